@@ -1,0 +1,1 @@
+"""Study-specific analysis: metrics, paper comparisons and plots, called by the orchestrator."""

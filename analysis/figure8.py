@@ -1,0 +1,111 @@
+"""Figure-8 tracking (paper section VI-B): Euclidean error of the CG on straights and curves,
+speed and yaw-rate tracking, the paper's figures as PNG."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from orchestrator.study import Study
+
+from .signals import rms, signal
+
+# The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
+# straight and below 60 cm on curved time-based trajectories.
+PAPER_BOUNDS = {"euclid_max_straight": 0.40, "euclid_max_curved": 0.60}
+
+
+def tracking_error(frame: pd.DataFrame, study: Study) -> np.ndarray:
+    dx = signal(frame, study, "tractor_yaw_plant", "x_cg") - signal(frame, study, "figure8_reference", "x_ref")
+    dy = signal(frame, study, "tractor_yaw_plant", "y_cg") - signal(frame, study, "figure8_reference", "y_ref")
+    return np.hypot(dx, dy)
+
+
+def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
+    err = tracking_error(frame, study)
+    curved = signal(frame, study, "figure8_reference", "segment") > 0.5
+    speed = signal(frame, study, "speed_drivetrain", "speed")
+    v_d = signal(frame, study, "kinematic_tracker", "speed_desired")
+    gamma = signal(frame, study, "tractor_yaw_plant", "yaw_rate")
+    gamma_d = signal(frame, study, "kinematic_tracker", "yaw_rate_desired")
+    psi = signal(frame, study, "tractor_yaw_plant", "heading")
+    psi_hat = signal(frame, study, "pose_ekf", "heading")
+    dpsi = np.angle(np.exp(1j * (psi_hat - psi)))
+    straight = ~curved
+    return {
+        "euclid_mean_straight": float(err[straight].mean()),
+        "euclid_max_straight": float(err[straight].max()),
+        "euclid_mean_curved": float(err[curved].mean()),
+        "euclid_max_curved": float(err[curved].max()),
+        "euclid_rms": rms(err),
+        "speed_rms_error": rms(speed - v_d),
+        "speed_mean_error": float(np.mean(speed - v_d)),
+        "speed_rms_error_vs_path": rms(speed - signal(frame, study, "figure8_reference", "speed_ref")),
+        "yaw_rate_rms_error": rms(gamma - gamma_d),
+        "yaw_rate_mean_error": float(np.mean(gamma - gamma_d)),
+        "heading_estimate_rms_error": rms(dpsi),
+    }
+
+
+def summary(values: dict[str, float]) -> str:
+    rows = [("euclid_mean_straight", "m", None), ("euclid_max_straight", "m", "< 0.40"),
+            ("euclid_mean_curved", "m", None), ("euclid_max_curved", "m", "< 0.60"),
+            ("speed_rms_error", "m/s", "steady-state error seen"), ("yaw_rate_rms_error", "rad/s", "no steady-state error"),
+            ("heading_estimate_rms_error", "rad", None), ("sim_time_s", "s", None), ("wall_time_s", "s", None)]
+    lines = [f"{'metric':<28}{'ours':>12}  {'unit':<6} paper", "-" * 64]
+    for key, unit, paper in rows:
+        if key in values:
+            lines.append(f"{key:<28}{values[key]:>12.4f}  {unit:<6} {paper or ''}")
+    return "\n".join(lines)
+
+
+def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = frame["t"].to_numpy()
+    sig = lambda typ, port: signal(frame, study, typ, port)  # noqa: E731
+    written = []
+
+    def save(fig, name):
+        path = out_dir / name
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(sig("figure8_reference", "x_ref"), sig("figure8_reference", "y_ref"), "k--", lw=1, label="reference")
+    ax.plot(sig("tractor_yaw_plant", "x_cg"), sig("tractor_yaw_plant", "y_cg"), "r", lw=1, label="actual (CG)")
+    ax.set_xlabel("east x [m]"), ax.set_ylabel("north y [m]"), ax.axis("equal"), ax.legend()
+    ax.set_title("Reference and actual trajectory")
+    save(fig, "trajectory.png")
+
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 4.5))
+    ex = sig("figure8_reference", "x_ref") - sig("tractor_yaw_plant", "x_cg")
+    ey = sig("figure8_reference", "y_ref") - sig("tractor_yaw_plant", "y_cg")
+    for ax, e, name in zip(axes, (ex, ey), ("x", "y")):
+        ax.plot(t, e, lw=0.8)
+        ax.set_ylabel(f"error {name} [m]")
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title("Trajectory following error")
+    save(fig, "error.png")
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.plot(t, sig("kinematic_tracker", "speed_desired"), "k--", lw=0.8, label="desired")
+    ax.plot(t, sig("speed_drivetrain", "speed"), "r", lw=0.8, label="actual")
+    ax.set_xlabel("time [s]"), ax.set_ylabel("speed [m/s]"), ax.legend(), ax.grid(alpha=0.3)
+    ax.set_title("Longitudinal speed")
+    save(fig, "speed.png")
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.plot(t, sig("kinematic_tracker", "yaw_rate_desired"), "k--", lw=0.8, label="desired")
+    ax.plot(t, sig("tractor_yaw_plant", "yaw_rate"), "r", lw=0.8, label="actual")
+    ax.set_xlabel("time [s]"), ax.set_ylabel("yaw rate [rad/s]"), ax.legend(), ax.grid(alpha=0.3)
+    ax.set_title("Yaw rate")
+    save(fig, "yaw_rate.png")
+    return written

@@ -1,0 +1,1 @@
+"""Models shared by several components (equations of the paper, no co-simulation plumbing)."""

@@ -1,0 +1,133 @@
+"""Offset-free tracking MPC for a SISO model, condensed into a small dense QP (paper section V).
+
+Model: G(s) discretised with a zero-order hold at T_s -> (A, B, C). An internal model runs in
+parallel with the applied inputs, x_k = A x_{k-1} + B u_{k-1}; the output disturbance
+d_k = y_meas - C x_k is held over the horizon (this gives zero steady-state error).
+
+Decision: input moves DU = [du_0 .. du_{Nc-1}], u_{k+j} = u_{k-1} + sum_{l<=min(j,Nc-1)} du_l.
+Predicted outputs Y = f + Phi DU with f_i = C A^i x_k + s_i u_{k-1} + d_k and
+Phi[i-1, l] = s_{i-l} (step-response coefficients s_m = sum_{q=1..m} C A^{q-1} B), i = 1..Np.
+
+    minimise   Q ||r 1 - Y||^2 + R ||DU||^2
+    subject to |du_l| <= du_max,   |u_{k-1} + sum_{m<=l} du_m| <= u_max
+
+i.e. 0.5 DU' H DU + g' DU with H = 2 (Q Phi'Phi + R I), g = 2 Q Phi'(f - r 1).
+The paper writes the weights as x'Qx + u'Ru; weighting the tracking error and the input moves is
+what makes the yaw-rate tracking free of steady-state error, as the paper reports.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .yaw_dynamics import controllable_canonical, zoh_discretize
+
+SOLVERS = ("daqp", "proxsuite")
+
+
+@dataclass
+class QPData:
+    H: np.ndarray
+    g: np.ndarray
+    A: np.ndarray          # general constraints lower <= A x <= upper
+    lower: np.ndarray
+    upper: np.ndarray
+    box: np.ndarray        # |x_i| <= box_i
+
+
+class CondensedTrackingMPC:
+    def __init__(self, num, den, dt: float, Np: int, Nc: int, Q: float, R: float,
+                 u_max: float, du_max: float, solver: str = "daqp", tolerance: float = 1e-10) -> None:
+        if not (1 <= Nc <= Np):
+            raise ValueError(f"need 1 <= control horizon ({Nc}) <= prediction horizon ({Np})")
+        if Q < 0 or R <= 0:
+            raise ValueError("need Q >= 0 and R > 0")
+        if solver not in SOLVERS:
+            raise ValueError(f"qp solver {solver!r}; expected one of {SOLVERS}")
+        Ac, Bc, Cc = controllable_canonical(num, den)
+        self.A, self.B = zoh_discretize(Ac, Bc, dt)
+        self.C = Cc
+        self.Np, self.Nc, self.Q, self.R = Np, Nc, Q, R
+        self.u_max, self.du_max = u_max, du_max
+        n = self.A.shape[0]
+        # free-response rows C A^i (i = 1..Np) and step-response coefficients s_1..s_Np
+        self.CApow = np.zeros((Np, n))
+        markov = np.zeros(Np + 1)
+        Ai = np.eye(n)
+        for i in range(1, Np + 1):
+            markov[i] = self.C @ Ai @ self.B          # C A^{i-1} B
+            Ai = Ai @ self.A
+            self.CApow[i - 1] = self.C @ Ai
+        self.step_response = np.cumsum(markov)        # s_0 = 0, s_m
+        self.Phi = np.zeros((Np, Nc))
+        for i in range(1, Np + 1):
+            for l in range(min(i, Nc)):
+                self.Phi[i - 1, l] = self.step_response[i - l]
+        self.H = 2.0 * (Q * self.Phi.T @ self.Phi + R * np.eye(Nc))
+        self.S = np.tril(np.ones((Nc, Nc)))
+        self.solver_name, self.tolerance = solver, tolerance
+        self._solver = None
+        self.reset()
+
+    def reset(self, u_prev: float = 0.0) -> None:
+        self.x = np.zeros(self.A.shape[0])
+        self._x_prev_model = self.x.copy()
+        self.u_prev = u_prev
+        self.last_du = np.zeros(self.Nc)
+        self._solver = None
+
+    def qp(self, r: float, y_meas: float) -> QPData:
+        """The QP of this instant (no state change)."""
+        d = y_meas - float(self.C @ self.x)
+        f = self.CApow @ self.x + self.step_response[1:] * self.u_prev + d
+        g = 2.0 * self.Q * self.Phi.T @ (f - r)
+        lower = np.full(self.Nc, -self.u_max - self.u_prev)
+        upper = np.full(self.Nc, self.u_max - self.u_prev)
+        return QPData(self.H, g, self.S, lower, upper, np.full(self.Nc, self.du_max))
+
+    def _solve(self, qp: QPData) -> tuple[np.ndarray, int]:
+        if self.solver_name == "daqp":
+            import daqp
+
+            bu = np.concatenate([qp.box, qp.upper])
+            bl = np.concatenate([-qp.box, qp.lower])
+            if self._solver is None:
+                self._solver = daqp.Model()
+                self._solver.setup(qp.H, qp.g, qp.A, bu, bl)
+                self._solver.settings = {"primal_tol": self.tolerance, "dual_tol": self.tolerance}
+            else:
+                self._solver.update(f=qp.g, bupper=bu, blower=bl)
+            x, _, flag, info = self._solver.solve()
+            return np.asarray(x, dtype=float), int(flag)
+        from proxsuite import proxqp
+
+        if self._solver is None:
+            s = proxqp.dense.QP(self.Nc, 0, self.Nc, box_constraints=True)
+            s.settings.eps_abs, s.settings.eps_rel = self.tolerance, 0.0
+            s.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+            s.init(qp.H, qp.g, None, None, qp.A, qp.lower, qp.upper, -qp.box, qp.box)
+            self._solver = s
+        else:
+            self._solver.update(g=qp.g, l=qp.lower, u=qp.upper, l_box=-qp.box, u_box=qp.box)
+        self._solver.solve()
+        status = self._solver.results.info.status
+        ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
+        return np.array(self._solver.results.x, dtype=float), (1 if ok else -1)
+
+    def step(self, r: float, y_meas: float, u_applied: float | None = None) -> tuple[float, int]:
+        """Solve at this instant, apply the first move, advance the internal model.
+        ``u_applied``: the input the plant actually received over the last step (a measured
+        actuator position), used in place of the last command. Returns (u_k, status > 0 solved)."""
+        if u_applied is not None:
+            self.x = self._x_prev_model + self.B * float(u_applied)
+            self.u_prev = float(u_applied)
+        qp = self.qp(r, y_meas)
+        du, status = self._solve(qp)
+        if status <= 0 or not np.all(np.isfinite(du)):
+            du = np.zeros(self.Nc)                      # hold the previous input: always feasible
+        u = float(np.clip(self.u_prev + du[0], -self.u_max, self.u_max))
+        self._x_prev_model = self.A @ self.x
+        self.x = self._x_prev_model + self.B * u
+        self.u_prev, self.last_du = u, du
+        return u, status

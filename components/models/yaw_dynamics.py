@@ -1,0 +1,94 @@
+"""Linear yaw dynamics of the tractor, paper section III-A (equations of yaw motion).
+
+Equations of motion (linear tyres F = -C*alpha, small angles, v_x a parameter)::
+
+    m dv_y/dt   = -m v_x gamma - C_f alpha_f - C_r alpha_r
+    I dgamma/dt = -l_f C_f alpha_f + l_r C_r alpha_r
+
+Side-slip angles, static (traditional bicycle) or through relaxation lengths (RLF front only,
+RLFR front and rear)::
+
+    alpha_f = (v_y + l_f gamma)/v_x - delta        or  sigma_f dalpha_f/dt = v_y + l_f gamma - v_x (delta + alpha_f)
+    alpha_r = (v_y - l_r gamma)/v_x                or  sigma_r dalpha_r/dt = v_y - l_r gamma - v_x alpha_r
+
+State order: [v_y, gamma] (+ alpha_f for RLF) (+ alpha_r for RLFR); input delta; output gamma.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+PHYSICAL_MODELS = ("bicycle", "rlf", "rlfr")
+
+
+@dataclass(frozen=True)
+class TractorParameters:
+    """The paper's Table 'Numerical Values of the Parameters' (SI units)."""
+
+    m: float = 700.0
+    I: float = 280.0
+    l_f: float = 1.0
+    l_r: float = 0.4
+    C_f: float = 8000.0
+    C_r: float = 90000.0
+    sigma_f: float = 0.1942
+    sigma_r: float = 1.6657
+
+
+def state_space(model: str, p: TractorParameters, v_x: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B, C) of the yaw dynamics at longitudinal speed ``v_x`` (> 0 for bicycle and RLF)."""
+    m, I, lf, lr, Cf, Cr, sf, sr = p.m, p.I, p.l_f, p.l_r, p.C_f, p.C_r, p.sigma_f, p.sigma_r
+    v = float(v_x)
+    if model == "bicycle":
+        A = np.array([[-(Cf + Cr) / (m * v), -v - (Cf * lf - Cr * lr) / (m * v)],
+                      [-(lf * Cf - lr * Cr) / (I * v), -(lf**2 * Cf + lr**2 * Cr) / (I * v)]])
+        B = np.array([Cf / m, lf * Cf / I])
+    elif model == "rlf":
+        A = np.array([[-Cr / (m * v), -v + Cr * lr / (m * v), -Cf / m],
+                      [lr * Cr / (I * v), -lr**2 * Cr / (I * v), -lf * Cf / I],
+                      [1.0 / sf, lf / sf, -v / sf]])
+        B = np.array([0.0, 0.0, -v / sf])
+    elif model == "rlfr":
+        A = np.array([[0.0, -v, -Cf / m, -Cr / m],
+                      [0.0, 0.0, -lf * Cf / I, lr * Cr / I],
+                      [1.0 / sf, lf / sf, -v / sf, 0.0],
+                      [1.0 / sr, -lr / sr, 0.0, -v / sr]])
+        B = np.array([0.0, 0.0, -v / sf, 0.0])
+    else:
+        raise ValueError(f"unknown yaw model {model!r}; expected one of {PHYSICAL_MODELS}")
+    C = np.zeros(A.shape[0])
+    C[1] = 1.0
+    return A, B, C
+
+
+def controllable_canonical(num: list[float], den: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A, B, C) of a strictly proper transfer function num/den (highest power first)."""
+    den = np.asarray(den, dtype=float)
+    num = np.asarray(num, dtype=float)
+    if den[0] == 0:
+        raise ValueError("leading denominator coefficient is zero")
+    num, den = num / den[0], den / den[0]
+    n = len(den) - 1
+    if n < 1 or len(num) > n:
+        raise ValueError("transfer function must be strictly proper with order >= 1")
+    A = np.zeros((n, n))
+    A[0, :] = -den[1:]
+    A[1:, :-1] = np.eye(n - 1)
+    B = np.zeros(n)
+    B[0] = 1.0
+    C = np.zeros(n)
+    C[n - len(num):] = num
+    return A, B, C
+
+
+def zoh_discretize(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact zero-order-hold discretisation: [Ad Bd; 0 I] = expm([A B; 0 0] dt)."""
+    from scipy.linalg import expm
+
+    n = A.shape[0]
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n] = A
+    M[:n, n] = B
+    E = expm(M * dt)
+    return E[:n, :n], E[:n, n]

@@ -1,0 +1,71 @@
+"""Speed drivetrain (paper section II): electro-mechanic valve -> pedal -> hydrostatic drive -> speed.
+
+    o          = valve opening of (V - V_n) with dead-band (as the steering valve)
+    dp/dt      = o * pedal_rate_max,             p in [0, 1]          pedal actuator
+    v_ss(p)    = v_max * clip((p - p_0)/(1 - p_0), 0, 1) ** n         dead zone and curvature
+    dv/dt      = (v_ss(p) - v) / tau                                  drivetrain lag
+
+The dead zone p_0 and the curvature n make the pedal-to-speed gain vary with the operating point;
+the speed PID's clamped integral then cannot remove the whole error: the steady-state error the
+paper observed.
+"""
+from __future__ import annotations
+
+import math
+
+from orchestrator.component import Component, inp, out, par
+
+from .steering_hydraulics import valve_opening
+
+
+def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: float) -> float:
+    """v_ss(p) of the hydrostatic drive."""
+    x = min(max((pedal - dead_zone) / (1.0 - dead_zone), 0.0), 1.0)
+    return v_max * x ** exponent
+
+
+class SpeedDrivetrain(Component):
+    sampled = False
+    variables = (
+        inp("pedal_valve_voltage", "V", 6.0, "voltage of the electro-mechanic pedal valve"),
+        par("neutral_voltage", "V", 6.0, "voltage with the pedal at rest"),
+        par("voltage_max", "V", 12.0, "highest valve voltage"),
+        par("deadband", "V", 0.4, "valve dead-band half-width"),
+        par("pedal_rate_max", "1/s", 1.0, "pedal speed at full valve opening (pedal travel / s)"),
+        par("pedal_dead_zone", "1", 0.12, "pedal travel that does not move the tractor"),
+        par("max_speed", "m/s", 4.0, "speed at full pedal"),
+        par("speed_exponent", "1", 1.3, "curvature of the pedal-to-speed map"),
+        par("time_constant", "s", 0.8, "drivetrain lag"),
+        par("internal_step", "s", 0.005, "integration step"),
+        par("speed0", "m/s", 0.0, "initial speed"),
+        par("pedal0", "1", 0.0, "initial pedal position"),
+        out("pedal_position", "1", 0.0, "pedal position 0..1"),
+        out("speed", "m/s", 0.0, "longitudinal speed of the CG"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        p = self.p
+        self.require(0 <= p["pedal_dead_zone"] < 1, "pedal_dead_zone must be in [0, 1)")
+        self.require(p["time_constant"] > 0 and p["internal_step"] > 0, "time constants must be > 0")
+        self.substeps = max(1, int(round(dt / p["internal_step"])))
+        self.pedal, self.v = float(p["pedal0"]), float(p["speed0"])
+        self.y["pedal_position"], self.y["speed"] = self.pedal, self.v
+
+    def step(self, t: float, dt: float) -> None:
+        p = self.p
+        h = dt / self.substeps
+        vn = p["neutral_voltage"]
+        opening = valve_opening(float(self.u["pedal_valve_voltage"]), vn, p["deadband"],
+                                p["voltage_max"] - vn)
+        decay = math.exp(-h / p["time_constant"])
+        pedal, v = self.pedal, self.v
+        for _ in range(self.substeps):
+            pedal = min(max(pedal + h * opening * p["pedal_rate_max"], 0.0), 1.0)
+            v_ss = steady_state_speed(pedal, p["max_speed"], p["pedal_dead_zone"], p["speed_exponent"])
+            v = v_ss + (v - v_ss) * decay
+        self.pedal, self.v = pedal, v
+        self.y["pedal_position"], self.y["speed"] = pedal, v
+
+
+COMPONENT = SpeedDrivetrain

@@ -1,0 +1,101 @@
+"""Steering hydraulics (paper section II): low-level PI -> electro-hydraulic valve -> wheel angle.
+
+Per internal step h (``internal_step``, default 1 ms)::
+
+    V       = clip(V_neutral + PI(delta_cmd - delta_measured), V_min, V_max)        [0..12 V]
+    o_cmd   = sign(V - V_n) * max(|V - V_n| - deadband, 0) / (V_max - V_n - deadband)   [-1..1]
+    do/dt   = (o_cmd - o) / tau_valve                                               spool lag
+    ddelta/dt = o * Q_max / V_per_rad                                               flow -> rate
+    delta   in [-delta_max, delta_max] (mechanical stop)
+    delta_measured = resolution * round(delta / resolution)                         potentiometer
+
+Q_max = 12 L/min; with the default cylinder volume per radian the fastest steering rate is 60 deg/s.
+"""
+from __future__ import annotations
+
+import math
+
+from orchestrator.component import Component, inp, out, par
+
+from .models.pid import DiscretePID
+
+
+def valve_opening(voltage: float, neutral: float, deadband: float, full_scale: float) -> float:
+    """Normalised spool opening for a valve voltage, with a symmetric dead-band around neutral."""
+    e = voltage - neutral
+    excess = abs(e) - deadband
+    if excess <= 0.0:
+        return 0.0
+    return math.copysign(min(excess / (full_scale - deadband), 1.0), e)
+
+
+def quantize(value: float, resolution: float) -> float:
+    return resolution * round(value / resolution) if resolution > 0 else value
+
+
+class SteeringHydraulics(Component):
+    sampled = False
+    variables = (
+        inp("steer_angle_cmd", "rad", 0.0, "desired front wheel angle (from the yaw-rate MPC)"),
+        par("kp", "V/rad", 150.0, "low-level PI proportional gain"),
+        par("ki", "V/(rad s)", 20.0, "low-level PI integral gain"),
+        par("integral_limit", "V", 2.0, "anti-windup clamp of the PI integral"),
+        par("neutral_voltage", "V", 6.0, "valve voltage with no flow"),
+        par("voltage_min", "V", 0.0, "lowest valve voltage"),
+        par("voltage_max", "V", 12.0, "highest valve voltage"),
+        par("deadband", "V", 0.5, "valve dead-band half-width around neutral"),
+        par("max_flow", "m3/s", 12.0 / 60000.0, "valve flow at full opening (12 L/min)"),
+        par("volume_per_rad", "m3/rad", (12.0 / 60000.0) / math.radians(60.0),
+            "cylinder volume per radian of wheel angle"),
+        par("valve_time_constant", "s", 0.03, "spool lag"),
+        par("angle_limit", "rad", math.radians(45.0), "mechanical stop |delta|"),
+        par("potentiometer_resolution", "rad", math.radians(1.0), "angle sensor resolution"),
+        par("internal_step", "s", 0.001, "integration and low-level control step"),
+        par("delta0", "rad", 0.0, "initial wheel angle"),
+        out("steer_angle", "rad", 0.0, "true front wheel angle delta"),
+        out("steer_angle_measured", "rad", 0.0, "potentiometer reading (quantised)"),
+        out("valve_voltage", "V", 6.0, "voltage applied to the electro-hydraulic valve"),
+        out("steer_rate", "rad/s", 0.0, "wheel angle rate"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        p = self.p
+        self.require(p["voltage_min"] < p["neutral_voltage"] < p["voltage_max"],
+                     "need voltage_min < neutral_voltage < voltage_max")
+        self.require(0 <= p["deadband"] < p["voltage_max"] - p["neutral_voltage"],
+                     "deadband must be >= 0 and below the valve's voltage span")
+        self.require(p["internal_step"] > 0 and p["valve_time_constant"] > 0, "time constants must be > 0")
+        self.substeps = max(1, int(round(dt / p["internal_step"])))
+        self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
+                              p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
+        self.delta = float(p["delta0"])
+        self.opening = 0.0
+        self.y["steer_angle"] = self.delta
+        self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
+
+    def step(self, t: float, dt: float) -> None:
+        p = self.p
+        h = dt / self.substeps
+        vn, db = p["neutral_voltage"], p["deadband"]
+        span = p["voltage_max"] - vn
+        rate_full = p["max_flow"] / p["volume_per_rad"]
+        lim, res = p["angle_limit"], p["potentiometer_resolution"]
+        alpha = 1.0 - math.exp(-h / p["valve_time_constant"])
+        cmd = float(self.u["steer_angle_cmd"])
+        delta, opening = self.delta, self.opening
+        voltage = vn
+        for _ in range(self.substeps):
+            measured = quantize(delta, res)
+            voltage = vn + self.pi.update(cmd - measured, h)
+            opening += alpha * (valve_opening(voltage, vn, db, span) - opening)
+            delta = min(max(delta + h * opening * rate_full, -lim), lim)
+        self.delta, self.opening = delta, opening
+        y = self.y
+        y["steer_angle"] = delta
+        y["steer_angle_measured"] = quantize(delta, res)
+        y["valve_voltage"] = voltage
+        y["steer_rate"] = opening * rate_full if abs(delta) < lim else 0.0
+
+
+COMPONENT = SteeringHydraulics

@@ -1,0 +1,136 @@
+"""Tractor yaw plant: LPV yaw dynamics in the longitudinal speed plus pose kinematics.
+
+Yaw dynamics (``model``): ``bicycle`` (2nd order), ``rlf`` (3rd, relaxation length front),
+``rlfr`` (4th, front and rear) from the equations of motion (see models.yaw_dynamics), or
+``transfer_function`` (num/den, default the paper's empirical G_2nd = 291/(s^2+10.9s+242),
+not speed dependent; lateral velocity then taken kinematically, v_y = l_r gamma).
+
+Default ``rlf``: with the Table values it is stable at every speed and at 2 m/s its poles
+(-5.9 +- 13.7j) lie next to G_2nd's (-5.45 +- 14.6j). ``rlfr`` with the Table values has a weakly
+growing rear-relaxation mode near 1.65 Hz (Re ~ +0.03 1/s) and is only for short experiments.
+
+Integration: over each step the dynamics are exact for delta and v_x held (ZOH, matrix
+exponential). The pose at the CG follows (paper eq. 2)::
+
+    dx/dt = v_x cos(psi) - v_y sin(psi),  dy/dt = v_x sin(psi) + v_y cos(psi),  dpsi/dt = gamma
+
+integrated with the midpoint rule; the rear-axle point R (GPS antenna) is CG - l_r (cos psi, sin psi).
+Below ``min_speed`` the dynamics use min_speed (the slip equations divide by v_x) and the yaw rate
+is scaled by v_x/min_speed, so a tractor at rest does not turn.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from orchestrator.component import Component, inp, out, par
+
+from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical,
+                                  state_space, zoh_discretize)
+
+MODELS = PHYSICAL_MODELS + ("transfer_function",)
+
+
+class TractorYawPlant(Component):
+    sampled = False
+    variables = (
+        inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
+        inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),
+        par("model", "", "rlf", "yaw model: bicycle, rlf, rlfr or transfer_function"),
+        par("m", "kg", 700.0, "mass"),
+        par("I", "kg m2", 280.0, "yaw moment of inertia (paper: I = m l_f l_r)"),
+        par("l_f", "m", 1.0, "front axle to CG"),
+        par("l_r", "m", 0.4, "rear axle to CG"),
+        par("C_f", "N/rad", 8000.0, "front cornering stiffness"),
+        par("C_r", "N/rad", 90000.0, "rear cornering stiffness"),
+        par("sigma_f", "m", 0.1942, "front relaxation length"),
+        par("sigma_r", "m", 1.6657, "rear relaxation length"),
+        par("tf_num", "", [291.0], "transfer_function model: numerator, highest power first"),
+        par("tf_den", "", [1.0, 10.9, 242.0], "transfer_function model: denominator"),
+        par("min_speed", "m/s", 0.1, "regularisation speed for the slip equations"),
+        par("x0", "m", 0.0, "initial CG east position"),
+        par("y0", "m", 0.0, "initial CG north position"),
+        par("psi0", "rad", 0.0, "initial heading (from east, counter-clockwise)"),
+        par("speed_cache_resolution", "m/s", 1e-4, "speeds closer than this share one discretisation"),
+        out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
+        out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
+        out("heading", "rad", 0.0, "yaw angle psi"),
+        out("x_cg", "m", 0.0, "CG east position"),
+        out("y_cg", "m", 0.0, "CG north position"),
+        out("x_rear", "m", 0.0, "rear-axle point R east position (GPS antenna)"),
+        out("y_rear", "m", 0.0, "rear-axle point R north position"),
+        out("vel_east_rear", "m/s", 0.0, "velocity of R, east"),
+        out("vel_north_rear", "m/s", 0.0, "velocity of R, north"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        p = self.p
+        self.require(p["model"] in MODELS, f"parameter model={p['model']!r}; expected one of {MODELS}")
+        self.params = TractorParameters(p["m"], p["I"], p["l_f"], p["l_r"], p["C_f"], p["C_r"],
+                                        p["sigma_f"], p["sigma_r"])
+        for key in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r", "min_speed"):
+            self.require(float(p[key]) > 0, f"parameter {key} must be > 0, got {p[key]}")
+        if p["model"] == "transfer_function":
+            self._tf = controllable_canonical(p["tf_num"], p["tf_den"])
+            n = self._tf[0].shape[0]
+        else:
+            n = state_space(p["model"], self.params, 1.0)[0].shape[0]
+        self.z = np.zeros(n)
+        self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
+        self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._set_outputs(0.0, 0.0, 0.0)
+
+    def discretized(self, v: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Ad, Bd, C) at speed v (cached on a grid of speed_cache_resolution)."""
+        res = self.p["speed_cache_resolution"]
+        key = (int(round(v / res)), dt)
+        hit = self._cache.get(key)
+        if hit is None:
+            vq = key[0] * res
+            A, B, C = self._tf if self.p["model"] == "transfer_function" else \
+                state_space(self.p["model"], self.params, vq)
+            Ad, Bd = zoh_discretize(A, B, dt)
+            hit = self._cache[key] = (Ad, Bd, C)
+            if len(self._cache) > 20000:
+                self._cache.clear()
+        return hit
+
+    def _yaw_rate_and_lateral(self, C: np.ndarray) -> tuple[float, float]:
+        """(gamma, v_y) of the current dynamic state, before low-speed scaling."""
+        gamma = float(C @ self.z)
+        v_y = self.params.l_r * gamma if self.p["model"] == "transfer_function" else float(self.z[0])
+        return gamma, v_y
+
+    def _set_outputs(self, v: float, gamma: float, v_y: float) -> None:
+        lr = self.params.l_r
+        c, s = math.cos(self.psi), math.sin(self.psi)
+        y = self.y
+        y["yaw_rate"], y["lateral_velocity"], y["heading"] = gamma, v_y, self.psi
+        y["x_cg"], y["y_cg"] = self.x, self.y_pos
+        y["x_rear"], y["y_rear"] = self.x - lr * c, self.y_pos - lr * s
+        v_lat_rear = v_y - lr * gamma
+        y["vel_east_rear"] = v * c - v_lat_rear * s
+        y["vel_north_rear"] = v * s + v_lat_rear * c
+
+    def step(self, t: float, dt: float) -> None:
+        v = float(self.u["speed"])
+        delta = float(self.u["steer_angle"])
+        vmin = self.p["min_speed"]
+        v_eff = max(abs(v), vmin)
+        scale = min(1.0, abs(v) / vmin)
+        Ad, Bd, C = self.discretized(v_eff, dt)
+        gamma0, vy0 = (scale * q for q in self._yaw_rate_and_lateral(C))
+        self.z = Ad @ self.z + Bd * delta
+        gamma1, vy1 = (scale * q for q in self._yaw_rate_and_lateral(C))
+        psi_mid = self.psi + 0.25 * dt * (gamma0 + gamma1)
+        vy_mid = 0.5 * (vy0 + vy1)
+        c, s = math.cos(psi_mid), math.sin(psi_mid)
+        self.x += dt * (v * c - vy_mid * s)
+        self.y_pos += dt * (v * s + vy_mid * c)
+        self.psi += 0.5 * dt * (gamma0 + gamma1)
+        self._set_outputs(v, gamma1, vy1)
+
+
+COMPONENT = TractorYawPlant

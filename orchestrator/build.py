@@ -1,0 +1,185 @@
+"""From a validated study to wired component instances: type lookup, parameters, port checks,
+evaluation order of sampled components and refusal of algebraic loops."""
+from __future__ import annotations
+
+import graphlib
+import importlib
+import math
+import zlib
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .component import Component, ComponentError
+from .study import Connection, Study, StudyError
+from .units import UnitError, same_unit, to_si
+
+
+@dataclass
+class Node:
+    """One component instance with its place in the schedule."""
+
+    name: str
+    component: Component
+    step: float
+    ratio: int                      # step / base_step
+    sources: list[tuple[str, "Node", str]] = field(default_factory=list)  # (input, src node, output)
+
+
+@dataclass
+class System:
+    study: Study
+    nodes: dict[str, Node]
+    sampled_order: list[Node]        # evaluated in this order at each sample instant
+    continuous: list[Node]
+    connections: list[Connection]
+    unconnected_inputs: list[str]
+
+
+def _where(study: Study) -> str:
+    return str(study.path) if study.path else "<study>"
+
+
+def resolve_type(type_name: str, package: str, where: str) -> type[Component]:
+    """``"module"`` -> ``<package>.module.COMPONENT``; ``"pkg.mod:Class"`` -> that class."""
+    if ":" in type_name:
+        module_name, attr = type_name.split(":", 1)
+    else:
+        module_name, attr = f"{package}.{type_name}", "COMPONENT"
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        raise StudyError(f"{where}: type {type_name!r}: cannot import module {module_name!r} ({exc})") from None
+    cls = getattr(module, attr, None)
+    if cls is None:
+        raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
+    if not (isinstance(cls, type) and issubclass(cls, Component)):
+        raise StudyError(f"{where}: type {type_name!r}: {attr!r} is not a Component class")
+    return cls
+
+
+def component_seed(study_seed: int, name: str) -> np.random.Generator:
+    """Independent, reproducible stream per component: seeded by (study seed, crc32(name))."""
+    return np.random.default_rng([study_seed, zlib.crc32(name.encode())])
+
+
+def build_system(study: Study) -> System:
+    where = _where(study)
+    base = study.study.base_step
+    nodes: dict[str, Node] = {}
+    for name, spec in study.components.items():
+        cls = resolve_type(spec.type, study.study.component_package, where)
+        params = cls.declared("parameter")
+        converted: dict[str, Any] = {}
+        for key, value in spec.parameters.items():
+            if key not in params:
+                raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
+                                 f"{spec.type!r}; known: {', '.join(sorted(params))}")
+            try:
+                converted[key] = to_si(value, params[key].unit)
+            except UnitError as exc:
+                raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+        try:
+            comp = cls(name, converted, rng=component_seed(study.study.seed, name))
+        except ComponentError as exc:
+            raise StudyError(f"{where}: components.{name}: {exc}") from None
+        inputs = cls.declared("input")
+        for key, value in spec.inputs.items():
+            if key not in inputs:
+                raise StudyError(f"{where}: components.{name}.inputs.{key}: unknown input; "
+                                 f"known: {', '.join(sorted(inputs))}")
+            try:
+                comp.u[key] = to_si(value, inputs[key].unit)
+            except UnitError as exc:
+                raise StudyError(f"{where}: components.{name}.inputs.{key}: {exc}") from None
+        step = spec.step if spec.step is not None else base
+        ratio = round(step / base)
+        if ratio < 1 or not math.isclose(ratio * base, step, rel_tol=1e-9, abs_tol=1e-12):
+            raise StudyError(f"{where}: components.{name}.step: {step} s is not an integer multiple "
+                             f"of study.base_step {base} s")
+        nodes[name] = Node(name, comp, step, ratio)
+
+    connected: dict[tuple[str, str], Connection] = {}
+    for i, conn in enumerate(study.connections):
+        field_name = f"connections[{i}] '{conn}'"
+        for comp_name in (conn.source, conn.target):
+            if comp_name not in nodes:
+                raise StudyError(f"{where}: {field_name}: unknown component {comp_name!r}; "
+                                 f"known: {', '.join(sorted(nodes))}")
+        src, dst = nodes[conn.source].component, nodes[conn.target].component
+        outs, ins = src.declared("output"), dst.declared("input")
+        if conn.output not in outs:
+            hint = " (it is an input)" if conn.output in src.declared("input") else ""
+            raise StudyError(f"{where}: {field_name}: {conn.source!r} has no output {conn.output!r}{hint}; "
+                             f"outputs: {', '.join(sorted(outs))}")
+        if conn.input not in ins:
+            hint = " (it is an output)" if conn.input in dst.declared("output") else ""
+            raise StudyError(f"{where}: {field_name}: {conn.target!r} has no input {conn.input!r}{hint}; "
+                             f"inputs: {', '.join(sorted(ins))}")
+        if not same_unit(outs[conn.output].unit, ins[conn.input].unit):
+            raise StudyError(f"{where}: {field_name}: unit mismatch: output is in "
+                             f"{outs[conn.output].unit!r}, input expects {ins[conn.input].unit!r}")
+        key = (conn.target, conn.input)
+        if key in connected:
+            raise StudyError(f"{where}: {field_name}: input {conn.target}.{conn.input} is already "
+                             f"driven by '{connected[key]}'")
+        connected[key] = conn
+        nodes[conn.target].sources.append((conn.input, nodes[conn.source], conn.output))
+
+    unconnected = [f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")
+                   if (n, i) not in connected]
+    _refuse_algebraic_loops(nodes, study.connections, where)
+    sampled = [n for n in nodes.values() if n.component.sampled]
+    order = _sampled_order(sampled, where)
+    continuous = [n for n in nodes.values() if not n.component.sampled]
+    return System(study, nodes, order, continuous, list(study.connections), unconnected)
+
+
+def _direct(node: Node, input_name: str) -> bool:
+    comp = node.component
+    return comp.sampled and any(input_name in deps for deps in comp.feedthrough.values())
+
+
+def _refuse_algebraic_loops(nodes: dict[str, Node], connections: list[Connection], where: str) -> None:
+    """Port graph: connection edges output->input, feedthrough edges input->output of sampled
+    components. A cycle is an algebraic loop (continuous components break loops: their outputs
+    at t come from their state)."""
+    graph: dict[tuple[str, str, str], set[tuple[str, str, str]]] = {}
+    for conn in connections:
+        graph.setdefault((conn.target, conn.input, "input"), set()).add((conn.source, conn.output, "output"))
+    for name, node in nodes.items():
+        comp = node.component
+        if not comp.sampled:
+            continue
+        for out_name, deps in comp.feedthrough.items():
+            graph.setdefault((name, out_name, "output"), set()).update((name, d, "input") for d in deps)
+    try:
+        list(graphlib.TopologicalSorter(graph).static_order())
+    except graphlib.CycleError as exc:
+        cycle = [f"{c}.{p} ({kind})" for c, p, kind in exc.args[1]]
+        raise StudyError(f"{where}: algebraic loop through direct feedthrough: "
+                         f"{' -> '.join(cycle)}; break it with a delay or a continuous "
+                         f"component") from None
+
+
+def _sampled_order(sampled: list[Node], where: str) -> list[Node]:
+    """Order sampled components so each reads inputs its sources produced at the same instant.
+    Edges into inputs without feedthrough are preferences: dropped if they alone close a cycle."""
+    names = {n.name for n in sampled}
+    by_name = {n.name: n for n in sampled}
+
+    def graph(all_edges: bool) -> dict[str, set[str]]:
+        g: dict[str, set[str]] = {n.name: set() for n in sampled}
+        for node in sampled:
+            for inp, src, _ in node.sources:
+                if src.name in names and src.name != node.name and (all_edges or _direct(node, inp)):
+                    g[node.name].add(src.name)
+        return g
+
+    for all_edges in (True, False):
+        try:
+            return [by_name[n] for n in graphlib.TopologicalSorter(graph(all_edges)).static_order()]
+        except graphlib.CycleError:
+            continue
+    raise StudyError(f"{where}: cannot order sampled components")  # unreachable after loop check

@@ -1,0 +1,106 @@
+"""The co-simulation unit contract (FMI-shaped).
+
+A component declares its variables (name, causality, unit, start, description), which outputs
+depend directly on which inputs in the same step (direct feedthrough), and whether it is
+*sampled* or *continuous*:
+
+- sampled: ``step(t, dt)`` reads the inputs at ``t`` and sets outputs that hold on ``[t, t+dt)``
+  (a discrete controller, a sensor, a reference generator);
+- continuous: ``step(t, dt)`` integrates from ``t`` to ``t+dt`` with the inputs of ``t`` held;
+  afterwards the outputs describe ``t+dt`` (a plant, an actuator).
+
+Inputs live in ``self.u``, outputs in ``self.y``, parameters in ``self.p`` (plain dicts, SI units).
+A Python class, an FMU wrapper or a hardware adapter are interchangeable behind this interface.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar, Mapping
+
+import numpy as np
+
+CAUSALITIES = ("input", "output", "parameter")
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One declared variable of a component."""
+
+    name: str
+    causality: str
+    unit: str
+    start: Any
+    description: str
+
+    def __post_init__(self) -> None:
+        if self.causality not in CAUSALITIES:
+            raise ValueError(f"variable {self.name!r}: causality must be one of {CAUSALITIES}")
+
+
+def inp(name: str, unit: str, start: Any, description: str) -> Variable:
+    return Variable(name, "input", unit, start, description)
+
+
+def out(name: str, unit: str, start: Any, description: str) -> Variable:
+    return Variable(name, "output", unit, start, description)
+
+
+def par(name: str, unit: str, start: Any, description: str) -> Variable:
+    return Variable(name, "parameter", unit, start, description)
+
+
+class ComponentError(Exception):
+    """A component refuses its parameters or fails while stepping."""
+
+
+class Component:
+    """Base class of every Python co-simulation unit.
+
+    Subclasses set ``variables`` and ``feedthrough`` (output name -> input names it depends on
+    within the same step), ``sampled`` (see module docstring) and implement ``initialize`` and
+    ``step``. ``rng`` is a numpy Generator seeded by the orchestrator from the study seed.
+    """
+
+    variables: ClassVar[tuple[Variable, ...]] = ()
+    feedthrough: ClassVar[Mapping[str, tuple[str, ...]]] = {}
+    sampled: ClassVar[bool] = True
+
+    def __init__(self, name: str, parameters: Mapping[str, Any] | None = None,
+                 rng: np.random.Generator | None = None) -> None:
+        self.name = name
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.p: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "parameter"}
+        self.u: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "input"}
+        self.y: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "output"}
+        for key, value in (parameters or {}).items():
+            if key not in self.p:
+                raise ComponentError(f"{name}: unknown parameter {key!r}; known: {sorted(self.p)}")
+            self.p[key] = value
+
+    # --- declarations -------------------------------------------------------------------------
+    @classmethod
+    def declared(cls, causality: str) -> dict[str, Variable]:
+        return {v.name: v for v in cls.variables if v.causality == causality}
+
+    def describe(self) -> list[Variable]:
+        return list(self.variables)
+
+    # --- life cycle ---------------------------------------------------------------------------
+    def initialize(self, t0: float, dt: float) -> None:
+        """Prepare internal state for a run starting at ``t0`` with step ``dt``."""
+
+    def step(self, t: float, dt: float) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def reset(self) -> None:
+        """Return inputs and outputs to their start values (parameters are kept)."""
+        for v in self.variables:
+            if v.causality == "input":
+                self.u[v.name] = v.start
+            elif v.causality == "output":
+                self.y[v.name] = v.start
+
+    # --- helpers for subclasses ---------------------------------------------------------------
+    def require(self, condition: bool, message: str) -> None:
+        if not condition:
+            raise ComponentError(f"{self.name}: {message}")

@@ -1,0 +1,74 @@
+"""Run a study end to end: build, simulate, analyse, write ``metrics.json``, the signal table and
+plots into an output folder."""
+from __future__ import annotations
+
+import importlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .build import build_system
+from .engine import RunError, Simulation
+from .results import write_json, write_table
+from .study import Study, StudyError
+
+
+@dataclass
+class RunResult:
+    metrics: dict[str, Any]
+    frame: Any
+    summary: str
+    files: list[Path]
+
+
+def _analysis(study: Study):
+    if not study.study.analysis:
+        return None
+    try:
+        return importlib.import_module(study.study.analysis)
+    except ModuleNotFoundError as exc:
+        raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
+
+
+def simulate(study: Study):
+    """Build and simulate; returns (recording, system). Raises StudyError / RunError."""
+    system = build_system(study)
+    return Simulation(system).run(), system
+
+
+def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResult:
+    analysis = _analysis(study)
+    out_dir = Path(out_dir) if out_dir is not None else None
+    fmt = study.study.signals_format
+    system = build_system(study)
+    base = {"study": study.study.name, "study_file": str(study.path), "seed": study.study.seed,
+            "sim_time_s": study.study.stop_time - study.study.start_time}
+    try:
+        rec = Simulation(system).run()
+    except RunError as err:
+        if out_dir is not None:
+            write_table(out_dir / "signals", err.partial.to_frame(), fmt)
+            write_json(out_dir / "metrics.json", {**base, "status": "failed", "error": str(err),
+                                                   "wall_time_s": err.partial.wall_time_s})
+        raise
+    frame = rec.to_frame()
+    values: dict[str, Any] = {}
+    if analysis is not None:
+        values.update(analysis.metrics(frame, study))
+    values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s)
+    metrics = {**base, "status": "completed", **values}
+    summary = analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
+        json.dumps(values, indent=2)
+    files: list[Path] = []
+    if out_dir is not None:
+        files.append(write_table(out_dir / "signals", frame, fmt))
+        files.append(write_json(out_dir / "metrics.json", metrics))
+        files.append(write_json(out_dir / "run.json", {
+            "study": study.model_dump(mode="json", exclude={"path"}),
+            "unconnected_inputs": system.unconnected_inputs,
+            "order_sampled": [n.name for n in system.sampled_order],
+        }))
+        if plots and analysis is not None and hasattr(analysis, "plots"):
+            files.extend(analysis.plots(frame, study, out_dir))
+    return RunResult(metrics, frame, summary, files)

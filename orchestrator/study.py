@@ -1,0 +1,159 @@
+"""Study files: declarative description of a co-simulation (TOML or YAML), validated with pydantic.
+
+Layout::
+
+    [study]            name, stop_time, base_step, seed, start_time, signals_format, analysis
+    [components.NAME]  type = "module" or "package.module:Class", step, parameters = {...},
+                       inputs = {...}   (constant values for inputs left unconnected)
+    connections = ["src.output -> dst.input", ...]
+"""
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+
+class StudyError(Exception):
+    """A study cannot be loaded or built; the message names the file and the field."""
+
+
+_CONNECTION = re.compile(r"^\s*([A-Za-z_][\w]*)\.([A-Za-z_][\w]*)\s*->\s*([A-Za-z_][\w]*)\.([A-Za-z_][\w]*)\s*$")
+
+
+class StudySettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    name: str
+    description: str = ""
+    start_time: float = 0.0
+    stop_time: float = Field(gt=0)
+    base_step: float = Field(gt=0)
+    seed: int = Field(ge=0)
+    signals_format: Literal["parquet", "csv"] = "parquet"
+    component_package: str = "components"
+    analysis: str | None = None
+
+
+class ComponentSpec(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    type: str
+    step: float | None = Field(default=None, gt=0)
+    parameters: dict[str, Any] = {}
+    inputs: dict[str, Any] = {}
+
+
+class Connection(BaseModel):
+    source: str
+    output: str
+    target: str
+    input: str
+
+    def __str__(self) -> str:
+        return f"{self.source}.{self.output} -> {self.target}.{self.input}"
+
+
+class Study(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    study: StudySettings
+    components: dict[str, ComponentSpec]
+    connections: list[Connection] = []
+    path: Path | None = None
+
+    @field_validator("connections", mode="before")
+    @classmethod
+    def _parse_connections(cls, value: Any) -> Any:
+        if not isinstance(value, list):
+            raise ValueError("expected a list of strings 'component.output -> component.input'")
+        parsed = []
+        for i, item in enumerate(value):
+            if isinstance(item, str):
+                match = _CONNECTION.match(item)
+                if not match:
+                    raise ValueError(f"item {i} {item!r}: expected 'component.output -> component.input'")
+                parsed.append(dict(zip(("source", "output", "target", "input"), match.groups())))
+            else:
+                parsed.append(item)
+        return parsed
+
+    @field_validator("components")
+    @classmethod
+    def _names(cls, value: dict[str, ComponentSpec]) -> dict[str, ComponentSpec]:
+        if not value:
+            raise ValueError("a study needs at least one component")
+        for name in value:
+            if not re.fullmatch(r"[A-Za-z_]\w*", name):
+                raise ValueError(f"component name {name!r} must be an identifier")
+        return value
+
+
+def _format_validation(path: Path, err: ValidationError) -> str:
+    lines = [f"{path}: invalid study file"]
+    for e in err.errors():
+        loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
+        lines.append(f"  field {loc}: {e['msg']}")
+    return "\n".join(lines)
+
+
+def read_study_file(path: str | Path) -> dict[str, Any]:
+    """Parse TOML (``.toml``) or YAML (``.yaml``/``.yml``) into a plain dict."""
+    path = Path(path)
+    if not path.is_file():
+        raise StudyError(f"{path}: study file not found")
+    text = path.read_text(encoding="utf-8")
+    try:
+        if path.suffix == ".toml":
+            return tomllib.loads(text)
+        if path.suffix in (".yaml", ".yml"):
+            import yaml
+
+            data = yaml.safe_load(text)
+            if not isinstance(data, dict):
+                raise StudyError(f"{path}: expected a mapping at the top level")
+            return data
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{path}: not valid TOML: {exc}") from None
+    except Exception as exc:  # yaml errors
+        if isinstance(exc, StudyError):
+            raise
+        raise StudyError(f"{path}: not valid YAML: {exc}") from None
+    raise StudyError(f"{path}: unknown study file type {path.suffix!r}; expected .toml, .yaml or .yml")
+
+
+def parse_study(data: dict[str, Any], path: str | Path = "<study>") -> Study:
+    path = Path(path)
+    try:
+        study = Study.model_validate(data)
+    except ValidationError as err:
+        raise StudyError(_format_validation(path, err)) from None
+    study.path = path
+    return study
+
+
+def load_study(path: str | Path, overrides: list[str] | None = None) -> Study:
+    """Load and validate a study file; ``overrides`` are ``component.parameter=value`` strings."""
+    data = read_study_file(path)
+    for item in overrides or []:
+        apply_override(data, item, path)
+    return parse_study(data, path)
+
+
+def apply_override(data: dict[str, Any], item: str, path: str | Path) -> None:
+    """Set ``comp.param=value`` or ``study.field=value`` in raw study data (value parsed as TOML)."""
+    if "=" not in item or "." not in item.split("=", 1)[0]:
+        raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value'")
+    key, raw = item.split("=", 1)
+    section, field = key.strip().split(".", 1)
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    if section == "study":
+        data.setdefault("study", {})[field] = value
+        return
+    comps = data.get("components", {})
+    if section not in comps:
+        raise StudyError(f"{path}: override {item!r}: no component {section!r}; known: {sorted(comps)}")
+    comps[section].setdefault("parameters", {})[field] = value
