@@ -14,7 +14,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 
 class StudyError(Exception):
@@ -35,6 +35,14 @@ class StudySettings(BaseModel):
     signals_format: Literal["parquet", "csv"] = "parquet"
     component_package: str = "components"
     analysis: str | None = None
+
+    @model_validator(mode="after")
+    def _times(self) -> "StudySettings":
+        if self.stop_time <= self.start_time:
+            raise ValueError(f"stop_time ({self.stop_time}) must be after start_time ({self.start_time})")
+        if self.base_step > self.stop_time - self.start_time:
+            raise ValueError("base_step is longer than the run")
+        return self
 
 
 class ComponentSpec(BaseModel):

@@ -1,0 +1,64 @@
+"""Tiny components for orchestrator tests (no tractor in sight)."""
+from __future__ import annotations
+
+from orchestrator.component import Component, ComponentError, inp, out, par
+
+
+class Clock(Component):
+    """Sampled source: value = t."""
+
+    sampled = True
+    variables = (out("value", "s", -1.0, "time of the last sample"),)
+
+    def step(self, t, dt):
+        self.y["value"] = t
+
+
+class Gain(Component):
+    """Sampled, direct feedthrough: y = k u."""
+
+    sampled = True
+    variables = (inp("u", "s", 0.0, "input"), par("k", "1", 1.0, "gain"), out("y", "s", 0.0, "k u"))
+    feedthrough = {"y": ("u",)}
+
+    def step(self, t, dt):
+        self.y["y"] = self.p["k"] * self.u["u"]
+
+
+class Metres(Component):
+    sampled = True
+    variables = (inp("u", "m", 0.0, "input in metres"), out("y", "m", 0.0, "copy"))
+    feedthrough = {"y": ("u",)}
+
+    def step(self, t, dt):
+        self.y["y"] = self.u["u"]
+
+
+class Counter(Component):
+    """Continuous: counts its steps and integrates its input (forward Euler)."""
+
+    sampled = False
+    variables = (inp("u", "s", 0.0, "rate"), out("steps", "1", 0.0, "number of steps taken"),
+                 out("integral", "s", 0.0, "integral of u"), out("time", "s", 0.0, "time reached"))
+
+    def initialize(self, t0, dt):
+        self.calls = []
+        self.y["time"] = t0
+
+    def step(self, t, dt):
+        self.calls.append((t, dt))
+        self.y["steps"] += 1
+        self.y["integral"] += dt * self.u["u"]
+        self.y["time"] = t + dt
+
+
+class FailAt(Component):
+    """Sampled; raises at a chosen time."""
+
+    sampled = True
+    variables = (par("fail_time", "s", 1.0, "when to fail"), out("value", "s", 0.0, "t"))
+
+    def step(self, t, dt):
+        if t >= self.p["fail_time"] - 1e-12:
+            raise ComponentError(f"{self.name}: deliberate failure")
+        self.y["value"] = t
