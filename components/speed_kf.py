@@ -22,7 +22,7 @@ class SpeedKF(Component):
         inp("vel_east", "m/s", 0.0, "GPS east velocity"),
         inp("vel_north", "m/s", 0.0, "GPS north velocity"),
         inp("fix_valid", "1", 1.0, "1 when the GPS sample is a new fix"),
-        par("acceleration_psd", "m2/s3", 0.5, "white-acceleration spectral density q"),
+        par("acceleration_psd", "m2/s3", 0.005, "white-acceleration spectral density q"),
         par("position_noise_std", "m", 0.02, "GPS position noise"),
         par("velocity_noise_std", "m/s", 0.02, "GPS velocity noise"),
         out("speed", "m/s", 0.0, "filtered speed |v|"),
