@@ -36,6 +36,38 @@ class QPData:
     box: np.ndarray        # |x_i| <= box_i
 
 
+def polish(qp: QPData, x: np.ndarray, tol: float = 1e-4) -> np.ndarray:
+    """Refine an approximate QP solution: guess the active set from the constraints within
+    ``tol`` of their bounds, solve that equality-constrained KKT system exactly and keep the
+    result when it is feasible with multipliers of the right sign."""
+    n = len(x)
+    rows, rhs = [], []
+    for i in range(n):
+        if abs(x[i] - qp.box[i]) < tol:
+            rows.append(np.eye(n)[i]); rhs.append(qp.box[i])
+        elif abs(x[i] + qp.box[i]) < tol:
+            rows.append(-np.eye(n)[i]); rhs.append(qp.box[i])
+    Ax = qp.A @ x
+    for i in range(len(Ax)):
+        if abs(Ax[i] - qp.upper[i]) < tol:
+            rows.append(qp.A[i]); rhs.append(qp.upper[i])
+        elif abs(Ax[i] - qp.lower[i]) < tol:
+            rows.append(-qp.A[i]); rhs.append(-qp.lower[i])
+    k = len(rows)
+    if k > n:
+        return x
+    G = np.array(rows).reshape(k, n)
+    kkt = np.block([[qp.H, G.T], [G, np.zeros((k, k))]])
+    try:
+        sol = np.linalg.solve(kkt, np.concatenate([-qp.g, rhs]))
+    except np.linalg.LinAlgError:
+        return x
+    xp, lam = sol[:n], sol[n:]
+    feasible = (np.all(np.abs(xp) <= qp.box + 1e-9) and np.all(qp.A @ xp <= qp.upper + 1e-9)
+                and np.all(qp.A @ xp >= qp.lower - 1e-9))
+    return xp if feasible and np.all(lam >= -1e-9) else x
+
+
 class CondensedTrackingMPC:
     def __init__(self, num, den, dt: float, Np: int, Nc: int, Q: float, R: float,
                  u_max: float, du_max: float, solver: str = "daqp", tolerance: float = 1e-10) -> None:
@@ -102,18 +134,28 @@ class CondensedTrackingMPC:
             return np.asarray(x, dtype=float), int(flag)
         from proxsuite import proxqp
 
+        # bounds on the moves as ordinary inequality rows: proxsuite's box-constraint mode
+        # returned wrong answers (outside the box) on instances of this shape
+        C = np.vstack([np.eye(self.Nc), qp.A])
+        lower = np.concatenate([-qp.box, qp.lower])
+        upper = np.concatenate([qp.box, qp.upper])
         if self._solver is None:
-            s = proxqp.dense.QP(self.Nc, 0, self.Nc, box_constraints=True)
+            s = proxqp.dense.QP(self.Nc, 0, 2 * self.Nc)
             s.settings.eps_abs, s.settings.eps_rel = self.tolerance, 0.0
             s.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
-            s.init(qp.H, qp.g, None, None, qp.A, qp.lower, qp.upper, -qp.box, qp.box)
+            s.init(qp.H, qp.g, None, None, C, lower, upper)
             self._solver = s
         else:
-            self._solver.update(g=qp.g, l=qp.lower, u=qp.upper, l_box=-qp.box, u_box=qp.box)
+            self._solver.update(g=qp.g, l=lower, u=upper)
         self._solver.solve()
-        status = self._solver.results.info.status
-        ok = status == proxqp.QPSolverOutput.PROXQP_SOLVED
-        return np.array(self._solver.results.x, dtype=float), (1 if ok else -1)
+        if self._solver.results.info.status != proxqp.QPSolverOutput.PROXQP_SOLVED:
+            # a warm start from a distant problem can mislead it: one cold retry
+            self._solver.settings.initial_guess = proxqp.InitialGuess.NO_INITIAL_GUESS
+            self._solver.solve()
+            self._solver.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+        if self._solver.results.info.status != proxqp.QPSolverOutput.PROXQP_SOLVED:
+            return np.zeros(self.Nc), -1
+        return polish(qp, np.array(self._solver.results.x, dtype=float)), 1
 
     def step(self, r: float, y_meas: float, u_applied: float | None = None) -> tuple[float, int]:
         """Solve at this instant, apply the first move, advance the internal model.
