@@ -62,3 +62,14 @@ class FailAt(Component):
         if t >= self.p["fail_time"] - 1e-12:
             raise ComponentError(f"{self.name}: deliberate failure")
         self.y["value"] = t
+
+
+class YawRateInDegrees(Component):
+    """A component a user might add: reports the yaw rate in degrees per second."""
+
+    sampled = True
+    variables = (inp("yaw_rate", "rad/s", 0.0, "yaw rate"), out("yaw_rate_deg", "deg/s", 0.0, "yaw rate in deg/s"))
+    feedthrough = {"yaw_rate_deg": ("yaw_rate",)}
+
+    def step(self, t, dt):
+        self.y["yaw_rate_deg"] = self.u["yaw_rate"] * 180.0 / 3.141592653589793

@@ -160,10 +160,10 @@ class CondensedTrackingMPC:
     def step(self, r: float, y_meas: float, u_applied: float | None = None) -> tuple[float, int]:
         """Solve at this instant, apply the first move, advance the internal model.
         ``u_applied``: the input the plant actually received over the last step (a measured
-        actuator position), used in place of the last command. Returns (u_k, status > 0 solved)."""
+        actuator position): the internal model is advanced with it instead of the last command;
+        the moves and their limits stay relative to the last command. Returns (u_k, status > 0)."""
         if u_applied is not None:
             self.x = self._x_prev_model + self.B * float(u_applied)
-            self.u_prev = float(u_applied)
         qp = self.qp(r, y_meas)
         du, status = self._solve(qp)
         if status <= 0 or not np.all(np.isfinite(du)):
