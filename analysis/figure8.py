@@ -109,17 +109,13 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     axes[0].set_title("Trajectory following error")
     save(fig, "error.png")
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(t, sig("kinematic_tracker", "speed_desired"), "k--", lw=0.8, label="desired")
-    ax.plot(t, sig("speed_drivetrain", "speed"), "r", lw=0.8, label="actual")
-    ax.set_xlabel("time [s]"), ax.set_ylabel("speed [m/s]"), ax.legend(), ax.grid(alpha=0.3)
-    ax.set_title("Longitudinal speed")
-    save(fig, "speed.png")
-
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.plot(t, sig("kinematic_tracker", "yaw_rate_desired"), "k--", lw=0.8, label="desired")
-    ax.plot(t, sig("tractor_yaw_plant", "yaw_rate"), "r", lw=0.8, label="actual")
-    ax.set_xlabel("time [s]"), ax.set_ylabel("yaw rate [rad/s]"), ax.legend(), ax.grid(alpha=0.3)
-    ax.set_title("Yaw rate")
-    save(fig, "yaw_rate.png")
+    for port_d, (typ, port), label, title, name in (
+            ("speed_desired", ("speed_drivetrain", "speed"), "speed [m/s]", "Longitudinal speed", "speed.png"),
+            ("yaw_rate_desired", ("tractor_yaw_plant", "yaw_rate"), "yaw rate [rad/s]", "Yaw rate", "yaw_rate.png")):
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        ax.plot(t, sig("kinematic_tracker", port_d), "k--", lw=0.8, label="desired")
+        ax.plot(t, sig(typ, port), "r", lw=0.8, label="actual")
+        ax.set_xlabel("time [s]"), ax.set_ylabel(label), ax.legend(), ax.grid(alpha=0.3)
+        ax.set_title(title)
+        save(fig, name)
     return written
