@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from .engine import RunError
-from .runner import run_study
+from .runner import AnalysisError, run_study
 from .study import StudyError, load_study
 
 
@@ -26,6 +26,9 @@ def main(argv: list[str] | None = None) -> int:
     except StudyError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except AnalysisError as exc:
+        print(f"error: {exc}; the signals are in {args.out}", file=sys.stderr)
+        return 1
     except RunError as exc:
         print(f"error: run failed {exc}; results recorded so far are in {args.out}", file=sys.stderr)
         return 1

@@ -14,6 +14,10 @@ from .results import write_json, write_table
 from .study import Study, StudyError
 
 
+class AnalysisError(Exception):
+    """The study's analysis could not compute its metrics (the signals are kept)."""
+
+
 @dataclass
 class RunResult:
     metrics: dict[str, Any]
@@ -53,16 +57,23 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResu
                                                    "wall_time_s": err.partial.wall_time_s})
         raise
     frame = rec.to_frame()
+    files: list[Path] = []
+    if out_dir is not None:
+        files.append(write_table(out_dir / "signals", frame, fmt))
     values: dict[str, Any] = {}
     if analysis is not None:
-        values.update(analysis.metrics(frame, study))
+        try:
+            values.update(analysis.metrics(frame, study))
+        except (ValueError, KeyError) as exc:
+            if out_dir is not None:
+                write_json(out_dir / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
+                                                       "wall_time_s": rec.wall_time_s})
+            raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s)
     metrics = {**base, "status": "completed", **values}
     summary = analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
         json.dumps(values, indent=2)
-    files: list[Path] = []
     if out_dir is not None:
-        files.append(write_table(out_dir / "signals", frame, fmt))
         files.append(write_json(out_dir / "metrics.json", metrics))
         files.append(write_json(out_dir / "run.json", {
             "study": study.model_dump(mode="json", exclude={"path"}),

@@ -177,3 +177,13 @@ def test_cli_reports_bad_study_without_traceback(tmp_path, edit, words):
     for w in words:
         assert w in proc.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(ROOT / "studies/figure8.toml"),
+                           "--out", str(tmp_path), "--set", "study.stop_time=5"],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert "run too short for metrics" in proc.stderr and "study.analysis" in proc.stderr
+    assert (tmp_path / "signals.parquet").exists()
+    assert json.loads((tmp_path / "metrics.json").read_text())["status"] == "analysis_failed"
