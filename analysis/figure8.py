@@ -45,11 +45,15 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     psi_hat = signal(frame, study, "pose_ekf", "heading")
     dpsi = np.angle(np.exp(1j * (psi_hat - psi)))
     straight = ~curved
+
+    def stat(fn, values):      # NaN when the window holds no sample of that kind
+        return float(fn(values)) if len(values) else float("nan")
+
     return {
-        "euclid_mean_straight": float(err[straight].mean()),
-        "euclid_max_straight": float(err[straight].max()),
-        "euclid_mean_curved": float(err[curved].mean()),
-        "euclid_max_curved": float(err[curved].max()),
+        "euclid_mean_straight": stat(np.mean, err[straight]),
+        "euclid_max_straight": stat(np.max, err[straight]),
+        "euclid_mean_curved": stat(np.mean, err[curved]),
+        "euclid_max_curved": stat(np.max, err[curved]),
         "euclid_rms": rms(err),
         "euclid_max_startup": float(err_all[:start].max()) if start else 0.0,
         "metrics_from_time_s": float(frame["t"].iloc[0]),

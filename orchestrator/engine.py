@@ -61,11 +61,15 @@ class Simulation:
         sys_ = self.system
         start = time.perf_counter()
         published: dict[str, dict] = {}
-        for node in sys_.nodes.values():
-            node.component.initialize(self.t0, node.step)
-            published[node.name] = dict(node.component.y)
         n = self.n_steps + 1
         data = np.full((n, 1 + len(self.signals)), np.nan)
+        for node in sys_.nodes.values():
+            try:
+                node.component.initialize(self.t0, node.step)
+            except (ComponentError, ValueError, ArithmeticError) as exc:
+                rec = Recording(self.columns, data[:0], time.perf_counter() - start, False)
+                raise RunError(f"initialising {node.name!r}: {exc}", rec) from exc
+            published[node.name] = dict(node.component.y)
         sampled, continuous = sys_.sampled_order, sys_.continuous
         k = 0
         try:

@@ -9,11 +9,14 @@ Layout::
 """
 from __future__ import annotations
 
+import copy
+import math
 import re
 import tomllib
 from pathlib import Path
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 
@@ -63,11 +66,61 @@ class Connection(BaseModel):
         return f"{self.source}.{self.output} -> {self.target}.{self.input}"
 
 
+class SweepRange(BaseModel):
+    """Inclusive range: ``{start, stop, step}`` or ``{start, stop, num}``."""
+
+    model_config = ConfigDict(extra="forbid")
+    start: float
+    stop: float
+    step: float | None = None
+    num: int | None = None
+
+    @model_validator(mode="after")
+    def _one_of(self) -> "SweepRange":
+        if (self.step is None) == (self.num is None):
+            raise ValueError("give exactly one of 'step' or 'num'")
+        if self.num is not None and self.num < 1:
+            raise ValueError("'num' must be >= 1")
+        if self.step is not None and (self.step == 0 or (self.stop - self.start) * self.step < 0):
+            raise ValueError(f"empty range: from {self.start} to {self.stop} by {self.step}")
+        return self
+
+    def values(self) -> list[float]:
+        if self.num is not None:
+            return [float(v) for v in np.linspace(self.start, self.stop, self.num)]
+        n = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+        return [self.start + k * self.step for k in range(n)]
+
+
+class Sweep(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    mode: Literal["grid", "zip"] = "grid"
+    parameters: dict[str, list[Any] | SweepRange]
+    seeds: list[int] | None = None
+    analysis: str | None = None
+
+    @field_validator("parameters")
+    @classmethod
+    def _names(cls, value: dict[str, Any]) -> dict[str, Any]:
+        if not value:
+            raise ValueError("a sweep needs at least one parameter")
+        for name, values in value.items():
+            if not re.fullmatch(r"[A-Za-z_]\w*\.[A-Za-z_]\w*", name):
+                raise ValueError(f"{name!r}: expected 'component.parameter' or 'study.field'")
+            if isinstance(values, list) and not values:
+                raise ValueError(f"{name!r}: empty list of values")
+        return value
+
+    def expanded(self) -> dict[str, list[Any]]:
+        return {k: (v.values() if isinstance(v, SweepRange) else list(v)) for k, v in self.parameters.items()}
+
+
 class Study(BaseModel):
     model_config = ConfigDict(extra="forbid")
     study: StudySettings
     components: dict[str, ComponentSpec]
     connections: list[Connection] = []
+    sweep: Sweep | None = None
     path: Path | None = None
 
     @field_validator("connections", mode="before")
@@ -105,9 +158,35 @@ def _format_validation(path: Path, err: ValidationError) -> str:
     return "\n".join(lines)
 
 
-def read_study_file(path: str | Path) -> dict[str, Any]:
-    """Parse TOML (``.toml``) or YAML (``.yaml``/``.yml``) into a plain dict."""
+def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """Deep merge: tables merge key by key, anything else in ``over`` replaces."""
+    out = copy.deepcopy(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """Parse a study file; a top-level ``extends = "other.toml"`` (relative to this file) starts
+    from that study and merges this file's tables over it."""
     path = Path(path)
+    data = _read_one(path)
+    parent = data.pop("extends", None)
+    if parent is None:
+        return data
+    if not isinstance(parent, str):
+        raise StudyError(f"{path}: field extends: expected a file name")
+    parent_path = (path.parent / parent).resolve()
+    if parent_path in _seen:
+        raise StudyError(f"{path}: field extends: circular ({' -> '.join(map(str, _seen + (parent_path,)))})")
+    return merge(read_study_file(parent_path, _seen + (path.resolve(),)), data)
+
+
+def _read_one(path: Path) -> dict[str, Any]:
+    """Parse TOML (``.toml``) or YAML (``.yaml``/``.yml``) into a plain dict."""
     if not path.is_file():
         raise StudyError(f"{path}: study file not found")
     text = path.read_text(encoding="utf-8")
@@ -140,12 +219,17 @@ def parse_study(data: dict[str, Any], path: str | Path = "<study>") -> Study:
     return study
 
 
-def load_study(path: str | Path, overrides: list[str] | None = None) -> Study:
-    """Load and validate a study file; ``overrides`` are ``component.parameter=value`` strings."""
+def load_raw(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
+    """The study file as data (``extends`` resolved), with ``component.parameter=value`` overrides."""
     data = read_study_file(path)
     for item in overrides or []:
         apply_override(data, item, path)
-    return parse_study(data, path)
+    return data
+
+
+def load_study(path: str | Path, overrides: list[str] | None = None) -> Study:
+    """Load and validate a study file; ``overrides`` are ``component.parameter=value`` strings."""
+    return parse_study(load_raw(path, overrides), path)
 
 
 def apply_override(data: dict[str, Any], item: str, path: str | Path) -> None:

@@ -1,0 +1,136 @@
+"""Parameter sweeps: same metrics as separate runs, resumable after a kill, Dask equals the
+process pool, bad sweeps refused before anything runs."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from orchestrator.runner import run_study
+from orchestrator.study import StudyError, load_raw, load_study, parse_study
+from orchestrator.sweep import SweepRun, expand
+
+ROOT = Path(__file__).resolve().parents[1]
+SHORT = "study.stop_time=20.0"
+
+
+def sweep_file(tmp_path, body, name="sweep.toml"):
+    path = tmp_path / name
+    path.write_text(f'extends = "{ROOT / "studies/figure8.toml"}"\n{body}')
+    return path
+
+
+THREE = '[sweep]\nmode = "zip"\nseeds = [5]\n[sweep.parameters]\n"reference.speed" = [1.5, 2.0, 2.5]\n' \
+        '"tracker.k_c" = [1.5, 1.5, 1.2]\n'
+
+
+def comparable(table: pd.DataFrame) -> pd.DataFrame:
+    return table.drop(columns=["wall_time_s"]).sort_values("point").reset_index(drop=True)
+
+
+def run_sweep(path, out, workers=2, scheduler=None, overrides=(SHORT,)):
+    raw = load_raw(path, list(overrides))
+    return SweepRun(parse_study(raw, path), raw, out).run(workers, scheduler, progress=False)
+
+
+def test_points_expand_as_grid_or_zip_with_seeds(tmp_path):
+    grid = load_study(sweep_file(tmp_path, '[sweep]\nseeds = [1, 2]\n[sweep.parameters]\n'
+                                 '"reference.speed" = {start = 1.0, stop = 2.0, step = 0.5}\n"tracker.k_c" = [1, 2]\n'))
+    points = expand(grid)
+    assert len(points) == 3 * 2 * 2
+    assert {(p.values["reference.speed"], p.values["tracker.k_c"], p.seed) for p in points} == {
+        (v, k, s) for v in (1.0, 1.5, 2.0) for k in (1, 2) for s in (1, 2)}
+    zipped = load_study(sweep_file(tmp_path, THREE))
+    assert [p.values for p in expand(zipped)] == [{"reference.speed": 1.5, "tracker.k_c": 1.5},
+                                                  {"reference.speed": 2.0, "tracker.k_c": 1.5},
+                                                  {"reference.speed": 2.5, "tracker.k_c": 1.2}]
+
+
+def test_three_point_sweep_equals_three_separate_runs(tmp_path):
+    path = sweep_file(tmp_path, THREE)
+    table = run_sweep(path, tmp_path / "out")
+    assert list(table["status"]) == ["completed"] * 3
+    for _, row in table.iterrows():
+        single = run_study(load_study(ROOT / "studies/figure8.toml",
+                                      [SHORT, "study.seed=5", f"reference.speed={row['reference.speed']}",
+                                       f"tracker.k_c={row['tracker.k_c']}"]), None, plots=False).metrics
+        for key, value in single.items():
+            if isinstance(value, float) and key != "wall_time_s":
+                assert row[key] == value or (pd.isna(row[key]) and pd.isna(value)), key
+    # each point's full signal table is kept beside it
+    signals = pd.read_parquet(tmp_path / "out/points/p0001/signals.parquet")
+    assert signals["reference.speed_ref"].max() == pytest.approx(2.0)
+    assert pd.read_parquet(tmp_path / "out/results.parquet").shape[0] == 3
+
+
+def test_killed_sweep_resumes_without_rerunning_finished_points(tmp_path):
+    body = '[sweep]\nseeds = [3]\n[sweep.parameters]\n"reference.speed" = [1.0, 1.5, 2.0, 2.5]\n'
+    path = sweep_file(tmp_path, body)
+    out = tmp_path / "interrupted"
+    cmd = [sys.executable, "-m", "orchestrator", "sweep", str(path), "--out", str(out), "--workers", "1",
+           "--set", SHORT, "--no-progress", "--no-plots"]
+    proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while not (out / "points/p0001/metrics.json").exists():
+        assert time.time() < deadline and proc.poll() is None
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    finished = {p.parent.name: p.stat().st_mtime_ns for p in out.glob("points/*/metrics.json")}
+    assert 2 <= len(finished) < 4
+    rerun = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+    assert rerun.returncode == 0, rerun.stderr
+    assert not list(out.rglob("*.tmp"))
+    for name, mtime in finished.items():                 # no finished point was run again
+        assert (out / "points" / name / "metrics.json").stat().st_mtime_ns == mtime
+    resumed = pd.read_parquet(out / "results.parquet")
+    whole = run_sweep(path, tmp_path / "whole", workers=2)
+    pd.testing.assert_frame_equal(comparable(resumed), comparable(whole), check_exact=True)
+
+
+def test_dask_local_cluster_gives_the_same_table(tmp_path):
+    path = sweep_file(tmp_path, THREE)
+    pool = run_sweep(path, tmp_path / "pool", workers=2)
+    dask = run_sweep(path, tmp_path / "dask", workers=2, scheduler="local")
+    pd.testing.assert_frame_equal(comparable(pool), comparable(dask), check_exact=True)
+
+
+@pytest.mark.parametrize("body, words", [
+    ('[sweep]\n[sweep.parameters]\n"reference.sped" = [1.0, 2.0]\n', ["unknown parameter", "sped", "sweep point"]),
+    ('[sweep]\n[sweep.parameters]\n"referee.speed" = [1.0, 2.0]\n', ["no component 'referee'"]),
+    ('[sweep]\n[sweep.parameters]\n"reference.speed" = {start = 2.0, stop = 1.0, step = 0.5}\n', ["empty range"]),
+    ('[sweep]\n[sweep.parameters]\n"reference.speed" = []\n', ["empty list"]),
+    ('[sweep]\nmode = "zip"\n[sweep.parameters]\n"reference.speed" = [1.0, 2.0]\n"tracker.k_c" = [1.0]\n',
+     ["equal length"]),
+    ('[sweep]\n[sweep.parameters]\n"reference.speed" = ["3 deg"]\n', ["expected 'm/s'"]),
+])
+def test_bad_sweeps_fail_before_running_anything(tmp_path, body, words):
+    path = sweep_file(tmp_path, body)
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "orchestrator", "sweep", str(path), "--out", str(out),
+                           "--no-progress"], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    for w in words:
+        assert w in proc.stderr
+    assert not (out / "points").exists()
+
+
+def test_a_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
+    path = sweep_file(tmp_path, '[sweep]\n[sweep.parameters]\n"reference.speed" = [1.5, -1.0, 2.0]\n')
+    table = run_sweep(path, tmp_path / "out")
+    assert list(table["status"]) == ["completed", "failed", "completed"]
+    assert "speed must be > 0" in table["error"].iloc[1]
+
+
+def test_a_changed_study_is_not_mixed_into_old_results(tmp_path):
+    path = sweep_file(tmp_path, THREE)
+    run_sweep(path, tmp_path / "out")
+    with pytest.raises(StudyError, match="different sweep"):
+        run_sweep(path, tmp_path / "out", overrides=(SHORT, "tracker.k_s=0.5"))
