@@ -70,7 +70,8 @@ def plots(table: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
             ax.plot(pol.real, pol.imag, "x", color=colour, ms=9, mew=2)
             ax.plot(z.real, z.imag, "o", mfc="none", color=colour, ms=9, mew=2)
         ax.axvline(0, color="k", lw=0.5)
-        ax.set_xlim(-40, 5)
+        ax.set_xscale("symlog", linthresh=10.0)       # slow modes near 0 and fast real ones (-400) both visible
+        ax.set_xlim(-500.0, 5.0)
         ax.set_title(f"{model}: poles x, zeros o ({speeds[0]:.2f} to {speeds[-1]:.2f} m/s)", fontsize=9)
         ax.set_xlabel("real [1/s]"), ax.set_ylabel("imag [rad/s]"), ax.grid(alpha=0.3)
     fig.suptitle("Yaw models against speed (paper's 1 m/s blue, 2 m/s red); colour: speed, dark = slow")
