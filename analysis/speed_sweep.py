@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space
+from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space, transfer_function
 from components.tractor_yaw_plant import TractorYawPlant
 from orchestrator.study import Study
 
@@ -25,15 +25,9 @@ def tractor_parameters(study: Study) -> TractorParameters:
 
 
 def poles_zeros(model: str, p: TractorParameters, v: float) -> tuple[np.ndarray, np.ndarray]:
-    """Poles = eig(A); zeros = roots of the numerator of C (sI-A)^-1 B (structurally zero
-    leading coefficients, left by round-off, trimmed)."""
-    from scipy.signal import ss2tf
-
-    A, B, C = state_space(model, p, v)
-    num, _ = ss2tf(A, B.reshape(-1, 1), C.reshape(1, -1), np.zeros((1, 1)))
-    num = num[0]
-    num = num[np.argmax(np.abs(num) > 1e-9 * np.abs(num).max()):]
-    return np.linalg.eigvals(A), np.roots(num)
+    """Poles = eig(A); zeros = roots of the numerator of C (sI-A)^-1 B."""
+    num, _ = transfer_function(model, p, v)
+    return np.linalg.eigvals(state_space(model, p, v)[0]), np.roots(num)
 
 
 def dc_gain(model: str, p: TractorParameters, v: float) -> float:

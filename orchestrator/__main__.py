@@ -30,9 +30,21 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("--retry-failed", action="store_true", help="run failed points again")
     sw.add_argument("--no-progress", action="store_true")
     sw.add_argument("--no-plots", action="store_true")
+    ident = sub.add_parser("identify", help="identify the yaw dynamics from a study's experiment or a measured log")
+    ident.add_argument("source", type=Path, help="study file (.toml/.yaml) or log (.csv/.parquet)")
+    ident.add_argument("--out", type=Path, required=True)
+    ident.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help="study only")
+    ident.add_argument("--period", type=float, help="log: multisine period [s] (detected if not given)")
+    ident.add_argument("--speed", type=float, help="log: speed [m/s] (median of v if not given)")
+    ident.add_argument("--band", type=float, nargs=2, metavar=("F_MIN", "F_MAX"), help="log: lines to fit [Hz]")
+    ident.add_argument("--models", nargs="+", help="log: structures to fit")
+    ident.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
+    ident.add_argument("--no-plots", action="store_true")
     args = parser.parse_args(argv)
     if args.command == "sweep":
         return _sweep(args)
+    if args.command == "identify":
+        return _identify(args)
     try:
         study = load_study(args.study, args.set)
         result = run_study(study, args.out, plots=not args.no_plots)
@@ -74,6 +86,30 @@ def _sweep(args) -> int:
     print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
           + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
     return 0 if failed == 0 else 1
+
+
+def _identify(args) -> int:
+    from identification.experiment import LogError
+    from identification.pipeline import identify_log, identify_study, summary
+    from .study import load_raw, parse_study
+
+    try:
+        if args.source.suffix in (".toml", ".yaml", ".yml"):
+            raw = load_raw(args.source, args.set)
+            report = identify_study(parse_study(raw, args.source), raw, args.out, plots=not args.no_plots)
+        else:
+            report = identify_log(args.source, args.out, args.period, args.speed,
+                                  tuple(args.band) if args.band else None, args.models, args.delay,
+                                  plots=not args.no_plots)
+    except (StudyError, LogError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:      # e.g. an unknown model structure
+        print(f"error: {args.source}: {exc}", file=sys.stderr)
+        return 2
+    print(summary(report))
+    print(f"\nwritten to {args.out}/identification.json")
+    return 0
 
 
 if __name__ == "__main__":

@@ -121,6 +121,7 @@ class Study(BaseModel):
     components: dict[str, ComponentSpec]
     connections: list[Connection] = []
     sweep: Sweep | None = None
+    identification: dict[str, Any] | None = None   # validated by the identification tool
     path: Path | None = None
 
     @field_validator("connections", mode="before")
@@ -242,8 +243,8 @@ def apply_override(data: dict[str, Any], item: str, path: str | Path) -> None:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
-    if section == "study":
-        data.setdefault("study", {})[field] = value
+    if section in ("study", "identification"):
+        data.setdefault(section, {})[field] = value
         return
     comps = data.get("components", {})
     if section not in comps:

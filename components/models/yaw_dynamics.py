@@ -92,3 +92,15 @@ def zoh_discretize(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray,
     M[:n, n] = B
     E = expm(M * dt)
     return E[:n, :n], E[:n, n]
+
+
+def transfer_function(model: str, p: TractorParameters, v_x: float) -> tuple[np.ndarray, np.ndarray]:
+    """(num, den) of gamma/delta, highest power first, den monic; numerator coefficients that
+    are structurally zero (round-off only) are trimmed."""
+    from scipy.signal import ss2tf
+
+    A, B, C = state_space(model, p, v_x)
+    num, den = ss2tf(A, B.reshape(-1, 1), C.reshape(1, -1), np.zeros((1, 1)))
+    num = num[0] / den[0]
+    num = num[np.argmax(np.abs(num) > 1e-9 * np.abs(num).max()):]
+    return num, den / den[0]

@@ -1,0 +1,268 @@
+"""Identification experiments: simulated through the orchestrator from a study file, or read from
+a measured log in the canonical format (t, delta_cmd, delta, v, yaw_rate, ...)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from orchestrator.runner import simulate
+from orchestrator.study import Study, StudyError, parse_study
+from orchestrator.units import UnitError, to_si
+
+from .fitting import STRUCTURES
+from .multisine import MultisineDesign, realisation
+
+CANONICAL = ("t", "delta_cmd", "delta", "v", "yaw_rate")
+
+
+class IdentificationConfig(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    speeds: list[float] = Field(default=[2.0], min_length=1)
+    speed_input: str = "tractor.speed"
+    excitation: str = "excitation"
+    signals: dict[str, str]
+    sample_rate: float = Field(20.0, gt=0)
+    period: float = Field(50.0, gt=0)
+    periods: int = Field(4, ge=2)
+    transient_periods: int = Field(1, ge=0)
+    realisations: int = Field(4, ge=1)
+    band: tuple[float, float] = (0.02, 2.0)
+    kind: str = "odd_odd"
+    rms: float | str = "4 deg"
+    validation_bands: list[tuple[float, float]] = [(0.0, 2.0), (0.0, 8.0)]
+    validation_periods: int = Field(2, ge=1)
+    detection_band: tuple[float, float] | None = (0.02, 8.0)   # wide odd-odd run for the NL analysis
+    detection_realisations: int = Field(2, ge=1)
+    models: list[str] = list(STRUCTURES)
+    delay: bool = False
+
+    @field_validator("models")
+    @classmethod
+    def _models(cls, v: list[str]) -> list[str]:
+        bad = [m for m in v if m not in STRUCTURES]
+        if bad:
+            raise ValueError(f"unknown model structures {bad}; expected some of {list(STRUCTURES)}")
+        return v
+
+    @field_validator("signals")
+    @classmethod
+    def _signals(cls, v: dict[str, str]) -> dict[str, str]:
+        missing = [k for k in ("delta_cmd", "delta", "yaw_rate") if k not in v]
+        if missing:
+            raise ValueError(f"missing signal mappings {missing}")
+        return v
+
+    @property
+    def period_samples(self) -> int:
+        return int(round(self.period * self.sample_rate))
+
+    @property
+    def rms_rad(self) -> float:
+        return float(to_si(self.rms, "rad"))
+
+
+@dataclass
+class Experiment:
+    """Steady-state data of one experiment, shaped (realisations, periods, samples)."""
+
+    fs: float
+    excited: np.ndarray
+    r: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    speed: float
+    notes: list[str] = field(default_factory=list)
+    full: list[pd.DataFrame] = field(default_factory=list)   # each realisation's whole record
+    transient_samples: int = 0
+
+    @property
+    def period_samples(self) -> int:
+        return self.u.shape[-1]
+
+
+def config_of(study: Study) -> IdentificationConfig:
+    if study.identification is None:
+        raise StudyError(f"{study.path}: no [identification] section")
+    try:
+        cfg = IdentificationConfig.model_validate(study.identification)
+        cfg.rms_rad
+    except ValidationError as err:
+        lines = [f"{study.path}: invalid [identification] section"]
+        lines += [f"  field identification.{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in err.errors()]
+        raise StudyError("\n".join(lines)) from None
+    except UnitError as exc:
+        raise StudyError(f"{study.path}: field identification.rms: {exc}") from None
+    if not math.isclose(cfg.period * cfg.sample_rate, cfg.period_samples):
+        raise StudyError(f"{study.path}: identification.period x sample_rate must be a whole number of samples")
+    return cfg
+
+
+def _design(cfg: IdentificationConfig, band, kind: str) -> MultisineDesign:
+    f0 = cfg.sample_rate / cfg.period_samples
+    lo = max(band[0], f0)
+    return MultisineDesign(cfg.sample_rate, cfg.period_samples, lo, band[1], cfg.rms_rad, kind)
+
+
+def simulate_experiment(study: Study, raw: dict[str, Any], cfg: IdentificationConfig, speed: float,
+                        band, kind: str, realisations: int, periods: int, seed: int) -> Experiment:
+    """Run ``realisations`` co-simulations of transient + ``periods`` periods of a fresh random-phase
+    multisine each, at ``speed``; sample the signals at the identification rate."""
+    design = _design(cfg, band, kind)
+    rng = np.random.default_rng(seed)
+    n_per = cfg.transient_periods + periods
+    N = cfg.period_samples
+    step = 1.0 / cfg.sample_rate
+    comp, port = cfg.speed_input.split(".", 1)
+    rs, us, ys, full = [], [], [], []
+    for m in range(realisations):
+        values = realisation(design, rng)
+        data = {**raw, "study": {**raw["study"], "stop_time": raw["study"].get("start_time", 0.0) + n_per * cfg.period,
+                                 "seed": int(rng.integers(2**31))}}
+        data["components"] = {k: dict(v) for k, v in raw["components"].items()}
+        exc = data["components"].get(cfg.excitation)
+        if exc is None or comp not in data["components"]:
+            raise StudyError(f"{study.path}: identification.excitation / speed_input name unknown components")
+        exc["parameters"] = {**exc.get("parameters", {}), "values": values.tolist()}
+        exc["step"] = step
+        data["components"][comp] = {**data["components"][comp],
+                                    "inputs": {**data["components"][comp].get("inputs", {}), port: speed}}
+        data.pop("sweep", None)
+        rec, _ = simulate(parse_study(data, study.path))
+        frame = rec.to_frame()
+        every = int(round(step / study.study.base_step))
+        frame = frame.iloc[::every].reset_index(drop=True).iloc[: n_per * N]
+        for key, column in cfg.signals.items():
+            if column not in frame:
+                raise StudyError(f"{study.path}: identification.signals.{key}: no signal {column!r}")
+        log = pd.DataFrame({"t": frame["t"], **{k: frame[c] for k, c in cfg.signals.items()}})
+        log["v"] = speed
+        full.append(log)
+        steady = slice(cfg.transient_periods * N, n_per * N)
+        rs.append(log["delta_cmd"].to_numpy()[steady].reshape(periods, N))
+        us.append(log["delta"].to_numpy()[steady].reshape(periods, N))
+        ys.append(log["yaw_rate"].to_numpy()[steady].reshape(periods, N))
+    return Experiment(cfg.sample_rate, design.excited, np.array(rs), np.array(us), np.array(ys), speed,
+                      full=full, transient_samples=cfg.transient_periods * N)
+
+
+# ---------------------------------------------------------------------------------------------
+# measured logs
+
+class LogError(ValueError):
+    pass
+
+
+def read_log(path: Path) -> pd.DataFrame:
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"{path}: log not found")
+    try:
+        frame = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    except Exception as exc:
+        raise LogError(f"{path}: cannot read as {'Parquet' if path.suffix == '.parquet' else 'CSV'}: {exc}") from None
+    missing = [c for c in CANONICAL if c not in frame.columns]
+    if missing:
+        raise LogError(f"{path}: missing columns {missing}; a log needs {list(CANONICAL)} (SI units, radians)")
+    for c in CANONICAL:
+        if not pd.api.types.is_numeric_dtype(frame[c]):
+            raise LogError(f"{path}: column {c!r} is not numeric")
+        bad = frame[c].isna().to_numpy()
+        if bad.any():
+            raise LogError(f"{path}: column {c!r} has {bad.sum()} NaN values (first at row {int(np.argmax(bad))})")
+    t = frame["t"].to_numpy()
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise LogError(f"{path}: time is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
+    if np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt):
+        i = int(np.argmax(np.abs(dt - np.median(dt))))
+        raise LogError(f"{path}: uneven sampling: step {dt[i]:.4g} s at row {i + 1}, typical {np.median(dt):.4g} s")
+    if np.abs(frame["delta"]).max() > math.pi:
+        raise LogError(f"{path}: column 'delta' reaches {np.abs(frame['delta']).max():.3g}: degrees? "
+                       "the log must hold radians")
+    return frame
+
+
+def detect_period(r: np.ndarray, min_samples: int = 8) -> int:
+    """Smallest N with r[t] == r[t - N] (to 1e-6 of its range) over most of the record."""
+    scale = np.ptp(r) or 1.0
+    for N in range(min_samples, len(r) // 2 + 1):
+        same = np.abs(r[N:] - r[:-N]) <= 1e-6 * scale
+        if same.mean() > 0.45:
+            return N
+    raise LogError("no period found in delta_cmd: the excitation must be periodic (a multisine) "
+                   "and the log must hold at least two periods")
+
+
+def experiment_from_log(frame: pd.DataFrame, where: str, period_s: float | None = None,
+                        speed: float | None = None, band: tuple[float, float] | None = None) -> Experiment:
+    """Split a log into realisations (where the command stops repeating), drop each one's first
+    period as transient, keep whole periods; detect what was not given and say so."""
+    notes = []
+    t = frame["t"].to_numpy()
+    fs = 1.0 / float(np.median(np.diff(t)))
+    r = frame["delta_cmd"].to_numpy()
+    if period_s is None:
+        N = detect_period(r)
+        notes.append(f"period detected from delta_cmd: {N} samples = {N / fs:.6g} s (f0 = {fs / N:.6g} Hz)")
+    else:
+        N = int(round(period_s * fs))
+    scale = np.ptp(r) or 1.0
+    repeats = np.zeros(len(r), dtype=bool)
+    repeats[N:] = np.abs(r[N:] - r[:-N]) <= 1e-6 * scale
+    # a realisation: a stretch where samples repeat the previous period, plus that first period
+    runs, start = [], None
+    for i in range(N, len(r) + 1):
+        on = i < len(r) and repeats[i]
+        if on and start is None:
+            start = i - N
+        if not on and start is not None:
+            runs.append((start, i))
+            start = None
+    blocks = []
+    for a, b in runs:
+        whole = (b - a) // N
+        if whole >= 3:                        # one transient + at least two steady periods
+            blocks.append((a, whole))
+    if not blocks:
+        raise LogError(f"{where}: too few periods: each realisation needs a transient period and at "
+                       f"least 2 steady periods of {N} samples")
+    P = min(w for _, w in blocks) - 1
+    notes.append(f"{len(blocks)} realisation(s) found, {P} steady period(s) each used "
+                 f"(first period of each dropped as transient)")
+    def stack(col):
+        x = frame[col].to_numpy()
+        return np.array([x[a + N: a + N + P * N].reshape(P, N) for a, _ in blocks])
+    R = np.fft.rfft(stack("delta_cmd").mean(axis=(0, 1)))
+    mag = np.abs(R)
+    excited = np.flatnonzero(mag > 1e-3 * mag.max())
+    excited = excited[excited > 0]
+    if band is not None:
+        excited = excited[(excited * fs / N >= band[0]) & (excited * fs / N <= band[1])]
+    notes.append(f"excited lines detected: {len(excited)} from {excited[0] * fs / N:.4g} to "
+                 f"{excited[-1] * fs / N:.4g} Hz" + (" (odd-odd)" if np.all(excited % 4 == 1) else
+                                                     " (odd)" if np.all(excited % 2 == 1) else ""))
+    if speed is None:
+        speed = float(np.median(frame["v"]))
+        notes.append(f"speed from column v: median {speed:.3f} m/s")
+    full = [frame.iloc[a: a + w * N].reset_index(drop=True) for a, w in blocks]
+    return Experiment(fs, excited, stack("delta_cmd"), stack("delta"), stack("yaw_rate"), speed, notes,
+                      full=full, transient_samples=N)
+
+
+def experiment_to_log(experiments: list[Experiment]) -> pd.DataFrame:
+    """The canonical log of simulated experiments (realisations one after the other)."""
+    parts, t0 = [], 0.0
+    for exp in experiments:
+        for log in exp.full:
+            part = log.copy()
+            part["t"] = part["t"] - part["t"].iloc[0] + t0
+            t0 = part["t"].iloc[-1] + 1.0 / exp.fs
+            parts.append(part)
+    return pd.concat(parts, ignore_index=True)
