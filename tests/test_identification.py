@@ -90,15 +90,17 @@ def test_multisine_design():
         MultisineDesign(20.0, 1000, 0.02, 12.0, 0.1)
 
 
-def band_limited_experiment(num, den, seed, M=4, P_=4, noise=0.075):
-    """Steady-state periodic data of a known G(s): Y_k = G(j w_k) U_k exactly, plus white noise."""
+def band_limited_experiment(num, den, seed, M=4, P_=4, noise=0.075, delay=0.0):
+    """Steady-state periodic data of a known G(s) e^{-s delay}: Y_k = G(j w_k) U_k exactly, plus
+    white noise."""
     d = MultisineDesign(20.0, 1000, 0.02, 2.0, math.radians(4), "odd_odd")
     rng = np.random.default_rng(seed)
     us, ys = [], []
     for _ in range(M):
         one = realisation(d, rng)
         s = 2j * np.pi * np.arange(501) * d.f0
-        y_one = np.fft.irfft(np.polyval(num, s) / np.polyval(den, s) * np.fft.rfft(one), n=1000)
+        G = np.polyval(num, s) / np.polyval(den, s) * np.exp(-s * delay)
+        y_one = np.fft.irfft(G * np.fft.rfft(one), n=1000)
         us.append(np.tile(one, P_).reshape(P_, 1000))
         ys.append(np.tile(y_one, P_).reshape(P_, 1000) + noise * rng.standard_normal((P_, 1000)))
     return frf.analyse(np.array(us), np.array(ys), 20.0, d.excited)
@@ -116,6 +118,18 @@ def test_recovery_of_a_known_transfer_function_is_within_three_reported_sigmas()
     assert np.mean(np.abs(z) <= 3) >= 0.97                      # 3-sigma coverage
     assert 0.7 < z.std() < 1.4                                   # the reported sigmas are calibrated
     assert abs(z.mean()) < 0.5                                   # no bias
+
+
+def test_a_pure_delay_is_recovered_when_asked_for():
+    hits = 0
+    for seed in range(10):
+        r = band_limited_experiment(*PAPER_G2ND, seed, delay=0.15)
+        f = fit("second_order", r.freq, r.G, r.var_fit, delay=True)
+        hits += abs(f.delay - 0.15) <= 3 * f.delay_std
+        assert f.delay_std < 0.02
+    assert hits >= 9
+    no_delay = fit("second_order", r.freq, r.G, r.var_fit)
+    assert no_delay.cost > 5 * f.cost                      # leaving it out does not fit
 
 
 def test_frf_variances_match_their_empirical_spread():
