@@ -197,6 +197,10 @@ def _json_default(o):
     raise TypeError(type(o))
 
 
+def _hz_or(value, text: str) -> str:
+    return f"{value:g} Hz" if value else text
+
+
 def summary(report: dict) -> str:
     """Our coefficients and RMSE beside the paper's."""
     lines = [f"identification ({report['source']}), main speed {report['main_speed']:g} m/s"]
@@ -204,12 +208,13 @@ def summary(report: dict) -> str:
     nl = report["nonlinearity"]
     lines.append(f"nonlinearity: odd-line ratio {nl['odd_ratio'] or float('nan'):.2f}, even-line ratio "
                  f"{nl['even_ratio'] or float('nan'):.2f} (about 1 = linear); distortion dominates above: "
-                 f"{nl['nonlinear_dominant_above_hz'] or 'not reached'} Hz")
+                 + _hz_or(nl['nonlinear_dominant_above_hz'], "not reached in the band"))
     wide = report.get("nonlinearity_wide")
     if wide:
         lines.append(f"wide odd-odd run {wide['band_hz'][0]:g}-{wide['band_hz'][1]:g} Hz: odd-line ratio "
                      f"{wide['odd_ratio']:.1f}, even {wide['even_ratio']:.1f}; distortion as large as the linear "
-                     f"output above {wide['nonlinear_dominant_above_hz'] or 'nowhere'} Hz (paper: after 2 Hz)")
+                     f"output above: {_hz_or(wide['nonlinear_dominant_above_hz'], 'nowhere in the band')} "
+                     "(paper: after 2 Hz)")
     fmt = lambda c: "[" + ", ".join(f"{x:.4g}" for x in c) + "]"  # noqa: E731
     for name, m in report["models"].items():
         lines.append(f"\n{name}: num {fmt(m['num'])} +- {fmt(m['num_std'])}")
