@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from orchestrator.component import Component, inp, out, par
 
 
@@ -46,28 +44,45 @@ class PoseEKF(Component):
                    for k in ("x_rear", "y_rear", "heading", "x_cg", "y_cg", "heading_std")}
 
     def initialize(self, t0: float, dt: float) -> None:
+        """State and the six entries of the symmetric covariance are kept as floats; predict and
+        update are the matrix equations written out (tests: equal to the matrix form)."""
         p = self.p
-        self.s = np.array([p["x0"], p["y0"], p["psi0"]], dtype=float)
-        self.P = np.diag([p["position0_std"] ** 2] * 2 + [p["heading0_std"] ** 2])
-        self.Q = np.diag([p["position_process_std"] ** 2] * 2 + [p["heading_process_std"] ** 2])
-        self.R = np.eye(2) * p["position_noise_std"] ** 2
+        self.s = [float(p["x0"]), float(p["y0"]), float(p["psi0"])]
+        p0, h0 = p["position0_std"] ** 2, p["heading0_std"] ** 2
+        self.P = [p0, 0.0, 0.0, p0, 0.0, h0]             # P11 P12 P13 P22 P23 P33
+        self.Q = (p["position_process_std"] ** 2, p["heading_process_std"] ** 2)
+        self.r = p["position_noise_std"] ** 2
         self.prev_input: tuple[float, float] | None = None
         self._publish()
 
     def predict(self, v: float, delta: float, dt: float) -> None:
+        """s <- f(s, v, delta);  P <- F P F' + Q with F = [[1, 0, f13], [0, 1, f23], [0, 0, 1]]."""
         x, y, psi = self.s
         c, s = math.cos(psi), math.sin(psi)
-        self.s = np.array([x + dt * v * c, y + dt * v * s, psi + dt * v * math.tan(delta) / self.p["wheelbase"]])
-        F = np.array([[1.0, 0.0, -dt * v * s], [0.0, 1.0, dt * v * c], [0.0, 0.0, 1.0]])
-        self.P = F @ self.P @ F.T + self.Q
+        self.s = [x + dt * v * c, y + dt * v * s, psi + dt * v * math.tan(delta) / self.p["wheelbase"]]
+        f13, f23 = -dt * v * s, dt * v * c
+        p11, p12, p13, p22, p23, p33 = self.P
+        qp, qh = self.Q
+        self.P = [p11 + 2 * f13 * p13 + f13 * f13 * p33 + qp,
+                  p12 + f13 * p23 + f23 * p13 + f13 * f23 * p33,
+                  p13 + f13 * p33,
+                  p22 + 2 * f23 * p23 + f23 * f23 * p33 + qp,
+                  p23 + f23 * p33,
+                  p33 + qh]
 
     def update(self, zx: float, zy: float) -> None:
-        innovation = np.array([zx, zy]) - self.s[:2]
-        S = self.P[:2, :2] + self.R
-        K = self.P[:, :2] @ np.linalg.inv(S)
-        self.s = self.s + K @ innovation
-        self.P = self.P - K @ self.P[:2, :]
-        self.P = 0.5 * (self.P + self.P.T)
+        """K = P H' (H P H' + R)^-1 with H = [I 0];  s <- s + K (z - H s);  P <- P - K H P."""
+        p11, p12, p13, p22, p23, p33 = self.P
+        s11, s22 = p11 + self.r, p22 + self.r
+        det = s11 * s22 - p12 * p12
+        ex, ey = zx - self.s[0], zy - self.s[1]
+        k = [((pi1 * s22 - pi2 * p12) / det, (pi2 * s11 - pi1 * p12) / det)
+             for pi1, pi2 in ((p11, p12), (p12, p22), (p13, p23))]
+        self.s = [si + ki1 * ex + ki2 * ey for si, (ki1, ki2) in zip(self.s, k)]
+        (k11, k12), (k21, k22), (k31, k32) = k
+        self.P = [p11 - (k11 * p11 + k12 * p12), p12 - (k11 * p12 + k12 * p22),
+                  p13 - (k11 * p13 + k12 * p23), p22 - (k21 * p12 + k22 * p22),
+                  p23 - (k21 * p13 + k22 * p23), p33 - (k31 * p13 + k32 * p23)]
 
     def step(self, t: float, dt: float) -> None:
         u = self.u
@@ -79,14 +94,14 @@ class PoseEKF(Component):
         self._publish()
 
     def _publish(self) -> None:
-        x, y, psi = (float(v) for v in self.s)
+        x, y, psi = self.s
         psi = math.atan2(math.sin(psi), math.cos(psi))
         self.s[2] = psi
         lr = self.p["l_r"]
         out_ = self.y
         out_["x_rear"], out_["y_rear"], out_["heading"] = x, y, psi
         out_["x_cg"], out_["y_cg"] = x + lr * math.cos(psi), y + lr * math.sin(psi)
-        out_["heading_std"] = math.sqrt(self.P[2, 2])
+        out_["heading_std"] = math.sqrt(self.P[5])
 
 
 COMPONENT = PoseEKF

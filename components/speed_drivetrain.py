@@ -60,10 +60,17 @@ class SpeedDrivetrain(Component):
                                 p["voltage_max"] - vn)
         decay = math.exp(-h / p["time_constant"])
         pedal, v = self.pedal, self.v
-        for _ in range(self.substeps):
-            pedal = min(max(pedal + h * opening * p["pedal_rate_max"], 0.0), 1.0)
-            v_ss = steady_state_speed(pedal, p["max_speed"], p["pedal_dead_zone"], p["speed_exponent"])
-            v = v_ss + (v - v_ss) * decay
+        rate = h * opening * p["pedal_rate_max"]
+        v_max, p0, expo = p["max_speed"], p["pedal_dead_zone"], p["speed_exponent"]
+        if rate == 0.0 or (pedal == 0.0 and rate < 0.0) or (pedal == 1.0 and rate > 0.0):
+            # the pedal does not move over this step: v_ss is constant, the lag is exact in one go
+            v_ss = steady_state_speed(pedal, v_max, p0, expo)
+            v = v_ss + (v - v_ss) * decay ** self.substeps
+        else:
+            for _ in range(self.substeps):
+                pedal = min(max(pedal + rate, 0.0), 1.0)
+                v_ss = steady_state_speed(pedal, v_max, p0, expo)
+                v = v_ss + (v - v_ss) * decay
         self.pedal, self.v = pedal, v
         self.y["pedal_position"], self.y["speed"] = pedal, v
 

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from orchestrator.component import Component, inp, out, par
 
 
@@ -33,30 +31,40 @@ class SpeedKF(Component):
                    for k in ("speed", "vel_east", "vel_north")}
 
     def initialize(self, t0: float, dt: float) -> None:
+        """Both axes have the same Phi, Q, R and initial P, so they share one 2x2 covariance
+        [[a, b], [b, c]]; the filter is written out in scalars (tests: equal to the 4-state
+        matrix form)."""
         p = self.p
-        one = np.array([[1.0, dt], [0.0, 1.0]])
-        self.Phi = np.kron(np.eye(2), one)
         q = p["acceleration_psd"]
-        self.Q = np.kron(np.eye(2), q * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]]))
-        self.R = np.diag([p["position_noise_std"] ** 2, p["velocity_noise_std"] ** 2] * 2)
-        self.x: np.ndarray | None = None
-        self.P = np.diag([1.0, 1.0, 1.0, 1.0])
+        self.T = dt
+        self.Q = (q * dt**3 / 3, q * dt**2 / 2, q * dt)
+        self.R = (p["position_noise_std"] ** 2, p["velocity_noise_std"] ** 2)
+        self.state: list[float] | None = None          # [x, v_east, y, v_north]
+        self.P = (self.R[0], 0.0, self.R[1])
 
     def step(self, t: float, dt: float) -> None:
         u = self.u
-        z = np.array([u["x"], u["vel_east"], u["y"], u["vel_north"]], dtype=float)
-        if self.x is None:
-            self.x = z.copy()
-            self.P = self.R.copy()
+        z = (float(u["x"]), float(u["vel_east"]), float(u["y"]), float(u["vel_north"]))
+        if self.state is None:
+            self.state = list(z)
         else:
-            self.x = self.Phi @ self.x
-            self.P = self.Phi @ self.P @ self.Phi.T + self.Q
+            T, (q11, q12, q22), (rp, rv) = self.T, self.Q, self.R
+            a, b, c = self.P
+            st = self.state
+            st[0] += T * st[1]
+            st[2] += T * st[3]
+            a, b, c = a + 2 * T * b + T * T * c + q11, b + T * c + q12, c + q22
             if u["fix_valid"] > 0.5:
-                S = self.P + self.R
-                K = np.linalg.solve(S, self.P).T          # P S^-1 (P, S symmetric)
-                self.x = self.x + K @ (z - self.x)
-                self.P = (np.eye(4) - K) @ self.P
-        ve, vn = float(self.x[1]), float(self.x[3])
+                det = (a + rp) * (c + rv) - b * b      # K = P (P + R)^-1
+                k11, k12 = (a * (c + rv) - b * b) / det, b * rp / det
+                k21, k22 = b * rv / det, (c * (a + rp) - b * b) / det
+                for i in (0, 2):
+                    ep, ev = z[i] - st[i], z[i + 1] - st[i + 1]
+                    st[i] += k11 * ep + k12 * ev
+                    st[i + 1] += k21 * ep + k22 * ev
+                a, b, c = a - (k11 * a + k12 * b), b - (k11 * b + k12 * c), c - (k21 * b + k22 * c)
+            self.P = (a, b, c)
+        ve, vn = self.state[1], self.state[3]
         self.y["vel_east"], self.y["vel_north"], self.y["speed"] = ve, vn, math.hypot(ve, vn)
 
 

@@ -75,27 +75,61 @@ class SteeringHydraulics(Component):
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
 
     def step(self, t: float, dt: float) -> None:
+        """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
+        (a call costs as much as the arithmetic here); tests check it against those functions."""
         p = self.p
         h = dt / self.substeps
         vn, db = p["neutral_voltage"], p["deadband"]
-        span = p["voltage_max"] - vn
-        rate_full = p["max_flow"] / p["volume_per_rad"]
+        opening_scale = 1.0 / (p["voltage_max"] - vn - db)
+        rate_step = h * p["max_flow"] / p["volume_per_rad"]
         lim, res = p["angle_limit"], p["potentiometer_resolution"]
         alpha = 1.0 - math.exp(-h / p["valve_time_constant"])
+        pi = self.pi
+        kp, ki_h, v_lo, v_hi, i_lim = pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit
+        integral = pi.integral
         cmd = float(self.u["steer_angle_cmd"])
         delta, opening = self.delta, self.opening
-        voltage = vn
+        v_rel = 0.0
+        inv_res = 1.0 / res if res > 0 else 0.0
         for _ in range(self.substeps):
-            measured = quantize(delta, res)
-            voltage = vn + self.pi.update(cmd - measured, h)
-            opening += alpha * (valve_opening(voltage, vn, db, span) - opening)
-            delta = min(max(delta + h * opening * rate_full, -lim), lim)
+            error = cmd - (res * round(delta * inv_res) if inv_res else delta)
+            raw = kp * error + integral
+            if raw > v_hi:
+                v_rel = v_hi
+                windup = error > 0
+            elif raw < v_lo:
+                v_rel = v_lo
+                windup = error < 0
+            else:
+                v_rel, windup = raw, False
+            if not windup:
+                integral += ki_h * error
+                if integral > i_lim:
+                    integral = i_lim
+                elif integral < -i_lim:
+                    integral = -i_lim
+            if v_rel > db:
+                target = (v_rel - db) * opening_scale
+                target = 1.0 if target > 1.0 else target
+            elif v_rel < -db:
+                target = (v_rel + db) * opening_scale
+                target = -1.0 if target < -1.0 else target
+            else:
+                target = 0.0
+            opening += alpha * (target - opening)
+            delta += rate_step * opening
+            if delta > lim:
+                delta = lim
+            elif delta < -lim:
+                delta = -lim
+        pi.integral, pi.prev_error = integral, error
+        voltage = vn + v_rel
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
         y["steer_angle_measured"] = quantize(delta, res)
         y["valve_voltage"] = voltage
-        y["steer_rate"] = opening * rate_full if abs(delta) < lim else 0.0
+        y["steer_rate"] = opening * rate_step / h if abs(delta) < lim else 0.0
 
 
 COMPONENT = SteeringHydraulics

@@ -52,7 +52,7 @@ class TractorYawPlant(Component):
         par("x0", "m", 0.0, "initial CG east position"),
         par("y0", "m", 0.0, "initial CG north position"),
         par("psi0", "rad", 0.0, "initial heading (from east, counter-clockwise)"),
-        par("speed_cache_resolution", "m/s", 1e-4, "speeds closer than this share one discretisation"),
+        par("speed_cache_resolution", "m/s", 1e-3, "speeds closer than this share one discretisation"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -72,11 +72,13 @@ class TractorYawPlant(Component):
                                         p["sigma_f"], p["sigma_r"])
         for key in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r", "min_speed"):
             self.require(float(p[key]) > 0, f"parameter {key} must be > 0, got {p[key]}")
+        self._tf = None
         if p["model"] == "transfer_function":
             self._tf = controllable_canonical(p["tf_num"], p["tf_den"])
             n = self._tf[0].shape[0]
         else:
             n = state_space(p["model"], self.params, 1.0)[0].shape[0]
+        self._min_speed, self._cache_res = float(p["min_speed"]), float(p["speed_cache_resolution"])
         self.z = np.zeros(n)
         self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
@@ -84,11 +86,10 @@ class TractorYawPlant(Component):
 
     def discretized(self, v: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(Ad, Bd, C) at speed v (cached on a grid of speed_cache_resolution)."""
-        res = self.p["speed_cache_resolution"]
-        key = (int(round(v / res)), dt)
+        key = (int(round(v / self._cache_res)), dt)
         hit = self._cache.get(key)
         if hit is None:
-            vq = key[0] * res
+            vq = key[0] * self._cache_res
             A, B, C = self._tf if self.p["model"] == "transfer_function" else \
                 state_space(self.p["model"], self.params, vq)
             Ad, Bd = zoh_discretize(A, B, dt)
@@ -97,11 +98,13 @@ class TractorYawPlant(Component):
                 self._cache.clear()
         return hit
 
-    def _yaw_rate_and_lateral(self, C: np.ndarray) -> tuple[float, float]:
-        """(gamma, v_y) of the current dynamic state, before low-speed scaling."""
-        gamma = float(C @ self.z)
-        v_y = self.params.l_r * gamma if self.p["model"] == "transfer_function" else float(self.z[0])
-        return gamma, v_y
+    def _yaw_rate_and_lateral(self) -> tuple[float, float]:
+        """(gamma, v_y) of the current dynamic state, before low-speed scaling (C does not depend
+        on the speed: the physical models' state is [v_y, gamma, ...])."""
+        if self._tf is None:
+            return float(self.z[1]), float(self.z[0])
+        gamma = float(self._tf[2] @ self.z)
+        return gamma, self.params.l_r * gamma
 
     def _set_outputs(self, v: float, gamma: float, v_y: float) -> None:
         lr = self.params.l_r
@@ -117,13 +120,15 @@ class TractorYawPlant(Component):
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
         delta = float(self.u["steer_angle"])
-        vmin = self.p["min_speed"]
-        v_eff = max(abs(v), vmin)
-        scale = min(1.0, abs(v) / vmin)
-        Ad, Bd, C = self.discretized(v_eff, dt)
-        gamma0, vy0 = (scale * q for q in self._yaw_rate_and_lateral(C))
-        self.z = Ad @ self.z + Bd * delta
-        gamma1, vy1 = (scale * q for q in self._yaw_rate_and_lateral(C))
+        vmin, speed = self._min_speed, abs(v)
+        v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
+        Ad, Bd, _ = self.discretized(v_eff, dt)
+        gamma0, vy0 = self._yaw_rate_and_lateral()
+        z = Ad @ self.z
+        z += Bd * delta
+        self.z = z
+        gamma1, vy1 = self._yaw_rate_and_lateral()
+        gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
         psi_mid = self.psi + 0.25 * dt * (gamma0 + gamma1)
         vy_mid = 0.5 * (vy0 + vy1)
         c, s = math.cos(psi_mid), math.sin(psi_mid)

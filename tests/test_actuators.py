@@ -130,3 +130,56 @@ def test_discrete_pid_against_hand_computed_values():
     pid2 = DiscretePID(100.0, 1.0, 0.0, -1, 1)
     pid2.update(1.0, 0.1)
     assert pid2.integral == 0.0                                      # saturated: integral frozen
+
+
+def test_inlined_substep_loop_equals_the_stated_equations():
+    """The component's inlined loop against the module docstring written with DiscretePID,
+    valve_opening and quantize, on a random command sequence that crosses the dead-band,
+    saturates the voltage and hits the mechanical stop."""
+    from components.steering_hydraulics import quantize
+
+    rng = np.random.default_rng(7)
+    cmds = np.repeat(rng.uniform(-60, 60, 10) * DEG, 100)
+    cmds[400:500] = 0.3 * DEG                                    # inside the dead-band
+    s = SteeringHydraulics("steering", {})
+    s.initialize(0.0, 0.01)
+    p = s.p
+    pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - 6.0, p["voltage_max"] - 6.0, p["integral_limit"])
+    h, delta, opening, reached = 0.001, 0.0, 0.0, 0.0
+    alpha = 1 - math.exp(-h / p["valve_time_constant"])
+    rate = p["max_flow"] / p["volume_per_rad"]
+    for k, cmd in enumerate(cmds):
+        s.u["steer_angle_cmd"] = cmd
+        s.step(k * 0.01, 0.01)
+        for _ in range(10):
+            voltage = 6.0 + pi.update(cmd - quantize(delta, p["potentiometer_resolution"]), h)
+            opening += alpha * (valve_opening(voltage, 6.0, p["deadband"], 6.0) - opening)
+            delta = min(max(delta + h * opening * rate, -45 * DEG), 45 * DEG)
+        assert s.y["steer_angle"] == pytest.approx(delta, abs=1e-12)
+        assert s.y["valve_voltage"] == pytest.approx(voltage, abs=1e-9)
+        reached = max(reached, abs(delta))
+    assert reached == pytest.approx(45 * DEG)                    # the stop was reached
+
+
+def test_drivetrain_shortcut_for_a_still_pedal_equals_the_substep_equations():
+    """Random valve voltages (dead-band, both pedal stops) against the docstring's per-substep
+    equations."""
+    d = SpeedDrivetrain("d", {})
+    d.initialize(0.0, 0.01)
+    p = d.p
+    h, pedal, v = p["internal_step"], float(p["pedal0"]), float(p["speed0"])
+    rng = np.random.default_rng(8)
+    volts = np.repeat(rng.choice([0.0, 6.2, 12.0, 3.0, 9.0], 30), 60)
+    stops = set()
+    for k, volt in enumerate(volts):
+        d.u["pedal_valve_voltage"] = volt
+        d.step(k * 0.01, 0.01)
+        o = valve_opening(volt, p["neutral_voltage"], p["deadband"], p["voltage_max"] - p["neutral_voltage"])
+        for _ in range(int(round(0.01 / h))):
+            pedal = min(max(pedal + h * o * p["pedal_rate_max"], 0.0), 1.0)
+            v_ss = steady_state_speed(pedal, p["max_speed"], p["pedal_dead_zone"], p["speed_exponent"])
+            v = v_ss + (v - v_ss) * math.exp(-h / p["time_constant"])
+        stops.add(pedal if pedal in (0.0, 1.0) else None)
+        assert d.y["pedal_position"] == pytest.approx(pedal, abs=1e-12)
+        assert d.y["speed"] == pytest.approx(v, abs=1e-9)
+    assert {0.0, 1.0} <= stops

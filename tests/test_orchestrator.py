@@ -68,6 +68,23 @@ def test_multirate_steps_at_integer_multiples_and_publishes_at_step_end():
     assert math.isclose(f["fast.integral"].iloc[-1], expected, rel_tol=1e-12)
 
 
+@pytest.mark.parametrize("order", [("a", "b", "c"), ("c", "b", "a")])
+def test_continuous_components_read_each_other_at_t_k_whatever_the_order(order):
+    """b and c integrate a.time (forward Euler): they must see a's value at t_k, never the one
+    a reaches at t_k + h in the same macro step, in any declaration order."""
+    specs = {"a": {"type": "tests.toy_components:Counter", "step": 0.1},
+             "b": {"type": "tests.toy_components:Counter", "step": 0.1},
+             "c": {"type": "tests.toy_components:Counter", "step": 0.3}}
+    comps = {name: specs[name] for name in order}
+    f = run(comps, ["a.time -> b.u", "a.time -> c.u", "b.time -> a.u"], stop=3.0, base=0.1)
+    n = np.arange(len(f))
+    np.testing.assert_allclose(f["b.integral"], 0.01 * n * (n - 1) / 2, atol=1e-9)
+    np.testing.assert_allclose(f["a.integral"], 0.01 * n * (n - 1) / 2, atol=1e-9)
+    # c steps at 0, 0.3, ...: sum of 0.3 * t_j over its steps that ended by t
+    ends = np.floor(n / 3 + 1e-9)
+    np.testing.assert_allclose(f["c.integral"], 0.09 * ends * (ends - 1) / 2, atol=1e-9)
+
+
 def test_algebraic_loop_is_refused_with_the_loop_named():
     comps = {"a": {"type": "tests.toy_components:Gain"}, "b": {"type": "tests.toy_components:Gain"}}
     with pytest.raises(StudyError) as err:

@@ -98,6 +98,34 @@ def test_speed_kf_reduces_gps_velocity_noise():
     assert rms < 0.7 * 0.02 and abs(np.mean(errs)) < 0.003
 
 
+def test_scalar_speed_kf_equals_the_four_state_matrix_filter():
+    """The component's shared-covariance scalar form against the docstring's matrix KF, with
+    missed fixes in between."""
+    kf = SpeedKF("kf", {"velocity_noise_std": 0.05})
+    kf.initialize(0.0, 0.05)
+    T, q, rp, rv = 0.05, kf.p["acceleration_psd"], 0.02**2, 0.05**2
+    Phi = np.kron(np.eye(2), [[1.0, T], [0.0, 1.0]])
+    Q = np.kron(np.eye(2), q * np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]]))
+    R = np.diag([rp, rv, rp, rv])
+    rng = np.random.default_rng(11)
+    x = P = None
+    for k in range(300):
+        z = np.array([k * 0.1, 2.0, -k * 0.05, -1.0]) + rng.normal(0, [0.02, 0.05, 0.02, 0.05])
+        valid = float(k % 7 != 3)
+        kf.u.update(x=z[0], vel_east=z[1], y=z[2], vel_north=z[3], fix_valid=valid)
+        kf.step(k * T, T)
+        if x is None:
+            x, P = z.copy(), R.copy()
+        else:
+            x, P = Phi @ x, Phi @ P @ Phi.T + Q
+            if valid:
+                K = P @ np.linalg.inv(P + R)
+                x, P = x + K @ (z - x), (np.eye(4) - K) @ P
+        assert kf.y["vel_east"] == pytest.approx(x[1], abs=1e-12)
+        assert kf.y["vel_north"] == pytest.approx(x[3], abs=1e-12)
+        assert kf.y["speed"] == pytest.approx(math.hypot(x[1], x[3]), abs=1e-12)
+
+
 def ekf_on_plant_study(heading_error_deg, seed=5):
     """A small study: plant driven by constant steering and speed, GPS, speed KF, EKF."""
     psi0 = 0.4
@@ -141,6 +169,39 @@ def test_ekf_predicts_through_gps_outage():
         ekf.step(k * 0.05, 0.05)
     assert ekf.y["x_rear"] == pytest.approx(2.0, abs=1e-12)     # 20 prediction steps of 0.1 m
     assert ekf.y["y_rear"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_scalar_ekf_equals_the_matrix_equations():
+    """The component's written-out EKF against F P F' + Q and the Kalman update in matrices."""
+    ekf = PoseEKF("ekf", {"psi0": 0.3, "x0": 0.1, "y0": -0.2})
+    ekf.initialize(0.0, 0.05)
+    p = ekf.p
+    T, L = 0.05, p["wheelbase"]
+    s = np.array([0.1, -0.2, 0.3])
+    P = np.diag([p["position0_std"] ** 2] * 2 + [p["heading0_std"] ** 2])
+    Q = np.diag([p["position_process_std"] ** 2] * 2 + [p["heading_process_std"] ** 2])
+    R = np.eye(2) * p["position_noise_std"] ** 2
+    H = np.hstack([np.eye(2), np.zeros((2, 1))])
+    rng = np.random.default_rng(12)
+    prev = None
+    for k in range(200):
+        v, delta = 1.5 + 0.5 * math.sin(0.05 * k), 0.3 * math.sin(0.03 * k)
+        z = np.array([0.1 * k, 0.05 * k]) + rng.normal(0, 0.02, 2)
+        valid = float(k % 9 != 4)
+        ekf.u.update(gps_x=z[0], gps_y=z[1], fix_valid=valid, speed=v, steer_angle=delta)
+        ekf.step(k * T, T)
+        if prev is not None:
+            pv, pd = prev
+            F = np.array([[1, 0, -T * pv * math.sin(s[2])], [0, 1, T * pv * math.cos(s[2])], [0, 0, 1]])
+            s = s + T * pv * np.array([math.cos(s[2]), math.sin(s[2]), math.tan(pd) / L])
+            P = F @ P @ F.T + Q
+        if valid:
+            K = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+            s, P = s + K @ (z - H @ s), (np.eye(3) - K @ H) @ P
+        s[2] = math.atan2(math.sin(s[2]), math.cos(s[2]))
+        prev = (v, delta)
+        assert [ekf.y["x_rear"], ekf.y["y_rear"], ekf.y["heading"]] == pytest.approx(s, abs=1e-10)
+        assert ekf.y["heading_std"] == pytest.approx(math.sqrt(P[2, 2]), rel=1e-9)
 
 
 def test_component_seed_differs_per_component_and_is_reproducible():

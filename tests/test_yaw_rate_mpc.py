@@ -133,3 +133,34 @@ def test_unconstrained_solution_equals_the_normal_equations():
     du, _ = mpc._solve(qp)
     np.testing.assert_allclose(du, np.linalg.solve(qp.H, -qp.g), atol=1e-10)
     assert np.all(np.abs(du) < qp.box)
+
+
+def test_folded_gradient_equals_the_prediction_form():
+    """g = 2 Q Phi'(f - r) with f = CApow x + s u_prev + (y - C x), computed term by term."""
+    mpc = paper_mpc()
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        mpc.x, mpc.u_prev = rng.normal(size=2) * 0.01, rng.uniform(-0.5, 0.5)
+        r, y = rng.uniform(-1, 1), rng.uniform(-1, 1)
+        d = y - float(mpc.C @ mpc.x)
+        f = mpc.CApow @ mpc.x + mpc.step_response[1:] * mpc.u_prev + d
+        np.testing.assert_allclose(mpc.qp(r, y).g, 2 * mpc.Q * mpc.Phi.T @ (f - r), atol=1e-12)
+
+
+def test_step_applies_the_solution_of_its_own_qp_and_advances_the_model():
+    """The in-place fast path of step() against qp() + an independent solve + the model."""
+    mpc, ref = paper_mpc(), paper_mpc("proxsuite")
+    rng = np.random.default_rng(4)
+    for k in range(100):
+        r, y = rng.uniform(-1, 1), rng.uniform(-1, 1)
+        applied = rng.uniform(-0.5, 0.5) if k else None
+        if applied is not None:
+            ref.x = x_pred + ref.B * applied
+        qp = ref.qp(r, y)
+        du = exact_qp(qp.H, qp.g, qp.A, qp.lower, qp.upper, qp.box)
+        u_expected = ref.u_prev + du[0]
+        u, status = mpc.step(r, y, applied)
+        assert status > 0 and u == pytest.approx(u_expected, abs=1e-9)
+        x_pred = ref.A @ ref.x
+        ref.x, ref.u_prev = x_pred + ref.B * u_expected, u_expected
+        np.testing.assert_allclose(mpc.x, ref.x, atol=1e-9)

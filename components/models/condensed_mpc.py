@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import daqp
 import numpy as np
 
 from .yaw_dynamics import controllable_canonical, zoh_discretize
@@ -69,6 +70,13 @@ def polish(qp: QPData, x: np.ndarray, tol: float = 1e-4) -> np.ndarray:
 
 
 class CondensedTrackingMPC:
+    """Per step (all matrices precomputed; the step allocates only what the QP solver returns):
+
+        g  = G [x; u_{k-1}; y_meas - r]     with G = 2 Q Phi' [CApow - 1 C,  s,  1]
+        bounds: |du| <= du_max,  -u_max - u_{k-1} <= S du <= u_max - u_{k-1}   (S lower-triangular ones)
+
+    (the disturbance d = y_meas - C x is folded into G, so g is one matrix-vector product)."""
+
     def __init__(self, num, den, dt: float, Np: int, Nc: int, Q: float, R: float,
                  u_max: float, du_max: float, solver: str = "daqp", tolerance: float = 1e-10) -> None:
         if not (1 <= Nc <= Np):
@@ -98,52 +106,82 @@ class CondensedTrackingMPC:
                 self.Phi[i - 1, l] = self.step_response[i - l]
         self.H = 2.0 * (Q * self.Phi.T @ self.Phi + R * np.eye(Nc))
         self.S = np.tril(np.ones((Nc, Nc)))
+        ones = np.ones(Np)
+        self.G = 2.0 * Q * self.Phi.T @ np.column_stack(
+            [self.CApow - np.outer(ones, self.C), self.step_response[1:], ones])
         self.solver_name, self.tolerance = solver, tolerance
+        self._n = n
+        self._z = np.zeros(n + 2)                     # [x; u_prev; y_meas - r]
+        self._x_pred = np.zeros(n)                    # A x of the last step
+        self._g = np.zeros(Nc)
+        self._bu = np.full(2 * Nc, du_max)            # daqp: [box; general rows]
+        self._bl = np.full(2 * Nc, -du_max)
         self._solver = None
         self.reset()
 
+    @property
+    def x(self) -> np.ndarray:
+        """Internal model state (a view)."""
+        return self._z[:self._n]
+
+    @x.setter
+    def x(self, value) -> None:
+        self._z[:self._n] = value
+
+    @property
+    def u_prev(self) -> float:
+        return float(self._z[self._n])
+
+    @u_prev.setter
+    def u_prev(self, value: float) -> None:
+        self._z[self._n] = value
+
     def reset(self, u_prev: float = 0.0) -> None:
-        self.x = np.zeros(self.A.shape[0])
-        self._x_prev_model = self.x.copy()
-        self.u_prev = u_prev
+        self._z[:] = 0.0
+        self._z[self._n] = u_prev
+        self._x_pred[:] = 0.0
         self.last_du = np.zeros(self.Nc)
         self._solver = None
 
     def qp(self, r: float, y_meas: float) -> QPData:
         """The QP of this instant (no state change)."""
-        d = y_meas - float(self.C @ self.x)
-        f = self.CApow @ self.x + self.step_response[1:] * self.u_prev + d
-        g = 2.0 * self.Q * self.Phi.T @ (f - r)
-        lower = np.full(self.Nc, -self.u_max - self.u_prev)
-        upper = np.full(self.Nc, self.u_max - self.u_prev)
-        return QPData(self.H, g, self.S, lower, upper, np.full(self.Nc, self.du_max))
+        z = self._z.copy()
+        z[-1] = y_meas - r
+        u_prev = z[self._n]
+        lower = np.full(self.Nc, -self.u_max - u_prev)
+        upper = np.full(self.Nc, self.u_max - u_prev)
+        return QPData(self.H, self.G @ z, self.S, lower, upper, np.full(self.Nc, self.du_max))
+
+    def _daqp(self, g: np.ndarray, bu: np.ndarray, bl: np.ndarray) -> tuple[np.ndarray, int]:
+        if self._solver is None:
+            self._solver = daqp.Model()
+            self._solver.setup(self.H, g, self.S, bu, bl)
+            self._solver.settings = {"primal_tol": self.tolerance, "dual_tol": self.tolerance}
+        else:
+            self._solver.update(f=g, bupper=bu, blower=bl)
+        x, _, flag, _ = self._solver.solve()
+        return x, flag
 
     def _solve(self, qp: QPData) -> tuple[np.ndarray, int]:
+        bu = np.concatenate([qp.box, qp.upper])
+        bl = np.concatenate([-qp.box, qp.lower])
         if self.solver_name == "daqp":
-            import daqp
-
-            bu = np.concatenate([qp.box, qp.upper])
-            bl = np.concatenate([-qp.box, qp.lower])
-            if self._solver is None:
-                self._solver = daqp.Model()
-                self._solver.setup(qp.H, qp.g, qp.A, bu, bl)
-                self._solver.settings = {"primal_tol": self.tolerance, "dual_tol": self.tolerance}
-            else:
-                self._solver.update(f=qp.g, bupper=bu, blower=bl)
-            x, _, flag, info = self._solver.solve()
+            x, flag = self._daqp(qp.g, bu, bl)
             return np.asarray(x, dtype=float), int(flag)
+        return self._proxsuite(qp, bl, bu)
+
+    def _proxsuite(self, qp: QPData, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, int]:
         from proxsuite import proxqp
 
         # bounds on the moves as ordinary inequality rows: proxsuite's box-constraint mode
         # returned wrong answers (outside the box) on instances of this shape
-        C = np.vstack([np.eye(self.Nc), qp.A])
-        lower = np.concatenate([-qp.box, qp.lower])
-        upper = np.concatenate([qp.box, qp.upper])
         if self._solver is None:
             s = proxqp.dense.QP(self.Nc, 0, 2 * self.Nc)
             s.settings.eps_abs, s.settings.eps_rel = self.tolerance, 0.0
+            # warm start from the previous result; proxsuite 0.8.0 crashes on update() before
+            # the first solve, so the first call goes through init() only
             s.settings.initial_guess = proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
-            s.init(qp.H, qp.g, None, None, C, lower, upper)
+            s.init(qp.H, qp.g, None, None, np.vstack([np.eye(self.Nc), qp.A]), lower, upper)
             self._solver = s
         else:
             self._solver.update(g=qp.g, l=lower, u=upper)
@@ -162,14 +200,26 @@ class CondensedTrackingMPC:
         ``u_applied``: the input the plant actually received over the last step (a measured
         actuator position): the internal model is advanced with it instead of the last command;
         the moves and their limits stay relative to the last command. Returns (u_k, status > 0)."""
+        z, n, x = self._z, self._n, self._z[:self._n]
         if u_applied is not None:
-            self.x = self._x_prev_model + self.B * float(u_applied)
-        qp = self.qp(r, y_meas)
-        du, status = self._solve(qp)
-        if status <= 0 or not np.all(np.isfinite(du)):
-            du = np.zeros(self.Nc)                      # hold the previous input: always feasible
-        u = float(np.clip(self.u_prev + du[0], -self.u_max, self.u_max))
-        self._x_prev_model = self.A @ self.x
-        self.x = self._x_prev_model + self.B * u
-        self.u_prev, self.last_du = u, du
-        return u, status
+            np.multiply(self.B, u_applied, out=x)
+            x += self._x_pred
+        u_prev = z[n]
+        z[n + 1] = y_meas - r
+        if self.solver_name == "daqp":
+            np.dot(self.G, z, out=self._g)
+            self._bu[self.Nc:] = self.u_max - u_prev
+            self._bl[self.Nc:] = -self.u_max - u_prev
+            du, status = self._daqp(self._g, self._bu, self._bl)
+        else:
+            du, status = self._solve(self.qp(r, y_meas))
+        du0 = du[0]
+        if status <= 0 or du0 != du0:                   # failed or NaN: hold the previous input
+            du, du0 = np.zeros(self.Nc), 0.0
+        u = min(max(u_prev + du0, -self.u_max), self.u_max)
+        np.dot(self.A, x, out=self._x_pred)
+        np.multiply(self.B, u, out=x)
+        x += self._x_pred
+        z[n] = u
+        self.last_du = du
+        return float(u), status
