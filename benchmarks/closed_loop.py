@@ -34,33 +34,37 @@ def timed_components(system):
     return spent
 
 
+def measure(study_path: Path = ROOT / "studies/figure8.toml", repeat: int = 3) -> dict:
+    study = load_study(study_path)
+    cold = Simulation(build_system(study)).run().wall_time_s      # first run: imports, first calls
+    warm = statistics.median(Simulation(build_system(study)).run().wall_time_s for _ in range(repeat))
+    system = build_system(study)
+    spent = timed_components(system)
+    timed = Simulation(system).run().wall_time_s
+    return {"name": study.study.name, "sim_time": study.study.stop_time - study.study.start_time,
+            "cold": cold, "warm": warm, "timed": timed, "repeat": repeat, "spent": dict(spent),
+            "orchestrator": max(warm - sum(spent.values()), 0.0)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--study", type=Path, default=ROOT / "studies/figure8.toml")
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
-    study = load_study(args.study)
-    sim_time = study.study.stop_time - study.study.start_time
-
-    cold = Simulation(build_system(study)).run().wall_time_s      # first run: imports, first calls
-    warm = statistics.median(Simulation(build_system(study)).run().wall_time_s for _ in range(args.repeat))
-    system = build_system(study)
-    spent = timed_components(system)
-    timed = Simulation(system).run().wall_time_s
-
-    print(f"study {study.study.name}: {sim_time:.0f} s simulated (target: >= 200x real time)")
+    r = measure(args.study, args.repeat)
+    sim_time, warm = r["sim_time"], r["warm"]
+    print(f"study {r['name']}: {sim_time:.0f} s simulated (target: >= 200x real time)")
     print(f"{'run':<36}{'wall [s]':>10}{'x real time':>14}")
-    print(f"{'cold (first run in the process)':<36}{cold:>10.3f}{sim_time / cold:>14.1f}")
-    print(f"{f'warm (median of {args.repeat})':<36}{warm:>10.3f}{sim_time / warm:>14.1f}")
-    print(f"{'warm, with per-component timers':<36}{timed:>10.3f}{sim_time / timed:>14.1f}")
+    for label, key in (("cold (first run in the process)", "cold"), (f"warm (median of {r['repeat']})", "warm"),
+                       ("warm, with per-component timers", "timed")):
+        print(f"{label:<36}{r[key]:>10.3f}{sim_time / r[key]:>14.1f}")
     print()
     print("share of the warm run: component steps timed in the instrumented run, the orchestrator "
           "is the rest of the plain warm run (target: < 20%)")
     print(f"{'':<36}{'wall [s]':>10}{'share':>14}")
-    for name, sec in sorted(spent.items(), key=lambda kv: -kv[1]):
+    for name, sec in sorted(r["spent"].items(), key=lambda kv: -kv[1]):
         print(f"{name:<36}{sec:>10.3f}{100 * sec / warm:>13.1f}%")
-    orchestrator = max(warm - sum(spent.values()), 0.0)
-    print(f"{'orchestrator (rest)':<36}{orchestrator:>10.3f}{100 * orchestrator / warm:>13.1f}%")
+    print(f"{'orchestrator (rest)':<36}{r['orchestrator']:>10.3f}{100 * r['orchestrator'] / warm:>13.1f}%")
 
 
 if __name__ == "__main__":

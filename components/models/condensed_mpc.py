@@ -112,7 +112,10 @@ class CondensedTrackingMPC:
         self.solver_name, self.tolerance = solver, tolerance
         self._n = n
         self._z = np.zeros(n + 2)                     # [x; u_prev; y_meas - r]
-        self._x_pred = np.zeros(n)                    # A x of the last step
+        # one product advances the model both ways: W = [A x + B u; A x] with z = [x; u; .]
+        self._advance = np.block([[self.A, self.B.reshape(-1, 1), np.zeros((n, 1))],
+                                  [self.A, np.zeros((n, 2))]])
+        self._w = np.zeros(2 * n)
         self._g = np.zeros(Nc)
         self._bu = np.full(2 * Nc, du_max)            # daqp: [box; general rows]
         self._bl = np.full(2 * Nc, -du_max)
@@ -139,7 +142,7 @@ class CondensedTrackingMPC:
     def reset(self, u_prev: float = 0.0) -> None:
         self._z[:] = 0.0
         self._z[self._n] = u_prev
-        self._x_pred[:] = 0.0
+        self._w[:] = 0.0
         self.last_du = np.zeros(self.Nc)
         self._solver = None
 
@@ -200,10 +203,9 @@ class CondensedTrackingMPC:
         ``u_applied``: the input the plant actually received over the last step (a measured
         actuator position): the internal model is advanced with it instead of the last command;
         the moves and their limits stay relative to the last command. Returns (u_k, status > 0)."""
-        z, n, x = self._z, self._n, self._z[:self._n]
+        z, n = self._z, self._n
         if u_applied is not None:
-            np.multiply(self.B, u_applied, out=x)
-            x += self._x_pred
+            z[:n] = self._w[n:] + self.B * u_applied
         u_prev = z[n]
         z[n + 1] = y_meas - r
         if self.solver_name == "daqp":
@@ -217,9 +219,9 @@ class CondensedTrackingMPC:
         if status <= 0 or du0 != du0:                   # failed or NaN: hold the previous input
             du, du0 = np.zeros(self.Nc), 0.0
         u = min(max(u_prev + du0, -self.u_max), self.u_max)
-        np.dot(self.A, x, out=self._x_pred)
-        np.multiply(self.B, u, out=x)
-        x += self._x_pred
         z[n] = u
+        w = self._w
+        np.dot(self._advance, z, out=w)
+        z[:n] = w[:n]
         self.last_du = du
         return float(u), status
