@@ -15,6 +15,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import closed_loop  # noqa: E402
+import fmu_step  # noqa: E402
 import identification  # noqa: E402
 import mpc_step  # noqa: E402
 import sweep  # noqa: E402
@@ -41,6 +42,15 @@ def main() -> None:
                      f">= 250x: {'met' if ratio >= 250 else 'NOT met'}"))
     else:
         rows.append(("MPC step", "do-mpc", mpc["do_mpc"], ""))
+
+    fs = fmu_step.measure(20.0 if args.quick else 60.0)
+    fmed = {name: float(np.median(t)) for name, t in fs["rows"].items()}
+    c_step = fmed["FMU C step alone (C harness)"]
+    for name, t in fs["rows"].items():
+        rows.append(("controller step", f"{name}: median", f"{fmed[name] * 1e6:.2f} us",
+                     f"{fmed[name] / c_step:.0f}x the C step"))
+    rows.append(("controller step", "bare daqp QP from Python / whole C controller step",
+                 f"{bare / c_step:.0f}x", ""))
 
     cl = closed_loop.measure()
     speed = cl["sim_time"] / cl["warm"]

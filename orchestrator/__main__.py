@@ -40,7 +40,14 @@ def main(argv: list[str] | None = None) -> int:
     ident.add_argument("--models", nargs="+", help="log: structures to fit")
     ident.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
     ident.add_argument("--no-plots", action="store_true")
+    exp = sub.add_parser("export-controller",
+                         help="export the study's guidance controller (tracker + MPC + speed PID) as an FMU")
+    exp.add_argument("study", type=Path)
+    exp.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
+    exp.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE")
     args = parser.parse_args(argv)
+    if args.command == "export-controller":
+        return _export_controller(args)
     if args.command == "sweep":
         return _sweep(args)
     if args.command == "identify":
@@ -86,6 +93,18 @@ def _sweep(args) -> int:
     print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
           + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
     return 0 if failed == 0 else 1
+
+
+def _export_controller(args) -> int:
+    from fmu_export.controller import ExportError, export_controller
+
+    try:
+        out = export_controller(load_study(args.study, args.set), args.out)
+    except (StudyError, ExportError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"controller of {args.study} exported to {out}")
+    return 0
 
 
 def _identify(args) -> int:

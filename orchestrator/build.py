@@ -7,6 +7,7 @@ import importlib
 import math
 import zlib
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -59,6 +60,21 @@ def resolve_type(type_name: str, package: str, where: str) -> type[Component]:
     return cls
 
 
+def _component_class(study: Study, name: str, type_name: str, where: str) -> type[Component]:
+    """A Python component type, or an FMU named by path (relative to the study file)."""
+    if not type_name.lower().endswith(".fmu"):
+        return resolve_type(type_name, study.study.component_package, where)
+    from .fmu import FMUError, fmu_component_class
+
+    path = Path(type_name)
+    if not path.is_absolute() and study.path is not None:
+        path = Path(study.path).parent / path
+    try:
+        return fmu_component_class(path)
+    except FMUError as exc:
+        raise StudyError(f"{where}: components.{name}.type: {exc}") from None
+
+
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
     """Independent, reproducible stream per component: seeded by (study seed, crc32(name))."""
     return np.random.default_rng([study_seed, zlib.crc32(name.encode())])
@@ -69,7 +85,7 @@ def build_system(study: Study) -> System:
     base = study.study.base_step
     nodes: dict[str, Node] = {}
     for name, spec in study.components.items():
-        cls = resolve_type(spec.type, study.study.component_package, where)
+        cls = _component_class(study, name, spec.type, where)
         params = cls.declared("parameter")
         converted: dict[str, Any] = {}
         for key, value in spec.parameters.items():

@@ -1,0 +1,68 @@
+"""Build and package an FMI 2.0 FMU from a folder holding ``modelDescription.xml`` and
+``sources/``: the FMI headers (from fmpy) are added to the sources, the binary for this platform
+is built with fmpy.build (CMake + the C compiler), and the archive is written atomically."""
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import sys
+import tempfile
+import zipfile
+from pathlib import Path
+
+FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+
+
+class PackagingError(Exception):
+    """The FMU could not be built (the message carries the end of the build log)."""
+
+
+@contextlib.contextmanager
+def _output_to(path: Path):
+    """Send this process's stdout and stderr (file descriptors: subprocesses too) to a file."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with open(path, "wb") as f:
+        os.dup2(f.fileno(), 1)
+        os.dup2(f.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+
+
+def package_fmu(source_root: Path, out: Path) -> Path:
+    import fmpy
+    from fmpy.build import build_platform_binary
+
+    if out.suffix != ".fmu":
+        raise PackagingError(f"{out}: expected a path ending in .fmu")
+    fmpy_c = Path(fmpy.__file__).with_name("c-code")
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp) / "fmu"
+        shutil.copytree(source_root, root)
+        for header in FMI2_HEADERS:
+            if not (root / "sources" / header).exists():
+                shutil.copy(fmpy_c / header, root / "sources" / header)
+        build, log = Path(tmp) / "build", Path(tmp) / "build.log"
+        build.mkdir()
+        try:
+            with _output_to(log):
+                build_platform_binary(root, build, cmake_options={
+                    "CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm", "CMAKE_C_FLAGS:STRING": "-O2"})
+        except Exception as exc:
+            tail = log.read_text(errors="replace")[-2000:] if log.exists() else ""
+            raise PackagingError(f"building {out.name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None
+        out.parent.mkdir(parents=True, exist_ok=True)
+        partial = out.with_name(out.name + ".tmp")
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
+            for path in sorted(root.rglob("*")):
+                if path.is_file():
+                    zf.write(path, path.relative_to(root).as_posix())
+        partial.replace(out)
+    return out
