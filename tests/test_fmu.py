@@ -19,6 +19,7 @@ from orchestrator.study import StudyError, load_raw, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
+FIRST_ORDER_FMI3 = ROOT / "tests/fmu_sources/first_order_fmi3"
 
 
 @pytest.fixture(scope="session")
@@ -26,6 +27,33 @@ def first_order_fmu(tmp_path_factory) -> Path:
     from fmu_export.packaging import package_fmu
 
     return package_fmu(FIRST_ORDER_SOURCES, tmp_path_factory.mktemp("fmu") / "first_order.fmu")
+
+
+@pytest.fixture(scope="session")
+def first_order_fmi3_fmu(tmp_path_factory) -> Path:
+    """FMI 3.0 build of the same lag: gcc directly; every FMI 3 function fmpy binds but the
+    source does not define becomes a stub returning fmi3Error."""
+    import inspect
+    import re
+
+    import fmpy
+    from fmpy.fmi3 import FMU3Slave
+
+    tmp = tmp_path_factory.mktemp("fmi3")
+    source = (FIRST_ORDER_FMI3 / "first_order3.c").read_text()
+    defined = set(re.findall(r"\b(fmi3\w+)\(", source))
+    stubs = [f"int {name}(void) {{ return 3; }}" for name, _ in inspect.getmembers(FMU3Slave)
+             if name.startswith("fmi3") and name not in defined]
+    (tmp / "stubs.c").write_text("\n".join(stubs) + "\n")
+    binary = tmp / "binaries" / fmpy.platform_tuple / "first_order3.so"
+    binary.parent.mkdir(parents=True)
+    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-o", str(binary), str(FIRST_ORDER_FMI3 / "first_order3.c"),
+                    str(tmp / "stubs.c"), "-lm"], check=True)
+    out = tmp / "first_order3.fmu"
+    with zipfile.ZipFile(out, "w") as zf:
+        zf.write(FIRST_ORDER_FMI3 / "modelDescription.xml", "modelDescription.xml")
+        zf.write(binary, binary.relative_to(tmp).as_posix())
+    return out
 
 
 @pytest.fixture(scope="session")
@@ -56,6 +84,17 @@ def test_a_third_party_fmu_runs_in_a_study_with_python_components(first_order_fm
     np.testing.assert_allclose(f["lag.y"], expected, atol=1e-12)
     assert f["lag.y"].iloc[0] == pytest.approx(0.05)                 # propagated at t0
     np.testing.assert_allclose(f["gyro.yaw_rate_measured"], f["lag.y"], atol=1e-12)
+
+
+def test_an_fmi3_fmu_runs_in_a_study(first_order_fmi3_fmu):
+    comps = {"lag": {"type": str(first_order_fmi3_fmu), "parameters": {"k": 3.0, "tau": 0.2, "y0": 0.05},
+                     "inputs": {"u": 0.1}},
+             "gyro": {"type": "gyro_sensor"}}
+    system = build_system(toy_study(comps, ["lag.y -> gyro.yaw_rate"]))
+    f = Simulation(system).run().to_frame()
+    expected = 0.3 + (0.05 - 0.3) * np.exp(-f["t"].to_numpy() / 0.2)
+    np.testing.assert_allclose(f["lag.y"], expected, atol=1e-12)
+    np.testing.assert_allclose(Simulation(system).run().to_frame()["lag.y"], expected, atol=1e-12)  # after reset
 
 
 def test_one_instance_is_reused_across_runs_with_reset(first_order_fmu):
