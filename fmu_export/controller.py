@@ -106,7 +106,8 @@ def _c_array(values) -> str:
     return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
 
 
-def _guid(design: ControllerDesign, source: str) -> str:
+def _guid(source: str) -> str:
+    """A GUID that changes whenever the generated source does."""
     return "{" + str(uuid.UUID(hashlib.sha256(source.encode()).hexdigest()[:32])) + "}"
 
 
@@ -129,7 +130,7 @@ def generate_c(design: ControllerDesign) -> tuple[str, str]:
     source = template
     for key, value in values.items():
         source = source.replace(f"@@{key}@@", str(value))
-    guid = _guid(design, source.replace("@@GUID@@", ""))
+    guid = _guid(source.replace("@@GUID@@", ""))
     source = source.replace("@@GUID@@", guid)
     if "@@" in source:
         raise ExportError("internal: unreplaced placeholder in the C template")
