@@ -17,31 +17,27 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-FEEDS = {"tracker_x_ref": "reference.x_ref", "tracker_y_ref": "reference.y_ref",
-         "tracker_xdot_ref": "reference.xdot_ref", "tracker_ydot_ref": "reference.ydot_ref",
-         "tracker_x": "ekf.x_cg", "tracker_y": "ekf.y_cg", "tracker_heading": "ekf.heading",
-         "mpc_yaw_rate": "tractor.yaw_rate", "mpc_steer_angle": "steering.steer_angle_measured",
-         "speed_controller_speed": "speed_filter.speed", "speed_controller_pedal_position": "drivetrain.pedal_position"}
-
-
 def recorded_inputs(seconds: float):
+    """(study, the 20 Hz samples of a figure-8 run, FMU input -> recorded column)."""
+    from fmu_export.controller import controller_design, controller_feeds
     from orchestrator.build import build_system
     from orchestrator.engine import Simulation
-    from orchestrator.study import load_study
+    from orchestrator.study import load_raw, parse_study
 
-    st = load_study(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
+    raw = load_raw(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
+    st = parse_study(raw, ROOT / "studies/figure8.toml")
     frame = Simulation(build_system(st)).run().to_frame().iloc[::5]
-    return st, frame
+    return st, frame, controller_feeds(raw, controller_design(st))
 
 
-def time_python(st, frame) -> np.ndarray:
+def time_python(st, frame, feeds) -> np.ndarray:
     from orchestrator.build import build_system
 
     nodes = build_system(st).nodes
     comps = [nodes[n].component for n in ("tracker", "mpc", "speed_controller")]
     for c in comps:
         c.initialize(0.0, 0.05)
-    cols = {port: frame[col].to_numpy() for port, col in FEEDS.items()}
+    cols = {port: frame[col].to_numpy() for port, col in feeds.items()}
     times = np.empty(len(frame))
     tracker, mpc, speed = comps
     for k in range(len(frame)):
@@ -59,7 +55,7 @@ def time_python(st, frame) -> np.ndarray:
     return times * 1e-9
 
 
-def time_fmpy(fmu: Path, frame) -> np.ndarray:
+def time_fmpy(fmu: Path, frame, feeds) -> np.ndarray:
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -71,9 +67,9 @@ def time_fmpy(fmu: Path, frame) -> np.ndarray:
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
     slave.exitInitializationMode()
-    vin = [refs[p] for p in FEEDS]
+    vin = [refs[p] for p in feeds]
     vout = [v.valueReference for v in md.modelVariables if v.causality == "output"]
-    data = frame[list(FEEDS.values())].to_numpy()
+    data = frame[list(feeds.values())].to_numpy()
     times = np.empty(len(frame))
     for k in range(len(frame)):
         t0 = time.perf_counter_ns()
@@ -86,20 +82,20 @@ def time_fmpy(fmu: Path, frame) -> np.ndarray:
     return times * 1e-9
 
 
-def time_c(fmu: Path, frame, tmp: Path) -> np.ndarray:
+def time_c(fmu: Path, frame, feeds, tmp: Path) -> np.ndarray:
     from fmpy import read_model_description
 
     md = read_model_description(str(fmu))
     ins = [v for v in md.modelVariables if v.causality == "input"]
     outs = [v for v in md.modelVariables if v.causality == "output"]
-    if [v.name for v in ins] != list(FEEDS):
+    if [v.name for v in ins] != list(feeds):
         raise RuntimeError("the FMU's inputs are not in the expected order")
     with zipfile.ZipFile(fmu) as zf:
         zf.extractall(tmp / "fmu")
     lib = tmp / "fmu/binaries/linux64/guidance_controller.so"
     harness = tmp / "harness"
     subprocess.run(["gcc", "-O2", "-o", str(harness), str(ROOT / "benchmarks/c/fmu_step_harness.c"), "-ldl"], check=True)
-    data = np.ascontiguousarray(frame[list(FEEDS.values())].to_numpy(), dtype=float)
+    data = np.ascontiguousarray(frame[list(feeds.values())].to_numpy(), dtype=float)
     (tmp / "inputs.bin").write_bytes(data.tobytes())
     res = subprocess.run([str(harness), str(lib), md.guid, str(tmp / "inputs.bin"), str(len(ins)),
                           str(ins[0].valueReference), str(len(outs)), str(outs[0].valueReference), "0.05"],
@@ -110,13 +106,13 @@ def time_c(fmu: Path, frame, tmp: Path) -> np.ndarray:
 def measure(seconds: float = 60.0) -> dict:
     from fmu_export.controller import export_controller
 
-    st, frame = recorded_inputs(seconds)
+    st, frame, feeds = recorded_inputs(seconds)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         fmu = export_controller(st, tmp / "guidance_controller.fmu")
-        rows = {"Python components (tracker + MPC + PID)": time_python(st, frame),
-                "FMU through fmpy (set, doStep, get)": time_fmpy(fmu, frame),
-                "FMU C step alone (C harness)": time_c(fmu, frame, tmp)}
+        rows = {"Python components (tracker + MPC + PID)": time_python(st, frame, feeds),
+                "FMU through fmpy (set, doStep, get)": time_fmpy(fmu, frame, feeds),
+                "FMU C step alone (C harness)": time_c(fmu, frame, feeds, tmp)}
     return {"steps": len(frame), "rows": rows}
 
 

@@ -218,17 +218,22 @@ def export_controller(study: Study, out: Path) -> Path:
             raise ExportError(str(exc)) from None
 
 
+def _connections(study_raw: dict, design: ControllerDesign) -> list:
+    from orchestrator.study import parse_study
+
+    return parse_study(study_raw, design.study_path).connections
+
+
 def controller_study(study_raw: dict, design: ControllerDesign, fmu_path: str, name: str = "controller") -> dict:
     """The raw study with the three controller components replaced by the FMU (same wiring)."""
-    raw = {k: v for k, v in study_raw.items()}
+    raw = dict(study_raw)
     comps = {k: v for k, v in raw["components"].items() if k not in design.names.values()}
     comps[name] = {"type": fmu_path, "step": design.sample_time}
     role_of = {n: r for r, n in design.names.items()}
     ports = {p[0] for p in design.inputs + design.outputs}
     conns = []
-    for item in raw.get("connections", []):
-        left, right = (s.strip() for s in item.split("->"))
-        (sc, so), (tc, ti) = left.split(".", 1), right.split(".", 1)
+    for c in _connections(study_raw, design):
+        (sc, so), (tc, ti) = (c.source, c.output), (c.target, c.input)
         if sc in role_of and tc in role_of:
             continue                                # inside the controller
         if sc in role_of:
@@ -236,7 +241,29 @@ def controller_study(study_raw: dict, design: ControllerDesign, fmu_path: str, n
         if tc in role_of:
             tc, ti = name, f"{role_of[tc]}_{ti}"
             if ti not in ports:
-                raise StudyError(f"connection {item!r}: {ti} is not an input of the exported controller")
+                raise StudyError(f"connection '{c}': {ti} is not an input of the exported controller")
         conns.append(f"{sc}.{so} -> {tc}.{ti}")
     raw["components"], raw["connections"] = comps, conns
     return raw
+
+
+def controller_feeds(study_raw: dict, design: ControllerDesign) -> dict[str, str]:
+    """FMU input -> the study signal ("component.output") that drives it, from the study's wiring."""
+    role_of = {n: r for r, n in design.names.items()}
+    feeds = {f"{role_of[c.target]}_{c.input}": f"{c.source}.{c.output}" for c in _connections(study_raw, design)
+             if c.target in role_of and c.source not in role_of}
+    return {name: feeds[name] for name, _, _ in design.inputs if name in feeds}
+
+
+def run_with_exported_controller(study_path: Path, fmu: Path, overrides: list[str] | None = None):
+    """Run a study as written and with the FMU in place of its three controllers:
+    (python frame, FMU frame, study)."""
+    from orchestrator.engine import Simulation
+    from orchestrator.study import load_raw, parse_study
+
+    raw = load_raw(study_path, overrides or [])
+    study = parse_study(raw, study_path)
+    with_fmu = parse_study(controller_study(raw, controller_design(study), str(fmu)), study_path)
+    python_frame = Simulation(build_system(study)).run().to_frame()
+    return python_frame, Simulation(build_system(with_fmu)).run().to_frame(), study
+

@@ -16,7 +16,6 @@ Only Real/Float64 variables become ports (others are ignored).
 """
 from __future__ import annotations
 
-import platform
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -36,13 +35,9 @@ def _binary_dir(fmi_version: str) -> str:
     return fmpy.platform if fmi_version.startswith("2") else fmpy.platform_tuple
 
 
-def _library_suffix() -> str:
-    return {"Windows": ".dll", "Darwin": ".dylib"}.get(platform.system(), ".so")
-
-
 def inspect_fmu(path: Path):
     """Read and check an FMU: (model description, unzip-free checks done). Raises FMUError."""
-    from fmpy import read_model_description
+    from fmpy import read_model_description, sharedLibraryExtension
 
     if not path.exists():
         raise FMUError(f"{path}: no such file")
@@ -61,7 +56,7 @@ def inspect_fmu(path: Path):
     if md.coSimulation is None:
         raise FMUError(f"{path}: a model-exchange-only FMU; co-simulation (FMI 2.0/3.0 CoSimulation) is required")
     ident = md.coSimulation.modelIdentifier
-    binary = f"binaries/{_binary_dir(md.fmiVersion)}/{ident}{_library_suffix()}"
+    binary = f"binaries/{_binary_dir(md.fmiVersion)}/{ident}{sharedLibraryExtension}"
     if binary not in names:
         have = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
         raise FMUError(f"{path}: no binary for this platform ({binary} missing; the FMU has "

@@ -234,14 +234,9 @@ def test_exported_qp_solver_equals_daqp_on_random_instances(controller_fmu, tmp_
 
 
 def _python_and_fmu_runs(controller_fmu, overrides):
-    from fmu_export.controller import controller_design, controller_study
+    from fmu_export.controller import run_with_exported_controller
 
-    raw = load_raw(ROOT / "studies/figure8.toml", overrides)
-    st = parse_study(raw, ROOT / "studies/figure8.toml")
-    raw_fmu = controller_study(raw, controller_design(st), str(controller_fmu))
-    py = Simulation(build_system(st)).run().to_frame()
-    fmu = Simulation(build_system(parse_study(raw_fmu, ROOT / "studies/figure8.toml"))).run().to_frame()
-    return py, fmu, st
+    return run_with_exported_controller(ROOT / "studies/figure8.toml", controller_fmu, overrides)
 
 
 def _max_position_difference(a, b):
@@ -280,15 +275,14 @@ def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu):
     open loop here, so its outputs must equal the Python controllers' outputs."""
     from fmpy import simulate_fmu
 
-    st = parse_study(load_raw(ROOT / "studies/figure8.toml", ["study.stop_time=30"]), ROOT / "studies/figure8.toml")
+    from fmu_export.controller import controller_design, controller_feeds
+
+    raw = load_raw(ROOT / "studies/figure8.toml", ["study.stop_time=30"])
+    st = parse_study(raw, ROOT / "studies/figure8.toml")
+    feeds = controller_feeds(raw, controller_design(st))
+    assert len(feeds) == 11                                # every FMU input is driven by the study
     py = Simulation(build_system(st)).run().to_frame()
     samples = py.iloc[::5].reset_index(drop=True)          # the controllers' 20 Hz instants
-    feeds = {"tracker_x_ref": "reference.x_ref", "tracker_y_ref": "reference.y_ref",
-             "tracker_xdot_ref": "reference.xdot_ref", "tracker_ydot_ref": "reference.ydot_ref",
-             "tracker_x": "ekf.x_cg", "tracker_y": "ekf.y_cg", "tracker_heading": "ekf.heading",
-             "mpc_yaw_rate": "tractor.yaw_rate", "mpc_steer_angle": "steering.steer_angle_measured",
-             "speed_controller_speed": "speed_filter.speed",
-             "speed_controller_pedal_position": "drivetrain.pedal_position"}
     inputs = np.zeros(len(samples), dtype=[("time", float)] + [(k, float) for k in feeds])
     inputs["time"] = samples["t"]
     for port, column in feeds.items():
