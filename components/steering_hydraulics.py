@@ -10,10 +10,16 @@ Per internal step h (``internal_step``, default 1 ms)::
     delta_measured = resolution * round(delta / resolution)                         potentiometer
 
 Q_max = 12 L/min; with the default cylinder volume per radian the fastest steering rate is 60 deg/s.
+
+Extensions (off by default; entries of the diagnosis catalogue): ``command_delay`` (the command
+acts ``d`` seconds late, resolved to the component's step), ``angle_deadband`` (the PI sees
+sign(e) max(|e| - D, 0): errors below D are ignored) and ``rate_limit`` (|ddelta/dt| <= r, on top
+of the valve's flow limit; 0 = no extra limit).
 """
 from __future__ import annotations
 
 import math
+from collections import deque
 
 from orchestrator.component import Component, inp, out, par
 
@@ -52,6 +58,9 @@ class SteeringHydraulics(Component):
         par("potentiometer_resolution", "rad", math.radians(1.0), "angle sensor resolution"),
         par("internal_step", "s", 0.001, "integration and low-level control step"),
         par("delta0", "rad", 0.0, "initial wheel angle"),
+        par("command_delay", "s", 0.0, "extension: transport delay of the command"),
+        par("angle_deadband", "rad", 0.0, "extension: angle errors below this are ignored"),
+        par("rate_limit", "rad/s", 0.0, "extension: extra wheel-rate limit (0 = the valve's only)"),
         out("steer_angle", "rad", 0.0, "true front wheel angle delta"),
         out("steer_angle_measured", "rad", 0.0, "potentiometer reading (quantised)"),
         out("valve_voltage", "V", 6.0, "voltage applied to the electro-hydraulic valve"),
@@ -67,6 +76,10 @@ class SteeringHydraulics(Component):
                      "deadband must be >= 0 and below the valve's voltage span")
         self.require(p["internal_step"] > 0 and p["valve_time_constant"] > 0, "time constants must be > 0")
         self.substeps = max(1, int(round(dt / p["internal_step"])))
+        for key in ("command_delay", "angle_deadband", "rate_limit"):
+            self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
+        delay_steps = int(round(float(p["command_delay"]) / dt))
+        self.command_history = deque([0.0] * delay_steps, maxlen=delay_steps + 1)
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
@@ -87,12 +100,18 @@ class SteeringHydraulics(Component):
         pi = self.pi
         kp, ki_h, v_lo, v_hi, i_lim = pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit
         integral = pi.integral
-        cmd = float(self.u["steer_angle_cmd"])
+        history = self.command_history
+        history.append(float(self.u["steer_angle_cmd"]))
+        cmd = history[0]
+        dead = p["angle_deadband"]
+        max_move = p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf
         delta, opening = self.delta, self.opening
         v_rel = 0.0
         inv_res = 1.0 / res if res > 0 else 0.0
         for _ in range(self.substeps):
             error = cmd - (res * round(delta * inv_res) if inv_res else delta)
+            if dead:
+                error = error - dead if error > dead else (error + dead if error < -dead else 0.0)
             raw = kp * error + integral
             if raw > v_hi:
                 v_rel = v_hi
@@ -117,7 +136,12 @@ class SteeringHydraulics(Component):
             else:
                 target = 0.0
             opening += alpha * (target - opening)
-            delta += rate_step * opening
+            move = rate_step * opening
+            if move > max_move:
+                move = max_move
+            elif move < -max_move:
+                move = -max_move
+            delta += move
             if delta > lim:
                 delta = lim
             elif delta < -lim:
@@ -129,7 +153,7 @@ class SteeringHydraulics(Component):
         y["steer_angle"] = delta
         y["steer_angle_measured"] = quantize(delta, res)
         y["valve_voltage"] = voltage
-        y["steer_rate"] = opening * rate_step / h if abs(delta) < lim else 0.0
+        y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
 
 
 COMPONENT = SteeringHydraulics

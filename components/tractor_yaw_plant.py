@@ -17,6 +17,12 @@ exponential). The pose at the CG follows (paper eq. 2)::
 integrated with the midpoint rule; the rear-axle point R (GPS antenna) is CG - l_r (cos psi, sin psi).
 Below ``min_speed`` the dynamics use min_speed (the slip equations divide by v_x) and the yaw rate
 is scaled by v_x/min_speed, so a tractor at rest does not turn.
+
+Extensions (off by default; each is an entry of the diagnosis catalogue, see diagnosis/catalogue.py):
+``steer_angle_offset`` (the tyres see delta + offset: a wheel-angle sensor zeroed wrongly),
+``cornering_speed_slope`` (C_f, C_r scaled by 1 + k (v_x - v_ref)), ``slope_angle`` with
+``slope_downhill_heading`` (side slope: a_lat = g sin(phi) sin(psi_d - psi) at the CG, physical
+models only) and ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame).
 """
 from __future__ import annotations
 
@@ -27,7 +33,9 @@ import numpy as np
 from orchestrator.component import Component, inp, out, par
 
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical,
-                                  state_space, zoh_discretize)
+                                  cornering_scale, lateral_disturbance_column,
+                                  slope_lateral_acceleration, state_space, with_cornering_scale,
+                                  zoh_discretize)
 
 MODELS = PHYSICAL_MODELS + ("transfer_function",)
 
@@ -53,6 +61,13 @@ class TractorYawPlant(Component):
         par("y0", "m", 0.0, "initial CG north position"),
         par("psi0", "rad", 0.0, "initial heading (from east, counter-clockwise)"),
         par("speed_cache_resolution", "m/s", 1e-3, "speeds closer than this share one discretisation"),
+        par("steer_angle_offset", "rad", 0.0, "extension: tyres see steer_angle + offset"),
+        par("cornering_speed_slope", "s/m", 0.0, "extension: C_f, C_r x (1 + k (v_x - v_ref))"),
+        par("cornering_reference_speed", "m/s", 2.0, "extension: v_ref of the cornering scaling"),
+        par("slope_angle", "rad", 0.0, "extension: side slope of the field plane"),
+        par("slope_downhill_heading", "rad", 0.0, "extension: azimuth of the fall line (from east, CCW)"),
+        par("antenna_forward", "m", 0.0, "extension: GPS antenna ahead of R"),
+        par("antenna_left", "m", 0.0, "extension: GPS antenna left of R"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -62,6 +77,10 @@ class TractorYawPlant(Component):
         out("y_rear", "m", 0.0, "rear-axle point R north position"),
         out("vel_east_rear", "m/s", 0.0, "velocity of R, east"),
         out("vel_north_rear", "m/s", 0.0, "velocity of R, north"),
+        out("x_antenna", "m", 0.0, "GPS antenna east position (R + lever arm)"),
+        out("y_antenna", "m", 0.0, "GPS antenna north position"),
+        out("vel_east_antenna", "m/s", 0.0, "GPS antenna velocity, east"),
+        out("vel_north_antenna", "m/s", 0.0, "GPS antenna velocity, north"),
     )
     feedthrough = {}
 
@@ -73,6 +92,10 @@ class TractorYawPlant(Component):
         for key in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r", "min_speed"):
             self.require(float(p[key]) > 0, f"parameter {key} must be > 0, got {p[key]}")
         self._tf = None
+        self._slope = float(p["slope_angle"]) != 0.0
+        self._cornering = float(p["cornering_speed_slope"]) != 0.0
+        self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering),
+                     "slope_angle and cornering_speed_slope need a physical model (bicycle, rlf, rlfr)")
         if p["model"] == "transfer_function":
             self._tf = controllable_canonical(p["tf_num"], p["tf_den"])
             n = self._tf[0].shape[0]
@@ -90,8 +113,16 @@ class TractorYawPlant(Component):
         hit = self._cache.get(key)
         if hit is None:
             vq = key[0] * self._cache_res
-            A, B, C = self._tf if self.p["model"] == "transfer_function" else \
-                state_space(self.p["model"], self.params, vq)
+            if self._tf is not None:
+                A, B, C = self._tf
+            else:
+                params = self.params
+                if self._cornering:
+                    params = with_cornering_scale(params, cornering_scale(
+                        vq, self.p["cornering_speed_slope"], self.p["cornering_reference_speed"]))
+                A, B, C = state_space(self.p["model"], params, vq)
+                if self._slope:
+                    B = np.column_stack([B, lateral_disturbance_column(A.shape[0])])
             Ad, Bd = zoh_discretize(A, B, dt)
             hit = self._cache[key] = (Ad, Bd, C)
             if len(self._cache) > 20000:
@@ -116,16 +147,25 @@ class TractorYawPlant(Component):
         v_lat_rear = v_y - lr * gamma
         y["vel_east_rear"] = v * c - v_lat_rear * s
         y["vel_north_rear"] = v * s + v_lat_rear * c
+        af, al = self.p["antenna_forward"], self.p["antenna_left"]
+        y["x_antenna"] = y["x_rear"] + af * c - al * s
+        y["y_antenna"] = y["y_rear"] + af * s + al * c
+        y["vel_east_antenna"] = y["vel_east_rear"] - gamma * (af * s + al * c)
+        y["vel_north_antenna"] = y["vel_north_rear"] + gamma * (af * c - al * s)
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
-        delta = float(self.u["steer_angle"])
+        delta = float(self.u["steer_angle"]) + self.p["steer_angle_offset"]
         vmin, speed = self._min_speed, abs(v)
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
         Ad, Bd, _ = self.discretized(v_eff, dt)
         gamma0, vy0 = self._yaw_rate_and_lateral()
         z = Ad @ self.z
-        z += Bd * delta
+        if self._slope:
+            a_lat = slope_lateral_acceleration(self.psi, self.p["slope_angle"], self.p["slope_downhill_heading"])
+            z += Bd[:, 0] * delta + Bd[:, 1] * a_lat
+        else:
+            z += Bd * delta
         self.z = z
         gamma1, vy1 = self._yaw_rate_and_lateral()
         gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1

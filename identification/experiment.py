@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
+from analysis.measured_log import LogError, read_log as read_measured_log
 from orchestrator.runner import simulate
 from orchestrator.study import Study, StudyError, parse_study
 from orchestrator.units import UnitError, to_si
@@ -154,39 +155,9 @@ def simulate_experiment(study: Study, raw: dict[str, Any], cfg: IdentificationCo
 # ---------------------------------------------------------------------------------------------
 # measured logs
 
-class LogError(ValueError):
-    pass
-
-
 def read_log(path: Path) -> pd.DataFrame:
-    path = Path(path)
-    if not path.is_file():
-        raise LogError(f"{path}: log not found")
-    try:
-        frame = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
-    except Exception as exc:
-        raise LogError(f"{path}: cannot read as {'Parquet' if path.suffix == '.parquet' else 'CSV'}: {exc}") from None
-    missing = [c for c in CANONICAL if c not in frame.columns]
-    if missing:
-        raise LogError(f"{path}: missing columns {missing}; a log needs {list(CANONICAL)} (SI units, radians)")
-    for c in CANONICAL:
-        if not pd.api.types.is_numeric_dtype(frame[c]):
-            raise LogError(f"{path}: column {c!r} is not numeric")
-        bad = frame[c].isna().to_numpy()
-        if bad.any():
-            raise LogError(f"{path}: column {c!r} has {bad.sum()} NaN values (first at row {int(np.argmax(bad))})")
-    t = frame["t"].to_numpy()
-    dt = np.diff(t)
-    if np.any(dt <= 0):
-        i = int(np.argmax(dt <= 0))
-        raise LogError(f"{path}: time is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
-    if np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt):
-        i = int(np.argmax(np.abs(dt - np.median(dt))))
-        raise LogError(f"{path}: uneven sampling: step {dt[i]:.4g} s at row {i + 1}, typical {np.median(dt):.4g} s")
-    if np.abs(frame["delta"]).max() > math.pi:
-        raise LogError(f"{path}: column 'delta' reaches {np.abs(frame['delta']).max():.3g}: degrees? "
-                       "the log must hold radians")
-    return frame
+    """A canonical log with the columns identification needs (analysis.measured_log checks it)."""
+    return read_measured_log(path, CANONICAL)
 
 
 def detect_period(r: np.ndarray, min_samples: int = 8) -> int:

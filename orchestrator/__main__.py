@@ -45,7 +45,16 @@ def main(argv: list[str] | None = None) -> int:
     exp.add_argument("study", type=Path)
     exp.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
     exp.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE")
+    diag = sub.add_parser("diagnose", help="name what the simulation gets wrong about a measured log")
+    diag.add_argument("log", type=Path, help="measured log (.csv/.parquet): t, delta_cmd, delta, v, yaw_rate, x, y")
+    diag.add_argument("--study", type=Path, default=None, help="baseline study (default: studies/figure8.toml)")
+    diag.add_argument("--out", type=Path, required=True)
+    diag.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
+    diag.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
+    diag.add_argument("--no-plots", action="store_true")
     args = parser.parse_args(argv)
+    if args.command == "diagnose":
+        return _diagnose(args)
     if args.command == "export-controller":
         return _export_controller(args)
     if args.command == "sweep":
@@ -128,6 +137,31 @@ def _identify(args) -> int:
         return 2
     print(summary(report))
     print(f"\nwritten to {args.out}/identification.json")
+    return 0
+
+
+def _diagnose(args) -> int:
+    """Exit 0 with a verdict (an effect or 'none'); 2 when the log or study cannot be used (the
+    verdict 'cannot decide' and the reason are still written)."""
+    from diagnosis.pipeline import CANNOT_DECIDE, diagnose
+
+    if not 0.2 <= args.fit_fraction <= 0.8:
+        print("error: --fit-fraction must be in [0.2, 0.8]", file=sys.stderr)
+        return 2
+    try:
+        result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots)
+    except StudyError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if result["verdict"] == CANNOT_DECIDE:
+        print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
+        return 2
+    print(f"verdict: {result['verdict']}")
+    for f in result["findings"][:3]:
+        print(f"  {f['effect']:26s} dBIC {f['evidence']['delta_bic']:9.1f}  held-out gain {100 * f['gain']:5.1f}%  "
+              + ", ".join(f"{k} = {v:.4g}" for k, v in f["params_display"].items()))
+    print(f"report: {args.out}/report.md" + (f", extended study: {args.out}/{result['extended_study']}"
+                                             if "extended_study" in result else ""))
     return 0
 
 

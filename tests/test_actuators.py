@@ -183,3 +183,29 @@ def test_drivetrain_shortcut_for_a_still_pedal_equals_the_substep_equations():
         assert d.y["pedal_position"] == pytest.approx(pedal, abs=1e-12)
         assert d.y["speed"] == pytest.approx(v, abs=1e-9)
     assert {0.0, 1.0} <= stops
+
+
+# --- diagnosis-catalogue extensions (issue 6) -----------------------------------------------
+
+def test_command_delay_shifts_the_step_response_by_the_delay():
+    base = run_steering(10 * DEG, 1.5, dt=0.01)[:, 0]
+    late = run_steering(10 * DEG, 1.5, dt=0.01, command_delay=0.2)[:, 0]
+    assert np.all(late[:20] == 0.0)                                   # nothing moves for 0.2 s
+    np.testing.assert_allclose(late[20:], base[:-20], atol=1e-12)     # then the same response
+
+
+def test_angle_deadband_leaves_the_error_inside_the_band_and_small_commands_unexecuted():
+    small = run_steering(1.5 * DEG, 2.0, angle_deadband=2 * DEG, ki=0.0)[:, 0]
+    assert np.all(small == 0.0)
+    big = run_steering(10 * DEG, 3.0, angle_deadband=2 * DEG, ki=0.0, potentiometer_resolution=0.0,
+                       valve_time_constant=0.001)[:, 0]
+    # a fast spool (no coasting): stops short by D plus the valve dead-band seen through kp
+    # (0.5 V / 150 V/rad = 0.19 deg)
+    assert 10 * DEG - (2 + 0.19 + 0.05) * DEG <= big[-1] <= 10 * DEG - 2 * DEG
+
+
+def test_rate_limit_bounds_the_wheel_rate_below_the_valve_limit():
+    r = run_steering(40 * DEG, 2.0, dt=0.001, rate_limit=15 * DEG)[:, 0]
+    rate = np.diff(r) / 0.001
+    assert rate.max() == pytest.approx(15 * DEG, rel=1e-9)
+    assert r[-1] == pytest.approx(min(40 * DEG, 15 * DEG * 2.0), abs=0.5 * DEG)

@@ -205,3 +205,61 @@ def test_at_rest_the_tractor_does_not_turn():
     for k in range(200):
         plant.step(k * 0.01, 0.01)
     assert plant.y["heading"] == 0.0 and plant.y["x_cg"] == 0.0
+
+
+# --- diagnosis-catalogue extensions (issue 6) -----------------------------------------------
+
+def test_steer_angle_offset_turns_at_zero_reading_with_the_understeer_gain():
+    v, offset = 2.0, math.radians(2.0)
+    plant = make_plant("rlf", steer_angle_offset=offset)
+    plant.u.update(speed=v, steer_angle=0.0)
+    for k in range(1500):
+        plant.step(k * 0.01, 0.01)
+    assert plant.y["yaw_rate"] == pytest.approx(offset * understeer_gain(v), rel=1e-6)
+
+
+def test_speed_dependent_cornering_equals_the_plant_with_scaled_stiffness():
+    """Two routes: k = 0.25 at 3 m/s (scale 1.25) against C_f, C_r multiplied by 1.25 by hand."""
+    a = make_plant("rlf", cornering_speed_slope=0.25, cornering_reference_speed=2.0)
+    b = make_plant("rlf", C_f=P.C_f * 1.25, C_r=P.C_r * 1.25)
+    for p in (a, b):
+        p.u.update(speed=3.0, steer_angle=math.radians(5))
+        for k in range(300):
+            p.step(k * 0.01, 0.01)
+    assert a.y["yaw_rate"] == pytest.approx(b.y["yaw_rate"], rel=1e-12)
+    assert abs(a.y["yaw_rate"] - make_plant("rlf").discretized(3.0, 0.01)[0][1, 1]) > 0    # not the baseline
+
+
+def test_side_slope_pushes_downhill_with_g_sin_phi():
+    """Fall line to the tractor's left, at rest in yaw: dv_y/dt(0) = g sin(phi) (the equations'
+    only lateral input), and the lateral force vanishes when the fall line is straight ahead."""
+    phi, dt = math.radians(5), 1e-6
+    left = make_plant("rlf", slope_angle=phi, slope_downhill_heading=math.pi / 2)
+    left.u.update(speed=2.0, steer_angle=0.0)
+    left.initialize(0.0, dt)
+    left.step(0.0, dt)
+    assert left.y["lateral_velocity"] / dt == pytest.approx(9.81 * math.sin(phi), rel=1e-3)
+    ahead = make_plant("rlf", slope_angle=phi, slope_downhill_heading=0.0)
+    ahead.u.update(speed=2.0, steer_angle=0.0)
+    for k in range(100):
+        ahead.step(k * 0.01, 0.01)
+    assert ahead.y["lateral_velocity"] == 0.0 and ahead.y["yaw_rate"] == 0.0
+
+
+def test_antenna_lever_arm_position_and_velocity_are_consistent():
+    plant = make_plant("rlf", antenna_forward=0.8, antenna_left=-0.3, psi0=0.4)
+    plant.u.update(speed=2.0, steer_angle=math.radians(8))
+    rows = []
+    for k in range(400):
+        plant.step(k * 0.01, 0.01)
+        y = plant.y
+        rows.append((y["x_antenna"], y["y_antenna"], y["vel_east_antenna"], y["vel_north_antenna"],
+                     y["x_rear"], y["y_rear"], y["heading"]))
+    a = np.array(rows)
+    c, s = np.cos(a[:, 6]), np.sin(a[:, 6])
+    np.testing.assert_allclose(a[:, 0], a[:, 4] + 0.8 * c + 0.3 * s, atol=1e-12)
+    np.testing.assert_allclose(a[:, 1], a[:, 5] + 0.8 * s - 0.3 * c, atol=1e-12)
+    ve = np.gradient(a[:, 0], 0.01)[5:-5]
+    vn = np.gradient(a[:, 1], 0.01)[5:-5]
+    np.testing.assert_allclose(ve, a[5:-5, 2], atol=2e-3)
+    np.testing.assert_allclose(vn, a[5:-5, 3], atol=2e-3)

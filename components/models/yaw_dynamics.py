@@ -12,6 +12,12 @@ RLFR front and rear)::
     alpha_r = (v_y - l_r gamma)/v_x                or  sigma_r dalpha_r/dt = v_y - l_r gamma - v_x alpha_r
 
 State order: [v_y, gamma] (+ alpha_f for RLF) (+ alpha_r for RLFR); input delta; output gamma.
+
+Model extensions (the diagnosis catalogue, issue 6), shared by the plant and the diagnosis replay:
+
+- speed-dependent cornering: C_f, C_r scaled by c(v) = max(0.2, 1 + k (v_x - v_ref));
+- side slope: a field plane tilted by phi with its fall line at azimuth psi_d adds the lateral
+  acceleration a_lat = g sin(phi) sin(psi_d - psi) to dv_y/dt (input column ``E``: [1, 0, ...]).
 """
 from __future__ import annotations
 
@@ -34,6 +40,33 @@ class TractorParameters:
     C_r: float = 90000.0
     sigma_f: float = 0.1942
     sigma_r: float = 1.6657
+
+
+GRAVITY = 9.81
+
+
+def cornering_scale(v_x: float, slope: float, reference_speed: float) -> float:
+    """c(v) = max(0.2, 1 + slope (v_x - v_ref)): the factor on both cornering stiffnesses."""
+    return max(0.2, 1.0 + slope * (v_x - reference_speed))
+
+
+def with_cornering_scale(p: TractorParameters, scale: float) -> TractorParameters:
+    """The parameters with C_f and C_r multiplied by ``scale``."""
+    from dataclasses import replace
+
+    return replace(p, C_f=p.C_f * scale, C_r=p.C_r * scale)
+
+
+def slope_lateral_acceleration(heading, slope_angle: float, downhill_heading: float):
+    """a_lat = g sin(phi) sin(psi_d - psi): gravity along the body's left axis on a side slope."""
+    return GRAVITY * np.sin(slope_angle) * np.sin(downhill_heading - heading)
+
+
+def lateral_disturbance_column(n_states: int) -> np.ndarray:
+    """E: a lateral acceleration at the CG enters dv_y/dt (state 0) with gain 1."""
+    E = np.zeros(n_states)
+    E[0] = 1.0
+    return E
 
 
 def state_space(model: str, p: TractorParameters, v_x: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -83,15 +116,18 @@ def controllable_canonical(num: list[float], den: list[float]) -> tuple[np.ndarr
 
 
 def zoh_discretize(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact zero-order-hold discretisation: [Ad Bd; 0 I] = expm([A B; 0 0] dt)."""
+    """Exact zero-order-hold discretisation: [Ad Bd; 0 I] = expm([A B; 0 0] dt).
+    ``B`` is one input column (n,) or several (n, m); Bd has the same shape."""
     from scipy.linalg import expm
 
     n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
+    Bm = B.reshape(n, -1)
+    m = Bm.shape[1]
+    M = np.zeros((n + m, n + m))
     M[:n, :n] = A
-    M[:n, n] = B
+    M[:n, n:] = Bm
     E = expm(M * dt)
-    return E[:n, :n], E[:n, n]
+    return E[:n, :n], E[:n, n:].reshape(B.shape)
 
 
 def transfer_function(model: str, p: TractorParameters, v_x: float) -> tuple[np.ndarray, np.ndarray]:

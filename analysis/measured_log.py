@@ -1,0 +1,69 @@
+"""Reading a measured log in the canonical format (DESIGN.md, 'Measured data').
+
+A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units:
+``delta_cmd``, ``delta`` [rad], ``v`` [m/s], ``yaw_rate`` [rad/s], ``x``, ``y`` [m]; more columns
+are allowed. Every refusal names the file, the column and what was expected.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+CANONICAL = ("t", "delta_cmd", "delta", "v", "yaw_rate", "x", "y")
+
+# A column whose largest magnitude passes this bound is almost surely in degrees: no tractor
+# steers beyond 70 deg (1.22 rad) or yaws faster than 3 rad/s (172 deg/s).
+DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s")}
+
+
+class LogError(ValueError):
+    """A log that cannot be used as it is."""
+
+
+def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.DataFrame:
+    """Load and check a log: columns present and numeric, no NaN, time increasing and evenly
+    sampled (a gap is named), angles in radians (degrees are detected and named)."""
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"{path}: log not found")
+    kind = "Parquet" if path.suffix == ".parquet" else "CSV"
+    try:
+        frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
+    except Exception as exc:
+        raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise LogError(f"{path}: missing columns {missing}; a log needs {list(required)} (SI units, radians)")
+    for c in required:
+        if not pd.api.types.is_numeric_dtype(frame[c]):
+            raise LogError(f"{path}: column {c!r} is not numeric (first value {frame[c].iloc[0]!r})")
+        bad = frame[c].isna().to_numpy()
+        if bad.any():
+            raise LogError(f"{path}: column {c!r} has {int(bad.sum())} NaN values (first at row {int(np.argmax(bad))}, "
+                           f"t = {frame['t'].iloc[int(np.argmax(bad))]})")
+    if len(frame) < 3:
+        raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
+    t = frame["t"].to_numpy(dtype=float)
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
+    step = float(np.median(dt))
+    if dt.max() > 1.5 * step:
+        i = int(np.argmax(dt))
+        raise LogError(f"{path}: column 't' has a gap of {dt[i]:.4g} s at t = {t[i]:.4g} s (row {i + 1}); "
+                       f"expected an even step of {step:.4g} s: cut the log at the gap or fill it")
+    if np.max(np.abs(dt - step)) > 0.01 * step:
+        i = int(np.argmax(np.abs(dt - step)))
+        raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical {step:.4g} s")
+    for c, (bound, unit) in DEGREE_SUSPECT.items():
+        if c in required:
+            peak = float(np.abs(frame[c]).max())
+            if peak > bound:
+                raise LogError(f"{path}: column {c!r} reaches {peak:.3g}, more than {bound} {unit}: it looks like "
+                               f"degrees{'/s' if unit == 'rad/s' else ''}; the log must hold {unit} "
+                               f"(multiply by pi/180 = {math.pi / 180:.6f})")
+    return frame

@@ -1,0 +1,145 @@
+"""Issue 6: the diagnosis names an effect hidden in logs it has never seen.
+
+The logs come from tests/field_truth.py (the paper's equations in scalar form, Heun at 200 Hz, its
+own steering loop with an unmodelled spool lag, parameters drawn around the paper's, its own
+sensor noise); the effect and its size are drawn there and compared here only.
+"""
+from __future__ import annotations
+
+import json
+import math
+import multiprocessing
+import os
+import subprocess
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from tests.field_truth import EFFECTS, make_log, recovered
+
+ROOT = Path(__file__).resolve().parent.parent
+DEG = math.pi / 180
+BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+SEEDS = (101, 102)           # not used while the diagnosis was tuned (seeds 1-3)
+
+
+def _one(case: tuple[str | None, int, str]) -> dict:
+    from diagnosis.pipeline import diagnose
+
+    effect, seed, folder = case
+    frame, truth = make_log(seed, effect)
+    log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
+    frame.to_parquet(log)
+    result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)
+    return {"effect": effect or "none", "seed": seed, "truth": truth, "result": result}
+
+
+@pytest.fixture(scope="module")
+def hidden(tmp_path_factory):
+    folder = str(tmp_path_factory.mktemp("diagnosis"))
+    cases = [(e, s, folder) for e in (None, *EFFECTS) for s in SEEDS]
+    # fresh single-threaded BLAS in each worker: two processes spinning two BLAS threads each on
+    # two cores run 3x slower than one process
+    saved = {k: os.environ.get(k) for k in BLAS_THREADS}
+    os.environ.update({k: "1" for k in BLAS_THREADS})
+    try:
+        with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
+            runs = list(pool.map(_one, cases))
+    finally:
+        for k, v in saved.items():
+            os.environ.pop(k) if v is None else os.environ.__setitem__(k, v)
+    right = sum(r["result"]["verdict"] == r["effect"] for r in runs)
+    print(f"\ndiagnosis named the hidden effect in {right}/{len(runs)} logs ({100 * right / len(runs):.0f}%)")
+    return {(r["effect"], r["seed"]): r for r in runs}
+
+
+@pytest.mark.parametrize("effect", ["none", *EFFECTS])
+def test_hidden_effect_is_named_recovered_and_gains_on_held_out_data(hidden, effect):
+    for seed in SEEDS:
+        run = hidden[(effect, seed)]
+        res = run["result"]
+        assert res["verdict"] == effect, (seed, res["verdict"], res["findings"][0]["evidence"]["reasons"])
+        if effect == "none":
+            assert all(not f["evidence"]["supported"] for f in res["findings"])
+            continue
+        top = res["findings"][0]
+        assert top["effect"] == effect and top["evidence"]["supported"]
+        est, true, tol = recovered(effect, run["truth"], top["params"])
+        assert abs(est - true) <= tol, (seed, est, true, tol)
+        assert top["gain"] > 0.05
+        assert all(top["rmse_after"][k] < top["rmse_before"][k] * 1.05 for k in top["rmse_before"])
+
+
+def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
+    res = hidden[("side_slope", SEEDS[0])]["result"]
+    assert {"verdict", "findings"} <= set(res)
+    assert [f["effect"] for f in res["findings"]].count("side_slope") == 1 and len(res["findings"]) == 9
+    for f in res["findings"]:
+        assert {"effect", "subsystem", "params", "rmse_before", "rmse_after", "gain", "evidence"} <= set(f)
+    supported = [f["evidence"]["supported"] for f in res["findings"]]
+    assert supported == sorted(supported, reverse=True)
+    bics = [f["evidence"]["delta_bic"] for f in res["findings"] if f["evidence"]["supported"]]
+    assert bics == sorted(bics)
+
+
+def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tmp_path):
+    """The extended study written by the diagnosis runs, and the plant it builds shows the fitted
+    delay: the steering's step response moves ~d later than the baseline's."""
+    from orchestrator.runner import simulate
+    from orchestrator.study import load_study
+
+    frame, truth = make_log(7, "actuator_delay")
+    frame.to_csv(tmp_path / "log.csv", index=False)
+    proc = subprocess.run([sys.executable, "-m", "orchestrator", "diagnose", str(tmp_path / "log.csv"),
+                           "--out", str(tmp_path / "d"), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 0, proc.stderr
+    res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
+    assert res["verdict"] == "actuator_delay" and "verdict: actuator_delay" in proc.stdout
+    study = load_study(tmp_path / "d" / "extended_study.toml", ["study.stop_time=20"])
+    fitted = study.components["steering"].parameters["command_delay"]
+    assert fitted == pytest.approx(res["findings"][0]["params"]["command_delay"])
+    ext = simulate(study)[0].to_frame()
+    base = simulate(load_study(ROOT / "studies" / "figure8.toml", ["study.stop_time=20"]))[0].to_frame()
+    assert np.max(np.abs(ext["tractor.x_cg"].to_numpy() - base["tractor.x_cg"].to_numpy())) > 1e-3
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda f: f.drop(columns=["x"]), ["missing columns", "'x'"]),
+    (lambda f: f.assign(delta=np.degrees(f["delta"])), ["'delta'", "looks like degrees"]),
+    (lambda f: f.assign(yaw_rate=np.degrees(f["yaw_rate"])), ["'yaw_rate'", "deg"]),
+    (lambda f: f.drop(index=range(1000, 1100)), ["gap of 5.05 s", "t = 49.95"]),
+    (lambda f: f.assign(v=f["v"].where(f.index != 300, np.nan)), ["'v'", "NaN", "row 300"]),
+    (lambda f: f.iloc[:800], ["lasts 40.0 s", "at least 60 s"]),
+    (lambda f: f.assign(v=0.0), ["moves", "0%"]),
+])
+def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
+    frame, _ = make_log(5, None, duration=120.0)
+    log = tmp_path / "bad.csv"
+    edit(frame).to_csv(log, index=False)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("earlier result")
+    proc = subprocess.run([sys.executable, "-m", "orchestrator", "diagnose", str(log), "--out", str(out)],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    for w in words:
+        assert w in proc.stderr, proc.stderr
+    res = json.loads((out / "diagnosis.json").read_text())
+    assert res["verdict"] == "cannot decide" and res["findings"] == []
+    assert (out / "keep.txt").read_text() == "earlier result"
+
+
+def test_gyro_in_degrees_per_second_is_caught_even_when_small():
+    """Gentle driving keeps |yaw_rate| below the magnitude bound; the GPS turn rate gives it away."""
+    from diagnosis.baseline import baseline_from_study
+    from diagnosis.candidates import CannotDecide, Replay
+    from orchestrator.study import load_study
+
+    frame, _ = make_log(5, None, duration=120.0)
+    frame["yaw_rate"] = np.degrees(frame["yaw_rate"])
+    with pytest.raises(CannotDecide, match="deg/s"):
+        Replay(frame, baseline_from_study(load_study(ROOT / "studies" / "figure8.toml")))
