@@ -52,7 +52,17 @@ def main(argv: list[str] | None = None) -> int:
     diag.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
     diag.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
     diag.add_argument("--no-plots", action="store_true")
+    emu = sub.add_parser("emulate", help="serve a simulated tractor in real time over NMEA/TCP and CAN")
+    emu.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
+    emu.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")
+    emu.add_argument("--out", type=Path, default=None, help="write the emulated tractor's signals here")
+    emu.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
+    emu.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE")
     args = parser.parse_args(argv)
+    if args.command == "emulate":
+        from components.hardware.emulate import emulate
+
+        return emulate(args.study, args.nmea_port, args.out, args.set, args.duration)
     if args.command == "diagnose":
         return _diagnose(args)
     if args.command == "export-controller":

@@ -72,6 +72,7 @@ class Component:
         self.p: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "parameter"}
         self.u: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "input"}
         self.y: dict[str, Any] = {v.name: v.start for v in self.variables if v.causality == "output"}
+        self.events: list[tuple[float, str]] = []
         for key, value in (parameters or {}).items():
             if key not in self.p:
                 raise ComponentError(f"{name}: unknown parameter {key!r}; known: {sorted(self.p)}")
@@ -92,8 +93,18 @@ class Component:
     def step(self, t: float, dt: float) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    # A sampled hardware adapter may also define ``actuate(t)``: called at the end of each of its
+    # instants, after every sampled component has stepped and with its inputs refreshed, so that
+    # it reads its sensors in ``step`` (first) and writes the commands of the same instant here
+    # (last): read - compute - write in one cycle, as a real-time target does.
+    actuate = None
+
+    def terminate(self) -> None:
+        """Release what the component holds (ports, sockets, buses); called once after a run."""
+
     def reset(self) -> None:
         """Return inputs and outputs to their start values (parameters are kept)."""
+        self.events = []
         for v in self.variables:
             if v.causality == "input":
                 self.u[v.name] = v.start
@@ -101,6 +112,11 @@ class Component:
                 self.y[v.name] = v.start
 
     # --- helpers for subclasses ---------------------------------------------------------------
+    def event(self, t: float, message: str) -> None:
+        """Log why something happened (a watchdog tripping, a link lost); the runner writes
+        every component's events to events.log."""
+        self.events.append((float(t), message))
+
     def require(self, condition: bool, message: str) -> None:
         if not condition:
             raise ComponentError(f"{self.name}: {message}")

@@ -4,7 +4,8 @@ At each macro instant t_k = t0 + k*h (never accumulated):
  1. continuous components whose step ended at t_k publish the outputs they reached;
  2. sampled components due at t_k, in dependency order, read their inputs and step
     (their outputs hold on [t_k, t_k + step));
- 3. every output is recorded for t_k;
+ 3. every output is recorded for t_k; components defining ``actuate`` (hardware adapters) write
+    the inputs of t_k out;
  4. continuous components due at t_k read their inputs (all values of t_k; every read happens
     before any of them steps) and integrate to t_k + step; their outputs stay private until
     step 1 of that instant.
@@ -17,13 +18,14 @@ from __future__ import annotations
 import math
 import time
 from array import array
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from operator import itemgetter
 
 import numpy as np
 
 from .build import Node, System
 from .component import ComponentError
+from .realtime import RealTimePacer
 
 
 class RunError(Exception):
@@ -40,6 +42,8 @@ class Recording:
     data: np.ndarray            # shape (n_samples, 1 + n_signals); column 0 is time
     wall_time_s: float
     completed: bool
+    events: list[tuple[float, str, str]] = field(default_factory=list)   # (t, component, message)
+    realtime: dict | None = None                                          # pacing statistics
 
     def to_frame(self):
         import pandas as pd
@@ -69,8 +73,10 @@ class _Recorder:
 
 
 class Simulation:
-    def __init__(self, system: System) -> None:
+    def __init__(self, system: System, record: bool = True) -> None:
+        """``record=False``: keep no signal history (a sub-system stepped inside a component)."""
         self.system = system
+        self.record = record
         s = system.study.study
         self.t0, self.h = s.start_time, s.base_step
         self.n_steps = int(round((s.stop_time - s.start_time) / s.base_step))
@@ -86,27 +92,41 @@ class Simulation:
     def _recording(self, recorders: list[_Recorder], rows: int, completed: bool, start: float) -> Recording:
         times = self.t0 + np.arange(rows) * self.h
         blocks = [times.reshape(-1, 1)] + [r.table(rows) for r in recorders]
-        data = np.hstack(blocks) if rows else np.empty((0, 1 + len(self.signals)))
-        return Recording(self.columns, data, time.perf_counter() - start, completed)
+        data = np.hstack(blocks) if rows and recorders else np.empty((0, 1 + len(self.signals)))
+        events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
+        pacer = getattr(self, "pacer", None)
+        return Recording(self.columns, data, time.perf_counter() - start, completed, events,
+                         pacer.stats() if pacer is not None else None)
 
     def run(self) -> Recording:
+        """Initialise, step to stop_time, record; components are terminated afterwards."""
+        try:
+            self.start()
+            self.advance(self.n_steps)
+            return self.finish()
+        finally:
+            self.terminate()
+
+    def start(self) -> None:
+        """Initialise every component and publish its outputs at t0 (step 0 not yet taken)."""
         sys_ = self.system
-        start = time.perf_counter()
-        published: dict[str, dict] = {}
-        n = self.n_steps + 1
+        self._start = time.perf_counter()
+        s = sys_.study.study
+        self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
+        self.published = published = {}
         outputs: dict[str, list[str]] = {}
         for node, out in self.signals:
             outputs.setdefault(node.name, []).append(out)
-        recorders = {name: _Recorder(name, sys_.nodes[name].ratio, outs) for name, outs in outputs.items()}
-        ordered = list(recorders.values())
+        recorders = {name: _Recorder(name, sys_.nodes[name].ratio, outs) for name, outs in outputs.items()} \
+            if self.record else {}
+        self._recorders = list(recorders.values())
         for node in sys_.nodes.values():
             try:
                 node.component.initialize(self.t0, node.step)
-            except (ComponentError, ValueError, ArithmeticError) as exc:
+            except (ComponentError, ValueError, ArithmeticError, OSError) as exc:
                 raise RunError(f"initialising {node.name!r}: {exc}",
-                               self._recording(ordered, 0, False, start)) from exc
+                               self._recording(self._recorders, 0, False, self._start)) from exc
             published[node.name] = dict(node.component.y)
-        period = self._period
         pulls = self._pulls
 
         def entry(node: Node):
@@ -114,17 +134,28 @@ class Simulation:
             return (node.name, comp.step, comp.u, pulls[node.name], node.step, recorders.get(node.name),
                     comp, node.ratio == 1)
 
-        due_s = [[entry(nd) for nd in nodes] for nodes in self._due_sampled]
-        due_c = [[entry(nd) for nd in nodes] for nodes in self._due_continuous]
+        self._due_s = [[entry(nd) for nd in nodes] for nodes in self._due_sampled]
+        self._due_a = [[(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in nodes
+                        if nd.component.actuate is not None] for nodes in self._due_sampled]
+        self._due_c = [[entry(nd) for nd in nodes] for nodes in self._due_continuous]
         # a continuous component stepping every base step publishes its live outputs: every
         # continuous input is pulled before any continuous component steps, so nobody sees a value
         # early. Slower ones publish a copy at the end of their step interval.
         for node in sys_.continuous:
             if node.ratio == 1:
                 published[node.name] = node.component.y
-        k = 0
+        self.k = 0
+
+    def advance(self, k_end: int) -> None:
+        """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, continuous
+        steps): afterwards the system stands at t0 + k_end h."""
+        published, period, pace = self.published, self._period, self.pacer
+        due_s, due_c, due_a = self._due_s, self._due_c, self._due_a
+        k = self.k
         try:
-            for k in range(n):
+            for k in range(self.k, k_end):
+                if pace is not None:
+                    pace.wait(k)
                 t = self.t0 + k * self.h
                 phase = k % period
                 continuous = due_c[phase]
@@ -140,14 +171,55 @@ class Simulation:
                     y = published[name] = comp.y
                     if rec is not None:
                         rec.buf.extend(rec.get(y))
-                if k == n - 1:
-                    break
+                for u, sources, actuate in due_a[phase]:
+                    for inp, src, out in sources:
+                        u[inp] = published[src][out]
+                    actuate(t)
                 for _, _, u, sources, _, _, _, _ in continuous:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                 for _, step, _, _, dt, _, _, _ in continuous:
                     step(t, dt)
-        except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError) as exc:
-            raise RunError(f"at t = {self.t0 + k * self.h:.6g} s: {exc}",
-                           self._recording(ordered, k, False, start)) from exc
-        return self._recording(ordered, n, True, start)
+        except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError, OSError,
+                KeyboardInterrupt) as exc:
+            self.k = k
+            what = "interrupted" if isinstance(exc, KeyboardInterrupt) else str(exc)
+            raise RunError(f"at t = {self.t0 + k * self.h:.6g} s: {what}",
+                           self._recording(self._recorders, k, False, self._start)) from exc
+        self.k = k_end
+
+    def finish(self) -> Recording:
+        """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
+        k = self.k
+        if self.pacer is not None:
+            self.pacer.wait(k)
+        t = self.t0 + k * self.h
+        phase = k % self._period
+        published = self.published
+        try:
+            for name, _, _, _, _, rec, comp, live in self._due_c[phase]:
+                if k and not live:
+                    published[name] = dict(comp.y)
+                if rec is not None:
+                    rec.buf.extend(rec.get(published[name]))
+            for name, step, u, sources, dt, rec, comp, _ in self._due_s[phase]:
+                for inp, src, out in sources:
+                    u[inp] = published[src][out]
+                step(t, dt)
+                published[name] = comp.y
+                if rec is not None:
+                    rec.buf.extend(rec.get(comp.y))
+            for u, sources, actuate in self._due_a[phase]:
+                for inp, src, out in sources:
+                    u[inp] = published[src][out]
+                actuate(t)
+        except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError, OSError) as exc:
+            raise RunError(f"at t = {t:.6g} s: {exc}", self._recording(self._recorders, k, False, self._start)) from exc
+        return self._recording(self._recorders, k + 1, True, self._start)
+
+    def terminate(self) -> None:
+        for node in self.system.nodes.values():
+            try:
+                node.component.terminate()
+            except Exception:       # noqa: BLE001 - releasing resources must not mask the run's outcome
+                pass

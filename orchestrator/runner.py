@@ -9,8 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from .build import build_system
-from .engine import RunError, Simulation
-from .results import write_json, write_table
+from .engine import Recording, RunError, Simulation
+from .results import atomic_write, write_json, write_table
 from .study import Study, StudyError
 
 
@@ -41,6 +41,20 @@ def simulate(study: Study):
     return Simulation(system).run(), system
 
 
+def _run_facts(rec: Recording) -> dict[str, Any]:
+    """Real-time statistics and the number of logged events, for metrics.json."""
+    facts: dict[str, Any] = {"events": len(rec.events)}
+    if rec.realtime is not None:
+        facts["realtime"] = rec.realtime
+    return facts
+
+
+def write_events(out_dir: Path, rec: Recording) -> Path:
+    """events.log: one line per component event, 't [s]  component  message'."""
+    lines = [f"{t:10.3f}  {name}  {msg}" for t, name, msg in rec.events]
+    return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
+
+
 def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResult:
     analysis = _analysis(study)
     out_dir = Path(out_dir) if out_dir is not None else None
@@ -53,13 +67,16 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResu
     except RunError as err:
         if out_dir is not None:
             write_table(out_dir / "signals", err.partial.to_frame(), fmt)
+            write_events(out_dir, err.partial)
             write_json(out_dir / "metrics.json", {**base, "status": "failed", "error": str(err),
-                                                   "wall_time_s": err.partial.wall_time_s})
+                                                   "wall_time_s": err.partial.wall_time_s,
+                                                   **_run_facts(err.partial)})
         raise
     frame = rec.to_frame()
     files: list[Path] = []
     if out_dir is not None:
         files.append(write_table(out_dir / "signals", frame, fmt))
+        files.append(write_events(out_dir, rec))
     values: dict[str, Any] = {}
     if analysis is not None:
         try:
@@ -67,9 +84,9 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResu
         except (ValueError, KeyError) as exc:
             if out_dir is not None:
                 write_json(out_dir / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
-                                                       "wall_time_s": rec.wall_time_s})
+                                                       "wall_time_s": rec.wall_time_s, **_run_facts(rec)})
             raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
-    values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s)
+    values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
     metrics = {**base, "status": "completed", **values}
     summary = analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
         json.dumps(values, indent=2)

@@ -38,6 +38,8 @@ class StudySettings(BaseModel):
     signals_format: Literal["parquet", "csv"] = "parquet"
     component_package: str = "components"
     analysis: str | None = None
+    realtime: bool = False           # pace the base step against the wall clock
+    realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
 
     @model_validator(mode="after")
     def _times(self) -> "StudySettings":

@@ -34,8 +34,11 @@ def to_si(value: Any, unit: str) -> Any:
     """Convert a study value to the SI unit ``unit``.
 
     Numbers, booleans, lists and plain strings pass through; a string ``"<number> <unit>"`` is
-    converted when its unit is ``unit`` itself or an edge unit that maps onto it.
+    converted when its unit is ``unit`` itself or an edge unit that maps onto it. Parameters with
+    no unit (``""``: names, addresses, paths) take strings as they are.
     """
+    if isinstance(value, str) and unit == "":
+        return value
     if isinstance(value, str):
         match = _QUANTITY.match(value)
         if not match:

@@ -73,3 +73,18 @@ class YawRateInDegrees(Component):
 
     def step(self, t, dt):
         self.y["yaw_rate_deg"] = self.u["yaw_rate"] * 180.0 / 3.141592653589793
+
+
+class Sleeper(Component):
+    """Sleeps ``sleep`` seconds every ``every`` steps: a component that overruns its slot."""
+
+    sampled = True
+    variables = (par("sleep", "s", 0.0, "sleep"), par("every", "1", 10, "period in steps"),
+                 out("count", "1", 0.0, "steps taken"))
+
+    def step(self, t, dt):
+        import time
+
+        self.y["count"] += 1
+        if self.p["sleep"] and int(self.y["count"]) % int(self.p["every"]) == 0:
+            time.sleep(self.p["sleep"])

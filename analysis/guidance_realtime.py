@@ -1,0 +1,68 @@
+"""Metrics of the figure-8 with the tractor as one component (simulated or hardware) and of the
+emulated tractor: path (cross-track) error of the CG against the 8-shaped path, the time-based
+Euclidean error where the truth is known, and the time spent in the watchdog's safe state."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from scipy.spatial import cKDTree
+
+from components.models.figure8_path import Figure8Path
+from orchestrator.study import Study
+
+from .figure8 import STARTUP_SETTLE_S
+from .signals import MissingSignal, component_named, rms, signal
+
+TRACTOR_TYPES = ("simulated_tractor", "hardware_tractor")
+
+
+def path_error(x: np.ndarray, y: np.ndarray, path: Figure8Path, spacing: float = 0.01) -> np.ndarray:
+    """Distance from each point to the nearest point of the path (sampled every ``spacing`` m)."""
+    s = np.arange(0.0, path.lap_length, spacing)
+    pts = np.array([path.pose(si)[:2] for si in s])
+    return cKDTree(pts).query(np.column_stack([x, y]))[0]
+
+
+def _tractor(study: Study) -> str:
+    for kind in TRACTOR_TYPES:
+        try:
+            return component_named(study, kind)
+        except MissingSignal:
+            continue
+    raise MissingSignal(f"the analysis needs a component of type {TRACTOR_TYPES}")
+
+
+def _path(study: Study) -> Figure8Path:
+    try:
+        ref = study.components[component_named(study, "figure8_reference")].parameters
+    except MissingSignal:
+        ref = {}
+    return Figure8Path(float(ref.get("radius", 10.0)), float(ref.get("centre_offset", 20.0)))
+
+
+def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
+    name = _tractor(study)
+    t = frame["t"].to_numpy()
+    start = int(np.searchsorted(t, t[0] + 8.0 + STARTUP_SETTLE_S))      # the reference's start ramp + settling
+    if start >= len(t) - 1:
+        raise ValueError(f"run too short for metrics: it must last beyond {t[0] + 8.0 + STARTUP_SETTLE_S} s")
+    x, y = frame[f"{name}.x_cg"].to_numpy(), frame[f"{name}.y_cg"].to_numpy()
+    out: dict[str, float] = {}
+    if np.all(np.isfinite(x[start:])):
+        err = path_error(x[start:], y[start:], _path(study))
+        out.update(path_error_max=float(err.max()), path_error_mean=float(err.mean()))
+        try:
+            dx = x - signal(frame, study, "figure8_reference", "x_ref")
+            dy = y - signal(frame, study, "figure8_reference", "y_ref")
+            e = np.hypot(dx, dy)[start:]
+            out.update(euclid_max=float(e.max()), euclid_rms=rms(e))
+        except MissingSignal:
+            pass
+    try:
+        safe = signal(frame, study, "safety_watchdog", "safe_state")
+        out["safe_state_time_s"] = float(np.sum(safe > 0.5) * np.median(np.diff(t)))
+    except MissingSignal:
+        pass
+    out["fix_age_max"] = float(frame[f"{name}.fix_age"].max())
+    out["metrics_from_time_s"] = float(t[start])
+    return out

@@ -1,0 +1,107 @@
+"""CAN through python-can, frames through cantools: one bus per component, the DBC shipped here."""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from orchestrator.component import par
+
+DEFAULT_DBC = Path(__file__).resolve().parent / "agrobot_tractor.dbc"
+
+
+def load_dbc(path: str | Path | None):
+    """The frame layout; ``""``/None means the project's own agrobot_tractor.dbc."""
+    import cantools
+
+    return cantools.database.load_file(str(path or DEFAULT_DBC))
+
+
+def open_bus(interface: str, channel: str, port: int = 0, bitrate: int = 0):
+    """A python-can bus: 'virtual' (one process, tests), 'udp_multicast' (processes on one host),
+    'socketcan', 'pcan', ... as python-can knows them."""
+    import can
+
+    options = {}
+    if port:
+        options["port"] = int(port)
+    if bitrate:
+        options["bitrate"] = int(bitrate)
+    return can.Bus(interface=interface, channel=channel, **options)
+
+
+class FrameCodec:
+    """Encode one outgoing message and decode one incoming message by name, with a rolling
+    4-bit counter; bad frames (wrong length, undecodable) are counted, never raised."""
+
+    def __init__(self, db, send: str, receive: str) -> None:
+        self.db = db
+        self.tx = db.get_message_by_name(send)
+        self.rx = db.get_message_by_name(receive)
+        self.counter = 0
+        self.bad = 0
+
+    def encode(self, **signals) -> tuple[int, bytes]:
+        self.counter = (self.counter + 1) % 16
+        values = {**signals, "Counter": self.counter}
+        for sig in self.tx.signals:                 # clamp to the DBC range instead of refusing
+            if sig.name in values and sig.minimum is not None and sig.maximum is not None:
+                values[sig.name] = min(max(values[sig.name], sig.minimum), sig.maximum)
+        return self.tx.frame_id, self.tx.encode(values)
+
+    def decode(self, message) -> dict | None:
+        if message is None or message.arbitration_id != self.rx.frame_id:
+            return None
+        try:
+            return self.rx.decode(bytes(message.data))
+        except Exception:           # noqa: BLE001 - a bad frame is counted, not fatal
+            self.bad += 1
+            return None
+
+
+CAN_PARAMETERS = (
+    par("interface", "", "virtual", "python-can interface"),
+    par("channel", "", "agrobot", "python-can channel"),
+    par("port", "1", 0, "UDP port of the udp_multicast interface (0: its default)"),
+    par("bitrate", "1/s", 0, "bus bit rate (0: leave the interface's)"),
+    par("dbc", "", "", "DBC file (empty: the project's agrobot_tractor.dbc)"),
+)
+
+
+def prefixed(parameters, prefix: str):
+    """The same parameters named ``prefix + name`` (for a composite holding this adapter)."""
+    return tuple(replace(v, name=prefix + v.name) for v in parameters)
+
+
+def connect(component, send: str, receive: str):
+    """(codec, bus) for a component declaring CAN_PARAMETERS; failures become the component's
+    error naming the DBC or the bus."""
+    p = component.p
+    codec = bus = None
+    try:
+        codec = FrameCodec(load_dbc(p["dbc"]), send, receive)
+    except (OSError, KeyError) as exc:
+        component.require(False, f"DBC {p['dbc'] or DEFAULT_DBC.name}: {exc}")
+    try:
+        bus = open_bus(p["interface"], p["channel"], p["port"], p["bitrate"])
+    except Exception as exc:                    # noqa: BLE001 - python-can raises many kinds
+        component.require(False, f"cannot open CAN {p['interface']}:{p['channel']}: {exc}")
+    return codec, bus
+
+
+def drain(bus, codec):
+    """Every frame waiting on the bus, decoded when it is ``codec``'s incoming message."""
+    frames = []
+    while True:
+        msg = bus.recv(timeout=0.0)
+        if msg is None:
+            return frames
+        frame = codec.decode(msg)
+        if frame is not None:
+            frames.append(frame)
+
+
+def send(bus, codec, **signals) -> None:
+    import can
+
+    fid, data = codec.encode(**signals)
+    bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=False))

@@ -1,0 +1,74 @@
+"""The tractor reached over its hardware interfaces, as one component with the ports of
+``simulated_tractor``: an ``nmea_gps`` (GPS over NMEA 0183 from a serial port or TCP socket) and a
+``can_actuators`` (set-points out, wheel angle, yaw rate and speed back over CAN) inside. A study
+swaps simulation for hardware by changing this component's line only. Truth outputs are NaN.
+"""
+from __future__ import annotations
+
+import math
+
+from orchestrator.component import Component, par
+
+from .can_actuators import CANActuators
+from .hardware.can_link import CAN_PARAMETERS, prefixed
+from .hardware.nmea import DATUM_PARAMETERS
+from .nmea_gps import NMEAGPS
+from .simulated_tractor import TRACTOR_PORTS
+
+GPS_OUTPUTS = {"gps_x": "x", "gps_y": "y", "gps_vel_east": "vel_east", "gps_vel_north": "vel_north",
+               "fix_valid": "fix_valid", "fix_age": "fix_age", "fix_quality": "fix_quality"}
+CAN_OUTPUTS = {"steer_angle_measured": "steer_angle_measured", "yaw_rate": "yaw_rate", "speed_measured": "speed_measured"}
+
+
+class HardwareTractor(Component):
+    sampled = True
+    variables = TRACTOR_PORTS + (
+        par("nmea_url", "", "socket://127.0.0.1:10110", "pyserial URL or device of the GPS receiver"),
+        par("nmea_baudrate", "1/s", 115200, "serial line speed"),
+        *DATUM_PARAMETERS,
+        par("min_fix_quality", "1", 4, "GGA quality of a valid fix"),
+        par("connect_timeout", "s", 5.0, "how long to retry opening the GPS port"),
+        *prefixed(CAN_PARAMETERS, "can_"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        p = self.p
+        self.gps = NMEAGPS(f"{self.name}.gps", {
+            "url": p["nmea_url"], "baudrate": p["nmea_baudrate"],
+            **{v.name: p[v.name] for v in DATUM_PARAMETERS},
+            "min_fix_quality": p["min_fix_quality"], "connect_timeout": p["connect_timeout"]})
+        self.can = CANActuators(f"{self.name}.can", {v.name: p["can_" + v.name] for v in CAN_PARAMETERS})
+        self.can.initialize(t0, dt)
+        try:
+            self.gps.initialize(t0, dt)
+        except Exception:
+            self.can.terminate()
+            raise
+        self.events = self.gps.events        # one log for both adapters
+        self.can.events = self.events
+        for k in ("x_cg", "y_cg", "heading"):
+            self.y[k] = math.nan
+
+    def step(self, t: float, dt: float) -> None:
+        """Read: CAN feedback and NMEA fixes that arrived since the last instant."""
+        self.can.step(t, dt)
+        self.gps.step(t, dt)
+        for port, name in GPS_OUTPUTS.items():
+            self.y[port] = self.gps.y[name]
+        for port, name in CAN_OUTPUTS.items():
+            self.y[port] = self.can.y[name]
+
+    def actuate(self, t: float) -> None:
+        """Write: the set-points computed at this instant, over CAN."""
+        for k in ("steer_angle_cmd", "speed_cmd", "safe_state"):
+            self.can.u[k] = self.u[k]
+        self.can.actuate(t)
+
+    def terminate(self) -> None:
+        for part in (getattr(self, "gps", None), getattr(self, "can", None)):
+            if part is not None:
+                part.terminate()
+
+
+COMPONENT = HardwareTractor

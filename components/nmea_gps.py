@@ -1,0 +1,105 @@
+"""GPS receiver over NMEA 0183 (hardware adapter): the outputs of gps_sensor plus fix quality.
+
+Reads whatever bytes arrived since the last step from a pyserial URL (``/dev/ttyUSB0``,
+``socket://127.0.0.1:10110``, ``rfc2217://...``), parses GGA (position, fix quality) and VTG or RMC
+(speed, course over ground) with pynmeagps, and converts latitude/longitude/height to east/north
+about the study's datum. Bad checksums, partial lines, unknown sentences and fixes worse than
+``min_fix_quality`` (4 = RTK fixed; 5, RTK float, is worse) are counted in outputs and flagged
+(``fix_valid`` = 0); none is fatal. ``fix_age`` is the time since the last good fix arrived.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+from orchestrator.component import Component, out, par
+
+from .hardware.nmea import DATUM_PARAMETERS, RTK_FIXED, LocalFrame, NMEAStream, Position, Velocity, fix_at_least
+
+
+class NMEAGPS(Component):
+    sampled = True
+    variables = (
+        par("url", "", "socket://127.0.0.1:10110", "pyserial URL or device of the receiver"),
+        par("baudrate", "1/s", 115200, "serial line speed (ignored for sockets)"),
+        *DATUM_PARAMETERS,
+        par("min_fix_quality", "1", RTK_FIXED, "GGA quality needed for a valid fix (4 RTK fixed)"),
+        par("connect_timeout", "s", 5.0, "how long to retry opening the port"),
+        out("x", "m", 0.0, "east position of the antenna"),
+        out("y", "m", 0.0, "north position of the antenna"),
+        out("vel_east", "m/s", 0.0, "east velocity (VTG/RMC)"),
+        out("vel_north", "m/s", 0.0, "north velocity"),
+        out("fix_valid", "1", 0.0, "1 when a good fix arrived during this step"),
+        out("fix_age", "s", 0.0, "time since the last good fix arrived"),
+        out("fix_quality", "1", 0.0, "GGA quality of the latest fix (0 none, 4 RTK fixed, 5 float)"),
+        out("satellites", "1", 0.0, "satellites used"),
+        out("bad_checksums", "1", 0.0, "sentences with a wrong checksum so far"),
+        out("malformed_sentences", "1", 0.0, "sentences the parser refused so far"),
+        out("unknown_sentences", "1", 0.0, "sentences of an unknown talker or type so far"),
+        out("partial_lines", "1", 0.0, "truncated lines and stray bytes so far"),
+        out("poor_fixes", "1", 0.0, "fixes below min_fix_quality so far"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        import serial
+
+        p = self.p
+        self.frame = LocalFrame.of(p)
+        self.stream = NMEAStream()
+        self.last_good = t0
+        self.port = None
+        deadline = time.monotonic() + float(p["connect_timeout"])
+        while True:
+            try:
+                self.port = serial.serial_for_url(p["url"], baudrate=int(p["baudrate"]), timeout=0)
+                break
+            except (serial.SerialException, OSError, ValueError) as exc:
+                if time.monotonic() > deadline:
+                    self.require(False, f"cannot open GPS port {p['url']!r}: {exc}")
+                time.sleep(0.1)
+        self.event(t0, f"GPS port {p['url']} open")
+
+    def read_available(self, t: float) -> bytes:
+        chunks = []
+        while True:
+            try:
+                data = self.port.read(4096)
+            except Exception as exc:           # noqa: BLE001 - a dropped link is a stale fix, not a crash
+                self.event(t, f"GPS read failed: {exc}")
+                break
+            if not data:
+                break
+            chunks.append(data)
+        return b"".join(chunks)
+
+    def step(self, t: float, dt: float) -> None:
+        self.apply(t, self.stream.feed(self.read_available(t)))
+
+    def apply(self, t: float, items: list[Position | Velocity]) -> None:
+        """Update the outputs from parsed sentences (shared by the serial path and the tests)."""
+        y, c = self.y, self.stream.counters
+        y["fix_valid"] = 0.0
+        for item in items:
+            if isinstance(item, Velocity):
+                y["vel_east"] = item.speed * math.sin(item.course)
+                y["vel_north"] = item.speed * math.cos(item.course)
+                continue
+            y["fix_quality"], y["satellites"] = float(item.quality), float(item.satellites)
+            if not fix_at_least(item.quality, self.p["min_fix_quality"]):
+                c.poor_fix += 1
+                continue
+            y["x"], y["y"], _ = self.frame.to_local(item.latitude, item.longitude, item.height)
+            y["fix_valid"] = 1.0
+            self.last_good = t
+        y["fix_age"] = t - self.last_good
+        y["bad_checksums"], y["malformed_sentences"] = float(c.bad_checksum), float(c.malformed)
+        y["unknown_sentences"], y["partial_lines"], y["poor_fixes"] = float(c.unknown), float(c.partial), float(c.poor_fix)
+
+    def terminate(self) -> None:
+        if self.port is not None:
+            self.port.close()
+            self.port = None
+
+
+COMPONENT = NMEAGPS

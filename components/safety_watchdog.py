@@ -1,0 +1,60 @@
+"""Watchdog between the guidance and the actuators: a GPS fix older than ``max_fix_age`` or
+worse than ``min_fix_quality`` (4 = RTK fixed; 5 = RTK float is worse; 0 = no fix) brings the
+commands to a safe state: speed 0 and the wheel angle held where it was measured when the
+watchdog tripped. It stays tripped until the fix has
+been good for ``recovery_time``. Every trip and recovery is logged with its reason.
+"""
+from __future__ import annotations
+
+from orchestrator.component import Component, inp, out, par
+
+from .hardware.nmea import fix_at_least
+
+REASONS = {0: "ok", 1: "stale GPS fix", 2: "GPS fix below the required quality"}
+
+
+class SafetyWatchdog(Component):
+    sampled = True
+    variables = (
+        inp("steer_angle_cmd", "rad", 0.0, "wheel-angle command from the controller"),
+        inp("speed_cmd", "m/s", 0.0, "speed command from the controller"),
+        inp("steer_angle_measured", "rad", 0.0, "measured wheel angle (held in the safe state)"),
+        inp("fix_age", "s", 0.0, "time since the last good GPS fix"),
+        inp("fix_quality", "1", 4.0, "GGA fix quality"),
+        par("max_fix_age", "s", 0.5, "older fixes trip the watchdog"),
+        par("min_fix_quality", "1", 4, "lower qualities trip the watchdog"),
+        par("recovery_time", "s", 1.0, "good-fix time needed to leave the safe state"),
+        out("steer_angle_cmd_out", "rad", 0.0, "wheel-angle command to the actuators"),
+        out("speed_cmd_out", "m/s", 0.0, "speed command to the actuators"),
+        out("safe_state", "1", 0.0, "1 while tripped"),
+        out("trip_reason", "1", 0.0, "0 ok, 1 stale fix, 2 poor fix"),
+    )
+    feedthrough = {k: ("steer_angle_cmd", "speed_cmd", "steer_angle_measured", "fix_age", "fix_quality")
+                   for k in ("steer_angle_cmd_out", "speed_cmd_out", "safe_state", "trip_reason")}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        self.tripped, self.good_since, self.held = False, t0, 0.0
+
+    def step(self, t: float, dt: float) -> None:
+        u, p, y = self.u, self.p, self.y
+        reason = 1 if u["fix_age"] > p["max_fix_age"] else (0 if fix_at_least(u["fix_quality"], p["min_fix_quality"]) else 2)
+        if reason:
+            self.good_since = None
+            if not self.tripped:
+                self.tripped, self.held = True, u["steer_angle_measured"]
+                self.event(t, f"SAFE STATE: {REASONS[reason]} (fix age {u['fix_age']:.2f} s, quality "
+                              f"{u['fix_quality']:.0f}); speed to 0, wheel angle held at {self.held:.4f} rad")
+        else:
+            if self.good_since is None:
+                self.good_since = t
+            if self.tripped and t - self.good_since >= p["recovery_time"]:
+                self.tripped = False
+                self.event(t, f"recovered: fix good for {t - self.good_since:.2f} s")
+        y["safe_state"], y["trip_reason"] = float(self.tripped), float(reason)
+        if self.tripped:
+            y["steer_angle_cmd_out"], y["speed_cmd_out"] = self.held, 0.0
+        else:
+            y["steer_angle_cmd_out"], y["speed_cmd_out"] = u["steer_angle_cmd"], u["speed_cmd"]
+
+
+COMPONENT = SafetyWatchdog
