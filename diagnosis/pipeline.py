@@ -13,7 +13,7 @@ from .baseline import baseline_from_study
 from .candidates import STAGES, CannotDecide, Finding, Replay, assess_catalogue
 from .catalogue import SIGNALS
 from .evidence import stage_evidence
-from .report import markdown, stage_figure
+from .report import binned_figure, markdown, stage_figure
 
 DEFAULT_STUDY = Path(__file__).resolve().parent.parent / "studies" / "figure8.toml"
 CANNOT_DECIDE = "cannot decide"
@@ -114,6 +114,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         for s in STAGES:
             extended = findings[0].fit.values if winner and s in findings[0].effect.stages else None
             files.append(stage_figure(replay, s, base.values, extended, out / f"{s}.png").name)
+        winner_values = findings[0].fit.values if winner else None
+        files.append(binned_figure(replay, base.values, winner_values, out / "binned.png").name)
     options = winner.pop("_options") if winner else None
     for item in items:
         item.pop("_options", None)

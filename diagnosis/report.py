@@ -20,7 +20,8 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     import matplotlib.pyplot as plt
 
     k, unit = UNIT_SCALE[stage]
-    fig, ax = plt.subplots(2, 2, figsize=(12, 7))
+    rows = 1 if stage == "position" else 2
+    fig, ax = plt.subplots(rows, 2, figsize=(12, 3.8 * rows), squeeze=False)
     models = [("baseline", base, "tab:red")] + ([("extended", winner, "tab:green")] if winner else [])
     if stage == "position":
         for label, v, color in models:
@@ -31,8 +32,6 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         track = replay.gps
         ax[0, 1].plot(track[:, 0], track[:, 1], lw=0.6, color="k")
         ax[0, 1].set(title="measured GPS track", xlabel="east [m]", ylabel="north [m]", aspect="equal")
-        ax[1, 0].axis("off")
-        ax[1, 1].axis("off")
     else:
         sel = (replay.yaw_mask if stage == "yaw" else replay.mask)
         keep = sel["fit"] | sel["test"]
@@ -104,3 +103,40 @@ def markdown(result: dict, plots: list[str]) -> str:
             lines.append(f"  - RMS by |delta_cmd|: {cells}")
     lines += [""] + [f"![{p}]({p})" for p in plots] + [""]
     return "\n".join(lines)
+
+
+def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
+    """Residual mean (with its standard error) by speed and RMS by steering amplitude, for the
+    steering and yaw stages, baseline against the winner."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .evidence import AMPLITUDE_BINS_DEG, SPEED_BINS, binned
+
+    fig, ax = plt.subplots(2, 2, figsize=(12, 6))
+    models = [("baseline", base, "tab:red")] + ([("extended", winner, "tab:green")] if winner else [])
+    for row, stage in enumerate(("steering", "yaw")):
+        k, unit = UNIT_SCALE[stage]
+        keep = (replay.yaw_mask if stage == "yaw" else replay.mask)
+        sel = keep["fit"] | keep["test"]
+        for j, (label, v, color) in enumerate(models):
+            res = (replay.measured(stage) - replay.predicted(stage, v))[sel]
+            by_v = binned(res, replay.speed[sel], SPEED_BINS)
+            by_a = binned(res, np.degrees(np.abs(replay.cmd[sel])), AMPLITUDE_BINS_DEG)
+            off = 0.15 * (j - 0.5 * (len(models) - 1))
+            ax[row, 0].errorbar([0.5 * (b["from"] + min(b["to"], 4.0)) + off for b in by_v], [k * b["mean"] for b in by_v],
+                                yerr=[1.96 * k * b["sem"] for b in by_v], fmt="o", color=color, label=label)
+            ax[row, 1].bar([i + off for i in range(len(by_a))], [k * b["rms"] for b in by_a], width=0.3,
+                           color=color, label=label)
+            ax[row, 1].set_xticks(range(len(by_a)), [f"{b['from']:.0f}-{b['to']:.0f}" for b in by_a])
+        ax[row, 0].axhline(0, color="k", lw=0.6)
+        ax[row, 0].set(title=f"{stage}: residual mean by speed (95% interval)", xlabel="speed [m/s]", ylabel=f"[{unit}]")
+        ax[row, 1].set(title=f"{stage}: residual RMS by |delta_cmd|", xlabel="|delta_cmd| [deg]", ylabel=f"[{unit}]")
+        for a in ax[row]:
+            a.legend(fontsize=7)
+            a.grid(alpha=0.3)
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+    plt.close(fig)
+    return path

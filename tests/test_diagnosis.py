@@ -143,3 +143,21 @@ def test_gyro_in_degrees_per_second_is_caught_even_when_small():
     frame["yaw_rate"] = np.degrees(frame["yaw_rate"])
     with pytest.raises(CannotDecide, match="deg/s"):
         Replay(frame, baseline_from_study(load_study(ROOT / "studies" / "figure8.toml")))
+
+
+def test_report_shows_the_verdict_the_candidates_and_the_evidence_plots(tmp_path):
+    from diagnosis.pipeline import diagnose
+
+    frame, truth = make_log(8, "steering_offset")
+    frame.to_csv(tmp_path / "log.csv", index=False)
+    res = diagnose(tmp_path / "log.csv", tmp_path / "out")
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert res["verdict"] == "steering_offset" and "## Verdict: **steering_offset**" in report
+    assert report.count("| steering_offset |") == 1 and "## Baseline residuals" in report
+    for png in ("steering.png", "yaw.png", "position.png", "binned.png"):
+        assert (tmp_path / "out" / png).stat().st_size > 10_000 and f"]({png})" in report
+    # the evidence a reader needs: the yaw residual's mean grows with speed (a steering offset
+    # acts through the speed-dependent yaw gain), its sign is the offset's
+    by_speed = res["residuals"]["yaw"]["by_speed"]
+    means = [b["mean"] for b in by_speed]
+    assert abs(means[-1]) > 2 * abs(means[0]) and np.sign(means[-1]) == np.sign(truth["offset"])
