@@ -115,6 +115,8 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     (lambda f: f.assign(v=f["v"].where(f.index != 300, np.nan)), ["'v'", "NaN", "row 300"]),
     (lambda f: f.iloc[:800], ["lasts 40.0 s", "at least 60 s"]),
     (lambda f: f.assign(v=0.0), ["moves", "0%"]),
+    (lambda f: f.assign(v=3.6 * f["v"]), ["'v'", "km/h"]),
+    (lambda f: f.assign(x=50.86 + f["x"] / 111e3, y=4.67 + f["y"] / 70e3), ["'x', 'y'", "latitude/longitude"]),
 ])
 def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
     frame, _ = make_log(5, None, duration=120.0)
