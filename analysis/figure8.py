@@ -25,16 +25,20 @@ def tracking_error(frame: pd.DataFrame, study: Study) -> np.ndarray:
     return np.hypot(dx, dy)
 
 
+def settled_index(t: np.ndarray, speed: np.ndarray, fraction: float = 0.999) -> int:
+    """First sample STARTUP_SETTLE_S after ``speed`` reaches ``fraction`` of its maximum."""
+    t_full = t[int(np.argmax(speed >= fraction * speed.max()))]
+    start = int(np.searchsorted(t, t_full + STARTUP_SETTLE_S))
+    if start >= len(t) - 1:
+        raise ValueError(f"run too short for metrics: it must last beyond {t_full + STARTUP_SETTLE_S} s")
+    return start
+
+
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     """Tracking metrics from STARTUP_SETTLE_S after the reference reaches its speed; the start
     from rest is reported apart as ``euclid_max_startup``."""
     err_all = tracking_error(frame, study)
-    v_ref = signal(frame, study, "figure8_reference", "speed_ref")
-    t = frame["t"].to_numpy()
-    t_full = t[int(np.argmax(v_ref >= 0.999 * v_ref.max()))]
-    start = int(np.searchsorted(t, t_full + STARTUP_SETTLE_S))
-    if start >= len(t) - 1:
-        raise ValueError(f"run too short for metrics: it must last beyond {t_full + STARTUP_SETTLE_S} s")
+    start = settled_index(frame["t"].to_numpy(), signal(frame, study, "figure8_reference", "speed_ref"))
     frame, err = frame.iloc[start:], err_all[start:]
     curved = signal(frame, study, "figure8_reference", "segment") > 0.5
     speed = signal(frame, study, "speed_drivetrain", "speed")

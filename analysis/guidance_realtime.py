@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 from components.models.figure8_path import Figure8Path
 from orchestrator.study import Study
 
-from .figure8 import STARTUP_SETTLE_S
+from .figure8 import settled_index
 from .signals import MissingSignal, component_named, rms, signal
 
 TRACTOR_TYPES = ("simulated_tractor", "hardware_tractor")
@@ -43,9 +43,10 @@ def _path(study: Study) -> Figure8Path:
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     name = _tractor(study)
     t = frame["t"].to_numpy()
-    start = int(np.searchsorted(t, t[0] + 8.0 + STARTUP_SETTLE_S))      # the reference's start ramp + settling
-    if start >= len(t) - 1:
-        raise ValueError(f"run too short for metrics: it must last beyond {t[0] + 8.0 + STARTUP_SETTLE_S} s")
+    try:      # settled: after the reference's start ramp; without a reference (the emulator), the tractor's
+        start = settled_index(t, signal(frame, study, "figure8_reference", "speed_ref"))
+    except MissingSignal:
+        start = settled_index(t, frame[f"{name}.speed_measured"].to_numpy(), fraction=0.9)
     x, y = frame[f"{name}.x_cg"].to_numpy(), frame[f"{name}.y_cg"].to_numpy()
     out: dict[str, float] = {}
     if np.all(np.isfinite(x[start:])):

@@ -5,13 +5,16 @@ Its ports are those of ``hardware_tractor``, so a study swaps simulation for har
 this component's line only. Set-points go to ``steering.steer_angle_cmd`` and
 ``speed_controller.speed_desired`` of the sub-study; outputs come from its ``gps``, ``steering``,
 ``tractor`` and ``drivetrain`` components (the truth outputs x_cg, y_cg, heading too; hardware has
-none and reports NaN). The sub-study's seed is drawn from this component's random stream.
+none and reports NaN); ``fix_quality`` is RTK fixed while the simulated GPS delivers and 0 in an
+outage. The sub-study's seed is drawn from this component's random stream.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 from orchestrator.component import Component, inp, out, par
+
+from .hardware.nmea import RTK_FIXED
 
 STUDIES = Path(__file__).resolve().parent.parent / "studies"
 
@@ -54,7 +57,6 @@ class SimulatedTractor(Component):
     sampled = False
     variables = TRACTOR_PORTS + (
         par("study", "", "tractor_side.toml", "tractor-side study (path, or a file of studies/)"),
-        par("psi0", "rad", 0.5235987755982988, "initial heading (overrides the sub-study's plant)"),
     )
     feedthrough = {}
 
@@ -66,8 +68,7 @@ class SimulatedTractor(Component):
         path = resolve_study(self.p["study"])
         seed = int(self.rng.integers(0, 2**31 - 1))
         try:
-            study = load_study(path, [f"study.seed={seed}", f"study.start_time={t0}",
-                                      f"tractor.psi0={self.p['psi0']}"])
+            study = load_study(path, [f"study.seed={seed}", f"study.start_time={t0}"])
             system = build_system(study)
         except StudyError as exc:
             self.require(False, f"tractor-side study: {exc}")
@@ -79,6 +80,7 @@ class SimulatedTractor(Component):
                      f"step {dt} s must be a multiple of the tractor-side base step {sub} s")
         self.sim = Simulation(system, record=False)
         self.nodes = system.nodes
+        self.fix_latency = float(system.nodes["gps"].component.p.get("latency", 0.0))   # fix_age of a fresh fix
         self.sim.start()
         self._publish()
 
@@ -86,7 +88,7 @@ class SimulatedTractor(Component):
         y = self.y
         for port, (comp, name) in OUTPUTS.items():
             y[port] = self.nodes[comp].component.y[name]
-        y["fix_quality"] = 4.0 if y["fix_age"] <= 0.1 else 0.0
+        y["fix_quality"] = RTK_FIXED if y["fix_age"] <= self.fix_latency + 1e-9 else 0.0
 
     def step(self, t: float, dt: float) -> None:
         for port, (comp, name) in INPUTS.items():

@@ -24,7 +24,7 @@ from scipy.optimize import least_squares
 
 from .baseline import Baseline
 from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN, Effect, Parameter
-from .replay import (YawReplay, aligned_residuals, antenna_track, cumulative_trapezoid, heading_estimate,
+from .replay import (YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, integrate,
                      steering_replay)
 
 STAGES = ("steering", "yaw", "position")
@@ -68,9 +68,10 @@ class Replay:
         t_split = self.t[0] + self.fit_fraction * duration
         after_burn = self.t >= self.t[0] + self.burn_in
         self.t_split = t_split
-        self.mask = {"fit": after_burn & (self.t < t_split), "test": self.t >= t_split}
-        self.yaw_mask = {k: m & moving for k, m in self.mask.items()}
-        self.heading = heading_estimate(self.t, self.gps[:, 0], self.gps[:, 1], self.gyro, self.speed)
+        steering = {"fit": after_burn & (self.t < t_split), "test": self.t >= t_split}
+        # samples scored per stage and part (the yaw replay only where the tractor moves)
+        self.masks = {"steering": steering, "yaw": {k: m & moving for k, m in steering.items()}}
+        self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed)
         self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
                              self.heading, min_speed=self.min_speed)
         L = int(round(self.window / self.h))
@@ -85,16 +86,16 @@ class Replay:
     def _check_speed_and_position_units(self) -> None:
         """v against the speed of the GPS track over 1 s chords: 3.6 means km/h; a track that
         hardly moves while v says it does means x, y are not metres (degrees of lat/lon?)."""
-        k = max(1, int(round(0.5 / self.h)))
-        track = np.hypot(*(self.gps[2 * k:] - self.gps[:-2 * k]).T) / (2 * k * self.h)
+        k, d = chords(self.gps, self.h)
+        track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * self.h)
         v = self.speed[k:-k]
         fast = v > 0.5
         if fast.sum() < 100:
             return
         ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
         if abs(ratio - 3.6) < 0.4:
-            raise CannotDecide(f"column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
-                               f"the log must hold m/s")
+            raise CannotDecide("column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
+                               "the log must hold m/s")
         if ratio > 50:
             raise CannotDecide(f"columns 'x', 'y' move {ratio:.0f} times slower than 'v' says: they look like "
                                f"degrees of latitude/longitude; the log must hold metres east/north of a datum")
@@ -105,12 +106,12 @@ class Replay:
     def _check_yaw_rate_unit(self, moving: np.ndarray) -> None:
         """Heading change over 2 s, integrated gyro against the GPS course (from 1 s chords):
         the regression slope is 1 in rad/s and 57 in deg/s."""
-        k, L = max(1, int(round(0.5 / self.h))), max(1, int(round(2.0 / self.h)))
-        if len(self.t) <= 2 * k + L + 100:
+        k, d = chords(self.gps, self.h)
+        L = max(1, int(round(2.0 / self.h)))
+        if len(d) <= L + 100:
             return
-        x, y = self.gps[:, 0], self.gps[:, 1]
-        course = np.arctan2(y[2 * k:] - y[:-2 * k], x[2 * k:] - x[:-2 * k])
-        psi = cumulative_trapezoid(self.gyro, self.h)[k:-k]
+        course = np.arctan2(d[:, 1], d[:, 0])
+        psi = integrate(self.gyro, self.h)[k:-k]
         fast = moving[k:-k]
         dc = np.angle(np.exp(1j * (course[L:] - course[:-L])))
         dp = psi[L:] - psi[:-L]
@@ -132,11 +133,20 @@ class Replay:
     def measured(self, stage: str) -> np.ndarray:
         return {"steering": self.delta, "yaw": self.gyro, "position": self.gps}[stage]
 
-    def residuals(self, stage: str, v: dict[str, float], part: str) -> np.ndarray:
+    def residuals(self, stage: str, v: dict[str, float], *parts: str) -> np.ndarray | tuple[np.ndarray, ...]:
+        """The stage's residuals on each named part ("fit", "test"), from one simulation; one
+        part gives an array, several a tuple."""
+        pred = self.predicted(stage, v)
         if stage == "position":
-            return aligned_residuals(self.predicted(stage, v), self.gps, self.windows[part]).ravel()
-        mask = self.yaw_mask[part] if stage == "yaw" else self.mask[part]
-        return (self.measured(stage) - self.predicted(stage, v))[mask]
+            out = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
+        else:
+            res = self.measured(stage) - pred
+            out = tuple(res[self.masks[stage][p]] for p in parts)
+        return out[0] if len(parts) == 1 else out
+
+    def scored(self, stage: str) -> np.ndarray:
+        """Samples of a time-series stage scored in either part (for plots and evidence)."""
+        return self.masks[stage]["fit"] | self.masks[stage]["test"]
 
     def residual_series(self, stage: str, v: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
         """(t, residual) over both parts, for the plots; position: the along-window norm."""
@@ -144,8 +154,7 @@ class Replay:
             rows = np.concatenate([self.windows["fit"], self.windows["test"]])
             r = aligned_residuals(self.predicted(stage, v), self.gps, rows)
             return self.t[rows].ravel(), np.hypot(r[..., 0], r[..., 1]).ravel()
-        mask = self.yaw_mask if stage == "yaw" else self.mask
-        keep = mask["fit"] | mask["test"]
+        keep = self.scored(stage)
         return self.t[keep], (self.measured(stage) - self.predicted(stage, v))[keep]
 
 
@@ -164,6 +173,7 @@ class Fit:
 
     values: dict[str, float]
     rss: dict[str, float]
+    n: dict[str, int]
     n_eff: dict[str, float]
     rmse_test: dict[str, float]
     std: dict[str, float] = field(default_factory=dict)
@@ -194,25 +204,23 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
         values = values_of(best.x)
     else:
         values = dict(base_values)
-    rss, n_eff, rmse = {}, {}, {}
+    rss, n, n_eff, rmse = {}, {}, {}, {}
     for s in stages:
-        r = replay.residuals(s, values, "fit")
-        rss[s], n_eff[s] = float(r @ r), effective_size(r)
-        rt = replay.residuals(s, values, "test")
+        r, rt = replay.residuals(s, values, "fit", "test")
+        rss[s], n[s], n_eff[s] = float(r @ r), len(r), effective_size(r)
         rmse[s] = float(np.sqrt(np.mean(rt ** 2)))
     std = {}
     if best is not None:
         J = best.jac
         dof = max(1, len(best.fun) - len(free))
-        n_all = sum(len(replay.residuals(s, values, "fit")) for s in stages)
-        inflation = n_all / max(sum(n_eff.values()), 1.0)
+        inflation = sum(n.values()) / max(sum(n_eff.values()), 1.0)
         try:
             cov = np.linalg.inv(J.T @ J) * (2 * best.cost / dof) * inflation
             for i, p in enumerate(free):
                 std[p.name] = float(math.sqrt(max(cov[i, i], 0.0)) * p.scale)
         except np.linalg.LinAlgError:
             pass
-    return Fit(values, rss, n_eff, rmse, std)
+    return Fit(values, rss, n, n_eff, rmse, std)
 
 
 def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
@@ -224,7 +232,7 @@ def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
         values = _fit(replay, values, list(UNCERTAIN[s]), (s,), [{}], sigma).values
     fit = _fit(replay, values, [], STAGES, [{}], sigma)
     for s in STAGES:
-        sigma[s] = math.sqrt(fit.rss[s] / len(replay.residuals(s, values, "fit"))) or 1.0
+        sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
     return fit, sigma
 
 

@@ -49,21 +49,18 @@ def stage_evidence(replay, stage: str, values: dict[str, float]) -> dict:
     """The residual analysis of one stage under ``values`` (both parts of the log)."""
     fs = 1.0 / replay.h
     if stage == "position":
-        out = {}
-        for part in ("fit", "test"):
-            r = replay.residuals(stage, values, part)
-            out[f"rms_{part}"] = float(np.sqrt(np.mean(r ** 2)))
+        out = {f"rms_{part}": float(np.sqrt(np.mean(r ** 2)))
+               for part, r in zip(("fit", "test"), replay.residuals(stage, values, "fit", "test"))}
         t, r = replay.residual_series(stage, values)
         out["worst_windows"] = [{"t_start": float(t[i]), "error": float(r[i])} for i in np.argsort(r)[-3:][::-1]]
         return out
-    keep = (replay.yaw_mask if stage == "yaw" else replay.mask)
-    sel = keep["fit"] | keep["test"]
-    res = (replay.measured(stage) - replay.predicted(stage, values))[sel]
+    sel = replay.scored(stage)
+    _, res = replay.residual_series(stage, values)
     inputs = {"delta_cmd": replay.cmd[sel]} if stage == "steering" else \
         {"delta": replay.delta[sel], "v": replay.speed[sel]}
-    out = {"rms_fit": float(np.sqrt(np.mean(replay.residuals(stage, values, "fit") ** 2))),
-           "rms_test": float(np.sqrt(np.mean(replay.residuals(stage, values, "test") ** 2))),
-           "mean": float(res.mean())}
+    out = {f"rms_{part}": float(np.sqrt(np.mean(r ** 2)))
+           for part, r in zip(("fit", "test"), replay.residuals(stage, values, "fit", "test"))}
+    out["mean"] = float(res.mean())
     f, p = spectrum(res, fs)
     out["spectrum_peak_hz"] = float(f[1:][np.argmax(p[1:])])
     xc = {}

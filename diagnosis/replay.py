@@ -83,9 +83,7 @@ class YawReplay:
         hit = self._cache.get(key)
         if hit is not None:
             return hit
-        from dataclasses import replace
-
-        p = replace(self.params, C_f=self.params.C_f * front_scale, C_r=self.params.C_r * rear_scale)
+        p = with_cornering_scale(self.params, front_scale, rear_scale)
         mats = {}
         for b in np.unique(self.bins):
             speed = b * self.grid
@@ -111,18 +109,25 @@ class YawReplay:
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
 
 
-def cumulative_trapezoid(x: np.ndarray, h: float) -> np.ndarray:
-    out = np.empty_like(x, dtype=float)
-    out[0] = 0.0
-    np.cumsum(0.5 * h * (x[1:] + x[:-1]), out=out[1:])
-    return out
+def integrate(x: np.ndarray, h: float) -> np.ndarray:
+    """Cumulative trapezoid from 0 (scipy), on the log's even step ``h``."""
+    from scipy.integrate import cumulative_trapezoid
+
+    return cumulative_trapezoid(x, dx=h, initial=0.0)
+
+
+def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarray]:
+    """(k, d): the GPS displacement over ``span`` seconds centred on sample i + k, d[i] =
+    gps[i + 2k] - gps[i]. Chords average the 2 cm noise that point-to-point differences amplify."""
+    k = max(1, int(round(0.5 * span / h)))
+    return k, gps[2 * k:] - gps[:-2 * k]
 
 
 def antenna_track(t: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
     """Dead-reckoned GPS reading (N, 2) in an arbitrary frame: psi = int(gamma_measured - bias),
     dR/dt = v (cos psi, sin psi), antenna = R + Rot(psi) (a_forward, a_left), read ``gps_latency`` late."""
     h = float(t[1] - t[0])
-    psi = cumulative_trapezoid(yaw_rate - v["yaw_rate_bias"], h)
+    psi = integrate(yaw_rate - v["yaw_rate_bias"], h)
     psi_mid = 0.5 * (psi[1:] + psi[:-1])
     v_mid = 0.5 * (speed[1:] + speed[:-1])
     x = np.concatenate([[0.0], np.cumsum(h * v_mid * np.cos(psi_mid))])
@@ -150,23 +155,21 @@ def aligned_residuals(predicted: np.ndarray, measured: np.ndarray, windows: np.n
     return np.stack([M[..., 0] - (c * P[..., 0] - s * P[..., 1]), M[..., 1] - (s * P[..., 0] + c * P[..., 1])], axis=-1)
 
 
-def heading_estimate(t: np.ndarray, x: np.ndarray, y: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray,
+def heading_estimate(t: np.ndarray, gps: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray,
                      span: float = 10.0, min_speed: float = 0.3) -> np.ndarray:
-    """Absolute heading: the integrated gyro, its offset taken from the GPS course (circular mean
-    over ``span`` seconds of moving samples). Good to a degree or two: enough to resolve the
-    direction of a side slope."""
+    """Absolute heading: the integrated gyro, its offset taken from the GPS course over 1 s chords
+    (circular mean over ``span`` seconds of moving samples). Good to a degree or two: enough to
+    resolve the direction of a side slope."""
     h = float(t[1] - t[0])
-    psi = cumulative_trapezoid(yaw_rate, h)
-    k = max(1, int(round(0.1 / h)))
-    ve, vn = np.gradient(x, t), np.gradient(y, t)
-    box = np.ones(2 * k + 1) / (2 * k + 1)
-    ve, vn = np.convolve(ve, box, "same"), np.convolve(vn, box, "same")
-    moving = (np.hypot(ve, vn) > min_speed) & (speed > min_speed)
-    z = np.exp(1j * (np.arctan2(vn, ve) - psi)) * moving
+    psi = integrate(yaw_rate, h)
+    k, d = chords(gps, h)
+    moving = (np.hypot(d[:, 0], d[:, 1]) > min_speed * 2 * k * h) & (speed[k:-k] > min_speed)
+    z = np.zeros(len(t), dtype=complex)
+    z[k:-k] = np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - psi[k:-k])) * moving
     w = max(1, int(round(span / h)))
     zs = np.convolve(z, np.ones(w), "same")
-    if not np.any(np.abs(zs) > 0):
-        return psi
     good = np.abs(zs) > 1e-9
+    if not np.any(good):
+        return psi
     offset = np.interp(np.arange(len(t)), np.flatnonzero(good), np.unwrap(np.angle(zs[good])))
     return psi + offset

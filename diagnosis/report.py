@@ -33,8 +33,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         ax[0, 1].plot(track[:, 0], track[:, 1], lw=0.6, color="k")
         ax[0, 1].set(title="measured GPS track", xlabel="east [m]", ylabel="north [m]", aspect="equal")
     else:
-        sel = (replay.yaw_mask if stage == "yaw" else replay.mask)
-        keep = sel["fit"] | sel["test"]
+        keep = replay.scored(stage)
         t = replay.t
         window = (t >= replay.t_split) & (t < replay.t_split + 30)
         ax[0, 0].plot(t[window], k * replay.measured(stage)[window], color="k", lw=1, label="measured")
@@ -118,10 +117,9 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
     models = [("baseline", base, "tab:red")] + ([("extended", winner, "tab:green")] if winner else [])
     for row, stage in enumerate(("steering", "yaw")):
         k, unit = UNIT_SCALE[stage]
-        keep = (replay.yaw_mask if stage == "yaw" else replay.mask)
-        sel = keep["fit"] | keep["test"]
+        sel = replay.scored(stage)
         for j, (label, v, color) in enumerate(models):
-            res = (replay.measured(stage) - replay.predicted(stage, v))[sel]
+            _, res = replay.residual_series(stage, v)
             by_v = binned(res, replay.speed[sel], SPEED_BINS)
             by_a = binned(res, np.degrees(np.abs(replay.cmd[sel])), AMPLITUDE_BINS_DEG)
             off = 0.15 * (j - 0.5 * (len(models) - 1))

@@ -3,8 +3,6 @@ parameters -> time-domain validation -> speed dependence; JSON, plots and the pa
 from __future__ import annotations
 
 import json
-import math
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 

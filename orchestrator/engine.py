@@ -146,14 +146,16 @@ class Simulation:
                 published[node.name] = node.component.y
         self.k = 0
 
-    def advance(self, k_end: int) -> None:
-        """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, continuous
-        steps): afterwards the system stands at t0 + k_end h."""
+    def advance(self, k_end: int, final: bool = False) -> None:
+        """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, actuate,
+        continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
+        instant k_end too, without integrating past it (the last instant of a run)."""
         published, period, pace = self.published, self._period, self.pacer
         due_s, due_c, due_a = self._due_s, self._due_c, self._due_a
+        last = k_end if final else -1
         k = self.k
         try:
-            for k in range(self.k, k_end):
+            for k in range(self.k, k_end + 1 if final else k_end):
                 if pace is not None:
                     pace.wait(k)
                 t = self.t0 + k * self.h
@@ -175,6 +177,8 @@ class Simulation:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                     actuate(t)
+                if k == last:
+                    break
                 for _, _, u, sources, _, _, _, _ in continuous:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
@@ -190,32 +194,8 @@ class Simulation:
 
     def finish(self) -> Recording:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
-        k = self.k
-        if self.pacer is not None:
-            self.pacer.wait(k)
-        t = self.t0 + k * self.h
-        phase = k % self._period
-        published = self.published
-        try:
-            for name, _, _, _, _, rec, comp, live in self._due_c[phase]:
-                if k and not live:
-                    published[name] = dict(comp.y)
-                if rec is not None:
-                    rec.buf.extend(rec.get(published[name]))
-            for name, step, u, sources, dt, rec, comp, _ in self._due_s[phase]:
-                for inp, src, out in sources:
-                    u[inp] = published[src][out]
-                step(t, dt)
-                published[name] = comp.y
-                if rec is not None:
-                    rec.buf.extend(rec.get(comp.y))
-            for u, sources, actuate in self._due_a[phase]:
-                for inp, src, out in sources:
-                    u[inp] = published[src][out]
-                actuate(t)
-        except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError, OSError) as exc:
-            raise RunError(f"at t = {t:.6g} s: {exc}", self._recording(self._recorders, k, False, self._start)) from exc
-        return self._recording(self._recorders, k + 1, True, self._start)
+        self.advance(self.k, final=True)
+        return self._recording(self._recorders, self.k + 1, True, self._start)
 
     def terminate(self) -> None:
         for node in self.system.nodes.values():

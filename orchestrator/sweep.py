@@ -24,12 +24,12 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Iterator
 
 import pandas as pd
 
 from .build import build_system
-from .results import atomic_write, read_table, write_json, write_table
+from .results import atomic_write, write_json, write_table
 from .study import Study, StudyError, parse_study
 
 

@@ -10,6 +10,10 @@ is not told which.
 from __future__ import annotations
 
 import math
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -82,10 +86,15 @@ def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0):
     return t, cmd, speed
 
 
-def make_log(seed: int, effect: str | None = None, duration: float = 240.0) -> tuple[pd.DataFrame, dict]:
+def make_log(seed: int, effect: str | None = None, duration: float = 240.0,
+             scale: dict[str, float] | None = None) -> tuple[pd.DataFrame, dict]:
+    """The log and the truth; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
+    sigma_f) to stress the diagnosis with a truth further from the baseline."""
     rng = np.random.default_rng(seed)
     e = draw_effect(effect, rng)
     p = dict(TABLE)
+    for key, factor in (scale or {}).items():
+        p[key] *= factor
     for k, lo, hi in (("C_f", 0.85, 1.15), ("C_r", 0.85, 1.15), ("sigma_f", 0.9, 1.1)):
         p[k] *= rng.uniform(lo, hi)
     tau = STEERING_TIME_CONSTANT * rng.uniform(0.8, 1.2)
@@ -132,7 +141,7 @@ def make_log(seed: int, effect: str | None = None, duration: float = 240.0) -> t
         s1 = tuple(a + h * b for a, b in zip(state, k1))
         k2 = deriv(t0 + h, s1)
         state = tuple(a + 0.5 * h * (b + c) for a, b, c in zip(state, k1, k2))
-    delta, vy, r, psi, x, y = rec[:, 0], rec[:, 2], rec[:, 3], rec[:, 5], rec[:, 6], rec[:, 7]
+    delta, r, psi, x, y = rec[:, 0], rec[:, 3], rec[:, 5], rec[:, 6], rec[:, 7]
     fwd, left = e.get("forward", 0.0), e.get("left", 0.0)
     c, s = np.cos(psi), np.sin(psi)
     ax = x - lr * c + fwd * c - left * s
@@ -177,3 +186,34 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         err = math.hypot(params["antenna_forward"] - truth["forward"], params["antenna_left"] - truth["left"])
         return err, 0.0, 0.15                                                        # m, both axes
     raise KeyError(effect)
+
+
+BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def diagnose_hidden(case: tuple) -> dict:
+    """Write the log of (effect, seed[, TABLE scale]) to ``folder`` and diagnose it (no plots)."""
+    from diagnosis.pipeline import diagnose
+
+    effect, seed, folder, *scale = case
+    frame, truth = make_log(seed, effect, scale=scale[0] if scale else None)
+    log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
+    frame.to_parquet(log)
+    result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)
+    return {"effect": effect or "none", "seed": seed, "truth": truth, "result": result}
+
+
+def diagnose_many(cases: list[tuple[str | None, int, str]], workers: int = 2) -> list[dict]:
+    """diagnose_hidden over worker processes, each with single-threaded BLAS: two processes
+    spinning two BLAS threads each on two cores run 3x slower than one process."""
+    saved = {k: os.environ.get(k) for k in BLAS_THREADS}
+    os.environ.update({k: "1" for k in BLAS_THREADS})
+    try:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            return list(pool.map(diagnose_hidden, cases))
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k)
+            else:
+                os.environ[k] = v

@@ -8,50 +8,24 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing
-import os
 import subprocess
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
-from tests.field_truth import EFFECTS, make_log, recovered
+from tests.field_truth import EFFECTS, diagnose_many, make_log, recovered
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180
-BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 SEEDS = (101, 102)           # not used while the diagnosis was tuned (seeds 1-3)
-
-
-def _one(case: tuple[str | None, int, str]) -> dict:
-    from diagnosis.pipeline import diagnose
-
-    effect, seed, folder = case
-    frame, truth = make_log(seed, effect)
-    log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
-    frame.to_parquet(log)
-    result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)
-    return {"effect": effect or "none", "seed": seed, "truth": truth, "result": result}
 
 
 @pytest.fixture(scope="module")
 def hidden(tmp_path_factory):
     folder = str(tmp_path_factory.mktemp("diagnosis"))
-    cases = [(e, s, folder) for e in (None, *EFFECTS) for s in SEEDS]
-    # fresh single-threaded BLAS in each worker: two processes spinning two BLAS threads each on
-    # two cores run 3x slower than one process
-    saved = {k: os.environ.get(k) for k in BLAS_THREADS}
-    os.environ.update({k: "1" for k in BLAS_THREADS})
-    try:
-        with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
-            runs = list(pool.map(_one, cases))
-    finally:
-        for k, v in saved.items():
-            os.environ.pop(k) if v is None else os.environ.__setitem__(k, v)
+    runs = diagnose_many([(e, s, folder) for e in (None, *EFFECTS) for s in SEEDS])
     right = sum(r["result"]["verdict"] == r["effect"] for r in runs)
     print(f"\ndiagnosis named the hidden effect in {right}/{len(runs)} logs ({100 * right / len(runs):.0f}%)")
     return {(r["effect"], r["seed"]): r for r in runs}

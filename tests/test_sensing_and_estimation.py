@@ -11,7 +11,7 @@ from components.pose_ekf import PoseEKF
 from components.speed_kf import SpeedKF
 from orchestrator.build import build_system, component_seed
 from orchestrator.engine import Simulation
-from orchestrator.study import StudyError, parse_study
+from orchestrator.study import parse_study
 
 
 def gps(seed=1, **params):

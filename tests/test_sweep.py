@@ -2,7 +2,6 @@
 process pool, bad sweeps refused before anything runs."""
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess

@@ -51,7 +51,6 @@ def test_prediction_matrices_equal_a_direct_simulation():
         mpc.x = rng.normal(size=2) * 0.01
         mpc.u_prev = rng.uniform(-0.3, 0.3)
         du = rng.uniform(-0.05, 0.05, 3)
-        y_meas = float(mpc.C @ mpc.x)            # no disturbance
         # predicted outputs from the condensed form
         free = mpc.CApow @ mpc.x + mpc.step_response[1:] * mpc.u_prev
         Y = free + mpc.Phi @ du
@@ -99,7 +98,7 @@ def test_closed_loop_honours_both_constraints():
     mpc = paper_mpc()
     A, B = zoh_discretize(*controllable_canonical([291.0], [1.0, 10.9, 242.0])[:2], DT)
     C = controllable_canonical([291.0], [1.0, 10.9, 242.0])[2]
-    x, u_prev, us = np.zeros(2), 0.0, []
+    x, us = np.zeros(2), []
     for k in range(200):
         r = 2.5 if (k // 50) % 2 == 0 else -2.5        # far beyond what 45 deg can give
         u, status = mpc.step(r, float(C @ x))

@@ -50,11 +50,11 @@ def cornering_scale(v_x: float, slope: float, reference_speed: float) -> float:
     return max(0.2, 1.0 + slope * (v_x - reference_speed))
 
 
-def with_cornering_scale(p: TractorParameters, scale: float) -> TractorParameters:
-    """The parameters with C_f and C_r multiplied by ``scale``."""
+def with_cornering_scale(p: TractorParameters, scale: float, rear_scale: float | None = None) -> TractorParameters:
+    """The parameters with C_f multiplied by ``scale`` and C_r by ``rear_scale`` (default: the same)."""
     from dataclasses import replace
 
-    return replace(p, C_f=p.C_f * scale, C_r=p.C_r * scale)
+    return replace(p, C_f=p.C_f * scale, C_r=p.C_r * (scale if rear_scale is None else rear_scale))
 
 
 def slope_lateral_acceleration(heading, slope_angle: float, downhill_heading: float):
