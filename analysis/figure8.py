@@ -20,8 +20,8 @@ STARTUP_SETTLE_S = 5.0
 
 
 def tracking_error(frame: pd.DataFrame, study: Study) -> np.ndarray:
-    dx = signal(frame, study, "tractor_yaw_plant", "x_cg") - signal(frame, study, "figure8_reference", "x_ref")
-    dy = signal(frame, study, "tractor_yaw_plant", "y_cg") - signal(frame, study, "figure8_reference", "y_ref")
+    dx = signal(frame, study, "yaw_plant", "x_cg") - signal(frame, study, "reference", "x_ref")
+    dy = signal(frame, study, "yaw_plant", "y_cg") - signal(frame, study, "reference", "y_ref")
     return np.hypot(dx, dy)
 
 
@@ -38,15 +38,15 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     """Tracking metrics from STARTUP_SETTLE_S after the reference reaches its speed; the start
     from rest is reported apart as ``euclid_max_startup``."""
     err_all = tracking_error(frame, study)
-    start = settled_index(frame["t"].to_numpy(), signal(frame, study, "figure8_reference", "speed_ref"))
+    start = settled_index(frame["t"].to_numpy(), signal(frame, study, "reference", "speed_ref"))
     frame, err = frame.iloc[start:], err_all[start:]
-    curved = signal(frame, study, "figure8_reference", "segment") > 0.5
-    speed = signal(frame, study, "speed_drivetrain", "speed")
-    v_d = signal(frame, study, "kinematic_tracker", "speed_desired")
-    gamma = signal(frame, study, "tractor_yaw_plant", "yaw_rate")
-    gamma_d = signal(frame, study, "kinematic_tracker", "yaw_rate_desired")
-    psi = signal(frame, study, "tractor_yaw_plant", "heading")
-    psi_hat = signal(frame, study, "pose_ekf", "heading")
+    curved = signal(frame, study, "reference", "segment") > 0.5
+    speed = signal(frame, study, "drivetrain", "speed")
+    v_d = signal(frame, study, "tracker", "speed_desired")
+    gamma = signal(frame, study, "yaw_plant", "yaw_rate")
+    gamma_d = signal(frame, study, "tracker", "yaw_rate_desired")
+    psi = signal(frame, study, "yaw_plant", "heading")
+    psi_hat = signal(frame, study, "pose_estimator", "heading")
     dpsi = np.angle(np.exp(1j * (psi_hat - psi)))
     straight = ~curved
 
@@ -63,7 +63,7 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         "metrics_from_time_s": float(frame["t"].iloc[0]),
         "speed_rms_error": rms(speed - v_d),
         "speed_mean_error": float(np.mean(speed - v_d)),
-        "speed_rms_error_vs_path": rms(speed - signal(frame, study, "figure8_reference", "speed_ref")),
+        "speed_rms_error_vs_path": rms(speed - signal(frame, study, "reference", "speed_ref")),
         "yaw_rate_rms_error": rms(gamma - gamma_d),
         "yaw_rate_mean_error": float(np.mean(gamma - gamma_d)),
         "heading_estimate_rms_error": rms(dpsi),
@@ -100,15 +100,15 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         written.append(path)
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(sig("figure8_reference", "x_ref"), sig("figure8_reference", "y_ref"), "k--", lw=1, label="reference")
-    ax.plot(sig("tractor_yaw_plant", "x_cg"), sig("tractor_yaw_plant", "y_cg"), "r", lw=1, label="actual (CG)")
+    ax.plot(sig("reference", "x_ref"), sig("reference", "y_ref"), "k--", lw=1, label="reference")
+    ax.plot(sig("yaw_plant", "x_cg"), sig("yaw_plant", "y_cg"), "r", lw=1, label="actual (CG)")
     ax.set_xlabel("east x [m]"), ax.set_ylabel("north y [m]"), ax.axis("equal"), ax.legend()
     ax.set_title("Reference and actual trajectory")
     save(fig, "trajectory.png")
 
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 4.5))
-    ex = sig("figure8_reference", "x_ref") - sig("tractor_yaw_plant", "x_cg")
-    ey = sig("figure8_reference", "y_ref") - sig("tractor_yaw_plant", "y_cg")
+    ex = sig("reference", "x_ref") - sig("yaw_plant", "x_cg")
+    ey = sig("reference", "y_ref") - sig("yaw_plant", "y_cg")
     for ax, e, name in zip(axes, (ex, ey), ("x", "y")):
         ax.plot(t, e, lw=0.8)
         ax.set_ylabel(f"error {name} [m]")
@@ -118,10 +118,10 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     save(fig, "error.png")
 
     for port_d, (typ, port), label, title, name in (
-            ("speed_desired", ("speed_drivetrain", "speed"), "speed [m/s]", "Longitudinal speed", "speed.png"),
-            ("yaw_rate_desired", ("tractor_yaw_plant", "yaw_rate"), "yaw rate [rad/s]", "Yaw rate", "yaw_rate.png")):
+            ("speed_desired", ("drivetrain", "speed"), "speed [m/s]", "Longitudinal speed", "speed.png"),
+            ("yaw_rate_desired", ("yaw_plant", "yaw_rate"), "yaw rate [rad/s]", "Yaw rate", "yaw_rate.png")):
         fig, ax = plt.subplots(figsize=(7, 3.5))
-        ax.plot(t, sig("kinematic_tracker", port_d), "k--", lw=0.8, label="desired")
+        ax.plot(t, sig("tracker", port_d), "k--", lw=0.8, label="desired")
         ax.plot(t, sig(typ, port), "r", lw=0.8, label="actual")
         ax.set_xlabel("time [s]"), ax.set_ylabel(label), ax.legend(), ax.grid(alpha=0.3)
         ax.set_title(title)

@@ -13,9 +13,6 @@ from orchestrator.study import Study
 from .figure8 import settled_index
 from .signals import MissingSignal, component_named, rms, signal
 
-TRACTOR_TYPES = ("simulated_tractor", "hardware_tractor")
-
-
 def path_error(x: np.ndarray, y: np.ndarray, path: Figure8Path, spacing: float = 0.01) -> np.ndarray:
     """Distance from each point to the nearest point of the path (sampled every ``spacing`` m)."""
     s = np.arange(0.0, path.lap_length, spacing)
@@ -23,28 +20,19 @@ def path_error(x: np.ndarray, y: np.ndarray, path: Figure8Path, spacing: float =
     return cKDTree(pts).query(np.column_stack([x, y]))[0]
 
 
-def _tractor(study: Study) -> str:
-    for kind in TRACTOR_TYPES:
-        try:
-            return component_named(study, kind)
-        except MissingSignal:
-            continue
-    raise MissingSignal(f"the analysis needs a component of type {TRACTOR_TYPES}")
-
-
 def _path(study: Study) -> Figure8Path:
     try:
-        ref = study.components[component_named(study, "figure8_reference")].parameters
+        ref = study.parameters(component_named(study, "reference"))
     except MissingSignal:
         ref = {}
     return Figure8Path(float(ref.get("radius", 10.0)), float(ref.get("centre_offset", 20.0)))
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
-    name = _tractor(study)
+    name = component_named(study, "tractor")      # the composite subsystem or the hardware
     t = frame["t"].to_numpy()
     try:      # settled: after the reference's start ramp; without a reference (the emulator), the tractor's
-        start = settled_index(t, signal(frame, study, "figure8_reference", "speed_ref"))
+        start = settled_index(t, signal(frame, study, "reference", "speed_ref"))
     except MissingSignal:
         start = settled_index(t, frame[f"{name}.speed_measured"].to_numpy(), fraction=0.9)
     x, y = frame[f"{name}.x_cg"].to_numpy(), frame[f"{name}.y_cg"].to_numpy()
@@ -53,14 +41,14 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         err = path_error(x[start:], y[start:], _path(study))
         out.update(path_error_max=float(err.max()), path_error_mean=float(err.mean()))
         try:
-            dx = x - signal(frame, study, "figure8_reference", "x_ref")
-            dy = y - signal(frame, study, "figure8_reference", "y_ref")
+            dx = x - signal(frame, study, "reference", "x_ref")
+            dy = y - signal(frame, study, "reference", "y_ref")
             e = np.hypot(dx, dy)[start:]
             out.update(euclid_max=float(e.max()), euclid_rms=rms(e))
         except MissingSignal:
             pass
     try:
-        safe = signal(frame, study, "safety_watchdog", "safe_state")
+        safe = signal(frame, study, "watchdog", "safe_state")
         out["safe_state_time_s"] = float(np.sum(safe > 0.5) * np.median(np.diff(t)))
     except MissingSignal:
         pass

@@ -9,19 +9,15 @@ import numpy as np
 import pandas as pd
 
 from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space, transfer_function
-from components.tractor_yaw_plant import TractorYawPlant
+from components.models.paper_models import G_2ND
 from orchestrator.study import Study
 
 from .signals import component_named
 
-G2ND = ([291.0], [1.0, 10.9, 242.0])
 
 
 def tractor_parameters(study: Study) -> TractorParameters:
-    name = component_named(study, "tractor_yaw_plant")
-    params = {**{k: v.start for k, v in TractorYawPlant.declared("parameter").items()},
-              **study.components[name].parameters}
-    return TractorParameters(*(float(params[k]) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")))
+    return TractorParameters.of(study.parameters(component_named(study, "yaw_plant")))
 
 
 def poles_zeros(model: str, p: TractorParameters, v: float) -> tuple[np.ndarray, np.ndarray]:
@@ -36,7 +32,7 @@ def dc_gain(model: str, p: TractorParameters, v: float) -> float:
 
 
 def speed_column(table: pd.DataFrame, study: Study) -> str:
-    column = f"{component_named(study, 'figure8_reference')}.speed"
+    column = f"{component_named(study, 'reference')}.speed"
     if column not in table:
         raise KeyError(f"the sweep does not vary {column!r}")
     return column
@@ -77,7 +73,7 @@ def plots(table: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for model, style in zip(PHYSICAL_MODELS, ("-", "--", ":")):
         ax.plot(speeds, [dc_gain(model, p, v) for v in speeds], style, label=model)
-    ax.axhline(G2ND[0][0] / G2ND[1][-1], color="grey", lw=1, label="G_2nd (identified, fixed)")
+    ax.axhline(G_2ND.num[-1] / G_2ND.den[-1], color="grey", lw=1, label="G_2nd (identified, fixed)")
     ax.plot(speeds, speeds / (p.l_f + p.l_r), "k", lw=0.6, alpha=0.5, label="kinematic v/L")
     ax.set_xlabel("speed [m/s]"), ax.set_ylabel("steady-state yaw-rate gain [1/s]"), ax.legend(), ax.grid(alpha=0.3)
     fig.tight_layout()

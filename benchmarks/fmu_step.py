@@ -22,12 +22,11 @@ def recorded_inputs(seconds: float):
     from fmu_export.controller import controller_design, controller_feeds
     from orchestrator.build import build_system
     from orchestrator.engine import Simulation
-    from orchestrator.study import load_raw, parse_study
+    from orchestrator.study import Study
 
-    raw = load_raw(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
-    st = parse_study(raw, ROOT / "studies/figure8.toml")
+    st = Study.load(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
     frame = Simulation(build_system(st)).run().to_frame().iloc[::5]
-    return st, frame, controller_feeds(raw, controller_design(st))
+    return st, frame, controller_feeds(st, controller_design(st))
 
 
 def time_python(st, frame, feeds) -> np.ndarray:

@@ -9,7 +9,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from orchestrator.study import load_raw, parse_study
+from orchestrator.study import Study
 from orchestrator.sweep import SweepRun
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -18,13 +18,12 @@ ROOT = Path(__file__).resolve().parents[1]
 def measure(study_path: Path = ROOT / "studies/speed_sweep.toml", stop_time: float | None = None) -> dict:
     """Wall time of the whole sweep with 1 and 2 worker processes (fresh output folders)."""
     overrides = [f"study.stop_time={stop_time}"] if stop_time else []
-    raw = load_raw(study_path, overrides)
-    study = parse_study(raw, study_path)
+    study = Study.load(study_path, overrides)
     rows = []
     for workers in (1, 2):
         with tempfile.TemporaryDirectory() as out:
             start = time.perf_counter()
-            table = SweepRun(study, raw, Path(out)).run(workers, progress=False)
+            table = SweepRun(study, Path(out)).run(workers, progress=False)
             wall = time.perf_counter() - start
         rows.append((workers, len(table), wall, len(table) / wall))
     return {"name": study.study.name, "stop_time": study.study.stop_time, "rows": rows}

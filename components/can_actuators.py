@@ -12,6 +12,7 @@ from .hardware.can_link import CAN_PARAMETERS, connect, drain, send
 
 class CANActuators(Component):
     sampled = True
+    roles = ("actuator_link",)
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point"),
         inp("speed_cmd", "m/s", 0.0, "speed set-point"),

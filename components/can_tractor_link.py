@@ -11,6 +11,7 @@ from .hardware.can_link import CAN_PARAMETERS, connect, drain, send
 
 class CANTractorLink(Component):
     sampled = True
+    roles = ("tractor_link",)
     variables = (
         inp("steer_angle_measured", "rad", 0.0, "wheel angle to report"),
         inp("yaw_rate", "rad/s", 0.0, "yaw rate to report"),

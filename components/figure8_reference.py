@@ -15,6 +15,7 @@ from .models.figure8_path import Figure8Path
 
 class Figure8Reference(Component):
     sampled = True
+    roles = ("reference",)
     variables = (
         par("speed", "m/s", 2.0, "reference speed along the path"),
         par("radius", "m", 10.0, "radius of the two loops"),

@@ -3,7 +3,7 @@
 Output at sample k is the true antenna state of sample k - latency/dt plus white Gaussian noise.
 Dropouts: a two-state chain; each sample starts an outage with probability
 ``dropout_probability``, an outage lasts ``dropout_duration`` seconds; during it the last fix is
-held, ``fix_valid`` = 0 and ``fix_age`` grows.
+held, ``fix_valid`` = 0, ``fix_quality`` = 0 (no fix) and ``fix_age`` grows.
 """
 from __future__ import annotations
 
@@ -12,9 +12,12 @@ from collections import deque
 
 from orchestrator.component import Component, inp, out, par
 
+from .hardware.nmea import RTK_FIXED
+
 
 class GPSSensor(Component):
     sampled = True
+    roles = ("gps",)
     variables = (
         inp("x_true", "m", 0.0, "true antenna east position"),
         inp("y_true", "m", 0.0, "true antenna north position"),
@@ -31,6 +34,7 @@ class GPSSensor(Component):
         out("vel_north", "m/s", 0.0, "measured north velocity"),
         out("fix_valid", "1", 1.0, "1 when this sample carries a new fix, else 0"),
         out("fix_age", "s", 0.0, "time since the last valid fix"),
+        out("fix_quality", "1", float(RTK_FIXED), "GGA fix quality: 4 (RTK fixed) with a fix, 0 in an outage"),
     )
     feedthrough = {k: ("x_true", "y_true", "vel_east_true", "vel_north_true")
                    for k in ("x", "y", "vel_east", "vel_north")}
@@ -54,14 +58,14 @@ class GPSSensor(Component):
         noise = self.rng.standard_normal(4)
         if self.outage_left > 0:
             self.outage_left -= 1
-            y["fix_valid"] = 0.0
+            y["fix_valid"] = y["fix_quality"] = 0.0
             y["fix_age"] = t - self.last_fix_time
             return
         x, yy, ve, vn = self.history[0]
         sp, sv = p["position_noise_std"], p["velocity_noise_std"]
         y["x"], y["y"] = x + sp * noise[0], yy + sp * noise[1]
         y["vel_east"], y["vel_north"] = ve + sv * noise[2], vn + sv * noise[3]
-        y["fix_valid"] = 1.0
+        y["fix_valid"], y["fix_quality"] = 1.0, float(RTK_FIXED)
         self.last_fix_time = t
         y["fix_age"] = p["latency"]
 

@@ -6,6 +6,7 @@ from orchestrator.component import Component, inp, out, par
 
 class GyroSensor(Component):
     sampled = True
+    roles = ("gyro",)
     variables = (
         inp("yaw_rate", "rad/s", 0.0, "true yaw rate"),
         par("noise_std", "rad/s", 0.0, "white measurement noise (1 sigma)"),

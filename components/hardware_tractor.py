@@ -1,5 +1,5 @@
-"""The tractor reached over its hardware interfaces, as one component with the ports of
-``simulated_tractor``: an ``nmea_gps`` (GPS over NMEA 0183 from a serial port or TCP socket) and a
+"""The tractor reached over its hardware interfaces, as one component with the ports that
+studies/tractor_side.toml exports (the simulated tractor, a composite subsystem): an ``nmea_gps`` (GPS over NMEA 0183 from a serial port or TCP socket) and a
 ``can_actuators`` (set-points out, wheel angle, yaw rate and speed back over CAN) inside. A study
 swaps simulation for hardware by changing this component's line only. Truth outputs are NaN.
 """
@@ -7,13 +7,31 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, par
+from orchestrator.component import Component, inp, out, par
 
 from .can_actuators import CANActuators
 from .hardware.can_link import CAN_PARAMETERS, prefixed
 from .hardware.nmea import DATUM_PARAMETERS
 from .nmea_gps import NMEAGPS
-from .simulated_tractor import TRACTOR_PORTS
+
+TRACTOR_PORTS = (
+    inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point"),
+    inp("speed_cmd", "m/s", 0.0, "speed set-point"),
+    inp("safe_state", "1", 0.0, "1 while the guidance holds the tractor safe"),
+    out("gps_x", "m", 0.0, "GPS antenna east position"),
+    out("gps_y", "m", 0.0, "GPS antenna north position"),
+    out("gps_vel_east", "m/s", 0.0, "GPS east velocity"),
+    out("gps_vel_north", "m/s", 0.0, "GPS north velocity"),
+    out("fix_valid", "1", 0.0, "1 when a new good fix arrived"),
+    out("fix_age", "s", 0.0, "time since the last good fix"),
+    out("fix_quality", "1", 0.0, "GGA fix quality (4 RTK fixed)"),
+    out("steer_angle_measured", "rad", 0.0, "measured wheel angle"),
+    out("yaw_rate", "rad/s", 0.0, "measured yaw rate"),
+    out("speed_measured", "m/s", 0.0, "measured speed"),
+    out("x_cg", "m", 0.0, "truth: CG east position (NaN on hardware)"),
+    out("y_cg", "m", 0.0, "truth: CG north position (NaN on hardware)"),
+    out("heading", "rad", 0.0, "truth: heading (NaN on hardware)"),
+)
 
 GPS_OUTPUTS = {"gps_x": "x", "gps_y": "y", "gps_vel_east": "vel_east", "gps_vel_north": "vel_north",
                "fix_valid": "fix_valid", "fix_age": "fix_age", "fix_quality": "fix_quality"}
@@ -22,6 +40,7 @@ CAN_OUTPUTS = {"steer_angle_measured": "steer_angle_measured", "yaw_rate": "yaw_
 
 class HardwareTractor(Component):
     sampled = True
+    roles = ("tractor",)
     variables = TRACTOR_PORTS + (
         par("nmea_url", "", "socket://127.0.0.1:10110", "pyserial URL or device of the GPS receiver"),
         par("nmea_baudrate", "1/s", 115200, "serial line speed"),

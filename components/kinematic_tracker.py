@@ -18,6 +18,7 @@ def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float) -> tupl
 
 class KinematicTracker(Component):
     sampled = True
+    roles = ("tracker",)
     variables = (
         inp("x_ref", "m", 0.0, "reference CG east position"),
         inp("y_ref", "m", 0.0, "reference CG north position"),

@@ -19,6 +19,7 @@ from .hardware.nmea import DATUM_PARAMETERS, RTK_FIXED, LocalFrame, NMEAStream, 
 
 class NMEAGPS(Component):
     sampled = True
+    roles = ("gps_receiver",)
     variables = (
         par("url", "", "socket://127.0.0.1:10110", "pyserial URL or device of the receiver"),
         par("baudrate", "1/s", 115200, "serial line speed (ignored for sockets)"),

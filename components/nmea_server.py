@@ -14,6 +14,7 @@ from .hardware.nmea import DATUM_PARAMETERS, RTK_FIXED, LocalFrame, gga_vtg
 
 class NMEAServer(Component):
     sampled = True
+    roles = ("nmea_server",)
     variables = (
         inp("x", "m", 0.0, "antenna east position"),
         inp("y", "m", 0.0, "antenna north position"),

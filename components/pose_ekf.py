@@ -17,6 +17,7 @@ from orchestrator.component import Component, inp, out, par
 
 class PoseEKF(Component):
     sampled = True
+    roles = ("pose_estimator",)
     variables = (
         inp("gps_x", "m", 0.0, "GPS east position of R"),
         inp("gps_y", "m", 0.0, "GPS north position of R"),

@@ -26,6 +26,7 @@ def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: f
 
 class SpeedDrivetrain(Component):
     sampled = False
+    roles = ("drivetrain",)
     variables = (
         inp("pedal_valve_voltage", "V", 6.0, "voltage of the electro-mechanic pedal valve"),
         par("neutral_voltage", "V", 6.0, "voltage with the pedal at rest"),

@@ -14,6 +14,7 @@ from orchestrator.component import Component, inp, out, par
 
 class SpeedKF(Component):
     sampled = True
+    roles = ("speed_estimator",)
     variables = (
         inp("x", "m", 0.0, "GPS east position"),
         inp("y", "m", 0.0, "GPS north position"),

@@ -14,6 +14,7 @@ from .models.pid import DiscretePID
 
 class SpeedPID(Component):
     sampled = True
+    roles = ("speed_controller",)
     variables = (
         inp("speed_desired", "m/s", 0.0, "desired speed v_d (kinematic tracker)"),
         inp("speed", "m/s", 0.0, "measured / estimated speed"),

@@ -10,6 +10,7 @@ from orchestrator.component import Component, out, par
 
 class SteeringExcitation(Component):
     sampled = True
+    roles = ("excitation",)
     variables = (
         par("values", "", [0.0], "one period of the signal, one value per step"),
         par("scale", "rad", 1.0, "radians per unit of values"),

@@ -41,6 +41,7 @@ def quantize(value: float, resolution: float) -> float:
 
 class SteeringHydraulics(Component):
     sampled = False
+    roles = ("steering",)
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "desired front wheel angle (from the yaw-rate MPC)"),
         par("kp", "V/rad", 150.0, "low-level PI proportional gain"),

@@ -32,6 +32,7 @@ import numpy as np
 
 from orchestrator.component import Component, inp, out, par
 
+from .models.paper_models import G_2ND
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical,
                                   cornering_scale, lateral_disturbance_column,
                                   slope_lateral_acceleration, state_space, with_cornering_scale,
@@ -42,6 +43,7 @@ MODELS = PHYSICAL_MODELS + ("transfer_function",)
 
 class TractorYawPlant(Component):
     sampled = False
+    roles = ("yaw_plant",)
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),
@@ -54,8 +56,8 @@ class TractorYawPlant(Component):
         par("C_r", "N/rad", 90000.0, "rear cornering stiffness"),
         par("sigma_f", "m", 0.1942, "front relaxation length"),
         par("sigma_r", "m", 1.6657, "rear relaxation length"),
-        par("tf_num", "", [291.0], "transfer_function model: numerator, highest power first"),
-        par("tf_den", "", [1.0, 10.9, 242.0], "transfer_function model: denominator"),
+        par("tf_num", "", list(G_2ND.num), "transfer_function model: numerator, highest power first"),
+        par("tf_den", "", list(G_2ND.den), "transfer_function model: denominator"),
         par("min_speed", "m/s", 0.1, "regularisation speed for the slip equations"),
         par("x0", "m", 0.0, "initial CG east position"),
         par("y0", "m", 0.0, "initial CG north position"),

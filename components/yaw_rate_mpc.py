@@ -7,17 +7,19 @@ import math
 
 from orchestrator.component import Component, inp, out, par
 
+from .models.paper_models import G_2ND
 from .models.condensed_mpc import CondensedTrackingMPC
 
 
 class YawRateMPC(Component):
     sampled = True
+    roles = ("yaw_rate_controller",)
     variables = (
         inp("yaw_rate_ref", "rad/s", 0.0, "desired yaw rate gamma_d"),
         inp("yaw_rate", "rad/s", 0.0, "measured yaw rate"),
         inp("steer_angle", "rad", 0.0, "measured wheel angle (used when model_input = measured)"),
-        par("num", "", [291.0], "model numerator (steer angle -> yaw rate), highest power first"),
-        par("den", "", [1.0, 10.9, 242.0], "model denominator"),
+        par("num", "", list(G_2ND.num), "model numerator (steer angle -> yaw rate), highest power first"),
+        par("den", "", list(G_2ND.den), "model denominator"),
         par("prediction_horizon", "1", 8, "N_p"),
         par("control_horizon", "1", 3, "N_c"),
         par("Q", "1", 0.5, "weight of the yaw-rate tracking error"),

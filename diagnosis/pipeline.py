@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from analysis.measured_log import LogError, read_log
+from measurements import LogError, read_log
 from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 

@@ -24,20 +24,24 @@ from components.models.condensed_mpc import CondensedTrackingMPC
 from components.speed_pid import SpeedPID
 from components.yaw_rate_mpc import YawRateMPC
 from orchestrator.build import build_system
+from orchestrator.errors import InputError
 from orchestrator.study import Study, StudyError
 
 from .packaging import PackagingError, package_fmu
 
 MODEL_IDENTIFIER = "guidance_controller"
+ANNOTATION_TOOL = "agrobot"          # <Tool name="agrobot"><Sampled/></Tool>: outputs hold on [t, t + dt)
 C_DIR = Path(__file__).with_name("c")
-ROLES = {"tracker": KinematicTracker, "mpc": YawRateMPC, "speed_controller": SpeedPID}
+# port prefix -> (declared role, the class the C code re-implements)
+ROLES = {"tracker": ("tracker", KinematicTracker), "mpc": ("yaw_rate_controller", YawRateMPC),
+         "speed_controller": ("speed_controller", SpeedPID)}
 TUNABLE = {"tracker": ("k_s", "k_c", "l_r"), "mpc": ("steer_limit", "steer_rate_limit"),
            "speed_controller": ("kp", "ki", "kd", "integral_limit", "feedforward", "inner_kp", "inner_ki",
                                 "inner_kd", "neutral_voltage", "voltage_min", "voltage_max")}
 VR_IN0, VR_OUT0 = 100, 200
 
 
-class ExportError(Exception):
+class ExportError(InputError):
     """The study's controller cannot be exported (message names the study and the reason)."""
 
 
@@ -60,12 +64,12 @@ def controller_design(study: Study) -> ControllerDesign:
     where = str(study.path)
     system = build_system(study)
     names: dict[str, str] = {}
-    for role, cls in ROLES.items():
-        found = [n for n, node in system.nodes.items() if isinstance(node.component, cls)]
+    for prefix, (role, cls) in ROLES.items():
+        found = study.find(role=role, type=cls)
         if len(found) != 1:
             raise ExportError(f"{where}: the controller export needs exactly one {cls.__name__} "
                               f"component, found {len(found)}" + (f" ({', '.join(found)})" if found else ""))
-        names[role] = found[0]
+        names[prefix] = found[0]
     steps = {system.nodes[n].step for n in names.values()}
     if len(steps) != 1:
         raise ExportError(f"{where}: tracker, MPC and speed controller must share one step, got "
@@ -182,7 +186,7 @@ def model_description(design: ControllerDesign, guid: str) -> str:
   </LogCategories>
   <DefaultExperiment startTime="0.0" stepSize="{design.sample_time!r}"/>
   <VendorAnnotations>
-    <Tool name="agrobot"><Sampled/></Tool>
+    <Tool name="{ANNOTATION_TOOL}"><Sampled/></Tool>
   </VendorAnnotations>
   <ModelVariables>
 {chr(10).join(rows)}
@@ -218,40 +222,22 @@ def export_controller(study: Study, out: Path) -> Path:
             raise ExportError(str(exc)) from None
 
 
-def _connections(study_raw: dict, design: ControllerDesign) -> list:
-    from orchestrator.study import parse_study
-
-    return parse_study(study_raw, design.study_path).connections
-
-
-def controller_study(study_raw: dict, design: ControllerDesign, fmu_path: str, name: str = "controller") -> dict:
-    """The raw study with the three controller components replaced by the FMU (same wiring)."""
-    raw = dict(study_raw)
-    comps = {k: v for k, v in raw["components"].items() if k not in design.names.values()}
-    comps[name] = {"type": fmu_path, "step": design.sample_time}
-    role_of = {n: r for r, n in design.names.items()}
-    ports = {p[0] for p in design.inputs + design.outputs}
-    conns = []
-    for c in _connections(study_raw, design):
-        (sc, so), (tc, ti) = (c.source, c.output), (c.target, c.input)
-        if sc in role_of and tc in role_of:
-            continue                                # inside the controller
-        if sc in role_of:
-            sc, so = name, f"{role_of[sc]}_{so}"
-        if tc in role_of:
-            tc, ti = name, f"{role_of[tc]}_{ti}"
-            if ti not in ports:
-                raise StudyError(f"connection '{c}': {ti} is not an input of the exported controller")
-        conns.append(f"{sc}.{so} -> {tc}.{ti}")
-    raw["components"], raw["connections"] = comps, conns
-    return raw
+def _port_name(design: ControllerDesign):
+    """FMU port of a controller component's port: the role prefix and the port name."""
+    prefix_of = {n: r for r, n in design.names.items()}
+    return lambda comp, port: f"{prefix_of[comp]}_{port}"
 
 
-def controller_feeds(study_raw: dict, design: ControllerDesign) -> dict[str, str]:
+def controller_study(study: Study, design: ControllerDesign, fmu_path: str, name: str = "controller") -> Study:
+    """The study with the three controller components folded into the FMU (same outside wiring)."""
+    return study.collapse(design.names.values(), into=name, type=fmu_path, step=design.sample_time,
+                          port_name=_port_name(design))
+
+
+def controller_feeds(study: Study, design: ControllerDesign) -> dict[str, str]:
     """FMU input -> the study signal ("component.output") that drives it, from the study's wiring."""
-    role_of = {n: r for r, n in design.names.items()}
-    feeds = {f"{role_of[c.target]}_{c.input}": f"{c.source}.{c.output}" for c in _connections(study_raw, design)
-             if c.target in role_of and c.source not in role_of}
+    inputs, _, _ = study.boundary(design.names.values(), _port_name(design))
+    feeds = {port: f"{v['source'][0]}.{v['source'][1]}" for port, v in inputs.items() if v["source"]}
     return {name: feeds[name] for name, _, _ in design.inputs if name in feeds}
 
 
@@ -259,11 +245,9 @@ def run_with_exported_controller(study_path: Path, fmu: Path, overrides: list[st
     """Run a study as written and with the FMU in place of its three controllers:
     (python frame, FMU frame, study)."""
     from orchestrator.engine import Simulation
-    from orchestrator.study import load_raw, parse_study
 
-    raw = load_raw(study_path, overrides or [])
-    study = parse_study(raw, study_path)
-    with_fmu = parse_study(controller_study(raw, controller_design(study), str(fmu)), study_path)
+    study = Study.load(study_path, overrides or [])
+    with_fmu = controller_study(study, controller_design(study), str(fmu))
     python_frame = Simulation(build_system(study)).run().to_frame()
     return python_frame, Simulation(build_system(with_fmu)).run().to_frame(), study
 

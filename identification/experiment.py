@@ -11,15 +11,15 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from analysis.measured_log import LogError, read_log as read_measured_log
+from measurements import LogError, read_log as read_measured_log
 from orchestrator.runner import simulate
-from orchestrator.study import Study, StudyError, parse_study
+from orchestrator.study import Study, StudyError
 from orchestrator.units import UnitError, to_si
 
 from .fitting import STRUCTURES
 from .multisine import MultisineDesign, realisation
 
-CANONICAL = ("t", "delta_cmd", "delta", "v", "yaw_rate")
+NEEDED = ("t", "delta_cmd", "delta", "v", "yaw_rate")      # columns of the canonical log it reads
 
 
 class IdentificationConfig(BaseModel):
@@ -88,10 +88,11 @@ class Experiment:
 
 
 def config_of(study: Study) -> IdentificationConfig:
-    if study.identification is None:
+    section = study.section("identification")
+    if section is None:
         raise StudyError(f"{study.path}: no [identification] section")
     try:
-        cfg = IdentificationConfig.model_validate(study.identification)
+        cfg = IdentificationConfig.model_validate(section)
         cfg.rms_rad
     except ValidationError as err:
         lines = [f"{study.path}: invalid [identification] section"]
@@ -110,7 +111,7 @@ def _design(cfg: IdentificationConfig, band, kind: str) -> MultisineDesign:
     return MultisineDesign(cfg.sample_rate, cfg.period_samples, lo, band[1], cfg.rms_rad, kind)
 
 
-def simulate_experiment(study: Study, raw: dict[str, Any], cfg: IdentificationConfig, speed: float,
+def simulate_experiment(study: Study, cfg: IdentificationConfig, speed: float,
                         band, kind: str, realisations: int, periods: int, seed: int) -> Experiment:
     """Run ``realisations`` co-simulations of transient + ``periods`` periods of a fresh random-phase
     multisine each, at ``speed``; sample the signals at the identification rate."""
@@ -120,21 +121,16 @@ def simulate_experiment(study: Study, raw: dict[str, Any], cfg: IdentificationCo
     N = cfg.period_samples
     step = 1.0 / cfg.sample_rate
     comp, port = cfg.speed_input.split(".", 1)
+    if cfg.excitation not in study.components or comp not in study.components:
+        raise StudyError(f"{study.path}: identification.excitation / speed_input name unknown components")
+    base = (study.without("sweep") if study.sweep else study).with_component(cfg.excitation, step=step)
     rs, us, ys, full = [], [], [], []
     for m in range(realisations):
         values = realisation(design, rng)
-        data = {**raw, "study": {**raw["study"], "stop_time": raw["study"].get("start_time", 0.0) + n_per * cfg.period,
-                                 "seed": int(rng.integers(2**31))}}
-        data["components"] = {k: dict(v) for k, v in raw["components"].items()}
-        exc = data["components"].get(cfg.excitation)
-        if exc is None or comp not in data["components"]:
-            raise StudyError(f"{study.path}: identification.excitation / speed_input name unknown components")
-        exc["parameters"] = {**exc.get("parameters", {}), "values": values.tolist()}
-        exc["step"] = step
-        data["components"][comp] = {**data["components"][comp],
-                                    "inputs": {**data["components"][comp].get("inputs", {}), port: speed}}
-        data.pop("sweep", None)
-        rec, _ = simulate(parse_study(data, study.path))
+        run = base.with_values({"study.stop_time": study.study.start_time + n_per * cfg.period,
+                                "study.seed": int(rng.integers(2**31)),
+                                f"{cfg.excitation}.values": values.tolist(), f"{comp}.inputs.{port}": speed})
+        rec, _ = simulate(run)
         frame = rec.to_frame()
         every = int(round(step / study.study.base_step))
         frame = frame.iloc[::every].reset_index(drop=True).iloc[: n_per * N]
@@ -156,8 +152,8 @@ def simulate_experiment(study: Study, raw: dict[str, Any], cfg: IdentificationCo
 # measured logs
 
 def read_log(path: Path) -> pd.DataFrame:
-    """A canonical log with the columns identification needs (analysis.measured_log checks it)."""
-    return read_measured_log(path, CANONICAL)
+    """A canonical log with the columns identification needs (measurements.read_log checks it)."""
+    return read_measured_log(path, NEEDED)
 
 
 def detect_period(r: np.ndarray, min_samples: int = 8) -> int:

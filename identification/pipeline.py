@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from components.models import paper_models
 from components.models.yaw_dynamics import TractorParameters
 from orchestrator.results import write_json, write_table
 from orchestrator.study import Study
@@ -19,12 +20,9 @@ from .fitting import Fit, fit
 from .physical import rlfr_physical
 
 PAPER = {
-    "models": {"rlf": {"num": [292, 177], "den": [1, 11.6, 249, 150]},
-               "rlfr": {"num": [279, 335, 27860], "den": [1, 11.5, 347, 1311, 23340]},
-               "second_order": {"num": [291], "den": [1, 10.9, 242]}},
-    "rmse": {"second_order": {"0-2Hz": 0.0787, "0-8Hz": 0.0854}, "rlf": {"0-2Hz": 0.0787, "0-8Hz": 0.0854},
-             "rlfr": {"0-2Hz": 0.0793, "0-8Hz": 0.0860}},
-    "physical": {"C_f": 8000.0, "C_r": 90000.0, "sigma_f": 0.1942, "sigma_r": 1.6657},
+    "models": {name: {"num": list(tf.num), "den": list(tf.den)} for name, tf in paper_models.IDENTIFIED.items()},
+    "rmse": paper_models.VALIDATION_RMSE,
+    "physical": paper_models.PHYSICAL,
 }
 
 
@@ -100,9 +98,7 @@ def frf_summary(r: frf_mod.FRF) -> dict[str, Any]:
 def tractor_parameters(study: Study | None) -> TractorParameters:
     if study is None:
         return TractorParameters()
-    from analysis.speed_sweep import tractor_parameters as from_study
-
-    return from_study(study)
+    return TractorParameters.of(study.parameters(study.one(role="yaw_plant", purpose="identification")))
 
 
 def build_report(analyses: dict[float, dict], main_speed: float, validation: dict[str, Experiment],
@@ -132,19 +128,19 @@ def build_report(analyses: dict[float, dict], main_speed: float, validation: dic
             "speeds": per_speed, "paper": PAPER}
 
 
-def identify_study(study: Study, raw: dict[str, Any], out_dir: Path | None, plots: bool = True) -> dict[str, Any]:
+def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> dict[str, Any]:
     cfg: IdentificationConfig = config_of(study)
     seed = study.study.seed
     params = tractor_parameters(study)
     analyses, experiments = {}, {}
     for i, v in enumerate(cfg.speeds):
-        exp = simulate_experiment(study, raw, cfg, v, cfg.band, cfg.kind, cfg.realisations, cfg.periods, seed + 101 * i)
+        exp = simulate_experiment(study, cfg, v, cfg.band, cfg.kind, cfg.realisations, cfg.periods, seed + 101 * i)
         experiments[v] = exp
         analyses[v] = analyse(exp, cfg.models, cfg.delay, params)
     main = cfg.speeds[0]
     notes = []
     if cfg.detection_band is not None:
-        wide = simulate_experiment(study, raw, cfg, main, cfg.detection_band, cfg.kind,
+        wide = simulate_experiment(study, cfg, main, cfg.detection_band, cfg.kind,
                                    cfg.detection_realisations, cfg.periods, seed + 4099)
         wide_frf = frf_mod.analyse(wide.u, wide.y, wide.fs, wide.excited)
         analyses[main]["nonlinearity_wide"] = {
@@ -155,7 +151,7 @@ def identify_study(study: Study, raw: dict[str, Any], out_dir: Path | None, plot
     validation = {}
     for j, band in enumerate(cfg.validation_bands):
         validation[f"{band[0]:g}-{band[1]:g}Hz"] = simulate_experiment(
-            study, raw, cfg, main, band, "full", 1, cfg.validation_periods, seed + 7919 * (j + 1))
+            study, cfg, main, band, "full", 1, cfg.validation_periods, seed + 7919 * (j + 1))
     report = build_report(analyses, main, validation, params, notes, f"study {study.path}")
     if out_dir is not None:
         write_outputs(report, analyses, out_dir, plots)

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from .component import Component, ComponentError
-from .study import Connection, Study, StudyError
+from .study import SUBSYSTEM_SUFFIXES, ComponentSpec, Connection, Study, StudyError
 from .units import UnitError, same_unit, to_si
 
 
@@ -42,16 +42,31 @@ def _where(study: Study) -> str:
     return str(study.path) if study.path else "<study>"
 
 
-def resolve_type(type_name: str, package: str, where: str) -> type[Component]:
-    """``"module"`` -> ``<package>.module.COMPONENT``; ``"pkg.mod:Class"`` -> that class."""
+def resolve_type(type_name: str, package: str | None, where: str) -> type[Component]:
+    """``"name"`` -> ``<package>.name.COMPONENT`` (the study's package, then every registered
+    one); ``"pkg.mod:Class"`` -> that class."""
     if ":" in type_name:
         module_name, attr = type_name.split(":", 1)
+        candidates = [module_name]
     else:
-        module_name, attr = f"{package}.{type_name}", "COMPONENT"
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as exc:
-        raise StudyError(f"{where}: type {type_name!r}: cannot import module {module_name!r} ({exc})") from None
+        from .registry import registry
+
+        packages = ([package] if package else []) + registry().component_packages
+        if not packages:
+            raise StudyError(f"{where}: type {type_name!r}: no component package is registered (install the "
+                             f"project: pip install -e .) and study.component_package is not set")
+        candidates, attr = [f"{p}.{type_name}" for p in dict.fromkeys(packages)], "COMPONENT"
+    module = None
+    for module_name in candidates:
+        try:
+            module = importlib.import_module(module_name)
+            break
+        except ModuleNotFoundError as exc:
+            if exc.name is None or not module_name.startswith(exc.name):
+                raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
+    if module is None:
+        raise StudyError(f"{where}: type {type_name!r}: no such component type (looked for modules "
+                         f"{', '.join(repr(c) for c in candidates)})")
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
@@ -60,19 +75,47 @@ def resolve_type(type_name: str, package: str, where: str) -> type[Component]:
     return cls
 
 
-def _component_class(study: Study, name: str, type_name: str, where: str) -> type[Component]:
-    """A Python component type, or an FMU named by path (relative to the study file)."""
-    if not type_name.lower().endswith(".fmu"):
-        return resolve_type(type_name, study.study.component_package, where)
-    from .fmu import FMUError, fmu_component_class
+def component_class(study: Study, name: str, type_name: str | None) -> type[Component]:
+    """The class of component ``name``: a Python type, an FMU or a subsystem named by path
+    (relative to the study file), or an inline subsystem (``type_name`` None)."""
+    where = _where(study)
+    if type_name is None:
+        from .composite import composite_class, inline_subsystem
 
+        return composite_class(inline_subsystem(study, name), f"{where}: subsystems.{name}")
+    lowered = type_name.lower()
+    if not lowered.endswith(".fmu") and not lowered.endswith(SUBSYSTEM_SUFFIXES):
+        return resolve_type(type_name, study.study.component_package, where)
     path = Path(type_name)
     if not path.is_absolute() and study.path is not None:
         path = Path(study.path).parent / path
+    if lowered.endswith(SUBSYSTEM_SUFFIXES):
+        from .composite import composite_class
+
+        sub = Study.load(path)
+        return composite_class(sub, f"{where}: components.{name}.type")
+    from .fmu import FMUError, fmu_component_class
+
     try:
         return fmu_component_class(path)
     except FMUError as exc:
         raise StudyError(f"{where}: components.{name}.type: {exc}") from None
+
+
+def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
+    """The study's values of component ``name``'s parameters in SI (declared units); unknown
+    names and unit mismatches are refused with the field named."""
+    params = cls.declared("parameter")
+    converted: dict[str, Any] = {}
+    for key, value in values.items():
+        if key not in params:
+            raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
+                             f"{getattr(cls, 'type_name', cls.__name__)!r}; known: {', '.join(sorted(params))}")
+        try:
+            converted[key] = to_si(value, params[key].unit)
+        except UnitError as exc:
+            raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+    return converted
 
 
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
@@ -84,18 +127,10 @@ def build_system(study: Study) -> System:
     where = _where(study)
     base = study.study.base_step
     nodes: dict[str, Node] = {}
-    for name, spec in study.components.items():
-        cls = _component_class(study, name, spec.type, where)
-        params = cls.declared("parameter")
-        converted: dict[str, Any] = {}
-        for key, value in spec.parameters.items():
-            if key not in params:
-                raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
-                                 f"{spec.type!r}; known: {', '.join(sorted(params))}")
-            try:
-                converted[key] = to_si(value, params[key].unit)
-            except UnitError as exc:
-                raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+    specs = {**study.components, **{n: ComponentSpec(type="", step=s.step) for n, s in study.subsystems.items()}}
+    for name, spec in specs.items():
+        cls = study.component_class(name)
+        converted = resolved_parameters(cls, name, spec.parameters, where)
         try:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))
         except ComponentError as exc:

@@ -25,10 +25,11 @@ import numpy as np
 
 from .build import Node, System
 from .component import ComponentError
+from .errors import ComputationError
 from .realtime import RealTimePacer
 
 
-class RunError(Exception):
+class RunError(ComputationError):
     """A component failed mid-run; ``partial`` holds what was recorded before the failure."""
 
     def __init__(self, message: str, partial: "Recording") -> None:

@@ -8,10 +8,10 @@ kept per component and ``reset()`` between runs.
 Stepping semantics:
 - by default an FMU is *continuous*: ``doStep(t, dt)`` integrates with the inputs of t and its
   outputs describe t + dt (no direct feedthrough);
-- an FMU whose modelDescription carries the vendor annotation
-  ``<Tool name="agrobot"><Sampled/></Tool>`` is *sampled*: doStep computes its outputs from the
+- an FMU whose modelDescription carries a vendor annotation ``<Tool name="T"><Sampled/></Tool>``,
+  T a tool name a plugin registered (orchestrator.registry), is *sampled*: doStep computes its outputs from the
   inputs at t and they hold on [t, t + dt); feedthrough comes from ModelStructure's output
-  dependencies (the exported guidance controller is such an FMU).
+  dependencies (an exported controller is such an FMU).
 Only Real/Float64 variables become ports (others are ignored).
 """
 from __future__ import annotations
@@ -21,11 +21,9 @@ from pathlib import Path
 from typing import Any
 
 from .component import Component, ComponentError, Variable
+from .errors import InputError
 
-ANNOTATION_TOOL = "agrobot"
-
-
-class FMUError(Exception):
+class FMUError(InputError):
     """The file cannot be used as a co-simulation component (message names file and reason)."""
 
 
@@ -78,7 +76,9 @@ def _is_real(variable) -> bool:
 def _is_sampled(path: Path) -> bool:
     with zipfile.ZipFile(path) as zf:
         xml = zf.read("modelDescription.xml").decode("utf-8", "replace")
-    return f'<Tool name="{ANNOTATION_TOOL}">' in xml and "<Sampled" in xml
+    from .registry import registry
+
+    return "<Sampled" in xml and any(f'<Tool name="{tool}">' in xml for tool in registry().fmu_annotation_tools)
 
 
 def fmu_component_class(path: str | Path) -> type["FMUComponent"]:

@@ -9,12 +9,13 @@ from pathlib import Path
 from typing import Any
 
 from .build import build_system
+from .errors import ComputationError
 from .engine import Recording, RunError, Simulation
 from .results import atomic_write, write_json, write_table
 from .study import Study, StudyError
 
 
-class AnalysisError(Exception):
+class AnalysisError(ComputationError):
     """The study's analysis could not compute its metrics (the signals are kept)."""
 
 

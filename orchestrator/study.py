@@ -1,11 +1,27 @@
-"""Study files: declarative description of a co-simulation (TOML or YAML), validated with pydantic.
+"""Study files and the Study API: the one description of a co-simulation, and the one way to
+derive a variant of it.
 
-Layout::
+Layout of a study file (TOML or YAML, validated with pydantic)::
 
-    [study]            name, stop_time, base_step, seed, start_time, signals_format, analysis
-    [components.NAME]  type = "module" or "package.module:Class", step, parameters = {...},
-                       inputs = {...}   (constant values for inputs left unconnected)
+    extends = "other.toml"  (optional: start from that study, merge this file's tables over it)
+    [study]                 name, stop_time, base_step, seed, start_time, signals_format, analysis
+    [components.NAME]       type, step, parameters = {...}, inputs = {...} (constants for inputs
+                            left unconnected). ``type`` is a registered component type
+                            ("steering_hydraulics"), "package.module:Class", a path to an FMU
+                            (.fmu) or to another study used as a subsystem (.toml/.yaml)
+    [subsystems.NAME]       an inline subsystem, one component of this study: step, base_step,
+                            components, connections, exports
+    [exports]               the ports this study offers when another study uses it as a
+                            subsystem: inputs = {port = "comp.input" or [...]}, outputs = {port = "comp.output"}
     connections = ["src.output -> dst.input", ...]
+    [sweep]                 parameters to sweep (see orchestrator.sweep)
+    [TOOL]                  a table read by a tool that registered it (see orchestrator.registry)
+
+A ``Study`` is immutable in use: ``with_values``, ``with_component``, ``replace_component``,
+``without``, ``with_connections``, ``extract`` and ``collapse`` return new studies; ``to_toml``
+writes one back. Parameters keep the values as written ("8000 N/rad", "30 deg") until
+``parameters(name)`` resolves them to SI with the component's declared units, the one place
+where a unit string is parsed (``orchestrator.units``).
 """
 from __future__ import annotations
 
@@ -14,17 +30,22 @@ import math
 import re
 import tomllib
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Iterable, Literal, Mapping
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .errors import InputError
 
-class StudyError(Exception):
+
+class StudyError(InputError):
     """A study cannot be loaded or built; the message names the file and the field."""
 
 
-_CONNECTION = re.compile(r"^\s*([A-Za-z_][\w]*)\.([A-Za-z_][\w]*)\s*->\s*([A-Za-z_][\w]*)\.([A-Za-z_][\w]*)\s*$")
+_NAME = r"[A-Za-z_]\w*"
+_CONNECTION = re.compile(rf"^\s*({_NAME})\.({_NAME})\s*->\s*({_NAME})\.({_NAME})\s*$")
+_PORT = re.compile(rf"^\s*({_NAME})\.({_NAME})\s*$")
+SUBSYSTEM_SUFFIXES = (".toml", ".yaml", ".yml")
 
 
 class StudySettings(BaseModel):
@@ -36,7 +57,7 @@ class StudySettings(BaseModel):
     base_step: float = Field(gt=0)
     seed: int = Field(ge=0)
     signals_format: Literal["parquet", "csv"] = "parquet"
-    component_package: str = "components"
+    component_package: str | None = None   # look types up here first (default: registered packages)
     analysis: str | None = None
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
@@ -66,6 +87,92 @@ class Connection(BaseModel):
 
     def __str__(self) -> str:
         return f"{self.source}.{self.output} -> {self.target}.{self.input}"
+
+
+def _parse_connections(value: Any) -> Any:
+    if not isinstance(value, list):
+        raise ValueError("expected a list of strings 'component.output -> component.input'")
+    parsed = []
+    for i, item in enumerate(value):
+        if isinstance(item, str):
+            match = _CONNECTION.match(item)
+            if not match:
+                raise ValueError(f"item {i} {item!r}: expected 'component.output -> component.input'")
+            parsed.append(dict(zip(("source", "output", "target", "input"), match.groups())))
+        else:
+            parsed.append(item)
+    return parsed
+
+
+def _check_component_names(value: dict[str, Any]) -> dict[str, Any]:
+    for name in value:
+        if not re.fullmatch(_NAME, name):
+            raise ValueError(f"component name {name!r} must be an identifier")
+    return value
+
+
+class ExportedInput(BaseModel):
+    """An exported input written as a table: its inner targets (possibly none: a port the
+    subsystem accepts and ignores, to match another implementation's ports) and, for none, its
+    declaration."""
+
+    model_config = ConfigDict(extra="forbid")
+    targets: list[str] = []
+    unit: str | None = None
+    start: float = 0.0
+    description: str = ""
+
+    @model_validator(mode="after")
+    def _declared(self) -> "ExportedInput":
+        if not self.targets and self.unit is None:
+            raise ValueError("an exported input with no targets needs a 'unit'")
+        return self
+
+
+class Exports(BaseModel):
+    """Ports a study offers as a subsystem: exported name -> inner 'component.port'. An exported
+    input may drive several inner inputs (a list) or none (a table with ``unit``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    inputs: dict[str, str | list[str] | ExportedInput] = {}
+    outputs: dict[str, str] = {}
+    roles: list[str] = []          # what the subsystem is, for Study.find (Component.roles)
+
+    @model_validator(mode="after")
+    def _ports(self) -> "Exports":
+        for kind, table in (("inputs", self.inputs), ("outputs", self.outputs)):
+            for name, target in table.items():
+                if not re.fullmatch(_NAME, name):
+                    raise ValueError(f"{kind}.{name}: an exported port name must be an identifier")
+                items = target.targets if isinstance(target, ExportedInput) else \
+                    [target] if isinstance(target, str) else target
+                for item in items:
+                    if not _PORT.match(item):
+                        raise ValueError(f"{kind}.{name} = {item!r}: expected 'component.port'")
+        return self
+
+    def input_targets(self, name: str) -> list[tuple[str, str]]:
+        value = self.inputs[name]
+        items = value.targets if isinstance(value, ExportedInput) else [value] if isinstance(value, str) else value
+        return [_PORT.match(v).groups() for v in items]
+
+    def output_source(self, name: str) -> tuple[str, str]:
+        return _PORT.match(self.outputs[name]).groups()
+
+
+class SubsystemSpec(BaseModel):
+    """An inline subsystem: a component of the study that is itself a small study."""
+
+    model_config = ConfigDict(extra="forbid")
+    step: float | None = Field(default=None, gt=0)
+    base_step: float | None = Field(default=None, gt=0)   # default: the subsystem's step
+    description: str = ""
+    components: dict[str, ComponentSpec]
+    connections: list[Connection] = []
+    exports: Exports
+
+    _connections = field_validator("connections", mode="before")(classmethod(lambda cls, v: _parse_connections(v)))
+    _names = field_validator("components")(classmethod(lambda cls, v: _check_component_names(v)))
 
 
 class SweepRange(BaseModel):
@@ -107,7 +214,7 @@ class Sweep(BaseModel):
         if not value:
             raise ValueError("a sweep needs at least one parameter")
         for name, values in value.items():
-            if not re.fullmatch(r"[A-Za-z_]\w*\.[A-Za-z_]\w*", name):
+            if not re.fullmatch(rf"{_NAME}(\.{_NAME})+", name):
                 raise ValueError(f"{name!r}: expected 'component.parameter' or 'study.field'")
             if isinstance(values, list) and not values:
                 raise ValueError(f"{name!r}: empty list of values")
@@ -117,47 +224,282 @@ class Sweep(BaseModel):
         return {k: (v.values() if isinstance(v, SweepRange) else list(v)) for k, v in self.parameters.items()}
 
 
+_TABLES = ("study", "components", "connections", "sweep", "exports", "subsystems")
+
+
 class Study(BaseModel):
     model_config = ConfigDict(extra="forbid")
     study: StudySettings
-    components: dict[str, ComponentSpec]
+    components: dict[str, ComponentSpec] = {}
     connections: list[Connection] = []
     sweep: Sweep | None = None
-    identification: dict[str, Any] | None = None   # validated by the identification tool
+    exports: Exports | None = None
+    subsystems: dict[str, SubsystemSpec] = {}
+    sections: dict[str, dict[str, Any]] = {}    # tables of registered tools, e.g. [identification]
     path: Path | None = None
 
-    @field_validator("connections", mode="before")
+    @model_validator(mode="before")
     @classmethod
-    def _parse_connections(cls, value: Any) -> Any:
-        if not isinstance(value, list):
-            raise ValueError("expected a list of strings 'component.output -> component.input'")
-        parsed = []
-        for i, item in enumerate(value):
-            if isinstance(item, str):
-                match = _CONNECTION.match(item)
-                if not match:
-                    raise ValueError(f"item {i} {item!r}: expected 'component.output -> component.input'")
-                parsed.append(dict(zip(("source", "output", "target", "input"), match.groups())))
-            else:
-                parsed.append(item)
-        return parsed
+    def _tool_tables(cls, data: Any) -> Any:
+        """Top-level tables other than the orchestrator's go to ``sections`` when a tool
+        registered them; anything else is refused by name."""
+        if not isinstance(data, dict):
+            return data
+        from .registry import registry
+
+        data = dict(data)
+        sections = dict(data.pop("sections", {}) or {})
+        known = registry().sections
+        for key in [k for k in data if k not in _TABLES and k != "path"]:
+            if key not in known:
+                raise ValueError(f"unknown table {key!r}; a study has {', '.join(_TABLES)}"
+                                 + (f" or a tool's table ({', '.join(sorted(known))})" if known else ""))
+            value = data.pop(key)
+            if not isinstance(value, dict):
+                raise ValueError(f"{key}: expected a table")
+            sections[key] = value
+        data["sections"] = sections
+        return data
+
+    _connections = field_validator("connections", mode="before")(classmethod(lambda cls, v: _parse_connections(v)))
 
     @field_validator("components")
     @classmethod
     def _names(cls, value: dict[str, ComponentSpec]) -> dict[str, ComponentSpec]:
-        if not value:
+        return _check_component_names(value)
+
+    @model_validator(mode="after")
+    def _some_component(self) -> "Study":
+        if not self.components and not self.subsystems:
             raise ValueError("a study needs at least one component")
-        for name in value:
-            if not re.fullmatch(r"[A-Za-z_]\w*", name):
-                raise ValueError(f"component name {name!r} must be an identifier")
-        return value
+        both = sorted(set(self.components) & set(self.subsystems))
+        if both:
+            raise ValueError(f"{both}: a name is either a component or a subsystem, not both")
+        return self
+
+    # --- loading and writing ------------------------------------------------------------------
+    @classmethod
+    def load(cls, path: str | Path, overrides: Iterable[str] = ()) -> "Study":
+        """A study file (``extends`` resolved) with ``key=value`` overrides (``--set``; the value
+        is read as TOML, else as a string), validated once."""
+        data = read_study_file(path)
+        for item in overrides:
+            key, value = parse_override(item, path)
+            _set_value(data, key, value, f"{path}: override {item!r}")
+        return parse_study(data, path)
+
+    @property
+    def where(self) -> str:
+        return str(self.path) if self.path else "<study>"
+
+    def to_data(self) -> dict[str, Any]:
+        """The study as a study file holds it (values as written; tool tables at the top level)."""
+        data = self.model_dump(mode="python", exclude={"path", "sections"}, exclude_unset=True)
+        data.update(copy.deepcopy(self.sections))
+        if "connections" in data:
+            data["connections"] = [str(c) for c in self.connections]
+        for name, sub in self.subsystems.items():
+            if "connections" in data["subsystems"][name]:
+                data["subsystems"][name]["connections"] = [str(c) for c in sub.connections]
+        return data
+
+    def to_toml(self) -> str:
+        import tomli_w
+
+        data = self.to_data()
+        order = ["connections", "study"] + [k for k in data if k not in ("connections", "study")]
+        return tomli_w.dumps({k: data[k] for k in order if k in data}, multiline_strings=False)
+
+    def _derive(self, data: dict[str, Any]) -> "Study":
+        return parse_study(data, self.path if self.path is not None else "<study>")
+
+    # --- variants -----------------------------------------------------------------------------
+    def with_values(self, values: Mapping[str, Any]) -> "Study":
+        """Set values by dotted key: ``study.FIELD``, ``COMP.PARAM``, ``COMP.inputs.PORT``,
+        ``SUBSYSTEM.COMP.PARAM`` (an inline subsystem's component), ``TABLE.FIELD`` (a tool's table)."""
+        data = self.to_data()
+        for key, value in values.items():
+            _set_value(data, key, value, f"{self.where}: {key!r}")
+        return self._derive(data)
+
+    def with_component(self, name: str, **fields: Any) -> "Study":
+        """Add component ``name`` or update fields of it (``type``, ``step``; ``parameters`` and
+        ``inputs`` are merged into what it has)."""
+        data = self.to_data()
+        spec = data.setdefault("components", {}).setdefault(name, {})
+        for key, value in fields.items():
+            if key in ("parameters", "inputs") and isinstance(spec.get(key), dict):
+                spec[key] = {**spec[key], **value}
+            else:
+                spec[key] = value
+        return self._derive(data)
+
+    def replace_component(self, name: str, type: str, *, step: float | None = None,
+                          parameters: Mapping[str, Any] | None = None, keep_parameters: bool = False) -> "Study":
+        """Component ``name`` becomes a ``type`` (same name, so every connection stays)."""
+        if name not in self.components:
+            raise StudyError(f"{self.where}: components.{name}: no such component; known: {', '.join(sorted(self.components))}")
+        data = self.to_data()
+        old = data["components"][name]
+        new = {"type": type, "step": step if step is not None else old.get("step")}
+        new["parameters"] = {**(old.get("parameters", {}) if keep_parameters else {}), **(parameters or {})}
+        if old.get("inputs"):
+            new["inputs"] = old["inputs"]
+        data["components"][name] = {k: v for k, v in new.items() if v is not None}
+        return self._derive(data)
+
+    def without(self, *names: str) -> "Study":
+        """Drop components or subsystems (with every connection touching them) or whole tables
+        (``sweep``, ``exports``, a tool's table)."""
+        data = self.to_data()
+        gone = set()
+        for name in names:
+            if name in self.components or name in self.subsystems:
+                data.get("components", {}).pop(name, None)
+                data.get("subsystems", {}).pop(name, None)
+                gone.add(name)
+            elif name in data and name not in ("study", "components", "connections"):
+                data.pop(name)
+            else:
+                raise StudyError(f"{self.where}: without({name!r}): no such component or table")
+        data["connections"] = [str(c) for c in self.connections if c.source not in gone and c.target not in gone]
+        return self._derive(data)
+
+    def with_connections(self, add: Iterable[str] = (), remove: Iterable[str] = ()) -> "Study":
+        """Add connection strings, remove connections (given as strings, compared parsed)."""
+        drop = {str(Connection(**dict(zip(("source", "output", "target", "input"), _CONNECTION.match(r).groups()))))
+                for r in remove}
+        data = self.to_data()
+        data["connections"] = [str(c) for c in self.connections if str(c) not in drop] + list(add)
+        return self._derive(data)
+
+    # --- tool tables --------------------------------------------------------------------------
+    def section(self, name: str) -> dict[str, Any] | None:
+        """A registered tool's table, or None when the study has none."""
+        return self.sections.get(name)
+
+    # --- components: types, resolved parameters, lookup -------------------------------------
+    def component_class(self, name: str):
+        """The class behind component ``name`` (Python, FMU or subsystem)."""
+        from .build import component_class
+
+        if name in self.subsystems:
+            return component_class(self, name, None)
+        if name not in self.components:
+            raise StudyError(f"{self.where}: no component {name!r}; known: {', '.join(sorted(self.components))}")
+        return component_class(self, name, self.components[name].type)
+
+    def parameters(self, name: str) -> dict[str, Any]:
+        """Every parameter of component ``name`` in SI: declared defaults, then the study's values
+        converted with the declared units."""
+        from .build import resolved_parameters
+
+        cls = self.component_class(name)
+        spec = self.components.get(name)
+        return {**{k: v.start for k, v in cls.declared("parameter").items()},
+                **resolved_parameters(cls, name, spec.parameters if spec else {}, self.where)}
+
+    def find(self, *, role: str | None = None, type: type | str | None = None) -> list[str]:
+        """Names of the components that declare ``role`` (``Component.roles``) or are of ``type``
+        (a class, matched with isinstance semantics, or a type name as written in the study)."""
+        found = []
+        for name in list(self.components) + list(self.subsystems):
+            if isinstance(type, str):
+                if self.components.get(name) is None or self.components[name].type != type:
+                    continue
+                if role is None:
+                    found.append(name)
+                    continue
+            cls = self.component_class(name)
+            if type is not None and not isinstance(type, str) and not issubclass(cls, type):
+                continue
+            if role is not None and role not in getattr(cls, "roles", ()):
+                continue
+            found.append(name)
+        return found
+
+    def one(self, *, role: str | None = None, type: type | str | None = None, purpose: str = "") -> str:
+        """The single component with ``role`` / of ``type``; a StudyError names what was found."""
+        found = self.find(role=role, type=type)
+        if len(found) != 1:
+            what = f"role {role!r}" if role else f"type {getattr(type, '__name__', type)!r}"
+            raise StudyError(f"{self.where}: components: {purpose + ' needs' if purpose else 'expected'} exactly one "
+                             f"component with {what}, found {len(found)}" + (f" ({', '.join(found)})" if found else ""))
+        return found[0]
+
+    # --- subsystems: cut a group out, or fold it into one component -------------------------
+    def boundary(self, names: Iterable[str], port_name=lambda comp, port: f"{comp}_{port}"):
+        """The group's external wiring: (inputs, outputs, internal connections), where inputs maps an
+        exported port to [(comp, input)] and the outside signal feeding it (or None), outputs maps an
+        exported port to (comp, output) and the outside inputs it drives."""
+        group = set(names)
+        missing = sorted(group - set(self.components))
+        if missing:
+            raise StudyError(f"{self.where}: components {missing} not in the study")
+        inputs: dict[str, dict[str, Any]] = {}
+        outputs: dict[str, dict[str, Any]] = {}
+        internal = []
+        fed = {(c.target, c.input): c for c in self.connections}
+        for name in self.components:
+            if name not in group:
+                continue
+            cls = self.component_class(name)
+            for port in cls.declared("input"):
+                conn = fed.get((name, port))
+                if conn is not None and conn.source in group:
+                    continue
+                inputs[port_name(name, port)] = {"targets": [(name, port)],
+                                                 "source": (conn.source, conn.output) if conn else None}
+            for port in cls.declared("output"):
+                outputs[port_name(name, port)] = {"source": (name, port), "drives": []}
+        for c in self.connections:
+            if c.source in group and c.target in group:
+                internal.append(c)
+            elif c.source in group:
+                outputs[port_name(c.source, c.output)]["drives"].append((c.target, c.input))
+        return inputs, outputs, internal
+
+    def extract(self, names: Iterable[str], name: str | None = None,
+                port_name=lambda comp, port: f"{comp}_{port}") -> "Study":
+        """The group of components as a study of its own with ``exports``: every input not fed
+        inside the group and every output of the group, named by ``port_name``."""
+        names = list(names)
+        inputs, outputs, internal = self.boundary(names, port_name)
+        data = self.to_data()
+        steps = {self.components[n].step or self.study.base_step for n in names}
+        base = min(steps)
+        settings = {**data["study"], "name": name or f"{self.study.name}_subsystem", "base_step": base}
+        settings.pop("analysis", None)
+        settings.pop("realtime", None)
+        sub = {"study": settings,
+               "components": {n: data["components"][n] for n in names},
+               "connections": [str(c) for c in internal],
+               "exports": {"inputs": {p: f"{c}.{i}" for p, v in inputs.items() for c, i in v["targets"]},
+                           "outputs": {p: f"{c}.{o}" for p, v in outputs.items() for c, o in [v["source"]]}}}
+        return self._derive(sub)
+
+    def collapse(self, names: Iterable[str], into: str, type: str, step: float | None = None,
+                 port_name=lambda comp, port: f"{comp}_{port}", parameters: Mapping[str, Any] | None = None) -> "Study":
+        """This study with the group replaced by one component ``into`` of ``type`` whose ports are
+        the group's boundary ports (``port_name``); the outside wiring is kept."""
+        names = list(names)
+        inputs, outputs, _ = self.boundary(names, port_name)
+        add = [f"{v['source'][0]}.{v['source'][1]} -> {into}.{p}" for p, v in inputs.items() if v["source"]]
+        add += [f"{into}.{p} -> {t}.{i}" for p, v in outputs.items() for t, i in v["drives"]]
+        reduced = self.without(*names)
+        spec: dict[str, Any] = {"type": type}
+        if step is not None:
+            spec["step"] = step
+        if parameters:
+            spec["parameters"] = dict(parameters)
+        return reduced.with_component(into, **spec).with_connections(add=add)
 
 
 def _format_validation(path: Path, err: ValidationError) -> str:
     lines = [f"{path}: invalid study file"]
     for e in err.errors():
         loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
-        lines.append(f"  field {loc}: {e['msg']}")
+        lines.append(f"  field {loc}: {e['msg'].removeprefix('Value error, ')}")
     return "\n".join(lines)
 
 
@@ -222,33 +564,48 @@ def parse_study(data: dict[str, Any], path: str | Path = "<study>") -> Study:
     return study
 
 
-def load_raw(path: str | Path, overrides: list[str] | None = None) -> dict[str, Any]:
-    """The study file as data (``extends`` resolved), with ``component.parameter=value`` overrides."""
-    data = read_study_file(path)
-    for item in overrides or []:
-        apply_override(data, item, path)
-    return data
+def load_study(path: str | Path, overrides: Iterable[str] | None = None) -> Study:
+    """Load and validate a study file; ``overrides`` are ``key=value`` strings (``--set``)."""
+    return Study.load(path, overrides or ())
 
 
-def load_study(path: str | Path, overrides: list[str] | None = None) -> Study:
-    """Load and validate a study file; ``overrides`` are ``component.parameter=value`` strings."""
-    return parse_study(load_raw(path, overrides), path)
-
-
-def apply_override(data: dict[str, Any], item: str, path: str | Path) -> None:
-    """Set ``comp.param=value`` or ``study.field=value`` in raw study data (value parsed as TOML)."""
+def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
+    """``comp.param=value`` -> (key, value); the value is read as TOML, else kept as a string."""
     if "=" not in item or "." not in item.split("=", 1)[0]:
-        raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value'")
+        raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value' or 'study.field=value'")
     key, raw = item.split("=", 1)
-    section, field = key.strip().split(".", 1)
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
-    if section in ("study", "identification"):
-        data.setdefault(section, {})[field] = value
+    return key.strip(), value
+
+
+def _set_value(data: dict[str, Any], key: str, value: Any, where: str) -> None:
+    """Set one dotted key in study data (see ``Study.with_values``)."""
+    parts = key.split(".")
+    if len(parts) < 2 or not all(re.fullmatch(_NAME, p) for p in parts):
+        raise StudyError(f"{where}: expected 'component.parameter', 'component.inputs.port' or 'study.field'")
+    head, rest = parts[0], parts[1:]
+    if head == "study":
+        if len(rest) != 1:
+            raise StudyError(f"{where}: expected 'study.field'")
+        data.setdefault("study", {})[rest[0]] = value
         return
     comps = data.get("components", {})
-    if section not in comps:
-        raise StudyError(f"{path}: override {item!r}: no component {section!r}; known: {sorted(comps)}")
-    comps[section].setdefault("parameters", {})[field] = value
+    subs = data.get("subsystems", {})
+    if head in comps:
+        spec = comps[head]
+        if len(rest) == 2 and rest[0] == "inputs":
+            spec.setdefault("inputs", {})[rest[1]] = value
+        else:
+            spec.setdefault("parameters", {})[".".join(rest)] = value
+        return
+    if head in subs and len(rest) >= 2:
+        _set_value(subs[head], ".".join(rest), value, where)
+        return
+    if head not in _TABLES and isinstance(data.get(head), dict) and len(rest) == 1:
+        data[head][rest[0]] = value
+        return
+    known = sorted(comps) + sorted(subs)
+    raise StudyError(f"{where}: no component {head!r}; known: {', '.join(known)}")

@@ -12,7 +12,6 @@ Output folder::
 from __future__ import annotations
 
 import concurrent.futures as cf
-import copy
 import hashlib
 import importlib
 import io
@@ -30,7 +29,7 @@ import pandas as pd
 
 from .build import build_system
 from .results import atomic_write, write_json, write_table
-from .study import Study, StudyError, parse_study
+from .study import Study, StudyError
 
 
 @dataclass(frozen=True)
@@ -63,25 +62,15 @@ def expand(study: Study) -> list[Point]:
             for i, (combo, seed) in enumerate((c, s) for c in combos for s in seeds)]
 
 
-def point_data(raw: dict[str, Any], point: Point, where: str) -> dict[str, Any]:
-    """The raw study of one point: the sweep values set, its seed, no sweep section."""
-    data = copy.deepcopy(raw)
-    data.pop("sweep", None)
-    for name, value in point.values.items():
-        section, field = name.split(".", 1)
-        if section == "study":
-            data["study"][field] = value
-            continue
-        comps = data.get("components", {})
-        if section not in comps:
-            raise StudyError(f"{where}: sweep.parameters.'{name}': no component {section!r}; "
-                             f"known: {', '.join(sorted(comps))}")
-        comps[section].setdefault("parameters", {})[field] = value
-    data["study"]["seed"] = point.seed
-    return data
+def point_study(study: Study, point: Point) -> Study:
+    """The study of one point: the sweep values set, its seed, no sweep section."""
+    try:
+        return study.without("sweep").with_values({**point.values, "study.seed": point.seed})
+    except StudyError as exc:
+        raise StudyError(str(exc).replace(f"{study.where}: ", f"{study.where}: sweep.parameters.", 1)) from None
 
 
-def simulate_point(data: dict[str, Any], where: str) -> dict[str, Any]:
+def simulate_point(study: Study) -> dict[str, Any]:
     """Worker: run one point; never raises (a failure is a result)."""
     from .engine import RunError
     from .runner import AnalysisError, run_study
@@ -92,7 +81,7 @@ def simulate_point(data: dict[str, Any], where: str) -> dict[str, Any]:
         return buf.getvalue()
 
     try:
-        result = run_study(parse_study(data, where), None, plots=False)
+        result = run_study(study, None, plots=False)
         return {"status": "completed", "metrics": result.metrics, "signals": parquet_bytes(result.frame)}
     except RunError as exc:
         return {"status": "failed", "error": str(exc), "signals": parquet_bytes(exc.partial.to_frame())}
@@ -103,13 +92,13 @@ def simulate_point(data: dict[str, Any], where: str) -> dict[str, Any]:
                 "signals": None}
 
 
-def sweep_hash(raw: dict[str, Any]) -> str:
-    return hashlib.sha256(json.dumps(raw, sort_keys=True, default=str).encode()).hexdigest()[:16]
+def sweep_hash(study: Study) -> str:
+    return hashlib.sha256(json.dumps(study.to_data(), sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
 class SweepRun:
-    def __init__(self, study: Study, raw: dict[str, Any], out_dir: Path) -> None:
-        self.study, self.raw, self.out = study, raw, Path(out_dir)
+    def __init__(self, study: Study, out_dir: Path) -> None:
+        self.study, self.out = study, Path(out_dir)
         self.where = str(study.path)
         self.points = expand(study)
         self.fmt = study.study.signals_format
@@ -119,13 +108,12 @@ class SweepRun:
     def validate(self) -> None:
         """Build every point (types, parameters, units, wiring) before running any."""
         for point in self.points:
-            data = point_data(self.raw, point, self.where)
             try:
-                build_system(parse_study(data, self.where))
+                build_system(point_study(self.study, point))
             except StudyError as exc:
                 raise StudyError(f"{exc}\n  (sweep point {point.key}: {point.values}, seed {point.seed})") from None
         manifest = self.out / "sweep.json"
-        digest = sweep_hash(self.raw)
+        digest = sweep_hash(self.study)
         if manifest.exists():
             old = json.loads(manifest.read_text())
             if old.get("hash") != digest:
@@ -201,7 +189,7 @@ class SweepRun:
         return self.table()
 
     def _execute(self, todo: list[Point], workers: int, scheduler: str | None) -> Iterator[tuple[Point, dict]]:
-        jobs = [(p, point_data(self.raw, p, self.where)) for p in todo]
+        jobs = [(p, point_study(self.study, p)) for p in todo]
         if not jobs:
             return
         # one thread per point: parallelism comes from processes (BLAS threads spinning on tiny
@@ -211,7 +199,7 @@ class SweepRun:
         if scheduler is None:
             ctx = multiprocessing.get_context("spawn")
             with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-                futures = {pool.submit(simulate_point, data, self.where): p for p, data in jobs}
+                futures = {pool.submit(simulate_point, point): p for p, point in jobs}
                 try:
                     for fut in cf.as_completed(futures):
                         yield futures[fut], _result(fut)
@@ -219,7 +207,7 @@ class SweepRun:
                     pool.shutdown(wait=False, cancel_futures=True)
                     raise
             return
-        yield from _execute_dask(jobs, workers, scheduler, self.where)
+        yield from _execute_dask(jobs, workers, scheduler)
 
 
 def _result(fut) -> dict[str, Any]:
@@ -229,7 +217,7 @@ def _result(fut) -> dict[str, Any]:
         return {"status": "failed", "error": f"worker lost: {type(exc).__name__}: {exc}", "signals": None}
 
 
-def _execute_dask(jobs, workers: int, scheduler: str, where: str):
+def _execute_dask(jobs, workers: int, scheduler: str):
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
@@ -240,8 +228,8 @@ def _execute_dask(jobs, workers: int, scheduler: str, where: str):
     else:
         client = Client(scheduler)
     try:
-        futures = {client.submit(simulate_point, data, where, pure=False, key=f"{p.key}-{time.time_ns()}"): p
-                   for p, data in jobs}
+        futures = {client.submit(simulate_point, point, pure=False, key=f"{p.key}-{time.time_ns()}"): p
+                   for p, point in jobs}
         for fut in as_completed(futures):
             yield futures[fut], _result(fut)
     finally:

@@ -15,7 +15,7 @@ import pytest
 from orchestrator.build import build_system
 from orchestrator.engine import RunError, Simulation
 from orchestrator.runner import run_study
-from orchestrator.study import StudyError, load_raw, parse_study
+from orchestrator.study import Study, StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
@@ -258,8 +258,8 @@ def test_with_the_1_degree_potentiometer_any_1e12_difference_grows_the_same_way(
     from analysis.figure8 import metrics
 
     py, fmu, st = _python_and_fmu_runs(controller_fmu, [])
-    raw = load_raw(ROOT / "studies/figure8.toml", ["tracker.k_s=0.6000000000006"])
-    nudged = Simulation(build_system(parse_study(raw, ROOT / "studies/figure8.toml"))).run().to_frame()
+    nudged = Simulation(build_system(Study.load(ROOT / "studies/figure8.toml", ["tracker.k_s=0.6000000000006"])))\
+        .run().to_frame()
     d_fmu, d_nudge = _max_position_difference(py, fmu), _max_position_difference(py, nudged)
     assert d_nudge > 1e-3                       # sensitivity of the loop itself
     assert d_fmu < 5 * d_nudge
@@ -277,9 +277,8 @@ def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu):
 
     from fmu_export.controller import controller_design, controller_feeds
 
-    raw = load_raw(ROOT / "studies/figure8.toml", ["study.stop_time=30"])
-    st = parse_study(raw, ROOT / "studies/figure8.toml")
-    feeds = controller_feeds(raw, controller_design(st))
+    st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=30"])
+    feeds = controller_feeds(st, controller_design(st))
     assert len(feeds) == 11                                # every FMU input is driven by the study
     py = Simulation(build_system(st)).run().to_frame()
     samples = py.iloc[::5].reset_index(drop=True)          # the controllers' 20 Hz instants

@@ -24,7 +24,7 @@ from components.nmea_gps import NMEAGPS
 from components.nmea_server import NMEAServer
 from components.safety_watchdog import SafetyWatchdog
 from orchestrator.runner import simulate
-from orchestrator.study import load_raw, load_study, parse_study
+from orchestrator.study import load_study, parse_study
 
 ROOT = Path(__file__).resolve().parent.parent
 DATUM = (math.radians(50.8637), math.radians(4.6782), 60.0)
@@ -216,15 +216,15 @@ def test_realtime_mode_paces_against_the_wall_clock_and_counts_misses():
 # --- one study, simulated or on hardware -----------------------------------------------------
 
 def test_hil_study_differs_from_the_simulation_only_in_the_tractor_component():
-    sim = load_raw(ROOT / "studies" / "figure8_realtime.toml")
-    hil = load_raw(ROOT / "studies" / "figure8_hil.toml")
-    assert sim["connections"] == hil["connections"]
-    differ = {n for n in sim["components"] if sim["components"][n] != hil["components"][n]}
-    assert differ == {"tractor"} and set(sim["components"]) == set(hil["components"])
-    from components.hardware_tractor import HardwareTractor
-    from components.simulated_tractor import SimulatedTractor
+    sim = load_study(ROOT / "studies" / "figure8_realtime.toml")
+    hil = load_study(ROOT / "studies" / "figure8_hil.toml")
+    assert sim.connections == hil.connections
+    differ = {n for n in sim.components if sim.components[n] != hil.components[n]}
+    assert differ == {"tractor"} and set(sim.components) == set(hil.components)
+    assert sim.find(role="tractor") == hil.find(role="tractor") == ["tractor"]
     ports = lambda cls: {(v.name, v.causality, v.unit) for v in cls.variables if v.causality != "parameter"}
-    assert ports(HardwareTractor) == ports(SimulatedTractor)
+    simulated, hardware = sim.component_class("tractor"), hil.component_class("tractor")
+    assert simulated.sampled is False and ports(simulated) == ports(hardware)
 
 
 def _multicast_ok(port: int) -> bool:

@@ -13,18 +13,19 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from components.models.paper_models import G_2ND
 from components.models.yaw_dynamics import TractorParameters
 from identification import frf
 from identification.experiment import config_of, simulate_experiment
 from identification.fitting import fit
 from identification.multisine import MultisineDesign, crest_factor, realisation
 from identification.physical import MISPRINTS, appendix_as_printed, coefficients, rlfr_physical
-from orchestrator.study import load_raw, parse_study
+from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 P = TractorParameters()
 PAPER_RLFR = ([279, 335, 27860], [1, 11.5, 347, 1311, 23340])
-PAPER_G2ND = ([291.0], [1.0, 10.9, 242.0])
+PAPER_G2ND = (list(G_2ND.num), list(G_2ND.den))
 
 
 @pytest.mark.parametrize("v", [0.7, 2.0, 3.0])
@@ -143,11 +144,10 @@ def test_frf_variances_match_their_empirical_spread():
 
 
 def nl_experiment(deadband_v):
-    raw = load_raw(ROOT / "studies/identification.toml",
-                   [f"steering.deadband={deadband_v}", "steering.potentiometer_resolution=0.0",
-                    "gyro.noise_std=0.01", "identification.period=20.0", 'identification.rms="1 deg"'])
-    study = parse_study(raw, "nl.toml")
-    exp = simulate_experiment(study, raw, config_of(study), 2.0, (0.05, 2.0), "odd_odd", 2, 3, 1)
+    study = Study.load(ROOT / "studies/identification.toml",
+                       [f"steering.deadband={deadband_v}", "steering.potentiometer_resolution=0.0",
+                        "gyro.noise_std=0.01", "identification.period=20.0", 'identification.rms="1 deg"'])
+    exp = simulate_experiment(study, config_of(study), 2.0, (0.05, 2.0), "odd_odd", 2, 3, 1)
     return frf.analyse(exp.u, exp.y, exp.fs, exp.excited)
 
 

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from orchestrator.runner import run_study
-from orchestrator.study import StudyError, load_raw, load_study, parse_study
+from orchestrator.study import Study, StudyError, load_study
 from orchestrator.sweep import SweepRun, expand
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,8 +35,7 @@ def comparable(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def run_sweep(path, out, workers=2, scheduler=None, overrides=(SHORT,)):
-    raw = load_raw(path, list(overrides))
-    return SweepRun(parse_study(raw, path), raw, out).run(workers, scheduler, progress=False)
+    return SweepRun(Study.load(path, overrides), out).run(workers, scheduler, progress=False)
 
 
 def test_points_expand_as_grid_or_zip_with_seeds(tmp_path):

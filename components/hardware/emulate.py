@@ -3,13 +3,13 @@
 signals recorded so far are written either way."""
 from __future__ import annotations
 
+import argparse
 import signal
-import sys
 from pathlib import Path
 
 from orchestrator.engine import RunError
 from orchestrator.runner import run_study
-from orchestrator.study import StudyError, load_raw, parse_study
+from orchestrator.study import Study
 
 
 def _interrupt(signum, frame):          # SIGTERM ends the run like Ctrl-C: partial results are kept
@@ -17,21 +17,12 @@ def _interrupt(signum, frame):          # SIGTERM ends the run like Ctrl-C: part
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None) -> int:
-    raw = load_raw(study_path, overrides)
-    servers = [n for n, c in raw.get("components", {}).items() if str(c.get("type", "")).endswith("nmea_server")]
-    if len(servers) != 1:
-        print(f"error: {study_path}: components: emulate needs exactly one nmea_server component, found {servers}",
-              file=sys.stderr)
-        return 2
-    raw["components"][servers[0]].setdefault("parameters", {})["port"] = nmea_port
-    raw["study"]["realtime"] = True
+    study = Study.load(study_path, overrides)
+    server = study.one(role="nmea_server", purpose="emulate")
+    values = {f"{server}.port": nmea_port, "study.realtime": True}
     if duration is not None:
-        raw["study"]["stop_time"] = float(duration)
-    try:
-        study = parse_study(raw, study_path)
-    except StudyError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
+        values["study.stop_time"] = float(duration)
+    study = study.with_values(values)
     signal.signal(signal.SIGTERM, _interrupt)
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
@@ -40,8 +31,23 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     except RunError as exc:
         print(f"emulator stopped: {exc}" + (f"; signals so far in {out}" if out else ""), flush=True)
         return 0 if "interrupted" in str(exc) else 1
-    except StudyError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
     print(result.summary, flush=True)
     return 0
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from orchestrator.cli import add_set_option
+
+    p.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
+    p.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")
+    p.add_argument("--out", type=Path, default=None, help="write the emulated tractor's signals here")
+    p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
+    add_set_option(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration)
+
+
+def register(registry) -> None:
+    registry.add_command("emulate", "serve a simulated tractor in real time over NMEA/TCP and CAN", add_arguments, run)

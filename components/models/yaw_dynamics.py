@@ -41,6 +41,11 @@ class TractorParameters:
     sigma_f: float = 0.1942
     sigma_r: float = 1.6657
 
+    @classmethod
+    def of(cls, parameters) -> "TractorParameters":
+        """From a component's resolved parameters (SI; e.g. ``study.parameters(plant)``)."""
+        return cls(*(float(parameters[k]) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")))
+
 
 GRAVITY = 9.81
 

@@ -1,8 +1,8 @@
-"""Reading a measured log in the canonical format (DESIGN.md, 'Measured data').
+"""The measured log: one column table, one reader (DESIGN.md, 'Measured data').
 
-A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units:
-``delta_cmd``, ``delta`` [rad], ``v`` [m/s], ``yaw_rate`` [rad/s], ``x``, ``y`` [m]; more columns
-are allowed. Every refusal names the file, the column and what was expected.
+A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units
+(``COLUMNS``); more columns are allowed. Every refusal names the file, the column and what was
+expected. Identification, diagnosis and the tests read logs through ``read_log`` only.
 """
 from __future__ import annotations
 
@@ -12,14 +12,26 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-CANONICAL = ("t", "delta_cmd", "delta", "v", "yaw_rate", "x", "y")
+from orchestrator.errors import InputError
+
+# the canonical columns: name -> (SI unit, meaning)
+COLUMNS: dict[str, tuple[str, str]] = {
+    "t": ("s", "time"),
+    "delta_cmd": ("rad", "front wheel angle commanded to the steering"),
+    "delta": ("rad", "front wheel angle measured (potentiometer)"),
+    "v": ("m/s", "longitudinal speed"),
+    "yaw_rate": ("rad/s", "yaw rate (gyro)"),
+    "x": ("m", "GPS antenna east of the datum"),
+    "y": ("m", "GPS antenna north of the datum"),
+}
+CANONICAL = tuple(COLUMNS)
 
 # A column whose largest magnitude passes this bound is almost surely in degrees: no tractor
 # steers beyond 70 deg (1.22 rad) or yaws faster than 3 rad/s (172 deg/s).
 DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s")}
 
 
-class LogError(ValueError):
+class LogError(InputError, ValueError):
     """A log that cannot be used as it is."""
 
 
@@ -36,7 +48,8 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.Data
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
     missing = [c for c in required if c not in frame.columns]
     if missing:
-        raise LogError(f"{path}: missing columns {missing}; a log needs {list(required)} (SI units, radians)")
+        raise LogError(f"{path}: missing columns {missing}; a log needs "
+                       + ", ".join(f"{c} [{COLUMNS[c][0]}]" if c in COLUMNS else c for c in required))
     for c in required:
         if not pd.api.types.is_numeric_dtype(frame[c]):
             raise LogError(f"{path}: column {c!r} is not numeric (first value {frame[c].iloc[0]!r})")
@@ -67,3 +80,10 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.Data
                                f"degrees{'/s' if unit == 'rad/s' else ''}; the log must hold {unit} "
                                f"(multiply by pi/180 = {math.pi / 180:.6f})")
     return frame
+
+
+def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(first ``fraction`` of the duration, the rest): a fit part and a held-out part."""
+    t = frame["t"].to_numpy(dtype=float)
+    cut = t[0] + fraction * (t[-1] - t[0])
+    return frame[t < cut].reset_index(drop=True), frame[t >= cut].reset_index(drop=True)

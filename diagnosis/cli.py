@@ -1,0 +1,41 @@
+"""``diagnose``: the diagnosis tool's sub-command."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("log", type=Path, help="measured log (.csv/.parquet): t, delta_cmd, delta, v, yaw_rate, x, y")
+    p.add_argument("--study", type=Path, default=None, help="baseline study (default: studies/figure8.toml)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
+    p.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Exit 0 with a verdict (an effect or 'none'); 2 when the log or study cannot be used (the
+    verdict 'cannot decide' and the reason are still written)."""
+    from orchestrator.study import StudyError
+
+    from .pipeline import CANNOT_DECIDE, diagnose
+
+    if not 0.2 <= args.fit_fraction <= 0.8:
+        raise StudyError("--fit-fraction must be in [0.2, 0.8]")
+    result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots)
+    if result["verdict"] == CANNOT_DECIDE:
+        print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
+        return 2
+    print(f"verdict: {result['verdict']}")
+    for f in result["findings"][:3]:
+        print(f"  {f['effect']:26s} dBIC {f['evidence']['delta_bic']:9.1f}  held-out gain {100 * f['gain']:5.1f}%  "
+              + ", ".join(f"{k} = {v:.4g}" for k, v in f["params_display"].items()))
+    print(f"report: {args.out}/report.md" + (f", extended study: {args.out}/{result['extended_study']}"
+                                             if "extended_study" in result else ""))
+    return 0
+
+
+def register(registry) -> None:
+    registry.add_command("diagnose", "name what the simulation gets wrong about a measured log", add_arguments, run)

@@ -1,0 +1,32 @@
+"""``export-controller``: the FMU export tool's sub-command."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from orchestrator.cli import add_set_option
+
+    p.add_argument("study", type=Path, help="study holding the tracker, the yaw-rate MPC and the speed PID")
+    p.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
+    add_set_option(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from orchestrator.study import Study
+
+    from .controller import export_controller
+
+    out = export_controller(Study.load(args.study, args.set), args.out)
+    print(f"controller of {args.study} exported to {out}")
+    return 0
+
+
+def register(registry) -> None:
+    from .controller import ANNOTATION_TOOL
+
+    registry.add_fmu_annotation_tool(ANNOTATION_TOOL)     # the exported FMUs are sampled components
+    registry.add_command("export-controller",
+                         "export the study's guidance controller (tracker + MPC + speed PID) as an FMU",
+                         add_arguments, run)

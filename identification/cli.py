@@ -1,0 +1,47 @@
+"""``identify``: the identification tool's sub-command and its study table ([identification])."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from orchestrator.cli import add_set_option
+
+    p.add_argument("source", type=Path, help="study file (.toml/.yaml) or log (.csv/.parquet)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    add_set_option(p, "study only: override a parameter (or study.FIELD=VALUE); repeatable")
+    p.add_argument("--period", type=float, help="log: multisine period [s] (detected if not given)")
+    p.add_argument("--speed", type=float, help="log: speed [m/s] (median of v if not given)")
+    p.add_argument("--band", type=float, nargs=2, metavar=("F_MIN", "F_MAX"), help="log: lines to fit [Hz]")
+    p.add_argument("--models", nargs="+", help="log: structures to fit")
+    p.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
+
+
+def run(args: argparse.Namespace) -> int:
+    from orchestrator.errors import InputError
+    from orchestrator.study import Study, StudyError
+
+    from .pipeline import identify_log, identify_study, summary
+
+    try:
+        if args.source.suffix in (".toml", ".yaml", ".yml"):
+            report = identify_study(Study.load(args.source, args.set), args.out, plots=not args.no_plots)
+        else:
+            report = identify_log(args.source, args.out, args.period, args.speed,
+                                  tuple(args.band) if args.band else None, args.models, args.delay,
+                                  plots=not args.no_plots)
+    except ValueError as exc:      # e.g. an unknown model structure
+        if isinstance(exc, InputError):       # a LogError is both
+            raise
+        raise StudyError(f"{args.source}: {exc}") from None
+    print(summary(report))
+    print(f"\nwritten to {args.out}/identification.json")
+    return 0
+
+
+def register(registry) -> None:
+    registry.add_section("identification", "identification tool (python -m orchestrator identify)")
+    registry.add_command("identify", "identify the yaw dynamics from a study's experiment or a measured log",
+                         add_arguments, run)

@@ -1,0 +1,110 @@
+"""Command line: ``run`` and ``sweep`` are the orchestrator's; every other sub-command is
+registered by a tool (orchestrator.registry). Errors become exit codes and one-line messages
+through one table (orchestrator.errors)."""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from pathlib import Path
+
+from .errors import exit_code
+from .registry import registry
+
+PROG = "python -m orchestrator"
+
+
+def add_set_option(parser: argparse.ArgumentParser, help: str = "override a parameter (or study.FIELD=VALUE); repeatable") -> None:
+    """The ``--set COMP.PARAM=VALUE`` option every study-taking command shares."""
+    parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
+
+
+def _run_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
+    p.add_argument("--out", type=Path, required=True, help="output folder")
+    add_set_option(p)
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .engine import RunError
+    from .runner import AnalysisError, run_study
+    from .study import Study
+
+    study = Study.load(args.study, args.set)
+    try:
+        result = run_study(study, args.out, plots=not args.no_plots)
+    except AnalysisError as exc:
+        print(f"error: {exc}; the signals are in {args.out}", file=sys.stderr)
+        return 1
+    except RunError as exc:
+        print(f"error: run failed {exc}; results recorded so far are in {args.out}", file=sys.stderr)
+        return 1
+    print(result.summary)
+    print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
+    return 0
+
+
+def _sweep_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("study", type=Path, help="study file with a [sweep] section")
+    p.add_argument("--out", type=Path, required=True, help="output folder (rerun it to resume)")
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a Dask scheduler address, or 'local' to start a local Dask cluster")
+    add_set_option(p)
+    p.add_argument("--retry-failed", action="store_true", help="run failed points again")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-plots", action="store_true", help="skip the figures")
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from .study import Study, StudyError
+    from .sweep import SweepRun, sweep_plots
+
+    if args.workers < 1:
+        raise StudyError("--workers must be >= 1")
+    study = Study.load(args.study, args.set)
+    runner = SweepRun(study, args.out)
+    try:
+        table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
+              file=sys.stderr)
+        return 130
+    failed = int((table["status"] != "completed").sum())
+    files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
+    print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
+          + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
+    return 0 if failed == 0 else 1
+
+
+CORE = {"run": ("run a study file and write metrics, signals and plots", _run_arguments, _run),
+        "sweep": ("run every point of a study's [sweep] section", _sweep_arguments, _sweep)}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    invoked = Path(sys.argv[0]).name
+    parser = argparse.ArgumentParser(
+        prog=PROG if invoked in ("__main__.py", "-c", "") else invoked,
+        description="Run co-simulation studies and sweeps, and the tools the installed project registers.")
+    sub = parser.add_subparsers(dest="command", required=True)
+    commands = {**{k: v for k, v in CORE.items()},
+                **{c.name: (c.help, c.add_arguments, c.run) for c in registry().commands.values()}}
+    for name, (help, add_arguments, run) in commands.items():
+        p = sub.add_parser(name, help=help, description=help)
+        add_arguments(p)
+        p.set_defaults(handler=run)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except (Exception, KeyboardInterrupt) as exc:
+        known = exit_code(exc)
+        if known is None:
+            raise
+        code, message = known
+        print(message, file=sys.stderr)
+        return code

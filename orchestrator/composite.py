@@ -1,0 +1,179 @@
+"""Composite subsystems: a study used as one component of another (a Diagram inside a Diagram).
+
+A subsystem is a study with an ``[exports]`` table, named by path as a component's ``type``
+(``type = "tractor_side.toml"``, relative to the study file), or an inline ``[subsystems.NAME]``
+block. Its ports are the exported ones, with the units and start values the inner components
+declare; its parameters are the inner components' parameters, named ``component.parameter``.
+
+Semantics (the component contract, orchestrator.component):
+- if every inner component is sampled, the composite is *sampled*: ``step(t, dt)`` sets the inner
+  inputs and takes the inner instants of [t, t + dt); its feedthrough is the inner path from each
+  exported input to each exported output (connections plus inner feedthrough);
+- otherwise it is *continuous*: ``step(t, dt)`` holds the inputs of t and runs the inner engine
+  to t + dt; its outputs then describe t + dt.
+The inner study's seed is drawn from the composite's own random stream, its start time is the
+host's; ``dt`` must be a whole number of the inner base steps.
+"""
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from .build import System, build_system
+from .component import Component, ComponentError, Variable
+from .engine import RunError, Simulation
+from .study import ExportedInput, Study, StudyError, parse_study
+
+
+def inline_subsystem(study: Study, name: str) -> Study:
+    """The ``[subsystems.NAME]`` block of ``study`` as a study of its own."""
+    spec = study.subsystems[name]
+    s = study.study
+    base = spec.base_step or spec.step or s.base_step
+    data: dict[str, Any] = {
+        "study": {"name": f"{s.name}.{name}", "description": spec.description, "start_time": s.start_time,
+                  "stop_time": s.stop_time, "base_step": base, "seed": s.seed},
+        "components": {k: v.model_dump(exclude_unset=True) for k, v in spec.components.items()},
+        "connections": [str(c) for c in spec.connections],
+        "exports": spec.exports.model_dump(),
+    }
+    if s.component_package:
+        data["study"]["component_package"] = s.component_package
+    return parse_study(data, study.path if study.path is not None else "<study>")
+
+
+def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], dict[str, tuple[str, ...]]]:
+    """Port variables of the composite and, when it is sampled, its feedthrough."""
+    exports = sub.exports
+    variables: list[Variable] = []
+    unconnected = set(system.unconnected_inputs)
+    for port in exports.inputs:
+        targets = exports.input_targets(port)
+        units = set()
+        for comp, name in targets:
+            node = system.nodes.get(comp)
+            declared = node.component.declared("input") if node else {}
+            if name not in declared:
+                raise StudyError(f"{where}: exports.inputs.{port}: {comp}.{name} is not an input of the subsystem"
+                                 + (f"; {comp}'s inputs: {', '.join(sorted(declared))}" if node else
+                                    f"; components: {', '.join(sorted(system.nodes))}"))
+            if f"{comp}.{name}" not in unconnected:
+                raise StudyError(f"{where}: exports.inputs.{port}: {comp}.{name} is already driven inside the subsystem")
+            units.add(declared[name].unit.replace(" ", ""))
+        if len(units) > 1:
+            raise StudyError(f"{where}: exports.inputs.{port}: its targets differ in unit ({sorted(units)})")
+        table = exports.inputs[port]
+        if isinstance(table, ExportedInput) and table.unit is not None:
+            if units and table.unit.replace(" ", "") not in units:
+                raise StudyError(f"{where}: exports.inputs.{port}.unit: {table.unit!r}, but its targets take {sorted(units)}")
+            variables.append(Variable(port, "input", table.unit, table.start, table.description))
+            continue
+        first = system.nodes[targets[0][0]].component.declared("input")[targets[0][1]]
+        variables.append(Variable(port, "input", first.unit, first.start, first.description))
+    for port in exports.outputs:
+        comp, name = exports.output_source(port)
+        node = system.nodes.get(comp)
+        declared = node.component.declared("output") if node else {}
+        if name not in declared:
+            raise StudyError(f"{where}: exports.outputs.{port}: {comp}.{name} is not an output of the subsystem"
+                             + (f"; {comp}'s outputs: {', '.join(sorted(declared))}" if node else
+                                f"; components: {', '.join(sorted(system.nodes))}"))
+        v = declared[name]
+        variables.append(Variable(port, "output", v.unit, v.start, v.description))
+    for comp, node in system.nodes.items():
+        for v in node.component.declared("parameter").values():
+            variables.append(Variable(f"{comp}.{v.name}", "parameter", v.unit, None, f"{comp}: {v.description}"))
+    feedthrough: dict[str, tuple[str, ...]] = {}
+    if all(node.component.sampled for node in system.nodes.values()):
+        feedthrough = _inner_feedthrough(system, exports)
+    return variables, feedthrough
+
+
+def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
+    """Exported output -> exported inputs it reaches in the same instant: a path of connections
+    and inner direct feedthrough (every inner component is sampled)."""
+    edges: dict[tuple[str, str], set[tuple[str, str]]] = {}          # port -> ports it drives
+    for conn in system.connections:
+        edges.setdefault((conn.source, conn.output), set()).add((conn.target, conn.input))
+    for name, node in system.nodes.items():
+        for out_name, deps in node.component.feedthrough.items():
+            for d in deps:
+                edges.setdefault((name, d), set()).add((name, out_name))
+    reach: dict[str, set[tuple[str, str]]] = {}
+    for port in exports.inputs:
+        seen, todo = set(), list(exports.input_targets(port))
+        while todo:
+            p = todo.pop()
+            if p not in seen:
+                seen.add(p)
+                todo.extend(edges.get(p, ()))
+        reach[port] = seen
+    return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
+
+
+def composite_class(sub: Study, where: str) -> type["CompositeComponent"]:
+    """A Component class whose ports are ``sub``'s exports (built once to check them)."""
+    if sub.exports is None:
+        raise StudyError(f"{where}: {sub.where} has no [exports] table; a study used as a subsystem declares "
+                         f"the ports it offers: [exports] inputs = {{port = \"component.input\"}}, "
+                         f"outputs = {{port = \"component.output\"}}")
+    try:
+        system = build_system(sub)
+    except StudyError as exc:
+        raise StudyError(f"{where}: in the subsystem: {exc}") from None
+    variables, feedthrough = _exported(system, sub, sub.where)
+    sampled = all(node.component.sampled for node in system.nodes.values())
+    attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": sampled,
+             "subsystem": sub, "type_name": sub.where, "roles": tuple(sub.exports.roles)}
+    return type(f"Subsystem_{sub.study.name.replace('.', '_')}", (CompositeComponent,), attrs)
+
+
+class CompositeComponent(Component):
+    """One instance of a subsystem: its own engine, stepped inside this component's step."""
+
+    subsystem: ClassVar[Study]
+    type_name: ClassVar[str]
+
+    def initialize(self, t0: float, dt: float) -> None:
+        seed = int(self.rng.integers(0, 2**31 - 1))
+        values = {"study.seed": seed, "study.start_time": t0,
+                  **{k: v for k, v in self.p.items() if v is not None}}
+        try:
+            sub = self.subsystem.with_values(values)
+            system = build_system(sub)
+        except StudyError as exc:
+            raise ComponentError(f"{self.name}: subsystem: {exc}") from None
+        h = sub.study.base_step
+        self.substeps = int(round(dt / h))
+        self.require(self.substeps >= 1 and abs(self.substeps * h - dt) < 1e-9,
+                     f"step {dt} s must be a multiple of the subsystem's base step {h} s")
+        ex = sub.exports
+        self._inputs = [(port, [(system.nodes[c].component.u, n) for c, n in ex.input_targets(port)])
+                        for port in ex.inputs]
+        self._outputs = [(port, system.nodes[c].component, n) for port in ex.outputs
+                         for c, n in [ex.output_source(port)]]
+        self.system = system
+        self.sim = Simulation(system, record=False)
+        self.sim.start()
+        self._publish()
+
+    def _publish(self) -> None:
+        y = self.y
+        for port, comp, name in self._outputs:
+            y[port] = comp.y[name]
+
+    def step(self, t: float, dt: float) -> None:
+        u = self.u
+        for port, targets in self._inputs:
+            for inner_u, name in targets:
+                inner_u[name] = u[port]
+        try:
+            self.sim.advance(self.sim.k + self.substeps)
+        except RunError as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):
+                raise KeyboardInterrupt from None
+            raise ComponentError(f"{self.name}: in the subsystem {exc}") from None
+        self._publish()
+
+    def terminate(self) -> None:
+        if getattr(self, "sim", None) is not None:
+            self.sim.terminate()

@@ -1,0 +1,66 @@
+"""What the orchestrator learns from the project it serves, through entry points.
+
+A project declares plugins in its ``pyproject.toml``::
+
+    [project.entry-points."orchestrator.plugins"]
+    components = "components:register"        # a callable taking the Registry
+
+Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
+``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
+top-level study tables it reads (``[identification]``), FMU vendor annotations it understands.
+The orchestrator itself names no package, table or tool of any project.
+"""
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import Callable
+
+GROUP = "orchestrator.plugins"
+
+
+@dataclass
+class Command:
+    name: str
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+@dataclass
+class Registry:
+    component_packages: list[str] = field(default_factory=list)
+    commands: dict[str, Command] = field(default_factory=dict)
+    sections: dict[str, str] = field(default_factory=dict)        # study table -> what reads it
+    fmu_annotation_tools: list[str] = field(default_factory=list)  # <Tool name=...><Sampled/> readers
+    loaded: list[str] = field(default_factory=list)
+
+    def add_component_package(self, package: str) -> None:
+        if package not in self.component_packages:
+            self.component_packages.append(package)
+
+    def add_command(self, name: str, help: str, add_arguments, run) -> None:
+        self.commands[name] = Command(name, help, add_arguments, run)
+
+    def add_section(self, name: str, reader: str) -> None:
+        self.sections[name] = reader
+
+    def add_fmu_annotation_tool(self, tool: str) -> None:
+        if tool not in self.fmu_annotation_tools:
+            self.fmu_annotation_tools.append(tool)
+
+
+_REGISTRY: Registry | None = None
+
+
+def registry() -> Registry:
+    """The registry, filled once from the installed plugins."""
+    global _REGISTRY
+    if _REGISTRY is None:
+        reg = Registry()
+        for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
+            ep.load()(reg)
+            reg.loaded.append(ep.name)
+        _REGISTRY = reg
+    return _REGISTRY
