@@ -1,8 +1,8 @@
 """How often the diagnosis names a hidden effect: ``python3 benchmarks/diagnosis_rate.py [--seeds N]``.
 
-For each catalogue effect (and for none), N logs from tests/field_truth.py with seeds 1000.. are
+For each catalogue effect (and for none), N logs from measurements/truth_tractor.py with seeds 1000.. are
 diagnosed; a log counts as right when the verdict names the hidden effect and (for an effect) its
-headline parameter is within the tolerance stated in field_truth.recovered. Prints one table.
+headline parameter is within the tolerance stated in diagnosis.hidden_effects.recovered. Prints one table.
 Stress: ``--scale-truth sigma_f=2`` moves the truth model further from the baseline;
 ``--effects none side_slope`` picks the hidden effects.
 """
@@ -10,18 +10,16 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 
 def score(run: dict) -> tuple:
     """(effect, named, named with the parameter in tolerance, held-out gain, verdict)."""
-    from tests.field_truth import recovered
+    from diagnosis.hidden_effects import recovered
 
     effect, res = run["effect"], run["result"]
     named = res["verdict"] == effect
@@ -41,7 +39,7 @@ def main() -> None:
                     help="stress: multiply a truth-model parameter (m, I, l_f, l_r, C_f, C_r, sigma_f)")
     ap.add_argument("--effects", nargs="+", default=None, help="only these hidden effects ('none' for none)")
     args = ap.parse_args()
-    from tests.field_truth import EFFECTS, diagnose_many
+    from diagnosis.hidden_effects import EFFECTS, diagnose_many
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:

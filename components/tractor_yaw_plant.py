@@ -33,7 +33,7 @@ import numpy as np
 from orchestrator.component import Component, inp, out, par
 
 from .models.paper_models import G_2ND
-from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical,
+from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, body_to_world, controllable_canonical,
                                   cornering_scale, lateral_disturbance_column,
                                   slope_lateral_acceleration, state_space, with_cornering_scale,
                                   zoh_discretize)
@@ -149,11 +149,10 @@ class TractorYawPlant(Component):
         v_lat_rear = v_y - lr * gamma
         y["vel_east_rear"] = v * c - v_lat_rear * s
         y["vel_north_rear"] = v * s + v_lat_rear * c
-        af, al = self.p["antenna_forward"], self.p["antenna_left"]
-        y["x_antenna"] = y["x_rear"] + af * c - al * s
-        y["y_antenna"] = y["y_rear"] + af * s + al * c
-        y["vel_east_antenna"] = y["vel_east_rear"] - gamma * (af * s + al * c)
-        y["vel_north_antenna"] = y["vel_north_rear"] + gamma * (af * c - al * s)
+        dx, dy = body_to_world(self.p["antenna_forward"], self.p["antenna_left"], c, s)
+        y["x_antenna"], y["y_antenna"] = y["x_rear"] + dx, y["y_rear"] + dy
+        y["vel_east_antenna"] = y["vel_east_rear"] - gamma * dy
+        y["vel_north_antenna"] = y["vel_north_rear"] + gamma * dx
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])

@@ -19,46 +19,33 @@ DEFAULT_STUDY = Path(__file__).resolve().parent.parent / "studies" / "figure8.to
 CANNOT_DECIDE = "cannot decide"
 
 
-def _params_display(finding: Finding) -> dict[str, float]:
-    v = finding.fit.values
-    if finding.effect.id == "side_slope":
-        from .catalogue import slope_angle_and_heading
-
-        phi, psi_d = slope_angle_and_heading(v)
-        return {"slope_angle [deg]": math.degrees(phi), "slope_downhill_heading [deg]": math.degrees(psi_d)}
-    return {f"{p.name} [{p.display_unit or p.unit}]": v[p.name] * p.display_factor for p in finding.effect.parameters}
-
-
-def _study_options(finding: Finding, baseline, study) -> list[tuple[str, str, float]]:
-    """(component, parameter, value) in the study; the GPS latency is rounded to the GPS step."""
+def _study_options(finding: Finding, baseline) -> list[tuple[str, str, float]]:
+    """(component, parameter, SI value) that switch the finding's effect on in the study."""
     out = []
-    for role, name, value in finding.effect.options(finding.fit.values, baseline.values):
+    for role, name, value in finding.effect.options(finding.fit.values, baseline.values, baseline.study):
         comp = baseline.components.get(role)
         if comp is None:
             raise KeyError(role)
-        if role == "gps" and name == "latency":
-            step = study.components[comp].step or study.study.base_step
-            value = round(value / step) * step
         out.append((comp, name, float(value)))
     return out
 
 
-def _finding_json(f: Finding, baseline, study) -> dict:
+def _finding_json(f: Finding, baseline) -> dict:
     try:
-        options = _study_options(f, baseline, study)
+        options = _study_options(f, baseline)
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
     except KeyError as missing:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
     signals = ", ".join(f"{k} {f.rmse_before[k]:.4g} -> {f.rmse_after[k]:.4g} {SIGNALS[s][1]}"
                         for s in f.effect.stages for k in [SIGNALS[s][0]])
-    params = ", ".join(f"{k} = {v:.4g}" for k, v in _params_display(f).items())
+    params = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     summary = (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {params}; "
                f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}.")
     return {
         "effect": f.effect.id,
         "subsystem": f.effect.subsystem,
         "params": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
-        "params_display": _params_display(f),
+        "params_display": f.effect.display(f.fit.values),
         "rmse_before": f.rmse_before,
         "rmse_after": f.rmse_after,
         "gain": f.gain,
@@ -102,7 +89,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["baseline_refit"] = {k: base.values[k] for k in ("steering_time_constant", "cornering_front_scale",
                                                            "cornering_rear_scale")}
     result["noise_level"] = {SIGNALS[s][0]: sigma[s] for s in STAGES}
-    items = [_finding_json(f, baseline, study) for f in findings]
+    items = [_finding_json(f, baseline) for f in findings]
     winner = items[0] if findings[0].supported else None
     result["verdict"] = winner["effect"] if winner else "none"
     result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in STAGES}
@@ -122,12 +109,9 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["findings"] = items
     if winner and options:
         result["extended_study"] = "extended_study.toml"
-        text = [f"# {winner['effect']} found by `python -m orchestrator diagnose {log_path}`",
-                f'extends = "{Path(study_path).resolve().as_posix()}"', ""]
-        for comp in dict.fromkeys(c for c, _, _ in options):
-            text += [f"[components.{comp}.parameters]"]
-            text += [f"{name} = {value!r}" for c, name, value in options if c == comp] + [""]
-        atomic_write(out / "extended_study.toml", lambda p: p.write_text("\n".join(text)))
+        text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
+                                    f"{winner['effect']} found by `python -m orchestrator diagnose {log_path}`")
+        atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
     return result
 

@@ -1,6 +1,6 @@
 """Replaying a log through the baseline model, one subsystem at a time (issue 6, step 1).
 
-- steering: delta_cmd -> delta (the closed-loop first-order equivalent of diagnosis.baseline);
+- steering: delta_cmd -> delta (the closed-loop first-order equivalent, components.models.steering_equivalent);
 - yaw: measured delta and speed -> yaw rate (the study's LPV yaw model);
 - position: measured yaw rate and speed -> antenna track, dead-reckoned and aligned to the GPS
   track window by window (a rigid 2-D fit per window removes the unknown start pose).
@@ -16,43 +16,16 @@ from typing import Mapping
 
 import numpy as np
 
-from components.models.yaw_dynamics import (TractorParameters, cornering_scale, lateral_disturbance_column,
+from components.models import steering_equivalent
+from components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, with_cornering_scale, zoh_discretize)
 
 
-def delayed_command(cmd: np.ndarray, h: float, delay: float) -> np.ndarray:
-    """Mean over [t_k, t_k + h) of the held command delayed by ``delay``:
-    (1 - f) cmd[k - n] + f cmd[k - n - 1] with delay = (n + f) h."""
-    n = int(math.floor(delay / h + 1e-12))
-    f = delay / h - n
-    k = np.arange(len(cmd))
-    a = cmd[np.clip(k - n, 0, None)]
-    if f <= 1e-12:
-        return a
-    return (1.0 - f) * a + f * cmd[np.clip(k - n - 1, 0, None)]
-
-
 def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float) -> np.ndarray:
-    """delta[k+1] = delta[k] + clip(alpha dz(c[k] - delta[k], D), -r h, r h), alpha = 1 - exp(-h/tau):
-    the exact step of ddelta/dt = dz(c - delta, D)/tau away from the limits."""
-    c = delayed_command(np.asarray(cmd, float), h, v["command_delay"]).tolist()
-    alpha = 1.0 - math.exp(-h / max(v["steering_time_constant"], 1e-4))
-    dead = v["steering_deadband"]
-    move_max = v["steering_rate_limit"] * h
-    out = [0.0] * len(c)
-    d = float(delta0)
-    for k, ck in enumerate(c):
-        out[k] = d
-        e = ck - d
-        if e > dead:
-            e -= dead
-        elif e < -dead:
-            e += dead
-        else:
-            continue
-        m = alpha * e
-        d += move_max if m > move_max else (-move_max if m < -move_max else m)
-    return np.asarray(out)
+    """The steering's first-order equivalent (components.models.steering_equivalent) with the
+    replay's values."""
+    return steering_equivalent.simulate(cmd, h, v["steering_time_constant"], v["steering_deadband"],
+                                        v["steering_rate_limit"], v["command_delay"], delta0)
 
 
 def midpoints(x: np.ndarray) -> np.ndarray:
@@ -132,9 +105,8 @@ def antenna_track(t: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray, v: Map
     v_mid = 0.5 * (speed[1:] + speed[:-1])
     x = np.concatenate([[0.0], np.cumsum(h * v_mid * np.cos(psi_mid))])
     y = np.concatenate([[0.0], np.cumsum(h * v_mid * np.sin(psi_mid))])
-    af, al = v["antenna_forward"], v["antenna_left"]
-    c, s = np.cos(psi), np.sin(psi)
-    ax, ay = x + af * c - al * s, y + af * s + al * c
+    dx, dy = body_to_world(v["antenna_forward"], v["antenna_left"], np.cos(psi), np.sin(psi))
+    ax, ay = x + dx, y + dy
     lat = v["gps_latency"]
     if lat:
         ax, ay = np.interp(t - lat, t, ax), np.interp(t - lat, t, ay)

@@ -65,8 +65,8 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
             if exc.name is None or not module_name.startswith(exc.name):
                 raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
     if module is None:
-        raise StudyError(f"{where}: type {type_name!r}: no such component type (looked for modules "
-                         f"{', '.join(repr(c) for c in candidates)})")
+        raise StudyError(f"{where}: type {type_name!r}: no such component type: cannot import "
+                         f"{' or '.join(repr(c) for c in candidates)}")
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
@@ -85,7 +85,7 @@ def component_class(study: Study, name: str, type_name: str | None) -> type[Comp
         return composite_class(inline_subsystem(study, name), f"{where}: subsystems.{name}")
     lowered = type_name.lower()
     if not lowered.endswith(".fmu") and not lowered.endswith(SUBSYSTEM_SUFFIXES):
-        return resolve_type(type_name, study.study.component_package, where)
+        return resolve_type(type_name, study.study.component_package, f"{where}: components.{name}")
     path = Path(type_name)
     if not path.is_absolute() and study.path is not None:
         path = Path(study.path).parent / path

@@ -1,7 +1,7 @@
 """Composite subsystems: a study used as one component of another (a Diagram inside a Diagram).
 
 A subsystem is a study with an ``[exports]`` table, named by path as a component's ``type``
-(``type = "tractor_side.toml"``, relative to the study file), or an inline ``[subsystems.NAME]``
+(``type = "plant_side.toml"``, relative to the study file), or an inline ``[subsystems.NAME]``
 block. Its ports are the exported ones, with the units and start values the inner components
 declare; its parameters are the inner components' parameters, named ``component.parameter``.
 

@@ -7,7 +7,7 @@ A project declares plugins in its ``pyproject.toml``::
 
 Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
 ``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
-top-level study tables it reads (``[identification]``), FMU vendor annotations it understands.
+top-level study tables it reads (``[my_tool]``), FMU vendor annotations it understands.
 The orchestrator itself names no package, table or tool of any project.
 """
 from __future__ import annotations

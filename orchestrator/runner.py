@@ -94,7 +94,7 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResu
     if out_dir is not None:
         files.append(write_json(out_dir / "metrics.json", metrics))
         files.append(write_json(out_dir / "run.json", {
-            "study": study.model_dump(mode="json", exclude={"path"}),
+            "study": study.to_data(),
             "unconnected_inputs": system.unconnected_inputs,
             "order_sampled": [n.name for n in system.sampled_order],
         }))

@@ -7,7 +7,7 @@ Layout of a study file (TOML or YAML, validated with pydantic)::
     [study]                 name, stop_time, base_step, seed, start_time, signals_format, analysis
     [components.NAME]       type, step, parameters = {...}, inputs = {...} (constants for inputs
                             left unconnected). ``type`` is a registered component type
-                            ("steering_hydraulics"), "package.module:Class", a path to an FMU
+                            ("first_order_lag"), "package.module:Class", a path to an FMU
                             (.fmu) or to another study used as a subsystem (.toml/.yaml)
     [subsystems.NAME]       an inline subsystem, one component of this study: step, base_step,
                             components, connections, exports
@@ -235,7 +235,7 @@ class Study(BaseModel):
     sweep: Sweep | None = None
     exports: Exports | None = None
     subsystems: dict[str, SubsystemSpec] = {}
-    sections: dict[str, dict[str, Any]] = {}    # tables of registered tools, e.g. [identification]
+    sections: dict[str, dict[str, Any]] = {}    # tables of registered tools ([my_tool])
     path: Path | None = None
 
     @model_validator(mode="before")
@@ -309,6 +309,30 @@ class Study(BaseModel):
         data = self.to_data()
         order = ["connections", "study"] + [k for k in data if k not in ("connections", "study")]
         return tomli_w.dumps({k: data[k] for k in order if k in data}, multiline_strings=False)
+
+    def extension_toml(self, values: Mapping[str, Any], comment: str = "") -> str:
+        """A study file that is this study with ``values`` set (keys as in ``with_values``): a
+        small file that ``extends`` the study file when this study is what its file says, else the
+        whole study written out."""
+        header = "".join(f"# {line}\n" for line in comment.splitlines())
+        extended = self.with_values(values)
+        try:
+            pristine = self.path is not None and \
+                parse_study(read_study_file(self.path), self.path).to_data() == self.to_data()
+        except StudyError:
+            pristine = False
+        if not pristine:
+            return header + extended.to_toml()
+        import tomli_w
+
+        overlay: dict[str, Any] = {"extends": Path(self.path).resolve().as_posix()}
+        skeleton = {"components": {n: {} for n in self.components}, "subsystems": {n: {"components": {
+            c: {} for c in s.components}} for n, s in self.subsystems.items()}, "study": {},
+            **{k: {} for k in self.sections}}
+        for key, value in values.items():
+            _set_value(skeleton, key, value, f"{self.where}: {key!r}")
+        overlay.update(_pruned(skeleton))
+        return header + tomli_w.dumps(overlay)
 
     def _derive(self, data: dict[str, Any]) -> "Study":
         return parse_study(data, self.path if self.path is not None else "<study>")
@@ -493,6 +517,18 @@ class Study(BaseModel):
         if parameters:
             spec["parameters"] = dict(parameters)
         return reduced.with_component(into, **spec).with_connections(add=add)
+
+
+def _pruned(table: dict[str, Any]) -> dict[str, Any]:
+    """The table without empty sub-tables (recursively)."""
+    out = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            value = _pruned(value)
+            if not value:
+                continue
+        out[key] = value
+    return out
 
 
 def _format_validation(path: Path, err: ValidationError) -> str:

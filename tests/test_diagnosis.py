@@ -1,6 +1,6 @@
 """Issue 6: the diagnosis names an effect hidden in logs it has never seen.
 
-The logs come from tests/field_truth.py (the paper's equations in scalar form, Heun at 200 Hz, its
+The logs come from measurements/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
 own steering loop with an unmodelled spool lag, parameters drawn around the paper's, its own
 sensor noise); the effect and its size are drawn there and compared here only.
 """
@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.field_truth import EFFECTS, diagnose_many, make_log, recovered
+from diagnosis.hidden_effects import EFFECTS, diagnose_many, recovered
+from measurements.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180

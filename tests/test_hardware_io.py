@@ -209,7 +209,7 @@ def test_realtime_mode_paces_against_the_wall_clock_and_counts_misses():
     assert rec.realtime["jitter_ms"]["p50"] < 2.0
     slow, _ = simulate(parse_study(_toy_study(0.03)))           # 30 ms sleep every 10th 10 ms step
     assert slow.realtime["deadline_misses"] >= 9 and slow.realtime["jitter_ms"]["max"] >= 15.0
-    fast, _ = simulate(parse_study({**_toy_study(0.0), "study": {**_toy_study(0.0)["study"], "realtime": False}}))
+    fast, _ = simulate(parse_study(_toy_study(0.0)).with_values({"study.realtime": False}))
     assert fast.realtime is None
 
 

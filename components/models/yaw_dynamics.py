@@ -50,6 +50,12 @@ class TractorParameters:
 GRAVITY = 9.81
 
 
+def body_to_world(forward, left, cos_psi, sin_psi):
+    """A body-frame offset (forward, left) in east/north at heading psi: the lever arm of a point
+    (the GPS antenna) on the tractor, (f cos psi - l sin psi, f sin psi + l cos psi)."""
+    return forward * cos_psi - left * sin_psi, forward * sin_psi + left * cos_psi
+
+
 def cornering_scale(v_x: float, slope: float, reference_speed: float) -> float:
     """c(v) = max(0.2, 1 + slope (v_x - v_ref)): the factor on both cornering stiffnesses."""
     return max(0.2, 1.0 + slope * (v_x - reference_speed))

@@ -1,0 +1,72 @@
+"""The steering's closed-loop first-order equivalent (paper section II: a PI around a valve
+whose flow sets the wheel rate), the model a replay of delta_cmd -> delta uses::
+
+    ddelta/dt = clip(dz(delta_cmd(t - d) - delta, D) / tau, -r, r)
+
+derived from the hydraulics' parameters (``components.steering_hydraulics``):
+
+    tau = V_rad (V_max - V_n - V_db) / (k_p Q_max) + tau_valve    small-signal loop gain + spool lag
+    D   = V_db / k_p (+ angle_deadband)                            valve dead-band seen as an angle
+    r   = Q_max / V_rad (or rate_limit if lower)                   full-opening rate
+    d   = command_delay
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FirstOrderSteering:
+    time_constant: float      # tau [s]
+    deadband: float           # D [rad]
+    rate_limit: float         # r [rad/s]
+    delay: float              # d [s]
+
+    @classmethod
+    def of(cls, p: Mapping[str, float]) -> "FirstOrderSteering":
+        """From the steering hydraulics' resolved parameters (SI)."""
+        kp = float(p["kp"])
+        span = p["voltage_max"] - p["neutral_voltage"] - p["deadband"]
+        valve_rate = p["max_flow"] / p["volume_per_rad"]
+        rate = min(valve_rate, p["rate_limit"]) if p["rate_limit"] > 0 else valve_rate
+        return cls(p["volume_per_rad"] * span / (kp * p["max_flow"]) + p["valve_time_constant"],
+                   p["deadband"] / kp + p["angle_deadband"], rate, p["command_delay"])
+
+
+def delayed_command(cmd: np.ndarray, h: float, delay: float) -> np.ndarray:
+    """Mean over [t_k, t_k + h) of the held command delayed by ``delay``:
+    (1 - f) cmd[k - n] + f cmd[k - n - 1] with delay = (n + f) h."""
+    n = int(math.floor(delay / h + 1e-12))
+    f = delay / h - n
+    k = np.arange(len(cmd))
+    a = cmd[np.clip(k - n, 0, None)]
+    if f <= 1e-12:
+        return a
+    return (1.0 - f) * a + f * cmd[np.clip(k - n - 1, 0, None)]
+
+
+def simulate(cmd: np.ndarray, h: float, time_constant: float, deadband: float, rate_limit: float,
+             delay: float, delta0: float) -> np.ndarray:
+    """delta[k+1] = delta[k] + clip(alpha dz(c[k] - delta[k], D), -r h, r h), alpha = 1 - exp(-h/tau):
+    the exact step of ddelta/dt = dz(c - delta, D)/tau away from the limits."""
+    c = delayed_command(np.asarray(cmd, float), h, delay).tolist()
+    alpha = 1.0 - math.exp(-h / max(time_constant, 1e-4))
+    move_max = rate_limit * h
+    out = [0.0] * len(c)
+    d = float(delta0)
+    for k, ck in enumerate(c):
+        out[k] = d
+        e = ck - d
+        if e > deadband:
+            e -= deadband
+        elif e < -deadband:
+            e += deadband
+        else:
+            continue
+        m = alpha * e
+        d += move_max if m > move_max else (-move_max if m < -move_max else m)
+    return np.asarray(out)

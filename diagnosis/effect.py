@@ -1,0 +1,77 @@
+"""What a diagnosis effect is: a complete object (issue 14, item 5).
+
+An effect names the subsystem it lives in, the replay stages whose residuals it changes, its
+parameters (SI, with the bounds searched and a typical scale for the optimiser), the values of
+those parameters in the baseline study, a materiality threshold (smaller fitted values are not
+worth a model change, whatever the statistics say) and the component options that switch it on
+in a study. Adding one is one class in one file of ``diagnosis/effects/`` plus its test; the
+catalogue finds it there.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Mapping
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str                 # key of the replay's value mapping
+    unit: str                 # SI unit
+    scale: float              # typical magnitude (optimiser scaling)
+    lower: float
+    upper: float
+    display_unit: str = ""
+    display_factor: float = 1.0
+
+
+class BaselineStudy:
+    """The baseline study as the effects read it: component names and resolved (SI) parameters
+    by role (``steering``, ``yaw_plant``, ``gps``, ``gyro``), each optional but the first two."""
+
+    def __init__(self, study, names: Mapping[str, str]) -> None:
+        self.study = study
+        self.names = dict(names)
+        self._params = {role: study.parameters(name) for role, name in names.items()}
+
+    def has(self, role: str) -> bool:
+        return role in self.names
+
+    def parameters(self, role: str, default: Mapping[str, float] | None = None) -> Mapping[str, float]:
+        if role not in self._params:
+            if default is None:
+                raise KeyError(role)
+            return default
+        return self._params[role]
+
+    def step(self, role: str) -> float:
+        spec = self.study.components[self.names[role]]
+        return spec.step or self.study.study.base_step
+
+
+class Effect:
+    """One catalogue entry. Subclasses set the class attributes and implement ``baseline``,
+    ``material`` and ``options``."""
+
+    id: ClassVar[str]
+    subsystem: ClassVar[str]
+    stages: ClassVar[tuple[str, ...]]
+    parameters: ClassVar[tuple[Parameter, ...]]
+    starts: ClassVar[tuple[tuple[float, ...], ...]]      # starting values of the parameters
+    threshold: ClassVar[str]                             # the materiality rule, in words
+    hypothesis: ClassVar[str]                            # what it means on the tractor
+
+    def baseline(self, study: BaselineStudy) -> dict[str, float]:
+        """The replay values of this effect's parameters in the baseline study."""
+        raise NotImplementedError
+
+    def material(self, fitted: Mapping[str, float], base: Mapping[str, float]) -> bool:
+        raise NotImplementedError
+
+    def options(self, fitted: Mapping[str, float], base: Mapping[str, float],
+                study: BaselineStudy) -> list[tuple[str, str, float]]:
+        """[(role, parameter, SI value)]: the component options that carry the fitted effect."""
+        raise NotImplementedError
+
+    def display(self, fitted: Mapping[str, float]) -> dict[str, float]:
+        """The fitted parameters as a person reads them ('name [unit]' -> value)."""
+        return {f"{p.name} [{p.display_unit or p.unit}]": fitted[p.name] * p.display_factor for p in self.parameters}

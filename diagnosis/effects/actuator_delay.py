@@ -1,0 +1,23 @@
+"""The wheels follow the command late: a transport delay in the valve drive or the bus."""
+from components.models.steering_equivalent import FirstOrderSteering
+
+from ..effect import Effect, Parameter
+
+
+class ActuatorDelay(Effect):
+    id = "actuator_delay"
+    subsystem = "steering"
+    stages = ("steering",)
+    parameters = (Parameter("command_delay", "s", 0.1, 0.0, 0.6, "s", 1.0),)
+    starts = ((0.05,), (0.15,), (0.3,))
+    threshold = "delay >= 0.05 s"
+    hypothesis = "the wheels follow the command late: a transport delay in the valve drive or the bus"
+
+    def baseline(self, study):
+        return {"command_delay": FirstOrderSteering.of(study.parameters("steering")).delay}
+
+    def material(self, fitted, base):
+        return fitted["command_delay"] - base["command_delay"] >= 0.05
+
+    def options(self, fitted, base, study):
+        return [("steering", "command_delay", fitted["command_delay"])]

@@ -1,0 +1,23 @@
+"""The GPS reports where the antenna was a moment ago."""
+from ..effect import Effect, Parameter
+
+
+class GPSLatency(Effect):
+    id = "gps_latency"
+    subsystem = "gps"
+    stages = ("position",)
+    parameters = (Parameter("gps_latency", "s", 0.1, 0.0, 1.0, "s", 1.0),)
+    starts = ((0.05,), (0.25,))
+    threshold = "latency >= 0.05 s"
+    hypothesis = "the GPS reports where the antenna was a moment ago"
+
+    def baseline(self, study):
+        return {"gps_latency": study.parameters("gps", {"latency": 0.0})["latency"]}
+
+    def material(self, fitted, base):
+        return fitted["gps_latency"] - base["gps_latency"] >= 0.05
+
+    def options(self, fitted, base, study):
+        """The sensor delays by whole samples: the latency is rounded to its step."""
+        step = study.step("gps")
+        return [("gps", "latency", round(fitted["gps_latency"] / step) * step)]

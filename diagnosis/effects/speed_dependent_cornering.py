@@ -1,0 +1,24 @@
+"""The tyres' cornering stiffness changes with speed: one model does not fit every speed."""
+from ..effect import Effect, Parameter
+
+
+class SpeedDependentCornering(Effect):
+    id = "speed_dependent_cornering"
+    subsystem = "yaw (tyre cornering stiffness)"
+    stages = ("yaw",)
+    parameters = (Parameter("cornering_speed_slope", "s/m", 0.1, -0.35, 0.8, "1/(m/s)", 1.0),)
+    starts = ((0.0,), (-0.2,), (0.3,))
+    threshold = "|k| >= 0.08 per m/s"
+    hypothesis = "the tyres' cornering stiffness changes with speed: one model does not fit every speed"
+
+    def baseline(self, study):
+        p = study.parameters("yaw_plant")
+        return {"cornering_speed_slope": p["cornering_speed_slope"],
+                "cornering_reference_speed": p["cornering_reference_speed"]}
+
+    def material(self, fitted, base):
+        return abs(fitted["cornering_speed_slope"] - base["cornering_speed_slope"]) >= 0.08
+
+    def options(self, fitted, base, study):
+        return [("yaw_plant", "cornering_speed_slope", fitted["cornering_speed_slope"]),
+                ("yaw_plant", "cornering_reference_speed", base["cornering_reference_speed"])]

@@ -1,0 +1,25 @@
+"""The wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading."""
+import math
+
+from ..effect import Effect, Parameter
+
+DEG = math.pi / 180.0
+
+
+class SteeringOffset(Effect):
+    id = "steering_offset"
+    subsystem = "steering angle sensor (wheel angle seen by the tyres)"
+    stages = ("yaw",)
+    parameters = (Parameter("steer_angle_offset", "rad", 0.02, -0.15, 0.15, "deg", 1 / DEG),)
+    starts = ((0.0,),)
+    threshold = "|offset| >= 0.3 deg"
+    hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"
+
+    def baseline(self, study):
+        return {"steer_angle_offset": study.parameters("yaw_plant")["steer_angle_offset"]}
+
+    def material(self, fitted, base):
+        return abs(fitted["steer_angle_offset"] - base["steer_angle_offset"]) >= 0.3 * DEG
+
+    def options(self, fitted, base, study):
+        return [("yaw_plant", "steer_angle_offset", fitted["steer_angle_offset"])]

@@ -1,0 +1,21 @@
+"""The gyro reads a constant offset: the integrated yaw rate turns away from the GPS track."""
+from ..effect import Effect, Parameter
+
+
+class YawRateBias(Effect):
+    id = "yaw_rate_bias"
+    subsystem = "gyro"
+    stages = ("yaw", "position")
+    parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "rad/s", 1.0),)
+    starts = ((0.0,),)
+    threshold = "|bias| >= 0.004 rad/s"
+    hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
+
+    def baseline(self, study):
+        return {"yaw_rate_bias": study.parameters("gyro", {"bias": 0.0})["bias"]}
+
+    def material(self, fitted, base):
+        return abs(fitted["yaw_rate_bias"] - base["yaw_rate_bias"]) >= 0.004
+
+    def options(self, fitted, base, study):
+        return [("gyro", "bias", fitted["yaw_rate_bias"])]

@@ -1,0 +1,69 @@
+"""Diagnosis on logs with a hidden effect from the independent truth tractor
+(measurements.truth_tractor): one runner for the tests and the benchmark, and the stated
+tolerances of each effect's headline parameter."""
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from measurements.truth_tractor import DEG, EFFECTS, make_log
+
+__all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "recovered"]
+
+
+def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, float]:
+    """(estimate, truth, tolerance) of each effect's headline parameter; tolerances are stated here."""
+    if effect == "actuator_delay":
+        return params["command_delay"], truth["delay"], 0.03                        # s
+    if effect == "steering_deadband":
+        return params["steering_deadband"], truth["deadband"] + 0.5 / 150, 0.5 * DEG
+    if effect == "steering_rate_limit":
+        return params["steering_rate_limit"], truth["rate"], 0.2 * truth["rate"]
+    if effect == "steering_offset":
+        return params["steer_angle_offset"], truth["offset"], 0.3 * DEG
+    if effect == "yaw_rate_bias":
+        return params["yaw_rate_bias"], truth["bias"], 0.003                         # rad/s
+    if effect == "gps_latency":
+        return params["gps_latency"], truth["latency"], 0.04                         # s
+    if effect == "speed_dependent_cornering":
+        return params["cornering_speed_slope"], truth["k"], 0.08                     # per m/s
+    if effect == "side_slope":
+        return math.asin(math.hypot(params["slope_east"], params["slope_north"]) / 9.81), truth["slope"], 1.0 * DEG
+    if effect == "antenna_lever_arm":
+        err = math.hypot(params["antenna_forward"] - truth["forward"], params["antenna_left"] - truth["left"])
+        return err, 0.0, 0.15                                                        # m, both axes
+    raise KeyError(effect)
+
+
+BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def diagnose_hidden(case: tuple) -> dict:
+    """Write the log of (effect, seed[, TABLE scale]) to ``folder`` and diagnose it (no plots)."""
+    from .pipeline import diagnose
+
+    effect, seed, folder, *scale = case
+    frame, truth = make_log(seed, effect, scale=scale[0] if scale else None)
+    log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
+    frame.to_parquet(log)
+    result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)
+    return {"effect": effect or "none", "seed": seed, "truth": truth, "result": result}
+
+
+def diagnose_many(cases: list[tuple[str | None, int, str]], workers: int = 2) -> list[dict]:
+    """diagnose_hidden over worker processes, each with single-threaded BLAS: two processes
+    spinning two BLAS threads each on two cores run 3x slower than one process."""
+    saved = {k: os.environ.get(k) for k in BLAS_THREADS}
+    os.environ.update({k: "1" for k in BLAS_THREADS})
+    try:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            return list(pool.map(diagnose_hidden, cases))
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k)
+            else:
+                os.environ[k] = v
