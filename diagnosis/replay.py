@@ -11,7 +11,6 @@ in the integral sense), so a 20 Hz log replays without half-a-sample lag.
 """
 from __future__ import annotations
 
-import math
 from typing import Mapping
 
 import numpy as np

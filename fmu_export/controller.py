@@ -25,7 +25,7 @@ from components.speed_pid import SpeedPID
 from components.yaw_rate_mpc import YawRateMPC
 from orchestrator.build import build_system
 from orchestrator.errors import InputError
-from orchestrator.study import Study, StudyError
+from orchestrator.study import Study
 
 from .packaging import PackagingError, package_fmu
 

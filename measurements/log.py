@@ -87,3 +87,20 @@ def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFr
     t = frame["t"].to_numpy(dtype=float)
     cut = t[0] + fraction * (t[-1] - t[0])
     return frame[t < cut].reset_index(drop=True), frame[t >= cut].reset_index(drop=True)
+
+
+def resample(frame: pd.DataFrame, step: float | None = None) -> pd.DataFrame:
+    """The log on an even time grid t0, t0 + step, ... (default step: the median interval), every
+    numeric column linearly interpolated: for logs whose clock jitters by a fraction of a step."""
+    t = frame["t"].to_numpy(dtype=float)
+    if len(t) < 2 or np.any(np.diff(t) <= 0):
+        raise LogError("resampling needs a time column 't' that increases")
+    step = float(np.median(np.diff(t))) if step is None else float(step)
+    if step <= 0:
+        raise LogError(f"resampling step {step} s must be > 0")
+    grid = t[0] + step * np.arange(int(np.floor((t[-1] - t[0]) / step + 1e-9)) + 1)
+    columns = {"t": grid}
+    for c in frame.columns:
+        if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
+            columns[c] = np.interp(grid, t, frame[c].to_numpy(dtype=float))
+    return pd.DataFrame(columns)

@@ -41,6 +41,17 @@ def inline_subsystem(study: Study, name: str) -> Study:
     return parse_study(data, study.path if study.path is not None else "<study>")
 
 
+def _inner_port(system: System, comp: str, name: str, causality: str, field: str) -> Variable:
+    """The declaration of an inner component's port; a StudyError names what exists."""
+    node = system.nodes.get(comp)
+    declared = node.component.declared(causality) if node else {}
+    if name not in declared:
+        raise StudyError(f"{field}: {comp}.{name} is not an {causality} of the subsystem"
+                         + (f"; {comp}'s {causality}s: {', '.join(sorted(declared))}" if node else
+                            f"; components: {', '.join(sorted(system.nodes))}"))
+    return declared[name]
+
+
 def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], dict[str, tuple[str, ...]]]:
     """Port variables of the composite and, when it is sampled, its feedthrough."""
     exports = sub.exports
@@ -50,15 +61,10 @@ def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], d
         targets = exports.input_targets(port)
         units = set()
         for comp, name in targets:
-            node = system.nodes.get(comp)
-            declared = node.component.declared("input") if node else {}
-            if name not in declared:
-                raise StudyError(f"{where}: exports.inputs.{port}: {comp}.{name} is not an input of the subsystem"
-                                 + (f"; {comp}'s inputs: {', '.join(sorted(declared))}" if node else
-                                    f"; components: {', '.join(sorted(system.nodes))}"))
+            declared = _inner_port(system, comp, name, "input", f"{where}: exports.inputs.{port}")
             if f"{comp}.{name}" not in unconnected:
                 raise StudyError(f"{where}: exports.inputs.{port}: {comp}.{name} is already driven inside the subsystem")
-            units.add(declared[name].unit.replace(" ", ""))
+            units.add(declared.unit.replace(" ", ""))
         if len(units) > 1:
             raise StudyError(f"{where}: exports.inputs.{port}: its targets differ in unit ({sorted(units)})")
         table = exports.inputs[port]
@@ -70,14 +76,7 @@ def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], d
         first = system.nodes[targets[0][0]].component.declared("input")[targets[0][1]]
         variables.append(Variable(port, "input", first.unit, first.start, first.description))
     for port in exports.outputs:
-        comp, name = exports.output_source(port)
-        node = system.nodes.get(comp)
-        declared = node.component.declared("output") if node else {}
-        if name not in declared:
-            raise StudyError(f"{where}: exports.outputs.{port}: {comp}.{name} is not an output of the subsystem"
-                             + (f"; {comp}'s outputs: {', '.join(sorted(declared))}" if node else
-                                f"; components: {', '.join(sorted(system.nodes))}"))
-        v = declared[name]
+        v = _inner_port(system, *exports.output_source(port), "output", f"{where}: exports.outputs.{port}")
         variables.append(Variable(port, "output", v.unit, v.start, v.description))
     for comp, node in system.nodes.items():
         for v in node.component.declared("parameter").values():

@@ -75,7 +75,7 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert res["verdict"] == "actuator_delay" and "verdict: actuator_delay" in proc.stdout
     study = load_study(tmp_path / "d" / "extended_study.toml", ["study.stop_time=20"])
-    fitted = study.components["steering"].parameters["command_delay"]
+    fitted = study.parameters("steering")["command_delay"]
     assert fitted == pytest.approx(res["findings"][0]["params"]["command_delay"])
     ext = simulate(study)[0].to_frame()
     base = simulate(load_study(ROOT / "studies" / "figure8.toml", ["study.stop_time=20"]))[0].to_frame()

@@ -1,0 +1,43 @@
+"""Each catalogue effect is a complete object: the component options it writes into a study carry
+exactly the value it fitted, read back through the baseline (the same path a diagnosis takes).
+A new effect in diagnosis/effects/ is picked up here without editing this file."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from diagnosis.baseline import baseline_from_study
+from diagnosis.catalogue import CATALOGUE
+from orchestrator.study import Study
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("effect", CATALOGUE, ids=lambda e: e.id)
+def test_the_study_option_of_an_effect_carries_its_fitted_value(effect):
+    for name in ("figure8.toml", "identification.toml"):    # the gyro lives in the identification study
+        study = Study.load(ROOT / "studies" / name)
+        base = baseline_from_study(study)
+        fitted = dict(base.values)
+        for p in effect.parameters:                     # a value inside the bounds, away from the baseline
+            fitted[p.name] = p.lower + 0.1 * (p.upper - p.lower)
+        options = effect.options(fitted, base.values, base.study)
+        if {role for role, _, _ in options} <= set(base.components):
+            break
+    else:
+        pytest.fail(f"no shipped study has the components of {effect.id}'s options {options}")
+    extended = study.with_values({f"{base.components[role]}.{name}": value for role, name, value in options})
+    again = baseline_from_study(extended).values
+    for p in effect.parameters:
+        assert again[p.name] == pytest.approx(fitted[p.name], rel=1e-9, abs=1e-12), p.name
+    untouched = set(base.values) - {p.name for p in effect.parameters} - {"cornering_reference_speed"}
+    assert {k: again[k] for k in untouched} == {k: base.values[k] for k in untouched}
+
+
+@pytest.mark.parametrize("effect", CATALOGUE, ids=lambda e: e.id)
+def test_an_effect_is_material_far_from_the_baseline_and_not_at_it(effect):
+    base = baseline_from_study(Study.load(ROOT / "studies" / "figure8.toml")).values
+    assert not effect.material(base, base)
+    assert effect.stages and all(s in ("steering", "yaw", "position") for s in effect.stages)
+    assert all(len(start) == len(effect.parameters) for start in effect.starts)
