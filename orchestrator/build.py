@@ -2,8 +2,10 @@
 evaluation order of sampled components and refusal of algebraic loops."""
 from __future__ import annotations
 
+import difflib
 import graphlib
 import importlib
+import pkgutil
 import math
 import zlib
 from dataclasses import dataclass, field
@@ -65,14 +67,28 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
             if exc.name is None or not module_name.startswith(exc.name):
                 raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
     if module is None:
+        known = _known_types(packages)
+        close = difflib.get_close_matches(type_name, known, n=3)
         raise StudyError(f"{where}: type {type_name!r}: no such component type: cannot import "
-                         f"{' or '.join(repr(c) for c in candidates)}")
+                         f"{' or '.join(repr(c) for c in candidates)}"
+                         + (f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""))
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
     if not (isinstance(cls, type) and issubclass(cls, Component)):
         raise StudyError(f"{where}: type {type_name!r}: {attr!r} is not a Component class")
     return cls
+
+
+def _known_types(packages: list[str]) -> list[str]:
+    """Module names of the component packages (the type names a study may use)."""
+    names = []
+    for package in packages:
+        try:
+            names += [m.name for m in pkgutil.iter_modules(importlib.import_module(package).__path__)]
+        except (ImportError, AttributeError):
+            continue
+    return names
 
 
 def component_class(study: Study, name: str, type_name: str | None) -> type[Component]:
@@ -92,7 +108,10 @@ def component_class(study: Study, name: str, type_name: str | None) -> type[Comp
     if lowered.endswith(SUBSYSTEM_SUFFIXES):
         from .composite import composite_class
 
-        sub = Study.load(path)
+        try:
+            sub = Study.load(path)
+        except StudyError as exc:
+            raise StudyError(f"{where}: components.{name}.type: subsystem {exc}") from None
         return composite_class(sub, f"{where}: components.{name}.type")
     from .fmu import FMUError, fmu_component_class
 
@@ -109,8 +128,11 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
     converted: dict[str, Any] = {}
     for key, value in values.items():
         if key not in params:
+            close = difflib.get_close_matches(key, list(params), n=1)
             raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
-                             f"{getattr(cls, 'type_name', cls.__name__)!r}; known: {', '.join(sorted(params))}")
+                             f"{getattr(cls, 'type_name', cls.__name__)!r}"
+                             + (f"; did you mean {close[0]!r}?" if close else "")
+                             + f" Known: {', '.join(sorted(params))}")
         try:
             converted[key] = to_si(value, params[key].unit)
         except UnitError as exc:

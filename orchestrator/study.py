@@ -640,8 +640,8 @@ def _set_value(data: dict[str, Any], key: str, value: Any, where: str) -> None:
     if head in subs and len(rest) >= 2:
         _set_value(subs[head], ".".join(rest), value, where)
         return
-    if head not in _TABLES and isinstance(data.get(head), dict) and len(rest) == 1:
-        data[head][rest[0]] = value
+    if head not in ("components", "subsystems") and isinstance(data.get(head), dict) and len(rest) == 1:
+        data[head][rest[0]] = value            # a table's field: sweep.mode, my_tool.period
         return
     known = sorted(comps) + sorted(subs)
     raise StudyError(f"{where}: no component {head!r}; known: {', '.join(known)}")

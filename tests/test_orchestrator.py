@@ -117,7 +117,7 @@ def test_bad_connections_get_clear_messages(connections, words):
 
 
 @pytest.mark.parametrize("components, words", [
-    ({"g": {"type": "tests.toy_components:Gain", "parameters": {"kk": 1}}}, ["components.g.parameters.kk", "known: k"]),
+    ({"g": {"type": "tests.toy_components:Gain", "parameters": {"kk": 1}}}, ["components.g.parameters.kk", "did you mean 'k'", "Known: k"]),
     ({"g": {"type": "tests.toy_components:Gain", "step": 0.25}}, ["components.g.step", "integer multiple"]),
     ({"g": {"type": "no_such_module"}}, ["cannot import", "components.no_such_module"]),
     ({"g": {"type": "tests.toy_components:Nope"}}, ["has no 'Nope'"]),
