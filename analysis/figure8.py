@@ -49,6 +49,9 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     psi_hat = signal(frame, study, "pose_estimator", "heading")
     dpsi = np.angle(np.exp(1j * (psi_hat - psi)))
     straight = ~curved
+    t = frame["t"].to_numpy()
+    delta = signal(frame, study, "steering", "steer_angle")        # the wheels' angle (not the sensor's)
+    steer_rate = np.diff(delta) / np.diff(t) if len(t) > 1 else np.zeros(0)
 
     def stat(fn, values):      # NaN when the window holds no sample of that kind
         return float(fn(values)) if len(values) else float("nan")
@@ -67,6 +70,8 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         "yaw_rate_rms_error": rms(gamma - gamma_d),
         "yaw_rate_mean_error": float(np.mean(gamma - gamma_d)),
         "heading_estimate_rms_error": rms(dpsi),
+        "steer_angle_rms": rms(delta),
+        "steer_rate_rms": rms(steer_rate),
     }
 
 
@@ -74,7 +79,8 @@ def summary(values: dict[str, float]) -> str:
     rows = [("euclid_mean_straight", "m", None), ("euclid_max_straight", "m", "< 0.40"),
             ("euclid_mean_curved", "m", None), ("euclid_max_curved", "m", "< 0.60"),
             ("speed_rms_error", "m/s", "steady-state error seen"), ("yaw_rate_rms_error", "rad/s", "no steady-state error"),
-            ("heading_estimate_rms_error", "rad", None), ("sim_time_s", "s", None), ("wall_time_s", "s", None)]
+            ("heading_estimate_rms_error", "rad", None), ("steer_angle_rms", "rad", None),
+            ("steer_rate_rms", "rad/s", None), ("sim_time_s", "s", None), ("wall_time_s", "s", None)]
     lines = [f"{'metric':<28}{'ours':>12}  {'unit':<6} paper", "-" * 64]
     for key, unit, paper in rows:
         if key in values:

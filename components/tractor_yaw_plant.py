@@ -7,7 +7,10 @@ not speed dependent; lateral velocity then taken kinematically, v_y = l_r gamma)
 
 Default ``rlf``: with the Table values it is stable at every speed and at 2 m/s its poles
 (-5.9 +- 13.7j) lie next to G_2nd's (-5.45 +- 14.6j). ``rlfr`` with the Table values has a weakly
-growing rear-relaxation mode near 1.65 Hz (Re ~ +0.03 1/s) and is only for short experiments.
+growing rear-relaxation mode near 1.65 Hz (Re ~ +0.03 1/s): a study naming only ``model = "rlfr"``
+gets ``parameter_set = "rlfr_identified"`` (stable, G_RLFR's poles at 2 m/s; models.paper_models);
+``parameter_set = "table"`` keeps the Table values and building such a study warns
+(UnstableModelWarning) with the pole. Values a study sets (C_f, ...) win over the set.
 
 Integration: over each step the dynamics are exact for delta and v_x held (ZOH, matrix
 exponential). The pose at the CG follows (paper eq. 2)::
@@ -18,7 +21,7 @@ integrated with the midpoint rule; the rear-axle point R (GPS antenna) is CG - l
 Below ``min_speed`` the dynamics use min_speed (the slip equations divide by v_x) and the yaw rate
 is scaled by v_x/min_speed, so a tractor at rest does not turn.
 
-Extensions (off by default; each is an entry of the diagnosis catalogue, see diagnosis/catalogue.py):
+Extensions (off by default; each is an entry of the diagnosis catalogue, see diagnosis/effects/):
 ``steer_angle_offset`` (the tyres see delta + offset: a wheel-angle sensor zeroed wrongly),
 ``cornering_speed_slope`` (C_f, C_r scaled by 1 + k (v_x - v_ref)), ``slope_angle`` with
 ``slope_downhill_heading`` (side slope: a_lat = g sin(phi) sin(psi_d - psi) at the CG, physical
@@ -27,10 +30,11 @@ models only) and ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever a
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
-from orchestrator.component import Component, inp, out, par
+from orchestrator.component import Component, ComponentError, inp, out, par
 
 from .models.paper_models import G_2ND
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, body_to_world, controllable_canonical,
@@ -39,6 +43,22 @@ from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, body_to_wo
                                   zoh_discretize)
 
 MODELS = PHYSICAL_MODELS + ("transfer_function",)
+CHECKED_SPEEDS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+
+
+class UnstableModelWarning(UserWarning):
+    """The plant's linear yaw model has a pole in the right half plane."""
+
+
+def unstable_modes(model: str, params: TractorParameters, speeds=CHECKED_SPEEDS) -> list[tuple[float, complex]]:
+    """(speed, pole with the largest real part) at each speed where that real part is > 0."""
+    out = []
+    for v in speeds:
+        poles = np.linalg.eigvals(state_space(model, params, v)[0])
+        worst = poles[np.argmax(poles.real)]
+        if worst.real > 1e-9:
+            out.append((v, complex(worst)))
+    return out
 
 
 class TractorYawPlant(Component):
@@ -52,10 +72,12 @@ class TractorYawPlant(Component):
         par("I", "kg m2", 280.0, "yaw moment of inertia (paper: I = m l_f l_r)"),
         par("l_f", "m", 1.0, "front axle to CG"),
         par("l_r", "m", 0.4, "rear axle to CG"),
-        par("C_f", "N/rad", 8000.0, "front cornering stiffness"),
-        par("C_r", "N/rad", 90000.0, "rear cornering stiffness"),
-        par("sigma_f", "m", 0.1942, "front relaxation length"),
-        par("sigma_r", "m", 1.6657, "rear relaxation length"),
+        par("parameter_set", "", "", "named C_f, C_r, sigma_f, sigma_r: 'table' or 'rlfr_identified' "
+            "(empty: rlfr_identified for rlfr, table otherwise; see models.paper_models)"),
+        par("C_f", "N/rad", None, "front cornering stiffness (unset: from parameter_set)"),
+        par("C_r", "N/rad", None, "rear cornering stiffness (unset: from parameter_set)"),
+        par("sigma_f", "m", None, "front relaxation length (unset: from parameter_set)"),
+        par("sigma_r", "m", None, "rear relaxation length (unset: from parameter_set)"),
         par("tf_num", "", list(G_2ND.num), "transfer_function model: numerator, highest power first"),
         par("tf_den", "", list(G_2ND.den), "transfer_function model: denominator"),
         par("min_speed", "m/s", 0.1, "regularisation speed for the slip equations"),
@@ -86,13 +108,35 @@ class TractorYawPlant(Component):
     )
     feedthrough = {}
 
+    def __init__(self, name, parameters=None, rng=None) -> None:
+        super().__init__(name, parameters, rng)
+        if self.p["model"] in PHYSICAL_MODELS:
+            try:
+                unstable = unstable_modes(self.p["model"], self._parameters())
+            except (ValueError, np.linalg.LinAlgError):
+                return                                   # initialize() names the bad value
+            if unstable:
+                v, pole = unstable[0]
+                warnings.warn(UnstableModelWarning(
+                    f"{name}: the {self.p['model']} model with parameter set "
+                    f"{self.p['parameter_set'] or 'default'!r} has an unstable mode: pole {pole.real:+.3f} "
+                    f"{pole.imag:+.2f}j 1/s at {v:g} m/s (unstable at {', '.join(f'{s:g}' for s, _ in unstable)} m/s); "
+                    f"the paper's identified G_RLFR has none (parameter_set = 'rlfr_identified' is stable)"),
+                    stacklevel=2)
+
+    def _parameters(self) -> TractorParameters:
+        try:
+            return TractorParameters.of(self.p)
+        except ValueError as exc:
+            raise ComponentError(f"{self.name}: {exc}") from None
+
     def initialize(self, t0: float, dt: float) -> None:
         p = self.p
         self.require(p["model"] in MODELS, f"parameter model={p['model']!r}; expected one of {MODELS}")
-        self.params = TractorParameters(p["m"], p["I"], p["l_f"], p["l_r"], p["C_f"], p["C_r"],
-                                        p["sigma_f"], p["sigma_r"])
-        for key in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r", "min_speed"):
-            self.require(float(p[key]) > 0, f"parameter {key} must be > 0, got {p[key]}")
+        self.params = self._parameters()
+        for key in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r"):
+            self.require(getattr(self.params, key) > 0, f"parameter {key} must be > 0, got {getattr(self.params, key)}")
+        self.require(float(p["min_speed"]) > 0, f"parameter min_speed must be > 0, got {p['min_speed']}")
         self._tf = None
         self._slope = float(p["slope_angle"]) != 0.0
         self._cornering = float(p["cornering_speed_slope"]) != 0.0

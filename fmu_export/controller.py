@@ -35,7 +35,7 @@ C_DIR = Path(__file__).with_name("c")
 # port prefix -> (declared role, the class the C code re-implements)
 ROLES = {"tracker": ("tracker", KinematicTracker), "mpc": ("yaw_rate_controller", YawRateMPC),
          "speed_controller": ("speed_controller", SpeedPID)}
-TUNABLE = {"tracker": ("k_s", "k_c", "l_r"), "mpc": ("steer_limit", "steer_rate_limit"),
+TUNABLE = {"tracker": ("k_s", "k_c", "l_r", "lookahead"), "mpc": ("steer_limit", "steer_rate_limit"),
            "speed_controller": ("kp", "ki", "kd", "integral_limit", "feedforward", "inner_kp", "inner_ki",
                                 "inner_kd", "neutral_voltage", "voltage_min", "voltage_max")}
 VR_IN0, VR_OUT0 = 100, 200

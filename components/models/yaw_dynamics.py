@@ -43,8 +43,20 @@ class TractorParameters:
 
     @classmethod
     def of(cls, parameters) -> "TractorParameters":
-        """From a component's resolved parameters (SI; e.g. ``study.parameters(plant)``)."""
-        return cls(*(float(parameters[k]) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")))
+        """From a yaw plant's resolved parameters (SI; e.g. ``study.parameters(plant)``): values the
+        study leaves unset (None) come from the named ``parameter_set`` (paper_models.PARAMETER_SETS;
+        by default the model's, DEFAULT_SET, else the Table)."""
+        from .paper_models import DEFAULT_SET, PARAMETER_SETS
+
+        name = parameters.get("parameter_set") or DEFAULT_SET.get(parameters.get("model", ""), "table")
+        if name not in PARAMETER_SETS:
+            raise ValueError(f"parameter_set {name!r}; expected one of {sorted(PARAMETER_SETS)}")
+        named = PARAMETER_SETS[name]
+        values = []
+        for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r"):
+            v = parameters.get(k)
+            values.append(float(v) if v is not None else float(named.get(k, getattr(cls, k))))
+        return cls(*values)
 
 
 GRAVITY = 9.81

@@ -119,6 +119,9 @@ static void controller_step(Controller *c, double h) {
     double yd = in[IN_tracker_ydot_ref] + p[P_tracker_k_s] * tanh(p[P_tracker_k_c] * ey);
     double cs = cos(in[IN_tracker_heading]), sn = sin(in[IN_tracker_heading]);
     double v_d = cs * xd + sn * yd, gamma_d = (-sn * xd + cs * yd) / p[P_tracker_l_r];
+    /* look-ahead a > l_r: gamma_d = (l_r gamma_fb + (a - l_r) gamma_r) / a (components/kinematic_tracker.py) */
+    double share = p[P_tracker_l_r] / (p[P_tracker_lookahead] != 0.0 ? p[P_tracker_lookahead] : p[P_tracker_l_r]);
+    if (share != 1.0) gamma_d = share * gamma_d + (1.0 - share) * in[IN_tracker_yaw_rate_ref];
     out[OUT_tracker_speed_desired] = v_d;
     out[OUT_tracker_yaw_rate_desired] = gamma_d;
     out[OUT_tracker_error_x] = ex;
