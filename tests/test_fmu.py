@@ -278,8 +278,10 @@ def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu):
     from fmu_export.controller import controller_design, controller_feeds
 
     st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=30"])
-    feeds = controller_feeds(st, controller_design(st))
-    assert len(feeds) == 11                                # every FMU input is driven by the study
+    design = controller_design(st)
+    feeds = controller_feeds(st, design)
+    assert set(feeds) == {name for name, _, _ in design.inputs}     # every FMU input is driven by the study
+    assert len(feeds) == 12 and feeds["tracker_yaw_rate_ref"] == "reference.yaw_rate_ref"
     py = Simulation(build_system(st)).run().to_frame()
     samples = py.iloc[::5].reset_index(drop=True)          # the controllers' 20 Hz instants
     inputs = np.zeros(len(samples), dtype=[("time", float)] + [(k, float) for k in feeds])

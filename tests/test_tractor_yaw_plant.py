@@ -11,7 +11,7 @@ import sympy as sp
 from scipy.integrate import solve_ivp
 
 from components.models.yaw_dynamics import TractorParameters, state_space
-from components.tractor_yaw_plant import TractorYawPlant
+from components.tractor_yaw_plant import TractorYawPlant, UnstableModelWarning
 
 P = TractorParameters()
 SPEEDS = [0.5, 1.0, 2.0, 3.0]
@@ -170,8 +170,10 @@ def test_default_plant_stays_bounded_for_ten_minutes():
         assert np.isfinite(peak) and peak < 3.0 * 0.3 * v / 1.4
 
 
-def test_rlfr_grows_over_ten_minutes_which_is_why_it_is_not_the_default():
-    plant = make_plant("rlfr")
+def _free_response(**parameters) -> tuple[float, float]:
+    """Peak |yaw rate| in 10-20 s and in the last 10 s of ten minutes after a small steering pulse."""
+    plant = TractorYawPlant("plant", {"model": "rlfr", **parameters})
+    plant.initialize(0.0, 0.01)
     plant.u.update(speed=2.0, steer_angle=0.01)
     plant.step(0.0, 0.01)
     plant.u["steer_angle"] = 0.0
@@ -182,7 +184,33 @@ def test_rlfr_grows_over_ten_minutes_which_is_why_it_is_not_the_default():
             early = max(early, abs(plant.y["yaw_rate"]))
         if k >= 59000:
             late = max(late, abs(plant.y["yaw_rate"]))
+    return early, late
+
+
+def test_rlfr_with_the_table_values_grows_over_ten_minutes_and_says_so():
+    with pytest.warns(UnstableModelWarning, match=r"pole \+0\.0\d+ \+10\.\d+j 1/s"):
+        early, late = _free_response(parameter_set="table")
     assert late > 100 * early
+
+
+def test_rlfr_by_default_is_the_stable_set_with_the_identified_poles():
+    """model = "rlfr" alone: the parameter set fitted to G_RLFR, whose poles at 2 m/s are the
+    identified model's (-0.62 +- 9.95j, -5.13 +- 14.44j) and which decays at every speed."""
+    import warnings
+
+    from components.models.paper_models import G_RLFR
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UnstableModelWarning)
+        early, late = _free_response()
+        params = TractorParameters.of({"model": "rlfr"})
+    assert late < 1e-6 * early
+    poles = np.sort_complex(np.linalg.eigvals(state_space("rlfr", params, 2.0)[0]))
+    np.testing.assert_allclose(poles, np.sort_complex(np.roots(G_RLFR.den)), rtol=1e-4)
+    for v in (0.3, 1.0, 2.5, 4.0):
+        assert np.linalg.eigvals(state_space("rlfr", params, v)[0]).real.max() < 0
+    # a value the study sets wins over the set
+    assert TractorParameters.of({"model": "rlfr", "C_f": 8500.0}).C_f == 8500.0
 
 
 def test_transfer_function_model_has_the_paper_g2nd_response():
