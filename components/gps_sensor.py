@@ -1,5 +1,9 @@
 """RTK-GPS sensor (paper section II): antenna position and velocity, 2 cm noise at 20 Hz.
 
+Error model: white noise (``position_noise_std``, the default worst case) plus, as an option, a
+correlated RTK error per axis, first-order Gauss-Markov (``bias_std``, ``bias_time_constant``):
+b_k+1 = exp(-dt/T) b_k + sqrt(1 - exp(-2 dt/T)) sigma_b w_k.
+
 Output at sample k is the true antenna state of sample k - latency/dt plus white Gaussian noise.
 Dropouts: a two-state chain; each sample starts an outage with probability
 ``dropout_probability``, an outage lasts ``dropout_duration`` seconds; during it the last fix is
@@ -28,6 +32,8 @@ class GPSSensor(Component):
         par("latency", "s", 0.0, "measurement delay, a multiple of the sensor step"),
         par("dropout_probability", "1", 0.0, "probability per sample that an outage starts"),
         par("dropout_duration", "s", 1.0, "length of an outage"),
+        par("bias_std", "m", 0.0, "correlated RTK error: stationary std per axis of a Gauss-Markov bias (0: off)"),
+        par("bias_time_constant", "s", 60.0, "correlated RTK error: correlation time of the bias"),
         out("x", "m", 0.0, "measured east position"),
         out("y", "m", 0.0, "measured north position"),
         out("vel_east", "m/s", 0.0, "measured east velocity"),
@@ -49,6 +55,11 @@ class GPSSensor(Component):
         self.history: deque = deque(maxlen=self.lag + 1)
         self.outage_left = 0
         self.last_fix_time = t0
+        self.require(p["bias_std"] >= 0 and p["bias_time_constant"] > 0,
+                     "bias_std must be >= 0 and bias_time_constant > 0")
+        # b_k+1 = phi b_k + sqrt(1 - phi^2) sigma_b w_k, phi = exp(-dt / T): stationary std sigma_b
+        self.bias_phi = math.exp(-dt / p["bias_time_constant"])
+        self.bias = self.rng.standard_normal(2) * p["bias_std"] if p["bias_std"] > 0 else (0.0, 0.0)
 
     def step(self, t: float, dt: float) -> None:
         u, p, y = self.u, self.p, self.y
@@ -56,6 +67,9 @@ class GPSSensor(Component):
         if self.outage_left == 0 and p["dropout_probability"] > 0 and self.rng.random() < p["dropout_probability"]:
             self.outage_left = max(1, int(round(p["dropout_duration"] / dt)))
         noise = self.rng.standard_normal(4)
+        if p["bias_std"] > 0:
+            phi = self.bias_phi
+            self.bias = phi * self.bias + math.sqrt(1 - phi * phi) * p["bias_std"] * self.rng.standard_normal(2)
         if self.outage_left > 0:
             self.outage_left -= 1
             y["fix_valid"] = y["fix_quality"] = 0.0
@@ -63,7 +77,8 @@ class GPSSensor(Component):
             return
         x, yy, ve, vn = self.history[0]
         sp, sv = p["position_noise_std"], p["velocity_noise_std"]
-        y["x"], y["y"] = x + sp * noise[0], yy + sp * noise[1]
+        bx, by = self.bias
+        y["x"], y["y"] = x + sp * noise[0] + bx, yy + sp * noise[1] + by
         y["vel_east"], y["vel_north"] = ve + sv * noise[2], vn + sv * noise[3]
         y["fix_valid"], y["fix_quality"] = 1.0, float(RTK_FIXED)
         self.last_fix_time = t
