@@ -16,7 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import closed_loop  # noqa: E402
 import fmu_step  # noqa: E402
-import identification  # noqa: E402
+import identify_time  # noqa: E402
 import mpc_step  # noqa: E402
 import sweep  # noqa: E402
 
@@ -63,7 +63,7 @@ def main() -> None:
     rows.append(("closed loop", "share: orchestrator", f"{100 * share:.1f}%",
                  f"< 20%: {'met' if share < 0.2 else 'NOT met'}"))
 
-    ident = identification.measure(repeat=1 if args.quick else 3)
+    ident = identify_time.measure(repeat=1 if args.quick else 3)
     rows.append(("identification", "identify studies/identification.toml (fresh process)",
                  f"{ident['median']:.1f} s", f"< 10 s: {'met' if ident['median'] < 10 else 'NOT met'}"))
 

@@ -78,6 +78,8 @@ class TractorYawPlant(Component):
         par("C_r", "N/rad", None, "rear cornering stiffness (unset: from parameter_set)"),
         par("sigma_f", "m", None, "front relaxation length (unset: from parameter_set)"),
         par("sigma_r", "m", None, "rear relaxation length (unset: from parameter_set)"),
+        par("cornering_scale_front", "1", 1.0, "factor on C_f (a relative variation, whatever the set)"),
+        par("cornering_scale_rear", "1", 1.0, "factor on C_r (a relative variation, whatever the set)"),
         par("tf_num", "", list(G_2ND.num), "transfer_function model: numerator, highest power first"),
         par("tf_den", "", list(G_2ND.den), "transfer_function model: denominator"),
         par("min_speed", "m/s", 0.1, "regularisation speed for the slip equations"),

@@ -60,7 +60,12 @@ def registry() -> Registry:
     if _REGISTRY is None:
         reg = Registry()
         for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
-            ep.load()(reg)
+            try:
+                plugin = ep.load()
+            except ImportError as exc:
+                raise ImportError(f"orchestrator plugin {ep.name!r} ({ep.value}) cannot be imported: {exc} "
+                                  f"(is a script's folder shadowing a package of that name on sys.path?)") from exc
+            plugin(reg)
             reg.loaded.append(ep.name)
         _REGISTRY = reg
     return _REGISTRY

@@ -201,12 +201,41 @@ class SweepRange(BaseModel):
         return [self.start + k * self.step for k in range(n)]
 
 
-class Sweep(BaseModel):
+class Uniform(BaseModel):
+    """Monte Carlo: a value drawn uniformly from [low, high]."""
+
     model_config = ConfigDict(extra="forbid")
-    mode: Literal["grid", "zip"] = "grid"
-    parameters: dict[str, list[Any] | SweepRange]
+    uniform: tuple[float, float]
+
+    @model_validator(mode="after")
+    def _order(self) -> "Uniform":
+        if not self.uniform[0] <= self.uniform[1]:
+            raise ValueError(f"uniform = {list(self.uniform)}: expected [low, high] with low <= high")
+        return self
+
+
+class Sweep(BaseModel):
+    """Points to run: ``grid`` (every combination), ``zip`` (element by element) or
+    ``monte_carlo`` (``samples`` draws: a list is a uniform choice, ``{uniform = [a, b]}`` a
+    uniform value, each sample with its own seed; all drawn from the study's seed)."""
+
+    model_config = ConfigDict(extra="forbid")
+    mode: Literal["grid", "zip", "monte_carlo"] = "grid"
+    parameters: dict[str, list[Any] | SweepRange | Uniform]
     seeds: list[int] | None = None
+    samples: int | None = Field(default=None, ge=1)
     analysis: str | None = None
+
+    @model_validator(mode="after")
+    def _monte_carlo(self) -> "Sweep":
+        draws = [k for k, v in self.parameters.items() if isinstance(v, Uniform)]
+        if self.mode == "monte_carlo":
+            if self.samples is None:
+                raise ValueError("mode = 'monte_carlo' needs 'samples' (how many draws)")
+        elif draws or self.samples is not None:
+            raise ValueError(f"'samples' and {{uniform = [a, b]}} ({', '.join(draws) or 'none here'}) need "
+                             f"mode = 'monte_carlo'")
+        return self
 
     @field_validator("parameters")
     @classmethod
@@ -222,6 +251,21 @@ class Sweep(BaseModel):
 
     def expanded(self) -> dict[str, list[Any]]:
         return {k: (v.values() if isinstance(v, SweepRange) else list(v)) for k, v in self.parameters.items()}
+
+    def draws(self, seed: int) -> list[tuple[dict[str, Any], int]]:
+        """Monte Carlo: ``samples`` (values, seed) pairs from one generator seeded by ``seed``."""
+        rng = np.random.default_rng(seed)
+        out = []
+        for _ in range(self.samples or 0):
+            values = {}
+            for name, spec in self.parameters.items():
+                if isinstance(spec, Uniform):
+                    values[name] = float(rng.uniform(*spec.uniform))
+                else:
+                    options = spec.values() if isinstance(spec, SweepRange) else list(spec)
+                    values[name] = options[int(rng.integers(len(options)))]
+            out.append((values, int(rng.integers(2**31 - 1))))
+        return out
 
 
 _TABLES = ("study", "components", "connections", "sweep", "exports", "subsystems")
@@ -552,7 +596,8 @@ def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
 
 def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str, Any]:
     """Parse a study file; a top-level ``extends = "other.toml"`` (relative to this file) starts
-    from that study and merges this file's tables over it."""
+    from that study and merges this file's tables over it (a component given another ``type``
+    starts afresh: the parent's parameters of the old type do not carry over)."""
     path = Path(path)
     data = _read_one(path)
     parent = data.pop("extends", None)
@@ -563,7 +608,12 @@ def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str,
     parent_path = (path.parent / parent).resolve()
     if parent_path in _seen:
         raise StudyError(f"{path}: field extends: circular ({' -> '.join(map(str, _seen + (parent_path,)))})")
-    return merge(read_study_file(parent_path, _seen + (path.resolve(),)), data)
+    base = read_study_file(parent_path, _seen + (path.resolve(),))
+    for name, spec in (data.get("components") or {}).items():
+        old = (base.get("components") or {}).get(name)
+        if isinstance(spec, dict) and isinstance(old, dict) and "type" in spec and spec["type"] != old.get("type"):
+            base["components"][name] = {}       # another type: its parameters and inputs start afresh
+    return merge(base, data)
 
 
 def _read_one(path: Path) -> dict[str, Any]:

@@ -44,10 +44,13 @@ class Point:
 
 
 def expand(study: Study) -> list[Point]:
-    """The sweep's points: grid (every combination) or zip (element by element), each per seed."""
+    """The sweep's points: grid (every combination) or zip (element by element), each per seed;
+    or the Monte Carlo draws (values and seed of each sample from the study's seed)."""
     sweep = study.sweep
     if sweep is None:
         raise StudyError(f"{study.path}: no [sweep] section")
+    if sweep.mode == "monte_carlo":
+        return [Point(i, values, seed) for i, (values, seed) in enumerate(sweep.draws(study.study.seed))]
     values = sweep.expanded()
     names = list(values)
     if sweep.mode == "zip":
@@ -259,7 +262,8 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
         return []
     params = list(study.sweep.parameters)
     x = params[0]
-    group_cols = params[1:] + (["seed"] if ok["seed"].nunique() > 1 else [])
+    scatter = study.sweep.mode == "monte_carlo"          # one cloud: each sample is its own point
+    group_cols = [] if scatter else params[1:] + (["seed"] if ok["seed"].nunique() > 1 else [])
     skip = set(params) | {"point", "seed", "status", "error", "sim_time_s"}
     metrics = [c for c in ok.columns if c not in skip and pd.api.types.is_numeric_dtype(ok[c])]
     cols = 3
@@ -269,7 +273,7 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     for ax, metric in zip(axes.flat, metrics):
         for label, g in groups:
             g = g.sort_values(x)
-            ax.plot(g[x], g[metric], "o-", ms=3, label=str(label) if group_cols else None)
+            ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=str(label) if group_cols else None)
         ax.set_xlabel(x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
     for ax in list(axes.flat)[len(metrics):]:
         ax.axis("off")

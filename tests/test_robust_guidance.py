@@ -88,3 +88,47 @@ def test_correlated_gps_error_has_the_gauss_markov_std_and_correlation_time():
     lag = int(T / dt)
     rho = np.corrcoef(x[:-lag], x[lag:])[0, 1]
     assert rho == pytest.approx(math.exp(-1.0), abs=0.06)
+
+
+# --- baselines: pure pursuit and Stanley ----------------------------------------------------------
+
+def _straight_inputs(offset_left: float, heading: float = 0.0, v: float = 2.0) -> dict:
+    """The reference moving east along y = 0 at v; the CG ``offset_left`` north of it."""
+    return {"x_ref": 0.0, "y_ref": 0.0, "xdot_ref": v, "ydot_ref": 0.0, "x": 0.0, "y": offset_left,
+            "heading": heading, "yaw_rate_ref": 0.0}
+
+
+def test_pure_pursuit_curvature_is_the_circle_through_the_goal_point():
+    """R at lateral offset d, heading along the line, goal L_d ahead: kappa = -2 d / (L_d^2 + d^2)
+    (the arc tangent to the heading through the goal), gamma_d = v kappa."""
+    from components.pure_pursuit import PurePursuit
+
+    pp = PurePursuit("pp", {"lookahead_min": 3.0, "lookahead_time": 0.0, "l_r": 0.4})
+    d = 0.5
+    pp.u.update(_straight_inputs(d))
+    pp.step(0.0, 0.05)
+    goal_ahead = 3.0 + 0.4                          # the goal is 3 m ahead of the reference point, R 0.4 m behind it
+    assert pp.y["yaw_rate_desired"] == pytest.approx(2.0 * -2 * d / (goal_ahead ** 2 + d ** 2), rel=1e-12)
+    assert pp.y["speed_desired"] == pytest.approx(2.0)
+
+
+def test_stanley_steers_by_heading_error_plus_cross_track_term():
+    """delta = psi_e + atan(k e / (v_soft + v)); gamma_d = v tan(delta) / L."""
+    from components.stanley import Stanley
+
+    st = Stanley("st", {"k": 1.5, "v_soft": 1.0, "l_f": 1.0, "l_r": 0.4})
+    st.u.update(_straight_inputs(0.0, heading=0.1))
+    st.step(0.0, 0.05)                                 # the front axle sits 1.0 sin(0.1) left of the line
+    delta = -0.1 - math.atan(1.5 * math.sin(0.1) / 3.0)
+    assert st.y["yaw_rate_desired"] == pytest.approx(2.0 * math.tan(delta) / 1.4, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["pure_pursuit", "stanley"])
+def test_baseline_studies_swap_only_the_tracker_and_track_the_figure8(name):
+    base = Study.load(FIGURE8)
+    study = Study.load(ROOT / "studies" / f"figure8_{name}.toml")
+    assert study.components["tracker"].type == name and study.connections == base.connections
+    assert {n: c for n, c in study.components.items() if n != "tracker"} == \
+        {n: c for n, c in base.components.items() if n != "tracker"}
+    m = run_study(study, None, plots=False).metrics
+    assert m["euclid_max_straight"] < 0.6 and m["euclid_max_curved"] < 0.8       # it tracks (baseline)

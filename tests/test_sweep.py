@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -132,3 +133,50 @@ def test_a_changed_study_is_not_mixed_into_old_results(tmp_path):
     run_sweep(path, tmp_path / "out")
     with pytest.raises(StudyError, match="different sweep"):
         run_sweep(path, tmp_path / "out", overrides=(SHORT, "tracker.k_s=0.5"))
+
+
+def test_monte_carlo_draws_are_seeded_within_their_ranges_and_distinct(tmp_path):
+    body = ('[sweep]\nmode = "monte_carlo"\nsamples = 400\n[sweep.parameters]\n'
+            '"reference.speed" = { uniform = [1.0, 2.5] }\n"tracker.k_c" = [1.0, 1.5, 2.0]\n')
+    study = load_study(sweep_file(tmp_path, body))
+    points = expand(study)
+    again = expand(load_study(sweep_file(tmp_path, body)))
+    assert [(p.values, p.seed) for p in points] == [(p.values, p.seed) for p in again]      # the study's seed
+    speeds = np.array([p.values["reference.speed"] for p in points])
+    assert speeds.min() >= 1.0 and speeds.max() <= 2.5 and abs(speeds.mean() - 1.75) < 0.06
+    counts = {v: sum(p.values["tracker.k_c"] == v for p in points) for v in (1.0, 1.5, 2.0)}
+    assert all(100 < c < 170 for c in counts.values())                                      # uniform choice
+    assert len({p.seed for p in points}) == 400
+    other = expand(load_study(sweep_file(tmp_path, body), ["study.seed=5"]))
+    assert [p.values for p in other] != [p.values for p in points]
+
+
+@pytest.mark.parametrize("body, words", [
+    ('[sweep]\nmode = "monte_carlo"\n[sweep.parameters]\n"reference.speed" = { uniform = [1.0, 2.5] }\n', ["needs 'samples'"]),
+    ('[sweep]\n[sweep.parameters]\n"reference.speed" = { uniform = [1.0, 2.5] }\n', ["need mode = 'monte_carlo'"]),
+    ('[sweep]\nmode = "monte_carlo"\nsamples = 3\n[sweep.parameters]\n"reference.speed" = { uniform = [2.5, 1.0] }\n',
+     ["low <= high"]),
+])
+def test_bad_monte_carlo_sections_are_refused_by_field(tmp_path, body, words):
+    with pytest.raises(StudyError) as err:
+        load_study(sweep_file(tmp_path, body))
+    for w in words:
+        assert w in str(err.value)
+    assert "sweep" in str(err.value)
+
+
+def test_robustness_study_runs_on_the_sweep_machinery_and_summarises(tmp_path):
+    """A short version of studies/robustness.toml (6 draws, 40 s): every point completes, the
+    summary counts them and its percentiles match the table."""
+    from analysis.robustness import summarise
+
+    study = Study.load(ROOT / "studies" / "robustness.toml", ["sweep.samples=6", "study.stop_time=40"])
+    table = SweepRun(study, tmp_path / "mc").run(2, progress=False)
+    assert list(table["status"]) == ["completed"] * 6
+    s = summarise(table)
+    assert s["runs"] == 6 and s["euclid_max_curved"]["max"] == pytest.approx(table["euclid_max_curved"].max())
+    assert 0.0 <= s["within_bounds"] <= 1.0
+    from orchestrator.sweep import sweep_plots
+
+    files = sweep_plots(study, table, tmp_path / "mc" / "plots")
+    assert {p.name for p in files} >= {"max_error_vs_delay.png", "robustness.json"}

@@ -45,18 +45,21 @@ class TractorParameters:
     def of(cls, parameters) -> "TractorParameters":
         """From a yaw plant's resolved parameters (SI; e.g. ``study.parameters(plant)``): values the
         study leaves unset (None) come from the named ``parameter_set`` (paper_models.PARAMETER_SETS;
-        by default the model's, DEFAULT_SET, else the Table)."""
+        by default the model's, DEFAULT_SET, else the Table); ``cornering_scale_front/rear``
+        multiply C_f and C_r (relative variations that hold for every set)."""
         from .paper_models import DEFAULT_SET, PARAMETER_SETS
 
         name = parameters.get("parameter_set") or DEFAULT_SET.get(parameters.get("model", ""), "table")
         if name not in PARAMETER_SETS:
             raise ValueError(f"parameter_set {name!r}; expected one of {sorted(PARAMETER_SETS)}")
         named = PARAMETER_SETS[name]
-        values = []
+        values = {}
         for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r"):
             v = parameters.get(k)
-            values.append(float(v) if v is not None else float(named.get(k, getattr(cls, k))))
-        return cls(*values)
+            values[k] = float(v) if v is not None else float(named.get(k, getattr(cls, k)))
+        values["C_f"] *= float(parameters.get("cornering_scale_front", 1.0))
+        values["C_r"] *= float(parameters.get("cornering_scale_rear", 1.0))
+        return cls(**values)
 
 
 GRAVITY = 9.81

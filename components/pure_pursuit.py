@@ -1,0 +1,77 @@
+"""Pure-pursuit tracker (Coulter 1992; the steering law AgOpenGPS users know), on the time-based
+reference, as a drop-in for the kinematic tracker (same inputs, same outputs to the yaw-rate MPC
+and the speed PID).
+
+The rear axle R = CG - l_r (cos psi, sin psi) chases the goal point G = ref + L_d t_r (t_r the
+reference's unit velocity; L_d = max(lookahead_min, lookahead_time v_r)). With alpha the angle from
+the heading to G - R and D = |G - R|:
+
+    kappa = 2 sin(alpha) / D,   gamma_d = v_d kappa,   v_d = v_r + k_s tanh(k_c e_along)
+
+e_along = (ref - CG) . t_r is the along-track error (the reference is time based).
+"""
+from __future__ import annotations
+
+import math
+
+from orchestrator.component import Component, inp, out, par
+
+TRACKER_PORTS = (
+    inp("x_ref", "m", 0.0, "reference CG east position"),
+    inp("y_ref", "m", 0.0, "reference CG north position"),
+    inp("xdot_ref", "m/s", 0.0, "reference east velocity"),
+    inp("ydot_ref", "m/s", 0.0, "reference north velocity"),
+    inp("x", "m", 0.0, "estimated CG east position"),
+    inp("y", "m", 0.0, "estimated CG north position"),
+    inp("heading", "rad", 0.0, "estimated yaw angle"),
+    inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate"),
+    out("speed_desired", "m/s", 0.0, "desired speed v_d"),
+    out("yaw_rate_desired", "rad/s", 0.0, "desired yaw rate gamma_d"),
+    out("error_x", "m", 0.0, "e_x = x_ref - x"),
+    out("error_y", "m", 0.0, "e_y = y_ref - y"),
+)
+TRACKER_FEEDTHROUGH = {k: ("x_ref", "y_ref", "xdot_ref", "ydot_ref", "x", "y", "heading", "yaw_rate_ref")
+                       for k in ("speed_desired", "yaw_rate_desired", "error_x", "error_y")}
+
+
+def along_track(u, p) -> tuple[float, float, float, float, float]:
+    """(e_x, e_y, v_r, unit reference direction t_x, t_y) and the speed law's v_d."""
+    ex, ey = u["x_ref"] - u["x"], u["y_ref"] - u["y"]
+    v_r = math.hypot(u["xdot_ref"], u["ydot_ref"])
+    if v_r > 1e-9:
+        tx, ty = u["xdot_ref"] / v_r, u["ydot_ref"] / v_r
+    else:
+        tx, ty = math.cos(u["heading"]), math.sin(u["heading"])
+    v_d = v_r + p["k_s"] * math.tanh(p["k_c"] * (ex * tx + ey * ty))
+    return ex, ey, tx, ty, v_d
+
+
+class PurePursuit(Component):
+    sampled = True
+    roles = ("tracker",)
+    variables = TRACKER_PORTS + (
+        par("k_s", "m/s", 0.6, "speed law: saturation constant"),
+        par("k_c", "1/m", 1.5, "speed law: gain on the along-track error"),
+        par("l_r", "m", 0.4, "rear axle to CG"),
+        par("lookahead_min", "m", 2.0, "shortest look-ahead distance L_d"),
+        par("lookahead_time", "s", 1.5, "look-ahead distance per unit reference speed"),
+    )
+    feedthrough = TRACKER_FEEDTHROUGH
+
+    def step(self, t: float, dt: float) -> None:
+        u, p, y = self.u, self.p, self.y
+        ex, ey, tx, ty, v_d = along_track(u, p)
+        v_r = math.hypot(u["xdot_ref"], u["ydot_ref"])
+        L_d = max(p["lookahead_min"], p["lookahead_time"] * v_r)
+        psi = u["heading"]
+        c, s = math.cos(psi), math.sin(psi)
+        rx, ry = u["x"] - p["l_r"] * c, u["y"] - p["l_r"] * s
+        gx, gy = u["x_ref"] + L_d * tx - rx, u["y_ref"] + L_d * ty - ry
+        D = max(math.hypot(gx, gy), 1e-6)
+        alpha = math.atan2(-s * gx + c * gy, c * gx + s * gy)
+        y["speed_desired"] = v_d
+        y["yaw_rate_desired"] = v_d * 2.0 * math.sin(alpha) / D
+        y["error_x"], y["error_y"] = ex, ey
+
+
+COMPONENT = PurePursuit

@@ -1,0 +1,50 @@
+"""Stanley tracker (Hoffmann et al. 2007, Stanford's DARPA vehicle; in AgOpenGPS too), on the
+time-based reference, as a drop-in for the kinematic tracker. The front axle F = CG + l_f
+(cos psi, sin psi) is steered onto the reference line through the reference point:
+
+    delta = psi_e + atan(k e_cross / (v_soft + v)),   psi_e = psi_r - psi,
+    e_cross = (F - ref) x t_r (positive left of the line),
+    gamma_d = v_d tan(delta) / L,   v_d = v_r + k_s tanh(k_c e_along)
+
+with psi_r the reference heading (of its velocity) and L = l_f + l_r; the wheel angle goes to the
+yaw-rate MPC as the yaw rate it makes (the same steering, estimation and speed stack).
+"""
+from __future__ import annotations
+
+import math
+
+from orchestrator.component import Component, par
+
+from .pure_pursuit import TRACKER_FEEDTHROUGH, TRACKER_PORTS, along_track
+
+
+class Stanley(Component):
+    sampled = True
+    roles = ("tracker",)
+    variables = TRACKER_PORTS + (
+        par("k_s", "m/s", 0.6, "speed law: saturation constant"),
+        par("k_c", "1/m", 1.5, "speed law: gain on the along-track error"),
+        par("k", "1", 1.0, "cross-track gain"),
+        par("v_soft", "m/s", 1.0, "softening speed (keeps the law finite at low speed)"),
+        par("l_f", "m", 1.0, "front axle to CG"),
+        par("l_r", "m", 0.4, "rear axle to CG"),
+        par("steer_limit", "rad", math.radians(45.0), "|delta| bound of the law"),
+    )
+    feedthrough = TRACKER_FEEDTHROUGH
+
+    def step(self, t: float, dt: float) -> None:
+        u, p, y = self.u, self.p, self.y
+        ex, ey, tx, ty, v_d = along_track(u, p)
+        psi = u["heading"]
+        fx = u["x"] + p["l_f"] * math.cos(psi) - u["x_ref"]
+        fy = u["y"] + p["l_f"] * math.sin(psi) - u["y_ref"]
+        cross = tx * fy - ty * fx                              # left of the line > 0
+        psi_e = math.atan2(math.sin(math.atan2(ty, tx) - psi), math.cos(math.atan2(ty, tx) - psi))
+        delta = psi_e - math.atan(p["k"] * cross / (p["v_soft"] + max(v_d, 0.0)))
+        delta = min(max(delta, -p["steer_limit"]), p["steer_limit"])
+        y["speed_desired"] = v_d
+        y["yaw_rate_desired"] = v_d * math.tan(delta) / (p["l_f"] + p["l_r"])
+        y["error_x"], y["error_y"] = ex, ey
+
+
+COMPONENT = Stanley
