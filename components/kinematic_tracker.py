@@ -27,29 +27,35 @@ def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float) -> tupl
     return c * xdot + s * ydot, (-s * xdot + c * ydot) / l_r
 
 
+# the ports every tracker shares (kinematic, pure pursuit, Stanley): swappable in a study
+TRACKER_INPUTS = (
+    inp("x_ref", "m", 0.0, "reference CG east position"),
+    inp("y_ref", "m", 0.0, "reference CG north position"),
+    inp("xdot_ref", "m/s", 0.0, "reference east velocity"),
+    inp("ydot_ref", "m/s", 0.0, "reference north velocity"),
+    inp("x", "m", 0.0, "estimated CG east position"),
+    inp("y", "m", 0.0, "estimated CG north position"),
+    inp("heading", "rad", 0.0, "estimated yaw angle"),
+    inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate gamma_r (feed-forward)"),
+)
+TRACKER_OUTPUTS = (
+    out("speed_desired", "m/s", 0.0, "desired speed v_d"),
+    out("yaw_rate_desired", "rad/s", 0.0, "desired yaw rate gamma_d"),
+    out("error_x", "m", 0.0, "e_x = x_ref - x"),
+    out("error_y", "m", 0.0, "e_y = y_ref - y"),
+)
+TRACKER_FEEDTHROUGH = {o.name: tuple(i.name for i in TRACKER_INPUTS) for o in TRACKER_OUTPUTS}
+SPEED_LAW = (par("k_s", "m/s", 0.6, "saturation constant"), par("k_c", "1/m", 1.5, "gain"))
+
+
 class KinematicTracker(Component):
     sampled = True
     roles = ("tracker",)
-    variables = (
-        inp("x_ref", "m", 0.0, "reference CG east position"),
-        inp("y_ref", "m", 0.0, "reference CG north position"),
-        inp("xdot_ref", "m/s", 0.0, "reference east velocity"),
-        inp("ydot_ref", "m/s", 0.0, "reference north velocity"),
-        inp("x", "m", 0.0, "estimated CG east position"),
-        inp("y", "m", 0.0, "estimated CG north position"),
-        inp("heading", "rad", 0.0, "estimated yaw angle"),
-        inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate gamma_r (feed-forward with a look-ahead)"),
-        par("k_s", "m/s", 0.6, "saturation constant"),
-        par("k_c", "1/m", 1.5, "gain"),
+    variables = TRACKER_INPUTS + SPEED_LAW + (
         par("l_r", "m", 0.4, "rear axle to CG"),
         par("lookahead", "m", 0.0, "steered point a ahead of the rear axle (0: a = l_r, the paper's law)"),
-        out("speed_desired", "m/s", 0.0, "desired speed v_d"),
-        out("yaw_rate_desired", "rad/s", 0.0, "desired yaw rate gamma_d"),
-        out("error_x", "m", 0.0, "e_x = x_ref - x"),
-        out("error_y", "m", 0.0, "e_y = y_ref - y"),
-    )
-    feedthrough = {k: ("x_ref", "y_ref", "xdot_ref", "ydot_ref", "x", "y", "heading", "yaw_rate_ref")
-                   for k in ("speed_desired", "yaw_rate_desired", "error_x", "error_y")}
+    ) + TRACKER_OUTPUTS
+    feedthrough = TRACKER_FEEDTHROUGH
 
     def initialize(self, t0: float, dt: float) -> None:
         p = self.p

@@ -14,25 +14,9 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from orchestrator.component import Component, par
 
-TRACKER_PORTS = (
-    inp("x_ref", "m", 0.0, "reference CG east position"),
-    inp("y_ref", "m", 0.0, "reference CG north position"),
-    inp("xdot_ref", "m/s", 0.0, "reference east velocity"),
-    inp("ydot_ref", "m/s", 0.0, "reference north velocity"),
-    inp("x", "m", 0.0, "estimated CG east position"),
-    inp("y", "m", 0.0, "estimated CG north position"),
-    inp("heading", "rad", 0.0, "estimated yaw angle"),
-    inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate"),
-    out("speed_desired", "m/s", 0.0, "desired speed v_d"),
-    out("yaw_rate_desired", "rad/s", 0.0, "desired yaw rate gamma_d"),
-    out("error_x", "m", 0.0, "e_x = x_ref - x"),
-    out("error_y", "m", 0.0, "e_y = y_ref - y"),
-)
-TRACKER_FEEDTHROUGH = {k: ("x_ref", "y_ref", "xdot_ref", "ydot_ref", "x", "y", "heading", "yaw_rate_ref")
-                       for k in ("speed_desired", "yaw_rate_desired", "error_x", "error_y")}
-
+from .kinematic_tracker import SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS
 
 def along_track(u, p) -> tuple[float, float, float, float, float]:
     """(e_x, e_y, v_r, unit reference direction t_x, t_y) and the speed law's v_d."""
@@ -49,9 +33,7 @@ def along_track(u, p) -> tuple[float, float, float, float, float]:
 class PurePursuit(Component):
     sampled = True
     roles = ("tracker",)
-    variables = TRACKER_PORTS + (
-        par("k_s", "m/s", 0.6, "speed law: saturation constant"),
-        par("k_c", "1/m", 1.5, "speed law: gain on the along-track error"),
+    variables = TRACKER_INPUTS + SPEED_LAW + TRACKER_OUTPUTS + (
         par("l_r", "m", 0.4, "rear axle to CG"),
         par("lookahead_min", "m", 2.0, "shortest look-ahead distance L_d"),
         par("lookahead_time", "s", 1.5, "look-ahead distance per unit reference speed"),

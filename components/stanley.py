@@ -15,15 +15,14 @@ import math
 
 from orchestrator.component import Component, par
 
-from .pure_pursuit import TRACKER_FEEDTHROUGH, TRACKER_PORTS, along_track
+from .kinematic_tracker import SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS
+from .pure_pursuit import along_track
 
 
 class Stanley(Component):
     sampled = True
     roles = ("tracker",)
-    variables = TRACKER_PORTS + (
-        par("k_s", "m/s", 0.6, "speed law: saturation constant"),
-        par("k_c", "1/m", 1.5, "speed law: gain on the along-track error"),
+    variables = TRACKER_INPUTS + SPEED_LAW + TRACKER_OUTPUTS + (
         par("k", "1", 1.0, "cross-track gain"),
         par("v_soft", "m/s", 1.0, "softening speed (keeps the law finite at low speed)"),
         par("l_f", "m", 1.0, "front axle to CG"),
