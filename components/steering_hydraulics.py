@@ -15,6 +15,11 @@ Extensions (off by default; entries of the diagnosis catalogue): ``command_delay
 acts ``d`` seconds late, resolved to the component's step), ``angle_deadband`` (the PI sees
 sign(e) max(|e| - D, 0): errors below D are ignored) and ``rate_limit`` (|ddelta/dt| <= r, on top
 of the valve's flow limit; 0 = no extra limit).
+
+``quantization_guard`` (a controller setting, on in the shipped figure-8): the PI also ignores
+errors within half the potentiometer resolution. Without it the PI hunts between two sensor levels
+(the wheel-rate reverses about 9 times a second on the figure-8); with it, once a second. The
+diagnosis' first-order equivalent leaves it out, as it leaves out the potentiometer's quantisation.
 """
 from __future__ import annotations
 
@@ -61,6 +66,8 @@ class SteeringHydraulics(Component):
         par("delta0", "rad", 0.0, "initial wheel angle"),
         par("command_delay", "s", 0.0, "extension: transport delay of the command"),
         par("angle_deadband", "rad", 0.0, "extension: angle errors below this are ignored"),
+        par("quantization_guard", "1", 0, "1: the PI also ignores errors within half the potentiometer "
+            "resolution (no hunting between two sensor levels)"),
         par("rate_limit", "rad/s", 0.0, "extension: extra wheel-rate limit (0 = the valve's only)"),
         out("steer_angle", "rad", 0.0, "true front wheel angle delta"),
         out("steer_angle_measured", "rad", 0.0, "potentiometer reading (quantised)"),
@@ -104,7 +111,7 @@ class SteeringHydraulics(Component):
         history = self.command_history
         history.append(float(self.u["steer_angle_cmd"]))
         cmd = history[0]
-        dead = p["angle_deadband"]
+        dead = p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0)
         max_move = p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf
         delta, opening = self.delta, self.opening
         v_rel = 0.0
