@@ -52,9 +52,9 @@ class StudySettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
     name: str
     description: str = ""
-    start_time: float = 0.0
-    stop_time: float = Field(gt=0)
-    base_step: float = Field(gt=0)
+    start_time: float = Field(default=0.0, allow_inf_nan=False)
+    stop_time: float = Field(gt=0, allow_inf_nan=False)
+    base_step: float = Field(gt=0, allow_inf_nan=False)
     seed: int = Field(ge=0)
     signals_format: Literal["parquet", "csv"] = "parquet"
     component_package: str | None = None   # look types up here first (default: registered packages)

@@ -204,3 +204,22 @@ def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_pat
     assert "run too short for metrics" in proc.stderr and "study.analysis" in proc.stderr
     assert (tmp_path / "signals.parquet").exists()
     assert json.loads((tmp_path / "metrics.json").read_text())["status"] == "analysis_failed"
+
+
+def test_infinite_times_are_refused_with_the_field_named(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(ROOT / "studies" / "figure8.toml"),
+                           "--out", str(tmp_path / "o"), "--set", "study.stop_time=inf"], capture_output=True,
+                          text=True, cwd=ROOT)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "study.stop_time" in proc.stderr and "finite" in proc.stderr
+
+
+def test_result_files_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
+    import os
+
+    from orchestrator.results import write_json
+
+    mask = os.umask(0)
+    os.umask(mask)
+    path = write_json(tmp_path / "m.json", {"a": 1})
+    assert path.stat().st_mode & 0o777 == 0o666 & ~mask
