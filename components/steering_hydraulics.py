@@ -86,6 +86,8 @@ class SteeringHydraulics(Component):
         self.substeps = max(1, int(round(dt / p["internal_step"])))
         for key in ("command_delay", "angle_deadband", "rate_limit"):
             self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
+        self.require(p["quantization_guard"] in (0, 1), f"parameter quantization_guard must be 0 or 1, "
+                     f"got {p['quantization_guard']!r}")
         delay_steps = int(round(float(p["command_delay"]) / dt))
         self.command_history = deque([0.0] * delay_steps, maxlen=delay_steps + 1)
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],

@@ -16,6 +16,7 @@ host's; ``dt`` must be a whole number of the inner base steps.
 """
 from __future__ import annotations
 
+import json
 from typing import Any, ClassVar
 
 from .build import System, build_system
@@ -109,8 +110,19 @@ def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
 
 
+_CLASSES: dict[str, type["CompositeComponent"]] = {}
+
+
 def composite_class(sub: Study, where: str) -> type["CompositeComponent"]:
-    """A Component class whose ports are ``sub``'s exports (built once to check them)."""
+    """A Component class whose ports are ``sub``'s exports (built once to check them; cached on
+    the subsystem's content, so looking components up does not rebuild it)."""
+    key = json.dumps([str(sub.path), sub.to_data()], sort_keys=True, default=str)
+    if key not in _CLASSES:
+        _CLASSES[key] = _composite_class(sub, where)
+    return _CLASSES[key]
+
+
+def _composite_class(sub: Study, where: str) -> type["CompositeComponent"]:
     if sub.exports is None:
         raise StudyError(f"{where}: {sub.where} has no [exports] table; a study used as a subsystem declares "
                          f"the ports it offers: [exports] inputs = {{port = \"component.input\"}}, "

@@ -184,3 +184,10 @@ def test_the_steering_does_not_hunt_between_potentiometer_levels():
     hunting = reversals_per_second("steering.quantization_guard=0")
     perfect = reversals_per_second("steering.quantization_guard=0", "steering.potentiometer_resolution=0.0")
     assert hunting > 3 * guarded and guarded < 2 * perfect + 1.0, (hunting, guarded, perfect)
+
+
+def test_quantization_guard_takes_only_0_or_1():
+    from orchestrator.engine import RunError
+
+    with pytest.raises(RunError, match="quantization_guard must be 0 or 1, got 'yes'"):
+        metrics("steering.quantization_guard=yes", "study.stop_time=20")
