@@ -15,6 +15,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import closed_loop  # noqa: E402
+import diagnosis_rate  # noqa: E402
 import fmu_step  # noqa: E402
 import identify_time  # noqa: E402
 import mpc_step  # noqa: E402
@@ -66,6 +67,11 @@ def main() -> None:
     ident = identify_time.measure(repeat=1 if args.quick else 3)
     rows.append(("identification", "identify studies/identification.toml (fresh process)",
                  f"{ident['median']:.1f} s", f"< 10 s: {'met' if ident['median'] < 10 else 'NOT met'}"))
+
+    cases = ["none", "actuator_delay+steering_offset+antenna_lever_arm"] + ([] if args.quick else ["wheel_slip"])
+    for case, seconds in diagnosis_rate.timing(420.0, cases):
+        rows.append(("diagnosis", f"diagnose a 420 s log ({case}), plots included", f"{seconds:.1f} s",
+                     f"<= 15 s: {'met' if seconds <= 15 else 'NOT met'}"))
 
     sw = sweep.measure(stop_time=40.0 if args.quick else None)
     (_, n, _, r1), (_, _, _, r2) = sw["rows"]

@@ -48,7 +48,7 @@ def baseline_from_study(study: Study) -> Baseline:
         raise StudyError(f"{study.where}: components.{found['yaw_plant']}.parameters.model: the diagnosis needs a "
                          f"physical yaw model {PHYSICAL_MODELS}, got {tp['model']!r}")
     values = {"steering_time_constant": FirstOrderSteering.of(view.parameters("steering")).time_constant,
-              "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0}
+              "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
     return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view)

@@ -27,7 +27,7 @@ from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN, Effect, Parameter
 from .replay import (YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, integrate,
                      steering_replay)
 
-STAGES = ("steering", "yaw", "position")
+STAGES = ("steering", "yaw", "position", "speed")
 
 
 class CannotDecide(Exception):
@@ -71,6 +71,13 @@ class Replay:
         steering = {"fit": after_burn & (self.t < t_split), "test": self.t >= t_split}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
         self.masks = {"steering": steering, "yaw": {k: m & moving for k, m in steering.items()}}
+        # speed: the GPS chord speed (1 s chords, centred) where a chord exists and the tractor moves
+        k, d = chords(self.gps, self.h)
+        self.chord_k, self.chord_span = k, 2 * k * self.h
+        self.track_speed = np.full(len(self.t), np.nan)
+        self.track_speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
+        has_chord = np.isfinite(self.track_speed)
+        self.masks["speed"] = {p: m & has_chord for p, m in self.masks["yaw"].items()}
         self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed)
         self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
                              self.heading, min_speed=self.min_speed)
@@ -98,7 +105,8 @@ class Replay:
                                "the log must hold m/s")
         if ratio > 50:
             raise CannotDecide(f"columns 'x', 'y' move {ratio:.0f} times slower than 'v' says: they look like "
-                               f"degrees of latitude/longitude; the log must hold metres east/north of a datum")
+                               f"degrees of latitude/longitude, or they do not follow the tractor at all (noise, a "
+                               f"fixed point); the log must hold the GPS position in metres east/north of a datum")
         if not 0.67 < ratio < 1.5:
             raise CannotDecide(f"column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
                                f"check the units of v, x and y (m/s and m)")
@@ -128,10 +136,17 @@ class Replay:
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
             return self.yaw.yaw_rate(v)
-        return antenna_track(self.t, self.gyro, self.speed, v)
+        track = antenna_track(self.t, self.gyro, self.speed, v)
+        if stage == "speed":
+            k = self.chord_k
+            out = np.full(len(self.t), np.nan)
+            d = track[2 * k:] - track[:-2 * k]
+            out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
+            return out
+        return track
 
     def measured(self, stage: str) -> np.ndarray:
-        return {"steering": self.delta, "yaw": self.gyro, "position": self.gps}[stage]
+        return {"steering": self.delta, "yaw": self.gyro, "position": self.gps, "speed": self.track_speed}[stage]
 
     def residuals(self, stage: str, v: dict[str, float], *parts: str) -> np.ndarray | tuple[np.ndarray, ...]:
         """The stage's residuals on each named part ("fit", "test"), from one simulation; one
@@ -177,6 +192,7 @@ class Fit:
     n_eff: dict[str, float]
     rmse_test: dict[str, float]
     std: dict[str, float] = field(default_factory=dict)
+    free: tuple[str, ...] = ()          # the parameters this fit moved
 
 
 def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
@@ -220,7 +236,7 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
                 std[p.name] = float(math.sqrt(max(cov[i, i], 0.0)) * p.scale)
         except np.linalg.LinAlgError:
             pass
-    return Fit(values, rss, n, n_eff, rmse, std)
+    return Fit(values, rss, n, n_eff, rmse, std, tuple(p.name for p in free))
 
 
 def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
@@ -236,51 +252,11 @@ def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
     return fit, sigma
 
 
-@dataclass
-class Finding:
-    effect: Effect
-    fit: Fit
-    delta_bic: float
-    gain_by_signal: dict[str, float]
-    rmse_before: dict[str, float]
-    rmse_after: dict[str, float]
-    material: bool
-    supported: bool
-    reasons: list[str]
-
-    @property
-    def gain(self) -> float:
-        return self.gain_by_signal[SIGNALS[self.effect.stages[0]][0]]
-
-
-def assess_effect(replay: Replay, effect: Effect, base: Fit, sigma: dict[str, float], min_gain: float = 0.05) -> Finding:
-    free = [p for s in effect.stages for p in UNCERTAIN[s]] + list(effect.parameters)
-    starts = [{p.name: x for p, x in zip(effect.parameters, start)} for start in effect.starts]
-    fit = _fit(replay, base.values, free, effect.stages, starts, sigma)
-    n_total = sum(fit.n_eff[s] for s in effect.stages)
-    dbic = sum(fit.n_eff[s] * math.log(max(fit.rss[s], 1e-300) / max(base.rss[s], 1e-300)) for s in effect.stages)
-    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
-    names = {s: SIGNALS[s][0] for s in effect.stages}
-    before = {names[s]: base.rmse_test[s] for s in effect.stages}
-    after = {names[s]: fit.rmse_test[s] for s in effect.stages}
-    gains = {k: 1.0 - after[k] / before[k] if before[k] > 0 else 0.0 for k in before}
-    material = bool(effect.material(fit.values, replay.baseline.values))
-    reasons = []
-    if dbic >= -10:
-        reasons.append(f"dBIC {dbic:.1f} is not below -10")
-    main = names[effect.stages[0]]
-    if gains[main] < min_gain:
-        reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
-    worse = [k for k, g in gains.items() if g < -0.05]
-    if worse:
-        reasons.append(f"held-out RMS rises for {worse}")
-    if not material:
-        reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
-    return Finding(effect, fit, dbic, gains, before, after, material, not reasons, reasons)
-
-
-def assess_catalogue(replay: Replay, min_gain: float = 0.05) -> tuple[Fit, dict[str, float], list[Finding]]:
-    base, sigma = fit_baseline(replay)
-    findings = [assess_effect(replay, e, base, sigma, min_gain) for e in CATALOGUE]
-    findings.sort(key=lambda f: (not f.supported, f.delta_bic))
-    return base, sigma, findings
+def merged(model: Fit, part: Fit, reset: dict[str, float] | None = None) -> Fit:
+    """``model`` with the stages that ``part`` scored, and the parameters it moved, taken from
+    ``part`` (``reset``: further values, those of an effect that leaves the model)."""
+    def upd(a, b):
+        return {**a, **b}
+    values = {**model.values, **{k: part.values[k] for k in part.free}, **(reset or {})}
+    return Fit(values, upd(model.rss, part.rss), upd(model.n, part.n), upd(model.n_eff, part.n_eff),
+               upd(model.rmse_test, part.rmse_test), upd(model.std, part.std))

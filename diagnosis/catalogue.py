@@ -29,8 +29,11 @@ EFFECT_IDS = tuple(e.id for e in CATALOGUE)
 # the baseline's re-fitted ("uncertain") parameters of each stage
 UNCERTAIN = {
     "steering": (Parameter("steering_time_constant", "s", 0.05, 0.005, 1.0),),
-    "yaw": (Parameter("cornering_front_scale", "1", 0.2, 0.4, 2.5), Parameter("cornering_rear_scale", "1", 0.2, 0.4, 2.5)),
+    "yaw": (Parameter("cornering_front_scale", "1", 0.2, 0.4, 2.5), Parameter("cornering_rear_scale", "1", 0.2, 0.4, 2.5),
+            Parameter("relaxation_scale", "1", 0.2, 0.3, 3.0)),
     "position": (),
+    "speed": (),
 }
 
-SIGNALS = {"steering": ("delta", "rad"), "yaw": ("yaw_rate", "rad/s"), "position": ("antenna_position", "m")}
+SIGNALS = {"steering": ("delta", "rad"), "yaw": ("yaw_rate", "rad/s"), "position": ("antenna_position", "m"),
+           "speed": ("track_speed", "m/s")}

@@ -16,7 +16,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Exit 0 with a verdict (an effect or 'none'); 2 when the log or study cannot be used (the
+    """Exit 0 with a verdict (the strongest effect, 'unexplained' or 'none'); 2 when the log or study cannot be used (the
     verdict 'cannot decide' and the reason are still written)."""
     from orchestrator.study import StudyError
 
@@ -29,9 +29,20 @@ def run(args: argparse.Namespace) -> int:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
     print(f"verdict: {result['verdict']}")
-    for f in result["findings"][:3]:
-        print(f"  {f['effect']:26s} dBIC {f['evidence']['delta_bic']:9.1f}  held-out gain {100 * f['gain']:5.1f}%  "
-              + ", ".join(f"{k} = {v:.4g}" for k, v in f["params_display"].items()))
+    for e in result["effects"]:
+        if e["id"] == "unexplained":
+            xc, ext = e["correlates_with"], e["extension"]
+            print(f"  unexplained in the {e['stage']} stage ({e['ratio_to_floor']:.1f} x its noise floor; also: "
+                  f"{', '.join(s for s in e['stages'] if s != e['stage']) or 'none'}): correlates with {xc['signal']} "
+                  f"(rho {xc['rho']:.2f}); data-driven {ext['kind']} on {ext['signal']}: held-out gain "
+                  f"{100 * ext['held_out_gain']:.0f}%")
+            continue
+        print(f"  {e['id']:26s} dBIC {e['delta_bic']:9.1f}  held-out gain {100 * e['held_out_gain']:5.1f}%  "
+              + ", ".join(f"{k} = {v:.4g}" for k, v in e["parameters_display"].items()))
+    for tie in result.get("inconclusive", []):
+        print(f"  inconclusive: {' or '.join(tie['effects'])}; {tie['experiment']}")
+    for w in result.get("warnings", []):
+        print(f"warning: {w}", file=sys.stderr)
     print(f"report: {args.out}/report.md" + (f", extended study: {args.out}/{result['extended_study']}"
                                              if "extended_study" in result else ""))
     return 0

@@ -59,6 +59,7 @@ class Effect:
     starts: ClassVar[tuple[tuple[float, ...], ...]]      # starting values of the parameters
     threshold: ClassVar[str]                             # the materiality rule, in words
     hypothesis: ClassVar[str]                            # what it means on the tractor
+    experiment: ClassVar[str]                            # the excitation that shows it apart from its rivals
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

@@ -9,9 +9,16 @@ import os
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from measurements.truth_tractor import DEG, EFFECTS, make_log
+from measurements.truth_tractor import DEG, EFFECTS, UNLISTED, make_log
 
-__all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "recovered"]
+__all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recovered"]
+
+
+def expected_ids(truth: dict) -> set[str]:
+    """The effect ids a right diagnosis of a truth log finds: its catalogue effects, and
+    'unexplained' when it holds a fault outside the catalogue."""
+    ids = set(truth["effects"])
+    return (ids - set(UNLISTED)) | ({"unexplained"} if ids & set(UNLISTED) else set())
 
 
 def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, float]:
@@ -42,11 +49,14 @@ BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def diagnose_hidden(case: tuple) -> dict:
-    """Write the log of (effect, seed[, TABLE scale]) to ``folder`` and diagnose it (no plots)."""
+    """Write the log of (effect, seed, folder[, TABLE scale[, duration]]) to ``folder`` and diagnose
+    it (no plots); ``effect`` may be several ids joined by '+' (measurements.truth_tractor)."""
     from .pipeline import diagnose
 
-    effect, seed, folder, *scale = case
-    frame, truth = make_log(seed, effect, scale=scale[0] if scale else None)
+    effect, seed, folder, *rest = case
+    scale = rest[0] if rest else None
+    duration = rest[1] if len(rest) > 1 else 240.0
+    frame, truth = make_log(seed, effect, scale=scale, duration=duration)
     log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
     frame.to_parquet(log)
     result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)

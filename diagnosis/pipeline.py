@@ -5,15 +5,22 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
+
 from measurements import LogError, read_log
 from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 
 from .baseline import baseline_from_study
-from .candidates import STAGES, CannotDecide, Finding, Replay, assess_catalogue
+from .candidates import STAGES, CannotDecide, Fit, Replay, _fit
 from .catalogue import SIGNALS
 from .evidence import stage_evidence
-from .report import binned_figure, markdown, stage_figure
+from .noise_floor import stage_floors
+from .report import binned_figure, floors_figure, markdown, stage_figure
+from .selection import Finding, select
+from .unexplained import stage_check
+
+REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
 DEFAULT_STUDY = Path(__file__).resolve().parent.parent / "studies" / "figure8.toml"
 CANNOT_DECIDE = "cannot decide"
@@ -58,13 +65,82 @@ def _finding_json(f: Finding, baseline) -> dict:
             "param_std": {k: v for k, v in f.fit.std.items() if k in {p.name for p in f.effect.parameters}},
             "materiality": f.effect.threshold,
             "material": f.material,
-            "refit_baseline": {k: f.fit.values[k] for k in ("steering_time_constant", "cornering_front_scale",
-                                                           "cornering_rear_scale")},
+            "refit_baseline": {k: f.fit.values[k] for k in REFIT},
             "study_option": option_text,
             "summary": summary,
         },
         "_options": options,
     }
+
+
+def _effect_json(f: Finding, baseline, inconclusive: list[dict]) -> dict:
+    """One effect of the final model, judged by its drop-one comparison."""
+    item = _finding_json(f, baseline)
+    names = {p.name for p in f.effect.parameters}
+    return {
+        "id": f.effect.id,
+        "subsystem": f.effect.subsystem,
+        "hypothesis": f.effect.hypothesis,
+        "parameters": {k: v for k, v in item["params"].items()},
+        "parameters_display": item["params_display"],
+        "std": {k: v for k, v in f.fit.std.items() if k in names},
+        "delta_bic": f.delta_bic,
+        "held_out_gain": f.gain,
+        "residual_by_stage": {s: {"rms_without": f.rmse_before[SIGNALS[s][0]], "rms_with": f.rmse_after[SIGNALS[s][0]],
+                                  "unit": SIGNALS[s][1]} for s in f.stages},
+        "study_option": item["evidence"]["study_option"],
+        "summary": item["evidence"]["summary"],
+        "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
+        "_options": item["_options"],
+    }
+
+
+def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
+    """What makes a verdict on this log fragile (issue 15, item 4)."""
+    out = []
+    duration = replay.t[-1] - replay.t[0]
+    if duration < 180:
+        out.append(f"the log lasts {duration:.0f} s: with {duration * (1 - replay.fit_fraction):.0f} s held out, "
+                   f"small effects cannot be confirmed (record at least 180 s, better 400 s)")
+    cmd_std = math.degrees(float(np.std(replay.cmd)))
+    if cmd_std < 2.0:
+        out.append(f"little steering excitation: delta_cmd varies by {cmd_std:.1f} deg (std); steering and yaw "
+                   f"effects need turns and steps of several degrees")
+    moving = replay.speed[replay.speed > replay.min_speed]
+    spread = float(np.percentile(moving, 90) - np.percentile(moving, 10)) if len(moving) else 0.0
+    if spread < 0.5:
+        out.append(f"the speed hardly varies (10-90% spread {spread:.2f} m/s): speed-dependent effects "
+                   f"(cornering stiffness, GPS latency against antenna position) cannot be told apart")
+    for stage, column in (("steering", replay.delta), ("yaw", replay.gyro)):
+        mask = replay.masks[stage]["test"]
+        spread = float(np.std(column[mask]))
+        if spread < 3 * floors[stage]:
+            out.append(f"the {SIGNALS[stage][0]} signal is mostly noise: std {spread:.3g} against a noise floor of "
+                       f"{floors[stage]:.3g} {SIGNALS[stage][1]}")
+        elif base.rmse_test[stage] > 0.9 * spread:
+            out.append(f"the baseline explains almost none of {SIGNALS[stage][0]}: held-out RMS {base.rmse_test[stage]:.3g} "
+                       f"against a signal std of {spread:.3g} {SIGNALS[stage][1]}; check the study and the log's columns")
+    return out
+
+
+def _unexplained(checks: dict) -> dict | None:
+    misfit = [c for c in checks.values() if c["misfit"]]
+    if not misfit:
+        return None
+    worst = max(misfit, key=lambda c: c["ratio"])
+    xc = worst["correlates_with"]
+    ext = worst["extension"]
+    gain = ext["held_out_gain"]
+    outcome = (f"takes {100 * gain:.0f}% off the held-out RMS" if gain >= 0.05 else
+               f"does not carry over to the held-out part ({100 * gain:+.0f}% on its RMS): the misfit is not a "
+               f"fixed function of one signal; extend the model by physics or record the conditions it happens in")
+    summary = (f"the {worst['stage']} stage stays {worst['ratio']:.1f} x its noise floor after the catalogued effects "
+               f"(excess {worst['excess']:.3g} {worst['unit']}); its residual correlates with {xc['signal']} "
+               f"(rho {xc['rho']:.2f}); a data-driven {ext['kind']} on {ext['signal']}, fitted on the training part, "
+               f"{outcome}")
+    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit],
+            "ratio_to_floor": worst["ratio"], "correlates_with": xc, "extension": ext,
+            "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
@@ -73,7 +149,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
-    result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "findings": []}
+    result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
+                    "findings": []}
     try:
         study = load_study(study_path)
         baseline = baseline_from_study(study)
@@ -84,39 +161,61 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         result["split_time"] = float("nan")
         _write(out, result, [])
         return result
-    base, sigma, findings = assess_catalogue(replay, min_gain)
+    sel = select(replay, min_gain, seed=study.study.seed)
+    base = sel.base
+    final = _fit(replay, sel.model.values, [], STAGES, [{}], sel.sigma)
+    floors = stage_floors(replay, final.values, seed=study.study.seed)
+    checks = {s: stage_check(replay, s, final.values, floors[s], math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
+              for s in STAGES}
     result["split_time"] = replay.t_split
-    result["baseline_refit"] = {k: base.values[k] for k in ("steering_time_constant", "cornering_front_scale",
-                                                           "cornering_rear_scale")}
-    result["noise_level"] = {SIGNALS[s][0]: sigma[s] for s in STAGES}
-    items = [_finding_json(f, baseline) for f in findings]
-    winner = items[0] if findings[0].supported else None
-    result["verdict"] = winner["effect"] if winner else "none"
+    result["baseline_refit"] = {k: base.values[k] for k in REFIT}
+    result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in STAGES}
+    result["noise_floor"] = {s: floors[s] for s in STAGES} | {"sensors": floors["_sensors"]}
+    effects = [_effect_json(f, baseline, sel.inconclusive) for f in sel.effects]
+    options = [o for e in effects for o in (e.pop("_options") or [])]
+    unexplained = _unexplained(checks)
+    result["effects"] = effects + ([unexplained] if unexplained else [])
+    result["verdict"] = effects[0]["id"] if effects else ("unexplained" if unexplained else "none")
+    result["inconclusive"] = sel.inconclusive
+    result["selection_trace"] = sel.trace
+    result["warnings"] = _warnings(replay, base, floors)
+    result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
+                            "rms_baseline_test": base.rmse_test[s],
+                            "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
+                        for s in STAGES}
     result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in STAGES}
-    if winner:
-        result["extended_residuals"] = {s: stage_evidence(replay, s, findings[0].fit.values)
-                                        for s in findings[0].effect.stages}
-    files = []
-    if plots:
-        for s in STAGES:
-            extended = findings[0].fit.values if winner and s in findings[0].effect.stages else None
-            files.append(stage_figure(replay, s, base.values, extended, out / f"{s}.png").name)
-        winner_values = findings[0].fit.values if winner else None
-        files.append(binned_figure(replay, base.values, winner_values, out / "binned.png").name)
-    options = winner.pop("_options") if winner else None
+    if effects:
+        result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in STAGES}
+    items = [_finding_json(f, baseline) for f in sel.first_step]
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
-    if winner and options:
+    files = []
+    if plots:
+        touched = {s for f in sel.effects for s in f.stages}
+        for s in STAGES:
+            files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
+                                      out / f"{s}.png").name)
+        files.append(binned_figure(replay, base.values, final.values if effects else None, out / "binned.png").name)
+        files.append(floors_figure(result, out / "noise_floors.png").name)
+    if effects and None not in [e["study_option"] for e in effects] and options:
         result["extended_study"] = "extended_study.toml"
         text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
-                                    f"{winner['effect']} found by `python -m orchestrator diagnose {log_path}`")
+                                    f"{' + '.join(e['id'] for e in effects)} found by "
+                                    f"`python -m orchestrator diagnose {log_path}`")
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
     return result
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
-    clean = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in result.items()}
-    write_json(out / "diagnosis.json", clean)
+    def clean(v):
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()}
+        if isinstance(v, list):
+            return [clean(x) for x in v]
+        return v
+    write_json(out / "diagnosis.json", clean(result))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

@@ -11,13 +11,15 @@ in the integral sense), so a 20 Hz log replays without half-a-sample lag.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from typing import Mapping
 
 import numpy as np
 
 from components.models import steering_equivalent
 from components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
-                                            state_space, with_cornering_scale, zoh_discretize)
+                                            state_space, zoh_discretize)
 
 
 def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float) -> np.ndarray:
@@ -48,37 +50,90 @@ class YawReplay:
         self.inputs = np.column_stack([midpoints(delta), np.ones(len(delta)), np.cos(psi), -np.sin(psi)])
         self.bins = np.round(np.maximum(midpoints(v), min_speed) / speed_grid).astype(int)
         self.grid = speed_grid
+        self.speeds = np.unique(self.bins) * speed_grid
+        self.index = np.searchsorted(np.unique(self.bins), self.bins)
+        self._parts: list[np.ndarray] | None = None
         self._cache: dict[tuple, np.ndarray] = {}
 
-    def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float) -> np.ndarray:
-        key = (round(front_scale, 12), round(rear_scale, 12), round(speed_slope, 12), v_ref)
+    def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
+                  relaxation_scale: float = 1.0) -> np.ndarray:
+        key = (round(front_scale, 12), round(rear_scale, 12), round(speed_slope, 12), v_ref, round(relaxation_scale, 12))
         hit = self._cache.get(key)
         if hit is not None:
             return hit
-        p = with_cornering_scale(self.params, front_scale, rear_scale)
-        mats = {}
-        for b in np.unique(self.bins):
-            speed = b * self.grid
-            A, B, _ = state_space(self.model, with_cornering_scale(p, cornering_scale(speed, speed_slope, v_ref)), speed)
-            Ad, Bd = zoh_discretize(A, np.column_stack([B, lateral_disturbance_column(A.shape[0])]), self.h)
-            mats[b] = (Ad, Bd[:, [0, 0, 1, 1]])
-        n = next(iter(mats.values()))[0].shape[0]
-        Z = np.zeros((n, 4))
-        out = np.empty((len(self.bins), 4))
-        for k, (b, u) in enumerate(zip(self.bins.tolist(), self.inputs)):
-            out[k] = Z[1]
-            Ad, Bsel = mats[b]
-            Z = Ad @ Z + Bsel * u
+        Ad, Bd = self._discrete(front_scale, rear_scale, speed_slope, v_ref, relaxation_scale)
+        out = blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0, 0, 1, 1]] * self.inputs[:, None, :], row=1)
         if len(self._cache) > 64:
             self._cache.clear()
         self._cache[key] = out
         return out
 
+    def _discrete(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
+                  relaxation_scale: float = 1.0):
+        """ZOH (Ad, [Bd_delta, Bd_lateral]) at each speed of the log, batched. A and B are affine in
+        the cornering stiffnesses and in 1/sigma (the relaxation lengths) at a given speed (every
+        physical model), so they are assembled from parts computed once:
+        A = A_0(v) + (1/s - 1) A_sigma(v) + c(v) (s_f C_f A_f(v) + s_r C_r A_r(v)), s the scale
+        on both relaxation lengths, A_sigma the part of A_0 proportional to 1/sigma."""
+        if self._parts is None:
+            zero = replace(self.params, C_f=0.0, C_r=0.0)
+            longer = replace(zero, sigma_f=2 * zero.sigma_f, sigma_r=2 * zero.sigma_r)
+            parts = []
+            for speed in self.speeds:
+                A0, B, _ = state_space(self.model, zero, speed)
+                A2, B2, _ = state_space(self.model, longer, speed)
+                Af = state_space(self.model, replace(zero, C_f=self.params.C_f), speed)[0] - A0
+                Ar = state_space(self.model, replace(zero, C_r=self.params.C_r), speed)[0] - A0
+                E = lateral_disturbance_column(len(B))
+                parts.append((A0, 2 * (A0 - A2), Af, Ar, np.column_stack([B, E]),
+                              np.column_stack([2 * (B - B2), np.zeros_like(E)])))
+            self._parts = [np.array(x) for x in zip(*parts)]
+        A0, As, Af, Ar, B, Bs = self._parts
+        c = np.array([cornering_scale(v, speed_slope, v_ref) for v in self.speeds])[:, None, None]
+        k = 1.0 / relaxation_scale - 1.0
+        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs, self.h)
+
+    def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
+        Ad, Bd = self._discrete(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                                v["cornering_reference_speed"], v["relaxation_scale"])
+        u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
+        return blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0] * u.shape[1]] * u[:, None, :], row=1)
+
     def yaw_rate(self, v: Mapping[str, float]) -> np.ndarray:
         R = self.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                           v["cornering_reference_speed"])
+                           v["cornering_reference_speed"], v["relaxation_scale"])
         return R[:, 0] + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
+
+
+def blocked_recursion(A: np.ndarray, b: np.ndarray, row: int, block: int = 0) -> np.ndarray:
+    """Row ``row`` of Z_{k-1} for the time-varying recursion Z_k = A_k Z_{k-1} + b_k, Z_{-1} = 0
+    (A: (N, n, n), b: (N, n, m)); the output at sample k is the state before its update.
+
+    Blocked: the N steps are cut into ~sqrt(N) blocks run side by side from a zero state, with
+    Phi_k = A_k ... A_first of each block; the block ends are then chained, Z_end(j) = Zl_end(j)
+    + Phi_end(j) Z_end(j-1), and every Z_k = Zl_k + Phi_k Z_end(j-1). Same arithmetic as the plain
+    loop, about sqrt(N) Python steps instead of N."""
+    N, n, m = b.shape
+    L = block or max(1, int(math.ceil(math.sqrt(N))))
+    J = -(-N // L)
+    pad = J * L - N
+    if pad:
+        A = np.concatenate([A, np.broadcast_to(np.eye(n), (pad, n, n))])
+        b = np.concatenate([b, np.zeros((pad, n, m))])
+    A, b = A.reshape(J, L, n, n), b.reshape(J, L, n, m)
+    Zl, Phi = np.empty((J, L, n, m)), np.empty((J, L, n, n))
+    z, phi = np.zeros((J, n, m)), np.broadcast_to(np.eye(n), (J, n, n))
+    for k in range(L):
+        z = A[:, k] @ z + b[:, k]
+        phi = A[:, k] @ phi
+        Zl[:, k], Phi[:, k] = z, phi
+    start = np.zeros((J, n, m))                       # true state before each block
+    for j in range(1, J):
+        start[j] = Zl[j - 1, -1] + Phi[j - 1, -1] @ start[j - 1]
+    Z = (Zl[:, :, row, :] + np.einsum("jkn,jnm->jkm", Phi[:, :, row, :], start)).reshape(J * L, m)[:N]
+    return np.vstack([np.zeros((1, m)), Z[:-1]])
 
 
 def integrate(x: np.ndarray, h: float) -> np.ndarray:

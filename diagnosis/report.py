@@ -10,8 +10,10 @@ from orchestrator.results import atomic_write
 
 from .catalogue import SIGNALS
 from .evidence import cross_correlation, spectrum
+from .unexplained import RATIO
 
-UNIT_SCALE = {"steering": (180 / np.pi, "deg"), "yaw": (1.0, "rad/s"), "position": (100.0, "cm")}
+UNIT_SCALE = {"steering": (180 / np.pi, "deg"), "yaw": (1.0, "rad/s"), "position": (100.0, "cm"),
+              "speed": (1.0, "m/s")}
 
 
 def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path) -> Path:
@@ -43,7 +45,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             ax[0, 1].plot(t[keep], k * res[keep], lw=0.5, color=color, label=label)
             f, p = spectrum(res[keep], 1 / replay.h)
             ax[1, 0].semilogy(f, p, color=color, label=label)
-            x = replay.cmd if stage == "steering" else replay.delta
+            x = {"steering": replay.cmd, "speed": replay.speed}.get(stage, replay.delta)
             lags, rho, bound = cross_correlation(res[keep], x[keep], 1 / replay.h)
             ax[1, 1].plot(lags, rho, color=color, label=label)
         ax[1, 1].axhspan(-bound, bound, color="0.85", label="95% bound (white)")
@@ -51,7 +53,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         ax[0, 1].set(title="residual (measured - simulated)", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].axvline(replay.t_split, color="k", ls="--", lw=0.8)
         ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel="PSD")
-        ax[1, 1].set(title=f"residual x {'delta_cmd' if stage == 'steering' else 'delta'} cross-correlation",
+        ax[1, 1].set(title=f"residual x {({'steering': 'delta_cmd', 'speed': 'v'}).get(stage, 'delta')} cross-correlation",
                      xlabel="lag [s]")
     for a in ax.flat:
         if a.get_legend_handles_labels()[0]:
@@ -72,14 +74,42 @@ def markdown(result: dict, plots: list[str]) -> str:
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
         return "\n".join(lines)
-    win = next((f for f in result["findings"] if f["effect"] == result["verdict"]), None)
-    if win:
-        lines += [f"{win['evidence']['summary']}", "",
-                  f"Switch it on in a study: `{win['evidence']['study_option']}` "
-                  f"(written to `extended_study.toml` when the study has that component).", ""]
-    else:
-        lines += ["No extension beats the noise: each one fails a test below.", ""]
-    lines += ["## Candidates, best first", "",
+    for e in result["effects"]:
+        lines += [f"- **{e['id']}**: {e['summary']}"]
+        if e["id"] != "unexplained":
+            lines += [f"  Switch it on in a study: `{e['study_option']}`"]
+    if result.get("extended_study"):
+        lines += ["", "All found effects are switched on in `extended_study.toml`."]
+    if not result["effects"]:
+        lines += ["No extension beats the noise, and every stage's residual is at its noise floor."]
+    for tie in result.get("inconclusive", []):
+        a, b = tie["effects"]
+        lines += ["", f"**Inconclusive**: {a} and {b} explain the same misfit equally well (dBIC {tie['delta_bic'][0]:.0f} "
+                      f"against {tie['delta_bic'][1]:.0f}); {a} is kept. Separate them with a new run, {tie['experiment']}."]
+    for w in result.get("warnings", []):
+        lines += ["", f"> Warning: {w}"]
+    lines += ["", "## Residual by stage against the noise floor (held-out RMS)", "",
+              "The floor is the sensors' white noise, estimated from the log (top of the residual spectrum; for the",
+              "position and speed stages propagated through the dead reckoning). 'without X': the final model",
+              "refitted without effect X. A stage is misfit above "
+              f"{RATIO:.1f} x its floor and a material excess.", "",
+              "| " + " | ".join(["stage", "unit", "floor", "baseline"]
+                                + [f"without {e['id']}" for e in result["effects"] if e["id"] != "unexplained"]
+                                + ["final", "x floor", "data-driven extension"]) + " |",
+              "|---|---|---:|---:|" + "---:|" * sum(e["id"] != "unexplained" for e in result["effects"]) + "---:|---:|---|"]
+    by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
+    for stage, st in result.get("stages", {}).items():
+        k, unit = UNIT_SCALE[stage]
+        cells = [f"{k * st['rms_without'][e['id']]:.3g}" if e["id"] in st["rms_without"] else "-"
+                 for e in result["effects"] if e["id"] != "unexplained"]
+        ext = by_stage.get(stage, {}).get("extension")
+        ext_text = (f"{ext['kind']} on {ext['signal']}: {k * ext['rms_after']:.3g} ({100 * ext['held_out_gain']:.0f}% off)"
+                    if ext else "-")
+        lines.append(f"| {stage} | {unit} | {k * st['floor']:.3g} | {k * st['rms_baseline_test']:.3g} | "
+                     + "".join(c + " | " for c in cells)
+                     + f"{k * st['rms_test']:.3g} | {st['ratio']:.2f}{' (misfit)' if st['misfit'] else ''} | {ext_text} |")
+    lines += [""]
+    lines += ["## Each catalogue effect alone against the baseline, best first", "",
               "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",
               "|---|---|---:|---:|---|---|---|"]
     for f in result["findings"]:
@@ -134,6 +164,41 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
         for a in ax[row]:
             a.legend(fontsize=7)
             a.grid(alpha=0.3)
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+    plt.close(fig)
+    return path
+
+
+def floors_figure(result: dict, path: Path) -> Path:
+    """Held-out residual RMS of each stage in multiples of its noise floor: baseline, the final
+    model without each found effect, the final model, and the data-driven extension."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    stages = list(result["stages"])
+    found = [e["id"] for e in result["effects"] if e["id"] != "unexplained"]
+    by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
+    series = [("baseline", lambda s, st: st["rms_baseline_test"], "tab:red")]
+    series += [(f"without {eid}", (lambda eid: lambda s, st: st["rms_without"].get(eid, np.nan))(eid), None)
+               for eid in found]
+    series += [("final model", lambda s, st: st["rms_test"], "tab:green"),
+               ("+ data-driven extension", lambda s, st: by_stage[s]["extension"]["rms_after"] if s in by_stage else np.nan,
+                "tab:purple")]
+    fig, ax = plt.subplots(figsize=(10, 4.2))
+    width = 0.8 / len(series)
+    for i, (label, get, color) in enumerate(series):
+        ratios = [get(s, result["stages"][s]) / result["stages"][s]["floor"] for s in stages]
+        ax.bar(np.arange(len(stages)) + (i - (len(series) - 1) / 2) * width, ratios, width, label=label, color=color)
+    ax.axhline(1.0, color="k", lw=1, label="noise floor")
+    ax.axhline(RATIO, color="k", lw=0.8, ls="--", label=f"misfit threshold ({RATIO} x floor)")
+    ax.set_yscale("log")
+    ax.set_xticks(range(len(stages)), [f"{s}\nfloor {UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"
+                                       for s in stages])
+    ax.set(ylabel="held-out residual RMS / noise floor [-]", title="What each model leaves, against the noise floor")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
     plt.close(fig)

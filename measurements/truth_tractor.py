@@ -4,8 +4,8 @@ Written from the paper's equations of motion (section III, RLF: relaxation lengt
 axle) in scalar form, integrated with Heun's method at 200 Hz (the project's plant uses exact ZOH
 steps with matrix exponentials), with its own steering loop (first order, rate limit, a 15 ms
 spool lag the baseline does not model), its own parameters drawn around the paper's values, and
-its own sensors sampled at 20 Hz. One catalogue effect can be injected; the diagnosis under test
-is not told which. Tests and benchmarks both use it (diagnosis.hidden_effects runs the diagnosis
+its own sensors sampled at 20 Hz. Any combination of catalogue effects can be injected, and
+faults the diagnosis catalogue does not list (UNLISTED); the diagnosis under test is not told which. Tests and benchmarks both use it (diagnosis.hidden_effects runs the diagnosis
 on its logs).
 """
 from __future__ import annotations
@@ -26,6 +26,28 @@ EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steeri
            "gps_latency", "speed_dependent_cornering", "side_slope", "antenna_lever_arm")
 
 
+# faults outside the diagnosis catalogue: the diagnosis must call them "unexplained"
+UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_saturation")
+
+
+def draw_unlisted(effect: str, rng: np.random.Generator) -> dict[str, float]:
+    """Magnitudes of the unlisted faults:
+
+    - steering_sensor_gain: the wheel-angle sensor reads g > 1 x the angle; the steering loop closes
+      on the reading, so the wheels turn 1/g as far as the log says (g < 1 would also make the
+      logged steering slower than its rate limit: a catalogued steering_rate_limit, rightly found);
+    - gyro_scale_factor: the gyro reads s x the yaw rate;
+    - wheel_slip: the logged speed (wheel speed) is (1 + slip) x the ground speed;
+    - tyre_saturation: the tyre forces saturate, F = C alpha / (1 + |alpha| / alpha_s).
+    """
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    u = rng.uniform
+    return {"steering_sensor_gain": {"sensor_gain": 1.0 + u(0.12, 0.2)},
+            "gyro_scale_factor": {"gyro_scale": 1.0 + sign * u(0.08, 0.15)},
+            "wheel_slip": {"slip": u(0.06, 0.12)},
+            "tyre_saturation": {"alpha_s": u(2.0, 4.0) * DEG}}[effect]
+
+
 def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float]:
     """A magnitude a real tractor shows."""
     sign = 1.0 if rng.random() < 0.5 else -1.0
@@ -44,9 +66,11 @@ def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float
     }[effect]
 
 
-def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0):
+def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0, speeds_cycle=(1.0, 2.0, 3.0)):
     """Steering command (held at ``rate``) and a smooth speed profile: 20 s segments cycling
-    through a multisine, steps, a headland-like turn and small corrections, at 1, 2 and 3 m/s."""
+    through a multisine, steps, a headland-like turn and small corrections, at 1, 2 and 3 m/s
+    (``speeds_cycle``: other segment speeds, e.g. one speed for a log that cannot separate
+    speed-dependent effects)."""
     n = int(round(duration * rate))
     t = np.arange(n) / rate
     cmd = np.zeros(n)
@@ -70,7 +94,7 @@ def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0):
         else:
             peak = rng.choice([-1, 1]) * rng.uniform(15, 25) * DEG
             cmd[a:b] = np.interp(tt, [0, 2, 8, 10, 14, 16, 20], [0, peak, peak, -0.5 * peak, -0.5 * peak, 0, 0])
-        speeds.append((1.0, 2.0, 3.0)[i % 3])
+        speeds.append(speeds_cycle[i % len(speeds_cycle)])
     cmd = np.clip(cmd, -30 * DEG, 30 * DEG)
 
     def speed(time: float) -> float:
@@ -83,12 +107,32 @@ def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0):
     return t, cmd, speed
 
 
-def make_log(seed: int, effect: str | None = None, duration: float = 240.0,
-             scale: dict[str, float] | None = None) -> tuple[pd.DataFrame, dict]:
-    """The log and the truth; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
+def effect_list(effect: str | tuple | list | None) -> list[str]:
+    """None, one effect id, a '+'-joined string or a sequence of ids -> the list of ids."""
+    if effect is None or effect == "none":
+        return []
+    if isinstance(effect, str):
+        return [e for e in effect.split("+") if e]
+    return list(effect)
+
+
+def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
+             scale: dict[str, float] | None = None, speeds: tuple[float, ...] = (1.0, 2.0, 3.0)) -> tuple[pd.DataFrame, dict]:
+    """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
+    EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
     sigma_f) to stress the diagnosis with a truth further from the baseline."""
     rng = np.random.default_rng(seed)
-    e = draw_effect(effect, rng)
+    ids = effect_list(effect)
+    unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED]
+    if unknown:
+        raise ValueError(f"unknown truth effects {unknown}; known: {EFFECTS + UNLISTED}")
+    e: dict[str, float] = {}
+    for i in [i for i in ids if i in EFFECTS] or [None]:
+        e.update(draw_effect(i, rng))
+    side = np.random.default_rng([seed, 1])           # unlisted faults: the catalogue draws stay as they were
+    for i in ids:
+        if i in UNLISTED:
+            e.update(draw_unlisted(i, side))
     p = dict(TABLE)
     for key, factor in (scale or {}).items():
         p[key] *= factor
@@ -101,15 +145,17 @@ def make_log(seed: int, effect: str | None = None, duration: float = 240.0,
     delay, offset = e.get("delay", 0.0), e.get("offset", 0.0)
     k_corner = e.get("k", 0.0)
     slope, downhill = e.get("slope", 0.0), e.get("downhill", 0.0)
-    t_log, cmd, speed_of = driving_plan(rng, duration)
+    t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=speeds)
     m, I, lf, lr, sf = p["m"], p["I"], p["l_f"], p["l_r"], p["sigma_f"]
     g_slope = G * math.sin(slope)
+    sensor_gain = e.get("sensor_gain", 1.0)
+    alpha_s = e.get("alpha_s", math.inf)
 
     def deriv(time, s):
         delta, spool, vy, r, af, psi, x, y = s
         k = int(math.floor((time - delay) * 20.0 + 1e-9))
         c = cmd[min(max(k, 0), len(cmd) - 1)]
-        err = c - delta
+        err = c - sensor_gain * delta           # the loop closes on the sensor's reading
         err = err - dead if err > dead else (err + dead if err < -dead else 0.0)
         want = max(-rate, min(rate, err / tau))
         v = speed_of(time)
@@ -118,8 +164,9 @@ def make_log(seed: int, effect: str | None = None, duration: float = 240.0,
         vv = max(v, 0.8)          # the slip equations divide by v; below 0.8 m/s scaled (v / vv)
         ar = (vy - lr * r) / vv
         a_lat = g_slope * math.sin(downhill - psi)
-        dvy = -vv * r + (-cf * af - cr * ar) / m + a_lat
-        dr = (-lf * cf * af + lr * cr * ar) / I
+        sat_f, sat_r = 1.0 + abs(af) / alpha_s, 1.0 + abs(ar) / alpha_s
+        dvy = -vv * r + (-cf * af / sat_f - cr * ar / sat_r) / m + a_lat
+        dr = (-lf * cf * af / sat_f + lr * cr * ar / sat_r) / I
         daf = (vy + lf * r - vv * (delta + offset + af)) / sf
         c_, s_ = math.cos(psi), math.sin(psi)
         return (spool, (want - spool) / tau_spool, dvy * (v / vv), dr * (v / vv), daf * (v / vv), r,
@@ -151,11 +198,11 @@ def make_log(seed: int, effect: str | None = None, duration: float = 240.0,
     frame = pd.DataFrame({
         "t": t_log,
         "delta_cmd": cmd,
-        "delta": q * np.round((delta[idx] + 0.05 * DEG * noise[0]) / q),
-        "v": np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
-        "yaw_rate": r[idx] + e.get("bias", 0.0) + 0.005 * noise[2],
+        "delta": q * np.round((sensor_gain * delta[idx] + 0.05 * DEG * noise[0]) / q),
+        "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
+        "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + 0.005 * noise[2],
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
-    truth = {"effect": effect or "none", **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"]}
+    truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"]}
     return frame, truth

@@ -37,24 +37,29 @@ def test_hidden_effect_is_named_recovered_and_gains_on_held_out_data(hidden, eff
     for seed in SEEDS:
         run = hidden[(effect, seed)]
         res = run["result"]
-        assert res["verdict"] == effect, (seed, res["verdict"], res["findings"][0]["evidence"]["reasons"])
+        assert res["verdict"] == effect, (seed, res["verdict"], res["selection_trace"])
         if effect == "none":
-            assert all(not f["evidence"]["supported"] for f in res["findings"])
+            assert res["effects"] == [] and all(not st["misfit"] for st in res["stages"].values())
             continue
-        top = res["findings"][0]
-        assert top["effect"] == effect and top["evidence"]["supported"]
-        est, true, tol = recovered(effect, run["truth"], top["params"])
+        assert [e["id"] for e in res["effects"]] == [effect], (seed, res["selection_trace"])
+        top = res["effects"][0]
+        est, true, tol = recovered(effect, run["truth"], top["parameters"])
         assert abs(est - true) <= tol, (seed, est, true, tol)
-        assert top["gain"] > 0.05
-        assert all(top["rmse_after"][k] < top["rmse_before"][k] * 1.05 for k in top["rmse_before"])
+        assert top["held_out_gain"] > 0.05
+        assert all(r["rms_with"] < r["rms_without"] * 1.05 for r in top["residual_by_stage"].values())
+        # the effect found alone against the baseline is the same one (the single-effect verdict of before)
+        assert res["findings"][0]["effect"] == effect and res["findings"][0]["evidence"]["supported"]
 
 
 def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
     res = hidden[("side_slope", SEEDS[0])]["result"]
-    assert {"verdict", "findings"} <= set(res)
+    assert {"verdict", "effects", "findings", "stages", "noise_floor", "warnings", "inconclusive"} <= set(res)
     assert [f["effect"] for f in res["findings"]].count("side_slope") == 1 and len(res["findings"]) == 9
     for f in res["findings"]:
         assert {"effect", "subsystem", "params", "rmse_before", "rmse_after", "gain", "evidence"} <= set(f)
+    for e in res["effects"]:
+        assert {"id", "parameters", "std", "residual_by_stage", "held_out_gain", "delta_bic"} <= set(e)
+    assert set(res["stages"]) == {"steering", "yaw", "position", "speed"}
     supported = [f["evidence"]["supported"] for f in res["findings"]]
     assert supported == sorted(supported, reverse=True)
     bics = [f["evidence"]["delta_bic"] for f in res["findings"] if f["evidence"]["supported"]]
@@ -76,7 +81,7 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     assert res["verdict"] == "actuator_delay" and "verdict: actuator_delay" in proc.stdout
     study = load_study(tmp_path / "d" / "extended_study.toml", ["study.stop_time=20"])
     fitted = study.parameters("steering")["command_delay"]
-    assert fitted == pytest.approx(res["findings"][0]["params"]["command_delay"])
+    assert fitted == pytest.approx(res["effects"][0]["parameters"]["command_delay"])
     ext = simulate(study)[0].to_frame()
     base = simulate(load_study(ROOT / "studies" / "figure8.toml", ["study.stop_time=20"]))[0].to_frame()
     assert np.max(np.abs(ext["tractor.x_cg"].to_numpy() - base["tractor.x_cg"].to_numpy())) > 1e-3
@@ -131,7 +136,8 @@ def test_report_shows_the_verdict_the_candidates_and_the_evidence_plots(tmp_path
     report = (tmp_path / "out" / "report.md").read_text()
     assert res["verdict"] == "steering_offset" and "## Verdict: **steering_offset**" in report
     assert report.count("| steering_offset |") == 1 and "## Baseline residuals" in report
-    for png in ("steering.png", "yaw.png", "position.png", "binned.png"):
+    assert "## Residual by stage against the noise floor" in report
+    for png in ("steering.png", "yaw.png", "position.png", "speed.png", "binned.png", "noise_floors.png"):
         assert (tmp_path / "out" / png).stat().st_size > 10_000 and f"]({png})" in report
     # the evidence a reader needs: the yaw residual's mean grows with speed (a steering offset
     # acts through the speed-dependent yaw gain), its sign is the offset's

@@ -37,36 +37,40 @@ class FirstOrderSteering:
                    p["deadband"] / kp + p["angle_deadband"], rate, p["command_delay"])
 
 
-def delayed_command(cmd: np.ndarray, h: float, delay: float) -> np.ndarray:
-    """Mean over [t_k, t_k + h) of the held command delayed by ``delay``:
-    (1 - f) cmd[k - n] + f cmd[k - n - 1] with delay = (n + f) h."""
+def delayed_command(cmd: np.ndarray, h: float, delay: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The held command delayed by ``delay`` = (n + f) h over [t_k, t_k + h): cmd[k - n - 1] for
+    the first f h, then cmd[k - n]. Returns (earlier, later, f)."""
     n = int(math.floor(delay / h + 1e-12))
     f = delay / h - n
     k = np.arange(len(cmd))
-    a = cmd[np.clip(k - n, 0, None)]
+    later = cmd[np.clip(k - n, 0, None)]
     if f <= 1e-12:
-        return a
-    return (1.0 - f) * a + f * cmd[np.clip(k - n - 1, 0, None)]
+        return later, later, 0.0
+    return cmd[np.clip(k - n - 1, 0, None)], later, f
 
 
 def simulate(cmd: np.ndarray, h: float, time_constant: float, deadband: float, rate_limit: float,
              delay: float, delta0: float) -> np.ndarray:
-    """delta[k+1] = delta[k] + clip(alpha dz(c[k] - delta[k], D), -r h, r h), alpha = 1 - exp(-h/tau):
-    the exact step of ddelta/dt = dz(c - delta, D)/tau away from the limits."""
-    c = delayed_command(np.asarray(cmd, float), h, delay).tolist()
-    alpha = 1.0 - math.exp(-h / max(time_constant, 1e-4))
-    move_max = rate_limit * h
-    out = [0.0] * len(c)
+    """delta <- delta + clip(alpha dz(c - delta, D), -r s, r s), alpha = 1 - exp(-s/tau): the exact
+    step of length s of ddelta/dt = dz(c - delta, D)/tau away from the limits, taken over each
+    piece of the interval on which the delayed held command is constant (two pieces when the
+    delay is not a whole number of samples, so a step of the command lands at its true time)."""
+    earlier, later, f = delayed_command(np.asarray(cmd, float), h, delay)
+    tau = max(time_constant, 1e-4)
+    pieces = [(later.tolist(), h)] if f == 0.0 else [(earlier.tolist(), f * h), (later.tolist(), (1.0 - f) * h)]
+    steps = [(c, 1.0 - math.exp(-s / tau), rate_limit * s) for c, s in pieces]
+    out = [0.0] * len(later)
     d = float(delta0)
-    for k, ck in enumerate(c):
+    for k in range(len(out)):
         out[k] = d
-        e = ck - d
-        if e > deadband:
-            e -= deadband
-        elif e < -deadband:
-            e += deadband
-        else:
-            continue
-        m = alpha * e
-        d += move_max if m > move_max else (-move_max if m < -move_max else m)
+        for c, alpha, move_max in steps:
+            e = c[k] - d
+            if e > deadband:
+                e -= deadband
+            elif e < -deadband:
+                e += deadband
+            else:
+                continue
+            m = alpha * e
+            d += move_max if m > move_max else (-move_max if m < -move_max else m)
     return np.asarray(out)

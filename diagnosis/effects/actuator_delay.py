@@ -12,6 +12,8 @@ class ActuatorDelay(Effect):
     starts = ((0.05,), (0.15,), (0.3,))
     threshold = "delay >= 0.05 s"
     hypothesis = "the wheels follow the command late: a transport delay in the valve drive or the bus"
+    experiment = ("small fast steering steps (+/-2 deg) at any speed: a delay shifts "
+                  "even the smallest moves, a rate limit does not")
 
     def baseline(self, study):
         return {"command_delay": FirstOrderSteering.of(study.parameters("steering")).delay}

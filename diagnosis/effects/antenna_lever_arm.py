@@ -13,6 +13,8 @@ class AntennaLeverArm(Effect):
     starts = ((0.0, 0.0),)
     threshold = "lever arm >= 0.15 m"
     hypothesis = "the antenna is not where the model puts it: in turns it swings on a different radius"
+    experiment = ("tight turns both ways at low speed: a lever arm swings the antenna "
+                  "on a different radius, independent of speed")
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

@@ -10,6 +10,7 @@ class GPSLatency(Effect):
     starts = ((0.05,), (0.25,))
     threshold = "latency >= 0.05 s"
     hypothesis = "the GPS reports where the antenna was a moment ago"
+    experiment = "straight runs at 1 and 3 m/s: a latency puts the fix behind by speed x latency, along the track"
 
     def baseline(self, study):
         return {"gps_latency": study.parameters("gps", {"latency": 0.0})["latency"]}

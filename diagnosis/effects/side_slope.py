@@ -26,6 +26,7 @@ class SideSlope(Effect):
     starts = ((0.0, 0.0),)
     threshold = "slope >= 1.5 deg"
     hypothesis = "the field is tilted: gravity pulls sideways, by an amount that follows the heading"
+    experiment = "the same straight line driven both ways: a slope's pull reverses with the heading"
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

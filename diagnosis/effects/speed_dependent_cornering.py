@@ -10,6 +10,8 @@ class SpeedDependentCornering(Effect):
     starts = ((0.0,), (-0.2,), (0.3,))
     threshold = "|k| >= 0.08 per m/s"
     hypothesis = "the tyres' cornering stiffness changes with speed: one model does not fit every speed"
+    experiment = ("the same steering multisine at 1, 2 and 3 m/s: only a speed-dependent "
+                  "stiffness changes the yaw gain's shape with speed")
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

@@ -16,6 +16,7 @@ class SteeringDeadband(Effect):
     starts = ((0.5 * DEG,), (2.0 * DEG,), (4.0 * DEG,))
     threshold = "dead-band >= the baseline's + 0.4 deg"
     hypothesis = "small steering corrections are not executed: play in the linkage or a valve dead-band"
+    experiment = "slow ramps and small steps around straight ahead: a dead-band swallows only the smallest commands"
 
     def baseline(self, study):
         return {"steering_deadband": FirstOrderSteering.of(study.parameters("steering")).deadband}

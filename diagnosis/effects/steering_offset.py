@@ -14,6 +14,8 @@ class SteeringOffset(Effect):
     starts = ((0.0,),)
     threshold = "|offset| >= 0.3 deg"
     hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"
+    experiment = ("straight runs at 1 and 3 m/s in both directions: an offset's "
+                  "yaw rate grows with speed and keeps its sign")
 
     def baseline(self, study):
         return {"steer_angle_offset": study.parameters("yaw_plant")["steer_angle_offset"]}

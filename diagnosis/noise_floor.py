@@ -1,0 +1,68 @@
+"""The noise floor of each replay stage, estimated from the log itself (issue 15, item 2).
+
+A model that explains the data leaves a residual at the sensors' noise. Model errors live where the
+tractor's dynamics live (below a few hertz); the sensors' white noise spreads evenly up to the
+Nyquist frequency. So the white level of a signal is read from the top of its spectrum:
+
+    sigma^2 = mean_{f in [0.35 fs, 0.5 fs]} S(f) * fs / 2     (S: one-sided Welch density)
+
+- steering, yaw: the white level of the stage's residual (wheel-angle sensor, gyro);
+- speed: the GPS chord speed against the dead-reckoned chord speed; both are 1 s means, so the floor
+  is propagated: var = 2 sigma_gps^2 / T^2 + sigma_v^2 / (T / h)   (T the chord span);
+- position: the dead-reckoned track integrates the gyro's and the speed's noise, so the floor is the
+  aligned residual of the same windows when only noise of the estimated levels is present
+  (Monte Carlo through the same replay, seeded), with the GPS white level added.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.signal import welch
+
+HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
+
+
+def white_level(x: np.ndarray, fs: float) -> float:
+    """Standard deviation of the white part of ``x`` from the top of its Welch spectrum."""
+    x = np.asarray(x, float)
+    if x.ndim == 1:
+        x = x[None, :]
+    densities = []
+    for row in x:
+        f, p = welch(row - row.mean(), fs=fs, nperseg=min(len(row), 128))
+        band = (f >= HIGH_BAND[0] * fs) & (f <= HIGH_BAND[1] * fs)
+        densities.append(p[band].mean())
+    return math.sqrt(float(np.mean(densities)) * fs / 2.0)
+
+
+def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: int = 4) -> dict[str, float]:
+    """The RMS a residual of each stage would have if the model were right (same units as the
+    stage's residual); ``values`` is the fitted model (its position track is perturbed)."""
+    fs = 1.0 / replay.h
+    floors = {}
+    for stage in ("steering", "yaw"):
+        floors[stage] = white_level(replay.residual_series(stage, values)[1], fs)
+    # GPS white level: from the aligned position residual, window by window, each axis
+    rows = np.concatenate([replay.windows["fit"], replay.windows["test"]])
+    from .replay import aligned_residuals
+
+    nominal = replay.predicted("position", values)
+    res = aligned_residuals(nominal, replay.gps, rows)
+    sigma_gps = white_level(np.concatenate([res[..., 0], res[..., 1]]), fs)
+    sigma_v = white_level(replay.speed, fs)
+    sigma_gyro = floors["yaw"]
+    span = replay.chord_span
+    floors["speed"] = math.sqrt(2 * sigma_gps ** 2 / span ** 2 + sigma_v ** 2 * replay.h / span)
+    rng = np.random.default_rng(seed)
+    from .replay import antenna_track
+
+    sq = []
+    for _ in range(realisations):
+        noisy = antenna_track(replay.t, replay.gyro + sigma_gyro * rng.standard_normal(len(replay.t)),
+                              replay.speed + sigma_v * rng.standard_normal(len(replay.t)), values)
+        gps = nominal + sigma_gps * rng.standard_normal(nominal.shape)
+        sq.append(np.mean(aligned_residuals(noisy, gps, rows) ** 2))
+    floors["position"] = math.sqrt(float(np.mean(sq)))
+    floors["_sensors"] = {"delta": floors["steering"], "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
+    return floors

@@ -1,0 +1,264 @@
+"""Several effects at once (issue 15, item 1): forward selection with a joint refit, and backward
+elimination, so that effects that mimic each other are separated by evidence, not by the order
+in which they were tried.
+
+The model is the baseline plus a set S of catalogue effects. Stages couple only through the
+effects that touch several of them (the gyro bias: yaw and position), so each trial refits the
+*group* of a candidate: the effects of S that share a stage with it (transitively), their
+parameters, the candidate's and the stages' uncertain parameters, scored on the group's stages.
+
+- forward: every effect not in S is refitted jointly with its group; the supported one with the
+  lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
+  material) joins S;
+- backward: every other member f of S is tested by refitting its group without it; f stays only
+  if the model with f is still supported against the model without it (same rules);
+- a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
+  and is no longer supported once the best has joined, the two explain the same misfit and the
+  data cannot tell which: the pair is reported as inconclusive with the experiment that would
+  separate them;
+- pairs: when no single candidate is supported but a stage is still above its noise floor
+  (unexplained.is_misfit), pairs of effects of that stage are fitted together (a dead-band with a
+  rate limit fits badly alone); a supported pair joins S;
+- stop when nothing more is supported (at most ``max_effects`` steps);
+- absorbed: an effect of a stage that is still misfit at the end must take ``min_gain`` off the
+  held-out RMS even when the stage's data-driven extension is fitted with and without it;
+  otherwise it only soaked up part of a misfit it does not explain, and leaves S.
+
+Each effect of the final model is reported by its drop-one comparison: the final model against
+the final model refitted without it (held-out RMS per stage with and without it).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged
+from .noise_floor import stage_floors
+from .unexplained import extension, is_misfit
+from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN
+from .effect import Effect
+
+TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
+STRONG = -10.0         # dBIC below which the evidence is strong
+
+
+@dataclass
+class Finding:
+    """One effect judged against the same model without it."""
+
+    effect: Effect
+    fit: Fit                          # the model with the effect (its group refitted)
+    delta_bic: float
+    gain_by_signal: dict[str, float]
+    rmse_before: dict[str, float]     # held-out, without the effect
+    rmse_after: dict[str, float]      # held-out, with it
+    material: bool
+    supported: bool
+    reasons: list[str]
+    stages: tuple[str, ...] = ()
+    without: Fit | None = None        # the model refitted without the effect (drop-one only)
+
+    @property
+    def gain(self) -> float:
+        return self.gain_by_signal[SIGNALS[self.effect.stages[0]][0]]
+
+
+def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, min_gain) -> Finding:
+    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py."""
+    n_total = sum(with_.n_eff[s] for s in stages)
+    dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in stages)
+    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
+    names = {s: SIGNALS[s][0] for s in stages}
+    before = {names[s]: without.rmse_test[s] for s in stages}
+    after = {names[s]: with_.rmse_test[s] for s in stages}
+    gains = {k: 1.0 - after[k] / before[k] if before[k] > 0 else 0.0 for k in before}
+    material = bool(effect.material(with_.values, baseline_values))
+    reasons = []
+    if dbic >= STRONG:
+        reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
+    main = names[effect.stages[0]]
+    if gains[main] < min_gain:
+        reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
+    worse = [k for k, g in gains.items() if g < -0.05]
+    if worse:
+        reasons.append(f"held-out RMS rises for {worse}")
+    if not material:
+        reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
+    return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
+
+
+def group(stages: set[str], members: list[Effect]) -> tuple[tuple[str, ...], list[Effect]]:
+    """The stages and the members coupled to ``stages`` through shared stages (transitively)."""
+    stages, related = set(stages), []
+    changed = True
+    while changed:
+        changed = False
+        for f in members:
+            if f not in related and stages & set(f.stages):
+                related.append(f)
+                stages |= set(f.stages)
+                changed = True
+    return tuple(s for s in STAGES if s in stages), related
+
+
+def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> Fit:
+    free = [p for s in stages for p in UNCERTAIN[s]] + [p for e in effects for p in e.parameters]
+    return _fit(replay, values, free, stages, starts, sigma)
+
+
+@dataclass
+class Selection:
+    base: Fit
+    sigma: dict[str, float]
+    model: Fit
+    effects: list[Finding]                       # drop-one judgement of each effect of the final model
+    first_step: list[Finding]                    # every catalogue effect against the baseline
+    inconclusive: list[dict] = field(default_factory=list)
+    trace: list[str] = field(default_factory=list)
+
+
+class Selector:
+    def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0) -> None:
+        self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
+        self.base_values = replay.baseline.values
+        self._cache: dict[tuple, Finding] = {}
+        self._first: dict[str, dict[str, float]] = {}
+
+    def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
+        """The model with ``effect`` joined to its group, judged against ``model``."""
+        stages, related = group(set(effect.stages), members)
+        key = (effect.id, tuple(sorted(f.id for f in related)))
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        if effect.id in self._first:
+            starts = [self._first[effect.id]]
+        else:
+            starts = [{p.name: x for p, x in zip(effect.parameters, start)} for start in effect.starts]
+        fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma, starts)
+        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain)
+        self._cache[key] = finding
+        if effect.id not in self._first:
+            self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
+        return finding
+
+    def drop(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
+        """``model`` judged against itself refitted without ``effect`` (a member)."""
+        others = [f for f in members if f is not effect]
+        stages, related = group(set(effect.stages), others)
+        reset = {p.name: self.base_values[p.name] for p in effect.parameters}
+        without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
+        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
+        finding.without = merged(model, without, reset)      # the model to fall back to
+        return finding
+
+    def run(self) -> Selection:
+        base, self.sigma = fit_baseline(self.replay)
+        model, members, trace, inconclusive = base, [], [], []
+        first = [self.add(base, [], e) for e in CATALOGUE]
+        first.sort(key=lambda f: (not f.supported, f.delta_bic))
+        removed: set[str] = set()
+        for _ in range(self.max_effects):
+            trials = first if not members else [self.add(model, members, e) for e in CATALOGUE if e not in members]
+            supported = sorted((f for f in trials if f.supported and f.effect.id not in removed),
+                               key=lambda f: f.delta_bic)
+            if not supported:
+                pair = self.pair(model, members, removed)
+                if pair is None:
+                    break
+                a, b, fit, dbic = pair
+                members = members + [a, b]
+                model = merged(model, fit)
+                trace.append(f"+ {a.id} and {b.id} together (neither alone is supported; dBIC {dbic:.1f})")
+                continue
+            best = supported[0]
+            rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
+                      and set(f.effect.stages) & set(best.effect.stages)]
+            members = members + [best.effect]
+            model = merged(model, best.fit)
+            trace.append(f"+ {best.effect.id} (dBIC {best.delta_bic:.1f})")
+            for rival in rivals:
+                again = self.add(model, members, rival.effect)
+                if not again.supported:
+                    inconclusive.append(_tie(best, rival))
+            for f in list(members[:-1]):
+                check = self.drop(model, members, f)
+                if not check.supported:
+                    members = [m for m in members if m is not f]
+                    model = check.without
+                    removed.add(f.id)
+                    trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
+        model, members = self.absorbed(model, members, trace)
+        effects = [self.drop(model, members, f) for f in members]
+        effects.sort(key=lambda f: f.delta_bic)
+        return Selection(base, self.sigma, model, effects, first, inconclusive, trace)
+
+    def misfit_stages(self, model: Fit) -> list[str]:
+        floors = stage_floors(self.replay, model.values, seed=self.seed)
+        final = _fit(self.replay, model.values, [], STAGES, [{}], self.sigma)
+        return [s for s in STAGES if is_misfit(s, final.rmse_test[s], floors[s])]
+
+    def pair(self, model: Fit, members: list[Effect], removed: set[str]):
+        """Two effects of one misfit stage that only explain it together (a dead-band with a rate
+        limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
+        misfit = self.misfit_stages(model)
+        pool = [e for e in CATALOGUE if e not in members and e.id not in removed and set(e.stages) & set(misfit)]
+        best = None
+        for i, a in enumerate(pool):
+            for b in pool[i + 1:]:
+                if not set(a.stages) & set(b.stages):
+                    continue
+                stages, related = group(set(a.stages) | set(b.stages), members)
+                starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
+                fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
+                ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)
+                jb = _judge(b, fit, model, stages, self.base_values, self.min_gain)
+                dbic = ja.delta_bic + len(b.parameters) * math.log(max(sum(fit.n_eff[s] for s in stages), 2.0))
+                ok = dbic < STRONG and ja.material and jb.material and max(ja.gain, jb.gain) >= self.min_gain \
+                    and not any(g < -0.05 for g in ja.gain_by_signal.values())
+                if ok and (best is None or dbic < best[3]):
+                    best = (a, b, fit, dbic)
+        return best
+
+    def absorbed(self, model: Fit, members: list[Effect], trace: list[str]) -> tuple[Fit, list[Effect]]:
+        """An effect in a stage that stays misfit must beat the stage's data-driven extension:
+        with the same extension (kind and signal chosen with the effect) fitted on both sides
+        (misfit stages; the plain residual elsewhere),
+        the effect must still take min_gain off the held-out RMS of one of its stages; otherwise
+        it only soaked up part of a misfit it does not explain."""
+        misfit = set(self.misfit_stages(model))
+        for f in list(members):
+            if not misfit & set(f.stages):
+                continue
+            check = self.drop(model, members, f)
+            gains = {}
+            for stage in check.stages:
+                if stage in misfit:
+                    best = extension(self.replay, stage, model.values)
+                    with_ = best["rms_after"]
+                    without = extension(self.replay, stage, check.without.values, like=best)["rms_after"]
+                else:
+                    with_, without = model.rmse_test[stage], check.without.rmse_test[stage]
+                gains[stage] = 1.0 - with_ / without if without > 0 else 0.0
+            text = ", ".join(f"{100 * g:.1f}% ({s})" for s, g in gains.items())
+            if max(gains.values()) < self.min_gain:
+                members = [m for m in members if m is not f]
+                model = check.without
+                trace.append(f"- {f.id}: with the data-driven extension of the misfit stages on both sides it takes "
+                             f"{text} off the held-out RMS (< {100 * self.min_gain:.0f}%)")
+            else:
+                trace.append(f"= {f.id} beats the data-driven extension of the misfit stages: {text} off the held-out RMS")
+        return model, members
+
+
+def _tie(best: Finding, rival: Finding) -> dict:
+    return {"effects": [best.effect.id, rival.effect.id],
+            "delta_bic": [best.delta_bic, rival.delta_bic],
+            "chosen": best.effect.id,
+            "experiment": f"to tell {best.effect.id} from {rival.effect.id}: {best.effect.experiment}; "
+                          f"{rival.effect.experiment}"}
+
+
+def select(replay: Replay, min_gain: float = 0.05, seed: int = 0) -> Selection:
+    """``seed``: the study's, for the Monte Carlo of the position noise floor."""
+    return Selector(replay, min_gain, seed=seed).run()
