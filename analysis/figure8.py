@@ -75,12 +75,20 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     }
 
 
+# metric -> (SI unit, the paper's statement); the units label sweep plots too (orchestrator.sweep)
+METRICS = {"euclid_mean_straight": ("m", None), "euclid_max_straight": ("m", "< 0.40"),
+           "euclid_mean_curved": ("m", None), "euclid_max_curved": ("m", "< 0.60"),
+           "speed_mean_error": ("m/s", "steady-state error seen"), "speed_rms_error": ("m/s", None),
+           "yaw_rate_mean_error": ("rad/s", "no steady-state error"), "yaw_rate_rms_error": ("rad/s", None),
+           "heading_estimate_rms_error": ("rad", None), "steer_angle_rms": ("rad", None),
+           "steer_rate_rms": ("rad/s", None), "sim_time_s": ("s", None), "wall_time_s": ("s", None)}
+METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
+                "euclid_rms": "m", "euclid_max_startup": "m", "metrics_from_time_s": "s",
+                "speed_rms_error_vs_path": "m/s", "events": "count"}
+
+
 def summary(values: dict[str, float]) -> str:
-    rows = [("euclid_mean_straight", "m", None), ("euclid_max_straight", "m", "< 0.40"),
-            ("euclid_mean_curved", "m", None), ("euclid_max_curved", "m", "< 0.60"),
-            ("speed_rms_error", "m/s", "steady-state error seen"), ("yaw_rate_rms_error", "rad/s", "no steady-state error"),
-            ("heading_estimate_rms_error", "rad", None), ("steer_angle_rms", "rad", None),
-            ("steer_rate_rms", "rad/s", None), ("sim_time_s", "s", None), ("wall_time_s", "s", None)]
+    rows = [(k, unit, paper) for k, (unit, paper) in METRICS.items()]
     lines = [f"{'metric':<28}{'ours':>12}  {'unit':<6} paper", "-" * 64]
     for key, unit, paper in rows:
         if key in values:

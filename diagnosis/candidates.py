@@ -22,6 +22,9 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
+from measurements import LogError
+from measurements.log import check_units
+
 from .baseline import Baseline
 from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN, Effect, Parameter
 from .replay import (YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, integrate,
@@ -63,7 +66,10 @@ class Replay:
                                f"of the log; the yaw and position replays need it moving")
         if np.std(self.cmd) < 0.5 * math.pi / 180:
             raise CannotDecide("delta_cmd hardly varies (std < 0.5 deg): nothing excites the steering and yaw dynamics")
-        self._check_speed_and_position_units()
+        try:
+            check_units(f, "log")
+        except LogError as exc:
+            raise CannotDecide(str(exc).removeprefix("log: ")) from None
         self._check_yaw_rate_unit(moving)
         t_split = self.t[0] + self.fit_fraction * duration
         after_burn = self.t >= self.t[0] + self.burn_in
@@ -89,27 +95,6 @@ class Replay:
         if len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2:
             raise CannotDecide(f"too few {self.window:.0f} s stretches of driving for the position replay "
                                f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
-
-    def _check_speed_and_position_units(self) -> None:
-        """v against the speed of the GPS track over 1 s chords: 3.6 means km/h; a track that
-        hardly moves while v says it does means x, y are not metres (degrees of lat/lon?)."""
-        k, d = chords(self.gps, self.h)
-        track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * self.h)
-        v = self.speed[k:-k]
-        fast = v > 0.5
-        if fast.sum() < 100:
-            return
-        ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
-        if abs(ratio - 3.6) < 0.4:
-            raise CannotDecide("column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
-                               "the log must hold m/s")
-        if ratio > 50:
-            raise CannotDecide(f"columns 'x', 'y' move {ratio:.0f} times slower than 'v' says: they look like "
-                               f"degrees of latitude/longitude, or they do not follow the tractor at all (noise, a "
-                               f"fixed point); the log must hold the GPS position in metres east/north of a datum")
-        if not 0.67 < ratio < 1.5:
-            raise CannotDecide(f"column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
-                               f"check the units of v, x and y (m/s and m)")
 
     def _check_yaw_rate_unit(self, moving: np.ndarray) -> None:
         """Heading change over 2 s, integrated gyro against the GPS course (from 1 s chords):

@@ -12,6 +12,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
     p.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
+    p.add_argument("--resample", action="store_true",
+                   help="interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
@@ -24,7 +26,8 @@ def run(args: argparse.Namespace) -> int:
 
     if not 0.2 <= args.fit_fraction <= 0.8:
         raise StudyError("--fit-fraction must be in [0.2, 0.8]")
-    result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots)
+    result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
+                      resample=args.resample)
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2

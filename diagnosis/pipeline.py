@@ -144,7 +144,7 @@ def _unexplained(checks: dict) -> dict | None:
 
 
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
-             fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True) -> dict:
+             fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False) -> dict:
     """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
@@ -154,7 +154,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     try:
         study = load_study(study_path)
         baseline = baseline_from_study(study)
-        frame = read_log(log_path)
+        frame = read_log(log_path, resample_jitter=resample)
         replay = Replay(frame, baseline, fit_fraction=fit_fraction)
     except (LogError, CannotDecide) as exc:
         result["reason"] = str(exc)

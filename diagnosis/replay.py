@@ -18,6 +18,7 @@ from typing import Mapping
 import numpy as np
 
 from components.models import steering_equivalent
+from measurements.log import chords
 from components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, zoh_discretize)
 
@@ -141,13 +142,6 @@ def integrate(x: np.ndarray, h: float) -> np.ndarray:
     from scipy.integrate import cumulative_trapezoid
 
     return cumulative_trapezoid(x, dx=h, initial=0.0)
-
-
-def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarray]:
-    """(k, d): the GPS displacement over ``span`` seconds centred on sample i + k, d[i] =
-    gps[i + 2k] - gps[i]. Chords average the 2 cm noise that point-to-point differences amplify."""
-    k = max(1, int(round(0.5 * span / h)))
-    return k, gps[2 * k:] - gps[:-2 * k]
 
 
 def antenna_track(t: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray, v: Mapping[str, float]) -> np.ndarray:

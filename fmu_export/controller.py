@@ -27,7 +27,7 @@ from orchestrator.build import build_system
 from orchestrator.errors import InputError
 from orchestrator.study import Study
 
-from .packaging import PackagingError, package_fmu
+from .packaging import PackagingError, check_fmu_target, package_fmu
 
 MODEL_IDENTIFIER = "guidance_controller"
 ANNOTATION_TOOL = "agrobot"          # <Tool name="agrobot"><Sampled/></Tool>: outputs hold on [t, t + dt)
@@ -207,6 +207,10 @@ def export_controller(study: Study, out: Path) -> Path:
     """Write ``out`` (.fmu): sources, modelDescription.xml and the binary for this platform."""
     if out.suffix != ".fmu":
         raise ExportError(f"--out {out}: expected a path ending in .fmu")
+    try:
+        check_fmu_target(out)
+    except PackagingError as exc:
+        raise ExportError(str(exc)) from None
     design = controller_design(study)
     source, guid = generate_c(design)
     with tempfile.TemporaryDirectory() as tmp:

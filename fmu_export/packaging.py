@@ -36,6 +36,19 @@ def _output_to(path: Path):
             os.close(saved[1])
 
 
+def check_fmu_target(out: Path) -> None:
+    """Before building: ``out`` must be a file path whose folder can be written."""
+    import os
+
+    if out.is_dir():
+        raise PackagingError(f"--out {out}: is a folder; expected a file path ending in .fmu")
+    base = out.parent
+    while not base.exists() and base != base.parent:
+        base = base.parent
+    if not base.is_dir() or not os.access(base, os.W_OK | os.X_OK):
+        raise PackagingError(f"--out {out}: cannot write there ({base} is not a writable folder)")
+
+
 def package_fmu(source_root: Path, out: Path) -> Path:
     import fmpy
     from fmpy.build import build_platform_binary
@@ -58,11 +71,17 @@ def package_fmu(source_root: Path, out: Path) -> Path:
         except Exception as exc:
             tail = log.read_text(errors="replace")[-2000:] if log.exists() else ""
             raise PackagingError(f"building {out.name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None
-        out.parent.mkdir(parents=True, exist_ok=True)
-        partial = out.with_name(out.name + ".tmp")
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
-            for path in sorted(root.rglob("*")):
-                if path.is_file():
-                    zf.write(path, path.relative_to(root).as_posix())
-        partial.replace(out)
+        check_fmu_target(out)
+        partial = out.with_name(f".{out.name}.tmp")
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
+                for path in sorted(root.rglob("*")):
+                    if path.is_file():
+                        zf.write(path, path.relative_to(root).as_posix())
+            partial.replace(out)
+        except OSError as exc:
+            raise PackagingError(f"--out {out}: cannot write the FMU: {exc}") from None
+        finally:
+            partial.unlink(missing_ok=True)
     return out

@@ -16,6 +16,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--band", type=float, nargs=2, metavar=("F_MIN", "F_MAX"), help="log: lines to fit [Hz]")
     p.add_argument("--models", nargs="+", help="log: structures to fit")
     p.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
+    p.add_argument("--resample", action="store_true",
+                   help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
@@ -25,13 +27,18 @@ def run(args: argparse.Namespace) -> int:
 
     from .pipeline import identify_log, identify_study, summary
 
+    if args.band is not None and not 0 < args.band[0] < args.band[1]:
+        raise StudyError(f"--band {args.band[0]:g} {args.band[1]:g}: expected 0 < F_MIN < F_MAX [Hz]")
+    for option, value in (("--speed", args.speed), ("--period", args.period)):
+        if value is not None and not value > 0:
+            raise StudyError(f"{option} {value:g}: expected a positive number")
     try:
         if args.source.suffix in (".toml", ".yaml", ".yml"):
             report = identify_study(Study.load(args.source, args.set), args.out, plots=not args.no_plots)
         else:
             report = identify_log(args.source, args.out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
-                                  plots=not args.no_plots)
+                                  plots=not args.no_plots, resample=args.resample)
     except ValueError as exc:      # e.g. an unknown model structure
         if isinstance(exc, InputError):       # a LogError is both
             raise

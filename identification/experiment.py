@@ -150,9 +150,10 @@ def simulate_experiment(study: Study, cfg: IdentificationConfig, speed: float,
 # ---------------------------------------------------------------------------------------------
 # measured logs
 
-def read_log(path: Path) -> pd.DataFrame:
-    """A canonical log with the columns identification needs (measurements.read_log checks it)."""
-    return read_measured_log(path, NEEDED)
+def read_log(path: Path, resample: bool = False) -> pd.DataFrame:
+    """A canonical log with the columns identification needs (measurements.read_log checks it;
+    ``resample``: put a jittered clock on an even grid)."""
+    return read_measured_log(path, NEEDED, resample_jitter=resample)
 
 
 def detect_period(r: np.ndarray, min_samples: int = 8) -> int:

@@ -160,8 +160,9 @@ def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> di
 
 
 def identify_log(path: Path, out_dir: Path | None, period: float | None = None, speed: float | None = None,
-                 band=None, models=None, delay: bool = False, plots: bool = True) -> dict[str, Any]:
-    frame = read_log(path)
+                 band=None, models=None, delay: bool = False, plots: bool = True,
+                 resample: bool = False) -> dict[str, Any]:
+    frame = read_log(path, resample)
     exp = experiment_from_log(frame, str(path), period, speed, band)
     models = models or ["second_order", "bicycle", "rlf", "rlfr"]
     analyses = {exp.speed: analyse(exp, models, delay, TractorParameters())}

@@ -35,9 +35,11 @@ class LogError(InputError, ValueError):
     """A log that cannot be used as it is."""
 
 
-def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.DataFrame:
-    """Load and check a log: columns present and numeric, no NaN, time increasing and evenly
-    sampled (a gap is named), angles in radians (degrees are detected and named)."""
+def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_jitter: bool = False) -> pd.DataFrame:
+    """Load and check a log: columns present and numeric, no NaN or infinity, time in seconds,
+    increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
+    with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
+    (degrees are detected and named), speed against the GPS track (check_units)."""
     path = Path(path)
     if not path.is_file():
         raise LogError(f"{path}: log not found")
@@ -50,13 +52,15 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.Data
     if missing:
         raise LogError(f"{path}: missing columns {missing}; a log needs "
                        + ", ".join(f"{c} [{COLUMNS[c][0]}]" if c in COLUMNS else c for c in required))
+    if len(frame) < 3:
+        raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
     for c in required:
         if not pd.api.types.is_numeric_dtype(frame[c]):
             raise LogError(f"{path}: column {c!r} is not numeric (first value {frame[c].iloc[0]!r})")
-        bad = frame[c].isna().to_numpy()
-        if bad.any():
-            raise LogError(f"{path}: column {c!r} has {int(bad.sum())} NaN values (first at row {int(np.argmax(bad))}, "
-                           f"t = {frame['t'].iloc[int(np.argmax(bad))]})")
+        for what, bad in (("NaN", frame[c].isna().to_numpy()), ("infinite", np.isinf(frame[c].to_numpy(float)))):
+            if bad.any():
+                raise LogError(f"{path}: column {c!r} has {int(bad.sum())} {what} values (first at row "
+                               f"{int(np.argmax(bad))}, t = {frame['t'].iloc[int(np.argmax(bad))]})")
     if len(frame) < 3:
         raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
     t = frame["t"].to_numpy(dtype=float)
@@ -65,13 +69,21 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.Data
         i = int(np.argmax(dt <= 0))
         raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
     step = float(np.median(dt))
+    if step > 1.0:
+        unit, factor = ("microseconds", 1e6) if step > 1000 else ("milliseconds", 1e3)
+        raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a tractor log samples at 10-100 Hz, "
+                       f"so it looks like {unit}: the log must hold seconds (divide t by {factor:g})")
     if dt.max() > 1.5 * step:
         i = int(np.argmax(dt))
         raise LogError(f"{path}: column 't' has a gap of {dt[i]:.4g} s at t = {t[i]:.4g} s (row {i + 1}); "
                        f"expected an even step of {step:.4g} s: cut the log at the gap or fill it")
     if np.max(np.abs(dt - step)) > 0.01 * step:
-        i = int(np.argmax(np.abs(dt - step)))
-        raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical {step:.4g} s")
+        if resample_jitter:
+            frame = resample(frame, step)
+        else:
+            i = int(np.argmax(np.abs(dt - step)))
+            raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical "
+                           f"{step:.4g} s; pass --resample to interpolate the log onto an even {step:.4g} s grid")
     for c, (bound, unit) in DEGREE_SUSPECT.items():
         if c in required:
             peak = float(np.abs(frame[c]).max())
@@ -79,7 +91,41 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL) -> pd.Data
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g}, more than {bound} {unit}: it looks like "
                                f"degrees{'/s' if unit == 'rad/s' else ''}; the log must hold {unit} "
                                f"(multiply by pi/180 = {math.pi / 180:.6f})")
+    check_units(frame, str(path))
     return frame
+
+
+def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarray]:
+    """(k, d): the GPS displacement over ``span`` seconds centred on sample i + k, d[i] =
+    gps[i + 2k] - gps[i]. Chords average the 2 cm noise that point-to-point differences amplify."""
+    k = max(1, int(round(0.5 * span / h)))
+    return k, gps[2 * k:] - gps[:-2 * k]
+
+
+def check_units(frame: pd.DataFrame, where: str) -> None:
+    """Speed against the speed of the GPS track over 1 s chords (when v, x, y are logged): 3.6
+    means km/h; a track that hardly moves while v says it does means x, y are not metres."""
+    if not {"t", "v", "x", "y"} <= set(frame.columns) or len(frame) < 10:
+        return
+    t = frame["t"].to_numpy(float)
+    h = float(np.median(np.diff(t)))
+    k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+    track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
+    v = frame["v"].to_numpy(float)[k:-k]
+    fast = v > 0.5
+    if fast.sum() < 100:
+        return
+    ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
+    if abs(ratio - 3.6) < 0.4:
+        raise LogError(f"{where}: column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
+                       f"the log must hold m/s (divide v by 3.6)")
+    if ratio > 50:
+        raise LogError(f"{where}: columns 'x', 'y' move {ratio:.0f} times slower than 'v' says: they look like "
+                       f"degrees of latitude/longitude, or they do not follow the tractor at all (noise, a "
+                       f"fixed point); the log must hold the GPS position in metres east/north of a datum")
+    if not 0.67 < ratio < 1.5:
+        raise LogError(f"{where}: column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
+                       f"check the units of v, x and y (m/s and m)")
 
 
 def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFrame]:

@@ -137,6 +137,12 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
             converted[key] = to_si(value, params[key].unit)
         except UnitError as exc:
             raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+        start = params[key].start
+        numeric = isinstance(start, (int, float)) and not isinstance(start, bool)
+        if numeric and isinstance(converted[key], str):
+            raise StudyError(f"{where}: components.{name}.parameters.{key}: got {value!r}, expected a number"
+                             + (f" in {params[key].unit} (or a string like '1.5 {params[key].unit}')"
+                                if params[key].unit not in ("", "1") else ""))
     return converted
 
 

@@ -9,7 +9,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .errors import exit_code
+from .errors import Terminated, exit_code, install_sigterm
 from .registry import registry
 
 PROG = "python -m orchestrator"
@@ -22,7 +22,10 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
 
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    p.add_argument("--out", type=Path, required=True,
+                   help="output folder: written aside and moved into place when the run ends; a folder that "
+                        "holds other files than an earlier run's is refused unless --overwrite")
+    p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
@@ -34,12 +37,13 @@ def _run(args: argparse.Namespace) -> int:
 
     study = Study.load(args.study, args.set)
     try:
-        result = run_study(study, args.out, plots=not args.no_plots)
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:
-        print(f"error: {exc}; the signals are in {args.out}", file=sys.stderr)
+        print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}", file=sys.stderr)
         return 1
     except RunError as exc:
-        print(f"error: run failed {exc}; results recorded so far are in {args.out}", file=sys.stderr)
+        print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}",
+              file=sys.stderr)
         return 1
     print(result.summary)
     print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
@@ -68,10 +72,10 @@ def _sweep(args: argparse.Namespace) -> int:
     runner = SweepRun(study, args.out)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
               file=sys.stderr)
-        return 130
+        return 143 if isinstance(exc, Terminated) else 130
     failed = int((table["status"] != "completed").sum())
     files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
     print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
@@ -104,6 +108,7 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
+    install_sigterm()
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)

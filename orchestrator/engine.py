@@ -89,9 +89,13 @@ class Simulation:
         self._due_sampled = [[nd for nd in system.sampled_order if j % nd.ratio == 0] for j in range(period)]
         self._due_continuous = [[nd for nd in system.continuous if j % nd.ratio == 0] for j in range(period)]
         self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in system.nodes.values()}
+        self.k, self._drained, self._recorders, self._start = 0, 0, [], time.perf_counter()
 
     def _recording(self, recorders: list[_Recorder], rows: int, completed: bool, start: float) -> Recording:
-        times = self.t0 + np.arange(rows) * self.h
+        """The rows recorded since the last ``drain`` up to base step ``rows`` (absolute)."""
+        drained = getattr(self, "_drained", 0)
+        rows = max(rows - drained, 0)
+        times = self.t0 + (drained + np.arange(rows)) * self.h
         blocks = [times.reshape(-1, 1)] + [r.table(rows) for r in recorders]
         data = np.hstack(blocks) if rows and recorders else np.empty((0, 1 + len(self.signals)))
         events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
@@ -115,6 +119,7 @@ class Simulation:
         s = sys_.study.study
         self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.published = published = {}
+        self._drained = 0
         outputs: dict[str, list[str]] = {}
         for node, out in self.signals:
             outputs.setdefault(node.name, []).append(out)
@@ -192,6 +197,22 @@ class Simulation:
             raise RunError(f"at t = {self.t0 + k * self.h:.6g} s: {what}",
                            self._recording(self._recorders, k, False, self._start)) from exc
         self.k = k_end
+
+    @property
+    def chunk_period(self) -> int:
+        """Base steps after which every recorder has a whole number of samples (drain on multiples)."""
+        return self._period
+
+    def drain(self) -> np.ndarray:
+        """The rows (time + signals) of the base steps taken since the last drain, which must end on
+        a multiple of ``chunk_period``; the recorders' buffers are emptied (memory stays flat)."""
+        if self.k % self._period:
+            raise ValueError(f"drain at base step {self.k}, not a multiple of {self._period}")
+        data = self._recording(self._recorders, self.k, False, self._start).data
+        for rec in self._recorders:
+            del rec.buf[:]
+        self._drained = self.k
+        return data
 
     def finish(self) -> Recording:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""

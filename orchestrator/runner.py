@@ -9,9 +9,9 @@ from pathlib import Path
 from typing import Any
 
 from .build import build_system
-from .errors import ComputationError
+from .errors import ComputationError, Interrupted, Terminated, critical
 from .engine import Recording, RunError, Simulation
-from .results import atomic_write, write_json, write_table
+from .results import SignalWriter, atomic_write, read_table, write_json
 from .study import Study, StudyError
 
 
@@ -56,48 +56,161 @@ def write_events(out_dir: Path, rec: Recording) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
 
 
-def run_study(study: Study, out_dir: Path | None, plots: bool = True) -> RunResult:
-    analysis = _analysis(study)
-    out_dir = Path(out_dir) if out_dir is not None else None
-    fmt = study.study.signals_format
-    system = build_system(study)
-    base = {"study": study.study.name, "study_file": str(study.path), "seed": study.study.seed,
-            "sim_time_s": study.study.stop_time - study.study.start_time}
+CHUNK_STEPS = 10_000          # base steps between two writes of the signal table
+
+
+class Progress:
+    """tqdm on a terminal; otherwise a line on stderr every ``every`` seconds of wall time, and only
+    for runs that last longer than that."""
+
+    def __init__(self, total_steps: int, h: float, every: float = 10.0) -> None:
+        import sys
+        import time
+
+        self.total, self.h, self.every = total_steps, h, every
+        self._time = time.perf_counter
+        self.t_start = self.last = self._time()
+        self.bar = None
+        if sys.stderr.isatty():
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total_steps, unit="step", file=sys.stderr, leave=False, mininterval=1.0)
+
+    def update(self, k: int) -> None:
+        import sys
+
+        if self.bar is not None:
+            self.bar.n = k
+            self.bar.refresh()
+            return
+        now = self._time()
+        if now - self.last >= self.every:
+            self.last = now
+            done = k / self.total if self.total else 1.0
+            print(f"progress: t = {k * self.h:.6g} of {self.total * self.h:.6g} s ({100 * done:.0f}%), "
+                  f"{k * self.h / (now - self.t_start):.3g} x real time", file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _stream(sim: Simulation, writer, progress: Progress) -> Recording:
+    """Run ``sim`` to its stop time, writing the signal table block by block. An interrupt outside
+    the engine's step loop becomes the same RunError as one inside it (with the rows not yet
+    written); draining and writing a block is never cut in half (errors.critical)."""
+    step = max(1, CHUNK_STEPS // sim.chunk_period) * sim.chunk_period
     try:
-        rec = Simulation(system).run()
-    except RunError as err:
-        if out_dir is not None:
-            write_table(out_dir / "signals", err.partial.to_frame(), fmt)
-            write_events(out_dir, err.partial)
-            write_json(out_dir / "metrics.json", {**base, "status": "failed", "error": str(err),
-                                                   "wall_time_s": err.partial.wall_time_s,
-                                                   **_run_facts(err.partial)})
-        raise
-    frame = rec.to_frame()
-    files: list[Path] = []
-    if out_dir is not None:
-        files.append(write_table(out_dir / "signals", frame, fmt))
-        files.append(write_events(out_dir, rec))
-    values: dict[str, Any] = {}
-    if analysis is not None:
+        sim.start()
+        while sim.k < sim.n_steps:
+            sim.advance(min(sim.k + step, sim.n_steps))
+            with critical():
+                if sim.k % sim.chunk_period == 0:
+                    writer.append(sim.drain())
+            progress.update(sim.k)
+        with critical():
+            rec = sim.finish()
+            writer.append(rec.data)
+        return rec
+    except KeyboardInterrupt as exc:
+        raise RunError(f"at t = {sim.t0 + sim.k * sim.h:.6g} s: interrupted",
+                       sim._recording(sim._recorders, sim.k, False, sim._start)) from exc
+
+
+def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False) -> RunResult:
+    """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
+    before anything runs (orchestrator.output), the signals are streamed into a fresh folder beside
+    it, and the folder is moved into place at the end (completed, interrupted or failed: see
+    ResultFolder). An interrupt (SIGINT/SIGTERM) keeps every row up to the instant and raises
+    Interrupted (exit 130/143)."""
+    if out_dir is None:
+        return _run_in_memory(study, plots)
+    from .output import ResultFolder
+
+    analysis = _analysis(study)
+    folder = ResultFolder(Path(out_dir), overwrite)
+    system = build_system(study)
+    base = _base_facts(study)
+    with folder:
+        tmp = folder.tmp
+        writer = SignalWriter(tmp / "signals", [f"{n.name}.{o}" for n in system.nodes.values() for o in n.component.y],
+                              study.study.signals_format)
+        sim = Simulation(system)
+        progress = Progress(sim.n_steps, sim.h)
         try:
-            values.update(analysis.metrics(frame, study))
-        except (ValueError, KeyError) as exc:
-            if out_dir is not None:
-                write_json(out_dir / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
-                                                       "wall_time_s": rec.wall_time_s, **_run_facts(rec)})
-            raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
-    values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-    metrics = {**base, "status": "completed", **values}
-    summary = analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
-        json.dumps(values, indent=2)
-    if out_dir is not None:
-        files.append(write_json(out_dir / "metrics.json", metrics))
-        files.append(write_json(out_dir / "run.json", {
-            "study": study.to_data(),
-            "unconnected_inputs": system.unconnected_inputs,
-            "order_sampled": [n.name for n in system.sampled_order],
-        }))
+            rec = _stream(sim, writer, progress)
+        except RunError as err:
+            interrupt = err.__cause__ if isinstance(err.__cause__, KeyboardInterrupt) else None
+            writer.append(err.partial.data)
+            writer.close()
+            write_events(tmp, err.partial)
+            status = "interrupted" if interrupt is not None else "failed"
+            t_reached = study.study.start_time + (writer.rows - 1) * sim.h if writer.rows else study.study.start_time
+            facts = {**base, "status": status, "t_reached_s": t_reached, "wall_time_s": err.partial.wall_time_s,
+                     **_run_facts(err.partial)}
+            if interrupt is None:
+                facts["error"] = str(err)
+            write_json(tmp / "metrics.json", facts)
+            write_json(tmp / "run.json", _run_json(study, system, status, t_reached))
+            where = folder.commit(status)
+            if interrupt is not None:
+                code = 143 if isinstance(interrupt, Terminated) else 130
+                raise Interrupted(f"at t = {t_reached:.6g} s; the signals up to then are in {where}", code) from None
+            err.where = where
+            raise
+        finally:
+            progress.close()
+            sim.terminate()
+        files = [writer.close(), write_events(tmp, rec)]
+        frame = read_table(writer.path)
+        try:
+            values = _metrics(analysis, frame, study)
+        except AnalysisError as exc:
+            write_json(tmp / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
+                                              "wall_time_s": rec.wall_time_s, **_run_facts(rec)})
+            write_json(tmp / "run.json", _run_json(study, system, "analysis_failed", study.study.stop_time))
+            exc.where = folder.commit("analysis_failed")
+            raise
+        values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
+        metrics = {**base, "status": "completed", **values}
+        files.append(write_json(tmp / "metrics.json", metrics))
+        files.append(write_json(tmp / "run.json", _run_json(study, system, "completed", study.study.stop_time)))
         if plots and analysis is not None and hasattr(analysis, "plots"):
-            files.extend(analysis.plots(frame, study, out_dir))
-    return RunResult(metrics, frame, summary, files)
+            files.extend(analysis.plots(frame, study, tmp))
+        where = folder.commit("completed")
+    return RunResult(metrics, frame, _summary(analysis, values), [where / f.relative_to(tmp) for f in files])
+
+
+def _base_facts(study: Study) -> dict[str, Any]:
+    return {"study": study.study.name, "study_file": str(study.path), "seed": study.study.seed,
+            "sim_time_s": study.study.stop_time - study.study.start_time}
+
+
+def _run_json(study: Study, system, status: str, t_reached: float) -> dict[str, Any]:
+    return {"status": status, "t_reached_s": t_reached, "study": study.to_data(),
+            "unconnected_inputs": system.unconnected_inputs, "order_sampled": [n.name for n in system.sampled_order]}
+
+
+def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
+    if analysis is None:
+        return {}
+    try:
+        return dict(analysis.metrics(frame, study))
+    except (ValueError, KeyError) as exc:
+        raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
+
+
+def _summary(analysis, values: dict) -> str:
+    return analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
+        json.dumps(values, indent=2)
+
+
+def _run_in_memory(study: Study, plots: bool) -> RunResult:
+    """No output folder: simulate, analyse, return (sweep points, tests)."""
+    analysis = _analysis(study)
+    rec = Simulation(build_system(study)).run()
+    frame = rec.to_frame()
+    values = _metrics(analysis, frame, study)
+    base = _base_facts(study)
+    values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
+    return RunResult({**base, "status": "completed", **values}, frame, _summary(analysis, values), [])

@@ -73,6 +73,29 @@ def point_study(study: Study, point: Point) -> Study:
         raise StudyError(str(exc).replace(f"{study.where}: ", f"{study.where}: sweep.parameters.", 1)) from None
 
 
+def watch_parent(parent: int) -> None:
+    """Worker initialiser: the worker ends with the sweep that started it, whatever ends the sweep
+    (SIGKILL included). Linux: the kernel sends SIGKILL when the parent dies (PR_SET_PDEATHSIG);
+    elsewhere, and as a back-up, a daemon thread exits when the parent is gone (a new parent id)."""
+    import signal
+    import threading
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)        # Ctrl-C reaches the whole group: the parent decides
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, int(signal.SIGKILL))   # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True, name="watch-parent").start()
+
+
 def simulate_point(study: Study) -> dict[str, Any]:
     """Worker: run one point; never raises (a failure is a result)."""
     from .engine import RunError
@@ -201,12 +224,17 @@ class SweepRun:
             os.environ.setdefault(var, "1")
         if scheduler is None:
             ctx = multiprocessing.get_context("spawn")
-            with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
+                                        initargs=(os.getpid(),)) as pool:
                 futures = {pool.submit(simulate_point, point): p for p, point in jobs}
                 try:
                     for fut in cf.as_completed(futures):
                         yield futures[fut], _result(fut)
                 except BaseException:
+                    # interrupted: the points in flight are dropped (a rerun does them again) and
+                    # their workers end now, not when their point would have finished
+                    for proc in list((pool._processes or {}).values()):
+                        proc.terminate()
                     pool.shutdown(wait=False, cancel_futures=True)
                     raise
             return
@@ -220,6 +248,13 @@ def _result(fut) -> dict[str, Any]:
         return {"status": "failed", "error": f"worker lost: {type(exc).__name__}: {exc}", "signals": None}
 
 
+CONNECT_TIMEOUT = 6.0        # s: a wrong --scheduler address fails well within 10 s
+
+
+class SchedulerError(StudyError):
+    """The --scheduler address does not lead to a Dask scheduler (exit 2)."""
+
+
 def _execute_dask(jobs, workers: int, scheduler: str):
     from distributed import Client, LocalCluster, as_completed
 
@@ -229,7 +264,12 @@ def _execute_dask(jobs, workers: int, scheduler: str):
                                dashboard_address=None)
         client = Client(cluster)
     else:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within "
+                                 f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
+                                 f"expected an address like tcp://HOST:8786, or 'local'") from None
     try:
         futures = {client.submit(simulate_point, point, pure=False, key=f"{p.key}-{time.time_ns()}"): p
                    for p, point in jobs}
@@ -246,6 +286,16 @@ def _progress(total: int, initial: int, enabled: bool):
 
     return tqdm(total=total, initial=initial, desc="sweep points", unit="pt", disable=not enabled,
                 dynamic_ncols=True)
+
+
+def _parameter_unit(study: Study, name: str) -> str:
+    """The declared SI unit of a swept 'component.parameter' ('' when unknown or a study field)."""
+    comp, _, param = name.partition(".")
+    try:
+        declared = study.component_class(comp).declared("parameter")
+    except (StudyError, KeyError, AttributeError):
+        return "s" if name in ("study.stop_time", "study.base_step") else ""
+    return declared[param].unit if param in declared else ""
 
 
 def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
@@ -270,11 +320,17 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     rows = -(-len(metrics) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 2.8 * rows), squeeze=False)
     groups = ok.groupby(group_cols) if group_cols else [((), ok)]
+    metric_units = dict(getattr(importlib.import_module(study.study.analysis), "METRIC_UNITS", {})) \
+        if study.study.analysis else {}
+    metric_units.update(sim_time_s="s", wall_time_s="s")
+    x_unit = _parameter_unit(study, x)
     for ax, metric in zip(axes.flat, metrics):
         for label, g in groups:
             g = g.sort_values(x)
             ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=str(label) if group_cols else None)
-        ax.set_xlabel(x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
+        unit = metric_units.get(metric)
+        ax.set_xlabel(f"{x} [{x_unit}]" if x_unit else x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
+        ax.set_ylabel(f"[{unit}]" if unit else "[-]")
     for ax in list(axes.flat)[len(metrics):]:
         ax.axis("off")
     fig.tight_layout()

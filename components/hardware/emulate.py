@@ -1,19 +1,16 @@
 """``python -m orchestrator emulate STUDY --nmea-port PORT``: run a study holding an
 ``nmea_server`` in real time until its stop time or until interrupted (Ctrl-C, SIGTERM); the
-signals recorded so far are written either way."""
+signals recorded so far are written either way, and the exit status is 130 (Ctrl-C) or 143
+(SIGTERM)."""
 from __future__ import annotations
 
 import argparse
-import signal
 from pathlib import Path
 
 from orchestrator.engine import RunError
+from orchestrator.errors import Interrupted, Terminated, install_sigterm
 from orchestrator.runner import run_study
 from orchestrator.study import Study
-
-
-def _interrupt(signum, frame):          # SIGTERM ends the run like Ctrl-C: partial results are kept
-    raise KeyboardInterrupt
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None) -> int:
@@ -23,14 +20,20 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if duration is not None:
         values["study.stop_time"] = float(duration)
     study = study.with_values(values)
-    signal.signal(signal.SIGTERM, _interrupt)
+    install_sigterm()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
     try:
         result = run_study(study, out, plots=False)
+    except Interrupted as exc:
+        print(f"emulator stopped {exc}", flush=True)
+        return exc.exit_status
     except RunError as exc:
-        print(f"emulator stopped: {exc}" + (f"; signals so far in {out}" if out else ""), flush=True)
-        return 0 if "interrupted" in str(exc) else 1
+        cause = exc.__cause__
+        print(f"emulator stopped: {exc}", flush=True)
+        if isinstance(cause, KeyboardInterrupt):
+            return 143 if isinstance(cause, Terminated) else 130
+        return 1
     print(result.summary, flush=True)
     return 0
 
