@@ -163,6 +163,10 @@ def build_system(study: Study) -> System:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))
         except ComponentError as exc:
             raise StudyError(f"{where}: components.{name}: {exc}") from None
+        except (ValueError, TypeError, ArithmeticError, KeyError, IndexError) as exc:
+            # a parameter value the component's equations cannot take (checked nowhere else)
+            raise StudyError(f"{where}: components.{name}: cannot be built with parameters "
+                             f"{dict(spec.parameters)}: {type(exc).__name__}: {exc}") from None
         inputs = cls.declared("input")
         for key, value in spec.inputs.items():
             if key not in inputs:
