@@ -156,13 +156,29 @@ def read_log(path: Path, resample: bool = False) -> pd.DataFrame:
     return read_measured_log(path, NEEDED, resample_jitter=resample)
 
 
+def hold_factor(r: np.ndarray, tol: float) -> float:
+    """How many log samples a command value is held for on average (1: it changes every sample;
+    2.5: a 20 Hz command in a 50 Hz log)."""
+    changes = int(np.sum(np.abs(np.diff(r)) > tol))
+    return len(r) / (changes + 1) if changes >= 4 else 1.0
+
+
 def detect_period(r: np.ndarray, min_samples: int = 8) -> int:
-    """Smallest N with r[t] == r[t - N] (to 1e-6 of its range) over most of the record."""
+    """Smallest N with r[t] == r[t - N] (to 1e-6 of its range) over most of the record. A command
+    held over m log samples (a 20 Hz command in a 100 Hz log) repeats itself at every lag below m:
+    the search starts beyond m, in steps of m when m is whole."""
     scale = np.ptp(r) or 1.0
-    for N in range(min_samples, len(r) // 2 + 1):
-        same = np.abs(r[N:] - r[:-N]) <= 1e-6 * scale
-        if same.mean() > 0.45:
-            return N
+    hold = hold_factor(r, 1e-6 * scale)
+    step = int(round(hold)) if abs(hold - round(hold)) < 0.05 else 1
+    first = max(min_samples, int(math.ceil(hold)) + 1)
+    def match(N: int) -> float:
+        return float(np.mean(np.abs(r[N:] - r[:-N]) <= 1e-6 * scale))
+
+    for N in range(step * -(-first // step), len(r) // 2 + 1, step):
+        if match(N) > 0.45:
+            # a command held over a fractional number of samples also matches one lag early
+            near = range(N, min(N + int(math.ceil(hold)) + 1, len(r) // 2 + 1))
+            return max(near, key=match)
     raise LogError("no period found in delta_cmd: the excitation must be periodic (a multisine) "
                    "and the log must hold at least two periods")
 
@@ -210,6 +226,11 @@ def experiment_from_log(frame: pd.DataFrame, where: str, period_s: float | None 
     mag = np.abs(R)
     excited = np.flatnonzero(mag > 1e-3 * mag.max())
     excited = excited[excited > 0]
+    hold = hold_factor(r, 1e-6 * scale)
+    if hold > 1.2:        # a held command's spectral images above its own Nyquist frequency are not excitation
+        excited = excited[excited * fs / N < fs / (2 * hold)]
+        notes.append(f"delta_cmd is held over {hold} log samples (a {fs / hold:.4g} Hz command in a {fs:.4g} Hz log): "
+                     f"lines above {fs / (2 * hold):.4g} Hz are its images, not excitation")
     if band is not None:
         excited = excited[(excited * fs / N >= band[0]) & (excited * fs / N <= band[1])]
     notes.append(f"excited lines detected: {len(excited)} from {excited[0] * fs / N:.4g} to "

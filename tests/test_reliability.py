@@ -324,3 +324,36 @@ def test_the_readme_metric_table_uses_the_printed_names():
             names.append(first)
     assert len(names) >= 6
     assert set(names) <= set(METRICS), set(names) - set(METRICS)
+
+
+def test_identification_works_on_logs_at_10_20_50_and_100_hz(tmp_path):
+    """The same experiment logged at four rates (the command held at 20 Hz in the 50 and 100 Hz
+    logs, decimated to 10 Hz): the RLF model identified from each log has the same steady-state
+    gain and the same slowest pole as from the 20 Hz log."""
+    from identification.pipeline import identify_log, identify_study
+    from orchestrator.study import Study
+
+    logs = {}
+    for rate in (20, 50, 100):
+        study = tmp_path / f"id{rate}.toml"
+        study.write_text(f'extends = "{ROOT / "studies" / "identification.toml"}"\n[components.gyro]\nstep = {1 / rate}\n'
+                         f'[identification]\nsample_rate = {float(rate)}\nspeeds = [2.0]\n')
+        identify_study(Study.load(study), tmp_path / f"r{rate}", plots=False)
+        logs[rate] = tmp_path / f"r{rate}" / "experiment_log.csv"
+    ten = pd.read_csv(logs[20]).iloc[::2]
+    logs[10] = tmp_path / "r10.csv"
+    ten.to_csv(logs[10], index=False)
+
+    def summary(path):
+        """|G| at 0.5 and 1 Hz (inside the identification band) and the oscillatory pole pair's magnitude."""
+        model = identify_log(path, None, plots=False)["models"]["rlf"]
+        s = 2j * np.pi * np.array([0.5, 1.0])
+        gains = np.abs(np.polyval(model["num"], s) / np.polyval(model["den"], s))
+        pair = max(abs(complex(*p)) for p in model["poles"] if abs(p[1]) > 1e-9)
+        return gains, pair
+
+    ref_gains, ref_pair = summary(logs[20])
+    for rate in (10, 50, 100):
+        gains, pair = summary(logs[rate])
+        np.testing.assert_allclose(gains, ref_gains, rtol=0.05, err_msg=f"{rate} Hz")
+        assert pair == pytest.approx(ref_pair, rel=0.10), rate
