@@ -25,8 +25,12 @@ import numpy as np
 
 from .build import Node, System
 from .component import ComponentError
-from .errors import ComputationError
+from .errors import ComputationError, InputError
 from .realtime import RealTimePacer
+
+
+class ParameterError(InputError):
+    """A component refused its parameters when initialised (the message names the field)."""
 
 
 class RunError(ComputationError):
@@ -129,7 +133,10 @@ class Simulation:
         for node in sys_.nodes.values():
             try:
                 node.component.initialize(self.t0, node.step)
-            except (ComponentError, ValueError, ArithmeticError, OSError) as exc:
+            except (ComponentError, ValueError, ArithmeticError) as exc:
+                # a component refusing its parameters before the first step: the user's input (exit 2)
+                raise ParameterError(f"{sys_.study.path}: components.{node.name}: {exc}") from None
+            except OSError as exc:          # a device or port that cannot be opened: the environment
                 raise RunError(f"initialising {node.name!r}: {exc}",
                                self._recording(self._recorders, 0, False, self._start)) from exc
             published[node.name] = dict(node.component.y)

@@ -275,12 +275,43 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["margins", "nope.toml"], 2, ["nope.toml"]),
     (["run", "studies/figure8.toml", "--out", "{tmp}/header.csv"], 2, ["is a file"]),
     (["emulate", "nope.toml", "--nmea-port", "10999"], 2, ["nope.toml", "not found"]),
+    (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.seed=abc"], 2, ["study.seed"]),
+    (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.signals_format=xlsx"], 2, ["signals_format"]),
+    (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "steering.quantization_guard=2"], 2,
+     ["components.steering", "quantization_guard must be 0 or 1"]),
+    (["run", "{tmp}/broken.toml", "--out", "{tmp}/o"], 2, ["broken.toml"]),
+    (["run", "{tmp}/unknown_type.toml", "--out", "{tmp}/o"], 2, ["unknown_type.toml", "no_such_component"]),
+    (["run", "studies/figure8.toml"], 2, ["--out"]),
+    (["no-such-command"], 2, ["invalid choice"]),
+    (["sweep", "studies/speed_sweep.toml", "--out", "{tmp}/s", "--scheduler", "foo"], 2, ["--scheduler foo"]),
+    (["sweep", "studies/speed_sweep.toml", "--out", "{tmp}/s", "--set", "study.stop_time=-1"], 2, ["stop_time"]),
+    (["diagnose", "{tmp}/header.csv", "--out", "{tmp}/d", "--study", "nope.toml"], 2, ["nope.toml"]),
+    (["diagnose", "{tmp}/degrees.csv", "--out", "{tmp}/d"], 2, ["'delta'", "degrees"]),
+    (["diagnose", "{tmp}/ms.csv", "--out", "{tmp}/d"], 2, ["'t'", "milliseconds"]),
+    (["identify", "{tmp}/ms.csv", "--out", "{tmp}/i"], 2, ["'t'", "milliseconds"]),
+    (["identify", "{tmp}/degrees.csv", "--out", "{tmp}/i"], 2, ["'delta'", "degrees"]),
+    (["identify", "{tmp}/missing.csv", "--out", "{tmp}/i"], 2, ["missing columns"]),
+    (["identify", "studies/identification.toml", "--out", "{tmp}/i", "--set", "gyro.noise_std=loud"], 2,
+     ["noise_std", "'loud'"]),
+    (["export-controller", "nope.toml", "--out", "{tmp}/c.fmu"], 2, ["nope.toml"]),
+    (["margins", "studies/figure8.toml", "--set", "x=1"], 2, ["'x=1'"]),
+    (["emulate", "studies/tractor_emulator.toml", "--nmea-port", "70000"], 2, ["--nmea-port"]),
+    (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.base_step=0.003"], 2, ["step"]),
 ]
 
 
 @pytest.mark.parametrize("args, code, words", BAD, ids=[" ".join(a[:2]) + f" #{i}" for i, (a, _, _) in enumerate(BAD)])
 def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_path, args, code, words):
     (tmp_path / "header.csv").write_text("t,delta_cmd,delta,v,yaw_rate,x,y\n")
+    (tmp_path / "broken.toml").write_text("[study\nname = 1\n")
+    (tmp_path / "unknown_type.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
+                                                f'[components.gps]\ntype = "no_such_component"\n')
+    from measurements.truth_tractor import make_log
+
+    frame, _ = make_log(5, None, duration=120.0)
+    frame.assign(delta=np.degrees(frame["delta"])).to_csv(tmp_path / "degrees.csv", index=False)
+    frame.assign(t=frame["t"] * 1000).to_csv(tmp_path / "ms.csv", index=False)
+    frame.drop(columns=["yaw_rate"]).to_csv(tmp_path / "missing.csv", index=False)
     proc = subprocess.run(CMD + [a.format(tmp=tmp_path) for a in args], cwd=ROOT, capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == code, proc.stderr

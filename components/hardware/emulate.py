@@ -10,10 +10,14 @@ from pathlib import Path
 from orchestrator.engine import RunError
 from orchestrator.errors import Interrupted, Terminated, install_sigterm
 from orchestrator.runner import run_study
-from orchestrator.study import Study
+from orchestrator.study import Study, StudyError
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None) -> int:
+    if not 0 <= nmea_port <= 65535:
+        raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
+    if duration is not None and not duration > 0:
+        raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
     study = Study.load(study_path, overrides)
     server = study.one(role="nmea_server", purpose="emulate")
     values = {f"{server}.port": nmea_port, "study.realtime": True}
