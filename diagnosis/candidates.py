@@ -1,4 +1,5 @@
-"""Fitting the baseline and each catalogue extension, and scoring them (issue 6, steps 2 and 4).
+"""The replay of a log, the baseline fit and the least-squares fit of any set of parameters
+(issue 6; the selection of several effects is diagnosis.selection, issue 15).
 
 The log is split in time: the first ``fit_fraction`` is for fitting, the rest is held out. Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages
@@ -9,9 +10,8 @@ Score (Gaussian likelihood, per-stage unknown variance, autocorrelation-correcte
     dBIC = sum_s n_eff,s ln(RSS_s,after / RSS_s,before) + k ln(sum_s n_eff,s)
     n_eff = n (1 - rho1) / (1 + rho1),  rho1 the lag-1 autocorrelation of the fitted residuals
 
-An extension is *supported* when dBIC < -10 (strong evidence), it lowers the held-out RMS of its
-main signal by at least ``min_gain`` without raising another by more than 5%, and the fitted
-value passes the effect's materiality threshold.
+(diagnosis.selection judges an effect with this score: supported when dBIC < -10, the held-out
+RMS of its main signal falls by ``min_gain``, no other rises by 5%, and the value is material.)
 """
 from __future__ import annotations
 
@@ -26,9 +26,8 @@ from measurements import LogError
 from measurements.log import check_units
 
 from .baseline import Baseline
-from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN, Effect, Parameter
-from .replay import (YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, integrate,
-                     steering_replay)
+from .catalogue import UNCERTAIN, Parameter
+from .replay import YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -70,7 +69,6 @@ class Replay:
             check_units(f, "log")
         except LogError as exc:
             raise CannotDecide(str(exc).removeprefix("log: ")) from None
-        self._check_yaw_rate_unit(moving)
         t_split = self.t[0] + self.fit_fraction * duration
         after_burn = self.t >= self.t[0] + self.burn_in
         self.t_split = t_split
@@ -95,25 +93,6 @@ class Replay:
         if len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2:
             raise CannotDecide(f"too few {self.window:.0f} s stretches of driving for the position replay "
                                f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
-
-    def _check_yaw_rate_unit(self, moving: np.ndarray) -> None:
-        """Heading change over 2 s, integrated gyro against the GPS course (from 1 s chords):
-        the regression slope is 1 in rad/s and 57 in deg/s."""
-        k, d = chords(self.gps, self.h)
-        L = max(1, int(round(2.0 / self.h)))
-        if len(d) <= L + 100:
-            return
-        course = np.arctan2(d[:, 1], d[:, 0])
-        psi = integrate(self.gyro, self.h)[k:-k]
-        fast = moving[k:-k]
-        dc = np.angle(np.exp(1j * (course[L:] - course[:-L])))
-        dp = psi[L:] - psi[:-L]
-        ok = fast[L:] & fast[:-L]
-        if ok.sum() > 100 and dc[ok] @ dc[ok] > 0:
-            slope = float(dc[ok] @ dp[ok] / (dc[ok] @ dc[ok]))
-            if slope > 20:
-                raise CannotDecide(f"column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
-                                   f"it looks like deg/s; the log must hold rad/s")
 
     def predicted(self, stage: str, v: dict[str, float]) -> np.ndarray:
         """The stage's simulated signal on every sample (position: the dead-reckoned track)."""

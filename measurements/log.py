@@ -126,6 +126,29 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
     if not 0.67 < ratio < 1.5:
         raise LogError(f"{where}: column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
                        f"check the units of v, x and y (m/s and m)")
+    if "yaw_rate" in frame.columns:
+        _check_yaw_rate_unit(frame, where, h, k, d)
+
+
+def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:
+    """Heading change over 2 s, integrated yaw rate against the GPS course (1 s chords) while
+    moving: the regression slope is 1 in rad/s and 57 in deg/s (small yaw rates give it away too)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    L = max(1, int(round(2.0 / h)))
+    if len(d) <= L + 100:
+        return
+    course = np.arctan2(d[:, 1], d[:, 0])
+    psi = cumulative_trapezoid(frame["yaw_rate"].to_numpy(float), dx=h, initial=0.0)[k:-k]
+    fast = (frame["v"].to_numpy(float) > 0.3)[k:-k]
+    dc = np.angle(np.exp(1j * (course[L:] - course[:-L])))
+    dp = psi[L:] - psi[:-L]
+    ok = fast[L:] & fast[:-L]
+    if ok.sum() > 100 and dc[ok] @ dc[ok] > 0:
+        slope = float(dc[ok] @ dp[ok] / (dc[ok] @ dc[ok]))
+        if slope > 20:
+            raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
+                           f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
 
 
 def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFrame]:
