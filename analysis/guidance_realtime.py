@@ -37,13 +37,18 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         start = settled_index(t, frame[f"{name}.speed_measured"].to_numpy(), fraction=0.9)
     x, y = frame[f"{name}.x_cg"].to_numpy(), frame[f"{name}.y_cg"].to_numpy()
     out: dict[str, float] = {}
-    if np.all(np.isfinite(x[start:])):
-        err = path_error(x[start:], y[start:], _path(study))
+    # over the samples with a position (a hardware tractor has none before its first fix, or while
+    # the fix is lost); the share is reported so that a partial figure is not taken for a whole one
+    valid = np.isfinite(x) & np.isfinite(y)
+    valid[:start] = False
+    out["position_valid_share"] = float(valid[start:].mean()) if len(valid) > start else 0.0
+    if valid.any():
+        err = path_error(x[valid], y[valid], _path(study))
         out.update(path_error_max=float(err.max()), path_error_mean=float(err.mean()))
         try:
             dx = x - signal(frame, study, "reference", "x_ref")
             dy = y - signal(frame, study, "reference", "y_ref")
-            e = np.hypot(dx, dy)[start:]
+            e = np.hypot(dx, dy)[valid]
             out.update(euclid_max=float(e.max()), euclid_rms=rms(e))
         except MissingSignal:
             pass
