@@ -185,7 +185,7 @@ def test_sweep_workers_end_with_their_parent_even_on_sigkill(tmp_path):
 
 def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
     out = tmp_path / "sw"
-    proc = _sweep(out, "30")
+    proc = _sweep(out, "150")
     end = time.time() + 120
     while time.time() < end and len(list(out.glob("points/*/metrics.json"))) < 3:
         time.sleep(0.2)
@@ -195,7 +195,7 @@ def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
     kept = pd.read_parquet(out / "results.parquet")
     assert 3 <= len(kept) < 11 and set(kept["status"]) == {"completed"}
     again = subprocess.run(CMD + ["sweep", "studies/speed_sweep.toml", "--out", str(out), "--workers", "2",
-                                  "--no-plots", "--no-progress", "--set", "study.stop_time=30"],
+                                  "--no-plots", "--no-progress", "--set", "study.stop_time=150"],
                            cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     table = pd.read_parquet(out / "results.parquet")
