@@ -153,6 +153,13 @@ def _children(parent: int) -> list[int]:
     return out
 
 
+def _cmdline(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_text()
+    except OSError:
+        return ""
+
+
 def _alive(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
@@ -171,7 +178,7 @@ def test_sweep_workers_end_with_their_parent_even_on_sigkill(tmp_path):
     end = time.time() + 60
     workers: list[int] = []
     while time.time() < end and len(workers) < 2:
-        workers = [c for c in _children(proc.pid) if "resource_tracker" not in Path(f"/proc/{c}/cmdline").read_text()]
+        workers = [c for c in _children(proc.pid) if "resource_tracker" not in _cmdline(c)]
         time.sleep(0.3)
     assert workers, "no worker started"
     time.sleep(2.0)
