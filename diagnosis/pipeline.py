@@ -12,10 +12,9 @@ from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 
 from .baseline import baseline_from_study
-from .candidates import STAGES, CannotDecide, Fit, Replay, _fit
+from .candidates import STAGES, CannotDecide, Fit, Replay
 from .catalogue import SIGNALS
 from .evidence import stage_evidence
-from .noise_floor import stage_floors
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
 from .unexplained import stage_check
@@ -163,8 +162,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         return result
     sel = select(replay, min_gain, seed=study.study.seed)
     base = sel.base
-    final = _fit(replay, sel.model.values, [], STAGES, [{}], sel.sigma)
-    floors = stage_floors(replay, final.values, seed=study.study.seed)
+    final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors[s], math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
               for s in STAGES}
     result["split_time"] = replay.t_split

@@ -113,6 +113,8 @@ class Selection:
     model: Fit
     effects: list[Finding]                       # drop-one judgement of each effect of the final model
     first_step: list[Finding]                    # every catalogue effect against the baseline
+    final: Fit                                   # the final model scored on every stage
+    floors: dict                                 # each stage's noise floor under it (noise_floor.py)
     inconclusive: list[dict] = field(default_factory=list)
     trace: list[str] = field(default_factory=list)
 
@@ -123,6 +125,7 @@ class Selector:
         self.base_values = replay.baseline.values
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
+        self._evaluated: tuple | None = None
 
     def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
@@ -191,11 +194,20 @@ class Selector:
         model, members = self.absorbed(model, members, trace)
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
-        return Selection(base, self.sigma, model, effects, first, inconclusive, trace)
+        final, floors = self.evaluate(model)
+        return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def evaluate(self, model: Fit) -> tuple[Fit, dict]:
+        """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
+        values: the end of the selection and the report ask for the same model)."""
+        key = tuple(sorted(model.values.items()))
+        if self._evaluated is None or self._evaluated[0] != key:
+            final = _fit(self.replay, model.values, [], STAGES, [{}], self.sigma)
+            self._evaluated = (key, final, stage_floors(self.replay, model.values, seed=self.seed))
+        return self._evaluated[1], self._evaluated[2]
 
     def misfit_stages(self, model: Fit) -> list[str]:
-        floors = stage_floors(self.replay, model.values, seed=self.seed)
-        final = _fit(self.replay, model.values, [], STAGES, [{}], self.sigma)
+        final, floors = self.evaluate(model)
         return [s for s in STAGES if is_misfit(s, final.rmse_test[s], floors[s])]
 
     def pair(self, model: Fit, members: list[Effect], removed: set[str]):

@@ -9,7 +9,7 @@ import sys
 import warnings
 from pathlib import Path
 
-from .errors import Terminated, exit_code, install_sigterm
+from .errors import Terminated, exit_code, install_signal_handlers
 from .registry import registry
 
 PROG = "python -m orchestrator"
@@ -108,7 +108,7 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
-    install_sigterm()
+    install_signal_handlers()
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)

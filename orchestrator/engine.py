@@ -97,7 +97,7 @@ class Simulation:
 
     def _recording(self, recorders: list[_Recorder], rows: int, completed: bool, start: float) -> Recording:
         """The rows recorded since the last ``drain`` up to base step ``rows`` (absolute)."""
-        drained = getattr(self, "_drained", 0)
+        drained = self._drained
         rows = max(rows - drained, 0)
         times = self.t0 + (drained + np.arange(rows)) * self.h
         blocks = [times.reshape(-1, 1)] + [r.table(rows) for r in recorders]
@@ -123,7 +123,7 @@ class Simulation:
         s = sys_.study.study
         self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.published = published = {}
-        self._drained = 0
+        self._drained = 0          # a restarted simulation records from its start again
         outputs: dict[str, list[str]] = {}
         for node, out in self.signals:
             outputs.setdefault(node.name, []).append(out)

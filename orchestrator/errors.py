@@ -53,7 +53,7 @@ class critical:
             raise pending()
 
 
-def install_sigterm() -> None:
+def install_signal_handlers() -> None:
     """SIGINT and SIGTERM end the main thread's work as KeyboardInterrupt / Terminated (deferred
     past a ``critical`` block), so that every run saves its partial results on either signal."""
     import signal

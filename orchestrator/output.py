@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 
 from .errors import InputError
-from .results import _UMASK
+from .results import UMASK
 
 MARKERS = ("run.json", "metrics.json")
 
@@ -81,7 +81,7 @@ class ResultFolder:
             raise OutputError(f"--out {self.out}: another run is writing to this folder; wait for it or "
                               f"choose another folder") from None
         self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", dir=parent))
-        os.chmod(self.tmp, 0o777 & ~_UMASK)
+        os.chmod(self.tmp, 0o777 & ~UMASK)
         return self
 
     def commit(self, status: str) -> Path:

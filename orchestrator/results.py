@@ -17,7 +17,7 @@ def _umask() -> int:
     return mask
 
 
-_UMASK = _umask()
+UMASK = _umask()
 
 
 def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
@@ -27,7 +27,7 @@ def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
     tmp_path = Path(tmp)
     try:
         write(tmp_path)
-        os.chmod(tmp_path, 0o666 & ~_UMASK)      # mkstemp makes 0600; results are for everyone who may read the folder
+        os.chmod(tmp_path, 0o666 & ~UMASK)      # mkstemp makes 0600; results are for everyone who may read the folder
         os.replace(tmp_path, path)
     finally:
         if tmp_path.exists():
@@ -92,5 +92,5 @@ class SignalWriter:
             self._parquet = None
         elif not self._csv.closed:
             self._csv.close()
-        os.chmod(self.path, 0o666 & ~_UMASK)
+        os.chmod(self.path, 0o666 & ~UMASK)
         return self.path

@@ -8,7 +8,7 @@ import argparse
 from pathlib import Path
 
 from orchestrator.engine import RunError
-from orchestrator.errors import Interrupted, Terminated, install_sigterm
+from orchestrator.errors import Interrupted, Terminated, install_signal_handlers
 from orchestrator.runner import run_study
 from orchestrator.study import Study, StudyError
 
@@ -24,7 +24,7 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if duration is not None:
         values["study.stop_time"] = float(duration)
     study = study.with_values(values)
-    install_sigterm()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
+    install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
     try:
