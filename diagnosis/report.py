@@ -24,7 +24,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     k, unit = UNIT_SCALE[stage]
     rows = 1 if stage == "position" else 2
     fig, ax = plt.subplots(rows, 2, figsize=(12, 3.8 * rows), squeeze=False)
-    models = [("baseline", base, "tab:red")] + ([("extended", winner, "tab:green")] if winner else [])
+    models = [("baseline", base, "tab:red")] + ([("final model", winner, "tab:green")] if winner else [])
     if stage == "position":
         for label, v, color in models:
             t, r = replay.residual_series(stage, v)
@@ -52,9 +52,9 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s of the held-out part", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].set(title="residual (measured - simulated)", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].axvline(replay.t_split, color="k", ls="--", lw=0.8)
-        ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel="PSD")
+        ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel=f"PSD [({SIGNALS[stage][1]})^2/Hz]")
         ax[1, 1].set(title=f"residual x {({'steering': 'delta_cmd', 'speed': 'v'}).get(stage, 'delta')} cross-correlation",
-                     xlabel="lag [s]")
+                     xlabel="lag [s]", ylabel="correlation [-]")
     for a in ax.flat:
         if a.get_legend_handles_labels()[0]:
             a.legend(fontsize=7)
@@ -144,7 +144,7 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
     from .evidence import AMPLITUDE_BINS_DEG, SPEED_BINS, binned
 
     fig, ax = plt.subplots(2, 2, figsize=(12, 6))
-    models = [("baseline", base, "tab:red")] + ([("extended", winner, "tab:green")] if winner else [])
+    models = [("baseline", base, "tab:red")] + ([("final model", winner, "tab:green")] if winner else [])
     for row, stage in enumerate(("steering", "yaw")):
         k, unit = UNIT_SCALE[stage]
         sel = replay.scored(stage)
