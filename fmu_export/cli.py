@@ -10,6 +10,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("study", type=Path, help="study holding the tracker, the yaw-rate MPC and the speed PID")
     p.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
+    p.add_argument("--fmi-version", type=int, default=2, choices=(2, 3), help="FMI version of the FMU (default 2)")
     add_set_option(p)
 
 
@@ -18,15 +19,12 @@ def run(args: argparse.Namespace) -> int:
 
     from .controller import export_controller
 
-    out = export_controller(Study.load(args.study, args.set), args.out)
-    print(f"controller of {args.study} exported to {out}")
+    out = export_controller(Study.load(args.study, args.set), args.out, args.fmi_version)
+    print(f"controller of {args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation)")
     return 0
 
 
 def register(registry) -> None:
-    from .controller import ANNOTATION_TOOL
-
-    registry.add_fmu_annotation_tool(ANNOTATION_TOOL)     # the exported FMUs are sampled components
     registry.add_command("export-controller",
                          "export the study's guidance controller (tracker + MPC + speed PID) as an FMU",
                          add_arguments, run)

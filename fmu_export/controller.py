@@ -1,6 +1,11 @@
 """Export a study's guidance controller (kinematic tracker + yaw-rate MPC + speed PID cascade) as a
-self-contained FMI 2.0 co-simulation FMU: C sources generated from the study's design, a binary
-built for this platform with fmpy.build (CMake), the sources shipped inside for other platforms.
+self-contained FMI 2.0 or 3.0 co-simulation FMU: C sources generated from the study's design, a
+binary built for this platform with fmpy.build (CMake), the sources shipped inside for other platforms.
+
+One C core for both versions: the generated model (``guidance_core.c``: y_k = g(x_k, u_k),
+x_k+1 = f(x_k, u_k) at the MPC's sample instants), the shared co-simulation semantics
+(``sampled_instance.c``: get after set recomputes, the period handled inside for any communication
+step dividing it, call sequence and finite inputs checked) and a thin wrapper per FMI version.
 
 Ports are the three components' ports prefixed by their role (``tracker_x_ref``,
 ``mpc_yaw_rate``, ``speed_controller_speed`` ...); connections between the three stay inside.
@@ -10,12 +15,9 @@ Fixed by the design (regenerate to change): the MPC model, sample time, horizons
 from __future__ import annotations
 
 import hashlib
-import shutil
-import tempfile
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -27,18 +29,19 @@ from orchestrator.build import build_system
 from orchestrator.errors import InputError
 from orchestrator.study import Study
 
-from .packaging import PackagingError, check_fmu_target, package_fmu
+from .packaging import PackagingError, check_fmu_target
+from .sampled_fmu import SampledModel, build_fmu
 
 MODEL_IDENTIFIER = "guidance_controller"
-ANNOTATION_TOOL = "agrobot"          # <Tool name="agrobot"><Sampled/></Tool>: outputs hold on [t, t + dt)
 C_DIR = Path(__file__).with_name("c")
+FMI_VERSIONS = (2, 3)
 # port prefix -> (declared role, the class the C code re-implements)
 ROLES = {"tracker": ("tracker", KinematicTracker), "mpc": ("yaw_rate_controller", YawRateMPC),
          "speed_controller": ("speed_controller", SpeedPID)}
 TUNABLE = {"tracker": ("k_s", "k_c", "l_r", "lookahead"), "mpc": ("steer_limit", "steer_rate_limit"),
            "speed_controller": ("kp", "ki", "kd", "integral_limit", "feedforward", "inner_kp", "inner_ki",
                                 "inner_kd", "neutral_voltage", "voltage_min", "voltage_max")}
-VR_IN0, VR_OUT0 = 100, 200
+VR_IN0, VR_OUT0 = 1000, 2000        # as sampled_instance.c numbers inputs and outputs
 
 
 class ExportError(InputError):
@@ -93,21 +96,32 @@ def controller_design(study: Study) -> ControllerDesign:
         outs += [(f"{role}_{v.name}", v.unit, v.description) for v in comp.variables if v.causality == "output"]
     internal = ("mpc_yaw_rate_ref", "speed_controller_speed_desired")     # driven by the tracker
     ins = [i for i in ins if i[0] not in internal]
-    tracker_in = [i[0] for i in ins if i[0].startswith("tracker_")]
-    deps = {}
-    for port, _, _ in outs:
-        if port.startswith("tracker_"):
-            deps[port] = tracker_in
-        elif port.startswith("mpc_"):
-            deps[port] = tracker_in + ["mpc_yaw_rate"]
-        else:
-            deps[port] = tracker_in + ["speed_controller_speed"] + (
-                ["speed_controller_pedal_position"] if port.endswith("voltage") else [])
+    deps = controller_dependencies(mp["model_input"] == "measured")
     return ControllerDesign(where, names, dt, mpc, mp["model_input"] == "measured", params, ins, outs, deps)
+
+
+def controller_dependencies(measured_input: bool) -> dict[str, list[str]]:
+    """Output port -> the input ports its value at a sample instant is computed from, as the C
+    core's equations read them (guidance_core.c: model_sample)."""
+    pose = ["tracker_x_ref", "tracker_y_ref", "tracker_x", "tracker_y", "tracker_xdot_ref", "tracker_ydot_ref",
+            "tracker_heading"]
+    speed_desired = pose
+    yaw_rate_desired = pose + ["tracker_yaw_rate_ref"]
+    steer = yaw_rate_desired + ["mpc_yaw_rate"] + (["mpc_steer_angle"] if measured_input else [])
+    pedal = speed_desired + ["speed_controller_speed"]
+    return {"tracker_speed_desired": speed_desired, "tracker_yaw_rate_desired": yaw_rate_desired,
+            "tracker_error_x": ["tracker_x_ref", "tracker_x"], "tracker_error_y": ["tracker_y_ref", "tracker_y"],
+            "mpc_steer_angle_cmd": steer, "mpc_qp_status": steer,
+            "speed_controller_pedal_position_cmd": pedal,
+            "speed_controller_pedal_valve_voltage": pedal + ["speed_controller_pedal_position"]}
 
 
 def _c_array(values) -> str:
     return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
+
+
+def _c_strings(names) -> str:
+    return ", ".join(f'"{n}"' for n in names)
 
 
 def _guid(source: str) -> str:
@@ -116,8 +130,8 @@ def _guid(source: str) -> str:
 
 
 def generate_c(design: ControllerDesign) -> tuple[str, str]:
-    """(C source, GUID)."""
-    template = (C_DIR / "guidance_controller.c").read_text()
+    """(the model core's C source, GUID / instantiation token)."""
+    template = (C_DIR / "guidance_core.c").read_text()
     m = design.mpc
     par_defines = "\n".join(f"#define P_{name} {i}" for i, (name, *_) in enumerate(design.parameters))
     io_defines = "\n".join([f"#define IN_{name} {i}" for i, (name, *_) in enumerate(design.inputs)]
@@ -125,7 +139,9 @@ def generate_c(design: ControllerDesign) -> tuple[str, str]:
     values = {
         "STUDY": Path(design.study_path).name, "NX": m.A.shape[0], "NC": m.Nc,
         "NPAR": len(design.parameters), "NIN": len(design.inputs), "NOUT": len(design.outputs),
-        "VR_IN0": VR_IN0, "VR_OUT0": VR_OUT0, "SAMPLE_TIME": repr(design.sample_time),
+        "SAMPLE_TIME": repr(float(design.sample_time)),
+        "PAR_NAMES": _c_strings(p[0] for p in design.parameters), "IN_NAMES": _c_strings(i[0] for i in design.inputs),
+        "OUT_NAMES": _c_strings(o[0] for o in design.outputs),
         "MEASURED_INPUT": int(design.measured_input), "MPC_H": _c_array(m.H), "MPC_G": _c_array(m.G),
         "MPC_S": _c_array(m.S), "MPC_ADVANCE": _c_array(m._advance), "MPC_B": _c_array(m.B),
         "PAR_START": _c_array([p[1] for p in design.parameters]),
@@ -141,89 +157,34 @@ def generate_c(design: ControllerDesign) -> tuple[str, str]:
     return source, guid
 
 
-def model_description(design: ControllerDesign, guid: str) -> str:
+def sampled_model(design: ControllerDesign) -> SampledModel:
+    """The controller as a sampled model (the generated C core and its ports)."""
     m = design.mpc
-    rows, index = [], {}
-    units = sorted({u for _, _, u, _ in design.parameters} | {u for _, u, _ in design.inputs + design.outputs})
-
-    def variable(name, vr, causality, variability, unit, description, start=None, initial=None):
-        index[name] = len(rows) + 1
-        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
-        if initial:
-            attrs += f' initial="{initial}"'
-        real = f'<Real unit={quoteattr(unit)}' + (f' start="{start!r}"' if start is not None else "") + "/>"
-        rows.append(f"    <ScalarVariable {attrs} description={quoteattr(description)}>{real}</ScalarVariable>")
-
-    for i, (name, start, unit, desc) in enumerate(design.parameters):
-        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
-    for i, (name, unit, desc) in enumerate(design.inputs):
-        variable(name, VR_IN0 + i, "input", "discrete", unit, desc, 0.0)
-    for i, (name, unit, desc) in enumerate(design.outputs):
-        variable(name, VR_OUT0 + i, "output", "discrete", unit, desc, None, "calculated")
-    outputs = "\n".join(f'      <Unknown index="{index[n]}" dependencies="{" ".join(str(index[d]) for d in design.dependencies[n])}"/>'
-                        for n, _, _ in design.outputs)
-    initial = "\n".join(f'      <Unknown index="{index[n]}" dependencies=""/>' for n, _, _ in design.outputs)
+    source, guid = generate_c(design)
     description = (f"Guidance controller of {Path(design.study_path).name}: kinematic tracker, yaw-rate MPC "
-                   f"(model {list(np.round(m.A.ravel(), 12))} discretised at {design.sample_time} s, "
-                   f"Np={m.Np}, Nc={m.Nc}, Q={m.Q}, R={m.R}), speed PID cascade")
-    unit_defs = "\n".join(f"    <Unit name={quoteattr(u)}/>" for u in units)
-    return f"""<?xml version="1.0" encoding="UTF-8"?>
-<fmiModelDescription fmiVersion="2.0" modelName="{MODEL_IDENTIFIER}" guid="{guid}"
-  description={quoteattr(description)} generationTool="agrobot-guidance fmu_export"
-  variableNamingConvention="flat" numberOfEventIndicators="0">
-  <CoSimulation modelIdentifier="{MODEL_IDENTIFIER}" canHandleVariableCommunicationStepSize="false"
-    canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true">
-    <SourceFiles>
-      <File name="guidance_controller.c"/>
-      <File name="qp_active_set.c"/>
-    </SourceFiles>
-  </CoSimulation>
-  <UnitDefinitions>
-{unit_defs}
-  </UnitDefinitions>
-  <LogCategories>
-    <Category name="logStatusError" description="errors"/>
-  </LogCategories>
-  <DefaultExperiment startTime="0.0" stepSize="{design.sample_time!r}"/>
-  <VendorAnnotations>
-    <Tool name="{ANNOTATION_TOOL}"><Sampled/></Tool>
-  </VendorAnnotations>
-  <ModelVariables>
-{chr(10).join(rows)}
-  </ModelVariables>
-  <ModelStructure>
-    <Outputs>
-{outputs}
-    </Outputs>
-    <InitialUnknowns>
-{initial}
-    </InitialUnknowns>
-  </ModelStructure>
-</fmiModelDescription>
-"""
+                   f"(model A = {[float(a) for a in np.round(m.A.ravel(), 12)]} discretised at "
+                   f"{float(design.sample_time)} s, Np={int(m.Np)}, Nc={int(m.Nc)}, Q={float(m.Q)}, R={float(m.R)}), "
+                   f"speed PID cascade; sampled every {float(design.sample_time)} s, outputs follow the inputs "
+                   f"of each sample instant")
+    return SampledModel(MODEL_IDENTIFIER, guid, description, design.sample_time, design.parameters, design.inputs,
+                        design.outputs, design.dependencies, source, ["qp_active_set.c", "qp_active_set.h"])
 
 
-def export_controller(study: Study, out: Path) -> Path:
-    """Write ``out`` (.fmu): sources, modelDescription.xml and the binary for this platform."""
+def export_controller(study: Study, out: Path, fmi_version: int = 2) -> Path:
+    """Write ``out`` (.fmu, FMI ``fmi_version``.0): sources, modelDescription.xml, the binary for this platform."""
     if out.suffix != ".fmu":
         raise ExportError(f"--out {out}: expected a path ending in .fmu")
+    if fmi_version not in FMI_VERSIONS:
+        raise ExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, FMI_VERSIONS))}")
     try:
         check_fmu_target(out)
     except PackagingError as exc:
         raise ExportError(str(exc)) from None
-    design = controller_design(study)
-    source, guid = generate_c(design)
-    with tempfile.TemporaryDirectory() as tmp:
-        root = Path(tmp)
-        (root / "sources").mkdir()
-        (root / "sources" / "guidance_controller.c").write_text(source)
-        for name in ("qp_active_set.c", "qp_active_set.h"):
-            shutil.copy(C_DIR / name, root / "sources" / name)
-        (root / "modelDescription.xml").write_text(model_description(design, guid))
-        try:
-            return package_fmu(root, out)
-        except PackagingError as exc:
-            raise ExportError(str(exc)) from None
+    model = sampled_model(controller_design(study))
+    try:
+        return build_fmu(model, out, fmi_version)
+    except PackagingError as exc:
+        raise ExportError(str(exc)) from None
 
 
 def _port_name(design: ControllerDesign):

@@ -1,6 +1,7 @@
-"""Build and package an FMI 2.0 FMU from a folder holding ``modelDescription.xml`` and
+"""Build and package an FMI 2.0 or 3.0 FMU from a folder holding ``modelDescription.xml`` and
 ``sources/``: the FMI headers (from fmpy) are added to the sources, the binary for this platform
-is built with fmpy.build (CMake + the C compiler), and the archive is written atomically."""
+is built with fmpy.build (CMake + the C compiler, hidden visibility: only the functions the FMI
+headers mark for export leave the binary), and the archive is written atomically."""
 from __future__ import annotations
 
 import contextlib
@@ -11,7 +12,40 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-FMI2_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
+               3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
+
+
+# fmpy's copy of fmi2Functions.h always exports and never prefixes; the standard's header prefixes
+# every function with FMI2_FUNCTION_PREFIX when it is defined (a source-code FMU linked beside
+# others) and then leaves the export to the linker. These lines restore that behaviour.
+_FMI2_STANDARD_NAMING = """
+#if !defined(FMI2_Export)
+  #if defined(FMI2_FUNCTION_PREFIX)
+    #define FMI2_Export
+  #elif defined _WIN32 || defined __CYGWIN__
+    #define FMI2_Export __declspec(dllexport)
+  #elif __GNUC__ >= 4
+    #define FMI2_Export __attribute__ ((visibility ("default")))
+  #else
+    #define FMI2_Export
+  #endif
+#endif
+#if defined(FMI2_FUNCTION_PREFIX)
+  #define fmi2Paste(a, b) a ## b
+  #define fmi2PasteB(a, b) fmi2Paste(a, b)
+  #define fmi2FullName(name) fmi2PasteB(FMI2_FUNCTION_PREFIX, name)
+#else
+  #define fmi2FullName(name) name
+#endif
+"""
+
+
+def _fmi2_header(text: str) -> str:
+    """fmpy's fmi2Functions.h with the standard's export and prefix macros."""
+    start = text.index("#if defined _WIN32 || defined __CYGWIN__")
+    end = text.index("#define fmi2FullName(name) name") + len("#define fmi2FullName(name) name")
+    return text[:start] + _FMI2_STANDARD_NAMING.strip() + text[end:]
 
 
 class PackagingError(Exception):
@@ -49,7 +83,7 @@ def check_fmu_target(out: Path) -> None:
         raise PackagingError(f"--out {out}: cannot write there ({base} is not a writable folder)")
 
 
-def package_fmu(source_root: Path, out: Path) -> Path:
+def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
     import fmpy
     from fmpy.build import build_platform_binary
 
@@ -59,15 +93,16 @@ def package_fmu(source_root: Path, out: Path) -> Path:
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp) / "fmu"
         shutil.copytree(source_root, root)
-        for header in FMI2_HEADERS:
+        for header in FMI_HEADERS[fmi_version]:
             if not (root / "sources" / header).exists():
-                shutil.copy(fmpy_c / header, root / "sources" / header)
+                text = (fmpy_c / header).read_text()
+                (root / "sources" / header).write_text(_fmi2_header(text) if header == "fmi2Functions.h" else text)
         build, log = Path(tmp) / "build", Path(tmp) / "build.log"
         build.mkdir()
         try:
             with _output_to(log):
                 build_platform_binary(root, build, cmake_options={
-                    "CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm", "CMAKE_C_FLAGS:STRING": "-O2"})
+                    "CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm", "CMAKE_C_FLAGS:STRING": "-O2 -fvisibility=hidden"})
         except Exception as exc:
             tail = log.read_text(errors="replace")[-2000:] if log.exists() else ""
             raise PackagingError(f"building {out.name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None

@@ -16,7 +16,7 @@ import numpy as np
 
 from .component import Component, ComponentError
 from .study import SUBSYSTEM_SUFFIXES, ComponentSpec, Connection, Study, StudyError
-from .units import UnitError, same_unit, to_si
+from .units import UnitError, to_si, units_match
 
 
 @dataclass
@@ -200,9 +200,12 @@ def build_system(study: Study) -> System:
             hint = " (it is an output)" if conn.input in dst.declared("output") else ""
             raise StudyError(f"{where}: {field_name}: {conn.target!r} has no input {conn.input!r}{hint}; "
                              f"inputs: {', '.join(sorted(ins))}")
-        if not same_unit(outs[conn.output].unit, ins[conn.input].unit):
-            raise StudyError(f"{where}: {field_name}: unit mismatch: output is in "
-                             f"{outs[conn.output].unit!r}, input expects {ins[conn.input].unit!r}")
+        a, b = outs[conn.output].unit, ins[conn.input].unit
+        # compared by dimension and factor (an FMU's BaseUnits where it states them)
+        if not units_match(a, b, getattr(src, "base_units", {}).get(conn.output),
+                           getattr(dst, "base_units", {}).get(conn.input)):
+            raise StudyError(f"{where}: {field_name}: unit mismatch: output is in {a!r}, input expects "
+                             f"{b!r} (not the same dimension and scale)")
         key = (conn.target, conn.input)
         if key in connected:
             raise StudyError(f"{where}: {field_name}: input {conn.target}.{conn.input} is already "
@@ -210,6 +213,8 @@ def build_system(study: Study) -> System:
         connected[key] = conn
         nodes[conn.target].sources.append((conn.input, nodes[conn.source], conn.output))
 
+    for name, node in nodes.items():
+        node.component.connected_inputs = frozenset(i for t, i in connected if t == name)
     unconnected = [f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")
                    if (n, i) not in connected]
     _refuse_algebraic_loops(nodes, study.connections, where)

@@ -45,6 +45,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}",
               file=sys.stderr)
         return 1
+    ended = result.metrics.get("ended_by")
+    if ended:
+        print(f"the run ended at t = {ended['t']:.6g} s, before the stop time: {ended['component']} asked "
+              f"to terminate ({ended['reason']})")
     print(result.summary)
     print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
     return 0

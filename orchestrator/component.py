@@ -53,6 +53,15 @@ class ComponentError(Exception):
     """A component refuses its parameters or fails while stepping."""
 
 
+class EndRun(Exception):
+    """A component asks to end the run where it stands (an FMU's terminate request): not a
+    failure; the run stops cleanly at the last instant every component reached."""
+
+    def __init__(self, component: str, reason: str) -> None:
+        super().__init__(f"{component}: {reason}")
+        self.component, self.reason = component, reason
+
+
 class Component:
     """Base class of every Python co-simulation unit.
 
@@ -66,6 +75,7 @@ class Component:
     feedthrough: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     sampled: ClassVar[bool] = True
     roles: ClassVar[tuple[str, ...]] = ()   # what the component is, for lookup by tools (Study.find)
+    connected_inputs: frozenset[str] = frozenset()   # inputs a connection drives (set when built)
 
     def __init__(self, name: str, parameters: Mapping[str, Any] | None = None,
                  rng: np.random.Generator | None = None) -> None:
@@ -100,6 +110,12 @@ class Component:
     # it reads its sensors in ``step`` (first) and writes the commands of the same instant here
     # (last): read - compute - write in one cycle, as a real-time target does.
     actuate = None
+
+    # A sampled component may also define ``advance(t, dt)``: called after the instant's outputs are
+    # recorded, with its inputs refreshed (every value of t, as a continuous component sees them),
+    # to move its state over [t, t + dt) (an FMU: set the inputs of t, doStep). ``step`` then only
+    # computes the outputs of t (get after set), which holds for any co-simulation FMU.
+    advance = None
 
     def terminate(self) -> None:
         """Release what the component holds (ports, sockets, buses); called once after a run."""

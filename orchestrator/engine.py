@@ -6,9 +6,12 @@ At each macro instant t_k = t0 + k*h (never accumulated):
     (their outputs hold on [t_k, t_k + step));
  3. every output is recorded for t_k; components defining ``actuate`` (hardware adapters) write
     the inputs of t_k out;
- 4. continuous components due at t_k read their inputs (all values of t_k; every read happens
-    before any of them steps) and integrate to t_k + step; their outputs stay private until
-    step 1 of that instant.
+ 4. continuous components due at t_k, and sampled ones that ``advance`` (FMUs), read their inputs
+    (all values of t_k; every read happens before any of them steps) and integrate to
+    t_k + step; their outputs stay private until step 1 (continuous) or step 2 (advancing) of
+    that instant.
+A component raising EndRun (an FMU's terminate request) ends the run cleanly at the last instant
+recorded in full; ``Recording.ended_by`` says who asked, when and why.
 Each component's outputs are recorded at the instants they can change (multiples of its step)
 and held in between when the table is built.
 Step 2 at k = 0 propagates the outputs at t0 before anything integrates.
@@ -24,7 +27,7 @@ from operator import itemgetter
 import numpy as np
 
 from .build import Node, System
-from .component import ComponentError
+from .component import ComponentError, EndRun
 from .errors import ComputationError, InputError
 from .realtime import RealTimePacer
 
@@ -49,6 +52,7 @@ class Recording:
     completed: bool
     events: list[tuple[float, str, str]] = field(default_factory=list)   # (t, component, message)
     realtime: dict | None = None                                          # pacing statistics
+    ended_by: dict | None = None          # {"component", "t", "reason"}: a component ended the run
 
     def to_frame(self):
         import pandas as pd
@@ -94,6 +98,7 @@ class Simulation:
         self._due_continuous = [[nd for nd in system.continuous if j % nd.ratio == 0] for j in range(period)]
         self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in system.nodes.values()}
         self.k, self._drained, self._recorders, self._start = 0, 0, [], time.perf_counter()
+        self.ended_by: dict | None = None
 
     def _recording(self, recorders: list[_Recorder], rows: int, completed: bool, start: float) -> Recording:
         """The rows recorded since the last ``drain`` up to base step ``rows`` (absolute)."""
@@ -105,7 +110,7 @@ class Simulation:
         events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
         pacer = getattr(self, "pacer", None)
         return Recording(self.columns, data, time.perf_counter() - start, completed, events,
-                         pacer.stats() if pacer is not None else None)
+                         pacer.stats() if pacer is not None else None, self.ended_by)
 
     def run(self) -> Recording:
         """Initialise, step to stop_time, record; components are terminated afterwards."""
@@ -151,6 +156,8 @@ class Simulation:
         self._due_a = [[(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in nodes
                         if nd.component.actuate is not None] for nodes in self._due_sampled]
         self._due_c = [[entry(nd) for nd in nodes] for nodes in self._due_continuous]
+        self._due_v = [[(nd.component.u, pulls[nd.name], nd.component.advance, nd.step) for nd in nodes
+                        if nd.component.advance is not None] for nodes in self._due_sampled]
         # a continuous component stepping every base step publishes its live outputs: every
         # continuous input is pulled before any continuous component steps, so nobody sees a value
         # early. Slower ones publish a copy at the end of their step interval.
@@ -164,9 +171,9 @@ class Simulation:
         continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
         instant k_end too, without integrating past it (the last instant of a run)."""
         published, period, pace = self.published, self._period, self.pacer
-        due_s, due_c, due_a = self._due_s, self._due_c, self._due_a
+        due_s, due_c, due_a, due_v = self._due_s, self._due_c, self._due_a, self._due_v
         last = k_end if final else -1
-        k = self.k
+        k, recorded = self.k, self.k
         try:
             for k in range(self.k, k_end + 1 if final else k_end):
                 if pace is not None:
@@ -190,13 +197,28 @@ class Simulation:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                     actuate(t)
+                recorded = k + 1
                 if k == last:
                     break
+                advancing = due_v[phase]
                 for _, _, u, sources, _, _, _, _ in continuous:
+                    for inp, src, out in sources:
+                        u[inp] = published[src][out]
+                for u, sources, _, _ in advancing:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                 for _, step, _, _, dt, _, _, _ in continuous:
                     step(t, dt)
+                for _, _, advance, dt in advancing:
+                    advance(t, dt)
+        except EndRun as request:
+            if recorded == 0:
+                raise RunError(f"at t = {self.t0:.6g} s: {request.component} ended the run before its first "
+                               f"instant: {request.reason}", self._recording(self._recorders, 0, False, self._start))
+            self.ended_by = {"component": request.component, "t": self.t0 + (recorded - 1) * self.h,
+                             "reason": request.reason}
+            self.k = self.n_steps = recorded - 1
+            return
         except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError, OSError,
                 KeyboardInterrupt) as exc:
             self.k = k
@@ -223,6 +245,8 @@ class Simulation:
 
     def finish(self) -> Recording:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
+        if self.ended_by is not None:             # the last instant is recorded already
+            return self._recording(self._recorders, self.k + 1, True, self._start)
         self.advance(self.k, final=True)
         return self._recording(self._recorders, self.k + 1, True, self._start)
 

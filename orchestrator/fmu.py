@@ -1,30 +1,53 @@
-"""Co-simulation FMUs (FMI 2.0 and 3.0, through fmpy) behind the component contract.
+"""FMUs (FMI 2.0 and 3.0, co-simulation or model exchange, through fmpy) behind the component contract.
 
-A study names an FMU by path (``type = "fmus/plant.fmu"``, relative to the study file). Ports,
-units and start values come from ``modelDescription.xml``; parameters are set after instantiation,
-before initialisation; outputs are read after initialisation (propagated at t0). One instance is
-kept per component and ``reset()`` between runs.
+A study names an FMU by path (``type = "fmus/plant.fmu"``, relative to the study file). Everything
+comes from ``modelDescription.xml``, read as the standard writes it (no vendor annotations):
 
-Stepping semantics:
-- by default an FMU is *continuous*: ``doStep(t, dt)`` integrates with the inputs of t and its
-  outputs describe t + dt (no direct feedthrough);
-- an FMU whose modelDescription carries a vendor annotation ``<Tool name="T"><Sampled/></Tool>``,
-  T a tool name a plugin registered (orchestrator.registry), is *sampled*: doStep computes its outputs from the
-  inputs at t and they hold on [t, t + dt); feedthrough comes from ModelStructure's output
-  dependencies (an exported controller is such an FMU).
-Only Real/Float64 variables become ports (others are ignored).
+- ports: every variable of causality input, output or parameter, of any type (FMI 2.0 Real,
+  Integer, Boolean, String, Enumeration; FMI 3.0 Float32/64, (U)Int8..64, Boolean, String, Binary,
+  Enumeration). An FMI 3.0 array is a whole port ``x`` (a numpy array) and element ports ``x[2]``
+  or ``x[1,3]`` (1-based, as structured names write them); connect either. Clocks are refused by name;
+- units: each port's unit with the BaseUnit of the FMU's UnitDefinitions; connections compare
+  dimension and factor (orchestrator.units);
+- timing, FMI's co-simulation semantics: at each instant t of its step the inputs of t are set and
+  the outputs read (get after set), so outputs that ModelStructure declares dependent on inputs
+  reflect the inputs of t; the orchestrator orders the FMU after their sources and refuses algebraic
+  loops through them. After the instant is recorded, ``advance`` sets the inputs of t again (every
+  value of t) and calls doStep(t, dt); a model-exchange FMU is integrated instead (scipy's RK45,
+  state events located, time and step events handled). The first instant sets the inputs from
+  their sources before anything is read, so inputs at the start time are the sources' values;
+- a terminate request (fmi2Discard with fmi2Terminated, FMI 3.0 terminateSimulation, or an event
+  update asking to terminate) ends the run cleanly (EndRun), reported in metrics.json as ``ended_by``.
+One instance is kept per component and ``reset()`` between runs.
 """
 from __future__ import annotations
 
+import ctypes
+import re
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .component import Component, ComponentError, Variable
+import numpy as np
+
+from .component import Component, ComponentError, EndRun, Variable
 from .errors import InputError
+from .units import BaseUnit
+
 
 class FMUError(InputError):
-    """The file cannot be used as a co-simulation component (message names file and reason)."""
+    """The file cannot be used as a component (message names file and reason)."""
+
+
+# FMI type -> (fmpy accessor suffix, Python conversion)
+_FMI2_TYPES = {"Real": ("Real", float), "Integer": ("Integer", int), "Enumeration": ("Integer", int),
+               "Boolean": ("Boolean", bool), "String": ("String", str)}
+_FMI3_TYPES = {**{t: (t, float) for t in ("Float32", "Float64")},
+               **{t: (t, int) for t in ("Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")},
+               "Enumeration": ("Int64", int), "Boolean": ("Boolean", bool), "String": ("String", str),
+               "Binary": ("Binary", bytes)}
+CAUSALITIES = {"input": "input", "output": "output", "parameter": "parameter", "structuralParameter": "parameter"}
 
 
 def _binary_dir(fmi_version: str) -> str:
@@ -34,7 +57,7 @@ def _binary_dir(fmi_version: str) -> str:
 
 
 def inspect_fmu(path: Path):
-    """Read and check an FMU: (model description, unzip-free checks done). Raises FMUError."""
+    """Read and check an FMU: its model description. Raises FMUError naming the file and reason."""
     from fmpy import read_model_description, sharedLibraryExtension
 
     if not path.exists():
@@ -51,15 +74,39 @@ def inspect_fmu(path: Path):
         raise FMUError(f"{path}: modelDescription.xml cannot be read: {exc}") from None
     if md.fmiVersion not in ("2.0",) and not md.fmiVersion.startswith("3."):
         raise FMUError(f"{path}: FMI version {md.fmiVersion} is not supported (2.0 and 3.0 are)")
-    if md.coSimulation is None:
-        raise FMUError(f"{path}: a model-exchange-only FMU; co-simulation (FMI 2.0/3.0 CoSimulation) is required")
-    ident = md.coSimulation.modelIdentifier
-    binary = f"binaries/{_binary_dir(md.fmiVersion)}/{ident}{sharedLibraryExtension}"
+    kind = md.coSimulation or md.modelExchange
+    if kind is None:
+        raise FMUError(f"{path}: neither co-simulation nor model exchange is provided "
+                       f"(a scheduled-execution FMU cannot be stepped by this orchestrator)")
+    binary = f"binaries/{_binary_dir(md.fmiVersion)}/{kind.modelIdentifier}{sharedLibraryExtension}"
     if binary not in names:
         have = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
         raise FMUError(f"{path}: no binary for this platform ({binary} missing; the FMU has "
                        f"{', '.join(have) or 'no binaries'})")
+    clocked = [v.name for v in md.modelVariables if v.type == "Clock" or getattr(v, "clocks", None)]
+    if clocked:
+        raise FMUError(f"{path}: clocks are not supported; clocked variables: {', '.join(clocked[:8])}"
+                       + (" ..." if len(clocked) > 8 else ""))
     return md
+
+
+@dataclass(frozen=True)
+class _FMIVar:
+    """One FMI variable: its accessor type, value reference, shape (() for a scalar) and conversion."""
+
+    name: str
+    vr: int
+    accessor: str
+    convert: Any
+    shape: tuple[int, ...]
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape)) if self.shape else 1
+
+    def element_names(self) -> list[str]:
+        return [f"{self.name}[{','.join(str(i + 1) for i in idx)}]" for idx in np.ndindex(*self.shape)] \
+            if self.shape else []
 
 
 def _unit(variable) -> str:
@@ -69,40 +116,80 @@ def _unit(variable) -> str:
     return unit or "1"
 
 
-def _is_real(variable) -> bool:
-    return variable.type in ("Real", "Float64")
+def _shape(md, v, path: Path) -> tuple[int, ...]:
+    dims = getattr(v, "dimensions", None) or []
+    shape = []
+    for d in dims:
+        if d.start not in (None, ""):
+            shape.append(int(d.start))
+            continue
+        ref = d.variable or next((w for w in md.modelVariables if w.valueReference == d.valueReference), None)
+        if ref is None or ref.start in (None, ""):
+            raise FMUError(f"{path}: array {v.name!r}: its dimension (value reference {d.valueReference}) has no size")
+        shape.append(int(ref.start))
+    return tuple(shape)
 
 
-def _is_sampled(path: Path) -> bool:
-    with zipfile.ZipFile(path) as zf:
-        xml = zf.read("modelDescription.xml").decode("utf-8", "replace")
-    from .registry import registry
-
-    return "<Sampled" in xml and any(f'<Tool name="{tool}">' in xml for tool in registry().fmu_annotation_tools)
+def _start(fv: _FMIVar, text) -> Any:
+    if text is None:
+        zero = fv.convert() if fv.convert is not bytes else b""
+        return np.full(fv.shape, zero, dtype=object if fv.convert in (str, bytes) else None) if fv.shape else zero
+    if fv.convert is str:
+        return str(text)
+    if fv.convert is bytes:
+        return bytes.fromhex(str(text)) if text else b""
+    items = str(text).split() if fv.shape else [text]
+    parse = (lambda s: str(s).lower() in ("true", "1")) if fv.convert is bool else \
+        (lambda s: fv.convert(float(s)) if fv.convert is int else float(s))
+    values = [parse(s) for s in items]
+    if not fv.shape:
+        return values[0]
+    if len(values) == 1:
+        values = values * fv.size
+    return np.asarray(values).reshape(fv.shape)
 
 
 def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
-    """A Component subclass whose declared variables are the FMU's Real ports."""
+    """A Component subclass whose declared variables are the FMU's ports (see module docstring)."""
     path = Path(path).resolve()
     md = inspect_fmu(path)
-    variables, refs = [], {}
+    fmi3 = not md.fmiVersion.startswith("2")
+    types = _FMI3_TYPES if fmi3 else _FMI2_TYPES
+    bases = {u.name: BaseUnit(tuple(int(getattr(u.baseUnit, k)) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")),
+                              float(u.baseUnit.factor), float(u.baseUnit.offset))
+             for u in (md.unitDefinitions or []) if u.baseUnit is not None}
+    variables, fmi_vars, base_units, ports_of = [], {}, {}, {}
     for v in md.modelVariables:
-        if not _is_real(v) or v.causality not in ("input", "output", "parameter"):
+        causality = CAUSALITIES.get(v.causality)
+        if causality is None:
             continue
-        start = float(v.start) if v.start is not None else 0.0
-        variables.append(Variable(v.name, v.causality, _unit(v), start, v.description or ""))
-        refs[v.name] = v.valueReference
-    sampled = _is_sampled(path)
+        if v.type not in types:
+            raise FMUError(f"{path}: variable {v.name!r} has type {v.type}, which this orchestrator cannot exchange")
+        accessor, convert = types[v.type]
+        fv = _FMIVar(v.name, v.valueReference, accessor, convert, _shape(md, v, path))
+        fmi_vars[v.name] = (causality, fv)
+        unit = _unit(v)
+        start = _start(fv, v.start)
+        names = [v.name] + fv.element_names()
+        ports_of[v.name] = names
+        variables.append(Variable(v.name, causality, unit, start, v.description or ""))
+        for element, value in zip(fv.element_names(), np.asarray(start).ravel() if fv.shape else []):
+            variables.append(Variable(element, causality, unit, value.item() if hasattr(value, "item") else value,
+                                      f"element of {v.name}"))
+        if unit in bases:
+            base_units.update({n: bases[unit] for n in names})
+    inputs = [n for n, (c, _) in fmi_vars.items() if c == "input"]
     feedthrough: dict[str, tuple[str, ...]] = {}
-    if sampled:
-        inputs = {v.name for v in md.modelVariables if v.causality == "input"}
-        for unknown in md.outputs:
-            deps = unknown.dependencies
-            names = [d.name for d in deps] if deps is not None else sorted(inputs)
-            feedthrough[unknown.variable.name] = tuple(n for n in names if n in inputs)
-    attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": sampled,
-             "fmu_path": path, "model_description": md, "value_references": refs}
-    return type(f"FMU_{md.modelName}", (FMUComponent,), attrs)
+    for unknown in md.outputs:
+        deps = unknown.dependencies
+        dep_vars = [d.name for d in deps] if deps is not None else inputs     # no attribute: every input
+        ports = tuple(p for d in dep_vars if d in inputs for p in ports_of[d])
+        for name in ports_of.get(unknown.variable.name, []):
+            feedthrough[name] = ports
+    attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": True,
+             "fmu_path": path, "model_description": md, "fmi_vars": fmi_vars, "base_units": base_units,
+             "model_exchange": md.coSimulation is None}
+    return type(f"FMU_{re.sub(r'[^A-Za-z0-9_]', '_', md.modelName)}", (FMUComponent,), attrs)
 
 
 class FMUComponent(Component):
@@ -110,78 +197,274 @@ class FMUComponent(Component):
 
     fmu_path: Path
     model_description: Any
-    value_references: dict[str, int]
+    fmi_vars: dict[str, tuple[str, _FMIVar]]
+    base_units: dict[str, BaseUnit]
+    model_exchange: bool
+    connected_inputs: frozenset[str] = frozenset()
 
     def __init__(self, name, parameters=None, rng=None) -> None:
         super().__init__(name, parameters, rng)
         self._slave = None
-        self._unzipdir: str | None = None
         self.instantiations = 0
+        self._fmi3 = not self.model_description.fmiVersion.startswith("2")
 
+    # --- instance --------------------------------------------------------------------------------
     def _create(self) -> None:
         from fmpy import extract
-        from fmpy.fmi2 import FMU2Slave
-        from fmpy.fmi3 import FMU3Slave
+        from fmpy.fmi2 import FMU2Model, FMU2Slave
+        from fmpy.fmi3 import FMU3Model, FMU3Slave
 
         md = self.model_description
-        self._unzipdir = extract(str(self.fmu_path))
-        cls = FMU2Slave if md.fmiVersion == "2.0" else FMU3Slave
-        token = md.guid if md.fmiVersion == "2.0" else md.instantiationToken
-        self._slave = cls(guid=token, unzipDirectory=self._unzipdir,
-                          modelIdentifier=md.coSimulation.modelIdentifier, instanceName=self.name)
+        kind = md.modelExchange if self.model_exchange else md.coSimulation
+        classes = {(False, False): FMU2Slave, (False, True): FMU2Model, (True, False): FMU3Slave, (True, True): FMU3Model}
+        cls = classes[(self._fmi3, self.model_exchange)]
+        token = md.instantiationToken if self._fmi3 else md.guid
+        self._slave = cls(guid=token, unzipDirectory=extract(str(self.fmu_path)),
+                          modelIdentifier=kind.modelIdentifier, instanceName=self.name)
         self._slave.instantiate()
         self.instantiations += 1
 
     def _call(self, what: str, fn, *args):
         try:
             return fn(*args)
+        except EndRun:
+            raise
         except Exception as exc:     # fmpy raises FMICallException on a non-OK status
             raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: {what} failed ({exc})") from None
 
+    def _groups(self, causality: str) -> list[tuple[str, list[_FMIVar]]]:
+        groups: dict[str, list[_FMIVar]] = {}
+        for c, fv in self.fmi_vars.values():
+            if c == causality:
+                groups.setdefault(fv.accessor, []).append(fv)
+        return list(groups.items())
+
+    def _write(self, what: str, groups, values_of) -> None:
+        s = self._slave
+        for accessor, fvs in groups:
+            values = []
+            for fv in fvs:
+                value = values_of(fv)
+                flat = np.asarray(value, dtype=object).ravel().tolist() if fv.shape else [value]
+                if len(flat) != fv.size:
+                    raise ComponentError(f"{self.name}: {fv.name}: expected {fv.size} values, got {len(flat)}")
+                values += [fv.convert(x) if fv.convert is not int else int(round(float(x))) for x in flat]
+            setter = getattr(s, f"set{accessor}")
+            self._call(f"{what} ({', '.join(f.name for f in fvs)})", setter, [f.vr for f in fvs], values)
+
+    def _input_value(self, fv: _FMIVar):
+        u = self.u
+        if not fv.shape or fv.name in self.connected_inputs:
+            return u[fv.name]
+        return np.asarray([u[e] for e in fv.element_names()], dtype=object).reshape(fv.shape)
+
+    def _set_inputs(self) -> None:
+        self._write("setting inputs", self._in_groups, self._input_value)
+
+    def _read_outputs(self) -> None:
+        s, y = self._slave, self.y
+        for accessor, fvs in self._out_groups:
+            getter = getattr(s, f"get{accessor}")
+            refs = [f.vr for f in fvs]
+            total = sum(f.size for f in fvs)
+            values = self._call("reading outputs", getter, refs, total) if self._fmi3 else \
+                self._call("reading outputs", getter, refs)
+            i = 0
+            for fv in fvs:
+                chunk = [fv.convert(x) if fv.convert is not bytes else x for x in values[i:i + fv.size]]
+                i += fv.size
+                if fv.shape:
+                    y[fv.name] = np.asarray(chunk).reshape(fv.shape)
+                    y.update(zip(fv.element_names(), chunk))
+                else:
+                    y[fv.name] = chunk[0]
+
+    # --- life cycle ------------------------------------------------------------------------------
     def initialize(self, t0: float, dt: float) -> None:
-        fmi2 = self.model_description.fmiVersion == "2.0"
         if self._slave is None:
             self._call("instantiate", self._create)
         else:
             self._call("reset", self._slave.reset)
-        s, refs = self._slave, self.value_references
-        set_real = s.setReal if fmi2 else s.setFloat64
-        self._get = s.getReal if fmi2 else s.getFloat64
-        self._set = set_real
-        names = list(self.p)
-        if names:
-            self._call("setting parameters", set_real, [refs[n] for n in names], [float(self.p[n]) for n in names])
-        if fmi2:
+        s = self._slave
+        both = [n for n, (c, fv) in self.fmi_vars.items() if c == "input" and fv.shape
+                and n in self.connected_inputs and any(e in self.connected_inputs for e in fv.element_names())]
+        if both:
+            raise ComponentError(f"input array {both[0]!r} is connected whole and by element; connect one or the other")
+        starts = {v.name: v.start for v in self.variables}
+        changed = [(acc, [fv for fv in fvs if not _equal(self.p[fv.name], starts[fv.name])])
+                   for acc, fvs in self._groups("parameter")]
+        self._write("setting parameters", [(a, f) for a, f in changed if f], lambda fv: self.p[fv.name])
+        self._in_groups, self._out_groups = self._groups("input"), self._groups("output")
+        if self._fmi3:
+            self._call("enterInitializationMode", lambda: s.enterInitializationMode(startTime=t0))
+        else:
             self._call("setupExperiment", s.setupExperiment, None, t0)
             self._call("enterInitializationMode", s.enterInitializationMode)
-        else:
-            self._call("enterInitializationMode", lambda: s.enterInitializationMode(startTime=t0))
-        self._in_names = list(self.u)
-        self._in_refs = [refs[n] for n in self._in_names]
-        if self._in_refs:
-            self._call("setting inputs", set_real, self._in_refs, [float(self.u[n]) for n in self._in_names])
+        self._set_inputs()
         self._call("exitInitializationMode", s.exitInitializationMode)
-        self._out_names = list(self.y)
-        self._out_refs = [refs[n] for n in self._out_names]
+        if self.model_exchange:
+            self._integrator = _ModelExchange(self, t0)
         self._read_outputs()
-
-    def _read_outputs(self) -> None:
-        if self._out_refs:
-            values = self._call("reading outputs", self._get, self._out_refs)
-            self.y.update(zip(self._out_names, values))
 
     def step(self, t: float, dt: float) -> None:
-        u = self.u
-        if self._in_refs:
-            self._call("setting inputs", self._set, self._in_refs, [float(u[n]) for n in self._in_names])
-        self._call(f"doStep at t = {t:.6g} s", self._slave.doStep, t, dt)
+        """The outputs of t from the inputs of t (get after set)."""
+        self._set_inputs()
+        if self.model_exchange:
+            self._integrator.inputs_changed(t)
         self._read_outputs()
+
+    def advance(self, t: float, dt: float) -> None:
+        """doStep(t, dt) with the inputs of t (or integrate, for model exchange)."""
+        self._set_inputs()
+        if self.model_exchange:
+            self._integrator.integrate(t, t + dt)
+        elif self._fmi3:
+            self._do_step3(t, dt)
+        else:
+            self._do_step2(t, dt)
+
+    def _do_step2(self, t: float, dt: float) -> None:
+        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi2 import fmi2Discard
+
+        try:
+            self._slave.doStep(t, dt)
+        except FMICallException as exc:
+            if exc.status == fmi2Discard and self._terminated2():
+                raise EndRun(self.name, f"fmi2DoStep from t = {t:.6g} s returned fmi2Discard with fmi2Terminated") from None
+            raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed ({exc})") from None
+
+    def _terminated2(self) -> bool:
+        from fmpy.fmi2 import fmi2Terminated
+
+        try:
+            return bool(self._slave.getBooleanStatus(fmi2Terminated))
+        except Exception:        # noqa: BLE001 - an FMU that cannot tell has not asked to terminate
+            return False
+
+    def _do_step3(self, t: float, dt: float) -> None:
+        from fmpy.fmi1 import FMICallException
+        from fmpy.fmi3 import fmi3Boolean, fmi3Float64
+
+        s = self._slave
+        event, terminate, early, last = fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()
+        try:
+            s.fmi3DoStep(s.component, t, dt, fmi3Boolean(True), ctypes.byref(event), ctypes.byref(terminate),
+                         ctypes.byref(early), ctypes.byref(last))
+        except FMICallException as exc:
+            if not terminate.value:
+                raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed ({exc})") from None
+        if terminate.value:
+            raise EndRun(self.name, f"fmi3DoStep from t = {t:.6g} s set terminateSimulation "
+                                    f"(last successful time {last.value:.6g} s)")
+
+    def terminate(self) -> None:
+        """Nothing to release between runs (the instance is reset and reused)."""
 
     def __del__(self) -> None:
         slave = getattr(self, "_slave", None)
         if slave is not None:
             try:
                 slave.terminate()
+            except Exception:
+                pass
+            try:
                 slave.freeInstance()
             except Exception:
                 pass
+
+
+def _equal(a, b) -> bool:
+    try:
+        return bool(np.all(np.asarray(a) == np.asarray(b)))
+    except Exception:        # noqa: BLE001 - values that cannot be compared count as changed
+        return False
+
+
+class _ModelExchange:
+    """Integrate a model-exchange FMU over communication intervals: scipy's RK45 with the event
+    indicators as event functions (a sign change stops the integrator at the crossing), time events
+    from the event update, step events from completedIntegratorStep; event iteration in event mode."""
+
+    def __init__(self, comp: FMUComponent, t0: float) -> None:
+        self.c, self.s, self.fmi3 = comp, comp._slave, comp._fmi3
+        md = comp.model_description
+        self.nx = len(md.derivatives)
+        self.nz = int(md.numberOfEventIndicators or 0)
+        self._x = (ctypes.c_double * max(self.nx, 1))()
+        self._dx = (ctypes.c_double * max(self.nx, 1))()
+        self._z = (ctypes.c_double * max(self.nz, 1))()
+        self.next_time = np.inf
+        self._event_iteration(t0)
+        self.c._call("enterContinuousTimeMode", self.s.enterContinuousTimeMode)
+
+    def _event_iteration(self, t: float) -> None:
+        while True:
+            info = self.c._call("event update", self.s.updateDiscreteStates if self.fmi3 else self.s.newDiscreteStates)
+            needed, terminate, _, _, time_defined, next_time = info
+            if terminate:
+                raise EndRun(self.c.name, f"the model asked to terminate at its event update at t = {t:.6g} s")
+            if not needed:
+                break
+        self.next_time = float(next_time) if time_defined else np.inf
+
+    def _states(self) -> np.ndarray:
+        if self.nx:
+            self.s.getContinuousStates(self._x, self.nx)
+        return np.frombuffer(self._x, dtype=float, count=self.nx).copy()
+
+    def _put(self, t: float, x: np.ndarray) -> None:
+        self.s.setTime(t)
+        if self.nx:
+            self._x[:self.nx] = x
+            self.s.setContinuousStates(self._x, self.nx)
+
+    def _derivatives(self, t: float, x: np.ndarray) -> np.ndarray:
+        self._put(t, x)
+        (self.s.getContinuousStateDerivatives if self.fmi3 else self.s.getDerivatives)(self._dx, self.nx)
+        return np.frombuffer(self._dx, dtype=float, count=self.nx).copy()
+
+    def _indicators(self, t: float, x: np.ndarray) -> np.ndarray:
+        self._put(t, x)
+        self.s.getEventIndicators(self._z, self.nz)
+        return np.frombuffer(self._z, dtype=float, count=self.nz).copy()
+
+    def inputs_changed(self, t: float) -> None:
+        self.s.setTime(t)
+
+    def _event(self, t: float) -> None:
+        self.c._call("enterEventMode", self.s.enterEventMode)
+        self._event_iteration(t)
+        self.c._call("enterContinuousTimeMode", self.s.enterContinuousTimeMode)
+
+    def integrate(self, t: float, t_end: float) -> None:
+        from scipy.integrate import solve_ivp
+
+        x = self._states()
+        while t < t_end - 1e-12 * max(1.0, abs(t_end)):
+            stop = min(t_end, self.next_time)
+            if self.nx:
+                events = []
+                for i in range(self.nz):
+                    def crossing(tt, xx, i=i):
+                        return self._indicators(tt, xx)[i]
+                    crossing.terminal = True
+                    events.append(crossing)
+                sol = solve_ivp(self._derivatives, (t, stop), x, method="RK45", rtol=1e-8, atol=1e-10,
+                                events=events or None)
+                if sol.status == -1:
+                    raise ComponentError(f"{self.c.name}: integration failed at t = {t:.6g} s: {sol.message}")
+                t, x = float(sol.t[-1]), sol.y[:, -1]
+                state_event = sol.status == 1
+            else:
+                t, state_event = stop, False
+            self._put(t, x)
+            if self.fmi3:
+                step_event, terminate = self.s.completedIntegratorStep()[:2]
+            else:
+                step_event, terminate = self.s.completedIntegratorStep()
+            if terminate:
+                raise EndRun(self.c.name, f"the model asked to terminate after an integrator step at t = {t:.6g} s")
+            if state_event or step_event or t >= self.next_time - 1e-12:
+                self._event(t)
+                x = self._states()

@@ -7,7 +7,7 @@ A project declares plugins in its ``pyproject.toml``::
 
 Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
 ``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
-top-level study tables it reads (``[my_tool]``), FMU vendor annotations it understands.
+top-level study tables it reads (``[my_tool]``).
 The orchestrator itself names no package, table or tool of any project.
 """
 from __future__ import annotations
@@ -33,7 +33,6 @@ class Registry:
     component_packages: list[str] = field(default_factory=list)
     commands: dict[str, Command] = field(default_factory=dict)
     sections: dict[str, str] = field(default_factory=dict)        # study table -> what reads it
-    fmu_annotation_tools: list[str] = field(default_factory=list)  # <Tool name=...><Sampled/> readers
     loaded: list[str] = field(default_factory=list)
 
     def add_component_package(self, package: str) -> None:
@@ -45,10 +44,6 @@ class Registry:
 
     def add_section(self, name: str, reader: str) -> None:
         self.sections[name] = reader
-
-    def add_fmu_annotation_tool(self, tool: str) -> None:
-        if tool not in self.fmu_annotation_tools:
-            self.fmu_annotation_tools.append(tool)
 
 
 _REGISTRY: Registry | None = None

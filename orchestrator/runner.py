@@ -43,11 +43,23 @@ def simulate(study: Study):
 
 
 def _run_facts(rec: Recording) -> dict[str, Any]:
-    """Real-time statistics and the number of logged events, for metrics.json."""
+    """Real-time statistics, the number of logged events and who ended the run early (a
+    component's terminate request), for metrics.json."""
     facts: dict[str, Any] = {"events": len(rec.events)}
     if rec.realtime is not None:
         facts["realtime"] = rec.realtime
+    if rec.ended_by is not None:
+        facts["ended_by"] = rec.ended_by
     return facts
+
+
+def _status(rec: Recording) -> str:
+    """'completed', or 'ended' when a component asked to end the run before the stop time."""
+    return "ended" if rec.ended_by is not None else "completed"
+
+
+def _t_end(study: Study, rec: Recording) -> float:
+    return rec.ended_by["t"] if rec.ended_by is not None else study.study.stop_time
 
 
 def write_events(out_dir: Path, rec: Recording) -> Path:
@@ -168,16 +180,16 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
         except AnalysisError as exc:
             write_json(tmp / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
                                               "wall_time_s": rec.wall_time_s, **_run_facts(rec)})
-            write_json(tmp / "run.json", _run_json(study, system, "analysis_failed", study.study.stop_time))
+            write_json(tmp / "run.json", _run_json(study, system, "analysis_failed", _t_end(study, rec)))
             exc.where = folder.commit("analysis_failed")
             raise
         values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-        metrics = {**base, "status": "completed", **values}
+        metrics = {**base, "status": _status(rec), **values}
         files.append(write_json(tmp / "metrics.json", metrics))
-        files.append(write_json(tmp / "run.json", _run_json(study, system, "completed", study.study.stop_time)))
+        files.append(write_json(tmp / "run.json", _run_json(study, system, _status(rec), _t_end(study, rec))))
         if plots and analysis is not None and hasattr(analysis, "plots"):
             files.extend(analysis.plots(frame, study, tmp))
-        where = folder.commit("completed")
+        where = folder.commit("completed")   # an ended run (terminate request) is a clean result too
     return RunResult(metrics, frame, _summary(analysis, values), [where / f.relative_to(tmp) for f in files])
 
 
@@ -213,4 +225,4 @@ def _run_in_memory(study: Study, plots: bool) -> RunResult:
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-    return RunResult({**base, "status": "completed", **values}, frame, _summary(analysis, values), [])
+    return RunResult({**base, "status": _status(rec), **values}, frame, _summary(analysis, values), [])

@@ -43,8 +43,11 @@ class StudyError(InputError):
 
 
 _NAME = r"[A-Za-z_]\w*"
-_CONNECTION = re.compile(rf"^\s*({_NAME})\.({_NAME})\s*->\s*({_NAME})\.({_NAME})\s*$")
-_PORT = re.compile(rf"^\s*({_NAME})\.({_NAME})\s*$")
+# a port: an identifier or an FMI structured name (``body.speed``, ``x[2]``, ``a.b[1,3].c``)
+_INDEX = r"(?:\[\d+(?:,\d+)*\])?"
+_PORT_NAME = rf"{_NAME}{_INDEX}(?:\.{_NAME}{_INDEX})*"
+_CONNECTION = re.compile(rf"^\s*({_NAME})\.({_PORT_NAME})\s*->\s*({_NAME})\.({_PORT_NAME})\s*$")
+_PORT = re.compile(rf"^\s*({_NAME})\.({_PORT_NAME})\s*$")
 SUBSYSTEM_SUFFIXES = (".toml", ".yaml", ".yml")
 
 

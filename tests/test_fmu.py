@@ -56,13 +56,21 @@ def first_order_fmi3_fmu(tmp_path_factory) -> Path:
     return out
 
 
-@pytest.fixture(scope="session")
-def controller_fmu(tmp_path_factory) -> Path:
-    out = tmp_path_factory.mktemp("fmu") / "guidance_controller.fmu"
+def _export(out: Path, *extra: str) -> Path:
     res = subprocess.run([sys.executable, "-m", "orchestrator", "export-controller", "studies/figure8.toml",
-                          "--out", str(out)], cwd=ROOT, capture_output=True, text=True)
+                          "--out", str(out), *extra], cwd=ROOT, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     return out
+
+
+@pytest.fixture(scope="session")
+def controller_fmu(tmp_path_factory) -> Path:
+    return _export(tmp_path_factory.mktemp("fmu") / "guidance_controller.fmu")
+
+
+@pytest.fixture(scope="session")
+def controller_fmu3(tmp_path_factory) -> Path:
+    return _export(tmp_path_factory.mktemp("fmu3") / "guidance_controller.fmu", "--fmi-version", "3")
 
 
 def toy_study(components, connections, stop=2.0, base=0.01, path="toy.toml", **extra):
@@ -118,15 +126,15 @@ def _rewrite(src: Path, dst: Path, drop_binaries=False, xml_edit=None) -> Path:
     return dst
 
 
-def _model_exchange_only(xml: str) -> str:
+def _scheduled_execution_only(xml: str) -> str:
     start, end = xml.index("<CoSimulation"), xml.index("</CoSimulation>") + len("</CoSimulation>")
-    return xml[:start] + '<ModelExchange modelIdentifier="first_order"/>' + xml[end:]
+    return xml[:start] + xml[end:]
 
 
 @pytest.mark.parametrize("case, words", [
     ("not_zip", ["not an FMU", "not a zip"]),
     ("no_description", ["not an FMU", "no modelDescription.xml"]),
-    ("model_exchange", ["model-exchange-only", "co-simulation"]),
+    ("scheduled_execution", ["neither co-simulation nor model exchange"]),
     ("no_binary", ["no binary for this platform", "linux64"]),
 ])
 def test_unusable_files_are_refused_naming_file_and_reason(first_order_fmu, tmp_path, case, words):
@@ -136,8 +144,8 @@ def test_unusable_files_are_refused_naming_file_and_reason(first_order_fmu, tmp_
     elif case == "no_description":
         with zipfile.ZipFile(bad, "w") as zf:
             zf.writestr("sources/x.c", "int x;")
-    elif case == "model_exchange":
-        _rewrite(first_order_fmu, bad, xml_edit=_model_exchange_only)
+    elif case == "scheduled_execution":
+        _rewrite(first_order_fmu, bad, xml_edit=_scheduled_execution_only)
     else:
         _rewrite(first_order_fmu, bad, drop_binaries=True)
     with pytest.raises(StudyError) as err:
@@ -201,7 +209,13 @@ def test_exported_qp_solver_equals_daqp_on_random_instances(controller_fmu, tmp_
     """The C active-set solver inside the FMU against daqp on QPs of the MPC's shape (Nc up to 10)."""
     import daqp
 
-    lib = ctypes.CDLL(str(_binary(controller_fmu, tmp_path)))
+    # the solver the FMU compiles in, built on its own from the FMU's shipped sources
+    with zipfile.ZipFile(controller_fmu) as zf:
+        zf.extractall(tmp_path / "src")
+    so = tmp_path / "qp.so"
+    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-o", str(so), str(tmp_path / "src/sources/qp_active_set.c"),
+                    "-lm"], check=True)
+    lib = ctypes.CDLL(str(so))
     dp = ctypes.POINTER(ctypes.c_double)
     lib.agrobot_qp_solve.argtypes = [ctypes.c_int, ctypes.c_int] + [dp] * 6
     rng = np.random.default_rng(5)
@@ -270,30 +284,72 @@ def test_with_the_1_degree_potentiometer_any_1e12_difference_grows_the_same_way(
     assert abs(m_fmu["euclid_mean_straight"] - m_py["euclid_mean_straight"]) < 0.01
 
 
-def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu):
-    """fmpy.simulate_fmu with the inputs recorded in a Python closed-loop run: the controller is
-    open loop here, so its outputs must equal the Python controllers' outputs."""
-    from fmpy import simulate_fmu
+def _standard_master(fmu: Path, inputs: dict[str, np.ndarray], times: np.ndarray, h: float, outputs: list[str]):
+    """A plain standard co-simulation master on fmpy's API: at each communication point set the
+    inputs, read the outputs, then doStep (FMI 2.0 or 3.0)."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi3 import FMU3Slave
 
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmi3 = md.fmiVersion.startswith("3")
+    cls = FMU3Slave if fmi3 else FMU2Slave
+    s = cls(guid=md.instantiationToken if fmi3 else md.guid, unzipDirectory=extract(str(fmu)),
+            modelIdentifier=md.coSimulation.modelIdentifier, instanceName="c")
+    s.instantiate()
+    if fmi3:
+        s.enterInitializationMode(startTime=0.0)
+    else:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+    s.exitInitializationMode()
+    get, set_ = (s.getFloat64, s.setFloat64) if fmi3 else (s.getReal, s.setReal)
+    names = list(inputs)
+    rows = []
+    n_sub = int(round((times[1] - times[0]) / h))
+    for k, t in enumerate(times):
+        for j in range(n_sub):
+            tj = t + j * h
+            set_([vr[n] for n in names], [float(inputs[n][k]) for n in names])
+            values = get([vr[o] for o in outputs])
+            if j == 0:
+                rows.append(values)
+            s.doStep(tj, h)
+    s.terminate()
+    s.freeInstance()
+    return np.asarray(rows)
+
+
+@pytest.fixture(scope="module")
+def recorded_controller_run():
+    """A Python closed-loop run's controller inputs and outputs at the controllers' 20 Hz instants."""
     from fmu_export.controller import controller_design, controller_feeds
 
-    st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=30"])
+    st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=20"])
     design = controller_design(st)
     feeds = controller_feeds(st, design)
+    py = Simulation(build_system(st)).run().to_frame()
+    samples = py.iloc[::5].reset_index(drop=True)
+    return design, feeds, samples
+
+
+CONTROLLER_OUTPUTS = {"mpc_steer_angle_cmd": "mpc.steer_angle_cmd",
+                      "speed_controller_pedal_valve_voltage": "speed_controller.pedal_valve_voltage",
+                      "tracker_yaw_rate_desired": "tracker.yaw_rate_desired"}
+
+
+@pytest.mark.parametrize("fmi_version, h", [(2, 0.05), (2, 0.01), (3, 0.05), (3, 0.025)])
+def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu, controller_fmu3, recorded_controller_run,
+                                                              fmi_version, h):
+    """A standard master (set inputs, get outputs, doStep) with the inputs recorded in a Python
+    closed-loop run, at the sample period and at communication steps dividing it: the controller
+    is open loop here, so its outputs at each sample instant equal the Python controllers' outputs."""
+    design, feeds, samples = recorded_controller_run
     assert set(feeds) == {name for name, _, _ in design.inputs}     # every FMU input is driven by the study
     assert len(feeds) == 12 and feeds["tracker_yaw_rate_ref"] == "reference.yaw_rate_ref"
-    py = Simulation(build_system(st)).run().to_frame()
-    samples = py.iloc[::5].reset_index(drop=True)          # the controllers' 20 Hz instants
-    inputs = np.zeros(len(samples), dtype=[("time", float)] + [(k, float) for k in feeds])
-    inputs["time"] = samples["t"]
-    for port, column in feeds.items():
-        inputs[port] = samples[column]
-    outputs = {"mpc_steer_angle_cmd": "mpc.steer_angle_cmd",
-               "speed_controller_pedal_valve_voltage": "speed_controller.pedal_valve_voltage",
-               "tracker_yaw_rate_desired": "tracker.yaw_rate_desired"}
-    res = simulate_fmu(str(controller_fmu), start_time=0.0, stop_time=float(samples["t"].iloc[-1]), step_size=0.05,
-                       output_interval=0.05, input=inputs, output=list(outputs))
-    # fmpy records after each doStep(t_k): row k + 1 holds what the controller computed at t_k
-    for port, column in outputs.items():
-        np.testing.assert_allclose(res[port][1:], samples[column].to_numpy()[:len(res) - 1], atol=1e-9,
-                                   err_msg=port)
+    fmu = controller_fmu if fmi_version == 2 else controller_fmu3
+    inputs = {port: samples[column].to_numpy() for port, column in feeds.items()}
+    got = _standard_master(fmu, inputs, samples["t"].to_numpy(), h, list(CONTROLLER_OUTPUTS))
+    for i, column in enumerate(CONTROLLER_OUTPUTS.values()):
+        np.testing.assert_allclose(got[:, i], samples[column].to_numpy(), atol=1e-9, err_msg=column)

@@ -38,7 +38,7 @@ static int solve_dense(int n, double *K, double *rhs) {
     return 0;
 }
 
-int agrobot_qp_solve(int n, int m, const double *H, const double *g, const double *A,
+QP_API int agrobot_qp_solve(int n, int m, const double *H, const double *g, const double *A,
                      const double *lo, const double *up, double *x) {
     int work_row[QP_MAX_N], work_side[QP_MAX_N];   /* side +1: a'x = lo, -1: a'x = up */
     int in_work[QP_MAX_M];

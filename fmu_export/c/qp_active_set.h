@@ -13,7 +13,13 @@
 #define QP_MAX_N 10
 #define QP_MAX_M 40
 
-int agrobot_qp_solve(int n, int m, const double *H, const double *g, const double *A,
+/* QP_API: empty when compiled on its own (the equivalence tests); an FMU's model core defines it
+ * as `static` and includes qp_active_set.c, so that nothing but the FMI API leaves the binary. */
+#ifndef QP_API
+#define QP_API
+#endif
+
+QP_API int agrobot_qp_solve(int n, int m, const double *H, const double *g, const double *A,
                      const double *lo, const double *up, double *x);
 
 #endif

@@ -1,0 +1,207 @@
+"""A sampled model's FMU, FMI 2.0 or 3.0, from one C core: the model description (ports with
+units and BaseUnits, ModelStructure from the model's dependencies), the sources (the generated
+model core, ``sampled_instance.c``, the wrapper of the version, the FMI headers) and the build.
+
+The C model core defines ModelState, model_start, model_sample and the MODEL_* constants
+(see c/sampled_instance.c); value references: parameters 0.., inputs 1000.., outputs 2000..
+"""
+from __future__ import annotations
+
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from orchestrator.units import base_unit
+
+from .packaging import package_fmu
+
+C_DIR = Path(__file__).with_name("c")
+VR_TIME, VR_INPUT0, VR_OUTPUT0 = 999, 1000, 2000       # as c/sampled_instance.c numbers them
+WRAPPERS = {2: "fmi2_cs.c", 3: "fmi3_cs.c"}
+
+
+@dataclass
+class SampledModel:
+    """What an FMU is generated from (ports as (name, unit, description); parameters with a start)."""
+
+    identifier: str
+    token: str                                   # GUID / instantiation token, also compiled into the core
+    description: str
+    period: float                                # s: the sample period
+    parameters: list[tuple[str, float, str, str]]
+    inputs: list[tuple[str, str, str]]
+    outputs: list[tuple[str, str, str]]
+    dependencies: dict[str, list[str]]           # output -> inputs read at the same sample instant
+    core_source: str                             # the generated model core (C)
+    extra_sources: list[str] = field(default_factory=list)   # files of c/ the core includes
+
+
+def _initial_dependencies(model: SampledModel, output: str) -> list[str]:
+    return [p[0] for p in model.parameters] + model.dependencies[output]
+
+
+def _unit_definitions(units: list[str], indent: str) -> str:
+    rows = []
+    for unit in units:
+        base = base_unit(unit)
+        if base is None:
+            rows.append(f"{indent}<Unit name={quoteattr(unit)}/>")
+            continue
+        attrs = " ".join(f'{k}="{v}"' for k, v in base.fmi_attributes().items())
+        rows.append(f"{indent}<Unit name={quoteattr(unit)}><BaseUnit {attrs}/></Unit>")
+    return "\n".join(rows)
+
+
+def _units(model: SampledModel) -> list[str]:
+    return sorted({u for _, _, u, _ in model.parameters} | {u for _, u, _ in model.inputs + model.outputs} | {"s"})
+
+
+def _fmi2_description(model: SampledModel) -> str:
+    rows, index = [], {}
+
+    def variable(name, vr, causality, variability, unit, description, start=None, initial=None):
+        index[name] = len(rows) + 1
+        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+        if initial:
+            attrs += f' initial="{initial}"'
+        real = f"<Real unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "") + "/>"
+        rows.append(f"    <ScalarVariable {attrs} description={quoteattr(description)}>{real}</ScalarVariable>")
+
+    for i, (name, start, unit, desc) in enumerate(model.parameters):
+        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
+    for i, (name, unit, desc) in enumerate(model.inputs):
+        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
+    for i, (name, unit, desc) in enumerate(model.outputs):
+        variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
+    outputs = "\n".join(f'      <Unknown index="{index[n]}" dependencies="{" ".join(str(index[d]) for d in model.dependencies[n])}"/>'
+                        for n, _, _ in model.outputs)
+    # at initialisation the outputs also follow every parameter (the first sample is computed from them)
+    initial = "\n".join(f'      <Unknown index="{index[n]}" dependencies="{" ".join(str(index[d]) for d in _initial_dependencies(model, n))}"/>'
+                         for n, _, _ in model.outputs)
+    sources = f'      <File name="{model.identifier}.c"/>'
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="2.0" modelName="{model.identifier}" guid="{model.token}"
+  description={quoteattr(model.description)} generationTool="agrobot-guidance fmu_export"
+  variableNamingConvention="flat" numberOfEventIndicators="0">
+  <CoSimulation modelIdentifier="{model.identifier}" canHandleVariableCommunicationStepSize="true"
+    canBeInstantiatedOnlyOncePerProcess="false" canNotUseMemoryManagementFunctions="true">
+    <SourceFiles>
+{sources}
+    </SourceFiles>
+  </CoSimulation>
+  <UnitDefinitions>
+{_unit_definitions(_units(model), "    ")}
+  </UnitDefinitions>
+  <LogCategories>
+    <Category name="logStatusError" description="errors: refused calls and values"/>
+    <Category name="logAll" description="everything else"/>
+  </LogCategories>
+  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+    <Outputs>
+{outputs}
+    </Outputs>
+    <InitialUnknowns>
+{initial}
+    </InitialUnknowns>
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def _fmi3_description(model: SampledModel) -> str:
+    rows, vr_of = [], {}
+
+    def variable(name, vr, causality, variability, unit, description, start=None, initial=None):
+        vr_of[name] = vr
+        attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
+        if initial:
+            attrs += f' initial="{initial}"'
+        attrs += f" unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "")
+        rows.append(f"    <Float64 {attrs} description={quoteattr(description)}/>")
+
+    rows.append(f'    <Float64 name="time" valueReference="{VR_TIME}" causality="independent" '
+                f'variability="continuous" unit="s" description="simulation time"/>')
+    for i, (name, start, unit, desc) in enumerate(model.parameters):
+        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
+    for i, (name, unit, desc) in enumerate(model.inputs):
+        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
+    for i, (name, unit, desc) in enumerate(model.outputs):
+        variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
+
+    def unknown(tag, n):
+        deps = " ".join(str(vr_of[d]) for d in (model.dependencies[n] if tag == "Output" else _initial_dependencies(model, n)))
+        return f'    <{tag} valueReference="{vr_of[n]}" dependencies="{deps}"/>'
+
+    structure = "\n".join([unknown("Output", n) for n, _, _ in model.outputs]
+                          + [unknown("InitialUnknown", n) for n, _, _ in model.outputs])
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiModelDescription fmiVersion="3.0" modelName="{model.identifier}" instantiationToken="{model.token}"
+  description={quoteattr(model.description)} generationTool="agrobot-guidance fmu_export"
+  variableNamingConvention="flat">
+  <CoSimulation modelIdentifier="{model.identifier}" canHandleVariableCommunicationStepSize="true"
+    canBeInstantiatedOnlyOncePerProcess="false" providesIntermediateUpdate="false"
+    hasEventMode="false" canReturnEarlyAfterIntermediateUpdate="false"/>
+  <UnitDefinitions>
+{_unit_definitions(_units(model), "    ")}
+  </UnitDefinitions>
+  <LogCategories>
+    <Category name="logStatusError" description="errors: refused calls and values"/>
+    <Category name="logAll" description="everything else"/>
+  </LogCategories>
+  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>
+  <ModelStructure>
+{structure}
+  </ModelStructure>
+</fmiModelDescription>
+"""
+
+
+def _fmi3_build_description(model: SampledModel) -> str:
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<fmiBuildDescription fmiVersion="3.0">
+  <BuildConfiguration modelIdentifier="{model.identifier}">
+    <SourceFileSet language="C99">
+      <SourceFile name="{model.identifier}.c"/>
+    </SourceFileSet>
+  </BuildConfiguration>
+</fmiBuildDescription>
+"""
+
+
+def model_description(model: SampledModel, fmi_version: int) -> str:
+    return _fmi2_description(model) if fmi_version == 2 else _fmi3_description(model)
+
+
+def write_sources(model: SampledModel, root: Path, fmi_version: int) -> None:
+    """``root/sources``: the model core, the shared semantics, the wrapper, and one compilation
+    unit ``<identifier>.c`` that includes them (so nothing but the FMI API has external linkage)."""
+    sources = root / "sources"
+    sources.mkdir(parents=True, exist_ok=True)
+    core = f"{model.identifier}_model.c"
+    (sources / core).write_text(model.core_source)
+    for name in ["sampled_instance.c", WRAPPERS[fmi_version], *model.extra_sources]:
+        shutil.copy(C_DIR / name, sources / name)
+    (sources / f"{model.identifier}.c").write_text(
+        f"/* {model.identifier}: FMI {fmi_version}.0 co-simulation build of a sampled model (one unit). */\n"
+        f'#include "{core}"\n#include "sampled_instance.c"\n#include "{WRAPPERS[fmi_version]}"\n')
+    if fmi_version == 3:
+        (sources / "buildDescription.xml").write_text(_fmi3_build_description(model))
+    (root / "modelDescription.xml").write_text(model_description(model, fmi_version))
+
+
+def build_fmu(model: SampledModel, out: Path, fmi_version: int = 2) -> Path:
+    """Generate the sources, build the binary for this platform and write ``out`` atomically."""
+    if fmi_version not in WRAPPERS:
+        raise ValueError(f"FMI version {fmi_version}: expected 2 or 3")
+    with tempfile.TemporaryDirectory() as tmp:
+        write_sources(model, Path(tmp), fmi_version)
+        return package_fmu(Path(tmp), out, fmi_version)
