@@ -60,6 +60,10 @@ class Recording:
         return pd.DataFrame(self.data, columns=["t"] + self.columns)
 
 
+def _numeric_scalar(value) -> bool:
+    return isinstance(value, (int, float, np.number)) and not isinstance(value, (str, bytes))
+
+
 def _single(key: str):
     return lambda d: (d[key],)
 
@@ -89,7 +93,10 @@ class Simulation:
         s = system.study.study
         self.t0, self.h = s.start_time, s.base_step
         self.n_steps = int(round((s.stop_time - s.start_time) / s.base_step))
-        self.signals = [(node, out) for node in system.nodes.values() for out in node.component.y]
+        # the signal table holds every numeric scalar output (strings, bytes and whole arrays of an
+        # FMU are exchanged between components but not recorded; array elements are)
+        self.signals = [(node, v.name) for node in system.nodes.values() for v in node.component.variables
+                        if v.causality == "output" and _numeric_scalar(v.start)]
         self.columns = [f"{node.name}.{out}" for node, out in self.signals]
         # schedule over one period of the slowest rhythm: which nodes are due at k mod period
         period = math.lcm(*(node.ratio for node in system.nodes.values())) if system.nodes else 1
@@ -217,7 +224,7 @@ class Simulation:
                                f"instant: {request.reason}", self._recording(self._recorders, 0, False, self._start))
             self.ended_by = {"component": request.component, "t": self.t0 + (recorded - 1) * self.h,
                              "reason": request.reason}
-            self.k = self.n_steps = recorded - 1
+            self.k = self.n_steps = recorded          # every row before `recorded` is complete
             return
         except (ComponentError, FloatingPointError, ValueError, ArithmeticError, TypeError, OSError,
                 KeyboardInterrupt) as exc:
@@ -246,7 +253,7 @@ class Simulation:
     def finish(self) -> Recording:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
         if self.ended_by is not None:             # the last instant is recorded already
-            return self._recording(self._recorders, self.k + 1, True, self._start)
+            return self._recording(self._recorders, self.k, True, self._start)
         self.advance(self.k, final=True)
         return self._recording(self._recorders, self.k + 1, True, self._start)
 

@@ -40,12 +40,17 @@ class FMUError(InputError):
     """The file cannot be used as a component (message names file and reason)."""
 
 
+def _text(value="") -> str:
+    """A String variable's value as text (fmpy returns bytes)."""
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
 # FMI type -> (fmpy accessor suffix, Python conversion)
 _FMI2_TYPES = {"Real": ("Real", float), "Integer": ("Integer", int), "Enumeration": ("Integer", int),
-               "Boolean": ("Boolean", bool), "String": ("String", str)}
+               "Boolean": ("Boolean", bool), "String": ("String", _text)}
 _FMI3_TYPES = {**{t: (t, float) for t in ("Float32", "Float64")},
                **{t: (t, int) for t in ("Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64")},
-               "Enumeration": ("Int64", int), "Boolean": ("Boolean", bool), "String": ("String", str),
+               "Enumeration": ("Int64", int), "Boolean": ("Boolean", bool), "String": ("String", _text),
                "Binary": ("Binary", bytes)}
 CAUSALITIES = {"input": "input", "output": "output", "parameter": "parameter", "structuralParameter": "parameter"}
 
@@ -132,10 +137,10 @@ def _shape(md, v, path: Path) -> tuple[int, ...]:
 
 def _start(fv: _FMIVar, text) -> Any:
     if text is None:
-        zero = fv.convert() if fv.convert is not bytes else b""
-        return np.full(fv.shape, zero, dtype=object if fv.convert in (str, bytes) else None) if fv.shape else zero
-    if fv.convert is str:
-        return str(text)
+        zero = {_text: "", bytes: b""}.get(fv.convert) if fv.convert in (_text, bytes) else fv.convert()
+        return np.full(fv.shape, zero, dtype=object if fv.convert in (_text, bytes) else None) if fv.shape else zero
+    if fv.convert is _text:
+        return _text(text)
     if fv.convert is bytes:
         return bytes.fromhex(str(text)) if text else b""
     items = str(text).split() if fv.shape else [text]
@@ -441,28 +446,34 @@ class _ModelExchange:
         from scipy.integrate import solve_ivp
 
         x = self._states()
+        stalled = 0
         while t < t_end - 1e-12 * max(1.0, abs(t_end)):
             stop = min(t_end, self.next_time)
+            state_event = False
             if self.nx:
+                z0 = self._indicators(t, x) if self.nz else np.zeros(0)
                 events = []
                 for i in range(self.nz):
                     def crossing(tt, xx, i=i):
                         return self._indicators(tt, xx)[i]
                     crossing.terminal = True
+                    # leave the side the indicator is on now (an indicator at zero after an event
+                    # is not a new crossing)
+                    crossing.direction = -1.0 if z0[i] >= 0 else 1.0
                     events.append(crossing)
                 sol = solve_ivp(self._derivatives, (t, stop), x, method="RK45", rtol=1e-8, atol=1e-10,
                                 events=events or None)
                 if sol.status == -1:
                     raise ComponentError(f"{self.c.name}: integration failed at t = {t:.6g} s: {sol.message}")
+                stalled = stalled + 1 if float(sol.t[-1]) <= t else 0
+                if stalled > 100:
+                    raise ComponentError(f"{self.c.name}: events without progress at t = {t:.6g} s (chattering)")
                 t, x = float(sol.t[-1]), sol.y[:, -1]
                 state_event = sol.status == 1
             else:
-                t, state_event = stop, False
+                t = stop
             self._put(t, x)
-            if self.fmi3:
-                step_event, terminate = self.s.completedIntegratorStep()[:2]
-            else:
-                step_event, terminate = self.s.completedIntegratorStep()
+            step_event, terminate = self.s.completedIntegratorStep()[:2]
             if terminate:
                 raise EndRun(self.c.name, f"the model asked to terminate after an integrator step at t = {t:.6g} s")
             if state_event or step_event or t >= self.next_time - 1e-12:

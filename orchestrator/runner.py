@@ -145,9 +145,8 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     base = _base_facts(study)
     with folder:
         tmp = folder.tmp
-        writer = SignalWriter(tmp / "signals", [f"{n.name}.{o}" for n in system.nodes.values() for o in n.component.y],
-                              study.study.signals_format)
         sim = Simulation(system)
+        writer = SignalWriter(tmp / "signals", sim.columns, study.study.signals_format)
         progress = Progress(sim.n_steps, sim.h)
         try:
             rec = _stream(sim, writer, progress)

@@ -19,7 +19,6 @@ from orchestrator.study import Study, StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
-FIRST_ORDER_FMI3 = ROOT / "tests/fmu_sources/first_order_fmi3"
 
 
 @pytest.fixture(scope="session")
@@ -31,29 +30,10 @@ def first_order_fmu(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def first_order_fmi3_fmu(tmp_path_factory) -> Path:
-    """FMI 3.0 build of the same lag: gcc directly; every FMI 3 function fmpy binds but the
-    source does not define becomes a stub returning fmi3Error."""
-    import inspect
-    import re
+    """FMI 3.0 build of the same lag (tests/fmu_build.py: gcc, stubs for what the source lacks)."""
+    from tests.fmu_build import build_test_fmu
 
-    import fmpy
-    from fmpy.fmi3 import FMU3Slave
-
-    tmp = tmp_path_factory.mktemp("fmi3")
-    source = (FIRST_ORDER_FMI3 / "first_order3.c").read_text()
-    defined = set(re.findall(r"\b(fmi3\w+)\(", source))
-    stubs = [f"int {name}(void) {{ return 3; }}" for name, _ in inspect.getmembers(FMU3Slave)
-             if name.startswith("fmi3") and name not in defined]
-    (tmp / "stubs.c").write_text("\n".join(stubs) + "\n")
-    binary = tmp / "binaries" / fmpy.platform_tuple / "first_order3.so"
-    binary.parent.mkdir(parents=True)
-    subprocess.run(["gcc", "-O2", "-shared", "-fPIC", "-o", str(binary), str(FIRST_ORDER_FMI3 / "first_order3.c"),
-                    str(tmp / "stubs.c"), "-lm"], check=True)
-    out = tmp / "first_order3.fmu"
-    with zipfile.ZipFile(out, "w") as zf:
-        zf.write(FIRST_ORDER_FMI3 / "modelDescription.xml", "modelDescription.xml")
-        zf.write(binary, binary.relative_to(tmp).as_posix())
-    return out
+    return build_test_fmu("first_order_fmi3", tmp_path_factory.mktemp("fmi3"))
 
 
 def _export(out: Path, *extra: str) -> Path:

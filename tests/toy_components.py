@@ -88,3 +88,36 @@ class Sleeper(Component):
         self.y["count"] += 1
         if self.p["sleep"] and int(self.y["count"]) % int(self.p["every"]) == 0:
             time.sleep(self.p["sleep"])
+
+
+class RateSource(Component):
+    """Sampled: rate = 1 + t (a yaw rate, to drive FMU inputs)."""
+
+    sampled = True
+    variables = (out("rate", "rad/s", 0.0, "1 + t"), out("count", "1", 0.0, "1 + floor(t)"),
+                 out("on", "1", 0.0, "t >= 0.5"))
+
+    def step(self, t: float, dt: float) -> None:
+        self.y["rate"], self.y["count"], self.y["on"] = 1.0 + t, float(1 + int(t + 1e-9)), float(t >= 0.5)
+
+
+class RateSink(Component):
+    """Sampled, direct feedthrough: copies a yaw rate (reads an FMU output at the same instant)."""
+
+    sampled = True
+    variables = (inp("u", "rad/s", 0.0, "input"), out("y", "rad/s", 0.0, "copy"))
+    feedthrough = {"y": ("u",)}
+
+    def step(self, t: float, dt: float) -> None:
+        self.y["y"] = self.u["u"]
+
+
+class AngleSink(Component):
+    """Sampled: an input in radians."""
+
+    sampled = True
+    variables = (inp("angle", "rad", 0.0, "input"), out("y", "rad", 0.0, "copy"))
+    feedthrough = {"y": ("angle",)}
+
+    def step(self, t: float, dt: float) -> None:
+        self.y["y"] = self.u["angle"]
