@@ -167,7 +167,7 @@ def sampled_model(design: ControllerDesign) -> SampledModel:
                    f"speed PID cascade; sampled every {float(design.sample_time)} s, outputs follow the inputs "
                    f"of each sample instant")
     return SampledModel(MODEL_IDENTIFIER, guid, description, design.sample_time, design.parameters, design.inputs,
-                        design.outputs, design.dependencies, source, ["qp_active_set.c", "qp_active_set.h"])
+                        design.outputs, design.dependencies, source, ["guidance_laws.c", "qp_active_set.c", "qp_active_set.h"])
 
 
 def export_controller(study: Study, out: Path, fmi_version: int = 2) -> Path:

@@ -10,8 +10,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#define QP_API static
-#include "qp_active_set.c"
 
 /* ---- generated design ------------------------------------------------------------------- */
 #define NX @@NX@@                 /* MPC model order */
@@ -35,29 +33,13 @@ static const char *const MODEL_OUT_NAMES[MODEL_NOUT] = {@@OUT_NAMES@@};
 @@PAR_DEFINES@@
 @@IO_DEFINES@@
 
-typedef struct { double integral, prev_error; int has_prev; } PIDState;
+#include "guidance_laws.c"
 
 typedef struct {
-    double z[NX + 2], w[2 * NX];      /* MPC: [x; u_prev; y - r], W = [A x + B u; A x] */
+    MPCState mpc;
     PIDState outer, inner;
     int started;
 } ModelState;
-
-/* DiscretePID.update: u = clip(offset + kp e + I + kd de/dt), I clamped, frozen while saturated */
-static double pid_update(PIDState *s, double kp, double ki, double kd, double umin, double umax,
-                         double ilim, double e, double dt, double offset) {
-    double deriv = (!s->has_prev || kd == 0.0) ? 0.0 : (e - s->prev_error) / dt;
-    s->prev_error = e;
-    s->has_prev = 1;
-    double raw = offset + kp * e + s->integral + kd * deriv;
-    double u = raw < umin ? umin : (raw > umax ? umax : raw);
-    int saturated_same_way = (raw > umax && e > 0) || (raw < umin && e < 0);
-    if (!saturated_same_way) {
-        double i = s->integral + ki * e * dt;
-        s->integral = i < -ilim ? -ilim : (i > ilim ? ilim : i);
-    }
-    return u;
-}
 
 /* The state at the start time (every controller at rest). */
 static void model_start(ModelState *st, const double *par) {
@@ -65,62 +47,24 @@ static void model_start(ModelState *st, const double *par) {
     memset(st, 0, sizeof *st);
 }
 
-/* One MPC step (condensed_mpc.CondensedTrackingMPC.step); returns the command, sets *status. */
-static double mpc_step(ModelState *c, const double *par, double r, double y, double applied,
-                       int use_applied, double h, double *status) {
-    double *z = c->z, g[NC], A[2 * NC * NC], lo[2 * NC], up[2 * NC], du[NC];
-    double umax = par[P_mpc_steer_limit], dumax = par[P_mpc_steer_rate_limit] * h;
-    if (use_applied)
-        for (int i = 0; i < NX; i++) z[i] = c->w[NX + i] + MPC_B[i] * applied;
-    double u_prev = z[NX];
-    z[NX + 1] = y - r;
-    for (int i = 0; i < NC; i++) {
-        g[i] = 0.0;
-        for (int j = 0; j < NX + 2; j++) g[i] += MPC_G[i * (NX + 2) + j] * z[j];
-    }
-    memset(A, 0, sizeof A);
-    for (int i = 0; i < NC; i++) {
-        A[i * NC + i] = 1.0;                              /* |du_i| <= du_max */
-        lo[i] = -dumax; up[i] = dumax;
-        for (int j = 0; j < NC; j++) A[(NC + i) * NC + j] = MPC_S[i * NC + j];
-        lo[NC + i] = -umax - u_prev; up[NC + i] = umax - u_prev;
-    }
-    int flag = agrobot_qp_solve(NC, 2 * NC, MPC_H, g, A, lo, up, du);
-    double du0 = du[0];
-    if (flag <= 0 || du0 != du0) du0 = 0.0;               /* hold the previous command */
-    *status = flag > 0 ? 1.0 : (double)flag;
-    double u = u_prev + du0;
-    u = u < -umax ? -umax : (u > umax ? umax : u);
-    z[NX] = u;
-    for (int i = 0; i < 2 * NX; i++) {
-        double s = 0.0;
-        for (int j = 0; j < NX + 2; j++) s += MPC_ADVANCE[i * (NX + 2) + j] * z[j];
-        c->w[i] = s;
-    }
-    for (int i = 0; i < NX; i++) z[i] = c->w[i];
-    return u;
-}
-
 /* One sample: the outputs of t_k from the state and the inputs of t_k; the state advances to t_k+1. */
 static void model_sample(ModelState *c, const double *p, const double *in, double *out) {
     const double h = MODEL_PERIOD;
     /* kinematic tracker */
-    double ex = in[IN_tracker_x_ref] - in[IN_tracker_x], ey = in[IN_tracker_y_ref] - in[IN_tracker_y];
-    double xd = in[IN_tracker_xdot_ref] + p[P_tracker_k_s] * tanh(p[P_tracker_k_c] * ex);
-    double yd = in[IN_tracker_ydot_ref] + p[P_tracker_k_s] * tanh(p[P_tracker_k_c] * ey);
-    double cs = cos(in[IN_tracker_heading]), sn = sin(in[IN_tracker_heading]);
-    double v_d = cs * xd + sn * yd, gamma_d = (-sn * xd + cs * yd) / p[P_tracker_l_r];
-    /* look-ahead a > l_r: gamma_d = (l_r gamma_fb + (a - l_r) gamma_r) / a (components/kinematic_tracker.py) */
-    double share = p[P_tracker_l_r] / (p[P_tracker_lookahead] != 0.0 ? p[P_tracker_lookahead] : p[P_tracker_l_r]);
-    if (share != 1.0) gamma_d = share * gamma_d + (1.0 - share) * in[IN_tracker_yaw_rate_ref];
+    double tr[4];
+    tracker_law(in[IN_tracker_x_ref], in[IN_tracker_y_ref], in[IN_tracker_xdot_ref], in[IN_tracker_ydot_ref],
+                in[IN_tracker_x], in[IN_tracker_y], in[IN_tracker_heading], in[IN_tracker_yaw_rate_ref],
+                p[P_tracker_k_s], p[P_tracker_k_c], p[P_tracker_l_r], p[P_tracker_lookahead], tr);
+    double v_d = tr[0], gamma_d = tr[1];
     out[OUT_tracker_speed_desired] = v_d;
     out[OUT_tracker_yaw_rate_desired] = gamma_d;
-    out[OUT_tracker_error_x] = ex;
-    out[OUT_tracker_error_y] = ey;
+    out[OUT_tracker_error_x] = tr[2];
+    out[OUT_tracker_error_y] = tr[3];
     /* yaw-rate MPC */
     double status;
-    out[OUT_mpc_steer_angle_cmd] = mpc_step(c, p, gamma_d, in[IN_mpc_yaw_rate], in[IN_mpc_steer_angle],
-                                              MEASURED_INPUT && c->started, h, &status);
+    out[OUT_mpc_steer_angle_cmd] = mpc_step(&c->mpc, p[P_mpc_steer_limit], p[P_mpc_steer_rate_limit] * h, gamma_d,
+                                            in[IN_mpc_yaw_rate], in[IN_mpc_steer_angle], MEASURED_INPUT && c->started,
+                                            &status);
     out[OUT_mpc_qp_status] = status;
     /* speed PID cascade */
     double vn = p[P_speed_controller_neutral_voltage];
