@@ -35,7 +35,7 @@ class SampledModel:
     outputs: list[tuple[str, str, str]]
     dependencies: dict[str, list[str]]           # output -> inputs read at the same sample instant
     core_source: str                             # the generated model core (C)
-    extra_sources: list[str] = field(default_factory=list)   # files of c/ the core includes
+    extra_sources: list[str] = field(default_factory=list)   # files of c/ (or c/components/) the core includes
 
 
 def _initial_dependencies(model: SampledModel, output: str) -> list[str]:
@@ -189,7 +189,7 @@ def write_sources(model: SampledModel, root: Path, fmi_version: int) -> None:
     core = f"{model.identifier}_model.c"
     (sources / core).write_text(model.core_source)
     for name in ["sampled_instance.c", WRAPPERS[fmi_version], *model.extra_sources]:
-        shutil.copy(C_DIR / name, sources / name)
+        shutil.copy(C_DIR / name, sources / Path(name).name)      # one flat folder: the includes find each other
     (sources / f"{model.identifier}.c").write_text(
         f"/* {model.identifier}: FMI {fmi_version}.0 co-simulation build of a sampled model (one unit). */\n"
         f'#include "{core}"\n#include "sampled_instance.c"\n#include "{WRAPPERS[fmi_version]}"\n')

@@ -1,0 +1,207 @@
+"""One FMU per study component, from the same equations as the Python components: a C model core
+per component type (c/components/<type>.c) behind the shared sampled-model semantics
+(c/sampled_instance.c), FMI 2.0 or 3.0.
+
+The FMU keeps the component's name and port names; its numeric parameters are tunable FMU
+parameters with the study's values as starts; parameters that fix the code's shape (the yaw
+model, a delay length, the MPC design) are compiled in. The sample period is the component's
+step in the study: continuous components (plant, actuators) are exact or substepped over it as
+their Python counterparts are, so a plant FMU stepped at its period reproduces the Python run.
+"""
+from __future__ import annotations
+
+import hashlib
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from orchestrator.build import System
+from orchestrator.component import Component
+from orchestrator.errors import InputError
+
+from .sampled_fmu import C_DIR, SampledModel, build_fmu
+
+
+class ComponentExportError(InputError):
+    """A study component that has no FMU form (the message names it and why)."""
+
+
+@dataclass(frozen=True)
+class CoreSpec:
+    """How a component type becomes a model core."""
+
+    source: str                                                  # c/components/<source>
+    compiled: Callable[[Component, float], str] = lambda comp, period: ""   # C #defines of fixed values
+    compiled_parameters: tuple[str, ...] = ()                    # parameters consumed by ``compiled``
+    values: Callable[[Component], dict[str, float]] | None = None  # parameter values overriding comp.p
+    extra_parameters: tuple[tuple[str, float, str, str], ...] = ()  # FMU-only parameters
+    dependencies: Callable[[Component], dict[str, list[str]]] | None = None   # default: the declared feedthrough
+    extra_sources: tuple[str, ...] = ()
+    extra_values: Callable[[Component, str], dict[str, float]] | None = None
+
+
+def _numeric(value) -> bool:
+    return isinstance(value, (bool, int, float, np.number))
+
+
+def _substeps(comp: Component, period: float) -> str:
+    return f"#define SUBSTEPS {max(1, int(round(period / float(comp.p['internal_step']))))}\n"
+
+
+def _plant_compiled(comp: Component, period: float) -> str:
+    from components.models.yaw_dynamics import PHYSICAL_MODELS
+
+    model = comp.p["model"]
+    if model not in PHYSICAL_MODELS:
+        raise ComponentExportError(f"components.{comp.name}: model = {model!r} has no FMU form "
+                                   f"(the exported plant covers {', '.join(PHYSICAL_MODELS)})")
+    return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n"
+
+
+def _plant_values(comp: Component) -> dict[str, float]:
+    from components.models.yaw_dynamics import TractorParameters
+
+    params = TractorParameters.of(comp.p)           # the named set resolved, cornering scales applied
+    return {k: getattr(params, k) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")}
+
+
+def _steering_compiled(comp: Component, period: float) -> str:
+    return _substeps(comp, period) + f"#define DELAY_STEPS {int(round(float(comp.p['command_delay']) / period))}\n"
+
+
+def _gps_compiled(comp: Component, period: float) -> str:
+    return f"#define LAG {int(round(float(comp.p['latency']) / period))}\n#define LATENCY {float(comp.p['latency'])!r}\n"
+
+
+def _c_array(values) -> str:
+    return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
+
+
+def _mpc_compiled(comp: Component, period: float) -> str:
+    from components.models.condensed_mpc import CondensedTrackingMPC
+
+    p = comp.p
+    m = CondensedTrackingMPC(p["num"], p["den"], period, int(p["prediction_horizon"]), int(p["control_horizon"]),
+                             float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * period)
+    if m.Nc > 10 or m.A.shape[0] > 8:
+        raise ComponentExportError(f"components.{comp.name}: the exported QP solver handles a control horizon "
+                                   f"up to 10 (got {m.Nc}) and a model order up to 8")
+    return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(p['model_input'] == 'measured')}\n"
+            f"static const double MPC_H[NC * NC] = {{{_c_array(m.H)}}};\n"
+            f"static const double MPC_G[NC * (NX + 2)] = {{{_c_array(m.G)}}};\n"
+            f"static const double MPC_S[NC * NC] = {{{_c_array(m.S)}}};\n"
+            f"static const double MPC_ADVANCE[2 * NX * (NX + 2)] = {{{_c_array(m._advance)}}};\n"
+            f"static const double MPC_B[NX] = {{{_c_array(m.B)}}};\n")
+
+
+def _mpc_dependencies(comp: Component) -> dict[str, list[str]]:
+    reads = ["yaw_rate_ref", "yaw_rate"] + (["steer_angle"] if comp.p["model_input"] == "measured" else [])
+    return {"steer_angle_cmd": reads, "qp_status": reads}
+
+
+def _gps_seed(comp: Component, name: str) -> dict[str, float]:
+    return {"seed": float(int(comp.rng.integers(0, 2**52)))}
+
+
+SPECS: dict[str, CoreSpec] = {
+    "Figure8Reference": CoreSpec("figure8_reference.c"),
+    "TractorYawPlant": CoreSpec("tractor_yaw_plant.c", _plant_compiled,
+                                ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
+                                 "cornering_scale_rear"), _plant_values),
+    "SteeringHydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay")),
+    "SpeedDrivetrain": CoreSpec("speed_drivetrain.c", _substeps, ("internal_step",)),
+    "GPSSensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",),
+                          extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
+                          extra_values=_gps_seed),
+    "SpeedKF": CoreSpec("speed_kf.c"),
+    "PoseEKF": CoreSpec("pose_ekf.c"),
+    "ComputationDelay": CoreSpec("computation_delay.c",
+                                 lambda comp, period: f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n", ("samples",)),
+    "KinematicTracker": CoreSpec("kinematic_tracker.c", extra_sources=("guidance_laws.c",)),
+    "SpeedPID": CoreSpec("speed_pid.c", extra_sources=("guidance_laws.c",)),
+    "YawRateMPC": CoreSpec("yaw_rate_mpc.c", _mpc_compiled,
+                           ("num", "den", "prediction_horizon", "control_horizon", "Q", "R", "model_input",
+                            "qp_solver", "qp_tolerance"),
+                           dependencies=_mpc_dependencies,
+                           extra_sources=("guidance_laws.c", "qp_active_set.c", "qp_active_set.h")),
+}
+
+
+def fmu_input_name(comp: Component, name: str) -> str:
+    """The FMU variable of input ``name``: the same name, or ``<name>_in`` where an output has that
+    name too (FMI names are unique; the speed filter reads and writes ``vel_east``)."""
+    return f"{name}_in" if name in comp.declared("output") else name
+
+
+def exportable(comp: Component) -> bool:
+    return type(comp).__name__ in SPECS
+
+
+def _c_strings(names) -> str:
+    return ", ".join(f'"{n}"' for n in names) or '""'
+
+
+def component_model(system: System, name: str) -> SampledModel:
+    """The sampled model of the study component ``name`` (its parameters as resolved in the study)."""
+    node = system.nodes[name]
+    comp, period = node.component, float(node.step)
+    spec = SPECS.get(type(comp).__name__)
+    if spec is None:
+        raise ComponentExportError(f"{system.study.path}: components.{name}: type {type(comp).__name__} has no FMU "
+                                   f"form; exportable types: {', '.join(sorted(SPECS))}")
+    values = {**comp.p, **(spec.values(comp) if spec.values else {})}
+    parameters = []
+    for v in comp.variables:
+        if v.causality != "parameter" or v.name in spec.compiled_parameters:
+            continue
+        value = values[v.name]
+        if not _numeric(value):
+            raise ComponentExportError(f"{system.study.path}: components.{name}.parameters.{v.name} = {value!r}: "
+                                       f"not a number; the FMU form takes numeric parameters only")
+        parameters.append((v.name, float(value), v.unit or "1", v.description))
+    extra = dict(spec.extra_values(comp, name)) if spec.extra_values else {}
+    parameters += [(n, extra.get(n, start), unit, desc) for n, start, unit, desc in spec.extra_parameters]
+    outputs = [(v.name, v.unit or "1", v.description) for v in comp.variables if v.causality == "output"]
+    inputs = [(fmu_input_name(comp, v.name), v.unit or "1", v.description)
+              for v in comp.variables if v.causality == "input"]
+    if spec.dependencies is not None:
+        deps = spec.dependencies(comp)
+    elif comp.sampled:
+        deps = {o: list(comp.feedthrough.get(o, ())) for o, _, _ in outputs}
+    else:
+        deps = {}
+    deps = {o: [fmu_input_name(comp, i) for i in deps.get(o, [])] for o, _, _ in outputs}
+    prologue = "\n".join([
+        f"/* {name}: {type(comp).__name__} of {Path(str(system.study.path)).name}, sampled every {period!r} s "
+        f"(generated by fmu_export.component_fmus) */",
+        "#include <math.h>", "#include <stdlib.h>", "#include <string.h>",
+        f"#define MODEL_NPAR {len(parameters)}", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
+        f"#define MODEL_PERIOD {period!r}",
+        f"static const double MODEL_PAR_START[MODEL_NPAR + 1] = {{{_c_array([p[1] for p in parameters]) or '0.0'}}};",
+        f"static const char *const MODEL_PAR_NAMES[MODEL_NPAR + 1] = {{{_c_strings(p[0] for p in parameters)}}};",
+        f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{_c_strings(i[0] for i in inputs)}}};",
+        f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{_c_strings(o[0] for o in outputs)}}};",
+        *[f"#define P_{p[0]} {i}" for i, p in enumerate(parameters)],
+        *[f"#define IN_{v.name} {i}" for i, v in enumerate(x for x in comp.variables if x.causality == "input")],
+        *[f"#define OUT_{x[0]} {i}" for i, x in enumerate(outputs)],
+        spec.compiled(comp, period),
+        f'#include "{spec.source}"', ""])
+    digest = hashlib.sha256((prologue + (C_DIR / "components" / spec.source).read_text()).encode()).hexdigest()
+    token = "{" + str(uuid.UUID(digest[:32])) + "}"
+    source = prologue.replace("#define MODEL_PERIOD", f'#define MODEL_TOKEN "{token}"\n#define MODEL_PERIOD')
+    description = (f"{name} ({type(comp).__name__}) of {Path(str(system.study.path)).name}: {type(comp).__doc__ or ''}"
+                   .strip().split("\n")[0] + f"; sampled every {period!r} s")
+    return SampledModel(name, token, description, period, parameters, inputs, outputs, deps, source,
+                        [f"components/{spec.source}", *spec.extra_sources])
+
+
+
+def export_component(system: System, name: str, out: Path, fmi_version: int = 2) -> Path:
+    return build_fmu(component_model(system, name), out, fmi_version)
+
+
+def non_exportable(system: System) -> list[str]:
+    return [n for n, node in system.nodes.items() if not exportable(node.component)]
