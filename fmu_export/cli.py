@@ -24,7 +24,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
+    from orchestrator.cli import add_set_option
+
+    p.add_argument("study", type=Path, help="study whose components all have an FMU form (e.g. studies/figure8.toml)")
+    p.add_argument("--out", type=Path, required=True, help="the .ssp to write, e.g. fmus/figure8.ssp")
+    add_set_option(p)
+
+
+def run_ssp(args: argparse.Namespace) -> int:
+    from orchestrator.study import Study
+
+    from .ssp_export import export_ssp
+
+    out = export_ssp(Study.load(args.study, args.set), args.out)
+    print(f"{args.study} exported to {out} (SSP 1.0: SystemStructure.ssd and one FMI 2.0 FMU per component)")
+    return 0
+
+
 def register(registry) -> None:
     registry.add_command("export-controller",
                          "export the study's guidance controller (tracker + MPC + speed PID) as an FMU",
                          add_arguments, run)
+    registry.add_command("export-ssp", "export the study as an SSP 1.0 archive (one FMU per component)",
+                         add_ssp_arguments, run_ssp)

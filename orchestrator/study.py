@@ -80,6 +80,7 @@ class ComponentSpec(BaseModel):
     step: float | None = Field(default=None, gt=0)
     parameters: dict[str, Any] = {}
     inputs: dict[str, Any] = {}
+    roles: list[str] = []          # roles besides the class's own (an FMU that is a yaw plant)
 
 
 class Connection(BaseModel):
@@ -484,7 +485,8 @@ class Study(BaseModel):
             cls = self.component_class(name)
             if type is not None and not isinstance(type, str) and not issubclass(cls, type):
                 continue
-            if role is not None and role not in getattr(cls, "roles", ()):
+            extra = self.components[name].roles if name in self.components else []
+            if role is not None and role not in getattr(cls, "roles", ()) and role not in extra:
                 continue
             found.append(name)
         return found
@@ -602,6 +604,10 @@ def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str,
     from that study and merges this file's tables over it (a component given another ``type``
     starts afresh: the parent's parameters of the old type do not carry over)."""
     path = Path(path)
+    if path.suffix in (".ssp", ".ssd"):          # an SSP archive or its System Structure Description
+        from .ssp import study_data
+
+        return study_data(path)
     data = _read_one(path)
     parent = data.pop("extends", None)
     if parent is None:
