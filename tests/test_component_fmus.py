@@ -102,5 +102,5 @@ def test_a_component_without_an_fmu_form_is_named(tmp_path):
     from fmu_export.component_fmus import ComponentExportError, component_model
 
     system = build_system(Study.load(ROOT / "studies/figure8.toml", ["tractor.model=transfer_function"]))
-    with pytest.raises(ComponentExportError, match="components.tractor: model = 'transfer_function' has no FMU form"):
+    with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: model = 'transfer_function' has no FMU form"):
         component_model(system, "tractor")
