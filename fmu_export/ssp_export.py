@@ -5,7 +5,7 @@ component (fmu_export.component_fmus), FMI 2.0 (the version every SSP engine rea
 keeps the study's component and port names (an input that shares an output's name is
 ``<name>_in``, FMI names being unique), every connection, each component's parameter values
 (inline ParameterBindings, SI with units) and the units with their BaseUnits; DefaultExperiment
-gives start and stop time. An annotation of type ``org.agrobot.study`` carries what SSP 1.0 has
+gives start and stop time. The orchestrator's study annotation (orchestrator.ssp) carries what SSP 1.0 has
 no element for (base step, each component's step, seed), for this project's own import (another
 engine is given its step by its own API: libcosim's ``from_ssp_file(path, step_size)``). The SSD is validated against the SSP 1.0 schema before
 the archive is written (atomically)."""
@@ -18,6 +18,7 @@ from xml.sax.saxutils import quoteattr
 
 from orchestrator.build import build_system
 from orchestrator.errors import InputError
+from orchestrator.ssp import STUDY_ANNOTATION
 from orchestrator.study import Study
 from orchestrator.units import base_unit
 
@@ -28,7 +29,6 @@ from .sampled_fmu import build_fmu
 SSD_NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
           "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
           "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
-STUDY_ANNOTATION = "org.agrobot.study"
 
 
 class SSPExportError(InputError):

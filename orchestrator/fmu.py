@@ -142,7 +142,10 @@ def _start(fv: _FMIVar, text) -> Any:
     if fv.convert is _text:
         return _text(text)
     if fv.convert is bytes:
-        return bytes.fromhex(str(text)) if text else b""
+        try:
+            return bytes.fromhex(str(text).removeprefix("0x")) if text else b""
+        except ValueError:
+            return str(text).encode()
     items = str(text).split() if fv.shape else [text]
     parse = (lambda s: str(s).lower() in ("true", "1")) if fv.convert is bool else \
         (lambda s: fv.convert(float(s)) if fv.convert is int else float(s))
@@ -184,7 +187,10 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
         if unit in bases:
             base_units.update({n: bases[unit] for n in names})
     inputs = [n for n, (c, _) in fmi_vars.items() if c == "input"]
-    feedthrough: dict[str, tuple[str, ...]] = {}
+    every_input = tuple(p for d in inputs for p in ports_of[d])
+    # an output ModelStructure does not list (a malformed description) may depend on any input
+    feedthrough: dict[str, tuple[str, ...]] = {p: every_input for n, (c, _) in fmi_vars.items() if c == "output"
+                                                for p in ports_of[n]}
     for unknown in md.outputs:
         deps = unknown.dependencies
         dep_vars = [d.name for d in deps] if deps is not None else inputs     # no attribute: every input
@@ -395,7 +401,7 @@ class _ModelExchange:
         self.c, self.s, self.fmi3 = comp, comp._slave, comp._fmi3
         md = comp.model_description
         self.nx = len(md.derivatives)
-        self.nz = int(md.numberOfEventIndicators or 0)
+        self.nz = int(getattr(md, "numberOfEventIndicators", None) or len(getattr(md, "eventIndicators", None) or []))
         self._x = (ctypes.c_double * max(self.nx, 1))()
         self._dx = (ctypes.c_double * max(self.nx, 1))()
         self._z = (ctypes.c_double * max(self.nz, 1))()

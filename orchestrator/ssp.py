@@ -4,8 +4,8 @@ Each ``ssd:Component`` of the top-level system becomes a component whose type is
 the archive, extracted once per process), with the values of its inline ParameterBindings
 (converted to the FMU variable's unit by BaseUnit when the binding states another); each
 ``ssd:Connection`` between two elements becomes a connection. Start and stop time come from
-DefaultExperiment; base step, component steps and roles, seed and analysis from this project's
-``org.agrobot.study`` annotation when present, otherwise the base step is the smallest FMU default
+DefaultExperiment; base step, component steps and roles, seed and analysis from the orchestrator's
+own annotation (STUDY_ANNOTATION) when present, otherwise the base step is the smallest FMU default
 step size and each component steps at its FMU's default step size when that is a multiple of it.
 Not read (refused with a message naming them): nested systems, connections to the system's own
 connectors, parameter bindings in external files.
@@ -25,7 +25,7 @@ from .errors import InputError
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
       "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues"}
-STUDY_ANNOTATION = "org.agrobot.study"
+STUDY_ANNOTATION = "org.cosim-orchestrator.study"   # the study fields SSP 1.0 has no element for
 _EXTRACTED: dict[Path, Path] = {}
 
 
@@ -39,7 +39,7 @@ def _extract(path: Path) -> Path:
     if path not in _EXTRACTED:
         if not zipfile.is_zipfile(path):
             raise SSPError(f"{path}: not an SSP archive (not a zip file)")
-        folder = Path(tempfile.mkdtemp(prefix="agrobot-ssp-"))
+        folder = Path(tempfile.mkdtemp(prefix="ssp-"))
         atexit.register(shutil.rmtree, folder, True)
         with zipfile.ZipFile(path) as zf:
             if "SystemStructure.ssd" not in zf.namelist():

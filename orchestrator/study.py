@@ -80,7 +80,7 @@ class ComponentSpec(BaseModel):
     step: float | None = Field(default=None, gt=0)
     parameters: dict[str, Any] = {}
     inputs: dict[str, Any] = {}
-    roles: list[str] = []          # roles besides the class's own (an FMU that is a yaw plant)
+    roles: list[str] = []          # roles besides the class's own (an FMU that plays a role a tool looks up)
 
 
 class Connection(BaseModel):
