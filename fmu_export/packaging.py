@@ -83,6 +83,26 @@ def check_fmu_target(out: Path) -> None:
         raise PackagingError(f"--out {out}: cannot write there ({base} is not a writable folder)")
 
 
+def write_archive(out: Path, entries: dict[str, Path | str], what: str) -> Path:
+    """Write the zip archive ``out`` atomically: ``entries`` maps a member name to a file or to
+    text; a temporary file beside ``out`` is moved into place, and removed if anything fails."""
+    partial = out.with_name(f".{out.name}.tmp")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
+            for name, content in entries.items():
+                if isinstance(content, Path):
+                    zf.write(content, name)
+                else:
+                    zf.writestr(name, content)
+        partial.replace(out)
+    except OSError as exc:
+        raise PackagingError(f"--out {out}: cannot write the {what}: {exc}") from None
+    finally:
+        partial.unlink(missing_ok=True)
+    return out
+
+
 def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
     import fmpy
     from fmpy.build import build_platform_binary
@@ -107,16 +127,6 @@ def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
             tail = log.read_text(errors="replace")[-2000:] if log.exists() else ""
             raise PackagingError(f"building {out.name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None
         check_fmu_target(out)
-        partial = out.with_name(f".{out.name}.tmp")
-        try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
-                for path in sorted(root.rglob("*")):
-                    if path.is_file():
-                        zf.write(path, path.relative_to(root).as_posix())
-            partial.replace(out)
-        except OSError as exc:
-            raise PackagingError(f"--out {out}: cannot write the FMU: {exc}") from None
-        finally:
-            partial.unlink(missing_ok=True)
+        files = {path.relative_to(root).as_posix(): path for path in sorted(root.rglob("*")) if path.is_file()}
+        write_archive(out, files, "FMU")
     return out

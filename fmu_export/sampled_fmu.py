@@ -58,6 +58,32 @@ def _units(model: SampledModel) -> list[str]:
     return sorted({u for _, _, u, _ in model.parameters} | {u for _, u, _ in model.inputs + model.outputs} | {"s"})
 
 
+def _declare(model: SampledModel, variable) -> None:
+    """Call ``variable(name, vr, causality, variability, unit, description, start, initial)`` for
+    every parameter (tunable, exact), input and output (discrete, calculated) of the model."""
+    for i, (name, start, unit, desc) in enumerate(model.parameters):
+        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
+    for i, (name, unit, desc) in enumerate(model.inputs):
+        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
+    for i, (name, unit, desc) in enumerate(model.outputs):
+        variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
+
+
+def _shared_elements(model: SampledModel, rows: list[str]) -> str:
+    """UnitDefinitions, LogCategories, DefaultExperiment and ModelVariables: alike in FMI 2.0 and 3.0."""
+    return f"""  <UnitDefinitions>
+{_unit_definitions(_units(model), "    ")}
+  </UnitDefinitions>
+  <LogCategories>
+    <Category name="logStatusError" description="errors: refused calls and values"/>
+    <Category name="logAll" description="everything else"/>
+  </LogCategories>
+  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
+  <ModelVariables>
+{chr(10).join(rows)}
+  </ModelVariables>"""
+
+
 def _fmi2_description(model: SampledModel) -> str:
     rows, index = [], {}
 
@@ -69,12 +95,7 @@ def _fmi2_description(model: SampledModel) -> str:
         real = f"<Real unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "") + "/>"
         rows.append(f"    <ScalarVariable {attrs} description={quoteattr(description)}>{real}</ScalarVariable>")
 
-    for i, (name, start, unit, desc) in enumerate(model.parameters):
-        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
-    for i, (name, unit, desc) in enumerate(model.inputs):
-        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
-    for i, (name, unit, desc) in enumerate(model.outputs):
-        variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
+    _declare(model, variable)
     outputs = "\n".join(f'      <Unknown index="{index[n]}" dependencies="{" ".join(str(index[d]) for d in model.dependencies[n])}"/>'
                         for n, _, _ in model.outputs)
     # at initialisation the outputs also follow every parameter (the first sample is computed from them)
@@ -91,17 +112,7 @@ def _fmi2_description(model: SampledModel) -> str:
 {sources}
     </SourceFiles>
   </CoSimulation>
-  <UnitDefinitions>
-{_unit_definitions(_units(model), "    ")}
-  </UnitDefinitions>
-  <LogCategories>
-    <Category name="logStatusError" description="errors: refused calls and values"/>
-    <Category name="logAll" description="everything else"/>
-  </LogCategories>
-  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
-  <ModelVariables>
-{chr(10).join(rows)}
-  </ModelVariables>
+{_shared_elements(model, rows)}
   <ModelStructure>
     <Outputs>
 {outputs}
@@ -127,12 +138,7 @@ def _fmi3_description(model: SampledModel) -> str:
 
     rows.append(f'    <Float64 name="time" valueReference="{VR_TIME}" causality="independent" '
                 f'variability="continuous" unit="s" description="simulation time"/>')
-    for i, (name, start, unit, desc) in enumerate(model.parameters):
-        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
-    for i, (name, unit, desc) in enumerate(model.inputs):
-        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
-    for i, (name, unit, desc) in enumerate(model.outputs):
-        variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
+    _declare(model, variable)
 
     def unknown(tag, n):
         deps = " ".join(str(vr_of[d]) for d in (model.dependencies[n] if tag == "Output" else _initial_dependencies(model, n)))
@@ -147,17 +153,7 @@ def _fmi3_description(model: SampledModel) -> str:
   <CoSimulation modelIdentifier="{model.identifier}" canHandleVariableCommunicationStepSize="true"
     canBeInstantiatedOnlyOncePerProcess="false" providesIntermediateUpdate="false"
     hasEventMode="false" canReturnEarlyAfterIntermediateUpdate="false"/>
-  <UnitDefinitions>
-{_unit_definitions(_units(model), "    ")}
-  </UnitDefinitions>
-  <LogCategories>
-    <Category name="logStatusError" description="errors: refused calls and values"/>
-    <Category name="logAll" description="everything else"/>
-  </LogCategories>
-  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
-  <ModelVariables>
-{chr(10).join(rows)}
-  </ModelVariables>
+{_shared_elements(model, rows)}
   <ModelStructure>
 {structure}
   </ModelStructure>

@@ -12,7 +12,6 @@ the archive is written (atomically)."""
 from __future__ import annotations
 
 import tempfile
-import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -23,7 +22,7 @@ from orchestrator.study import Study
 from orchestrator.units import base_unit
 
 from .component_fmus import component_model, fmu_input_name, non_exportable
-from .packaging import PackagingError, check_fmu_target
+from .packaging import PackagingError, check_fmu_target, write_archive
 from .sampled_fmu import build_fmu
 
 SSD_NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -143,16 +142,9 @@ def export_ssp(study: Study, out: Path) -> Path:
                 fmus[name] = build_fmu(model, Path(tmp) / f"{name}.fmu", 2)
             except PackagingError as exc:
                 raise SSPExportError(str(exc)) from None
-        partial = out.with_name(f".{out.name}.tmp")
         try:
-            out.parent.mkdir(parents=True, exist_ok=True)
-            with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
-                zf.writestr("SystemStructure.ssd", ssd)
-                for name, path in fmus.items():
-                    zf.write(path, f"resources/{name}.fmu")
-            partial.replace(out)
-        except OSError as exc:
-            raise SSPExportError(f"--out {out}: cannot write the SSP: {exc}") from None
-        finally:
-            partial.unlink(missing_ok=True)
+            write_archive(out, {"SystemStructure.ssd": ssd, **{f"resources/{n}.fmu": path for n, path in fmus.items()}},
+                          "SSP")
+        except PackagingError as exc:
+            raise SSPExportError(str(exc)) from None
     return out
