@@ -2,8 +2,9 @@
 
 Reads whatever bytes arrived since the last step from a pyserial URL (``/dev/ttyUSB0``,
 ``socket://127.0.0.1:10110``, ``rfc2217://...``), parses GGA (position, fix quality) and VTG or RMC
-(speed, course over ground) with pynmeagps, and converts latitude/longitude/height to east/north
-about the study's datum. Bad checksums, partial lines, unknown sentences and fixes worse than
+(speed, course over ground), GST (position error statistics) and HDT (true heading of a dual
+antenna) with pynmeagps, any talker (GN, GP, GL, ...), and converts latitude/longitude/height to
+east/north about the study's datum; other sentences (ZDA, GSA, GSV ...) are counted as unused. Bad checksums, partial lines, unknown sentences and fixes worse than
 ``min_fix_quality`` (4 = RTK fixed; 5, RTK float, is worse) are counted in outputs and flagged
 (``fix_valid`` = 0); none is fatal. ``fix_age`` is the time since the last good fix arrived.
 """
@@ -14,7 +15,8 @@ import time
 
 from orchestrator.component import Component, out, par
 
-from .hardware.nmea import DATUM_PARAMETERS, RTK_FIXED, LocalFrame, NMEAStream, Position, Velocity, fix_at_least
+from .hardware.nmea import (DATUM_PARAMETERS, RTK_FIXED, Heading, LocalFrame, NMEAStream, Position,
+                           PositionError, Velocity, fix_at_least)
 
 
 class NMEAGPS(Component):
@@ -34,6 +36,9 @@ class NMEAGPS(Component):
         out("fix_age", "s", 0.0, "time since the last good fix arrived"),
         out("fix_quality", "1", 0.0, "GGA quality of the latest fix (0 none, 4 RTK fixed, 5 float)"),
         out("satellites", "1", 0.0, "satellites used"),
+        out("position_std", "m", 0.0, "1-sigma horizontal position error the receiver reports (GST; 0: none yet)"),
+        out("heading", "rad", 0.0, "true heading of a dual antenna (HDT), from east counter-clockwise"),
+        out("heading_valid", "1", 0.0, "1 when an HDT arrived during this step"),
         out("bad_checksums", "1", 0.0, "sentences with a wrong checksum so far"),
         out("malformed_sentences", "1", 0.0, "sentences the parser refused so far"),
         out("unknown_sentences", "1", 0.0, "sentences of an unknown talker or type so far"),
@@ -77,11 +82,18 @@ class NMEAGPS(Component):
     def step(self, t: float, dt: float) -> None:
         self.apply(t, self.stream.feed(self.read_available(t)))
 
-    def apply(self, t: float, items: list[Position | Velocity]) -> None:
+    def apply(self, t: float, items: list[Position | Velocity | PositionError | Heading]) -> None:
         """Update the outputs from parsed sentences (shared by the serial path and the tests)."""
         y, c = self.y, self.stream.counters
-        y["fix_valid"] = 0.0
+        y["fix_valid"] = y["heading_valid"] = 0.0
         for item in items:
+            if isinstance(item, PositionError):
+                y["position_std"] = max(item.std_north, item.std_east)
+                continue
+            if isinstance(item, Heading):        # from north clockwise -> from east counter-clockwise
+                y["heading"] = math.atan2(math.cos(item.heading), math.sin(item.heading))
+                y["heading_valid"] = 1.0
+                continue
             if isinstance(item, Velocity):
                 y["vel_east"] = item.speed * math.sin(item.course)
                 y["vel_north"] = item.speed * math.cos(item.course)

@@ -1,15 +1,21 @@
-"""NMEA 0183 out over TCP (the emulated tractor's GPS receiver): at each step with a fix, a GGA and
-a VTG for the antenna position (east/north about the datum -> latitude/longitude) go to every
-client connected to ``host:port``. Fault injection for tests: ``stop_after`` (s, the stream
-stops) and ``float_after`` (s, the fix quality drops to 5, RTK float); negative = never.
+"""NMEA 0183 out, as a receiver sends it (the emulated tractor's GPS): at each step the sentences
+of ``sentences`` (default GGA, GST, PGRME, VTG, RMC, ZDA) for the antenna position (east/north about the
+datum -> latitude/longitude), UTC time and date counted from ``epoch``, GST and PGRME errors from
+``position_std`` (the GPS error model's), HDOP and mode consistent with the fix quality; without a
+fix, the same sentences with empty fields (quality 0, RMC status V). They go to every client
+connected to ``host:port`` (TCP) and, with ``serial_port`` set, to that serial device (pyserial).
+Fault injection for tests: ``stop_after`` (s, the stream stops) and ``float_after`` (s, the fix
+quality drops to 5, RTK float); negative = never.
 """
 from __future__ import annotations
 
+import datetime
 import socket
 
 from orchestrator.component import Component, inp, out, par
 
-from .hardware.nmea import DATUM_PARAMETERS, RTK_FIXED, LocalFrame, gga_vtg
+from .hardware.nmea import (DATUM_PARAMETERS, DEFAULT_EPOCH, RTK_FIXED, SENTENCES, TALKERS, LocalFrame, parse_epoch,
+                            receiver_sentences)
 
 
 class NMEAServer(Component):
@@ -24,7 +30,12 @@ class NMEAServer(Component):
         par("host", "", "127.0.0.1", "address to listen on"),
         par("port", "1", 10110, "TCP port to listen on"),
         *DATUM_PARAMETERS,
-        par("talker", "", "GN", "NMEA talker id"),
+        par("talker", "", "GN", "NMEA talker id (GN, GP, GL, GA, GB, GQ, GI)"),
+        par("sentences", "", ",".join(SENTENCES), "sentences sent each step, in order (of GGA, GST, PGRME, VTG, RMC, ZDA)"),
+        par("epoch", "", DEFAULT_EPOCH, "UTC date and time of t = 0 (ISO 8601)"),
+        par("position_std", "m", 0.02, "1-sigma horizontal position error reported in GST (the GPS error model's)"),
+        par("serial_port", "", "", "serial device to send on besides TCP (empty: TCP only)"),
+        par("baudrate", "1/s", 115200, "serial line speed"),
         par("stop_after", "s", -1.0, "fault injection: stop sending after this time"),
         par("float_after", "s", -1.0, "fault injection: report RTK float after this time"),
         out("clients", "1", 0.0, "connected clients"),
@@ -34,7 +45,25 @@ class NMEAServer(Component):
 
     def initialize(self, t0: float, dt: float) -> None:
         p = self.p
+        self.require(p["talker"] in TALKERS, f"talker {p['talker']!r}: expected one of {', '.join(sorted(TALKERS))}")
+        self.sentence_set = tuple(x.strip().upper() for x in str(p["sentences"]).split(",") if x.strip())
+        unknown = [x for x in self.sentence_set if x not in SENTENCES]
+        self.require(self.sentence_set and not unknown,
+                     f"sentences {p['sentences']!r}: expected a comma-separated list of {', '.join(SENTENCES)}")
+        try:
+            self.epoch = parse_epoch(p["epoch"])
+        except ValueError:
+            self.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
         self.frame = LocalFrame.of(p)
+        self.serial = None
+        if p["serial_port"]:
+            import serial
+
+            try:
+                self.serial = serial.serial_for_url(p["serial_port"], baudrate=int(p["baudrate"]), timeout=0,
+                                                    write_timeout=0)
+            except (serial.SerialException, OSError, ValueError) as exc:
+                self.require(False, f"cannot open serial port {p['serial_port']!r}: {exc}")
         self.server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         self.server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
@@ -63,10 +92,21 @@ class NMEAServer(Component):
         if 0 <= p["float_after"] <= t and not self.floating:
             self.floating = True
             self.event(t, "fault injection: fix quality drops to RTK float")
-        if u["fix_valid"] > 0.5 and not self.stopped and self.clients:
-            lat, lon, h = self.frame.to_geodetic(u["x"], u["y"])
-            data = gga_vtg(t, lat, lon, h, u["vel_east"], u["vel_north"], 5 if self.floating else RTK_FIXED,
-                           talker=p["talker"])
+        if not self.stopped and (self.clients or self.serial is not None):
+            when = self.epoch + datetime.timedelta(seconds=t)
+            if u["fix_valid"] > 0.5:
+                lat, lon, h = self.frame.to_geodetic(u["x"], u["y"])
+                quality = 5 if self.floating else RTK_FIXED
+            else:
+                lat = lon = None
+                h, quality = 0.0, 0
+            data = receiver_sentences(when, lat, lon, h, u["vel_east"], u["vel_north"], quality, talker=p["talker"],
+                                      sentences=self.sentence_set, position_std=p["position_std"])
+            if self.serial is not None:
+                try:
+                    self.serial.write(data)
+                except Exception as exc:         # noqa: BLE001 - a full or gone line loses this epoch only
+                    self.event(t, f"NMEA serial write failed: {exc}")
             for conn in list(self.clients):
                 try:
                     conn.sendall(data)
@@ -74,10 +114,13 @@ class NMEAServer(Component):
                     self.clients.remove(conn)
                     conn.close()
                     self.event(t, "NMEA client gone")
-            self.sent += 2
+            self.sent += len(self.sentence_set)
         self.y["clients"], self.y["sentences_sent"] = float(len(self.clients)), float(self.sent)
 
     def terminate(self) -> None:
+        if getattr(self, "serial", None) is not None:
+            self.serial.close()
+            self.serial = None
         for conn in getattr(self, "clients", []):
             conn.close()
         if getattr(self, "server", None) is not None:

@@ -10,7 +10,7 @@ from orchestrator.component import par
 
 KNOTS = 1852.0 / 3600.0          # m/s per knot
 TALKERS = {"GP", "GN", "GL", "GA", "GB", "GQ", "GI"}
-USED = {"GGA", "VTG", "RMC"}
+USED = {"GGA", "VTG", "RMC", "GST", "HDT"}      # ZDA, GSA, GSV ... are counted as unused, quietly
 RTK_FIXED = 4
 # GGA fix quality codes are not ordered by goodness (5, RTK float, is worse than 4, RTK fixed):
 # rank them before comparing. 6 dead reckoning, 7 manual and 8 simulation carry no measurement.
@@ -38,6 +38,22 @@ class Velocity:
 
 
 @dataclass
+class PositionError:
+    """GST: 1-sigma errors of the position (m)."""
+
+    std_north: float
+    std_east: float
+    std_height: float
+
+
+@dataclass
+class Heading:
+    """HDT: true heading of a dual-antenna receiver (rad, from north, clockwise)."""
+
+    heading: float
+
+
+@dataclass
 class StreamCounters:
     sentences: int = 0
     bad_checksum: int = 0
@@ -55,8 +71,8 @@ class NMEAStream:
     counters: StreamCounters = field(default_factory=StreamCounters)
     _buffer: bytes = b""
 
-    def feed(self, data: bytes) -> list[Position | Velocity]:
-        out: list[Position | Velocity] = []
+    def feed(self, data: bytes) -> list[Position | Velocity | PositionError | Heading]:
+        out: list[Position | Velocity | PositionError | Heading] = []
         self._buffer += bytes(data)
         *lines, self._buffer = self._buffer.split(b"\n")
         if len(self._buffer) > self.max_line:          # no newline in sight: garbage
@@ -85,6 +101,9 @@ class NMEAStream:
             c.partial += 1
             return None
         c.sentences += 1
+        if line.startswith(b"$P"):                      # proprietary (PGRME, PUBX ...): not used here
+            c.unknown += 1
+            return None
         try:
             msg = NMEAReader.parse(line + b"\r\n", validate=VALCKSUM)
         except NMEAParseError as exc:
@@ -107,6 +126,11 @@ class NMEAStream:
             return None
 
     def _fields(self, msg, ident: str):
+        if ident == "GGA" and (msg.quality in ("", 0) or msg.lat == ""):
+            return Position(math.nan, math.nan, math.nan, 0, 0)    # a receiver without a fix says so
+        if (ident == "RMC" and msg.status == "V") or (ident == "VTG" and msg.sogk == "" and msg.sogn == "") \
+                or (ident == "GST" and msg.stdLat == ""):
+            return None                                          # no fix: nothing to measure
         if ident == "GGA":
             lat, lon, q = float(msg.lat), float(msg.lon), int(msg.quality)
             if not (-90 <= lat <= 90 and -180 <= lon <= 180) or not 0 <= q <= 9:
@@ -115,6 +139,16 @@ class NMEAStream:
             sep = float(msg.sep) if getattr(msg, "sep", "") != "" else 0.0
             sats = int(msg.numSV) if msg.numSV != "" else 0
             return Position(math.radians(lat), math.radians(lon), alt + sep, q, sats)
+        if ident == "GST":
+            std = (float(msg.stdLat), float(msg.stdLong), float(msg.stdAlt) if msg.stdAlt != "" else math.nan)
+            if not all(v >= 0 for v in std[:2]):
+                raise ValueError("negative error")
+            return PositionError(*std)
+        if ident == "HDT":
+            heading = float(msg.headingT)
+            if not 0 <= heading <= 360:
+                raise ValueError("out of range")
+            return Heading(math.radians(heading))
         if ident == "VTG":
             if msg.sogk != "":
                 speed = float(msg.sogk) / 3.6
@@ -123,7 +157,7 @@ class NMEAStream:
             course = float(msg.cogt) if msg.cogt != "" else 0.0
         else:   # RMC
             if msg.status != "A":
-                raise ValueError("RMC not valid")
+                raise ValueError(f"RMC status {msg.status!r}")
             speed, course = float(msg.spd) * KNOTS, float(msg.cog) if msg.cog != "" else 0.0
         if not (0 <= speed < 100 and 0 <= course <= 360):
             raise ValueError("out of range")
@@ -161,21 +195,92 @@ class LocalFrame:
         return float(lat), float(lon), float(h)
 
 
-def gga_vtg(t: float, latitude: float, longitude: float, height: float, vel_east: float, vel_north: float,
-            quality: int = RTK_FIXED, satellites: int = 14, talker: str = "GN") -> bytes:
-    """A GGA (position, fix quality; 7 decimals of minutes: 0.2 mm) and a VTG (speed, course) for
-    time ``t`` seconds after midnight UTC. Heights: altitude given as ellipsoidal, separation 0."""
+# what a receiver sends, and the writer can write. GST carries the 1-sigma errors; PGRME (Garmin's
+# estimated position error, 50 % radii) is what gpsd 3.22 turns into its TPV epx/epy/epv, and it
+# must come within the epoch's cycle (before RMC, which ends gpsd's cycle)
+SENTENCES = ("GGA", "GST", "PGRME", "VTG", "RMC", "ZDA")
+CEP50 = math.sqrt(2.0 * math.log(2.0))        # 1.1774: the 50 % radius of a circular 2-D normal, in sigmas
+HALF_1D = 0.6745                              # the 50 % half-width of a 1-D normal, in sigmas
+DEFAULT_EPOCH = "2026-05-01T08:00:00Z"                 # UTC of t = 0 when a study names none
+# fix quality -> (FAA mode indicator of VTG/RMC, HDOP): an RTK fix sees many satellites
+FIX_MODES = {0: ("N", 99.99), 1: ("A", 1.2), 2: ("D", 0.9), 4: ("R", 0.7), 5: ("F", 0.8)}
+
+
+def parse_epoch(text: str) -> datetime.datetime:
+    """An ISO 8601 UTC time (``2026-05-01T08:00:00Z``) as an aware datetime; ValueError otherwise."""
+    when = datetime.datetime.fromisoformat(str(text).replace("Z", "+00:00"))
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=datetime.timezone.utc)
+    return when.astimezone(datetime.timezone.utc)
+
+
+def receiver_sentences(when: datetime.datetime, latitude: float | None, longitude: float | None, height: float,
+                       vel_east: float, vel_north: float, quality: int = RTK_FIXED, *, talker: str = "GN",
+                       sentences=SENTENCES, position_std: float = 0.02, height_std: float | None = None,
+                       satellites: int = 14) -> bytes:
+    """What a receiver sends for one epoch at UTC ``when``: GGA (position, quality, HDOP), VTG and
+    RMC (speed and course; RMC with the date, status A or V), GST (the 1-sigma position errors:
+    ``position_std`` per horizontal axis, ``height_std`` vertically, default 2x), PGRME (the same
+    errors as 50 % radii: CEP50 = 1.1774 sigma) and ZDA (date and time), in the order of ``sentences``. ``quality`` 0 (no fix) writes the sentences with empty
+    position fields, RMC status V and mode N, as receivers do. Minutes of arc with 7 decimals
+    (0.2 mm)."""
     from pynmeagps import GET, NMEAMessage
 
-    stamp = (datetime.datetime(2000, 1, 1) + datetime.timedelta(seconds=t % 86400.0)).time()
-    gga = NMEAMessage(talker, "GGA", GET, hpnmeamode=True, time=stamp,
-                      lat=math.degrees(latitude), NS="N" if latitude >= 0 else "S",
-                      lon=math.degrees(longitude), EW="E" if longitude >= 0 else "W",
-                      quality=int(quality), numSV=int(satellites), HDOP=0.7, alt=round(height, 4), altUnit="M",
-                      sep=0.0, sepUnit="M", diffAge=1.0, diffStation=0)
+    fix = quality != 0 and latitude is not None
+    mode, hdop = FIX_MODES.get(int(quality), ("A", 1.5))
+    stamp = when.time().replace(tzinfo=None)
     speed = math.hypot(vel_east, vel_north)
     course = math.degrees(math.atan2(vel_east, vel_north)) % 360.0
-    vtg = NMEAMessage(talker, "VTG", GET, cogt=round(course, 2), cogtUnit="T", cogm="", cogmUnit="M",
-                      sogn=round(speed / KNOTS, 4), sognUnit="N", sogk=round(speed * 3.6, 4), sogkUnit="K",
-                      posMode="R" if quality == RTK_FIXED else ("F" if quality == 5 else "A"))
-    return gga.serialize() + vtg.serialize()
+    where = dict(lat=math.degrees(latitude), NS="N" if latitude >= 0 else "S", lon=math.degrees(longitude),
+                 EW="E" if longitude >= 0 else "W") if fix else dict(lat="", NS="", lon="", EW="")
+    out = []
+    for ident in sentences:
+        if ident == "GGA":
+            fields = dict(time=stamp, **where, quality=int(quality) if fix else 0, numSV=int(satellites) if fix else 0,
+                          HDOP=hdop if fix else 99.99, alt=round(height, 4) if fix else "", altUnit="M",
+                          sep=0.0 if fix else "", sepUnit="M", diffAge=1.0 if quality in (2, 4, 5) else "",
+                          diffStation=0 if quality in (2, 4, 5) else "")
+        elif ident == "VTG":
+            fields = dict(cogt=round(course, 2) if fix else "", cogtUnit="T", cogm="", cogmUnit="M",
+                          sogn=round(speed / KNOTS, 4) if fix else "", sognUnit="N",
+                          sogk=round(speed * 3.6, 4) if fix else "", sogkUnit="K", posMode=mode if fix else "N")
+        elif ident == "RMC":
+            fields = dict(time=stamp, status="A" if fix else "V", **where, spd=round(speed / KNOTS, 4) if fix else "",
+                          cog=round(course, 2) if fix else "", date=when.date(), mv="", mvEW="",
+                          posMode=mode if fix else "N", navStatus="S" if fix else "V")
+        elif ident == "GST" and not fix:
+            fields = dict(time=stamp, rangeRms="", stdMajor="", stdMinor="", orient="", stdLat="", stdLong="", stdAlt="")
+        elif ident == "GST":
+            sh = float(position_std)
+            sv = float(height_std) if height_std is not None else 2.0 * sh
+            fields = dict(time=stamp, rangeRms=round(sh * math.sqrt(2.0), 4), stdMajor=round(sh, 4), stdMinor=round(sh, 4),
+                          orient=0.0, stdLat=round(sh, 4), stdLong=round(sh, 4), stdAlt=round(sv, 4))
+        elif ident == "ZDA":
+            fields = dict(time=stamp, day=when.day, month=when.month, year=when.year, ltzh="00", ltzn="00")
+        elif ident == "PGRME":
+            sh = float(position_std)
+            sv = float(height_std) if height_std is not None else 2.0 * sh
+            hpe, vpe = CEP50 * sh, HALF_1D * sv
+            body = f"PGRME,{hpe:.4f},M,{vpe:.4f},M,{math.hypot(hpe, vpe):.4f},M" if fix else "PGRME,,M,,M,,M"
+            out.append(_with_checksum(body))
+            continue
+        else:
+            raise ValueError(f"sentence {ident!r}: the writer knows {', '.join(SENTENCES)}")
+        out.append(NMEAMessage(talker, ident, GET, hpnmeamode=ident in ("GGA", "RMC"), **fields).serialize())
+    return b"".join(out)
+
+
+def _with_checksum(body: str) -> bytes:
+    """``$body*hh`` and CR LF: a sentence pynmeagps does not write (a proprietary one)."""
+    check = 0
+    for ch in body.encode():
+        check ^= ch
+    return f"${body}*{check:02X}\r\n".encode()
+
+
+def gga_vtg(t: float, latitude: float, longitude: float, height: float, vel_east: float, vel_north: float,
+            quality: int = RTK_FIXED, satellites: int = 14, talker: str = "GN") -> bytes:
+    """GGA and VTG for ``t`` seconds after the default epoch (the pair the first emulator sent)."""
+    when = parse_epoch(DEFAULT_EPOCH) + datetime.timedelta(seconds=t)
+    return receiver_sentences(when, latitude, longitude, height, vel_east, vel_north, quality, talker=talker,
+                              sentences=("GGA", "VTG"), satellites=satellites)
