@@ -4,7 +4,8 @@ datum -> latitude/longitude), UTC time and date counted from ``epoch``, GST and 
 ``position_std`` (the GPS error model's), HDOP and mode consistent with the fix quality; without a
 fix, the same sentences with empty fields (quality 0, RMC status V). They go to every client
 connected to ``host:port`` (TCP) and, with ``serial_port`` set, to that serial device (pyserial).
-Fault injection for tests: ``stop_after`` (s, the stream stops) and ``float_after`` (s, the fix
+With ``record_file`` every sentence also goes to that file, after the host's UNIX time
+(``1777622400.050123 $GNGGA,...``), written as sent. Fault injection for tests: ``stop_after`` (s, the stream stops) and ``float_after`` (s, the fix
 quality drops to 5, RTK float); negative = never.
 """
 from __future__ import annotations
@@ -36,6 +37,8 @@ class NMEAServer(Component):
         par("position_std", "m", 0.02, "1-sigma horizontal position error reported in GST (the GPS error model's)"),
         par("serial_port", "", "", "serial device to send on besides TCP (empty: TCP only)"),
         par("baudrate", "1/s", 115200, "serial line speed"),
+        par("record_file", "", "", "record what is sent: one sentence per line after the host's UNIX time "
+            "(empty: no recording)"),
         par("stop_after", "s", -1.0, "fault injection: stop sending after this time"),
         par("float_after", "s", -1.0, "fault injection: report RTK float after this time"),
         out("clients", "1", 0.0, "connected clients"),
@@ -55,6 +58,12 @@ class NMEAServer(Component):
         except ValueError:
             self.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
         self.frame = LocalFrame.of(p)
+        self.record = None
+        if p["record_file"]:
+            try:
+                self.record = open(p["record_file"], "a", buffering=1, encoding="ascii")
+            except OSError as exc:
+                self.require(False, f"cannot record NMEA to {p['record_file']!r}: {exc}")
         self.serial = None
         if p["serial_port"]:
             import serial
@@ -92,7 +101,7 @@ class NMEAServer(Component):
         if 0 <= p["float_after"] <= t and not self.floating:
             self.floating = True
             self.event(t, "fault injection: fix quality drops to RTK float")
-        if not self.stopped and (self.clients or self.serial is not None):
+        if not self.stopped and (self.clients or self.serial is not None or self.record is not None):
             when = self.epoch + datetime.timedelta(seconds=t)
             if u["fix_valid"] > 0.5:
                 lat, lon, h = self.frame.to_geodetic(u["x"], u["y"])
@@ -102,6 +111,11 @@ class NMEAServer(Component):
                 h, quality = 0.0, 0
             data = receiver_sentences(when, lat, lon, h, u["vel_east"], u["vel_north"], quality, talker=p["talker"],
                                       sentences=self.sentence_set, position_std=p["position_std"])
+            if self.record is not None:
+                import time
+
+                stamp = f"{time.time():.6f} "
+                self.record.write("".join(stamp + line + "\n" for line in data.decode("ascii").split("\r\n") if line))
             if self.serial is not None:
                 try:
                     self.serial.write(data)
@@ -118,6 +132,9 @@ class NMEAServer(Component):
         self.y["clients"], self.y["sentences_sent"] = float(len(self.clients)), float(self.sent)
 
     def terminate(self) -> None:
+        if getattr(self, "record", None) is not None:
+            self.record.close()
+            self.record = None
         if getattr(self, "serial", None) is not None:
             self.serial.close()
             self.serial = None

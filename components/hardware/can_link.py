@@ -64,7 +64,42 @@ CAN_PARAMETERS = (
     par("port", "1", 0, "UDP port of the udp_multicast interface (0: its default)"),
     par("bitrate", "1/s", 0, "bus bit rate (0: leave the interface's)"),
     par("dbc", "", "", "DBC file (empty: the project's agrobot_tractor.dbc)"),
+    par("record_file", "", "", "record every frame sent and received: a candump .log, Vector .asc or .blf "
+        "file (empty: no recording)"),
 )
+
+
+class RecordingBus:
+    """A python-can bus that also writes every frame it sends or receives to a log file, in the
+    format its suffix names (python-can's Logger: candump ``.log``, Vector ``.asc``, ``.blf``);
+    each frame is written as it passes, so an interrupted run keeps what it recorded."""
+
+    def __init__(self, bus, path: str) -> None:
+        import can
+
+        self.bus = bus
+        self.log = can.Logger(path)
+
+    def send(self, msg, timeout=None) -> None:
+        import time
+
+        if not msg.timestamp:
+            msg.timestamp = time.time()
+        msg.is_rx = False                        # the log marks it transmitted
+        self.bus.send(msg, timeout)
+        self.log(msg)
+
+    def recv(self, timeout=None):
+        msg = self.bus.recv(timeout)
+        if msg is not None:
+            self.log(msg)
+        return msg
+
+    def shutdown(self) -> None:
+        try:
+            self.log.stop()
+        finally:
+            self.bus.shutdown()
 
 
 def prefixed(parameters, prefix: str):
@@ -85,6 +120,12 @@ def connect(component, send: str, receive: str):
         bus = open_bus(p["interface"], p["channel"], p["port"], p["bitrate"])
     except Exception as exc:                    # noqa: BLE001 - python-can raises many kinds
         component.require(False, f"cannot open CAN {p['interface']}:{p['channel']}: {exc}")
+    if p.get("record_file"):
+        try:
+            bus = RecordingBus(bus, str(p["record_file"]))
+        except (OSError, ValueError) as exc:    # an unwritable path, an unknown suffix
+            bus.shutdown()
+            component.require(False, f"cannot record CAN to {p['record_file']!r}: {exc} (suffix .log, .asc or .blf)")
     return codec, bus
 
 

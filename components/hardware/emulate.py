@@ -13,7 +13,8 @@ from orchestrator.runner import run_study
 from orchestrator.study import Study, StudyError
 
 
-def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None) -> int:
+def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None,
+            record: Path | None = None) -> int:
     if not 0 <= nmea_port <= 65535:
         raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
     if duration is not None and not duration > 0:
@@ -23,6 +24,13 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     values = {f"{server}.port": nmea_port, "study.realtime": True}
     if duration is not None:
         values["study.stop_time"] = float(duration)
+    if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
+        if record.exists() and not record.is_dir():
+            raise StudyError(f"--record {record}: is a file; expected a folder for gps.nmea and can.log")
+        record.mkdir(parents=True, exist_ok=True)
+        values[f"{server}.record_file"] = str(record / "gps.nmea")
+        for link in study.find(role="tractor_link"):
+            values[f"{link}.record_file"] = str(record / "can.log")
     study = study.with_values(values)
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
@@ -49,11 +57,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")
     p.add_argument("--out", type=Path, default=None, help="write the emulated tractor's signals here")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
+    p.add_argument("--record", type=Path, default=None, metavar="DIR",
+                   help="record the buses as a field log: DIR/gps.nmea (host-stamped NMEA) and DIR/can.log (candump)")
     add_set_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration)
+    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration, args.record)
 
 
 def register(registry) -> None:
