@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import datetime
 import socket
+import time
 
 from orchestrator.component import Component, inp, out, par
 
@@ -112,8 +113,6 @@ class NMEAServer(Component):
             data = receiver_sentences(when, lat, lon, h, u["vel_east"], u["vel_north"], quality, talker=p["talker"],
                                       sentences=self.sentence_set, position_std=p["position_std"])
             if self.record is not None:
-                import time
-
                 stamp = f"{time.time():.6f} "
                 self.record.write("".join(stamp + line + "\n" for line in data.decode("ascii").split("\r\n") if line))
             if self.serial is not None:

@@ -10,8 +10,6 @@ their Python counterparts are, so a plant FMU stepped at its period reproduces t
 """
 from __future__ import annotations
 
-import hashlib
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -22,7 +20,7 @@ from orchestrator.build import System
 from orchestrator.component import Component
 from orchestrator.errors import InputError
 
-from .sampled_fmu import C_DIR, SampledModel, build_fmu
+from .sampled_fmu import C_DIR, SampledModel, build_fmu, c_array, c_strings, token_of
 
 
 class ComponentExportError(InputError):
@@ -76,10 +74,6 @@ def _gps_compiled(comp: Component, period: float) -> str:
     return f"#define LAG {int(round(float(comp.p['latency']) / period))}\n#define LATENCY {float(comp.p['latency'])!r}\n"
 
 
-def _c_array(values) -> str:
-    return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
-
-
 def _mpc_compiled(comp: Component, period: float) -> str:
     from components.models.condensed_mpc import CondensedTrackingMPC
 
@@ -90,11 +84,11 @@ def _mpc_compiled(comp: Component, period: float) -> str:
         raise ComponentExportError(f"components.{comp.name}: the exported QP solver handles a control horizon "
                                    f"up to 10 (got {m.Nc}) and a model order up to 8")
     return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(p['model_input'] == 'measured')}\n"
-            f"static const double MPC_H[NC * NC] = {{{_c_array(m.H)}}};\n"
-            f"static const double MPC_G[NC * (NX + 2)] = {{{_c_array(m.G)}}};\n"
-            f"static const double MPC_S[NC * NC] = {{{_c_array(m.S)}}};\n"
-            f"static const double MPC_ADVANCE[2 * NX * (NX + 2)] = {{{_c_array(m._advance)}}};\n"
-            f"static const double MPC_B[NX] = {{{_c_array(m.B)}}};\n")
+            f"static const double MPC_H[NC * NC] = {{{c_array(m.H)}}};\n"
+            f"static const double MPC_G[NC * (NX + 2)] = {{{c_array(m.G)}}};\n"
+            f"static const double MPC_S[NC * NC] = {{{c_array(m.S)}}};\n"
+            f"static const double MPC_ADVANCE[2 * NX * (NX + 2)] = {{{c_array(m._advance)}}};\n"
+            f"static const double MPC_B[NX] = {{{c_array(m.B)}}};\n")
 
 
 def _mpc_dependencies(comp: Component) -> dict[str, list[str]]:
@@ -140,10 +134,6 @@ def exportable(comp: Component) -> bool:
     return type(comp).__name__ in SPECS
 
 
-def _c_strings(names) -> str:
-    return ", ".join(f'"{n}"' for n in names) or '""'
-
-
 def component_model(system: System, name: str) -> SampledModel:
     """The sampled model of the study component ``name`` (its parameters as resolved in the study)."""
     node = system.nodes[name]
@@ -184,17 +174,16 @@ def component_model(system: System, name: str) -> SampledModel:
         "#include <math.h>", "#include <stdlib.h>", "#include <string.h>",
         f"#define MODEL_NPAR {len(parameters)}", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
         f"#define MODEL_PERIOD {period!r}",
-        f"static const double MODEL_PAR_START[MODEL_NPAR + 1] = {{{_c_array([p[1] for p in parameters]) or '0.0'}}};",
-        f"static const char *const MODEL_PAR_NAMES[MODEL_NPAR + 1] = {{{_c_strings(p[0] for p in parameters)}}};",
-        f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{_c_strings(i[0] for i in inputs)}}};",
-        f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{_c_strings(o[0] for o in outputs)}}};",
+        f"static const double MODEL_PAR_START[MODEL_NPAR + 1] = {{{c_array([p[1] for p in parameters]) or '0.0'}}};",
+        f"static const char *const MODEL_PAR_NAMES[MODEL_NPAR + 1] = {{{c_strings(p[0] for p in parameters)}}};",
+        f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{c_strings(i[0] for i in inputs)}}};",
+        f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{c_strings(o[0] for o in outputs)}}};",
         *[f"#define P_{p[0]} {i}" for i, p in enumerate(parameters)],
         *[f"#define IN_{v.name} {i}" for i, v in enumerate(x for x in comp.variables if x.causality == "input")],
         *[f"#define OUT_{x[0]} {i}" for i, x in enumerate(outputs)],
         compiled,
         f'#include "{spec.source}"', ""])
-    digest = hashlib.sha256((prologue + (C_DIR / "components" / spec.source).read_text()).encode()).hexdigest()
-    token = "{" + str(uuid.UUID(digest[:32])) + "}"
+    token = token_of(prologue + (C_DIR / "components" / spec.source).read_text())
     source = prologue.replace("#define MODEL_PERIOD", f'#define MODEL_TOKEN "{token}"\n#define MODEL_PERIOD')
     description = (f"{name} ({type(comp).__name__}) of {Path(str(system.study.path)).name}: {type(comp).__doc__ or ''}"
                    .strip().split("\n")[0] + f"; sampled every {period!r} s")

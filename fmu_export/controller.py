@@ -14,8 +14,6 @@ Fixed by the design (regenerate to change): the MPC model, sample time, horizons
 """
 from __future__ import annotations
 
-import hashlib
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,7 +28,7 @@ from orchestrator.errors import InputError
 from orchestrator.study import Study
 
 from .packaging import PackagingError, check_fmu_target
-from .sampled_fmu import SampledModel, build_fmu
+from .sampled_fmu import SampledModel, build_fmu, c_array, c_strings, token_of
 
 MODEL_IDENTIFIER = "guidance_controller"
 C_DIR = Path(__file__).with_name("c")
@@ -116,19 +114,6 @@ def controller_dependencies(measured_input: bool) -> dict[str, list[str]]:
             "speed_controller_pedal_valve_voltage": pedal + ["speed_controller_pedal_position"]}
 
 
-def _c_array(values) -> str:
-    return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
-
-
-def _c_strings(names) -> str:
-    return ", ".join(f'"{n}"' for n in names)
-
-
-def _guid(source: str) -> str:
-    """A GUID that changes whenever the generated source does."""
-    return "{" + str(uuid.UUID(hashlib.sha256(source.encode()).hexdigest()[:32])) + "}"
-
-
 def generate_c(design: ControllerDesign) -> tuple[str, str]:
     """(the model core's C source, GUID / instantiation token)."""
     template = (C_DIR / "guidance_core.c").read_text()
@@ -140,17 +125,17 @@ def generate_c(design: ControllerDesign) -> tuple[str, str]:
         "STUDY": Path(design.study_path).name, "NX": m.A.shape[0], "NC": m.Nc,
         "NPAR": len(design.parameters), "NIN": len(design.inputs), "NOUT": len(design.outputs),
         "SAMPLE_TIME": repr(float(design.sample_time)),
-        "PAR_NAMES": _c_strings(p[0] for p in design.parameters), "IN_NAMES": _c_strings(i[0] for i in design.inputs),
-        "OUT_NAMES": _c_strings(o[0] for o in design.outputs),
-        "MEASURED_INPUT": int(design.measured_input), "MPC_H": _c_array(m.H), "MPC_G": _c_array(m.G),
-        "MPC_S": _c_array(m.S), "MPC_ADVANCE": _c_array(m._advance), "MPC_B": _c_array(m.B),
-        "PAR_START": _c_array([p[1] for p in design.parameters]),
+        "PAR_NAMES": c_strings(p[0] for p in design.parameters), "IN_NAMES": c_strings(i[0] for i in design.inputs),
+        "OUT_NAMES": c_strings(o[0] for o in design.outputs),
+        "MEASURED_INPUT": int(design.measured_input), "MPC_H": c_array(m.H), "MPC_G": c_array(m.G),
+        "MPC_S": c_array(m.S), "MPC_ADVANCE": c_array(m._advance), "MPC_B": c_array(m.B),
+        "PAR_START": c_array([p[1] for p in design.parameters]),
         "PAR_DEFINES": par_defines, "IO_DEFINES": io_defines,
     }
     source = template
     for key, value in values.items():
         source = source.replace(f"@@{key}@@", str(value))
-    guid = _guid(source.replace("@@GUID@@", ""))
+    guid = token_of(source.replace("@@GUID@@", ""))
     source = source.replace("@@GUID@@", guid)
     if "@@" in source:
         raise ExportError("internal: unreplaced placeholder in the C template")

@@ -7,19 +7,38 @@ The C model core defines ModelState, model_start, model_sample and the MODEL_* c
 """
 from __future__ import annotations
 
+import hashlib
 import shutil
 import tempfile
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from orchestrator.units import base_unit
 
+import numpy as np
+
 from .packaging import package_fmu
 
 C_DIR = Path(__file__).with_name("c")
 VR_TIME, VR_INPUT0, VR_OUTPUT0 = 999, 1000, 2000       # as c/sampled_instance.c numbers them
 WRAPPERS = {2: "fmi2_cs.c", 3: "fmi3_cs.c"}
+
+
+def c_array(values) -> str:
+    """Numbers as the body of a C double array initialiser (repr: every digit kept)."""
+    return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
+
+
+def c_strings(names) -> str:
+    """Names as the body of a C string array initialiser ("" for none: C has no empty arrays)."""
+    return ", ".join(f'"{n}"' for n in names) or '""'
+
+
+def token_of(source: str) -> str:
+    """The GUID / instantiation token of a generated source: it changes whenever the source does."""
+    return "{" + str(uuid.UUID(hashlib.sha256(source.encode()).hexdigest()[:32])) + "}"
 
 
 @dataclass

@@ -15,7 +15,7 @@ import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from orchestrator.build import build_system
+from orchestrator.build import System, build_system
 from orchestrator.errors import InputError
 from orchestrator.ssp import STUDY_ANNOTATION
 from orchestrator.study import Study
@@ -40,9 +40,9 @@ def _unit_xml(unit: str) -> str:
     return f"      <ssc:Unit name={quoteattr(unit)}><ssc:BaseUnit {attrs}/></ssc:Unit>"
 
 
-def system_structure(study: Study, models: dict) -> str:
-    """SystemStructure.ssd of the study whose components are ``models`` (name -> SampledModel)."""
-    system = build_system(study)
+def system_structure(system: System, models: dict) -> str:
+    """SystemStructure.ssd of the built study whose components are ``models`` (name -> SampledModel)."""
+    study = system.study
     s = study.study
     units: set[str] = set()
     elements = []
@@ -131,7 +131,7 @@ def export_ssp(study: Study, out: Path) -> Path:
         raise SSPExportError(f"{study.path}: cannot export as SSP: no FMU form for "
                              + ", ".join(f"{n} ({type(system.nodes[n].component).__name__})" for n in missing))
     models = {name: component_model(system, name) for name in system.nodes}
-    ssd = system_structure(study, models)
+    ssd = system_structure(system, models)
     errors = validate_ssd(ssd)
     if errors:
         raise SSPExportError("internal: the SystemStructure.ssd does not validate: " + "; ".join(errors[:5]))

@@ -33,14 +33,14 @@ import numpy as np
 
 from .component import Component, ComponentError, EndRun, Variable
 from .errors import InputError
-from .units import BaseUnit
+from .units import FMI_BASE, BaseUnit
 
 
 class FMUError(InputError):
     """The file cannot be used as a component (message names file and reason)."""
 
 
-def _text(value="") -> str:
+def _text(value="") -> str:       # (called without an argument: the empty string)
     """A String variable's value as text (fmpy returns bytes)."""
     return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
 
@@ -114,7 +114,15 @@ class _FMIVar:
             if self.shape else []
 
 
-def _unit(variable) -> str:
+def base_units(md) -> dict[str, BaseUnit]:
+    """Unit name -> BaseUnit, from an FMU's UnitDefinitions (units without a BaseUnit left out)."""
+    return {u.name: BaseUnit(tuple(int(getattr(u.baseUnit, k)) for k in FMI_BASE), float(u.baseUnit.factor),
+                             float(u.baseUnit.offset))
+            for u in (md.unitDefinitions or []) if u.baseUnit is not None}
+
+
+def variable_unit(variable) -> str:
+    """A variable's unit: its own, else its declared type's, else "1"."""
     unit = getattr(variable, "unit", None)
     if not unit and getattr(variable, "declaredType", None) is not None:
         unit = getattr(variable.declaredType, "unit", None)
@@ -137,7 +145,7 @@ def _shape(md, v, path: Path) -> tuple[int, ...]:
 
 def _start(fv: _FMIVar, text) -> Any:
     if text is None:
-        zero = {_text: "", bytes: b""}.get(fv.convert) if fv.convert in (_text, bytes) else fv.convert()
+        zero = fv.convert()          # 0.0, 0, False, "" or b''
         return np.full(fv.shape, zero, dtype=object if fv.convert in (_text, bytes) else None) if fv.shape else zero
     if fv.convert is _text:
         return _text(text)
@@ -163,10 +171,8 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
     md = inspect_fmu(path)
     fmi3 = not md.fmiVersion.startswith("2")
     types = _FMI3_TYPES if fmi3 else _FMI2_TYPES
-    bases = {u.name: BaseUnit(tuple(int(getattr(u.baseUnit, k)) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")),
-                              float(u.baseUnit.factor), float(u.baseUnit.offset))
-             for u in (md.unitDefinitions or []) if u.baseUnit is not None}
-    variables, fmi_vars, base_units, ports_of = [], {}, {}, {}
+    bases = base_units(md)
+    variables, fmi_vars, port_units, ports_of = [], {}, {}, {}
     for v in md.modelVariables:
         causality = CAUSALITIES.get(v.causality)
         if causality is None:
@@ -176,7 +182,7 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
         accessor, convert = types[v.type]
         fv = _FMIVar(v.name, v.valueReference, accessor, convert, _shape(md, v, path))
         fmi_vars[v.name] = (causality, fv)
-        unit = _unit(v)
+        unit = variable_unit(v)
         start = _start(fv, v.start)
         names = [v.name] + fv.element_names()
         ports_of[v.name] = names
@@ -185,7 +191,7 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
             variables.append(Variable(element, causality, unit, value.item() if hasattr(value, "item") else value,
                                       f"element of {v.name}"))
         if unit in bases:
-            base_units.update({n: bases[unit] for n in names})
+            port_units.update({n: bases[unit] for n in names})
     inputs = [n for n, (c, _) in fmi_vars.items() if c == "input"]
     every_input = tuple(p for d in inputs for p in ports_of[d])
     # an output ModelStructure does not list (a malformed description) may depend on any input
@@ -198,7 +204,7 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
         for name in ports_of.get(unknown.variable.name, []):
             feedthrough[name] = ports
     attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": True,
-             "fmu_path": path, "model_description": md, "fmi_vars": fmi_vars, "base_units": base_units,
+             "fmu_path": path, "model_description": md, "fmi_vars": fmi_vars, "base_units": port_units,
              "model_exchange": md.coSimulation is None}
     return type(f"FMU_{re.sub(r'[^A-Za-z0-9_]', '_', md.modelName)}", (FMUComponent,), attrs)
 
@@ -250,18 +256,32 @@ class FMUComponent(Component):
                 groups.setdefault(fv.accessor, []).append(fv)
         return list(groups.items())
 
-    def _write(self, what: str, groups, values_of) -> None:
+    def _setters(self, what: str, groups):
+        """Per accessor group: (setter, value references, variables, what the call does), built once."""
         s = self._slave
-        for accessor, fvs in groups:
-            values = []
-            for fv in fvs:
-                value = values_of(fv)
-                flat = np.asarray(value, dtype=object).ravel().tolist() if fv.shape else [value]
-                if len(flat) != fv.size:
-                    raise ComponentError(f"{self.name}: {fv.name}: expected {fv.size} values, got {len(flat)}")
-                values += [fv.convert(x) if fv.convert is not int else int(round(float(x))) for x in flat]
-            setter = getattr(s, f"set{accessor}")
-            self._call(f"{what} ({', '.join(f.name for f in fvs)})", setter, [f.vr for f in fvs], values)
+        return [(getattr(s, f"set{accessor}"), [f.vr for f in fvs], fvs, f"{what} ({', '.join(f.name for f in fvs)})")
+                for accessor, fvs in groups if fvs]
+
+    def _values(self, fvs, values_of) -> list:
+        values = []
+        for fv in fvs:
+            value = values_of(fv)
+            flat = np.asarray(value, dtype=object).ravel().tolist() if fv.shape else [value]
+            if len(flat) != fv.size:
+                raise ComponentError(f"{self.name}: {fv.name}: expected {fv.size} values, got {len(flat)}")
+            values += [fv.convert(x) if fv.convert is not int else int(round(float(x))) for x in flat]
+        return values
+
+    def _write(self, setters, values_of, last: list | None = None) -> None:
+        """Set every group's values; with ``last`` (one slot per group), a group whose values
+        did not change since the last call is not set again."""
+        for i, (setter, refs, fvs, what) in enumerate(setters):
+            values = self._values(fvs, values_of)
+            if last is not None:
+                if last[i] == values:
+                    continue
+                last[i] = values
+            self._call(what, setter, refs, values)
 
     def _input_value(self, fv: _FMIVar):
         u = self.u
@@ -270,7 +290,8 @@ class FMUComponent(Component):
         return np.asarray([u[e] for e in fv.element_names()], dtype=object).reshape(fv.shape)
 
     def _set_inputs(self) -> None:
-        self._write("setting inputs", self._in_groups, self._input_value)
+        """The inputs of the instant: set once whether ``step`` or ``advance`` comes first."""
+        self._write(self._in_setters, self._input_value, self._last_inputs)
 
     def _read_outputs(self) -> None:
         s, y = self._slave, self.y
@@ -304,8 +325,10 @@ class FMUComponent(Component):
         starts = {v.name: v.start for v in self.variables}
         changed = [(acc, [fv for fv in fvs if not _equal(self.p[fv.name], starts[fv.name])])
                    for acc, fvs in self._groups("parameter")]
-        self._write("setting parameters", [(a, f) for a, f in changed if f], lambda fv: self.p[fv.name])
-        self._in_groups, self._out_groups = self._groups("input"), self._groups("output")
+        self._write(self._setters("setting parameters", changed), lambda fv: self.p[fv.name])
+        self._in_setters = self._setters("setting inputs", self._groups("input"))
+        self._last_inputs = [None] * len(self._in_setters)
+        self._out_groups = self._groups("output")
         if self._fmi3:
             self._call("enterInitializationMode", lambda: s.enterInitializationMode(startTime=t0))
         else:

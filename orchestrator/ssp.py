@@ -58,16 +58,13 @@ def _annotation(element, tag: str):
 
 def _fmu_facts(fmu: Path) -> tuple[float | None, dict[str, tuple[str, Any]]]:
     """(default step size, variable name -> (unit, BaseUnit or None)) of an FMU."""
-    from .fmu import inspect_fmu
-    from .units import BaseUnit
+    from .fmu import base_units, inspect_fmu, variable_unit
 
     md = inspect_fmu(fmu)
-    bases = {u.name: BaseUnit(tuple(int(getattr(u.baseUnit, k)) for k in ("kg", "m", "s", "A", "K", "mol", "cd", "rad")),
-                              float(u.baseUnit.factor), float(u.baseUnit.offset))
-             for u in (md.unitDefinitions or []) if u.baseUnit is not None}
+    bases = base_units(md)
     units = {}
     for v in md.modelVariables:
-        unit = v.unit or (v.declaredType.unit if v.declaredType is not None else None) or "1"
+        unit = variable_unit(v)
         units[v.name] = (unit, bases.get(unit))
     step = md.defaultExperiment.stepSize if md.defaultExperiment is not None else None
     return (float(step) if step else None), units

@@ -158,6 +158,8 @@ static SIStatus si_get(SampledInstance *s, const unsigned vr[], size_t n, double
 }
 
 static SIStatus si_set(SampledInstance *s, const unsigned vr[], size_t n, const double v[]) {
+    if (n && !si_check_mode(s, "setting a variable", IN_MODES(MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEP)))
+        return SI_ERROR;
     for (size_t i = 0; i < n; i++) {
         unsigned r = vr[i];
         const char *what;
@@ -175,8 +177,6 @@ static SIStatus si_set(SampledInstance *s, const unsigned vr[], size_t n, const 
             si_log(s, "no variable has value reference %u", r);
             return SI_ERROR;
         }
-        if (!si_check_mode(s, "setting a variable", IN_MODES(MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEP)))
-            return SI_ERROR;
         if (!isfinite(v[i])) {
             si_log(s, "%s = %g refused: the value must be finite", what, v[i]);
             return SI_ERROR;
