@@ -206,5 +206,7 @@ def test_gpsd_reads_the_emulated_receiver_with_time_speed_course_and_error():
     with_error = [m for m in good if "epx" in m and "epy" in m]
     assert len(with_error) >= 3, good[-3:]
     assert all(0.02 <= m["epx"] <= 0.1 and 0.02 <= m["epy"] <= 0.1 for m in with_error), with_error[-1]
+    print(f"gpsd TPV: speed {last['speed']} m/s, track {last['track']} deg, epx {with_error[-1]['epx']} m, "
+          f"epy {with_error[-1]['epy']} m, eph {last.get('eph')} m")
     gst = [m for m in tpv if m["class"] == "GST"]
     assert gst and gst[-1]["lat"] == pytest.approx(0.02) and gst[-1]["lon"] == pytest.approx(0.02)
