@@ -5,4 +5,9 @@ The package registers itself with the orchestrator (pyproject.toml, entry point 
 
 def register(registry) -> None:
     """Orchestrator plugin: this package's component types."""
+    from .hardware.record import record_study
+
     registry.add_component_package("components")
+    registry.add_run_option("--record", "record the tractor's buses into DIR as a field logger would: gps.nmea "
+                            "(host-stamped NMEA) and can.log (candump); a simulated tractor needs no real-time wait",
+                            "DIR", record_study)

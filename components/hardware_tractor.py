@@ -31,11 +31,14 @@ TRACTOR_PORTS = (
     out("x_cg", "m", 0.0, "truth: CG east position (NaN on hardware)"),
     out("y_cg", "m", 0.0, "truth: CG north position (NaN on hardware)"),
     out("heading", "rad", 0.0, "truth: heading (NaN on hardware)"),
+    out("machine_ready", "1", 1.0, "the steering system reports ready (ISO 11783-7; the agrobot messages: 1)"),
+    out("machine_lockout", "1", 0.0, "the operator's mechanical lockout is active (ISO 11783-7)"),
 )
 
 GPS_OUTPUTS = {"gps_x": "x", "gps_y": "y", "gps_vel_east": "vel_east", "gps_vel_north": "vel_north",
                "fix_valid": "fix_valid", "fix_age": "fix_age", "fix_quality": "fix_quality"}
-CAN_OUTPUTS = {"steer_angle_measured": "steer_angle_measured", "yaw_rate": "yaw_rate", "speed_measured": "speed_measured"}
+CAN_OUTPUTS = {"steer_angle_measured": "steer_angle_measured", "yaw_rate": "yaw_rate", "speed_measured": "speed_measured",
+               "machine_ready": "machine_ready", "machine_lockout": "machine_lockout"}
 
 
 class HardwareTractor(Component):

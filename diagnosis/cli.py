@@ -7,7 +7,8 @@ from pathlib import Path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("log", type=Path, help="measured log (.csv/.parquet): t, delta_cmd, delta, v, yaw_rate, x, y")
+    p.add_argument("log", type=Path, help="measured log (.csv/.parquet): t, delta_cmd, delta, v, yaw_rate, x, y; "
+                   "or a raw recording: a folder of *.nmea files and CAN logs (*.log candump, *.asc, *.blf)")
     p.add_argument("--study", type=Path, default=None, help="baseline study (default: studies/figure8.toml)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
@@ -15,6 +16,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resample", action="store_true",
                    help="interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    from measurements.cli import add_recording_options
+
+    add_recording_options(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -26,8 +30,13 @@ def run(args: argparse.Namespace) -> int:
 
     if not 0.2 <= args.fit_fraction <= 0.8:
         raise StudyError("--fit-fraction must be in [0.2, 0.8]")
+    from measurements.cli import recording_options
+    from measurements.recording import describe
+
     result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                      resample=args.resample)
+                      resample=args.resample, recording=recording_options(args))
+    if result.get("recording"):
+        print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2

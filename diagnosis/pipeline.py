@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from measurements import LogError, read_log
+from measurements import LogError, load_log
 from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 
@@ -143,7 +143,8 @@ def _unexplained(checks: dict) -> dict | None:
 
 
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
-             fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False) -> dict:
+             fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
+             recording=None) -> dict:
     """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
@@ -153,7 +154,9 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     try:
         study = load_study(study_path)
         baseline = baseline_from_study(study)
-        frame = read_log(log_path, resample_jitter=resample)
+        frame, imported = load_log(log_path, resample_jitter=resample, recording=recording)
+        if imported is not None:
+            result["recording"] = imported
         replay = Replay(frame, baseline, fit_fraction=fit_fraction)
     except (LogError, CannotDecide) as exc:
         result["reason"] = str(exc)

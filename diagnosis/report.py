@@ -74,6 +74,11 @@ def markdown(result: dict, plots: list[str]) -> str:
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
         return "\n".join(lines)
+    if result.get("recording"):
+        from measurements.recording import describe
+
+        lines += ["The log was imported from a raw recording (details in diagnosis.json, `recording`):", "", "```",
+                  describe(result["recording"]), "```", ""]
     for e in result["effects"]:
         lines += [f"- **{e['id']}**: {e['summary']}"]
         if e["id"] != "unexplained":

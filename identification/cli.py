@@ -8,7 +8,8 @@ from pathlib import Path
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from orchestrator.cli import add_set_option
 
-    p.add_argument("source", type=Path, help="study file (.toml/.yaml) or log (.csv/.parquet)")
+    p.add_argument("source", type=Path, help="study file (.toml/.yaml), log (.csv/.parquet), or a raw recording "
+                   "(a folder of *.nmea files and CAN logs)")
     p.add_argument("--out", type=Path, required=True, help="output folder")
     add_set_option(p, "study only: override a parameter (or study.FIELD=VALUE); repeatable")
     p.add_argument("--period", type=float, help="log: multisine period [s] (detected if not given)")
@@ -19,6 +20,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    from measurements.cli import add_recording_options
+
+    add_recording_options(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,9 +40,15 @@ def run(args: argparse.Namespace) -> int:
         if args.source.suffix in (".toml", ".yaml", ".yml"):
             report = identify_study(Study.load(args.source, args.set), args.out, plots=not args.no_plots)
         else:
+            from measurements.cli import recording_options
+            from measurements.recording import describe
+
             report = identify_log(args.source, args.out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
-                                  plots=not args.no_plots, resample=args.resample)
+                                  plots=not args.no_plots, resample=args.resample,
+                                  recording=recording_options(args))
+            if "recording" in report:
+                print(describe(report["recording"]))
     except ValueError as exc:      # e.g. an unknown model structure
         if isinstance(exc, InputError):       # a LogError is both
             raise

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from measurements import LogError, read_log as read_measured_log
+from measurements import LogError, load_log
 from orchestrator.runner import simulate
 from orchestrator.study import Study, StudyError
 from orchestrator.units import UnitError, to_si
@@ -150,10 +150,11 @@ def simulate_experiment(study: Study, cfg: IdentificationConfig, speed: float,
 # ---------------------------------------------------------------------------------------------
 # measured logs
 
-def read_log(path: Path, resample: bool = False) -> pd.DataFrame:
-    """A canonical log with the columns identification needs (measurements.read_log checks it;
-    ``resample``: put a jittered clock on an even grid)."""
-    return read_measured_log(path, NEEDED, resample_jitter=resample)
+def read_log(path: Path, resample: bool = False, recording=None) -> tuple[pd.DataFrame, dict | None]:
+    """(log with the columns identification needs, import report): a table or a raw field
+    recording (measurements.load_log checks it; ``resample``: put a jittered clock on an even
+    grid; ``recording``: ImportOptions for a raw recording)."""
+    return load_log(path, NEEDED, resample_jitter=resample, recording=recording)
 
 
 def hold_factor(r: np.ndarray, tol: float) -> float:

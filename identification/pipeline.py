@@ -161,13 +161,15 @@ def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> di
 
 def identify_log(path: Path, out_dir: Path | None, period: float | None = None, speed: float | None = None,
                  band=None, models=None, delay: bool = False, plots: bool = True,
-                 resample: bool = False) -> dict[str, Any]:
-    frame = read_log(path, resample)
+                 resample: bool = False, recording=None) -> dict[str, Any]:
+    frame, imported = read_log(path, resample, recording)
     exp = experiment_from_log(frame, str(path), period, speed, band)
     models = models or ["second_order", "bicycle", "rlf", "rlfr"]
     analyses = {exp.speed: analyse(exp, models, delay, TractorParameters())}
     # time-domain check on the same log (a measured log rarely has a separate validation record)
     report = build_report(analyses, exp.speed, {"log": exp}, TractorParameters(), exp.notes, f"log {path}")
+    if imported is not None:
+        report["recording"] = imported
     if out_dir is not None:
         write_outputs(report, analyses, out_dir, plots)
     return report

@@ -48,6 +48,13 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    return check_log(frame, str(path), required, resample_jitter)
+
+
+def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
+              resample_jitter: bool = False) -> pd.DataFrame:
+    """The checks of read_log on a table already in memory (an imported recording); ``path``
+    names it in the messages."""
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise LogError(f"{path}: missing columns {missing}; a log needs "
@@ -91,7 +98,7 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g}, more than {bound} {unit}: it looks like "
                                f"degrees{'/s' if unit == 'rad/s' else ''}; the log must hold {unit} "
                                f"(multiply by pi/180 = {math.pi / 180:.6f})")
-    check_units(frame, str(path))
+    check_units(frame, path)
     return frame
 
 
@@ -173,3 +180,19 @@ def resample(frame: pd.DataFrame, step: float | None = None) -> pd.DataFrame:
         if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
             columns[c] = np.interp(grid, t, frame[c].to_numpy(dtype=float))
     return pd.DataFrame(columns)
+
+
+def load_log(source: str | Path, required: tuple[str, ...] = CANONICAL, resample_jitter: bool = False,
+             recording=None) -> tuple[pd.DataFrame, dict | None]:
+    """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
+    (a folder of NMEA files and CAN logs, or one such file) through
+    measurements.recording.import_recording with ``recording`` (ImportOptions), then the same
+    checks. The report is None for a table."""
+    from .recording import import_recording, is_recording
+
+    source = Path(source)
+    if not is_recording(source):
+        return read_log(source, required, resample_jitter), None
+    frame, report = import_recording(source, recording)
+    where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
+    return check_log(frame, where, required, resample_jitter), report

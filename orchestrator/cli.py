@@ -28,6 +28,8 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    for option in registry().run_options:
+        p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -36,6 +38,10 @@ def _run(args: argparse.Namespace) -> int:
     from .study import Study
 
     study = Study.load(args.study, args.set)
+    for option in registry().run_options:
+        value = getattr(args, option.flag.lstrip("-").replace("-", "_"), None)
+        if value is not None:
+            study = option.apply(study, value)
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:

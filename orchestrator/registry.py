@@ -29,10 +29,21 @@ class Command:
 
 
 @dataclass
+class RunOption:
+    """An option a plugin adds to ``run``: ``apply(study, value)`` returns the study to run."""
+
+    flag: str
+    help: str
+    metavar: str
+    apply: Callable
+
+
+@dataclass
 class Registry:
     component_packages: list[str] = field(default_factory=list)
     commands: dict[str, Command] = field(default_factory=dict)
     sections: dict[str, str] = field(default_factory=dict)        # study table -> what reads it
+    run_options: list[RunOption] = field(default_factory=list)
     loaded: list[str] = field(default_factory=list)
 
     def add_component_package(self, package: str) -> None:
@@ -41,6 +52,10 @@ class Registry:
 
     def add_command(self, name: str, help: str, add_arguments, run) -> None:
         self.commands[name] = Command(name, help, add_arguments, run)
+
+    def add_run_option(self, flag: str, help: str, metavar: str, apply) -> None:
+        """``run FLAG VALUE``: the study is replaced by ``apply(study, value)`` before it runs."""
+        self.run_options.append(RunOption(flag, help, metavar, apply))
 
     def add_section(self, name: str, reader: str) -> None:
         self.sections[name] = reader

@@ -63,7 +63,11 @@ CAN_PARAMETERS = (
     par("channel", "", "agrobot", "python-can channel"),
     par("port", "1", 0, "UDP port of the udp_multicast interface (0: its default)"),
     par("bitrate", "1/s", 0, "bus bit rate (0: leave the interface's)"),
-    par("dbc", "", "", "DBC file (empty: the project's agrobot_tractor.dbc)"),
+    par("protocol", "", "agrobot", "message set: 'agrobot' (the project's frames) or 'isobus' (ISO 11783-7 "
+        "guidance, J1939 29-bit ids)"),
+    par("dbc", "", "", "DBC file (empty: the protocol's own, agrobot_tractor.dbc or isobus_guidance.dbc)"),
+    par("wheelbase", "m", 1.4, "isobus: curvature = tan(wheel angle) / wheelbase"),
+    par("source_address", "1", -1, "isobus: J1939 source address of what this side sends (-1: the DBC's)"),
     par("record_file", "", "", "record every frame sent and received: a candump .log, Vector .asc or .blf "
         "file (empty: no recording)"),
 )
@@ -107,15 +111,17 @@ def prefixed(parameters, prefix: str):
     return tuple(replace(v, name=prefix + v.name) for v in parameters)
 
 
-def connect(component, send: str, receive: str):
-    """(codec, bus) for a component declaring CAN_PARAMETERS; failures become the component's
-    error naming the DBC or the bus."""
+def connect(component, side: str):
+    """(messages, bus) for a component declaring CAN_PARAMETERS (``side``: 'guidance' or
+    'tractor'); failures become the component's error naming the DBC, protocol or bus."""
+    from .guidance_messages import messages_for
+
     p = component.p
-    codec = bus = None
+    messages = bus = None
     try:
-        codec = FrameCodec(load_dbc(p["dbc"]), send, receive)
-    except (OSError, KeyError) as exc:
-        component.require(False, f"DBC {p['dbc'] or DEFAULT_DBC.name}: {exc}")
+        messages = messages_for(p["protocol"], p["dbc"], side, p["wheelbase"], int(p["source_address"]))
+    except (OSError, KeyError, ValueError) as exc:
+        component.require(False, f"CAN messages (protocol {p['protocol']!r}, DBC {p['dbc'] or 'default'}): {exc}")
     try:
         bus = open_bus(p["interface"], p["channel"], p["port"], p["bitrate"])
     except Exception as exc:                    # noqa: BLE001 - python-can raises many kinds
@@ -126,23 +132,24 @@ def connect(component, send: str, receive: str):
         except (OSError, ValueError) as exc:    # an unwritable path, an unknown suffix
             bus.shutdown()
             component.require(False, f"cannot record CAN to {p['record_file']!r}: {exc} (suffix .log, .asc or .blf)")
-    return codec, bus
+    return messages, bus
 
 
-def drain(bus, codec):
-    """Every frame waiting on the bus, decoded when it is ``codec``'s incoming message."""
+def drain(bus, read):
+    """Every frame waiting on the bus that ``read`` (a message set's reader) decodes."""
     frames = []
     while True:
         msg = bus.recv(timeout=0.0)
         if msg is None:
             return frames
-        frame = codec.decode(msg)
+        frame = read(msg)
         if frame is not None:
             frames.append(frame)
 
 
-def send(bus, codec, **signals) -> None:
+def send(bus, frames, extended: bool) -> None:
+    """Send (identifier, data) pairs."""
     import can
 
-    fid, data = codec.encode(**signals)
-    bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=False))
+    for fid, data in frames:
+        bus.send(can.Message(arbitration_id=fid, data=data, is_extended_id=extended))

@@ -24,14 +24,11 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     values = {f"{server}.port": nmea_port, "study.realtime": True}
     if duration is not None:
         values["study.stop_time"] = float(duration)
-    if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
-        if record.exists() and not record.is_dir():
-            raise StudyError(f"--record {record}: is a file; expected a folder for gps.nmea and can.log")
-        record.mkdir(parents=True, exist_ok=True)
-        values[f"{server}.record_file"] = str(record / "gps.nmea")
-        for link in study.find(role="tractor_link"):
-            values[f"{link}.record_file"] = str(record / "can.log")
     study = study.with_values(values)
+    if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
+        from .record import _folder, record_adapters
+
+        study = record_adapters(study, _folder(record))
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)

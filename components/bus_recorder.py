@@ -1,0 +1,137 @@
+"""What a data logger on a simulated tractor would record, without real time (``run --record``):
+the receiver's NMEA (``gps.nmea``: each sentence after a host timestamp) and the CAN bus
+(``can.log``: candump, or .asc/.blf by the name's suffix) carrying the guidance's set-points and
+the tractor's feedback in the study's message set (the project's frames, or ISO 11783-7).
+
+Clocks, so that an import can be tested against known truth: the receiver's UTC is ``epoch + t``;
+the host clock reads epoch + t (1 + drift) + offset; an NMEA sentence is stamped
+``nmea_latency`` (plus up to ``nmea_latency_jitter``) after its epoch, a CAN frame when it is sent. With ``reference_log`` set, the
+same signals are also written as the measured log (t, delta_cmd, delta, v, yaw_rate, x, y): the
+simulation's own log, to compare an imported recording against.
+"""
+from __future__ import annotations
+
+import datetime
+from pathlib import Path
+
+from orchestrator.component import Component, inp, par
+
+from .hardware.guidance_messages import PROTOCOLS, messages_for
+from .hardware.nmea import DATUM_PARAMETERS, DEFAULT_EPOCH, RTK_FIXED, SENTENCES, TALKERS, LocalFrame, parse_epoch, \
+    receiver_sentences
+
+
+class BusRecorder(Component):
+    sampled = True
+    roles = ("bus_recorder",)
+    variables = (
+        inp("x", "m", 0.0, "GPS antenna east"),
+        inp("y", "m", 0.0, "GPS antenna north"),
+        inp("vel_east", "m/s", 0.0, "GPS east velocity"),
+        inp("vel_north", "m/s", 0.0, "GPS north velocity"),
+        inp("fix_valid", "1", 1.0, "1 when a fix is available"),
+        inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point sent to the tractor"),
+        inp("speed_cmd", "m/s", 0.0, "speed set-point sent to the tractor"),
+        inp("safe_state", "1", 0.0, "1 while the guidance holds the tractor safe"),
+        inp("steer_angle_measured", "rad", 0.0, "wheel angle the tractor reports"),
+        inp("yaw_rate", "rad/s", 0.0, "yaw rate the tractor reports"),
+        inp("speed", "m/s", 0.0, "speed the tractor reports"),
+        inp("machine_ready", "1", 1.0, "steering system ready"),
+        inp("machine_lockout", "1", 0.0, "operator lockout active"),
+        par("directory", "", "", "folder for the recording (created)"),
+        par("nmea_file", "", "gps.nmea", "NMEA file name in the folder"),
+        par("can_file", "", "can.log", "CAN log name in the folder (.log candump, .asc, .blf)"),
+        par("reference_log", "", "", "also write the simulation's own measured log here (CSV; empty: no)"),
+        par("protocol", "", "agrobot", f"CAN message set: {' or '.join(PROTOCOLS)}"),
+        par("dbc", "", "", "DBC (empty: the protocol's own)"),
+        par("wheelbase", "m", 1.4, "isobus: curvature = tan(wheel angle) / wheelbase"),
+        *DATUM_PARAMETERS,
+        par("epoch", "", DEFAULT_EPOCH, "UTC of t = 0 (ISO 8601)"),
+        par("talker", "", "GN", "NMEA talker"),
+        par("sentences", "", ",".join(SENTENCES), "sentences per epoch"),
+        par("position_std", "m", 0.02, "1-sigma position error reported in GST"),
+        par("host_clock_offset", "s", 0.0, "host clock minus UTC at t = 0"),
+        par("host_clock_drift", "1", 0.0, "host clock rate error (1e-6 = 1 ppm)"),
+        par("nmea_latency", "s", 0.0, "a sentence reaches the host this long after its epoch"),
+        par("nmea_latency_jitter", "s", 0.0, "plus a uniform random 0 to this (the component's random stream)"),
+    )
+    feedthrough = {}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        import can
+
+        p = self.p
+        self.require(bool(p["directory"]), "directory: expected the folder to record into")
+        self.require(p["talker"] in TALKERS, f"talker {p['talker']!r}: expected one of {', '.join(sorted(TALKERS))}")
+        self.sentences = tuple(x.strip().upper() for x in str(p["sentences"]).split(",") if x.strip())
+        self.require(self.sentences and all(x in SENTENCES for x in self.sentences),
+                     f"sentences {p['sentences']!r}: expected a comma-separated list of {', '.join(SENTENCES)}")
+        try:
+            self.epoch = parse_epoch(p["epoch"])
+        except ValueError:
+            self.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
+        self.require(p["nmea_latency"] >= 0, f"nmea_latency {p['nmea_latency']}: expected >= 0 s")
+        try:
+            self.guidance = messages_for(p["protocol"], p["dbc"], "guidance", p["wheelbase"])
+            self.tractor = messages_for(p["protocol"], p["dbc"], "tractor", p["wheelbase"])
+        except (OSError, KeyError, ValueError) as exc:
+            self.require(False, f"CAN messages (protocol {p['protocol']!r}): {exc}")
+        folder = Path(p["directory"])
+        self.nmea = self.can = self.reference = None
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            self.nmea = open(folder / p["nmea_file"], "w", buffering=1 << 16, encoding="ascii")
+            self.can = can.Logger(str(folder / p["can_file"]))
+            if p["reference_log"]:
+                self.reference = open(p["reference_log"], "w", encoding="ascii")
+                self.reference.write("t,delta_cmd,delta,v,yaw_rate,x,y\n")
+        except (OSError, ValueError) as exc:
+            self.terminate()
+            self.require(False, f"cannot record into {folder}: {exc}")
+        self.frame = LocalFrame.of(p)
+        self.epoch_posix = self.epoch.timestamp()
+
+    def host_time(self, t: float) -> float:
+        p = self.p
+        return self.epoch_posix + t * (1.0 + p["host_clock_drift"]) + p["host_clock_offset"]
+
+    def step(self, t: float, dt: float) -> None:
+        import can
+
+        u, p = self.u, self.p
+        when = self.epoch + datetime.timedelta(seconds=t)
+        if u["fix_valid"] > 0.5:
+            lat, lon, h = self.frame.to_geodetic(u["x"], u["y"])
+            quality = RTK_FIXED
+        else:
+            lat = lon = None
+            h, quality = 0.0, 0
+        data = receiver_sentences(when, lat, lon, h, u["vel_east"], u["vel_north"], quality, talker=p["talker"],
+                                  sentences=self.sentences, position_std=p["position_std"])
+        late = p["nmea_latency"] + (p["nmea_latency_jitter"] * self.rng.random() if p["nmea_latency_jitter"] > 0 else 0.0)
+        stamp = f"{self.host_time(t) + late:.6f} "
+        self.nmea.write("".join(stamp + line + "\n" for line in data.decode("ascii").split("\r\n") if line))
+        host = self.host_time(t)
+        frames = [(m, True) for m in self.guidance.command(u["steer_angle_cmd"], u["speed_cmd"], u["safe_state"] <= 0.5)]
+        frames += [(m, False) for m in self.tractor.feedback(u["steer_angle_measured"], u["yaw_rate"], u["speed"],
+                                                             ready=u["machine_ready"] > 0.5,
+                                                             lockout=u["machine_lockout"] > 0.5, dt=dt)]
+        for i, ((fid, payload), _sent_by_guidance) in enumerate(frames):
+            self.can(can.Message(timestamp=host + 1e-4 * i, arbitration_id=fid, data=payload,
+                                 is_extended_id=self.guidance.extended, channel="can0"))
+        if self.reference is not None:
+            self.reference.write(f"{t:.6f},{u['steer_angle_cmd']:.9g},{u['steer_angle_measured']:.9g},{u['speed']:.9g},"
+                                 f"{u['yaw_rate']:.9g},{u['x']:.9g},{u['y']:.9g}\n")
+
+    def terminate(self) -> None:
+        for name in ("nmea", "reference"):
+            f = getattr(self, name, None)
+            if f is not None:
+                f.close()
+                setattr(self, name, None)
+        if getattr(self, "can", None) is not None:
+            self.can.stop()
+            self.can = None
+
+
+COMPONENT = BusRecorder

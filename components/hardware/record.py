@@ -1,0 +1,69 @@
+"""``--record DIR`` (``run`` and ``emulate``): record a study's tractor buses as a field logger
+would, as raw NMEA (host-stamped) and a candump CAN log.
+
+- A study serving an emulated tractor (an ``nmea_server`` or a ``tractor_link``) records what its
+  adapters send and receive (their ``record_file``), in real time.
+- A study with a simulated tractor (the component of role ``tractor``) gets a ``bus_recorder``
+  wired to the tractor's outputs and to what feeds its set-point inputs: the recording takes no
+  real-time wait. DIR also receives ``simulation_log.csv``, the same signals as the measured log.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from orchestrator.study import StudyError
+
+RECORDER = "bus_recorder"
+FIELD_DATUM = {"datum_latitude": "50.8637 deg", "datum_longitude": "4.6782 deg", "datum_height": 60.0}   # the paper's field
+# recorder input <- tractor output
+FROM_TRACTOR = {"x": "gps_x", "y": "gps_y", "vel_east": "gps_vel_east", "vel_north": "gps_vel_north",
+                "fix_valid": "fix_valid", "steer_angle_measured": "steer_angle_measured", "yaw_rate": "yaw_rate",
+                "speed": "speed_measured", "machine_ready": "machine_ready", "machine_lockout": "machine_lockout"}
+# recorder input <- the source of this tractor input
+TO_TRACTOR = {"steer_angle_cmd": "steer_angle_cmd", "speed_cmd": "speed_cmd", "safe_state": "safe_state"}
+
+
+def _folder(value) -> Path:
+    folder = Path(value)
+    if folder.exists() and not folder.is_dir():
+        raise StudyError(f"--record {folder}: is a file; expected a folder for gps.nmea and can.log")
+    return folder
+
+
+def record_adapters(study, folder: Path):
+    """The emulator's adapters record into ``folder`` (None when the study has none)."""
+    servers, links = study.find(role="nmea_server"), study.find(role="tractor_link")
+    if not servers and not links:
+        return None
+    folder.mkdir(parents=True, exist_ok=True)
+    values = {f"{s}.record_file": str(folder / "gps.nmea") for s in servers}
+    values.update({f"{link}.record_file": str(folder / "can.log") for link in links})
+    return study.with_values(values)
+
+
+def record_study(study, value):
+    """The study with its buses recorded into the folder ``value``."""
+    folder = _folder(value)
+    adapters = record_adapters(study, folder)
+    if adapters is not None:
+        return adapters
+    tractor = study.one(role="tractor", purpose="--record")
+    from ..hardware_tractor import HardwareTractor
+
+    cls = study.component_class(tractor)
+    if issubclass(cls, HardwareTractor):
+        raise StudyError(f"{study.where}: --record: {tractor} is a hardware tractor; record on its buses with "
+                         f"candump and the receiver's logger, or record the emulator (emulate --record)")
+    outputs = {v.name for v in cls.variables if v.causality == "output"}
+    add = [f"{tractor}.{o} -> {RECORDER}.{i}" for i, o in FROM_TRACTOR.items() if o in outputs]
+    for conn in study.connections:
+        if conn.target == tractor and conn.input in TO_TRACTOR.values():
+            i = next(k for k, v in TO_TRACTOR.items() if v == conn.input)
+            add.append(f"{conn.source}.{conn.output} -> {RECORDER}.{i}")
+    if RECORDER in study.components:
+        raise StudyError(f"{study.where}: --record: the study already has a component named {RECORDER!r}")
+    folder.mkdir(parents=True, exist_ok=True)
+    step = study.components[tractor].step if tractor in study.components else None
+    params = {"directory": str(folder), "reference_log": str(folder / "simulation_log.csv"), **FIELD_DATUM}
+    return study.with_component(RECORDER, type=RECORDER, step=max(0.05, step or 0.05), parameters=params) \
+        .with_connections(add=add)

@@ -1,0 +1,91 @@
+"""``convert``: a raw field recording (NMEA files and CAN logs) to the measured log (CSV or
+Parquet), with its import report beside it; and the recording options ``identify`` and
+``diagnose`` share."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """Options for reading a raw recording (ignored for a CSV/Parquet log)."""
+    g = p.add_argument_group("raw recordings (a folder of *.nmea files and CAN logs, or one such file)")
+    g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (default: the project's "
+                   "agrobot_tractor.dbc; components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
+    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=[-]Message.Signal",
+                   help="take a log column from this CAN signal (a leading '-' flips its sign); repeatable")
+    g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle (default 1.4, the paper tractor)")
+    g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
+    g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
+    g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
+                   help="use this span, s after the recording's first fix, instead of a run")
+
+
+def recording_options(args: argparse.Namespace):
+    """ImportOptions from the parsed options; a LogError names the bad one."""
+    from .log import LogError
+    from .raw_can import parse_source
+    from .recording import ImportOptions
+
+    if args.wheelbase is not None and not 0.5 <= args.wheelbase <= 10.0:
+        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.5 to 10")
+    if args.run is not None and args.run < 1:
+        raise LogError(f"--run {args.run}: runs are numbered from 1")
+    if args.time_range is not None and not 0 <= args.time_range[0] < args.time_range[1]:
+        raise LogError(f"--time-range {args.time_range[0]:g} {args.time_range[1]:g}: expected 0 <= START < END (s)")
+    if args.run is not None and args.time_range is not None:
+        raise LogError("--run and --time-range: give one of them")
+    if args.dbc is not None and not args.dbc.is_file():
+        raise LogError(f"--dbc {args.dbc}: no such file")
+    options = ImportOptions(dbc=args.dbc, signals=[parse_source(s) for s in args.signal], rate=args.rate,
+                            run=args.run, time_range=tuple(args.time_range) if args.time_range else None)
+    if args.wheelbase is not None:
+        options.wheelbase = args.wheelbase
+    return options
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", type=Path, help="a folder of *.nmea files and CAN logs (*.log candump, *.asc, *.blf, "
+                   "*.trc), or one such file")
+    p.add_argument("--out", type=Path, required=True, help="the log to write (.csv or .parquet); the import report "
+                   "goes beside it as <name>.import.json")
+    p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
+    add_recording_options(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
+    from orchestrator.results import atomic_write
+
+    from .log import LogError, check_log
+    from .recording import describe, import_recording
+
+    if args.out.suffix not in (".csv", ".parquet"):
+        raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
+    options = recording_options(args)
+    frame, report = import_recording(args.source, options)
+    jobs = [(args.out, frame, report)]
+    if args.all_runs:
+        if options.run is not None or options.time_range is not None:
+            raise LogError("--all-runs: not with --run or --time-range")
+        jobs = []
+        for r in report["runs"]:
+            f, rep = import_recording(args.source, replace(options, run=r["run"]))
+            jobs.append((args.out.with_name(f"{args.out.stem}_run{r['run']:02d}{args.out.suffix}"), f, rep))
+    for path, f, rep in jobs:
+        check_log(f, f"{args.source} ({rep['used']['how']})")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
+                     else (lambda p, f=f: f.to_csv(p, index=False, float_format="%.9g")))
+        atomic_write(path.with_name(path.stem + ".import.json"),
+                     lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
+        print(describe(rep))
+        print(f"written: {path} ({len(f)} rows) and {path.with_name(path.stem + '.import.json').name}", file=sys.stdout)
+    return 0
+
+
+def register(registry) -> None:
+    registry.add_command("convert", "a raw field recording (NMEA files and CAN logs) as a measured log", add_arguments, run)

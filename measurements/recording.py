@@ -1,0 +1,414 @@
+"""A raw field recording (NMEA files and CAN logs) as one measured log, and a report of how.
+
+Time base: the receiver's UTC (a fix is valid at its epoch's time). Clocks:
+
+- NMEA host stamps: host = U0 + a + b (utc - U0), fitted as the lower envelope of the points (a
+  linear programme: every stamp is at or after the line, the sum of distances least), because
+  a sentence arrives after its epoch, never before. Drift is b - 1; the latency of each sentence
+  beyond the envelope is named (median, 95 %, max). With |a| < ``SYNCED`` the host clock is taken
+  to keep UTC and a is the least NMEA latency; otherwise a is mostly the clock's own offset, and
+  the least latency cannot be told from it (taken as 0, said so).
+- CAN timestamps on the same host clock (their span overlaps the NMEA host stamps): mapped by the
+  same line. Otherwise (a logger with its own clock, or NMEA without host stamps) the CAN clock
+  is aligned by its content: the CAN speed against the GNSS speed, cross-correlated in windows
+  (offset and drift from a line through the windows' lags); a GPS latency cannot be told from a
+  clock offset then, and the report says so.
+
+Gaps (a stream silent for more than 3 of its periods and 0.2 s, or without a fix) split the
+recording; runs are the stretches where the tractor drives (CAN speed above ``min_speed``, stops
+shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
+``run``-th, or a ``time_range`` (seconds from the recording's first fix); the report says which.
+Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
+signals are interpolated linearly onto the log's grid; the set-point is held (the last frame).
+"""
+from __future__ import annotations
+
+import datetime
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .log import CANONICAL, LogError
+from .raw_can import CAN_COLUMNS, CAN_SUFFIXES, CANRecording, SignalSource, choose_sources, converter, load_dbc, \
+    read_can_file
+from .raw_nmea import NMEARecording, looks_like_nmea, read_nmea_file
+
+NMEA_SUFFIXES = (".nmea", ".gps", ".nma")
+SYNCED = 0.5          # s: a host clock this close to GPS time is taken to keep UTC
+HELD = ("delta_cmd",)  # set-points: held between frames, not interpolated
+GAP_PERIODS, GAP_MIN = 3.0, 0.2
+
+
+@dataclass
+class ImportOptions:
+    """How to read a recording (the ``convert``/``identify``/``diagnose`` options)."""
+
+    dbc: Path | None = None                     # None: the project's agrobot_tractor.dbc
+    signals: list[SignalSource] = field(default_factory=list)
+    wheelbase: float = 1.4                      # m: curvature <-> wheel angle (the paper tractor: l_f + l_r)
+    rate: float | None = None                   # Hz of the log (default: the GNSS epoch rate)
+    run: int | None = None                      # 1-based index of the run to use
+    time_range: tuple[float, float] | None = None   # s from the first fix
+    min_speed: float = 0.2                      # m/s: driving
+    min_stop: float = 3.0                       # s: a shorter stop does not end a run
+    min_run: float = 10.0                       # s: shorter runs are listed, not used
+
+
+def is_recording(source: Path) -> bool:
+    """A folder, or a file that is a raw recording rather than a table (CSV/Parquet)."""
+    source = Path(source)
+    return source.is_dir() or source.suffix.lower() in NMEA_SUFFIXES + CAN_SUFFIXES
+
+
+def recording_files(source: Path) -> tuple[list[Path], list[Path]]:
+    """(NMEA files, CAN logs) of a folder or of one file; a ``.log`` holding NMEA is NMEA."""
+    source = Path(source)
+    if not source.exists():
+        raise LogError(f"{source}: no such file or folder")
+    files = sorted(p for p in source.iterdir() if p.is_file()) if source.is_dir() else [source]
+    nmea, can_logs = [], []
+    for p in files:
+        suffix = p.suffix.lower()
+        if suffix in NMEA_SUFFIXES or (suffix in (".log", ".txt") and looks_like_nmea(p)):
+            nmea.append(p)
+        elif suffix in CAN_SUFFIXES:
+            can_logs.append(p)
+    return nmea, can_logs
+
+
+# --- clocks ----------------------------------------------------------------------------------
+def lower_envelope(u: np.ndarray, h: np.ndarray) -> tuple[float, float]:
+    """(a, b) of the line a + b u below every point (u_i, h_i) with the least summed distance."""
+    from scipy.optimize import linprog
+
+    if len(u) < 3 or np.ptp(u) <= 0:
+        return float(np.min(h - u)), 1.0
+    scale = float(np.ptp(u))
+    x = (u - u[0]) / scale
+    # maximise sum(a + b x_i) subject to a + b x_i <= h_i
+    res = linprog(c=[-len(x), -float(x.sum())], A_ub=np.column_stack([np.ones_like(x), x]), b_ub=h,
+                  bounds=[(None, None), (None, None)], method="highs")
+    if not res.success:
+        slope = 1.0
+        return float(np.min(h - slope * (u - u[0]))), slope
+    a, b = res.x
+    return float(a - b * u[0] / scale), float(b / scale)
+
+
+def content_lag(t_ref: np.ndarray, x_ref: np.ndarray, t_other: np.ndarray, x_other: np.ndarray,
+                step: float = 0.02, window: tuple[float, float] | None = None, search: float | None = None) -> tuple[float, float]:
+    """(tau, rho): x_other(t) follows x_ref(t + tau) best (cross-correlation of the mean-removed
+    signals on a common ``step`` grid, refined by a parabola through the peak); ``window``
+    limits the other signal's time span, ``search`` the lags around 0 (s)."""
+    lo, hi = (t_other[0], t_other[-1]) if window is None else window
+    grid_o = np.arange(lo, hi, step)
+    if len(grid_o) < 20:
+        return math.nan, 0.0
+    xo = np.interp(grid_o, t_other, x_other)
+    xo = xo - xo.mean()
+    span = search if search is not None else (t_ref[-1] - t_ref[0]) + (hi - lo)
+    grid_r = np.arange(lo - span, hi + span + step, step)
+    xr = np.interp(grid_r, t_ref, x_ref, left=np.nan, right=np.nan)
+    valid = np.isfinite(xr)
+    xr = np.where(valid, xr - np.nanmean(xr), 0.0)
+    from scipy.signal import correlate
+
+    num = correlate(xr, xo, mode="valid", method="fft")
+    count = correlate(valid.astype(float), np.ones_like(xo), mode="valid", method="fft")
+    energy = correlate(xr ** 2, np.ones_like(xo), mode="valid", method="fft")
+    ok = count > 0.5 * len(xo)
+    rho = np.where(ok, num / np.sqrt(np.maximum(energy, 1e-12) * (xo @ xo)), -np.inf)
+    k = int(np.argmax(rho))
+    if not np.isfinite(rho[k]):
+        return math.nan, 0.0
+    frac = 0.0
+    if 0 < k < len(rho) - 1 and np.isfinite(rho[k - 1]) and np.isfinite(rho[k + 1]):
+        den = rho[k - 1] - 2 * rho[k] + rho[k + 1]
+        frac = 0.5 * (rho[k - 1] - rho[k + 1]) / den if den < 0 else 0.0
+    return float(grid_r[0] - lo + (k + frac) * step), float(rho[k])
+
+
+# --- streams -----------------------------------------------------------------------------------
+def gaps(t: np.ndarray, what: str, origin: float) -> list[dict]:
+    """Silences longer than GAP_PERIODS typical periods and GAP_MIN seconds."""
+    if len(t) < 2:
+        return []
+    dt = np.diff(t)
+    limit = max(GAP_PERIODS * float(np.median(dt)), GAP_MIN)
+    return [{"stream": what, "start": float(t[i] - origin), "end": float(t[i + 1] - origin),
+             "duration": float(dt[i])} for i in np.flatnonzero(dt > limit)]
+
+
+def _covered(t: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """True where ``grid`` lies within a stretch of ``t`` without a gap."""
+    if len(t) < 2:
+        return np.zeros(len(grid), bool)
+    limit = max(GAP_PERIODS * float(np.median(np.diff(t))), GAP_MIN)
+    i = np.clip(np.searchsorted(t, grid, side="right"), 1, len(t) - 1)
+    return (grid >= t[0]) & (grid <= t[-1]) & (t[i] - t[i - 1] <= limit)
+
+
+def _stretches(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) index pairs of the True stretches."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def _held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The value in force at each grid time: the last one sent at or before it (1 ms tolerance)."""
+    i = np.clip(np.searchsorted(t, grid + 1e-3, side="right") - 1, 0, len(t) - 1)
+    return values[i]
+
+
+def _iso(posix: float) -> str:
+    return datetime.datetime.fromtimestamp(posix, datetime.timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+@dataclass
+class _Streams:
+    gnss: pd.DataFrame                  # utc, lat, lon, height, quality, speed
+    can: dict[str, tuple[np.ndarray, np.ndarray]]      # column -> (utc, SI values)
+    report: dict
+
+
+def _read(source: Path, options: ImportOptions) -> tuple[list[NMEARecording], list[CANRecording], object, str]:
+    nmea_files, can_files = recording_files(source)
+    if not nmea_files or not can_files:
+        missing = "NMEA file (*.nmea, or a .log/.txt holding sentences)" if not nmea_files else \
+            "CAN log (*.log candump, *.asc, *.blf, *.trc)"
+        raise LogError(f"{source}: no {missing}; a recording needs the receiver's NMEA (position and time) and a "
+                       f"CAN log (steering command and angle, speed, yaw rate)")
+    dbc_name = str(options.dbc) if options.dbc else "the project's agrobot_tractor.dbc"
+    db = load_dbc(options.dbc)
+    return [read_nmea_file(p) for p in nmea_files], [read_can_file(p, db) for p in can_files], db, dbc_name
+
+
+def _streams(source: Path, options: ImportOptions) -> _Streams:
+    nmea, cans, db, dbc_name = _read(source, options)
+    sources = choose_sources(db, dbc_name, options.signals)
+    epochs = pd.concat([n.epochs for n in nmea]).sort_values("utc").drop_duplicates("utc").reset_index(drop=True)
+    fix = epochs["quality"].to_numpy() > 0
+    if fix.sum() < 10:
+        raise LogError(f"{source}: {int(fix.sum())} GNSS epochs with a fix; the log needs positions")
+    u0 = float(epochs.loc[fix, "utc"].iloc[0])
+    report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
+                    "dbc": dbc_name, "first_fix_utc": _iso(u0), "notes": [x for n in nmea for x in n.notes]}
+    counts = {}
+    for n in nmea:
+        for k, v in n.counts.items():
+            counts[k] = counts.get(k, 0) + v
+    quality = epochs["quality"].value_counts().sort_index()
+    report["nmea"] = {"epochs": int(len(epochs)), "with_fix": int(fix.sum()),
+                      "by_quality": {str(int(k)): int(v) for k, v in quality.items()},
+                      "rate_hz": float(1.0 / np.median(np.diff(epochs["utc"]))), "sentences": counts}
+    report["can"] = {"frames": int(sum(c.counts["frames"] for c in cans)),
+                     "decoded": int(sum(c.counts["decoded"] for c in cans)),
+                     "unknown_ids": dict(sum((c.unknown_ids for c in cans), type(cans[0].unknown_ids)()).most_common(8)),
+                     "not_decoded": int(sum(c.counts["frames that do not decode"] for c in cans)),
+                     "messages": {}}
+    frames: dict[str, pd.DataFrame] = {}
+    for c in cans:
+        for name, table in c.messages.items():
+            frames[name] = pd.concat([frames[name], table]) if name in frames else table
+    raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    units = {}
+    for column, s in sources.items():
+        table = frames.get(s.message)
+        if table is None or table[s.signal].notna().sum() < 10:
+            raise LogError(f"{source}: the CAN logs hold {0 if table is None else int(table[s.signal].notna().sum())} "
+                           f"frames of {s.message} with {s.signal} (column {column!r}, DBC {dbc_name}); "
+                           f"messages found: {', '.join(sorted(frames)) or 'none'}"
+                           + (f"; unknown identifiers: {', '.join(report['can']['unknown_ids'])}" if report['can']['unknown_ids'] else ""))
+        table = table.sort_values("t", kind="stable").drop_duplicates("t")
+        ok = table[s.signal].notna().to_numpy()
+        convert, text = converter(db, dbc_name, s, options.wheelbase)
+        raw[column] = (table["t"].to_numpy(float)[ok], convert(table[s.signal].to_numpy(float)[ok]))
+        units[column] = text
+        report["can"]["messages"][s.message] = {"frames": int(len(table)),
+                                                "rate_hz": float(1.0 / np.median(np.diff(table["t"])))}
+    report["columns"] = {**units, "x": "NMEA GGA latitude/longitude -> east of the run's first fix (pymap3d)",
+                         "y": "NMEA GGA latitude/longitude -> north of the run's first fix (pymap3d)",
+                         "t": "receiver UTC (GGA), s from the run's start"}
+    gnss = epochs.loc[fix].reset_index(drop=True)
+    report["clocks"], to_utc = _clocks(epochs, raw, u0, gnss)
+    can = {c: (to_utc(t), v) for c, (t, v) in raw.items()}
+    return _Streams(gnss, can, report)
+
+
+def _gnss_speed(gnss: pd.DataFrame) -> np.ndarray:
+    """Speed over ground per epoch: RMC/VTG where given, else from 1 s position chords."""
+    speed = gnss["speed"].to_numpy(float)
+    if np.isfinite(speed).mean() > 0.5:
+        return np.interp(gnss["utc"], gnss["utc"][np.isfinite(speed)], speed[np.isfinite(speed)])
+    lat0, lon0 = math.radians(gnss["lat"].iloc[0]), math.radians(gnss["lon"].iloc[0])
+    north = np.radians(gnss["lat"].to_numpy() - gnss["lat"].iloc[0]) * 6.371e6
+    east = np.radians(gnss["lon"].to_numpy() - gnss["lon"].iloc[0]) * 6.371e6 * math.cos(lat0)
+    del lon0
+    return np.hypot(np.gradient(east, gnss["utc"]), np.gradient(north, gnss["utc"]))
+
+
+def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
+    """The clocks' report and the map from CAN time to UTC."""
+    out: dict = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
+    host = epochs["host"].to_numpy(float)
+    utc = epochs["utc"].to_numpy(float)
+    have_host = np.isfinite(host)
+    can_lo = min(float(t[0]) for t, _ in raw.values())
+    can_hi = max(float(t[-1]) for t, _ in raw.values())
+    line = None
+    if have_host.sum() >= 10:
+        u, h = utc[have_host], host[have_host]
+        a, b = lower_envelope(u - u0, h - u0)
+        late = (h - u0) - (a + b * (u - u0))
+        synced = abs(a) < SYNCED
+        out["nmea_host_clock"] = {
+            "offset_s": a, "drift_ppm": (b - 1.0) * 1e6,
+            "interpretation": ("the host clock keeps GPS time (offset below 0.5 s): the offset is the least NMEA "
+                               "latency" if synced else
+                               "the host clock is off GPS time by the offset; the least NMEA latency cannot be told "
+                               "from it and is taken as 0"),
+            "nmea_latency_s": {"least": a if synced else 0.0, "median": float(np.median(late)) + (a if synced else 0.0),
+                               "p95": float(np.percentile(late, 95)) + (a if synced else 0.0),
+                               "max": float(late.max()) + (a if synced else 0.0)}}
+        if can_hi > h.min() - 60 and can_lo < h.max() + 60:
+            line = (0.0, 1.0) if synced else (a, b)
+    if line is not None:
+        a, b = line
+        out["can_clock"] = {"method": "same host clock as the NMEA stamps", "offset_s": a, "drift_ppm": (b - 1.0) * 1e6}
+        return out, (lambda t: u0 + (t - u0 - a) / b)
+    # an independent clock: align the CAN speed on the GNSS speed
+    t_can, v_can = raw["v"]
+    speed = _gnss_speed(gnss)
+    t_ref = gnss["utc"].to_numpy(float)
+    start = t_ref[0] - t_can[0]                   # both clocks started together, then the content decides
+    tau, rho = content_lag(t_ref, speed, t_can + start, v_can)
+    tau += start
+    if not math.isfinite(tau) or rho < 0.5:
+        raise LogError(f"the CAN log's clock ({_iso(can_lo) if can_lo > 1e8 else f'{can_lo:.3f} s'} ...) is not the NMEA "
+                       f"host clock and its speed does not match the GNSS speed (best correlation {rho:.2f}): cannot "
+                       f"place the CAN data in time; record NMEA with host timestamps on the CAN logger's clock")
+    windows, lags = [], []
+    for lo in np.arange(t_can[0], t_can[-1] - 60.0, 60.0):
+        lag, r = content_lag(t_ref, speed, t_can + tau, v_can, window=(lo + tau, lo + tau + 120.0), search=2.0)
+        lag_abs = tau + lag if math.isfinite(lag) else math.nan
+        if r > 0.8 and math.isfinite(lag_abs):
+            windows.append(lo + 60.0)
+            lags.append(lag_abs)
+    drift = 0.0
+    if len(windows) >= 5:          # a drift only where the windows' lags resolve it (slope > 3 standard errors)
+        x = np.array(windows) - t_can[0]
+        fit, cov = np.polyfit(x, lags, 1, cov=True)
+        if abs(fit[0]) > 3.0 * math.sqrt(max(cov[0, 0], 0.0)):
+            drift, tau = float(fit[0]), float(fit[1])
+    t_start = float(t_can[0])
+
+    def tau_at(t):
+        return tau + drift * (t - t_start)
+    out["can_clock"] = {"method": "independent clock, aligned by the CAN speed against the GNSS speed "
+                                  "(a GPS latency cannot be told from this offset)",
+                        "offset_s": float(tau), "drift_ppm": drift * 1e6, "correlation": rho, "windows": len(windows)}
+    return out, (lambda t: t + tau_at(t))
+
+
+def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
+    """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
+    source = Path(source)
+    options = options or ImportOptions()
+    if options.rate is not None and not 1.0 <= options.rate <= 200.0:
+        raise LogError(f"--rate {options.rate:g}: expected 1 to 200 Hz")
+    streams = _streams(source, options)
+    gnss, can, report = streams.gnss, streams.can, streams.report
+    u0 = float(gnss["utc"].iloc[0])
+    t_gnss = gnss["utc"].to_numpy(float)
+    # the epoch period to the millisecond (GGA times have 10 ms): a float median would let the grid creep
+    step = 1.0 / options.rate if options.rate else max(round(float(np.median(np.diff(t_gnss))), 3), 0.001)
+    everything = [t_gnss] + [t for t, _ in can.values()]
+    lo, hi = max(t[0] for t in everything), min(t[-1] for t in everything)
+    report["gaps"] = sum((gaps(t, name, u0) for name, t in [("gnss", t_gnss)] + [(c, can[c][0]) for c in can]), [])
+    if hi - lo < 10 * step:
+        raise LogError(f"{source}: the NMEA and CAN streams overlap for {max(hi - lo, 0):.3g} s in GPS time "
+                       f"(NMEA {_iso(t_gnss[0])} to {_iso(t_gnss[-1])}); nothing to align")
+    grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
+    covered = _covered(t_gnss, grid)
+    for t, _ in can.values():
+        covered &= _covered(t, grid)
+    v = np.interp(grid, *can["v"])
+    moving = v > options.min_speed
+    for a, b in _stretches(~moving):                 # short stops do not end a run
+        if 0 < a and b < len(grid) and (b - a) * step < options.min_stop:
+            moving[a:b] = True
+    runs = []
+    for a, b in _stretches(moving & covered):
+        runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
+                     "mean_speed": float(v[a:b].mean()), "utc_start": _iso(grid[a])})
+    long_runs = [r for r in runs if r["duration"] >= options.min_run]
+    for i, r in enumerate(long_runs, 1):
+        r["run"] = i
+    report["runs"] = long_runs
+    report["short_runs_ignored"] = len(runs) - len(long_runs)
+    if options.time_range is not None:
+        a, b = options.time_range
+        pick = (grid - u0 >= a) & (grid - u0 <= b)
+        if pick.sum() < 10:
+            raise LogError(f"{source}: --time-range {a:g} {b:g}: the recording runs from 0 to "
+                           f"{t_gnss[-1] - u0:.1f} s after its first fix; the range holds {int(pick.sum())} samples")
+        holes = pick & ~covered
+        if holes.any():
+            g = [x for x in report["gaps"] if x["end"] > a and x["start"] < b]
+            raise LogError(f"{source}: --time-range {a:g} {b:g} crosses a gap"
+                           + (f" ({g[0]['stream']} silent from {g[0]['start']:.2f} to {g[0]['end']:.2f} s)" if g else "")
+                           + "; choose a range within one run (runs: "
+                           + ", ".join(f"{r['start']:.1f}-{r['end']:.1f} s" for r in long_runs) + ")")
+        used = {"how": "time range", "start": float(a), "end": float(b)}
+    else:
+        if not long_runs:
+            raise LogError(f"{source}: no run of {options.min_run:g} s or more with the tractor driving (speed above "
+                           f"{options.min_speed:g} m/s) and every stream present"
+                           + (f"; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
+                              if report["gaps"] else ""))
+        if options.run is not None and not 1 <= options.run <= len(long_runs):
+            raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "
+                           + ", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s" for r in long_runs))
+        r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
+        pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
+        used = {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "start": r["start"], "end": r["end"]}
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0])}
+    t = grid[pick]
+    lat = np.interp(t, t_gnss, gnss["lat"])
+    lon = np.interp(t, t_gnss, gnss["lon"])
+    height = np.interp(t, t_gnss, gnss["height"])
+    import pymap3d
+
+    datum = (float(lat[0]), float(lon[0]), float(height[0]))
+    east, north, _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
+    columns = {"t": t - t[0], **{c: _held(t, *can[c]) if c in HELD else np.interp(t, *can[c]) for c in CAN_COLUMNS},
+               "x": east, "y": north}
+    report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
+    report["rate_hz"] = 1.0 / step
+    return pd.DataFrame(columns)[list(CANONICAL)], report
+
+
+def describe(report: dict) -> str:
+    """A few lines for the terminal: files, clocks, gaps, runs, what was used."""
+    c = report["clocks"]
+    lines = [f"recording {report['source']}: {len(report['files']['nmea'])} NMEA file(s), "
+             f"{len(report['files']['can'])} CAN log(s), DBC {report['dbc']}"]
+    if "nmea_host_clock" in c:
+        h = c["nmea_host_clock"]
+        lat = h["nmea_latency_s"]
+        lines.append(f"  host clock - GPS time: {h['offset_s']:+.4f} s, drift {h['drift_ppm']:+.1f} ppm; NMEA latency "
+                     f"median {1e3 * lat['median']:.1f} ms, 95% {1e3 * lat['p95']:.1f} ms, max {1e3 * lat['max']:.1f} ms")
+    k = c["can_clock"]
+    lines.append(f"  CAN clock: {k['method']}; offset {k['offset_s']:+.4f} s, drift {k['drift_ppm']:+.1f} ppm")
+    g = report["gaps"]
+    lines.append(f"  gaps: {len(g)}" + (": " + ", ".join(f"{x['stream']} {x['start']:.2f}-{x['end']:.2f} s"
+                                                         for x in g[:4]) + (" ..." if len(g) > 4 else "") if g else ""))
+    lines.append(f"  runs: " + (", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s ({r['mean_speed']:.2f} m/s)"
+                                          for r in report["runs"]) or "none"))
+    u = report["used"]
+    lines.append(f"  used: {u['how']}, {u['start']:.2f}-{u['end']:.2f} s after the first fix ({u['utc_start']}), "
+                 f"{u['duration']:.1f} s at {report['rate_hz']:g} Hz")
+    return "\n".join(lines)
