@@ -50,6 +50,7 @@ class HardwareTractor(Component):
         *DATUM_PARAMETERS,
         par("min_fix_quality", "1", 4, "GGA quality of a valid fix"),
         par("connect_timeout", "s", 5.0, "how long to retry opening the GPS port"),
+        par("nmea_record_file", "", "", "record the receiver's lines, host-stamped (empty: no recording)"),
         *prefixed(CAN_PARAMETERS, "can_"),
     )
     feedthrough = {}
@@ -59,7 +60,8 @@ class HardwareTractor(Component):
         self.gps = NMEAGPS(f"{self.name}.gps", {
             "url": p["nmea_url"], "baudrate": p["nmea_baudrate"],
             **{v.name: p[v.name] for v in DATUM_PARAMETERS},
-            "min_fix_quality": p["min_fix_quality"], "connect_timeout": p["connect_timeout"]})
+            "min_fix_quality": p["min_fix_quality"], "connect_timeout": p["connect_timeout"],
+            "record_file": p["nmea_record_file"]})
         self.can = CANActuators(f"{self.name}.can", {v.name: p["can_" + v.name] for v in CAN_PARAMETERS})
         self.can.initialize(t0, dt)
         try:

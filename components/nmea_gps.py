@@ -28,6 +28,8 @@ class NMEAGPS(Component):
         *DATUM_PARAMETERS,
         par("min_fix_quality", "1", RTK_FIXED, "GGA quality needed for a valid fix (4 RTK fixed)"),
         par("connect_timeout", "s", 5.0, "how long to retry opening the port"),
+        par("record_file", "", "", "record every line received, after the host's UNIX time of its arrival "
+            "(empty: no recording)"),
         out("x", "m", 0.0, "east position of the antenna"),
         out("y", "m", 0.0, "north position of the antenna"),
         out("vel_east", "m/s", 0.0, "east velocity (VTG/RMC)"),
@@ -54,7 +56,13 @@ class NMEAGPS(Component):
         self.frame = LocalFrame.of(p)
         self.stream = NMEAStream()
         self.last_good = t0
-        self.port = None
+        self.port = self.record = None
+        self.partial = b""
+        if p["record_file"]:
+            try:
+                self.record = open(p["record_file"], "a", buffering=1, encoding="ascii", errors="replace")
+            except OSError as exc:
+                self.require(False, f"cannot record NMEA to {p['record_file']!r}: {exc}")
         deadline = time.monotonic() + float(p["connect_timeout"])
         while True:
             try:
@@ -80,7 +88,12 @@ class NMEAGPS(Component):
         return b"".join(chunks)
 
     def step(self, t: float, dt: float) -> None:
-        self.apply(t, self.stream.feed(self.read_available(t)))
+        data = self.read_available(t)
+        if self.record is not None and data:        # whole lines, stamped when they arrived
+            *lines, self.partial = (self.partial + data).split(b"\n")
+            stamp = f"{time.time():.6f} "
+            self.record.write("".join(stamp + ln.rstrip(b"\r").decode("ascii", "replace") + "\n" for ln in lines if ln.strip()))
+        self.apply(t, self.stream.feed(data))
 
     def apply(self, t: float, items: list[Position | Velocity | PositionError | Heading]) -> None:
         """Update the outputs from parsed sentences (shared by the serial path and the tests)."""
@@ -110,6 +123,9 @@ class NMEAGPS(Component):
         y["unknown_sentences"], y["partial_lines"], y["poor_fixes"] = float(c.unknown), float(c.partial), float(c.poor_fix)
 
     def terminate(self) -> None:
+        if getattr(self, "record", None) is not None:
+            self.record.close()
+            self.record = None
         if self.port is not None:
             self.port.close()
             self.port = None

@@ -375,7 +375,8 @@ def import_recording(source: str | Path, options: ImportOptions | None = None) -
         r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
         pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
         used = {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "start": r["start"], "end": r["end"]}
-    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0])}
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0]),
+                      "utc_start_s": float(grid[pick][0])}
     t = grid[pick]
     lat = np.interp(t, t_gnss, gnss["lat"])
     lon = np.interp(t, t_gnss, gnss["lon"])

@@ -243,7 +243,7 @@ def _multicast_ok(port: int) -> bool:
         b.shutdown()
 
 
-def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = ()):
+def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), record: bool = False):
     can_port = random.randint(40000, 49999)
     if not _multicast_ok(can_port):
         pytest.skip("python-can udp_multicast (CAN between processes) is not available on this host")
@@ -251,7 +251,8 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = ()):
     emu_out, hil_out = tmp_path / "emulator", tmp_path / "guidance"
     emu = subprocess.Popen([sys.executable, "-m", "orchestrator", "emulate", "studies/tractor_emulator.toml",
                             "--nmea-port", str(nmea_port), "--out", str(emu_out), "--duration", str(guidance_s + 15),
-                            "--set", f"can.port={can_port}", *[a for s in emulator_sets for a in ("--set", s)]],
+                            "--set", f"can.port={can_port}", *[a for s in emulator_sets for a in ("--set", s)],
+                            *(["--record", str(tmp_path / "emulator_recording")] if record else [])],
                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         ready = emu.stdout.readline()               # printed once the study is loaded, before the run
@@ -260,7 +261,8 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = ()):
         guidance = subprocess.run([sys.executable, "-m", "orchestrator", "run", "studies/figure8_hil.toml",
                                    "--out", str(hil_out), "--no-plots", "--set", f"study.stop_time={guidance_s}",
                                    "--set", f"tractor.nmea_url=socket://127.0.0.1:{nmea_port}",
-                                   "--set", f"tractor.can_port={can_port}"],
+                                   "--set", f"tractor.can_port={can_port}",
+                                   *(["--record", str(tmp_path / "guidance_recording")] if record else [])],
                                   cwd=ROOT, capture_output=True, text=True, timeout=guidance_s + 60)
     finally:
         emu.terminate()
@@ -277,7 +279,7 @@ def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     from analysis.guidance_realtime import path_error
     from components.models.figure8_path import Figure8Path
 
-    metrics, sig, events, emu = _hil(tmp_path, 30.0)
+    metrics, sig, events, emu = _hil(tmp_path, 30.0, record=True)
     rt = metrics["realtime"]
     print(f"\nHIL deadline statistics: {json.dumps(rt)}")
     # reported, not timed: the machine is shared; only a loop that mostly keeps its slots passes
@@ -299,6 +301,20 @@ def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     assert len(hil_err) > 200
     assert hil_err.max() <= 2.0 * sim_err.max() + 0.05
     assert sig["watchdog.safe_state"][sig["t"] > 5.0].max() == 0.0
+    # both ends recorded their buses (run --record on the HIL study, emulate --record): the two
+    # recordings import to the same signals on the receiver's time base
+    from measurements.recording import import_recording
+
+    logs = {side: import_recording(tmp_path / f"{side}_recording") for side in ("guidance", "emulator")}
+    for side, (log, report) in logs.items():
+        assert report["used"]["duration"] > 15.0, (side, report["runs"])
+        assert report["clocks"]["can_clock"]["method"].startswith("same host clock"), side
+    (g, gr), (e, er) = logs["guidance"], logs["emulator"]
+    key = lambda log, rep: log.assign(key=np.round((log["t"] + rep["used"]["utc_start_s"]) / 0.05).astype(np.int64))
+    both = key(g, gr).merge(key(e, er), on="key", suffixes=("_g", "_e"))
+    assert len(both) > 300
+    for c in ("v", "yaw_rate", "delta"):
+        assert np.sqrt(np.mean((both[f"{c}_g"] - both[f"{c}_e"]) ** 2)) < 0.02, c
 
 
 @pytest.mark.parametrize("fault, words", [("nmea.stop_after", "stale GPS fix"),

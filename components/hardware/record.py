@@ -3,6 +3,7 @@ would, as raw NMEA (host-stamped) and a candump CAN log.
 
 - A study serving an emulated tractor (an ``nmea_server`` or a ``tractor_link``) records what its
   adapters send and receive (their ``record_file``), in real time.
+- A hardware-in-the-loop study (a ``hardware_tractor``) records what its adapters receive and send.
 - A study with a simulated tractor (the component of role ``tractor``) gets a ``bus_recorder``
   wired to the tractor's outputs and to what feeds its set-point inputs: the recording takes no
   real-time wait. DIR also receives ``simulation_log.csv``, the same signals as the measured log.
@@ -51,9 +52,10 @@ def record_study(study, value):
     from ..hardware_tractor import HardwareTractor
 
     cls = study.component_class(tractor)
-    if issubclass(cls, HardwareTractor):
-        raise StudyError(f"{study.where}: --record: {tractor} is a hardware tractor; record on its buses with "
-                         f"candump and the receiver's logger, or record the emulator (emulate --record)")
+    if issubclass(cls, HardwareTractor):         # hardware in the loop: what its adapters receive and send
+        folder.mkdir(parents=True, exist_ok=True)
+        return study.with_values({f"{tractor}.nmea_record_file": str(folder / "gps.nmea"),
+                                  f"{tractor}.can_record_file": str(folder / "can.log")})
     outputs = {v.name for v in cls.variables if v.causality == "output"}
     add = [f"{tractor}.{o} -> {RECORDER}.{i}" for i, o in FROM_TRACTOR.items() if o in outputs]
     for conn in study.connections:
