@@ -234,6 +234,11 @@ def experiment_from_log(frame: pd.DataFrame, where: str, period_s: float | None 
                      f"lines above {fs / (2 * hold):.4g} Hz are its images, not excitation")
     if band is not None:
         excited = excited[(excited * fs / N >= band[0]) & (excited * fs / N <= band[1])]
+    if len(excited) == 0:
+        raise LogError(f"{where}: no excited line in the steering command's period-average "
+                       f"(period {N / fs:.4g} s{', band ' + str(band) + ' Hz' if band is not None else ''}): "
+                       f"identification needs a periodic multisine on delta_cmd; give --period or --band, or "
+                       f"use `diagnose` for a log of ordinary driving")
     notes.append(f"excited lines detected: {len(excited)} from {excited[0] * fs / N:.4g} to "
                  f"{excited[-1] * fs / N:.4g} Hz" + (" (odd-odd)" if np.all(excited % 4 == 1) else
                                                      " (odd)" if np.all(excited % 2 == 1) else ""))

@@ -55,14 +55,19 @@ def rlfr_physical(num: np.ndarray, den: np.ndarray, v: float, m: float, l_f: flo
     """Cornering stiffnesses and relaxation lengths reproducing identified RLFR coefficients, with
     m, l_f, l_r known and I = m l_f l_r. Multi-start least squares on relative coefficient errors
     in log-parameters; returns the distinct solutions, best first, each with its cost (the paper
-    saw several solutions fit about equally)."""
+    saw several solutions fit about equally); none when every start runs off to non-physical values."""
     target = np.concatenate([np.asarray(num, float), np.asarray(den, float)[1:]])
     base = TractorParameters(m=m, I=m * l_f * l_r, l_f=l_f, l_r=l_r)
 
     def residual(logp):
+        if not np.all(np.abs(logp) < 50.0):               # a start diverging out of any physical range
+            return np.full(len(target), 1e3)
         Cf, Cr, sf, sr = np.exp(logp)
-        pn, pd = transfer_function("rlfr", replace(base, C_f=Cf, C_r=Cr, sigma_f=sf, sigma_r=sr), v)
-        if len(pn) != len(num):
+        try:
+            pn, pd = transfer_function("rlfr", replace(base, C_f=Cf, C_r=Cr, sigma_f=sf, sigma_r=sr), v)
+        except np.linalg.LinAlgError:
+            return np.full(len(target), 1e3)
+        if len(pn) != len(num) or not (np.all(np.isfinite(pn)) and np.all(np.isfinite(pd))):
             return np.full(len(target), 1e3)
         return (np.concatenate([pn, pd[1:]]) - target) / np.abs(target)
 
@@ -71,11 +76,15 @@ def rlfr_physical(num: np.ndarray, den: np.ndarray, v: float, m: float, l_f: flo
     found: list[dict] = []
     for _ in range(starts):
         sol = least_squares(residual, rng.uniform(lo, hi), method="lm", xtol=1e-12, ftol=1e-12)
+        if not np.all((sol.x > lo - 10.0) & (sol.x < hi + 10.0)):
+            continue                                      # ran off to no physical tractor
         values = np.exp(sol.x)
         cost = float(np.sum(sol.fun ** 2))
         if any(np.allclose(values, f["values"], rtol=1e-3) for f in found):
             continue
         found.append({"values": values, "cost": cost})
+    if not found:
+        return []
     found.sort(key=lambda f: f["cost"])
     best = found[0]["cost"]
     return [{"C_f": f["values"][0], "C_r": f["values"][1], "sigma_f": f["values"][2], "sigma_r": f["values"][3],

@@ -223,7 +223,9 @@ def summary(report: dict) -> str:
             lines.append(f"{'':>{len(name)}}  paper: num {fmt(paper['num'])} den {fmt(paper['den'])}; RMSE "
                          + ", ".join(f"{b}: {v}" for b, v in PAPER["rmse"][name].items()))
     phys = report["models"].get("rlfr", {}).get("physical")
-    if phys:
+    if phys and not phys["solutions"]:
+        lines.append("\nRLFR physical: no physical parameters reproduce these coefficients (every start diverged)")
+    elif phys:
         best = phys["solutions"][0]
         lines.append(f"\nRLFR physical (m, l_f, l_r known, I = m l_f l_r): C_f {best['C_f']:.0f} N/rad, "
                      f"C_r {best['C_r']:.0f} N/rad, sigma_f {best['sigma_f']:.4f} m, sigma_r {best['sigma_r']:.4f} m"
