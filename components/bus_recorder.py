@@ -17,19 +17,15 @@ from pathlib import Path
 from orchestrator.component import Component, inp, par
 
 from .hardware.guidance_messages import PROTOCOLS, messages_for
-from .hardware.nmea import DATUM_PARAMETERS, DEFAULT_EPOCH, RTK_FIXED, SENTENCES, TALKERS, LocalFrame, parse_epoch, \
-    receiver_sentences
+from .hardware.nmea import DATUM_PARAMETERS, RECEIVER_INPUTS, RECEIVER_PARAMETERS, RTK_FIXED, LocalFrame, \
+    receiver_sentences, receiver_settings
 
 
 class BusRecorder(Component):
     sampled = True
     roles = ("bus_recorder",)
     variables = (
-        inp("x", "m", 0.0, "GPS antenna east"),
-        inp("y", "m", 0.0, "GPS antenna north"),
-        inp("vel_east", "m/s", 0.0, "GPS east velocity"),
-        inp("vel_north", "m/s", 0.0, "GPS north velocity"),
-        inp("fix_valid", "1", 1.0, "1 when a fix is available"),
+        *RECEIVER_INPUTS,
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point sent to the tractor"),
         inp("speed_cmd", "m/s", 0.0, "speed set-point sent to the tractor"),
         inp("safe_state", "1", 0.0, "1 while the guidance holds the tractor safe"),
@@ -46,10 +42,7 @@ class BusRecorder(Component):
         par("dbc", "", "", "DBC (empty: the protocol's own)"),
         par("wheelbase", "m", 1.4, "isobus: curvature = tan(wheel angle) / wheelbase"),
         *DATUM_PARAMETERS,
-        par("epoch", "", DEFAULT_EPOCH, "UTC of t = 0 (ISO 8601)"),
-        par("talker", "", "GN", "NMEA talker"),
-        par("sentences", "", ",".join(SENTENCES), "sentences per epoch"),
-        par("position_std", "m", 0.02, "1-sigma position error reported in GST"),
+        *RECEIVER_PARAMETERS,
         par("host_clock_offset", "s", 0.0, "host clock minus UTC at t = 0"),
         par("host_clock_drift", "1", 0.0, "host clock rate error (1e-6 = 1 ppm)"),
         par("nmea_latency", "s", 0.0, "a sentence reaches the host this long after its epoch"),
@@ -62,14 +55,7 @@ class BusRecorder(Component):
 
         p = self.p
         self.require(bool(p["directory"]), "directory: expected the folder to record into")
-        self.require(p["talker"] in TALKERS, f"talker {p['talker']!r}: expected one of {', '.join(sorted(TALKERS))}")
-        self.sentences = tuple(x.strip().upper() for x in str(p["sentences"]).split(",") if x.strip())
-        self.require(self.sentences and all(x in SENTENCES for x in self.sentences),
-                     f"sentences {p['sentences']!r}: expected a comma-separated list of {', '.join(SENTENCES)}")
-        try:
-            self.epoch = parse_epoch(p["epoch"])
-        except ValueError:
-            self.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
+        self.sentences, self.epoch = receiver_settings(self)
         self.require(p["nmea_latency"] >= 0, f"nmea_latency {p['nmea_latency']}: expected >= 0 s")
         try:
             self.guidance = messages_for(p["protocol"], p["dbc"], "guidance", p["wheelbase"])

@@ -14,28 +14,21 @@ import datetime
 import socket
 import time
 
-from orchestrator.component import Component, inp, out, par
+from orchestrator.component import Component, out, par
 
-from .hardware.nmea import (DATUM_PARAMETERS, DEFAULT_EPOCH, RTK_FIXED, SENTENCES, TALKERS, LocalFrame, parse_epoch,
-                            receiver_sentences)
+from .hardware.nmea import (DATUM_PARAMETERS, RECEIVER_INPUTS, RECEIVER_PARAMETERS, RTK_FIXED, LocalFrame,
+                            receiver_sentences, receiver_settings)
 
 
 class NMEAServer(Component):
     sampled = True
     roles = ("nmea_server",)
     variables = (
-        inp("x", "m", 0.0, "antenna east position"),
-        inp("y", "m", 0.0, "antenna north position"),
-        inp("vel_east", "m/s", 0.0, "antenna east velocity"),
-        inp("vel_north", "m/s", 0.0, "antenna north velocity"),
-        inp("fix_valid", "1", 1.0, "1 when a fix is available"),
+        *RECEIVER_INPUTS,
         par("host", "", "127.0.0.1", "address to listen on"),
         par("port", "1", 10110, "TCP port to listen on"),
         *DATUM_PARAMETERS,
-        par("talker", "", "GN", "NMEA talker id (GN, GP, GL, GA, GB, GQ, GI)"),
-        par("sentences", "", ",".join(SENTENCES), "sentences sent each step, in order (of GGA, GST, PGRME, VTG, RMC, ZDA)"),
-        par("epoch", "", DEFAULT_EPOCH, "UTC date and time of t = 0 (ISO 8601)"),
-        par("position_std", "m", 0.02, "1-sigma horizontal position error reported in GST (the GPS error model's)"),
+        *RECEIVER_PARAMETERS,
         par("serial_port", "", "", "serial device to send on besides TCP (empty: TCP only)"),
         par("baudrate", "1/s", 115200, "serial line speed"),
         par("record_file", "", "", "record what is sent: one sentence per line after the host's UNIX time "
@@ -49,15 +42,7 @@ class NMEAServer(Component):
 
     def initialize(self, t0: float, dt: float) -> None:
         p = self.p
-        self.require(p["talker"] in TALKERS, f"talker {p['talker']!r}: expected one of {', '.join(sorted(TALKERS))}")
-        self.sentence_set = tuple(x.strip().upper() for x in str(p["sentences"]).split(",") if x.strip())
-        unknown = [x for x in self.sentence_set if x not in SENTENCES]
-        self.require(self.sentence_set and not unknown,
-                     f"sentences {p['sentences']!r}: expected a comma-separated list of {', '.join(SENTENCES)}")
-        try:
-            self.epoch = parse_epoch(p["epoch"])
-        except ValueError:
-            self.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
+        self.sentence_set, self.epoch = receiver_settings(self)
         self.frame = LocalFrame.of(p)
         self.record = None
         if p["record_file"]:

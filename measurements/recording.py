@@ -367,7 +367,7 @@ def import_recording(source: str | Path, options: ImportOptions | None = None) -
         if not long_runs:
             raise LogError(f"{source}: no run of {options.min_run:g} s or more with the tractor driving (speed above "
                            f"{options.min_speed:g} m/s) and every stream present"
-                           + (f"; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
+                           + ("; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
                               if report["gaps"] else ""))
         if options.run is not None and not 1 <= options.run <= len(long_runs):
             raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "
@@ -407,7 +407,7 @@ def describe(report: dict) -> str:
     g = report["gaps"]
     lines.append(f"  gaps: {len(g)}" + (": " + ", ".join(f"{x['stream']} {x['start']:.2f}-{x['end']:.2f} s"
                                                          for x in g[:4]) + (" ..." if len(g) > 4 else "") if g else ""))
-    lines.append(f"  runs: " + (", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s ({r['mean_speed']:.2f} m/s)"
+    lines.append("  runs: " + (", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s ({r['mean_speed']:.2f} m/s)"
                                           for r in report["runs"]) or "none"))
     u = report["used"]
     lines.append(f"  used: {u['how']}, {u['start']:.2f}-{u['end']:.2f} s after the first fix ({u['utc_start']}), "

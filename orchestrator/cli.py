@@ -37,11 +37,18 @@ def _run(args: argparse.Namespace) -> int:
     from .runner import AnalysisError, run_study
     from .study import Study
 
-    study = Study.load(args.study, args.set)
-    for option in registry().run_options:
-        value = getattr(args, option.flag.lstrip("-").replace("-", "_"), None)
-        if value is not None:
+    chosen = [(o, getattr(args, o.flag.lstrip("-").replace("-", "_"), None)) for o in registry().run_options]
+    chosen = [(o, v) for o, v in chosen if v is not None]
+    if not chosen:
+        study = Study.load(args.study, args.set)
+    else:           # a plugin's option first, so that --set also reaches what it adds (a recorder ...)
+        study = Study.load(args.study)
+        for option, value in chosen:
             study = option.apply(study, value)
+        if args.set:
+            from .study import parse_override
+
+            study = study.with_values(dict(parse_override(item, args.study) for item in args.set))
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:

@@ -6,7 +6,7 @@ import datetime
 import math
 from dataclasses import dataclass, field
 
-from orchestrator.component import par
+from orchestrator.component import inp, par
 
 KNOTS = 1852.0 / 3600.0          # m/s per knot
 TALKERS = {"GP", "GN", "GL", "GA", "GB", "GQ", "GI"}
@@ -204,6 +204,37 @@ HALF_1D = 0.6745                              # the 50 % half-width of a 1-D nor
 DEFAULT_EPOCH = "2026-05-01T08:00:00Z"                 # UTC of t = 0 when a study names none
 # fix quality -> (FAA mode indicator of VTG/RMC, HDOP): an RTK fix sees many satellites
 FIX_MODES = {0: ("N", 99.99), 1: ("A", 1.2), 2: ("D", 0.9), 4: ("R", 0.7), 5: ("F", 0.8)}
+
+
+# what a receiver's NMEA is made of (the emulator's server and the bus recorder write it)
+RECEIVER_INPUTS = (
+    inp("x", "m", 0.0, "antenna east position"),
+    inp("y", "m", 0.0, "antenna north position"),
+    inp("vel_east", "m/s", 0.0, "antenna east velocity"),
+    inp("vel_north", "m/s", 0.0, "antenna north velocity"),
+    inp("fix_valid", "1", 1.0, "1 when a fix is available"),
+)
+RECEIVER_PARAMETERS = (
+    par("talker", "", "GN", "NMEA talker id (GN, GP, GL, GA, GB, GQ, GI)"),
+    par("sentences", "", ",".join(SENTENCES), "sentences sent each step, in order (of GGA, GST, PGRME, VTG, RMC, ZDA)"),
+    par("epoch", "", DEFAULT_EPOCH, "UTC date and time of t = 0 (ISO 8601)"),
+    par("position_std", "m", 0.02, "1-sigma horizontal position error reported in GST (the GPS error model's)"),
+)
+
+
+def receiver_settings(component) -> tuple[tuple[str, ...], datetime.datetime]:
+    """(sentence ids, epoch) from a component's RECEIVER_PARAMETERS; bad values are the
+    component's error, naming the parameter."""
+    p = component.p
+    component.require(p["talker"] in TALKERS, f"talker {p['talker']!r}: expected one of {', '.join(sorted(TALKERS))}")
+    sentences = tuple(x.strip().upper() for x in str(p["sentences"]).split(",") if x.strip())
+    component.require(bool(sentences) and all(x in SENTENCES for x in sentences),
+                      f"sentences {p['sentences']!r}: expected a comma-separated list of {', '.join(SENTENCES)}")
+    try:
+        epoch = parse_epoch(p["epoch"])
+    except ValueError:
+        component.require(False, f"epoch {p['epoch']!r}: expected an ISO 8601 UTC time like {DEFAULT_EPOCH}")
+    return sentences, epoch
 
 
 def parse_epoch(text: str) -> datetime.datetime:
