@@ -15,7 +15,6 @@ import time
 import zipfile
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,77 +22,17 @@ sys.path.insert(0, str(ROOT))
 
 H = 0.01
 
+from fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run  # noqa: E402
+
 
 def difference(ours: pd.DataFrame, other: pd.DataFrame, until: float = 20.0) -> float:
-    a, b = ours[ours["t"] <= until + 1e-9], other[other["t"] <= until + 1e-9]
-    a, b = a.set_index(a["t"].round(6)), b.set_index(b["t"].round(6))
-    common = a.index.intersection(b.index)
-    return float(np.hypot(a.loc[common, "tractor.x_cg"] - b.loc[common, "tractor.x_cg"],
-                          a.loc[common, "tractor.y_cg"] - b.loc[common, "tractor.y_cg"]).max())
+    return cg_distance(ours, other, until)[0]
 
 
-def libcosim_frame(unpacked: Path, stop: float) -> pd.DataFrame:
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
+def cofmupy_or_none(unpacked: Path) -> pd.DataFrame | None:
+    import importlib.util
 
-    log_output_level(CosimLogLevel.WARNING)
-    execution = CosimExecution.from_ssp_file(str(unpacked), step_size=int(round(H * 1e9)))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    watched = []
-    for info in execution.slave_infos():
-        variables = [v for v in execution.slave_variables(info.index) if v.causality == 2]
-        watched.append((info.name.decode(), info.index, [v.name.decode() for v in variables], [v.reference for v in variables]))
-    rows = []
-    for k in range(int(round(stop / H))):
-        execution.step()
-        row = [(k + 1) * H]
-        for _, index, _, refs in watched:
-            row += observer.last_real_values(index, refs)
-        rows.append(row)
-    return pd.DataFrame(rows, columns=["t"] + [f"{n}.{v}" for n, _, names, _ in watched for v in names])
-
-
-def fmpy_frame(ssp: Path) -> pd.DataFrame:
-    from fmpy.ssp.simulation import simulate_ssp
-
-    res = simulate_ssp(str(ssp), stop_time=20.0, step_size=H)
-    return pd.DataFrame({"t": res["time"] + H, "tractor.x_cg": res["tractor.x_cg"], "tractor.y_cg": res["tractor.y_cg"]})
-
-
-def cofmupy_frame(unpacked: Path) -> pd.DataFrame | None:
-    try:
-        import cofmupy.wrappers
-        from cofmupy import Coordinator
-    except ImportError:
-        return None
-    import xml.etree.ElementTree as ET
-
-    read = cofmupy.wrappers.read_model_description
-
-    def numeric(*args, **kwargs):          # cofmupy expects fmpy 0.3.20's numbers (tests/test_foreign_engines.py)
-        md = read(*args, **kwargs)
-        for field in ("startTime", "stopTime", "stepSize", "tolerance"):
-            value = getattr(md.defaultExperiment, field, None) if md.defaultExperiment is not None else None
-            if isinstance(value, str):
-                setattr(md.defaultExperiment, field, float(value))
-        return md
-
-    cofmupy.wrappers.read_model_description = numeric
-    ns = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"
-    root = ET.parse(unpacked / "SystemStructure.ssd").getroot()
-    config = {"fmus": [{"id": c.get("name"), "path": str(unpacked / c.get("source"))} for c in root.iter(f"{ns}Component")],
-              "connections": [{"source": {"id": c.get("startElement"), "variable": c.get("startConnector"), "type": "fmu"},
-                               "target": [{"id": c.get("endElement"), "variable": c.get("endConnector"), "type": "fmu"}]}
-                              for c in root.iter(f"{ns}Connection")],
-              "edge_sep": " -> ", "cosim_method": "jacobi", "iterative": False, "root": ""}
-    coordinator = Coordinator()
-    coordinator.start(config)
-    coordinator.run_simulation(step_size=H, end_time=20.0)
-    res = coordinator.get_results()
-    return pd.DataFrame({"t": np.asarray(res["time"]) + H, "tractor.x_cg": np.asarray(res[("tractor", "x_cg")]),
-                         "tractor.y_cg": np.asarray(res[("tractor", "y_cg")])})
+    return cofmupy_run(unpacked, 20.0, H) if importlib.util.find_spec("cofmupy") else None
 
 
 def main() -> None:
@@ -119,12 +58,12 @@ def main() -> None:
         py = Simulation(build_system(py_study)).run().to_frame()
         study = Study.load(ssp)
         ours = Simulation(build_system(study)).run().to_frame()
-        cosim = libcosim_frame(unpacked, study.study.stop_time)
+        cosim = libcosim_run(unpacked, study.study.stop_time, H)
         rows = [("Python study", metrics(py, py_study), difference(ours, py)),
                 ("this orchestrator, SSP", metrics(ours, study), 0.0),
                 ("libcosim, SSP", metrics(cosim, study), difference(ours, cosim)),
-                ("fmpy SSP master, 20 s", None, difference(ours, fmpy_frame(ssp)))]
-        cof = cofmupy_frame(unpacked)
+                ("fmpy SSP master, 20 s", None, difference(ours, fmpy_ssp_run(ssp, 20.0, H)))]
+        cof = cofmupy_or_none(unpacked)
         if cof is not None:
             rows.append(("cofmupy (Jacobi), 20 s", None, difference(ours, cof)))
     print(f"export-ssp of studies/figure8.toml: {export_s:.1f} s")

@@ -98,11 +98,10 @@ class BusRecorder(Component):
         stamp = f"{self.host_time(t) + late:.6f} "
         self.nmea.write("".join(stamp + line + "\n" for line in data.decode("ascii").split("\r\n") if line))
         host = self.host_time(t)
-        frames = [(m, True) for m in self.guidance.command(u["steer_angle_cmd"], u["speed_cmd"], u["safe_state"] <= 0.5)]
-        frames += [(m, False) for m in self.tractor.feedback(u["steer_angle_measured"], u["yaw_rate"], u["speed"],
-                                                             ready=u["machine_ready"] > 0.5,
-                                                             lockout=u["machine_lockout"] > 0.5, dt=dt)]
-        for i, ((fid, payload), _sent_by_guidance) in enumerate(frames):
+        frames = self.guidance.command(u["steer_angle_cmd"], u["speed_cmd"], u["safe_state"] <= 0.5)
+        frames += self.tractor.feedback(u["steer_angle_measured"], u["yaw_rate"], u["speed"], ready=u["machine_ready"] > 0.5,
+                                        lockout=u["machine_lockout"] > 0.5, dt=dt)
+        for i, (fid, payload) in enumerate(frames):
             self.can(can.Message(timestamp=host + 1e-4 * i, arbitration_id=fid, data=payload,
                                  is_extended_id=self.guidance.extended, channel="can0"))
         if self.reference is not None:

@@ -56,25 +56,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
     from orchestrator.results import atomic_write
 
     from .log import LogError, check_log
-    from .recording import describe, import_recording
+    from .recording import describe, import_recording, import_runs
 
     if args.out.suffix not in (".csv", ".parquet"):
         raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
     options = recording_options(args)
-    frame, report = import_recording(args.source, options)
-    jobs = [(args.out, frame, report)]
     if args.all_runs:
         if options.run is not None or options.time_range is not None:
             raise LogError("--all-runs: not with --run or --time-range")
-        jobs = []
-        for r in report["runs"]:
-            f, rep = import_recording(args.source, replace(options, run=r["run"]))
-            jobs.append((args.out.with_name(f"{args.out.stem}_run{r['run']:02d}{args.out.suffix}"), f, rep))
+        jobs = [(args.out.with_name(f"{args.out.stem}_run{rep['used']['run']:02d}{args.out.suffix}"), f, rep)
+                for f, rep in import_runs(args.source, options)]
+    else:
+        jobs = [(args.out, *import_recording(args.source, options))]
     for path, f, rep in jobs:
         check_log(f, f"{args.source} ({rep['used']['how']})")
         path.parent.mkdir(parents=True, exist_ok=True)

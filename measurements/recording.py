@@ -23,9 +23,11 @@ signals are interpolated linearly onto the log's grid; the set-point is held (th
 """
 from __future__ import annotations
 
+import copy
 import datetime
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -206,7 +208,7 @@ def _streams(source: Path, options: ImportOptions) -> _Streams:
                       "rate_hz": float(1.0 / np.median(np.diff(epochs["utc"]))), "sentences": counts}
     report["can"] = {"frames": int(sum(c.counts["frames"] for c in cans)),
                      "decoded": int(sum(c.counts["decoded"] for c in cans)),
-                     "unknown_ids": dict(sum((c.unknown_ids for c in cans), type(cans[0].unknown_ids)()).most_common(8)),
+                     "unknown_ids": dict(sum((c.unknown_ids for c in cans), Counter()).most_common(8)),
                      "not_decoded": int(sum(c.counts["frames that do not decode"] for c in cans)),
                      "messages": {}}
     frames: dict[str, pd.DataFrame] = {}
@@ -243,10 +245,8 @@ def _gnss_speed(gnss: pd.DataFrame) -> np.ndarray:
     speed = gnss["speed"].to_numpy(float)
     if np.isfinite(speed).mean() > 0.5:
         return np.interp(gnss["utc"], gnss["utc"][np.isfinite(speed)], speed[np.isfinite(speed)])
-    lat0, lon0 = math.radians(gnss["lat"].iloc[0]), math.radians(gnss["lon"].iloc[0])
-    north = np.radians(gnss["lat"].to_numpy() - gnss["lat"].iloc[0]) * 6.371e6
-    east = np.radians(gnss["lon"].to_numpy() - gnss["lon"].iloc[0]) * 6.371e6 * math.cos(lat0)
-    del lon0
+    north = np.radians(gnss["lat"].to_numpy() - gnss["lat"].iloc[0]) * 6.371e6      # a sphere is enough for a speed
+    east = np.radians(gnss["lon"].to_numpy() - gnss["lon"].iloc[0]) * 6.371e6 * math.cos(math.radians(gnss["lat"].iloc[0]))
     return np.hypot(np.gradient(east, gnss["utc"]), np.gradient(north, gnss["utc"]))
 
 
@@ -315,12 +315,28 @@ def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
 
 def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
-    source = Path(source)
     options = options or ImportOptions()
+    return _assemble(Path(source), _checked(Path(source), options), options)
+
+
+def import_runs(source: str | Path, options: ImportOptions | None = None) -> list[tuple[pd.DataFrame, dict]]:
+    """Every run of a recording as (log, report), the files read once."""
+    source, options = Path(source), options or ImportOptions()
+    streams = _checked(source, options)
+    first = _assemble(source, streams, options)
+    return [first if r["run"] == first[1]["used"].get("run") else _assemble(source, streams, replace(options, run=r["run"]))
+            for r in first[1]["runs"]]
+
+
+def _checked(source: Path, options: ImportOptions) -> _Streams:
     if options.rate is not None and not 1.0 <= options.rate <= 200.0:
         raise LogError(f"--rate {options.rate:g}: expected 1 to 200 Hz")
-    streams = _streams(source, options)
-    gnss, can, report = streams.gnss, streams.can, streams.report
+    return _streams(source, options)
+
+
+def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
+    """The log on its grid for the run or range ``options`` choose, and the report of it."""
+    gnss, can, report = streams.gnss, streams.can, copy.deepcopy(streams.report)
     u0 = float(gnss["utc"].iloc[0])
     t_gnss = gnss["utc"].to_numpy(float)
     # the epoch period to the millisecond (GGA times have 10 ms): a float median would let the grid creep
@@ -374,7 +390,8 @@ def import_recording(source: str | Path, options: ImportOptions | None = None) -
                            + ", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s" for r in long_runs))
         r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
         pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
-        used = {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "start": r["start"], "end": r["end"]}
+        used = {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "run": r["run"],
+                "start": r["start"], "end": r["end"]}
     report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0]),
                       "utc_start_s": float(grid[pick][0])}
     t = grid[pick]

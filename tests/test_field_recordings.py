@@ -15,7 +15,7 @@ import pytest
 from components.hardware.guidance_messages import ISOBUS_DBC
 from components.hardware.record import record_study
 from measurements import LogError
-from measurements.recording import ImportOptions, import_recording
+from measurements.recording import ImportOptions, import_recording, import_runs
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -166,6 +166,9 @@ def test_gaps_split_runs_and_a_run_or_time_range_is_chosen(lever_recording, tmp_
     assert report["used"]["how"] == "run 2 (the longest)"
     first, rep1 = import_recording(folder, ImportOptions(run=1))
     assert rep1["used"]["how"] == "run 1" and abs(first["t"].iloc[-1] - (report["runs"][0]["end"] - report["runs"][0]["start"])) < 0.06
+    every = import_runs(folder)                            # the files read once, each run assembled
+    assert [r["used"]["run"] for _, r in every] == [1, 2] and len(every[0][0]) == len(first)
+    assert np.array_equal(every[1][0].to_numpy(), frame.to_numpy())
     part, rep = import_recording(folder, ImportOptions(time_range=(10.0, 50.0)))
     assert abs(part["t"].iloc[-1] - 40.0) < 0.06 and rep["used"]["how"] == "time range"
     with pytest.raises(LogError, match="crosses a gap.*gnss silent from 99.95"):

@@ -11,19 +11,17 @@ agree within 10 cm over the first 20 s (measured: libcosim, fmpy 5 cm, cofmupy 8
 seed alone moves the run by 3 cm), not to round-off."""
 from __future__ import annotations
 
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 import pytest
 
+from fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
-SSD = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription"}
 H = 0.01
 
 
@@ -51,12 +49,9 @@ def own_run(figure8_ssp):
 
 
 def _position_difference(frame: pd.DataFrame, other: pd.DataFrame, until: float) -> float:
-    a, b = frame[frame["t"] <= until + 1e-9], other[other["t"] <= until + 1e-9]
-    a, b = a.set_index(a["t"].round(6)), b.set_index(b["t"].round(6))
-    common = a.index.intersection(b.index)
-    assert len(common) > until / H * 0.9
-    return float(np.hypot(a.loc[common, "tractor.x_cg"] - b.loc[common, "tractor.x_cg"],
-                          a.loc[common, "tractor.y_cg"] - b.loc[common, "tractor.y_cg"]).max())
+    distance, common = cg_distance(frame, other, until)
+    assert common > until / H * 0.9
+    return distance
 
 
 def test_the_ssp_runs_in_this_orchestrator_as_the_study_does(own_run):
@@ -75,88 +70,25 @@ def test_the_ssp_runs_in_this_orchestrator_as_the_study_does(own_run):
 
 
 def test_libcosim_runs_the_figure8_ssp_within_the_paper_bounds(unpacked, own_run):
-    from libcosimpy.CosimExecution import CosimExecution
-    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
-
     from analysis.figure8 import metrics
 
     study, ours = own_run
-    log_output_level(CosimLogLevel.WARNING)
-    execution = CosimExecution.from_ssp_file(str(unpacked), step_size=int(round(H * 1e9)))
-    observer = CosimObserver.create_last_value()
-    execution.add_observer(observer)
-    watched = []
-    for info in execution.slave_infos():
-        name = info.name.decode()
-        variables = [v for v in execution.slave_variables(info.index) if v.causality == 2]     # outputs
-        watched.append((name, info.index, [v.name.decode() for v in variables], [v.reference for v in variables]))
-    steps = int(round(study.study.stop_time / H))
-    rows = np.empty((steps, 1 + sum(len(w[2]) for w in watched)))
-    for k in range(steps):
-        execution.step()
-        row = [(k + 1) * H]
-        for _, index, _, refs in watched:
-            row += observer.last_real_values(index, refs)
-        rows[k] = row
-    frame = pd.DataFrame(rows, columns=["t"] + [f"{n}.{v}" for n, _, names, _ in watched for v in names])
+    frame = libcosim_run(unpacked, study.study.stop_time, H)
     m = metrics(frame, study)
     assert m["euclid_max_straight"] < 0.40 and m["euclid_max_curved"] < 0.60
     assert abs(m["euclid_mean_straight"] - metrics(ours, study)["euclid_mean_straight"]) < 0.05
     assert _position_difference(ours, frame, 20.0) < 0.10
 
 
-def _ssd_graph(unpacked: Path):
-    root = ET.parse(unpacked / "SystemStructure.ssd").getroot()
-    components = {c.get("name"): str(unpacked / c.get("source")) for c in root.iter(f"{{{SSD['ssd']}}}Component")}
-    connections = [(c.get("startElement"), c.get("startConnector"), c.get("endElement"), c.get("endConnector"))
-                   for c in root.iter(f"{{{SSD['ssd']}}}Connection")]
-    return components, connections
-
-
 def test_fmpy_ssp_master_runs_the_figure8_ssp(figure8_ssp, own_run):
-    from fmpy.ssp.simulation import simulate_ssp
-
     _, ours = own_run
-    result = simulate_ssp(str(figure8_ssp), stop_time=20.0, step_size=H)
-    frame = pd.DataFrame({"t": result["time"] + H, "tractor.x_cg": result["tractor.x_cg"],
-                          "tractor.y_cg": result["tractor.y_cg"]})
     # fmpy's master reads each output after doStep: row k holds the state at t_k + h
-    assert _position_difference(ours, frame, 20.0) < 0.10
+    assert _position_difference(ours, fmpy_ssp_run(figure8_ssp, 20.0, H), 20.0) < 0.10
 
 
-def test_cofmupy_runs_the_figure8_fmus(unpacked, own_run, monkeypatch):
-    import cofmupy.wrappers
-    from cofmupy import Coordinator
-
-    # cofmupy 1.0 pins fmpy 0.3.20, whose model description gives the default step size as a
-    # number; fmpy 0.3.32 keeps the attribute's text. Convert it where cofmupy reads it.
-    read = cofmupy.wrappers.read_model_description
-
-    def numeric_default_experiment(*args, **kwargs):
-        md = read(*args, **kwargs)
-        if md.defaultExperiment is not None:
-            for field in ("startTime", "stopTime", "stepSize", "tolerance"):
-                value = getattr(md.defaultExperiment, field, None)
-                if isinstance(value, str):
-                    setattr(md.defaultExperiment, field, float(value))
-        return md
-
-    monkeypatch.setattr(cofmupy.wrappers, "read_model_description", numeric_default_experiment)
-    components, connections = _ssd_graph(unpacked)
-    config = {"fmus": [{"id": n, "path": p} for n, p in components.items()],
-              "connections": [{"source": {"id": a, "variable": o, "type": "fmu"},
-                               "target": [{"id": b, "variable": i, "type": "fmu"}]} for a, o, b, i in connections],
-              "edge_sep": " -> ", "cosim_method": "jacobi", "iterative": False, "root": ""}
-    coordinator = Coordinator()
-    coordinator.start(config)
-    coordinator.run_simulation(step_size=H, end_time=20.0)
-    res = coordinator.get_results()
+def test_cofmupy_runs_the_figure8_fmus(unpacked, own_run):
     _, ours = own_run
-    # like fmpy's, cofmupy's results pair the time of a step's start with the outputs after it
-    frame = pd.DataFrame({"t": np.asarray(res["time"]) + H, "tractor.x_cg": np.asarray(res[("tractor", "x_cg")]),
-                          "tractor.y_cg": np.asarray(res[("tractor", "y_cg")])})
-    assert _position_difference(ours, frame, 20.0) < 0.10
+    assert _position_difference(ours, cofmupy_run(unpacked, 20.0, H), 20.0) < 0.10
 
 
 @pytest.mark.parametrize("args, words", [

@@ -26,9 +26,9 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
         values["study.stop_time"] = float(duration)
     study = study.with_values(values)
     if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
-        from .record import _folder, record_adapters
+        from .record import record_adapters, record_folder
 
-        study = record_adapters(study, _folder(record))
+        study = record_adapters(study, record_folder(record))
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)

@@ -77,8 +77,7 @@ class IsobusMessages:
         for name in mine:
             fid = self.messages[name].frame_id
             self.ids[name] = fid if source_address < 0 else (fid & ~0xFF) | (int(source_address) & 0xFF)
-        self.distance = 0.0
-        self.last_time = None
+        self.distance = 0.0                     # m, Wheel-based Machine Distance
 
     def _frame(self, name: str, values: dict) -> tuple[int, bytes]:
         msg = self.messages[name]

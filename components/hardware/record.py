@@ -24,7 +24,7 @@ FROM_TRACTOR = {"x": "gps_x", "y": "gps_y", "vel_east": "gps_vel_east", "vel_nor
 TO_TRACTOR = {"steer_angle_cmd": "steer_angle_cmd", "speed_cmd": "speed_cmd", "safe_state": "safe_state"}
 
 
-def _folder(value) -> Path:
+def record_folder(value) -> Path:
     folder = Path(value)
     if folder.exists() and not folder.is_dir():
         raise StudyError(f"--record {folder}: is a file; expected a folder for gps.nmea and can.log")
@@ -44,7 +44,7 @@ def record_adapters(study, folder: Path):
 
 def record_study(study, value):
     """The study with its buses recorded into the folder ``value``."""
-    folder = _folder(value)
+    folder = record_folder(value)
     adapters = record_adapters(study, folder)
     if adapters is not None:
         return adapters
