@@ -159,7 +159,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
             result["recording"] = imported
         replay = Replay(frame, baseline, fit_fraction=fit_fraction)
     except (LogError, CannotDecide) as exc:
-        result["reason"] = str(exc)
+        reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
+        result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
         result["split_time"] = float("nan")
         _write(out, result, [])
         return result
