@@ -9,7 +9,7 @@ import pandas as pd
 
 from orchestrator.study import Study
 
-from .signals import rms, signal
+from .signals import between_samples, rms, signal
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
 # straight and below 60 cm on curved time-based trajectories.
@@ -19,10 +19,15 @@ PAPER_BOUNDS = {"euclid_max_straight": 0.40, "euclid_max_curved": 0.60}
 STARTUP_SETTLE_S = 5.0
 
 
-def tracking_error(frame: pd.DataFrame, study: Study) -> np.ndarray:
-    dx = signal(frame, study, "yaw_plant", "x_cg") - signal(frame, study, "reference", "x_ref")
-    dy = signal(frame, study, "yaw_plant", "y_cg") - signal(frame, study, "reference", "y_ref")
-    return np.hypot(dx, dy)
+def tracking_error(frame: pd.DataFrame, study: Study, held: bool = False) -> np.ndarray:
+    """|CG - reference| at every instant of the plant, the reference taken at the same instant
+    (interpolated between its 20 Hz samples: signals.between_samples); ``held``: the reference as
+    the table holds it between samples (up to speed x its step behind, the figures before issue 28)."""
+    if held:
+        x_ref, y_ref = signal(frame, study, "reference", "x_ref"), signal(frame, study, "reference", "y_ref")
+    else:
+        x_ref, y_ref = between_samples(frame, study, "reference", ("x_ref", "y_ref"))
+    return np.hypot(signal(frame, study, "yaw_plant", "x_cg") - x_ref, signal(frame, study, "yaw_plant", "y_cg") - y_ref)
 
 
 def settled_index(t: np.ndarray, speed: np.ndarray, fraction: float = 0.999) -> int:
@@ -38,8 +43,9 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     """Tracking metrics from STARTUP_SETTLE_S after the reference reaches its speed; the start
     from rest is reported apart as ``euclid_max_startup``."""
     err_all = tracking_error(frame, study)
+    held = tracking_error(frame, study, held=True)
     start = settled_index(frame["t"].to_numpy(), signal(frame, study, "reference", "speed_ref"))
-    frame, err = frame.iloc[start:], err_all[start:]
+    frame, err, held = frame.iloc[start:], err_all[start:], held[start:]
     curved = signal(frame, study, "reference", "segment") > 0.5
     speed = signal(frame, study, "drivetrain", "speed")
     v_d = signal(frame, study, "tracker", "speed_desired")
@@ -63,6 +69,10 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         "euclid_max_curved": stat(np.max, err[curved]),
         "euclid_rms": rms(err),
         "euclid_max_startup": float(err_all[:start].max()) if start else 0.0,
+        "euclid_mean_straight_held": stat(np.mean, held[straight]),
+        "euclid_max_straight_held": stat(np.max, held[straight]),
+        "euclid_mean_curved_held": stat(np.mean, held[curved]),
+        "euclid_max_curved_held": stat(np.max, held[curved]),
         "metrics_from_time_s": float(frame["t"].iloc[0]),
         "speed_rms_error": rms(speed - v_d),
         "speed_mean_error": float(np.mean(speed - v_d)),
@@ -83,6 +93,8 @@ METRICS = {"euclid_mean_straight": ("m", None), "euclid_max_straight": ("m", "< 
            "heading_estimate_rms_error": ("rad", None), "steer_angle_rms": ("rad", None),
            "steer_rate_rms": ("rad/s", None), "sim_time_s": ("s", None), "wall_time_s": ("s", None)}
 METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
+                **{f"{k}_held": "m" for k in ("euclid_mean_straight", "euclid_max_straight", "euclid_mean_curved",
+                                              "euclid_max_curved")},
                 "euclid_rms": "m", "euclid_max_startup": "m", "metrics_from_time_s": "s",
                 "speed_rms_error_vs_path": "m/s", "events": "count"}
 
@@ -121,8 +133,9 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     save(fig, "trajectory.png")
 
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 4.5))
-    ex = sig("reference", "x_ref") - sig("yaw_plant", "x_cg")
-    ey = sig("reference", "y_ref") - sig("yaw_plant", "y_cg")
+    x_ref, y_ref = between_samples(frame, study, "reference", ("x_ref", "y_ref"))
+    ex = x_ref - sig("yaw_plant", "x_cg")
+    ey = y_ref - sig("yaw_plant", "y_cg")
     for ax, e, name in zip(axes, (ex, ey), ("x", "y")):
         ax.plot(t, e, lw=0.8)
         ax.set_ylabel(f"error {name} [m]")

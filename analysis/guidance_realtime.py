@@ -11,7 +11,7 @@ from components.models.figure8_path import Figure8Path
 from orchestrator.study import Study
 
 from .figure8 import settled_index
-from .signals import MissingSignal, component_named, rms, signal
+from .signals import MissingSignal, between_samples, component_named, rms, signal
 
 def path_error(x: np.ndarray, y: np.ndarray, path: Figure8Path, spacing: float = 0.01) -> np.ndarray:
     """Distance from each point to the nearest point of the path (sampled every ``spacing`` m)."""
@@ -46,9 +46,8 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
         err = path_error(x[valid], y[valid], _path(study))
         out.update(path_error_max=float(err.max()), path_error_mean=float(err.mean()))
         try:
-            dx = x - signal(frame, study, "reference", "x_ref")
-            dy = y - signal(frame, study, "reference", "y_ref")
-            e = np.hypot(dx, dy)[valid]
+            x_ref, y_ref = between_samples(frame, study, "reference", ("x_ref", "y_ref"))
+            e = np.hypot(x - x_ref, y - y_ref)[valid]
             out.update(euclid_max=float(e.max()), euclid_rms=rms(e))
         except MissingSignal:
             pass

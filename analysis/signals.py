@@ -29,3 +29,20 @@ def signal(frame: pd.DataFrame, study: Study, role: str, port: str) -> np.ndarra
 
 def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else float("nan")
+
+
+def between_samples(frame: pd.DataFrame, study: Study, role: str, ports: tuple[str, ...]) -> list[np.ndarray]:
+    """The outputs of the sampled component with ``role`` at every instant of ``frame``,
+    interpolated linearly between the instants it computed them (t0 + k step) instead of held
+    from one to the next: a 20 Hz reference compared with a 100 Hz plant then adds no sawtooth of
+    up to speed x 50 ms. Rows after the last sample keep it."""
+    name = component_named(study, role)
+    spec = study.components.get(name)
+    step = (spec.step if spec is not None and spec.step else None) or study.study.base_step
+    t = frame["t"].to_numpy(float)
+    k = (t - study.study.start_time) / step          # its instants count from the study's start, not the table's
+    own = np.abs(k - np.round(k)) < 1e-6
+    values = [signal(frame, study, role, port) for port in ports]
+    if own.sum() < 2 or own.all():
+        return values
+    return [np.interp(t, t[own], v[own]) for v in values]

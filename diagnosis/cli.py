@@ -28,8 +28,11 @@ def run(args: argparse.Namespace) -> int:
 
     from .pipeline import CANNOT_DECIDE, diagnose
 
+    from orchestrator.output import check_output
+
     if not 0.2 <= args.fit_fraction <= 0.8:
         raise StudyError("--fit-fraction must be in [0.2, 0.8]")
+    check_output(args.out, overwrite=True)
     from measurements.cli import recording_options
     from measurements.recording import describe
 

@@ -49,18 +49,21 @@ BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def diagnose_hidden(case: tuple) -> dict:
-    """Write the log of (effect, seed, folder[, TABLE scale[, duration]]) to ``folder`` and diagnose
-    it (no plots); ``effect`` may be several ids joined by '+' (measurements.truth_tractor)."""
+    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant]]]) to
+    ``folder`` and diagnose it (no plots); ``effect`` may be several ids joined by '+', ``healthy``
+    one or several of truth_tractor.HEALTHY (a truth without fault that differs from the baseline)."""
     from .pipeline import diagnose
 
     effect, seed, folder, *rest = case
     scale = rest[0] if rest else None
     duration = rest[1] if len(rest) > 1 else 240.0
-    frame, truth = make_log(seed, effect, scale=scale, duration=duration)
-    log = Path(folder) / f"{effect or 'none'}_{seed}.parquet"
+    healthy = rest[2] if len(rest) > 2 else None
+    frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy)
+    name = f"{effect or 'none'}_{healthy.replace('+', '-') + '_' if healthy else ''}{seed}"
+    log = Path(folder) / f"{name}.parquet"
     frame.to_parquet(log)
-    result = diagnose(log, Path(folder) / f"{effect or 'none'}_{seed}", plots=False)
-    return {"effect": effect or "none", "seed": seed, "truth": truth, "result": result}
+    result = diagnose(log, Path(folder) / name, plots=False)
+    return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}
 
 
 def diagnose_many(cases: list[tuple[str | None, int, str]], workers: int = 2) -> list[dict]:

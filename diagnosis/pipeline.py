@@ -167,7 +167,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     sel = select(replay, min_gain, seed=study.study.seed)
     base = sel.base
     final, floors = sel.final, sel.floors
-    checks = {s: stage_check(replay, s, final.values, floors[s], math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
+    checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
               for s in STAGES}
     result["split_time"] = replay.t_split
     result["baseline_refit"] = {k: base.values[k] for k in REFIT}

@@ -96,12 +96,15 @@ def markdown(result: dict, plots: list[str]) -> str:
     lines += ["", "## Residual by stage against the noise floor (held-out RMS)", "",
               "The floor is the sensors' white noise, estimated from the log (top of the residual spectrum; for the",
               "position and speed stages propagated through the dead reckoning). 'without X': the final model",
-              "refitted without effect X. A stage is misfit above "
-              f"{RATIO:.1f} x its floor and a material excess.", "",
-              "| " + " | ".join(["stage", "unit", "floor", "baseline"]
+              "refitted without effect X. 'healthy': what a tractor with no fault, described exactly by the",
+              "study, leaves in this log's replay (the baseline's own simplifications: the steering's first-order",
+              "equivalent, a quantised wheel-angle sensor; see below). A stage is misfit above "
+              f"{RATIO:.1f} x its floor and a material excess over the healthy level.", "",
+              "| " + " | ".join(["stage", "unit", "floor", "healthy", "baseline"]
                                 + [f"without {e['id']}" for e in result["effects"] if e["id"] != "unexplained"]
-                                + ["final", "x floor", "data-driven extension"]) + " |",
-              "|---|---|---:|---:|" + "---:|" * sum(e["id"] != "unexplained" for e in result["effects"]) + "---:|---:|---|"]
+                                + ["final", "x floor", "excess over healthy (materiality)", "data-driven extension"]) + " |",
+              "|---|---|---:|---:|---:|" + "---:|" * sum(e["id"] != "unexplained" for e in result["effects"])
+              + "---:|---:|---:|---|"]
     by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
     for stage, st in result.get("stages", {}).items():
         k, unit = UNIT_SCALE[stage]
@@ -110,9 +113,13 @@ def markdown(result: dict, plots: list[str]) -> str:
         ext = by_stage.get(stage, {}).get("extension")
         ext_text = (f"{ext['kind']} on {ext['signal']}: {k * ext['rms_after']:.3g} ({100 * ext['held_out_gain']:.0f}% off)"
                     if ext else "-")
-        lines.append(f"| {stage} | {unit} | {k * st['floor']:.3g} | {k * st['rms_baseline_test']:.3g} | "
+        healthy = st.get("healthy_level", st["floor"])
+        lines.append(f"| {stage} | {unit} | {k * st['floor']:.3g} | {k * healthy:.3g} | {k * st['rms_baseline_test']:.3g} | "
                      + "".join(c + " | " for c in cells)
-                     + f"{k * st['rms_test']:.3g} | {st['ratio']:.2f}{' (misfit)' if st['misfit'] else ''} | {ext_text} |")
+                     + f"{k * st['rms_test']:.3g} | {st['ratio']:.2f}{' (misfit)' if st['misfit'] else ''} | "
+                     + f"{k * st.get('excess_over_healthy', 0.0):.3g} ({k * st['materiality']:.3g}) | {ext_text} |")
+    lines += ["", "How the healthy level was found:", ""]
+    lines += [f"- {stage}: {st.get('healthy_how', 'the noise floor')}" for stage, st in result.get("stages", {}).items()]
     lines += [""]
     lines += ["## Each catalogue effect alone against the baseline, best first", "",
               "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",

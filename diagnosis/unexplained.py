@@ -193,16 +193,32 @@ def extension(replay, stage: str, values: dict, like: dict | None = None) -> dic
     return _time_series_extension(replay, stage, values, stage_signals(replay, stage, values), only)
 
 
-def is_misfit(stage: str, rms_test: float, floor: float) -> bool:
-    return floor > 0 and rms_test / floor > RATIO and rms_test ** 2 - floor ** 2 >= MATERIAL[stage] ** 2
+def materiality(stage: str, floors: dict) -> float:
+    """MATERIAL, and for the steering stage at least half the wheel-angle sensor's resolution: a
+    servo closed on a sensor of step q holds the wheel anywhere within about q/2 of its command,
+    so a smaller misfit says where each hold ended, not what the model lacks."""
+    q = floors.get("_healthy", {}).get("delta_resolution", 0.0)
+    return max(MATERIAL[stage], 0.5 * q) if stage == "steering" else MATERIAL[stage]
 
 
-def stage_check(replay, stage: str, values: dict, floor: float, rms_fit: float, rms_test: float) -> dict:
+def is_misfit(stage: str, rms_test: float, floors: dict) -> bool:
+    """Above the noise floor by RATIO, and above what a healthy tractor leaves (the baseline's
+    simplifications, simplification.healthy_levels) by a material amount."""
+    floor = floors[stage]
+    healthy = floors.get("_healthy", {}).get(stage, floor)
+    return floor > 0 and rms_test / floor > RATIO and rms_test ** 2 - healthy ** 2 >= materiality(stage, floors) ** 2
+
+
+def stage_check(replay, stage: str, values: dict, floors: dict, rms_fit: float, rms_test: float) -> dict:
     """The floor comparison of one stage; the correlation and the extension when it is misfit."""
+    floor = floors[stage]
+    healthy = floors.get("_healthy", {}).get(stage, floor)
     excess = math.sqrt(max(rms_test ** 2 - floor ** 2, 0.0))
     out = {"stage": stage, "unit": UNITS[stage], "floor": floor, "rms_fit": rms_fit, "rms_test": rms_test,
-           "ratio": rms_test / floor if floor > 0 else math.inf, "excess": excess, "materiality": MATERIAL[stage]}
-    out["misfit"] = is_misfit(stage, rms_test, floor)
+           "ratio": rms_test / floor if floor > 0 else math.inf, "excess": excess, "materiality": materiality(stage, floors),
+           "healthy_level": healthy, "excess_over_healthy": math.sqrt(max(rms_test ** 2 - healthy ** 2, 0.0)),
+           "healthy_how": floors.get("_healthy", {}).get("how", {}).get(stage, "the noise floor")}
+    out["misfit"] = is_misfit(stage, rms_test, floors)
     if not out["misfit"]:
         return out
     if stage == "position":

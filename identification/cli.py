@@ -36,6 +36,9 @@ def run(args: argparse.Namespace) -> int:
     for option, value in (("--speed", args.speed), ("--period", args.period)):
         if value is not None and not value > 0:
             raise StudyError(f"{option} {value:g}: expected a positive number")
+    from orchestrator.output import check_output
+
+    check_output(args.out, overwrite=True)
     try:
         if args.source.suffix in (".toml", ".yaml", ".yml"):
             report = identify_study(Study.load(args.source, args.set), args.out, plots=not args.no_plots)

@@ -63,6 +63,9 @@ def run(args: argparse.Namespace) -> int:
 
     if args.out.suffix not in (".csv", ".parquet"):
         raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
+    from orchestrator.output import check_output
+
+    check_output(args.out.parent, overwrite=True)
     options = recording_options(args)
     if args.all_runs:
         if options.run is not None or options.time_range is not None:

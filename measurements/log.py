@@ -158,6 +158,26 @@ def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: n
                            f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
 
 
+def resolution(x: np.ndarray, min_repeat: float = 2.0) -> float:
+    """The step q of a quantised signal (its values lie on a grid x0 + k q: a potentiometer's
+    counts, a float32 position far from its origin), or 0 when the values are not on a grid.
+
+    q is the smallest gap between distinct values; the signal is quantised when every gap is a
+    whole multiple of q (within 2 %) and values repeat (fewer distinct values than samples /
+    ``min_repeat``, so that a smooth signal sampled once per level is not taken for a grid)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    levels = np.unique(x)
+    if len(levels) < 3 or len(levels) > len(x) / min_repeat:
+        return 0.0
+    gaps = np.diff(levels)
+    q = float(gaps.min())
+    if q <= 0 or q < 1e-12 * max(float(np.abs(levels).max()), 1.0):
+        return 0.0
+    ratio = gaps / q
+    return q if float(np.max(np.abs(ratio - np.round(ratio)))) < 0.02 else 0.0
+
+
 def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(first ``fraction`` of the duration, the rest): a fit part and a held-out part."""
     t = frame["t"].to_numpy(dtype=float)
@@ -195,4 +215,6 @@ def load_log(source: str | Path, required: tuple[str, ...] = CANONICAL, resample
         return read_log(source, required, resample_jitter), None
     frame, report = import_recording(source, recording)
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
-    return check_log(frame, where, required, resample_jitter), report
+    frame = check_log(frame, where, required, resample_jitter)
+    frame.attrs["resolution"] = dict(report.get("resolution", {}))
+    return frame, report

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .log import CANONICAL, LogError
+from .log import CANONICAL, LogError, resolution
 from .raw_can import CAN_COLUMNS, CAN_SUFFIXES, CANRecording, SignalSource, choose_sources, converter, load_dbc, \
     read_can_file
 from .raw_nmea import NMEARecording, looks_like_nmea, read_nmea_file
@@ -406,6 +406,8 @@ def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[
                "x": east, "y": north}
     report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
     report["rate_hz"] = 1.0 / step
+    # a sensor's steps, read on its own frames: interpolation onto the grid hides them from the log
+    report["resolution"] = {c: resolution(can[c][1]) for c in CAN_COLUMNS}
     return pd.DataFrame(columns)[list(CANONICAL)], report
 
 

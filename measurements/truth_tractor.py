@@ -29,6 +29,49 @@ EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steeri
 # faults outside the diagnosis catalogue: the diagnosis must call them "unexplained"
 UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_saturation")
 
+# healthy truths: ways a tractor with no fault differs from the baseline (the diagnosis must say "none")
+HEALTHY = ("servo", "servo_guard", "rear_relaxation", "relaxation", "noisy_sensors", "quiet_sensors",
+           "one_speed", "field_driving", "servo+rear_relaxation+noisy_sensors")
+
+
+def draw_healthy(variant: str, rng: np.random.Generator) -> dict:
+    """The truth settings of a healthy variant (several joined by '+'):
+
+    - servo: the paper's servo steering instead of a first-order loop: a PI (150 V/rad, 20 V/(rad s)
+      x 0.8-1.2) at 1 kHz on a 1-deg potentiometer, a 0.3-0.7 V valve dead-band around neutral, a
+      20-40 ms spool lag, 60 deg/s x 0.9-1.1 at full opening; the log's wheel angle is the
+      potentiometer's reading (it hunts between two levels); servo_guard: the same with the PI
+      ignoring errors within half a potentiometer step (as the shipped figure-8's controller);
+    - rear_relaxation: a rear relaxation length of 0.3-1.0 m (with the Table's stiffnesses a longer
+      one leaves the yaw mode at 11-13 rad/s almost undamped, and at 1.6 m, the paper's, unstable:
+      not a healthy tractor);
+      relaxation: the front one x 0.5-2;
+    - noisy_sensors / quiet_sensors: gyro, speed, GPS and wheel-angle noise x 2-3 / x 0.3-0.6;
+    - one_speed: the whole log at one speed (1.5-2.5 m/s);
+    - field_driving: long straights with small corrections and a headland turn every 30-60 s
+      (little of the multisine excitation)."""
+    out: dict = {}
+    u = rng.uniform
+    for part in effect_list(variant):
+        if part in ("servo", "servo_guard"):
+            out.update(steering="servo", guard=part == "servo_guard", kp=150.0 * u(0.8, 1.2), ki=20.0 * u(0.8, 1.2),
+                       valve_deadband=u(0.3, 0.7), spool=u(0.02, 0.04), servo_rate=STEERING_RATE * u(0.9, 1.1),
+                       resolution=1.0 * DEG)
+        elif part == "rear_relaxation":
+            out["sigma_r"] = u(0.3, 1.0)
+        elif part == "relaxation":
+            out["sigma_f_factor"] = float(np.exp(u(math.log(0.5), math.log(2.0))))
+        elif part in ("noisy_sensors", "quiet_sensors"):
+            lo, hi = (2.0, 3.0) if part == "noisy_sensors" else (0.3, 0.6)
+            out["noise"] = float(u(lo, hi))
+        elif part == "one_speed":
+            out["speeds"] = (float(np.round(u(1.5, 2.5), 1)),)
+        elif part == "field_driving":
+            out["plan"] = "field"
+        else:
+            raise ValueError(f"unknown healthy variant {part!r}; known: {HEALTHY}")
+    return out
+
 
 def draw_unlisted(effect: str, rng: np.random.Generator) -> dict[str, float]:
     """Magnitudes of the unlisted faults:
@@ -116,11 +159,80 @@ def effect_list(effect: str | tuple | list | None) -> list[str]:
     return list(effect)
 
 
+def field_plan(rng: np.random.Generator, duration: float, rate: float = 20.0, speed: float = 2.0):
+    """Field work: straights held by small corrections (steps of 0.5-2 deg every 2-6 s), a headland
+    turn (a 20-30 deg U-turn of 12 s, slowing to 60 % of the working speed) every 30-60 s."""
+    n = int(round(duration * rate))
+    t = np.arange(n) / rate
+    cmd = np.zeros(n)
+    turns = []
+    k, side = 0, rng.choice([-1.0, 1.0])
+    while k < n:
+        straight = int(rng.uniform(30.0, 60.0) * rate)
+        j = k
+        while j < min(n, k + straight):
+            m = min(n, k + straight, j + int(rng.uniform(2.0, 6.0) * rate))
+            cmd[j:m] = rng.uniform(-2.0, 2.0) * DEG * rng.choice([0.25, 1.0])
+            j = m
+        a = min(n, k + straight)
+        b = min(n, a + int(12 * rate))
+        peak = side * rng.uniform(20.0, 30.0) * DEG
+        cmd[a:b] = np.interp(t[a:b] - a / rate, [0, 2, 10, 12], [0, peak, peak, 0])
+        turns.append((a / rate, 12.0))
+        side, k = -side, b
+
+    def speed_of(time: float) -> float:
+        ramp = min(time / 3.0, 1.0)
+        slow = 0.0
+        for start, length in turns:
+            if start - 3.0 <= time <= start + length + 3.0:
+                s = min((time - start + 3.0) / 3.0, 1.0, (start + length + 3.0 - time) / 3.0)
+                slow = max(slow, 0.5 * (1 - math.cos(math.pi * max(s, 0.0))))
+        return speed * (0.5 * (1 - math.cos(math.pi * ramp))) * (1.0 - 0.4 * slow)
+
+    return t, cmd, speed_of
+
+
+class Servo:
+    """The paper's steering servo (section II) in scalar form, stepped at 1 kHz: a PI on the
+    potentiometer's reading -> valve voltage (+-6 V about neutral, dead-band) -> spool lag ->
+    wheel rate proportional to the opening -> +-45 deg stop."""
+
+    def __init__(self, v: dict, deadband: float, rate_limit: float, sensor_gain: float, h: float = 0.001):
+        self.kp, self.ki, self.db, self.spool_tau = v["kp"], v["ki"], v["valve_deadband"], v["spool"]
+        self.full_rate, self.q, self.h = v["servo_rate"], v["resolution"], h
+        self.angle_deadband = deadband + (0.5 * self.q if v.get("guard") else 0.0)
+        self.rate_limit, self.sensor_gain = rate_limit, sensor_gain
+        self.delta = self.opening = self.integral = 0.0
+        self.alpha = 1.0 - math.exp(-h / self.spool_tau)
+
+    def advance(self, cmd: float, duration: float) -> float:
+        for _ in range(int(round(duration / self.h))):
+            reading = self.q * round(self.sensor_gain * self.delta / self.q)
+            err = cmd - reading
+            d = self.angle_deadband
+            err = err - d if err > d else (err + d if err < -d else 0.0)
+            raw = self.kp * err + self.integral
+            volts = max(-6.0, min(6.0, raw))
+            if volts == raw or (raw > 6.0) != (err > 0):
+                self.integral = max(-2.0, min(2.0, self.integral + self.ki * self.h * err))
+            excess = abs(volts) - self.db
+            target = math.copysign(min(excess / (6.0 - self.db), 1.0), volts) if excess > 0 else 0.0
+            self.opening += self.alpha * (target - self.opening)
+            move = self.full_rate * self.h * self.opening
+            move = max(-self.rate_limit * self.h, min(self.rate_limit * self.h, move))
+            self.delta = max(-45 * DEG, min(45 * DEG, self.delta + move))
+        return self.delta
+
+
 def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
-             scale: dict[str, float] | None = None, speeds: tuple[float, ...] = (1.0, 2.0, 3.0)) -> tuple[pd.DataFrame, dict]:
+             scale: dict[str, float] | None = None, speeds: tuple[float, ...] = (1.0, 2.0, 3.0),
+             healthy: str | None = None) -> tuple[pd.DataFrame, dict]:
     """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
     EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
-    sigma_f) to stress the diagnosis with a truth further from the baseline."""
+    sigma_f) to stress the diagnosis with a truth further from the baseline; ``healthy``: one or
+    several of HEALTHY ('a+b'), ways the truth differs from the baseline without a fault
+    (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay)."""
     rng = np.random.default_rng(seed)
     ids = effect_list(effect)
     unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED]
@@ -133,11 +245,14 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     for i in ids:
         if i in UNLISTED:
             e.update(draw_unlisted(i, side))
+    hv = draw_healthy(healthy, np.random.default_rng([seed, 2])) if healthy else {}
     p = dict(TABLE)
     for key, factor in (scale or {}).items():
         p[key] *= factor
     for k, lo, hi in (("C_f", 0.85, 1.15), ("C_r", 0.85, 1.15), ("sigma_f", 0.9, 1.1)):
         p[k] *= rng.uniform(lo, hi)
+    p["sigma_f"] *= hv.get("sigma_f_factor", 1.0)
+    sigma_r = hv.get("sigma_r", 0.0)
     tau = STEERING_TIME_CONSTANT * rng.uniform(0.8, 1.2)
     tau_spool = 0.015
     rate = e.get("rate", STEERING_RATE)
@@ -145,42 +260,56 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     delay, offset = e.get("delay", 0.0), e.get("offset", 0.0)
     k_corner = e.get("k", 0.0)
     slope, downhill = e.get("slope", 0.0), e.get("downhill", 0.0)
-    t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=speeds)
+    if hv.get("plan") == "field":
+        t_log, cmd, speed_of = field_plan(rng, duration)
+    else:
+        t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=hv.get("speeds", speeds))
     m, I, lf, lr, sf = p["m"], p["I"], p["l_f"], p["l_r"], p["sigma_f"]
     g_slope = G * math.sin(slope)
     sensor_gain = e.get("sensor_gain", 1.0)
     alpha_s = e.get("alpha_s", math.inf)
+    servo = Servo(hv, e.get("deadband", 0.0), rate, sensor_gain) if hv.get("steering") == "servo" else None
+    servo_rate = [0.0]                          # the servo's mean wheel rate over the current step
 
     def deriv(time, s):
-        delta, spool, vy, r, af, psi, x, y = s
-        k = int(math.floor((time - delay) * 20.0 + 1e-9))
-        c = cmd[min(max(k, 0), len(cmd) - 1)]
-        err = c - sensor_gain * delta           # the loop closes on the sensor's reading
-        err = err - dead if err > dead else (err + dead if err < -dead else 0.0)
-        want = max(-rate, min(rate, err / tau))
+        delta, spool, vy, r, af, psi, x, y, ar_state = s
+        if servo is None:
+            k = int(math.floor((time - delay) * 20.0 + 1e-9))
+            c = cmd[min(max(k, 0), len(cmd) - 1)]
+            err = c - sensor_gain * delta           # the loop closes on the sensor's reading
+            err = err - dead if err > dead else (err + dead if err < -dead else 0.0)
+            want = max(-rate, min(rate, err / tau))
+            d_delta, d_spool = spool, (want - spool) / tau_spool
+        else:
+            d_delta, d_spool = servo_rate[0], 0.0
         v = speed_of(time)
         scale = max(0.2, 1.0 + k_corner * (v - 2.0))
         cf, cr = p["C_f"] * scale, p["C_r"] * scale
         vv = max(v, 0.8)          # the slip equations divide by v; below 0.8 m/s scaled (v / vv)
-        ar = (vy - lr * r) / vv
+        ar = ar_state if sigma_r > 0 else (vy - lr * r) / vv
         a_lat = g_slope * math.sin(downhill - psi)
         sat_f, sat_r = 1.0 + abs(af) / alpha_s, 1.0 + abs(ar) / alpha_s
         dvy = -vv * r + (-cf * af / sat_f - cr * ar / sat_r) / m + a_lat
         dr = (-lf * cf * af / sat_f + lr * cr * ar / sat_r) / I
         daf = (vy + lf * r - vv * (delta + offset + af)) / sf
+        dar = (vy - lr * r - vv * ar_state) / sigma_r if sigma_r > 0 else 0.0
         c_, s_ = math.cos(psi), math.sin(psi)
-        return (spool, (want - spool) / tau_spool, dvy * (v / vv), dr * (v / vv), daf * (v / vv), r,
-                v * c_ - vy * s_, v * s_ + vy * c_)
+        return (d_delta, d_spool, dvy * (v / vv), dr * (v / vv), daf * (v / vv), r,
+                v * c_ - vy * s_, v * s_ + vy * c_, dar * (v / vv))
 
     sub = 10                                  # 200 Hz internal steps per 20 Hz sample
     h = 0.05 / sub
     n = len(t_log)
-    state = (0.0,) * 5 + (rng.uniform(-math.pi, math.pi), 0.0, 0.0)
-    rec = np.empty((n * sub, 8))
+    state = (0.0,) * 5 + (rng.uniform(-math.pi, math.pi), 0.0, 0.0, 0.0)
+    rec = np.empty((n * sub, 9))
     times = np.arange(n * sub) * h
     for i in range(n * sub):
         rec[i] = state
         t0 = times[i]
+        if servo is not None:                 # the servo runs at 1 kHz; the wheel angle enters linearly over the step
+            k = int(math.floor((t0 - delay) * 20.0 + 1e-9))
+            before = servo.delta
+            servo_rate[0] = (servo.advance(cmd[min(max(k, 0), len(cmd) - 1)], h) - before) / h
         k1 = deriv(t0, state)
         s1 = tuple(a + h * b for a, b in zip(state, k1))
         k2 = deriv(t0 + h, s1)
@@ -193,8 +322,8 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     idx = np.arange(n) * sub
     lat = e.get("latency", 0.0)
     gx, gy = np.interp(t_log - lat, times, ax), np.interp(t_log - lat, times, ay)
-    noise = rng.standard_normal((6, n))
-    q = 0.1 * DEG
+    noise = rng.standard_normal((6, n)) * hv.get("noise", 1.0)
+    q = hv.get("resolution", 0.1 * DEG)
     frame = pd.DataFrame({
         "t": t_log,
         "delta_cmd": cmd,
@@ -204,5 +333,6 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
-    truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"]}
+    truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
+             "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
     return frame, truth

@@ -49,6 +49,10 @@ def check_output(out: Path, overwrite: bool = False) -> None:
         raise OutputError(f"--out {out}: {base} is not a folder")
     if not os.access(base, os.W_OK | os.X_OK):
         raise OutputError(f"--out {out}: cannot create it, {base} is not writable")
+    try:                    # permissions are not the whole story (/proc, a read-only mount, a full disk)
+        os.rmdir(tempfile.mkdtemp(prefix=".probe.", dir=base))
+    except OSError as exc:
+        raise OutputError(f"--out {out}: cannot create folders in {base}: {exc.strerror or exc}") from None
 
 
 def _completed(folder: Path) -> bool:
@@ -72,8 +76,11 @@ class ResultFolder:
 
     def __enter__(self) -> "ResultFolder":
         parent = self.out.parent
-        parent.mkdir(parents=True, exist_ok=True)
-        self._lock = open(parent / f".{self.out.name}.lock", "w")
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+            self._lock = open(parent / f".{self.out.name}.lock", "w")
+        except OSError as exc:
+            raise OutputError(f"--out {self.out}: cannot create {parent}: {exc.strerror or exc}") from None
         try:
             fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

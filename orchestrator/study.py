@@ -4,6 +4,8 @@ derive a variant of it.
 Layout of a study file (TOML or YAML, validated with pydantic)::
 
     extends = "other.toml"  (optional: start from that study, merge this file's tables over it)
+    connections_remove = [...], connections_add = [...]   (with extends: edit the parent's
+                            connections instead of repeating them)
     [study]                 name, stop_time, base_step, seed, start_time, signals_format, analysis
     [components.NAME]       type, step, parameters = {...}, inputs = {...} (constants for inputs
                             left unconnected). ``type`` is a registered component type
@@ -610,7 +612,10 @@ def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str,
         return study_data(path)
     data = _read_one(path)
     parent = data.pop("extends", None)
+    edits = {k: data.pop(k) for k in ("connections_remove", "connections_add") if k in data}
     if parent is None:
+        if edits:
+            raise StudyError(f"{path}: field {next(iter(edits))}: only with extends (it edits the parent's connections)")
         return data
     if not isinstance(parent, str):
         raise StudyError(f"{path}: field extends: expected a file name")
@@ -622,7 +627,31 @@ def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str,
         old = (base.get("components") or {}).get(name)
         if isinstance(spec, dict) and isinstance(old, dict) and "type" in spec and spec["type"] != old.get("type"):
             base["components"][name] = {}       # another type: its parameters and inputs start afresh
-    return merge(base, data)
+    merged = merge(base, data)
+    if edits:
+        merged["connections"] = _edited_connections(merged.get("connections") or [], edits, path)
+    return merged
+
+
+def _edited_connections(connections: list, edits: dict[str, Any], path: Path) -> list:
+    """The parent's connections without ``connections_remove`` and with ``connections_add``
+    (compared parsed, so spacing does not matter); removing one that is not there is an error."""
+    def key(item):
+        return tuple(_parse_connections([item])[0].values())
+
+    for field in edits:
+        if not isinstance(edits[field], list) or not all(isinstance(x, str) for x in edits[field]):
+            raise StudyError(f"{path}: field {field}: expected a list of strings 'component.output -> component.input'")
+        try:
+            [key(x) for x in edits[field]]
+        except ValueError as exc:
+            raise StudyError(f"{path}: field {field}: {exc}") from None
+    present = {key(c): c for c in connections}
+    drop = {key(x) for x in edits.get("connections_remove", [])}
+    missing = [x for x in edits.get("connections_remove", []) if key(x) not in present]
+    if missing:
+        raise StudyError(f"{path}: field connections_remove: {missing[0]!r} is not a connection of the study it extends")
+    return [c for c in connections if key(c) not in drop] + list(edits.get("connections_add", []))
 
 
 def _read_one(path: Path) -> dict[str, Any]:

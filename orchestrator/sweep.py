@@ -133,6 +133,9 @@ class SweepRun:
     # --- checks before anything runs ----------------------------------------------------------
     def validate(self) -> None:
         """Build every point (types, parameters, units, wiring) before running any."""
+        from .output import check_output
+
+        check_output(self.out, overwrite=True)
         for point in self.points:
             try:
                 build_system(point_study(self.study, point))

@@ -385,3 +385,28 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
                            "--period", "50", "--models", "second_order", "--no-plots"],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0 and "used: run 1" in proc.stdout, proc.stderr
+
+
+def test_a_steering_offset_in_a_recording_is_named_with_its_value(tmp_path):
+    """Issue 28, item 2: a 0.03 rad (1.7 deg) wheel-angle offset on the project's own plant, through
+    the recording path, is named with its value: a free input map that could also carry an offset
+    does not displace the named effect. A clean recording of the same drive names no steering
+    effect and leaves no stage misfit (its GPS is one 50 ms sample older than the gyro and the wheel
+    angle, which the diagnosis may rightly name as gps_latency)."""
+    from diagnosis.pipeline import diagnose
+
+    results = {}
+    for name, values in (("offset", {"tractor.tractor.steer_angle_offset": 0.03}), ("clean", None)):
+        folder = record(tmp_path / name / "recording", 240.0, values)
+        results[name] = diagnose(folder, tmp_path / name / "diagnosis", plots=False)
+    res = results["offset"]
+    offset = next((e for e in res["effects"] if e["id"] == "steering_offset"), None)
+    assert offset is not None, res["selection_trace"]
+    assert abs(offset["parameters"]["steer_angle_offset"] - 0.03) < math.radians(0.3)
+    assert not any(line.startswith("- steering_offset") for line in res["selection_trace"])
+    clean = results["clean"]
+    assert {e["id"] for e in clean["effects"]} <= {"gps_latency"}, clean["selection_trace"]
+    assert not any(st["misfit"] for st in clean["stages"].values())
+    latency = [e["parameters"]["gps_latency"] for e in clean["effects"]]
+    assert all(abs(x - 0.05) < 0.02 for x in latency)
+    assert clean["recording"]["resolution"]["delta"] == pytest.approx(math.radians(1.0), abs=2e-4)

@@ -216,7 +216,7 @@ def test_realtime_mode_paces_against_the_wall_clock_and_counts_misses():
 # --- one study, simulated or on hardware -----------------------------------------------------
 
 def test_hil_study_differs_from_the_simulation_only_in_the_tractor_component():
-    sim = load_study(ROOT / "studies" / "figure8_realtime.toml")
+    sim = load_study(ROOT / "studies" / "figure8_hardware_layout.toml")
     hil = load_study(ROOT / "studies" / "figure8_hil.toml")
     assert sim.connections == hil.connections
     differ = {n for n in sim.components if sim.components[n] != hil.components[n]}
@@ -291,7 +291,7 @@ def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     first = emu["t"][guided].iloc[0]
     keep = guided & (emu["t"] > first + 8.0)
     hil_err = path_error(emu["tractor.x_cg"][keep].to_numpy(), emu["tractor.y_cg"][keep].to_numpy(), Figure8Path(10, 20))
-    study = load_study(ROOT / "studies" / "figure8_realtime.toml", ["study.stop_time=30"])
+    study = load_study(ROOT / "studies" / "figure8_hardware_layout.toml", ["study.stop_time=30"])
     rec, _ = simulate(study)
     frame = rec.to_frame()
     settled = frame["t"] > 13.0

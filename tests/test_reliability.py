@@ -67,7 +67,7 @@ def test_a_long_run_stopped_by_a_signal_keeps_every_row_and_says_interrupted(tmp
 
 def test_a_real_time_composite_run_interrupted_keeps_its_signals(tmp_path):
     out = tmp_path / "rt"
-    proc = _start(["run", "studies/figure8_realtime.toml", "--set", "study.realtime=true", "--out", str(out),
+    proc = _start(["run", "studies/figure8_hardware_layout.toml", "--set", "study.realtime=true", "--out", str(out),
                    "--no-plots"])
     time.sleep(6.0)
     proc.send_signal(signal.SIGTERM)
@@ -304,6 +304,13 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["margins", "studies/figure8.toml", "--set", "x=1"], 2, ["'x=1'"]),
     (["emulate", "studies/tractor_emulator.toml", "--nmea-port", "70000"], 2, ["--nmea-port"]),
     (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.base_step=0.003"], 2, ["step"]),
+    # issue 28: an --out whose parent cannot be created; a study's edit of connections it does not have
+    (["run", "studies/figure8.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
+    (["sweep", "studies/speed_sweep.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
+    (["diagnose", "{tmp}/degrees.csv", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
+    (["identify", "studies/identification.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
+    (["run", "{tmp}/bad_edit.toml", "--out", "{tmp}/o"], 2, ["bad_edit.toml", "connections_remove",
+                                                              "'gps.x -> nowhere.x'", "not a connection"]),
 ]
 
 
@@ -313,6 +320,8 @@ def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_pa
     (tmp_path / "broken.toml").write_text("[study\nname = 1\n")
     (tmp_path / "unknown_type.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
                                                 f'[components.gps]\ntype = "no_such_component"\n')
+    (tmp_path / "bad_edit.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
+                                            f'connections_remove = ["gps.x -> nowhere.x"]\n')
     from measurements.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)

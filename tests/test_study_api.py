@@ -148,7 +148,7 @@ def test_subsystem_errors_name_the_file_and_the_field(tmp_path):
 
 
 def test_the_simulated_tractor_is_the_tractor_side_study_as_one_component():
-    rt = Study.load(ROOT / "studies" / "figure8_realtime.toml", ["study.stop_time=20"])
+    rt = Study.load(ROOT / "studies" / "figure8_hardware_layout.toml", ["study.stop_time=20"])
     cls = rt.component_class("tractor")
     assert cls.sampled is False and "tractor" in cls.roles
     frame = frame_of(rt)
@@ -188,3 +188,16 @@ def test_an_unknown_top_level_table_is_refused_by_name(tmp_path):
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "unknown table 'identifcation'" in proc.stderr and "identification" in proc.stderr
+
+
+def test_a_study_file_edits_its_parents_connections_like_with_connections(tmp_path):
+    """connections_remove / connections_add in a file that extends another are the file form of
+    Study.with_connections (studies/figure8_rlfr.toml inserts a notch that way)."""
+    edited = Study.load(ROOT / "studies" / "figure8_rlfr.toml")
+    by_api = Study.load(ROOT / "studies" / "figure8.toml").with_connections(
+        add=["tractor.yaw_rate -> yaw_notch.yaw_rate", "yaw_notch.yaw_rate_filtered -> mpc.yaw_rate"],
+        remove=["tractor.yaw_rate -> mpc.yaw_rate"])
+    assert sorted(map(str, edited.connections)) == sorted(map(str, by_api.connections))
+    (tmp_path / "alone.toml").write_text('connections_add = ["a.x -> b.y"]\n[study]\nname = "x"\n')
+    with pytest.raises(StudyError, match="only with extends"):
+        Study.load(tmp_path / "alone.toml")
