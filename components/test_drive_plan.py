@@ -13,6 +13,7 @@ class TestDrivePlan(Component):
     variables = (
         par("duration", "s", 600.0, "length of the drawn plan (held at its last value after)"),
         par("speeds", "m/s", [1.0, 2.0, 3.0], "segment speeds, cycled"),
+        par("steer_scale", "1", 1.0, "factor on the plan's steering (a car at highway speed: 0.05)"),
         out("steer_angle_cmd", "rad", 0.0, "front wheel angle command"),
         out("speed_cmd", "m/s", 0.0, "speed set-point"),
     )
@@ -25,6 +26,7 @@ class TestDrivePlan(Component):
         self.require(self.p["duration"] > 0 and speeds and min(speeds) >= 0,
                      f"duration {self.p['duration']} s and speeds {speeds}: expected a positive duration and speeds >= 0")
         self.t_plan, self.cmd, self.speed_of = driving_plan(self.rng, float(self.p["duration"]), speeds_cycle=speeds)
+        self.cmd = self.cmd * float(self.p["steer_scale"])
         self.t0 = t0
 
     def step(self, t: float, dt: float) -> None:

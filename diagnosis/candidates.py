@@ -23,7 +23,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from measurements import LogError
-from measurements.log import check_units
+from measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline
 from .catalogue import UNCERTAIN, Parameter
@@ -36,9 +36,40 @@ class CannotDecide(Exception):
     """The log holds too little to tell one model from another."""
 
 
+# what each stage reads; "speed" is v, else the receiver's gnss_speed, else the GPS track's speed
+STAGE_NEEDS = {"steering": ("delta_cmd", "delta"), "yaw": ("delta", "yaw_rate", "speed"),
+               "position": ("x", "y", "yaw_rate", "speed not from the track"), "speed": ("x", "y", "yaw_rate", "v")}
+NEED_TEXT = {"speed": "speed (v, gnss_speed, or x and y)",
+             "speed not from the track": "measured speed (v or gnss_speed: the track's own speed cannot judge the track)"}
+MIN_RATE = {"steering": 10.0, "yaw": 10.0, "position": 5.0, "speed": 5.0}      # Hz a stage needs
+MAX_POSITION_STEP = 0.01       # m: coarser positions (float32 latitude/longitude) cannot judge centimetres
+COARSE_DELTA = 0.2 * math.pi / 180    # rad: a wheel-angle sensor this coarse biases the yaw refit
+MIN_COMMANDED_YAW = 0.0125     # rad/s: 0.5 deg of steering at 2 m/s on the paper tractor's 1.4 m wheelbase
+
+
+def position_step(xy: np.ndarray) -> float:
+    """The step positions move in when they are quantised (float32 latitude/longitude: 0.1-1 m),
+    else 0: the smallest non-zero move between samples, when nearly every move is a whole number
+    of it (on either axis)."""
+    steps = []
+    for col in np.asarray(xy, float).T:
+        d = np.abs(np.diff(col))
+        d = d[d > 1e-9]
+        if len(d) < 20:
+            continue
+        q = float(np.percentile(d, 1))
+        if q <= 0:
+            continue
+        r = d / q
+        if np.mean(np.abs(r - np.round(r)) < 0.05) > 0.9:
+            steps.append(q)
+    return max(steps) if steps else 0.0
+
+
 @dataclass
 class Replay:
-    """The log's arrays, the split and the three stage replays."""
+    """The log's arrays, the split and the stage replays. A partial log replays the stages its
+    columns allow (``stages``); ``not_judged`` says why each other one is not judged."""
 
     frame: pd.DataFrame
     baseline: Baseline
@@ -50,21 +81,34 @@ class Replay:
 
     def __post_init__(self) -> None:
         f = self.frame
+        n = len(f)
         self.t = f["t"].to_numpy(float)
         self.h = float(np.median(np.diff(self.t)))
-        self.cmd, self.delta = f["delta_cmd"].to_numpy(float), f["delta"].to_numpy(float)
-        self.speed, self.gyro = f["v"].to_numpy(float), f["yaw_rate"].to_numpy(float)
-        self.gps = f[["x", "y"]].to_numpy(float)
+
+        def column(name):
+            return f[name].to_numpy(float) if name in f else np.full(n, np.nan)
+
+        self.cmd, self.delta, self.gyro = column("delta_cmd"), column("delta"), column("yaw_rate")
+        self.gps = np.column_stack([column("x"), column("y")])
+        speed, self.speed_source = speed_estimate(f)
+        self.speed = speed if speed is not None else np.full(n, np.nan)
+        self.stages, self.not_judged = self._stages(f)
+        q = f.attrs.get("resolution", {}).get("delta") or (resolution(self.delta) if "delta" in f else 0.0)
+        self.coarse_delta = q > COARSE_DELTA
         duration = self.t[-1] - self.t[0]
         if duration < self.min_duration:
             raise CannotDecide(f"the log lasts {duration:.1f} s; a diagnosis needs at least {self.min_duration:.0f} s "
                                f"(a fit part and a held-out part, each with turns and straights)")
-        moving = self.speed > self.min_speed
-        if moving.mean() < 0.5:
-            raise CannotDecide(f"the tractor moves (v > {self.min_speed} m/s) in only {100 * moving.mean():.0f}% "
+        if not self.stages:
+            raise CannotDecide("nothing to judge: " + "; ".join(f"{s} {why}" for s, why in self.not_judged.items()))
+        moving = self.speed > self.min_speed if speed is not None else np.ones(n, bool)
+        if speed is not None and moving.mean() < 0.5 and set(self.stages) - {"steering"}:
+            raise CannotDecide(f"the vehicle moves (v > {self.min_speed} m/s) in only {100 * moving.mean():.0f}% "
                                f"of the log; the yaw and position replays need it moving")
-        if np.std(self.cmd) < 0.5 * math.pi / 180:
-            raise CannotDecide("delta_cmd hardly varies (std < 0.5 deg): nothing excites the steering and yaw dynamics")
+        if "steering" in self.stages and self.commanded_yaw() < MIN_COMMANDED_YAW:
+            raise CannotDecide(f"delta_cmd hardly varies: it would turn the vehicle at {self.commanded_yaw():.3g} rad/s "
+                               f"(std of v delta_cmd / wheelbase; below {MIN_COMMANDED_YAW} rad/s, 0.5 deg of steering "
+                               f"at 2 m/s on the paper tractor): nothing excites the steering and yaw dynamics")
         try:
             check_units(f, "log")
         except LogError as exc:
@@ -82,17 +126,58 @@ class Replay:
         self.track_speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
         has_chord = np.isfinite(self.track_speed)
         self.masks["speed"] = {p: m & has_chord for p, m in self.masks["yaw"].items()}
-        self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed)
-        self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
-                             self.heading, min_speed=self.min_speed)
+        has_track = {"x", "y"} <= set(f.columns) and "yaw_rate" in f
+        self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed) if has_track else np.zeros(n)
+        if "yaw" in self.stages:
+            self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
+                                 self.heading, min_speed=self.min_speed)
         L = int(round(self.window / self.h))
         starts = np.arange(0, len(self.t) - L + 1, L)
         rows = starts[:, None] + np.arange(L)[None, :]
         rows = rows[np.all(moving[rows], axis=1)]
         self.windows = {"fit": rows[self.t[rows[:, -1]] < t_split], "test": rows[self.t[rows[:, 0]] >= t_split]}
-        if len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2:
-            raise CannotDecide(f"too few {self.window:.0f} s stretches of driving for the position replay "
-                               f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
+        if "position" in self.stages and (len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2):
+            why = (f"too few {self.window:.0f} s stretches of driving for the position replay "
+                   f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
+            if self.stages == ("position",) or set(self.stages) <= {"position", "speed"}:
+                raise CannotDecide(why)
+            for stage in ("position", "speed"):
+                if stage in self.stages:
+                    self.not_judged[stage] = f"not judged: {why}"
+            self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+
+    def commanded_yaw(self) -> float:
+        """The excitation of the steering command as the yaw rate it asks for, std(v delta_cmd / L):
+        degrees of steering at a tractor's 2 m/s, tenths of a degree at a car's 30 m/s."""
+        p = self.baseline.tractor
+        v = np.nan_to_num(self.speed, nan=0.0) if self.speed_source != "none" else np.full(len(self.cmd), 2.0)
+        return float(np.std(v * np.nan_to_num(self.cmd) / (p.l_f + p.l_r)))
+
+    def _stages(self, f: pd.DataFrame) -> tuple[tuple[str, ...], dict[str, str]]:
+        """The stages the log's columns, rate and resolution allow, and why not the others."""
+        have = set(f.columns) | ({"speed"} if self.speed_source != "none" else set())
+        if self.speed_source in ("v", "gnss_speed"):
+            have.add("speed not from the track")
+        rate = 1.0 / self.h
+        step = position_step(self.gps) if {"x", "y"} <= set(f.columns) else 0.0
+        stages, why = [], {}
+        for stage, needs in STAGE_NEEDS.items():
+            missing = [c for c in needs if c not in have]
+            if missing:
+                why[stage] = "not judged: no " + ", no ".join(NEED_TEXT.get(c, c) for c in missing)
+            elif rate < MIN_RATE[stage]:
+                why[stage] = (f"not judged: the log samples at {rate:.3g} Hz; the {stage} stage needs "
+                              f"{MIN_RATE[stage]:g} Hz or more (steering time constants of tens of ms, yaw modes "
+                              f"near 2 Hz)")
+            elif stage in ("position", "speed") and step > MAX_POSITION_STEP:
+                why[stage] = (f"not judged: the positions move in steps of {step:.3g} m (float32 latitude/longitude?); "
+                              f"the {stage} stage judges centimetres")
+            else:
+                stages.append(stage)
+        if "speed" in stages and self.speed_source != "v":
+            stages.remove("speed")
+            why["speed"] = "not judged: no wheel speed v (the speed stage compares it with the GPS track)"
+        return tuple(stages), why
 
     def predicted(self, stage: str, v: dict[str, float]) -> np.ndarray:
         """The stage's simulated signal on every sample (position: the dead-reckoned track)."""
@@ -100,7 +185,7 @@ class Replay:
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
             return self.yaw.yaw_rate(v)
-        track = antenna_track(self.t, self.gyro, self.speed, v)
+        track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
         if stage == "speed":
             k = self.chord_k
             out = np.full(len(self.t), np.nan)
@@ -108,6 +193,18 @@ class Replay:
             out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
             return out
         return track
+
+    def lateral(self, v: dict[str, float]) -> np.ndarray | None:
+        """The rear axle's lateral velocity (side-slip) from the yaw model under ``v``, where the
+        yaw stage is replayed (nothing for a tractor at 2 m/s; metres over 10 s for a car at 30 m/s).
+        With a wheel angle quantised coarser than COARSE_DELTA the refitted stiffnesses carry the
+        input's errors (a 1-deg potentiometer halves the rear one): the study's own values then."""
+        if "yaw" not in self.stages:
+            return None
+        if self.coarse_delta:
+            v = {**v, **{k: self.baseline.values[k] for k in ("cornering_front_scale", "cornering_rear_scale",
+                                                             "relaxation_scale")}}
+        return self.yaw.rear_lateral_velocity(v)
 
     def measured(self, stage: str) -> np.ndarray:
         return {"steering": self.delta, "yaw": self.gyro, "position": self.gps, "speed": self.track_speed}[stage]
@@ -207,11 +304,11 @@ def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
     """Re-fit each stage's uncertain parameters (no extension); returns the fit and the per-stage
     noise levels used to normalise later fits."""
     values = dict(replay.baseline.values)
-    sigma = {s: 1.0 for s in STAGES}
-    for s in STAGES:
+    sigma = {s: 1.0 for s in replay.stages}
+    for s in replay.stages:
         values = _fit(replay, values, list(UNCERTAIN[s]), (s,), [{}], sigma).values
-    fit = _fit(replay, values, [], STAGES, [{}], sigma)
-    for s in STAGES:
+    fit = _fit(replay, values, [], replay.stages, [{}], sigma)
+    for s in replay.stages:
         sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
     return fit, sigma
 

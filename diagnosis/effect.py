@@ -60,6 +60,7 @@ class Effect:
     threshold: ClassVar[str]                             # the materiality rule, in words
     hypothesis: ClassVar[str]                            # what it means on the tractor
     experiment: ClassVar[str]                            # the excitation that shows it apart from its rivals
+    needs: ClassVar[tuple[str, ...]] = ()                # log columns it reads beyond its stages' (side slope: x, y)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

@@ -71,5 +71,6 @@ def stage_evidence(replay, stage: str, values: dict[str, float]) -> dict:
                     "outside_bound": bool(abs(rho[i]) > bound)}
     out["cross_correlation"] = xc
     out["by_speed"] = binned(res, replay.speed[sel], SPEED_BINS)
-    out["by_steering_amplitude_deg"] = binned(res, np.degrees(np.abs(replay.cmd[sel])), AMPLITUDE_BINS_DEG)
+    steer = replay.cmd if "steering" in replay.stages else replay.delta      # a log without a command: the angle
+    out["by_steering_amplitude_deg"] = binned(res, np.degrees(np.abs(steer[sel])), AMPLITUDE_BINS_DEG)
     return out

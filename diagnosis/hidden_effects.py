@@ -35,8 +35,9 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         return params["yaw_rate_bias"], truth["bias"], 0.003                         # rad/s
     if effect == "gps_latency":
         return params["gps_latency"], truth["latency"], 0.04                         # s
-    if effect == "speed_dependent_cornering":
-        return params["cornering_speed_slope"], truth["k"], 0.08                     # per m/s
+    if effect == "speed_dependent_cornering":     # per m/s at a 2 m/s reference: relative (truth_tractor)
+        relative = 2.0 / truth.get("v_ref", 2.0)
+        return params["cornering_speed_slope"] / relative, truth["k"], 0.08
     if effect == "side_slope":
         return math.asin(math.hypot(params["slope_east"], params["slope_north"]) / 9.81), truth["slope"], 1.0 * DEG
     if effect == "antenna_lever_arm":
@@ -46,23 +47,27 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
 
 
 BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+STUDIES = Path(__file__).resolve().parent.parent / "studies"
+BASELINES = {"tractor": STUDIES / "figure8.toml", "car": STUDIES / "passenger_car.toml"}
 
 
 def diagnose_hidden(case: tuple) -> dict:
-    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant]]]) to
-    ``folder`` and diagnose it (no plots); ``effect`` may be several ids joined by '+', ``healthy``
-    one or several of truth_tractor.HEALTHY (a truth without fault that differs from the baseline)."""
+    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant[, vehicle]]]])
+    to ``folder`` and diagnose it (no plots) against the vehicle's baseline study (BASELINES);
+    ``effect`` may be several ids joined by '+', ``healthy`` one or several of truth_tractor.HEALTHY
+    (a truth without fault that differs from the baseline)."""
     from .pipeline import diagnose
 
     effect, seed, folder, *rest = case
     scale = rest[0] if rest else None
     duration = rest[1] if len(rest) > 1 else 240.0
     healthy = rest[2] if len(rest) > 2 else None
-    frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy)
-    name = f"{effect or 'none'}_{healthy.replace('+', '-') + '_' if healthy else ''}{seed}"
+    vehicle = rest[3] if len(rest) > 3 else "tractor"
+    frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy, vehicle=vehicle)
+    name = f"{vehicle}_{effect or 'none'}_{healthy.replace('+', '-') + '_' if healthy else ''}{seed}"
     log = Path(folder) / f"{name}.parquet"
     frame.to_parquet(log)
-    result = diagnose(log, Path(folder) / name, plots=False)
+    result = diagnose(log, Path(folder) / name, plots=False, study_path=BASELINES[vehicle])
     return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}
 
 

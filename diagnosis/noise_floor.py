@@ -37,32 +37,35 @@ def white_level(x: np.ndarray, fs: float) -> float:
 
 
 def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: int = 4) -> dict[str, float]:
-    """The RMS a residual of each stage would have if the model were right (same units as the
-    stage's residual); ``values`` is the fitted model (its position track is perturbed)."""
+    """The RMS a residual of each replayed stage would have if the model were right (same units
+    as the stage's residual); ``values`` is the fitted model (its position track is perturbed)."""
     fs = 1.0 / replay.h
-    floors = {}
-    for stage in ("steering", "yaw"):
-        floors[stage] = white_level(replay.residual_series(stage, values)[1], fs)
+    floors: dict = {}
+    sensors: dict = {}
+    for stage, sensor in (("steering", "delta"), ("yaw", "yaw_rate")):
+        if stage in replay.stages:
+            floors[stage] = sensors[sensor] = white_level(replay.residual_series(stage, values)[1], fs)
+    if not {"position", "speed"} & set(replay.stages):
+        floors["_sensors"] = sensors
+        return floors
+    from .replay import aligned_residuals, antenna_track
+
     # GPS white level: from the aligned position residual, window by window, each axis
     rows = np.concatenate([replay.windows["fit"], replay.windows["test"]])
-    from .replay import aligned_residuals
-
     nominal = replay.predicted("position", values)
     res = aligned_residuals(nominal, replay.gps, rows)
     sigma_gps = white_level(np.concatenate([res[..., 0], res[..., 1]]), fs)
     sigma_v = white_level(replay.speed, fs)
-    sigma_gyro = floors["yaw"]
+    sigma_gyro = sensors.get("yaw_rate") or white_level(replay.gyro, fs)     # no yaw stage: the gyro's own top band
     span = replay.chord_span
     floors["speed"] = math.sqrt(2 * sigma_gps ** 2 / span ** 2 + sigma_v ** 2 * replay.h / span)
     rng = np.random.default_rng(seed)
-    from .replay import antenna_track
-
     sq = []
     for _ in range(realisations):
         noisy = antenna_track(replay.t, replay.gyro + sigma_gyro * rng.standard_normal(len(replay.t)),
-                              replay.speed + sigma_v * rng.standard_normal(len(replay.t)), values)
+                              replay.speed + sigma_v * rng.standard_normal(len(replay.t)), values, replay.lateral(values))
         gps = nominal + sigma_gps * rng.standard_normal(nominal.shape)
         sq.append(np.mean(aligned_residuals(noisy, gps, rows) ** 2))
     floors["position"] = math.sqrt(float(np.mean(sq)))
-    floors["_sensors"] = {"delta": floors["steering"], "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
+    floors["_sensors"] = {**sensors, "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
     return floors

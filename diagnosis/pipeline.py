@@ -43,7 +43,7 @@ def _finding_json(f: Finding, baseline) -> dict:
     except KeyError as missing:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
     signals = ", ".join(f"{k} {f.rmse_before[k]:.4g} -> {f.rmse_after[k]:.4g} {SIGNALS[s][1]}"
-                        for s in f.effect.stages for k in [SIGNALS[s][0]])
+                        for s in f.stages for k in [SIGNALS[s][0]])
     params = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     summary = (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {params}; "
                f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}.")
@@ -96,21 +96,27 @@ def _effect_json(f: Finding, baseline, inconclusive: list[dict]) -> dict:
 
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
     """What makes a verdict on this log fragile (issue 15, item 4)."""
-    out = []
+    out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
+    if replay.speed_source != "v" and set(replay.stages) & {"yaw", "position"}:
+        out.append({"gnss_speed": "no wheel speed v: the yaw and position replays run on the receiver's speed over ground",
+                    "track": "no speed column: the yaw replay runs on the speed of the GPS track"}[replay.speed_source])
     duration = replay.t[-1] - replay.t[0]
     if duration < 180:
         out.append(f"the log lasts {duration:.0f} s: with {duration * (1 - replay.fit_fraction):.0f} s held out, "
                    f"small effects cannot be confirmed (record at least 180 s, better 400 s)")
-    cmd_std = math.degrees(float(np.std(replay.cmd)))
-    if cmd_std < 2.0:
-        out.append(f"little steering excitation: delta_cmd varies by {cmd_std:.1f} deg (std); steering and yaw "
-                   f"effects need turns and steps of several degrees")
+    asked = replay.commanded_yaw() if "steering" in replay.stages else math.inf
+    if asked < 0.05:               # 2 deg of steering at 2 m/s on the paper tractor
+        out.append(f"little steering excitation: delta_cmd varies by {math.degrees(float(np.std(replay.cmd))):.2g} deg "
+                   f"(std), asking for {asked:.3g} rad/s of yaw rate; steering and yaw effects need turns and steps "
+                   f"(several degrees on a tractor)")
     moving = replay.speed[replay.speed > replay.min_speed]
     spread = float(np.percentile(moving, 90) - np.percentile(moving, 10)) if len(moving) else 0.0
     if spread < 0.5:
         out.append(f"the speed hardly varies (10-90% spread {spread:.2f} m/s): speed-dependent effects "
                    f"(cornering stiffness, GPS latency against antenna position) cannot be told apart")
     for stage, column in (("steering", replay.delta), ("yaw", replay.gyro)):
+        if stage not in replay.stages:
+            continue
         mask = replay.masks[stage]["test"]
         spread = float(np.std(column[mask]))
         if spread < 3 * floors[stage]:
@@ -154,6 +160,9 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     try:
         study = load_study(study_path)
         baseline = baseline_from_study(study)
+        from measurements.recording import ImportOptions
+
+        recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
         frame, imported = load_log(log_path, resample_jitter=resample, recording=recording)
         if imported is not None:
             result["recording"] = imported
@@ -167,12 +176,15 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     sel = select(replay, min_gain, seed=study.study.seed)
     base = sel.base
     final, floors = sel.final, sel.floors
+    judged = replay.stages
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
-              for s in STAGES}
+              for s in judged}
     result["split_time"] = replay.t_split
     result["baseline_refit"] = {k: base.values[k] for k in REFIT}
-    result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in STAGES}
-    result["noise_floor"] = {s: floors[s] for s in STAGES} | {"sensors": floors["_sensors"]}
+    result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
+    result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
+    result["stages_judged"] = list(judged)
+    result["not_judged"] = dict(replay.not_judged)
     effects = [_effect_json(f, baseline, sel.inconclusive) for f in sel.effects]
     options = [o for e in effects for o in (e.pop("_options") or [])]
     unexplained = _unexplained(checks)
@@ -184,10 +196,11 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
-                        for s in STAGES}
-    result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in STAGES}
+                        for s in judged}
+    result["stages"].update({s: {"stage": s, "judged": False, "reason": why} for s, why in replay.not_judged.items()})
+    result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in judged}
     if effects:
-        result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in STAGES}
+        result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in judged}
     items = [_finding_json(f, baseline) for f in sel.first_step]
     for item in items:
         item.pop("_options", None)
@@ -195,7 +208,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     files = []
     if plots:
         touched = {s for f in sel.effects for s in f.stages}
-        for s in STAGES:
+        for s in judged:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
                                       out / f"{s}.png").name)
         files.append(binned_figure(replay, base.values, final.values if effects else None, out / "binned.png").name)

@@ -108,6 +108,9 @@ def markdown(result: dict, plots: list[str]) -> str:
     by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
     for stage, st in result.get("stages", {}).items():
         k, unit = UNIT_SCALE[stage]
+        if not st.get("judged", True):
+            lines.append(f"| {stage} | {unit} | {st['reason']} |")
+            continue
         cells = [f"{k * st['rms_without'][e['id']]:.3g}" if e["id"] in st["rms_without"] else "-"
                  for e in result["effects"] if e["id"] != "unexplained"]
         ext = by_stage.get(stage, {}).get("extension")
@@ -119,7 +122,8 @@ def markdown(result: dict, plots: list[str]) -> str:
                      + f"{k * st['rms_test']:.3g} | {st['ratio']:.2f}{' (misfit)' if st['misfit'] else ''} | "
                      + f"{k * st.get('excess_over_healthy', 0.0):.3g} ({k * st['materiality']:.3g}) | {ext_text} |")
     lines += ["", "How the healthy level was found:", ""]
-    lines += [f"- {stage}: {st.get('healthy_how', 'the noise floor')}" for stage, st in result.get("stages", {}).items()]
+    lines += [f"- {stage}: {st.get('healthy_how', 'the noise floor')}" for stage, st in result.get("stages", {}).items()
+              if st.get("judged", True)]
     lines += [""]
     lines += ["## Each catalogue effect alone against the baseline, best first", "",
               "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",
@@ -155,15 +159,17 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
 
     from .evidence import AMPLITUDE_BINS_DEG, SPEED_BINS, binned
 
-    fig, ax = plt.subplots(2, 2, figsize=(12, 6))
+    stages = [s for s in ("steering", "yaw") if s in replay.stages]
+    fig, ax = plt.subplots(max(len(stages), 1), 2, figsize=(12, 3 * max(len(stages), 1)), squeeze=False)
     models = [("baseline", base, "tab:red")] + ([("final model", winner, "tab:green")] if winner else [])
-    for row, stage in enumerate(("steering", "yaw")):
+    for row, stage in enumerate(stages):
         k, unit = UNIT_SCALE[stage]
         sel = replay.scored(stage)
         for j, (label, v, color) in enumerate(models):
             _, res = replay.residual_series(stage, v)
             by_v = binned(res, replay.speed[sel], SPEED_BINS)
-            by_a = binned(res, np.degrees(np.abs(replay.cmd[sel])), AMPLITUDE_BINS_DEG)
+            by_a = binned(res, np.degrees(np.abs((replay.cmd if stage == "steering" else replay.delta)[sel])),
+                          AMPLITUDE_BINS_DEG)
             off = 0.15 * (j - 0.5 * (len(models) - 1))
             ax[row, 0].errorbar([0.5 * (b["from"] + min(b["to"], 4.0)) + off for b in by_v], [k * b["mean"] for b in by_v],
                                 yerr=[1.96 * k * b["sem"] for b in by_v], fmt="o", color=color, label=label)
@@ -172,7 +178,8 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
             ax[row, 1].set_xticks(range(len(by_a)), [f"{b['from']:.0f}-{b['to']:.0f}" for b in by_a])
         ax[row, 0].axhline(0, color="k", lw=0.6)
         ax[row, 0].set(title=f"{stage}: residual mean by speed (95% interval)", xlabel="speed [m/s]", ylabel=f"[{unit}]")
-        ax[row, 1].set(title=f"{stage}: residual RMS by |delta_cmd|", xlabel="|delta_cmd| [deg]", ylabel=f"[{unit}]")
+        amp = "delta_cmd" if stage == "steering" else "delta"
+        ax[row, 1].set(title=f"{stage}: residual RMS by |{amp}|", xlabel=f"|{amp}| [deg]", ylabel=f"[{unit}]")
         for a in ax[row]:
             a.legend(fontsize=7)
             a.grid(alpha=0.3)
@@ -189,7 +196,7 @@ def floors_figure(result: dict, path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    stages = list(result["stages"])
+    stages = [s for s, st in result["stages"].items() if st.get("judged", True)]
     found = [e["id"] for e in result["effects"] if e["id"] != "unexplained"]
     by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
     series = [("baseline", lambda s, st: st["rms_baseline_test"], "tab:red")]

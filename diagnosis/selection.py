@@ -62,7 +62,12 @@ class Finding:
 
     @property
     def gain(self) -> float:
-        return self.gain_by_signal[SIGNALS[self.effect.stages[0]][0]]
+        return self.gain_by_signal[SIGNALS[main_stage(self.effect, self.stages)][0]]
+
+
+def main_stage(effect: Effect, scored) -> str:
+    """The effect's first stage among those scored (a partial log may lack its first)."""
+    return next(s for s in effect.stages if s in scored)
 
 
 def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, min_gain) -> Finding:
@@ -78,7 +83,7 @@ def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, mi
     reasons = []
     if dbic >= STRONG:
         reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
-    main = names[effect.stages[0]]
+    main = names[main_stage(effect, stages)]
     if gains[main] < min_gain:
         reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
     worse = [k for k, g in gains.items() if g < -0.05]
@@ -89,8 +94,10 @@ def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, mi
     return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
 
 
-def group(stages: set[str], members: list[Effect]) -> tuple[tuple[str, ...], list[Effect]]:
-    """The stages and the members coupled to ``stages`` through shared stages (transitively)."""
+def group(stages: set[str], members: list[Effect], available=STAGES) -> tuple[tuple[str, ...], list[Effect]]:
+    """The stages and the members coupled to ``stages`` through shared stages (transitively),
+    among the ``available`` stages (a partial log judges fewer)."""
+    stages = set(stages) & set(available)
     stages, related = set(stages), []
     changed = True
     while changed:
@@ -100,7 +107,7 @@ def group(stages: set[str], members: list[Effect]) -> tuple[tuple[str, ...], lis
                 related.append(f)
                 stages |= set(f.stages)
                 changed = True
-    return tuple(s for s in STAGES if s in stages), related
+    return tuple(s for s in STAGES if s in stages and s in available), related
 
 
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> Fit:
@@ -125,13 +132,16 @@ class Selector:
     def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
         self.base_values = replay.baseline.values
+        # the effects this log can judge: one of their stages replayed, the columns they read there
+        self.catalogue = [e for e in CATALOGUE if set(e.stages) & set(replay.stages)
+                          and all(c in replay.frame for c in e.needs)]
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None
 
     def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
-        stages, related = group(set(effect.stages), members)
+        stages, related = group(set(effect.stages), members, self.replay.stages)
         key = (effect.id, tuple(sorted(f.id for f in related)))
         hit = self._cache.get(key)
         if hit is not None:
@@ -150,7 +160,7 @@ class Selector:
     def drop(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """``model`` judged against itself refitted without ``effect`` (a member)."""
         others = [f for f in members if f is not effect]
-        stages, related = group(set(effect.stages), others)
+        stages, related = group(set(effect.stages), others, self.replay.stages)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
@@ -160,11 +170,11 @@ class Selector:
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
         model, members, trace, inconclusive = base, [], [], []
-        first = [self.add(base, [], e) for e in CATALOGUE]
+        first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
         for _ in range(self.max_effects):
-            trials = first if not members else [self.add(model, members, e) for e in CATALOGUE if e not in members]
+            trials = first if not members else [self.add(model, members, e) for e in self.catalogue if e not in members]
             supported = sorted((f for f in trials if f.supported and f.effect.id not in removed),
                                key=lambda f: f.delta_bic)
             if not supported:
@@ -204,7 +214,7 @@ class Selector:
         values: the end of the selection and the report ask for the same model)."""
         key = tuple(sorted(model.values.items()))
         if self._evaluated is None or self._evaluated[0] != key:
-            final = _fit(self.replay, model.values, [], STAGES, [{}], self.sigma)
+            final = _fit(self.replay, model.values, [], self.replay.stages, [{}], self.sigma)
             floors = stage_floors(self.replay, model.values, seed=self.seed)
             floors["_healthy"] = healthy_levels(self.replay, model.values, floors, seed=self.seed)
             self._evaluated = (key, final, floors)
@@ -212,19 +222,19 @@ class Selector:
 
     def misfit_stages(self, model: Fit) -> list[str]:
         final, floors = self.evaluate(model)
-        return [s for s in STAGES if is_misfit(s, final.rmse_test[s], floors)]
+        return [s for s in self.replay.stages if is_misfit(s, final.rmse_test[s], floors)]
 
     def pair(self, model: Fit, members: list[Effect], removed: set[str]):
         """Two effects of one misfit stage that only explain it together (a dead-band with a rate
         limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
         misfit = self.misfit_stages(model)
-        pool = [e for e in CATALOGUE if e not in members and e.id not in removed and set(e.stages) & set(misfit)]
+        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)]
         best = None
         for i, a in enumerate(pool):
             for b in pool[i + 1:]:
                 if not set(a.stages) & set(b.stages):
                     continue
-                stages, related = group(set(a.stages) | set(b.stages), members)
+                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages)
                 starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
                 fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
                 ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)

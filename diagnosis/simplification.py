@@ -62,13 +62,21 @@ def steering_twin(baseline, cmd: np.ndarray, h: float, q: float, seed: int = 0) 
 
 
 def healthy_levels(replay, values: dict, floors: dict, seed: int = 0) -> dict:
-    """Per stage (steering, yaw): the held-out RMS a healthy tractor described exactly by the
-    study leaves in this log's replay, and how it was found. Stages without a twin keep their
-    noise floor."""
+    """Per replayed stage: the held-out RMS a healthy vehicle described exactly by the study
+    leaves in this log's replay, and how it was found (the steering and yaw stages from the twin;
+    the others, and a log without a steering command, from their noise floors and the quantised
+    wheel angle alone)."""
     h = replay.h
     q = replay.frame.attrs.get("resolution", {}).get("delta") or resolution(replay.delta)
-    out = {"delta_resolution": q, "steering": floors["steering"], "yaw": floors["yaw"],
-           "position": floors["position"], "speed": floors["speed"], "how": {}}
+    out = {"delta_resolution": q, "how": {}, **{s: floors[s] for s in replay.stages}}
+    if "steering" not in replay.stages:
+        if "yaw" in replay.stages and q > 0:
+            smooth = np.convolve(replay.delta, np.ones(9) / 9.0, mode="same")        # a plausible true angle
+            share = _quantised_input_share(replay, values, smooth, q * np.round(smooth / q))
+            out["yaw"] = math.hypot(floors["yaw"], share)
+            out["how"]["yaw"] = (f"the yaw model driven by a smoothed wheel angle and by it quantised to the log's "
+                                 f"{math.degrees(q):.3g} deg steps: {share:.3g} rad/s, with the gyro's white level")
+        return out
     key = ("steering_twin", q, seed)              # the twin depends on the log only: simulated once per replay
     cache = replay.__dict__.setdefault("_cache", {})
     if key not in cache:
@@ -96,10 +104,16 @@ def healthy_levels(replay, values: dict, floors: dict, seed: int = 0) -> dict:
     out["how"]["steering"] = (f"the study's steering component with a {math.degrees(q):.3g} deg potentiometer, driven "
                               f"by the log's delta_cmd, replayed through the first-order equivalent "
                               f"(tau refitted: {sol.x[0]:.3f} s): held-out RMS {math.degrees(steer):.3g} deg")
-    ytest = replay.masks["yaw"]["test"]
-    both = replay.yaw.response_to(np.column_stack([true, measured]), values)
-    share = float(np.sqrt(np.mean((both[ytest, 1] - both[ytest, 0]) ** 2)))
-    out["yaw"] = math.hypot(floors["yaw"], share)
-    out["how"]["yaw"] = (f"the yaw model driven by the twin's measured instead of its true wheel angle: "
-                         f"{share:.3g} rad/s held-out RMS, with the gyro's white level {floors['yaw']:.3g} rad/s")
+    if "yaw" in replay.stages:
+        share = _quantised_input_share(replay, values, true, measured)
+        out["yaw"] = math.hypot(floors["yaw"], share)
+        out["how"]["yaw"] = (f"the yaw model driven by the twin's measured instead of its true wheel angle: "
+                             f"{share:.3g} rad/s held-out RMS, with the gyro's white level {floors['yaw']:.3g} rad/s")
     return out
+
+
+def _quantised_input_share(replay, values: dict, true: np.ndarray, measured: np.ndarray) -> float:
+    """Held-out RMS of the yaw model's response to the measured minus the true wheel angle."""
+    test = replay.masks["yaw"]["test"]
+    both = replay.yaw.response_to(np.column_stack([true, measured]), values)
+    return float(np.sqrt(np.mean((both[test, 1] - both[test, 0]) ** 2)))

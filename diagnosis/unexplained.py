@@ -36,19 +36,23 @@ UNITS = {"steering": "rad", "yaw": "rad/s", "position": "m", "speed": "m/s"}
 
 
 def stage_signals(replay, stage: str, values: dict) -> dict[str, np.ndarray]:
-    """The inputs and states a stage's residual is tested against (whole-log arrays)."""
+    """The inputs and states a stage's residual is tested against (whole-log arrays; a signal
+    the log does not have is left out)."""
     h = replay.h
     if stage == "steering":
-        return {"delta_cmd": replay.cmd, "delta_cmd_rate": np.gradient(replay.cmd, h),
-                "delta_predicted": replay.predicted("steering", values)}
-    if stage == "yaw":
-        return {"delta": replay.delta, "v": replay.speed, "delta*v": replay.delta * replay.speed,
-                "yaw_rate_predicted": replay.predicted("yaw", values), "cos_heading": np.cos(replay.heading),
-                "sin_heading": np.sin(replay.heading), "t": replay.t}
-    if stage == "speed":
-        return {"v": replay.speed, "abs_yaw_rate": np.abs(replay.gyro), "dv_dt": np.gradient(replay.speed, h),
-                "abs_delta": np.abs(replay.delta), "t": replay.t}
-    raise KeyError(stage)
+        out = {"delta_cmd": replay.cmd, "delta_cmd_rate": np.gradient(replay.cmd, h),
+               "delta_predicted": replay.predicted("steering", values)}
+    elif stage == "yaw":
+        out = {"delta": replay.delta, "v": replay.speed, "delta*v": replay.delta * replay.speed,
+               "yaw_rate_predicted": replay.predicted("yaw", values), "t": replay.t}
+        if {"x", "y"} <= set(replay.frame.columns):        # a heading from the GPS course
+            out.update(cos_heading=np.cos(replay.heading), sin_heading=np.sin(replay.heading))
+    elif stage == "speed":
+        out = {"v": replay.speed, "abs_yaw_rate": np.abs(replay.gyro), "dv_dt": np.gradient(replay.speed, h),
+               "abs_delta": np.abs(replay.delta), "t": replay.t}
+    else:
+        raise KeyError(stage)
+    return {k: v for k, v in out.items() if np.isfinite(v).all()}
 
 
 def whiteness(res: np.ndarray, lags: int = 20) -> dict:
@@ -158,7 +162,7 @@ def _yaw_input_map(replay, values: dict) -> tuple[float, np.ndarray, np.ndarray]
 
 
 def _track_with_gains(replay, values: dict, gains) -> np.ndarray:
-    return antenna_track(replay.t, gains[1] * replay.gyro, gains[0] * replay.speed, values)
+    return antenna_track(replay.t, gains[1] * replay.gyro, gains[0] * replay.speed, values, replay.lateral(values))
 
 
 def _position_analysis(replay, values: dict) -> tuple[dict, dict]:

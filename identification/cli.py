@@ -17,6 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--band", type=float, nargs=2, metavar=("F_MIN", "F_MAX"), help="log: lines to fit [Hz]")
     p.add_argument("--models", nargs="+", help="log: structures to fit")
     p.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
+    p.add_argument("--study", type=Path, default=None, help="log: the vehicle's study (its yaw plant's mass and axle "
+                   "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
@@ -49,7 +51,8 @@ def run(args: argparse.Namespace) -> int:
             report = identify_log(args.source, args.out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
                                   plots=not args.no_plots, resample=args.resample,
-                                  recording=recording_options(args))
+                                  recording=recording_options(args),
+                                  study=Study.load(args.study) if args.study else None)
             if "recording" in report:
                 print(describe(report["recording"]))
     except ValueError as exc:      # e.g. an unknown model structure

@@ -19,6 +19,9 @@ from .fitting import STRUCTURES
 from .multisine import MultisineDesign, realisation
 
 NEEDED = ("t", "delta_cmd", "delta", "v", "yaw_rate")      # columns of the canonical log it reads
+# what each need is for (a partial log is refused naming them)
+WHY = {"delta_cmd": "the multisine on the steering command is the reference (the instrument of the FRF)",
+       "delta": "the measured wheel angle is the FRF's input", "yaw_rate": "the gyro's yaw rate is the FRF's output"}
 
 
 class IdentificationConfig(BaseModel):
@@ -154,7 +157,20 @@ def read_log(path: Path, resample: bool = False, recording=None) -> tuple[pd.Dat
     """(log with the columns identification needs, import report): a table or a raw field
     recording (measurements.load_log checks it; ``resample``: put a jittered clock on an even
     grid; ``recording``: ImportOptions for a raw recording)."""
-    return load_log(path, NEEDED, resample_jitter=resample, recording=recording)
+    frame, report = load_log(path, ("t",), resample_jitter=resample, recording=recording)
+    missing = [c for c in WHY if c not in frame]
+    if missing:
+        raise LogError(f"{path}: identification not possible (the yaw stage is not judged): "
+                       + "; ".join(f"no {c} ({WHY[c]})" for c in missing)
+                       + f"; the log has {', '.join(map(str, frame.columns))}")
+    if "v" not in frame:                              # the receiver's speed, else the track's, with a note
+        from measurements.log import speed_estimate
+
+        speed, source = speed_estimate(frame)
+        if speed is not None:
+            frame = frame.assign(v=speed)
+            frame.attrs["speed_from"] = source
+    return frame, report
 
 
 def hold_factor(r: np.ndarray, tol: float) -> float:
@@ -242,6 +258,8 @@ def experiment_from_log(frame: pd.DataFrame, where: str, period_s: float | None 
     notes.append(f"excited lines detected: {len(excited)} from {excited[0] * fs / N:.4g} to "
                  f"{excited[-1] * fs / N:.4g} Hz" + (" (odd-odd)" if np.all(excited % 4 == 1) else
                                                      " (odd)" if np.all(excited % 2 == 1) else ""))
+    if speed is None and "v" not in frame:
+        raise LogError(f"{where}: no speed in the log (no v, gnss_speed or x, y): give it with --speed")
     if speed is None:
         speed = float(np.median(frame["v"]))
         notes.append(f"speed from column v: median {speed:.3f} m/s")

@@ -161,13 +161,19 @@ def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> di
 
 def identify_log(path: Path, out_dir: Path | None, period: float | None = None, speed: float | None = None,
                  band=None, models=None, delay: bool = False, plots: bool = True,
-                 resample: bool = False, recording=None) -> dict[str, Any]:
-    frame, imported = read_log(path, resample, recording)
+                 resample: bool = False, recording=None, study: Study | None = None) -> dict[str, Any]:
+    """Identification from a measured log; ``study``: the vehicle it comes from (its yaw plant's
+    m, l_f, l_r, stiffnesses for the physical back-out and the starts; its [vehicle] table for
+    reading a recording), else the paper's tractor."""
+    from measurements.recording import ImportOptions
+
+    params = tractor_parameters(study)
+    frame, imported = read_log(path, resample, (recording or ImportOptions()).for_vehicle(study))
     exp = experiment_from_log(frame, str(path), period, speed, band)
     models = models or ["second_order", "bicycle", "rlf", "rlfr"]
-    analyses = {exp.speed: analyse(exp, models, delay, TractorParameters())}
+    analyses = {exp.speed: analyse(exp, models, delay, params)}
     # time-domain check on the same log (a measured log rarely has a separate validation record)
-    report = build_report(analyses, exp.speed, {"log": exp}, TractorParameters(), exp.notes, f"log {path}")
+    report = build_report(analyses, exp.speed, {"log": exp}, params, exp.notes, f"log {path}")
     if imported is not None:
         report["recording"] = imported
     if out_dir is not None:

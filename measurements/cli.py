@@ -11,11 +11,15 @@ from pathlib import Path
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """Options for reading a raw recording (ignored for a CSV/Parquet log)."""
-    g = p.add_argument_group("raw recordings (a folder of *.nmea files and CAN logs, or one such file)")
+    g = p.add_argument_group("raw recordings (a folder or one file: NMEA, CAN logs, ROS bags, ISO 11783-10 TaskData)")
     g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (default: the project's "
                    "agrobot_tractor.dbc; components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
-    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=[-]Message.Signal",
-                   help="take a log column from this CAN signal (a leading '-' flips its sign); repeatable")
+    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=[-]Message.Signal|/topic.field",
+                   help="take a log column from this CAN signal, or from this field of a ROS topic (a leading '-' "
+                        "flips its sign; lat/lon in degrees become x/y); repeatable")
+    g.add_argument("--steering-ratio", type=float, default=None, metavar="R",
+                   help="the recording's steering angles are handwheel angles: divide delta and delta_cmd by R "
+                        "(default: the study's steering_ratio for identify/diagnose, else 1)")
     g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle (default 1.4, the paper tractor)")
     g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
     g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
@@ -39,16 +43,26 @@ def recording_options(args: argparse.Namespace):
         raise LogError("--run and --time-range: give one of them")
     if args.dbc is not None and not args.dbc.is_file():
         raise LogError(f"--dbc {args.dbc}: no such file")
-    options = ImportOptions(dbc=args.dbc, signals=[parse_source(s) for s in args.signal], rate=args.rate,
+    from .rosbag import parse_topic_source
+
+    if args.steering_ratio is not None and not 0.05 <= args.steering_ratio <= 50.0:
+        raise LogError(f"--steering-ratio {args.steering_ratio:g}: expected the handwheel-to-road-wheel ratio, "
+                       f"0.05 to 50 (a car: 12-20)")
+    signals = [parse_topic_source(s) if s.partition("=")[2].strip().lstrip("-").startswith("/") else parse_source(s)
+               for s in args.signal]
+    options = ImportOptions(dbc=args.dbc, signals=signals, rate=args.rate,
                             run=args.run, time_range=tuple(args.time_range) if args.time_range else None)
+    if args.steering_ratio is not None:
+        options.steering_ratio = args.steering_ratio
     if args.wheelbase is not None:
         options.wheelbase = args.wheelbase
     return options
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", type=Path, help="a folder of *.nmea files and CAN logs (*.log candump, *.asc, *.blf, "
-                   "*.trc), or one such file")
+    p.add_argument("source", type=Path, help="a folder or one file: NMEA (*.nmea, *.gps, a .log/.txt of "
+                   "sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), ROS bags (*.bag, *.db3, *.mcap, a "
+                   "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin)")
     p.add_argument("--out", type=Path, required=True, help="the log to write (.csv or .parquet); the import report "
                    "goes beside it as <name>.import.json")
     p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
@@ -75,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
     for path, f, rep in jobs:
-        check_log(f, f"{args.source} ({rep['used']['how']})")
+        check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
                      else (lambda p, f=f: f.to_csv(p, index=False, float_format="%.9g")))
@@ -87,4 +101,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(registry) -> None:
-    registry.add_command("convert", "a raw field recording (NMEA files and CAN logs) as a measured log", add_arguments, run)
+    registry.add_command("convert", "a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log) as a measured log",
+                         add_arguments, run)
+    registry.add_section("vehicle", "measurements: steering_ratio (handwheel / road wheel) and wheelbase [m] for reading "
+                                    "the vehicle's recordings")

@@ -36,6 +36,7 @@ class LogError(InputError, ValueError):
 
 
 def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_jitter: bool = False) -> pd.DataFrame:
+    # ``required``: the columns the caller cannot do without (("t",) for a partial log)
     """Load and check a log: columns present and numeric, no NaN or infinity, time in seconds,
     increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
     with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
@@ -54,14 +55,19 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
 def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
               resample_jitter: bool = False) -> pd.DataFrame:
     """The checks of read_log on a table already in memory (an imported recording); ``path``
-    names it in the messages."""
+    names it in the messages. ``required`` columns must be there; every canonical column that is
+    there is checked the same way (a partial log: the tools say what they cannot judge)."""
     missing = [c for c in required if c not in frame.columns]
     if missing:
         raise LogError(f"{path}: missing columns {missing}; a log needs "
                        + ", ".join(f"{c} [{COLUMNS[c][0]}]" if c in COLUMNS else c for c in required))
+    if not any(c in frame.columns for c in CANONICAL[1:]):
+        raise LogError(f"{path}: none of the log's columns ({', '.join(CANONICAL[1:])}) is in it; found "
+                       f"{', '.join(map(str, frame.columns[:12]))}")
     if len(frame) < 3:
         raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
-    for c in required:
+    checked = tuple(dict.fromkeys(tuple(required) + tuple(c for c in CANONICAL if c in frame.columns)))
+    for c in checked:
         if not pd.api.types.is_numeric_dtype(frame[c]):
             raise LogError(f"{path}: column {c!r} is not numeric (first value {frame[c].iloc[0]!r})")
         for what, bad in (("NaN", frame[c].isna().to_numpy()), ("infinite", np.isinf(frame[c].to_numpy(float)))):
@@ -76,9 +82,9 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
         i = int(np.argmax(dt <= 0))
         raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
     step = float(np.median(dt))
-    if step > 1.0:
+    if step >= 9.5:           # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
         unit, factor = ("microseconds", 1e6) if step > 1000 else ("milliseconds", 1e3)
-        raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a tractor log samples at 10-100 Hz, "
+        raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a vehicle log samples at 0.1-100 Hz, "
                        f"so it looks like {unit}: the log must hold seconds (divide t by {factor:g})")
     if dt.max() > 1.5 * step:
         i = int(np.argmax(dt))
@@ -92,7 +98,7 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
             raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical "
                            f"{step:.4g} s; pass --resample to interpolate the log onto an even {step:.4g} s grid")
     for c, (bound, unit) in DEGREE_SUSPECT.items():
-        if c in required:
+        if c in checked:
             peak = float(np.abs(frame[c]).max())
             if peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g}, more than {bound} {unit}: it looks like "
@@ -107,6 +113,26 @@ def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarra
     gps[i + 2k] - gps[i]. Chords average the 2 cm noise that point-to-point differences amplify."""
     k = max(1, int(round(0.5 * span / h)))
     return k, gps[2 * k:] - gps[:-2 * k]
+
+
+def speed_estimate(frame: pd.DataFrame) -> tuple[np.ndarray | None, str]:
+    """(speed [m/s], where from): the wheel speed v, else the receiver's speed over ground
+    (gnss_speed), else the speed of the GPS track over 1 s chords ("track"); (None, "none")."""
+    if "v" in frame:
+        return frame["v"].to_numpy(float), "v"
+    if "gnss_speed" in frame:
+        return frame["gnss_speed"].to_numpy(float), "gnss_speed"
+    if {"x", "y"} <= set(frame.columns):
+        t = frame["t"].to_numpy(float)
+        gps = frame[["x", "y"]].to_numpy(float)
+        h = float(np.median(np.diff(t)))
+        k, d = chords(gps, h)
+        speed = np.full(len(t), np.nan)
+        speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
+        ok = np.isfinite(speed)
+        if ok.sum() >= 2:
+            return np.interp(np.arange(len(t)), np.flatnonzero(ok), speed[ok]), "track"
+    return None, "none"
 
 
 def check_units(frame: pd.DataFrame, where: str) -> None:
@@ -202,7 +228,7 @@ def resample(frame: pd.DataFrame, step: float | None = None) -> pd.DataFrame:
     return pd.DataFrame(columns)
 
 
-def load_log(source: str | Path, required: tuple[str, ...] = CANONICAL, resample_jitter: bool = False,
+def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_jitter: bool = False,
              recording=None) -> tuple[pd.DataFrame, dict | None]:
     """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
     (a folder of NMEA files and CAN logs, or one such file) through

@@ -15,6 +15,7 @@ right, the log's angles to the left: those sources carry the sign -1.
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,14 +53,20 @@ SOURCES: dict[str, tuple[SignalSource, ...]] = {
 CAN_COLUMNS = tuple(SOURCES)
 
 
+_COLUMN_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
+
+
 def parse_source(text: str) -> SignalSource:
-    """``COLUMN=[-]Message.Signal`` (the ``--signal`` option)."""
+    """``COLUMN=[-]Message.Signal`` (the ``--signal`` option for CAN). COLUMN is a log column
+    (delta_cmd, delta, v, yaw_rate) or any other lower-case name, kept as an extra column."""
     column, eq, rest = text.partition("=")
     sign = -1.0 if rest.strip().startswith("-") else 1.0
     message, dot, signal = rest.strip().lstrip("-").partition(".")
-    if not eq or not dot or not message or not signal or column.strip() not in CAN_COLUMNS:
+    if not eq or not dot or not message or not signal or not _COLUMN_NAME.match(column.strip()) \
+            or column.strip() in ("t", "x", "y"):
         raise LogError(f"--signal {text!r}: expected COLUMN=[-]Message.Signal with COLUMN one of "
-                       f"{', '.join(CAN_COLUMNS)} (a leading '-' flips the sign)")
+                       f"{', '.join(CAN_COLUMNS)} or another lower-case name for an extra column (a leading '-' "
+                       f"flips the sign); a ROS topic is COLUMN=/topic.field")
     return SignalSource(column.strip(), message.strip(), signal.strip(), sign)
 
 
@@ -144,26 +151,62 @@ def read_can_file(path: str | Path, db) -> CANRecording:
     return CANRecording(path, messages, counts, unknown)
 
 
-def choose_sources(db, dbc_name: str, given: list[SignalSource] = ()) -> dict[str, SignalSource]:
-    """Column -> source: the user's, else the first of SOURCES the DBC holds; a LogError names
-    the DBC, the column and the messages it has when a column has none."""
+# a maker's DBC names its signals its own way: by name and unit (pint), the first match in
+# message order is used and the report says so (--signal chooses another)
+GUESSES = {
+    "yaw_rate": (re.compile(r"yaw.?rate", re.I), "rad/s"),
+    "v": (re.compile(r"(veh(icle)?|ground|wheel.?based|machine|xmission|transmission|wheel|road).?speed|^speed$|"
+                     r"speed.?(kph|mps|veh)|^v(eh)?_?speed", re.I), "m/s"),
+    "delta": (re.compile(r"(steer(ing)?|road.?wheel|wheel).?(wheel.?)?angle(?!.*(cmd|command|req|target|set))", re.I), "rad"),
+    "delta_cmd": (re.compile(r"steer.*(cmd|command|req(uest)?|target|set.?point|desired)", re.I), "rad"),
+}
+
+
+def _guess(db, column: str, taken: set) -> SignalSource | None:
+    from orchestrator.units import base_unit
+
+    pattern, unit = GUESSES[column]
+    want = base_unit(unit).exponents
+    for m in db.messages:
+        for sig in m.signals:
+            name = f"{m.name}.{sig.name}"
+            if name in taken or not (pattern.search(sig.name) or pattern.search(name.replace(".", "_"))):
+                continue
+            have = base_unit(sig.unit.strip()) if (sig.unit or "").strip() else None
+            if have is not None and have.exponents == want:
+                return SignalSource(column, m.name, sig.name)
+    return None
+
+
+def choose_sources(db, dbc_name: str, given: list[SignalSource] = ()) -> tuple[dict[str, SignalSource], dict[str, str], set]:
+    """(column -> source, column -> why it has none, columns matched by name): the user's, else
+    the first of SOURCES the DBC holds, else a signal matched by name and unit (GUESSES); a
+    LogError names the DBC and what it holds when a given source does not exist."""
     names = {m.name: m for m in db.messages}
     chosen = {s.column: s for s in given}
+    how: dict[str, str] = {}
     for column, candidates in SOURCES.items():
         if column not in chosen:
             found = [s for s in candidates if s.message in names]
             if found:
                 chosen[column] = found[0]
+    taken = {f"{s.message}.{s.signal}" for s in chosen.values()}
     for column in CAN_COLUMNS:
-        s = chosen.get(column)
-        if s is None:
-            raise LogError(f"{dbc_name}: no message for column {column!r} ({COLUMNS[column][1]}); the DBC has "
-                           f"{', '.join(sorted(names)) or 'no messages'}; map one with --signal {column}=Message.Signal")
+        if column not in chosen:
+            guess = _guess(db, column, taken)
+            if guess is not None:
+                chosen[column] = guess
+                taken.add(f"{guess.message}.{guess.signal}")
+                how[column] = "matched by name and unit"
+    for s in chosen.values():
         if s.message not in names or s.signal not in [x.name for x in names[s.message].signals]:
             have = [x.name for x in names[s.message].signals] if s.message in names else sorted(names)
             raise LogError(f"{dbc_name}: --signal {s}: no such {'signal' if s.message in names else 'message'}; "
                            f"{'signals of ' + s.message if s.message in names else 'messages'}: {', '.join(have)}")
-    return {c: chosen[c] for c in CAN_COLUMNS}
+    unmapped = {c: (f"no signal for it in {dbc_name} (messages: {', '.join(sorted(names)[:12])}"
+                    f"{' ...' if len(names) > 12 else ''}); map one with --signal {c}=Message.Signal")
+                for c in CAN_COLUMNS if c not in chosen}
+    return chosen, unmapped, set(how)
 
 
 def converter(db, dbc_name: str, source: SignalSource, wheelbase: float):
@@ -171,10 +214,14 @@ def converter(db, dbc_name: str, source: SignalSource, wheelbase: float):
     from orchestrator.units import base_unit
 
     sig = db.get_message_by_name(source.message).get_signal_by_name(source.signal)
-    target = COLUMNS[source.column][0]
     unit = (sig.unit or "").strip()
-    want = base_unit(target)
     have = base_unit(unit) if unit else None
+    if source.column not in COLUMNS:             # an extra column: SI where the unit says how
+        k = source.sign * (have.factor if have is not None else 1.0)
+        return (lambda x: k * x), f"{source} [{unit or 'no unit'}] x {k:.6g} -> " + \
+            ("SI" if have is not None else "as logged (a unit the units library does not know)")
+    target = COLUMNS[source.column][0]
+    want = base_unit(target)
     if not unit:
         return (lambda x: source.sign * x), f"{source}: no unit in the DBC, taken as {target}"
     if have is not None and have.exponents == want.exponents:

@@ -1,11 +1,15 @@
 """A recorded NMEA 0183 file as a table of GNSS epochs (issue 17, 'recordings in').
 
 A line is a sentence, optionally after a host timestamp (UNIX seconds, ``1777622400.05 $GNGGA,...``,
-or ISO 8601, ``2026-05-01T08:00:00.05Z $GNGGA,...``; separated by blanks, a comma or a semicolon).
-GGA opens an epoch (UTC time of day, position, fix quality); RMC and ZDA give the date, RMC and
-VTG speed and course. The epoch's time is the receiver's UTC; the host stamp, where the file has
-one, is kept beside it (the clock alignment uses both). Sentences are parsed by pynmeagps with
-their checksums checked; what is not used (GSA, GSV, GST, proprietary ...) is counted, not parsed.
+candump style ``(1777622400.050000) $GNGGA,...``, or ISO 8601, ``2026-05-01T08:00:00.05Z $GNGGA,...``;
+separated by blanks, a comma or a semicolon); lines starting with ``#`` are comments. Any talker
+(GP, GN, GL, GA, GB, BD, IN, ...). GGA opens an epoch (UTC time of day, position at whatever
+precision the receiver writes, fix quality kept as its code: 1 GPS, 2 DGPS, 4 RTK fixed, 5 RTK
+float ...); RMC and ZDA give the date, RMC and VTG speed and course, HDT or THS a dual antenna's
+heading, GST the receiver's position error. The epoch's time is the receiver's UTC; the host
+stamp, where the file has one, is kept beside it (the clock alignment uses both). Sentences are
+parsed by pynmeagps with their checksums checked; what is not used (GSA, GSV, GLL, TXT, $PUBX,
+$PASHR and other proprietary sentences ...) is counted, not parsed.
 """
 from __future__ import annotations
 
@@ -22,7 +26,7 @@ import pandas as pd
 from .log import LogError
 
 KNOTS = 1852.0 / 3600.0
-USED = ("GGA", "RMC", "VTG", "ZDA")
+USED = ("GGA", "RMC", "VTG", "ZDA", "HDT", "THS", "GST")
 _STAMP = re.compile(r"^\s*([^$]*?)[\s,;]*(\$.*)$")
 DAY = 86400.0
 
@@ -46,6 +50,8 @@ class NMEARecording:
 def _host_stamp(prefix: str) -> float:
     """UNIX seconds or an ISO 8601 time before the sentence; NaN when there is none."""
     prefix = prefix.strip()
+    if prefix.startswith("(") and ")" in prefix:          # candump: (1777622400.050000) [can0 ...]
+        prefix = prefix[1:prefix.index(")")]
     if not prefix:
         return math.nan
     try:
@@ -76,7 +82,7 @@ def looks_like_nmea(path: Path) -> bool:
             head = f.read(4096)
     except OSError:
         return False
-    lines = [ln for ln in head.split(b"\n")[:20] if ln.strip()]
+    lines = [ln for ln in head.split(b"\n") if ln.strip() and not ln.lstrip().startswith(b"#")][:20]
     return bool(lines) and sum(b"$" in ln and b"*" in ln for ln in lines) >= max(1, len(lines) // 2)
 
 
@@ -100,6 +106,9 @@ def read_nmea_file(path: str | Path) -> NMEARecording:
         if not raw.strip():
             continue
         counts["lines"] += 1
+        if raw.lstrip().startswith("#"):
+            counts["comment"] += 1
+            continue
         m = _STAMP.match(raw)
         if m is None:
             counts["not a sentence"] += 1
@@ -137,7 +146,8 @@ def read_nmea_file(path: str | Path) -> NMEARecording:
                 alt = (float(msg.alt) if msg.alt != "" else 0.0) + (float(msg.sep) if msg.sep != "" else 0.0)
                 rows[key] = dict(tod=tod, day=day_index, host=host, lat=float(msg.lat) if fix else math.nan,
                                  lon=float(msg.lon) if fix else math.nan, height=alt if fix else math.nan,
-                                 quality=int(msg.quality) if fix else 0, speed=math.nan, course=math.nan)
+                                 quality=int(msg.quality) if fix else 0, speed=math.nan, course=math.nan,
+                                 heading=math.nan, position_std=math.nan)
                 order.append(key)
                 last_key = key
                 counts["GGA"] += 1
@@ -153,6 +163,15 @@ def read_nmea_file(path: str | Path) -> NMEARecording:
                 if msg.year != "":
                     dates.append((host, tod, _date_seconds(datetime.date(int(msg.year), int(msg.month), int(msg.day)))))
                 counts["ZDA"] += 1
+            elif ident in ("HDT", "THS"):      # true heading, clockwise from north -> ENU yaw
+                value = msg.headingT if ident == "HDT" else msg.headt
+                if last_key is not None and value != "":
+                    rows[last_key]["heading"] = math.pi / 2 - math.radians(float(value))
+                counts[ident] += 1
+            elif ident == "GST":
+                if last_key is not None and msg.stdLat != "" and msg.stdLong != "":
+                    rows[last_key]["position_std"] = math.hypot(float(msg.stdLat), float(msg.stdLong))
+                counts["GST"] += 1
             else:   # VTG: no time of its own, it belongs to the epoch its GGA opened
                 if last_key is not None and msg.sogk != "":
                     row = rows[last_key]
@@ -170,8 +189,8 @@ def read_nmea_file(path: str | Path) -> NMEARecording:
     notes: list[str] = []
     frame["utc"] = _utc(frame, dates, notes, path)
     frame = frame.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
-    return NMEARecording(path, frame[["utc", "host", "lat", "lon", "height", "quality", "speed", "course"]],
-                         counts, notes)
+    return NMEARecording(path, frame[["utc", "host", "lat", "lon", "height", "quality", "speed", "course", "heading",
+                                      "position_std"]], counts, notes)
 
 
 def _utc(frame: pd.DataFrame, dates: list, notes: list[str], path: Path) -> np.ndarray:

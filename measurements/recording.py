@@ -49,36 +49,64 @@ class ImportOptions:
     """How to read a recording (the ``convert``/``identify``/``diagnose`` options)."""
 
     dbc: Path | None = None                     # None: the project's agrobot_tractor.dbc
-    signals: list[SignalSource] = field(default_factory=list)
-    wheelbase: float = 1.4                      # m: curvature <-> wheel angle (the paper tractor: l_f + l_r)
+    signals: list = field(default_factory=list)  # SignalSource (CAN) or TopicSource (ROS) per column
+    wheelbase: float | None = None              # m: curvature <-> wheel angle (None: the study's, else 1.4)
     rate: float | None = None                   # Hz of the log (default: the GNSS epoch rate)
     run: int | None = None                      # 1-based index of the run to use
     time_range: tuple[float, float] | None = None   # s from the first fix
     min_speed: float = 0.2                      # m/s: driving
     min_stop: float = 3.0                       # s: a shorter stop does not end a run
     min_run: float = 10.0                       # s: shorter runs are listed, not used
+    steering_ratio: float | None = None         # recorded steering angles / road-wheel angles (None: the study's, else 1)
+
+    def for_vehicle(self, study=None) -> "ImportOptions":
+        """These options with what they leave open taken from the study's [vehicle] table
+        (steering_ratio, wheelbase), else its yaw plant's l_f + l_r, else the paper tractor's."""
+        vehicle = (study.section("vehicle") if study is not None else None) or {}
+        wheelbase = self.wheelbase or vehicle.get("wheelbase")
+        if wheelbase is None and study is not None and study.find(role="yaw_plant"):
+            p = study.parameters(study.find(role="yaw_plant")[0])
+            wheelbase = float(p.get("l_f", 1.0)) + float(p.get("l_r", 0.4))
+        return replace(self, wheelbase=float(wheelbase or 1.4),
+                       steering_ratio=float(self.steering_ratio or vehicle.get("steering_ratio", 1.0)))
+
+
+BAG_SUFFIXES = (".bag", ".db3", ".mcap")
+KINDS = ("nmea", "can", "bag", "isoxml")
 
 
 def is_recording(source: Path) -> bool:
     """A folder, or a file that is a raw recording rather than a table (CSV/Parquet)."""
     source = Path(source)
-    return source.is_dir() or source.suffix.lower() in NMEA_SUFFIXES + CAN_SUFFIXES
+    suffix = source.suffix.lower()
+    return source.is_dir() or suffix in NMEA_SUFFIXES + CAN_SUFFIXES + BAG_SUFFIXES + (".txt", ".xml", ".bin")
 
 
-def recording_files(source: Path) -> tuple[list[Path], list[Path]]:
-    """(NMEA files, CAN logs) of a folder or of one file; a ``.log`` holding NMEA is NMEA."""
+def recording_files(source: Path) -> dict[str, list[Path]]:
+    """The files of a folder or the one file, by kind (KINDS): NMEA (a ``.log``/``.txt`` holding
+    sentences counts), CAN logs, ROS bags (ROS 1 ``.bag``, ROS 2 ``.db3``/``.mcap`` or a rosbag2
+    folder with metadata.yaml) and ISO 11783-10 TaskData (TASKDATA.XML, or TLGnnnnn.xml/.bin)."""
     source = Path(source)
     if not source.exists():
         raise LogError(f"{source}: no such file or folder")
+    kinds: dict[str, list[Path]] = {k: [] for k in KINDS}
+    if source.is_dir() and (source / "metadata.yaml").is_file():
+        kinds["bag"].append(source)                   # a rosbag2 folder is one bag
+        return kinds
     files = sorted(p for p in source.iterdir() if p.is_file()) if source.is_dir() else [source]
-    nmea, can_logs = [], []
     for p in files:
-        suffix = p.suffix.lower()
+        suffix, name = p.suffix.lower(), p.name.upper()
         if suffix in NMEA_SUFFIXES or (suffix in (".log", ".txt") and looks_like_nmea(p)):
-            nmea.append(p)
+            kinds["nmea"].append(p)
         elif suffix in CAN_SUFFIXES:
-            can_logs.append(p)
-    return nmea, can_logs
+            kinds["can"].append(p)
+        elif suffix in BAG_SUFFIXES:
+            kinds["bag"].append(p)
+        elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):
+            kinds["isoxml"].append(p)
+    if source.is_dir():
+        kinds["bag"] += [d for d in sorted(source.iterdir()) if d.is_dir() and (d / "metadata.yaml").is_file()]
+    return kinds
 
 
 # --- clocks ----------------------------------------------------------------------------------
@@ -171,73 +199,146 @@ def _iso(posix: float) -> str:
 
 @dataclass
 class _Streams:
-    gnss: pd.DataFrame                  # utc, lat, lon, height, quality, speed
-    can: dict[str, tuple[np.ndarray, np.ndarray]]      # column -> (utc, SI values)
+    """What a recording holds, on one time base (POSIX seconds where the source knows them):
+    ``gnss`` the receiver's epochs with a fix (utc, lat, lon, height, quality, speed, course and
+    where given heading, position_std), or None; ``signals`` column -> (time, SI values); ``held``
+    the set-points among them; ``resolution`` each signal's step read on its own samples."""
+
+    gnss: pd.DataFrame | None
+    signals: dict[str, tuple[np.ndarray, np.ndarray]]
     report: dict
+    held: set = field(default_factory=set)
+    resolution: dict = field(default_factory=dict)
+
+    @property
+    def can(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:          # the name the NMEA/CAN path had
+        return self.signals
 
 
-def _read(source: Path, options: ImportOptions) -> tuple[list[NMEARecording], list[CANRecording], object, str]:
-    nmea_files, can_files = recording_files(source)
-    if not nmea_files or not can_files:
-        missing = "NMEA file (*.nmea, or a .log/.txt holding sentences)" if not nmea_files else \
-            "CAN log (*.log candump, *.asc, *.blf, *.trc)"
-        raise LogError(f"{source}: no {missing}; a recording needs the receiver's NMEA (position and time) and a "
-                       f"CAN log (steering command and angle, speed, yaw rate)")
+def _read(source: Path, options: ImportOptions, kinds: dict[str, list[Path]]):
+    nmea_files, can_files = kinds["nmea"], kinds["can"]
     dbc_name = str(options.dbc) if options.dbc else "the project's agrobot_tractor.dbc"
-    db = load_dbc(options.dbc)
+    db = load_dbc(options.dbc) if can_files else None
     return [read_nmea_file(p) for p in nmea_files], [read_can_file(p, db) for p in can_files], db, dbc_name
 
 
 def _streams(source: Path, options: ImportOptions) -> _Streams:
-    nmea, cans, db, dbc_name = _read(source, options)
-    sources = choose_sources(db, dbc_name, options.signals)
-    epochs = pd.concat([n.epochs for n in nmea]).sort_values("utc").drop_duplicates("utc").reset_index(drop=True)
-    fix = epochs["quality"].to_numpy() > 0
-    if fix.sum() < 10:
-        raise LogError(f"{source}: {int(fix.sum())} GNSS epochs with a fix; the log needs positions")
-    u0 = float(epochs.loc[fix, "utc"].iloc[0])
+    kinds = recording_files(source)
+    if kinds["bag"]:
+        from .rosbag import bag_streams
+
+        return _steered(bag_streams(kinds["bag"], options, source), options)
+    if kinds["isoxml"]:
+        from .isoxml_log import timelog_streams
+
+        return timelog_streams(kinds["isoxml"], options, source)
+    if not kinds["nmea"] and not kinds["can"]:
+        raise LogError(f"{source}: no recording in it: expected NMEA files (*.nmea, *.gps, or a .log/.txt holding "
+                       f"sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), a ROS bag (*.bag, *.db3, *.mcap, "
+                       f"or a rosbag2 folder) or an ISO 11783-10 TaskData (TASKDATA.XML with TLG files)")
+    nmea, cans, db, dbc_name = _read(source, options, kinds)
     report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
-                    "dbc": dbc_name, "first_fix_utc": _iso(u0), "notes": [x for n in nmea for x in n.notes]}
-    counts = {}
-    for n in nmea:
-        for k, v in n.counts.items():
-            counts[k] = counts.get(k, 0) + v
-    quality = epochs["quality"].value_counts().sort_index()
-    report["nmea"] = {"epochs": int(len(epochs)), "with_fix": int(fix.sum()),
-                      "by_quality": {str(int(k)): int(v) for k, v in quality.items()},
-                      "rate_hz": float(1.0 / np.median(np.diff(epochs["utc"]))), "sentences": counts}
+                    "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes]}
+    gnss, epochs, u0 = None, None, None
+    if nmea:
+        epochs = pd.concat([n.epochs for n in nmea]).sort_values("utc").drop_duplicates("utc").reset_index(drop=True)
+        fix = epochs["quality"].to_numpy() > 0
+        if fix.sum() < 2 and not cans:
+            raise LogError(f"{source}: {int(fix.sum())} GNSS epochs with a fix ({len(epochs)} epochs); a recording of "
+                           f"NMEA alone needs positions")
+        counts: Counter = Counter()
+        for n in nmea:
+            counts.update(n.counts)
+        quality = epochs["quality"].value_counts().sort_index()
+        report["nmea"] = {"epochs": int(len(epochs)), "with_fix": int(fix.sum()),
+                          "by_quality": {str(int(k)): int(v) for k, v in quality.items()},
+                          "rate_hz": float(1.0 / np.median(np.diff(epochs["utc"]))) if len(epochs) > 1 else math.nan,
+                          "sentences": dict(counts)}
+        if fix.sum() >= 2:
+            gnss = epochs.loc[fix].reset_index(drop=True)
+            u0 = float(gnss["utc"].iloc[0])
+            report["first_fix_utc"] = _iso(u0)
+        else:
+            report["notes"].append(f"the NMEA holds {int(fix.sum())} epochs with a fix: no positions")
+    raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    units: dict[str, str] = {}
+    if cans:
+        raw, units = _can_signals(source, cans, db, dbc_name, options, report)
+    report["columns"] = dict(units)
+    if gnss is not None:
+        report["columns"].update({"x": "NMEA GGA latitude/longitude -> east of the run's first fix (pymap3d)",
+                                  "y": "NMEA GGA latitude/longitude -> north of the run's first fix (pymap3d)",
+                                  "t": "receiver UTC (GGA), s from the run's start"})
+    if raw and gnss is not None:
+        report["clocks"], to_utc = _clocks(epochs, raw, u0, gnss)
+        raw = {c: (to_utc(t), v) for c, (t, v) in raw.items()}
+    elif raw:
+        lo = min(float(t[0]) for t, _ in raw.values())
+        report["clocks"] = {"reference": "the CAN logger's clock (no NMEA with a fix: not GPS time)",
+                            "can_clock": {"method": "the time base itself", "offset_s": 0.0, "drift_ppm": 0.0,
+                                          "posix": lo > 1e8}}
+        report["columns"]["t"] = "the CAN logger's timestamps, s from the run's start"
+    else:
+        report["clocks"] = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
+    streams = _Streams(gnss, raw, report, set(HELD) & set(raw),
+                       {c: resolution(v) for c, (_, v) in raw.items()})
+    return _steered(streams, options)
+
+
+def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, options: ImportOptions, report: dict):
+    """Column -> (logger time, SI values) of every column the DBC (or --signal) gives, and how."""
+    sources, unmapped, guessed = choose_sources(db, dbc_name, [s for s in options.signals if isinstance(s, SignalSource)])
     report["can"] = {"frames": int(sum(c.counts["frames"] for c in cans)),
                      "decoded": int(sum(c.counts["decoded"] for c in cans)),
                      "unknown_ids": dict(sum((c.unknown_ids for c in cans), Counter()).most_common(8)),
                      "not_decoded": int(sum(c.counts["frames that do not decode"] for c in cans)),
-                     "messages": {}}
+                     "messages": {}, "columns_without_a_signal": unmapped}
     frames: dict[str, pd.DataFrame] = {}
     for c in cans:
         for name, table in c.messages.items():
             frames[name] = pd.concat([frames[name], table]) if name in frames else table
-    raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    units = {}
+    raw, units = {}, {}
     for column, s in sources.items():
         table = frames.get(s.message)
         if table is None or table[s.signal].notna().sum() < 10:
-            raise LogError(f"{source}: the CAN logs hold {0 if table is None else int(table[s.signal].notna().sum())} "
-                           f"frames of {s.message} with {s.signal} (column {column!r}, DBC {dbc_name}); "
-                           f"messages found: {', '.join(sorted(frames)) or 'none'}"
-                           + (f"; unknown identifiers: {', '.join(report['can']['unknown_ids'])}" if report['can']['unknown_ids'] else ""))
+            given = any(g.column == column for g in options.signals)
+            what = (f"the CAN logs hold {0 if table is None else int(table[s.signal].notna().sum())} frames of "
+                    f"{s.message} with {s.signal} (column {column!r}, DBC {dbc_name}); messages found: "
+                    f"{', '.join(sorted(frames)) or 'none'}"
+                    + (f"; unknown identifiers: {', '.join(report['can']['unknown_ids'])}" if report['can']['unknown_ids'] else ""))
+            if given:
+                raise LogError(f"{source}: {what}")
+            report["can"]["columns_without_a_signal"][column] = what
+            continue
         table = table.sort_values("t", kind="stable").drop_duplicates("t")
         ok = table[s.signal].notna().to_numpy()
         convert, text = converter(db, dbc_name, s, options.wheelbase)
         raw[column] = (table["t"].to_numpy(float)[ok], convert(table[s.signal].to_numpy(float)[ok]))
-        units[column] = text
+        units[column] = text + ("; matched by name and unit (--signal to choose another)" if column in guessed else "")
         report["can"]["messages"][s.message] = {"frames": int(len(table)),
                                                 "rate_hz": float(1.0 / np.median(np.diff(table["t"])))}
-    report["columns"] = {**units, "x": "NMEA GGA latitude/longitude -> east of the run's first fix (pymap3d)",
-                         "y": "NMEA GGA latitude/longitude -> north of the run's first fix (pymap3d)",
-                         "t": "receiver UTC (GGA), s from the run's start"}
-    gnss = epochs.loc[fix].reset_index(drop=True)
-    report["clocks"], to_utc = _clocks(epochs, raw, u0, gnss)
-    can = {c: (to_utc(t), v) for c, (t, v) in raw.items()}
-    return _Streams(gnss, can, report)
+    if not raw:
+        unknown = report["can"]["unknown_ids"]
+        raise LogError(f"{source}: no CAN frame decodes to a column of the log with {dbc_name} "
+                       f"({report['can']['decoded']} of {report['can']['frames']} frames decoded"
+                       + (f"; unknown identifiers: {', '.join(unknown)}" if unknown else "")
+                       + "); give the vehicle's DBC with --dbc, and map signals with --signal COLUMN=Message.Signal")
+    return raw, units
+
+
+def _steered(streams: _Streams, options: ImportOptions) -> _Streams:
+    """Handwheel angles to road-wheel angles: delta and delta_cmd divided by the steering ratio."""
+    if options.steering_ratio == 1.0:
+        return streams
+    for column in ("delta_cmd", "delta"):
+        if column in streams.signals:
+            t, v = streams.signals[column]
+            streams.signals[column] = (t, v / options.steering_ratio)
+            streams.resolution[column] = streams.resolution.get(column, 0.0) / options.steering_ratio
+            streams.report.setdefault("columns", {})[column] = (streams.report.get("columns", {}).get(column, column)
+                                                                 + f"; / steering ratio {options.steering_ratio:g} "
+                                                                   f"(handwheel -> road wheel)")
+    return streams
 
 
 def _gnss_speed(gnss: pd.DataFrame) -> np.ndarray:
@@ -280,6 +381,9 @@ def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
         out["can_clock"] = {"method": "same host clock as the NMEA stamps", "offset_s": a, "drift_ppm": (b - 1.0) * 1e6}
         return out, (lambda t: u0 + (t - u0 - a) / b)
     # an independent clock: align the CAN speed on the GNSS speed
+    if "v" not in raw:
+        raise LogError("the CAN log's clock is not the NMEA host clock and the CAN log carries no speed to align it on "
+                       "the GNSS speed: record NMEA with host timestamps on the CAN logger's clock, or a speed on CAN")
     t_can, v_can = raw["v"]
     speed = _gnss_speed(gnss)
     t_ref = gnss["utc"].to_numpy(float)
@@ -315,13 +419,13 @@ def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
 
 def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
-    options = options or ImportOptions()
+    options = (options or ImportOptions()).for_vehicle()
     return _assemble(Path(source), _checked(Path(source), options), options)
 
 
 def import_runs(source: str | Path, options: ImportOptions | None = None) -> list[tuple[pd.DataFrame, dict]]:
     """Every run of a recording as (log, report), the files read once."""
-    source, options = Path(source), options or ImportOptions()
+    source, options = Path(source), (options or ImportOptions()).for_vehicle()
     streams = _checked(source, options)
     first = _assemble(source, streams, options)
     return [first if r["run"] == first[1]["used"].get("run") else _assemble(source, streams, replace(options, run=r["run"]))
@@ -334,43 +438,120 @@ def _checked(source: Path, options: ImportOptions) -> _Streams:
     return _streams(source, options)
 
 
+def _grid_step(streams: _Streams, options: ImportOptions) -> float:
+    """The log's period: --rate, else the GNSS epoch period, else the fastest canonical signal's
+    (at most 50 Hz); to the millisecond, so that a float median does not let the grid creep."""
+    if options.rate:
+        return 1.0 / options.rate
+    if streams.gnss is not None:
+        return max(round(float(np.median(np.diff(streams.gnss["utc"].to_numpy(float)))), 3), 0.001)
+    periods = [float(np.median(np.diff(t))) for c, (t, _) in streams.signals.items() if c in CANONICAL and len(t) > 1]
+    periods = periods or [float(np.median(np.diff(t))) for t, _ in streams.signals.values() if len(t) > 1]
+    return max(round(min(periods), 3), 0.02)
+
+
 def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
-    """The log on its grid for the run or range ``options`` choose, and the report of it."""
-    gnss, can, report = streams.gnss, streams.can, copy.deepcopy(streams.report)
-    u0 = float(gnss["utc"].iloc[0])
-    t_gnss = gnss["utc"].to_numpy(float)
-    # the epoch period to the millisecond (GGA times have 10 ms): a float median would let the grid creep
-    step = 1.0 / options.rate if options.rate else max(round(float(np.median(np.diff(t_gnss))), 3), 0.001)
-    everything = [t_gnss] + [t for t, _ in can.values()]
-    lo, hi = max(t[0] for t in everything), min(t[-1] for t in everything)
-    report["gaps"] = sum((gaps(t, name, u0) for name, t in [("gnss", t_gnss)] + [(c, can[c][0]) for c in can]), [])
-    if hi - lo < 10 * step:
-        raise LogError(f"{source}: the NMEA and CAN streams overlap for {max(hi - lo, 0):.3g} s in GPS time "
-                       f"(NMEA {_iso(t_gnss[0])} to {_iso(t_gnss[-1])}); nothing to align")
+    """The log on its grid for the run or range ``options`` choose, and the report of it: every
+    canonical column the recording holds, then the extras (the receiver's speed, fix quality,
+    heading and position error, and any other mapped signal); the missing columns are named."""
+    gnss, sig, report = streams.gnss, streams.signals, copy.deepcopy(streams.report)
+    # the streams that set the log's span and its gaps: the positions and the canonical columns
+    # (an extra column, logged now and then, is held or interpolated within that span)
+    times = ([("gnss", gnss["utc"].to_numpy(float))] if gnss is not None else []) + \
+        [(c, t) for c, (t, _) in sig.items() if c in CANONICAL]
+    times = times or [(c, t) for c, (t, _) in sig.items()]
+    if not times:
+        raise LogError(f"{source}: nothing with a time stamp in it")
+    u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
+    step = _grid_step(streams, options)
+    lo, hi = max(float(t[0]) for _, t in times), min(float(t[-1]) for _, t in times)
+    report["gaps"] = sum((gaps(t, name, u0) for name, t in times), [])
+    if hi - lo < 2 * step:
+        spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
+        raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
     grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
-    covered = _covered(t_gnss, grid)
-    for t, _ in can.values():
+    covered = np.ones(len(grid), bool)
+    for _, t in times:
         covered &= _covered(t, grid)
-    v = np.interp(grid, *can["v"])
-    moving = v > options.min_speed
+    if "v" in sig:
+        v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
+    elif gnss is not None:
+        v, report["runs_by"] = np.interp(grid, gnss["utc"], _gnss_speed(gnss)), "the receiver's speed over ground"
+    else:
+        v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
+    moving = v > options.min_speed if v is not None else np.ones(len(grid), bool)
     for a, b in _stretches(~moving):                 # short stops do not end a run
         if 0 < a and b < len(grid) and (b - a) * step < options.min_stop:
             moving[a:b] = True
     runs = []
     for a, b in _stretches(moving & covered):
         runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
-                     "mean_speed": float(v[a:b].mean()), "utc_start": _iso(grid[a])})
+                     "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": _iso(grid[a])})
     long_runs = [r for r in runs if r["duration"] >= options.min_run]
     for i, r in enumerate(long_runs, 1):
         r["run"] = i
     report["runs"] = long_runs
     report["short_runs_ignored"] = len(runs) - len(long_runs)
+    pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0]),
+                      "utc_start_s": float(grid[pick][0])}
+    t = grid[pick]
+    columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
+    for c in CANONICAL[1:]:
+        if c in sig:
+            columns[c] = _held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
+    if gnss is not None:
+        import pymap3d
+
+        utc = gnss["utc"].to_numpy(float)
+        lat, lon, height = (np.interp(t, utc, gnss[k]) for k in ("lat", "lon", "height"))
+        datum = (float(lat[0]), float(lon[0]), float(height[0]))
+        columns["x"], columns["y"], _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
+        report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
+        if np.isfinite(gnss["speed"].to_numpy(float)).mean() > 0.5:      # the receiver's own (Doppler) speed
+            columns["gnss_speed"] = np.interp(t, utc, _gnss_speed(gnss))
+        else:                                                              # none: the track's, named so
+            columns["track_speed"] = np.interp(t, utc, _gnss_speed(gnss))
+        columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
+        for extra in ("heading", "position_std"):
+            if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
+                ok = np.isfinite(gnss[extra].to_numpy(float))
+                x = gnss[extra].to_numpy(float)[ok]
+                columns[extra] = np.interp(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
+                if extra == "heading":
+                    columns[extra] = np.angle(np.exp(1j * columns[extra]))
+    for c, (tc, vc) in sig.items():
+        if c not in columns:
+            columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
+    report["rate_hz"] = 1.0 / step
+    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in sig}
+    present = [c for c in CANONICAL if c in columns]
+    report["present"] = present + [c for c in columns if c not in CANONICAL]
+    why = report.get("can", {}).get("columns_without_a_signal", {})
+    report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
+    order = present + [c for c in columns if c not in CANONICAL]
+    return pd.DataFrame(columns)[order], report
+
+
+def _missing_reason(column: str, report: dict) -> str:
+    if column in ("x", "y"):
+        return "no positions: no NMEA with a fix, no NavSatFix topic, no TLG position"
+    return {"delta_cmd": "no steering command in the recording (map one with --signal delta_cmd=...)",
+            "delta": "no wheel-angle measurement in the recording (map one with --signal delta=...; a handwheel "
+                     "angle with --steering-ratio)",
+            "v": "no wheel speed in the recording (the receiver's speed, where there is one, is gnss_speed)",
+            "yaw_rate": "no yaw rate (gyro) in the recording (map one with --signal yaw_rate=...)"}[column]
+
+
+def _choose(source: Path, grid: np.ndarray, u0: float, covered: np.ndarray, long_runs: list, report: dict,
+            options: ImportOptions) -> tuple[np.ndarray, dict]:
+    """The samples used: a --time-range (refused across a gap), the --run-th run, or the longest."""
     if options.time_range is not None:
         a, b = options.time_range
         pick = (grid - u0 >= a) & (grid - u0 <= b)
         if pick.sum() < 10:
             raise LogError(f"{source}: --time-range {a:g} {b:g}: the recording runs from 0 to "
-                           f"{t_gnss[-1] - u0:.1f} s after its first fix; the range holds {int(pick.sum())} samples")
+                           f"{grid[-1] - u0:.1f} s after its start; the range holds {int(pick.sum())} samples")
         holes = pick & ~covered
         if holes.any():
             g = [x for x in report["gaps"] if x["end"] > a and x["start"] < b]
@@ -378,57 +559,59 @@ def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[
                            + (f" ({g[0]['stream']} silent from {g[0]['start']:.2f} to {g[0]['end']:.2f} s)" if g else "")
                            + "; choose a range within one run (runs: "
                            + ", ".join(f"{r['start']:.1f}-{r['end']:.1f} s" for r in long_runs) + ")")
-        used = {"how": "time range", "start": float(a), "end": float(b)}
-    else:
-        if not long_runs:
-            raise LogError(f"{source}: no run of {options.min_run:g} s or more with the tractor driving (speed above "
+        return pick, {"how": "time range", "start": float(a), "end": float(b)}
+    if not long_runs:
+        stretches = [(a, b) for a, b in _stretches(covered) if b - a >= 3]
+        if options.run is not None or not stretches:
+            raise LogError(f"{source}: no run of {options.min_run:g} s or more with the vehicle driving (speed above "
                            f"{options.min_speed:g} m/s) and every stream present"
                            + ("; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
                               if report["gaps"] else ""))
-        if options.run is not None and not 1 <= options.run <= len(long_runs):
-            raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "
-                           + ", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s" for r in long_runs))
-        r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
-        pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
-        used = {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "run": r["run"],
-                "start": r["start"], "end": r["end"]}
-    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0]),
-                      "utc_start_s": float(grid[pick][0])}
-    t = grid[pick]
-    lat = np.interp(t, t_gnss, gnss["lat"])
-    lon = np.interp(t, t_gnss, gnss["lon"])
-    height = np.interp(t, t_gnss, gnss["height"])
-    import pymap3d
-
-    datum = (float(lat[0]), float(lon[0]), float(height[0]))
-    east, north, _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
-    columns = {"t": t - t[0], **{c: _held(t, *can[c]) if c in HELD else np.interp(t, *can[c]) for c in CAN_COLUMNS},
-               "x": east, "y": north}
-    report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
-    report["rate_hz"] = 1.0 / step
-    # a sensor's steps, read on its own frames: interpolation onto the grid hides them from the log
-    report["resolution"] = {c: resolution(can[c][1]) for c in CAN_COLUMNS}
-    return pd.DataFrame(columns)[list(CANONICAL)], report
+        a, b = max(stretches, key=lambda ab: ab[1] - ab[0])
+        pick = np.zeros(len(grid), bool)
+        pick[a:b] = True
+        report.setdefault("notes", []).append(
+            f"no run of {options.min_run:g} s or more with the vehicle driving (above {options.min_speed:g} m/s): "
+            f"the longest stretch without a gap is used; a diagnosis needs the vehicle driving")
+        return pick, {"how": "the longest stretch without a gap (the vehicle does not drive)",
+                      "start": float(grid[a] - u0), "end": float(grid[b - 1] - u0)}
+    if options.run is not None and not 1 <= options.run <= len(long_runs):
+        raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "
+                       + ", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s" for r in long_runs))
+    r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
+    pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
+    return pick, {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "run": r["run"],
+                  "start": r["start"], "end": r["end"]}
 
 
 def describe(report: dict) -> str:
-    """A few lines for the terminal: files, clocks, gaps, runs, what was used."""
-    c = report["clocks"]
-    lines = [f"recording {report['source']}: {len(report['files']['nmea'])} NMEA file(s), "
-             f"{len(report['files']['can'])} CAN log(s), DBC {report['dbc']}"]
+    """A few lines for the terminal: files, clocks, gaps, runs, what was used, what is missing."""
+    files = report["files"]
+    parts = [f"{len(v)} {k} file(s)" for k, v in files.items() if v]
+    lines = [f"recording {report['source']}: {', '.join(parts) or 'no files'}"
+             + (f", DBC {report['dbc']}" if report.get("dbc") else "")]
+    c = report.get("clocks", {})
     if "nmea_host_clock" in c:
         h = c["nmea_host_clock"]
         lat = h["nmea_latency_s"]
         lines.append(f"  host clock - GPS time: {h['offset_s']:+.4f} s, drift {h['drift_ppm']:+.1f} ppm; NMEA latency "
                      f"median {1e3 * lat['median']:.1f} ms, 95% {1e3 * lat['p95']:.1f} ms, max {1e3 * lat['max']:.1f} ms")
-    k = c["can_clock"]
-    lines.append(f"  CAN clock: {k['method']}; offset {k['offset_s']:+.4f} s, drift {k['drift_ppm']:+.1f} ppm")
+    if "can_clock" in c:
+        k = c["can_clock"]
+        lines.append(f"  CAN clock: {k['method']}; offset {k['offset_s']:+.4f} s, drift {k['drift_ppm']:+.1f} ppm")
+    elif c.get("reference"):
+        lines.append(f"  time base: {c['reference']}")
     g = report["gaps"]
     lines.append(f"  gaps: {len(g)}" + (": " + ", ".join(f"{x['stream']} {x['start']:.2f}-{x['end']:.2f} s"
                                                          for x in g[:4]) + (" ..." if len(g) > 4 else "") if g else ""))
-    lines.append("  runs: " + (", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s ({r['mean_speed']:.2f} m/s)"
-                                          for r in report["runs"]) or "none"))
+    lines.append("  runs: " + (", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s"
+                                          + (f" ({r['mean_speed']:.2f} m/s)" if math.isfinite(r["mean_speed"]) else "")
+                                          for r in report["runs"][:8]) or "none")
+                 + (f" ... ({len(report['runs'])} runs)" if len(report["runs"]) > 8 else ""))
     u = report["used"]
-    lines.append(f"  used: {u['how']}, {u['start']:.2f}-{u['end']:.2f} s after the first fix ({u['utc_start']}), "
+    lines.append(f"  used: {u['how']}, {u['start']:.2f}-{u['end']:.2f} s after the start ({u['utc_start']}), "
                  f"{u['duration']:.1f} s at {report['rate_hz']:g} Hz")
+    lines.append(f"  columns: {', '.join(report.get('present', []))}")
+    for column, why in report.get("missing", {}).items():
+        lines.append(f"  missing {column}: {why}")
     return "\n".join(lines)

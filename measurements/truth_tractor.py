@@ -22,6 +22,18 @@ STEERING_TIME_CONSTANT = 0.0667     # the paper tractor's closed-loop steering (
 STEERING_RATE = 60 * DEG
 STEERING_DEADBAND = 0.5 / 150       # valve dead-band / kp of the paper tractor
 
+# other vehicles the truth can be (``vehicle``): their own parameters, steering, sensors and driving;
+# "car" is a mid-size passenger car (studies/passenger_car.toml is its baseline) driven at 10, 20
+# and 30 m/s with road-wheel angles a twentieth of the tractor's (the same lateral accelerations,
+# roughly), an electric power steering and a CAN steering-angle sensor of 0.01 deg at the road wheel
+VEHICLES = {
+    "tractor": dict(table=TABLE, tau=STEERING_TIME_CONSTANT, rate=STEERING_RATE, deadband=STEERING_DEADBAND,
+                    speeds=(1.0, 2.0, 3.0), steer_scale=1.0, resolution=0.1 * DEG, gyro_noise=0.005, v_ref=2.0),
+    "car": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
+                tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(10.0, 20.0, 30.0), steer_scale=0.05,
+                resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0),
+}
+
 EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steering_offset", "yaw_rate_bias",
            "gps_latency", "speed_dependent_cornering", "side_slope", "antenna_lever_arm")
 
@@ -226,13 +238,18 @@ class Servo:
 
 
 def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
-             scale: dict[str, float] | None = None, speeds: tuple[float, ...] = (1.0, 2.0, 3.0),
-             healthy: str | None = None) -> tuple[pd.DataFrame, dict]:
+             scale: dict[str, float] | None = None, speeds: tuple[float, ...] | None = None,
+             healthy: str | None = None, vehicle: str = "tractor") -> tuple[pd.DataFrame, dict]:
     """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
     EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
     sigma_f) to stress the diagnosis with a truth further from the baseline; ``healthy``: one or
     several of HEALTHY ('a+b'), ways the truth differs from the baseline without a fault
-    (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay)."""
+    (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay);
+    ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering)."""
+    if vehicle not in VEHICLES:
+        raise ValueError(f"unknown vehicle {vehicle!r}; known: {sorted(VEHICLES)}")
+    veh = VEHICLES[vehicle]
+    speeds = speeds or veh["speeds"]
     rng = np.random.default_rng(seed)
     ids = effect_list(effect)
     unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED]
@@ -245,25 +262,29 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     for i in ids:
         if i in UNLISTED:
             e.update(draw_unlisted(i, side))
+    for key in ("offset", "deadband"):
+        if key in e:
+            e[key] *= veh["steer_scale"]
     hv = draw_healthy(healthy, np.random.default_rng([seed, 2])) if healthy else {}
-    p = dict(TABLE)
+    p = dict(veh["table"])
     for key, factor in (scale or {}).items():
         p[key] *= factor
     for k, lo, hi in (("C_f", 0.85, 1.15), ("C_r", 0.85, 1.15), ("sigma_f", 0.9, 1.1)):
         p[k] *= rng.uniform(lo, hi)
     p["sigma_f"] *= hv.get("sigma_f_factor", 1.0)
     sigma_r = hv.get("sigma_r", 0.0)
-    tau = STEERING_TIME_CONSTANT * rng.uniform(0.8, 1.2)
+    tau = veh["tau"] * rng.uniform(0.8, 1.2)
     tau_spool = 0.015
-    rate = e.get("rate", STEERING_RATE)
-    dead = STEERING_DEADBAND + e.get("deadband", 0.0)
+    rate = e.get("rate", veh["rate"])
+    dead = veh["deadband"] + e.get("deadband", 0.0)
     delay, offset = e.get("delay", 0.0), e.get("offset", 0.0)
-    k_corner = e.get("k", 0.0)
+    k_corner, v_ref = e.get("k", 0.0), veh["v_ref"]
     slope, downhill = e.get("slope", 0.0), e.get("downhill", 0.0)
     if hv.get("plan") == "field":
         t_log, cmd, speed_of = field_plan(rng, duration)
     else:
         t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=hv.get("speeds", speeds))
+    cmd = cmd * veh["steer_scale"]
     m, I, lf, lr, sf = p["m"], p["I"], p["l_f"], p["l_r"], p["sigma_f"]
     g_slope = G * math.sin(slope)
     sensor_gain = e.get("sensor_gain", 1.0)
@@ -283,7 +304,7 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         else:
             d_delta, d_spool = servo_rate[0], 0.0
         v = speed_of(time)
-        scale = max(0.2, 1.0 + k_corner * (v - 2.0))
+        scale = max(0.2, 1.0 + k_corner * (v - v_ref) * (2.0 / v_ref))      # relative: k per m/s at 2 m/s
         cf, cr = p["C_f"] * scale, p["C_r"] * scale
         vv = max(v, 0.8)          # the slip equations divide by v; below 0.8 m/s scaled (v / vv)
         ar = ar_state if sigma_r > 0 else (vy - lr * r) / vv
@@ -323,16 +344,17 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     lat = e.get("latency", 0.0)
     gx, gy = np.interp(t_log - lat, times, ax), np.interp(t_log - lat, times, ay)
     noise = rng.standard_normal((6, n)) * hv.get("noise", 1.0)
-    q = hv.get("resolution", 0.1 * DEG)
+    q = hv.get("resolution", veh["resolution"])
     frame = pd.DataFrame({
         "t": t_log,
         "delta_cmd": cmd,
         "delta": q * np.round((sensor_gain * delta[idx] + 0.05 * DEG * noise[0]) / q),
         "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
-        "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + 0.005 * noise[2],
+        "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2],
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
     truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
+             "vehicle": vehicle, "v_ref": v_ref,
              "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
     return frame, truth

@@ -88,7 +88,8 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
 
 
 @pytest.mark.parametrize("edit, words", [
-    (lambda f: f.drop(columns=["x"]), ["missing columns", "'x'"]),
+    (lambda f: f.drop(columns=["delta_cmd", "delta", "yaw_rate"]), ["nothing to judge", "steering not judged: no delta_cmd",
+                                                                    "position not judged: no yaw_rate"]),
     (lambda f: f.assign(delta=np.degrees(f["delta"])), ["'delta'", "looks like degrees"]),
     (lambda f: f.assign(yaw_rate=np.degrees(f["yaw_rate"])), ["'yaw_rate'", "deg"]),
     (lambda f: f.drop(index=range(1000, 1100)), ["gap of 5.05 s", "t = 49.95"]),

@@ -205,7 +205,7 @@ def test_the_same_command_on_the_experiments_log_gives_the_same_fits(study_run, 
 
 
 @pytest.mark.parametrize("edit, words", [
-    (lambda f: f.drop(columns=["yaw_rate"]), ["missing columns", "yaw_rate"]),
+    (lambda f: f.drop(columns=["yaw_rate"]), ["identification not possible", "no yaw_rate"]),
     (lambda f: f.assign(t=f["t"].where(f.index != 100, 0.0)), ["not increasing at row"]),
     (lambda f: f.assign(delta=f["delta"].where(f.index != 50, np.nan)), ["'delta'", "NaN"]),
     (lambda f: f.iloc[:2000], ["too few periods"]),

@@ -297,7 +297,7 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["diagnose", "{tmp}/ms.csv", "--out", "{tmp}/d"], 2, ["'t'", "milliseconds"]),
     (["identify", "{tmp}/ms.csv", "--out", "{tmp}/i"], 2, ["'t'", "milliseconds"]),
     (["identify", "{tmp}/degrees.csv", "--out", "{tmp}/i"], 2, ["'delta'", "degrees"]),
-    (["identify", "{tmp}/missing.csv", "--out", "{tmp}/i"], 2, ["missing columns"]),
+    (["identify", "{tmp}/missing.csv", "--out", "{tmp}/i"], 2, ["identification not possible", "no yaw_rate"]),
     (["identify", "studies/identification.toml", "--out", "{tmp}/i", "--set", "gyro.noise_std=loud"], 2,
      ["noise_std", "'loud'"]),
     (["export-controller", "nope.toml", "--out", "{tmp}/c.fmu"], 2, ["nope.toml"]),

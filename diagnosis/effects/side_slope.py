@@ -22,6 +22,7 @@ class SideSlope(Effect):
     id = "side_slope"
     subsystem = "yaw (terrain: a side slope)"
     stages = ("yaw",)
+    needs = ("x", "y")            # the heading, from the GPS course, resolves the fall line
     parameters = (Parameter("slope_east", "m/s2", 0.5, -3.0, 3.0), Parameter("slope_north", "m/s2", 0.5, -3.0, 3.0))
     starts = ((0.0, 0.0),)
     threshold = "slope >= 1.5 deg"

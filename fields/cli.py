@@ -1,0 +1,114 @@
+"""``fields PATH``: what a field file or folder holds (fields, area, rings, guidance lines,
+headland, validity) and a drawing of it; ``--out DIR`` writes fields.png, fields.json and the
+fields as GeoJSON (longitude/latitude) for any GIS."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", type=Path, help="a GeoJSON, WKT, GML or ISO 11783-10 TaskData file, a polygon CSV, "
+                   "an AgOpenGPS field folder, or a folder of such files")
+    p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it (EPSG:6677 ...)")
+    p.add_argument("--out", type=Path, default=None, help="folder for fields.png, fields.json, fields.geojson")
+
+
+def run(args: argparse.Namespace) -> int:
+    from orchestrator.output import check_output
+    from orchestrator.results import atomic_write, write_json
+
+    from .readers import read_fields, read_folder
+
+    if args.out is not None:
+        check_output(args.out, overwrite=True)
+    fields, skipped = read_folder(args.source, args.crs) if args.source.is_dir() else (read_fields(args.source, args.crs), [])
+    print(f"{args.source}: {len(fields)} field(s)")
+    for why in skipped:
+        print(f"  not read: {why}")
+    print(f"{'field':32s} {'area [ha]':>10s} {'rings':>5s} {'lines':>5s} {'headland':>8s}  valid  coordinates")
+    for f in fields:
+        s = f.summary()
+        print(f"{f.name[:32]:32s} {s['area_ha']:10.3f} {s['rings']:5d} {len(s['lines']):5d} "
+              f"{'yes' if s['headland'] else 'no':>8s}  {'yes' if s['valid'] else 'NO':5s}  {f.crs}")
+        for g in s["lines"]:
+            print(f"    {g['kind']} {g['name']!r}: {g['length_m']:.1f} m, heading {g['heading_deg']:.1f} deg (east = 0, "
+                  f"counter-clockwise)")
+        for problem in s["problems"]:
+            print(f"    problem: {problem}")
+    if args.out is not None:
+        summaries = [f.summary() for f in fields]
+        write_json(args.out / "fields.json", {"source": str(args.source), "fields": summaries})
+        atomic_write(args.out / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
+        draw(fields, args.out / "fields.png", str(args.source))
+        print(f"written: {args.out}/fields.png, fields.json, fields.geojson")
+    return 0
+
+
+def geojson(fields) -> dict:
+    """The fields as a GeoJSON FeatureCollection in longitude/latitude (local coordinates when a
+    field has no geographic reference, said in its properties)."""
+    import numpy as np
+    from shapely.geometry import LineString, Polygon, mapping
+
+    feats = []
+    for f in fields:
+        conv = f.to_geodetic if f.origin is not None else (lambda xy: np.asarray(xy))
+        poly = Polygon(conv(np.asarray(f.boundary.exterior.coords)),
+                       [conv(np.asarray(h.coords)) for h in f.boundary.interiors])
+        props = {"name": f.name, "area_ha": round(f.area_ha, 4), "kind": "boundary",
+                 "coordinates": "lon/lat" if f.origin is not None else "local metres"}
+        feats.append({"type": "Feature", "properties": props, "geometry": mapping(poly)})
+        for g in f.lines:
+            feats.append({"type": "Feature", "properties": {"name": g.name, "field": f.name, "kind": g.kind},
+                          "geometry": mapping(LineString(conv(g.points)))})
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def draw(fields, path: Path, title: str) -> Path:
+    """Each field in its local frame, side by side (at most 12), with holes, headland and lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from orchestrator.results import atomic_write
+
+    shown = fields[:12]
+    cols = min(4, len(shown))
+    rows = math.ceil(len(shown) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    for ax, f in zip(axes.flat, shown):
+        x, y = f.boundary.exterior.xy
+        ax.fill(x, y, color="#cfe8b0", edgecolor="#2f6b1f", lw=1.2, label="boundary")
+        for k, hole in enumerate(f.boundary.interiors):
+            hx, hy = hole.xy
+            ax.fill(hx, hy, color="white", edgecolor="#8a3b12", lw=1, label="hole" if k == 0 else None)
+        if f.headland is not None:
+            hx, hy = f.headland.exterior.xy
+            ax.plot(hx, hy, "--", color="#7a5c00", lw=1, label="headland")
+        for k, g in enumerate(f.lines):
+            ax.plot(g.points[:, 0], g.points[:, 1], color="tab:blue", lw=1.2, label="guidance line" if k == 0 else None)
+        ax.set_title(f"{f.name[:28]}\n{f.area_ha:.2f} ha, {f.holes} hole(s), {len(f.lines)} line(s)"
+                     + ("" if not f.problems() else "\nINVALID: self-intersecting"), fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlabel("east [m]" + ("" if f.origin else " (local)"), fontsize=8)
+        ax.set_ylabel("north [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+        if f.holes or f.lines or f.headland is not None:
+            ax.legend(fontsize=6, loc="best")
+    for ax in list(axes.flat)[len(shown):]:
+        ax.axis("off")
+    fig.suptitle(f"{title}: {len(fields)} field(s)" + (f", first {len(shown)} shown" if len(fields) > len(shown) else ""),
+                 fontsize=10)
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=100, format="png"))
+    plt.close(fig)
+    return path
+
+
+def register(registry) -> None:
+    registry.add_command("fields", "list and draw the fields in a file or folder (GeoJSON, WKT, GML, ISOXML, AgOpenGPS)",
+                         add_arguments, run)

@@ -1,0 +1,193 @@
+"""ISO 11783-10 time logs (TLGnnnnn.xml header + TLGnnnnn.bin records) as a recording (issue 26).
+
+The TaskData itself (TASKDATA.XML) is read with the ``isoxml`` package (its typed models and its
+DDI dictionary: name, unit, bit resolution); the binary time logs it does not read, so this
+module does, after ISO 11783-10's layout. The header's ``TIM`` names what each record holds: an
+attribute written empty is logged per record, one with a value is fixed. A record is, little-endian:
+
+- TIM A (start): uint32 ms since midnight, uint16 days since 1980-01-01;
+- PTN A north, B east: int32 x 1e-7 deg; C up: int32 mm; D status: uint8; E PDOP, F HDOP: uint16 x
+  0.1; G satellites: uint8; H GPS UTC time: uint32 ms; I GPS UTC date: uint16 days since 1980;
+- uint8 N, then N x (uint8 DLV index in the header's order, int32 value).
+
+Each DLV becomes a column named after its DDI (``ddi0074_total_area`` style) with the value
+times the DDI's bit resolution, in the DDI's unit (the report names it); the position goes to
+x/y about the first fix, the speed between fixes to ``track_speed``. PTN D (status) is ISO's:
+0 no GPS, 1 GNSS, 2 DGNSS, 3 precise GNSS, 4 RTK fixed, 5 RTK float, ... 15 not available; it is
+kept as ``fix_quality`` with GGA's codes where they agree (0-5) and 15 -> NaN (unknown).
+"""
+from __future__ import annotations
+
+import datetime
+import math
+import re
+import struct
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .log import LogError
+
+EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
+PTN_LAYOUT = {"A": ("<i", 1e-7), "B": ("<i", 1e-7), "C": ("<i", 1e-3), "D": ("<B", 1.0), "E": ("<H", 0.1),
+              "F": ("<H", 0.1), "G": ("<B", 1.0), "H": ("<I", 1e-3), "I": ("<H", 1.0)}
+PTN_NAMES = {"A": "lat", "B": "lon", "C": "height", "D": "status", "E": "pdop", "F": "hdop", "G": "satellites",
+             "H": "gps_time_ms", "I": "gps_date"}
+
+
+def ddi_name(ddi: int) -> tuple[str, str, float]:
+    """(column name, unit, bit resolution) of a DDI, from the isoxml package's dictionary."""
+    from isoxml.models.ddi_entities import DDEntity
+
+    try:
+        e = DDEntity.from_id(ddi)
+        name, unit, res = e.name, e.unit, float(e.bit_resolution)
+    except KeyError:
+        name, unit, res = "proprietary", "", 1.0
+    words = re.sub(r"\s+as\s+\[.*?\]$", "", name)
+    slug = re.sub(r"[^a-z0-9]+", "_", words.lower()).strip("_")[:48]
+    return f"ddi{ddi:04d}_{slug}", unit, res
+
+
+def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
+    """(PTN attributes logged per record, [(DDI, element)] of the DLVs, fixed values) of a
+    TLG header; a LogError names the file and the element when it is not a time-log header."""
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as exc:
+        raise LogError(f"{path}: not a readable XML file: {exc}") from None
+    if root.tag != "TIM":
+        raise LogError(f"{path}: expected a time-log header (root element TIM), found <{root.tag}>")
+    if root.get("A") != "":
+        raise LogError(f"{path}: TIM A (the start time) is not logged per record (A=\"\"); found A={root.get('A')!r}")
+    ptn = root.find("PTN")
+    logged = [k for k in "ABCDEFGHI" if ptn is not None and ptn.get(k) == ""]
+    fixed = {PTN_NAMES[k]: ptn.get(k) for k in "ABCDEFGHI" if ptn is not None and ptn.get(k) not in (None, "")}
+    dlvs = []
+    for i, dlv in enumerate(root.findall("DLV")):
+        try:
+            dlvs.append((int(dlv.get("A"), 16), dlv.get("C", "")))
+        except (TypeError, ValueError):
+            raise LogError(f"{path}: DLV {i}: attribute A must be a DDI in hex, got {dlv.get('A')!r}") from None
+    return logged, dlvs, fixed
+
+
+def read_binary(path: Path, logged: list[str], n_dlv: int) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+    """(POSIX times, PTN columns, DLV values (records x n_dlv, NaN where a record has none))."""
+    data = path.read_bytes()
+    times, ptn_rows, dlv_rows = [], [], []
+    i, n = 0, len(data)
+    layout = [(k, PTN_LAYOUT[k]) for k in logged]
+    size = 6 + sum(struct.calcsize(fmt) for _, (fmt, _) in layout) + 1
+    record = 0
+    while i < n:
+        if i + size > n:
+            raise LogError(f"{path}: record {record} at byte {i} is cut off ({n - i} bytes left, the header's TIM/PTN "
+                           f"need {size}); the binary does not match its header")
+        ms, days = struct.unpack_from("<IH", data, i)
+        i += 6
+        values = []
+        for _, (fmt, scale) in layout:
+            values.append(struct.unpack_from(fmt, data, i)[0] * scale)
+            i += struct.calcsize(fmt)
+        count = data[i]
+        i += 1
+        if i + 5 * count > n:
+            raise LogError(f"{path}: record {record} at byte {i - 1} says {count} values but {n - i} bytes remain; "
+                           f"the binary does not match its header")
+        row = np.full(n_dlv, np.nan)
+        for _ in range(count):
+            index, value = struct.unpack_from("<Bi", data, i)
+            i += 5
+            if index >= n_dlv:
+                raise LogError(f"{path}: record {record} refers to DLV {index}; the header lists {n_dlv} "
+                               f"(0 to {n_dlv - 1}): the binary does not match its header")
+            row[index] = value
+        times.append(EPOCH_1980 + days * 86400.0 + ms * 1e-3)
+        ptn_rows.append(values)
+        dlv_rows.append(row)
+        record += 1
+    if not times:
+        raise LogError(f"{path}: no record in it")
+    ptn = np.array(ptn_rows, float).reshape(len(times), len(layout))
+    return np.array(times), {PTN_NAMES[k]: ptn[:, j] for j, (k, _) in enumerate(layout)}, np.array(dlv_rows)
+
+
+def read_timelog(xml: Path) -> tuple[pd.DataFrame, dict]:
+    """One time log as a table (utc, lat, lon, height, status ..., a column per DLV) and its
+    columns' units."""
+    logged, dlvs, fixed = read_header(xml)
+    binary = xml.with_suffix(".bin") if xml.with_suffix(".bin").exists() else xml.with_suffix(".BIN")
+    if not binary.exists():
+        raise LogError(f"{xml}: its binary {xml.with_suffix('.bin').name} is missing")
+    t, ptn, values = read_binary(binary, logged, len(dlvs))
+    table = pd.DataFrame({"utc": t, **ptn})
+    units = {}
+    names = [ddi_name(d) for d, _ in dlvs]
+    count = {}
+    for (ddi, element), (name, unit, res), column in zip(dlvs, names, values.T):
+        count[name] = count.get(name, 0) + 1
+        label = name if sum(n == name for n, _, _ in names) == 1 else f"{name}_{element.lower().replace('-', '')}"
+        table[label] = column * res
+        units[label] = f"{unit or '-'} (DDI {ddi} 0x{ddi:04X}, element {element or '-'}, resolution {res:g})"
+    return table, {"units": units, "fixed": fixed, "records": int(len(t))}
+
+
+def timelog_files(paths: list[Path]) -> list[Path]:
+    """The TLG headers among the files (a TASKDATA.XML names them; the headers are found beside it)."""
+    heads = sorted({p for p in paths if p.name.upper().startswith("TLG") and p.suffix.lower() == ".xml"})
+    if not heads:
+        for p in paths:
+            if p.name.upper().startswith("TLG") and p.suffix.lower() == ".bin":
+                heads.append(p.with_suffix(".xml"))
+        for task in [p for p in paths if p.name.upper() == "TASKDATA.XML"]:
+            heads += sorted(task.parent.glob("TLG*.xml")) + sorted(task.parent.glob("TLG*.XML"))
+    return sorted(set(heads))
+
+
+def timelog_streams(paths: list[Path], options, source: Path):
+    """The recording's streams from ISO 11783-10 time logs (one, or every one of a TaskData:
+    the longest is used unless --run/--time-range says otherwise, each being one run)."""
+    from .recording import _Streams
+
+    heads = timelog_files(paths)
+    if not heads:
+        raise LogError(f"{source}: a TaskData without time logs (no TLGnnnnn.xml/.bin beside it)")
+    tables = [(h, *read_timelog(h)) for h in heads]
+    head, table, info = max(tables, key=lambda x: len(x[1])) if len(tables) > 1 else tables[0]
+    table = table.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
+    report: dict = {"source": str(source), "files": {"isoxml": [str(h) for h, _, _ in tables]}, "dbc": None,
+                    "notes": [], "timelogs": {h.stem: {"records": i["records"], "start": _iso(float(t["utc"].min())),
+                                                        "end": _iso(float(t["utc"].max()))} for h, t, i in tables},
+                    "timelog_used": head.stem,
+                    "clocks": {"reference": "the task controller's TIM start times (ms since midnight, days since 1980)"}}
+    if len(tables) > 1:
+        report["notes"].append(f"{len(tables)} time logs; the longest, {head.stem} ({len(table)} records), is used "
+                               f"(convert one file to choose another)")
+    gnss = None
+    if "lat" in table and "lon" in table:
+        ok = (table["lat"].abs() > 0) | (table["lon"].abs() > 0)
+        status = table["status"].to_numpy(float) if "status" in table else np.full(len(table), 15.0)
+        quality = np.where(status <= 5, status, np.nan)
+        gnss = pd.DataFrame({"utc": table["utc"][ok], "lat": table["lat"][ok], "lon": table["lon"][ok],
+                             "height": table["height"][ok] if "height" in table else 0.0,
+                             "quality": np.where(np.isfinite(quality), quality, 1.0)[ok.to_numpy()],
+                             "speed": np.nan, "course": np.nan, "heading": np.nan, "position_std": np.nan}).reset_index(drop=True)
+        if np.all(status[ok.to_numpy()] == 15):
+            report["notes"].append("PositionStatus is 15 (not available) in every record: the receiver's fix quality "
+                                   "was not logged")
+    signals = {c: (table["utc"].to_numpy(float), table[c].to_numpy(float)) for c in info["units"]
+               if np.isfinite(table[c]).sum() >= 2}
+    signals = {c: (t[np.isfinite(v)], v[np.isfinite(v)]) for c, (t, v) in signals.items()}
+    report["columns"] = {**{c: info["units"][c] for c in signals},
+                         "x": "PTN north/east (1e-7 deg) -> east of the run's first fix (pymap3d)",
+                         "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
+                         "t": "TIM start, s from the run's start"}
+    report["fixed"] = info["fixed"]
+    return _Streams(gnss, signals, report, set(signals), {})
+
+
+def _iso(posix: float) -> str:
+    return datetime.datetime.fromtimestamp(posix, datetime.timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
