@@ -49,12 +49,13 @@ MIN_COMMANDED_YAW = 0.0125     # rad/s: 0.5 deg of steering at 2 m/s on the pape
 
 def position_step(xy: np.ndarray) -> float:
     """The step positions move in when they are quantised (float32 latitude/longitude: 0.1-1 m),
-    else 0: the smallest non-zero move between samples, when nearly every move is a whole number
-    of it (on either axis)."""
+    else 0: the smallest move between samples above a millimetre (the projection to east/north
+    mixes a little of the other axis' steps into each), when nearly every such move is a whole
+    number of it (on either axis)."""
     steps = []
     for col in np.asarray(xy, float).T:
         d = np.abs(np.diff(col))
-        d = d[d > 1e-9]
+        d = d[d > 1e-3]
         if len(d) < 20:
             continue
         q = float(np.percentile(d, 1))

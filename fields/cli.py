@@ -43,23 +43,26 @@ def run(args: argparse.Namespace) -> int:
         write_json(args.out / "fields.json", {"source": str(args.source), "fields": summaries})
         atomic_write(args.out / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
         draw(fields, args.out / "fields.png", str(args.source))
-        print(f"written: {args.out}/fields.png, fields.json, fields.geojson")
+        local = [f.name for f in fields if f.origin is None]
+        print(f"written: {args.out}/fields.png, fields.json, fields.geojson"
+              + (f" (without {', '.join(local)}: local coordinates, no longitude/latitude)" if local else ""))
     return 0
 
 
 def geojson(fields) -> dict:
-    """The fields as a GeoJSON FeatureCollection in longitude/latitude (local coordinates when a
-    field has no geographic reference, said in its properties)."""
+    """The fields with a geographic reference as a GeoJSON FeatureCollection in longitude/latitude
+    (RFC 7946); a field in local coordinates has no place in it."""
     import numpy as np
     from shapely.geometry import LineString, Polygon, mapping
 
     feats = []
     for f in fields:
-        conv = f.to_geodetic if f.origin is not None else (lambda xy: np.asarray(xy))
+        if f.origin is None:
+            continue
+        conv = f.to_geodetic
         poly = Polygon(conv(np.asarray(f.boundary.exterior.coords)),
                        [conv(np.asarray(h.coords)) for h in f.boundary.interiors])
-        props = {"name": f.name, "area_ha": round(f.area_ha, 4), "kind": "boundary",
-                 "coordinates": "lon/lat" if f.origin is not None else "local metres"}
+        props = {"name": f.name, "area_ha": round(f.area_ha, 4), "kind": "boundary"}
         feats.append({"type": "Feature", "properties": props, "geometry": mapping(poly)})
         for g in f.lines:
             feats.append({"type": "Feature", "properties": {"name": g.name, "field": f.name, "kind": g.kind},

@@ -40,7 +40,7 @@ MAX_GEOGRAPHIC_EXTENT = 0.5        # deg: beyond this a file of small numbers is
 class Coordinates:
     """How a file's numbers become local metres: lon/lat, a projected CRS, or local as written."""
 
-    def __init__(self, where: str, declared: str | None, given: str | None, sample: np.ndarray):
+    def __init__(self, where: str, declared: str | None, given: str | None, sample):
         self.where = where
         self.crs = None
         text = given or declared
@@ -54,12 +54,14 @@ class Coordinates:
                                  f"EPSG:6677") from None
             self.kind = "geographic" if self.crs.is_geographic else "projected"
             self.text = f"{self.crs.to_string()} ({'given' if given else 'named by the file'})"
-        else:
-            ok = len(sample) > 0 and np.all(np.abs(sample[:, 0]) <= 180) and np.all(np.abs(sample[:, 1]) <= 90)
-            extent = float(np.max(np.ptp(sample, axis=0))) if len(sample) else 0.0
+        else:            # each field's own extent: one file may hold fields continents apart
+            rings = sample if isinstance(sample, list) else [sample]
+            allpts = np.vstack(rings)
+            ok = len(allpts) > 0 and np.all(np.abs(allpts[:, 0]) <= 180) and np.all(np.abs(allpts[:, 1]) <= 90)
+            extent = max(float(np.max(np.ptp(r, axis=0))) for r in rings) if len(allpts) else 0.0
             self.kind = "geographic" if ok and extent < MAX_GEOGRAPHIC_EXTENT else "local"
-            self.text = ("longitude/latitude (WGS 84): the values fit and span under half a degree" if self.kind ==
-                         "geographic" else "local metres as written (no CRS named; too large for degrees)")
+            self.text = ("longitude/latitude (WGS 84): the values fit and each field spans under half a degree"
+                         if self.kind == "geographic" else "local metres as written (no CRS named; too large for degrees)")
 
     def lonlat(self, xy: np.ndarray) -> np.ndarray:
         xy = np.asarray(xy, float)[:, :2]
@@ -124,24 +126,26 @@ def read_wkt(path: Path, crs: str | None = None) -> list[Field]:
 
 
 def _fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str | None) -> list[Field]:
+    """A field per polygon, each in its own local frame (a file may hold fields continents apart);
+    a line goes to the field it crosses most."""
     polys = [(p, props) for geom, props in shapes for p in polygons(geom)]
     lines = [(ln, props) for geom, props in shapes
              for ln in ([geom] if isinstance(geom, LineString) else list(geom.geoms) if isinstance(geom, MultiLineString) else [])]
     if not polys:
         raise FieldError(f"{path}: no Polygon or MultiPolygon in it (found {', '.join(sorted({g.geom_type for g, _ in shapes})) or 'nothing'})")
     rings = [np.asarray(p.exterior.coords)[:, :2] for p, _ in polys]
-    coords = Coordinates(str(path), declared, crs, np.vstack(rings))
-    origin, to_local = coords.frame(rings)
-    fields = []
+    coords = Coordinates(str(path), declared, crs, rings)
+    fields, frames = [], []
     for i, (p, props) in enumerate(polys):
+        origin, to_local = coords.frame([rings[i]])
         name = str(props.get("Name") or props.get("name") or props.get("id") or f"{path.stem}_{i + 1}")
         boundary = polygon(to_local(np.asarray(p.exterior.coords)), [to_local(np.asarray(h.coords)) for h in p.interiors])
         fields.append(Field(name, boundary, origin, str(path), coords.text, properties=_plain(props)))
+        frames.append((p, to_local))
     for j, (ln, props) in enumerate(lines):
-        g = GuidanceLine(str(props.get("Name") or props.get("name") or props.get("path_id") or f"line {j + 1}"),
-                         to_local(np.asarray(ln.coords)))
-        owner = max(fields, key=lambda f: f.boundary.intersection(LineString(g.points)).length) if len(fields) > 1 else fields[0]
-        owner.lines.append(g)
+        k = max(range(len(polys)), key=lambda i: polys[i][0].intersection(ln).length) if len(polys) > 1 else 0
+        fields[k].lines.append(GuidanceLine(str(props.get("Name") or props.get("name") or props.get("path_id")
+                                                or f"line {j + 1}"), frames[k][1](np.asarray(ln.coords))))
     return fields
 
 
@@ -174,13 +178,13 @@ def read_gml(path: Path, crs: str | None = None, root=None) -> list[Field]:
             raise FieldError(f"{path}: gml:Polygon {k}: no exterior ring with three points or more")
         parsed.append((poly, outer[0], inner))
     srs = parsed[0][0].get("srsName")
-    coords = Coordinates(str(path), srs, crs, np.vstack([o for _, o, _ in parsed]))
-    origin, to_local = coords.frame([o for _, o, _ in parsed])
+    coords = Coordinates(str(path), srs, crs, [o for _, o, _ in parsed])
     owner_attrs = {}
     for el in root.iter():
         if el.tag.endswith("Field") and el.attrib:
             owner_attrs = dict(el.attrib)
     for k, (poly, outer, inner) in enumerate(parsed):
+        origin, to_local = coords.frame([outer])
         props = {key: _number(v) for key, v in owner_attrs.items()}
         name = str(props.pop("id", None) or root.get("id") or f"{path.stem}_{k + 1}")
         fields.append(Field(name if len(parsed) == 1 else f"{name}_{k + 1}", polygon(to_local(outer), [to_local(i) for i in inner]),
@@ -393,9 +397,12 @@ def read_polygon_csv(path: Path, crs: str | None = None) -> list[Field]:
         rows.append((parts[0], pts))
     if not rows:
         raise FieldError(f"{path}: no polygon row (name, x1, y1, z1, x2, ...)")
-    coords = Coordinates(str(path), None, crs, np.vstack([p for _, p in rows]))
-    origin, to_local = coords.frame([p for _, p in rows])
-    return [Field(name, polygon(to_local(p)), origin, str(path), coords.text) for name, p in rows]
+    coords = Coordinates(str(path), None, crs, [p for _, p in rows])
+    out = []
+    for name, p in rows:
+        origin, to_local = coords.frame([p])
+        out.append(Field(name, polygon(to_local(p)), origin, str(path), coords.text))
+    return out
 
 
 def xyz_triples(nums: list[float]) -> bool:

@@ -75,13 +75,14 @@ def parse_topic_source(text: str, topics: list[str] | None = None) -> TopicSourc
         raise LogError(f"--signal {text!r}: expected COLUMN=[-]/topic[.field.path] with COLUMN a log column "
                        f"(delta_cmd, delta, v, yaw_rate, lat, lon) or another lower-case name")
     topic, path = rest, ""
-    if topics:
-        known = [t for t in topics if rest == t or rest.startswith(t + ".")]
-        if known:
-            topic = max(known, key=len)
-            path = rest[len(topic) + 1:]
-    elif "." in rest:
-        topic, path = rest.split(".", 1)
+    known = [t for t in topics or () if rest == t or rest.startswith(t + ".")]
+    if known:                                  # a topic of the bag (its name may hold a dot)
+        topic = max(known, key=len)
+        path = rest[len(topic) + 1:]
+    elif "." in rest.rsplit("/", 1)[-1]:       # /topic.field: the field after the last name
+        head, tail = rest.rsplit("/", 1)
+        name, path = tail.split(".", 1)
+        topic = f"{head}/{name}"
     if path and not _PATH.match(path):
         raise LogError(f"--signal {text!r}: the field path {path!r} is not a.b[2].c")
     return TopicSource(column, topic, path, sign)

@@ -1,0 +1,155 @@
+"""Turns a tractor can drive: continuous curvature, bounded curvature and bounded sharpness.
+
+A turn is built from *CC turns* (Fraichard and Scheuer's continuous-curvature arcs): curvature
+ramps linearly from 0 to +-kappa_max at the sharpness sigma (a clothoid), holds (an arc), and
+ramps back to 0, turning the heading by theta; a turn too short for full ramps peaks lower
+(kappa_p = sqrt(sigma |theta|)). The sharpness is the steering-rate limit seen along the path:
+d kappa / ds = d delta / dt / (L v cos^2 delta) <= delta_rate_max / (L v). Paths are sequences of CC
+turns and straights, integrated numerically (heading = int kappa ds, position = int (cos, sin)),
+so every point's curvature is known.
+
+``connect(a, b)`` finds the shortest path from pose a to pose b among the CSC families (turn,
+straight, turn: LSL, RSR, LSR, RSL) and the CCC families (LRL, RLR: the omega turn between swaths
+closer than a U-turn's width), each solved for its free lengths and angles by Newton's method
+(scipy) on the integrated end pose. Why not a library: Dubins paths (the ``dubins`` package,
+Reeds-Shepp's ``rsplan``) jump in curvature at every arc's ends, which a steering that turns at
+tens of degrees per second cannot follow; continuous-curvature Dubins is what Fields2Cover uses
+(from the steering_functions library, C++, not packaged for Python here).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+DS = 0.05          # m: integration step
+
+
+@dataclass(frozen=True)
+class Limits:
+    """kappa_max = 1 / R_min [1/m]; sigma = d kappa / ds [1/m^2]."""
+
+    kappa_max: float
+    sigma: float
+
+    @classmethod
+    def of(cls, turn_radius: float, wheelbase: float, steer_rate: float, speed: float) -> "Limits":
+        """R_min, and the sharpness a steering rate [rad/s] allows at ``speed`` (at the straight
+        ahead, where d delta / d kappa = L)."""
+        return cls(1.0 / turn_radius, steer_rate / (wheelbase * max(speed, 0.1)))
+
+
+def cc_profile(theta: float, limits: Limits) -> list[tuple[float, float, float]]:
+    """[(length, kappa at start, kappa at end)] of a CC turn of heading change theta (signed)."""
+    sign = 1.0 if theta >= 0 else -1.0
+    th = abs(theta)
+    if th < 1e-12:
+        return []
+    km, sg = limits.kappa_max, limits.sigma
+    if th <= km * km / sg:                       # no room for the full ramps: a clothoid pair
+        kp = math.sqrt(sg * th)
+        ramp = kp / sg
+        return [(ramp, 0.0, sign * kp), (ramp, sign * kp, 0.0)]
+    ramp = km / sg
+    arc = (th - km * ramp) / km
+    return [(ramp, 0.0, sign * km), (arc, sign * km, sign * km), (ramp, sign * km, 0.0)]
+
+
+def integrate(pieces: list[tuple[float, float, float]], start=(0.0, 0.0, 0.0), step: float = DS) -> np.ndarray:
+    """(N, 4) x, y, heading, curvature along pieces of linearly varying curvature, every ``step``
+    (the last point exactly at the end); exact for straights and arcs, second order for ramps."""
+    x, y, th = start
+    out = [(x, y, th, pieces[0][1] if pieces else 0.0)]
+    for length, k0, k1 in pieces:
+        n = max(1, int(math.ceil(length / step)))
+        h = length / n
+        dk = (k1 - k0) / length if length > 0 else 0.0
+        for i in range(n):
+            ka, kb = k0 + dk * i * h, k0 + dk * (i + 1) * h
+            th_mid = th + 0.5 * h * ka + dk * h * h / 8.0           # the heading half a step on
+            x += h * math.cos(th_mid)                               # midpoint rule on cos, sin
+            y += h * math.sin(th_mid)
+            th = th + 0.5 * h * (ka + kb)                           # exact for linear curvature
+            out.append((x, y, th, kb))
+    return np.array(out)
+
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
+
+
+def end_pose(pieces, start=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """The end pose of the pieces, by Gauss-Legendre quadrature of (cos, sin) of the heading
+    (a quadratic in s on each piece): the solver's fast path, to 1e-12 on turns of a few radians."""
+    x, y, th = start
+    for length, k0, k1 in pieces:
+        if length <= 0:
+            continue
+        sq = 0.5 * length * (_GL_X + 1.0)
+        dk = (k1 - k0) / length
+        heading = th + k0 * sq + 0.5 * dk * sq * sq
+        w = 0.5 * length * _GL_W
+        x += float(w @ np.cos(heading))
+        y += float(w @ np.sin(heading))
+        th += 0.5 * length * (k0 + k1)
+    return np.array([x, y, th])
+
+
+def _pieces(kind: str, params: np.ndarray, limits: Limits) -> list:
+    """The pieces of a family: CSC params (theta1, straight, theta2), CCC (theta1, theta2, theta3)."""
+    if kind in ("LSL", "RSR", "LSR", "RSL"):
+        s1 = 1.0 if kind[0] == "L" else -1.0
+        s2 = 1.0 if kind[2] == "L" else -1.0
+        return cc_profile(s1 * abs(params[0]), limits) + ([(abs(params[1]), 0.0, 0.0)] if abs(params[1]) > 1e-9 else []) \
+            + cc_profile(s2 * abs(params[2]), limits)
+    s = 1.0 if kind == "LRL" else -1.0
+    return cc_profile(s * abs(params[0]), limits) + cc_profile(-s * abs(params[1]), limits) + \
+        cc_profile(s * abs(params[2]), limits)
+
+
+def _length(pieces) -> float:
+    return float(sum(p[0] for p in pieces))
+
+
+def connect(a, b, limits: Limits, families=("LSL", "RSR", "LSR", "RSL", "LRL", "RLR")) -> np.ndarray | None:
+    """The shortest CC path (N, 4) from pose a = (x, y, heading) to pose b, or None."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    c, s = math.cos(-a[2]), math.sin(-a[2])
+    d = b[:2] - a[:2]
+    goal = np.array([c * d[0] - s * d[1], s * d[0] + c * d[1], _wrap(b[2] - a[2])])     # b in a's frame
+    best = None
+    R = 1.0 / limits.kappa_max
+    for kind in families:
+        for guess in _guesses(kind, goal, R):
+            def residual(p):
+                e = end_pose(_pieces(kind, p, limits))
+                return [e[0] - goal[0], e[1] - goal[1], R * _wrap(e[2] - goal[2])]
+            try:
+                sol = least_squares(residual, guess, xtol=1e-10, ftol=1e-10, max_nfev=60)
+            except (ValueError, FloatingPointError):
+                continue
+            if np.max(np.abs(sol.fun)) > 1e-3:
+                continue
+            pieces = _pieces(kind, sol.x, limits)
+            length = _length(pieces)
+            if best is None or length < best[0] - 1e-6:
+                best = (length, pieces)
+    if best is None:
+        return None
+    path = integrate(best[1], tuple(a))
+    return path
+
+
+def _guesses(kind: str, goal: np.ndarray, R: float) -> list[np.ndarray]:
+    dist = float(np.hypot(goal[0], goal[1]))
+    turn = abs(goal[2])
+    if kind in ("LSL", "RSR", "LSR", "RSL"):
+        return [np.array([t1, max(dist - 2 * R, 0.5), t2]) for t1, t2 in
+                ((turn / 2, turn / 2), (math.pi / 2, math.pi / 2), (0.3, turn + 0.3), (turn + 0.3, 0.3))]
+    return [np.array([t1, t2, t3]) for t1, t2, t3 in
+            ((0.8, math.pi + 1.6 - turn, 0.8), (0.5, math.pi + 1.0, 0.5), (1.2, math.pi + 2.4, 1.2))]
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
