@@ -129,25 +129,19 @@ def write_bag(path: Path, kind: str, epochs: pd.DataFrame, receive_delay: float 
     yaw = 0.2 * np.sin(0.1 * (epochs["utc"].to_numpy() - epochs["utc"].iloc[0]))     # a gyro's reading, rad/s
     if kind == "ros1":
         store = get_typestore(Stores.ROS1_NOETIC)
-        with W1(path) as w:
-            fix = w.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=store)
-            imu = w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=store)
-            for r, g in zip(epochs.itertuples(), yaw):
-                stamp = int((r.utc + receive_delay) * 1e9)
-                w.write(fix, stamp, store.serialize_ros1(_navsat(store, "sensor_msgs/msg/NavSatFix", r.utc, r.lat, r.lon,
-                                                                 r.height, r.quality), "sensor_msgs/msg/NavSatFix"))
-                w.write(imu, stamp, store.serialize_ros1(_imu(store, r.utc, g), "sensor_msgs/msg/Imu"))
-        return path
-    store = typestore()
-    plugin = StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3
-    with W2(path, version=8, storage_plugin=plugin) as w:
+        writer, serialize = W1(path), store.serialize_ros1
+    else:
+        store = typestore()
+        writer = W2(path, version=8, storage_plugin=StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3)
+        serialize = store.serialize_cdr
+    with writer as w:
         fix = w.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=store)
         imu = w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=store)
         for r, g in zip(epochs.itertuples(), yaw):
             stamp = int((r.utc + receive_delay) * 1e9)
-            w.write(fix, stamp, store.serialize_cdr(_navsat(store, "sensor_msgs/msg/NavSatFix", r.utc, r.lat, r.lon,
-                                                            r.height, r.quality), "sensor_msgs/msg/NavSatFix"))
-            w.write(imu, stamp, store.serialize_cdr(_imu(store, r.utc, g), "sensor_msgs/msg/Imu"))
+            w.write(fix, stamp, serialize(_navsat(store, "sensor_msgs/msg/NavSatFix", r.utc, r.lat, r.lon, r.height,
+                                                  r.quality), "sensor_msgs/msg/NavSatFix"))
+            w.write(imu, stamp, serialize(_imu(store, r.utc, g), "sensor_msgs/msg/Imu"))
     return path
 
 
