@@ -37,7 +37,7 @@ import numpy as np
 from orchestrator.component import Component, ComponentError, inp, out, par
 
 from .models.paper_models import G_2ND
-from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, body_to_world, controllable_canonical,
+from .models.yaw_dynamics import (GRAVITY, PHYSICAL_MODELS, TractorParameters, body_to_world, controllable_canonical,
                                   cornering_scale, lateral_disturbance_column,
                                   slope_lateral_acceleration, state_space, with_cornering_scale,
                                   zoh_discretize)
@@ -107,6 +107,9 @@ class TractorYawPlant(Component):
         out("y_antenna", "m", 0.0, "GPS antenna north position"),
         out("vel_east_antenna", "m/s", 0.0, "GPS antenna velocity, east"),
         out("vel_north_antenna", "m/s", 0.0, "GPS antenna velocity, north"),
+        out("slope_pull_east", "m/s2", 0.0, "the side slope's in-plane gravity g sin(phi) cos(psi_d), for a "
+            "trailed implement"),
+        out("slope_pull_north", "m/s2", 0.0, "g sin(phi) sin(psi_d)"),
     )
     feedthrough = {}
 
@@ -199,6 +202,9 @@ class TractorYawPlant(Component):
         y["x_antenna"], y["y_antenna"] = y["x_rear"] + dx, y["y_rear"] + dy
         y["vel_east_antenna"] = y["vel_east_rear"] - gamma * dy
         y["vel_north_antenna"] = y["vel_north_rear"] + gamma * dx
+        pull = GRAVITY * math.sin(self.p["slope_angle"])
+        y["slope_pull_east"] = pull * math.cos(self.p["slope_downhill_heading"])
+        y["slope_pull_north"] = pull * math.sin(self.p["slope_downhill_heading"])
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])

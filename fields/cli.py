@@ -113,5 +113,8 @@ def draw(fields, path: Path, title: str) -> Path:
 
 
 def register(registry) -> None:
+    from .plan_cli import register as register_plan
+
+    register_plan(registry)
     registry.add_command("fields", "list and draw the fields in a file or folder (GeoJSON, WKT, GML, ISOXML, AgOpenGPS)",
                          add_arguments, run)

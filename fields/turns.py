@@ -112,8 +112,22 @@ def _length(pieces) -> float:
     return float(sum(p[0] for p in pieces))
 
 
-def connect(a, b, limits: Limits, families=("LSL", "RSR", "LSR", "RSL", "LRL", "RLR")) -> np.ndarray | None:
+FAMILIES = ("LSL", "RSR", "LSR", "RSL", "LRL", "RLR")
+
+
+def turn_families(a, b) -> tuple[str, ...]:
+    """The families worth trying for a U-turn-like move (heading reversed): towards the side
+    the goal lies on, turn-straight-turn or the omega loop; otherwise all of them."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if abs(_wrap(b[2] - a[2] - math.pi)) > 0.3:
+        return FAMILIES
+    side = math.cos(a[2]) * (b[1] - a[1]) - math.sin(a[2]) * (b[0] - a[0])
+    return ("LSL", "RLR", "LSR", "RSL") if side > 0 else ("RSR", "LRL", "RSL", "LSR")
+
+
+def connect(a, b, limits: Limits, families=None) -> np.ndarray | None:
     """The shortest CC path (N, 4) from pose a = (x, y, heading) to pose b, or None."""
+    families = families or turn_families(a, b)
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = math.cos(-a[2]), math.sin(-a[2])
     d = b[:2] - a[:2]
@@ -126,7 +140,7 @@ def connect(a, b, limits: Limits, families=("LSL", "RSR", "LSR", "RSL", "LRL", "
                 e = end_pose(_pieces(kind, p, limits))
                 return [e[0] - goal[0], e[1] - goal[1], R * _wrap(e[2] - goal[2])]
             try:
-                sol = least_squares(residual, guess, xtol=1e-10, ftol=1e-10, max_nfev=60)
+                sol = least_squares(residual, guess, method="lm", xtol=1e-10, ftol=1e-10, max_nfev=80)
             except (ValueError, FloatingPointError):
                 continue
             if np.max(np.abs(sol.fun)) > 1e-3:

@@ -330,10 +330,13 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     for ax, metric in zip(axes.flat, metrics):
         for label, g in groups:
             g = g.sort_values(x)
-            ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=str(label) if group_cols else None)
+            text = ", ".join(map(str, label if isinstance(label, tuple) else (label,)))
+            ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=text if group_cols else None)
         unit = metric_units.get(metric)
         ax.set_xlabel(f"{x} [{x_unit}]" if x_unit else x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
         ax.set_ylabel(f"[{unit}]" if unit else "[-]")
+    if group_cols and metrics:
+        axes.flat[0].legend(title=", ".join(group_cols), fontsize=7, title_fontsize=7)
     for ax in list(axes.flat)[len(metrics):]:
         ax.axis("off")
     fig.tight_layout()

@@ -89,6 +89,9 @@ static void model_sample(ModelState *st, const double *p, const double *in, doub
     out[OUT_x_antenna] = out[OUT_x_rear] + dx; out[OUT_y_antenna] = out[OUT_y_rear] + dy;
     out[OUT_vel_east_antenna] = out[OUT_vel_east_rear] - gamma * dy;
     out[OUT_vel_north_antenna] = out[OUT_vel_north_rear] + gamma * dx;
+    double pull = GRAVITY * sin(p[P_slope_angle]);
+    out[OUT_slope_pull_east] = pull * cos(p[P_slope_downhill_heading]);
+    out[OUT_slope_pull_north] = pull * sin(p[P_slope_downhill_heading]);
 
     /* step over [t_k, t_k+1) with the inputs of t_k */
     double h = MODEL_PERIOD, speed_in = in[IN_speed], delta = in[IN_steer_angle] + p[P_steer_angle_offset];

@@ -1,0 +1,178 @@
+"""A field's coverage route as the trackers' reference: path following, not a clock (issue 27).
+
+At initialisation the field named by ``path`` is read (fields.read_fields: GeoJSON, WKT, GML,
+ISOXML, AgOpenGPS, a polygon CSV in ``crs``) and planned (fields.coverage.plan with this
+component's parameters); the route is put in the *mission frame*, its start at the origin heading
+east, so that the tractor starts there at rest (route_frame). Each step projects the estimated CG
+onto the route near where it was (a window of -2 m to +10 m of arc length, so a turn that crosses
+a swath does not capture it) and gives the reference at that arc length s*:
+
+    (x_ref, y_ref) = route(s*),   (xdot_ref, ydot_ref) = v(s*) (cos h, sin h),   gamma_ref = v(s*) kappa(s*)
+
+so the tracker's along-track error is nil and its cross-track error is the distance to the route;
+the speed comes from the route's profile (slower in turns). The implement's working point is
+projected the same way (its own window): ``implement_cross_track`` is its signed distance to the
+route, left positive, and ``working`` says whether it is on a swath or a headland pass. The run ends
+(EndRun) when the CG reaches the route's end.
+"""
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+
+import numpy as np
+
+from orchestrator.component import Component, EndRun, inp, out, par
+
+STUDIES = Path(__file__).resolve().parent.parent / "studies"
+
+
+def resolve_path(text: str) -> Path:
+    """A field path as given (absolute, or relative to the working folder), else relative to the
+    project's studies/ folder (the shipped fields)."""
+    p = Path(text)
+    return p if p.is_absolute() or p.exists() else STUDIES / p
+
+
+@functools.lru_cache(maxsize=8)
+def planned(path: str, crs: str, name: str, settings):
+    """(field, plan) for the parameters (cached: the run and its analysis plan once)."""
+    from fields import read_fields
+    from fields.coverage import plan
+    from fields.plan_cli import choose_field
+
+    field = choose_field(read_fields(resolve_path(path), crs or None), name or None, path)
+    return field, plan(field, settings)
+
+
+def route_frame(route: dict) -> tuple[np.ndarray, float]:
+    """(origin, rotation) of the mission frame: the route's start, its heading."""
+    return np.array([route["x"][0], route["y"][0]]), float(route["heading"][0])
+
+
+def to_mission(xy: np.ndarray, origin: np.ndarray, rotation: float) -> np.ndarray:
+    """Field-local (N, 2) -> mission frame."""
+    c, s = math.cos(-rotation), math.sin(-rotation)
+    d = np.asarray(xy, float) - origin
+    return np.column_stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1]])
+
+
+def settings_of(p: dict):
+    """fields.coverage.Settings from the component's parameters of the same names (nan angle: chosen)."""
+    from dataclasses import fields
+
+    from fields.coverage import Settings
+
+    values = {}
+    for f in fields(Settings):
+        if f.name not in p:
+            continue
+        v, default = p[f.name], f.default
+        if f.name == "driving_angle":
+            values[f.name] = None if v is None or (isinstance(v, float) and math.isnan(v)) else float(v)
+        else:
+            values[f.name] = type(default)(v)
+    return Settings(**values)
+
+
+class FieldRoute(Component):
+    sampled = True
+    roles = ("reference", "route")
+    variables = (
+        inp("x", "m", 0.0, "estimated CG east position (mission frame)"),
+        inp("y", "m", 0.0, "estimated CG north position"),
+        inp("implement_x", "m", 0.0, "implement working point east"),
+        inp("implement_y", "m", 0.0, "implement working point north"),
+        par("path", "", "fields/test_parcel.json", "the field: a file or folder fields.read_fields reads"),
+        par("crs", "", "", "its CRS when the file does not name it (EPSG:6677 ...)"),
+        par("name", "", "", "the field when the file holds several (default: the largest)"),
+        par("working_width", "m", 3.0, "implement working width"),
+        par("headland_passes", "1", 0, "0: as many as the turns need"),
+        par("driving_angle", "rad", float("nan"), "swath direction, east = 0, counter-clockwise (nan: fewest swaths)"),
+        par("turn_radius", "m", 4.0, "the tractor's smallest turning radius"),
+        par("wheelbase", "m", 1.4, "for the steering-rate limit of the turns"),
+        par("steer_rate", "rad/s", math.radians(30.0), "steering rate the turns may ask"),
+        par("work_speed", "m/s", 2.0, "speed on swaths and headland passes"),
+        par("turn_speed", "m/s", 1.0, "speed in turns"),
+        par("acceleration", "m/s2", 0.5, "speed changes"),
+        par("overlap", "m", 0.05, "between adjacent passes"),
+        par("order", "", "auto", "auto, boustrophedon or skip"),
+        par("half_width", "m", 0.8, "the tractor's half width, kept inside the field"),
+        par("hitch_offset", "m", 0.6, "the implement's hitch behind the rear axle"),
+        par("drawbar", "m", 2.5, "hitch to implement axle (0: mounted)"),
+        par("headland_work", "1", 1, "1: work the headland passes after the swaths"),
+        par("max_swaths", "1", 0, "0: every swath; N: the first N (a section of the field)"),
+        par("settle", "m", 5.0, "straight run before a swath beyond the implement's length"),
+        par("swath_extension", "m", 0.1, "each swath worked on beyond its strip's reach (lift and drop margin)"),
+        out("x_ref", "m", 0.0, "route point at the CG's projection, east"),
+        out("y_ref", "m", 0.0, "north"),
+        out("xdot_ref", "m/s", 0.0, "route speed along its tangent, east"),
+        out("ydot_ref", "m/s", 0.0, "north"),
+        out("heading_ref", "rad", 0.0, "route tangent"),
+        out("yaw_rate_ref", "rad/s", 0.0, "v kappa at the projection"),
+        out("speed_ref", "m/s", 0.0, "route speed profile at the projection"),
+        out("path_length", "m", 0.0, "s*: arc length of the CG's projection"),
+        out("segment", "1", 0.0, "what the CG is on: 0 swath, 1 turn, 2 headland pass, 3 transit"),
+        out("swath", "1", -1.0, "swath (or headland ring) index, -1 in turns"),
+        out("cross_track", "m", 0.0, "CG to route, left positive"),
+        out("implement_cross_track", "m", 0.0, "implement working point to route, left positive"),
+        out("implement_segment", "1", 0.0, "what the implement is on (as segment)"),
+        out("working", "1", 0.0, "1 while the implement is on a swath or a headland pass"),
+        out("implement_on_straight", "1", 0.0, "1 while the route is straight where the implement is (a swath and "
+            "its run-in: the side-shift may act)"),
+        out("progress", "1", 0.0, "share of the route done"),
+    )
+    feedthrough = {o: ("x", "y") for o in ("x_ref", "y_ref", "xdot_ref", "ydot_ref", "heading_ref", "yaw_rate_ref",
+                                           "speed_ref", "path_length", "segment", "swath", "cross_track", "progress")}
+    feedthrough |= {o: ("implement_x", "implement_y") for o in ("implement_cross_track", "implement_segment", "working",
+                                                                "implement_on_straight")}
+
+    def initialize(self, t0: float, dt: float) -> None:
+        from fields import FieldError
+
+        try:
+            _, plan = planned(str(self.p["path"]), str(self.p["crs"]), str(self.p["name"]), settings_of(self.p))
+        except (FieldError, ValueError, OSError) as exc:
+            self.require(False, f"parameter path = {self.p['path']!r}: {exc}")
+        r = plan.route
+        origin, rotation = route_frame(r)
+        xy = to_mission(np.column_stack([r["x"], r["y"]]), origin, rotation)
+        self.rx, self.ry = xy[:, 0], xy[:, 1]
+        self.h = np.unwrap(r["heading"] - rotation)
+        self.kappa, self.speed, self.kind, self.index, self.s = r["curvature"], r["speed"], r["kind"], r["index"], r["s"]
+        self.i_cg = self.i_impl = 0
+        self.started = False
+        self.step(t0, dt)
+
+    def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
+        """(index, signed lateral distance) of the route point nearest (px, py) within the window."""
+        step = self.s[1] - self.s[0] if len(self.s) > 1 else 0.1
+        a, b = max(0, i - int(back / step)), min(len(self.s), i + int(ahead / step) + 1)
+        d2 = (self.rx[a:b] - px) ** 2 + (self.ry[a:b] - py) ** 2
+        j = a + int(np.argmin(d2))
+        lateral = -math.sin(self.h[j]) * (px - self.rx[j]) + math.cos(self.h[j]) * (py - self.ry[j])
+        return j, lateral
+
+    def step(self, t: float, dt: float) -> None:
+        u, y = self.u, self.y
+        self.i_cg, lateral = self._project(u["x"], u["y"], self.i_cg)
+        j = self.i_cg
+        v = float(self.speed[j])
+        y["x_ref"], y["y_ref"] = float(self.rx[j]), float(self.ry[j])
+        y["heading_ref"] = float(self.h[j])
+        y["xdot_ref"], y["ydot_ref"] = v * math.cos(self.h[j]), v * math.sin(self.h[j])
+        y["yaw_rate_ref"], y["speed_ref"] = v * float(self.kappa[j]), v
+        y["path_length"], y["segment"], y["swath"] = float(self.s[j]), float(self.kind[j]), float(self.index[j])
+        y["cross_track"], y["progress"] = lateral, float(self.s[j] / self.s[-1])
+        self.i_impl, lat_i = self._project(u["implement_x"], u["implement_y"], min(self.i_impl, j), back=2.0,
+                                           ahead=max(12.0, (j - self.i_impl) * 0.1 + 2.0))
+        y["implement_cross_track"] = lat_i
+        y["implement_segment"] = float(self.kind[self.i_impl])
+        y["working"] = float(self.kind[self.i_impl] in (0, 2))
+        y["implement_on_straight"] = float(abs(self.kappa[self.i_impl]) < 1e-3)
+        if j >= len(self.s) - 3:
+            raise EndRun(self.name, f"the route is complete ({self.s[-1]:.0f} m)")
+
+
+COMPONENT = FieldRoute
