@@ -258,7 +258,7 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(9, 8))
     bx, by = boundary.exterior.xy
     ax.plot(bx, by, "k-", lw=1)
-    ax.plot(s["x"], s["y"], color="0.75", lw=0.5, label="tractor (turns)")
+    ax.plot(s["x"], s["y"], color="0.75", lw=0.5, label="tractor's CG (whole route)")
     on = np.isfinite(xte_i)
     pts = np.column_stack([s["ix"], s["iy"]])
     segs = np.stack([pts[:-1], pts[1:]], axis=1)[on[:-1] & on[1:]]

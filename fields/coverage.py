@@ -2,19 +2,23 @@
 
 - **Headland**: ``headland_passes`` rings of the working width w inside the boundary (and around
   each hole); the swaths fill what is left (the boundary buffered in by n w). Auto: as many
-  passes as the turns need to stay inside the field (their reach beyond the swath ends, plus the
-  implement behind the tractor), at least one.
+  passes as the turns need to stay inside the field (their reach beyond the swath ends, the
+  straight run-in of the implement's length and ``settle``, the tractor's half width, w/2), and
+  up to 3 more when a turn at a slanted edge or a corner still leaves the field (noted).
 - **Swaths**: straight lines w - overlap apart at the driving angle, each as long as its strip
-  touches the inner field (a line crossing a hole or a bay gives several swaths). The angle is given, or chosen to
-  minimise the number of swaths, hence of turns (ties: the longer mean swath); Fields2Cover's
-  default objective is the same count.
+  touches the inner field (a line crossing a hole or a bay gives several swaths). The angle is
+  given, or chosen to minimise the number of swaths, hence of turns (ties: the longer mean
+  swath); Fields2Cover's default objective is the same count.
 - **Order**: boustrophedon when a U-turn fits between adjacent swaths (w >= about 2 R_min);
   otherwise rows are skipped in blocks (_skip_order: every move spans at least s lines, the
   smallest s whose s w fits a U-turn), so no turn loops round (an omega turn needs far more
-  headland). A field whose lines give several swaths is ordered greedily, nearest swath first.
+  headland). Lines that give several swaths split the field into boustrophedon cells
+  (_cells), each driven in that order, the nearest cell next.
 - **Turns and transits**: continuous-curvature paths (fields.turns) within the curvature and the
   steering-rate limits; each is checked to stay inside the field with the tractor's half width.
-- **Headland work**: after the swaths, each ring from the innermost out, joined by
+  A move to another cell that would leave the field goes round the innermost headland pass.
+- **Headland work**: after the swaths, each ring from the innermost out (either way round,
+  whichever is nearer), once round and on by the implement's length, joined by
   continuous-curvature shifts. Corners are rounded (a tractor cannot follow a polygon's corner):
   the innermost pass at R, each further out at w more, so that the passes are parallel and leave
   no gap between them at the corners.
@@ -439,7 +443,7 @@ def _via_headland(plan_: Plan, a, b, limits: Limits, inside) -> np.ndarray | Non
     rings = ring_path(plan_.field, (plan_.headland_passes - 0.5) * w, settings.turn_radius)
     best = None
     for ring in rings:
-        for way in (ring, np.column_stack([ring[::-1, :2], ring[::-1, 2] + math.pi, -ring[::-1, 3]])):
+        for way in (ring, _reversed_ring(ring)):
             n = len(way)
             i0 = int(np.argmin(np.hypot(way[:, 0] - a[0], way[:, 1] - a[1])))
             j0 = int(np.argmin(np.hypot(way[:, 0] - b[0], way[:, 1] - b[1])))
@@ -452,7 +456,7 @@ def _via_headland(plan_: Plan, a, b, limits: Limits, inside) -> np.ndarray | Non
                 if onto is None or off is None:
                     continue
                 path = np.vstack([onto, along[1:-1], off])
-                length = float(np.sum(np.hypot(*np.diff(path[:, :2], axis=0).T)))
+                length = _length_of(path)
                 if (best is None or length < best[0]) and _outside(path, inside) is None:
                     best = (length, path)
                     break
@@ -485,14 +489,17 @@ def ring_path(field: Field, offset: float, radius: float) -> list[np.ndarray]:
     for poly in polygons(shape):
         for ring, ccw in [(poly.exterior, True)] + [(r, False) for r in poly.interiors]:
             xy = np.asarray(LineString(ring.coords).segmentize(0.5).coords)[:-1]
-            if ring.is_ccw != ccw:
-                xy = xy[::-1]
-            d = np.diff(np.vstack([xy, xy[:1]]), axis=0)
-            heading = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
-            ds = np.hypot(d[:, 0], d[:, 1])
-            curvature = np.gradient(heading) / np.maximum(ds, 1e-6)
-            out.append(np.column_stack([xy, heading, curvature]))
+            out.append(_closed_path(xy[::-1] if ring.is_ccw != ccw else xy))
     return out
+
+
+def _closed_path(xy: np.ndarray) -> np.ndarray:
+    """(N, 4) x, y, heading (towards the next point, unwrapped), curvature of a closed polyline."""
+    d = np.diff(np.vstack([xy, xy[:1]]), axis=0)
+    heading = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    ds = np.hypot(d[:, 0], d[:, 1])
+    curvature = np.gradient(heading) / np.maximum(ds, 1e-6)
+    return np.column_stack([xy, heading, curvature])
 
 
 def _headland(plan_: Plan, limits: Limits, where: str) -> None:
@@ -503,22 +510,16 @@ def _headland(plan_: Plan, limits: Limits, where: str) -> None:
     for k in range(plan_.headland_passes - 1, -1, -1):
         rings = ring_path(plan_.field, (k + 0.5) * w, R + (plan_.headland_passes - 1 - k) * w)
         for j, ring in enumerate(rings):
-            d = np.hypot(ring[:, 0] - last[0], ring[:, 1] - last[1])
-            candidates = np.argsort(d)
-            path = None
-            for lead in (8.0, 14.0, 20.0, 30.0):        # join the ring this far along it (metres)
-                for i0 in candidates[:5]:
-                    i = (i0 + int(lead / 0.5)) % len(ring)
-                    path = connect(last, ring[i, :3], limits)
-                    if path is not None and _outside(path, inside) is None:
-                        break
-                    path = None
-                if path is not None:
-                    break
-            if path is None:
+            best = None
+            for way in (ring, _reversed_ring(ring)):          # either way round: the shorter way on
+                found = _onto_ring(last, way, limits, inside)
+                if found is not None and (best is None or _length_of(found[0]) < _length_of(best[0])):
+                    best = (*found, way)
+            if best is None:
                 plan_.notes.append(f"headland pass {k + 1}{'' if j == 0 else f' (hole {j})'}: no turn onto it "
                                    f"within the field; left out")
                 continue
+            path, i, ring = best
             plan_.segments.append(Segment(TRANSIT, k, path))
             # once round and on by the implement's length, so that it closes the loop where it came in
             more = int(math.ceil((settings.hitch_offset + settings.drawbar + 1.0) / 0.5))
@@ -526,6 +527,28 @@ def _headland(plan_: Plan, limits: Limits, where: str) -> None:
             plan_.segments.append(Segment(HEADLAND, k, loop))
             last = loop[-1, :3].copy()
             last[2] = math.atan2(*(loop[-1, 1::-1] - loop[-2, 1::-1]))
+
+
+def _reversed_ring(ring: np.ndarray) -> np.ndarray:
+    """A ring path driven the other way round."""
+    return _closed_path(ring[::-1, :2])
+
+
+def _length_of(path: np.ndarray) -> float:
+    return float(np.sum(np.hypot(*np.diff(path[:, :2], axis=0).T)))
+
+
+def _onto_ring(pose, ring: np.ndarray, limits: Limits, inside) -> tuple[np.ndarray, int] | None:
+    """(path, index): a turn from pose onto the ring a little along it from its nearest points,
+    inside the field, or None."""
+    candidates = np.argsort(np.hypot(ring[:, 0] - pose[0], ring[:, 1] - pose[1]))
+    for lead in (8.0, 14.0, 20.0, 30.0):        # join the ring this far along it (metres)
+        for i0 in candidates[:5]:
+            i = (i0 + int(lead / 0.5)) % len(ring)
+            path = connect(pose, ring[i, :3], limits)
+            if path is not None and _outside(path, inside) is None:
+                return path, int(i)
+    return None
 
 
 # --- the route ---------------------------------------------------------------------------------------------

@@ -8,6 +8,7 @@ reference (an AgOpenGPS field has one: its StartFix) has ``origin`` None. Geomet
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field as dc_field
 
 import numpy as np
@@ -67,7 +68,11 @@ class Field:
         if self.boundary.is_empty or len(self.boundary.exterior.coords) < 4:
             return ["the boundary has fewer than three distinct points"]
         if not self.boundary.is_valid:
-            return [f"the boundary is not a simple polygon: {explain_validity(self.boundary)}"]
+            why = explain_validity(self.boundary)
+            where = re.search(r"\[(-?[\d.e+-]+) (-?[\d.e+-]+)\]", why)
+            if where:
+                why = f"{why[:where.start()]} at ({float(where[1]):.2f}, {float(where[2]):.2f}) m east/north of the field's origin"
+            return [f"the boundary is not a simple polygon: {why}"]
         return []
 
     def to_geodetic(self, xy: np.ndarray) -> np.ndarray:

@@ -120,6 +120,27 @@ def test_a_whole_plan_covers_the_workable_field(file, name, overrides):
     assert p.field.boundary.area - p.workable.area < field.boundary.length * 1e-3 + 400
 
 
+def test_a_field_with_a_bay_and_a_hole_is_split_into_cells_and_covered():
+    """A U-shaped field (a bay cut into its top) with a pond: the lines crossing the bay or the
+    pond give two swaths each, the planner splits them into cells, each swath is driven once,
+    the whole stays inside the field (round the pond too) and covers the workable area."""
+    from fields.coverage import _cells, _swath_lines
+    from fields.field import Field
+
+    outer = [(0, 0), (300, 0), (300, 200), (190, 200), (190, 100), (110, 100), (110, 200), (0, 200)]
+    pond = [(50, 40), (80, 40), (80, 55), (50, 55)]
+    field = Field("bay and pond", Polygon(outer, [pond]), None, "synthetic", "local metres")
+    settings = Settings(driving_angle=0.0, working_width=6.0)       # east-west: across the bay and the pond
+    p = plan(field, settings)
+    _check_route(p, settings)
+    lines = _swath_lines(p.inner, p.angle, settings.working_width - settings.overlap, settings.working_width)
+    cells = _cells(lines, p.angle)
+    assert len(cells) >= 5 and f"in {len(cells)} cells" in p.order_how        # below, round the pond, two arms
+    assert sum(len(c) for c in cells) == sum(len(segs) for segs in lines) == len(p.swaths)
+    covered, overlap = _planned_cover(p)
+    assert covered >= 0.99 and overlap <= 0.05, (covered, overlap)
+
+
 def _min_width(poly: Polygon) -> float:
     """Rotating calipers on the convex hull: the smallest over hull edges of the farthest vertex."""
     hull = np.asarray(poly.convex_hull.exterior.coords)[:-1]
@@ -361,15 +382,17 @@ def test_a_bad_field_in_a_study_exits_2_before_anything_is_written(tmp_path):
     assert not out.exists()
 
 
-def test_a_speed_and_angle_sweep_of_a_field_mission_runs_in_the_pool(tmp_path):
-    """The shipped sweep, cut to 2 x 2 points, on the process pool."""
+@pytest.mark.parametrize("scheduler", [None, "local"], ids=["pool", "dask"])
+def test_a_speed_and_angle_sweep_of_a_field_mission_runs(tmp_path, scheduler):
+    """The shipped sweep, cut to 2 x 2 points, on the process pool and on a local Dask cluster
+    (a real scheduler and workers)."""
     text = (STUDIES / "field_speed_sweep.toml").read_text()
     text = text.replace('extends = "field_plot_mounted.toml"', f'extends = "{STUDIES / "field_plot_mounted.toml"}"')
     text = text.replace('{ start = 1.0, stop = 3.0, step = 1.0 }', '[1.5, 3.0]')
     study = tmp_path / "sweep.toml"
     study.write_text(text + '\n[components.field.parameters]\nmax_swaths = 3\nheadland_work = 0\n')
     out = tmp_path / "out"
-    res = _cli("sweep", str(study), "--out", str(out), "--workers", "2")
+    res = _cli("sweep", str(study), "--out", str(out), "--workers", "2", *(["--scheduler", scheduler] if scheduler else []))
     assert res.returncode == 0, res.stderr
     import pandas as pd
 
