@@ -46,6 +46,7 @@ def main() -> None:
     args = parser.parse_args()
     head = (f"{'field / study':<46}{'ha':>6}{'swaths':>7}{'cover':>7}{'overlap':>8}{'cross':>6}{'P95 tr':>8}"
             f"{'P95 imp':>8}{'P2P95':>7}{'mission':>9}{'wall':>7}{'x real':>8}")
+    measure("field_plot_mounted.toml", ("field.max_swaths=1", "field.headland_work=0"))    # warm up: imports
     print(head)
     print("-" * len(head))
     for label, study, overrides, quick in ROWS:

@@ -90,6 +90,7 @@ class FieldRoute(Component):
         par("working_width", "m", 3.0, "implement working width"),
         par("headland_passes", "1", 0, "0: as many as the turns need"),
         par("driving_angle", "rad", float("nan"), "swath direction, east = 0, counter-clockwise (nan: fewest swaths)"),
+        par("guidance_line", "", "", "drive along this guidance line of the field (an AB line; '*': its first)"),
         par("turn_radius", "m", 4.0, "the tractor's smallest turning radius"),
         par("wheelbase", "m", 1.4, "for the steering-rate limit of the turns"),
         par("steer_rate", "rad/s", math.radians(30.0), "steering rate the turns may ask"),

@@ -51,6 +51,7 @@ class Settings:
     working_width: float = 3.0            # m
     headland_passes: int = 0              # 0: as many as the turns need
     driving_angle: float | None = None    # rad, east = 0, counter-clockwise; None: fewest swaths
+    guidance_line: str = ""               # else along this guidance line of the field ("*": its first)
     turn_radius: float = 4.0              # m: the tractor's smallest (well above its 45 deg lock)
     wheelbase: float = 1.4                # m
     steer_rate: float = math.radians(30)  # rad/s the turns may ask (the hydraulics do 60)
@@ -187,7 +188,10 @@ def _layout(field: Field, settings: Settings, n_h: int, order: str, skip: int, l
     if len(parts) > 1:
         notes.append(f"the inner field falls apart into {len(parts)} pieces; the largest ({inner.area / 1e4:.2f} ha) "
                      f"is worked")
-    angle, angle_how = _angle(inner, spacing, settings.driving_angle)
+    if settings.driving_angle is None and settings.guidance_line:
+        angle, angle_how = _along_line(field, settings.guidance_line, where)
+    else:
+        angle, angle_how = _angle(inner, spacing, settings.driving_angle)
     lines = _swath_lines(inner, angle, spacing, w)
     if settings.max_swaths:
         notes.append(f"a section of the field: the first {min(settings.max_swaths, len(lines))} swath(s) of the route")
@@ -205,6 +209,16 @@ def _min_width(poly: Polygon) -> float:
     xy = np.asarray(rect.exterior.coords)
     sides = np.hypot(*np.diff(xy, axis=0).T)
     return float(min(sides[:2])) if len(sides) >= 2 else 0.0
+
+
+def _along_line(field: Field, name: str, where: str) -> tuple[float, str]:
+    """The driving angle of the field's guidance line (an AB line's heading, a curve's ends)."""
+    found = field.lines[:1] if name == "*" else [g for g in field.lines if g.name == name]
+    if not found:
+        have = ", ".join(repr(g.name) for g in field.lines) or "none"
+        raise FieldError(f"{where}: guidance_line = {name!r}: the field has no such guidance line (it has {have})")
+    line = found[0]
+    return line.heading % math.pi, f"along the field's {line.kind} {line.name!r}"
 
 
 def _angle(inner: Polygon, spacing: float, given: float | None) -> tuple[float, str]:

@@ -22,6 +22,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--headland-passes", type=int, default=d.headland_passes, help="0: as many as the turns need")
     p.add_argument("--angle", type=float, default=None, help="driving angle [deg, east = 0, counter-clockwise] "
                    "(default: chosen for the fewest swaths)")
+    p.add_argument("--guidance-line", default="", metavar="NAME", help="drive along the field's guidance line "
+                   "NAME (an AB line of an AgOpenGPS or ISOXML field; '*': its first)")
     p.add_argument("--turn-radius", type=float, default=d.turn_radius, help=f"m ({d.turn_radius:g})")
     p.add_argument("--work-speed", type=float, default=d.work_speed, help=f"m/s ({d.work_speed:g})")
     p.add_argument("--turn-speed", type=float, default=d.turn_speed, help=f"m/s ({d.turn_speed:g})")
@@ -57,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
                         driving_angle=None if args.angle is None else math.radians(args.angle),
                         turn_radius=args.turn_radius, work_speed=args.work_speed, turn_speed=args.turn_speed,
                         order=args.order, hitch_offset=args.hitch_offset, drawbar=args.drawbar,
-                        settle=args.settle, max_swaths=args.max_swaths)
+                        settle=args.settle, max_swaths=args.max_swaths, guidance_line=args.guidance_line)
     p = plan(field, settings)
     summary = p.summary()
     write_route(p, args.out)

@@ -373,6 +373,24 @@ def test_bad_fields_exit_2_naming_the_field_and_the_value(tmp_path, args, expect
     assert not out.exists() or not any(out.iterdir())
 
 
+@needs_real
+def test_an_agopengps_field_is_driven_along_its_ab_line(tmp_path):
+    """A farmer's AgOpenGPS folder (written from a real partfield): --set field.path=FOLDER runs it,
+    and field.guidance_line takes the driving angle from its AB line."""
+    from tests.test_other_data import write_agopengps
+
+    real = next(f for f in read_fields(REAL / "isoxml_dev4ag_timelogs" / "PARTFIELDS_TASKDATA.XML")
+                if f.name == "SW_Curitiba_Simple")
+    c = np.asarray(real.boundary.centroid.coords)[0]
+    folder = write_agopengps(tmp_path / "Curitiba", real, [("AB 30", np.array([c, c + [86.6, 50.0]]))])
+    p = plan(read_fields(folder)[0], Settings(guidance_line="AB 30", max_swaths=2))
+    assert p.angle == pytest.approx(math.radians(30.0), abs=1e-4) and "AB line 'AB 30'" in p.angle_how
+    with pytest.raises(FieldError, match="no such guidance line .*'AB 30'"):
+        plan(read_fields(folder)[0], Settings(guidance_line="AB 99"))
+    m = _run("field_coverage.toml", f"field.path={folder}", "field.guidance_line=AB 30", "field.max_swaths=3").metrics
+    assert m["route_done_share"] > 0.99 and m["boundary_crossings"] == 0 and m["implement_xte_p95_m"] <= 0.05
+
+
 def test_a_bad_field_in_a_study_exits_2_before_anything_is_written(tmp_path):
     out = tmp_path / "run"
     res = _cli("run", str(STUDIES / "field_coverage.toml"), "--out", str(out),

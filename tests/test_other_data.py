@@ -323,7 +323,7 @@ def write_agopengps(folder: Path, field, lines: list[tuple[str, np.ndarray]], he
     for hole in field.boundary.interiors:
         boundary += ["True"] + ring_lines(hole)
     (folder / "Boundary.txt").write_text("\n".join(boundary) + "\n")
-    inner = field.boundary.exterior.buffer(-headland_inset) if False else field.boundary.buffer(-headland_inset)
+    inner = field.boundary.buffer(-headland_inset)
     (folder / "Headland.txt").write_text("\n".join(["$Headland"] + ring_lines(inner.exterior)) + "\n")
     track = ["$TrackLines"]
     for name, pts in lines:
