@@ -23,11 +23,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from fields.coverage import HEADLAND, SWATH, TRANSIT, TURN
 from orchestrator.study import Study
 
 from .signals import component_named, signal
 
-SWATH, TURN, HEADLAND, TRANSIT = 0, 1, 2, 3
 STEP = 0.1          # s: the geometry's sampling of the trajectories
 
 

@@ -24,15 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from orchestrator.component import Component, EndRun, inp, out, par
-
-STUDIES = Path(__file__).resolve().parent.parent / "studies"
-
-
-def resolve_path(text: str) -> Path:
-    """A field path as given (absolute, or relative to the working folder), else relative to the
-    project's studies/ folder (the shipped fields)."""
-    p = Path(text)
-    return p if p.is_absolute() or p.exists() else STUDIES / p
+from fields.coverage import HEADLAND, SWATH
+from orchestrator.units import FILE_UNIT
 
 
 @functools.lru_cache(maxsize=8)
@@ -42,7 +35,7 @@ def planned(path: str, crs: str, name: str, settings):
     from fields.coverage import plan
     from fields.plan_cli import choose_field
 
-    field = choose_field(read_fields(resolve_path(path), crs or None), name or None, path)
+    field = choose_field(read_fields(Path(path), crs or None), name or None, path)
     return field, plan(field, settings)
 
 
@@ -84,7 +77,8 @@ class FieldRoute(Component):
         inp("y", "m", 0.0, "estimated CG north position"),
         inp("implement_x", "m", 0.0, "implement working point east"),
         inp("implement_y", "m", 0.0, "implement working point north"),
-        par("path", "", "fields/test_parcel.json", "the field: a file or folder fields.read_fields reads"),
+        par("path", FILE_UNIT, "", "the field: a file or folder fields.read_fields reads (relative: to the study "
+            "file, the files it extends, or the working folder)"),
         par("crs", "", "", "its CRS when the file does not name it (EPSG:6677 ...)"),
         par("name", "", "", "the field when the file holds several (default: the largest)"),
         par("working_width", "m", 3.0, "implement working width"),
@@ -132,10 +126,11 @@ class FieldRoute(Component):
     def initialize(self, t0: float, dt: float) -> None:
         from fields import FieldError
 
+        self.require(bool(self.p["path"]), "parameter path: expected the field's file or folder")
         try:
             _, plan = planned(str(self.p["path"]), str(self.p["crs"]), str(self.p["name"]), settings_of(self.p))
         except (FieldError, ValueError, OSError) as exc:
-            self.require(False, f"parameter path = {self.p['path']!r}: {exc}")
+            self.require(False, str(exc))             # names the file, the field and the value
         r = plan.route
         origin, rotation = route_frame(r)
         xy = to_mission(np.column_stack([r["x"], r["y"]]), origin, rotation)
@@ -170,7 +165,7 @@ class FieldRoute(Component):
                                            ahead=max(12.0, (j - self.i_impl) * 0.1 + 2.0))
         y["implement_cross_track"] = lat_i
         y["implement_segment"] = float(self.kind[self.i_impl])
-        y["working"] = float(self.kind[self.i_impl] in (0, 2))
+        y["working"] = float(self.kind[self.i_impl] in (SWATH, HEADLAND))
         y["implement_on_straight"] = float(abs(self.kappa[self.i_impl]) < 1e-3)
         if j >= len(self.s) - 3:
             raise EndRun(self.name, f"the route is complete ({self.s[-1]:.0f} m)")

@@ -75,6 +75,10 @@ class Settings:
                 raise FieldError(f"{where}: {name} = {getattr(self, name)}: expected a positive number")
         if self.order not in ("auto", "boustrophedon", "skip"):
             raise FieldError(f"{where}: order = {self.order!r}: expected auto, boustrophedon or skip")
+        for name in ("headland_passes", "hitch_offset", "drawbar", "half_width", "settle", "swath_extension",
+                     "max_swaths"):
+            if not getattr(self, name) >= 0:
+                raise FieldError(f"{where}: {name} = {getattr(self, name)}: expected zero or more")
         if not 0 <= self.overlap < 0.5 * self.working_width:
             raise FieldError(f"{where}: overlap = {self.overlap} m: expected 0 to half the working width")
 
@@ -311,12 +315,13 @@ def _order_and_reach(spacing: float, limits: Limits, settings: Settings) -> tupl
     def csc(D):          # a U-turn of turn-straight-turn turning through pi once: no loop
         p = connect((0.0, 0.0, 0.0), (0.0, D, math.pi), limits, families=("LSL",))
         return p is not None and np.all(np.diff(p[:, 2]) >= -1e-9) and np.ptp(p[:, 2]) <= math.pi + 1e-6
+    fits = csc(spacing)
+    if settings.order == "boustrophedon" or (settings.order == "auto" and fits):
+        return "boustrophedon", 1, _reach(_u_turn(spacing, limits))
     u_min = spacing
-    while not csc(u_min) and u_min < 10 * settings.turn_radius + 10 * spacing:
+    while not fits and u_min < 10 * settings.turn_radius + 10 * spacing:
         u_min += 0.25 * spacing
-    adjacent = _u_turn(spacing, limits)
-    if settings.order == "boustrophedon" or (settings.order == "auto" and csc(spacing)):
-        return "boustrophedon", 1, _reach(adjacent)
+        fits = csc(u_min)
     s = max(2, math.ceil(u_min / spacing))
     reach = max(_reach(_u_turn(s * spacing, limits)), _reach(_u_turn((s + 1) * spacing, limits)))
     return "skip", s, reach

@@ -10,13 +10,13 @@ import math
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from .component import Component, ComponentError
 from .study import SUBSYSTEM_SUFFIXES, ComponentSpec, Connection, Study, StudyError
-from .units import UnitError, to_si, units_match
+from .units import FILE_UNIT, UnitError, to_si, units_match
 
 
 @dataclass
@@ -121,9 +121,13 @@ def component_class(study: Study, name: str, type_name: str | None) -> type[Comp
         raise StudyError(f"{where}: components.{name}.type: {exc}") from None
 
 
-def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], where: str) -> dict[str, Any]:
+def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], where: str,
+                        folders: Callable[[], Sequence[Path]] | None = None) -> dict[str, Any]:
     """The study's values of component ``name``'s parameters in SI (declared units); unknown
-    names and unit mismatches are refused with the field named."""
+    names and unit mismatches are refused with the field named. A relative path in a parameter
+    declared with unit ``"file"`` is found in the first of ``folders()`` (the study file's, then
+    those of the files it extends) or the working folder that holds it, and made absolute; one
+    found nowhere is left as written for the component to name."""
     params = cls.declared("parameter")
     converted: dict[str, Any] = {}
     for key, value in values.items():
@@ -137,6 +141,8 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
             converted[key] = to_si(value, params[key].unit)
         except UnitError as exc:
             raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+        if params[key].unit == FILE_UNIT and isinstance(converted[key], str) and converted[key]:
+            converted[key] = _find_file(converted[key], folders() if folders else ())
         start = params[key].start
         numeric = isinstance(start, (int, float)) and not isinstance(start, bool)
         if numeric and isinstance(converted[key], str):
@@ -144,6 +150,16 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
                              + (f" in {params[key].unit} (or a string like '1.5 {params[key].unit}')"
                                 if params[key].unit not in ("", "1") else ""))
     return converted
+
+
+def _find_file(text: str, folders: Sequence[Path]) -> str:
+    path = Path(text).expanduser()
+    if path.is_absolute():
+        return str(path)
+    for folder in (*folders, Path.cwd()):
+        if (folder / path).exists():
+            return str((folder / path).resolve())
+    return text
 
 
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
@@ -158,7 +174,7 @@ def build_system(study: Study) -> System:
     specs = {**study.components, **{n: ComponentSpec(type="", step=s.step) for n, s in study.subsystems.items()}}
     for name, spec in specs.items():
         cls = study.component_class(name)
-        converted = resolved_parameters(cls, name, spec.parameters, where)
+        converted = resolved_parameters(cls, name, spec.parameters, where, study.folders)
         try:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))
         except ComponentError as exc:

@@ -465,13 +465,29 @@ class Study(BaseModel):
 
     def parameters(self, name: str) -> dict[str, Any]:
         """Every parameter of component ``name`` in SI: declared defaults, then the study's values
-        converted with the declared units."""
+        converted with the declared units (files found as the build finds them)."""
         from .build import resolved_parameters
 
         cls = self.component_class(name)
         spec = self.components.get(name)
         return {**{k: v.start for k, v in cls.declared("parameter").items()},
-                **resolved_parameters(cls, name, spec.parameters if spec else {}, self.where)}
+                **resolved_parameters(cls, name, spec.parameters if spec else {}, self.where, self.folders)}
+
+    def folders(self) -> tuple[Path, ...]:
+        """Where a relative file named in the study is looked for: the study file's folder, then
+        the folders of the files it extends, nearest first."""
+        out: list[Path] = []
+        seen: set[Path] = set()
+        path = Path(self.path) if self.path is not None else None
+        while path is not None and path.is_file() and path.resolve() not in seen:
+            seen.add(path.resolve())
+            if path.resolve().parent not in out:
+                out.append(path.resolve().parent)
+            if path.suffix not in (".toml", ".yaml", ".yml"):
+                break
+            parent = _read_one(path).get("extends")
+            path = path.parent / parent if isinstance(parent, str) else None
+        return tuple(out)
 
     def find(self, *, role: str | None = None, type: type | str | None = None) -> list[str]:
         """Names of the components that declare ``role`` (``Component.roles``) or are of ``type``

@@ -20,6 +20,8 @@ EDGE_UNITS: dict[str, tuple[str, float]] = {
     "Hz": ("1/s", 1.0),
 }
 
+FILE_UNIT = "file"        # a parameter naming a file: found relative to the study (orchestrator.build)
+
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S+)\s*$")
 
 
@@ -130,9 +132,9 @@ def to_si(value: Any, unit: str) -> Any:
 
     Numbers, booleans, lists and plain strings pass through; a string ``"<number> <unit>"`` is
     converted when its unit is ``unit`` itself or an edge unit that maps onto it. Parameters with
-    no unit (``""``: names, addresses, paths) take strings as they are.
+    no unit (``""``: names, addresses) or naming a file (``"file"``) take strings as they are.
     """
-    if isinstance(value, str) and unit == "":
+    if isinstance(value, str) and unit in ("", FILE_UNIT):
         return value
     if isinstance(value, str):
         match = _QUANTITY.match(value)

@@ -260,6 +260,28 @@ def test_on_a_side_slope_a_passive_implement_runs_L_beta_downhill_and_the_side_s
     assert abs(imp.y["y"]) < 1e-3 and imp.y["side_shift"] == pytest.approx(L * math.sin(beta), rel=0.02)
 
 
+def test_a_field_file_is_found_beside_the_study_that_names_it(tmp_path, monkeypatch):
+    """A relative field path is looked for beside the study file, then beside the files it
+    extends, then in the working folder; one found nowhere is named in the error."""
+    import shutil
+
+    monkeypatch.chdir(tmp_path)                                      # not the project's folder
+    mine = tmp_path / "farm"
+    mine.mkdir()
+    shutil.copy(STUDIES / "fields" / "iam_field_boundaries.csv", mine / "plots.csv")
+    child = mine / "my_plot.toml"
+    child.write_text(f'extends = "{STUDIES / "field_plot_mounted.toml"}"\n'
+                     '[components.field]\nparameters = { path = "plots.csv" }\n')
+    assert Study.load(child).parameters("field")["path"] == str((mine / "plots.csv").resolve())
+    inherits = mine / "inherits.toml"                                # the parent's own field, beside the parent
+    inherits.write_text(f'extends = "{STUDIES / "field_plot_mounted.toml"}"\n')
+    assert Study.load(inherits).parameters("field")["path"] == str(STUDIES / "fields" / "iam_field_boundaries.csv")
+    missing = Study.load(child, ["field.path=nowhere.geojson"])
+    assert missing.parameters("field")["path"] == "nowhere.geojson"
+    res = _cli("run", str(child), "--out", str(tmp_path / "out"), "--set", "field.path=nowhere.geojson")
+    assert res.returncode == 2 and "nowhere.geojson" in res.stderr and "Traceback" not in res.stderr
+
+
 def test_the_route_component_takes_every_planner_setting():
     defaults = {v.name: v.start for v in FieldRoute.variables if v.causality == "parameter"}
     assert settings_of(defaults) == Settings()
