@@ -65,8 +65,8 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
 def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Swath index -> (start, unit direction) in the mission frame."""
     out = {}
-    for (a, b), seg in zip(plan.swaths, [s for s in plan.segments if s.kind == SWATH]):
-        a2, b2 = conv(np.array([a, b]))
+    for seg in (s for s in plan.segments if s.kind == SWATH):
+        a2, b2 = conv(seg.path[[0, -1], :2])
         d = (b2 - a2) / max(np.hypot(*(b2 - a2)), 1e-9)
         out[int(seg.index)] = (a2, d)
     return out

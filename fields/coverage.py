@@ -111,11 +111,15 @@ class Plan:
     headland_passes: int
     inner: Polygon
     workable: Polygon
-    swaths: list[tuple[np.ndarray, np.ndarray]]          # (start, end) in driving order
     segments: list[Segment]
     order_how: str
     notes: list[str] = dc_field(default_factory=list)
     route: dict | None = None
+
+    @property
+    def swaths(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(start, end) of each swath in driving order."""
+        return [(seg.path[0, :2], seg.path[-1, :2]) for seg in self.segments if seg.kind == SWATH]
 
     def summary(self) -> dict:
         r = self.route
@@ -199,7 +203,7 @@ def _layout(field: Field, settings: Settings, n_h: int, order: str, skip: int, l
     lines = _swath_lines(inner, angle, spacing, w)
     if settings.max_swaths:
         notes.append(f"a section of the field: the first {min(settings.max_swaths, len(lines))} swath(s) of the route")
-    plan_ = Plan(field, settings, angle, angle_how, n_h, inner, _workable(field, settings, n_h), [], [],
+    plan_ = Plan(field, settings, angle, angle_how, n_h, inner, _workable(field, settings, n_h), [],
                  f"{order}" + (f" (skip {skip})" if order == "skip" else ""), notes)
     _swaths_and_turns(plan_, lines, skip, limits, where)
     if settings.headland_work and not settings.max_swaths:
@@ -385,7 +389,6 @@ def _swaths_and_turns(plan_: Plan, lines, skip: int, limits: Limits, where: str)
             path = _straight(run_in, start)
         plan_.segments.append(Segment(TURN, -1, path))
         plan_.segments.append(Segment(SWATH, idx, _straight(start, end)))
-        plan_.swaths.append((start, end))
         run_out = end + settings.lead * direction
         plan_.segments.append(Segment(TURN, -1, _straight(end, run_out)))
         previous = (run_out[0], run_out[1], heading)
