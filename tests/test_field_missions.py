@@ -1,4 +1,4 @@
-"""Issue 27: field missions. Coverage plans on every real field of ../shared/realdata (sections of
+"""Issue 27: field missions. Coverage plans on every real field (copies in tests/data) (sections of
 the large ones), continuous-curvature turns within the limits, the trailed implement's kinematics
 against closed-form steady states, the whole guidance stack covering a real plot, the farmers'
 metrics against a second computation, bad fields refused by name, sweeps over speed and angle."""
@@ -25,12 +25,11 @@ from orchestrator.runner import run_study
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
-REAL = ROOT.parent / "shared" / "realdata"
+REAL = ROOT / "tests" / "data"             # copies of ../shared/realdata with their licences
 STUDIES = ROOT / "studies"
 IAM_CSV = REAL / "iam_field_open_autonomous_tractor" / "datasets" / "iam_field" / "field_boundaries.csv"
 SMALL_IMPLEMENT = dict(working_width=2.0, turn_radius=2.5, drawbar=0.0, settle=2.0)   # for the 0.15 ha plots
 
-needs_real = pytest.mark.skipif(not REAL.exists(), reason="../shared/realdata is not here")
 
 # every file of real fields; the settings that suit its fields; the fields it must refuse, and why
 REAL_FIELD_FILES = {
@@ -69,7 +68,6 @@ def _check_route(p, settings: Settings) -> None:
         assert abs(math.sin(heading - p.angle)) < 1e-6
 
 
-@needs_real
 @pytest.mark.parametrize("name", sorted(REAL_FIELD_FILES))
 def test_every_real_field_is_planned_or_refused_by_name(name):
     """Each field of the file: a section of 4 swaths (and its headland and turns) planned within
@@ -101,7 +99,6 @@ def _planned_cover(p) -> tuple[float, float]:
     return covered / p.workable.area, (swept - covered) / p.workable.area
 
 
-@needs_real
 @pytest.mark.parametrize("file,name,overrides", [
     ("fields2cover_data/test.json", "test parcel", {}),
     ("isoxml_dev4ag_timelogs/TASKDATA.XML", " YmB4QHFgW", {}),              # a bay: several cells
@@ -152,7 +149,6 @@ def _min_width(poly: Polygon) -> float:
     return best
 
 
-@needs_real
 @pytest.mark.parametrize("file", ["fields2cover_data/test1.xml", "fields2cover_data/test.json",
                                   "isoxml_dev4ag_timelogs/PARTFIELDS_TASKDATA.XML"])
 def test_the_chosen_angle_gives_the_fewest_swaths_by_rotating_calipers(file):
@@ -328,7 +324,6 @@ def test_the_coverage_metric_agrees_with_a_monte_carlo_count():
     assert m["overlap_area_m2"] > 0.5                  # adjacent passes overlap by the planned 5 cm
 
 
-@needs_real
 @pytest.mark.parametrize("path,extra", [
     ("fields2cover_data/test1.xml", ()),
     ("isoxml_dev4ag_timelogs/PARTFIELDS_TASKDATA.XML", ("field.name=NO_Warschau_Simple",)),
@@ -383,8 +378,6 @@ def test_plan_command_writes_the_route_and_its_figures(tmp_path):
     (("{studies}/fields/iam_field_boundaries.csv", "--crs", "EPSG:99999"), ("EPSG:99999",)),
 ])
 def test_bad_fields_exit_2_naming_the_field_and_the_value(tmp_path, args, expect):
-    if "{real}" in args[0] and not REAL.exists():
-        pytest.skip("../shared/realdata is not here")
     args = (args[0].format(real=REAL, studies=STUDIES),) + args[1:]
     out = tmp_path / "plan"
     res = _cli("plan", *args, "--out", str(out))
@@ -395,7 +388,6 @@ def test_bad_fields_exit_2_naming_the_field_and_the_value(tmp_path, args, expect
     assert not out.exists() or not any(out.iterdir())
 
 
-@needs_real
 def test_an_agopengps_field_is_driven_along_its_ab_line(tmp_path):
     """A farmer's AgOpenGPS folder (written from a real partfield): --set field.path=FOLDER runs it,
     and field.guidance_line takes the driving angle from its AB line."""

@@ -1,4 +1,4 @@
-"""Issue 26: other people's data. Every file in ../shared/realdata through the new readers (real
+"""Issue 26: other people's data. Every file of the real sets (copies in tests/data) through the new readers (real
 receivers' NMEA, an ISO 11783-10 TaskData with 21 binary time logs, partfields, Fields2Cover's
 fields, a test field in a Japanese plane-rectangular CRS), ROS bags written here from real NMEA
 positions, AgOpenGPS field folders written from real fields, partial recordings, and a vehicle
@@ -22,12 +22,11 @@ from measurements.raw_nmea import read_nmea_file
 from measurements.recording import ImportOptions, import_recording
 
 ROOT = Path(__file__).resolve().parents[1]
-REAL = ROOT.parent / "shared" / "realdata"
+REAL = ROOT / "tests" / "data"             # copies of ../shared/realdata with their licences
 NMEA = REAL / "nmea_gpsd_testlogs"
 ISOXML = REAL / "isoxml_dev4ag_timelogs"
 F2C = REAL / "fields2cover_data"
 IAM = REAL / "iam_field_open_autonomous_tractor"
-pytestmark = pytest.mark.skipif(not REAL.is_dir(), reason=f"{REAL} (the shared real data) is not here")
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
