@@ -1,0 +1,114 @@
+"""``identify LOG``: which method a measured log gets, and the driving method's outputs
+(identification.json, the figures, the summary on the terminal, progress on stderr)."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+
+def _read(source: Path, resample: bool, recording, study):
+    """The log as measurements.load_log reads it; a table with clock gaps or jitter (ordinary
+    logging) is checked piece by piece between its gaps, each piece on its own even clock."""
+    import numpy as np
+    import pandas as pd
+
+    from measurements import LogError, load_log
+    from measurements.log import check_log
+    from measurements.recording import ImportOptions, is_recording
+
+
+    try:
+        return load_log(source, ("t",), resample_jitter=resample,
+                        recording=(recording or ImportOptions()).for_vehicle(study))
+    except LogError as exc:
+        if is_recording(Path(source)) or not ("gap" in str(exc) or "unevenly" in str(exc)):
+            raise
+    frame = pd.read_parquet(source) if Path(source).suffix == ".parquet" else pd.read_csv(source)
+    t = frame["t"].to_numpy(float)
+    if np.any(np.diff(t) <= 0):
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise LogError(f"{source}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
+    # every check of a log but the even clock (identification.driving puts each piece on its own)
+    even = frame.iloc[:3].assign(t=[0.0, 0.01, 0.02])
+    for c in frame.columns:
+        if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
+            bad = ~np.isfinite(frame[c].to_numpy(float))
+            if bad.any():
+                raise LogError(f"{source}: column {c!r} has {int(bad.sum())} NaN or infinite values (first at row "
+                               f"{int(np.argmax(bad))}, t = {t[int(np.argmax(bad))]:.4g} s)")
+    peaks = frame.abs().max().to_frame().T
+    check_log(pd.concat([even, peaks.assign(t=0.03)], ignore_index=True), str(source), ("t",))
+    return frame, None
+
+
+def wants_driving(source: Path, resample: bool, recording, study) -> bool:
+    """True unless delta_cmd repeats itself with a period (a designed multisine experiment)."""
+    from measurements import LogError
+
+    from .experiment import detect_period
+
+    frame, _ = _read(source, resample, recording, study)
+    if "delta_cmd" not in frame or "delta" not in frame:
+        return True
+    try:
+        detect_period(frame["delta_cmd"].to_numpy(float))
+    except LogError:
+        return True
+    return False
+
+
+def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
+                         recording=None) -> int:
+    from orchestrator.results import write_json
+
+    from .ordinary_driving import identify_driving, summary
+
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:
+        print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    frame, imported = _read(source, resample, recording, study)
+    progress(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
+    report = identify_driving(frame, str(source), study, progress=progress)
+    hidden = report.pop("_plot")
+    if imported is not None:
+        report["recording"] = imported
+    out_dir = Path(out_dir)
+    files = []
+    if plots:
+        from .driving_plots import write_driving_plots
+
+        progress("figures")
+        files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
+    report["figures"] = files
+    write_json(out_dir / "identification.json", _finite(json.loads(json.dumps(report, default=_plain))))
+    print(summary(report))
+    print(f"\nwritten to {out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
+    return 0
+
+
+def _plain(o):
+    import numpy as np
+
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.bool_):
+        return bool(o)
+    raise TypeError(type(o))
+
+
+def _finite(v):
+    """JSON has no infinity: a non-finite number is written as null."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, dict):
+        return {k: _finite(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_finite(x) for x in v]
+    return v
