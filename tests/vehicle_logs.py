@@ -21,6 +21,7 @@ import pandas as pd
 DATA = Path(__file__).resolve().parent / "data"
 FRICTIONMAPS = DATA / "f1tenth_frictionmaps" / "DataSets"
 AUTOKOOPMAN = DATA / "f1tenth_autokoopman_steps" / "F1tenthCar"
+ROOT_STUDIES = Path(__file__).resolve().parent.parent / "studies"
 
 
 def _topic(path: Path, columns: dict[str, str]) -> pd.DataFrame:
@@ -30,15 +31,21 @@ def _topic(path: Path, columns: dict[str, str]) -> pd.DataFrame:
     return out.sort_values("stamp").reset_index(drop=True)
 
 
-def frictionmaps_log(run: str | Path, tolerance: float = 0.05) -> pd.DataFrame:
-    """One FrictionMaps run (``"DS1"`` or its folder) as a canonical log on the command's clock."""
+def frictionmaps_log(run: str | Path, tolerance: float = 0.05, clock: str = "command") -> pd.DataFrame:
+    """One FrictionMaps run (``"DS1"`` or its folder) as a canonical log on the clock of the
+    steering command (``clock="command"``) or of the gyro (``"imu"``); the command is the value
+    last sent (a held command), the other topics the nearest sample."""
     folder = Path(run) if Path(run).is_dir() else FRICTIONMAPS / str(run)
     cmd = _topic(folder / "commandData.csv", {"delta": "delta_cmd"})
     imu = _topic(folder / "imuData.csv", {"wz": "wz_deg"})
     odom = _topic(folder / "pfOdomData.csv", {"vx": "v", "x": "x", "y": "y"})
-    joined = cmd
-    for other in (imu, odom):
-        joined = pd.merge_asof(joined, other, on="stamp", direction="nearest", tolerance=tolerance)
+    if clock == "imu":
+        joined = pd.merge_asof(imu, cmd, on="stamp", direction="backward", tolerance=4 * tolerance)
+        joined = pd.merge_asof(joined, odom, on="stamp", direction="nearest", tolerance=tolerance)
+    else:
+        joined = cmd
+        for other in (imu, odom):
+            joined = pd.merge_asof(joined, other, on="stamp", direction="nearest", tolerance=tolerance)
     joined = joined.dropna().reset_index(drop=True)
     log = pd.DataFrame({"t": joined["stamp"] - joined["stamp"].iloc[0], "delta_cmd": joined["delta_cmd"],
                         "v": joined["v"], "yaw_rate": np.radians(joined["wz_deg"]),
