@@ -36,7 +36,11 @@ def _study_options(finding: Finding, baseline) -> list[tuple[str, str, float]]:
     return out
 
 
-def _finding_json(f: Finding, baseline) -> dict:
+def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
+    """The one JSON shape of a judged effect, whether it is in the final model (``effects``,
+    judged by its drop-one comparison) or tried alone against the baseline (``findings``):
+    every fitted parameter with its value, standard deviation, 95 % interval and the bounds it
+    was searched in, so that anyone can see how far it is from them."""
     try:
         options = _study_options(f, baseline)
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
@@ -44,54 +48,47 @@ def _finding_json(f: Finding, baseline) -> dict:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
     signals = ", ".join(f"{k} {f.rmse_before[k]:.4g} -> {f.rmse_after[k]:.4g} {SIGNALS[s][1]}"
                         for s in f.stages for k in [SIGNALS[s][0]])
-    params = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
-    summary = (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {params}; "
-               f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}.")
-    return {
-        "effect": f.effect.id,
-        "subsystem": f.effect.subsystem,
-        "params": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
-        "params_display": f.effect.display(f.fit.values),
-        "rmse_before": f.rmse_before,
-        "rmse_after": f.rmse_after,
-        "gain": f.gain,
-        "evidence": {
-            "supported": f.supported,
-            "reasons": f.reasons,
-            "delta_bic": f.delta_bic,
-            "gain_by_signal": f.gain_by_signal,
-            "n_eff": f.fit.n_eff,
-            "param_std": {k: v for k, v in f.fit.std.items() if k in {p.name for p in f.effect.parameters}},
-            "materiality": f.effect.threshold,
-            "material": f.material,
-            "refit_baseline": {k: f.fit.values[k] for k in REFIT},
-            "study_option": option_text,
-            "summary": summary,
-        },
-        "_options": options,
-    }
-
-
-def _effect_json(f: Finding, baseline, inconclusive: list[dict]) -> dict:
-    """One effect of the final model, judged by its drop-one comparison."""
-    item = _finding_json(f, baseline)
-    names = {p.name for p in f.effect.parameters}
+    shown = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
+    fitted = {}
+    for p in f.effect.parameters:
+        value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
+        fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
+                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p)}
     return {
         "id": f.effect.id,
         "subsystem": f.effect.subsystem,
         "hypothesis": f.effect.hypothesis,
-        "parameters": {k: v for k, v in item["params"].items()},
-        "parameters_display": item["params_display"],
-        "std": {k: v for k, v in f.fit.std.items() if k in names},
+        "parameters": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
+        "parameters_display": f.effect.display(f.fit.values),
+        "fitted": fitted,
         "delta_bic": f.delta_bic,
         "held_out_gain": f.gain,
+        "gain_by_signal": f.gain_by_signal,
+        "rmse_before": f.rmse_before,
+        "rmse_after": f.rmse_after,
         "residual_by_stage": {s: {"rms_without": f.rmse_before[SIGNALS[s][0]], "rms_with": f.rmse_after[SIGNALS[s][0]],
                                   "unit": SIGNALS[s][1]} for s in f.stages},
-        "study_option": item["evidence"]["study_option"],
-        "summary": item["evidence"]["summary"],
+        "supported": f.supported,
+        "reasons": f.reasons,
+        "material": f.material,
+        "materiality": f.effect.threshold,
+        "n_eff": f.fit.n_eff,
+        "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
+        "study_option": option_text,
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {shown}; "
+                    f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
         "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
-        "_options": item["_options"],
+        "_options": options,
     }
+
+
+def at_bound(value: float, p) -> str | None:
+    """'lower' or 'upper' when a fitted value ends within 0.5 % of the searched range of a bound."""
+    span = p.upper - p.lower
+    for side, b in (("lower", p.lower), ("upper", p.upper)):
+        if abs(value - b) <= 5e-3 * span:
+            return side
+    return None
 
 
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
@@ -185,7 +182,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
-    effects = [_effect_json(f, baseline, sel.inconclusive) for f in sel.effects]
+    effects = [finding_json(f, baseline, sel.inconclusive) for f in sel.effects]
     options = [o for e in effects for o in (e.pop("_options") or [])]
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
@@ -201,7 +198,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in judged}
     if effects:
         result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in judged}
-    items = [_finding_json(f, baseline) for f in sel.first_step]
+    items = [finding_json(f, baseline) for f in sel.first_step]
     for item in items:
         item.pop("_options", None)
     result["findings"] = items

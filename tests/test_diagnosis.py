@@ -48,21 +48,23 @@ def test_hidden_effect_is_named_recovered_and_gains_on_held_out_data(hidden, eff
         assert top["held_out_gain"] > 0.05
         assert all(r["rms_with"] < r["rms_without"] * 1.05 for r in top["residual_by_stage"].values())
         # the effect found alone against the baseline is the same one (the single-effect verdict of before)
-        assert res["findings"][0]["effect"] == effect and res["findings"][0]["evidence"]["supported"]
+        assert res["findings"][0]["id"] == effect and res["findings"][0]["supported"]
 
 
 def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
     res = hidden[("side_slope", SEEDS[0])]["result"]
     assert {"verdict", "effects", "findings", "stages", "noise_floor", "warnings", "inconclusive"} <= set(res)
-    assert [f["effect"] for f in res["findings"]].count("side_slope") == 1 and len(res["findings"]) == 9
-    for f in res["findings"]:
-        assert {"effect", "subsystem", "params", "rmse_before", "rmse_after", "gain", "evidence"} <= set(f)
-    for e in res["effects"]:
-        assert {"id", "parameters", "std", "residual_by_stage", "held_out_gain", "delta_bic"} <= set(e)
+    assert [f["id"] for f in res["findings"]].count("side_slope") == 1 and len(res["findings"]) >= 9
+    shape = {"id", "subsystem", "parameters", "fitted", "rmse_before", "rmse_after", "held_out_gain", "supported",
+             "reasons", "residual_by_stage", "delta_bic"}
+    for f in res["findings"] + res["effects"]:          # one shape for a finding, wherever it is listed
+        assert shape <= set(f)
+        for name, p in f["fitted"].items():            # every fitted parameter: value, interval, bounds
+            assert p["value"] == f["parameters"][name] and len(p["interval"]) == 2 and p["bounds"][0] < p["bounds"][1]
     assert set(res["stages"]) == {"steering", "yaw", "position", "speed"}
-    supported = [f["evidence"]["supported"] for f in res["findings"]]
+    supported = [f["supported"] for f in res["findings"]]
     assert supported == sorted(supported, reverse=True)
-    bics = [f["evidence"]["delta_bic"] for f in res["findings"] if f["evidence"]["supported"]]
+    bics = [f["delta_bic"] for f in res["findings"] if f["supported"]]
     assert bics == sorted(bics)
 
 
