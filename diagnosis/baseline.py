@@ -14,6 +14,8 @@ from components.models.steering_equivalent import FirstOrderSteering
 from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
 from orchestrator.study import Study, StudyError
 
+from identification.vehicle import Vehicle
+
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy
 
@@ -30,6 +32,7 @@ class Baseline:
     tractor: TractorParameters
     values: dict[str, float] = field(default_factory=dict)
     study: BaselineStudy | None = None
+    vehicle: Vehicle = field(default_factory=Vehicle)
 
 
 def baseline_from_study(study: Study) -> Baseline:
@@ -51,4 +54,4 @@ def baseline_from_study(study: Study) -> Baseline:
               "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
-    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view)
+    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))

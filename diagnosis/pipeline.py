@@ -94,6 +94,8 @@ def at_bound(value: float, p) -> str | None:
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
     """What makes a verdict on this log fragile (issue 15, item 4)."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
+    if replay.not_judged:
+        out.append(f"the log's columns: {', '.join(map(str, replay.frame.columns))}")
     if replay.speed_source != "v" and set(replay.stages) & {"yaw", "position"}:
         out.append({"gnss_speed": "no wheel speed v: the yaw and position replays run on the receiver's speed over ground",
                     "track": "no speed column: the yaw replay runs on the speed of the GPS track"}[replay.speed_source])

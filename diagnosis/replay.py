@@ -77,7 +77,8 @@ class YawReplay:
         the cornering stiffnesses and in 1/sigma (the relaxation lengths) at a given speed (every
         physical model), so they are assembled from parts computed once:
         A = A_0(v) + (1/s - 1) A_sigma(v) + c(v) (s_f C_f A_f(v) + s_r C_r A_r(v)), s the scale
-        on both relaxation lengths, A_sigma the part of A_0 proportional to 1/sigma."""
+        on both relaxation lengths, A_sigma the part of A_0 proportional to 1/sigma; likewise B, whose
+        delta column holds C_f in the bicycle model (B_f)."""
         if self._parts is None:
             zero = replace(self.params, C_f=0.0, C_r=0.0)
             longer = replace(zero, sigma_f=2 * zero.sigma_f, sigma_r=2 * zero.sigma_r)
@@ -85,16 +86,18 @@ class YawReplay:
             for speed in self.speeds:
                 A0, B, _ = state_space(self.model, zero, speed)
                 A2, B2, _ = state_space(self.model, longer, speed)
-                Af = state_space(self.model, replace(zero, C_f=self.params.C_f), speed)[0] - A0
+                front = state_space(self.model, replace(zero, C_f=self.params.C_f), speed)
+                Af, Bf = front[0] - A0, front[1] - B        # the bicycle model's B holds C_f too
                 Ar = state_space(self.model, replace(zero, C_r=self.params.C_r), speed)[0] - A0
                 E = lateral_disturbance_column(len(B))
                 parts.append((A0, 2 * (A0 - A2), Af, Ar, np.column_stack([B, E]),
-                              np.column_stack([2 * (B - B2), np.zeros_like(E)])))
+                              np.column_stack([2 * (B - B2), np.zeros_like(E)]), np.column_stack([Bf, np.zeros_like(E)])))
             self._parts = [np.array(x) for x in zip(*parts)]
-        A0, As, Af, Ar, B, Bs = self._parts
+        A0, As, Af, Ar, B, Bs, Bf = self._parts
         c = np.array([cornering_scale(v, speed_slope, v_ref) for v in self.speeds])[:, None, None]
         k = 1.0 / relaxation_scale - 1.0
-        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs, self.h)
+        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar),
+                              B + k * Bs + c * front_scale * Bf, self.h)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
@@ -103,10 +106,13 @@ class YawReplay:
         u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
         return blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0] * u.shape[1]] * u[:, None, :], row=1)
 
-    def yaw_rate(self, v: Mapping[str, float]) -> np.ndarray:
+    def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
+        """The yaw rate under ``v``, driven by the measured wheel angle, or by ``delta`` (a wheel
+        angle replayed from the command, when the log has none measured)."""
         R = self.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                            v["cornering_reference_speed"], v["relaxation_scale"])
-        return R[:, 0] + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
+        first = R[:, 0] if delta is None else self.response_to(np.asarray(delta, float)[:, None], v)[:, 0]
+        return first + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
 
     def rear_lateral_velocity(self, v: Mapping[str, float]) -> np.ndarray:

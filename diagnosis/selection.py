@@ -33,7 +33,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged
+import copy
+
+from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -111,7 +113,7 @@ def group(stages: set[str], members: list[Effect], available=STAGES) -> tuple[tu
 
 
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> Fit:
-    free = [p for s in stages for p in UNCERTAIN[s]] + [p for e in effects for p in e.parameters]
+    free = list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] + [p for e in effects for p in e.parameters]))
     return _fit(replay, values, free, stages, starts, sigma)
 
 
@@ -133,7 +135,7 @@ class Selector:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
         self.base_values = replay.baseline.values
         # the effects this log can judge: one of their stages replayed, the columns they read there
-        self.catalogue = [e for e in CATALOGUE if set(e.stages) & set(replay.stages)
+        self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs)]
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
@@ -286,6 +288,15 @@ class Selector:
             else:
                 trace.append(f"= {f.id} stays: {text}")
         return model, members
+
+
+def restaged(effect: Effect, replay: Replay) -> Effect:
+    """The effect as this log judges it: on a log with only the steering command, a steering
+    effect is judged in the yaw stage (the replayed steering drives the yaw model)."""
+    if getattr(replay, "command_only", False) and "steering" in effect.stages:
+        effect = copy.copy(effect)
+        effect.stages = tuple(dict.fromkeys("yaw" if s == "steering" else s for s in effect.stages))
+    return effect
 
 
 def _tie(best: Finding, rival: Finding) -> dict:
