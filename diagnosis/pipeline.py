@@ -188,8 +188,20 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     options = [o for e in effects for o in (e.pop("_options") or [])]
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
-    result["verdict"] = effects[0]["id"] if effects else ("unexplained" if unexplained else "none")
+    # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
+    unidentifiable = [e for e in effects if any(p["at_bound"] for p in e["fitted"].values())]
+    for e in unidentifiable:
+        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"]}
+        e["not_identifiable"] = "; ".join(
+            f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
+            for n, p in bound.items())
+    answers = [e for e in effects if e not in unidentifiable]
+    result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
+                                  for e in unidentifiable]
+    result["verdict"] = answers[0]["id"] if answers else ("unexplained" if unexplained else "none")
     result["inconclusive"] = sel.inconclusive
+    result["verdict_status"] = ("inconclusive" if any(t["effects"][0] == result["verdict"] for t in sel.inconclusive)
+                                else "conclusive")
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, base, floors)
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},

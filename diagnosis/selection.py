@@ -30,10 +30,11 @@ the final model refitted without it (held-out RMS per stage with and without it)
 """
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
-
 import copy
+import math
+from dataclasses import dataclass, field, replace
+
+from components.models.yaw_dynamics import GRAVITY
 
 from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
@@ -191,13 +192,22 @@ class Selector:
             best = supported[0]
             rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
                       and set(f.effect.stages) & set(best.effect.stages)]
+            # a rival that is not supported itself (dBIC not strong, or immaterial) but within TIE of
+            # the best and with evidence for it: the log cannot tell the two apart
+            near = [f for f in trials if f not in supported and f.effect is not best.effect and f.delta_bic < 0
+                    and f.delta_bic - best.delta_bic < TIE and set(f.effect.stages) & set(best.effect.stages)
+                    and f.effect.id not in removed]
+            for rival in near:
+                inconclusive.append(_tie(best, rival, "it is not supported on its own (" + "; ".join(rival.reasons)
+                                         + ") but its evidence is within the margin of the chosen one's"))
             members = members + [best.effect]
             model = merged(model, best.fit)
             trace.append(f"+ {best.effect.id} (dBIC {best.delta_bic:.1f})")
             for rival in rivals:
                 again = self.add(model, members, rival.effect)
                 if not again.supported:
-                    inconclusive.append(_tie(best, rival))
+                    inconclusive.append(_tie(best, rival, "both are supported alone, and with the chosen one in the "
+                                                          "model the other adds nothing"))
             for f in list(members[:-1]):
                 check = self.drop(model, members, f)
                 if not check.supported:
@@ -206,6 +216,13 @@ class Selector:
                     removed.add(f.id)
                     trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
         model, members = self.absorbed(model, members, trace)
+        seen, ties = set(), []
+        for t in inconclusive:                       # one entry per pair, the chosen effect still in the model
+            key = tuple(t["effects"])
+            if key not in seen and t["effects"][0] in {m.id for m in members}:
+                seen.add(key)
+                ties.append(t)
+        inconclusive = ties
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
@@ -291,17 +308,42 @@ class Selector:
 
 
 def restaged(effect: Effect, replay: Replay) -> Effect:
-    """The effect as this log judges it: on a log with only the steering command, a steering
-    effect is judged in the yaw stage (the replayed steering drives the yaw model)."""
+    """The effect as this log and this vehicle judge it: on a log with only the steering command,
+    a steering effect is judged in the yaw stage (the replayed steering drives the yaw model); its
+    parameters are searched within what the study's [vehicle] allows (vehicle_bounds)."""
     if getattr(replay, "command_only", False) and "steering" in effect.stages:
         effect = copy.copy(effect)
         effect.stages = tuple(dict.fromkeys("yaw" if s == "steering" else s for s in effect.stages))
+    bounds = vehicle_bounds(replay.baseline.vehicle)
+    if any(p.name in bounds for p in effect.parameters):
+        effect = copy.copy(effect)
+        effect.parameters = tuple(replace(p, lower=bounds[p.name][0], upper=bounds[p.name][1]) if p.name in bounds else p
+                                  for p in effect.parameters)
     return effect
 
 
-def _tie(best: Finding, rival: Finding) -> dict:
+def vehicle_bounds(vehicle) -> dict[str, tuple[float, float]]:
+    """Search ranges from the vehicle's class and outline (none when the study does not say):
+    a gyro bias a gyro of its class can have, a slope its roads or fields can have (as the lateral
+    pull g sin(phi)), an antenna inside its outline."""
+    out = {}
+    if vehicle.gyro_bias_bound:
+        out["yaw_rate_bias"] = (-vehicle.gyro_bias_bound, vehicle.gyro_bias_bound)
+    if vehicle.slope_bound:
+        pull = GRAVITY * math.sin(vehicle.slope_bound)
+        out["slope_east"] = out["slope_north"] = (-pull, pull)
+    arm = vehicle.lever_arm_bounds()
+    if arm:
+        out["antenna_forward"], out["antenna_left"] = arm
+    return out
+
+
+def _tie(best: Finding, rival: Finding, why: str) -> dict:
+    margin = rival.delta_bic - best.delta_bic
     return {"effects": [best.effect.id, rival.effect.id],
             "delta_bic": [best.delta_bic, rival.delta_bic],
+            "margin": margin,
+            "why": f"{rival.effect.id} is within {margin:.1f} of {best.effect.id}'s dBIC (a tie below {TIE:g}): {why}",
             "chosen": best.effect.id,
             "experiment": f"to tell {best.effect.id} from {rival.effect.id}: {best.effect.experiment}; "
                           f"{rival.effect.experiment}"}
