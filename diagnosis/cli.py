@@ -36,8 +36,15 @@ def run(args: argparse.Namespace) -> int:
     from measurements.cli import recording_options
     from measurements.recording import describe
 
+    import time
+
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:
+        print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+
     result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                      resample=args.resample, recording=recording_options(args))
+                      resample=args.resample, recording=recording_options(args), progress=progress)
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:

@@ -149,7 +149,7 @@ def _unexplained(checks: dict) -> dict | None:
 
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None) -> dict:
+             recording=None, progress=None) -> dict:
     """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
@@ -172,7 +172,10 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         result["split_time"] = float("nan")
         _write(out, result, [])
         return result
+    say = progress or (lambda text: None)
+    say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
     sel = select(replay, min_gain, seed=study.study.seed)
+    say("effects selected; judging the stages against their noise floors")
     base = sel.base
     final, floors = sel.final, sel.floors
     judged = replay.stages
@@ -218,6 +221,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["findings"] = items
     files = []
     if plots:
+        say("figures")
         touched = {s for f in sel.effects for s in f.stages}
         for s in judged:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,

@@ -85,6 +85,8 @@ def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = 
         progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
     report["figures"] = files
+    if study is not None:
+        report["extended_study"] = write_extended_study(report, study, out_dir, source)
     write_json(out_dir / "identification.json", _finite(json.loads(json.dumps(report, default=_plain))))
     print(summary(report))
     print(f"\nwritten to {out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
@@ -112,3 +114,36 @@ def _finite(v):
     if isinstance(v, list):
         return [_finite(x) for x in v]
     return v
+
+
+def write_extended_study(report: dict, study, out_dir: Path, source) -> str | None:
+    """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
+    steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
+    the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
+    from orchestrator.results import atomic_write
+
+    plant = study.find(role="yaw_plant")
+    if not plant:
+        return None
+    values = {}
+    for key, name in (("front", "C_f"), ("rear", "C_r")):
+        s = report["cornering_stiffness"][key]
+        if s["identifiable"]:
+            values[f"{plant[0]}.{name}"] = s["value"]
+    params = report["parameters"]
+    steering = study.find(role="steering")
+    if steering and params["delay"]["identifiable"]:
+        values[f"{steering[0]}.command_delay"] = params["delay"]["value"]
+    gyro = study.find(role="gyro")
+    if gyro and params.get("gyro_bias", {}).get("identifiable"):
+        values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
+    tyre = report["tyre_saturation"]
+    if tyre["found"]:
+        values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
+        if tyre["parameters"]["shape"]["identifiable"]:
+            values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]
+    if not values:
+        return None
+    text = study.extension_toml(values, f"identified from {source} by `python -m orchestrator identify`")
+    atomic_write(Path(out_dir) / "extended_study.toml", lambda p: p.write_text(text))
+    return "extended_study.toml"
