@@ -135,7 +135,8 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if steering and params["delay"]["identifiable"]:
         values[f"{steering[0]}.command_delay"] = params["delay"]["value"]
     gyro = study.find(role="gyro")
-    if gyro and params.get("gyro_bias", {}).get("identifiable"):
+    bias = params.get("gyro_bias", {})
+    if gyro and bias.get("identifiable") and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
         values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
     tyre = report["tyre_saturation"]
     if tyre["found"]:

@@ -140,10 +140,15 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
          "unit": unit}
     if bounds is not None:
         d["bounds"] = [float(bounds[0]), float(bounds[1])]
-        d["identifiable"] = at_bound is None and math.isfinite(std)
+        # a positive physical quantity whose 95 % interval reaches zero is not pinned down either
+        vague = bounds[0] > 0 and not value - Z95 * std > 0
+        d["identifiable"] = at_bound is None and math.isfinite(std) and not vague
         if at_bound:
             d["note"] = (f"not identifiable from this log: ended on its {at_bound} bound "
                          f"{bounds[0] if at_bound == 'lower' else bounds[1]:g} {unit}")
+        elif not d["identifiable"]:
+            d["note"] = (f"not identifiable from this log: its 95 % interval [{value - Z95 * std:.3g}, "
+                         f"{value + Z95 * std:.3g}] {unit} reaches zero")
     d.update(more)
     return d
 
