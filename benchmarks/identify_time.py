@@ -43,11 +43,10 @@ def long_log(minutes: float, folder: Path) -> Path:
     from orchestrator.study import Study
 
     seconds = 60.0 * minutes
-    study = Study.load(ROOT / "studies/f1tenth.toml").with_values(
-        {"study.stop_time": seconds, "study.base_step": 0.01, "plan.duration": seconds, "steering.step": 0.01,
-         "car.step": 0.01})
+    study = Study.load(ROOT / "studies/f1tenth.toml").with_values({"study.stop_time": seconds, "plan.duration": seconds})
     rec, _ = simulate(study)
     f = rec.to_frame()
+    f = f.iloc[:: int(round(0.01 / study.study.base_step))].reset_index(drop=True)        # 100 Hz
     log = pd.DataFrame({"t": f["t"], "delta_cmd": f["plan.steer_angle_cmd"], "v": f["plan.speed_cmd"],
                         "yaw_rate": f["gyro.yaw_rate_measured"], "x": f["gps.x"], "y": f["gps.y"]})
     path = folder / f"drive_{minutes:g}min.parquet"

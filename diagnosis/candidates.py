@@ -27,7 +27,7 @@ from measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline
 from .catalogue import UNCERTAIN, Parameter
-from .replay import YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
+from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -203,9 +203,10 @@ class Replay:
         if stage == "steering":
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
-            if self.command_only:
-                return self.yaw.yaw_rate(v, steering_replay(self.cmd, self.h, v, float(self.cmd[0])))
-            return self.yaw.yaw_rate(v)
+            delta = steering_replay(self.cmd, self.h, v, float(self.cmd[0])) if self.command_only else None
+            if math.isfinite(v.get("tyre_friction", math.inf)):
+                return self.saturated_yaw_rate(v, delta)
+            return self.yaw.yaw_rate(v, delta)
         track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
         if stage == "speed":
             k = self.chord_k
@@ -214,6 +215,19 @@ class Replay:
             out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
             return out
         return track
+
+    def saturated_yaw_rate(self, v: dict[str, float], delta: np.ndarray | None) -> np.ndarray:
+        """The yaw stage with Magic Formula tyres (SaturatedYawReplay), plus the linear model's
+        response to a side slope."""
+        if getattr(self, "_saturated", None) is None:
+            self._saturated = SaturatedYawReplay(self.baseline.yaw_model, self.baseline.tractor, self.t, self.h,
+                                                 self.delta if delta is None else delta, self.speed, self.min_speed)
+        out = self._saturated.yaw_rate(v, self.delta if delta is None else delta)
+        if v["slope_north"] or v["slope_east"]:
+            R = self.yaw.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                                   v["cornering_reference_speed"], v["relaxation_scale"])
+            out = out + v["slope_north"] * R[:, 2] + v["slope_east"] * R[:, 3]
+        return out
 
     def lateral(self, v: dict[str, float]) -> np.ndarray | None:
         """The rear axle's lateral velocity (side-slip) from the yaw model under ``v``, where the

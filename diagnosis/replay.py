@@ -220,3 +220,54 @@ def heading_estimate(t: np.ndarray, gps: np.ndarray, yaw_rate: np.ndarray, speed
         return psi
     offset = np.interp(np.arange(len(t)), np.flatnonzero(good), np.unwrap(np.angle(zs[good])))
     return psi + offset
+
+
+class SaturatedYawReplay:
+    """The yaw model with Magic Formula tyres (components.models.tyre) on every sample of the log.
+
+    A nonlinear model has no response to superpose: it is simulated, in pieces of ``piece`` s run
+    side by side (identification.driving.YawModel), each from a kinematic state ``burn_in`` s
+    before it, so a simulation costs one pass over a piece (the slip dynamics forget their start
+    within a few time constants, tenths of a second). A side slope enters through the linear
+    model's response to it (its share of the lateral force is small beside the turn's)."""
+
+    def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
+                 v: np.ndarray, min_speed: float, piece: float = 3.0, burn_in: float = 2.0) -> None:
+        from identification.driving import DrivingLog, Segments, YawModel
+
+        n = len(t)
+        P, B = max(2, int(round(piece / h))), int(round(burn_in / h))
+        rows = [(max(0, a - B), a, min(n, a + P)) for a in range(0, n, P)]
+        L = max(b - s for s, _, b in rows)
+        idx = np.empty((len(rows), L), int)
+        for i, (s, a, b) in enumerate(rows):
+            idx[i, : b - s] = np.arange(s, b)
+            idx[i, b - s:] = b - 1
+        self.rows = rows
+        self.log = DrivingLog(np.asarray(t, float), np.asarray(delta, float), np.asarray(v, float), np.zeros(n),
+                              np.zeros(n, int), h, "delta")
+        segs = Segments(idx, np.ones_like(idx, bool), np.zeros(len(rows), bool))
+        self.model = YawModel(model, params, self.log, segs, min_sim_speed=min_speed)
+        self.loads = self.model.loads
+        self.params = params
+
+    def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
+        """The gyro's yaw rate under the replay's values ``v`` (without the slope's share)."""
+        from dataclasses import replace as _replace
+
+        if delta is not None:
+            self.log.u = np.asarray(delta, float)
+        p = self.params
+        scale = v["relaxation_scale"]
+        self.model.p = _replace(p, sigma_f=p.sigma_f * scale, sigma_r=p.sigma_r * scale)
+        Fzf, Fzr = self.loads
+        values = {"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
+                  "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
+                  "friction": v["tyre_friction"], "shape": v["tyre_shape"],
+                  "cornering_speed_slope": v["cornering_speed_slope"],
+                  "cornering_reference_speed": v["cornering_reference_speed"]}
+        sim = self.model.simulate(values)
+        out = np.empty(len(self.log.t))
+        for i, (s, a, b) in enumerate(self.rows):
+            out[a:b] = sim[i, a - s: b - s]
+        return out

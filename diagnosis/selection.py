@@ -34,6 +34,8 @@ import copy
 import math
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from components.models.yaw_dynamics import GRAVITY
 
 from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
@@ -134,7 +136,12 @@ class Selection:
 class Selector:
     def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
-        self.base_values = replay.baseline.values
+        from .effects.tyre_saturation import LATERAL_KEY
+
+        moving = replay.speed > replay.min_speed
+        a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
+        # the baseline's values, and what a materiality rule reads of the log itself
+        self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0}
         # the effects this log can judge: one of their stages replayed, the columns they read there
         self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs)]
@@ -172,7 +179,8 @@ class Selector:
 
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
-        model, members, trace, inconclusive = base, [], [], []
+        trace_gate = self.saturation_gate(base)
+        model, members, trace, inconclusive = base, [], [trace_gate] if trace_gate else [], []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
@@ -227,6 +235,32 @@ class Selector:
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def saturation_gate(self, base: Fit) -> str | None:
+        """Tyre saturation is tried only where the linear model's misfit grows with |a_y|: in the
+        top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
+        vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
+        the predicted yaw rate there. Otherwise it is left out (and the trace says why)."""
+        effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
+        if effect is None:
+            return None
+        replay = self.replay
+        keep = replay.scored("yaw")
+        predicted = replay.predicted("yaw", base.values)[keep]
+        res = replay.gyro[keep] - predicted
+        a_y = np.abs(replay.speed[keep] * replay.gyro[keep])
+        top = a_y >= np.percentile(a_y, 90)
+        signed = (res * np.sign(predicted))[top]
+        n_eff = max(2.0, len(signed) * base.n_eff.get("yaw", len(res)) / max(base.n.get("yaw", len(res)), 1))
+        mean, se = float(signed.mean()), float(signed.std() / math.sqrt(n_eff))
+        shortfall = -mean / max(float(np.mean(np.abs(predicted[top]))), 1e-9)
+        text = (f"where |a_y| > {np.percentile(a_y, 90):.3g} m/s2 the baseline's yaw residual signed by the turn "
+                f"is {mean:+.3g} rad/s (t = {mean / se if se > 0 else 0.0:.1f}, {100 * shortfall:.0f} % of the "
+                f"predicted yaw rate)")
+        if se > 0 and mean / se < -3.0 and shortfall > 0.05:
+            return f"tyre_saturation tried: {text}"
+        self.catalogue = [e for e in self.catalogue if e is not effect]
+        return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
 
     def evaluate(self, model: Fit) -> tuple[Fit, dict]:
         """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
@@ -332,6 +366,8 @@ def vehicle_bounds(vehicle) -> dict[str, tuple[float, float]]:
     if vehicle.slope_bound:
         pull = GRAVITY * math.sin(vehicle.slope_bound)
         out["slope_east"] = out["slope_north"] = (-pull, pull)
+    if vehicle.kind:
+        out["tyre_friction"] = vehicle.friction_range
     arm = vehicle.lever_arm_bounds()
     if arm:
         out["antenna_forward"], out["antenna_left"] = arm

@@ -177,7 +177,7 @@ class YawModel:
     every segment side by side. ``values``: the free parameters by name (others at their defaults)."""
 
     DEFAULTS = {"delay": 0.0, "lag": 0.0, "gyro_bias": 0.0, "steer_offset": 0.0, "steer_gain": 1.0,
-                "friction": math.inf, "shape": 1.3}
+                "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
                  max_substep: float = 0.04, min_sim_speed: float = 0.05) -> None:
@@ -227,6 +227,8 @@ class YawModel:
         Cf, Cr = per_row("c_f") * Fzf, per_row("c_r") * Fzr
         mu = per_row("friction")
         tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": per_row("shape"), "C_f": Cf, "C_r": Cr}
+        slope, v_ref = per_row("cornering_speed_slope"), per_row("cornering_reference_speed")
+        speed_scaled = bool(np.any(slope != 0.0))
         n = {"bicycle": 2, "rlf": 3, "rlfr": 4}[self.model]
         rows = R * S
         z = np.zeros((rows, n))
@@ -245,6 +247,9 @@ class YawModel:
                 s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
                 v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])
                 v1 = vv[:, j] + s1 * (vv[:, j + 1] - vv[:, j])
+                if speed_scaled:        # C x max(0.2, 1 + k (v - v_ref)), the speed-dependent cornering
+                    c = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
+                    tyre["C_f"], tyre["C_r"] = Cf * c, Cr * c
                 f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
                 M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
                 k1 = np.einsum("sij,sj->si", M, f0)

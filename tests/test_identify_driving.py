@@ -133,3 +133,27 @@ def test_bad_logs_are_named(study, case, expect):
     with pytest.raises((LogError, NotEnoughDriving)) as err:
         identify_driving(log, "log.csv", study)
     assert expect in str(err.value)
+
+
+def test_extended_study_plant_saturates_at_the_friction_limit():
+    """The yaw plant with tyre_friction (the extended study's option) never turns the car harder
+    than friction allows: its lateral acceleration a_y = dv_y/dt + v r (the axle forces over the
+    mass) stays within mu g (a closed-form bound), where the linear tyre goes far beyond it."""
+    from components.tractor_yaw_plant import TractorYawPlant
+
+    def peak_lateral(mu: float) -> float:
+        plant = TractorYawPlant("car", {"model": "bicycle", "m": 3.33, "I": 0.0687, "l_f": 0.112, "l_r": 0.208,
+                                        "C_f": 106.0, "C_r": 114.0, "tyre_friction": mu, "tyre_shape": 1.3})
+        h, peak, vy = 0.005, 0.0, 0.0
+        plant.initialize(0.0, h)
+        for k in range(800):
+            plant.u["steer_angle"], plant.u["speed"] = 0.3, 3.0
+            plant.step(k * h, h)
+            a_y = (plant.y["lateral_velocity"] - vy) / h + 3.0 * plant.y["yaw_rate"]
+            vy = plant.y["lateral_velocity"]
+            peak = max(peak, abs(a_y)) if k > 0 else peak
+        return peak
+
+    mu = 0.5
+    assert peak_lateral(mu) <= mu * 9.81 * 1.02
+    assert peak_lateral(0.0) > 1.5 * mu * 9.81
