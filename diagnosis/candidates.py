@@ -203,7 +203,7 @@ class Replay:
         if stage == "steering":
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
-            delta = steering_replay(self.cmd, self.h, v, float(self.cmd[0])) if self.command_only else None
+            delta = self.replayed_steering(v) if self.command_only else None
             if math.isfinite(v.get("tyre_friction", math.inf)):
                 return self.saturated_yaw_rate(v, delta)
             return self.yaw.yaw_rate(v, delta)
@@ -215,6 +215,18 @@ class Replay:
             out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
             return out
         return track
+
+    def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
+        """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
+        a fit of the yaw stage's other parameters replays it once)."""
+        key = tuple(round(float(v[k]), 12) for k in ("steering_time_constant", "steering_deadband",
+                                                      "steering_rate_limit", "command_delay"))
+        cache = self.__dict__.setdefault("_steering_cache", {})
+        if key not in cache:
+            if len(cache) > 32:
+                cache.clear()
+            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]))
+        return cache[key]
 
     def saturated_yaw_rate(self, v: dict[str, float], delta: np.ndarray | None) -> np.ndarray:
         """The yaw stage with Magic Formula tyres (SaturatedYawReplay), plus the linear model's

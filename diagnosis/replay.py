@@ -111,7 +111,18 @@ class YawReplay:
         angle replayed from the command, when the log has none measured)."""
         R = self.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                            v["cornering_reference_speed"], v["relaxation_scale"])
-        first = R[:, 0] if delta is None else self.response_to(np.asarray(delta, float)[:, None], v)[:, 0]
+        if delta is None:
+            first = R[:, 0]
+        else:                                   # memoised on the input array and the yaw values
+            key = (id(delta), round(v["cornering_front_scale"], 12), round(v["cornering_rear_scale"], 12),
+                   round(v["cornering_speed_slope"], 12), v["cornering_reference_speed"], round(v["relaxation_scale"], 12))
+            hit = self._cache.get(("input",) + key)
+            if hit is None or hit[0] is not delta:
+                hit = (delta, self.response_to(np.asarray(delta, float)[:, None], v)[:, 0])
+                if len(self._cache) > 64:
+                    self._cache.clear()
+                self._cache[("input",) + key] = hit
+            first = hit[1]
         return first + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
 

@@ -70,7 +70,8 @@ class DrivingLog:
 
 def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None) -> DrivingLog:
     """Interpolate each gap-free stretch of the log onto an even clock (its median step, no finer
-    than ``max_rate``); a step longer than ``gap`` (default max(0.5 s, 5 median steps)) splits."""
+    than ``max_rate``: a faster log is averaged over the coarser step first); a step longer than
+    ``gap`` (default max(0.5 s, 5 median steps)) splits."""
     t = frame["t"].to_numpy(float)
     dt = np.diff(t)
     step = float(np.median(dt))
@@ -90,8 +91,13 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
             continue
         grid = t[a] + h * np.arange(int(math.floor((t[b - 1] - t[a]) / h + 1e-9)) + 1)
         parts["t"].append(grid)
+        k_avg = int(round(h / step))
         for key, col in (("u", input_name), ("v", "v"), ("r", "yaw_rate")):
-            parts[key].append(np.interp(grid, t[a:b], frame[col].to_numpy(float)[a:b]))
+            x = frame[col].to_numpy(float)[a:b]
+            if k_avg > 1 and b - a > k_avg:         # a coarser clock: average over its step first (no aliasing)
+                x = np.convolve(np.pad(x, (k_avg // 2, k_avg - 1 - k_avg // 2), mode="edge"), np.ones(k_avg) / k_avg,
+                                mode="valid")
+            parts[key].append(np.interp(grid, t[a:b], x))
         parts["run"].append(np.full(len(grid), k))
     arrays = {k: np.concatenate(v) for k, v in parts.items()}
     return DrivingLog(arrays["t"], arrays["u"], arrays["v"], arrays["r"], arrays["run"], h, input_name, notes)
@@ -180,7 +186,7 @@ class YawModel:
                 "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
-                 max_substep: float = 0.04, min_sim_speed: float = 0.05) -> None:
+                 max_substep: float = 0.02, min_sim_speed: float = 0.05) -> None:
         self.model, self.p, self.log, self.segs = model, params, log, segs
         self.loads = axle_loads(params.m, params.l_f, params.l_r)
         self.L = params.l_f + params.l_r
@@ -295,10 +301,12 @@ class FitResult:
         return None
 
     def interval_of(self, grad: dict[str, float]) -> float:
-        """Standard deviation of a derived quantity with gradient ``grad`` (delta method)."""
+        """Standard deviation of a derived quantity with gradient ``grad`` (delta method; a
+        parameter held on its bound contributes nothing)."""
         names = [p.name for p in self.free]
         gvec = np.array([grad.get(n, 0.0) for n in names])
-        return float(math.sqrt(max(gvec @ self.cov @ gvec, 0.0)))
+        cov = np.nan_to_num(self.cov, nan=0.0)
+        return float(math.sqrt(max(gvec @ cov @ gvec, 0.0)))
 
     @property
     def bic(self) -> float:
@@ -349,12 +357,19 @@ def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, se
     rows = [(r_meas - model.simulate(values, segs))[i][mask[i]] for i in range(len(segs.idx))]
     n, n_eff = len(res), effective_size(rows)
     dof = max(1, n - len(free))
-    try:
-        cov_x = np.linalg.pinv(sol.jac.T @ sol.jac) * (2 * sol.cost / dof) * (n / max(n_eff, 1.0))
-    except np.linalg.LinAlgError:
-        cov_x = np.full((len(free), len(free)), np.inf)
-    D = np.diag([p.scale for p in free])
-    return FitResult(values, free, D @ cov_x @ D, float(res @ res), n, n_eff, res)
+    # a parameter on its bound is held there: the covariance is that of the others (its own: nan)
+    span = hi - lo
+    active = (np.abs(sol.x - lo) <= 2e-3 * span) | (np.abs(sol.x - hi) <= 2e-3 * span)
+    cov_x = np.full((len(free), len(free)), np.nan)
+    inner = np.flatnonzero(~active)
+    if len(inner):
+        J = sol.jac[:, inner]
+        try:
+            cov_x[np.ix_(inner, inner)] = np.linalg.pinv(J.T @ J) * (2 * sol.cost / dof) * (n / max(n_eff, 1.0))
+        except np.linalg.LinAlgError:
+            cov_x[np.ix_(inner, inner)] = np.inf
+    scale = np.array([p.scale for p in free])
+    return FitResult(values, free, cov_x * np.outer(scale, scale), float(res @ res), n, n_eff, res)
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:

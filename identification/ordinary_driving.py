@@ -153,8 +153,8 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
     return d
 
 
-def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 600.0,
-                     progress=None) -> dict:
+def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
+                     progress=None, max_rate: float = 25.0) -> dict:
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
     what the log lacks."""
     from measurements import LogError
@@ -176,7 +176,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                f"log has no measured wheel angle delta: delta_cmd is not an angle the wheels follow")
     input_name = "delta" if "delta" in frame else "delta_cmd"
     command = input_name == "delta_cmd"
-    log = even_grid(frame, input_name)
+    log = even_grid(frame, input_name, max_rate=max_rate)
     notes = list(log.notes)
     notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
                  "steering chain" if command else "input: the measured wheel angle delta")
@@ -231,10 +231,12 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
     nl = None
     nl = None
-    for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top, and nearly linear
+    for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
         trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
         if nl is None or trial.rss < nl.rss:
             nl = trial
+        if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
+            break
     say("judging on the held-out segments")
     r_test = log.r[test_segs.idx]
     sims = model.simulate_many([linear.values, nl.values, linear_low.values], test_segs)
@@ -297,7 +299,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         stiff[key] = {**_quantity(entry["value"] * load, entry["std"] * load, "N/rad"),
                       "identifiable": entry["identifiable"], "per_axle_load": entry,
                       **({"note": entry["note"]} if "note" in entry else {})}
-    k_ident = params_json["c_f"]["identifiable"] or params_json["c_r"]["identifiable"]
+    # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
+    # interval then says how well the log pins it
+    k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
     understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd)),
                            deg_per_g=math.degrees(K) * GRAVITY)
     if K > 0:
@@ -327,7 +331,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         lin_range = mu * GRAVITY * share
         eps = 1e-4
         d_share = (linear_share_limit(min(shape + eps, 1.95)) - linear_share_limit(shape - eps)) / (2 * eps)
-        lr_sd = GRAVITY * math.hypot(share * nl.std("friction"), mu * d_share * nl.std("shape"))
+        lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
         linear_range = {**_quantity(lin_range, lr_sd, "m/s2"),
                         "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
                                f"x {share:.3f} (shape {shape:.2f})"}
@@ -388,8 +392,11 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
 
 def summary(report: dict) -> str:
     """What an engineer reads first."""
-    q = lambda d, f="{:.4g}": (f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "] "  # noqa: E731
-                               + d.get("unit", ""))
+    def q(d, f="{:.4g}"):
+        if not all(x is not None and math.isfinite(x) for x in d["interval"]):
+            return f.format(d["value"]) + " " + d.get("unit", "") + " (on its bound)"
+        return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "] " + d.get("unit", "")
+
     lines = [f"identification from driving ({report['source']}): {report['model']} model, input {report['input']}, "
              f"{report['seconds_driven']:.0f} s of driving, {report['segments']['held_out']} segment(s) held out"]
     lines += [f"  {n}" for n in report["notes"]]
