@@ -4,7 +4,7 @@
 F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman step runs (the same
 kind of car, 41 designed 3 s runs laid end to end), read with tests/vehicle_logs.py, against
 studies/f1tenth.toml. ``identify`` takes the whole log (it cuts it at its clock gaps); ``diagnose``
-replays one gap-free stretch on an even clock, the longest (its replay needs a continuous log).
+judges its longest gap-free stretch on an even clock (its replay needs a continuous log).
 Prints one table: vehicle, seconds, delay, understeer gradient K, cornering stiffnesses, held-out
 fit, tyre saturation, the diagnosis' verdict and what was not judged.
 """
@@ -15,9 +15,6 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-
-import numpy as np
-import pandas as pd
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -38,19 +35,6 @@ def logs():
     yield "F1TENTH AutoKoopman steps (41 x 3 s)", autokoopman_log()
 
 
-def longest_stretch(log: pd.DataFrame, gap: float = 0.5) -> pd.DataFrame:
-    """The longest stretch without a clock gap, on an even clock of its median step."""
-    t = log["t"].to_numpy(float)
-    cuts = np.flatnonzero(np.diff(t) > gap) + 1
-    a, b = max(zip(np.r_[0, cuts], np.r_[cuts, len(t)]), key=lambda ab: ab[1] - ab[0])
-    piece = log.iloc[a:b]
-    step = float(np.median(np.diff(piece["t"])))
-    grid = np.arange(piece["t"].iloc[0], piece["t"].iloc[-1], step)
-    even = pd.DataFrame({c: np.interp(grid, piece["t"], piece[c]) for c in piece.columns if c != "run"})
-    even["t"] = grid - grid[0]
-    return even
-
-
 def fmt(q: dict, f: str = "{:.3g}") -> str:
     if not q.get("identifiable", True):
         return "not identifiable"
@@ -62,6 +46,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
     args = ap.parse_args()
     from diagnosis.pipeline import diagnose
+    from identification.from_log import longest_stretch
     from identification.ordinary_driving import identify_driving
     from orchestrator.errors import InputError
     from orchestrator.study import Study
@@ -84,10 +69,10 @@ def main() -> None:
                                              if rep["tyre_saturation"]["found"] else "not found")}
             except InputError as exc:
                 ident = {"delay [s]": f"cannot judge: {exc}"}
-            piece = longest_stretch(log)
+            piece, _ = longest_stretch(log)         # what diagnose judges of a log with clock gaps
             path = base / f"log{k}.parquet"
             path.parent.mkdir(parents=True, exist_ok=True)
-            piece.to_parquet(path)
+            log.drop(columns=[c for c in ("run",) if c in log]).to_parquet(path)
             res = diagnose(path, base / f"diagnosis{k}", study_path, plots=args.out is not None)
             verdict = res["verdict"] + (" (inconclusive)" if res.get("verdict_status") == "inconclusive" else "")
             if res["verdict"] == "cannot decide":

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from measurements import LogError, load_log
+from measurements import LogError
 from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 
@@ -184,10 +184,13 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         from measurements.recording import ImportOptions
 
         recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
-        frame, imported = load_log(log_path, resample_jitter=resample, recording=recording)
+        from identification.from_log import read_uneven
+
+        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study)
         if imported is not None:
             result["recording"] = imported
         frame, note = coarser_clock(frame)
+        note = "; ".join(x for x in (stretch, note) if x) or None
         replay = Replay(frame, baseline, fit_fraction=fit_fraction)
     except (LogError, CannotDecide) as exc:
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not

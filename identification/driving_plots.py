@@ -40,7 +40,7 @@ def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]
         ax.plot(w["v"][turning][~inside], gain[~inside], "x", ms=4, color="tab:red",
                 label=f"steady windows, |a_y| > {lin:.3g} m/s2 (beyond the linear range)")
     ax.set(xlabel="speed v [m/s]", ylabel=f"yaw rate / {report['input']} [(rad/s)/rad]",
-           title=f"Steady-state yaw-rate gain ({report['source']})")
+           title=f"Steady-state yaw-rate gain ({Path(report['source']).name})")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()

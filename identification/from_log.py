@@ -44,6 +44,41 @@ def _read(source: Path, resample: bool, recording, study):
     return frame, None
 
 
+def longest_stretch(frame, gap: float | None = None):
+    """(the longest stretch of the log without a clock gap, on an even clock of its median step;
+    (start, end) of it in the log's time). A gap: a step longer than max(0.5 s, 5 median steps)."""
+    import numpy as np
+    import pandas as pd
+
+    t = frame["t"].to_numpy(float)
+    step = float(np.median(np.diff(t)))
+    cuts = np.flatnonzero(np.diff(t) > (gap or max(0.5, 5 * step))) + 1
+    a, b = max(zip(np.r_[0, cuts], np.r_[cuts, len(t)]), key=lambda ab: ab[1] - ab[0])
+    piece = frame.iloc[a:b]
+    step = float(np.median(np.diff(piece["t"])))
+    grid = piece["t"].iloc[0] + step * np.arange(int((piece["t"].iloc[-1] - piece["t"].iloc[0]) / step) + 1)
+    even = pd.DataFrame({c: np.interp(grid, piece["t"], piece[c]) for c in piece.columns
+                         if c != "t" and pd.api.types.is_numeric_dtype(piece[c])})
+    even.insert(0, "t", grid - grid[0])
+    return even, (float(t[a]), float(t[b - 1]))
+
+
+def read_uneven(source: Path, resample: bool = False, recording=None, study=None):
+    """(log, import report, note): the log as load_log reads it; a table whose clock has gaps or
+    jitter (ordinary logging) gives its longest gap-free stretch on an even clock, and says so."""
+    frame, imported = _read(source, resample, recording, study)
+    t = frame["t"].to_numpy(float)
+    import numpy as np
+
+    dt = np.diff(t)
+    if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):
+        even, (a, b) = longest_stretch(frame)
+        return even, imported, (f"the log's clock has gaps or jitter: its longest stretch without a gap, t = "
+                                f"{a:.1f}-{b:.1f} s of {t[0]:.1f}-{t[-1]:.1f} s, is judged on an even "
+                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock")
+    return frame, imported, None
+
+
 def wants_driving(source: Path, resample: bool, recording, study) -> bool:
     """True unless delta_cmd repeats itself with a period (a designed multisine experiment)."""
     from measurements import LogError

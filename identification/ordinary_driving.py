@@ -141,14 +141,15 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
     if bounds is not None:
         d["bounds"] = [float(bounds[0]), float(bounds[1])]
         # a positive physical quantity whose 95 % interval reaches zero is not pinned down either
-        vague = bounds[0] > 0 and not value - Z95 * std > 0
+        lo, hi = value - Z95 * std, value + Z95 * std
+        vague = (bounds[0] > 0 and not lo > 0) or (lo < bounds[0] and hi > bounds[1])
         d["identifiable"] = at_bound is None and math.isfinite(std) and not vague
         if at_bound:
             d["note"] = (f"not identifiable from this log: ended on its {at_bound} bound "
                          f"{bounds[0] if at_bound == 'lower' else bounds[1]:g} {unit}")
         elif not d["identifiable"]:
-            d["note"] = (f"not identifiable from this log: its 95 % interval [{value - Z95 * std:.3g}, "
-                         f"{value + Z95 * std:.3g}] {unit} reaches zero")
+            d["note"] = (f"not identifiable from this log: its 95 % interval [{lo:.3g}, {hi:.3g}] {unit} "
+                         + ("covers its whole range" if lo < bounds[0] and hi > bounds[1] else "reaches zero"))
     d.update(more)
     return d
 
@@ -278,10 +279,16 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                 "fit_percent": fit_percent(r_test[i][m], pred[i][m]),
                                 "rms": float(np.sqrt(np.mean((r_test[i][m] - pred[i][m]) ** 2)))})
     overall = fit_percent(y, pred[test_segs.scored])
-    fits = np.array([s["fit_percent"] for s in per_segment])
+    # interval: percentile bootstrap over the held-out segments of the pooled fit (seeded by the study)
+    pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
+              if test_segs.scored[i].sum() >= 10]
     rng = np.random.default_rng(getattr(getattr(study, "study", None), "seed", 0) or 0)
-    boot = [np.mean(rng.choice(fits, len(fits))) for _ in range(400)] if len(fits) > 1 else [overall]
-    fit_sd = float(np.std(boot))
+    boot = []
+    for _ in range(400 if len(pieces) > 1 else 0):
+        pick = rng.integers(len(pieces), size=len(pieces))
+        boot.append(fit_percent(np.concatenate([pieces[k][0] for k in pick]), np.concatenate([pieces[k][1] for k in pick])))
+    fit_lo, fit_hi = (float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))) if boot else (overall, overall)
+    fit_sd = float(np.std(boot)) if boot else 0.0
 
     # derived quantities with their intervals (delta method on the fit's covariance)
     cf, cr = final.values["c_f"], final.values["c_r"]
@@ -363,9 +370,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "understeer_gradient": understeer,
         "characteristic_speed": char,
         "delay": delay_q,
-        "held_out_fit": {"value": overall, "std": fit_sd, "interval": [overall - Z95 * fit_sd, overall + Z95 * fit_sd],
+        "held_out_fit": {"value": overall, "std": fit_sd, "interval": [fit_lo, fit_hi],
                          "unit": "%", "how": "100 (1 - |y - y_model| / |y - mean y|) on the held-out samples; "
-                         "interval: bootstrap of the segments' mean", "per_segment": per_segment,
+                         "interval: 2.5-97.5 % of a bootstrap over the held-out segments", "per_segment": per_segment,
                          "linear_model": fit_percent(y, sims[0][test_segs.scored]),
                          "saturation_model": fit_percent(y, sims[1][test_segs.scored])},
         "cornering_stiffness": stiff,
