@@ -265,13 +265,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
-    def clean(v):
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list):
-            return [clean(x) for x in v]
-        return v
-    write_json(out / "diagnosis.json", clean(result))
+    from identification.from_log import finite_for_json
+
+    write_json(out / "diagnosis.json", finite_for_json(result))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .driving import steady_state_gain
+from .plots import _save
 
 
 def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]:
@@ -79,9 +80,3 @@ def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]
     fig.tight_layout()
     written.append(_save(fig, out_dir / "misfit_by_lateral_acceleration.png", plt))
     return written
-
-
-def _save(fig, path: Path, plt) -> Path:
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path

@@ -122,32 +122,22 @@ def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = 
     report["figures"] = files
     if study is not None:
         report["extended_study"] = write_extended_study(report, study, out_dir, source)
-    write_json(out_dir / "identification.json", _finite(json.loads(json.dumps(report, default=_plain))))
+    from .pipeline import _json_default
+
+    write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
     print(summary(report))
     print(f"\nwritten to {out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
     return 0
 
 
-def _plain(o):
-    import numpy as np
-
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, np.bool_):
-        return bool(o)
-    raise TypeError(type(o))
-
-
-def _finite(v):
+def finite_for_json(v):
     """JSON has no infinity: a non-finite number is written as null."""
     if isinstance(v, float) and not math.isfinite(v):
         return None
     if isinstance(v, dict):
-        return {k: _finite(x) for k, x in v.items()}
+        return {k: finite_for_json(x) for k, x in v.items()}
     if isinstance(v, list):
-        return [_finite(x) for x in v]
+        return [finite_for_json(x) for x in v]
     return v
 
 
