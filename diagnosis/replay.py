@@ -243,7 +243,7 @@ class SaturatedYawReplay:
     model's response to it (its share of the lateral force is small beside the turn's)."""
 
     def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
-                 v: np.ndarray, min_speed: float, piece: float = 3.0, burn_in: float = 2.0) -> None:
+                 v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0) -> None:
         from identification.driving import DrivingLog, Segments, YawModel
 
         n = len(t)
@@ -258,7 +258,7 @@ class SaturatedYawReplay:
         self.log = DrivingLog(np.asarray(t, float), np.asarray(delta, float), np.asarray(v, float), np.zeros(n),
                               np.zeros(n, int), h, "delta")
         segs = Segments(idx, np.ones_like(idx, bool), np.zeros(len(rows), bool))
-        self.model = YawModel(model, params, self.log, segs, min_sim_speed=min_speed)
+        self.model = YawModel(model, params, self.log, segs, max_substep=0.04, min_sim_speed=min_speed)
         self.loads = self.model.loads
         self.params = params
 

@@ -203,7 +203,7 @@ class Selector:
             # a rival that is not supported itself (dBIC not strong, or immaterial) but within TIE of
             # the best and with evidence for it: the log cannot tell the two apart
             near = [f for f in trials if f not in supported and f.effect is not best.effect and f.delta_bic < 0
-                    and f.delta_bic - best.delta_bic < TIE and set(f.effect.stages) & set(best.effect.stages)
+                    and 0.0 <= f.delta_bic - best.delta_bic < TIE and set(f.effect.stages) & set(best.effect.stages)
                     and f.effect.id not in removed]
             for rival in near:
                 inconclusive.append(_tie(best, rival, "it is not supported on its own (" + "; ".join(rival.reasons)
@@ -281,7 +281,10 @@ class Selector:
         """Two effects of one misfit stage that only explain it together (a dead-band with a rate
         limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
         misfit = self.misfit_stages(model)
-        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)]
+        # (a nonlinear effect is not paired: its replay is costly and a pair is for two small
+        # steering nonlinearities that only fit together)
+        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)
+                and e.id != "tyre_saturation"]
         best = None
         for i, a in enumerate(pool):
             for b in pool[i + 1:]:
