@@ -181,7 +181,7 @@ class Replay:
                 why[stage] = "not judged: " + self.baseline.vehicle.not_applicable()[stage]
             elif missing:
                 why[stage] = "not judged: no " + ", no ".join(_named(c, f.columns) for c in missing)
-                if stage == "steering" and self.command_only and "yaw" not in missing:
+                if stage == "steering" and self.command_only and {"yaw_rate", "speed"} <= have:
                     why[stage] += (" (the log has only the command delta_cmd: the steering's delay, lag, dead-band and "
                                    "rate limit are judged through the yaw rate instead)")
             elif rate < MIN_RATE[stage]:

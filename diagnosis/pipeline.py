@@ -57,7 +57,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
     return {
         "id": f.effect.id,
         "subsystem": f.effect.subsystem,
-        "hypothesis": f.effect.hypothesis,
+        "hypothesis": f.effect.hypothesis_for(f.stages),
         "parameters": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
         "parameters_display": f.effect.display(f.fit.values),
         "fitted": fitted,
@@ -75,7 +75,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         "n_eff": f.fit.n_eff,
         "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
         "study_option": option_text,
-        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {shown}; "
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {shown}; "
                     f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
         "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
         "_options": options,
