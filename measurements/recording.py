@@ -729,3 +729,20 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     frame = check_log(frame, where, required, resample_jitter)
     frame.attrs["resolution"] = dict(report.get("resolution", {}))
     return frame, report
+
+
+def positions(source: str | Path, options: ImportOptions | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """(times [s], latitude, longitude [deg], report) of every fix of a recording, whole (no run
+    chosen): the track a field is made of."""
+    source = Path(source)
+    options = (options or ImportOptions()).for_vehicle()
+    streams = _checked(source, options)
+    if streams.gnss is None:
+        raise LogError(f"{source}: no positions in it (NMEA with a fix, a NavSatFix topic, a TLG position, or "
+                       f"lat/lon columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN)")
+    g = streams.gnss
+    report = streams.report
+    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, mm
+    if width and np.isfinite(width[0]).any():
+        report["working_width_m"] = float(np.nanmedian(width[0])) / 1000.0
+    return g["utc"].to_numpy(float), g["lat"].to_numpy(float), g["lon"].to_numpy(float), report
