@@ -3,6 +3,7 @@
 Who does what: cantools parses and decodes (``cantools.database.load_string``); this module only
 repairs the text before cantools sees it, and isolates what cannot be repaired. In order:
 
+0. the files a DBC imports (``CM_ "IMPORT name";``, opendbc's convention) are read in;
 1. cantools in its strict mode;
 2. cantools with ``strict=False`` (overlapping signals, value tables for signals that do not exist:
    the checks it relaxes are named);
@@ -73,6 +74,7 @@ def load_dbc_file(path: str | Path):
     except OSError as exc:
         raise LogError(f"{path}: cannot read the DBC: {exc}") from None
     report = DBCReport(str(path))
+    text = _with_imports(path, text, report, {path.resolve()})
     try:
         return cantools.database.load_string(text, database_format="dbc"), report
     except Exception as strict_error:                       # noqa: BLE001 - cantools raises many kinds
@@ -99,6 +101,46 @@ def load_dbc_file(path: str | Path):
         db = _message_by_message(path, repaired, report, "too many statements the parser refuses")
     _restore_names(db, report)
     return db, report
+
+
+_IMPORT = re.compile(r'^CM_\s+"IMPORT\s+([^"]+?)"\s*;\s*$', re.M)
+
+
+def _with_imports(path: Path, text: str, report: DBCReport, seen: set) -> str:
+    """The DBC with the files its ``CM_ "IMPORT name";`` lines name (opendbc's generator
+    convention) put in their place, without their headers."""
+    names = _IMPORT.findall(text)
+    if not names:
+        return text
+    parts = []
+    for name in names:
+        other = (path.parent / name).resolve()
+        if other in seen:
+            continue
+        if not other.is_file():
+            report.skipped[f"IMPORT {name}"] = "no such file beside the DBC"
+            continue
+        seen.add(other)
+        body = _with_imports(other, _read_text(other), report, seen)
+        parts.append(_body(body))
+        report.repairs["files it imports, read in"] = report.repairs.get("files it imports, read in", 0) + 1
+    return _IMPORT.sub("", text) + "\n" + "\n".join(parts)
+
+
+def _body(text: str) -> str:
+    """A DBC without its header (VERSION, NS_ and its list, BS_, BU_)."""
+    out, in_ns = [], False
+    for line in text.replace("\r\n", "\n").split("\n"):
+        if line.startswith("NS_"):
+            in_ns = True
+            continue
+        if in_ns and (line.startswith((" ", "\t")) or not line.strip()):
+            continue
+        in_ns = False
+        if line.startswith(("VERSION", "BS_", "BU_")):
+            continue
+        out.append(line)
+    return "\n".join(out)
 
 
 def _read_text(path: Path) -> str:

@@ -71,12 +71,16 @@ def spike_note(column: str, t: np.ndarray, x: np.ndarray, index: np.ndarray, t0:
 
 
 def float32_step(values: np.ndarray) -> float:
-    """The float32 spacing at these values when every one of them is a float32 (0: not so)."""
+    """The float32 spacing at these values when every one of them is a float32, or the shortest
+    text of one (a CSV writer's float32 column) (0: not so)."""
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]
     if len(v) < 3 or np.all(v == np.round(v)):
         return 0.0
-    if not np.array_equal(v.astype(np.float32).astype(float), v):
+    as32 = v.astype(np.float32)
+    exact = np.array_equal(as32.astype(float), v)
+    shortest = exact or all(float(str(a)) == b for a, b in zip(as32[:2000], v[:2000]))   # written as float32 text
+    if not shortest:
         return 0.0
     return float(np.spacing(np.float32(np.max(np.abs(v)))))
 

@@ -189,7 +189,8 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
     rows: dict[str, list] = {t: [] for t in wanted}
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
-    for conn, receive_ns, raw in reader.messages(connections=connections):
+    # rosbags reads every topic when given no connection: nothing wanted, nothing read
+    for conn, receive_ns, raw in (reader.messages(connections=connections) if connections else ()):
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:                     # noqa: BLE001 - an unknown type or a broken message

@@ -90,10 +90,13 @@ def check_unit(unit: str, where: str):
     from orchestrator.units import base_unit
 
     try:
-        return base_unit(unit)
-    except Exception as exc:                         # noqa: BLE001 - pint raises several kinds
-        raise LogError(f"{where}: unit {unit!r} is not one pint knows ({type(exc).__name__}); expected e.g. deg, "
-                       f"rad, deg/s, rad/s, km/h, m/s, g, m, 1/km") from None
+        found = base_unit(unit)
+    except Exception:                                # noqa: BLE001 - pint raises several kinds
+        found = None
+    if found is None:
+        raise LogError(f"{where}: unit {unit!r} is not one pint knows; expected e.g. deg, rad, deg/s, rad/s, km/h, "
+                       f"m/s, g, m, 1/km")
+    return found
 
 
 def _tokens(text: str, whole: str) -> list[tuple[str, str]]:
@@ -276,11 +279,10 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
 
 
 def _known(unit: str) -> bool:
-    try:
-        from orchestrator.units import base_unit
+    from orchestrator.units import base_unit
 
-        base_unit(unit)
-        return True
+    try:
+        return base_unit(unit) is not None
     except Exception:                                # noqa: BLE001
         return False
 

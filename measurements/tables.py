@@ -284,14 +284,19 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
         elif rate is not None:
             t.t = np.arange(n) / rate
             t.time_how = f"row k at k / {rate:g} Hz (--rate; the table has no time column)"
-        else:
-            raise LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
-                           f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
-                           f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS), "
-                           f"or give --rate HZ")
+        else:                 # refused when a column of it is asked for (untimed)
+            t.time_how = ""
     for t in tables:
-        _clean(t)
+        if t.t is not None:
+            _clean(t)
     return tables
+
+
+def untimed(t: Table) -> LogError:
+    return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
+                    f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
+                    f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
+                    f"of another table), or give --rate HZ")
 
 
 # --- names ----------------------------------------------------------------------------------------
@@ -320,6 +325,8 @@ def table_series(tables: list[Table], name: str) -> Series | None:
     if found is None:
         return None
     t, c = found
+    if t.t is None:
+        raise untimed(t)
     x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
     ok = np.isfinite(x)
     return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
@@ -327,7 +334,7 @@ def table_series(tables: list[Table], name: str) -> Series | None:
 
 def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
     """A LogError naming each table's span when the tables that give columns share no time."""
-    chosen = [t for t in tables if t.name in used and len(t.t)]
+    chosen = [t for t in tables if t.name in used and t.t is not None and len(t.t)]
     if len(chosen) < 2:
         return
     lo, hi = max(float(t.t[0]) for t in chosen), min(float(t.t[-1]) for t in chosen)
@@ -365,8 +372,6 @@ def describe_table(t: Table) -> list[str]:
     return lines
 
 
-def first_time(tables: list[Table]) -> float:
-    return min(float(t.t[0]) for t in tables if len(t.t)) if tables else math.nan
 
 
 # --- the recording's streams -------------------------------------------------------------------------
@@ -434,11 +439,11 @@ def table_streams(paths: list[Path], options, source: Path):
         columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
             ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
     spans_overlap(tables, used, source)
-    boot = [t.name for t in tables if t.name in used and is_boot_clock(t.t)]
+    boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
-              "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how, "used": t.name in used,
-                                  "start": iso(float(t.t[0])) if len(t.t) else None,
-                                  "duration_s": float(t.t[-1] - t.t[0]) if len(t.t) > 1 else 0.0}
+              "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
+                                  "start": iso(float(t.t[0])) if t.t is not None and len(t.t) else None,
+                                  "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
                          for t in tables},
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
