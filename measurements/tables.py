@@ -385,8 +385,9 @@ def _holders(tables: list[Table], name: str) -> list[str]:
 
 
 def table_streams(paths: list[Path], options, source: Path):
-    """Streams of the tables: the ``--signal`` expressions; without any, the columns named as the
-    log's (delta_cmd, delta, v, yaw_rate, x, y: SI unless the header gives a unit) or lat/lon."""
+    """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
+    table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
+    v, yaw_rate, x, y: SI, the log's convention, unless the header gives a unit)."""
     from .log import CANONICAL
     from .signals import SignalSpec, evaluate, target_unit, unknown_name
     from .streams import Streams
@@ -400,7 +401,10 @@ def table_streams(paths: list[Path], options, source: Path):
         if given:                # the user's mapping is the whole of it: no column taken by its name
             break
         for alias in ALIASES.get(column, (column,)):
-            hits = _holders(tables, alias)
+            # the log's own names only in a table laid out as a log (a 't' column, the names as
+            # written): elsewhere 'V' or 'delta' may be a command, and a bare number has no unit
+            hits = _holders(tables, alias) if column in ALIASES else \
+                [f"{t.name}.{alias}" for t in tables if alias in t.frame.columns and "t" in t.time_columns]
             if len(hits) == 1:
                 specs.append(SignalSpec(column, ((hits[0], 1.0),), 0.0, None, f"{column}={hits[0]}"))
                 auto.add(column)
