@@ -11,6 +11,7 @@ from typing import Any
 from .build import build_system
 from .errors import ComputationError, Interrupted, Terminated, critical
 from .engine import Recording, RunError, Simulation
+from .resolver import resolve
 from .results import SignalWriter, atomic_write, read_table, write_json
 from .study import Study, StudyError
 
@@ -38,7 +39,7 @@ def _analysis(study: Study):
 
 def simulate(study: Study):
     """Build and simulate; returns (recording, system). Raises StudyError / RunError."""
-    system = build_system(study)
+    system = build_system(resolve(study))
     return Simulation(system).run(), system
 
 
@@ -141,7 +142,7 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
 
     analysis = _analysis(study)
     folder = ResultFolder(Path(out_dir), overwrite)
-    system = build_system(study)
+    system = build_system(resolve(study))
     base = _base_facts(study)
     with folder:
         tmp = folder.tmp
@@ -219,7 +220,7 @@ def _summary(analysis, values: dict) -> str:
 def _run_in_memory(study: Study, plots: bool) -> RunResult:
     """No output folder: simulate, analyse, return (sweep points, tests)."""
     analysis = _analysis(study)
-    rec = Simulation(build_system(study)).run()
+    rec = Simulation(build_system(resolve(study))).run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)
