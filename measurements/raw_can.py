@@ -94,7 +94,7 @@ class CANRecording:
 
 def load_dbc(path: str | Path | None):
     """A DBC (None: the project's own); a LogError names the file when it cannot be read."""
-    from components.hardware.can_link import DEFAULT_DBC, load_dbc as load
+    from components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
 
     try:
         return load(path)
