@@ -32,7 +32,7 @@ def logs(root: Path) -> list[tuple[str, str, str, str]]:
 
 
 def fields(root: Path) -> list[tuple[str, str, str, str]]:
-    from fields.readers import read_fields, read_folder
+    from fields.readers import read_fields
 
     rows = []
     targets = [(p, None) for p in sorted((root / "fields2cover_data").iterdir()) if p.suffix in (".xml", ".json", ".geojson")]

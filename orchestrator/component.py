@@ -96,9 +96,6 @@ class Component:
     def declared(cls, causality: str) -> dict[str, Variable]:
         return {v.name: v for v in cls.variables if v.causality == causality}
 
-    def describe(self) -> list[Variable]:
-        return list(self.variables)
-
     # --- life cycle ---------------------------------------------------------------------------
     def initialize(self, t0: float, dt: float) -> None:
         """Prepare internal state for a run starting at ``t0`` with step ``dt``."""
