@@ -150,3 +150,10 @@ def test_a_tool_table_is_validated_by_its_tool_when_the_study_is_resolved(checke
     unknown = good.derive({**good.to_data(), "chekced": {"period": 0.5}})
     with pytest.raises(StudyError, match=r"unknown table 'chekced'; .* or a tool's table \(.*checked"):
         resolve(unknown)
+
+
+def test_a_type_whose_module_does_not_exist_is_refused_by_name():
+    study = Study.load(ROOT / "studies" / "figure8.toml").with_component("extra", type="nosuch.module:Thing")
+    with pytest.raises(StudyError, match=r"components\.extra: type 'nosuch\.module:Thing': no such component type: "
+                                         r"cannot import 'nosuch\.module'"):
+        resolve(study)
