@@ -70,7 +70,7 @@ class Study(BaseModel):
     path: Path | None = None
     # what resolvers made of this study (orchestrator.resolver keeps its model here: a study is
     # immutable in use, so its types are resolved once)
-    _resolved: "_Memo" = PrivateAttr(default_factory=lambda: _Memo())
+    _resolved: _Memo = PrivateAttr(default_factory=_Memo)
 
     def __copy__(self) -> "Study":
         copied = super().__copy__()
