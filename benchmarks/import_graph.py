@@ -161,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\nupward imports: {len(up)}")
     for a, b in up:
         print(f"  {a} -> {b}" + ("   (pending)" if pending_upward((a, b)) else ""))
-    print(f"\nlargest modules (lines):")
+    print("\nlargest modules (lines):")
     for name, n in sorted(lines.items(), key=lambda kv: -kv[1])[:args.largest]:
         print(f"  {n:5d}  {name}")
     failing = [c for c in found if not (args.allow_pending and pending_circle(c))] + \
