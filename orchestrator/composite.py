@@ -181,8 +181,8 @@ class CompositeComponent(Component):
         try:
             self.sim.advance(self.sim.k + self.substeps)
         except RunError as exc:
-            if isinstance(exc.__cause__, KeyboardInterrupt):
-                raise KeyboardInterrupt from None
+            if isinstance(exc.__cause__, KeyboardInterrupt):     # Ctrl-C or SIGTERM (errors.Terminated): the same kind
+                raise type(exc.__cause__)() from None
             raise ComponentError(f"{self.name}: in the subsystem {exc}") from None
         self._publish()
 
