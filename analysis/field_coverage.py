@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from fields.coverage import HEADLAND, SWATH, TRANSIT, TURN
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .signals import component_named, signal
@@ -36,7 +37,7 @@ def mission(study: Study):
     from components.field_route import planned, route_frame, settings_of, to_mission
 
     name = component_named(study, "route")
-    p = study.parameters(name)
+    p = resolve(study).parameters(name)
     field, plan = planned(str(p["path"]), str(p["crs"]), str(p["name"]), settings_of(p))
     origin, rotation = route_frame(plan.route)
     return field, plan, lambda xy: to_mission(xy, origin, rotation), name

@@ -1,6 +1,6 @@
-"""A field test drive for identification and diagnosis (``driving_plan``, which the truth
-tractor of measurements.truth_tractor drives too): 20 s segments cycling through a steering multisine,
-steps, a headland-like turn and small corrections, at speeds cycling through ``speeds``
+"""A field test drive for identification and diagnosis (``driving_plan``, the plan the truth
+tractor of measurements.truth_tractor drives too): 20 s segments cycling through a steering
+multisine, steps, a headland-like turn and small corrections, at speeds cycling through ``speeds``
 (smooth 3 s changes, from rest). The steering command is held at 20 Hz; the plan is drawn from
 the component's random stream (the study seed)."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 
 from orchestrator.component import Component, out, par
 
-DEG = math.pi / 180
+_DEG = math.pi / 180
 
 
 def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0, speeds_cycle=(1.0, 2.0, 3.0)):
@@ -31,19 +31,19 @@ def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0, 
         if kind == 0:
             f = rng.uniform(0.05, 1.0, 6)
             x = np.sum(np.sin(2 * np.pi * f[:, None] * tt[None, :] + rng.uniform(0, 2 * np.pi, 6)[:, None]), axis=0)
-            cmd[a:b] = 6 * DEG * x / np.sqrt(3.0)
+            cmd[a:b] = 6 * _DEG * x / np.sqrt(3.0)
         elif kind == 1 or kind == 3:
-            span, amp = ((1.5, 3.0), 20 * DEG) if kind == 1 else ((1.0, 2.0), 3 * DEG)
+            span, amp = ((1.5, 3.0), 20 * _DEG) if kind == 1 else ((1.0, 2.0), 3 * _DEG)
             k = a
             while k < b:
                 m = min(b, k + int(rng.uniform(*span) * rate))
                 cmd[k:m] = rng.uniform(-amp, amp)
                 k = m
         else:
-            peak = rng.choice([-1, 1]) * rng.uniform(15, 25) * DEG
+            peak = rng.choice([-1, 1]) * rng.uniform(15, 25) * _DEG
             cmd[a:b] = np.interp(tt, [0, 2, 8, 10, 14, 16, 20], [0, peak, peak, -0.5 * peak, -0.5 * peak, 0, 0])
         speeds.append(speeds_cycle[i % len(speeds_cycle)])
-    cmd = np.clip(cmd, -30 * DEG, 30 * DEG)
+    cmd = np.clip(cmd, -30 * _DEG, 30 * _DEG)
 
     def speed(time: float) -> float:
         i = min(int(time // 20.0), len(speeds) - 1)
@@ -70,7 +70,7 @@ class TestDrivePlan(Component):
         speeds = tuple(float(v) for v in (self.p["speeds"] if isinstance(self.p["speeds"], list) else [self.p["speeds"]]))
         self.require(self.p["duration"] > 0 and speeds and min(speeds) >= 0,
                      f"duration {self.p['duration']} s and speeds {speeds}: expected a positive duration and speeds >= 0")
-        self.t_plan, self.cmd, self.speed_of = driving_plan(self.rng, float(self.p["duration"]), speeds_cycle=speeds)
+        _, self.cmd, self.speed_of = driving_plan(self.rng, float(self.p["duration"]), speeds_cycle=speeds)
         self.cmd = self.cmd * float(self.p["steer_scale"])
         self.t0 = t0
 

@@ -19,7 +19,6 @@ kept as ``fix_quality`` with GGA's codes where they agree (0-5) and 15 -> NaN (u
 from __future__ import annotations
 
 import datetime
-import math
 import re
 import struct
 import xml.etree.ElementTree as ET

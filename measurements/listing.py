@@ -63,7 +63,7 @@ def _can(paths: list[Path], options) -> list[str]:
     from .raw_can import load_dbc, read_can_file
 
     db, report = load_dbc(options.dbc)
-    out = report.lines() if report is not None else [f"DBC: the project's agrobot_tractor.dbc"]
+    out = report.lines() if report is not None else ["DBC: the project's agrobot_tractor.dbc"]
     out[0] += f": {len(db.messages)} messages"
     for p in paths:
         try:

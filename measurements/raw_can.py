@@ -83,7 +83,7 @@ class CANRecording:
 def load_dbc(path: str | Path | None):
     """(database, DBCReport or None): the DBC (None: the project's own agrobot_tractor.dbc); a
     LogError names the file when nothing in it can be read."""
-    from components.hardware.can_link import DEFAULT_DBC, load_dbc as load
+    from components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
 
     from .dbc import load_dbc_file
 

@@ -38,6 +38,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from orchestrator.resolver import resolve
+
 from .log import CANONICAL, LogError, check_log, read_log, resolution
 from .quirks import position_quantisation, spike_note, spikes
 from .raw_can import CAN_SUFFIXES, CANRecording, choose_sources, load_dbc, merge, read_can_file, series, signal_names
@@ -76,8 +78,9 @@ class ImportOptions:
         (steering_ratio, wheelbase), else its yaw plant's l_f + l_r, else the paper tractor's."""
         vehicle = (study.section("vehicle") if study is not None else None) or {}
         wheelbase = self.wheelbase or vehicle.get("wheelbase")
-        if wheelbase is None and study is not None and study.find(role="yaw_plant"):
-            p = study.parameters(study.find(role="yaw_plant")[0])
+        model = resolve(study) if wheelbase is None and study is not None else None
+        if model is not None and model.find(role="yaw_plant"):
+            p = model.parameters(model.find(role="yaw_plant")[0])
             wheelbase = float(p.get("l_f", 1.0)) + float(p.get("l_r", 0.4))
         return replace(self, wheelbase=float(wheelbase or 1.4),
                        steering_ratio=float(self.steering_ratio or vehicle.get("steering_ratio", 1.0)))

@@ -28,7 +28,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .log import LogError
 from .streams import Series, Streams, gnss_table, iso

@@ -19,7 +19,6 @@ and the counts named.
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path

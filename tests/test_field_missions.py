@@ -21,6 +21,7 @@ from components.trailed_implement import TrailedImplement
 from fields import FieldError, read_fields
 from fields.coverage import HEADLAND, SWATH, TURN, Settings, _skip_order, plan
 from fields.turns import Limits, connect, integrate
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -268,12 +269,12 @@ def test_a_field_file_is_found_beside_the_study_that_names_it(tmp_path, monkeypa
     child = mine / "my_plot.toml"
     child.write_text(f'extends = "{STUDIES / "field_plot_mounted.toml"}"\n'
                      '[components.field]\nparameters = { path = "plots.csv" }\n')
-    assert Study.load(child).parameters("field")["path"] == str((mine / "plots.csv").resolve())
+    assert resolve(Study.load(child)).parameters("field")["path"] == str((mine / "plots.csv").resolve())
     inherits = mine / "inherits.toml"                                # the parent's own field, beside the parent
     inherits.write_text(f'extends = "{STUDIES / "field_plot_mounted.toml"}"\n')
-    assert Study.load(inherits).parameters("field")["path"] == str(STUDIES / "fields" / "iam_field_boundaries.csv")
+    assert resolve(Study.load(inherits)).parameters("field")["path"] == str(STUDIES / "fields" / "iam_field_boundaries.csv")
     missing = Study.load(child, ["field.path=nowhere.geojson"])
-    assert missing.parameters("field")["path"] == "nowhere.geojson"
+    assert resolve(missing).parameters("field")["path"] == "nowhere.geojson"
     res = _cli("run", str(child), "--out", str(tmp_path / "out"), "--set", "field.path=nowhere.geojson")
     assert res.returncode == 2 and "nowhere.geojson" in res.stderr and "Traceback" not in res.stderr
 

@@ -17,7 +17,6 @@ import pandas as pd
 import pytest
 
 from fields import FieldError, read_fields
-from measurements import LogError
 from measurements.raw_nmea import read_nmea_file
 from measurements.recording import ImportOptions, import_recording
 
