@@ -126,3 +126,15 @@ def polygons(geom) -> list[Polygon]:
     if isinstance(geom, MultiPolygon):
         return list(geom.geoms)
     return []
+
+
+def choose_field(fields: list[Field], name: str | None, where: str) -> Field:
+    """The field named ``name`` (the largest when None); refused when no field, or several, have the name."""
+    if name is None:
+        return max(fields, key=lambda f: f.boundary.area)
+    found = [f for f in fields if f.name == name]
+    if not found:
+        raise FieldError(f"{where}: no field named {name!r}; fields: {', '.join(f.name for f in fields)}")
+    if len(found) > 1:
+        raise FieldError(f"{where}: {len(found)} fields are named {name!r}; give the file's fields distinct names")
+    return found[0]
