@@ -171,7 +171,6 @@ class FieldRoute(Component):
         self.route = RouteWindow(self.path, origin, rotation)
         self.end = (self.route.size - 1) * ROUTE_STEP          # s of the last grid point
         self.i_cg = self.i_impl = 0
-        self.started = False
         self.step(t0, dt)
 
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:

@@ -289,7 +289,7 @@ def _run(study: str, *overrides: str):
 
 
 def test_a_real_plot_is_covered_by_the_guidance_stack():
-    """The IAM plot (shipped in studies/fields), whole, at 2 m/s with RTK noise: the issue's bars."""
+    """The IAM plot (shipped in studies/fields), whole, at 2 m/s with RTK noise: the farmers' bars (coverage, overlap, RTK-class errors)."""
     m = _run("field_plot_mounted.toml").metrics
     assert m["route_done_share"] > 0.99
     assert m["coverage_share"] >= 0.99 and m["overlap_share"] <= 0.05, (m["coverage_share"], m["overlap_share"])
