@@ -18,6 +18,9 @@ from shapely.validation import explain_validity
 from orchestrator.errors import InputError
 
 
+EARTH_REACH = 2.0e7     # m: no two points of the Earth's surface are farther apart along it (half a meridian)
+
+
 class FieldError(InputError, ValueError):
     """A field file that cannot be read, or a field that cannot be used (exit 2, named)."""
 
@@ -64,9 +67,14 @@ class Field:
         return len(self.boundary.interiors)
 
     def problems(self) -> list[str]:
-        """Why the boundary cannot be planned on (self-intersection, too few points), or []."""
+        """Why the boundary cannot be planned on (too few points, coordinates beyond the Earth,
+        self-intersection), or []."""
         if self.boundary.is_empty or len(self.boundary.exterior.coords) < 4:
             return ["the boundary has fewer than three distinct points"]
+        far = max(abs(b) for b in self.boundary.bounds)
+        if not far <= EARTH_REACH:
+            return [f"coordinates {far:.3g} m from the field's origin: beyond the Earth (no two places are more than "
+                    f"{EARTH_REACH / 1e3:,.0f} km apart); is the coordinate system right (--crs)?"]
         if not self.boundary.is_valid:
             why = explain_validity(self.boundary)
             where = re.search(r"\[(-?[\d.e+-]+) (-?[\d.e+-]+)\]", why)

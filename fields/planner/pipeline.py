@@ -22,7 +22,6 @@ from .speed import speed_profile
 from .turns import Joiner, TurnOutside
 from .types import HEADLAND, SWATH, TRANSIT, TURN, Cell, Route, Swath
 
-EARTH_REACH = 2.0e7     # m: no two points of the Earth's surface are farther apart along it (half a meridian)
 MAX_SWATHS = 20_000     # across a field at the fewest: about 1 GB of path (a 60 km wide field of a 3 m implement)
 MORE_PASSES = 3         # the auto headland widens by at most this many passes
 
@@ -63,21 +62,16 @@ class Plan:
 
 
 def check_field(field: Field, settings: Settings, where: str) -> None:
-    """What can be known before planning: a simple polygon, on the Earth, not too many swaths
-    across, wide enough for the turns (a U-turn reaches at least R beyond the swath ends: its
+    """What can be known before planning: a simple polygon on the Earth (Field.problems), not too
+    many swaths across, wide enough for the turns (a U-turn reaches at least R beyond the swath ends: its
     heading passes pi/2 with |kappa| <= 1/R, so x >= R int_0^{pi/2} cos = R)."""
     problems = field.problems()
     if problems:
         raise FieldError(f"{where}: {problems[0]}")
-    bounds = field.boundary.bounds
-    far = max(abs(b) for b in bounds)
-    if not far <= EARTH_REACH:
-        raise FieldError(f"{where}: coordinates {far:.3g} m from the field's origin: beyond the Earth (no two places "
-                         f"are more than {EARTH_REACH / 1e3:,.0f} km apart); is the coordinate system right (--crs)?")
     across = decomposition.min_width(field.boundary)
     fewest = across / settings.spacing
     if fewest > MAX_SWATHS:
-        raise FieldError(f"{where}: the field is {across / 1e3:.1f} km across at its narrowest: at least "
+        raise FieldError(f"{where}: the field is {across / 1e3:.1f} km across at its narrowest: about "
                          f"{fewest:,.0f} swaths of {settings.spacing:g} m, more than the {MAX_SWATHS:,} planned at once; "
                          f"plan it in parts or with a wider working width")
     lowest = headland.width_needed(settings.turn_radius, settings)
