@@ -1,7 +1,7 @@
 """Time and peak memory of ``plan`` on large square fields, and of the route component stepping along
 a large route: one line per case.
 
-    python3 benchmarks/plan_memory.py [--sizes 5 500 5000] [--limit-gb 8] [--route-step 0]
+    python3 benchmarks/plan_memory.py [--sizes 5 500 5000] [--wavy] [--limit-gb 8] [--no-follow]
 
 Each case runs in a child process (``python -m orchestrator plan SQUARE --out DIR``) whose peak
 resident memory is read from ``os.wait4``; the child's address space is capped at ``--limit-gb``
@@ -50,18 +50,29 @@ print(f"{planned:.1f} {rss0 / 1024:.0f} {rss1 / 1024:.0f} {path.length / 1000:.1
 """
 
 
-def square(folder: Path, hectares: float) -> Path:
+def square(folder: Path, hectares: float, wavy: bool = False) -> Path:
+    """A square field of ``hectares`` as GeoJSON in local metres; ``wavy``: its east and west sides
+    waving (60 m, every 700 and 900 m), so that the swaths end at other places and every turn
+    differs (between straight sides the turns repeat and are solved once)."""
     side = math.sqrt(hectares * 1e4)
-    ring = [[0.0, 0.0], [side, 0.0], [side, side], [0.0, side], [0.0, 0.0]]
-    doc = {"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"name": f"square {hectares:g} ha"},
+    if wavy:
+        ys = [side * k / 399 for k in range(400)]
+        ring = ([[side + 60 * math.sin(2 * math.pi * y / 700), y] for y in ys]
+                + [[60 * math.sin(2 * math.pi * y / 900 + 1), y] for y in reversed(ys)])
+        ring.append(ring[0])
+    else:
+        ring = [[0.0, 0.0], [side, 0.0], [side, side], [0.0, side], [0.0, 0.0]]
+    name = f"{'wavy' if wavy else 'square'} {hectares:g} ha"
+    doc = {"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"name": name},
                                                        "geometry": {"type": "Polygon", "coordinates": [ring]}}]}
-    path = folder / f"square_{hectares:g}ha.geojson"
+    path = folder / f"{name.replace(' ', '_')}.geojson"
     path.write_text(json.dumps(doc))
     return path
 
 
-def measured(cmd: list[str], limit_gb: float) -> tuple[int, float, float, str]:
-    """(exit code, wall seconds, peak RSS in MB, stdout) of a child capped at limit_gb of address space."""
+def measured(cmd: list[str], limit_gb: float) -> tuple[int, float, float, float, str]:
+    """(exit code, wall seconds, CPU seconds, peak RSS in MB, stdout) of a child capped at limit_gb
+    of address space (the CPU time does not grow when other work shares the machine)."""
     def cap():
         limit = int(limit_gb * 2 ** 30)
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
@@ -76,7 +87,7 @@ def measured(cmd: list[str], limit_gb: float) -> tuple[int, float, float, str]:
         wall = time.perf_counter() - t0
         out.seek(0)
         text = out.read()
-    return child.returncode, wall, usage.ru_maxrss / 1024, text
+    return child.returncode, wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, text
 
 
 def main() -> None:
@@ -85,31 +96,33 @@ def main() -> None:
     parser.add_argument("--limit-gb", type=float, default=8.0, help="address-space cap of each child [GiB]")
     parser.add_argument("--route-step", type=float, default=None, help="passed to plan --route-step when given")
     parser.add_argument("--no-follow", action="store_true", help="leave out the route component cases")
+    parser.add_argument("--wavy", action="store_true", help="also plan fields of the same sizes with waving sides")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix="plan_memory.") as tmp:
         tmp = Path(tmp)
-        print(f"{'case':<28}{'exit':>5}{'wall s':>9}{'peak MB':>9}{'route.csv MB':>14}{'route.geojson MB':>18}  notes")
-        for ha in args.sizes:
-            field = square(tmp, ha)
-            out = tmp / f"plan_{ha:g}"
+        print(f"{'case':<28}{'exit':>5}{'wall s':>9}{'CPU s':>8}{'peak MB':>9}{'route.csv MB':>14}"
+              f"{'route.geojson MB':>18}  notes")
+        for ha, wavy in [(ha, False) for ha in args.sizes] + ([(ha, True) for ha in args.sizes] if args.wavy else []):
+            field = square(tmp, ha, wavy)
+            out = tmp / f"plan_{field.stem}"
             cmd = [sys.executable, "-m", "orchestrator", "plan", str(field), "--out", str(out)]
             if args.route_step is not None:
                 cmd += ["--route-step", str(args.route_step)]
-            code, wall, peak, text = measured(cmd, args.limit_gb)
+            code, wall, cpu, peak, text = measured(cmd, args.limit_gb)
             sizes = [(out / name).stat().st_size / 2 ** 20 if (out / name).exists() else float("nan")
                      for name in ("route.csv", "route.geojson")]
-            note = next((line.strip() for line in text.splitlines() if "swaths" in line), text.strip()[-160:])
-            print(f"{'plan ' + f'{ha:g} ha square':<28}{code:>5}{wall:>9.1f}{peak:>9.0f}{sizes[0]:>14.1f}{sizes[1]:>18.1f}"
-                  f"  {note}", flush=True)
+            note = next((line.strip() for line in text.splitlines() if " swaths, " in line), text.strip()[-160:])
+            print(f"{'plan ' + field.stem.replace('_', ' '):<28}{code:>5}{wall:>9.1f}{cpu:>8.1f}{peak:>9.0f}{sizes[0]:>14.1f}"
+                  f"{sizes[1]:>18.1f}  {note}", flush=True)
         if not args.no_follow:
             for ha in args.sizes:
                 field = square(tmp, ha)
-                code, wall, peak, text = measured([sys.executable, "-c", FOLLOW, str(field)], args.limit_gb)
+                code, wall, cpu, peak, text = measured([sys.executable, "-c", FOLLOW, str(field)], args.limit_gb)
                 parts = text.split()
                 note = (f"planned in {parts[-4]} s; {parts[-1]} km of route; max RSS {parts[-3]} MB after planning, "
                         f"{parts[-2]} MB after 2 x 2 km of following") if code == 0 and len(parts) >= 4 else text.strip()[-200:]
-                print(f"{'follow ' + f'{ha:g} ha square':<28}{code:>5}{wall:>9.1f}{peak:>9.0f}{'':>14}{'':>18}  {note}",
-                      flush=True)
+                print(f"{'follow ' + f'{ha:g} ha square':<28}{code:>5}{wall:>9.1f}{cpu:>8.1f}{peak:>9.0f}{'':>14}{'':>18}"
+                      f"  {note}", flush=True)
 
 
 if __name__ == "__main__":

@@ -3,6 +3,7 @@ memory whatever the route's length), plan.json, and plan.png (the field, headlan
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path as FilePath
 
 import numpy as np
@@ -88,8 +89,13 @@ def draw_plan(plan: Plan, target: FilePath) -> None:
     styles = {SWATH: ("tab:blue", 1.0, "swath"), TURN: ("tab:red", 0.9, "turn"),
               HEADLAND: ("tab:green", 1.0, "headland pass"), TRANSIT: ("tab:purple", 0.9, "transit")}
     segments = plan.path.segments
+    minx, miny, maxx, maxy = plan.field.boundary.bounds
+    pixels = plan.settings.spacing / max(maxx - minx, maxy - miny, 1e-9) * 750     # between swaths, on the figure
+    every = max(1, math.ceil(3.0 / pixels))           # thinned to one in ``every`` when they would merge
     for kind, (color, lw, label) in styles.items():
-        lines = [seg.points[:, :2] for seg in segments if seg.kind == kind]
+        lines = [seg.points[:, :2] for seg in segments if seg.kind == kind and (kind != SWATH or seg.index % every == 0)]
+        if kind == SWATH and every > 1:
+            label = f"swath (one line in {every} shown)"
         if lines:
             ax.add_collection(LineCollection(lines, colors=color, linewidths=lw, label=label))
     x0, y0, _ = plan.path.start_pose()
