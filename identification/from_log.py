@@ -145,9 +145,11 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
     steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
     the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
+    from orchestrator.resolver import resolve
     from orchestrator.results import atomic_write
 
-    plant = study.find(role="yaw_plant")
+    model = resolve(study)
+    plant = model.find(role="yaw_plant")
     if not plant:
         return None
     values = {}
@@ -156,10 +158,10 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
         if s["identifiable"]:
             values[f"{plant[0]}.{name}"] = s["value"]
     params = report["parameters"]
-    steering = study.find(role="steering")
+    steering = model.find(role="steering")
     if steering and params["delay"]["identifiable"]:
         values[f"{steering[0]}.command_delay"] = params["delay"]["value"]
-    gyro = study.find(role="gyro")
+    gyro = model.find(role="gyro")
     bias = params.get("gyro_bias", {})
     if gyro and bias.get("identifiable") and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
         values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]

@@ -84,14 +84,16 @@ def missing_text(frame, needs: dict[str, str]) -> str | None:
 
 
 def study_plant(study) -> tuple[str, TractorParameters]:
+    from orchestrator.resolver import resolve
     from orchestrator.study import StudyError
 
     if study is None:
         return "rlf", TractorParameters()
-    names = study.find(role="yaw_plant")
+    resolved = resolve(study)
+    names = resolved.find(role="yaw_plant")
     if not names:
         raise StudyError(f"{study.path}: no component with role 'yaw_plant' (the vehicle's mass, inertia, axles)")
-    p = study.parameters(names[0])
+    p = resolved.parameters(names[0])
     model = p.get("model", "rlf")
     if model not in PHYSICAL_MODELS:
         raise StudyError(f"{study.path}: components.{names[0]}.parameters.model = {model!r}: identification from "
