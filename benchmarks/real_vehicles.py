@@ -2,9 +2,9 @@
 ``python3 benchmarks/real_vehicles.py [--out DIR]``.
 
 F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman step runs (the same
-kind of car, 41 designed 3 s runs laid end to end), read with tests/vehicle_logs.py, against
-studies/f1tenth.toml. ``identify`` takes the whole log (it cuts it at its clock gaps); ``diagnose``
-judges its longest gap-free stretch on an even clock (its replay needs a continuous log).
+kind of car, 41 designed 3 s runs laid end to end), read by the recording importer (as ``convert``
+reads them: the longest run without a clock gap) through tests/vehicle_logs.py, against
+studies/f1tenth.toml.
 Prints one table: vehicle, seconds, delay, understeer gradient K, cornering stiffnesses, held-out
 fit, tyre saturation, the diagnosis' verdict and what was not judged.
 """
@@ -78,7 +78,7 @@ def main() -> None:
             if res["verdict"] == "cannot decide":
                 verdict += f": {res['reason'].split(': ', 1)[-1]}"
             else:
-                verdict += "".join(f"; {e['id']} {', '.join(f'{n} {v:.3g}' for n, v in e['parameters'].items())}"
+                verdict += "".join(f"; {e['id']} {', '.join(f'{n} {v:.3g}' for n, v in e.get('parameters', {}).items())}"
                                    for e in res["effects"] if e["id"] == res["verdict"])
             not_judged = "; ".join(f"{s}: {w.removeprefix('not judged: ')}" for s, w in res.get("not_judged", {}).items())
             rows.append({"vehicle": name, "seconds": f"{seconds:.0f} (diagnosed {piece['t'].iloc[-1]:.0f})", **ident,
