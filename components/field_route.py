@@ -141,6 +141,12 @@ class FieldRoute(Component):
         self.started = False
         self.step(t0, dt)
 
+    def run_progress(self) -> tuple[float, float, str] | None:
+        """(metres of the route done, the route's length, "m"): the run's progress line
+        (orchestrator.observers.Progress)."""
+        s = getattr(self, "s", None)
+        return None if s is None else (float(self.y["path_length"]), float(s[-1]), "m")
+
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
         """(index, signed lateral distance) of the route point nearest (px, py) within the window."""
         step = self.s[1] - self.s[0] if len(self.s) > 1 else 0.1

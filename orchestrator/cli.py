@@ -52,17 +52,22 @@ def _run(args: argparse.Namespace) -> int:
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:
-        print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}", file=sys.stderr)
+        print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
+              file=sys.stderr)
         return 1
     except RunError as exc:
-        print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}",
-              file=sys.stderr)
+        print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}"
+              f"{getattr(exc, 'kept', '')}", file=sys.stderr)
         return 1
     ended = result.metrics.get("ended_by")
     if ended:
         print(f"the run ended at t = {ended['t']:.6g} s, before the stop time: {ended['component']} asked "
               f"to terminate ({ended['reason']})")
     print(result.summary)
+    for warning in result.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    if result.failed_bounds:
+        print("FAIL: " + "; ".join(result.failed_bounds))
     print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
     return 0
 
@@ -80,8 +85,9 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    from .observers import Stage
     from .study import Study, StudyError
-    from .sweep import SweepRun, sweep_plots
+    from .sweep import SweepRun, sweep_plots, sweep_summary
 
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
@@ -93,10 +99,16 @@ def _sweep(args: argparse.Namespace) -> int:
         print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
               file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    failed = int((table["status"] != "completed").sum())
-    files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
-    print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
+    with Stage("drawing the sweep's figures"):
+        files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
+    text, reasons = sweep_summary(study, table)
+    print(text)
+    print(f"\nresults in {args.out}/results.{study.study.signals_format}, one folder per point in {args.out}/points"
           + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
+    failed = sum(len(points) for _, points in reasons)
+    if failed and failed == len(table) and len(reasons) == 1:
+        print(f"error: every point failed: {reasons[0][0]}", file=sys.stderr)
+        return 2
     return 0 if failed == 0 else 1
 
 
