@@ -3,6 +3,8 @@ instances with their parameters in SI and their constant inputs, port and unit c
 connection, the evaluation order of sampled components, and algebraic loops refused."""
 from __future__ import annotations
 
+import difflib
+
 import graphlib
 import math
 import zlib
@@ -53,7 +55,7 @@ def build_system(model: Model) -> System:
     specs = {**study.components, **{n: ComponentSpec(type="", step=s.step) for n, s in study.subsystems.items()}}
     for name, spec in specs.items():
         cls = model.classes[name]
-        converted = resolved_parameters(cls, name, spec.parameters, where, study.folders)
+        converted = resolved_parameters(cls, name, spec.parameters, study.origin, study.folders)
         try:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))
         except ComponentError as exc:
@@ -64,13 +66,15 @@ def build_system(model: Model) -> System:
                              f"{dict(spec.parameters)}: {type(exc).__name__}: {exc}") from None
         inputs = cls.declared("input")
         for key, value in spec.inputs.items():
+            at = study.origin(f"components.{name}.inputs.{key}")
             if key not in inputs:
-                raise StudyError(f"{where}: components.{name}.inputs.{key}: unknown input; "
-                                 f"known: {', '.join(sorted(inputs))}")
+                close = difflib.get_close_matches(key, list(inputs), n=1)
+                raise StudyError(f"{at}: unknown input" + (f"; did you mean {close[0]!r}?" if close else "")
+                                 + f" Known: {', '.join(sorted(inputs))}")
             try:
                 comp.u[key] = to_si(value, inputs[key].unit)
             except UnitError as exc:
-                raise StudyError(f"{where}: components.{name}.inputs.{key}: {exc}") from None
+                raise StudyError(f"{at}: {exc}") from None
         step = spec.step if spec.step is not None else base
         ratio = round(step / base)
         if ratio < 1 or not math.isclose(ratio * base, step, rel_tol=1e-9, abs_tol=1e-12):

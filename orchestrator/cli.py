@@ -46,9 +46,7 @@ def _run(args: argparse.Namespace) -> int:
         for option, value in chosen:
             study = option.apply(study, value)
         if args.set:
-            from .study_files import parse_override
-
-            study = study.with_values(dict(parse_override(item, args.study) for item in args.set))
+            study = study.with_overrides(args.set)
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:

@@ -71,8 +71,9 @@ def bounds(analysis, study_bounds: Mapping[str, str] | None = None) -> dict[str,
     return out
 
 
-def check_study_bounds(analysis, study_bounds: Mapping[str, str], where: str) -> None:
-    """Refuse, before anything runs, a bound on a figure the analysis does not compute."""
+def check_study_bounds(analysis, study_bounds: Mapping[str, str], origin) -> None:
+    """Refuse, before anything runs, a bound on a figure the analysis does not compute
+    (``origin(field)`` says where the bound was given: Study.origin)."""
     from .study_files import StudyError
 
     known = known_figures(analysis) | {"sim_time_s", "wall_time_s", "events"}
@@ -81,7 +82,7 @@ def check_study_bounds(analysis, study_bounds: Mapping[str, str], where: str) ->
     for key in study_bounds:
         if key not in known:
             close = difflib.get_close_matches(key, sorted(known), n=3)
-            raise StudyError(f"{where}: study.bounds.{key}: the analysis {getattr(analysis, '__name__', '')!r} "
+            raise StudyError(f"{origin(f'study.bounds.{key}')}: the analysis {getattr(analysis, '__name__', '')!r} "
                              f"computes no figure {key!r}"
                              + (f"; did you mean {' or '.join(map(repr, close))}?" if close else "")
                              + f" Its figures: {', '.join(sorted(declared(analysis)) or sorted(known))}")

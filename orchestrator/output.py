@@ -77,8 +77,9 @@ def _holds_something_else(out: Path) -> bool:
     files that are not a result of a run at all."""
     if not out.is_dir() or not any(out.iterdir()):
         return False
-    status = status_of(out)
-    return status is None or status in COMPLETE
+    if not any((out / m).exists() for m in MARKERS):
+        return True
+    return status_of(out) in COMPLETE
 
 
 def swap_folder(new: Path, target: Path) -> Path | None:
@@ -110,7 +111,7 @@ def _beside(out: Path, status: str) -> Path:
     kind = "interrupted" if status == "interrupted" else "failed"
     for n in range(1, 1000):
         candidate = out.with_name(f"{out.name}.{kind}" + (f"-{n}" if n > 1 else ""))
-        if not candidate.exists() or (candidate.is_dir() and status_of(candidate) is not None):
+        if not candidate.exists() or (candidate.is_dir() and any((candidate / m).exists() for m in MARKERS)):
             return candidate
     raise OutputError(f"--out {out}: no free name beside it for the {kind} run's folder")
 

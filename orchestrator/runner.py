@@ -47,7 +47,7 @@ def _analysis(study: Study):
         module = importlib.import_module(study.study.analysis)
     except ModuleNotFoundError as exc:
         raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
-    check_study_bounds(module, study.study.bounds, study.where)
+    check_study_bounds(module, study.study.bounds, study.origin)
     return module
 
 

@@ -10,7 +10,7 @@ Output folder::
     results.parquet|csv        one row per point
     plots/                     each metric against the swept parameter, plus the study's own plots
 
-A point's worker records its run into a fresh folder ``points/.pNNNN.XXXX`` (signals streamed: a
+A point's worker records its run into a fresh folder ``.running/pNNNN.XXXX`` (signals streamed: a
 long point keeps flat memory, orchestrator.runner.record_run); the parent adds the point's record
 and moves the folder into place in one step, so ``points/pNNNN`` is either whole or absent, and a
 point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
@@ -147,6 +147,7 @@ class SweepRun:
         self.points = expand(study)
         self.fmt = study.study.signals_format
         self.points_dir = self.out / "points"
+        self.running_dir = self.out / ".running"          # points being recorded by their workers
 
     # --- checks before anything runs ----------------------------------------------------------
     def validate(self) -> None:
@@ -185,9 +186,11 @@ class SweepRun:
         return done
 
     def new_folder(self, point: Point) -> Path:
-        """A fresh folder beside the point's, for its worker to record into."""
+        """A fresh folder for the point's worker to record into (on the same file system as the
+        point's, to be moved there in one step)."""
         self.points_dir.mkdir(parents=True, exist_ok=True)
-        folder = Path(tempfile.mkdtemp(prefix=f".{point.key}.", dir=self.points_dir))
+        self.running_dir.mkdir(parents=True, exist_ok=True)
+        folder = Path(tempfile.mkdtemp(prefix=f"{point.key}.", dir=self.running_dir))
         os.chmod(folder, 0o777 & ~UMASK)
         return folder
 
@@ -250,8 +253,7 @@ class SweepRun:
         """Files and point folders left half-written by a run that was killed or interrupted."""
         for stale in self.out.glob("**/.*.tmp"):
             stale.unlink(missing_ok=True)
-        for stale in self.points_dir.glob(".p*"):
-            shutil.rmtree(stale, ignore_errors=True)
+        shutil.rmtree(self.running_dir, ignore_errors=True)
 
     def _execute(self, todo: list[Point], workers: int,
                  scheduler: str | None) -> Iterator[tuple[Point, dict, Path | None]]:
