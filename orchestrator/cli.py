@@ -136,8 +136,8 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     install_signal_handlers()
-    args = build_parser().parse_args(argv)
-    try:
+    try:            # a signal may land while the plugins' modules load, before any command runs
+        args = build_parser().parse_args(argv)
         return args.handler(args)
     except (Exception, KeyboardInterrupt) as exc:
         known = exit_code(exc)
