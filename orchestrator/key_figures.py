@@ -136,12 +136,15 @@ def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound]) 
     return "\n".join(lines), failed
 
 
-def sweep_table(table, analysis, judged: Mapping[str, Bound]) -> str:
+def sweep_table(table, analysis, judged: Mapping[str, Bound], skip: set[str] = frozenset()) -> str:
     """P50, P95 and max of each key figure over the completed points; the share of all points
-    within each bound (a failed point counts as outside)."""
+    within each bound (a failed point counts as outside). ``skip``: the swept parameters."""
+    import pandas as pd
+
     done = table[table["status"] == "completed"] if "status" in table else table
-    rows = [(k, unit) for k, unit, _ in _figures({c: 0.0 for c in done.columns}, analysis, judged)
-            if k in done and k not in ("sim_time_s", "wall_time_s", "point", "seed")]
+    numeric = {c: 0.0 for c in done.columns if c not in skip and pd.api.types.is_numeric_dtype(done[c])}
+    rows = [(k, unit) for k, unit, _ in _figures(numeric, analysis, judged)
+            if k in numeric and k not in ("sim_time_s", "wall_time_s", "events", "point", "seed")]
     if not rows:
         return ""
     width = max([len(k) for k, _ in rows] + [10])

@@ -361,7 +361,7 @@ def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[st
     lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "
              f"{len(table) - done} failed"]
     if done:
-        text = sweep_table(table, analysis, bounds(analysis, study.study.bounds))
+        text = sweep_table(table, analysis, bounds(analysis, study.study.bounds), set(study.sweep.parameters))
         lines += [text] if text else []
         if study.sweep.analysis:
             module = importlib.import_module(study.sweep.analysis)
