@@ -176,8 +176,8 @@ class FieldRoute(Component):
     def run_progress(self) -> tuple[float, float, str] | None:
         """(metres of the route done, the route's length, "m"): the run's progress line
         (orchestrator.observers.Progress)."""
-        s = getattr(self, "s", None)
-        return None if s is None else (float(self.y["path_length"]), float(s[-1]), "m")
+        end = getattr(self, "end", None)
+        return None if end is None else (float(self.y["path_length"]), float(end), "m")
 
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
         """(index, signed lateral distance) of the route point nearest (px, py) within the window."""

@@ -135,7 +135,7 @@ def test_progress_is_told_in_the_unit_a_component_reports(monkeypatch, capsys):
     route = build_system(resolve(field)).nodes["field"].component
     route.initialize(0.0, 0.05)
     done, total, unit = route.run_progress()
-    assert (done, unit) == (0.0, "m") and total == pytest.approx(float(route.s[-1])) and total > 100
+    assert (done, unit) == (0.0, "m") and total == pytest.approx(float(route.end)) and total > 100
 
 
 def test_a_step_that_lasts_says_what_it_does_and_how_far_it_is(monkeypatch):
