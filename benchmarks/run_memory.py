@@ -7,7 +7,9 @@ slower than the signal table (rows x columns x 8 bytes).
     python benchmarks/run_memory.py --tree /path/to/checkout   # the same commands with another checkout's code
 
 Each case is one ``python -m orchestrator run`` in its own process; its peak resident set size is
-the kernel's (``wait4``'s ru_maxrss), the CPU time user + sys.
+the kernel's (``wait4``'s ru_maxrss), the CPU time user + sys. "simulation" is the same run without
+its analysis (``--set study.analysis=""``): what the run itself holds; "with analysis" adds the
+columns the analysis reads back and its arrays.
 """
 from __future__ import annotations
 
@@ -42,7 +44,7 @@ def peak_run(tree: Path, study: str, overrides: list[str], out: Path) -> dict:
     metrics = json.loads((out / "metrics.json").read_text())
     return {"rows": meta.num_rows, "columns": meta.num_columns, "table_mb": meta.num_rows * meta.num_columns * 8 / 1e6,
             "peak_mb": usage.ru_maxrss / 1024, "cpu_s": usage.ru_utime + usage.ru_stime, "wall_s": wall,
-            "sim_s": metrics.get("ended_by", {}).get("t", metrics["sim_time_s"])}
+            "sim_s": (metrics.get("ended_by") or {}).get("t", metrics["sim_time_s"])}
 
 
 def main() -> None:
@@ -56,12 +58,15 @@ def main() -> None:
     if args.field:
         cases.append(("studies/field_coverage.toml", []))
     print(f"code: {args.tree}")
-    print(f"{'study':<28}{'simulated [s]':>14}{'rows':>10}{'table [MB]':>12}{'peak RSS [MB]':>15}{'CPU [s]':>9}{'wall [s]':>10}")
+    print(f"{'':<54}{'peak RSS [MB]':^28}")
+    print(f"{'study':<16}{'simulated [s]':>14}{'rows':>10}{'table [MB]':>12}{'simulation':>14}{'with analysis':>14}"
+          f"{'CPU [s]':>9}{'wall [s]':>10}")
     with tempfile.TemporaryDirectory(prefix="run_memory.") as tmp:
         for i, (study, overrides) in enumerate(cases):
+            bare = peak_run(args.tree, study, overrides + ['study.analysis=""'], Path(tmp) / f"bare{i}")
             r = peak_run(args.tree, study, overrides, Path(tmp) / f"out{i}")
-            print(f"{Path(study).stem:<28}{r['sim_s']:>14.0f}{r['rows']:>10}{r['table_mb']:>12.0f}{r['peak_mb']:>15.0f}"
-                  f"{r['cpu_s']:>9.1f}{r['wall_s']:>10.1f}", flush=True)
+            print(f"{Path(study).stem:<16}{r['sim_s']:>14.0f}{r['rows']:>10}{r['table_mb']:>12.0f}{bare['peak_mb']:>14.0f}"
+                  f"{r['peak_mb']:>14.0f}{r['cpu_s']:>9.1f}{r['wall_s']:>10.1f}", flush=True)
 
 
 if __name__ == "__main__":
