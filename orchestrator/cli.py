@@ -125,8 +125,20 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (help, add_arguments, run) in commands.items():
         p = sub.add_parser(name, help=help, description=help)
         add_arguments(p)
-        p.set_defaults(handler=run)
+        p.set_defaults(handler=run if name in CORE else _in_stage(name, run))
     return parser
+
+
+def _in_stage(name: str, run):
+    """A registered command's handler inside a Stage: a tool that says nothing while it works
+    still shows, after 5 s, that it is working and for how long (with what it reports through
+    ``report_progress``)."""
+    def handler(args: argparse.Namespace) -> int:
+        from .observers import Stage
+
+        with Stage(name):
+            return run(args)
+    return handler
 
 
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:

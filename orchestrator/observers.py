@@ -98,7 +98,7 @@ class Stage:
     """``with Stage("analysing the signals"):`` a step of a command that may take a while: once it
     has lasted ``first`` seconds a line says what it is doing and for how long, then every
     ``every`` seconds, with the progress it reports (``report_progress``); a step that ends sooner
-    prints nothing."""
+    prints nothing. Of nested stages only the innermost speaks."""
 
     def __init__(self, what: str, first: float = 5.0, every: float = 10.0) -> None:
         self.what, self.first, self.every = what, first, every
@@ -117,11 +117,13 @@ class Stage:
     def _watch(self) -> None:
         wait = self.first
         while not self._stop.wait(wait):
+            wait = self.every
+            if _STAGES and _STAGES[-1] is not self:
+                continue
             elapsed = time.perf_counter() - self._start
             print(f"{self.what}{': ' + self.detail if self.detail else ''} ... {elapsed:.0f} s",
                   file=self._out, flush=True)
             self.printed = True
-            wait = self.every
 
     def __exit__(self, *exc) -> None:
         _STAGES.remove(self)

@@ -161,6 +161,35 @@ def test_a_step_that_lasts_says_what_it_does_and_how_far_it_is(monkeypatch):
     assert quiet.getvalue() == ""
 
 
+def test_of_nested_steps_only_the_innermost_speaks_and_every_tool_runs_inside_one(monkeypatch):
+    from orchestrator import cli, observers
+
+    class Kept(io.StringIO):
+        def close(self):
+            pass
+
+    out = Kept()
+    monkeypatch.setattr(observers, "_terminal", lambda: out)
+    with observers.Stage("plan", first=0.01, every=0.01) as outer:
+        with observers.Stage("placing swaths", first=0.01, every=0.01) as inner:
+            end = time.time() + 10
+            while not inner.printed and time.time() < end:
+                time.sleep(0.01)
+            time.sleep(0.05)
+    assert "placing swaths ..." in out.getvalue() and "plan ..." not in out.getvalue() and not outer.printed
+    # a registered command (not run or sweep) is handed its arguments inside a stage named after it
+    seen = []
+
+    def tool(args):
+        seen.append(list(observers._STAGES))
+        return 0
+
+    handler = cli._in_stage("identify", tool)
+    assert handler(None) == 0 and [s.what for s in seen[0]] == ["identify"] and observers._STAGES == []
+    parser = cli.build_parser()
+    assert parser.parse_args(["run", "x.toml", "--out", "o"]).handler is cli._run
+
+
 def test_a_real_time_run_that_misses_deadlines_warns_on_screen(tmp_path):
     """The command's own words: pacing statistics and a warning, both from metrics.json's counts."""
     import json
