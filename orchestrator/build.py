@@ -3,7 +3,6 @@ instances with their parameters in SI and their constant inputs, port and unit c
 connection, the evaluation order of sampled components, and algebraic loops refused."""
 from __future__ import annotations
 
-import difflib
 
 import graphlib
 import math
@@ -13,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .component import Component, ComponentError
+from .errors import did_you_mean
 from .model import Model, resolved_parameters
 from .study import ComponentSpec, Connection, Study, StudyError
 from .units import UnitError, to_si, units_match
@@ -68,8 +68,7 @@ def build_system(model: Model) -> System:
         for key, value in spec.inputs.items():
             at = study.origin(f"components.{name}.inputs.{key}")
             if key not in inputs:
-                close = difflib.get_close_matches(key, list(inputs), n=1)
-                raise StudyError(f"{at}: unknown input" + (f"; did you mean {close[0]!r}?" if close else "")
+                raise StudyError(f"{at}: unknown input{did_you_mean(key, inputs, n=1)}"
                                  + f" Known: {', '.join(sorted(inputs))}")
             try:
                 comp.u[key] = to_si(value, inputs[key].unit)

@@ -6,6 +6,16 @@ message; nothing prints a traceback for a user's mistake.
 """
 from __future__ import annotations
 
+import difflib
+from typing import Iterable
+
+
+def did_you_mean(name: str, known: Iterable[str], n: int = 3, form: str = "; did you mean {}?") -> str:
+    """The hint a message about an unknown name ends with: up to ``n`` of the ``known`` names
+    closest to it, joined by "or", in ``form``; empty when none is close."""
+    close = difflib.get_close_matches(str(name), list(known), n=n)
+    return form.format(" or ".join(map(repr, close))) if close else ""
+
 
 class InputError(Exception):
     """Something the user gave cannot be used (a file, a field, an option); the message names it."""

@@ -13,7 +13,6 @@ run and whether it kept real time.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import operator
 from dataclasses import dataclass
@@ -21,6 +20,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .errors import did_you_mean
 from .study_schema import BOUND
 
 _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge, "==": operator.eq,
@@ -81,10 +81,8 @@ def check_study_bounds(analysis, study_bounds: Mapping[str, str], origin) -> Non
         return
     for key in study_bounds:
         if key not in known:
-            close = difflib.get_close_matches(key, sorted(known), n=3)
             raise StudyError(f"{origin(f'study.bounds.{key}')}: the analysis {getattr(analysis, '__name__', '')!r} "
-                             f"computes no figure {key!r}"
-                             + (f"; did you mean {' or '.join(map(repr, close))}?" if close else "")
+                             f"computes no figure {key!r}{did_you_mean(key, sorted(known))}"
                              + f" Its figures: {', '.join(sorted(declared(analysis)) or sorted(known))}")
 
 

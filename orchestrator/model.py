@@ -8,11 +8,11 @@ The one place where a study's parameter values are converted with the declared u
 """
 from __future__ import annotations
 
-import difflib
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from .component import Component
+from .errors import did_you_mean
 from .study import Study, StudyError
 from .units import FILE_UNIT, UnitError, to_si
 
@@ -156,10 +156,8 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
     for key, value in values.items():
         where = origin(f"components.{name}.parameters.{key}")
         if key not in params:
-            close = difflib.get_close_matches(key, list(params), n=1)
             raise StudyError(f"{where}: unknown parameter of "
-                             f"{getattr(cls, 'type_name', cls.__name__)!r}"
-                             + (f"; did you mean {close[0]!r}?" if close else "")
+                             f"{getattr(cls, 'type_name', cls.__name__)!r}{did_you_mean(key, params, n=1)}"
                              + f" Known: {', '.join(sorted(params))}")
         try:
             converted[key] = to_si(value, params[key].unit)

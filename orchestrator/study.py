@@ -29,12 +29,12 @@ back. Parameters keep the values as written ("8000 N/rad", "30 deg"); the resolv
 from __future__ import annotations
 
 import copy
-import difflib
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError, field_validator, model_validator
 
+from .errors import did_you_mean
 from .study_files import (StudyError, parse_override, pruned, read_study_file, set_value,
                           study_folders)
 from .study_schema import (CONNECTION, TABLES, ComponentSpec, Connection, Exports, StudySettings,
@@ -308,9 +308,8 @@ def _format_validation(path: Path, err: ValidationError, set_by: Mapping[str, st
                 annotation = table.model_fields.get(str(part)) if isinstance(table, type) else None
                 table = annotation.annotation if annotation is not None else None
             fields = sorted(table.model_fields) if isinstance(table, type) and issubclass(table, BaseModel) else []
-            close = difflib.get_close_matches(str(e["loc"][-1]), fields, n=3)
             message = f"{'.'.join(map(str, e['loc'][:-1]))} has no field {str(e['loc'][-1])!r}" \
-                + (f" (did you mean {' or '.join(map(repr, close))}?)" if close else "") \
+                + did_you_mean(e["loc"][-1], fields, form=" (did you mean {}?)") \
                 + (f"; its fields: {', '.join(fields)}" if fields else "")
         set_lines.append(f"--set {item}: {message}" if e["type"] == "extra_forbidden" else
                          f"--set {item} ({loc}): {message}")

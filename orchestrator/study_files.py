@@ -5,13 +5,12 @@ plain dictionaries out: validation is the schema's (orchestrator.study_schema)."
 from __future__ import annotations
 
 import copy
-import difflib
 import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
+from .errors import InputError, did_you_mean
 from .study_schema import NAME, parse_connections
 
 
@@ -135,11 +134,6 @@ def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def _near(name: str, known: list[str]) -> str:
-    close = difflib.get_close_matches(name, known, n=3, cutoff=0.6)
-    return f" (did you mean {' or '.join(repr(c) for c in close)}?)" if close else ""
-
-
 def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
     """Set one dotted key in study data (see ``Study.with_values``); returns the field it set, as
     the schema names it (``components.tracker.parameters.lookahead``)."""
@@ -171,7 +165,7 @@ def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
         return f"{head}.{rest[0]}"
     known = sorted(comps) + sorted(subs)
     tables = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in ("components", "subsystems", "study"))
-    raise StudyError(f"{where}: no component {head!r}{_near(head, known + tables)}; components: {', '.join(known)}"
+    raise StudyError(f"{where}: no component {head!r}{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
                      + (f"; tables: {', '.join(tables)}" if tables else ""))
 
 
