@@ -135,3 +135,29 @@ def test_the_identification_finds_the_delay_through_the_importer(recording):
     delay, lag = rep["delay"]["value"], rep["parameters"]["lag"]["value"]
     # a 40 ms clock cannot part 10 ms of lag from delay: each within 12 ms (half a step: 20 ms), their sum too
     assert abs(delay - DELAY) < 0.012 and lag < 0.012 and abs(delay + lag - DELAY) < 0.012, rep["parameters"]
+
+
+def _circling(yaw_peak: float, with_pose: bool = True, to_degrees: bool = False) -> pd.DataFrame:
+    """A car weaving at 2-3 m/s (50 Hz, 60 s), its yaw rate peaking at ``yaw_peak`` rad/s, the
+    track x, y integrated from it; the gyro column written in deg/s when ``to_degrees``."""
+    t = np.arange(0.0, 60.0, 0.02)
+    v = 2.5 + 0.5 * np.sin(2 * np.pi * t / 17.0)
+    r = yaw_peak * np.sin(2 * np.pi * t / 6.0) ** 7         # short sharp turns: the 2 s heading change within pi
+    psi = np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]) * 0.02)])
+    x = np.concatenate([[0.0], np.cumsum(v[:-1] * np.cos(psi[:-1]) * 0.02)])
+    y = np.concatenate([[0.0], np.cumsum(v[:-1] * np.sin(psi[:-1]) * 0.02)])
+    frame = pd.DataFrame({"t": t, "v": v, "yaw_rate": np.degrees(r) if to_degrees else r})
+    return frame.assign(x=x, y=y) if with_pose else frame
+
+
+@pytest.mark.parametrize("with_pose", [True, False])
+def test_a_fast_yaw_rate_is_read_as_rad_per_s_when_the_motion_says_so_and_degrees_are_still_named(with_pose):
+    from measurements.log import LogError, check_log
+
+    # 3.2 rad/s at 2-3 m/s: a 0.64 m radius, 9.5 m/s2, as a 1:10 car drives (the FrictionMaps DS4 peak is 3.1 rad/s)
+    fast = check_log(_circling(3.2, with_pose), "fast car", ("t",))
+    note = " ".join(fast.attrs["notes"])
+    assert "read as rad/s" in note and ("track" if with_pose else "radius") in note
+    # a tractor's 0.2 rad/s written in deg/s (11.5 "rad/s"): a 0.2 m radius, 29 m/s2 (or 57 times the track's turn)
+    with pytest.raises(LogError, match="looks like degrees/s"):
+        check_log(_circling(0.2, with_pose, to_degrees=True), "slow tractor", ("t",))
