@@ -161,3 +161,17 @@ def test_a_fast_yaw_rate_is_read_as_rad_per_s_when_the_motion_says_so_and_degree
     # a tractor's 0.2 rad/s written in deg/s (11.5 "rad/s"): a 0.2 m radius, 29 m/s2 (or 57 times the track's turn)
     with pytest.raises(LogError, match="looks like degrees/s"):
         check_log(_circling(0.2, with_pose, to_degrees=True), "slow tractor", ("t",))
+
+
+def test_a_fast_yaw_rate_in_a_log_with_gaps_is_judged_on_its_longest_stretch(tmp_path):
+    from identification.from_log import _read
+    from measurements.log import LogError
+
+    frame = _circling(3.2)
+    holed = frame.drop(index=range(1000, 1100)).reset_index(drop=True)      # a 2 s hole at t = 20 s
+    holed.to_parquet(tmp_path / "fast.parquet")
+    log, _ = _read(tmp_path / "fast.parquet", False, None, None)
+    assert "read as rad/s" in " ".join(log.attrs["notes"])
+    _circling(0.2, to_degrees=True).drop(index=range(1000, 1100)).to_parquet(tmp_path / "deg.parquet")
+    with pytest.raises(LogError, match="looks like degrees/s"):
+        _read(tmp_path / "deg.parquet", False, None, None)
