@@ -56,7 +56,10 @@ class HeightGrid:
     def __init__(self, xs: np.ndarray, ys: np.ndarray, z: np.ndarray, where: str = "height grid") -> None:
         from scipy.interpolate import RegularGridInterpolator
 
-        xs, ys, z = np.asarray(xs, float), np.asarray(ys, float), np.asarray(z, float)
+        try:
+            xs, ys, z = np.asarray(xs, float), np.asarray(ys, float), np.asarray(z, float)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: a coordinate or a height is not a number ({exc})") from None
         if len(xs) < 2 or len(ys) < 2 or z.shape != (len(xs), len(ys)):
             raise ValueError(f"{where}: expected at least a 2 x 2 grid of heights, got {z.shape}")
         if not (np.all(np.diff(xs) > 0) and np.all(np.diff(ys) > 0)):
