@@ -94,6 +94,19 @@ def _stats(e: np.ndarray) -> tuple[float, float, float]:
     return float(np.sqrt(np.mean(e ** 2))), float(np.percentile(e, 95)), float(e.max())
 
 
+def _thinned(xy: np.ndarray, spacing: float = 0.05) -> np.ndarray:
+    """The points of a track at least ``spacing`` from the last one kept (and its last point): a
+    standing implement's jitter would otherwise make a line GEOS cannot buffer in memory."""
+    keep, last = [0], xy[0]
+    for i in range(1, len(xy)):
+        if abs(xy[i, 0] - last[0]) + abs(xy[i, 1] - last[1]) >= spacing:
+            keep.append(i)
+            last = xy[i]
+    if keep[-1] != len(xy) - 1:
+        keep.append(len(xy) - 1)
+    return xy[keep]
+
+
 def _strips(s: pd.DataFrame, width: float):
     """The implement's swept strips: one per run of working samples."""
     from shapely.geometry import LineString
@@ -102,44 +115,63 @@ def _strips(s: pd.DataFrame, width: float):
     edges = np.diff(np.concatenate([[0], work.astype(int), [0]]))
     strips = []
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        xy = np.column_stack([s["ix"].to_numpy()[a:b], s["iy"].to_numpy()[a:b]])
-        xy = xy[np.concatenate([[True], np.hypot(*np.diff(xy, axis=0).T) > 1e-3])]   # a standing implement: one point
+        xy = _thinned(np.column_stack([s["ix"].to_numpy()[a:b], s["iy"].to_numpy()[a:b]]))
         if len(xy) >= 2:
             line = LineString(xy)
             strips.append(line.buffer(0.5 * width, cap_style="flat", join_style="round"))
     return strips
 
 
-def _pass_to_pass(s: pd.DataFrame, frames, spacing: float) -> np.ndarray:
-    """Spacing errors between adjacent implement passes (line k and k + 1), 1 m apart along them."""
-    on = (s["impl_segment"].to_numpy() == SWATH)
-    px, py, k_of = s["ix"].to_numpy(), s["iy"].to_numpy(), s["swath"].to_numpy()
+IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a track's columns in _samples
+
+
+def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray, np.ndarray] | None:
+    """The implement's (or the tractor's) track on swath j as (along, across) in ``frame`` (start,
+    direction), sorted along; None with fewer than 10 samples."""
+    a, d = frame
+    px, py, segment = point
+    m = (s[segment].to_numpy() == SWATH) & (s["swath"].to_numpy() == j)
+    if m.sum() < 10:
+        return None
+    rel = np.column_stack([s[px].to_numpy()[m] - a[0], s[py].to_numpy()[m] - a[1]])
+    along, across = rel @ d, rel @ np.array([-d[1], d[0]])
+    order = np.argsort(along)
+    return along[order], across[order]
+
+
+def _gap(one, other) -> np.ndarray:
+    """other's across minus one's, 1 m apart along their common part (interpolated on both)."""
+    if one is None or other is None:
+        return np.zeros(0)
+    lo, hi = max(one[0][0], other[0][0]), min(one[0][-1], other[0][-1])
+    if hi - lo < 2.0:
+        return np.zeros(0)
+    grid = np.arange(lo, hi, 1.0)
+    return np.interp(grid, *other) - np.interp(grid, *one)
+
+
+def _pass_to_pass(s: pd.DataFrame, frames, spacing: float, point=IMPLEMENT) -> np.ndarray:
+    """Spacing errors between adjacent implement (or tractor) passes (line k and k + 1), 1 m apart
+    along them."""
     errors = []
-    keys = sorted(frames)
-    for k in keys:
-        if k + 1 not in frames:
-            continue
-        a, d = frames[k]
-        n = np.array([-d[1], d[0]])
-        tracks = []
-        for j in (k, k + 1):
-            m = on & (k_of == j)
-            if m.sum() < 10:
-                break
-            rel = np.column_stack([px[m] - a[0], py[m] - a[1]])
-            along, across = rel @ d, rel @ n
-            order = np.argsort(along)
-            tracks.append((along[order], across[order]))
-        if len(tracks) < 2:
-            continue
-        lo = max(tracks[0][0][0], tracks[1][0][0])
-        hi = min(tracks[0][0][-1], tracks[1][0][-1])
-        if hi - lo < 2.0:
-            continue
-        grid = np.arange(lo, hi, 1.0)
-        gap = np.interp(grid, *tracks[1]) - np.interp(grid, *tracks[0])
-        errors.append(np.abs(gap) - spacing)
+    for k in sorted(frames):
+        if k + 1 in frames:
+            gap = _gap(_track(s, k, frames[k], point), _track(s, k + 1, frames[k], point))
+            if len(gap):
+                errors.append(np.abs(gap) - spacing)
     return np.concatenate(errors) if errors else np.zeros(0)
+
+
+def repeatability(first: tuple[pd.DataFrame, Study], second: tuple[pd.DataFrame, Study], swath: int) -> np.ndarray:
+    """The same line driven twice (two runs: another day, another realisation of every sensor's
+    errors): the implement's across-track difference between the two tracks of ``swath``, 1 m apart
+    along their common part."""
+    tracks = []
+    for frame, study in (first, second):
+        _, plan, conv, _ = mission(study)
+        frames = _swath_frames(plan, conv)
+        tracks.append(_track(_samples(frame, study), swath, frames[swath]) if swath in frames else None)
+    return _gap(*tracks)
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
@@ -305,6 +337,9 @@ def ground_metrics(frame: pd.DataFrame, study: Study, s: pd.DataFrame, plan, con
     gaps = [abs(starts[k + 1] - starts[k]) for k in starts if k + 1 in starts]
     if gaps:
         out["pass_to_pass_interval_s"] = float(np.median(gaps))
+    # ISO 12188-2 takes a point of the vehicle: the tractor's CG passes too
+    p2p = _pass_to_pass(s, frames, plan.settings.working_width - plan.settings.overlap, TRACTOR)
+    out["tractor_pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out.update(_outage_metrics(rows, study, s, xte))
     return out
 
@@ -359,7 +394,8 @@ METRICS = {"coverage_share": ("1", ">= 0.99"), "overlap_share": ("1", "<= 0.05")
            "swath_time_s": ("s", None), "turn_time_s": ("s", None), "headland_time_s": ("s", None),
            "mission_time_s": ("s", None), "wall_time_s": ("s", None),
            "route_xte_p95_m": ("m", None), "line_acquisition_p95_m": ("m", None), "line_acquisition_p95_s": ("s", None),
-           "pass_to_pass_interval_s": ("s", None), "xte_max_in_outage_m": ("m", None),
+           "pass_to_pass_interval_s": ("s", None), "tractor_pass_to_pass_p95_m": ("m", None),
+           "xte_max_in_outage_m": ("m", None),
            "outage_drift_max_m": ("m", None), "guidance_stops": ("count", None)}
 METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 **{f"{kind}_{q}": unit for kind in ("swath", "headland", "turn", "transit")

@@ -176,25 +176,29 @@ def test_the_estimator_propagates_its_covariance_as_the_dense_jacobian_does():
     the heading, the white velocity, the gyro's noise through the tilt, the random walks."""
     ekf = _quiet_ekf(crab_estimate=1)
     rng = np.random.default_rng(5)
-    A = rng.standard_normal((6, 6)) * np.array([1e-3, 1e-3, 1e-3, 1e-5, 1e-3, 1e-4])
-    s0, P0 = np.array([3.0, -2.0, 0.8, 1e-3, 0.04, 5e-3]), A @ A.T
+    ekf.error_std = 0.3                                         # an RTK float fix's wandering error
+    A = rng.standard_normal((8, 8)) * np.array([1e-3, 1e-3, 1e-3, 1e-5, 1e-3, 1e-4, 1e-2, 1e-2])
+    s0, P0 = np.array([3.0, -2.0, 0.8, 1e-3, 0.04, 5e-3, 0.1, -0.2]), A @ A.T
     u = (0.05, 4 * DEG, -2 * DEG, 1.3, 2.1, 0.01)
-    F = np.zeros((6, 6))
+    F = np.zeros((8, 8))
     for j in range(6):
-        e = np.zeros(6)
+        e = np.zeros(8)
         e[j] = 1e-6
         ekf.s = s0 + e
         plus = ekf.jacobian(*u)[0]
         ekf.s = s0 - e
-        F[:, j] = (plus - ekf.jacobian(*u)[0]) / 2e-6
+        F[:, j] = (plus - ekf.jacobian(*u)[0]) / 2e-6              # (the error states do not move R)
     p, dt = ekf.p, u[-1]
+    phi = math.exp(-dt / p["degraded_time_constant"])
+    F[6, 6] = F[7, 7] = phi                                     # the receiver's error: a Gauss-Markov decay
     c, s = math.cos(s0[2]), math.sin(s0[2])
-    Q = np.zeros((6, 6))
+    Q = np.zeros((8, 8))
     Q[:2, :2] = (p["odometry_noise_std"] * dt) ** 2 * np.outer((c, s), (c, s)) + p["velocity_noise_psd"] * dt * np.eye(2)
     Q[2, 2] = p["gyro_noise_psd"] * dt / (math.cos(u[1]) * math.cos(u[2])) ** 2
     Q[3, 3] = 2 * p["gyro_bias_instability"] ** 2 / p["gyro_bias_time_constant"] * dt
     Q[4, 4] = 2 * p["odometry_scale_wander"] ** 2 / p["odometry_scale_time_constant"] * dt
     Q[5, 5] = p["slip_compliance_rate_std"] ** 2 * dt
+    Q[6, 6] = Q[7, 7] = (1 - phi * phi) * 0.3 ** 2
     ekf.s, ekf.P = s0.copy(), P0.copy()
     ekf.predict(*u)
     assert np.allclose(ekf.P, F @ P0 @ F.T + Q, rtol=1e-6, atol=1e-16)
@@ -207,13 +211,12 @@ def test_dead_reckoning_uncertainty_grows_as_the_closed_form_of_the_sensor_model
     + l_r^2 t) + q_b (v^2 t^5/20 + v l_r t^4/4 + l_r^2 t^3/3) + q_v t (diagonal start)."""
     ekf = _quiet_ekf(crab_estimate=0, odometry_scale_std=0.0, odometry_scale_wander=0.0)
     P_yy, P_pp, P_bb = 0.01 ** 2, 0.002 ** 2, 2e-5 ** 2
-    ekf.P = np.diag([P_yy, P_yy, P_pp, P_bb, 0.0, 0.0])
     v, dt, l_r = 2.0, 0.01, ekf.p["l_r"]
     q_g, q_v = ekf.p["gyro_noise_psd"], ekf.p["velocity_noise_psd"]
     q_b = 2 * ekf.p["gyro_bias_instability"] ** 2 / ekf.p["gyro_bias_time_constant"]
     for n in (1000, 6000, 30000):               # 10 s, 1 min, 5 min
-        ekf.P = np.diag([P_yy, P_yy, P_pp, P_bb, 0.0, 0.0])
-        ekf.s = np.zeros(6)
+        ekf.P = np.diag([P_yy, P_yy, P_pp, P_bb, 0.0, 0.0, 0.0, 0.0])
+        ekf.s = np.zeros(8)
         for _ in range(n):
             ekf.predict(0.0, 0.0, 0.0, 0.0, v, dt)
         ekf._publish(0.0, v, n * dt)

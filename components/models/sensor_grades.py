@@ -14,8 +14,8 @@ Xsens quote 0.2 deg static, 0.3-0.5 deg dynamic (1 sigma) for their MTi VRU/AHRS
 installation's roll calibration (driving a line both ways, as every autosteer install does) we
 take 0.1 deg as the residual offset per run and 0.05 deg white noise on a straight swath.
 
-Wheel odometry: rear-wheel speed with the wheel slip of field work (5-15 % on tilled soil, the
-ASABE D497 traction range): a scale error of 5 % (1 sigma) per run, wandering 1 % with a 30 s
+Wheel odometry: rear-wheel speed with the wheel slip of field work (typically 5-15 %; our
+assumption, no datasheet): a scale error of 5 % (1 sigma) per run, wandering 1 % with a 30 s
 correlation time as the soil changes, and 0.02 m/s white noise at 100 Hz.
 """
 from __future__ import annotations
