@@ -31,6 +31,7 @@ import numpy as np
 from components.models.condensed_mpc import CondensedTrackingMPC
 from components.models.steering_equivalent import FirstOrderSteering
 from components.models.yaw_dynamics import TractorParameters, controllable_canonical, state_space
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -75,8 +76,9 @@ def _margins(L) -> Margins:
 
 def mpc_controller(study: Study) -> ct.StateSpace:
     """The unconstrained yaw-rate MPC: inputs (delta_m, gamma, gamma_d), output u."""
-    name = study.one(role="yaw_rate_controller", purpose="margins")
-    p = study.parameters(name)
+    model = resolve(study)
+    name = model.one(role="yaw_rate_controller", purpose="margins")
+    p = model.parameters(name)
     Ts = study.components[name].step or study.study.base_step
     mpc = CondensedTrackingMPC(p["num"], p["den"], Ts, int(p["prediction_horizon"]), int(p["control_horizon"]),
                                float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * Ts)
@@ -96,8 +98,9 @@ def mpc_controller(study: Study) -> ct.StateSpace:
 def actuator_and_plant(study: Study, speed: float, Ts: float, delay: float) -> ct.StateSpace:
     """u -> (delta, gamma): steering equivalent (with the delay in whole MPC steps, the remainder
     as a first-order Pade term) and the yaw model at ``speed``, held over Ts."""
-    steer = FirstOrderSteering.of(study.parameters(study.one(role="steering", purpose="margins")))
-    plant = study.parameters(study.one(role="yaw_plant", purpose="margins"))
+    model = resolve(study)
+    steer = FirstOrderSteering.of(model.parameters(model.one(role="steering", purpose="margins")))
+    plant = model.parameters(model.one(role="yaw_plant", purpose="margins"))
     if plant["model"] == "transfer_function":
         Ay, By, Cy = controllable_canonical(plant["tf_num"], plant["tf_den"])
     else:
@@ -122,8 +125,9 @@ def loops(study: Study, speed: float | None = None, extra_delay: float = 0.0):
     """(yaw-rate loop L_in, path loop L_out, closed yaw-rate loop T), negative-feedback convention."""
     C = mpc_controller(study)
     Ts = C.dt
-    tracker = study.parameters(study.one(role="tracker", purpose="margins"))
-    v = speed if speed is not None else float(study.parameters(study.one(role="reference", purpose="margins"))["speed"])
+    model = resolve(study)
+    tracker = model.parameters(model.one(role="tracker", purpose="margins"))
+    v = speed if speed is not None else float(model.parameters(model.one(role="reference", purpose="margins"))["speed"])
     P = actuator_and_plant(study, v, Ts, extra_delay)
     Cfb, Cr = C[:, :2], C[:, 2]
     L_in = -(Cfb * P)
@@ -151,8 +155,9 @@ def within_bounds(study: Study, delay: float) -> bool:
 def simulated_delay_limit(study: Study, high: float = 1.0, tolerance: float = 0.01) -> float:
     """Smallest steering.command_delay at which the simulated figure-8 leaves the bounds
     (bisection; assumes within at the study's own delay); inf when still within at ``high``."""
-    steering = study.one(role="steering", purpose="margins")
-    low = float(study.parameters(steering)["command_delay"])
+    model = resolve(study)
+    steering = model.one(role="steering", purpose="margins")
+    low = float(model.parameters(steering)["command_delay"])
     if within_bounds(study, high):
         return math.inf
     while high - low > tolerance:
@@ -163,8 +168,9 @@ def simulated_delay_limit(study: Study, high: float = 1.0, tolerance: float = 0.
 
 def report(study: Study, simulate: bool = True) -> str:
     result = predicted(study)
-    steering = study.one(role="steering", purpose="margins")
-    own = float(study.parameters(steering)["command_delay"])
+    model = resolve(study)
+    steering = model.one(role="steering", purpose="margins")
+    own = float(model.parameters(steering)["command_delay"])
     lines = [f"{'loop':<16}{'gain margin':>13}{'phase margin':>14}{'crossover':>14}{'delay margin':>14}",
              "-" * 71]
     for name, m in result.items():

@@ -11,6 +11,7 @@ import pytest
 
 from components.computation_delay import ComputationDelay
 from components.gps_sensor import GPSSensor
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -146,7 +147,7 @@ def test_linear_mpc_equals_the_qp_mpc_while_no_constraint_is_active():
 
     study = Study.load(FIGURE8)
     C = mpc_controller(study)
-    p = study.parameters("mpc")
+    p = resolve(study).parameters("mpc")
     mpc = CondensedTrackingMPC(p["num"], p["den"], 0.05, 8, 3, p["Q"], p["R"], p["steer_limit"], p["steer_rate_limit"] * 0.05)
     rng = np.random.default_rng(0)
     n = 200
