@@ -263,7 +263,7 @@ def _rows_at(frame: pd.DataFrame, t: np.ndarray) -> pd.DataFrame:
 
 def _tractor_gps(study: Study) -> str | None:
     """The receiver whose fixes the pose estimator reads (a study may have one on the implement too)."""
-    estimator = study.find(role="pose_estimator")
+    estimator = resolve(study).find(role="pose_estimator")
     if len(estimator) != 1:
         return None
     return next((c.source for c in study.connections if c.target == estimator[0] and c.input == "gps_x"), None)
@@ -275,11 +275,21 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
-def _acquisitions(s: pd.DataFrame, plan, conv, frames, path_length: np.ndarray) -> list[tuple[float, float]]:
+def route_samples(path, until: float) -> dict[str, np.ndarray]:
+    """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
+    arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
+    from fields.planner.sampling import ROUTE_STEP
+
+    stop = min(path.grid_size(ROUTE_STEP), int(math.ceil(max(until, 0.0) / ROUTE_STEP)) + 2)
+    return path.grid(0, stop, ROUTE_STEP)
+
+
+def _acquisitions(s: pd.DataFrame, route: dict[str, np.ndarray], frames,
+                  path_length: np.ndarray) -> list[tuple[float, float]]:
     """(distance, time) from the end of each turn (where the route straightens before a swath) until
     the tractor's CG is within ACQUIRED of the swath's line and stays so for ACQUIRED_HOLD (or to the
-    swath's end); NaN when it never does. The first swath, entered from rest, is not a turn's."""
-    route = plan.route
+    swath's end); NaN when it never does. The first swath, entered from rest, is not a turn's.
+    ``route``: route_samples of the driven part."""
     kind, index, kappa, arc = route["kind"], route["index"], route["curvature"], route["s"]
     t, x, y = s["t"].to_numpy(), s["x"].to_numpy(), s["y"].to_numpy()
     out = []
@@ -312,15 +322,16 @@ def ground_metrics(frame: pd.DataFrame, study: Study, s: pd.DataFrame, plan, con
     """Route cross-track error by interpolation, line acquisition, GNSS outages, guidance stops and
     the interval between adjacent passes (see the module's docstring)."""
     out: dict[str, float] = {}
-    route = plan.route
+    rows = _rows_at(frame, s["t"].to_numpy())
+    name = component_named(study, "route")
+    path_length = rows[f"{name}.path_length"].to_numpy()
+    route = route_samples(plan.path, float(np.max(path_length, initial=0.0)) + 20.0)
     rxy = conv(np.column_stack([route["x"], route["y"]]))
     x, y = s["x"].to_numpy(), s["y"].to_numpy()
     xte, _ = route_cross_track(x, y, rxy[:, 0], rxy[:, 1])
-    rows = _rows_at(frame, s["t"].to_numpy())
     rms, p95, mx = _stats(xte)
     out.update(route_xte_rms_m=rms, route_xte_p95_m=p95, route_xte_max_m=mx)
-    name = component_named(study, "route")
-    acq = np.array(_acquisitions(s, plan, conv, frames, rows[f"{name}.path_length"].to_numpy()), float).reshape(-1, 2)
+    acq = np.array(_acquisitions(s, route, frames, path_length), float).reshape(-1, 2)
     if len(acq):
         ok = np.isfinite(acq[:, 0])
         out["line_acquisitions"] = float(len(acq))
@@ -362,7 +373,7 @@ def _outage_metrics(rows: pd.DataFrame, study: Study, s: pd.DataFrame, xte: np.n
     heading = signal(rows, study, "yaw_plant", "heading")
     dx, dy = ex - s["x"].to_numpy(), ey - s["y"].to_numpy()
     drift, across = np.hypot(dx, dy), -np.sin(heading) * dx + np.cos(heading) * dy
-    watchdog = study.find(role="watchdog")
+    watchdog = resolve(study).find(role="watchdog")
     safe = rows[f"{watchdog[0]}.safe_state"].to_numpy() if len(watchdog) == 1 else np.zeros(len(rows))
     t = s["t"].to_numpy()
     windows = _runs(quality != RTK_FIXED)
