@@ -434,3 +434,22 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
 def _cli(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, capture_output=True, text=True,
                           timeout=300)
+
+
+def test_a_standing_implement_jittering_gives_a_strip_of_few_points():
+    """An implement that stands (a pause, a watchdog stop) while its position jitters by a few
+    millimetres: its swept strip is buffered from points at least 5 cm apart (L1), so the strip of
+    2,000 standing samples and a 10 m drive is the drive's 200 points or so, and covers the same
+    area as the straight 10 m strip (10 m x 3 m plus the round join: at most pi 1.5^2 more)."""
+    import pandas as pd
+
+    from analysis.field_coverage import _strips
+
+    rng = np.random.default_rng(1)
+    n_drive, n_stand = 1001, 2000
+    x = np.concatenate([np.linspace(0.0, 10.0, n_drive), 10.0 + 0.003 * rng.standard_normal(n_stand)])
+    y = np.concatenate([np.zeros(n_drive), 0.003 * rng.standard_normal(n_stand)])
+    s = pd.DataFrame({"ix": x, "iy": y, "working": np.ones(len(x))})
+    (strip,) = _strips(s, 3.0)
+    assert len(strip.exterior.coords) < 600
+    assert 30.0 - 0.05 <= strip.area <= 30.0 + math.pi * 1.5 ** 2
