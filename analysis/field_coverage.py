@@ -255,10 +255,22 @@ def route_cross_track(px: np.ndarray, py: np.ndarray, rx: np.ndarray, ry: np.nda
     return dist, arc
 
 
-def _rows_at(frame: pd.DataFrame, t: np.ndarray) -> pd.DataFrame:
-    """The rows of ``frame`` at the sample times ``t`` (taken from the frame)."""
-    idx = np.clip(np.searchsorted(frame["t"].to_numpy(), t - 1e-9), 0, len(frame) - 1)
-    return frame.iloc[idx].reset_index(drop=True)
+class _RowsAt:
+    """The rows of a signal table (a DataFrame or the result's column-wise table) at the sample times
+    ``t``, read a column at a time when asked: ``rows[name]`` (a Series), ``name in rows``."""
+
+    def __init__(self, frame, t: np.ndarray) -> None:
+        self._frame = frame
+        self._idx = np.clip(np.searchsorted(frame["t"].to_numpy(), t - 1e-9), 0, len(frame) - 1)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._frame
+
+    def __getitem__(self, name: str) -> pd.Series:
+        return pd.Series(self._frame[name].to_numpy()[self._idx])
+
+    def __len__(self) -> int:
+        return len(self._idx)
 
 
 def _tractor_gps(study: Study) -> str | None:
@@ -322,7 +334,7 @@ def ground_metrics(frame: pd.DataFrame, study: Study, s: pd.DataFrame, plan, con
     """Route cross-track error by interpolation, line acquisition, GNSS outages, guidance stops and
     the interval between adjacent passes (see the module's docstring)."""
     out: dict[str, float] = {}
-    rows = _rows_at(frame, s["t"].to_numpy())
+    rows = _RowsAt(frame, s["t"].to_numpy())
     name = component_named(study, "route")
     path_length = rows[f"{name}.path_length"].to_numpy()
     route = route_samples(plan.path, float(np.max(path_length, initial=0.0)) + 20.0)
@@ -356,7 +368,7 @@ def ground_metrics(frame: pd.DataFrame, study: Study, s: pd.DataFrame, plan, con
     return out
 
 
-def _outage_metrics(rows: pd.DataFrame, study: Study, s: pd.DataFrame, xte: np.ndarray) -> dict[str, float]:
+def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarray) -> dict[str, float]:
     """Per stretch without an RTK fix: its length, the true cross-track error at its end and at most,
     the estimate's drift at its end (estimated CG - true CG: horizontal, as receivers quote their
     accuracy, and across the tractor's heading, what guidance feels), and when the watchdog stopped

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from components.gps_sensor import GPSSensor, gga_qualities
@@ -316,7 +317,8 @@ def test_through_a_gnss_outage_the_estimator_drifts_within_its_own_uncertainty_a
     assert 0.02 < std_end < 0.3 and m["outage_1_drift_across_m"] < 3 * std_end, (m["outage_1_drift_across_m"], std_end)
     bounded = run_study(Study.load(ROOT / "studies" / "field_coverage.toml", [*common, "watchdog.max_position_std=5 cm"]),
                         tmp_path / "bounded", plots=False)
-    g, b = bounded.frame, bounded.metrics
+    b = bounded.metrics
+    g = pd.DataFrame({c: bounded.frame[c].to_numpy() for c in ("t", "ekf.cross_track_std", "watchdog.safe_state")})
     crossing = float(g.loc[g["ekf.cross_track_std"] > 0.05, "t"].iloc[0])
     stop = float(g.loc[g["watchdog.safe_state"] > 0.5, "t"].iloc[0])
     assert 140 < crossing < 180 and 0 <= stop - crossing <= 0.05 + 1e-9
