@@ -423,7 +423,8 @@ def _type_name(comp) -> str:
 
 
 def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, off_loop: tuple) -> Block | None:
-    """The component's block, or None when it is off the lateral loop or reads nothing."""
+    """The component's block, or None when it has none (network_of then checks that it is off the
+    loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
     from orchestrator.composite import CompositeComponent
 
     if hasattr(comp, "lateral_linearisation"):
@@ -437,9 +438,7 @@ def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, of
             return block
     if isinstance(comp, CompositeComponent):
         return composite(comp, step, ratio, op)
-    if isinstance(comp, off_loop) or not comp.declared("input"):
-        return None
-    raise NoLinearModel(f"component {comp.name!r} ({_type_name(comp)}) has no linear model")
+    return None
 
 
 def composite(comp, step: float, ratio: int, op: OperatingPoint) -> Block:
@@ -496,6 +495,7 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins") -> Netwo
         if target in blocks and port in blocks[target].inputs and source not in blocks:
             comp = system.nodes[source].component
             if comp.declared("input") and not isinstance(comp, off_loop):
-                raise NoLinearModel(f"{study.where}: {purpose}: {source} ({_type_name(comp)}) drives "
-                                    f"{target}.{port} and has no linear model")
+                raise NoLinearModel(f"{study.where}: {purpose}: component {source!r} ({_type_name(comp)}) drives "
+                                    f"{target}.{port} in the guidance loop and has no linear model (a method "
+                                    f"lateral_linearisation, or one in analysis.loop_models)")
     return Network(blocks, [n.name for n in system.sampled_order], sources, study.study.base_step)
