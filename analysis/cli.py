@@ -102,6 +102,8 @@ def add_tune_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--identified", type=Path, default=None, metavar="IDENTIFICATION_JSON",
                    help="an `identify` result: its fitted model becomes the plant and the yaw-rate controller's model")
     p.add_argument("--model", default="second_order", help="the fitted model of --identified to use (default second_order)")
+    p.add_argument("--grid", type=float, default=1.0, help="density of the searched grid of gains (default 1; "
+                   "0.5: a quarter of the candidates for two gains)")
     p.add_argument("--no-simulation", action="store_true", help="skip the simulated check of the proposal")
     p.add_argument("--duration", type=float, default=160.0, help="simulated seconds per run (default 160)")
 
@@ -146,11 +148,13 @@ def run_tune(args: argparse.Namespace) -> int:
         raise StudyError(f"--along-track-error {args.along_track_error:g}: expected a positive number of metres")
     if not args.duration > 0:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
+    if not 0 < args.grid <= 4:
+        raise StudyError(f"--grid {args.grid:g}: expected a number in (0, 4]")
     _check_tune_out(args.out, args.overwrite)
     study = Study.load(args.study, args.set)
     identified = identified_values(study, args.identified, args.model) if args.identified else None
     targets = Targets(args.delay_margin, args.phase_margin, args.gain_margin, args.along_track_error)
-    proposal = propose(study, targets, _progress, identified)
+    proposal = propose(study, targets, _progress, identified, args.grid)
     _write_atomically(args.out, proposal.text)
     print("\n" + comparison(proposal))
     print(f"\nwritten to {args.out} (extends {args.study})")

@@ -422,6 +422,47 @@ def _type_name(comp) -> str:
     return getattr(comp, "type_name", None) or type(comp).__name__
 
 
+def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, eps: float = 1e-6) -> None:
+    """The tracker's declared linearisation against its own step function: a fresh copy at the
+    operating point (east-bound reference, the CG ``along_track_error`` behind it) with each input
+    port moved by +-eps for ``steps`` steps; the central differences of its outputs must follow the
+    declared system (inputs it leaves out: no effect). A law changed without its linearisation is
+    refused here rather than analysed wrongly."""
+    trim = {"x_ref": 10.0 + op.along_track_error, "y_ref": 0.0, "xdot_ref": op.speed, "ydot_ref": 0.0, "x": 10.0,
+            "y": 0.0, "heading": 0.0, "yaw_rate_ref": 0.0}
+    ports = [p for p in comp.declared("input") if p in trim]
+    outputs = list(lin.output_labels)
+
+    def run(port: str, delta: float) -> np.ndarray:
+        fresh = type(comp)(comp.name, comp.p)
+        fresh.initialize(0.0, step)
+        rows = []
+        for k in range(steps):
+            fresh.u.update(trim)
+            fresh.u[port] += delta
+            fresh.step(k * step, step)
+            rows.append([fresh.y[o] for o in outputs])
+        return np.array(rows)
+
+    A, B, C, D = (np.atleast_2d(np.asarray(m, float)) for m in (lin.A, lin.B, lin.C, lin.D))
+    for port in ports:
+        measured = (run(port, eps) - run(port, -eps)) / (2 * eps)
+        u = np.zeros(len(lin.input_labels))
+        if port in lin.input_labels:
+            u[lin.input_labels.index(port)] = 1.0
+        x = np.zeros(A.shape[0])
+        for k in range(steps):
+            declared = (C @ x if A.size else np.zeros(len(outputs))) + D @ u
+            x = A @ x + B @ u if A.size else x
+            bad = np.abs(measured[k] - declared) > 1e-4 * (1.0 + np.abs(declared))
+            if bad.any():
+                j = int(np.argmax(bad))
+                raise NoLinearModel(f"component {comp.name!r} ({_type_name(comp)}): its declared linearisation "
+                                    f"disagrees with its step function at {op.speed:g} m/s: d {outputs[j]} / d {port} "
+                                    f"after {k + 1} step(s) is declared {declared[j]:.6g}, its step gives "
+                                    f"{measured[k][j]:.6g} (finite differences); update lateral_linearisation")
+
+
 def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, off_loop: tuple) -> Block | None:
     """The component's block, or None when it has none (network_of then checks that it is off the
     loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
@@ -429,6 +470,8 @@ def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, of
 
     if hasattr(comp, "lateral_linearisation"):
         sys_ = comp.lateral_linearisation(op.speed, step, op.along_track_error)
+        if "tracker" in comp.roles:
+            check_tracker(comp, sys_, step, op)
         return Block.of(comp.name, list(sys_.input_labels), list(sys_.output_labels), sys_.A, sys_.B, sys_.C, sys_.D,
                         ratio, comp.sampled)
     for cls, model in models.items():

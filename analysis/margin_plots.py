@@ -132,8 +132,8 @@ def write_plots(analysis: Analysis, out: Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     files = []
     for r in analysis.points:
-        what = (f"{analysis.study.study.name}: {r.op.speed:.1f} m/s on a straight ({r.op.label}), tracker "
-                f"{analysis.study.components[analysis.anatomy.tracker].type}; L = loop gain, marks: margins")
+        what = (f"{analysis.study.study.name}, tracker {analysis.study.components[analysis.anatomy.tracker].type}: "
+                f"the loop gain L linearised on a straight at {r.op.speed:g} m/s ({r.op.label} speed), margins marked")
         suffix = f"_{r.op.label}" if len(analysis.points) > 1 else ""
         files.append(bode(r, what, out / f"bode{suffix}.png"))
         files.append(nyquist(r, what, out / f"nyquist{suffix}.png"))

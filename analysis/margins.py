@@ -24,10 +24,14 @@ trackers' linearisations (it raises v_d, and so the heading gain).
 
 Simulated check: the study run twice with the steering command delayed by d, the second time with
 the tractor started OFFSET to the side (the same seed: the same noise); the loop is stable when the
-two CG tracks have come together by the end: their separation over the last quarter of the run
-(RMS) below a quarter of the offset. An unstable loop keeps them apart (its oscillation grows until
-a saturation, the steering's or the tracker's tanh, bounds it), a stable one pulls both onto the
-reference; the difference of the two runs removes the course's own excitation (curves, noise). A
+two runs' tracking errors (the tracker's error vector, reference - CG) have come together by the
+end: their difference over the last quarter of the run (RMS) below a quarter of the offset. An
+unstable loop keeps them apart (its oscillation grows until a saturation, the steering's or the
+tracker's tanh, bounds it), a stable one pulls both onto the reference; the difference of the two
+runs removes the course's own excitation (curves, noise). The errors are compared where the
+reference stood at the same arc length (the same instant for a time-based reference): on a route
+followed by arc length the two tractors may settle a little apart along it (nothing pulls them
+back along the path) while each returns onto it. A
 fast instability (near the yaw-rate loop's phase crossover) moves the CG little: it shows as the
 steering command sitting at the yaw-rate controller's angle or rate bound on more than a tenth of
 its samples (a stable run touches the rate bound at the junctions of the path only, under 1 %).
@@ -121,7 +125,6 @@ class Anatomy:
     reference: str
     offset_key: str                          # the yaw plant's initial north position (simulated check)
     own_offset: float
-    cg_columns: tuple[str, str]              # recorded CG position (x, y) of the tractor
     command_signal: str = ""                 # recorded steering command (component.output)
     command_step: float = 0.05               # its sample time [s]
     steer_limit: float = math.inf            # the yaw-rate controller's bounds on it [rad], [rad/s]
@@ -194,26 +197,20 @@ def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
                    command_step, **limits)
 
 
-def _plant(study: Study, purpose: str) -> tuple[str, float, tuple[str, str]]:
-    """(key of the yaw plant's y0, its value, recorded CG columns), at the top level or in a subsystem
-    that exports the CG."""
+def _plant(study: Study, purpose: str) -> tuple[str, float]:
+    """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
     from orchestrator.composite import CompositeComponent
 
     plants = study.find(role="yaw_plant")
     if len(plants) == 1:
-        return f"{plants[0]}.y0", float(study.parameters(plants[0])["y0"]), (f"{plants[0]}.x_cg", f"{plants[0]}.y_cg")
+        return f"{plants[0]}.y0", float(study.parameters(plants[0])["y0"])
     for name in study.components:
         cls = study.component_class(name)
         if issubclass(cls, CompositeComponent) and len(cls.subsystem.find(role="yaw_plant")) == 1:
-            inner = cls.subsystem
-            plant = inner.find(role="yaw_plant")[0]
-            exported = {inner.exports.output_source(port): port for port in inner.exports.outputs}
-            if (plant, "x_cg") in exported and (plant, "y_cg") in exported:
-                value = study.parameters(name).get(f"{plant}.y0")
-                own = float(value if value is not None else inner.parameters(plant)["y0"])
-                return (f"{name}.{plant}.y0", own,
-                        (f"{name}.{exported[(plant, 'x_cg')]}", f"{name}.{exported[(plant, 'y_cg')]}"))
-    raise NoLinearModel(f"{study.where}: {purpose}: no yaw plant (role 'yaw_plant') whose CG is recorded")
+            plant = cls.subsystem.find(role="yaw_plant")[0]
+            value = study.parameters(name).get(f"{plant}.y0")
+            return f"{name}.{plant}.y0", float(value if value is not None else cls.subsystem.parameters(plant)["y0"])
+    raise NoLinearModel(f"{study.where}: {purpose}: no yaw plant (role 'yaw_plant')")
 
 
 # --- analysis -------------------------------------------------------------------------------
@@ -293,6 +290,9 @@ def analyse(study: Study, speed_excess_value: float | None = None, progress: Cal
 
     an = anatomy(study)
     notes = []
+    if study.sweep is not None:
+        notes.append(f"this study sweeps {', '.join(study.sweep.parameters)} ({study.sweep.mode}): the margins are at "
+                     f"its own values; a point's with --set NAME=VALUE")
     points = []
     system_reference = study.component_class(an.reference)(an.reference, study.parameters(an.reference))
     tracker_p = study.parameters(an.tracker)
@@ -333,7 +333,7 @@ def simulate(study: Study, duration: float):
 @dataclass
 class SimulatedRun:
     delay: float
-    separation: float             # RMS distance of the two CG tracks over the last quarter [m]
+    separation: float             # RMS difference of the two runs' tracking errors over the last quarter [m]
     saturated: float              # share of the steering command's samples at its angle or rate bound
     wall_time: float
 
@@ -342,9 +342,9 @@ class SimulatedRun:
         return self.separation < CONVERGED * OFFSET and self.saturated <= SATURATED
 
     def describe(self) -> str:
-        return (f"{'stable' if self.stable else 'LOST STABILITY'} (the {OFFSET:g} m offset run ends {self.separation:.3f} m "
-                f"from the other; steering command at a bound {100 * self.saturated:.1f} % of the time; "
-                f"{self.wall_time:.1f} s)")
+        return (f"{'stable' if self.stable else 'LOST STABILITY'} (tracking errors of the runs started {OFFSET:g} m "
+                f"apart end {self.separation:.3f} m apart; steering command at a bound {100 * self.saturated:.1f} % "
+                f"of the time; {self.wall_time:.1f} s)")
 
 
 def saturated_share(frame, study: Study, an: Anatomy, settle: float = 15.0) -> float:
@@ -369,10 +369,14 @@ def simulated_run(study: Study, an: Anatomy, delay: float, duration: float, valu
     delayed = study.with_values({**(values or {}), an.delay_key: delay})
     a = simulate(delayed, duration)
     b = simulate(delayed.with_values({an.offset_key: an.own_offset + OFFSET}), duration)
-    n = min(len(a), len(b))
-    t = a["t"].to_numpy()[:n]
-    x, y = an.cg_columns
-    gap = np.hypot(a[x].to_numpy()[:n] - b[x].to_numpy()[:n], a[y].to_numpy()[:n] - b[y].to_numpy()[:n])
+    t = a["t"].to_numpy()
+    x, y, s = f"{an.tracker}.error_x", f"{an.tracker}.error_y", f"{an.reference}.path_length"
+    s_a, s_b = a[s].to_numpy(), np.maximum.accumulate(b[s].to_numpy())
+    first = np.concatenate([[True], np.diff(s_b) > 0])            # b's error where its reference first stood at s
+    inside = s_a <= s_b[-1]
+    gap = np.hypot(a[x].to_numpy() - np.interp(s_a, s_b[first], b[x].to_numpy()[first]),
+                   a[y].to_numpy() - np.interp(s_a, s_b[first], b[y].to_numpy()[first]))[inside]
+    t = t[inside]
     late = t >= t[0] + 0.75 * (t[-1] - t[0])
     return SimulatedRun(delay, float(np.sqrt(np.mean(gap[late] ** 2))),
                         max(saturated_share(a, delayed, an), saturated_share(b, delayed, an)), time.perf_counter() - start)

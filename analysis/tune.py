@@ -1,8 +1,8 @@
 """Tracker gains from the study's plant (its yaw model, possibly an identified one) that meet
 margin targets, checked in simulation (``tune STUDY``).
 
-Design rule (loop shaping by search): among the tracker's gains on a grid (each tracker's own
-parameters, TUNABLE), keep those whose whole loop (opened at the steering command, analysis.margins)
+Design rule (loop shaping by search): among the tracker's gains on a grid refined by a pattern
+search (each tracker's own parameters, ``tunable``), keep those whose whole loop (opened at the steering command, analysis.margins)
 has at every operating point of the reference a delay margin, a phase margin and a gain margin at
 least the targets; take the one with the highest gain crossover (the bandwidth that keeps the
 tracking error small), and among those within 5 % of it the smallest along-track error (a
@@ -122,25 +122,51 @@ class Search:
 
 
 def search(study: Study, targets: Targets, points: list[OperatingPoint], speed_excess_value: float | None,
-           progress: Callable[[str], None] | None = None) -> tuple[Design, list[Design]]:
-    """The best design on the grid (module docstring) and every design evaluated."""
+           progress: Callable[[str], None] | None = None, grid: float = 1.0) -> tuple[Design, list[Design]]:
+    """The best design (module docstring) and every design evaluated: a log-spaced grid (``grid``
+    scales its number of points), then a pattern search around its best (feasible: the highest
+    bandwidth; none feasible yet: the largest slack), halving the step three times."""
     s = Search(study, points, speed_excess_value)
     ranges = tunable(s.cls, s.params)
-    grids = [np.geomspace(r.low, r.high, r.points) for r in ranges]
-    designs = []
+    grids = [np.geomspace(r.low, r.high, max(3, int(round(r.points * grid)))) for r in ranges]
+    designs: dict[tuple, Design] = {}
+
+    def evaluate(logs) -> Design:
+        values = {r.parameter: _rounded(float(np.clip(math.exp(v), r.low, r.high))) for r, v in zip(ranges, logs)}
+        key = tuple(values.values())
+        if key not in designs:
+            designs[key] = s.evaluate(values, targets)
+        return designs[key]
+
+    def rank(d: Design) -> tuple:
+        return (1, d.bandwidth) if d.feasible else (0, d.slack)
+
     total = int(np.prod([len(g) for g in grids]))
     for i, combo in enumerate(itertools.product(*grids)):
-        designs.append(s.evaluate({r.parameter: _rounded(float(v)) for r, v in zip(ranges, combo)}, targets))
+        evaluate([math.log(v) for v in combo])
         if progress and (i + 1) % 40 == 0:
             progress(f"  {i + 1} of {total} candidate gains evaluated")
-    feasible = [d for d in designs if d.feasible]
+    best = max(designs.values(), key=rank)
+    at = [math.log(v) for v in best.values.values()]
+    steps = [math.log(g[1] / g[0]) / 2 for g in grids]
+    for _ in range(3):
+        moved = True
+        while moved:
+            moved = False
+            for i in range(len(at)):
+                for sign in (-1, 1):
+                    trial = list(at)
+                    trial[i] += sign * steps[i]
+                    d = evaluate(trial)
+                    if rank(d) > rank(best):
+                        best, at, moved = d, trial, True
+        steps = [x / 2 for x in steps]
+    feasible = [d for d in designs.values() if d.feasible]
     if not feasible:
-        best = max(designs, key=lambda d: d.slack)
-        return best, designs
+        return best, list(designs.values())
     top = max(d.bandwidth for d in feasible)
     near = [d for d in feasible if d.bandwidth >= 0.95 * top]
-    best = max(near, key=lambda d: (-d.along_track, d.bandwidth))
-    return best, designs
+    return max(near, key=lambda d: (-d.along_track, d.bandwidth)), list(designs.values())
 
 
 @dataclass
@@ -181,7 +207,7 @@ MOVE_WEIGHT_FACTORS = (1.0, 2.0, 4.0, 8.0, 16.0)
 
 
 def propose(study: Study, targets: Targets, progress: Callable[[str], None] | None = None,
-            identified: dict[str, object] | None = None) -> Proposal:
+            identified: dict[str, object] | None = None, grid: float = 1.0) -> Proposal:
     """Search the tracker's gains with the study's yaw-rate controller; when none meets the targets
     (the inner loop's own gain margin can be the limit), again with its move weight R raised
     (MOVE_WEIGHT_FACTORS: a calmer inner loop). Round, re-analyse; an InputError when no design
@@ -198,11 +224,11 @@ def propose(study: Study, targets: Targets, progress: Callable[[str], None] | No
     closest = None
     for factor in MOVE_WEIGHT_FACTORS:
         trial = base if factor == 1.0 else base.with_values({f"{controller}.R": _rounded(R0 * factor)})
-        say(f"searching {' x '.join(f'{r.points} {r.parameter}' for r in ranges)} gains of {an.tracker} "
+        say(f"searching {' x '.join(f'{max(3, int(round(r.points * grid)))} {r.parameter}' for r in ranges)} gains of {an.tracker} "
             f"({base.components[an.tracker].type}), {controller}.R = {_rounded(R0 * factor):g}, for delay margin >= "
             f"{targets.delay:g} s, phase margin >= {targets.phase_deg:g} deg, gain margin >= {targets.gain_db:g} dB at "
             f"{', '.join(f'{p.speed:g} m/s' for p in points)} ...")
-        best, _ = search(trial, targets, points, excess, say)
+        best, _ = search(trial, targets, points, excess, say, grid)
         if closest is None or best.slack > closest[0].slack:
             closest = (best, factor)
         if best.feasible:

@@ -21,15 +21,16 @@ import pytest
 
 from analysis.loop_models import NoLinearModel
 from analysis.margins import analyse, anatomy, margins_of, simulated_run
+from components.stanley import Stanley
 from orchestrator.component import Component, inp, out, par
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
 # the study's first operating point's simulated check: run length [s]
-SIMULATED = {"figure8": 100.0, "figure8_pure_pursuit": 100.0, "figure8_stanley": 100.0, "figure8_rlfr": 100.0,
-             "figure8_hardware_layout": 100.0, "field_coverage": 80.0, "field_plot_mounted": 80.0,
-             "field_plot_pure_pursuit": 80.0, "field_plot_stanley": 80.0}
+SIMULATED = {"figure8": 80.0, "figure8_pure_pursuit": 80.0, "figure8_stanley": 80.0, "figure8_rlfr": 80.0,
+             "figure8_hardware_layout": 80.0, "field_coverage": 60.0, "field_plot_mounted": 60.0,
+             "field_plot_pure_pursuit": 60.0, "field_plot_stanley": 60.0}
 # sweeps: their loop at the study's own values is their base study's
 SWEEPS = {"speed_sweep": "figure8", "robustness": "figure8", "robustness_pure_pursuit": "figure8_pure_pursuit",
           "robustness_stanley": "figure8_stanley", "field_speed_sweep": "field_plot_mounted"}
@@ -90,6 +91,22 @@ class YawRateRelay(Component):
 
     def step(self, t: float, dt: float) -> None:
         self.y["y"] = self.u["u"]
+
+
+class WrongStanley(Stanley):
+    """Stanley's law changed (10 % more gain) without its linearisation."""
+
+    def step(self, t: float, dt: float) -> None:
+        super().step(t, dt)
+        self.y["yaw_rate_desired"] *= 1.1
+
+
+def test_a_tracker_whose_law_and_linearisation_disagree_is_refused():
+    study = Study.load(STUDIES / "figure8_stanley.toml").replace_component(
+        "tracker", "tests.test_margins:WrongStanley", step=0.05, keep_parameters=True)
+    with pytest.raises(NoLinearModel, match="'tracker' .WrongStanley.: its declared linearisation disagrees with its "
+                                            "step function .* d yaw_rate_desired / d y_ref"):
+        analyse(study, speed_excess_value=0.17)
 
 
 def test_gain_margin_against_a_gain_on_the_steering_command():
