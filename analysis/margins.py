@@ -31,10 +31,10 @@ tracker's tanh, bounds it), a stable one pulls both onto the reference; the diff
 runs removes the course's own excitation (curves, noise). The errors are compared where the
 reference stood at the same arc length (the same instant for a time-based reference): on a route
 followed by arc length the two tractors may settle a little apart along it (nothing pulls them
-back along the path) while each returns onto it. A
-fast instability (near the yaw-rate loop's phase crossover) moves the CG little: it shows as the
-steering command sitting at the yaw-rate controller's angle or rate bound on more than a tenth of
-its samples (a stable run touches the rate bound at the junctions of the path only, under 1 %).
+back along the path) while each returns onto it. A fast instability (near the yaw-rate loop's
+phase crossover) moves the CG little: it shows as the steering command sitting at the yaw-rate
+controller's angle or rate bound on more than a tenth of its samples (a stable run touches the
+rate bound at the junctions of the path only, under 3 %).
 """
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ from orchestrator.study import Study
 from .loop_models import NoLinearModel, OpenLoop, OperatingPoint, network_of
 
 OFFSET = 0.3                  # m: the second run's tractor starts this far to the side
-CONVERGED = 0.25              # stable: RMS separation of the two CG tracks over the last quarter < CONVERGED x OFFSET
+CONVERGED = 0.25              # stable: RMS difference of the two runs' errors over the last quarter < CONVERGED x OFFSET
 SATURATED = 0.10              # unstable: the steering command at its angle or rate bound on more of its samples
 TRIM_TIME = 40.0              # s of the study run to read the speed loop's steady excess
 STABLE_RADIUS = 1.0 + 1e-9
@@ -84,13 +84,15 @@ def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margi
     w_max = 0.999 * math.pi / loop.dt
     w = np.logspace(math.log10(w_min), math.log10(w_max), points)
     L = -loop.response(w)
-    one = lambda x: abs(-loop.response(np.array([x]))[0]) - 1.0
-    imag = lambda x: float(np.imag(-loop.response(np.array([x]))[0]))
+
+    def at(x: float) -> complex:
+        return complex(-loop.response(np.array([x]))[0])
+
     mag = np.abs(L)
     best_pm, best_delay, wc = math.inf, math.inf, math.nan
     for i in np.flatnonzero(np.sign(mag[:-1] - 1.0) != np.sign(mag[1:] - 1.0)):
-        x = _refine(one, w[i], w[i + 1])
-        lag = (np.angle(-loop.response(np.array([x]))[0]) + math.pi) % (2 * math.pi)   # 180 deg + arg L in [0, 2 pi)
+        x = _refine(lambda v: abs(at(v)) - 1.0, w[i], w[i + 1])
+        lag = (np.angle(at(x)) + math.pi) % (2 * math.pi)          # 180 deg + arg L, in [0, 2 pi)
         pm = math.degrees(lag if lag <= math.pi else lag - 2 * math.pi)
         best_pm = min(best_pm, pm)
         if lag / x < best_delay:
@@ -99,8 +101,8 @@ def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margi
     for i in np.flatnonzero(np.sign(L.imag[:-1]) != np.sign(L.imag[1:])):
         if L.real[i] >= 0 and L.real[i + 1] >= 0:
             continue
-        x = _refine(imag, w[i], w[i + 1])
-        re = float(np.real(-loop.response(np.array([x]))[0]))
+        x = _refine(lambda v: at(v).imag, w[i], w[i + 1])
+        re = at(x).real
         if re >= 0:
             continue
         if re > -1.0 and 1.0 / -re < gain:
@@ -232,10 +234,6 @@ class Analysis:
     points: list[PointResult]
     notes: list[str] = field(default_factory=list)
 
-    @property
-    def limiting(self) -> PointResult:
-        return min(self.points, key=lambda r: r.delay_limit)
-
 
 LOOPS = {"whole loop": "steering command", "yaw-rate loop": "steering command, path held", "path loop": "yaw-rate command"}
 
@@ -300,6 +298,10 @@ def analyse(study: Study, speed_excess_value: float | None = None, progress: Cal
         excess = None
         e = spec["along_track_error"]
         if e is None:
+            if "k_s" not in tracker_p or "k_c" not in tracker_p:
+                raise NoLinearModel(f"{study.where}: the margins: the reference {an.reference!r} is time based and the "
+                                    f"tracker {an.tracker!r} has no speed law v_d = v_r + k_s tanh(k_c e) to place its "
+                                    f"along-track error")
             if speed_excess_value is None:
                 if progress:
                     progress(f"reading the speed loop's steady excess from a {TRIM_TIME:.0f} s run ...")

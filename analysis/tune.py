@@ -172,7 +172,7 @@ def search(study: Study, targets: Targets, points: list[OperatingPoint], speed_e
 @dataclass
 class Proposal:
     study: Study                   # the tuned study
-    values: dict[str, str | float]  # the values set (keys as in Study.with_values)
+    values: dict[str, object]      # the values set (keys as in Study.with_values)
     before: Analysis
     after: Analysis
     targets: Targets
@@ -267,15 +267,17 @@ def _comment(study: Study, after: Analysis, targets: Targets) -> str:
     return "\n".join(lines)
 
 
+def _value(v) -> str:
+    return f"{v:.4g}" if isinstance(v, (int, float)) else ("[...]" if isinstance(v, list) else str(v))
+
+
 def comparison(p: Proposal) -> str:
     """Before and after: the gains set and the whole loop's margins at each operating point."""
     t = p.targets
     rows = [f"{'':<34}{'study':>12}{'proposed':>12}   target"]
     for key, value in p.values.items():
         name, param = key.split(".", 1)
-        before = p.before.study.parameters(name).get(param)
-        fmt = lambda v: f"{v:.4g}" if isinstance(v, (int, float)) else ("[...]" if isinstance(v, list) else str(v))
-        rows.append(f"{key:<34}{fmt(before):>12}{fmt(value):>12}")
+        rows.append(f"{key:<34}{_value(p.before.study.parameters(name).get(param)):>12}{_value(value):>12}")
     for b, a in zip(p.before.points, p.after.points):
         mb, ma = b.loops["whole loop"], a.loops["whole loop"]
         rows.append(f"whole loop at {a.op.speed:g} m/s ({a.op.label}):")
@@ -313,8 +315,7 @@ def simulated_check(p: Proposal, duration: float, progress: Callable[[str], None
         lines += [f"  {k:<38}{v:>10.4g}" for k, v in metrics.items()
                   if isinstance(v, float) and ("xte" in k or "euclid" in k)]
     an = p.after.anatomy
-    limiting = p.after.limiting
-    predicted = limiting.delay_limit
+    predicted = p.after.points[0].delay_limit          # the reference's first operating point: where a run spends its time
     say(f"\nbisecting the steering command delay at which the proposal loses stability (predicted {predicted:.3f} s) ...")
     lo, hi, runs = simulated_delay_limit(study, an, predicted, duration, progress=say)
     lines += ["", f"{'steering command delay at which it loses stability':<52}{'predicted':>10}{'simulated':>20}",

@@ -83,16 +83,6 @@ class SteeringCommandGain(Component):
         self.y["y"] = self.p["k"] * self.u["u"]
 
 
-class YawRateRelay(Component):
-    """A yaw-rate pass-through the margins have no model of."""
-    sampled = True
-    variables = (inp("u", "rad/s", 0.0, "in"), out("y", "rad/s", 0.0, "out"))
-    feedthrough = {"y": ("u",)}
-
-    def step(self, t: float, dt: float) -> None:
-        self.y["y"] = self.u["u"]
-
-
 class WrongStanley(Stanley):
     """Stanley's law changed (10 % more gain) without its linearisation."""
 
@@ -196,11 +186,12 @@ def test_margins_command_on_a_study_without_a_loop_exits_2(tmp_path):
 
 
 def test_margins_of_a_loop_with_an_unknown_component_exit_2(tmp_path):
-    """A filter the margins have no model of, placed in the yaw-rate feedback: refused by name."""
+    """A yaw-rate pass-through the margins have no model of (tests.toy_components.RateSink), placed
+    in the yaw-rate feedback: refused by name."""
     study = Study.load(STUDIES / "figure8.toml").with_component(
-        "odd", type="tests.test_margins:YawRateRelay", step=0.05).with_connections(
+        "odd", type="tests.toy_components:RateSink", step=0.05).with_connections(
         add=["tractor.yaw_rate -> odd.u", "odd.y -> mpc.yaw_rate"], remove=["tractor.yaw_rate -> mpc.yaw_rate"])
-    with pytest.raises(NoLinearModel, match="'odd' .YawRateRelay. drives mpc.yaw_rate in the guidance loop and has no linear model"):
+    with pytest.raises(NoLinearModel, match="'odd' .RateSink. drives mpc.yaw_rate in the guidance loop and has no linear model"):
         analyse(study, speed_excess_value=0.17)
 
 
