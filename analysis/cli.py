@@ -45,7 +45,7 @@ def _simulated_lines(analysis, duration: float) -> list[str]:
     lines.append(f"  simulated ({len(runs)} pairs of runs, {time.perf_counter() - start:.0f} s):"
                  f"{'':>14}{lo:.3f} .. {hi:.3f} s   (simulated / predicted {ratio})")
     lines.append("  (the steering's dead zones and potentiometer steps, left out of the linear model, lower the "
-                 "simulated limit by up to about 15 %)")
+                 "simulated limit by up to about 20 %)")
     return lines
 
 

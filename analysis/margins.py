@@ -474,7 +474,8 @@ def as_dict(analysis: Analysis) -> dict:
                           for name, m in r.loops.items()}} for r in analysis.points]}
 
 
-def write_json(analysis: Analysis, path) -> "Path":
+def write_json(analysis: Analysis, path):
+    """margins.json: as_dict(analysis); returns its path."""
     import json
     from pathlib import Path
 

@@ -27,8 +27,8 @@ import numpy as np
 from orchestrator.errors import InputError
 from orchestrator.study import Study
 
-from .loop_models import Block, NoLinearModel, OperatingPoint, block_of, linear_models, network_of, off_the_lateral_loop
-from .margins import Analysis, Margins, analyse, anatomy, margins_of, speed_excess
+from .loop_models import NoLinearModel, OperatingPoint, block_of, linear_models, network_of, off_the_lateral_loop
+from .margins import Analysis, Margins, analyse, anatomy, margins_of
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ the command line, and the studies that have no loop to analyse.
 Tolerance of the simulated checks. The linear model leaves out the steering's dead zones (the
 quantisation guard's +-0.5 deg, the valve's dead band) and the potentiometer's 1 deg steps. Inside
 the servo loop they act like backlash: at the small oscillations near the limit they add phase lag,
-which only lowers the delay at which the loop loses stability (by 4 % on the figure-8, 15 % with
+which only lowers the delay at which the loop loses stability (by 5 % on the figure-8, 17 % with
 Stanley's faster loop: the lag is a time of about backlash / (amplitude x frequency)). So a study as
 shipped must be stable at 0.8 x the predicted delay and unstable at 1.1 x; with the dead zones,
 steps and sensor noise taken out the linear prediction must hold to +-10 %.

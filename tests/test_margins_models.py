@@ -2,7 +2,6 @@
 (finite differences, or the component driven with small signals beside the linear block)."""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
