@@ -172,10 +172,11 @@ class FieldRoute(Component):
 
     def operating_points(self) -> dict[str, dict[str, float]]:
         """Where the guidance loop is linearised: a straight at ``work_speed`` (swaths, headland
-        passes) and at ``turn_speed``; the route point is the CG's projection, so the tracker's
-        along-track error is nil."""
+        passes) and at ``turn_speed`` (the turns, of radius down to ``turn_radius``); the route point
+        is the CG's projection, so the tracker's along-track error is nil."""
         return {"work": {"speed": float(self.p["work_speed"]), "along_track_error": 0.0},
-                "turn": {"speed": float(self.p["turn_speed"]), "along_track_error": 0.0}}
+                "turn": {"speed": float(self.p["turn_speed"]), "along_track_error": 0.0,
+                         "turn_radius": float(self.p["turn_radius"])}}
 
     def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
         """Small deviations of the CG from a straight leg heading east: the route point is the

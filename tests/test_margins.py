@@ -1,13 +1,18 @@
 """Margins of every shipped study against its simulation, the second method for the delay limit,
 the command line, and the studies that have no loop to analyse.
 
-Tolerance of the simulated checks. The linear model leaves out the steering's dead zones (the
-quantisation guard's +-0.5 deg, the valve's dead band) and the potentiometer's 1 deg steps. Inside
-the servo loop they act like backlash: at the small oscillations near the limit they add phase lag,
-which only lowers the delay at which the loop loses stability (by 5 % on the figure-8, 17 % with
-Stanley's faster loop: the lag is a time of about backlash / (amplitude x frequency)). So a study as
-shipped must be stable at 0.8 x the predicted delay and unstable at 1.1 x; with the dead zones,
-steps and sensor noise taken out the linear prediction must hold to +-10 %.
+Tolerance of the simulated checks. The margins are those of the loop linearised on a straight. It
+leaves out the steering's dead zones (the quantisation guard's +-0.5 deg, the valve's dead band) and
+the potentiometer's 1 deg steps: inside the servo loop they act like backlash, and at the small
+oscillations near the limit their phase lag lowers the delay at which the loop gives way (by 5 %
+on the figure-8, 17 % with Stanley's faster loop: the lag is a time of about backlash / (amplitude x
+frequency)). So a study on the figure-8 must be stable at 0.8 x the predicted delay and unstable at
+1.1 x; with the dead zones, steps and sensor noise taken out the prediction must hold to +-10 %.
+A field route also turns, at 1 m/s on radii of 2.5-4 m (wheel angles near 30 deg, where the EKF's
+tan(delta) is 30 % steeper than on a straight), which the straight-line model does not see: over the
+routes' first minute (a third to three quarters of it on swaths) it must be stable at 0.7 x the
+work-speed prediction and unstable at 1.1 x (benchmarks/margins.py: over two minutes the routes gave
+way at 0.81-1.03 x).
 """
 from __future__ import annotations
 
@@ -27,10 +32,11 @@ from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
-# the study's first operating point's simulated check: run length [s]
-SIMULATED = {"figure8": 80.0, "figure8_pure_pursuit": 80.0, "figure8_stanley": 80.0, "figure8_rlfr": 80.0,
-             "figure8_hardware_layout": 80.0, "field_coverage": 60.0, "field_plot_mounted": 60.0,
-             "field_plot_pure_pursuit": 60.0, "field_plot_stanley": 60.0}
+# the study's first operating point's simulated check: run length [s], the fraction of the predicted
+# delay that must be stable (module docstring)
+SIMULATED = {"figure8": (80.0, 0.8), "figure8_pure_pursuit": (80.0, 0.8), "figure8_stanley": (80.0, 0.8),
+             "figure8_rlfr": (80.0, 0.8), "figure8_hardware_layout": (80.0, 0.8), "field_coverage": (60.0, 0.7),
+             "field_plot_mounted": (60.0, 0.7), "field_plot_pure_pursuit": (60.0, 0.7), "field_plot_stanley": (60.0, 0.7)}
 # sweeps: their loop at the study's own values is their base study's
 SWEEPS = {"speed_sweep": "figure8", "robustness": "figure8", "robustness_pure_pursuit": "figure8_pure_pursuit",
           "robustness_stanley": "figure8_stanley", "field_speed_sweep": "field_plot_mounted"}
@@ -53,14 +59,15 @@ def test_every_shipped_study_is_covered_here():
 
 @pytest.mark.parametrize("name", SIMULATED)
 def test_the_simulation_loses_stability_where_the_margins_say(name):
-    """The steering command delayed by 0.8 x the predicted limit: the tractor started 0.3 m aside
-    joins the undisturbed run; by 1.1 x it does not (module docstring: the tolerance)."""
+    """The steering command delayed by 0.8 x (a route: 0.7 x) the predicted limit: the tractor
+    started 0.3 m aside joins the undisturbed run; by 1.1 x it does not (module docstring)."""
     study = Study.load(STUDIES / f"{name}.toml")
     analysis = analyse(study)
     main = analysis.points[0]
     assert main.stable and 0.2 < main.delay_limit < 2.0
-    below = simulated_run(study, analysis.anatomy, 0.8 * main.delay_limit, SIMULATED[name])
-    above = simulated_run(study, analysis.anatomy, 1.1 * main.delay_limit, SIMULATED[name])
+    duration, stable_below = SIMULATED[name]
+    below = simulated_run(study, analysis.anatomy, stable_below * main.delay_limit, duration)
+    above = simulated_run(study, analysis.anatomy, 1.1 * main.delay_limit, duration)
     assert below.stable and not above.stable, (main.delay_limit, below, above)
 
 

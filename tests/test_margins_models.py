@@ -98,6 +98,7 @@ def test_field_route_linearisation_against_its_projection(tmp_path):
         fd = (up[port] - down[port]) / 2e-3
         assert fd == pytest.approx(lin.D[lin.output_labels.index(port), 0], abs=1e-9), port
     assert route.operating_points()["work"] == {"speed": 2.0, "along_track_error": 0.0}
+    assert route.operating_points()["turn"]["turn_radius"] == 4.0
 
 
 # --- plant, steering, sensors, estimator, controller -----------------------------------------
