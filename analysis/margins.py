@@ -466,8 +466,8 @@ def report(analysis: Analysis) -> str:
             f"{an.tracker!r} ({study.components[an.tracker].type}), the steering command into "
             f"{an.steering_break[0]}.{an.steering_break[1]}, its delay {an.delay_key}"]
     head += [f"  {n}" for n in analysis.notes]
-    foot = ["", "gain margin: factor (dB) on the loop gain at the opening; '/ x': the loop is also unstable below "
-            "a gain factor x (conditionally stable). delay margin: extra delay at the opening."]
+    foot = ["", "", "gain margin: factor (dB) on the loop gain at the opening ('/ x': also unstable below a factor x);",
+            "delay margin: extra delay at the opening the loop tolerates."]
     return "\n".join(head) + table(analysis) + "\n".join(foot)
 
 
