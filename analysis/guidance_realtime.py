@@ -8,6 +8,7 @@ import pandas as pd
 from scipy.spatial import cKDTree
 
 from components.models.figure8_path import Figure8Path
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .figure8 import settled_index
@@ -22,7 +23,7 @@ def path_error(x: np.ndarray, y: np.ndarray, path: Figure8Path, spacing: float =
 
 def _path(study: Study) -> Figure8Path:
     try:
-        ref = study.parameters(component_named(study, "reference"))
+        ref = resolve(study).parameters(component_named(study, "reference"))
     except MissingSignal:
         ref = {}
     return Figure8Path(float(ref.get("radius", 10.0)), float(ref.get("centre_offset", 20.0)))

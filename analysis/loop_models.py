@@ -488,7 +488,7 @@ def composite(comp, step: float, ratio: int, op: OperatingPoint) -> Block:
     """A subsystem as one block: its inner network run over its step (the inputs held), its
     outputs what its inner components hold after it (orchestrator.composite)."""
     sub = comp.subsystem.with_values({k: v for k, v in comp.p.items() if v is not None})
-    inner = network_of(sub, op, purpose=f"the subsystem {comp.name!r}")
+    inner = network_of(sub, op, purpose=f"the subsystem {comp.name!r}", resolver=comp.resolver)
     substeps = int(round(step / inner.base_step))
     if comp.sampled or substeps % inner.period:
         raise NoLinearModel(f"component {comp.name!r}: a subsystem whose step ({step} s) is not a whole number of "
@@ -522,11 +522,13 @@ def composite(comp, step: float, ratio: int, op: OperatingPoint) -> Block:
     return Block.of(comp.name, inputs, outputs, X[:, :inner.n], X[:, inner.n:N], C, ratio=ratio, sampled=False)
 
 
-def network_of(study, op: OperatingPoint, purpose: str = "the margins") -> Network:
-    """The study's lateral loop at the operating point (see the module docstring)."""
+def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver=None) -> Network:
+    """The study's lateral loop at the operating point (see the module docstring); its components'
+    classes found by ``resolver`` (orchestrator.resolver; default: the default resolver)."""
     from orchestrator.build import build_system
+    from orchestrator.resolver import resolve
 
-    system = build_system(study)
+    system = build_system(resolve(study, resolver))
     models, off_loop = linear_models(), off_the_lateral_loop()
     blocks: dict[str, Block] = {}
     for name, node in system.nodes.items():

@@ -47,6 +47,7 @@ from typing import Callable
 
 import numpy as np
 
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .loop_models import NoLinearModel, OpenLoop, OperatingPoint, network_of
@@ -139,29 +140,31 @@ def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, 
     """(break, delay key, own delay, step) of the steering, at the top level or inside a subsystem."""
     from orchestrator.composite import CompositeComponent
 
-    found = study.find(role="steering")
+    model = resolve(study)
+    found = model.find(role="steering")
     if len(found) == 1:
         name = found[0]
         step = study.components[name].step or study.study.base_step
-        return (name, "steer_angle_cmd"), f"{name}.command_delay", float(study.parameters(name)["command_delay"]), step
+        return (name, "steer_angle_cmd"), f"{name}.command_delay", float(model.parameters(name)["command_delay"]), step
     if len(found) > 1:
         raise NoLinearModel(f"{study.where}: {purpose}: more than one steering component ({', '.join(found)})")
     for name in study.components:
-        cls = study.component_class(name)
+        cls = model.component_class(name)
         if not issubclass(cls, CompositeComponent):
             continue
         inner = cls.subsystem
-        steering = inner.find(role="steering")
+        inner_model = cls.resolver.resolve(inner)
+        steering = inner_model.find(role="steering")
         if len(steering) != 1:
             continue
         for port in inner.exports.inputs:
             if (steering[0], "steer_angle_cmd") in [tuple(t) for t in inner.exports.input_targets(port)]:
                 key = f"{steering[0]}.command_delay"
-                value = study.parameters(name).get(key)
-                own = float(value if value is not None else inner.parameters(steering[0])["command_delay"])
+                value = model.parameters(name).get(key)
+                own = float(value if value is not None else inner_model.parameters(steering[0])["command_delay"])
                 step = inner.components[steering[0]].step or inner.study.base_step
                 return (name, port), f"{name}.{key}", own, step
-    hardware = [n for n in study.find(role="tractor") if not issubclass(study.component_class(n), CompositeComponent)]
+    hardware = [n for n in model.find(role="tractor") if not issubclass(model.component_class(n), CompositeComponent)]
     if hardware:
         raise NoLinearModel(f"{study.where}: {purpose}: the tractor {hardware[0]!r} "
                             f"({study.components[hardware[0]].type}) is hardware: there is no model of it to derive "
@@ -172,7 +175,8 @@ def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, 
 def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
     """Find the loop's parts by role; a NoLinearModel (exit 2) says why a study has no loop."""
     steering_break, delay_key, own, step = _steering(study, purpose)
-    trackers = study.find(role="tracker")
+    model = resolve(study)
+    trackers = model.find(role="tracker")
     if len(trackers) != 1:
         fed = {(c.target, c.input): c for c in study.connections}.get(steering_break)
         source = f"; its steering command comes from {fed.source}.{fed.output}" if fed else \
@@ -184,7 +188,7 @@ def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
     targets = [(c.target, c.input) for c in study.connections if c.source == tracker and c.output == "yaw_rate_desired"]
     if len(targets) != 1:
         raise NoLinearModel(f"{study.where}: {purpose}: {tracker}.yaw_rate_desired drives {len(targets)} inputs, expected one")
-    references = [n for n in study.find(role="reference") if hasattr(study.component_class(n), "operating_points")]
+    references = [n for n in model.find(role="reference") if hasattr(model.component_class(n), "operating_points")]
     if len(references) != 1:
         raise NoLinearModel(f"{study.where}: {purpose}: expected one reference that declares its operating points "
                             f"(role 'reference'), found {len(references)}")
@@ -193,9 +197,9 @@ def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
     command = f"{fed.source}.{fed.output}" if fed else ""
     command_step = (study.components[fed.source].step or study.study.base_step) if fed else study.study.base_step
     limits = {}
-    controllers = study.find(role="yaw_rate_controller")
+    controllers = model.find(role="yaw_rate_controller")
     if len(controllers) == 1:
-        p = study.parameters(controllers[0])
+        p = model.parameters(controllers[0])
         limits = {"steer_limit": float(p["steer_limit"]), "steer_rate_limit": float(p["steer_rate_limit"])}
     return Anatomy(steering_break, targets[0], delay_key, own, step, tracker, references[0], *plant, command,
                    command_step, **limits)
@@ -205,15 +209,19 @@ def _plant(study: Study, purpose: str) -> tuple[str, float]:
     """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
     from orchestrator.composite import CompositeComponent
 
-    plants = study.find(role="yaw_plant")
+    model = resolve(study)
+    plants = model.find(role="yaw_plant")
     if len(plants) == 1:
-        return f"{plants[0]}.y0", float(study.parameters(plants[0])["y0"])
+        return f"{plants[0]}.y0", float(model.parameters(plants[0])["y0"])
     for name in study.components:
-        cls = study.component_class(name)
-        if issubclass(cls, CompositeComponent) and len(cls.subsystem.find(role="yaw_plant")) == 1:
-            plant = cls.subsystem.find(role="yaw_plant")[0]
-            value = study.parameters(name).get(f"{plant}.y0")
-            return f"{name}.{plant}.y0", float(value if value is not None else cls.subsystem.parameters(plant)["y0"])
+        cls = model.component_class(name)
+        if not issubclass(cls, CompositeComponent):
+            continue
+        inner = cls.resolver.resolve(cls.subsystem)
+        if len(inner.find(role="yaw_plant")) == 1:
+            plant = inner.find(role="yaw_plant")[0]
+            value = model.parameters(name).get(f"{plant}.y0")
+            return f"{name}.{plant}.y0", float(value if value is not None else inner.parameters(plant)["y0"])
     raise NoLinearModel(f"{study.where}: {purpose}: no yaw plant (role 'yaw_plant')")
 
 
@@ -294,8 +302,9 @@ def analyse(study: Study, speed_excess_value: float | None = None, progress: Cal
         notes.append(f"this study sweeps {', '.join(study.sweep.parameters)} ({study.sweep.mode}): the margins are at "
                      f"its own values; a point's with --set NAME=VALUE")
     points = []
-    system_reference = study.component_class(an.reference)(an.reference, study.parameters(an.reference))
-    tracker_p = study.parameters(an.tracker)
+    model = resolve(study)
+    system_reference = model.component_class(an.reference)(an.reference, model.parameters(an.reference))
+    tracker_p = model.parameters(an.tracker)
     for label, spec in system_reference.operating_points().items():
         excess = None
         e = spec["along_track_error"]
@@ -334,7 +343,7 @@ def simulate(study: Study, duration: float):
     from orchestrator.engine import Simulation
 
     study = study.with_values({"study.stop_time": min(study.study.stop_time, study.study.start_time + duration)})
-    return Simulation(build_system(study)).run().to_frame()
+    return Simulation(build_system(resolve(study))).run().to_frame()
 
 
 @dataclass

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 
@@ -13,7 +14,7 @@ class MissingSignal(KeyError):
 
 def component_named(study: Study, role: str) -> str:
     """The one component declaring ``role`` (Component.roles)."""
-    names = study.find(role=role)
+    names = resolve(study).find(role=role)
     if len(names) != 1:
         raise MissingSignal(f"the analysis needs exactly one component with role {role!r}, "
                             f"the study has {len(names)}" + (f" ({', '.join(names)})" if names else ""))

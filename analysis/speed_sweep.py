@@ -10,6 +10,7 @@ import pandas as pd
 
 from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space, transfer_function
 from components.models.paper_models import G_2ND
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .signals import component_named
@@ -17,7 +18,7 @@ from .signals import component_named
 
 
 def tractor_parameters(study: Study) -> TractorParameters:
-    return TractorParameters.of(study.parameters(component_named(study, "yaw_plant")))
+    return TractorParameters.of(resolve(study).parameters(component_named(study, "yaw_plant")))
 
 
 def poles_zeros(model: str, p: TractorParameters, v: float) -> tuple[np.ndarray, np.ndarray]:

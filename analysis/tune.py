@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 
 from orchestrator.errors import InputError
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .loop_models import NoLinearModel, OperatingPoint, block_of, linear_models, network_of, off_the_lateral_loop
@@ -92,8 +93,9 @@ class Search:
 
     def __init__(self, study: Study, points: list[OperatingPoint], speed_excess_value: float | None):
         self.study, self.an = study, anatomy(study, "tune")
-        self.cls = study.component_class(self.an.tracker)
-        self.params = study.parameters(self.an.tracker)
+        model = resolve(study)
+        self.cls = model.component_class(self.an.tracker)
+        self.params = model.parameters(self.an.tracker)
         self.step = study.components[self.an.tracker].step or study.study.base_step
         self.excess = speed_excess_value
         self.points = points
@@ -196,8 +198,9 @@ def identified_values(study: Study, path, model: str) -> dict[str, object]:
     if not isinstance(models, dict) or model not in models or "num" not in models[model] or "den" not in models[model]:
         known = ", ".join(sorted(models)) if isinstance(models, dict) else "none"
         raise InputError(f"--identified {path}: no model {model!r} with num and den (models: {known})")
-    plant = study.one(role="yaw_plant", purpose="tune --identified")
-    controller = study.one(role="yaw_rate_controller", purpose="tune --identified")
+    model = resolve(study)
+    plant = model.one(role="yaw_plant", purpose="tune --identified")
+    controller = model.one(role="yaw_rate_controller", purpose="tune --identified")
     num, den = [float(x) for x in models[model]["num"]], [float(x) for x in models[model]["den"]]
     return {f"{plant}.model": "transfer_function", f"{plant}.tf_num": num, f"{plant}.tf_den": den,
             f"{controller}.num": num, f"{controller}.den": den}
@@ -218,9 +221,10 @@ def propose(study: Study, targets: Targets, progress: Callable[[str], None] | No
     excess = next((r.speed_excess for r in before.points if r.speed_excess is not None), None)
     points = [r.op for r in before.points]
     an = before.anatomy
-    controller = base.one(role="yaw_rate_controller", purpose="tune")
-    R0 = float(base.parameters(controller)["R"])
-    ranges = tunable(base.component_class(an.tracker), base.parameters(an.tracker))
+    model = resolve(base)
+    controller = model.one(role="yaw_rate_controller", purpose="tune")
+    R0 = float(model.parameters(controller)["R"])
+    ranges = tunable(model.component_class(an.tracker), model.parameters(an.tracker))
     closest = None
     for factor in MOVE_WEIGHT_FACTORS:
         trial = base if factor == 1.0 else base.with_values({f"{controller}.R": _rounded(R0 * factor)})
@@ -275,9 +279,10 @@ def comparison(p: Proposal) -> str:
     """Before and after: the gains set and the whole loop's margins at each operating point."""
     t = p.targets
     rows = [f"{'':<34}{'study':>12}{'proposed':>12}   target"]
+    before = resolve(p.before.study)
     for key, value in p.values.items():
         name, param = key.split(".", 1)
-        rows.append(f"{key:<34}{_value(p.before.study.parameters(name).get(param)):>12}{_value(value):>12}")
+        rows.append(f"{key:<34}{_value(before.parameters(name).get(param)):>12}{_value(value):>12}")
     for b, a in zip(p.before.points, p.after.points):
         mb, ma = b.loops["whole loop"], a.loops["whole loop"]
         rows.append(f"whole loop at {a.op.speed:g} m/s ({a.op.label}):")

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -36,9 +37,9 @@ def timed_components(system):
 
 def measure(study_path: Path = ROOT / "studies/figure8.toml", repeat: int = 3) -> dict:
     study = load_study(study_path)
-    cold = Simulation(build_system(study)).run().wall_time_s      # first run: imports, first calls
-    warm = statistics.median(Simulation(build_system(study)).run().wall_time_s for _ in range(repeat))
-    system = build_system(study)
+    cold = Simulation(build_system(resolve(study))).run().wall_time_s      # first run: imports, first calls
+    warm = statistics.median(Simulation(build_system(resolve(study))).run().wall_time_s for _ in range(repeat))
+    system = build_system(resolve(study))
     spent = timed_components(system)
     timed = Simulation(system).run().wall_time_s
     return {"name": study.study.name, "sim_time": study.study.stop_time - study.study.start_time,

@@ -22,17 +22,19 @@ def recorded_inputs(seconds: float):
     from fmu_export.controller import controller_design, controller_feeds
     from orchestrator.build import build_system
     from orchestrator.engine import Simulation
+    from orchestrator.resolver import resolve
     from orchestrator.study import Study
 
     st = Study.load(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
-    frame = Simulation(build_system(st)).run().to_frame().iloc[::5]
+    frame = Simulation(build_system(resolve(st))).run().to_frame().iloc[::5]
     return st, frame, controller_feeds(st, controller_design(st))
 
 
 def time_python(st, frame, feeds) -> np.ndarray:
     from orchestrator.build import build_system
+    from orchestrator.resolver import resolve
 
-    nodes = build_system(st).nodes
+    nodes = build_system(resolve(st)).nodes
     comps = [nodes[n].component for n in ("tracker", "mpc", "speed_controller")]
     for c in comps:
         c.initialize(0.0, 0.05)

@@ -23,13 +23,14 @@ def main() -> None:
     from fmu_export.controller import export_controller, run_with_exported_controller
     from orchestrator.build import build_system
     from orchestrator.engine import Simulation
+    from orchestrator.resolver import resolve
     from orchestrator.study import load_study
 
     with tempfile.TemporaryDirectory() as tmp:
         fmu = export_controller(load_study(STUDY), Path(tmp) / "guidance_controller.fmu")
         smooth = run_with_exported_controller(STUDY, fmu, ["steering.potentiometer_resolution=0"])
         quantised = run_with_exported_controller(STUDY, fmu)
-    nudged = Simulation(build_system(load_study(STUDY, ["tracker.k_s=0.6000000000006"]))).run().to_frame()
+    nudged = Simulation(build_system(resolve(load_study(STUDY, ["tracker.k_s=0.6000000000006"])))).run().to_frame()
     print("max CG position difference over the 160 s figure-8 run [m]")
     print(f"  FMU vs Python, continuous wheel-angle sensor:        {max_position_difference(*smooth[:2]):.2e}")
     print(f"  FMU vs Python, 1-degree potentiometer (as the paper): {max_position_difference(*quantised[:2]):.2e}")

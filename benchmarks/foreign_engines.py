@@ -40,6 +40,7 @@ def main() -> None:
     from fmu_export.ssp_export import export_ssp
     from orchestrator.build import build_system
     from orchestrator.engine import Simulation
+    from orchestrator.resolver import resolve
     from orchestrator.study import Study
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -55,9 +56,9 @@ def main() -> None:
         with zipfile.ZipFile(ssp) as zf:
             zf.extractall(unpacked)
         py_study = Study.load(ROOT / "studies/figure8.toml")
-        py = Simulation(build_system(py_study)).run().to_frame()
+        py = Simulation(build_system(resolve(py_study))).run().to_frame()
         study = Study.load(ssp)
-        ours = Simulation(build_system(study)).run().to_frame()
+        ours = Simulation(build_system(resolve(study))).run().to_frame()
         cosim = libcosim_run(unpacked, study.study.stop_time, H)
         rows = [("Python study", metrics(py, py_study), difference(ours, py)),
                 ("this orchestrator, SSP", metrics(ours, study), 0.0),

@@ -1,38 +1,85 @@
-"""Every file of the shared real data through the project's readers, one table:
+"""Every file of the shared real data through the project's readers, whole, one table:
 
     python3 benchmarks/real_data.py [--root ../shared/realdata]
 
-Per file: the format the reader took it for, what it gave (log rows and columns, or fields with
-their area), and what is missing (a log's canonical columns it lacks, a field's problems).
+Per file (or per recording folder): the format it was read as, what it gave (log rows and
+columns, DBC messages, fields with their area), and what was skipped, repaired or named (the
+quirks, the DBC's repairs and left-out messages, a log's missing canonical columns), with the
+seconds it took. The F1TENTH runs are converted with the gyro declared in deg/s, the step tests
+with their time from time.csv, as docs/bring-your-own-data.md shows.
 """
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+F1TENTH = ["delta_cmd=commandData.delta[rad]", "yaw_rate=imuData.wz[deg/s]", "v=pfOdomData.vx[m/s]",
+           "x=pfOdomData.x[m]", "y=pfOdomData.y[m]"]
+STEPS = ["x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=trajectory.col3[rad]", "v=trajectory.col4[m/s]",
+         "delta_cmd=input.col1[rad]", "speed_cmd=input.col2[m/s]"]
 
 
-def logs(root: Path) -> list[tuple[str, str, str, str]]:
+def _log_row(root: Path, path: Path, fmt: str, options) -> tuple:
     from measurements.recording import import_recording
 
+    start = time.perf_counter()
+    try:
+        frame, report = import_recording(path, options)
+        named = report.get("quirks", []) + [f"missing {c}" for c in report["missing"]]
+        notes = [n for n in report.get("notes", []) if "index the writer left" not in n]
+        gave = (f"{len(frame)} rows, {report['used']['duration']:.0f} s at {report['rate_hz']:.3g} Hz "
+                f"({report['used']['how'].split(' (')[0]}): {', '.join(frame.columns[:7])}"
+                + (" ..." if len(frame.columns) > 7 else ""))
+        return (str(path.relative_to(root)), fmt, gave, "; ".join(named + notes[:1])[:160] or "-",
+                f"{time.perf_counter() - start:.1f}")
+    except Exception as exc:          # noqa: BLE001 - the table reports what failed
+        return (str(path.relative_to(root)), fmt, f"FAILED: {exc}"[:160], "", f"{time.perf_counter() - start:.1f}")
+
+
+def logs(root: Path) -> list[tuple]:
+    from measurements.recording import ImportOptions
+    from measurements.signals import parse_signal
+
     rows = []
-    for path in sorted((root / "nmea_gpsd_testlogs").glob("*.log")) + [root / "isoxml_dev4ag_timelogs"]:
-        try:
-            frame, report = import_recording(path)
-            fmt = "ISO 11783-10 TaskData + TLG" if path.is_dir() else \
-                f"NMEA ({report['nmea']['epochs']} epochs, qualities {'/'.join(report['nmea']['by_quality'])})"
-            rows.append((str(path.relative_to(root)), fmt,
-                         f"{len(frame)} rows at {report['rate_hz']:g} Hz: {', '.join(c for c in frame.columns[:8])}"
-                         + (" ..." if len(frame.columns) > 8 else ""), ", ".join(report["missing"]) or "-"))
-        except Exception as exc:          # noqa: BLE001 - the table reports what failed
-            rows.append((str(path.relative_to(root)), "?", f"FAILED: {exc}", ""))
+    for path in sorted((root / "nmea_gpsd_testlogs").glob("*.log")):
+        rows.append(_log_row(root, path, "NMEA", ImportOptions()))
+    for path in sorted((root / "isoxml_dev4ag_timelogs").glob("TLG*.xml")):
+        rows.append(_log_row(root, path, "ISO 11783-10 TLG", ImportOptions()))
+    for run in sorted((root / "f1tenth_frictionmaps").rglob("DS*")):
+        if run.is_dir():
+            rows.append(_log_row(root, run, "tables joined on time",
+                                 ImportOptions(signals=[parse_signal(s) for s in F1TENTH])))
+    folders = sorted((root / "f1tenth_autokoopman_steps").rglob("measurement_*"), key=lambda p: int(p.name.split("_")[1]))
+    for m in folders:
+        rows.append(_log_row(root, m, "headerless tables", ImportOptions(signals=[parse_signal(s) for s in STEPS],
+                                                                          time="time.col1[s]")))
     return rows
 
 
-def fields(root: Path) -> list[tuple[str, str, str, str]]:
-    from fields.readers import read_fields, read_folder
+def dbcs(root: Path) -> list[tuple]:
+    from measurements.dbc import load_dbc_file
+
+    rows = []
+    for path in sorted((root / "opendbc").rglob("*.dbc")):
+        start = time.perf_counter()
+        try:
+            db, report = load_dbc_file(path)
+            repairs = ", ".join(f"{k} ({v})" for k, v in report.repairs.items())
+            left = ", ".join(report.skipped)
+            rows.append((str(path.relative_to(root)), "DBC", f"{len(db.messages)} messages, "
+                         f"{sum(len(m.signals) for m in db.messages)} signals; {report.loader}"[:110],
+                         ("; ".join(x for x in (repairs, f"left out: {left}" if left else "") if x))[:160] or "-",
+                         f"{time.perf_counter() - start:.1f}"))
+        except Exception as exc:      # noqa: BLE001
+            rows.append((str(path.relative_to(root)), "DBC", f"FAILED: {exc}"[:160], "", ""))
+    return rows
+
+
+def fields(root: Path) -> list[tuple]:
+    from fields.readers import read_fields
 
     rows = []
     targets = [(p, None) for p in sorted((root / "fields2cover_data").iterdir()) if p.suffix in (".xml", ".json", ".geojson")]
@@ -40,6 +87,7 @@ def fields(root: Path) -> list[tuple[str, str, str, str]]:
                 (root / "isoxml_dev4ag_timelogs" / "PARTFIELDS_TASKDATA.XML", None),
                 (root / "iam_field_open_autonomous_tractor" / "datasets" / "iam_field" / "field_boundaries.csv", "EPSG:6677")]
     for path, crs in targets:
+        start = time.perf_counter()
         try:
             found = read_fields(path, crs)
             area = sum(f.area_ha for f in found)
@@ -47,9 +95,28 @@ def fields(root: Path) -> list[tuple[str, str, str, str]]:
             rows.append((str(path.relative_to(root)), f"fields ({found[0].crs.split(' (')[0][:40]})",
                          f"{len(found)} field(s), {area:.2f} ha, {sum(f.holes for f in found)} hole(s), "
                          f"{sum(len(f.lines) for f in found)} line(s)",
-                         f"{problems} self-intersecting" if problems else "-"))
+                         f"{problems} self-intersecting" if problems else "-", f"{time.perf_counter() - start:.1f}"))
         except Exception as exc:          # noqa: BLE001
-            rows.append((str(path.relative_to(root)), "fields", f"not a field file: {exc}"[:90], ""))
+            rows.append((str(path.relative_to(root)), "fields", f"not a field file: {exc}"[:120], "", ""))
+    return rows
+
+
+def tracks(root: Path) -> list[tuple]:
+    """Each time log's track as the field the harvester worked (fields --from-track)."""
+    from fields.track import field_from_track
+    from measurements.recording import positions
+
+    rows = []
+    for path in sorted((root / "isoxml_dev4ag_timelogs").glob("TLG*.xml")):
+        start = time.perf_counter()
+        try:
+            t, lat, lon, report = positions(path)
+            f = field_from_track(t, lat, lon, path.stem, str(path), report.get("working_width_m"))
+            rows.append((str(path.relative_to(root)), "field from its track",
+                         f"{f.area_ha:.2f} ha worked, {f.properties['passes']} passes, width "
+                         f"{f.properties['working_width_m']:g} m", "-", f"{time.perf_counter() - start:.1f}"))
+        except Exception as exc:          # noqa: BLE001
+            rows.append((str(path.relative_to(root)), "field from its track", f"not made: {exc}"[:120], "", ""))
     return rows
 
 
@@ -59,11 +126,15 @@ def main() -> None:
     args = ap.parse_args()
     if not args.root.is_dir():
         sys.exit(f"{args.root}: not found")
-    rows = logs(args.root) + fields(args.root)
-    widths = [max(len(r[i]) for r in rows) for i in range(3)]
-    print(f"{'file':{widths[0]}s}  {'read as':{widths[1]}s}  {'gave':{widths[2]}s}  missing")
+    rows = logs(args.root) + dbcs(args.root) + fields(args.root) + tracks(args.root)
+    head = ("file", "read as", "gave", "skipped, repaired or named", "s")
+    widths = [max(len(str(r[i])) for r in rows + [head]) for i in range(4)]
+    print(" | ".join(f"{h:{w}s}" for h, w in zip(head, widths)) + " | s")
+    print("-|-".join("-" * w for w in widths) + "-|--")
     for r in rows:
-        print(f"{r[0]:{widths[0]}s}  {r[1]:{widths[1]}s}  {r[2]:{widths[2]}s}  {r[3]}")
+        print(" | ".join(f"{str(x):{w}s}" for x, w in zip(r, widths)) + f" | {r[4]}")
+    failed = [r for r in rows if str(r[2]).startswith(("FAILED", "not a field", "not made"))]
+    print(f"\n{len(rows)} files or folders read, {len(failed)} not")
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from components.models.steering_equivalent import FirstOrderSteering
 from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
+from orchestrator.resolver import resolve
 from orchestrator.study import Study, StudyError
 
 from .catalogue import CATALOGUE
@@ -33,16 +34,17 @@ class Baseline:
 
 
 def baseline_from_study(study: Study) -> Baseline:
+    model = resolve(study)
     found: dict[str, str] = {}
     for role in ROLES:
-        names = study.find(role=role)
+        names = model.find(role=role)
         if names:
             found[role] = names[0]
     for role in ROLES[:2]:
         if role not in found:
             raise StudyError(f"{study.where}: components: the diagnosis needs a component with role {role!r}; "
                              f"found {sorted(study.components)}")
-    view = BaselineStudy(study, found)
+    view = BaselineStudy(model, found)
     tp = view.parameters("yaw_plant")
     if tp["model"] not in PHYSICAL_MODELS:
         raise StudyError(f"{study.where}: components.{found['yaw_plant']}.parameters.model: the diagnosis needs a "

@@ -28,10 +28,10 @@ class BaselineStudy:
     """The baseline study as the effects read it: component names and resolved (SI) parameters
     by role (``steering``, ``yaw_plant``, ``gps``, ``gyro``), each optional but the first two."""
 
-    def __init__(self, study, names: Mapping[str, str]) -> None:
-        self.study = study
+    def __init__(self, model, names: Mapping[str, str]) -> None:
+        self.model, self.study = model, model.study
         self.names = dict(names)
-        self._params = {role: study.parameters(name) for role, name in names.items()}
+        self._params = {role: model.parameters(name) for role, name in names.items()}
 
     def has(self, role: str) -> bool:
         return role in self.names

@@ -41,11 +41,11 @@ def steering_twin(baseline, cmd: np.ndarray, h: float, q: float, seed: int = 0) 
     view = baseline.study
     if view is None or not view.has("steering"):
         return None
-    study, name = view.study, view.names["steering"]
-    cls = study.component_class(name)
+    model, name = view.model, view.names["steering"]
+    cls = model.component_class(name)
     if not {COMMAND} <= set(cls.declared("input")) or not {TRUE, READING} <= set(cls.declared("output")):
         return None
-    params = dict(study.parameters(name))
+    params = dict(model.parameters(name))
     if RESOLUTION_PARAMETER in params:
         params[RESOLUTION_PARAMETER] = q
     comp = cls(name, params, np.random.default_rng(seed))

@@ -10,10 +10,20 @@ from pathlib import Path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", type=Path, help="a GeoJSON, WKT, GML or ISO 11783-10 TaskData file, a polygon CSV, "
-                   "an AgOpenGPS field folder, or a folder of such files")
+    p.add_argument("source", type=Path, help="a GeoJSON, WKT, GML, KML/KMZ or ISO 11783-10 TaskData file, a polygon "
+                   "CSV, an AgOpenGPS field folder, or a folder of such files; with --from-track a GNSS track (any "
+                   "recording convert reads: NMEA, a bag, a TLG time log, a lat/lon table)")
     p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it (EPSG:6677 ...)")
     p.add_argument("--out", type=Path, default=None, help="folder for fields.png, fields.json, fields.geojson")
+    t = p.add_argument_group("a field from a track (--from-track)")
+    t.add_argument("--from-track", action="store_true", help="the field a machine worked: the outline of the ground "
+                   "its track covered and its straight passes as AB lines (write it with --out, plan it with plan "
+                   "OUT/fields.geojson)")
+    t.add_argument("--width", type=float, default=None, help="working width [m] (default: the recording's, ISO DDI 67, "
+                   "else the spacing of the passes)")
+    t.add_argument("--signal", action="append", default=[], metavar="COLUMN=EXPR[unit]",
+                   help="a table's position columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN")
+    t.add_argument("--time", default=None, metavar="COLUMN[unit|datetime]", help="a table's time column (as convert)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -24,7 +34,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.out is not None:
         check_output(args.out, overwrite=True)
-    fields, skipped = read_folder(args.source, args.crs) if args.source.is_dir() else (read_fields(args.source, args.crs), [])
+    if args.from_track:
+        fields, skipped = [track_field(args)], []
+    else:
+        fields, skipped = read_folder(args.source, args.crs) if args.source.is_dir() else \
+            (read_fields(args.source, args.crs), [])
     print(f"{args.source}: {len(fields)} field(s)")
     for why in skipped:
         print(f"  not read: {why}")
@@ -47,6 +61,25 @@ def run(args: argparse.Namespace) -> int:
         print(f"written: {args.out}/fields.png, fields.json, fields.geojson"
               + (f" (without {', '.join(local)}: local coordinates, no longitude/latitude)" if local else ""))
     return 0
+
+
+def track_field(args: argparse.Namespace):
+    """The field of the track in ``args.source`` (measurements reads the recording)."""
+    from measurements.recording import ImportOptions, positions
+    from measurements.signals import parse_signal
+
+    from .track import field_from_track
+
+    options = ImportOptions(signals=[parse_signal(s) for s in args.signal], time=args.time)
+    t, lat, lon, report = positions(args.source, options)
+    width = args.width or report.get("working_width_m")
+    f = field_from_track(t, lat, lon, args.source.stem or args.source.name, str(args.source), width)
+    if args.width is None and width is not None:
+        f.properties["working_width_from"] = "the recording's ISO 11783 actual working width (DDI 67), median"
+    print(f"track {args.source}: {f.properties['track_fixes']} fixes in {f.properties['track_pieces']} piece(s), "
+          f"{f.properties['track_length_m']:.0f} m; working width {f.properties['working_width_m']:g} m "
+          f"({f.properties['working_width_from']}); {f.properties['passes']} straight passes")
+    return f
 
 
 def geojson(fields) -> dict:
@@ -94,7 +127,7 @@ def draw(fields, path: Path, title: str) -> Path:
         for k, g in enumerate(f.lines):
             ax.plot(g.points[:, 0], g.points[:, 1], color="tab:blue", lw=1.2, label="guidance line" if k == 0 else None)
         ax.set_title(f"{f.name[:28]}\n{f.area_ha:.2f} ha, {f.holes} hole(s), {len(f.lines)} line(s)"
-                     + ("" if not f.problems() else "\nINVALID: self-intersecting"), fontsize=9)
+                     + ("" if not f.problems() else f"\nINVALID: {f.problems()[0][:36]}..."), fontsize=9)
         ax.set_aspect("equal")
         ax.set_xlabel("east [m]" + ("" if f.origin else " (local)"), fontsize=8)
         ax.set_ylabel("north [m]", fontsize=8)
@@ -116,5 +149,6 @@ def register(registry) -> None:
     from .plan_cli import register as register_plan
 
     register_plan(registry)
-    registry.add_command("fields", "list and draw the fields in a file or folder (GeoJSON, WKT, GML, ISOXML, AgOpenGPS)",
+    registry.add_command("fields", "list and draw the fields in a file or folder (GeoJSON, WKT, GML, KML, ISOXML, "
+                                   "AgOpenGPS), or make one from a GNSS track (--from-track)",
                          add_arguments, run)

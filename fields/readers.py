@@ -5,11 +5,13 @@
 - WKT (a ``.wkt`` file): POLYGON, MULTIPOLYGON, LINESTRING;
 - GML polygons (Fields2Cover's GAOS parcels: ``gml:coordinates`` under ``srsName``), the field's
   attributes (swath_width, best_angle ...) kept as properties;
-- ISO 11783-10 TaskData (TASKDATA.XML, any file name): partfields (PFD) with their boundary
+- ISO 11783-10 TaskData (TASKDATA.XML, any file name; versions 3 and 4): partfields (PFD) with their boundary
   polygons (PLN type 1: exterior and interior rings; obstacles, water, buildings of types 3-6
   inside it become holes), guidance groups (GGP/GPN: AB lines from the A and B reference points,
   curves from the pattern's points), read with the ``isoxml`` package;
-- AgOpenGPS field folders: Field.txt (StartFix latitude, longitude: the local frame's origin),
+- KML (Google Earth, a farm software's export) and KMZ (zipped KML): Polygon placemarks are fields
+  (inner rings holes), LineString placemarks guidance lines;
+- AgOpenGPS field folders (file names in any letter case): Field.txt (StartFix latitude, longitude: the local frame's origin),
   Boundary.txt (rings: the first the fence, the others holes), Headland.txt, TrackLines.txt,
   ABLines.txt and CurveLines.txt (local east/north metres);
 - a CSV of polygons, one per row (``name, x1, y1, z1, x2, y2, z2, ...``, as the open autonomous
@@ -244,7 +246,7 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
         boundary = polygon(to_local(ext), [to_local(h) for h in holes + [r for r in rings if r is not ext]])
         f = Field(str(pf.designator or pf.id), boundary, origin, str(path), coords.text,
                   properties={"id": pf.id, **({"area_m2_in_file": float(pf.area)} if pf.area else {})})
-        for ggp in pf.guidance_groups:
+        for ggp in getattr(pf, "guidance_groups", None) or ():     # version 3 has none
             for gpn in ggp.guidance_patterns:
                 pts = [p for ls in gpn.line_strings for p in ls.points]
                 xy = np.array([[float(p.east), float(p.north)] for p in pts], float)
@@ -262,20 +264,34 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
 # --- AgOpenGPS -----------------------------------------------------------------------------------------
 def read_agopengps(folder: Path) -> list[Field]:
     origin = _aog_origin(folder)
-    rings = _aog_rings(folder / "Boundary.txt")
+    rings = _aog_rings(aog_file(folder, "Boundary.txt"))
     if not rings:
-        raise FieldError(f"{folder / 'Boundary.txt'}: no boundary ring in it (expected $Boundary, a True/False "
+        raise FieldError(f"{aog_file(folder, 'Boundary.txt')}: no boundary ring in it (expected $Boundary, a True/False "
                          f"drive-through flag, a point count, then easting,northing,heading lines)")
     boundary = polygon(rings[0], rings[1:])
     crs = f"AgOpenGPS local metres about StartFix {origin[0]:.7f}, {origin[1]:.7f}"
     f = Field(folder.name, boundary, origin, str(folder), crs)
-    head = folder / "Headland.txt" if (folder / "Headland.txt").exists() else folder / "Headland.Txt"
+    head = aog_file(folder, "Headland.txt")
     if head.exists():
         hl = _aog_rings(head)
         if hl:
             f.headland = polygon(hl[0], hl[1:])
     f.lines = _aog_tracks(folder)
     return [f]
+
+
+def aog_file(folder: Path, name: str) -> Path:
+    """An AgOpenGPS file of the folder in whatever letter case it was written (Boundary.Txt,
+    BOUNDARY.TXT); the name as given when the folder has none."""
+    if (folder / name).exists():
+        return folder / name
+    lower = name.lower()
+    found = [p for p in folder.iterdir() if p.name.lower() == lower] if folder.is_dir() else []
+    return found[0] if found else folder / name
+
+
+def is_agopengps(folder: Path) -> bool:
+    return folder.is_dir() and aog_file(folder, "Field.txt").exists() and aog_file(folder, "Boundary.txt").exists()
 
 
 def _lines(path: Path) -> list[str]:
@@ -286,7 +302,7 @@ def _lines(path: Path) -> list[str]:
 
 
 def _aog_origin(folder: Path) -> tuple[float, float]:
-    path = folder / "Field.txt"
+    path = aog_file(folder, "Field.txt")
     lines = _lines(path)
     for i, line in enumerate(lines[:-1]):
         if line.lower().startswith("startfix"):
@@ -331,7 +347,7 @@ def _aog_rings(path: Path) -> list[np.ndarray]:
 
 def _aog_tracks(folder: Path) -> list[GuidanceLine]:
     out = []
-    track = folder / "TrackLines.txt"
+    track = aog_file(folder, "TrackLines.txt")
     if track.exists():              # name, heading, A, B, nudge, mode, visible, count, count points
         lines = [ln for ln in _lines(track) if ln]
         i = 1 if lines and lines[0].startswith("$") else 0
@@ -347,7 +363,7 @@ def _aog_tracks(folder: Path) -> list[GuidanceLine]:
                                  f"nudge, mode, visible, a point count and the points") from None
             out.append(GuidanceLine(name, np.array(pts if len(pts) >= 2 else [a, b], float)))
             i += 8 + count
-    ab = folder / "ABLines.txt"
+    ab = aog_file(folder, "ABLines.txt")
     if ab.exists():                  # name, heading [deg, from north clockwise], easting, northing
         for k, line in enumerate(ln for ln in _lines(ab) if ln and not ln.startswith("$")):
             parts = line.split(",")
@@ -357,7 +373,7 @@ def _aog_tracks(folder: Path) -> list[GuidanceLine]:
                 raise FieldError(f"{ab}: line {k + 1}: expected name,heading,easting,northing, got {line!r}") from None
             d = np.array([math.sin(math.radians(heading)), math.cos(math.radians(heading))])
             out.append(GuidanceLine(parts[0], np.array([[e, n], [e + 100 * d[0], n + 100 * d[1]]])))
-    curve = folder / "CurveLines.txt"
+    curve = aog_file(folder, "CurveLines.txt")
     if curve.exists():               # $CurveLines, then name, heading, count, count points
         lines = [ln for ln in _lines(curve) if ln]
         i = 1 if lines and lines[0].startswith("$") else 0
@@ -423,7 +439,11 @@ def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
     kind = kind_of(path)
     if kind is None:
         raise FieldError(f"{path}: not a field file: expected .geojson/.json, .wkt, .xml (GML or ISO 11783-10 "
-                         f"TaskData), .csv, or an AgOpenGPS field folder")
+                         f"TaskData), .kml/.kmz, .csv, or an AgOpenGPS field folder (a GNSS track: --from-track)")
+    if kind == "kml":
+        from .kml import read_kml_shapes
+
+        return _fields_from_shapes(path, read_kml_shapes(path), crs, "EPSG:4326")
     if kind == "xml":
         root = _xml(path)
         if root.tag.endswith("ISO11783_TaskData"):
@@ -435,17 +455,17 @@ def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
 def read_folder(path: Path, crs: str | None = None) -> tuple[list[Field], list[str]]:
     """(fields, why each other file was skipped) of a folder: an AgOpenGPS field, or every
     readable file in it (and AgOpenGPS fields one level down)."""
-    if (path / "Field.txt").exists() and (path / "Boundary.txt").exists():
+    if is_agopengps(path):
         return read_agopengps(path), []
     out, skipped = [], []
     for p in sorted(path.iterdir()):
-        if p.is_file() and kind_of(p):
-            try:
+        try:
+            if p.is_file() and kind_of(p):
                 out += read_fields(p, crs)
-            except FieldError as exc:
-                skipped.append(str(exc))
-        elif p.is_dir() and (p / "Field.txt").exists():
-            out += read_agopengps(p)
+            elif p.is_dir() and aog_file(p, "Field.txt").exists():
+                out += read_agopengps(p)
+        except FieldError as exc:         # one bad field does not hide the others: it is named
+            skipped.append(str(exc))
     if not out:
         raise FieldError(f"{path}: no field file in it (GeoJSON, WKT, GML, ISO 11783-10 TaskData, an AgOpenGPS "
                          f"field folder, a polygon CSV)" + (f"; {'; '.join(skipped[:3])}" if skipped else ""))
@@ -462,4 +482,6 @@ def kind_of(path: Path) -> str | None:
         return "xml"
     if suffix == ".csv":
         return "csv"
+    if suffix in (".kml", ".kmz"):
+        return "kml"
     return None

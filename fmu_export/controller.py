@@ -25,6 +25,7 @@ from components.speed_pid import SpeedPID
 from components.yaw_rate_mpc import YawRateMPC
 from orchestrator.build import build_system
 from orchestrator.errors import InputError
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .packaging import PackagingError, check_fmu_target
@@ -63,10 +64,11 @@ class ControllerDesign:
 
 def controller_design(study: Study) -> ControllerDesign:
     where = str(study.path)
-    system = build_system(study)
+    model = resolve(study)
+    system = build_system(model)
     names: dict[str, str] = {}
     for prefix, (role, cls) in ROLES.items():
-        found = study.find(role=role, type=cls)
+        found = model.find(role=role, type=cls)
         if len(found) != 1:
             raise ExportError(f"{where}: the controller export needs exactly one {cls.__name__} "
                               f"component, found {len(found)}" + (f" ({', '.join(found)})" if found else ""))
@@ -180,13 +182,13 @@ def _port_name(design: ControllerDesign):
 
 def controller_study(study: Study, design: ControllerDesign, fmu_path: str, name: str = "controller") -> Study:
     """The study with the three controller components folded into the FMU (same outside wiring)."""
-    return study.collapse(design.names.values(), into=name, type=fmu_path, step=design.sample_time,
-                          port_name=_port_name(design))
+    return resolve(study).collapse(design.names.values(), into=name, type=fmu_path, step=design.sample_time,
+                                   port_name=_port_name(design))
 
 
 def controller_feeds(study: Study, design: ControllerDesign) -> dict[str, str]:
     """FMU input -> the study signal ("component.output") that drives it, from the study's wiring."""
-    inputs, _, _ = study.boundary(design.names.values(), _port_name(design))
+    inputs, _, _ = resolve(study).boundary(design.names.values(), _port_name(design))
     feeds = {port: f"{v['source'][0]}.{v['source'][1]}" for port, v in inputs.items() if v["source"]}
     return {name: feeds[name] for name, _, _ in design.inputs if name in feeds}
 
@@ -198,6 +200,6 @@ def run_with_exported_controller(study_path: Path, fmu: Path, overrides: list[st
 
     study = Study.load(study_path, overrides or [])
     with_fmu = controller_study(study, controller_design(study), str(fmu))
-    python_frame = Simulation(build_system(study)).run().to_frame()
-    return python_frame, Simulation(build_system(with_fmu)).run().to_frame(), study
+    python_frame = Simulation(build_system(resolve(study))).run().to_frame()
+    return python_frame, Simulation(build_system(resolve(with_fmu))).run().to_frame(), study
 

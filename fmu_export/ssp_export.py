@@ -17,6 +17,7 @@ from xml.sax.saxutils import quoteattr
 
 from orchestrator.build import System, build_system
 from orchestrator.errors import InputError
+from orchestrator.resolver import resolve
 from orchestrator.ssp import STUDY_ANNOTATION
 from orchestrator.study import Study
 from orchestrator.units import base_unit
@@ -125,7 +126,7 @@ def export_ssp(study: Study, out: Path) -> Path:
         check_fmu_target(out)
     except PackagingError as exc:
         raise SSPExportError(str(exc).replace(".fmu", ".ssp")) from None
-    system = build_system(study)
+    system = build_system(resolve(study))
     missing = non_exportable(system)
     if missing:
         raise SSPExportError(f"{study.path}: cannot export as SSP: no FMU form for "

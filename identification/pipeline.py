@@ -10,6 +10,7 @@ import numpy as np
 
 from components.models import paper_models
 from components.models.yaw_dynamics import TractorParameters
+from orchestrator.resolver import resolve
 from orchestrator.results import write_json, write_table
 from orchestrator.study import Study
 
@@ -98,7 +99,8 @@ def frf_summary(r: frf_mod.FRF) -> dict[str, Any]:
 def tractor_parameters(study: Study | None) -> TractorParameters:
     if study is None:
         return TractorParameters()
-    return TractorParameters.of(study.parameters(study.one(role="yaw_plant", purpose="identification")))
+    model = resolve(study)
+    return TractorParameters.of(model.parameters(model.one(role="yaw_plant", purpose="identification")))
 
 
 def build_report(analyses: dict[float, dict], main_speed: float, validation: dict[str, Experiment],

@@ -1,6 +1,6 @@
-"""``convert``: a raw field recording (NMEA files and CAN logs) to the measured log (CSV or
-Parquet), with its import report beside it; and the recording options ``identify`` and
-``diagnose`` share."""
+"""``convert``: a raw recording (NMEA, CAN with any maker's DBC, ROS bags, ISO 11783-10 time logs,
+other tools' tables) to the measured log (CSV or Parquet), with its import report beside it, or
+``--list`` of what it holds; and the recording options ``identify`` and ``diagnose`` share."""
 from __future__ import annotations
 
 import argparse
@@ -11,12 +11,23 @@ from pathlib import Path
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """Options for reading a raw recording (ignored for a CSV/Parquet log)."""
-    g = p.add_argument_group("raw recordings (a folder or one file: NMEA, CAN logs, ROS bags, ISO 11783-10 TaskData)")
-    g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (default: the project's "
-                   "agrobot_tractor.dbc; components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
-    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=[-]Message.Signal|/topic.field",
-                   help="take a log column from this CAN signal, or from this field of a ROS topic (a leading '-' "
-                        "flips its sign; lat/lon in degrees become x/y); repeatable")
+    g = p.add_argument_group("raw recordings (a folder or one file: NMEA, CAN logs, ROS bags, ISO 11783-10 TaskData, "
+                             "tables)")
+    g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (any maker's: what cannot be "
+                   "decoded is left out and named; default: the project's agrobot_tractor.dbc; "
+                   "components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
+    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=EXPR[unit]",
+                   help="a log column from an expression of signals: Message.Signal (CAN), /topic.field (ROS), "
+                        "TABLE.COLUMN or COLUMN (tables); sums, differences and numbers (A+B, -0.5*(A+B), A*3.6); "
+                        "[unit] any unit pint knows (deg, deg/s, km/h, g), else the source's own; an angle, rate or "
+                        "speed without any unit must be declared; lat/lon in degrees become x/y; repeatable")
+    g.add_argument("--bus", default=None, help="the CAN bus to read when a log holds several (can0, can1, or a "
+                   "Vector channel number)")
+    g.add_argument("--time", default=None, metavar="COLUMN[unit|datetime]",
+                   help="a table's time: COLUMN[s|ms|us|ns], COLUMN[datetime], SECONDS+NANOSECONDS, DATE+TIME[datetime], "
+                        "or TABLE.COLUMN for tables without their own (default: found by name, e.g. t, time, s+ns)")
+    g.add_argument("--keep-spikes", action="store_true", help="keep the samples found to be spikes (they are "
+                   "named in the report either way)")
     g.add_argument("--steering-ratio", type=float, default=None, metavar="R",
                    help="the recording's steering angles are handwheel angles: divide delta and delta_cmd by R "
                         "(default: the study's steering_ratio for identify/diagnose, else 1)")
@@ -30,7 +41,6 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
 def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
     from .log import LogError
-    from .raw_can import parse_source
     from .recording import ImportOptions
 
     if args.wheelbase is not None and not 0.5 <= args.wheelbase <= 10.0:
@@ -43,15 +53,22 @@ def recording_options(args: argparse.Namespace):
         raise LogError("--run and --time-range: give one of them")
     if args.dbc is not None and not args.dbc.is_file():
         raise LogError(f"--dbc {args.dbc}: no such file")
-    from .rosbag import parse_topic_source
+    from .signals import parse_signal
+    from .tables import parse_time
 
     if args.steering_ratio is not None and not 0.05 <= args.steering_ratio <= 50.0:
         raise LogError(f"--steering-ratio {args.steering_ratio:g}: expected the handwheel-to-road-wheel ratio, "
                        f"0.05 to 50 (a car: 12-20)")
-    signals = [parse_topic_source(s) if s.partition("=")[2].strip().lstrip("-").startswith("/") else parse_source(s)
-               for s in args.signal]
+    signals = [parse_signal(s) for s in args.signal]
+    columns = [s.column for s in signals]
+    twice = sorted({c for c in columns if columns.count(c) > 1})
+    if twice:
+        raise LogError(f"--signal: column {twice[0]!r} is given {columns.count(twice[0])} times; give each column once")
+    parse_time(getattr(args, "time", None))
     options = ImportOptions(dbc=args.dbc, signals=signals, rate=args.rate,
-                            run=args.run, time_range=tuple(args.time_range) if args.time_range else None)
+                            run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
+                            bus=getattr(args, "bus", None), time=getattr(args, "time", None),
+                            keep_spikes=getattr(args, "keep_spikes", False))
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio
     if args.wheelbase is not None:
@@ -62,9 +79,12 @@ def recording_options(args: argparse.Namespace):
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", type=Path, help="a folder or one file: NMEA (*.nmea, *.gps, a .log/.txt of "
                    "sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), ROS bags (*.bag, *.db3, *.mcap, a "
-                   "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin)")
-    p.add_argument("--out", type=Path, required=True, help="the log to write (.csv or .parquet); the import report "
+                   "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin), tables (*.csv, "
+                   "*.tsv, *.parquet: a folder of them is joined on time)")
+    p.add_argument("--out", type=Path, default=None, help="the log to write (.csv or .parquet); the import report "
                    "goes beside it as <name>.import.json")
+    p.add_argument("--list", action="store_true", help="print what the recording holds (topics and types, CAN "
+                   "messages and signals with units and rates, table columns with ranges) and write nothing")
     p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
     add_recording_options(p)
 
@@ -75,6 +95,14 @@ def run(args: argparse.Namespace) -> int:
     from .log import LogError, check_log
     from .recording import describe, import_recording, import_runs
 
+    if args.list:
+        from .listing import list_source
+
+        options = recording_options(args)
+        print("\n".join(list_source(args.source, options)))
+        return 0
+    if args.out is None:
+        raise LogError("convert: give --out LOG.csv (or .parquet), or --list to see what the recording holds")
     if args.out.suffix not in (".csv", ".parquet"):
         raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
     from orchestrator.output import check_output
@@ -88,8 +116,9 @@ def run(args: argparse.Namespace) -> int:
                 for f, rep in import_runs(args.source, options)]
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
-    for path, f, rep in jobs:
+    for path, f, rep in jobs:             # every log checked before the first is written
         check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+    for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
                      else (lambda p, f=f: f.to_csv(p, index=False, float_format="%.9g")))
@@ -101,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(registry) -> None:
-    registry.add_command("convert", "a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log) as a measured log",
+    registry.add_command("convert", "a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log, tables) as a measured "
+                                    "log, or --list what it holds",
                          add_arguments, run)
     registry.add_section("vehicle", "measurements: steering_ratio (handwheel / road wheel) and wheelbase [m] for reading "
                                     "the vehicle's recordings")

@@ -1,4 +1,4 @@
-"""ISO 11783-10 time logs (TLGnnnnn.xml header + TLGnnnnn.bin records) as a recording (issue 26).
+"""ISO 11783-10 time logs (TLGnnnnn.xml header + TLGnnnnn.bin records) as a recording.
 
 The TaskData itself (TASKDATA.XML) is read with the ``isoxml`` package (its typed models and its
 DDI dictionary: name, unit, bit resolution); the binary time logs it does not read, so this
@@ -19,7 +19,6 @@ kept as ``fix_quality`` with GGA's codes where they agree (0-5) and 15 -> NaN (u
 from __future__ import annotations
 
 import datetime
-import math
 import re
 import struct
 import xml.etree.ElementTree as ET
@@ -29,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .streams import Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
 PTN_LAYOUT = {"A": ("<i", 1e-7), "B": ("<i", 1e-7), "C": ("<i", 1e-3), "D": ("<B", 1.0), "E": ("<H", 0.1),
@@ -150,7 +150,6 @@ def timelog_files(paths: list[Path]) -> list[Path]:
 def timelog_streams(paths: list[Path], options, source: Path):
     """The recording's streams from ISO 11783-10 time logs (one, or every one of a TaskData:
     the longest is used unless --run/--time-range says otherwise, each being one run)."""
-    from .recording import _Streams
 
     heads = timelog_files(paths)
     if not heads:
@@ -159,8 +158,8 @@ def timelog_streams(paths: list[Path], options, source: Path):
     head, table, info = max(tables, key=lambda x: len(x[1])) if len(tables) > 1 else tables[0]
     table = table.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
     report: dict = {"source": str(source), "files": {"isoxml": [str(h) for h, _, _ in tables]}, "dbc": None,
-                    "notes": [], "timelogs": {h.stem: {"records": i["records"], "start": _iso(float(t["utc"].min())),
-                                                        "end": _iso(float(t["utc"].max()))} for h, t, i in tables},
+                    "notes": [], "timelogs": {h.stem: {"records": i["records"], "start": iso(float(t["utc"].min())),
+                                                        "end": iso(float(t["utc"].max()))} for h, t, i in tables},
                     "timelog_used": head.stem,
                     "clocks": {"reference": "the task controller's TIM start times (ms since midnight, days since 1980)"}}
     if len(tables) > 1:
@@ -186,8 +185,4 @@ def timelog_streams(paths: list[Path], options, source: Path):
                          "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
                          "t": "TIM start, s from the run's start"}
     report["fixed"] = info["fixed"]
-    return _Streams(gnss, signals, report, set(signals), {})
-
-
-def _iso(posix: float) -> str:
-    return datetime.datetime.fromtimestamp(posix, datetime.timezone.utc).isoformat(timespec="seconds").replace("+00:00", "Z")
+    return Streams(gnss, signals, report, set(signals), {})

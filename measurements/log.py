@@ -90,22 +90,45 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
         i = int(np.argmax(dt))
         raise LogError(f"{path}: column 't' has a gap of {dt[i]:.4g} s at t = {t[i]:.4g} s (row {i + 1}); "
                        f"expected an even step of {step:.4g} s: cut the log at the gap or fill it")
+    grid = {c: resolution(frame[c].to_numpy(float)) for c in ("x", "y") if c in frame}
     if np.max(np.abs(dt - step)) > 0.01 * step:
         if resample_jitter:
+            attrs = dict(frame.attrs)
             frame = resample(frame, step)
+            frame.attrs.update(attrs)
         else:
             i = int(np.argmax(np.abs(dt - step)))
             raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical "
                            f"{step:.4g} s; pass --resample to interpolate the log onto an even {step:.4g} s grid")
     for c, (bound, unit) in DEGREE_SUSPECT.items():
         if c in checked:
-            peak = float(np.abs(frame[c]).max())
+            peak = robust_peak(frame[c].to_numpy(float))
             if peak > bound:
-                raise LogError(f"{path}: column {c!r} reaches {peak:.3g}, more than {bound} {unit}: it looks like "
-                               f"degrees{'/s' if unit == 'rad/s' else ''}; the log must hold {unit} "
-                               f"(multiply by pi/180 = {math.pi / 180:.6f})")
+                raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
+                               f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
+                               f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}; a raw recording: declare the "
+                               f"unit, --signal '{c}=...[deg{'/s' if unit == 'rad/s' else ''}]')")
     check_units(frame, path)
+    quantised = {c: q for c, q in grid.items() if q > 0}
+    if quantised:        # read on the samples as written, before any resampling
+        frame.attrs["resolution"] = {**frame.attrs.get("resolution", {}), **quantised}
     return frame
+
+
+def robust_peak(x: np.ndarray) -> float:
+    """The 99.5th percentile of |x| (the largest value for fewer than 200 samples, after the
+    median of 3 has removed single glitches)."""
+    x = np.abs(np.asarray(x, float))
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return 0.0
+    if len(x) >= 200:
+        return float(np.percentile(x, 99.5))
+    if len(x) >= 3:
+        from scipy.ndimage import median_filter
+
+        return float(median_filter(x, size=3, mode="nearest").max())
+    return float(x.max())
 
 
 def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarray]:
@@ -226,21 +249,3 @@ def resample(frame: pd.DataFrame, step: float | None = None) -> pd.DataFrame:
         if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
             columns[c] = np.interp(grid, t, frame[c].to_numpy(dtype=float))
     return pd.DataFrame(columns)
-
-
-def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_jitter: bool = False,
-             recording=None) -> tuple[pd.DataFrame, dict | None]:
-    """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
-    (a folder of NMEA files and CAN logs, or one such file) through
-    measurements.recording.import_recording with ``recording`` (ImportOptions), then the same
-    checks. The report is None for a table."""
-    from .recording import import_recording, is_recording
-
-    source = Path(source)
-    if not is_recording(source):
-        return read_log(source, required, resample_jitter), None
-    frame, report = import_recording(source, recording)
-    where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
-    frame = check_log(frame, where, required, resample_jitter)
-    frame.attrs["resolution"] = dict(report.get("resolution", {}))
-    return frame, report

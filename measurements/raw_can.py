@@ -1,16 +1,20 @@
 """A recorded CAN log decoded with a DBC, and the map from its signals to the log's columns.
 
-Any format python-can reads (candump ``.log``, Vector ``.asc``, ``.blf``, ``.trc``, ``.csv``)
-goes through ``can.LogReader``; frames are decoded by cantools. A 29-bit frame that matches no
-identifier exactly is matched by its J1939 parameter group number (priority and source address
-free, and the destination of a PDU1 group), so one DBC decodes any sender. A decoded value outside
-the DBC's range (J1939's 'not available' patterns) is NaN.
+Any format python-can reads (candump ``.log``, Vector ``.asc``, ``.blf``, ``.trc``) goes through
+``can.LogReader``; the DBC is loaded by measurements.dbc (cantools, repaired where a maker's file
+needs it) and frames are decoded by cantools to raw values, scaled here (value = raw x scale +
+offset). Multiplexed messages give, per frame, the signals of the multiplexer value sent. A
+29-bit frame that matches no identifier exactly is matched by its J1939 parameter group number
+(priority and source address free, and the destination of a PDU1 group), so one DBC decodes any
+sender; in 29-bit messages a byte-aligned unsigned field above J1939's valid range (0xFA.. for
+8 bits, 0xFAFF for 16 ...: 'error' and 'not available') is NaN, counted. A DBC's declared
+[min|max] is a plausibility note (values outside are counted and named, kept).
 
-Columns come from signals (``SOURCES``: the project's messages, then ISO 11783-7 guidance), or
-from ``COLUMN=[-]Message.Signal`` given by the user. Units are converted from the DBC's unit
-(pint: deg, km/h, deg/s ...); a curvature feeds a wheel angle through the wheelbase,
-delta = atan(L kappa) (kinematic bicycle). ISO 11783-7 curvature is positive to the driver's
-right, the log's angles to the left: those sources carry the sign -1.
+Frames carry their bus (candump's ``can0``, a Vector channel ``1``): ``--bus`` chooses; a log of
+several buses without it is refused with the buses named. Columns come from ``--signal``
+expressions (measurements.signals), else from SOURCES (the project's messages, then ISO 11783-7
+guidance), else from a signal matched by name and unit (GUESSES). ISO 11783-7 curvature is
+positive to the driver's right, the log's angles to the left: those sources carry the sign -1.
 """
 from __future__ import annotations
 
@@ -23,51 +27,30 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .log import COLUMNS, LogError
+from .log import LogError
+from .signals import SignalSpec
+from .streams import Series
 
 CAN_SUFFIXES = (".log", ".asc", ".blf", ".trc")
 
 
-@dataclass(frozen=True)
-class SignalSource:
-    column: str
-    message: str
-    signal: str
-    sign: float = 1.0
-
-    def __str__(self) -> str:
-        return f"{self.column}={'-' if self.sign < 0 else ''}{self.message}.{self.signal}"
+def _spec(column: str, message: str, signal: str, sign: float = 1.0) -> SignalSpec:
+    return SignalSpec(column, ((f"{message}.{signal}", sign),), 0.0, None,
+                      f"{column}={'-' if sign < 0 else ''}{message}.{signal}")
 
 
 # per column, the first source whose message the DBC holds is used
-SOURCES: dict[str, tuple[SignalSource, ...]] = {
-    "delta_cmd": (SignalSource("delta_cmd", "GuidanceCommand", "SteerAngleCmd"),
-                  SignalSource("delta_cmd", "GuidanceSystemCommand", "CurvatureCommand", -1.0)),
-    "delta": (SignalSource("delta", "TractorFeedback", "SteerAngle"),
-              SignalSource("delta", "GuidanceMachineInfo", "EstimatedCurvature", -1.0)),
-    "v": (SignalSource("v", "TractorFeedback", "Speed"),
-          SignalSource("v", "WheelBasedSpeedAndDistance", "WheelBasedMachineSpeed")),
-    "yaw_rate": (SignalSource("yaw_rate", "TractorFeedback", "YawRate"),
-                 SignalSource("yaw_rate", "AgrobotYawRate", "YawRate")),
+SOURCES: dict[str, tuple[SignalSpec, ...]] = {
+    "delta_cmd": (_spec("delta_cmd", "GuidanceCommand", "SteerAngleCmd"),
+                  _spec("delta_cmd", "GuidanceSystemCommand", "CurvatureCommand", -1.0)),
+    "delta": (_spec("delta", "TractorFeedback", "SteerAngle"),
+              _spec("delta", "GuidanceMachineInfo", "EstimatedCurvature", -1.0)),
+    "v": (_spec("v", "TractorFeedback", "Speed"),
+          _spec("v", "WheelBasedSpeedAndDistance", "WheelBasedMachineSpeed")),
+    "yaw_rate": (_spec("yaw_rate", "TractorFeedback", "YawRate"),
+                 _spec("yaw_rate", "AgrobotYawRate", "YawRate")),
 }
 CAN_COLUMNS = tuple(SOURCES)
-
-
-_COLUMN_NAME = re.compile(r"^[a-z_][a-z0-9_]*$")
-
-
-def parse_source(text: str) -> SignalSource:
-    """``COLUMN=[-]Message.Signal`` (the ``--signal`` option for CAN). COLUMN is a log column
-    (delta_cmd, delta, v, yaw_rate) or any other lower-case name, kept as an extra column."""
-    column, eq, rest = text.partition("=")
-    sign = -1.0 if rest.strip().startswith("-") else 1.0
-    message, dot, signal = rest.strip().lstrip("-").partition(".")
-    if not eq or not dot or not message or not signal or not _COLUMN_NAME.match(column.strip()) \
-            or column.strip() in ("t", "x", "y"):
-        raise LogError(f"--signal {text!r}: expected COLUMN=[-]Message.Signal with COLUMN one of "
-                       f"{', '.join(CAN_COLUMNS)} or another lower-case name for an extra column (a leading '-' "
-                       f"flips the sign); a ROS topic is COLUMN=/topic.field")
-    return SignalSource(column.strip(), message.strip(), signal.strip(), sign)
 
 
 def _key(frame_id: int, extended: bool) -> tuple:
@@ -79,12 +62,17 @@ def _key(frame_id: int, extended: bool) -> tuple:
 
 @dataclass
 class CANRecording:
-    """Decoded frames per DBC message (a table with ``t``, ``source_address`` and the signals)."""
+    """Decoded frames per DBC message (a table with ``t``, ``source_address`` and the signals
+    scaled), and what the reader counted: frames, unknown identifiers, buses, values outside the
+    DBC's declared ranges, J1939 'not available' values."""
 
     path: Path
     messages: dict[str, pd.DataFrame]
     counts: Counter = field(default_factory=Counter)
     unknown_ids: Counter = field(default_factory=Counter)
+    buses: Counter = field(default_factory=Counter)
+    outside_range: dict = field(default_factory=dict)
+    not_available: dict = field(default_factory=dict)
 
     @property
     def span(self) -> tuple[float, float]:
@@ -93,32 +81,56 @@ class CANRecording:
 
 
 def load_dbc(path: str | Path | None):
-    """A DBC (None: the project's own); a LogError names the file when it cannot be read."""
-    from components.hardware.can_link import DEFAULT_DBC, load_dbc as load
+    """(database, DBCReport or None): the DBC (None: the project's own agrobot_tractor.dbc); a
+    LogError names the file when nothing in it can be read."""
+    from components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
 
-    try:
-        return load(path)
-    except Exception as exc:             # noqa: BLE001 - cantools raises many kinds
-        raise LogError(f"{path or DEFAULT_DBC}: cannot read as a DBC: {exc}") from None
+    from .dbc import load_dbc_file
+
+    if path is None:
+        try:
+            return load(None), None
+        except Exception as exc:             # noqa: BLE001 - cantools raises many kinds
+            raise LogError(f"{DEFAULT_DBC}: cannot read as a DBC: {exc}") from None
+    if not Path(path).is_file():
+        raise LogError(f"--dbc {path}: no such file")
+    return load_dbc_file(path)
 
 
-def read_can_file(path: str | Path, db) -> CANRecording:
-    """Every frame of a CAN log that a message of ``db`` describes, decoded."""
+def _bus_name(channel) -> str:
+    if channel is None or channel == "":
+        return "-"
+    return str(channel)
+
+
+def _bus_matches(channel: str, wanted: str) -> bool:
+    wanted = wanted.strip()
+    return channel == wanted or channel == wanted.removeprefix("can") or f"can{channel}" == wanted
+
+
+def read_can_file(path: str | Path, db, bus: str | None = None) -> CANRecording:
+    """Every frame of a CAN log that a message of ``db`` describes, decoded (on ``bus`` only,
+    when given)."""
     import can
 
     path = Path(path)
     exact = {(m.is_extended_frame, m.frame_id): m for m in db.messages}
     by_group = {_key(m.frame_id, True): m for m in db.messages if m.is_extended_frame}
     rows: dict[str, list] = {m.name: [] for m in db.messages}
-    ranges = {m.name: {s.name: (s.minimum, s.maximum) for s in m.signals} for m in db.messages}
     counts: Counter = Counter()
     unknown: Counter = Counter()
+    buses: Counter = Counter()
     try:
         # Vector ASC: absolute times from the file's trigger-block date (python-can's default is from 0)
         reader = can.ASCReader(str(path), relative_timestamp=False) if path.suffix.lower() == ".asc" \
             else can.LogReader(str(path))
         for frame in reader:
             counts["frames"] += 1
+            channel = _bus_name(frame.channel)
+            buses[channel] += 1
+            if bus is not None and not _bus_matches(channel, bus):
+                counts["frames on other buses"] += 1
+                continue
             if frame.is_error_frame or frame.is_remote_frame:
                 counts["error or remote frames"] += 1
                 continue
@@ -129,26 +141,93 @@ def read_can_file(path: str | Path, db) -> CANRecording:
                 unknown[f"0x{frame.arbitration_id:X}"] += 1
                 continue
             try:
-                values = msg.decode(bytes(frame.data), decode_choices=False)
+                values = msg.decode(bytes(frame.data), decode_choices=False, scaling=False, allow_truncated=True)
             except Exception:            # noqa: BLE001 - a frame that does not decode is counted
                 counts["frames that do not decode"] += 1
                 continue
-            for name, (lo, hi) in ranges[msg.name].items():
-                v = values.get(name)
-                if v is not None and ((lo is not None and v < lo - 1e-9) or (hi is not None and v > hi + 1e-9)):
-                    values[name] = math.nan              # a J1939 'not available' / 'error' pattern
-            rows[msg.name].append({"t": float(frame.timestamp),
+            rows[msg.name].append({"t": float(frame.timestamp), "bus": channel,
                                    "source_address": frame.arbitration_id & 0xFF if frame.is_extended_id else -1,
-                                   **{k: float(v) for k, v in values.items()}})
+                                   **values})
             counts["decoded"] += 1
     except (OSError, ValueError, EOFError, can.CanError) as exc:
         raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {exc}") from None
     except Exception as exc:              # noqa: BLE001 - a reader choking on a foreign format
         raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {type(exc).__name__}: {exc}") from None
     if counts["frames"] == 0:
-        raise LogError(f"{path}: no CAN frame in it (python-can reads .log candump, .asc, .blf, .trc, .csv)")
-    messages = {k: pd.DataFrame(v).sort_values("t", kind="stable").reset_index(drop=True) for k, v in rows.items() if v}
-    return CANRecording(path, messages, counts, unknown)
+        raise LogError(f"{path}: no CAN frame in it (python-can reads .log candump, .asc, .blf, .trc)")
+    if bus is not None and counts["frames on other buses"] == counts["frames"]:
+        raise LogError(f"{path}: --bus {bus}: no frame on that bus; buses in the log: "
+                       + ", ".join(f"{b} ({n} frames)" for b, n in buses.most_common()))
+    if bus is None and len(buses) > 1:
+        raise LogError(f"{path}: frames from {len(buses)} buses ("
+                       + ", ".join(f"{b}: {n} frames" for b, n in buses.most_common())
+                       + "); choose one with --bus NAME")
+    rec = CANRecording(path, {}, counts, unknown, buses)
+    by_name = {m.name: m for m in db.messages}
+    for name, r in rows.items():
+        if r:
+            rec.messages[name] = _scaled(by_name[name], pd.DataFrame(r), rec)
+    return rec
+
+
+def _scaled(msg, raw: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
+    """The message's raw values scaled; J1939 'error'/'not available' fields NaN; values outside
+    the DBC's declared range counted (kept)."""
+    table = raw.sort_values("t", kind="stable").reset_index(drop=True)
+    for sig in msg.signals:
+        if sig.name not in table:
+            continue
+        x = pd.to_numeric(table[sig.name], errors="coerce").to_numpy(float)
+        if msg.is_extended_frame and not sig.is_signed and not sig.is_float and sig.length in (8, 16, 24, 32):
+            limit = (0xFB << (sig.length - 8))          # J1939-71: above 0xFA.. is error / not available
+            na = np.isfinite(x) & (x >= limit)
+            if na.any():
+                rec.not_available[f"{msg.name}.{sig.name}"] = int(na.sum())
+                x = np.where(na, np.nan, x)
+        conv = getattr(sig, "conversion", None)
+        scale = float(getattr(conv, "scale", getattr(sig, "scale", 1.0)) or 1.0)
+        offset = float(getattr(conv, "offset", getattr(sig, "offset", 0.0)) or 0.0)
+        x = x * scale + offset
+        lo, hi = sig.minimum, sig.maximum
+        if lo is not None and hi is not None and not (lo == 0 and hi == 0) and hi > lo:
+            out = np.isfinite(x) & ((x < lo - 1e-9 * max(1.0, abs(lo))) | (x > hi + 1e-9 * max(1.0, abs(hi))))
+            if out.any():
+                rec.outside_range[f"{msg.name}.{sig.name}"] = {
+                    "outside": int(out.sum()), "of": int(np.isfinite(x).sum()), "declared": [lo, hi],
+                    "seen": [float(np.nanmin(x)), float(np.nanmax(x))]}
+        table[sig.name] = x
+    return table
+
+
+def merge(cans: list[CANRecording]) -> dict[str, pd.DataFrame]:
+    """Each message's frames from every log, in time order."""
+    frames: dict[str, list] = {}
+    for c in cans:
+        for name, table in c.messages.items():
+            frames.setdefault(name, []).append(table)
+    return {k: pd.concat(v).sort_values("t", kind="stable").drop_duplicates("t").reset_index(drop=True)
+            for k, v in frames.items()}
+
+
+def signal_names(db) -> list[str]:
+    return [f"{m.name}.{s.name}" for m in db.messages for s in m.signals]
+
+
+def series(db, frames: dict[str, pd.DataFrame], name: str) -> Series | None:
+    """The named ``Message.Signal`` as recorded (None: the DBC has no such signal). A message
+    name may hold dots: the longest message name that prefixes ``name`` is taken."""
+    messages = {m.name: m for m in db.messages}
+    for k in [i for i, ch in enumerate(name) if ch == "."][::-1]:
+        message, signal = name[:k], name[k + 1:]
+        if message in messages and signal in [s.name for s in messages[message].signals]:
+            sig = messages[message].get_signal_by_name(signal)
+            table = frames.get(message)
+            if table is None or signal not in table:
+                return Series(np.array([]), np.array([]), (sig.unit or "").strip() or None, name)
+            ok = table[signal].notna().to_numpy()
+            return Series(table["t"].to_numpy(float)[ok], table[signal].to_numpy(float)[ok],
+                          (sig.unit or "").strip() or None, f"{name} (CAN {messages[message].frame_id:#x})")
+    return None
 
 
 # a maker's DBC names its signals its own way: by name and unit (pint), the first match in
@@ -162,7 +241,7 @@ GUESSES = {
 }
 
 
-def _guess(db, column: str, taken: set) -> SignalSource | None:
+def _guess(db, column: str, taken: set) -> SignalSpec | None:
     from orchestrator.units import base_unit
 
     pattern, unit = GUESSES[column]
@@ -172,65 +251,35 @@ def _guess(db, column: str, taken: set) -> SignalSource | None:
             name = f"{m.name}.{sig.name}"
             if name in taken or not (pattern.search(sig.name) or pattern.search(name.replace(".", "_"))):
                 continue
-            have = base_unit(sig.unit.strip()) if (sig.unit or "").strip() else None
+            try:
+                have = base_unit(sig.unit.strip()) if (sig.unit or "").strip() else None
+            except Exception:                    # noqa: BLE001 - a unit pint does not know: not a match
+                have = None
             if have is not None and have.exponents == want:
-                return SignalSource(column, m.name, sig.name)
+                return _spec(column, m.name, sig.name)
     return None
 
 
-def choose_sources(db, dbc_name: str, given: list[SignalSource] = ()) -> tuple[dict[str, SignalSource], dict[str, str], set]:
-    """(column -> source, column -> why it has none, columns matched by name): the user's, else
-    the first of SOURCES the DBC holds, else a signal matched by name and unit (GUESSES); a
-    LogError names the DBC and what it holds when a given source does not exist."""
-    names = {m.name: m for m in db.messages}
+def choose_sources(db, dbc_name: str, given: list[SignalSpec] = ()) -> tuple[dict[str, SignalSpec], dict[str, str], set]:
+    """(column -> expression, column -> why it has none, columns matched by name): the user's,
+    else the first of SOURCES the DBC holds, else a signal matched by name and unit (GUESSES)."""
+    names = {m.name for m in db.messages}
     chosen = {s.column: s for s in given}
-    how: dict[str, str] = {}
+    how: set = set()
     for column, candidates in SOURCES.items():
         if column not in chosen:
-            found = [s for s in candidates if s.message in names]
+            found = [s for s in candidates if s.names[0].split(".")[0] in names]
             if found:
                 chosen[column] = found[0]
-    taken = {f"{s.message}.{s.signal}" for s in chosen.values()}
+    taken = {n for s in chosen.values() for n in s.names}
     for column in CAN_COLUMNS:
         if column not in chosen:
             guess = _guess(db, column, taken)
             if guess is not None:
                 chosen[column] = guess
-                taken.add(f"{guess.message}.{guess.signal}")
-                how[column] = "matched by name and unit"
-    for s in chosen.values():
-        if s.message not in names or s.signal not in [x.name for x in names[s.message].signals]:
-            have = [x.name for x in names[s.message].signals] if s.message in names else sorted(names)
-            raise LogError(f"{dbc_name}: --signal {s}: no such {'signal' if s.message in names else 'message'}; "
-                           f"{'signals of ' + s.message if s.message in names else 'messages'}: {', '.join(have)}")
+                taken.update(guess.names)
+                how.add(column)
     unmapped = {c: (f"no signal for it in {dbc_name} (messages: {', '.join(sorted(names)[:12])}"
                     f"{' ...' if len(names) > 12 else ''}); map one with --signal {c}=Message.Signal")
                 for c in CAN_COLUMNS if c not in chosen}
-    return chosen, unmapped, set(how)
-
-
-def converter(db, dbc_name: str, source: SignalSource, wheelbase: float):
-    """(function raw -> column value in SI, description) from the DBC unit of ``source``."""
-    from orchestrator.units import base_unit
-
-    sig = db.get_message_by_name(source.message).get_signal_by_name(source.signal)
-    unit = (sig.unit or "").strip()
-    have = base_unit(unit) if unit else None
-    if source.column not in COLUMNS:             # an extra column: SI where the unit says how
-        k = source.sign * (have.factor if have is not None else 1.0)
-        return (lambda x: k * x), f"{source} [{unit or 'no unit'}] x {k:.6g} -> " + \
-            ("SI" if have is not None else "as logged (a unit the units library does not know)")
-    target = COLUMNS[source.column][0]
-    want = base_unit(target)
-    if not unit:
-        return (lambda x: source.sign * x), f"{source}: no unit in the DBC, taken as {target}"
-    if have is not None and have.exponents == want.exponents:
-        k = source.sign * have.factor / want.factor
-        return (lambda x: k * x), f"{source} [{unit}] x {k:.6g} -> {target}"
-    curvature = have is not None and have.exponents == tuple(-1 if i == 1 else 0 for i in range(len(want.exponents)))
-    if curvature and target == "rad":
-        k = source.sign * have.factor
-        return (lambda x: np.arctan(wheelbase * k * x)), \
-            f"{source} [{unit}]: curvature to wheel angle, atan({wheelbase:g} m x {k:.6g} x kappa) -> rad"
-    raise LogError(f"{dbc_name}: signal {source.message}.{source.signal} is in {unit!r}; column {source.column!r} "
-                   f"needs {target} or a unit convertible to it" + (" (or a curvature, 1/m)" if target == "rad" else ""))
+    return chosen, unmapped, how

@@ -1,4 +1,4 @@
-"""A recorded NMEA 0183 file as a table of GNSS epochs (issue 17, 'recordings in').
+"""A recorded NMEA 0183 file as a table of GNSS epochs .
 
 A line is a sentence, optionally after a host timestamp (UNIX seconds, ``1777622400.05 $GNGGA,...``,
 candump style ``(1777622400.050000) $GNGGA,...``, or ISO 8601, ``2026-05-01T08:00:00.05Z $GNGGA,...``;

@@ -1,6 +1,12 @@
-"""A raw field recording (NMEA files and CAN logs) as one measured log, and a report of how.
+"""A raw field recording as one measured log, and a report of how: the readers' dispatcher.
 
-Time base: the receiver's UTC (a fix is valid at its epoch's time). Clocks:
+The readers (measurements.raw_nmea, raw_can, rosbag, isoxml_log, tables) each turn their files
+into Streams (measurements.streams); this module chooses them by the files it finds, merges NMEA
+with CAN on one clock, finds the quirks (measurements.quirks: spikes, position quantisation) and
+puts everything on one grid. No reader imports it.
+
+Time base: the receiver's UTC where there is one (a fix is valid at its epoch's time), else the
+source's own clock (a logger's boot-time clock is reported as such, never as a 1970 date). Clocks:
 
 - NMEA host stamps: host = U0 + a + b (utc - U0), fitted as the lower envelope of the points (a
   linear programme: every stamp is at or after the line, the sum of distances least), because
@@ -15,33 +21,38 @@ Time base: the receiver's UTC (a fix is valid at its epoch's time). Clocks:
   clock offset then, and the report says so.
 
 Gaps (a stream silent for more than 3 of its periods and 0.2 s, or without a fix) split the
-recording; runs are the stretches where the tractor drives (CAN speed above ``min_speed``, stops
+recording; runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
 shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
-``run``-th, or a ``time_range`` (seconds from the recording's first fix); the report says which.
+``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
 Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
-signals are interpolated linearly onto the log's grid; the set-point is held (the last frame).
+signals are interpolated linearly onto the log's grid; the set-points are held (the last frame).
 """
 from __future__ import annotations
 
 import copy
-import datetime
 import math
-from dataclasses import dataclass, field, replace
 from collections import Counter
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from .log import CANONICAL, LogError, resolution
-from .raw_can import CAN_COLUMNS, CAN_SUFFIXES, CANRecording, SignalSource, choose_sources, converter, load_dbc, \
-    read_can_file
-from .raw_nmea import NMEARecording, looks_like_nmea, read_nmea_file
+from orchestrator.resolver import resolve
+
+from .log import CANONICAL, LogError, check_log, read_log, resolution
+from .quirks import position_quantisation, spike_note, spikes
+from .raw_can import CAN_SUFFIXES, CANRecording, choose_sources, load_dbc, merge, read_can_file, series, signal_names
+from .raw_nmea import looks_like_nmea, read_nmea_file
+from .signals import evaluate, unknown_name
+from .streams import Streams, gnss_table, iso
+from .tables import TABLE_SUFFIXES
 
 NMEA_SUFFIXES = (".nmea", ".gps", ".nma")
 SYNCED = 0.5          # s: a host clock this close to GPS time is taken to keep UTC
-HELD = ("delta_cmd",)  # set-points: held between frames, not interpolated
+HELD = ("delta_cmd", "speed_cmd")  # set-points: held between frames, not interpolated
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
+HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
 
 
 @dataclass
@@ -49,30 +60,39 @@ class ImportOptions:
     """How to read a recording (the ``convert``/``identify``/``diagnose`` options)."""
 
     dbc: Path | None = None                     # None: the project's agrobot_tractor.dbc
-    signals: list = field(default_factory=list)  # SignalSource (CAN) or TopicSource (ROS) per column
+    signals: list = field(default_factory=list)  # SignalSpec per column (measurements.signals)
     wheelbase: float | None = None              # m: curvature <-> wheel angle (None: the study's, else 1.4)
     rate: float | None = None                   # Hz of the log (default: the GNSS epoch rate)
     run: int | None = None                      # 1-based index of the run to use
-    time_range: tuple[float, float] | None = None   # s from the first fix
+    time_range: tuple[float, float] | None = None   # s from the first sample
     min_speed: float = 0.2                      # m/s: driving
     min_stop: float = 3.0                       # s: a shorter stop does not end a run
     min_run: float = 10.0                       # s: shorter runs are listed, not used
     steering_ratio: float | None = None         # recorded steering angles / road-wheel angles (None: the study's, else 1)
+    bus: str | None = None                      # the CAN bus to read (candump's can0, a Vector channel)
+    time: str | None = None                     # a table's time column(s) (measurements.tables.parse_time)
+    keep_spikes: bool = False                   # keep the samples found to be spikes (they are named either way)
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table
         (steering_ratio, wheelbase), else its yaw plant's l_f + l_r, else the paper tractor's."""
         vehicle = (study.section("vehicle") if study is not None else None) or {}
         wheelbase = self.wheelbase or vehicle.get("wheelbase")
-        if wheelbase is None and study is not None and study.find(role="yaw_plant"):
-            p = study.parameters(study.find(role="yaw_plant")[0])
+        model = resolve(study) if wheelbase is None and study is not None else None
+        if model is not None and model.find(role="yaw_plant"):
+            p = model.parameters(model.find(role="yaw_plant")[0])
             wheelbase = float(p.get("l_f", 1.0)) + float(p.get("l_r", 0.4))
         return replace(self, wheelbase=float(wheelbase or 1.4),
                        steering_ratio=float(self.steering_ratio or vehicle.get("steering_ratio", 1.0)))
 
+    @property
+    def maps_a_table(self) -> bool:
+        """Options that only a table import uses: a table given with them is not a log as it is."""
+        return bool(self.signals) or self.time is not None
+
 
 BAG_SUFFIXES = (".bag", ".db3", ".mcap")
-KINDS = ("nmea", "can", "bag", "isoxml")
+KINDS = ("nmea", "can", "bag", "isoxml", "table")
 
 
 def is_recording(source: Path) -> bool:
@@ -85,7 +105,8 @@ def is_recording(source: Path) -> bool:
 def recording_files(source: Path) -> dict[str, list[Path]]:
     """The files of a folder or the one file, by kind (KINDS): NMEA (a ``.log``/``.txt`` holding
     sentences counts), CAN logs, ROS bags (ROS 1 ``.bag``, ROS 2 ``.db3``/``.mcap`` or a rosbag2
-    folder with metadata.yaml) and ISO 11783-10 TaskData (TASKDATA.XML, or TLGnnnnn.xml/.bin)."""
+    folder with metadata.yaml), ISO 11783-10 TaskData (TASKDATA.XML, or TLGnnnnn.xml/.bin) and
+    tables (CSV, TSV, Parquet)."""
     source = Path(source)
     if not source.exists():
         raise LogError(f"{source}: no such file or folder")
@@ -104,10 +125,11 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
             kinds["bag"].append(p)
         elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):
             kinds["isoxml"].append(p)
+        elif suffix in TABLE_SUFFIXES:
+            kinds["table"].append(p)
     if source.is_dir():
         kinds["bag"] += [d for d in sorted(source.iterdir()) if d.is_dir() and (d / "metadata.yaml").is_file()]
     return kinds
-
 
 # --- clocks ----------------------------------------------------------------------------------
 def lower_envelope(u: np.ndarray, h: np.ndarray) -> tuple[float, float]:
@@ -161,22 +183,24 @@ def content_lag(t_ref: np.ndarray, x_ref: np.ndarray, t_other: np.ndarray, x_oth
     return float(grid_r[0] - lo + (k + frac) * step), float(rho[k])
 
 
+
+
 # --- streams -----------------------------------------------------------------------------------
-def gaps(t: np.ndarray, what: str, origin: float) -> list[dict]:
-    """Silences longer than GAP_PERIODS typical periods and GAP_MIN seconds."""
+def gaps(t: np.ndarray, what: str, origin: float, least: float = GAP_MIN) -> list[dict]:
+    """Silences longer than GAP_PERIODS typical periods and ``least`` seconds."""
     if len(t) < 2:
         return []
     dt = np.diff(t)
-    limit = max(GAP_PERIODS * float(np.median(dt)), GAP_MIN)
+    limit = max(GAP_PERIODS * float(np.median(dt)), least)
     return [{"stream": what, "start": float(t[i] - origin), "end": float(t[i + 1] - origin),
              "duration": float(dt[i])} for i in np.flatnonzero(dt > limit)]
 
 
-def _covered(t: np.ndarray, grid: np.ndarray) -> np.ndarray:
+def _covered(t: np.ndarray, grid: np.ndarray, least: float = GAP_MIN) -> np.ndarray:
     """True where ``grid`` lies within a stretch of ``t`` without a gap."""
     if len(t) < 2:
         return np.zeros(len(grid), bool)
-    limit = max(GAP_PERIODS * float(np.median(np.diff(t))), GAP_MIN)
+    limit = max(GAP_PERIODS * float(np.median(np.diff(t))), least)
     i = np.clip(np.searchsorted(t, grid, side="right"), 1, len(t) - 1)
     return (grid >= t[0]) & (grid <= t[-1]) & (t[i] - t[i - 1] <= limit)
 
@@ -193,52 +217,103 @@ def _held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
     return values[i]
 
 
-def _iso(posix: float) -> str:
-    return datetime.datetime.fromtimestamp(posix, datetime.timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
-
-@dataclass
-class _Streams:
-    """What a recording holds, on one time base (POSIX seconds where the source knows them):
-    ``gnss`` the receiver's epochs with a fix (utc, lat, lon, height, quality, speed, course and
-    where given heading, position_std), or None; ``signals`` column -> (time, SI values); ``held``
-    the set-points among them; ``resolution`` each signal's step read on its own samples."""
-
-    gnss: pd.DataFrame | None
-    signals: dict[str, tuple[np.ndarray, np.ndarray]]
-    report: dict
-    held: set = field(default_factory=set)
-    resolution: dict = field(default_factory=dict)
-
-    @property
-    def can(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:          # the name the NMEA/CAN path had
-        return self.signals
-
-
-def _read(source: Path, options: ImportOptions, kinds: dict[str, list[Path]]):
-    nmea_files, can_files = kinds["nmea"], kinds["can"]
-    dbc_name = str(options.dbc) if options.dbc else "the project's agrobot_tractor.dbc"
-    db = load_dbc(options.dbc) if can_files else None
-    return [read_nmea_file(p) for p in nmea_files], [read_can_file(p, db) for p in can_files], db, dbc_name
-
-
-def _streams(source: Path, options: ImportOptions) -> _Streams:
+# --- the readers ---------------------------------------------------------------------------------
+def _streams(source: Path, options: ImportOptions) -> Streams:
     kinds = recording_files(source)
     if kinds["bag"]:
         from .rosbag import bag_streams
 
-        return _steered(bag_streams(kinds["bag"], options, source), options)
-    if kinds["isoxml"]:
+        streams = bag_streams(kinds["bag"], options, source)
+    elif kinds["isoxml"]:
         from .isoxml_log import timelog_streams
 
-        return timelog_streams(kinds["isoxml"], options, source)
-    if not kinds["nmea"] and not kinds["can"]:
+        streams = timelog_streams(kinds["isoxml"], options, source)
+    elif kinds["nmea"] or kinds["can"]:
+        streams = _nmea_can_streams(source, options, kinds)
+    elif kinds["table"]:
+        from .tables import table_streams
+
+        streams = table_streams(kinds["table"], options, source)
+    else:
         raise LogError(f"{source}: no recording in it: expected NMEA files (*.nmea, *.gps, or a .log/.txt holding "
                        f"sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), a ROS bag (*.bag, *.db3, *.mcap, "
-                       f"or a rosbag2 folder) or an ISO 11783-10 TaskData (TASKDATA.XML with TLG files)")
-    nmea, cans, db, dbc_name = _read(source, options, kinds)
+                       f"or a rosbag2 folder), an ISO 11783-10 TaskData (TASKDATA.XML with TLG files) or tables "
+                       f"(*.csv, *.tsv, *.parquet)")
+    ignored = [p.name for k in ("table",) for p in kinds[k] if streams.report.get("files", {}).get(k) is None]
+    if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
+        streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
+    return _steered(_quirks(_positions(streams, source), options), options)
+
+
+def _positions(streams: Streams, source: Path) -> Streams:
+    """lat/lon columns (a table's, a custom topic's, a CAN GNSS message's) as the receiver's fixes."""
+    sig = streams.signals
+    if streams.gnss is None and "lat" in sig and "lon" in sig:
+        t, lat = sig.pop("lat")
+        lon = np.interp(t, *sig.pop("lon"))
+        height = np.interp(t, *sig.pop("height")) if "height" in sig else None
+        ok = np.isfinite(lat) & np.isfinite(lon) & ((np.abs(lat) > 0) | (np.abs(lon) > 0))
+        if ok.sum() < 2:
+            raise LogError(f"{source}: the lat/lon columns hold {int(ok.sum())} positions")
+        bad = ok & ((np.abs(lat) > 90) | (np.abs(lon) > 180))
+        if bad.any():
+            raise LogError(f"{source}: lat/lon {lat[bad][0]:g}, {lon[bad][0]:g} are not degrees of latitude/longitude "
+                           f"(expected |lat| <= 90, |lon| <= 180; a projected CRS in metres maps to x/y)")
+        streams.gnss = gnss_table(t[ok], lat[ok], lon[ok], None if height is None else height[ok])
+        streams.report.setdefault("columns", {}).update({
+            "x": "lat/lon -> east of the run's first fix (pymap3d)", "y": "lat/lon -> north of the run's first fix"})
+    elif "lat" in sig or "lon" in sig:
+        have = "lat" if "lat" in sig else "lon"
+        raise LogError(f"{source}: a {have} column without its {'lon' if have == 'lat' else 'lat'}: positions need both")
+    return streams
+
+
+def _quirks(streams: Streams, options: ImportOptions) -> Streams:
+    """Spikes found (and masked unless kept) in every measured signal; position quantisation
+    read on the raw fixes."""
+    report = streams.report
+    t0 = min([float(t[0]) for t, _ in streams.signals.values() if len(t)]
+              + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None else []), default=0.0)
+    found = []
+    for column, (t, x) in list(streams.signals.items()):
+        if column in streams.held or column in ("fix_quality",) or len(x) < 20:
+            continue
+        index = spikes(t, x)
+        if len(index):
+            found.append(spike_note(column, t, x, index, t0, options.keep_spikes))
+            if not options.keep_spikes:
+                keep = np.ones(len(t), bool)
+                keep[index] = False
+                streams.signals[column] = (t[keep], x[keep])
+    if found:
+        report["spikes"] = found
+        report.setdefault("quirks", []).extend(
+            f"{s['count']} spike(s) in {s['column']} at {', '.join(f'{v:.2f}' for v in s['times_s'][:5])} s"
+            + (" ..." if s["count"] > 5 else "") + f" (values {', '.join(f'{v:.4g}' for v in s['values'][:3])}; "
+            f"typical {s['typical_range'][0]:.4g} to {s['typical_range'][1]:.4g}): "
+            + ("kept (--keep-spikes)" if s["kept"] else "masked (--keep-spikes keeps them)") for s in found)
+    if streams.gnss is not None:
+        q = position_quantisation(streams.gnss["lat"].to_numpy(float), streams.gnss["lon"].to_numpy(float))
+        if q is not None:
+            report["position_quantisation"] = q
+            report.setdefault("quirks", []).append(q["note"])
+            streams.resolution["x"], streams.resolution["y"] = q["east_m"], q["north_m"]
+    for column, (t, x) in streams.signals.items():
+        streams.resolution.setdefault(column, resolution(x))
+    return streams
+
+
+def _nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list[Path]]) -> Streams:
+    nmea_files, can_files = kinds["nmea"], kinds["can"]
+    dbc_name = str(options.dbc) if options.dbc else "the project's agrobot_tractor.dbc"
+    db, dbc_report = load_dbc(options.dbc) if can_files else (None, None)
+    nmea = [read_nmea_file(p) for p in nmea_files]
+    cans = [read_can_file(p, db, options.bus) for p in can_files]
     report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
                     "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes]}
+    if dbc_report is not None:
+        report["dbc_load"] = dbc_report.as_dict()
     gnss, epochs, u0 = None, None, None
     if nmea:
         epochs = pd.concat([n.epochs for n in nmea]).sort_values("utc").drop_duplicates("utc").reset_index(drop=True)
@@ -257,7 +332,7 @@ def _streams(source: Path, options: ImportOptions) -> _Streams:
         if fix.sum() >= 2:
             gnss = epochs.loc[fix].reset_index(drop=True)
             u0 = float(gnss["utc"].iloc[0])
-            report["first_fix_utc"] = _iso(u0)
+            report["first_fix_utc"] = iso(u0)
         else:
             report["notes"].append(f"the NMEA holds {int(fix.sum())} epochs with a fix: no positions")
     raw: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -274,49 +349,58 @@ def _streams(source: Path, options: ImportOptions) -> _Streams:
         raw = {c: (to_utc(t), v) for c, (t, v) in raw.items()}
     elif raw:
         lo = min(float(t[0]) for t, _ in raw.values())
-        report["clocks"] = {"reference": "the CAN logger's clock (no NMEA with a fix: not GPS time)",
+        report["clocks"] = {"reference": "the CAN logger's clock (no NMEA with a fix: not GPS time)"
+                                         + ("" if lo > 1e8 else "; it counts from the logger's start, not a date"),
                             "can_clock": {"method": "the time base itself", "offset_s": 0.0, "drift_ppm": 0.0,
                                           "posix": lo > 1e8}}
         report["columns"]["t"] = "the CAN logger's timestamps, s from the run's start"
     else:
         report["clocks"] = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
-    streams = _Streams(gnss, raw, report, set(HELD) & set(raw),
-                       {c: resolution(v) for c, (_, v) in raw.items()})
-    return _steered(streams, options)
+    return Streams(gnss, raw, report, set(HELD) & set(raw), {})
 
 
 def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, options: ImportOptions, report: dict):
-    """Column -> (logger time, SI values) of every column the DBC (or --signal) gives, and how."""
-    sources, unmapped, guessed = choose_sources(db, dbc_name, [s for s in options.signals if isinstance(s, SignalSource)])
+    """Column -> (logger time, values in the column's unit) of every column the DBC (or --signal) gives, and how."""
+    sources, unmapped, guessed = choose_sources(db, dbc_name, list(options.signals))
     report["can"] = {"frames": int(sum(c.counts["frames"] for c in cans)),
                      "decoded": int(sum(c.counts["decoded"] for c in cans)),
                      "unknown_ids": dict(sum((c.unknown_ids for c in cans), Counter()).most_common(8)),
                      "not_decoded": int(sum(c.counts["frames that do not decode"] for c in cans)),
+                     "buses": dict(sum((c.buses for c in cans), Counter())),
                      "messages": {}, "columns_without_a_signal": unmapped}
-    frames: dict[str, pd.DataFrame] = {}
     for c in cans:
-        for name, table in c.messages.items():
-            frames[name] = pd.concat([frames[name], table]) if name in frames else table
+        report["can"].setdefault("outside_declared_range", {}).update(c.outside_range)
+        report["can"].setdefault("j1939_not_available", {}).update(c.not_available)
+    if options.bus is not None:
+        report["can"]["bus"] = options.bus
+    frames = merge(cans)
+    known = signal_names(db)
     raw, units = {}, {}
-    for column, s in sources.items():
-        table = frames.get(s.message)
-        if table is None or table[s.signal].notna().sum() < 10:
-            given = any(g.column == column for g in options.signals)
-            what = (f"the CAN logs hold {0 if table is None else int(table[s.signal].notna().sum())} frames of "
-                    f"{s.message} with {s.signal} (column {column!r}, DBC {dbc_name}); messages found: "
-                    f"{', '.join(sorted(frames)) or 'none'}"
+    given_columns = {g.column for g in options.signals}
+    for column, spec in sources.items():
+        found = {}
+        for name in spec.names:
+            s = series(db, frames, name)
+            if s is None:
+                raise unknown_name(f"{source} (DBC {dbc_name})", spec, name, known)
+            found[name] = s
+        short = [n for n, s in found.items() if len(s.t) < 10]
+        if short:
+            what = (f"the CAN logs hold {len(found[short[0]].t)} frames with {short[0]} (column {column!r}, DBC "
+                    f"{dbc_name}); messages found: {', '.join(sorted(frames)[:12]) or 'none'}"
                     + (f"; unknown identifiers: {', '.join(report['can']['unknown_ids'])}" if report['can']['unknown_ids'] else ""))
-            if given:
+            if column in given_columns:
                 raise LogError(f"{source}: {what}")
             report["can"]["columns_without_a_signal"][column] = what
             continue
-        table = table.sort_values("t", kind="stable").drop_duplicates("t")
-        ok = table[s.signal].notna().to_numpy()
-        convert, text = converter(db, dbc_name, s, options.wheelbase)
-        raw[column] = (table["t"].to_numpy(float)[ok], convert(table[s.signal].to_numpy(float)[ok]))
+        t, values, text = evaluate(spec, found, f"{source} (DBC {dbc_name})", options.wheelbase or 1.4)
+        raw[column] = (t, values)
         units[column] = text + ("; matched by name and unit (--signal to choose another)" if column in guessed else "")
-        report["can"]["messages"][s.message] = {"frames": int(len(table)),
-                                                "rate_hz": float(1.0 / np.median(np.diff(table["t"])))}
+        for name in spec.names:
+            message = name.rsplit(".", 1)[0]
+            tm = frames[message]["t"].to_numpy(float)
+            report["can"]["messages"][message] = {"frames": int(len(tm)),
+                                                  "rate_hz": float(1.0 / np.median(np.diff(tm))) if len(tm) > 1 else math.nan}
     if not raw:
         unknown = report["can"]["unknown_ids"]
         raise LogError(f"{source}: no CAN frame decodes to a column of the log with {dbc_name} "
@@ -326,9 +410,9 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
     return raw, units
 
 
-def _steered(streams: _Streams, options: ImportOptions) -> _Streams:
+def _steered(streams: Streams, options: ImportOptions) -> Streams:
     """Handwheel angles to road-wheel angles: delta and delta_cmd divided by the steering ratio."""
-    if options.steering_ratio == 1.0:
+    if not options.steering_ratio or options.steering_ratio == 1.0:
         return streams
     for column in ("delta_cmd", "delta"):
         if column in streams.signals:
@@ -391,7 +475,7 @@ def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
     tau, rho = content_lag(t_ref, speed, t_can + start, v_can)
     tau += start
     if not math.isfinite(tau) or rho < 0.5:
-        raise LogError(f"the CAN log's clock ({_iso(can_lo) if can_lo > 1e8 else f'{can_lo:.3f} s'} ...) is not the NMEA "
+        raise LogError(f"the CAN log's clock ({iso(can_lo)} ...) is not the NMEA "
                        f"host clock and its speed does not match the GNSS speed (best correlation {rho:.2f}): cannot "
                        f"place the CAN data in time; record NMEA with host timestamps on the CAN logger's clock")
     windows, lags = [], []
@@ -417,6 +501,8 @@ def _clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):
     return out, (lambda t: t + tau_at(t))
 
 
+
+
 def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
     options = (options or ImportOptions()).for_vehicle()
@@ -432,13 +518,13 @@ def import_runs(source: str | Path, options: ImportOptions | None = None) -> lis
             for r in first[1]["runs"]]
 
 
-def _checked(source: Path, options: ImportOptions) -> _Streams:
+def _checked(source: Path, options: ImportOptions) -> Streams:
     if options.rate is not None and not 1.0 <= options.rate <= 200.0:
         raise LogError(f"--rate {options.rate:g}: expected 1 to 200 Hz")
     return _streams(source, options)
 
 
-def _grid_step(streams: _Streams, options: ImportOptions) -> float:
+def _grid_step(streams: Streams, options: ImportOptions) -> float:
     """The log's period: --rate, else the GNSS epoch period, else the fastest canonical signal's
     (at most 50 Hz); to the millisecond, so that a float median does not let the grid creep."""
     if options.rate:
@@ -450,7 +536,7 @@ def _grid_step(streams: _Streams, options: ImportOptions) -> float:
     return max(round(min(periods), 3), 0.02)
 
 
-def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
+def _assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
     """The log on its grid for the run or range ``options`` choose, and the report of it: every
     canonical column the recording holds, then the extras (the receiver's speed, fix quality,
     heading and position error, and any other mapped signal); the missing columns are named."""
@@ -465,35 +551,36 @@ def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[
     u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
     step = _grid_step(streams, options)
     lo, hi = max(float(t[0]) for _, t in times), min(float(t[-1]) for _, t in times)
-    report["gaps"] = sum((gaps(t, name, u0) for name, t in times), [])
+    least = {name: HELD_GAP if name in streams.held else GAP_MIN for name, _ in times}
+    report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
     if hi - lo < 2 * step:
         spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
         raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
     grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
     covered = np.ones(len(grid), bool)
-    for _, t in times:
-        covered &= _covered(t, grid)
+    for name, t in times:
+        covered &= _covered(t, grid, least[name])
     if "v" in sig:
         v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
     elif gnss is not None:
         v, report["runs_by"] = np.interp(grid, gnss["utc"], _gnss_speed(gnss)), "the receiver's speed over ground"
     else:
         v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
-    moving = v > options.min_speed if v is not None else np.ones(len(grid), bool)
+    moving = np.abs(v) > options.min_speed if v is not None else np.ones(len(grid), bool)   # reversing drives too
     for a, b in _stretches(~moving):                 # short stops do not end a run
         if 0 < a and b < len(grid) and (b - a) * step < options.min_stop:
             moving[a:b] = True
     runs = []
     for a, b in _stretches(moving & covered):
         runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
-                     "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": _iso(grid[a])})
+                     "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": iso(grid[a])})
     long_runs = [r for r in runs if r["duration"] >= options.min_run]
     for i, r in enumerate(long_runs, 1):
         r["run"] = i
     report["runs"] = long_runs
     report["short_runs_ignored"] = len(runs) - len(long_runs)
     pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
-    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": _iso(grid[pick][0]),
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
                       "utc_start_s": float(grid[pick][0])}
     t = grid[pick]
     columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
@@ -524,7 +611,8 @@ def _assemble(source: Path, streams: _Streams, options: ImportOptions) -> tuple[
         if c not in columns:
             columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
     report["rate_hz"] = 1.0 / step
-    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in sig}
+    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
+                            if c in sig or c in streams.resolution}
     present = [c for c in CANONICAL if c in columns]
     report["present"] = present + [c for c in columns if c not in CANONICAL]
     why = report.get("can", {}).get("columns_without_a_signal", {})
@@ -612,6 +700,52 @@ def describe(report: dict) -> str:
     lines.append(f"  used: {u['how']}, {u['start']:.2f}-{u['end']:.2f} s after the start ({u['utc_start']}), "
                  f"{u['duration']:.1f} s at {report['rate_hz']:g} Hz")
     lines.append(f"  columns: {', '.join(report.get('present', []))}")
+    load = report.get("dbc_load") or {}
+    if load.get("repairs") or load.get("messages_left_out"):
+        left = load.get("messages_left_out", {})
+        lines.append(f"  DBC: {load['loader']}; " + ", ".join(f"{k} ({v})" for k, v in load.get("repairs", {}).items())
+                     + (f"; left out: {', '.join(list(left)[:6])}{' ...' if len(left) > 6 else ''}" if left else ""))
+    outside = report.get("can", {}).get("outside_declared_range", {})
+    for name, o in list(outside.items())[:6]:
+        lines.append(f"  plausibility: {name}: {o['outside']} of {o['of']} values outside the DBC's declared "
+                     f"[{o['declared'][0]:g}|{o['declared'][1]:g}] (seen {o['seen'][0]:.4g} to {o['seen'][1]:.4g}; kept)")
+    for quirk in report.get("quirks", []):
+        lines.append(f"  quirk: {quirk}")
+    for note in report.get("notes", []):
+        lines.append(f"  note: {note}")
     for column, why in report.get("missing", {}).items():
         lines.append(f"  missing {column}: {why}")
     return "\n".join(lines)
+
+
+def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_jitter: bool = False,
+             recording=None) -> tuple[pd.DataFrame, dict | None]:
+    """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
+    (a folder of NMEA files and CAN logs, or one such file) through
+    measurements.recording.import_recording with ``recording`` (ImportOptions), then the same
+    checks. The report is None for a table."""
+    source = Path(source)
+    if not is_recording(source) and not (recording is not None and recording.maps_a_table):
+        return read_log(source, required, resample_jitter), None
+    frame, report = import_recording(source, recording)
+    where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
+    frame = check_log(frame, where, required, resample_jitter)
+    frame.attrs["resolution"] = dict(report.get("resolution", {}))
+    return frame, report
+
+
+def positions(source: str | Path, options: ImportOptions | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict]:
+    """(times [s], latitude, longitude [deg], report) of every fix of a recording, whole (no run
+    chosen): the track a field is made of."""
+    source = Path(source)
+    options = (options or ImportOptions()).for_vehicle()
+    streams = _checked(source, options)
+    if streams.gnss is None:
+        raise LogError(f"{source}: no positions in it (NMEA with a fix, a NavSatFix topic, a TLG position, or "
+                       f"lat/lon columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN)")
+    g = streams.gnss
+    report = streams.report
+    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, mm
+    if width and np.isfinite(width[0]).any():
+        report["working_width_m"] = float(np.nanmedian(width[0])) / 1000.0
+    return g["utc"].to_numpy(float), g["lat"].to_numpy(float), g["lon"].to_numpy(float), report

@@ -1,4 +1,4 @@
-"""ROS bags as a recording (issue 26): ROS 1 ``.bag``, ROS 2 ``.db3`` or ``.mcap`` files, or a
+"""ROS bags as a recording: ROS 1 ``.bag``, ROS 2 ``.db3`` or ``.mcap`` files, or a
 rosbag2 folder, read with rosbags (no ROS install).
 
 Standard messages are mapped by their type, without options (TYPE_MAP):
@@ -13,8 +13,11 @@ Standard messages are mapped by their type, without options (TYPE_MAP):
 - ``ackermann_msgs/AckermannDriveStamped``: ``delta_cmd`` from drive.steering_angle, ``speed_cmd``
   from drive.speed.
 
-Any numeric field of any topic: ``--signal COLUMN=/topic[.field.path]`` (``a.b[2].c``; a message
-with one numeric field needs no path); ``lat``/``lon`` columns in degrees become x/y. Times are
+Any numeric field of any topic, custom messages included: ``--signal COLUMN=/topic[.field.path]``
+(``a.b[2].c``; a message with one numeric field needs no path), in expressions with units
+(measurements.signals: a standard message's field has its SI unit, a custom one's must be
+declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees become x/y.
+Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
 the messages' header stamps where they have a header with a stamp, else the bag's receive times;
 every topic is on that one clock, and the report says which each topic used.
 """
@@ -22,13 +25,12 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
-from .log import LogError, resolution
+from .log import LogError
+from .streams import Series, Streams, gnss_table, iso
 
 # ackermann_msgs is not in the rosbags type stores; its layout (ROS 1 and 2 alike)
 ACKERMANN = {
@@ -50,42 +52,41 @@ TYPE_MAP: dict[str, list[tuple[str, str]]] = {
 _PATH = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?)*$")
 
 
-@dataclass(frozen=True)
-class TopicSource:
-    """``COLUMN=[-]/topic[.field.path]``: a log column from a field of a ROS topic."""
+# the units of standard messages' fields (REP 103: SI, angles in radians; NavSatFix in degrees)
+FIELD_UNITS = [
+    (("sensor_msgs/msg/NavSatFix",), {"latitude": "deg", "longitude": "deg", "altitude": "m"}),
+    (("sensor_msgs/msg/Imu",), {"angular_velocity.": "rad/s", "linear_acceleration.": "m/s^2"}),
+    (("nav_msgs/msg/Odometry",), {"twist.twist.linear.": "m/s", "twist.twist.angular.": "rad/s",
+                                  "pose.pose.position.": "m"}),
+    (("geometry_msgs/msg/TwistStamped",), {"twist.linear.": "m/s", "twist.angular.": "rad/s"}),
+    (("geometry_msgs/msg/Twist",), {"linear.": "m/s", "angular.": "rad/s"}),
+    (("geometry_msgs/msg/PoseStamped",), {"pose.position.": "m"}),
+    (("ackermann_msgs/msg/AckermannDriveStamped",), {"drive.steering_angle": "rad", "drive.speed": "m/s",
+                                                     "drive.steering_angle_velocity": "rad/s"}),
+    (("ackermann_msgs/msg/AckermannDrive",), {"steering_angle": "rad", "speed": "m/s"}),
+]
 
-    column: str
-    topic: str
-    path: str = ""
-    sign: float = 1.0
 
-    def __str__(self) -> str:
-        return f"{self.column}={'-' if self.sign < 0 else ''}{self.topic}{'.' + self.path if self.path else ''}"
+def field_unit(msgtype: str, path: str) -> str | None:
+    """The SI unit of a standard message's field (None: a custom message, or a field without one)."""
+    for types, fields in FIELD_UNITS:
+        if msgtype in types:
+            for prefix, unit in fields.items():
+                if path == prefix or (prefix.endswith(".") and path.startswith(prefix)):
+                    return unit
+    return None
 
 
-def parse_topic_source(text: str, topics: list[str] | None = None) -> TopicSource:
-    """``COLUMN=[-]/topic[.field.path]``; the topic is the longest known prefix when ``topics``
-    are given (a topic name may hold dots only where the bag says so), else up to the first dot."""
-    column, _, rest = text.partition("=")
-    rest = rest.strip()
-    sign = -1.0 if rest.startswith("-") else 1.0
-    rest = rest.lstrip("-")
-    column = column.strip()
-    if not rest.startswith("/") or not re.match(r"^[a-z_][a-z0-9_]*$", column) or column in ("t", "x", "y"):
-        raise LogError(f"--signal {text!r}: expected COLUMN=[-]/topic[.field.path] with COLUMN a log column "
-                       f"(delta_cmd, delta, v, yaw_rate, lat, lon) or another lower-case name")
-    topic, path = rest, ""
-    known = [t for t in topics or () if rest == t or rest.startswith(t + ".")]
-    if known:                                  # a topic of the bag (its name may hold a dot)
+def split_name(name: str, topics: list[str]) -> tuple[str, str]:
+    """(topic, field path) of ``/topic.field.path``: the longest topic of the bag that prefixes it
+    (a topic name may hold dots only where the bag says so), else up to the first dot."""
+    known = [t for t in topics if name == t or name.startswith(t + ".")]
+    if known:
         topic = max(known, key=len)
-        path = rest[len(topic) + 1:]
-    elif "." in rest.rsplit("/", 1)[-1]:       # /topic.field: the field after the last name
-        head, tail = rest.rsplit("/", 1)
-        name, path = tail.split(".", 1)
-        topic = f"{head}/{name}"
-    if path and not _PATH.match(path):
-        raise LogError(f"--signal {text!r}: the field path {path!r} is not a.b[2].c")
-    return TopicSource(column, topic, path, sign)
+        return topic, name[len(topic) + 1:]
+    head, _, tail = name.rpartition("/")
+    topic, _, path = tail.partition(".")
+    return f"{head}/{topic}", path
 
 
 def typestore():
@@ -141,9 +142,10 @@ def _value(column: str, path: str, raw):
     return float(raw)
 
 
-def read_bags(paths: list[Path], given: list[TopicSource], source: Path) -> tuple[dict, dict]:
-    """(column -> (times, values), report) of the bags: the standard types by TYPE_MAP, the
-    ``given`` topics by their paths. A LogError names the bag, the topic or the field."""
+def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]:
+    """(column -> (times, values in the column's unit), report) of the bags: the standard types
+    by TYPE_MAP, the ``given`` expressions (SignalSpec) by their ``/topic.field`` names. A
+    LogError names the bag, the topic or the field."""
     from rosbags.highlevel import AnyReader
 
     try:
@@ -157,26 +159,37 @@ def read_bags(paths: list[Path], given: list[TopicSource], source: Path) -> tupl
         reader.close()
 
 
-def _read(reader, given: list[TopicSource], source: Path) -> tuple[dict, dict]:
+def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
+    from .signals import SignalSpec, evaluate, unknown_name
+
     topics = {c.topic: c.msgtype for c in reader.connections}
-    given = [parse_topic_source(str(g), list(topics)) for g in given]
-    wanted: dict[str, list[tuple[str, str, float]]] = {}            # topic -> [(column, path, sign)]
-    for g in given:
-        if g.topic not in topics:
-            raise LogError(f"{source}: --signal {g}: no topic {g.topic!r} in the bag; topics: "
-                           + ", ".join(f"{t} ({m})" for t, m in sorted(topics.items())))
-        wanted.setdefault(g.topic, []).append((g.column, g.path, g.sign))
+    wanted: dict[str, dict[str, str]] = {}            # topic -> {name: field path}
+    for spec in given:
+        for name in spec.names:
+            if not name.startswith("/"):
+                raise LogError(f"{source}: --signal {spec}: {name!r} is not a topic's field; a ROS bag's signals are "
+                               f"named /topic.field.path (topics: {', '.join(sorted(topics))})")
+            topic, path = split_name(name, list(topics))
+            if topic not in topics:
+                near = unknown_name(str(source), spec, topic, sorted(topics), "topic")
+                raise LogError(str(near).split(" (convert")[0].split("; ")[0] + "; topics: "
+                               + ", ".join(f"{t} ({m})" for t, m in sorted(topics.items())))
+            wanted.setdefault(topic, {})[name] = path
     taken = {g.column for g in given}
+    auto: dict[str, SignalSpec] = {}
     for msgtype, fields in TYPE_MAP.items():
         for topic in sorted(t for t, m in topics.items() if m == msgtype):
             for column, path in fields:
                 if column not in taken:
-                    wanted.setdefault(topic, []).append((column, path, 1.0))
+                    name = f"{topic}.{path}"
+                    wanted.setdefault(topic, {})[name] = path
+                    auto[column] = SignalSpec(column, ((name, 1.0),), 0.0, None, f"{column}={name}")
                     taken.add(column)
     rows: dict[str, list] = {t: [] for t in wanted}
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
-    for conn, receive_ns, raw in reader.messages(connections=connections):
+    # rosbags reads every topic when given no connection: nothing wanted, nothing read
+    for conn, receive_ns, raw in (reader.messages(connections=connections) if connections else ()):
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:                     # noqa: BLE001 - an unknown type or a broken message
@@ -186,45 +199,113 @@ def _read(reader, given: list[TopicSource], source: Path) -> tuple[dict, dict]:
         t, from_header = _stamp(msg, receive_ns)
         header_used.setdefault(conn.topic, from_header)
         values = []
-        for column, path, sign in wanted[conn.topic]:
+        for name, path in wanted[conn.topic].items():
             try:
                 p = path or _numeric_field(msg)
                 if p is None:
                     raise LookupError("the message has several fields: give one, /topic.field")
-                raw_value = field(msg, p)
-                values.append(sign * _value(column, p, raw_value) if column != "fix_quality" else _value(column, p, raw_value))
+                column = next((c for c, s in auto.items() if s.names[0] == name), "")
+                values.append(_value(column, p, field(msg, p)))
             except (LookupError, TypeError, ValueError, IndexError) as exc:
-                raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}), column {column!r}: field "
+                raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}): field "
                                f"{path or '(the only numeric field)'}: {exc}") from None
         rows[conn.topic].append((t, *values))
-    signals: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    series: dict[str, Series] = {}
     report_topics = {}
-    for topic, columns in wanted.items():
+    for topic, names in wanted.items():
         data = np.array(rows[topic], float)
         if len(data) == 0:
-            if any(g.topic == topic for g in given):
+            if any(n in s.names for s in given for n in names):
                 raise LogError(f"{source}: topic {topic} holds no message")
             continue
         data = data[np.argsort(data[:, 0], kind="stable")]
-        keep = np.concatenate([[True], np.diff(data[:, 0]) > 0])
-        data = data[keep]
-        for i, (column, path, _) in enumerate(columns, 1):
-            signals[column] = (data[:, 0], data[:, i])
+        data = data[np.concatenate([[True], np.diff(data[:, 0]) > 0])]
+        for i, (name, path) in enumerate(names.items(), 1):
+            series[name] = Series(data[:, 0], data[:, i], field_unit(topics[topic], path), name)
         report_topics[topic] = {"type": topics[topic], "messages": int(len(data)),
                                 "rate_hz": float(1.0 / np.median(np.diff(data[:, 0]))) if len(data) > 1 else math.nan,
                                 "time": "header stamps" if header_used.get(topic) else "bag receive times",
-                                "columns": {c: (path or "(the only numeric field)") for c, path, _ in columns}}
+                                "columns": {}}
+    signals: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for spec in list(given) + list(auto.values()):
+        if not all(n in series for n in spec.names):
+            continue
+        if spec.column in ("fix_quality", "position_std"):
+            s = series[spec.names[0]]
+            signals[spec.column] = (s.t, s.values)
+            how = spec.names[0]
+        elif spec.column in ("lat", "lon", "height") and spec in auto.values():
+            s = series[spec.names[0]]
+            signals[spec.column] = (s.t, s.values)
+            how = spec.names[0]
+        else:
+            t, v, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source))
+            signals[spec.column] = (t, v)
+        for n in spec.names:
+            topic = split_name(n, list(topics))[0]
+            if topic in report_topics:
+                report_topics[topic]["columns"][spec.column] = how
     report = {"topics": report_topics,
               "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
     return signals, report
 
 
-def bag_streams(paths: list[Path], options, source: Path):
-    """The recording's streams (measurements.recording._Streams) from ROS bags."""
-    from .recording import _Streams
+def list_bag(paths: list[Path]) -> list[str]:
+    """``--list``: each topic, its type, count and rate, and the numeric fields of its first message."""
+    from rosbags.highlevel import AnyReader
 
-    given = [s for s in options.signals if isinstance(s, TopicSource)]
-    signals, topics = read_bags(paths, given, source)
+    try:
+        reader = AnyReader([Path(p) for p in paths], default_typestore=typestore())
+        reader.open()
+    except Exception as exc:                         # noqa: BLE001
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    lines = []
+    try:
+        lines.append(f"ROS bag {', '.join(p.name for p in paths)}: {len(reader.connections)} topic(s), "
+                     f"{(reader.end_time - reader.start_time) * 1e-9:.1f} s")
+        for conn in sorted(reader.connections, key=lambda c: c.topic):
+            count = conn.msgcount
+            rate = count / max((reader.end_time - reader.start_time) * 1e-9, 1e-9)
+            used = [c for c, _ in TYPE_MAP.get(conn.msgtype, [])]
+            lines.append(f"  {conn.topic} ({conn.msgtype}): {count} messages, about {rate:.3g} Hz"
+                         + (f"; read without options as {', '.join(used)}" if used else ""))
+            first = next(reader.messages(connections=[conn]), None)
+            if first is None:
+                continue
+            try:
+                msg = reader.deserialize(first[2], conn.msgtype)
+            except Exception as exc:                 # noqa: BLE001
+                lines.append(f"    (cannot decode: {type(exc).__name__}: {exc})")
+                continue
+            for path, value in _numeric_paths(msg)[:40]:
+                unit = field_unit(conn.msgtype, path)
+                lines.append(f"    {conn.topic}.{path}{f' [{unit}]' if unit else ''}: {value:.6g} (first message)")
+    finally:
+        reader.close()
+    return lines
+
+
+def _numeric_paths(msg, prefix: str = "") -> list[tuple[str, float]]:
+    out = []
+    for k in getattr(msg, "__dataclass_fields__", {}):
+        if k.startswith("__"):
+            continue
+        v = getattr(msg, k)
+        path = f"{prefix}{k}"
+        if isinstance(v, bool):
+            continue
+        if isinstance(v, (int, float, np.number)):
+            out.append((path, float(v)))
+        elif isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.size <= 9:
+            out += [(f"{path}[{i}]", float(x)) for i, x in enumerate(v.ravel())]
+        elif hasattr(v, "__dataclass_fields__") and k not in ("header", "stamp"):
+            out += _numeric_paths(v, path + ".")
+    return out
+
+
+def bag_streams(paths: list[Path], options, source: Path):
+    """The recording's streams from ROS bags."""
+    signals, topics = read_bags(paths, list(options.signals), source)
     report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None, "notes": [],
                     "bag": topics, "clocks": {"reference": "the bag's clock: header stamps (receive times where a "
                                                            "message has no header)"}}
@@ -237,10 +318,8 @@ def bag_streams(paths: list[Path], options, source: Path):
         std = np.interp(t, *signals.pop("position_std")) if "position_std" in signals else np.full(len(t), np.nan)
         fix = (quality > 0) & np.isfinite(lat) & np.isfinite(lon)
         if fix.sum() >= 2:
-            gnss = pd.DataFrame({"utc": t[fix], "lat": lat[fix], "lon": lon[fix], "height": height[fix],
-                                 "quality": quality[fix], "speed": np.nan, "course": np.nan, "heading": np.nan,
-                                 "position_std": std[fix]})
-            report["first_fix_utc"] = float(t[fix][0])
+            gnss = gnss_table(t[fix], lat[fix], lon[fix], height[fix], quality[fix], None, std[fix])
+            report["first_fix_utc"] = iso(float(t[fix][0]))
         else:
             report["notes"].append(f"the NavSatFix topic holds {int(fix.sum())} messages with a fix: no positions")
     for column in ("height", "fix_quality", "position_std"):
@@ -248,12 +327,12 @@ def bag_streams(paths: list[Path], options, source: Path):
     if not signals and gnss is None:
         raise LogError(f"{source}: no topic of a known type (NavSatFix, Imu, Odometry, TwistStamped, "
                        f"AckermannDriveStamped) and no --signal; topics: "
-                       + ", ".join(f"{t} ({m})" for t, m in topics["topics_not_used"].items()))
-    columns = {c: f"{t} ({v['type']}).{v['columns'][c]}" for t, v in topics["topics"].items() for c in v["columns"]
-               if c in signals}
+                       + ", ".join(f"{t} ({m})" for t, m in topics["topics_not_used"].items())
+                       + "; map a field with --signal COLUMN=/topic.field[unit] (convert SOURCE --list shows the fields)")
+    columns = {c: how for v in topics["topics"].values() for c, how in v["columns"].items() if c in signals}
     if gnss is not None:
         columns.update({"x": "NavSatFix latitude/longitude -> east of the run's first fix (pymap3d)",
                         "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return _Streams(gnss, signals, report, held, {c: resolution(v) for c, (_, v) in signals.items()})
+    return Streams(gnss, signals, report, held, {})

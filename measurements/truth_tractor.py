@@ -15,6 +15,8 @@ import math
 import numpy as np
 import pandas as pd
 
+from components.test_drive_plan import driving_plan
+
 DEG = math.pi / 180
 G = 9.81
 TABLE = dict(m=700.0, I=280.0, l_f=1.0, l_r=0.4, C_f=8000.0, C_r=90000.0, sigma_f=0.1942)
@@ -119,47 +121,6 @@ def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float
         "side_slope": {"slope": u(3.0, 6.0) * DEG, "downhill": u(-math.pi, math.pi)},
         "antenna_lever_arm": {"forward": u(0.4, 1.0), "left": sign * u(0.1, 0.4)},
     }[effect]
-
-
-def driving_plan(rng: np.random.Generator, duration: float, rate: float = 20.0, speeds_cycle=(1.0, 2.0, 3.0)):
-    """Steering command (held at ``rate``) and a smooth speed profile: 20 s segments cycling
-    through a multisine, steps, a headland-like turn and small corrections, at 1, 2 and 3 m/s
-    (``speeds_cycle``: other segment speeds, e.g. one speed for a log that cannot separate
-    speed-dependent effects)."""
-    n = int(round(duration * rate))
-    t = np.arange(n) / rate
-    cmd = np.zeros(n)
-    seg = int(20 * rate)
-    speeds = []
-    for i, a in enumerate(range(0, n, seg)):
-        b = min(n, a + seg)
-        tt = t[a:b] - t[a]
-        kind = i % 4
-        if kind == 0:
-            f = rng.uniform(0.05, 1.0, 6)
-            x = np.sum(np.sin(2 * np.pi * f[:, None] * tt[None, :] + rng.uniform(0, 2 * np.pi, 6)[:, None]), axis=0)
-            cmd[a:b] = 6 * DEG * x / np.sqrt(3.0)
-        elif kind == 1 or kind == 3:
-            span, amp = ((1.5, 3.0), 20 * DEG) if kind == 1 else ((1.0, 2.0), 3 * DEG)
-            k = a
-            while k < b:
-                m = min(b, k + int(rng.uniform(*span) * rate))
-                cmd[k:m] = rng.uniform(-amp, amp)
-                k = m
-        else:
-            peak = rng.choice([-1, 1]) * rng.uniform(15, 25) * DEG
-            cmd[a:b] = np.interp(tt, [0, 2, 8, 10, 14, 16, 20], [0, peak, peak, -0.5 * peak, -0.5 * peak, 0, 0])
-        speeds.append(speeds_cycle[i % len(speeds_cycle)])
-    cmd = np.clip(cmd, -30 * DEG, 30 * DEG)
-
-    def speed(time: float) -> float:
-        i = min(int(time // 20.0), len(speeds) - 1)
-        v1 = speeds[i]
-        v0 = speeds[i - 1] if i > 0 else 0.0
-        s = min(max((time - 20.0 * i) / 3.0, 0.0), 1.0)
-        return v0 + (v1 - v0) * 0.5 * (1 - math.cos(math.pi * s))
-
-    return t, cmd, speed
 
 
 def effect_list(effect: str | tuple | list | None) -> list[str]:

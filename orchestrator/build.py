@@ -1,22 +1,19 @@
-"""From a validated study to wired component instances: type lookup, parameters, port checks,
-evaluation order of sampled components and refusal of algebraic loops."""
+"""From a resolved model to the System the engine runs (after Drake's DiagramBuilder): component
+instances with their parameters in SI and their constant inputs, port and unit checks of every
+connection, the evaluation order of sampled components, and algebraic loops refused."""
 from __future__ import annotations
 
-import difflib
 import graphlib
-import importlib
-import pkgutil
 import math
 import zlib
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from .component import Component, ComponentError
-from .study import SUBSYSTEM_SUFFIXES, ComponentSpec, Connection, Study, StudyError
-from .units import FILE_UNIT, UnitError, to_si, units_match
+from .model import Model, resolved_parameters
+from .study import ComponentSpec, Connection, Study, StudyError
+from .units import UnitError, to_si, units_match
 
 
 @dataclass
@@ -40,140 +37,22 @@ class System:
     unconnected_inputs: list[str]
 
 
-def _where(study: Study) -> str:
-    return str(study.path) if study.path else "<study>"
-
-
-def resolve_type(type_name: str, package: str | None, where: str) -> type[Component]:
-    """``"name"`` -> ``<package>.name.COMPONENT`` (the study's package, then every registered
-    one); ``"pkg.mod:Class"`` -> that class."""
-    if ":" in type_name:
-        module_name, attr = type_name.split(":", 1)
-        candidates = [module_name]
-    else:
-        from .registry import registry
-
-        packages = ([package] if package else []) + registry().component_packages
-        if not packages:
-            raise StudyError(f"{where}: type {type_name!r}: no component package is registered (install the "
-                             f"project: pip install -e .) and study.component_package is not set")
-        candidates, attr = [f"{p}.{type_name}" for p in dict.fromkeys(packages)], "COMPONENT"
-    module = None
-    for module_name in candidates:
-        try:
-            module = importlib.import_module(module_name)
-            break
-        except ModuleNotFoundError as exc:
-            if exc.name is None or not module_name.startswith(exc.name):
-                raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
-    if module is None:
-        known = _known_types(packages)
-        close = difflib.get_close_matches(type_name, known, n=3)
-        raise StudyError(f"{where}: type {type_name!r}: no such component type: cannot import "
-                         f"{' or '.join(repr(c) for c in candidates)}"
-                         + (f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""))
-    cls = getattr(module, attr, None)
-    if cls is None:
-        raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
-    if not (isinstance(cls, type) and issubclass(cls, Component)):
-        raise StudyError(f"{where}: type {type_name!r}: {attr!r} is not a Component class")
-    return cls
-
-
-def _known_types(packages: list[str]) -> list[str]:
-    """Module names of the component packages (the type names a study may use)."""
-    names = []
-    for package in packages:
-        try:
-            names += [m.name for m in pkgutil.iter_modules(importlib.import_module(package).__path__)]
-        except (ImportError, AttributeError):
-            continue
-    return names
-
-
-def component_class(study: Study, name: str, type_name: str | None) -> type[Component]:
-    """The class of component ``name``: a Python type, an FMU or a subsystem named by path
-    (relative to the study file), or an inline subsystem (``type_name`` None)."""
-    where = _where(study)
-    if type_name is None:
-        from .composite import composite_class, inline_subsystem
-
-        return composite_class(inline_subsystem(study, name), f"{where}: subsystems.{name}")
-    lowered = type_name.lower()
-    if not lowered.endswith(".fmu") and not lowered.endswith(SUBSYSTEM_SUFFIXES):
-        return resolve_type(type_name, study.study.component_package, f"{where}: components.{name}")
-    path = Path(type_name)
-    if not path.is_absolute() and study.path is not None:
-        path = Path(study.path).parent / path
-    if lowered.endswith(SUBSYSTEM_SUFFIXES):
-        from .composite import composite_class
-
-        try:
-            sub = Study.load(path)
-        except StudyError as exc:
-            raise StudyError(f"{where}: components.{name}.type: subsystem {exc}") from None
-        return composite_class(sub, f"{where}: components.{name}.type")
-    from .fmu import FMUError, fmu_component_class
-
-    try:
-        return fmu_component_class(path)
-    except FMUError as exc:
-        raise StudyError(f"{where}: components.{name}.type: {exc}") from None
-
-
-def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], where: str,
-                        folders: Callable[[], Sequence[Path]] | None = None) -> dict[str, Any]:
-    """The study's values of component ``name``'s parameters in SI (declared units); unknown
-    names and unit mismatches are refused with the field named. A relative path in a parameter
-    declared with unit ``"file"`` is found in the first of ``folders()`` (the study file's, then
-    those of the files it extends) or the working folder that holds it, and made absolute; one
-    found nowhere is left as written for the component to name."""
-    params = cls.declared("parameter")
-    converted: dict[str, Any] = {}
-    for key, value in values.items():
-        if key not in params:
-            close = difflib.get_close_matches(key, list(params), n=1)
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
-                             f"{getattr(cls, 'type_name', cls.__name__)!r}"
-                             + (f"; did you mean {close[0]!r}?" if close else "")
-                             + f" Known: {', '.join(sorted(params))}")
-        try:
-            converted[key] = to_si(value, params[key].unit)
-        except UnitError as exc:
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
-        if params[key].unit == FILE_UNIT and isinstance(converted[key], str) and converted[key]:
-            converted[key] = _find_file(converted[key], folders() if folders else ())
-        start = params[key].start
-        numeric = isinstance(start, (int, float)) and not isinstance(start, bool)
-        if numeric and isinstance(converted[key], str):
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: got {value!r}, expected a number"
-                             + (f" in {params[key].unit} (or a string like '1.5 {params[key].unit}')"
-                                if params[key].unit not in ("", "1") else ""))
-    return converted
-
-
-def _find_file(text: str, folders: Sequence[Path]) -> str:
-    path = Path(text).expanduser()
-    if path.is_absolute():
-        return str(path)
-    for folder in (*folders, Path.cwd()):
-        if (folder / path).exists():
-            return str((folder / path).resolve())
-    return text
-
-
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
     """Independent, reproducible stream per component: seeded by (study seed, crc32(name))."""
     return np.random.default_rng([study_seed, zlib.crc32(name.encode())])
 
 
-def build_system(study: Study) -> System:
-    where = _where(study)
+def build_system(model: Model) -> System:
+    """Instances of the model's components, wired and ordered (a StudyError names the field)."""
+    if not isinstance(model, Model):
+        raise TypeError(f"build_system takes a resolved Model (build_system(resolve(study))), not {type(model).__name__}")
+    study = model.study
+    where = study.where
     base = study.study.base_step
     nodes: dict[str, Node] = {}
     specs = {**study.components, **{n: ComponentSpec(type="", step=s.step) for n, s in study.subsystems.items()}}
     for name, spec in specs.items():
-        cls = study.component_class(name)
+        cls = model.classes[name]
         converted = resolved_parameters(cls, name, spec.parameters, where, study.folders)
         try:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))

@@ -46,7 +46,7 @@ def _run(args: argparse.Namespace) -> int:
         for option, value in chosen:
             study = option.apply(study, value)
         if args.set:
-            from .study import parse_override
+            from .study_files import parse_override
 
             study = study.with_values(dict(parse_override(item, args.study) for item in args.set))
     try:

@@ -68,13 +68,14 @@ class Component:
     Subclasses set ``variables`` and ``feedthrough`` (output name -> input names it depends on
     within the same step), ``sampled`` (see module docstring) and implement ``initialize`` and
     ``step``; ``roles`` names what the component is for the tools that look components up
-    (``Study.find(role=...)``). ``rng`` is a numpy Generator seeded by the orchestrator from the study seed.
+    (``Model.find(role=...)``, orchestrator.model). ``rng`` is a numpy Generator seeded by the
+    orchestrator from the study seed.
     """
 
     variables: ClassVar[tuple[Variable, ...]] = ()
     feedthrough: ClassVar[Mapping[str, tuple[str, ...]]] = {}
     sampled: ClassVar[bool] = True
-    roles: ClassVar[tuple[str, ...]] = ()   # what the component is, for lookup by tools (Study.find)
+    roles: ClassVar[tuple[str, ...]] = ()   # what the component is, for lookup by tools (Model.find)
     connected_inputs: frozenset[str] = frozenset()   # inputs a connection drives (set when built)
 
     def __init__(self, name: str, parameters: Mapping[str, Any] | None = None,
@@ -94,9 +95,6 @@ class Component:
     @classmethod
     def declared(cls, causality: str) -> dict[str, Variable]:
         return {v.name: v for v in cls.variables if v.causality == causality}
-
-    def describe(self) -> list[Variable]:
-        return list(self.variables)
 
     # --- life cycle ---------------------------------------------------------------------------
     def initialize(self, t0: float, dt: float) -> None:

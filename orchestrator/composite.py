@@ -22,24 +22,8 @@ from typing import Any, ClassVar
 from .build import System, build_system
 from .component import Component, ComponentError, Variable
 from .engine import RunError, Simulation
-from .study import ExportedInput, Study, StudyError, parse_study
-
-
-def inline_subsystem(study: Study, name: str) -> Study:
-    """The ``[subsystems.NAME]`` block of ``study`` as a study of its own."""
-    spec = study.subsystems[name]
-    s = study.study
-    base = spec.base_step or spec.step or s.base_step
-    data: dict[str, Any] = {
-        "study": {"name": f"{s.name}.{name}", "description": spec.description, "start_time": s.start_time,
-                  "stop_time": s.stop_time, "base_step": base, "seed": s.seed},
-        "components": {k: v.model_dump(exclude_unset=True) for k, v in spec.components.items()},
-        "connections": [str(c) for c in spec.connections],
-        "exports": spec.exports.model_dump(),
-    }
-    if s.component_package:
-        data["study"]["component_package"] = s.component_package
-    return parse_study(data, study.path if study.path is not None else "<study>")
+from .study import Study, StudyError
+from .study_schema import SUBSYSTEM_SUFFIXES, ExportedInput
 
 
 def _inner_port(system: System, comp: str, name: str, causality: str, field: str) -> Variable:
@@ -110,31 +94,47 @@ def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
 
 
-_CLASSES: dict[str, type["CompositeComponent"]] = {}
+class SubsystemTypes:
+    """Sub-resolver (orchestrator.resolver): an inline ``[subsystems.NAME]`` block, or a component
+    whose type is a study file (.toml/.yaml, relative to the study file). Each subsystem's class is
+    made once per content (its inner system is built once to check its exports)."""
+
+    def __init__(self) -> None:
+        self._classes: dict[str, type[CompositeComponent]] = {}
+
+    def component_class(self, study: Study, name: str, resolver) -> type["CompositeComponent"] | None:
+        if name in study.subsystems:
+            return self.composite_class(study.subsystem(name), f"{study.where}: subsystems.{name}", resolver)
+        spec = study.components.get(name)
+        if spec is None or not spec.type.lower().endswith(SUBSYSTEM_SUFFIXES):
+            return None
+        try:
+            sub = Study.load(study.file_path(spec.type))
+        except StudyError as exc:
+            raise StudyError(f"{study.where}: components.{name}.type: subsystem {exc}") from None
+        return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
+
+    def composite_class(self, sub: Study, where: str, resolver) -> type["CompositeComponent"]:
+        """A Component class whose ports are ``sub``'s exports."""
+        key = json.dumps([str(sub.path), sub.to_data()], sort_keys=True, default=str)
+        if key not in self._classes:
+            self._classes[key] = _composite_class(sub, where, resolver)
+        return self._classes[key]
 
 
-def composite_class(sub: Study, where: str) -> type["CompositeComponent"]:
-    """A Component class whose ports are ``sub``'s exports (built once to check them; cached on
-    the subsystem's content, so looking components up does not rebuild it)."""
-    key = json.dumps([str(sub.path), sub.to_data()], sort_keys=True, default=str)
-    if key not in _CLASSES:
-        _CLASSES[key] = _composite_class(sub, where)
-    return _CLASSES[key]
-
-
-def _composite_class(sub: Study, where: str) -> type["CompositeComponent"]:
+def _composite_class(sub: Study, where: str, resolver) -> type["CompositeComponent"]:
     if sub.exports is None:
         raise StudyError(f"{where}: {sub.where} has no [exports] table; a study used as a subsystem declares "
                          f"the ports it offers: [exports] inputs = {{port = \"component.input\"}}, "
                          f"outputs = {{port = \"component.output\"}}")
     try:
-        system = build_system(sub)
+        system = build_system(resolver.resolve(sub))
     except StudyError as exc:
         raise StudyError(f"{where}: in the subsystem: {exc}") from None
     variables, feedthrough = _exported(system, sub, sub.where)
     sampled = all(node.component.sampled for node in system.nodes.values())
     attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": sampled,
-             "subsystem": sub, "type_name": sub.where, "roles": tuple(sub.exports.roles)}
+             "subsystem": sub, "resolver": resolver, "type_name": sub.where, "roles": tuple(sub.exports.roles)}
     return type(f"Subsystem_{sub.study.name.replace('.', '_')}", (CompositeComponent,), attrs)
 
 
@@ -142,6 +142,7 @@ class CompositeComponent(Component):
     """One instance of a subsystem: its own engine, stepped inside this component's step."""
 
     subsystem: ClassVar[Study]
+    resolver: ClassVar[Any]          # the resolver that made the class resolves its variants
     type_name: ClassVar[str]
 
     def initialize(self, t0: float, dt: float) -> None:
@@ -150,7 +151,7 @@ class CompositeComponent(Component):
                   **{k: v for k, v in self.p.items() if v is not None}}
         try:
             sub = self.subsystem.with_values(values)
-            system = build_system(sub)
+            system = build_system(self.resolver.resolve(sub))
         except StudyError as exc:
             raise ComponentError(f"{self.name}: subsystem: {exc}") from None
         h = sub.study.base_step
@@ -180,8 +181,8 @@ class CompositeComponent(Component):
         try:
             self.sim.advance(self.sim.k + self.substeps)
         except RunError as exc:
-            if isinstance(exc.__cause__, KeyboardInterrupt):
-                raise KeyboardInterrupt from None
+            if isinstance(exc.__cause__, KeyboardInterrupt):     # Ctrl-C or SIGTERM (errors.Terminated): the same kind
+                raise type(exc.__cause__)() from None
             raise ComponentError(f"{self.name}: in the subsystem {exc}") from None
         self._publish()
 

@@ -12,24 +12,26 @@ At each macro instant t_k = t0 + k*h (never accumulated):
     that instant.
 A component raising EndRun (an FMU's terminate request) ends the run cleanly at the last instant
 recorded in full; ``Recording.ended_by`` says who asked, when and why.
-Each component's outputs are recorded at the instants they can change (multiples of its step)
-and held in between when the table is built.
 Step 2 at k = 0 propagates the outputs at t0 before anything integrates.
+
+Recording the signals (orchestrator.recording), pacing against the wall clock
+(orchestrator.realtime) and reporting progress are observers (orchestrator.observers): the
+engine calls their hooks and takes no part in what they do.
 """
 from __future__ import annotations
 
 import math
 import time
-from array import array
-from dataclasses import dataclass, field
-from operator import itemgetter
+from typing import Iterable
 
 import numpy as np
 
 from .build import Node, System
 from .component import ComponentError, EndRun
 from .errors import ComputationError, InputError
+from .observers import Observer
 from .realtime import RealTimePacer
+from .recording import Recording, SignalRecorder
 
 
 class ParameterError(InputError):
@@ -44,80 +46,44 @@ class RunError(ComputationError):
         self.partial = partial
 
 
-@dataclass
-class Recording:
-    columns: list[str]
-    data: np.ndarray            # shape (n_samples, 1 + n_signals); column 0 is time
-    wall_time_s: float
-    completed: bool
-    events: list[tuple[float, str, str]] = field(default_factory=list)   # (t, component, message)
-    realtime: dict | None = None                                          # pacing statistics
-    ended_by: dict | None = None          # {"component", "t", "reason"}: a component ended the run
-
-    def to_frame(self):
-        import pandas as pd
-
-        return pd.DataFrame(self.data, columns=["t"] + self.columns)
-
-
-def _numeric_scalar(value) -> bool:
-    return isinstance(value, (int, float, np.number)) and not isinstance(value, (str, bytes))
-
-
-def _single(key: str):
-    return lambda d: (d[key],)
-
-
-class _Recorder:
-    """Outputs of one component, kept at the instants they can change (multiples of its ratio,
-    for sampled and continuous components alike) and held in between when the table is built."""
-
-    __slots__ = ("name", "ratio", "width", "get", "buf")
-
-    def __init__(self, name: str, ratio: int, outputs: list[str]) -> None:
-        self.name, self.ratio, self.width = name, ratio, len(outputs)
-        self.get = itemgetter(*outputs) if len(outputs) > 1 else _single(outputs[0])
-        self.buf = array("d")
-
-    def table(self, rows: int) -> np.ndarray:
-        """(rows, width): sample j of the buffer held over base steps j*ratio .. (j+1)*ratio - 1."""
-        kept = np.frombuffer(self.buf, dtype=float).reshape(-1, self.width)
-        return np.repeat(kept, self.ratio, axis=0)[:rows] if rows else kept[:0]
-
-
 class Simulation:
-    def __init__(self, system: System, record: bool = True) -> None:
-        """``record=False``: keep no signal history (a sub-system stepped inside a component)."""
+    def __init__(self, system: System, record: bool = True, observers: Iterable[Observer] = ()) -> None:
+        """``record=False``: keep no signal history (a sub-system stepped inside a component);
+        ``observers`` watch the run besides the recorder and the real-time pacer."""
         self.system = system
         self.record = record
         s = system.study.study
         self.t0, self.h = s.start_time, s.base_step
         self.n_steps = int(round((s.stop_time - s.start_time) / s.base_step))
-        # the signal table holds every numeric scalar output (strings, bytes and whole arrays of an
-        # FMU are exchanged between components but not recorded; array elements are)
-        self.signals = [(node, v.name) for node in system.nodes.values() for v in node.component.variables
-                        if v.causality == "output" and _numeric_scalar(v.start)]
-        self.columns = [f"{node.name}.{out}" for node, out in self.signals]
         # schedule over one period of the slowest rhythm: which nodes are due at k mod period
         period = math.lcm(*(node.ratio for node in system.nodes.values())) if system.nodes else 1
         self._period = period
         self._due_sampled = [[nd for nd in system.sampled_order if j % nd.ratio == 0] for j in range(period)]
         self._due_continuous = [[nd for nd in system.continuous if j % nd.ratio == 0] for j in range(period)]
         self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in system.nodes.values()}
-        self.k, self._drained, self._recorders, self._start = 0, 0, [], time.perf_counter()
+        self.recorder = SignalRecorder(system, period)
+        self.columns = self.recorder.columns
+        self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
+        self.observers: list[Observer] = [o for o in (self.pacer, self.recorder if record else None) if o is not None]
+        self.observers += list(observers)
+        self.k, self._drained, self._start = 0, 0, time.perf_counter()
         self.ended_by: dict | None = None
 
-    def _recording(self, recorders: list[_Recorder], rows: int, completed: bool, start: float) -> Recording:
+    def add_observer(self, observer: Observer) -> None:
+        """Watch the run (before ``start``)."""
+        self.observers.append(observer)
+
+    def _recording(self, rows: int, completed: bool) -> Recording:
         """The rows recorded since the last ``drain`` up to base step ``rows`` (absolute)."""
-        drained = self._drained
-        rows = max(rows - drained, 0)
-        times = self.t0 + (drained + np.arange(rows)) * self.h
-        blocks = [times.reshape(-1, 1)] + [r.table(rows) for r in recorders]
-        data = np.hstack(blocks) if rows and recorders else np.empty((0, 1 + len(self.signals)))
+        data = self.recorder.rows(self.t0, self.h, self._drained, rows) if self.record else \
+            self.recorder.rows(self.t0, self.h, 0, 0)
         events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
-        pacer = getattr(self, "pacer", None)
-        return Recording(self.columns, data, time.perf_counter() - start, completed, events,
-                         pacer.stats() if pacer is not None else None, self.ended_by)
+        return Recording(self.columns, data, time.perf_counter() - self._start, completed, events,
+                         self.pacer.stats() if self.pacer is not None else None, self.ended_by)
+
+    def partial(self) -> Recording:
+        """What the run recorded up to where it stands (not completed)."""
+        return self._recording(self.k, False)
 
     def run(self) -> Recording:
         """Initialise, step to stop_time, record; components are terminated afterwards."""
@@ -132,16 +98,8 @@ class Simulation:
         """Initialise every component and publish its outputs at t0 (step 0 not yet taken)."""
         sys_ = self.system
         self._start = time.perf_counter()
-        s = sys_.study.study
-        self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.published = published = {}
         self._drained = 0          # a restarted simulation records from its start again
-        outputs: dict[str, list[str]] = {}
-        for node, out in self.signals:
-            outputs.setdefault(node.name, []).append(out)
-        recorders = {name: _Recorder(name, sys_.nodes[name].ratio, outs) for name, outs in outputs.items()} \
-            if self.record else {}
-        self._recorders = list(recorders.values())
         for node in sys_.nodes.values():
             try:
                 node.component.initialize(self.t0, node.step)
@@ -149,15 +107,13 @@ class Simulation:
                 # a component refusing its parameters before the first step: the user's input (exit 2)
                 raise ParameterError(f"{sys_.study.path}: components.{node.name}: {exc}") from None
             except OSError as exc:          # a device or port that cannot be opened: the environment
-                raise RunError(f"initialising {node.name!r}: {exc}",
-                               self._recording(self._recorders, 0, False, self._start)) from exc
+                raise RunError(f"initialising {node.name!r}: {exc}", self._recording(0, False)) from exc
             published[node.name] = dict(node.component.y)
         pulls = self._pulls
 
         def entry(node: Node):
             comp = node.component
-            return (node.name, comp.step, comp.u, pulls[node.name], node.step, recorders.get(node.name),
-                    comp, node.ratio == 1)
+            return node.name, comp.step, comp.u, pulls[node.name], node.step, comp, node.ratio == 1
 
         self._due_s = [[entry(nd) for nd in nodes] for nodes in self._due_sampled]
         self._due_a = [[(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in nodes
@@ -172,34 +128,39 @@ class Simulation:
             if node.ratio == 1:
                 published[node.name] = node.component.y
         self.k = 0
+        hooks = {name: [getattr(o, name) for o in self.observers if getattr(o, name) is not None]
+                 for name in ("started", "instant", "recorded", "advanced")}
+        self._instant, self._recorded, self._advanced = hooks["instant"], hooks["recorded"], hooks["advanced"]
+        for hook in hooks["started"]:
+            hook(self)
 
     def advance(self, k_end: int, final: bool = False) -> None:
         """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, actuate,
         continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
         instant k_end too, without integrating past it (the last instant of a run)."""
-        published, period, pace = self.published, self._period, self.pacer
+        published, period = self.published, self._period
         due_s, due_c, due_a, due_v = self._due_s, self._due_c, self._due_a, self._due_v
+        before, after = self._instant, self._recorded
         last = k_end if final else -1
         k, recorded = self.k, self.k
         try:
             for k in range(self.k, k_end + 1 if final else k_end):
-                if pace is not None:
-                    pace.wait(k)
+                for hook in before:
+                    hook(k)
                 t = self.t0 + k * self.h
                 phase = k % period
                 continuous = due_c[phase]
-                for name, _, _, _, _, rec, comp, live in continuous:
-                    if k and not live:
-                        published[name] = dict(comp.y)
-                    if rec is not None:
-                        rec.buf.extend(rec.get(published[name]))
-                for name, step, u, sources, dt, rec, comp, _ in due_s[phase]:
+                if k:
+                    for name, _, _, _, _, comp, live in continuous:
+                        if not live:
+                            published[name] = dict(comp.y)
+                for name, step, u, sources, dt, comp, _ in due_s[phase]:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                     step(t, dt)
-                    y = published[name] = comp.y
-                    if rec is not None:
-                        rec.buf.extend(rec.get(y))
+                    published[name] = comp.y
+                for hook in after:
+                    hook(phase)
                 for u, sources, actuate in due_a[phase]:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
@@ -208,20 +169,20 @@ class Simulation:
                 if k == last:
                     break
                 advancing = due_v[phase]
-                for _, _, u, sources, _, _, _, _ in continuous:
+                for _, _, u, sources, _, _, _ in continuous:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                 for u, sources, _, _ in advancing:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
-                for _, step, _, _, dt, _, _, _ in continuous:
+                for _, step, _, _, dt, _, _ in continuous:
                     step(t, dt)
                 for _, _, advance, dt in advancing:
                     advance(t, dt)
         except EndRun as request:
             if recorded == 0:
                 raise RunError(f"at t = {self.t0:.6g} s: {request.component} ended the run before its first "
-                               f"instant: {request.reason}", self._recording(self._recorders, 0, False, self._start))
+                               f"instant: {request.reason}", self._recording(0, False))
             self.ended_by = {"component": request.component, "t": self.t0 + (recorded - 1) * self.h,
                              "reason": request.reason}
             self.k = self.n_steps = recorded          # every row before `recorded` is complete
@@ -230,9 +191,10 @@ class Simulation:
                 KeyboardInterrupt) as exc:
             self.k = k
             what = "interrupted" if isinstance(exc, KeyboardInterrupt) else str(exc)
-            raise RunError(f"at t = {self.t0 + k * self.h:.6g} s: {what}",
-                           self._recording(self._recorders, k, False, self._start)) from exc
+            raise RunError(f"at t = {self.t0 + k * self.h:.6g} s: {what}", self._recording(k, False)) from exc
         self.k = k_end
+        for hook in self._advanced:
+            hook(k_end)
 
     @property
     def chunk_period(self) -> int:
@@ -244,18 +206,17 @@ class Simulation:
         a multiple of ``chunk_period``; the recorders' buffers are emptied (memory stays flat)."""
         if self.k % self._period:
             raise ValueError(f"drain at base step {self.k}, not a multiple of {self._period}")
-        data = self._recording(self._recorders, self.k, False, self._start).data
-        for rec in self._recorders:
-            del rec.buf[:]
+        data = self._recording(self.k, False).data
+        self.recorder.clear()
         self._drained = self.k
         return data
 
     def finish(self) -> Recording:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
         if self.ended_by is not None:             # the last instant is recorded already
-            return self._recording(self._recorders, self.k, True, self._start)
+            return self._recording(self.k, True)
         self.advance(self.k, final=True)
-        return self._recording(self._recorders, self.k + 1, True, self._start)
+        return self._recording(self.k + 1, True)
 
     def terminate(self) -> None:
         for node in self.system.nodes.values():

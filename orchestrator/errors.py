@@ -65,8 +65,7 @@ def install_signal_handlers() -> None:
 
 
 # (error kind, exit code, message template); first match wins, so subclasses come first.
-# ``{exc}`` is the error's text. RunError and AnalysisError are registered by the modules that
-# define them (engine, runner) through ``register_error``.
+# ``{exc}`` is the error's text.
 EXIT_TABLE: list[tuple[type[BaseException], int, str]] = [
     (InputError, 2, "error: {exc}"),
     (ComputationError, 1, "error: {exc}"),
@@ -74,11 +73,6 @@ EXIT_TABLE: list[tuple[type[BaseException], int, str]] = [
     (Terminated, 143, "terminated"),
     (KeyboardInterrupt, 130, "interrupted"),
 ]
-
-
-def register_error(kind: type[BaseException], code: int, template: str) -> None:
-    """Put ``kind`` in front of the table (more specific kinds are registered after their bases)."""
-    EXIT_TABLE.insert(0, (kind, code, template))
 
 
 def exit_code(exc: BaseException) -> tuple[int, str] | None:

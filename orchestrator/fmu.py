@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import ctypes
 import re
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,12 +31,9 @@ from typing import Any
 import numpy as np
 
 from .component import Component, ComponentError, EndRun, Variable
-from .errors import InputError
-from .units import FMI_BASE, BaseUnit
-
-
-class FMUError(InputError):
-    """The file cannot be used as a component (message names file and reason)."""
+from .fmu_description import FMUError, base_units, inspect_fmu, variable_unit
+from .study import Study, StudyError
+from .units import BaseUnit
 
 
 def _text(value="") -> str:       # (called without an argument: the empty string)
@@ -53,46 +49,6 @@ _FMI3_TYPES = {**{t: (t, float) for t in ("Float32", "Float64")},
                "Enumeration": ("Int64", int), "Boolean": ("Boolean", bool), "String": ("String", _text),
                "Binary": ("Binary", bytes)}
 CAUSALITIES = {"input": "input", "output": "output", "parameter": "parameter", "structuralParameter": "parameter"}
-
-
-def _binary_dir(fmi_version: str) -> str:
-    import fmpy
-
-    return fmpy.platform if fmi_version.startswith("2") else fmpy.platform_tuple
-
-
-def inspect_fmu(path: Path):
-    """Read and check an FMU: its model description. Raises FMUError naming the file and reason."""
-    from fmpy import read_model_description, sharedLibraryExtension
-
-    if not path.exists():
-        raise FMUError(f"{path}: no such file")
-    if not zipfile.is_zipfile(path):
-        raise FMUError(f"{path}: not an FMU (not a zip archive)")
-    with zipfile.ZipFile(path) as zf:
-        names = set(zf.namelist())
-    if "modelDescription.xml" not in names:
-        raise FMUError(f"{path}: not an FMU (no modelDescription.xml in the archive)")
-    try:
-        md = read_model_description(str(path), validate=False)
-    except Exception as exc:  # fmpy raises several kinds for a malformed description
-        raise FMUError(f"{path}: modelDescription.xml cannot be read: {exc}") from None
-    if md.fmiVersion not in ("2.0",) and not md.fmiVersion.startswith("3."):
-        raise FMUError(f"{path}: FMI version {md.fmiVersion} is not supported (2.0 and 3.0 are)")
-    kind = md.coSimulation or md.modelExchange
-    if kind is None:
-        raise FMUError(f"{path}: neither co-simulation nor model exchange is provided "
-                       f"(a scheduled-execution FMU cannot be stepped by this orchestrator)")
-    binary = f"binaries/{_binary_dir(md.fmiVersion)}/{kind.modelIdentifier}{sharedLibraryExtension}"
-    if binary not in names:
-        have = sorted({n.split("/")[1] for n in names if n.startswith("binaries/") and n.count("/") >= 2})
-        raise FMUError(f"{path}: no binary for this platform ({binary} missing; the FMU has "
-                       f"{', '.join(have) or 'no binaries'})")
-    clocked = [v.name for v in md.modelVariables if v.type == "Clock" or getattr(v, "clocks", None)]
-    if clocked:
-        raise FMUError(f"{path}: clocks are not supported; clocked variables: {', '.join(clocked[:8])}"
-                       + (" ..." if len(clocked) > 8 else ""))
-    return md
 
 
 @dataclass(frozen=True)
@@ -112,21 +68,6 @@ class _FMIVar:
     def element_names(self) -> list[str]:
         return [f"{self.name}[{','.join(str(i + 1) for i in idx)}]" for idx in np.ndindex(*self.shape)] \
             if self.shape else []
-
-
-def base_units(md) -> dict[str, BaseUnit]:
-    """Unit name -> BaseUnit, from an FMU's UnitDefinitions (units without a BaseUnit left out)."""
-    return {u.name: BaseUnit(tuple(int(getattr(u.baseUnit, k)) for k in FMI_BASE), float(u.baseUnit.factor),
-                             float(u.baseUnit.offset))
-            for u in (md.unitDefinitions or []) if u.baseUnit is not None}
-
-
-def variable_unit(variable) -> str:
-    """A variable's unit: its own, else its declared type's, else "1"."""
-    unit = getattr(variable, "unit", None)
-    if not unit and getattr(variable, "declaredType", None) is not None:
-        unit = getattr(variable.declaredType, "unit", None)
-    return unit or "1"
 
 
 def _shape(md, v, path: Path) -> tuple[int, ...]:
@@ -508,3 +449,17 @@ class _ModelExchange:
             if state_event or step_event or t >= self.next_time - 1e-12:
                 self._event(t)
                 x = self._states()
+
+
+class FMUTypes:
+    """Sub-resolver (orchestrator.resolver): a component whose type is a path ending in ``.fmu``,
+    relative to the study file."""
+
+    def component_class(self, study: Study, name: str, resolver) -> type[FMUComponent] | None:
+        spec = study.components.get(name)
+        if spec is None or not spec.type.lower().endswith(".fmu"):
+            return None
+        try:
+            return fmu_component_class(study.file_path(spec.type))
+        except FMUError as exc:
+            raise StudyError(f"{study.where}: components.{name}.type: {exc}") from None

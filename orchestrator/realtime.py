@@ -2,7 +2,8 @@
 
 Per step it records the lateness (wall time at the start of the step minus its deadline: the
 jitter) and the compute time; a step that starts later than ``tolerance`` after its deadline is a
-deadline miss (the previous steps overran their slot). Statistics in milliseconds.
+deadline miss (the previous steps overran their slot). Statistics in milliseconds. An observer
+of the engine (orchestrator.observers): it waits before each base step.
 """
 from __future__ import annotations
 
@@ -11,16 +12,23 @@ from array import array
 
 import numpy as np
 
+from .observers import Observer
 
-class RealTimePacer:
+
+class RealTimePacer(Observer):
     def __init__(self, step: float, tolerance: float = 0.002) -> None:
         self.h, self.tolerance = step, tolerance
+        self.started(None)
+
+    def started(self, sim) -> None:
+        """A new run: the clock starts at its first step."""
         self.start: float | None = None
         self.lateness = array("d")
         self.compute = array("d")
         self._step_start = 0.0
 
-    def wait(self, k: int) -> None:
+    def instant(self, k: int) -> None:
+        """Wait until base step ``k``'s deadline."""
         now = time.perf_counter()
         if self.start is None:
             self.start = now

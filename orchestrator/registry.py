@@ -7,7 +7,8 @@ A project declares plugins in its ``pyproject.toml``::
 
 Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
 ``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
-top-level study tables it reads (``[my_tool]``).
+top-level study tables it reads (``[my_tool]``, with a pydantic model that validates it if the
+tool gives one: orchestrator.resolver checks every table when a study is resolved).
 The orchestrator itself names no package, table or tool of any project.
 """
 from __future__ import annotations
@@ -43,6 +44,7 @@ class Registry:
     component_packages: list[str] = field(default_factory=list)
     commands: dict[str, Command] = field(default_factory=dict)
     sections: dict[str, str] = field(default_factory=dict)        # study table -> what reads it
+    section_schemas: dict[str, type] = field(default_factory=dict)  # study table -> its pydantic model
     run_options: list[RunOption] = field(default_factory=list)
     loaded: list[str] = field(default_factory=list)
 
@@ -57,8 +59,12 @@ class Registry:
         """``run FLAG VALUE``: the study is replaced by ``apply(study, value)`` before it runs."""
         self.run_options.append(RunOption(flag, help, metavar, apply))
 
-    def add_section(self, name: str, reader: str) -> None:
+    def add_section(self, name: str, reader: str, schema: type | None = None) -> None:
+        """A top-level study table ``[name]`` that ``reader`` reads; ``schema``, a pydantic model,
+        validates it when a study is resolved."""
         self.sections[name] = reader
+        if schema is not None:
+            self.section_schemas[name] = schema
 
 
 _REGISTRY: Registry | None = None

@@ -10,7 +10,10 @@ from typing import Any
 
 from .build import build_system
 from .errors import ComputationError, Interrupted, Terminated, critical
-from .engine import Recording, RunError, Simulation
+from .engine import RunError, Simulation
+from .observers import Progress
+from .recording import Recording
+from .resolver import resolve
 from .results import SignalWriter, atomic_write, read_table, write_json
 from .study import Study, StudyError
 
@@ -38,7 +41,7 @@ def _analysis(study: Study):
 
 def simulate(study: Study):
     """Build and simulate; returns (recording, system). Raises StudyError / RunError."""
-    system = build_system(study)
+    system = build_system(resolve(study))
     return Simulation(system).run(), system
 
 
@@ -71,43 +74,7 @@ def write_events(out_dir: Path, rec: Recording) -> Path:
 CHUNK_STEPS = 10_000          # base steps between two writes of the signal table
 
 
-class Progress:
-    """tqdm on a terminal; otherwise a line on stderr every ``every`` seconds of wall time, and only
-    for runs that last longer than that."""
-
-    def __init__(self, total_steps: int, h: float, every: float = 10.0) -> None:
-        import sys
-        import time
-
-        self.total, self.h, self.every = total_steps, h, every
-        self._time = time.perf_counter
-        self.t_start = self.last = self._time()
-        self.bar = None
-        if sys.stderr.isatty():
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total_steps, unit="step", file=sys.stderr, leave=False, mininterval=1.0)
-
-    def update(self, k: int) -> None:
-        import sys
-
-        if self.bar is not None:
-            self.bar.n = k
-            self.bar.refresh()
-            return
-        now = self._time()
-        if now - self.last >= self.every:
-            self.last = now
-            done = k / self.total if self.total else 1.0
-            print(f"progress: t = {k * self.h:.6g} of {self.total * self.h:.6g} s ({100 * done:.0f}%), "
-                  f"{k * self.h / (now - self.t_start):.3g} x real time", file=sys.stderr, flush=True)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
-def _stream(sim: Simulation, writer, progress: Progress) -> Recording:
+def _stream(sim: Simulation, writer) -> Recording:
     """Run ``sim`` to its stop time, writing the signal table block by block. An interrupt outside
     the engine's step loop becomes the same RunError as one inside it (with the rows not yet
     written); draining and writing a block is never cut in half (errors.critical)."""
@@ -119,14 +86,12 @@ def _stream(sim: Simulation, writer, progress: Progress) -> Recording:
             with critical():
                 if sim.k % sim.chunk_period == 0:
                     writer.append(sim.drain())
-            progress.update(sim.k)
         with critical():
             rec = sim.finish()
             writer.append(rec.data)
         return rec
     except KeyboardInterrupt as exc:
-        raise RunError(f"at t = {sim.t0 + sim.k * sim.h:.6g} s: interrupted",
-                       sim._recording(sim._recorders, sim.k, False, sim._start)) from exc
+        raise RunError(f"at t = {sim.t0 + sim.k * sim.h:.6g} s: interrupted", sim.partial()) from exc
 
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False) -> RunResult:
@@ -141,15 +106,16 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
 
     analysis = _analysis(study)
     folder = ResultFolder(Path(out_dir), overwrite)
-    system = build_system(study)
+    system = build_system(resolve(study))
     base = _base_facts(study)
     with folder:
         tmp = folder.tmp
         sim = Simulation(system)
         writer = SignalWriter(tmp / "signals", sim.columns, study.study.signals_format)
         progress = Progress(sim.n_steps, sim.h)
+        sim.add_observer(progress)
         try:
-            rec = _stream(sim, writer, progress)
+            rec = _stream(sim, writer)
         except RunError as err:
             interrupt = err.__cause__ if isinstance(err.__cause__, KeyboardInterrupt) else None
             writer.append(err.partial.data)
@@ -219,7 +185,7 @@ def _summary(analysis, values: dict) -> str:
 def _run_in_memory(study: Study, plots: bool) -> RunResult:
     """No output folder: simulate, analyse, return (sweep points, tests)."""
     analysis = _analysis(study)
-    rec = Simulation(build_system(study)).run()
+    rec = Simulation(build_system(resolve(study))).run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)

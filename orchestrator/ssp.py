@@ -58,7 +58,7 @@ def _annotation(element, tag: str):
 
 def _fmu_facts(fmu: Path) -> tuple[float | None, dict[str, tuple[str, Any]]]:
     """(default step size, variable name -> (unit, BaseUnit or None)) of an FMU."""
-    from .fmu import base_units, inspect_fmu, variable_unit
+    from .fmu_description import base_units, inspect_fmu, variable_unit
 
     md = inspect_fmu(fmu)
     bases = base_units(md)

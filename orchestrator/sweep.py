@@ -28,6 +28,7 @@ from typing import Any, Iterator
 import pandas as pd
 
 from .build import build_system
+from .resolver import resolve
 from .results import atomic_write, write_json, write_table
 from .study import Study, StudyError
 
@@ -138,7 +139,7 @@ class SweepRun:
         check_output(self.out, overwrite=True)
         for point in self.points:
             try:
-                build_system(point_study(self.study, point))
+                build_system(resolve(point_study(self.study, point)))
             except StudyError as exc:
                 raise StudyError(f"{exc}\n  (sweep point {point.key}: {point.values}, seed {point.seed})") from None
         manifest = self.out / "sweep.json"
@@ -295,7 +296,7 @@ def _parameter_unit(study: Study, name: str) -> str:
     """The declared SI unit of a swept 'component.parameter' ('' when unknown or a study field)."""
     comp, _, param = name.partition(".")
     try:
-        declared = study.component_class(comp).declared("parameter")
+        declared = resolve(study).component_class(comp).declared("parameter")
     except (StudyError, KeyError, AttributeError):
         return "s" if name in ("study.stop_time", "study.base_step") else ""
     return declared[param].unit if param in declared else ""

@@ -12,6 +12,7 @@ import pytest
 
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -21,7 +22,7 @@ OVERRIDES = ["study.stop_time=30", "gps.position_noise_std=0", "gps.velocity_noi
 @pytest.fixture(scope="module")
 def recorded():
     study = Study.load(ROOT / "studies/figure8.toml", OVERRIDES)
-    system = build_system(study)
+    system = build_system(resolve(study))
     return system, Simulation(system).run().to_frame()
 
 
@@ -101,6 +102,6 @@ def test_gps_fmu_noise_has_the_configured_spread_and_the_seed_repeats_it(recorde
 def test_a_component_without_an_fmu_form_is_named(tmp_path):
     from fmu_export.component_fmus import ComponentExportError, component_model
 
-    system = build_system(Study.load(ROOT / "studies/figure8.toml", ["tractor.model=transfer_function"]))
+    system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tractor.model=transfer_function"])))
     with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: model = 'transfer_function' has no FMU form"):
         component_model(system, "tractor")

@@ -69,6 +69,7 @@ def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
 def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tmp_path):
     """The extended study written by the diagnosis runs, and the plant it builds shows the fitted
     delay: the steering's step response moves ~d later than the baseline's."""
+    from orchestrator.resolver import resolve
     from orchestrator.runner import simulate
     from orchestrator.study import load_study
 
@@ -80,7 +81,7 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert res["verdict"] == "actuator_delay" and "verdict: actuator_delay" in proc.stdout
     study = load_study(tmp_path / "d" / "extended_study.toml", ["study.stop_time=20"])
-    fitted = study.parameters("steering")["command_delay"]
+    fitted = resolve(study).parameters("steering")["command_delay"]
     assert fitted == pytest.approx(res["effects"][0]["parameters"]["command_delay"])
     ext = simulate(study)[0].to_frame()
     base = simulate(load_study(ROOT / "studies" / "figure8.toml", ["study.stop_time=20"]))[0].to_frame()

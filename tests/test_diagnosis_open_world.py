@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from diagnosis.hidden_effects import diagnose_many, expected_ids as expected, recovered
-from measurements.truth_tractor import UNLISTED, make_log
+from measurements.truth_tractor import make_log
 
 SEED = 7002
 COMBINATIONS = (

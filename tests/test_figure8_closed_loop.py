@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import load_study
 
@@ -93,7 +94,7 @@ def test_the_path_error_compares_the_cg_with_the_reference_at_the_same_instant(c
     study = load_study(STUDY)
     frame = pd.read_parquet(out / "signals.parquet")
     m = metrics(frame, study)
-    ref = Figure8Reference("reference", study.parameters("reference"))
+    ref = Figure8Reference("reference", resolve(study).parameters("reference"))
     ref.initialize(0.0, 0.05)
     t = frame["t"].to_numpy()
     exact = np.array([ref.path.pose(ref.progress(ti)[0])[:2] for ti in t])

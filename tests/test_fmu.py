@@ -14,6 +14,7 @@ import pytest
 
 from orchestrator.build import build_system
 from orchestrator.engine import RunError, Simulation
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study, StudyError, parse_study
 
@@ -66,7 +67,7 @@ def test_a_third_party_fmu_runs_in_a_study_with_python_components(first_order_fm
     comps = {"lag": {"type": str(first_order_fmu), "parameters": {"k": 3.0, "tau": 0.2, "y0": 0.05},
                      "inputs": {"u": 0.1}},
              "gyro": {"type": "gyro_sensor", "parameters": {"noise_std": 0.0}}}
-    f = Simulation(build_system(toy_study(comps, ["lag.y -> gyro.yaw_rate"]))).run().to_frame()
+    f = Simulation(build_system(resolve(toy_study(comps, ["lag.y -> gyro.yaw_rate"])))).run().to_frame()
     t = f["t"].to_numpy()
     expected = 0.3 + (0.05 - 0.3) * np.exp(-t / 0.2)
     np.testing.assert_allclose(f["lag.y"], expected, atol=1e-12)
@@ -78,7 +79,7 @@ def test_an_fmi3_fmu_runs_in_a_study(first_order_fmi3_fmu):
     comps = {"lag": {"type": str(first_order_fmi3_fmu), "parameters": {"k": 3.0, "tau": 0.2, "y0": 0.05},
                      "inputs": {"u": 0.1}},
              "gyro": {"type": "gyro_sensor"}}
-    system = build_system(toy_study(comps, ["lag.y -> gyro.yaw_rate"]))
+    system = build_system(resolve(toy_study(comps, ["lag.y -> gyro.yaw_rate"])))
     f = Simulation(system).run().to_frame()
     expected = 0.3 + (0.05 - 0.3) * np.exp(-f["t"].to_numpy() / 0.2)
     np.testing.assert_allclose(f["lag.y"], expected, atol=1e-12)
@@ -87,7 +88,7 @@ def test_an_fmi3_fmu_runs_in_a_study(first_order_fmi3_fmu):
 
 def test_one_instance_is_reused_across_runs_with_reset(first_order_fmu):
     comps = {"lag": {"type": str(first_order_fmu), "inputs": {"u": 1.0}}}
-    system = build_system(toy_study(comps, []))
+    system = build_system(resolve(toy_study(comps, [])))
     first = Simulation(system).run().to_frame()
     second = Simulation(system).run().to_frame()
     pd.testing.assert_frame_equal(first, second)
@@ -129,7 +130,7 @@ def test_unusable_files_are_refused_naming_file_and_reason(first_order_fmu, tmp_
     else:
         _rewrite(first_order_fmu, bad, drop_binaries=True)
     with pytest.raises(StudyError) as err:
-        build_system(toy_study({"lag": {"type": str(bad)}}, [], path=str(tmp_path / "s.toml")))
+        build_system(resolve(toy_study({"lag": {"type": str(bad)}}, [], path=str(tmp_path / "s.toml"))))
     msg = str(err.value)
     assert "components.lag.type" in msg and "bad.fmu" in msg
     assert all(w in msg for w in words), msg
@@ -138,21 +139,21 @@ def test_unusable_files_are_refused_naming_file_and_reason(first_order_fmu, tmp_
 def test_fmu_path_is_relative_to_the_study_file(first_order_fmu, tmp_path):
     (tmp_path / "plant.fmu").write_bytes(first_order_fmu.read_bytes())
     st = toy_study({"lag": {"type": "plant.fmu"}}, [], path=str(tmp_path / "s.toml"))
-    assert "lag" in build_system(st).nodes
+    assert "lag" in build_system(resolve(st)).nodes
     with pytest.raises(StudyError, match="no such file"):
-        build_system(toy_study({"lag": {"type": "missing.fmu"}}, [], path=str(tmp_path / "s.toml")))
+        build_system(resolve(toy_study({"lag": {"type": "missing.fmu"}}, [], path=str(tmp_path / "s.toml"))))
 
 
 def test_unknown_variables_and_unit_mismatches_get_clear_messages(first_order_fmu):
     with pytest.raises(StudyError) as err:
-        build_system(toy_study({"lag": {"type": str(first_order_fmu), "parameters": {"gain": 2.0}}}, []))
+        build_system(resolve(toy_study({"lag": {"type": str(first_order_fmu), "parameters": {"gain": 2.0}}}, [])))
     assert "components.lag.parameters.gain" in str(err.value) and "tau" in str(err.value)
     comps = {"lag": {"type": str(first_order_fmu)}, "m": {"type": "tests.toy_components:Metres"}}
     with pytest.raises(StudyError) as err:
-        build_system(toy_study(comps, ["lag.yy -> m.u"]))
+        build_system(resolve(toy_study(comps, ["lag.yy -> m.u"])))
     assert "has no output 'yy'" in str(err.value)
     with pytest.raises(StudyError) as err:
-        build_system(toy_study(comps, ["lag.y -> m.u"]))
+        build_system(resolve(toy_study(comps, ["lag.y -> m.u"])))
     assert "unit mismatch" in str(err.value) and "'rad/s'" in str(err.value) and "'m'" in str(err.value)
 
 
@@ -252,7 +253,7 @@ def test_with_the_1_degree_potentiometer_any_1e12_difference_grows_the_same_way(
     from analysis.figure8 import metrics
 
     py, fmu, st = _python_and_fmu_runs(controller_fmu, [])
-    nudged = Simulation(build_system(Study.load(ROOT / "studies/figure8.toml", ["tracker.k_s=0.6000000000006"])))\
+    nudged = Simulation(build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tracker.k_s=0.6000000000006"]))))\
         .run().to_frame()
     d_fmu, d_nudge = _max_position_difference(py, fmu), _max_position_difference(py, nudged)
     assert d_nudge > 1e-3                       # sensitivity of the loop itself
@@ -309,7 +310,7 @@ def recorded_controller_run():
     st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=20"])
     design = controller_design(st)
     feeds = controller_feeds(st, design)
-    py = Simulation(build_system(st)).run().to_frame()
+    py = Simulation(build_system(resolve(st))).run().to_frame()
     samples = py.iloc[::5].reset_index(drop=True)
     return design, feeds, samples
 

@@ -13,6 +13,7 @@ import pytest
 
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import StudyError, parse_study
 from tests.fmu_build import build_test_fmu
 
@@ -30,7 +31,7 @@ def study(components, connections, stop=1.0, base=0.1):
 
 
 def run(st):
-    return Simulation(build_system(st)).run()
+    return Simulation(build_system(resolve(st))).run()
 
 
 def test_declared_feedthrough_has_no_lag_and_inputs_start_from_their_sources(fmus):
@@ -51,7 +52,7 @@ def test_an_algebraic_loop_through_declared_feedthrough_is_refused(fmus):
     st = study({"fmu": {"type": str(fmus["conformance2"])}, "sink": {"type": "tests.toy_components:RateSink"}},
                ["fmu.y_direct -> sink.u", "sink.y -> fmu.u"])
     with pytest.raises(StudyError, match="algebraic loop.*fmu.u"):
-        build_system(st)
+        build_system(resolve(st))
 
 
 def test_every_fmi2_type_and_structured_names(fmus):
@@ -66,9 +67,9 @@ def test_every_fmi2_type_and_structured_names(fmus):
     np.testing.assert_array_equal(frame["fmu.flag_out"].to_numpy().astype(bool), t < 0.5 - 1e-9)
     np.testing.assert_array_equal(frame["fmu.mode"].to_numpy(), np.ones(len(t)))
     np.testing.assert_allclose(frame["fmu.body.speed"], 2 * frame["fmu.x"])      # a structured name
-    comp = build_system(st).nodes["fmu"].component
+    comp = build_system(resolve(st)).nodes["fmu"].component
     assert comp.declared("output")["label_out"].start == ""
-    sim = Simulation(build_system(st))
+    sim = Simulation(build_system(resolve(st)))
     sim.start()
     assert sim.system.nodes["fmu"].component.y["label_out"] == "tractor"         # String parameter and output
     sim.terminate()
@@ -79,11 +80,11 @@ def test_structured_names_connect_and_units_compare_by_dimension_and_factor(fmus
     st = study({"fmu": {"type": str(fmus["conformance2"])}, "sink": {"type": "tests.toy_components:AngleSink"}},
                ["fmu.body.speed -> sink.angle"])
     with pytest.raises(StudyError, match=r"unit mismatch: output is in 'grad', input expects 'rad' \(not the same"):
-        build_system(st)
+        build_system(resolve(st))
     # 'x' is in rad (BaseUnit rad=1): connects to a 'rad' input; u is 'rad.s-1', fed from 'rad/s'
     st = study({"src": {"type": "tests.toy_components:RateSource"}, "fmu": {"type": str(fmus["conformance2"])},
                 "sink": {"type": "tests.toy_components:AngleSink"}}, ["src.rate -> fmu.u", "fmu.x -> sink.angle"])
-    assert build_system(st).nodes["sink"].sources[0][2] == "x"
+    assert build_system(resolve(st)).nodes["sink"].sources[0][2] == "x"
 
 
 def test_fmi3_arrays_whole_and_by_element_and_every_type(fmus):
@@ -102,7 +103,7 @@ def test_fmi3_arrays_whole_and_by_element_and_every_type(fmus):
     np.testing.assert_allclose(frame["fmu.u32"], u.astype(np.float32))
     assert set(frame["fmu.gear"]) == {3} and frame["fmu.on"].all()
     np.testing.assert_array_equal(frame["fmu.count"], np.arange(len(t)))
-    sim = Simulation(build_system(st))
+    sim = Simulation(build_system(resolve(st)))
     sim.start()
     y = sim.system.nodes["fmu"].component.y
     assert isinstance(y["scaled"], np.ndarray) and y["scaled"].shape == (3,)
@@ -148,7 +149,7 @@ def test_clocks_are_named_in_a_clear_refusal(fmus, tmp_path):
     fmu = build_test_fmu("conformance3", tmp_path, xml_edit=with_clock)
     st = study({"fmu": {"type": str(fmu)}}, [])
     with pytest.raises(StudyError, match="clocks are not supported; clocked variables: tick"):
-        build_system(st)
+        build_system(resolve(st))
 
 
 def test_a_model_exchange_fmu_runs_with_a_solver_and_its_events(fmus):

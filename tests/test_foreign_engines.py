@@ -19,6 +19,7 @@ import pytest
 from fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -45,7 +46,7 @@ def unpacked(figure8_ssp, tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def own_run(figure8_ssp):
     study = Study.load(figure8_ssp)
-    return study, Simulation(build_system(study)).run().to_frame()
+    return study, Simulation(build_system(resolve(study))).run().to_frame()
 
 
 def _position_difference(frame: pd.DataFrame, other: pd.DataFrame, until: float) -> float:
@@ -64,7 +65,7 @@ def test_the_ssp_runs_in_this_orchestrator_as_the_study_does(own_run):
     m = metrics(frame, study)
     assert m["euclid_max_straight"] < 0.40 and m["euclid_max_curved"] < 0.60
     py_study = Study.load(ROOT / "studies/figure8.toml")
-    py = metrics(Simulation(build_system(py_study)).run().to_frame(), py_study)
+    py = metrics(Simulation(build_system(resolve(py_study))).run().to_frame(), py_study)
     assert abs(m["euclid_mean_straight"] - py["euclid_mean_straight"]) < 0.02
     assert abs(m["euclid_mean_curved"] - py["euclid_mean_curved"]) < 0.02
 

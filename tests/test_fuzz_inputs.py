@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from measurements import CANONICAL, LogError, read_log
 from orchestrator.build import build_system
 from orchestrator.errors import InputError
+from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -82,7 +83,7 @@ def test_a_fuzzed_study_loads_or_is_refused_by_name(study, params, top):
             return
         try:
             loaded = Study.load(path)
-            build_system(loaded.with_values({"study.stop_time": 0.2}) if loaded.sweep is None else loaded)
+            build_system(resolve(loaded.with_values({"study.stop_time": 0.2}) if loaded.sweep is None else loaded))
         except InputError as exc:
             assert "fuzz.toml" in str(exc) or "--" in str(exc) or "override" in str(exc), str(exc)
 

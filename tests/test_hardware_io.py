@@ -23,6 +23,7 @@ from components.hardware.nmea import LocalFrame, NMEAStream, Position, Velocity,
 from components.nmea_gps import NMEAGPS
 from components.nmea_server import NMEAServer
 from components.safety_watchdog import SafetyWatchdog
+from orchestrator.resolver import resolve
 from orchestrator.runner import simulate
 from orchestrator.study import load_study, parse_study
 
@@ -221,9 +222,9 @@ def test_hil_study_differs_from_the_simulation_only_in_the_tractor_component():
     assert sim.connections == hil.connections
     differ = {n for n in sim.components if sim.components[n] != hil.components[n]}
     assert differ == {"tractor"} and set(sim.components) == set(hil.components)
-    assert sim.find(role="tractor") == hil.find(role="tractor") == ["tractor"]
+    assert resolve(sim).find(role="tractor") == resolve(hil).find(role="tractor") == ["tractor"]
     ports = lambda cls: {(v.name, v.causality, v.unit) for v in cls.variables if v.causality != "parameter"}
-    simulated, hardware = sim.component_class("tractor"), hil.component_class("tractor")
+    simulated, hardware = resolve(sim).component_class("tractor"), resolve(hil).component_class("tractor")
     assert simulated.sampled is False and ports(simulated) == ports(hardware)
 
 

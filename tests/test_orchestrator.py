@@ -12,6 +12,7 @@ import pytest
 
 from orchestrator.build import build_system
 from orchestrator.engine import RunError, Simulation
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import StudyError, load_study, parse_study
 
@@ -25,7 +26,7 @@ def study(components, connections, stop=1.0, base=0.1, **extra):
 
 
 def run(components, connections, **kw):
-    return Simulation(build_system(study(components, connections, **kw))).run().to_frame()
+    return Simulation(build_system(resolve(study(components, connections, **kw)))).run().to_frame()
 
 
 def test_chain_declared_backwards_propagates_within_the_same_instant():
@@ -51,7 +52,7 @@ def test_multirate_steps_at_integer_multiples_and_publishes_at_step_end():
              "slow": {"type": "tests.toy_components:Counter", "step": 0.3},
              "fast": {"type": "tests.toy_components:Counter", "step": 0.1}}
     st = study(comps, ["clk.value -> slow.u", "clk.value -> fast.u"], stop=3.0, base=0.1)
-    system = build_system(st)
+    system = build_system(resolve(st))
     f = Simulation(system).run().to_frame()
     slow = system.nodes["slow"].component
     assert [round(t, 9) for t, _ in slow.calls] == [0.0, 0.3, 0.6, 0.9, 1.2, 1.5, 1.8, 2.1, 2.4, 2.7]
@@ -88,7 +89,7 @@ def test_continuous_components_read_each_other_at_t_k_whatever_the_order(order):
 def test_algebraic_loop_is_refused_with_the_loop_named():
     comps = {"a": {"type": "tests.toy_components:Gain"}, "b": {"type": "tests.toy_components:Gain"}}
     with pytest.raises(StudyError) as err:
-        build_system(study(comps, ["a.y -> b.u", "b.y -> a.u"]))
+        build_system(resolve(study(comps, ["a.y -> b.u", "b.y -> a.u"])))
     msg = str(err.value)
     assert "algebraic loop" in msg and "a.y" in msg and "b.u" in msg and "toy.toml" in msg
 
@@ -110,7 +111,7 @@ def test_bad_connections_get_clear_messages(connections, words):
     comps = {"a": {"type": "tests.toy_components:Clock"}, "g": {"type": "tests.toy_components:Gain"},
              "m": {"type": "tests.toy_components:Metres"}}
     with pytest.raises(StudyError) as err:
-        build_system(study(comps, connections))
+        build_system(resolve(study(comps, connections)))
     for w in words:
         assert w in str(err.value)
     assert "toy.toml" in str(err.value) and "connections[" in str(err.value)
@@ -124,7 +125,7 @@ def test_bad_connections_get_clear_messages(connections, words):
 ])
 def test_bad_components_get_clear_messages(components, words):
     with pytest.raises(StudyError) as err:
-        build_system(study(components, []))
+        build_system(resolve(study(components, [])))
     for w in words:
         assert w in str(err.value)
 
@@ -140,11 +141,11 @@ def test_validation_errors_name_file_and_field():
 def test_edge_units_are_converted_and_wrong_units_refused():
     st = study({"g": {"type": "figure8_reference", "parameters": {"speed": "7.2 km/h"}},
                 "t": {"type": "tractor_yaw_plant", "parameters": {"psi0": "90 deg"}}}, [])
-    system = build_system(st)
+    system = build_system(resolve(st))
     assert math.isclose(system.nodes["g"].component.p["speed"], 2.0)
     assert math.isclose(system.nodes["t"].component.p["psi0"], math.pi / 2)
     with pytest.raises(StudyError) as err:
-        build_system(study({"g": {"type": "figure8_reference", "parameters": {"speed": "3 deg"}}}, []))
+        build_system(resolve(study({"g": {"type": "figure8_reference", "parameters": {"speed": "3 deg"}}}, [])))
     assert "components.g.parameters.speed" in str(err.value) and "expected 'm/s'" in str(err.value)
 
 

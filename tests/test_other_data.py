@@ -17,7 +17,6 @@ import pandas as pd
 import pytest
 
 from fields import FieldError, read_fields
-from measurements import LogError
 from measurements.raw_nmea import read_nmea_file
 from measurements.recording import ImportOptions, import_recording
 
@@ -175,7 +174,7 @@ def test_ros1_ros2_and_mcap_bags_round_trip_to_the_same_log_as_the_receivers_nme
 
 def test_any_topic_field_by_signal_and_bad_bags_are_named(bags, tmp_path):
     proc = cli("convert", bags["ros1"], "--out", tmp_path / "a.csv", "--signal", "gyro_z=/imu.angular_velocity.z",
-               "--signal", "v=/fix.altitude")
+               "--signal", "v=/fix.altitude[m/s]")     # a declared unit overrides the field's own
     assert proc.returncode == 0, proc.stderr
     log = pd.read_csv(tmp_path / "a.csv")
     assert "gyro_z" in log and np.allclose(log["gyro_z"], log["yaw_rate"])

@@ -40,7 +40,7 @@ def test_the_nmea_recording_has_host_stamps_and_parses(recording):
 def test_the_can_recording_is_a_candump_log_the_dbc_decodes(recording):
     import can
 
-    from components.hardware.can_link import load_dbc
+    from components.hardware.can_frames import load_dbc
 
     db = load_dbc("")
     frames = list(can.LogReader(str(recording / "can.log")))

@@ -404,3 +404,28 @@ def test_identification_works_on_logs_at_10_20_50_and_100_hz(tmp_path):
         gains, pair = summary(logs[rate])
         np.testing.assert_allclose(gains, ref_gains, rtol=0.05, err_msg=f"{rate} Hz")
         assert pair == pytest.approx(ref_pair, rel=0.10), rate
+
+
+def test_sigterm_landing_inside_a_subsystem_still_ends_the_run_as_terminated(tmp_path, monkeypatch):
+    """The interrupt raised while a composite steps its inner system keeps its kind (SIGTERM: exit 143)."""
+    from orchestrator.errors import Interrupted, Terminated
+    from orchestrator.runner import run_study
+    from orchestrator.study import parse_study
+    from tests import toy_components
+
+    class TerminatedAt(toy_components.FailAt):
+        def step(self, t, dt):
+            if t >= self.p["fail_time"] - 1e-12:
+                raise Terminated()
+            self.y["value"] = t
+
+    monkeypatch.setattr(toy_components, "TerminatedAt", TerminatedAt, raising=False)
+    study = parse_study({"study": {"name": "s", "stop_time": 1.0, "base_step": 0.1, "seed": 1},
+                         "subsystems": {"inner": {"components": {"f": {"type": "tests.toy_components:TerminatedAt",
+                                                                       "parameters": {"fail_time": 0.5}}},
+                                                  "exports": {"outputs": {"value": "f.value"}}}}},
+                        tmp_path / "s.toml")
+    with pytest.raises(Interrupted) as err:
+        run_study(study, tmp_path / "out", plots=False)
+    assert err.value.exit_status == 143
+    assert json.loads((tmp_path / "out" / "metrics.json").read_text())["status"] == "interrupted"

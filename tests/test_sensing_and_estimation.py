@@ -11,6 +11,7 @@ from components.pose_ekf import PoseEKF
 from components.speed_kf import SpeedKF
 from orchestrator.build import build_system, component_seed
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import parse_study
 
 
@@ -145,7 +146,7 @@ def ekf_on_plant_study(heading_error_deg, seed=5):
              "gps.x -> ekf.gps_x", "gps.y -> ekf.gps_y", "kf.speed -> ekf.speed"]
     st = parse_study({"study": {"name": "ekf", "stop_time": 30.0, "base_step": 0.01, "seed": seed},
                       "components": comps, "connections": conns}, "ekf.toml")
-    f = Simulation(build_system(st)).run().to_frame()
+    f = Simulation(build_system(resolve(st))).run().to_frame()
     err = np.angle(np.exp(1j * (f["ekf.heading"] - f["tractor.heading"])))
     return f, err
 

@@ -15,6 +15,7 @@ from components.models.yaw_dynamics import TractorParameters
 from components.tractor_yaw_plant import TractorYawPlant
 from orchestrator.build import build_system
 from orchestrator.engine import Simulation
+from orchestrator.resolver import resolve
 from orchestrator.study import Study, StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,7 +24,7 @@ CONTROLLERS = ("tracker", "mpc", "speed_controller")
 
 
 def frame_of(study: Study):
-    return Simulation(build_system(study)).run().to_frame()
+    return Simulation(build_system(resolve(study))).run().to_frame()
 
 
 # --- variants ---------------------------------------------------------------------------------
@@ -36,7 +37,7 @@ def test_with_values_derives_a_new_study_and_leaves_the_original_alone():
     assert variant.components["tractor"].inputs == {"speed": 0.0}
     assert base.components["reference"].parameters["speed"] == 2.0 and base.study.seed == 2024
     assert base.components["tractor"].inputs == {}
-    assert variant.parameters("tractor")["C_f"] == 9000.0          # the unit string parsed in one place
+    assert resolve(variant).parameters("tractor")["C_f"] == 9000.0          # the unit string parsed in one place
     with pytest.raises(StudyError, match="no component 'referee'; known: .*reference"):
         base.with_values({"referee.speed": 1.0})
 
@@ -55,7 +56,7 @@ def test_resolved_parameters_accept_units_wherever_they_are_read(tmp_path):
     p = tractor_parameters(study)
     assert p.C_f == 8000.0 and p.l_r == pytest.approx(0.4)
     declared = TractorYawPlant.declared("parameter")
-    full = study.parameters("tractor")
+    full = resolve(study).parameters("tractor")
     assert set(full) == set(declared) and full["psi0"] == pytest.approx(np.radians(30))
     assert TractorParameters.of(full) == TractorParameters(l_r=full["l_r"])
 
@@ -71,11 +72,11 @@ def test_to_toml_round_trips_and_runs_the_same(tmp_path):
 
 def test_find_by_role_or_type_and_without_and_replace():
     study = Study.load(FIGURE8)
-    assert study.find(role="yaw_plant") == ["tractor"] == study.find(type=TractorYawPlant)
-    assert study.find(type="tractor_yaw_plant") == ["tractor"]
-    assert study.one(role="yaw_rate_controller") == "mpc"
+    assert resolve(study).find(role="yaw_plant") == ["tractor"] == resolve(study).find(type=TractorYawPlant)
+    assert resolve(study).find(type="tractor_yaw_plant") == ["tractor"]
+    assert resolve(study).one(role="yaw_rate_controller") == "mpc"
     with pytest.raises(StudyError, match="exactly one component with role 'nmea_server', found 0"):
-        study.one(role="nmea_server")
+        resolve(study).one(role="nmea_server")
     smaller = study.without("ekf")
     assert "ekf" not in smaller.components
     assert not [c for c in smaller.connections if "ekf" in (c.source, c.target)]
@@ -90,10 +91,10 @@ def test_controllers_as_a_composite_subsystem_give_the_flat_trajectory(tmp_path)
     """Extract the three controllers into a study of their own, use it as ONE component in their
     place: the sampled composite (inner feedthrough) must reproduce the flat study exactly."""
     flat = Study.load(FIGURE8, ["study.stop_time=30"])
-    sub = flat.extract(CONTROLLERS, name="guidance")
+    sub = resolve(flat).extract(CONTROLLERS, name="guidance")
     (tmp_path / "guidance.toml").write_text(sub.to_toml())
-    host = flat.collapse(CONTROLLERS, into="guidance", type=str(tmp_path / "guidance.toml"), step=0.05)
-    cls = host.component_class("guidance")
+    host = resolve(flat).collapse(CONTROLLERS, into="guidance", type=str(tmp_path / "guidance.toml"), step=0.05)
+    cls = resolve(host).component_class("guidance")
     assert cls.sampled and set(cls.feedthrough["mpc_steer_angle_cmd"]) >= {"tracker_x", "mpc_yaw_rate"}
     a, b = frame_of(flat), frame_of(host)
     for port in ("x_cg", "y_cg", "heading"):
@@ -125,11 +126,11 @@ def test_inline_subsystem_steps_with_its_feedthrough_in_the_same_instant():
 def test_a_loop_through_a_composites_feedthrough_is_refused():
     study = _inline(1.0, 1.0, ["chain.y -> chain.u"])
     with pytest.raises(StudyError) as err:
-        build_system(study)
+        build_system(resolve(study))
     assert "already driven" in str(err.value) or "algebraic loop" in str(err.value)
     loop = parse_study({**_inline(1.0, 1.0).to_data(), "connections": ["chain.y -> chain.u"]}, "loop.toml")
     with pytest.raises(StudyError, match="algebraic loop"):
-        build_system(loop)
+        build_system(resolve(loop))
 
 
 def test_subsystem_errors_name_the_file_and_the_field(tmp_path):
@@ -140,16 +141,16 @@ def test_subsystem_errors_name_the_file_and_the_field(tmp_path):
     host = parse_study({"study": {"name": "h", "stop_time": 1.0, "base_step": 0.1, "seed": 1},
                         "components": {"s": {"type": "sub.toml"}}}, tmp_path / "host.toml")
     with pytest.raises(StudyError, match=r"exports.inputs.u: g.nope is not an input of the subsystem; g's inputs: u"):
-        build_system(host)
+        build_system(resolve(host))
     sub.write_text('[study]\nname = "s"\nstop_time = 1.0\nbase_step = 0.1\nseed = 1\n'
                    '[components.g]\ntype = "tests.toy_components:Gain"\n')
     with pytest.raises(StudyError, match=r"has no \[exports\] table"):
-        build_system(host)
+        build_system(resolve(host))
 
 
 def test_the_simulated_tractor_is_the_tractor_side_study_as_one_component():
     rt = Study.load(ROOT / "studies" / "figure8_hardware_layout.toml", ["study.stop_time=20"])
-    cls = rt.component_class("tractor")
+    cls = resolve(rt).component_class("tractor")
     assert cls.sampled is False and "tractor" in cls.roles
     frame = frame_of(rt)
     assert np.all(frame["tractor.fix_quality"] == 4.0)          # RTK fixed throughout (no outage)

@@ -11,6 +11,7 @@ import pytest
 
 from analysis.margins import simulated_run
 from analysis.tune import Targets, propose
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -69,7 +70,7 @@ def test_tune_writes_a_small_study_that_extends_the_original(perturbed, tmp_path
     assert f'extends = "{perturbed.resolve().as_posix()}"' in text and "lookahead" in text and len(text) < 1500
     assert "delay margin [s]" in proc.stdout and "proposed" in proc.stdout
     tuned = Study.load(out)
-    assert tuned.parameters("tracker")["lookahead"] > 0.4
+    assert resolve(tuned).parameters("tracker")["lookahead"] > 0.4
 
 
 def test_identified_model_becomes_plant_and_controller_model(tmp_path):

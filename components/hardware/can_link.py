@@ -1,19 +1,12 @@
-"""CAN through python-can, frames through cantools: one bus per component, the DBC shipped here."""
+"""CAN through python-can: one bus per component, its options, and what is sent and received on it
+(the message sets of components.hardware.guidance_messages, framed by components.hardware.can_frames)."""
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 from orchestrator.component import par
 
-DEFAULT_DBC = Path(__file__).resolve().parent / "agrobot_tractor.dbc"
-
-
-def load_dbc(path: str | Path | None):
-    """The frame layout; ``""``/None means the project's own agrobot_tractor.dbc."""
-    import cantools
-
-    return cantools.database.load_file(str(path or DEFAULT_DBC))
+from .guidance_messages import messages_for
 
 
 def open_bus(interface: str, channel: str, port: int = 0, bitrate: int = 0):
@@ -27,35 +20,6 @@ def open_bus(interface: str, channel: str, port: int = 0, bitrate: int = 0):
     if bitrate:
         options["bitrate"] = int(bitrate)
     return can.Bus(interface=interface, channel=channel, **options)
-
-
-class FrameCodec:
-    """Encode one outgoing message and decode one incoming message by name, with a rolling
-    4-bit counter; bad frames (wrong length, undecodable) are counted, never raised."""
-
-    def __init__(self, db, send: str, receive: str) -> None:
-        self.db = db
-        self.tx = db.get_message_by_name(send)
-        self.rx = db.get_message_by_name(receive)
-        self.counter = 0
-        self.bad = 0
-
-    def encode(self, **signals) -> tuple[int, bytes]:
-        self.counter = (self.counter + 1) % 16
-        values = {**signals, "Counter": self.counter}
-        for sig in self.tx.signals:                 # clamp to the DBC range instead of refusing
-            if sig.name in values and sig.minimum is not None and sig.maximum is not None:
-                values[sig.name] = min(max(values[sig.name], sig.minimum), sig.maximum)
-        return self.tx.frame_id, self.tx.encode(values)
-
-    def decode(self, message) -> dict | None:
-        if message is None or message.arbitration_id != self.rx.frame_id:
-            return None
-        try:
-            return self.rx.decode(bytes(message.data))
-        except Exception:           # noqa: BLE001 - a bad frame is counted, not fatal
-            self.bad += 1
-            return None
 
 
 CAN_PARAMETERS = (
@@ -114,8 +78,6 @@ def prefixed(parameters, prefix: str):
 def connect(component, side: str):
     """(messages, bus) for a component declaring CAN_PARAMETERS (``side``: 'guidance' or
     'tractor'); failures become the component's error naming the DBC, protocol or bus."""
-    from .guidance_messages import messages_for
-
     p = component.p
     messages = bus = None
     try:

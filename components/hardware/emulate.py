@@ -9,6 +9,7 @@ from pathlib import Path
 
 from orchestrator.engine import RunError
 from orchestrator.errors import Interrupted, Terminated, install_signal_handlers
+from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study, StudyError
 
@@ -20,7 +21,7 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if duration is not None and not duration > 0:
         raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
     study = Study.load(study_path, overrides)
-    server = study.one(role="nmea_server", purpose="emulate")
+    server = resolve(study).one(role="nmea_server", purpose="emulate")
     values = {f"{server}.port": nmea_port, "study.realtime": True}
     if duration is not None:
         values["study.stop_time"] = float(duration)

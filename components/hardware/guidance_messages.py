@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from .can_link import DEFAULT_DBC, FrameCodec, load_dbc
+from .can_frames import DEFAULT_DBC, FrameCodec, load_dbc
 
 ISOBUS_DBC = Path(__file__).resolve().parent / "isobus_guidance.dbc"
 PROTOCOLS = ("agrobot", "isobus")

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from orchestrator.resolver import resolve
 from orchestrator.study import StudyError
 
 RECORDER = "bus_recorder"
@@ -33,7 +34,8 @@ def record_folder(value) -> Path:
 
 def record_adapters(study, folder: Path):
     """The emulator's adapters record into ``folder`` (None when the study has none)."""
-    servers, links = study.find(role="nmea_server"), study.find(role="tractor_link")
+    model = resolve(study)
+    servers, links = model.find(role="nmea_server"), model.find(role="tractor_link")
     if not servers and not links:
         return None
     folder.mkdir(parents=True, exist_ok=True)
@@ -48,10 +50,11 @@ def record_study(study, value):
     adapters = record_adapters(study, folder)
     if adapters is not None:
         return adapters
-    tractor = study.one(role="tractor", purpose="--record")
+    model = resolve(study)
+    tractor = model.one(role="tractor", purpose="--record")
     from ..hardware_tractor import HardwareTractor
 
-    cls = study.component_class(tractor)
+    cls = model.component_class(tractor)
     if issubclass(cls, HardwareTractor):         # hardware in the loop: what its adapters receive and send
         folder.mkdir(parents=True, exist_ok=True)
         return study.with_values({f"{tractor}.nmea_record_file": str(folder / "gps.nmea"),

@@ -45,7 +45,7 @@ class TractorParameters:
 
     @classmethod
     def of(cls, parameters) -> "TractorParameters":
-        """From a yaw plant's resolved parameters (SI; e.g. ``study.parameters(plant)``): values the
+        """From a yaw plant's resolved parameters (SI; e.g. ``resolve(study).parameters(plant)``): values the
         study leaves unset (None) come from the named ``parameter_set`` (paper_models.PARAMETER_SETS;
         by default the model's, DEFAULT_SET, else the Table); ``cornering_scale_front/rear``
         multiply C_f and C_r (relative variations that hold for every set)."""

@@ -1,0 +1,106 @@
+"""Quirks of real recordings, found with robust statistics and named rather than misread.
+
+- Spikes: a sample (or a run of up to ``SPIKE_WIDTH``) far from the running median of its
+  neighbours, |x - median_7| > d = max(10 x 1.4826 MAD, half the signal's 1-99 % range),
+  more than d from the samples just before and after it, which agree with each other within d:
+  the signal leaves and comes back in one sample, a glitch, not a fast manoeuvre (a real peak
+  rises through its neighbours; a step is followed by the median and does not come back). They are counted,
+  named with their times and masked (dropped before interpolation) unless kept.
+- Ranges: the degrees heuristic and every 'reaches' check read the 99.5th percentile of |x|
+  (``robust_peak``), so that a few glitches do not make a signal look like degrees.
+- Position quantisation: latitude/longitude stored as float32 (a step of about 0.4-0.9 m at
+  mid-latitudes) or written with few decimals sit on a grid; the step is read on the raw fixes,
+  before any interpolation or resampling could hide it, and carried as x/y resolution.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .log import resolution
+
+SPIKE_WIDTH = 3
+SPIKE_SIGMAS = 10.0
+SPIKE_RANGE_FRACTION = 0.5
+EARTH_RADIUS = 6_371_000.0
+QUANTISATION_REPORTED = 0.01       # m: a position step below this is not worth a note
+
+
+def spikes(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Indices of the spike samples of x (see the module's rule)."""
+    from scipy.ndimage import median_filter
+
+    x = np.asarray(x, float)
+    n = len(x)
+    if n < 4 * SPIKE_WIDTH + 3:
+        return np.array([], int)
+    window = 2 * SPIKE_WIDTH + 1
+    med = median_filter(x, size=window, mode="nearest")
+    r = x - med
+    mad = 1.4826 * float(np.median(np.abs(r - np.median(r))))
+    lo, hi = np.percentile(x, [1, 99])
+    threshold = max(SPIKE_SIGMAS * mad, SPIKE_RANGE_FRACTION * float(hi - lo))
+    if threshold <= 0:
+        return np.array([], int)
+    candidates = np.abs(r) > threshold
+    out = []
+    i = 0
+    while i < n:
+        if not candidates[i]:
+            i += 1
+            continue
+        j = i
+        while j < n and candidates[j]:
+            j += 1
+        if j - i <= SPIKE_WIDTH and 0 < i and j < n:
+            before, after, run = x[i - 1], x[j], x[i:j]
+            near = min(np.abs(run - before).min(), np.abs(run - after).min())
+            if abs(before - after) < threshold and near > threshold:
+                out.extend(range(i, j))
+        i = j
+    return np.array(out, int)
+
+
+def spike_note(column: str, t: np.ndarray, x: np.ndarray, index: np.ndarray, t0: float, kept: bool) -> dict:
+    """The report entry of a column's spikes: count, times from the start, values."""
+    return {"column": column, "count": int(len(index)), "kept": kept,
+            "times_s": [round(float(t[i] - t0), 3) for i in index[:10]],
+            "values": [float(x[i]) for i in index[:10]],
+            "typical_range": [float(v) for v in np.percentile(np.delete(x, index), [1, 99])]}
+
+
+def float32_step(values: np.ndarray) -> float:
+    """The float32 spacing at these values when every one of them is a float32, or the shortest
+    text of one (a CSV writer's float32 column) (0: not so)."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if len(v) < 3 or np.all(v == np.round(v)):
+        return 0.0
+    as32 = v.astype(np.float32)
+    exact = np.array_equal(as32.astype(float), v)
+    shortest = exact or all(float(str(a)) == b for a, b in zip(as32[:2000], v[:2000]))   # written as float32 text
+    if not shortest:
+        return 0.0
+    return float(np.spacing(np.float32(np.max(np.abs(v)))))
+
+
+def position_quantisation(lat: np.ndarray, lon: np.ndarray) -> dict | None:
+    """{north_m, east_m, how} of raw latitude/longitude fixes on a grid, or None."""
+    lat, lon = np.asarray(lat, float), np.asarray(lon, float)
+    if len(lat) < 3:
+        return None
+    how = "latitude/longitude stored as float32"
+    q_lat, q_lon = float32_step(lat), float32_step(lon)
+    if not (q_lat and q_lon):
+        how = "latitude/longitude on a grid (few decimals)"
+        q_lat, q_lon = resolution(lat, 1.5), resolution(lon, 1.5)
+    if not (q_lat or q_lon):
+        return None
+    north = math.radians(q_lat) * EARTH_RADIUS
+    east = math.radians(q_lon) * EARTH_RADIUS * math.cos(math.radians(float(np.nanmedian(lat))))
+    if max(north, east) < QUANTISATION_REPORTED:
+        return None
+    return {"north_m": north, "east_m": east, "how": how,
+            "note": f"positions are quantised: steps of {north:.2f} m north and {east:.2f} m east ({how}); judged on "
+                    f"the raw fixes, a resampled or interpolated log does not remove it"}

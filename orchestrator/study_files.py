@@ -1,0 +1,178 @@
+"""Reading study files: TOML or YAML, an SSP archive or its SSD, ``extends`` (a file merged over
+the study it names, with ``connections_remove``/``connections_add`` editing the parent's
+connections), ``--set`` overrides and dotted keys into the file's tables. Plain dictionaries in,
+plain dictionaries out: validation is the schema's (orchestrator.study_schema)."""
+from __future__ import annotations
+
+import copy
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from .errors import InputError
+from .study_schema import NAME, parse_connections
+
+
+class StudyError(InputError):
+    """A study cannot be loaded or built; the message names the file and the field."""
+
+
+def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """Deep merge: tables merge key by key, anything else in ``over`` replaces."""
+    out = copy.deepcopy(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """Parse a study file; a top-level ``extends = "other.toml"`` (relative to this file) starts
+    from that study and merges this file's tables over it (a component given another ``type``
+    starts afresh: the parent's parameters of the old type do not carry over)."""
+    path = Path(path)
+    if path.suffix in (".ssp", ".ssd"):          # an SSP archive or its System Structure Description
+        from .ssp import study_data
+
+        return study_data(path)
+    data = read_one(path)
+    parent = data.pop("extends", None)
+    edits = {k: data.pop(k) for k in ("connections_remove", "connections_add") if k in data}
+    if parent is None:
+        if edits:
+            raise StudyError(f"{path}: field {next(iter(edits))}: only with extends (it edits the parent's connections)")
+        return data
+    if not isinstance(parent, str):
+        raise StudyError(f"{path}: field extends: expected a file name")
+    parent_path = (path.parent / parent).resolve()
+    if parent_path in _seen:
+        raise StudyError(f"{path}: field extends: circular ({' -> '.join(map(str, _seen + (parent_path,)))})")
+    base = read_study_file(parent_path, _seen + (path.resolve(),))
+    for name, spec in (data.get("components") or {}).items():
+        old = (base.get("components") or {}).get(name)
+        if isinstance(spec, dict) and isinstance(old, dict) and "type" in spec and spec["type"] != old.get("type"):
+            base["components"][name] = {}       # another type: its parameters and inputs start afresh
+    merged = merge(base, data)
+    if edits:
+        merged["connections"] = _edited_connections(merged.get("connections") or [], edits, path)
+    return merged
+
+
+def _edited_connections(connections: list, edits: dict[str, Any], path: Path) -> list:
+    """The parent's connections without ``connections_remove`` and with ``connections_add``
+    (compared parsed, so spacing does not matter); removing one that is not there is an error."""
+    def key(item):
+        return tuple(parse_connections([item])[0].values())
+
+    for field in edits:
+        if not isinstance(edits[field], list) or not all(isinstance(x, str) for x in edits[field]):
+            raise StudyError(f"{path}: field {field}: expected a list of strings 'component.output -> component.input'")
+        try:
+            [key(x) for x in edits[field]]
+        except ValueError as exc:
+            raise StudyError(f"{path}: field {field}: {exc}") from None
+    present = {key(c): c for c in connections}
+    drop = {key(x) for x in edits.get("connections_remove", [])}
+    missing = [x for x in edits.get("connections_remove", []) if key(x) not in present]
+    if missing:
+        raise StudyError(f"{path}: field connections_remove: {missing[0]!r} is not a connection of the study it extends")
+    return [c for c in connections if key(c) not in drop] + list(edits.get("connections_add", []))
+
+
+def read_one(path: Path) -> dict[str, Any]:
+    """Parse TOML (``.toml``) or YAML (``.yaml``/``.yml``) into a plain dict."""
+    if not path.is_file():
+        raise StudyError(f"{path}: study file not found")
+    text = path.read_text(encoding="utf-8")
+    try:
+        if path.suffix == ".toml":
+            return tomllib.loads(text)
+        if path.suffix in (".yaml", ".yml"):
+            import yaml
+
+            data = yaml.safe_load(text)
+            if not isinstance(data, dict):
+                raise StudyError(f"{path}: expected a mapping at the top level")
+            return data
+    except tomllib.TOMLDecodeError as exc:
+        raise StudyError(f"{path}: not valid TOML: {exc}") from None
+    except Exception as exc:  # yaml errors
+        if isinstance(exc, StudyError):
+            raise
+        raise StudyError(f"{path}: not valid YAML: {exc}") from None
+    raise StudyError(f"{path}: unknown study file type {path.suffix!r}; expected .toml, .yaml or .yml")
+
+
+
+def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
+    """``comp.param=value`` -> (key, value); the value is read as TOML, else kept as a string."""
+    if "=" not in item or "." not in item.split("=", 1)[0]:
+        raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value' or 'study.field=value'")
+    key, raw = item.split("=", 1)
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return key.strip(), value
+
+
+def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> None:
+    """Set one dotted key in study data (see ``Study.with_values``)."""
+    parts = key.split(".")
+    if len(parts) < 2 or not all(re.fullmatch(NAME, p) for p in parts):
+        raise StudyError(f"{where}: expected 'component.parameter', 'component.inputs.port' or 'study.field'")
+    head, rest = parts[0], parts[1:]
+    if head == "study":
+        if len(rest) != 1:
+            raise StudyError(f"{where}: expected 'study.field'")
+        data.setdefault("study", {})[rest[0]] = value
+        return
+    comps = data.get("components", {})
+    subs = data.get("subsystems", {})
+    if head in comps:
+        spec = comps[head]
+        if len(rest) == 2 and rest[0] == "inputs":
+            spec.setdefault("inputs", {})[rest[1]] = value
+        else:
+            spec.setdefault("parameters", {})[".".join(rest)] = value
+        return
+    if head in subs and len(rest) >= 2:
+        set_value(subs[head], ".".join(rest), value, where)
+        return
+    if head not in ("components", "subsystems") and isinstance(data.get(head), dict) and len(rest) == 1:
+        data[head][rest[0]] = value            # a table's field: sweep.mode, my_tool.period
+        return
+    known = sorted(comps) + sorted(subs)
+    raise StudyError(f"{where}: no component {head!r}; known: {', '.join(known)}")
+
+
+def pruned(table: dict[str, Any]) -> dict[str, Any]:
+    """The table without empty sub-tables (recursively)."""
+    out = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            value = pruned(value)
+            if not value:
+                continue
+        out[key] = value
+    return out
+
+
+def study_folders(path: str | Path | None) -> tuple[Path, ...]:
+    """Where a relative file named in a study is looked for: the study file's folder, then the
+    folders of the files it extends, nearest first."""
+    out: list[Path] = []
+    seen: set[Path] = set()
+    path = Path(path) if path is not None else None
+    while path is not None and path.is_file() and path.resolve() not in seen:
+        seen.add(path.resolve())
+        if path.resolve().parent not in out:
+            out.append(path.resolve().parent)
+        if path.suffix not in (".toml", ".yaml", ".yml"):
+            break
+        parent = read_one(path).get("extends")
+        path = path.parent / parent if isinstance(parent, str) else None
+    return tuple(out)
