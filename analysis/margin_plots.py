@@ -56,12 +56,14 @@ def bode(result: PointResult, title: str, path: Path) -> Path:
                           color="crimson", fontsize=9, va="center")
         if np.isfinite(m.gain):
             gm_db = -m.gain_db
-            ax_m.plot([m.phase_crossover, m.phase_crossover], [gm_db, 0.0], color="purple", lw=2)
-            ax_m.plot([m.phase_crossover], [gm_db], "o", color="purple")
-            ax_m.annotate(f"GM {m.gain_db:.1f} dB ({m.gain:.2f}x)\nat {m.phase_crossover:.2f} rad/s",
-                          (m.phase_crossover, 0.5 * gm_db), xytext=(8, 0), textcoords="offset points",
+            wp = max(m.phase_crossover, w[0])                 # w = 0 (a static gain) at the left edge
+            where = f"{m.phase_crossover:.2f} rad/s" if m.phase_crossover > 0 else "0 rad/s (static gain)"
+            ax_m.plot([wp, wp], [gm_db, 0.0], color="purple", lw=2)
+            ax_m.plot([wp], [gm_db], "o", color="purple")
+            ax_m.annotate(f"GM {m.gain_db:.1f} dB ({m.gain:.2f}x)\nat {where}",
+                          (wp, 0.5 * gm_db), xytext=(8, 0), textcoords="offset points",
                           color="purple", fontsize=9, va="center")
-            ax_p.plot([m.phase_crossover], [float(np.interp(m.phase_crossover, w, ph))], "o", color="purple")
+            ax_p.plot([wp], [float(np.interp(wp, w, ph))], "o", color="purple")
         ax_m.set_title(f"{name}: opened at the {LOOPS[name]}", fontsize=10)
         ax_m.set_ylim(min(max(-80.0, mag.min() - 5), -5.0), max(min(80.0, mag.max() + 5), 5.0))
         lo = np.min(ph[w > w[0] * 3]) if len(ph) else -360

@@ -101,11 +101,19 @@ def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margi
         if lag / x < best_delay:
             best_delay, wc = lag / x, x
     gain, reduction, wp = math.inf, None, math.nan
+    crossings = []
     for i in np.flatnonzero(np.sign(L.imag[:-1]) != np.sign(L.imag[1:])):
         if L.real[i] >= 0 and L.real[i + 1] >= 0:
             continue
         x = _refine(lambda v: at(v).imag, w[i], w[i + 1])
-        re = at(x).real
+        crossings.append((x, at(x).real))
+    # L is real at w = 0 and at the Nyquist frequency: a loop that sits on the negative real axis
+    # there (a sign-reversed static gain, a lag of 180 deg at pi/dt) crosses it without a sign change
+    # (the lowest frequency of the grid stands for z = 1, a pole of the integrators)
+    with np.errstate(all="ignore"):
+        ends = [(0.0, L[0]), (math.pi / loop.dt, at(math.pi / loop.dt))]
+    crossings += [(x, v.real) for x, v in ends if np.isfinite(v) and abs(v.imag) <= 1e-2 * abs(v) and -1.0 < v.real < 0]
+    for x, re in crossings:
         if re >= 0:
             continue
         if re > -1.0 and 1.0 / -re < gain:

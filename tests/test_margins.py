@@ -223,3 +223,21 @@ def test_margins_of_a_discrete_loop_by_hand():
     wp = w[np.argmin(np.abs(np.angle(L) + math.pi))]
     assert m.gain == pytest.approx(1 / abs(k / (np.exp(1j * wp * T) * (np.exp(1j * wp * T) - 1))), rel=1e-4)
     assert m.delay == pytest.approx(math.radians(pm) / wc, rel=1e-4)
+
+
+@pytest.mark.parametrize("pole, sign", [(0.5, 1.0), (-0.5, -1.0)])
+def test_gain_margin_where_the_loop_is_real_at_zero_or_nyquist_frequency(pole, sign):
+    """L(z) = -0.2 / (z - pole) sits on the negative real axis at w = 0 (pole 0.5: L(1) = -0.4) or at
+    the Nyquist frequency (pole -0.5: L(-1) = +0.4, so with sign -1 L(-1) = -0.4) without crossing it
+    anywhere else. Closing w = k z: the pole moves to pole + 0.2 k sign, which reaches the unit circle at
+    k = 2.5, the gain margin 1 / 0.4."""
+    from analysis.loop_models import OpenLoop
+
+    T = 0.1
+    loop = OpenLoop(np.array([[pole]]), np.array([[1.0]]), np.array([[0.2 * sign]]), np.zeros((1, 1)), T)
+    m = margins_of(loop)
+    assert m.gain == pytest.approx(2.5, rel=1e-3)
+    assert m.phase_crossover == pytest.approx(0.0 if pole > 0 else math.pi / T, abs=1e-9)
+    for k, radius in ((2.5 / 1.05, "<"), (2.5 * 1.05, ">")):
+        z = pole + 0.2 * sign * k
+        assert (abs(z) < 1) == (radius == "<")
