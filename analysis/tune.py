@@ -198,9 +198,9 @@ def identified_values(study: Study, path, model: str) -> dict[str, object]:
     if not isinstance(models, dict) or model not in models or "num" not in models[model] or "den" not in models[model]:
         known = ", ".join(sorted(models)) if isinstance(models, dict) else "none"
         raise InputError(f"--identified {path}: no model {model!r} with num and den (models: {known})")
-    model = resolve(study)
-    plant = model.one(role="yaw_plant", purpose="tune --identified")
-    controller = model.one(role="yaw_rate_controller", purpose="tune --identified")
+    resolved = resolve(study)
+    plant = resolved.one(role="yaw_plant", purpose="tune --identified")
+    controller = resolved.one(role="yaw_rate_controller", purpose="tune --identified")
     num, den = [float(x) for x in models[model]["num"]], [float(x) for x in models[model]["den"]]
     return {f"{plant}.model": "transfer_function", f"{plant}.tf_num": num, f"{plant}.tf_den": den,
             f"{controller}.num": num, f"{controller}.den": den}
