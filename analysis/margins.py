@@ -110,8 +110,11 @@ def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margi
     # L is real at w = 0 and at the Nyquist frequency: a loop that sits on the negative real axis
     # there (a sign-reversed static gain, a lag of 180 deg at pi/dt) crosses it without a sign change
     # (the lowest frequency of the grid stands for z = 1, a pole of the integrators)
-    with np.errstate(all="ignore"):
-        ends = [(0.0, L[0]), (math.pi / loop.dt, at(math.pi / loop.dt))]
+    ends = [(0.0, L[0])]
+    try:
+        ends.append((math.pi / loop.dt, at(math.pi / loop.dt)))
+    except np.linalg.LinAlgError:                    # a pole at z = -1: no finite crossing there
+        pass
     crossings += [(x, v.real) for x, v in ends if np.isfinite(v) and abs(v.imag) <= 1e-2 * abs(v) and -1.0 < v.real < 0]
     for x, re in crossings:
         if re >= 0:
