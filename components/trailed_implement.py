@@ -1,5 +1,4 @@
-"""A trailed implement on a drawbar, with an optional side-shift that steers it onto its line
-(issue 27).
+"""A trailed implement on a drawbar, with an optional side-shift that steers it onto its line.
 
 The hitch H sits ``hitch_offset`` c behind the tractor's rear axle R; the implement's axle A is
 ``drawbar`` L behind H and does not slip sideways except for the side slope's pull. With the
