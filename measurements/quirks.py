@@ -15,10 +15,13 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
-from .log import resolution
+from .log import LogError, resolution
+from .options import ImportOptions
+from .streams import Streams, gnss_table
 
 SPIKE_WIDTH = 3
 SPIKE_SIGMAS = 10.0
@@ -104,3 +107,61 @@ def position_quantisation(lat: np.ndarray, lon: np.ndarray) -> dict | None:
     return {"north_m": north, "east_m": east, "how": how,
             "note": f"positions are quantised: steps of {north:.2f} m north and {east:.2f} m east ({how}); judged on "
                     f"the raw fixes, a resampled or interpolated log does not remove it"}
+
+
+def fixes_from_columns(streams: Streams, source: Path) -> Streams:
+    """lat/lon columns (a table's, a custom topic's, a CAN GNSS message's) as the receiver's fixes."""
+    sig = streams.signals
+    if streams.gnss is None and "lat" in sig and "lon" in sig:
+        t, lat = sig.pop("lat")
+        lon = np.interp(t, *sig.pop("lon"))
+        height = np.interp(t, *sig.pop("height")) if "height" in sig else None
+        ok = np.isfinite(lat) & np.isfinite(lon) & ((np.abs(lat) > 0) | (np.abs(lon) > 0))
+        if ok.sum() < 2:
+            raise LogError(f"{source}: the lat/lon columns hold {int(ok.sum())} positions")
+        bad = ok & ((np.abs(lat) > 90) | (np.abs(lon) > 180))
+        if bad.any():
+            raise LogError(f"{source}: lat/lon {lat[bad][0]:g}, {lon[bad][0]:g} are not degrees of latitude/longitude "
+                           f"(expected |lat| <= 90, |lon| <= 180; a projected CRS in metres maps to x/y)")
+        streams.gnss = gnss_table(t[ok], lat[ok], lon[ok], None if height is None else height[ok])
+        streams.report.setdefault("columns", {}).update({
+            "x": "lat/lon -> east of the run's first fix (pymap3d)", "y": "lat/lon -> north of the run's first fix"})
+    elif "lat" in sig or "lon" in sig:
+        have = "lat" if "lat" in sig else "lon"
+        raise LogError(f"{source}: a {have} column without its {'lon' if have == 'lat' else 'lat'}: positions need both")
+    return streams
+
+
+def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
+    """Spikes found (and masked unless kept) in every measured signal; position quantisation
+    read on the raw fixes."""
+    report = streams.report
+    t0 = min([float(t[0]) for t, _ in streams.signals.values() if len(t)]
+              + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None else []), default=0.0)
+    found = []
+    for column, (t, x) in list(streams.signals.items()):
+        if column in streams.held or column in ("fix_quality",) or len(x) < 20:
+            continue
+        index = spikes(t, x)
+        if len(index):
+            found.append(spike_note(column, t, x, index, t0, options.keep_spikes))
+            if not options.keep_spikes:
+                keep = np.ones(len(t), bool)
+                keep[index] = False
+                streams.signals[column] = (t[keep], x[keep])
+    if found:
+        report["spikes"] = found
+        report.setdefault("quirks", []).extend(
+            f"{s['count']} spike(s) in {s['column']} at {', '.join(f'{v:.2f}' for v in s['times_s'][:5])} s"
+            + (" ..." if s["count"] > 5 else "") + f" (values {', '.join(f'{v:.4g}' for v in s['values'][:3])}; "
+            f"typical {s['typical_range'][0]:.4g} to {s['typical_range'][1]:.4g}): "
+            + ("kept (--keep-spikes)" if s["kept"] else "masked (--keep-spikes keeps them)") for s in found)
+    if streams.gnss is not None:
+        q = position_quantisation(streams.gnss["lat"].to_numpy(float), streams.gnss["lon"].to_numpy(float))
+        if q is not None:
+            report["position_quantisation"] = q
+            report.setdefault("quirks", []).append(q["note"])
+            streams.resolution["x"], streams.resolution["y"] = q["east_m"], q["north_m"]
+    for column, (t, x) in streams.signals.items():
+        streams.resolution.setdefault(column, resolution(x))
+    return streams

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+HELD = ("delta_cmd", "speed_cmd")  # set-points: held between frames, not interpolated
 # POSIX seconds before this (1973-03-03) are not dates: a clock counting from the logger's boot
 BOOT_CLOCK_LIMIT = 1e8
 
@@ -71,3 +72,13 @@ def is_boot_clock(t: np.ndarray) -> bool:
     """Stamps that count from a logger's start rather than from 1970."""
     t = np.asarray(t, float)
     return len(t) > 0 and float(np.nanmax(np.abs(t))) < BOOT_CLOCK_LIMIT
+
+
+def gnss_speed(gnss: pd.DataFrame) -> np.ndarray:
+    """Speed over ground per epoch: RMC/VTG where given, else from 1 s position chords."""
+    speed = gnss["speed"].to_numpy(float)
+    if np.isfinite(speed).mean() > 0.5:
+        return np.interp(gnss["utc"], gnss["utc"][np.isfinite(speed)], speed[np.isfinite(speed)])
+    north = np.radians(gnss["lat"].to_numpy() - gnss["lat"].iloc[0]) * 6.371e6      # a sphere is enough for a speed
+    east = np.radians(gnss["lon"].to_numpy() - gnss["lon"].iloc[0]) * 6.371e6 * math.cos(math.radians(gnss["lat"].iloc[0]))
+    return np.hypot(np.gradient(east, gnss["utc"]), np.gradient(north, gnss["utc"]))
