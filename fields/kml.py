@@ -4,12 +4,14 @@ WGS 84). fields.readers makes fields of them. Parsed with the standard library's
 KML's geometry is a few elements, whatever its namespace (KML 2.0-2.2, Google's gx)."""
 from __future__ import annotations
 
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import numpy as np
 from shapely.geometry import LineString, Polygon
+
+from measurements.source_files import LIMITS, regular_file, size_text
 
 from .field import FieldError
 
@@ -31,13 +33,17 @@ def kml_root(path: Path):
     """The KML document of a .kml file, or of the first .kml inside a .kmz."""
     try:
         if path.suffix.lower() == ".kmz":
-            with zipfile.ZipFile(path) as z:
+            with zipfile.ZipFile(regular_file(path, FieldError)) as z:
                 names = [n for n in z.namelist() if n.lower().endswith(".kml")]
                 if not names:
                     raise FieldError(f"{path}: a KMZ without a .kml file in it (found {', '.join(z.namelist()[:5])})")
                 name = "doc.kml" if "doc.kml" in names else names[0]
+                size = z.getinfo(name).file_size
+                if size > LIMITS["whole"]:
+                    raise FieldError(f"{path}: {name} unpacks to {size_text(size)}, above the {size_text(LIMITS['whole'])} "
+                                     f"limit for a file read whole into memory (--max-file-size raises it)")
                 return ET.fromstring(z.read(name))
-        return ET.parse(path).getroot()
+        return ET.parse(regular_file(path, FieldError)).getroot()
     except (ET.ParseError, OSError, zipfile.BadZipFile) as exc:
         raise FieldError(f"{path}: not a readable {'KMZ' if path.suffix.lower() == '.kmz' else 'KML'} file: {exc}") from None
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import math
 import re
+import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -34,9 +35,12 @@ import numpy as np
 from shapely import wkt as shapely_wkt
 from shapely.geometry import LineString, MultiLineString, Polygon
 
+from measurements.source_files import checked_path, regular_file
+
 from .field import Field, FieldError, GuidanceLine, local_frame, polygon, polygons
 
 MAX_GEOGRAPHIC_EXTENT = 0.5        # deg: beyond this a file of small numbers is metres, not degrees
+EARTH_CIRCUMFERENCE = 40_075_017.0  # m (WGS 84 equator): no coordinate of a field on Earth is larger
 
 
 class Coordinates:
@@ -59,8 +63,15 @@ class Coordinates:
         else:            # each field's own extent: one file may hold fields continents apart
             rings = sample if isinstance(sample, list) else [sample]
             allpts = np.vstack(rings)
+            _on_earth(where, allpts)
             ok = len(allpts) > 0 and np.all(np.abs(allpts[:, 0]) <= 180) and np.all(np.abs(allpts[:, 1]) <= 90)
             extent = max(float(np.max(np.ptp(r, axis=0))) for r in rings) if len(allpts) else 0.0
+            swapped = len(allpts) > 0 and np.all(np.abs(allpts[:, 0]) <= 90) and np.all(np.abs(allpts[:, 1]) <= 180)
+            if not ok and swapped and extent < MAX_GEOGRAPHIC_EXTENT:
+                lat = float(allpts[np.argmax(np.abs(allpts[:, 1])), 1])
+                raise FieldError(f"{where}: latitude {lat:g} deg is beyond +-90 (the second number of a point is the "
+                                 f"latitude); every point fits longitude/latitude with the two swapped: write "
+                                 f"longitude first (GeoJSON RFC 7946, KML), or give --crs for metres of a projection")
             self.kind = "geographic" if ok and extent < MAX_GEOGRAPHIC_EXTENT else "local"
             self.text = ("longitude/latitude (WGS 84): the values fit and each field spans under half a degree"
                          if self.kind == "geographic" else "local metres as written (no CRS named; too large for degrees)")
@@ -78,13 +89,42 @@ class Coordinates:
     def frame(self, rings: list[np.ndarray], origin=None):
         """(origin, rings -> local) for the rings of one file."""
         if self.kind == "local":
-            return None, (lambda xy: np.asarray(xy, float)[:, :2])
+            for r in rings:
+                _on_earth(self.where, np.asarray(r, float)[:, :2])
+            return None, (lambda xy: _on_earth(self.where, np.asarray(xy, float)[:, :2]))
         lonlat = [self.lonlat(r) for r in rings]
         bad = [p for r in lonlat for p in r if not (abs(p[0]) <= 180 and abs(p[1]) <= 90)]
         if bad:
             raise FieldError(f"{self.where}: coordinates {bad[0].tolist()} are not longitude/latitude under {self.text}")
         origin, to_local = local_frame(lonlat, origin)
         return origin, (lambda xy: to_local(self.lonlat(xy)))
+
+
+def _on_earth(where: str, xy: np.ndarray) -> np.ndarray:
+    """``xy`` when every coordinate is a finite number no larger than the Earth's circumference
+    (a local or projected metre beyond it is no place on Earth); else a FieldError naming it."""
+    bad = ~np.isfinite(xy) | (np.abs(xy) > EARTH_CIRCUMFERENCE)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise FieldError(f"{where}: coordinate {xy[i, j]:g} (point {i + 1}, {'xy'[j]}) is beyond the Earth: expected "
+                         f"finite metres within +-{EARTH_CIRCUMFERENCE:.4g} (or longitude/latitude in degrees)")
+    return xy
+
+
+def distinct_names(fields: list[Field]) -> list[Field]:
+    """The fields with names told apart: a name that repeats gets _2, _3 ... in file order, so that
+    ``plan --name`` picks one field, not the first of several."""
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
+    for f in fields:
+        name, k = f.name, counts.get(f.name, 1)
+        while name in taken:
+            k += 1
+            name = f"{f.name}_{k}"
+        counts[f.name] = k
+        taken.add(name)
+        f.name = name
+    return fields
 
 
 def _epsg(text: str) -> str:
@@ -95,9 +135,12 @@ def _epsg(text: str) -> str:
 # --- GeoJSON / WKT ------------------------------------------------------------------------------
 def read_geojson(path: Path, crs: str | None = None) -> list[Field]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8-sig"))
+        data = json.loads(regular_file(path, FieldError).read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise FieldError(f"{path}: not a readable JSON file: {exc}") from None
+    except RecursionError:
+        raise FieldError(f"{path}: JSON nested deeper than a GeoJSON ever is (Python's parser gives up); "
+                         f"expected a FeatureCollection of Features with Polygon geometries") from None
     from shapely.geometry import shape
 
     if not isinstance(data, dict) or "type" not in data:
@@ -117,7 +160,7 @@ def read_geojson(path: Path, crs: str | None = None) -> list[Field]:
 
 
 def read_wkt(path: Path, crs: str | None = None) -> list[Field]:
-    text = path.read_text(encoding="utf-8-sig").strip()
+    text = regular_file(path, FieldError).read_text(encoding="utf-8-sig", errors="replace").strip()
     shapes = []
     for i, chunk in enumerate(c for c in re.split(r"\n\s*\n|;\s*\n?", text) if c.strip()):
         try:
@@ -130,7 +173,12 @@ def read_wkt(path: Path, crs: str | None = None) -> list[Field]:
 def _fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str | None) -> list[Field]:
     """A field per polygon, each in its own local frame (a file may hold fields continents apart);
     a line goes to the field it crosses most."""
-    polys = [(p, props) for geom, props in shapes for p in polygons(geom)]
+    polys = []
+    for geom, props in shapes:         # the parcels of one MultiPolygon feature: name_1, name_2 ...
+        parts = polygons(geom)
+        base = props.get("Name") or props.get("name") or props.get("id")
+        for k, p in enumerate(parts, 1):
+            polys.append((p, props if base is None or len(parts) == 1 else {**props, "name": f"{base}_{k}", "Name": None}))
     lines = [(ln, props) for geom, props in shapes
              for ln in ([geom] if isinstance(geom, LineString) else list(geom.geoms) if isinstance(geom, MultiLineString) else [])]
     if not polys:
@@ -144,6 +192,7 @@ def _fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str
         boundary = polygon(to_local(np.asarray(p.exterior.coords)), [to_local(np.asarray(h.coords)) for h in p.interiors])
         fields.append(Field(name, boundary, origin, str(path), coords.text, properties=_plain(props)))
         frames.append((p, to_local))
+    distinct_names(fields)
     for j, (ln, props) in enumerate(lines):
         k = max(range(len(polys)), key=lambda i: polys[i][0].intersection(ln).length) if len(polys) > 1 else 0
         fields[k].lines.append(GuidanceLine(str(props.get("Name") or props.get("name") or props.get("path_id")
@@ -203,7 +252,7 @@ def _number(text: str):
 
 def _xml(path: Path):
     try:
-        return ET.parse(path).getroot()
+        return ET.parse(regular_file(path, FieldError)).getroot()
     except (ET.ParseError, OSError) as exc:
         raise FieldError(f"{path}: not a readable XML file: {exc}") from None
 
@@ -217,8 +266,10 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
     from isoxml.util.isoxml_io import isoxml_from_text
 
     try:
-        text = path.read_text(encoding="utf-8-sig")
-        task = isoxml_from_text(text)
+        text = regular_file(path, FieldError).read_text(encoding="utf-8-sig")
+        with warnings.catch_warnings():      # a value xsdata cannot convert is kept as text and named below
+            warnings.simplefilter("ignore")
+            task = isoxml_from_text(text)
     except Exception as exc:            # noqa: BLE001 - xsdata raises many kinds for an invalid document
         raise FieldError(f"{path}: not a valid ISO 11783-10 TaskData: {type(exc).__name__}: {exc}") from None
     if not task.partfields:
@@ -229,7 +280,8 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
         for pln in pf.polygons:
             kind = pln.type.name if pln.type is not None else ""
             for ls in pln.line_strings:
-                pts = np.array([[float(p.east), float(p.north)] for p in ls.points], float)
+                pts = np.array([[_iso_number(path, pf, "PNT D (north)", p.north) for p in ls.points],
+                                [_iso_number(path, pf, "PNT E (east)", p.east) for p in ls.points]], float).T[:, ::-1]
                 if len(pts) < 3:
                     raise FieldError(f"{path}: partfield {pf.id} ({pf.designator}): polygon {pln.id or kind}: a ring of "
                                      f"{len(pts)} points (PNT); a ring needs three or more")
@@ -245,11 +297,13 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
         ext = max(rings, key=lambda r: Polygon(r).area)
         boundary = polygon(to_local(ext), [to_local(h) for h in holes + [r for r in rings if r is not ext]])
         f = Field(str(pf.designator or pf.id), boundary, origin, str(path), coords.text,
-                  properties={"id": pf.id, **({"area_m2_in_file": float(pf.area)} if pf.area else {})})
+                  properties={"id": pf.id, **({"area_m2_in_file": _iso_number(path, pf, "D (area, m2)", pf.area)}
+                                          if pf.area not in (None, "") else {})})
         for ggp in getattr(pf, "guidance_groups", None) or ():     # version 3 has none
             for gpn in ggp.guidance_patterns:
                 pts = [p for ls in gpn.line_strings for p in ls.points]
-                xy = np.array([[float(p.east), float(p.north)] for p in pts], float)
+                xy = np.array([[_iso_number(path, pf, "PNT E (east)", p.east),
+                                _iso_number(path, pf, "PNT D (north)", p.north)] for p in pts], float).reshape(-1, 2)
                 if len(xy) < 2:
                     raise FieldError(f"{path}: guidance pattern {gpn.id}: {len(xy)} points; a line needs two")
                 kinds = [p.type.name if p.type is not None else "" for p in pts]
@@ -259,6 +313,17 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
                 f.lines.append(GuidanceLine(str(gpn.designator or gpn.id), to_local(xy)))
         fields.append(f)
     return fields
+
+
+def _iso_number(path: Path, pf, attribute: str, value) -> float:
+    """A number of a partfield's element; a FieldError naming the partfield and attribute otherwise."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        x = math.nan
+    if not math.isfinite(x):
+        raise FieldError(f"{path}: partfield {pf.id} ({pf.designator}): {attribute} is {value!r}, expected a number")
+    return x
 
 
 # --- AgOpenGPS -----------------------------------------------------------------------------------------
@@ -290,19 +355,28 @@ def aog_file(folder: Path, name: str) -> Path:
     return found[0] if found else folder / name
 
 
+def _aog_boundary_only(folder: Path) -> bool:
+    return folder.is_dir() and aog_file(folder, "Boundary.txt").exists() and not aog_file(folder, "Field.txt").exists()
+
+
 def is_agopengps(folder: Path) -> bool:
     return folder.is_dir() and aog_file(folder, "Field.txt").exists() and aog_file(folder, "Boundary.txt").exists()
 
 
 def _lines(path: Path) -> list[str]:
     try:
-        return [ln.strip() for ln in path.read_text(encoding="utf-8-sig", errors="replace").splitlines()]
+        return [ln.strip() for ln in regular_file(path, FieldError).read_text(encoding="utf-8-sig", errors="replace")
+                .splitlines()]
     except OSError as exc:
         raise FieldError(f"{path}: cannot read: {exc}") from None
 
 
 def _aog_origin(folder: Path) -> tuple[float, float]:
     path = aog_file(folder, "Field.txt")
+    if not path.exists():
+        raise FieldError(f"{folder}: an AgOpenGPS field folder (it has {aog_file(folder, 'Boundary.txt').name}) without "
+                         f"Field.txt: its StartFix line gives the latitude,longitude that the boundary's local metres "
+                         f"are measured from")
     lines = _lines(path)
     for i, line in enumerate(lines[:-1]):
         if line.lower().startswith("startfix"):
@@ -431,11 +505,10 @@ def xyz_triples(nums: list[float]) -> bool:
 def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
     """Every field in a file or folder (a folder: an AgOpenGPS field, or every readable file in
     it); a FieldError names the file and what was expected."""
-    path = Path(path)
-    if not path.exists():
-        raise FieldError(f"{path}: no such file or folder")
+    path = checked_path(path, FieldError)
     if path.is_dir():
         return read_folder(path, crs)[0]
+    regular_file(path, FieldError, None)
     kind = kind_of(path)
     if kind is None:
         raise FieldError(f"{path}: not a field file: expected .geojson/.json, .wkt, .xml (GML or ISO 11783-10 "
@@ -455,17 +528,18 @@ def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
 def read_folder(path: Path, crs: str | None = None) -> tuple[list[Field], list[str]]:
     """(fields, why each other file was skipped) of a folder: an AgOpenGPS field, or every
     readable file in it (and AgOpenGPS fields one level down)."""
-    if is_agopengps(path):
-        return read_agopengps(path), []
+    if is_agopengps(path) or _aog_boundary_only(path):
+        return read_agopengps(path), []       # without Field.txt: the error names it
     out, skipped = [], []
     for p in sorted(path.iterdir()):
         try:
-            if p.is_file() and kind_of(p):
-                out += read_fields(p, crs)
-            elif p.is_dir() and aog_file(p, "Field.txt").exists():
+            if p.is_dir() and (aog_file(p, "Field.txt").exists() or _aog_boundary_only(p)):
                 out += read_agopengps(p)
+            elif not p.is_dir() and kind_of(p):
+                out += read_fields(p, crs)     # a device, a dangling link or a loop is named, not read
         except FieldError as exc:         # one bad field does not hide the others: it is named
             skipped.append(str(exc))
+    distinct_names(out)
     if not out:
         raise FieldError(f"{path}: no field file in it (GeoJSON, WKT, GML, ISO 11783-10 TaskData, an AgOpenGPS "
                          f"field folder, a polygon CSV)" + (f"; {'; '.join(skipped[:3])}" if skipped else ""))

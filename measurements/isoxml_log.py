@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .source_files import regular_file
 from .streams import Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
@@ -54,6 +55,7 @@ def ddi_name(ddi: int) -> tuple[str, str, float]:
 def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
     """(PTN attributes logged per record, [(DDI, element)] of the DLVs, fixed values) of a
     TLG header; a LogError names the file and the element when it is not a time-log header."""
+    regular_file(path, LogError)
     try:
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError) as exc:
@@ -76,7 +78,7 @@ def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
 
 def read_binary(path: Path, logged: list[str], n_dlv: int) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
     """(POSIX times, PTN columns, DLV values (records x n_dlv, NaN where a record has none))."""
-    data = path.read_bytes()
+    data = regular_file(path, LogError).read_bytes()
     times, ptn_rows, dlv_rows = [], [], []
     i, n = 0, len(data)
     layout = [(k, PTN_LAYOUT[k]) for k in logged]

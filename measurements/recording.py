@@ -26,6 +26,7 @@ from .quirks import find_quirks, fixes_from_columns
 from .raw_can import CAN_SUFFIXES
 from .raw_nmea import looks_like_nmea
 from .runs import assemble
+from .source_files import checked_path, regular_file, regular_files
 from .streams import Streams
 from .tables import TABLE_SUFFIXES
 
@@ -51,15 +52,15 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
     sentences counts), CAN logs, ROS bags (ROS 1 ``.bag``, ROS 2 ``.db3``/``.mcap`` or a rosbag2
     folder with metadata.yaml), ISO 11783-10 TaskData (TASKDATA.XML, or TLGnnnnn.xml/.bin) and
     tables (CSV, TSV, Parquet)."""
-    source = Path(source)
-    if not source.exists():
-        raise LogError(f"{source}: no such file or folder")
+    source = checked_path(source, LogError)
     kinds: dict[str, list[Path]] = {k: [] for k in KINDS}
     if source.is_dir() and (source / "metadata.yaml").is_file():
         kinds["bag"].append(source)                   # a rosbag2 folder is one bag
         return kinds
-    files = sorted(p for p in source.iterdir() if p.is_file()) if source.is_dir() else [source]
+    files = regular_files(source) if source.is_dir() else [source]
     for p in files:
+        if not source.is_dir():
+            regular_file(p, LogError, None)        # before a byte is read; the size limit by kind below
         suffix, name = p.suffix.lower(), p.name.upper()
         if suffix in NMEA_SUFFIXES or (suffix in (".log", ".txt") and looks_like_nmea(p)):
             kinds["nmea"].append(p)
@@ -71,6 +72,9 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
             kinds["isoxml"].append(p)
         elif suffix in TABLE_SUFFIXES:
             kinds["table"].append(p)
+    for kind, paths in kinds.items():
+        for p in paths:
+            regular_file(p, LogError, "streamed" if kind in ("nmea", "can", "bag") else "whole")
     if source.is_dir():
         kinds["bag"] += [d for d in sorted(source.iterdir()) if d.is_dir() and (d / "metadata.yaml").is_file()]
     return kinds
