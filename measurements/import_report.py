@@ -41,6 +41,8 @@ def describe(report: dict) -> str:
     for name, o in list(outside.items())[:6]:
         lines.append(f"  plausibility: {name}: {o['outside']} of {o['of']} values outside the DBC's declared "
                      f"[{o['declared'][0]:g}|{o['declared'][1]:g}] (seen {o['seen'][0]:.4g} to {o['seen'][1]:.4g}; kept)")
+    for split in report.get("splits", []):
+        lines.append(f"  split: {split}")
     for quirk in report.get("quirks", []):
         lines.append(f"  quirk: {quirk}")
     for note in report.get("notes", []):

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .quirks import ordered_in_time
 from .source_files import regular_file
 from .streams import Streams, iso
 
@@ -157,10 +158,19 @@ def timelog_streams(paths: list[Path], options, source: Path):
     if not heads:
         raise LogError(f"{source}: a TaskData without time logs (no TLGnnnnn.xml/.bin beside it)")
     tables = [(h, *read_timelog(h)) for h in heads]
+    notes = _task_notes(paths, heads) + _repeated_logs(tables)
     head, table, info = max(tables, key=lambda x: len(x[1])) if len(tables) > 1 else tables[0]
-    table = table.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
+    table["line"] = np.arange(len(table))
+    quirks = []
+    padding = (table["utc"] == EPOCH_1980).to_numpy()
+    if padding.any():
+        i = np.flatnonzero(padding)
+        quirks.append(f"{head.stem}: {len(i)} record(s) dated 1980-01-01 00:00:00.000 (time 0: zero padding or an unset "
+                      f"clock), records {i[0]}-{i[-1]}: masked")
+        table = table.loc[~padding].reset_index(drop=True)
+    table, breaks = ordered_in_time(table, head.stem, notes, what="record")
     report: dict = {"source": str(source), "files": {"isoxml": [str(h) for h, _, _ in tables]}, "dbc": None,
-                    "notes": [], "timelogs": {h.stem: {"records": i["records"], "start": iso(float(t["utc"].min())),
+                    "notes": notes, "quirks": quirks, "timelogs": {h.stem: {"records": i["records"], "start": iso(float(t["utc"].min())),
                                                         "end": iso(float(t["utc"].max()))} for h, t, i in tables},
                     "timelog_used": head.stem,
                     "clocks": {"reference": "the task controller's TIM start times (ms since midnight, days since 1980)"}}
@@ -187,4 +197,37 @@ def timelog_streams(paths: list[Path], options, source: Path):
                          "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
                          "t": "TIM start, s from the run's start"}
     report["fixed"] = info["fixed"]
-    return Streams(gnss, signals, report, set(signals), {})
+    return Streams(gnss, signals, report, set(signals), {}, breaks)
+
+
+def _task_notes(paths: list[Path], heads: list[Path]) -> list[str]:
+    """What the TaskData beside the time logs says of itself: a TASKDATA.XML that is not an ISO
+    11783-10 document is named (the time logs are read without it: each header says its layout)."""
+    tasks = {p for p in paths if p.name.upper() == "TASKDATA.XML"}
+    tasks |= {p for h in heads for p in h.parent.iterdir() if p.name.upper() == "TASKDATA.XML"}
+    notes = []
+    for task in sorted(tasks):
+        try:
+            root = ET.parse(regular_file(task, LogError)).getroot()
+            if not root.tag.endswith("ISO11783_TaskData"):
+                notes.append(f"{task.name}: root element <{root.tag[:40]}>, not ISO11783_TaskData: not a TaskData "
+                             f"(the time logs are read without it)")
+        except ET.ParseError as exc:
+            notes.append(f"{task.name}: not readable XML ({exc}): the TaskData is damaged; the time logs are read "
+                         f"without it (each TLG header gives its own layout)")
+    return notes
+
+
+def _repeated_logs(tables: list) -> list[str]:
+    """Time logs that repeat another one record for record (a TaskData copied twice into one folder)."""
+    seen: dict = {}
+    notes = []
+    for head, table, _ in tables:
+        key = (len(table), float(table["utc"].iloc[0]), float(table["utc"].iloc[-1]),
+               float(np.nansum(table.select_dtypes("number").to_numpy(float))))
+        if key in seen:
+            notes.append(f"{head.stem} repeats {seen[key]} record for record ({len(table)} records, "
+                         f"{iso(key[1])} to {iso(key[2])}): a duplicated TaskData; read once")
+        else:
+            seen[key] = head.stem
+    return notes

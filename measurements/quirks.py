@@ -18,15 +18,18 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from .log import LogError, resolution
 from .options import ImportOptions
-from .streams import Streams, gnss_table
+from .streams import Streams, gnss_table, iso
 
 SPIKE_WIDTH = 3
 SPIKE_SIGMAS = 10.0
 SPIKE_RANGE_FRACTION = 0.5
 EARTH_RADIUS = 6_371_000.0
+POSITION_SPEED = 100.0             # m/s between two fixes: faster than any ground vehicle, a fix out of place
+POSITION_NOISE = 10.0              # m: a step within this is the receiver's noise at any rate
 QUANTISATION_REPORTED = 0.01       # m: a position step below this is not worth a note
 
 
@@ -157,6 +160,8 @@ def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
             f"typical {s['typical_range'][0]:.4g} to {s['typical_range'][1]:.4g}): "
             + ("kept (--keep-spikes)" if s["kept"] else "masked (--keep-spikes keeps them)") for s in found)
     if streams.gnss is not None:
+        streams.gnss = _checked_fixes(streams, t0)
+    if streams.gnss is not None:
         q = position_quantisation(streams.gnss["lat"].to_numpy(float), streams.gnss["lon"].to_numpy(float))
         if q is not None:
             report["position_quantisation"] = q
@@ -165,3 +170,105 @@ def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
     for column, (t, x) in streams.signals.items():
         streams.resolution.setdefault(column, resolution(x))
     return streams
+
+
+def _checked_fixes(streams: Streams, t0: float) -> pd.DataFrame:
+    """The receiver's fixes without impossible coordinates (|lat| > 90, |lon| > 180, not finite)
+    and position spikes (masked, named); a position jump splits the recording (a break)."""
+    g = streams.gnss
+    report = streams.report
+    lat, lon, t = (g[c].to_numpy(float) for c in ("lat", "lon", "utc"))
+    impossible = ~(np.isfinite(lat) & np.isfinite(lon) & (np.abs(lat) <= 90) & (np.abs(lon) <= 180))
+    if impossible.any():
+        i = np.flatnonzero(impossible)
+        report.setdefault("quirks", []).append(
+            f"{len(i)} fix(es) with impossible coordinates (latitude {lat[i[0]]:g}, longitude {lon[i[0]]:g} deg; "
+            f"expected |lat| <= 90, |lon| <= 180) at {', '.join(f'{t[k] - t0:.2f}' for k in i[:5])} s"
+            + (" ..." if len(i) > 5 else "") + ": masked")
+        report["impossible_fixes"] = {"count": int(len(i)), "times_s": [float(t[k] - t0) for k in i[:50]]}
+        g = g.loc[~impossible].reset_index(drop=True)
+        lat, lon, t = lat[~impossible], lon[~impossible], t[~impossible]
+    if len(t) < 3:
+        return g
+    spike, jumps, speed = position_outliers(t, lat, lon)
+    if spike.any():
+        i = np.flatnonzero(spike)
+        report.setdefault("quirks", []).append(
+            f"{len(i)} position spike(s) (a fix that leaves the track and comes back; implied speed up to "
+            f"{float(np.max(speed[i])):.3g} m/s, above {POSITION_SPEED:g} m/s) at "
+            f"{', '.join(f'{t[k] - t0:.2f}' for k in i[:5])} s" + (" ..." if len(i) > 5 else "") + ": masked")
+        report["position_spikes"] = {"count": int(len(i)), "times_s": [float(t[k] - t0) for k in i[:50]],
+                                     "max_speed_m_s": float(np.max(speed[i]))}
+    for a, b in jumps:
+        if any(k["start"] <= t[a] + 1e-6 and k["end"] >= t[b] - 1e-6 for k in streams.breaks):
+            continue                                   # the clock's own step, already split there
+        d = EARTH_RADIUS * math.hypot(math.radians(lat[b] - lat[a]),
+                                      math.radians(lon[b] - lon[a]) * math.cos(math.radians(float(lat[a]))))
+        why = (f"the position jumps {d:.4g} m in {t[b] - t[a]:.3g} s ({d / max(t[b] - t[a], 1e-3):.3g} m/s, above "
+               f"{POSITION_SPEED:g} m/s) at {t[b] - t0:.2f} s and stays: the recording is split there")
+        streams.breaks.append({"stream": "gnss", "start": float(t[a]), "end": float(t[b]), "why": why,
+                               "kind": "position jump"})
+    return g.loc[~spike].reset_index(drop=True) if spike.any() else g
+
+
+def position_outliers(t: np.ndarray, lat: np.ndarray, lon: np.ndarray) -> tuple[np.ndarray, list, np.ndarray]:
+    """(spike mask, jumps [(last fix before, first fix after)], implied speed into each fix [m/s]):
+    a fix farther from the last good one than POSITION_SPEED x dt + POSITION_NOISE is out; up to
+    SPIKE_WIDTH such fixes in a row followed by one back on the track are spikes, more are a jump
+    (the track goes on from there)."""
+    north = np.radians(lat - lat[0]) * EARTH_RADIUS
+    east = np.radians(lon - lon[0]) * EARTH_RADIUS * math.cos(math.radians(float(lat[0])))
+    dt = np.maximum(np.diff(t), 1e-3)
+    speed = np.concatenate([[0.0], np.hypot(np.diff(east), np.diff(north)) / dt])
+    spike = np.zeros(len(t), bool)
+    if not np.any(np.hypot(np.diff(east), np.diff(north)) > POSITION_SPEED * dt + POSITION_NOISE):
+        return spike, [], speed
+    jumps, good, out = [], 0, []
+    for i in range(1, len(t)):
+        far = math.hypot(east[i] - east[good], north[i] - north[good]) > POSITION_SPEED * (t[i] - t[good]) + POSITION_NOISE
+        if not far:
+            spike[out] = True
+            good, out = i, []
+        elif len(out) >= SPIKE_WIDTH:               # it does not come back: a jump, the track goes on from there
+            jumps.append((good, out[0]))
+            good, out = i, []
+        else:
+            out.append(i)
+    spike[out] = True                       # the last fixes never came back: masked, not trusted
+    return spike, jumps, speed
+
+
+def ordered_in_time(frame: pd.DataFrame, label: str, notes: list[str], same: tuple = ("lat", "lon"),
+                    stream: str = "gnss", what: str = "line") -> tuple[pd.DataFrame, list[dict]]:
+    """(records in time order, breaks) of records in file order (``utc`` POSIX s, ``line`` the
+    file's line or record number, ``what`` says which): a record dated at or before one already read is either a repeat (same time
+    and ``same`` values: the log written twice; dropped and counted) or the clock stepping back;
+    those are masked until the time passes the latest one read, named with their count, line and
+    times, and the span becomes a break that no run bridges (a splice would join positions that
+    are seconds apart as if they were one step apart)."""
+    t = frame["utc"].to_numpy(float)
+    if len(t) < 2 or bool(np.all(np.diff(t) > 0)):
+        return frame, []
+    latest = np.maximum.accumulate(t)
+    behind = np.zeros(len(t), bool)
+    behind[1:] = t[1:] <= latest[:-1]
+    keys = [c for c in ("utc", *same) if c in frame]
+    repeat = behind & frame.round(9).duplicated(subset=keys, keep="first").to_numpy()
+    stepped = behind & ~repeat
+    where = frame["line"].to_numpy() if "line" in frame else np.arange(len(t))
+    if repeat.any():
+        i = int(np.argmax(repeat))
+        notes.append(f"{label}: {int(repeat.sum())} record(s) repeat earlier ones (same time and position; the log "
+                     f"written twice?), the first at {what} {where[i]}: dropped")
+    breaks = []
+    ahead = np.diff(t)[np.diff(t) > 0]
+    period = float(np.median(ahead)) if len(ahead) else 0.0
+    edges = np.diff(np.concatenate([[0], stepped.astype(int), [0]]))
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        before = float(latest[a - 1])
+        after = float(t[b]) if b < len(t) else float(t[a:b].max())
+        why = (f"the clock steps back {before + period - t[a]:.3g} s at {what} {where[a]} (from {iso(before)} to {iso(t[a])}): "
+               f"{b - a} record(s) dated before ones already read are masked, and the recording is split there")
+        breaks.append({"stream": stream, "start": before, "end": max(after, before), "why": f"{label}: {why}",
+                       "masked": int(b - a)})
+    return frame.loc[~behind].reset_index(drop=True), breaks

@@ -89,12 +89,20 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
     grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
     covered = np.ones(len(grid), bool)
+    for b in streams.breaks:                  # never bridged: the samples on either side are not one step apart
+        i0 = int(np.searchsorted(grid, b["start"], side="right"))
+        covered[i0:max(int(np.searchsorted(grid, b["end"], side="right")), i0 + 1)] = False
+        report["gaps"].append({"stream": f"{b['stream']} (split: {b.get('kind', 'clock step back')})",
+                               "start": float(b["start"] - u0), "end": float(b["end"] - u0),
+                               "duration": float(b["end"] - b["start"])})
+    if streams.breaks:
+        report["splits"] = [b["why"] for b in streams.breaks]
     for name, t in times:
         covered &= _covered(t, grid, least[name])
     if "v" in sig:
         v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
     elif gnss is not None:
-        v, report["runs_by"] = np.interp(grid, gnss["utc"], gnss_speed(gnss)), "the receiver's speed over ground"
+        v, report["runs_by"] = np.interp(grid, gnss["utc"], gnss_speed(gnss, streams.breaks)), "the receiver's speed over ground"
     else:
         v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
     moving = np.abs(v) > options.min_speed if v is not None else np.ones(len(grid), bool)   # reversing drives too
@@ -127,9 +135,9 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         columns["x"], columns["y"], _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
         report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
         if np.isfinite(gnss["speed"].to_numpy(float)).mean() > 0.5:      # the receiver's own (Doppler) speed
-            columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss))
+            columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
         else:                                                              # none: the track's, named so
-            columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss))
+            columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
         columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
         for extra in ("heading", "position_std"):
             if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
