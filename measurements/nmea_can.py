@@ -14,10 +14,12 @@ from .clocks import align_clocks
 from .log import LogError
 from .options import ImportOptions
 from .raw_can import (
+    CANDUMP_FORMAT,
     CANRecording,
     choose_sources,
     load_dbc,
     merge,
+    messages_of,
     read_can_file,
     series,
     signal_names,
@@ -32,9 +34,15 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
     dbc_name = str(options.dbc) if options.dbc else "the project's agrobot_tractor.dbc"
     db, dbc_report = load_dbc(options.dbc) if can_files else (None, None)
     nmea = [read_nmea_file(p) for p in nmea_files]
-    cans = [read_can_file(p, db, options.bus) for p in can_files]
+    wanted = messages_of(db, choose_sources(db, dbc_name, list(options.signals))[0].values()) if can_files else None
+    cans = [read_can_file(p, db, options.bus, wanted) for p in can_files]
     report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
                     "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes]}
+    for c in cans:
+        if c.bad_lines:
+            report["notes"].append(f"{c.path.name}: {c.counts['lines that are not frames']} line(s) that are not CAN "
+                                   f"frames skipped (" + "; ".join(f"line {n}: {t!r}" for n, t in c.bad_lines)
+                                   + f"); expected {CANDUMP_FORMAT}")
     if dbc_report is not None:
         report["dbc_load"] = dbc_report.as_dict()
     gnss, epochs, u0 = None, None, None

@@ -81,3 +81,26 @@ def write_timelog(folder: Path, seconds: int = 300, lat_at: dict | None = None, 
     out += bytes(struct.calcsize("<IHiiB") * padding + padding)     # a zero record: no time, no fix, N = 0
     (folder / f"{name}.bin").write_bytes(bytes(out))
     return folder
+
+
+# --- CAN (candump -L) ----------------------------------------------------------------------------------
+def candump_lines(seconds: float, rate: float = 20.0, start: float = 1_777_622_400.0):
+    """candump lines of the project's TractorFeedback (0x280) at ``rate``: a wheel angle of
+    0.2 sin(0.5 t) rad, a yaw rate of 0.1 sin(0.5 t) rad/s, 2 m/s (encoded with its DBC's scaling)."""
+    for k in range(int(seconds * rate)):
+        t = k / rate
+        angle = round(0.2 * math.sin(0.5 * t) / 1e-4)
+        yaw = round(0.1 * math.sin(0.5 * t) / 1e-4)
+        data = struct.pack("<hhH", angle, yaw, 2000) + bytes([(k % 16) << 4, 0])
+        yield f"({start + t:.6f}) can0 280#{data.hex().upper()}"
+
+
+def write_candump(path: Path, seconds: float = 60.0, bad: dict[int, str] | None = None, **kw) -> Path:
+    """A candump log; ``bad`` {index: text} puts a line that is not a frame before the index-th frame."""
+    lines = []
+    for k, line in enumerate(candump_lines(seconds, **kw)):
+        if bad and k in bad:
+            lines.append(bad[k])
+        lines.append(line)
+    path.write_text("\n".join(lines) + "\n")
+    return path
