@@ -151,12 +151,51 @@ def read_geojson(path: Path, crs: str | None = None) -> list[Field]:
         raise FieldError(f"{path}: 'features' must be a list")
     shapes = []
     for i, f in enumerate(feats):
+        if not isinstance(f, dict) or not isinstance(f.get("geometry"), dict):
+            raise FieldError(f"{path}: feature {i}: not a geometry: none given (expected a Feature with a 'geometry' object: "
+                             f"{{'type': 'Polygon', 'coordinates': [[[lon, lat], ...]]}})")
+        _check_geometry(path, i, f["geometry"])
+        props = f.get("properties")
         try:
-            shapes.append((shape(f["geometry"]), f.get("properties") or {}))
+            shapes.append((shape(f["geometry"]), props if isinstance(props, dict) else {}))
         except Exception as exc:        # noqa: BLE001 - shapely raises many kinds for a bad geometry
             raise FieldError(f"{path}: feature {i}: not a geometry: {exc}") from None
     declared = ((data.get("crs") or {}).get("properties") or {}).get("name")
     return _fields_from_shapes(path, shapes, crs, declared)
+
+
+DEPTH = {"Point": 0, "MultiPoint": 1, "LineString": 1, "MultiLineString": 2, "Polygon": 2, "MultiPolygon": 3}
+LEAST = {"LineString": 2, "MultiLineString": 2, "Polygon": 4, "MultiPolygon": 4}     # positions a line / ring needs
+
+
+def _check_geometry(path: Path, i: int, geom: dict, depth: int = 0) -> None:
+    """A GeoJSON geometry as RFC 7946 writes it (a type, coordinates nested to its depth, each
+    position two or three finite numbers), else a FieldError naming the feature and what is wrong."""
+    kind = geom.get("type")
+    if kind == "GeometryCollection" and depth < 4 and isinstance(geom.get("geometries"), list):
+        for g in geom["geometries"]:
+            _check_geometry(path, i, g if isinstance(g, dict) else {}, depth + 1)
+        return
+    if kind not in DEPTH:
+        raise FieldError(f"{path}: feature {i}: not a geometry: type {str(kind)[:40]!r}; expected one of "
+                         f"{', '.join(DEPTH)} or GeometryCollection")
+
+    def walk(value, level: int, where: str) -> None:
+        if level == 0:
+            if not (isinstance(value, list) and len(value) in (2, 3)
+                    and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value)):
+                raise FieldError(f"{path}: feature {i}: not a geometry: {kind} position {where}: {str(value)[:40]}; expected "
+                                 f"[longitude, latitude] (or x, y) of two or three finite numbers")
+            return
+        if not isinstance(value, list):
+            raise FieldError(f"{path}: feature {i}: not a geometry: {kind} coordinates{' ' + where if where else ''}: {str(value)[:40]}; expected "
+                             f"lists nested {DEPTH[kind] + 1} deep around the positions")
+        if level == 1 and kind in LEAST and len(value) < LEAST[kind]:
+            raise FieldError(f"{path}: feature {i}: not a geometry: {kind} {'ring' if 'Polygon' in kind else 'line'} {where or '0'}: "
+                             f"{len(value)} position(s); it needs {LEAST[kind]} or more")
+        for k, v in enumerate(value):
+            walk(v, level - 1, f"{where}[{k}]")
+    walk(geom.get("coordinates"), DEPTH[kind], "")
 
 
 def read_wkt(path: Path, crs: str | None = None) -> list[Field]:

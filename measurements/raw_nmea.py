@@ -193,7 +193,7 @@ def _batches(path: Path, first_line: dict, size: int = 20000):
             continue
         start = line.find(b"$")
         if start < 0:
-            kind = "binary data (UBX or another binary protocol)" if _binary(line) else "text that is not a sentence"
+            kind = "binary data (UBX or another binary protocol)" if _binary(line) else "not a sentence"
             counts[kind] += 1
             first_line.setdefault(kind, number)
             continue
@@ -249,7 +249,9 @@ def read_nmea_file(path: str | Path) -> NMEARecording:  # noqa: C901 - one pass 
     notes: list[str] = []
     frame["utc"] = _utc(frame, dates, notes, path)
     for kind, n in first_line.items():
-        notes.append(f"{path.name}: {counts[kind]} line(s) with {kind} skipped (the first at line {n})")
+        notes.append(f"{path.name}: {counts[kind]} line(s) with {kind} removed, the sentence after it read (the first "
+                     f"at line {n})" if kind.startswith("binary data before") else
+                     f"{path.name}: {counts[kind]} line(s) skipped: {kind} (the first at line {n})")
     frame, breaks = ordered_in_time(frame, path.name, notes)
     return NMEARecording(path, frame[["utc", "host", "lat", "lon", "height", "quality", "speed", "course", "heading",
                                       "position_std"]].reset_index(drop=True), counts, notes, breaks)
