@@ -39,6 +39,7 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
     report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
                     "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes]}
     for c in cans:
+        report["notes"] += c.notes
         if c.bad_lines:
             report["notes"].append(f"{c.path.name}: {c.counts['lines that are not frames']} line(s) that are not CAN "
                                    f"frames skipped (" + "; ".join(f"line {n}: {t!r}" for n, t in c.bad_lines)
@@ -75,9 +76,12 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
         report["columns"].update({"x": "NMEA GGA latitude/longitude -> east of the run's first fix (pymap3d)",
                                   "y": "NMEA GGA latitude/longitude -> north of the run's first fix (pymap3d)",
                                   "t": "receiver UTC (GGA), s from the run's start"})
+    can_breaks = [b for c in cans for b in c.breaks]
     if raw and gnss is not None:
         report["clocks"], to_utc = align_clocks(epochs, raw, u0, gnss)
         raw = {c: (to_utc(t), v) for c, (t, v) in raw.items()}
+        for b in can_breaks:
+            b["start"], b["end"] = float(to_utc(b["start"])), float(to_utc(b["end"]))
     elif raw:
         lo = min(float(t[0]) for t, _ in raw.values())
         report["clocks"] = {"reference": "the CAN logger's clock (no NMEA with a fix: not GPS time)"
@@ -87,7 +91,7 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
         report["columns"]["t"] = "the CAN logger's timestamps, s from the run's start"
     else:
         report["clocks"] = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
-    return Streams(gnss, raw, report, set(HELD) & set(raw), {}, [b for n in nmea for b in n.breaks])
+    return Streams(gnss, raw, report, set(HELD) & set(raw), {}, [b for n in nmea for b in n.breaks] + can_breaks)
 
 
 def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, options: ImportOptions, report: dict):

@@ -238,24 +238,51 @@ def position_outliers(t: np.ndarray, lat: np.ndarray, lon: np.ndarray) -> tuple[
     return spike, jumps, speed
 
 
+def time_spikes(t: np.ndarray) -> np.ndarray:
+    """True at a record whose time is more than J = max(10 typical steps, 1 s) from both its
+    neighbours' while they are within J of each other (at the ends: from its one neighbour, the
+    next two agreeing)."""
+    d = np.diff(t)
+    ahead = d[d > 0]
+    jump = max(10.0 * float(np.median(ahead)) if len(ahead) else 0.0, 1.0)
+    far = np.abs(d) > jump
+    lone = np.zeros(len(t), bool)
+    if len(t) >= 3:
+        lone[1:-1] = far[:-1] & far[1:] & (np.abs(t[2:] - t[:-2]) <= jump)
+        lone[0] = far[0] and not far[1]
+        lone[-1] = far[-1] and not far[-2]
+    return lone
+
+
 def ordered_in_time(frame: pd.DataFrame, label: str, notes: list[str], same: tuple = ("lat", "lon"),
                     stream: str = "gnss", what: str = "line") -> tuple[pd.DataFrame, list[dict]]:
     """(records in time order, breaks) of records in file order (``utc`` POSIX s, ``line`` the
-    file's line or record number, ``what`` says which): a record dated at or before one already read is either a repeat (same time
-    and ``same`` values: the log written twice; dropped and counted) or the clock stepping back;
+    file's line or record number, ``what`` says which). A lone record whose time is far from both
+    its neighbours', which agree, is a damaged stamp (masked, counted). A record dated at or before
+    one already read is either a repeat (same time and ``same`` values: the log written twice;
+    dropped and counted) or the clock stepping back;
     those are masked until the time passes the latest one read, named with their count, line and
     times, and the span becomes a break that no run bridges (a splice would join positions that
     are seconds apart as if they were one step apart)."""
     t = frame["utc"].to_numpy(float)
     if len(t) < 2 or bool(np.all(np.diff(t) > 0)):
         return frame, []
+    where = frame["line"].to_numpy() if "line" in frame else np.arange(len(t))
+    lone = time_spikes(t)
+    if lone.any():
+        i = np.flatnonzero(lone)
+        notes.append(f"{label}: {len(i)} record(s) with a time far from both neighbours' (a damaged time stamp, "
+                     f"e.g. {iso(t[i[0]])} between {iso(t[i[0] - 1]) if i[0] > 0 else '-'} and "
+                     f"{iso(t[i[0] + 1]) if i[0] + 1 < len(t) else '-'}), the first at {what} {where[i[0]]}: masked")
+        frame, t, where = frame.loc[~lone].reset_index(drop=True), t[~lone], where[~lone]
+        if len(t) < 2 or bool(np.all(np.diff(t) > 0)):
+            return frame, []
     latest = np.maximum.accumulate(t)
     behind = np.zeros(len(t), bool)
     behind[1:] = t[1:] <= latest[:-1]
     keys = [c for c in ("utc", *same) if c in frame]
     repeat = behind & frame.round(9).duplicated(subset=keys, keep="first").to_numpy()
     stepped = behind & ~repeat
-    where = frame["line"].to_numpy() if "line" in frame else np.arange(len(t))
     if repeat.any():
         i = int(np.argmax(repeat))
         notes.append(f"{label}: {int(repeat.sum())} record(s) repeat earlier ones (same time and position; the log "

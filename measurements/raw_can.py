@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .quirks import ordered_in_time
 from .signals import SignalSpec
 from .streams import Series
 
@@ -75,6 +76,8 @@ class CANRecording:
     outside_range: dict = field(default_factory=dict)
     not_available: dict = field(default_factory=dict)
     bad_lines: list = field(default_factory=list)        # (line number, text) of the first lines that are not frames
+    notes: list = field(default_factory=list)
+    breaks: list = field(default_factory=list)           # on the logger's clock (measurements.quirks.ordered_in_time)
 
     @property
     def span(self) -> tuple[float, float]:
@@ -235,7 +238,11 @@ def read_can_file(path: str | Path, db, bus: str | None = None, wanted: set[str]
     rec.bad_lines = bad
     by_name = {m.name: m for m in db.messages}
     for name, c in columns.items():
-        rec.messages[name] = _scaled(by_name[name], c.table(), rec)
+        table = c.table().rename(columns={"t": "utc"})          # in file order: damaged or backward stamps named
+        table, breaks = ordered_in_time(table, f"{path.name} {name}", rec.notes, tuple(c.names), stream=f"CAN {name}",
+                                        what="frame")
+        rec.breaks += breaks
+        rec.messages[name] = _scaled(by_name[name], table.rename(columns={"utc": "t"}), rec)
     return rec
 
 

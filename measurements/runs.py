@@ -21,6 +21,7 @@ from .options import ImportOptions
 from .streams import Streams, gnss_speed, iso
 
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
+MAX_SAMPLES = 5e7      # rows of one log grid (a day at 500 Hz): more is a damaged clock, not a recording
 HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
 
 
@@ -87,6 +88,11 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     if hi - lo < 2 * step:
         spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
         raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
+    if (hi - lo) / step > MAX_SAMPLES:
+        spans = ", ".join(f"{name} {iso(t[0])} to {iso(t[-1])}" for name, t in times)
+        raise LogError(f"{source}: the streams span {hi - lo:.4g} s ({spans}): {(hi - lo) / step:.3g} samples at "
+                       f"{1 / step:g} Hz, above {MAX_SAMPLES:.0e}; a time stamp far from the others, or choose a span "
+                       f"with --time-range or a lower --rate")
     grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
     covered = np.ones(len(grid), bool)
     for b in streams.breaks:                  # never bridged: the samples on either side are not one step apart
