@@ -140,10 +140,14 @@ class _Epochs:
         self.lines = array("q")
         self.recent: dict[tuple, int] = {}
 
-    def add(self, key: tuple, line: int, **values) -> int:
+    def add(self, key: tuple, line: int, tod: float, day: float, host: float, lat: float = math.nan,
+            lon: float = math.nan, height: float = math.nan, quality: float = 0.0) -> int:
         i = len(self.lines)
-        for c in self.COLUMNS:
-            self.columns[c].append(values.get(c, math.nan))
+        c = self.columns
+        for name, value in (("tod", tod), ("day", day), ("host", host), ("lat", lat), ("lon", lon), ("height", height),
+                            ("quality", quality), ("speed", math.nan), ("course", math.nan), ("heading", math.nan),
+                            ("position_std", math.nan)):
+            c[name].append(value)
         self.lines.append(line)
         self.recent[key] = i
         if len(self.recent) > 32:
@@ -293,15 +297,15 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                 return day_index, last_tod, epochs.recent[key]
             quality = int(f[6]) if f[6] else 0
             fix = quality != 0 and bool(f[2])
-            values = dict(tod=tod, day=day_index, host=host, quality=0.0)
             if fix:
                 alt = (float(f[9]) if f[9] else 0.0) + (float(f[11]) if len(f) > 11 and f[11] else 0.0)
-                values.update(lat=_degrees(f[2], f[3], 2), lon=_degrees(f[4], f[5], 3), height=alt,
-                              quality=float(quality))
-            last = epochs.add(key, number, **values)
+                last = epochs.add(key, number, tod, day_index, host, _degrees(f[2], f[3], 2), _degrees(f[4], f[5], 3),
+                                  alt, float(quality))
+            else:
+                last = epochs.add(key, number, tod, day_index, host)
             counts["GGA"] += 1
         elif ident == "RMC":
-            if len(f) > 9 and len(f[9]) == 6 and f[9].isdigit():
+            if not dates and len(f) > 9 and len(f[9]) == 6 and f[9].isdigit():      # the first date is the one used
                 yy = int(f[9][4:6])
                 d = datetime.date(yy + (2000 if yy < 69 else 1900), int(f[9][2:4]), int(f[9][0:2]))
                 dates.append((host, tod, _date_seconds(d)))
@@ -311,7 +315,7 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                 epochs.set(i, "course", math.radians(float(f[8])) if f[8] else math.nan)
             counts["RMC"] += 1
         elif ident == "ZDA":
-            if f[4]:
+            if not dates and f[4]:
                 dates.append((host, tod, _date_seconds(datetime.date(int(f[4]), int(f[3]), int(f[2])))))
             counts["ZDA"] += 1
         elif ident in ("HDT", "THS"):      # true heading, clockwise from north -> ENU yaw
