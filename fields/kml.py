@@ -22,10 +22,16 @@ def _local(tag: str) -> str:
 
 def _coordinates(el, where: str) -> np.ndarray:
     text = next((c.text or "" for c in el.iter() if _local(c.tag) == "coordinates"), "")
-    try:
-        pts = [[float(v) for v in tup.split(",")[:2]] for tup in text.split() if tup.strip()]
-    except ValueError as exc:
-        raise FieldError(f"{where}: coordinates are not 'longitude,latitude[,altitude]' tuples: {exc}") from None
+    pts = []
+    for k, tup in enumerate(t for t in text.split() if t.strip()):
+        try:
+            values = [float(v) for v in tup.split(",")]
+        except ValueError:
+            values = []
+        if len(values) not in (2, 3):
+            raise FieldError(f"{where}: coordinate tuple {k + 1} is {tup[:40]!r}; expected 'longitude,latitude"
+                             f"[,altitude]' (tuples apart by blanks, numbers within one by commas)")
+        pts.append(values[:2])
     return np.array(pts, float).reshape(-1, 2)
 
 
@@ -44,7 +50,9 @@ def kml_root(path: Path):
                                      f"limit for a file read whole into memory (--max-file-size raises it)")
                 return ET.fromstring(z.read(name))
         return ET.parse(regular_file(path, FieldError)).getroot()
-    except (ET.ParseError, OSError, zipfile.BadZipFile) as exc:
+    except FieldError:
+        raise
+    except (ET.ParseError, OSError, zipfile.BadZipFile, LookupError, ValueError) as exc:      # LookupError: an unknown encoding
         raise FieldError(f"{path}: not a readable {'KMZ' if path.suffix.lower() == '.kmz' else 'KML'} file: {exc}") from None
 
 

@@ -257,7 +257,12 @@ def read_gml(path: Path, crs: str | None = None, root=None) -> list[Field]:
             text = el.findtext(f".//{gml}coordinates")
             try:
                 if text is not None:        # GML 2: "x,y[,z] x,y[,z] ..."
-                    return np.array([[float(v) for v in t.split(",")[:2]] for t in text.split()], float)
+                    tuples = [[float(v) for v in t.split(",")] for t in text.split()]
+                    short = [t for t in tuples if len(t) not in (2, 3)]
+                    if short:
+                        raise ValueError(f"a tuple of {len(short[0])} number(s), {short[0]}; expected 'x,y[,z]' tuples "
+                                         f"apart by blanks")
+                    return np.array([t[:2] for t in tuples], float)
                 nums = [float(x) for x in (el.findtext(f".//{gml}posList") or "").split()]   # GML 3: x y x y
                 return np.array(nums, float).reshape(-1, 2)
             except ValueError as exc:
@@ -292,7 +297,7 @@ def _number(text: str):
 def _xml(path: Path):
     try:
         return ET.parse(regular_file(path, FieldError)).getroot()
-    except (ET.ParseError, OSError) as exc:
+    except (ET.ParseError, OSError, LookupError, ValueError) as exc:
         raise FieldError(f"{path}: not a readable XML file: {exc}") from None
 
 

@@ -59,7 +59,7 @@ def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
     regular_file(path, LogError)
     try:
         root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError) as exc:
+    except (ET.ParseError, OSError, LookupError, ValueError) as exc:      # LookupError: an unknown encoding
         raise LogError(f"{path}: not a readable XML file: {exc}") from None
     if root.tag != "TIM":
         raise LogError(f"{path}: expected a time-log header (root element TIM), found <{root.tag}>")
@@ -212,7 +212,7 @@ def _task_notes(paths: list[Path], heads: list[Path]) -> list[str]:
             if not root.tag.endswith("ISO11783_TaskData"):
                 notes.append(f"{task.name}: root element <{root.tag[:40]}>, not ISO11783_TaskData: not a TaskData "
                              f"(the time logs are read without it)")
-        except ET.ParseError as exc:
+        except (ET.ParseError, LookupError, ValueError) as exc:
             notes.append(f"{task.name}: not readable XML ({exc}): the TaskData is damaged; the time logs are read "
                          f"without it (each TLG header gives its own layout)")
     return notes

@@ -66,8 +66,11 @@ def iso(posix: float) -> str:
         return "unknown"
     if abs(posix) < BOOT_CLOCK_LIMIT:
         return f"{posix:.3f} s on the logger's clock (since its start, not a date)"
-    return datetime.datetime.fromtimestamp(posix, datetime.timezone.utc).isoformat(timespec="milliseconds") \
-        .replace("+00:00", "Z")
+    try:
+        when = datetime.datetime.fromtimestamp(posix, datetime.timezone.utc)
+    except (ValueError, OverflowError, OSError):
+        return f"{posix:.6g} s (beyond the calendar: not a date)"
+    return when.isoformat(timespec="milliseconds").replace("+00:00", "Z")
 
 
 def is_boot_clock(t: np.ndarray) -> bool:

@@ -106,8 +106,12 @@ def _bases() -> dict[str, bytes]:
 
 
 BASES = _bases()
+KML = (b'<kml xmlns="http://www.opengis.net/kml/2.2"><Document><Placemark><name>square</name><Polygon>'
+       b'<outerBoundaryIs><LinearRing><coordinates>5,52,0 5.002,52,0 5.002,52.001,0 5,52.001,0 5,52,0</coordinates>'
+       b'</LinearRing></outerBoundaryIs><innerBoundaryIs><LinearRing><coordinates>5.0005,52.0002 5.001,52.0002 '
+       b'5.001,52.0006 5.0005,52.0002</coordinates></LinearRing></innerBoundaryIs></Polygon></Placemark></Document></kml>')
 FIELD_FILES = [DATA / "fields2cover_data" / "test.json", DATA / "fields2cover_data" / "test_2_cell.json",
-               DATA / "fields2cover_data" / "Envelope.xml"]
+               DATA / "fields2cover_data" / "Envelope.xml", "square.kml"]
 START_MB = _peak_mb()
 
 
@@ -145,8 +149,8 @@ def test_a_mutated_time_log_is_read_or_refused_by_name(edits, header):
 def test_a_mutated_field_file_is_read_or_refused_by_name(index, edits):
     with tempfile.TemporaryDirectory() as tmp:
         source = FIELD_FILES[index]
-        path = Path(tmp) / source.name
-        path.write_bytes(mutate(source.read_bytes(), edits))
+        path = Path(tmp) / (source.name if isinstance(source, Path) else source)
+        path.write_bytes(mutate(source.read_bytes() if isinstance(source, Path) else KML, edits))
         _fields(path)
 
 
