@@ -29,10 +29,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from measurements.source_files import set_limit
     from orchestrator.output import check_output
     from orchestrator.results import atomic_write, write_json
-
-    from measurements.source_files import set_limit
 
     from .readers import read_fields, read_folder
 
@@ -115,6 +114,7 @@ def draw(fields, path: Path, title: str) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from orchestrator.results import atomic_write
 
     shown = fields[:12]
