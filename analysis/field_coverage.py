@@ -1,4 +1,4 @@
-"""Farmers' and autosteer vendors' figures of a field mission (issue 27), from the true positions
+"""Farmers' and autosteer vendors' figures of a field mission, from the true positions
 (the plant's CG, the implement's working point), not the estimates:
 
 - cross-track error on swaths (RMS, P95, max) of the tractor's CG and of the implement, against
@@ -7,7 +7,7 @@
   common part (P95 of its magnitude, as autosteer vendors quote it);
 - coverage: the implement's swept strips (its working width about its working point, while it
   works: on a swath or a headland pass) united with shapely, against the workable area (the field
-  the implement can reach: fields.coverage); covered, overlapping (worked more than once) and
+  the implement can reach: fields.planner.headland); covered, overlapping (worked more than once) and
   skipped area, and their shares;
 - boundary crossings: the tractor's CG or the implement leaving the field (must be 0);
 - time and distance on swaths, headland passes and in turns.
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fields.coverage import HEADLAND, SWATH, TRANSIT, TURN
+from fields.planner import HEADLAND, SWATH, TRANSIT, TURN
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
@@ -39,7 +39,7 @@ def mission(study: Study):
     name = component_named(study, "route")
     p = resolve(study).parameters(name)
     field, plan = planned(str(p["path"]), str(p["crs"]), str(p["name"]), settings_of(p))
-    origin, rotation = route_frame(plan.route)
+    origin, rotation = route_frame(plan.path)
     return field, plan, lambda xy: to_mission(xy, origin, rotation), name
 
 
@@ -66,8 +66,8 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
 def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Swath index -> (start, unit direction) in the mission frame."""
     out = {}
-    for seg in (s for s in plan.segments if s.kind == SWATH):
-        a2, b2 = conv(seg.path[[0, -1], :2])
+    for seg in (s for s in plan.path.segments if s.kind == SWATH):
+        a2, b2 = conv(seg.points[[0, -1], :2])
         d = (b2 - a2) / max(np.hypot(*(b2 - a2)), 1e-9)
         out[int(seg.index)] = (a2, d)
     return out

@@ -1,4 +1,4 @@
-"""The README's field-mission table: whole real fields covered by the guidance stack (issue 27).
+"""The README's field-mission table: whole real fields covered by the guidance stack.
 
     python3 benchmarks/field_mission.py [--quick]
 
@@ -17,7 +17,8 @@ from orchestrator.runner import run_study
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
-REAL = ROOT.parent / "shared" / "realdata"
+REAL = next((p / "shared" / "realdata" for p in ROOT.parents if (p / "shared" / "realdata").is_dir()),
+            ROOT.parent / "shared" / "realdata")
 PARTFIELDS = REAL / "isoxml_dev4ag_timelogs" / "PARTFIELDS_TASKDATA.XML"
 TASKDATA = REAL / "isoxml_dev4ag_timelogs" / "TASKDATA.XML"
 

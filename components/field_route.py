@@ -1,11 +1,11 @@
-"""A field's coverage route as the trackers' reference: path following, not a clock (issue 27).
+"""A field's coverage route as the trackers' reference: path following, not a clock.
 
 At initialisation the field named by ``path`` is read (fields.read_fields: GeoJSON, WKT, GML,
-ISOXML, AgOpenGPS, a polygon CSV in ``crs``) and planned (fields.coverage.plan with this
+ISOXML, AgOpenGPS, a polygon CSV in ``crs``) and planned (fields.planner.plan with this
 component's parameters); the route is put in the *mission frame*, its start at the origin heading
 east, so that the tractor starts there at rest (route_frame). Each step projects the estimated CG
-onto the route near where it was (a window of -2 m to +10 m of arc length, so a turn that crosses
-a swath does not capture it) and gives the reference at that arc length s*:
+onto the route near where it was (a window of -2 m to +10 m of arc length on the grid s = k ROUTE_STEP,
+so a turn that crosses a swath does not capture it) and gives the reference at that arc length s*:
 
     (x_ref, y_ref) = route(s*),   (xdot_ref, ydot_ref) = v(s*) (cos h, sin h),   gamma_ref = v(s*) kappa(s*)
 
@@ -14,6 +14,9 @@ the speed comes from the route's profile (slower in turns). The implement's work
 projected the same way (its own window): ``implement_cross_track`` is its signed distance to the
 route, left positive, and ``working`` says whether it is on a swath or a headland pass. The run ends
 (EndRun) when the CG reaches the route's end.
+
+The route is the plan's Path, evaluated lazily: the grid is sampled a window of WINDOW metres at a
+time round the vehicle (RouteWindow), so memory stays flat however long the route.
 """
 from __future__ import annotations
 
@@ -23,25 +26,30 @@ from pathlib import Path
 
 import numpy as np
 
+from fields.planner import HEADLAND, SWATH
+from fields.planner.sampling import ROUTE_STEP
 from orchestrator.component import Component, EndRun, inp, out, par
-from fields.coverage import HEADLAND, SWATH
 from orchestrator.units import FILE_UNIT
+
+WINDOW = 500.0          # m of the route sampled at a time
+BEHIND = 20.0           # m of it kept behind the vehicle
 
 
 @functools.lru_cache(maxsize=8)
 def planned(path: str, crs: str, name: str, settings):
     """(field, plan) for the parameters (cached: the run and its analysis plan once)."""
     from fields import read_fields
-    from fields.coverage import plan
-    from fields.plan_cli import choose_field
+    from fields.field import choose_field
+    from fields.planner import plan
 
     field = choose_field(read_fields(Path(path), crs or None), name or None, path)
     return field, plan(field, settings)
 
 
-def route_frame(route: dict) -> tuple[np.ndarray, float]:
+def route_frame(path) -> tuple[np.ndarray, float]:
     """(origin, rotation) of the mission frame: the route's start, its heading."""
-    return np.array([route["x"][0], route["y"][0]]), float(route["heading"][0])
+    x, y, heading = path.start_pose()
+    return np.array([x, y]), heading
 
 
 def to_mission(xy: np.ndarray, origin: np.ndarray, rotation: float) -> np.ndarray:
@@ -52,10 +60,10 @@ def to_mission(xy: np.ndarray, origin: np.ndarray, rotation: float) -> np.ndarra
 
 
 def settings_of(p: dict):
-    """fields.coverage.Settings from the component's parameters of the same names (nan angle: chosen)."""
+    """fields.planner.Settings from the component's parameters of the same names (nan angle: chosen)."""
     from dataclasses import fields
 
-    from fields.coverage import Settings
+    from fields.planner import Settings
 
     values = {}
     for f in fields(Settings):
@@ -67,6 +75,32 @@ def settings_of(p: dict):
         else:
             values[f.name] = type(default)(v)
     return Settings(**values)
+
+
+class RouteWindow:
+    """The route on the grid s = i ROUTE_STEP, i < size, in the mission frame, sampled a window at
+    a time: ``take(a, b)`` makes sure points a..b-1 are at hand (resampling WINDOW metres from
+    BEHIND before a when they are not); ``x``, ``y``, ... are then indexed by i - ``first``."""
+
+    def __init__(self, path, origin: np.ndarray, rotation: float) -> None:
+        self.path, self.origin, self.rotation = path, origin, rotation
+        self.size = path.grid_size(ROUTE_STEP)
+        self.first = self.stop = 0
+
+    def take(self, a: int, b: int) -> None:
+        if self.first <= a and b <= self.stop:
+            return
+        self.first = max(0, a - int(BEHIND / ROUTE_STEP))
+        self.stop = min(self.size, max(b, self.first + int(WINDOW / ROUTE_STEP)))
+        r = self.path.grid(self.first, self.stop, ROUTE_STEP)
+        xy = to_mission(np.column_stack([r["x"], r["y"]]), self.origin, self.rotation)
+        self.x, self.y = xy[:, 0], xy[:, 1]
+        self.h = r["heading"] - self.rotation
+        self.kappa, self.speed, self.kind, self.index, self.s = r["curvature"], r["speed"], r["kind"], r["index"], r["s"]
+
+    def at(self, i: int, name: str) -> float:
+        self.take(i, i + 1)
+        return float(getattr(self, name)[i - self.first])
 
 
 class FieldRoute(Component):
@@ -83,8 +117,9 @@ class FieldRoute(Component):
         par("name", "", "", "the field when the file holds several (default: the largest)"),
         par("working_width", "m", 3.0, "implement working width"),
         par("headland_passes", "1", 0, "0: as many as the turns need"),
-        par("driving_angle", "rad", float("nan"), "swath direction, east = 0, counter-clockwise (nan: fewest swaths)"),
+        par("driving_angle", "rad", float("nan"), "swath direction, east = 0, counter-clockwise (nan: by angle_objective)"),
         par("guidance_line", "", "", "drive along this guidance line of the field (an AB line; '*': its first)"),
+        par("angle_objective", "", "fewest_swaths", "how the driving angle is chosen: fewest_swaths or longest_edge"),
         par("turn_radius", "m", 4.0, "the tractor's smallest turning radius"),
         par("wheelbase", "m", 1.4, "for the steering-rate limit of the turns"),
         par("steer_rate", "rad/s", math.radians(30.0), "steering rate the turns may ask"),
@@ -131,44 +166,44 @@ class FieldRoute(Component):
             _, plan = planned(str(self.p["path"]), str(self.p["crs"]), str(self.p["name"]), settings_of(self.p))
         except (FieldError, ValueError, OSError) as exc:
             self.require(False, str(exc))             # names the file, the field and the value
-        r = plan.route
-        origin, rotation = route_frame(r)
-        xy = to_mission(np.column_stack([r["x"], r["y"]]), origin, rotation)
-        self.rx, self.ry = xy[:, 0], xy[:, 1]
-        self.h = np.unwrap(r["heading"] - rotation)
-        self.kappa, self.speed, self.kind, self.index, self.s = r["curvature"], r["speed"], r["kind"], r["index"], r["s"]
+        self.path = plan.path
+        origin, rotation = route_frame(self.path)
+        self.route = RouteWindow(self.path, origin, rotation)
+        self.end = (self.route.size - 1) * ROUTE_STEP          # s of the last grid point
         self.i_cg = self.i_impl = 0
-        self.started = False
         self.step(t0, dt)
 
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
         """(index, signed lateral distance) of the route point nearest (px, py) within the window."""
-        step = self.s[1] - self.s[0] if len(self.s) > 1 else 0.1
-        a, b = max(0, i - int(back / step)), min(len(self.s), i + int(ahead / step) + 1)
-        d2 = (self.rx[a:b] - px) ** 2 + (self.ry[a:b] - py) ** 2
+        r = self.route
+        a, b = max(0, i - int(back / ROUTE_STEP)), min(r.size, i + int(ahead / ROUTE_STEP) + 1)
+        r.take(a, b)
+        d2 = (r.x[a - r.first:b - r.first] - px) ** 2 + (r.y[a - r.first:b - r.first] - py) ** 2
         j = a + int(np.argmin(d2))
-        lateral = -math.sin(self.h[j]) * (px - self.rx[j]) + math.cos(self.h[j]) * (py - self.ry[j])
+        k = j - r.first
+        lateral = -math.sin(r.h[k]) * (px - r.x[k]) + math.cos(r.h[k]) * (py - r.y[k])
         return j, lateral
 
     def step(self, t: float, dt: float) -> None:
-        u, y = self.u, self.y
+        u, y, r = self.u, self.y, self.route
         self.i_cg, lateral = self._project(u["x"], u["y"], self.i_cg)
         j = self.i_cg
-        v = float(self.speed[j])
-        y["x_ref"], y["y_ref"] = float(self.rx[j]), float(self.ry[j])
-        y["heading_ref"] = float(self.h[j])
-        y["xdot_ref"], y["ydot_ref"] = v * math.cos(self.h[j]), v * math.sin(self.h[j])
-        y["yaw_rate_ref"], y["speed_ref"] = v * float(self.kappa[j]), v
-        y["path_length"], y["segment"], y["swath"] = float(self.s[j]), float(self.kind[j]), float(self.index[j])
-        y["cross_track"], y["progress"] = lateral, float(self.s[j] / self.s[-1])
+        v, h = r.at(j, "speed"), r.at(j, "h")
+        y["x_ref"], y["y_ref"] = r.at(j, "x"), r.at(j, "y")
+        y["heading_ref"] = h
+        y["xdot_ref"], y["ydot_ref"] = v * math.cos(h), v * math.sin(h)
+        y["yaw_rate_ref"], y["speed_ref"] = v * r.at(j, "kappa"), v
+        y["path_length"], y["segment"], y["swath"] = r.at(j, "s"), r.at(j, "kind"), r.at(j, "index")
+        y["cross_track"], y["progress"] = lateral, r.at(j, "s") / self.end if self.end > 0 else 1.0
         self.i_impl, lat_i = self._project(u["implement_x"], u["implement_y"], min(self.i_impl, j), back=2.0,
-                                           ahead=max(12.0, (j - self.i_impl) * 0.1 + 2.0))
+                                           ahead=max(12.0, (j - self.i_impl) * ROUTE_STEP + 2.0))
         y["implement_cross_track"] = lat_i
-        y["implement_segment"] = float(self.kind[self.i_impl])
-        y["working"] = float(self.kind[self.i_impl] in (SWATH, HEADLAND))
-        y["implement_on_straight"] = float(abs(self.kappa[self.i_impl]) < 1e-3)
-        if j >= len(self.s) - 3:
-            raise EndRun(self.name, f"the route is complete ({self.s[-1]:.0f} m)")
+        kind = r.at(self.i_impl, "kind")
+        y["implement_segment"] = kind
+        y["working"] = float(kind in (SWATH, HEADLAND))
+        y["implement_on_straight"] = float(abs(r.at(self.i_impl, "kappa")) < 1e-3)
+        if j >= r.size - 3:
+            raise EndRun(self.name, f"the route is complete ({self.end:.0f} m)")
 
 
 COMPONENT = FieldRoute

@@ -133,7 +133,7 @@ def draw(fields, path: Path, title: str) -> Path:
         for k, g in enumerate(f.lines):
             ax.plot(g.points[:, 0], g.points[:, 1], color="tab:blue", lw=1.2, label="guidance line" if k == 0 else None)
         ax.set_title(f"{f.name[:28]}\n{f.area_ha:.2f} ha, {f.holes} hole(s), {len(f.lines)} line(s)"
-                     + ("" if not f.problems() else "\nINVALID: self-intersecting"), fontsize=9)
+                     + ("" if not f.problems() else f"\nINVALID: {f.problems()[0][:36]}..."), fontsize=9)
         ax.set_aspect("equal")
         ax.set_xlabel("east [m]" + ("" if f.origin else " (local)"), fontsize=8)
         ax.set_ylabel("north [m]", fontsize=8)

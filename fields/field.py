@@ -18,6 +18,9 @@ from shapely.validation import explain_validity
 from orchestrator.errors import InputError
 
 
+EARTH_REACH = 2.0e7     # m: no two points of the Earth's surface are farther apart along it (half a meridian)
+
+
 class FieldError(InputError, ValueError):
     """A field file that cannot be read, or a field that cannot be used (exit 2, named)."""
 
@@ -64,9 +67,14 @@ class Field:
         return len(self.boundary.interiors)
 
     def problems(self) -> list[str]:
-        """Why the boundary cannot be planned on (self-intersection, too few points), or []."""
+        """Why the boundary cannot be planned on (too few points, coordinates beyond the Earth,
+        self-intersection), or []."""
         if self.boundary.is_empty or len(self.boundary.exterior.coords) < 4:
             return ["the boundary has fewer than three distinct points"]
+        far = max(abs(b) for b in self.boundary.bounds)
+        if not far <= EARTH_REACH:
+            return [f"coordinates {far:.3g} m from the field's origin: beyond the Earth (no two places are more than "
+                    f"{EARTH_REACH / 1e3:,.0f} km apart); is the coordinate system right (--crs)?"]
         if not self.boundary.is_valid:
             why = explain_validity(self.boundary)
             where = re.search(r"\[(-?[\d.e+-]+) (-?[\d.e+-]+)\]", why)
@@ -126,3 +134,15 @@ def polygons(geom) -> list[Polygon]:
     if isinstance(geom, MultiPolygon):
         return list(geom.geoms)
     return []
+
+
+def choose_field(fields: list[Field], name: str | None, where: str) -> Field:
+    """The field named ``name`` (the largest when None); refused when no field, or several, have the name."""
+    if name is None:
+        return max(fields, key=lambda f: f.boundary.area)
+    found = [f for f in fields if f.name == name]
+    if not found:
+        raise FieldError(f"{where}: no field named {name!r}; fields: {', '.join(f.name for f in fields)}")
+    if len(found) > 1:
+        raise FieldError(f"{where}: {len(found)} fields are named {name!r}; give the file's fields distinct names")
+    return found[0]

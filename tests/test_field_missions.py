@@ -1,4 +1,4 @@
-"""Issue 27: field missions. Coverage plans on every real field (copies in tests/data) (sections of
+"""Field missions. Coverage plans on every real field (copies in tests/data) (sections of
 the large ones), continuous-curvature turns within the limits, the trailed implement's kinematics
 against closed-form steady states, the whole guidance stack covering a real plot, the farmers'
 metrics against a second computation, bad fields refused by name, sweeps over speed and angle."""
@@ -19,8 +19,11 @@ from shapely.ops import unary_union
 from components.field_route import FieldRoute, settings_of
 from components.trailed_implement import TrailedImplement
 from fields import FieldError, read_fields
-from fields.coverage import HEADLAND, SWATH, TURN, Settings, _skip_order, plan
-from fields.turns import Limits, connect, integrate
+from fields.planner import HEADLAND, SWATH, TURN, Settings, plan
+from fields.planner.curves import Limits, connect, integrate
+from fields.planner.decomposition import cells as _cells
+from fields.planner.route_order import skip_order as _skip_order
+from fields.planner.swaths import swath_lines as _swath_lines
 from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
@@ -51,20 +54,20 @@ REAL_FIELD_FILES = {
 def _check_route(p, settings: Settings) -> None:
     """What any route must be: continuous, inside the field by the tractor's half width, turns
     within the curvature and sharpness limits, swaths at the driving angle."""
-    r = p.route
+    r = p.path.grid(0, p.path.grid_size())              # the route on the trackers' grid
     steps = np.hypot(np.diff(r["x"]), np.diff(r["y"]))
     assert steps.max() < 0.1 + 1e-6
     inside = p.field.boundary.buffer(-settings.half_width + 1e-6)
     assert contains_xy(inside, r["x"], r["y"]).all()
     limits = Limits.of(settings.turn_radius, settings.wheelbase, settings.steer_rate, settings.turn_speed)
-    for seg in p.segments:
-        if seg.kind == TURN and len(seg.path) > 2:
-            k = seg.path[:, 3]
+    for seg in p.path.segments:
+        if seg.kind == TURN and len(seg.points) > 2:
+            k = seg.points[:, 3]
             assert np.abs(k).max() <= limits.kappa_max * (1 + 1e-9)
-            ds = np.hypot(*np.diff(seg.path[:, :2], axis=0).T)
+            ds = np.hypot(*np.diff(seg.points[:, :2], axis=0).T)
             ok = ds > 1e-6
             assert (np.abs(np.diff(k))[ok] / ds[ok]).max() <= limits.sigma * 1.01
-    for a, b in p.swaths:
+    for a, b in ((sw.start, sw.end) for sw in p.swaths):
         heading = math.atan2(b[1] - a[1], b[0] - a[0])
         assert abs(math.sin(heading - p.angle)) < 1e-6
 
@@ -92,7 +95,7 @@ def test_every_real_field_is_planned_or_refused_by_name(name):
 def _planned_cover(p) -> tuple[float, float]:
     """(covered share, overlap share) of the workable area by the plan's own working strips."""
     w = p.settings.working_width
-    strips = [LineString(s.path[:, :2]).buffer(0.5 * w, cap_style="flat") for s in p.segments
+    strips = [LineString(s.points[:, :2]).buffer(0.5 * w, cap_style="flat") for s in p.path.segments
               if s.kind in (SWATH, HEADLAND)]
     union = unary_union(strips)
     covered = union.intersection(p.workable).area
@@ -122,7 +125,6 @@ def test_a_field_with_a_bay_and_a_hole_is_split_into_cells_and_covered():
     """A U-shaped field (a bay cut into its top) with a pond: the lines crossing the bay or the
     pond give two swaths each, the planner splits them into cells, each swath is driven once,
     the whole stays inside the field (round the pond too) and covers the workable area."""
-    from fields.coverage import _cells, _swath_lines
     from fields.field import Field
 
     outer = [(0, 0), (300, 0), (300, 200), (190, 200), (190, 100), (110, 100), (110, 200), (0, 200)]
@@ -134,7 +136,7 @@ def test_a_field_with_a_bay_and_a_hole_is_split_into_cells_and_covered():
     lines = _swath_lines(p.inner, p.angle, settings.working_width - settings.overlap, settings.working_width)
     cells = _cells(lines, p.angle)
     assert len(cells) >= 5 and f"in {len(cells)} cells" in p.order_how        # below, round the pond, two arms
-    assert sum(len(c) for c in cells) == sum(len(segs) for segs in lines) == len(p.swaths)
+    assert sum(len(c.swaths) for c in cells) == sum(len(segs) for segs in lines) == len(p.swaths)
     covered, overlap = _planned_cover(p)
     assert covered >= 0.99 and overlap <= 0.05, (covered, overlap)
 
@@ -159,8 +161,6 @@ def test_the_chosen_angle_gives_the_fewest_swaths_by_rotating_calipers(file):
     field = max(read_fields(REAL / file), key=lambda f: f.boundary.area if f.area_ha < 20 else 0)
     p = plan(field, Settings(max_swaths=2))
     spacing = p.settings.working_width - p.settings.overlap
-    from fields.coverage import _swath_lines
-
     count = len(_swath_lines(p.inner, p.angle, spacing, p.settings.working_width))
     fewest = math.ceil(_min_width(p.inner) / spacing)
     assert fewest <= count <= fewest + 1, (count, fewest)
@@ -290,7 +290,7 @@ def _run(study: str, *overrides: str):
 
 
 def test_a_real_plot_is_covered_by_the_guidance_stack():
-    """The IAM plot (shipped in studies/fields), whole, at 2 m/s with RTK noise: the issue's bars."""
+    """The IAM plot (shipped in studies/fields), whole, at 2 m/s with RTK noise: the farmers' bars (coverage, overlap, RTK-class errors)."""
     m = _run("field_plot_mounted.toml").metrics
     assert m["route_done_share"] > 0.99
     assert m["coverage_share"] >= 0.99 and m["overlap_share"] <= 0.05, (m["coverage_share"], m["overlap_share"])

@@ -18,13 +18,14 @@ tens of degrees per second cannot follow; continuous-curvature Dubins is what Fi
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
-DS = 0.05          # m: integration step
+from .sampling import TURN_STEP
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ def cc_profile(theta: float, limits: Limits) -> list[tuple[float, float, float]]
     return [(ramp, 0.0, sign * km), (arc, sign * km, sign * km), (ramp, sign * km, 0.0)]
 
 
-def integrate(pieces: list[tuple[float, float, float]], start=(0.0, 0.0, 0.0), step: float = DS) -> np.ndarray:
+def integrate(pieces: list[tuple[float, float, float]], start=(0.0, 0.0, 0.0), step: float = TURN_STEP) -> np.ndarray:
     """(N, 4) x, y, heading, curvature along pieces of linearly varying curvature, every ``step``
     (the last point exactly at the end); exact for straights and arcs, second order for ramps."""
     x, y, th = start
@@ -81,19 +82,21 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
 
 def end_pose(pieces, start=(0.0, 0.0, 0.0)) -> np.ndarray:
     """The end pose of the pieces, by Gauss-Legendre quadrature of (cos, sin) of the heading
-    (a quadratic in s on each piece): the solver's fast path, to 1e-12 on turns of a few radians."""
+    (a quadratic in s on each piece): the solver's fast path, to 1e-12 on turns of a few radians.
+    All pieces at once: the heading at each piece's start is the sum of the turns before it."""
     x, y, th = start
-    for length, k0, k1 in pieces:
-        if length <= 0:
-            continue
-        sq = 0.5 * length * (_GL_X + 1.0)
-        dk = (k1 - k0) / length
-        heading = th + k0 * sq + 0.5 * dk * sq * sq
-        w = 0.5 * length * _GL_W
-        x += float(w @ np.cos(heading))
-        y += float(w @ np.sin(heading))
-        th += 0.5 * length * (k0 + k1)
-    return np.array([x, y, th])
+    p = np.asarray(pieces, float).reshape(-1, 3)
+    p = p[p[:, 0] > 0]
+    if not len(p):
+        return np.array([x, y, th])
+    length, k0, k1 = p[:, :1], p[:, 1:2], p[:, 2:]
+    turn = 0.5 * length * (k0 + k1)
+    th0 = th + np.cumsum(turn) - turn[:, 0]
+    sq = 0.5 * length * (_GL_X + 1.0)
+    heading = th0[:, None] + k0 * sq + 0.5 * ((k1 - k0) / length) * sq * sq
+    w = 0.5 * length * _GL_W
+    return np.array([x + float(np.sum(w * np.cos(heading))), y + float(np.sum(w * np.sin(heading))),
+                     th + float(np.sum(turn))])
 
 
 def _pieces(kind: str, params: np.ndarray, limits: Limits) -> list:
@@ -127,11 +130,24 @@ def turn_families(a, b) -> tuple[str, ...]:
 
 def connect(a, b, limits: Limits, families=None) -> np.ndarray | None:
     """The shortest CC path (N, 4) from pose a = (x, y, heading) to pose b, or None."""
-    families = families or turn_families(a, b)
+    families = tuple(families or turn_families(a, b))
     a, b = np.asarray(a, float), np.asarray(b, float)
     c, s = math.cos(-a[2]), math.sin(-a[2])
     d = b[:2] - a[:2]
-    goal = np.array([c * d[0] - s * d[1], s * d[0] + c * d[1], _wrap(b[2] - a[2])])     # b in a's frame
+    goal = (c * d[0] - s * d[1], s * d[0] + c * d[1], _wrap(b[2] - a[2]))     # b in a's frame
+    local = _local_path(tuple(round(g, 9) for g in goal), limits, families)
+    if local is None:
+        return None
+    ca, sa = math.cos(a[2]), math.sin(a[2])
+    return np.column_stack([a[0] + ca * local[:, 0] - sa * local[:, 1], a[1] + sa * local[:, 0] + ca * local[:, 1],
+                            a[2] + local[:, 2], local[:, 3]])
+
+
+@functools.lru_cache(maxsize=4096)
+def _local_path(goal: tuple[float, float, float], limits: Limits, families: tuple[str, ...]) -> np.ndarray | None:
+    """The shortest CC path from the origin heading east to ``goal`` (x, y, heading), integrated;
+    cached: the turns between parallel swaths whose ends line up are all one turn, moved."""
+    goal = np.array(goal)
     best = None
     R = 1.0 / limits.kappa_max
     for kind in families:
@@ -151,7 +167,8 @@ def connect(a, b, limits: Limits, families=None) -> np.ndarray | None:
                 best = (length, pieces)
     if best is None:
         return None
-    path = integrate(best[1], tuple(a))
+    path = integrate(best[1])
+    path.setflags(write=False)
     return path
 
 

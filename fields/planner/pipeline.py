@@ -1,0 +1,127 @@
+"""A coverage plan of a field, in stages (after Fields2Cover):
+
+    headland -> decomposition -> swaths (an angle objective) -> route order -> turns -> speed profile
+
+Before any of it the settings and the field are checked (finite values in range, coordinates on
+the Earth, a number of swaths that fits memory, a turn radius the field can hold), so that a plan
+that cannot be made is refused at once, naming the value. The auto headland widens by a pass (up
+to 3) when a turn at a slanted edge or a corner leaves the field.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field as dc_field
+
+from shapely.geometry import Polygon
+
+from ..field import Field, FieldError
+from . import decomposition, headland, route_order, swaths
+from .path import Path
+from .settings import Settings
+from .speed import speed_profile
+from .turns import Joiner, TurnOutside
+from .types import HEADLAND, SWATH, TRANSIT, TURN, Cell, Route, Swath
+
+MAX_SWATHS = 20_000     # across a field at the fewest: about 1 GB of path (a 60 km wide field of a 3 m implement)
+MORE_PASSES = 3         # the auto headland widens by at most this many passes
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    field: Field
+    settings: Settings
+    angle: float                # rad, east = 0, counter-clockwise
+    angle_how: str
+    headland_passes: int
+    inner: Polygon              # what the swaths fill
+    workable: Polygon           # what the implement can reach
+    cells: tuple[Cell, ...]
+    route: Route
+    path: Path
+    notes: tuple[str, ...] = dc_field(default_factory=tuple)
+
+    @property
+    def order_how(self) -> str:
+        return self.route.how
+
+    @property
+    def swaths(self) -> list[Swath]:
+        """The swaths as driven (oriented, extended), in driving order."""
+        return self.route.swaths
+
+    def summary(self) -> dict:
+        dist = self.path.distances()
+        return {"field": self.field.name, "area_ha": round(self.field.area_ha, 4),
+                "workable_ha": round(self.workable.area / 1e4, 4), "driving_angle_deg": round(math.degrees(self.angle), 2),
+                "driving_angle_how": self.angle_how, "order": self.order_how, "headland_passes": self.headland_passes,
+                "swaths": len(self.swaths), "turns": max(len(self.swaths) - 1, 0),
+                "distance_m": round(self.path.length, 1), "working_distance_m": round(dist[SWATH] + dist[HEADLAND], 1),
+                "turn_distance_m": round(dist[TURN], 1), "transit_distance_m": round(dist[TRANSIT], 1),
+                "estimated_time_s": round(self.path.time(), 1), "working_width_m": self.settings.working_width,
+                "turn_radius_m": self.settings.turn_radius, "notes": list(self.notes)}
+
+
+def check_field(field: Field, settings: Settings, where: str) -> None:
+    """What can be known before planning: a simple polygon on the Earth (Field.problems), not too
+    many swaths across, wide enough for the turns (a U-turn reaches at least R beyond the swath ends: its
+    heading passes pi/2 with |kappa| <= 1/R, so x >= R int_0^{pi/2} cos = R)."""
+    problems = field.problems()
+    if problems:
+        raise FieldError(f"{where}: {problems[0]}")
+    across = decomposition.min_width(field.boundary)
+    fewest = across / settings.spacing
+    if fewest > MAX_SWATHS:
+        raise FieldError(f"{where}: the field is {across / 1e3:.1f} km across at its narrowest: about "
+                         f"{fewest:,.0f} swaths of {settings.spacing:g} m, more than the {MAX_SWATHS:,} planned at once; "
+                         f"plan it in parts or with a wider working width")
+    lowest = headland.width_needed(settings.turn_radius, settings)
+    if across <= 2 * lowest:
+        w = settings.working_width
+        raise FieldError(f"{where}: the field is narrower than two working widths ({2 * w:g} m) inside the headland its "
+                         f"turns need: with turn radius {settings.turn_radius:g} m a turn needs at least {lowest:.1f} m "
+                         f"on each side (the radius, a straight run of {settings.lead:.1f} m, the tractor's half width "
+                         f"and half the working width), but the field is {across:.1f} m across at its narrowest; use a "
+                         f"smaller turn radius or a shorter run")
+
+
+def plan(field: Field, settings: Settings = Settings()) -> Plan:
+    where = f"{field.source}: field {field.name!r}"
+    settings.check(where)
+    check_field(field, settings, where)
+    order, skip, reach = route_order.pattern(settings)
+    needed = headland.width_needed(reach, settings)
+    n = first = headland.passes(needed, settings, reach, where)
+    refused = None
+    while True:
+        try:
+            return _layout(field, settings, n, order, skip, where, [] if n == first else
+                           [f"headland widened from {first} to {n} passes: a turn at a slanted edge or a corner needed "
+                            f"the room"])
+        except TurnOutside as exc:
+            # auto headland: a turn at a slanted edge or a corner needs more room than the straight
+            # U-turn's reach; widen by a pass rather than refuse the field
+            if settings.headland_passes or n >= first + MORE_PASSES:
+                raise FieldError(str(exc)) from None
+            n, refused = n + 1, exc
+        except FieldError:
+            if refused is None:
+                raise
+            raise FieldError(str(refused)) from None          # widening left too little: the turn is the cause
+
+
+def _layout(field: Field, settings: Settings, n: int, order: str, skip: int, where: str, widened: list[str]) -> Plan:
+    """Every stage for n headland passes."""
+    notes: list[str] = []
+    w = settings.working_width
+    region = decomposition.worked_region(headland.inner_parts(field, n, w), w, n, where, notes)
+    angle, angle_how = swaths.driving_angle(field, region, settings, where)
+    lines = swaths.swath_lines(region, angle, settings.spacing, w)
+    if settings.max_swaths:
+        notes.append(f"a section of the field: the first {min(settings.max_swaths, len(lines))} swath(s) of the route")
+    cells = decomposition.cells(lines, angle)
+    rings = headland.headland_passes(field, settings, n) if settings.headland_work and not settings.max_swaths else []
+    route = route_order.route(cells, skip, order, settings, rings)
+    segments = Joiner(field, settings, n, where, notes).join(route)
+    path = Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
+    return Plan(field, settings, angle, angle_how, n, region, headland.workable(field, settings, n), tuple(cells), route,
+                path, tuple(notes + widened))

@@ -1,0 +1,86 @@
+"""The planner's settings: the implement, the tractor's turning limits, speeds, the order; every
+value checked (finite, in range) before any work, the message naming the setting and its value."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+from ..field import FieldError
+from .curves import Limits
+from .objectives import OBJECTIVES
+
+POSITIVE = ("working_width", "turn_radius", "wheelbase", "steer_rate", "work_speed", "turn_speed", "acceleration")
+NON_NEGATIVE = ("headland_passes", "hitch_offset", "drawbar", "half_width", "settle", "swath_extension", "max_swaths",
+                "overlap")
+ORDERS = ("auto", "boustrophedon", "skip")
+
+
+@dataclass(frozen=True)
+class Settings:
+    working_width: float = 3.0            # m
+    headland_passes: int = 0              # 0: as many as the turns need
+    driving_angle: float | None = None    # rad, east = 0, counter-clockwise; None: by the angle objective
+    guidance_line: str = ""               # else along this guidance line of the field ("*": its first)
+    angle_objective: str = "fewest_swaths"  # how the driving angle is chosen (fields.planner.objectives)
+    turn_radius: float = 4.0              # m: the tractor's smallest (well above its 45 deg lock)
+    wheelbase: float = 1.4                # m
+    steer_rate: float = math.radians(30)  # rad/s the turns may ask (the hydraulics do 60)
+    work_speed: float = 2.0               # m/s
+    turn_speed: float = 1.0               # m/s
+    acceleration: float = 0.5             # m/s^2
+    overlap: float = 0.05                 # m between adjacent passes
+    order: str = "auto"                   # auto, boustrophedon, skip
+    half_width: float = 0.8               # m: the tractor's, kept inside the boundary
+    hitch_offset: float = 0.6             # m behind the rear axle
+    drawbar: float = 2.5                  # m hitch to implement axle (0: a mounted implement)
+    headland_work: bool = True            # drive the headland passes after the swaths
+    settle: float = 5.0                   # m driven straight before a swath beyond the implement's length
+    swath_extension: float = 0.1          # m each swath works on beyond its strip's reach (lift and drop margin)
+    max_swaths: int = 0                   # 0: all; else the first N (a section of a field, for tests)
+
+    def check(self, where: str, names: dict[str, str] | None = None) -> None:
+        """Refuse a value that is not finite or out of range; ``names``: how the caller calls each
+        setting (a command-line option), for the message."""
+        def name(key: str) -> str:
+            return (names or {}).get(key, key)
+
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, float) and not math.isfinite(value):
+                raise FieldError(f"{where}: {name(f.name)} = {value}: expected a finite number")
+        for key in POSITIVE:
+            if not getattr(self, key) > 0:
+                raise FieldError(f"{where}: {name(key)} = {getattr(self, key)}: expected a positive number")
+        for key in NON_NEGATIVE:
+            if not getattr(self, key) >= 0:
+                raise FieldError(f"{where}: {name(key)} = {getattr(self, key)}: expected zero or more")
+        if self.order not in ORDERS:
+            raise FieldError(f"{where}: {name('order')} = {self.order!r}: expected {', '.join(ORDERS)}")
+        if self.angle_objective not in OBJECTIVES:
+            raise FieldError(f"{where}: {name('angle_objective')} = {self.angle_objective!r}: expected one of "
+                             f"{', '.join(OBJECTIVES)}")
+        if not self.overlap < 0.5 * self.working_width:
+            raise FieldError(f"{where}: {name('working_width')} = {self.working_width:g} m with {name('overlap')} = "
+                             f"{self.overlap:g} m between passes: expected an overlap under half the working width")
+
+    @property
+    def spacing(self) -> float:
+        """Distance between adjacent swaths: the working width less the overlap."""
+        return self.working_width - self.overlap
+
+    @property
+    def limits(self) -> Limits:
+        """The turns' curvature and sharpness limits (at the turn speed)."""
+        return Limits.of(self.turn_radius, self.wheelbase, self.steer_rate, self.turn_speed)
+
+    @property
+    def lead(self) -> float:
+        """Straight run before and after each swath: the implement (hitch + drawbar behind the
+        rear axle) is on the line, and the loop has settled, when the work starts."""
+        return self.hitch_offset + self.drawbar + self.settle
+
+    @property
+    def implement_radius(self) -> float:
+        """R_i: the implement's steady radius when the rear axle runs on R (hitch c behind, drawbar L)."""
+        r2 = self.turn_radius ** 2 + self.hitch_offset ** 2 - self.drawbar ** 2
+        return math.sqrt(max(r2, 0.25 * self.turn_radius ** 2))
