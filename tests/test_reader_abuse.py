@@ -127,6 +127,16 @@ def test_a_receiver_clock_that_steps_back_splits_the_run_and_is_named(tmp_path):
     assert any("split" in g["stream"] for g in report["gaps"])
 
 
+def test_a_receiver_clock_that_steps_forward_is_a_named_gap_between_two_runs(tmp_path):
+    log = write_nmea(tmp_path / "ahead.nmea", 150.0, step_back=(60.0, -30.0))    # 60 s on, the clock reads 30 s more
+    converted(cli("convert", log, "--out", tmp_path / "a.csv", "--all-runs"),
+              "gaps: 1: gnss 59.90-90.00 s", "runs: 1: 0.0-59.8 s", "2: 90.0-179.9 s")
+    first, second = (pd.read_csv(tmp_path / f"a_run0{k}.csv") for k in (1, 2))
+    assert (len(first), len(second)) == (599, 900)       # 60 s and 90 s at 10 Hz, the last sample of run 1 at the grid's end
+    for run in (first, second):                             # no splice: 2 m/s at 10 Hz is 0.2 m a step
+        assert steps_m(run).max() < 0.25
+
+
 def test_binary_bytes_between_and_before_sentences_are_skipped_and_counted(tmp_path):
     clean = write_nmea(tmp_path / "clean.nmea", 40.0)
     ubx = bytes([0xB5, 0x62, 0x01, 0x07, 0x5C, 0x00, 0xE8, 0x03, 0x00, 0x00, 0x0A, 0x1B])
