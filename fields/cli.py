@@ -29,7 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from measurements.source_files import set_limit
+    from orchestrator.source_files import set_limit
     from orchestrator.output import check_output
     from orchestrator.results import atomic_write, write_json
 

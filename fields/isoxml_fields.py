@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import Polygon
 
-from measurements.source_files import regular_file
+from orchestrator.source_files import regular_file
 
 from .coordinates import Coordinates
 from .field import Field, FieldError, GuidanceLine, polygon

@@ -44,7 +44,7 @@ def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
     from .log import LogError
     from .recording import ImportOptions
-    from .source_files import set_limit
+    from orchestrator.source_files import set_limit
 
     set_limit(getattr(args, "max_file_size", None))
 

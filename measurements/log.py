@@ -41,7 +41,7 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
     with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
     (degrees are detected and named), speed against the GPS track (check_units)."""
-    from .source_files import checked_path, regular_file
+    from orchestrator.source_files import checked_path, regular_file
 
     path = regular_file(checked_path(path, LogError, "log not found"), LogError)
     kind = "Parquet" if path.suffix == ".parquet" else "CSV"

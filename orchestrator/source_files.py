@@ -1,4 +1,4 @@
-"""Input files opened safely: only regular files, under a size limit that names itself.
+"""Input files opened safely (recordings, field files): only regular files, under a size limit that names itself.
 
 A recording or field file is read only when it is a regular file (a symlink is followed to one;
 a device such as /dev/zero, a pipe or a socket is refused before a byte is read, and a symlink
