@@ -173,6 +173,12 @@ class FieldRoute(Component):
         self.i_cg = self.i_impl = 0
         self.step(t0, dt)
 
+    def run_progress(self) -> tuple[float, float, str] | None:
+        """(metres of the route done, the route's length, "m"): the run's progress line
+        (orchestrator.observers.Progress)."""
+        end = getattr(self, "end", None)
+        return None if end is None else (float(self.y["path_length"]), float(end), "m")
+
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
         """(index, signed lateral distance) of the route point nearest (px, py) within the window."""
         r = self.route
