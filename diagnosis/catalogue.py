@@ -1,4 +1,4 @@
-"""The catalogue of model extensions a diagnosis tests (issue 6, step 2): every ``Effect`` class
+"""The catalogue of model extensions a diagnosis tests: every ``Effect`` class
 of the modules in ``diagnosis/effects/`` (one effect per module, see diagnosis.effect), ordered by
 id, and the baseline's re-fitted parameters of each stage."""
 from __future__ import annotations

@@ -92,7 +92,7 @@ def at_bound(value: float, p) -> str | None:
 
 
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
-    """What makes a verdict on this log fragile (issue 15, item 4)."""
+    """What makes a verdict on this log fragile."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
     if replay.not_judged:
         out.append(f"the log's columns: {', '.join(map(str, replay.frame.columns))}")

@@ -1,4 +1,4 @@
-"""What the baseline's own simplifications leave on a healthy log (issue 28, item 1).
+"""What the baseline's own simplifications leave on a healthy log.
 
 The replay is simpler than the study it comes from: the steering is its first-order equivalent
 (the study's steering component is a PI around a valve with a dead-band and a spool lag, closed

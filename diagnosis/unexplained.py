@@ -1,4 +1,4 @@
-"""What the best catalogued model leaves unexplained (issue 15, item 2).
+"""What the best catalogued model leaves unexplained.
 
 Per stage, the held-out residual of the final model is compared with the stage's noise floor
 (noise_floor.py). A stage is *misfit* when both
