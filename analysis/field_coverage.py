@@ -197,7 +197,8 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
 
 
 IMPLEMENT_XTE_P95_TARGET = 0.05       # m: the implement's P95 cross-track target (RTK class +-0.025 m)
-METRICS = {"coverage_share": ("1", ">= 0.99"), "overlap_share": ("1", "<= 0.05"), "skipped_area_m2": ("m2", None),
+COVERAGE_TARGET, OVERLAP_TARGET = 0.99, 0.05       # shares of the workable area: at least, at most
+METRICS = {"coverage_share": ("1", f">= {COVERAGE_TARGET}"), "overlap_share": ("1", f"<= {OVERLAP_TARGET}"), "skipped_area_m2": ("m2", None),
            "boundary_crossings": ("count", "0"), "tractor_xte_p95_m": ("m", None),
            "implement_xte_p95_m": ("m", f"<= {IMPLEMENT_XTE_P95_TARGET} (RTK class +-0.025)"), "pass_to_pass_p95_m": ("m", None),
            "tractor_xte_rms_m": ("m", None), "implement_xte_rms_m": ("m", None), "implement_xte_max_m": ("m", None),
@@ -209,6 +210,12 @@ METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 **{k: "m" for k in ("tractor_xte_max_m", "pass_to_pass_mean_m")},
                 **{k: "m2" for k in ("covered_area_m2", "overlap_area_m2", "workable_area_m2", "field_area_m2")},
                 "route_done_share": "1", "swaths_planned": "count", "events": "count"}
+
+
+# What a sweep plots (orchestrator.sweep.sweep_plots), with the bound each is judged by: the farmer's
+# figures (coverage, overlap, accuracy of the implement, time) and the field's limit.
+SWEEP_METRICS = {"coverage_share": COVERAGE_TARGET, "overlap_share": OVERLAP_TARGET, "implement_xte_p95_m": IMPLEMENT_XTE_P95_TARGET,
+                 "pass_to_pass_p95_m": None, "mission_time_s": None, "boundary_crossings": 0.0}
 
 
 def summary(values: dict[str, float]) -> str:

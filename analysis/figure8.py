@@ -99,6 +99,13 @@ METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 "speed_rms_error_vs_path": "m/s", "events": "count"}
 
 
+# What a sweep plots (orchestrator.sweep.sweep_plots), with the bound each is judged by: the bounded
+# errors, the tracking of the two inner loops, the steering effort.
+SWEEP_METRICS = {"euclid_max_straight": PAPER_BOUNDS["euclid_max_straight"],
+                 "euclid_max_curved": PAPER_BOUNDS["euclid_max_curved"],
+                 "speed_rms_error": None, "yaw_rate_rms_error": None, "steer_angle_rms": None, "steer_rate_rms": None}
+
+
 def summary(values: dict[str, float]) -> str:
     rows = [(k, unit, paper) for k, (unit, paper) in METRICS.items()]
     lines = [f"{'metric':<28}{'ours':>12}  {'unit':<6} paper", "-" * 64]

@@ -48,6 +48,7 @@ def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import StrMethodFormatter
 
     out_dir = Path(out_dir)
     summary = summarise(table)
@@ -62,6 +63,7 @@ def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:
     ax.axhline(PAPER_BOUNDS["euclid_max_straight"], color="C0", ls="--", lw=1, label="paper bound, straights (0.40 m)")
     ax.axhline(PAPER_BOUNDS["euclid_max_curved"], color="C1", ls="--", lw=1, label="paper bound, curves (0.60 m)")
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(StrMethodFormatter("{x:g}")), ax.yaxis.set_minor_formatter(StrMethodFormatter("{x:g}"))
     ax.set_xlabel("actuator delay steering.command_delay [ms]")
     ax.set_ylabel("max Euclidean error [m]")
     ax.set_title(f"{study.study.name}: {summary['within_bounds']:.0%} of {summary['runs']} runs within bounds")
@@ -80,6 +82,7 @@ def compare(tables: dict[str, pd.DataFrame], out: Path) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import StrMethodFormatter
 
     fig, ax = plt.subplots(figsize=(7, 4))
     for i, (name, table) in enumerate(tables.items()):
@@ -89,6 +92,7 @@ def compare(tables: dict[str, pd.DataFrame], out: Path) -> Path:
     ax.axhline(PAPER_BOUNDS["euclid_max_straight"], color="grey", ls="--", lw=1, label="0.40 m (straights)")
     ax.axhline(PAPER_BOUNDS["euclid_max_curved"], color="grey", ls=":", lw=1, label="0.60 m (curves)")
     ax.set_yscale("log")
+    ax.yaxis.set_major_formatter(StrMethodFormatter("{x:g}")), ax.yaxis.set_minor_formatter(StrMethodFormatter("{x:g}"))
     ax.set_xlabel("actuator delay steering.command_delay [ms]")
     ax.set_ylabel("max Euclidean error, straight or curve [m]")
     ax.grid(alpha=0.3, which="both")

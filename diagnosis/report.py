@@ -245,11 +245,9 @@ def floors_figure(result: dict, path: Path) -> Path:
         ax.hlines(st.get("misfit_level", RATIO * st["floor"]) / st["floor"], *span, color="tab:red", ls="--", lw=1.5,
                   label=f"misfit above: {RATIO:g} x floor and a material excess over healthy" if j == 0 else None)
     ax.set_yscale("log")
-    from matplotlib.ticker import FuncFormatter
+    from matplotlib.ticker import StrMethodFormatter
 
-    for axis in (ax.yaxis,):
-        axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-        axis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if v < 10 else ""))
+    ax.yaxis.set_major_formatter(StrMethodFormatter("{x:g}")), ax.yaxis.set_minor_formatter(StrMethodFormatter("{x:g}"))
     ax.set_xticks(range(len(stages)), [f"{s}\nfinal: {'MISFIT' if result['stages'][s]['misfit'] else 'no misfit'}\nfloor "
                                        f"{UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"
                                        for s in stages])
