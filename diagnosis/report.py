@@ -237,13 +237,12 @@ def floors_figure(result: dict, path: Path) -> Path:
         ratios = [get(s, result["stages"][s]) / result["stages"][s]["floor"] for s in stages]
         ax.bar(np.arange(len(stages)) + (i - (len(series) - 1) / 2) * width, ratios, width, label=label, color=color)
     ax.axhline(1.0, color="0.5", lw=1, label="noise floor")
-    for j, s in enumerate(stages):            # each stage's own judgement: healthy level, misfit level, verdict
-        st = result["stages"][s]
-        span = (j - 0.45, j + 0.45)
-        ax.hlines(st.get("healthy_level", st["floor"]) / st["floor"], *span, color="k", lw=2.5,
-                  label="healthy level (what a fault-free tractor leaves)" if j == 0 else None)
-        ax.hlines(st.get("misfit_level", RATIO * st["floor"]) / st["floor"], *span, color="tab:red", ls="--", lw=1.5,
-                  label=f"misfit above: {RATIO:g} x floor and a material excess over healthy" if j == 0 else None)
+    judged = [result["stages"][s] for s in stages]        # each stage's own judgement: healthy and misfit levels
+    xs = np.arange(len(stages))
+    ax.hlines([st.get("healthy_level", st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45, color="k",
+              lw=2.5, label="healthy level (what a fault-free tractor leaves)")
+    ax.hlines([st.get("misfit_level", RATIO * st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45,
+              color="tab:red", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
     ax.set_yscale("log")
     from matplotlib.ticker import StrMethodFormatter
 
