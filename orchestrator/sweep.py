@@ -340,7 +340,7 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
         unit = metric_units.get(metric)
         bound = (chosen or {}).get(metric)
         if bound is not None:
-            ax.axhline(bound, color="tab:red", ls="--", lw=1.2, label=f"bound {bound:g} {unit or ''}".rstrip())
+            ax.axhline(bound, color="tab:red", ls="--", lw=1.2, label=f"bound {bound:g} {'' if unit in (None, '1', 'count') else unit}".rstrip())
             ax.legend(fontsize=7)
         ax.set_xlabel(f"{x} [{x_unit}]" if x_unit else x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
         ax.set_ylabel(f"[{unit}]" if unit else "[-]")
