@@ -157,7 +157,7 @@ def error_figure(frame: pd.DataFrame, study: Study):
         for ax in axes[:, 0]:
             ax.plot(t[i], err[i], "o", color=colour, ms=6, mec="k", label=f"max on {kind}s {err[i]:.3f} m"
                     if ax is main else None)
-    main.set_ylim(0, 1.1 * max(bound_c, bound_s, float(err.max())))
+    main.set_ylim(0, 1.4 * max(bound_c, bound_s, float(err.max())))      # headroom for the legend
     main.set_title("Tracking error judged by the paper's bounds: " + "; ".join(verdicts), fontsize=9)
     main.legend(fontsize=7, loc="upper right", ncol=2)
     if zoom:
@@ -183,7 +183,7 @@ def trajectory_figure(frame: pd.DataFrame, study: Study):
     fig, (ax, zoom) = plt.subplots(1, 2, figsize=(11, 4.8), gridspec_kw={"width_ratios": [2, 1]})
     half = max(3.0 * err[i], 0.3)
     for a in (ax, zoom):
-        a.plot(x_ref, y_ref, color="0.6", lw=5 if a is ax else 7, alpha=0.6, solid_capstyle="round",
+        a.plot(x_ref, y_ref, color="0.6", lw=5 if a is ax else 4, alpha=0.6, solid_capstyle="round",
                label="reference", zorder=1)
         a.plot(x, y, color="r", lw=0.8, label="actual (CG)", zorder=2)
         a.set_xlabel("east x [m]"), a.set_ylabel("north y [m]"), a.grid(alpha=0.3)
