@@ -17,6 +17,7 @@ path. v_d is unchanged (P and CG move alike along the heading).
 from __future__ import annotations
 
 import math
+from typing import Mapping
 
 from orchestrator.component import Component, inp, out, par
 
@@ -48,6 +49,31 @@ TRACKER_FEEDTHROUGH = {o.name: tuple(i.name for i in TRACKER_INPUTS) for o in TR
 SPEED_LAW = (par("k_s", "m/s", 0.6, "saturation constant"), par("k_c", "1/m", 1.5, "gain"))
 
 
+def trim_along_track_error(p: Mapping[str, float], speed_excess: float) -> float:
+    """The along-track error e at which the speed law v_d = v_r + k_s tanh(k_c e) asks
+    ``speed_excess`` = v_d - v_r (what a speed loop with a steady error needs to hold v_r)."""
+    ratio = min(max(speed_excess / p["k_s"], -0.999999), 0.999999)
+    return math.atanh(ratio) / p["k_c"]
+
+
+# The lateral channel of a tracker about a straight reference heading east (psi = 0) with the CG on
+# it: the ports whose small deviations move the yaw-rate command (north positions and velocities,
+# heading, reference yaw rate); east positions and speeds enter at second order only.
+LATERAL_INPUTS = ("y_ref", "ydot_ref", "yaw_rate_ref", "y", "heading")
+
+
+def static_law(gains: Mapping[str, Mapping[str, float]], inputs: tuple[str, ...], dt: float):
+    """A memoryless linear law as a python-control StateSpace with no state, inputs and outputs
+    named by port: ``gains[output][input]`` = d output / d input (absent: 0)."""
+    import control
+    import numpy as np
+
+    outputs = tuple(gains)
+    D = np.array([[float(gains[o].get(i, 0.0)) for i in inputs] for o in outputs])
+    return control.ss(np.zeros((0, 0)), np.zeros((0, len(inputs))), np.zeros((len(outputs), 0)), D, dt,
+                      inputs=list(inputs), outputs=list(outputs))
+
+
 class KinematicTracker(Component):
     sampled = True
     roles = ("tracker",)
@@ -74,6 +100,24 @@ class KinematicTracker(Component):
             gamma_d = share * gamma_d + (1.0 - share) * u["yaw_rate_ref"]
         y = self.y
         y["speed_desired"], y["yaw_rate_desired"], y["error_x"], y["error_y"] = v_d, gamma_d, ex, ey
+
+    def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
+        """Small deviations about a straight reference heading east at ``speed``, the CG on its
+        line ``along_track_error`` behind the reference point (psi = e_y = 0; xdot_d = v_d = v + k_s
+        tanh(k_c e_x)): from gamma_fb = (-sin psi xdot_d + cos psi ydot_d) / l_r and gamma_d = (l_r / a)
+        gamma_fb + (1 - l_r / a) gamma_r,
+
+            d gamma_d = (k_s k_c (d y_ref - d y) - v_d d psi + d ydot_ref) / a + (1 - l_r / a) d gamma_r
+
+        (a = l_r: the paper's law). A static gain (python-control StateSpace, ports as names)."""
+        p = self.p
+        a = p["lookahead"] or p["l_r"]
+        k = p["k_s"] * p["k_c"]
+        v_d = speed + p["k_s"] * math.tanh(p["k_c"] * along_track_error)
+        gains = {"yaw_rate_desired": {"y_ref": k / a, "y": -k / a, "heading": -v_d / a, "ydot_ref": 1.0 / a,
+                                      "yaw_rate_ref": 1.0 - p["l_r"] / a},
+                 "error_y": {"y_ref": 1.0, "y": -1.0}}
+        return static_law(gains, LATERAL_INPUTS, dt)
 
 
 COMPONENT = KinematicTracker

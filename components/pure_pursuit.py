@@ -16,7 +16,8 @@ import math
 
 from orchestrator.component import Component, par
 
-from .kinematic_tracker import SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS
+from .kinematic_tracker import (LATERAL_INPUTS, SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS,
+                                static_law)
 
 def along_track(u, p) -> tuple[float, float, float, float, float]:
     """(e_x, e_y, v_r, unit reference direction t_x, t_y) and the speed law's v_d."""
@@ -54,6 +55,24 @@ class PurePursuit(Component):
         y["speed_desired"] = v_d
         y["yaw_rate_desired"] = v_d * 2.0 * math.sin(alpha) / D
         y["error_x"], y["error_y"] = ex, ey
+
+    def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
+        """Small deviations about a straight reference heading east at ``speed``, the CG on its
+        line e = ``along_track_error`` behind the reference point (v_d = v + k_s tanh(k_c e)). The
+        goal lies D0 = e + L_d + l_r ahead of R; its lateral offset in the body frame is
+        (y_ref - y) + L_d ydot_ref / v - (e + L_d) psi, so
+
+            alpha = ((d y_ref - d y) + L_d d ydot_ref / v - (e + L_d) d psi) / D0,   d gamma_d = 2 v_d alpha / D0
+
+        A static gain (python-control StateSpace, ports as names)."""
+        p = self.p
+        e = along_track_error
+        L_d = max(p["lookahead_min"], p["lookahead_time"] * speed)
+        D0 = e + L_d + p["l_r"]
+        g = 2.0 * (speed + p["k_s"] * math.tanh(p["k_c"] * e)) / D0 ** 2
+        gains = {"yaw_rate_desired": {"y_ref": g, "y": -g, "heading": -g * (e + L_d), "ydot_ref": g * L_d / speed},
+                 "error_y": {"y_ref": 1.0, "y": -1.0}}
+        return static_law(gains, LATERAL_INPUTS, dt)
 
 
 COMPONENT = PurePursuit

@@ -15,7 +15,8 @@ import math
 
 from orchestrator.component import Component, par
 
-from .kinematic_tracker import SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS
+from .kinematic_tracker import (LATERAL_INPUTS, SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS,
+                                static_law)
 from .pure_pursuit import along_track
 
 
@@ -44,6 +45,25 @@ class Stanley(Component):
         y["speed_desired"] = v_d
         y["yaw_rate_desired"] = v_d * math.tan(delta) / (p["l_f"] + p["l_r"])
         y["error_x"], y["error_y"] = ex, ey
+
+    def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
+        """Small deviations about a straight reference heading east at ``speed``, the CG on its
+        line e = ``along_track_error`` behind the reference point (v_d = v + k_s tanh(k_c e), the
+        steering bound inactive). With c = k / (v_soft + v_d): e_cross = d y - d y_ref + l_f d psi -
+        (l_f - e) d ydot_ref / v, psi_e = d ydot_ref / v - d psi, and
+
+            d gamma_d = (v_d / L) (psi_e - c e_cross)
+
+        A static gain (python-control StateSpace, ports as names)."""
+        p = self.p
+        e = along_track_error
+        v_d = speed + p["k_s"] * math.tanh(p["k_c"] * e)
+        c = p["k"] / (p["v_soft"] + max(v_d, 0.0))
+        g = v_d / (p["l_f"] + p["l_r"])
+        gains = {"yaw_rate_desired": {"y_ref": g * c, "y": -g * c, "heading": -g * (1.0 + c * p["l_f"]),
+                                      "ydot_ref": g * (1.0 + c * (p["l_f"] - e)) / speed},
+                 "error_y": {"y_ref": 1.0, "y": -1.0}}
+        return static_law(gains, LATERAL_INPUTS, dt)
 
 
 COMPONENT = Stanley

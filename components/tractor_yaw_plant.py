@@ -25,7 +25,10 @@ Extensions (off by default; each is an entry of the diagnosis catalogue, see dia
 ``steer_angle_offset`` (the tyres see delta + offset: a wheel-angle sensor zeroed wrongly),
 ``cornering_speed_slope`` (C_f, C_r scaled by 1 + k (v_x - v_ref)), ``slope_angle`` with
 ``slope_downhill_heading`` (side slope: a_lat = g sin(phi) sin(psi_d - psi) at the CG, physical
-models only) and ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame).
+models only), ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame)
+and ``tyre_friction`` with ``tyre_shape`` (tyre saturation: each axle's force follows the simplified
+Magic Formula of models.tyre instead of C alpha; physical models only; integrated by Rosenbrock
+sub-steps of at most 2 ms instead of the matrix exponential).
 """
 from __future__ import annotations
 
@@ -94,6 +97,8 @@ class TractorYawPlant(Component):
         par("slope_downhill_heading", "rad", 0.0, "extension: azimuth of the fall line (from east, CCW)"),
         par("antenna_forward", "m", 0.0, "extension: GPS antenna ahead of R"),
         par("antenna_left", "m", 0.0, "extension: GPS antenna left of R"),
+        par("tyre_friction", "1", 0.0, "extension: tyre friction mu of the Magic Formula (0 = linear tyres)"),
+        par("tyre_shape", "1", 1.3, "extension: Magic Formula shape factor C (1 < C < 2)"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -145,8 +150,11 @@ class TractorYawPlant(Component):
         self._tf = None
         self._slope = float(p["slope_angle"]) != 0.0
         self._cornering = float(p["cornering_speed_slope"]) != 0.0
-        self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering),
-                     "slope_angle and cornering_speed_slope need a physical model (bicycle, rlf, rlfr)")
+        self._saturation = float(p["tyre_friction"]) > 0.0
+        self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering or self._saturation),
+                     "slope_angle, cornering_speed_slope and tyre_friction need a physical model (bicycle, rlf, rlfr)")
+        self.require(not self._saturation or 1.0 < float(p["tyre_shape"]) < 2.0,
+                     f"parameter tyre_shape={p['tyre_shape']}: expected 1 < C < 2")
         if p["model"] == "transfer_function":
             self._tf = controllable_canonical(p["tf_num"], p["tf_den"])
             n = self._tf[0].shape[0]
@@ -206,15 +214,35 @@ class TractorYawPlant(Component):
         y["slope_pull_east"] = pull * math.cos(self.p["slope_downhill_heading"])
         y["slope_pull_north"] = pull * math.sin(self.p["slope_downhill_heading"])
 
+    def _saturated_step(self, v: float, delta: float, dt: float) -> np.ndarray:
+        """The state after dt with Magic Formula tyres (models.tyre.ros2_step, sub-steps <= 2 ms)."""
+        from .models.tyre import ros2_step
+
+        scale = cornering_scale(v, self.p["cornering_speed_slope"], self.p["cornering_reference_speed"]) \
+            if self._cornering else 1.0
+        tyre = {"mu": float(self.p["tyre_friction"]), "shape": float(self.p["tyre_shape"]),
+                "C_f": self.params.C_f * scale, "C_r": self.params.C_r * scale}
+        n = max(1, int(math.ceil(dt / 0.002)))
+        z = self.z
+        for _ in range(n):
+            z = ros2_step(self.p["model"], self.params, z, dt / n, v, v, delta, delta, **tyre)
+        return z
+
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
         delta = float(self.u["steer_angle"]) + self.p["steer_angle_offset"]
         vmin, speed = self._min_speed, abs(v)
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        Ad, Bd, _ = self.discretized(v_eff, dt)
         gamma0, vy0 = self._yaw_rate_and_lateral()
-        z = Ad @ self.z
-        if self._slope:
+        if self._saturation:
+            z = self._saturated_step(v_eff, delta, dt)
+        else:
+            Ad, Bd, _ = self.discretized(v_eff, dt)
+            z = Ad @ self.z
+        if self._saturation:
+            if self._slope:
+                z[0] += dt * slope_lateral_acceleration(self.psi, self.p["slope_angle"], self.p["slope_downhill_heading"])
+        elif self._slope:
             a_lat = slope_lateral_acceleration(self.psi, self.p["slope_angle"], self.p["slope_downhill_heading"])
             z += Bd[:, 0] * delta + Bd[:, 1] * a_lat
         else:

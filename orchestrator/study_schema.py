@@ -17,6 +17,9 @@ PORT_NAME = rf"{NAME}{INDEX}(?:\.{NAME}{INDEX})*"
 CONNECTION = re.compile(rf"^\s*({NAME})\.({PORT_NAME})\s*->\s*({NAME})\.({PORT_NAME})\s*$")
 PORT = re.compile(rf"^\s*({NAME})\.({PORT_NAME})\s*$")
 SUBSYSTEM_SUFFIXES = (".toml", ".yaml", ".yml")
+# a bound on a key figure: a comparison and a number, then any words ("< 0.40", ">= 0.99 (target)");
+# a bare number means "==" (orchestrator.key_figures)
+BOUND = re.compile(r"^\s*(<=|>=|==|<|>|=)?\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?![\w.])")
 
 
 class StudySettings(BaseModel):
@@ -32,6 +35,15 @@ class StudySettings(BaseModel):
     analysis: str | None = None
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
+    bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
+
+    @field_validator("bounds")
+    @classmethod
+    def _bounds(cls, value: dict[str, str]) -> dict[str, str]:
+        for key, text in value.items():
+            if not BOUND.match(text):
+                raise ValueError(f"bound {key} = {text!r}: expected a comparison and a number, e.g. '< 0.40' or '>= 0.99'")
+        return value
 
     @model_validator(mode="after")
     def _times(self) -> "StudySettings":
