@@ -48,7 +48,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
     signals = ", ".join(f"{k} {DISPLAY[s][0] * f.rmse_before[k]:.4g} -> {shown(s, f.rmse_after[k], 4)}"
                         for s in f.stages for k in [SIGNALS[s][0]])
-    shown = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
+    fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     fitted = {}
     for p in f.effect.parameters:
         value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
@@ -75,7 +75,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         "n_eff": f.fit.n_eff,
         "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
         "study_option": option_text,
-        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {shown}; "
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {fitted_text}; "
                     f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
         "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
         "_options": options,
