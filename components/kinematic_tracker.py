@@ -13,6 +13,12 @@ with the reference's yaw rate gamma_r as feed-forward; inverting P's kinematics 
 The heading feedback gain drops from v/l_r to v/a (5 -> 1.7 rad/s at 2 m/s for a = 1.2 m), which
 the yaw-rate loop can follow with actuator delay; on a curve the feed-forward keeps the CG on the
 path. v_d is unchanged (P and CG move alike along the heading).
+
+Crab (``lateral_velocity`` v_c, an estimate of the rear axle's sideways velocity: wheel slip on a
+side slope or in a turn; 0 without an estimator that gives it): R moves at v (cos psi, sin psi) +
+v_c (-sin psi, cos psi), so the body-lateral velocity the law asks of the CG is made by the yaw
+rate minus the crab, gamma_fb = (lateral - v_c) / l_r; a steady side force then leaves no
+steady offset (the feedback needs no error to cancel the crab).
 """
 from __future__ import annotations
 
@@ -22,10 +28,11 @@ from typing import Mapping
 from orchestrator.component import Component, inp, out, par
 
 
-def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float) -> tuple[float, float]:
-    """(v_x, gamma) that move the CG with velocity (xdot, ydot) when the rear axle does not slip."""
+def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float, crab: float = 0.0) -> tuple[float, float]:
+    """(v_x, gamma) that move the CG with velocity (xdot, ydot) when the rear axle slips sideways at
+    ``crab`` (left positive; 0: no slip)."""
     c, s = math.cos(psi), math.sin(psi)
-    return c * xdot + s * ydot, (-s * xdot + c * ydot) / l_r
+    return c * xdot + s * ydot, (-s * xdot + c * ydot - crab) / l_r
 
 
 # the ports every tracker shares (kinematic, pure pursuit, Stanley): swappable in a study
@@ -38,6 +45,7 @@ TRACKER_INPUTS = (
     inp("y", "m", 0.0, "estimated CG north position"),
     inp("heading", "rad", 0.0, "estimated yaw angle"),
     inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate gamma_r (feed-forward)"),
+    inp("lateral_velocity", "m/s", 0.0, "estimated crab of the rear axle, left positive (feed-forward; 0: none)"),
 )
 TRACKER_OUTPUTS = (
     out("speed_desired", "m/s", 0.0, "desired speed v_d"),
@@ -94,7 +102,7 @@ class KinematicTracker(Component):
         ex, ey = u["x_ref"] - u["x"], u["y_ref"] - u["y"]
         xdot_d = u["xdot_ref"] + p["k_s"] * math.tanh(p["k_c"] * ex)
         ydot_d = u["ydot_ref"] + p["k_s"] * math.tanh(p["k_c"] * ey)
-        v_d, gamma_d = inverse_kinematics(xdot_d, ydot_d, u["heading"], p["l_r"])
+        v_d, gamma_d = inverse_kinematics(xdot_d, ydot_d, u["heading"], p["l_r"], u["lateral_velocity"])
         share = p["l_r"] / (p["lookahead"] or p["l_r"])      # l_r / a; 1 for the paper's law
         if share != 1.0:
             gamma_d = share * gamma_d + (1.0 - share) * u["yaw_rate_ref"]

@@ -8,7 +8,9 @@ the heading to G - R and D = |G - R|:
 
     kappa = 2 sin(alpha) / D,   gamma_d = v_d kappa,   v_d = v_r + k_s tanh(k_c e_along)
 
-e_along = (ref - CG) . t_r is the along-track error (the reference is time based).
+e_along = (ref - CG) . t_r is the along-track error (the reference is time based). With a crab v_c
+(``lateral_velocity``) R moves along its course psi + beta, beta = atan(v_c / v_r): alpha is taken
+from the course.
 """
 from __future__ import annotations
 
@@ -31,6 +33,11 @@ def along_track(u, p) -> tuple[float, float, float, float, float]:
     return ex, ey, tx, ty, v_d
 
 
+def crab_angle(crab: float, speed: float) -> float:
+    """beta = atan(v_c / v): the course's angle from the heading (0 at rest)."""
+    return math.atan2(crab, speed) if speed > 0.1 else 0.0
+
+
 class PurePursuit(Component):
     sampled = True
     roles = ("tracker",)
@@ -51,7 +58,7 @@ class PurePursuit(Component):
         rx, ry = u["x"] - p["l_r"] * c, u["y"] - p["l_r"] * s
         gx, gy = u["x_ref"] + L_d * tx - rx, u["y_ref"] + L_d * ty - ry
         D = max(math.hypot(gx, gy), 1e-6)
-        alpha = math.atan2(-s * gx + c * gy, c * gx + s * gy)
+        alpha = math.atan2(-s * gx + c * gy, c * gx + s * gy) - crab_angle(u["lateral_velocity"], v_r)
         y["speed_desired"] = v_d
         y["yaw_rate_desired"] = v_d * 2.0 * math.sin(alpha) / D
         y["error_x"], y["error_y"] = ex, ey

@@ -7,7 +7,8 @@ time-based reference, as a drop-in for the kinematic tracker. The front axle F =
     gamma_d = v_d tan(delta) / L,   v_d = v_r + k_s tanh(k_c e_along)
 
 with psi_r the reference heading (of its velocity) and L = l_f + l_r; the wheel angle goes to the
-yaw-rate MPC as the yaw rate it makes (the same steering, estimation and speed stack).
+yaw-rate MPC as the yaw rate it makes (the same steering, estimation and speed stack). With a crab
+(``lateral_velocity``) the heading error is taken from the course, psi_e = psi_r - (psi + beta).
 """
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from orchestrator.component import Component, par
 
 from .kinematic_tracker import (LATERAL_INPUTS, SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS,
                                 static_law)
-from .pure_pursuit import along_track
+from .pure_pursuit import along_track, crab_angle
 
 
 class Stanley(Component):
@@ -39,7 +40,8 @@ class Stanley(Component):
         fx = u["x"] + p["l_f"] * math.cos(psi) - u["x_ref"]
         fy = u["y"] + p["l_f"] * math.sin(psi) - u["y_ref"]
         cross = tx * fy - ty * fx                              # left of the line > 0
-        psi_e = math.atan2(math.sin(math.atan2(ty, tx) - psi), math.cos(math.atan2(ty, tx) - psi))
+        course = psi + crab_angle(u["lateral_velocity"], math.hypot(u["xdot_ref"], u["ydot_ref"]))
+        psi_e = math.atan2(math.sin(math.atan2(ty, tx) - course), math.cos(math.atan2(ty, tx) - course))
         delta = psi_e - math.atan(p["k"] * cross / (p["v_soft"] + max(v_d, 0.0)))
         delta = min(max(delta, -p["steer_limit"]), p["steer_limit"])
         y["speed_desired"] = v_d
