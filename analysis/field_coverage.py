@@ -32,7 +32,7 @@ from fields.planner import HEADLAND, SWATH, TRANSIT, TURN
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .signals import component_named, signal
+from .signals import component_named, runs, signal
 
 STEP = 0.1          # s: the geometry's sampling of the trajectories
 
@@ -295,12 +295,6 @@ def _tractor_gps(study: Study) -> str | None:
     return next((c.source for c in study.connections if c.target == estimator[0] and c.input == "gps_x"), None)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last + 1) of each run of True."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
-
-
 def route_samples(path, until: float) -> dict[str, np.ndarray]:
     """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
     arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
@@ -334,7 +328,7 @@ def _acquisitions(s: pd.DataFrame, route: dict[str, np.ndarray], frames,
         e = np.abs(-d[1] * (x[on] - a[0]) + d[0] * (y[on] - a[1]))
         inside = e < ACQUIRED
         found = math.nan, math.nan
-        for first, last in _runs(inside):
+        for first, last in runs(inside):
             if t[on[last - 1]] - t[on[first]] >= ACQUIRED_HOLD or last == len(on):
                 j0, j1 = on[0], on[first]
                 along = (x[j1] - x[j0]) * d[0] + (y[j1] - y[j0]) * d[1]
@@ -402,9 +396,9 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     watchdog = resolve(study).find(role="watchdog")
     safe = rows[f"{watchdog[0]}.safe_state"].to_numpy() if len(watchdog) == 1 else np.zeros(len(rows))
     t = s["t"].to_numpy()
-    windows = _runs(quality != RTK_FIXED)
+    windows = runs(quality != RTK_FIXED)
     out["outages"] = float(len(windows))
-    stops = [a for a, _ in _runs(safe > 0.5)]
+    stops = [a for a, _ in runs(safe > 0.5)]
     out["guidance_stops"] = float(len(stops))
     if not windows:
         return out

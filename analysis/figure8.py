@@ -9,7 +9,7 @@ import pandas as pd
 
 from orchestrator.study import Study
 
-from .signals import between_samples, rms, sample_rows, signal
+from .signals import between_samples, rms, runs, sample_rows, signal
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
 # straight and below 60 cm on curved time-based trajectories.
@@ -108,12 +108,6 @@ SWEEP_METRICS = {"euclid_max_straight": PAPER_BOUNDS["euclid_max_straight"],
                  "speed_rms_error": None, "yaw_rate_rms_error": None, "steer_angle_rms": None, "steer_rate_rms": None}
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """[(first, last)] index of each run of True in ``mask``."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1))
-
-
 def error_figure(frame: pd.DataFrame, study: Study):
     """The bounded quantity: |CG - reference| (the metrics' error) against time, the paper's bounds
     as lines, curves shaded, the start-up (not judged) hatched, the maxima on straights and curves
@@ -131,8 +125,8 @@ def error_figure(frame: pd.DataFrame, study: Study):
     fig, axes = plt.subplots(2 if zoom else 1, 1, sharex=True, figsize=(8, 6.5 if zoom else 4.5), squeeze=False)
     verdicts = []
     for ax in axes[:, 0]:
-        for k, (a, b) in enumerate(_runs(curved)):
-            ax.axvspan(t[a], t[b], color="C1", alpha=0.15, lw=0, label="curve (bound 0.60 m)" if k == 0 else None)
+        for k, (a, b) in enumerate(runs(curved)):
+            ax.axvspan(t[a], t[b - 1], color="C1", alpha=0.15, lw=0, label="curve (bound 0.60 m)" if k == 0 else None)
         ax.axvspan(t[0], t[start], facecolor="none", edgecolor="0.6", hatch="//", lw=0,
                    label=f"start-up, not judged (t < {t[start]:.0f} s)")
         ax.plot(t, err, color="k", lw=0.9, label="Euclidean error |CG - reference|")

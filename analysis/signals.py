@@ -28,6 +28,12 @@ def signal(frame: pd.DataFrame, study: Study, role: str, port: str) -> np.ndarra
     return frame[column].to_numpy()
 
 
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last + 1) of each run of True in ``mask``."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
 def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else float("nan")
 
