@@ -1,11 +1,11 @@
-"""The README's robust-guidance table: the figure-8 under delays, speeds, masses and yaw models,
+"""The robust-guidance table (docs/guidance-loop.md): the figure-8 under delays, speeds, masses and yaw models,
 with the paper's tracker law and with the shipped one.
 
     python3 benchmarks/robust_guidance.py
 
 Each cell: max Euclidean error straight / curved [m] (the CG against the reference at the same
 instant, analysis.figure8), and the steering rate RMS [deg/s]; in brackets the mean error on
-straights with the reference held between its 20 Hz samples (the figure before issue 28) and the
+straights with the reference held between its 20 Hz samples (the older figure) and the
 honest one.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 16: runs that lose nothing when interrupted or misused (real processes, real signals)."""
+"""Runs that lose nothing when interrupted or misused (real processes, real signals)."""
 from __future__ import annotations
 
 import json
@@ -304,7 +304,7 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["margins", "studies/figure8.toml", "--set", "x=1"], 2, ["'x=1'"]),
     (["emulate", "studies/tractor_emulator.toml", "--nmea-port", "70000"], 2, ["--nmea-port"]),
     (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.base_step=0.003"], 2, ["step"]),
-    # issue 28: an --out whose parent cannot be created; a study's edit of connections it does not have
+    # an --out whose parent cannot be created; a study's edit of connections it does not have
     (["run", "studies/figure8.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
     (["sweep", "studies/speed_sweep.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
     (["diagnose", "{tmp}/degrees.csv", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
@@ -356,16 +356,16 @@ def test_sweep_plots_label_every_axis_with_its_unit(tmp_path, monkeypatch):
     assert labels["steer_rate_rms"] == ("reference.speed [m/s]", "[rad/s]")
 
 
-def test_the_readme_metric_table_uses_the_printed_names():
+def test_the_documented_metric_table_uses_the_printed_names():
     import re
 
     from analysis.figure8 import METRICS
 
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs" / "guidance-loop.md").read_text()
     table = text.split("## What the shipped study gives", 1)[1].split("\n\n", 3)[2]
     names = []
     for row in table.splitlines()[2:]:
-        cell = row.split("|")[1].strip()
+        cell = row.split("|")[1].replace("`", "").strip()
         first = re.sub(r"\(.*?\)", "", cell).split("/")[0].strip()
         if first and first != "wall time":
             names.append(first)
