@@ -83,9 +83,10 @@ def draw_plan(plan: Plan, target: FilePath) -> None:
     for hole in plan.field.boundary.interiors:
         hx, hy = hole.xy
         ax.fill(hx, hy, color="white", edgecolor="#8a3b12", lw=1)
-    ix, iy = plan.inner.exterior.xy
-    ax.plot(ix, iy, "--", color="#7a5c00", lw=1, label=f"headland ({plan.headland_passes} x "
-            f"{plan.settings.working_width:g} m)")
+    for k, piece in enumerate(plan.pieces or [plan.inner]):
+        ix, iy = piece.exterior.xy
+        ax.plot(ix, iy, "--", color="#7a5c00", lw=1, label=None if k else f"headland ({plan.headland_passes} x "
+                f"{plan.settings.working_width:g} m)" + (f"; {len(plan.pieces)} pieces inside" if len(plan.pieces) > 1 else ""))
     styles = {SWATH: ("tab:blue", 1.0, "swath"), TURN: ("tab:red", 0.9, "turn"),
               HEADLAND: ("tab:green", 1.0, "headland pass"), TRANSIT: ("tab:purple", 0.9, "transit")}
     segments = plan.path.segments
