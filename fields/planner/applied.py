@@ -35,6 +35,7 @@ class AsApplied:
     workable: float
     covered_workable: float
     strips: tuple                      # the applied strips (shapely polygons)
+    shape: object = None               # what was covered (their union within the field)
 
     @property
     def field_coverage_share(self) -> float:
@@ -59,7 +60,7 @@ def areas(strips: list, field: Polygon, workable: Polygon) -> AsApplied:
     union = unary_union(strips).intersection(field) if strips else Polygon()     # union first: exactly adjacent
     swept = sum(s.intersection(field).area for s in strips)                       # strips stay seamless
     return AsApplied(field.area, union.area, max(swept - union.area, 0.0), workable.area,
-                     union.intersection(workable).area, tuple(strips))
+                     union.intersection(workable).area, tuple(strips), union)
 
 
 def working_strips(plan) -> list:
@@ -117,3 +118,35 @@ def _block_strips(x: np.ndarray, y: np.ndarray, h: np.ndarray, on: np.ndarray, l
             if math.hypot(sx[-1] - sx[0], sy[-1] - sy[0]) > 1e-6:
                 out.append(LineString(np.column_stack([sx, sy])).buffer(0.5 * (j1 - j0) * w, cap_style="flat"))
     return out
+
+
+def crossings(plan, step: float = 0.25) -> int:
+    """Times the tractor's side (the path's centre line kept ``half_width`` inside) leaves the
+    field or enters a hole or an obstacle: runs of path points, every ``step`` m, outside the field
+    shrunk by the half width (1 cm tolerance)."""
+    from shapely import contains_xy
+
+    inside = plan.field.boundary.buffer(-plan.settings.half_width + 0.01)
+    count, was_in = 0, True
+    for s in plan.path.knots(step, uniform=True):
+        r = plan.path.evaluate(s)
+        ok = contains_xy(inside, r["x"], r["y"])
+        flags = np.concatenate([[was_in], ok])
+        count += int(np.sum(flags[:-1] & ~flags[1:]))
+        was_in = bool(ok[-1])
+    return count
+
+
+def applied_outside(applied: AsApplied, field: Polygon) -> float:
+    """Area [m^2] the implement applied outside the field (beyond the boundary, in holes, on obstacles)."""
+    return float(unary_union(applied.strips).difference(field).area) if applied.strips else 0.0
+
+
+def summary(plan, applied: AsApplied, sections: int) -> dict:
+    """The as-applied figures for plan.json."""
+    return {"sections": sections, "field_coverage_share": round(applied.field_coverage_share, 5),
+            "coverage_share": round(applied.coverage_share, 5), "overlap_share": round(applied.overlap_share, 5),
+            "covered_ha": round(applied.covered / 1e4, 4), "overlap_ha": round(applied.overlap / 1e4, 4),
+            "skipped_ha": round(applied.skipped / 1e4, 4),
+            "applied_outside_m2": round(applied_outside(applied, plan.field.boundary), 2),
+            "boundary_crossings": crossings(plan)}
