@@ -20,7 +20,7 @@ from . import decomposition, headland, route_order, swaths
 from .path import Path
 from .settings import Settings
 from .speed import speed_profile
-from .turns import Joiner, TurnOutside
+from .turns import Joiner, TurnOutside, length_of
 from .types import HEADLAND, SWATH, TRANSIT, TURN, Cell, Route, Swath
 
 MAX_SWATHS = 20_000     # across a field at the fewest: about 1 GB of path (a 60 km wide field of a 3 m implement)
@@ -132,7 +132,36 @@ def _layout(field: Field, settings: Settings, n: int, order: str, skip: int, whe
     rings = headland.headland_passes(field, settings, n) if settings.headland_work and not settings.max_swaths else []
     route = route_order.route(cells, skip, order, settings, rings)
     segments = Joiner(field, settings, n, where, notes, pieces).join(route)
+    if order == "optimised":
+        route, segments = _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces)
     path = Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
     inner = pieces[0] if len(pieces) == 1 else unary_union(pieces)
     return Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
                 path, tuple(notes + widened), tuple(pieces), tuple(angles))
+
+
+def idle_distance(segments) -> float:
+    """Metres driven without working: turns and transits."""
+    return sum(float(length_of(seg.points)) for seg in segments if seg.kind in (TURN, TRANSIT))
+
+
+def _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces):
+    """The solver's order, or a pattern's (boustrophedon; skip where the U-turn needs it) where that,
+    joined by the real turns, drives less without working: the solver's costs are closed-form
+    estimates without the headland transits the joiner may add."""
+    mine = best = idle_distance(segments)
+    chosen = (route, segments, [])
+    for pattern, s in (("boustrophedon", 1),) + ((("skip", skip),) if skip > 1 else ()):
+        other_notes: list[str] = []
+        other = route_order.route(cells, s, pattern, settings, rings)
+        try:
+            other_segments = Joiner(field, settings, n, where, other_notes, pieces).join(other)
+        except FieldError:
+            continue
+        idle = idle_distance(other_segments)
+        notes.append(f"the {pattern} order drives {idle:.0f} m without working, the solver's {mine:.0f} m")
+        if idle < best:
+            best, chosen = idle, (Route(other.passes, other.cell_starts, other.how + " (kept: less idle than the "
+                                        "solver's)"), other_segments, other_notes)
+    notes += [x for x in chosen[2] if x not in notes]
+    return chosen[0], chosen[1]

@@ -125,9 +125,10 @@ class SectionControl:
         self.last: tuple[float, float, float, float] | None = None        # travelled, x, y, heading
 
     def wanted(self, x: float, y: float, heading: float, travelled: float, ahead: float) -> np.ndarray:
-        """Which sections have workable ground not yet worked ``ahead`` m in front of the working point."""
+        """Which sections have workable ground not yet worked ``ahead`` m in front of the working point
+        (and a raster cell more: the cell under the working point is being worked by the section itself)."""
         return open_sections(self.map, np.array([x]), np.array([y]), np.array([heading]), np.array([travelled]),
-                             self.offsets, self.owner, self.layout, ahead)[0]
+                             self.offsets, self.owner, self.layout, ahead + self.map.cell)[0]
 
     def step(self, t: float, travelled: float, x: float, y: float, heading: float, speed: float,
              working: bool) -> np.ndarray:
