@@ -30,6 +30,7 @@ from .settings import Settings
 from .types import Swath
 
 SCALE = 100             # costs in centimetres (the solver takes integers)
+MAX_SEARCH = 4.0        # s of local search at most (route_seconds 0)
 UNREACHABLE = 10.0      # turn radii added to the straight distance where no estimate applies
 
 
@@ -100,6 +101,11 @@ def move_costs(a: np.ndarray, b: np.ndarray, limits: Limits) -> np.ndarray:
     return np.where(np.isfinite(best), best, far)
 
 
+def budget(n: int) -> float:
+    """Seconds of greedy local search for n swaths (the route order's share of a plan's time)."""
+    return min(MAX_SEARCH, 0.5 + 0.004 * n)
+
+
 def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=None, end=None,
           initial: list[int] | None = None) -> tuple[list[Swath], str]:
     """The swaths oriented and in the order the solver finds; ``groups``: each swath's piece of
@@ -142,7 +148,9 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
         params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
         params.time_limit.FromMilliseconds(int(1000 * settings.route_seconds))
     else:
+        # greedy descent, bounded: its full neighbourhoods take minutes from some hundred swaths on
         params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GREEDY_DESCENT
+        params.time_limit.FromMilliseconds(int(1000 * budget(n)))
     if initial is not None:
         routing.CloseModelWithParameters(params)
         first = routing.ReadAssignmentFromRoutes([[int(manager.NodeToIndex(v)) for v in initial]], True)
@@ -158,5 +166,5 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
             out.append(swaths[node // 2] if node % 2 == 0 else swaths[node // 2].reversed())
         index = solution.Value(routing.NextVar(index))
     search = (f"{settings.route_seconds:g} s of guided local search" if settings.route_seconds > 0 else
-              "local search to its optimum")
+              f"greedy local search, at most {budget(n):.1f} s")
     return out, f"optimised (OR-tools routing from the {'skip' if initial else 'cheapest-arc'} order, {search})"

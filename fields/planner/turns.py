@@ -54,8 +54,9 @@ def densified(xy: np.ndarray, step: float = POLYLINE_STEP) -> np.ndarray:
     n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / step).astype(int))
     if n.max() == 1:
         return xy
-    parts = [xy[i] + np.linspace(0.0, 1.0, k + 1)[:-1, None] * d[i] for i, k in enumerate(n)]
-    return np.vstack(parts + [xy[-1:]])
+    chord = np.repeat(np.arange(len(d)), n)                       # each new point's chord
+    share = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
+    return np.vstack([xy[chord] + share[:, None] * d[chord], xy[-1:]])
 
 
 def outside(path: np.ndarray, inside: Polygon) -> np.ndarray | None:
