@@ -4,7 +4,7 @@ with section control (--sections), the tractor's boundary crossings, the distanc
 working (turns and transits) for each route order on one headland, and the plan's time; then the
 time to plan 1,000 swaths (a 3,050 x 150 m strip worked across).
 
-    python3 benchmarks/whole_field.py [--max-ha 30] [--sections 6]
+    python3 benchmarks/whole_field.py [--max-ha 30] [--sections 6] [--headland-corners tight]
 
 The areas are exact (shapely on the applied strips, fields.planner.applied); times are wall
 seconds on a shared machine (CPU seconds beside them).
@@ -27,18 +27,22 @@ from plan_every_field import FILES, REAL
 ORDERS = ("boustrophedon", "skip", "optimised")
 
 
-def one_field(field: Field, sections: int) -> str:
+def one_field(field: Field, sections: int, corners: str) -> str:
     t0, c0 = time.perf_counter(), time.process_time()
-    p = plan(field, Settings())
+    p = plan(field, Settings(headland_corners=corners))
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     whole, cut = as_applied(p), as_applied(p, sections)
     idle = []
-    for order in ORDERS:          # one headland for every order: the auto plan's
+    try:                          # one headland for every order: the widest the orders need
+        n = max(p.headland_passes, plan(field, Settings(order="boustrophedon", headland_corners=corners)).headland_passes)
+    except FieldError:
+        n = p.headland_passes
+    for order in ORDERS:
         try:
-            q = plan(field, Settings(order=order, headland_passes=p.headland_passes))
-            idle.append(f"{idle_distance(q.path.segments):>9.0f}")
+            q = plan(field, Settings(order=order, headland_passes=n, headland_corners=corners))
+            idle.append(f"{idle_distance(q.path.segments):>10.0f}")
         except FieldError:
-            idle.append(f"{'refused':>9}")
+            idle.append(f"{'refused':>10}")
     return (f"{field.area_ha:>8.2f}{len(p.pieces):>4}{100 * whole.field_coverage_share:>9.2f}"
             f"{100 * whole.coverage_share:>8.2f}{100 * whole.overlap_share:>8.2f}{100 * cut.overlap_share:>8.2f}"
             f"{100 * cut.field_coverage_share:>8.2f}{crossings(p):>6}" + "".join(idle) + f"{seconds:>8.1f}{cpu:>7.1f}")
@@ -48,9 +52,10 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--max-ha", type=float, default=30.0, help="fields larger than this are listed, not planned")
     parser.add_argument("--sections", type=int, default=6)
+    parser.add_argument("--headland-corners", default=Settings().headland_corners, choices=("tight", "parallel"))
     args = parser.parse_args()
     print(f"{'file':<26}{'field':<24}{'ha':>8}{'pcs':>4}{'field %':>9}{'work %':>8}{'ovl %':>8}"
-          f"{'ovl S %':>8}{'fld S %':>8}{'cross':>6}" + "".join(f"{o[:9]:>9}" for o in ORDERS) + f"{'plan s':>8}{'cpu s':>7}")
+          f"{'ovl S %':>8}{'fld S %':>8}{'cross':>6}" + "".join(f"{o[:9]:>10}" for o in ORDERS) + f"{'plan s':>8}{'cpu s':>7}")
     print(f"{'':<58}(% of the whole field; S: with {args.sections} sections; idle m without working by order)")
     for name in FILES:
         for field in read_fields(REAL / name):
@@ -59,7 +64,7 @@ def main() -> None:
                 print(f"{label}{field.area_ha:>8.2f}  (larger than --max-ha {args.max_ha:g})", flush=True)
                 continue
             try:
-                print(label + one_field(field, args.sections), flush=True)
+                print(label + one_field(field, args.sections, args.headland_corners), flush=True)
             except FieldError as exc:
                 print(f"{label}{field.area_ha:>8.2f}  refused: {str(exc).split(': ', 2)[-1][:100]}", flush=True)
     strip = Field("1,000 swaths", Polygon([(0, 0), (3050, 0), (3050, 150), (0, 150)]), None, "generated", "local metres")
