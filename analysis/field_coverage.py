@@ -10,7 +10,12 @@
   the implement can reach: fields.planner.headland); covered, overlapping (worked more than once) and
   skipped area, and their shares;
 - boundary crossings: the tractor's CG or the implement leaving the field (must be 0);
-- time and distance on swaths, headland passes and in turns.
+- time and distance on swaths, headland passes and in turns;
+- real ground (ground_metrics): the tractor's cross-track error to the whole route by
+  interpolation (its projection on the route's segments, not the nearest route point), line
+  acquisition after each turn, the cross-track error and the estimator's drift in GNSS outages
+  (the samples whose fix is not RTK fixed), the watchdog's stops, and the time between adjacent
+  passes (pass-to-pass is quoted at an interval: ISO 12188-2 takes 15 min).
 
 Plots: the field coloured by coverage count, the track coloured by cross-track error, and the
 error histograms.
@@ -90,6 +95,19 @@ def _stats(e: np.ndarray) -> tuple[float, float, float]:
     return float(np.sqrt(np.mean(e ** 2))), float(np.percentile(e, 95)), float(e.max())
 
 
+def _thinned(xy: np.ndarray, spacing: float = 0.05) -> np.ndarray:
+    """The points of a track at least ``spacing`` from the last one kept (and its last point): a
+    standing implement's jitter would otherwise make a line GEOS cannot buffer in memory."""
+    keep, last = [0], xy[0]
+    for i in range(1, len(xy)):
+        if abs(xy[i, 0] - last[0]) + abs(xy[i, 1] - last[1]) >= spacing:
+            keep.append(i)
+            last = xy[i]
+    if keep[-1] != len(xy) - 1:
+        keep.append(len(xy) - 1)
+    return xy[keep]
+
+
 def _strips(s: pd.DataFrame, width: float):
     """The implement's swept strips: one per run of working samples."""
     from shapely.geometry import LineString
@@ -98,42 +116,63 @@ def _strips(s: pd.DataFrame, width: float):
     edges = np.diff(np.concatenate([[0], work.astype(int), [0]]))
     strips = []
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        if b - a >= 2:
-            line = LineString(np.column_stack([s["ix"].to_numpy()[a:b], s["iy"].to_numpy()[a:b]]))
+        xy = _thinned(np.column_stack([s["ix"].to_numpy()[a:b], s["iy"].to_numpy()[a:b]]))
+        if len(xy) >= 2:
+            line = LineString(xy)
             strips.append(line.buffer(0.5 * width, cap_style="flat", join_style="round"))
     return strips
 
 
-def _pass_to_pass(s: pd.DataFrame, frames, spacing: float) -> np.ndarray:
-    """Spacing errors between adjacent implement passes (line k and k + 1), 1 m apart along them."""
-    on = (s["impl_segment"].to_numpy() == SWATH)
-    px, py, k_of = s["ix"].to_numpy(), s["iy"].to_numpy(), s["swath"].to_numpy()
+IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a track's columns in _samples
+
+
+def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray, np.ndarray] | None:
+    """The implement's (or the tractor's) track on swath j as (along, across) in ``frame`` (start,
+    direction), sorted along; None with fewer than 10 samples."""
+    a, d = frame
+    px, py, segment = point
+    m = (s[segment].to_numpy() == SWATH) & (s["swath"].to_numpy() == j)
+    if m.sum() < 10:
+        return None
+    rel = np.column_stack([s[px].to_numpy()[m] - a[0], s[py].to_numpy()[m] - a[1]])
+    along, across = rel @ d, rel @ np.array([-d[1], d[0]])
+    order = np.argsort(along)
+    return along[order], across[order]
+
+
+def _gap(one, other) -> np.ndarray:
+    """other's across minus one's, 1 m apart along their common part (interpolated on both)."""
+    if one is None or other is None:
+        return np.zeros(0)
+    lo, hi = max(one[0][0], other[0][0]), min(one[0][-1], other[0][-1])
+    if hi - lo < 2.0:
+        return np.zeros(0)
+    grid = np.arange(lo, hi, 1.0)
+    return np.interp(grid, *other) - np.interp(grid, *one)
+
+
+def _pass_to_pass(s: pd.DataFrame, frames, spacing: float, point=IMPLEMENT) -> np.ndarray:
+    """Spacing errors between adjacent implement (or tractor) passes (line k and k + 1), 1 m apart
+    along them."""
     errors = []
-    keys = sorted(frames)
-    for k in keys:
-        if k + 1 not in frames:
-            continue
-        a, d = frames[k]
-        n = np.array([-d[1], d[0]])
-        tracks = []
-        for j in (k, k + 1):
-            m = on & (k_of == j)
-            if m.sum() < 10:
-                break
-            rel = np.column_stack([px[m] - a[0], py[m] - a[1]])
-            along, across = rel @ d, rel @ n
-            order = np.argsort(along)
-            tracks.append((along[order], across[order]))
-        if len(tracks) < 2:
-            continue
-        lo = max(tracks[0][0][0], tracks[1][0][0])
-        hi = min(tracks[0][0][-1], tracks[1][0][-1])
-        if hi - lo < 2.0:
-            continue
-        grid = np.arange(lo, hi, 1.0)
-        gap = np.interp(grid, *tracks[1]) - np.interp(grid, *tracks[0])
-        errors.append(np.abs(gap) - spacing)
+    for k in sorted(frames):
+        if k + 1 in frames:
+            gap = _gap(_track(s, k, frames[k], point), _track(s, k + 1, frames[k], point))
+            if len(gap):
+                errors.append(np.abs(gap) - spacing)
     return np.concatenate(errors) if errors else np.zeros(0)
+
+
+def repeatability(first: tuple[pd.DataFrame, Study], second: tuple[pd.DataFrame, Study], swath: int) -> np.ndarray:
+    """The same line driven twice (two runs: another day, another realisation of every sensor's
+    errors): the implement's across-track difference between the two tracks of ``swath``, 1 m apart
+    along their common part."""
+    tracks = []
+    for frame, study in (first, second):
+        _, plan, conv, _ = mission(study)
+        frames = _swath_frames(plan, conv)
+        tracks.append(_track(_samples(frame, study), swath, frames[swath]) if swath in frames else None)
+    return _gap(*tracks)
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
@@ -181,6 +220,196 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out["mission_time_s"] = float(s["t"].iloc[-1] - s["t"].iloc[0])
     out["route_done_share"] = float(s["progress"].max())
     out["swaths_planned"] = float(len(plan.swaths))
+    out.update(ground_metrics(frame, study, s, plan, conv, frames))
+    return out
+
+
+# --- real ground: route cross-track by interpolation, line acquisition, GNSS outages ------------------------
+ACQUIRED = 0.05         # m: |XTE| under which a line counts as acquired
+ACQUIRED_HOLD = 2.0     # s: ... and stays so this long (or to the swath's end)
+
+
+def route_cross_track(px: np.ndarray, py: np.ndarray, rx: np.ndarray, ry: np.ndarray, back: float = 2.0,
+                      ahead: float = 10.0) -> tuple[np.ndarray, np.ndarray]:
+    """(signed distance, left positive; arc length) of each point of a track to a route polyline:
+    the foot of the perpendicular on the nearest segment (interpolation, not the nearest route
+    point), searched from the previous point's segment back ``back`` and ahead ``ahead`` metres,
+    so that a turn crossing a swath does not capture the track."""
+    dx, dy = np.diff(rx), np.diff(ry)
+    seg = np.hypot(dx, dy)
+    seg = np.where(seg > 1e-12, seg, 1e-12)
+    s_at = np.concatenate([[0.0], np.cumsum(seg)])
+    step = float(np.median(seg)) if len(seg) else 0.1
+    nb, na = int(back / step) + 1, int(ahead / step) + 2
+    dist, arc = np.full(len(px), np.nan), np.full(len(px), np.nan)
+    j = 0
+    for k in range(len(px)):
+        a, b = max(0, j - nb), min(len(seg), j + na)
+        ux, uy = dx[a:b] / seg[a:b], dy[a:b] / seg[a:b]
+        wx, wy = px[k] - rx[a:b], py[k] - ry[a:b]
+        along = np.clip(wx * ux + wy * uy, 0.0, seg[a:b])
+        ex, ey = wx - along * ux, wy - along * uy
+        i = int(np.argmin(ex * ex + ey * ey))
+        j = a + i
+        side = ux[i] * wy[i] - uy[i] * wx[i]
+        dist[k] = math.copysign(math.hypot(ex[i], ey[i]), side if side != 0 else 1.0)
+        arc[k] = s_at[j] + along[i]
+    return dist, arc
+
+
+class _RowsAt:
+    """The rows of a signal table (a DataFrame or the result's column-wise table) at the sample times
+    ``t``, read a column at a time when asked: ``rows[name]`` (a Series), ``name in rows``."""
+
+    def __init__(self, frame, t: np.ndarray) -> None:
+        self._frame = frame
+        self._idx = np.clip(np.searchsorted(frame["t"].to_numpy(), t - 1e-9), 0, len(frame) - 1)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._frame
+
+    def __getitem__(self, name: str) -> pd.Series:
+        return pd.Series(self._frame[name].to_numpy()[self._idx])
+
+    def __len__(self) -> int:
+        return len(self._idx)
+
+
+def _tractor_gps(study: Study) -> str | None:
+    """The receiver whose fixes the pose estimator reads (a study may have one on the implement too)."""
+    estimator = resolve(study).find(role="pose_estimator")
+    if len(estimator) != 1:
+        return None
+    return next((c.source for c in study.connections if c.target == estimator[0] and c.input == "gps_x"), None)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last + 1) of each run of True."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def route_samples(path, until: float) -> dict[str, np.ndarray]:
+    """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
+    arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
+    from fields.planner.sampling import ROUTE_STEP
+
+    stop = min(path.grid_size(ROUTE_STEP), int(math.ceil(max(until, 0.0) / ROUTE_STEP)) + 2)
+    return path.grid(0, stop, ROUTE_STEP)
+
+
+def _acquisitions(s: pd.DataFrame, route: dict[str, np.ndarray], frames,
+                  path_length: np.ndarray) -> list[tuple[float, float]]:
+    """(distance, time) from the end of each turn (where the route straightens before a swath) until
+    the tractor's CG is within ACQUIRED of the swath's line and stays so for ACQUIRED_HOLD (or to the
+    swath's end); NaN when it never does. The first swath, entered from rest, is not a turn's.
+    ``route``: route_samples of the driven part."""
+    kind, index, kappa, arc = route["kind"], route["index"], route["curvature"], route["s"]
+    t, x, y = s["t"].to_numpy(), s["x"].to_numpy(), s["y"].to_numpy()
+    out = []
+    firsts = [int(np.flatnonzero((kind == SWATH) & (index == k))[0]) for k in frames
+              if np.any((kind == SWATH) & (index == k))]
+    for i_swath in sorted(firsts)[1:]:
+        k = int(index[i_swath])
+        i = i_swath
+        while i > 0 and kind[i - 1] == TURN and abs(kappa[i - 1]) < 1e-3:
+            i -= 1
+        s_start, s_end = arc[i], arc[min(len(arc) - 1, i_swath + int(np.sum((kind == SWATH) & (index == k))) - 1)]
+        on = np.flatnonzero((path_length >= s_start) & (path_length <= s_end))
+        if len(on) < 2:
+            continue
+        a, d = frames[k]
+        e = np.abs(-d[1] * (x[on] - a[0]) + d[0] * (y[on] - a[1]))
+        inside = e < ACQUIRED
+        found = math.nan, math.nan
+        for first, last in _runs(inside):
+            if t[on[last - 1]] - t[on[first]] >= ACQUIRED_HOLD or last == len(on):
+                j0, j1 = on[0], on[first]
+                along = (x[j1] - x[j0]) * d[0] + (y[j1] - y[j0]) * d[1]
+                found = float(along), float(t[j1] - t[j0])
+                break
+        out.append(found)
+    return out
+
+
+def ground_metrics(frame: pd.DataFrame, study: Study, s: pd.DataFrame, plan, conv, frames) -> dict[str, float]:
+    """Route cross-track error by interpolation, line acquisition, GNSS outages, guidance stops and
+    the interval between adjacent passes (see the module's docstring)."""
+    out: dict[str, float] = {}
+    rows = _RowsAt(frame, s["t"].to_numpy())
+    name = component_named(study, "route")
+    path_length = rows[f"{name}.path_length"].to_numpy()
+    route = route_samples(plan.path, float(np.max(path_length, initial=0.0)) + 20.0)
+    rxy = conv(np.column_stack([route["x"], route["y"]]))
+    x, y = s["x"].to_numpy(), s["y"].to_numpy()
+    xte, _ = route_cross_track(x, y, rxy[:, 0], rxy[:, 1])
+    rms, p95, mx = _stats(xte)
+    out.update(route_xte_rms_m=rms, route_xte_p95_m=p95, route_xte_max_m=mx)
+    acq = np.array(_acquisitions(s, route, frames, path_length), float).reshape(-1, 2)
+    if len(acq):
+        ok = np.isfinite(acq[:, 0])
+        out["line_acquisitions"] = float(len(acq))
+        out["line_acquisition_failures"] = float(np.sum(~ok))
+        out["line_acquisition_p95_m"] = float(np.percentile(acq[ok, 0], 95)) if ok.any() else math.nan
+        out["line_acquisition_p95_s"] = float(np.percentile(acq[ok, 1], 95)) if ok.any() else math.nan
+        out["line_acquisition_max_m"] = float(np.max(acq[ok, 0])) if ok.any() else math.nan
+    # time between adjacent passes: their starts (the implement entering each swath)
+    iseg, sw, t = s["impl_segment"].to_numpy(), s["swath"].to_numpy(), s["t"].to_numpy()
+    starts = {}
+    for k in frames:
+        on = np.flatnonzero((iseg == SWATH) & (sw == k))
+        if len(on):
+            starts[k] = t[on[0]]
+    gaps = [abs(starts[k + 1] - starts[k]) for k in starts if k + 1 in starts]
+    if gaps:
+        out["pass_to_pass_interval_s"] = float(np.median(gaps))
+    # ISO 12188-2 takes a point of the vehicle: the tractor's CG passes too
+    p2p = _pass_to_pass(s, frames, plan.settings.working_width - plan.settings.overlap, TRACTOR)
+    out["tractor_pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
+    out.update(_outage_metrics(rows, study, s, xte))
+    return out
+
+
+def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarray) -> dict[str, float]:
+    """Per stretch without an RTK fix: its length, the true cross-track error at its end and at most,
+    the estimate's drift at its end (estimated CG - true CG: horizontal, as receivers quote their
+    accuracy, and across the tractor's heading, what guidance feels), and when the watchdog stopped
+    the tractor in it."""
+    from components.hardware.nmea import RTK_FIXED
+
+    out: dict[str, float] = {}
+    gps = _tractor_gps(study)
+    if gps is None or f"{gps}.fix_quality" not in rows:
+        return out
+    quality = rows[f"{gps}.fix_quality"].to_numpy()
+    estimator = component_named(study, "pose_estimator")
+    ex, ey = rows[f"{estimator}.x_cg"].to_numpy(), rows[f"{estimator}.y_cg"].to_numpy()
+    heading = signal(rows, study, "yaw_plant", "heading")
+    dx, dy = ex - s["x"].to_numpy(), ey - s["y"].to_numpy()
+    drift, across = np.hypot(dx, dy), -np.sin(heading) * dx + np.cos(heading) * dy
+    watchdog = resolve(study).find(role="watchdog")
+    safe = rows[f"{watchdog[0]}.safe_state"].to_numpy() if len(watchdog) == 1 else np.zeros(len(rows))
+    t = s["t"].to_numpy()
+    windows = _runs(quality != RTK_FIXED)
+    out["outages"] = float(len(windows))
+    stops = [a for a, _ in _runs(safe > 0.5)]
+    out["guidance_stops"] = float(len(stops))
+    if not windows:
+        return out
+    in_outage = np.zeros(len(t), bool)
+    for k, (a, b) in enumerate(windows, 1):
+        in_outage[a:b] = True
+        end = b - 1
+        out[f"outage_{k}_start_s"] = float(t[a])
+        out[f"outage_{k}_duration_s"] = float(t[end] - t[a] + (t[1] - t[0] if len(t) > 1 else 0.0))
+        out[f"outage_{k}_quality"] = float(np.max(quality[a:b]))
+        out[f"outage_{k}_xte_end_m"] = float(abs(xte[end]))
+        out[f"outage_{k}_drift_m"] = float(drift[end])
+        out[f"outage_{k}_drift_across_m"] = float(abs(across[end]))
+        stopped = np.flatnonzero(safe[a:b] > 0.5)
+        out[f"outage_{k}_stopped_after_s"] = float(t[a + stopped[0]] - t[a]) if len(stopped) else math.nan
+    out["xte_max_in_outage_m"] = float(np.nanmax(np.abs(xte[in_outage])))
+    out["outage_drift_max_m"] = float(max(out[f"outage_{k}_drift_m"] for k in range(1, len(windows) + 1)))
     return out
 
 
@@ -190,13 +419,20 @@ METRICS = {"field_coverage_share": ("1", ">= 0.99 (of the whole field)"), "cover
            "implement_xte_p95_m": ("m", "<= 0.05 (RTK class +-0.025)"), "pass_to_pass_p95_m": ("m", None),
            "tractor_xte_rms_m": ("m", None), "implement_xte_rms_m": ("m", None), "implement_xte_max_m": ("m", None),
            "swath_time_s": ("s", None), "turn_time_s": ("s", None), "headland_time_s": ("s", None),
-           "mission_time_s": ("s", None), "wall_time_s": ("s", None)}
+           "mission_time_s": ("s", None), "wall_time_s": ("s", None),
+           "route_xte_p95_m": ("m", None), "line_acquisition_p95_m": ("m", None), "line_acquisition_p95_s": ("s", None),
+           "pass_to_pass_interval_s": ("s", None), "tractor_pass_to_pass_p95_m": ("m", None),
+           "xte_max_in_outage_m": ("m", None),
+           "outage_drift_max_m": ("m", None), "guidance_stops": ("count", None)}
 METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 **{f"{kind}_{q}": unit for kind in ("swath", "headland", "turn", "transit")
                    for q, unit in (("time_s", "s"), ("distance_m", "m"))},
                 **{k: "m" for k in ("tractor_xte_max_m", "pass_to_pass_mean_m")},
                 **{k: "m2" for k in ("covered_area_m2", "overlap_area_m2", "workable_area_m2", "field_area_m2")},
-                "route_done_share": "1", "swaths_planned": "count", "events": "count"}
+                "route_done_share": "1", "swaths_planned": "count", "events": "count",
+                **{k: "m" for k in ("route_xte_rms_m", "route_xte_max_m", "line_acquisition_max_m")},
+                **{k: "count" for k in ("line_acquisitions", "line_acquisition_failures", "outages")}}
+
 
 
 def summary(values: dict[str, float]) -> str:

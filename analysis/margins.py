@@ -1,189 +1,520 @@
-"""Stability margins of the figure-8 guidance loop, linearised with python-control, against the
-delay at which the simulated figure-8 leaves the paper's bounds (issue 19, item 4).
+"""Gain, phase and delay margins of a study's guidance loop, from its own components
+(analysis.loop_models), and the delay at which its simulation loses stability.
 
-Linear model at the reference speed v, every block taken from the study through its roles:
+The loop is linearised on a straight at each operating point the reference declares (the figure-8:
+its speed; a field route: the work and turn speeds) and opened at three places:
 
-- yaw-rate MPC without active constraints is a linear controller (models.condensed_mpc): the first
-  move du_0 = K [x_k; u_{k-1}; gamma_k - gamma_d] with K = -(H^-1 G)[0]; its model state follows the
-  measured wheel angle, x_k = A x_{k-1} + B delta_k; u_k = u_{k-1} + du_0;
-- the steering as its closed-loop first-order equivalent 1/(tau s + 1) (models.steering_equivalent)
-  with the study's command delay; the yaw plant's model at v (models.yaw_dynamics); both held over
-  the MPC step (zero-order hold);
-- the path loop on a straight, linearised: psi' = gamma, e' = v psi + l_r gamma (the CG's lateral
-  offset), and the tracker's law gamma_d = -(v psi + k_s k_c e) / a (a the look-ahead, l_r for the
-  paper's law).
+- the steering command (the whole loop: yaw-rate and path loops closed): its delay margin is the
+  extra actuator delay the loop tolerates, the number the simulation checks;
+- the steering command with the path loop held open (the yaw-rate loop alone);
+- the yaw-rate command between tracker and yaw-rate controller (the path loop, the yaw-rate loop
+  closed inside): the margins of the tracker's gains.
 
-Yaw-rate loop: broken at the steering command. Path loop: broken at gamma_d, with the yaw-rate loop
-closed inside. On a curve of the figure-8 the linearised loops are the same (the reference yaw rate
-enters as feed-forward, the plant is linear in the wheel angle at fixed speed), so one set of margins
-holds for both. Delay margin = phase margin / crossover frequency: the extra actuator delay the
-linear loop tolerates.
+Convention: L = -G with G the return of the opened loop (z = G w), closed by w = z, so the
+closed loop is stable when L's Nyquist curve leaves -1 where the Nyquist criterion says. Phase
+margin = 180 deg + arg L at a gain crossover |L| = 1; delay margin = the smallest (phase margin +
+2 pi k) / crossover over the crossovers; gain margin = 1 / |L| where L crosses the negative real
+axis inside the unit circle (a reduction where it crosses outside). Besides the frequency response,
+the delay at which the closed-loop poles leave the unit circle is found directly (the steering's
+command delay raised in whole steps): a second method for the delay limit.
+
+A time-based reference (the figure-8) leaves the tracker an along-track error that the speed loop
+sets (its steady speed excess v_d - v): it is read from a short run of the study and enters the
+trackers' linearisations (it raises v_d, and so the heading gain).
+
+Simulated check: the study run twice with the steering command delayed by d, the second time with
+the tractor started OFFSET to the side (the same seed: the same noise); the loop is stable when the
+two runs' cross-track errors (the tracker's error, reference - CG, across the reference's
+direction) have come together: their difference (RMS) below a quarter of the offset where both
+runs are on a straight in the second half
+of the run (its later half; the last quarter of the run when that is under 5 s). An unstable loop
+keeps them apart (its oscillation grows until a saturation, the steering's or the tracker's tanh,
+bounds it), a stable one pulls both onto the reference; the difference of the two runs removes the
+course's own excitation. Across, on the straights, because that is where the margins are computed,
+and because on a route followed by arc length the two tractors may settle a little apart along it
+(nothing pulls them back along the path; the route point also steps by its 0.1 m spacing): on a
+straight that changes nothing across it, in a turn it shifts when each slows down. A fast instability (near the yaw-rate loop's
+phase crossover) moves the CG little: it shows as the steering command sitting at the yaw-rate
+controller's angle or rate bound on more than a tenth of its samples (a stable run touches the
+rate bound at the junctions of the path only, under 3 %).
 """
 from __future__ import annotations
 
 import math
-import warnings
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
+from typing import Callable
 
-import control as ct
 import numpy as np
 
-from components.models.condensed_mpc import CondensedTrackingMPC
-from components.models.steering_equivalent import FirstOrderSteering
-from components.models.yaw_dynamics import TractorParameters, controllable_canonical, state_space
 from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
 from orchestrator.study import Study
 
-from .figure8 import PAPER_BOUNDS
+from .loop_models import NoLinearModel, OpenLoop, OperatingPoint, network_of
+
+OFFSET = 0.3                  # m: the second run's tractor starts this far to the side
+CONVERGED = 0.25              # stable: RMS difference of the two runs' cross-track errors at the end < CONVERGED x OFFSET
+SATURATED = 0.10              # unstable: the steering command at its angle or rate bound on more of its samples
+TRIM_TIME = 40.0              # s of the study run to read the speed loop's steady excess
+STABLE_RADIUS = 1.0 + 1e-9
 
 
 @dataclass
 class Margins:
-    gain: float              # gain margin (factor); inf when the phase never reaches -180 deg
-    phase_deg: float         # phase margin; inf when |L| never crosses 1
-    crossover: float         # gain crossover [rad/s] (nan without one)
-    delay: float             # delay margin [s] = phase margin / crossover (inf without a crossover)
+    gain: float                   # gain margin (factor > 1); inf when L never crosses the real axis in (-1, 0)
+    gain_reduction: float | None  # factor < 1 below which the loop is unstable (conditionally stable), or None
+    phase_deg: float              # smallest phase margin over the gain crossovers; inf without one
+    crossover: float              # the gain crossover [rad/s] that sets the delay margin (nan without one)
+    delay: float                  # delay margin [s] (inf without a crossover)
+    phase_crossover: float        # where the gain margin is read [rad/s] (nan without one)
+
+    @property
+    def gain_db(self) -> float:
+        if self.gain <= 0.0:
+            return -math.inf
+        return 20.0 * math.log10(self.gain) if np.isfinite(self.gain) else math.inf
 
 
-def _margins(L) -> Margins:
-    """Margins from L's frequency response (python-control) on a dense grid up to Nyquist: the
-    first gain crossover (|L| falls through 1) gives the phase and delay margins, the first phase
-    crossover (-180 deg) above it the gain margin. (stability_margins' polynomial method is inaccurate on
-    the path loop's double integrator at z = 1.)"""
-    w = np.logspace(-2, math.log10(0.999 * math.pi / L.dt), 20000)
-    with np.errstate(all="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore")               # the integrators' z = 1 is not on the grid
-        resp = ct.frequency_response(L, w)
-    mag, phase = np.asarray(resp.magnitude).ravel(), np.asarray(resp.phase).ravel()
-    finite = np.isfinite(mag) & np.isfinite(phase)
-    w, mag, phase = w[finite], mag[finite], np.unwrap(phase[finite])
-    phase -= 2 * math.pi * math.ceil(phase[0] / (2 * math.pi))   # start in (-360, 0] deg
-    down = np.flatnonzero((mag[:-1] >= 1.0) & (mag[1:] < 1.0))
-    if len(down):
-        i = down[0]
-        f = (mag[i] - 1.0) / (mag[i] - mag[i + 1])
-        wc = w[i] + f * (w[i + 1] - w[i])
-        pm = math.degrees(phase[i] + f * (phase[i + 1] - phase[i])) + 180.0
-        delay = math.radians(pm) / wc
+def _refine(f: Callable[[float], float], a: float, b: float) -> float:
+    from scipy.optimize import brentq
+
+    return brentq(f, a, b, xtol=1e-10, rtol=1e-10)
+
+
+def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margins:
+    """Margins of L = -G from its frequency response on ``points`` frequencies up to the period's
+    Nyquist frequency, each crossing refined by root finding."""
+    w_max = 0.999 * math.pi / loop.dt
+    w = np.logspace(math.log10(w_min), math.log10(w_max), points)
+    L = -loop.response(w)
+
+    def at(x: float) -> complex:
+        return complex(-loop.response(np.array([x]))[0])
+
+    mag = np.abs(L)
+    best_pm, best_delay, wc = math.inf, math.inf, math.nan
+    for i in np.flatnonzero(np.sign(mag[:-1] - 1.0) != np.sign(mag[1:] - 1.0)):
+        x = _refine(lambda v: abs(at(v)) - 1.0, w[i], w[i + 1])
+        lag = (np.angle(at(x)) + math.pi) % (2 * math.pi)          # 180 deg + arg L, in [0, 2 pi)
+        pm = math.degrees(lag if lag <= math.pi else lag - 2 * math.pi)
+        best_pm = min(best_pm, pm)
+        if lag / x < best_delay:
+            best_delay, wc = lag / x, x
+    gain, reduction, wp = math.inf, None, math.nan
+    crossings = []
+    for i in np.flatnonzero(np.sign(L.imag[:-1]) != np.sign(L.imag[1:])):
+        if L.real[i] >= 0 and L.real[i + 1] >= 0:
+            continue
+        x = _refine(lambda v: at(v).imag, w[i], w[i + 1])
+        crossings.append((x, at(x).real))
+    # L is real at w = 0 and at the Nyquist frequency: a loop that sits on the negative real axis
+    # there (a sign-reversed static gain, a lag of 180 deg at pi/dt) crosses it without a sign change
+    # (the lowest frequency of the grid stands for z = 1, a pole of the integrators)
+    ends = [(0.0, L[0])]
+    try:
+        ends.append((math.pi / loop.dt, at(math.pi / loop.dt)))
+    except np.linalg.LinAlgError:                    # a pole at z = -1: no finite crossing there
+        pass
+    crossings += [(x, v.real) for x, v in ends if np.isfinite(v) and abs(v.imag) <= 1e-2 * abs(v) and -1.0 < v.real < 0]
+    for x, re in crossings:
+        if re >= 0:
+            continue
+        if re > -1.0 and 1.0 / -re < gain:
+            gain, wp = 1.0 / -re, x
+        elif re < -1.0:
+            reduction = max(reduction or 0.0, 1.0 / -re)
+    return Margins(gain, reduction, best_pm, wc, best_delay, wp)
+
+
+# --- the loop's anatomy in a study ----------------------------------------------------------
+
+@dataclass
+class Anatomy:
+    """Where the loop is opened and how its actuator delay is set."""
+
+    steering_break: tuple[str, str]          # (component, input) that receives the steering command
+    path_break: tuple[str, str]              # (component, input) that receives the tracker's yaw-rate command
+    delay_key: str                           # the study value of the steering's command delay
+    own_delay: float                         # its value in the study [s]
+    delay_step: float                        # the steering's step (the delay's resolution) [s]
+    tracker: str
+    reference: str
+    offset_key: str                          # the yaw plant's initial north position (simulated check)
+    own_offset: float
+    command_signal: str = ""                 # recorded steering command (component.output)
+    command_step: float = 0.05               # its sample time [s]
+    steer_limit: float = math.inf            # the yaw-rate controller's bounds on it [rad], [rad/s]
+    steer_rate_limit: float = math.inf
+
+
+def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, float]:
+    """(break, delay key, own delay, step) of the steering, at the top level or inside a subsystem."""
+    from orchestrator.composite import CompositeComponent
+
+    model = resolve(study)
+    found = model.find(role="steering")
+    if len(found) == 1:
+        name = found[0]
+        step = study.components[name].step or study.study.base_step
+        return (name, "steer_angle_cmd"), f"{name}.command_delay", float(model.parameters(name)["command_delay"]), step
+    if len(found) > 1:
+        raise NoLinearModel(f"{study.where}: {purpose}: more than one steering component ({', '.join(found)})")
+    for name in study.components:
+        cls = model.component_class(name)
+        if not issubclass(cls, CompositeComponent):
+            continue
+        inner = cls.subsystem
+        inner_model = cls.resolver.resolve(inner)
+        steering = inner_model.find(role="steering")
+        if len(steering) != 1:
+            continue
+        for port in inner.exports.inputs:
+            if (steering[0], "steer_angle_cmd") in [tuple(t) for t in inner.exports.input_targets(port)]:
+                key = f"{steering[0]}.command_delay"
+                value = model.parameters(name).get(key)
+                own = float(value if value is not None else inner_model.parameters(steering[0])["command_delay"])
+                step = inner.components[steering[0]].step or inner.study.base_step
+                return (name, port), f"{name}.{key}", own, step
+    hardware = [n for n in model.find(role="tractor") if not issubclass(model.component_class(n), CompositeComponent)]
+    if hardware:
+        raise NoLinearModel(f"{study.where}: {purpose}: the tractor {hardware[0]!r} "
+                            f"({study.components[hardware[0]].type}) is hardware: there is no model of it to derive "
+                            f"margins from (its simulated twin has one, e.g. studies/figure8_hardware_layout.toml)")
+    raise NoLinearModel(f"{study.where}: {purpose}: no steering component (role 'steering'): no steering loop to analyse")
+
+
+def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
+    """Find the loop's parts by role; a NoLinearModel (exit 2) says why a study has no loop."""
+    steering_break, delay_key, own, step = _steering(study, purpose)
+    model = resolve(study)
+    trackers = model.find(role="tracker")
+    if len(trackers) != 1:
+        fed = {(c.target, c.input): c for c in study.connections}.get(steering_break)
+        source = f"; its steering command comes from {fed.source}.{fed.output}" if fed else \
+            "; its steering command is an input of the study (a subsystem's export)" if study.exports else ""
+        raise NoLinearModel(f"{study.where}: {purpose}: no closed guidance loop: "
+                            + ("no tracker (role 'tracker') steers the tractor" if not trackers
+                               else f"{len(trackers)} trackers ({', '.join(trackers)})") + source)
+    tracker = trackers[0]
+    targets = [(c.target, c.input) for c in study.connections if c.source == tracker and c.output == "yaw_rate_desired"]
+    if len(targets) != 1:
+        raise NoLinearModel(f"{study.where}: {purpose}: {tracker}.yaw_rate_desired drives {len(targets)} inputs, expected one")
+    references = [n for n in model.find(role="reference") if hasattr(model.component_class(n), "operating_points")]
+    if len(references) != 1:
+        raise NoLinearModel(f"{study.where}: {purpose}: expected one reference that declares its operating points "
+                            f"(role 'reference'), found {len(references)}")
+    plant = _plant(study, purpose)
+    fed = {(c.target, c.input): c for c in study.connections}.get(steering_break)
+    command = f"{fed.source}.{fed.output}" if fed else ""
+    command_step = (study.components[fed.source].step or study.study.base_step) if fed else study.study.base_step
+    limits = {}
+    controllers = model.find(role="yaw_rate_controller")
+    if len(controllers) == 1:
+        p = model.parameters(controllers[0])
+        limits = {"steer_limit": float(p["steer_limit"]), "steer_rate_limit": float(p["steer_rate_limit"])}
+    return Anatomy(steering_break, targets[0], delay_key, own, step, tracker, references[0], *plant, command,
+                   command_step, **limits)
+
+
+def _plant(study: Study, purpose: str) -> tuple[str, float]:
+    """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
+    from orchestrator.composite import CompositeComponent
+
+    model = resolve(study)
+    plants = model.find(role="yaw_plant")
+    if len(plants) == 1:
+        return f"{plants[0]}.y0", float(model.parameters(plants[0])["y0"])
+    for name in study.components:
+        cls = model.component_class(name)
+        if not issubclass(cls, CompositeComponent):
+            continue
+        inner = cls.resolver.resolve(cls.subsystem)
+        if len(inner.find(role="yaw_plant")) == 1:
+            plant = inner.find(role="yaw_plant")[0]
+            value = model.parameters(name).get(f"{plant}.y0")
+            return f"{name}.{plant}.y0", float(value if value is not None else inner.parameters(plant)["y0"])
+    raise NoLinearModel(f"{study.where}: {purpose}: no yaw plant (role 'yaw_plant')")
+
+
+# --- analysis -------------------------------------------------------------------------------
+
+@dataclass
+class PointResult:
+    op: OperatingPoint
+    loops: dict[str, Margins]
+    open_loops: dict[str, OpenLoop]
+    stable: bool                              # the closed loop at the study's values
+    delay_limit: float                        # total steering command delay at which the poles leave the unit circle [s]
+    speed_excess: float | None = None         # v_d - v read from the trim run (time-based reference)
+
+
+@dataclass
+class Analysis:
+    study: Study
+    anatomy: Anatomy
+    points: list[PointResult]
+    notes: list[str] = field(default_factory=list)
+
+
+LOOPS = {"whole loop": "steering command", "yaw-rate loop": "steering command, path held", "path loop": "yaw-rate command"}
+
+
+def open_loops(study: Study, an: Anatomy, op: OperatingPoint) -> dict[str, OpenLoop]:
+    net = network_of(study, op)
+    return {"whole loop": net.opened_at([an.steering_break]),
+            "yaw-rate loop": net.opened_at([an.steering_break], zeroed=[an.path_break]),
+            "path loop": net.opened_at([an.path_break])}
+
+
+def stable(study: Study, an: Anatomy, op: OperatingPoint, delay: float | None = None) -> bool:
+    """The closed loop's poles inside the unit circle, with the steering command delayed by
+    ``delay`` in all (None: the study's own)."""
+    if delay is not None:
+        study = study.with_values({an.delay_key: delay})
+    return network_of(study, op).opened_at([an.steering_break]).spectral_radius() < STABLE_RADIUS
+
+
+def pole_delay_limit(study: Study, an: Anatomy, op: OperatingPoint, guess: float) -> float:
+    """The smallest steering command delay (whole steering steps) at which the closed loop has a pole
+    outside the unit circle; inf when none up to 10 s."""
+    h = an.delay_step
+    lo = int(round(an.own_delay / h))
+    hi = max(lo + 1, int(math.ceil(guess / h)) + 1)
+    while stable(study, an, op, hi * h):
+        lo, hi = hi, 2 * hi
+        if hi * h > 10.0:
+            return math.inf
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if stable(study, an, op, mid * h) else (lo, mid)
+    return hi * h
+
+
+def speed_excess(study: Study, an: Anatomy, duration: float = TRIM_TIME) -> float:
+    """v_d - v on the reference after its start: the median over the last quarter of a short run
+    (the speed loop's steady excess, which sets a time-based tracker's along-track error)."""
+    frame = simulate(study, duration)
+    t = frame["t"].to_numpy()
+    v_d = frame[f"{an.tracker}.speed_desired"].to_numpy()
+    v_r = frame[f"{an.reference}.speed_ref"].to_numpy() if f"{an.reference}.speed_ref" in frame else None
+    if v_r is None:
+        raise NoLinearModel(f"{study.where}: the reference {an.reference!r} records no speed_ref")
+    window = (t >= 0.75 * t[-1]) & (v_r > 0.99 * np.max(v_r))
+    return float(np.median(v_d[window] - v_r[window])) if window.any() else 0.0
+
+
+def analyse(study: Study, speed_excess_value: float | None = None, progress: Callable[[str], None] | None = None) -> Analysis:
+    """Margins at every operating point of the study's reference."""
+    from components.kinematic_tracker import trim_along_track_error
+
+    an = anatomy(study)
+    notes = []
+    if study.sweep is not None:
+        notes.append(f"this study sweeps {', '.join(study.sweep.parameters)} ({study.sweep.mode}): the margins are at "
+                     f"its own values; a point's with --set NAME=VALUE")
+    points = []
+    model = resolve(study)
+    system_reference = model.component_class(an.reference)(an.reference, model.parameters(an.reference))
+    tracker_p = model.parameters(an.tracker)
+    for label, spec in system_reference.operating_points().items():
+        excess = None
+        e = spec["along_track_error"]
+        if e is None:
+            if "k_s" not in tracker_p or "k_c" not in tracker_p:
+                raise NoLinearModel(f"{study.where}: the margins: the reference {an.reference!r} is time based and the "
+                                    f"tracker {an.tracker!r} has no speed law v_d = v_r + k_s tanh(k_c e) to place its "
+                                    f"along-track error")
+            if speed_excess_value is None:
+                if progress:
+                    progress(f"reading the speed loop's steady excess from a {TRIM_TIME:.0f} s run ...")
+                speed_excess_value = speed_excess(study, an)
+            excess = speed_excess_value
+            e = trim_along_track_error(tracker_p, excess)
+            notes.append(f"{label}: time-based reference: the speed loop leaves v_d - v = {excess:+.3f} m/s, "
+                         f"an along-track error of {e:.3f} m (tracker's speed law)")
+        if spec.get("turn_radius"):
+            notes.append(f"{label}: linearised on a straight; its curves of {spec['turn_radius']:g} m radius are not "
+                         f"(--simulate checks the course)")
+        op = OperatingPoint(float(spec["speed"]), float(e), label)
+        loops = open_loops(study, an, op)
+        margins = {name: margins_of(loop) for name, loop in loops.items()}
+        ok = loops["whole loop"].spectral_radius() < STABLE_RADIUS
+        whole = margins["whole loop"]
+        guess = an.own_delay + (whole.delay if np.isfinite(whole.delay) else 1.0)
+        limit = pole_delay_limit(study, an, op, guess) if ok else an.own_delay
+        points.append(PointResult(op, margins, loops, ok, limit, excess))
+    return Analysis(study, an, points, notes)
+
+
+# --- simulation ------------------------------------------------------------------------------
+
+def simulate(study: Study, duration: float):
+    """The study's signals over its first ``duration`` seconds (in memory)."""
+    from orchestrator.build import build_system
+    from orchestrator.engine import Simulation
+
+    study = study.with_values({"study.stop_time": min(study.study.stop_time, study.study.start_time + duration)})
+    return Simulation(build_system(resolve(study))).run().to_frame()
+
+
+@dataclass
+class SimulatedRun:
+    delay: float
+    separation: float             # RMS difference of the two runs' cross-track errors at the end (straights) [m]
+    saturated: float              # share of the steering command's samples at its angle or rate bound
+    wall_time: float
+
+    @property
+    def stable(self) -> bool:
+        return self.separation < CONVERGED * OFFSET and self.saturated <= SATURATED
+
+    def describe(self) -> str:
+        return (f"{'stable' if self.stable else 'LOST STABILITY'} (cross-track errors of the runs started {OFFSET:g} m "
+                f"apart end {self.separation:.3f} m apart; steering command at a bound {100 * self.saturated:.1f} % "
+                f"of the time; {self.wall_time:.1f} s)")
+
+
+def saturated_share(frame, study: Study, an: Anatomy, settle: float = 15.0) -> float:
+    """Share of the steering command's samples after ``settle`` s at its angle bound or moved by
+    its rate bound (98 %)."""
+    if not an.command_signal or an.command_signal not in frame:
+        return 0.0
+    t = frame["t"].to_numpy()
+    k = (t - study.study.start_time) / an.command_step
+    own = np.abs(k - np.round(k)) < 1e-6
+    t, u = t[own], frame[an.command_signal].to_numpy()[own]
+    at_bound = (np.abs(u[1:]) >= 0.98 * an.steer_limit) | \
+        (np.abs(np.diff(u)) >= 0.98 * an.steer_rate_limit * an.command_step)
+    window = t[1:] > t[0] + min(settle, 0.5 * (t[-1] - t[0]))
+    return float(np.mean(at_bound[window])) if window.any() else 0.0
+
+
+def cross_track_error(frame, an: Anatomy) -> np.ndarray:
+    """The tracker's error (reference - CG) across the reference's direction, left positive."""
+    ex, ey = frame[f"{an.tracker}.error_x"].to_numpy(), frame[f"{an.tracker}.error_y"].to_numpy()
+    vx, vy = frame[f"{an.reference}.xdot_ref"].to_numpy(), frame[f"{an.reference}.ydot_ref"].to_numpy()
+    speed = np.hypot(vx, vy)
+    return np.where(speed > 1e-6, (-vy * ex + vx * ey) / np.where(speed > 1e-6, speed, 1.0), np.hypot(ex, ey))
+
+
+def simulated_run(study: Study, an: Anatomy, delay: float, duration: float, values: dict | None = None) -> SimulatedRun:
+    """The study (with ``values`` set) run twice with the steering command delayed by ``delay`` [s]
+    in all, the second time with the tractor started OFFSET to the side (module docstring)."""
+    start = time.perf_counter()
+    delayed = study.with_values({**(values or {}), an.delay_key: delay})
+    a = simulate(delayed, duration)
+    b = simulate(delayed.with_values({an.offset_key: an.own_offset + OFFSET}), duration)
+    n = min(len(a), len(b))
+    t = a["t"].to_numpy()[:n]
+    gap = np.abs(cross_track_error(a, an)[:n] - cross_track_error(b, an)[:n])
+    g = f"{an.reference}.yaw_rate_ref"
+    straight = (np.abs(a[g].to_numpy()[:n]) < 1e-3) & (np.abs(b[g].to_numpy()[:n]) < 1e-3)
+    second_half = t > t[0] + 0.5 * (t[-1] - t[0])
+    on = np.flatnonzero(straight & second_half)
+    if len(on) * (t[1] - t[0]) >= 5.0:
+        late = np.zeros(n, bool)
+        late[on[len(on) // 2:]] = True                 # the later half of the straights of the second half
     else:
-        wc, pm, delay = math.nan, math.inf, math.inf
-    above = w[:-1] > (wc if np.isfinite(wc) else 0.0)     # the upper gain margin (above the crossover)
-    cross = np.flatnonzero(above & (phase[:-1] > -math.pi) & (phase[1:] <= -math.pi))
-    gm = float(1.0 / mag[cross[0]]) if len(cross) else math.inf
-    return Margins(gm, pm, wc, delay)
+        late = t >= t[0] + 0.75 * (t[-1] - t[0])
+    return SimulatedRun(delay, float(np.sqrt(np.mean(gap[late] ** 2))),
+                        max(saturated_share(a, delayed, an), saturated_share(b, delayed, an)), time.perf_counter() - start)
 
 
-def mpc_controller(study: Study) -> ct.StateSpace:
-    """The unconstrained yaw-rate MPC: inputs (delta_m, gamma, gamma_d), output u."""
-    model = resolve(study)
-    name = model.one(role="yaw_rate_controller", purpose="margins")
-    p = model.parameters(name)
-    Ts = study.components[name].step or study.study.base_step
-    mpc = CondensedTrackingMPC(p["num"], p["den"], Ts, int(p["prediction_horizon"]), int(p["control_horizon"]),
-                               float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * Ts)
-    n = mpc.A.shape[0]
-    K = -np.linalg.solve(mpc.H, mpc.G)[0]
-    Kx, Ku, Ke = K[:n], K[n], K[n + 1]
-    A, B = mpc.A, mpc.B.reshape(-1, 1)
-    kb = float(Kx @ B.ravel())
-    # state [x_{k-1}; u_{k-1}]
-    Ac = np.block([[A, np.zeros((n, 1))], [(Kx @ A).reshape(1, -1), np.array([[1.0 + Ku]])]])
-    Bc = np.block([[B, np.zeros((n, 2))], [np.array([[kb, Ke, -Ke]])]])
-    Cc = np.concatenate([Kx @ A, [1.0 + Ku]]).reshape(1, -1)
-    Dc = np.array([[kb, Ke, -Ke]])
-    return ct.ss(Ac, Bc, Cc, Dc, Ts)
+def simulated_delay_limit(study: Study, an: Anatomy, predicted: float, duration: float,
+                          progress: Callable[[str], None] | None = None,
+                          max_runs: int = 10) -> tuple[float, float, list[SimulatedRun]]:
+    """(largest total steering delay found stable, smallest found unstable) by bisection, from a
+    bracket of +-15 % of the predicted margin around the predicted limit (widened when the
+    simulation disagrees) down to 2 % of the margin (at least 0.01 s); nan / inf when the bracket
+    could not be closed within ``max_runs`` pairs of runs."""
+    runs: list[SimulatedRun] = []
+    own = an.own_delay
+    margin = max(predicted - own, 0.05) if np.isfinite(predicted) else 1.0
+    tolerance = max(0.01, 0.02 * margin)
+
+    def stable(d: float) -> bool:
+        r = simulated_run(study, an, d, duration)
+        runs.append(r)
+        if progress:
+            progress(f"  run {len(runs)}: steering command delay {d:.3f} s ... {r.describe()}")
+        return r.stable
+
+    lo, hi = own + 0.85 * margin, own + 1.15 * margin
+    while not stable(lo):
+        hi = lo
+        if lo <= own + 1e-9 or len(runs) >= max_runs:
+            return math.nan, hi, runs
+        lo = own + 0.7 * (lo - own) if lo - own > 0.02 else own
+    while stable(hi):
+        lo, hi = hi, own + 1.3 * (hi - own)
+        if len(runs) >= max_runs:
+            return lo, math.inf, runs
+    while hi - lo > tolerance and len(runs) < max_runs:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo, hi, runs
 
 
-def actuator_and_plant(study: Study, speed: float, Ts: float, delay: float) -> ct.StateSpace:
-    """u -> (delta, gamma): steering equivalent (with the delay in whole MPC steps, the remainder
-    as a first-order Pade term) and the yaw model at ``speed``, held over Ts."""
-    model = resolve(study)
-    steer = FirstOrderSteering.of(model.parameters(model.one(role="steering", purpose="margins")))
-    plant = model.parameters(model.one(role="yaw_plant", purpose="margins"))
-    if plant["model"] == "transfer_function":
-        Ay, By, Cy = controllable_canonical(plant["tf_num"], plant["tf_den"])
-    else:
-        Ay, By, Cy = state_space(plant["model"], TractorParameters.of(plant), speed)
-    m, tau = Ay.shape[0], steer.time_constant
-    Ap = np.block([[np.array([[-1.0 / tau]]), np.zeros((1, m))], [By.reshape(-1, 1), Ay]])
-    Bp = np.concatenate([[1.0 / tau], np.zeros(m)]).reshape(-1, 1)
-    Cp = np.block([[np.array([[1.0]]), np.zeros((1, m))], [np.zeros((1, 1)), Cy.reshape(1, -1)]])
-    total = steer.delay + delay
-    whole = int(math.floor(total / Ts + 1e-9))
-    rest = total - whole * Ts
-    P = ct.ss(Ap, Bp, Cp, np.zeros((2, 1)))
-    if rest > 1e-9:
-        P = P * ct.ss(ct.tf(*ct.pade(rest, 1)))
-    Pd = ct.c2d(P, Ts, "zoh")
-    if whole:
-        Pd = Pd * ct.ss(ct.tf([1.0], [1.0] + [0.0] * whole, Ts))
-    return Pd
+# --- report --------------------------------------------------------------------------------
+
+def _fmt(x: float, fmt: str, unit: str = "") -> str:
+    return f"{x:{fmt}}{unit}" if np.isfinite(x) else "inf" if x == math.inf else "none"
 
 
-def loops(study: Study, speed: float | None = None, extra_delay: float = 0.0):
-    """(yaw-rate loop L_in, path loop L_out, closed yaw-rate loop T), negative-feedback convention."""
-    C = mpc_controller(study)
-    Ts = C.dt
-    model = resolve(study)
-    tracker = model.parameters(model.one(role="tracker", purpose="margins"))
-    v = speed if speed is not None else float(model.parameters(model.one(role="reference", purpose="margins"))["speed"])
-    P = actuator_and_plant(study, v, Ts, extra_delay)
-    Cfb, Cr = C[:, :2], C[:, 2]
-    L_in = -(Cfb * P)
-    closed = ct.feedback(P, Cfb, sign=1)                # u = v_ext + Cfb y
-    T = closed[1, :] * Cr                               # gamma_d -> gamma
-    a = tracker.get("lookahead") or tracker["l_r"]
-    k = tracker["k_s"] * tracker["k_c"]
-    s = ct.tf("s")
-    path = (v / a) / s + (k / a) * (v / s ** 2 + tracker["l_r"] / s)   # gamma -> -gamma_d
-    L_out = ct.ss2tf(T) * ct.c2d(path, Ts, "tustin")     # as polynomials: exact at z near 1
-    return L_in, L_out, T
-
-
-def predicted(study: Study, speed: float | None = None) -> dict:
-    L_in, L_out, _ = loops(study, speed)
-    return {"yaw_rate_loop": _margins(L_in), "path_loop": _margins(L_out)}
-
-
-def within_bounds(study: Study, delay: float) -> bool:
-    m = run_study(study.with_values({"steering.command_delay": delay}), None, plots=False).metrics
-    return m["euclid_max_straight"] < PAPER_BOUNDS["euclid_max_straight"] and \
-        m["euclid_max_curved"] < PAPER_BOUNDS["euclid_max_curved"]
-
-
-def simulated_delay_limit(study: Study, high: float = 1.0, tolerance: float = 0.01) -> float:
-    """Smallest steering.command_delay at which the simulated figure-8 leaves the bounds
-    (bisection; assumes within at the study's own delay); inf when still within at ``high``."""
-    model = resolve(study)
-    steering = model.one(role="steering", purpose="margins")
-    low = float(model.parameters(steering)["command_delay"])
-    if within_bounds(study, high):
-        return math.inf
-    while high - low > tolerance:
-        mid = 0.5 * (low + high)
-        low, high = (mid, high) if within_bounds(study, mid) else (low, mid)
-    return high
-
-
-def report(study: Study, simulate: bool = True) -> str:
-    result = predicted(study)
-    model = resolve(study)
-    steering = model.one(role="steering", purpose="margins")
-    own = float(model.parameters(steering)["command_delay"])
-    lines = [f"{'loop':<16}{'gain margin':>13}{'phase margin':>14}{'crossover':>14}{'delay margin':>14}",
-             "-" * 71]
-    for name, m in result.items():
-        gm = f"{m.gain:.2f} ({20 * math.log10(m.gain):.1f} dB)" if np.isfinite(m.gain) else "inf"
-        pm = f"{m.phase_deg:.1f} deg" if np.isfinite(m.phase_deg) else "inf"
-        wc = f"{m.crossover:.2f} rad/s" if np.isfinite(m.crossover) else "none"
-        dm = f"{m.delay:.3f} s" if np.isfinite(m.delay) else "inf"
-        lines.append(f"{name:<16}{gm:>13}{pm:>14}{wc:>14}{dm:>14}")
-    limit = own + min(m.delay for m in result.values())
-    lines.append(f"\npredicted: the loop loses stability at an actuator delay of {limit:.3f} s "
-                 f"(the study's {own:.3f} s + the smallest delay margin); on a straight and on a curve alike")
-    if simulate:
-        sim = simulated_delay_limit(study)
-        lines.append(f"simulated: the figure-8 leaves the paper's bounds at steering.command_delay = "
-                     + (f"{sim:.3f} s (bisection to 0.01 s)" if np.isfinite(sim) else "more than 1 s"))
+def table(analysis: Analysis) -> str:
+    an = analysis.anatomy
+    lines = []
+    for r in analysis.points:
+        lines.append(f"\nat {r.op.speed:.2f} m/s ({r.op.label}; along-track error {r.op.along_track_error:.3f} m)"
+                     + ("" if r.stable else "  -- THE CLOSED LOOP IS UNSTABLE at the study's values"))
+        lines.append(f"  {'loop':<15}{'opened at':<30}{'gain margin':>18}{'phase margin':>14}{'crossover':>13}{'delay margin':>14}")
+        for name, m in r.loops.items():
+            gm = f"{m.gain:.2f} ({m.gain_db:.1f} dB)" if np.isfinite(m.gain) else "inf"
+            if m.gain_reduction is not None:
+                gm += f" / {m.gain_reduction:.2f}"
+            lines.append(f"  {name:<15}{LOOPS[name]:<30}{gm:>18}{_fmt(m.phase_deg, '.1f', ' deg'):>14}"
+                         f"{_fmt(m.crossover, '.2f', ' rad/s'):>13}{_fmt(m.delay, '.3f', ' s'):>14}")
+        lines.append(f"  closed-loop poles leave the unit circle at a steering command delay of "
+                     f"{_fmt(r.delay_limit, '.2f', ' s')} (the study's {an.own_delay:.2f} s + "
+                     f"{_fmt(r.delay_limit - an.own_delay, '.2f', ' s')})")
     return "\n".join(lines)
+
+
+def report(analysis: Analysis) -> str:
+    an, study = analysis.anatomy, analysis.study
+    head = [f"margins of {study.where}: linearised on a straight (analysis.loop_models); the tracker "
+            f"{an.tracker!r} ({study.components[an.tracker].type}), the steering command into "
+            f"{an.steering_break[0]}.{an.steering_break[1]}, its delay {an.delay_key}"]
+    head += [f"  {n}" for n in analysis.notes]
+    foot = ["", "", "gain margin: factor (dB) on the loop gain at the opening ('/ x': also unstable below a factor x);",
+            "delay margin: extra delay at the opening the loop tolerates."]
+    return "\n".join(head) + table(analysis) + "\n".join(foot)
+
+
+def as_dict(analysis: Analysis) -> dict:
+    """The analysis as JSON-ready values (inf and nan as null)."""
+    def num(x):
+        return float(x) if x is not None and np.isfinite(x) else None
+
+    an = analysis.anatomy
+    return {"study": str(analysis.study.where), "tracker": an.tracker, "steering_command": ".".join(an.steering_break),
+            "delay_parameter": an.delay_key, "own_delay_s": an.own_delay, "notes": analysis.notes,
+            "operating_points": [{
+                "label": r.op.label, "speed_m_s": r.op.speed, "along_track_error_m": r.op.along_track_error,
+                "speed_excess_m_s": r.speed_excess, "closed_loop_stable": r.stable,
+                "delay_limit_s": num(r.delay_limit),
+                "loops": {name: {"opened_at": LOOPS[name], "gain_margin": num(m.gain), "gain_margin_db": num(m.gain_db),
+                                 "gain_reduction": m.gain_reduction, "phase_margin_deg": num(m.phase_deg),
+                                 "crossover_rad_s": num(m.crossover), "delay_margin_s": num(m.delay),
+                                 "phase_crossover_rad_s": num(m.phase_crossover)}
+                          for name, m in r.loops.items()}} for r in analysis.points]}
+
+
+def write_json(analysis: Analysis, path):
+    """margins.json: as_dict(analysis); returns its path."""
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    path.write_text(json.dumps(as_dict(analysis), indent=2) + "\n")
+    return path

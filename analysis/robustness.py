@@ -2,8 +2,9 @@
 maximum errors, the fraction of runs within the paper's bounds (over all runs and over those with
 at most 0.1 s of actuator delay), and the max error against the actuator delay.
 
-Sweep analysis hook: ``plots(table, study, out_dir)`` writes ``max_error_vs_delay.png`` and
-``robustness.json``."""
+Sweep analysis hooks: ``plots(table, study, out_dir)`` writes ``max_error_vs_delay.png`` and
+``robustness.json``; ``summary(table, study)`` is what the sweep prints of them (the P50/P95 of the
+errors are in the sweep's own table of key figures)."""
 from __future__ import annotations
 
 import json
@@ -41,6 +42,17 @@ def summarise(table: pd.DataFrame) -> dict:
         low = (table[DELAY] <= REQUIRED_DELAY).to_numpy()
         out["within_bounds_delay_le_0.1s"] = float(inside[low].mean()) if low.any() else float("nan")
     return out
+
+
+def summary(table: pd.DataFrame, study) -> str:
+    """The fractions of runs within both of the paper's bounds, over all runs and up to the
+    required actuator delay."""
+    s = summarise(table)
+    text = f"within both of the paper's bounds: {s['within_bounds']:.0%} of {s['runs']} runs"
+    if "within_bounds_delay_le_0.1s" in s:
+        low = int((table[DELAY] <= REQUIRED_DELAY).sum())
+        text += f"; {s['within_bounds_delay_le_0.1s']:.0%} of the {low} with {DELAY} <= {REQUIRED_DELAY:g} s"
+    return text
 
 
 def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:

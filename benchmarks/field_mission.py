@@ -1,4 +1,4 @@
-"""The README's field-mission table: whole real fields covered by the guidance stack.
+"""The field-mission table (docs/field-missions.md): whole real fields covered by the guidance stack.
 
     python3 benchmarks/field_mission.py [--quick]
 
@@ -28,7 +28,7 @@ ROWS = [
     ("IAM plot ro1-a, pure pursuit", "field_plot_pure_pursuit.toml", (), True),
     ("IAM plot ro1-a, Stanley", "field_plot_stanley.toml", (), True),
     ("F2C test parcel, 3 m trailed", "field_coverage.toml", (), True),
-    ("TASKDATA euDZYo7 (a bay: 2 cells)", "field_coverage.toml", (f"field.path={TASKDATA}", "field.name=euDZYo7"), True),
+    ("TASKDATA euDZYo7 (a bay)", "field_coverage.toml", (f"field.path={TASKDATA}", "field.name=euDZYo7"), True),
     ("PARTFIELDS NO_Warschau_Simple at 2.5 m/s", "field_coverage.toml",
      (f"field.path={PARTFIELDS}", "field.name=NO_Warschau_Simple", "field.work_speed=2.5"), False),
     ("F2C test1.xml (17 ha)", "field_coverage.toml", (f"field.path={REAL / 'fields2cover_data' / 'test1.xml'}",), False),

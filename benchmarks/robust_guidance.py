@@ -1,4 +1,4 @@
-"""The README's robust-guidance table: the figure-8 under delays, speeds, masses and yaw models,
+"""The robust-guidance table (docs/guidance-loop.md): the figure-8 under delays, speeds, masses and yaw models,
 with the paper's tracker law and with the shipped one.
 
     python3 benchmarks/robust_guidance.py

@@ -174,6 +174,12 @@ class FieldRoute(Component):
         self.i_cg = self.i_impl = 0
         self.step(t0, dt)
 
+    def run_progress(self) -> tuple[float, float, str] | None:
+        """(metres of the route done, the route's length, "m"): the run's progress line
+        (orchestrator.observers.Progress)."""
+        end = getattr(self, "end", None)
+        return None if end is None else (float(self.y["path_length"]), float(end), "m")
+
     def _project(self, px: float, py: float, i: int, back: float = 2.0, ahead: float = 10.0) -> tuple[int, float]:
         """(index, signed lateral distance) of the route point nearest (px, py) within the window."""
         r = self.route
@@ -205,6 +211,27 @@ class FieldRoute(Component):
         y["implement_on_straight"] = float(abs(r.at(self.i_impl, "kappa")) < 1e-3)
         if j >= r.size - 3:
             raise EndRun(self.name, f"the route is complete ({self.end:.0f} m)")
+
+    def operating_points(self) -> dict[str, dict[str, float]]:
+        """Where the guidance loop is linearised: a straight at ``work_speed`` (swaths, headland
+        passes) and at ``turn_speed`` (the turns, of radius down to ``turn_radius``); the route point
+        is the CG's projection, so the tracker's along-track error is nil."""
+        return {"work": {"speed": float(self.p["work_speed"]), "along_track_error": 0.0},
+                "turn": {"speed": float(self.p["turn_speed"]), "along_track_error": 0.0,
+                         "turn_radius": float(self.p["turn_radius"])}}
+
+    def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
+        """Small deviations of the CG from a straight leg heading east: the route point is the
+        CG's projection, so the reference the tracker reads (y_ref, ydot_ref, heading_ref,
+        yaw_rate_ref) does not move with the CG and the along-track error stays nil (the argument
+        is there for the common signature);
+        cross_track = d y. A static gain (python-control StateSpace, ports as names)."""
+        import control
+        import numpy as np
+
+        outputs = ["y_ref", "ydot_ref", "heading_ref", "yaw_rate_ref", "cross_track"]
+        return control.ss(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((len(outputs), 0)),
+                          np.array([[0.0], [0.0], [0.0], [0.0], [1.0]]), dt, inputs=["y"], outputs=outputs)
 
 
 COMPONENT = FieldRoute

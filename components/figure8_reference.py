@@ -63,5 +63,12 @@ class Figure8Reference(Component):
         out_["heading_ref"], out_["yaw_rate_ref"] = h, sdot * kappa
         out_["speed_ref"], out_["segment"], out_["path_length"] = sdot, float(label), s
 
+    def operating_points(self) -> dict[str, dict[str, float | None]]:
+        """Where the guidance loop is linearised: the path's speed after the start ramp (its
+        straights; its loops have ``radius``); the reference is time based, so the tracker's
+        along-track error is what the speed loop leaves (None: not known here). It reads nothing,
+        so it adds nothing to the loop."""
+        return {"path": {"speed": float(self.p["speed"]), "along_track_error": None, "turn_radius": float(self.p["radius"])}}
+
 
 COMPONENT = Figure8Reference

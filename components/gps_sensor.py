@@ -1,4 +1,5 @@
-"""RTK-GPS sensor (paper section II): antenna position and velocity, 2 cm noise at 20 Hz.
+"""RTK-GPS sensor (paper section II): antenna position and velocity, 2 cm noise at 20 Hz, and the
+fix quality a receiver reports in NMEA GGA (4 RTK fixed, 5 RTK float, 2 DGPS, 1 single, 0 none).
 
 Error model: white noise (``position_noise_std``, the default worst case) plus, as an option, a
 correlated RTK error per axis, first-order Gauss-Markov (``bias_std``, ``bias_time_constant``):
@@ -8,15 +9,62 @@ Output at sample k is the true antenna state of sample k - latency/dt plus white
 Dropouts: a two-state chain; each sample starts an outage with probability
 ``dropout_probability``, an outage lasts ``dropout_duration`` seconds; during it the last fix is
 held, ``fix_valid`` = 0, ``fix_quality`` = 0 (no fix) and ``fix_age`` grows.
+
+Quality drops, as a receiver has them when it loses its corrections or its sky:
+``outages = [[start_s, end_s], ...]`` (no fix) or ``[[start_s, end_s, quality], ...]`` (that GGA
+quality over the window), and ``quality_log``, a recorded NMEA log whose GGA qualities the receiver
+replays (from ``quality_log_start`` on, by the time since the log's first GGA; a pause of more than
+a second in its GGAs is no fix; after its last GGA the receiver is back to RTK fixed). A degraded
+fix (quality 1, 2, 5) carries, besides the white noise, an error per axis of that quality's std
+(models.sensor_grades.FIX_ERROR_STD) that wanders as a Gauss-Markov process of
+``degraded_error_time_constant``; a quality of 0, 6, 7 or 8 carries no position (``fix_valid`` 0).
 """
 from __future__ import annotations
 
 import math
 from collections import deque
 
-from orchestrator.component import Component, inp, out, par
+import numpy as np
 
-from .hardware.nmea import RTK_FIXED
+from orchestrator.component import Component, inp, out, par
+from orchestrator.units import FILE_UNIT
+
+from .hardware.nmea import FIX_RANK, RTK_FIXED
+from .models.sensor_grades import DEGRADED_ERROR_TIME_CONSTANT, FIX_ERROR_STD, gauss_markov_step
+
+GGA_QUALITIES = tuple(range(10))
+
+
+def gga_qualities(path: str) -> tuple[np.ndarray, np.ndarray]:
+    """(time since the first GGA [s], quality) of every GGA of an NMEA log (bad sentences skipped;
+    time of day wrapping past midnight continues)."""
+    from pynmeagps import VALCKSUM, NMEAReader
+
+    times, qualities = [], []
+    try:
+        lines = open(path, "rb").read().splitlines()
+    except OSError as exc:
+        raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
+    day = 0.0
+    for line in lines:
+        start = line.find(b"$")
+        if start < 0 or line[start + 3:start + 6] != b"GGA":
+            continue
+        try:
+            msg = NMEAReader.parse(line[start:].strip() + b"\r\n", validate=VALCKSUM)
+            clock = msg.time
+            q = int(msg.quality) if msg.quality != "" else 0
+            t = clock.hour * 3600.0 + clock.minute * 60.0 + clock.second + clock.microsecond * 1e-6
+        except Exception:                           # noqa: BLE001 - a bad sentence is skipped, as a receiver's would be
+            continue
+        if times and t + day < times[-1] - 43200.0:  # past midnight
+            day += 86400.0
+        times.append(t + day)
+        qualities.append(q if q in GGA_QUALITIES else 0)
+    if not times:
+        raise ValueError(f"{path}: no GGA sentence with a time and a quality")
+    t = np.asarray(times)
+    return t - t[0], np.asarray(qualities, int)
 
 
 class GPSSensor(Component):
@@ -34,6 +82,14 @@ class GPSSensor(Component):
         par("dropout_duration", "s", 1.0, "length of an outage"),
         par("bias_std", "m", 0.0, "correlated RTK error: stationary std per axis of a Gauss-Markov bias (0: off)"),
         par("bias_time_constant", "s", 60.0, "correlated RTK error: correlation time of the bias"),
+        par("outages", "", [], "windows [[start_s, end_s], ...] without a fix, or [[start_s, end_s, quality], ...] "
+            "with that GGA quality"),
+        par("quality_log", FILE_UNIT, "", "an NMEA log whose GGA qualities the receiver replays (empty: none)"),
+        par("quality_log_start", "s", 0.0, "run time at which the log's first GGA plays"),
+        par("rtk_float_error_std", "m", FIX_ERROR_STD[5], "error of an RTK float fix (quality 5), per axis"),
+        par("dgps_error_std", "m", FIX_ERROR_STD[2], "error of a DGPS fix (qualities 2, 3, 9), per axis"),
+        par("single_error_std", "m", FIX_ERROR_STD[1], "error of a single-point fix (quality 1), per axis"),
+        par("degraded_error_time_constant", "s", DEGRADED_ERROR_TIME_CONSTANT, "correlation time of those errors"),
         out("x", "m", 0.0, "measured east position"),
         out("y", "m", 0.0, "measured north position"),
         out("vel_east", "m/s", 0.0, "measured east velocity"),
@@ -60,6 +116,56 @@ class GPSSensor(Component):
         # b_k+1 = phi b_k + sqrt(1 - phi^2) sigma_b w_k, phi = exp(-dt / T): stationary std sigma_b
         self.bias_phi = math.exp(-dt / p["bias_time_constant"])
         self.bias = self.rng.standard_normal(2) * p["bias_std"] if p["bias_std"] > 0 else (0.0, 0.0)
+        self.windows = self._windows(p["outages"])
+        self.log = None
+        if p["quality_log"]:
+            try:
+                times, qualities = gga_qualities(str(p["quality_log"]))
+            except ValueError as exc:
+                self.require(False, f"parameter quality_log: {exc}")
+            steps = np.diff(times)
+            gap = max(1.0, 5.0 * float(np.median(steps))) if len(steps) else 1.0
+            self.log = (times + float(p["quality_log_start"]), qualities, gap)
+        for key in ("rtk_float_error_std", "dgps_error_std", "single_error_std"):
+            self.require(p[key] >= 0, f"parameter {key} must be >= 0, got {p[key]}")
+        self.require(p["degraded_error_time_constant"] > 0, "parameter degraded_error_time_constant must be > 0")
+        self.error_std = {5: p["rtk_float_error_std"], 2: p["dgps_error_std"], 3: p["dgps_error_std"],
+                          9: p["dgps_error_std"], 1: p["single_error_std"]}
+        self.degraded_phi = math.exp(-dt / p["degraded_error_time_constant"])
+        self.degraded = any(q not in (0, RTK_FIXED) for _, _, q in self.windows) or self.log is not None
+        self.wander = self.rng.standard_normal(2) if self.degraded else np.zeros(2)    # unit-std Gauss-Markov
+
+    def _windows(self, value) -> list[tuple[float, float, int]]:
+        """The outage windows, checked: each [start_s, end_s] or [start_s, end_s, quality]."""
+        where = "parameter outages"
+        self.require(isinstance(value, (list, tuple)), f"{where} = {value!r}: expected a list of [start_s, end_s] "
+                     "or [start_s, end_s, quality]")
+        windows = []
+        for i, item in enumerate(value):
+            ok = isinstance(item, (list, tuple)) and len(item) in (2, 3) and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in item)
+            self.require(ok, f"{where}, item {i} = {item!r}: expected [start_s, end_s] or [start_s, end_s, quality] "
+                         "(finite numbers)")
+            start, end = float(item[0]), float(item[1])
+            quality = item[2] if len(item) == 3 else 0
+            self.require(start < end, f"{where}, item {i} = {item!r}: the window must end after it starts")
+            self.require(quality in GGA_QUALITIES and quality == int(quality),
+                         f"{where}, item {i} = {item!r}: quality {quality!r} is not a GGA fix quality (0 to 9)")
+            windows.append((start, end, int(quality)))
+        return windows
+
+    def quality_at(self, t: float) -> int:
+        """The GGA quality the receiver has at time t (before random dropouts)."""
+        quality = RTK_FIXED
+        if self.log is not None:
+            times, qualities, gap = self.log
+            i = int(np.searchsorted(times, t + 1e-9, side="right")) - 1
+            if 0 <= i < len(times) - 1 or (i == len(times) - 1 and t - times[-1] <= gap):
+                quality = int(qualities[i]) if t - times[i] <= gap else 0
+        for start, end, q in self.windows:
+            if start - 1e-9 <= t < end - 1e-9:
+                quality = q
+        return quality
 
     def step(self, t: float, dt: float) -> None:
         u, p, y = self.u, self.p, self.y
@@ -68,19 +174,27 @@ class GPSSensor(Component):
             self.outage_left = max(1, int(round(p["dropout_duration"] / dt)))
         noise = self.rng.standard_normal(4)
         if p["bias_std"] > 0:
-            phi = self.bias_phi
-            self.bias = phi * self.bias + math.sqrt(1 - phi * phi) * p["bias_std"] * self.rng.standard_normal(2)
-        if self.outage_left > 0:
-            self.outage_left -= 1
-            y["fix_valid"] = y["fix_quality"] = 0.0
+            w = self.rng.standard_normal(2)
+            self.bias = [gauss_markov_step(b, self.bias_phi, p["bias_std"], wi) for b, wi in zip(self.bias, w)]
+        degraded = (0.0, 0.0)
+        quality = self.quality_at(t)
+        if self.degraded:
+            std = self.error_std.get(quality, 0.0)
+            degraded = (std * self.wander[0], std * self.wander[1])
+            w = self.rng.standard_normal(2)
+            self.wander = np.array([gauss_markov_step(g, self.degraded_phi, 1.0, wi) for g, wi in zip(self.wander, w)])
+        if self.outage_left > 0 or FIX_RANK.get(quality, 0) == 0:
+            y["fix_valid"] = 0.0
+            y["fix_quality"] = 0.0 if self.outage_left > 0 else float(quality)
             y["fix_age"] = t - self.last_fix_time
+            self.outage_left = max(self.outage_left - 1, 0)
             return
         x, yy, ve, vn = self.history[0]
         sp, sv = p["position_noise_std"], p["velocity_noise_std"]
         bx, by = self.bias
-        y["x"], y["y"] = x + sp * noise[0] + bx, yy + sp * noise[1] + by
+        y["x"], y["y"] = x + sp * noise[0] + bx + degraded[0], yy + sp * noise[1] + by + degraded[1]
         y["vel_east"], y["vel_north"] = ve + sv * noise[2], vn + sv * noise[3]
-        y["fix_valid"], y["fix_quality"] = 1.0, float(RTK_FIXED)
+        y["fix_valid"], y["fix_quality"] = 1.0, float(quality)
         self.last_fix_time = t
         y["fix_age"] = p["latency"]
 

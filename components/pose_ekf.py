@@ -15,6 +15,24 @@ import math
 from orchestrator.component import Component, inp, out, par
 
 
+# what every pose estimator starts from and gives (this EKF, the GNSS/INS one): swappable in a study
+POSE_START = (
+    par("x0", "m", 0.0, "initial east position of R"),
+    par("y0", "m", 0.0, "initial north position of R"),
+    par("psi0", "rad", 0.0, "initial heading estimate"),
+    par("heading0_std", "rad", math.radians(30.0), "initial heading uncertainty"),
+    par("position0_std", "m", 0.5, "initial position uncertainty"),
+)
+POSE_OUTPUTS = (
+    out("x_rear", "m", 0.0, "estimated east position of R"),
+    out("y_rear", "m", 0.0, "estimated north position of R"),
+    out("heading", "rad", 0.0, "estimated yaw angle"),
+    out("x_cg", "m", 0.0, "estimated east position of the CG"),
+    out("y_cg", "m", 0.0, "estimated north position of the CG"),
+    out("heading_std", "rad", 0.0, "heading standard deviation"),
+)
+
+
 class PoseEKF(Component):
     sampled = True
     roles = ("pose_estimator",)
@@ -29,18 +47,7 @@ class PoseEKF(Component):
         par("position_process_std", "m", 0.003, "process noise per step, position"),
         par("heading_process_std", "rad", 0.003, "process noise per step, heading"),
         par("position_noise_std", "m", 0.02, "GPS position noise"),
-        par("x0", "m", 0.0, "initial east position of R"),
-        par("y0", "m", 0.0, "initial north position of R"),
-        par("psi0", "rad", 0.0, "initial heading estimate"),
-        par("heading0_std", "rad", math.radians(30.0), "initial heading uncertainty"),
-        par("position0_std", "m", 0.5, "initial position uncertainty"),
-        out("x_rear", "m", 0.0, "estimated east position of R"),
-        out("y_rear", "m", 0.0, "estimated north position of R"),
-        out("heading", "rad", 0.0, "estimated yaw angle"),
-        out("x_cg", "m", 0.0, "estimated east position of the CG"),
-        out("y_cg", "m", 0.0, "estimated north position of the CG"),
-        out("heading_std", "rad", 0.0, "heading standard deviation"),
-    )
+    ) + POSE_START + POSE_OUTPUTS
     feedthrough = {k: ("gps_x", "gps_y", "fix_valid")
                    for k in ("x_rear", "y_rear", "heading", "x_cg", "y_cg", "heading_std")}
 

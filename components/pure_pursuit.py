@@ -8,7 +8,9 @@ the heading to G - R and D = |G - R|:
 
     kappa = 2 sin(alpha) / D,   gamma_d = v_d kappa,   v_d = v_r + k_s tanh(k_c e_along)
 
-e_along = (ref - CG) . t_r is the along-track error (the reference is time based).
+e_along = (ref - CG) . t_r is the along-track error (the reference is time based). With a crab v_c
+(``lateral_velocity``) R moves along its course psi + beta, beta = atan(v_c / v_r): alpha is taken
+from the course.
 """
 from __future__ import annotations
 
@@ -16,7 +18,8 @@ import math
 
 from orchestrator.component import Component, par
 
-from .kinematic_tracker import SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS
+from .kinematic_tracker import (LATERAL_INPUTS, SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS,
+                                static_law)
 
 def along_track(u, p) -> tuple[float, float, float, float, float]:
     """(e_x, e_y, v_r, unit reference direction t_x, t_y) and the speed law's v_d."""
@@ -28,6 +31,11 @@ def along_track(u, p) -> tuple[float, float, float, float, float]:
         tx, ty = math.cos(u["heading"]), math.sin(u["heading"])
     v_d = v_r + p["k_s"] * math.tanh(p["k_c"] * (ex * tx + ey * ty))
     return ex, ey, tx, ty, v_d
+
+
+def crab_angle(crab: float, speed: float) -> float:
+    """beta = atan(v_c / v): the course's angle from the heading (0 at rest)."""
+    return math.atan2(crab, speed) if speed > 0.1 else 0.0
 
 
 class PurePursuit(Component):
@@ -50,10 +58,28 @@ class PurePursuit(Component):
         rx, ry = u["x"] - p["l_r"] * c, u["y"] - p["l_r"] * s
         gx, gy = u["x_ref"] + L_d * tx - rx, u["y_ref"] + L_d * ty - ry
         D = max(math.hypot(gx, gy), 1e-6)
-        alpha = math.atan2(-s * gx + c * gy, c * gx + s * gy)
+        alpha = math.atan2(-s * gx + c * gy, c * gx + s * gy) - crab_angle(u["lateral_velocity"], v_r)
         y["speed_desired"] = v_d
         y["yaw_rate_desired"] = v_d * 2.0 * math.sin(alpha) / D
         y["error_x"], y["error_y"] = ex, ey
+
+    def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
+        """Small deviations about a straight reference heading east at ``speed``, the CG on its
+        line e = ``along_track_error`` behind the reference point (v_d = v + k_s tanh(k_c e)). The
+        goal lies D0 = e + L_d + l_r ahead of R; its lateral offset in the body frame is
+        (y_ref - y) + L_d ydot_ref / v - (e + L_d) psi, so
+
+            alpha = ((d y_ref - d y) + L_d d ydot_ref / v - (e + L_d) d psi) / D0,   d gamma_d = 2 v_d alpha / D0
+
+        A static gain (python-control StateSpace, ports as names)."""
+        p = self.p
+        e = along_track_error
+        L_d = max(p["lookahead_min"], p["lookahead_time"] * speed)
+        D0 = e + L_d + p["l_r"]
+        g = 2.0 * (speed + p["k_s"] * math.tanh(p["k_c"] * e)) / D0 ** 2
+        gains = {"yaw_rate_desired": {"y_ref": g, "y": -g, "heading": -g * (e + L_d), "ydot_ref": g * L_d / speed},
+                 "error_y": {"y_ref": 1.0, "y": -1.0}}
+        return static_law(gains, LATERAL_INPUTS, dt)
 
 
 COMPONENT = PurePursuit

@@ -25,7 +25,18 @@ Extensions (off by default; each is an entry of the diagnosis catalogue, see dia
 ``steer_angle_offset`` (the tyres see delta + offset: a wheel-angle sensor zeroed wrongly),
 ``cornering_speed_slope`` (C_f, C_r scaled by 1 + k (v_x - v_ref)), ``slope_angle`` with
 ``slope_downhill_heading`` (side slope: a_lat = g sin(phi) sin(psi_d - psi) at the CG, physical
-models only) and ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame).
+models only), ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame)
+and ``tyre_friction`` with ``tyre_shape`` (tyre saturation: each axle's force follows the simplified
+Magic Formula of models.tyre instead of C alpha; physical models only; integrated by Rosenbrock
+sub-steps of at most 2 ms instead of the matrix exponential).
+
+Terrain (models.terrain): the ground is the plane of ``slope_angle`` and ``slope_downhill_heading``,
+or the height grid of ``terrain_file``; at the CG it gives the tractor's roll and pitch (outputs)
+and the lateral pull a_lat = P . (-sin psi, cos psi) of the in-plane gravity P. The GPS antenna
+stands ``antenna_height`` above R: its horizontal position is R + Rz(psi) Ry(-pitch) Rx(roll)
+(forward, left, height), h sin(roll) downhill on a side slope. The dynamics stay those of the
+horizontal projection (the slope shortens distances by cos(phi): 1.5 % at 10 deg), and the antenna
+velocity leaves out the attitude's own rates (roll and pitch change only as the heading turns).
 """
 from __future__ import annotations
 
@@ -36,11 +47,12 @@ import numpy as np
 
 from orchestrator.component import Component, ComponentError, inp, out, par
 
+from orchestrator.units import FILE_UNIT
+
 from .models.paper_models import G_2ND
-from .models.yaw_dynamics import (GRAVITY, PHYSICAL_MODELS, TractorParameters, body_to_world, controllable_canonical,
-                                  cornering_scale, lateral_disturbance_column,
-                                  slope_lateral_acceleration, state_space, with_cornering_scale,
-                                  zoh_discretize)
+from .models.terrain import attitude, ground_of, lever_offset, slope_pull
+from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical, cornering_scale,
+                                  lateral_disturbance_column, state_space, with_cornering_scale, zoh_discretize)
 
 MODELS = PHYSICAL_MODELS + ("transfer_function",)
 CHECKED_SPEEDS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -94,6 +106,11 @@ class TractorYawPlant(Component):
         par("slope_downhill_heading", "rad", 0.0, "extension: azimuth of the fall line (from east, CCW)"),
         par("antenna_forward", "m", 0.0, "extension: GPS antenna ahead of R"),
         par("antenna_left", "m", 0.0, "extension: GPS antenna left of R"),
+        par("antenna_height", "m", 0.0, "GPS antenna height above the ground at R (2-4 m on tractors)"),
+        par("terrain_file", FILE_UNIT, "", "the ground as a height grid: CSV x, y, z in metres, mission frame "
+            "(empty: the plane of slope_angle)"),
+        par("tyre_friction", "1", 0.0, "extension: tyre friction mu of the Magic Formula (0 = linear tyres)"),
+        par("tyre_shape", "1", 1.3, "extension: Magic Formula shape factor C (1 < C < 2)"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -110,6 +127,8 @@ class TractorYawPlant(Component):
         out("slope_pull_east", "m/s2", 0.0, "the side slope's in-plane gravity g sin(phi) cos(psi_d), for a "
             "trailed implement"),
         out("slope_pull_north", "m/s2", 0.0, "g sin(phi) sin(psi_d)"),
+        out("roll", "rad", 0.0, "roll on the ground at the CG, positive: left side up"),
+        out("pitch", "rad", 0.0, "pitch on the ground at the CG, positive: nose up"),
     )
     feedthrough = {}
 
@@ -143,10 +162,19 @@ class TractorYawPlant(Component):
             self.require(getattr(self.params, key) > 0, f"parameter {key} must be > 0, got {getattr(self.params, key)}")
         self.require(float(p["min_speed"]) > 0, f"parameter min_speed must be > 0, got {p['min_speed']}")
         self._tf = None
-        self._slope = float(p["slope_angle"]) != 0.0
+        self._slope = float(p["slope_angle"]) != 0.0 or bool(p["terrain_file"])
         self._cornering = float(p["cornering_speed_slope"]) != 0.0
-        self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering),
-                     "slope_angle and cornering_speed_slope need a physical model (bicycle, rlf, rlfr)")
+        self._saturation = float(p["tyre_friction"]) > 0.0
+        self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering or self._saturation),
+                     "slope_angle, terrain_file, cornering_speed_slope and tyre_friction need a physical model "
+                     "(bicycle, rlf, rlfr)")
+        self.require(not self._saturation or 1.0 < float(p["tyre_shape"]) < 2.0,
+                     f"parameter tyre_shape={p['tyre_shape']}: expected 1 < C < 2")
+        try:
+            self._ground = ground_of(p["slope_angle"], p["slope_downhill_heading"], p["terrain_file"])
+        except ValueError as exc:
+            self.require(False, f"parameter terrain_file: {exc}")
+        self._pull = (0.0, 0.0)
         if p["model"] == "transfer_function":
             self._tf = controllable_canonical(p["tf_num"], p["tf_den"])
             n = self._tf[0].shape[0]
@@ -156,7 +184,14 @@ class TractorYawPlant(Component):
         self.z = np.zeros(n)
         self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._update_ground()
         self._set_outputs(0.0, 0.0, 0.0)
+
+    def _update_ground(self) -> None:
+        """Gradient, pull and attitude of the ground at the CG."""
+        gx, gy = self._ground.gradient(self.x, self.y_pos)
+        self._pull = slope_pull(gx, gy)
+        self._attitude = attitude(gx, gy, self.psi)
 
     def discretized(self, v: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(Ad, Bd, C) at speed v (cached on a grid of speed_cache_resolution)."""
@@ -198,24 +233,44 @@ class TractorYawPlant(Component):
         v_lat_rear = v_y - lr * gamma
         y["vel_east_rear"] = v * c - v_lat_rear * s
         y["vel_north_rear"] = v * s + v_lat_rear * c
-        dx, dy = body_to_world(self.p["antenna_forward"], self.p["antenna_left"], c, s)
+        roll, pitch = self._attitude
+        dx, dy = lever_offset(roll, pitch, self.psi, self.p["antenna_forward"], self.p["antenna_left"],
+                              self.p["antenna_height"])
         y["x_antenna"], y["y_antenna"] = y["x_rear"] + dx, y["y_rear"] + dy
         y["vel_east_antenna"] = y["vel_east_rear"] - gamma * dy
         y["vel_north_antenna"] = y["vel_north_rear"] + gamma * dx
-        pull = GRAVITY * math.sin(self.p["slope_angle"])
-        y["slope_pull_east"] = pull * math.cos(self.p["slope_downhill_heading"])
-        y["slope_pull_north"] = pull * math.sin(self.p["slope_downhill_heading"])
+        y["slope_pull_east"], y["slope_pull_north"] = self._pull
+        y["roll"], y["pitch"] = roll, pitch
+
+    def _saturated_step(self, v: float, delta: float, dt: float) -> np.ndarray:
+        """The state after dt with Magic Formula tyres (models.tyre.ros2_step, sub-steps <= 2 ms)."""
+        from .models.tyre import ros2_step
+
+        scale = cornering_scale(v, self.p["cornering_speed_slope"], self.p["cornering_reference_speed"]) \
+            if self._cornering else 1.0
+        tyre = {"mu": float(self.p["tyre_friction"]), "shape": float(self.p["tyre_shape"]),
+                "C_f": self.params.C_f * scale, "C_r": self.params.C_r * scale}
+        n = max(1, int(math.ceil(dt / 0.002)))
+        z = self.z
+        for _ in range(n):
+            z = ros2_step(self.p["model"], self.params, z, dt / n, v, v, delta, delta, **tyre)
+        return z
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
         delta = float(self.u["steer_angle"]) + self.p["steer_angle_offset"]
         vmin, speed = self._min_speed, abs(v)
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        Ad, Bd, _ = self.discretized(v_eff, dt)
         gamma0, vy0 = self._yaw_rate_and_lateral()
-        z = Ad @ self.z
-        if self._slope:
-            a_lat = slope_lateral_acceleration(self.psi, self.p["slope_angle"], self.p["slope_downhill_heading"])
+        if self._saturation:
+            z = self._saturated_step(v_eff, delta, dt)
+        else:
+            Ad, Bd, _ = self.discretized(v_eff, dt)
+            z = Ad @ self.z
+        a_lat = -self._pull[0] * math.sin(self.psi) + self._pull[1] * math.cos(self.psi) if self._slope else 0.0
+        if self._saturation:
+            z[0] += dt * a_lat
+        elif self._slope:
             z += Bd[:, 0] * delta + Bd[:, 1] * a_lat
         else:
             z += Bd * delta
@@ -228,6 +283,7 @@ class TractorYawPlant(Component):
         self.x += dt * (v * c - vy_mid * s)
         self.y_pos += dt * (v * s + vy_mid * c)
         self.psi += 0.5 * dt * (gamma0 + gamma1)
+        self._update_ground()
         self._set_outputs(v, gamma1, vy1)
 
 

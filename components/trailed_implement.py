@@ -1,5 +1,4 @@
-"""A trailed implement on a drawbar, with an optional side-shift that steers it onto its line
-(issue 27).
+"""A trailed implement on a drawbar, with an optional side-shift that steers it onto its line.
 
 The hitch H sits ``hitch_offset`` c behind the tractor's rear axle R; the implement's axle A is
 ``drawbar`` L behind H and does not slip sideways except for the side slope's pull. With the
@@ -19,12 +18,17 @@ rate and stroke limits) following e_cmd = -(k_p xte + k_i int xte) of the implem
 error (from the route) while ``active`` (the route straight under the implement: a swath and its
 run-in), centred in turns; k_p = 0 is a passive implement. L = 0 is a mounted implement (psi_i = psi).
 Integrated at ``internal_step`` (Heun) within each step.
+
+Its roll and pitch (outputs) are those of a body at heading psi_i on the plane whose pull is P
+(models.terrain: the ground under the tractor, taken to hold under the implement too).
 """
 from __future__ import annotations
 
 import math
 
 from orchestrator.component import Component, inp, out, par
+
+from .models.terrain import attitude, gradient_of_pull
 
 
 class TrailedImplement(Component):
@@ -56,6 +60,8 @@ class TrailedImplement(Component):
         out("heading", "rad", 0.0, "implement heading psi_i"),
         out("hitch_angle", "rad", 0.0, "psi - psi_i"),
         out("side_shift", "m", 0.0, "e_s, left positive"),
+        out("roll", "rad", 0.0, "roll on the ground, positive: left side up"),
+        out("pitch", "rad", 0.0, "pitch on the ground, positive: nose up"),
     )
     feedthrough = {}
 
@@ -115,6 +121,7 @@ class TrailedImplement(Component):
         y["heading"] = self.psi_i
         y["hitch_angle"] = math.atan2(math.sin(psi - self.psi_i), math.cos(psi - self.psi_i))
         y["side_shift"] = self.shift
+        y["roll"], y["pitch"] = attitude(*gradient_of_pull(u["slope_pull_east"], u["slope_pull_north"]), self.psi_i)
 
 
 COMPONENT = TrailedImplement

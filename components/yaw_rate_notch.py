@@ -1,4 +1,4 @@
-"""A notch filter on the measured yaw rate (issue 28, item 4): removes a lightly damped yaw mode
+"""A notch filter on the measured yaw rate: removes a lightly damped yaw mode
 (the RLFR tractor's, -0.62 +- 9.95j at 2 m/s) from what the yaw-rate controller sees, so that the
 controller does not chase it with the steering.
 

@@ -15,6 +15,8 @@ from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
 from orchestrator.resolver import resolve
 from orchestrator.study import Study, StudyError
 
+from identification.vehicle import Vehicle
+
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy
 
@@ -31,6 +33,7 @@ class Baseline:
     tractor: TractorParameters
     values: dict[str, float] = field(default_factory=dict)
     study: BaselineStudy | None = None
+    vehicle: Vehicle = field(default_factory=Vehicle)
 
 
 def baseline_from_study(study: Study) -> Baseline:
@@ -53,4 +56,4 @@ def baseline_from_study(study: Study) -> Baseline:
               "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
-    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view)
+    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))

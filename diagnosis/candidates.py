@@ -27,7 +27,7 @@ from measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline
 from .catalogue import UNCERTAIN, Parameter
-from .replay import YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
+from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -44,6 +44,7 @@ NEED_TEXT = {"speed": "speed (v, gnss_speed, or x and y)",
 MIN_RATE = {"steering": 10.0, "yaw": 10.0, "position": 5.0, "speed": 5.0}      # Hz a stage needs
 MAX_POSITION_STEP = 0.01       # m: coarser positions (float32 latitude/longitude) cannot judge centimetres
 COARSE_DELTA = 0.2 * math.pi / 180    # rad: a wheel-angle sensor this coarse biases the yaw refit
+HARD_MIN_DURATION = 30.0      # s: shorter logs are refused; up to min_duration they are judged with a warning
 MIN_COMMANDED_YAW = 0.0125     # rad/s: 0.5 deg of steering at 2 m/s on the paper tractor's 1.4 m wheelbase
 
 
@@ -90,6 +91,13 @@ class Replay:
             return f[name].to_numpy(float) if name in f else np.full(n, np.nan)
 
         self.cmd, self.delta, self.gyro = column("delta_cmd"), column("delta"), column("yaw_rate")
+        vehicle = self.baseline.vehicle
+        # no measured wheel angle, an angle-commanded steering: the yaw stage is driven by the
+        # steering replayed from delta_cmd, whose parameters it then judges; ``delta`` holds the
+        # baseline's replayed angle for the evidence (correlations, binning)
+        self.command_only = "delta" not in f and "delta_cmd" in f and vehicle.steering == "angle"
+        if self.command_only:
+            self.delta = steering_replay(self.cmd, self.h, self.baseline.values, float(self.cmd[0]))
         self.gps = np.column_stack([column("x"), column("y")])
         speed, self.speed_source = speed_estimate(f)
         self.speed = speed if speed is not None else np.full(n, np.nan)
@@ -97,16 +105,17 @@ class Replay:
         q = f.attrs.get("resolution", {}).get("delta") or (resolution(self.delta) if "delta" in f else 0.0)
         self.coarse_delta = q > COARSE_DELTA
         duration = self.t[-1] - self.t[0]
-        if duration < self.min_duration:
-            raise CannotDecide(f"the log lasts {duration:.1f} s; a diagnosis needs at least {self.min_duration:.0f} s "
-                               f"(a fit part and a held-out part, each with turns and straights)")
+        if duration < HARD_MIN_DURATION:
+            raise CannotDecide(f"the log lasts {duration:.2f} s; a diagnosis needs at least {HARD_MIN_DURATION:.0f} s: "
+                               f"a fit part and a held-out part of {self.window:.0f} s windows each, after a "
+                               f"{self.burn_in:.0f} s burn-in (record at least {self.min_duration:.0f} s, better 180 s)")
         if not self.stages:
             raise CannotDecide("nothing to judge: " + "; ".join(f"{s} {why}" for s, why in self.not_judged.items()))
         moving = self.speed > self.min_speed if speed is not None else np.ones(n, bool)
         if speed is not None and moving.mean() < 0.5 and set(self.stages) - {"steering"}:
             raise CannotDecide(f"the vehicle moves (v > {self.min_speed} m/s) in only {100 * moving.mean():.0f}% "
                                f"of the log; the yaw and position replays need it moving")
-        if "steering" in self.stages and self.commanded_yaw() < MIN_COMMANDED_YAW:
+        if ("steering" in self.stages or self.command_only) and self.commanded_yaw() < MIN_COMMANDED_YAW:
             raise CannotDecide(f"delta_cmd hardly varies: it would turn the vehicle at {self.commanded_yaw():.3g} rad/s "
                                f"(std of v delta_cmd / wheelbase; below {MIN_COMMANDED_YAW} rad/s, 0.5 deg of steering "
                                f"at 2 m/s on the paper tractor): nothing excites the steering and yaw dynamics")
@@ -157,6 +166,8 @@ class Replay:
     def _stages(self, f: pd.DataFrame) -> tuple[tuple[str, ...], dict[str, str]]:
         """The stages the log's columns, rate and resolution allow, and why not the others."""
         have = set(f.columns) | ({"speed"} if self.speed_source != "none" else set())
+        if self.command_only:
+            have.add("delta")
         if self.speed_source in ("v", "gnss_speed"):
             have.add("speed not from the track")
         rate = 1.0 / self.h
@@ -164,8 +175,15 @@ class Replay:
         stages, why = [], {}
         for stage, needs in STAGE_NEEDS.items():
             missing = [c for c in needs if c not in have]
-            if missing:
-                why[stage] = "not judged: no " + ", no ".join(NEED_TEXT.get(c, c) for c in missing)
+            if stage == "steering" and self.command_only:
+                missing = ["delta"]
+            if stage in self.baseline.vehicle.not_applicable():
+                why[stage] = "not judged: " + self.baseline.vehicle.not_applicable()[stage]
+            elif missing:
+                why[stage] = "not judged: no " + ", no ".join(_named(c, f.columns) for c in missing)
+                if stage == "steering" and self.command_only and {"yaw_rate", "speed"} <= have:
+                    why[stage] += (" (the log has only the command delta_cmd: the steering's delay, lag, dead-band and "
+                                   "rate limit are judged through the yaw rate instead)")
             elif rate < MIN_RATE[stage]:
                 why[stage] = (f"not judged: the log samples at {rate:.3g} Hz; the {stage} stage needs "
                               f"{MIN_RATE[stage]:g} Hz or more (steering time constants of tens of ms, yaw modes "
@@ -185,7 +203,10 @@ class Replay:
         if stage == "steering":
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
-            return self.yaw.yaw_rate(v)
+            delta = self.replayed_steering(v) if self.command_only else None
+            if math.isfinite(v.get("tyre_friction", math.inf)):
+                return self.saturated_yaw_rate(v, delta)
+            return self.yaw.yaw_rate(v, delta)
         track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
         if stage == "speed":
             k = self.chord_k
@@ -194,6 +215,31 @@ class Replay:
             out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
             return out
         return track
+
+    def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
+        """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
+        a fit of the yaw stage's other parameters replays it once)."""
+        key = tuple(round(float(v[k]), 12) for k in ("steering_time_constant", "steering_deadband",
+                                                      "steering_rate_limit", "command_delay"))
+        cache = self.__dict__.setdefault("_steering_cache", {})
+        if key not in cache:
+            if len(cache) > 32:
+                cache.clear()
+            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]))
+        return cache[key]
+
+    def saturated_yaw_rate(self, v: dict[str, float], delta: np.ndarray | None) -> np.ndarray:
+        """The yaw stage with Magic Formula tyres (SaturatedYawReplay), plus the linear model's
+        response to a side slope."""
+        if getattr(self, "_saturated", None) is None:
+            self._saturated = SaturatedYawReplay(self.baseline.yaw_model, self.baseline.tractor, self.t, self.h,
+                                                 self.delta if delta is None else delta, self.speed, self.min_speed)
+        out = self._saturated.yaw_rate(v, self.delta if delta is None else delta)
+        if v["slope_north"] or v["slope_east"]:
+            R = self.yaw.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                                   v["cornering_reference_speed"], v["relaxation_scale"])
+            out = out + v["slope_north"] * R[:, 2] + v["slope_east"] * R[:, 3]
+        return out
 
     def lateral(self, v: dict[str, float]) -> np.ndarray | None:
         """The rear axle's lateral velocity (side-slip) from the yaw model under ``v``, where the
@@ -233,6 +279,22 @@ class Replay:
             return self.t[rows].ravel(), np.hypot(r[..., 0], r[..., 1]).ravel()
         keep = self.scored(stage)
         return self.t[keep], (self.measured(stage) - self.predicted(stage, v))[keep]
+
+
+def _named(need: str, columns) -> str:
+    """A missing need in words, with the log's column that looks like it (YawRate for yaw_rate)."""
+    from identification.ordinary_driving import similar_columns
+
+    text = NEED_TEXT.get(need, need)
+    near = similar_columns(columns, need) if need in ("delta", "delta_cmd", "yaw_rate", "v", "x", "y") else []
+    return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")
+
+
+def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
+    """The baseline parameters refitted with a stage: the yaw stage of a command-only log also
+    carries the steering's time constant."""
+    extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
+    return tuple(UNCERTAIN[stage]) + tuple(extra)
 
 
 def effective_size(res: np.ndarray) -> float:
@@ -307,7 +369,7 @@ def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     for s in replay.stages:
-        values = _fit(replay, values, list(UNCERTAIN[s]), (s,), [{}], sigma).values
+        values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
     fit = _fit(replay, values, [], replay.stages, [{}], sigma)
     for s in replay.stages:
         sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0

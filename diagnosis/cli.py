@@ -36,14 +36,25 @@ def run(args: argparse.Namespace) -> int:
     from measurements.cli import recording_options
     from measurements.recording import describe
 
+    import time
+
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:
+        print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+
     result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                      resample=args.resample, recording=recording_options(args))
+                      resample=args.resample, recording=recording_options(args), progress=progress)
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
-    print(f"verdict: {result['verdict']}")
+    ties = [t for t in result.get("inconclusive", []) if t["effects"][0] == result["verdict"]]
+    print(f"verdict: {result['verdict']}" + (f" (inconclusive: or {', '.join(t['effects'][1] for t in ties)})"
+                                            if ties else ""))
+    for item in result.get("not_identifiable", []):
+        print(f"  {item['id']}: {item['why']}")
     for e in result["effects"]:
         if e["id"] == "unexplained":
             xc, ext = e["correlates_with"], e["extension"]
@@ -55,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {e['id']:26s} dBIC {e['delta_bic']:9.1f}  held-out gain {100 * e['held_out_gain']:5.1f}%  "
               + ", ".join(f"{k} = {v:.4g}" for k, v in e["parameters_display"].items()))
     for tie in result.get("inconclusive", []):
-        print(f"  inconclusive: {' or '.join(tie['effects'])}; {tie['experiment']}")
+        print(f"  inconclusive: {' or '.join(tie['effects'])}: {tie['why']}; {tie['experiment']}")
     for w in result.get("warnings", []):
         print(f"warning: {w}", file=sys.stderr)
     print(f"report: {args.out}/report.md" + (f", extended study: {args.out}/{result['extended_study']}"

@@ -74,6 +74,11 @@ class Effect:
         """[(role, parameter, SI value)]: the component options that carry the fitted effect."""
         raise NotImplementedError
 
+    def hypothesis_for(self, stages) -> str:
+        """The hypothesis in terms of the stages this log judged it on (a log without GPS is not
+        told about the GPS track)."""
+        return self.hypothesis
+
     def display(self, fitted: Mapping[str, float]) -> dict[str, float]:
         """The fitted parameters as a person reads them ('name [unit]' -> value)."""
         return {f"{p.name} [{p.display_unit or p.unit}]": fitted[p.name] * p.display_factor for p in self.parameters}

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from measurements import LogError, load_log
+from measurements import LogError
 from orchestrator.results import atomic_write, write_json
 from orchestrator.study import load_study
 
@@ -36,7 +36,11 @@ def _study_options(finding: Finding, baseline) -> list[tuple[str, str, float]]:
     return out
 
 
-def _finding_json(f: Finding, baseline) -> dict:
+def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
+    """The one JSON shape of a judged effect, whether it is in the final model (``effects``,
+    judged by its drop-one comparison) or tried alone against the baseline (``findings``):
+    every fitted parameter with its value, standard deviation, 95 % interval and the bounds it
+    was searched in, so that anyone can see how far it is from them."""
     try:
         options = _study_options(f, baseline)
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
@@ -44,59 +48,54 @@ def _finding_json(f: Finding, baseline) -> dict:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
     signals = ", ".join(f"{k} {f.rmse_before[k]:.4g} -> {f.rmse_after[k]:.4g} {SIGNALS[s][1]}"
                         for s in f.stages for k in [SIGNALS[s][0]])
-    params = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
-    summary = (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis}. Fitted {params}; "
-               f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}.")
+    shown = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
+    fitted = {}
+    for p in f.effect.parameters:
+        value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
+        fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
+                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p)}
     return {
-        "effect": f.effect.id,
+        "id": f.effect.id,
         "subsystem": f.effect.subsystem,
-        "params": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
-        "params_display": f.effect.display(f.fit.values),
+        "hypothesis": f.effect.hypothesis_for(f.stages),
+        "parameters": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
+        "parameters_display": f.effect.display(f.fit.values),
+        "fitted": fitted,
+        "delta_bic": f.delta_bic,
+        "held_out_gain": f.gain,
+        "gain_by_signal": f.gain_by_signal,
         "rmse_before": f.rmse_before,
         "rmse_after": f.rmse_after,
-        "gain": f.gain,
-        "evidence": {
-            "supported": f.supported,
-            "reasons": f.reasons,
-            "delta_bic": f.delta_bic,
-            "gain_by_signal": f.gain_by_signal,
-            "n_eff": f.fit.n_eff,
-            "param_std": {k: v for k, v in f.fit.std.items() if k in {p.name for p in f.effect.parameters}},
-            "materiality": f.effect.threshold,
-            "material": f.material,
-            "refit_baseline": {k: f.fit.values[k] for k in REFIT},
-            "study_option": option_text,
-            "summary": summary,
-        },
+        "residual_by_stage": {s: {"rms_without": f.rmse_before[SIGNALS[s][0]], "rms_with": f.rmse_after[SIGNALS[s][0]],
+                                  "unit": SIGNALS[s][1]} for s in f.stages},
+        "supported": f.supported,
+        "reasons": f.reasons,
+        "material": f.material,
+        "materiality": f.effect.threshold,
+        "n_eff": f.fit.n_eff,
+        "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
+        "study_option": option_text,
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {shown}; "
+                    f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
+        "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
         "_options": options,
     }
 
 
-def _effect_json(f: Finding, baseline, inconclusive: list[dict]) -> dict:
-    """One effect of the final model, judged by its drop-one comparison."""
-    item = _finding_json(f, baseline)
-    names = {p.name for p in f.effect.parameters}
-    return {
-        "id": f.effect.id,
-        "subsystem": f.effect.subsystem,
-        "hypothesis": f.effect.hypothesis,
-        "parameters": {k: v for k, v in item["params"].items()},
-        "parameters_display": item["params_display"],
-        "std": {k: v for k, v in f.fit.std.items() if k in names},
-        "delta_bic": f.delta_bic,
-        "held_out_gain": f.gain,
-        "residual_by_stage": {s: {"rms_without": f.rmse_before[SIGNALS[s][0]], "rms_with": f.rmse_after[SIGNALS[s][0]],
-                                  "unit": SIGNALS[s][1]} for s in f.stages},
-        "study_option": item["evidence"]["study_option"],
-        "summary": item["evidence"]["summary"],
-        "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
-        "_options": item["_options"],
-    }
+def at_bound(value: float, p) -> str | None:
+    """'lower' or 'upper' when a fitted value ends within 0.5 % of the searched range of a bound."""
+    span = p.upper - p.lower
+    for side, b in (("lower", p.lower), ("upper", p.upper)):
+        if abs(value - b) <= 5e-3 * span:
+            return side
+    return None
 
 
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
     """What makes a verdict on this log fragile (issue 15, item 4)."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
+    if replay.not_judged:
+        out.append(f"the log's columns: {', '.join(map(str, replay.frame.columns))}")
     if replay.speed_source != "v" and set(replay.stages) & {"yaw", "position"}:
         out.append({"gnss_speed": "no wheel speed v: the yaw and position replays run on the receiver's speed over ground",
                     "track": "no speed column: the yaw replay runs on the speed of the GPS track"}[replay.speed_source])
@@ -148,9 +147,32 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
+LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
+COARSE_RATE = 10.0       # Hz: the rate the steering and yaw stages need (MIN_RATE): every replay's cost grows
+                         # with the samples, and a long log has the turns and speeds to judge at that rate
+
+
+def coarser_clock(frame):
+    """(frame, note): a long fast log averaged over blocks of k samples to at most COARSE_RATE
+    (the cost of every replay grows with the samples; the dynamics judged live below 5 Hz)."""
+    t = frame["t"].to_numpy(float)
+    if len(t) < 3 or t[-1] - t[0] <= LONG_LOG:
+        return frame, None
+    rate = 1.0 / float(np.median(np.diff(t)))
+    k = int(rate // COARSE_RATE)
+    if k < 2:
+        return frame, None
+    n = len(frame) // k * k
+    numeric = frame.select_dtypes("number").iloc[:n]
+    out = numeric.groupby(np.arange(n) // k).mean().reset_index(drop=True)
+    out.attrs = dict(frame.attrs)
+    return out, (f"the log lasts {t[-1] - t[0]:.0f} s at {rate:.3g} Hz: averaged over blocks of {k} samples to "
+                 f"{rate / k:.3g} Hz to bound the cost (steering time constants below 0.1 s are not resolved)")
+
+
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None) -> dict:
+             recording=None, progress=None) -> dict:
     """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
@@ -163,9 +185,13 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         from measurements.recording import ImportOptions
 
         recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
-        frame, imported = load_log(log_path, resample_jitter=resample, recording=recording)
+        from identification.from_log import read_uneven
+
+        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study)
         if imported is not None:
             result["recording"] = imported
+        frame, note = coarser_clock(frame)
+        note = "; ".join(x for x in (stretch, note) if x) or None
         replay = Replay(frame, baseline, fit_fraction=fit_fraction)
     except (LogError, CannotDecide) as exc:
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
@@ -173,7 +199,10 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         result["split_time"] = float("nan")
         _write(out, result, [])
         return result
+    say = progress or (lambda text: None)
+    say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
     sel = select(replay, min_gain, seed=study.study.seed)
+    say("effects selected; judging the stages against their noise floors")
     base = sel.base
     final, floors = sel.final, sel.floors
     judged = replay.stages
@@ -185,14 +214,26 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
-    effects = [_effect_json(f, baseline, sel.inconclusive) for f in sel.effects]
+    effects = [finding_json(f, baseline, sel.inconclusive) for f in sel.effects]
     options = [o for e in effects for o in (e.pop("_options") or [])]
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
-    result["verdict"] = effects[0]["id"] if effects else ("unexplained" if unexplained else "none")
+    # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
+    unidentifiable = [e for e in effects if any(p["at_bound"] for p in e["fitted"].values())]
+    for e in unidentifiable:
+        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"]}
+        e["not_identifiable"] = "; ".join(
+            f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
+            for n, p in bound.items())
+    answers = [e for e in effects if e not in unidentifiable]
+    result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
+                                  for e in unidentifiable]
+    result["verdict"] = answers[0]["id"] if answers else ("unexplained" if unexplained else "none")
     result["inconclusive"] = sel.inconclusive
+    result["verdict_status"] = ("inconclusive" if any(t["effects"][0] == result["verdict"] for t in sel.inconclusive)
+                                else "conclusive")
     result["selection_trace"] = sel.trace
-    result["warnings"] = _warnings(replay, base, floors)
+    result["warnings"] = _warnings(replay, base, floors) + ([note] if note else [])
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
@@ -201,12 +242,13 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in judged}
     if effects:
         result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in judged}
-    items = [_finding_json(f, baseline) for f in sel.first_step]
+    items = [finding_json(f, baseline) for f in sel.first_step]
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
     files = []
     if plots:
+        say("figures")
         touched = {s for f in sel.effects for s in f.stages}
         for s in judged:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
@@ -224,13 +266,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
-    def clean(v):
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, list):
-            return [clean(x) for x in v]
-        return v
-    write_json(out / "diagnosis.json", clean(result))
+    from identification.from_log import finite_for_json
+
+    write_json(out / "diagnosis.json", finite_for_json(result))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

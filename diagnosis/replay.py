@@ -77,7 +77,8 @@ class YawReplay:
         the cornering stiffnesses and in 1/sigma (the relaxation lengths) at a given speed (every
         physical model), so they are assembled from parts computed once:
         A = A_0(v) + (1/s - 1) A_sigma(v) + c(v) (s_f C_f A_f(v) + s_r C_r A_r(v)), s the scale
-        on both relaxation lengths, A_sigma the part of A_0 proportional to 1/sigma."""
+        on both relaxation lengths, A_sigma the part of A_0 proportional to 1/sigma; likewise B, whose
+        delta column holds C_f in the bicycle model (B_f)."""
         if self._parts is None:
             zero = replace(self.params, C_f=0.0, C_r=0.0)
             longer = replace(zero, sigma_f=2 * zero.sigma_f, sigma_r=2 * zero.sigma_r)
@@ -85,16 +86,18 @@ class YawReplay:
             for speed in self.speeds:
                 A0, B, _ = state_space(self.model, zero, speed)
                 A2, B2, _ = state_space(self.model, longer, speed)
-                Af = state_space(self.model, replace(zero, C_f=self.params.C_f), speed)[0] - A0
+                front = state_space(self.model, replace(zero, C_f=self.params.C_f), speed)
+                Af, Bf = front[0] - A0, front[1] - B        # the bicycle model's B holds C_f too
                 Ar = state_space(self.model, replace(zero, C_r=self.params.C_r), speed)[0] - A0
                 E = lateral_disturbance_column(len(B))
                 parts.append((A0, 2 * (A0 - A2), Af, Ar, np.column_stack([B, E]),
-                              np.column_stack([2 * (B - B2), np.zeros_like(E)])))
+                              np.column_stack([2 * (B - B2), np.zeros_like(E)]), np.column_stack([Bf, np.zeros_like(E)])))
             self._parts = [np.array(x) for x in zip(*parts)]
-        A0, As, Af, Ar, B, Bs = self._parts
+        A0, As, Af, Ar, B, Bs, Bf = self._parts
         c = np.array([cornering_scale(v, speed_slope, v_ref) for v in self.speeds])[:, None, None]
         k = 1.0 / relaxation_scale - 1.0
-        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs, self.h)
+        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar),
+                              B + k * Bs + c * front_scale * Bf, self.h)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
@@ -103,10 +106,24 @@ class YawReplay:
         u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
         return blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0] * u.shape[1]] * u[:, None, :], row=1)
 
-    def yaw_rate(self, v: Mapping[str, float]) -> np.ndarray:
+    def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
+        """The yaw rate under ``v``, driven by the measured wheel angle, or by ``delta`` (a wheel
+        angle replayed from the command, when the log has none measured)."""
         R = self.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                            v["cornering_reference_speed"], v["relaxation_scale"])
-        return R[:, 0] + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
+        if delta is None:
+            first = R[:, 0]
+        else:                                   # memoised on the input array and the yaw values
+            key = (id(delta), round(v["cornering_front_scale"], 12), round(v["cornering_rear_scale"], 12),
+                   round(v["cornering_speed_slope"], 12), v["cornering_reference_speed"], round(v["relaxation_scale"], 12))
+            hit = self._cache.get(("input",) + key)
+            if hit is None or hit[0] is not delta:
+                hit = (delta, self.response_to(np.asarray(delta, float)[:, None], v)[:, 0])
+                if len(self._cache) > 64:
+                    self._cache.clear()
+                self._cache[("input",) + key] = hit
+            first = hit[1]
+        return first + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
 
     def rear_lateral_velocity(self, v: Mapping[str, float]) -> np.ndarray:
@@ -214,3 +231,54 @@ def heading_estimate(t: np.ndarray, gps: np.ndarray, yaw_rate: np.ndarray, speed
         return psi
     offset = np.interp(np.arange(len(t)), np.flatnonzero(good), np.unwrap(np.angle(zs[good])))
     return psi + offset
+
+
+class SaturatedYawReplay:
+    """The yaw model with Magic Formula tyres (components.models.tyre) on every sample of the log.
+
+    A nonlinear model has no response to superpose: it is simulated, in pieces of ``piece`` s run
+    side by side (identification.driving.YawModel), each from a kinematic state ``burn_in`` s
+    before it, so a simulation costs one pass over a piece (the slip dynamics forget their start
+    within a few time constants, tenths of a second). A side slope enters through the linear
+    model's response to it (its share of the lateral force is small beside the turn's)."""
+
+    def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
+                 v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0) -> None:
+        from identification.driving import DrivingLog, Segments, YawModel
+
+        n = len(t)
+        P, B = max(2, int(round(piece / h))), int(round(burn_in / h))
+        rows = [(max(0, a - B), a, min(n, a + P)) for a in range(0, n, P)]
+        L = max(b - s for s, _, b in rows)
+        idx = np.empty((len(rows), L), int)
+        for i, (s, a, b) in enumerate(rows):
+            idx[i, : b - s] = np.arange(s, b)
+            idx[i, b - s:] = b - 1
+        self.rows = rows
+        self.log = DrivingLog(np.asarray(t, float), np.asarray(delta, float), np.asarray(v, float), np.zeros(n),
+                              np.zeros(n, int), h, "delta")
+        segs = Segments(idx, np.ones_like(idx, bool), np.zeros(len(rows), bool))
+        self.model = YawModel(model, params, self.log, segs, max_substep=0.04, min_sim_speed=min_speed)
+        self.loads = self.model.loads
+        self.params = params
+
+    def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
+        """The gyro's yaw rate under the replay's values ``v`` (without the slope's share)."""
+        from dataclasses import replace as _replace
+
+        if delta is not None:
+            self.log.u = np.asarray(delta, float)
+        p = self.params
+        scale = v["relaxation_scale"]
+        self.model.p = _replace(p, sigma_f=p.sigma_f * scale, sigma_r=p.sigma_r * scale)
+        Fzf, Fzr = self.loads
+        values = {"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
+                  "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
+                  "friction": v["tyre_friction"], "shape": v["tyre_shape"],
+                  "cornering_speed_slope": v["cornering_speed_slope"],
+                  "cornering_reference_speed": v["cornering_reference_speed"]}
+        sim = self.model.simulate(values)
+        out = np.empty(len(self.log.t))
+        for i, (s, a, b) in enumerate(self.rows):
+            out[a:b] = sim[i, a - s: b - s]
+        return out

@@ -129,10 +129,10 @@ def markdown(result: dict, plots: list[str]) -> str:
               "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",
               "|---|---|---:|---:|---|---|---|"]
     for f in result["findings"]:
-        params = ", ".join(f"{k} = {v:.4g}" for k, v in f["params_display"].items())
-        lines.append(f"| {f['effect']} | {f['subsystem']} | {f['evidence']['delta_bic']:.1f} | "
-                     f"{100 * f['gain']:.1f}% | {params} | {'yes' if f['evidence']['supported'] else 'no'} | "
-                     f"{'; '.join(f['evidence']['reasons'])} |")
+        params = ", ".join(f"{k} = {v:.4g}" for k, v in f["parameters_display"].items())
+        lines.append(f"| {f['id']} | {f['subsystem']} | {f['delta_bic']:.1f} | "
+                     f"{100 * f['held_out_gain']:.1f}% | {params} | {'yes' if f['supported'] else 'no'} | "
+                     f"{'; '.join(f['reasons'])} |")
     lines += ["", "## Baseline residuals", ""]
     for stage, ev in result["residuals"].items():
         lines.append(f"- **{stage}**: RMS {ev['rms_fit']:.4g} (fit) / {ev['rms_test']:.4g} (held out)"

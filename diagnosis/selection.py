@@ -30,10 +30,15 @@ the final model refitted without it (held-out RMS per stage with and without it)
 """
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
-from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged
+import numpy as np
+
+from components.models.yaw_dynamics import GRAVITY
+
+from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -111,7 +116,7 @@ def group(stages: set[str], members: list[Effect], available=STAGES) -> tuple[tu
 
 
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> Fit:
-    free = [p for s in stages for p in UNCERTAIN[s]] + [p for e in effects for p in e.parameters]
+    free = list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] + [p for e in effects for p in e.parameters]))
     return _fit(replay, values, free, stages, starts, sigma)
 
 
@@ -131,9 +136,14 @@ class Selection:
 class Selector:
     def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
-        self.base_values = replay.baseline.values
+        from .effects.tyre_saturation import LATERAL_KEY
+
+        moving = replay.speed > replay.min_speed
+        a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
+        # the baseline's values, and what a materiality rule reads of the log itself
+        self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0}
         # the effects this log can judge: one of their stages replayed, the columns they read there
-        self.catalogue = [e for e in CATALOGUE if set(e.stages) & set(replay.stages)
+        self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs)]
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
@@ -169,7 +179,8 @@ class Selector:
 
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
-        model, members, trace, inconclusive = base, [], [], []
+        trace_gate = self.saturation_gate(base)
+        model, members, trace, inconclusive = base, [], [trace_gate] if trace_gate else [], []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
@@ -189,13 +200,22 @@ class Selector:
             best = supported[0]
             rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
                       and set(f.effect.stages) & set(best.effect.stages)]
+            # a rival that is not supported itself (dBIC not strong, or immaterial) but within TIE of
+            # the best and with evidence for it: the log cannot tell the two apart
+            near = [f for f in trials if f not in supported and f.effect is not best.effect and f.delta_bic < 0
+                    and 0.0 <= f.delta_bic - best.delta_bic < TIE and set(f.effect.stages) & set(best.effect.stages)
+                    and f.effect.id not in removed]
+            for rival in near:
+                inconclusive.append(_tie(best, rival, "it is not supported on its own (" + "; ".join(rival.reasons)
+                                         + ") but its evidence is within the margin of the chosen one's"))
             members = members + [best.effect]
             model = merged(model, best.fit)
             trace.append(f"+ {best.effect.id} (dBIC {best.delta_bic:.1f})")
             for rival in rivals:
                 again = self.add(model, members, rival.effect)
                 if not again.supported:
-                    inconclusive.append(_tie(best, rival))
+                    inconclusive.append(_tie(best, rival, "both are supported alone, and with the chosen one in the "
+                                                          "model the other adds nothing"))
             for f in list(members[:-1]):
                 check = self.drop(model, members, f)
                 if not check.supported:
@@ -204,10 +224,43 @@ class Selector:
                     removed.add(f.id)
                     trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
         model, members = self.absorbed(model, members, trace)
+        seen, ties = set(), []
+        for t in inconclusive:                       # one entry per pair, the chosen effect still in the model
+            key = tuple(t["effects"])
+            if key not in seen and t["effects"][0] in {m.id for m in members}:
+                seen.add(key)
+                ties.append(t)
+        inconclusive = ties
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def saturation_gate(self, base: Fit) -> str | None:
+        """Tyre saturation is tried only where the linear model's misfit grows with |a_y|: in the
+        top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
+        vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
+        the predicted yaw rate there. Otherwise it is left out (and the trace says why)."""
+        effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
+        if effect is None:
+            return None
+        replay = self.replay
+        keep = replay.scored("yaw")
+        predicted = replay.predicted("yaw", base.values)[keep]
+        res = replay.gyro[keep] - predicted
+        a_y = np.abs(replay.speed[keep] * replay.gyro[keep])
+        top = a_y >= np.percentile(a_y, 90)
+        signed = (res * np.sign(predicted))[top]
+        n_eff = max(2.0, len(signed) * base.n_eff.get("yaw", len(res)) / max(base.n.get("yaw", len(res)), 1))
+        mean, se = float(signed.mean()), float(signed.std() / math.sqrt(n_eff))
+        shortfall = -mean / max(float(np.mean(np.abs(predicted[top]))), 1e-9)
+        text = (f"where |a_y| > {np.percentile(a_y, 90):.3g} m/s2 the baseline's yaw residual signed by the turn "
+                f"is {mean:+.3g} rad/s (t = {mean / se if se > 0 else 0.0:.1f}, {100 * shortfall:.0f} % of the "
+                f"predicted yaw rate)")
+        if se > 0 and mean / se < -3.0 and shortfall > 0.05:
+            return f"tyre_saturation tried: {text}"
+        self.catalogue = [e for e in self.catalogue if e is not effect]
+        return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
 
     def evaluate(self, model: Fit) -> tuple[Fit, dict]:
         """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
@@ -228,7 +281,10 @@ class Selector:
         """Two effects of one misfit stage that only explain it together (a dead-band with a rate
         limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
         misfit = self.misfit_stages(model)
-        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)]
+        # (a nonlinear effect is not paired: its replay is costly and a pair is for two small
+        # steering nonlinearities that only fit together)
+        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)
+                and e.id != "tyre_saturation"]
         best = None
         for i, a in enumerate(pool):
             for b in pool[i + 1:]:
@@ -288,9 +344,45 @@ class Selector:
         return model, members
 
 
-def _tie(best: Finding, rival: Finding) -> dict:
+def restaged(effect: Effect, replay: Replay) -> Effect:
+    """The effect as this log and this vehicle judge it: on a log with only the steering command,
+    a steering effect is judged in the yaw stage (the replayed steering drives the yaw model); its
+    parameters are searched within what the study's [vehicle] allows (vehicle_bounds)."""
+    if getattr(replay, "command_only", False) and "steering" in effect.stages:
+        effect = copy.copy(effect)
+        effect.stages = tuple(dict.fromkeys("yaw" if s == "steering" else s for s in effect.stages))
+    bounds = vehicle_bounds(replay.baseline.vehicle)
+    if any(p.name in bounds for p in effect.parameters):
+        effect = copy.copy(effect)
+        effect.parameters = tuple(replace(p, lower=bounds[p.name][0], upper=bounds[p.name][1]) if p.name in bounds else p
+                                  for p in effect.parameters)
+    return effect
+
+
+def vehicle_bounds(vehicle) -> dict[str, tuple[float, float]]:
+    """Search ranges from the vehicle's class and outline (none when the study does not say):
+    a gyro bias a gyro of its class can have, a slope its roads or fields can have (as the lateral
+    pull g sin(phi)), an antenna inside its outline."""
+    out = {}
+    if vehicle.gyro_bias_bound:
+        out["yaw_rate_bias"] = (-vehicle.gyro_bias_bound, vehicle.gyro_bias_bound)
+    if vehicle.slope_bound:
+        pull = GRAVITY * math.sin(vehicle.slope_bound)
+        out["slope_east"] = out["slope_north"] = (-pull, pull)
+    if vehicle.kind:
+        out["tyre_friction"] = vehicle.friction_range
+    arm = vehicle.lever_arm_bounds()
+    if arm:
+        out["antenna_forward"], out["antenna_left"] = arm
+    return out
+
+
+def _tie(best: Finding, rival: Finding, why: str) -> dict:
+    margin = rival.delta_bic - best.delta_bic
     return {"effects": [best.effect.id, rival.effect.id],
             "delta_bic": [best.delta_bic, rival.delta_bic],
+            "margin": margin,
+            "why": f"{rival.effect.id} is within {margin:.1f} of {best.effect.id}'s dBIC (a tie below {TIE:g}): {why}",
             "chosen": best.effect.id,
             "experiment": f"to tell {best.effect.id} from {rival.effect.id}: {best.effect.experiment}; "
                           f"{rival.effect.experiment}"}

@@ -67,7 +67,8 @@ def healthy_levels(replay, values: dict, floors: dict, seed: int = 0) -> dict:
     the others, and a log without a steering command, from their noise floors and the quantised
     wheel angle alone)."""
     h = replay.h
-    q = replay.frame.attrs.get("resolution", {}).get("delta") or resolution(replay.delta)
+    q = 0.0 if getattr(replay, "command_only", False) else \
+        (replay.frame.attrs.get("resolution", {}).get("delta") or resolution(replay.delta))
     out = {"delta_resolution": q, "how": {}, **{s: floors[s] for s in replay.stages}}
     if "steering" not in replay.stages:
         if "yaw" in replay.stages and q > 0:

@@ -78,6 +78,8 @@ def _hats(x: np.ndarray, knots: np.ndarray) -> np.ndarray:
     end knots (the end segments' slopes), so that a map fitted on part of the range extrapolates
     like a straight line instead of going flat."""
     k = np.asarray(knots, float)
+    if len(k) < 2:                                     # a signal on one value: no map to fit
+        return np.zeros((len(x), 1))
     i = np.clip(np.searchsorted(k, x, side="right") - 1, 0, len(k) - 2)
     w = (x - k[i]) / (k[i + 1] - k[i])                 # < 0 left of the range, > 1 right of it
     out = np.zeros((len(x), len(k)))
@@ -101,6 +103,8 @@ def _time_series_extension(replay, stage: str, values: dict, signals: dict, only
             if only and only[0] != kind:
                 continue
             X = np.column_stack([np.ones(len(xs)), X])
+            if not (np.all(np.isfinite(X[fit])) and np.all(np.isfinite(res[fit]))):
+                continue
             coef, *_ = np.linalg.lstsq(X[fit], res[fit], rcond=None)
             rss = float(np.sum((res[fit] - X[fit] @ coef) ** 2))
             n = int(fit.sum())

@@ -15,6 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "recording convert reads: NMEA, a bag, a TLG time log, a lat/lon table)")
     p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it (EPSG:6677 ...)")
     p.add_argument("--out", type=Path, default=None, help="folder for fields.png, fields.json, fields.geojson")
+    p.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; default "
+                   "1G for a file read whole, 16G for a recording read as a stream)")
     t = p.add_argument_group("a field from a track (--from-track)")
     t.add_argument("--from-track", action="store_true", help="the field a machine worked: the outline of the ground "
                    "its track covered and its straight passes as AB lines (write it with --out, plan it with plan "
@@ -27,10 +29,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from orchestrator.source_files import set_limit
     from orchestrator.output import check_output
     from orchestrator.results import atomic_write, write_json
 
     from .readers import read_fields, read_folder
+
+    set_limit(args.max_file_size)
 
     if args.out is not None:
         check_output(args.out, overwrite=True)
@@ -109,6 +114,7 @@ def draw(fields, path: Path, title: str) -> Path:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     from orchestrator.results import atomic_write
 
     shown = fields[:12]

@@ -4,12 +4,14 @@ WGS 84). fields.readers makes fields of them. Parsed with the standard library's
 KML's geometry is a few elements, whatever its namespace (KML 2.0-2.2, Google's gx)."""
 from __future__ import annotations
 
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 import numpy as np
 from shapely.geometry import LineString, Polygon
+
+from orchestrator.source_files import LIMITS, regular_file, size_text
 
 from .field import FieldError
 
@@ -20,10 +22,16 @@ def _local(tag: str) -> str:
 
 def _coordinates(el, where: str) -> np.ndarray:
     text = next((c.text or "" for c in el.iter() if _local(c.tag) == "coordinates"), "")
-    try:
-        pts = [[float(v) for v in tup.split(",")[:2]] for tup in text.split() if tup.strip()]
-    except ValueError as exc:
-        raise FieldError(f"{where}: coordinates are not 'longitude,latitude[,altitude]' tuples: {exc}") from None
+    pts = []
+    for k, tup in enumerate(t for t in text.split() if t.strip()):
+        try:
+            values = [float(v) for v in tup.split(",")]
+        except ValueError:
+            values = []
+        if len(values) not in (2, 3):
+            raise FieldError(f"{where}: coordinate tuple {k + 1} is {tup[:40]!r}; expected 'longitude,latitude"
+                             f"[,altitude]' (tuples apart by blanks, numbers within one by commas)")
+        pts.append(values[:2])
     return np.array(pts, float).reshape(-1, 2)
 
 
@@ -31,14 +39,20 @@ def kml_root(path: Path):
     """The KML document of a .kml file, or of the first .kml inside a .kmz."""
     try:
         if path.suffix.lower() == ".kmz":
-            with zipfile.ZipFile(path) as z:
+            with zipfile.ZipFile(regular_file(path, FieldError)) as z:
                 names = [n for n in z.namelist() if n.lower().endswith(".kml")]
                 if not names:
                     raise FieldError(f"{path}: a KMZ without a .kml file in it (found {', '.join(z.namelist()[:5])})")
                 name = "doc.kml" if "doc.kml" in names else names[0]
+                size = z.getinfo(name).file_size
+                if size > LIMITS["whole"]:
+                    raise FieldError(f"{path}: {name} unpacks to {size_text(size)}, above the {size_text(LIMITS['whole'])} "
+                                     f"limit for a file read whole into memory (--max-file-size raises it)")
                 return ET.fromstring(z.read(name))
-        return ET.parse(path).getroot()
-    except (ET.ParseError, OSError, zipfile.BadZipFile) as exc:
+        return ET.parse(regular_file(path, FieldError)).getroot()
+    except FieldError:
+        raise
+    except (ET.ParseError, OSError, zipfile.BadZipFile, LookupError, ValueError) as exc:      # LookupError: an unknown encoding
         raise FieldError(f"{path}: not a readable {'KMZ' if path.suffix.lower() == '.kmz' else 'KML'} file: {exc}") from None
 
 

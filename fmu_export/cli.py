@@ -15,11 +15,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from orchestrator.observers import Stage
     from orchestrator.study import Study
 
     from .controller import export_controller
 
-    out = export_controller(Study.load(args.study, args.set), args.out, args.fmi_version)
+    study = Study.load(args.study, args.set)
+    with Stage(f"export-controller: generating the C code and compiling {args.out.name} (cmake and the C compiler)"):
+        out = export_controller(study, args.out, args.fmi_version)
     print(f"controller of {args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation)")
     return 0
 
@@ -33,11 +36,15 @@ def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_ssp(args: argparse.Namespace) -> int:
+    from orchestrator.observers import Stage
     from orchestrator.study import Study
 
     from .ssp_export import export_ssp
 
-    out = export_ssp(Study.load(args.study, args.set), args.out)
+    study = Study.load(args.study, args.set)
+    with Stage(f"export-ssp: compiling {len(study.components)} FMUs, one per component (cmake and the C "
+               f"compiler), and validating the SSD"):
+        out = export_ssp(study, args.out)
     print(f"{args.study} exported to {out} (SSP 1.0: SystemStructure.ssd and one FMI 2.0 FMU per component)")
     return 0
 

@@ -56,6 +56,9 @@ def _plant_compiled(comp: Component, period: float) -> str:
     if model not in PHYSICAL_MODELS:
         raise ComponentExportError(f"components.{comp.name}: model = {model!r} has no FMU form "
                                    f"(the exported plant covers {', '.join(PHYSICAL_MODELS)})")
+    if comp.p["terrain_file"]:
+        raise ComponentExportError(f"components.{comp.name}: terrain_file = {comp.p['terrain_file']!r} has no FMU "
+                                   f"form (the exported plant's ground is the plane of slope_angle)")
     return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n"
 
 
@@ -70,7 +73,15 @@ def _steering_compiled(comp: Component, period: float) -> str:
     return _substeps(comp, period) + f"#define DELAY_STEPS {int(round(float(comp.p['command_delay']) / period))}\n"
 
 
+GPS_QUALITY_PARAMETERS = ("outages", "quality_log", "quality_log_start", "rtk_float_error_std", "dgps_error_std",
+                          "single_error_std", "degraded_error_time_constant")
+
+
 def _gps_compiled(comp: Component, period: float) -> str:
+    for key in ("outages", "quality_log"):
+        if comp.p[key]:
+            raise ComponentExportError(f"components.{comp.name}: {key} = {comp.p[key]!r} has no FMU form (the "
+                                       f"exported receiver has an RTK fix or random dropouts)")
     return f"#define LAG {int(round(float(comp.p['latency']) / period))}\n#define LATENCY {float(comp.p['latency'])!r}\n"
 
 
@@ -104,10 +115,10 @@ SPECS: dict[str, CoreSpec] = {
     "Figure8Reference": CoreSpec("figure8_reference.c"),
     "TractorYawPlant": CoreSpec("tractor_yaw_plant.c", _plant_compiled,
                                 ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
-                                 "cornering_scale_rear"), _plant_values),
+                                 "cornering_scale_rear", "terrain_file"), _plant_values),
     "SteeringHydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay")),
     "SpeedDrivetrain": CoreSpec("speed_drivetrain.c", _substeps, ("internal_step",)),
-    "GPSSensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",),
+    "GPSSensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",) + GPS_QUALITY_PARAMETERS,
                           extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
                           extra_values=_gps_seed),
     "SpeedKF": CoreSpec("speed_kf.c"),

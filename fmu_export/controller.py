@@ -106,7 +106,7 @@ def controller_dependencies(measured_input: bool) -> dict[str, list[str]]:
     pose = ["tracker_x_ref", "tracker_y_ref", "tracker_x", "tracker_y", "tracker_xdot_ref", "tracker_ydot_ref",
             "tracker_heading"]
     speed_desired = pose
-    yaw_rate_desired = pose + ["tracker_yaw_rate_ref"]
+    yaw_rate_desired = pose + ["tracker_yaw_rate_ref", "tracker_lateral_velocity"]
     steer = yaw_rate_desired + ["mpc_yaw_rate"] + (["mpc_steer_angle"] if measured_input else [])
     pedal = speed_desired + ["speed_controller_speed"]
     return {"tracker_speed_desired": speed_desired, "tracker_yaw_rate_desired": yaw_rate_desired,

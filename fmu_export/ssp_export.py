@@ -50,7 +50,12 @@ def system_structure(system: System, models: dict) -> str:
     for name, model in models.items():
         node = system.nodes[name]
         connectors = []
+        # an input no connection drives is left out: it keeps the FMU's start value (fmpy's SSP master
+        # would tie an unconnected input connector to the source of the one listed before it)
+        driven = {fmu_input_name(node.component, inp) for inp, _, _ in node.sources}
         for port, unit, _ in model.inputs:
+            if port not in driven:
+                continue
             connectors.append(f'          <ssd:Connector name={quoteattr(port)} kind="input"><ssc:Real unit={quoteattr(unit)}/></ssd:Connector>')
             units.add(unit)
         for port, unit, _ in model.outputs:

@@ -16,7 +16,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--speed", type=float, help="log: speed [m/s] (median of v if not given)")
     p.add_argument("--band", type=float, nargs=2, metavar=("F_MIN", "F_MAX"), help="log: lines to fit [Hz]")
     p.add_argument("--models", nargs="+", help="log: structures to fit")
-    p.add_argument("--delay", action="store_true", help="log: fit a pure delay too")
+    p.add_argument("--delay", action="store_true", help="log: fit a pure delay too (multisine)")
+    p.add_argument("--method", choices=("auto", "multisine", "driving"), default="auto",
+                   help="log: 'multisine' (a designed periodic experiment: FRF and frequency-domain fits), 'driving' "
+                   "(ordinary driving: a time-domain fit held out on segments), 'auto' (multisine when delta_cmd repeats "
+                   "with a period, else driving)")
     p.add_argument("--study", type=Path, default=None, help="log: the vehicle's study (its yaw plant's mass and axle "
                    "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
     p.add_argument("--resample", action="store_true",
@@ -48,11 +52,18 @@ def run(args: argparse.Namespace) -> int:
             from measurements.cli import recording_options
             from measurements.recording import describe
 
+            study = Study.load(args.study) if args.study else None
+            if args.method != "multisine":
+                from .from_log import identify_driving_log, wants_driving
+
+                if args.method == "driving" or wants_driving(args.source, args.resample, recording_options(args), study):
+                    return identify_driving_log(args.source, args.out, study, plots=not args.no_plots,
+                                                resample=args.resample, recording=recording_options(args))
             report = identify_log(args.source, args.out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
                                   plots=not args.no_plots, resample=args.resample,
                                   recording=recording_options(args),
-                                  study=Study.load(args.study) if args.study else None)
+                                  study=study)
             if "recording" in report:
                 print(describe(report["recording"]))
     except ValueError as exc:      # e.g. an unknown model structure

@@ -32,6 +32,8 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    help="the recording's steering angles are handwheel angles: divide delta and delta_cmd by R "
                         "(default: the study's steering_ratio for identify/diagnose, else 1)")
     g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle (default 1.4, the paper tractor)")
+    g.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; "
+                   "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
     g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
     g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
     g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
@@ -42,6 +44,9 @@ def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
     from .log import LogError
     from .recording import ImportOptions
+    from orchestrator.source_files import set_limit
+
+    set_limit(getattr(args, "max_file_size", None))
 
     if args.wheelbase is not None and not 0.5 <= args.wheelbase <= 10.0:
         raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.5 to 10")

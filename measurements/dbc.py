@@ -67,7 +67,9 @@ def load_dbc_file(path: str | Path):
     names the file when nothing in it is a DBC message."""
     import cantools
 
-    path = Path(path)
+    from orchestrator.source_files import regular_file
+
+    path = regular_file(path, LogError)
     try:
         text = path.read_bytes().decode("utf-8", errors="replace") if path.suffix.lower() != ".dbc" else \
             _read_text(path)

@@ -28,6 +28,8 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .quirks import ordered_in_time
+from orchestrator.source_files import regular_file
 from .streams import Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
@@ -54,9 +56,10 @@ def ddi_name(ddi: int) -> tuple[str, str, float]:
 def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
     """(PTN attributes logged per record, [(DDI, element)] of the DLVs, fixed values) of a
     TLG header; a LogError names the file and the element when it is not a time-log header."""
+    regular_file(path, LogError)
     try:
         root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError) as exc:
+    except (ET.ParseError, OSError, LookupError, ValueError) as exc:      # LookupError: an unknown encoding
         raise LogError(f"{path}: not a readable XML file: {exc}") from None
     if root.tag != "TIM":
         raise LogError(f"{path}: expected a time-log header (root element TIM), found <{root.tag}>")
@@ -76,7 +79,7 @@ def read_header(path: Path) -> tuple[list[str], list[tuple[int, str]], dict]:
 
 def read_binary(path: Path, logged: list[str], n_dlv: int) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
     """(POSIX times, PTN columns, DLV values (records x n_dlv, NaN where a record has none))."""
-    data = path.read_bytes()
+    data = regular_file(path, LogError).read_bytes()
     times, ptn_rows, dlv_rows = [], [], []
     i, n = 0, len(data)
     layout = [(k, PTN_LAYOUT[k]) for k in logged]
@@ -155,10 +158,19 @@ def timelog_streams(paths: list[Path], options, source: Path):
     if not heads:
         raise LogError(f"{source}: a TaskData without time logs (no TLGnnnnn.xml/.bin beside it)")
     tables = [(h, *read_timelog(h)) for h in heads]
+    notes = _task_notes(paths, heads) + _repeated_logs(tables)
     head, table, info = max(tables, key=lambda x: len(x[1])) if len(tables) > 1 else tables[0]
-    table = table.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
+    table["line"] = np.arange(len(table))
+    quirks = []
+    padding = (table["utc"] == EPOCH_1980).to_numpy()
+    if padding.any():
+        i = np.flatnonzero(padding)
+        quirks.append(f"{head.stem}: {len(i)} record(s) dated 1980-01-01 00:00:00.000 (time 0: zero padding or an unset "
+                      f"clock), records {i[0]}-{i[-1]}: masked")
+        table = table.loc[~padding].reset_index(drop=True)
+    table, breaks = ordered_in_time(table, head.stem, notes, what="record")
     report: dict = {"source": str(source), "files": {"isoxml": [str(h) for h, _, _ in tables]}, "dbc": None,
-                    "notes": [], "timelogs": {h.stem: {"records": i["records"], "start": iso(float(t["utc"].min())),
+                    "notes": notes, "quirks": quirks, "timelogs": {h.stem: {"records": i["records"], "start": iso(float(t["utc"].min())),
                                                         "end": iso(float(t["utc"].max()))} for h, t, i in tables},
                     "timelog_used": head.stem,
                     "clocks": {"reference": "the task controller's TIM start times (ms since midnight, days since 1980)"}}
@@ -185,4 +197,37 @@ def timelog_streams(paths: list[Path], options, source: Path):
                          "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
                          "t": "TIM start, s from the run's start"}
     report["fixed"] = info["fixed"]
-    return Streams(gnss, signals, report, set(signals), {})
+    return Streams(gnss, signals, report, set(signals), {}, breaks)
+
+
+def _task_notes(paths: list[Path], heads: list[Path]) -> list[str]:
+    """What the TaskData beside the time logs says of itself: a TASKDATA.XML that is not an ISO
+    11783-10 document is named (the time logs are read without it: each header says its layout)."""
+    tasks = {p for p in paths if p.name.upper() == "TASKDATA.XML"}
+    tasks |= {p for h in heads for p in h.parent.iterdir() if p.name.upper() == "TASKDATA.XML"}
+    notes = []
+    for task in sorted(tasks):
+        try:
+            root = ET.parse(regular_file(task, LogError)).getroot()
+            if not root.tag.endswith("ISO11783_TaskData"):
+                notes.append(f"{task.name}: root element <{root.tag[:40]}>, not ISO11783_TaskData: not a TaskData "
+                             f"(the time logs are read without it)")
+        except (ET.ParseError, LookupError, ValueError) as exc:
+            notes.append(f"{task.name}: not readable XML ({exc}): the TaskData is damaged; the time logs are read "
+                         f"without it (each TLG header gives its own layout)")
+    return notes
+
+
+def _repeated_logs(tables: list) -> list[str]:
+    """Time logs that repeat another one record for record (a TaskData copied twice into one folder)."""
+    seen: dict = {}
+    notes = []
+    for head, table, _ in tables:
+        key = (len(table), float(table["utc"].iloc[0]), float(table["utc"].iloc[-1]),
+               float(np.nansum(table.select_dtypes("number").to_numpy(float))))
+        if key in seen:
+            notes.append(f"{head.stem} repeats {seen[key]} record for record ({len(table)} records, "
+                         f"{iso(key[1])} to {iso(key[2])}): a duplicated TaskData; read once")
+        else:
+            seen[key] = head.stem
+    return notes

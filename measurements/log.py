@@ -41,9 +41,9 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
     with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
     (degrees are detected and named), speed against the GPS track (check_units)."""
-    path = Path(path)
-    if not path.is_file():
-        raise LogError(f"{path}: log not found")
+    from orchestrator.source_files import checked_path, regular_file
+
+    path = regular_file(checked_path(path, LogError, "log not found"), LogError)
     kind = "Parquet" if path.suffix == ".parquet" else "CSV"
     try:
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import re
+from array import array
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .quirks import ordered_in_time
 from .signals import SignalSpec
 from .streams import Series
 
@@ -73,6 +75,9 @@ class CANRecording:
     buses: Counter = field(default_factory=Counter)
     outside_range: dict = field(default_factory=dict)
     not_available: dict = field(default_factory=dict)
+    bad_lines: list = field(default_factory=list)        # (line number, text) of the first lines that are not frames
+    notes: list = field(default_factory=list)
+    breaks: list = field(default_factory=list)           # on the logger's clock (measurements.quirks.ordered_in_time)
 
     @property
     def span(self) -> tuple[float, float]:
@@ -108,22 +113,79 @@ def _bus_matches(channel: str, wanted: str) -> bool:
     return channel == wanted or channel == wanted.removeprefix("can") or f"can{channel}" == wanted
 
 
-def read_can_file(path: str | Path, db, bus: str | None = None) -> CANRecording:
+# candump -L: '(1436509052.249713) can0 18FEF100#00FA0000000000FF', CAN FD '##<flags><data>', remote 'R[dlc]'
+CANDUMP_LINE = re.compile(r"^\(\d+(?:\.\d*)?\)\s+\S+\s+[0-9A-Fa-f]{1,8}#(?:#[0-9A-Fa-f])?"
+                          r"(?:(?:[0-9A-Fa-f]{2})*|[Rr]\d*)(?:\s+[RrTt])?$")
+CANDUMP_FORMAT = "'(SECONDS) BUS ID#HEXDATA' (candump -L, e.g. '(1436509052.249713) can0 18FEF100#00FA0000000000FF')"
+
+
+class _CheckedLines:
+    """A candump log's lines for python-can's reader, each checked against CANDUMP_LINE first: a
+    line that is not a frame is skipped, counted and its number kept (python-can would stop the
+    whole log at it)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path, self.bad, self.good, self.examples = path, 0, 0, []
+
+    def __iter__(self):
+        with open(self.path, "rb") as f:
+            for number, raw in enumerate(f, 1):
+                line = raw.strip()
+                if not line or line.startswith(b"#"):
+                    continue
+                text = line.decode("ascii", "replace")
+                if CANDUMP_LINE.match(text):
+                    self.good += 1
+                    yield text
+                else:
+                    self.bad += 1
+                    if len(self.examples) < 3:
+                        self.examples.append((number, text[:60]))
+                    if self.bad > 1000 and self.bad > 10 * self.good:
+                        return          # not a candump log: the error below names the first lines
+
+    def close(self) -> None:
+        pass
+
+
+class _Columns:
+    """One message's decoded frames, column by column in compact arrays (8 bytes a value)."""
+
+    def __init__(self, msg) -> None:
+        self.names = [s.name for s in msg.signals]
+        self.t, self.source, self.values = array("d"), array("d"), {n: array("d") for n in self.names}
+
+    def add(self, t: float, source: int, values: dict) -> None:
+        self.t.append(t)
+        self.source.append(source)
+        for n in self.names:
+            v = values.get(n, math.nan)
+            self.values[n].append(float(v) if isinstance(v, (int, float)) else math.nan)
+
+    def table(self) -> pd.DataFrame:
+        return pd.DataFrame({"t": np.frombuffer(self.t, float), "source_address": np.frombuffer(self.source, float),
+                             **{n: np.frombuffer(v, float) for n, v in self.values.items()}})
+
+
+def read_can_file(path: str | Path, db, bus: str | None = None, wanted: set[str] | None = None) -> CANRecording:
     """Every frame of a CAN log that a message of ``db`` describes, decoded (on ``bus`` only,
-    when given)."""
+    when given; of the ``wanted`` messages only, when given: the others are counted), read a
+    frame at a time into compact columns. A candump line that is not a frame is skipped and
+    counted with its line number; a log with no frame is refused naming its first lines."""
     import can
 
     path = Path(path)
     exact = {(m.is_extended_frame, m.frame_id): m for m in db.messages}
     by_group = {_key(m.frame_id, True): m for m in db.messages if m.is_extended_frame}
-    rows: dict[str, list] = {m.name: [] for m in db.messages}
+    columns: dict[str, _Columns] = {}
     counts: Counter = Counter()
     unknown: Counter = Counter()
     buses: Counter = Counter()
+    lines = _CheckedLines(path) if path.suffix.lower() == ".log" else None
     try:
         # Vector ASC: absolute times from the file's trigger-block date (python-can's default is from 0)
         reader = can.ASCReader(str(path), relative_timestamp=False) if path.suffix.lower() == ".asc" \
-            else can.LogReader(str(path))
+            else can.CanutilsLogReader(lines) if lines is not None else can.LogReader(str(path))
         for frame in reader:
             counts["frames"] += 1
             channel = _bus_name(frame.channel)
@@ -140,21 +202,31 @@ def read_can_file(path: str | Path, db, bus: str | None = None) -> CANRecording:
             if msg is None:
                 unknown[f"0x{frame.arbitration_id:X}"] += 1
                 continue
+            if wanted is not None and msg.name not in wanted:
+                counts["frames of messages not used"] += 1
+                continue
             try:
                 values = msg.decode(bytes(frame.data), decode_choices=False, scaling=False, allow_truncated=True)
             except Exception:            # noqa: BLE001 - a frame that does not decode is counted
                 counts["frames that do not decode"] += 1
                 continue
-            rows[msg.name].append({"t": float(frame.timestamp), "bus": channel,
-                                   "source_address": frame.arbitration_id & 0xFF if frame.is_extended_id else -1,
-                                   **values})
+            if msg.name not in columns:
+                columns[msg.name] = _Columns(msg)
+            columns[msg.name].add(float(frame.timestamp), frame.arbitration_id & 0xFF if frame.is_extended_id else -1,
+                                  values)
             counts["decoded"] += 1
     except (OSError, ValueError, EOFError, can.CanError) as exc:
         raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {exc}") from None
     except Exception as exc:              # noqa: BLE001 - a reader choking on a foreign format
         raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {type(exc).__name__}: {exc}") from None
-    if counts["frames"] == 0:
-        raise LogError(f"{path}: no CAN frame in it (python-can reads .log candump, .asc, .blf, .trc)")
+    bad = [] if lines is None else lines.examples
+    if lines is not None and lines.bad:
+        counts["lines that are not frames"] = lines.bad
+    if counts["frames"] == 0 or (lines is not None and lines.bad > lines.good):
+        raise LogError((f"{path}: no CAN frame in it" if counts["frames"] == 0 else
+                        f"{path}: {lines.bad} of {lines.bad + lines.good} lines are not CAN frames")
+                       + ("; " + "; ".join(f"line {n}: {t!r}" for n, t in bad) + f"; expected {CANDUMP_FORMAT}" if bad
+                          else " (python-can reads .log candump, .asc, .blf, .trc)"))
     if bus is not None and counts["frames on other buses"] == counts["frames"]:
         raise LogError(f"{path}: --bus {bus}: no frame on that bus; buses in the log: "
                        + ", ".join(f"{b} ({n} frames)" for b, n in buses.most_common()))
@@ -163,10 +235,14 @@ def read_can_file(path: str | Path, db, bus: str | None = None) -> CANRecording:
                        + ", ".join(f"{b}: {n} frames" for b, n in buses.most_common())
                        + "); choose one with --bus NAME")
     rec = CANRecording(path, {}, counts, unknown, buses)
+    rec.bad_lines = bad
     by_name = {m.name: m for m in db.messages}
-    for name, r in rows.items():
-        if r:
-            rec.messages[name] = _scaled(by_name[name], pd.DataFrame(r), rec)
+    for name, c in columns.items():
+        table = c.table().rename(columns={"t": "utc"})          # in file order: damaged or backward stamps named
+        table, breaks = ordered_in_time(table, f"{path.name} {name}", rec.notes, tuple(c.names), stream=f"CAN {name}",
+                                        what="frame")
+        rec.breaks += breaks
+        rec.messages[name] = _scaled(by_name[name], table.rename(columns={"utc": "t"}), rec)
     return rec
 
 
@@ -207,6 +283,18 @@ def merge(cans: list[CANRecording]) -> dict[str, pd.DataFrame]:
             frames.setdefault(name, []).append(table)
     return {k: pd.concat(v).sort_values("t", kind="stable").drop_duplicates("t").reset_index(drop=True)
             for k, v in frames.items()}
+
+
+def messages_of(db, specs) -> set[str]:
+    """The DBC messages that the expressions ``specs`` read (the longest message name that
+    prefixes each ``Message.Signal``)."""
+    names = {m.name for m in db.messages}
+    out = set()
+    for spec in specs:
+        for name in spec.names:
+            cuts = [i for i, ch in enumerate(name) if ch == "."][::-1]
+            out.update(next(([name[:k]] for k in cuts if name[:k] in names), []))
+    return out
 
 
 def signal_names(db) -> list[str]:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import datetime
 import math
 import re
+from array import array
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .quirks import ordered_in_time
 
 KNOTS = 1852.0 / 3600.0
 USED = ("GGA", "RMC", "VTG", "ZDA", "HDT", "THS", "GST")
@@ -41,6 +43,7 @@ class NMEARecording:
     epochs: pd.DataFrame
     counts: Counter = field(default_factory=Counter)
     notes: list[str] = field(default_factory=list)
+    breaks: list[dict] = field(default_factory=list)     # where the clock stepped back (measurements.quirks)
 
     @property
     def has_host_time(self) -> bool:
@@ -86,111 +89,252 @@ def looks_like_nmea(path: Path) -> bool:
     return bool(lines) and sum(b"$" in ln and b"*" in ln for ln in lines) >= max(1, len(lines) // 2)
 
 
-def read_nmea_file(path: str | Path) -> NMEARecording:
-    """Every GNSS epoch of an NMEA file; a LogError names the file and line when nothing usable
-    is in it. Bad checksums, malformed and unused sentences are counted in ``counts``."""
-    from pynmeagps import VALCKSUM, NMEAReader
+def _checksums_ok(bodies: list[bytes], given: list[bytes]) -> np.ndarray:
+    """True where the XOR of a sentence's characters between '$' and '*' equals its two hex digits
+    (NMEA 0183), for a batch of sentences at once."""
+    if not bodies:
+        return np.zeros(0, bool)
+    lengths = np.fromiter((len(b) for b in bodies), int, len(bodies))
+    data = np.frombuffer(b"".join(bodies) + b"\0", np.uint8)
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    xor = np.bitwise_xor.reduceat(data, starts)
+    xor = np.where(lengths > 0, xor, 0)
+    want = np.array([int(g, 16) if len(g) == 2 and all(c in b"0123456789abcdefABCDEF" for c in g) else -1
+                     for g in given])
+    return xor == want
 
-    path = Path(path)
+
+def _hms(text: bytes) -> float:
+    """Seconds of the day of 'hhmmss[.ss]'; ValueError otherwise."""
+    if len(text) < 6 or not text[:6].isdigit():
+        raise ValueError("not hhmmss")
+    h, m, sec = int(text[:2]), int(text[2:4]), float(text[4:])
+    if h > 23 or m > 59 or not 0 <= sec < 61:
+        raise ValueError("not a time of day")
+    return h * 3600.0 + m * 60.0 + sec
+
+
+def _degrees(value: bytes, hemisphere: bytes, width: int) -> float:
+    """Decimal degrees of NMEA's (d)ddmm.mmmm and N/S/E/W."""
+    deg = int(value[:width]) + float(value[width:]) / 60.0
+    if hemisphere in (b"S", b"W"):
+        return -deg
+    if hemisphere not in (b"N", b"E"):
+        raise ValueError("no hemisphere")
+    return deg
+
+
+def _number(text: bytes) -> float:
+    return float(text) if text else math.nan
+
+
+class _Epochs:
+    """The epochs read so far, column by column in compact arrays (8 bytes a value), with the
+    file line of each; the last few epochs are kept by (day, time of day) so that RMC, VTG, HDT and
+    GST find the epoch their GGA opened."""
+
+    COLUMNS = ("tod", "day", "host", "lat", "lon", "height", "quality", "speed", "course", "heading", "position_std")
+
+    def __init__(self) -> None:
+        self.columns = {c: array("d") for c in self.COLUMNS}
+        self.lines = array("q")
+        self.recent: dict[tuple, int] = {}
+
+    def add(self, key: tuple, line: int, tod: float, day: float, host: float, lat: float = math.nan,
+            lon: float = math.nan, height: float = math.nan, quality: float = 0.0) -> int:
+        i = len(self.lines)
+        c = self.columns
+        for name, value in (("tod", tod), ("day", day), ("host", host), ("lat", lat), ("lon", lon), ("height", height),
+                            ("quality", quality), ("speed", math.nan), ("course", math.nan), ("heading", math.nan),
+                            ("position_std", math.nan)):
+            c[name].append(value)
+        self.lines.append(line)
+        self.recent[key] = i
+        if len(self.recent) > 32:
+            del self.recent[next(iter(self.recent))]
+        return i
+
+    def set(self, i: int, column: str, value: float) -> None:
+        self.columns[column][i] = value
+
+    def get(self, i: int, column: str) -> float:
+        return self.columns[column][i]
+
+
+CHUNK = 1 << 22          # bytes read at a time: the reader's memory does not grow with the file
+
+
+def _lines(path: Path):
+    """(line number, bytes) of the file, a chunk at a time."""
+    number = 0
+    rest = b""
+    with open(path, "rb") as f:
+        while True:
+            chunk = f.read(CHUNK)
+            if not chunk:
+                break
+            lines = (rest + chunk).split(b"\n")
+            rest = lines.pop()
+            for line in lines:
+                number += 1
+                yield number, line
+    if rest:
+        yield number + 1, rest
+
+
+def _batches(path: Path, first_line: dict, size: int = 20000):
+    """Batches of (line number, host prefix, sentence id, fields, checksum ok) of the sentences this
+    reader uses, and the counts of everything else (comments, binary, unused sentences)."""
     counts: Counter = Counter()
-    rows: dict[tuple, dict] = {}
-    order: list[tuple] = []
-    dates: list[tuple[float, float, float]] = []        # (host, time of day, date seconds) per dated sentence
-    last_key = None
-    day_index, last_tod = 0, None
-    try:
-        text = path.read_bytes().decode("ascii", errors="replace")
-    except OSError as exc:
-        raise LogError(f"{path}: cannot read: {exc}") from None
-    for number, raw in enumerate(text.splitlines(), 1):
-        if not raw.strip():
+    batch, bodies, given = [], [], []
+    for number, raw in _lines(path):
+        line = raw.strip()
+        if not line:
             continue
         counts["lines"] += 1
-        if raw.lstrip().startswith("#"):
+        if line.startswith(b"#"):
             counts["comment"] += 1
             continue
-        m = _STAMP.match(raw)
-        if m is None:
-            counts["not a sentence"] += 1
+        start = line.find(b"$")
+        if start < 0:
+            kind = "binary data (UBX or another binary protocol)" if _binary(line) else "not a sentence"
+            counts[kind] += 1
+            first_line.setdefault(kind, number)
             continue
-        prefix, sentence = m.groups()
-        try:
-            host = _host_stamp(prefix)
-        except ValueError as exc:
-            raise LogError(f"{path}: line {number}: {exc}") from None
-        ident = sentence[3:6] if not sentence.startswith("$P") else "proprietary"
+        star = line.rfind(b"*")
+        body = line[start + 1:star] if star > start else line[start + 1:]
+        talker = body[2:5] if not body.startswith(b"P") else b"proprietary"
+        ident = talker.decode("ascii", "replace")
         if ident not in USED:
             counts[f"unused {ident}"] += 1
             continue
-        try:
-            msg = NMEAReader.parse(sentence.strip().encode() + b"\r\n", validate=VALCKSUM)
-        except Exception as exc:               # noqa: BLE001 - a parser error is one bad sentence
-            counts["bad checksum" if "checksum" in str(exc).lower() else "malformed"] += 1
-            continue
-        try:
-            if ident in ("GGA", "RMC", "ZDA"):
-                if msg.time == "":
-                    counts[f"{ident} without time"] += 1
-                    continue
-                tod = _seconds_of_day(msg.time)
-            if ident == "GGA":
-                if last_tod is not None and tod < last_tod - DAY / 2:
-                    day_index += 1                       # past midnight
-                last_tod = tod
-                key = (day_index, round(tod, 3))
-                if key in rows:
-                    counts["repeated epoch"] += 1
-                    last_key = key
-                    continue
-                fix = msg.quality not in ("", 0) and msg.lat != ""
-                alt = (float(msg.alt) if msg.alt != "" else 0.0) + (float(msg.sep) if msg.sep != "" else 0.0)
-                rows[key] = dict(tod=tod, day=day_index, host=host, lat=float(msg.lat) if fix else math.nan,
-                                 lon=float(msg.lon) if fix else math.nan, height=alt if fix else math.nan,
-                                 quality=int(msg.quality) if fix else 0, speed=math.nan, course=math.nan,
-                                 heading=math.nan, position_std=math.nan)
-                order.append(key)
-                last_key = key
-                counts["GGA"] += 1
-            elif ident == "RMC":
-                if msg.date != "":
-                    dates.append((host, tod, _date_seconds(msg.date)))
-                key = (day_index, round(tod, 3))
-                if key in rows and msg.status == "A" and msg.spd != "":
-                    rows[key]["speed"] = float(msg.spd) * KNOTS
-                    rows[key]["course"] = math.radians(float(msg.cog)) if msg.cog != "" else math.nan
-                counts["RMC"] += 1
-            elif ident == "ZDA":
-                if msg.year != "":
-                    dates.append((host, tod, _date_seconds(datetime.date(int(msg.year), int(msg.month), int(msg.day)))))
-                counts["ZDA"] += 1
-            elif ident in ("HDT", "THS"):      # true heading, clockwise from north -> ENU yaw
-                value = msg.headingT if ident == "HDT" else msg.headt
-                if last_key is not None and value != "":
-                    rows[last_key]["heading"] = math.pi / 2 - math.radians(float(value))
-                counts[ident] += 1
-            elif ident == "GST":
-                if last_key is not None and msg.stdLat != "" and msg.stdLong != "":
-                    rows[last_key]["position_std"] = math.hypot(float(msg.stdLat), float(msg.stdLong))
-                counts["GST"] += 1
-            else:   # VTG: no time of its own, it belongs to the epoch its GGA opened
-                if last_key is not None and msg.sogk != "":
-                    row = rows[last_key]
-                    if not math.isfinite(row["speed"]):
-                        row["speed"] = float(msg.sogk) / 3.6
-                        row["course"] = math.radians(float(msg.cogt)) if msg.cogt != "" else math.nan
-                counts["VTG"] += 1
-        except (TypeError, ValueError, AttributeError):
-            counts["malformed"] += 1
-    if not order:
+        batch.append((number, line[:start], ident, body.split(b",")))
+        bodies.append(body)
+        given.append(line[star + 1:star + 3] if star > start else b"")
+        if len(batch) >= size:
+            yield batch, _checksums_ok(bodies, given), counts
+            batch, bodies, given = [], [], []
+    yield batch, _checksums_ok(bodies, given), counts
+
+
+def _binary(data: bytes) -> bool:
+    return any(b < 9 or 13 < b < 32 or b > 126 for b in data)
+
+
+def read_nmea_file(path: str | Path) -> NMEARecording:  # noqa: C901 - one pass over the sentences
+    """Every GNSS epoch of an NMEA file, read a chunk at a time; a LogError names the file and line
+    when nothing usable is in it. Bad checksums, malformed and unused sentences, binary data
+    between sentences (UBX ...) and lines whose text before '$' is not a time are skipped and
+    counted (the first line of each kind named); epochs dated before ones already read (the
+    receiver's clock stepping back) are masked and named, and the recording is split there."""
+    path = Path(path)
+    epochs = _Epochs()
+    dates: list[tuple[float, float, float]] = []        # (host, time of day, date seconds) per dated sentence
+    first_line: dict[str, int] = {}
+    last = None
+    day_index, last_tod = 0, None
+    counts: Counter = Counter()
+    try:
+        for batch, ok, counts in _batches(path, first_line):
+            for (number, prefix, ident, f), good in zip(batch, ok):
+                kind = _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line, (day_index, last_tod, last))
+                if kind is not None:
+                    day_index, last_tod, last = kind
+    except OSError as exc:
+        raise LogError(f"{path}: cannot read: {exc}") from None
+    if not len(epochs.lines):
         what = ", ".join(f"{v} {k}" for k, v in counts.most_common(6)) or "no lines"
-        raise LogError(f"{path}: no GGA sentence with a time (the reader needs GGA for position and time; "
-                       f"found {what})")
-    frame = pd.DataFrame([rows[k] for k in order])
+        bad = "; ".join(f"{k} first at line {n}" for k, n in first_line.items())
+        raise LogError(f"{path}: no GGA sentence with a time (the reader needs GGA for position and time, "
+                       f"'[host time] $..GGA,hhmmss.ss,ddmm.mm,N,dddmm.mm,E,q,...*hh' a line; found {what}"
+                       + (f"; {bad}" if bad else "") + ")")
+    frame = pd.DataFrame({c: np.frombuffer(epochs.columns[c], float) for c in _Epochs.COLUMNS})
+    frame["line"] = np.frombuffer(epochs.lines, np.int64)
     notes: list[str] = []
     frame["utc"] = _utc(frame, dates, notes, path)
-    frame = frame.sort_values("utc", kind="stable").drop_duplicates("utc").reset_index(drop=True)
+    for kind, n in first_line.items():
+        notes.append(f"{path.name}: {counts[kind]} line(s) with {kind} removed, the sentence after it read (the first "
+                     f"at line {n})" if kind.startswith("binary data before") else
+                     f"{path.name}: {counts[kind]} line(s) skipped: {kind} (the first at line {n})")
+    frame, breaks = ordered_in_time(frame, path.name, notes)
     return NMEARecording(path, frame[["utc", "host", "lat", "lon", "height", "quality", "speed", "course", "heading",
-                                      "position_std"]], counts, notes)
+                                      "position_std"]].reset_index(drop=True), counts, notes, breaks)
+
+
+def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line, state):
+    """One sentence into the epochs; the new (day index, last time of day, last epoch) or None."""
+    day_index, last_tod, last = state
+    if not good:
+        counts["bad checksum"] += 1
+        first_line.setdefault("bad checksum", number)
+        return None
+    host = math.nan
+    if prefix.strip():
+        try:
+            host = _host_stamp(prefix.decode("ascii"))
+        except (ValueError, UnicodeDecodeError):
+            kind = ("binary data before '$' (UBX or another binary protocol)" if _binary(prefix)
+                    else "text before '$' that is neither UNIX seconds nor an ISO 8601 time")
+            counts[kind] += 1
+            first_line.setdefault(kind, number)
+            if _binary(prefix):
+                host = math.nan          # the sentence itself is whole (its checksum holds): used
+            else:
+                return None
+    try:
+        if ident in ("GGA", "RMC", "ZDA"):
+            if not f[1]:
+                counts[f"{ident} without time"] += 1
+                return None
+            tod = _hms(f[1])
+        if ident == "GGA":
+            if last_tod is not None and tod < last_tod - DAY / 2:
+                day_index += 1                       # past midnight
+            last_tod = tod
+            key = (day_index, round(tod, 3))
+            if key in epochs.recent:
+                counts["repeated epoch"] += 1
+                return day_index, last_tod, epochs.recent[key]
+            quality = int(f[6]) if f[6] else 0
+            fix = quality != 0 and bool(f[2])
+            if fix:
+                alt = (float(f[9]) if f[9] else 0.0) + (float(f[11]) if len(f) > 11 and f[11] else 0.0)
+                last = epochs.add(key, number, tod, day_index, host, _degrees(f[2], f[3], 2), _degrees(f[4], f[5], 3),
+                                  alt, float(quality))
+            else:
+                last = epochs.add(key, number, tod, day_index, host)
+            counts["GGA"] += 1
+        elif ident == "RMC":
+            if not dates and len(f) > 9 and len(f[9]) == 6 and f[9].isdigit():      # the first date is the one used
+                yy = int(f[9][4:6])
+                d = datetime.date(yy + (2000 if yy < 69 else 1900), int(f[9][2:4]), int(f[9][0:2]))
+                dates.append((host, tod, _date_seconds(d)))
+            i = epochs.recent.get((day_index, round(tod, 3)))
+            if i is not None and f[2] == b"A" and f[7]:
+                epochs.set(i, "speed", float(f[7]) * KNOTS)
+                epochs.set(i, "course", math.radians(float(f[8])) if f[8] else math.nan)
+            counts["RMC"] += 1
+        elif ident == "ZDA":
+            if not dates and f[4]:
+                dates.append((host, tod, _date_seconds(datetime.date(int(f[4]), int(f[3]), int(f[2])))))
+            counts["ZDA"] += 1
+        elif ident in ("HDT", "THS"):      # true heading, clockwise from north -> ENU yaw
+            if last is not None and f[1]:
+                epochs.set(last, "heading", math.pi / 2 - math.radians(float(f[1])))
+            counts[ident] += 1
+        elif ident == "GST":
+            if last is not None and len(f) > 7 and f[6] and f[7]:
+                epochs.set(last, "position_std", math.hypot(float(f[6]), float(f[7])))
+            counts["GST"] += 1
+        else:   # VTG: no time of its own, it belongs to the epoch its GGA opened
+            if last is not None and len(f) > 7 and f[7] and not math.isfinite(epochs.get(last, "speed")):
+                epochs.set(last, "speed", float(f[7]) / 3.6)
+                epochs.set(last, "course", math.radians(float(f[1])) if f[1] else math.nan)
+            counts["VTG"] += 1
+    except (TypeError, ValueError, IndexError, OverflowError):
+        counts["malformed"] += 1
+        first_line.setdefault("malformed", number)
+    return day_index, last_tod, last
 
 
 def _utc(frame: pd.DataFrame, dates: list, notes: list[str], path: Path) -> np.ndarray:

@@ -3,6 +3,7 @@ instances with their parameters in SI and their constant inputs, port and unit c
 connection, the evaluation order of sampled components, and algebraic loops refused."""
 from __future__ import annotations
 
+
 import graphlib
 import math
 import zlib
@@ -11,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .component import Component, ComponentError
+from .errors import did_you_mean
 from .model import Model, resolved_parameters
 from .study import ComponentSpec, Connection, Study, StudyError
 from .units import UnitError, to_si, units_match
@@ -53,7 +55,7 @@ def build_system(model: Model) -> System:
     specs = {**study.components, **{n: ComponentSpec(type="", step=s.step) for n, s in study.subsystems.items()}}
     for name, spec in specs.items():
         cls = model.classes[name]
-        converted = resolved_parameters(cls, name, spec.parameters, where, study.folders)
+        converted = resolved_parameters(cls, name, spec.parameters, study.origin, study.folders)
         try:
             comp = cls(name, converted, rng=component_seed(study.study.seed, name))
         except ComponentError as exc:
@@ -64,13 +66,14 @@ def build_system(model: Model) -> System:
                              f"{dict(spec.parameters)}: {type(exc).__name__}: {exc}") from None
         inputs = cls.declared("input")
         for key, value in spec.inputs.items():
+            at = study.origin(f"components.{name}.inputs.{key}")
             if key not in inputs:
-                raise StudyError(f"{where}: components.{name}.inputs.{key}: unknown input; "
-                                 f"known: {', '.join(sorted(inputs))}")
+                raise StudyError(f"{at}: unknown input{did_you_mean(key, inputs, n=1)}"
+                                 + f" Known: {', '.join(sorted(inputs))}")
             try:
                 comp.u[key] = to_si(value, inputs[key].unit)
             except UnitError as exc:
-                raise StudyError(f"{where}: components.{name}.inputs.{key}: {exc}") from None
+                raise StudyError(f"{at}: {exc}") from None
         step = spec.step if spec.step is not None else base
         ratio = round(step / base)
         if ratio < 1 or not math.isclose(ratio * base, step, rel_tol=1e-9, abs_tol=1e-12):

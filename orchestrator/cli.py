@@ -46,23 +46,26 @@ def _run(args: argparse.Namespace) -> int:
         for option, value in chosen:
             study = option.apply(study, value)
         if args.set:
-            from .study_files import parse_override
-
-            study = study.with_values(dict(parse_override(item, args.study) for item in args.set))
+            study = study.with_overrides(args.set)
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
     except AnalysisError as exc:
-        print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}", file=sys.stderr)
+        print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
+              file=sys.stderr)
         return 1
     except RunError as exc:
-        print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}",
-              file=sys.stderr)
+        print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}"
+              f"{getattr(exc, 'kept', '')}", file=sys.stderr)
         return 1
     ended = result.metrics.get("ended_by")
     if ended:
         print(f"the run ended at t = {ended['t']:.6g} s, before the stop time: {ended['component']} asked "
               f"to terminate ({ended['reason']})")
     print(result.summary)
+    for warning in result.warnings:
+        print(f"warning: {warning}", file=sys.stderr)
+    if result.failed_bounds:
+        print("FAIL: " + "; ".join(result.failed_bounds))
     print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
     return 0
 
@@ -80,8 +83,9 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    from .observers import Stage
     from .study import Study, StudyError
-    from .sweep import SweepRun, sweep_plots
+    from .sweep import SweepRun, sweep_plots, sweep_summary
 
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
@@ -93,10 +97,16 @@ def _sweep(args: argparse.Namespace) -> int:
         print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
               file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    failed = int((table["status"] != "completed").sum())
-    files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
-    print(f"{len(table)} points ({failed} failed) in {args.out}/results.{study.study.signals_format}"
+    with Stage("drawing the sweep's figures"):
+        files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
+    text, reasons = sweep_summary(study, table)
+    print(text)
+    print(f"\nresults in {args.out}/results.{study.study.signals_format}, one folder per point in {args.out}/points"
           + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
+    failed = sum(len(points) for _, points in reasons)
+    if failed and failed == len(table) and len(reasons) == 1:
+        print(f"error: every point failed: {reasons[0][0]}", file=sys.stderr)
+        return 2
     return 0 if failed == 0 else 1
 
 
@@ -115,8 +125,20 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (help, add_arguments, run) in commands.items():
         p = sub.add_parser(name, help=help, description=help)
         add_arguments(p)
-        p.set_defaults(handler=run)
+        p.set_defaults(handler=run if name in CORE else _in_stage(name, run))
     return parser
+
+
+def _in_stage(name: str, run):
+    """A registered command's handler inside a Stage: a tool that says nothing while it works
+    still shows, after 5 s, that it is working and for how long (with what it reports through
+    ``report_progress``)."""
+    def handler(args: argparse.Namespace) -> int:
+        from .observers import Stage
+
+        with Stage(name):
+            return run(args)
+    return handler
 
 
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
@@ -126,8 +148,8 @@ def _one_line_warning(message, category, filename, lineno, line=None) -> str:
 def main(argv: list[str] | None = None) -> int:
     warnings.formatwarning = _one_line_warning
     install_signal_handlers()
-    args = build_parser().parse_args(argv)
-    try:
+    try:            # a signal may land while the plugins' modules load, before any command runs
+        args = build_parser().parse_args(argv)
         return args.handler(args)
     except (Exception, KeyboardInterrupt) as exc:
         known = exit_code(exc)

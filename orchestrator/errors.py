@@ -6,6 +6,16 @@ message; nothing prints a traceback for a user's mistake.
 """
 from __future__ import annotations
 
+import difflib
+from typing import Iterable
+
+
+def did_you_mean(name: str, known: Iterable[str], n: int = 3, form: str = "; did you mean {}?") -> str:
+    """The hint a message about an unknown name ends with: up to ``n`` of the ``known`` names
+    closest to it, joined by "or", in ``form``; empty when none is close."""
+    close = difflib.get_close_matches(str(name), list(known), n=n)
+    return form.format(" or ".join(map(repr, close))) if close else ""
+
 
 class InputError(Exception):
     """Something the user gave cannot be used (a file, a field, an option); the message names it."""
@@ -28,13 +38,46 @@ class Interrupted(Exception):
 
 
 _CRITICAL = {"depth": 0, "pending": None}
+RETRY_S = 0.05          # a signal deferred while a module is imported is raised this soon after
+
+
+def _importing(frame) -> bool:
+    """True while the main thread is importing a module: an exception raised there can leave a
+    C extension half initialised (a later ImportError) or be swallowed by a library's guarded import."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _defer(kind, frame) -> bool:
+    """Keep the signal pending when it cannot be raised here; look again RETRY_S later (SIGALRM)
+    when only an import stands in the way."""
+    if _CRITICAL["depth"]:
+        _CRITICAL["pending"] = kind          # raised when the critical section ends
+        return True
+    if _importing(frame):
+        import signal
+
+        _CRITICAL["pending"] = kind
+        signal.setitimer(signal.ITIMER_REAL, RETRY_S)
+        return True
+    return False
 
 
 def _handler(signum, frame):
     kind = Terminated if signum == 15 else KeyboardInterrupt
-    if _CRITICAL["depth"]:
-        _CRITICAL["pending"] = kind          # raised when the critical section ends
+    if not _defer(kind, frame):
+        raise kind()
+
+
+def _retry(signum, frame):
+    """SIGALRM: raise a signal kept pending while a module was imported, once the import is over."""
+    kind = _CRITICAL["pending"]
+    if kind is None or _defer(kind, frame):
         return
+    _CRITICAL["pending"] = None
     raise kind()
 
 
@@ -55,13 +98,15 @@ class critical:
 
 def install_signal_handlers() -> None:
     """SIGINT and SIGTERM end the main thread's work as KeyboardInterrupt / Terminated (deferred
-    past a ``critical`` block), so that every run saves its partial results on either signal."""
+    past a ``critical`` block, and past the import of a module), so that every run saves its
+    partial results on either signal and no half-imported module is left behind."""
     import signal
     import threading
 
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _handler)
         signal.signal(signal.SIGINT, _handler)
+        signal.signal(signal.SIGALRM, _retry)
 
 
 # (error kind, exit code, message template); first match wins, so subclasses come first.

@@ -8,11 +8,11 @@ The one place where a study's parameter values are converted with the declared u
 """
 from __future__ import annotations
 
-import difflib
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from .component import Component
+from .errors import did_you_mean
 from .study import Study, StudyError
 from .units import FILE_UNIT, UnitError, to_si
 
@@ -45,7 +45,7 @@ class Model:
         cls = self.component_class(name)
         spec = self.study.components.get(name)
         return {**{k: v.start for k, v in cls.declared("parameter").items()},
-                **resolved_parameters(cls, name, spec.parameters if spec else {}, self.where, self.study.folders)}
+                **resolved_parameters(cls, name, spec.parameters if spec else {}, self.study.origin, self.study.folders)}
 
     def find(self, *, role: str | None = None, type: type | str | None = None) -> list[str]:
         """Names of the components that declare ``role`` (``Component.roles``, or the study's
@@ -143,32 +143,32 @@ class Model:
         return self.study.without(*names).with_component(into, **spec).with_connections(add=add)
 
 
-def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], where: str,
+def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], origin: Callable[[str], str],
                         folders: Callable[[], Sequence[Path]] | None = None) -> dict[str, Any]:
     """The study's values of component ``name``'s parameters in SI (declared units); unknown
-    names and unit mismatches are refused with the field named. A relative path in a parameter
+    names and unit mismatches are refused with the field named where its value was given
+    (``origin(field)``: the study file's field, or the ``--set`` that set it). A relative path in a parameter
     declared with unit ``"file"`` is found in the first of ``folders()`` (the study file's, then
     those of the files it extends) or the working folder that holds it, and made absolute; one
     found nowhere is left as written for the component to name."""
     params = cls.declared("parameter")
     converted: dict[str, Any] = {}
     for key, value in values.items():
+        where = origin(f"components.{name}.parameters.{key}")
         if key not in params:
-            close = difflib.get_close_matches(key, list(params), n=1)
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: unknown parameter of "
-                             f"{getattr(cls, 'type_name', cls.__name__)!r}"
-                             + (f"; did you mean {close[0]!r}?" if close else "")
+            raise StudyError(f"{where}: unknown parameter of "
+                             f"{getattr(cls, 'type_name', cls.__name__)!r}{did_you_mean(key, params, n=1)}"
                              + f" Known: {', '.join(sorted(params))}")
         try:
             converted[key] = to_si(value, params[key].unit)
         except UnitError as exc:
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: {exc}") from None
+            raise StudyError(f"{where}: {exc}") from None
         if params[key].unit == FILE_UNIT and isinstance(converted[key], str) and converted[key]:
             converted[key] = _find_file(converted[key], folders() if folders else ())
         start = params[key].start
         numeric = isinstance(start, (int, float)) and not isinstance(start, bool)
         if numeric and isinstance(converted[key], str):
-            raise StudyError(f"{where}: components.{name}.parameters.{key}: got {value!r}, expected a number"
+            raise StudyError(f"{where}: got {value!r}, expected a number"
                              + (f" in {params[key].unit} (or a string like '1.5 {params[key].unit}')"
                                 if params[key].unit not in ("", "1") else ""))
     return converted

@@ -1,13 +1,15 @@
-"""The output folder of a run, protected (issue 16, item 2).
+"""The output folder of a run, protected.
 
 - checked before any computation: ``--out`` must not be a file; an existing, non-empty folder must
   be a result folder of this project (it holds ``run.json`` or ``metrics.json``) unless
   ``overwrite``; the folder it would be created in must be writable;
 - locked: a second run into the same ``--out`` is refused while the first holds the lock (an
   ``flock`` on ``.NAME.lock`` next to it, released by the kernel if the process dies);
-- written aside: the run writes into a fresh folder ``.NAME.XXXX`` next to ``--out`` and moves it into
-  place when it is complete or interrupted (marked so in its files). A failed run never replaces a
-  complete earlier result: it is moved to ``NAME.failed`` instead, and the message says so.
+- written aside: the run writes into a fresh folder ``.NAME.XXXX`` next to ``--out``. A complete
+  run (status completed, or ended by a component) is swapped into place in one step; a run that
+  is interrupted or fails never replaces what ``--out`` holds unless that is itself an unfinished
+  result (or nothing): it is moved beside it, to ``NAME.interrupted`` or ``NAME.failed``, and the
+  message says where.
 """
 from __future__ import annotations
 
@@ -18,7 +20,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, critical
 from .results import UMASK
 
 MARKERS = ("run.json", "metrics.json")
@@ -55,11 +57,63 @@ def check_output(out: Path, overwrite: bool = False) -> None:
         raise OutputError(f"--out {out}: cannot create folders in {base}: {exc.strerror or exc}") from None
 
 
-def _completed(folder: Path) -> bool:
-    try:
-        return json.loads((folder / "metrics.json").read_text()).get("status") == "completed"
-    except (OSError, ValueError, AttributeError):
+COMPLETE = ("completed", "ended")          # statuses of a whole result (ended: a component ended the run)
+
+
+def status_of(folder: Path) -> str | None:
+    """The status in a result folder's metrics.json (or run.json); None when it holds neither."""
+    for name in MARKERS[::-1]:
+        try:
+            status = json.loads((folder / name).read_text()).get("status")
+        except (OSError, ValueError, AttributeError):
+            continue
+        if isinstance(status, str):
+            return status
+    return None
+
+
+def _holds_something_else(out: Path) -> bool:
+    """True when ``out`` holds what an unfinished run must not replace: a complete result, or
+    files that are not a result of a run at all."""
+    if not out.is_dir() or not any(out.iterdir()):
         return False
+    if not any((out / m).exists() for m in MARKERS):
+        return True
+    return status_of(out) in COMPLETE
+
+
+def swap_folder(new: Path, target: Path) -> Path | None:
+    """Move folder ``new`` to ``target``; an existing ``target`` is exchanged with it in one step
+    (Linux renameat2 RENAME_EXCHANGE; elsewhere two renames) and its old content is returned
+    (at ``new``'s path) for the caller to remove."""
+    if not target.exists():
+        os.replace(new, target)
+        return None
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.renameat2(-100, os.fsencode(new), -100, os.fsencode(target), 2) == 0:   # AT_FDCWD, RENAME_EXCHANGE
+            return new
+    except (OSError, AttributeError):
+        pass
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+    os.rmdir(old)
+    os.replace(target, old)
+    os.replace(new, target)
+    return old
+
+
+def _beside(out: Path, status: str) -> Path:
+    """Where an unfinished run goes when ``out`` must stay as it is: ``OUT.interrupted`` or
+    ``OUT.failed`` (replacing an earlier one of ours), or the first ``OUT.failed-N`` that is free
+    or ours when that name holds something else."""
+    kind = "interrupted" if status == "interrupted" else "failed"
+    for n in range(1, 1000):
+        candidate = out.with_name(f"{out.name}.{kind}" + (f"-{n}" if n > 1 else ""))
+        if not candidate.exists() or (candidate.is_dir() and any((candidate / m).exists() for m in MARKERS)):
+            return candidate
+    raise OutputError(f"--out {out}: no free name beside it for the {kind} run's folder")
 
 
 class ResultFolder:
@@ -92,20 +146,18 @@ class ResultFolder:
         return self
 
     def commit(self, status: str) -> Path:
-        """Move the run's folder into place; returns where it went."""
+        """Move the run's folder into place (``status`` completed or ended) or beside ``--out``
+        (interrupted, failed, analysis_failed: see the module docstring); returns where it went.
+        Not cut in half by SIGINT/SIGTERM (errors.critical)."""
         target = self.out
-        if status != "completed" and status != "interrupted" and self.out.is_dir() and _completed(self.out):
-            target = self.out.with_name(self.out.name + ".failed")
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
-            os.rmdir(old)
-            os.replace(target, old)
-            os.replace(self.tmp, target)
+        if status not in COMPLETE and _holds_something_else(self.out):
+            target = _beside(self.out, status)
+        with critical():
+            old = swap_folder(self.tmp, target)
+            self.tmp = None
+            self.where = target
+        if old is not None:
             shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(self.tmp, target)
-        self.tmp = None
-        self.where = target
         return target
 
     def __exit__(self, *exc) -> None:

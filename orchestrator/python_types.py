@@ -3,11 +3,11 @@
 registered (orchestrator.registry); ``type = "package.module:Class"`` is that class."""
 from __future__ import annotations
 
-import difflib
 import importlib
 import pkgutil
 
 from .component import Component
+from .errors import did_you_mean
 from .registry import registry
 from .study import Study, StudyError
 
@@ -45,10 +45,9 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
                 raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
     if module is None:
         known = _known_types(packages)
-        close = difflib.get_close_matches(type_name, known, n=3)
         raise StudyError(f"{where}: type {type_name!r}: no such component type: cannot import "
                          f"{' or '.join(repr(c) for c in candidates)}"
-                         + (f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""))
+                         + did_you_mean(type_name, known))
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")

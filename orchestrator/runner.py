@@ -1,20 +1,29 @@
 """Run a study end to end: build, simulate, analyse, write ``metrics.json``, the signal table and
-plots into an output folder."""
+plots into an output folder.
+
+The signals are streamed to the folder while the run goes (memory stays flat in the run's length)
+and the analysis reads them back by column (orchestrator.signal_table). The folder is written
+aside and moved into place when the run ends (orchestrator.output): a complete run replaces what
+``--out`` held; an interrupted or failed one never replaces a complete result and goes beside it.
+"""
 from __future__ import annotations
 
 import importlib
 import json
-from dataclasses import dataclass
+import time
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .build import build_system
-from .errors import ComputationError, Interrupted, Terminated, critical
+from .build import System, build_system
 from .engine import RunError, Simulation
-from .observers import Progress
+from .errors import ComputationError, Interrupted, Terminated, critical
+from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
+from .observers import Progress, Stage
 from .recording import Recording
 from .resolver import resolve
-from .results import SignalWriter, atomic_write, read_table, write_json
+from .results import SignalWriter, atomic_write, write_json
+from .signal_table import SignalTable
 from .study import Study, StudyError
 
 
@@ -25,18 +34,22 @@ class AnalysisError(ComputationError):
 @dataclass
 class RunResult:
     metrics: dict[str, Any]
-    frame: Any
-    summary: str
+    frame: Any                  # a DataFrame (in memory) or the folder's SignalTable (read by column)
+    summary: str                # the key figures with their bounds, and the real-time pacing
     files: list[Path]
+    failed_bounds: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
 
 def _analysis(study: Study):
     if not study.study.analysis:
         return None
     try:
-        return importlib.import_module(study.study.analysis)
+        module = importlib.import_module(study.study.analysis)
     except ModuleNotFoundError as exc:
         raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
+    check_study_bounds(module, study.study.bounds, study.origin)
+    return module
 
 
 def simulate(study: Study):
@@ -71,21 +84,30 @@ def write_events(out_dir: Path, rec: Recording) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
 
 
-CHUNK_STEPS = 10_000          # base steps between two writes of the signal table
+CHUNK_STEPS = 10_000          # base steps between two writes of the signal table (at most)
+REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
 def _stream(sim: Simulation, writer) -> Recording:
-    """Run ``sim`` to its stop time, writing the signal table block by block. An interrupt outside
-    the engine's step loop becomes the same RunError as one inside it (with the rows not yet
-    written); draining and writing a block is never cut in half (errors.critical)."""
-    step = max(1, CHUNK_STEPS // sim.chunk_period) * sim.chunk_period
+    """Run ``sim`` to its stop time, writing the signal table block by block (every CHUNK_STEPS
+    base steps). The engine is advanced about REPORT_EVERY_S of wall time at a time, so that
+    progress moves as often whether the run is paced in real time or runs 500 times faster.
+    An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
+    the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
+    period = sim.chunk_period
+    step, drained = period, 0
     try:
         sim.start()
         while sim.k < sim.n_steps:
+            began = time.perf_counter()
             sim.advance(min(sim.k + step, sim.n_steps))
-            with critical():
-                if sim.k % sim.chunk_period == 0:
+            took = time.perf_counter() - began
+            rate = step / took if took > 0 else float("inf")
+            step = period * max(1, min(CHUNK_STEPS // period, int(REPORT_EVERY_S * rate) // period))
+            if sim.k - drained >= CHUNK_STEPS and sim.k % period == 0:
+                with critical():
                     writer.append(sim.drain())
+                    drained = sim.k
         with critical():
             rec = sim.finish()
             writer.append(rec.data)
@@ -94,12 +116,100 @@ def _stream(sim: Simulation, writer) -> Recording:
         raise RunError(f"at t = {sim.t0 + sim.k * sim.h:.6g} s: interrupted", sim.partial()) from exc
 
 
-def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False) -> RunResult:
+@dataclass
+class Outcome:
+    """What ``record_run`` left in a folder: the status of metrics.json and run.json, the facts
+    written there, the error that stopped it (None when complete) and the files."""
+
+    status: str                 # completed, ended, interrupted, failed, analysis_failed
+    facts: dict[str, Any]
+    error: BaseException | None
+    files: list[Path]
+    table: SignalTable | None = None
+    values: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def complete(self) -> bool:
+        return self.status in ("completed", "ended")
+
+
+def record_run(study: Study, system: System, folder: Path, analysis=None, plots: bool = True,
+               progress: bool = True) -> Outcome:
+    """Simulate ``system`` into ``folder`` (signals streamed, events.log, run.json), analyse the
+    signals and write metrics.json (and the analysis's plots). Never raises for what a run can
+    meet: a component failing, SIGINT/SIGTERM (in the simulation or the analysis), the analysis
+    failing; the outcome says which, and metrics.json holds the status."""
+    base = _base_facts(study)
+    sim = Simulation(system)
+    writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
+    watch = Progress(sim.n_steps, sim.h) if progress else None
+    if watch is not None:
+        sim.add_observer(watch)
+    try:
+        rec = _stream(sim, writer)
+    except RunError as err:
+        interrupt = err.__cause__ if isinstance(err.__cause__, KeyboardInterrupt) else None
+        with critical():
+            writer.append(err.partial.data)
+            writer.close()
+            write_events(folder, err.partial)
+            status = "interrupted" if interrupt is not None else "failed"
+            t_reached = study.study.start_time + (writer.rows - 1) * sim.h if writer.rows else study.study.start_time
+            facts = {**base, "status": status, "t_reached_s": t_reached, "wall_time_s": err.partial.wall_time_s,
+                     **_run_facts(err.partial)}
+            if interrupt is None:
+                facts["error"] = str(err)
+            _write_status(folder, study, system, facts, t_reached)
+        return Outcome(status, facts, interrupt if interrupt is not None else err,
+                       [writer.path, folder / "events.log", folder / "metrics.json", folder / "run.json"])
+    finally:
+        if watch is not None:
+            watch.close()
+        sim.terminate()
+    facts = {**base, "status": _status(rec), "wall_time_s": rec.wall_time_s, **_run_facts(rec)}
+    files: list[Path] = []
+    table = None
+    try:
+        with critical():
+            files = [writer.close(), write_events(folder, rec)]
+            files.append(write_json(folder / "run.json", _run_json(study, system, _status(rec), _t_end(study, rec))))
+            files.append(write_json(folder / "metrics.json", {**facts, "status": "analysing"}))
+        table = SignalTable(writer.path)
+        with Stage(f"analysing the signals ({study.study.analysis})" if analysis else "analysing the signals"):
+            values = _metrics(analysis, table, study)
+        values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
+        metrics = {**base, "status": _status(rec), **values}
+        if plots and analysis is not None and hasattr(analysis, "plots"):
+            with Stage("drawing the figures"):
+                files.extend(analysis.plots(table, study, folder))
+        write_json(folder / "metrics.json", metrics)      # last: a folder whose metrics say completed is whole
+    except (AnalysisError, KeyboardInterrupt) as exc:
+        interrupted = isinstance(exc, KeyboardInterrupt)
+        status = "interrupted" if interrupted else "analysis_failed"
+        facts.update(status=status, **({"interrupted_in": "analysis (the simulation is complete)"} if interrupted
+                                       else {"error": str(exc)}))
+        _write_status(folder, study, system, facts, _t_end(study, rec))
+        return Outcome(status, facts, exc, files, table)
+    except Exception as exc:                    # a bug in the analysis: the signals are kept all the same
+        facts.update(status="analysis_failed", error=f"{type(exc).__name__}: {exc}")
+        _write_status(folder, study, system, facts, _t_end(study, rec))
+        return Outcome("analysis_failed", facts, exc, files, table)
+    return Outcome(_status(rec), metrics, None, files, table, values)
+
+
+def _write_status(folder: Path, study: Study, system, facts: dict[str, Any], t_reached: float) -> None:
+    with critical():
+        write_json(folder / "metrics.json", facts)
+        write_json(folder / "run.json", _run_json(study, system, facts["status"], t_reached))
+
+
+def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
+              progress: bool = True) -> RunResult:
     """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
-    before anything runs (orchestrator.output), the signals are streamed into a fresh folder beside
-    it, and the folder is moved into place at the end (completed, interrupted or failed: see
-    ResultFolder). An interrupt (SIGINT/SIGTERM) keeps every row up to the instant and raises
-    Interrupted (exit 130/143)."""
+    before anything runs (orchestrator.output), the run is recorded into a fresh folder beside it
+    (``record_run``) and moved into place or beside it. Raises Interrupted (exit 130/143) on
+    SIGINT/SIGTERM, RunError or AnalysisError on a failure, with ``where`` the folder that holds
+    what was kept."""
     if out_dir is None:
         return _run_in_memory(study, plots)
     from .output import ResultFolder
@@ -107,55 +217,40 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     analysis = _analysis(study)
     folder = ResultFolder(Path(out_dir), overwrite)
     system = build_system(resolve(study))
-    base = _base_facts(study)
     with folder:
+        try:
+            outcome = record_run(study, system, folder.tmp, analysis, plots, progress)
+        except KeyboardInterrupt as exc:        # a second signal while the first one's results were saved
+            if not (folder.tmp / "metrics.json").exists():
+                raise
+            outcome = Outcome("interrupted", json.loads((folder.tmp / "metrics.json").read_text()), exc, [])
         tmp = folder.tmp
-        sim = Simulation(system)
-        writer = SignalWriter(tmp / "signals", sim.columns, study.study.signals_format)
-        progress = Progress(sim.n_steps, sim.h)
-        sim.add_observer(progress)
-        try:
-            rec = _stream(sim, writer)
-        except RunError as err:
-            interrupt = err.__cause__ if isinstance(err.__cause__, KeyboardInterrupt) else None
-            writer.append(err.partial.data)
-            writer.close()
-            write_events(tmp, err.partial)
-            status = "interrupted" if interrupt is not None else "failed"
-            t_reached = study.study.start_time + (writer.rows - 1) * sim.h if writer.rows else study.study.start_time
-            facts = {**base, "status": status, "t_reached_s": t_reached, "wall_time_s": err.partial.wall_time_s,
-                     **_run_facts(err.partial)}
-            if interrupt is None:
-                facts["error"] = str(err)
-            write_json(tmp / "metrics.json", facts)
-            write_json(tmp / "run.json", _run_json(study, system, status, t_reached))
-            where = folder.commit(status)
-            if interrupt is not None:
-                code = 143 if isinstance(interrupt, Terminated) else 130
-                raise Interrupted(f"at t = {t_reached:.6g} s; the signals up to then are in {where}", code) from None
-            err.where = where
-            raise
-        finally:
-            progress.close()
-            sim.terminate()
-        files = [writer.close(), write_events(tmp, rec)]
-        frame = read_table(writer.path)
-        try:
-            values = _metrics(analysis, frame, study)
-        except AnalysisError as exc:
-            write_json(tmp / "metrics.json", {**base, "status": "analysis_failed", "error": str(exc),
-                                              "wall_time_s": rec.wall_time_s, **_run_facts(rec)})
-            write_json(tmp / "run.json", _run_json(study, system, "analysis_failed", _t_end(study, rec)))
-            exc.where = folder.commit("analysis_failed")
-            raise
-        values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-        metrics = {**base, "status": _status(rec), **values}
-        files.append(write_json(tmp / "metrics.json", metrics))
-        files.append(write_json(tmp / "run.json", _run_json(study, system, _status(rec), _t_end(study, rec))))
-        if plots and analysis is not None and hasattr(analysis, "plots"):
-            files.extend(analysis.plots(frame, study, tmp))
-        where = folder.commit("completed")   # an ended run (terminate request) is a clean result too
-    return RunResult(metrics, frame, _summary(analysis, values), [where / f.relative_to(tmp) for f in files])
+        where = folder.commit(outcome.status)
+    kept = _kept(Path(out_dir), where)
+    error = outcome.error
+    if isinstance(error, KeyboardInterrupt):
+        code = 143 if isinstance(error, Terminated) else 130
+        t = outcome.facts.get("t_reached_s")
+        at = f"at t = {t:.6g} s" if t is not None else "in the analysis (the simulation had completed)"
+        raise Interrupted(f"{at}; the signals up to then are in {where}{kept}", code) from None
+    if error is not None:
+        error.where = where
+        error.kept = kept
+        raise error
+    return _result(outcome.values, outcome.facts, analysis, study, [where / f.relative_to(tmp) for f in outcome.files],
+                   SignalTable(where / outcome.table.path.name))
+
+
+def _kept(out: Path, where: Path) -> str:
+    """What the message of an unfinished run says of ``--out`` when the run went beside it."""
+    return "" if where == out else f" (the earlier result in {out} is untouched)"
+
+
+def _result(values: dict[str, Any], metrics: dict[str, Any], analysis, study: Study, files: list[Path],
+            frame) -> RunResult:
+    table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds))
+    lines, warning = realtime_lines(values.get("realtime"))
+    return RunResult(metrics, frame, "\n".join([table, *lines]), files, failed, [warning] if warning else [])
 
 
 def _base_facts(study: Study) -> dict[str, Any]:
@@ -177,17 +272,12 @@ def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
         raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
 
 
-def _summary(analysis, values: dict) -> str:
-    return analysis.summary(values) if analysis is not None and hasattr(analysis, "summary") else \
-        json.dumps(values, indent=2)
-
-
 def _run_in_memory(study: Study, plots: bool) -> RunResult:
-    """No output folder: simulate, analyse, return (sweep points, tests)."""
+    """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
     rec = Simulation(build_system(resolve(study))).run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-    return RunResult({**base, "status": _status(rec), **values}, frame, _summary(analysis, values), [])
+    return _result(values, {**base, "status": _status(rec), **values}, analysis, study, [], frame)

@@ -34,6 +34,7 @@ from typing import Any, Iterable, Mapping
 
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError, field_validator, model_validator
 
+from .errors import did_you_mean
 from .study_files import (StudyError, parse_override, pruned, read_study_file, set_value,
                           study_folders)
 from .study_schema import (CONNECTION, TABLES, ComponentSpec, Connection, Exports, StudySettings,
@@ -71,6 +72,8 @@ class Study(BaseModel):
     # what resolvers made of this study (orchestrator.resolver keeps its model here: a study is
     # immutable in use, so its types are resolved once)
     _resolved: _Memo = PrivateAttr(default_factory=_Memo)
+    # field (as the schema names it) -> the --set item that gave its value, for the messages
+    _set_by: _Memo = PrivateAttr(default_factory=_Memo)
 
     def __copy__(self) -> "Study":
         copied = super().__copy__()
@@ -116,12 +119,22 @@ class Study(BaseModel):
     @classmethod
     def load(cls, path: str | Path, overrides: Iterable[str] = ()) -> "Study":
         """A study file (``extends`` resolved) with ``key=value`` overrides (``--set``; the value
-        is read as TOML, else as a string), validated once."""
+        is read as TOML, else as a string), validated once. A field an override set is blamed on
+        the override in every message about it (``origin``), here and when the study is resolved."""
         data = read_study_file(path)
-        for item in overrides:
-            key, value = parse_override(item, path)
-            set_value(data, key, value, f"{path}: override {item!r}")
-        return parse_study(data, path)
+        return parse_study(data, path, _overridden(data, overrides, path))
+
+    def with_overrides(self, overrides: Iterable[str]) -> "Study":
+        """This study with ``--set`` items applied (blamed on the items in messages, as by ``load``)."""
+        data = self.to_data()
+        set_by = {**self._set_by, **_overridden(data, overrides, self.where)}
+        return parse_study(data, self.path if self.path is not None else "<study>", set_by)
+
+    def origin(self, field: str) -> str:
+        """Where the value of ``field`` (``components.tracker.parameters.lookahead``) was given,
+        for a message: ``--set ITEM`` or ``FILE: FIELD``."""
+        item = self._set_by.get(field)
+        return f"--set {item} ({field})" if item is not None else f"{self.where}: {field}"
 
     @property
     def where(self) -> str:
@@ -268,21 +281,51 @@ class Study(BaseModel):
         return self.derive(data)
 
 
-def _format_validation(path: Path, err: ValidationError) -> str:
-    lines = [f"{path}: invalid study file"]
+def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> dict[str, str]:
+    """Apply ``--set`` items to study data; returns field -> item."""
+    set_by = {}
+    for item in overrides:
+        key, value = parse_override(item, path)
+        set_by[set_value(data, key, value, f"--set {item}")] = item
+    return set_by
+
+
+def _format_validation(path: Path, err: ValidationError, set_by: Mapping[str, str]) -> str:
+    """One line per error; an error in a field an override set names the override (and, for a
+    field the table does not have, the nearest ones it has)."""
+    file_lines, set_lines = [], []
     for e in err.errors():
         loc = ".".join(str(p) for p in e["loc"]) or "(top level)"
-        lines.append(f"  field {loc}: {e['msg'].removeprefix('Value error, ')}")
-    return "\n".join(lines)
+        message = e["msg"].removeprefix("Value error, ")
+        item = next((i for f, i in set_by.items() if loc == f or loc.startswith(f + ".") or f.startswith(loc + ".")),
+                    None)
+        if item is None:
+            file_lines.append(f"  field {loc}: {message}")
+            continue
+        if e["type"] == "extra_forbidden" and len(e["loc"]) >= 2:
+            table = Study
+            for part in e["loc"][:-1]:
+                annotation = table.model_fields.get(str(part)) if isinstance(table, type) else None
+                table = annotation.annotation if annotation is not None else None
+            fields = sorted(table.model_fields) if isinstance(table, type) and issubclass(table, BaseModel) else []
+            message = f"{'.'.join(map(str, e['loc'][:-1]))} has no field {str(e['loc'][-1])!r}" \
+                + did_you_mean(e["loc"][-1], fields, form=" (did you mean {}?)") \
+                + (f"; its fields: {', '.join(fields)}" if fields else "")
+        set_lines.append(f"--set {item}: {message}" if e["type"] == "extra_forbidden" else
+                         f"--set {item} ({loc}): {message}")
+    if not file_lines:
+        return "\n".join(set_lines)
+    return "\n".join(set_lines + [f"{path}: invalid study file"] + file_lines)
 
 
-def parse_study(data: dict[str, Any], path: str | Path = "<study>") -> Study:
+def parse_study(data: dict[str, Any], path: str | Path = "<study>", set_by: Mapping[str, str] | None = None) -> Study:
     path = Path(path)
     try:
         study = Study.model_validate(data)
     except ValidationError as err:
-        raise StudyError(_format_validation(path, err)) from None
+        raise StudyError(_format_validation(path, err, set_by or {})) from None
     study.path = path
+    study._set_by = _Memo(set_by or {})
     return study
 
 

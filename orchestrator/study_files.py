@@ -10,7 +10,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from .errors import InputError
+from .errors import InputError, did_you_mean
 from .study_schema import NAME, parse_connections
 
 
@@ -86,7 +86,7 @@ def read_one(path: Path) -> dict[str, Any]:
     """Parse TOML (``.toml``) or YAML (``.yaml``/``.yml``) into a plain dict."""
     if not path.is_file():
         raise StudyError(f"{path}: study file not found")
-    text = path.read_text(encoding="utf-8")
+    text = decoded(path, path.read_bytes())
     try:
         if path.suffix == ".toml":
             return tomllib.loads(text)
@@ -107,6 +107,21 @@ def read_one(path: Path) -> dict[str, Any]:
 
 
 
+def decoded(path: Path, raw: bytes) -> str:
+    """A study file's text: UTF-8 (TOML's encoding, and YAML's here); anything else is refused
+    with the line, the column and the byte that is not UTF-8, since guessing an encoding could
+    change a value silently."""
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        column = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        context = raw[raw.rfind(b"\n", 0, exc.start) + 1:exc.start].decode("utf-8", "replace")[-30:]
+        raise StudyError(f"{path}: line {line}, column {column} (byte offset {exc.start}): byte "
+                         f"0x{raw[exc.start]:02x} after {context!r} is not UTF-8; a study file must be UTF-8 text "
+                         f"(saved as Latin-1 or Windows-1252? save it again as UTF-8)") from None
+
+
 def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
     """``comp.param=value`` -> (key, value); the value is read as TOML, else kept as a string."""
     if "=" not in item or "." not in item.split("=", 1)[0]:
@@ -119,34 +134,39 @@ def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
     return key.strip(), value
 
 
-def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> None:
-    """Set one dotted key in study data (see ``Study.with_values``)."""
+def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
+    """Set one dotted key in study data (see ``Study.with_values``); returns the field it set, as
+    the schema names it (``components.tracker.parameters.lookahead``)."""
     parts = key.split(".")
     if len(parts) < 2 or not all(re.fullmatch(NAME, p) for p in parts):
         raise StudyError(f"{where}: expected 'component.parameter', 'component.inputs.port' or 'study.field'")
     head, rest = parts[0], parts[1:]
     if head == "study":
+        if len(rest) == 2 and rest[0] == "bounds":
+            data.setdefault("study", {}).setdefault("bounds", {})[rest[1]] = value
+            return f"study.bounds.{rest[1]}"
         if len(rest) != 1:
-            raise StudyError(f"{where}: expected 'study.field'")
+            raise StudyError(f"{where}: expected 'study.field' (or 'study.bounds.FIGURE')")
         data.setdefault("study", {})[rest[0]] = value
-        return
+        return f"study.{rest[0]}"
     comps = data.get("components", {})
     subs = data.get("subsystems", {})
     if head in comps:
         spec = comps[head]
         if len(rest) == 2 and rest[0] == "inputs":
             spec.setdefault("inputs", {})[rest[1]] = value
-        else:
-            spec.setdefault("parameters", {})[".".join(rest)] = value
-        return
+            return f"components.{head}.inputs.{rest[1]}"
+        spec.setdefault("parameters", {})[".".join(rest)] = value
+        return f"components.{head}.parameters.{'.'.join(rest)}"
     if head in subs and len(rest) >= 2:
-        set_value(subs[head], ".".join(rest), value, where)
-        return
+        return f"subsystems.{head}." + set_value(subs[head], ".".join(rest), value, where)
     if head not in ("components", "subsystems") and isinstance(data.get(head), dict) and len(rest) == 1:
         data[head][rest[0]] = value            # a table's field: sweep.mode, my_tool.period
-        return
+        return f"{head}.{rest[0]}"
     known = sorted(comps) + sorted(subs)
-    raise StudyError(f"{where}: no component {head!r}; known: {', '.join(known)}")
+    tables = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in ("components", "subsystems", "study"))
+    raise StudyError(f"{where}: no component {head!r}{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
+                     + (f"; tables: {', '.join(tables)}" if tables else ""))
 
 
 def pruned(table: dict[str, Any]) -> dict[str, Any]:

@@ -17,21 +17,33 @@ PORT_NAME = rf"{NAME}{INDEX}(?:\.{NAME}{INDEX})*"
 CONNECTION = re.compile(rf"^\s*({NAME})\.({PORT_NAME})\s*->\s*({NAME})\.({PORT_NAME})\s*$")
 PORT = re.compile(rf"^\s*({NAME})\.({PORT_NAME})\s*$")
 SUBSYSTEM_SUFFIXES = (".toml", ".yaml", ".yml")
+# a bound on a key figure: a comparison and a number, then any words ("< 0.40", ">= 0.99 (target)");
+# a bare number means "==" (orchestrator.key_figures)
+BOUND = re.compile(r"^\s*(<=|>=|==|<|>|=)?\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)(?![\w.])")
 
 
 class StudySettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    name: str
+    name: str                        # names the run in its results
     description: str = ""
-    start_time: float = Field(default=0.0, allow_inf_nan=False)
-    stop_time: float = Field(gt=0, allow_inf_nan=False)
-    base_step: float = Field(gt=0, allow_inf_nan=False)
-    seed: int = Field(ge=0)
-    signals_format: Literal["parquet", "csv"] = "parquet"
+    start_time: float = Field(default=0.0, allow_inf_nan=False)   # s
+    stop_time: float = Field(gt=0, allow_inf_nan=False)           # s
+    base_step: float = Field(gt=0, allow_inf_nan=False)           # s: every component step is a multiple
+    seed: int = Field(ge=0)          # every random stream is seeded from it and the component's name
+    signals_format: Literal["parquet", "csv"] = "parquet"        # the signal table's file format
     component_package: str | None = None   # look types up here first (default: registered packages)
-    analysis: str | None = None
+    analysis: str | None = None      # module with the study's metrics and figures (analysis.figure8)
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
+    bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
+
+    @field_validator("bounds")
+    @classmethod
+    def _bounds(cls, value: dict[str, str]) -> dict[str, str]:
+        for key, text in value.items():
+            if not BOUND.match(text):
+                raise ValueError(f"bound {key} = {text!r}: expected a comparison and a number, e.g. '< 0.40' or '>= 0.99'")
+        return value
 
     @model_validator(mode="after")
     def _times(self) -> "StudySettings":
@@ -44,10 +56,10 @@ class StudySettings(BaseModel):
 
 class ComponentSpec(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    type: str
-    step: float | None = Field(default=None, gt=0)
-    parameters: dict[str, Any] = {}
-    inputs: dict[str, Any] = {}
+    type: str                      # a component type, "package.module:Class", an .fmu or a study file
+    step: float | None = Field(default=None, gt=0)   # s (default: the base step)
+    parameters: dict[str, Any] = {}   # declared parameter -> value (a number in SI or "30 deg")
+    inputs: dict[str, Any] = {}    # unconnected input -> constant value
     roles: list[str] = []          # roles besides the class's own (an FMU that plays a role a tool looks up)
 
 

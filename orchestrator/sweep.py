@@ -4,21 +4,30 @@
 Output folder::
 
     sweep.json                 the sweep's identity (hash of the resolved study) and its points
-    points/pNNNN/metrics.json  per point: parameters, seed, status, error, metrics (written last:
-    points/pNNNN/signals.*     its presence marks the point finished)
+    points/pNNNN/metrics.json  per point: parameters, seed, status, error (and its kind), metrics
+    points/pNNNN/signals.*     the point's signals, streamed by its worker
+    points/pNNNN/run.json, events.log
     results.parquet|csv        one row per point
     plots/                     each metric against the swept parameter, plus the study's own plots
+
+A point's worker records its run into a fresh folder ``.running/pNNNN.XXXX`` (signals streamed: a
+long point keeps flat memory, orchestrator.runner.record_run); the parent adds the point's record
+and moves the folder into place in one step, so ``points/pNNNN`` is either whole or absent, and a
+point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
+(``--scheduler ADDRESS``) the worker records into its own temporary folder and sends the files.
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
 import hashlib
 import importlib
-import io
 import itertools
 import json
 import multiprocessing
 import os
+import re
+import shutil
+import tempfile
 import time
 import traceback
 from dataclasses import dataclass
@@ -29,7 +38,8 @@ import pandas as pd
 
 from .build import build_system
 from .resolver import resolve
-from .results import atomic_write, write_json, write_table
+from .errors import critical
+from .results import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 
 
@@ -97,26 +107,33 @@ def watch_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="watch-parent").start()
 
 
-def simulate_point(study: Study) -> dict[str, Any]:
-    """Worker: run one point; never raises (a failure is a result)."""
+def simulate_point(study: Study, folder: str | None = None) -> dict[str, Any]:
+    """Worker: run one point into ``folder`` (None: a temporary folder whose files are returned);
+    never raises (a failure is a result, with its kind: input, run, analysis or bug)."""
     from .engine import RunError
-    from .runner import AnalysisError, run_study
+    from .errors import InputError
+    from .runner import AnalysisError, _analysis, record_run
 
-    def parquet_bytes(frame: pd.DataFrame) -> bytes:
-        buf = io.BytesIO()
-        frame.to_parquet(buf, index=False)
-        return buf.getvalue()
-
+    target = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="sweep-point-"))
     try:
-        result = run_study(study, None, plots=False)
-        return {"status": "completed", "metrics": result.metrics, "signals": parquet_bytes(result.frame)}
-    except RunError as exc:
-        return {"status": "failed", "error": str(exc), "signals": parquet_bytes(exc.partial.to_frame())}
-    except (AnalysisError, StudyError) as exc:
-        return {"status": "failed", "error": str(exc), "signals": None}
+        outcome = record_run(study, build_system(resolve(study)), target, _analysis(study), plots=False,
+                             progress=False)
+    except InputError as exc:           # the point's values refused when its components start
+        result = {"status": "failed", "kind": "input", "error": str(exc)}
     except Exception as exc:  # a bug in a component: record it, the sweep goes on
-        return {"status": "failed", "error": f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}",
-                "signals": None}
+        result = {"status": "failed", "kind": "bug", "error": f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"}
+    else:
+        error = outcome.error
+        result = {"status": "completed" if outcome.complete else "failed", "metrics": outcome.values}
+        if error is not None:
+            kind = "run" if isinstance(error, RunError) else "analysis" if isinstance(error, AnalysisError) else "bug"
+            text = str(error) if kind != "bug" else \
+                f"{type(error).__name__}: {error}\n{''.join(traceback.format_exception(error))}"
+            result.update(kind=kind, error=text)
+    if folder is None:
+        result["files"] = {p.name: p.read_bytes() for p in target.iterdir() if p.is_file()}
+        shutil.rmtree(target, ignore_errors=True)
+    return result
 
 
 def sweep_hash(study: Study) -> str:
@@ -130,6 +147,7 @@ class SweepRun:
         self.points = expand(study)
         self.fmt = study.study.signals_format
         self.points_dir = self.out / "points"
+        self.running_dir = self.out / ".running"          # points being recorded by their workers
 
     # --- checks before anything runs ----------------------------------------------------------
     def validate(self) -> None:
@@ -167,19 +185,32 @@ class SweepRun:
                     done.add(point.key)
         return done
 
-    def store(self, point: Point, result: dict[str, Any]) -> dict[str, Any]:
-        folder = self.points_dir / point.key
-        if result.get("signals"):
-            frame = pd.read_parquet(io.BytesIO(result["signals"]))
-            if self.fmt == "parquet":
-                atomic_write(folder / "signals.parquet", lambda p: p.write_bytes(result["signals"]))
-            else:
-                write_table(folder / "signals", frame, self.fmt)
+    def new_folder(self, point: Point) -> Path:
+        """A fresh folder for the point's worker to record into (on the same file system as the
+        point's, to be moved there in one step)."""
+        self.points_dir.mkdir(parents=True, exist_ok=True)
+        self.running_dir.mkdir(parents=True, exist_ok=True)
+        folder = Path(tempfile.mkdtemp(prefix=f"{point.key}.", dir=self.running_dir))
+        os.chmod(folder, 0o777 & ~UMASK)
+        return folder
+
+    def store(self, point: Point, result: dict[str, Any], folder: Path | None = None) -> dict[str, Any]:
+        """Add the point's record to the folder its worker wrote (or write the files it sent) and
+        move the folder into place in one step."""
+        from .output import swap_folder
+
+        folder = folder if folder is not None and folder.is_dir() else self.new_folder(point)
+        for name, data in (result.get("files") or {}).items():
+            atomic_write(folder / name, lambda p, data=data: p.write_bytes(data))
         record = {"point": point.key, "seed": point.seed, "parameters": point.values,
-                  "status": result["status"], "error": result.get("error"),
-                  "metrics": {k: v for k, v in result.get("metrics", {}).items()
+                  "status": result["status"], "error": result.get("error"), "error_kind": result.get("kind"),
+                  "metrics": {k: v for k, v in (result.get("metrics") or {}).items()
                               if isinstance(v, (int, float)) and not isinstance(v, bool)}}
-        write_json(self.record_path(point), record)
+        write_json(folder / "metrics.json", record)
+        with critical():
+            old = swap_folder(folder, self.points_dir / point.key)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
         return record
 
     def table(self) -> pd.DataFrame:
@@ -200,26 +231,35 @@ class SweepRun:
     def run(self, workers: int, scheduler: str | None = None, retry_failed: bool = False,
             progress: bool = True) -> pd.DataFrame:
         self.validate()
-        for stale in self.out.glob("**/.*.tmp"):     # left by a killed run mid-write
-            stale.unlink()
+        self._remove_stale()
         done = self.finished(retry_failed)
         todo = [p for p in self.points if p.key not in done]
         bar = _progress(len(self.points), len(done), progress)
         failures = sum(1 for p in self.points if p.key in done
                        and json.loads(self.record_path(p).read_text())["status"] != "completed")
         try:
-            for point, result in self._execute(todo, workers, scheduler):
-                record = self.store(point, result)
+            for point, result, folder in self._execute(todo, workers, scheduler):
+                record = self.store(point, result, folder)
                 failures += record["status"] != "completed"
                 bar.update(1)
                 bar.set_postfix(failures=failures)
         finally:
             bar.close()
             self.write_table()
+            self._remove_stale()
         return self.table()
 
-    def _execute(self, todo: list[Point], workers: int, scheduler: str | None) -> Iterator[tuple[Point, dict]]:
-        jobs = [(p, point_study(self.study, p)) for p in todo]
+    def _remove_stale(self) -> None:
+        """Files and point folders left half-written by a run that was killed or interrupted."""
+        for stale in self.out.glob("**/.*.tmp"):
+            stale.unlink(missing_ok=True)
+        shutil.rmtree(self.running_dir, ignore_errors=True)
+
+    def _execute(self, todo: list[Point], workers: int,
+                 scheduler: str | None) -> Iterator[tuple[Point, dict, Path | None]]:
+        """(point, result, the folder its worker wrote) as points finish."""
+        shared = scheduler in (None, "local")            # the workers see this machine's folders
+        jobs = [(p, point_study(self.study, p), self.new_folder(p) if shared else None) for p in todo]
         if not jobs:
             return
         # one thread per point: parallelism comes from processes (BLAS threads spinning on tiny
@@ -230,10 +270,11 @@ class SweepRun:
             ctx = multiprocessing.get_context("spawn")
             with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
                                         initargs=(os.getpid(),)) as pool:
-                futures = {pool.submit(simulate_point, point): p for p, point in jobs}
+                futures = {pool.submit(simulate_point, point, str(folder)): (p, folder) for p, point, folder in jobs}
                 try:
                     for fut in cf.as_completed(futures):
-                        yield futures[fut], _result(fut)
+                        point, folder = futures[fut]
+                        yield point, _result(fut), folder
                 except BaseException:
                     # interrupted: the points in flight are dropped (a rerun does them again) and
                     # their workers end now, not when their point would have finished
@@ -249,7 +290,7 @@ def _result(fut) -> dict[str, Any]:
     try:
         return fut.result()
     except Exception as exc:  # a worker process died (killed, out of memory)
-        return {"status": "failed", "error": f"worker lost: {type(exc).__name__}: {exc}", "signals": None}
+        return {"status": "failed", "kind": "bug", "error": f"worker lost: {type(exc).__name__}: {exc}"}
 
 
 CONNECT_TIMEOUT = 6.0        # s: a wrong --scheduler address fails well within 10 s
@@ -275,10 +316,11 @@ def _execute_dask(jobs, workers: int, scheduler: str):
                                  f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
                                  f"expected an address like tcp://HOST:8786, or 'local'") from None
     try:
-        futures = {client.submit(simulate_point, point, pure=False, key=f"{p.key}-{time.time_ns()}"): p
-                   for p, point in jobs}
+        futures = {client.submit(simulate_point, point, str(folder) if folder else None, pure=False,
+                                 key=f"{p.key}-{time.time_ns()}"): (p, folder) for p, point, folder in jobs}
         for fut in as_completed(futures):
-            yield futures[fut], _result(fut)
+            point, folder = futures[fut]
+            yield point, _result(fut), folder
     finally:
         client.close()
         if cluster is not None:
@@ -290,6 +332,48 @@ def _progress(total: int, initial: int, enabled: bool):
 
     return tqdm(total=total, initial=initial, desc="sweep points", unit="pt", disable=not enabled,
                 dynamic_ncols=True)
+
+
+_AT_T = re.compile(r"^at t = [^:]+ s: ")
+
+
+def failure_reasons(table: pd.DataFrame) -> list[tuple[str, list[str]]]:
+    """The failed points grouped by reason (the error's first line, without the instant it came
+    at), most frequent first: [(reason, [point, ...]), ...]."""
+    if "status" not in table or table.empty:
+        return []
+    groups: dict[str, list[str]] = {}
+    for _, row in table[table["status"] != "completed"].iterrows():
+        text = str(row.get("error") or "no error recorded").strip().splitlines()[0]
+        groups.setdefault(_AT_T.sub("", text), []).append(str(row["point"]))
+    return sorted(groups.items(), key=lambda item: -len(item[1]))
+
+
+def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[str, list[str]]]]:
+    """(the text a sweep ends with, its failures grouped by reason): the key figures over the
+    completed points with their bounds (orchestrator.key_figures), the sweep analysis's own
+    summary (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
+    from .key_figures import bounds, sweep_table
+    from .runner import _analysis
+
+    analysis = _analysis(study)
+    done = int((table["status"] == "completed").sum()) if "status" in table else 0
+    lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "
+             f"{len(table) - done} failed"]
+    if done:
+        text = sweep_table(table, analysis, bounds(analysis, study.study.bounds), set(study.sweep.parameters))
+        lines += [text] if text else []
+        if study.sweep.analysis:
+            module = importlib.import_module(study.sweep.analysis)
+            if hasattr(module, "summary"):
+                lines.append(module.summary(table, study))
+    reasons = failure_reasons(table)
+    if reasons:
+        lines.append(f"failed points, by reason ({len(reasons)} reason{'s' if len(reasons) > 1 else ''}):")
+        for reason, points in reasons:
+            shown = ", ".join(points[:5]) + (", ..." if len(points) > 5 else "")
+            lines.append(f"  {len(points):>4} x {reason}  ({shown})")
+    return "\n".join(lines), reasons
 
 
 def _parameter_unit(study: Study, name: str) -> str:

@@ -327,7 +327,9 @@ def test_fmu_alone_reproduces_the_recorded_controller_outputs(controller_fmu, co
     closed-loop run, at the sample period and at communication steps dividing it: the controller
     is open loop here, so its outputs at each sample instant equal the Python controllers' outputs."""
     design, feeds, samples = recorded_controller_run
-    assert set(feeds) == {name for name, _, _ in design.inputs}     # every FMU input is driven by the study
+    # every FMU input is driven by the study but the tracker's crab feed-forward, which the paper's
+    # EKF does not give: it stays at its start, 0, in the FMU as in Python
+    assert set(feeds) == {name for name, _, _ in design.inputs} - {"tracker_lateral_velocity"}
     assert len(feeds) == 12 and feeds["tracker_yaw_rate_ref"] == "reference.yaw_rate_ref"
     fmu = controller_fmu if fmi_version == 2 else controller_fmu3
     inputs = {port: samples[column].to_numpy() for port, column in feeds.items()}

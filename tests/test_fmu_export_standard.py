@@ -77,7 +77,8 @@ def _running(fmu: Path, rng, warm: int = 3) -> tuple[Driver, dict]:
     d.s.exitInitializationMode()
     # a tractor near its reference, driving east at 1.9 m/s: no limit active
     nominal = {"tracker_x_ref": 10.05, "tracker_y_ref": 5.03, "tracker_xdot_ref": 2.0, "tracker_ydot_ref": 0.05,
-               "tracker_yaw_rate_ref": 0.01, "tracker_x": 10.0, "tracker_y": 5.0, "tracker_heading": 0.02,
+               "tracker_yaw_rate_ref": 0.01, "tracker_lateral_velocity": 0.0, "tracker_x": 10.0, "tracker_y": 5.0,
+               "tracker_heading": 0.02,
                "mpc_yaw_rate": 0.02, "mpc_steer_angle": 0.01, "speed_controller_speed": 1.9,
                "speed_controller_pedal_position": 0.55}
     base = {n: nominal[n] + float(rng.normal(0, 0.005)) for n in d.inputs}

@@ -63,8 +63,9 @@ def test_receiver_details_are_kept_qualities_heading_error_talkers():
     assert rst.counts["unused proprietary"] == 100              # $PASHR at 25 Hz: counted, not refused
     sky = read_nmea_file(NMEA / "skytraq-dgps.log").epochs
     assert sky["position_std"].notna().all() and (sky["position_std"] > 0).all()     # GST
-    boat = read_nmea_file(NMEA / "humminbird-M37.log")           # talker IN, a clock that steps back
-    assert len(boat.epochs) == 8 and boat.epochs["utc"].is_monotonic_increasing
+    boat = read_nmea_file(NMEA / "humminbird-M37.log")           # talker IN, a clock that steps back:
+    assert len(boat.epochs) == 6 and boat.epochs["utc"].is_monotonic_increasing     # 2 of 8 masked, split there
+    assert [b["masked"] for b in boat.breaks] == [2]
     hp = read_nmea_file(NMEA / "ublox-f9p-hpnmea.log").epochs     # high-precision GGA: 7 decimals of minutes
     assert abs(hp["lat"].iloc[0] - (44 + 4.1306024 / 60)) < 1e-10
 

@@ -11,7 +11,6 @@ import pytest
 
 from components.computation_delay import ComputationDelay
 from components.gps_sensor import GPSSensor
-from orchestrator.resolver import resolve
 from orchestrator.runner import run_study
 from orchestrator.study import Study
 
@@ -133,42 +132,6 @@ def test_baseline_studies_swap_only_the_tracker_and_track_the_figure8(name):
         {n: c for n, c in base.components.items() if n != "tracker"}
     m = run_study(study, None, plots=False).metrics
     assert m["euclid_max_straight"] < 0.6 and m["euclid_max_curved"] < 0.8       # it tracks (baseline)
-
-
-# --- margins: linearised loops against the simulation ---------------------------------------------
-
-def test_linear_mpc_equals_the_qp_mpc_while_no_constraint_is_active():
-    """analysis.margins writes the unconstrained MPC as a state-space controller; on small signals
-    (no constraint active) it must give the QP controller's commands."""
-    import control as ct
-
-    from analysis.margins import mpc_controller
-    from components.models.condensed_mpc import CondensedTrackingMPC
-
-    study = Study.load(FIGURE8)
-    C = mpc_controller(study)
-    p = resolve(study).parameters("mpc")
-    mpc = CondensedTrackingMPC(p["num"], p["den"], 0.05, 8, 3, p["Q"], p["R"], p["steer_limit"], p["steer_rate_limit"] * 0.05)
-    rng = np.random.default_rng(0)
-    n = 200
-    delta_m, gamma, ref = (1e-3 * rng.standard_normal(n) for _ in range(3))
-    qp = [mpc.step(ref[k], gamma[k], delta_m[k] if k else None)[0] for k in range(n)]
-    delta_m[0] = 0.0                                  # the QP controller starts from its own model
-    lin = ct.forced_response(C, T=np.arange(n) * 0.05, U=np.vstack([delta_m, gamma, ref])).outputs
-    np.testing.assert_allclose(np.ravel(lin), qp, rtol=1e-9, atol=1e-12)
-
-
-def test_predicted_and_simulated_delay_limits_agree_within_a_factor_of_1_5():
-    from analysis.margins import predicted, simulated_delay_limit
-
-    study = Study.load(FIGURE8)
-    margins = predicted(study)
-    limit = min(m.delay for m in margins.values())
-    simulated = simulated_delay_limit(study, high=1.0, tolerance=0.02)
-    assert 0.2 < simulated < 1.0 and 1 / 1.5 < limit / simulated < 1.5, (limit, simulated)
-    assert margins["path_loop"].phase_deg > 30 and margins["yaw_rate_loop"].gain > 3
-    paper = predicted(study.with_values({"tracker.lookahead": 0.0}))["path_loop"]
-    assert paper.delay < 0.1 < limit                 # the paper's law: a tenth of the delay tolerance
 
 
 def test_the_steering_does_not_hunt_between_potentiometer_levels():

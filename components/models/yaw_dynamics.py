@@ -13,7 +13,7 @@ RLFR front and rear)::
 
 State order: [v_y, gamma] (+ alpha_f for RLF) (+ alpha_r for RLFR); input delta; output gamma.
 
-Model extensions (the diagnosis catalogue, issue 6), shared by the plant and the diagnosis replay:
+Model extensions (the diagnosis catalogue), shared by the plant and the diagnosis replay:
 
 - speed-dependent cornering: C_f, C_r scaled by c(v) = max(0.2, 1 + k (v_x - v_ref));
 - side slope: a field plane tilted by phi with its fall line at azimuth psi_d adds the lateral

@@ -10,7 +10,12 @@ class YawRateBias(Effect):
     starts = ((0.0,),)
     threshold = "|bias| >= 0.004 rad/s"
     hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
-    experiment = "30 s standing still: a gyro bias reads a yaw rate with the tractor at rest"
+    experiment = "30 s standing still: a gyro bias reads a yaw rate with the vehicle at rest"
+
+    def hypothesis_for(self, stages):
+        if "position" in stages:
+            return self.hypothesis
+        return "the gyro reads a constant offset: it reads a turn when the vehicle drives straight"
 
     def baseline(self, study):
         return {"yaw_rate_bias": study.parameters("gyro", {"bias": 0.0})["bias"]}

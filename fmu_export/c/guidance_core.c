@@ -54,6 +54,7 @@ static void model_sample(ModelState *c, const double *p, const double *in, doubl
     double tr[4];
     tracker_law(in[IN_tracker_x_ref], in[IN_tracker_y_ref], in[IN_tracker_xdot_ref], in[IN_tracker_ydot_ref],
                 in[IN_tracker_x], in[IN_tracker_y], in[IN_tracker_heading], in[IN_tracker_yaw_rate_ref],
+                in[IN_tracker_lateral_velocity],
                 p[P_tracker_k_s], p[P_tracker_k_c], p[P_tracker_l_r], p[P_tracker_lookahead], tr);
     double v_d = tr[0], gamma_d = tr[1];
     out[OUT_tracker_speed_desired] = v_d;

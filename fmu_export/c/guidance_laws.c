@@ -28,13 +28,13 @@ static double pid_update(PIDState *s, double kp, double ki, double kd, double um
  * v_d, gamma_d from the saturated position errors; with a look-ahead a > l_r:
  * gamma_d = (l_r gamma_fb + (a - l_r) gamma_r) / a (components/kinematic_tracker.py). */
 static void tracker_law(double x_ref, double y_ref, double xdot_ref, double ydot_ref, double x, double y,
-                        double heading, double yaw_rate_ref, double k_s, double k_c, double l_r, double lookahead,
-                        double out[4]) {
+                        double heading, double yaw_rate_ref, double crab, double k_s, double k_c, double l_r,
+                        double lookahead, double out[4]) {
     double ex = x_ref - x, ey = y_ref - y;
     double xd = xdot_ref + k_s * tanh(k_c * ex);
     double yd = ydot_ref + k_s * tanh(k_c * ey);
     double cs = cos(heading), sn = sin(heading);
-    double v_d = cs * xd + sn * yd, gamma_d = (-sn * xd + cs * yd) / l_r;
+    double v_d = cs * xd + sn * yd, gamma_d = (-sn * xd + cs * yd - crab) / l_r;
     double share = l_r / (lookahead != 0.0 ? lookahead : l_r);
     if (share != 1.0) gamma_d = share * gamma_d + (1.0 - share) * yaw_rate_ref;
     out[0] = v_d; out[1] = gamma_d; out[2] = ex; out[3] = ey;

@@ -4,7 +4,8 @@
  * expm([A B; 0 0] h), the speed quantised to speed_cache_resolution as the Python cache does),
  * and the pose at the CG by the midpoint rule; below min_speed the slip equations use min_speed
  * and the yaw rate is scaled by v / min_speed. Extensions: steer_angle_offset, cornering speed
- * slope, side slope (a lateral acceleration into dv_y/dt), antenna lever arm. */
+ * slope, side slope (a lateral acceleration into dv_y/dt; the roll and pitch it gives, models/terrain.py),
+ * antenna lever arm with its height turned by the roll and pitch. */
 #define NS (YAW_MODEL + 2)
 #define NA (NS + 2)                     /* augmented: states, delta, lateral acceleration */
 #define GRAVITY 9.81
@@ -85,7 +86,14 @@ static void model_sample(ModelState *st, const double *p, const double *in, doub
     double v_lat_rear = st->vy_out - lr * gamma;
     out[OUT_vel_east_rear] = v * c - v_lat_rear * s;
     out[OUT_vel_north_rear] = v * s + v_lat_rear * c;
-    double dx = p[P_antenna_forward] * c - p[P_antenna_left] * s, dy = p[P_antenna_forward] * s + p[P_antenna_left] * c;
+    /* the plane's gradient and the attitude at the heading (terrain.attitude, terrain.lever_offset) */
+    double tn = -tan(p[P_slope_angle]), gx = tn * cos(p[P_slope_downhill_heading]), gy = tn * sin(p[P_slope_downhill_heading]);
+    double pitch = atan(gx * c + gy * s), roll = atan((-gx * s + gy * c) * cos(pitch));
+    double cr = cos(roll), sr = sin(roll), cp = cos(pitch), sp = sin(pitch);
+    double fa = p[P_antenna_forward] * cp - p[P_antenna_left] * sp * sr - p[P_antenna_height] * sp * cr;
+    double fb = p[P_antenna_left] * cr - p[P_antenna_height] * sr;
+    double dx = c * fa - s * fb, dy = s * fa + c * fb;
+    out[OUT_roll] = roll; out[OUT_pitch] = pitch;
     out[OUT_x_antenna] = out[OUT_x_rear] + dx; out[OUT_y_antenna] = out[OUT_y_rear] + dy;
     out[OUT_vel_east_antenna] = out[OUT_vel_east_rear] - gamma * dy;
     out[OUT_vel_north_antenna] = out[OUT_vel_north_rear] + gamma * dx;

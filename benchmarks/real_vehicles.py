@@ -1,0 +1,96 @@
+"""Identify and diagnose every real vehicle log in ../shared/realdata:
+``python3 benchmarks/real_vehicles.py [--out DIR]``.
+
+F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman step runs (the same
+kind of car, 41 designed 3 s runs laid end to end), read by the recording importer (as ``convert``
+reads them: the longest run without a clock gap) through tests/vehicle_logs.py, against
+studies/f1tenth.toml.
+Prints one table: vehicle, seconds, delay, understeer gradient K, cornering stiffnesses, held-out
+fit, tyre saturation, the diagnosis' verdict and what was not judged.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+REAL = ROOT.parent / "shared" / "realdata"
+if not REAL.is_dir():
+    REAL = Path("/work/shared/realdata")
+
+
+def logs():
+    from tests.vehicle_logs import autokoopman_log, frictionmaps_log
+
+    folder = REAL / "f1tenth_frictionmaps" / "DataSets"
+    for run in sorted(p.name for p in folder.iterdir() if p.is_dir()):
+        yield f"F1TENTH FrictionMaps {run}", frictionmaps_log(folder / run)
+    import tests.vehicle_logs as vl
+
+    vl.AUTOKOOPMAN = REAL / "f1tenth_autokoopman_steps" / "F1tenthCar"
+    yield "F1TENTH AutoKoopman steps (41 x 3 s)", autokoopman_log()
+
+
+def fmt(q: dict, f: str = "{:.3g}") -> str:
+    if not q.get("identifiable", True):
+        return "not identifiable"
+    return f.format(q["value"]) + " [" + ", ".join(f.format(x) for x in q["interval"]) + "]"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
+    args = ap.parse_args()
+    from diagnosis.pipeline import diagnose
+    from identification.from_log import longest_stretch
+    from identification.ordinary_driving import identify_driving
+    from orchestrator.errors import InputError
+    from orchestrator.study import Study
+
+    study_path = ROOT / "studies" / "f1tenth.toml"
+    study = Study.load(study_path)
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        base = args.out or Path(tmp)
+        for k, (name, log) in enumerate(logs()):
+            start = time.perf_counter()
+            seconds = float(log["t"].iloc[-1] - log["t"].iloc[0])
+            try:
+                rep = identify_driving(log, name, study)
+                ident = {"delay [s]": fmt(rep["delay"]), "K [rad/(m/s2)]": fmt(rep["understeer_gradient"]),
+                         "C_f, C_r [N/rad]": f"{fmt(rep['cornering_stiffness']['front'], '{:.0f}')}; "
+                                             f"{fmt(rep['cornering_stiffness']['rear'], '{:.0f}')}",
+                         "held-out fit [%]": fmt(rep["held_out_fit"], "{:.0f}"),
+                         "tyre saturation": (f"mu {rep['tyre_saturation']['parameters']['friction']['value']:.2f}"
+                                             if rep["tyre_saturation"]["found"] else "not found")}
+            except InputError as exc:
+                ident = {"delay [s]": f"cannot judge: {exc}"}
+            piece, _ = longest_stretch(log)         # what diagnose judges of a log with clock gaps
+            path = base / f"log{k}.parquet"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            log.drop(columns=[c for c in ("run",) if c in log]).to_parquet(path)
+            res = diagnose(path, base / f"diagnosis{k}", study_path, plots=args.out is not None)
+            verdict = res["verdict"] + (" (inconclusive)" if res.get("verdict_status") == "inconclusive" else "")
+            if res["verdict"] == "cannot decide":
+                verdict += f": {res['reason'].split(': ', 1)[-1]}"
+            else:
+                verdict += "".join(f"; {e['id']} {', '.join(f'{n} {v:.3g}' for n, v in e.get('parameters', {}).items())}"
+                                   for e in res["effects"] if e["id"] == res["verdict"])
+            not_judged = "; ".join(f"{s}: {w.removeprefix('not judged: ')}" for s, w in res.get("not_judged", {}).items())
+            rows.append({"vehicle": name, "seconds": f"{seconds:.0f} (diagnosed {piece['t'].iloc[-1]:.0f})", **ident,
+                         "verdict": verdict, "not judged": not_judged or "-",
+                         "time [s]": f"{time.perf_counter() - start:.0f}"})
+            print(f"{name}: done in {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
+    cols = list(dict.fromkeys(k for r in rows for k in r))
+    print("| " + " | ".join(cols) + " |")
+    print("|" + "---|" * len(cols))
+    for r in rows:
+        print("| " + " | ".join(str(r.get(c, "")) for c in cols) + " |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,46 @@
+"""The tyres saturate: in hard turns the lateral force falls behind C alpha.
+
+Simplified Magic Formula per axle (components.models.tyre): F = mu F_z sin(C atan(B alpha)),
+B = C_alpha / (C mu F_z), with the friction mu and the shape factor C fitted; the cornering
+stiffnesses stay the baseline's refitted ones (the small-slip slope). The linear tyre is mu = inf.
+"""
+import math
+
+from components.models.tyre import linear_share_limit
+from components.models.yaw_dynamics import GRAVITY
+
+from ..effect import Effect, Parameter
+
+LATERAL_KEY = "log_lateral_acceleration_p99"     # the log's 99th percentile of |v r| [m/s2], set by the selection
+
+
+class TyreSaturation(Effect):
+    id = "tyre_saturation"
+    subsystem = "yaw (tyres: lateral force saturation, simplified Magic Formula)"
+    stages = ("yaw",)
+    parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0), Parameter("tyre_shape", "1", 0.3, 1.05, 1.95))
+    starts = ((1.0, 1.3), (0.3, 1.3))
+    threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
+                 "99th percentile of |a_y|: the log drives into the saturation")
+    hypothesis = ("the tyres saturate: in hard turns the lateral force falls behind C alpha, and the yaw rate "
+                  "with it")
+    experiment = ("steady turns at rising speed (a ramp of lateral acceleration to the limit): saturation caps "
+                  "a_y near mu g, a stiffness or a steering gain does not")
+
+    def baseline(self, study):
+        p = study.parameters("yaw_plant")
+        mu = float(p.get("tyre_friction") or 0.0)
+        return {"tyre_friction": mu if mu > 0 else math.inf, "tyre_shape": float(p.get("tyre_shape") or 1.3)}
+
+    def material(self, fitted, base):
+        if not math.isfinite(fitted["tyre_friction"]):
+            return False
+        limit = fitted["tyre_friction"] * GRAVITY * linear_share_limit(fitted["tyre_shape"])
+        return limit < base.get(LATERAL_KEY, 0.0)
+
+    def options(self, fitted, base, study):
+        return [("yaw_plant", "tyre_friction", fitted["tyre_friction"]),
+                ("yaw_plant", "tyre_shape", fitted["tyre_shape"])]
+
+    def display(self, fitted):
+        return {"tyre_friction [-]": fitted["tyre_friction"], "tyre_shape [-]": fitted["tyre_shape"]}

@@ -1,0 +1,61 @@
+"""Shapely geometries (GeoJSON, WKT, KML) as fields: a field per polygon, each in its own local
+frame, every field with a name of its own."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from shapely.geometry import LineString, MultiLineString
+
+from .coordinates import Coordinates
+from .field import Field, FieldError, GuidanceLine, polygon, polygons
+
+
+def distinct_names(fields: list[Field]) -> list[Field]:
+    """The fields with names told apart: a name that repeats gets _2, _3 ... in file order, so that
+    ``plan --name`` picks one field, not the first of several."""
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
+    for f in fields:
+        name, k = f.name, counts.get(f.name, 1)
+        while name in taken:
+            k += 1
+            name = f"{f.name}_{k}"
+        counts[f.name] = k
+        taken.add(name)
+        f.name = name
+    return fields
+
+
+def fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str | None) -> list[Field]:
+    """A field per polygon, each in its own local frame (a file may hold fields continents apart);
+    a line goes to the field it crosses most."""
+    polys = []
+    for geom, props in shapes:         # the parcels of one MultiPolygon feature: name_1, name_2 ...
+        parts = polygons(geom)
+        base = props.get("Name") or props.get("name") or props.get("id")
+        for k, p in enumerate(parts, 1):
+            polys.append((p, props if base is None or len(parts) == 1 else {**props, "name": f"{base}_{k}", "Name": None}))
+    lines = [(ln, props) for geom, props in shapes
+             for ln in ([geom] if isinstance(geom, LineString) else list(geom.geoms) if isinstance(geom, MultiLineString) else [])]
+    if not polys:
+        raise FieldError(f"{path}: no Polygon or MultiPolygon in it (found {', '.join(sorted({g.geom_type for g, _ in shapes})) or 'nothing'})")
+    rings = [np.asarray(p.exterior.coords)[:, :2] for p, _ in polys]
+    coords = Coordinates(str(path), declared, crs, rings)
+    fields, frames = [], []
+    for i, (p, props) in enumerate(polys):
+        origin, to_local = coords.frame([rings[i]])
+        name = str(props.get("Name") or props.get("name") or props.get("id") or f"{path.stem}_{i + 1}")
+        boundary = polygon(to_local(np.asarray(p.exterior.coords)), [to_local(np.asarray(h.coords)) for h in p.interiors])
+        fields.append(Field(name, boundary, origin, str(path), coords.text, properties=_plain(props)))
+        frames.append((p, to_local))
+    distinct_names(fields)
+    for j, (ln, props) in enumerate(lines):
+        k = max(range(len(polys)), key=lambda i: polys[i][0].intersection(ln).length) if len(polys) > 1 else 0
+        fields[k].lines.append(GuidanceLine(str(props.get("Name") or props.get("name") or props.get("path_id")
+                                                or f"line {j + 1}"), frames[k][1](np.asarray(ln.coords))))
+    return fields
+
+
+def _plain(props: dict) -> dict:
+    return {k: v for k, v in props.items() if isinstance(v, (int, float, str, bool)) and k not in ("Name", "name")}

@@ -1,0 +1,378 @@
+"""Yaw-dynamics identification from ordinary driving: an output-error fit in the time domain.
+
+Model (the study's single-track model, LPV in the measured speed v)::
+
+    w(t)      = g u(t - tau) + delta_0            wheel angle asked: steering input u (the measured
+                                                  wheel angle delta, else the command delta_cmd),
+                                                  delay tau, gain g (1 for a measured angle), offset
+    T dd/dt   = w - d                             steering lag T: the wheel angle d the tyres see
+    single-track yaw dynamics driven by d at v    (components.models.tyre: linear tyres, or the
+                                                  simplified Magic Formula with friction mu, shape C)
+    r_gyro    = gamma + b                         gyro bias b
+
+Free: the cornering coefficients c_f = C_f / F_zf and c_r = C_r / F_zr (cornering stiffness per
+unit axle load, 1/rad), tau, T, b, delta_0, g (command input only), and mu, C for the saturation
+effect; m, I, l_f, l_r and the relaxation lengths are the study's. In these terms the understeer
+gradient (delta = L / R + K a_y in steady cornering) is K = (1 / c_f - 1 / c_r) / g_0, whatever
+the mass and CG position (g_0 = 9.81 m/s2).
+
+The log is cut into segments of driving (v above ``min_speed``, no clock gap), each simulated from
+a kinematic state with a burn-in before the samples it is scored on; every third segment is held
+out. Segments run side by side (vectorised), so a simulation costs one pass over the longest
+segment, and the fit uses at most ``max_fit_seconds`` of segments spread over the log: the cost
+grows linearly with the log's length at most. Least squares (scipy, bounded); intervals from the
+Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from orchestrator.errors import InputError
+
+from components.models.tyre import GAMMA_ROS2, axle_loads, rates
+from components.models.yaw_dynamics import GRAVITY, TractorParameters
+
+Z95 = 1.959964
+
+
+class NotEnoughDriving(InputError, ValueError):
+    """The log holds too little driving to identify the yaw dynamics (the reason says how much more)."""
+
+
+@dataclass
+class DrivingLog:
+    """The log on an even grid: steering input u, speed v, gyro r; ``run`` numbers the
+    stretches without a clock gap."""
+
+    t: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    r: np.ndarray
+    run: np.ndarray
+    h: float
+    input_name: str
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def a_y(self) -> np.ndarray:
+        """Measured lateral acceleration of steady turning, v r [m/s2]."""
+        return self.v * self.r
+
+    def run_start(self) -> np.ndarray:
+        first = np.r_[True, self.run[1:] != self.run[:-1]]
+        return self.t[first][np.cumsum(first) - 1]
+
+
+def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None) -> DrivingLog:
+    """Interpolate each gap-free stretch of the log onto an even clock (its median step, no finer
+    than ``max_rate``: a faster log is averaged over the coarser step first); a step longer than
+    ``gap`` (default max(0.5 s, 5 median steps)) splits."""
+    t = frame["t"].to_numpy(float)
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    h = max(step, 1.0 / max_rate)
+    gap = gap or max(0.5, 5 * step)
+    cuts = np.flatnonzero(dt > gap) + 1
+    notes = []
+    if len(cuts):
+        notes.append(f"{len(cuts)} clock gap(s) longer than {gap:.3g} s: the log is cut there")
+    jitter = float(np.std(dt[dt <= gap]) / step) if len(dt) else 0.0
+    if jitter > 0.05 or h > step * 1.01:
+        notes.append(f"samples interpolated onto an even {1 / h:.3g} Hz clock (median step {step * 1e3:.3g} ms, "
+                     f"jitter {100 * jitter:.0f} %)")
+    parts = {"t": [], "u": [], "v": [], "r": [], "run": []}
+    for k, (a, b) in enumerate(zip(np.r_[0, cuts], np.r_[cuts, len(t)])):
+        if b - a < 2:
+            continue
+        grid = t[a] + h * np.arange(int(math.floor((t[b - 1] - t[a]) / h + 1e-9)) + 1)
+        parts["t"].append(grid)
+        k_avg = int(round(h / step))
+        for key, col in (("u", input_name), ("v", "v"), ("r", "yaw_rate")):
+            x = frame[col].to_numpy(float)[a:b]
+            if k_avg > 1 and b - a > k_avg:         # a coarser clock: average over its step first (no aliasing)
+                x = np.convolve(np.pad(x, (k_avg // 2, k_avg - 1 - k_avg // 2), mode="edge"), np.ones(k_avg) / k_avg,
+                                mode="valid")
+            parts[key].append(np.interp(grid, t[a:b], x))
+        parts["run"].append(np.full(len(grid), k))
+    arrays = {k: np.concatenate(v) for k, v in parts.items()}
+    return DrivingLog(arrays["t"], arrays["u"], arrays["v"], arrays["r"], arrays["run"], h, input_name, notes)
+
+
+@dataclass
+class Segments:
+    """Rows of sample indices simulated side by side: ``idx`` (S, L), padded with each row's last
+    index; ``scored`` marks the samples a row is judged on (after its burn-in, moving)."""
+
+    idx: np.ndarray
+    scored: np.ndarray
+    held_out: np.ndarray          # (S,) bool
+
+    def take(self, rows) -> "Segments":
+        return Segments(self.idx[rows], self.scored[rows], self.held_out[rows])
+
+    @property
+    def seconds(self) -> int:
+        return int(self.scored.sum())
+
+
+def cut_segments(log: DrivingLog, min_speed: float, length: float = 10.0, burn_in: float = 1.0,
+                 min_length: float = 1.0, hold_every: int = 3) -> Segments:
+    """Stretches of driving (v >= min_speed, no gap, at least ``min_length`` s) cut into pieces of
+    about ``length`` s, each simulated from ``burn_in`` s before it (less where its stretch starts
+    the run: a quarter of what precedes its end); every ``hold_every``-th piece is held out."""
+    h = log.h
+    moving = log.v >= min_speed
+    pieces = []
+    edges = np.flatnonzero(np.diff(np.r_[0, moving.astype(int), 0]))
+    for a, b in zip(edges[::2], edges[1::2]):
+        while a < b and log.run[a] != log.run[b - 1]:          # a stretch never crosses a gap
+            split = a + int(np.argmax(log.run[a:b] != log.run[a]))
+            pieces += _pieces(a, split, h, length, min_length)
+            a = split
+        pieces += _pieces(a, b, h, length, min_length)
+    if not pieces:
+        return Segments(np.zeros((0, 1), int), np.zeros((0, 1), bool), np.zeros(0, bool))
+    run_first = {}
+    for i, k in enumerate(log.run):
+        run_first.setdefault(int(k), i)
+    rows = []
+    burn = int(round(burn_in / h))
+    for a, b in pieces:
+        start = max(run_first[int(log.run[a])], a - burn)
+        settle = min(burn, (b - start) // 4)
+        rows.append((start, max(a, start + settle), b))
+    L = max(b - s for s, _, b in rows)
+    idx = np.empty((len(rows), L), int)
+    scored = np.zeros((len(rows), L), bool)
+    for i, (s, a, b) in enumerate(rows):
+        idx[i, : b - s] = np.arange(s, b)
+        idx[i, b - s:] = b - 1
+        scored[i, a - s: b - s] = moving[a:b]
+    held = (np.arange(len(rows)) % hold_every) == hold_every - 1
+    if len(rows) == 1:
+        held[:] = False
+    return Segments(idx, scored, held)
+
+
+def _pieces(a: int, b: int, h: float, length: float, min_length: float) -> list[tuple[int, int]]:
+    n = b - a
+    if n * h < min_length:
+        return []
+    k = max(1, int(round(n * h / length)))
+    bounds = np.linspace(a, b, k + 1).round().astype(int)
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+@dataclass(frozen=True)
+class FreeParameter:
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    scale: float
+    meaning: str
+
+
+class YawModel:
+    """The single-track model of the study driven through delay, gain, offset and lag; simulates
+    every segment side by side. ``values``: the free parameters by name (others at their defaults)."""
+
+    DEFAULTS = {"delay": 0.0, "lag": 0.0, "gyro_bias": 0.0, "steer_offset": 0.0, "steer_gain": 1.0,
+                "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
+
+    def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
+                 max_substep: float = 0.02, min_sim_speed: float = 0.05) -> None:
+        self.model, self.p, self.log, self.segs = model, params, log, segs
+        self.loads = axle_loads(params.m, params.l_f, params.l_r)
+        self.L = params.l_f + params.l_r
+        self.n_sub = max(1, int(math.ceil(log.h / max_substep)))
+        # below min_sim_speed the slip equations (1/v) are replaced by that speed and the yaw rate
+        # scaled by v / min_sim_speed, as in the plant: a car at rest does not turn
+        self.v_sim = np.maximum(log.v, min_sim_speed)
+        self.low_speed_scale = np.clip(log.v / min_sim_speed, 0.0, 1.0)
+        self.t0 = log.run_start()
+
+    def wheel_angle(self, values: dict) -> np.ndarray:
+        """w = g u(t - tau) + delta_0 on every sample (u before its run's start: its first value)."""
+        log = self.log
+        tau = values.get("delay", 0.0)
+        u = log.u
+        if tau > 0:
+            # per run: interpolate at t - tau, clipped to the run's first sample
+            tq = np.maximum(log.t - tau, self.t0)
+            u = np.interp(tq + log.run * 1e6, log.t + log.run * 1e6, log.u)
+        return values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0)
+
+    def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:
+        """Gyro reading the model predicts, (S, L) on the segments' samples."""
+        return self.simulate_many([values], segs)[0]
+
+    def simulate_many(self, sets: list[dict], segs: Segments | None = None) -> np.ndarray:
+        """(R, S, L): the model under each of R parameter sets, all rows stepped together (the
+        per-step cost is Python overhead: a Jacobian's sets cost little more than one)."""
+        sets = [{**self.DEFAULTS, **v} for v in sets]
+        segs = segs or self.segs
+        idx = segs.idx
+        S, L = idx.shape
+        R = len(sets)
+        w = np.concatenate([self.wheel_angle(v)[idx] for v in sets])          # (R S, L)
+        vv = np.tile(self.v_sim[idx], (R, 1))
+        h = self.log.h
+
+        def per_row(key):
+            return np.repeat([float(v[key]) for v in sets], S)
+
+        lag = per_row("lag")
+        a = np.where(lag > 1e-6, np.exp(-h / np.maximum(lag, 1e-6)), 0.0)
+        Fzf, Fzr = self.loads
+        Cf, Cr = per_row("c_f") * Fzf, per_row("c_r") * Fzr
+        mu = per_row("friction")
+        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": per_row("shape"), "C_f": Cf, "C_r": Cr}
+        slope, v_ref = per_row("cornering_speed_slope"), per_row("cornering_reference_speed")
+        speed_scaled = bool(np.any(slope != 0.0))
+        n = {"bicycle": 2, "rlf": 3, "rlfr": 4}[self.model]
+        rows = R * S
+        z = np.zeros((rows, n))
+        d = w[:, 0].copy()
+        r0 = vv[:, 0] * d / self.L                       # kinematic start
+        z[:, 0], z[:, 1] = self.p.l_r * r0, r0
+        out = np.empty((rows, L))
+        hs = h / self.n_sub
+        eye = np.eye(n)
+        for j in range(L):
+            out[:, j] = z[:, 1]
+            if j == L - 1:
+                break
+            d_next = a * d + (1.0 - a) * 0.5 * (w[:, j] + w[:, j + 1])
+            for k in range(self.n_sub):
+                s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
+                v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])
+                v1 = vv[:, j] + s1 * (vv[:, j + 1] - vv[:, j])
+                if speed_scaled:        # C x max(0.2, 1 + k (v - v_ref)), the speed-dependent cornering
+                    c = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
+                    tyre["C_f"], tyre["C_r"] = Cf * c, Cr * c
+                f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
+                M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
+                k1 = np.einsum("sij,sj->si", M, f0)
+                f1, _ = rates(self.model, self.p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
+                k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
+                z = z + hs * (1.5 * k1 + 0.5 * k2)
+            d = d_next
+        out *= np.tile(self.low_speed_scale[idx], (R, 1))
+        out += per_row("gyro_bias")[:, None]
+        return out.reshape(R, S, L)
+
+
+def understeer_gradient(c_f: float, c_r: float) -> float:
+    """K = (1/c_f - 1/c_r) / g_0 [rad/(m/s2)] from the cornering coefficients (stiffness / axle load)."""
+    return (1.0 / c_f - 1.0 / c_r) / GRAVITY
+
+
+def steady_state_gain(speed, K: float, L: float, gain: float = 1.0):
+    """Steady-state yaw rate per unit steering input: g v / (L + K v^2)."""
+    speed = np.asarray(speed, float)
+    return gain * speed / (L + K * speed ** 2)
+
+
+@dataclass
+class FitResult:
+    values: dict[str, float]
+    free: list[FreeParameter]
+    cov: np.ndarray
+    rss: float
+    n: int
+    n_eff: float
+    residual_fit: np.ndarray
+
+    def std(self, name: str) -> float:
+        i = [p.name for p in self.free].index(name)
+        return float(math.sqrt(max(self.cov[i, i], 0.0)))
+
+    def at_bound(self, p: FreeParameter) -> str | None:
+        x, span = self.values[p.name], p.upper - p.lower
+        for side, b in (("lower", p.lower), ("upper", p.upper)):
+            if abs(x - b) <= 2e-3 * span:
+                return side
+        return None
+
+    def interval_of(self, grad: dict[str, float]) -> float:
+        """Standard deviation of a derived quantity with gradient ``grad`` (delta method; a
+        parameter held on its bound contributes nothing)."""
+        names = [p.name for p in self.free]
+        gvec = np.array([grad.get(n, 0.0) for n in names])
+        cov = np.nan_to_num(self.cov, nan=0.0)
+        return float(math.sqrt(max(gvec @ cov @ gvec, 0.0)))
+
+    @property
+    def bic(self) -> float:
+        return self.n_eff * math.log(self.rss / self.n) + len(self.free) * math.log(self.n_eff)
+
+
+def effective_size(res_rows: list[np.ndarray]) -> float:
+    """sum over segments of n (1 - rho1) / (1 + rho1), rho1 the pooled lag-1 autocorrelation."""
+    num = den = 0.0
+    n = 0
+    for r in res_rows:
+        r = r - r.mean() if len(r) else r
+        num += float(r[1:] @ r[:-1]) if len(r) > 1 else 0.0
+        den += float(r @ r)
+        n += len(r)
+    rho = min(max(num / den, 0.0), 0.98) if den > 0 else 0.0
+    return n * (1 - rho) / (1 + rho)
+
+
+def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, segs: Segments,
+        max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
+    """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
+    ``mask``, (S, L), when given)."""
+    r_meas = model.log.r[segs.idx]
+    mask = segs.scored if mask is None else segs.scored & mask
+    lo = np.array([p.lower / p.scale for p in free])
+    hi = np.array([p.upper / p.scale for p in free])
+
+    def values_of(x):
+        return {**fixed, **{p.name: float(xi) * p.scale for p, xi in zip(free, x)}}
+
+    def fun(x):
+        return (r_meas - model.simulate(values_of(x), segs))[mask]
+
+    def jac(x):
+        """Forward differences, every perturbed set simulated in one batched pass."""
+        steps = 1e-3 * np.maximum(np.abs(x), 1.0)
+        steps = np.where(x + steps > hi, -steps, steps)
+        xs = [x] + [x + steps[i] * np.eye(len(x))[i] for i in range(len(x))]
+        sims = model.simulate_many([values_of(xi) for xi in xs], segs)
+        base = sims[0][mask]
+        return np.column_stack([(base - sims[i + 1][mask]) / steps[i] for i in range(len(x))])
+
+    x0 = np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
+    sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=max_nfev, x_scale=1.0, ftol=1e-6, xtol=1e-6)
+    values = values_of(sol.x)
+    res = sol.fun
+    rows = [(r_meas - model.simulate(values, segs))[i][mask[i]] for i in range(len(segs.idx))]
+    n, n_eff = len(res), effective_size(rows)
+    dof = max(1, n - len(free))
+    # a parameter on its bound is held there: the covariance is that of the others (its own: nan)
+    span = hi - lo
+    active = (np.abs(sol.x - lo) <= 2e-3 * span) | (np.abs(sol.x - hi) <= 2e-3 * span)
+    cov_x = np.full((len(free), len(free)), np.nan)
+    inner = np.flatnonzero(~active)
+    if len(inner):
+        J = sol.jac[:, inner]
+        try:
+            cov_x[np.ix_(inner, inner)] = np.linalg.pinv(J.T @ J) * (2 * sol.cost / dof) * (n / max(n_eff, 1.0))
+        except np.linalg.LinAlgError:
+            cov_x[np.ix_(inner, inner)] = np.inf
+    scale = np.array([p.scale for p in free])
+    return FitResult(values, free, cov_x * np.outer(scale, scale), float(res @ res), n, n_eff, res)
+
+
+def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:
+    """100 (1 - ||y - yhat|| / ||y - mean y||): the NRMSE fit (100 % perfect, 0 % the mean)."""
+    den = float(np.linalg.norm(y - y.mean()))
+    return float(100.0 * (1.0 - np.linalg.norm(y - yhat) / den)) if den > 0 else float("nan")

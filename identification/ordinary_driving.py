@@ -1,0 +1,440 @@
+"""``identify LOG --study S`` on ordinary driving: the steps, the verdicts and the results' JSON.
+
+1. The log's steering input (measured wheel angle delta, else the command delta_cmd), speed v and
+   gyro yaw_rate on an even clock, cut into segments of driving; every third one held out.
+2. Gyro bias from the samples standing still (|v| < 2 cm/s, at least 2 s), else fitted.
+3. Linear single-track model (identification.driving) fitted on the fit segments: cornering
+   coefficients, delay, lag, offset, gain (command input), bias.
+4. Tyre saturation (simplified Magic Formula, friction mu and shape C, components.models.tyre):
+   fitted from the linear fit; found when the linear model's held-out misfit grows with |a_y|:
+   the extended model wins on BIC by more than 10 and takes ``min_gain`` off the held-out RMS in
+   the top third of |a_y|, with mu off its bounds. Reported beside it: how the linear model fitted
+   where |a_y| <= 0.15 g (tyres on any ground are linear there) misses beyond, signed by the turn's
+   direction (a saturating tyre turns less than it predicts: negative).
+5. Verdicts: a parameter on its bound is "not identifiable from this log" (value and bound given);
+   every quantity is given with its 95 % interval; the steady-state regression
+   (identification.steady_state) is reported beside the dynamic fit.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from components.models.tyre import linear_share_limit
+from components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, TractorParameters
+
+from .driving import (Z95, DrivingLog, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
+                      fit, fit_percent, steady_state_gain, understeer_gradient)
+from .steady_state import regression, steady_windows
+from .vehicle import Vehicle
+
+MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
+LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
+MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
+STANDSTILL = 0.02             # m/s
+SEGMENT = 4.0                 # s
+BURN_IN = 1.0                 # s
+
+
+def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
+    """Cornering stiffness per unit axle load [1/rad]: 1-30 covers tractors' soft front tyres (4)
+    to stiff road and racing tyres (20-25)."""
+    return 1.0, 30.0
+
+
+def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool) -> list[FreeParameter]:
+    lo, hi = cornering_bounds(vehicle)
+    bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
+    out = [FreeParameter("c_f", "1/rad", lo, hi, 5.0, "front cornering stiffness / front axle load"),
+           FreeParameter("c_r", "1/rad", lo, hi, 5.0, "rear cornering stiffness / rear axle load"),
+           FreeParameter("delay", "s", 0.0, 0.5, 0.1, "steering delay (input to the wheels)"),
+           FreeParameter("lag", "s", 0.0, 0.5, 0.1, "steering first-order lag"),
+           FreeParameter("steer_offset", "rad", -0.1, 0.1, 0.02, "wheel angle the tyres see at zero input")]
+    if command_input:
+        out.append(FreeParameter("steer_gain", "1", 0.5, 1.5, 0.2, "wheel angle per commanded angle"))
+    if fit_bias:
+        out.append(FreeParameter("gyro_bias", "rad/s", -bias, bias, 0.01, "gyro bias"))
+    if saturation:
+        mu_lo, mu_hi = vehicle.friction_range
+        out += [FreeParameter("friction", "1", mu_lo, mu_hi, 0.3, "tyre friction coefficient mu (peak force / load)"),
+                FreeParameter("shape", "1", 1.05, 1.95, 0.3, "Magic Formula shape factor C")]
+    return out
+
+
+def similar_columns(columns, wanted: str) -> list[str]:
+    """Columns whose name, lower-cased without separators, is the wanted one's (YawRate, yaw-rate)."""
+    key = wanted.replace("_", "").lower()
+    return [c for c in map(str, columns) if c != wanted and c.replace("_", "").replace("-", "").replace(" ", "").lower() == key]
+
+
+def missing_text(frame, needs: dict[str, str]) -> str | None:
+    """None when every need is met; else what is missing, why, and the columns the log has."""
+    gaps = []
+    for col, why in needs.items():
+        options = col.split("|")
+        if not any(o in frame for o in options):
+            near = [s for o in options for s in similar_columns(frame.columns, o)]
+            hint = f" (the log has {', '.join(near)}: rename it to {options[0]} if it is that, in SI units)" if near else ""
+            gaps.append(f"no {' or '.join(options)} ({why}){hint}")
+    if not gaps:
+        return None
+    return "; ".join(gaps) + f"; the log has {', '.join(map(str, frame.columns))}"
+
+
+def study_plant(study) -> tuple[str, TractorParameters]:
+    from orchestrator.resolver import resolve
+    from orchestrator.study import StudyError
+
+    if study is None:
+        return "rlf", TractorParameters()
+    resolved = resolve(study)
+    names = resolved.find(role="yaw_plant")
+    if not names:
+        raise StudyError(f"{study.path}: no component with role 'yaw_plant' (the vehicle's mass, inertia, axles)")
+    p = resolved.parameters(names[0])
+    model = p.get("model", "rlf")
+    if model not in PHYSICAL_MODELS:
+        raise StudyError(f"{study.path}: components.{names[0]}.parameters.model = {model!r}: identification from "
+                         f"driving needs a physical single-track model {PHYSICAL_MODELS}")
+    return model, TractorParameters.of(p)
+
+
+def _delay_start(log: DrivingLog, L: float, max_delay: float = 0.5) -> float:
+    """Lag of the peak cross-correlation between the gyro and the kinematic yaw rate v u / L."""
+    kin = log.v * log.u / L
+    moving = log.v > 0.3
+    best, lag_best = -np.inf, 0
+    for lag in range(int(max_delay / log.h) + 1):
+        a, b = kin[: len(kin) - lag], log.r[lag:]
+        m = moving[lag:] & (log.run[lag:] == log.run[: len(kin) - lag])
+        if m.sum() < 20:
+            continue
+        c = np.corrcoef(a[m], b[m])[0, 1]
+        if c > best:
+            best, lag_best = c, lag
+    return lag_best * log.h
+
+
+def _spread(segs: Segments, max_seconds: float, h: float) -> Segments:
+    """At most ``max_seconds`` of segments, evenly spread over the log."""
+    per = segs.scored.sum(axis=1) * h
+    if per.sum() <= max_seconds:
+        return segs
+    k = max(1, int(len(per) * max_seconds / per.sum()))
+    return segs.take(np.unique(np.linspace(0, len(per) - 1, k).round().astype(int)))
+
+
+def _bins(a: np.ndarray, res: np.ndarray, edges, signed: bool = False) -> list[dict]:
+    out = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        m = (a >= lo) & (a < hi)
+        if m.sum() >= 10:
+            out.append({"from": float(lo), "to": float(hi), "samples": int(m.sum()),
+                        "rms": float(np.sqrt(np.mean(res[m] ** 2)))}
+                       | ({"mean_signed": float(res[m].mean())} if signed else {}))
+    return out
+
+
+def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
+    d = {"value": float(value), "std": float(std), "interval": [float(value - Z95 * std), float(value + Z95 * std)],
+         "unit": unit}
+    if bounds is not None:
+        d["bounds"] = [float(bounds[0]), float(bounds[1])]
+        # a positive physical quantity whose 95 % interval reaches zero is not pinned down either
+        lo, hi = value - Z95 * std, value + Z95 * std
+        vague = (bounds[0] > 0 and not lo > 0) or (lo < bounds[0] and hi > bounds[1])
+        d["identifiable"] = at_bound is None and math.isfinite(std) and not vague
+        if at_bound:
+            d["note"] = (f"not identifiable from this log: ended on its {at_bound} bound "
+                         f"{bounds[0] if at_bound == 'lower' else bounds[1]:g} {unit}")
+        elif not d["identifiable"]:
+            d["note"] = (f"not identifiable from this log: its 95 % interval [{lo:.3g}, {hi:.3g}] {unit} "
+                         + ("covers its whole range" if lo < bounds[0] and hi > bounds[1] else "reaches zero"))
+    d.update(more)
+    return d
+
+
+def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
+                     progress=None, max_rate: float = 25.0) -> dict:
+    """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
+    what the log lacks."""
+    from measurements import LogError
+
+    say = progress or (lambda text: None)
+    vehicle = Vehicle.of(study)
+    model_name, p = study_plant(study)
+    L = vehicle.wheelbase or (p.l_f + p.l_r)
+    if vehicle.steering == "none" or vehicle.drive != "ackermann":
+        why = vehicle.not_applicable().get("yaw")
+        raise NotEnoughDriving(f"{where}: the yaw dynamics are not identified: {why}")
+    gap = missing_text(frame, {"yaw_rate": "the gyro's yaw rate is the output fitted",
+                               "delta|delta_cmd": "a steering angle, measured or commanded, is the input",
+                               "v": "the speed schedules the model"})
+    if gap:
+        raise LogError(f"{where}: identification from driving not possible: {gap}")
+    if vehicle.steering == "torque" and "delta" not in frame:
+        raise NotEnoughDriving(f"{where}: the steering is commanded in torque (vehicle.steering = 'torque') and the "
+                               f"log has no measured wheel angle delta: delta_cmd is not an angle the wheels follow")
+    input_name = "delta" if "delta" in frame else "delta_cmd"
+    command = input_name == "delta_cmd"
+    log = even_grid(frame, input_name, max_rate=max_rate)
+    notes = list(log.notes)
+    notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
+                 "steering chain" if command else "input: the measured wheel angle delta")
+    min_speed = max(0.2, 0.1 * float(np.percentile(np.abs(log.v), 90)))
+    segs = cut_segments(log, min_speed, SEGMENT, BURN_IN)
+    driven = segs.seconds * log.h
+    excitation = float(np.std((log.v * log.u / L)[log.v >= min_speed])) if np.any(log.v >= min_speed) else 0.0
+    if driven < MIN_DRIVING or segs.held_out.sum() < 1 or (~segs.held_out).sum() < 2:
+        raise NotEnoughDriving(f"{where}: {driven:.1f} s of driving (v >= {min_speed:.2g} m/s, no clock gap, stretches of "
+                               f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
+                               f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
+                               f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
+    if excitation < MIN_EXCITATION:
+        raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
+                               f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
+                               f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
+                               f"of steering at {max(np.median(log.v), 0.5):.2g} m/s)")
+    say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+
+    # gyro bias standing still
+    still = np.abs(log.v) < STANDSTILL
+    fixed: dict[str, float] = {}
+    bias_info = None
+    if still.sum() * log.h >= 2.0:
+        rs = log.r[still]
+        b, b_sd = float(rs.mean()), float(rs.std() / math.sqrt(max(1.0, still.sum() * log.h / 0.5)))
+        fixed["gyro_bias"] = b
+        bias_info = _quantity(b, b_sd, "rad/s", how=f"mean gyro reading over {still.sum() * log.h:.1f} s standing still")
+    free = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=False)
+    Fz = YawModel(model_name, p, log, segs).loads
+    lo, hi = cornering_bounds(vehicle)
+    start = {"c_f": float(np.clip(p.C_f / Fz[0], lo, hi)), "c_r": float(np.clip(p.C_r / Fz[1], lo, hi)),
+             "delay": _delay_start(log, L), "lag": 0.05, "steer_offset": 0.0, "steer_gain": 1.0, "gyro_bias": 0.0}
+    model = YawModel(model_name, p, log, segs, min_sim_speed=max(min_speed, 0.3))
+    fit_segs = _spread(segs.take(~segs.held_out), max_fit_seconds, log.h)
+    test_segs = segs.take(segs.held_out)
+    if fit_segs.seconds * log.h < driven * (1 - 1 / 3) - 1:
+        notes.append(f"fitted on {fit_segs.seconds * log.h:.0f} s of segments spread over the log (cost bound); "
+                     f"held out: {test_segs.seconds * log.h:.0f} s")
+    say("fitting the linear model")
+    linear = fit(model, free, start, fixed, fit_segs)
+    a_fit = np.abs(log.a_y[fit_segs.idx])
+    low = a_fit <= LINEAR_TYRE
+    if (low & fit_segs.scored).sum() * log.h >= 0.5 * MIN_DRIVING and (~low & fit_segs.scored).sum() * log.h >= 5.0:
+        say(f"fitting the linear model where |a_y| <= {LINEAR_TYRE:g} m/s2")
+        linear_low = fit(model, free, linear.values, fixed, fit_segs, mask=low)
+    else:
+        linear_low = linear
+    say("fitting the tyre-saturation model")
+    free_nl = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=True)
+    ay_fit = np.abs(log.a_y[fit_segs.idx][fit_segs.scored])
+    mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
+    nl = None
+    nl = None
+    for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
+        trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
+        if nl is None or trial.rss < nl.rss:
+            nl = trial
+        if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
+            break
+    say("judging on the held-out segments")
+    r_test = log.r[test_segs.idx]
+    sims = model.simulate_many([linear.values, nl.values, linear_low.values], test_segs)
+    a_test = np.abs(log.a_y[test_segs.idx])[test_segs.scored]
+    y = r_test[test_segs.scored]
+    res_lin, res_nl = y - sims[0][test_segs.scored], y - sims[1][test_segs.scored]
+    hi_q = float(np.percentile(a_test, 100 * 2 / 3)) if len(a_test) else 0.0
+    top = a_test >= hi_q
+    res_low = y - sims[2][test_segs.scored]
+    rms = lambda x: float(np.sqrt(np.mean(x ** 2))) if len(x) else float("nan")  # noqa: E731
+    # systematic misfit at high |a_y|: the residual of the linear model fitted where the tyres are
+    # linear, signed by the turn's direction (a saturating tyre turns less than the linear one
+    # predicts: negative), against its standard error with the autocorrelation's n_eff
+    signed = (res_low * np.sign(y))[a_test > max(LINEAR_TYRE, 0.0)] if linear_low is not linear else (res_lin * np.sign(y))[top]
+    n_top = max(2.0, len(signed) * linear.n_eff / max(linear.n, 1))
+    growth = float(signed.mean() / (signed.std() / math.sqrt(n_top))) if len(signed) > 2 and signed.std() > 0 else 0.0
+    gain_top = 1 - rms(res_nl[top]) / max(rms(res_lin[top]), 1e-12)
+    gain_all = 1 - rms(res_nl) / max(rms(res_lin), 1e-12)
+    dbic = nl.bic - linear.bic
+    mu_param = next(q for q in free_nl if q.name == "friction")
+    reasons = []
+    if dbic >= -10:
+        reasons.append(f"dBIC {dbic:.1f} is not below -10")
+    if gain_top < min_gain:
+        reasons.append(f"held-out RMS at high |a_y| falls by {100 * gain_top:.1f} % < {100 * min_gain:.0f} %")
+    if nl.at_bound(mu_param):
+        reasons.append(f"the friction ended on its {nl.at_bound(mu_param)} bound: not identifiable from this log")
+    saturation = not reasons
+    final = nl if saturation else linear
+    final_name = "tyre_saturation" if saturation else "linear"
+
+    # per-segment held-out fit of the final model
+    pred = sims[1] if saturation else sims[0]
+    per_segment = []
+    for i in range(len(test_segs.idx)):
+        m = test_segs.scored[i]
+        if m.sum() >= 10:
+            per_segment.append({"t_start": float(log.t[test_segs.idx[i][m][0]]), "seconds": float(m.sum() * log.h),
+                                "fit_percent": fit_percent(r_test[i][m], pred[i][m]),
+                                "rms": float(np.sqrt(np.mean((r_test[i][m] - pred[i][m]) ** 2)))})
+    overall = fit_percent(y, pred[test_segs.scored])
+    # interval: percentile bootstrap over the held-out segments of the pooled fit (seeded by the study)
+    pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
+              if test_segs.scored[i].sum() >= 10]
+    rng = np.random.default_rng(getattr(getattr(study, "study", None), "seed", 0) or 0)
+    boot = []
+    for _ in range(400 if len(pieces) > 1 else 0):
+        pick = rng.integers(len(pieces), size=len(pieces))
+        boot.append(fit_percent(np.concatenate([pieces[k][0] for k in pick]), np.concatenate([pieces[k][1] for k in pick])))
+    fit_lo, fit_hi = (float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))) if boot else (overall, overall)
+    fit_sd = float(np.std(boot)) if boot else 0.0
+
+    # derived quantities with their intervals (delta method on the fit's covariance)
+    cf, cr = final.values["c_f"], final.values["c_r"]
+    K = understeer_gradient(cf, cr)
+    K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+    params_json = {}
+    for q in (free_nl if saturation else free):
+        params_json[q.name] = _quantity(final.values[q.name], final.std(q.name), q.unit, (q.lower, q.upper),
+                                        final.at_bound(q), meaning=q.meaning)
+    if bias_info:
+        params_json["gyro_bias"] = {**bias_info, "bounds": None, "identifiable": True}
+    stiff = {}
+    for key, q, load in (("front", "c_f", Fz[0]), ("rear", "c_r", Fz[1])):
+        entry = params_json[q]
+        stiff[key] = {**_quantity(entry["value"] * load, entry["std"] * load, "N/rad"),
+                      "identifiable": entry["identifiable"], "per_axle_load": entry,
+                      **({"note": entry["note"]} if "note" in entry else {})}
+    # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
+    # interval then says how well the log pins it
+    k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
+    understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd)),
+                           deg_per_g=math.degrees(K) * GRAVITY)
+    if K > 0:
+        vch = math.sqrt(L / K)
+        char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
+                "std": 0.5 * vch * K_sd / K, "unit": "m/s"}
+    elif K < 0:
+        vch = math.sqrt(-L / K)
+        char = {"kind": "critical speed (oversteer): unstable above it", "value": vch, "std": 0.5 * vch * K_sd / -K,
+                "unit": "m/s"}
+    else:
+        char = {"kind": "neutral steer", "value": math.inf, "std": math.inf, "unit": "m/s"}
+    char["interval"] = [char["value"] - Z95 * char["std"], char["value"] + Z95 * char["std"]]
+    g = final.values.get("steer_gain", 1.0)
+    g_sd = final.std("steer_gain") if command else 0.0
+    speeds = np.linspace(max(min_speed, 0.1), float(np.percentile(log.v[log.v >= min_speed], 99)), 12)
+    gain_rows = []
+    for s in speeds:
+        G = float(steady_state_gain(s, K, L, g))
+        dG_dK = -g * s ** 3 / (L + K * s * s) ** 2
+        sd = math.sqrt((dG_dK * K_sd) ** 2 + (G / g * g_sd) ** 2)
+        gain_rows.append({"speed": float(s), "gain": G, "interval": [G - Z95 * sd, G + Z95 * sd]})
+    delay_q = params_json["delay"]
+    if saturation:
+        mu, shape = nl.values["friction"], nl.values["shape"]
+        share = linear_share_limit(shape)
+        lin_range = mu * GRAVITY * share
+        eps = 1e-4
+        d_share = (linear_share_limit(min(shape + eps, 1.95)) - linear_share_limit(shape - eps)) / (2 * eps)
+        lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
+        linear_range = {**_quantity(lin_range, lr_sd, "m/s2"),
+                        "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
+                               f"x {share:.3f} (shape {shape:.2f})"}
+    else:
+        top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
+        linear_range = {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
+                        "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
+
+    # the independent check: steady-state regression inside the linear range
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=final.values["delay"])
+    ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
+    tyre = {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
+            "found": saturation, "why_not": reasons, "delta_bic": dbic,
+            "held_out_gain": gain_all, "held_out_gain_high_lateral": gain_top,
+            "misfit_at_high_lateral_t": growth, "high_lateral_from": hi_q,
+            "parameters": {k: params_json_nl for k, params_json_nl in
+                           ((q.name, _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper),
+                                               nl.at_bound(q), meaning=q.meaning)) for q in free_nl
+                            if q.name in ("friction", "shape"))}}
+    not_identifiable = [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")]
+    report = {
+        "method": "output error, single-track model LPV in speed, segments held out",
+        "source": where, "model": model_name, "input": input_name, "final_model": final_name,
+        "samples_per_second": 1 / log.h, "seconds_driven": driven,
+        "segments": {"fit": int(len(fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
+                     "burn_in_s": BURN_IN, "min_speed": min_speed},
+        "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
+                    "axle_loads": list(Fz)},
+        "understeer_gradient": understeer,
+        "characteristic_speed": char,
+        "delay": delay_q,
+        "held_out_fit": {"value": overall, "std": fit_sd, "interval": [fit_lo, fit_hi],
+                         "unit": "%", "how": "100 (1 - |y - y_model| / |y - mean y|) on the held-out samples; "
+                         "interval: 2.5-97.5 % of a bootstrap over the held-out segments", "per_segment": per_segment,
+                         "linear_model": fit_percent(y, sims[0][test_segs.scored]),
+                         "saturation_model": fit_percent(y, sims[1][test_segs.scored])},
+        "cornering_stiffness": stiff,
+        "parameters": params_json,
+        "steady_state_gain": {"unit": "(rad/s) per rad of input", "rows": gain_rows,
+                              "formula": "g v / (L + K v^2)"},
+        "linear_range": linear_range,
+        "tyre_saturation": tyre,
+        "residual_by_lateral_acceleration": {
+            "linear": _bins(a_test, res_lin, [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30]),
+            "linear_fitted_in_linear_range": _bins(a_test, res_low * np.sign(y), [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30],
+                                                    signed=True),
+            "saturation": _bins(a_test, res_nl, [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30])},
+        "steady_state_regression": ss.as_dict() if ss else
+        {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
+         "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
+        "not_identifiable": not_identifiable,
+        "notes": notes,
+    }
+    report["_plot"] = {"log": log, "model": model, "test": test_segs, "linear": linear.values, "nl": nl.values,
+                       "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
+    return report
+
+
+def summary(report: dict) -> str:
+    """What an engineer reads first."""
+    def q(d, f="{:.4g}"):
+        if not all(x is not None and math.isfinite(x) for x in d["interval"]):
+            return f.format(d["value"]) + " " + d.get("unit", "") + " (on its bound)"
+        return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "] " + d.get("unit", "")
+
+    lines = [f"identification from driving ({report['source']}): {report['model']} model, input {report['input']}, "
+             f"{report['seconds_driven']:.0f} s of driving, {report['segments']['held_out']} segment(s) held out"]
+    lines += [f"  {n}" for n in report["notes"]]
+    K = report["understeer_gradient"]
+    lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
+                 + ("" if K["identifiable"] else "; not identifiable from this log"))
+    ch = report["characteristic_speed"]
+    lines.append(f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s")
+    lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
+    for side, s in report["cornering_stiffness"].items():
+        lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
+    hf = report["held_out_fit"]
+    lines.append(f"held-out fit: {q(hf, '{:.1f}')} (linear {hf['linear_model']:.1f} %, with tyre saturation "
+                 f"{hf['saturation_model']:.1f} %) over {len(hf['per_segment'])} segment(s)")
+    t = report["tyre_saturation"]
+    if t["found"]:
+        mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
+        lines.append(f"tyre saturation found: friction {q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+                     f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
+                     f"{t['high_lateral_from']:.2g} m/s2")
+    else:
+        lines.append("tyre saturation not found: " + "; ".join(t["why_not"]))
+    lr = report["linear_range"]
+    lines.append(f"linear model holds for |a_y| up to {q(lr, '{:.3g}')}")
+    ss = report["steady_state_regression"]
+    if "understeer_gradient" in ss:
+        lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
+                     f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
+                     f"{ss['steer_offset']['value']:.3g} rad")
+    for p_name, pj in report["parameters"].items():
+        lines.append(f"  {p_name}: {q(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
+    return "\n".join(lines)

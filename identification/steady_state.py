@@ -1,0 +1,114 @@
+"""Steady-state cornering from the log, by ordinary least squares: a check on the dynamic fit that
+shares none of its machinery (no simulation, no delay or lag model).
+
+In steady cornering the wheel angle is delta = L / R + K a_y with R = v / r and a_y = v r; with the
+steering input u (command or measured angle) seen as g u + delta_0 by the tyres and a gyro reading
+r_m = r + b::
+
+    L r_m = g (u v) + delta_0 v - K (v^2 r_m) + L b      (+ K v^2 b, negligible)
+
+so L r_m regressed on [u v, v, v^2 r_m, 1] gives g, delta_0, -K and L b. Steady windows: the input
+held within ``tolerance`` + ``relative`` |u| for ``settle`` s (plus the delay) before and during a
+window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
+10 %, moving; each window contributes its means. Only windows with |a_y| below
+``max_lateral`` enter (the linear tyre's range).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class SteadyState:
+    windows: dict[str, np.ndarray]         # u, v, r (means per window), a_y
+    gain: float
+    gain_std: float
+    offset: float
+    offset_std: float
+    K: float
+    K_std: float
+    bias: float
+    used: int
+    max_lateral: float
+
+    def as_dict(self) -> dict:
+        return {"method": "ordinary least squares on steady windows: L r = g (u v) + delta_0 v - K v^2 r + L b",
+                "windows": self.used, "max_lateral_acceleration": self.max_lateral,
+                "understeer_gradient": {"value": self.K, "std": self.K_std,
+                                        "interval": [self.K - 1.96 * self.K_std, self.K + 1.96 * self.K_std]},
+                "steer_gain": {"value": self.gain, "std": self.gain_std},
+                "steer_offset": {"value": self.offset, "std": self.offset_std}, "gyro_bias": self.bias}
+
+
+def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window: float = 0.3, settle: float = 0.4,
+                   tolerance: float = 0.01, relative: float = 0.05) -> dict[str, np.ndarray]:
+    """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring); u is
+    taken ``delay`` s earlier than v and r."""
+    from numpy.lib.stride_tricks import sliding_window_view
+
+    h = float(np.median(np.diff(t)))
+    nw, ns = max(2, int(round(window / h))), int(round((settle + delay) / h))
+    n = len(t)
+    if n < nw + ns + 1:
+        return {k: np.zeros(0) for k in ("u", "v", "r", "a_y")}
+
+    def window_stats(x, width):
+        c = np.concatenate([[0.0], np.cumsum(x)])
+        mean = (c[width:] - c[:-width]) / width                     # mean over [k, k + width)
+        win = sliding_window_view(x, width)
+        return mean, win.max(axis=1), win.min(axis=1)
+
+    lag = int(round(delay / h))
+    u_width = ns + nw - lag                                         # input held over [k - ns, k + nw - lag)
+    _, u_hi, u_lo = window_stats(u, u_width)
+    v_mean, v_hi, v_lo = window_stats(v, nw)
+    r_mean, _, _ = window_stats(r, nw)
+    u_mean, _, _ = window_stats(u, nw)
+    run_same = run[: n - nw + 1] == run[nw - 1:]
+    ks = np.arange(ns, n - nw + 1)
+    u_level = np.maximum(np.abs(u_hi[ks - ns]), np.abs(u_lo[ks - ns]))
+    ok = ((u_hi[ks - ns] - u_lo[ks - ns]) <= tolerance + relative * u_level) & (v_lo[ks] >= min_speed) & \
+         ((v_hi[ks] - v_lo[ks]) <= 0.1 * v_mean[ks]) & run_same[ks] & (run[ks - ns] == run[ks])
+    rows, next_free = [], 0
+    for k in ks[ok]:
+        if k - ns >= next_free:
+            rows.append((u_mean[k - lag], v_mean[k], r_mean[k]))
+            next_free = k + nw
+    arr = np.array(rows) if rows else np.zeros((0, 3))
+    return {"u": arr[:, 0], "v": arr[:, 1], "r": arr[:, 2], "a_y": arr[:, 1] * arr[:, 2]}
+
+
+def regression(w: dict[str, np.ndarray], L: float, max_lateral: float = math.inf,
+               fixed_gain: float | None = None) -> SteadyState | None:
+    """The least-squares fit of the module's equation on windows with |a_y| <= max_lateral
+    (``fixed_gain``: a measured wheel angle, g = 1, not fitted). None: fewer than 7 windows, no
+    turning, or (a command input) speeds too alike (10th to 90th percentile less than 1.5 x)."""
+    keep = np.abs(w["a_y"]) <= max_lateral
+    u, v, r = w["u"][keep], w["v"][keep], w["r"][keep]
+    if len(v) and fixed_gain is None and np.percentile(v, 90) < 1.5 * np.percentile(v, 10):
+        return None             # one speed: the gain and K are not told apart
+    if len(u) and np.std(u) < 1e-3:
+        return None             # straight driving only
+    cols = [v, -(v ** 2) * r, np.ones_like(v)]
+    y = L * r
+    if fixed_gain is None:
+        cols = [u * v] + cols
+    else:
+        y = y - fixed_gain * u * v
+    X = np.column_stack(cols)
+    if len(y) < X.shape[1] + 3:
+        return None
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    res = y - X @ beta
+    s2 = float(res @ res) / (len(y) - X.shape[1])
+    cov = s2 * np.linalg.pinv(X.T @ X)
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    if fixed_gain is None:
+        g, g_sd, (d0, K, Lb), (d0_sd, K_sd, _) = beta[0], sd[0], beta[1:], sd[1:]
+    else:
+        g, g_sd, (d0, K, Lb), (d0_sd, K_sd, _) = fixed_gain, 0.0, beta, sd
+    return SteadyState({k: x[keep] for k, x in w.items()}, float(g), float(g_sd), float(d0), float(d0_sd),
+                       float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral))

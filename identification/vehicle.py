@@ -1,0 +1,116 @@
+"""The study's ``[vehicle]`` table: what kind of vehicle a log comes from, and the ranges a fitted
+parameter may take on it.
+
+    [vehicle]
+    class = "scale_car"        # tractor | car | truck | scale_car | robot
+    wheelbase = 0.32           # m
+    length = 0.55              # m, overall
+    width = 0.30               # m, overall
+    steering = "angle"         # angle (the command is a wheel angle) | torque (an electric steering's
+                               # torque) | none (skid-steered: no steering angle)
+    drive = "ackermann"        # ackermann | skid | articulated
+    steering_ratio = 1.0       # handwheel / road-wheel angle (a recording's CAN handwheel angle)
+
+Ranges a class gives (a fitted value outside them is not a property of such a vehicle): the gyro
+bias a gyro of that class can have, the slope a road or a field can have, the friction its tyres
+can have on their ground; an antenna lever arm must lie inside the vehicle's outline.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+DEG = math.pi / 180.0
+
+# class -> (gyro bias bound [rad/s], slope bound [rad], friction range, what it is)
+CLASSES = {
+    "tractor": (1.0 * DEG, 15 * DEG, (0.2, 1.2), "an agricultural tractor (automotive-grade gyro, field slopes)"),
+    "car": (1.0 * DEG, 7 * DEG, (0.1, 1.3), "a road car (automotive-grade gyro, road gradients up to about 12 %)"),
+    "truck": (1.0 * DEG, 7 * DEG, (0.1, 1.1), "a road truck"),
+    "scale_car": (3.0 * DEG, 5 * DEG, (0.2, 1.8), "a 1:10 to 1:5 model car (hobby MEMS gyro, indoor floors)"),
+    "robot": (3.0 * DEG, 10 * DEG, (0.2, 1.5), "a small mobile robot (hobby MEMS gyro)"),
+}
+STEERING = ("angle", "torque", "none")
+DRIVES = ("ackermann", "skid", "articulated")
+
+
+class VehicleError(ValueError):
+    """The [vehicle] table has a value outside what it may say."""
+
+
+@dataclass(frozen=True)
+class Vehicle:
+    """What the tools know of the vehicle (None: the study does not say)."""
+
+    kind: str | None = None              # the table's ``class``
+    wheelbase: float | None = None
+    length: float | None = None
+    width: float | None = None
+    steering: str = "angle"
+    drive: str = "ackermann"
+    steering_ratio: float | None = None
+    declared: bool = False               # the study has a [vehicle] table
+
+    @classmethod
+    def of(cls, study) -> "Vehicle":
+        table = (study.section("vehicle") if study is not None else None) or {}
+        return cls.from_table(table, getattr(study, "path", "study"))
+
+    @classmethod
+    def from_table(cls, table: dict, where="study") -> "Vehicle":
+        kind = table.get("class")
+        if kind is not None and kind not in CLASSES:
+            raise VehicleError(f"{where}: vehicle.class = {kind!r}; expected one of {sorted(CLASSES)}")
+        steering = table.get("steering", "angle")
+        if steering not in STEERING:
+            raise VehicleError(f"{where}: vehicle.steering = {steering!r}; expected one of {list(STEERING)}")
+        drive = table.get("drive", "ackermann")
+        if drive not in DRIVES:
+            raise VehicleError(f"{where}: vehicle.drive = {drive!r}; expected one of {list(DRIVES)}")
+        numbers = {}
+        for key in ("wheelbase", "length", "width", "steering_ratio"):
+            value = table.get(key)
+            if value is not None:
+                try:
+                    value = float(value)
+                except (TypeError, ValueError):
+                    raise VehicleError(f"{where}: vehicle.{key} = {value!r}; expected a number") from None
+                if not value > 0:
+                    raise VehicleError(f"{where}: vehicle.{key} = {value:g}; expected a positive number")
+            numbers[key] = value
+        return cls(kind, numbers["wheelbase"], numbers["length"], numbers["width"], steering, drive,
+                   numbers["steering_ratio"], bool(table))
+
+    @property
+    def gyro_bias_bound(self) -> float | None:
+        return CLASSES[self.kind][0] if self.kind else None
+
+    @property
+    def slope_bound(self) -> float | None:
+        return CLASSES[self.kind][1] if self.kind else None
+
+    @property
+    def friction_range(self) -> tuple[float, float]:
+        return CLASSES[self.kind][2] if self.kind else (0.1, 2.0)
+
+    def lever_arm_bounds(self) -> tuple[tuple[float, float], tuple[float, float]] | None:
+        """((forward lo, hi), (left lo, hi)) of a point on the vehicle measured from the rear axle:
+        within the outline (the rear overhang taken as a quarter of the length)."""
+        if self.length is None or self.width is None:
+            return None
+        return (-0.25 * self.length, self.length), (-0.5 * self.width, 0.5 * self.width)
+
+    def not_applicable(self) -> dict[str, str]:
+        """Stages of the single-track (Ackermann, angle-steered) replay that do not apply to this
+        vehicle, and why."""
+        why = {}
+        if self.drive != "ackermann":
+            why["yaw"] = (f"the vehicle is {self.drive}-steered (vehicle.drive); the single-track yaw model "
+                          f"describes an Ackermann-steered vehicle")
+        if self.steering == "none":
+            why["steering"] = "the vehicle has no steering angle (vehicle.steering = 'none')"
+            why.setdefault("yaw", "the vehicle has no steering angle to drive the yaw model (vehicle.steering = 'none')")
+        elif self.steering == "torque":
+            why["steering"] = ("the steering is commanded in torque (vehicle.steering = 'torque'): delta_cmd is not "
+                               "a wheel angle the steering follows")
+        return why

@@ -1,0 +1,217 @@
+"""A recording's streams on one grid: gaps, runs, the run or span used, and the log's columns.
+
+Gaps (a stream silent for more than 3 of its periods and 0.2 s, or without a fix) split the
+recording; runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
+shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
+``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
+Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
+signals are interpolated linearly onto the log's grid; the set-points are held (the last frame).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .log import CANONICAL, LogError
+from .options import ImportOptions
+from .streams import Streams, gnss_speed, iso
+
+GAP_PERIODS, GAP_MIN = 3.0, 0.2
+MAX_SAMPLES = 5e7      # rows of one log grid (a day at 500 Hz): more is a damaged clock, not a recording
+HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
+
+
+def gaps(t: np.ndarray, what: str, origin: float, least: float = GAP_MIN) -> list[dict]:
+    """Silences longer than GAP_PERIODS typical periods and ``least`` seconds."""
+    if len(t) < 2:
+        return []
+    dt = np.diff(t)
+    limit = max(GAP_PERIODS * float(np.median(dt)), least)
+    return [{"stream": what, "start": float(t[i] - origin), "end": float(t[i + 1] - origin),
+             "duration": float(dt[i])} for i in np.flatnonzero(dt > limit)]
+
+
+def _covered(t: np.ndarray, grid: np.ndarray, least: float = GAP_MIN) -> np.ndarray:
+    """True where ``grid`` lies within a stretch of ``t`` without a gap."""
+    if len(t) < 2:
+        return np.zeros(len(grid), bool)
+    limit = max(GAP_PERIODS * float(np.median(np.diff(t))), least)
+    i = np.clip(np.searchsorted(t, grid, side="right"), 1, len(t) - 1)
+    return (grid >= t[0]) & (grid <= t[-1]) & (t[i] - t[i - 1] <= limit)
+
+
+def _stretches(mask: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) index pairs of the True stretches."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
+def _held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The value in force at each grid time: the last one sent at or before it (1 ms tolerance)."""
+    i = np.clip(np.searchsorted(t, grid + 1e-3, side="right") - 1, 0, len(t) - 1)
+    return values[i]
+
+
+def _grid_step(streams: Streams, options: ImportOptions) -> float:
+    """The log's period: --rate, else the GNSS epoch period, else the fastest canonical signal's
+    (at most 50 Hz); to the millisecond, so that a float median does not let the grid creep."""
+    if options.rate:
+        return 1.0 / options.rate
+    if streams.gnss is not None:
+        return max(round(float(np.median(np.diff(streams.gnss["utc"].to_numpy(float)))), 3), 0.001)
+    periods = [float(np.median(np.diff(t))) for c, (t, _) in streams.signals.items() if c in CANONICAL and len(t) > 1]
+    periods = periods or [float(np.median(np.diff(t))) for t, _ in streams.signals.values() if len(t) > 1]
+    return max(round(min(periods), 3), 0.02)
+
+
+def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
+    """The log on its grid for the run or range ``options`` choose, and the report of it: every
+    canonical column the recording holds, then the extras (the receiver's speed, fix quality,
+    heading and position error, and any other mapped signal); the missing columns are named."""
+    gnss, sig, report = streams.gnss, streams.signals, copy.deepcopy(streams.report)
+    # the streams that set the log's span and its gaps: the positions and the canonical columns
+    # (an extra column, logged now and then, is held or interpolated within that span)
+    times = ([("gnss", gnss["utc"].to_numpy(float))] if gnss is not None else []) + \
+        [(c, t) for c, (t, _) in sig.items() if c in CANONICAL]
+    times = times or [(c, t) for c, (t, _) in sig.items()]
+    if not times:
+        raise LogError(f"{source}: nothing with a time stamp in it")
+    u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
+    step = _grid_step(streams, options)
+    lo, hi = max(float(t[0]) for _, t in times), min(float(t[-1]) for _, t in times)
+    least = {name: HELD_GAP if name in streams.held else GAP_MIN for name, _ in times}
+    report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
+    if hi - lo < 2 * step:
+        spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
+        raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
+    if (hi - lo) / step > MAX_SAMPLES:
+        spans = ", ".join(f"{name} {iso(t[0])} to {iso(t[-1])}" for name, t in times)
+        raise LogError(f"{source}: the streams span {hi - lo:.4g} s ({spans}): {(hi - lo) / step:.3g} samples at "
+                       f"{1 / step:g} Hz, above {MAX_SAMPLES:.0e}; a time stamp far from the others, or choose a span "
+                       f"with --time-range or a lower --rate")
+    grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
+    covered = np.ones(len(grid), bool)
+    for b in streams.breaks:                  # never bridged: the samples on either side are not one step apart
+        i0 = int(np.searchsorted(grid, b["start"], side="right"))
+        covered[i0:max(int(np.searchsorted(grid, b["end"], side="right")), i0 + 1)] = False
+        report["gaps"].append({"stream": f"{b['stream']} (split: {b.get('kind', 'clock step back')})",
+                               "start": float(b["start"] - u0), "end": float(b["end"] - u0),
+                               "duration": float(b["end"] - b["start"])})
+    if streams.breaks:
+        report["splits"] = [b["why"] for b in streams.breaks]
+    for name, t in times:
+        covered &= _covered(t, grid, least[name])
+    if "v" in sig:
+        v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
+    elif gnss is not None:
+        v, report["runs_by"] = np.interp(grid, gnss["utc"], gnss_speed(gnss, streams.breaks)), "the receiver's speed over ground"
+    else:
+        v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
+    moving = np.abs(v) > options.min_speed if v is not None else np.ones(len(grid), bool)   # reversing drives too
+    for a, b in _stretches(~moving):                 # short stops do not end a run
+        if 0 < a and b < len(grid) and (b - a) * step < options.min_stop:
+            moving[a:b] = True
+    runs = []
+    for a, b in _stretches(moving & covered):
+        runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
+                     "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": iso(grid[a])})
+    long_runs = [r for r in runs if r["duration"] >= options.min_run]
+    for i, r in enumerate(long_runs, 1):
+        r["run"] = i
+    report["runs"] = long_runs
+    report["short_runs_ignored"] = len(runs) - len(long_runs)
+    pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
+                      "utc_start_s": float(grid[pick][0])}
+    t = grid[pick]
+    columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
+    for c in CANONICAL[1:]:
+        if c in sig:
+            columns[c] = _held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
+    if gnss is not None:
+        import pymap3d
+
+        utc = gnss["utc"].to_numpy(float)
+        lat, lon, height = (np.interp(t, utc, gnss[k]) for k in ("lat", "lon", "height"))
+        datum = (float(lat[0]), float(lon[0]), float(height[0]))
+        columns["x"], columns["y"], _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
+        report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
+        if np.isfinite(gnss["speed"].to_numpy(float)).mean() > 0.5:      # the receiver's own (Doppler) speed
+            columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
+        else:                                                              # none: the track's, named so
+            columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
+        columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
+        for extra in ("heading", "position_std"):
+            if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
+                ok = np.isfinite(gnss[extra].to_numpy(float))
+                x = gnss[extra].to_numpy(float)[ok]
+                columns[extra] = np.interp(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
+                if extra == "heading":
+                    columns[extra] = np.angle(np.exp(1j * columns[extra]))
+    for c, (tc, vc) in sig.items():
+        if c not in columns:
+            columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
+    report["rate_hz"] = 1.0 / step
+    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
+                            if c in sig or c in streams.resolution}
+    present = [c for c in CANONICAL if c in columns]
+    report["present"] = present + [c for c in columns if c not in CANONICAL]
+    why = report.get("can", {}).get("columns_without_a_signal", {})
+    report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
+    order = present + [c for c in columns if c not in CANONICAL]
+    return pd.DataFrame(columns)[order], report
+
+
+def _missing_reason(column: str, report: dict) -> str:
+    if column in ("x", "y"):
+        return "no positions: no NMEA with a fix, no NavSatFix topic, no TLG position"
+    return {"delta_cmd": "no steering command in the recording (map one with --signal delta_cmd=...)",
+            "delta": "no wheel-angle measurement in the recording (map one with --signal delta=...; a handwheel "
+                     "angle with --steering-ratio)",
+            "v": "no wheel speed in the recording (the receiver's speed, where there is one, is gnss_speed)",
+            "yaw_rate": "no yaw rate (gyro) in the recording (map one with --signal yaw_rate=...)"}[column]
+
+
+def _choose(source: Path, grid: np.ndarray, u0: float, covered: np.ndarray, long_runs: list, report: dict,
+            options: ImportOptions) -> tuple[np.ndarray, dict]:
+    """The samples used: a --time-range (refused across a gap), the --run-th run, or the longest."""
+    if options.time_range is not None:
+        a, b = options.time_range
+        pick = (grid - u0 >= a) & (grid - u0 <= b)
+        if pick.sum() < 10:
+            raise LogError(f"{source}: --time-range {a:g} {b:g}: the recording runs from 0 to "
+                           f"{grid[-1] - u0:.1f} s after its start; the range holds {int(pick.sum())} samples")
+        holes = pick & ~covered
+        if holes.any():
+            g = [x for x in report["gaps"] if x["end"] > a and x["start"] < b]
+            raise LogError(f"{source}: --time-range {a:g} {b:g} crosses a gap"
+                           + (f" ({g[0]['stream']} silent from {g[0]['start']:.2f} to {g[0]['end']:.2f} s)" if g else "")
+                           + "; choose a range within one run (runs: "
+                           + ", ".join(f"{r['start']:.1f}-{r['end']:.1f} s" for r in long_runs) + ")")
+        return pick, {"how": "time range", "start": float(a), "end": float(b)}
+    if not long_runs:
+        stretches = [(a, b) for a, b in _stretches(covered) if b - a >= 3]
+        if options.run is not None or not stretches:
+            raise LogError(f"{source}: no run of {options.min_run:g} s or more with the vehicle driving (speed above "
+                           f"{options.min_speed:g} m/s) and every stream present"
+                           + ("; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
+                              if report["gaps"] else ""))
+        a, b = max(stretches, key=lambda ab: ab[1] - ab[0])
+        pick = np.zeros(len(grid), bool)
+        pick[a:b] = True
+        report.setdefault("notes", []).append(
+            f"no run of {options.min_run:g} s or more with the vehicle driving (above {options.min_speed:g} m/s): "
+            f"the longest stretch without a gap is used; a diagnosis needs the vehicle driving")
+        return pick, {"how": "the longest stretch without a gap (the vehicle does not drive)",
+                      "start": float(grid[a] - u0), "end": float(grid[b - 1] - u0)}
+    if options.run is not None and not 1 <= options.run <= len(long_runs):
+        raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "
+                       + ", ".join(f"{r['run']}: {r['start']:.1f}-{r['end']:.1f} s" for r in long_runs))
+    r = long_runs[options.run - 1] if options.run else max(long_runs, key=lambda r: r["duration"])
+    pick = (grid - u0 >= r["start"] - 1e-9) & (grid - u0 <= r["end"] + 1e-9)
+    return pick, {"how": f"run {r['run']}" + ("" if options.run else " (the longest)"), "run": r["run"],
+                  "start": r["start"], "end": r["end"]}
