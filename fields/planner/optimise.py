@@ -22,6 +22,7 @@ search for at most ``route_seconds``; the order it returns is then joined by the
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -30,7 +31,8 @@ from .settings import Settings
 from .types import Swath
 
 SCALE = 100             # costs in centimetres (the solver takes integers)
-MAX_SEARCH = 4.0        # s of local search at most (route_seconds 0)
+IMPROVEMENTS = 200       # greedy local search stops after this many improving moves (deterministic)
+BACKSTOP = 120.0         # s: a clock limit only against pathological sizes (then said in the result)
 UNREACHABLE = 10.0      # turn radii added to the straight distance where no estimate applies
 
 
@@ -101,11 +103,6 @@ def move_costs(a: np.ndarray, b: np.ndarray, limits: Limits) -> np.ndarray:
     return np.where(np.isfinite(best), best, far)
 
 
-def budget(n: int) -> float:
-    """Seconds of greedy local search for n swaths (the route order's share of a plan's time)."""
-    return min(MAX_SEARCH, 0.5 + 0.004 * n)
-
-
 def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=None, end=None,
           initial: list[int] | None = None) -> tuple[list[Swath], str]:
     """The swaths oriented and in the order the solver finds; ``groups``: each swath's piece of
@@ -150,7 +147,10 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
     else:
         # greedy descent, bounded: its full neighbourhoods take minutes from some hundred swaths on
         params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GREEDY_DESCENT
-        params.time_limit.FromMilliseconds(int(1000 * budget(n)))
+        # bounded by a count of improving moves, not by the clock: the same plan on any machine
+        params.solution_limit = IMPROVEMENTS
+        params.time_limit.FromMilliseconds(int(1000 * BACKSTOP))
+    began = time.monotonic()
     if initial is not None:
         routing.CloseModelWithParameters(params)
         first = routing.ReadAssignmentFromRoutes([[int(manager.NodeToIndex(v)) for v in initial]], True)
@@ -166,5 +166,7 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
             out.append(swaths[node // 2] if node % 2 == 0 else swaths[node // 2].reversed())
         index = solution.Value(routing.NextVar(index))
     search = (f"{settings.route_seconds:g} s of guided local search" if settings.route_seconds > 0 else
-              f"greedy local search, at most {budget(n):.1f} s")
+              f"greedy local search, at most {IMPROVEMENTS} improvements")
+    if settings.route_seconds <= 0 and time.monotonic() - began >= 0.95 * BACKSTOP:
+        search += f"; stopped by the {BACKSTOP:g} s backstop, so it may differ between machines"
     return out, f"optimised (OR-tools routing from the {'skip' if initial else 'cheapest-arc'} order, {search})"
