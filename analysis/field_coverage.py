@@ -222,7 +222,9 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out["pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out["pass_to_pass_mean_m"] = float(np.mean(p2p)) if len(p2p) else math.nan
     area = workable.area
-    out.update(coverage_share=covered / area, overlap_share=overlap / area, skipped_area_m2=area - covered,
+    field_covered = union.intersection(boundary).area if union is not None else 0.0
+    out.update(field_coverage_share=field_covered / boundary.area, coverage_share=covered / area,
+               overlap_share=overlap / area, skipped_area_m2=area - covered,
                covered_area_m2=covered, overlap_area_m2=overlap, workable_area_m2=area,
                field_area_m2=boundary.area, boundary_crossings=float(crossings))
     for kind, name in ((SWATH, "swath"), (HEADLAND, "headland"), (TURN, "turn"), (TRANSIT, "transit")):
@@ -421,7 +423,9 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
 
 IMPLEMENT_XTE_P95_TARGET = 0.05       # m: the implement's P95 cross-track target (RTK class +-0.025 m)
 COVERAGE_TARGET, OVERLAP_TARGET = 0.99, 0.05       # shares of the workable area: at least, at most
-METRICS = {"coverage_share": ("1", f">= {COVERAGE_TARGET}"), "overlap_share": ("1", f"<= {OVERLAP_TARGET}"), "skipped_area_m2": ("m2", None),
+METRICS = {"field_coverage_share": ("1", f">= {COVERAGE_TARGET} (of the whole field)"),
+           "coverage_share": ("1", f">= {COVERAGE_TARGET}"), "overlap_share": ("1", f"<= {OVERLAP_TARGET}"),
+           "skipped_area_m2": ("m2", None),
            "boundary_crossings": ("count", "0"), "tractor_xte_p95_m": ("m", None),
            "implement_xte_p95_m": ("m", f"<= {IMPLEMENT_XTE_P95_TARGET} (RTK class +-0.025)"), "pass_to_pass_p95_m": ("m", None),
            "tractor_xte_rms_m": ("m", None), "implement_xte_rms_m": ("m", None), "implement_xte_max_m": ("m", None),
@@ -462,7 +466,6 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
-    from shapely import contains_xy
 
     from orchestrator.results import atomic_write
 
@@ -481,25 +484,10 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         plt.close(fig)
         written.append(out_dir / name)
 
-    # coverage count on a grid (at most about 1.5 M cells)
-    minx, miny, maxx, maxy = boundary.bounds
-    cell = max(0.25, math.sqrt((maxx - minx) * (maxy - miny) / 1.5e6))
-    gx, gy = np.meshgrid(np.arange(minx, maxx, cell) + cell / 2, np.arange(miny, maxy, cell) + cell / 2)
-    count = np.zeros(gx.shape)
-    for st in _strips(s, plan.settings.working_width):
-        count += contains_xy(st, gx, gy)
-    count = np.clip(count, 0, 3)
-    count[~contains_xy(workable, gx, gy)] = -1            # the implement cannot reach it (corners)
-    count[~contains_xy(boundary, gx, gy)] = np.nan
-    fig, ax = plt.subplots(figsize=(9, 8))
-    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from fields.planner.export import times_worked, times_worked_colorbar
 
-    cmap = ListedColormap(["#bdbdbd", "#d7301f", "#a6d96a", "#fdae61", "#7b3294"])
-    im = ax.pcolormesh(gx, gy, count, cmap=cmap, norm=BoundaryNorm([-1.5, -0.5, 0.5, 1.5, 2.5, 3.5], 5),
-                       shading="auto")
-    cb = fig.colorbar(im, ax=ax, ticks=[-1, 0, 1, 2, 3], shrink=0.6)
-    cb.ax.set_yticklabels(["not workable", "0 (skipped)", "1", "2 (overlap)", "3+"])
-    cb.set_label("times worked")
+    fig, ax = plt.subplots(figsize=(9, 8))
+    times_worked_colorbar(fig, ax, times_worked(ax, _strips(s, plan.settings.working_width), boundary, workable))
     for geom, style, label in ((boundary, "k-", "field"), (workable, "k:", "workable")):
         bx, by = geom.exterior.xy
         ax.plot(bx, by, style, lw=1, label=label)
