@@ -76,7 +76,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--order", default=d.order, choices=("auto", "boustrophedon", "skip", "optimised"),
                    help="the swaths' order; optimised: the least non-working distance (OR-tools routing)")
     p.add_argument("--route-seconds", type=finite, default=d.route_seconds, help="--order optimised: seconds of "
-                   "guided local search (0: a greedy descent of at most 200 improving moves, the same on every machine)")
+                   "guided local search (0: a greedy descent of a bounded number of improving moves, the same on every machine)")
     p.add_argument("--start", type=point, default=None, metavar="E,N", help="the route starts here [m east, north of "
                    "the field's origin]")
     p.add_argument("--end", type=point, default=None, metavar="E,N", help="and ends here")

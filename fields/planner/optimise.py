@@ -31,7 +31,9 @@ from .settings import Settings
 from .types import Swath
 
 SCALE = 100             # costs in centimetres (the solver takes integers)
-IMPROVEMENTS = 200       # greedy local search stops after this many improving moves (deterministic)
+IMPROVING_WORK = 1.3e11   # greedy local search: improving moves x n^4 (a move costs ~n^4 with OR-tools'
+MOST_IMPROVEMENTS = 500   # neighbourhoods): 500 moves for 128 swaths, about 2 s of CPU
+FEWEST_IMPROVEMENTS = 5   # below this the search is not worth its minutes: the pattern order is kept
 BACKSTOP = 120.0         # s: a clock limit only against pathological sizes (then said in the result)
 UNREACHABLE = 10.0      # turn radii added to the straight distance where no estimate applies
 
@@ -103,6 +105,12 @@ def move_costs(a: np.ndarray, b: np.ndarray, limits: Limits) -> np.ndarray:
     return np.where(np.isfinite(best), best, far)
 
 
+def improvements(n: int) -> int:
+    """Improving moves the greedy local search makes at most for n swaths: a count, not a clock,
+    so that a plan is the same on every machine."""
+    return int(min(MOST_IMPROVEMENTS, IMPROVING_WORK / max(n, 1) ** 4))
+
+
 def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=None, end=None,
           initial: list[int] | None = None) -> tuple[list[Swath], str]:
     """The swaths oriented and in the order the solver finds; ``groups``: each swath's piece of
@@ -148,9 +156,16 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
         # greedy descent, bounded: its full neighbourhoods take minutes from some hundred swaths on
         params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GREEDY_DESCENT
         # bounded by a count of improving moves, not by the clock: the same plan on any machine
-        params.solution_limit = IMPROVEMENTS
+        params.solution_limit = improvements(n)
         params.time_limit.FromMilliseconds(int(1000 * BACKSTOP))
     began = time.monotonic()
+
+    def as_given(nodes: list[int]) -> list[Swath]:
+        return [swaths[v // 2] if v % 2 == 0 else swaths[v // 2].reversed() for v in nodes]
+
+    if settings.route_seconds <= 0 and improvements(n) < FEWEST_IMPROVEMENTS and initial is not None:
+        return as_given(initial), (f"the pattern's order ({n} swaths: beyond what the bounded local search improves "
+                                   f"in seconds)")
     if initial is not None:
         routing.CloseModelWithParameters(params)
         first = routing.ReadAssignmentFromRoutes([[int(manager.NodeToIndex(v)) for v in initial]], True)
@@ -158,7 +173,8 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
     else:
         solution = routing.SolveWithParameters(params)
     if solution is None:
-        return [], "optimised (no solution)"
+        return (as_given(initial), "the pattern's order (the solver found none better)") if initial else \
+            ([], "optimised (no solution)")
     out, index = [], routing.Start(0)
     while not routing.IsEnd(index):
         node = manager.IndexToNode(index)
@@ -166,7 +182,7 @@ def order(swaths: list[Swath], groups: np.ndarray, settings: Settings, start=Non
             out.append(swaths[node // 2] if node % 2 == 0 else swaths[node // 2].reversed())
         index = solution.Value(routing.NextVar(index))
     search = (f"{settings.route_seconds:g} s of guided local search" if settings.route_seconds > 0 else
-              f"greedy local search, at most {IMPROVEMENTS} improvements")
+              f"greedy local search, at most {improvements(n)} improving moves")
     if settings.route_seconds <= 0 and time.monotonic() - began >= 0.95 * BACKSTOP:
         search += f"; stopped by the {BACKSTOP:g} s backstop, so it may differ between machines"
     return out, f"optimised (OR-tools routing from the {'skip' if initial else 'cheapest-arc'} order, {search})"

@@ -32,7 +32,7 @@ class Settings:
     acceleration: float = 0.5             # m/s^2
     overlap: float = 0.05                 # m between adjacent passes
     order: str = "auto"                   # auto, boustrophedon, skip, optimised (OR-tools: fields.planner.optimise)
-    route_seconds: float = 0.0            # optimised order: 0 a bounded greedy descent (fields.planner.optimise.IMPROVEMENTS); else guided local search this long
+    route_seconds: float = 0.0            # optimised order: 0 a bounded greedy descent (fields.planner.optimise.improvements); else guided local search this long
     half_width: float = 0.8               # m: the tractor's, kept inside the boundary
     hitch_offset: float = 0.6             # m behind the rear axle
     drawbar: float = 2.5                  # m hitch to implement axle (0: a mounted implement)
