@@ -251,6 +251,18 @@ def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int 
                                                          the antenna's lean -h roll with terrain compensation)
 
     outputs the updated R (north), heading, CG = R + l_r psi and the crab -k0 v f_y of this step."""
+    key = (repr(sorted(comp.p.items())), step, speed, fix_every, fix_phase)
+    if key not in _INS_BLOCKS:
+        _INS_BLOCKS[key] = _ins_ekf(comp, step, speed, fix_every, fix_phase)
+    block = _INS_BLOCKS[key]
+    return Block(comp.name, block.inputs, block.outputs, block.A, block.B, block.C, block.D, block.ratio,
+                 block.sampled, block.phases)
+
+
+_INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters and operating point (seconds each)
+
+
+def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) -> Block:
     from components.ins_ekf import INSEKF
 
     p = comp.p
