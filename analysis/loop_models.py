@@ -544,7 +544,7 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
     declared system (inputs it leaves out: no effect). A law changed without its linearisation is
     refused here rather than analysed wrongly."""
     trim = {"x_ref": 10.0 + op.along_track_error, "y_ref": 0.0, "xdot_ref": op.speed, "ydot_ref": 0.0, "x": 10.0,
-            "y": 0.0, "heading": 0.0, "yaw_rate_ref": 0.0}
+            "y": 0.0, "heading": 0.0, "yaw_rate_ref": 0.0, "lateral_velocity": 0.0}
     ports = [p for p in comp.declared("input") if p in trim]
     outputs = list(lin.output_labels)
 

@@ -50,7 +50,7 @@ def test_tracker_linearisation_is_the_jacobian_of_its_step(cls, params, speed, a
     tracker.initialize(0.0, 0.05)
     lin = tracker.lateral_linearisation(speed, 0.05, along)
     trim = {"x_ref": 10.0 + along, "y_ref": 0.0, "xdot_ref": speed, "ydot_ref": 0.0, "x": 10.0, "y": 0.0,
-            "heading": 0.0, "yaw_rate_ref": 0.0}
+            "heading": 0.0, "yaw_rate_ref": 0.0, "lateral_velocity": 0.0}
 
     def gamma_d(port, eps):
         tracker.u.update(trim)
