@@ -12,7 +12,7 @@ A field route also turns, at 1 m/s on radii of 2.5-4 m (wheel angles near 30 deg
 tan(delta) is 30 % steeper than on a straight), which the straight-line model does not see: over the
 routes' first minute (a third to three quarters of it on swaths) it must be stable at 0.6 x the
 work-speed prediction and unstable at 1.1 x (benchmarks/margins.py: over two minutes the routes gave
-way at 0.70-1.03 x, the lowest on the 0.15 ha plot's 2.5 m turns).
+way at 0.65-1.03 x, the lowest on the 0.15 ha plot's 2.5 m turns).
 """
 from __future__ import annotations
 
