@@ -32,7 +32,7 @@ from fields.planner import HEADLAND, SWATH, TRANSIT, TURN
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .signals import component_named, signal
+from .signals import component_named, runs, signal
 
 STEP = 0.1          # s: the geometry's sampling of the trajectories
 
@@ -66,6 +66,20 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
         "segment": f[f"{route}.segment"], "swath": f[f"{route}.swath"], "impl_segment": f[f"{route}.implement_segment"],
         "working": f[f"{route}.working"], "speed": signal(f, study, "drivetrain", "speed"),
         "progress": f[f"{route}.progress"]})
+
+
+def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
+    """The samples' positions from the mission frame back to the field's east/north frame:
+    p_field = R(rotation) p_mission + origin (the inverse of components.field_route.to_mission)."""
+    from components.field_route import route_frame
+
+    origin, rotation = route_frame(plan.path)
+    c, sn = math.cos(rotation), math.sin(rotation)
+    out = s.copy()
+    for a, b in (("x", "y"), ("ix", "iy")):
+        mx, my = s[a].to_numpy(), s[b].to_numpy()
+        out[a], out[b] = origin[0] + c * mx - sn * my, origin[1] + sn * mx + c * my
+    return out
 
 
 def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
@@ -208,7 +222,9 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out["pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out["pass_to_pass_mean_m"] = float(np.mean(p2p)) if len(p2p) else math.nan
     area = workable.area
-    out.update(coverage_share=covered / area, overlap_share=overlap / area, skipped_area_m2=area - covered,
+    field_covered = union.intersection(boundary).area if union is not None else 0.0
+    out.update(field_coverage_share=field_covered / boundary.area, coverage_share=covered / area,
+               overlap_share=overlap / area, skipped_area_m2=area - covered,
                covered_area_m2=covered, overlap_area_m2=overlap, workable_area_m2=area,
                field_area_m2=boundary.area, boundary_crossings=float(crossings))
     for kind, name in ((SWATH, "swath"), (HEADLAND, "headland"), (TURN, "turn"), (TRANSIT, "transit")):
@@ -281,12 +297,6 @@ def _tractor_gps(study: Study) -> str | None:
     return next((c.source for c in study.connections if c.target == estimator[0] and c.input == "gps_x"), None)
 
 
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(first, last + 1) of each run of True."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
-
-
 def route_samples(path, until: float) -> dict[str, np.ndarray]:
     """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
     arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
@@ -320,7 +330,7 @@ def _acquisitions(s: pd.DataFrame, route: dict[str, np.ndarray], frames,
         e = np.abs(-d[1] * (x[on] - a[0]) + d[0] * (y[on] - a[1]))
         inside = e < ACQUIRED
         found = math.nan, math.nan
-        for first, last in _runs(inside):
+        for first, last in runs(inside):
             if t[on[last - 1]] - t[on[first]] >= ACQUIRED_HOLD or last == len(on):
                 j0, j1 = on[0], on[first]
                 along = (x[j1] - x[j0]) * d[0] + (y[j1] - y[j0]) * d[1]
@@ -388,9 +398,9 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     watchdog = resolve(study).find(role="watchdog")
     safe = rows[f"{watchdog[0]}.safe_state"].to_numpy() if len(watchdog) == 1 else np.zeros(len(rows))
     t = s["t"].to_numpy()
-    windows = _runs(quality != RTK_FIXED)
+    windows = runs(quality != RTK_FIXED)
     out["outages"] = float(len(windows))
-    stops = [a for a, _ in _runs(safe > 0.5)]
+    stops = [a for a, _ in runs(safe > 0.5)]
     out["guidance_stops"] = float(len(stops))
     if not windows:
         return out
@@ -411,9 +421,13 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     return out
 
 
-METRICS = {"coverage_share": ("1", ">= 0.99"), "overlap_share": ("1", "<= 0.05"), "skipped_area_m2": ("m2", None),
+IMPLEMENT_XTE_P95_TARGET = 0.05       # m: the implement's P95 cross-track target (RTK class +-0.025 m)
+COVERAGE_TARGET, OVERLAP_TARGET = 0.99, 0.05       # shares of the workable area: at least, at most
+METRICS = {"field_coverage_share": ("1", f">= {COVERAGE_TARGET} (of the whole field)"),
+           "coverage_share": ("1", f">= {COVERAGE_TARGET}"), "overlap_share": ("1", f"<= {OVERLAP_TARGET}"),
+           "skipped_area_m2": ("m2", None),
            "boundary_crossings": ("count", "0"), "tractor_xte_p95_m": ("m", None),
-           "implement_xte_p95_m": ("m", "<= 0.05 (RTK class +-0.025)"), "pass_to_pass_p95_m": ("m", None),
+           "implement_xte_p95_m": ("m", f"<= {IMPLEMENT_XTE_P95_TARGET} (RTK class +-0.025)"), "pass_to_pass_p95_m": ("m", None),
            "tractor_xte_rms_m": ("m", None), "implement_xte_rms_m": ("m", None), "implement_xte_max_m": ("m", None),
            "swath_time_s": ("s", None), "turn_time_s": ("s", None), "headland_time_s": ("s", None),
            "mission_time_s": ("s", None), "wall_time_s": ("s", None),
@@ -432,6 +446,12 @@ METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
 
 
 
+# What a sweep plots (orchestrator.sweep.sweep_plots), with the bound each is judged by: the farmer's
+# figures (coverage, overlap, accuracy of the implement, time) and the field's limit.
+SWEEP_METRICS = {"coverage_share": COVERAGE_TARGET, "overlap_share": OVERLAP_TARGET, "implement_xte_p95_m": IMPLEMENT_XTE_P95_TARGET,
+                 "pass_to_pass_p95_m": None, "mission_time_s": None, "boundary_crossings": 0.0}
+
+
 def summary(values: dict[str, float]) -> str:
     lines = [f"{'metric':<26}{'value':>14}  {'unit':<6} target", "-" * 64]
     for key, (unit, target) in METRICS.items():
@@ -446,14 +466,13 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
-    from shapely import contains_xy
 
     from orchestrator.results import atomic_write
 
-    field, plan, conv, _ = mission(study)
-    s = _samples(frame, study)
-    boundary, workable = _shape(field.boundary, conv), _shape(plan.workable, conv)
-    frames = _swath_frames(plan, conv)
+    field, plan, _, _ = mission(study)
+    s = _in_field_frame(_samples(frame, study), plan)        # east/north, the frame of plan.png
+    boundary, workable = field.boundary, plan.workable
+    frames = _swath_frames(plan, np.asarray)
     swath = s["swath"].to_numpy().astype(int)
     xte_t = _cross_track(s["x"].to_numpy(), s["y"].to_numpy(), np.where(s["segment"] == SWATH, swath, -99), frames)
     xte_i = _cross_track(s["ix"].to_numpy(), s["iy"].to_numpy(), np.where(s["impl_segment"] == SWATH, swath, -99), frames)
@@ -465,29 +484,14 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         plt.close(fig)
         written.append(out_dir / name)
 
-    # coverage count on a grid (at most about 1.5 M cells)
-    minx, miny, maxx, maxy = boundary.bounds
-    cell = max(0.25, math.sqrt((maxx - minx) * (maxy - miny) / 1.5e6))
-    gx, gy = np.meshgrid(np.arange(minx, maxx, cell) + cell / 2, np.arange(miny, maxy, cell) + cell / 2)
-    count = np.zeros(gx.shape)
-    for st in _strips(s, plan.settings.working_width):
-        count += contains_xy(st, gx, gy)
-    count = np.clip(count, 0, 3)
-    count[~contains_xy(workable, gx, gy)] = -1            # the implement cannot reach it (corners)
-    count[~contains_xy(boundary, gx, gy)] = np.nan
-    fig, ax = plt.subplots(figsize=(9, 8))
-    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from fields.planner.export import times_worked, times_worked_colorbar
 
-    cmap = ListedColormap(["#bdbdbd", "#d7301f", "#a6d96a", "#fdae61", "#7b3294"])
-    im = ax.pcolormesh(gx, gy, count, cmap=cmap, norm=BoundaryNorm([-1.5, -0.5, 0.5, 1.5, 2.5, 3.5], 5),
-                       shading="auto")
-    cb = fig.colorbar(im, ax=ax, ticks=[-1, 0, 1, 2, 3], shrink=0.8)
-    cb.ax.set_yticklabels(["not workable", "0 (skipped)", "1", "2 (overlap)", "3+"])
-    cb.set_label("times worked")
+    fig, ax = plt.subplots(figsize=(9, 8))
+    times_worked_colorbar(fig, ax, times_worked(ax, _strips(s, plan.settings.working_width), boundary, workable))
     for geom, style, label in ((boundary, "k-", "field"), (workable, "k:", "workable")):
         bx, by = geom.exterior.xy
         ax.plot(bx, by, style, lw=1, label=label)
-    ax.set(aspect="equal", xlabel="x [m] (mission frame: the route starts at 0, 0 heading along x)", ylabel="y [m]",
+    ax.set(aspect="equal", xlabel="east [m]", ylabel="north [m]",
            title=f"field {field.name!r} ({field.area_ha:.2f} ha): times the implement worked each spot")
     ax.legend(fontsize=8, loc="lower right")
     save(fig, "coverage.png")
@@ -502,8 +506,8 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     lc = LineCollection(segs, cmap="viridis", array=100 * np.abs(xte_i[:-1][on[:-1] & on[1:]]), linewidths=1.5)
     lc.set_clim(0, max(5.0, 100 * np.nanpercentile(np.abs(xte_i), 99) if on.any() else 5.0))
     ax.add_collection(lc)
-    fig.colorbar(lc, ax=ax, shrink=0.8, label="implement |cross-track error| on swaths [cm]")
-    ax.set(aspect="equal", xlabel="x [m] (mission frame)", ylabel="y [m]", title="the implement's track on the swaths, "
+    fig.colorbar(lc, ax=ax, shrink=0.6, label="implement |cross-track error| on swaths [cm]")
+    ax.set(aspect="equal", xlabel="east [m]", ylabel="north [m]", title="the implement's track on the swaths, "
            "coloured by its cross-track error")
     ax.legend(fontsize=8, loc="lower right")
     save(fig, "track_error.png")
@@ -519,6 +523,12 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
             for v in (-p95, p95):
                 ax.axvline(v, color="k", ls="--", lw=1)
             ax.set_title(f"{title}\nP95 |error| {p95:.1f} cm", fontsize=9)
+            if ax is axes[1]:           # the judged figure: the implement's P95 against its target
+                for v in (-1, 1):
+                    ax.axvline(100 * v * IMPLEMENT_XTE_P95_TARGET, color="tab:red", lw=1.2,
+                               label=f"target: P95 <= {100 * IMPLEMENT_XTE_P95_TARGET:g} cm" if v > 0 else None)
+                ax.plot([], [], "k--", lw=1, label="P95 |error|")
+                ax.legend(fontsize=7)
         ax.set_xlabel("error [cm]")
         ax.set_ylabel("samples")
         ax.grid(alpha=0.3)

@@ -9,7 +9,7 @@ import pandas as pd
 
 from orchestrator.study import Study
 
-from .signals import between_samples, rms, signal
+from .signals import between_samples, rms, runs, sample_rows, signal
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
 # straight and below 60 cm on curved time-based trajectories.
@@ -101,6 +101,101 @@ METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 "speed_rms_error_vs_path": "m/s", "events": "count"}
 
 
+# What a sweep plots (orchestrator.sweep.sweep_plots), with the bound each is judged by: the bounded
+# errors, the tracking of the two inner loops, the steering effort.
+SWEEP_METRICS = {"euclid_max_straight": PAPER_BOUNDS["euclid_max_straight"],
+                 "euclid_max_curved": PAPER_BOUNDS["euclid_max_curved"],
+                 "speed_rms_error": None, "yaw_rate_rms_error": None, "steer_angle_rms": None, "steer_rate_rms": None}
+
+
+def error_figure(frame: pd.DataFrame, study: Study):
+    """The bounded quantity: |CG - reference| (the metrics' error) against time, the paper's bounds
+    as lines, curves shaded, the start-up (not judged) hatched, the maxima on straights and curves
+    marked; a second panel at the error's own scale when it is under a quarter of the bounds."""
+    import matplotlib.pyplot as plt
+
+    t = frame["t"].to_numpy()
+    err = tracking_error(frame, study)
+    curved = signal(frame, study, "reference", "segment") > 0.5
+    start = settled_index(t, signal(frame, study, "reference", "speed_ref"))
+    judged = np.arange(len(t)) >= start
+    bound_s, bound_c = PAPER_BOUNDS["euclid_max_straight"], PAPER_BOUNDS["euclid_max_curved"]
+    peak = float(err[judged].max())
+    zoom = peak < 0.25 * min(bound_s, bound_c)
+    fig, axes = plt.subplots(2 if zoom else 1, 1, sharex=True, figsize=(8, 6.5 if zoom else 4.5), squeeze=False)
+    verdicts = []
+    for ax in axes[:, 0]:
+        for k, (a, b) in enumerate(runs(curved)):
+            ax.axvspan(t[a], t[b - 1], color="C1", alpha=0.15, lw=0, label="curve (bound 0.60 m)" if k == 0 else None)
+        ax.axvspan(t[0], t[start], facecolor="none", edgecolor="0.6", hatch="//", lw=0,
+                   label=f"start-up, not judged (t < {t[start]:.0f} s)")
+        ax.plot(t, err, color="k", lw=0.9, label="Euclidean error |CG - reference|")
+        ax.set_ylabel("Euclidean error [m]")
+        ax.grid(alpha=0.3)
+    main = axes[0, 0]
+    main.axhline(bound_s, color="C0", ls="--", lw=1.2, label=f"paper bound on straights {bound_s:.2f} m")
+    main.axhline(bound_c, color="C1", ls="--", lw=1.2, label=f"paper bound on curves {bound_c:.2f} m")
+    for kind, sel, bound, colour in (("straight", ~curved, bound_s, "C0"), ("curve", curved, bound_c, "C1")):
+        idx = np.flatnonzero(sel & judged)
+        if not len(idx):
+            continue
+        i = idx[np.argmax(err[idx])]
+        verdicts.append(f"max on {kind}s {err[i]:.3f} m {'<' if err[i] < bound else '>='} {bound:.2f} m")
+        for ax in axes[:, 0]:
+            ax.plot(t[i], err[i], "o", color=colour, ms=6, mec="k", label=f"max on {kind}s {err[i]:.3f} m"
+                    if ax is main else None)
+    main.set_ylim(0, 1.4 * max(bound_c, bound_s, float(err.max())))      # headroom for the legend
+    main.set_title("Tracking error judged by the paper's bounds: " + "; ".join(verdicts), fontsize=9)
+    main.legend(fontsize=7, loc="upper right", ncol=2)
+    if zoom:
+        axes[1, 0].set_ylim(0, 1.15 * peak)
+        axes[1, 0].set_title("zoom: the judged error at its own scale (bounds far above)", fontsize=9)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 0].set_xlim(t[0], t[-1])
+    fig.tight_layout()
+    return fig
+
+
+def trajectory_figure(frame: pd.DataFrame, study: Study):
+    """The reference (wide grey band, its 20 Hz samples as dots in the zoom) under the CG's path
+    (thin red); the right panel zooms on the largest judged error, drawn as a segment."""
+    import matplotlib.pyplot as plt
+
+    t = frame["t"].to_numpy()
+    x, y = signal(frame, study, "yaw_plant", "x_cg"), signal(frame, study, "yaw_plant", "y_cg")
+    x_ref, y_ref = between_samples(frame, study, "reference", ("x_ref", "y_ref"))
+    err = np.hypot(x - x_ref, y - y_ref)
+    start = settled_index(t, signal(frame, study, "reference", "speed_ref"))
+    i = start + int(np.argmax(err[start:]))
+    fig, (ax, zoom) = plt.subplots(1, 2, figsize=(11, 4.8), gridspec_kw={"width_ratios": [2, 1]})
+    half = max(3.0 * err[i], 0.3)
+    for a in (ax, zoom):
+        a.plot(x_ref, y_ref, color="0.6", lw=5 if a is ax else 4, alpha=0.6, solid_capstyle="round",
+               label="reference", zorder=1)
+        a.plot(x, y, color="r", lw=0.8, label="actual (CG)", zorder=2)
+        a.set_xlabel("east x [m]"), a.set_ylabel("north y [m]"), a.grid(alpha=0.3)
+    near = (np.abs(x_ref - x_ref[i]) < half) & (np.abs(y_ref - y_ref[i]) < half)
+    own = sample_rows(frame, study, "reference")
+    zoom.plot(x_ref[own & near], y_ref[own & near], ".", color="0.3", ms=3, label="reference samples (20 Hz)")
+    zoom.plot([x[i], x_ref[i]], [y[i], y_ref[i]], "b-", lw=1.5, label=f"largest judged error {err[i]:.3f} m")
+    zoom.plot(x[i], y[i], "o", color="r", ms=6, label=f"CG at t = {t[i]:.1f} s")
+    zoom.plot(x_ref[i], y_ref[i], "x", color="k", ms=8, mew=2, label="reference at the same t")
+    xdot, ydot = (v[i] for v in between_samples(frame, study, "reference", ("xdot_ref", "ydot_ref")))
+    along = ((x_ref[i] - x[i]) * xdot + (y_ref[i] - y[i]) * ydot) / max(np.hypot(xdot, ydot), 1e-9)
+    across = np.sqrt(max(err[i] ** 2 - along ** 2, 0.0))
+    zoom.set_xlim(x_ref[i] - half, x_ref[i] + half), zoom.set_ylim(y_ref[i] - half, y_ref[i] + half)
+    zoom.set_aspect("equal", adjustable="box")
+    zoom.set_title(f"zoom, {2 * half:.1f} m square: the largest judged error\n{along:+.3f} m along the path (+: CG behind), "
+                   f"{across:.3f} m across", fontsize=8)
+    zoom.legend(fontsize=7, loc="lower left")
+    ax.axis("equal")
+    ax.indicate_inset([x_ref[i] - half, y_ref[i] - half, 2 * half, 2 * half], inset_ax=zoom, edgecolor="b")
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("Reference and actual trajectory")
+    fig.tight_layout()
+    return fig
+
+
 def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     import matplotlib
 
@@ -118,32 +213,18 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         plt.close(fig)
         written.append(path)
 
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(sig("reference", "x_ref"), sig("reference", "y_ref"), "k--", lw=1, label="reference")
-    ax.plot(sig("yaw_plant", "x_cg"), sig("yaw_plant", "y_cg"), "r", lw=1, label="actual (CG)")
-    ax.set_xlabel("east x [m]"), ax.set_ylabel("north y [m]"), ax.axis("equal"), ax.legend()
-    ax.set_title("Reference and actual trajectory")
-    save(fig, "trajectory.png")
-
-    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 4.5))
-    x_ref, y_ref = between_samples(frame, study, "reference", ("x_ref", "y_ref"))
-    ex = x_ref - sig("yaw_plant", "x_cg")
-    ey = y_ref - sig("yaw_plant", "y_cg")
-    for ax, e, name in zip(axes, (ex, ey), ("x", "y")):
-        ax.plot(t, e, lw=0.8)
-        ax.set_ylabel(f"error {name} [m]")
-        ax.grid(alpha=0.3)
-    axes[-1].set_xlabel("time [s]")
-    axes[0].set_title("Trajectory following error")
-    save(fig, "error.png")
+    save(trajectory_figure(frame, study), "trajectory.png")
+    save(error_figure(frame, study), "error.png")
 
     for port_d, (typ, port), label, title, name in (
             ("speed_desired", ("drivetrain", "speed"), "speed [m/s]", "Longitudinal speed", "speed.png"),
             ("yaw_rate_desired", ("yaw_plant", "yaw_rate"), "yaw rate [rad/s]", "Yaw rate", "yaw_rate.png")):
         fig, ax = plt.subplots(figsize=(7, 3.5))
-        ax.plot(t, sig("tracker", port_d), "k--", lw=0.8, label="desired")
+        if port == "speed":
+            ax.plot(t, sig("reference", "speed_ref"), color="0.6", lw=2, alpha=0.6, label="path's speed (reference)")
+        ax.plot(t, sig("tracker", port_d), "k--", lw=0.8, label="desired (tracker)")
         ax.plot(t, sig(typ, port), "r", lw=0.8, label="actual")
-        ax.set_xlabel("time [s]"), ax.set_ylabel(label), ax.legend(), ax.grid(alpha=0.3)
+        ax.set_xlabel("time [s]"), ax.set_ylabel(label), ax.legend(fontsize=8), ax.grid(alpha=0.3)
         ax.set_title(title)
         save(fig, name)
     return written

@@ -28,8 +28,23 @@ def signal(frame: pd.DataFrame, study: Study, role: str, port: str) -> np.ndarra
     return frame[column].to_numpy()
 
 
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last + 1) of each run of True in ``mask``."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
 def rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.square(x)))) if len(x) else float("nan")
+
+
+def sample_rows(frame: pd.DataFrame, study: Study, role: str) -> np.ndarray:
+    """Rows at the instants the sampled component with ``role`` computed its outputs (t0 + k step,
+    counted from the study's start, not the table's)."""
+    spec = study.components.get(component_named(study, role))
+    step = (spec.step if spec is not None and spec.step else None) or study.study.base_step
+    k = (frame["t"].to_numpy(float) - study.study.start_time) / step
+    return np.abs(k - np.round(k)) < 1e-6
 
 
 def between_samples(frame: pd.DataFrame, study: Study, role: str, ports: tuple[str, ...]) -> list[np.ndarray]:
@@ -37,12 +52,8 @@ def between_samples(frame: pd.DataFrame, study: Study, role: str, ports: tuple[s
     interpolated linearly between the instants it computed them (t0 + k step) instead of held
     from one to the next: a 20 Hz reference compared with a 100 Hz plant then adds no sawtooth of
     up to speed x 50 ms. Rows after the last sample keep it."""
-    name = component_named(study, role)
-    spec = study.components.get(name)
-    step = (spec.step if spec is not None and spec.step else None) or study.study.base_step
     t = frame["t"].to_numpy(float)
-    k = (t - study.study.start_time) / step          # its instants count from the study's start, not the table's
-    own = np.abs(k - np.round(k)) < 1e-6
+    own = sample_rows(frame, study, role)
     values = [signal(frame, study, role, port) for port in ports]
     if own.sum() < 2 or own.all():
         return values

@@ -51,8 +51,10 @@ def plots(table: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
     cmap = plt.get_cmap("viridis")
     for ax, model in zip(axes, PHYSICAL_MODELS):
+        imag = 1.0
         for i, v in enumerate(speeds):
             pol, z = poles_zeros(model, p, v)
+            imag = max(imag, 1.15 * float(np.max(np.abs(np.concatenate([pol.imag, z.imag])), initial=0.0)))
             c = cmap(i / max(len(speeds) - 1, 1))
             ax.plot(pol.real, pol.imag, "x", color=c, ms=5)
             ax.plot(z.real, z.imag, "o", mfc="none", color=c, ms=5)
@@ -63,6 +65,7 @@ def plots(table: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         ax.axvline(0, color="k", lw=0.5)
         ax.set_xscale("symlog", linthresh=10.0)       # slow modes near 0 and fast real ones (-400) both visible
         ax.set_xlim(-500.0, 5.0)
+        ax.set_ylim(-imag, imag)            # real roots only: a 1 rad/s window, not a hair's width
         ax.set_title(f"{model}: poles x, zeros o ({speeds[0]:.2f} to {speeds[-1]:.2f} m/s)", fontsize=9)
         ax.set_xlabel("real [1/s]"), ax.set_ylabel("imag [rad/s]"), ax.grid(alpha=0.3)
     fig.suptitle("Yaw models against speed (paper's 1 m/s blue, 2 m/s red); colour: speed, dark = slow")

@@ -5,7 +5,7 @@ with the paper's tracker law and with the shipped one.
 
 Each cell: max Euclidean error straight / curved [m] (the CG against the reference at the same
 instant, analysis.figure8), and the steering rate RMS [deg/s]; in brackets the mean error on
-straights with the reference held between its 20 Hz samples (the figure before issue 28) and the
+straights with the reference held between its 20 Hz samples (the older figure) and the
 honest one.
 """
 from __future__ import annotations

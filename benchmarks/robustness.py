@@ -1,5 +1,5 @@
 """Monte Carlo robustness of the figure-8 guidance for the paper's tracker + MPC and the two
-baselines (issue 19): 200 seeded runs each on the sweep machinery, one table, one figure.
+baselines: 200 seeded runs each on the sweep machinery, one table, one figure.
 
     python3 benchmarks/robustness.py [--out results/robustness] [--samples 200] [--workers 2]
 

@@ -1,5 +1,5 @@
 """The replay of a log, the baseline fit and the least-squares fit of any set of parameters
-(issue 6; the selection of several effects is diagnosis.selection, issue 15).
+(the selection of several effects is diagnosis.selection).
 
 The log is split in time: the first ``fit_fraction`` is for fitting, the rest is held out. Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages

@@ -1,9 +1,10 @@
-"""The catalogue of model extensions a diagnosis tests (issue 6, step 2): every ``Effect`` class
+"""The catalogue of model extensions a diagnosis tests: every ``Effect`` class
 of the modules in ``diagnosis/effects/`` (one effect per module, see diagnosis.effect), ordered by
 id, and the baseline's re-fitted parameters of each stage."""
 from __future__ import annotations
 
 import importlib
+import math
 import pkgutil
 
 from . import effects as _effects
@@ -37,3 +38,12 @@ UNCERTAIN = {
 
 SIGNALS = {"steering": ("delta", "rad"), "yaw": ("yaw_rate", "rad/s"), "position": ("antenna_position", "m"),
            "speed": ("track_speed", "m/s")}
+# What a person reads (reports, plots, messages): angles and angular rates in degrees, SI otherwise.
+DISPLAY = {"steering": (180 / math.pi, "deg"), "yaw": (180 / math.pi, "deg/s"), "position": (1.0, "m"),
+           "speed": (1.0, "m/s")}
+
+
+def shown(stage: str, value: float, digits: int = 3) -> str:
+    """A stage's SI value in its display unit, with the unit."""
+    k, unit = DISPLAY[stage]
+    return f"{k * value:.{digits}g} {unit}"

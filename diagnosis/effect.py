@@ -1,4 +1,4 @@
-"""What a diagnosis effect is: a complete object (issue 14, item 5).
+"""What a diagnosis effect is: a complete object.
 
 An effect names the subsystem it lives in, the replay stages whose residuals it changes, its
 parameters (SI, with the bounds searched and a typical scale for the optimiser), the values of

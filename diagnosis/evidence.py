@@ -1,4 +1,4 @@
-"""What the baseline gets wrong, stage by stage (issue 6, step 1): residual statistics that point
+"""What the baseline gets wrong, stage by stage: residual statistics that point
 at a cause before any extension is fitted.
 
 - spectrum: Welch estimate of the residual's power spectral density;

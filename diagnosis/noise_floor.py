@@ -1,4 +1,4 @@
-"""The noise floor of each replay stage, estimated from the log itself (issue 15, item 2).
+"""The noise floor of each replay stage, estimated from the log itself.
 
 A model that explains the data leaves a residual at the sensors' noise. Model errors live where the
 tractor's dynamics live (below a few hertz); the sensors' white noise spreads evenly up to the

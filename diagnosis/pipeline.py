@@ -13,7 +13,7 @@ from orchestrator.study import load_study
 
 from .baseline import baseline_from_study
 from .candidates import STAGES, CannotDecide, Fit, Replay
-from .catalogue import SIGNALS
+from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
@@ -46,9 +46,9 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
     except KeyError as missing:
         options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
-    signals = ", ".join(f"{k} {f.rmse_before[k]:.4g} -> {f.rmse_after[k]:.4g} {SIGNALS[s][1]}"
+    signals = ", ".join(f"{k} {DISPLAY[s][0] * f.rmse_before[k]:.4g} -> {shown(s, f.rmse_after[k], 4)}"
                         for s in f.stages for k in [SIGNALS[s][0]])
-    shown = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
+    fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     fitted = {}
     for p in f.effect.parameters:
         value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
@@ -75,7 +75,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         "n_eff": f.fit.n_eff,
         "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
         "study_option": option_text,
-        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {shown}; "
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {fitted_text}; "
                     f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
         "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
         "_options": options,
@@ -92,7 +92,7 @@ def at_bound(value: float, p) -> str | None:
 
 
 def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
-    """What makes a verdict on this log fragile (issue 15, item 4)."""
+    """What makes a verdict on this log fragile."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
     if replay.not_judged:
         out.append(f"the log's columns: {', '.join(map(str, replay.frame.columns))}")
@@ -106,7 +106,7 @@ def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
     asked = replay.commanded_yaw() if "steering" in replay.stages else math.inf
     if asked < 0.05:               # 2 deg of steering at 2 m/s on the paper tractor
         out.append(f"little steering excitation: delta_cmd varies by {math.degrees(float(np.std(replay.cmd))):.2g} deg "
-                   f"(std), asking for {asked:.3g} rad/s of yaw rate; steering and yaw effects need turns and steps "
+                   f"(std), asking for {math.degrees(asked):.3g} deg/s of yaw rate; steering and yaw effects need turns and steps "
                    f"(several degrees on a tractor)")
     moving = replay.speed[replay.speed > replay.min_speed]
     spread = float(np.percentile(moving, 90) - np.percentile(moving, 10)) if len(moving) else 0.0
@@ -122,8 +122,9 @@ def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
             out.append(f"the {SIGNALS[stage][0]} signal is mostly noise: std {spread:.3g} against a noise floor of "
                        f"{floors[stage]:.3g} {SIGNALS[stage][1]}")
         elif base.rmse_test[stage] > 0.9 * spread:
-            out.append(f"the baseline explains almost none of {SIGNALS[stage][0]}: held-out RMS {base.rmse_test[stage]:.3g} "
-                       f"against a signal std of {spread:.3g} {SIGNALS[stage][1]}; check the study and the log's columns")
+            out.append(f"the baseline explains almost none of {SIGNALS[stage][0]}: held-out RMS "
+                       f"{shown(stage, base.rmse_test[stage])} against a signal std of {shown(stage, spread)}; "
+                       f"check the study and the log's columns")
     return out
 
 
@@ -139,7 +140,7 @@ def _unexplained(checks: dict) -> dict | None:
                f"does not carry over to the held-out part ({100 * gain:+.0f}% on its RMS): the misfit is not a "
                f"fixed function of one signal; extend the model by physics or record the conditions it happens in")
     summary = (f"the {worst['stage']} stage stays {worst['ratio']:.1f} x its noise floor after the catalogued effects "
-               f"(excess {worst['excess']:.3g} {worst['unit']}); its residual correlates with {xc['signal']} "
+               f"(excess {shown(worst['stage'], worst['excess'])}); its residual correlates with {xc['signal']} "
                f"(rho {xc['rho']:.2f}); a data-driven {ext['kind']} on {ext['signal']}, fitted on the training part, "
                f"{outcome}")
     return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit],
@@ -252,7 +253,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         touched = {s for f in sel.effects for s in f.stages}
         for s in judged:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
-                                      out / f"{s}.png").name)
+                                      out / f"{s}.png", result["stages"][s]).name)
         files.append(binned_figure(replay, base.values, final.values if effects else None, out / "binned.png").name)
         files.append(floors_figure(result, out / "noise_floors.png").name)
     if effects and None not in [e["study_option"] for e in effects] and options:

@@ -1,4 +1,4 @@
-"""Replaying a log through the baseline model, one subsystem at a time (issue 6, step 1).
+"""Replaying a log through the baseline model, one subsystem at a time.
 
 - steering: delta_cmd -> delta (the closed-loop first-order equivalent, components.models.steering_equivalent);
 - yaw: measured delta and speed -> yaw rate (the study's LPV yaw model);

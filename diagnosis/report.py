@@ -8,15 +8,19 @@ import numpy as np
 
 from orchestrator.results import atomic_write
 
-from .catalogue import SIGNALS
+from .catalogue import DISPLAY, SIGNALS
 from .evidence import cross_correlation, spectrum
 from .unexplained import RATIO
 
-UNIT_SCALE = {"steering": (180 / np.pi, "deg"), "yaw": (1.0, "rad/s"), "position": (100.0, "cm"),
-              "speed": (1.0, "m/s")}
+UNIT_SCALE = DISPLAY          # every number of the report and its plots: angles in degrees, SI otherwise
+UNITS_NOTE = ("Units: angles in deg and angular rates in deg/s, everything else SI (m, m/s, s); the study-file "
+              "lines are in SI as study files take them (rad, rad/s).")
 
 
-def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path) -> Path:
+def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path, levels: dict | None = None) -> Path:
+    """The stage's measured and simulated signal, residual, spectrum and cross-correlation;
+    ``levels`` (the stage's judgement: floor, healthy_level, misfit) draws the RMS levels the verdict
+    compares the residual with."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -31,6 +35,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             ax[0, 0].plot(t, k * r, ".", ms=1, color=color, label=label)
         ax[0, 0].set(title="antenna position residual after per-window alignment", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 0].axvline(replay.t_split, color="k", ls="--", lw=0.8)
+        _draw_levels(ax[0, 0], levels, k, unit, signed=False)
         track = replay.gps
         ax[0, 1].plot(track[:, 0], track[:, 1], lw=0.6, color="k")
         ax[0, 1].set(title="measured GPS track", xlabel="east [m]", ylabel="north [m]", aspect="equal")
@@ -44,7 +49,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             res = (replay.measured(stage) - replay.predicted(stage, v))
             ax[0, 1].plot(t[keep], k * res[keep], lw=0.5, color=color, label=label)
             f, p = spectrum(res[keep], 1 / replay.h)
-            ax[1, 0].semilogy(f, p, color=color, label=label)
+            ax[1, 0].semilogy(f, k ** 2 * p, color=color, label=label)
             x = {"steering": replay.cmd, "speed": replay.speed}.get(stage, replay.delta)
             lags, rho, bound = cross_correlation(res[keep], x[keep], 1 / replay.h)
             ax[1, 1].plot(lags, rho, color=color, label=label)
@@ -52,7 +57,8 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s of the held-out part", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].set(title="residual (measured - simulated)", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].axvline(replay.t_split, color="k", ls="--", lw=0.8)
-        ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel=f"PSD [({SIGNALS[stage][1]})^2/Hz]")
+        _draw_levels(ax[0, 1], levels, k, unit)
+        ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel=f"PSD [({unit})^2/Hz]")
         ax[1, 1].set(title=f"residual x {({'steering': 'delta_cmd', 'speed': 'v'}).get(stage, 'delta')} cross-correlation",
                      xlabel="lag [s]", ylabel="correlation [-]")
     for a in ax.flat:
@@ -66,10 +72,27 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     return path
 
 
+def _draw_levels(ax, levels: dict | None, k: float, unit: str, signed: bool = True) -> None:
+    """The RMS levels the final model's residual is judged by: its noise floor, the healthy level (what a fault-free
+    tractor leaves) and the misfit level (RATIO x floor and a material excess over the healthy
+    level), at +- for a signed residual."""
+    if not levels:
+        return
+    floor, healthy = levels["floor"], levels.get("healthy_level", levels["floor"])
+    for value, style, colour, label in ((floor, ":", "0.5", "noise floor (RMS)"),
+                                        (healthy, "-", "k", "healthy level (RMS)"),
+                                        (levels.get("misfit_level", RATIO * floor), "--", "tab:red",
+                                         "misfit above (RMS)")):
+        for sign in ((-1, 1) if signed else (1,)):
+            ax.axhline(sign * k * value, color=colour, ls=style, lw=1.2,
+                       label=f"{label} {k * value:.3g} {unit}" if sign > 0 else None)
+    ax.legend(fontsize=7, loc="upper right")
+
+
 def markdown(result: dict, plots: list[str]) -> str:
     lines = [f"# Diagnosis of `{result['log']}`", "",
              f"Baseline model: `{result['study']}`. Fit on t < {result['split_time']:.1f} s, "
-             f"measured on the rest (held out).", "",
+             f"measured on the rest (held out). {UNITS_NOTE}", "",
              f"## Verdict: **{result['verdict']}**", ""]
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
@@ -135,17 +158,20 @@ def markdown(result: dict, plots: list[str]) -> str:
                      f"{'; '.join(f['reasons'])} |")
     lines += ["", "## Baseline residuals", ""]
     for stage, ev in result["residuals"].items():
-        lines.append(f"- **{stage}**: RMS {ev['rms_fit']:.4g} (fit) / {ev['rms_test']:.4g} (held out)"
-                     + (f", mean {ev['mean']:.3g}" if "mean" in ev else ""))
+        k, unit = UNIT_SCALE[stage]
+        lines.append(f"- **{stage}** [{unit}]: RMS {k * ev['rms_fit']:.4g} (fit) / {k * ev['rms_test']:.4g} (held out)"
+                     + (f", mean {k * ev['mean']:.3g}" if "mean" in ev else ""))
         for name, xc in ev.get("cross_correlation", {}).items():
             lines.append(f"  - cross-correlation with {name}: peak {xc['peak']:.2f} at lag {xc['lag_s']:.2f} s "
                          f"({'outside' if xc['outside_bound'] else 'inside'} the 95% bound {xc['bound']:.3f})")
         if ev.get("by_speed"):
-            cells = ", ".join(f"{b['from']:.2g}-{b['to']:.2g} m/s: {b['mean']:.3g}±{b['sem']:.1g}" for b in ev["by_speed"])
-            lines.append(f"  - mean by speed: {cells}")
+            cells = ", ".join(f"{b['from']:.2g}-{b['to']:.2g} m/s: {k * b['mean']:.3g}±{k * b['sem']:.1g}"
+                              for b in ev["by_speed"])
+            lines.append(f"  - mean by speed [{unit}]: {cells}")
         if ev.get("by_steering_amplitude_deg"):
-            cells = ", ".join(f"{b['from']:.0f}-{b['to']:.0f} deg: rms {b['rms']:.3g}" for b in ev["by_steering_amplitude_deg"])
-            lines.append(f"  - RMS by |delta_cmd|: {cells}")
+            cells = ", ".join(f"{b['from']:.0f}-{b['to']:.0f} deg: rms {k * b['rms']:.3g}"
+                              for b in ev["by_steering_amplitude_deg"])
+            lines.append(f"  - RMS [{unit}] by |delta_cmd|: {cells}")
     lines += [""] + [f"![{p}]({p})" for p in plots] + [""]
     return "\n".join(lines)
 
@@ -205,20 +231,30 @@ def floors_figure(result: dict, path: Path) -> Path:
     series += [("final model", lambda s, st: st["rms_test"], "tab:green"),
                ("+ data-driven extension", lambda s, st: by_stage[s]["extension"]["rms_after"] if s in by_stage else np.nan,
                 "tab:purple")]
-    fig, ax = plt.subplots(figsize=(10, 4.2))
+    fig, ax = plt.subplots(figsize=(11, 4.6))
     width = 0.8 / len(series)
     for i, (label, get, color) in enumerate(series):
         ratios = [get(s, result["stages"][s]) / result["stages"][s]["floor"] for s in stages]
         ax.bar(np.arange(len(stages)) + (i - (len(series) - 1) / 2) * width, ratios, width, label=label, color=color)
-    ax.axhline(1.0, color="k", lw=1, label="noise floor")
-    ax.axhline(RATIO, color="k", lw=0.8, ls="--", label=f"misfit threshold ({RATIO} x floor)")
+    ax.axhline(1.0, color="0.5", lw=1, label="noise floor")
+    judged = [result["stages"][s] for s in stages]        # each stage's own judgement: healthy and misfit levels
+    xs = np.arange(len(stages))
+    ax.hlines([st.get("healthy_level", st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45, color="k",
+              lw=2.5, label="healthy level (what a fault-free tractor leaves)")
+    ax.hlines([st.get("misfit_level", RATIO * st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45,
+              color="tab:red", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
     ax.set_yscale("log")
-    ax.set_xticks(range(len(stages)), [f"{s}\nfloor {UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"
+    from matplotlib.ticker import StrMethodFormatter
+
+    ax.yaxis.set_major_formatter(StrMethodFormatter("{x:g}")), ax.yaxis.set_minor_formatter(StrMethodFormatter("{x:g}"))
+    ax.set_xticks(range(len(stages)), [f"{s}\nfinal: {'MISFIT' if result['stages'][s]['misfit'] else 'no misfit'}\nfloor "
+                                       f"{UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"
                                        for s in stages])
-    ax.set(ylabel="held-out residual RMS / noise floor [-]", title="What each model leaves, against the noise floor")
-    ax.legend(fontsize=7, ncol=2)
-    ax.grid(alpha=0.3, axis="y")
+    ax.set(ylabel="held-out residual RMS / noise floor [-]",
+           title=f"What each model leaves, against the noise floor (verdict: {result['verdict']})")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(alpha=0.3, axis="y", which="both")
     fig.tight_layout()
-    atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
+    atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png", bbox_inches="tight"))
     plt.close(fig)
     return path

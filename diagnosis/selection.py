@@ -1,4 +1,4 @@
-"""Several effects at once (issue 15, item 1): forward selection with a joint refit, and backward
+"""Several effects at once: forward selection with a joint refit, and backward
 elimination, so that effects that mimic each other are separated by evidence, not by the order
 in which they were tried.
 
@@ -303,7 +303,7 @@ class Selector:
         return best
 
     def absorbed(self, model: Fit, members: list[Effect], trace: list[str]) -> tuple[Fit, list[Effect]]:
-        """Parsimony that favours a named effect (issue 28, item 2). An effect in a stage that
+        """Parsimony that favours a named effect. An effect in a stage that
         stays misfit may only have soaked up part of a misfit it does not explain; it is tested
         against the stage's data-driven extension E (kind and signal chosen with the effect), on
         the held-out part:

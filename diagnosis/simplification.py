@@ -1,4 +1,4 @@
-"""What the baseline's own simplifications leave on a healthy log (issue 28, item 1).
+"""What the baseline's own simplifications leave on a healthy log.
 
 The replay is simpler than the study it comes from: the steering is its first-order equivalent
 (the study's steering component is a PI around a valve with a dead-band and a spool lag, closed
@@ -76,7 +76,7 @@ def healthy_levels(replay, values: dict, floors: dict, seed: int = 0) -> dict:
             share = _quantised_input_share(replay, values, smooth, q * np.round(smooth / q))
             out["yaw"] = math.hypot(floors["yaw"], share)
             out["how"]["yaw"] = (f"the yaw model driven by a smoothed wheel angle and by it quantised to the log's "
-                                 f"{math.degrees(q):.3g} deg steps: {share:.3g} rad/s, with the gyro's white level")
+                                 f"{math.degrees(q):.3g} deg steps: {math.degrees(share):.3g} deg/s, with the gyro's white level")
         return out
     key = ("steering_twin", q, seed)              # the twin depends on the log only: simulated once per replay
     cache = replay.__dict__.setdefault("_cache", {})
@@ -109,7 +109,8 @@ def healthy_levels(replay, values: dict, floors: dict, seed: int = 0) -> dict:
         share = _quantised_input_share(replay, values, true, measured)
         out["yaw"] = math.hypot(floors["yaw"], share)
         out["how"]["yaw"] = (f"the yaw model driven by the twin's measured instead of its true wheel angle: "
-                             f"{share:.3g} rad/s held-out RMS, with the gyro's white level {floors['yaw']:.3g} rad/s")
+                             f"{math.degrees(share):.3g} deg/s held-out RMS, with the gyro's white level "
+                             f"{math.degrees(floors['yaw']):.3g} deg/s")
     return out
 
 

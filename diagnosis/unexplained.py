@@ -1,4 +1,4 @@
-"""What the best catalogued model leaves unexplained (issue 15, item 2).
+"""What the best catalogued model leaves unexplained.
 
 Per stage, the held-out residual of the final model is compared with the stage's noise floor
 (noise_floor.py). A stage is *misfit* when both
@@ -211,7 +211,8 @@ def materiality(stage: str, floors: dict) -> float:
 
 def is_misfit(stage: str, rms_test: float, floors: dict) -> bool:
     """Above the noise floor by RATIO, and above what a healthy tractor leaves (the baseline's
-    simplifications, simplification.healthy_levels) by a material amount."""
+    simplifications, simplification.healthy_levels) by a material amount: above
+    max(RATIO floor, hypot(healthy, materiality)), the ``misfit_level`` of stage_check."""
     floor = floors[stage]
     healthy = floors.get("_healthy", {}).get(stage, floor)
     return floor > 0 and rms_test / floor > RATIO and rms_test ** 2 - healthy ** 2 >= materiality(stage, floors) ** 2
@@ -225,6 +226,7 @@ def stage_check(replay, stage: str, values: dict, floors: dict, rms_fit: float, 
     out = {"stage": stage, "unit": UNITS[stage], "floor": floor, "rms_fit": rms_fit, "rms_test": rms_test,
            "ratio": rms_test / floor if floor > 0 else math.inf, "excess": excess, "materiality": materiality(stage, floors),
            "healthy_level": healthy, "excess_over_healthy": math.sqrt(max(rms_test ** 2 - healthy ** 2, 0.0)),
+           "misfit_level": max(RATIO * floor, math.hypot(healthy, materiality(stage, floors))),
            "healthy_how": floors.get("_healthy", {}).get("how", {}).get(stage, "the noise floor")}
     out["misfit"] = is_misfit(stage, rms_test, floors)
     if not out["misfit"]:

@@ -1,7 +1,13 @@
 """``plan FIELD --out DIR``: a coverage plan of a field (fields.planner) written as one set:
 route.csv (s, x, y, heading, curvature, speed, kind, index), route.geojson (longitude/latitude
 where the field has a geographic reference), plan.json (swaths, turns, distances, estimated time,
-angle and how it was chosen) and plan.png (the field, headland, swaths and turns).
+angle and how it was chosen, the as-applied figures: share of the whole field covered, overlap,
+boundary crossings), plan.png (the field, headland, swaths and turns), as_applied.geojson and
+as_applied.png (the ground worked, with ``--sections N`` by an implement of N sections switched off
+over worked ground and outside the field).
+
+Obstacles (``--obstacles FILE``, ``--obstacle E,N,R``) are cut out of the field before planning
+(fields.obstacles): headland passes go round them, swaths stop short, sections switch off.
 
 The set is written into a new folder beside ``--out`` and swapped into place when all four are
 complete: an interrupted or failed plan leaves ``--out`` as it was (an earlier plan, or nothing).
@@ -20,8 +26,21 @@ from .planner.settings import Settings
 OPTIONS = {"working_width": "--width", "headland_passes": "--headland-passes", "driving_angle": "--angle",
            "guidance_line": "--guidance-line", "angle_objective": "--angle-objective", "turn_radius": "--turn-radius",
            "work_speed": "--work-speed", "turn_speed": "--turn-speed", "order": "--order",
-           "hitch_offset": "--hitch-offset", "drawbar": "--drawbar", "settle": "--settle", "max_swaths": "--max-swaths"}
-FILES = ("route.csv", "route.geojson", "plan.json", "plan.png")
+           "hitch_offset": "--hitch-offset", "drawbar": "--drawbar", "settle": "--settle", "max_swaths": "--max-swaths",
+           "headland_order": "--headland", "headland_corners": "--headland-corners", "route_seconds": "--route-seconds",
+           "start_point": "--start", "end_point": "--end", "overlap": "--overlap"}
+FILES = ("route.csv", "route.geojson", "plan.json", "plan.png", "as_applied.geojson", "as_applied.png")
+
+
+def point(text: str) -> tuple[float, float]:
+    """``E,N`` metres east and north of the field's origin (argparse type)."""
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected east,north in metres (e.g. 10,-25.5), got {text!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
+    return x, y
 
 
 def finite(text: str) -> float:
@@ -54,7 +73,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--turn-radius", type=finite, default=d.turn_radius, help=f"m ({d.turn_radius:g})")
     p.add_argument("--work-speed", type=finite, default=d.work_speed, help=f"m/s ({d.work_speed:g})")
     p.add_argument("--turn-speed", type=finite, default=d.turn_speed, help=f"m/s ({d.turn_speed:g})")
-    p.add_argument("--order", default=d.order, choices=("auto", "boustrophedon", "skip"))
+    p.add_argument("--order", default=d.order, choices=("auto", "boustrophedon", "skip", "optimised"),
+                   help="the swaths' order; optimised: the least non-working distance (OR-tools routing)")
+    p.add_argument("--route-seconds", type=finite, default=d.route_seconds, help="--order optimised: seconds of "
+                   "guided local search (0: a greedy descent of at most 200 improving moves, the same on every machine)")
+    p.add_argument("--start", type=point, default=None, metavar="E,N", help="the route starts here [m east, north of "
+                   "the field's origin]")
+    p.add_argument("--end", type=point, default=None, metavar="E,N", help="and ends here")
+    p.add_argument("--headland", dest="headland_order", default=d.headland_order, choices=("first", "last"),
+                   help=f"drive the headland passes before or after the swaths ({d.headland_order})")
+    p.add_argument("--headland-corners", default=d.headland_corners, choices=("tight", "parallel"),
+                   help=f"tight: every pass rounds its corners at the turn radius; parallel: each outer pass a "
+                        f"working width wider ({d.headland_corners})")
+    p.add_argument("--overlap", type=finite, default=d.overlap, help=f"m between adjacent passes ({d.overlap:g})")
+    p.add_argument("--sections", type=int, default=0, help="the implement's sections, switched off over worked "
+                   "ground and outside the field, for the as-applied map (0: no section control)")
+    p.add_argument("--obstacles", type=Path, default=None, metavar="FILE", help="GeoJSON of obstacles: Points with a "
+                   "'radius' [m] property, Polygons (lon/lat when the field has a geographic reference, else local m)")
+    p.add_argument("--obstacle", action="append", default=[], metavar="E,N,R", help="a round obstacle: metres east, "
+                   "north of the field's origin and its radius (repeatable)")
     p.add_argument("--hitch-offset", type=finite, default=d.hitch_offset,
                    help=f"m behind the rear axle ({d.hitch_offset:g})")
     p.add_argument("--drawbar", type=finite, default=d.drawbar,
@@ -92,8 +129,12 @@ def run(args: argparse.Namespace) -> int:
     from orchestrator.results import write_json
 
     from .field import FieldError
+    from .obstacles import parse_point, read_obstacles, with_obstacles
     from .planner import plan
-    from .planner.export import draw_plan, write_route_csv, write_route_geojson
+    from .planner.applied import as_applied, summary as applied_summary
+    from .planner.export import (draw_applied, draw_plan, write_applied_geojson, write_route_csv,
+                                 write_route_geojson)
+    from .planner.sections import check_sections
 
     check_output(args.out, overwrite=True)
     check_out(args.out)
@@ -104,19 +145,30 @@ def run(args: argparse.Namespace) -> int:
                         angle_objective=args.angle_objective, turn_radius=args.turn_radius, work_speed=args.work_speed,
                         turn_speed=args.turn_speed, order=args.order, hitch_offset=args.hitch_offset,
                         drawbar=args.drawbar, settle=args.settle, max_swaths=args.max_swaths,
-                        guidance_line=args.guidance_line)
+                        guidance_line=args.guidance_line, headland_order=args.headland_order,
+                        headland_corners=args.headland_corners, route_seconds=args.route_seconds,
+                        start_point=args.start, end_point=args.end, overlap=args.overlap)
     settings.check("plan", OPTIONS)
+    sections = check_sections(args.sections, settings.working_width, "plan: --sections") if args.sections else 0
     field, skipped = read_field(args)
     for why in skipped:
         print(f"not read: {why}")
+    obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
+    if args.obstacles is not None:
+        obstacles += read_obstacles(args.obstacles, field)
+    field = with_obstacles(field, obstacles)
     p = plan(field, settings)
-    summary = p.summary() | {"not_read": skipped}
+    applied = as_applied(p, sections)
+    summary = p.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in obstacles],
+                             "as_applied": applied_summary(p, applied, sections)}
     with ResultFolder(args.out, overwrite=True) as folder:
         rows = write_route_csv(p, folder.tmp / "route.csv", args.route_step, args.route_uniform)
         write_route_geojson(p, folder.tmp / "route.geojson", args.route_step, args.route_uniform)
         write_json(folder.tmp / "plan.json", summary | {"route_rows": rows, "route_step_m": args.route_step,
                                                         "route_uniform": args.route_uniform})
         draw_plan(p, folder.tmp / "plan.png")
+        write_applied_geojson(p, applied, folder.tmp / "as_applied.geojson")
+        draw_applied(p, applied, sections, folder.tmp / "as_applied.png")
         folder.commit("completed")
     print(f"field {field.name!r} ({field.area_ha:.2f} ha, workable {summary['workable_ha']:.2f} ha) from {args.field}")
     print(f"  driving angle {summary['driving_angle_deg']:.1f} deg ({summary['driving_angle_how']}); order "
@@ -124,9 +176,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"  {summary['swaths']} swaths, {summary['turns']} turns; {summary['distance_m'] / 1000:.2f} km in all, "
           f"{summary['working_distance_m'] / 1000:.2f} km working, {summary['turn_distance_m'] / 1000:.2f} km turning; "
           f"about {summary['estimated_time_s'] / 3600:.2f} h")
+    a = summary["as_applied"]
+    print(f"  as applied ({f'{sections} sections' if sections else 'no section control'}): "
+          f"{100 * a['field_coverage_share']:.2f} % of the whole field, {100 * a['coverage_share']:.2f} % of its "
+          f"workable part, overlap {100 * a['overlap_share']:.2f} %, {a['boundary_crossings']} boundary crossing(s)")
     for note in summary["notes"]:
         print(f"  note: {note}")
-    print(f"written as one set: {args.out}/route.csv ({rows} rows), route.geojson, plan.json, plan.png")
+    print(f"written as one set: {args.out}/route.csv ({rows} rows), " + ", ".join(FILES[1:]))
     return 0
 
 

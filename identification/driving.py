@@ -229,6 +229,10 @@ class YawModel:
 
         lag = per_row("lag")
         a = np.where(lag > 1e-6, np.exp(-h / np.maximum(lag, 1e-6)), 0.0)
+        # the lag's exact step for an input linear between samples (first-order hold):
+        # d+ = a d + (1 - a) w_j + c (w_j+1 - w_j), c = 1 - (T/h)(1 - a): c -> 1 as T -> 0 (no lag,
+        # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
+        c = 1.0 - lag / h * (1.0 - a)
         Fzf, Fzr = self.loads
         Cf, Cr = per_row("c_f") * Fzf, per_row("c_r") * Fzr
         mu = per_row("friction")
@@ -248,7 +252,7 @@ class YawModel:
             out[:, j] = z[:, 1]
             if j == L - 1:
                 break
-            d_next = a * d + (1.0 - a) * 0.5 * (w[:, j] + w[:, j + 1])
+            d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
             for k in range(self.n_sub):
                 s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
                 v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])

@@ -16,7 +16,7 @@ def _read(source: Path, resample: bool, recording, study):
     import pandas as pd
 
     from measurements import LogError, load_log
-    from measurements.log import check_log
+    from measurements.log import DEGREE_SUSPECT, check_log, yaw_rate_in_radians
     from measurements.recording import ImportOptions, is_recording
 
 
@@ -40,6 +40,12 @@ def _read(source: Path, resample: bool, recording, study):
                 raise LogError(f"{source}: column {c!r} has {int(bad.sum())} NaN or infinite values (first at row "
                                f"{int(np.argmax(bad))}, t = {t[int(np.argmax(bad))]:.4g} s)")
     peaks = frame.abs().max().to_frame().T
+    # a fast yaw rate is judged on the motion of the longest stretch (measurements.log.yaw_rate_in_radians)
+    fast = "yaw_rate" in frame and len(frame) > 10 and float(peaks["yaw_rate"].iloc[0]) > DEGREE_SUSPECT["yaw_rate"][0]
+    why = yaw_rate_in_radians(longest_stretch(frame)[0]) if fast else None
+    if why:
+        even, peaks = even.drop(columns="yaw_rate"), peaks.drop(columns="yaw_rate")
+        frame.attrs.setdefault("notes", []).append(f"column 'yaw_rate' read as rad/s: {why}")
     check_log(pd.concat([even, peaks.assign(t=0.03)], ignore_index=True), str(source), ("t",))
     return frame, None
 

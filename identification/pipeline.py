@@ -239,4 +239,7 @@ def summary(report: dict) -> str:
                      f"C_r {best['C_r']:.0f} N/rad, sigma_f {best['sigma_f']:.4f} m, sigma_r {best['sigma_r']:.4f} m"
                      f"; paper: 8000+-500, 90000+-7000, 0.1942, 1.6657"
                      + ("; several solutions fit about equally" if phys["several_fit_equally"] else ""))
-    return "\n".join(lines)
+    from .plots import root_notes
+
+    notes = root_notes(report)
+    return "\n".join(lines + ([""] + notes if notes else []))

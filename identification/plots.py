@@ -7,6 +7,63 @@ from pathlib import Path
 import numpy as np
 
 
+# Poles and zeros beyond this multiple of the top measured angular frequency are not seen by the
+# data (a fit can put them anywhere out there): off the figure's scale, listed instead.
+OFF_SCALE = 4.0
+
+
+def root_points(roots: dict) -> list[tuple[float, str, str, complex]]:
+    """{speed: {model: (poles, zeros)}} -> [(speed, model, 'pole'|'zero', value)], finite values only."""
+    return [(float(v), name, kind, complex(p)) for v, models in sorted(roots.items()) for name, pz in models.items()
+            for kind, values in zip(("pole", "zero"), pz) for p in np.atleast_1d(values) if np.isfinite(p)]
+
+
+def off_scale(points: list, w_top: float) -> list:
+    """The points beyond OFF_SCALE x ``w_top`` [rad/s]."""
+    return [q for q in points if abs(q[3]) > OFF_SCALE * w_top]
+
+
+def physical_scale(points: list, w_top: float) -> float:
+    """Half-width of the s-plane window [rad/s]: the on-scale roots with a margin."""
+    near = [max(abs(q[3].real), abs(q[3].imag)) for q in points if q not in off_scale(points, w_top)]
+    return 1.15 * max(near + [1.0])
+
+
+def _root_text(q) -> str:
+    v, name, kind, p = q
+    value = f"{p.real:+.3g}" + (f" {p.imag:+.3g}j" if abs(p.imag) > 1e-9 else "")
+    return f"{kind} {value} rad/s at {v:g} m/s" + (" (RHP)" if kind == "zero" and p.real > 0 else "")
+
+
+def root_notes(report: dict) -> list[str]:
+    """The printed lines: roots off the plot's scale, and right-half-plane zeros, per model."""
+    roots = {float(v): {n: tuple(np.array([complex(*z) for z in m[k]]) for k in ("poles", "zeros"))
+                        for n, m in s["models"].items()} for v, s in report["speeds"].items()}
+    w_top = 2 * np.pi * max(max(s["frf"]["freq_hz"]) for s in report["speeds"].values())
+    points = root_points(roots)
+    far = off_scale(points, w_top)
+    rhp = [q for q in points if q[2] == "zero" and q[3].real > 0]
+    lines = []
+    if far:
+        lines.append(f"poles and zeros off the scale of poles_zeros.png (|s| > {OFF_SCALE * w_top:.0f} rad/s, "
+                     f"{OFF_SCALE:g} x the top measured frequency: beyond what the data sees):")
+        lines += [f"  {q[1]}: {_root_text(q)}" for q in far]
+    if rhp:
+        lines.append("right-half-plane zeros (non-minimum phase; " + (
+            "all beyond the measured band" if all(abs(q[3]) > w_top for q in rhp) else "inside the measured band")
+            + "):")
+        lines += [f"  {q[1]}: {_root_text(q)}" for q in rhp]
+    return lines
+
+
+def _db_limits(values: np.ndarray) -> tuple[float, float]:
+    """A magnitude axis around the data: at least 6 dB tall, 15 % margins."""
+    lo, hi = float(np.min(values)), float(np.max(values))
+    span = max(hi - lo, 6.0)
+    mid = 0.5 * (lo + hi)
+    return mid - 0.65 * span, mid + 0.65 * span
+
+
 def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     import matplotlib
 
@@ -17,22 +74,30 @@ def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     written = []
     main = analyses[main_speed]
     r = main["frf"]
-    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
+    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 8), gridspec_kw={"height_ratios": [3, 2, 2]})
     db = lambda x: 20 * np.log10(np.abs(x))  # noqa: E731
-    a1.semilogx(r.freq, db(r.G), "k.", label="measured FRF")
-    floor = float(np.min(db(r.G))) - 60.0          # variances far below the FRF carry no information
-    for var, style, label in ((r.var_noise, "c-", "noise variance"), (r.var_nl, "m-", "nonlinear variance")):
-        level = 10 * np.log10(np.maximum(var, 1e-300))
-        a1.semilogx(r.freq, np.where(level > floor, level, np.nan), style, lw=0.8, label=label)
-    a1.set_ylim(bottom=floor)
     f = np.logspace(np.log10(r.freq.min()), np.log10(r.freq.max()), 300)
-    for name, fit in main["fits"].items():
-        g = fit.response(f)
-        a1.semilogx(f, db(g), label=name)
-        a2.semilogx(f, np.degrees(np.unwrap(np.angle(g))), label=name)
+    a1.semilogx(r.freq, db(r.G), "k.", label="measured FRF")
     a2.semilogx(r.freq, np.degrees(np.unwrap(np.angle(r.G))), "k.")
-    a1.set_ylabel("|G| [dB]"), a2.set_ylabel("phase [deg]"), a2.set_xlabel("frequency [Hz]")
-    a1.legend(fontsize=7), a1.grid(alpha=0.3), a2.grid(alpha=0.3)
+    for (name, fit), ls in zip(main["fits"].items(), ("-", "--", "-.", ":", (0, (5, 1)))):
+        g = fit.response(f)
+        a1.semilogx(f, db(g), ls=ls, label=name)
+        a2.semilogx(f, np.degrees(np.unwrap(np.angle(g))), ls=ls, label=name)
+    a1.set_ylim(*_db_limits(db(r.G)))           # the FRF's own range (the fits follow it)
+    a3.semilogx(r.freq, db(r.G), "k.", ms=3, label="|G| (for scale)")
+    levels = [db(r.G)]
+    for var, style, label in ((r.var_noise, "c.-", "noise variance of G"),
+                              (r.var_nl, "m.", "nonlinear variance of G (where above 0)")):
+        level = 10 * np.log10(np.where(var > 0, var, np.nan))
+        a3.semilogx(r.freq, level, style, lw=0.8, ms=4, label=label)
+        levels.append(level[np.isfinite(level)])
+    top = float(np.max(db(r.G))) + 5.0
+    a3.set_ylim(max(float(np.min(np.concatenate(levels))) - 5.0, top - 80.0), top)
+    a1.set_ylabel("|G| [dB]"), a2.set_ylabel("phase [deg]"), a3.set_ylabel("[dB]"), a3.set_xlabel("frequency [Hz]")
+    a3.set_title("uncertainty of the measured FRF (variances in dB, 10 log10)", fontsize=9)
+    for a in (a1, a2, a3):
+        a.grid(alpha=0.3, which="both")
+    a1.legend(fontsize=7, ncol=2), a3.legend(fontsize=7)
     a1.set_title(f"Steering angle to yaw rate at {main_speed:g} m/s")
     fig.tight_layout()
     written.append(_save(fig, out_dir / "frf.png", plt))
@@ -49,30 +114,40 @@ def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     written.append(_save(fig, out_dir / "nonlinear_distortion.png", plt))
 
     names = list(main["fits"])
-    fig, axes = plt.subplots(1, len(names), figsize=(3.6 * len(names), 3.8), squeeze=False)
+    roots = {v: {n: (f.poles, f.zeros) for n, f in a["fits"].items()} for v, a in analyses.items()}
+    w_top = 2 * np.pi * max(float(np.max(a["frf"].freq)) for a in analyses.values())
+    fig, axes = plt.subplots(1, len(names), figsize=(3.8 * len(names), 5.2), squeeze=False)
     colours = plt.get_cmap("tab10")
+    speeds = sorted(analyses)
     for ax, name in zip(axes[0], names):
-        points = [(v, complex(p), kind) for v, a in sorted(analyses.items())
-                  for kind, values in (("pole", a["fits"][name].poles), ("zero", a["fits"][name].zeros))
-                  for p in np.atleast_1d(values) if np.isfinite(p)]
-        near = [abs(p.real) for _, p, _ in points if abs(p) < 200.0] + [abs(p.imag) for _, p, _ in points]
-        lim = 1.15 * max(near + [5.0])
-        speeds = sorted(analyses)
-        for v, p, kind in points:
+        points = [q for q in root_points(roots) if q[1] == name]
+        far = off_scale(points, w_top)
+        lim = physical_scale(points, w_top)
+        for v, _, kind, p in points:
             colour = colours(speeds.index(v))
-            x = min(max(p.real, -lim), lim)
-            marker = ("x" if kind == "pole" else "o") if x == p.real else ("<" if p.real < 0 else ">")
-            ax.plot(x, p.imag, marker, mfc="none" if kind == "zero" else colour, color=colour, ms=6)
-            if x != p.real:         # off scale: drawn at the edge, its value written
-                ax.annotate(f"{kind} {p.real:.3g}", (x, p.imag), fontsize=6, xytext=(0, 6), textcoords="offset points",
-                            ha="right" if p.real > 0 else "left")
+            if (v, name, kind, p) in far:            # off scale: an arrow at the edge, listed below
+                x = float(np.clip(p.real, -lim, lim))
+                y = float(np.clip(p.imag, -lim, lim))
+                ax.plot(x, y, "<" if p.real < 0 else ">", color=colour, ms=7, mfc="none" if kind == "zero" else colour)
+                continue
+            ax.plot(p.real, p.imag, "x" if kind == "pole" else "o", mfc="none" if kind == "zero" else colour,
+                    color=colour, ms=7, mew=1.5)
+            if kind == "zero" and p.real > 0:
+                ax.annotate("RHP zero", (p.real, p.imag), fontsize=7, xytext=(0, 6), textcoords="offset points",
+                            ha="center")
         for i, v in enumerate(speeds):
             ax.plot([], [], "s", color=colours(i), label=f"{v:g} m/s")
-        ax.set_xlim(-lim, lim)
-        ax.axvline(0, color="k", lw=0.5), ax.grid(alpha=0.3), ax.set_title(f"{name}: x poles, o zeros", fontsize=9)
+        ax.set_xlim(-lim, lim), ax.set_ylim(-lim, lim), ax.set_aspect("equal", adjustable="box")
+        ax.axvline(0, color="k", lw=0.5), ax.axhline(0, color="k", lw=0.3)
+        ax.grid(alpha=0.3), ax.set_title(f"{name}: x poles, o zeros", fontsize=9)
         ax.set_xlabel("real part [rad/s]"), ax.set_ylabel("imaginary part [rad/s]")
-        ax.legend(fontsize=7)
-    fig.tight_layout()
+        ax.legend(fontsize=7, loc="upper left")
+        text = [f"off scale (|s| > {OFF_SCALE * w_top:.0f} rad/s), at the edge:"] + [_root_text(q) for q in far] \
+            if far else ["all poles and zeros on scale"]
+        ax.text(0.0, -0.18, "\n".join(text), transform=ax.transAxes, fontsize=7, va="top", ha="left")
+    fig.suptitle(f"Poles and zeros at the physical scale (up to {OFF_SCALE:g} x the top measured frequency, "
+                 f"{w_top / (2 * np.pi):.2g} Hz); RHP: right half-plane (non-minimum phase)", fontsize=9)
+    fig.tight_layout(rect=(0, 0.1, 1, 1))        # room below for the off-scale lists
     written.append(_save(fig, out_dir / "poles_zeros.png", plt))
     return written
 

@@ -103,7 +103,10 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
     for c, (bound, unit) in DEGREE_SUSPECT.items():
         if c in checked:
             peak = robust_peak(frame[c].to_numpy(float))
-            if peak > bound:
+            if peak > bound and c == "yaw_rate" and (why := yaw_rate_in_radians(frame)):
+                frame.attrs.setdefault("notes", []).append(
+                    f"column 'yaw_rate' reaches {peak:.3g} rad/s, more than {bound} rad/s, and is read as rad/s: {why}")
+            elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
                                f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
                                f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}; a raw recording: declare the "
@@ -186,14 +189,14 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
         _check_yaw_rate_unit(frame, where, h, k, d)
 
 
-def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:
+def _track_turn_ratio(frame: pd.DataFrame, h: float, k: int, d: np.ndarray) -> float | None:
     """Heading change over 2 s, integrated yaw rate against the GPS course (1 s chords) while
-    moving: the regression slope is 1 in rad/s and 57 in deg/s (small yaw rates give it away too)."""
+    moving: the regression slope, 1 in rad/s and 57 in deg/s (None: too little moving)."""
     from scipy.integrate import cumulative_trapezoid
 
     L = max(1, int(round(2.0 / h)))
     if len(d) <= L + 100:
-        return
+        return None
     course = np.arctan2(d[:, 1], d[:, 0])
     psi = cumulative_trapezoid(frame["yaw_rate"].to_numpy(float), dx=h, initial=0.0)[k:-k]
     fast = (frame["v"].to_numpy(float) > 0.3)[k:-k]
@@ -201,10 +204,48 @@ def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: n
     dp = psi[L:] - psi[:-L]
     ok = fast[L:] & fast[:-L]
     if ok.sum() > 100 and dc[ok] @ dc[ok] > 0:
-        slope = float(dc[ok] @ dp[ok] / (dc[ok] @ dc[ok]))
-        if slope > 20:
-            raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
-                           f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
+        return float(dc[ok] @ dp[ok] / (dc[ok] @ dc[ok]))
+    return None
+
+
+# A yaw rate above DEGREE_SUSPECT's bound is still rad/s when the vehicle's motion says so: at
+# |v| > MOVING m/s a ground vehicle turns no tighter than MAX_CURVATURE (a 0.4 m radius) and
+# no harder than MAX_LATERAL (2 g, beyond any tyre); deg/s would be 57 times either.
+MOVING, MAX_CURVATURE, MAX_LATERAL = 0.5, 2.5, 19.6
+
+
+def yaw_rate_in_radians(frame: pd.DataFrame) -> str | None:
+    """The evidence that a fast yaw_rate column is in rad/s, or None: integrated, it turns as the
+    track (x, y) turns; else, with the speed v, its curvature |r|/|v| and lateral acceleration
+    |v r| stay physical while moving."""
+    if not {"t", "v", "yaw_rate"} <= set(frame.columns) or len(frame) < 10:
+        return None
+    t = frame["t"].to_numpy(float)
+    h = float(np.median(np.diff(t)))
+    if {"x", "y"} <= set(frame.columns):
+        k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+        slope = _track_turn_ratio(frame, h, k, d) if len(d) else None
+        if slope is not None and 0.5 < slope < 2.0:
+            return f"integrated, it turns {slope:.2f} times as fast as the track (x, y)"
+        if slope is not None and slope > 20:
+            return None
+    v, r = frame["v"].to_numpy(float), frame["yaw_rate"].to_numpy(float)
+    moving = np.abs(v) > MOVING
+    if moving.sum() < 100:
+        return None
+    curvature, lateral = robust_peak(r[moving] / v[moving]), robust_peak(r[moving] * v[moving])
+    if curvature <= MAX_CURVATURE and lateral <= MAX_LATERAL:
+        return (f"while moving (|v| > {MOVING} m/s) it turns no tighter than {1 / curvature:.2g} m radius and "
+                f"|v yaw_rate| reaches {lateral:.3g} m/s2 (in deg/s it would be 57 times that)")
+    return None
+
+
+def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:
+    """The track's evidence (_track_turn_ratio): a slope above 20 is deg/s."""
+    slope = _track_turn_ratio(frame, h, k, d)
+    if slope is not None and slope > 20:
+        raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
+                       f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
 
 
 def resolution(x: np.ndarray, min_repeat: float = 2.0) -> float:

@@ -387,8 +387,10 @@ def _parameter_unit(study: Study, name: str) -> str:
 
 
 def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
-    """Each metric against the first swept parameter (one line per other value / seed), and
-    the sweep analysis module's own plots (``sweep.analysis``)."""
+    """The metrics that matter against the first swept parameter (one line per other value / seed),
+    and the sweep analysis module's own plots (``sweep.analysis``). The study's analysis module
+    chooses them: ``SWEEP_METRICS`` {metric: bound drawn as a line, or None}; without it, every
+    metric but counters and wall time (all stay in results.parquet)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -402,15 +404,17 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     x = params[0]
     scatter = study.sweep.mode == "monte_carlo"          # one cloud: each sample is its own point
     group_cols = [] if scatter else params[1:] + (["seed"] if ok["seed"].nunique() > 1 else [])
-    skip = set(params) | {"point", "seed", "status", "error", "sim_time_s"}
+    skip = set(params) | {"point", "seed", "status", "error", "sim_time_s", "wall_time_s"}
+    analysis = importlib.import_module(study.study.analysis) if study.study.analysis else None
+    metric_units = dict(getattr(analysis, "METRIC_UNITS", {}))
+    metric_units.update(sim_time_s="s", wall_time_s="s")
+    chosen = getattr(analysis, "SWEEP_METRICS", None)
     metrics = [c for c in ok.columns if c not in skip and pd.api.types.is_numeric_dtype(ok[c])]
+    metrics = [m for m in chosen if m in metrics] if chosen else [m for m in metrics if metric_units.get(m) != "count"]
     cols = 3
     rows = -(-len(metrics) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 2.8 * rows), squeeze=False)
     groups = ok.groupby(group_cols) if group_cols else [((), ok)]
-    metric_units = dict(getattr(importlib.import_module(study.study.analysis), "METRIC_UNITS", {})) \
-        if study.study.analysis else {}
-    metric_units.update(sim_time_s="s", wall_time_s="s")
     x_unit = _parameter_unit(study, x)
     for ax, metric in zip(axes.flat, metrics):
         for label, g in groups:
@@ -418,6 +422,11 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
             text = ", ".join(map(str, label if isinstance(label, tuple) else (label,)))
             ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=text if group_cols else None)
         unit = metric_units.get(metric)
+        bound = (chosen or {}).get(metric)
+        if bound is not None:
+            shown = "" if unit in (None, "1", "count") else f" {unit}"
+            ax.axhline(bound, color="tab:red", ls="--", lw=1.2, label=f"bound {bound:g}{shown}")
+            ax.legend(fontsize=7)
         ax.set_xlabel(f"{x} [{x_unit}]" if x_unit else x), ax.set_title(metric, fontsize=9), ax.grid(alpha=0.3)
         ax.set_ylabel(f"[{unit}]" if unit else "[-]")
     if group_cols and metrics:

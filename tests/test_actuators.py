@@ -185,7 +185,7 @@ def test_drivetrain_shortcut_for_a_still_pedal_equals_the_substep_equations():
     assert {0.0, 1.0} <= stops
 
 
-# --- diagnosis-catalogue extensions (issue 6) -----------------------------------------------
+# --- diagnosis-catalogue extensions -----------------------------------------------
 
 def test_command_delay_shifts_the_step_response_by_the_delay():
     base = run_steering(10 * DEG, 1.5, dt=0.01)[:, 0]

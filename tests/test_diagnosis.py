@@ -1,4 +1,4 @@
-"""Issue 6: the diagnosis names an effect hidden in logs it has never seen.
+"""The diagnosis names an effect hidden in logs it has never seen.
 
 The logs come from measurements/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
 own steering loop with an unmodelled spool lag, parameters drawn around the paper's, its own

@@ -1,4 +1,4 @@
-"""Issue 15: several causes at once, causes outside the catalogue, honest verdicts.
+"""Several causes at once, causes outside the catalogue, honest verdicts.
 
 The logs come from measurements/truth_tractor.py (independent of the replay); the hidden effects
 and their sizes are drawn there. Tuning used seeds 1-3. Seed 7001 was the first reserved seed: its

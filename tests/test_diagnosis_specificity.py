@@ -1,4 +1,4 @@
-"""Issue 28: verdicts a user can trust. No false alarm on a healthy tractor that differs from the
+"""Verdicts a user can trust. No false alarm on a healthy tractor that differs from the
 baseline the way real ones do (the paper's servo steering on a 1-deg potentiometer, relaxation
 lengths, sensor noise, one speed, field driving), detection kept, a named effect kept against a
 free map, and the healthy level the misfit is judged against.

@@ -1,4 +1,4 @@
-"""Raw field recordings in (issue 17): NMEA files and CAN logs -> the measured log, clocks,
+"""Raw field recordings in: NMEA files and CAN logs -> the measured log, clocks,
 gaps and runs, the round trip run --record -> import -> diagnose, and ISO 11783-7 guidance."""
 from __future__ import annotations
 
@@ -388,7 +388,7 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
 
 
 def test_a_steering_offset_in_a_recording_is_named_with_its_value(tmp_path):
-    """Issue 28, item 2: a 0.03 rad (1.7 deg) wheel-angle offset on the project's own plant, through
+    """A 0.03 rad (1.7 deg) wheel-angle offset on the project's own plant, through
     the recording path, is named with its value: a free input map that could also carry an offset
     does not displace the named effect. A clean recording of the same drive names no steering
     effect and leaves no stage misfit (its GPS is one 50 ms sample older than the gyro and the wheel

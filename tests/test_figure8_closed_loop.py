@@ -84,7 +84,7 @@ def test_adding_a_component_takes_a_module_and_a_few_study_lines(tmp_path):
 
 
 def test_the_path_error_compares_the_cg_with_the_reference_at_the_same_instant(cli_run):
-    """Issue 28, item 3: the reference is computed at 20 Hz and held in the 100 Hz table; the
+    """The reference is computed at 20 Hz and held in the 100 Hz table; the
     metrics take it at the plant's instants. Checked against the reference's own path evaluated at
     every instant (a second method: Figure8Reference.progress and the path's pose)."""
     from analysis.figure8 import metrics, settled_index

@@ -1,4 +1,4 @@
-"""Issue 16, item 5: fuzzed study files and measured logs give named errors only (hypothesis)."""
+"""Fuzzed study files and measured logs give named errors only (hypothesis)."""
 from __future__ import annotations
 
 import math

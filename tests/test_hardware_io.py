@@ -1,4 +1,4 @@
-"""Issue 7: hardware I/O adapters (NMEA GPS, CAN actuators), the watchdog, real-time pacing and
+"""Hardware I/O adapters (NMEA GPS, CAN actuators), the watchdog, real-time pacing and
 the emulated tractor as a hardware peer in another process."""
 from __future__ import annotations
 

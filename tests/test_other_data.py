@@ -1,4 +1,4 @@
-"""Issue 26: other people's data. Every file of the real sets (copies in tests/data) through the new readers (real
+"""Other people's data. Every file of the real sets (copies in tests/data) through the new readers (real
 receivers' NMEA, an ISO 11783-10 TaskData with 21 binary time logs, partfields, Fields2Cover's
 fields, a test field in a Japanese plane-rectangular CRS), ROS bags written here from real NMEA
 positions, AgOpenGPS field folders written from real fields, partial recordings, and a vehicle

@@ -1,4 +1,4 @@
-"""Issue 26, items 5 and 6: partial recordings judged stage by stage (a car's CAN log alone with
+"""Partial recordings judged stage by stage (a car's CAN log alone with
 its maker's DBC, IMU + GNSS without steering, float32 positions), and a vehicle other than the
 tractor (studies/passenger_car.toml) at highway speeds for diagnosis and identification."""
 from __future__ import annotations

@@ -295,7 +295,8 @@ def test_plan_writes_its_files_as_one_set_and_an_interrupted_plan_keeps_the_earl
     common = ["--width", "6", "--max-swaths", "2", "--out", str(out)]
     assert main(["plan", str(source), "--name", "east", *common]) == 0
     before = {f.name: f.read_bytes() for f in out.iterdir()}
-    assert sorted(before) == ["plan.json", "plan.png", "route.csv", "route.geojson"]
+    assert sorted(before) == ["as_applied.geojson", "as_applied.png", "plan.json", "plan.png", "route.csv",
+                              "route.geojson"]
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt

@@ -1,4 +1,4 @@
-"""Issue 16: runs that lose nothing when interrupted or misused (real processes, real signals)."""
+"""Runs that lose nothing when interrupted or misused (real processes, real signals)."""
 from __future__ import annotations
 
 import json
@@ -304,7 +304,7 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["margins", "studies/figure8.toml", "--set", "x=1"], 2, ["'x=1'"]),
     (["emulate", "studies/tractor_emulator.toml", "--nmea-port", "70000"], 2, ["--nmea-port"]),
     (["run", "studies/figure8.toml", "--out", "{tmp}/o", "--set", "study.base_step=0.003"], 2, ["step"]),
-    # issue 28: an --out whose parent cannot be created; a study's edit of connections it does not have
+    # an --out whose parent cannot be created; a study's edit of connections it does not have
     (["run", "studies/figure8.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
     (["sweep", "studies/speed_sweep.toml", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),
     (["diagnose", "{tmp}/degrees.csv", "--out", "/proc/x/y"], 2, ["--out /proc/x/y", "cannot create"]),

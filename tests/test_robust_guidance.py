@@ -1,4 +1,4 @@
-"""Issue 19 (part): the figure-8 loop survives actuator and computation delay, every yaw model and
+"""The figure-8 loop survives actuator and computation delay, every yaw model and
 the speed range, with quiet steering; the paper's original tracker law does not (the contrast shows
 what the look-ahead buys). Bounds are the paper's: 0.40 m on straights, 0.60 m on curves."""
 from __future__ import annotations
@@ -164,7 +164,7 @@ def test_quantization_guard_takes_only_0_or_1():
 @pytest.mark.parametrize("overrides", [(), ("steering.command_delay=0.1",), ("reference.speed=2.5",)],
                          ids=lambda o: " ".join(o) or "nominal")
 def test_the_rlfr_tractor_steers_quietly_with_the_notch(overrides):
-    """Issue 28, item 4: on RLFR's lightly damped 10 rad/s mode the MPC fed the raw yaw rate sets
+    """On RLFR's lightly damped 10 rad/s mode the MPC fed the raw yaw rate sets
     up a limit cycle (about 47 deg/s RMS of steering); studies/figure8_rlfr.toml notches the mode
     out of the yaw rate the MPC sees: <= 15 deg/s within the paper's bounds."""
     m = run_study(Study.load(ROOT / "studies" / "figure8_rlfr.toml", overrides), None, plots=False).metrics

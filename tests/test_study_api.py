@@ -1,4 +1,4 @@
-"""Issue 14: one Study API for every variant, composite subsystems, an orchestrator that is a
+"""One Study API for every variant, composite subsystems, an orchestrator that is a
 library. Composites are checked against the same system wired flat (a second method)."""
 from __future__ import annotations
 

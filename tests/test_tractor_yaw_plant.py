@@ -235,7 +235,7 @@ def test_at_rest_the_tractor_does_not_turn():
     assert plant.y["heading"] == 0.0 and plant.y["x_cg"] == 0.0
 
 
-# --- diagnosis-catalogue extensions (issue 6) -----------------------------------------------
+# --- diagnosis-catalogue extensions -----------------------------------------------
 
 def test_steer_angle_offset_turns_at_zero_reading_with_the_understeer_gain():
     v, offset = 2.0, math.radians(2.0)

@@ -1,4 +1,6 @@
 """The gyro reads a constant offset: the integrated yaw rate turns away from the GPS track."""
+import math
+
 from ..effect import Effect, Parameter
 
 
@@ -6,9 +8,9 @@ class YawRateBias(Effect):
     id = "yaw_rate_bias"
     subsystem = "gyro"
     stages = ("yaw", "position")
-    parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "rad/s", 1.0),)
+    parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "deg/s", 180.0 / math.pi),)
     starts = ((0.0,),)
-    threshold = "|bias| >= 0.004 rad/s"
+    threshold = "|bias| >= 0.229 deg/s"
     hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
     experiment = "30 s standing still: a gyro bias reads a yaw rate with the vehicle at rest"
 

@@ -146,11 +146,29 @@ def connect(a, b, limits: Limits, families=None) -> np.ndarray | None:
 @functools.lru_cache(maxsize=4096)
 def _local_path(goal: tuple[float, float, float], limits: Limits, families: tuple[str, ...]) -> np.ndarray | None:
     """The shortest CC path from the origin heading east to ``goal`` (x, y, heading), integrated;
-    cached: the turns between parallel swaths whose ends line up are all one turn, moved."""
+    cached: the turns between parallel swaths whose ends line up are all one turn, moved. The CSC
+    families in closed form (``_csc``), Newton's method where that does not apply (a turn too short
+    for full ramps); the CCC families (omega loops) only where they can be shorter."""
     goal = np.array(goal)
     best = None
     R = 1.0 / limits.kappa_max
-    for kind in families:
+    r, mu = cc_circle(limits)
+    ramp = limits.kappa_max / limits.sigma
+    for kind in sorted(families, key=lambda k: k not in CSC):
+        if kind in CSC:
+            pieces = _csc(kind, goal, limits)
+            if pieces is not None:
+                if best is None or _length(pieces) < best[0] - 1e-6:
+                    best = (_length(pieces), pieces)
+                continue
+        else:
+            # a CCC path turns through more than pi in its middle turn: no shorter than pi R plus three ramps;
+            # its outer turns' circles are at most 4 r apart
+            if best is not None and best[0] <= math.pi * R + 3 * ramp:
+                continue
+            s = 1.0 if kind[0] == "L" else -1.0
+            if np.hypot(*(_centre(np.zeros(3), s, r, mu, True) - _centre(goal, s, r, mu, False))) > 4 * r + 1e-6:
+                continue
         for guess in _guesses(kind, goal, R):
             def residual(p):
                 e = end_pose(_pieces(kind, p, limits))
@@ -170,6 +188,62 @@ def _local_path(goal: tuple[float, float, float], limits: Limits, families: tupl
     path = integrate(best[1])
     path.setflags(write=False)
     return path
+
+
+CSC = ("LSL", "RSR", "LSR", "RSL")
+
+
+@functools.lru_cache(maxsize=64)
+def cc_circle(limits: Limits) -> tuple[float, float]:
+    """(r, mu) of a CC turn with full ramps (Fraichard and Scheuer): from its start, the centre of
+    its arc is at distance r, mu off the normal towards the turn; the turn ends on the circle of
+    radius r about that centre, its heading mu outwards of that circle's tangent. So the straight
+    after it is tangent to the circle of radius r cos mu about the centre."""
+    km, sg = limits.kappa_max, limits.sigma
+    xs, ys, ths = end_pose([(km / sg, 0.0, km)])
+    R = 1.0 / km
+    ox, oy = xs - R * math.sin(ths), ys + R * math.cos(ths)
+    return math.hypot(ox, oy), math.atan2(ox, oy)
+
+
+def _centre(pose: np.ndarray, side: float, r: float, mu: float, starts: bool) -> np.ndarray:
+    """The centre of the CC turn (side +1 left, -1 right) that starts (or ends) at pose."""
+    along = r * math.sin(mu) * (1.0 if starts else -1.0)
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return np.array([pose[0] + c * along - s * side * r * math.cos(mu), pose[1] + s * along + c * side * r * math.cos(mu)])
+
+
+def _csc(kind: str, goal: np.ndarray, limits: Limits) -> list | None:
+    """The pieces of the CSC path of this family from the origin (heading 0) to ``goal`` in closed
+    form: the straight is a common tangent of the circles of radius rho = r cos mu about the two
+    turns' centres (outer for LSL, RSR; inner for LSR, RSL), and runs from r sin mu past the first
+    tangent point to r sin mu before the second. None where a turn is too short for full ramps
+    (deflection under kappa^2 / sigma) or the turns overlap: Newton's method takes those."""
+    r, mu = cc_circle(limits)
+    rho = r * math.cos(mu)
+    s1, s2 = (1.0 if kind[0] == "L" else -1.0), (1.0 if kind[2] == "L" else -1.0)
+    a, b = _centre(np.zeros(3), s1, r, mu, True), _centre(goal, s2, r, mu, False)
+    d = b - a
+    D, alpha = float(np.hypot(*d)), math.atan2(d[1], d[0])
+    if s1 == s2:
+        phi, t = alpha, D
+    else:
+        if D < 2 * rho:
+            return None
+        phi = alpha + s1 * math.asin(2 * rho / D)
+        t = math.sqrt(max(D * D - 4 * rho * rho, 0.0))
+    straight = t - 2 * r * math.sin(mu)
+    th1 = (s1 * phi) % (2 * math.pi)
+    th2 = (s2 * (goal[2] - phi)) % (2 * math.pi)
+    least = limits.kappa_max ** 2 / limits.sigma
+    if straight < -1e-9 or th1 < least or th2 < least:
+        return None
+    pieces = cc_profile(s1 * th1, limits) + ([(straight, 0.0, 0.0)] if straight > 1e-9 else []) + \
+        cc_profile(s2 * th2, limits)
+    e = end_pose(pieces)
+    if max(abs(e[0] - goal[0]), abs(e[1] - goal[1]), abs(_wrap(e[2] - goal[2]))) > 1e-6:
+        return None
+    return pieces
 
 
 def _guesses(kind: str, goal: np.ndarray, R: float) -> list[np.ndarray]:

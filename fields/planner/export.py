@@ -83,9 +83,10 @@ def draw_plan(plan: Plan, target: FilePath) -> None:
     for hole in plan.field.boundary.interiors:
         hx, hy = hole.xy
         ax.fill(hx, hy, color="white", edgecolor="#8a3b12", lw=1)
-    ix, iy = plan.inner.exterior.xy
-    ax.plot(ix, iy, "--", color="#7a5c00", lw=1, label=f"headland ({plan.headland_passes} x "
-            f"{plan.settings.working_width:g} m)")
+    for k, piece in enumerate(plan.pieces or [plan.inner]):
+        ix, iy = piece.exterior.xy
+        ax.plot(ix, iy, "--", color="#7a5c00", lw=1, label=None if k else f"headland ({plan.headland_passes} x "
+                f"{plan.settings.working_width:g} m)" + (f"; {len(plan.pieces)} pieces inside" if len(plan.pieces) > 1 else ""))
     styles = {SWATH: ("tab:blue", 1.0, "swath"), TURN: ("tab:red", 0.9, "turn"),
               HEADLAND: ("tab:green", 1.0, "headland pass"), TRANSIT: ("tab:purple", 0.9, "transit")}
     segments = plan.path.segments
@@ -109,6 +110,84 @@ def draw_plan(plan: Plan, target: FilePath) -> None:
     ax.set_ylabel("north [m]")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    fig.savefig(target, dpi=110, format="png")
+    plt.close(fig)
+
+
+def write_applied_geojson(plan: Plan, applied, target: FilePath) -> None:
+    """as_applied.geojson: the ground covered (one feature) and each applied strip (a section's or
+    the whole width's run where it was on); longitude/latitude where the field has a geographic
+    reference, else its local metres."""
+    from shapely.geometry import mapping
+    from shapely.ops import transform
+
+    field = plan.field
+    if field.origin is not None:
+        def conv(geom):
+            return transform(lambda x, y, z=None: tuple(field.to_geodetic(np.column_stack([x, y])).T), geom)
+    else:
+        def conv(geom):
+            return geom
+    features = [{"type": "Feature", "properties": {"kind": "covered", "area_m2": round(applied.covered, 2)},
+                 "geometry": mapping(conv(applied.shape))}]
+    features += [{"type": "Feature", "properties": {"kind": "strip"}, "geometry": mapping(conv(s.simplify(0.01)))}
+                 for s in applied.strips]
+    with open(target, "w") as f:
+        json.dump({"type": "FeatureCollection", "properties": {
+            "coordinates": "lon/lat" if field.origin is not None else "local metres",
+            "field_coverage_share": applied.field_coverage_share, "overlap_share": applied.overlap_share},
+            "features": features}, f)
+
+
+def times_worked(ax, strips, boundary, workable, cells: float = 1.5e6):
+    """A raster (at most ``cells`` cells) of how many times each spot of the field was worked,
+    drawn on ``ax``: grey where the implement cannot reach, red skipped, green once, orange and
+    purple more. Returns the colour mesh (for a colour bar)."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from shapely import contains_xy
+
+    minx, miny, maxx, maxy = boundary.bounds
+    cell = max(0.1, math.sqrt((maxx - minx) * (maxy - miny) / cells))
+    gx, gy = np.meshgrid(np.arange(minx, maxx, cell) + cell / 2, np.arange(miny, maxy, cell) + cell / 2)
+    count = np.zeros(gx.shape)
+    for st in strips:
+        a, b, c, d = st.bounds
+        i0, i1 = np.searchsorted(gy[:, 0], [b, d])
+        j0, j1 = np.searchsorted(gx[0], [a, c])
+        count[i0:i1, j0:j1] += contains_xy(st, gx[i0:i1, j0:j1], gy[i0:i1, j0:j1])
+    count = np.clip(count, 0, 3)
+    count[~contains_xy(workable, gx, gy) & (count == 0)] = -1       # the implement cannot reach it (corners)
+    count[~contains_xy(boundary, gx, gy)] = np.nan
+    cmap = ListedColormap(["#bdbdbd", "#d7301f", "#a6d96a", "#fdae61", "#7b3294"])
+    return ax.pcolormesh(gx, gy, count, cmap=cmap, norm=BoundaryNorm([-1.5, -0.5, 0.5, 1.5, 2.5, 3.5], 5),
+                         shading="auto")
+
+
+def times_worked_colorbar(fig, ax, mesh) -> None:
+    cb = fig.colorbar(mesh, ax=ax, ticks=[-1, 0, 1, 2, 3], shrink=0.8)
+    cb.ax.set_yticklabels(["not reachable", "0 (skipped)", "1", "2 (overlap)", "3+"])
+    cb.set_label("times worked")
+
+
+def draw_applied(plan: Plan, applied, sections: int, target: FilePath) -> None:
+    """as_applied.png: times each spot of the field was worked, as planned."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 8))
+    boundary = plan.field.boundary
+    mesh = times_worked(ax, applied.strips, boundary, plan.workable)
+    times_worked_colorbar(fig, ax, mesh)
+    for ring in [boundary.exterior, *boundary.interiors]:
+        bx, by = ring.xy
+        ax.plot(bx, by, "k-", lw=1)
+    how = f"{sections} sections" if sections else "no section control"
+    ax.set_title(f"{plan.field.name} as applied ({how}): {100 * applied.field_coverage_share:.2f} % of the field "
+                 f"worked, {100 * applied.overlap_share:.2f} % overlap", fontsize=10)
+    ax.set(aspect="equal", xlabel="east [m]", ylabel="north [m]")
     fig.tight_layout()
     fig.savefig(target, dpi=110, format="png")
     plt.close(fig)

@@ -5,11 +5,16 @@ fill (the boundary buffered in by n w), what the implement can reach, and the he
   the swath ends, the straight run-in of the implement's length and ``settle``, the tractor's half
   width, w/2 (a swath's end may lie w/2 beyond the inner field: fields.planner.swaths).
 - **Passes**: rings at (k + 1/2) w inside the boundary (and round each hole). Corners are rounded
-  (a tractor cannot follow a polygon's corner): the innermost pass at R, each further out at w
-  more, so that the passes are parallel and leave no gap between them at the corners.
-- **Workable**: the field opened by a disk of radius R_o + w/2 + (R - R_i), R_o = R + (n - 1) w the
-  outer pass's corner radius, R_i the trailed implement's steady radius when the tractor turns at R
-  (it cuts each corner by R - R_i).
+  (a tractor cannot follow a polygon's corner). ``tight`` corners: every pass at R, the tightest a
+  forward pass can take; the field's corner beyond the outer pass is (R + w/2)^2 (1 - pi/4) at a
+  right angle, and passes k and k + 1 are (sqrt 2 - 1) w further apart on the corner's bisector
+  than on the sides (a small gap between them there). ``parallel`` corners: the innermost at R,
+  each further out at w more: no gap between passes, but the outer pass rounds at R + (n - 1) w
+  and leaves (R + (n - 1/2) w)^2 (1 - pi/4) of each right-angled corner. Tight leaves less of the
+  whole field (about half, on the real fields).
+- **Workable**: the field opened by a disk of radius R_o + w/2 + (R - R_i), R_o the outer pass's
+  corner radius, R_i the trailed implement's steady radius when the tractor turns at R (it cuts
+  each corner by R - R_i).
 """
 from __future__ import annotations
 
@@ -50,8 +55,15 @@ def inner_parts(field: Field, n: int, width: float) -> list[Polygon]:
     return [p for p in polygons(inner) if p.area > width * width]
 
 
+def corner_radius(settings: Settings, n: int, k: int) -> float:
+    """The corner radius of headland pass k of n (0 the outermost)."""
+    if settings.headland_corners == "tight":
+        return settings.turn_radius
+    return settings.turn_radius + (n - 1 - k) * settings.working_width
+
+
 def workable(field: Field, settings: Settings, n: int) -> Polygon:
-    outer = settings.turn_radius + (n - 1) * settings.working_width
+    outer = corner_radius(settings, n, 0)
     rho = outer + 0.5 * settings.working_width + (settings.turn_radius - settings.implement_radius)
     opened = field.boundary.buffer(-rho).buffer(rho)
     return max(polygons(opened), key=lambda p: p.area) if polygons(opened) else field.boundary
@@ -85,8 +97,10 @@ def reversed_ring(ring: np.ndarray) -> np.ndarray:
 
 
 def headland_passes(field: Field, settings: Settings, n: int) -> list[HeadlandPass]:
-    """The passes from the innermost out (the order they are worked in after the swaths): ring k
-    at (k + 1/2) w, its corners at R + (n - 1 - k) w."""
-    w, R = settings.working_width, settings.turn_radius
-    return [HeadlandPass(k, j, ring) for k in range(n - 1, -1, -1)
-            for j, ring in enumerate(ring_path(field, (k + 0.5) * w, R + (n - 1 - k) * w))]
+    """The passes in the order they are worked: after the swaths (``headland_order`` last) from the
+    innermost out, before them (first) from the outermost in; ring k at (k + 1/2) w, its corners
+    at ``corner_radius``."""
+    w = settings.working_width
+    order = range(n) if settings.headland_order == "first" else range(n - 1, -1, -1)
+    return [HeadlandPass(k, j, ring) for k in order
+            for j, ring in enumerate(ring_path(field, (k + 0.5) * w, corner_radius(settings, n, k)))]

@@ -12,14 +12,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field as dc_field
 
-from shapely.geometry import Polygon
+from shapely.geometry import MultiPolygon, Polygon
+from shapely.ops import unary_union
 
 from ..field import Field, FieldError
 from . import decomposition, headland, route_order, swaths
 from .path import Path
 from .settings import Settings
 from .speed import speed_profile
-from .turns import Joiner, TurnOutside
+from .turns import Joiner, TurnOutside, length_of
 from .types import HEADLAND, SWATH, TRANSIT, TURN, Cell, Route, Swath
 
 MAX_SWATHS = 20_000     # across a field at the fewest: about 1 GB of path (a 60 km wide field of a 3 m implement)
@@ -33,12 +34,14 @@ class Plan:
     angle: float                # rad, east = 0, counter-clockwise
     angle_how: str
     headland_passes: int
-    inner: Polygon              # what the swaths fill
+    inner: Polygon | MultiPolygon   # what the swaths fill: every piece of the inner field
     workable: Polygon           # what the implement can reach
     cells: tuple[Cell, ...]
     route: Route
     path: Path
     notes: tuple[str, ...] = dc_field(default_factory=tuple)
+    pieces: tuple[Polygon, ...] = ()        # the inner field's pieces, the largest first
+    angles: tuple[float, ...] = ()          # the driving angle [rad] of each piece
 
     @property
     def order_how(self) -> str:
@@ -53,6 +56,7 @@ class Plan:
         dist = self.path.distances()
         return {"field": self.field.name, "area_ha": round(self.field.area_ha, 4),
                 "workable_ha": round(self.workable.area / 1e4, 4), "driving_angle_deg": round(math.degrees(self.angle), 2),
+                "pieces": len(self.pieces), "piece_angles_deg": [round(math.degrees(a), 2) for a in self.angles],
                 "driving_angle_how": self.angle_how, "order": self.order_how, "headland_passes": self.headland_passes,
                 "swaths": len(self.swaths), "turns": max(len(self.swaths) - 1, 0),
                 "distance_m": round(self.path.length, 1), "working_distance_m": round(dist[SWATH] + dist[HEADLAND], 1),
@@ -110,18 +114,54 @@ def plan(field: Field, settings: Settings = Settings()) -> Plan:
 
 
 def _layout(field: Field, settings: Settings, n: int, order: str, skip: int, where: str, widened: list[str]) -> Plan:
-    """Every stage for n headland passes."""
+    """Every stage for n headland passes: each piece of the inner field its own swaths and cells."""
     notes: list[str] = []
     w = settings.working_width
-    region = decomposition.worked_region(headland.inner_parts(field, n, w), w, n, where, notes)
-    angle, angle_how = swaths.driving_angle(field, region, settings, where)
-    lines = swaths.swath_lines(region, angle, settings.spacing, w)
+    pieces = decomposition.worked_regions(headland.inner_parts(field, n, w), w, n, where, notes)
+    cells: list[Cell] = []
+    angles, hows, count = [], [], 0
+    for k, piece in enumerate(pieces):
+        first = sum(len(c.swaths) for c in cells)
+        lines, along, angle, how = swaths.generate(field, piece, settings, where, first, count)
+        count += len(lines) + 1                 # a line number left out between pieces: not neighbours
+        cells += decomposition.cells(lines, along, len(cells), k)
+        angles.append(angle)
+        hows.append(how)
     if settings.max_swaths:
-        notes.append(f"a section of the field: the first {min(settings.max_swaths, len(lines))} swath(s) of the route")
-    cells = decomposition.cells(lines, angle)
+        notes.append(f"a section of the field: the first {min(settings.max_swaths, count)} swath(s) of the route")
     rings = headland.headland_passes(field, settings, n) if settings.headland_work and not settings.max_swaths else []
     route = route_order.route(cells, skip, order, settings, rings)
-    segments = Joiner(field, settings, n, where, notes).join(route)
+    segments = Joiner(field, settings, n, where, notes, pieces).join(route)
+    if order == "optimised":
+        route, segments = _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces)
     path = Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
-    return Plan(field, settings, angle, angle_how, n, region, headland.workable(field, settings, n), tuple(cells), route,
-                path, tuple(notes + widened))
+    inner = pieces[0] if len(pieces) == 1 else unary_union(pieces)
+    return Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
+                path, tuple(notes + widened), tuple(pieces), tuple(angles))
+
+
+def idle_distance(segments) -> float:
+    """Metres driven without working: turns and transits."""
+    return sum(float(length_of(seg.points)) for seg in segments if seg.kind in (TURN, TRANSIT))
+
+
+def _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces):
+    """The solver's order, or a pattern's (boustrophedon; skip where the U-turn needs it) where that,
+    joined by the real turns, drives less without working: the solver's costs are closed-form
+    estimates without the headland transits the joiner may add."""
+    mine = best = idle_distance(segments)
+    chosen = (route, segments, [])
+    for pattern, s in (("boustrophedon", 1),) + ((("skip", skip),) if skip > 1 else ()):
+        other_notes: list[str] = []
+        other = route_order.route(cells, s, pattern, settings, rings)
+        try:
+            other_segments = Joiner(field, settings, n, where, other_notes, pieces).join(other)
+        except FieldError:
+            continue
+        idle = idle_distance(other_segments)
+        notes.append(f"the {pattern} order drives {idle:.0f} m without working, the solver's {mine:.0f} m")
+        if idle < best:
+            best, chosen = idle, (Route(other.passes, other.cell_starts, other.how + " (kept: less idle than the "
+                                        "solver's)"), other_segments, other_notes)
+    notes += [x for x in chosen[2] if x not in notes]
+    return chosen[0], chosen[1]

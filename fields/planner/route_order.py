@@ -38,8 +38,9 @@ def pattern(settings: Settings) -> tuple[str, int, float]:
         return p is not None and np.all(np.diff(p[:, 2]) >= -1e-9) and np.ptp(p[:, 2]) <= math.pi + 1e-6
 
     fits = csc(spacing)
-    if settings.order == "boustrophedon" or (settings.order == "auto" and fits):
-        return "boustrophedon", 1, reach(u_turn(spacing, limits))
+    chosen = "optimised" if settings.order == "optimised" else None      # its headland: as the auto pattern's
+    if settings.order == "boustrophedon" or (settings.order in ("auto", "optimised") and fits):
+        return chosen or "boustrophedon", 1, reach(u_turn(spacing, limits))
     # the narrowest U-turn on a grid of quarter spacings (the turn fits from some width on: bisection)
     widths, u = [spacing], spacing
     while u < 10 * settings.turn_radius + 10 * spacing:
@@ -52,7 +53,7 @@ def pattern(settings: Settings) -> tuple[str, int, float]:
             lo, hi = (lo, mid) if csc(widths[mid]) else (mid, hi)
     u_min = widths[0] if fits else widths[hi]
     s = max(2, math.ceil(u_min / spacing))
-    return "skip", s, max(reach(u_turn(s * spacing, limits)), reach(u_turn((s + 1) * spacing, limits)))
+    return chosen or "skip", s, max(reach(u_turn(s * spacing, limits)), reach(u_turn((s + 1) * spacing, limits)))
 
 
 def skip_order(n: int, s: int) -> list[int]:
@@ -86,15 +87,17 @@ def entered(swath: Swath, pos) -> Swath:
     return swath.reversed()
 
 
-def cell_order(cells: list[Cell], skip: int) -> tuple[list[Swath], frozenset[int]]:
-    """The swaths in driving order (as generated, not yet oriented) and where each cell begins."""
+def cell_order(cells: list[Cell], skip: int, pos=None) -> tuple[list[Swath], frozenset[int]]:
+    """The swaths in driving order (as generated, not yet oriented) and where each cell begins; the
+    first cell the one nearest ``pos`` (given), else the first."""
     def sequence(cell: Cell) -> list[Swath]:
         n = len(cell.swaths)
         return [cell.swaths[k] for k in (range(n) if skip == 1 else skip_order(n, skip))]
 
     left = list(range(len(cells)))
     out: list[Swath] = []
-    pos, starts = None, set()
+    starts: set[int] = set()
+    pos = None if pos is None else np.asarray(pos, float)
     while left:
         options = [(c, seq) for c in left for seq in (sequence(cells[c]), sequence(cells[c])[::-1])]
         if pos is None:
@@ -112,11 +115,15 @@ def cell_order(cells: list[Cell], skip: int) -> tuple[list[Swath], frozenset[int
 def route(cells: list[Cell], skip: int, order: str, settings: Settings, rings: list[HeadlandPass]) -> Route:
     """The work in driving order: each swath entered from the end nearer where the last one's
     run-out ended, lengthened by ``swath_extension`` at each end; then the headland passes."""
-    chosen, starts = cell_order(cells, skip)
+    first_rings = settings.headland_order == "first" and rings
+    start = None if first_rings or settings.start_point is None else settings.start_point
+    if order == "optimised":
+        return _optimised(cells, skip, settings, rings, start)
+    chosen, starts = cell_order(cells, skip, start)
     if settings.max_swaths:
         chosen = chosen[:settings.max_swaths]
     passes: list[Swath | HeadlandPass] = []
-    run_out = None
+    run_out = None if start is None else np.asarray(start, float)
     for sw in chosen:
         sw = entered(sw, run_out).extended(settings.swath_extension)
         passes.append(sw)
@@ -124,4 +131,29 @@ def route(cells: list[Cell], skip: int, order: str, settings: Settings, rings: l
     how = f"{order}" + (f" (skip {skip})" if order == "skip" else "")
     if len(cells) > 1:
         how += f" in {len(cells)} cells (lines that cross holes or bays give several swaths)"
-    return Route(tuple(passes) + tuple(rings), frozenset(k for k in starts if k < len(chosen)), how)
+    starts = frozenset(k for k in starts if k < len(chosen))
+    if settings.headland_order == "first":
+        return Route(tuple(rings) + tuple(passes), frozenset(k + len(rings) for k in starts), how + ", headland first")
+    return Route(tuple(passes) + tuple(rings), starts, how)
+
+
+def _optimised(cells: list[Cell], skip: int, settings: Settings, rings: list[HeadlandPass], start) -> Route:
+    """The order of fields.planner.optimise, from the pattern's order (boustrophedon or skip) on."""
+    from .optimise import order as optimised
+
+    swaths = [sw for c in cells for sw in c.swaths]
+    position = {sw.index: k for k, sw in enumerate(swaths)}
+    piece = np.array([c.piece for c in cells for _ in c.swaths])
+    initial, run_out = [], None if start is None else np.asarray(start, float)
+    for sw in cell_order(cells, skip, start)[0]:
+        e = entered(sw, run_out)
+        initial.append(2 * position[sw.index] + (0 if e is sw else 1))
+        run_out = e.end + settings.lead * e.direction(at_end=True)
+    chosen, how = optimised(swaths, piece, settings, start, None if rings else settings.end_point, initial)
+    if settings.max_swaths:
+        chosen = chosen[:settings.max_swaths]
+    passes = tuple(sw.extended(settings.swath_extension) for sw in chosen)
+    moves = frozenset(range(len(passes)))               # any move may go round by the headland
+    if settings.headland_order == "first" and rings:
+        return Route(tuple(rings) + passes, frozenset(k + len(rings) for k in moves), how + ", headland first")
+    return Route(passes + tuple(rings), moves, how)

@@ -11,8 +11,10 @@ from .objectives import OBJECTIVES
 
 POSITIVE = ("working_width", "turn_radius", "wheelbase", "steer_rate", "work_speed", "turn_speed", "acceleration")
 NON_NEGATIVE = ("headland_passes", "hitch_offset", "drawbar", "half_width", "settle", "swath_extension", "max_swaths",
-                "overlap")
-ORDERS = ("auto", "boustrophedon", "skip")
+                "overlap", "route_seconds")
+ORDERS = ("auto", "boustrophedon", "skip", "optimised")
+HEADLAND_ORDERS = ("last", "first")
+CORNERS = ("tight", "parallel")
 
 
 @dataclass(frozen=True)
@@ -29,14 +31,19 @@ class Settings:
     turn_speed: float = 1.0               # m/s
     acceleration: float = 0.5             # m/s^2
     overlap: float = 0.05                 # m between adjacent passes
-    order: str = "auto"                   # auto, boustrophedon, skip
+    order: str = "auto"                   # auto, boustrophedon, skip, optimised (OR-tools: fields.planner.optimise)
+    route_seconds: float = 0.0            # optimised order: 0 a bounded greedy descent (fields.planner.optimise.IMPROVEMENTS); else guided local search this long
     half_width: float = 0.8               # m: the tractor's, kept inside the boundary
     hitch_offset: float = 0.6             # m behind the rear axle
     drawbar: float = 2.5                  # m hitch to implement axle (0: a mounted implement)
-    headland_work: bool = True            # drive the headland passes after the swaths
+    headland_work: bool = True            # drive the headland passes
+    headland_order: str = "last"          # last: after the swaths (innermost out); first: before them (outermost in)
+    headland_corners: str = "parallel"    # parallel: pass k rounds its corners at R + (n - 1 - k) w; tight: every pass at R
     settle: float = 5.0                   # m driven straight before a swath beyond the implement's length
     swath_extension: float = 0.1          # m each swath works on beyond its strip's reach (lift and drop margin)
     max_swaths: int = 0                   # 0: all; else the first N (a section of a field, for tests)
+    start_point: tuple[float, float] | None = None   # m, east/north of the field's origin: the route starts here
+    end_point: tuple[float, float] | None = None     # and ends here (None: where the last pass ends)
 
     def check(self, where: str, names: dict[str, str] | None = None) -> None:
         """Refuse a value that is not finite or out of range; ``names``: how the caller calls each
@@ -48,6 +55,8 @@ class Settings:
             value = getattr(self, f.name)
             if isinstance(value, float) and not math.isfinite(value):
                 raise FieldError(f"{where}: {name(f.name)} = {value}: expected a finite number")
+            if isinstance(value, tuple) and (len(value) != 2 or not all(math.isfinite(v) for v in value)):
+                raise FieldError(f"{where}: {name(f.name)} = {value}: expected two finite numbers (east, north [m])")
         for key in POSITIVE:
             if not getattr(self, key) > 0:
                 raise FieldError(f"{where}: {name(key)} = {getattr(self, key)}: expected a positive number")
@@ -56,6 +65,9 @@ class Settings:
                 raise FieldError(f"{where}: {name(key)} = {getattr(self, key)}: expected zero or more")
         if self.order not in ORDERS:
             raise FieldError(f"{where}: {name('order')} = {self.order!r}: expected {', '.join(ORDERS)}")
+        for key, allowed in (("headland_order", HEADLAND_ORDERS), ("headland_corners", CORNERS)):
+            if getattr(self, key) not in allowed:
+                raise FieldError(f"{where}: {name(key)} = {getattr(self, key)!r}: expected {' or '.join(allowed)}")
         if self.angle_objective not in OBJECTIVES:
             raise FieldError(f"{where}: {name('angle_objective')} = {self.angle_objective!r}: expected one of "
                              f"{', '.join(OBJECTIVES)}")

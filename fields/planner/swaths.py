@@ -5,6 +5,7 @@ several)."""
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 from shapely import affinity
@@ -12,12 +13,23 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import unary_union
 
 from ..field import Field, FieldError
+from .decomposition import straight_along
 from .objectives import OBJECTIVES, best_angle
 from .settings import Settings
 from .types import Swath
 
 SHIFTS = 9          # placements of the lines' slack across the region tried (the least unworked wins)
 SHORTEST = 1.0      # m: a shorter piece of a line is not a swath
+
+
+def generate(field: Field, piece: Polygon, settings: Settings, where: str, first_index: int = 0,
+             first_line: int = 0) -> tuple[list[list[Swath]], Callable[[np.ndarray], float], float, str]:
+    """The swaths of a piece of the inner field, line by line (lines numbered from ``first_line``,
+    swaths from ``first_index``); the coordinate along them (for the cells); the driving angle and
+    how it was chosen."""
+    angle, how = driving_angle(field, piece, settings, where)
+    lines = swath_lines(piece, angle, settings.spacing, settings.working_width, first_index, first_line)
+    return lines, straight_along(angle), angle, how
 
 
 def driving_angle(field: Field, region: Polygon, settings: Settings, where: str) -> tuple[float, str]:
@@ -39,7 +51,8 @@ def along_line(field: Field, name: str, where: str) -> tuple[float, str]:
     return line.heading % math.pi, f"along the field's {line.kind} {line.name!r}"
 
 
-def swath_lines(region: Polygon, angle: float, spacing: float, width: float) -> list[list[Swath]]:
+def swath_lines(region: Polygon, angle: float, spacing: float, width: float, first_index: int = 0,
+                first_line: int = 0) -> list[list[Swath]]:
     """Per line across the region, its swaths along the driving direction. The ceil(H / spacing)
     lines across the region's height H leave some slack; where they sit in it is chosen (SHIFTS
     placements) to leave the least of the region unworked: an edge at a small angle to the swaths
@@ -65,7 +78,7 @@ def swath_lines(region: Polygon, angle: float, spacing: float, width: float) -> 
     w_pad = width + 1.0
     near = rot.buffer(0.5 * width, join_style="mitre", mitre_limit=3.0)
     out: list[list[Swath]] = []
-    number = 0
+    number = first_index
     for k in range(count):
         yk = offset + k * spacing
         band = rot.intersection(LineString([(minx - 1, yk), (maxx + 1, yk)]).buffer(0.5 * width, cap_style="flat"))
@@ -83,7 +96,7 @@ def swath_lines(region: Polygon, angle: float, spacing: float, width: float) -> 
                 continue
             a = [c * x0 - s * yk, s * x0 + c * yk]
             b = [c * x1 - s * yk, s * x1 + c * yk]
-            swaths.append(Swath(number, len(out), np.array([a, b])))
+            swaths.append(Swath(number, first_line + len(out), np.array([a, b])))
             number += 1
         if swaths:
             out.append(swaths)

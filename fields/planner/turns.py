@@ -12,14 +12,16 @@
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
 import numpy as np
 from shapely import contains_xy
 from shapely.geometry import Polygon
+from shapely.ops import unary_union
 
 from ..field import Field, FieldError
 from .curves import Limits, connect
-from .headland import reversed_ring, ring_path
+from .headland import corner_radius, reversed_ring, ring_path
 from .sampling import POLYLINE_STEP
 from .settings import Settings
 from .types import HEADLAND, SWATH, TRANSIT, TURN, HeadlandPass, Route, Segment, Swath
@@ -52,8 +54,9 @@ def densified(xy: np.ndarray, step: float = POLYLINE_STEP) -> np.ndarray:
     n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / step).astype(int))
     if n.max() == 1:
         return xy
-    parts = [xy[i] + np.linspace(0.0, 1.0, k + 1)[:-1, None] * d[i] for i, k in enumerate(n)]
-    return np.vstack(parts + [xy[-1:]])
+    chord = np.repeat(np.arange(len(d)), n)                       # each new point's chord
+    share = (np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)) / np.repeat(n, n)
+    return np.vstack([xy[chord] + share[:, None] * d[chord], xy[-1:]])
 
 
 def outside(path: np.ndarray, inside: Polygon) -> np.ndarray | None:
@@ -70,41 +73,98 @@ def length_of(path: np.ndarray) -> float:
 class Joiner:
     """Joins a route's passes; ``segments`` grows as it goes, ``notes`` says what was left out."""
 
-    def __init__(self, field: Field, settings: Settings, passes: int, where: str, notes: list[str]) -> None:
+    def __init__(self, field: Field, settings: Settings, passes: int, where: str, notes: list[str],
+                 pieces: Sequence[Polygon] = ()) -> None:
         self.field, self.settings, self.passes, self.where, self.notes = field, settings, passes, where, notes
         self.limits: Limits = settings.limits
         self.inside = field.boundary.buffer(-settings.half_width)
+        # transits keep to the headland: out of the inner field's pieces deeper than a working width
+        worked = unary_union([p.buffer(-settings.working_width) for p in pieces]) if pieces else None
+        self.headland = self.inside if worked is None or worked.is_empty else self.inside.difference(worked)
         self.segments: list[Segment] = []
-        self._innermost: list[np.ndarray] | None = None
+        self._rings: dict[int, list[np.ndarray]] = {}
 
     def join(self, route: Route) -> list[Segment]:
-        previous, last_swath = None, None
+        s = self.settings
+        pose, last_swath = None, None
+        if s.start_point is not None:
+            pose = self._start(route)
         for k, item in enumerate(route.passes):
             if isinstance(item, Swath):
-                previous = self._swath(item, previous, last_swath, k in route.cell_starts)
+                new_cell = k in route.cell_starts or not isinstance(last_swath, Swath)
+                pose = self._swath(item, pose, last_swath, new_cell, self.inside if k == 0 else None)
                 last_swath = item
             else:
-                self._headland_pass(item)
+                pose = self._headland_pass(item, pose)
+                last_swath = item
+        if s.end_point is not None:
+            self._end(pose)
         return self.segments
 
-    def _swath(self, sw: Swath, previous, last: Swath | None, new_cell: bool) -> tuple[float, float, float]:
+    # --- the user's start and end points ------------------------------------------------------------
+    def _start(self, route: Route) -> tuple[float, float, float]:
+        """The start pose: at the user's point, facing the first pass's entry."""
+        x, y = self.settings.start_point
+        self._check_point("start_point", x, y)
+        first = route.passes[0]
+        entry = first.start - self.settings.lead * first.direction() if isinstance(first, Swath) else first.points[0, :2]
+        return x, y, math.atan2(entry[1] - y, entry[0] - x)
+
+    def _end(self, pose) -> None:
+        x, y = self.settings.end_point
+        self._check_point("end_point", x, y)
+        if math.hypot(x - pose[0], y - pose[1]) < 1e-6:
+            return
+        goal = (x, y, math.atan2(y - pose[1], x - pose[0]))
+        path = self._transit(pose, goal, self.inside)
+        if path is None:
+            raise FieldError(f"{self.where}: end_point = ({x:g}, {y:g}) m: no drivable way to it inside the field from "
+                             f"the route's last pass (a continuous-curvature path within turn radius "
+                             f"{self.settings.turn_radius:g} m, the tractor's half width inside the boundary)")
+        self.segments.append(Segment(TRANSIT, -1, path))
+
+    def _check_point(self, name: str, x: float, y: float) -> None:
+        from shapely.geometry import Point, Polygon
+
+        point = Point(x, y)
+        if self.inside.contains(point):
+            return
+        if not Polygon(self.field.boundary.exterior).contains(point):
+            what = "outside the field"
+        elif not self.field.boundary.contains(point):
+            what = "inside a hole or an obstacle of the field"
+        else:
+            what = f"within the tractor's half width ({self.settings.half_width:g} m) of the field's boundary"
+        raise FieldError(f"{self.where}: {name} = ({x:g}, {y:g}) m (east, north of the field's origin): {what}; "
+                         f"expected a point the tractor can stand on inside the field")
+
+    # --- passes ------------------------------------------------------------------------------------------
+    def _swath(self, sw: Swath, previous, last, new_cell: bool, zone: Polygon | None) -> tuple[float, float, float]:
+        """The swath with its run-in and run-out, and the turn onto it from ``previous``: within the
+        field; a move to another cell or piece (``new_cell``) within ``zone`` (the headland), else
+        along a headland pass."""
         s = self.settings
         d_in, d_out = sw.direction(), sw.direction(at_end=True)
         heading_in = math.atan2(d_in[1], d_in[0])
         run_in = sw.start - s.lead * d_in
+        goal = (run_in[0], run_in[1], heading_in)
         if previous is not None:
-            turn = connect(previous, (run_in[0], run_in[1], heading_in), self.limits)
-            if turn is None:
-                raise FieldError(f"{self.where}: no turn within the limits from swath {last.line} to swath {sw.line}")
-            path = np.vstack([turn, straight(run_in, sw.start)[1:]])
-            off = outside(path, self.inside)
-            if off is not None and new_cell:               # to another cell: round by the headland
-                via = self._via_headland(previous, (run_in[0], run_in[1], heading_in))
+            turn = connect(previous, goal, self.limits)
+            off = crossing = None
+            if turn is not None:
+                path = np.vstack([turn, straight(run_in, sw.start)[1:]])
+                off = outside(path, self.inside)
+                if off is None and new_cell and zone is None:
+                    crossing = outside(turn, self.headland)        # across the inner field: round it if it can
+            if (turn is None or off is not None or crossing is not None) and new_cell:
+                via = self._via_rings(previous, goal, zone)          # to another cell or piece: by the headland
                 if via is not None:
                     self.segments.append(Segment(TRANSIT, -1, via))
-                    path, off = straight(run_in, sw.start), None
+                    path, off, turn = straight(run_in, sw.start), None, via
+            if turn is None:
+                raise FieldError(f"{self.where}: no turn within the limits from {_name(last)} to swath {sw.line}")
             if off is not None:
-                raise TurnOutside(f"{self.where}: the turn from swath {last.line} to swath {sw.line} leaves the field "
+                raise TurnOutside(f"{self.where}: the turn from {_name(last)} to swath {sw.line} leaves the field "
                                   f"near ({off[0]:.1f}, {off[1]:.1f}) m: the headland ({self.passes} x "
                                   f"{s.working_width:g} m) cannot hold a turn of radius {s.turn_radius:g} m")
         else:
@@ -114,59 +174,34 @@ class Joiner:
                           Segment(TURN, -1, straight(sw.end, run_out))]
         return run_out[0], run_out[1], math.atan2(d_out[1], d_out[0])
 
-    def _via_headland(self, a, b) -> np.ndarray | None:
-        """A transit from pose a to pose b along the innermost headland pass (either way round, the
-        field's outer ring or a hole's), joined by continuous-curvature turns; the shortest inside
-        the field, or None."""
+    def _headland_pass(self, ring: HeadlandPass, last) -> tuple[float, float, float] | None:
         s = self.settings
-        if self._innermost is None:
-            self._innermost = ring_path(self.field, (self.passes - 0.5) * s.working_width, s.turn_radius)
-        best = None
-        for ring in self._innermost:
-            for way in (ring, reversed_ring(ring)):
-                n = len(way)
-                i0 = int(np.argmin(np.hypot(way[:, 0] - a[0], way[:, 1] - a[1])))
-                j0 = int(np.argmin(np.hypot(way[:, 0] - b[0], way[:, 1] - b[1])))
-                for lead in VIA_HEADLAND_JOINS:
-                    i, j = (i0 + int(lead / POLYLINE_STEP)) % n, (j0 - int(lead / POLYLINE_STEP)) % n
-                    along = way[i:j + 1] if j >= i else np.vstack([way[i:], way[:j + 1]])
-                    if len(along) < 2:
-                        continue
-                    onto, off = connect(a, way[i, :3], self.limits), connect(way[j, :3], b, self.limits)
-                    if onto is None or off is None:
-                        continue
-                    path = np.vstack([onto, along[1:-1], off])
-                    length = length_of(path)
-                    if (best is None or length < best[0]) and outside(path, self.inside) is None:
-                        best = (length, path)
-                        break
-        return None if best is None else best[1]
-
-    def _headland_pass(self, ring: HeadlandPass) -> None:
-        s = self.settings
-        last = self.segments[-1].points[-1, :3].copy()
-        if self.segments[-1].kind == HEADLAND:                 # leave a pass along its last chord
+        if last is not None and self.segments and self.segments[-1].kind == HEADLAND:   # leave a pass along its last chord
             p = self.segments[-1].points
-            last[2] = math.atan2(p[-1, 1] - p[-2, 1], p[-1, 0] - p[-2, 0])
+            last = (last[0], last[1], math.atan2(p[-1, 1] - p[-2, 1], p[-1, 0] - p[-2, 0]))
         best = None
         for way in (ring.points, reversed_ring(ring.points)):   # either way round: the shorter way on
-            found = self._onto_ring(last, way)
+            found = (None, 0) if last is None else self._onto_ring(last, way)
             if found is not None and (best is None or length_of(found[0]) < length_of(best[0])):
                 best = (*found, way)
+            if last is None:
+                break
         if best is None:
-            self.notes.append(f"headland pass {ring.index + 1}{'' if ring.hole == 0 else f' (hole {ring.hole})'}: "
-                              f"no turn onto it within the field; left out")
-            return
+            self.notes.append(f"headland pass {ring.index + 1}{'' if ring.hole == 0 else f' (ring {ring.hole + 1})'}: "
+                              f"no way onto it within the field; left out")
+            return last
         path, i, way = best
-        self.segments.append(Segment(TRANSIT, ring.index, path))
+        if path is not None:
+            self.segments.append(Segment(TRANSIT, ring.index, path))
         # once round and on by the implement's length, so that it closes the loop where it came in
         more = int(math.ceil((s.hitch_offset + s.drawbar + 1.0) / POLYLINE_STEP))
         loop = np.vstack([way[i:], way[:i + 1], way[i + 1:][:more], way[:max(0, more - (len(way) - i - 1))]])
         self.segments.append(Segment(HEADLAND, ring.index, loop))
+        return float(loop[-1, 0]), float(loop[-1, 1]), float(loop[-1, 2])
 
     def _onto_ring(self, pose, ring: np.ndarray) -> tuple[np.ndarray, int] | None:
         """(path, index): a turn from pose onto the ring a little along it from its nearest points,
-        inside the field, or None."""
+        inside the field (directly, else round another headland pass), or None."""
         candidates = np.argsort(np.hypot(ring[:, 0] - pose[0], ring[:, 1] - pose[1]))
         for lead in ONTO_RING_JOINS:
             for i0 in candidates[:5]:
@@ -174,4 +209,59 @@ class Joiner:
                 path = connect(pose, ring[i, :3], self.limits)
                 if path is not None and outside(path, self.inside) is None:
                     return path, int(i)
+        i = int((candidates[0] + int(ONTO_RING_JOINS[-1] / POLYLINE_STEP)) % len(ring))
+        path = self._via_rings(pose, ring[i, :3])
+        return None if path is None else (path, i)
+
+    # --- transits -----------------------------------------------------------------------------------
+    def _transit(self, a, b, zone: Polygon | None = None) -> np.ndarray | None:
+        """A drivable way from pose a to pose b in ``zone`` (the headland: the field but the inner
+        field's pieces deeper than a working width): directly, else along a headland pass."""
+        zone = self.headland if zone is None else zone
+        path = connect(a, b, self.limits)
+        if path is not None and outside(path, zone) is None:
+            return path
+        return self._via_rings(a, b, zone)
+
+    def _ring_loops(self, k: int) -> list[np.ndarray]:
+        """The closed paths of headland pass k (0 the outermost), as many as the field gives at its offset."""
+        if k not in self._rings:
+            s = self.settings
+            self._rings[k] = ring_path(self.field, (k + 0.5) * s.working_width, corner_radius(s, self.passes, k))
+        return self._rings[k]
+
+    def _via_rings(self, a, b, zone: Polygon | None = None) -> np.ndarray | None:
+        """A transit from pose a to pose b along a headland pass (either way round, round the field
+        or a hole), joined by continuous-curvature turns: the innermost pass first, the next ones out
+        when it gives none (a narrow waist splits the inner passes); the shortest inside the field, or None."""
+        for k in range(self.passes - 1, -1, -1):
+            best = None
+            for ring in self._ring_loops(k):
+                for way in (ring, reversed_ring(ring)):
+                    n = len(way)
+                    i0 = int(np.argmin(np.hypot(way[:, 0] - a[0], way[:, 1] - a[1])))
+                    j0 = int(np.argmin(np.hypot(way[:, 0] - b[0], way[:, 1] - b[1])))
+                    for lead in VIA_HEADLAND_JOINS:
+                        i, j = (i0 + int(lead / POLYLINE_STEP)) % n, (j0 - int(lead / POLYLINE_STEP)) % n
+                        along = way[i:j + 1] if j >= i else np.vstack([way[i:], way[:j + 1]])
+                        if len(along) < 2:
+                            continue
+                        onto, off = connect(a, way[i, :3], self.limits), connect(way[j, :3], b, self.limits)
+                        if onto is None or off is None:
+                            continue
+                        path = np.vstack([onto, along[1:-1], off])
+                        length = length_of(path)
+                        if (best is None or length < best[0]) and outside(path, zone or self.headland) is None:
+                            best = (length, path)
+                            break
+            if best is not None:
+                return best[1]
         return None
+
+
+def _name(item) -> str:
+    if isinstance(item, Swath):
+        return f"swath {item.line}"
+    if isinstance(item, HeadlandPass):
+        return f"headland pass {item.index + 1}"
+    return "the start"

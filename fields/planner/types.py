@@ -71,6 +71,7 @@ class Cell:
 
     index: int
     swaths: tuple[Swath, ...]   # in the order of their lines across the field
+    piece: int = 0              # the piece of the inner field it lies in
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,79 @@
+"""The whole field, worked as planned, on every real field of ../shared/realdata up to --max-ha:
+one line per field with its area, the share of the whole field covered, the overlap without and
+with section control (--sections), the tractor's boundary crossings, the distance driven without
+working (turns and transits) for each route order on one headland, and the plan's time; then the
+time to plan 1,000 swaths (a 3,050 x 150 m strip worked across).
+
+    python3 benchmarks/whole_field.py [--max-ha 30] [--sections 6] [--headland-corners tight]
+
+The areas are exact (shapely on the applied strips, fields.planner.applied); times are wall
+seconds on a shared machine (CPU seconds beside them).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+from shapely.geometry import Polygon
+
+from fields import FieldError, read_fields
+from fields.field import Field
+from fields.planner import Settings, plan
+from fields.planner.applied import as_applied, crossings
+from fields.planner.pipeline import idle_distance
+from plan_every_field import FILES, REAL
+
+ORDERS = ("boustrophedon", "skip", "optimised")
+
+
+def one_field(field: Field, sections: int, corners: str) -> str:
+    t0, c0 = time.perf_counter(), time.process_time()
+    p = plan(field, Settings(headland_corners=corners))
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    whole, cut = as_applied(p), as_applied(p, sections)
+    idle = []
+    try:                          # one headland for every order: the widest the orders need
+        n = max(p.headland_passes, plan(field, Settings(order="boustrophedon", headland_corners=corners)).headland_passes)
+    except FieldError:
+        n = p.headland_passes
+    for order in ORDERS:
+        try:
+            q = plan(field, Settings(order=order, headland_passes=n, headland_corners=corners))
+            idle.append(f"{idle_distance(q.path.segments):>10.0f}")
+        except FieldError:
+            idle.append(f"{'refused':>10}")
+    return (f"{field.area_ha:>8.2f}{len(p.pieces):>4}{100 * whole.field_coverage_share:>9.2f}"
+            f"{100 * whole.coverage_share:>8.2f}{100 * whole.overlap_share:>8.2f}{100 * cut.overlap_share:>8.2f}"
+            f"{100 * cut.field_coverage_share:>8.2f}{crossings(p):>6}" + "".join(idle) + f"{seconds:>8.1f}{cpu:>7.1f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--max-ha", type=float, default=30.0, help="fields larger than this are listed, not planned")
+    parser.add_argument("--sections", type=int, default=6)
+    parser.add_argument("--headland-corners", default=Settings().headland_corners, choices=("tight", "parallel"))
+    args = parser.parse_args()
+    print(f"{'file':<26}{'field':<24}{'ha':>8}{'pcs':>4}{'field %':>9}{'work %':>8}{'ovl %':>8}"
+          f"{'ovl S %':>8}{'fld S %':>8}{'cross':>6}" + "".join(f"{o[:9]:>10}" for o in ORDERS) + f"{'plan s':>8}{'cpu s':>7}")
+    print(f"{'':<58}(% of the whole field; S: with {args.sections} sections; idle m without working by order)")
+    for name in FILES:
+        for field in read_fields(REAL / name):
+            label = f"{name.split('/')[-1][:25]:<26}{field.name[:23]:<24}"
+            if field.area_ha > args.max_ha:
+                print(f"{label}{field.area_ha:>8.2f}  (larger than --max-ha {args.max_ha:g})", flush=True)
+                continue
+            try:
+                print(label + one_field(field, args.sections, args.headland_corners), flush=True)
+            except FieldError as exc:
+                print(f"{label}{field.area_ha:>8.2f}  refused: {str(exc).split(': ', 2)[-1][:100]}", flush=True)
+    strip = Field("1,000 swaths", Polygon([(0, 0), (3050, 0), (3050, 150), (0, 150)]), None, "generated", "local metres")
+    for order in ("auto", "optimised"):
+        t0, c0 = time.perf_counter(), time.process_time()
+        p = plan(strip, Settings(order=order, driving_angle=math.pi / 2, headland_work=False))
+        print(f"1,000 swaths: {len(p.swaths)} swaths, order {order}: planned in {time.perf_counter() - t0:.1f} s "
+              f"({time.process_time() - c0:.1f} CPU s), {idle_distance(p.path.segments):.0f} m without working")
+
+
+if __name__ == "__main__":
+    main()
