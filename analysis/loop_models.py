@@ -11,10 +11,12 @@ Each component on the loop becomes a discrete block at its own step, inputs and 
 
 - trackers and routes declare theirs (``lateral_linearisation(speed, dt, along_track_error)``: a python-control
   StateSpace whose labels are port names);
-- the yaw plant, steering, GPS, gyro, pose EKF, yaw-rate MPC, notch, computation delay and watchdog
-  are linearised here, each from its own step equations and parameters without the nonlinearities a
+- the yaw plant, steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF, yaw-rate MPC, notch, computation
+  delay and watchdog are linearised here, each from its own step equations and parameters without the nonlinearities a
   small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
 - a composite subsystem is its inner network lifted over its step.
+A block may change from step to step with a period of its own (``Block.phases``: the INS EKF takes
+a fix on every n-th of its steps); the network's period then covers that cycle too.
 
 Schedule (orchestrator.engine): at each base instant continuous blocks publish the state they
 reached, sampled blocks step in the study's evaluation order (y = C x + D u, then x <- A x + B u),
