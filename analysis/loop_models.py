@@ -15,6 +15,7 @@ Each component on the loop becomes a discrete block at its own step, inputs and 
   delay and watchdog are linearised here, each from its own step equations and parameters without the nonlinearities a
   small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
 - a composite subsystem is its inner network lifted over its step.
+
 A block may change from step to step with a period of its own (``Block.phases``: the INS EKF takes
 a fix on every n-th of its steps); the network's period then covers that cycle too.
 
