@@ -29,7 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _simulated_lines(analysis, duration: float) -> list[str]:
     """Bisection on the steering command delay around the prediction at the reference's first
     operating point (the figure-8's path, a route's work speed: where a run spends its time)."""
-    from .margins import simulated_delay_limit
+    from .margins_simulation import simulated_delay_limit
 
     an = analysis.anatomy
     main = analysis.points[0]

@@ -21,27 +21,10 @@ command delay raised in whole steps): a second method for the delay limit.
 A time-based reference (the figure-8) leaves the tracker an along-track error that the speed loop
 sets (its steady speed excess v_d - v): it is read from a short run of the study and enters the
 trackers' linearisations (it raises v_d, and so the heading gain).
-
-Simulated check: the study run twice with the steering command delayed by d, the second time with
-the tractor started OFFSET to the side (the same seed: the same noise); the loop is stable when the
-two runs' cross-track errors (the tracker's error, reference - CG, across the reference's
-direction) have come together: their difference (RMS) below a quarter of the offset where both
-runs are on a straight in the second half
-of the run (its later half; the last quarter of the run when that is under 5 s). An unstable loop
-keeps them apart (its oscillation grows until a saturation, the steering's or the tracker's tanh,
-bounds it), a stable one pulls both onto the reference; the difference of the two runs removes the
-course's own excitation. Across, on the straights, because that is where the margins are computed,
-and because on a route followed by arc length the two tractors may settle a little apart along it
-(nothing pulls them back along the path; the route point also steps by its 0.1 m spacing): on a
-straight that changes nothing across it, in a turn it shifts when each slows down. A fast instability (near the yaw-rate loop's
-phase crossover) moves the CG little: it shows as the steering command sitting at the yaw-rate
-controller's angle or rate bound on more than a tenth of its samples (a stable run touches the
-rate bound at the junctions of the path only, under 3 %).
 """
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -51,10 +34,9 @@ from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
 from .loop_models import NoLinearModel, OpenLoop, OperatingPoint, network_of
+from .loop_anatomy import Anatomy, anatomy  # noqa: F401 (the module's API)
+from .margins_simulation import simulate, simulated_delay_limit, simulated_run  # noqa: F401 (the module's API)
 
-OFFSET = 0.3                  # m: the second run's tractor starts this far to the side
-CONVERGED = 0.25              # stable: RMS difference of the two runs' cross-track errors at the end < CONVERGED x OFFSET
-SATURATED = 0.10              # unstable: the steering command at its angle or rate bound on more of its samples
 TRIM_TIME = 40.0              # s of the study run to read the speed loop's steady excess
 STABLE_RADIUS = 1.0 + 1e-9
 
@@ -124,116 +106,6 @@ def margins_of(loop: OpenLoop, w_min: float = 1e-3, points: int = 3000) -> Margi
         elif re < -1.0:
             reduction = max(reduction or 0.0, 1.0 / -re)
     return Margins(gain, reduction, best_pm, wc, best_delay, wp)
-
-
-# --- the loop's anatomy in a study ----------------------------------------------------------
-
-@dataclass
-class Anatomy:
-    """Where the loop is opened and how its actuator delay is set."""
-
-    steering_break: tuple[str, str]          # (component, input) that receives the steering command
-    path_break: tuple[str, str]              # (component, input) that receives the tracker's yaw-rate command
-    delay_key: str                           # the study value of the steering's command delay
-    own_delay: float                         # its value in the study [s]
-    delay_step: float                        # the steering's step (the delay's resolution) [s]
-    tracker: str
-    reference: str
-    offset_key: str                          # the yaw plant's initial north position (simulated check)
-    own_offset: float
-    command_signal: str = ""                 # recorded steering command (component.output)
-    command_step: float = 0.05               # its sample time [s]
-    steer_limit: float = math.inf            # the yaw-rate controller's bounds on it [rad], [rad/s]
-    steer_rate_limit: float = math.inf
-
-
-def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, float]:
-    """(break, delay key, own delay, step) of the steering, at the top level or inside a subsystem."""
-    from orchestrator.composite import CompositeComponent
-
-    model = resolve(study)
-    found = model.find(role="steering")
-    if len(found) == 1:
-        name = found[0]
-        step = study.components[name].step or study.study.base_step
-        return (name, "steer_angle_cmd"), f"{name}.command_delay", float(model.parameters(name)["command_delay"]), step
-    if len(found) > 1:
-        raise NoLinearModel(f"{study.where}: {purpose}: more than one steering component ({', '.join(found)})")
-    for name in study.components:
-        cls = model.component_class(name)
-        if not issubclass(cls, CompositeComponent):
-            continue
-        inner = cls.subsystem
-        inner_model = cls.resolver.resolve(inner)
-        steering = inner_model.find(role="steering")
-        if len(steering) != 1:
-            continue
-        for port in inner.exports.inputs:
-            if (steering[0], "steer_angle_cmd") in [tuple(t) for t in inner.exports.input_targets(port)]:
-                key = f"{steering[0]}.command_delay"
-                value = model.parameters(name).get(key)
-                own = float(value if value is not None else inner_model.parameters(steering[0])["command_delay"])
-                step = inner.components[steering[0]].step or inner.study.base_step
-                return (name, port), f"{name}.{key}", own, step
-    hardware = [n for n in model.find(role="tractor") if not issubclass(model.component_class(n), CompositeComponent)]
-    if hardware:
-        raise NoLinearModel(f"{study.where}: {purpose}: the tractor {hardware[0]!r} "
-                            f"({study.components[hardware[0]].type}) is hardware: there is no model of it to derive "
-                            f"margins from (its simulated twin has one, e.g. studies/figure8_hardware_layout.toml)")
-    raise NoLinearModel(f"{study.where}: {purpose}: no steering component (role 'steering'): no steering loop to analyse")
-
-
-def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
-    """Find the loop's parts by role; a NoLinearModel (exit 2) says why a study has no loop."""
-    steering_break, delay_key, own, step = _steering(study, purpose)
-    model = resolve(study)
-    trackers = model.find(role="tracker")
-    if len(trackers) != 1:
-        fed = {(c.target, c.input): c for c in study.connections}.get(steering_break)
-        source = f"; its steering command comes from {fed.source}.{fed.output}" if fed else \
-            "; its steering command is an input of the study (a subsystem's export)" if study.exports else ""
-        raise NoLinearModel(f"{study.where}: {purpose}: no closed guidance loop: "
-                            + ("no tracker (role 'tracker') steers the tractor" if not trackers
-                               else f"{len(trackers)} trackers ({', '.join(trackers)})") + source)
-    tracker = trackers[0]
-    targets = [(c.target, c.input) for c in study.connections if c.source == tracker and c.output == "yaw_rate_desired"]
-    if len(targets) != 1:
-        raise NoLinearModel(f"{study.where}: {purpose}: {tracker}.yaw_rate_desired drives {len(targets)} inputs, expected one")
-    references = [n for n in model.find(role="reference") if hasattr(model.component_class(n), "operating_points")]
-    if len(references) != 1:
-        raise NoLinearModel(f"{study.where}: {purpose}: expected one reference that declares its operating points "
-                            f"(role 'reference'), found {len(references)}")
-    plant = _plant(study, purpose)
-    fed = {(c.target, c.input): c for c in study.connections}.get(steering_break)
-    command = f"{fed.source}.{fed.output}" if fed else ""
-    command_step = (study.components[fed.source].step or study.study.base_step) if fed else study.study.base_step
-    limits = {}
-    controllers = model.find(role="yaw_rate_controller")
-    if len(controllers) == 1:
-        p = model.parameters(controllers[0])
-        limits = {"steer_limit": float(p["steer_limit"]), "steer_rate_limit": float(p["steer_rate_limit"])}
-    return Anatomy(steering_break, targets[0], delay_key, own, step, tracker, references[0], *plant, command,
-                   command_step, **limits)
-
-
-def _plant(study: Study, purpose: str) -> tuple[str, float]:
-    """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
-    from orchestrator.composite import CompositeComponent
-
-    model = resolve(study)
-    plants = model.find(role="yaw_plant")
-    if len(plants) == 1:
-        return f"{plants[0]}.y0", float(model.parameters(plants[0])["y0"])
-    for name in study.components:
-        cls = model.component_class(name)
-        if not issubclass(cls, CompositeComponent):
-            continue
-        inner = cls.resolver.resolve(cls.subsystem)
-        if len(inner.find(role="yaw_plant")) == 1:
-            plant = inner.find(role="yaw_plant")[0]
-            value = model.parameters(name).get(f"{plant}.y0")
-            return f"{name}.{plant}.y0", float(value if value is not None else inner.parameters(plant)["y0"])
-    raise NoLinearModel(f"{study.where}: {purpose}: no yaw plant (role 'yaw_plant')")
 
 
 # --- analysis -------------------------------------------------------------------------------
@@ -344,115 +216,6 @@ def analyse(study: Study, speed_excess_value: float | None = None, progress: Cal
         limit = pole_delay_limit(study, an, op, guess) if ok else an.own_delay
         points.append(PointResult(op, margins, loops, ok, limit, excess))
     return Analysis(study, an, points, notes)
-
-
-# --- simulation ------------------------------------------------------------------------------
-
-def simulate(study: Study, duration: float):
-    """The study's signals over its first ``duration`` seconds (in memory)."""
-    from orchestrator.build import build_system
-    from orchestrator.engine import Simulation
-
-    study = study.with_values({"study.stop_time": min(study.study.stop_time, study.study.start_time + duration)})
-    return Simulation(build_system(resolve(study))).run().to_frame()
-
-
-@dataclass
-class SimulatedRun:
-    delay: float
-    separation: float             # RMS difference of the two runs' cross-track errors at the end (straights) [m]
-    saturated: float              # share of the steering command's samples at its angle or rate bound
-    wall_time: float
-
-    @property
-    def stable(self) -> bool:
-        return self.separation < CONVERGED * OFFSET and self.saturated <= SATURATED
-
-    def describe(self) -> str:
-        return (f"{'stable' if self.stable else 'LOST STABILITY'} (cross-track errors of the runs started {OFFSET:g} m "
-                f"apart end {self.separation:.3f} m apart; steering command at a bound {100 * self.saturated:.1f} % "
-                f"of the time; {self.wall_time:.1f} s)")
-
-
-def saturated_share(frame, study: Study, an: Anatomy, settle: float = 15.0) -> float:
-    """Share of the steering command's samples after ``settle`` s at its angle bound or moved by
-    its rate bound (98 %)."""
-    if not an.command_signal or an.command_signal not in frame:
-        return 0.0
-    t = frame["t"].to_numpy()
-    k = (t - study.study.start_time) / an.command_step
-    own = np.abs(k - np.round(k)) < 1e-6
-    t, u = t[own], frame[an.command_signal].to_numpy()[own]
-    at_bound = (np.abs(u[1:]) >= 0.98 * an.steer_limit) | \
-        (np.abs(np.diff(u)) >= 0.98 * an.steer_rate_limit * an.command_step)
-    window = t[1:] > t[0] + min(settle, 0.5 * (t[-1] - t[0]))
-    return float(np.mean(at_bound[window])) if window.any() else 0.0
-
-
-def cross_track_error(frame, an: Anatomy) -> np.ndarray:
-    """The tracker's error (reference - CG) across the reference's direction, left positive."""
-    ex, ey = frame[f"{an.tracker}.error_x"].to_numpy(), frame[f"{an.tracker}.error_y"].to_numpy()
-    vx, vy = frame[f"{an.reference}.xdot_ref"].to_numpy(), frame[f"{an.reference}.ydot_ref"].to_numpy()
-    speed = np.hypot(vx, vy)
-    return np.where(speed > 1e-6, (-vy * ex + vx * ey) / np.where(speed > 1e-6, speed, 1.0), np.hypot(ex, ey))
-
-
-def simulated_run(study: Study, an: Anatomy, delay: float, duration: float, values: dict | None = None) -> SimulatedRun:
-    """The study (with ``values`` set) run twice with the steering command delayed by ``delay`` [s]
-    in all, the second time with the tractor started OFFSET to the side (module docstring)."""
-    start = time.perf_counter()
-    delayed = study.with_values({**(values or {}), an.delay_key: delay})
-    a = simulate(delayed, duration)
-    b = simulate(delayed.with_values({an.offset_key: an.own_offset + OFFSET}), duration)
-    n = min(len(a), len(b))
-    t = a["t"].to_numpy()[:n]
-    gap = np.abs(cross_track_error(a, an)[:n] - cross_track_error(b, an)[:n])
-    g = f"{an.reference}.yaw_rate_ref"
-    straight = (np.abs(a[g].to_numpy()[:n]) < 1e-3) & (np.abs(b[g].to_numpy()[:n]) < 1e-3)
-    second_half = t > t[0] + 0.5 * (t[-1] - t[0])
-    on = np.flatnonzero(straight & second_half)
-    if len(on) * (t[1] - t[0]) >= 5.0:
-        late = np.zeros(n, bool)
-        late[on[len(on) // 2:]] = True                 # the later half of the straights of the second half
-    else:
-        late = t >= t[0] + 0.75 * (t[-1] - t[0])
-    return SimulatedRun(delay, float(np.sqrt(np.mean(gap[late] ** 2))),
-                        max(saturated_share(a, delayed, an), saturated_share(b, delayed, an)), time.perf_counter() - start)
-
-
-def simulated_delay_limit(study: Study, an: Anatomy, predicted: float, duration: float,
-                          progress: Callable[[str], None] | None = None,
-                          max_runs: int = 10) -> tuple[float, float, list[SimulatedRun]]:
-    """(largest total steering delay found stable, smallest found unstable) by bisection, from a
-    bracket of +-15 % of the predicted margin around the predicted limit (widened when the
-    simulation disagrees) down to 2 % of the margin (at least 0.01 s); nan / inf when the bracket
-    could not be closed within ``max_runs`` pairs of runs."""
-    runs: list[SimulatedRun] = []
-    own = an.own_delay
-    margin = max(predicted - own, 0.05) if np.isfinite(predicted) else 1.0
-    tolerance = max(0.01, 0.02 * margin)
-
-    def stable(d: float) -> bool:
-        r = simulated_run(study, an, d, duration)
-        runs.append(r)
-        if progress:
-            progress(f"  run {len(runs)}: steering command delay {d:.3f} s ... {r.describe()}")
-        return r.stable
-
-    lo, hi = own + 0.85 * margin, own + 1.15 * margin
-    while not stable(lo):
-        hi = lo
-        if lo <= own + 1e-9 or len(runs) >= max_runs:
-            return math.nan, hi, runs
-        lo = own + 0.7 * (lo - own) if lo - own > 0.02 else own
-    while stable(hi):
-        lo, hi = hi, own + 1.3 * (hi - own)
-        if len(runs) >= max_runs:
-            return lo, math.inf, runs
-    while hi - lo > tolerance and len(runs) < max_runs:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
-    return lo, hi, runs
 
 
 # --- report --------------------------------------------------------------------------------

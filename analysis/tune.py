@@ -304,7 +304,7 @@ def simulated_check(p: Proposal, duration: float, progress: Callable[[str], None
     from orchestrator.runner import run_study
 
     from .figure8 import PAPER_BOUNDS
-    from .margins import simulated_delay_limit
+    from .margins_simulation import simulated_delay_limit
 
     say = progress or (lambda line: None)
     study = p.study

@@ -167,7 +167,7 @@ def plot(curves, figure: Path) -> None:
 
 
 def iso_table(seeds: list[int]) -> None:
-    from analysis.field_coverage import repeatability
+    from analysis.field_tracks import repeatability
 
     print("3. ISO 12188-2-style figures (studies/field_line_test.toml: the F2C test parcel's first two swaths, "
           "both receivers' RTK error 1.5 cm white + 1.3 cm Gauss-Markov over 5 min)")

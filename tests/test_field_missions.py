@@ -302,7 +302,7 @@ def test_a_real_plot_is_covered_by_the_guidance_stack():
 def test_the_coverage_metric_agrees_with_a_monte_carlo_count():
     """covered and overlap areas (shapely on the swept strips) against a second method: 2 M
     random points counting the strips each lies in (a grid would alias the 5 cm overlaps)."""
-    from analysis.field_coverage import _samples, _shape, _strips, mission
+    from analysis.field_tracks import _samples, _shape, _strips, mission
 
     overrides = ["field.max_swaths=3", "field.headland_work=0"]
     res = _run("field_plot_mounted.toml", *overrides)

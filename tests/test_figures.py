@@ -141,7 +141,7 @@ def test_identify_message_names_off_scale_roots_and_right_half_plane_zeros():
 
 
 def test_in_field_frame_undoes_the_mission_frame():
-    from analysis.field_coverage import _in_field_frame
+    from analysis.field_tracks import _in_field_frame
     from components.field_route import to_mission
 
     rng = np.random.default_rng(3)

@@ -335,7 +335,7 @@ def test_line_acquisition_after_each_turn_against_a_second_computation():
     curvature, and ISO-style cross-track error along the whole route by interpolation."""
     from shapely.geometry import LineString, Point
 
-    from analysis.field_coverage import mission
+    from analysis.field_tracks import mission
     from fields.planner import SWATH, TURN
 
     overrides = [f"field.path={PARTFIELDS}", "field.name=SW_Curitiba_Simple", "field.max_swaths=3",
@@ -376,7 +376,7 @@ def test_route_cross_track_interpolates_between_route_points():
     """On an arc of radius 20 m sampled every 2 m, the distance of points to the route by
     interpolation is within the chord's sagitta (2^2 / (8 R) = 2.5 cm) of the exact distance to the
     circle, and exact on a straight route; the nearest route point can be a metre off along it."""
-    from analysis.field_coverage import route_cross_track
+    from analysis.field_ground import route_cross_track
 
     theta = np.arange(0, 1.5, 0.1)
     rx, ry = 20 * np.sin(theta), 20 * (1 - np.cos(theta))
@@ -400,7 +400,7 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
     vertices is nearer than the track at the same place)."""
     from shapely.geometry import LineString, Point
 
-    from analysis.field_coverage import _samples, _swath_frames, mission
+    from analysis.field_tracks import _samples, _swath_frames, mission
     from fields.planner import SWATH
 
     overrides = [f"field.path={PARCEL}", "operator.pauses=[[1, 60.0]]"]
@@ -445,7 +445,7 @@ def test_a_standing_implement_jittering_gives_a_strip_of_few_points():
     area as the straight 10 m strip (10 m x 3 m plus the round join: at most pi 1.5^2 more)."""
     import pandas as pd
 
-    from analysis.field_coverage import _strips
+    from analysis.field_tracks import _strips
 
     rng = np.random.default_rng(1)
     n_drive, n_stand = 1001, 2000

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from analysis.margins import simulated_run
+from analysis.margins_simulation import simulated_run
 from analysis.tune import Targets, propose
 from orchestrator.resolver import resolve
 from orchestrator.runner import run_study

@@ -1,0 +1,169 @@
+"""The trajectories of a field mission in the plan's geometry: the run's samples (tractor CG and
+implement working point) in the mission frame or the field's east/north frame, the swath lines'
+frames, cross-track errors to them, the implement's swept strips and pass-to-pass gaps.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from fields.planner import SWATH
+from orchestrator.resolver import resolve
+from orchestrator.study import Study
+
+from .signals import component_named, signal
+STEP = 0.1          # s: the geometry's sampling of the trajectories
+
+
+def mission(study: Study):
+    """(field, plan, to_mission) of the study's route component (planned as the run planned it)."""
+    from components.field_route import planned, route_frame, settings_of, to_mission
+
+    name = component_named(study, "route")
+    p = resolve(study).parameters(name)
+    field, plan = planned(str(p["path"]), str(p["crs"]), str(p["name"]), settings_of(p))
+    origin, rotation = route_frame(plan.path)
+    return field, plan, lambda xy: to_mission(xy, origin, rotation), name
+
+
+def _shape(geom, conv):
+    from shapely.geometry import Polygon
+
+    return Polygon(conv(np.asarray(geom.exterior.coords)), [conv(np.asarray(h.coords)) for h in geom.interiors])
+
+
+def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
+    t = frame["t"].to_numpy()
+    h = float(np.median(np.diff(t))) if len(t) > 1 else STEP
+    every = max(1, int(round(STEP / h)))
+    f = frame.iloc[::every].reset_index(drop=True)
+    route = component_named(study, "route")
+    return pd.DataFrame({
+        "t": f["t"], "x": signal(f, study, "yaw_plant", "x_cg"), "y": signal(f, study, "yaw_plant", "y_cg"),
+        "ix": signal(f, study, "implement", "x"), "iy": signal(f, study, "implement", "y"),
+        "segment": f[f"{route}.segment"], "swath": f[f"{route}.swath"], "impl_segment": f[f"{route}.implement_segment"],
+        "working": f[f"{route}.working"], "speed": signal(f, study, "drivetrain", "speed"),
+        "progress": f[f"{route}.progress"]})
+
+
+def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
+    """The samples' positions from the mission frame back to the field's east/north frame:
+    p_field = R(rotation) p_mission + origin (the inverse of components.field_route.to_mission)."""
+    from components.field_route import route_frame
+
+    origin, rotation = route_frame(plan.path)
+    c, sn = math.cos(rotation), math.sin(rotation)
+    out = s.copy()
+    for a, b in (("x", "y"), ("ix", "iy")):
+        mx, my = s[a].to_numpy(), s[b].to_numpy()
+        out[a], out[b] = origin[0] + c * mx - sn * my, origin[1] + sn * mx + c * my
+    return out
+
+
+def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Swath index -> (start, unit direction) in the mission frame."""
+    out = {}
+    for seg in (s for s in plan.path.segments if s.kind == SWATH):
+        a2, b2 = conv(seg.points[[0, -1], :2])
+        d = (b2 - a2) / max(np.hypot(*(b2 - a2)), 1e-9)
+        out[int(seg.index)] = (a2, d)
+    return out
+
+
+def _cross_track(px, py, swath, frames):
+    """Signed distance (left positive) of each point to its swath's line; NaN off swaths."""
+    out = np.full(len(px), np.nan)
+    for k, (a, d) in frames.items():
+        m = swath == k
+        if m.any():
+            out[m] = -d[1] * (px[m] - a[0]) + d[0] * (py[m] - a[1])
+    return out
+
+
+def _stats(e: np.ndarray) -> tuple[float, float, float]:
+    e = np.abs(e[np.isfinite(e)])
+    if not len(e):
+        return math.nan, math.nan, math.nan
+    return float(np.sqrt(np.mean(e ** 2))), float(np.percentile(e, 95)), float(e.max())
+
+
+def _thinned(xy: np.ndarray, spacing: float = 0.05) -> np.ndarray:
+    """The points of a track at least ``spacing`` from the last one kept (and its last point): a
+    standing implement's jitter would otherwise make a line GEOS cannot buffer in memory."""
+    keep, last = [0], xy[0]
+    for i in range(1, len(xy)):
+        if abs(xy[i, 0] - last[0]) + abs(xy[i, 1] - last[1]) >= spacing:
+            keep.append(i)
+            last = xy[i]
+    if keep[-1] != len(xy) - 1:
+        keep.append(len(xy) - 1)
+    return xy[keep]
+
+
+def _strips(s: pd.DataFrame, width: float):
+    """The implement's swept strips: one per run of working samples."""
+    from shapely.geometry import LineString
+
+    work = s["working"].to_numpy() > 0.5
+    edges = np.diff(np.concatenate([[0], work.astype(int), [0]]))
+    strips = []
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        xy = _thinned(np.column_stack([s["ix"].to_numpy()[a:b], s["iy"].to_numpy()[a:b]]))
+        if len(xy) >= 2:
+            line = LineString(xy)
+            strips.append(line.buffer(0.5 * width, cap_style="flat", join_style="round"))
+    return strips
+
+
+IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a track's columns in _samples
+
+
+def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray, np.ndarray] | None:
+    """The implement's (or the tractor's) track on swath j as (along, across) in ``frame`` (start,
+    direction), sorted along; None with fewer than 10 samples."""
+    a, d = frame
+    px, py, segment = point
+    m = (s[segment].to_numpy() == SWATH) & (s["swath"].to_numpy() == j)
+    if m.sum() < 10:
+        return None
+    rel = np.column_stack([s[px].to_numpy()[m] - a[0], s[py].to_numpy()[m] - a[1]])
+    along, across = rel @ d, rel @ np.array([-d[1], d[0]])
+    order = np.argsort(along)
+    return along[order], across[order]
+
+
+def _gap(one, other) -> np.ndarray:
+    """other's across minus one's, 1 m apart along their common part (interpolated on both)."""
+    if one is None or other is None:
+        return np.zeros(0)
+    lo, hi = max(one[0][0], other[0][0]), min(one[0][-1], other[0][-1])
+    if hi - lo < 2.0:
+        return np.zeros(0)
+    grid = np.arange(lo, hi, 1.0)
+    return np.interp(grid, *other) - np.interp(grid, *one)
+
+
+def _pass_to_pass(s: pd.DataFrame, frames, spacing: float, point=IMPLEMENT) -> np.ndarray:
+    """Spacing errors between adjacent implement (or tractor) passes (line k and k + 1), 1 m apart
+    along them."""
+    errors = []
+    for k in sorted(frames):
+        if k + 1 in frames:
+            gap = _gap(_track(s, k, frames[k], point), _track(s, k + 1, frames[k], point))
+            if len(gap):
+                errors.append(np.abs(gap) - spacing)
+    return np.concatenate(errors) if errors else np.zeros(0)
+
+
+def repeatability(first: tuple[pd.DataFrame, Study], second: tuple[pd.DataFrame, Study], swath: int) -> np.ndarray:
+    """The same line driven twice (two runs: another day, another realisation of every sensor's
+    errors): the implement's across-track difference between the two tracks of ``swath``, 1 m apart
+    along their common part."""
+    tracks = []
+    for frame, study in (first, second):
+        _, plan, conv, _ = mission(study)
+        frames = _swath_frames(plan, conv)
+        tracks.append(_track(_samples(frame, study), swath, frames[swath]) if swath in frames else None)
+    return _gap(*tracks)
