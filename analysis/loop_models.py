@@ -11,10 +11,13 @@ Each component on the loop becomes a discrete block at its own step, inputs and 
 
 - trackers and routes declare theirs (``lateral_linearisation(speed, dt, along_track_error)``: a python-control
   StateSpace whose labels are port names);
-- the yaw plant, steering, GPS, gyro, pose EKF, yaw-rate MPC, notch, computation delay and watchdog
-  are linearised here, each from its own step equations and parameters without the nonlinearities a
+- the yaw plant, steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF, yaw-rate MPC, notch, computation
+  delay and watchdog are linearised here, each from its own step equations and parameters without the nonlinearities a
   small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
 - a composite subsystem is its inner network lifted over its step.
+
+A block may change from step to step with a period of its own (``Block.phases``: the INS EKF takes
+a fix on every n-th of its steps); the network's period then covers that cycle too.
 
 Schedule (orchestrator.engine): at each base instant continuous blocks publish the state they
 reached, sampled blocks step in the study's evaluation order (y = C x + D u, then x <- A x + B u),
@@ -65,6 +68,7 @@ class Block:
     D: np.ndarray
     ratio: int = 1
     sampled: bool = True
+    phases: list | None = None
 
     @classmethod
     def of(cls, name: str, inputs, outputs, A=None, B=None, C=None, D=None, ratio: int = 1,
@@ -80,6 +84,16 @@ class Block:
     @property
     def n(self) -> int:
         return self.A.shape[0]
+
+    @property
+    def cycle(self) -> int:
+        """Its own steps per period: 1, or the length of ``phases``."""
+        return len(self.phases) if self.phases else 1
+
+    def at(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, C, D) of its ``j``-th own step: the same each step, or ``phases[j mod cycle]`` for a
+        periodically time-varying block (an estimator that takes a fix every n-th of its steps)."""
+        return self.phases[j % len(self.phases)] if self.phases else (self.A, self.B, self.C, self.D)
 
 
 def delay_line(name: str, inputs: list[str], outputs: list[str], samples: int) -> Block:
@@ -222,6 +236,106 @@ def pose_ekf(comp, step: float, speed: float) -> Block:
     return Block.of(comp.name, ["gps_y", "steer_angle"], ["y_rear", "heading", "y_cg"], A, B, C, D)
 
 
+INS_INPUTS = ["gps_x", "gps_y", "yaw_rate", "roll", "accel_left"]
+INS_OUTPUTS = ["y_rear", "heading", "y_cg", "lateral_velocity"]
+
+
+def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int = 0) -> Block:
+    """The GNSS/INS EKF (components.ins_ekf) on the straight, level ground, k at its initial value
+    k0 (f_y = 0 leaves k unobservable and uncoupled), its gains periodic: a fix every ``fix_every``-th
+    of its steps, at the steps j = ``fix_phase`` (mod fix_every). The covariance recursion is run with
+    the component's own predict and update until the gains of a whole cycle settle; then, all eight
+    states s = [x, y, psi, b_g, e_v, k, b_x, b_y] and the inputs of the previous step (the component
+    predicts with them):
+
+        s- = F s + dt (0, -k0 v f_y', omega', 0, ...)   F = I + the component's own Jacobian entries,
+                                                         b_x, b_y decaying by exp(-dt / T)
+        s  = s- + K_j (z - H s- + (0, h roll))         on a fix step (H: the component's antenna Jacobian;
+                                                         the antenna's lean -h roll with terrain compensation)
+
+    outputs the updated R (north), heading, CG = R + l_r psi and the crab -k0 v f_y of this step."""
+    key = (repr(sorted(comp.p.items())), step, speed, fix_every, fix_phase)
+    if key not in _INS_BLOCKS:
+        _INS_BLOCKS[key] = _ins_ekf(comp, step, speed, fix_every, fix_phase)
+    block = _INS_BLOCKS[key]
+    return Block(comp.name, block.inputs, block.outputs, block.A, block.B, block.C, block.D, block.ratio,
+                 block.sampled, block.phases)
+
+
+_INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters and operating point (seconds each)
+
+
+def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) -> Block:
+    from components.ins_ekf import INSEKF
+
+    p = comp.p
+    ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": 0.0})
+    ekf.initialize(0.0, step)
+    n, R = 8, (p["fix_noise_std"] ** 2 + (p["antenna_height"] * p["attitude_noise_std"]) ** 2) * np.eye(2)
+    gains, previous = [None] * fix_every, None
+    for cycle in range(20000):
+        for j in range(fix_every):
+            ekf.predict(0.0, 0.0, 0.0, 0.0, speed, step)
+            if j == fix_phase % fix_every:
+                h, H = ekf.antenna(0.0, 0.0)
+                gains[j] = np.linalg.solve(H @ ekf.P @ H.T + R, H @ ekf.P).T
+                ekf.update(h, h, H, R)
+        K = gains[fix_phase % fix_every]
+        if previous is not None and np.allclose(previous, K, rtol=1e-10, atol=1e-14):
+            break
+        previous = K.copy()
+    k0 = float(p["slip_compliance0"]) if p["crab_estimate"] else 0.0
+    ekf.s = np.array([0.0, 0.0, 0.0, 0.0, 0.0, k0, 0.0, 0.0])
+    _, entries, _ = ekf.jacobian(0.0, 0.0, 0.0, 0.0, speed, step)
+    F = np.eye(n)
+    for (i, j), f in entries.items():
+        F[i, j] += f
+    F[6, 6] = F[7, 7] = math.exp(-step / p["degraded_time_constant"])
+    _, H = ekf.antenna(0.0, 0.0)
+    lean = -float(p["antenna_height"]) if p["terrain_compensation"] else 0.0     # d(antenna north) / d roll
+    # X = [s; omega'; f_y'], u = (gps_x, gps_y, yaw_rate, roll, accel_left)
+    G = np.zeros((n, 2))
+    G[1, 1], G[2, 0] = -step * k0 * speed, step                  # from f_y' and omega'
+    M = np.hstack([F, G])                                        # s- from X
+    lr = float(p["l_r"])
+    out = np.zeros((4, n))
+    out[0, 1], out[1, 2], out[2, 1], out[2, 2] = 1.0, 1.0, 1.0, lr
+    crab = np.array([0.0, 0.0, 0.0, 0.0, -k0 * speed])           # lateral_velocity from this step's f_y
+    hold = np.zeros((2, 5))
+    hold[0, 2] = hold[1, 4] = 1.0                                # omega', f_y' <- this step's inputs
+    phases = []
+    for j in range(fix_every):
+        if gains[j] is None:
+            Ms, Ns = M, np.zeros((n, 5))
+        else:
+            K = gains[j]
+            Ms = M - K @ H @ M
+            Ns = np.zeros((n, 5))
+            Ns[:, 0:2] = K
+            Ns[:, 3] = K[:, 1] * -lean
+        A = np.vstack([Ms, np.zeros((2, n + 2))])
+        B = np.vstack([Ns, hold])
+        C = out @ Ms
+        D = out @ Ns
+        D[3] += crab
+        phases.append((A, B, C, D))
+    block = Block.of(comp.name, INS_INPUTS, INS_OUTPUTS, *phases[0])
+    block.phases = phases if fix_every > 1 else None
+    return block
+
+
+def imu_sensor(comp, step: float, speed: float) -> Block:
+    """The IMU (components.imu_sensor) level and heading east without bias and noise: the gyro reads
+    the heading rate (cos(phi) cos(theta) = 1 to first order), roll reads roll, and the left specific
+    force is the north acceleration by a difference over one sample plus the gravity of the roll,
+    f_y = (v_n - v_n') / dt + g phi (the east acceleration is 0 on the operating point)."""
+    from components.models.terrain import GRAVITY
+
+    return Block.of(comp.name, ["yaw_rate", "vel_north", "roll"], ["yaw_rate", "accel_left", "roll"],
+                    A=[[0.0]], B=[[0.0, 1.0, 0.0]], C=[[0.0], [-1.0 / step], [0.0]],
+                    D=[[1.0, 0.0, 0.0], [0.0, 1.0 / step, GRAVITY], [0.0, 0.0, 1.0]])
+
+
 def yaw_rate_mpc(comp, step: float, speed: float) -> Block:
     """The MPC while no constraint is active (components.models.condensed_mpc): the first move
     du = K [x_k; u_{k-1}; gamma - gamma_d], K = -(H^-1 G)[0], with its model advanced by the measured
@@ -272,6 +386,8 @@ def linear_models() -> dict[type, object]:
     from components.computation_delay import ComputationDelay
     from components.gps_sensor import GPSSensor
     from components.gyro_sensor import GyroSensor
+    from components.imu_sensor import IMUSensor
+    from components.ins_ekf import INSEKF
     from components.pose_ekf import PoseEKF
     from components.safety_watchdog import SafetyWatchdog
     from components.steering_hydraulics import SteeringHydraulics
@@ -281,7 +397,7 @@ def linear_models() -> dict[type, object]:
 
     return {TractorYawPlant: yaw_plant, SteeringHydraulics: steering_hydraulics, GPSSensor: gps_sensor,
             PoseEKF: pose_ekf, YawRateMPC: yaw_rate_mpc, YawRateNotch: yaw_rate_notch,
-            ComputationDelay: computation_delay,
+            ComputationDelay: computation_delay, INSEKF: ins_ekf, IMUSensor: imu_sensor,
             GyroSensor: lambda c, step, v: passthrough(c.name, {"yaw_rate": "yaw_rate_measured"}),
             SafetyWatchdog: lambda c, step, v: passthrough(c.name, {"steer_angle_cmd": "steer_angle_cmd_out"})}
 
@@ -314,7 +430,7 @@ class Network:
     period: int = field(init=False)
 
     def __post_init__(self) -> None:
-        self.period = math.lcm(*(b.ratio for b in self.blocks.values())) if self.blocks else 1
+        self.period = math.lcm(*(b.ratio * b.cycle for b in self.blocks.values())) if self.blocks else 1
         self._layout: dict[str, tuple[slice, slice]] = {}
         i = 0
         for name, b in self.blocks.items():
@@ -363,15 +479,17 @@ class Network:
         for k in range(self.period if instants is None else instants):
             for b in continuous:
                 if k % b.ratio == 0:
-                    Y[b.name] = b.C @ S[b.name]
+                    Y[b.name] = b.at(k // b.ratio)[2] @ S[b.name]
             for b in sampled:
                 if k % b.ratio == 0:
                     U = gather(b.name)
-                    Y[b.name] = b.C @ S[b.name] + b.D @ U
-                    S[b.name] = b.A @ S[b.name] + b.B @ U
+                    A, B, C, D = b.at(k // b.ratio)
+                    Y[b.name] = C @ S[b.name] + D @ U
+                    S[b.name] = A @ S[b.name] + B @ U
             for b in continuous:
                 if k % b.ratio == 0:
-                    S[b.name] = b.A @ S[b.name] + b.B @ gather(b.name)
+                    A, B, _, _ = b.at(k // b.ratio)
+                    S[b.name] = A @ S[b.name] + B @ gather(b.name)
         X = np.vstack([np.vstack([S[b], Y[b]]) for b in self.blocks]).reshape(self.n, N)
         return X, captured, S, Y
 
@@ -429,7 +547,7 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
     declared system (inputs it leaves out: no effect). A law changed without its linearisation is
     refused here rather than analysed wrongly."""
     trim = {"x_ref": 10.0 + op.along_track_error, "y_ref": 0.0, "xdot_ref": op.speed, "ydot_ref": 0.0, "x": 10.0,
-            "y": 0.0, "heading": 0.0, "yaw_rate_ref": 0.0}
+            "y": 0.0, "heading": 0.0, "yaw_rate_ref": 0.0, "lateral_velocity": 0.0}
     ports = [p for p in comp.declared("input") if p in trim]
     outputs = list(lin.output_labels)
 
@@ -536,6 +654,17 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
         if block is not None:
             blocks[name] = block
     sources = {(c.target, c.input): (c.source, c.output) for c in system.connections}
+    order = [n.name for n in system.sampled_order]
+    for name, block in blocks.items():
+        comp = system.nodes[name].component
+        source = sources.get((name, "gps_y"), (None,))[0]
+        if models.get(type(comp)) is ins_ekf and source in system.nodes:
+            # a new fix every n-th of its steps: at the receiver's instants when the receiver steps first
+            node = system.nodes[name]
+            every = max(1, system.nodes[source].ratio // node.ratio)
+            first = source in order and order.index(source) < order.index(name)
+            blocks[name] = ins_ekf(comp, node.step, op.speed, every, 0 if first else 1)
+            blocks[name].ratio = node.ratio
     for (target, port), (source, output) in sources.items():
         if target in blocks and port in blocks[target].inputs and source not in blocks:
             comp = system.nodes[source].component
@@ -543,4 +672,4 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
                 raise NoLinearModel(f"{study.where}: {purpose}: component {source!r} ({_type_name(comp)}) drives "
                                     f"{target}.{port} in the guidance loop and has no linear model (a method "
                                     f"lateral_linearisation, or one in analysis.loop_models)")
-    return Network(blocks, [n.name for n in system.sampled_order], sources, study.study.base_step)
+    return Network(blocks, order, sources, study.study.base_step)

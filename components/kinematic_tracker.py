@@ -66,8 +66,8 @@ def trim_along_track_error(p: Mapping[str, float], speed_excess: float) -> float
 
 # The lateral channel of a tracker about a straight reference heading east (psi = 0) with the CG on
 # it: the ports whose small deviations move the yaw-rate command (north positions and velocities,
-# heading, reference yaw rate); east positions and speeds enter at second order only.
-LATERAL_INPUTS = ("y_ref", "ydot_ref", "yaw_rate_ref", "y", "heading")
+# heading, reference yaw rate, the estimated crab); east positions and speeds enter at second order only.
+LATERAL_INPUTS = ("y_ref", "ydot_ref", "yaw_rate_ref", "y", "heading", "lateral_velocity")
 
 
 def static_law(gains: Mapping[str, Mapping[str, float]], inputs: tuple[str, ...], dt: float):
@@ -112,10 +112,10 @@ class KinematicTracker(Component):
     def lateral_linearisation(self, speed: float, dt: float, along_track_error: float = 0.0):
         """Small deviations about a straight reference heading east at ``speed``, the CG on its
         line ``along_track_error`` behind the reference point (psi = e_y = 0; xdot_d = v_d = v + k_s
-        tanh(k_c e_x)): from gamma_fb = (-sin psi xdot_d + cos psi ydot_d) / l_r and gamma_d = (l_r / a)
+        tanh(k_c e_x)): from gamma_fb = (-sin psi xdot_d + cos psi ydot_d - v_c) / l_r and gamma_d = (l_r / a)
         gamma_fb + (1 - l_r / a) gamma_r,
 
-            d gamma_d = (k_s k_c (d y_ref - d y) - v_d d psi + d ydot_ref) / a + (1 - l_r / a) d gamma_r
+            d gamma_d = (k_s k_c (d y_ref - d y) - v_d d psi + d ydot_ref - d v_c) / a + (1 - l_r / a) d gamma_r
 
         (a = l_r: the paper's law). A static gain (python-control StateSpace, ports as names)."""
         p = self.p
@@ -123,7 +123,7 @@ class KinematicTracker(Component):
         k = p["k_s"] * p["k_c"]
         v_d = speed + p["k_s"] * math.tanh(p["k_c"] * along_track_error)
         gains = {"yaw_rate_desired": {"y_ref": k / a, "y": -k / a, "heading": -v_d / a, "ydot_ref": 1.0 / a,
-                                      "yaw_rate_ref": 1.0 - p["l_r"] / a},
+                                      "yaw_rate_ref": 1.0 - p["l_r"] / a, "lateral_velocity": -1.0 / a},
                  "error_y": {"y_ref": 1.0, "y": -1.0}}
         return static_law(gains, LATERAL_INPUTS, dt)
 

@@ -67,9 +67,10 @@ class PurePursuit(Component):
         """Small deviations about a straight reference heading east at ``speed``, the CG on its
         line e = ``along_track_error`` behind the reference point (v_d = v + k_s tanh(k_c e)). The
         goal lies D0 = e + L_d + l_r ahead of R; its lateral offset in the body frame is
-        (y_ref - y) + L_d ydot_ref / v - (e + L_d) psi, so
+        (y_ref - y) + L_d ydot_ref / v - (e + L_d) psi, and the crab turns the course by v_c / v, so
 
-            alpha = ((d y_ref - d y) + L_d d ydot_ref / v - (e + L_d) d psi) / D0,   d gamma_d = 2 v_d alpha / D0
+            alpha = ((d y_ref - d y) + L_d d ydot_ref / v - (e + L_d) d psi) / D0 - d v_c / v,
+            d gamma_d = 2 v_d alpha / D0
 
         A static gain (python-control StateSpace, ports as names)."""
         p = self.p
@@ -77,7 +78,8 @@ class PurePursuit(Component):
         L_d = max(p["lookahead_min"], p["lookahead_time"] * speed)
         D0 = e + L_d + p["l_r"]
         g = 2.0 * (speed + p["k_s"] * math.tanh(p["k_c"] * e)) / D0 ** 2
-        gains = {"yaw_rate_desired": {"y_ref": g, "y": -g, "heading": -g * (e + L_d), "ydot_ref": g * L_d / speed},
+        gains = {"yaw_rate_desired": {"y_ref": g, "y": -g, "heading": -g * (e + L_d), "ydot_ref": g * L_d / speed,
+                                      "lateral_velocity": -g * D0 / speed if speed > 0.1 else 0.0},
                  "error_y": {"y_ref": 1.0, "y": -1.0}}
         return static_law(gains, LATERAL_INPUTS, dt)
 

@@ -52,7 +52,7 @@ class Stanley(Component):
         """Small deviations about a straight reference heading east at ``speed``, the CG on its
         line e = ``along_track_error`` behind the reference point (v_d = v + k_s tanh(k_c e), the
         steering bound inactive). With c = k / (v_soft + v_d): e_cross = d y - d y_ref + l_f d psi -
-        (l_f - e) d ydot_ref / v, psi_e = d ydot_ref / v - d psi, and
+        (l_f - e) d ydot_ref / v, psi_e = d ydot_ref / v - d psi - d v_c / v (the crab's course), and
 
             d gamma_d = (v_d / L) (psi_e - c e_cross)
 
@@ -63,7 +63,8 @@ class Stanley(Component):
         c = p["k"] / (p["v_soft"] + max(v_d, 0.0))
         g = v_d / (p["l_f"] + p["l_r"])
         gains = {"yaw_rate_desired": {"y_ref": g * c, "y": -g * c, "heading": -g * (1.0 + c * p["l_f"]),
-                                      "ydot_ref": g * (1.0 + c * (p["l_f"] - e)) / speed},
+                                      "ydot_ref": g * (1.0 + c * (p["l_f"] - e)) / speed,
+                                      "lateral_velocity": -g / speed if speed > 0.1 else 0.0},
                  "error_y": {"y_ref": 1.0, "y": -1.0}}
         return static_law(gains, LATERAL_INPUTS, dt)
 

@@ -50,7 +50,7 @@ def test_tracker_linearisation_is_the_jacobian_of_its_step(cls, params, speed, a
     tracker.initialize(0.0, 0.05)
     lin = tracker.lateral_linearisation(speed, 0.05, along)
     trim = {"x_ref": 10.0 + along, "y_ref": 0.0, "xdot_ref": speed, "ydot_ref": 0.0, "x": 10.0, "y": 0.0,
-            "heading": 0.0, "yaw_rate_ref": 0.0}
+            "heading": 0.0, "yaw_rate_ref": 0.0, "lateral_velocity": 0.0}
 
     def gamma_d(port, eps):
         tracker.u.update(trim)
@@ -232,3 +232,104 @@ def test_the_opened_loop_closed_again_is_the_network():
         full, _, _, _ = net.run({}, 0)                    # one period of the closed network on numbers
         X = full @ X
     np.testing.assert_allclose(Xp, X, atol=1e-12)
+
+
+# --- the GNSS/INS estimator and the IMU: their blocks against finite differences of step() ----------
+
+def run_phased(block: Block, inputs: np.ndarray) -> np.ndarray:
+    """Outputs of a sampled block whose matrices change with its own step (Block.at), from rest."""
+    x = np.zeros(block.n)
+    out = []
+    for j, u in enumerate(inputs):
+        A, B, C, D = block.at(j)
+        out.append(C @ x + D @ u)
+        x = A @ x + B @ u
+    return np.array(out)
+
+
+@pytest.mark.parametrize("params, speed", [({"antenna_height": 2.5}, 2.0), ({"antenna_height": 2.5}, 1.0),
+                                           ({"antenna_height": 1.0, "antenna_forward": 0.8, "slip_compliance0": 0.006,
+                                             "l_r": 0.6}, 2.0),
+                                           ({"antenna_height": 2.5, "terrain_compensation": 0, "crab_estimate": 0}, 2.0)])
+def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
+    """The INS EKF settled on a straight (a fix every 5th step at the true antenna, wheel speed v, level),
+    then each lateral input stepped by +-eps for 25 steps (a receiver's
+    value held between its fixes): the central differences of its outputs
+    follow the block with the periodic gains (the fix steps first), to 1e-3 relative (the filter
+    after 200 s is that close to its settled gains)."""
+    import copy
+
+    from analysis.loop_models import INS_INPUTS, INS_OUTPUTS, ins_ekf
+    from components.ins_ekf import INSEKF
+
+    dt, every = 0.01, 5
+    ekf = INSEKF("ekf", {"x0": 0.0, "y0": 0.0, "psi0": 0.0, **params})
+    ekf.initialize(0.0, dt)
+    f = float(params.get("antenna_forward", 0.0))
+
+    def inputs(k):
+        x = speed * dt * (k // every * every)              # the fix moves at the receiver's steps only
+        return {"gps_x": x + f, "gps_y": 0.0, "fix_valid": 1.0, "fix_quality": 4.0, "yaw_rate": 0.0, "roll": 0.0,
+                "pitch": 0.0, "accel_left": 0.0, "speed": speed}
+
+    start = 20000                                          # 200 s: the gyro bias and scale settled
+    for k in range(start):
+        ekf.u.update(inputs(k))
+        ekf.step(k * dt, dt)
+    block = ins_ekf(ekf, dt, speed, every, 0)
+    steps, eps = 25, 1e-6
+
+    def run(port, delta):
+        fresh = copy.deepcopy(ekf)
+        rows = []
+        for i in range(steps):
+            u = inputs(start + i)
+            u[port] += delta
+            fresh.u.update(u)
+            fresh.step((start + i) * dt, dt)
+            rows.append([fresh.y[o] for o in INS_OUTPUTS])
+        return np.array(rows)
+
+    for port in INS_INPUTS:
+        measured = (run(port, eps) - run(port, -eps)) / (2 * eps)
+        u = np.zeros((steps, len(INS_INPUTS)))
+        u[:, INS_INPUTS.index(port)] = 1.0
+        declared = run_phased(block, u)
+        assert np.allclose(measured, declared, rtol=1e-3, atol=1e-6), (port, measured[:6], declared[:6])
+        assert np.abs(declared).max() > 1e-3 or port in ("gps_x", "roll", "accel_left")
+
+
+def test_imu_block_is_the_jacobian_of_its_step():
+    """The IMU without bias or noise, level, heading east at 2 m/s: central differences of its gyro,
+    left specific force and roll over 3 steps for each input against the block."""
+    import copy
+
+    from analysis.loop_models import imu_sensor
+    from components.imu_sensor import IMUSensor
+
+    zero = {k: 0.0 for k in ("gyro_noise_psd", "gyro_bias_std", "gyro_bias_instability", "accel_noise_psd",
+                             "accel_bias_std", "attitude_bias_std", "attitude_noise_std")}
+    imu = IMUSensor("imu", zero)
+    imu.rng = np.random.default_rng(0)
+    imu.initialize(0.0, 0.01)
+    trim = {"roll": 0.0, "pitch": 0.0, "heading": 0.0, "yaw_rate": 0.0, "vel_east": 2.0, "vel_north": 0.0}
+    imu.u.update(trim)
+    imu.step(0.0, 0.01)
+    block = imu_sensor(imu, 0.01, 2.0)
+    eps = 1e-6
+    for port in trim:
+        def run(delta):
+            fresh = copy.deepcopy(imu)
+            rows = []
+            for k in range(3):
+                fresh.u.update(trim)
+                fresh.u[port] += delta if k == 0 else 0.0
+                fresh.step((k + 1) * 0.01, 0.01)
+                rows.append([fresh.y[o] for o in block.outputs])
+            return np.array(rows)
+
+        measured = (run(eps) - run(-eps)) / (2 * eps)
+        u = np.zeros((3, len(block.inputs)))
+        if port in block.inputs:
+            u[0, block.inputs.index(port)] = 1.0
+        assert np.allclose(measured, run_block(block, u), rtol=1e-5, atol=1e-5), port
