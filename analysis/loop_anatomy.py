@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .loop_models import NoLinearModel
+from .loop_blocks import NoLinearModel
 
 @dataclass
 class Anatomy:

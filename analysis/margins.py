@@ -33,9 +33,10 @@ import numpy as np
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .loop_models import NoLinearModel, OpenLoop, OperatingPoint, network_of
-from .loop_anatomy import Anatomy, anatomy  # noqa: F401 (the module's API)
-from .margins_simulation import simulate, simulated_delay_limit, simulated_run  # noqa: F401 (the module's API)
+from .loop_blocks import NoLinearModel, OperatingPoint
+from .loop_models import OpenLoop, network_of
+from .loop_anatomy import Anatomy, anatomy
+from .margins_simulation import simulate
 
 TRIM_TIME = 40.0              # s of the study run to read the speed loop's steady excess
 STABLE_RADIUS = 1.0 + 1e-9

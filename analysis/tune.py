@@ -28,7 +28,9 @@ from orchestrator.errors import InputError
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .loop_models import NoLinearModel, OperatingPoint, block_of, linear_models, network_of, off_the_lateral_loop
+from .component_models import linear_models, off_the_lateral_loop
+from .loop_blocks import NoLinearModel, OperatingPoint
+from .loop_models import block_of, network_of
 from .margins import Analysis, Margins, analyse, anatomy, margins_of
 
 

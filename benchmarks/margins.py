@@ -16,7 +16,8 @@ import sys
 import time
 from pathlib import Path
 
-from analysis.margins import analyse, simulated_delay_limit
+from analysis.margins import analyse
+from analysis.margins_simulation import simulated_delay_limit
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent

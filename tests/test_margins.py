@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.loop_models import NoLinearModel
-from analysis.margins import analyse, anatomy, margins_of, simulated_run
+from analysis.loop_blocks import NoLinearModel
+from analysis.margins import analyse, anatomy, margins_of
+from analysis.margins_simulation import simulated_run
 from components.stanley import Stanley
 from orchestrator.component import Component, inp, out, par
 from orchestrator.study import Study

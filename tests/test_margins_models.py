@@ -7,8 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.loop_models import (Block, OperatingPoint, gps_sensor, network_of, pose_ekf, steering_hydraulics,
-                                  yaw_plant, yaw_rate_mpc, yaw_rate_notch)
+from analysis.component_models import (gps_sensor, pose_ekf, steering_hydraulics, yaw_plant, yaw_rate_mpc,
+                                       yaw_rate_notch)
+from analysis.loop_blocks import Block, OperatingPoint
+from analysis.loop_models import network_of
 from components.kinematic_tracker import TRACKER_INPUTS, KinematicTracker
 from components.pure_pursuit import PurePursuit
 from components.stanley import Stanley
@@ -259,7 +261,7 @@ def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
     after 200 s is that close to its settled gains)."""
     import copy
 
-    from analysis.loop_models import INS_INPUTS, INS_OUTPUTS, ins_ekf
+    from analysis.component_models import INS_INPUTS, INS_OUTPUTS, ins_ekf
     from components.ins_ekf import INSEKF
 
     dt, every = 0.01, 5
@@ -304,7 +306,7 @@ def test_imu_block_is_the_jacobian_of_its_step():
     left specific force and roll over 3 steps for each input against the block."""
     import copy
 
-    from analysis.loop_models import imu_sensor
+    from analysis.component_models import imu_sensor
     from components.imu_sensor import IMUSensor
 
     zero = {k: 0.0 for k in ("gyro_noise_psd", "gyro_bias_std", "gyro_bias_instability", "accel_noise_psd",

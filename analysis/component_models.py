@@ -1,0 +1,300 @@
+"""The linear models of the guidance loop's components on a straight (analysis.loop_models), each
+derived from the component's own step equations and parameters, without the nonlinearities a small
+signal beyond the dead bands does not see (dead bands, quantisation, saturations).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .loop_blocks import Block, delay_line, lifted, passthrough
+
+
+def yaw_plant(comp, step: float, speed: float) -> Block:
+    """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)
+    with the pose on the straight: psi' = gamma, y_cg' = v psi + v_y; R = CG - l_r psi, the
+    antenna a lever arm f ahead of R: y_ant = y_R + f psi, its velocity + f gamma."""
+    from components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
+                                                state_space, with_cornering_scale, zoh_discretize)
+
+    p = comp.p
+    params = TractorParameters.of(p)
+    if p["model"] == "transfer_function":
+        Ay, By, Cy = controllable_canonical(p["tf_num"], p["tf_den"])
+        vy = params.l_r * Cy
+    else:
+        if float(p["cornering_speed_slope"]):
+            params = with_cornering_scale(params, cornering_scale(speed, p["cornering_speed_slope"],
+                                                                  p["cornering_reference_speed"]))
+        Ay, By, Cy = state_space(p["model"], params, speed)
+        vy = np.eye(len(By))[0]
+    n = len(By)
+    A = np.zeros((n + 2, n + 2))
+    A[:n, :n] = Ay
+    A[n, :n] = Cy                                    # psi' = gamma
+    A[n + 1, :n], A[n + 1, n] = vy, speed            # y' = v psi + v_y
+    B = np.concatenate([By, [0.0, 0.0]]).reshape(-1, 1)
+    e = np.eye(n + 2)
+    gamma, psi, y, lr, f = np.concatenate([Cy, [0, 0]]), e[n], e[n + 1], params.l_r, float(p["antenna_forward"])
+    lateral = np.concatenate([vy, [0, 0]])
+    vel_rear = speed * psi + lateral - lr * gamma
+    rows = {"yaw_rate": gamma, "lateral_velocity": lateral, "heading": psi, "y_cg": y, "y_rear": y - lr * psi,
+            "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi, "vel_north_antenna": vel_rear + f * gamma}
+    Ad, Bd = zoh_discretize(A, B, step)
+    return Block.of(comp.name, ["steer_angle"], list(rows), Ad, Bd, np.array(list(rows.values())), sampled=False)
+
+
+def steering_hydraulics(comp, step: float, speed: float) -> Block:
+    """The hydraulics' substep (components.steering_hydraulics) beyond its dead bands, lifted over
+    the substeps of one step, with the command delay in whole steps:
+
+        e = c - delta;  I <- I + k_i h e;  o <- o + alpha (s_o (k_p e + I) - o);  delta <- delta + r_s o
+
+    s_o = 1 / (V_max - V_n - V_db) the valve's slope above its dead band, alpha = 1 - exp(-h / tau_valve),
+    r_s = h Q_max / V_rad. The potentiometer reads delta."""
+    p = comp.p
+    m = max(1, int(round(step / p["internal_step"])))
+    h = step / m
+    s_o = 1.0 / (p["voltage_max"] - p["neutral_voltage"] - p["deadband"])
+    alpha = 1.0 - math.exp(-h / p["valve_time_constant"])
+    rs = h * p["max_flow"] / p["volume_per_rad"]
+    kp, kih = p["kp"], p["ki"] * h
+    A1 = np.array([[1.0, 0.0, -kih], [alpha * s_o, 1.0 - alpha, -alpha * s_o * kp], [0.0, 0.0, 1.0]])
+    B1 = np.array([kih, alpha * s_o * kp, 0.0])
+    A1[2] += rs * A1[1]                               # delta uses the new opening
+    B1[2] += rs * B1[1]
+    As, Bs = lifted(A1, B1.reshape(3, 1), m)
+    d = int(round(float(p["command_delay"]) / step))
+    line = delay_line("", ["c"], ["c"], d)
+    # state [I, o, delta; registers]; the hydraulics act on the delayed command
+    n = 3 + line.n
+    A = np.zeros((n, n))
+    A[:3, :3] = As
+    A[:3, 3:] = Bs @ line.C
+    A[3:, 3:] = line.A
+    B = np.vstack([Bs @ line.D, line.B])
+    C = np.zeros((2, n))
+    C[:, 2] = 1.0
+    return Block.of(comp.name, ["steer_angle_cmd"], ["steer_angle", "steer_angle_measured"], A, B, C, sampled=False)
+
+
+def gps_sensor(comp, step: float, speed: float) -> Block:
+    """The true antenna position and velocity ``latency`` / step samples late (noise, bias and
+    dropouts left out)."""
+    return delay_line(comp.name, ["y_true", "vel_north_true"], ["y", "vel_north"], int(round(comp.p["latency"] / step)))
+
+
+def pose_ekf(comp, step: float, speed: float) -> Block:
+    """The EKF (components.pose_ekf) on the straight with its steady-state gain: the covariance
+    recursion run with the component's own predict and update until it settles, then
+
+        y- = y + T v psi,  psi- = psi + T v delta_{k-1} / L,  (y, psi) = (y-, psi-) + K (z - y-)
+
+    outputs the updated R, heading and CG = R + l_r psi."""
+    from components.pose_ekf import PoseEKF
+
+    ekf = PoseEKF(comp.name, {**comp.p, "x0": 0.0, "y0": 0.0, "psi0": 0.0})
+    ekf.initialize(0.0, step)
+    P = None
+    for _ in range(100000):
+        ekf.predict(speed, 0.0, step)
+        previous, P = P, list(ekf.P)
+        ekf.update(0.0, 0.0)
+        if previous is not None and np.allclose(previous, P, rtol=1e-12, atol=0.0):
+            break
+    p11, p12, p13, p22, p23, p33 = P
+    Pm = np.array([[p11, p12, p13], [p12, p22, p23], [p13, p23, p33]])
+    S = Pm[:2, :2] + ekf.r * np.eye(2)
+    K = Pm[:, :2] @ np.linalg.inv(S)                  # columns: gps_x, gps_y
+    ky, kpsi = K[1, 1], K[2, 1]
+    T, L, lr = step, comp.p["wheelbase"], comp.p["l_r"]
+    M = np.array([[1.0, T * speed, 0.0], [0.0, 1.0, T * speed / L]])      # (y-, psi-) from (y, psi, delta_prev)
+    U = np.array([[1.0 - ky, 0.0], [-kpsi, 1.0]])                          # update, innovation z - y-
+    Kz = np.array([ky, kpsi])
+    A = np.vstack([U @ M, [0.0, 0.0, 0.0]])
+    B = np.array([[ky, 0.0], [kpsi, 0.0], [0.0, 1.0]])                      # inputs (gps_y, steer_angle)
+    out = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, lr]])                    # y_rear, heading, y_cg
+    C = out @ U @ M
+    D = np.column_stack([out @ Kz, np.zeros(3)])
+    return Block.of(comp.name, ["gps_y", "steer_angle"], ["y_rear", "heading", "y_cg"], A, B, C, D)
+
+
+INS_INPUTS = ["gps_x", "gps_y", "yaw_rate", "roll", "accel_left"]
+INS_OUTPUTS = ["y_rear", "heading", "y_cg", "lateral_velocity"]
+
+
+def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int = 0) -> Block:
+    """The GNSS/INS EKF (components.ins_ekf) on the straight, level ground, k at its initial value
+    k0 (f_y = 0 leaves k unobservable and uncoupled), its gains periodic: a fix every ``fix_every``-th
+    of its steps, at the steps j = ``fix_phase`` (mod fix_every). The covariance recursion is run with
+    the component's own predict and update until the gains of a whole cycle settle; then, all eight
+    states s = [x, y, psi, b_g, e_v, k, b_x, b_y] and the inputs of the previous step (the component
+    predicts with them):
+
+        s- = F s + dt (0, -k0 v f_y', omega', 0, ...)   F = I + the component's own Jacobian entries,
+                                                         b_x, b_y decaying by exp(-dt / T)
+        s  = s- + K_j (z - H s- + (0, h roll))         on a fix step (H: the component's antenna Jacobian;
+                                                         the antenna's lean -h roll with terrain compensation)
+
+    outputs the updated R (north), heading, CG = R + l_r psi and the crab -k0 v f_y of this step."""
+    key = (repr(sorted(comp.p.items())), step, speed, fix_every, fix_phase)
+    if key not in _INS_BLOCKS:
+        _INS_BLOCKS[key] = _ins_ekf(comp, step, speed, fix_every, fix_phase)
+    block = _INS_BLOCKS[key]
+    return Block(comp.name, block.inputs, block.outputs, block.A, block.B, block.C, block.D, block.ratio,
+                 block.sampled, block.phases)
+
+
+_INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters and operating point (seconds each)
+
+
+def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) -> Block:
+    from components.ins_ekf import INSEKF
+
+    p = comp.p
+    ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": 0.0})
+    ekf.initialize(0.0, step)
+    n, R = 8, (p["fix_noise_std"] ** 2 + (p["antenna_height"] * p["attitude_noise_std"]) ** 2) * np.eye(2)
+    gains, previous = [None] * fix_every, None
+    for cycle in range(20000):
+        for j in range(fix_every):
+            ekf.predict(0.0, 0.0, 0.0, 0.0, speed, step)
+            if j == fix_phase % fix_every:
+                h, H = ekf.antenna(0.0, 0.0)
+                gains[j] = np.linalg.solve(H @ ekf.P @ H.T + R, H @ ekf.P).T
+                ekf.update(h, h, H, R)
+        K = gains[fix_phase % fix_every]
+        if previous is not None and np.allclose(previous, K, rtol=1e-10, atol=1e-14):
+            break
+        previous = K.copy()
+    k0 = float(p["slip_compliance0"]) if p["crab_estimate"] else 0.0
+    ekf.s = np.array([0.0, 0.0, 0.0, 0.0, 0.0, k0, 0.0, 0.0])
+    _, entries, _ = ekf.jacobian(0.0, 0.0, 0.0, 0.0, speed, step)
+    F = np.eye(n)
+    for (i, j), f in entries.items():
+        F[i, j] += f
+    F[6, 6] = F[7, 7] = math.exp(-step / p["degraded_time_constant"])
+    _, H = ekf.antenna(0.0, 0.0)
+    lean = -float(p["antenna_height"]) if p["terrain_compensation"] else 0.0     # d(antenna north) / d roll
+    # X = [s; omega'; f_y'], u = (gps_x, gps_y, yaw_rate, roll, accel_left)
+    G = np.zeros((n, 2))
+    G[1, 1], G[2, 0] = -step * k0 * speed, step                  # from f_y' and omega'
+    M = np.hstack([F, G])                                        # s- from X
+    lr = float(p["l_r"])
+    out = np.zeros((4, n))
+    out[0, 1], out[1, 2], out[2, 1], out[2, 2] = 1.0, 1.0, 1.0, lr
+    crab = np.array([0.0, 0.0, 0.0, 0.0, -k0 * speed])           # lateral_velocity from this step's f_y
+    hold = np.zeros((2, 5))
+    hold[0, 2] = hold[1, 4] = 1.0                                # omega', f_y' <- this step's inputs
+    phases = []
+    for j in range(fix_every):
+        if gains[j] is None:
+            Ms, Ns = M, np.zeros((n, 5))
+        else:
+            K = gains[j]
+            Ms = M - K @ H @ M
+            Ns = np.zeros((n, 5))
+            Ns[:, 0:2] = K
+            Ns[:, 3] = K[:, 1] * -lean
+        A = np.vstack([Ms, np.zeros((2, n + 2))])
+        B = np.vstack([Ns, hold])
+        C = out @ Ms
+        D = out @ Ns
+        D[3] += crab
+        phases.append((A, B, C, D))
+    block = Block.of(comp.name, INS_INPUTS, INS_OUTPUTS, *phases[0])
+    block.phases = phases if fix_every > 1 else None
+    return block
+
+
+def imu_sensor(comp, step: float, speed: float) -> Block:
+    """The IMU (components.imu_sensor) level and heading east without bias and noise: the gyro reads
+    the heading rate (cos(phi) cos(theta) = 1 to first order), roll reads roll, and the left specific
+    force is the north acceleration by a difference over one sample plus the gravity of the roll,
+    f_y = (v_n - v_n') / dt + g phi (the east acceleration is 0 on the operating point)."""
+    from components.models.terrain import GRAVITY
+
+    return Block.of(comp.name, ["yaw_rate", "vel_north", "roll"], ["yaw_rate", "accel_left", "roll"],
+                    A=[[0.0]], B=[[0.0, 1.0, 0.0]], C=[[0.0], [-1.0 / step], [0.0]],
+                    D=[[1.0, 0.0, 0.0], [0.0, 1.0 / step, GRAVITY], [0.0, 0.0, 1.0]])
+
+
+def yaw_rate_mpc(comp, step: float, speed: float) -> Block:
+    """The MPC while no constraint is active (components.models.condensed_mpc): the first move
+    du = K [x_k; u_{k-1}; gamma - gamma_d], K = -(H^-1 G)[0], with its model advanced by the measured
+    wheel angle (x_k = A x_{k-1} + B delta_m) or by its last command (x_k = A x_{k-1} + B u_{k-1});
+    state [x_{k-1}; u_{k-1}], inputs (steer_angle, yaw_rate, yaw_rate_ref)."""
+    from components.models.condensed_mpc import CondensedTrackingMPC
+
+    p = comp.p
+    mpc = CondensedTrackingMPC(p["num"], p["den"], step, int(p["prediction_horizon"]), int(p["control_horizon"]),
+                               float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * step)
+    n = mpc.A.shape[0]
+    K = -np.linalg.solve(mpc.H, mpc.G)[0]
+    Kx, Ku, Ke = K[:n], K[n], K[n + 1]
+    Am, Bm = mpc.A, mpc.B.reshape(-1)
+    if p["model_input"] == "measured":
+        Ax = np.hstack([Am, np.zeros((n, 1))])               # x_k from (x_{k-1}, u_{k-1})
+        Bx = np.column_stack([Bm, np.zeros(n), np.zeros(n)])
+    else:
+        Ax = np.hstack([Am, Bm.reshape(-1, 1)])
+        Bx = np.zeros((n, 3))
+    urow = np.concatenate([Kx @ Ax[:, :n], [Kx @ Ax[:, n] + 1.0 + Ku]])
+    ucol = Kx @ Bx + np.array([0.0, Ke, -Ke])
+    A = np.vstack([Ax, urow])
+    B = np.vstack([Bx, ucol])
+    return Block.of(comp.name, ["steer_angle", "yaw_rate", "yaw_rate_ref"], ["steer_angle_cmd"], A, B, urow, ucol)
+
+
+def yaw_rate_notch(comp, step: float, speed: float) -> Block:
+    """The notch's difference equation (components.yaw_rate_notch), or a unit gain at frequency 0."""
+    from scipy.signal import tf2ss
+
+    from components.yaw_rate_notch import notch_coefficients
+
+    p = comp.p
+    if float(p["frequency"]) == 0.0:
+        return passthrough(comp.name, {"yaw_rate": "yaw_rate_filtered"})
+    b, a = notch_coefficients(float(p["frequency"]), float(p["notch_damping"]), float(p["pole_damping"]), step)
+    A, B, C, D = tf2ss(b, a)
+    return Block.of(comp.name, ["yaw_rate"], ["yaw_rate_filtered"], A, B, C, D)
+
+
+def computation_delay(comp, step: float, speed: float) -> Block:
+    return delay_line(comp.name, ["steer_angle_cmd"], ["steer_angle_cmd_out"], int(comp.p["samples"]))
+
+
+def linear_models() -> dict[type, object]:
+    """Component class -> f(component, step, speed) -> Block."""
+    from components.computation_delay import ComputationDelay
+    from components.gps_sensor import GPSSensor
+    from components.gyro_sensor import GyroSensor
+    from components.imu_sensor import IMUSensor
+    from components.ins_ekf import INSEKF
+    from components.pose_ekf import PoseEKF
+    from components.safety_watchdog import SafetyWatchdog
+    from components.steering_hydraulics import SteeringHydraulics
+    from components.tractor_yaw_plant import TractorYawPlant
+    from components.yaw_rate_mpc import YawRateMPC
+    from components.yaw_rate_notch import YawRateNotch
+
+    return {TractorYawPlant: yaw_plant, SteeringHydraulics: steering_hydraulics, GPSSensor: gps_sensor,
+            PoseEKF: pose_ekf, YawRateMPC: yaw_rate_mpc, YawRateNotch: yaw_rate_notch,
+            ComputationDelay: computation_delay, INSEKF: ins_ekf, IMUSensor: imu_sensor,
+            GyroSensor: lambda c, step, v: passthrough(c.name, {"yaw_rate": "yaw_rate_measured"}),
+            SafetyWatchdog: lambda c, step, v: passthrough(c.name, {"steer_angle_cmd": "steer_angle_cmd_out"})}
+
+
+def off_the_lateral_loop() -> tuple[type, ...]:
+    """Components whose outputs do not move the lateral channel at first order on a straight:
+    the speed loop and its estimator (they set v), the implement and its side-shift (it reads the
+    tractor, nothing reads it back), status and recording."""
+    from components.bus_recorder import BusRecorder
+    from components.speed_drivetrain import SpeedDrivetrain
+    from components.speed_kf import SpeedKF
+    from components.speed_pid import SpeedPID
+    from components.steering_status import SteeringStatus
+    from components.trailed_implement import TrailedImplement
+
+    return SpeedPID, SpeedDrivetrain, SpeedKF, TrailedImplement, SteeringStatus, BusRecorder
