@@ -147,7 +147,7 @@ class Replay:
         rows = rows[np.all(moving[rows], axis=1)]
         self.windows = {"fit": rows[self.t[rows[:, -1]] < t_split], "test": rows[self.t[rows[:, 0]] >= t_split]}
         if "position" in self.stages and (len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2):
-            why = (f"too few {self.window:.0f} s stretches of driving for the position replay "
+            why = (f"too few {self.window:.0f} s stretches of driving for the position and speed replays "
                    f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
             if self.stages == ("position",) or set(self.stages) <= {"position", "speed"}:
                 raise CannotDecide(why)
