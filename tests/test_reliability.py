@@ -99,17 +99,17 @@ def test_out_is_checked_before_any_computation(tmp_path):
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "thesis.tex").write_text("precious")
-    start = time.perf_counter()
     proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--out", str(foreign)], cwd=ROOT,
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "--out" in proc.stderr and "--overwrite" in proc.stderr
+    assert "euclid" not in proc.stdout + proc.stderr            # refused before the simulation, not after it
     assert (foreign / "thesis.tex").read_text() == "precious"
     a_file = tmp_path / "file.txt"
     a_file.write_text("x")
     proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--out", str(a_file)], cwd=ROOT,
                           capture_output=True, text=True)
     assert proc.returncode == 2 and "is a file" in proc.stderr and "Traceback" not in proc.stderr
-    assert time.perf_counter() - start < 30          # refused at once, not after a 600 s simulation
+    assert "euclid" not in proc.stdout + proc.stderr
     proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--set", "study.stop_time=20", "--no-plots",
                                  "--out", str(foreign), "--overwrite"], cwd=ROOT, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
@@ -212,11 +212,11 @@ def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
 
 
 def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
-    start = time.perf_counter()
+    """Exit 2 naming the address, not a hang: the subprocess timeout is the guard (how fast it gives
+    up, CONNECT_TIMEOUT, is a figure for a benchmark, not a test on a shared machine)."""
     proc = subprocess.run(CMD + ["sweep", "studies/speed_sweep.toml", "--out", str(tmp_path / "sw"),
                                  "--scheduler", "tcp://127.0.0.1:9", "--no-progress"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=60)
-    assert time.perf_counter() - start < 10.0 + 3.0          # the interpreter's start included
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "tcp://127.0.0.1:9" in proc.stderr and "Traceback" not in proc.stderr
 
 
