@@ -155,7 +155,7 @@ def test_quantization_guard_takes_only_0_or_1():
 
     from orchestrator.study import StudyError
 
-    with pytest.raises(StudyError, match="quantization_guard: got 'yes', expected a number"):
+    with pytest.raises(StudyError, match=r"quantization_guard\)?: got 'yes', expected a number"):
         metrics("steering.quantization_guard=yes", "study.stop_time=20")
     with pytest.raises(ParameterError, match="components.steering: .*quantization_guard must be 0 or 1, got 2"):
         metrics("steering.quantization_guard=2", "study.stop_time=20")

@@ -170,13 +170,14 @@ def test_of_nested_steps_only_the_innermost_speaks_and_every_tool_runs_inside_on
 
     out = Kept()
     monkeypatch.setattr(observers, "_terminal", lambda: out)
-    with observers.Stage("plan", first=0.01, every=0.01) as outer:
+    with observers.Stage("plan", first=0.1, every=0.01) as outer:
         with observers.Stage("placing swaths", first=0.01, every=0.01) as inner:
             end = time.time() + 10
             while not inner.printed and time.time() < end:
                 time.sleep(0.01)
-            time.sleep(0.05)
-    assert "placing swaths ..." in out.getvalue() and "plan ..." not in out.getvalue() and not outer.printed
+            time.sleep(0.3)                                          # the outer's time is long due
+            shown, outer_spoke = out.getvalue(), outer.printed     # while the inner step runs
+    assert "placing swaths ..." in shown and "plan ..." not in shown and not outer_spoke
     # a registered command (not run or sweep) is handed its arguments inside a stage named after it
     seen = []
 

@@ -38,7 +38,7 @@ def test_with_values_derives_a_new_study_and_leaves_the_original_alone():
     assert base.components["reference"].parameters["speed"] == 2.0 and base.study.seed == 2024
     assert base.components["tractor"].inputs == {}
     assert resolve(variant).parameters("tractor")["C_f"] == 9000.0          # the unit string parsed in one place
-    with pytest.raises(StudyError, match="no component 'referee'; known: .*reference"):
+    with pytest.raises(StudyError, match=r"no component 'referee' \(did you mean 'reference'\?\); components: .*reference"):
         base.with_values({"referee.speed": 1.0})
 
 
