@@ -42,6 +42,7 @@ STAGE_NEEDS = {"steering": ("delta_cmd", "delta"), "yaw": ("delta", "yaw_rate", 
 NEED_TEXT = {"speed": "speed (v, gnss_speed, or x and y)",
              "speed not from the track": "measured speed (v or gnss_speed: the track's own speed cannot judge the track)"}
 MIN_RATE = {"steering": 10.0, "yaw": 10.0, "position": 5.0, "speed": 5.0}      # Hz a stage needs
+RATE_TOLERANCE = 1e-6   # a log averaged onto exactly MIN_RATE may compute a hair under it (time stamps' rounding)
 MAX_POSITION_STEP = 0.01       # m: coarser positions (float32 latitude/longitude) cannot judge centimetres
 COARSE_DELTA = 0.2 * math.pi / 180    # rad: a wheel-angle sensor this coarse biases the yaw refit
 HARD_MIN_DURATION = 30.0      # s: shorter logs are refused; up to min_duration they are judged with a warning
@@ -184,7 +185,7 @@ class Replay:
                 if stage == "steering" and self.command_only and {"yaw_rate", "speed"} <= have:
                     why[stage] += (" (the log has only the command delta_cmd: the steering's delay, lag, dead-band and "
                                    "rate limit are judged through the yaw rate instead)")
-            elif rate < MIN_RATE[stage]:
+            elif rate < MIN_RATE[stage] * (1.0 - RATE_TOLERANCE):
                 why[stage] = (f"not judged: the log samples at {rate:.3g} Hz; the {stage} stage needs "
                               f"{MIN_RATE[stage]:g} Hz or more (steering time constants of tens of ms, yaw modes "
                               f"near 2 Hz)")
