@@ -57,19 +57,24 @@ class YawReplay:
         self._cache: dict[tuple, np.ndarray] = {}
 
     def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
-                  relaxation_scale: float = 1.0) -> np.ndarray:
+                  relaxation_scale: float = 1.0, steering: np.ndarray | None = None) -> np.ndarray:
+        """The four responses (N, 4); with ``steering`` (a wheel angle, N) its yaw-rate response
+        too, as a fifth column of the same recursion (each column's arithmetic is its own)."""
         key = (round(front_scale, 12), round(rear_scale, 12), round(speed_slope, 12), v_ref, round(relaxation_scale, 12))
         hit = self._cache.get(key)
-        if hit is not None:
+        if hit is not None and steering is None:
             return hit
         Ad, Bd = self._discrete(front_scale, rear_scale, speed_slope, v_ref, relaxation_scale)
-        both = blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0, 0, 1, 1]] * self.inputs[:, None, :], row=(1, 0))
-        out = both[:, 0, :]
+        inputs, columns = self.inputs, [0, 0, 1, 1]
+        if steering is not None:
+            inputs, columns = np.column_stack([inputs, midpoints(np.asarray(steering, float))]), columns + [0]
+        both = blocked_recursion(Ad[self.index], Bd[self.index][:, :, columns] * inputs[:, None, :], row=(1, 0))
+        out = both[:, 0, :4]
         if len(self._cache) > 64:
             self._cache.clear()
         self._cache[key] = out
-        self._cache[key + ("v_y",)] = both[:, 1, :]
-        return out
+        self._cache[key + ("v_y",)] = both[:, 1, :4]
+        return both[:, 0, :]
 
     def _discrete(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0):
@@ -109,20 +114,24 @@ class YawReplay:
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """The yaw rate under ``v``, driven by the measured wheel angle, or by ``delta`` (a wheel
         angle replayed from the command, when the log has none measured)."""
-        R = self.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                           v["cornering_reference_speed"], v["relaxation_scale"])
+        yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+               v["cornering_reference_speed"], v["relaxation_scale"])
+        key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
         if delta is None:
-            first = R[:, 0]
+            first = self.responses(*yaw)[:, 0]
         else:                                   # memoised on the input array and the yaw values
-            key = (id(delta), round(v["cornering_front_scale"], 12), round(v["cornering_rear_scale"], 12),
-                   round(v["cornering_speed_slope"], 12), v["cornering_reference_speed"], round(v["relaxation_scale"], 12))
-            hit = self._cache.get(("input",) + key)
+            hit = self._cache.get(("input", id(delta)) + key)
             if hit is None or hit[0] is not delta:
-                hit = (delta, self.response_to(np.asarray(delta, float)[:, None], v)[:, 0])
+                if key in self._cache:          # the four responses known: the input's alone
+                    column = self.response_to(np.asarray(delta, float)[:, None], v)[:, 0]
+                else:                           # all five in one recursion
+                    column = self.responses(*yaw, steering=delta)[:, 4]
+                hit = (delta, column)
                 if len(self._cache) > 64:
                     self._cache.clear()
-                self._cache[("input",) + key] = hit
+                self._cache[("input", id(delta)) + key] = hit
             first = hit[1]
+        R = self.responses(*yaw)
         return first + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
             v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
 

@@ -50,13 +50,19 @@ def test_yaw_replay_of_a_real_log_equals_the_plain_recursion(name, monkeypatch):
              cornering_reference_speed=2.0, relaxation_scale=1.0, steer_angle_offset=0.01, slope_north=0.3,
              slope_east=-0.2, yaw_rate_bias=0.02)
 
+    replayed = 0.5 * delta
+
     def run():
-        r = YawReplay("bicycle", p, h, delta, speed, heading)
-        return r.yaw_rate(v), r.yaw_rate(v, 0.5 * delta), r.rear_lateral_velocity(v)
+        """A replayed wheel angle's response first (one recursion with the four responses),
+        then the measured one's; and in the other order on a second replay."""
+        r, r2 = YawReplay("bicycle", p, h, delta, speed, heading), YawReplay("bicycle", p, h, delta, speed, heading)
+        out = [r.yaw_rate(v, replayed), r.yaw_rate(v), r.rear_lateral_velocity(v)]
+        return out + [r2.yaw_rate(v), r2.yaw_rate(v, replayed)]
 
     blocked = run()
     monkeypatch.setattr(replay_module, "blocked_recursion", plain_recursion)
     plain = run()
-    assert np.max(np.abs(blocked[0])) > 0.0
+    assert np.max(np.abs(blocked[0] - blocked[1])) > 0.0
     for x, y in zip(blocked, plain):
         assert np.max(np.abs(x - y)) <= 1e-9 * np.max(np.abs(y))
+    assert np.max(np.abs(blocked[0] - blocked[4])) <= 1e-12 * np.max(np.abs(blocked[4]))
