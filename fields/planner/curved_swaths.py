@@ -1,0 +1,96 @@
+"""Swaths parallel to a curved guidance line: offset curves of the line at k x spacing (shapely's
+``offset_curve``, GEOS), the line's ends first extended along their tangents so that the offsets
+reach across the whole piece. An offset d to the concave side of an arc of radius r has radius
+r - d: where that falls under the turn radius R (kappa > 1/R), or the offset folds into a cusp or a
+loop, the swath is cut there (the parts either side kept, each with kappa <= 1/R). Each swath is
+clipped to where its strip (width w) touches the piece, as the straight swaths are."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from shapely.geometry import LineString, MultiLineString, Point, Polygon
+
+from .decomposition import Along
+from .types import Swath
+
+STEP = 0.5          # m: the offsets are resampled this finely before their curvature is judged
+SHORTEST = 1.0      # m: a shorter piece is not a swath
+
+
+def extended(line: np.ndarray, reach: float) -> LineString:
+    """The polyline lengthened at both ends along its end tangents by ``reach``."""
+    p = np.asarray(line, float)
+    d0 = (p[0] - p[1]) / max(np.hypot(*(p[0] - p[1])), 1e-12)
+    d1 = (p[-1] - p[-2]) / max(np.hypot(*(p[-1] - p[-2])), 1e-12)
+    return LineString(np.vstack([p[0] + reach * d0, p, p[-1] + reach * d1]))
+
+
+def resampled(g: LineString, step: float = STEP) -> np.ndarray:
+    n = max(int(math.ceil(g.length / step)), 1)
+    return np.array([g.interpolate(s).coords[0] for s in np.linspace(0.0, g.length, n + 1)])
+
+
+def curvature(p: np.ndarray) -> np.ndarray:
+    """Discrete curvature at the interior points of a polyline: the turning angle over the mean of
+    the two segment lengths (the circle through three points, to first order)."""
+    d = np.diff(p, axis=0)
+    h = np.arctan2(d[:, 1], d[:, 0])
+    turn = np.angle(np.exp(1j * np.diff(h)))
+    seg = np.hypot(*d.T)
+    return np.abs(turn) / np.maximum(0.5 * (seg[:-1] + seg[1:]), 1e-12)
+
+
+def smooth_parts(g: LineString, kappa_max: float) -> list[np.ndarray]:
+    """The parts of a curve with curvature <= ``kappa_max`` (cut where it is above, i.e. at cusps
+    and tight bends; a loop closes with a cusp, so it is cut apart and its short pieces dropped)."""
+    if g.is_empty or g.length < SHORTEST:
+        return []
+    p = resampled(g)
+    if len(p) < 3:
+        return [p]
+    bad = np.flatnonzero(curvature(p) > kappa_max) + 1        # interior point indices
+    cuts = np.concatenate([[0], bad, [len(p) - 1]])
+    parts = []
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        a, b = (a + 1 if a in bad else a), (b - 1 if b in bad else b)
+        if b - a >= 1 and np.sum(np.hypot(*np.diff(p[a:b + 1], axis=0).T)) >= SHORTEST:
+            parts.append(p[a:b + 1])
+    return parts
+
+
+def curved_lines(region: Polygon, guide: np.ndarray, spacing: float, width: float, turn_radius: float,
+                 first_index: int = 0, first_line: int = 0) -> tuple[list[list[Swath]], Along]:
+    """Per offset of the guidance line across the region (in order across it), its swaths; and the
+    coordinate along them (the distance along the extended guidance line of a point's projection)."""
+    minx, miny, maxx, maxy = region.bounds
+    reach = 2.0 * math.hypot(maxx - minx, maxy - miny) + 2.0 * width
+    base = extended(guide, reach)
+    corners = [Point(c) for c in region.exterior.coords]
+    left = max(base.distance(c) for c in corners) + width
+    count = int(math.ceil(left / spacing))
+    near = region.buffer(0.5 * width, join_style="mitre", mitre_limit=3.0)
+    out: list[list[Swath]] = []
+    number = first_index
+    for k in range(-count, count + 1):
+        off = base if k == 0 else base.offset_curve(k * spacing, join_style="round")
+        if off.is_empty:
+            continue
+        found = []
+        for g in (off.geoms if isinstance(off, MultiLineString) else [off]):
+            for part in smooth_parts(g, 1.0 / turn_radius):
+                cut = near.intersection(LineString(part))
+                found += [c for c in (cut.geoms if hasattr(cut, "geoms") else [cut])
+                          if isinstance(c, LineString) and c.length >= SHORTEST]
+        if not found:
+            continue
+        found.sort(key=lambda c: base.project(Point(c.coords[0])))
+        swaths = []
+        for c in found:
+            pts = np.asarray(c.coords)
+            if base.project(Point(pts[0])) > base.project(Point(pts[-1])):
+                pts = pts[::-1]
+            swaths.append(Swath(number, first_line + len(out), pts))
+            number += 1
+        out.append(swaths)
+    return out, lambda p: float(base.project(Point(np.asarray(p)[:2])))
