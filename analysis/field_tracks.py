@@ -62,23 +62,39 @@ def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
     return out
 
 
-def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Swath index -> (start, unit direction) in the mission frame."""
-    out = {}
-    for seg in (s for s in plan.path.segments if s.kind == SWATH):
-        a2, b2 = conv(seg.points[[0, -1], :2])
-        d = (b2 - a2) / max(np.hypot(*(b2 - a2)), 1e-9)
-        out[int(seg.index)] = (a2, d)
-    return out
+def _swath_frames(plan, conv) -> dict[int, np.ndarray]:
+    """Swath index -> its polyline (N >= 2, 2) in the mission frame (two points for a straight swath)."""
+    return {int(seg.index): np.asarray(conv(seg.points[:, :2]), float)
+            for seg in plan.path.segments if seg.kind == SWATH}
+
+
+def station(line: np.ndarray, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(along, across: left positive) of points relative to a polyline: the foot of the
+    perpendicular on its nearest segment, the first and last segments extended beyond the ends
+    (so that a straight swath is its infinite line: along = (p - a).d, across = d x (p - a))."""
+    a, b = line[:-1], line[1:]
+    seg = np.maximum(np.hypot(*(b - a).T), 1e-12)
+    d = (b - a) / seg[:, None]
+    wx, wy = px[:, None] - a[:, 0], py[:, None] - a[:, 1]
+    t = wx * d[:, 0] + wy * d[:, 1]
+    lo = np.where(np.arange(len(seg)) == 0, -np.inf, 0.0)
+    hi = np.where(np.arange(len(seg)) == len(seg) - 1, np.inf, seg)
+    t = np.clip(t, lo, hi)
+    ex, ey = wx - t * d[:, 0], wy - t * d[:, 1]
+    i = np.argmin(ex * ex + ey * ey, axis=1)
+    r = np.arange(len(px))
+    s_at = np.concatenate([[0.0], np.cumsum(seg)])
+    across = d[i, 0] * wy[r, i] - d[i, 1] * wx[r, i]
+    return s_at[i] + t[r, i], across
 
 
 def _cross_track(px, py, swath, frames):
-    """Signed distance (left positive) of each point to its swath's line; NaN off swaths."""
+    """Signed distance (left positive) of each point to its swath's polyline; NaN off swaths."""
     out = np.full(len(px), np.nan)
-    for k, (a, d) in frames.items():
+    for k, line in frames.items():
         m = swath == k
         if m.any():
-            out[m] = -d[1] * (px[m] - a[0]) + d[0] * (py[m] - a[1])
+            out[m] = station(line, px[m], py[m])[1]
     return out
 
 
@@ -121,15 +137,13 @@ IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a
 
 
 def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray, np.ndarray] | None:
-    """The implement's (or the tractor's) track on swath j as (along, across) in ``frame`` (start,
-    direction), sorted along; None with fewer than 10 samples."""
-    a, d = frame
+    """The implement's (or the tractor's) track on swath j as (along, across) the swath polyline
+    ``frame``, sorted along; None with fewer than 10 samples."""
     px, py, segment = point
     m = (s[segment].to_numpy() == SWATH) & (s["swath"].to_numpy() == j)
     if m.sum() < 10:
         return None
-    rel = np.column_stack([s[px].to_numpy()[m] - a[0], s[py].to_numpy()[m] - a[1]])
-    along, across = rel @ d, rel @ np.array([-d[1], d[0]])
+    along, across = station(frame, s[px].to_numpy()[m], s[py].to_numpy()[m])
     order = np.argsort(along)
     return along[order], across[order]
 
