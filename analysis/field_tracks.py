@@ -63,9 +63,9 @@ def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
 
 
 def _swath_frames(plan, conv) -> dict[int, np.ndarray]:
-    """Swath index -> its polyline (N >= 2, 2) in the mission frame (two points for a straight swath)."""
-    return {int(seg.index): np.asarray(conv(seg.points[:, :2]), float)
-            for seg in plan.path.segments if seg.kind == SWATH}
+    """Swath line -> its polyline (N >= 2, 2) in the mission frame (two points for a straight swath):
+    where the implement works (on a curve the tractor drives outside it: fields.planner.curved_swaths)."""
+    return {int(sw.line): np.asarray(conv(sw.points[:, :2]), float) for sw in plan.swaths}
 
 
 def station(line: np.ndarray, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

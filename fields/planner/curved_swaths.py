@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.interpolate import splev, splprep
 from shapely.geometry import LineString, MultiLineString, Point, Polygon
 
 from .decomposition import Along
@@ -16,6 +17,20 @@ from .types import Swath
 
 STEP = 0.5          # m: the offsets are resampled this finely before their curvature is judged
 SHORTEST = 1.0      # m: a shorter piece is not a swath
+
+
+def smoothed(line: np.ndarray, step: float = STEP) -> np.ndarray:
+    """The guidance line as an interpolating cubic spline through its vertices (chord-length
+    parameter; scipy's splprep), sampled every ``step``: a recorded curve's vertices a few metres
+    apart would give its offsets a kink at each vertex, the spline a continuous curvature."""
+    p = np.asarray(line, float)
+    keep = np.concatenate([[True], np.hypot(*np.diff(p, axis=0).T) > 1e-6])
+    p = p[keep]
+    if len(p) < 4:
+        return p
+    u = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+    tck, _ = splprep(p.T, u=u, s=0.0, k=3)
+    return np.column_stack(splev(np.linspace(0.0, u[-1], max(int(math.ceil(u[-1] / step)), 2) + 1), tck))
 
 
 def extended(line: np.ndarray, reach: float) -> LineString:
@@ -65,7 +80,7 @@ def curved_lines(region: Polygon, guide: np.ndarray, spacing: float, width: floa
     coordinate along them (the distance along the extended guidance line of a point's projection)."""
     minx, miny, maxx, maxy = region.bounds
     reach = 2.0 * math.hypot(maxx - minx, maxy - miny) + 2.0 * width
-    base = extended(guide, reach)
+    base = extended(smoothed(guide), reach)
     corners = [Point(c) for c in region.exterior.coords]
     left = max(base.distance(c) for c in corners) + width
     count = int(math.ceil(left / spacing))
@@ -94,3 +109,36 @@ def curved_lines(region: Polygon, guide: np.ndarray, spacing: float, width: floa
             number += 1
         out.append(swaths)
     return out, lambda p: float(base.project(Point(np.asarray(p)[:2])))
+
+
+def tractor_line(points: np.ndarray, hitch_offset: float, drawbar: float, ramp: float) -> np.ndarray:
+    """Where the rear axle drives so that a trailed implement runs on a curved swath: in a steady
+    turn the implement axle (drawbar L behind a hitch c behind the rear axle) runs on
+    r_i^2 = r^2 + c^2 - L^2, so the axle is put on r = sqrt(r_i^2 - c^2 + L^2), outside the swath
+    by r - r_i (zero on a straight swath). The shift grows from zero over ``ramp`` metres at each end
+    (the path joins its straight run-in and run-out)."""
+    p = np.asarray(points, float)
+    if len(p) < 3:
+        return p
+    kappa = signed_curvature(p)
+    r_i = 1.0 / np.maximum(np.abs(kappa), 1e-9)
+    shift = np.sqrt(np.maximum(r_i ** 2 - hitch_offset ** 2 + drawbar ** 2, 0.0)) - r_i
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+    shift *= np.clip(np.minimum(s, s[-1] - s) / max(ramp, 1e-9), 0.0, 1.0)
+    t = np.gradient(p, s, axis=0)
+    t /= np.maximum(np.hypot(*t.T), 1e-12)[:, None]
+    left = np.column_stack([-t[:, 1], t[:, 0]])
+    return p - (np.sign(kappa) * shift)[:, None] * left
+
+
+def signed_curvature(p: np.ndarray, base: float = 2.0) -> np.ndarray:
+    """Curvature (left positive) at every point of a polyline: the heading change over about
+    ``base`` metres either side, over the arc length between (a smooth estimate)."""
+    d = np.diff(p, axis=0)
+    h = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(*d.T))])
+    mid = 0.5 * (s[:-1] + s[1:])
+    lo = np.interp(np.clip(s - base, mid[0], mid[-1]), mid, h)
+    hi = np.interp(np.clip(s + base, mid[0], mid[-1]), mid, h)
+    span = np.clip(s + base, mid[0], mid[-1]) - np.clip(s - base, mid[0], mid[-1])
+    return np.where(span > 1e-9, (hi - lo) / np.maximum(span, 1e-9), 0.0)
