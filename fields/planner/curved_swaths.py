@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import shapely
 from scipy.interpolate import splev, splprep
 from shapely.geometry import LineString, MultiLineString, Point, Polygon
 
@@ -43,7 +44,7 @@ def extended(line: np.ndarray, reach: float) -> LineString:
 
 def resampled(g: LineString, step: float = STEP) -> np.ndarray:
     n = max(int(math.ceil(g.length / step)), 1)
-    return np.array([g.interpolate(s).coords[0] for s in np.linspace(0.0, g.length, n + 1)])
+    return shapely.get_coordinates(shapely.line_interpolate_point(g, np.linspace(0.0, g.length, n + 1)))
 
 
 def curvature(p: np.ndarray) -> np.ndarray:
@@ -81,15 +82,15 @@ def curved_lines(region: Polygon, guide: np.ndarray, spacing: float, width: floa
     minx, miny, maxx, maxy = region.bounds
     reach = 2.0 * math.hypot(maxx - minx, maxy - miny) + 2.0 * width
     base = extended(smoothed(guide), reach)
-    corners = [Point(c) for c in region.exterior.coords]
-    left = max(base.distance(c) for c in corners) + width
-    count = int(math.ceil(left / spacing))
+    # the farthest point of the region from the line may lie inside it (towards a curve's centre):
+    # the region's diagonal bounds every distance
+    count = int(math.ceil((math.hypot(maxx - minx, maxy - miny) + base.distance(region) + width) / spacing))
     near = region.buffer(0.5 * width, join_style="mitre", mitre_limit=3.0)
     out: list[list[Swath]] = []
     number = first_index
     for k in range(-count, count + 1):
         off = base if k == 0 else base.offset_curve(k * spacing, join_style="round")
-        if off.is_empty:
+        if off.is_empty or not off.intersects(near):
             continue
         found = []
         for g in (off.geoms if isinstance(off, MultiLineString) else [off]):
