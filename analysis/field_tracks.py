@@ -64,8 +64,18 @@ def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
 
 def _swath_frames(plan, conv) -> dict[int, np.ndarray]:
     """Swath line -> its polyline (N >= 2, 2) in the mission frame (two points for a straight swath):
-    where the implement works (on a curve the tractor drives outside it: fields.planner.curved_swaths)."""
-    return {int(sw.line): np.asarray(conv(sw.points[:, :2]), float) for sw in plan.swaths}
+    where the implement works (on a curve the tractor drives outside it: fields.planner.curved_swaths).
+    The swaths of a line that crosses a hole or a bay are parts of one line (one offset of a curve):
+    they are joined, turned the same way, in their order along it."""
+    parts: dict[int, list[np.ndarray]] = {}
+    for sw in plan.swaths:
+        parts.setdefault(int(sw.line), []).append(np.asarray(conv(sw.points[:, :2]), float))
+    out = {}
+    for line, pieces in parts.items():
+        d = pieces[0][-1] - pieces[0][0]
+        pieces = [p if (p[-1] - p[0]) @ d >= 0 else p[::-1] for p in pieces]
+        out[line] = np.vstack(sorted(pieces, key=lambda p: float(p.mean(axis=0) @ d)))
+    return out
 
 
 def station(line: np.ndarray, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -149,13 +159,20 @@ def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray,
 
 
 def _gap(one, other) -> np.ndarray:
-    """other's across minus one's, 1 m apart along their common part (interpolated on both)."""
+    """other's across minus one's, 1 m apart along their common part (interpolated on both), where
+    both tracks have samples less than 1 m apart either side (not across a hole or bay that splits a
+    line into swaths)."""
     if one is None or other is None:
         return np.zeros(0)
     lo, hi = max(one[0][0], other[0][0]), min(one[0][-1], other[0][-1])
     if hi - lo < 2.0:
         return np.zeros(0)
     grid = np.arange(lo, hi, 1.0)
+    covered = np.ones(len(grid), bool)
+    for along, _ in (one, other):
+        i = np.clip(np.searchsorted(along, grid, side="right"), 1, len(along) - 1)
+        covered &= along[i] - along[i - 1] <= 1.0
+    grid = grid[covered]
     return np.interp(grid, *other) - np.interp(grid, *one)
 
 

@@ -126,3 +126,16 @@ def test_a_field_mission_on_curved_swaths_keeps_the_implement_within_3_cm():
     m = run_study(study, None, plots=False).metrics
     assert m["swath_time_s"] > 10
     assert m["implement_xte_p95_m"] <= 0.03
+
+
+def test_pass_to_pass_gaps_are_taken_only_where_both_passes_were_driven():
+    """A line split by a hole: its two parts' tracks are not interpolated across the hole (a curved
+    neighbour would be measured against the chord)."""
+    from analysis.field_tracks import _gap
+
+    one_along = np.r_[np.arange(0.0, 20.0, 0.1), np.arange(40.0, 60.0, 0.1)]
+    one = (one_along, np.where(one_along < 30, 0.0, 1.0))
+    other = (np.arange(0.0, 60.0, 0.1), np.full(600, 3.0))
+    gaps = _gap(one, other)
+    assert len(gaps) == 40                  # 0..19 and 40..59: none in the hole
+    assert set(np.round(gaps, 9)) == {3.0, 2.0}
