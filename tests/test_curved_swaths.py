@@ -110,7 +110,7 @@ def test_the_swath_frame_projection_agrees_with_shapely_on_a_polyline():
 def test_a_curved_pattern_needs_a_guidance_line_and_a_known_name():
     f = arc_field()
     f.lines = []
-    with pytest.raises(FieldError, match="guidance_line = '\\*': the field has no such guidance line"):
+    with pytest.raises(FieldError, match="swath_pattern = 'curved': the field has no guidance line"):
         plan(f, Settings(swath_pattern="curved"))
     with pytest.raises(FieldError, match="swath_pattern = 'wavy': expected straight or curved"):
         plan(arc_field(), Settings(swath_pattern="wavy"))

@@ -29,6 +29,10 @@ def generate(field: Field, piece: Polygon, settings: Settings, where: str, first
     swaths from ``first_index``); the coordinate along them (for the cells); the driving angle and
     how it was chosen."""
     if settings.swath_pattern == "curved":
+        if not field.lines:
+            raise FieldError(f"{where}: swath_pattern = 'curved': the field has no guidance line to lay the swaths "
+                             f"along (expected a curve: an AgOpenGPS curve, ISOXML curve guidance or a GeoJSON "
+                             f"LineString)")
         line, how = guidance(field, settings.guidance_line or "*", where)
         lines, along = curved_lines(piece, line.points, settings.spacing, settings.working_width,
                                     settings.turn_radius, first_index, first_line)
