@@ -15,7 +15,7 @@ from fields.planner import SWATH, TURN
 from orchestrator.resolver import resolve
 from orchestrator.study import Study
 
-from .field_tracks import TRACTOR, _pass_to_pass, _stats
+from .field_tracks import TRACTOR, _pass_to_pass, _stats, station
 from .signals import component_named, runs, signal
 
 # line acquisition
@@ -106,14 +106,14 @@ def _acquisitions(s: pd.DataFrame, route: dict[str, np.ndarray], frames,
         on = np.flatnonzero((path_length >= s_start) & (path_length <= s_end))
         if len(on) < 2:
             continue
-        a, d = frames[k]
-        e = np.abs(-d[1] * (x[on] - a[0]) + d[0] * (y[on] - a[1]))
+        station_along, across = station(frames[k], x[on], y[on])
+        e = np.abs(across)
         inside = e < ACQUIRED
         found = math.nan, math.nan
         for first, last in runs(inside):
             if t[on[last - 1]] - t[on[first]] >= ACQUIRED_HOLD or last == len(on):
                 j0, j1 = on[0], on[first]
-                along = (x[j1] - x[j0]) * d[0] + (y[j1] - y[j0]) * d[1]
+                along = station_along[first] - station_along[0]
                 found = float(along), float(t[j1] - t[j0])
                 break
         out.append(found)

@@ -62,23 +62,49 @@ def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
     return out
 
 
-def _swath_frames(plan, conv) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Swath index -> (start, unit direction) in the mission frame."""
+def _swath_frames(plan, conv) -> dict[int, np.ndarray]:
+    """Swath line -> its polyline (N >= 2, 2) in the mission frame (two points for a straight swath):
+    where the implement works (on a curve the tractor drives outside it: fields.planner.curved_swaths).
+    The swaths of a line that crosses a hole or a bay are parts of one line (one offset of a curve):
+    they are joined, turned the same way, in their order along it."""
+    parts: dict[int, list[np.ndarray]] = {}
+    for sw in plan.swaths:
+        parts.setdefault(int(sw.line), []).append(np.asarray(conv(sw.points[:, :2]), float))
     out = {}
-    for seg in (s for s in plan.path.segments if s.kind == SWATH):
-        a2, b2 = conv(seg.points[[0, -1], :2])
-        d = (b2 - a2) / max(np.hypot(*(b2 - a2)), 1e-9)
-        out[int(seg.index)] = (a2, d)
+    for line, pieces in parts.items():
+        d = pieces[0][-1] - pieces[0][0]
+        pieces = [p if (p[-1] - p[0]) @ d >= 0 else p[::-1] for p in pieces]
+        out[line] = np.vstack(sorted(pieces, key=lambda p: float(p.mean(axis=0) @ d)))
     return out
 
 
+def station(line: np.ndarray, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(along, across: left positive) of points relative to a polyline: the foot of the
+    perpendicular on its nearest segment, the first and last segments extended beyond the ends
+    (so that a straight swath is its infinite line: along = (p - a).d, across = d x (p - a))."""
+    a, b = line[:-1], line[1:]
+    seg = np.maximum(np.hypot(*(b - a).T), 1e-12)
+    d = (b - a) / seg[:, None]
+    wx, wy = px[:, None] - a[:, 0], py[:, None] - a[:, 1]
+    t = wx * d[:, 0] + wy * d[:, 1]
+    lo = np.where(np.arange(len(seg)) == 0, -np.inf, 0.0)
+    hi = np.where(np.arange(len(seg)) == len(seg) - 1, np.inf, seg)
+    t = np.clip(t, lo, hi)
+    ex, ey = wx - t * d[:, 0], wy - t * d[:, 1]
+    i = np.argmin(ex * ex + ey * ey, axis=1)
+    r = np.arange(len(px))
+    s_at = np.concatenate([[0.0], np.cumsum(seg)])
+    across = d[i, 0] * wy[r, i] - d[i, 1] * wx[r, i]
+    return s_at[i] + t[r, i], across
+
+
 def _cross_track(px, py, swath, frames):
-    """Signed distance (left positive) of each point to its swath's line; NaN off swaths."""
+    """Signed distance (left positive) of each point to its swath's polyline; NaN off swaths."""
     out = np.full(len(px), np.nan)
-    for k, (a, d) in frames.items():
+    for k, line in frames.items():
         m = swath == k
         if m.any():
-            out[m] = -d[1] * (px[m] - a[0]) + d[0] * (py[m] - a[1])
+            out[m] = station(line, px[m], py[m])[1]
     return out
 
 
@@ -121,27 +147,32 @@ IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a
 
 
 def _track(s: pd.DataFrame, j: int, frame, point=IMPLEMENT) -> tuple[np.ndarray, np.ndarray] | None:
-    """The implement's (or the tractor's) track on swath j as (along, across) in ``frame`` (start,
-    direction), sorted along; None with fewer than 10 samples."""
-    a, d = frame
+    """The implement's (or the tractor's) track on swath j as (along, across) the swath polyline
+    ``frame``, sorted along; None with fewer than 10 samples."""
     px, py, segment = point
     m = (s[segment].to_numpy() == SWATH) & (s["swath"].to_numpy() == j)
     if m.sum() < 10:
         return None
-    rel = np.column_stack([s[px].to_numpy()[m] - a[0], s[py].to_numpy()[m] - a[1]])
-    along, across = rel @ d, rel @ np.array([-d[1], d[0]])
+    along, across = station(frame, s[px].to_numpy()[m], s[py].to_numpy()[m])
     order = np.argsort(along)
     return along[order], across[order]
 
 
 def _gap(one, other) -> np.ndarray:
-    """other's across minus one's, 1 m apart along their common part (interpolated on both)."""
+    """other's across minus one's, 1 m apart along their common part (interpolated on both), where
+    both tracks have samples less than 1 m apart either side (not across a hole or bay that splits a
+    line into swaths)."""
     if one is None or other is None:
         return np.zeros(0)
     lo, hi = max(one[0][0], other[0][0]), min(one[0][-1], other[0][-1])
     if hi - lo < 2.0:
         return np.zeros(0)
     grid = np.arange(lo, hi, 1.0)
+    covered = np.ones(len(grid), bool)
+    for along, _ in (one, other):
+        i = np.clip(np.searchsorted(along, grid, side="right"), 1, len(along) - 1)
+        covered &= along[i] - along[i - 1] <= 1.0
+    grid = grid[covered]
     return np.interp(grid, *other) - np.interp(grid, *one)
 
 

@@ -119,6 +119,8 @@ class FieldRoute(Component):
         par("headland_passes", "1", 0, "0: as many as the turns need"),
         par("driving_angle", "rad", float("nan"), "swath direction, east = 0, counter-clockwise (nan: by angle_objective)"),
         par("guidance_line", "", "", "drive along this guidance line of the field (an AB line; '*': its first)"),
+        par("swath_pattern", "", "straight", "straight; curved: swaths offset from the guidance line (a curve) at "
+            "the working width"),
         par("angle_objective", "", "fewest_swaths", "how the driving angle is chosen: fewest_swaths or longest_edge"),
         par("turn_radius", "m", 4.0, "the tractor's smallest turning radius"),
         par("wheelbase", "m", 1.4, "for the steering-rate limit of the turns"),

@@ -24,7 +24,7 @@ from .planner.sampling import EXPORT_STEP, ROUTE_STEP
 from .planner.settings import Settings
 
 OPTIONS = {"working_width": "--width", "headland_passes": "--headland-passes", "driving_angle": "--angle",
-           "guidance_line": "--guidance-line", "angle_objective": "--angle-objective", "turn_radius": "--turn-radius",
+           "guidance_line": "--guidance-line", "swath_pattern": "--swath-pattern", "angle_objective": "--angle-objective", "turn_radius": "--turn-radius",
            "work_speed": "--work-speed", "turn_speed": "--turn-speed", "order": "--order",
            "hitch_offset": "--hitch-offset", "drawbar": "--drawbar", "settle": "--settle", "max_swaths": "--max-swaths",
            "headland_order": "--headland", "headland_corners": "--headland-corners", "route_seconds": "--route-seconds",
@@ -68,6 +68,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "(default: chosen by --angle-objective)")
     p.add_argument("--angle-objective", default=d.angle_objective, choices=sorted(OBJECTIVES),
                    help=f"how the driving angle is chosen ({d.angle_objective})")
+    p.add_argument("--swath-pattern", default=d.swath_pattern, choices=("straight", "curved"),
+                   help="straight swaths, or curved: offsets of the guidance line (a curve; --guidance-line, default "
+                        "the field's first) at the working width")
     p.add_argument("--guidance-line", default="", metavar="NAME", help="drive along the field's guidance line "
                    "NAME (an AB line of an AgOpenGPS or ISOXML field; '*': its first)")
     p.add_argument("--turn-radius", type=finite, default=d.turn_radius, help=f"m ({d.turn_radius:g})")
@@ -145,7 +148,7 @@ def run(args: argparse.Namespace) -> int:
                         angle_objective=args.angle_objective, turn_radius=args.turn_radius, work_speed=args.work_speed,
                         turn_speed=args.turn_speed, order=args.order, hitch_offset=args.hitch_offset,
                         drawbar=args.drawbar, settle=args.settle, max_swaths=args.max_swaths,
-                        guidance_line=args.guidance_line, headland_order=args.headland_order,
+                        guidance_line=args.guidance_line, swath_pattern=args.swath_pattern, headland_order=args.headland_order,
                         headland_corners=args.headland_corners, route_seconds=args.route_seconds,
                         start_point=args.start, end_point=args.end, overlap=args.overlap)
     settings.check("plan", OPTIONS)

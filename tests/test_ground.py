@@ -419,7 +419,8 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
     assert m["pass_to_pass_interval_s"] == pytest.approx(starts[1] - starts[0], abs=1e-9)
     assert 60.0 < m["pass_to_pass_interval_s"] < 60.0 + 166 / 2.0 + 60.0
     spacing = plan.settings.working_width - plan.settings.overlap
-    a, d = _swath_frames(plan, conv)[0]
+    line = _swath_frames(plan, conv)[0]
+    a, d = line[0], (line[-1] - line[0]) / np.hypot(*(line[-1] - line[0]))
     n = np.array([-d[1], d[0]])
     along = [(tr - a) @ d for tr in tracks]
     lines = [LineString(tr) for tr in tracks]

@@ -15,6 +15,7 @@ NON_NEGATIVE = ("headland_passes", "hitch_offset", "drawbar", "half_width", "set
 ORDERS = ("auto", "boustrophedon", "skip", "optimised")
 HEADLAND_ORDERS = ("last", "first")
 CORNERS = ("tight", "parallel")
+PATTERNS = ("straight", "curved")
 
 
 @dataclass(frozen=True)
@@ -23,6 +24,7 @@ class Settings:
     headland_passes: int = 0              # 0: as many as the turns need
     driving_angle: float | None = None    # rad, east = 0, counter-clockwise; None: by the angle objective
     guidance_line: str = ""               # else along this guidance line of the field ("*": its first)
+    swath_pattern: str = "straight"       # straight; curved: offsets of the guidance line (a curve), fields.planner.curved_swaths
     angle_objective: str = "fewest_swaths"  # how the driving angle is chosen (fields.planner.objectives)
     turn_radius: float = 4.0              # m: the tractor's smallest (well above its 45 deg lock)
     wheelbase: float = 1.4                # m
@@ -65,7 +67,8 @@ class Settings:
                 raise FieldError(f"{where}: {name(key)} = {getattr(self, key)}: expected zero or more")
         if self.order not in ORDERS:
             raise FieldError(f"{where}: {name('order')} = {self.order!r}: expected {', '.join(ORDERS)}")
-        for key, allowed in (("headland_order", HEADLAND_ORDERS), ("headland_corners", CORNERS)):
+        for key, allowed in (("headland_order", HEADLAND_ORDERS), ("headland_corners", CORNERS),
+                             ("swath_pattern", PATTERNS)):
             if getattr(self, key) not in allowed:
                 raise FieldError(f"{where}: {name(key)} = {getattr(self, key)!r}: expected {' or '.join(allowed)}")
         if self.angle_objective not in OBJECTIVES:

@@ -13,6 +13,7 @@ from shapely.geometry import LineString, MultiLineString, Polygon
 from shapely.ops import unary_union
 
 from ..field import Field, FieldError
+from .curved_swaths import curved_lines
 from .decomposition import straight_along
 from .objectives import OBJECTIVES, best_angle
 from .settings import Settings
@@ -27,6 +28,15 @@ def generate(field: Field, piece: Polygon, settings: Settings, where: str, first
     """The swaths of a piece of the inner field, line by line (lines numbered from ``first_line``,
     swaths from ``first_index``); the coordinate along them (for the cells); the driving angle and
     how it was chosen."""
+    if settings.swath_pattern == "curved":
+        if not field.lines:
+            raise FieldError(f"{where}: swath_pattern = 'curved': the field has no guidance line to lay the swaths "
+                             f"along (expected a curve: an AgOpenGPS curve, ISOXML curve guidance or a GeoJSON "
+                             f"LineString)")
+        line, how = guidance(field, settings.guidance_line or "*", where)
+        lines, along = curved_lines(piece, line.points, settings.spacing, settings.working_width,
+                                    settings.turn_radius, first_index, first_line)
+        return lines, along, line.heading % math.pi, "offsets of " + how.removeprefix("along ")
     angle, how = driving_angle(field, piece, settings, where)
     lines = swath_lines(piece, angle, settings.spacing, settings.working_width, first_index, first_line)
     return lines, straight_along(angle), angle, how
@@ -43,12 +53,18 @@ def driving_angle(field: Field, region: Polygon, settings: Settings, where: str)
 
 def along_line(field: Field, name: str, where: str) -> tuple[float, str]:
     """The driving angle of the field's guidance line (an AB line's heading, a curve's ends)."""
+    line, how = guidance(field, name, where)
+    return line.heading % math.pi, how
+
+
+def guidance(field: Field, name: str, where: str):
+    """The field's guidance line named ``name`` ("*": its first), and how it was chosen."""
     found = field.lines[:1] if name == "*" else [g for g in field.lines if g.name == name]
     if not found:
         have = ", ".join(repr(g.name) for g in field.lines) or "none"
         raise FieldError(f"{where}: guidance_line = {name!r}: the field has no such guidance line (it has {have})")
     line = found[0]
-    return line.heading % math.pi, f"along the field's {line.kind} {line.name!r}"
+    return line, f"along the field's {line.kind} {line.name!r}"
 
 
 def swath_lines(region: Polygon, angle: float, spacing: float, width: float, first_index: int = 0,

@@ -24,6 +24,7 @@ from .curves import Limits, connect
 from .headland import corner_radius, reversed_ring, ring_path
 from .sampling import POLYLINE_STEP
 from .settings import Settings
+from .curved_swaths import tractor_line
 from .types import HEADLAND, SWATH, TRANSIT, TURN, HeadlandPass, Route, Segment, Swath
 
 VIA_HEADLAND_JOINS = (10.0, 20.0, 30.0)     # m along the ring past the nearest point where a transit joins it
@@ -170,7 +171,8 @@ class Joiner:
         else:
             path = straight(run_in, sw.start)
         run_out = sw.end + s.lead * d_out
-        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(sw.points)),
+        axle = tractor_line(sw.points, s.hitch_offset, s.drawbar, s.lead)
+        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(axle)),
                           Segment(TURN, -1, straight(sw.end, run_out))]
         return run_out[0], run_out[1], math.atan2(d_out[1], d_out[0])
 
