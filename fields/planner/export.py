@@ -119,13 +119,13 @@ def write_applied_geojson(plan: Plan, applied, target: FilePath) -> None:
     """as_applied.geojson: the ground covered (one feature) and each applied strip (a section's or
     the whole width's run where it was on); longitude/latitude where the field has a geographic
     reference, else its local metres."""
+    import shapely
     from shapely.geometry import mapping
-    from shapely.ops import transform
 
     field = plan.field
     if field.origin is not None:
         def conv(geom):
-            return transform(lambda x, y, z=None: tuple(field.to_geodetic(np.column_stack([x, y])).T), geom)
+            return shapely.transform(geom, lambda xy: np.asarray(field.to_geodetic(xy), float).reshape(-1, 2))
     else:
         def conv(geom):
             return geom
