@@ -22,7 +22,7 @@ STARTUP_SETTLE_S = 5.0
 def tracking_error(frame: pd.DataFrame, study: Study, held: bool = False) -> np.ndarray:
     """|CG - reference| at every instant of the plant, the reference taken at the same instant
     (interpolated between its 20 Hz samples: signals.between_samples); ``held``: the reference as
-    the table holds it between samples (up to speed x its step behind, the figures before issue 28)."""
+    the table holds it between samples (up to speed x its step behind: the figures of a reference held at 20 Hz)."""
     if held:
         x_ref, y_ref = signal(frame, study, "reference", "x_ref"), signal(frame, study, "reference", "y_ref")
     else:

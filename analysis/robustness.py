@@ -1,4 +1,4 @@
-"""Monte Carlo robustness of the figure-8 (issue 19): P50, P95 and max of the straight and curved
+"""Monte Carlo robustness of the figure-8: P50, P95 and max of the straight and curved
 maximum errors, the fraction of runs within the paper's bounds (over all runs and over those with
 at most 0.1 s of actuator delay), and the max error against the actuator delay.
 

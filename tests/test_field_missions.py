@@ -29,7 +29,7 @@ from orchestrator.runner import run_study
 from orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
-REAL = ROOT / "tests" / "data"             # copies of ../shared/realdata with their licences
+REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
 STUDIES = ROOT / "studies"
 IAM_CSV = REAL / "iam_field_open_autonomous_tractor" / "datasets" / "iam_field" / "field_boundaries.csv"
 SMALL_IMPLEMENT = dict(working_width=2.0, turn_radius=2.5, drawbar=0.0, settle=2.0)   # for the 0.15 ha plots

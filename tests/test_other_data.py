@@ -21,7 +21,7 @@ from measurements.raw_nmea import read_nmea_file
 from measurements.recording import ImportOptions, import_recording
 
 ROOT = Path(__file__).resolve().parents[1]
-REAL = ROOT / "tests" / "data"             # copies of ../shared/realdata with their licences
+REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
 NMEA = REAL / "nmea_gpsd_testlogs"
 ISOXML = REAL / "isoxml_dev4ag_timelogs"
 F2C = REAL / "fields2cover_data"
