@@ -12,7 +12,7 @@ def _progress(line: str) -> None:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("study", type=Path, help="a guidance study: tracker, yaw-rate controller, steering, yaw plant, "
                    "a reference (figure-8 or field route)")
@@ -50,7 +50,7 @@ def _simulated_lines(analysis, duration: float) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.study import Study, StudyError
+    from agrobot.orchestrator.study import Study, StudyError
 
     from .margins import analyse, report
 
@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
     study = Study.load(args.study, args.set)
     if args.out is not None:
-        from orchestrator.output import check_output
+        from agrobot.orchestrator.output import check_output
 
         check_output(args.out, overwrite=True)
     analysis = analyse(study, progress=_progress)
@@ -81,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
 # --- tune ------------------------------------------------------------------------------------
 
 def add_tune_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     from .tune import Targets
 
@@ -109,7 +109,7 @@ def add_tune_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _check_tune_out(path: Path, overwrite: bool) -> None:
-    from orchestrator.output import OutputError
+    from agrobot.orchestrator.output import OutputError
 
     if path.suffix != ".toml":
         raise OutputError(f"--out {path}: expected a study file name ending in .toml")
@@ -136,7 +136,7 @@ def _write_atomically(path: Path, text: str) -> None:
 
 
 def run_tune(args: argparse.Namespace) -> int:
-    from orchestrator.study import Study, StudyError
+    from agrobot.orchestrator.study import Study, StudyError
 
     from .tune import Targets, comparison, identified_values, propose, simulated_check
 

@@ -15,7 +15,7 @@ def yaw_plant(comp, step: float, speed: float) -> Block:
     """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)
     with the pose on the straight: psi' = gamma, y_cg' = v psi + v_y; R = CG - l_r psi, the
     antenna a lever arm f ahead of R: y_ant = y_R + f psi, its velocity + f gamma."""
-    from components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
+    from agrobot.components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
                                                 state_space, with_cornering_scale, zoh_discretize)
 
     p = comp.p
@@ -92,7 +92,7 @@ def pose_ekf(comp, step: float, speed: float) -> Block:
         y- = y + T v psi,  psi- = psi + T v delta_{k-1} / L,  (y, psi) = (y-, psi-) + K (z - y-)
 
     outputs the updated R, heading and CG = R + l_r psi."""
-    from components.pose_ekf import PoseEKF
+    from agrobot.components.pose_ekf import PoseEKF
 
     ekf = PoseEKF(comp.name, {**comp.p, "x0": 0.0, "y0": 0.0, "psi0": 0.0})
     ekf.initialize(0.0, step)
@@ -150,7 +150,7 @@ _INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters 
 
 
 def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) -> Block:
-    from components.ins_ekf import INSEKF
+    from agrobot.components.ins_ekf import INSEKF
 
     p = comp.p
     ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": 0.0})
@@ -213,7 +213,7 @@ def imu_sensor(comp, step: float, speed: float) -> Block:
     the heading rate (cos(phi) cos(theta) = 1 to first order), roll reads roll, and the left specific
     force is the north acceleration by a difference over one sample plus the gravity of the roll,
     f_y = (v_n - v_n') / dt + g phi (the east acceleration is 0 on the operating point)."""
-    from components.models.terrain import GRAVITY
+    from agrobot.components.models.terrain import GRAVITY
 
     return Block.of(comp.name, ["yaw_rate", "vel_north", "roll"], ["yaw_rate", "accel_left", "roll"],
                     A=[[0.0]], B=[[0.0, 1.0, 0.0]], C=[[0.0], [-1.0 / step], [0.0]],
@@ -225,7 +225,7 @@ def yaw_rate_mpc(comp, step: float, speed: float) -> Block:
     du = K [x_k; u_{k-1}; gamma - gamma_d], K = -(H^-1 G)[0], with its model advanced by the measured
     wheel angle (x_k = A x_{k-1} + B delta_m) or by its last command (x_k = A x_{k-1} + B u_{k-1});
     state [x_{k-1}; u_{k-1}], inputs (steer_angle, yaw_rate, yaw_rate_ref)."""
-    from components.models.condensed_mpc import CondensedTrackingMPC
+    from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
 
     p = comp.p
     mpc = CondensedTrackingMPC(p["num"], p["den"], step, int(p["prediction_horizon"]), int(p["control_horizon"]),
@@ -251,7 +251,7 @@ def yaw_rate_notch(comp, step: float, speed: float) -> Block:
     """The notch's difference equation (components.yaw_rate_notch), or a unit gain at frequency 0."""
     from scipy.signal import tf2ss
 
-    from components.yaw_rate_notch import notch_coefficients
+    from agrobot.components.yaw_rate_notch import notch_coefficients
 
     p = comp.p
     if float(p["frequency"]) == 0.0:
@@ -267,17 +267,17 @@ def computation_delay(comp, step: float, speed: float) -> Block:
 
 def linear_models() -> dict[type, object]:
     """Component class -> f(component, step, speed) -> Block."""
-    from components.computation_delay import ComputationDelay
-    from components.gps_sensor import GPSSensor
-    from components.gyro_sensor import GyroSensor
-    from components.imu_sensor import IMUSensor
-    from components.ins_ekf import INSEKF
-    from components.pose_ekf import PoseEKF
-    from components.safety_watchdog import SafetyWatchdog
-    from components.steering_hydraulics import SteeringHydraulics
-    from components.tractor_yaw_plant import TractorYawPlant
-    from components.yaw_rate_mpc import YawRateMPC
-    from components.yaw_rate_notch import YawRateNotch
+    from agrobot.components.computation_delay import ComputationDelay
+    from agrobot.components.gps_sensor import GPSSensor
+    from agrobot.components.gyro_sensor import GyroSensor
+    from agrobot.components.imu_sensor import IMUSensor
+    from agrobot.components.ins_ekf import INSEKF
+    from agrobot.components.pose_ekf import PoseEKF
+    from agrobot.components.safety_watchdog import SafetyWatchdog
+    from agrobot.components.steering_hydraulics import SteeringHydraulics
+    from agrobot.components.tractor_yaw_plant import TractorYawPlant
+    from agrobot.components.yaw_rate_mpc import YawRateMPC
+    from agrobot.components.yaw_rate_notch import YawRateNotch
 
     return {TractorYawPlant: yaw_plant, SteeringHydraulics: steering_hydraulics, GPSSensor: gps_sensor,
             PoseEKF: pose_ekf, YawRateMPC: yaw_rate_mpc, YawRateNotch: yaw_rate_notch,
@@ -290,11 +290,11 @@ def off_the_lateral_loop() -> tuple[type, ...]:
     """Components whose outputs do not move the lateral channel at first order on a straight:
     the speed loop and its estimator (they set v), the implement and its side-shift (it reads the
     tractor, nothing reads it back), status and recording."""
-    from components.bus_recorder import BusRecorder
-    from components.speed_drivetrain import SpeedDrivetrain
-    from components.speed_kf import SpeedKF
-    from components.speed_pid import SpeedPID
-    from components.steering_status import SteeringStatus
-    from components.trailed_implement import TrailedImplement
+    from agrobot.components.bus_recorder import BusRecorder
+    from agrobot.components.speed_drivetrain import SpeedDrivetrain
+    from agrobot.components.speed_kf import SpeedKF
+    from agrobot.components.speed_pid import SpeedPID
+    from agrobot.components.steering_status import SteeringStatus
+    from agrobot.components.trailed_implement import TrailedImplement
 
     return SpeedPID, SpeedDrivetrain, SpeedKF, TrailedImplement, SteeringStatus, BusRecorder

@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from fields.planner import HEADLAND, SWATH, TRANSIT, TURN
-from orchestrator.study import Study
+from agrobot.fields.planner import HEADLAND, SWATH, TRANSIT, TURN
+from agrobot.orchestrator.study import Study
 
 from .field_ground import ground_metrics
 from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _strips,
@@ -131,7 +131,7 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    from orchestrator.results import atomic_write
+    from agrobot.orchestrator.results import atomic_write
 
     field, plan, _, _ = mission(study)
     s = _in_field_frame(_samples(frame, study), plan)        # east/north, the frame of plan.png
@@ -148,7 +148,7 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         plt.close(fig)
         written.append(out_dir / name)
 
-    from fields.planner.export import times_worked, times_worked_colorbar
+    from agrobot.fields.planner.export import times_worked, times_worked_colorbar
 
     fig, ax = plt.subplots(figsize=(9, 8))
     times_worked_colorbar(fig, ax, times_worked(ax, _strips(s, plan.settings.working_width), boundary, workable))

@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pandas as pd
 
-from fields.planner import SWATH, TURN
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.fields.planner import SWATH, TURN
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .field_tracks import TRACTOR, _pass_to_pass, _stats, station
 from .signals import component_named, runs, signal
@@ -80,7 +80,7 @@ def _tractor_gps(study: Study) -> str | None:
 def route_samples(path, until: float) -> dict[str, np.ndarray]:
     """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
     arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
-    from fields.planner.sampling import ROUTE_STEP
+    from agrobot.fields.planner.sampling import ROUTE_STEP
 
     stop = min(path.grid_size(ROUTE_STEP), int(math.ceil(max(until, 0.0) / ROUTE_STEP)) + 2)
     return path.grid(0, stop, ROUTE_STEP)
@@ -163,7 +163,7 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     the estimate's drift at its end (estimated CG - true CG: horizontal, as receivers quote their
     accuracy, and across the tractor's heading, what guidance feels), and when the watchdog stopped
     the tractor in it."""
-    from components.hardware.nmea import RTK_FIXED
+    from agrobot.components.hardware.nmea import RTK_FIXED
 
     out: dict[str, float] = {}
     gps = _tractor_gps(study)

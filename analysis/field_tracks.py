@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pandas as pd
 
-from fields.planner import SWATH
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.fields.planner import SWATH
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .signals import component_named, signal
 STEP = 0.1          # s: the geometry's sampling of the trajectories
@@ -19,7 +19,7 @@ STEP = 0.1          # s: the geometry's sampling of the trajectories
 
 def mission(study: Study):
     """(field, plan, to_mission) of the study's route component (planned as the run planned it)."""
-    from components.field_route import planned, route_frame, settings_of, to_mission
+    from agrobot.components.field_route import planned, route_frame, settings_of, to_mission
 
     name = component_named(study, "route")
     p = resolve(study).parameters(name)
@@ -51,7 +51,7 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
 def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
     """The samples' positions from the mission frame back to the field's east/north frame:
     p_field = R(rotation) p_mission + origin (the inverse of components.field_route.to_mission)."""
-    from components.field_route import route_frame
+    from agrobot.components.field_route import route_frame
 
     origin, rotation = route_frame(plan.path)
     c, sn = math.cos(rotation), math.sin(rotation)

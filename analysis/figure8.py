@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from orchestrator.study import Study
+from agrobot.orchestrator.study import Study
 
 from .signals import between_samples, rms, runs, sample_rows, signal
 

@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
 
-from components.models.figure8_path import Figure8Path
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.components.models.figure8_path import Figure8Path
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .figure8 import settled_index
 from .signals import MissingSignal, between_samples, component_named, rms, signal

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .loop_blocks import NoLinearModel
 
@@ -33,7 +33,7 @@ class Anatomy:
 
 def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, float]:
     """(break, delay key, own delay, step) of the steering, at the top level or inside a subsystem."""
-    from orchestrator.composite import CompositeComponent
+    from agrobot.orchestrator.composite import CompositeComponent
 
     model = resolve(study)
     found = model.find(role="steering")
@@ -102,7 +102,7 @@ def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
 
 def _plant(study: Study, purpose: str) -> tuple[str, float]:
     """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
-    from orchestrator.composite import CompositeComponent
+    from agrobot.orchestrator.composite import CompositeComponent
 
     model = resolve(study)
     plants = model.find(role="yaw_plant")

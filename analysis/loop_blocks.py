@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from orchestrator.errors import InputError
+from agrobot.orchestrator.errors import InputError
 
 
 class NoLinearModel(InputError):

@@ -209,7 +209,7 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
 def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, off_loop: tuple) -> Block | None:
     """The component's block, or None when it has none (network_of then checks that it is off the
     loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
-    from orchestrator.composite import CompositeComponent
+    from agrobot.orchestrator.composite import CompositeComponent
 
     if hasattr(comp, "lateral_linearisation"):
         sys_ = comp.lateral_linearisation(op.speed, step, op.along_track_error)
@@ -268,8 +268,8 @@ def composite(comp, step: float, ratio: int, op: OperatingPoint) -> Block:
 def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver=None) -> Network:
     """The study's lateral loop at the operating point (see the module docstring); its components'
     classes found by ``resolver`` (orchestrator.resolver; default: the default resolver)."""
-    from orchestrator.build import build_system
-    from orchestrator.resolver import resolve
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.resolver import resolve
 
     system = build_system(resolve(study, resolver))
     models, off_loop = linear_models(), off_the_lateral_loop()

@@ -30,8 +30,8 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .loop_blocks import NoLinearModel, OperatingPoint
 from .loop_models import OpenLoop, network_of
@@ -178,7 +178,7 @@ def speed_excess(study: Study, an: Anatomy, duration: float = TRIM_TIME) -> floa
 
 def analyse(study: Study, speed_excess_value: float | None = None, progress: Callable[[str], None] | None = None) -> Analysis:
     """Margins at every operating point of the study's reference."""
-    from components.kinematic_tracker import trim_along_track_error
+    from agrobot.components.kinematic_tracker import trim_along_track_error
 
     an = anatomy(study)
     notes = []

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from orchestrator.results import write_json
+from agrobot.orchestrator.results import write_json
 
 from .figure8 import PAPER_BOUNDS
 

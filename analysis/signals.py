@@ -4,8 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 
 class MissingSignal(KeyError):

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space, transfer_function
-from components.models.paper_models import G_2ND
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters, state_space, transfer_function
+from agrobot.components.models.paper_models import G_2ND
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .signals import component_named
 

@@ -24,9 +24,9 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator.errors import InputError
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .component_models import linear_models, off_the_lateral_loop
 from .loop_blocks import NoLinearModel, OperatingPoint
@@ -52,9 +52,9 @@ class Range:
 
 def tunable(cls, params: dict) -> list[Range]:
     """The gains ``tune`` searches for a tracker class (log-spaced grids)."""
-    from components.kinematic_tracker import KinematicTracker
-    from components.pure_pursuit import PurePursuit
-    from components.stanley import Stanley
+    from agrobot.components.kinematic_tracker import KinematicTracker
+    from agrobot.components.pure_pursuit import PurePursuit
+    from agrobot.components.stanley import Stanley
 
     if issubclass(cls, KinematicTracker):
         return [Range("lookahead", float(params["l_r"]), 12.0, 16), Range("k_c", 0.3, 8.0, 12)]
@@ -104,7 +104,7 @@ class Search:
         self.networks = [network_of(study, op, "tune") for op in points]
 
     def evaluate(self, values: dict[str, float], targets: Targets, w_min: float = 1e-2) -> Design:
-        from components.kinematic_tracker import trim_along_track_error
+        from agrobot.components.kinematic_tracker import trim_along_track_error
 
         params = {**self.params, **values}
         tracker = self.cls(self.an.tracker, params)
@@ -269,7 +269,7 @@ def _comment(study: Study, after: Analysis, targets: Targets) -> str:
         m = r.loops["whole loop"]
         lines.append(f"  {r.op.speed:g} m/s ({r.op.label}): delay margin {m.delay:.3f} s, phase margin {m.phase_deg:.1f} deg, "
                      f"gain margin {m.gain_db:.1f} dB, crossover {m.crossover:.2f} rad/s")
-    lines.append("Check: python -m orchestrator margins THIS_FILE --simulate")
+    lines.append("Check: python -m agrobot margins THIS_FILE --simulate")
     return "\n".join(lines)
 
 
@@ -303,7 +303,7 @@ def comparison(p: Proposal) -> str:
 def simulated_check(p: Proposal, duration: float, progress: Callable[[str], None] | None = None) -> list[str]:
     """The proposal simulated: its metrics (the paper's bounds where the study's analysis gives the
     figure-8's) and the steering command delay at which it loses stability, against the prediction."""
-    from orchestrator.runner import run_study
+    from agrobot.orchestrator.runner import run_study
 
     from .figure8 import PAPER_BOUNDS
     from .margins_simulation import simulated_delay_limit

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from components.models.yaw_dynamics import TractorParameters, transfer_function
-from identification.pipeline import identify_study
-from orchestrator.study import Study
+from agrobot.components.models.yaw_dynamics import TractorParameters, transfer_function
+from agrobot.identification.pipeline import identify_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
 CAR = TractorParameters(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5, sigma_r=1.0)

@@ -11,10 +11,10 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from orchestrator.build import build_system
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import load_study
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

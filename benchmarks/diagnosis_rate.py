@@ -34,7 +34,7 @@ COMBINATIONS = ("actuator_delay+gps_latency", "steering_offset+yaw_rate_bias", "
 
 
 def unlisted_cases() -> tuple[str, ...]:
-    from measurements.truth_tractor import UNLISTED
+    from agrobot.measurements.truth_tractor import UNLISTED
 
     return UNLISTED + ("wheel_slip+actuator_delay", "tyre_saturation+gps_latency",
                        "steering_sensor_gain+yaw_rate_bias", "gyro_scale_factor+steering_deadband")
@@ -42,7 +42,7 @@ def unlisted_cases() -> tuple[str, ...]:
 
 def score(run: dict) -> tuple:
     """(case, exact set found, exact set with every parameter in tolerance, found set)."""
-    from diagnosis.hidden_effects import expected_ids, recovered
+    from agrobot.diagnosis.hidden_effects import expected_ids, recovered
 
     res = run["result"]
     if run.get("healthy"):
@@ -56,8 +56,8 @@ def score(run: dict) -> tuple:
 
 def timing(duration: float, cases: list[str]) -> list[tuple[str, float]]:
     """Seconds per diagnosis (with plots) of one log of ``duration`` s per case, in this process."""
-    from diagnosis.pipeline import diagnose
-    from measurements.truth_tractor import make_log
+    from agrobot.diagnosis.pipeline import diagnose
+    from agrobot.measurements.truth_tractor import make_log
 
     out = []
     with tempfile.TemporaryDirectory() as folder:
@@ -84,9 +84,9 @@ def main() -> None:
                     help="the truth and its baseline: the paper's tractor (figure8.toml) or a passenger car at "
                          "10-30 m/s (passenger_car.toml)")
     args = ap.parse_args()
-    from diagnosis.hidden_effects import EFFECTS, diagnose_many
+    from agrobot.diagnosis.hidden_effects import EFFECTS, diagnose_many
 
-    from measurements.truth_tractor import HEALTHY
+    from agrobot.measurements.truth_tractor import HEALTHY
 
     groups = {"singles": ["none", *EFFECTS], "combinations": list(COMBINATIONS), "unlisted": list(unlisted_cases()),
               "healthy": [f"healthy:{h}" for h in HEALTHY]}

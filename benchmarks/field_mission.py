@@ -13,8 +13,8 @@ import argparse
 import time
 from pathlib import Path
 
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
 REAL = next((p / "shared" / "realdata" for p in ROOT.parents if (p / "shared" / "realdata").is_dir()),

@@ -19,11 +19,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 def recorded_inputs(seconds: float):
     """(study, the 20 Hz samples of a figure-8 run, FMU input -> recorded column)."""
-    from fmu_export.controller import controller_design, controller_feeds
-    from orchestrator.build import build_system
-    from orchestrator.engine import Simulation
-    from orchestrator.resolver import resolve
-    from orchestrator.study import Study
+    from agrobot.fmu_export.controller import controller_design, controller_feeds
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.engine import Simulation
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.study import Study
 
     st = Study.load(ROOT / "studies/figure8.toml", [f"study.stop_time={seconds}"])
     frame = Simulation(build_system(resolve(st))).run().to_frame().iloc[::5]
@@ -31,8 +31,8 @@ def recorded_inputs(seconds: float):
 
 
 def time_python(st, frame, feeds) -> np.ndarray:
-    from orchestrator.build import build_system
-    from orchestrator.resolver import resolve
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.resolver import resolve
 
     nodes = build_system(resolve(st)).nodes
     comps = [nodes[n].component for n in ("tracker", "mpc", "speed_controller")]
@@ -105,7 +105,7 @@ def time_c(fmu: Path, frame, feeds, tmp: Path) -> np.ndarray:
 
 
 def measure(seconds: float = 60.0) -> dict:
-    from fmu_export.controller import export_controller
+    from agrobot.fmu_export.controller import export_controller
 
     st, frame, feeds = recorded_inputs(seconds)
     with tempfile.TemporaryDirectory() as tmp:

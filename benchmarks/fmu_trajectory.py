@@ -20,11 +20,11 @@ def max_position_difference(a, b) -> float:
 
 
 def main() -> None:
-    from fmu_export.controller import export_controller, run_with_exported_controller
-    from orchestrator.build import build_system
-    from orchestrator.engine import Simulation
-    from orchestrator.resolver import resolve
-    from orchestrator.study import load_study
+    from agrobot.fmu_export.controller import export_controller, run_with_exported_controller
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.engine import Simulation
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.study import load_study
 
     with tempfile.TemporaryDirectory() as tmp:
         fmu = export_controller(load_study(STUDY), Path(tmp) / "guidance_controller.fmu")

@@ -22,7 +22,7 @@ sys.path.insert(0, str(ROOT))
 
 H = 0.01
 
-from fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run  # noqa: E402
+from agrobot.fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run  # noqa: E402
 
 
 def difference(ours: pd.DataFrame, other: pd.DataFrame, until: float = 20.0) -> float:
@@ -36,12 +36,12 @@ def cofmupy_or_none(unpacked: Path) -> pd.DataFrame | None:
 
 
 def main() -> None:
-    from analysis.figure8 import metrics
-    from fmu_export.ssp_export import export_ssp
-    from orchestrator.build import build_system
-    from orchestrator.engine import Simulation
-    from orchestrator.resolver import resolve
-    from orchestrator.study import Study
+    from agrobot.analysis.figure8 import metrics
+    from agrobot.fmu_export.ssp_export import export_ssp
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.engine import Simulation
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.study import Study
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=None, help="keep the SSP here (default: a temporary folder)")

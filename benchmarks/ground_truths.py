@@ -32,8 +32,8 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")       # scipy's small expm is
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from orchestrator.runner import run_study  # noqa: E402
-from orchestrator.study import Study  # noqa: E402
+from agrobot.orchestrator.runner import run_study  # noqa: E402
+from agrobot.orchestrator.study import Study  # noqa: E402
 
 SHARED = ROOT.parent / "shared" / "realdata"
 REAL = SHARED if SHARED.exists() else ROOT / "tests" / "data"
@@ -85,7 +85,7 @@ def slope_table(seeds: list[int]) -> None:
         print(f"{label:<48}{spread([m['tractor_xte_p95_m'] for m in ms]):>22}"
               f"{spread([m['implement_xte_p95_m'] for m in ms]):>22}{spread([m['tractor_xte_rms_m'] for m in ms]):>22}",
               flush=True)
-    print("command: python -m orchestrator run studies/field_coverage.toml --out OUT --set field.max_swaths=3 "
+    print("command: python -m agrobot run studies/field_coverage.toml --out OUT --set field.max_swaths=3 "
           "--set field.headland_work=0 --set \"tractor.slope_angle=10 deg\" --set \"tractor.slope_downhill_heading=-90 deg\""
           " [--set ekf.terrain_compensation=0] [--set ekf.crab_estimate=0] [--set study.seed=N]\n")
 
@@ -132,7 +132,7 @@ def outage_table(seeds: list[int], figure: Path | None) -> None:
         curves[label] = (f.loc[w, "t"].to_numpy() - OUTAGE[0], -np.sin(psi) * dx + np.cos(psi) * dy,
                          f.loc[w, "ekf.cross_track_std"].to_numpy())
     print(f"vendor: {VENDOR}: satellite-delivered corrections while GNSS is still tracked, not dead reckoning")
-    print(f"command: python -m orchestrator run studies/field_coverage.toml --out OUT --set field.path={shown(PARTFIELDS)} "
+    print(f"command: python -m agrobot run studies/field_coverage.toml --out OUT --set field.path={shown(PARTFIELDS)} "
           f"--set field.name=NO_Prag_Komplex --set field.max_swaths=1 --set field.headland_work=0 "
           f"--set \"gps.outages=[[{OUTAGE[0]:.0f}, {OUTAGE[1]:.0f}, Q]]\" --set watchdog.max_position_std=inf\n")
     if figure is not None:
@@ -167,7 +167,7 @@ def plot(curves, figure: Path) -> None:
 
 
 def iso_table(seeds: list[int]) -> None:
-    from analysis.field_tracks import repeatability
+    from agrobot.analysis.field_tracks import repeatability
 
     print("3. ISO 12188-2-style figures (studies/field_line_test.toml: the F2C test parcel's first two swaths, "
           "both receivers' RTK error 1.5 cm white + 1.3 cm Gauss-Markov over 5 min)")
@@ -192,7 +192,7 @@ def iso_table(seeds: list[int]) -> None:
         runs = [(run("field_line_test.toml", ("operator.pauses=[[1, 0.0]]",), s).frame, study) for s in (a, b)]
         p95.append(float(np.percentile(np.abs(repeatability(*runs, swath=0)), 95)))
     print(f"{'repeatability P95: the first swath on two runs (seeds)':<58}{spread(p95):>24}")
-    print("command: python -m orchestrator run studies/field_line_test.toml --out OUT  (metrics.json: "
+    print("command: python -m agrobot run studies/field_line_test.toml --out OUT  (metrics.json: "
           "tractor_pass_to_pass_p95_m, pass_to_pass_p95_m, pass_to_pass_interval_s, line_acquisition_p95_m, line_acquisition_p95_s, route_xte_p95_m)\n")
 
 

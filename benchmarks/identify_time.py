@@ -30,7 +30,7 @@ def measure(study_path: Path = ROOT / "studies/identification.toml", repeat: int
     for _ in range(repeat):
         with tempfile.TemporaryDirectory() as out:
             start = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "orchestrator", "identify", str(study_path), "--out", out],
+            subprocess.run([sys.executable, "-m", "agrobot", "identify", str(study_path), "--out", out],
                            check=True, capture_output=True, cwd=ROOT)
             walls.append(time.perf_counter() - start)
     return {"study": study_path.name, "walls": walls, "median": statistics.median(walls)}
@@ -40,8 +40,8 @@ def long_log(minutes: float, folder: Path) -> Path:
     """The F1TENTH study driven for ``minutes`` at 100 Hz, as a command-only canonical log."""
     import pandas as pd
 
-    from orchestrator.runner import simulate
-    from orchestrator.study import Study
+    from agrobot.orchestrator.runner import simulate
+    from agrobot.orchestrator.study import Study
 
     seconds = 60.0 * minutes
     study = Study.load(ROOT / "studies/f1tenth.toml").with_values({"study.stop_time": seconds, "plan.duration": seconds})
@@ -80,9 +80,9 @@ def hour(minutes: list[float]) -> None:
         for m in minutes:
             path = long_log(m, Path(folder))
             print(f"{m:g} min log at 100 Hz ({int(m * 6000)} rows):")
-            ident = timed([sys.executable, "-m", "orchestrator", "identify", str(path), "--study", "studies/f1tenth.toml",
+            ident = timed([sys.executable, "-m", "agrobot", "identify", str(path), "--study", "studies/f1tenth.toml",
                            "--method", "driving", "--out", f"{folder}/ident", "--no-plots"])
-            diag = timed([sys.executable, "-m", "orchestrator", "diagnose", str(path), "--study", "studies/f1tenth.toml",
+            diag = timed([sys.executable, "-m", "agrobot", "diagnose", str(path), "--study", "studies/f1tenth.toml",
                           "--out", f"{folder}/diag", "--no-plots"])
             rows.append((m, ident, diag))
     print(f"\n(load average while measuring: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")

@@ -30,6 +30,9 @@ LAYERS = {"orchestrator": 0, "fields": 1, "components": 2, "identification": 3, 
           "analysis": 3, "measurements": 3, "fields.cli": 3, "fields.plan_cli": 3}
 
 
+ROOT_PACKAGE = "agrobot"      # installed names are agrobot.<folder>; the graph speaks of the folders
+
+
 def layer(module: str) -> int:
     """The layer of a dotted module name: that of the longest LAYERS key it is or starts with."""
     keys = [k for k in LAYERS if module == k or module.startswith(k + ".")]
@@ -74,6 +77,7 @@ def imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
         else:
             continue
         for target in targets:
+            target = target.removeprefix(ROOT_PACKAGE + ".")
             while target and target not in known:           # 'pkg.mod.attr' -> the module that holds it
                 target = target.rpartition(".")[0]
             if target and target != name:

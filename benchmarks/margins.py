@@ -16,9 +16,9 @@ import sys
 import time
 from pathlib import Path
 
-from analysis.margins import analyse
-from analysis.margins_simulation import simulated_delay_limit
-from orchestrator.study import Study
+from agrobot.analysis.margins import analyse
+from agrobot.analysis.margins_simulation import simulated_delay_limit
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
 

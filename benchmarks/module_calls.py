@@ -3,7 +3,7 @@
     python benchmarks/module_calls.py -- run studies/field_coverage.toml --set field.max_swaths=2 \
         --out /tmp/module_calls --overwrite --no-plots
 
-The command (everything after ``--``) runs in this process as ``python -m orchestrator`` would
+The command (everything after ``--``) runs in this process as ``python -m agrobot`` would
 run it; afterwards every call from a function defined in one ``orchestrator/*.py`` file to a
 function defined in another is summed per (caller module, callee module) pair (cProfile's caller
 table: number of calls, recursion included). The table lists every pair, most calls first, and
@@ -46,7 +46,7 @@ def main(argv: list[str] | None = None) -> int:
     if "--" not in argv:
         argparse.ArgumentParser(usage=__doc__).error("give the command after '--'")
     command = argv[argv.index("--") + 1:]
-    from orchestrator.cli import main as orchestrator_main
+    from agrobot.orchestrator.cli import main as orchestrator_main
 
     profile = cProfile.Profile()
     profile.enable()
@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         profile.disable()
     counts = calls_between_modules(pstats.Stats(profile))
-    print(f"\ncommand: python -m orchestrator {' '.join(command)} (exit {status})")
+    print(f"\ncommand: python -m agrobot {' '.join(command)} (exit {status})")
     print(f"{'caller module':<16} {'callee module':<16} {'calls':>9}")
     for (a, b), n in counts.most_common():
         print(f"{a:<16} {b:<16} {n:>9}")

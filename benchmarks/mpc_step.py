@@ -12,8 +12,8 @@ import time
 
 import numpy as np
 
-from components.models.condensed_mpc import CondensedTrackingMPC
-from components.models.paper_models import G_2ND as G2ND
+from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
+from agrobot.components.models.paper_models import G_2ND as G2ND
 
 DT, NP, NC, Q, R = 0.05, 8, 3, 0.5, 1.0
 U_MAX, DU_MAX = math.radians(45), math.radians(55) * 0.05

@@ -13,8 +13,8 @@ import argparse
 import time
 from pathlib import Path
 
-from fields import FieldError, read_fields
-from fields.planner import HEADLAND, SWATH, Settings, plan
+from agrobot.fields import FieldError, read_fields
+from agrobot.fields.planner import HEADLAND, SWATH, Settings, plan
 
 REAL = next((p / "shared" / "realdata" for p in Path(__file__).resolve().parents if (p / "shared" / "realdata").is_dir()),
             Path("../shared/realdata"))

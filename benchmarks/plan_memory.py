@@ -3,7 +3,7 @@ a large route: one line per case.
 
     python3 benchmarks/plan_memory.py [--sizes 5 500 5000] [--wavy] [--limit-gb 8] [--no-follow]
 
-Each case runs in a child process (``python -m orchestrator plan SQUARE --out DIR``) whose peak
+Each case runs in a child process (``python -m agrobot plan SQUARE --out DIR``) whose peak
 resident memory is read from ``os.wait4``; the child's address space is capped at ``--limit-gb``
 (a case over it fails instead of taking the machine). The squares are GeoJSON in local metres,
 planned with the default settings (3 m working width, 4 m turn radius). The ``follow`` cases
@@ -27,8 +27,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 FOLLOW = r"""
 import resource, sys, time
-from components.field_route import FieldRoute, to_mission
-from fields.planner.sampling import ROUTE_STEP
+from agrobot.components.field_route import FieldRoute, to_mission
+from agrobot.fields.planner.sampling import ROUTE_STEP
 route = FieldRoute("field", {"path": sys.argv[1]})
 t0 = time.perf_counter()
 route.initialize(0.0, 0.05)
@@ -105,7 +105,7 @@ def main() -> None:
         for ha, wavy in [(ha, False) for ha in args.sizes] + ([(ha, True) for ha in args.sizes] if args.wavy else []):
             field = square(tmp, ha, wavy)
             out = tmp / f"plan_{field.stem}"
-            cmd = [sys.executable, "-m", "orchestrator", "plan", str(field), "--out", str(out)]
+            cmd = [sys.executable, "-m", "agrobot", "plan", str(field), "--out", str(out)]
             if args.route_step is not None:
                 cmd += ["--route-step", str(args.route_step)]
             code, wall, cpu, peak, text = measured(cmd, args.limit_gb)

@@ -3,7 +3,7 @@
     python3 benchmarks/reader_limits.py [--cases nmea_1m,day_10hz,can_1h] [--repo PATH] [--keep DIR]
 
 Each case is generated (tests/reader_inputs.py: a straight drive at 2 m/s, written from known
-values), then converted by ``python -m orchestrator convert`` in a child process with the code
+values), then converted by ``python -m agrobot convert`` in a child process with the code
 tree ``--repo`` (default: this one) on its PYTHONPATH; its peak resident memory is the child's
 ``ru_maxrss`` (resource.getrusage(RUSAGE_CHILDREN), read in a fresh parent per case, so that
 no other child counts). Cases:
@@ -68,7 +68,7 @@ print(json.dumps({"code": proc.returncode, "wall_s": wall, "peak_mb": peak, "std
 
 
 def measure(repo: Path, args: list[str]) -> dict:
-    out = subprocess.run([sys.executable, "-c", MEASURE, str(repo), sys.executable, "-m", "orchestrator", *args],
+    out = subprocess.run([sys.executable, "-c", MEASURE, str(repo), sys.executable, "-m", "agrobot", *args],
                          capture_output=True, text=True, cwd=repo)
     return json.loads(out.stdout)
 

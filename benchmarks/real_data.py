@@ -23,7 +23,7 @@ STEPS = ["x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=trajectory.col
 
 
 def _log_row(root: Path, path: Path, fmt: str, options) -> tuple:
-    from measurements.recording import import_recording
+    from agrobot.measurements.recording import import_recording
 
     start = time.perf_counter()
     try:
@@ -40,8 +40,8 @@ def _log_row(root: Path, path: Path, fmt: str, options) -> tuple:
 
 
 def logs(root: Path) -> list[tuple]:
-    from measurements.recording import ImportOptions
-    from measurements.signals import parse_signal
+    from agrobot.measurements.recording import ImportOptions
+    from agrobot.measurements.signals import parse_signal
 
     rows = []
     for path in sorted((root / "nmea_gpsd_testlogs").glob("*.log")):
@@ -60,7 +60,7 @@ def logs(root: Path) -> list[tuple]:
 
 
 def dbcs(root: Path) -> list[tuple]:
-    from measurements.dbc import load_dbc_file
+    from agrobot.measurements.dbc import load_dbc_file
 
     rows = []
     for path in sorted((root / "opendbc").rglob("*.dbc")):
@@ -79,7 +79,7 @@ def dbcs(root: Path) -> list[tuple]:
 
 
 def fields(root: Path) -> list[tuple]:
-    from fields.readers import read_fields
+    from agrobot.fields.readers import read_fields
 
     rows = []
     targets = [(p, None) for p in sorted((root / "fields2cover_data").iterdir()) if p.suffix in (".xml", ".json", ".geojson")]
@@ -103,8 +103,8 @@ def fields(root: Path) -> list[tuple]:
 
 def tracks(root: Path) -> list[tuple]:
     """Each time log's track as the field the harvester worked (fields --from-track)."""
-    from fields.track import field_from_track
-    from measurements.recording import positions
+    from agrobot.fields.track import field_from_track
+    from agrobot.measurements.recording import positions
 
     rows = []
     for path in sorted((root / "isoxml_dev4ag_timelogs").glob("TLG*.xml")):

@@ -45,11 +45,11 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
     args = ap.parse_args()
-    from diagnosis.pipeline import diagnose
-    from identification.from_log import longest_stretch
-    from identification.ordinary_driving import identify_driving
-    from orchestrator.errors import InputError
-    from orchestrator.study import Study
+    from agrobot.diagnosis.pipeline import diagnose
+    from agrobot.identification.from_log import longest_stretch
+    from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.orchestrator.errors import InputError
+    from agrobot.orchestrator.study import Study
 
     study_path = ROOT / "studies" / "f1tenth.toml"
     study = Study.load(study_path)

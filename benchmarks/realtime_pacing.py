@@ -11,8 +11,8 @@ import argparse
 import os
 from pathlib import Path
 
-from orchestrator.runner import simulate
-from orchestrator.study import load_study, parse_study
+from agrobot.orchestrator.runner import simulate
+from agrobot.orchestrator.study import load_study, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
 PAPERS_LAW = ("tracker.lookahead=0", "steering.quantization_guard=0")

@@ -13,9 +13,9 @@ import argparse
 import time
 from pathlib import Path
 
-from analysis.robustness import compare, summarise
-from orchestrator.study import Study
-from orchestrator.sweep import SweepRun, sweep_plots
+from agrobot.analysis.robustness import compare, summarise
+from agrobot.orchestrator.study import Study
+from agrobot.orchestrator.sweep import SweepRun, sweep_plots
 
 ROOT = Path(__file__).resolve().parent.parent
 STUDIES = {"kinematic + MPC (shipped)": "robustness.toml", "pure pursuit + MPC": "robustness_pure_pursuit.toml",

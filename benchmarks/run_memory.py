@@ -6,7 +6,7 @@ slower than the signal table (rows x columns x 8 bytes).
     python benchmarks/run_memory.py --field                # and the field coverage run (whole route)
     python benchmarks/run_memory.py --tree /path/to/checkout   # the same commands with another checkout's code
 
-Each case is one ``python -m orchestrator run`` in its own process; its peak resident set size is
+Each case is one ``python -m agrobot run`` in its own process; its peak resident set size is
 the kernel's (``wait4``'s ru_maxrss), the CPU time user + sys. "simulation" is the same run without
 its analysis (``--set study.analysis=""``): what the run itself holds; "with analysis" adds the
 columns the analysis reads back and its arrays.
@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def peak_run(tree: Path, study: str, overrides: list[str], out: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1"}
-    args = [sys.executable, "-m", "orchestrator", "run", study, "--out", str(out), "--overwrite", "--no-plots"]
+    args = [sys.executable, "-m", "agrobot", "run", study, "--out", str(out), "--overwrite", "--no-plots"]
     for item in overrides:
         args += ["--set", item]
     start = time.perf_counter()

@@ -9,8 +9,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from orchestrator.study import Study
-from orchestrator.sweep import SweepRun
+from agrobot.orchestrator.study import Study
+from agrobot.orchestrator.sweep import SweepRun
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -17,11 +17,11 @@ import time
 
 from shapely.geometry import Polygon
 
-from fields import FieldError, read_fields
-from fields.field import Field
-from fields.planner import Settings, plan
-from fields.planner.applied import as_applied, crossings
-from fields.planner.pipeline import idle_distance
+from agrobot.fields import FieldError, read_fields
+from agrobot.fields.field import Field
+from agrobot.fields.planner import Settings, plan
+from agrobot.fields.planner.applied import as_applied, crossings
+from agrobot.fields.planner.pipeline import idle_distance
 from plan_every_field import FILES, REAL
 
 ORDERS = ("boustrophedon", "skip", "optimised")

@@ -14,7 +14,7 @@ from __future__ import annotations
 import datetime
 from pathlib import Path
 
-from orchestrator.component import Component, inp, par
+from agrobot.orchestrator.component import Component, inp, par
 
 from .hardware.guidance_messages import PROTOCOLS, messages_for
 from .hardware.nmea import DATUM_PARAMETERS, RECEIVER_INPUTS, RECEIVER_PARAMETERS, RTK_FIXED, LocalFrame, \

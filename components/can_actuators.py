@@ -6,7 +6,7 @@ channel ('virtual' in one process, 'udp_multicast' between processes, 'socketcan
 """
 from __future__ import annotations
 
-from orchestrator.component import Component, inp, out
+from agrobot.orchestrator.component import Component, inp, out
 
 from .hardware.can_link import CAN_PARAMETERS, connect, drain, send
 

@@ -4,7 +4,7 @@ speed out, frames from the same DBC as can_actuators. If no command arrives for
 """
 from __future__ import annotations
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .hardware.can_link import CAN_PARAMETERS, connect, drain, send
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 class ComputationDelay(Component):

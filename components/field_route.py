@@ -26,10 +26,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fields.planner import HEADLAND, SWATH
-from fields.planner.sampling import ROUTE_STEP
-from orchestrator.component import Component, EndRun, inp, out, par
-from orchestrator.units import FILE_UNIT
+from agrobot.fields.planner import HEADLAND, SWATH
+from agrobot.fields.planner.sampling import ROUTE_STEP
+from agrobot.orchestrator.component import Component, EndRun, inp, out, par
+from agrobot.orchestrator.units import FILE_UNIT
 
 WINDOW = 500.0          # m of the route sampled at a time
 BEHIND = 20.0           # m of it kept behind the vehicle
@@ -38,9 +38,9 @@ BEHIND = 20.0           # m of it kept behind the vehicle
 @functools.lru_cache(maxsize=8)
 def planned(path: str, crs: str, name: str, settings):
     """(field, plan) for the parameters (cached: the run and its analysis plan once)."""
-    from fields import read_fields
-    from fields.field import choose_field
-    from fields.planner import plan
+    from agrobot.fields import read_fields
+    from agrobot.fields.field import choose_field
+    from agrobot.fields.planner import plan
 
     field = choose_field(read_fields(Path(path), crs or None), name or None, path)
     return field, plan(field, settings)
@@ -63,7 +63,7 @@ def settings_of(p: dict):
     """fields.planner.Settings from the component's parameters of the same names (nan angle: chosen)."""
     from dataclasses import fields
 
-    from fields.planner import Settings
+    from agrobot.fields.planner import Settings
 
     values = {}
     for f in fields(Settings):
@@ -162,7 +162,7 @@ class FieldRoute(Component):
                                                                 "implement_on_straight")}
 
     def initialize(self, t0: float, dt: float) -> None:
-        from fields import FieldError
+        from agrobot.fields import FieldError
 
         self.require(bool(self.p["path"]), "parameter path: expected the field's file or folder")
         try:

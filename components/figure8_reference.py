@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 from .models.figure8_path import Figure8Path
 

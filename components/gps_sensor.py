@@ -26,8 +26,8 @@ from collections import deque
 
 import numpy as np
 
-from orchestrator.component import Component, inp, out, par
-from orchestrator.units import FILE_UNIT
+from agrobot.orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.units import FILE_UNIT
 
 from .hardware.nmea import FIX_RANK, RTK_FIXED
 from .models.sensor_grades import DEGRADED_ERROR_TIME_CONSTANT, FIX_ERROR_STD, gauss_markov_step

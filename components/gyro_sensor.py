@@ -1,7 +1,7 @@
 """Yaw-rate gyro: measured = true + bias + white noise (std ``noise_std``), sampled at its step."""
 from __future__ import annotations
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 class GyroSensor(Component):

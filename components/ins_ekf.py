@@ -42,7 +42,7 @@ import math
 
 import numpy as np
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .hardware.nmea import FIX_RANK
 from .models import sensor_grades as grade

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from typing import Mapping
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float, crab: float = 0.0) -> tuple[float, float]:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 from .hardware.nmea import (DATUM_PARAMETERS, RTK_FIXED, Heading, LocalFrame, NMEAStream, Position,
                            PositionError, Velocity, fix_at_least)

@@ -14,7 +14,7 @@ import datetime
 import socket
 import time
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 from .hardware.nmea import (DATUM_PARAMETERS, RECEIVER_INPUTS, RECEIVER_PARAMETERS, RTK_FIXED, LocalFrame,
                             receiver_sentences, receiver_settings)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 class OperatorPause(Component):

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 # what every pose estimator starts from and gives (this EKF, the GNSS/INS one): swappable in a study

@@ -10,7 +10,7 @@ condition has been good for ``recovery_time``. Every trip and recovery is logged
 """
 from __future__ import annotations
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .hardware.nmea import fix_at_least
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .steering_hydraulics import valve_opening
 

@@ -7,7 +7,7 @@ k_ff is a nominal (linear) pedal-per-speed feed-forward; the drivetrain's map is
 """
 from __future__ import annotations
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models.pid import DiscretePID
 

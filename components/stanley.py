@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, par
+from agrobot.orchestrator.component import Component, par
 
 from .kinematic_tracker import (LATERAL_INPUTS, SPEED_LAW, TRACKER_FEEDTHROUGH, TRACKER_INPUTS, TRACKER_OUTPUTS,
                                 static_law)

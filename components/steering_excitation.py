@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 
 class SteeringExcitation(Component):

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models.pid import DiscretePID
 

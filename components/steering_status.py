@@ -4,7 +4,7 @@ locked out unless a fault is injected (``not_ready_after``, ``lockout_after``; n
 ``*_until`` ends it; negative = for good)."""
 from __future__ import annotations
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 
 class SteeringStatus(Component):

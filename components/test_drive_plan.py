@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from orchestrator.component import Component, out, par
+from agrobot.orchestrator.component import Component, out, par
 
 _DEG = math.pi / 180
 

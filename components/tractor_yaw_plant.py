@@ -45,9 +45,9 @@ import warnings
 
 import numpy as np
 
-from orchestrator.component import Component, ComponentError, inp, out, par
+from agrobot.orchestrator.component import Component, ComponentError, inp, out, par
 
-from orchestrator.units import FILE_UNIT
+from agrobot.orchestrator.units import FILE_UNIT
 
 from .models.paper_models import G_2ND
 from .models.terrain import attitude, ground_of, lever_offset, slope_pull

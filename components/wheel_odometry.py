@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models import sensor_grades as grade
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models.paper_models import G_2ND
 from .models.condensed_mpc import CondensedTrackingMPC

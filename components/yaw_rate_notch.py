@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.component import Component, inp, out, par
 
 
 def notch_coefficients(w0: float, zeta_z: float, zeta_p: float, dt: float) -> tuple[np.ndarray, np.ndarray]:

@@ -10,12 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from components.models.steering_equivalent import FirstOrderSteering
-from components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
-from orchestrator.resolver import resolve
-from orchestrator.study import Study, StudyError
+from agrobot.components.models.steering_equivalent import FirstOrderSteering
+from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study, StudyError
 
-from identification.vehicle import Vehicle
+from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy

@@ -22,8 +22,8 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from measurements import LogError
-from measurements.log import check_units, resolution, speed_estimate
+from agrobot.measurements import LogError
+from agrobot.measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline
 from .catalogue import UNCERTAIN, Parameter
@@ -284,7 +284,7 @@ class Replay:
 
 def _named(need: str, columns) -> str:
     """A missing need in words, with the log's column that looks like it (YawRate for yaw_rate)."""
-    from identification.ordinary_driving import similar_columns
+    from agrobot.identification.ordinary_driving import similar_columns
 
     text = NEED_TEXT.get(need, need)
     near = similar_columns(columns, need) if need in ("delta", "delta_cmd", "yaw_rate", "v", "x", "y") else []

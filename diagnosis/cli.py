@@ -16,7 +16,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resample", action="store_true",
                    help="interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
-    from measurements.cli import add_recording_options
+    from agrobot.measurements.cli import add_recording_options
 
     add_recording_options(p)
 
@@ -24,17 +24,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with a verdict (the strongest effect, 'unexplained' or 'none'); 2 when the log or study cannot be used (the
     verdict 'cannot decide' and the reason are still written)."""
-    from orchestrator.study import StudyError
+    from agrobot.orchestrator.study import StudyError
 
     from .pipeline import CANNOT_DECIDE, diagnose
 
-    from orchestrator.output import check_output
+    from agrobot.orchestrator.output import check_output
 
     if not 0.2 <= args.fit_fraction <= 0.8:
         raise StudyError("--fit-fraction must be in [0.2, 0.8]")
     check_output(args.out, overwrite=True)
-    from measurements.cli import recording_options
-    from measurements.recording import describe
+    from agrobot.measurements.cli import recording_options
+    from agrobot.measurements.recording import describe
 
     import time
 

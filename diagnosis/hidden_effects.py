@@ -9,7 +9,8 @@ import os
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from measurements.truth_tractor import DEG, EFFECTS, UNLISTED, make_log
+from agrobot.studies import shipped
+from agrobot.measurements.truth_tractor import DEG, EFFECTS, UNLISTED, make_log
 
 __all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recovered"]
 
@@ -47,7 +48,7 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
 
 
 BLAS_THREADS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-STUDIES = Path(__file__).resolve().parent.parent / "studies"
+STUDIES = shipped()
 BASELINES = {"tractor": STUDIES / "figure8.toml", "car": STUDIES / "passenger_car.toml"}
 
 

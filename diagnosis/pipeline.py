@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from measurements import LogError
-from orchestrator.results import atomic_write, write_json
-from orchestrator.study import load_study
+from agrobot.measurements import LogError
+from agrobot.orchestrator.results import atomic_write, write_json
+from agrobot.orchestrator.study import load_study
+from agrobot.studies import shipped
 
 from .baseline import baseline_from_study
 from .candidates import STAGES, CannotDecide, Fit, Replay
@@ -21,7 +22,7 @@ from .unexplained import stage_check
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
-DEFAULT_STUDY = Path(__file__).resolve().parent.parent / "studies" / "figure8.toml"
+DEFAULT_STUDY = shipped("figure8.toml")
 CANNOT_DECIDE = "cannot decide"
 
 
@@ -183,10 +184,10 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     try:
         study = load_study(study_path)
         baseline = baseline_from_study(study)
-        from measurements.recording import ImportOptions
+        from agrobot.measurements.recording import ImportOptions
 
         recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
-        from identification.from_log import read_uneven
+        from agrobot.identification.from_log import read_uneven
 
         frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study)
         if imported is not None:
@@ -260,14 +261,14 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         result["extended_study"] = "extended_study.toml"
         text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
                                     f"{' + '.join(e['id'] for e in effects)} found by "
-                                    f"`python -m orchestrator diagnose {log_path}`")
+                                    f"`python -m agrobot diagnose {log_path}`")
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
     return result
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
-    from identification.from_log import finite_for_json
+    from agrobot.identification.from_log import finite_for_json
 
     write_json(out / "diagnosis.json", finite_for_json(result))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

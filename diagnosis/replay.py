@@ -17,9 +17,9 @@ from typing import Mapping
 
 import numpy as np
 
-from components.models import steering_equivalent
-from measurements.log import chords
-from components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
+from agrobot.components.models import steering_equivalent
+from agrobot.measurements.log import chords
+from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, zoh_discretize)
 
 
@@ -260,7 +260,7 @@ class SaturatedYawReplay:
 
     def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
                  v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0) -> None:
-        from identification.driving import DrivingLog, Segments, YawModel
+        from agrobot.identification.driving import DrivingLog, Segments, YawModel
 
         n = len(t)
         P, B = max(2, int(round(piece / h))), int(round(burn_in / h))

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.results import atomic_write
+from agrobot.orchestrator.results import atomic_write
 
 from .catalogue import DISPLAY, SIGNALS
 from .evidence import cross_correlation, spectrum
@@ -98,7 +98,7 @@ def markdown(result: dict, plots: list[str]) -> str:
         lines += [result.get("reason", ""), ""]
         return "\n".join(lines)
     if result.get("recording"):
-        from measurements.recording import describe
+        from agrobot.measurements.recording import describe
 
         lines += ["The log was imported from a raw recording (details in diagnosis.json, `recording`):", "", "```",
                   describe(result["recording"]), "```", ""]

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from components.models.yaw_dynamics import GRAVITY
+from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from measurements.log import resolution
+from agrobot.measurements.log import resolution
 
 from .replay import steering_replay
 

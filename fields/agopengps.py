@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.source_files import regular_file
+from agrobot.orchestrator.source_files import regular_file
 
 from .field import Field, FieldError, GuidanceLine, polygon
 

@@ -29,9 +29,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.source_files import set_limit
-    from orchestrator.output import check_output
-    from orchestrator.results import atomic_write, write_json
+    from agrobot.orchestrator.source_files import set_limit
+    from agrobot.orchestrator.output import check_output
+    from agrobot.orchestrator.results import atomic_write, write_json
 
     from .readers import read_fields, read_folder
 
@@ -70,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
 
 def track_field(args: argparse.Namespace):
     """The field of the track in ``args.source`` (measurements reads the recording)."""
-    from measurements.recording import ImportOptions, positions
-    from measurements.signals import parse_signal
+    from agrobot.measurements.recording import ImportOptions, positions
+    from agrobot.measurements.signals import parse_signal
 
     from .track import field_from_track
 
@@ -115,7 +115,7 @@ def draw(fields, path: Path, title: str) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from orchestrator.results import atomic_write
+    from agrobot.orchestrator.results import atomic_write
 
     shown = fields[:12]
     cols = min(4, len(shown))

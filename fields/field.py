@@ -15,7 +15,7 @@ import numpy as np
 from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.validation import explain_validity
 
-from orchestrator.errors import InputError
+from agrobot.orchestrator.errors import InputError
 
 
 EARTH_REACH = 2.0e7     # m: no two points of the Earth's surface are farther apart along it (half a meridian)

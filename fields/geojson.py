@@ -11,7 +11,7 @@ from pathlib import Path
 
 from shapely import wkt as shapely_wkt
 
-from orchestrator.source_files import regular_file
+from agrobot.orchestrator.source_files import regular_file
 
 from .field import Field, FieldError
 from .shapes import fields_from_shapes

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import Polygon
 
-from orchestrator.source_files import regular_file
+from agrobot.orchestrator.source_files import regular_file
 
 from .coordinates import Coordinates
 from .field import Field, FieldError, GuidanceLine, polygon

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import LineString, Polygon
 
-from orchestrator.source_files import LIMITS, regular_file, size_text
+from agrobot.orchestrator.source_files import LIMITS, regular_file, size_text
 
 from .field import FieldError
 

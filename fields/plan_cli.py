@@ -120,7 +120,7 @@ def read_field(args: argparse.Namespace):
 
 def check_out(out: Path) -> None:
     """``--out`` must be new, empty, or an earlier plan (it is replaced whole)."""
-    from orchestrator.output import OutputError
+    from agrobot.orchestrator.output import OutputError
 
     if out.is_dir() and any(out.iterdir()) and not (out / "plan.json").exists():
         raise OutputError(f"--out {out}: the folder holds files that are not a plan (no plan.json), and a plan "
@@ -128,8 +128,8 @@ def check_out(out: Path) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.output import ResultFolder, check_output
-    from orchestrator.results import write_json
+    from agrobot.orchestrator.output import ResultFolder, check_output
+    from agrobot.orchestrator.results import write_json
 
     from .field import FieldError
     from .obstacles import parse_point, read_obstacles, with_obstacles

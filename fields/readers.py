@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.source_files import checked_path, regular_file
+from agrobot.orchestrator.source_files import checked_path, regular_file
 
 from .agopengps import (
     aog_file,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("study", type=Path, help="study holding the tracker, the yaw-rate MPC and the speed PID")
     p.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
@@ -15,8 +15,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.observers import Stage
-    from orchestrator.study import Study
+    from agrobot.orchestrator.observers import Stage
+    from agrobot.orchestrator.study import Study
 
     from .controller import export_controller
 
@@ -28,7 +28,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("study", type=Path, help="study whose components all have an FMU form (e.g. studies/figure8.toml)")
     p.add_argument("--out", type=Path, required=True, help="the .ssp to write, e.g. fmus/figure8.ssp")
@@ -36,8 +36,8 @@ def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_ssp(args: argparse.Namespace) -> int:
-    from orchestrator.observers import Stage
-    from orchestrator.study import Study
+    from agrobot.orchestrator.observers import Stage
+    from agrobot.orchestrator.study import Study
 
     from .ssp_export import export_ssp
 

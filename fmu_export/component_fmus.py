@@ -16,9 +16,9 @@ from typing import Callable
 
 import numpy as np
 
-from orchestrator.build import System
-from orchestrator.component import Component
-from orchestrator.errors import InputError
+from agrobot.orchestrator.build import System
+from agrobot.orchestrator.component import Component
+from agrobot.orchestrator.errors import InputError
 
 from .sampled_fmu import C_DIR, SampledModel, build_fmu, c_array, c_strings, token_of
 
@@ -50,7 +50,7 @@ def _substeps(comp: Component, period: float) -> str:
 
 
 def _plant_compiled(comp: Component, period: float) -> str:
-    from components.models.yaw_dynamics import PHYSICAL_MODELS
+    from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS
 
     model = comp.p["model"]
     if model not in PHYSICAL_MODELS:
@@ -63,7 +63,7 @@ def _plant_compiled(comp: Component, period: float) -> str:
 
 
 def _plant_values(comp: Component) -> dict[str, float]:
-    from components.models.yaw_dynamics import TractorParameters
+    from agrobot.components.models.yaw_dynamics import TractorParameters
 
     params = TractorParameters.of(comp.p)           # the named set resolved, cornering scales applied
     return {k: getattr(params, k) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")}
@@ -86,7 +86,7 @@ def _gps_compiled(comp: Component, period: float) -> str:
 
 
 def _mpc_compiled(comp: Component, period: float) -> str:
-    from components.models.condensed_mpc import CondensedTrackingMPC
+    from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
 
     p = comp.p
     m = CondensedTrackingMPC(p["num"], p["den"], period, int(p["prediction_horizon"]), int(p["control_horizon"]),

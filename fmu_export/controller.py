@@ -19,14 +19,14 @@ from pathlib import Path
 
 import numpy as np
 
-from components.kinematic_tracker import KinematicTracker
-from components.models.condensed_mpc import CondensedTrackingMPC
-from components.speed_pid import SpeedPID
-from components.yaw_rate_mpc import YawRateMPC
-from orchestrator.build import build_system
-from orchestrator.errors import InputError
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.components.kinematic_tracker import KinematicTracker
+from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
+from agrobot.components.speed_pid import SpeedPID
+from agrobot.components.yaw_rate_mpc import YawRateMPC
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 from .packaging import PackagingError, check_fmu_target
 from .sampled_fmu import SampledModel, build_fmu, c_array, c_strings, token_of
@@ -196,7 +196,7 @@ def controller_feeds(study: Study, design: ControllerDesign) -> dict[str, str]:
 def run_with_exported_controller(study_path: Path, fmu: Path, overrides: list[str] | None = None):
     """Run a study as written and with the FMU in place of its three controllers:
     (python frame, FMU frame, study)."""
-    from orchestrator.engine import Simulation
+    from agrobot.orchestrator.engine import Simulation
 
     study = Study.load(study_path, overrides or [])
     with_fmu = controller_study(study, controller_design(study), str(fmu))

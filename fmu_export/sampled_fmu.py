@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from orchestrator.units import base_unit
+from agrobot.orchestrator.units import base_unit
 
 import numpy as np
 

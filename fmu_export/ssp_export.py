@@ -15,12 +15,12 @@ import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from orchestrator.build import System, build_system
-from orchestrator.errors import InputError
-from orchestrator.resolver import resolve
-from orchestrator.ssp import STUDY_ANNOTATION
-from orchestrator.study import Study
-from orchestrator.units import base_unit
+from agrobot.orchestrator.build import System, build_system
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.ssp import STUDY_ANNOTATION
+from agrobot.orchestrator.study import Study
+from agrobot.orchestrator.units import base_unit
 
 from .component_fmus import component_model, fmu_input_name, non_exportable
 from .packaging import PackagingError, check_fmu_target, write_archive

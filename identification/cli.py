@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("source", type=Path, help="study file (.toml/.yaml), log (.csv/.parquet), or a raw recording "
                    "(a folder of *.nmea files and CAN logs)")
@@ -26,14 +26,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
-    from measurements.cli import add_recording_options
+    from agrobot.measurements.cli import add_recording_options
 
     add_recording_options(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.errors import InputError
-    from orchestrator.study import Study, StudyError
+    from agrobot.orchestrator.errors import InputError
+    from agrobot.orchestrator.study import Study, StudyError
 
     from .pipeline import identify_log, identify_study, summary
 
@@ -42,15 +42,15 @@ def run(args: argparse.Namespace) -> int:
     for option, value in (("--speed", args.speed), ("--period", args.period)):
         if value is not None and not value > 0:
             raise StudyError(f"{option} {value:g}: expected a positive number")
-    from orchestrator.output import check_output
+    from agrobot.orchestrator.output import check_output
 
     check_output(args.out, overwrite=True)
     try:
         if args.source.suffix in (".toml", ".yaml", ".yml"):
             report = identify_study(Study.load(args.source, args.set), args.out, plots=not args.no_plots)
         else:
-            from measurements.cli import recording_options
-            from measurements.recording import describe
+            from agrobot.measurements.cli import recording_options
+            from agrobot.measurements.recording import describe
 
             study = Study.load(args.study) if args.study else None
             if args.method != "multisine":
@@ -76,6 +76,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def register(registry) -> None:
-    registry.add_section("identification", "identification tool (python -m orchestrator identify)")
+    registry.add_section("identification", "identification tool (python -m agrobot identify)")
     registry.add_command("identify", "identify the yaw dynamics from a study's experiment or a measured log",
                          add_arguments, run)

@@ -32,10 +32,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from orchestrator.errors import InputError
+from agrobot.orchestrator.errors import InputError
 
-from components.models.tyre import GAMMA_ROS2, axle_loads, rates
-from components.models.yaw_dynamics import GRAVITY, TractorParameters
+from agrobot.components.models.tyre import GAMMA_ROS2, axle_loads, rates
+from agrobot.components.models.yaw_dynamics import GRAVITY, TractorParameters
 
 Z95 = 1.959964
 

@@ -10,10 +10,10 @@ import numpy as np
 import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from measurements import LogError, load_log
-from orchestrator.runner import simulate
-from orchestrator.study import Study, StudyError
-from orchestrator.units import UnitError, to_si
+from agrobot.measurements import LogError, load_log
+from agrobot.orchestrator.runner import simulate
+from agrobot.orchestrator.study import Study, StudyError
+from agrobot.orchestrator.units import UnitError, to_si
 
 from .fitting import STRUCTURES
 from .multisine import MultisineDesign, realisation
@@ -164,7 +164,7 @@ def read_log(path: Path, resample: bool = False, recording=None) -> tuple[pd.Dat
                        + "; ".join(f"no {c} ({WHY[c]})" for c in missing)
                        + f"; the log has {', '.join(map(str, frame.columns))}")
     if "v" not in frame:                              # the receiver's speed, else the track's, with a note
-        from measurements.log import speed_estimate
+        from agrobot.measurements.log import speed_estimate
 
         speed, source = speed_estimate(frame)
         if speed is not None:

@@ -15,9 +15,9 @@ def _read(source: Path, resample: bool, recording, study):
     import numpy as np
     import pandas as pd
 
-    from measurements import LogError, load_log
-    from measurements.log import DEGREE_SUSPECT, check_log, yaw_rate_in_radians
-    from measurements.recording import ImportOptions, is_recording
+    from agrobot.measurements import LogError, load_log
+    from agrobot.measurements.log import DEGREE_SUSPECT, check_log, yaw_rate_in_radians
+    from agrobot.measurements.recording import ImportOptions, is_recording
 
 
     try:
@@ -87,7 +87,7 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
 
 def wants_driving(source: Path, resample: bool, recording, study) -> bool:
     """True unless delta_cmd repeats itself with a period (a designed multisine experiment)."""
-    from measurements import LogError
+    from agrobot.measurements import LogError
 
     from .experiment import detect_period
 
@@ -103,7 +103,7 @@ def wants_driving(source: Path, resample: bool, recording, study) -> bool:
 
 def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
                          recording=None) -> int:
-    from orchestrator.results import write_json
+    from agrobot.orchestrator.results import write_json
 
     from .ordinary_driving import identify_driving, summary
 
@@ -151,8 +151,8 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
     steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
     the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
-    from orchestrator.resolver import resolve
-    from orchestrator.results import atomic_write
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.results import atomic_write
 
     model = resolve(study)
     plant = model.find(role="yaw_plant")
@@ -178,6 +178,6 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
             values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]
     if not values:
         return None
-    text = study.extension_toml(values, f"identified from {source} by `python -m orchestrator identify`")
+    text = study.extension_toml(values, f"identified from {source} by `python -m agrobot identify`")
     atomic_write(Path(out_dir) / "extended_study.toml", lambda p: p.write_text(text))
     return "extended_study.toml"

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from components.models.tyre import linear_share_limit
-from components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, TractorParameters
+from agrobot.components.models.tyre import linear_share_limit
+from agrobot.components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, TractorParameters
 
 from .driving import (Z95, DrivingLog, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
@@ -84,8 +84,8 @@ def missing_text(frame, needs: dict[str, str]) -> str | None:
 
 
 def study_plant(study) -> tuple[str, TractorParameters]:
-    from orchestrator.resolver import resolve
-    from orchestrator.study import StudyError
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.study import StudyError
 
     if study is None:
         return "rlf", TractorParameters()
@@ -160,7 +160,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                      progress=None, max_rate: float = 25.0) -> dict:
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
     what the log lacks."""
-    from measurements import LogError
+    from agrobot.measurements import LogError
 
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)

@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from components.models.yaw_dynamics import TractorParameters, transfer_function
+from agrobot.components.models.yaw_dynamics import TractorParameters, transfer_function
 
 MISPRINTS = {("rlf", "a2"): "denominator I m v_x sigma_f missing",
              ("rlfr", "a0"): "speed term m v_x^2 (C_r l_r - C_f l_f) missing from the numerator",

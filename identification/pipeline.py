@@ -8,11 +8,11 @@ from typing import Any
 
 import numpy as np
 
-from components.models import paper_models
-from components.models.yaw_dynamics import TractorParameters
-from orchestrator.resolver import resolve
-from orchestrator.results import write_json, write_table
-from orchestrator.study import Study
+from agrobot.components.models import paper_models
+from agrobot.components.models.yaw_dynamics import TractorParameters
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.results import write_json, write_table
+from agrobot.orchestrator.study import Study
 
 from . import frf as frf_mod
 from .experiment import (Experiment, IdentificationConfig, config_of, experiment_from_log,
@@ -30,7 +30,7 @@ PAPER = {
 def starting_points(model: str, params: TractorParameters, speed: float) -> list[tuple]:
     """Extra NLS starts: the physical model with the given parameters at the experiment's speed,
     and the paper's identified model (when it has this structure)."""
-    from components.models.yaw_dynamics import PHYSICAL_MODELS, transfer_function
+    from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, transfer_function
 
     starts = []
     if model in PHYSICAL_MODELS:
@@ -63,7 +63,7 @@ def simulate_fit(f: Fit, u: np.ndarray, fs: float) -> np.ndarray:
     between samples (the measured steering angle is a sampled continuous signal)."""
     from scipy.signal import lsim
 
-    from components.models.yaw_dynamics import controllable_canonical
+    from agrobot.components.models.yaw_dynamics import controllable_canonical
 
     A, B, C = controllable_canonical(f.num, f.den)
     t = np.arange(len(u)) / fs
@@ -167,7 +167,7 @@ def identify_log(path: Path, out_dir: Path | None, period: float | None = None, 
     """Identification from a measured log; ``study``: the vehicle it comes from (its yaw plant's
     m, l_f, l_r, stiffnesses for the physical back-out and the starts; its [vehicle] table for
     reading a recording), else the paper's tractor."""
-    from measurements.recording import ImportOptions
+    from agrobot.measurements.recording import ImportOptions
 
     params = tractor_parameters(study)
     frame, imported = read_log(path, resample, (recording or ImportOptions()).for_vehicle(study))

@@ -44,7 +44,7 @@ def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
     from .log import LogError
     from .recording import ImportOptions
-    from orchestrator.source_files import set_limit
+    from agrobot.orchestrator.source_files import set_limit
 
     set_limit(getattr(args, "max_file_size", None))
 
@@ -95,7 +95,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from orchestrator.results import atomic_write
+    from agrobot.orchestrator.results import atomic_write
 
     from .log import LogError, check_log
     from .recording import describe, import_recording, import_runs
@@ -110,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         raise LogError("convert: give --out LOG.csv (or .parquet), or --list to see what the recording holds")
     if args.out.suffix not in (".csv", ".parquet"):
         raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
-    from orchestrator.output import check_output
+    from agrobot.orchestrator.output import check_output
 
     check_output(args.out.parent, overwrite=True)
     options = recording_options(args)

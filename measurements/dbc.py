@@ -67,7 +67,7 @@ def load_dbc_file(path: str | Path):
     names the file when nothing in it is a DBC message."""
     import cantools
 
-    from orchestrator.source_files import regular_file
+    from agrobot.orchestrator.source_files import regular_file
 
     path = regular_file(path, LogError)
     try:

@@ -29,7 +29,7 @@ import pandas as pd
 
 from .log import LogError
 from .quirks import ordered_in_time
-from orchestrator.source_files import regular_file
+from agrobot.orchestrator.source_files import regular_file
 from .streams import Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from orchestrator.errors import InputError
+from agrobot.orchestrator.errors import InputError
 
 # the canonical columns: name -> (SI unit, meaning)
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -41,7 +41,7 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
     with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
     (degrees are detected and named), speed against the GPS track (check_units)."""
-    from orchestrator.source_files import checked_path, regular_file
+    from agrobot.orchestrator.source_files import checked_path, regular_file
 
     path = regular_file(checked_path(path, LogError, "log not found"), LogError)
     kind = "Parquet" if path.suffix == ".parquet" else "CSV"

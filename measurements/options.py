@@ -4,7 +4,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from orchestrator.resolver import resolve
+from agrobot.orchestrator.resolver import resolve
 
 
 @dataclass

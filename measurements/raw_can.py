@@ -88,7 +88,7 @@ class CANRecording:
 def load_dbc(path: str | Path | None):
     """(database, DBCReport or None): the DBC (None: the project's own agrobot_tractor.dbc); a
     LogError names the file when nothing in it can be read."""
-    from components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
+    from agrobot.components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
 
     from .dbc import load_dbc_file
 
@@ -330,7 +330,7 @@ GUESSES = {
 
 
 def _guess(db, column: str, taken: set) -> SignalSpec | None:
-    from orchestrator.units import base_unit
+    from agrobot.orchestrator.units import base_unit
 
     pattern, unit = GUESSES[column]
     want = base_unit(unit).exponents

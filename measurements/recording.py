@@ -26,7 +26,7 @@ from .quirks import find_quirks, fixes_from_columns
 from .raw_can import CAN_SUFFIXES
 from .raw_nmea import looks_like_nmea
 from .runs import assemble
-from orchestrator.source_files import checked_path, regular_file, regular_files
+from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 from .streams import Streams
 from .tables import TABLE_SUFFIXES
 

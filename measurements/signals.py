@@ -87,7 +87,7 @@ def parse_signal(text: str) -> SignalSpec:
 
 def check_unit(unit: str, where: str):
     """The unit as orchestrator.units reads it (pint); a LogError when pint does not know it."""
-    from orchestrator.units import base_unit
+    from agrobot.orchestrator.units import base_unit
 
     try:
         found = base_unit(unit)
@@ -213,7 +213,7 @@ def target_unit(column: str) -> str | None:
 def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4
              ) -> tuple[np.ndarray, np.ndarray, str]:
     """(times, values in the column's unit, how) of ``spec`` from the named series."""
-    from orchestrator.units import base_unit
+    from agrobot.orchestrator.units import base_unit
 
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
@@ -279,7 +279,7 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
 
 
 def _known(unit: str) -> bool:
-    from orchestrator.units import base_unit
+    from agrobot.orchestrator.units import base_unit
 
     try:
         return base_unit(unit) is not None
@@ -293,7 +293,7 @@ def _bare(spec: SignalSpec) -> str:
 
 
 def _to_column(spec, t, value, have, unit_text, where, wheelbase, notes):
-    from orchestrator.units import base_unit
+    from agrobot.orchestrator.units import base_unit
 
     want_text = target_unit(spec.column)
     how = f"{spec} [{unit_text}]"

@@ -138,7 +138,7 @@ def parse_time(text: str | None) -> TimeSpec | None:
                        f"SECONDS+NANOSECONDS, or DATE+TIME[datetime]")
     if unit and unit != "datetime":
         from .signals import check_unit
-        from orchestrator.units import base_unit
+        from agrobot.orchestrator.units import base_unit
 
         b = check_unit(unit, f"--time {text!r}")
         if b.exponents != base_unit("s").exponents:
@@ -197,7 +197,7 @@ def time_of(table: Table, spec: TimeSpec | None) -> bool:
                     raise LogError(f"{where}: --time {spec.text}: column {cols[0]!r} holds text "
                                    f"({f[cols[0]].iloc[0]!r}); for date strings write --time '{cols[0]}[datetime]'")
                 if spec.unit:
-                    from orchestrator.units import base_unit
+                    from agrobot.orchestrator.units import base_unit
 
                     table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
                 else:

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from components.test_drive_plan import driving_plan
+from agrobot.components.test_drive_plan import driving_plan
 
 DEG = math.pi / 180
 G = 9.81

@@ -8,7 +8,7 @@ import pkgutil
 
 from .component import Component
 from .errors import did_you_mean
-from .registry import registry
+from .registry import import_study_module, registry
 from .study import Study, StudyError
 
 
@@ -38,7 +38,7 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
     module = None
     for module_name in candidates:
         try:
-            module = importlib.import_module(module_name)
+            module = import_study_module(module_name)
             break
         except ModuleNotFoundError as exc:
             if exc.name is None or not module_name.startswith(exc.name):

@@ -2,8 +2,8 @@
 
 A project declares plugins in its ``pyproject.toml``::
 
-    [project.entry-points."orchestrator.plugins"]
-    components = "components:register"        # a callable taking the Registry
+    [project.entry-points."agrobot.plugins"]
+    components = "agrobot.components:register"        # a callable taking the Registry
 
 Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
 ``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
@@ -14,11 +14,13 @@ The orchestrator itself names no package, table or tool of any project.
 from __future__ import annotations
 
 import argparse
+import importlib
+import warnings
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Callable
 
-GROUP = "orchestrator.plugins"
+GROUP = "agrobot.plugins"
 
 
 @dataclass
@@ -46,6 +48,7 @@ class Registry:
     sections: dict[str, str] = field(default_factory=dict)        # study table -> what reads it
     section_schemas: dict[str, type] = field(default_factory=dict)  # study table -> its pydantic model
     run_options: list[RunOption] = field(default_factory=list)
+    module_aliases: dict[str, str] = field(default_factory=dict)  # former top-level name -> its current one
     loaded: list[str] = field(default_factory=list)
 
     def add_component_package(self, package: str) -> None:
@@ -58,6 +61,11 @@ class Registry:
     def add_run_option(self, flag: str, help: str, metavar: str, apply) -> None:
         """``run FLAG VALUE``: the study is replaced by ``apply(study, value)`` before it runs."""
         self.run_options.append(RunOption(flag, help, metavar, apply))
+
+    def add_module_alias(self, former: str, current: str) -> None:
+        """A study naming module ``former.x`` (a module path from an earlier release) gets ``current.x``,
+        with a deprecation note (import_study_module)."""
+        self.module_aliases[former] = current
 
     def add_section(self, name: str, reader: str, schema: type | None = None) -> None:
         """A top-level study table ``[name]`` that ``reader`` reads; ``schema``, a pydantic model,
@@ -85,3 +93,23 @@ def registry() -> Registry:
             reg.loaded.append(ep.name)
         _REGISTRY = reg
     return _REGISTRY
+
+
+_NOTED: set[str] = set()
+
+
+def import_study_module(name: str):
+    """Import a module a study names (an analysis, a component's ``pkg.mod:Class``). A name under a
+    former top-level package (registry().module_aliases) is imported under its current name, with a
+    FutureWarning once per name: such study files keep working for one release."""
+    head, _, rest = name.partition(".")
+    current = registry().module_aliases.get(head)
+    if current is not None and not name.startswith(current + "."):
+        new = f"{current}.{rest}" if rest else current
+        if name not in _NOTED:
+            _NOTED.add(name)
+            warnings.warn(f"module path {name!r} is deprecated: write {new!r} (the project's modules moved "
+                          f"under one package; the former path is accepted until the next release)",
+                          FutureWarning, stacklevel=2)
+        name = new
+    return importlib.import_module(name)

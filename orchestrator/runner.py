@@ -8,7 +8,6 @@ aside and moved into place when the run ends (orchestrator.output): a complete r
 """
 from __future__ import annotations
 
-import importlib
 import json
 import time
 from dataclasses import dataclass, field
@@ -21,6 +20,7 @@ from .errors import ComputationError, Interrupted, Terminated, critical
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
 from .recording import Recording
+from .registry import import_study_module
 from .resolver import resolve
 from .results import SignalWriter, atomic_write, write_json
 from .signal_table import SignalTable
@@ -45,7 +45,7 @@ def _analysis(study: Study):
     if not study.study.analysis:
         return None
     try:
-        module = importlib.import_module(study.study.analysis)
+        module = import_study_module(study.study.analysis)
     except ModuleNotFoundError as exc:
         raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
     check_study_bounds(module, study.study.bounds, study.origin)

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import hashlib
-import importlib
 import itertools
 import json
 import multiprocessing
@@ -39,6 +38,7 @@ import pandas as pd
 from .build import build_system
 from .resolver import resolve
 from .errors import critical
+from .registry import import_study_module
 from .results import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 
@@ -364,7 +364,7 @@ def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[st
         text = sweep_table(table, analysis, bounds(analysis, study.study.bounds), set(study.sweep.parameters))
         lines += [text] if text else []
         if study.sweep.analysis:
-            module = importlib.import_module(study.sweep.analysis)
+            module = import_study_module(study.sweep.analysis)
             if hasattr(module, "summary"):
                 lines.append(module.summary(table, study))
     reasons = failure_reasons(table)
@@ -405,7 +405,7 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     scatter = study.sweep.mode == "monte_carlo"          # one cloud: each sample is its own point
     group_cols = [] if scatter else params[1:] + (["seed"] if ok["seed"].nunique() > 1 else [])
     skip = set(params) | {"point", "seed", "status", "error", "sim_time_s", "wall_time_s"}
-    analysis = importlib.import_module(study.study.analysis) if study.study.analysis else None
+    analysis = import_study_module(study.study.analysis) if study.study.analysis else None
     metric_units = dict(getattr(analysis, "METRIC_UNITS", {}))
     metric_units.update(sim_time_s="s", wall_time_s="s")
     chosen = getattr(analysis, "SWEEP_METRICS", None)
@@ -439,6 +439,6 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     plt.close(fig)
     written = [path]
     if study.sweep.analysis:
-        module = importlib.import_module(study.sweep.analysis)
+        module = import_study_module(study.sweep.analysis)
         written += module.plots(table, study, out_dir)
     return written

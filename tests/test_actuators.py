@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from components.models.pid import DiscretePID
-from components.speed_drivetrain import SpeedDrivetrain, steady_state_speed
-from components.speed_pid import SpeedPID
-from components.steering_hydraulics import SteeringHydraulics, valve_opening
+from agrobot.components.models.pid import DiscretePID
+from agrobot.components.speed_drivetrain import SpeedDrivetrain, steady_state_speed
+from agrobot.components.speed_pid import SpeedPID
+from agrobot.components.steering_hydraulics import SteeringHydraulics, valve_opening
 
 DEG = math.pi / 180
 
@@ -136,7 +136,7 @@ def test_inlined_substep_loop_equals_the_stated_equations():
     """The component's inlined loop against the module docstring written with DiscretePID,
     valve_opening and quantize, on a random command sequence that crosses the dead-band,
     saturates the voltage and hits the mechanical stop."""
-    from components.steering_hydraulics import quantize
+    from agrobot.components.steering_hydraulics import quantize
 
     rng = np.random.default_rng(7)
     cmds = np.repeat(rng.uniform(-60, 60, 10) * DEG, 100)

@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from pydantic import BaseModel, ConfigDict
 
-from orchestrator.registry import registry
-from orchestrator.resolver import resolve
-from orchestrator.study import Study, StudyError
+from agrobot.orchestrator.registry import registry
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study, StudyError
 
 ROOT = Path(__file__).resolve().parent.parent
 CHECKER = ROOT / "benchmarks" / "import_graph.py"
@@ -93,16 +93,16 @@ class Absent(MetaPathFinder):          # the project's plugin packages are not i
         return None
 
 sys.meta_path.insert(0, Absent())
-import orchestrator.registry
-orchestrator.registry.entry_points = lambda group: []      # no entry point either
-from orchestrator.study import Study, StudyError
+import agrobot.orchestrator.registry
+agrobot.orchestrator.registry.entry_points = lambda group: []      # no entry point either
+from agrobot.orchestrator.study import Study, StudyError
 
 parsed = {{}}
 for path in sorted(__import__("pathlib").Path("studies").glob("*.toml")):
     study = Study.load(path)
     parsed[path.name] = sorted(study.sections)
-loaded = sorted(m for m in sys.modules if m.startswith("orchestrator"))
-from orchestrator.resolver import resolve
+loaded = sorted(m for m in sys.modules if m.startswith("agrobot"))
+from agrobot.orchestrator.resolver import resolve
 try:
     resolve(Study.load("studies/figure8.toml"))
     refused = ""
@@ -120,9 +120,8 @@ def test_every_study_parses_with_no_plugin_installed_and_keeps_its_tool_tables()
     assert out["parsed"]["passenger_car.toml"] == ["vehicle"]            # kept as written, its tool absent
     assert out["parsed"]["identification.toml"] == ["identification"]
     # parsing loaded the description and nothing above it
-    assert set(out["loaded"]) <= {"orchestrator", "orchestrator.component", "orchestrator.errors",
-                                  "orchestrator.registry", "orchestrator.study", "orchestrator.study_files",
-                                  "orchestrator.study_schema"}
+    assert set(out["loaded"]) <= {"agrobot", "agrobot.orchestrator", *(f"agrobot.orchestrator.{m}" for m in (
+                                  "component", "errors", "registry", "study", "study_files", "study_schema"))}
     # resolving needs the component types: a message, not a traceback
     assert "figure8.toml" in out["refused"] and "no component package is registered" in out["refused"]
 

@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.build import build_system
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 OVERRIDES = ["study.stop_time=30", "gps.position_noise_std=0", "gps.velocity_noise_std=0"]
@@ -56,7 +56,7 @@ def drive(fmu: Path, inputs: dict[str, np.ndarray], h: float, n: int, parameters
 
 @pytest.fixture(scope="module")
 def component_fmus(recorded, tmp_path_factory):
-    from fmu_export.component_fmus import export_component
+    from agrobot.fmu_export.component_fmus import export_component
 
     system, _ = recorded
     where = tmp_path_factory.mktemp("components")
@@ -69,7 +69,7 @@ TOLERANCE = {"tractor": 1e-8, "ekf": 1e-8}          # m, rad: exact discretisati
 @pytest.mark.parametrize("name", ["reference", "tractor", "steering", "drivetrain", "gps", "speed_filter", "ekf",
                                   "tracker", "mpc", "speed_controller", "command_link"])
 def test_component_fmu_reproduces_its_python_component(recorded, component_fmus, name):
-    from fmu_export.component_fmus import fmu_input_name
+    from agrobot.fmu_export.component_fmus import fmu_input_name
 
     system, frame = recorded
     node = system.nodes[name]
@@ -100,7 +100,7 @@ def test_gps_fmu_noise_has_the_configured_spread_and_the_seed_repeats_it(recorde
 
 
 def test_a_component_without_an_fmu_form_is_named(tmp_path):
-    from fmu_export.component_fmus import ComponentExportError, component_model
+    from agrobot.fmu_export.component_fmus import ComponentExportError, component_model
 
     system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tractor.model=transfer_function"])))
     with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: model = 'transfer_function' has no FMU form"):

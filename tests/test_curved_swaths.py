@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Point, Polygon
 
-from fields.field import Field, FieldError, GuidanceLine
-from fields.planner.curved_swaths import curved_lines
-from fields.planner.pipeline import plan
-from fields.planner.settings import Settings
+from agrobot.fields.field import Field, FieldError, GuidanceLine
+from agrobot.fields.planner.curved_swaths import curved_lines
+from agrobot.fields.planner.pipeline import plan
+from agrobot.fields.planner.settings import Settings
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -90,7 +90,7 @@ def test_offsets_past_the_centre_of_a_tight_curve_are_cut_where_they_bend_too_mu
 
 
 def test_the_swath_frame_projection_agrees_with_shapely_on_a_polyline():
-    from analysis.field_tracks import station
+    from agrobot.analysis.field_tracks import station
 
     rng = np.random.default_rng(3)
     th = np.linspace(-0.5, 1.2, 40)
@@ -117,8 +117,8 @@ def test_a_curved_pattern_needs_a_guidance_line_and_a_known_name():
 
 
 def test_a_field_mission_on_curved_swaths_keeps_the_implement_within_3_cm():
-    from orchestrator.runner import run_study
-    from orchestrator.study import Study
+    from agrobot.orchestrator.runner import run_study
+    from agrobot.orchestrator.study import Study
 
     study = Study.load(ROOT / "studies" / "field_coverage.toml", [
         "field.path=fields/curved_field.geojson", "field.swath_pattern=curved", "field.max_swaths=2",
@@ -131,7 +131,7 @@ def test_a_field_mission_on_curved_swaths_keeps_the_implement_within_3_cm():
 def test_pass_to_pass_gaps_are_taken_only_where_both_passes_were_driven():
     """A line split by a hole: its two parts' tracks are not interpolated across the hole (a curved
     neighbour would be measured against the chord)."""
-    from analysis.field_tracks import _gap
+    from agrobot.analysis.field_tracks import _gap
 
     one_along = np.r_[np.arange(0.0, 20.0, 0.1), np.arange(40.0, 60.0, 0.1)]
     one = (one_along, np.where(one_along < 30, 0.0, 1.0))

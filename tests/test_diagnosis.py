@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diagnosis.hidden_effects import EFFECTS, diagnose_many, recovered
-from measurements.truth_tractor import make_log
+from agrobot.diagnosis.hidden_effects import EFFECTS, diagnose_many, recovered
+from agrobot.measurements.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180
@@ -71,13 +71,13 @@ def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
 def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tmp_path):
     """The extended study written by the diagnosis runs, and the plant it builds shows the fitted
     delay: the steering's step response moves ~d later than the baseline's."""
-    from orchestrator.resolver import resolve
-    from orchestrator.runner import simulate
-    from orchestrator.study import load_study
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.runner import simulate
+    from agrobot.orchestrator.study import load_study
 
     frame, truth = make_log(7, "actuator_delay")
     frame.to_csv(tmp_path / "log.csv", index=False)
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "diagnose", str(tmp_path / "log.csv"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(tmp_path / "log.csv"),
                            "--out", str(tmp_path / "d"), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
@@ -108,7 +108,7 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("earlier result")
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "diagnose", str(log), "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(log), "--out", str(out)],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     for w in words:
@@ -121,7 +121,7 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
 def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path):
     frame, _ = make_log(5, None, duration=120.0)
     frame.drop(index=range(1000, 1100)).to_csv(tmp_path / "gap.csv", index=False)
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "diagnose", str(tmp_path / "gap.csv"), "--out",
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(tmp_path / "gap.csv"), "--out",
                            str(tmp_path / "out"), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0 and "Traceback" not in proc.stderr
     assert "longest stretch without a gap, t = 55.0-120.0 s of 0.0-120.0 s" in proc.stderr
@@ -129,9 +129,9 @@ def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path)
 
 def test_gyro_in_degrees_per_second_is_caught_even_when_small():
     """Gentle driving keeps |yaw_rate| below the magnitude bound; the GPS turn rate gives it away."""
-    from diagnosis.baseline import baseline_from_study
-    from diagnosis.candidates import CannotDecide, Replay
-    from orchestrator.study import load_study
+    from agrobot.diagnosis.baseline import baseline_from_study
+    from agrobot.diagnosis.candidates import CannotDecide, Replay
+    from agrobot.orchestrator.study import load_study
 
     frame, _ = make_log(5, None, duration=120.0)
     frame["yaw_rate"] = np.degrees(frame["yaw_rate"])
@@ -140,7 +140,7 @@ def test_gyro_in_degrees_per_second_is_caught_even_when_small():
 
 
 def test_report_shows_the_verdict_the_candidates_and_the_evidence_plots(tmp_path):
-    from diagnosis.pipeline import diagnose
+    from agrobot.diagnosis.pipeline import diagnose
 
     frame, truth = make_log(8, "steering_offset")
     frame.to_csv(tmp_path / "log.csv", index=False)

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from diagnosis.baseline import baseline_from_study
-from diagnosis.catalogue import CATALOGUE
-from orchestrator.study import Study
+from agrobot.diagnosis.baseline import baseline_from_study
+from agrobot.diagnosis.catalogue import CATALOGUE
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from diagnosis.hidden_effects import diagnose_many, expected_ids as expected, recovered
-from measurements.truth_tractor import make_log
+from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids as expected, recovered
+from agrobot.measurements.truth_tractor import make_log
 
 SEED = 7002
 COMBINATIONS = (
@@ -97,11 +97,11 @@ def test_catalogued_and_unlisted_together(runs, case):
 def test_noise_floors_match_the_truth_sensors():
     """The floors are estimated from the log alone; the truth's sensor noise is known: gyro 0.005
     rad/s, speed 0.02 m/s, GPS 0.02 m per axis (measurements.truth_tractor)."""
-    from diagnosis.baseline import baseline_from_study
-    from diagnosis.candidates import Replay
-    from diagnosis.noise_floor import stage_floors
-    from diagnosis.selection import select
-    from orchestrator.study import load_study
+    from agrobot.diagnosis.baseline import baseline_from_study
+    from agrobot.diagnosis.candidates import Replay
+    from agrobot.diagnosis.noise_floor import stage_floors
+    from agrobot.diagnosis.selection import select
+    from agrobot.orchestrator.study import load_study
     from tests.test_diagnosis import ROOT
 
     frame, _ = make_log(SEED, "steering_offset")
@@ -116,10 +116,10 @@ def test_noise_floors_match_the_truth_sensors():
 def test_two_explanations_that_fit_equally_well_are_reported_inconclusive(monkeypatch, tmp_path):
     """A catalogue holding a twin of steering_offset (same physics, another name): the data cannot
     tell them apart, so the result must name both and the experiment, whichever it keeps."""
-    import diagnosis.selection as selection
-    from diagnosis.catalogue import CATALOGUE
-    from diagnosis.effects.steering_offset import SteeringOffset
-    from diagnosis.pipeline import diagnose
+    import agrobot.diagnosis.selection as selection
+    from agrobot.diagnosis.catalogue import CATALOGUE
+    from agrobot.diagnosis.effects.steering_offset import SteeringOffset
+    from agrobot.diagnosis.pipeline import diagnose
 
     class Twin(SteeringOffset):
         id = "steering_offset_twin"
@@ -138,7 +138,7 @@ def test_two_explanations_that_fit_equally_well_are_reported_inconclusive(monkey
 
 
 def test_a_log_that_cannot_support_a_verdict_says_so(tmp_path):
-    from diagnosis.pipeline import diagnose
+    from agrobot.diagnosis.pipeline import diagnose
 
     frame, _ = make_log(SEED, None, duration=120.0, speeds=(2.0,))
     frame.to_parquet(tmp_path / "log.parquet")
@@ -152,7 +152,7 @@ def test_a_log_that_cannot_support_a_verdict_says_so(tmp_path):
 
 
 def test_blocked_recursion_equals_the_plain_loop():
-    from diagnosis.replay import blocked_recursion
+    from agrobot.diagnosis.replay import blocked_recursion
 
     rng = np.random.default_rng(3)
     N, n = 1001, 4
@@ -169,7 +169,7 @@ def test_blocked_recursion_equals_the_plain_loop():
 def test_batched_matrix_exponential_equals_scipy():
     from scipy.linalg import expm
 
-    from components.models.yaw_dynamics import expm_batched
+    from agrobot.components.models.yaw_dynamics import expm_batched
 
     rng = np.random.default_rng(4)
     M = rng.standard_normal((30, 6, 6)) * np.logspace(-4, math.log10(40), 30)[:, None, None]

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from scipy.signal import lsim
 
-from components.models.yaw_dynamics import TractorParameters, state_space
-from diagnosis.pipeline import diagnose
-from diagnosis.replay import YawReplay
-from identification.vehicle import Vehicle, VehicleError
-from measurements.truth_tractor import make_log
+from agrobot.components.models.yaw_dynamics import TractorParameters, state_space
+from agrobot.diagnosis.pipeline import diagnose
+from agrobot.diagnosis.replay import YawReplay
+from agrobot.identification.vehicle import Vehicle, VehicleError
+from agrobot.measurements.truth_tractor import make_log
 from tests.vehicle_logs import ROOT_STUDIES, frictionmaps_log
 
 F1TENTH = ROOT_STUDIES / "f1tenth.toml"

@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
-from measurements.log import resolution
-from measurements.truth_tractor import DEG, HEALTHY, make_log
+from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
+from agrobot.measurements.log import resolution
+from agrobot.measurements.truth_tractor import DEG, HEALTHY, make_log
 
 SEED = 8801
 # faults hidden in a healthy-but-different truth: detection must survive the higher healthy level

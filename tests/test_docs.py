@@ -54,17 +54,17 @@ def test_readme_test_command_is_the_one_ci_runs():
 
 
 def test_commands_page_covers_every_registered_command():
-    from orchestrator.registry import registry
+    from agrobot.orchestrator.registry import registry
 
     page = reference.commands_markdown()
     expected = {"run", "sweep", *registry().commands}
     documented = set(re.findall(r"^## (\S+)$", page, flags=re.M))
     assert documented == expected
-    assert "usage: python -m orchestrator identify" in page
+    assert "usage: python -m agrobot identify" in page
 
 
 def test_study_file_page_covers_every_field():
-    from orchestrator import study_schema
+    from agrobot.orchestrator import study_schema
 
     page = reference.study_file_markdown()
     for model in (study_schema.StudySettings, study_schema.ComponentSpec, study_schema.Sweep,
@@ -86,7 +86,7 @@ def test_components_page_covers_every_component_module():
 
 
 def test_readme_lists_every_registered_command():
-    from orchestrator.registry import registry
+    from agrobot.orchestrator.registry import registry
 
     table = README.read_text(encoding="utf-8").split("## Commands", 1)[1].split("\n## ", 1)[0]
     listed = set(re.findall(r"^\| `([\w-]+)", table, flags=re.M))

@@ -16,17 +16,17 @@ from shapely import contains_xy
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
-from components.field_route import FieldRoute, settings_of
-from components.trailed_implement import TrailedImplement
-from fields import FieldError, read_fields
-from fields.planner import HEADLAND, SWATH, TURN, Settings, plan
-from fields.planner.curves import Limits, connect, integrate
-from fields.planner.decomposition import cells as _cells
-from fields.planner.route_order import skip_order as _skip_order
-from fields.planner.swaths import swath_lines as _swath_lines
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.components.field_route import FieldRoute, settings_of
+from agrobot.components.trailed_implement import TrailedImplement
+from agrobot.fields import FieldError, read_fields
+from agrobot.fields.planner import HEADLAND, SWATH, TURN, Settings, plan
+from agrobot.fields.planner.curves import Limits, connect, integrate
+from agrobot.fields.planner.decomposition import cells as _cells
+from agrobot.fields.planner.route_order import skip_order as _skip_order
+from agrobot.fields.planner.swaths import swath_lines as _swath_lines
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
@@ -125,7 +125,7 @@ def test_a_field_with_a_bay_and_a_hole_is_split_into_cells_and_covered():
     """A U-shaped field (a bay cut into its top) with a pond: the lines crossing the bay or the
     pond give two swaths each, the planner splits them into cells, each swath is driven once,
     the whole stays inside the field (round the pond too) and covers the workable area."""
-    from fields.field import Field
+    from agrobot.fields.field import Field
 
     outer = [(0, 0), (300, 0), (300, 200), (190, 200), (190, 100), (110, 100), (110, 200), (0, 200)]
     pond = [(50, 40), (80, 40), (80, 55), (50, 55)]
@@ -302,7 +302,7 @@ def test_a_real_plot_is_covered_by_the_guidance_stack():
 def test_the_coverage_metric_agrees_with_a_monte_carlo_count():
     """covered and overlap areas (shapely on the swept strips) against a second method: 2 M
     random points counting the strips each lies in (a grid would alias the 5 cm overlaps)."""
-    from analysis.field_tracks import _samples, _shape, _strips, mission
+    from agrobot.analysis.field_tracks import _samples, _shape, _strips, mission
 
     overrides = ["field.max_swaths=3", "field.headland_work=0"]
     res = _run("field_plot_mounted.toml", *overrides)
@@ -353,7 +353,7 @@ def test_the_side_slope_option_tilts_tractor_and_implement():
 
 # --- command line: plan, bad fields, sweeps --------------------------------------------------------------------
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *args], cwd=ROOT, capture_output=True, text=True,
                           timeout=300)
 
 

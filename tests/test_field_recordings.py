@@ -12,12 +12,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from components.hardware.guidance_messages import ISOBUS_DBC
-from components.hardware.record import record_study
-from measurements import LogError
-from measurements.recording import ImportOptions, import_recording, import_runs
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.components.hardware.guidance_messages import ISOBUS_DBC
+from agrobot.components.hardware.record import record_study
+from agrobot.measurements import LogError
+from agrobot.measurements.recording import ImportOptions, import_recording, import_runs
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 EPOCH = 1777622400.0          # the recorder's default epoch, 2026-05-01T08:00:00Z
@@ -48,7 +48,7 @@ def lever_recording(tmp_path_factory) -> Path:
     args = [a for k, v in LEVER.items() for a in ("--set", f"{k}={v}")]
     folder = tmp_path_factory.mktemp("field") / "recording"
     out = folder.parent / "run"
-    subprocess.run([sys.executable, "-m", "orchestrator", "run", str(ROOT / "studies" / "field_test.toml"), "--out", str(out),
+    subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies" / "field_test.toml"), "--out", str(out),
                     "--record", str(folder), "--no-plots", *args], check=True, capture_output=True, text=True, cwd=ROOT)
     return folder
 
@@ -70,7 +70,7 @@ def test_imported_recording_equals_the_simulations_own_log(lever_recording):
 
 
 def test_round_trip_finds_the_hidden_effect_as_from_the_simulation_log(lever_recording, tmp_path):
-    from diagnosis.pipeline import diagnose
+    from agrobot.diagnosis.pipeline import diagnose
 
     raw = diagnose(lever_recording, tmp_path / "raw", plots=False)
     own = diagnose(lever_recording / "simulation_log.csv", tmp_path / "own", plots=False)
@@ -179,7 +179,7 @@ def test_gaps_split_runs_and_a_run_or_time_range_is_chosen(lever_recording, tmp_
 
 def test_nmea_variants_are_read(lever_recording, tmp_path):
     """GP talker, no RMC/ZDA date (date from the host stamps), junk and corrupted lines counted."""
-    from measurements.raw_nmea import read_nmea_file
+    from agrobot.measurements.raw_nmea import read_nmea_file
 
     lines = (lever_recording / "gps.nmea").read_text().splitlines()
     out = []
@@ -240,7 +240,7 @@ def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
          "x.dbc: no such file"),
     ]
     for argv, expected in cases:
-        proc = subprocess.run([sys.executable, "-m", "orchestrator", *argv], capture_output=True, text=True, cwd=ROOT)
+        proc = subprocess.run([sys.executable, "-m", "agrobot", *argv], capture_output=True, text=True, cwd=ROOT)
         assert proc.returncode == 2 and expected in proc.stderr, (argv, proc.stderr)
     assert not (tmp_path / "a.csv").exists()
 
@@ -248,10 +248,10 @@ def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
 def test_convert_writes_the_log_and_its_report(lever_recording, tmp_path):
     import json
 
-    from measurements import read_log
+    from agrobot.measurements import read_log
 
     out = tmp_path / "converted" / "field.csv"
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "convert", str(lever_recording), "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "convert", str(lever_recording), "--out", str(out)],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     assert "used: run 1 (the longest)" in proc.stdout
@@ -265,8 +265,8 @@ def test_convert_writes_the_log_and_its_report(lever_recording, tmp_path):
 def _iso_pair(**tractor_params):
     import random
 
-    from components.can_actuators import CANActuators
-    from components.can_tractor_link import CANTractorLink
+    from agrobot.components.can_actuators import CANActuators
+    from agrobot.components.can_tractor_link import CANTractorLink
 
     channel = f"iso{random.getrandbits(32)}"
     common = {"interface": "virtual", "channel": channel, "protocol": "isobus", "wheelbase": 1.4}
@@ -324,7 +324,7 @@ def test_isobus_frames_have_the_iso_11783_7_layout():
 
 @pytest.mark.parametrize("fault, reason", [("lockout", 4), ("not_ready", 3)])
 def test_watchdog_disengages_when_the_machine_is_locked_out_or_not_ready(fault, reason):
-    from components.safety_watchdog import SafetyWatchdog
+    from agrobot.components.safety_watchdog import SafetyWatchdog
 
     guidance, tractor = _iso_pair(**{f"{fault}_after": 1.0})
     w = SafetyWatchdog("w", {"recovery_time": 1.0})
@@ -360,8 +360,8 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
     own log (the buses quantise to 1e-4 rad), and the CLI takes the folder."""
     import warnings
 
-    from identification.multisine import MultisineDesign, realisation
-    from identification.pipeline import identify_log
+    from agrobot.identification.multisine import MultisineDesign, realisation
+    from agrobot.identification.pipeline import identify_log
 
     design = MultisineDesign(20.0, 1000, 0.02, 2.0, math.radians(4), "odd_odd")
     study = Study.load(ROOT / "studies" / "field_test.toml", ["study.stop_time=205"])
@@ -381,7 +381,7 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
         assert np.allclose(a["num"], b["num"], rtol=0.02) and np.allclose(a["den"], b["den"], rtol=0.02), name
     den = raw["models"]["second_order"]["den"]
     assert 150 < den[2] < 260 and 8 < den[1] < 13          # the paper's 242 and 10.9 at 2 m/s, in range
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "identify", str(folder), "--out", str(tmp_path / "id"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(folder), "--out", str(tmp_path / "id"),
                            "--period", "50", "--models", "second_order", "--no-plots"],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0 and "used: run 1" in proc.stdout, proc.stderr
@@ -393,7 +393,7 @@ def test_a_steering_offset_in_a_recording_is_named_with_its_value(tmp_path):
     does not displace the named effect. A clean recording of the same drive names no steering
     effect and leaves no stage misfit (its GPS is one 50 ms sample older than the gyro and the wheel
     angle, which the diagnosis may rightly name as gps_latency)."""
-    from diagnosis.pipeline import diagnose
+    from agrobot.diagnosis.pipeline import diagnose
 
     results = {}
     for name, values in (("offset", {"tractor.tractor.steer_angle_offset": 0.03}), ("clean", None)):

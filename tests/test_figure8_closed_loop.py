@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import load_study
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY = ROOT / "studies/figure8.toml"
@@ -23,7 +23,7 @@ DEG = math.pi / 180
 @pytest.fixture(scope="module")
 def cli_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("figure8")
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(STUDY), "--out", str(out)],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(STUDY), "--out", str(out)],
                           capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert proc.returncode == 0, proc.stderr
     return out, proc.stdout
@@ -75,7 +75,7 @@ def test_adding_a_component_takes_a_module_and_a_few_study_lines(tmp_path):
     text += '\n[components.monitor]\ntype = "tests.toy_components:YawRateInDegrees"\nstep = 0.05\n'
     (tmp_path / "s.toml").write_text(text)
     study = load_study(tmp_path / "s.toml", ["study.stop_time=20.0"])
-    from orchestrator.runner import simulate
+    from agrobot.orchestrator.runner import simulate
 
     rec, _ = simulate(study)
     frame = rec.to_frame()
@@ -87,8 +87,8 @@ def test_the_path_error_compares_the_cg_with_the_reference_at_the_same_instant(c
     """The reference is computed at 20 Hz and held in the 100 Hz table; the
     metrics take it at the plant's instants. Checked against the reference's own path evaluated at
     every instant (a second method: Figure8Reference.progress and the path's pose)."""
-    from analysis.figure8 import metrics, settled_index
-    from components.figure8_reference import Figure8Reference
+    from agrobot.analysis.figure8 import metrics, settled_index
+    from agrobot.components.figure8_reference import Figure8Reference
 
     out, _ = cli_run
     study = load_study(STUDY)

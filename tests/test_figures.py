@@ -19,8 +19,8 @@ ROOT = Path(__file__).resolve().parent.parent
 
 @pytest.fixture(scope="module")
 def figure8_run():
-    from orchestrator.runner import simulate
-    from orchestrator.study import load_study
+    from agrobot.orchestrator.runner import simulate
+    from agrobot.orchestrator.study import load_study
 
     study = load_study(ROOT / "studies" / "figure8.toml", ["study.stop_time=45"])
     return study, simulate(study)[0].to_frame()
@@ -33,7 +33,7 @@ def _constant_lines(ax) -> dict[str, float]:
 
 
 def test_error_figure_draws_the_euclidean_error_the_bounds_judge(figure8_run):
-    from analysis.figure8 import error_figure, metrics
+    from agrobot.analysis.figure8 import error_figure, metrics
 
     study, frame = figure8_run
     fig = error_figure(frame, study)
@@ -62,7 +62,7 @@ def test_error_figure_draws_the_euclidean_error_the_bounds_judge(figure8_run):
 
 
 def test_trajectory_shows_the_reference_under_the_path_and_zooms_on_the_largest_error(figure8_run):
-    from analysis.figure8 import metrics, trajectory_figure
+    from agrobot.analysis.figure8 import metrics, trajectory_figure
 
     study, frame = figure8_run
     fig = trajectory_figure(frame, study)
@@ -109,7 +109,7 @@ def _captured(monkeypatch) -> list:
 
 
 def test_poles_zeros_at_physical_scale_list_the_off_scale_roots(tmp_path, monkeypatch):
-    from identification.plots import write_plots
+    from agrobot.identification.plots import write_plots
 
     figures = _captured(monkeypatch)
     write_plots(_fake_analyses(), 1.0, tmp_path)
@@ -128,7 +128,7 @@ def test_poles_zeros_at_physical_scale_list_the_off_scale_roots(tmp_path, monkey
 
 
 def test_identify_message_names_off_scale_roots_and_right_half_plane_zeros():
-    from identification.plots import root_notes
+    from agrobot.identification.plots import root_notes
 
     den = np.polymul([1.0, 11.6, 249.0], [1.0, 1.44e7])
     report = {"speeds": {"1": {"models": {"rlf": {"poles": [[p.real, p.imag] for p in np.roots(den)],
@@ -141,8 +141,8 @@ def test_identify_message_names_off_scale_roots_and_right_half_plane_zeros():
 
 
 def test_in_field_frame_undoes_the_mission_frame():
-    from analysis.field_tracks import _in_field_frame
-    from components.field_route import to_mission
+    from agrobot.analysis.field_tracks import _in_field_frame
+    from agrobot.components.field_route import to_mission
 
     rng = np.random.default_rng(3)
     xy = rng.uniform(-100, 100, (50, 2))
@@ -154,8 +154,8 @@ def test_in_field_frame_undoes_the_mission_frame():
 
 
 def test_sweep_figure_draws_the_chosen_metrics_with_their_bounds(tmp_path, monkeypatch):
-    from orchestrator.study import Study
-    from orchestrator.sweep import sweep_plots
+    from agrobot.orchestrator.study import Study
+    from agrobot.orchestrator.sweep import sweep_plots
 
     figures = _captured(monkeypatch)
     study = Study.load(ROOT / "studies" / "speed_sweep.toml")
@@ -173,9 +173,9 @@ def test_sweep_figure_draws_the_chosen_metrics_with_their_bounds(tmp_path, monke
 def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_system(tmp_path, monkeypatch):
     """A healthy log (verdict none) whose steering residual is above 1.5 x its floor: the figure draws
     the healthy level that explains it, and the final model's bar stays under the misfit level."""
-    from diagnosis.pipeline import diagnose
-    from diagnosis.report import floors_figure
-    from measurements.truth_tractor import make_log
+    from agrobot.diagnosis.pipeline import diagnose
+    from agrobot.diagnosis.report import floors_figure
+    from agrobot.measurements.truth_tractor import make_log
 
     frame, _ = make_log(101, None)
     frame.to_csv(tmp_path / "log.csv", index=False)
@@ -202,7 +202,7 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
     labels = [t.get_text() for t in ax.get_xticklabels()]
     assert all("no misfit" in label for label in labels)
     # report.md: every residual in deg, deg/s, m or m/s; radians only in the note on study-file values
-    from diagnosis.report import markdown
+    from agrobot.diagnosis.report import markdown
 
     text = markdown(res, [])
     body = "\n".join(line for line in text.splitlines() if not line.startswith("Baseline model:"))

@@ -12,11 +12,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.build import build_system
-from orchestrator.engine import RunError, Simulation
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import Study, StudyError, parse_study
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import RunError, Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study, StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
@@ -24,7 +24,7 @@ FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
 
 @pytest.fixture(scope="session")
 def first_order_fmu(tmp_path_factory) -> Path:
-    from fmu_export.packaging import package_fmu
+    from agrobot.fmu_export.packaging import package_fmu
 
     return package_fmu(FIRST_ORDER_SOURCES, tmp_path_factory.mktemp("fmu") / "first_order.fmu")
 
@@ -38,7 +38,7 @@ def first_order_fmi3_fmu(tmp_path_factory) -> Path:
 
 
 def _export(out: Path, *extra: str) -> Path:
-    res = subprocess.run([sys.executable, "-m", "orchestrator", "export-controller", "studies/figure8.toml",
+    res = subprocess.run([sys.executable, "-m", "agrobot", "export-controller", "studies/figure8.toml",
                           "--out", str(out), *extra], cwd=ROOT, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     return out
@@ -229,7 +229,7 @@ def test_exported_qp_solver_equals_daqp_on_random_instances(controller_fmu, tmp_
 
 
 def _python_and_fmu_runs(controller_fmu, overrides):
-    from fmu_export.controller import run_with_exported_controller
+    from agrobot.fmu_export.controller import run_with_exported_controller
 
     return run_with_exported_controller(ROOT / "studies/figure8.toml", controller_fmu, overrides)
 
@@ -250,7 +250,7 @@ def test_with_the_1_degree_potentiometer_any_1e12_difference_grows_the_same_way(
     """The 1-degree potentiometer makes the loop chaotic: a 1e-12 relative change of one Python
     gain moves the trajectory as far as swapping in the FMU does; both track within the paper's
     bounds and their mean errors agree."""
-    from analysis.figure8 import metrics
+    from agrobot.analysis.figure8 import metrics
 
     py, fmu, st = _python_and_fmu_runs(controller_fmu, [])
     nudged = Simulation(build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tracker.k_s=0.6000000000006"]))))\
@@ -305,7 +305,7 @@ def _standard_master(fmu: Path, inputs: dict[str, np.ndarray], times: np.ndarray
 @pytest.fixture(scope="module")
 def recorded_controller_run():
     """A Python closed-loop run's controller inputs and outputs at the controllers' 20 Hz instants."""
-    from fmu_export.controller import controller_design, controller_feeds
+    from agrobot.fmu_export.controller import controller_design, controller_feeds
 
     st = Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=20"])
     design = controller_design(st)

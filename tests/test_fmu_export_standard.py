@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module", params=[2, 3])
 def exported(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(f"fmi{request.param}") / "guidance_controller.fmu"
-    res = subprocess.run([sys.executable, "-m", "orchestrator", "export-controller", "studies/figure8.toml",
+    res = subprocess.run([sys.executable, "-m", "agrobot", "export-controller", "studies/figure8.toml",
                           "--out", str(out), "--fmi-version", str(request.param)], cwd=ROOT, capture_output=True,
                          text=True)
     assert res.returncode == 0, res.stderr

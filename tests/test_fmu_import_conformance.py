@@ -11,10 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from orchestrator.build import build_system
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import StudyError, parse_study
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import StudyError, parse_study
 from tests.fmu_build import build_test_fmu
 
 
@@ -111,7 +111,7 @@ def test_fmi3_arrays_whole_and_by_element_and_every_type(fmus):
 
 
 def test_a_whole_array_connects_and_one_connected_both_ways_is_refused(tmp_path):
-    from orchestrator.engine import ParameterError
+    from agrobot.orchestrator.engine import ParameterError
 
     def unitless(xml: str) -> str:        # scaled without a unit, so that it may feed gains (unit 1)
         return xml.replace('<Float64 name="scaled" valueReference="5" causality="output" unit="rad/s">',
@@ -128,7 +128,7 @@ def test_a_whole_array_connects_and_one_connected_both_ways_is_refused(tmp_path)
 
 @pytest.mark.parametrize("name", ["conformance2", "conformance3"])
 def test_a_terminate_request_ends_the_run_cleanly_and_is_reported(fmus, name, tmp_path):
-    from orchestrator.runner import run_study
+    from agrobot.orchestrator.runner import run_study
 
     st = study({"fmu": {"type": str(fmus[name]), "parameters": {"stop_time": 0.55}}}, [], stop=2.0)
     rec = run(st)

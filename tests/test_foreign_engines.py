@@ -16,11 +16,11 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run
-from orchestrator.build import build_system
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.fmu_export.foreign_engines import cg_distance, cofmupy_run, fmpy_ssp_run, libcosim_run
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 H = 0.01
@@ -28,7 +28,7 @@ H = 0.01
 
 @pytest.fixture(scope="module")
 def figure8_ssp(tmp_path_factory) -> Path:
-    from fmu_export.ssp_export import export_ssp
+    from agrobot.fmu_export.ssp_export import export_ssp
 
     return export_ssp(Study.load(ROOT / "studies/figure8.toml"), tmp_path_factory.mktemp("ssp") / "figure8.ssp")
 
@@ -58,7 +58,7 @@ def _position_difference(frame: pd.DataFrame, other: pd.DataFrame, until: float)
 def test_the_ssp_runs_in_this_orchestrator_as_the_study_does(own_run):
     """Same components, same seed: only the GPS noise generator differs (C xoshiro vs numpy), so
     the tracking statistics agree, and the run keeps the paper's bounds."""
-    from analysis.figure8 import metrics
+    from agrobot.analysis.figure8 import metrics
 
     study, frame = own_run
     assert {"tractor.x_cg", "reference.x_ref", "ekf.heading", "speed_filter.vel_east"} <= set(frame.columns)
@@ -71,7 +71,7 @@ def test_the_ssp_runs_in_this_orchestrator_as_the_study_does(own_run):
 
 
 def test_libcosim_runs_the_figure8_ssp_within_the_paper_bounds(unpacked, own_run):
-    from analysis.figure8 import metrics
+    from agrobot.analysis.figure8 import metrics
 
     study, ours = own_run
     frame = libcosim_run(unpacked, study.study.stop_time, H)
@@ -105,7 +105,7 @@ def test_bad_ssp_invocations_are_named_without_a_traceback(tmp_path, args, words
     import sys
 
     (tmp_path / "bad.ssp").write_text("hello")
-    res = subprocess.run([sys.executable, "-m", "orchestrator", *[a.format(tmp=tmp_path) for a in args]], cwd=ROOT,
+    res = subprocess.run([sys.executable, "-m", "agrobot", *[a.format(tmp=tmp_path) for a in args]], cwd=ROOT,
                          capture_output=True, text=True)
     assert res.returncode == 2 and "Traceback" not in res.stderr
     assert all(w in res.stderr for w in words), res.stderr

@@ -11,11 +11,11 @@ import tomli_w
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from measurements import CANONICAL, LogError, read_log
-from orchestrator.build import build_system
-from orchestrator.errors import InputError
-from orchestrator.resolver import resolve
-from orchestrator.study import Study
+from agrobot.measurements import CANONICAL, LogError, read_log
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parent.parent
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])

@@ -15,7 +15,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from orchestrator.errors import InputError
+from agrobot.orchestrator.errors import InputError
 from tests.reader_inputs import write_candump, write_nmea, write_timelog
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -58,7 +58,7 @@ def _peak_mb() -> float:
 
 def _import(path: Path) -> None:
     """A recording read whole: a valid log, or the readers' own error."""
-    from measurements.recording import import_recording
+    from agrobot.measurements.recording import import_recording
 
     start = time.perf_counter()
     try:
@@ -77,7 +77,7 @@ def _import(path: Path) -> None:
 
 
 def _fields(path: Path) -> None:
-    from fields import read_fields
+    from agrobot.fields import read_fields
 
     start = time.perf_counter()
     try:

@@ -14,13 +14,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from components.gps_sensor import GPSSensor, gga_qualities
-from components.imu_sensor import IMUSensor
-from components.ins_ekf import INSEKF
-from components.models import terrain
-from components.tractor_yaw_plant import TractorYawPlant
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.components.gps_sensor import GPSSensor, gga_qualities
+from agrobot.components.imu_sensor import IMUSensor
+from agrobot.components.ins_ekf import INSEKF
+from agrobot.components.models import terrain
+from agrobot.components.tractor_yaw_plant import TractorYawPlant
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"
@@ -140,7 +140,7 @@ def test_on_a_side_slope_the_rear_axle_crabs_at_k_f_y_v():
     wheel angle that holds gamma = 0, solved from its state space) moves the rear axle sideways at
     -k f_y v with k = m l_f / (L C_r): the rear tyres carry l_f / L of the side force m f_y at the
     slip angle force / C_r (the crab model the estimator uses); the plant holds that state."""
-    from components.models.yaw_dynamics import lateral_disturbance_column, state_space
+    from agrobot.components.models.yaw_dynamics import lateral_disturbance_column, state_space
 
     plant = TractorYawPlant("tractor", {"slope_angle": 10 * DEG, "slope_downhill_heading": -90 * DEG})
     v, dt = 2.0, 0.01
@@ -335,8 +335,8 @@ def test_line_acquisition_after_each_turn_against_a_second_computation():
     curvature, and ISO-style cross-track error along the whole route by interpolation."""
     from shapely.geometry import LineString, Point
 
-    from analysis.field_tracks import mission
-    from fields.planner import SWATH, TURN
+    from agrobot.analysis.field_tracks import mission
+    from agrobot.fields.planner import SWATH, TURN
 
     overrides = [f"field.path={PARTFIELDS}", "field.name=SW_Curitiba_Simple", "field.max_swaths=3",
                  "field.headland_work=0"]
@@ -376,7 +376,7 @@ def test_route_cross_track_interpolates_between_route_points():
     """On an arc of radius 20 m sampled every 2 m, the distance of points to the route by
     interpolation is within the chord's sagitta (2^2 / (8 R) = 2.5 cm) of the exact distance to the
     circle, and exact on a straight route; the nearest route point can be a metre off along it."""
-    from analysis.field_ground import route_cross_track
+    from agrobot.analysis.field_ground import route_cross_track
 
     theta = np.arange(0, 1.5, 0.1)
     rx, ry = 20 * np.sin(theta), 20 * (1 - np.cos(theta))
@@ -400,8 +400,8 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
     vertices is nearer than the track at the same place)."""
     from shapely.geometry import LineString, Point
 
-    from analysis.field_tracks import _samples, _swath_frames, mission
-    from fields.planner import SWATH
+    from agrobot.analysis.field_tracks import _samples, _swath_frames, mission
+    from agrobot.fields.planner import SWATH
 
     overrides = [f"field.path={PARCEL}", "operator.pauses=[[1, 60.0]]"]
     res = run_study(Study.load(ROOT / "studies" / "field_line_test.toml", overrides), None, plots=False)
@@ -435,7 +435,7 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
 
 
 def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *args], cwd=ROOT, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *args], cwd=ROOT, capture_output=True, text=True,
                           timeout=300)
 
 
@@ -446,7 +446,7 @@ def test_a_standing_implement_jittering_gives_a_strip_of_few_points():
     area as the straight 10 m strip (10 m x 3 m plus the round join: at most pi 1.5^2 more)."""
     import pandas as pd
 
-    from analysis.field_tracks import _strips
+    from agrobot.analysis.field_tracks import _strips
 
     rng = np.random.default_rng(1)
     n_drive, n_stand = 1001, 2000

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from components.figure8_reference import Figure8Reference
-from components.kinematic_tracker import KinematicTracker, inverse_kinematics
-from components.models.figure8_path import CURVED, STRAIGHT, Figure8Path
+from agrobot.components.figure8_reference import Figure8Reference
+from agrobot.components.kinematic_tracker import KinematicTracker, inverse_kinematics
+from agrobot.components.models.figure8_path import CURVED, STRAIGHT, Figure8Path
 
 
 def test_inverse_kinematics_inverts_the_point_ahead_model():

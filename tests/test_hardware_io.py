@@ -17,15 +17,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from components.can_actuators import CANActuators
-from components.can_tractor_link import CANTractorLink
-from components.hardware.nmea import LocalFrame, NMEAStream, Position, Velocity, gga_vtg
-from components.nmea_gps import NMEAGPS
-from components.nmea_server import NMEAServer
-from components.safety_watchdog import SafetyWatchdog
-from orchestrator.resolver import resolve
-from orchestrator.runner import simulate
-from orchestrator.study import load_study, parse_study
+from agrobot.components.can_actuators import CANActuators
+from agrobot.components.can_tractor_link import CANTractorLink
+from agrobot.components.hardware.nmea import LocalFrame, NMEAStream, Position, Velocity, gga_vtg
+from agrobot.components.nmea_gps import NMEAGPS
+from agrobot.components.nmea_server import NMEAServer
+from agrobot.components.safety_watchdog import SafetyWatchdog
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import simulate
+from agrobot.orchestrator.study import load_study, parse_study
 
 ROOT = Path(__file__).resolve().parent.parent
 DATUM = (math.radians(50.8637), math.radians(4.6782), 60.0)
@@ -216,7 +216,7 @@ class _Clock:
 
 
 def test_realtime_mode_paces_against_the_wall_clock_and_counts_misses(monkeypatch):
-    from orchestrator.key_figures import realtime_lines
+    from agrobot.orchestrator.key_figures import realtime_lines
 
     t0 = time.perf_counter()
     rec, _ = simulate(parse_study(_toy_study(0.0)))            # the real clock: it cannot end early
@@ -282,7 +282,7 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), recor
         pytest.skip("python-can udp_multicast (CAN between processes) is not available on this host")
     nmea_port = free_port()
     emu_out, hil_out = tmp_path / "emulator", tmp_path / "guidance"
-    emu = subprocess.Popen([sys.executable, "-m", "orchestrator", "emulate", "studies/tractor_emulator.toml",
+    emu = subprocess.Popen([sys.executable, "-m", "agrobot", "emulate", "studies/tractor_emulator.toml",
                             "--nmea-port", str(nmea_port), "--out", str(emu_out), "--duration", str(guidance_s + 15),
                             "--set", f"can.port={can_port}", *[a for s in emulator_sets for a in ("--set", s)],
                             *(["--record", str(tmp_path / "emulator_recording")] if record else [])],
@@ -291,7 +291,7 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), recor
         ready = emu.stdout.readline()               # printed once the study is loaded, before the run
         assert "emulating" in ready, f"emulator did not start: {ready}{emu.stderr.read() if emu.poll() is not None else ''}"
         time.sleep(1.0)                             # the NMEA server listens once initialised
-        guidance = subprocess.run([sys.executable, "-m", "orchestrator", "run", "studies/figure8_hil.toml",
+        guidance = subprocess.run([sys.executable, "-m", "agrobot", "run", "studies/figure8_hil.toml",
                                    "--out", str(hil_out), "--no-plots", "--set", f"study.stop_time={guidance_s}",
                                    "--set", f"tractor.nmea_url=socket://127.0.0.1:{nmea_port}",
                                    "--set", f"tractor.can_port={can_port}",
@@ -309,8 +309,8 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), recor
 def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     """The emulator in its own process (NMEA over TCP, CAN over UDP multicast), the guidance in
     real time with both adapters, 30 s of the figure-8."""
-    from analysis.guidance_realtime import path_error
-    from components.models.figure8_path import Figure8Path
+    from agrobot.analysis.guidance_realtime import path_error
+    from agrobot.components.models.figure8_path import Figure8Path
 
     metrics, sig, events, emu, printed = _hil(tmp_path, 30.0, record=True)
     rt = metrics["realtime"]
@@ -345,7 +345,7 @@ def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     assert sig["watchdog.safe_state"][sig["t"] > 5.0].max() == 0.0
     # both ends recorded their buses (run --record on the HIL study, emulate --record): the two
     # recordings import to the same signals on the receiver's time base
-    from measurements.recording import import_recording
+    from agrobot.measurements.recording import import_recording
 
     logs = {side: import_recording(tmp_path / f"{side}_recording") for side in ("guidance", "emulator")}
     for side, (log, report) in logs.items():

@@ -13,14 +13,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from components.models.paper_models import G_2ND
-from components.models.yaw_dynamics import TractorParameters
-from identification import frf
-from identification.experiment import config_of, simulate_experiment
-from identification.fitting import fit
-from identification.multisine import MultisineDesign, crest_factor, realisation
-from identification.physical import MISPRINTS, appendix_as_printed, coefficients, rlfr_physical
-from orchestrator.study import Study
+from agrobot.components.models.paper_models import G_2ND
+from agrobot.components.models.yaw_dynamics import TractorParameters
+from agrobot.identification import frf
+from agrobot.identification.experiment import config_of, simulate_experiment
+from agrobot.identification.fitting import fit
+from agrobot.identification.multisine import MultisineDesign, crest_factor, realisation
+from agrobot.identification.physical import MISPRINTS, appendix_as_printed, coefficients, rlfr_physical
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 P = TractorParameters()
@@ -162,7 +162,7 @@ def test_a_steering_dead_band_shows_at_the_odd_non_excited_lines_only():
 @pytest.fixture(scope="module")
 def study_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("ident")
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "identify", str(ROOT / "studies/identification.toml"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(ROOT / "studies/identification.toml"),
                            "--out", str(out)], capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert proc.returncode == 0, proc.stderr
     return out, proc.stdout, json.loads((out / "identification.json").read_text())
@@ -192,7 +192,7 @@ def test_study_identification_reproduces_section_iv(study_run):
 
 def test_the_same_command_on_the_experiments_log_gives_the_same_fits(study_run, tmp_path):
     out, _, rep = study_run
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "identify", str(out / "experiment_log.csv"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(out / "experiment_log.csv"),
                            "--out", str(tmp_path), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     log_rep = json.loads((tmp_path / "identification.json").read_text())
@@ -216,7 +216,7 @@ def test_bad_logs_get_clear_errors(study_run, tmp_path, edit, words):
     frame = edit(pd.read_csv(out / "experiment_log.csv"))
     bad = tmp_path / "bad.csv"
     frame.to_csv(bad, index=False)
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "identify", str(bad), "--out", str(tmp_path / "o")],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(bad), "--out", str(tmp_path / "o")],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert str(bad) in proc.stderr

@@ -9,10 +9,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from identification.driving import NotEnoughDriving, understeer_gradient
-from identification.ordinary_driving import identify_driving
-from measurements import LogError
-from orchestrator.study import Study
+from agrobot.identification.driving import NotEnoughDriving, understeer_gradient
+from agrobot.identification.ordinary_driving import identify_driving
+from agrobot.measurements import LogError
+from agrobot.orchestrator.study import Study
 from tests.vehicle_logs import ROOT_STUDIES, autokoopman_log, frictionmaps_log
 
 STUDY = ROOT_STUDIES / "f1tenth.toml"
@@ -90,7 +90,7 @@ def test_autokoopman_asymmetry_is_a_steering_offset(study):
 
 def simulated_log(stop: float = 150.0):
     """The F1TENTH study with a stiffer rear axle (c_r = 10: understeer K = (1/5 - 1/10)/g)."""
-    from orchestrator.runner import simulate
+    from agrobot.orchestrator.runner import simulate
 
     st = Study.load(STUDY).with_values({"car.C_r": 114.0, "study.stop_time": stop, "plan.duration": stop})
     rec, _ = simulate(st)
@@ -140,7 +140,7 @@ def test_extended_study_plant_saturates_at_the_friction_limit():
     """The yaw plant with tyre_friction (the extended study's option) never turns the car harder
     than friction allows: its lateral acceleration a_y = dv_y/dt + v r (the axle forces over the
     mass) stays within mu g (a closed-form bound), where the linear tyre goes far beyond it."""
-    from components.tractor_yaw_plant import TractorYawPlant
+    from agrobot.components.tractor_yaw_plant import TractorYawPlant
 
     def peak_lateral(mu: float) -> float:
         plant = TractorYawPlant("car", {"model": "bicycle", "m": 3.33, "I": 0.0687, "l_f": 0.112, "l_r": 0.208,

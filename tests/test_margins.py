@@ -24,12 +24,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.loop_blocks import NoLinearModel
-from analysis.margins import analyse, anatomy, margins_of
-from analysis.margins_simulation import simulated_run
-from components.stanley import Stanley
-from orchestrator.component import Component, inp, out, par
-from orchestrator.study import Study
+from agrobot.analysis.loop_blocks import NoLinearModel
+from agrobot.analysis.margins import analyse, anatomy, margins_of
+from agrobot.analysis.margins_simulation import simulated_run
+from agrobot.components.stanley import Stanley
+from agrobot.orchestrator.component import Component, inp, out, par
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
@@ -176,7 +176,7 @@ def test_studies_without_a_loop_get_a_reason(name):
 
 def test_margins_command_prints_margins_and_writes_the_plots(tmp_path):
     out = tmp_path / "m"
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "margins", "studies/figure8_pure_pursuit.toml",
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "margins", "studies/figure8_pure_pursuit.toml",
                            "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "reading the speed loop's steady excess" in proc.stdout          # progress before the numbers
@@ -191,7 +191,7 @@ def test_margins_command_prints_margins_and_writes_the_plots(tmp_path):
 
 
 def test_margins_command_on_a_study_without_a_loop_exits_2(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "margins", "studies/field_test.toml"],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "margins", "studies/field_test.toml"],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "no closed guidance loop" in proc.stderr
@@ -210,7 +210,7 @@ def test_margins_of_a_loop_with_an_unknown_component_exit_2(tmp_path):
 def test_margins_of_a_discrete_loop_by_hand():
     """margins_of on a loop whose margins are known in closed form: L(z) = k / (z (z - 1)) at
     T = 0.1 s, k = 0.2 (an integrator and a one-sample delay)."""
-    from analysis.loop_models import OpenLoop
+    from agrobot.analysis.loop_models import OpenLoop
 
     T, k = 0.1, 0.2
     # G = -L: x1+ = x1 + w (integrator), x2+ = x1 (one-sample delay), z = -k x2
@@ -235,7 +235,7 @@ def test_gain_margin_where_the_loop_is_real_at_zero_or_nyquist_frequency(pole, s
     the Nyquist frequency (pole -0.5: L(-1) = +0.4, so with sign -1 L(-1) = -0.4) without crossing it
     anywhere else. Closing w = k z: the pole moves to pole + 0.2 k sign, which reaches the unit circle at
     k = 2.5, the gain margin 1 / 0.4."""
-    from analysis.loop_models import OpenLoop
+    from agrobot.analysis.loop_models import OpenLoop
 
     T = 0.1
     loop = OpenLoop(np.array([[pole]]), np.array([[1.0]]), np.array([[0.2 * sign]]), np.zeros((1, 1)), T)

@@ -7,14 +7,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from analysis.component_models import (gps_sensor, pose_ekf, steering_hydraulics, yaw_plant, yaw_rate_mpc,
+from agrobot.analysis.component_models import (gps_sensor, pose_ekf, steering_hydraulics, yaw_plant, yaw_rate_mpc,
                                        yaw_rate_notch)
-from analysis.loop_blocks import Block, OperatingPoint
-from analysis.loop_models import network_of
-from components.kinematic_tracker import TRACKER_INPUTS, KinematicTracker
-from components.pure_pursuit import PurePursuit
-from components.stanley import Stanley
-from orchestrator.study import Study
+from agrobot.analysis.loop_blocks import Block, OperatingPoint
+from agrobot.analysis.loop_models import network_of
+from agrobot.components.kinematic_tracker import TRACKER_INPUTS, KinematicTracker
+from agrobot.components.pure_pursuit import PurePursuit
+from agrobot.components.stanley import Stanley
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -79,7 +79,7 @@ def test_paper_law_and_look_ahead_gains_by_hand():
 def test_field_route_linearisation_against_its_projection(tmp_path):
     """On the route's first (straight, east-bound) leg the CG moved north by +-1 mm changes
     cross_track by as much and leaves the reference the tracker reads unmoved."""
-    from components.field_route import FieldRoute
+    from agrobot.components.field_route import FieldRoute
 
     field = tmp_path / "plot.wkt"
     field.write_text("POLYGON ((0 0, 100 0, 100 60, 0 60, 0 0))")
@@ -108,7 +108,7 @@ def test_field_route_linearisation_against_its_projection(tmp_path):
 def test_steering_block_is_the_hydraulics_step_without_its_dead_bands():
     """With the dead bands, the quantisation and the bounds out of the way the hydraulics are
     linear: the block (substeps lifted, 30 ms command delay) reproduces them to round-off."""
-    from components.steering_hydraulics import SteeringHydraulics
+    from agrobot.components.steering_hydraulics import SteeringHydraulics
 
     params = {"deadband": 0.0, "potentiometer_resolution": 0.0, "quantization_guard": 0, "command_delay": 0.03}
     comp = SteeringHydraulics("steering", params)
@@ -128,7 +128,7 @@ def test_steering_block_is_the_hydraulics_step_without_its_dead_bands():
 def test_yaw_plant_block_against_the_plant_on_a_straight(model):
     """Small wheel angles about a straight at 2 m/s: yaw rate, heading, CG and antenna north
     positions of the plant (exact ZOH yaw dynamics, midpoint pose) against the block."""
-    from components.tractor_yaw_plant import TractorYawPlant
+    from agrobot.components.tractor_yaw_plant import TractorYawPlant
 
     plant = TractorYawPlant("tractor", {"model": model, "antenna_forward": 0.5})
     plant.initialize(0.0, 0.01)
@@ -152,7 +152,7 @@ def test_yaw_plant_block_against_the_plant_on_a_straight(model):
 def test_ekf_block_against_the_filter_after_it_settles():
     """The EKF run on a straight until its covariance settles, then fed small random GPS north
     offsets and wheel angles: its R, heading and CG match the steady-state block."""
-    from components.pose_ekf import PoseEKF
+    from agrobot.components.pose_ekf import PoseEKF
 
     ekf = PoseEKF("ekf", {"x0": 0.0, "y0": 0.0, "psi0": 0.0})
     ekf.initialize(0.0, 0.05)
@@ -176,7 +176,7 @@ def test_ekf_block_against_the_filter_after_it_settles():
 @pytest.mark.parametrize("model_input", ["measured", "command"])
 def test_mpc_block_equals_the_qp_mpc_while_no_constraint_is_active(model_input):
     """Small signals (no bound active): the block gives the QP controller's commands."""
-    from components.yaw_rate_mpc import YawRateMPC
+    from agrobot.components.yaw_rate_mpc import YawRateMPC
 
     mpc = YawRateMPC("mpc", {"model_input": model_input})
     mpc.initialize(0.0, 0.05)
@@ -193,8 +193,8 @@ def test_mpc_block_equals_the_qp_mpc_while_no_constraint_is_active(model_input):
 
 
 def test_notch_and_gps_latency_blocks_against_their_components():
-    from components.gps_sensor import GPSSensor
-    from components.yaw_rate_notch import YawRateNotch
+    from agrobot.components.gps_sensor import GPSSensor
+    from agrobot.components.yaw_rate_notch import YawRateNotch
 
     notch = YawRateNotch("n", {"frequency": 10.0, "notch_damping": 0.05, "pole_damping": 0.5})
     notch.initialize(0.0, 0.05)
@@ -261,8 +261,8 @@ def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
     after 200 s is that close to its settled gains)."""
     import copy
 
-    from analysis.component_models import INS_INPUTS, INS_OUTPUTS, ins_ekf
-    from components.ins_ekf import INSEKF
+    from agrobot.analysis.component_models import INS_INPUTS, INS_OUTPUTS, ins_ekf
+    from agrobot.components.ins_ekf import INSEKF
 
     dt, every = 0.01, 5
     ekf = INSEKF("ekf", {"x0": 0.0, "y0": 0.0, "psi0": 0.0, **params})
@@ -306,8 +306,8 @@ def test_imu_block_is_the_jacobian_of_its_step():
     left specific force and roll over 3 steps for each input against the block."""
     import copy
 
-    from analysis.component_models import imu_sensor
-    from components.imu_sensor import IMUSensor
+    from agrobot.analysis.component_models import imu_sensor
+    from agrobot.components.imu_sensor import IMUSensor
 
     zero = {k: 0.0 for k in ("gyro_noise_psd", "gyro_bias_std", "gyro_bias_instability", "accel_noise_psd",
                              "accel_bias_std", "attitude_bias_std", "attitude_noise_std")}

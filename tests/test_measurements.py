@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from measurements import CANONICAL, COLUMNS, LogError, read_log, resample, split
+from agrobot.measurements import CANONICAL, COLUMNS, LogError, read_log, resample, split
 
 
 def log(n=400, h=0.05, jitter=0.0, seed=0):

@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.build import build_system
-from orchestrator.engine import RunError, Simulation
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import StudyError, load_study, parse_study
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import RunError, Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import StudyError, load_study, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -187,7 +187,7 @@ def test_failure_mid_run_keeps_recorded_results(tmp_path):
 def test_cli_reports_bad_study_without_traceback(tmp_path, edit, words):
     bad = tmp_path / "bad.toml"
     bad.write_text(edit((ROOT / "studies/figure8.toml").read_text()))
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(bad), "--out", str(tmp_path / "o")],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(bad), "--out", str(tmp_path / "o")],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
@@ -198,7 +198,7 @@ def test_cli_reports_bad_study_without_traceback(tmp_path, edit, words):
 
 
 def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(ROOT / "studies/figure8.toml"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies/figure8.toml"),
                            "--out", str(tmp_path), "--set", "study.stop_time=5"],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
@@ -208,7 +208,7 @@ def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_pat
 
 
 def test_infinite_times_are_refused_with_the_field_named(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(ROOT / "studies" / "figure8.toml"),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies" / "figure8.toml"),
                            "--out", str(tmp_path / "o"), "--set", "study.stop_time=inf"], capture_output=True,
                           text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
@@ -218,7 +218,7 @@ def test_infinite_times_are_refused_with_the_field_named(tmp_path):
 def test_result_files_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
     import os
 
-    from orchestrator.results import write_json
+    from agrobot.orchestrator.results import write_json
 
     mask = os.umask(0)
     os.umask(mask)

@@ -16,9 +16,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from fields import FieldError, read_fields
-from measurements.raw_nmea import read_nmea_file
-from measurements.recording import ImportOptions, import_recording
+from agrobot.fields import FieldError, read_fields
+from agrobot.measurements.raw_nmea import read_nmea_file
+from agrobot.measurements.recording import ImportOptions, import_recording
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
@@ -29,7 +29,7 @@ IAM = REAL / "iam_field_open_autonomous_tractor"
 
 
 def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
                           cwd=ROOT, timeout=300)
 
 
@@ -123,7 +123,7 @@ def write_bag(path: Path, kind: str, epochs: pd.DataFrame, receive_delay: float 
     from rosbags.rosbag2 import StoragePlugin, Writer as W2
     from rosbags.typesys import Stores, get_typestore
 
-    from measurements.rosbag import typestore
+    from agrobot.measurements.rosbag import typestore
 
     yaw = 0.2 * np.sin(0.1 * (epochs["utc"].to_numpy() - epochs["utc"].iloc[0]))     # a gyro's reading, rad/s
     if kind == "ros1":
@@ -200,7 +200,7 @@ def test_any_topic_field_by_signal_and_bad_bags_are_named(bags, tmp_path):
 
 # --- ISO 11783-10 ----------------------------------------------------------------------------------------
 def test_every_binary_time_log_is_read_to_its_last_byte():
-    from measurements.isoxml_log import read_header, read_timelog
+    from agrobot.measurements.isoxml_log import read_header, read_timelog
 
     heads = sorted(ISOXML.glob("TLG*.xml"))
     assert len(heads) == 21
@@ -390,7 +390,7 @@ def test_geojson_wkt_and_isoxml_guidance_patterns_and_bad_field_files(tmp_path):
 def test_the_test_fields_road_points_agree_in_both_their_coordinate_columns():
     """road_boundary_points.csv gives each point twice: latitude/longitude and the plane-rectangular
     zone IX metres (x east, y north); the reader's projection of the metres must land on the degrees."""
-    from fields.readers import Coordinates
+    from agrobot.fields.readers import Coordinates
 
     table = pd.read_csv(IAM / "datasets" / "iam_field" / "road_boundary_points.csv")
     table = table[(table["latitude"] != 0) | (table["longitude"] != 0)]

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
-from diagnosis.pipeline import diagnose
-from measurements.truth_tractor import make_log
+from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
+from agrobot.diagnosis.pipeline import diagnose
+from agrobot.measurements.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parents[1]
 CAR = ROOT / "studies" / "passenger_car.toml"
@@ -42,7 +42,7 @@ BO_ 344 ENGINE_DATA: 8 ECU
 
 
 def cli(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
                           cwd=ROOT, timeout=300)
 
 
@@ -128,8 +128,8 @@ def test_float32_positions_are_named_as_the_limit_of_the_position_stage(tmp_path
 
 
 def test_the_passenger_car_study_runs_at_highway_speed(tmp_path):
-    from orchestrator.runner import run_study
-    from orchestrator.study import Study
+    from agrobot.orchestrator.runner import run_study
+    from agrobot.orchestrator.study import Study
 
     f = run_study(Study.load(CAR, ["study.stop_time=70"]), None, plots=False).frame
     v = f["plan.speed_cmd"].to_numpy()
@@ -160,9 +160,9 @@ def test_identification_of_the_car_matches_its_physical_model(tmp_path):
     """studies/passenger_car_identification.toml: the paper's multisine experiment on the car at
     20 and 30 m/s; the RLF fit against the RLF transfer function of the car's own numbers, over
     the excited band (what the data can speak for)."""
-    from components.models.yaw_dynamics import TractorParameters, transfer_function
-    from identification.pipeline import identify_study
-    from orchestrator.study import Study
+    from agrobot.components.models.yaw_dynamics import TractorParameters, transfer_function
+    from agrobot.identification.pipeline import identify_study
+    from agrobot.orchestrator.study import Study
 
     study = Study.load(ROOT / "studies" / "passenger_car_identification.toml",
                        ["identification.realisations=2", "identification.periods=3"])

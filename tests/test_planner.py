@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 from shapely.geometry import Polygon
 
-from components.field_route import FieldRoute, to_mission
-from fields import FieldError
-from fields.field import Field
-from fields.planner import HEADLAND, SWATH, TRANSIT, TURN, Settings, plan
-from fields.planner import objectives, route_order
-from fields.planner.curves import connect
-from fields.planner.sampling import ROUTE_STEP
-from orchestrator.cli import main
+from agrobot.components.field_route import FieldRoute, to_mission
+from agrobot.fields import FieldError
+from agrobot.fields.field import Field
+from agrobot.fields.planner import HEADLAND, SWATH, TRANSIT, TURN, Settings, plan
+from agrobot.fields.planner import objectives, route_order
+from agrobot.fields.planner.curves import connect
+from agrobot.fields.planner.sampling import ROUTE_STEP
+from agrobot.orchestrator.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 FAST = dict(working_width=6.0)              # a wide implement: few swaths, quick plans
@@ -156,7 +156,7 @@ def test_the_route_component_evaluates_a_window_and_matches_a_whole_route_projec
     field = small_plan.field
     route = FieldRoute("field", {"path": "unused", "working_width": 6.0})
     route.path = small_plan.path
-    from components.field_route import RouteWindow, route_frame
+    from agrobot.components.field_route import RouteWindow, route_frame
 
     origin, rotation = route_frame(route.path)
     route.route = RouteWindow(route.path, origin, rotation)
@@ -282,12 +282,12 @@ def test_plan_refuses_bad_values_with_exit_2_naming_them(tmp_path, capsys, monke
 
 # --- the files, as one set ---------------------------------------------------------------------------------------
 def _plan_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", "plan", *args], cwd=ROOT, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", "plan", *args], cwd=ROOT, capture_output=True,
                           text=True, timeout=300)
 
 
 def test_plan_writes_its_files_as_one_set_and_an_interrupted_plan_keeps_the_earlier(tmp_path, capsys, monkeypatch):
-    from fields.planner import export
+    from agrobot.fields.planner import export
 
     source = write_geojson(tmp_path / "two.geojson", {"east": rect_ring(120.0, 80.0),
                                                     "west": [[-200.0, 0.0], [-60.0, 0.0], [-60.0, 90.0], [-200.0, 90.0]]})

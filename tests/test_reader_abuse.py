@@ -26,7 +26,7 @@ ISOXML = DATA / "isoxml_dev4ag_timelogs"
 
 
 def cli(*args, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
                           cwd=ROOT, timeout=timeout)
 
 
@@ -99,7 +99,7 @@ def _pynmeagps_fixes(path: Path) -> list[tuple[float, float, float, int]]:
 
 
 def test_the_streamed_nmea_reader_agrees_with_pynmeagps_on_every_real_capture():
-    from measurements.raw_nmea import read_nmea_file
+    from agrobot.measurements.raw_nmea import read_nmea_file
 
     for path in sorted(NMEA.glob("*.log")):
         rec = read_nmea_file(path)
@@ -207,7 +207,7 @@ def _square(x: float, y: float, side: float = 0.001) -> list:
 
 
 def test_parcels_of_one_feature_and_repeated_names_get_distinct_names(tmp_path):
-    from fields import read_fields
+    from agrobot.fields import read_fields
 
     parcels = {"type": "Feature", "properties": {"name": "f0"},
                "geometry": {"type": "MultiPolygon", "coordinates": [[_square(7 + 0.002 * i, 51)] for i in range(50)]}}

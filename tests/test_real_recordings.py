@@ -31,7 +31,7 @@ F1_SIGNALS = ("--signal", "delta_cmd=commandData.delta[rad]", "--signal", "yaw_r
 
 
 def cli(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "orchestrator", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
                           cwd=ROOT, timeout=300)
 
 
@@ -45,7 +45,7 @@ def refused(proc, *words):
 def test_every_makers_dbc_loads_and_nothing_is_lost_unnamed():
     import cantools
 
-    from measurements.dbc import load_dbc_file
+    from agrobot.measurements.dbc import load_dbc_file
 
     files = sorted(OPENDBC.rglob("*.dbc"))
     assert len(files) == 118
@@ -64,7 +64,7 @@ def test_every_makers_dbc_loads_and_nothing_is_lost_unnamed():
 
 
 def test_repairs_are_named_and_names_beginning_with_a_digit_keep_their_own_name():
-    from measurements.dbc import load_dbc_file
+    from agrobot.measurements.dbc import load_dbc_file
 
     db, report = load_dbc_file(OPENDBC / "dbc" / "mazda_2017.dbc")
     assert "2017_5" in [m.name for m in db.messages]
@@ -88,7 +88,7 @@ def toyota_log(tmp_path_factory):
     """A candump of a Toyota's steering-angle sensor and kinematics at 50 Hz on a boot-time clock:
     a handwheel angle of 90 sin(0.5 t) deg sent as 1.5-deg coarse steps plus a 0.1-deg fraction,
     a yaw rate of 20 sin(0.3 t) deg/s (outside the DBC's declared [0|65535]: a signed value)."""
-    from measurements.dbc import load_dbc_file
+    from agrobot.measurements.dbc import load_dbc_file
 
     db, _ = load_dbc_file(TOYOTA)
     steer, kin = db.get_message_by_name("STEER_ANGLE_SENSOR"), db.get_message_by_name("KINEMATICS")
@@ -146,8 +146,8 @@ def test_can_list_and_bad_dbc_signal_and_unit_are_named(toyota_log, tmp_path):
 
 
 def test_extended_frames_on_two_buses_and_a_multiplexed_message(tmp_path):
-    from measurements.dbc import load_dbc_file
-    from measurements.raw_can import read_can_file
+    from agrobot.measurements.dbc import load_dbc_file
+    from agrobot.measurements.raw_can import read_can_file
 
     gm = OPENDBC / "dbc" / "gm_global_a_lowspeed.dbc"
     db, _ = load_dbc_file(gm)
@@ -255,7 +255,7 @@ def test_headerless_step_tests_take_their_time_from_another_table(tmp_path):
 
 
 def test_a_tractor_loggers_csv_with_dates_kmh_and_float32_positions(tmp_path):
-    from measurements.raw_nmea import read_nmea_file
+    from agrobot.measurements.raw_nmea import read_nmea_file
 
     e = read_nmea_file(NMEA / "haicom-305N.log").epochs
     e = e[e["quality"] > 0].reset_index(drop=True)
@@ -330,7 +330,7 @@ def test_a_bag_with_only_rosout_and_a_custom_topic_is_listed_and_read_with_a_dec
 
 # --- fields --------------------------------------------------------------------------------------------
 def test_kml_kmz_and_isoxml_v3_give_the_same_field_as_the_geojson(tmp_path):
-    from fields import read_fields
+    from agrobot.fields import read_fields
 
     real = read_fields(REAL / "fields2cover_data" / "test.json")[0]
     lonlat = real.to_geodetic(np.asarray(real.boundary.exterior.coords))
@@ -357,10 +357,10 @@ def test_kml_kmz_and_isoxml_v3_give_the_same_field_as_the_geojson(tmp_path):
 
 
 def test_agopengps_names_in_any_case_and_a_folder_names_the_field_it_cannot_read(tmp_path):
-    from fields.readers import read_folder
+    from agrobot.fields.readers import read_folder
     from tests.test_other_data import write_agopengps
 
-    from fields import read_fields
+    from agrobot.fields import read_fields
 
     real = next(f for f in read_fields(ISOXML / "PARTFIELDS_TASKDATA.XML") if f.name == "NM_Oxted_NullMeridian_Hole")
     good = write_agopengps(tmp_path / "farm" / "Oxted", real, [])
@@ -380,9 +380,9 @@ def test_a_harvesters_track_becomes_a_field_the_planner_replans(tmp_path):
     assert proc.returncode == 0, proc.stderr
     data = json.loads((tmp_path / "f" / "fields.json").read_text())["fields"][0]
     assert data["area_ha"] > 0.5 and len(data["lines"]) >= 10
-    from fields.track import field_from_track
-    from measurements.isoxml_log import read_timelog
-    from measurements.recording import positions
+    from agrobot.fields.track import field_from_track
+    from agrobot.measurements.isoxml_log import read_timelog
+    from agrobot.measurements.recording import positions
 
     t, lat, lon, report = positions(ISOXML / "TLG00002.xml")
     table, _ = read_timelog(ISOXML / "TLG00002.xml")

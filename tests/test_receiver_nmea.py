@@ -17,7 +17,7 @@ import time
 
 import pytest
 
-from components.hardware.nmea import NMEAStream, Position, PositionError, Velocity, parse_epoch, receiver_sentences
+from agrobot.components.hardware.nmea import NMEAStream, Position, PositionError, Velocity, parse_epoch, receiver_sentences
 
 LAT, LON = math.radians(51.98), math.radians(5.66)
 
@@ -51,7 +51,7 @@ def test_every_sentence_round_trips_with_time_date_errors_and_talker():
 
 
 def test_the_input_side_reads_common_receivers_and_ignores_the_rest_quietly():
-    from components.nmea_gps import NMEAGPS
+    from agrobot.components.nmea_gps import NMEAGPS
 
     stream = NMEAStream()
     data = (receiver_sentences(parse_epoch("2026-05-01T08:00:00Z"), LAT, LON, 0.0, 1.0, 0.0, talker="GL",
@@ -62,7 +62,7 @@ def test_the_input_side_reads_common_receivers_and_ignores_the_rest_quietly():
             + receiver_sentences(parse_epoch("2026-05-01T08:00:00Z"), LAT, LON, 0.0, 1.0, 0.0, sentences=("ZDA",)))
     gps = NMEAGPS("gps", {"datum_latitude": LAT, "datum_longitude": LON})
     gps.stream = stream
-    gps.frame = __import__("components.hardware.nmea", fromlist=["LocalFrame"]).LocalFrame(LAT, LON, 0.0)
+    gps.frame = __import__("agrobot.components.hardware.nmea", fromlist=["LocalFrame"]).LocalFrame(LAT, LON, 0.0)
     gps.last_good = 0.0
     gps.apply(0.1, stream.feed(data))
     c = stream.counters
@@ -78,9 +78,9 @@ def test_the_input_side_reads_common_receivers_and_ignores_the_rest_quietly():
 
 
 def test_bad_server_settings_are_named():
-    from orchestrator.component import ComponentError
+    from agrobot.orchestrator.component import ComponentError
 
-    from components.nmea_server import NMEAServer
+    from agrobot.components.nmea_server import NMEAServer
 
     for params, words in (({"talker": "XX"}, "talker 'XX'"), ({"sentences": "GGA,FOO"}, "sentences 'GGA,FOO'"),
                           ({"epoch": "yesterday"}, "epoch 'yesterday'"),
@@ -103,8 +103,8 @@ def _pty_pair():
 def test_nmea_goes_out_and_comes_in_over_a_serial_line():
     """The server writes on a pty's serial device; what arrives on the other end is written into a
     second pty, whose device the receiver component reads with pyserial."""
-    from components.nmea_gps import NMEAGPS
-    from components.nmea_server import NMEAServer
+    from agrobot.components.nmea_gps import NMEAGPS
+    from agrobot.components.nmea_server import NMEAServer
 
     out_master, out_device, out_slave = _pty_pair()
     in_master, in_device, in_slave = _pty_pair()
@@ -144,7 +144,7 @@ def _free_port() -> int:
 @pytest.mark.skipif(shutil.which("gpsd") is None, reason="gpsd is not installed (CI installs it as root; "
                     "locally: apt-get install gpsd)")
 def test_gpsd_reads_the_emulated_receiver_with_time_speed_course_and_error():
-    from components.nmea_server import NMEAServer
+    from agrobot.components.nmea_server import NMEAServer
 
     nmea_port, gpsd_port = _free_port(), _free_port()
     server = NMEAServer("nmea", {"port": nmea_port, "datum_latitude": LAT, "datum_longitude": LON,

@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory) -> Path:
     where = tmp_path_factory.mktemp("rec") / "field"
-    res = subprocess.run([sys.executable, "-m", "orchestrator", "emulate", "studies/tractor_emulator.toml",
+    res = subprocess.run([sys.executable, "-m", "agrobot", "emulate", "studies/tractor_emulator.toml",
                           "--nmea-port", "0", "--duration", "6", "--record", str(where),
                           "--set", "can.interface=virtual", "--set", "can.channel=recording-test"],
                          cwd=ROOT, capture_output=True, text=True, timeout=120)
@@ -24,7 +24,7 @@ def recording(tmp_path_factory) -> Path:
 
 
 def test_the_nmea_recording_has_host_stamps_and_parses(recording):
-    from components.hardware.nmea import NMEAStream, Position
+    from agrobot.components.hardware.nmea import NMEAStream, Position
 
     lines = (recording / "gps.nmea").read_text().splitlines()
     stamps = [float(line.split(" ", 1)[0]) for line in lines]
@@ -40,7 +40,7 @@ def test_the_nmea_recording_has_host_stamps_and_parses(recording):
 def test_the_can_recording_is_a_candump_log_the_dbc_decodes(recording):
     import can
 
-    from components.hardware.can_frames import load_dbc
+    from agrobot.components.hardware.can_frames import load_dbc
 
     db = load_dbc("")
     frames = list(can.LogReader(str(recording / "can.log")))
@@ -58,7 +58,7 @@ def test_the_can_recording_is_a_candump_log_the_dbc_decodes(recording):
 def test_record_into_a_file_is_refused_by_name(tmp_path):
     target = tmp_path / "a_file"
     target.write_text("x")
-    res = subprocess.run([sys.executable, "-m", "orchestrator", "emulate", "studies/tractor_emulator.toml",
+    res = subprocess.run([sys.executable, "-m", "agrobot", "emulate", "studies/tractor_emulator.toml",
                           "--nmea-port", "0", "--duration", "1", "--record", str(target)],
                          cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert res.returncode == 2 and "--record" in res.stderr and "is a file" in res.stderr

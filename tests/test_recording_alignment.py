@@ -101,8 +101,8 @@ def _lag(t: np.ndarray, x: np.ndarray, y: np.ndarray, max_lag: float = 0.3, step
 
 
 def _imported(folder: Path):
-    from measurements.recording import ImportOptions, import_recording
-    from measurements.signals import parse_signal
+    from agrobot.measurements.recording import ImportOptions, import_recording
+    from agrobot.measurements.signals import parse_signal
 
     return import_recording(folder, ImportOptions(signals=[parse_signal(s) for s in SIGNALS]))
 
@@ -126,8 +126,8 @@ def test_the_importer_keeps_command_and_yaw_rate_aligned_across_clocks(recording
 
 
 def test_the_identification_finds_the_delay_through_the_importer(recording):
-    from identification.ordinary_driving import identify_driving
-    from orchestrator.study import Study
+    from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.orchestrator.study import Study
 
     folder, _ = recording
     log, _ = _imported(folder)
@@ -152,7 +152,7 @@ def _circling(yaw_peak: float, with_pose: bool = True, to_degrees: bool = False)
 
 @pytest.mark.parametrize("with_pose", [True, False])
 def test_a_fast_yaw_rate_is_read_as_rad_per_s_when_the_motion_says_so_and_degrees_are_still_named(with_pose):
-    from measurements.log import LogError, check_log
+    from agrobot.measurements.log import LogError, check_log
 
     # 3.2 rad/s at 2-3 m/s: a 0.64 m radius, 9.5 m/s2, as a 1:10 car drives (the FrictionMaps DS4 peak is 3.1 rad/s)
     fast = check_log(_circling(3.2, with_pose), "fast car", ("t",))
@@ -164,8 +164,8 @@ def test_a_fast_yaw_rate_is_read_as_rad_per_s_when_the_motion_says_so_and_degree
 
 
 def test_a_fast_yaw_rate_in_a_log_with_gaps_is_judged_on_its_longest_stretch(tmp_path):
-    from identification.from_log import _read
-    from measurements.log import LogError
+    from agrobot.identification.from_log import _read
+    from agrobot.measurements.log import LogError
 
     frame = _circling(3.2)
     holed = frame.drop(index=range(1000, 1100)).reset_index(drop=True)      # a 2 s hole at t = 20 s

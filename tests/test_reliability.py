@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-CMD = [sys.executable, "-m", "orchestrator"]
+CMD = [sys.executable, "-m", "agrobot"]
 
 FAILING = """
 [study]
@@ -228,8 +228,8 @@ def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
     (lambda f: f.assign(t=f["t"] + np.random.default_rng(0).uniform(-0.002, 0.002, len(f))), ["unevenly", "--resample"]),
 ])
 def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
-    from measurements import LogError, read_log
-    from measurements.truth_tractor import make_log
+    from agrobot.measurements import LogError, read_log
+    from agrobot.measurements.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     path = tmp_path / "log.csv"
@@ -242,8 +242,8 @@ def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
 
 
 def test_a_jittered_log_is_diagnosed_with_resample(tmp_path):
-    from measurements import read_log
-    from measurements.truth_tractor import make_log
+    from agrobot.measurements import read_log
+    from agrobot.measurements.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     frame["t"] += np.random.default_rng(1).uniform(-0.002, 0.002, len(frame))
@@ -322,7 +322,7 @@ def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_pa
                                                 f'[components.gps]\ntype = "no_such_component"\n')
     (tmp_path / "bad_edit.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
                                             f'connections_remove = ["gps.x -> nowhere.x"]\n')
-    from measurements.truth_tractor import make_log
+    from agrobot.measurements.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     frame.assign(delta=np.degrees(frame["delta"])).to_csv(tmp_path / "degrees.csv", index=False)
@@ -341,8 +341,8 @@ def test_sweep_plots_label_every_axis_with_its_unit(tmp_path, monkeypatch):
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from orchestrator.study import Study
-    from orchestrator.sweep import sweep_plots
+    from agrobot.orchestrator.study import Study
+    from agrobot.orchestrator.sweep import sweep_plots
 
     captured = []
     monkeypatch.setattr(Figure, "savefig", lambda self, *a, **k: captured.append(self))
@@ -359,7 +359,7 @@ def test_sweep_plots_label_every_axis_with_its_unit(tmp_path, monkeypatch):
 def test_the_documented_metric_table_uses_the_printed_names():
     import re
 
-    from analysis.figure8 import METRICS
+    from agrobot.analysis.figure8 import METRICS
 
     text = (ROOT / "docs" / "guidance-loop.md").read_text()
     table = text.split("## What the shipped study gives", 1)[1].split("\n\n", 3)[2]
@@ -377,8 +377,8 @@ def test_identification_works_on_logs_at_10_20_50_and_100_hz(tmp_path):
     """The same experiment logged at four rates (the command held at 20 Hz in the 50 and 100 Hz
     logs, decimated to 10 Hz): the RLF model identified from each log has the same steady-state
     gain and the same slowest pole as from the 20 Hz log."""
-    from identification.pipeline import identify_log, identify_study
-    from orchestrator.study import Study
+    from agrobot.identification.pipeline import identify_log, identify_study
+    from agrobot.orchestrator.study import Study
 
     logs = {}
     for rate in (20, 50, 100):
@@ -408,9 +408,9 @@ def test_identification_works_on_logs_at_10_20_50_and_100_hz(tmp_path):
 
 def test_sigterm_landing_inside_a_subsystem_still_ends_the_run_as_terminated(tmp_path, monkeypatch):
     """The interrupt raised while a composite steps its inner system keeps its kind (SIGTERM: exit 143)."""
-    from orchestrator.errors import Interrupted, Terminated
-    from orchestrator.runner import run_study
-    from orchestrator.study import parse_study
+    from agrobot.orchestrator.errors import Interrupted, Terminated
+    from agrobot.orchestrator.runner import run_study
+    from agrobot.orchestrator.study import parse_study
     from tests import toy_components
 
     class TerminatedAt(toy_components.FailAt):

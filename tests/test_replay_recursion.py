@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import diagnosis.replay as replay_module
-from components.models.yaw_dynamics import TractorParameters
-from diagnosis.replay import YawReplay, blocked_recursion
+import agrobot.diagnosis.replay as replay_module
+from agrobot.components.models.yaw_dynamics import TractorParameters
+from agrobot.diagnosis.replay import YawReplay, blocked_recursion
 from tests.vehicle_logs import frictionmaps_log
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.computation_delay import ComputationDelay
-from components.gps_sensor import GPSSensor
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.components.computation_delay import ComputationDelay
+from agrobot.components.gps_sensor import GPSSensor
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -101,7 +101,7 @@ def _straight_inputs(offset_left: float, heading: float = 0.0, v: float = 2.0) -
 def test_pure_pursuit_curvature_is_the_circle_through_the_goal_point():
     """R at lateral offset d, heading along the line, goal L_d ahead: kappa = -2 d / (L_d^2 + d^2)
     (the arc tangent to the heading through the goal), gamma_d = v kappa."""
-    from components.pure_pursuit import PurePursuit
+    from agrobot.components.pure_pursuit import PurePursuit
 
     pp = PurePursuit("pp", {"lookahead_min": 3.0, "lookahead_time": 0.0, "l_r": 0.4})
     d = 0.5
@@ -114,7 +114,7 @@ def test_pure_pursuit_curvature_is_the_circle_through_the_goal_point():
 
 def test_stanley_steers_by_heading_error_plus_cross_track_term():
     """delta = psi_e + atan(k e / (v_soft + v)); gamma_d = v tan(delta) / L."""
-    from components.stanley import Stanley
+    from agrobot.components.stanley import Stanley
 
     st = Stanley("st", {"k": 1.5, "v_soft": 1.0, "l_f": 1.0, "l_r": 0.4})
     st.u.update(_straight_inputs(0.0, heading=0.1))
@@ -151,9 +151,9 @@ def test_the_steering_does_not_hunt_between_potentiometer_levels():
 
 
 def test_quantization_guard_takes_only_0_or_1():
-    from orchestrator.engine import ParameterError
+    from agrobot.orchestrator.engine import ParameterError
 
-    from orchestrator.study import StudyError
+    from agrobot.orchestrator.study import StudyError
 
     with pytest.raises(StudyError, match=r"quantization_guard\)?: got 'yes', expected a number"):
         metrics("steering.quantization_guard=yes", "study.stop_time=20")
@@ -181,7 +181,7 @@ def test_the_notch_removes_its_frequency_and_passes_dc():
     to a sine at w0 settles to that gain."""
     from scipy.signal import freqz
 
-    from components.yaw_rate_notch import YawRateNotch, notch_coefficients
+    from agrobot.components.yaw_rate_notch import YawRateNotch, notch_coefficients
 
     w0, zz, zp, dt = 10.0, 0.05, 0.5, 0.05
     b, a = notch_coefficients(w0, zz, zp, dt)

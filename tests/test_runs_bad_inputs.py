@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from orchestrator.study import Study, StudyError
+from agrobot.orchestrator.study import Study, StudyError
 
 ROOT = Path(__file__).resolve().parent.parent
-CMD = [sys.executable, "-m", "orchestrator"]
+CMD = [sys.executable, "-m", "agrobot"]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
 
 
@@ -44,8 +44,8 @@ def test_a_study_file_that_is_not_utf8_is_refused_with_its_line_column_and_byte(
     ("tractor.psi0=abc", ["--set tractor.psi0=abc", "expected a number"]),
 ])
 def test_a_mistyped_set_key_is_blamed_on_the_set_item_with_the_nearest_names(item, words):
-    from orchestrator.build import build_system
-    from orchestrator.resolver import resolve
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.resolver import resolve
 
     with pytest.raises(StudyError) as err:
         build_system(resolve(Study.load(FIGURE8, [item])))
@@ -56,8 +56,8 @@ def test_a_mistyped_set_key_is_blamed_on_the_set_item_with_the_nearest_names(ite
 
 
 def test_the_same_typo_in_the_file_is_blamed_on_the_file(tmp_path):
-    from orchestrator.build import build_system
-    from orchestrator.resolver import resolve
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.resolver import resolve
 
     path = tmp_path / "typo.toml"
     path.write_text(FIGURE8.read_text().replace("lookahead", "lookahed", 1) if "lookahead" in FIGURE8.read_text()
@@ -71,7 +71,7 @@ def test_a_signal_landing_in_an_import_is_raised_when_the_import_is_over(tmp_pat
     """Raised inside an import, the interrupt could leave a C extension half initialised or be
     swallowed by a library's guarded import (the run then went on, exit 0): it waits for the
     import to end, then ends the work as Terminated (exit 143)."""
-    from orchestrator import cli, errors
+    from agrobot.orchestrator import cli, errors
 
     saved = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)}
     (tmp_path / "slow_plugin.py").write_text(

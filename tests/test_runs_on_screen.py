@@ -13,12 +13,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.key_figures import parse_bound, run_table
-from orchestrator.runner import run_study
-from orchestrator.study import load_study
+from agrobot.orchestrator.key_figures import parse_bound, run_table
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import load_study
 
 ROOT = Path(__file__).resolve().parent.parent
-CMD = [sys.executable, "-m", "orchestrator"]
+CMD = [sys.executable, "-m", "agrobot"]
 
 
 @pytest.mark.parametrize("text, op, value", [("< 0.40", "<", 0.40), (">= 0.99", ">=", 0.99), ("0", "==", 0.0),
@@ -90,8 +90,8 @@ def test_a_sweep_whose_points_all_fail_for_one_reason_exits_2_and_says_it(tmp_pa
 
 
 def test_a_sweep_ends_with_the_percentiles_of_its_key_figures_and_their_bounds(tmp_path):
-    from orchestrator.study import Study
-    from orchestrator.sweep import SweepRun, sweep_summary
+    from agrobot.orchestrator.study import Study
+    from agrobot.orchestrator.sweep import SweepRun, sweep_summary
 
     study = Study.load(ROOT / "studies" / "robustness.toml", ["sweep.samples=4", "study.stop_time=40"])
     table = SweepRun(study, tmp_path / "r").run(2, progress=False)
@@ -110,11 +110,11 @@ def test_a_sweep_ends_with_the_percentiles_of_its_key_figures_and_their_bounds(t
 def test_progress_is_told_in_the_unit_a_component_reports(monkeypatch, capsys):
     """A component reporting (done, total, unit) sets the progress line; the field route reports
     metres of its route."""
-    from orchestrator.build import build_system
-    from orchestrator.engine import Simulation
-    from orchestrator.observers import Progress
-    from orchestrator.resolver import resolve
-    from orchestrator.study import parse_study
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.engine import Simulation
+    from agrobot.orchestrator.observers import Progress
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.study import parse_study
     from tests import toy_components
 
     class Walker(toy_components.FailAt):
@@ -139,7 +139,7 @@ def test_progress_is_told_in_the_unit_a_component_reports(monkeypatch, capsys):
 
 
 def test_a_step_that_lasts_says_what_it_does_and_how_far_it_is(monkeypatch):
-    from orchestrator import observers
+    from agrobot.orchestrator import observers
 
     class Kept(io.StringIO):
         def close(self):                 # the stage closes the terminal stream it opened
@@ -162,7 +162,7 @@ def test_a_step_that_lasts_says_what_it_does_and_how_far_it_is(monkeypatch):
 
 
 def test_of_nested_steps_only_the_innermost_speaks_and_every_tool_runs_inside_one(monkeypatch):
-    from orchestrator import cli, observers
+    from agrobot.orchestrator import cli, observers
 
     class Kept(io.StringIO):
         def close(self):

@@ -13,15 +13,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.component import EndRun
-from orchestrator.errors import Interrupted, Terminated
-from orchestrator.runner import RunError, run_study
-from orchestrator.signal_table import SignalTable
-from orchestrator.study import load_study, parse_study
+from agrobot.orchestrator.component import EndRun
+from agrobot.orchestrator.errors import Interrupted, Terminated
+from agrobot.orchestrator.runner import RunError, run_study
+from agrobot.orchestrator.signal_table import SignalTable
+from agrobot.orchestrator.study import load_study, parse_study
 from tests import toy_components
 
 ROOT = Path(__file__).resolve().parent.parent
-CMD = [sys.executable, "-m", "orchestrator"]
+CMD = [sys.executable, "-m", "agrobot"]
 
 
 class EndsAt(toy_components.FailAt):
@@ -76,13 +76,13 @@ def test_a_run_stopped_in_its_analysis_keeps_its_signals_and_the_earlier_result(
     assert _status(out) == "ended"
     kept = (out / "signals.csv").read_bytes()
 
-    import analysis.figure8 as module
+    import agrobot.analysis.figure8 as module
 
     def stopped(frame, study):
         raise Terminated()
 
     monkeypatch.setattr(module, "metrics", stopped)
-    study = _toy(tmp_path, "FailAt", 5.0).with_values({"study.analysis": "analysis.figure8"})
+    study = _toy(tmp_path, "FailAt", 5.0).with_values({"study.analysis": "agrobot.analysis.figure8"})
     with pytest.raises(Interrupted) as err:
         run_study(study, out)
     assert err.value.exit_status == 143 and "in the analysis" in str(err.value)
@@ -128,7 +128,7 @@ def test_the_streamed_signals_read_by_column_are_the_numbers_of_the_run_in_memor
     assert np.isfinite(folder.metrics["euclid_max_straight"]) and same(folder.metrics) == same(memory.metrics)
     # the analysis of a fresh table reads a few columns, never the whole width
     table = SignalTable(tmp_path / "f8" / "signals.parquet")
-    import analysis.figure8 as module
+    import agrobot.analysis.figure8 as module
 
     module.metrics(table, study)
     assert 5 <= len(table._columns.read) < len(whole.columns) / 2
@@ -156,8 +156,8 @@ def test_a_signal_table_answers_as_the_data_frame_does(tmp_path, fmt):
 def test_the_recorders_hold_at_most_two_blocks_while_a_long_run_streams(tmp_path, monkeypatch):
     """Memory flat in the run's length: the rows in memory never exceed two blocks, whatever the
     number of steps; the file gets one row group per block."""
-    import orchestrator.runner as runner
-    from orchestrator.engine import Simulation
+    import agrobot.orchestrator.runner as runner
+    from agrobot.orchestrator.engine import Simulation
 
     monkeypatch.setattr(runner, "CHUNK_STEPS", 200)
     held = []

@@ -6,13 +6,13 @@ import math
 import numpy as np
 import pytest
 
-from components.gps_sensor import GPSSensor
-from components.pose_ekf import PoseEKF
-from components.speed_kf import SpeedKF
-from orchestrator.build import build_system, component_seed
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import parse_study
+from agrobot.components.gps_sensor import GPSSensor
+from agrobot.components.pose_ekf import PoseEKF
+from agrobot.components.speed_kf import SpeedKF
+from agrobot.orchestrator.build import build_system, component_seed
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import parse_study
 
 
 def gps(seed=1, **params):

@@ -11,12 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from components.models.yaw_dynamics import TractorParameters
-from components.tractor_yaw_plant import TractorYawPlant
-from orchestrator.build import build_system
-from orchestrator.engine import Simulation
-from orchestrator.resolver import resolve
-from orchestrator.study import Study, StudyError, parse_study
+from agrobot.components.models.yaw_dynamics import TractorParameters
+from agrobot.components.tractor_yaw_plant import TractorYawPlant
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study, StudyError, parse_study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -50,7 +50,7 @@ def test_set_overrides_go_through_the_same_path_as_with_values():
 
 def test_resolved_parameters_accept_units_wherever_they_are_read(tmp_path):
     """The speed-sweep analysis used to fail on C_f = "8000 N/rad", which the study loader accepts."""
-    from analysis.speed_sweep import tractor_parameters
+    from agrobot.analysis.speed_sweep import tractor_parameters
 
     study = Study.load(FIGURE8, ['tractor.C_f="8000 N/rad"', 'tractor.l_r="40 cm"'])
     p = tractor_parameters(study)
@@ -172,12 +172,12 @@ def test_the_orchestrator_knows_nothing_of_tractors_and_imports_nothing_above_it
 
 
 def test_tools_register_their_commands_and_tables():
-    from orchestrator.registry import registry
+    from agrobot.orchestrator.registry import registry
 
     reg = registry()
     assert {"identify", "diagnose", "export-controller", "emulate"} <= set(reg.commands)
     assert "identification" in reg.sections and "components" in reg.component_packages
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "--help"], capture_output=True, text=True, cwd=ROOT)
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "--help"], capture_output=True, text=True, cwd=ROOT)
     for name in ("run", "sweep", "identify", "diagnose", "export-controller", "emulate"):
         assert name in proc.stdout
 
@@ -185,7 +185,7 @@ def test_tools_register_their_commands_and_tables():
 def test_an_unknown_top_level_table_is_refused_by_name(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(FIGURE8.read_text() + '\n[identifcation]\nspeeds = [1.0]\n')
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "run", str(bad), "--out", str(tmp_path / "o")],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(bad), "--out", str(tmp_path / "o")],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "unknown table 'identifcation'" in proc.stderr and "identification" in proc.stderr

@@ -13,9 +13,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from orchestrator.runner import run_study
-from orchestrator.study import Study, StudyError, load_study
-from orchestrator.sweep import SweepRun, expand
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study, StudyError, load_study
+from agrobot.orchestrator.sweep import SweepRun, expand
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = "study.stop_time=20.0"
@@ -73,7 +73,7 @@ def test_killed_sweep_resumes_without_rerunning_finished_points(tmp_path):
     body = '[sweep]\nseeds = [3]\n[sweep.parameters]\n"reference.speed" = [1.0, 1.5, 2.0, 2.5]\n'
     path = sweep_file(tmp_path, body)
     out = tmp_path / "interrupted"
-    cmd = [sys.executable, "-m", "orchestrator", "sweep", str(path), "--out", str(out), "--workers", "1",
+    cmd = [sys.executable, "-m", "agrobot", "sweep", str(path), "--out", str(out), "--workers", "1",
            "--set", SHORT, "--no-progress", "--no-plots"]
     proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
@@ -113,7 +113,7 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
 def test_bad_sweeps_fail_before_running_anything(tmp_path, body, words):
     path = sweep_file(tmp_path, body)
     out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "sweep", str(path), "--out", str(out),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "sweep", str(path), "--out", str(out),
                            "--no-progress"], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     for w in words:
@@ -168,7 +168,7 @@ def test_bad_monte_carlo_sections_are_refused_by_field(tmp_path, body, words):
 def test_robustness_study_runs_on_the_sweep_machinery_and_summarises(tmp_path):
     """A short version of studies/robustness.toml (6 draws, 40 s): every point completes, the
     summary counts them and its percentiles match the table."""
-    from analysis.robustness import summarise
+    from agrobot.analysis.robustness import summarise
 
     study = Study.load(ROOT / "studies" / "robustness.toml", ["sweep.samples=6", "study.stop_time=40"])
     table = SweepRun(study, tmp_path / "mc").run(2, progress=False)
@@ -176,7 +176,7 @@ def test_robustness_study_runs_on_the_sweep_machinery_and_summarises(tmp_path):
     s = summarise(table)
     assert s["runs"] == 6 and s["euclid_max_curved"]["max"] == pytest.approx(table["euclid_max_curved"].max())
     assert 0.0 <= s["within_bounds"] <= 1.0
-    from orchestrator.sweep import sweep_plots
+    from agrobot.orchestrator.sweep import sweep_plots
 
     files = sweep_plots(study, table, tmp_path / "mc" / "plots")
     assert {p.name for p in files} >= {"max_error_vs_delay.png", "robustness.json"}

@@ -10,8 +10,8 @@ import pytest
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from components.models.yaw_dynamics import TractorParameters, state_space
-from components.tractor_yaw_plant import TractorYawPlant, UnstableModelWarning
+from agrobot.components.models.yaw_dynamics import TractorParameters, state_space
+from agrobot.components.tractor_yaw_plant import TractorYawPlant, UnstableModelWarning
 
 P = TractorParameters()
 SPEEDS = [0.5, 1.0, 2.0, 3.0]
@@ -198,7 +198,7 @@ def test_rlfr_by_default_is_the_stable_set_with_the_identified_poles():
     identified model's (-0.62 +- 9.95j, -5.13 +- 14.44j) and which decays at every speed."""
     import warnings
 
-    from components.models.paper_models import G_RLFR
+    from agrobot.components.models.paper_models import G_RLFR
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", UnstableModelWarning)

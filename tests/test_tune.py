@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from analysis.margins_simulation import simulated_run
-from analysis.tune import Targets, propose
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import Study
+from agrobot.analysis.margins_simulation import simulated_run
+from agrobot.analysis.tune import Targets, propose
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -62,7 +62,7 @@ def test_tuned_gains_for_a_perturbed_tractor_hold_their_margins_and_the_bounds(p
 
 def test_tune_writes_a_small_study_that_extends_the_original(perturbed, tmp_path):
     out = tmp_path / "tuned.toml"
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "tune", str(perturbed), "--out", str(out),
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "tune", str(perturbed), "--out", str(out),
                            "--no-simulation", "--delay-margin", "0.2", "--grid", "0.5"], cwd=ROOT, capture_output=True, text=True,
                           timeout=900)
     assert proc.returncode == 0, proc.stderr
@@ -74,7 +74,7 @@ def test_tune_writes_a_small_study_that_extends_the_original(perturbed, tmp_path
 
 
 def test_identified_model_becomes_plant_and_controller_model(tmp_path):
-    from analysis.tune import identified_values
+    from agrobot.analysis.tune import identified_values
 
     ident = tmp_path / "identification.json"
     ident.write_text(json.dumps({"models": {"second_order": {"num": [250.0], "den": [1.0, 9.0, 220.0]}}}))
@@ -94,7 +94,7 @@ def test_identified_model_becomes_plant_and_controller_model(tmp_path):
 def test_tune_bad_options_exit_2_with_a_message(tmp_path, args, words):
     (tmp_path / "ident.json").write_text(json.dumps({"models": {"second_order": {"num": [291.0], "den": [1, 10.9, 242]}}}))
     argv = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    proc = subprocess.run([sys.executable, "-m", "orchestrator", "tune", "studies/figure8.toml", *argv, "--no-simulation"],
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "tune", "studies/figure8.toml", *argv, "--no-simulation"],
                           cwd=ROOT, capture_output=True, text=True, timeout=900)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     for word in words:

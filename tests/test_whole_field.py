@@ -14,18 +14,18 @@ import pytest
 from scipy.spatial import cKDTree
 from shapely.geometry import Point, Polygon
 
-from components.field_route import settings_of
-from fields import read_fields
-from fields.field import Field
-from fields.obstacles import circle, with_obstacles
-from fields.planner import HEADLAND, SWATH, TRANSIT, TURN, Settings, plan
-from fields.planner.applied import applied_outside, as_applied, crossings
-from fields.planner.curves import connect
-from fields.planner.optimise import move_costs
-from fields.planner.sections import SectionControl, SectionLayout
-from fields.planner.turns import length_of
-from fields.planner.types import WORKING
-from orchestrator.cli import main
+from agrobot.components.field_route import settings_of
+from agrobot.fields import read_fields
+from agrobot.fields.field import Field
+from agrobot.fields.obstacles import circle, with_obstacles
+from agrobot.fields.planner import HEADLAND, SWATH, TRANSIT, TURN, Settings, plan
+from agrobot.fields.planner.applied import applied_outside, as_applied, crossings
+from agrobot.fields.planner.curves import connect
+from agrobot.fields.planner.optimise import move_costs
+from agrobot.fields.planner.sections import SectionControl, SectionLayout
+from agrobot.fields.planner.turns import length_of
+from agrobot.fields.planner.types import WORKING
+from agrobot.orchestrator.cli import main
 
 PARCEL = "tests/data/fields2cover_data/test.json"     # Fields2Cover's test parcel, 3.6 ha
 

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from components.models.condensed_mpc import CondensedTrackingMPC
-from components.models.yaw_dynamics import controllable_canonical, zoh_discretize, state_space, TractorParameters
+from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
+from agrobot.components.models.yaw_dynamics import controllable_canonical, zoh_discretize, state_space, TractorParameters
 
 DEG = math.pi / 180
 DT = 0.05

@@ -1,7 +1,7 @@
 """Tiny components for orchestrator tests (no tractor in sight)."""
 from __future__ import annotations
 
-from orchestrator.component import Component, ComponentError, inp, out, par
+from agrobot.orchestrator.component import Component, ComponentError, inp, out, par
 
 
 class Clock(Component):

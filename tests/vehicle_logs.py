@@ -1,5 +1,5 @@
 """Canonical logs (t, delta_cmd, v, yaw_rate, x, y in SI) of the real F1TENTH sets, read by the
-recording importer (``python -m orchestrator convert``) with the signals named as a user names them.
+recording importer (``python -m agrobot convert``) with the signals named as a user names them.
 
 - F1TENTH FrictionMaps (one CSV per ROS topic, each on its own stamps): the tables are joined on
   time; ``wz`` is in deg/s; the command ``delta`` is the front-wheel angle asked for (there is no
@@ -29,8 +29,8 @@ AUTOKOOPMAN_SIGNALS = ("x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=
 
 def _import(folder: Path, signals, **options) -> pd.DataFrame:
     """Every run the importer finds in the recording, each at its start on the recording's clock."""
-    from measurements.recording import ImportOptions, import_recording, import_runs
-    from measurements.signals import parse_signal
+    from agrobot.measurements.recording import ImportOptions, import_recording, import_runs
+    from agrobot.measurements.signals import parse_signal
 
     opts = ImportOptions(signals=[parse_signal(s) for s in signals], **options)
     runs = import_runs(folder, opts) or [import_recording(folder, opts)]

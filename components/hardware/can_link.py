@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from orchestrator.component import par
+from agrobot.orchestrator.component import par
 
 from .guidance_messages import messages_for
 

@@ -1,4 +1,4 @@
-"""``python -m orchestrator emulate STUDY --nmea-port PORT``: run a study holding an
+"""``python -m agrobot emulate STUDY --nmea-port PORT``: run a study holding an
 ``nmea_server`` in real time until its stop time or until interrupted (Ctrl-C, SIGTERM); the
 signals recorded so far are written either way, and the exit status is 130 (Ctrl-C) or 143
 (SIGTERM)."""
@@ -7,11 +7,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from orchestrator.engine import RunError
-from orchestrator.errors import Interrupted, Terminated, install_signal_handlers
-from orchestrator.resolver import resolve
-from orchestrator.runner import run_study
-from orchestrator.study import Study, StudyError
+from agrobot.orchestrator.engine import RunError
+from agrobot.orchestrator.errors import Interrupted, Terminated, install_signal_handlers
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study, StudyError
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None,
@@ -49,7 +49,7 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
     p.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")

@@ -6,7 +6,7 @@ import datetime
 import math
 from dataclasses import dataclass, field
 
-from orchestrator.component import inp, par
+from agrobot.orchestrator.component import inp, par
 
 KNOTS = 1852.0 / 3600.0          # m/s per knot
 TALKERS = {"GP", "GN", "GL", "GA", "GB", "GQ", "GI"}

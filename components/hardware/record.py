@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from orchestrator.resolver import resolve
-from orchestrator.study import StudyError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import StudyError
 
 RECORDER = "bus_recorder"
 FIELD_DATUM = {"datum_latitude": "50.8637 deg", "datum_longitude": "4.6782 deg", "datum_height": 60.0}   # the paper's field

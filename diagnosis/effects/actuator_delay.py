@@ -1,5 +1,5 @@
 """The wheels follow the command late: a transport delay in the valve drive or the bus."""
-from components.models.steering_equivalent import FirstOrderSteering
+from agrobot.components.models.steering_equivalent import FirstOrderSteering
 
 from ..effect import Effect, Parameter
 

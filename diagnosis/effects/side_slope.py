@@ -5,7 +5,7 @@ which enter the yaw model linearly; reported and set as slope angle phi and fall
 """
 import math
 
-from components.models.yaw_dynamics import GRAVITY
+from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from ..effect import Effect, Parameter
 

@@ -1,7 +1,7 @@
 """Small steering corrections are not executed: play in the linkage or a valve dead-band."""
 import math
 
-from components.models.steering_equivalent import FirstOrderSteering
+from agrobot.components.models.steering_equivalent import FirstOrderSteering
 
 from ..effect import Effect, Parameter
 

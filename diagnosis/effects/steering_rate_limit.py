@@ -1,7 +1,7 @@
 """Large steering moves are slower than the model: less pump flow than assumed."""
 import math
 
-from components.models.steering_equivalent import FirstOrderSteering
+from agrobot.components.models.steering_equivalent import FirstOrderSteering
 
 from ..effect import Effect, Parameter
 

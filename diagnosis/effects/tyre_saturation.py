@@ -6,8 +6,8 @@ stiffnesses stay the baseline's refitted ones (the small-slip slope). The linear
 """
 import math
 
-from components.models.tyre import linear_share_limit
-from components.models.yaw_dynamics import GRAVITY
+from agrobot.components.models.tyre import linear_share_limit
+from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from ..effect import Effect, Parameter
 

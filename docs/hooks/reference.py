@@ -2,7 +2,7 @@
 mkdocs.yml), so they always say what the installed code does:
 
 - ``reference/commands.md``: every sub-command's ``--help``, from the argparse parser that
-  ``python -m orchestrator`` (and the ``agrobot`` script) builds, plugins' commands included;
+  ``python -m agrobot`` (and the ``agrobot`` script) builds, plugins' commands included;
 - ``reference/study-file.md``: every table of a study file, from the pydantic schema
   (orchestrator/study_schema.py, orchestrator/study.py) and the tools' registered tables;
 - ``reference/components.md``: every component type with its declared parameters, inputs and
@@ -50,7 +50,7 @@ def _fixed_help_layout():
 def command_parsers() -> dict:
     """Sub-command name -> its argparse parser, as the command line builds them."""
     _project_on_path()
-    from orchestrator.cli import build_parser
+    from agrobot.orchestrator.cli import build_parser
 
     with _fixed_help_layout():
         parser = build_parser()
@@ -62,7 +62,7 @@ def commands_markdown() -> str:
     parser, subs = command_parsers()
     lines = ["# Commands", "",
              "Generated from the command line's own `--help` when the site is built "
-             "(`docs/hooks/reference.py`). Every command is `python3 -m orchestrator COMMAND ...`; the "
+             "(`docs/hooks/reference.py`). Every command is `python3 -m agrobot COMMAND ...`; the "
              "installed script `agrobot COMMAND ...` is the same program. Exit codes: 0 done, 1 a run or "
              "computation that failed part-way (what was computed is kept), 2 bad input (the message "
              "names the file, field and value), 130 Ctrl-C, 143 SIGTERM.", "",
@@ -143,8 +143,8 @@ def _doc(obj) -> str:
 
 def study_file_markdown() -> str:
     _project_on_path()
-    from orchestrator import study_schema as s
-    from orchestrator.registry import registry
+    from agrobot.orchestrator import study_schema as s
+    from agrobot.orchestrator.registry import registry
 
     parts = [("`[study]`", s.StudySettings, "Times, seed and run settings (required)."),
              ("`[components.NAME]`", s.ComponentSpec,
@@ -190,9 +190,9 @@ def study_file_markdown() -> str:
 def component_types() -> dict[str, type]:
     """Every registered component type name -> its class."""
     _project_on_path()
-    from orchestrator.python_types import _known_types, resolve_type
-    from orchestrator.registry import registry
-    from orchestrator.study import StudyError
+    from agrobot.orchestrator.python_types import _known_types, resolve_type
+    from agrobot.orchestrator.registry import registry
+    from agrobot.orchestrator.study import StudyError
 
     found = {}
     for name in sorted(set(_known_types(registry().component_packages))):
