@@ -10,6 +10,7 @@ import pandas as pd
 from agrobot.orchestrator.study import Study
 
 from .signals import between_samples, rms, runs, sample_rows, signal
+from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
 # straight and below 60 cm on curved time-based trajectories.
