@@ -202,3 +202,22 @@ def test_a_port_in_use_is_refused_with_its_number(tmp_path):
                               capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert proc.returncode == 2 and f"127.0.0.1:{port}" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "run").exists()
+
+
+def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
+    from agrobot.measurements.truth_tractor import make_log
+    from agrobot.orchestrator.cli import main
+
+    frame, _ = make_log(3, None, duration=40.0)
+    frame.to_csv(tmp_path / "drive.csv", index=False)
+    assert main(["convert", str(tmp_path / "drive.csv"), "--out", str(tmp_path / "log.parquet"), "--mcap"]) == 0
+    log = pd.read_parquet(tmp_path / "log.parquet")
+    schemas, messages = _read(tmp_path / "log.mcap")
+    assert schemas["/log/position"] == "foxglove.Point3InFrame"
+    rows = messages["/signals/log"]
+    assert len(rows) == len(log)
+    for column in ("v", "yaw_rate", "delta"):
+        np.testing.assert_allclose([m[column] for _, m in rows], log[column], rtol=1e-12, atol=0)
+    positions = messages["/log/position"]
+    np.testing.assert_allclose([p.point.x for _, p in positions], log["x"], rtol=1e-12, atol=0)
+    assert [t for t, _ in positions] == [round((t - log["t"].iloc[0]) * 1e9) for t in log["t"]]
