@@ -69,6 +69,11 @@ class VehicleScene:
             self.path = xy[keep]
         self._ch = {}
 
+    @property
+    def note(self) -> str:
+        """What the scene chose that changes what a viewer shows: the map's origin."""
+        return f"map origin {self.origin[0]:.6f} N, {self.origin[1]:.6f} E: {self.origin_how}"
+
     # --- geodesy --------------------------------------------------------------------------------------
     def _geodesy(self, model, study):
         """(origin lat/lon deg, how it was chosen, world -> field-local map, the field's GeoJSON or None)."""

@@ -117,12 +117,13 @@ def _write_mcap(study, result, path: Path) -> int:
 
     try:
         frame = result.frame.to_pandas() if hasattr(result.frame, "to_pandas") else result.frame
-        write_study_mcap(study, frame, path)
+        _, note = write_study_mcap(study, frame, path)
     except OSError as exc:
         print(f"error: --mcap {path}: cannot be written ({exc}); the run's other results are in place",
               file=sys.stderr)
         return 2
-    print(f"MCAP written to {path} (open it in Foxglove or PlotJuggler; topics: docs/runs-and-results.md)")
+    print(f"MCAP written to {path} (open it in Foxglove or PlotJuggler; topics: docs/foxglove.md)"
+          + (f"; {note}" if note else ""))
     return 0
 
 

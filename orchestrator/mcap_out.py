@@ -170,13 +170,18 @@ def study_scene(study, frame=None):
     return factory(study, frame) if factory is not None else None
 
 
-def write_study_mcap(study, signals: pd.DataFrame, path: Path) -> Path:
-    """The run of ``study`` whose signals are ``signals`` as the MCAP file ``path``."""
+def write_study_mcap(study, signals: pd.DataFrame, path: Path) -> tuple[Path, str]:
+    """The run of ``study`` whose signals are ``signals`` as the MCAP file ``path``; (the path, what the scene
+    says of its choices, such as the map's origin: printed by the caller, written in the metadata)."""
     ratios, units, descriptions = study_signal_facts(study)
-    return write_run_mcap(path, signals, ratios=ratios, units=units, descriptions=descriptions,
-                          scene=study_scene(study, signals),
-                          metadata={"study": str(study.study.name), "start_time_s": repr(float(study.study.start_time)),
-                                    "time": "log times are simulated seconds from the study's start, in ns"})
+    scene = study_scene(study, signals)
+    note = str(getattr(scene, "note", "") or "")
+    metadata = {"study": str(study.study.name), "start_time_s": repr(float(study.study.start_time)),
+                "time": "log times are simulated seconds from the study's start, in ns"}
+    if note:
+        metadata["scene"] = note
+    return write_run_mcap(path, signals, ratios=ratios, units=units, descriptions=descriptions, scene=scene,
+                          metadata=metadata), note
 
 
 LIVE_RATE_HZ = 20.0        # wall-clock instants a second sent to the live view

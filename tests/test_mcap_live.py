@@ -60,7 +60,8 @@ def figure8_mcap(tmp_path_factory):
     study = Study.load(STUDIES / "figure8.toml", ["study.stop_time=16"])
     result = run_study(study, where / "run", plots=False, progress=False)
     frame = pd.read_parquet(where / "run" / "signals.parquet")
-    write_study_mcap(study, frame, where / "run.mcap")
+    _, note = write_study_mcap(study, frame, where / "run.mcap")
+    assert "nominal origin" in note and "[output] origin" in note          # the choice is said, with its option
     return frame, _read(where / "run.mcap")
 
 
