@@ -222,3 +222,46 @@ def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
     positions = messages["/log/position"]
     np.testing.assert_allclose([p.point.x for _, p in positions], log["x"], rtol=1e-12, atol=0)
     assert [t for t, _ in positions] == [round((t - log["t"].iloc[0]) * 1e9) for t in log["t"]]
+
+
+def _luminance(color) -> float:
+    from matplotlib.colors import to_rgb
+
+    r, g, b = to_rgb(color)
+    return 0.299 * r + 0.587 * g + 0.114 * b
+
+
+def _apart_in_greyscale(ax) -> list[str]:
+    """Pairs of labelled lines of ``ax`` that only their hue tells apart: the same line style, marker and
+    width (within half), and luminances closer than 0.15 (they merge when printed in grey)."""
+    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    clashes = []
+    for i, a in enumerate(lines):
+        for b in lines[i + 1:]:
+            same_look = (a.get_linestyle() == b.get_linestyle() and a.get_marker() == b.get_marker()
+                         and 0.5 <= a.get_linewidth() / max(b.get_linewidth(), 1e-9) <= 2.0)
+            if same_look and abs(_luminance(a.get_color()) - _luminance(b.get_color())) < 0.15:
+                clashes.append(f"{a.get_label()} / {b.get_label()}")
+    return clashes
+
+
+def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_grey(figure8_mcap):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from agrobot.analysis.figure8 import PAPER_BOUNDS, metrics, trajectory_figure
+
+    frame, _ = figure8_mcap
+    study = Study.load(STUDIES / "figure8.toml", ["study.stop_time=16"])
+    fig = trajectory_figure(frame, study)
+    title = fig._suptitle.get_text()
+    m = metrics(frame, study)
+    for key, where in (("euclid_max_curved", "curves"), ("euclid_max_straight", "straights")):
+        if np.isfinite(m[key]):
+            verdict = "within" if m[key] < PAPER_BOUNDS[key] else "BEYOND"
+            assert f"{where} max {m[key]:.2f} m ({verdict} the paper's {PAPER_BOUNDS[key]:.2f} m)" in title
+        else:
+            assert f"no {where} judged" in title
+    for ax in fig.axes:
+        assert "[m]" in ax.get_xlabel() and "[m]" in ax.get_ylabel()
+        assert _apart_in_greyscale(ax) == []
