@@ -170,6 +170,7 @@ class OutputSettings(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     origin: tuple[float, float] | None = None     # (lat, lon) degrees of the simulation frame's origin, on the map
+    mcap: bool = False                            # write the run's MCAP (run.mcap; in a sweep, one per point)
 
     @field_validator("origin")
     @classmethod

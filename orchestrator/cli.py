@@ -54,7 +54,7 @@ def _run(args: argparse.Namespace) -> int:
             study = option.apply(study, value)
         if args.set:
             study = study.with_overrides(args.set)
-    mcap = _mcap_path(args)
+    mcap = _mcap_path(args, study)
     live = _live_view(study, args.live, args.live_wait) if args.live else None
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
@@ -100,12 +100,13 @@ def _live_view(study, where: str, wait: float):
     return view
 
 
-def _mcap_path(args: argparse.Namespace) -> Path | None:
-    """Where ``--mcap`` writes: OUT/run.mcap by default, else the file named (checked before the run)."""
-    from .mcap_out import check_mcap_path
+def _mcap_path(args: argparse.Namespace, study) -> Path | None:
+    """Where ``--mcap`` writes: OUT/run.mcap by default (or with the study's ``[output] mcap = true``), else the
+    file named (checked before the run)."""
+    from .mcap_out import check_mcap_path, wants_mcap
 
     if args.mcap is None:
-        return None
+        return None if not wants_mcap(study) else args.out / "run.mcap"
     if args.mcap == "":
         return args.out / "run.mcap"
     return check_mcap_path(Path(args.mcap))
@@ -136,6 +137,8 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     add_set_option(p)
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--mcap", action="store_true", help="also write each point's run as points/<point>/run.mcap "
+                   "(the study's [output] mcap = true does the same)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
@@ -147,6 +150,10 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
     study = Study.load(args.study, args.set)
+    if args.mcap:
+        from .mcap_out import with_mcap
+
+        study = with_mcap(study)
     runner = SweepRun(study, args.out)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)

@@ -7,6 +7,7 @@ Topics (generic: the orchestrator knows nothing of the system simulated):
 - ``/signals/<component>``: every numeric output of the component as one JSON message per step of
   the component (its own rate), ``{"t": s, "<output>": value, ...}``; the JSON schema gives each
   output's unit and description, so PlotJuggler and Foxglove plot them by name.
+- the study's ``[output] mcap = true`` asks for the MCAP as ``--mcap`` does (a sweep: one per point);
 - whatever a *scene* adds: a project's analysis module may define ``mcap_scene(study)`` returning an
   object with ``channels(context)`` (its typed channels), ``static(t_ns)`` (messages logged once at the
   start: a path, a field) and ``step(t_ns, value)`` (messages of one instant, ``value(column)`` giving
@@ -137,6 +138,20 @@ def _row_value(arrays: Mapping[str, np.ndarray], k: int) -> Callable[[str], floa
         a = arrays.get(column)
         return float(a[k]) if a is not None else math.nan
     return value
+
+
+def wants_mcap(study) -> bool:
+    """The study asks for its run's MCAP (``[output] mcap = true``, a table a project registers)."""
+    return bool((study.section("output") or {}).get("mcap", False))
+
+
+def with_mcap(study):
+    """The study with ``[output] mcap = true`` (``sweep --mcap``: every point writes its MCAP)."""
+    from .study import parse_study
+
+    data = study.to_data()
+    data["output"] = {**data.get("output", {}), "mcap": True}
+    return parse_study(data, study.path)
 
 
 def study_signal_facts(study) -> tuple[dict[str, int], dict[str, str], dict[str, str]]:

@@ -265,3 +265,19 @@ def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_gre
     for ax in fig.axes:
         assert "[m]" in ax.get_xlabel() and "[m]" in ax.get_ylabel()
         assert _apart_in_greyscale(ax) == []
+
+
+def test_a_sweep_writes_each_points_mcap_on_request(tmp_path):
+    from agrobot.orchestrator.cli import main
+
+    study = tmp_path / "sweep.toml"
+    study.write_text(f'extends = "{STUDIES / "figure8.toml"}"\n[study]\nstop_time = 14.0\n'
+                     '[sweep]\nmode = "grid"\n[sweep.parameters]\n"reference.speed" = [1.5, 2.5]\n')
+    assert main(["sweep", str(study), "--out", str(tmp_path / "out"), "--workers", "1", "--no-plots", "--mcap"]) == 0
+    files = sorted((tmp_path / "out" / "points").glob("*/run.mcap"))
+    assert len(files) == 2
+    speeds = set()
+    for path in files:
+        _, messages = _read(path)
+        speeds.add(round(max(m["speed_ref"] for _, m in messages["/signals/reference"]), 6))
+    assert speeds == {1.5, 2.5}
