@@ -74,12 +74,12 @@ class SignalChannels:
     base step ``k`` for the components due at it (``ratio``: base steps between two of its steps)."""
 
     def __init__(self, context, columns: list[str], ratios: Mapping[str, int], units: Mapping[str, str],
-                 descriptions: Mapping[str, str]) -> None:
+                 descriptions: Mapping[str, str], prefix: str = SIGNALS_PREFIX) -> None:
         import foxglove
 
         self.groups = components_of(columns)
         self.ratios = {c: max(int(ratios.get(c, 1)), 1) for c in self.groups}
-        self.channels = {c: foxglove.Channel(SIGNALS_PREFIX + c, schema=signal_schema(c, outs, units, descriptions),
+        self.channels = {c: foxglove.Channel(prefix + c, schema=signal_schema(c, outs, units, descriptions),
                                              message_encoding="json", context=context,
                                              metadata={"units": ",".join(units.get(f"{c}.{o}", "") for o in outs)})
                          for c, outs in self.groups.items()}
@@ -96,7 +96,8 @@ class SignalChannels:
 
 
 def write_run_mcap(path: Path, frame: pd.DataFrame, *, ratios: Mapping[str, int], units: Mapping[str, str],
-                   descriptions: Mapping[str, str], scene=None, metadata: Mapping[str, str] | None = None) -> Path:
+                   descriptions: Mapping[str, str], scene=None, metadata: Mapping[str, str] | None = None,
+                   prefix: str = SIGNALS_PREFIX) -> Path:
     """Every signal of ``frame`` (a ``t`` column and ``component.output`` columns, one row per base step)
     and the scene's messages, into the MCAP file ``path`` (written beside and renamed: never half a file)."""
     import foxglove
@@ -109,7 +110,7 @@ def write_run_mcap(path: Path, frame: pd.DataFrame, *, ratios: Mapping[str, int]
         if metadata:
             writer.write_metadata("run", dict(metadata))
         columns = [c for c in frame.columns if c != "t"]
-        signals = SignalChannels(context, columns, ratios, units, descriptions)
+        signals = SignalChannels(context, columns, ratios, units, descriptions, prefix)
         if scene is not None:
             scene.channels(context)
         t = frame["t"].to_numpy(float)
