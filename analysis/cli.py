@@ -6,6 +6,8 @@ import math
 import time
 from pathlib import Path
 
+from pydantic import BaseModel, ConfigDict, field_validator
+
 
 def _progress(line: str) -> None:
     print(line, flush=True)
@@ -163,7 +165,25 @@ def run_tune(args: argparse.Namespace) -> int:
     return 0
 
 
+class OutputSettings(BaseModel):
+    """``[output]``: what a run's MCAP and live view show (analysis.mcap_scene)."""
+
+    model_config = ConfigDict(extra="forbid")
+    origin: tuple[float, float] | None = None     # (lat, lon) degrees of the simulation frame's origin, on the map
+    mcap: bool = False                            # write the run's MCAP (run.mcap; in a sweep, one per point)
+
+    @field_validator("origin")
+    @classmethod
+    def _on_earth(cls, value):
+        if value is not None and not (-90.0 <= value[0] <= 90.0 and -180.0 <= value[1] <= 180.0):
+            raise ValueError(f"origin {list(value)}: expected [latitude, longitude] in degrees "
+                             f"(latitude within +-90, longitude within +-180)")
+        return value
+
+
 def register(registry) -> None:
+    registry.add_section("output", "the run's MCAP and live view (analysis.mcap_scene): origin = [lat, lon] in "
+                                   "degrees places the simulation frame on the map", OutputSettings)
     registry.add_command("margins", "gain, phase and delay margins of a study's guidance loop from its own components "
                          "(Bode and Nyquist plots with --out; the simulated delay limit with --simulate)",
                          add_arguments, run)

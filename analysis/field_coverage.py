@@ -34,6 +34,7 @@ from agrobot.orchestrator.study import Study
 from .field_ground import ground_metrics
 from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _strips,
                            _swath_frames, mission)
+from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:

@@ -10,6 +10,7 @@ import pandas as pd
 from agrobot.orchestrator.study import Study
 
 from .signals import between_samples, rms, runs, sample_rows, signal
+from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
 # straight and below 60 cm on curved time-based trajectories.
@@ -191,9 +192,23 @@ def trajectory_figure(frame: pd.DataFrame, study: Study):
     ax.axis("equal")
     ax.indicate_inset([x_ref[i] - half, y_ref[i] - half, 2 * half, 2 * half], inset_ax=zoom, edgecolor="b")
     ax.legend(fontsize=8, loc="upper right")
-    ax.set_title("Reference and actual trajectory")
+    fig.suptitle(trajectory_verdict(frame, study), fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def trajectory_verdict(frame: pd.DataFrame, study: Study) -> str:
+    """The trajectory figure's conclusion: the largest errors on straights and curves against the paper's
+    bounds (section VI), each said within or beyond."""
+    m = metrics(frame, study)
+    parts = []
+    for key, where in (("euclid_max_straight", "straights"), ("euclid_max_curved", "curves")):
+        value, bound = m[key], PAPER_BOUNDS[key]
+        if not np.isfinite(value):
+            parts.append(f"no {where} judged")
+        else:
+            parts.append(f"{where} max {value:.2f} m ({'within' if value < bound else 'BEYOND'} the paper's {bound:.2f} m)")
+    return "The CG follows the figure-8: " + "; ".join(parts)
 
 
 def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:

@@ -13,6 +13,7 @@ from agrobot.orchestrator.study import Study
 
 from .figure8 import settled_index
 from .signals import MissingSignal, between_samples, component_named, rms, signal
+from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 # figure -> (SI unit, bound or note), printed with pass/fail after a run (orchestrator.key_figures).
 # The paper bounds the time-based Euclidean error by 0.40 m on straights and 0.60 m on curves; over

@@ -91,6 +91,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--list", action="store_true", help="print what the recording holds (topics and types, CAN "
                    "messages and signals with units and rates, table columns with ranges) and write nothing")
     p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
+    p.add_argument("--mcap", action="store_true", help="also write each log as <name>.mcap for Foxglove/PlotJuggler")
     add_recording_options(p)
 
 
@@ -131,6 +132,11 @@ def run(args: argparse.Namespace) -> int:
                      lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
         print(describe(rep))
         print(f"written: {path} ({len(f)} rows) and {path.with_name(path.stem + '.import.json').name}", file=sys.stdout)
+    if getattr(args, "mcap", False):          # after every log is in place: an MCAP that fails loses none of them
+        from .log_mcap import write_log_mcap
+
+        for path, f, _ in jobs:
+            print(f"written: {write_log_mcap(f, path.with_suffix('.mcap'), str(args.source))}")
     return 0
 
 

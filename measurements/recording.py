@@ -20,6 +20,7 @@ import pandas as pd
 
 from .import_report import describe
 from .log import LogError, check_log, read_log
+from .mdf4 import MDF_SUFFIXES, is_bus_logging
 from .nmea_can import nmea_can_streams
 from .options import ImportOptions
 from .quirks import find_quirks, fixes_from_columns
@@ -44,7 +45,7 @@ def is_recording(source: Path) -> bool:
     """A folder, or a file that is a raw recording rather than a table (CSV/Parquet)."""
     source = Path(source)
     suffix = source.suffix.lower()
-    return source.is_dir() or suffix in NMEA_SUFFIXES + CAN_SUFFIXES + BAG_SUFFIXES + (".txt", ".xml", ".bin")
+    return source.is_dir() or suffix in NMEA_SUFFIXES + CAN_SUFFIXES + BAG_SUFFIXES + MDF_SUFFIXES + (".txt", ".xml", ".bin")
 
 
 def recording_files(source: Path) -> dict[str, list[Path]]:
@@ -66,6 +67,8 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
             kinds["nmea"].append(p)
         elif suffix in CAN_SUFFIXES:
             kinds["can"].append(p)
+        elif suffix in MDF_SUFFIXES:                  # bus logging is a CAN log, signals are tables
+            kinds["can" if is_bus_logging(p) else "table"].append(p)
         elif suffix in BAG_SUFFIXES:
             kinds["bag"].append(p)
         elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):

@@ -265,12 +265,14 @@ def _clean(table: Table) -> None:
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
     table's row by row (same rows, or one fewer: a value per interval), else ``--rate``."""
+    from .mdf4 import MDF_SUFFIXES, mdf_tables
+
     spec = parse_time(time)
-    tables = [read_table(p) for p in paths]
+    tables = [t for p in paths for t in (mdf_tables(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
         raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
-    timed = [t for t in tables if time_of(t, spec)]
+    timed = [t for t in tables if t.t is not None or time_of(t, spec)]      # an MDF group has its own clock
     clock = next((t for t in timed if spec is not None and t.time_columns), None)
     for t in tables:
         if t.t is not None:

@@ -28,6 +28,13 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    p.add_argument("--mcap", nargs="?", const="", default=None, metavar="FILE",
+                   help="also write the run as an MCAP file for Foxglove/PlotJuggler (default OUT/run.mcap)")
+    p.add_argument("--live", nargs="?", const="127.0.0.1:8765", default=None, metavar="HOST:PORT",
+                   help="serve the running study to Foxglove over its WebSocket protocol (default 127.0.0.1:8765; "
+                        "the MCAP's topics at 20 instants a second of wall time)")
+    p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
+                   help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -47,8 +54,11 @@ def _run(args: argparse.Namespace) -> int:
             study = option.apply(study, value)
         if args.set:
             study = study.with_overrides(args.set)
+    mcap = _mcap_path(args, study)
+    live = _live_view(study, args.live, args.live_wait) if args.live else None
     try:
-        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
+                           observers=[live] if live else [])
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)
@@ -57,6 +67,10 @@ def _run(args: argparse.Namespace) -> int:
         print(f"error: run failed {exc}; results recorded so far are in {getattr(exc, 'where', args.out)}"
               f"{getattr(exc, 'kept', '')}", file=sys.stderr)
         return 1
+    finally:
+        if live is not None:
+            live.stop()
+            print(f"live view: {live.sent} instants sent to {live.url}")
     ended = result.metrics.get("ended_by")
     if ended:
         print(f"the run ended at t = {ended['t']:.6g} s, before the stop time: {ended['component']} asked "
@@ -67,6 +81,50 @@ def _run(args: argparse.Namespace) -> int:
     if result.failed_bounds:
         print("FAIL: " + "; ".join(result.failed_bounds))
     print(f"\nresults written to {args.out}/ ({', '.join(p.name for p in result.files)})")
+    return _write_mcap(study, result, mcap) if mcap is not None else 0
+
+
+def _live_view(study, where: str, wait: float):
+    """The live view's server, bound where ``--live`` says (loopback unless a host is named)."""
+    from .mcap_out import LiveView
+    from .output import OutputError
+
+    host, _, port = where.rpartition(":")
+    try:
+        port_number = int(port)
+    except ValueError:
+        raise OutputError(f"--live {where}: expected HOST:PORT or PORT (a number), e.g. 127.0.0.1:8765") from None
+    view = LiveView(study, host or "127.0.0.1", port_number, wait=wait)
+    print(f"live view: serving {view.url} (Foxglove: open a connection, Foxglove WebSocket, to this address)",
+          flush=True)
+    return view
+
+
+def _mcap_path(args: argparse.Namespace, study) -> Path | None:
+    """Where ``--mcap`` writes: OUT/run.mcap by default (or with the study's ``[output] mcap = true``), else the
+    file named (checked before the run)."""
+    from .mcap_out import check_mcap_path, wants_mcap
+
+    if args.mcap is None:
+        return None if not wants_mcap(study) else args.out / "run.mcap"
+    if args.mcap == "":
+        return args.out / "run.mcap"
+    return check_mcap_path(Path(args.mcap))
+
+
+def _write_mcap(study, result, path: Path) -> int:
+    """The run's MCAP after its other results are in place: a failure here loses none of them."""
+    from .mcap_out import write_study_mcap
+
+    try:
+        frame = result.frame.to_pandas() if hasattr(result.frame, "to_pandas") else result.frame
+        _, note = write_study_mcap(study, frame, path)
+    except OSError as exc:
+        print(f"error: --mcap {path}: cannot be written ({exc}); the run's other results are in place",
+              file=sys.stderr)
+        return 2
+    print(f"MCAP written to {path} (open it in Foxglove or PlotJuggler; topics: docs/foxglove.md)"
+          + (f"; {note}" if note else ""))
     return 0
 
 
@@ -79,6 +137,8 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     add_set_option(p)
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--mcap", action="store_true", help="also write each point's run as points/<point>/run.mcap "
+                   "(the study's [output] mcap = true does the same)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
@@ -90,6 +150,10 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
     study = Study.load(args.study, args.set)
+    if args.mcap:
+        from .mcap_out import with_mcap
+
+        study = with_mcap(study)
     runner = SweepRun(study, args.out)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)

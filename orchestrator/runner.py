@@ -134,7 +134,7 @@ class Outcome:
 
 
 def record_run(study: Study, system: System, folder: Path, analysis=None, plots: bool = True,
-               progress: bool = True) -> Outcome:
+               progress: bool = True, observers=()) -> Outcome:
     """Simulate ``system`` into ``folder`` (signals streamed, events.log, run.json), analyse the
     signals and write metrics.json (and the analysis's plots). Never raises for what a run can
     meet: a component failing, SIGINT/SIGTERM (in the simulation or the analysis), the analysis
@@ -143,8 +143,8 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
     sim = Simulation(system)
     writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
     watch = Progress(sim.n_steps, sim.h) if progress else None
-    if watch is not None:
-        sim.add_observer(watch)
+    for observer in ([watch] if watch is not None else []) + list(observers):
+        sim.add_observer(observer)
     try:
         rec = _stream(sim, writer)
     except RunError as err:
@@ -204,14 +204,14 @@ def _write_status(folder: Path, study: Study, system, facts: dict[str, Any], t_r
 
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
-              progress: bool = True) -> RunResult:
+              progress: bool = True, observers=()) -> RunResult:
     """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
     before anything runs (orchestrator.output), the run is recorded into a fresh folder beside it
     (``record_run``) and moved into place or beside it. Raises Interrupted (exit 130/143) on
     SIGINT/SIGTERM, RunError or AnalysisError on a failure, with ``where`` the folder that holds
     what was kept."""
     if out_dir is None:
-        return _run_in_memory(study, plots)
+        return _run_in_memory(study, plots, observers)
     from .output import ResultFolder
 
     analysis = _analysis(study)
@@ -219,7 +219,7 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     system = build_system(resolve(study))
     with folder:
         try:
-            outcome = record_run(study, system, folder.tmp, analysis, plots, progress)
+            outcome = record_run(study, system, folder.tmp, analysis, plots, progress, observers)
         except KeyboardInterrupt as exc:        # a second signal while the first one's results were saved
             if not (folder.tmp / "metrics.json").exists():
                 raise
@@ -272,10 +272,10 @@ def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
         raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
 
 
-def _run_in_memory(study: Study, plots: bool) -> RunResult:
+def _run_in_memory(study: Study, plots: bool, observers=()) -> RunResult:
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
-    rec = Simulation(build_system(resolve(study))).run()
+    rec = Simulation(build_system(resolve(study)), observers=observers).run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)

@@ -38,6 +38,7 @@ import pandas as pd
 from .build import build_system
 from .resolver import resolve
 from .errors import critical
+from .mcap_out import wants_mcap
 from .registry import import_study_module
 from .results import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
@@ -118,6 +119,10 @@ def simulate_point(study: Study, folder: str | None = None) -> dict[str, Any]:
     try:
         outcome = record_run(study, build_system(resolve(study)), target, _analysis(study), plots=False,
                              progress=False)
+        if outcome.complete and wants_mcap(study):
+            from .mcap_out import write_study_mcap
+
+            write_study_mcap(study, outcome.table.to_pandas(), target / "run.mcap")
     except InputError as exc:           # the point's values refused when its components start
         result = {"status": "failed", "kind": "input", "error": str(exc)}
     except Exception as exc:  # a bug in a component: record it, the sweep goes on

@@ -1,0 +1,295 @@
+"""A run as robotics engineers look at it: an MCAP file for Foxglove and PlotJuggler, written with the
+Foxglove SDK (``foxglove.open_mcap``), and the same topics served live over the Foxglove WebSocket
+protocol (``foxglove.start_server``).
+
+Topics (generic: the orchestrator knows nothing of the system simulated):
+
+- ``/signals/<component>``: every numeric output of the component as one JSON message per step of
+  the component (its own rate), ``{"t": s, "<output>": value, ...}``; the JSON schema gives each
+  output's unit and description, so PlotJuggler and Foxglove plot them by name.
+- the study's ``[output] mcap = true`` asks for the MCAP as ``--mcap`` does (a sweep: one per point);
+- whatever a *scene* adds: a project's analysis module may define ``mcap_scene(study)`` returning an
+  object with ``channels(context)`` (its typed channels), ``static(t_ns)`` (messages logged once at the
+  start: a path, a field) and ``step(t_ns, value)`` (messages of one instant, ``value(column)`` giving
+  the signal ``component.output`` or NaN) and ``every``, the base steps between two scene instants.
+
+Times: log times are the simulated time in nanoseconds from the study's start time (a run has no
+date); the MCAP's metadata record ``run`` names the study and its start time.
+"""
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .output import OutputError
+
+SIGNALS_PREFIX = "/signals/"
+
+
+def check_mcap_path(path: Path) -> Path:
+    """The MCAP file ``path`` before a run: its folder exists and is writable, and it is not a folder.
+    An OutputError (exit 2) names it otherwise, before anything runs."""
+    path = Path(path)
+    if path.suffix.lower() != ".mcap":
+        raise OutputError(f"--mcap {path}: expected a file name ending in .mcap")
+    if path.is_dir():
+        raise OutputError(f"--mcap {path}: a folder, expected a file name ending in .mcap")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(f"--mcap {path}: its folder {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise OutputError(f"--mcap {path}: its folder {parent} is not writable")
+    return path
+
+
+def signal_schema(component: str, outputs: list[str], units: Mapping[str, str], descriptions: Mapping[str, str]) -> dict:
+    """The JSON schema of a component's message: time and every output, a number with its unit."""
+    props = {"t": {"type": "number", "description": "simulated time [s]"}}
+    for name in outputs:
+        col = f"{component}.{name}"
+        unit = units.get(col, "")
+        props[name] = {"type": "number",
+                       "description": f"{descriptions.get(col, name)}" + (f" [{unit}]" if unit else "")}
+    return {"type": "object", "title": f"{component} outputs", "properties": props}
+
+
+def components_of(columns: list[str]) -> dict[str, list[str]]:
+    """``component.output`` columns grouped by component, in order."""
+    grouped: dict[str, list[str]] = {}
+    for col in columns:
+        if col == "t" or "." not in col:
+            continue
+        comp, _, port = col.partition(".")
+        grouped.setdefault(comp, []).append(port)
+    return grouped
+
+
+class SignalChannels:
+    """One JSON channel per component on a Foxglove context; ``log(k, t, value)`` logs the messages of
+    base step ``k`` for the components due at it (``ratio``: base steps between two of its steps)."""
+
+    def __init__(self, context, columns: list[str], ratios: Mapping[str, int], units: Mapping[str, str],
+                 descriptions: Mapping[str, str], prefix: str = SIGNALS_PREFIX) -> None:
+        import foxglove
+
+        self.groups = components_of(columns)
+        self.ratios = {c: max(int(ratios.get(c, 1)), 1) for c in self.groups}
+        self.channels = {c: foxglove.Channel(prefix + c, schema=signal_schema(c, outs, units, descriptions),
+                                             message_encoding="json", context=context,
+                                             metadata={"units": ",".join(units.get(f"{c}.{o}", "") for o in outs)})
+                         for c, outs in self.groups.items()}
+
+    def log(self, k: int, t: float, value: Callable[[str], float], t_ns: int) -> None:
+        for comp, outs in self.groups.items():
+            if k % self.ratios[comp]:
+                continue
+            message = {"t": t}
+            for port in outs:
+                v = float(value(f"{comp}.{port}"))
+                message[port] = v if math.isfinite(v) else None          # JSON has no NaN
+            self.channels[comp].log(message, log_time=t_ns)
+
+
+def write_run_mcap(path: Path, frame: pd.DataFrame, *, ratios: Mapping[str, int], units: Mapping[str, str],
+                   descriptions: Mapping[str, str], scene=None, metadata: Mapping[str, str] | None = None,
+                   prefix: str = SIGNALS_PREFIX) -> Path:
+    """Every signal of ``frame`` (a ``t`` column and ``component.output`` columns, one row per base step)
+    and the scene's messages, into the MCAP file ``path`` (written beside and renamed: never half a file)."""
+    import foxglove
+
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.writing")
+    context = foxglove.Context()
+    writer = foxglove.open_mcap(str(tmp), allow_overwrite=True, context=context)
+    try:
+        if metadata:
+            writer.write_metadata("run", dict(metadata))
+        columns = [c for c in frame.columns if c != "t"]
+        signals = SignalChannels(context, columns, ratios, units, descriptions, prefix)
+        if scene is not None:
+            scene.channels(context)
+        t = frame["t"].to_numpy(float)
+        t0 = float(t[0]) if len(t) else 0.0
+        arrays = {c: frame[c].to_numpy(float) for c in columns}
+        if scene is not None:
+            scene.static(0)
+        every = max(int(getattr(scene, "every", 1)), 1) if scene is not None else 0
+        for k in range(len(t)):
+            t_ns = int(round((t[k] - t0) * 1e9))
+            value = _row_value(arrays, k)
+            signals.log(k, float(t[k]), value, t_ns)
+            if scene is not None and k % every == 0:
+                scene.step(t_ns, value)
+    except BaseException:
+        writer.close()
+        tmp.unlink(missing_ok=True)
+        raise
+    writer.close()
+    os.replace(tmp, path)
+    return path
+
+
+def _row_value(arrays: Mapping[str, np.ndarray], k: int) -> Callable[[str], float]:
+    def value(column: str) -> float:
+        a = arrays.get(column)
+        return float(a[k]) if a is not None else math.nan
+    return value
+
+
+def wants_mcap(study) -> bool:
+    """The study asks for its run's MCAP (``[output] mcap = true``, a table a project registers)."""
+    return bool((study.section("output") or {}).get("mcap", False))
+
+
+def with_mcap(study):
+    """The study with ``[output] mcap = true`` (``sweep --mcap``: every point writes its MCAP)."""
+    from .study import parse_study
+
+    data = study.to_data()
+    data["output"] = {**data.get("output", {}), "mcap": True}
+    return parse_study(data, study.path)
+
+
+def study_signal_facts(study) -> tuple[dict[str, int], dict[str, str], dict[str, str]]:
+    """(component -> base steps between its steps, column -> unit, column -> description) of a study."""
+    from .resolver import resolve
+
+    model = resolve(study)
+    h = float(study.study.base_step)
+    ratios, units, descriptions = {}, {}, {}
+    for name, spec in study.components.items():
+        step = getattr(spec, "step", None)
+        ratios[name] = max(1, int(round(float(step) / h))) if step else 1
+        try:
+            cls = model.component_class(name)
+        except Exception:            # noqa: BLE001 - a component without declarations: no units
+            continue
+        for v in getattr(cls, "variables", ()):
+            if v.causality == "output":
+                units[f"{name}.{v.name}"] = v.unit
+                descriptions[f"{name}.{v.name}"] = v.description
+    return ratios, units, descriptions
+
+
+def study_scene(study, frame=None):
+    """The scene the study's analysis module offers (``mcap_scene(study, frame)``), or None."""
+    from .registry import import_study_module
+
+    if not study.study.analysis:
+        return None
+    factory = getattr(import_study_module(study.study.analysis), "mcap_scene", None)
+    return factory(study, frame) if factory is not None else None
+
+
+def write_study_mcap(study, signals: pd.DataFrame, path: Path) -> tuple[Path, str]:
+    """The run of ``study`` whose signals are ``signals`` as the MCAP file ``path``; (the path, what the scene
+    says of its choices, such as the map's origin: printed by the caller, written in the metadata)."""
+    ratios, units, descriptions = study_signal_facts(study)
+    scene = study_scene(study, signals)
+    note = str(getattr(scene, "note", "") or "")
+    metadata = {"study": str(study.study.name), "start_time_s": repr(float(study.study.start_time)),
+                "time": "log times are simulated seconds from the study's start, in ns"}
+    if note:
+        metadata["scene"] = note
+    return write_run_mcap(path, signals, ratios=ratios, units=units, descriptions=descriptions, scene=scene,
+                          metadata=metadata), note
+
+
+LIVE_RATE_HZ = 20.0        # wall-clock instants a second sent to the live view
+
+
+class LiveView:
+    """An observer (orchestrator.observers) serving the running study over the Foxglove WebSocket protocol,
+    with the MCAP's topics: at most ``rate`` instants a second of wall time (the latest values of every
+    component and the scene), so that the run is not slowed. ``wait`` seconds at the start for a viewer to
+    subscribe (0: start at once). ``stop()`` closes the server."""
+
+    def __init__(self, study, host: str = "127.0.0.1", port: int = 8765, rate: float = LIVE_RATE_HZ,
+                 wait: float = 0.0) -> None:
+        import threading
+
+        import foxglove
+
+        self.study, self.rate, self.wait = study, float(rate), float(wait)
+        self.context = foxglove.Context()
+        self.subscribed = threading.Event()
+        listener = _listener(self.subscribed)
+        try:
+            self.server = foxglove.start_server(host=host, port=port, context=self.context, server_listener=listener,
+                                                name=f"agrobot {study.study.name}")
+        except RuntimeError as exc:
+            raise OutputError(f"--live {host}:{port}: cannot serve there ({exc}); choose another port with "
+                              f"--live {host}:PORT") from None
+        self.host, self.port = host, self.server.port
+        ratios, units, descriptions = study_signal_facts(study)
+        self._ratios, self._units, self._descriptions = ratios, units, descriptions
+        self.scene = study_scene(study)
+        self.sent = 0
+        self._next = 0.0
+
+    @property
+    def url(self) -> str:
+        return f"ws://{self.host}:{self.port}"
+
+    # observer hooks
+    advanced = None
+    _k = 0
+
+    def instant(self, k: int) -> None:
+        self._k = k                  # the base step being taken (sim.k moves only between calls of advance)
+
+    def started(self, sim) -> None:
+        import time
+
+        self.sim = sim
+        self.signals = SignalChannels(self.context, list(sim.columns), {c: 1 for c in self._ratios}, self._units,
+                                      self._descriptions)
+        if self.scene is not None:
+            self.scene.channels(self.context)
+        if self.wait > 0:
+            self.subscribed.wait(self.wait)
+        if self.scene is not None:
+            self.scene.static(0)
+        self._period = 1.0 / self.rate if self.rate > 0 else 0.0
+        self._next = time.perf_counter()
+
+    def recorded(self, phase: int) -> None:
+        import time
+
+        now = time.perf_counter()
+        if now < self._next:
+            return
+        self._next = now + self._period
+        sim = self.sim
+        published = sim.published
+        t = sim.t0 + self._k * sim.h
+
+        def value(column: str) -> float:
+            comp, _, port = column.partition(".")
+            try:
+                return float(published[comp][port])
+            except (KeyError, TypeError, ValueError):
+                return math.nan
+        t_ns = int(round((t - sim.t0) * 1e9))
+        self.signals.log(0, t, value, t_ns)
+        if self.scene is not None:
+            self.scene.step(t_ns, value)
+        self.sent += 1
+
+    def stop(self) -> None:
+        self.server.stop()
+
+
+def _listener(event):
+    """A foxglove.ServerListener that sets ``event`` when a viewer subscribes to a channel."""
+    import foxglove
+
+    class Listener(foxglove.ServerListener):
+        def on_subscribe(self, client, channel) -> None:
+            event.set()
+    return Listener()

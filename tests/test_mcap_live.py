@@ -1,0 +1,283 @@
+"""Runs where robotics engineers look at them: the MCAP of a run (read back with the ``mcap`` reader, its
+typed Foxglove messages decoded as protobuf) holds the documented topics and schemas with the values of
+signals.parquet; the live view serves the same topics over the Foxglove WebSocket protocol to a real
+client; a bad MCAP path or a port in use is exit 2 before anything runs."""
+from __future__ import annotations
+
+import json
+import socket
+import struct
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.orchestrator.mcap_out import write_study_mcap
+from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.study import Study
+
+pytest.importorskip("foxglove")
+mcap_reader = pytest.importorskip("mcap.reader")
+ROOT = Path(__file__).resolve().parent.parent
+STUDIES = ROOT / "studies"
+SCHEMAS = {"/tf": "foxglove.FrameTransforms", "/vehicle/pose": "foxglove.PoseInFrame",
+           "/estimate/pose": "foxglove.PoseInFrame", "/reference/pose": "foxglove.PoseInFrame",
+           "/gnss/fix": "foxglove.LocationFix", "/reference/path": "foxglove.SceneUpdate"}
+
+
+def _read(path: Path):
+    """(topic -> schema name, topic -> [(log time ns, decoded message)]) of an MCAP file."""
+    from mcap_protobuf.decoder import DecoderFactory
+
+    with open(path, "rb") as f:
+        reader = mcap_reader.make_reader(f, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+        messages: dict[str, list] = {}
+        for schema, channel, message in reader.iter_messages():
+            if channel.message_encoding == "json":
+                messages.setdefault(channel.topic, []).append((message.log_time, json.loads(message.data)))
+        f.seek(0)
+        reader = mcap_reader.make_reader(f, decoder_factories=[DecoderFactory()])
+        for schema, channel, message, decoded in reader.iter_decoded_messages(
+                topics=[t for t in schemas if not t.startswith("/signals/")]):
+            messages.setdefault(channel.topic, []).append((message.log_time, decoded))
+    return schemas, messages
+
+
+def _at(frame: pd.DataFrame, t_ns: int) -> pd.Series:
+    k = int(np.argmin(np.abs(frame["t"].to_numpy() - frame["t"].iloc[0] - t_ns * 1e-9)))
+    return frame.iloc[k]
+
+
+@pytest.fixture(scope="module")
+def figure8_mcap(tmp_path_factory):
+    where = tmp_path_factory.mktemp("mcap")
+    study = Study.load(STUDIES / "figure8.toml", ["study.stop_time=16"])
+    result = run_study(study, where / "run", plots=False, progress=False)
+    frame = pd.read_parquet(where / "run" / "signals.parquet")
+    _, note = write_study_mcap(study, frame, where / "run.mcap")
+    assert "nominal origin" in note and "[output] origin" in note          # the choice is said, with its option
+    return frame, _read(where / "run.mcap")
+
+
+def test_a_figure8_mcap_holds_the_documented_topics_with_the_signals_values(figure8_mcap):
+    frame, (schemas, messages) = figure8_mcap
+    for topic, name in SCHEMAS.items():
+        assert schemas.get(topic) == name, (topic, schemas.get(topic))
+    components = {c.split(".")[0] for c in frame.columns if c != "t"}
+    assert {f"/signals/{c}" for c in components} <= set(schemas)
+    # every output of the plant at every base step (its own rate: the base step), equal to signals.parquet
+    tractor = messages["/signals/tractor"]
+    assert len(tractor) == len(frame)
+    got = np.array([m["x_cg"] for _, m in tractor])
+    np.testing.assert_array_equal(got, frame["tractor.x_cg"].to_numpy())
+    # the GPS at its own 20 Hz, one message per step of the component
+    assert len(messages["/signals/gps"]) == pytest.approx(len(frame) / 5, abs=1)
+    # the pose: position and heading (from the quaternion about z) of the plant's CG
+    for t_ns, pose in messages["/vehicle/pose"][::17]:
+        row = _at(frame, t_ns)
+        q = pose.pose.orientation
+        assert pose.frame_id == "world"
+        assert pose.pose.position.x == pytest.approx(row["tractor.x_cg"], abs=1e-12)
+        assert pose.pose.position.y == pytest.approx(row["tractor.y_cg"], abs=1e-12)
+        assert 2 * np.arctan2(q.z, q.w) == pytest.approx(row["tractor.heading"], abs=1e-9)
+    # the fix on the map: back to east/north about the stated origin with pymap3d, the GPS's measured x, y
+    import pymap3d
+
+    from agrobot.analysis.mcap_scene import NOMINAL_ORIGIN
+
+    for t_ns, fix in messages["/gnss/fix"][::23]:
+        row = _at(frame, t_ns)
+        e, n, _ = pymap3d.geodetic2enu(fix.latitude, fix.longitude, 0.0, *NOMINAL_ORIGIN, 0.0, deg=True)
+        assert (e, n) == (pytest.approx(row["gps.x"], abs=1e-6), pytest.approx(row["gps.y"], abs=1e-6))
+    # the reference path, once, through the reference points
+    (_, update), = messages["/reference/path"]
+    points = np.array([[p.x, p.y] for p in update.entities[0].lines[0].points])
+    ref = frame[["reference.x_ref", "reference.y_ref"]].to_numpy()
+    assert np.min(np.hypot(*(points[:, None, :] - ref[None, ::50, :]).transpose(2, 0, 1)), axis=0).max() < 0.06
+
+
+def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(tmp_path):
+    from shapely.geometry import Point, shape
+
+    study = Study.load(STUDIES / "field_coverage.toml", ["field.max_swaths=2", "field.headland_work=0",
+                                                         "study.stop_time=20"])
+    run_study(study, tmp_path / "run", plots=False, progress=False)
+    frame = pd.read_parquet(tmp_path / "run" / "signals.parquet")
+    write_study_mcap(study, frame, tmp_path / "field.mcap")
+    schemas, messages = _read(tmp_path / "field.mcap")
+    assert schemas["/field"] == "foxglove.GeoJSON" and schemas["/implement/pose"] == "foxglove.PoseInFrame"
+    (_, geo), = messages["/field"]
+    features = json.loads(geo.geojson)["features"]
+    boundary = shape(next(f["geometry"] for f in features if f["properties"]["kind"] == "boundary"))
+    # every fix the tractor's receiver gave lies in the field's boundary (longitude, latitude): the mission frame
+    # was carried back to the field's geodetic origin
+    fixes = [(m.longitude, m.latitude) for _, m in messages["/gnss/fix"]]
+    assert len(fixes) > 100 and all(boundary.contains(Point(p)) for p in fixes[::10])
+    implement = messages["/implement/pose"]
+    row = _at(frame, implement[-1][0])
+    name = next(c.split(".")[0] for c in frame.columns if c.endswith(".hitch_angle"))
+    assert implement[-1][1].pose.position.x == pytest.approx(row[f"{name}.x"], abs=1e-12)
+
+
+def test_a_bad_mcap_path_is_refused_before_the_run(tmp_path):
+    out = tmp_path / "run"
+    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out", str(out),
+                           "--mcap", str(tmp_path / "no_such_folder" / "x.mcap")],
+                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert proc.returncode == 2 and "no_such_folder" in proc.stderr and "does not exist" in proc.stderr
+    assert not out.exists()
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
+    from websockets.sync.client import connect
+
+    port = _free_port()
+    out = tmp_path / "run"
+    run = subprocess.Popen([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out", str(out),
+                            "--set", "study.stop_time=40", "--no-plots", "--live", f"127.0.0.1:{port}",
+                            "--live-wait", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    try:
+        deadline, ws = time.time() + 90, None
+        while ws is None:
+            try:
+                ws = connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"], open_timeout=2)
+            except OSError:
+                assert run.poll() is None and time.time() < deadline, "the live view never listened"
+                time.sleep(0.2)
+        channels, subscriptions, got = {}, {}, {}
+        with ws:
+            while True:
+                try:
+                    message = ws.recv(timeout=120)
+                except Exception:          # noqa: BLE001 - the server closes the connection when the run ends
+                    break
+                if isinstance(message, str):
+                    op = json.loads(message)
+                    if op["op"] == "advertise":
+                        channels.update({c["topic"]: c for c in op["channels"]})
+                        wanted = [channels[t] for t in ("/signals/tractor", "/vehicle/pose") if t in channels]
+                        subscriptions = {10 + k: c for k, c in enumerate(wanted)}
+                        ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                            {"id": k, "channelId": c["id"]} for k, c in subscriptions.items()]}))
+                else:
+                    opcode, sid, t_ns = struct.unpack_from("<BIQ", message)
+                    assert opcode == 1
+                    got.setdefault(subscriptions[sid]["topic"], []).append((t_ns, message[13:]))
+        stdout, stderr = run.communicate(timeout=120)
+    finally:
+        if run.poll() is None:
+            run.kill()
+    assert run.returncode == 0, stderr
+    assert channels["/vehicle/pose"]["schemaName"] == "foxglove.PoseInFrame"
+    assert channels["/signals/tractor"]["encoding"] == "json"
+    frame = pd.read_parquet(out / "signals.parquet")
+    tractor = [(t, json.loads(p)) for t, p in got["/signals/tractor"]]
+    # the two subscriptions reach the server one after the other: the pose may miss the first instant
+    assert len(tractor) >= 5 and 0 <= len(tractor) - len(got["/vehicle/pose"]) <= 2
+    assert f"{len(tractor)} instants sent" in stdout or "instants sent" in stdout
+    for t_ns, values in tractor:                 # the values of the run at the instant sent
+        row = frame.iloc[int(round(values["t"] / 0.01))]
+        assert t_ns == round(values["t"] * 1e9)
+        assert values["x_cg"] == row["tractor.x_cg"] and values["heading"] == row["tractor.heading"]
+
+
+def test_a_port_in_use_is_refused_with_its_number(tmp_path):
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out",
+                               str(tmp_path / "run"), "--live", f"127.0.0.1:{port}"],
+                              capture_output=True, text=True, timeout=120, cwd=ROOT)
+    assert proc.returncode == 2 and f"127.0.0.1:{port}" in proc.stderr and "Traceback" not in proc.stderr
+    assert not (tmp_path / "run").exists()
+
+
+def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
+    from agrobot.measurements.truth_tractor import make_log
+    from agrobot.orchestrator.cli import main
+
+    frame, _ = make_log(3, None, duration=40.0)
+    frame.to_csv(tmp_path / "drive.csv", index=False)
+    assert main(["convert", str(tmp_path / "drive.csv"), "--out", str(tmp_path / "log.parquet"), "--mcap"]) == 0
+    log = pd.read_parquet(tmp_path / "log.parquet")
+    schemas, messages = _read(tmp_path / "log.mcap")
+    assert schemas["/log/position"] == "foxglove.Point3InFrame"
+    rows = messages["/signals/log"]
+    assert len(rows) == len(log)
+    for column in ("v", "yaw_rate", "delta"):
+        np.testing.assert_allclose([m[column] for _, m in rows], log[column], rtol=1e-12, atol=0)
+    positions = messages["/log/position"]
+    np.testing.assert_allclose([p.point.x for _, p in positions], log["x"], rtol=1e-12, atol=0)
+    assert [t for t, _ in positions] == [round((t - log["t"].iloc[0]) * 1e9) for t in log["t"]]
+
+
+def _luminance(color) -> float:
+    from matplotlib.colors import to_rgb
+
+    r, g, b = to_rgb(color)
+    return 0.299 * r + 0.587 * g + 0.114 * b
+
+
+def _apart_in_greyscale(ax) -> list[str]:
+    """Pairs of labelled lines of ``ax`` that only their hue tells apart: the same line style, marker and
+    width (within half), and luminances closer than 0.15 (they merge when printed in grey)."""
+    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    clashes = []
+    for i, a in enumerate(lines):
+        for b in lines[i + 1:]:
+            same_look = (a.get_linestyle() == b.get_linestyle() and a.get_marker() == b.get_marker()
+                         and 0.5 <= a.get_linewidth() / max(b.get_linewidth(), 1e-9) <= 2.0)
+            if same_look and abs(_luminance(a.get_color()) - _luminance(b.get_color())) < 0.15:
+                clashes.append(f"{a.get_label()} / {b.get_label()}")
+    return clashes
+
+
+def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_grey(figure8_mcap):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from agrobot.analysis.figure8 import PAPER_BOUNDS, metrics, trajectory_figure
+
+    frame, _ = figure8_mcap
+    study = Study.load(STUDIES / "figure8.toml", ["study.stop_time=16"])
+    fig = trajectory_figure(frame, study)
+    title = fig._suptitle.get_text()
+    m = metrics(frame, study)
+    for key, where in (("euclid_max_curved", "curves"), ("euclid_max_straight", "straights")):
+        if np.isfinite(m[key]):
+            verdict = "within" if m[key] < PAPER_BOUNDS[key] else "BEYOND"
+            assert f"{where} max {m[key]:.2f} m ({verdict} the paper's {PAPER_BOUNDS[key]:.2f} m)" in title
+        else:
+            assert f"no {where} judged" in title
+    for ax in fig.axes:
+        assert "[m]" in ax.get_xlabel() and "[m]" in ax.get_ylabel()
+        assert _apart_in_greyscale(ax) == []
+
+
+def test_a_sweep_writes_each_points_mcap_on_request(tmp_path):
+    from agrobot.orchestrator.cli import main
+
+    study = tmp_path / "sweep.toml"
+    study.write_text(f'extends = "{STUDIES / "figure8.toml"}"\n[study]\nstop_time = 14.0\n'
+                     '[sweep]\nmode = "grid"\n[sweep.parameters]\n"reference.speed" = [1.5, 2.5]\n')
+    assert main(["sweep", str(study), "--out", str(tmp_path / "out"), "--workers", "1", "--no-plots", "--mcap"]) == 0
+    files = sorted((tmp_path / "out" / "points").glob("*/run.mcap"))
+    assert len(files) == 2
+    speeds = set()
+    for path in files:
+        _, messages = _read(path)
+        speeds.add(round(max(m["speed_ref"] for _, m in messages["/signals/reference"]), 6))
+    assert speeds == {1.5, 2.5}
