@@ -20,6 +20,13 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
     parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
 
 
+def add_engine_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--engine", choices=("python", "compiled", "auto"), default="python",
+                        help="python (default): the Python components; compiled: the study's whole loop from the "
+                             "components' C cores, one compiled program (every component needs one); auto: compiled "
+                             "when it can, and says why not otherwise")
+
+
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
     p.add_argument("--out", type=Path, required=True,
@@ -28,6 +35,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
     add_set_option(p)
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    add_engine_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -48,7 +56,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.set:
             study = study.with_overrides(args.set)
     try:
-        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite, engine=args.engine)
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)
@@ -80,6 +88,10 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    add_engine_option(p)
+    p.add_argument("--keep-signals", action=argparse.BooleanOptionalAction, default=None,
+                   help="write each point's signals (default: yes with the Python engine, no with the compiled "
+                        "one, whose Monte Carlo runs thousands of points)")
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -90,7 +102,7 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
     study = Study.load(args.study, args.set)
-    runner = SweepRun(study, args.out)
+    runner = SweepRun(study, args.out, engine=args.engine, keep_signals=args.keep_signals)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
     except KeyboardInterrupt as exc:
