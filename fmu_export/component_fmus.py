@@ -10,6 +10,7 @@ their Python counterparts are, so a plant FMU stepped at its period reproduces t
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -122,15 +123,26 @@ def _delay_runtime(comp: Component, period: float) -> tuple[str, dict[str, float
 
 
 def _mpc_compiled(comp: Component, period: float) -> str:
+    p = comp.p
+    try:
+        return _mpc_design(tuple(map(float, p["num"])), tuple(map(float, p["den"])), float(period),
+                           int(p["prediction_horizon"]), int(p["control_horizon"]), float(p["Q"]), float(p["R"]),
+                           float(p["steer_limit"]), float(p["steer_rate_limit"]), p["model_input"] == "measured")
+    except ComponentExportError as exc:
+        raise ComponentExportError(f"components.{comp.name}: {exc}") from None
+
+
+@functools.lru_cache(maxsize=32)
+def _mpc_design(num, den, period, horizon, control_horizon, Q, R, steer_limit, steer_rate_limit, measured) -> str:
+    """The MPC's compiled design (a sweep's draws share it: designed once per process)."""
     from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
 
-    p = comp.p
-    m = CondensedTrackingMPC(p["num"], p["den"], period, int(p["prediction_horizon"]), int(p["control_horizon"]),
-                             float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * period)
+    m = CondensedTrackingMPC(list(num), list(den), period, horizon, control_horizon, Q, R, steer_limit,
+                             steer_rate_limit * period)
     if m.Nc > 10 or m.A.shape[0] > 8:
-        raise ComponentExportError(f"components.{comp.name}: the exported QP solver handles a control horizon "
-                                   f"up to 10 (got {m.Nc}) and a model order up to 8")
-    return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(p['model_input'] == 'measured')}\n"
+        raise ComponentExportError(f"the exported QP solver handles a control horizon up to 10 (got {m.Nc}) and a "
+                                   f"model order up to 8")
+    return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(measured)}\n"
             f"static const double MPC_H[NC * NC] = {{{c_array(m.H)}}};\n"
             f"static const double MPC_G[NC * (NX + 2)] = {{{c_array(m.G)}}};\n"
             f"static const double MPC_S[NC * NC] = {{{c_array(m.S)}}};\n"

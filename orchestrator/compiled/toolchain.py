@@ -14,7 +14,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import ComputationError, InputError
 
 FLAGS = ["-O2", "-std=gnu99", "-shared", "-fPIC", "-fno-fast-math"]
 _LOADED: dict[str, ctypes.CDLL] = {}
@@ -24,8 +24,8 @@ class CompilerMissing(InputError):
     """No C compiler on this machine (the message names the package to install)."""
 
 
-class CompileError(RuntimeError):
-    """The compiler refused the generated sources (a bug of a core or of the generator)."""
+class CompileError(ComputationError):
+    """The compiler refused the generated sources, or a cached library is not of its shape."""
 
 
 def compiler() -> str:
