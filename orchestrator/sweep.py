@@ -169,10 +169,20 @@ def _metrics_only(study: Study, system, simulation) -> dict[str, Any]:
     return {"status": _status(rec), "metrics": values}
 
 
-def simulate_points(jobs: list[tuple[Study, str | None]], engine: str, keep_signals: bool) -> list[dict[str, Any]]:
-    """Worker: several points in one task (a compiled point takes milliseconds: one task each
-    would cost more in the pool than in the run)."""
-    return [simulate_point(study, folder, engine, keep_signals) for study, folder in jobs]
+def simulate_points(study: Study, jobs: list[tuple[Point, str | None]], engine: str,
+                    keep_signals: bool) -> list[dict[str, Any]]:
+    """Worker: several points of ``study``'s sweep in one task (a compiled point takes
+    milliseconds: one task each would cost more in the pool than in the run); each point's
+    study is made here, not in the parent."""
+    results = []
+    for point, folder in jobs:
+        try:
+            one = point_study(study, point)
+        except StudyError as exc:
+            results.append({"status": "failed", "kind": "input", "error": str(exc)})
+            continue
+        results.append(simulate_point(one, folder, engine, keep_signals))
+    return results
 
 
 BATCH = 25                   # points per task with the compiled engine
@@ -375,13 +385,14 @@ class SweepRun:
 
         def job(batch):
             folders = [self.new_folder(p) if shared else None for p in batch]
-            return [(point_study(self.study, p), str(f) if f else None) for p, f in zip(batch, folders)], folders
+            return [(p, str(f) if f else None) for p, f in zip(batch, folders)], folders
 
         if scheduler is None:
             ctx = multiprocessing.get_context("spawn")
             pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
                                           initargs=(os.getpid(),))
-            submit = lambda jobs: pool.submit(simulate_points, jobs, self.engine, self.keep_signals)  # noqa: E731
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+                                              self.keep_signals)
             wait_first = lambda fs: cf.wait(fs, return_when=cf.FIRST_COMPLETED)[0]  # noqa: E731
         else:
             from distributed import Client, LocalCluster, wait
@@ -389,7 +400,8 @@ class SweepRun:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) \
                 if scheduler == "local" else None
             pool = Client(cluster) if cluster is not None else Client(scheduler, timeout=CONNECT_TIMEOUT)
-            submit = lambda jobs: pool.submit(simulate_points, jobs, self.engine, self.keep_signals, pure=False)  # noqa: E731
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+                                              self.keep_signals, pure=False)
             wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
         pending: dict = {}
         queue = iter(batches)
