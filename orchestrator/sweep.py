@@ -255,8 +255,11 @@ class SweepRun:
             if old.get("hash") != digest:
                 raise StudyError(f"{self.out}: holds results of a different sweep (study changed); "
                                  f"use another --out folder or remove it")
+            if old.get("engine", "python") != self.engine:
+                raise StudyError(f"{self.out}: holds points run with --engine {old.get('engine', 'python')}; resume "
+                                 f"with that engine, or use another --out folder")
         else:
-            write_json(manifest, {"study_file": self.where, "hash": digest,
+            write_json(manifest, {"study_file": self.where, "hash": digest, "engine": self.engine,
                                   "points": [{"point": p.key, "seed": p.seed, **p.values} for p in self.points]})
 
     # --- bookkeeping --------------------------------------------------------------------------
