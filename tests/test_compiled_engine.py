@@ -191,3 +191,27 @@ def test_a_monte_carlo_on_a_dask_local_cluster_matches_the_draws_run_one_by_one(
         assert np.isfinite(alone["euclid_max_straight"])
         assert row["euclid_max_straight"] == pytest.approx(alone["euclid_max_straight"], rel=1e-12)
         assert row["steer_angle_rms"] == pytest.approx(alone["steer_angle_rms"], rel=1e-12)
+
+
+def test_a_sweep_folder_keeps_its_engine(cache, tmp_path):
+    from agrobot.orchestrator.study import StudyError
+    from agrobot.orchestrator.sweep import SweepRun
+
+    study = Study.load(shipped("robustness.toml"), ["sweep.samples=2", "study.stop_time=20"])
+    SweepRun(study, tmp_path / "mc", engine="compiled").validate()
+    with pytest.raises(StudyError, match="holds points run with --engine compiled"):
+        SweepRun(study, tmp_path / "mc", engine="python").validate()
+
+
+def test_a_large_sweep_checks_each_parameters_extremes_and_choices_first(tmp_path):
+    from agrobot.orchestrator.sweep import SweepRun
+
+    study = Study.load(shipped("robustness.toml"), ["sweep.samples=600"])
+    run = SweepRun(study, tmp_path / "mc", engine="compiled")
+    checked = run.checked_points()
+    assert len(checked) < 40 and checked[0].index == 0
+    for name in ("tractor.m", "reference.speed", "steering.command_delay"):
+        values = [p.values[name] for p in run.points]
+        assert min(values) in [p.values[name] for p in checked] and max(values) in [p.values[name] for p in checked]
+    assert {p.values["tractor.model"] for p in checked} == {"bicycle", "rlf", "rlfr", "transfer_function"}
+    assert {p.values["gps.latency"] for p in checked} == {0.0, 0.05, 0.1}
