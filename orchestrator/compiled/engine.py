@@ -5,7 +5,8 @@ one call per run, with the interface of orchestrator.engine.Simulation (``start`
 The Python components are still built and initialised: their parameters are checked as in a
 Python run (a refused value exits 2 the same way) and their outputs at t0 (before any step) are
 the loop's initial published values. ``start`` runs the whole loop; ``advance`` and ``drain``
-then hand the rows out.
+then hand the rows out. The C cores log no events (events.log stays empty) and nothing is paced
+in real time (such a study is refused).
 """
 from __future__ import annotations
 
