@@ -140,8 +140,8 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
     meet: a component failing, SIGINT/SIGTERM (in the simulation or the analysis), the analysis
     failing; the outcome says which, and metrics.json holds the status. ``simulation``: the
     engine's class (orchestrator.compiled.select_engine), the Python engine by default."""
-    base = _base_facts(study)
     sim = (simulation or Simulation)(system)
+    base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
     writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
     watch = Progress(sim.n_steps, sim.h) if progress else None
     if watch is not None:

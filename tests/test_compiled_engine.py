@@ -137,7 +137,9 @@ def test_the_api_and_run_write_what_a_python_run_writes(cache, tmp_path):
 
     a, b = pq.read_table(tmp_path / "python" / "signals.parquet"), pq.read_table(tmp_path / "compiled" / "signals.parquet")
     assert a.column_names == b.column_names and a.num_rows == b.num_rows == 1501
-    assert json.loads((tmp_path / "compiled" / "metrics.json").read_text())["status"] == "completed"
+    written = json.loads((tmp_path / "compiled" / "metrics.json").read_text())
+    assert written["status"] == "completed" and written["engine"] == "compiled"
+    assert json.loads((tmp_path / "python" / "metrics.json").read_text())["engine"] == "python"
 
 
 def test_engine_compiled_on_a_study_it_cannot_take_exits_2_naming_the_components(cache, tmp_path, capsys):

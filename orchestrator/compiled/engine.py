@@ -84,6 +84,8 @@ def select_engine(system: System, engine: str):
 class CompiledSimulation:
     """A run of ``system`` by its compiled loop (``cores``: from ``cores_of``, all present)."""
 
+    engine_name = "compiled"                # metrics.json and run.json say which engine ran
+
     def __init__(self, system: System, cores: dict[str, CCore] | None = None, record: bool = True,
                  prepared=None) -> None:
         self.system = system
