@@ -293,9 +293,10 @@ def _run_in_memory(study: Study, plots: bool, engine: str = "python") -> RunResu
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
     system = build_system(resolve(study))
-    rec = choose_engine(system, engine)(system).run()
+    sim = choose_engine(system, engine)(system)
+    rec = sim.run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
-    base = _base_facts(study)
+    base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
     return _result(values, {**base, "status": _status(rec), **values}, analysis, study, [], frame)
