@@ -283,7 +283,8 @@ class TractorYawPlant(Component):
         self.x += dt * (v * c - vy_mid * s)
         self.y_pos += dt * (v * s + vy_mid * c)
         self.psi += 0.5 * dt * (gamma0 + gamma1)
-        self._update_ground()
+        if self._slope:                      # level ground: no pull, zero roll and pitch at every pose
+            self._update_ground()
         self._set_outputs(v, gamma1, vy1)
 
 

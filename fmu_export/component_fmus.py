@@ -10,6 +10,7 @@ their Python counterparts are, so a plant FMU stepped at its period reproduces t
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -39,6 +40,9 @@ class CoreSpec:
     dependencies: Callable[[Component], dict[str, list[str]]] | None = None   # default: the declared feedthrough
     extra_sources: tuple[str, ...] = ()
     extra_values: Callable[[Component, str], dict[str, float]] | None = None
+    # the compiled loop (fmu_export.loop_cores): C #defines that replace ``compiled``'s, reading the
+    # values that vary from run to run (a delay length) as run-time parameters, and those values
+    runtime: Callable[[Component, float], tuple[str, dict[str, float]]] | None = None
 
 
 def _numeric(value) -> bool:
@@ -50,15 +54,23 @@ def _substeps(comp: Component, period: float) -> str:
 
 
 def _plant_compiled(comp: Component, period: float) -> str:
-    from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS
+    from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, controllable_canonical
 
     model = comp.p["model"]
-    if model not in PHYSICAL_MODELS:
-        raise ComponentExportError(f"components.{comp.name}: model = {model!r} has no FMU form "
-                                   f"(the exported plant covers {', '.join(PHYSICAL_MODELS)})")
     if comp.p["terrain_file"]:
         raise ComponentExportError(f"components.{comp.name}: terrain_file = {comp.p['terrain_file']!r} has no FMU "
                                    f"form (the exported plant's ground is the plane of slope_angle)")
+    if float(comp.p["tyre_friction"]) > 0:
+        raise ComponentExportError(f"components.{comp.name}: tyre_friction = {comp.p['tyre_friction']!r} has no FMU "
+                                   f"form (the exported plant's tyres are linear)")
+    if model == "transfer_function":          # yaw rate from num/den in controllable canonical form
+        A, B, C = controllable_canonical(comp.p["tf_num"], comp.p["tf_den"])
+        n = A.shape[0]
+        return (f"#define YAW_MODEL 3\n#define TF_ORDER {n}\nstatic const double TF_A[{n * n}] = {{{c_array(A)}}};\n"
+                f"static const double TF_B[{n}] = {{{c_array(B)}}};\nstatic const double TF_C[{n}] = {{{c_array(C)}}};\n")
+    if model not in PHYSICAL_MODELS:
+        raise ComponentExportError(f"components.{comp.name}: model = {model!r} has no FMU form "
+                                   f"(the exported plant covers {', '.join(PHYSICAL_MODELS)} and transfer_function)")
     return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n"
 
 
@@ -73,6 +85,18 @@ def _steering_compiled(comp: Component, period: float) -> str:
     return _substeps(comp, period) + f"#define DELAY_STEPS {int(round(float(comp.p['command_delay']) / period))}\n"
 
 
+def capacity(n: int) -> int:
+    """Room of a buffer whose length is a run-time value: 32, or the next power of two (a few
+    shapes cover every length a sweep draws)."""
+    return 32 if n <= 32 else 1 << (n - 1).bit_length()
+
+
+def _steering_runtime(comp: Component, period: float) -> tuple[str, dict[str, float]]:
+    steps = int(round(float(comp.p["command_delay"]) / period))
+    return (_substeps(comp, period) + f"#define DELAY_CAPACITY {capacity(steps)}\n#define DELAY_STEPS ((int)p[P__delay_steps])\n",
+            {"_delay_steps": float(steps)})
+
+
 GPS_QUALITY_PARAMETERS = ("outages", "quality_log", "quality_log_start", "rtk_float_error_std", "dgps_error_std",
                           "single_error_std", "degraded_error_time_constant")
 
@@ -85,16 +109,40 @@ def _gps_compiled(comp: Component, period: float) -> str:
     return f"#define LAG {int(round(float(comp.p['latency']) / period))}\n#define LATENCY {float(comp.p['latency'])!r}\n"
 
 
+def _gps_runtime(comp: Component, period: float) -> tuple[str, dict[str, float]]:
+    _gps_compiled(comp, period)                      # refuses what has no C form
+    lag = int(round(float(comp.p["latency"]) / period))
+    return (f"#define LAG_CAPACITY {capacity(lag)}\n#define LAG ((int)p[P__lag])\n#define LATENCY (p[P__latency])\n",
+            {"_lag": float(lag), "_latency": float(comp.p["latency"])})
+
+
+def _delay_runtime(comp: Component, period: float) -> tuple[str, dict[str, float]]:
+    samples = int(comp.p["samples"])
+    return (f"#define DELAY_CAPACITY {capacity(samples)}\n#define DELAY_SAMPLES ((int)p[P__samples])\n",
+            {"_samples": float(samples)})
+
+
 def _mpc_compiled(comp: Component, period: float) -> str:
+    p = comp.p
+    try:
+        return _mpc_design(tuple(map(float, p["num"])), tuple(map(float, p["den"])), float(period),
+                           int(p["prediction_horizon"]), int(p["control_horizon"]), float(p["Q"]), float(p["R"]),
+                           float(p["steer_limit"]), float(p["steer_rate_limit"]), p["model_input"] == "measured")
+    except ComponentExportError as exc:
+        raise ComponentExportError(f"components.{comp.name}: {exc}") from None
+
+
+@functools.lru_cache(maxsize=32)
+def _mpc_design(num, den, period, horizon, control_horizon, Q, R, steer_limit, steer_rate_limit, measured) -> str:
+    """The MPC's compiled design (a sweep's draws share it: designed once per process)."""
     from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
 
-    p = comp.p
-    m = CondensedTrackingMPC(p["num"], p["den"], period, int(p["prediction_horizon"]), int(p["control_horizon"]),
-                             float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * period)
+    m = CondensedTrackingMPC(list(num), list(den), period, horizon, control_horizon, Q, R, steer_limit,
+                             steer_rate_limit * period)
     if m.Nc > 10 or m.A.shape[0] > 8:
-        raise ComponentExportError(f"components.{comp.name}: the exported QP solver handles a control horizon "
-                                   f"up to 10 (got {m.Nc}) and a model order up to 8")
-    return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(p['model_input'] == 'measured')}\n"
+        raise ComponentExportError(f"the exported QP solver handles a control horizon up to 10 (got {m.Nc}) and a "
+                                   f"model order up to 8")
+    return (f"#define NX {m.A.shape[0]}\n#define NC {m.Nc}\n#define MEASURED_INPUT {int(measured)}\n"
             f"static const double MPC_H[NC * NC] = {{{c_array(m.H)}}};\n"
             f"static const double MPC_G[NC * (NX + 2)] = {{{c_array(m.G)}}};\n"
             f"static const double MPC_S[NC * NC] = {{{c_array(m.S)}}};\n"
@@ -116,15 +164,17 @@ SPECS: dict[str, CoreSpec] = {
     "TractorYawPlant": CoreSpec("tractor_yaw_plant.c", _plant_compiled,
                                 ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
                                  "cornering_scale_rear", "terrain_file"), _plant_values),
-    "SteeringHydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay")),
+    "SteeringHydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay"),
+                                   runtime=_steering_runtime),
     "SpeedDrivetrain": CoreSpec("speed_drivetrain.c", _substeps, ("internal_step",)),
     "GPSSensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",) + GPS_QUALITY_PARAMETERS,
                           extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
-                          extra_values=_gps_seed),
+                          extra_values=_gps_seed, runtime=_gps_runtime),
     "SpeedKF": CoreSpec("speed_kf.c"),
     "PoseEKF": CoreSpec("pose_ekf.c"),
     "ComputationDelay": CoreSpec("computation_delay.c",
-                                 lambda comp, period: f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n", ("samples",)),
+                                 lambda comp, period: f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n", ("samples",),
+                                 runtime=_delay_runtime),
     "KinematicTracker": CoreSpec("kinematic_tracker.c", extra_sources=("guidance_laws.c",)),
     "SpeedPID": CoreSpec("speed_pid.c", extra_sources=("guidance_laws.c",)),
     "YawRateMPC": CoreSpec("yaw_rate_mpc.c", _mpc_compiled,
@@ -145,14 +195,21 @@ def exportable(comp: Component) -> bool:
     return type(comp).__name__ in SPECS
 
 
-def component_model(system: System, name: str) -> SampledModel:
-    """The sampled model of the study component ``name`` (its parameters as resolved in the study)."""
-    node = system.nodes[name]
-    comp, period = node.component, float(node.step)
+def core_spec(system: System, name: str) -> CoreSpec:
+    """The C model core of the study component ``name``: the one place that says which component
+    type has which core (a ComponentExportError names the component otherwise)."""
+    comp = system.nodes[name].component
     spec = SPECS.get(type(comp).__name__)
     if spec is None:
         raise ComponentExportError(f"{system.study.path}: components.{name}: type {type(comp).__name__} has no FMU "
                                    f"form; exportable types: {', '.join(sorted(SPECS))}")
+    return spec
+
+
+def core_parameters(system: System, name: str, spec: CoreSpec) -> list[tuple[str, float, str, str]]:
+    """(name, value, unit, description) of the core's parameters: the component's numeric
+    parameters not compiled in, then the core's own (a seed)."""
+    comp = system.nodes[name].component
     values = {**comp.p, **(spec.values(comp) if spec.values else {})}
     parameters = []
     for v in comp.variables:
@@ -164,7 +221,15 @@ def component_model(system: System, name: str) -> SampledModel:
                                        f"not a number; the FMU form takes numeric parameters only")
         parameters.append((v.name, float(value), v.unit or "1", v.description))
     extra = dict(spec.extra_values(comp, name)) if spec.extra_values else {}
-    parameters += [(n, extra.get(n, start), unit, desc) for n, start, unit, desc in spec.extra_parameters]
+    return parameters + [(n, extra.get(n, start), unit, desc) for n, start, unit, desc in spec.extra_parameters]
+
+
+def component_model(system: System, name: str) -> SampledModel:
+    """The sampled model of the study component ``name`` (its parameters as resolved in the study)."""
+    node = system.nodes[name]
+    comp, period = node.component, float(node.step)
+    spec = core_spec(system, name)
+    parameters = core_parameters(system, name, spec)
     outputs = [(v.name, v.unit or "1", v.description) for v in comp.variables if v.causality == "output"]
     inputs = [(fmu_input_name(comp, v.name), v.unit or "1", v.description)
               for v in comp.variables if v.causality == "input"]

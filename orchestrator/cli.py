@@ -20,6 +20,13 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
     parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
 
 
+def add_engine_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--engine", choices=("python", "compiled", "auto"), default="python",
+                        help="python (default): the Python components; compiled: the study's whole loop from the "
+                             "components' C cores, one compiled program (every component needs one); auto: compiled "
+                             "when it can, and says why not otherwise")
+
+
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
     p.add_argument("--out", type=Path, required=True,
@@ -35,6 +42,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
                         "the MCAP's topics at 20 instants a second of wall time)")
     p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
                    help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
+    add_engine_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -57,7 +65,7 @@ def _run(args: argparse.Namespace) -> int:
     mcap = _mcap_path(args, study)
     live = _live_view(study, args.live, args.live_wait) if args.live else None
     try:
-        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite, engine=args.engine,
                            observers=[live] if live else [])
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
@@ -140,6 +148,10 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mcap", action="store_true", help="also write each point's run as points/<point>/run.mcap "
                    "(the study's [output] mcap = true does the same)")
     p.add_argument("--no-plots", action="store_true", help="skip the figures")
+    add_engine_option(p)
+    p.add_argument("--keep-signals", action=argparse.BooleanOptionalAction, default=None,
+                   help="write each point's signals (default: yes with the Python engine, no with the compiled "
+                        "one, whose Monte Carlo runs thousands of points)")
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -154,7 +166,7 @@ def _sweep(args: argparse.Namespace) -> int:
         from .mcap_out import with_mcap
 
         study = with_mcap(study)
-    runner = SweepRun(study, args.out)
+    runner = SweepRun(study, args.out, engine=args.engine, keep_signals=args.keep_signals)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
     except KeyboardInterrupt as exc:

@@ -14,6 +14,10 @@ A component raising EndRun (an FMU's terminate request) ends the run cleanly at 
 recorded in full; ``Recording.ended_by`` says who asked, when and why.
 Step 2 at k = 0 propagates the outputs at t0 before anything integrates.
 
+From ``start`` to ``terminate`` the BLAS libraries run on one thread (threadpoolctl): the
+components' matrices are a few rows wide, and on a busy machine a BLAS thread pool spends more
+waking its threads than computing (a 6x6 matrix exponential: 18 ms instead of 20 us at load 6).
+
 Recording the signals (orchestrator.recording), pacing against the wall clock
 (orchestrator.realtime) and reporting progress are observers (orchestrator.observers): the
 engine calls their hooks and takes no part in what they do.
@@ -25,6 +29,8 @@ import time
 from typing import Iterable
 
 import numpy as np
+
+from threadpoolctl import threadpool_limits
 
 from .build import Node, System
 from .component import ComponentError, EndRun
@@ -68,6 +74,7 @@ class Simulation:
         self.observers += list(observers)
         self.k, self._drained, self._start = 0, 0, time.perf_counter()
         self.ended_by: dict | None = None
+        self._blas_limit = None
 
     def add_observer(self, observer: Observer) -> None:
         """Watch the run (before ``start``)."""
@@ -97,6 +104,8 @@ class Simulation:
     def start(self) -> None:
         """Initialise every component and publish its outputs at t0 (step 0 not yet taken)."""
         sys_ = self.system
+        if self._blas_limit is None:
+            self._blas_limit = threadpool_limits(limits=1, user_api="blas")
         self._start = time.perf_counter()
         self.published = published = {}
         self._drained = 0          # a restarted simulation records from its start again
@@ -219,6 +228,10 @@ class Simulation:
         return self._recording(self.k + 1, True)
 
     def terminate(self) -> None:
+        """Release every component and give the BLAS libraries their threads back."""
+        if self._blas_limit is not None:
+            self._blas_limit.restore_original_limits()
+            self._blas_limit = None
         for node in self.system.nodes.values():
             try:
                 node.component.terminate()

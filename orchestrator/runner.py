@@ -134,13 +134,14 @@ class Outcome:
 
 
 def record_run(study: Study, system: System, folder: Path, analysis=None, plots: bool = True,
-               progress: bool = True, observers=()) -> Outcome:
+               progress: bool = True, observers=(), simulation=None) -> Outcome:
     """Simulate ``system`` into ``folder`` (signals streamed, events.log, run.json), analyse the
     signals and write metrics.json (and the analysis's plots). Never raises for what a run can
     meet: a component failing, SIGINT/SIGTERM (in the simulation or the analysis), the analysis
-    failing; the outcome says which, and metrics.json holds the status."""
-    base = _base_facts(study)
-    sim = Simulation(system)
+    failing; the outcome says which, and metrics.json holds the status. ``simulation``: the
+    engine's class (orchestrator.compiled.select_engine), the Python engine by default."""
+    sim = (simulation or Simulation)(system)
+    base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
     writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
     watch = Progress(sim.n_steps, sim.h) if progress else None
     for observer in ([watch] if watch is not None else []) + list(observers):
@@ -203,23 +204,39 @@ def _write_status(folder: Path, study: Study, system, facts: dict[str, Any], t_r
         write_json(folder / "run.json", _run_json(study, system, facts["status"], t_reached))
 
 
+def choose_engine(system: System, engine: str):
+    """The engine's class for ``engine`` (python, compiled, auto); the choice of ``auto``, and
+    why, is printed on stderr (orchestrator.compiled.select_engine)."""
+    if engine == "python":
+        return Simulation
+    import sys
+
+    from .compiled import select_engine
+
+    factory, note = select_engine(system, engine)
+    if note and engine == "auto":
+        print(note, file=sys.stderr)
+    return factory
+
+
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
-              progress: bool = True, observers=()) -> RunResult:
+              progress: bool = True, engine: str = "python", observers=()) -> RunResult:
     """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
     before anything runs (orchestrator.output), the run is recorded into a fresh folder beside it
     (``record_run``) and moved into place or beside it. Raises Interrupted (exit 130/143) on
     SIGINT/SIGTERM, RunError or AnalysisError on a failure, with ``where`` the folder that holds
-    what was kept."""
+    what was kept. ``engine``: python, compiled or auto (orchestrator.compiled)."""
     if out_dir is None:
-        return _run_in_memory(study, plots, observers)
+        return _run_in_memory(study, plots, engine, observers)
     from .output import ResultFolder
 
     analysis = _analysis(study)
     folder = ResultFolder(Path(out_dir), overwrite)
     system = build_system(resolve(study))
+    simulation = choose_engine(system, engine)
     with folder:
         try:
-            outcome = record_run(study, system, folder.tmp, analysis, plots, progress, observers)
+            outcome = record_run(study, system, folder.tmp, analysis, plots, progress, observers, simulation)
         except KeyboardInterrupt as exc:        # a second signal while the first one's results were saved
             if not (folder.tmp / "metrics.json").exists():
                 raise
@@ -272,12 +289,16 @@ def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
         raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
 
 
-def _run_in_memory(study: Study, plots: bool, observers=()) -> RunResult:
+def _run_in_memory(study: Study, plots: bool, engine: str = "python", observers=()) -> RunResult:
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
-    rec = Simulation(build_system(resolve(study)), observers=observers).run()
+    system = build_system(resolve(study))
+    sim = choose_engine(system, engine)(system)
+    for observer in observers:
+        sim.add_observer(observer)
+    rec = sim.run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
-    base = _base_facts(study)
+    base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
     return _result(values, {**base, "status": _status(rec), **values}, analysis, study, [], frame)

@@ -26,6 +26,7 @@ import multiprocessing
 import os
 import re
 import shutil
+import sys
 import tempfile
 import time
 import traceback
@@ -108,17 +109,31 @@ def watch_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="watch-parent").start()
 
 
-def simulate_point(study: Study, folder: str | None = None) -> dict[str, Any]:
+def simulate_point(study: Study, folder: str | None = None, engine: str = "python",
+                   keep_signals: bool = True) -> dict[str, Any]:
     """Worker: run one point into ``folder`` (None: a temporary folder whose files are returned);
-    never raises (a failure is a result, with its kind: input, run, analysis or bug)."""
+    never raises (a failure is a result, with its kind: input, run, analysis or bug). ``engine``:
+    python, compiled or auto (orchestrator.compiled); ``keep_signals`` False: the point's signal
+    table is removed once its metrics are computed."""
     from .engine import RunError
     from .errors import InputError
     from .runner import AnalysisError, _analysis, record_run
 
     target = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="sweep-point-"))
     try:
-        outcome = record_run(study, build_system(resolve(study)), target, _analysis(study), plots=False,
-                             progress=False)
+        system = build_system(resolve(study))
+        simulation = None
+        if engine != "python":
+            from .compiled import select_engine
+
+            simulation = select_engine(system, engine)[0]
+        if not keep_signals and not wants_mcap(study):
+            result = _metrics_only(study, system, simulation)
+            if folder is None:
+                shutil.rmtree(target, ignore_errors=True)
+            return result
+        outcome = record_run(study, system, target, _analysis(study), plots=False, progress=False,
+                             simulation=simulation)
         if outcome.complete and wants_mcap(study):
             from .mcap_out import write_study_mcap
 
@@ -141,13 +156,53 @@ def simulate_point(study: Study, folder: str | None = None) -> dict[str, Any]:
     return result
 
 
+def _metrics_only(study: Study, system, simulation) -> dict[str, Any]:
+    """A point run in memory: its metrics, no file (its signals are dropped once analysed)."""
+    from .engine import RunError, Simulation
+    from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status
+
+    try:
+        rec = (simulation or Simulation)(system).run()
+    except RunError as exc:
+        return {"status": "failed", "kind": "run", "error": str(exc)}
+    try:
+        values = _metrics(_analysis(study), rec.to_frame(), study)
+    except AnalysisError as exc:
+        return {"status": "failed", "kind": "analysis", "error": str(exc)}
+    values.update(sim_time_s=study.study.stop_time - study.study.start_time, wall_time_s=rec.wall_time_s,
+                  **_run_facts(rec))
+    return {"status": _status(rec), "metrics": values}
+
+
+def simulate_points(study: Study, jobs: list[tuple[Point, str | None]], engine: str,
+                    keep_signals: bool) -> list[dict[str, Any]]:
+    """Worker: several points of ``study``'s sweep in one task (a compiled point takes
+    milliseconds: one task each would cost more in the pool than in the run); each point's
+    study is made here, not in the parent."""
+    results = []
+    for point, folder in jobs:
+        try:
+            one = point_study(study, point)
+        except StudyError as exc:
+            results.append({"status": "failed", "kind": "input", "error": str(exc)})
+            continue
+        results.append(simulate_point(one, folder, engine, keep_signals))
+    return results
+
+
+BATCH = 25                   # points per task with the compiled engine
+VALIDATE_ALL_UP_TO = 500     # larger sweeps build a representative subset of their points first
+
+
 def sweep_hash(study: Study) -> str:
     return hashlib.sha256(json.dumps(study.to_data(), sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
 class SweepRun:
-    def __init__(self, study: Study, out_dir: Path) -> None:
+    def __init__(self, study: Study, out_dir: Path, engine: str = "python", keep_signals: bool | None = None) -> None:
         self.study, self.out = study, Path(out_dir)
+        self.engine = engine
+        self.keep_signals = engine == "python" if keep_signals is None else keep_signals
         self.where = str(study.path)
         self.points = expand(study)
         self.fmt = study.study.signals_format
@@ -155,14 +210,47 @@ class SweepRun:
         self.running_dir = self.out / ".running"          # points being recorded by their workers
 
     # --- checks before anything runs ----------------------------------------------------------
+    def checked_points(self) -> list[Point]:
+        """The points built before the sweep runs: all of them up to VALIDATE_ALL_UP_TO; beyond, the
+        first and, per swept parameter, the points of its smallest and largest value and the first
+        of each distinct value (a value refused is at an end of its range or a choice); the workers
+        check the others as they run them."""
+        if len(self.points) <= VALIDATE_ALL_UP_TO:
+            return self.points
+        chosen = {0}
+        for name in self.study.sweep.parameters:
+            values = [p.values.get(name) for p in self.points]
+            try:
+                chosen |= {min(range(len(values)), key=values.__getitem__), max(range(len(values)), key=values.__getitem__)}
+            except TypeError:
+                pass
+            seen: dict = {}
+            for i, v in enumerate(values):
+                seen.setdefault(repr(v), i)
+            if len(seen) <= 50:
+                chosen |= set(seen.values())
+        return [self.points[i] for i in sorted(chosen)]
+
     def validate(self) -> None:
-        """Build every point (types, parameters, units, wiring) before running any."""
+        """Build the points (types, parameters, units, wiring: ``checked_points``) before running
+        any; with the compiled engine, choose it on the first point (compiled: refused with the
+        components named; auto: the choice and why printed) and compile its shape once."""
         from .output import check_output
 
         check_output(self.out, overwrite=True)
-        for point in self.points:
+        checked = self.checked_points()
+        if len(checked) < len(self.points):
+            print(f"sweep: {len(self.points)} points: building {len(checked)} of them before the run (the first, each "
+                  f"parameter's extremes and choices); the workers check the others", file=sys.stderr)
+        for i, point in enumerate(checked):
             try:
-                build_system(resolve(point_study(self.study, point)))
+                system = build_system(resolve(point_study(self.study, point)))
+                if i == 0 and self.engine != "python":
+                    from .compiled import select_engine
+
+                    note = select_engine(system, self.engine)[1]
+                    if note and self.engine == "auto":
+                        print(note, file=sys.stderr)
             except StudyError as exc:
                 raise StudyError(f"{exc}\n  (sweep point {point.key}: {point.values}, seed {point.seed})") from None
         manifest = self.out / "sweep.json"
@@ -172,8 +260,11 @@ class SweepRun:
             if old.get("hash") != digest:
                 raise StudyError(f"{self.out}: holds results of a different sweep (study changed); "
                                  f"use another --out folder or remove it")
+            if old.get("engine", "python") != self.engine:
+                raise StudyError(f"{self.out}: holds points run with --engine {old.get('engine', 'python')}; resume "
+                                 f"with that engine, or use another --out folder")
         else:
-            write_json(manifest, {"study_file": self.where, "hash": digest,
+            write_json(manifest, {"study_file": self.where, "hash": digest, "engine": self.engine,
                                   "points": [{"point": p.key, "seed": p.seed, **p.values} for p in self.points]})
 
     # --- bookkeeping --------------------------------------------------------------------------
@@ -264,9 +355,12 @@ class SweepRun:
                  scheduler: str | None) -> Iterator[tuple[Point, dict, Path | None]]:
         """(point, result, the folder its worker wrote) as points finish."""
         shared = scheduler in (None, "local")            # the workers see this machine's folders
-        jobs = [(p, point_study(self.study, p), self.new_folder(p) if shared else None) for p in todo]
-        if not jobs:
+        if not todo:
             return
+        if self.engine != "python":
+            yield from self._execute_batched(todo, workers, scheduler, shared)
+            return
+        jobs = [(p, point_study(self.study, p), self.new_folder(p) if shared else None) for p in todo]
         # one thread per point: parallelism comes from processes (BLAS threads spinning on tiny
         # matrices made two workers four times slower than one on two cores)
         for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -289,6 +383,64 @@ class SweepRun:
                     raise
             return
         yield from _execute_dask(jobs, workers, scheduler)
+
+    def _execute_batched(self, todo: list[Point], workers: int, scheduler: str | None, shared: bool):
+        """As ``_execute``, BATCH points per task (the compiled engine); tasks are submitted as
+        workers free up, so memory holds a few batches whatever the number of points."""
+        for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(var, "1")
+        batches = [todo[i:i + BATCH] for i in range(0, len(todo), BATCH)]
+
+        def job(batch):
+            folders = [self.new_folder(p) if shared else None for p in batch]
+            return [(p, str(f) if f else None) for p, f in zip(batch, folders)], folders
+
+        if scheduler is None:
+            ctx = multiprocessing.get_context("spawn")
+            pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
+                                          initargs=(os.getpid(),))
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+                                              self.keep_signals)
+            wait_first = lambda fs: cf.wait(fs, return_when=cf.FIRST_COMPLETED)[0]  # noqa: E731
+        else:
+            from distributed import Client, LocalCluster, wait
+
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) \
+                if scheduler == "local" else None
+            pool = Client(cluster) if cluster is not None else Client(scheduler, timeout=CONNECT_TIMEOUT)
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+                                              self.keep_signals, pure=False)
+            wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
+        pending: dict = {}
+        queue = iter(batches)
+        try:
+            while True:
+                while len(pending) < 2 * workers:
+                    batch = next(queue, None)
+                    if batch is None:
+                        break
+                    jobs, folders = job(batch)
+                    pending[submit(jobs)] = (batch, folders)
+                if not pending:
+                    break
+                for fut in wait_first(pending.keys()):
+                    batch, folders = pending.pop(fut)
+                    try:
+                        results = fut.result()
+                    except Exception as exc:  # a worker process died (killed, out of memory)
+                        results = [{"status": "failed", "kind": "bug",
+                                    "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
+                    for point, result, folder in zip(batch, results, folders):
+                        yield point, result, folder
+        finally:
+            if scheduler is None:
+                for proc in list((pool._processes or {}).values()):
+                    proc.terminate()
+                pool.shutdown(wait=False, cancel_futures=True)
+            else:
+                pool.close()
+                if cluster is not None:
+                    cluster.close()
 
 
 def _result(fut) -> dict[str, Any]:

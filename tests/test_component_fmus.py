@@ -102,6 +102,6 @@ def test_gps_fmu_noise_has_the_configured_spread_and_the_seed_repeats_it(recorde
 def test_a_component_without_an_fmu_form_is_named(tmp_path):
     from agrobot.fmu_export.component_fmus import ComponentExportError, component_model
 
-    system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tractor.model=transfer_function"])))
-    with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: model = 'transfer_function' has no FMU form"):
+    system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tractor.tyre_friction=0.8"])))
+    with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: tyre_friction = 0.8 has no FMU form"):
         component_model(system, "tractor")

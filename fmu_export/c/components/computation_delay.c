@@ -1,6 +1,9 @@
 /* Computation delay (components/computation_delay.py): the commands pass through a FIFO of
  * DELAY_SAMPLES samples (0: straight through, direct feedthrough). */
-typedef struct { double steer[DELAY_SAMPLES + 1], volts[DELAY_SAMPLES + 1]; int head, filled; } ModelState;
+#ifndef DELAY_CAPACITY                     /* the FIFO's room: the delay itself, or a bound when the */
+#define DELAY_CAPACITY DELAY_SAMPLES       /* delay is a run-time value (the compiled loop)          */
+#endif
+typedef struct { double steer[DELAY_CAPACITY + 1], volts[DELAY_CAPACITY + 1]; int head, filled; } ModelState;
 
 static void model_start(ModelState *st, const double *par) { (void)par; memset(st, 0, sizeof *st); }
 

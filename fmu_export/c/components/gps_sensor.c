@@ -3,8 +3,11 @@
  * outages (an outage starts with dropout_probability per sample and lasts dropout_duration).
  * Random numbers: xoshiro256** seeded by the parameter `seed` (splitmix64), normals by Box-Muller;
  * the stream differs from numpy's, the distributions are the same. */
+#ifndef LAG_CAPACITY                       /* the history's room: the lag itself, or a bound when the */
+#define LAG_CAPACITY LAG                   /* lag is a run-time value (the compiled loop)             */
+#endif
 typedef struct {
-    double hist[LAG + 1][4];
+    double hist[LAG_CAPACITY + 1][4];
     int head, filled, outage_left;
     double last_fix_time, t, bias[2], held[4];
     unsigned long long rng[4];

@@ -1,6 +1,7 @@
 /* Speed drivetrain (components/speed_drivetrain.py): a valve with a dead-band moves the pedal at
  * a rate proportional to its opening; the speed lags the pedal's steady-state speed
  * v_ss = v_max ((p - p0) / (1 - p0))^n with time constant tau, integrated in SUBSTEPS substeps. */
+#define MODEL_HAS_OUTPUTS 1                /* model_outputs: y_k = g(x_k), read by the compiled loop */
 typedef struct { double pedal, v; } ModelState;
 
 static void model_start(ModelState *st, const double *p) { st->pedal = p[P_pedal0]; st->v = p[P_speed0]; }
@@ -18,9 +19,14 @@ static double valve_opening(double voltage, double neutral, double deadband, dou
     return copysign(o < 1.0 ? o : 1.0, e);
 }
 
-static void model_sample(ModelState *st, const double *p, const double *in, double *out) {
+static void model_outputs(const ModelState *st, const double *p, double *out) {
+    (void)p;
     out[OUT_pedal_position] = st->pedal;
     out[OUT_speed] = st->v;
+}
+
+static void model_sample(ModelState *st, const double *p, const double *in, double *out) {
+    model_outputs(st, p, out);
     double h = MODEL_PERIOD / SUBSTEPS, vn = p[P_neutral_voltage];
     double opening = valve_opening(in[IN_pedal_valve_voltage], vn, p[P_deadband], p[P_voltage_max] - vn);
     double decay = exp(-h / p[P_time_constant]), rate = h * opening * p[P_pedal_rate_max];

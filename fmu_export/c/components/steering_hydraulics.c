@@ -2,9 +2,13 @@
  * drives the valve voltage; the valve (dead-band, first-order spool lag) sets the wheel rate;
  * mechanical stops; SUBSTEPS substeps per period. Optional command transport delay of
  * DELAY_STEPS periods (a FIFO), angle dead-band, quantisation guard and extra rate limit. */
+#ifndef DELAY_CAPACITY                     /* the FIFO's room: the delay itself, or a bound when the */
+#define DELAY_CAPACITY DELAY_STEPS         /* delay is a run-time value (the compiled loop)          */
+#endif
+#define MODEL_HAS_OUTPUTS 1                /* model_outputs: y_k = g(x_k), read by the compiled loop */
 typedef struct {
     double delta, opening, integral, voltage, rate;
-    double history[DELAY_STEPS + 1];
+    double history[DELAY_CAPACITY + 1];
     int head, filled;
 } ModelState;
 
@@ -21,11 +25,15 @@ static void model_start(ModelState *st, const double *p) {
     st->head = DELAY_STEPS % (DELAY_STEPS + 1);
 }
 
-static void model_sample(ModelState *st, const double *p, const double *in, double *out) {
+static void model_outputs(const ModelState *st, const double *p, double *out) {
     out[OUT_steer_angle] = st->delta;
     out[OUT_steer_angle_measured] = quantize(st->delta, p[P_potentiometer_resolution]);
     out[OUT_valve_voltage] = st->voltage;
     out[OUT_steer_rate] = st->rate;
+}
+
+static void model_sample(ModelState *st, const double *p, const double *in, double *out) {
+    model_outputs(st, p, out);
     const int n = DELAY_STEPS + 1;
     st->history[st->head] = in[IN_steer_angle_cmd];
     st->head = (st->head + 1) % n;

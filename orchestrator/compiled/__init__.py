@@ -1,0 +1,18 @@
+"""The compiled engine: when every component of a study has a C core (a project registers where
+the cores come from: ``register_core_provider``), the study's whole loop (its wiring, rates,
+initial values and parameters, the master algorithm's order and sample-and-hold) is generated
+as C, compiled once per shape and cached, and run by one call per run.
+
+    from agrobot.orchestrator.compiled import select_engine
+    factory, note = select_engine(system, "auto")     # CompiledSimulation, or Simulation and why
+    recording = factory(system).run()
+
+The orchestrator's part is generic: it knows no component; orchestrator.compiled.cores says what
+a core provides.
+"""
+from .cores import CCore, NoCCore, register_core_provider
+from .engine import ENGINES, CompiledRefused, CompiledSimulation, cores_of, select_engine
+from .toolchain import CompileError, CompilerMissing
+
+__all__ = ["CCore", "NoCCore", "register_core_provider", "ENGINES", "CompiledRefused", "CompiledSimulation",
+           "cores_of", "select_engine", "CompileError", "CompilerMissing"]
