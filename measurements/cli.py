@@ -36,6 +36,13 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
     g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
     g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
+    g.add_argument("--max-gap", type=float, default=0.5, metavar="SECONDS",
+                   help="a channel's gap up to this is bridged (linear; a command held) and named; a longer one, or "
+                        "a silence of every channel, splits the log (default 0.5 s; 0 bridges nothing)")
+    g.add_argument("--align", default="auto", metavar="auto|none|GROUP=SECONDS",
+                   help="clock offsets between channel groups (a file, topic or bus): auto corrects those the audit "
+                        "finds on strong evidence (two speeds, gyro vs GNSS course, v r vs lateral acceleration); none "
+                        "keeps the stamps; GROUP=SECONDS moves GROUP earlier by SECONDS (default auto)")
     g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
                    help="use this span, s after the recording's first fix, instead of a run")
 
@@ -73,7 +80,11 @@ def recording_options(args: argparse.Namespace):
     options = ImportOptions(dbc=args.dbc, signals=signals, rate=args.rate,
                             run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
-                            keep_spikes=getattr(args, "keep_spikes", False))
+                            keep_spikes=getattr(args, "keep_spikes", False),
+                            max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"))
+    from .audit import parse_align
+
+    parse_align(options.align)
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio
     if args.wheelbase is not None:

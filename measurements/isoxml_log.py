@@ -197,7 +197,7 @@ def timelog_streams(paths: list[Path], options, source: Path):
                          "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
                          "t": "TIM start, s from the run's start"}
     report["fixed"] = info["fixed"]
-    return Streams(gnss, signals, report, set(signals), {}, breaks)
+    return Streams(gnss, signals, report, set(signals), {}, breaks, groups={c: "gnss" for c in signals})
 
 
 def _task_notes(paths: list[Path], heads: list[Path]) -> list[str]:

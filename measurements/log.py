@@ -2,7 +2,9 @@
 
 A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units
 (``COLUMNS``); more columns are allowed. Every refusal names the file, the column and what was
-expected. Identification, diagnosis and the tests read logs through ``read_log`` only.
+expected. Identification, diagnosis and the tests read logs through ``read_log`` only. A log that
+``convert`` wrote carries its import's audit (``frame.attrs["audit"]``, measurements.audit),
+restored from the Parquet metadata or the ``<name>.import.json`` beside it.
 """
 from __future__ import annotations
 
@@ -49,6 +51,11 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    from .audit import persisted
+
+    audit = persisted(path)                  # the import's audit, when convert wrote the log
+    if audit is not None:
+        frame.attrs["audit"] = audit
     return check_log(frame, str(path), required, resample_jitter)
 
 

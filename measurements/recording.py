@@ -104,7 +104,11 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
     ignored = [p.name for k in ("table",) for p in kinds[k] if streams.report.get("files", {}).get(k) is None]
     if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
         streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
-    return _steered(find_quirks(fixes_from_columns(streams, source), options), options)
+    streams = _steered(find_quirks(fixes_from_columns(streams, source), options), options)
+    from .audit import audit_streams
+
+    streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
+    return streams
 
 
 def _steered(streams: Streams, options: ImportOptions) -> Streams:
@@ -125,7 +129,8 @@ def _steered(streams: Streams, options: ImportOptions) -> Streams:
 def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
     options = (options or ImportOptions()).for_vehicle()
-    return assemble(Path(source), _checked(Path(source), options), options)
+    frame, report = assemble(Path(source), _checked(Path(source), options), options)
+    return _with_audit(frame, report), report
 
 
 def import_runs(source: str | Path, options: ImportOptions | None = None) -> list[tuple[pd.DataFrame, dict]]:
@@ -133,13 +138,22 @@ def import_runs(source: str | Path, options: ImportOptions | None = None) -> lis
     source, options = Path(source), (options or ImportOptions()).for_vehicle()
     streams = _checked(source, options)
     first = assemble(source, streams, options)
-    return [first if r["run"] == first[1]["used"].get("run") else assemble(source, streams, replace(options, run=r["run"]))
+    runs = [first if r["run"] == first[1]["used"].get("run") else assemble(source, streams, replace(options, run=r["run"]))
             for r in first[1]["runs"]]
+    return [(_with_audit(f, rep), rep) for f, rep in runs]
+
+
+def _with_audit(frame: pd.DataFrame, report: dict) -> pd.DataFrame:
+    """The audit's findings on the log (frame.attrs["audit"], measurements.audit)."""
+    frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
+    return frame
 
 
 def _checked(source: Path, options: ImportOptions) -> Streams:
     if options.rate is not None and not 1.0 <= options.rate <= 200.0:
         raise LogError(f"--rate {options.rate:g}: expected 1 to 200 Hz")
+    if not 0.0 <= options.max_gap <= 60.0:
+        raise LogError(f"--max-gap {options.max_gap:g}: expected 0 to 60 s (a channel's gap bridged up to this)")
     return _streams(source, options)
 
 
@@ -156,6 +170,7 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
     frame = check_log(frame, where, required, resample_jitter)
     frame.attrs["resolution"] = dict(report.get("resolution", {}))
+    frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
     return frame, report
 
 

@@ -335,4 +335,5 @@ def bag_streams(paths: list[Path], options, source: Path):
                         "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(gnss, signals, report, held, {})
+    groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
+    return Streams(gnss, signals, report, held, {}, groups=groups)

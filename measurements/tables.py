@@ -418,7 +418,7 @@ def table_streams(paths: list[Path], options, source: Path):
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
                        + " (convert SOURCE --list shows their ranges)")
     names = catalog(tables)
-    signals, columns, used = {}, {}, set()
+    signals, columns, used, groups = {}, {}, set(), {}
     for spec in specs:
         found = {}
         for name in spec.names:
@@ -439,6 +439,7 @@ def table_streams(paths: list[Path], options, source: Path):
         t, values, how = evaluate(spec, found, str(source), options.wheelbase or 1.4)
         ok = np.isfinite(values)
         signals[spec.column] = (t[ok], values[ok])
+        groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
         columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
             ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
     spans_overlap(tables, used, source)
@@ -452,4 +453,4 @@ def table_streams(paths: list[Path], options, source: Path):
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(None, signals, report, held, {})
+    return Streams(None, signals, report, held, {}, groups=groups)

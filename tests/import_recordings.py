@@ -1,0 +1,82 @@
+"""Generated recordings with one quirk each and a known truth, for the import audit's tests.
+
+The truth: a kinematic car (wheelbase L = 0.32 m, the F1TENTH study's) driven at 2 +- 0.5 m/s
+with a smooth random steering command; the wheels follow the command ``DELAY`` s late; the yaw
+rate is r = v tan(delta) / L, the lateral acceleration v r, the track its integral. The channels
+are written as a logger writes them, one CSV per device on its own stamps: ``gnss.csv`` (t, lat,
+lon at 10 Hz), ``imu.csv`` (t, wz [rad/s], ay [m/s2] at 50 Hz), ``bywire.csv`` (t, steer [rad]
+command, speed [m/s] at 30 Hz).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+L = 0.32
+DELAY = 0.15
+SIGNALS = ("delta_cmd=bywire.steer[rad]", "v=bywire.speed[m/s]", "yaw_rate=imu.wz[rad/s]", "ay=imu.ay[m/s2]",
+           "lat=gnss.lat", "lon=gnss.lon")
+
+
+def truth(seconds: float = 120.0, seed: int = 1, h: float = 0.002) -> pd.DataFrame:
+    """The drive on a fine grid: t, delta_cmd, delta, v, r, ay, lat, lon."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, seconds, h)
+    knots = np.arange(0.0, seconds + 2.0, 1.2)
+    from scipy.interpolate import CubicSpline
+
+    cmd = np.clip(CubicSpline(knots, rng.uniform(-0.25, 0.25, len(knots)))(t), -0.3, 0.3)
+    delta = np.interp(t - DELAY, t, cmd, left=cmd[0])
+    v = 2.0 + 0.5 * np.sin(2 * math.pi * t / 37.0) + 0.2 * np.sin(2 * math.pi * t / 9.0)
+    r = v * np.tan(delta) / L
+    psi = np.cumsum(r) * h
+    east, north = np.cumsum(v * np.cos(psi)) * h, np.cumsum(v * np.sin(psi)) * h
+    lat = 52.0 + np.degrees(north / 6_371_000.0)
+    lon = 5.0 + np.degrees(east / (6_371_000.0 * math.cos(math.radians(52.0))))
+    return pd.DataFrame({"t": t, "delta_cmd": cmd, "delta": delta, "v": v, "r": r, "ay": v * r, "lat": lat, "lon": lon})
+
+
+def _sample(drive: pd.DataFrame, rate: float, columns: dict, late: float = 0.0, start: float = 1.7e9,
+            noise: dict | None = None, seed: int = 2, drop=None) -> pd.DataFrame:
+    """The drive's columns sampled at ``rate`` Hz, stamped ``late`` s late, with noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.5, drive["t"].iloc[-1] - 0.5, 1.0 / rate)
+    out = {"t": start + t + late}
+    for name, source in columns.items():
+        x = np.interp(t, drive["t"], drive[source])
+        out[name] = x + (noise or {}).get(name, 0.0) * rng.standard_normal(len(t))
+    frame = pd.DataFrame(out)
+    frame["t"] = frame["t"].map(lambda x: f"{x:.4f}")      # POSIX seconds to 0.1 ms, as a logger writes them
+    if drop is not None:
+        frame = frame.loc[~drop(t)].reset_index(drop=True)
+    return frame
+
+
+def write_recording(folder: Path, seconds: float = 120.0, late: float = 0.0, drops: list | None = None,
+                    second_imu: tuple[float, float] | None = None, swap: bool = False, seed: int = 1) -> Path:
+    """The recording's three (or four) CSVs: ``late`` s on the by-wire kit's stamps; ``drops``
+    [(start, end)] of the steering report's silences; ``second_imu`` (scale, late) a second gyro
+    ``imu2.csv``; ``swap`` the IMU's wz and ay columns exchanged."""
+    folder.mkdir(parents=True, exist_ok=True)
+    drive = truth(seconds, seed)
+    gnss = _sample(drive, 10.0, {"lat": "lat", "lon": "lon"})
+    gnss["lat"], gnss["lon"] = gnss["lat"].round(9), gnss["lon"].round(9)
+    imu = _sample(drive, 50.0, {"wz": "r", "ay": "ay"}, noise={"wz": 0.01, "ay": 0.05})
+    if swap:
+        imu = imu.rename(columns={"wz": "ay", "ay": "wz"})[["t", "wz", "ay"]]
+    silent = None
+    if drops:
+        silent = lambda t: np.any([(t >= a) & (t < b) for a, b in drops], axis=0)  # noqa: E731
+    bywire = _sample(drive, 30.0, {"steer": "delta_cmd", "speed": "v"}, late=late, noise={"speed": 0.02}, drop=silent)
+    gnss.to_csv(folder / "gnss.csv", index=False, float_format="%.10g")
+    imu.to_csv(folder / "imu.csv", index=False, float_format="%.6g")
+    bywire.to_csv(folder / "bywire.csv", index=False, float_format="%.6g")
+    if second_imu is not None:
+        scale, lag = second_imu
+        imu2 = _sample(drive, 40.0, {"wz": "r"}, late=lag, noise={"wz": 0.01}, seed=3)
+        imu2["wz"] *= scale
+        imu2.to_csv(folder / "imu2.csv", index=False, float_format="%.6g")
+    return folder
