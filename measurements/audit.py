@@ -349,6 +349,11 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             if off:
                 what = _scale_meaning(name, a, b, s)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
+        if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
+            findings.append(finding("ambiguous_channel", [a, b], s, siv, "ratio",
+                                    f"two yaw-rate sources disagree ({b} is {s:.3g} times {a}, {late:+.3f} s late): "
+                                    f"{a} is the one identification and diagnosis use; --signal yaw_rate=... chooses "
+                                    f"the other"))
     return offsets, findings
 
 
@@ -381,13 +386,14 @@ def mislabelled(aud: Auditor) -> list[dict]:
         ay = np.interp(t, *sig[lateral])
         moving = np.abs(v) > 0.5
         if moving.sum() > 100:
-            normal = _corr(v[moving] * r[moving], ay[moving])
-            swapped = _corr(v[moving] * ay[moving], r[moving])
-            if swapped > 0.8 and swapped > normal + 0.2:
-                out.append(finding("mislabelled_channel", ["yaw_rate", lateral], swapped, None, "correlation",
-                                   f"yaw_rate and {lateral} look swapped: v x {lateral} follows yaw_rate (correlation "
-                                   f"{swapped:.2f}) while v x yaw_rate follows {lateral} at {normal:.2f}; a gyro and "
-                                   f"an accelerometer's channels exchanged: map each to the other"))
+            # a_y = v r: the relative misfit of that relation, and of the one with the two exchanged
+            normal = _misfit(ay[moving], v[moving] * r[moving])
+            swapped = _misfit(r[moving], v[moving] * ay[moving])
+            if swapped < 0.3 and normal > 2 * swapped and normal > 0.3:
+                out.append(finding("mislabelled_channel", ["yaw_rate", lateral], swapped, None, "relative misfit",
+                                   f"yaw_rate and {lateral} look swapped: v x {lateral} matches yaw_rate (relative "
+                                   f"misfit {swapped:.2f}) while v x yaw_rate misses {lateral} by {normal:.2f}; a gyro "
+                                   f"and an accelerometer's channels exchanged: map each to the other"))
     for steer in ("delta", "delta_cmd"):
         if steer in sig and "v" in sig and "yaw_rate" in sig:
             t, d = sig[steer]
@@ -412,6 +418,13 @@ def mislabelled(aud: Auditor) -> list[dict]:
                                    f"(correlation {as_rate:.2f}, as an angle {as_angle:.2f}); map the steering "
                                    f"angle, not its rate"))
     return out
+
+
+def _misfit(x, model) -> float:
+    """rms(x - model) / rms(x), offsets removed (a bias is not a mislabel)."""
+    x, model = np.asarray(x, float), np.asarray(model, float)
+    e = (x - x.mean()) - (model - model.mean())
+    return float(np.sqrt(np.mean(e ** 2)) / max(np.std(x), 1e-12))
 
 
 def _corr(x, y) -> float:

@@ -28,7 +28,7 @@ from .raw_nmea import looks_like_nmea
 from .runs import assemble
 from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 from .streams import Streams
-from .tables import TABLE_SUFFIXES
+from .tables import TABLE_SUFFIXES, TEXT_SUFFIXES, looks_like_table
 
 __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_recording", "load_log", "positions",
            "recording_files"]
@@ -70,8 +70,8 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
             kinds["bag"].append(p)
         elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):
             kinds["isoxml"].append(p)
-        elif suffix in TABLE_SUFFIXES:
-            kinds["table"].append(p)
+        elif suffix in TABLE_SUFFIXES or (suffix in TEXT_SUFFIXES and looks_like_table(p)):
+            kinds["table"].append(p)          # a table by its content: a .txt dump of one topic field
     for kind, paths in kinds.items():
         for p in paths:
             regular_file(p, LogError, "streamed" if kind in ("nmea", "can", "bag") else "whole")

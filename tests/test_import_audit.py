@@ -1,0 +1,160 @@
+"""The import audit (measurements.audit) on generated recordings with a known truth
+(tests/import_recordings.py): a channel group made 0.85 s late, dropouts of one channel, two
+gyros that disagree, a gyro/accelerometer pair swapped, a "gyro" that is an accelerometer; the
+audit must find each with the right number, and the log must come out right."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.measurements import LogError, read_log
+from agrobot.measurements.audit import require_causal
+from agrobot.measurements.recording import ImportOptions, import_recording
+from agrobot.measurements.signals import parse_signal
+from tests.import_recordings import DELAY, SIGNALS, write_recording
+
+LATE = 0.85
+
+
+def options(*extra, **kw) -> ImportOptions:
+    return ImportOptions(signals=[parse_signal(s) for s in SIGNALS + extra], wheelbase=0.32, **kw)
+
+
+def kinds(frame_or_report, kind):
+    found = frame_or_report.attrs["audit"] if hasattr(frame_or_report, "attrs") else frame_or_report["audit"]["findings"]
+    return [f for f in found if f["kind"] == kind]
+
+
+@pytest.fixture(scope="module")
+def late(tmp_path_factory):
+    return write_recording(tmp_path_factory.mktemp("late") / "rec", seconds=75.0, late=LATE)
+
+
+@pytest.fixture(scope="module")
+def late_none(late):
+    return import_recording(late, options(align="none"))
+
+
+def test_a_late_group_is_found_with_its_interval_and_aligned(late):
+    frame, report = import_recording(late, options())
+    offset = [f for f in kinds(frame, "clock_offset") if f["channels"] == ["gnss_speed", "v"]]
+    assert len(offset) == 1 and abs(offset[0]["value"] - LATE) < 0.03, offset
+    assert offset[0]["interval"][0] <= LATE <= offset[0]["interval"][1] and offset[0]["resolved"]
+    assert report["audit"]["alignment"]["channels_moved"] == ["delta_cmd", "v"]
+    # after alignment the steering leads the yaw rate by the truth's delay (independent: the
+    # generated drive's own DELAY), and the earlier lead is named as resolved
+    lead = kinds(frame, "response_leads_input")
+    assert lead and lead[0]["resolved"] and abs(lead[0]["value"] - (LATE - DELAY)) < 0.05
+    require_causal(frame, "identify")            # no refusal once aligned
+    assert not kinds(frame, "mislabelled_channel") and not kinds(frame, "scale_disagreement")
+    # the log itself: delta_cmd on the true clock, so v tan(delta_cmd(t - DELAY)) / L is yaw_rate
+    t = frame["t"].to_numpy()
+    kin = np.interp(t - DELAY, t, frame["v"] * np.tan(frame["delta_cmd"]) / 0.32)
+    ok = t > t[0] + 1
+    assert np.sqrt(np.mean((kin[ok] - frame["yaw_rate"].to_numpy()[ok]) ** 2)) < 0.1 * np.std(frame["yaw_rate"])
+
+
+def test_a_response_that_leads_is_refused_unless_aligned(late_none):
+    frame, report = late_none
+    lead = kinds(frame, "response_leads_input")
+    assert len(lead) == 1 and not lead[0]["resolved"]
+    assert abs(lead[0]["value"] - (LATE - DELAY)) < 0.05 and lead[0]["interval"][0] < LATE - DELAY < lead[0]["interval"][1]
+    with pytest.raises(LogError, match="BEFORE the steering"):
+        require_causal(frame, "identify")
+    assert "--align bywire=0.8" in " ".join(f["meaning"] for f in kinds(frame, "clock_offset"))
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_the_audit_is_persisted_with_the_written_log(late, tmp_path, suffix, capsys):
+    from agrobot.orchestrator.cli import main
+
+    out = tmp_path / f"log{suffix}"
+    args = ["convert", str(late), "--align", "none", "--out", str(out), "--wheelbase", "0.5"]
+    for s in SIGNALS:
+        args += ["--signal", s]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "audit response_leads_input" in printed and "audit clock_offset" in printed
+    back = read_log(out, ("t",))
+    assert kinds(back, "response_leads_input") and not kinds(back, "response_leads_input")[0]["resolved"]
+    side = json.loads(out.with_name("log.import.json").read_text())
+    assert side["audit"]["findings"] == back.attrs["audit"]
+    from agrobot.identification.from_log import read_uneven
+
+    with pytest.raises(LogError, match="response leads its input"):
+        read_uneven(out)
+
+
+@pytest.mark.slow
+def test_identify_recovers_the_truth_after_auto_alignment(tmp_path):
+    from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.orchestrator.study import Study
+    from tests.vehicle_logs import ROOT_STUDIES
+
+    study = Study.load(ROOT_STUDIES / "f1tenth.toml")
+    rec = write_recording(tmp_path / "rec", seconds=50.0, late=LATE, seed=4)
+    frame, _ = import_recording(rec, options(rate=25.0))
+    rep = identify_driving(frame, "aligned", study, max_fit_seconds=30.0)
+    total = rep["delay"]["value"] + rep["parameters"].get("lag", {"value": 0.0})["value"]
+    assert abs(total - DELAY) < 0.05, rep["delay"]
+
+
+def test_one_channels_dropouts_are_bridged_and_counted(tmp_path):
+    rng = np.random.default_rng(5)
+    starts = np.sort(rng.uniform(5, 55, 12))
+    starts = starts[np.concatenate([[True], np.diff(starts) > 1.5])]
+    lengths = rng.uniform(0.22, 0.45, len(starts))
+    rec = write_recording(tmp_path / "rec", seconds=60.0, drops=list(zip(starts, starts + lengths)))
+    frame, report = import_recording(rec, options(max_gap=0.5))
+    bridged = [f for f in kinds(frame, "gap_bridged") if f["channels"] == ["delta_cmd"]]
+    assert len(bridged) == 1 and str(len(starts)) + " gap(s)" in bridged[0]["meaning"]
+    # the longest silence between stamps: the dropout plus up to a 30 Hz period on either side
+    assert lengths.max() <= bridged[0]["value"] <= lengths.max() + 2 / 30 + 1e-3
+    assert len(report["runs"]) == 1 and report["used"]["duration"] > 55.0
+    frame0, report0 = import_recording(rec, options(max_gap=0.0))
+    assert report0["used"]["duration"] < 30.0 and kinds(frame0, "gap_split")
+    assert "--max-gap" in kinds(frame0, "gap_split")[0]["meaning"]
+
+
+def test_two_gyros_that_disagree_are_named(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=60.0, second_imu=(1.1, 0.3))
+    frame, _ = import_recording(rec, options("yaw_rate_2=imu2.wz[rad/s]"))
+    pair = [f for f in frame.attrs["audit"] if f["channels"] == ["yaw_rate", "yaw_rate_2"]]
+    offset = [f for f in pair if f["kind"] == "clock_offset"][0]
+    scale = [f for f in pair if f["kind"] == "scale_disagreement"][0]
+    assert abs(offset["value"] - 0.3) < 0.03 and abs(scale["value"] - 1.1) < 0.02
+    assert [f for f in pair if f["kind"] == "ambiguous_channel"]
+
+
+def test_a_swapped_gyro_and_accelerometer_are_named(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=60.0, swap=True)
+    frame, _ = import_recording(rec, options())
+    swapped = kinds(frame, "mislabelled_channel")
+    assert swapped and swapped[0]["channels"] == ["yaw_rate", "ay"] and swapped[0]["value"] < 0.1
+
+
+def test_a_gyro_whose_mean_is_g_is_named(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=40.0)
+    imu = pd.read_csv(rec / "imu.csv", dtype={"t": str})
+    imu["wz"] = 9.81 + 0.05 * np.random.default_rng(0).standard_normal(len(imu))
+    imu.to_csv(rec / "imu.csv", index=False)
+    frame, _ = import_recording(rec, options(align="none"))
+    g = kinds(frame, "mislabelled_channel")
+    assert g and g[0]["channels"] == ["yaw_rate"] and abs(g[0]["value"] - 9.81) < 0.02
+
+
+@pytest.mark.parametrize("align, expect", [("nowhere=0.3", "no group or column 'nowhere'"),
+                                           ("bywire=500", "larger than the recording"),
+                                           ("bywire", "expected auto, none, or GROUP=SECONDS")])
+def test_a_bad_alignment_is_refused_by_name(late, align, expect):
+    with pytest.raises(LogError, match=expect):
+        import_recording(late, options(align=align))
+
+
+def test_a_given_alignment_is_applied_and_said(late):
+    frame, report = import_recording(late, options(align=f"bywire={LATE}"))
+    assert report["audit"]["alignment"]["offsets_s"] == {"bywire": LATE}
+    assert kinds(frame, "response_leads_input")[0]["resolved"]
