@@ -457,6 +457,18 @@ def gaps_findings(aud: Auditor, max_gap: float) -> list[dict]:
     return out
 
 
+def stamp_findings(report: dict) -> list[dict]:
+    """Header stamps against receive times, per source that has both (report["stamp_vs_receive"]:
+    {source: {median, p95, min, max}} in s, receive - stamp)."""
+    out = []
+    for name, s in (report.get("stamp_vs_receive") or {}).items():
+        out.append(finding("stamp_vs_receive", [name], s["median"], [s["min"], s["max"]], "s",
+                           f"{name}: the messages arrive {s['median']:.3f} s after their header stamps (median; 95 % "
+                           f"within {s['p95']:.3f} s, from {s['min']:.3f} to {s['max']:.3f} s); the log uses the header "
+                           f"stamps (the time of the measurement), not the receive times", resolved=True))
+    return out
+
+
 def position_estimate(aud: Auditor, report: dict) -> list[dict]:
     """x, y given as columns (a localisation, odometry), not the receiver's fixes."""
     sig = aud.streams.signals
@@ -553,7 +565,16 @@ def audit_streams(streams, options, source) -> dict:
     if causal is not None:
         findings.append(_causality(causal, causal_before, applied))
     findings += mislabelled(aud)
+    clock = streams.report.get("terminal_clock")
+    if clock:
+        findings.append(finding("terminal_clock", ["t", "gnss_time"], clock["offset_s"], clock["range_s"], "s",
+                                f"the terminal's clock (labelled UTC) is {clock['offset_s']:+.3f} s from the GNSS time "
+                                f"in the same records ({clock['terminal_start']} vs {clock['gnss_start']}); every "
+                                f"channel is on the terminal's clock, so they agree with each other: only the "
+                                f"absolute time is off", resolved=True))
+    findings += stamp_findings(streams.report)
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
+    findings += position_estimate(aud, streams.report)
     return {"channels": channels, "findings": findings,
             "alignment": {"mode": how, "offsets_s": applied, "channels_moved": moved,
                           "found": {g: {"late_s": o[0], "interval_s": o[1], "evidence": o[2]}

@@ -80,3 +80,35 @@ def write_recording(folder: Path, seconds: float = 120.0, late: float = 0.0, dro
         imu2["wz"] *= scale
         imu2.to_csv(folder / "imu2.csv", index=False, float_format="%.6g")
     return folder
+
+
+TLG_HEADER = ('<?xml version="1.0" encoding="UTF-8"?>\n<TIM A="" D="4">\n<PTN A="" B="" D="" H="" I=""/>\n'
+              '<DLV A="018D" B="" C="DET-1"/>\n<DLV A="0090" B="" C="DET-1"/>\n</TIM>\n')
+
+
+def write_ddi_timelog(folder: Path, seconds: int = 120, speed_mm_s: int = 2500, yaw_mdeg: int = 45000,
+                      clock_ahead: float = 2040.0) -> Path:
+    """A 1 Hz ISO 11783-10 time log heading north at ``speed_mm_s`` (DDI 397, Actual Speed, mm/s)
+    with a yaw angle (DDI 144, 0.001 deg) and the GNSS time in every record (PTN H, I), the
+    terminal's clock (TIM) ``clock_ahead`` s ahead of it."""
+    import datetime
+    import struct
+
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "TLG00001.xml").write_text(TLG_HEADER)
+    epoch = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc)
+    start = datetime.datetime(2026, 5, 1, 8, 0, tzinfo=datetime.timezone.utc)
+    out = bytearray()
+    for k in range(seconds):
+        gps = start + datetime.timedelta(seconds=k)
+        tim = gps + datetime.timedelta(seconds=clock_ahead)
+        lat = 52.0 + math.degrees(k * speed_mm_s / 1000.0 / 6_371_000.0)
+        for when, fmt in ((tim, "<IH"),):
+            since = when - epoch
+            out += struct.pack(fmt, int(round((since.total_seconds() % 86400) * 1000)), since.days)
+        g = gps - epoch
+        out += struct.pack("<iiB", round(lat * 1e7), round(5.0 * 1e7), 4)
+        out += struct.pack("<IH", int(round((g.total_seconds() % 86400) * 1000)), g.days)
+        out += struct.pack("<B", 2) + struct.pack("<Bi", 0, speed_mm_s) + struct.pack("<Bi", 1, yaw_mdeg)
+    (folder / "TLG00001.bin").write_bytes(bytes(out))
+    return folder

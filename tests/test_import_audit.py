@@ -158,3 +158,46 @@ def test_a_given_alignment_is_applied_and_said(late):
     frame, report = import_recording(late, options(align=f"bywire={LATE}"))
     assert report["audit"]["alignment"]["offsets_s"] == {"bywire": LATE}
     assert kinds(frame, "response_leads_input")[0]["resolved"]
+
+
+# --- SI out of every reader: an ISO 11783-10 time log in its DDI units --------------------------------
+def test_ddi_raw_units_become_si_with_the_measured_speed_as_v_and_the_terminal_clock_named(tmp_path):
+    from tests.import_recordings import write_ddi_timelog
+
+    rec = write_ddi_timelog(tmp_path / "tlg", speed_mm_s=2500, yaw_mdeg=45000, clock_ahead=2040.0)
+    frame, report = import_recording(rec, ImportOptions())
+    assert np.allclose(frame["v"], 2.5) and np.allclose(frame["ddi0144_yaw_angle"], np.pi / 4)
+    clock = [f for f in frame.attrs["audit"] if f["kind"] == "terminal_clock"]
+    assert clock and abs(clock[0]["value"] - 2040.0) < 1e-3
+    frame, _ = import_recording(rec, ImportOptions(signals=[parse_signal("heading=DDI144")]))
+    assert np.allclose(frame["heading"], np.pi / 4)
+    with pytest.raises(LogError, match="near names: ddi0144_yaw_angle"):
+        import_recording(rec, ImportOptions(signals=[parse_signal("heading=ddi0144_yaw_angel[rad]")]))
+
+
+# --- text as it comes ------------------------------------------------------------------------------
+def test_headerless_txt_dumps_are_tables_with_the_time_guessed_and_said(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=40.0)
+    dump = tmp_path / "dump"
+    dump.mkdir()
+    for name in ("imu", "bywire"):
+        table = pd.read_csv(rec / f"{name}.csv", dtype={"t": str})
+        table.to_csv(dump / f"{name}.txt", sep=" ", header=False, index=False)
+    frame, report = import_recording(dump, ImportOptions(signals=[parse_signal(s) for s in (
+        "yaw_rate=imu.col2[rad/s]", "v=bywire.col3[m/s]", "delta_cmd=bywire.col2[rad]")]))
+    assert "guessed" in report["tables"]["imu"]["time"] and "col1" in report["tables"]["imu"]["time"]
+    truth = pd.read_csv(rec / "imu.csv")
+    assert abs(frame["yaw_rate"].std() - truth["wz"].std()) < 0.05 * truth["wz"].std()
+
+
+def test_a_csv_whose_rows_are_quoted_whole_is_unwrapped(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=40.0)
+    quoted = tmp_path / "quoted"
+    quoted.mkdir()
+    for name in ("imu", "bywire", "gnss"):
+        lines = (rec / f"{name}.csv").read_text().splitlines()
+        (quoted / f"{name}.csv").write_text("".join(f'"{line}"\n' for line in lines))
+    frame, report = import_recording(quoted, options())
+    plain, _ = import_recording(rec, options())
+    assert np.allclose(frame["yaw_rate"], plain["yaw_rate"]) and np.allclose(frame["x"], plain["x"])
+    assert any("wrapped in quotes" in n for n in report["notes"])
