@@ -133,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
     for path, f, rep in jobs:             # every log checked before the first is written
-        check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+        checked = check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+        rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
     for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"

@@ -113,6 +113,11 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
             if peak > bound and c == "yaw_rate" and (why := yaw_rate_in_radians(frame)):
                 frame.attrs.setdefault("notes", []).append(
                     f"column 'yaw_rate' reaches {peak:.3g} rad/s, more than {bound} rad/s, and is read as rad/s: {why}")
+            elif peak > bound and c in frame.attrs.get("declared", {}):
+                frame.attrs.setdefault("notes", []).append(
+                    f"warning: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than {bound} {unit}, "
+                    f"which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
+                    f"[{frame.attrs['declared'][c]}] (the user's word stands)")
             elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
                                f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
@@ -182,6 +187,11 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
     if fast.sum() < 100:
         return
     ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
+    if "v" in frame.attrs.get("declared", {}) and not 0.67 < ratio < 1.5:
+        frame.attrs.setdefault("notes", []).append(
+            f"warning: column 'v' is {ratio:.2f} times the speed of the GPS track; kept as declared "
+            f"[{frame.attrs['declared']['v']}] (the user's word stands)")
+        return
     if abs(ratio - 3.6) < 0.4:
         raise LogError(f"{where}: column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
                        f"the log must hold m/s (divide v by 3.6)")
@@ -251,6 +261,11 @@ def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: n
     """The track's evidence (_track_turn_ratio): a slope above 20 is deg/s."""
     slope = _track_turn_ratio(frame, h, k, d)
     if slope is not None and slope > 20:
+        if "yaw_rate" in frame.attrs.get("declared", {}):
+            frame.attrs.setdefault("notes", []).append(
+                f"warning: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track, which looks like "
+                f"deg/s; kept as declared [{frame.attrs['declared']['yaw_rate']}] (the user's word stands)")
+            return
         raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
                        f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
 

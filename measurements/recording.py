@@ -130,7 +130,7 @@ def import_recording(source: str | Path, options: ImportOptions | None = None) -
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
     options = (options or ImportOptions()).for_vehicle()
     frame, report = assemble(Path(source), _checked(Path(source), options), options)
-    return _with_audit(frame, report), report
+    return _with_audit(frame, report, options), report
 
 
 def import_runs(source: str | Path, options: ImportOptions | None = None) -> list[tuple[pd.DataFrame, dict]]:
@@ -140,12 +140,14 @@ def import_runs(source: str | Path, options: ImportOptions | None = None) -> lis
     first = assemble(source, streams, options)
     runs = [first if r["run"] == first[1]["used"].get("run") else assemble(source, streams, replace(options, run=r["run"]))
             for r in first[1]["runs"]]
-    return [(_with_audit(f, rep), rep) for f, rep in runs]
+    return [(_with_audit(f, rep, options), rep) for f, rep in runs]
 
 
-def _with_audit(frame: pd.DataFrame, report: dict) -> pd.DataFrame:
-    """The audit's findings on the log (frame.attrs["audit"], measurements.audit)."""
+def _with_audit(frame: pd.DataFrame, report: dict, options: ImportOptions) -> pd.DataFrame:
+    """The audit's findings on the log (frame.attrs["audit"], measurements.audit), and the units
+    the user declared (frame.attrs["declared"]: a unit heuristic warns on them, never refuses)."""
     frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
+    frame.attrs["declared"] = {s.column: s.unit for s in options.signals if s.unit}
     return frame
 
 
@@ -169,6 +171,7 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     frame, report = import_recording(source, recording)
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
     frame = check_log(frame, where, required, resample_jitter)
+    report.setdefault("notes", []).extend(n for n in frame.attrs.get("notes", []) if n.startswith("warning:"))
     frame.attrs["resolution"] = dict(report.get("resolution", {}))
     frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
     return frame, report

@@ -201,3 +201,20 @@ def test_a_csv_whose_rows_are_quoted_whole_is_unwrapped(tmp_path):
     plain, _ = import_recording(rec, options())
     assert np.allclose(frame["yaw_rate"], plain["yaw_rate"]) and np.allclose(frame["x"], plain["x"])
     assert any("wrapped in quotes" in n for n in report["notes"])
+
+
+# --- the user's word stands ------------------------------------------------------------------------
+def test_a_declared_unit_is_kept_with_a_warning_where_the_heuristic_disagrees(tmp_path):
+    from agrobot.measurements import load_log
+
+    rec = write_recording(tmp_path / "rec", seconds=40.0)
+    signals = [s for s in SIGNALS if not s.startswith("yaw_rate")] + ["yaw_rate=4*imu.wz[rad/s]"]
+    frame, report = load_log(rec, ("t",), recording=ImportOptions(signals=[parse_signal(s) for s in signals],
+                                                                  wheelbase=0.32))
+    truth = pd.read_csv(rec / "imu.csv")
+    assert frame["yaw_rate"].abs().max() > 3.0 and abs(frame["yaw_rate"].std() / truth["wz"].std() - 4) < 0.2
+    assert any("kept as declared [rad/s]" in n for n in report["notes"])
+    # the same values in a table without a declaration: the heuristic refuses, naming the unit
+    frame.to_csv(tmp_path / "log.csv", index=False)
+    with pytest.raises(LogError, match="looks like degrees"):
+        read_log(tmp_path / "log.csv", ("t",))
