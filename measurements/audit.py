@@ -264,13 +264,25 @@ class Auditor:
     def group(self, channel: str) -> str:
         return self.groups.get(channel, "gnss" if channel in ("gnss_speed", "course_rate", "x", "y") else channel)
 
-    def channels(self) -> list[dict]:
-        rows = []
+    def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
+        """([channels], stamps): the channels that share their stamps exactly, together (the
+        receiver's fixes as ``gnss``); ``only`` limits the channels."""
+        out: list[tuple[list[str], np.ndarray]] = []
         if self.streams.gnss is not None:
-            rows.append(channel_row("gnss", "gnss", self.streams.gnss["utc"].to_numpy(float), self.t0))
+            out.append((["gnss"], self.streams.gnss["utc"].to_numpy(float)))
         for c, (t, _) in self.streams.signals.items():
-            rows.append(channel_row(c, self.group(c), t, self.t0))
-        return rows
+            if only is not None and c not in only:
+                continue
+            same = next((names for names, s in out if len(s) == len(t) and np.array_equal(s, t)), None)
+            if same is not None:
+                same.append(c)
+            else:
+                out.append(([c], np.asarray(t, float)))
+        return out
+
+    def channels(self) -> list[dict]:
+        return [channel_row(", ".join(names), self.group(names[0]) if names != ["gnss"] else "gnss", t, self.t0)
+                for names, t in self.stamped()]
 
     def zero_lag_pairs(self) -> list[dict]:
         """Every pair with no physical lag: (name, a, b, lag dict)."""
@@ -434,22 +446,29 @@ def _corr(x, y) -> float:
 
 
 def gaps_findings(aud: Auditor, max_gap: float) -> list[dict]:
+    """The gaps of the channels that set the log's span (the receiver's fixes, the canonical
+    columns; runs.assemble): bridged up to ``max_gap``, else splitting the log."""
+    from .log import CANONICAL
+
     out = []
-    for c, (t, _) in aud.streams.signals.items():
+    for names, t in aud.stamped(only=CANONICAL):
+        if names == ["gnss"] or (names[0] == "gnss" and len(names) > 1):
+            names = ["gnss"] + [n for n in names if n != "gnss"]
+        c = ", ".join(names)
         i, length = channel_gaps(t)
         if not len(i):
             continue
-        held = c in aud.streams.held
+        held = all(n in aud.streams.held for n in names)
         short = length <= max_gap
         if short.any():
-            out.append(finding("gap_bridged", [c], float(length[short].max()), [float(length[short].min()),
+            out.append(finding("gap_bridged", names, float(length[short].max()), [float(length[short].min()),
                                                                               float(length[short].max())], "s",
                                f"{int(short.sum())} gap(s) of {c} up to {max_gap:g} s bridged "
                                f"({'held: a command stays in force' if held else 'linear'}), the longest "
                                f"{length[short].max():.2f} s; --max-gap 0 splits the log there instead",
                                resolved=True))
         if (~short).any():
-            out.append(finding("gap_split", [c], float(length[~short].max()), [float(length[~short].min()),
+            out.append(finding("gap_split", names, float(length[~short].max()), [float(length[~short].min()),
                                                                              float(length[~short].max())], "s",
                                f"{int((~short).sum())} gap(s) of {c} longer than --max-gap {max_gap:g} s split the "
                                f"log (the longest {length[~short].max():.2f} s; --max-gap "
@@ -617,7 +636,9 @@ def describe_audit(audit: dict) -> list[str]:
     """The audit as terminal lines."""
     lines = ["  audit, per channel: rate, gaps (count, longest, when), repeated stamps, group (its clock)"]
     for r in audit.get("channels", []):
-        lines.append(f"    {r['channel']:<14} {r['rate_hz']:7.3g} Hz  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
+        names = r["channel"].split(", ")
+        name = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
                      f"{r['end_s']:.2f} s  gaps {r['gaps']}"
                      + (f" (longest {r['longest_gap_s']:.2f} s, at {', '.join(f'{x:g}' for x in r['gaps_at_s'])} s)"
                         if r["gaps"] else "")
