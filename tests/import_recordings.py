@@ -112,3 +112,36 @@ def write_ddi_timelog(folder: Path, seconds: int = 120, speed_mm_s: int = 2500, 
         out += struct.pack("<B", 2) + struct.pack("<Bi", 0, speed_mm_s) + struct.pack("<Bi", 1, yaw_mdeg)
     (folder / "TLG00001.bin").write_bytes(bytes(out))
     return folder
+
+
+def _ring(lat0: float, lon0: float, north_m: float, east_m: float, kind: int = 1) -> str:
+    """An LSG ring (type ``kind``: 1 exterior, 2 interior) of a rectangle from (lat0, lon0)."""
+    dlat = math.degrees(north_m / 6_371_000.0)
+    dlon = math.degrees(east_m / (6_371_000.0 * math.cos(math.radians(lat0))))
+    corners = [(lat0, lon0), (lat0, lon0 + dlon), (lat0 + dlat, lon0 + dlon), (lat0 + dlat, lon0)]
+    return f'<LSG A="{kind}">' + "".join(f'<PNT A="2" C="{a:.9f}" D="{b:.9f}"/>' for a, b in corners) + "</LSG>"
+
+
+def write_xfr_taskdata(folder: Path, version: int = 4) -> Path:
+    """An ISO 11783-10 TaskData whose partfield lives in an external file (XFR -> PFD00001.XML,
+    root XFC): a 200 x 100 m boundary with a 20 x 10 m hole written as a boundary polygon of its
+    own, 50 m north and 50 m east of the corner; in version 4 also an empty guidance pattern
+    and an AB line. The truth: 2.0 ha less 0.02 ha, one hole, one line."""
+    folder.mkdir(parents=True, exist_ok=True)
+    lat0, lon0 = 52.0, 5.0
+    dlat = math.degrees(50.0 / 6_371_000.0)
+    dlon = math.degrees(50.0 / (6_371_000.0 * math.cos(math.radians(lat0))))
+    guidance = ""
+    if version >= 4:
+        guidance = ('<GGP A="GGP1" B="lines"><GPN A="GPN1" B="empty" C="1"><LSG A="5"/></GPN>'
+                    f'<GPN A="GPN2" B="AB" C="1"><LSG A="5"><PNT A="6" C="{lat0 + dlat / 5:.9f}" D="{lon0 + dlon / 5:.9f}"/>'
+                    f'<PNT A="7" C="{lat0 + dlat / 5:.9f}" D="{lon0 + 3 * dlon:.9f}"/></LSG></GPN></GGP>')
+    (folder / "PFD00001.XML").write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n<XFC>\n<PFD A="PFD1" C="north field" D="19800">'
+        f'<PLN A="1">{_ring(lat0, lon0, 100.0, 200.0)}</PLN>'
+        f'<PLN A="1">{_ring(lat0 + dlat, lon0 + dlon, 10.0, 20.0)}</PLN>{guidance}</PFD>\n</XFC>\n')
+    (folder / "TASKDATA.XML").write_text(
+        f'<?xml version="1.0" encoding="UTF-8"?>\n<ISO11783_TaskData VersionMajor="{version}" VersionMinor="0" '
+        'ManagementSoftwareManufacturer="test" ManagementSoftwareVersion="1" DataTransferOrigin="1">\n'
+        '<XFR A="PFD00001" B="1"/>\n</ISO11783_TaskData>\n')
+    return folder
