@@ -623,6 +623,19 @@ def _causality(now: dict, before: dict | None, applied: dict) -> dict:
 
 
 # --- consumers ---------------------------------------------------------------------------------
+FLOOR = 2.0 / 3.0       # a nominal minimum is guidance down to this fraction of it
+
+
+def minimum(have: float, nominal: float, what: str, unit: str = "s", floor: float = FLOOR) -> str | None:
+    """A stage's nominal minimum as guidance: None at or above it; a warning naming both numbers
+    between ``floor`` x nominal and nominal; a LogError below the floor, naming both."""
+    if have >= nominal:
+        return None
+    if have >= floor * nominal:
+        return (f"warning: {what} is {have:.3g} {unit}, under the nominal {nominal:.3g} {unit} but above its floor "
+                f"{floor * nominal:.3g} {unit}: used; the results are less certain")
+    raise LogError(f"{what} is {have:.3g} {unit}, under the floor {floor * nominal:.3g} {unit} ({floor:.2g} of the "
+                   f"nominal {nominal:.3g} {unit})")
 def require_causal(frame, what: str) -> None:
     """A LogError when the log's audit found a response that leads its input, unresolved: its
     dynamics cannot be judged (``what``: the tool that refuses)."""

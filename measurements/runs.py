@@ -128,6 +128,17 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
                      "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": iso(grid[a])})
     long_runs = [r for r in runs if r["duration"] >= options.min_run]
+    if not long_runs and runs:            # the minimum is guidance down to its floor (measurements.audit.minimum)
+        from .audit import minimum
+
+        best = max(runs, key=lambda r: r["duration"])
+        try:
+            warning = minimum(best["duration"], options.min_run, "the longest run", "s")
+        except LogError:
+            warning = None
+        if warning:
+            long_runs = [best]
+            report.setdefault("notes", []).append(warning)
     for i, r in enumerate(long_runs, 1):
         r["run"] = i
     report["runs"] = long_runs
@@ -227,7 +238,7 @@ def _choose(source: Path, grid: np.ndarray, u0: float, covered: np.ndarray, long
             f"no run of {options.min_run:g} s or more with the vehicle driving (above {options.min_speed:g} m/s) and "
             f"every stream present ({_standstill_or_silence(report)}): the longest stretch without a gap is used; a "
             f"diagnosis needs the vehicle driving")
-        return pick, {"how": "the longest stretch without a gap (the vehicle does not drive)",
+        return pick, {"how": "the longest stretch without a gap (no run long enough: " + _standstill_or_silence(report) + ")",
                       "start": float(grid[a] - u0), "end": float(grid[b - 1] - u0)}
     if options.run is not None and not 1 <= options.run <= len(long_runs):
         raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "

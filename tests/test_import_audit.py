@@ -218,3 +218,25 @@ def test_a_declared_unit_is_kept_with_a_warning_where_the_heuristic_disagrees(tm
     frame.to_csv(tmp_path / "log.csv", index=False)
     with pytest.raises(LogError, match="looks like degrees"):
         read_log(tmp_path / "log.csv", ("t",))
+
+
+# --- minimums as guidance ---------------------------------------------------------------------------
+def test_a_minimum_is_guidance_down_to_its_floor():
+    from agrobot.measurements.audit import minimum
+
+    assert minimum(20.0, 20.0, "driving") is None
+    assert "under the nominal 20 s" in minimum(19.0, 20.0, "driving") and "floor 13.3 s" in minimum(14.0, 20.0, "driving")
+    with pytest.raises(LogError, match="under the floor 13.3 s .* nominal 20 s"):
+        minimum(13.0, 20.0, "driving")
+
+
+def test_a_run_just_under_the_minimum_is_used_with_a_warning(tmp_path):
+    rec = write_recording(tmp_path / "rec", seconds=9.0)
+    frame, report = import_recording(rec, options(min_run=10.0))
+    assert 7.0 < report["used"]["duration"] < 10.0 and report["used"]["how"].startswith("run 1")
+    assert any("under the nominal 10 s" in n for n in report["notes"])
+    # under the floor (2/3 of 13 s): not a run; the longest stretch is used, and the note says the
+    # vehicle drives (a short drive, not a standstill)
+    frame, report = import_recording(rec, options(min_run=13.0))
+    assert report["used"]["how"].startswith("the longest stretch") and report["runs"] == []
+    assert any("the vehicle drives" in n and "too short" in n for n in report["notes"])
