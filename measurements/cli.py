@@ -55,8 +55,8 @@ def recording_options(args: argparse.Namespace):
 
     set_limit(getattr(args, "max_file_size", None))
 
-    if args.wheelbase is not None and not 0.5 <= args.wheelbase <= 10.0:
-        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.5 to 10")
+    if args.wheelbase is not None and not 0.1 <= args.wheelbase <= 10.0:
+        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.1 (a 1:10 model car) to 10")
     if args.run is not None and args.run < 1:
         raise LogError(f"--run {args.run}: runs are numbered from 1")
     if args.time_range is not None and not 0 <= args.time_range[0] < args.time_range[1]:
