@@ -542,7 +542,8 @@ def audit_streams(streams, options, source) -> dict:
     to the streams in place: {channels, findings, alignment}."""
     groups = dict(getattr(streams, "groups", {}) or {})
     t0 = min([float(t[0]) for t, _ in streams.signals.values() if len(t)]
-             + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None else []), default=0.0)
+             + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None and len(streams.gnss) else []),
+             default=0.0)
     aud = Auditor(streams, groups, options.wheelbase or 1.4, t0)
     channels = aud.channels()
     findings = []

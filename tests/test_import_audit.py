@@ -240,3 +240,29 @@ def test_a_run_just_under_the_minimum_is_used_with_a_warning(tmp_path):
     frame, report = import_recording(rec, options(min_run=13.0))
     assert report["used"]["how"].startswith("the longest stretch") and report["runs"] == []
     assert any("the vehicle drives" in n and "too short" in n for n in report["notes"])
+
+
+# --- bad input: exit 2, named, nothing written ---------------------------------------------------------
+@pytest.mark.parametrize("case, expect", [("impossible", "none of the log's columns"), ("zeros", "empty table"),
+                                          ("text", "no column to take"), ("align", "larger than the recording")])
+def test_bad_input_exits_2_naming_it_and_writes_nothing(tmp_path, capsys, case, expect):
+    from agrobot.orchestrator.cli import main
+    from tests.reader_inputs import write_timelog
+
+    extra = []
+    if case == "impossible":                        # a time log whose every fix is impossible
+        source = write_timelog(tmp_path / "tlg", 30, lat_at={k: 95.0 for k in range(30)})
+    elif case == "zeros":
+        source = tmp_path / "zeros.csv"
+        source.write_bytes(bytes(1000))
+    elif case == "text":
+        source = tmp_path / "text.csv"
+        source.write_text("a,b\nx,y\nz,w\n")
+    else:
+        source = write_recording(tmp_path / "rec", seconds=30.0)
+        extra = ["--align", "bywire=100"] + [a for s in SIGNALS for a in ("--signal", s)]
+    out = tmp_path / "out" / "log.csv"
+    assert main(["convert", str(source), "--out", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert expect in err and str(source) in err and "Traceback" not in err
+    assert not out.exists()
