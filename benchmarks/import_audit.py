@@ -47,12 +47,16 @@ def recordings(root: Path, quick: bool):
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--root", type=Path, default=ROOT.parent / "shared" / "realdata")
+    here = [d / "shared" / "realdata" for d in (ROOT.parent, ROOT.parent.parent)]
+    p.add_argument("--root", type=Path, default=next((d for d in here if d.is_dir()), here[0]))
     p.add_argument("--quick", action="store_true")
     args = p.parse_args(argv)
     from agrobot.measurements.audit import describe_audit
     from agrobot.measurements.recording import import_recording
 
+    if not args.root.is_dir():
+        print(f"error: --root {args.root}: no such folder (the shared real data)", file=sys.stderr)
+        return 2
     summary = []
     for name, path, options in recordings(args.root, args.quick):
         start = time.perf_counter()

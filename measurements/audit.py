@@ -129,14 +129,11 @@ def _xcorr(a: np.ndarray, b: np.ndarray, ok: tuple, shift: int) -> np.ndarray:
 
 
 def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
-    k = int(np.argmax(rho))
-    if not np.isfinite(rho[k]):
-        return math.nan, 0.0
-    frac = 0.0
-    if 0 < k < len(rho) - 1 and np.isfinite(rho[k - 1]) and np.isfinite(rho[k + 1]):
-        den = rho[k - 1] - 2 * rho[k] + rho[k + 1]
-        frac = 0.5 * (rho[k - 1] - rho[k + 1]) / den if den < 0 else 0.0
-    return (k - shift + frac) * step, float(rho[k])
+    """(lag [s], correlation) at the refined peak of a correlation over lags -shift..shift."""
+    from .clocks import parabolic_peak
+
+    k, best = parabolic_peak(rho)
+    return ((k - shift) * step, best) if math.isfinite(k) else (math.nan, 0.0)
 
 
 def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
@@ -670,19 +667,3 @@ def describe_audit(audit: dict) -> list[str]:
         lines.append(f"  not aligned ({a['mode']}): " + ", ".join(f"{g} {o['late_s']:+.3f} s late" for g, o in a["found"].items()))
     return lines
 
-
-def persisted(path) -> list | None:
-    """The findings written beside a log (its ``<name>.import.json``, as ``convert`` writes it),
-    or None: reading a log back restores frame.attrs["audit"]."""
-    import json
-    from pathlib import Path
-
-    side = Path(path).with_name(Path(path).stem + ".import.json")
-    if not side.is_file():
-        return None
-    try:
-        report = json.loads(side.read_text())
-    except (OSError, ValueError):
-        return None
-    found = report.get("audit", {}).get("findings") if isinstance(report, dict) else None
-    return list(found) if isinstance(found, list) else None

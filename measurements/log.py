@@ -51,12 +51,27 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
-    from .audit import persisted
-
-    audit = persisted(path)                  # the import's audit, when convert wrote the log
+    audit = persisted_audit(path)            # the import's audit, when convert wrote the log
     if audit is not None:
         frame.attrs["audit"] = audit
     return check_log(frame, str(path), required, resample_jitter)
+
+
+def persisted_audit(path) -> list | None:
+    """The findings written beside a log (its ``<name>.import.json``, as ``convert`` writes it),
+    or None: reading a log back restores frame.attrs["audit"]."""
+    import json
+    from pathlib import Path
+
+    side = Path(path).with_name(Path(path).stem + ".import.json")
+    if not side.is_file():
+        return None
+    try:
+        report = json.loads(side.read_text())
+    except (OSError, ValueError):
+        return None
+    found = report.get("audit", {}).get("findings") if isinstance(report, dict) else None
+    return list(found) if isinstance(found, list) else None
 
 
 def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
