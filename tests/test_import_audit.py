@@ -266,3 +266,37 @@ def test_bad_input_exits_2_naming_it_and_writes_nothing(tmp_path, capsys, case, 
     err = capsys.readouterr().err
     assert expect in err and str(source) in err and "Traceback" not in err
     assert not out.exists()
+
+
+# --- a bag: two IMU topics, header stamps against receive times ---------------------------------------
+def test_a_bags_second_gyro_and_its_receive_delays_are_named(tmp_path):
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    from agrobot.measurements.rosbag import typestore
+    from tests.import_recordings import truth
+    from tests.test_other_data import _imu, _navsat
+
+    drive = truth(60.0, h=0.01)
+    store = typestore()
+    rng = np.random.default_rng(7)
+    delays = rng.uniform(0.06, 0.56, 10_000)          # the robot's receive delays (truth)
+    used = []
+    with Writer(tmp_path / "bag", version=8, storage_plugin=StoragePlugin.SQLITE3) as w:
+        fix = w.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=store)
+        imus = [w.add_connection(name, "sensor_msgs/msg/Imu", typestore=store) for name in ("/imu", "/imu_b")]
+        for k, row in enumerate(drive.iloc[::10].itertuples()):
+            utc = 1.7e9 + row.t
+            d = delays[k]
+            used.append(d)
+            w.write(fix, int((utc + d) * 1e9), store.serialize_cdr(
+                _navsat(store, "sensor_msgs/msg/NavSatFix", utc, row.lat, row.lon, 10.0, 4), "sensor_msgs/msg/NavSatFix"))
+            for conn, scale in zip(imus, (1.0, 1.2)):
+                w.write(conn, int((utc + 0.01) * 1e9), store.serialize_cdr(_imu(store, utc, scale * row.r),
+                                                                             "sensor_msgs/msg/Imu"))
+    frame, report = import_recording(tmp_path / "bag", ImportOptions())
+    stamps = [f for f in frame.attrs["audit"] if f["kind"] == "stamp_vs_receive" and f["channels"] == ["/fix"]]
+    assert stamps and abs(stamps[0]["value"] - np.median(used)) < 0.01
+    assert abs(stamps[0]["interval"][0] - min(used)) < 0.01 and abs(stamps[0]["interval"][1] - max(used)) < 0.01
+    assert "yaw_rate_2" in frame and any("/imu_b" in n for n in report["notes"])
+    pair = [f for f in frame.attrs["audit"] if f["channels"] == ["yaw_rate", "yaw_rate_2"]]
+    assert any(f["kind"] == "ambiguous_channel" and abs(f["value"] - 1.2) < 0.02 for f in pair)
