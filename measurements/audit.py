@@ -667,3 +667,22 @@ def describe_audit(audit: dict) -> list[str]:
         lines.append(f"  not aligned ({a['mode']}): " + ", ".join(f"{g} {o['late_s']:+.3f} s late" for g, o in a["found"].items()))
     return lines
 
+
+
+def audit_frame(frame) -> list[dict]:
+    """The findings of a log table read as it is (one clock for every column, nothing moved):
+    the causality check, the scales of redundant columns and the signs of a mislabel. A log
+    that ``convert`` wrote carries its import's audit instead (measurements.log.persisted_audit)."""
+    from .log import CANONICAL
+    from .options import ImportOptions
+    from .streams import Streams
+
+    t = frame["t"].to_numpy(float)
+    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_"))]
+    signals = {c: (t, frame[c].to_numpy(float)) for c in names}
+    streams = Streams(None, signals, {}, {"delta_cmd"} & set(signals), {}, groups={c: "log" for c in signals})
+    try:
+        found = audit_streams(streams, ImportOptions(wheelbase=1.4, align="none", max_gap=0.0), "log")["findings"]
+    except LogError:
+        return []
+    return [f for f in found if f["kind"] not in ("gap_bridged", "gap_split")]

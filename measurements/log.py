@@ -4,7 +4,8 @@ A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals
 (``COLUMNS``); more columns are allowed. Every refusal names the file, the column and what was
 expected. Identification, diagnosis and the tests read logs through ``read_log`` only. A log that
 ``convert`` wrote carries its import's audit (``frame.attrs["audit"]``, measurements.audit),
-restored from the Parquet metadata or the ``<name>.import.json`` beside it.
+restored from the Parquet metadata or the ``<name>.import.json`` beside it (measurements.load_log
+audits any other table on its own columns).
 """
 from __future__ import annotations
 

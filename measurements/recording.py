@@ -164,10 +164,16 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
     (a folder of NMEA files and CAN logs, or one such file) through
     measurements.recording.import_recording with ``recording`` (ImportOptions), then the same
-    checks. The report is None for a table."""
+    checks. The report is None for a table. The log carries its audit (frame.attrs["audit"],
+    measurements.audit): the import's, the one written beside it, or that of its own columns."""
     source = Path(source)
     if not is_recording(source) and not (recording is not None and recording.maps_a_table):
-        return read_log(source, required, resample_jitter), None
+        frame = read_log(source, required, resample_jitter)
+        if "audit" not in frame.attrs:        # a table as it is: the audit of its own columns
+            from .audit import audit_frame
+
+            frame.attrs["audit"] = audit_frame(frame)
+        return frame, None
     frame, report = import_recording(source, recording)
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
     frame = check_log(frame, where, required, resample_jitter)

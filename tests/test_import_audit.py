@@ -300,3 +300,15 @@ def test_a_bags_second_gyro_and_its_receive_delays_are_named(tmp_path):
     assert "yaw_rate_2" in frame and any("/imu_b" in n for n in report["notes"])
     pair = [f for f in frame.attrs["audit"] if f["channels"] == ["yaw_rate", "yaw_rate_2"]]
     assert any(f["kind"] == "ambiguous_channel" and abs(f["value"] - 1.2) < 0.02 for f in pair)
+
+
+def test_a_plain_log_table_is_audited_on_its_own_columns(tmp_path, late_none):
+    """A log written without its import report (a table from elsewhere) with the steering 0.7 s
+    behind the yaw rate: load_log finds the lead on the table's own columns."""
+    from agrobot.measurements import load_log
+
+    frame, _ = late_none
+    frame[["t", "delta_cmd", "v", "yaw_rate"]].to_csv(tmp_path / "plain.csv", index=False)
+    back, _ = load_log(tmp_path / "plain.csv")
+    lead = [f for f in back.attrs["audit"] if f["kind"] == "response_leads_input"]
+    assert lead and abs(lead[0]["value"] - (LATE - DELAY)) < 0.05 and not lead[0]["resolved"]
