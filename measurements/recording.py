@@ -92,6 +92,8 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
         streams = timelog_streams(kinds["isoxml"], options, source)
     elif kinds["nmea"] or kinds["can"]:
         streams = nmea_can_streams(source, options, kinds)
+        if not kinds["can"] and options.signals:
+            _receiver_signals(streams, options, source)
     elif kinds["table"]:
         from .tables import table_streams
 
@@ -109,6 +111,36 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
 
     streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
     return streams
+
+
+RECEIVER_FIELDS = {"speed": "m/s", "course": "rad", "heading": "rad", "height": "m", "quality": "", "position_std": "m"}
+
+
+def _receiver_signals(streams: Streams, options: ImportOptions, source: Path) -> None:
+    """``--signal`` over an NMEA recording: the receiver's fields (gnss.speed, gnss.course,
+    gnss.heading, gnss.height, gnss.quality, gnss.position_std; SI); a name it does not hold is
+    refused with the near names."""
+    from .signals import evaluate, unknown_name
+    from .streams import Series
+
+    g = streams.gnss
+    if g is None:
+        raise LogError(f"{source}: --signal {options.signals[0]}: the NMEA holds no fix to take a signal from")
+    utc = g["utc"].to_numpy(float)
+    series = {}
+    for name, unit in RECEIVER_FIELDS.items():
+        x = g[name].to_numpy(float)
+        ok = np.isfinite(x)
+        if ok.sum() >= 2:
+            series[f"gnss.{name}"] = Series(utc[ok], x[ok], unit or None, f"gnss.{name}")
+    for spec in options.signals:
+        for name in spec.names:
+            if name not in series:
+                raise unknown_name(str(source), spec, name, sorted(series), "receiver field")
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        streams.signals[spec.column] = (t, values)
+        streams.groups[spec.column] = "gnss"
+        streams.report.setdefault("columns", {})[spec.column] = how
 
 
 def _steered(streams: Streams, options: ImportOptions) -> Streams:

@@ -312,3 +312,13 @@ def test_a_plain_log_table_is_audited_on_its_own_columns(tmp_path, late_none):
     back, _ = load_log(tmp_path / "plain.csv")
     lead = [f for f in back.attrs["audit"] if f["kind"] == "response_leads_input"]
     assert lead and abs(lead[0]["value"] - (LATE - DELAY)) < 0.05 and not lead[0]["resolved"]
+
+
+def test_signal_works_for_nmea_and_an_unknown_name_is_refused_with_the_near_names(tmp_path):
+    from tests.reader_inputs import write_nmea
+
+    nmea = write_nmea(tmp_path / "gps.nmea", 60.0)
+    frame, report = import_recording(nmea, ImportOptions(signals=[parse_signal("v=gnss.speed")]))
+    assert np.allclose(frame["v"], frame["gnss_speed"]) and "gnss.speed" in report["columns"]["v"]
+    with pytest.raises(LogError, match="near names: gnss.speed"):
+        import_recording(nmea, ImportOptions(signals=[parse_signal("v=gnss.sped[m/s]")]))
