@@ -40,8 +40,9 @@ def truth(seconds: float = 120.0, seed: int = 1, h: float = 0.002) -> pd.DataFra
 
 
 def _sample(drive: pd.DataFrame, rate: float, columns: dict, late: float = 0.0, start: float = 1.7e9,
-            noise: dict | None = None, seed: int = 2, drop=None) -> pd.DataFrame:
-    """The drive's columns sampled at ``rate`` Hz, stamped ``late`` s late, with noise."""
+            noise: dict | None = None, seed: int = 2, drop=None, blank: tuple = ()) -> pd.DataFrame:
+    """The drive's columns sampled at ``rate`` Hz, stamped ``late`` s late, with noise; ``drop(t)``
+    the rows left out, or only the ``blank`` columns left empty there."""
     rng = np.random.default_rng(seed)
     t = np.arange(0.5, drive["t"].iloc[-1] - 0.5, 1.0 / rate)
     out = {"t": start + t + late}
@@ -50,7 +51,9 @@ def _sample(drive: pd.DataFrame, rate: float, columns: dict, late: float = 0.0, 
         out[name] = x + (noise or {}).get(name, 0.0) * rng.standard_normal(len(t))
     frame = pd.DataFrame(out)
     frame["t"] = frame["t"].map(lambda x: f"{x:.4f}")      # POSIX seconds to 0.1 ms, as a logger writes them
-    if drop is not None:
+    if drop is not None and blank:
+        frame.loc[drop(t), list(blank)] = np.nan
+    elif drop is not None:
         frame = frame.loc[~drop(t)].reset_index(drop=True)
     return frame
 
@@ -58,7 +61,7 @@ def _sample(drive: pd.DataFrame, rate: float, columns: dict, late: float = 0.0, 
 def write_recording(folder: Path, seconds: float = 120.0, late: float = 0.0, drops: list | None = None,
                     second_imu: tuple[float, float] | None = None, swap: bool = False, seed: int = 1) -> Path:
     """The recording's three (or four) CSVs: ``late`` s on the by-wire kit's stamps; ``drops``
-    [(start, end)] of the steering report's silences; ``second_imu`` (scale, late) a second gyro
+    [(start, end)] of the steering report's silences (the speed beside it goes on); ``second_imu`` (scale, late) a second gyro
     ``imu2.csv``; ``swap`` the IMU's wz and ay columns exchanged."""
     folder.mkdir(parents=True, exist_ok=True)
     drive = truth(seconds, seed)
@@ -70,7 +73,8 @@ def write_recording(folder: Path, seconds: float = 120.0, late: float = 0.0, dro
     silent = None
     if drops:
         silent = lambda t: np.any([(t >= a) & (t < b) for a, b in drops], axis=0)  # noqa: E731
-    bywire = _sample(drive, 30.0, {"steer": "delta_cmd", "speed": "v"}, late=late, noise={"speed": 0.02}, drop=silent)
+    bywire = _sample(drive, 30.0, {"steer": "delta_cmd", "speed": "v"}, late=late, noise={"speed": 0.02}, drop=silent,
+                     blank=("steer",))
     gnss.to_csv(folder / "gnss.csv", index=False, float_format="%.10g")
     imu.to_csv(folder / "imu.csv", index=False, float_format="%.6g")
     bywire.to_csv(folder / "bywire.csv", index=False, float_format="%.6g")

@@ -108,13 +108,17 @@ def test_one_channels_dropouts_are_bridged_and_counted(tmp_path):
     starts = starts[np.concatenate([[True], np.diff(starts) > 1.5])]
     lengths = rng.uniform(0.22, 0.45, len(starts))
     rec = write_recording(tmp_path / "rec", seconds=60.0, drops=list(zip(starts, starts + lengths)))
-    frame, report = import_recording(rec, options(max_gap=0.5))
-    bridged = [f for f in kinds(frame, "gap_bridged") if f["channels"] == ["delta_cmd"]]
-    assert len(bridged) == 1 and str(len(starts)) + " gap(s)" in bridged[0]["meaning"]
+
+    def steering_report(**kw):          # the kit's steering report: a measured wheel angle
+        return ImportOptions(signals=[parse_signal(s.replace("delta_cmd=", "delta=")) for s in SIGNALS],
+                             wheelbase=0.32, **kw)
+    frame, report = import_recording(rec, steering_report(max_gap=0.5))
+    bridged = [f for f in kinds(frame, "gap_bridged") if f["channels"] == ["delta"]]
+    assert len(bridged) == 1 and str(len(starts)) + " gap(s)" in bridged[0]["meaning"] and "linear" in bridged[0]["meaning"]
     # the longest silence between stamps: the dropout plus up to a 30 Hz period on either side
     assert lengths.max() <= bridged[0]["value"] <= lengths.max() + 2 / 30 + 1e-3
     assert len(report["runs"]) == 1 and report["used"]["duration"] > 55.0
-    frame0, report0 = import_recording(rec, options(max_gap=0.0))
+    frame0, report0 = import_recording(rec, steering_report(max_gap=0.0))
     assert report0["used"]["duration"] < 30.0 and kinds(frame0, "gap_split")
     assert "--max-gap" in kinds(frame0, "gap_split")[0]["meaning"]
 
