@@ -53,6 +53,7 @@ class Table:
     time_how: str = ""
     time_columns: tuple = ()
     notes: list = field(default_factory=list)
+    mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
 
 
 def _lines(path: Path, n: int = 20) -> list[str]:
@@ -310,17 +311,25 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                     factor, how = 1e-9, "ns (rostopic's %time)"
                 table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
             return True
-    rising = [c for c in time_like(table) if str(c).lower() not in TIME_NAMES]
-    if table.headerless and rising:
-        c = rising[0]
+    first = f.columns[0] if len(f.columns) > 1 else None
+    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
+            and _even(f[first].to_numpy(float)):
+        c = first
         x = _numbers(f[c], where, c)
         factor, how = _magnitude_unit(x)
         table.t, table.time_columns = x * factor, (c,)
-        table.time_how = (f"{c} [{how}] (guessed: no header, the first column that increases throughout; "
+        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
                           f"--time COLUMN[unit] picks another)")
         table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
         return True
     return False
+
+
+def _even(x: np.ndarray) -> bool:
+    """Steps of a clock: 90 % of them within half the median step of it."""
+    dt = np.diff(x)
+    med = float(np.median(dt)) if len(dt) else 0.0
+    return med > 0 and float(np.mean(np.abs(dt - med) <= 0.5 * med)) >= 0.9
 
 
 def _numbers(col: pd.Series, where: str, name: str) -> np.ndarray:
@@ -347,11 +356,15 @@ def _clean(table: Table) -> None:
     table.frame, table.t = frame[keep].reset_index(drop=True), t[keep]
 
 
-def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path) -> list[Table]:
+def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
+                mapped: tuple = ()) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
-    table's row by row (same rows, or one fewer: a value per interval), else ``--rate``."""
+    table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
+    ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
     spec = parse_time(time)
     tables = [read_table(p) for p in paths]
+    for t in tables:
+        t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
         raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
@@ -476,7 +489,8 @@ def table_streams(paths: list[Path], options, source: Path):
     from .signals import SignalSpec, evaluate, target_unit, unknown_name
     from .streams import Streams
 
-    tables = read_tables(paths, options.time, options.rate, source)
+    tables = read_tables(paths, options.time, options.rate, source,
+                         tuple(n for s in options.signals for n in s.names))
     specs = list(options.signals)
     given = {s.column for s in specs}
     notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
