@@ -226,7 +226,7 @@ def positions(source: str | Path, options: ImportOptions | None = None) -> tuple
                        f"lat/lon columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN)")
     g = streams.gnss
     report = streams.report
-    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, mm
+    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, m (SI)
     if width and np.isfinite(width[0]).any():
-        report["working_width_m"] = float(np.nanmedian(width[0])) / 1000.0
+        report["working_width_m"] = float(np.nanmedian(width[0]))
     return g["utc"].to_numpy(float), g["lat"].to_numpy(float), g["lon"].to_numpy(float), report
