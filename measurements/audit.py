@@ -290,12 +290,13 @@ class Auditor:
             if "v" in sig:
                 out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, *sig["v"], through_origin=True,
                                                                mask=_moving(tg, speed, 0.3)), "m/s"))
-            if "yaw_rate" in sig and np.isfinite(course_rate).sum() > 20:
+            gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
+            for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
                 ok = np.isfinite(course_rate)
                 h = float(np.median(np.diff(tg)))
-                t, r = sig["yaw_rate"]
+                t, r = sig[gyro]
                 r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
-                out.append(("gyro vs GNSS course", "course_rate", "yaw_rate",
+                out.append(("gyro vs GNSS course", "course_rate", gyro,
                             lag(tg[ok], course_rate[ok], t, r, mask=_moving(tg, speed)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
         if lateral and "v" in sig and "yaw_rate" in sig:
@@ -359,10 +360,13 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                 what = _scale_meaning(name, a, b, s)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
         if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
+            course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
+            says = ("; against the GNSS course: " + ", ".join(f"{c} x {k:.3g}" for c, k in course.items())
+                    if len(course) == 2 else "")
             findings.append(finding("ambiguous_channel", [a, b], s, siv, "ratio",
-                                    f"two yaw-rate sources disagree ({b} is {s:.3g} times {a}, {late:+.3f} s late): "
-                                    f"{a} is the one identification and diagnosis use; --signal yaw_rate=... chooses "
-                                    f"the other"))
+                                    f"two yaw-rate sources disagree ({b} is {s:.3g} times {a}, {late:+.3f} s late)"
+                                    f"{says}: {a} is the one identification and diagnosis use; --signal yaw_rate=... "
+                                    f"chooses the other"))
     return offsets, findings
 
 

@@ -130,7 +130,8 @@ def test_two_gyros_that_disagree_are_named(tmp_path):
     offset = [f for f in pair if f["kind"] == "clock_offset"][0]
     scale = [f for f in pair if f["kind"] == "scale_disagreement"][0]
     assert abs(offset["value"] - 0.3) < 0.03 and abs(scale["value"] - 1.1) < 0.02
-    assert [f for f in pair if f["kind"] == "ambiguous_channel"]
+    ambiguous = [f for f in pair if f["kind"] == "ambiguous_channel"]
+    assert ambiguous and "against the GNSS course: yaw_rate x 1, yaw_rate_2 x 1.1" in ambiguous[0]["meaning"]
 
 
 def test_a_swapped_gyro_and_accelerometer_are_named(tmp_path):
