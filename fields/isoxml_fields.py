@@ -43,7 +43,9 @@ def read_isoxml(path: Path, crs: str | None = None) -> list[Field]:
     for pf in task.partfields:
         try:
             f = _partfield(path, pf, crs, skipped)
-        except FieldError as exc:            # one bad partfield does not hide the others: it is named
+        except FieldError as exc:            # a partfield without a usable boundary does not hide the others
+            if "expected a number" in str(exc):
+                raise                          # a damaged number: the file itself is damaged
             skipped.append(str(exc))
             continue
         fields.append(f)
