@@ -162,6 +162,9 @@ def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
         root = _xml(path)
         if root.tag.endswith("ISO11783_TaskData"):
             return read_isoxml(path, crs)
+        if root.tag == "XFC":
+            raise FieldError(f"{path}: an ISO 11783-10 external file (root XFC): its elements are read through the "
+                             f"TASKDATA.XML that refers to it (XFR)")
         return read_gml(path, crs, root)
     return {"geojson": read_geojson, "wkt": read_wkt, "csv": read_polygon_csv}[kind](path, crs)
 

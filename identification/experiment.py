@@ -11,6 +11,7 @@ import pandas as pd
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from agrobot.measurements import LogError, load_log
+from agrobot.measurements.audit import require_causal
 from agrobot.orchestrator.runner import simulate
 from agrobot.orchestrator.study import Study, StudyError
 from agrobot.orchestrator.units import UnitError, to_si
@@ -158,6 +159,7 @@ def read_log(path: Path, resample: bool = False, recording=None) -> tuple[pd.Dat
     recording (measurements.load_log checks it; ``resample``: put a jittered clock on an even
     grid; ``recording``: ImportOptions for a raw recording)."""
     frame, report = load_log(path, ("t",), resample_jitter=resample, recording=recording)
+    require_causal(frame, str(path))              # a response leading its input: refused, said why
     missing = [c for c in WHY if c not in frame]
     if missing:
         raise LogError(f"{path}: identification not possible (the yaw stage is not judged): "

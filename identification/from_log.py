@@ -20,13 +20,21 @@ def _read(source: Path, resample: bool, recording, study):
     from agrobot.measurements.recording import ImportOptions, is_recording
 
 
+    from agrobot.measurements.audit import require_causal
+    from agrobot.measurements.log import persisted_audit
+
     try:
-        return load_log(source, ("t",), resample_jitter=resample,
-                        recording=(recording or ImportOptions()).for_vehicle(study))
+        loaded = load_log(source, ("t",), resample_jitter=resample,
+                          recording=(recording or ImportOptions()).for_vehicle(study))
     except LogError as exc:
         if is_recording(Path(source)) or not ("gap" in str(exc) or "unevenly" in str(exc)):
             raise
+    else:
+        require_causal(loaded[0], str(source))          # a response leading its input: refused, said why
+        return loaded
     frame = pd.read_parquet(source) if Path(source).suffix == ".parquet" else pd.read_csv(source)
+    frame.attrs.setdefault("audit", persisted_audit(source) or [])
+    require_causal(frame, str(source))
     t = frame["t"].to_numpy(float)
     if np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0))

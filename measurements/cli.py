@@ -36,6 +36,13 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
     g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
     g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
+    g.add_argument("--max-gap", type=float, default=0.5, metavar="SECONDS",
+                   help="a channel's gap up to this is bridged (linear; a command held) and named; a longer one, or "
+                        "a silence of every channel, splits the log (default 0.5 s; 0 bridges nothing)")
+    g.add_argument("--align", default="auto", metavar="auto|none|GROUP=SECONDS",
+                   help="clock offsets between channel groups (a file, topic or bus): auto corrects those the audit "
+                        "finds on strong evidence (two speeds, gyro vs GNSS course, v r vs lateral acceleration); none "
+                        "keeps the stamps; GROUP=SECONDS moves GROUP earlier by SECONDS (default auto)")
     g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
                    help="use this span, s after the recording's first fix, instead of a run")
 
@@ -48,8 +55,8 @@ def recording_options(args: argparse.Namespace):
 
     set_limit(getattr(args, "max_file_size", None))
 
-    if args.wheelbase is not None and not 0.5 <= args.wheelbase <= 10.0:
-        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.5 to 10")
+    if args.wheelbase is not None and not 0.1 <= args.wheelbase <= 10.0:
+        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.1 (a 1:10 model car) to 10")
     if args.run is not None and args.run < 1:
         raise LogError(f"--run {args.run}: runs are numbered from 1")
     if args.time_range is not None and not 0 <= args.time_range[0] < args.time_range[1]:
@@ -73,7 +80,11 @@ def recording_options(args: argparse.Namespace):
     options = ImportOptions(dbc=args.dbc, signals=signals, rate=args.rate,
                             run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
-                            keep_spikes=getattr(args, "keep_spikes", False))
+                            keep_spikes=getattr(args, "keep_spikes", False),
+                            max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"))
+    from .audit import parse_align
+
+    parse_align(options.align)
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio
     if args.wheelbase is not None:
@@ -123,7 +134,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
     for path, f, rep in jobs:             # every log checked before the first is written
-        check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+        checked = check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+        rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
     for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"

@@ -65,6 +65,13 @@ def content_lag(t_ref: np.ndarray, x_ref: np.ndarray, t_other: np.ndarray, x_oth
     energy = correlate(xr ** 2, np.ones_like(xo), mode="valid", method="fft")
     ok = count > 0.5 * len(xo)
     rho = np.where(ok, num / np.sqrt(np.maximum(energy, 1e-12) * (xo @ xo)), -np.inf)
+    peak, best = parabolic_peak(rho)
+    return (float(grid_r[0] - lo + peak * step), best) if math.isfinite(peak) else (math.nan, 0.0)
+
+
+def parabolic_peak(rho: np.ndarray) -> tuple[float, float]:
+    """(index of the maximum refined by a parabola through it and its neighbours, the maximum);
+    (nan, 0) when no value is finite."""
     k = int(np.argmax(rho))
     if not np.isfinite(rho[k]):
         return math.nan, 0.0
@@ -72,7 +79,7 @@ def content_lag(t_ref: np.ndarray, x_ref: np.ndarray, t_other: np.ndarray, x_oth
     if 0 < k < len(rho) - 1 and np.isfinite(rho[k - 1]) and np.isfinite(rho[k + 1]):
         den = rho[k - 1] - 2 * rho[k] + rho[k + 1]
         frac = 0.5 * (rho[k - 1] - rho[k + 1]) / den if den < 0 else 0.0
-    return float(grid_r[0] - lo + (k + frac) * step), float(rho[k])
+    return k + frac, float(rho[k])
 
 
 def align_clocks(epochs: pd.DataFrame, raw: dict, u0: float, gnss: pd.DataFrame):

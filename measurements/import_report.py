@@ -49,4 +49,8 @@ def describe(report: dict) -> str:
         lines.append(f"  note: {note}")
     for column, why in report.get("missing", {}).items():
         lines.append(f"  missing {column}: {why}")
+    if report.get("audit"):
+        from .audit import describe_audit
+
+        lines += describe_audit(report["audit"])
     return "\n".join(lines)

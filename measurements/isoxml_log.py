@@ -11,8 +11,12 @@ attribute written empty is logged per record, one with a value is fixed. A recor
 - uint8 N, then N x (uint8 DLV index in the header's order, int32 value).
 
 Each DLV becomes a column named after its DDI (``ddi0074_total_area`` style) with the value
-times the DDI's bit resolution, in the DDI's unit (the report names it); the position goes to
-x/y about the first fix, the speed between fixes to ``track_speed``. PTN D (status) is ISO's:
+times the DDI's bit resolution, converted from the DDI's unit (ISO 11783-11: mm/s, mm, 0.001 deg,
+r/min ...) to SI (m/s, m, rad, rad/s; a unit pint does not know is kept and named); the machine's
+measured speed (DDI 397, Actual Speed) is the log's ``v``; ``--signal COLUMN=EXPR`` maps any
+column (by its name or ``DDInnn``). The position goes to x/y about the first fix, the speed
+between fixes to ``track_speed``. Where the records carry the GNSS time (PTN H, I), the
+terminal's clock (TIM) is compared with it and the offset named. PTN D (status) is ISO's:
 0 no GPS, 1 GNSS, 2 DGNSS, 3 precise GNSS, 4 RTK fixed, 5 RTK float, ... 15 not available; it is
 kept as ``fix_quality`` with GGA's codes where they agree (0-5) and 15 -> NaN (unknown).
 """
@@ -35,6 +39,8 @@ from .streams import Streams, iso
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
 PTN_LAYOUT = {"A": ("<i", 1e-7), "B": ("<i", 1e-7), "C": ("<i", 1e-3), "D": ("<B", 1.0), "E": ("<H", 0.1),
               "F": ("<H", 0.1), "G": ("<B", 1.0), "H": ("<I", 1e-3), "I": ("<H", 1.0)}
+SPEED_DDI = 397                 # Actual Speed [mm/s]: the machine's measured speed
+UNIT_ALIASES = {"r/min": "rpm", "/s": "1/s", "n.a.": "", "#": ""}
 PTN_NAMES = {"A": "lat", "B": "lon", "C": "height", "D": "status", "E": "pdop", "F": "hdop", "G": "satellites",
              "H": "gps_time_ms", "I": "gps_date"}
 
@@ -130,12 +136,35 @@ def read_timelog(xml: Path) -> tuple[pd.DataFrame, dict]:
     units = {}
     names = [ddi_name(d) for d, _ in dlvs]
     count = {}
+    si, ddis = {}, {}
     for (ddi, element), (name, unit, res), column in zip(dlvs, names, values.T):
         count[name] = count.get(name, 0) + 1
         label = name if sum(n == name for n, _, _ in names) == 1 else f"{name}_{element.lower().replace('-', '')}"
-        table[label] = column * res
-        units[label] = f"{unit or '-'} (DDI {ddi} 0x{ddi:04X}, element {element or '-'}, resolution {res:g})"
-    return table, {"units": units, "fixed": fixed, "records": int(len(t))}
+        factor, si_unit = ddi_to_si(unit)
+        table[label] = column * res * factor
+        si[label], ddis[label] = si_unit, ddi
+        units[label] = (f"{unit or '-'} (DDI {ddi} 0x{ddi:04X}, element {element or '-'}, resolution {res:g})"
+                        + (f" -> {si_unit}" if factor != 1.0 else "" if si_unit is not None else
+                           ": a unit pint does not know, kept as the terminal wrote it"))
+    return table, {"units": units, "fixed": fixed, "records": int(len(t)), "si": si, "ddi": ddis}
+
+
+def ddi_to_si(unit: str) -> tuple[float, str | None]:
+    """(factor, SI unit) of an ISO 11783-11 unit (mm/s -> 0.001 m/s, 0.001 deg -> rad ...);
+    (1, None) for one pint does not know."""
+    from agrobot.orchestrator.units import base_unit
+
+    text = UNIT_ALIASES.get((unit or "").strip(), (unit or "").strip())
+    try:
+        b = base_unit(text)
+    except Exception:                                # noqa: BLE001 - pint raises several kinds
+        b = None
+    if b is None or b.offset:
+        return 1.0, None
+    names = ("kg", "m", "s", "A", "K", "mol", "cd", "rad")
+    parts = [f"{n}^{e}" if e != 1 else n for n, e in zip(names, b.exponents) if e > 0]
+    below = [f"{n}^{-e}" if e != -1 else n for n, e in zip(names, b.exponents) if e < 0]
+    return b.factor, ("*".join(parts) or "1") + ("/" + "/".join(below) if below else "")
 
 
 def timelog_files(paths: list[Path]) -> list[Path]:
@@ -192,12 +221,60 @@ def timelog_streams(paths: list[Path], options, source: Path):
     signals = {c: (table["utc"].to_numpy(float), table[c].to_numpy(float)) for c in info["units"]
                if np.isfinite(table[c]).sum() >= 2}
     signals = {c: (t[np.isfinite(v)], v[np.isfinite(v)]) for c, (t, v) in signals.items()}
+    mapped = _mapped(signals, info, options, source, report)
+    _terminal_clock(table, report)
     report["columns"] = {**{c: info["units"][c] for c in signals},
                          "x": "PTN north/east (1e-7 deg) -> east of the run's first fix (pymap3d)",
                          "y": "PTN north/east (1e-7 deg) -> north of the run's first fix (pymap3d)",
                          "t": "TIM start, s from the run's start"}
     report["fixed"] = info["fixed"]
-    return Streams(gnss, signals, report, set(signals), {}, breaks)
+    report["columns"].update({c: how for c, (_, _, how) in mapped.items()})
+    signals.update({c: (t, v) for c, (t, v, _) in mapped.items()})
+    held = set(signals) - {c for c in mapped if c != "delta_cmd"}
+    return Streams(gnss, signals, report, held, {}, breaks, groups={c: "gnss" for c in signals})
+
+
+def _mapped(signals: dict, info: dict, options, source: Path, report: dict) -> dict:
+    """{column: (t, values, how)} of the ``--signal`` expressions over the time log's columns
+    (named as listed, or DDInnn), and the machine's measured speed as ``v`` when not mapped."""
+    from .signals import SignalSpec, evaluate, unknown_name
+    from .streams import Series
+
+    series = {c: Series(t, v, info["si"].get(c), c) for c, (t, v) in signals.items()}
+    for c, ddi in info["ddi"].items():
+        if c in series:
+            series.setdefault(f"DDI{ddi}", series[c])
+    specs = list(options.signals)
+    speed = next((c for c, d in info["ddi"].items() if d == SPEED_DDI and c in series), None)
+    if speed and "v" not in {s.column for s in specs}:
+        specs.append(SignalSpec("v", ((speed, 1.0),), 0.0, None, f"v={speed}"))
+    out = {}
+    for spec in specs:
+        for name in spec.names:
+            if name not in series:
+                raise unknown_name(str(source), spec, name, sorted(series), "column")
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        ok = np.isfinite(values)
+        out[spec.column] = (t[ok], values[ok], how + ("; the machine's measured speed (DDI 397)"
+                                                      if spec.text == f"v={speed}" else ""))
+    return out
+
+
+def _terminal_clock(table: pd.DataFrame, report: dict) -> None:
+    """The terminal's clock (TIM) against the GNSS time the same records carry (PTN H, I)."""
+    if "gps_time_ms" not in table or "gps_date" not in table:
+        return
+    gps = EPOCH_1980 + table["gps_date"].to_numpy(float) * 86400.0 + table["gps_time_ms"].to_numpy(float)   # s (PTN H read x 1e-3)
+    ok = np.isfinite(gps) & (table["gps_date"].to_numpy(float) > 0)
+    if ok.sum() < 2:
+        return
+    d = table["utc"].to_numpy(float)[ok] - gps[ok]
+    offset = float(np.median(d))
+    report["terminal_clock"] = {"offset_s": offset, "range_s": [float(d.min()), float(d.max())],
+                                "terminal_start": iso(float(table["utc"].iloc[0])), "gnss_start": iso(float(gps[ok][0]))}
+    report.setdefault("notes", []).append(
+        f"the terminal's clock (TIM, labelled UTC) is {offset:+.3f} s from the GNSS time in the same records "
+        f"(PTN H/I; {iso(float(table['utc'].iloc[0]))} vs {iso(float(gps[ok][0]))}); the log keeps the terminal's clock")
 
 
 def _task_notes(paths: list[Path], heads: list[Path]) -> list[str]:

@@ -138,7 +138,8 @@ def _tables(paths: list[Path], options) -> list[str]:
     from .tables import describe_table, read_table, read_tables
 
     try:
-        tables = read_tables(paths, options.time, options.rate, paths[0].parent)
+        tables = read_tables(paths, options.time, options.rate, paths[0].parent,
+                             tuple(n for s in options.signals for n in s.names))
     except LogError as exc:                   # each table alone, saying why the set has no clock
         out = [f"tables: {exc}"]
         for p in paths:

@@ -2,7 +2,10 @@
 
 A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units
 (``COLUMNS``); more columns are allowed. Every refusal names the file, the column and what was
-expected. Identification, diagnosis and the tests read logs through ``read_log`` only.
+expected. Identification, diagnosis and the tests read logs through ``read_log`` only. A log that
+``convert`` wrote carries its import's audit (``frame.attrs["audit"]``, measurements.audit),
+restored from the Parquet metadata or the ``<name>.import.json`` beside it (measurements.load_log
+audits any other table on its own columns).
 """
 from __future__ import annotations
 
@@ -49,7 +52,27 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    audit = persisted_audit(path)            # the import's audit, when convert wrote the log
+    if audit is not None:
+        frame.attrs["audit"] = audit
     return check_log(frame, str(path), required, resample_jitter)
+
+
+def persisted_audit(path) -> list | None:
+    """The findings written beside a log (its ``<name>.import.json``, as ``convert`` writes it),
+    or None: reading a log back restores frame.attrs["audit"]."""
+    import json
+    from pathlib import Path
+
+    side = Path(path).with_name(Path(path).stem + ".import.json")
+    if not side.is_file():
+        return None
+    try:
+        report = json.loads(side.read_text())
+    except (OSError, ValueError):
+        return None
+    found = report.get("audit", {}).get("findings") if isinstance(report, dict) else None
+    return list(found) if isinstance(found, list) else None
 
 
 def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
@@ -106,6 +129,11 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
             if peak > bound and c == "yaw_rate" and (why := yaw_rate_in_radians(frame)):
                 frame.attrs.setdefault("notes", []).append(
                     f"column 'yaw_rate' reaches {peak:.3g} rad/s, more than {bound} rad/s, and is read as rad/s: {why}")
+            elif peak > bound and c in frame.attrs.get("declared", {}):
+                frame.attrs.setdefault("notes", []).append(
+                    f"warning: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than {bound} {unit}, "
+                    f"which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
+                    f"[{frame.attrs['declared'][c]}] (the user's word stands)")
             elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
                                f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
@@ -175,6 +203,11 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
     if fast.sum() < 100:
         return
     ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
+    if "v" in frame.attrs.get("declared", {}) and not 0.67 < ratio < 1.5:
+        frame.attrs.setdefault("notes", []).append(
+            f"warning: column 'v' is {ratio:.2f} times the speed of the GPS track; kept as declared "
+            f"[{frame.attrs['declared']['v']}] (the user's word stands)")
+        return
     if abs(ratio - 3.6) < 0.4:
         raise LogError(f"{where}: column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
                        f"the log must hold m/s (divide v by 3.6)")
@@ -244,6 +277,11 @@ def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: n
     """The track's evidence (_track_turn_ratio): a slope above 20 is deg/s."""
     slope = _track_turn_ratio(frame, h, k, d)
     if slope is not None and slope > 20:
+        if "yaw_rate" in frame.attrs.get("declared", {}):
+            frame.attrs.setdefault("notes", []).append(
+                f"warning: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track, which looks like "
+                f"deg/s; kept as declared [{frame.attrs['declared']['yaw_rate']}] (the user's word stands)")
+            return
         raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
                        f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
 

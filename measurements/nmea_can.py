@@ -91,7 +91,8 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
         report["columns"]["t"] = "the CAN logger's timestamps, s from the run's start"
     else:
         report["clocks"] = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
-    return Streams(gnss, raw, report, set(HELD) & set(raw), {}, [b for n in nmea for b in n.breaks] + can_breaks)
+    return Streams(gnss, raw, report, set(HELD) & set(raw), {}, [b for n in nmea for b in n.breaks] + can_breaks,
+                   groups={c: "can" for c in raw})
 
 
 def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, options: ImportOptions, report: dict):

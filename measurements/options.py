@@ -24,6 +24,8 @@ class ImportOptions:
     bus: str | None = None                      # the CAN bus to read (candump's can0, a Vector channel)
     time: str | None = None                     # a table's time column(s) (measurements.tables.parse_time)
     keep_spikes: bool = False                   # keep the samples found to be spikes (they are named either way)
+    max_gap: float = 0.5                        # s: a channel's gap up to this is bridged (linear; held for a command)
+    align: str = "auto"                         # auto | none | GROUP=SECONDS (measurements.audit.parse_align)
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table

@@ -161,6 +161,15 @@ def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
             + ("kept (--keep-spikes)" if s["kept"] else "masked (--keep-spikes keeps them)") for s in found)
     if streams.gnss is not None:
         streams.gnss = _checked_fixes(streams, t0)
+        if len(streams.gnss) < 2:                  # no track left: the other channels may still be used
+            had = report.get("impossible_fixes", {}).get("count", 0)
+            if not streams.signals:
+                raise LogError(f"{report.get('source', 'the recording')}: {len(streams.gnss)} usable fix(es): "
+                               f"{had} with impossible coordinates (expected |lat| <= 90, |lon| <= 180), and no other "
+                               f"channel to make a log of")
+            report.setdefault("quirks", []).append(f"{len(streams.gnss)} usable fix(es) ({had} impossible): no "
+                                                   f"positions; the other channels are used")
+            streams.gnss = None
     if streams.gnss is not None:
         q = position_quantisation(streams.gnss["lat"].to_numpy(float), streams.gnss["lon"].to_numpy(float))
         if q is not None:

@@ -29,7 +29,7 @@ from .raw_nmea import looks_like_nmea
 from .runs import assemble
 from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 from .streams import Streams
-from .tables import TABLE_SUFFIXES
+from .tables import TABLE_SUFFIXES, TEXT_SUFFIXES, looks_like_table
 
 __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_recording", "load_log", "positions",
            "recording_files"]
@@ -73,8 +73,8 @@ def recording_files(source: Path) -> dict[str, list[Path]]:
             kinds["bag"].append(p)
         elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):
             kinds["isoxml"].append(p)
-        elif suffix in TABLE_SUFFIXES:
-            kinds["table"].append(p)
+        elif suffix in TABLE_SUFFIXES or (suffix in TEXT_SUFFIXES and looks_like_table(p)):
+            kinds["table"].append(p)          # a table by its content: a .txt dump of one topic field
     for kind, paths in kinds.items():
         for p in paths:
             regular_file(p, LogError, "streamed" if kind in ("nmea", "can", "bag") else "whole")
@@ -95,6 +95,8 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
         streams = timelog_streams(kinds["isoxml"], options, source)
     elif kinds["nmea"] or kinds["can"]:
         streams = nmea_can_streams(source, options, kinds)
+        if not kinds["can"] and options.signals:
+            _receiver_signals(streams, options, source)
     elif kinds["table"]:
         from .tables import table_streams
 
@@ -107,7 +109,41 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
     ignored = [p.name for k in ("table",) for p in kinds[k] if streams.report.get("files", {}).get(k) is None]
     if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
         streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
-    return _steered(find_quirks(fixes_from_columns(streams, source), options), options)
+    streams = _steered(find_quirks(fixes_from_columns(streams, source), options), options)
+    from .audit import audit_streams
+
+    streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
+    return streams
+
+
+RECEIVER_FIELDS = {"speed": "m/s", "course": "rad", "heading": "rad", "height": "m", "quality": "", "position_std": "m"}
+
+
+def _receiver_signals(streams: Streams, options: ImportOptions, source: Path) -> None:
+    """``--signal`` over an NMEA recording: the receiver's fields (gnss.speed, gnss.course,
+    gnss.heading, gnss.height, gnss.quality, gnss.position_std; SI); a name it does not hold is
+    refused with the near names."""
+    from .signals import evaluate, unknown_name
+    from .streams import Series
+
+    g = streams.gnss
+    if g is None:
+        raise LogError(f"{source}: --signal {options.signals[0]}: the NMEA holds no fix to take a signal from")
+    utc = g["utc"].to_numpy(float)
+    series = {}
+    for name, unit in RECEIVER_FIELDS.items():
+        x = g[name].to_numpy(float)
+        ok = np.isfinite(x)
+        if ok.sum() >= 2:
+            series[f"gnss.{name}"] = Series(utc[ok], x[ok], unit or None, f"gnss.{name}")
+    for spec in options.signals:
+        for name in spec.names:
+            if name not in series:
+                raise unknown_name(str(source), spec, name, sorted(series), "receiver field")
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        streams.signals[spec.column] = (t, values)
+        streams.groups[spec.column] = "gnss"
+        streams.report.setdefault("columns", {})[spec.column] = how
 
 
 def _steered(streams: Streams, options: ImportOptions) -> Streams:
@@ -128,7 +164,8 @@ def _steered(streams: Streams, options: ImportOptions) -> Streams:
 def import_recording(source: str | Path, options: ImportOptions | None = None) -> tuple[pd.DataFrame, dict]:
     """(canonical log t, delta_cmd, delta, v, yaw_rate, x, y; the import report)."""
     options = (options or ImportOptions()).for_vehicle()
-    return assemble(Path(source), _checked(Path(source), options), options)
+    frame, report = assemble(Path(source), _checked(Path(source), options), options)
+    return _with_audit(frame, report, options), report
 
 
 def import_runs(source: str | Path, options: ImportOptions | None = None) -> list[tuple[pd.DataFrame, dict]]:
@@ -136,13 +173,24 @@ def import_runs(source: str | Path, options: ImportOptions | None = None) -> lis
     source, options = Path(source), (options or ImportOptions()).for_vehicle()
     streams = _checked(source, options)
     first = assemble(source, streams, options)
-    return [first if r["run"] == first[1]["used"].get("run") else assemble(source, streams, replace(options, run=r["run"]))
+    runs = [first if r["run"] == first[1]["used"].get("run") else assemble(source, streams, replace(options, run=r["run"]))
             for r in first[1]["runs"]]
+    return [(_with_audit(f, rep, options), rep) for f, rep in runs]
+
+
+def _with_audit(frame: pd.DataFrame, report: dict, options: ImportOptions) -> pd.DataFrame:
+    """The audit's findings on the log (frame.attrs["audit"], measurements.audit), and the units
+    the user declared (frame.attrs["declared"]: a unit heuristic warns on them, never refuses)."""
+    frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
+    frame.attrs["declared"] = {s.column: s.unit for s in options.signals if s.unit}
+    return frame
 
 
 def _checked(source: Path, options: ImportOptions) -> Streams:
     if options.rate is not None and not 1.0 <= options.rate <= 200.0:
         raise LogError(f"--rate {options.rate:g}: expected 1 to 200 Hz")
+    if not 0.0 <= options.max_gap <= 60.0:
+        raise LogError(f"--max-gap {options.max_gap:g}: expected 0 to 60 s (a channel's gap bridged up to this)")
     return _streams(source, options)
 
 
@@ -151,14 +199,22 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     """(log, import report): a table (CSV/Parquet) through read_log, or a raw field recording
     (a folder of NMEA files and CAN logs, or one such file) through
     measurements.recording.import_recording with ``recording`` (ImportOptions), then the same
-    checks. The report is None for a table."""
+    checks. The report is None for a table. The log carries its audit (frame.attrs["audit"],
+    measurements.audit): the import's, the one written beside it, or that of its own columns."""
     source = Path(source)
     if not is_recording(source) and not (recording is not None and recording.maps_a_table):
-        return read_log(source, required, resample_jitter), None
+        frame = read_log(source, required, resample_jitter)
+        if "audit" not in frame.attrs:        # a table as it is: the audit of its own columns
+            from .audit import audit_frame
+
+            frame.attrs["audit"] = audit_frame(frame)
+        return frame, None
     frame, report = import_recording(source, recording)
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
     frame = check_log(frame, where, required, resample_jitter)
+    report.setdefault("notes", []).extend(n for n in frame.attrs.get("notes", []) if n.startswith("warning:"))
     frame.attrs["resolution"] = dict(report.get("resolution", {}))
+    frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
     return frame, report
 
 
@@ -173,7 +229,7 @@ def positions(source: str | Path, options: ImportOptions | None = None) -> tuple
                        f"lat/lon columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN)")
     g = streams.gnss
     report = streams.report
-    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, mm
+    width = [v for c, (_, v) in streams.signals.items() if c.startswith("ddi0067")]   # ISO 11783 actual working width, m (SI)
     if width and np.isfinite(width[0]).any():
-        report["working_width_m"] = float(np.nanmedian(width[0])) / 1000.0
+        report["working_width_m"] = float(np.nanmedian(width[0]))
     return g["utc"].to_numpy(float), g["lat"].to_numpy(float), g["lon"].to_numpy(float), report

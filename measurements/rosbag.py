@@ -185,6 +185,12 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
                     wanted.setdefault(topic, {})[name] = path
                     auto[column] = SignalSpec(column, ((name, 1.0),), 0.0, None, f"{column}={name}")
                     taken.add(column)
+                elif column == "yaw_rate" and "yaw_rate" in auto and auto["yaw_rate"].names[0].split(".")[0] != topic:
+                    # another gyro: kept as yaw_rate_2 ... for the audit to compare (the first is used)
+                    alt = f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}"
+                    name = f"{topic}.{path}"
+                    wanted.setdefault(topic, {})[name] = path
+                    auto[alt] = SignalSpec(alt, ((name, 1.0),), 0.0, None, f"{alt}={name}")
     rows: dict[str, list] = {t: [] for t in wanted}
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
@@ -209,9 +215,9 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
             except (LookupError, TypeError, ValueError, IndexError) as exc:
                 raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}): field "
                                f"{path or '(the only numeric field)'}: {exc}") from None
-        rows[conn.topic].append((t, *values))
+        rows[conn.topic].append((t, receive_ns * 1e-9, *values))
     series: dict[str, Series] = {}
-    report_topics = {}
+    report_topics, stamps = {}, {}
     for topic, names in wanted.items():
         data = np.array(rows[topic], float)
         if len(data) == 0:
@@ -220,8 +226,12 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
             continue
         data = data[np.argsort(data[:, 0], kind="stable")]
         data = data[np.concatenate([[True], np.diff(data[:, 0]) > 0])]
-        for i, (name, path) in enumerate(names.items(), 1):
+        for i, (name, path) in enumerate(names.items(), 2):
             series[name] = Series(data[:, 0], data[:, i], field_unit(topics[topic], path), name)
+        late = data[:, 1] - data[:, 0]                 # receive time - header stamp
+        if header_used.get(topic) and len(late):
+            stamps[topic] = {"median": float(np.median(late)), "p95": float(np.percentile(late, 95)),
+                             "min": float(late.min()), "max": float(late.max())}
         report_topics[topic] = {"type": topics[topic], "messages": int(len(data)),
                                 "rate_hz": float(1.0 / np.median(np.diff(data[:, 0]))) if len(data) > 1 else math.nan,
                                 "time": "header stamps" if header_used.get(topic) else "bag receive times",
@@ -245,8 +255,13 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
             topic = split_name(n, list(topics))[0]
             if topic in report_topics:
                 report_topics[topic]["columns"][spec.column] = how
-    report = {"topics": report_topics,
+    report = {"topics": report_topics, "stamp_vs_receive": stamps,
               "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
+    others = [s for c, s in auto.items() if c.startswith("yaw_rate_") and c in signals]
+    if others:
+        report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
+                             + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
+                             + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
     return signals, report
 
 
@@ -306,7 +321,8 @@ def _numeric_paths(msg, prefix: str = "") -> list[tuple[str, float]]:
 def bag_streams(paths: list[Path], options, source: Path):
     """The recording's streams from ROS bags."""
     signals, topics = read_bags(paths, list(options.signals), source)
-    report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None, "notes": [],
+    report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None,
+                    "notes": list(topics.pop("choices", [])), "stamp_vs_receive": topics.pop("stamp_vs_receive", {}),
                     "bag": topics, "clocks": {"reference": "the bag's clock: header stamps (receive times where a "
                                                            "message has no header)"}}
     gnss = None
@@ -335,4 +351,5 @@ def bag_streams(paths: list[Path], options, source: Path):
                         "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(gnss, signals, report, held, {})
+    groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
+    return Streams(gnss, signals, report, held, {}, groups=groups)

@@ -1,7 +1,9 @@
 """A recording's streams on one grid: gaps, runs, the run or span used, and the log's columns.
 
-Gaps (a stream silent for more than 3 of its periods and 0.2 s, or without a fix) split the
-recording; runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
+Gaps: a stream silent for more than 3 of its periods and ``max_gap`` (``--max-gap``, default
+0.5 s; 0.2 s at least) splits the recording, and so does a silence of every stream at once; a
+shorter gap of one stream is bridged (linear; a set-point held) and named by the audit
+(measurements.audit). Runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
 shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
 ``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
 Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
@@ -83,7 +85,8 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
     step = _grid_step(streams, options)
     lo, hi = max(float(t[0]) for _, t in times), min(float(t[-1]) for _, t in times)
-    least = {name: HELD_GAP if name in streams.held else GAP_MIN for name, _ in times}
+    bridge = max(GAP_MIN, float(options.max_gap))
+    least = {name: max(HELD_GAP if name in streams.held else GAP_MIN, bridge) for name, _ in times}
     report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
     if hi - lo < 2 * step:
         spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
@@ -103,8 +106,11 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
                                "duration": float(b["end"] - b["start"])})
     if streams.breaks:
         report["splits"] = [b["why"] for b in streams.breaks]
+    silent = np.ones(len(grid), bool)             # every stream silent at once: split, however short
     for name, t in times:
         covered &= _covered(t, grid, least[name])
+        silent &= ~_covered(t, grid, HELD_GAP if name in streams.held else GAP_MIN)
+    covered &= ~silent
     if "v" in sig:
         v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
     elif gnss is not None:
@@ -112,6 +118,8 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     else:
         v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
     moving = np.abs(v) > options.min_speed if v is not None else np.ones(len(grid), bool)   # reversing drives too
+    report["driving_s"] = float(moving.sum() * step)
+    report["silent_while_driving_s"] = float((moving & ~covered).sum() * step)
     for a, b in _stretches(~moving):                 # short stops do not end a run
         if 0 < a and b < len(grid) and (b - a) * step < options.min_stop:
             moving[a:b] = True
@@ -120,6 +128,17 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         runs.append({"start": float(grid[a] - u0), "end": float(grid[b - 1] - u0), "duration": float((b - a) * step),
                      "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": iso(grid[a])})
     long_runs = [r for r in runs if r["duration"] >= options.min_run]
+    if not long_runs and runs:            # the minimum is guidance down to its floor (measurements.audit.minimum)
+        from .audit import minimum
+
+        best = max(runs, key=lambda r: r["duration"])
+        try:
+            warning = minimum(best["duration"], options.min_run, "the longest run", "s")
+        except LogError:
+            warning = None
+        if warning:
+            long_runs = [best]
+            report.setdefault("notes", []).append(warning)
     for i, r in enumerate(long_runs, 1):
         r["run"] = i
     report["runs"] = long_runs
@@ -166,6 +185,17 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     return pd.DataFrame(columns)[order], report
 
 
+def _standstill_or_silence(report: dict) -> str:
+    """Standstill told from silence: how long the vehicle drives, and how much of that a stream is silent."""
+    driving, silent = report.get("driving_s", 0.0), report.get("silent_while_driving_s", 0.0)
+    if driving <= 0:
+        return "the vehicle stands still throughout (a standstill, not a silence)"
+    if silent <= 0:
+        return f"the vehicle drives {driving:.1f} s in all, in stretches too short"
+    return (f"the vehicle drives {driving:.1f} s, {silent:.1f} s of it with a stream silent longer than --max-gap "
+            f"(a silence, not a standstill: a larger --max-gap bridges it)")
+
+
 def _missing_reason(column: str, report: dict) -> str:
     if column in ("x", "y"):
         return "no positions: no NMEA with a fix, no NavSatFix topic, no TLG position"
@@ -190,23 +220,25 @@ def _choose(source: Path, grid: np.ndarray, u0: float, covered: np.ndarray, long
             g = [x for x in report["gaps"] if x["end"] > a and x["start"] < b]
             raise LogError(f"{source}: --time-range {a:g} {b:g} crosses a gap"
                            + (f" ({g[0]['stream']} silent from {g[0]['start']:.2f} to {g[0]['end']:.2f} s)" if g else "")
-                           + "; choose a range within one run (runs: "
+                           + "; choose a range within one run, or bridge a channel's gap with a larger --max-gap "
+                           f"(now {options.max_gap:g} s) (runs: "
                            + ", ".join(f"{r['start']:.1f}-{r['end']:.1f} s" for r in long_runs) + ")")
         return pick, {"how": "time range", "start": float(a), "end": float(b)}
     if not long_runs:
         stretches = [(a, b) for a, b in _stretches(covered) if b - a >= 3]
         if options.run is not None or not stretches:
             raise LogError(f"{source}: no run of {options.min_run:g} s or more with the vehicle driving (speed above "
-                           f"{options.min_speed:g} m/s) and every stream present"
+                           f"{options.min_speed:g} m/s) and every stream present: {_standstill_or_silence(report)}"
                            + ("; gaps: " + ", ".join(f"{g['stream']} {g['start']:.1f}-{g['end']:.1f} s" for g in report['gaps'][:5])
                               if report["gaps"] else ""))
         a, b = max(stretches, key=lambda ab: ab[1] - ab[0])
         pick = np.zeros(len(grid), bool)
         pick[a:b] = True
         report.setdefault("notes", []).append(
-            f"no run of {options.min_run:g} s or more with the vehicle driving (above {options.min_speed:g} m/s): "
-            f"the longest stretch without a gap is used; a diagnosis needs the vehicle driving")
-        return pick, {"how": "the longest stretch without a gap (the vehicle does not drive)",
+            f"no run of {options.min_run:g} s or more with the vehicle driving (above {options.min_speed:g} m/s) and "
+            f"every stream present ({_standstill_or_silence(report)}): the longest stretch without a gap is used; a "
+            f"diagnosis needs the vehicle driving")
+        return pick, {"how": "the longest stretch without a gap (no run long enough: " + _standstill_or_silence(report) + ")",
                       "start": float(grid[a] - u0), "end": float(grid[b - 1] - u0)}
     if options.run is not None and not 1 <= options.run <= len(long_runs):
         raise LogError(f"{source}: --run {options.run}: the recording has {len(long_runs)} run(s): "

@@ -33,6 +33,7 @@ from .streams import Series
 # the dimension a column must have, beyond the canonical ones (COLUMNS)
 EXTRA_TARGETS = {"lat": "deg", "lon": "deg", "height": "m", "x": "m", "y": "m", "speed_cmd": "m/s",
                  "heading": "rad", "gnss_speed": "m/s"}
+ALIASES = {"g": "standard_gravity"}          # a declared [g] is an acceleration (standard gravity), not a gram
 MUST_DECLARE = ("rad", "rad/s", "m/s")        # an angle, a rate, a speed: never taken as SI unannounced
 _COLUMN = re.compile(r"^[a-z_][a-z0-9_]*$")
 _NUMBER = re.compile(r"(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
@@ -89,6 +90,7 @@ def check_unit(unit: str, where: str):
     """The unit as orchestrator.units reads it (pint); a LogError when pint does not know it."""
     from agrobot.orchestrator.units import base_unit
 
+    unit = ALIASES.get(unit.strip(), unit)
     try:
         found = base_unit(unit)
     except Exception:                                # noqa: BLE001 - pint raises several kinds

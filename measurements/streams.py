@@ -38,7 +38,8 @@ class Streams:
     ``gnss`` the receiver's epochs with a fix (utc, lat, lon, height, quality, speed, course and
     where given heading, position_std), or None; ``signals`` column -> (time, SI values); ``held``
     the set-points among them; ``resolution`` each signal's step read on its own samples;
-    ``breaks`` the spans a run must not bridge (a clock that stepped back, a position jump)."""
+    ``breaks`` the spans a run must not bridge (a clock that stepped back, a position jump);
+    ``groups`` each signal's source (file, topic, bus): the channels that share a clock."""
 
     gnss: pd.DataFrame | None
     signals: dict[str, tuple[np.ndarray, np.ndarray]]
@@ -46,6 +47,7 @@ class Streams:
     held: set = field(default_factory=set)
     resolution: dict = field(default_factory=dict)
     breaks: list = field(default_factory=list)      # {stream, start, end (POSIX s), why}: never joined across
+    groups: dict = field(default_factory=dict)      # column -> the file, topic or bus it came from (one clock)
 
 
 def gnss_table(t, lat, lon, height=None, quality=None, speed=None, position_std=None) -> pd.DataFrame:

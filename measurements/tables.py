@@ -1,8 +1,9 @@
 """Other tools' tables (CSV, TSV, Parquet) as a recording: one table, or several on their own
 clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
 
-A table is read by pandas; a first row of numbers only means a file without a header, its
-columns named ``col1``, ``col2`` ... A header's unit in brackets, ``speed [km/h]`` or
+A table is read by pandas, recognised by its content as well as its suffix (a ``.txt`` of
+numbers in columns is a table); a first row of numbers only means a file without a header, its
+columns named ``col1``, ``col2`` ...; a row wrapped whole in quotes (``"1.0,2.5,3"``) is unwrapped. A header's unit in brackets, ``speed [km/h]`` or
 ``speed (km/h)``, is the column's unit (the name is what precedes it). A column is named by
 ``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
 table has it.
@@ -30,6 +31,7 @@ from .log import LogError
 from .streams import Series, is_boot_clock, iso
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
+TEXT_SUFFIXES = (".txt", ".dat", ".log", "")      # read as a table when their content is one
 PAIRS = (("s", "ns"), ("sec", "nsec"), ("secs", "nsecs"), ("sec", "nanosec"), ("seconds", "nanoseconds"),
          ("stamp_sec", "stamp_nanosec"), ("header.stamp.sec", "header.stamp.nanosec"),
          ("header.stamp.secs", "header.stamp.nsecs"), ("field.header.stamp.secs", "field.header.stamp.nsecs"))
@@ -51,27 +53,73 @@ class Table:
     time_how: str = ""
     time_columns: tuple = ()
     notes: list = field(default_factory=list)
+    mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
+
+
+def _lines(path: Path, n: int = 20) -> list[str]:
+    with open(path, encoding="utf-8", errors="replace") as f:
+        return [line.strip() for line, _ in zip(f, range(n)) if line.strip()]
+
+
+def _unquoted(line: str) -> str:
+    """A row wrapped whole in one pair of quotes, unwrapped ("1,2,3" -> 1,2,3)."""
+    return line[1:-1].replace('""', '"') if len(line) > 1 and line[0] == line[-1] == '"' and '","' not in line else line
+
+
+def _quoted_rows(path: Path) -> bool:
+    """Every row one quoted field holding separators: the writer quoted whole rows."""
+    lines = _lines(path)
+    return bool(lines) and all(len(x) > 2 and x[0] == x[-1] == '"' and '","' not in x and
+                               any(s in x for s in ",;\t|") for x in lines)
+
+
+def looks_like_table(path: Path) -> bool:
+    """A text file of rows with the same number of fields, mostly numbers (a header allowed)."""
+    import re as _re
+
+    try:
+        lines = [_unquoted(x) for x in _lines(path, 12)]
+    except OSError:
+        return False
+    if len(lines) < 3 or any(len(x) > 4000 for x in lines):
+        return False
+    split = [_re.split(r"[,;\t|]|\s+", x.strip()) for x in lines[1:]]
+    widths = {len(r) for r in split}
+    numeric = sum(_is_number(v) for r in split for v in r) / max(sum(len(r) for r in split), 1)
+    return len(widths) == 1 and numeric > 0.8
 
 
 def read_table(path: Path) -> Table:
     """A table file with its header's units; a LogError names the file when it is not a table."""
+    import io
+
     suffix = path.suffix.lower()
+    notes = []
     try:
         if suffix in (".parquet", ".pq"):
             frame, headerless = pd.read_parquet(path), False
         else:
-            sep = "\t" if suffix == ".tsv" else _separator(path)
-            head = pd.read_csv(path, sep=sep, nrows=1, header=None, dtype=str, skip_blank_lines=True)
+            text = None
+            if _quoted_rows(path):
+                with open(path, encoding="utf-8", errors="replace") as f:
+                    text = "".join(_unquoted(line.strip()) + "\n" for line in f)
+                notes.append("every row is wrapped in quotes: unwrapped")
+            src = io.StringIO(text) if text is not None else path
+            sep = "\t" if suffix == ".tsv" else _separator(path, text)
+            head = pd.read_csv(src, sep=sep, nrows=1, header=None, dtype=str, skip_blank_lines=True)
+            if text is not None:
+                src = io.StringIO(text)
             first = [str(x).strip() for x in head.iloc[0].tolist()] if len(head) else []
             headerless = bool(first) and all(_is_number(x) for x in first if x not in ("", "nan"))
-            frame = pd.read_csv(path, sep=sep, header=None if headerless else "infer")
+            frame = pd.read_csv(src, sep=sep, header=None if headerless else "infer",
+                                engine="python" if sep == r"\s+" else "c")
     except Exception as exc:            # noqa: BLE001 - pandas raises many kinds
         raise LogError(f"{path}: cannot read as a table ({suffix}): {type(exc).__name__}: {exc}") from None
     if headerless:
         frame.columns = [f"col{i + 1}" for i in range(frame.shape[1])]
     if frame.shape[1] == 0 or len(frame) == 0:
         raise LogError(f"{path}: an empty table")
-    units, names, notes, drop = {}, [], [], []
+    units, names, drop = {}, [], []
     for k, c in enumerate(frame.columns):
         text = str(c).strip()
         m = _UNIT_IN_HEADER.match(text)
@@ -91,16 +139,21 @@ def read_table(path: Path) -> Table:
     return Table(path, path.stem, frame, units, headerless, notes=notes)
 
 
-def _separator(path: Path) -> str:
-    """The CSV's field separator: the one of , ; tab | that splits its first lines alike."""
+def _separator(path: Path, text: str | None = None) -> str:
+    """The CSV's field separator: the one of , ; tab | that splits its first lines alike, else
+    white space where it splits them alike (a text dump), else a comma."""
     import csv
 
-    with open(path, newline="", encoding="utf-8", errors="replace") as f:
-        sample = "".join(f.readline() for _ in range(20))
+    if text is None:
+        with open(path, newline="", encoding="utf-8", errors="replace") as f:
+            sample = "".join(f.readline() for _ in range(20))
+    else:
+        sample = "\n".join(text.splitlines()[:20])
     try:
         return csv.Sniffer().sniff(sample, delimiters=",;\t|").delimiter
     except csv.Error:
-        return ","
+        rows = [len(x.split()) for x in sample.splitlines() if x.strip()]
+        return r"\s+" if rows and min(rows) > 1 and len(set(rows)) == 1 else ","
 
 
 def _is_number(text: str) -> bool:
@@ -176,8 +229,31 @@ def _magnitude_unit(x: np.ndarray) -> tuple[float, str]:
                                                                        "declare another with --time 'COLUMN[ms]')")
 
 
+def time_like(table: Table) -> list[str]:
+    """Columns that could be a clock: named as one, or increasing throughout (a header-less dump)."""
+    lower = {str(c).lower(): c for c in table.frame.columns}
+    named = [lower[n] for n in TIME_NAMES if n in lower] + [lower[s] for s, ns in PAIRS if s in lower and ns in lower]
+    rising = []
+    for c in table.frame.columns:
+        x = pd.to_numeric(table.frame[c], errors="coerce").to_numpy(float)
+        if len(x) >= 3 and np.isfinite(x).all() and np.all(np.diff(x) > 0) and c not in named:
+            rising.append(c)
+    return list(dict.fromkeys(named + rising))
+
+
 def time_of(table: Table, spec: TimeSpec | None) -> bool:
-    """Set ``table.t`` from the spec or the table's own columns; False when it has none."""
+    """Set ``table.t`` from the spec or the table's own columns (by name; in a table without a
+    header, the first column that increases throughout, the guess said); False when it has none.
+    Other columns that could be the clock are named in the table's notes."""
+    found = _time_of(table, spec)
+    others = [c for c in time_like(table) if c not in table.time_columns]
+    if found and others and spec is None:
+        table.notes.append(f"time: {'+'.join(map(str, table.time_columns))} used; other columns that could be the clock: "
+                           f"{', '.join(map(str, others[:5]))} (--time COLUMN[unit] picks one)")
+    return found
+
+
+def _time_of(table: Table, spec: TimeSpec | None) -> bool:
     f = table.frame
     where = str(table.path)
     if spec is not None:
@@ -235,7 +311,25 @@ def time_of(table: Table, spec: TimeSpec | None) -> bool:
                     factor, how = 1e-9, "ns (rostopic's %time)"
                 table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
             return True
+    first = f.columns[0] if len(f.columns) > 1 else None
+    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
+            and _even(f[first].to_numpy(float)):
+        c = first
+        x = _numbers(f[c], where, c)
+        factor, how = _magnitude_unit(x)
+        table.t, table.time_columns = x * factor, (c,)
+        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
+                          f"--time COLUMN[unit] picks another)")
+        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
+        return True
     return False
+
+
+def _even(x: np.ndarray) -> bool:
+    """Steps of a clock: 90 % of them within half the median step of it."""
+    dt = np.diff(x)
+    med = float(np.median(dt)) if len(dt) else 0.0
+    return med > 0 and float(np.mean(np.abs(dt - med) <= 0.5 * med)) >= 0.9
 
 
 def _numbers(col: pd.Series, where: str, name: str) -> np.ndarray:
@@ -262,13 +356,17 @@ def _clean(table: Table) -> None:
     table.frame, table.t = frame[keep].reset_index(drop=True), t[keep]
 
 
-def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path) -> list[Table]:
+def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
+                mapped: tuple = ()) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
-    table's row by row (same rows, or one fewer: a value per interval), else ``--rate``."""
+    table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
+    ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
     from .mdf4 import MDF_SUFFIXES, mdf_tables
 
     spec = parse_time(time)
     tables = [t for p in paths for t in (mdf_tables(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
+    for t in tables:
+        t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
         raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
@@ -393,7 +491,8 @@ def table_streams(paths: list[Path], options, source: Path):
     from .signals import SignalSpec, evaluate, target_unit, unknown_name
     from .streams import Streams
 
-    tables = read_tables(paths, options.time, options.rate, source)
+    tables = read_tables(paths, options.time, options.rate, source,
+                         tuple(n for s in options.signals for n in s.names))
     specs = list(options.signals)
     given = {s.column for s in specs}
     notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
@@ -420,7 +519,7 @@ def table_streams(paths: list[Path], options, source: Path):
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
                        + " (convert SOURCE --list shows their ranges)")
     names = catalog(tables)
-    signals, columns, used = {}, {}, set()
+    signals, columns, used, groups = {}, {}, set(), {}
     for spec in specs:
         found = {}
         for name in spec.names:
@@ -441,6 +540,7 @@ def table_streams(paths: list[Path], options, source: Path):
         t, values, how = evaluate(spec, found, str(source), options.wheelbase or 1.4)
         ok = np.isfinite(values)
         signals[spec.column] = (t[ok], values[ok])
+        groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
         columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
             ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
     spans_overlap(tables, used, source)
@@ -454,4 +554,4 @@ def table_streams(paths: list[Path], options, source: Path):
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(None, signals, report, held, {})
+    return Streams(None, signals, report, held, {}, groups=groups)

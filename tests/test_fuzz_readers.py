@@ -56,13 +56,13 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _import(path: Path) -> None:
-    """A recording read whole: a valid log, or the readers' own error."""
+def _import(path: Path, options=None) -> None:
+    """A recording read whole: a valid log with a well-formed audit, or the readers' own error."""
     from agrobot.measurements.recording import import_recording
 
     start = time.perf_counter()
     try:
-        frame, report = import_recording(path)
+        frame, report = import_recording(path, options)
     except InputError as exc:
         assert str(exc) and "Traceback" not in str(exc)
         return
@@ -74,6 +74,22 @@ def _import(path: Path) -> None:
         if column in frame:
             assert np.isfinite(frame[column].to_numpy(float)).all(), column
     assert "used" in report
+    _well_formed(frame.attrs["audit"])
+
+
+def _well_formed(findings) -> None:
+    """Every finding in the shape measurements.audit documents, JSON-able, its numbers finite."""
+    import json
+    import math
+
+    from agrobot.measurements import audit
+
+    kinds = [line.split("``")[1] for line in audit.__doc__.splitlines() if line.startswith("- ``")]
+    for f in findings:
+        assert set(f) == {"kind", "channels", "value", "interval", "unit", "meaning", "resolved"}, f
+        assert f["kind"] in kinds and isinstance(f["resolved"], bool) and f["meaning"] and f["channels"]
+        assert math.isfinite(f["value"]) and (f["interval"] is None or all(math.isfinite(x) for x in f["interval"]))
+    json.dumps(findings, allow_nan=False)
 
 
 def _fields(path: Path) -> None:
@@ -172,6 +188,68 @@ def test_random_bytes_under_any_name_are_refused_by_name(data, suffix):
             _import(path)
         else:
             _fields(path)
+
+
+TABLES = None
+
+
+def _tables() -> dict[str, bytes]:
+    """The generated recording of tests/import_recordings.py (one channel group 0.85 s late)."""
+    global TABLES
+    if TABLES is None:
+        from tests.import_recordings import write_recording
+
+        with tempfile.TemporaryDirectory() as tmp:
+            rec = write_recording(Path(tmp) / "rec", seconds=25.0, late=0.85)
+            TABLES = {p.name: p.read_bytes() for p in rec.iterdir()}
+    return TABLES
+
+
+@settings(SETTINGS, max_examples=12)
+@given(name=st.sampled_from(["gnss.csv", "imu.csv", "bywire.csv"]), edits=_mutations(),
+       align=st.sampled_from(["auto", "none", "bywire=0.85", "imu=-0.3"]), max_gap=st.sampled_from([0.0, 0.5, 5.0]))
+def test_a_mutated_table_recording_is_audited_or_refused_by_name(name, edits, align, max_gap):
+    """The audit and the alignment on a recording with one file damaged."""
+    from agrobot.measurements.recording import ImportOptions
+    from agrobot.measurements.signals import parse_signal
+    from tests.import_recordings import SIGNALS
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "rec"
+        folder.mkdir()
+        for file, data in _tables().items():
+            (folder / file).write_bytes(mutate(data, edits) if file == name else data)
+        _import(folder, ImportOptions(signals=[parse_signal(s) for s in SIGNALS], wheelbase=0.32, align=align,
+                                      max_gap=max_gap))
+
+
+@settings(SETTINGS, max_examples=60)
+@given(n=st.lists(st.integers(0, 400), min_size=1, max_size=4), seed=st.integers(0, 2 ** 16),
+       constant=st.booleans(), repeat=st.booleans(), scale=st.sampled_from([1e-9, 1.0, 1e6]))
+def test_the_audit_of_arbitrary_streams_is_well_formed(n, seed, constant, repeat, scale):
+    """Channels of any length (0 to 400 samples), repeated stamps, constant or huge values: the
+    audit gives well-formed findings or a LogError, nothing else."""
+    from agrobot.measurements import LogError
+    from agrobot.measurements.audit import audit_streams
+    from agrobot.measurements.recording import ImportOptions
+    from agrobot.measurements.streams import Streams
+
+    rng = np.random.default_rng(seed)
+    names = ["delta_cmd", "v", "yaw_rate", "ay"]
+    signals = {}
+    for name, k in zip(names, n):
+        t = np.sort(rng.uniform(0, 60, k))
+        if repeat and k > 2:
+            t[1] = t[0]
+        x = np.full(k, 1.0) if constant else scale * rng.standard_normal(k)
+        signals[name] = (t, x)
+    streams = Streams(None, signals, {}, {"delta_cmd"} & set(signals), {}, groups={c: c for c in signals})
+    try:
+        audit = audit_streams(streams, ImportOptions(wheelbase=1.4), "fuzz")
+    except LogError as exc:
+        assert str(exc)
+        return
+    _well_formed(audit["findings"])
 
 
 def test_the_fuzzing_stayed_within_its_memory_bound():

@@ -386,7 +386,7 @@ def test_a_harvesters_track_becomes_a_field_the_planner_replans(tmp_path):
 
     t, lat, lon, report = positions(ISOXML / "TLG00002.xml")
     table, _ = read_timelog(ISOXML / "TLG00002.xml")
-    declared = float(table["ddi0067_actual_working_width"].median()) / 1000       # the machine's own, mm
+    declared = float(table["ddi0067_actual_working_width"].median())       # the machine's own (DDI 67: mm -> m)
     estimated = field_from_track(t, lat, lon, "x", "TLG00002", None)               # from the passes' spacing
     assert estimated.properties["working_width_m"] == pytest.approx(declared, rel=0.35)
     plan = cli("plan", tmp_path / "f" / "fields.geojson", "--out", tmp_path / "p", "--max-swaths", 4,

@@ -1,0 +1,692 @@
+"""The audit of a recording before any log is used: every channel's timing, and what the channels
+say about each other's clocks, scales and labels.
+
+Per channel (a log column on its own stamps, or the receiver's fixes ``gnss``): samples, rate
+(1 / median step), gaps (silences longer than max(3 steps, 0.2 s): count, longest, when),
+repeated stamps, and its group (the file, topic or bus it came from: one clock).
+
+Between channels, from signals that must agree (Kayacan et al. section 2's kinematic relations):
+
+- two speeds: the wheel speed ``v`` against the receiver's speed over ground;
+- gyro against the GNSS course: ``yaw_rate`` against d(course)/dt of the track (1 s chords, |v| > 1 m/s);
+- ``v r`` against the lateral acceleration (a column ``ay``, ``a_y``, ``lat_acc``, ``acc_y``);
+- two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*``);
+- steering x speed against yaw rate, ``v tan(delta) / L`` -> ``r``: the only pair with a physical
+  lag (actuator, tyres), so it gives no clock offset but the causality check: a response never
+  leads its input.
+
+The lag is the peak of the normalised cross-correlation of the two signals on a common grid
+(masked where either is silent or the vehicle is too slow), refined by a parabola; its interval
+is the spread of the lags of up to 8 separate stretches (lag +- 2 s.e., at least one grid step).
+The scale is the least-squares slope of the second signal on the first at that lag.
+
+Findings: dicts {kind, channels, value, interval ([lo, hi] or None), unit, meaning, resolved}.
+Kinds:
+
+- ``clock_offset``: the second group's stamps are ``value`` s late against the first's (a pair
+  with no physical lag); resolved when aligned (``--align``) or too small to matter;
+- ``response_leads_input``: the yaw rate answers ``value`` s before the steering x speed that
+  causes it; resolved when an alignment removed it;
+- ``response_lag``: the lag of that causal pair when it is causal (information, resolved);
+- ``scale_disagreement``: the second channel is ``value`` times the first (two speeds, gyro vs
+  course, ``v r`` vs lateral acceleration, two gyros);
+- ``mislabelled_channel``: a "gyro" whose mean is g, a gyro/accelerometer pair swapped, an
+  "angle" that is a rate;
+- ``ambiguous_channel``: two plausible sources of one quantity that disagree;
+- ``position_is_estimate``: x, y from a localisation or odometry, not a receiver's fixes;
+- ``gap_bridged``: a channel's gaps up to ``--max-gap`` bridged (linear; held for a command);
+- ``gap_split``: a channel's gaps longer than ``--max-gap`` (they split the log);
+- ``stamp_vs_receive``: header stamps against the receive times of the same messages;
+- ``terminal_clock``: a terminal's clock against the GNSS time of the same records.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .log import LogError
+
+SEARCH = 3.0            # s: lags searched either way
+LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still within the stamps' jitter
+ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
+STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
+SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
+MOVING = 1.0            # m/s: the GNSS course is read above this speed
+LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
+GAP_PERIODS, GAP_MIN = 3.0, 0.2
+G = 9.80665
+
+
+def finding(kind: str, channels, value: float, interval, unit: str, meaning: str, resolved: bool = False) -> dict:
+    """One finding in the shape every consumer reads (module docstring)."""
+    return {"kind": kind, "channels": [str(c) for c in channels], "value": float(value),
+            "interval": None if interval is None else [float(interval[0]), float(interval[1])],
+            "unit": unit, "meaning": meaning, "resolved": bool(resolved)}
+
+
+# --- channels ---------------------------------------------------------------------------------
+def channel_gaps(t: np.ndarray, least: float = GAP_MIN) -> tuple[np.ndarray, np.ndarray]:
+    """(start index, length [s]) of the silences longer than max(3 median steps, ``least``)."""
+    if len(t) < 3:
+        return np.array([], int), np.array([])
+    dt = np.diff(t)
+    limit = max(GAP_PERIODS * float(np.median(dt[dt > 0])) if (dt > 0).any() else 0.0, least)
+    i = np.flatnonzero(dt > limit)
+    return i, dt[i]
+
+
+def channel_row(name: str, group: str, t: np.ndarray, t0: float) -> dict:
+    t = np.asarray(t, float)
+    dt = np.diff(t)
+    step = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
+    i, length = channel_gaps(t)
+    return {"channel": name, "group": group, "samples": int(len(t)),
+            "start_s": float(t[0] - t0) if len(t) else math.nan, "end_s": float(t[-1] - t0) if len(t) else math.nan,
+            "rate_hz": 1.0 / step if step > 0 else math.nan, "repeated_stamps": int(np.sum(dt == 0)),
+            "gaps": int(len(i)), "longest_gap_s": float(length.max()) if len(i) else 0.0,
+            "gaps_at_s": [round(float(t[k] - t0), 2) for k in i[:5]]}
+
+
+# --- lags ---------------------------------------------------------------------------------------
+def _on_grid(t: np.ndarray, x: np.ndarray, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """x interpolated onto ``grid``, and where it is valid (within its span, not inside a gap)."""
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    ok = np.isfinite(x)
+    t, x = t[ok], x[ok]
+    if len(t) < 3:
+        return np.zeros(len(grid)), np.zeros(len(grid), bool)
+    y = np.interp(grid, t, x)
+    j = np.clip(np.searchsorted(t, grid, side="right"), 1, len(t) - 1)
+    i, length = channel_gaps(t)
+    limit = length.min() if len(length) else np.inf
+    valid = (grid >= t[0]) & (grid <= t[-1]) & (t[j] - t[j - 1] < limit)
+    return y, valid
+
+
+def _xcorr(a: np.ndarray, b: np.ndarray, ok: tuple, shift: int) -> np.ndarray:
+    """Normalised correlation of a[i] with b[i + k], k = -shift..shift, over the samples valid in
+    both (six FFT correlations of the masked sums; -inf where fewer than 20 samples overlap)."""
+    from scipy.signal import correlate
+
+    ma, mb = ok[0].astype(float), ok[1].astype(float)
+    a, b = np.where(ok[0], a, 0.0), np.where(ok[1], b, 0.0)
+    a = a - (a.sum() / max(ma.sum(), 1.0)) * ma          # centred: the sums below lose no digits
+    b = b - (b.sum() / max(mb.sum(), 1.0)) * mb
+    n = len(a)
+
+    def c(x, y):       # sum_i x[i] y[i + k] for k = -shift..shift
+        full = correlate(y, x, mode="full", method="fft")
+        return full[n - 1 - shift:n + shift]
+    N = np.round(c(ma, mb))
+    sa, sb, sab = c(a, mb), c(ma, b), c(a, b)
+    saa, sbb = c(a * a, mb), c(ma, b * b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cov = sab - sa * sb / N
+        var = (saa - sa ** 2 / N) * (sbb - sb ** 2 / N)
+        rho = cov / np.sqrt(var)
+    return np.where((N >= 20) & (var > 0) & np.isfinite(rho), rho, -np.inf)
+
+
+def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
+    """(lag [s], correlation) at the refined peak of a correlation over lags -shift..shift."""
+    from .clocks import parabolic_peak
+
+    k, best = parabolic_peak(rho)
+    return ((k - shift) * step, best) if math.isfinite(k) else (math.nan, 0.0)
+
+
+def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
+    """How late b is against a: b(t) = s a(t - lag). {lag, interval, rho, scale, scale_interval,
+    seconds} or None when they share too little. ``mask(grid) -> bool`` limits the samples
+    (e.g. moving)."""
+    ta, tb = np.asarray(ta, float), np.asarray(tb, float)
+    if len(ta) < 20 or len(tb) < 20:
+        return None
+    lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
+    if hi - lo < 10.0:
+        return None
+    da, db = np.median(np.diff(ta)), np.median(np.diff(tb))
+    step = float(np.clip(min(da, db) / 2, 0.02, 0.05))
+    if (hi - lo) / step > 400_000:
+        step = (hi - lo) / 400_000
+    grid = np.arange(lo, hi, step)
+    a, oka = _on_grid(ta, xa, grid)
+    b, okb = _on_grid(tb, xb, grid)
+    if mask is not None:
+        m = mask(grid)
+        oka, okb = oka & m, okb & m
+    if oka.sum() < 50 or okb.sum() < 50 or np.ptp(a[oka]) == 0 or np.ptp(b[okb]) == 0:
+        return None
+    shift = int(round(search / step))
+    rho = _xcorr(a, b, (oka, okb), shift)
+    whole, r = _peak(rho, step, shift)
+    if not math.isfinite(whole):
+        return None
+    k = int(round(whole / step))
+    scale = _slope(a, b, oka, okb, k, through_origin)
+    # stretches: up to 8 separate ones of at least 15 s of valid samples
+    parts = min(8, int(np.sum(oka & okb) * step // 15.0))
+    lags, scales = [], []
+    if parts >= 3:
+        edges = np.linspace(0, len(grid), parts + 1).astype(int)
+        for e0, e1 in zip(edges[:-1], edges[1:]):
+            sel = np.zeros(len(grid), bool)
+            sel[e0:e1] = True
+            p = _xcorr(a, b, (oka & sel, okb), shift)
+            lp, rp = _peak(p, step, shift)
+            if math.isfinite(lp) and rp > 0.3:
+                lags.append(lp)
+                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin))
+    if len(lags) >= 3:
+        se = 2.0 * float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
+        interval = [whole - max(se, step), whole + max(se, step)]
+        ss = 2.0 * float(np.std(scales, ddof=1)) / math.sqrt(len(scales))
+        scale_interval = [scale - ss, scale + ss]
+    else:
+        half = _half_width(rho, step, shift, r)
+        interval = [whole - half, whole + half] if half is not None else None
+        scale_interval = None
+    return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
+            "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags)}
+
+
+def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float | None:
+    """Lags within 0.01 of the peak correlation: a crude interval where stretches are too few."""
+    near = np.flatnonzero(rho >= peak - 0.01)
+    if len(near) == 0 or peak < 0.3:
+        return None
+    return max(float(near.max() - near.min()) * step / 2, step)
+
+
+def _slope(a, b, oka, okb, k, through_origin):
+    n = len(a)
+    lo, hi = max(0, -k), min(n, n - k)
+    sel = oka[lo:hi] & okb[lo + k:hi + k]
+    x, y = a[lo:hi][sel], b[lo + k:hi + k][sel]
+    if len(x) < 10:
+        return math.nan
+    if through_origin:
+        return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
+    x, y = x - x.mean(), y - y.mean()
+    return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
+
+
+# --- the signals that must agree ---------------------------------------------------------------
+def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(utc, speed over ground [m/s], course rate [rad/s]) of the receiver's fixes: the course
+    of 1 s chords of the track (a sphere is enough for a rate), NaN below MOVING m/s."""
+    from .streams import gnss_speed
+
+    t = gnss["utc"].to_numpy(float)
+    lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
+    north = np.radians(lat - lat[0]) * 6.371e6
+    east = np.radians(lon - lon[0]) * 6.371e6 * math.cos(math.radians(float(lat[0])))
+    speed = gnss_speed(gnss)
+    rate = np.full(len(t), np.nan)
+    if len(t) > 5:
+        h = float(np.median(np.diff(t)))
+        k = max(1, int(round(0.5 / h)))
+        if len(t) > 2 * k + 2:
+            course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
+            tc = t[k:-k]
+            r = np.gradient(course, tc)
+            slow = np.interp(tc, t, speed) < MOVING
+            r[slow] = np.nan
+            rate[k:-k] = r
+    return t, speed, rate
+
+
+def smoothed(t: np.ndarray, x: np.ndarray, span: float) -> np.ndarray:
+    """The centred moving average of x over ``span`` seconds, on its own stamps (no lag added)."""
+    from scipy.ndimage import uniform_filter1d
+
+    h = float(np.median(np.diff(t)))
+    width = int(round(span / h)) if h > 0 else 1
+    return uniform_filter1d(np.asarray(x, float), width, mode="nearest") if width > 1 else np.asarray(x, float)
+
+
+def _moving(t_v, v, threshold=MOVING):
+    return lambda grid: np.abs(np.interp(grid, t_v, v)) > threshold
+
+
+class Auditor:
+    """Collects the channel table and the findings of one recording (measurements.recording)."""
+
+    def __init__(self, streams, groups: dict, wheelbase: float, t0: float):
+        self.streams, self.groups, self.L, self.t0 = streams, groups, wheelbase, t0
+        self.findings: list[dict] = []
+        self.pairs: list[dict] = []
+
+    def group(self, channel: str) -> str:
+        return self.groups.get(channel, "gnss" if channel in ("gnss_speed", "course_rate", "x", "y") else channel)
+
+    def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
+        """([channels], stamps): the channels that share their stamps exactly, together (the
+        receiver's fixes as ``gnss``); ``only`` limits the channels."""
+        out: list[tuple[list[str], np.ndarray]] = []
+        if self.streams.gnss is not None:
+            out.append((["gnss"], self.streams.gnss["utc"].to_numpy(float)))
+        for c, (t, _) in self.streams.signals.items():
+            if only is not None and c not in only:
+                continue
+            same = next((names for names, s in out if len(s) == len(t) and np.array_equal(s, t)), None)
+            if same is not None:
+                same.append(c)
+            else:
+                out.append(([c], np.asarray(t, float)))
+        return out
+
+    def channels(self) -> list[dict]:
+        return [channel_row(", ".join(names), self.group(names[0]) if names != ["gnss"] else "gnss", t, self.t0)
+                for names, t in self.stamped()]
+
+    def zero_lag_pairs(self) -> list[dict]:
+        """Every pair with no physical lag: (name, a, b, lag dict)."""
+        sig, out = self.streams.signals, []
+        gnss = self.streams.gnss
+        if gnss is not None and len(gnss) > 20:
+            tg, speed, course_rate = gnss_rates(gnss)
+            if "v" in sig:
+                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, *sig["v"], through_origin=True,
+                                                               mask=_moving(tg, speed, 0.3)), "m/s"))
+            gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
+            for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
+                ok = np.isfinite(course_rate)
+                h = float(np.median(np.diff(tg)))
+                t, r = sig[gyro]
+                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
+                out.append(("gyro vs GNSS course", "course_rate", gyro,
+                            lag(tg[ok], course_rate[ok], t, r, mask=_moving(tg, speed)), "rad/s"))
+        lateral = next((c for c in LATERAL if c in sig), None)
+        if lateral and "v" in sig and "yaw_rate" in sig:
+            t, r = sig["yaw_rate"]
+            vr = np.interp(t, *sig["v"]) * r
+            out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral]), "m/s2"))
+        for other in sorted(c for c in sig if c.startswith("yaw_rate_")):
+            if "yaw_rate" in sig:
+                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other]), "rad/s"))
+        return [p for p in out if p[3] is not None]
+
+    def causal(self) -> dict | None:
+        """Steering x speed -> yaw rate: {lag dict, input} or None."""
+        sig = self.streams.signals
+        steer = "delta" if "delta" in sig else "delta_cmd" if "delta_cmd" in sig else None
+        if steer is None or "v" not in sig or "yaw_rate" not in sig:
+            return None
+        t, d = sig[steer]
+        u = np.interp(t, *sig["v"]) * np.tan(np.clip(d, -1.4, 1.4)) / self.L
+        found = lag(t, u, *sig["yaw_rate"], mask=_moving(*sig["v"], 0.3))
+        return None if found is None else {**found, "input": steer}
+
+
+def _interval_text(iv, unit="s", digits=3) -> str:
+    return f" [{iv[0]:+.{digits}f}, {iv[1]:+.{digits}f}] {unit}" if iv else " (no interval: too few stretches)"
+
+
+def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], list[dict]]:
+    """({group: (seconds late, interval, evidence)} of the groups an offset was found for against
+    the reference (the receiver, else the gyro's group), the pairs' findings)."""
+    pairs = aud.zero_lag_pairs()
+    findings, offsets = [], {}
+    reference = "gnss" if aud.streams.gnss is not None else aud.group("yaw_rate")
+    for name, a, b, est, unit in pairs:
+        ga, gb = aud.group(a), aud.group(b)
+        late, iv = est["lag"], est["interval"]
+        strong = (est["rho"] >= STRONG_RHO and iv is not None and abs(late) >= ALIGN_MIN
+                  and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late))
+        small = iv is not None and abs(late) < ALIGN_MIN
+        meaning = (f"{name}: {b} ({gb}) follows {a} ({ga}) {late:+.3f} s late (correlation {est['rho']:.2f} over "
+                   f"{est['seconds']:.0f} s)")
+        if ga == gb:
+            meaning += "; one group, one clock: a lag within a group is the sensors' own latency"
+        elif small:
+            meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
+        elif strong:
+            meaning += ("; the clocks disagree: identification and diagnosis would take it for a delay or a lever arm "
+                        "until aligned (--align)")
+            base = {reference: 0.0, **{g: o[0] for g, o in offsets.items()}}
+            if ga in base and gb not in base:
+                offsets[gb] = (base[ga] + late, [base[ga] + iv[0], base[ga] + iv[1]], name)
+            elif gb in base and ga not in base:
+                offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
+        else:
+            meaning += "; too weak to correct (correlation or interval): named, not aligned"
+        findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or ga == gb))
+        s, siv = est["scale"], est["scale_interval"]
+        if math.isfinite(s) and est["rho"] >= 0.5:
+            off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
+            if off:
+                what = _scale_meaning(name, a, b, s)
+                findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
+        if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
+            course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
+            says = ("; against the GNSS course: " + ", ".join(f"{c} x {k:.3g}" for c, k in course.items())
+                    if len(course) == 2 else "")
+            findings.append(finding("ambiguous_channel", [a, b], s, siv, "ratio",
+                                    f"two yaw-rate sources disagree ({b} is {s:.3g} times {a}, {late:+.3f} s late)"
+                                    f"{says}: {a} is the one identification and diagnosis use; --signal yaw_rate=... "
+                                    f"chooses the other"))
+    return offsets, findings
+
+
+def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
+    text = f"{name}: {b} is {s:.3g} times {a}"
+    if abs(abs(s) - 180 / math.pi) < 3 or abs(abs(s) - math.pi / 180) < 0.002:
+        return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
+    if abs(s - 3.6) < 0.2 or abs(s - 1 / 3.6) < 0.02:
+        return text + ": a km/h vs m/s mix-up"
+    if s < 0:
+        return text + ": the sign is opposite (a mounting or axis convention); diagnosis would take it for a fault"
+    return (text + ": a wheel radius, a calibration or slip; identification takes the first as the truth, "
+            "diagnosis may name it a gain fault")
+
+
+def mislabelled(aud: Auditor) -> list[dict]:
+    """A gyro whose mean is g; a gyro/accelerometer pair swapped; an angle that is a rate."""
+    sig, out = aud.streams.signals, []
+    if "yaw_rate" in sig:
+        r = sig["yaw_rate"][1]
+        m, s = float(np.median(r)), float(np.std(r))
+        if abs(abs(m) - G) < 0.12 * G and s < 0.3 * abs(m):
+            out.append(finding("mislabelled_channel", ["yaw_rate"], m, None, "rad/s",
+                               f"the 'gyro' yaw_rate sits at {m:.3g} (std {s:.2g}): that is g in m/s2, an "
+                               f"accelerometer's vertical axis, not a yaw rate; map the gyro's z axis"))
+    lateral = next((c for c in LATERAL if c in sig), None)
+    if lateral and "v" in sig and "yaw_rate" in sig:
+        t, r = sig["yaw_rate"]
+        v = np.interp(t, *sig["v"])
+        ay = np.interp(t, *sig[lateral])
+        moving = np.abs(v) > 0.5
+        if moving.sum() > 100:
+            # a_y = v r: the relative misfit of that relation, and of the one with the two exchanged
+            normal = _misfit(ay[moving], v[moving] * r[moving])
+            swapped = _misfit(r[moving], v[moving] * ay[moving])
+            if swapped < 0.3 and normal > 2 * swapped and normal > 0.3:
+                out.append(finding("mislabelled_channel", ["yaw_rate", lateral], swapped, None, "relative misfit",
+                                   f"yaw_rate and {lateral} look swapped: v x {lateral} matches yaw_rate (relative "
+                                   f"misfit {swapped:.2f}) while v x yaw_rate misses {lateral} by {normal:.2f}; a gyro "
+                                   f"and an accelerometer's channels exchanged: map each to the other"))
+    for steer in ("delta", "delta_cmd"):
+        if steer in sig and "v" in sig and "yaw_rate" in sig:
+            t, d = sig[steer]
+            if len(t) < 100:
+                continue
+            v = np.interp(t, *sig["v"])
+            r = np.interp(t, *sig["yaw_rate"])
+            moving = np.abs(v) > 0.5
+            if moving.sum() < 100:
+                continue
+            from scipy.integrate import cumulative_trapezoid
+            from scipy.ndimage import uniform_filter1d
+
+            h = float(np.median(np.diff(t)))
+            integral = cumulative_trapezoid(d, t, initial=0.0)
+            integral = integral - uniform_filter1d(integral, max(3, int(20.0 / h)), mode="nearest")
+            as_angle = _corr(v[moving] * d[moving], r[moving])
+            as_rate = _corr(v[moving] * integral[moving], r[moving])
+            if as_rate > 0.8 and as_rate > as_angle + 0.3:
+                out.append(finding("mislabelled_channel", [steer], as_rate, None, "correlation",
+                                   f"the angle {steer} behaves as a rate: integrated, it follows the yaw rate / speed "
+                                   f"(correlation {as_rate:.2f}, as an angle {as_angle:.2f}); map the steering "
+                                   f"angle, not its rate"))
+    return out
+
+
+def _misfit(x, model) -> float:
+    """rms(x - model) / rms(x), offsets removed (a bias is not a mislabel)."""
+    x, model = np.asarray(x, float), np.asarray(model, float)
+    e = (x - x.mean()) - (model - model.mean())
+    return float(np.sqrt(np.mean(e ** 2)) / max(np.std(x), 1e-12))
+
+
+def _corr(x, y) -> float:
+    x, y = np.asarray(x, float) - np.mean(x), np.asarray(y, float) - np.mean(y)
+    den = math.sqrt(float(x @ x) * float(y @ y))
+    return float(x @ y) / den if den > 0 else 0.0
+
+
+def gaps_findings(aud: Auditor, max_gap: float) -> list[dict]:
+    """The gaps of the channels that set the log's span (the receiver's fixes, the canonical
+    columns; runs.assemble): bridged up to ``max_gap``, else splitting the log."""
+    from .log import CANONICAL
+
+    out = []
+    for names, t in aud.stamped(only=CANONICAL):
+        if names == ["gnss"] or (names[0] == "gnss" and len(names) > 1):
+            names = ["gnss"] + [n for n in names if n != "gnss"]
+        c = ", ".join(names)
+        i, length = channel_gaps(t)
+        if not len(i):
+            continue
+        held = all(n in aud.streams.held for n in names)
+        short = length <= max_gap
+        if short.any():
+            out.append(finding("gap_bridged", names, float(length[short].max()), [float(length[short].min()),
+                                                                              float(length[short].max())], "s",
+                               f"{int(short.sum())} gap(s) of {c} up to {max_gap:g} s bridged "
+                               f"({'held: a command stays in force' if held else 'linear'}), the longest "
+                               f"{length[short].max():.2f} s; --max-gap 0 splits the log there instead",
+                               resolved=True))
+        if (~short).any():
+            out.append(finding("gap_split", names, float(length[~short].max()), [float(length[~short].min()),
+                                                                             float(length[~short].max())], "s",
+                               f"{int((~short).sum())} gap(s) of {c} longer than --max-gap {max_gap:g} s split the "
+                               f"log (the longest {length[~short].max():.2f} s; --max-gap "
+                               f"{math.ceil(10 * length[~short].max()) / 10:g} would bridge them all)"))
+    return out
+
+
+def stamp_findings(report: dict) -> list[dict]:
+    """Header stamps against receive times, per source that has both (report["stamp_vs_receive"]:
+    {source: {median, p95, min, max}} in s, receive - stamp)."""
+    out = []
+    for name, s in (report.get("stamp_vs_receive") or {}).items():
+        out.append(finding("stamp_vs_receive", [name], s["median"], [s["min"], s["max"]], "s",
+                           f"{name}: the messages arrive {s['median']:.3f} s after their header stamps (median; 95 % "
+                           f"within {s['p95']:.3f} s, from {s['min']:.3f} to {s['max']:.3f} s); the log uses the header "
+                           f"stamps (the time of the measurement), not the receive times", resolved=True))
+    return out
+
+
+def position_estimate(aud: Auditor, report: dict) -> list[dict]:
+    """x, y given as columns (a localisation, odometry), not the receiver's fixes."""
+    sig = aud.streams.signals
+    if aud.streams.gnss is not None or not {"x", "y"} <= set(sig):
+        return []
+    t, x = sig["x"]
+    y = np.interp(t, *sig["y"])
+    jump = float(np.max(np.hypot(np.diff(x), np.diff(y)))) if len(t) > 1 else 0.0
+    how = report.get("columns", {}).get("x", "x")
+    return [finding("position_is_estimate", ["x", "y"], jump, None, "m",
+                    f"x, y come from {how}: an estimate (localisation, odometry), not a receiver's fixes; its "
+                    f"largest step is {jump:.3g} m; a lever arm or a GNSS latency cannot be judged on it",
+                    resolved=False)]
+
+
+# --- alignment ---------------------------------------------------------------------------------
+def parse_align(text: str | None) -> str | dict[str, float]:
+    """``auto`` | ``none`` | ``GROUP=SECONDS[,GROUP=SECONDS]`` (seconds the group is late)."""
+    text = (text or "auto").strip()
+    if text in ("auto", "none"):
+        return text
+    out = {}
+    for part in text.split(","):
+        name, eq, value = part.partition("=")
+        try:
+            seconds = float(value)
+        except ValueError:
+            seconds = math.nan
+        if not eq or not name.strip() or not math.isfinite(seconds):
+            raise LogError(f"--align {text!r}: expected auto, none, or GROUP=SECONDS (the seconds GROUP's stamps are "
+                           f"late, e.g. bywire=0.85; a group is a file, topic or column of the recording)")
+        out[name.strip()] = seconds
+    return out
+
+
+def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
+    """Every channel of each group moved earlier by its offset; the channels moved."""
+    moved = []
+    for c, (t, x) in list(streams.signals.items()):
+        g = group_of(c)
+        if g in offsets:
+            streams.signals[c] = (t - offsets[g], x)
+            moved.append(c)
+    if "gnss" in offsets and streams.gnss is not None:
+        streams.gnss = streams.gnss.assign(utc=streams.gnss["utc"] - offsets["gnss"])
+        moved.append("gnss")
+    return moved
+
+
+def audit_streams(streams, options, source) -> dict:
+    """The audit of a recording's streams, and the alignment ``options.align`` asks for, applied
+    to the streams in place: {channels, findings, alignment}."""
+    groups = dict(getattr(streams, "groups", {}) or {})
+    t0 = min([float(t[0]) for t, _ in streams.signals.values() if len(t)]
+             + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None and len(streams.gnss) else []),
+             default=0.0)
+    aud = Auditor(streams, groups, options.wheelbase or 1.4, t0)
+    channels = aud.channels()
+    findings = []
+    offsets, pair_findings = estimate_offsets(aud)
+    causal_before = aud.causal()
+    align = parse_align(getattr(options, "align", "auto"))
+    known = sorted({aud.group(c) for c in streams.signals} | ({"gnss"} if streams.gnss is not None else set()))
+    span = max((r["end_s"] for r in channels if math.isfinite(r["end_s"])), default=0.0) - \
+        min((r["start_s"] for r in channels if math.isfinite(r["start_s"])), default=0.0)
+    applied: dict[str, float] = {}
+    how = "none"
+    if isinstance(align, dict):
+        for name, seconds in align.items():
+            group = name if name in known else aud.group(name) if name in streams.signals else None
+            if group is None:
+                raise LogError(f"{source}: --align {name}={seconds:g}: no group or column {name!r}; groups: "
+                               f"{', '.join(known)}")
+            if abs(seconds) >= span:
+                raise LogError(f"{source}: --align {name}={seconds:g}: a realignment of {abs(seconds):g} s is larger "
+                               f"than the recording ({span:.3g} s); expected the seconds {name}'s stamps are late")
+            applied[group] = seconds
+        how = "given (--align)"
+    elif align == "auto":
+        applied = {g: o[0] for g, o in offsets.items()}
+        how = "auto: the offsets found strong (--align none keeps the stamps; --align GROUP=SECONDS sets one)"
+    moved = shift(streams, aud.group, applied) if applied else []
+    for f in pair_findings:
+        if f["kind"] == "clock_offset" and applied:
+            ga, gb = aud.group(f["channels"][0]), aud.group(f["channels"][1])
+            if ga in applied or gb in applied:
+                f["resolved"] = True
+                f["meaning"] += f"; aligned: {', '.join(f'{g} moved {-s:+.3f} s' for g, s in applied.items())}"
+    findings += pair_findings
+    for f in pair_findings:
+        g = next((aud.group(c) for c in f["channels"] if aud.group(c) in offsets and aud.group(c) not in applied), None)
+        if f["kind"] == "clock_offset" and not f["resolved"] and g is not None:
+            f["meaning"] += f"; not aligned (--align {getattr(options, 'align', 'auto')}): --align {g}={offsets[g][0]:.3f} corrects it"
+    causal = aud.causal() if applied else causal_before
+    if causal is not None:
+        findings.append(_causality(causal, causal_before, applied))
+    findings += mislabelled(aud)
+    clock = streams.report.get("terminal_clock")
+    if clock:
+        findings.append(finding("terminal_clock", ["t", "gnss_time"], clock["offset_s"], clock["range_s"], "s",
+                                f"the terminal's clock (labelled UTC) is {clock['offset_s']:+.3f} s from the GNSS time "
+                                f"in the same records ({clock['terminal_start']} vs {clock['gnss_start']}); every "
+                                f"channel is on the terminal's clock, so they agree with each other: only the "
+                                f"absolute time is off", resolved=True))
+    findings += stamp_findings(streams.report)
+    findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
+    findings += position_estimate(aud, streams.report)
+    return {"channels": channels, "findings": findings,
+            "alignment": {"mode": how, "offsets_s": applied, "channels_moved": moved,
+                          "found": {g: {"late_s": o[0], "interval_s": o[1], "evidence": o[2]}
+                                    for g, o in offsets.items()}}}
+
+
+def _causality(now: dict, before: dict | None, applied: dict) -> dict:
+    """The causality finding of steering x speed -> yaw rate."""
+    chans = [now["input"], "v", "yaw_rate"]
+    late, iv = now["lag"], now["interval"]
+    hi = iv[1] if iv else late
+    what = f"yaw_rate follows v tan({now['input']}) / L {late:+.3f} s late (correlation {now['rho']:.2f})"
+    if now["rho"] < 0.3:
+        return finding("response_lag", chans, late, iv, "s", what + ": too weak to judge causality", resolved=True)
+    if hi < -LEAD_TOLERANCE:
+        return finding("response_leads_input", chans, -late, None if iv is None else [-iv[1], -iv[0]], "s",
+                       f"the yaw rate answers {-late:.3f} s BEFORE the steering x speed that causes it: the channels' "
+                       f"clocks disagree; identification would put its delay on the zero bound and diagnosis name "
+                       f"lever arms and biases that are not there. Align the clocks: --align GROUP=SECONDS (the "
+                       f"steering's group late by about {-late:.2f} s plus the vehicle's own delay)")
+    if before is not None and before["rho"] >= 0.3 and (before["interval"] or [0, before["lag"]])[1] < -LEAD_TOLERANCE:
+        return finding("response_leads_input", chans, -before["lag"], None, "s",
+                       f"before alignment the yaw rate answered {-before['lag']:.3f} s before the steering; after "
+                       f"({', '.join(f'{g} {-s:+.3f} s' for g, s in applied.items())}) {what}", resolved=True)
+    return finding("response_lag", chans, late, iv, "s", what + ": causal (the response follows its input)",
+                   resolved=True)
+
+
+# --- consumers ---------------------------------------------------------------------------------
+FLOOR = 2.0 / 3.0       # a nominal minimum is guidance down to this fraction of it
+
+
+def minimum(have: float, nominal: float, what: str, unit: str = "s", floor: float = FLOOR) -> str | None:
+    """A stage's nominal minimum as guidance: None at or above it; a warning naming both numbers
+    between ``floor`` x nominal and nominal; a LogError below the floor, naming both."""
+    if have >= nominal:
+        return None
+    if have >= floor * nominal:
+        return (f"warning: {what} is {have:.3g} {unit}, under the nominal {nominal:.3g} {unit} but above its floor "
+                f"{floor * nominal:.3g} {unit}: used; the results are less certain")
+    raise LogError(f"{what} is {have:.3g} {unit}, under the floor {floor * nominal:.3g} {unit} ({floor:.2g} of the "
+                   f"nominal {nominal:.3g} {unit})")
+def require_causal(frame, what: str) -> None:
+    """A LogError when the log's audit found a response that leads its input, unresolved: its
+    dynamics cannot be judged (``what``: the tool that refuses)."""
+    for f in frame.attrs.get("audit", []) or []:
+        if f.get("kind") == "response_leads_input" and not f.get("resolved"):
+            raise LogError(f"{what}: the log's {', '.join(f['channels'])}: {f['meaning']}; the dynamics of a log whose "
+                           f"response leads its input are not judged")
+
+
+def describe_audit(audit: dict) -> list[str]:
+    """The audit as terminal lines."""
+    lines = ["  audit, per channel: rate, gaps (count, longest, when), repeated stamps, group (its clock)"]
+    for r in audit.get("channels", []):
+        names = r["channel"].split(", ")
+        name = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
+                     f"{r['end_s']:.2f} s  gaps {r['gaps']}"
+                     + (f" (longest {r['longest_gap_s']:.2f} s, at {', '.join(f'{x:g}' for x in r['gaps_at_s'])} s)"
+                        if r["gaps"] else "")
+                     + (f"  repeated stamps {r['repeated_stamps']}" if r["repeated_stamps"] else "")
+                     + f"  group {r['group']}")
+    for f in audit.get("findings", []):
+        iv = f" {_interval_text(f['interval'], f['unit'])}" if f["interval"] else ""
+        lines.append(f"  audit {f['kind']}{' (resolved)' if f['resolved'] else ''}: {f['value']:.4g} {f['unit']}"
+                     f"{iv}: {f['meaning']}")
+    a = audit.get("alignment", {})
+    if a.get("offsets_s"):
+        lines.append(f"  aligned ({a['mode']}): " + ", ".join(f"{g} moved {-s:+.3f} s" for g, s in a["offsets_s"].items())
+                     + f"; channels moved: {', '.join(a['channels_moved'])}")
+    elif a.get("found"):
+        lines.append(f"  not aligned ({a['mode']}): " + ", ".join(f"{g} {o['late_s']:+.3f} s late" for g, o in a["found"].items()))
+    return lines
+
+
+
+def audit_frame(frame) -> list[dict]:
+    """The findings of a log table read as it is (one clock for every column, nothing moved):
+    the causality check, the scales of redundant columns and the signs of a mislabel. A log
+    that ``convert`` wrote carries its import's audit instead (measurements.log.persisted_audit)."""
+    from .log import CANONICAL
+    from .options import ImportOptions
+    from .streams import Streams
+
+    t = frame["t"].to_numpy(float)
+    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_"))]
+    signals = {c: (t, frame[c].to_numpy(float)) for c in names}
+    streams = Streams(None, signals, {}, {"delta_cmd"} & set(signals), {}, groups={c: "log" for c in signals})
+    try:
+        found = audit_streams(streams, ImportOptions(wheelbase=1.4, align="none", max_gap=0.0), "log")["findings"]
+    except LogError:
+        return []
+    return [f for f in found if f["kind"] not in ("gap_bridged", "gap_split")]
