@@ -16,7 +16,10 @@ downhill side of the hitch's track.
 e_s is the side-shift, a frame moving the tools sideways: a first-order actuator (time constant,
 rate and stroke limits) following e_cmd = -(k_p xte + k_i int xte) of the implement's cross-track
 error (from the route) while ``active`` (the route straight under the implement: a swath and its
-run-in), centred in turns; k_p = 0 is a passive implement. L = 0 is a mounted implement (psi_i = psi).
+run-in), centred in turns; k_p = 0 is a passive implement. With ``side_shift_slope_feedforward`` the
+command adds -L beta, the steady hang the implement's own inclinometer gives on the slope (its
+lateral pull P . n_i, as its roll measures it), so that each swath starts with the hang already
+taken out and the feedback only trims. L = 0 is a mounted implement (psi_i = psi).
 Integrated at ``internal_step`` (Heun) within each step.
 
 Its roll and pitch (outputs) are those of a body at heading psi_i on the plane whose pull is P
@@ -54,6 +57,7 @@ class TrailedImplement(Component):
         par("side_shift_limit", "m", 0.3, "stroke, each side"),
         par("side_shift_rate", "m/s", 0.2, "fastest shift"),
         par("side_shift_time_constant", "s", 0.15, "actuator lag"),
+        par("side_shift_slope_feedforward", "1", 0, "1: the side-shift also takes out the slope's steady hang L beta"),
         par("internal_step", "s", 0.01, "integration step"),
         out("x", "m", 0.0, "working point east"),
         out("y", "m", 0.0, "working point north"),
@@ -74,6 +78,12 @@ class TrailedImplement(Component):
         self.shift = self.integral = 0.0
         self._publish()
 
+    def slip(self, psi_i: float) -> float:
+        """beta = m_i (P . n_i) / C_i: the implement's slip angle on the slope."""
+        u, p = self.u, self.p
+        return p["mass"] * (-math.sin(psi_i) * u["slope_pull_east"] + math.cos(psi_i) * u["slope_pull_north"]) \
+            / p["cornering_stiffness"]
+
     def _rates(self, psi_i: float) -> float:
         u, p = self.u, self.p
         L = p["drawbar"]
@@ -83,9 +93,7 @@ class TrailedImplement(Component):
         vx = u["vel_east_rear"] + c * gamma * math.sin(psi)
         vy = u["vel_north_rear"] - c * gamma * math.cos(psi)
         normal = -math.sin(psi_i) * vx + math.cos(psi_i) * vy
-        beta = p["mass"] * (-math.sin(psi_i) * u["slope_pull_east"] + math.cos(psi_i) * u["slope_pull_north"]) \
-            / p["cornering_stiffness"]
-        return (normal - math.hypot(vx, vy) * beta) / L
+        return (normal - math.hypot(vx, vy) * self.slip(psi_i)) / L
 
     def step(self, t: float, dt: float) -> None:
         p, u = self.p, self.u
@@ -104,7 +112,9 @@ class TrailedImplement(Component):
         elif p["side_shift_gain"] > 0 or p["side_shift_integral"] > 0:
             self.integral = max(-p["side_shift_limit"], min(p["side_shift_limit"],
                                                              self.integral + p["side_shift_integral"] * xte * dt))
-            cmd = max(-p["side_shift_limit"], min(p["side_shift_limit"], -(p["side_shift_gain"] * xte + self.integral)))
+            hang = p["drawbar"] * self.slip(self.psi_i) if p["side_shift_slope_feedforward"] else 0.0
+            cmd = max(-p["side_shift_limit"], min(p["side_shift_limit"],
+                                                  -(p["side_shift_gain"] * xte + self.integral + hang)))
         alpha = 1.0 - math.exp(-dt / p["side_shift_time_constant"])
         move = max(-p["side_shift_rate"] * dt, min(p["side_shift_rate"] * dt, alpha * (cmd - self.shift)))
         self.shift += move
