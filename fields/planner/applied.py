@@ -149,4 +149,12 @@ def summary(plan, applied: AsApplied, sections: int) -> dict:
             "covered_ha": round(applied.covered / 1e4, 4), "overlap_ha": round(applied.overlap / 1e4, 4),
             "skipped_ha": round(applied.skipped / 1e4, 4),
             "applied_outside_m2": round(applied_outside(applied, plan.field.boundary), 2),
-            "boundary_crossings": crossings(plan)}
+            "boundary_crossings": crossings(plan), **leftover_summary(plan, applied)}
+
+
+def leftover_summary(plan, applied: AsApplied) -> dict:
+    """The field left unworked, piece by piece with its area and why (fields.planner.leftovers)."""
+    from .leftovers import leftovers
+
+    named, slivers = leftovers(plan, applied.shape)
+    return {"leftovers": [x.summary() for x in named], "leftover_slivers_m2": round(slivers, 2)}
