@@ -66,7 +66,8 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out: dict[str, float] = {}
     for name, e in (("tractor", xte_t), ("implement", xte_i)):
         rms, p95, mx = _stats(e)
-        out.update({f"{name}_xte_rms_m": rms, f"{name}_xte_p95_m": p95, f"{name}_xte_max_m": mx})
+        out.update({f"{name}_xte_rms_m": rms, f"{name}_xte_p95_m": p95, f"{name}_xte_max_m": mx,
+                    f"{name}_xte_swaths_p95_m": p95})       # the judged part in the name: swaths, turns excluded
     out["pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out["pass_to_pass_mean_m"] = float(np.mean(p2p)) if len(p2p) else math.nan
     area = workable.area
@@ -119,7 +120,8 @@ METRICS = {"field_coverage_share": ("1", f">= {COVERAGE_TARGET} (of the whole fi
            "field_overlap_share": ("1", None), "plan_field_coverage_share": ("1", None),
            "plan_field_overlap_share": ("1", None), "field_skipped_area_m2": ("m2", None),
            "plan_field_skipped_area_m2": ("m2", None), "applied_outside_m2": ("m2", None),
-           "plan_applied_outside_m2": ("m2", None)}
+           "plan_applied_outside_m2": ("m2", None), "tractor_xte_swaths_p95_m": ("m", None),
+           "implement_xte_swaths_p95_m": ("m", None)}
 METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 **{f"{kind}_{q}": unit for kind in ("swath", "headland", "turn", "transit")
                    for q, unit in (("time_s", "s"), ("distance_m", "m"))},
