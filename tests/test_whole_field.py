@@ -207,3 +207,21 @@ def test_the_optimised_order_drives_no_more_than_the_patterns_and_starts_and_end
     assert (x0, y0) == pytest.approx(start, abs=1e-6)
     assert tuple(last[:2]) == pytest.approx(end, abs=0.01)
     assert crossings(p) == 0
+
+
+# --- what is left ----------------------------------------------------------------------------------------------
+def test_what_a_plan_leaves_is_named_with_its_area_and_why(parcel_plan):
+    """The parcel's leftovers, named piece by piece, add up to the field a second method finds
+    unworked (the 0.5 m raster of the working poses); the sharp corners are named as corners a turn
+    cannot reach (their centres outside the workable field)."""
+    from agrobot.fields.planner.leftovers import leftovers
+
+    p = parcel_plan
+    named, slivers = leftovers(p, as_applied(p).shape)
+    field = p.field.boundary
+    unworked = (1.0 - raster_cover(p, field)) * field.area
+    assert sum(x.area for x in named) + slivers == pytest.approx(unworked, rel=0.25, abs=10.0)
+    assert named and all(x.why and x.area >= 1.0 and x.width > 0 for x in named)
+    corners = [x for x in named if x.kind == "corner"]
+    assert corners
+    assert not any(p.workable.contains(Point(x.centroid)) for x in corners)
