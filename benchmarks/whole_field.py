@@ -83,12 +83,14 @@ def main() -> None:
     parser.add_argument("--headland-corners", default=Settings().headland_corners, choices=("tight", "parallel"))
     parser.add_argument("--missions", type=int, default=0, help="drive a section of the first N fields")
     parser.add_argument("--mission-swaths", type=int, default=3)
+    parser.add_argument("--no-plans", action="store_true", help="only the missions (with --missions)")
+    parser.add_argument("--mission-files", default="", help="comma-separated file names: drive only their fields")
     args = parser.parse_args()
     print(f"{'file':<26}{'field':<24}{'ha':>8}{'pcs':>4}{'field %':>9}{'work %':>8}{'ovl %':>8}"
           f"{'ovl S %':>8}{'fld S %':>8}{'cross':>6}" + "".join(f"{o[:9]:>10}" for o in ORDERS) + f"{'plan s':>8}{'cpu s':>7}"
           f"{'left':>5}{'left %':>8}{'sliv %':>7}  largest leftover")
     print(f"{'':<58}(% of the whole field; S: with {args.sections} sections; idle m without working by order)")
-    for name in FILES:
+    for name in [] if args.no_plans else FILES:
         for field in read_fields(REAL / name):
             label = f"{name.split('/')[-1][:25]:<26}{field.name[:23]:<24}"
             if field.area_ha > args.max_ha:
@@ -104,16 +106,19 @@ def main() -> None:
         print(f"{'file':<26}{'field':<24}{'plan cov':>9}{'driven':>9}{'plan ovl':>9}{'driven':>9}{'out m2':>9}"
               f"{'impl P95':>8}{'wall s':>8}")
         done = 0
-        for name in FILES:
+        wanted = [w for w in args.mission_files.split(",") if w]
+        for name in [f for f in FILES if not wanted or any(f.endswith(w) for w in wanted)]:
             for field in read_fields(REAL / name):
                 if done >= args.missions or field.area_ha > args.max_ha:
                     continue
                 label = f"{name.split('/')[-1][:25]:<26}{field.name[:23]:<24}"
                 try:
                     print(label + mission(str(REAL / name), field.name, args.sections, args.mission_swaths), flush=True)
+                    done += 1
                 except Exception as exc:             # noqa: BLE001 - a field the mission refuses is named, the rest go on
                     print(f"{label}  not driven: {str(exc).splitlines()[0][:100]}", flush=True)
-                done += 1
+    if args.no_plans:
+        return
     strip = Field("1,000 swaths", Polygon([(0, 0), (3050, 0), (3050, 150), (0, 150)]), None, "generated", "local metres")
     for order in ("auto", "optimised"):
         t0, c0 = time.perf_counter(), time.process_time()
