@@ -16,12 +16,7 @@ downhill side of the hitch's track.
 e_s is the side-shift, a frame moving the tools sideways: a first-order actuator (time constant,
 rate and stroke limits) following e_cmd = -(k_p xte + k_i int xte) of the implement's cross-track
 error (from the route) while ``active`` (the route straight under the implement: a swath and its
-run-in), centred in turns; k_p = 0 is a passive implement. With ``side_shift_feedforward`` the
-command adds -L sin(chi_H - psi_i), chi_H the course of the hitch (from the tractor's velocity and
-yaw rate) and psi_i - psi the hitch angle (a hitch-angle sensor): the implement's axle's offset
-from the hitch's track, which on a side slope settles at the hang L beta and after a turn is the
-implement's swing, so that the tools start each swath on the hitch's track and the feedback only
-trims. L = 0 is a mounted implement (psi_i = psi).
+run-in), centred in turns; k_p = 0 is a passive implement. L = 0 is a mounted implement (psi_i = psi).
 Integrated at ``internal_step`` (Heun) within each step.
 
 Its roll and pitch (outputs) are those of a body at heading psi_i on the plane whose pull is P
@@ -59,8 +54,6 @@ class TrailedImplement(Component):
         par("side_shift_limit", "m", 0.3, "stroke, each side"),
         par("side_shift_rate", "m/s", 0.2, "fastest shift"),
         par("side_shift_time_constant", "s", 0.15, "actuator lag"),
-        par("side_shift_feedforward", "1", 0, "1: the side-shift also takes out the axle's offset from the hitch's "
-            "track, L sin(chi_H - psi_i) (the slope's hang, the swing after a turn)"),
         par("internal_step", "s", 0.01, "integration step"),
         out("x", "m", 0.0, "working point east"),
         out("y", "m", 0.0, "working point north"),
@@ -81,32 +74,18 @@ class TrailedImplement(Component):
         self.shift = self.integral = 0.0
         self._publish()
 
-    def slip(self, psi_i: float) -> float:
-        """beta = m_i (P . n_i) / C_i: the implement's slip angle on the slope."""
-        u, p = self.u, self.p
-        return p["mass"] * (-math.sin(psi_i) * u["slope_pull_east"] + math.cos(psi_i) * u["slope_pull_north"]) \
-            / p["cornering_stiffness"]
-
-    def hitch_velocity(self) -> tuple[float, float]:
-        """V_H = V_R + c gamma (sin psi, -cos psi)."""
-        u, c = self.u, self.p["hitch_offset"]
-        psi, gamma = u["heading"], u["yaw_rate"]
-        return u["vel_east_rear"] + c * gamma * math.sin(psi), u["vel_north_rear"] - c * gamma * math.cos(psi)
-
-    def off_track(self) -> float:
-        """L sin(chi_H - psi_i): the axle's offset (left positive) from the line through the hitch along its course."""
-        vx, vy = self.hitch_velocity()
-        chi = math.atan2(vy, vx) if math.hypot(vx, vy) > 1e-3 else float(self.u["heading"])
-        return self.p["drawbar"] * math.sin(chi - self.psi_i)
-
     def _rates(self, psi_i: float) -> float:
         u, p = self.u, self.p
         L = p["drawbar"]
         if L <= 0:
             return 0.0
-        vx, vy = self.hitch_velocity()
+        psi, gamma, c = u["heading"], u["yaw_rate"], p["hitch_offset"]
+        vx = u["vel_east_rear"] + c * gamma * math.sin(psi)
+        vy = u["vel_north_rear"] - c * gamma * math.cos(psi)
         normal = -math.sin(psi_i) * vx + math.cos(psi_i) * vy
-        return (normal - math.hypot(vx, vy) * self.slip(psi_i)) / L
+        beta = p["mass"] * (-math.sin(psi_i) * u["slope_pull_east"] + math.cos(psi_i) * u["slope_pull_north"]) \
+            / p["cornering_stiffness"]
+        return (normal - math.hypot(vx, vy) * beta) / L
 
     def step(self, t: float, dt: float) -> None:
         p, u = self.p, self.u
@@ -125,9 +104,7 @@ class TrailedImplement(Component):
         elif p["side_shift_gain"] > 0 or p["side_shift_integral"] > 0:
             self.integral = max(-p["side_shift_limit"], min(p["side_shift_limit"],
                                                              self.integral + p["side_shift_integral"] * xte * dt))
-            hang = self.off_track() if p["side_shift_feedforward"] else 0.0
-            cmd = max(-p["side_shift_limit"], min(p["side_shift_limit"],
-                                                  -(p["side_shift_gain"] * xte + self.integral + hang)))
+            cmd = max(-p["side_shift_limit"], min(p["side_shift_limit"], -(p["side_shift_gain"] * xte + self.integral)))
         alpha = 1.0 - math.exp(-dt / p["side_shift_time_constant"])
         move = max(-p["side_shift_rate"] * dt, min(p["side_shift_rate"] * dt, alpha * (cmd - self.shift)))
         self.shift += move
