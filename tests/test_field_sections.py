@@ -35,7 +35,7 @@ def quad_field(path: Path) -> Path:
 
 
 def overrides(field: Path) -> list[str]:
-    return [f"field.path={field}", "field.max_swaths=2", "field.headland_work=0", "field.settle=2",
+    return [f"field.path={field}", "field.max_swaths=3", "field.headland_work=0", "field.settle=2",
             f"field.overlap={OVERLAP}", f"field.sections={SECTIONS}"]
 
 
@@ -98,14 +98,15 @@ def test_the_driven_as_applied_map_agrees_with_a_raster_of_the_swept_area(driven
 @pytest.mark.slow
 def test_sections_take_the_designed_overlap_away_and_match_the_plan(driven):
     """Without sections two adjacent passes overlap by OVERLAP along their common length (closed
-    form); with sections of 0.5 m the outermost section, wholly over the worked pass, is off, so
+    form; the route's skip order drives lines 4, 0 and 5); with sections of 0.5 m the outermost section, wholly over the worked pass, is off, so
     the driven overlap is a fraction of it, and coverage and overlap are close to the plan's."""
     study, res = driven
     m = res.metrics
     _, plan, _, _ = mission(study)
-    a, b = plan.swaths[0], plan.swaths[1]
-    common = min(np.hypot(*(a.end - a.start)), np.hypot(*(b.end - b.start)))
-    designed = OVERLAP * common
+    by_line = {sw.line: sw for sw in plan.swaths}               # skip order: lines 4, 0, 5 (4 and 5 adjacent)
+    pairs = [(by_line[k], by_line[k + 1]) for k in by_line if k + 1 in by_line]
+    assert pairs, sorted(by_line)
+    designed = sum(OVERLAP * min(np.hypot(*(a.end - a.start)), np.hypot(*(b.end - b.start))) for a, b in pairs)
     assert m["field_overlap_share"] * m["field_area_m2"] < 0.35 * designed
     assert m["field_coverage_share"] == pytest.approx(m["plan_field_coverage_share"], abs=0.005)
     assert abs(m["field_overlap_share"] - m["plan_field_overlap_share"]) < 0.003
