@@ -32,8 +32,8 @@ from agrobot.fields.planner import HEADLAND, SWATH, TRANSIT, TURN
 from agrobot.orchestrator.study import Study
 
 from .field_ground import ground_metrics
-from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _strips,
-                           _swath_frames, mission)
+from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _swath_frames,
+                           applied_strips, mission, sections_of)
 from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 
@@ -51,7 +51,8 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     xte_i = _cross_track(s["ix"].to_numpy(), s["iy"].to_numpy(), np.where(iseg == SWATH, swath, -99), frames)
     boundary = _shape(field.boundary, conv)
     workable = _shape(plan.workable, conv)
-    strips = _strips(s, settings.working_width)
+    sections = sections_of(study)
+    strips = applied_strips(s, settings.working_width, sections)
     union = unary_union(strips) if strips else None
     covered = union.intersection(workable).area if union is not None else 0.0
     swept = sum(st.intersection(workable).area for st in strips)
@@ -66,15 +67,22 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out: dict[str, float] = {}
     for name, e in (("tractor", xte_t), ("implement", xte_i)):
         rms, p95, mx = _stats(e)
-        out.update({f"{name}_xte_rms_m": rms, f"{name}_xte_p95_m": p95, f"{name}_xte_max_m": mx})
+        out.update({f"{name}_xte_rms_m": rms, f"{name}_xte_p95_m": p95, f"{name}_xte_max_m": mx,
+                    f"{name}_xte_swaths_p95_m": p95})       # the judged part in the name: swaths, turns excluded
     out["pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out["pass_to_pass_mean_m"] = float(np.mean(p2p)) if len(p2p) else math.nan
     area = workable.area
     field_covered = union.intersection(boundary).area if union is not None else 0.0
+    field_swept = sum(st.intersection(boundary).area for st in strips)
     out.update(field_coverage_share=field_covered / boundary.area, coverage_share=covered / area,
                overlap_share=overlap / area, skipped_area_m2=area - covered,
                covered_area_m2=covered, overlap_area_m2=overlap, workable_area_m2=area,
-               field_area_m2=boundary.area, boundary_crossings=float(crossings))
+               field_area_m2=boundary.area, boundary_crossings=float(crossings),
+               field_overlap_share=max(field_swept - field_covered, 0.0) / boundary.area,
+               field_skipped_area_m2=boundary.area - field_covered,
+               applied_outside_m2=union.difference(boundary).area if union is not None else 0.0,
+               sections=float(sections))
+    out.update(plan_figures(plan, sections))
     for kind, name in ((SWATH, "swath"), (HEADLAND, "headland"), (TURN, "turn"), (TRANSIT, "transit")):
         m = seg == kind
         out[f"{name}_time_s"] = float(dt[m].sum())
@@ -84,6 +92,16 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     out["swaths_planned"] = float(len(plan.swaths))
     out.update(ground_metrics(frame, study, s, plan, conv, frames))
     return out
+
+
+def plan_figures(plan, sections: int) -> dict[str, float]:
+    """The plan's own as-applied figures (fields.planner.applied, the same sections with perfect
+    look-ahead on the planned path), beside the driven ones: ``plan_*`` of the same names."""
+    from agrobot.fields.planner.applied import applied_outside, as_applied
+
+    a = as_applied(plan, sections)
+    return {"plan_field_coverage_share": a.field_coverage_share, "plan_field_overlap_share": a.overlap_share,
+            "plan_field_skipped_area_m2": a.skipped, "plan_applied_outside_m2": applied_outside(a, plan.field.boundary)}
 
 
 IMPLEMENT_XTE_P95_TARGET = 0.05       # m: the implement's P95 cross-track target (RTK class +-0.025 m)
@@ -99,13 +117,18 @@ METRICS = {"field_coverage_share": ("1", f">= {COVERAGE_TARGET} (of the whole fi
            "route_xte_p95_m": ("m", None), "line_acquisition_p95_m": ("m", None), "line_acquisition_p95_s": ("s", None),
            "pass_to_pass_interval_s": ("s", None), "tractor_pass_to_pass_p95_m": ("m", None),
            "xte_max_in_outage_m": ("m", None),
-           "outage_drift_max_m": ("m", None), "guidance_stops": ("count", None)}
+           "outage_drift_max_m": ("m", None), "guidance_stops": ("count", None),
+           "field_overlap_share": ("1", None), "plan_field_coverage_share": ("1", None),
+           "plan_field_overlap_share": ("1", None), "field_skipped_area_m2": ("m2", None),
+           "plan_field_skipped_area_m2": ("m2", None), "applied_outside_m2": ("m2", None),
+           "plan_applied_outside_m2": ("m2", None), "tractor_xte_swaths_p95_m": ("m", None),
+           "implement_xte_swaths_p95_m": ("m", None)}
 METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
                 **{f"{kind}_{q}": unit for kind in ("swath", "headland", "turn", "transit")
                    for q, unit in (("time_s", "s"), ("distance_m", "m"))},
                 **{k: "m" for k in ("tractor_xte_max_m", "pass_to_pass_mean_m")},
                 **{k: "m2" for k in ("covered_area_m2", "overlap_area_m2", "workable_area_m2", "field_area_m2")},
-                "route_done_share": "1", "swaths_planned": "count", "events": "count",
+                "route_done_share": "1", "swaths_planned": "count", "events": "count", "sections": "count",
                 **{k: "m" for k in ("route_xte_rms_m", "route_xte_max_m", "line_acquisition_max_m")},
                 **{k: "count" for k in ("line_acquisitions", "line_acquisition_failures", "outages")}}
 
@@ -152,7 +175,8 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     from agrobot.fields.planner.export import times_worked, times_worked_colorbar
 
     fig, ax = plt.subplots(figsize=(9, 8))
-    times_worked_colorbar(fig, ax, times_worked(ax, _strips(s, plan.settings.working_width), boundary, workable))
+    strips = applied_strips(s, plan.settings.working_width, sections_of(study))
+    times_worked_colorbar(fig, ax, times_worked(ax, strips, boundary, workable))
     for geom, style, label in ((boundary, "k-", "field"), (workable, "k:", "workable")):
         bx, by = geom.exterior.xy
         ax.plot(bx, by, style, lw=1, label=label)

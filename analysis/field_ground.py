@@ -1,8 +1,8 @@
 """Guidance on real ground, the figures autosteer vendors and ISO 12188-2 quote: the tractor's
 cross-track error to the whole route by interpolation (its projection on the route's segments,
 not the nearest route point), line acquisition after each turn, the cross-track error and the
-estimator's drift in GNSS outages (the samples whose fix is not RTK fixed), the watchdog's stops
-and the time between adjacent passes.
+estimator's drift in GNSS outages (the samples whose fix is not RTK fixed, or is bridged on aged
+corrections), the watchdog's stops and the time between adjacent passes.
 """
 from __future__ import annotations
 
@@ -178,7 +178,9 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     watchdog = resolve(study).find(role="watchdog")
     safe = rows[f"{watchdog[0]}.safe_state"].to_numpy() if len(watchdog) == 1 else np.zeros(len(rows))
     t = s["t"].to_numpy()
-    windows = runs(quality != RTK_FIXED)
+    age_column = f"{gps}.correction_age"
+    bridged = rows[age_column].to_numpy() > 0 if age_column in rows else np.zeros(len(quality), bool)
+    windows = runs((quality != RTK_FIXED) | bridged)          # a bridged fix reports RTK fixed on aged corrections
     out["outages"] = float(len(windows))
     stops = [a for a, _ in runs(safe > 0.5)]
     out["guidance_stops"] = float(len(stops))

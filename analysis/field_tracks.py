@@ -40,12 +40,17 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
     every = max(1, int(round(STEP / h)))
     f = frame.iloc[::every].reset_index(drop=True)
     route = component_named(study, "route")
-    return pd.DataFrame({
+    out = pd.DataFrame({
         "t": f["t"], "x": signal(f, study, "yaw_plant", "x_cg"), "y": signal(f, study, "yaw_plant", "y_cg"),
         "ix": signal(f, study, "implement", "x"), "iy": signal(f, study, "implement", "y"),
+        "ih": signal(f, study, "implement", "heading"),
         "segment": f[f"{route}.segment"], "swath": f[f"{route}.swath"], "impl_segment": f[f"{route}.implement_segment"],
         "working": f[f"{route}.working"], "speed": signal(f, study, "drivetrain", "speed"),
         "progress": f[f"{route}.progress"]})
+    for k in (0, 1):
+        column = f"{route}.section_mask_{k}"
+        out[f"mask{k}"] = f[column].to_numpy() if column in f else 0.0
+    return out
 
 
 def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
@@ -59,6 +64,8 @@ def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
     for a, b in (("x", "y"), ("ix", "iy")):
         mx, my = s[a].to_numpy(), s[b].to_numpy()
         out[a], out[b] = origin[0] + c * mx - sn * my, origin[1] + sn * mx + c * my
+    if "ih" in s:
+        out["ih"] = s["ih"].to_numpy() + rotation
     return out
 
 
@@ -141,6 +148,26 @@ def _strips(s: pd.DataFrame, width: float):
             line = LineString(xy)
             strips.append(line.buffer(0.5 * width, cap_style="flat", join_style="round"))
     return strips
+
+
+def applied_strips(s: pd.DataFrame, width: float, sections: int) -> list:
+    """What the implement applied: the whole width while working (``sections`` 0), else each
+    section's strips where the route's section control had it on (fields.planner.applied's strips
+    of a run of poses), about the implement's true working point and heading."""
+    if not sections:
+        return _strips(s, width)
+    from agrobot.components.field_route import section_mask
+    from agrobot.fields.planner.applied import block_strips
+    from agrobot.fields.planner.sections import SectionLayout
+
+    on = section_mask(s["mask0"].to_numpy(), s["mask1"].to_numpy(), sections)
+    return block_strips(s["ix"].to_numpy(), s["iy"].to_numpy(), s["ih"].to_numpy(), on, SectionLayout(width, sections))
+
+
+def sections_of(study: Study) -> int:
+    """The route component's section count (0: no section control)."""
+    p = resolve(study).parameters(component_named(study, "route"))
+    return int(p.get("sections", 0) or 0)
 
 
 IMPLEMENT, TRACTOR = ("ix", "iy", "impl_segment"), ("x", "y", "segment")     # a track's columns in _samples

@@ -1,6 +1,6 @@
 """Guidance on real ground: the figures of docs/slopes-and-outages.md, from commands anyone can rerun.
 
-    python3 benchmarks/ground_truths.py [--quick] [--figure docs/img/outage_drift.png]
+    python3 benchmarks/ground_truths.py [--quick] [--only slope|outage|bridging|iso] [--figure docs/img/outage_drift.png]
 
 1. Side slope: the tractor's and the implement's cross-track error on the swaths of a real parcel
    across a 10 deg side slope with RTK noise, with and without terrain compensation and the crab
@@ -9,6 +9,9 @@
    GNSS at all (IMU + odometry), RTK float or DGPS: the estimate's drift after 1 and 5 minutes and
    the time its own cross-track uncertainty passes the watchdog's 10 cm, beside the vendor's
    published figures for a correction outage (Trimble xFill).
+   With the receiver bridging the lost corrections (gps.outages mode "bridging") too; and the
+   receiver's own error after 1, 5 and 20 minutes in each mode (a Monte Carlo over receivers, the
+   sensor alone) beside its model and the vendors' figures.
 3. ISO 12188-2-style figures: pass-to-pass of adjacent passes driven 15 minutes apart and right
    after each other, line acquisition after each turn, the cross-track error along the whole route by
    interpolation, and the repeatability of the same line driven on two runs (two seeds).
@@ -90,8 +93,9 @@ def slope_table(seeds: list[int]) -> None:
           " [--set ekf.terrain_compensation=0] [--set ekf.crab_estimate=0] [--set study.seed=N]\n")
 
 
-def outage_runs(quality: int, seeds: list[int]):
-    window = f"gps.outages=[[{OUTAGE[0]}, {OUTAGE[1]}, {quality}]]"
+def outage_runs(quality, seeds: list[int]):
+    mode = f'"{quality}"' if isinstance(quality, str) else quality
+    window = f"gps.outages=[[{OUTAGE[0]}, {OUTAGE[1]}, {mode}]]"
     return [run("field_coverage.toml", (*LONG_LINE, window, "watchdog.max_position_std=inf"), seed) for seed in seeds]
 
 
@@ -105,14 +109,56 @@ def at_outage(frame, after: float) -> tuple[float, float, float]:
     return math.hypot(dx, dy), abs(-math.sin(psi) * dx + math.cos(psi) * dy), float(frame["ekf.cross_track_std"].iloc[i])
 
 
-def outage_table(seeds: list[int], figure: Path | None) -> None:
+RECEIVER_MODES = ((0, "no GNSS (IMU + odometry)"), (5, "RTK float (0.3 m)"), (2, "DGPS (0.85 m)"),
+                  ("bridging", "bridging (xFill-like)"))
+VENDORS = {"bridging": ("Trimble xFill (TMX-2050): 1-5 cm (1-5 min), 10-15 cm (11-20 min); NovAtel RTK ASSIST: "
+                        "~4 cm RMS for up to 20 min; u-blox F9P: a few cm per minute for up to 60 s (default)"),
+           5: "none quoted", 2: "u-blox ZED-F9P: SBAS 1.0 m CEP", 0: "dead reckoning: not a receiver figure"}
+
+
+def receiver_table(draws: int) -> None:
+    """The receiver's own horizontal error after 1, 5 and 20 minutes of each mode: RMS over ``draws``
+    receivers (gps_sensor alone, 2 cm white noise, 1 s steps), beside the mode's model."""
+    from agrobot.components.gps_sensor import GPSSensor, bridging_error
+    from agrobot.components.models.sensor_grades import FIX_ERROR_STD
+
+    ages, white = (60.0, 300.0, 1200.0), 0.02
+    print(f"2b. The receiver's horizontal error (RMS over {draws} receivers) after 1, 5 and 20 min of each mode, "
+          "beside its model")
+    head = f"{'mode':<26}" + "".join(f"{f'{a / 60:.0f} min: sim / model':>24}" for a in ages) + "  vendors"
+    print(head + "\n" + "-" * len(head))
+    for mode, label in RECEIVER_MODES:
+        errors = {a: [] for a in ages}
+        for seed in range(draws):
+            g = GPSSensor("gps", {"position_noise_std": white, "outages": [[0.0, 1500.0, mode]]},
+                          rng=np.random.default_rng(seed))
+            g.initialize(0.0, 1.0)
+            for k in range(int(max(ages)) + 1):
+                g.step(float(k), 1.0)
+                if float(k) in errors and g.y["fix_valid"] > 0.5:
+                    errors[float(k)].append(math.hypot(g.y["x"], g.y["y"]))
+        cells = []
+        for a in ages:
+            if mode == 0:
+                cells.append("no position")
+                continue
+            model = math.hypot(math.sqrt(2) * white, float(bridging_error(a)) if mode == "bridging"
+                               else math.sqrt(2) * FIX_ERROR_STD[mode])
+            sim = math.sqrt(np.mean(np.square(errors[a])))
+            cells.append(f"{100 * sim:.1f} / {100 * model:.1f} cm")
+        print(f"{label:<26}" + "".join(f"{c:>24}" for c in cells) + f"  {VENDORS[mode]}", flush=True)
+    print("model: bridging sqrt(2 sw^2 + (s0 + r a)^2), s0 = 0.81 cm, r = 0.758 cm/min (the line through xFill's "
+          "table); float, DGPS sqrt(2 sw^2 + 2 sq^2); sw = 2 cm white per axis\n")
+
+
+def outage_table(seeds: list[int], figure: Path | None, modes=RECEIVER_MODES) -> None:
     print(f"2. GNSS outage of {OUTAGE[1] - OUTAGE[0]:.0f} s at 2 m/s on a 1334 m swath (PARTFIELDS NO_Prag_Komplex), "
           "flat, antenna 2.5 m; drift = estimated CG - true CG")
     head = (f"{'receiver in the outage':<30}{'after 1 min: drift':>24}{'across':>22}{'after 5 min: drift':>24}"
             f"{'across':>22}{'std > 10 cm after':>22}")
     print(head + "\n" + "-" * len(head))
     curves = {}
-    for quality, label in ((0, "no GNSS (IMU + odometry)"), (5, "RTK float (0.3 m)"), (2, "DGPS (0.85 m)")):
+    for quality, label in modes:
         results = outage_runs(quality, seeds)
         one = [at_outage(r.frame, 60.0) for r in results]
         five = [at_outage(r.frame, OUTAGE[1] - OUTAGE[0] - 0.05) for r in results]
@@ -200,7 +246,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="one seed")
     parser.add_argument("--figure", type=Path, default=None, help="write the outage figure (PNG) there")
-    parser.add_argument("--only", choices=("slope", "outage", "iso"), default=None)
+    parser.add_argument("--only", choices=("slope", "outage", "bridging", "iso"), default=None)
     args = parser.parse_args()
     seeds = [27] if args.quick else [27, 28, 29]
     t0 = time.perf_counter()
@@ -208,6 +254,10 @@ def main() -> None:
         slope_table(seeds)
     if args.only in (None, "outage"):
         outage_table(seeds, args.figure)
+    if args.only in (None, "outage", "bridging"):
+        receiver_table(60 if args.quick else 200)
+    if args.only == "bridging":
+        outage_table(seeds, None, RECEIVER_MODES[-1:])
     if args.only in (None, "iso"):
         iso_table(seeds)
     print(f"(wall time {time.perf_counter() - t0:.0f} s)")

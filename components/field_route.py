@@ -32,6 +32,7 @@ from agrobot.orchestrator.component import Component, EndRun, inp, out, par
 from agrobot.orchestrator.units import FILE_UNIT
 
 WINDOW = 500.0          # m of the route sampled at a time
+MAX_LATENCY = 5.0       # s: a section latency beyond this is a unit slip (ms given as s), refused
 BEHIND = 20.0           # m of it kept behind the vehicle
 
 
@@ -77,6 +78,39 @@ def settings_of(p: dict):
     return Settings(**values)
 
 
+def section_control(p: dict, plan, origin: np.ndarray, rotation: float, require):
+    """fields.planner.sections.SectionControl over the field in the mission frame, or None
+    (``sections`` 0); the count and the latencies checked (ComponentError naming the value)."""
+    from shapely import transform
+
+    from agrobot.fields import FieldError
+    from agrobot.fields.planner.sections import SectionControl, SectionLayout, check_sections
+
+    for key in ("section_on_delay", "section_off_delay"):
+        v = p[key]
+        require(isinstance(v, (int, float)) and 0.0 <= v <= MAX_LATENCY,
+                f"parameter {key} = {v!r} s: expected a latency from 0 to {MAX_LATENCY:g} s")
+    require(p["section_look_ahead"] in (0, 1), f"parameter section_look_ahead = {p['section_look_ahead']!r}: "
+            "expected 0 or 1")
+    if p["sections"] == 0:
+        return None
+    try:
+        n = check_sections(p["sections"], plan.settings.working_width, "parameter sections")
+    except FieldError as exc:
+        require(False, str(exc))
+    region = transform(plan.field.boundary, lambda xy: to_mission(xy, origin, rotation))
+    return SectionControl(region, SectionLayout(plan.settings.working_width, n), float(p["section_on_delay"]),
+                          float(p["section_off_delay"]), bool(p["section_look_ahead"]))
+
+
+def section_mask(low: np.ndarray, high: np.ndarray, count: int) -> np.ndarray:
+    """(samples, count) of the sections on, from the route's ``section_mask_0`` and ``_1``."""
+    lo, hi = np.asarray(low).astype(np.int64), np.asarray(high).astype(np.int64)
+    bits = np.arange(count)
+    word = np.where(bits < 32, lo[:, None], hi[:, None])
+    return ((word >> (bits % 32)) & 1).astype(bool)
+
+
 class RouteWindow:
     """The route on the grid s = i ROUTE_STEP, i < size, in the mission frame, sampled a window at
     a time: ``take(a, b)`` makes sure points a..b-1 are at hand (resampling WINDOW metres from
@@ -111,6 +145,9 @@ class FieldRoute(Component):
         inp("y", "m", 0.0, "estimated CG north position"),
         inp("implement_x", "m", 0.0, "implement working point east"),
         inp("implement_y", "m", 0.0, "implement working point north"),
+        inp("implement_pose_x", "m", 0.0, "the implement's own working point east (sections switch from it)"),
+        inp("implement_pose_y", "m", 0.0, "its north"),
+        inp("implement_heading", "rad", 0.0, "its heading (a trailed implement's own)"),
         par("path", FILE_UNIT, "", "the field: a file or folder fields.read_fields reads (relative: to the study "
             "file, the files it extends, or the working folder)"),
         par("crs", "", "", "its CRS when the file does not name it (EPSG:6677 ...)"),
@@ -138,6 +175,13 @@ class FieldRoute(Component):
         par("max_swaths", "1", 0, "0: every swath; N: the first N (a section of the field)"),
         par("settle", "m", 5.0, "straight run before a swath beyond the implement's length"),
         par("swath_extension", "m", 0.1, "each swath worked on beyond its strip's reach (lift and drop margin)"),
+        par("sections", "1", 0, "0: the whole width works along every swath and headland pass; N: N sections "
+            "switched by section control"),
+        par("section_on_delay", "s", 0.3, "a section's latency from its on command to working (0 to "
+            f"{MAX_LATENCY:g} s)"),
+        par("section_off_delay", "s", 0.2, f"from its off command to stopping (0 to {MAX_LATENCY:g} s)"),
+        par("section_look_ahead", "1", 1, "1: commands go out v t ahead, so that sections switch at the edge; "
+            "0: they switch v t late"),
         out("x_ref", "m", 0.0, "route point at the CG's projection, east"),
         out("y_ref", "m", 0.0, "north"),
         out("xdot_ref", "m/s", 0.0, "route speed along its tangent, east"),
@@ -155,11 +199,16 @@ class FieldRoute(Component):
         out("implement_on_straight", "1", 0.0, "1 while the route is straight where the implement is (a swath and "
             "its run-in: the side-shift may act)"),
         out("progress", "1", 0.0, "share of the route done"),
+        out("sections_on", "1", 0.0, "sections working (all of the width: 1 without section control)"),
+        out("section_mask_0", "1", 0.0, "bit i: section i (0-31) on"),
+        out("section_mask_1", "1", 0.0, "bit i: section 32 + i on"),
     )
     feedthrough = {o: ("x", "y") for o in ("x_ref", "y_ref", "xdot_ref", "ydot_ref", "heading_ref", "yaw_rate_ref",
                                            "speed_ref", "path_length", "segment", "swath", "cross_track", "progress")}
     feedthrough |= {o: ("implement_x", "implement_y") for o in ("implement_cross_track", "implement_segment", "working",
                                                                 "implement_on_straight")}
+    feedthrough |= {o: ("implement_x", "implement_y", "implement_pose_x", "implement_pose_y", "implement_heading")
+                    for o in ("sections_on", "section_mask_0", "section_mask_1")}
 
     def initialize(self, t0: float, dt: float) -> None:
         from agrobot.fields import FieldError
@@ -174,6 +223,8 @@ class FieldRoute(Component):
         self.route = RouteWindow(self.path, origin, rotation)
         self.end = (self.route.size - 1) * ROUTE_STEP          # s of the last grid point
         self.i_cg = self.i_impl = 0
+        self.sections = section_control(self.p, plan, origin, rotation, self.require)
+        self.travelled, self.last_pose = 0.0, None
         self.step(t0, dt)
 
     def run_progress(self) -> tuple[float, float, str] | None:
@@ -211,8 +262,26 @@ class FieldRoute(Component):
         y["implement_segment"] = kind
         y["working"] = float(kind in (SWATH, HEADLAND))
         y["implement_on_straight"] = float(abs(r.at(self.i_impl, "kappa")) < 1e-3)
+        self._switch_sections(t, dt)
         if j >= r.size - 3:
             raise EndRun(self.name, f"the route is complete ({self.end:.0f} m)")
+
+    def _switch_sections(self, t: float, dt: float) -> None:
+        """The sections' states from the implement's own pose and speed (its travel over the step)."""
+        u, y = self.u, self.y
+        if self.sections is None:
+            y["sections_on"] = y["working"]
+            return
+        pose = (float(u["implement_pose_x"]), float(u["implement_pose_y"]))
+        moved = math.dist(pose, self.last_pose) if self.last_pose is not None else 0.0
+        self.travelled += moved
+        self.last_pose = pose
+        state = self.sections.step(t, self.travelled, *pose, float(u["implement_heading"]), moved / dt if dt > 0 else 0.0,
+                                   y["working"] > 0.5)
+        y["sections_on"] = float(state.sum())
+        bits = np.flatnonzero(state)
+        y["section_mask_0"] = float(sum(1 << int(i) for i in bits if i < 32))
+        y["section_mask_1"] = float(sum(1 << int(i - 32) for i in bits if i >= 32))
 
     def operating_points(self) -> dict[str, dict[str, float]]:
         """Where the guidance loop is linearised: a straight at ``work_speed`` (swaths, headland

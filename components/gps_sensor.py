@@ -18,6 +18,19 @@ a second in its GGAs is no fix; after its last GGA the receiver is back to RTK f
 fix (quality 1, 2, 5) carries, besides the white noise, an error per axis of that quality's std
 (models.sensor_grades.FIX_ERROR_STD) that wanders as a Gauss-Markov process of
 ``degraded_error_time_constant``; a quality of 0, 6, 7 or 8 carries no position (``fix_valid`` 0).
+
+A window's third item may name the mode instead: ``"none"`` (0), ``"float"`` (5), ``"dgps"`` (2),
+``"single"`` (1) or ``"bridging"``: the receiver keeps its satellites and bridges the lost RTK
+corrections with satellite-delivered ones (Trimble xFill, NovAtel RTK ASSIST), reporting the RTK
+quality it had (4) for up to ``bridging_timeout`` and DGPS (2) after it. Its error grows with the
+correction age a as the vendors document it, horizontal RMS
+
+    sigma_h(a) = bridging_error_start + bridging_error_rate a
+
+(the defaults, 0.81 cm + 0.758 cm/min, are the least-squares line through the Trimble TMX-2050 manual's
+xFill table: 1-5 cm after 1-5 min, 5-9 cm after 6-10 min, 10-15 cm after 11-20 min), each axis
+sigma_h(a) / sqrt(2) times a unit Gauss-Markov wander of ``bridging_time_constant`` (the bridged
+solution drifts slowly, it is not white). ``correction_age`` is a (0 with live corrections).
 """
 from __future__ import annotations
 
@@ -33,6 +46,15 @@ from .hardware.nmea import FIX_RANK, RTK_FIXED
 from .models.sensor_grades import DEGRADED_ERROR_TIME_CONSTANT, FIX_ERROR_STD, gauss_markov_step
 
 GGA_QUALITIES = tuple(range(10))
+BRIDGING = -1                                  # the bridging mode's code in a window (not a GGA quality)
+MODES = {"none": 0, "float": 5, "dgps": 2, "single": 1, "bridging": BRIDGING}
+BRIDGED_QUALITY, AFTER_BRIDGING = RTK_FIXED, 2  # reported while bridging, and after its timeout
+XFILL_START, XFILL_RATE = 0.0081, 0.00758 / 60.0  # m, m/s: horizontal RMS of the bridged fix (fitted, see above)
+
+
+def bridging_error(age, start: float = XFILL_START, rate: float = XFILL_RATE):
+    """sigma_h(a) [m]: the horizontal RMS error of a bridged fix a seconds after the corrections were lost."""
+    return start + rate * np.asarray(age, float)
 
 
 def gga_qualities(path: str) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +112,10 @@ class GPSSensor(Component):
         par("dgps_error_std", "m", FIX_ERROR_STD[2], "error of a DGPS fix (qualities 2, 3, 9), per axis"),
         par("single_error_std", "m", FIX_ERROR_STD[1], "error of a single-point fix (quality 1), per axis"),
         par("degraded_error_time_constant", "s", DEGRADED_ERROR_TIME_CONSTANT, "correlation time of those errors"),
+        par("bridging_error_start", "m", XFILL_START, "bridging: horizontal RMS error when the corrections are lost"),
+        par("bridging_error_rate", "m/s", XFILL_RATE, "bridging: its growth with the correction age"),
+        par("bridging_timeout", "s", 1200.0, "bridging: how long the receiver bridges (then DGPS)"),
+        par("bridging_time_constant", "s", 300.0, "bridging: correlation time of its error's wander"),
         out("x", "m", 0.0, "measured east position"),
         out("y", "m", 0.0, "measured north position"),
         out("vel_east", "m/s", 0.0, "measured east velocity"),
@@ -97,6 +123,8 @@ class GPSSensor(Component):
         out("fix_valid", "1", 1.0, "1 when this sample carries a new fix, else 0"),
         out("fix_age", "s", 0.0, "time since the last valid fix"),
         out("fix_quality", "1", float(RTK_FIXED), "GGA fix quality: 4 (RTK fixed) with a fix, 0 in an outage"),
+        out("correction_age", "s", 0.0, "age of the RTK corrections the fix uses (GGA's age of differential data): "
+            "0 with live corrections, the time since they were lost while bridging"),
     )
     feedthrough = {k: ("x_true", "y_true", "vel_east_true", "vel_north_true")
                    for k in ("x", "y", "vel_east", "vel_north")}
@@ -134,6 +162,12 @@ class GPSSensor(Component):
         self.degraded_phi = math.exp(-dt / p["degraded_error_time_constant"])
         self.degraded = any(q not in (0, RTK_FIXED) for _, _, q in self.windows) or self.log is not None
         self.wander = self.rng.standard_normal(2) if self.degraded else np.zeros(2)    # unit-std Gauss-Markov
+        for key in ("bridging_error_start", "bridging_error_rate", "bridging_timeout"):
+            self.require(p[key] >= 0, f"parameter {key} must be >= 0, got {p[key]}")
+        self.require(p["bridging_time_constant"] > 0, "parameter bridging_time_constant must be > 0")
+        self.bridging = any(q == BRIDGING for _, _, q in self.windows)
+        self.bridging_phi = math.exp(-dt / p["bridging_time_constant"])
+        self.bridge_wander = self.rng.standard_normal(2) if self.bridging else np.zeros(2)
 
     def _windows(self, value) -> list[tuple[float, float, int]]:
         """The outage windows, checked: each [start_s, end_s] or [start_s, end_s, quality]."""
@@ -143,16 +177,32 @@ class GPSSensor(Component):
         windows = []
         for i, item in enumerate(value):
             ok = isinstance(item, (list, tuple)) and len(item) in (2, 3) and all(
-                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in item)
+                isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in item[:2]) and (
+                len(item) == 2 or isinstance(item[2], str) or (isinstance(item[2], (int, float))
+                                                               and not isinstance(item[2], bool) and math.isfinite(item[2])))
             self.require(ok, f"{where}, item {i} = {item!r}: expected [start_s, end_s] or [start_s, end_s, quality] "
                          "(finite numbers)")
             start, end = float(item[0]), float(item[1])
             quality = item[2] if len(item) == 3 else 0
             self.require(start < end, f"{where}, item {i} = {item!r}: the window must end after it starts")
-            self.require(quality in GGA_QUALITIES and quality == int(quality),
-                         f"{where}, item {i} = {item!r}: quality {quality!r} is not a GGA fix quality (0 to 9)")
+            if isinstance(quality, str):
+                self.require(quality in MODES, f"{where}, item {i} = {item!r}: outage mode {quality!r} does not exist; "
+                             f"expected {', '.join(MODES)} or a GGA fix quality (0 to 9)")
+                quality = MODES[quality]
+            else:
+                self.require(quality in GGA_QUALITIES and quality == int(quality),
+                             f"{where}, item {i} = {item!r}: quality {quality!r} is not a GGA fix quality (0 to 9) "
+                             f"nor an outage mode ({', '.join(MODES)})")
             windows.append((start, end, int(quality)))
         return windows
+
+    def bridged_since(self, t: float) -> float | None:
+        """The start of the bridging window holding t (None: not bridging at t)."""
+        start_of = None
+        for start, end, q in self.windows:
+            if start - 1e-9 <= t < end - 1e-9:
+                start_of = start if q == BRIDGING else None
+        return start_of
 
     def quality_at(self, t: float) -> int:
         """The GGA quality the receiver has at time t (before random dropouts)."""
@@ -165,6 +215,9 @@ class GPSSensor(Component):
         for start, end, q in self.windows:
             if start - 1e-9 <= t < end - 1e-9:
                 quality = q
+        if quality == BRIDGING:
+            since = self.bridged_since(t)
+            quality = BRIDGED_QUALITY if t - since <= self.p["bridging_timeout"] else AFTER_BRIDGING
         return quality
 
     def step(self, t: float, dt: float) -> None:
@@ -183,6 +236,16 @@ class GPSSensor(Component):
             degraded = (std * self.wander[0], std * self.wander[1])
             w = self.rng.standard_normal(2)
             self.wander = np.array([gauss_markov_step(g, self.degraded_phi, 1.0, wi) for g, wi in zip(self.wander, w)])
+        since = self.bridged_since(t) if self.bridging else None
+        age = 0.0 if since is None else t - since
+        if self.bridging:
+            w = self.rng.standard_normal(2)
+            self.bridge_wander = np.array([gauss_markov_step(g, self.bridging_phi, 1.0, wi)
+                                           for g, wi in zip(self.bridge_wander, w)])
+            if since is not None and quality == BRIDGED_QUALITY:
+                axis = bridging_error(age, p["bridging_error_start"], p["bridging_error_rate"]) / math.sqrt(2.0)
+                degraded = (degraded[0] + axis * self.bridge_wander[0], degraded[1] + axis * self.bridge_wander[1])
+        y["correction_age"] = age
         if self.outage_left > 0 or FIX_RANK.get(quality, 0) == 0:
             y["fix_valid"] = 0.0
             y["fix_quality"] = 0.0 if self.outage_left > 0 else float(quality)

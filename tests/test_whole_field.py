@@ -207,3 +207,47 @@ def test_the_optimised_order_drives_no_more_than_the_patterns_and_starts_and_end
     assert (x0, y0) == pytest.approx(start, abs=1e-6)
     assert tuple(last[:2]) == pytest.approx(end, abs=0.01)
     assert crossings(p) == 0
+
+
+# --- what is left ----------------------------------------------------------------------------------------------
+def test_what_a_plan_leaves_is_named_with_its_area_and_why(parcel_plan):
+    """The parcel's leftovers, named piece by piece, add up to the field a second method finds
+    unworked (the 0.5 m raster of the working poses); the sharp corners are named as corners a turn
+    cannot reach (their centres outside the workable field)."""
+    from agrobot.fields.planner.leftovers import leftovers
+
+    p = parcel_plan
+    named, slivers = leftovers(p, as_applied(p).shape)
+    field = p.field.boundary
+    unworked = (1.0 - raster_cover(p, field)) * field.area
+    assert sum(x.area for x in named) + slivers == pytest.approx(unworked, rel=0.25, abs=10.0)
+    assert named and all(x.why and x.area >= 1.0 and x.width > 0 for x in named)
+    corners = [x for x in named if x.kind == "corner"]
+    assert corners
+    assert not any(p.workable.contains(Point(x.centroid)) for x in corners)
+
+
+def test_the_neck_between_two_pieces_is_named_with_its_area_and_the_pass_that_would_work_it():
+    """Two 60 x 50 m halves joined by a neck 14 m wide and 20 m long, 2 headland passes of 3 m: the
+    inner field's neck is 2 m wide (14 - 2 x 6); with the headland band and the two halves' inner
+    rectangles worked, what is left is the neck's band, 32 x 2 m (known by hand), between the pieces,
+    narrower than one pass, whose medial axis (y = 25, 32 m) keeps the tractor inside the field."""
+    from types import SimpleNamespace
+
+    from agrobot.fields.planner.leftovers import leftovers
+
+    field = Polygon([(0, 0), (60, 0), (60, 18), (80, 18), (80, 0), (140, 0), (140, 50), (80, 50), (80, 32), (60, 32),
+                     (60, 50), (0, 50)])
+    w, n = 3.0, 2
+    pieces = Polygon([(6, 6), (54, 6), (54, 44), (6, 44)]).union(Polygon([(86, 6), (134, 6), (134, 44), (86, 44)]))
+    band = field.difference(field.buffer(-n * w, join_style="mitre"))
+    p = SimpleNamespace(field=SimpleNamespace(boundary=field), settings=Settings(working_width=w), inner=pieces,
+                        headland_passes=n, workable=field)
+    named, slivers = leftovers(p, band.union(pieces))
+    assert slivers == pytest.approx(0.0, abs=1e-6)
+    (neck,) = named
+    assert neck.kind == "between pieces"
+    assert neck.area == pytest.approx(32 * 2, rel=1e-6)
+    assert neck.width == pytest.approx(2.0, abs=0.05)
+    assert neck.pass_m == pytest.approx(32.0, abs=0.1)
+    assert "medial axis" in neck.why and neck.centroid == pytest.approx((70.0, 25.0))

@@ -97,11 +97,11 @@ def section_strips(plan, layout: SectionLayout) -> list:
             want = open_sections(cmap, x[i0:i1], y[i0:i1], h[i0:i1], s[i0:i1], look, look_owner, layout)
             on[i0:i1] = want
             paint_strip(cmap, x[i0:i1], y[i0:i1], h[i0:i1], s[i0:i1], brush, brush_owner, want)
-        strips += _block_strips(x, y, h, on, layout)
+        strips += block_strips(x, y, h, on, layout)
     return strips
 
 
-def _block_strips(x: np.ndarray, y: np.ndarray, h: np.ndarray, on: np.ndarray, layout: SectionLayout) -> list:
+def block_strips(x: np.ndarray, y: np.ndarray, h: np.ndarray, on: np.ndarray, layout: SectionLayout) -> list:
     """Strips of the sections on (``on[i]`` from pose i to i + 1): one per run of poses with the same
     sections on and per block of adjacent sections on in it (few strips: their union stays quick)."""
     out = []
@@ -149,4 +149,12 @@ def summary(plan, applied: AsApplied, sections: int) -> dict:
             "covered_ha": round(applied.covered / 1e4, 4), "overlap_ha": round(applied.overlap / 1e4, 4),
             "skipped_ha": round(applied.skipped / 1e4, 4),
             "applied_outside_m2": round(applied_outside(applied, plan.field.boundary), 2),
-            "boundary_crossings": crossings(plan)}
+            "boundary_crossings": crossings(plan), **leftover_summary(plan, applied)}
+
+
+def leftover_summary(plan, applied: AsApplied) -> dict:
+    """The field left unworked, piece by piece with its area and why (fields.planner.leftovers)."""
+    from .leftovers import leftovers
+
+    named, slivers = leftovers(plan, applied.shape)
+    return {"leftovers": [x.summary() for x in named], "leftover_slivers_m2": round(slivers, 2)}
