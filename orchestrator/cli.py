@@ -20,14 +20,31 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
     parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
 
 
+OUT_RULE = ("a new or empty folder is written; an earlier result of this command is replaced (in one step, when "
+            "the command ends) only with --overwrite; anything else, or an input, is refused")
+
+
+def add_output_options(parser: argparse.ArgumentParser, what: str = "output folder", required: bool = True,
+                       file: bool = False, plots: bool = False, progress: bool = True) -> None:
+    """The output options every command shares, spelt and checked alike (orchestrator.output):
+    ``--out``, ``--overwrite``, ``--quiet``, and ``--no-plots`` / ``--no-progress`` where the
+    command draws figures or reports progress."""
+    rule = ("a new file is written; an existing one is replaced only with --overwrite; an input never"
+            if file else OUT_RULE)
+    parser.add_argument("--out", type=Path, required=required, help=f"{what}: {rule}")
+    parser.add_argument("--overwrite", action="store_true", help="replace an earlier result at --out")
+    if plots:
+        parser.add_argument("--no-plots", action="store_true", help="skip the figures")
+    if progress:
+        parser.add_argument("--no-progress", action="store_true", help="no progress lines or bars")
+    parser.add_argument("--quiet", action="store_true", help="print only warnings and errors (no results table, "
+                        "no progress): what the command finds is in --out")
+
+
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
-    p.add_argument("--out", type=Path, required=True,
-                   help="output folder: written aside and moved into place when the run ends; a folder that "
-                        "holds other files than an earlier run's is refused unless --overwrite")
-    p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
+    add_output_options(p, "output folder (metrics.json, run.json, the signals, plots)", plots=True)
     add_set_option(p)
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -48,7 +65,8 @@ def _run(args: argparse.Namespace) -> int:
         if args.set:
             study = study.with_overrides(args.set)
     try:
-        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite)
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
+                           progress=not args.no_progress)
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)
@@ -72,14 +90,13 @@ def _run(args: argparse.Namespace) -> int:
 
 def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file with a [sweep] section")
-    p.add_argument("--out", type=Path, required=True, help="output folder (rerun it to resume)")
+    add_output_options(p, "output folder (the same command into it again resumes the sweep; --overwrite starts "
+                          "afresh)", plots=True)
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="a Dask scheduler address, or 'local' to start a local Dask cluster")
     add_set_option(p)
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -90,12 +107,12 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
     study = Study.load(args.study, args.set)
-    runner = SweepRun(study, args.out)
+    runner = SweepRun(study, args.out, args.overwrite)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
     except KeyboardInterrupt as exc:
-        print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
-              file=sys.stderr)
+        print(f"\ninterrupted: finished points are kept in {runner.kept_in}; run the same command"
+              f"{'' if runner.kept_in == args.out else f' with --out {runner.kept_in}'} to resume", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
     with Stage("drawing the sweep's figures"):
         files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
@@ -119,6 +136,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG if invoked in ("__main__.py", "-c", "") else invoked,
         description="Run co-simulation studies and sweeps, and the tools the installed project registers.")
+    root = sys.modules.get(__name__.split(".")[0])
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {getattr(root, '__version__', 'unknown')} (Python {sys.version.split()[0]})")
     sub = parser.add_subparsers(dest="command", required=True)
     commands = {**{k: v for k, v in CORE.items()},
                 **{c.name: (c.help, c.add_arguments, c.run) for c in registry().commands.values()}}
@@ -141,6 +161,22 @@ def _in_stage(name: str, run):
     return handler
 
 
+def _handle(args: argparse.Namespace) -> int:
+    from .observers import PROGRESS
+
+    PROGRESS["shown"] = not (getattr(args, "no_progress", False) or getattr(args, "quiet", False))
+    return args.handler(args)
+
+
+def _quietly(args: argparse.Namespace) -> int:
+    """``--quiet``: what the command prints on stdout goes nowhere (warnings and errors, on
+    stderr, still show)."""
+    import contextlib
+
+    with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink):
+        return _handle(args)
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"warning: {category.__name__}: {message}\n"
 
@@ -150,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     install_signal_handlers()
     try:            # a signal may land while the plugins' modules load, before any command runs
         args = build_parser().parse_args(argv)
-        return args.handler(args)
+        return _quietly(args) if getattr(args, "quiet", False) else _handle(args)
     except (Exception, KeyboardInterrupt) as exc:
         known = exit_code(exc)
         if known is None:

@@ -181,18 +181,20 @@ def pruned(table: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def study_folders(path: str | Path | None) -> tuple[Path, ...]:
-    """Where a relative file named in a study is looked for: the study file's folder, then the
-    folders of the files it extends, nearest first."""
+def study_chain(path: str | Path | None) -> tuple[Path, ...]:
+    """A study file and the files it extends, nearest first (resolved)."""
     out: list[Path] = []
-    seen: set[Path] = set()
     path = Path(path) if path is not None else None
-    while path is not None and path.is_file() and path.resolve() not in seen:
-        seen.add(path.resolve())
-        if path.resolve().parent not in out:
-            out.append(path.resolve().parent)
+    while path is not None and path.is_file() and path.resolve() not in out:
+        out.append(path.resolve())
         if path.suffix not in (".toml", ".yaml", ".yml"):
             break
         parent = read_one(path).get("extends")
         path = path.parent / parent if isinstance(parent, str) else None
     return tuple(out)
+
+
+def study_folders(path: str | Path | None) -> tuple[Path, ...]:
+    """Where a relative file named in a study is looked for: the study file's folder, then the
+    folders of the files it extends, nearest first."""
+    return tuple(dict.fromkeys(p.parent for p in study_chain(path)))
