@@ -123,23 +123,40 @@ def decoded(path: Path, raw: bytes) -> str:
 
 
 def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
-    """``comp.param=value`` -> (key, value); the value is read as TOML, else kept as a string."""
+    """``comp.param=value`` -> (key, value), the value read as the study file would read it (TOML:
+    ``3``, ``"text"``, ``[1, 10, 250]``, ``{start = 1, stop = 5, num = 3}``); ``1,10,250`` is the
+    list ``[1, 10, 250]``; a bare word without quotes (``csv``) is a string; anything else is refused."""
     if "=" not in item or "." not in item.split("=", 1)[0]:
         raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value' or 'study.field=value'")
     key, raw = item.split("=", 1)
-    try:
-        value = tomllib.loads(f"v = {raw.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw.strip()
-    return key.strip(), value
+    raw = raw.strip()
+    for text in (raw, f"[{raw}]"):
+        try:
+            return key.strip(), tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            continue
+    if re.fullmatch(r"[^\s\[\]{}\"',=]+", raw):
+        return key.strip(), raw
+    raise StudyError(f"--set {item}: {raw!r} is not a value a study file could hold; write a list as [1, 10, 250] "
+                     f"or 1,10,250, a string in quotes ({key.strip()}='\"{raw}\"')")
+
+
+ORCHESTRATOR_TABLES = ("sweep", "exports")       # tables --set may start when the study has none
 
 
 def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
     """Set one dotted key in study data (see ``Study.with_values``); returns the field it set, as
-    the schema names it (``components.tracker.parameters.lookahead``)."""
+    the schema names it (``components.tracker.parameters.lookahead``). ``COMP.step`` is the
+    component's step (``COMP.parameters.NAME`` reaches any parameter by its full name);
+    ``sweep.parameters.COMP.PARAM`` a swept parameter; ``TABLE.A.B`` a field of any table."""
+    if key.startswith("sweep.parameters."):
+        swept = key.removeprefix("sweep.parameters.").replace('"', "")
+        data.setdefault("sweep", {}).setdefault("parameters", {})[swept] = value
+        return f"sweep.parameters.{swept}"
     parts = key.split(".")
     if len(parts) < 2 or not all(re.fullmatch(NAME, p) for p in parts):
-        raise StudyError(f"{where}: expected 'component.parameter', 'component.inputs.port' or 'study.field'")
+        raise StudyError(f"{where}: expected 'component.parameter', 'component.step', 'component.inputs.port', "
+                         f"'study.field' or 'table.field'")
     head, rest = parts[0], parts[1:]
     if head == "study":
         if len(rest) == 2 and rest[0] == "bounds":
@@ -156,17 +173,48 @@ def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
         if len(rest) == 2 and rest[0] == "inputs":
             spec.setdefault("inputs", {})[rest[1]] = value
             return f"components.{head}.inputs.{rest[1]}"
-        spec.setdefault("parameters", {})[".".join(rest)] = value
-        return f"components.{head}.parameters.{'.'.join(rest)}"
+        if rest == ["step"]:
+            spec["step"] = value
+            return f"components.{head}.step"
+        name = ".".join(rest[1:] if rest[0] == "parameters" and len(rest) > 1 else rest)
+        spec.setdefault("parameters", {})[name] = value
+        return f"components.{head}.parameters.{name}"
+    if head in subs and rest in (["step"], ["base_step"]):
+        subs[head][rest[0]] = value
+        return f"subsystems.{head}.{rest[0]}"
     if head in subs and len(rest) >= 2:
         return f"subsystems.{head}." + set_value(subs[head], ".".join(rest), value, where)
-    if head not in ("components", "subsystems") and isinstance(data.get(head), dict) and len(rest) == 1:
-        data[head][rest[0]] = value            # a table's field: sweep.mode, my_tool.period
-        return f"{head}.{rest[0]}"
+    if head not in ("components", "subsystems") and (isinstance(data.get(head), dict) or
+                                                     (head in ORCHESTRATOR_TABLES and head not in data)):
+        table = data.setdefault(head, {})
+        for part in rest[:-1]:               # a table's field: sweep.mode, my_tool.period, my_tool.a.b
+            if not isinstance(table.setdefault(part, {}), dict):
+                raise StudyError(f"{where}: {head}.{part} is a value, not a table")
+            table = table[part]
+        table[rest[-1]] = value
+        return f"{head}.{'.'.join(rest)}"
     known = sorted(comps) + sorted(subs)
     tables = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in ("components", "subsystems", "study"))
-    raise StudyError(f"{where}: no component {head!r}{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
+    raise StudyError(f"{where}: no component or table {head!r}"
+                     f"{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
                      + (f"; tables: {', '.join(tables)}" if tables else ""))
+
+
+def lookup(data: dict[str, Any], field: str, missing: Any = None) -> Any:
+    """The value at a field as ``set_value`` names it (``components.tracker.parameters.lookahead``),
+    ``missing`` when absent; a parameter's name may hold dots."""
+    node: Any = data
+    parts = field.split(".")
+    while parts:
+        if not isinstance(node, dict):
+            return missing
+        for n in range(len(parts), 0, -1):       # the longest key first: parameter names with dots
+            if ".".join(parts[:n]) in node:
+                node, parts = node[".".join(parts[:n])], parts[n:]
+                break
+        else:
+            return missing
+    return node
 
 
 def pruned(table: dict[str, Any]) -> dict[str, Any]:

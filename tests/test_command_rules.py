@@ -278,3 +278,36 @@ def test_sweeps_share_the_lock_and_never_replace_a_completed_point(tmp_path, cap
     assert json.loads(runner.record_path(point).read_text())["metrics"] == {"m": 1.0}
     code, _, err = _cli(["run", _study(tmp_path), "--out", out, "--overwrite"], capsys)   # a run into a sweep's
     assert code == 2 and "not a run result" in err and runner.record_path(point).exists()
+
+
+def test_set_reaches_the_sweep_table_a_step_and_lists_with_the_files_types_and_checks(tmp_path, capsys):
+    import tomllib
+
+    from agrobot.orchestrator.study import StudyError, load_study
+    from agrobot.orchestrator.sweep import expand
+
+    robustness = ROOT / "studies" / "robustness.toml"
+    written = tomllib.loads(robustness.read_text())["sweep"]["samples"]
+    study = load_study(robustness, ["sweep.samples=5"])
+    assert study.sweep.samples == 5 and len(expand(study)) == 5 != written
+    assert f"sweep.samples = 5, was {written}" in capsys.readouterr().out
+    toy = _study(tmp_path)                              # no [sweep] table: --set starts one
+    for item in ("sweep.parameters.f.fail_time=[5, 6, 7]", "sweep.parameters.f.fail_time=5,6,7"):
+        study = load_study(toy, [item, "f.step=0.1"])
+        assert [p.values for p in expand(study)] == [{"f.fail_time": v} for v in (5, 6, 7)]
+        assert study.components["f"].step == 0.1 and "step" not in study.components["f"].parameters
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[1] == "--set f.step=0.1: components.f.step = 0.1, was not set in the file (the default)"
+    with pytest.raises(StudyError, match="not a value a study file could hold"):
+        load_study(toy, ["f.fail_time=a,b"])
+    # the same check as the file: samples >= 1, said of the --set item
+    (tmp_path / "zero.toml").write_text(f'extends = "{robustness.as_posix()}"\n[sweep]\nsamples = 0\n')
+    with pytest.raises(StudyError) as from_file:
+        load_study(tmp_path / "zero.toml")
+    with pytest.raises(StudyError) as from_set:
+        load_study(robustness, ["sweep.samples=0"])
+    assert "greater than or equal to 1" in str(from_file.value) and "greater than or equal to 1" in str(from_set.value)
+    assert str(from_set.value).startswith("--set sweep.samples=0")
+    code, printed, err = _cli(["run", toy, "--out", tmp_path / "o", "--set", "f.step=0.1", "--no-plots"], capsys)
+    assert code == 0 and "components.f.step = 0.1" in printed, err
+    assert len(pd.read_csv(tmp_path / "o" / "signals.csv")) == round(1.0 / 0.05) + 1     # the base step stays
