@@ -17,6 +17,7 @@ host's; ``dt`` must be a whole number of the inner base steps.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Any, ClassVar
 
 from .build import System, build_system
@@ -101,6 +102,7 @@ class SubsystemTypes:
 
     def __init__(self) -> None:
         self._classes: dict[str, type[CompositeComponent]] = {}
+        self._open: list[Path] = []          # the study files being resolved, outermost first
 
     def component_class(self, study: Study, name: str, resolver) -> type["CompositeComponent"] | None:
         if name in study.subsystems:
@@ -108,11 +110,21 @@ class SubsystemTypes:
         spec = study.components.get(name)
         if spec is None or not spec.type.lower().endswith(SUBSYSTEM_SUFFIXES):
             return None
+        path = study.file_path(spec.type).resolve()
+        chain = self._open or ([Path(study.path).resolve()] if study.path is not None else [])
+        if path in chain:
+            cycle = chain[chain.index(path):] + [path]
+            raise StudyError(f"{study.where}: components.{name}.type = {spec.type!r}: a study that uses itself as a "
+                             f"subsystem ({' -> '.join(p.name for p in cycle)})")
         try:
-            sub = Study.load(study.file_path(spec.type))
+            sub = Study.load(path)
         except StudyError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: subsystem {exc}") from None
-        return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
+        self._open = chain + [path]
+        try:
+            return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
+        finally:
+            self._open = chain
 
     def composite_class(self, sub: Study, where: str, resolver) -> type["CompositeComponent"]:
         """A Component class whose ports are ``sub``'s exports."""

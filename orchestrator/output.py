@@ -225,8 +225,7 @@ def _holds_something_else(out: Path, signature: tuple[str, ...]) -> bool:
         return False
     if not any((out / m).exists() for m in signature):
         return True
-    status = status_of(out)
-    return status is None or status in COMPLETE
+    return status_of(out) in COMPLETE or not any((out / m).exists() for m in MARKERS)
 
 
 def swap_folder(new: Path, target: Path) -> Path | None:

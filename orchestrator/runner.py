@@ -23,6 +23,7 @@ from .recording import Recording
 from .registry import import_study_module
 from .resolver import resolve
 from .results import SignalWriter, atomic_write, write_json
+from .schedule import WRITE_EVERY
 from .signal_table import SignalTable
 from .study import Study, StudyError
 
@@ -84,7 +85,7 @@ def write_events(out_dir: Path, rec: Recording) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
 
 
-CHUNK_STEPS = 10_000          # base steps between two writes of the signal table (at most)
+CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at most)
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 

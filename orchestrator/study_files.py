@@ -96,6 +96,7 @@ def read_one(path: Path) -> dict[str, Any]:
             data = yaml.safe_load(text)
             if not isinstance(data, dict):
                 raise StudyError(f"{path}: expected a mapping at the top level")
+            expanded_size(data, path)
             return data
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{path}: not valid TOML: {exc}") from None
@@ -105,6 +106,40 @@ def read_one(path: Path) -> dict[str, Any]:
         raise StudyError(f"{path}: not valid YAML: {exc}") from None
     raise StudyError(f"{path}: unknown study file type {path.suffix!r}; expected .toml, .yaml or .yml")
 
+
+
+MAX_VALUES = 200_000         # values a study may expand to through YAML aliases (a large study: a few thousand)
+
+
+def expanded_size(data: Any, path: Path, limit: int = MAX_VALUES) -> int:
+    """The number of values ``data`` holds once every YAML alias is expanded, counted without
+    expanding (each shared object once, memoised); refuses an alias that contains itself and data
+    past ``limit`` (an alias bomb: nine lines of ``&a [*b, *b, ...]`` make 10^9 values)."""
+    sizes: dict[int, int] = {}
+    open_: set[int] = set()
+
+    def size(node: Any, trail: str) -> int:
+        if not isinstance(node, (dict, list)):
+            return 1
+        key = id(node)
+        if key in sizes:
+            return sizes[key]
+        if key in open_:
+            raise StudyError(f"{path}: field {trail or '(top level)'}: a YAML alias refers to a value that contains "
+                             f"it (a cycle); write the value out")
+        open_.add(key)
+        items = node.items() if isinstance(node, dict) else enumerate(node)
+        total = 1
+        for k, v in items:
+            total += size(v, f"{trail}.{k}" if trail else str(k))
+            if total > limit:
+                raise StudyError(f"{path}: field {trail or '(top level)'}: the YAML expands to more than {limit:,} "
+                                 f"values through its aliases (&anchor / *alias): an alias bomb? refused")
+        open_.discard(key)
+        sizes[key] = total
+        return total
+
+    return size(data, "")
 
 
 def decoded(path: Path, raw: bytes) -> str:
@@ -195,7 +230,7 @@ def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
         return f"{head}.{'.'.join(rest)}"
     known = sorted(comps) + sorted(subs)
     tables = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in ("components", "subsystems", "study"))
-    raise StudyError(f"{where}: no component or table {head!r}"
+    raise StudyError(f"{where}: no component {head!r}"
                      f"{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
                      + (f"; tables: {', '.join(tables)}" if tables else ""))
 

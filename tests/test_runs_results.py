@@ -53,7 +53,7 @@ def test_an_interrupted_rerun_keeps_the_complete_result_and_its_figures(tmp_path
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     assert {"trajectory.png", "signals.parquet", "metrics.json"} <= set(before)
     proc = subprocess.Popen(CMD + ["run", "studies/figure8.toml", "--set", "study.stop_time=1e5", "--out", str(out),
-                                   "--no-plots"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                   "--no-plots", "--overwrite"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     end = time.time() + 120
     while time.time() < end and not any(p.stat().st_size > 100_000 for p in tmp_path.glob(".f8.*/signals.parquet")):
         time.sleep(0.2)
