@@ -41,10 +41,21 @@ def add_output_options(parser: argparse.ArgumentParser, what: str = "output fold
                         "no progress): what the command finds is in --out")
 
 
+def add_isolate_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--isolate-fmus", action="store_true", help="run each FMU in a child process: a crash or a "
+                        "hang (study.fmu_timeout) is a named error, Ctrl-C ends the run at once, the signals so far "
+                        "are kept (as study.isolate_fmus = true)")
+
+
+def _isolated(args: argparse.Namespace) -> list[str]:
+    return ["study.isolate_fmus=true"] if getattr(args, "isolate_fmus", False) else []
+
+
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
     add_output_options(p, "output folder (metrics.json, run.json, the signals, plots)", plots=True)
     add_set_option(p)
+    add_isolate_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -57,13 +68,13 @@ def _run(args: argparse.Namespace) -> int:
     chosen = [(o, getattr(args, o.flag.lstrip("-").replace("-", "_"), None)) for o in registry().run_options]
     chosen = [(o, v) for o, v in chosen if v is not None]
     if not chosen:
-        study = Study.load(args.study, args.set)
+        study = Study.load(args.study, args.set + _isolated(args))
     else:           # a plugin's option first, so that --set also reaches what it adds (a recorder ...)
         study = Study.load(args.study)
         for option, value in chosen:
             study = option.apply(study, value)
-        if args.set:
-            study = study.with_overrides(args.set)
+        if args.set or _isolated(args):
+            study = study.with_overrides(args.set + _isolated(args))
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
                            progress=not args.no_progress)
@@ -97,6 +108,7 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
                    help="a Dask scheduler address, or 'local' to start a local Dask cluster")
     add_set_option(p)
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
+    add_isolate_option(p)
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -106,7 +118,7 @@ def _sweep(args: argparse.Namespace) -> int:
 
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
-    study = Study.load(args.study, args.set)
+    study = Study.load(args.study, args.set + _isolated(args))
     runner = SweepRun(study, args.out, args.overwrite)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
