@@ -113,7 +113,7 @@ def check_output_file(out: Path, overwrite: bool = False, inputs: Iterable[Path 
     replaced only with ``--overwrite``, an input never."""
     out = Path(out)
     if suffixes and out.suffix not in suffixes:
-        raise OutputError(f"--out {out}: expected a file name ending in {' or '.join(suffixes)}")
+        raise OutputError(f"--out {out}: expected a path ending in {' or '.join(suffixes)}")
     check_inputs(out, inputs)
     if out.is_dir():
         raise OutputError(f"--out {out}: is a folder, expected the {out.suffix or ''} file to write".replace("  ", " "))
