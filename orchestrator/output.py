@@ -76,7 +76,7 @@ def check_inputs(out: Path, inputs: Iterable[Path | str | None], flag: str = "--
 def _check_parent(out: Path) -> None:
     base = _nearest_existing(out.parent.resolve())
     if not base.is_dir():
-        raise OutputError(f"--out {out}: {base} is not a folder")
+        raise OutputError(f"--out {out}: cannot write there ({base} is not a folder)")
     if not os.access(base, os.W_OK | os.X_OK):
         raise OutputError(f"--out {out}: cannot create it, {base} is not writable")
     try:                    # permissions are not the whole story (/proc, a read-only mount, a full disk)
@@ -159,7 +159,7 @@ class OutputLock:
             except BlockingIOError:
                 holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
                 os.close(fd)
-                raise OutputError(f"--out {self.out}: another command{f' (process {holder})' if holder else ''} "
+                raise OutputError(f"--out {self.out}: another run or command{f' (process {holder})' if holder else ''} "
                                   f"is writing to it; wait for it or choose another folder") from None
             try:
                 same = os.stat(self.path).st_ino == os.fstat(fd).st_ino

@@ -160,7 +160,8 @@ def decoded(path: Path, raw: bytes) -> str:
 def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
     """``comp.param=value`` -> (key, value), the value read as the study file would read it (TOML:
     ``3``, ``"text"``, ``[1, 10, 250]``, ``{start = 1, stop = 5, num = 3}``); ``1,10,250`` is the
-    list ``[1, 10, 250]``; a bare word without quotes (``csv``) is a string; anything else is refused."""
+    list ``[1, 10, 250]``; text without quotes (``csv``, ``100 ms``) is a string; anything else
+    (brackets, braces or quotes that do not parse, ``a,b``) is refused."""
     if "=" not in item or "." not in item.split("=", 1)[0]:
         raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value' or 'study.field=value'")
     key, raw = item.split("=", 1)
@@ -170,7 +171,7 @@ def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
             return key.strip(), tomllib.loads(f"v = {text}")["v"]
         except tomllib.TOMLDecodeError:
             continue
-    if re.fullmatch(r"[^\s\[\]{}\"',=]+", raw):
+    if re.fullmatch(r"[^\[\]{}\"',=]+", raw):            # a word, or a value with its unit: 100 ms
         return key.strip(), raw
     raise StudyError(f"--set {item}: {raw!r} is not a value a study file could hold; write a list as [1, 10, 250] "
                      f"or 1,10,250, a string in quotes ({key.strip()}='\"{raw}\"')")

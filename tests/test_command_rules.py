@@ -150,7 +150,7 @@ def test_every_verb_refuses_a_foreign_folder_an_input_a_busy_out_and_an_unasked_
         # one writer at a time
         with OutputLock(tmp_path / f"busy_{name}"):
             code, _, err = _cli(argv + ["--out", tmp_path / f"busy_{name}"], capsys)
-        assert code == 2 and "another command" in err, (verb, err)
+        assert code == 2 and "is writing to it" in err, (verb, err)
     assert not _leftovers(tmp_path), _leftovers(tmp_path)
 
 
@@ -268,7 +268,7 @@ def test_sweeps_share_the_lock_and_never_replace_a_completed_point(tmp_path, cap
     out = tmp_path / "sw"
     with OutputLock(out):                 # a run writing there: the sweep waits its turn
         code, _, err = _cli(["sweep", sweep, "--out", out, "--workers", "1"], capsys)
-    assert code == 2 and "another command" in err
+    assert code == 2 and "is writing to it" in err
     runner = SweepRun(load_study(sweep), out)
     runner.validate()
     point = expand(runner.study)[0]

@@ -78,6 +78,7 @@ def test_a_crash_an_exit_and_a_hang_are_named_errors_and_the_signals_are_kept(fo
     assert _unpacked() <= before            # the unpacked FMU is gone
 
 
+@pytest.mark.slow               # a whole command in a subprocess, and its FMU's: about 15 s here
 def test_ctrl_c_ends_a_hung_isolated_run_within_seconds_and_keeps_the_signals(folder, tmp_path):
     study = _study(folder, 3, name="hang.toml")
     out = tmp_path / "out"
