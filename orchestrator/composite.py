@@ -95,6 +95,9 @@ def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
 
 
+_OPEN: list[Path] = []          # the study files being resolved as subsystems, outermost first (any resolver)
+
+
 class SubsystemTypes:
     """Sub-resolver (orchestrator.resolver): an inline ``[subsystems.NAME]`` block, or a component
     whose type is a study file (.toml/.yaml, relative to the study file). Each subsystem's class is
@@ -102,7 +105,6 @@ class SubsystemTypes:
 
     def __init__(self) -> None:
         self._classes: dict[str, type[CompositeComponent]] = {}
-        self._open: list[Path] = []          # the study files being resolved, outermost first
 
     def component_class(self, study: Study, name: str, resolver) -> type["CompositeComponent"] | None:
         if name in study.subsystems:
@@ -111,7 +113,7 @@ class SubsystemTypes:
         if spec is None or not spec.type.lower().endswith(SUBSYSTEM_SUFFIXES):
             return None
         path = study.file_path(spec.type).resolve()
-        chain = self._open or ([Path(study.path).resolve()] if study.path is not None else [])
+        chain = list(_OPEN) or ([Path(study.path).resolve()] if study.path is not None else [])
         if path in chain:
             cycle = chain[chain.index(path):] + [path]
             raise StudyError(f"{study.where}: components.{name}.type = {spec.type!r}: a study that uses itself as a "
@@ -120,11 +122,11 @@ class SubsystemTypes:
             sub = Study.load(path)
         except StudyError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: subsystem {exc}") from None
-        self._open = chain + [path]
+        _OPEN[:] = chain + [path]
         try:
             return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
         finally:
-            self._open = chain
+            _OPEN[:] = chain
 
     def composite_class(self, sub: Study, where: str, resolver) -> type["CompositeComponent"]:
         """A Component class whose ports are ``sub``'s exports."""
