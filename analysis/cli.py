@@ -10,22 +10,24 @@ from pydantic import BaseModel, ConfigDict, field_validator
 
 
 def _progress(line: str) -> None:
-    print(line, flush=True)
+    from agrobot.orchestrator.observers import PROGRESS
+
+    if PROGRESS["shown"]:
+        print(line, flush=True)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_output_options, add_set_option
 
     p.add_argument("study", type=Path, help="a guidance study: tracker, yaw-rate controller, steering, yaw plant, "
                    "a reference (figure-8 or field route)")
     add_set_option(p)
-    p.add_argument("--out", type=Path, default=None, help="write the Bode and Nyquist plots (bode*.png, nyquist*.png) "
-                   "and margins.json here")
+    add_output_options(p, "write the Bode and Nyquist plots (bode*.png, nyquist*.png) and margins.json here",
+                       required=False, plots=True)
     p.add_argument("--simulate", action="store_true", help="also find the steering command delay at which the "
                    "simulation loses stability (bisection, each run printed)")
     p.add_argument("--duration", type=float, default=160.0, help="simulated seconds per run of --simulate "
                    "(default 160)")
-    p.add_argument("--no-simulation", action="store_true", help="the analytic margins only (the default)")
 
 
 def _simulated_lines(analysis, duration: float) -> list[str]:
@@ -59,17 +61,24 @@ def run(args: argparse.Namespace) -> int:
     if not args.duration > 0:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
     study = Study.load(args.study, args.set)
+    folder = None
     if args.out is not None:
-        from agrobot.orchestrator.output import check_output
+        from agrobot.orchestrator.output import ResultFolder, study_inputs
 
-        check_output(args.out, overwrite=True)
-    analysis = analyse(study, progress=_progress)
-    print(report(analysis))
-    if args.out is not None:
-        from .margin_plots import write_plots
-        from .margins import write_json
+        folder = ResultFolder(args.out, args.overwrite, ("margins.json",), "margins", study_inputs(study))
+    import contextlib
 
-        files = write_plots(analysis, args.out) + [write_json(analysis, args.out / "margins.json")]
+    with folder if folder is not None else contextlib.nullcontext():
+        analysis = analyse(study, progress=_progress)
+        print(report(analysis))
+        if folder is not None:
+            from .margin_plots import write_plots
+            from .margins import write_json
+
+            files = (write_plots(analysis, folder.tmp) if not args.no_plots else []) \
+                + [write_json(analysis, folder.tmp / "margins.json")]
+            folder.commit()
+    if folder is not None:
         print(f"\nwritten to {args.out}/ ({', '.join(f.name for f in files)})")
     else:
         print("\n(--out DIR writes the Bode and Nyquist plots; --simulate checks the delay limit in simulation)")
@@ -83,14 +92,13 @@ def run(args: argparse.Namespace) -> int:
 # --- tune ------------------------------------------------------------------------------------
 
 def add_tune_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_output_options, add_set_option
 
     from .tune import Targets
 
     t = Targets()
     p.add_argument("study", type=Path, help="a guidance study (its yaw plant: the tractor as identified)")
-    p.add_argument("--out", type=Path, required=True, help="the tuned study file to write (.toml): it extends STUDY")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing --out file")
+    add_output_options(p, "the tuned study file to write (.toml): it extends STUDY", file=True)
     add_set_option(p)
     p.add_argument("--delay-margin", type=float, default=t.delay, metavar="S",
                    help=f"extra steering delay the loop must tolerate [s] (default {t.delay:g})")
@@ -110,33 +118,6 @@ def add_tune_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=float, default=160.0, help="simulated seconds per run (default 160)")
 
 
-def _check_tune_out(path: Path, overwrite: bool) -> None:
-    from agrobot.orchestrator.output import OutputError
-
-    if path.suffix != ".toml":
-        raise OutputError(f"--out {path}: expected a study file name ending in .toml")
-    if path.is_dir():
-        raise OutputError(f"--out {path}: is a folder, expected a .toml file to write")
-    if path.exists() and not overwrite:
-        raise OutputError(f"--out {path}: exists; pass --overwrite to replace it")
-    if not path.parent.resolve().is_dir():
-        raise OutputError(f"--out {path}: its folder {path.parent} does not exist")
-
-
-def _write_atomically(path: Path, text: str) -> None:
-    import os
-    import tempfile
-
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent.resolve())
-    try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def run_tune(args: argparse.Namespace) -> int:
     from agrobot.orchestrator.study import Study, StudyError
 
@@ -152,12 +133,16 @@ def run_tune(args: argparse.Namespace) -> int:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
     if not 0 < args.grid <= 4:
         raise StudyError(f"--grid {args.grid:g}: expected a number in (0, 4]")
-    _check_tune_out(args.out, args.overwrite)
+    from agrobot.orchestrator.output import ResultFile, study_inputs
+    from agrobot.orchestrator.results import atomic_write
+
     study = Study.load(args.study, args.set)
+    target = ResultFile(args.out, args.overwrite, [*study_inputs(study), args.identified], suffixes=(".toml",))
     identified = identified_values(study, args.identified, args.model) if args.identified else None
     targets = Targets(args.delay_margin, args.phase_margin, args.gain_margin, args.along_track_error)
-    proposal = propose(study, targets, _progress, identified, args.grid)
-    _write_atomically(args.out, proposal.text)
+    with target:
+        proposal = propose(study, targets, _progress, identified, args.grid)
+        atomic_write(args.out, lambda p: p.write_text(proposal.text))
     print("\n" + comparison(proposal))
     print(f"\nwritten to {args.out} (extends {args.study})")
     if not args.no_simulation:

@@ -10,12 +10,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("log", type=Path, help="measured log (.csv/.parquet): t, delta_cmd, delta, v, yaw_rate, x, y; "
                    "or a raw recording: a folder of *.nmea files and CAN logs (*.log candump, *.asc, *.blf)")
     p.add_argument("--study", type=Path, default=None, help="baseline study (default: studies/figure8.toml)")
-    p.add_argument("--out", type=Path, required=True, help="output folder")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "output folder (diagnosis.json, report.md, figures)", plots=True)
     p.add_argument("--fit-fraction", type=float, default=0.6, help="share of the log used to fit; the rest is held out")
     p.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
     p.add_argument("--resample", action="store_true",
                    help="interpolate a log whose clock jitters onto an even grid (its median step)")
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     from agrobot.measurements.cli import add_recording_options
 
     add_recording_options(p)
@@ -28,11 +29,13 @@ def run(args: argparse.Namespace) -> int:
 
     from .pipeline import CANNOT_DECIDE, diagnose
 
-    from agrobot.orchestrator.output import check_output
+    from agrobot.orchestrator.output import ResultFolder
+    from agrobot.orchestrator.study_files import study_chain
 
     if not 0.2 <= args.fit_fraction <= 0.8:
         raise StudyError("--fit-fraction must be in [0.2, 0.8]")
-    check_output(args.out, overwrite=True)
+    folder = ResultFolder(args.out, args.overwrite, ("diagnosis.json",), "diagnosis",
+                          [args.log, args.dbc, *study_chain(args.study)])
     from agrobot.measurements.cli import recording_options
     from agrobot.measurements.recording import describe
 
@@ -41,10 +44,15 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
 
     def progress(text: str) -> None:
-        print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+        from agrobot.orchestrator.observers import PROGRESS
 
-    result = diagnose(args.log, args.out, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                      resample=args.resample, recording=recording_options(args), progress=progress)
+        if PROGRESS["shown"]:
+            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    with folder:
+        result = diagnose(args.log, folder.tmp, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
+                          resample=args.resample, recording=recording_options(args), progress=progress)
+        folder.commit()
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:

@@ -14,7 +14,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "CSV, an AgOpenGPS field folder, or a folder of such files; with --from-track a GNSS track (any "
                    "recording convert reads: NMEA, a bag, a TLG time log, a lat/lon table)")
     p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it (EPSG:6677 ...)")
-    p.add_argument("--out", type=Path, default=None, help="folder for fields.png, fields.json, fields.geojson")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "folder for fields.png, fields.json, fields.geojson", required=False, plots=True)
     p.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; default "
                    "1G for a file read whole, 16G for a recording read as a stream)")
     t = p.add_argument_group("a field from a track (--from-track)")
@@ -30,15 +32,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from agrobot.orchestrator.source_files import set_limit
-    from agrobot.orchestrator.output import check_output
+    from agrobot.orchestrator.output import ResultFolder
     from agrobot.orchestrator.results import atomic_write, write_json
 
     from .readers import read_fields, read_folder
 
     set_limit(args.max_file_size)
 
-    if args.out is not None:
-        check_output(args.out, overwrite=True)
+    folder = None if args.out is None else \
+        ResultFolder(args.out, args.overwrite, ("fields.json",), "fields", [args.source])
     if args.from_track:
         fields, skipped = [track_field(args)], []
     else:
@@ -57,13 +59,16 @@ def run(args: argparse.Namespace) -> int:
                   f"counter-clockwise)")
         for problem in s["problems"]:
             print(f"    problem: {problem}")
-    if args.out is not None:
+    if folder is not None:
         summaries = [f.summary() for f in fields]
-        write_json(args.out / "fields.json", {"source": str(args.source), "fields": summaries})
-        atomic_write(args.out / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
-        draw(fields, args.out / "fields.png", str(args.source))
+        with folder:
+            write_json(folder.tmp / "fields.json", {"source": str(args.source), "fields": summaries})
+            atomic_write(folder.tmp / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
+            if not args.no_plots:
+                draw(fields, folder.tmp / "fields.png", str(args.source))
+            folder.commit()
         local = [f.name for f in fields if f.origin is None]
-        print(f"written: {args.out}/fields.png, fields.json, fields.geojson"
+        print(f"written: {args.out}/{'' if args.no_plots else 'fields.png, '}fields.json, fields.geojson"
               + (f" (without {', '.join(local)}: local coordinates, no longitude/latitude)" if local else ""))
     return 0
 

@@ -58,7 +58,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from .planner.objectives import OBJECTIVES
 
     p.add_argument("field", type=Path, help="a field file or folder (see the fields command)")
-    p.add_argument("--out", type=Path, required=True, help="output folder (new, empty, or an earlier plan's)")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "output folder (route.csv, route.geojson, plan.json, figures)")
     p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it")
     p.add_argument("--name", default=None, help="the field to plan when the file holds several (default: the largest)")
     d = Settings()
@@ -118,17 +120,8 @@ def read_field(args: argparse.Namespace):
     return choose_field(fields, args.name, str(args.field)), skipped
 
 
-def check_out(out: Path) -> None:
-    """``--out`` must be new, empty, or an earlier plan (it is replaced whole)."""
-    from agrobot.orchestrator.output import OutputError
-
-    if out.is_dir() and any(out.iterdir()) and not (out / "plan.json").exists():
-        raise OutputError(f"--out {out}: the folder holds files that are not a plan (no plan.json), and a plan "
-                          f"replaces the whole folder; choose a new or empty folder")
-
-
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.output import ResultFolder, check_output
+    from agrobot.orchestrator.output import ResultFolder
     from agrobot.orchestrator.results import write_json
 
     from .field import FieldError
@@ -139,8 +132,7 @@ def run(args: argparse.Namespace) -> int:
                                  write_route_geojson)
     from .planner.sections import check_sections
 
-    check_output(args.out, overwrite=True)
-    check_out(args.out)
+    folder = ResultFolder(args.out, args.overwrite, ("plan.json",), "plan", [args.field, args.obstacles])
     if not args.route_step > 0:
         raise FieldError(f"--route-step {args.route_step:g}: expected a positive number of metres")
     settings = Settings(working_width=args.width, headland_passes=args.headland_passes,
@@ -153,18 +145,18 @@ def run(args: argparse.Namespace) -> int:
                         start_point=args.start, end_point=args.end, overlap=args.overlap)
     settings.check("plan", OPTIONS)
     sections = check_sections(args.sections, settings.working_width, "plan: --sections") if args.sections else 0
-    field, skipped = read_field(args)
-    for why in skipped:
-        print(f"not read: {why}")
-    obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
-    if args.obstacles is not None:
-        obstacles += read_obstacles(args.obstacles, field)
-    field = with_obstacles(field, obstacles)
-    p = plan(field, settings)
-    applied = as_applied(p, sections)
-    summary = p.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in obstacles],
-                             "as_applied": applied_summary(p, applied, sections)}
-    with ResultFolder(args.out, overwrite=True) as folder:
+    with folder:
+        field, skipped = read_field(args)
+        for why in skipped:
+            print(f"not read: {why}")
+        obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
+        if args.obstacles is not None:
+            obstacles += read_obstacles(args.obstacles, field)
+        field = with_obstacles(field, obstacles)
+        p = plan(field, settings)
+        applied = as_applied(p, sections)
+        summary = p.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in obstacles],
+                                 "as_applied": applied_summary(p, applied, sections)}
         rows = write_route_csv(p, folder.tmp / "route.csv", args.route_step, args.route_uniform)
         write_route_geojson(p, folder.tmp / "route.geojson", args.route_step, args.route_uniform)
         write_json(folder.tmp / "plan.json", summary | {"route_rows": rows, "route_step_m": args.route_step,

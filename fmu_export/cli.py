@@ -6,10 +6,10 @@ from pathlib import Path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_output_options, add_set_option
 
     p.add_argument("study", type=Path, help="study holding the tracker, the yaw-rate MPC and the speed PID")
-    p.add_argument("--out", type=Path, required=True, help="the .fmu to write, e.g. fmus/guidance_controller.fmu")
+    add_output_options(p, "the .fmu to write, e.g. fmus/guidance_controller.fmu", file=True)
     p.add_argument("--fmi-version", type=int, default=2, choices=(2, 3), help="FMI version of the FMU (default 2)")
     add_set_option(p)
 
@@ -20,18 +20,21 @@ def run(args: argparse.Namespace) -> int:
 
     from .controller import export_controller
 
+    from agrobot.orchestrator.output import ResultFile, study_inputs
+
     study = Study.load(args.study, args.set)
-    with Stage(f"export-controller: generating the C code and compiling {args.out.name} (cmake and the C compiler)"):
+    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".fmu",)), \
+            Stage(f"export-controller: generating the C code and compiling {args.out.name} (cmake and the C compiler)"):
         out = export_controller(study, args.out, args.fmi_version)
     print(f"controller of {args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation)")
     return 0
 
 
 def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_set_option
+    from agrobot.orchestrator.cli import add_output_options, add_set_option
 
     p.add_argument("study", type=Path, help="study whose components all have an FMU form (e.g. studies/figure8.toml)")
-    p.add_argument("--out", type=Path, required=True, help="the .ssp to write, e.g. fmus/figure8.ssp")
+    add_output_options(p, "the .ssp to write, e.g. fmus/figure8.ssp", file=True)
     add_set_option(p)
 
 
@@ -41,8 +44,10 @@ def run_ssp(args: argparse.Namespace) -> int:
 
     from .ssp_export import export_ssp
 
+    from agrobot.orchestrator.output import ResultFile, study_inputs
+
     study = Study.load(args.study, args.set)
-    with Stage(f"export-ssp: compiling {len(study.components)} FMUs, one per component (cmake and the C "
+    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".ssp",)), Stage(f"export-ssp: compiling {len(study.components)} FMUs, one per component (cmake and the C "
                f"compiler), and validating the SSD"):
         out = export_ssp(study, args.out)
     print(f"{args.study} exported to {out} (SSP 1.0: SystemStructure.ssd and one FMI 2.0 FMU per component)")

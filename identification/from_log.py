@@ -110,7 +110,7 @@ def wants_driving(source: Path, resample: bool, recording, study) -> bool:
 
 
 def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
-                         recording=None) -> int:
+                         recording=None, shown_as: Path | None = None) -> int:
     from agrobot.orchestrator.results import write_json
 
     from .ordinary_driving import identify_driving, summary
@@ -118,7 +118,10 @@ def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = 
     start = time.perf_counter()
 
     def progress(text: str) -> None:
-        print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+        from agrobot.orchestrator.observers import PROGRESS
+
+        if PROGRESS["shown"]:
+            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
 
     frame, imported = _read(source, resample, recording, study)
     progress(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
@@ -140,7 +143,7 @@ def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = 
 
     write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
     print(summary(report))
-    print(f"\nwritten to {out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
+    print(f"\nwritten to {shown_as or out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
     return 0
 
 

@@ -97,8 +97,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), ROS bags (*.bag, *.db3, *.mcap, a "
                    "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin), tables (*.csv, "
                    "*.tsv, *.parquet: a folder of them is joined on time)")
-    p.add_argument("--out", type=Path, default=None, help="the log to write (.csv or .parquet); the import report "
-                   "goes beside it as <name>.import.json")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "the log to write (.csv or .parquet); the import report goes beside it as "
+                          "<name>.import.json", required=False, file=True)
     p.add_argument("--list", action="store_true", help="print what the recording holds (topics and types, CAN "
                    "messages and signals with units and rates, table columns with ranges) and write nothing")
     p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
@@ -107,10 +109,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.results import atomic_write
-
     from .log import LogError, check_log
-    from .recording import describe, import_recording, import_runs
+    from .recording import import_recording, import_runs
 
     if args.list:
         from .listing import list_source
@@ -120,11 +120,10 @@ def run(args: argparse.Namespace) -> int:
         return 0
     if args.out is None:
         raise LogError("convert: give --out LOG.csv (or .parquet), or --list to see what the recording holds")
-    if args.out.suffix not in (".csv", ".parquet"):
-        raise LogError(f"--out {args.out}: expected a .csv or .parquet file")
-    from agrobot.orchestrator.output import check_output
+    from agrobot.orchestrator.output import ResultFile, check_output_file
 
-    check_output(args.out.parent, overwrite=True)
+    inputs = [args.source, args.dbc]
+    target = ResultFile(args.out, args.overwrite, inputs, suffixes=(".csv", ".parquet"))
     options = recording_options(args)
     if args.all_runs:
         if options.run is not None or options.time_range is not None:
@@ -136,6 +135,23 @@ def run(args: argparse.Namespace) -> int:
     for path, f, rep in jobs:             # every log checked before the first is written
         checked = check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
         rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
+        for written in (path, path.with_name(path.stem + ".import.json")) + ((path.with_suffix(".mcap"),) if args.mcap else ()):
+            check_output_file(written, args.overwrite, inputs)
+    with target:
+        _write(jobs)
+    if args.mcap:          # after every log is in place: an MCAP that fails loses none of them
+        from .log_mcap import write_log_mcap
+
+        for path, f, _ in jobs:
+            print(f"written: {write_log_mcap(f, path.with_suffix('.mcap'), str(args.source))}")
+    return 0
+
+
+def _write(jobs) -> None:
+    from agrobot.orchestrator.results import atomic_write
+
+    from .recording import describe
+
     for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
@@ -144,12 +160,6 @@ def run(args: argparse.Namespace) -> int:
                      lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
         print(describe(rep))
         print(f"written: {path} ({len(f)} rows) and {path.with_name(path.stem + '.import.json').name}", file=sys.stdout)
-    if getattr(args, "mcap", False):          # after every log is in place: an MCAP that fails loses none of them
-        from .log_mcap import write_log_mcap
-
-        for path, f, _ in jobs:
-            print(f"written: {write_log_mcap(f, path.with_suffix('.mcap'), str(args.source))}")
-    return 0
 
 
 def register(registry) -> None:

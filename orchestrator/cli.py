@@ -25,16 +25,41 @@ def add_engine_option(parser: argparse.ArgumentParser) -> None:
                         help="python (default): the Python components; compiled: the study's whole loop from the "
                              "components' C cores, one compiled program (every component needs one); auto: compiled "
                              "when it can, and says why not otherwise")
+OUT_RULE = ("a new or empty folder is written; an earlier result of this command is replaced (in one step, when "
+            "the command ends) only with --overwrite; anything else, or an input, is refused")
+
+
+def add_output_options(parser: argparse.ArgumentParser, what: str = "output folder", required: bool = True,
+                       file: bool = False, plots: bool = False, progress: bool = True) -> None:
+    """The output options every command shares, spelt and checked alike (orchestrator.output):
+    ``--out``, ``--overwrite``, ``--quiet``, and ``--no-plots`` / ``--no-progress`` where the
+    command draws figures or reports progress."""
+    rule = ("a new file is written; an existing one is replaced only with --overwrite; an input never"
+            if file else OUT_RULE)
+    parser.add_argument("--out", type=Path, required=required, help=f"{what}: {rule}")
+    parser.add_argument("--overwrite", action="store_true", help="replace an earlier result at --out")
+    if plots:
+        parser.add_argument("--no-plots", action="store_true", help="skip the figures")
+    if progress:
+        parser.add_argument("--no-progress", action="store_true", help="no progress lines or bars")
+    parser.add_argument("--quiet", action="store_true", help="print only warnings and errors (no results table, "
+                        "no progress): what the command finds is in --out")
+
+
+def add_isolate_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--isolate-fmus", action="store_true", help="run each FMU in a child process: a crash or a "
+                        "hang (study.fmu_timeout) is a named error, Ctrl-C ends the run at once, the signals so far "
+                        "are kept (as study.isolate_fmus = true)")
+
+
+def _isolated(args: argparse.Namespace) -> list[str]:
+    return ["study.isolate_fmus=true"] if getattr(args, "isolate_fmus", False) else []
 
 
 def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file (.toml/.yaml)")
-    p.add_argument("--out", type=Path, required=True,
-                   help="output folder: written aside and moved into place when the run ends; a folder that "
-                        "holds other files than an earlier run's is refused unless --overwrite")
-    p.add_argument("--overwrite", action="store_true", help="replace an --out folder that holds other files")
+    add_output_options(p, "output folder (metrics.json, run.json, the signals, plots)", plots=True)
     add_set_option(p)
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     p.add_argument("--mcap", nargs="?", const="", default=None, metavar="FILE",
                    help="also write the run as an MCAP file for Foxglove/PlotJuggler (default OUT/run.mcap)")
     p.add_argument("--live", nargs="?", const="127.0.0.1:8765", default=None, metavar="HOST:PORT",
@@ -43,6 +68,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
                    help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
     add_engine_option(p)
+    add_isolate_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
 
@@ -55,18 +81,18 @@ def _run(args: argparse.Namespace) -> int:
     chosen = [(o, getattr(args, o.flag.lstrip("-").replace("-", "_"), None)) for o in registry().run_options]
     chosen = [(o, v) for o, v in chosen if v is not None]
     if not chosen:
-        study = Study.load(args.study, args.set)
+        study = Study.load(args.study, args.set + _isolated(args))
     else:           # a plugin's option first, so that --set also reaches what it adds (a recorder ...)
         study = Study.load(args.study)
         for option, value in chosen:
             study = option.apply(study, value)
-        if args.set:
-            study = study.with_overrides(args.set)
+        if args.set or _isolated(args):
+            study = study.with_overrides(args.set + _isolated(args))
     mcap = _mcap_path(args, study)
     live = _live_view(study, args.live, args.live_wait) if args.live else None
     try:
-        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite, engine=args.engine,
-                           observers=[live] if live else [])
+        result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
+                           progress=not args.no_progress, engine=args.engine, observers=[live] if live else [])
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)
@@ -138,20 +164,20 @@ def _write_mcap(study, result, path: Path) -> int:
 
 def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study file with a [sweep] section")
-    p.add_argument("--out", type=Path, required=True, help="output folder (rerun it to resume)")
+    add_output_options(p, "output folder (the same command into it again resumes the sweep; --overwrite starts "
+                          "afresh)", plots=True)
     p.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="worker processes (default: all cores)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="a Dask scheduler address, or 'local' to start a local Dask cluster")
     add_set_option(p)
     p.add_argument("--retry-failed", action="store_true", help="run failed points again")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--mcap", action="store_true", help="also write each point's run as points/<point>/run.mcap "
                    "(the study's [output] mcap = true does the same)")
-    p.add_argument("--no-plots", action="store_true", help="skip the figures")
     add_engine_option(p)
     p.add_argument("--keep-signals", action=argparse.BooleanOptionalAction, default=None,
                    help="write each point's signals (default: yes with the Python engine, no with the compiled "
                         "one, whose Monte Carlo runs thousands of points)")
+    add_isolate_option(p)
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -161,17 +187,17 @@ def _sweep(args: argparse.Namespace) -> int:
 
     if args.workers < 1:
         raise StudyError("--workers must be >= 1")
-    study = Study.load(args.study, args.set)
+    study = Study.load(args.study, args.set + _isolated(args))
     if args.mcap:
         from .mcap_out import with_mcap
 
         study = with_mcap(study)
-    runner = SweepRun(study, args.out, engine=args.engine, keep_signals=args.keep_signals)
+    runner = SweepRun(study, args.out, args.overwrite, engine=args.engine, keep_signals=args.keep_signals)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
     except KeyboardInterrupt as exc:
-        print(f"\ninterrupted: finished points are kept in {args.out}; run the same command to resume",
-              file=sys.stderr)
+        print(f"\ninterrupted: finished points are kept in {runner.kept_in}; run the same command"
+              f"{'' if runner.kept_in == args.out else f' with --out {runner.kept_in}'} to resume", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
     with Stage("drawing the sweep's figures"):
         files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
@@ -195,6 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG if invoked in ("__main__.py", "-c", "") else invoked,
         description="Run co-simulation studies and sweeps, and the tools the installed project registers.")
+    root = sys.modules.get(__name__.split(".")[0])
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {getattr(root, '__version__', 'unknown')} (Python {sys.version.split()[0]})")
     sub = parser.add_subparsers(dest="command", required=True)
     commands = {**{k: v for k, v in CORE.items()},
                 **{c.name: (c.help, c.add_arguments, c.run) for c in registry().commands.values()}}
@@ -217,6 +246,22 @@ def _in_stage(name: str, run):
     return handler
 
 
+def _handle(args: argparse.Namespace) -> int:
+    from .observers import PROGRESS
+
+    PROGRESS["shown"] = not (getattr(args, "no_progress", False) or getattr(args, "quiet", False))
+    return args.handler(args)
+
+
+def _quietly(args: argparse.Namespace) -> int:
+    """``--quiet``: what the command prints on stdout goes nowhere (warnings and errors, on
+    stderr, still show)."""
+    import contextlib
+
+    with open(os.devnull, "w") as sink, contextlib.redirect_stdout(sink):
+        return _handle(args)
+
+
 def _one_line_warning(message, category, filename, lineno, line=None) -> str:
     return f"warning: {category.__name__}: {message}\n"
 
@@ -226,7 +271,7 @@ def main(argv: list[str] | None = None) -> int:
     install_signal_handlers()
     try:            # a signal may land while the plugins' modules load, before any command runs
         args = build_parser().parse_args(argv)
-        return args.handler(args)
+        return _quietly(args) if getattr(args, "quiet", False) else _handle(args)
     except (Exception, KeyboardInterrupt) as exc:
         known = exit_code(exc)
         if known is None:

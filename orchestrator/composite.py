@@ -17,6 +17,7 @@ host's; ``dt`` must be a whole number of the inner base steps.
 from __future__ import annotations
 
 import json
+from pathlib import Path
 from typing import Any, ClassVar
 
 from .build import System, build_system
@@ -94,6 +95,9 @@ def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
 
 
+_OPEN: list[Path] = []          # the study files being resolved as subsystems, outermost first (any resolver)
+
+
 class SubsystemTypes:
     """Sub-resolver (orchestrator.resolver): an inline ``[subsystems.NAME]`` block, or a component
     whose type is a study file (.toml/.yaml, relative to the study file). Each subsystem's class is
@@ -108,11 +112,21 @@ class SubsystemTypes:
         spec = study.components.get(name)
         if spec is None or not spec.type.lower().endswith(SUBSYSTEM_SUFFIXES):
             return None
+        path = study.file_path(spec.type).resolve()
+        chain = list(_OPEN) or ([Path(study.path).resolve()] if study.path is not None else [])
+        if path in chain:
+            cycle = chain[chain.index(path):] + [path]
+            raise StudyError(f"{study.where}: components.{name}.type = {spec.type!r}: a study that uses itself as a "
+                             f"subsystem ({' -> '.join(p.name for p in cycle)})")
         try:
-            sub = Study.load(study.file_path(spec.type))
+            sub = Study.load(path)
         except StudyError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: subsystem {exc}") from None
-        return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
+        _OPEN[:] = chain + [path]
+        try:
+            return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
+        finally:
+            _OPEN[:] = chain
 
     def composite_class(self, sub: Study, where: str, resolver) -> type["CompositeComponent"]:
         """A Component class whose ports are ``sub``'s exports."""

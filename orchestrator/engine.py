@@ -38,6 +38,7 @@ from .errors import ComputationError, InputError
 from .observers import Observer
 from .realtime import RealTimePacer
 from .recording import Recording, SignalRecorder
+from .schedule import WRITE_EVERY, Schedule, budget
 
 
 class ParameterError(InputError):
@@ -61,14 +62,15 @@ class Simulation:
         s = system.study.study
         self.t0, self.h = s.start_time, s.base_step
         self.n_steps = int(round((s.stop_time - s.start_time) / s.base_step))
-        # schedule over one period of the slowest rhythm: which nodes are due at k mod period
-        period = math.lcm(*(node.ratio for node in system.nodes.values())) if system.nodes else 1
+        # which nodes are due at k mod period (orchestrator.schedule): its cost checked first
+        nodes = list(system.nodes.values())
+        period = math.lcm(*(node.ratio for node in nodes)) if nodes else 1
         self._period = period
-        self._due_sampled = [[nd for nd in system.sampled_order if j % nd.ratio == 0] for j in range(period)]
-        self._due_continuous = [[nd for nd in system.continuous if j % nd.ratio == 0] for j in range(period)]
-        self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in system.nodes.values()}
+        self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in nodes}
         self.recorder = SignalRecorder(system, period)
         self.columns = self.recorder.columns
+        self.cost = budget(f"{system.study.path}", self.h, s.stop_time - s.start_time, [nd.step for nd in nodes],
+                           [nd.ratio for nd in nodes], len(self.columns) if record else 0, WRITE_EVERY)
         self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.observers: list[Observer] = [o for o in (self.pacer, self.recorder if record else None) if o is not None]
         self.observers += list(observers)
@@ -124,12 +126,19 @@ class Simulation:
             comp = node.component
             return node.name, comp.step, comp.u, pulls[node.name], node.step, comp, node.ratio == 1
 
-        self._due_s = [[entry(nd) for nd in nodes] for nodes in self._due_sampled]
-        self._due_a = [[(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in nodes
-                        if nd.component.actuate is not None] for nodes in self._due_sampled]
-        self._due_c = [[entry(nd) for nd in nodes] for nodes in self._due_continuous]
-        self._due_v = [[(nd.component.u, pulls[nd.name], nd.component.advance, nd.step) for nd in nodes
-                        if nd.component.advance is not None] for nodes in self._due_sampled]
+        sampled = {nd.name for nd in sys_.sampled_order}
+
+        def due(nodes: list[Node]):
+            """(sampled steps, actuations, continuous steps, advances) of the nodes due at a phase."""
+            s_nodes = [nd for nd in nodes if nd.name in sampled]
+            return ([entry(nd) for nd in s_nodes],
+                    [(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in s_nodes
+                     if nd.component.actuate is not None],
+                    [entry(nd) for nd in nodes if nd.name not in sampled],
+                    [(nd.component.u, pulls[nd.name], nd.component.advance, nd.step) for nd in s_nodes
+                     if nd.component.advance is not None])
+
+        self._due = Schedule(list(sys_.sampled_order) + list(sys_.continuous), lambda nd: nd.ratio, due)
         # a continuous component stepping every base step publishes its live outputs: every
         # continuous input is pulled before any continuous component steps, so nobody sees a value
         # early. Slower ones publish a copy at the end of their step interval.
@@ -147,8 +156,7 @@ class Simulation:
         """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, actuate,
         continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
         instant k_end too, without integrating past it (the last instant of a run)."""
-        published, period = self.published, self._period
-        due_s, due_c, due_a, due_v = self._due_s, self._due_c, self._due_a, self._due_v
+        published, period, schedule = self.published, self._period, self._due
         before, after = self._instant, self._recorded
         last = k_end if final else -1
         k, recorded = self.k, self.k
@@ -158,26 +166,25 @@ class Simulation:
                     hook(k)
                 t = self.t0 + k * self.h
                 phase = k % period
-                continuous = due_c[phase]
+                due_s, due_a, continuous, advancing = schedule[phase]
                 if k:
                     for name, _, _, _, _, comp, live in continuous:
                         if not live:
                             published[name] = dict(comp.y)
-                for name, step, u, sources, dt, comp, _ in due_s[phase]:
+                for name, step, u, sources, dt, comp, _ in due_s:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                     step(t, dt)
                     published[name] = comp.y
                 for hook in after:
                     hook(phase)
-                for u, sources, actuate in due_a[phase]:
+                for u, sources, actuate in due_a:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]
                     actuate(t)
                 recorded = k + 1
                 if k == last:
                     break
-                advancing = due_v[phase]
                 for _, _, u, sources, _, _, _ in continuous:
                     for inp, src, out in sources:
                         u[inp] = published[src][out]

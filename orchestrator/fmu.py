@@ -32,6 +32,7 @@ import numpy as np
 
 from .component import Component, ComponentError, EndRun, Variable
 from .fmu_description import FMUError, base_units, inspect_fmu, variable_unit
+from .fmu_unpack import fmu_entries, remove as remove_unpacked, unpack
 from .study import Study, StudyError
 from .units import BaseUnit
 
@@ -160,15 +161,19 @@ class FMUComponent(Component):
     model_exchange: bool
     connected_inputs: frozenset[str] = frozenset()
 
+    isolate: bool = False               # in a child process (orchestrator.fmu_process)
+    call_timeout: float = 60.0          # s, for an isolated FMU's calls
+
     def __init__(self, name, parameters=None, rng=None) -> None:
         super().__init__(name, parameters, rng)
         self._slave = None
+        self._unpacked = None
         self.instantiations = 0
         self._fmi3 = not self.model_description.fmiVersion.startswith("2")
 
     # --- instance --------------------------------------------------------------------------------
     def _create(self) -> None:
-        from fmpy import extract
+        import fmpy
         from fmpy.fmi2 import FMU2Model, FMU2Slave
         from fmpy.fmi3 import FMU3Model, FMU3Slave
 
@@ -177,8 +182,20 @@ class FMUComponent(Component):
         classes = {(False, False): FMU2Slave, (False, True): FMU2Model, (True, False): FMU3Slave, (True, True): FMU3Model}
         cls = classes[(self._fmi3, self.model_exchange)]
         token = md.instantiationToken if self._fmi3 else md.guid
-        self._slave = cls(guid=token, unzipDirectory=extract(str(self.fmu_path)),
-                          modelIdentifier=kind.modelIdentifier, instanceName=self.name)
+        self._unpacked = unpack(self.fmu_path, fmu_entries([fmpy.platform, fmpy.platform_tuple]), "FMU")
+        kwargs = dict(guid=token, unzipDirectory=str(self._unpacked), modelIdentifier=kind.modelIdentifier,
+                      instanceName=self.name)
+        if self.isolate and not self.model_exchange:
+            from .fmu_process import RemoteSlave
+
+            self._slave = RemoteSlave(cls.__name__, kwargs, f"{self.name}: FMU {self.fmu_path.name}", self.call_timeout)
+        else:
+            if self.isolate:
+                import sys
+
+                print(f"note: {self.name}: a model-exchange FMU runs in this process (isolate_fmus isolates "
+                      f"co-simulation FMUs)", file=sys.stderr)
+            self._slave = cls(**kwargs)
         self._slave.instantiate()
         self.instantiations += 1
 
@@ -290,6 +307,8 @@ class FMUComponent(Component):
 
     def advance(self, t: float, dt: float) -> None:
         """doStep(t, dt) with the inputs of t (or integrate, for model exchange)."""
+        if self.isolate and not self.model_exchange:
+            self._slave.at = f" at t = {t:.6g} s"
         self._set_inputs()
         if self.model_exchange:
             self._integrator.integrate(t, t + dt)
@@ -323,12 +342,18 @@ class FMUComponent(Component):
 
         s = self._slave
         event, terminate, early, last = fmi3Boolean(), fmi3Boolean(), fmi3Boolean(), fmi3Float64()
-        try:
-            s.fmi3DoStep(s.component, t, dt, fmi3Boolean(True), ctypes.byref(event), ctypes.byref(terminate),
-                         ctypes.byref(early), ctypes.byref(last))
-        except FMICallException as exc:
-            if not terminate.value:
-                raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed ({exc})") from None
+        if self.isolate:
+            failed, _, terminate.value, _, last.value = s.call("doStep3", t, dt)
+            if failed is not None and not terminate.value:
+                raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed "
+                                     f"({FMICallException(*failed)})")
+        else:
+            try:
+                s.fmi3DoStep(s.component, t, dt, fmi3Boolean(True), ctypes.byref(event), ctypes.byref(terminate),
+                             ctypes.byref(early), ctypes.byref(last))
+            except FMICallException as exc:
+                if not terminate.value:
+                    raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed ({exc})") from None
         if terminate.value:
             raise EndRun(self.name, f"fmi3DoStep from t = {t:.6g} s set terminateSimulation "
                                     f"(last successful time {last.value:.6g} s)")
@@ -347,6 +372,9 @@ class FMUComponent(Component):
                 slave.freeInstance()
             except Exception:
                 pass
+            if hasattr(slave, "close"):         # an isolated FMU: its process ends
+                slave.close()
+        remove_unpacked(getattr(self, "_unpacked", None))
 
 
 def _equal(a, b) -> bool:
@@ -460,6 +488,9 @@ class FMUTypes:
         if spec is None or not spec.type.lower().endswith(".fmu"):
             return None
         try:
-            return fmu_component_class(study.file_path(spec.type))
+            cls = fmu_component_class(study.file_path(spec.type))
         except FMUError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: {exc}") from None
+        if study.study.isolate_fmus:
+            cls = type(cls.__name__, (cls,), {"isolate": True, "call_timeout": study.study.fmu_timeout})
+        return cls

@@ -20,6 +20,9 @@ import threading
 import time
 
 
+PROGRESS = {"shown": True}       # a command's --no-progress or --quiet turns every progress line off
+
+
 class Observer:
     """Base of the observers: a hook left None is not called."""
 
@@ -48,7 +51,7 @@ class Progress(Observer):
             if callable(report) and report() is not None:
                 self._source = (node.name, report)
                 break
-        if sys.stderr.isatty():
+        if sys.stderr.isatty() and PROGRESS["shown"]:
             from tqdm import tqdm
 
             total, unit = (self.total * self.h, "s") if self._source is None else self._source[1]()[1:]
@@ -67,7 +70,7 @@ class Progress(Observer):
             self.bar.refresh()
             return
         now = time.perf_counter()
-        if now < self.next:
+        if now < self.next or not PROGRESS["shown"]:
             return
         self.next = now + self.every
         done, total, unit = self._where(k)
@@ -118,7 +121,7 @@ class Stage:
         wait = self.first
         while not self._stop.wait(wait):
             wait = self.every
-            if _STAGES and _STAGES[-1] is not self:
+            if (_STAGES and _STAGES[-1] is not self) or not PROGRESS["shown"]:
                 continue
             elapsed = time.perf_counter() - self._start
             print(f"{self.what}{': ' + self.detail if self.detail else ''} ... {elapsed:.0f} s",

@@ -1,29 +1,41 @@
-"""The output folder of a run, protected.
+"""Where a command writes, one rule for every command.
 
-- checked before any computation: ``--out`` must not be a file; an existing, non-empty folder must
-  be a result folder of this project (it holds ``run.json`` or ``metrics.json``) unless
-  ``overwrite``; the folder it would be created in must be writable;
-- locked: a second run into the same ``--out`` is refused while the first holds the lock (an
-  ``flock`` on ``.NAME.lock`` next to it, released by the kernel if the process dies);
-- written aside: the run writes into a fresh folder ``.NAME.XXXX`` next to ``--out``. A complete
-  run (status completed, or ended by a component) is swapped into place in one step; a run that
-  is interrupted or fails never replaces what ``--out`` holds unless that is itself an unfinished
-  result (or nothing): it is moved beside it, to ``NAME.interrupted`` or ``NAME.failed``, and the
-  message says where.
+- ``--out`` names a folder (or, for a command that writes one file, that file). A new or empty
+  folder is written. A folder this command wrote before (it holds the command's *signature*
+  file: ``run.json`` for a run, ``plan.json`` for a plan ...) is replaced only with
+  ``--overwrite``, in one step. Anything else is refused, naming what is there.
+- An ``--out`` that is, contains or lies inside one of the command's inputs (the study file and
+  the files it extends, a log, a field) is refused: no command writes over what it reads.
+- One writer at a time: an ``flock`` on ``.NAME.lock`` next to ``--out``, taken before any work
+  and removed by its holder when the command ends (a lock file left by a killed command holds no
+  lock and is reused). Sweeps take the same lock as runs.
+- Written aside: a folder is written into ``.NAME.staging-XXXX`` next to ``--out`` and swapped
+  into place when complete. A run that is interrupted or fails never replaces what ``--out``
+  holds unless that is itself an unfinished result (or nothing): it goes beside it, to
+  ``NAME.interrupted`` or ``NAME.failed``, and the message says where. Staging folders left by a
+  killed command are removed (and named) by the next command into the same ``--out``.
+- A full disk (ENOSPC, EDQUOT) is an ``OutputError`` naming the file; the staging folder is
+  removed, so ``--out`` holds what it held before.
 """
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import os
+import re
 import shutil
+import sys
 import tempfile
 from pathlib import Path
+from typing import Iterable
 
 from .errors import InputError, critical
 from .results import UMASK
 
-MARKERS = ("run.json", "metrics.json")
+MARKERS = ("run.json", "metrics.json")          # a run's signature files
+STAGING = "staging-"
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
 
 
 class OutputError(InputError):
@@ -36,25 +48,159 @@ def _nearest_existing(path: Path) -> Path:
     return path
 
 
-def check_output(out: Path, overwrite: bool = False) -> None:
-    """Every problem with ``out`` that can be found before computing anything."""
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"--out {out}: is a file, not a folder")
-    if out.is_dir():
-        if any(out.iterdir()) and not any((out / m).exists() for m in MARKERS) and not overwrite:
-            raise OutputError(f"--out {out}: the folder holds files that are not results of a run "
-                              f"(no {' or '.join(MARKERS)}); choose another folder or pass --overwrite")
-        if not os.access(out, os.W_OK | os.X_OK):
-            raise OutputError(f"--out {out}: the folder is not writable")
+def _listing(folder: Path, limit: int = 4) -> str:
+    names = sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir())
+    return ", ".join(names[:limit]) + (f" and {len(names) - limit} more" if len(names) > limit else "")
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    return path == folder or folder in path.parents
+
+
+def check_inputs(out: Path, inputs: Iterable[Path | str | None], flag: str = "--out") -> None:
+    """Refuse an output that is, contains or lies inside one of ``inputs``."""
+    target = Path(out).resolve()
+    for given in inputs:
+        if given is None:
+            continue
+        source = Path(given).resolve()
+        if target == source:
+            raise OutputError(f"{flag} {out}: is the input {given}; choose another {flag}")
+        if _inside(source, target):
+            raise OutputError(f"{flag} {out}: holds the input {given}, which writing there would replace; "
+                              f"choose another {flag}")
+        if source.is_dir() and _inside(target, source):
+            raise OutputError(f"{flag} {out}: lies inside the input {given}; choose a {flag} outside it")
+
+
+def _check_parent(out: Path) -> None:
     base = _nearest_existing(out.parent.resolve())
     if not base.is_dir():
-        raise OutputError(f"--out {out}: {base} is not a folder")
+        raise OutputError(f"--out {out}: cannot write there ({base} is not a folder)")
     if not os.access(base, os.W_OK | os.X_OK):
         raise OutputError(f"--out {out}: cannot create it, {base} is not writable")
     try:                    # permissions are not the whole story (/proc, a read-only mount, a full disk)
         os.rmdir(tempfile.mkdtemp(prefix=".probe.", dir=base))
     except OSError as exc:
         raise OutputError(f"--out {out}: cannot create folders in {base}: {exc.strerror or exc}") from None
+
+
+def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] = MARKERS, what: str = "run",
+                 inputs: Iterable[Path | str | None] = (), resume: bool = False) -> None:
+    """Every problem with the output folder ``out`` that can be found before computing anything
+    (the module's rule). ``signature``: the files that mark a folder as this command's result;
+    ``resume``: such a folder is written into again without ``--overwrite`` (a sweep resumes)."""
+    out = Path(out)
+    check_inputs(out, inputs)
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"--out {out}: is a file, not a folder")
+    if out.is_dir() and any(out.iterdir()):
+        ours = [m for m in signature if (out / m).exists()]
+        if not ours:
+            raise OutputError(f"--out {out}: holds {_listing(out)}, which is not a {what} result (no "
+                              f"{' or '.join(signature)}); choose a new or empty folder")
+        if not (overwrite or resume):
+            raise OutputError(f"--out {out}: holds an earlier {what} result ({ours[0]}); pass --overwrite to "
+                              f"replace it, or choose another folder")
+    if out.is_dir() and not os.access(out, os.W_OK | os.X_OK):
+        raise OutputError(f"--out {out}: the folder is not writable")
+    _check_parent(out)
+
+
+def check_output_file(out: Path, overwrite: bool = False, inputs: Iterable[Path | str | None] = (),
+                      suffixes: tuple[str, ...] = ()) -> None:
+    """The rule for a command that writes one file: a new file is written, an existing one is
+    replaced only with ``--overwrite``, an input never."""
+    out = Path(out)
+    if suffixes and out.suffix not in suffixes:
+        raise OutputError(f"--out {out}: expected a path ending in {' or '.join(suffixes)}")
+    check_inputs(out, inputs)
+    if out.is_dir():
+        raise OutputError(f"--out {out}: is a folder, expected the {out.suffix or ''} file to write".replace("  ", " "))
+    if out.exists() and not overwrite:
+        raise OutputError(f"--out {out}: exists; pass --overwrite to replace it, or choose another name")
+    if out.exists() and not os.access(out.parent, os.W_OK | os.X_OK):
+        raise OutputError(f"--out {out}: its folder is not writable")
+    _check_parent(out)
+
+
+def disk_full(exc: BaseException) -> bool:
+    return isinstance(exc, OSError) and exc.errno in DISK_FULL
+
+
+def disk_full_error(out: Path, exc: OSError, kept: str) -> OutputError:
+    where = f" while writing {Path(exc.filename).name}" if getattr(exc, "filename", None) else ""
+    return OutputError(f"--out {out}: the disk is full ({exc.strerror or os.strerror(exc.errno)}){where}; "
+                       f"nothing was written to {out} ({kept}); free some space and run the command again")
+
+
+class OutputLock:
+    """One writer per ``--out``: an ``flock`` on ``.NAME.lock`` beside it. The holder removes the
+    file before it lets go; whoever locks a file that was removed meanwhile tries again, so two
+    writers never hold locks on two files of one name."""
+
+    def __init__(self, out: Path) -> None:
+        self.out = Path(out)
+        self.path = self.out.parent / f".{self.out.name}.lock"
+        self._fd: int | None = None
+
+    def acquire(self) -> "OutputLock":
+        try:
+            self.out.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"--out {self.out}: cannot create {self.out.parent}: {exc.strerror or exc}") from None
+        for _ in range(100):
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666 & ~UMASK)
+            except OSError as exc:
+                raise OutputError(f"--out {self.out}: cannot create its lock {self.path}: {exc.strerror or exc}") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
+                os.close(fd)
+                raise OutputError(f"--out {self.out}: another run or command{f' (process {holder})' if holder else ''} "
+                                  f"is writing to it; wait for it or choose another folder") from None
+            try:
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                os.ftruncate(fd, 0)
+                os.pwrite(fd, str(os.getpid()).encode(), 0)
+                self._fd = fd
+                return self
+            os.close(fd)                 # its holder removed it while we waited: take the new one
+        raise OutputError(f"--out {self.out}: could not take its lock {self.path}")
+
+    def release(self) -> None:
+        if self._fd is None:
+            return
+        try:
+            self.path.unlink()
+        except FileNotFoundError:
+            pass
+        os.close(self._fd)              # closing lets go of the flock
+        self._fd = None
+
+    def __enter__(self) -> "OutputLock":
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+def remove_stale_staging(out: Path) -> list[Path]:
+    """Staging folders of earlier commands into ``out`` that were killed (only called by the
+    lock's holder: no live writer owns them); removed, and returned for a message."""
+    pattern = re.compile(rf"^\.{re.escape(out.name)}\.(?:{STAGING}|old\.)[A-Za-z0-9_]+$")
+    found = [p for p in out.parent.iterdir() if pattern.match(p.name) and p.is_dir()] if out.parent.is_dir() else []
+    for path in found:
+        shutil.rmtree(path, ignore_errors=True)
+    if found:
+        print(f"note: removed {len(found)} staging folder(s) left by an earlier command that was killed: "
+              f"{', '.join(p.name for p in found)}", file=sys.stderr)
+    return found
 
 
 COMPLETE = ("completed", "ended")          # statuses of a whole result (ended: a component ended the run)
@@ -72,14 +218,14 @@ def status_of(folder: Path) -> str | None:
     return None
 
 
-def _holds_something_else(out: Path) -> bool:
-    """True when ``out`` holds what an unfinished run must not replace: a complete result, or
-    files that are not a result of a run at all."""
+def _holds_something_else(out: Path, signature: tuple[str, ...]) -> bool:
+    """True when ``out`` holds what an unfinished result must not replace: a complete result, or
+    files that are not a result of this command at all."""
     if not out.is_dir() or not any(out.iterdir()):
         return False
-    if not any((out / m).exists() for m in MARKERS):
+    if not any((out / m).exists() for m in signature):
         return True
-    return status_of(out) in COMPLETE
+    return status_of(out) in COMPLETE or not any((out / m).exists() for m in MARKERS)
 
 
 def swap_folder(new: Path, target: Path) -> Path | None:
@@ -104,54 +250,52 @@ def swap_folder(new: Path, target: Path) -> Path | None:
     return old
 
 
-def _beside(out: Path, status: str) -> Path:
-    """Where an unfinished run goes when ``out`` must stay as it is: ``OUT.interrupted`` or
+def _beside(out: Path, status: str, signature: tuple[str, ...]) -> Path:
+    """Where an unfinished result goes when ``out`` must stay as it is: ``OUT.interrupted`` or
     ``OUT.failed`` (replacing an earlier one of ours), or the first ``OUT.failed-N`` that is free
     or ours when that name holds something else."""
     kind = "interrupted" if status == "interrupted" else "failed"
     for n in range(1, 1000):
         candidate = out.with_name(f"{out.name}.{kind}" + (f"-{n}" if n > 1 else ""))
-        if not candidate.exists() or (candidate.is_dir() and any((candidate / m).exists() for m in MARKERS)):
+        if not candidate.exists() or (candidate.is_dir() and any((candidate / m).exists() for m in signature)):
             return candidate
-    raise OutputError(f"--out {out}: no free name beside it for the {kind} run's folder")
+    raise OutputError(f"--out {out}: no free name beside it for the {kind} result's folder")
 
 
 class ResultFolder:
-    """``with ResultFolder(out) as folder:`` write into ``folder.tmp``, then ``folder.commit(status)``
-    with status completed / interrupted / failed; leaving the block without a commit discards the
-    temporary folder."""
+    """``with ResultFolder(out, ...) as folder:`` write into ``folder.tmp``, then
+    ``folder.commit(status)`` with status completed / interrupted / failed; leaving the block
+    without a commit discards the staging folder. The rule of the module docstring is checked when
+    the object is made (before any work); the lock is taken on entering the block."""
 
-    def __init__(self, out: Path, overwrite: bool = False) -> None:
+    def __init__(self, out: Path, overwrite: bool = False, signature: tuple[str, ...] = MARKERS,
+                 what: str = "run", inputs: Iterable[Path | str | None] = ()) -> None:
         self.out = Path(out)
-        check_output(self.out, overwrite)
+        self.signature = tuple(signature)
+        self.inputs = list(inputs)
+        check_output(self.out, overwrite, self.signature, what, self.inputs)
         self.where = self.out
-        self._lock = None
+        self._lock = OutputLock(self.out)
         self.tmp: Path | None = None
 
     def __enter__(self) -> "ResultFolder":
-        parent = self.out.parent
+        self._lock.acquire()
         try:
-            parent.mkdir(parents=True, exist_ok=True)
-            self._lock = open(parent / f".{self.out.name}.lock", "w")
-        except OSError as exc:
-            raise OutputError(f"--out {self.out}: cannot create {parent}: {exc.strerror or exc}") from None
-        try:
-            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            self._lock.close()
-            raise OutputError(f"--out {self.out}: another run is writing to this folder; wait for it or "
-                              f"choose another folder") from None
-        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.", dir=parent))
-        os.chmod(self.tmp, 0o777 & ~UMASK)
+            remove_stale_staging(self.out)
+            self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.out.name}.{STAGING}", dir=self.out.parent))
+            os.chmod(self.tmp, 0o777 & ~UMASK)
+        except BaseException:
+            self._lock.release()
+            raise
         return self
 
-    def commit(self, status: str) -> Path:
-        """Move the run's folder into place (``status`` completed or ended) or beside ``--out``
+    def commit(self, status: str = "completed") -> Path:
+        """Move the staging folder into place (``status`` completed or ended) or beside ``--out``
         (interrupted, failed, analysis_failed: see the module docstring); returns where it went.
         Not cut in half by SIGINT/SIGTERM (errors.critical)."""
         target = self.out
-        if status not in COMPLETE and _holds_something_else(self.out):
-            target = _beside(self.out, status)
+        if status not in COMPLETE and _holds_something_else(self.out, self.signature):
+            target = _beside(self.out, status, self.signature)
         with critical():
             old = swap_folder(self.tmp, target)
             self.tmp = None
@@ -160,9 +304,74 @@ class ResultFolder:
             shutil.rmtree(old, ignore_errors=True)
         return target
 
-    def __exit__(self, *exc) -> None:
-        if self.tmp is not None:
-            shutil.rmtree(self.tmp, ignore_errors=True)
-        if self._lock is not None:
-            fcntl.flock(self._lock, fcntl.LOCK_UN)      # the lock file stays: unlinking it would race
-            self._lock.close()
+    def __exit__(self, kind, exc, tb) -> None:
+        try:
+            if self.tmp is not None:
+                shutil.rmtree(self.tmp, ignore_errors=True)
+                self.tmp = None
+        finally:
+            self._lock.release()
+        if exc is not None and disk_full(exc):
+            raise disk_full_error(self.out, exc, "it holds what it held before") from None
+
+
+class ResultFile:
+    """``with ResultFile(out, ...) as f:`` the rule for a command that writes one file (and
+    companions beside it, each written by ``results.atomic_write``): checked when made, locked in
+    the block, a full disk named."""
+
+    def __init__(self, out: Path, overwrite: bool = False, inputs: Iterable[Path | str | None] = (),
+                 suffixes: tuple[str, ...] = ()) -> None:
+        self.out = Path(out)
+        check_output_file(self.out, overwrite, inputs, suffixes)
+        self._lock = OutputLock(self.out)
+
+    def __enter__(self) -> "ResultFile":
+        self._lock.acquire()
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        self._lock.release()
+        if exc is not None and disk_full(exc):
+            raise disk_full_error(self.out, exc, "an earlier file of that name is as it was") from None
+
+
+def study_inputs(study) -> list[Path]:
+    """The files a study was read from: its file and the files it extends."""
+    from .study_files import study_chain
+
+    return list(study_chain(study.path)) if study is not None and study.path is not None else []
+
+
+OUTPUT_PARAMETER = re.compile(r"(^|_)record_file$")
+
+
+def output_parameters(study) -> list[tuple[str, str, Path]]:
+    """(dotted key, field, path) of every parameter of the study that names a file it writes
+    (``record_file``, ``*_record_file``), set to a path."""
+    found = []
+    for name, spec in study.components.items():
+        for param, value in (spec.parameters or {}).items():
+            if OUTPUT_PARAMETER.search(param) and isinstance(value, str) and value:
+                found.append((f"{name}.{param}", f"components.{name}.parameters.{param}", Path(value)))
+    return found
+
+
+def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Path] = (),
+                            inputs: Iterable[Path] = ()):
+    """The study with its output parameters checked against ``--out``: a path inside ``--out`` is
+    written into the staging folder (and so moves with the result); a path outside it only when
+    the user named it on the command line (``--set``, or one of ``named``); an input never."""
+    out = Path(out).resolve()
+    named = {Path(p).resolve() for p in named}
+    moved = {}
+    for key, field, path in output_parameters(study):
+        full = path.resolve()
+        check_inputs(full, inputs, flag=f"{study.origin(field)}:")
+        if _inside(full, out):
+            moved[key] = str(Path(staging) / full.relative_to(out))
+            Path(moved[key]).parent.mkdir(parents=True, exist_ok=True)
+        elif full not in named and not study.origin(field).startswith("--set"):
+            raise OutputError(f"{study.origin(field)} = {str(path)!r}: writes outside --out {out}; name it on the "
+                              f"command line (--set {key}={path}) or give a path inside --out")
+    return study.with_values(moved) if moved else study

@@ -11,6 +11,7 @@ from operator import itemgetter
 import numpy as np
 
 from .observers import Observer
+from .schedule import Schedule
 
 
 @dataclass
@@ -67,12 +68,12 @@ class SignalRecorder(Observer):
         self._layout = [(name, system.nodes[name].ratio, outs) for name, outs in outputs.items()]
         self._period = period
         self._buffers: list[_Buffer] = []
-        self._due: list[list[_Buffer]] = []
+        self._due: Schedule | list = []
         self._published: dict = {}
 
     def started(self, sim) -> None:
         self._buffers = [_Buffer(name, ratio, outs) for name, ratio, outs in self._layout]
-        self._due = [[b for b in self._buffers if j % b.ratio == 0] for j in range(self._period)]
+        self._due = Schedule(self._buffers, lambda b: b.ratio)
         self._published = sim.published
 
     def recorded(self, phase: int) -> None:

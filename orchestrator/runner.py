@@ -23,6 +23,7 @@ from .recording import Recording
 from .registry import import_study_module
 from .resolver import resolve
 from .results import SignalWriter, atomic_write, write_json
+from .schedule import WRITE_EVERY
 from .signal_table import SignalTable
 from .study import Study, StudyError
 
@@ -84,7 +85,7 @@ def write_events(out_dir: Path, rec: Recording) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
 
 
-CHUNK_STEPS = 10_000          # base steps between two writes of the signal table (at most)
+CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at most)
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
@@ -192,6 +193,10 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
         _write_status(folder, study, system, facts, _t_end(study, rec))
         return Outcome(status, facts, exc, files, table)
     except Exception as exc:                    # a bug in the analysis: the signals are kept all the same
+        from .output import disk_full
+
+        if disk_full(exc):                      # the output's trouble, not the analysis's (a named error)
+            raise
         facts.update(status="analysis_failed", error=f"{type(exc).__name__}: {exc}")
         _write_status(folder, study, system, facts, _t_end(study, rec))
         return Outcome("analysis_failed", facts, exc, files, table)
@@ -220,21 +225,28 @@ def choose_engine(system: System, engine: str):
 
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
-              progress: bool = True, engine: str = "python", observers=()) -> RunResult:
+              progress: bool = True, engine: str = "python", observers=(),
+              named: tuple[Path, ...] = ()) -> RunResult:
     """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
     before anything runs (orchestrator.output), the run is recorded into a fresh folder beside it
-    (``record_run``) and moved into place or beside it. Raises Interrupted (exit 130/143) on
+    (``record_run``) and moved into place or beside it. A file the study writes besides
+    (``record_file``) goes with the result when it lies inside ``out_dir``, and elsewhere only when
+    the user named it (``--set``, or ``named``). Raises Interrupted (exit 130/143) on
     SIGINT/SIGTERM, RunError or AnalysisError on a failure, with ``where`` the folder that holds
     what was kept. ``engine``: python, compiled or auto (orchestrator.compiled)."""
     if out_dir is None:
         return _run_in_memory(study, plots, engine, observers)
-    from .output import ResultFolder
+    from .output import ResultFolder, place_output_parameters, study_inputs
 
     analysis = _analysis(study)
-    folder = ResultFolder(Path(out_dir), overwrite)
+    inputs = study_inputs(study)
+    folder = ResultFolder(Path(out_dir), overwrite, inputs=inputs)
     system = build_system(resolve(study))
     simulation = choose_engine(system, engine)
     with folder:
+        placed = place_output_parameters(study, Path(out_dir), folder.tmp, named, inputs)
+        if placed is not study:
+            study, system = placed, build_system(resolve(placed))
         try:
             outcome = record_run(study, system, folder.tmp, analysis, plots, progress, observers, simulation)
         except KeyboardInterrupt as exc:        # a second signal while the first one's results were saved

@@ -12,9 +12,8 @@ connectors, parameter bindings in external files.
 """
 from __future__ import annotations
 
-import atexit
-import shutil
-import tempfile
+import os
+import posixpath
 import xml.etree.ElementTree as ET
 import zipfile
 from pathlib import Path
@@ -33,19 +32,27 @@ class SSPError(InputError):
     """The SSP cannot be read as a study (the message names the file, the element and why)."""
 
 
+ALLOW_OUTSIDE = "SSP_ALLOW_OUTSIDE_PATHS"      # =1: an archive's components may name FMUs outside it
+
+
 def _extract(path: Path) -> Path:
-    """The folder an .ssp archive is extracted to (once per process, removed at exit)."""
+    """The folder an .ssp archive is unpacked to (once per process, removed at exit): its
+    SystemStructure.ssd and the FMUs its components name, nothing else (orchestrator.fmu_unpack)."""
+    from .fmu_unpack import unpack
+
     path = path.resolve()
     if path not in _EXTRACTED:
         if not zipfile.is_zipfile(path):
             raise SSPError(f"{path}: not an SSP archive (not a zip file)")
-        folder = Path(tempfile.mkdtemp(prefix="ssp-"))
-        atexit.register(shutil.rmtree, folder, True)
         with zipfile.ZipFile(path) as zf:
             if "SystemStructure.ssd" not in zf.namelist():
                 raise SSPError(f"{path}: no SystemStructure.ssd in the archive")
-            zf.extractall(folder)
-        _EXTRACTED[path] = folder
+            try:
+                root = ET.fromstring(zf.read("SystemStructure.ssd"))
+            except ET.ParseError as exc:
+                raise SSPError(f"{path}: SystemStructure.ssd: not readable XML: {exc}") from None
+        used = {posixpath.normpath(c.get("source") or "") for c in root.iter(f"{{{NS['ssd']}}}Component")}
+        _EXTRACTED[path] = unpack(path, lambda name: name == "SystemStructure.ssd" or name in used, "SSP")
     return _EXTRACTED[path]
 
 
@@ -119,6 +126,9 @@ def study_data(path: str | Path) -> dict[str, Any]:
         if not source:
             raise SSPError(f"{where}: no source")
         fmu = (root_dir / source).resolve()
+        if path.suffix == ".ssp" and root_dir.resolve() not in fmu.parents and os.environ.get(ALLOW_OUTSIDE) != "1":
+            raise SSPError(f"{where}: source {source!r} lies outside the archive; an SSP's FMUs are read from inside "
+                           f"it ({ALLOW_OUTSIDE}=1 lets an archive you trust name files elsewhere)")
         default_step, units = _fmu_facts(fmu)
         parameters = {}
         for binding in comp.findall("ssd:ParameterBindings/ssd:ParameterBinding", NS):

@@ -35,7 +35,7 @@ from typing import Any, Iterable, Mapping
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .errors import did_you_mean
-from .study_files import (StudyError, parse_override, pruned, read_study_file, set_value,
+from .study_files import (StudyError, lookup, parse_override, pruned, read_study_file, set_value,
                           study_folders)
 from .study_schema import (CONNECTION, TABLES, ComponentSpec, Connection, Exports, StudySettings,
                            SubsystemSpec, Sweep, check_component_names, parse_connections)
@@ -281,12 +281,23 @@ class Study(BaseModel):
         return self.derive(data)
 
 
+_UNSET = object()
+
+
 def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> dict[str, str]:
-    """Apply ``--set`` items to study data; returns field -> item."""
+    """Apply ``--set`` items to study data, saying what each changed (one line each, on stdout);
+    returns field -> item."""
     set_by = {}
     for item in overrides:
         key, value = parse_override(item, path)
-        set_by[set_value(data, key, value, f"--set {item}")] = item
+        before = copy.deepcopy(data)
+        field = set_value(data, key, value, f"--set {item}")
+        set_by[field] = item
+        old = lookup(before, field, _UNSET)
+        was = "not set in the file (the default)" if old is _UNSET else repr(old)
+        kind = " (read as a string)" \
+            if isinstance(value, str) and not item.split("=", 1)[1].strip().startswith(('"', "'")) else ""
+        print(f"--set {item}: {field} = {value!r}{kind}, was {was}")
     return set_by
 
 

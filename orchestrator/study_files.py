@@ -96,6 +96,7 @@ def read_one(path: Path) -> dict[str, Any]:
             data = yaml.safe_load(text)
             if not isinstance(data, dict):
                 raise StudyError(f"{path}: expected a mapping at the top level")
+            expanded_size(data, path)
             return data
     except tomllib.TOMLDecodeError as exc:
         raise StudyError(f"{path}: not valid TOML: {exc}") from None
@@ -105,6 +106,40 @@ def read_one(path: Path) -> dict[str, Any]:
         raise StudyError(f"{path}: not valid YAML: {exc}") from None
     raise StudyError(f"{path}: unknown study file type {path.suffix!r}; expected .toml, .yaml or .yml")
 
+
+
+MAX_VALUES = 200_000         # values a study may expand to through YAML aliases (a large study: a few thousand)
+
+
+def expanded_size(data: Any, path: Path, limit: int = MAX_VALUES) -> int:
+    """The number of values ``data`` holds once every YAML alias is expanded, counted without
+    expanding (each shared object once, memoised); refuses an alias that contains itself and data
+    past ``limit`` (an alias bomb: nine lines of ``&a [*b, *b, ...]`` make 10^9 values)."""
+    sizes: dict[int, int] = {}
+    open_: set[int] = set()
+
+    def size(node: Any, trail: str) -> int:
+        if not isinstance(node, (dict, list)):
+            return 1
+        key = id(node)
+        if key in sizes:
+            return sizes[key]
+        if key in open_:
+            raise StudyError(f"{path}: field {trail or '(top level)'}: a YAML alias refers to a value that contains "
+                             f"it (a cycle); write the value out")
+        open_.add(key)
+        items = node.items() if isinstance(node, dict) else enumerate(node)
+        total = 1
+        for k, v in items:
+            total += size(v, f"{trail}.{k}" if trail else str(k))
+            if total > limit:
+                raise StudyError(f"{path}: field {trail or '(top level)'}: the YAML expands to more than {limit:,} "
+                                 f"values through its aliases (&anchor / *alias): an alias bomb? refused")
+        open_.discard(key)
+        sizes[key] = total
+        return total
+
+    return size(data, "")
 
 
 def decoded(path: Path, raw: bytes) -> str:
@@ -123,23 +158,41 @@ def decoded(path: Path, raw: bytes) -> str:
 
 
 def parse_override(item: str, path: str | Path) -> tuple[str, Any]:
-    """``comp.param=value`` -> (key, value); the value is read as TOML, else kept as a string."""
+    """``comp.param=value`` -> (key, value), the value read as the study file would read it (TOML:
+    ``3``, ``"text"``, ``[1, 10, 250]``, ``{start = 1, stop = 5, num = 3}``); ``1,10,250`` is the
+    list ``[1, 10, 250]``; text without quotes (``csv``, ``100 ms``) is a string; anything else
+    (brackets, braces or quotes that do not parse, ``a,b``) is refused."""
     if "=" not in item or "." not in item.split("=", 1)[0]:
         raise StudyError(f"{path}: override {item!r}: expected 'component.parameter=value' or 'study.field=value'")
     key, raw = item.split("=", 1)
-    try:
-        value = tomllib.loads(f"v = {raw.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw.strip()
-    return key.strip(), value
+    raw = raw.strip()
+    for text in (raw, f"[{raw}]"):
+        try:
+            return key.strip(), tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            continue
+    if re.fullmatch(r"[^\[\]{}\"',=]+", raw):            # a word, or a value with its unit: 100 ms
+        return key.strip(), raw
+    raise StudyError(f"--set {item}: {raw!r} is not a value a study file could hold; write a list as [1, 10, 250] "
+                     f"or 1,10,250, a string in quotes ({key.strip()}='\"{raw}\"')")
+
+
+ORCHESTRATOR_TABLES = ("sweep", "exports")       # tables --set may start when the study has none
 
 
 def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
     """Set one dotted key in study data (see ``Study.with_values``); returns the field it set, as
-    the schema names it (``components.tracker.parameters.lookahead``)."""
+    the schema names it (``components.tracker.parameters.lookahead``). ``COMP.step`` is the
+    component's step (``COMP.parameters.NAME`` reaches any parameter by its full name);
+    ``sweep.parameters.COMP.PARAM`` a swept parameter; ``TABLE.A.B`` a field of any table."""
+    if key.startswith("sweep.parameters."):
+        swept = key.removeprefix("sweep.parameters.").replace('"', "")
+        data.setdefault("sweep", {}).setdefault("parameters", {})[swept] = value
+        return f"sweep.parameters.{swept}"
     parts = key.split(".")
     if len(parts) < 2 or not all(re.fullmatch(NAME, p) for p in parts):
-        raise StudyError(f"{where}: expected 'component.parameter', 'component.inputs.port' or 'study.field'")
+        raise StudyError(f"{where}: expected 'component.parameter', 'component.step', 'component.inputs.port', "
+                         f"'study.field' or 'table.field'")
     head, rest = parts[0], parts[1:]
     if head == "study":
         if len(rest) == 2 and rest[0] == "bounds":
@@ -156,17 +209,48 @@ def set_value(data: dict[str, Any], key: str, value: Any, where: str) -> str:
         if len(rest) == 2 and rest[0] == "inputs":
             spec.setdefault("inputs", {})[rest[1]] = value
             return f"components.{head}.inputs.{rest[1]}"
-        spec.setdefault("parameters", {})[".".join(rest)] = value
-        return f"components.{head}.parameters.{'.'.join(rest)}"
+        if rest == ["step"]:
+            spec["step"] = value
+            return f"components.{head}.step"
+        name = ".".join(rest[1:] if rest[0] == "parameters" and len(rest) > 1 else rest)
+        spec.setdefault("parameters", {})[name] = value
+        return f"components.{head}.parameters.{name}"
+    if head in subs and rest in (["step"], ["base_step"]):
+        subs[head][rest[0]] = value
+        return f"subsystems.{head}.{rest[0]}"
     if head in subs and len(rest) >= 2:
         return f"subsystems.{head}." + set_value(subs[head], ".".join(rest), value, where)
-    if head not in ("components", "subsystems") and isinstance(data.get(head), dict) and len(rest) == 1:
-        data[head][rest[0]] = value            # a table's field: sweep.mode, my_tool.period
-        return f"{head}.{rest[0]}"
+    if head not in ("components", "subsystems") and (isinstance(data.get(head), dict) or
+                                                     (head in ORCHESTRATOR_TABLES and head not in data)):
+        table = data.setdefault(head, {})
+        for part in rest[:-1]:               # a table's field: sweep.mode, my_tool.period, my_tool.a.b
+            if not isinstance(table.setdefault(part, {}), dict):
+                raise StudyError(f"{where}: {head}.{part} is a value, not a table")
+            table = table[part]
+        table[rest[-1]] = value
+        return f"{head}.{'.'.join(rest)}"
     known = sorted(comps) + sorted(subs)
     tables = sorted(k for k, v in data.items() if isinstance(v, dict) and k not in ("components", "subsystems", "study"))
-    raise StudyError(f"{where}: no component {head!r}{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
+    raise StudyError(f"{where}: no component {head!r}"
+                     f"{did_you_mean(head, known + tables, form=' (did you mean {}?)')}; components: {', '.join(known)}"
                      + (f"; tables: {', '.join(tables)}" if tables else ""))
+
+
+def lookup(data: dict[str, Any], field: str, missing: Any = None) -> Any:
+    """The value at a field as ``set_value`` names it (``components.tracker.parameters.lookahead``),
+    ``missing`` when absent; a parameter's name may hold dots."""
+    node: Any = data
+    parts = field.split(".")
+    while parts:
+        if not isinstance(node, dict):
+            return missing
+        for n in range(len(parts), 0, -1):       # the longest key first: parameter names with dots
+            if ".".join(parts[:n]) in node:
+                node, parts = node[".".join(parts[:n])], parts[n:]
+                break
+        else:
+            return missing
+    return node
 
 
 def pruned(table: dict[str, Any]) -> dict[str, Any]:
@@ -181,18 +265,20 @@ def pruned(table: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def study_folders(path: str | Path | None) -> tuple[Path, ...]:
-    """Where a relative file named in a study is looked for: the study file's folder, then the
-    folders of the files it extends, nearest first."""
+def study_chain(path: str | Path | None) -> tuple[Path, ...]:
+    """A study file and the files it extends, nearest first (resolved)."""
     out: list[Path] = []
-    seen: set[Path] = set()
     path = Path(path) if path is not None else None
-    while path is not None and path.is_file() and path.resolve() not in seen:
-        seen.add(path.resolve())
-        if path.resolve().parent not in out:
-            out.append(path.resolve().parent)
+    while path is not None and path.is_file() and path.resolve() not in out:
+        out.append(path.resolve())
         if path.suffix not in (".toml", ".yaml", ".yml"):
             break
         parent = read_one(path).get("extends")
         path = path.parent / parent if isinstance(parent, str) else None
     return tuple(out)
+
+
+def study_folders(path: str | Path | None) -> tuple[Path, ...]:
+    """Where a relative file named in a study is looked for: the study file's folder, then the
+    folders of the files it extends, nearest first."""
+    return tuple(dict.fromkeys(p.parent for p in study_chain(path)))

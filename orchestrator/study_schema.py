@@ -36,6 +36,8 @@ class StudySettings(BaseModel):
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
+    isolate_fmus: bool = False       # each FMU in a child process: a crash or a hang is a named error
+    fmu_timeout: float = Field(default=60.0, gt=0, allow_inf_nan=False)   # s an isolated FMU's call may take
 
     @field_validator("bounds")
     @classmethod

@@ -199,15 +199,22 @@ def sweep_hash(study: Study) -> str:
 
 
 class SweepRun:
-    def __init__(self, study: Study, out_dir: Path, engine: str = "python", keep_signals: bool | None = None) -> None:
-        self.study, self.out = study, Path(out_dir)
+    def __init__(self, study: Study, out_dir: Path, overwrite: bool = False, engine: str = "python",
+                 keep_signals: bool | None = None) -> None:
+        self.study, self.out, self.overwrite = study, Path(out_dir), overwrite
         self.engine = engine
         self.keep_signals = engine == "python" if keep_signals is None else keep_signals
         self.where = str(study.path)
+        self.kept_in = self.out                 # where an interrupted sweep's finished points are
         self.points = expand(study)
         self.fmt = study.study.signals_format
-        self.points_dir = self.out / "points"
-        self.running_dir = self.out / ".running"          # points being recorded by their workers
+        self._into(self.out)
+
+    def _into(self, folder: Path) -> None:
+        """Write into ``folder`` (``--out``, or the staging folder of a sweep that replaces one)."""
+        self.folder = folder
+        self.points_dir = folder / "points"
+        self.running_dir = folder / ".running"          # points being recorded by their workers
 
     # --- checks before anything runs ----------------------------------------------------------
     def checked_points(self) -> list[Point]:
@@ -235,9 +242,6 @@ class SweepRun:
         """Build the points (types, parameters, units, wiring: ``checked_points``) before running
         any; with the compiled engine, choose it on the first point (compiled: refused with the
         components named; auto: the choice and why printed) and compile its shape once."""
-        from .output import check_output
-
-        check_output(self.out, overwrite=True)
         checked = self.checked_points()
         if len(checked) < len(self.points):
             print(f"sweep: {len(self.points)} points: building {len(checked)} of them before the run (the first, each "
@@ -253,16 +257,16 @@ class SweepRun:
                         print(note, file=sys.stderr)
             except StudyError as exc:
                 raise StudyError(f"{exc}\n  (sweep point {point.key}: {point.values}, seed {point.seed})") from None
-        manifest = self.out / "sweep.json"
+        manifest = self.folder / "sweep.json"
         digest = sweep_hash(self.study)
         if manifest.exists():
             old = json.loads(manifest.read_text())
             if old.get("hash") != digest:
-                raise StudyError(f"{self.out}: holds results of a different sweep (study changed); "
-                                 f"use another --out folder or remove it")
+                raise StudyError(f"--out {self.out}: holds the results of a different sweep (sweep.json: the study changed); "
+                                 f"pass --overwrite to replace them, or choose another folder")
             if old.get("engine", "python") != self.engine:
-                raise StudyError(f"{self.out}: holds points run with --engine {old.get('engine', 'python')}; resume "
-                                 f"with that engine, or use another --out folder")
+                raise StudyError(f"--out {self.out}: holds points run with --engine {old.get('engine', 'python')}; "
+                                 f"resume with that engine, or choose another folder")
         else:
             write_json(manifest, {"study_file": self.where, "hash": digest, "engine": self.engine,
                                   "points": [{"point": p.key, "seed": p.seed, **p.values} for p in self.points]})
@@ -296,6 +300,10 @@ class SweepRun:
         from .output import swap_folder
 
         folder = folder if folder is not None and folder.is_dir() else self.new_folder(point)
+        kept = self.record_path(point)
+        if kept.exists() and json.loads(kept.read_text()).get("status") == "completed":
+            shutil.rmtree(folder, ignore_errors=True)      # a completed point is never replaced
+            return json.loads(kept.read_text())
         for name, data in (result.get("files") or {}).items():
             atomic_write(folder / name, lambda p, data=data: p.write_bytes(data))
         record = {"point": point.key, "seed": point.seed, "parameters": point.values,
@@ -321,11 +329,35 @@ class SweepRun:
         return pd.DataFrame(rows)
 
     def write_table(self) -> Path:
-        return write_table(self.out / "results", self.table(), self.fmt)
+        return write_table(self.folder / "results", self.table(), self.fmt)
 
     # --- running ------------------------------------------------------------------------------
     def run(self, workers: int, scheduler: str | None = None, retry_failed: bool = False,
             progress: bool = True) -> pd.DataFrame:
+        """Run the points not yet done, under ``--out``'s lock (orchestrator.output): into ``--out``
+        itself when it is new, empty or this sweep's (resumed), into a staging folder swapped into
+        place at the end with ``--overwrite`` (an interrupted one goes beside ``--out``)."""
+        from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs
+
+        inputs = study_inputs(self.study)
+        check_output(self.out, self.overwrite, ("sweep.json",), "sweep", inputs, resume=not self.overwrite)
+        if self.overwrite and self.out.is_dir() and any(self.out.iterdir()):
+            with ResultFolder(self.out, True, ("sweep.json",), "sweep", inputs) as staging:
+                self._into(staging.tmp)
+                try:
+                    table = self._run(workers, scheduler, retry_failed, progress)
+                except KeyboardInterrupt:
+                    self.kept_in = staging.commit("interrupted")
+                    raise
+                finally:
+                    self._into(self.out)
+                staging.commit("completed")
+            return table
+        with OutputLock(self.out):
+            remove_stale_staging(self.out)
+            return self._run(workers, scheduler, retry_failed, progress)
+
+    def _run(self, workers: int, scheduler: str | None, retry_failed: bool, progress: bool) -> pd.DataFrame:
         self.validate()
         self._remove_stale()
         done = self.finished(retry_failed)
@@ -347,7 +379,7 @@ class SweepRun:
 
     def _remove_stale(self) -> None:
         """Files and point folders left half-written by a run that was killed or interrupted."""
-        for stale in self.out.glob("**/.*.tmp"):
+        for stale in self.folder.glob("**/.*.tmp"):
             stale.unlink(missing_ok=True)
         shutil.rmtree(self.running_dir, ignore_errors=True)
 

@@ -106,8 +106,6 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
     log = tmp_path / "bad.csv"
     edit(frame).to_csv(log, index=False)
     out = tmp_path / "out"
-    out.mkdir()
-    (out / "keep.txt").write_text("earlier result")
     proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(log), "--out", str(out)],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
@@ -115,7 +113,7 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
         assert w in proc.stderr, proc.stderr
     res = json.loads((out / "diagnosis.json").read_text())
     assert res["verdict"] == "cannot decide" and res["findings"] == []
-    assert (out / "keep.txt").read_text() == "earlier result"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "out"]          # no lock or staging left
 
 
 def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path):

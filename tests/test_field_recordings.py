@@ -235,7 +235,7 @@ def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
         (["convert", str(lever_recording), "--out", str(tmp_path / "a.csv"), "--signal", "v=TractorFeedback.Nope"],
          "no signal 'TractorFeedback.Nope'; near names: TractorFeedback."),
         (["convert", str(lever_recording), "--out", str(tmp_path / "a.csv"), "--run", "4"], "--run 4: the recording has 1 run"),
-        (["convert", str(lever_recording), "--out", str(tmp_path / "a.txt")], "expected a .csv or .parquet file"),
+        (["convert", str(lever_recording), "--out", str(tmp_path / "a.txt")], "expected a path ending in .csv or .parquet"),
         (["diagnose", str(lever_recording), "--out", str(tmp_path / "d"), "--dbc", str(tmp_path / "x.dbc")],
          "x.dbc: no such file"),
     ]

@@ -164,7 +164,7 @@ def test_failure_mid_run_keeps_recorded_results(tmp_path):
     st = study({"f": {"type": "tests.toy_components:FailAt", "parameters": {"fail_time": 0.55}}}, [],
                stop=1.0, base=0.05, signals_format="csv")
     with pytest.raises(RunError) as err:
-        run_study(st, tmp_path)
+        run_study(st, tmp_path, overwrite=True)
     assert "deliberate failure" in str(err.value)
     import pandas as pd
 

@@ -302,16 +302,18 @@ def test_plan_writes_its_files_as_one_set_and_an_interrupted_plan_keeps_the_earl
         raise KeyboardInterrupt
 
     monkeypatch.setattr(export, "draw_plan", interrupted)           # after route.csv, .geojson and plan.json
-    assert main(["plan", str(source), "--name", "west", *common]) == 130
+    assert main(["plan", str(source), "--name", "west", *common]) == 2          # an earlier plan: --overwrite
+    assert "--overwrite" in capsys.readouterr().err
+    assert main(["plan", str(source), "--name", "west", *common, "--overwrite"]) == 130
     assert {f.name: f.read_bytes() for f in out.iterdir()} == before
-    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".plan.") and p.is_dir()] == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".plan.")] == []      # nor a lock file
     monkeypatch.undo()
-    assert main(["plan", str(source), "--name", "west", *common]) == 0
+    assert main(["plan", str(source), "--name", "west", *common, "--overwrite"]) == 0
     assert json.loads((out / "plan.json").read_text())["field"] == "west"
     capsys.readouterr()
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "notes.txt").write_text("mine")
-    assert main(["plan", str(source), "--width", "6", "--out", str(tmp_path / "other")]) == 2
+    assert main(["plan", str(source), "--width", "6", "--out", str(tmp_path / "other"), "--overwrite"]) == 2
     assert "not a plan" in capsys.readouterr().err and (tmp_path / "other" / "notes.txt").read_text() == "mine"
 
 

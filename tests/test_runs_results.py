@@ -53,7 +53,7 @@ def test_an_interrupted_rerun_keeps_the_complete_result_and_its_figures(tmp_path
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     assert {"trajectory.png", "signals.parquet", "metrics.json"} <= set(before)
     proc = subprocess.Popen(CMD + ["run", "studies/figure8.toml", "--set", "study.stop_time=1e5", "--out", str(out),
-                                   "--no-plots"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                   "--no-plots", "--overwrite"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     end = time.time() + 120
     while time.time() < end and not any(p.stat().st_size > 100_000 for p in tmp_path.glob(".f8.*/signals.parquet")):
         time.sleep(0.2)
@@ -64,7 +64,7 @@ def test_an_interrupted_rerun_keeps_the_complete_result_and_its_figures(tmp_path
     beside = tmp_path / "f8.interrupted"
     assert str(beside) in err and f"earlier result in {out} is untouched" in err
     assert _status(beside) == "interrupted" and len(pd.read_parquet(beside / "signals.parquet")) >= 10_000
-    assert not list(tmp_path.glob(".f8.*[!k]"))          # no temporary folder left (the .lock stays)
+    assert not list(tmp_path.glob(".f8.*"))          # no staging folder left, no lock file
 
 
 def test_a_run_stopped_in_its_analysis_keeps_its_signals_and_the_earlier_result(tmp_path, monkeypatch):
@@ -84,28 +84,35 @@ def test_a_run_stopped_in_its_analysis_keeps_its_signals_and_the_earlier_result(
     monkeypatch.setattr(module, "metrics", stopped)
     study = _toy(tmp_path, "FailAt", 5.0).with_values({"study.analysis": "agrobot.analysis.figure8"})
     with pytest.raises(Interrupted) as err:
-        run_study(study, out)
+        run_study(study, out, overwrite=True)
     assert err.value.exit_status == 143 and "in the analysis" in str(err.value)
     assert (out / "signals.csv").read_bytes() == kept and _status(out) == "ended"
     beside = out.with_name("out.interrupted")
     assert _status(beside) == "interrupted" and len(pd.read_csv(beside / "signals.csv")) == 21   # t = 0 .. 1 whole
     # a failed run beside it too, and a later complete run replaces the earlier one in place
     with pytest.raises(RunError) as failed:
-        run_study(_toy(tmp_path, "FailAt", 0.5), out)
+        run_study(_toy(tmp_path, "FailAt", 0.5), out, overwrite=True)
     assert failed.value.where == out.with_name("out.failed") and _status(out) == "ended"
     monkeypatch.undo()
-    run_study(_toy(tmp_path, "FailAt", 5.0), out)
+    run_study(_toy(tmp_path, "FailAt", 5.0), out, overwrite=True)
     assert _status(out) == "completed" and len(pd.read_csv(out / "signals.csv")) == 21
 
 
 def test_a_folder_that_is_not_a_result_is_kept_when_the_run_does_not_finish(tmp_path):
-    """--overwrite lets a complete run replace a folder of other files, never an unfinished one."""
+    """A folder of other files is never replaced, --overwrite or not; an unfinished run never
+    replaces a complete one: it goes beside it, under a free name."""
+    from agrobot.orchestrator.output import OutputError
+
     out = tmp_path / "mine"
     out.mkdir()
     (out / "notes.txt").write_text("precious")
+    with pytest.raises(OutputError, match="notes.txt"):
+        run_study(_toy(tmp_path, "FailAt", 5.0), out, overwrite=True)
+    (out / "notes.txt").unlink()
+    run_study(_toy(tmp_path, "FailAt", 5.0), out)
     with pytest.raises(RunError) as err:
         run_study(_toy(tmp_path, "FailAt", 0.5), out, overwrite=True)
-    assert (out / "notes.txt").read_text() == "precious" and err.value.where == tmp_path / "mine.failed"
+    assert _status(out) == "completed" and err.value.where == tmp_path / "mine.failed"
     (tmp_path / "mine.failed").rename(tmp_path / "other")
     (tmp_path / "mine.failed").mkdir()
     (tmp_path / "mine.failed" / "x.txt").write_text("not a result")

@@ -15,7 +15,7 @@ from agrobot.orchestrator.study import Study, StudyError
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None,
-            record: Path | None = None) -> int:
+            record: Path | None = None, overwrite: bool = False, progress: bool = True) -> int:
     if not 0 <= nmea_port <= 65535:
         raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
     if duration is not None and not duration > 0:
@@ -26,15 +26,17 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if duration is not None:
         values["study.stop_time"] = float(duration)
     study = study.with_values(values)
+    named: tuple[Path, ...] = ()
     if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
         from .record import record_adapters, record_folder
 
         study = record_adapters(study, record_folder(record))
+        named = (record / "gps.nmea", record / "can.log")
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
     print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
     try:
-        result = run_study(study, out, plots=False)
+        result = run_study(study, out, plots=False, overwrite=overwrite, progress=progress, named=named)
     except Interrupted as exc:
         print(f"emulator stopped {exc}", flush=True)
         return exc.exit_status
@@ -53,7 +55,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
     p.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")
-    p.add_argument("--out", type=Path, default=None, help="write the emulated tractor's signals here")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "write the emulated tractor's signals here", required=False)
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
     p.add_argument("--record", type=Path, default=None, metavar="DIR",
                    help="record the buses as a field log: DIR/gps.nmea (host-stamped NMEA) and DIR/can.log (candump)")
@@ -61,7 +65,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration, args.record)
+    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration, args.record, args.overwrite,
+                   not args.no_progress)
 
 
 def register(registry) -> None:
