@@ -100,6 +100,7 @@ class Simulation:
         self._start = time.perf_counter()
         self.published = published = {}
         self._drained = 0          # a restarted simulation records from its start again
+        sys_.restart()             # every component as built: a run depends on the study and seed alone
         for node in sys_.nodes.values():
             try:
                 node.component.initialize(self.t0, node.step)

@@ -36,6 +36,8 @@ class StudySettings(BaseModel):
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
+    # inputs ("component.input") that may stay unconnected, holding their start value
+    allow_unconnected: list[str] = []
 
     @field_validator("bounds")
     @classmethod
@@ -44,6 +46,14 @@ class StudySettings(BaseModel):
             if not BOUND.match(text):
                 raise ValueError(f"bound {key} = {text!r}: expected a comparison and a number, e.g. '< 0.40' or '>= 0.99'")
         return value
+
+    @field_validator("allow_unconnected")
+    @classmethod
+    def _ports(cls, value: list[str]) -> list[str]:
+        for item in value:
+            if not PORT.match(item):
+                raise ValueError(f"allow_unconnected: {item!r}: expected 'component.input'")
+        return [item.strip() for item in value]
 
     @model_validator(mode="after")
     def _times(self) -> "StudySettings":
