@@ -191,7 +191,8 @@ def _held_inputs(study: Study, specs, nodes: dict[str, Node], unconnected: list[
             held.append((item, v.start, v.unit, "study.allow_unconnected"))
         else:
             missing.append(f"{item} ({v.description}; {v.unit})")
-    if missing:
+    declared = {f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")}
+    if missing and exported <= declared:      # a wrong export is named by the subsystem's exports
         first = missing[0].split(" ", 1)[0]
         raise StudyError(
             f"{where}: connections: {len(missing)} input{'s' if len(missing) > 1 else ''} connected to nothing: "
