@@ -9,6 +9,7 @@ aside and moved into place when the run ends (orchestrator.output): a complete r
 from __future__ import annotations
 
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +51,12 @@ def _analysis(study: Study):
         raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
     check_study_bounds(module, study.study.bounds, study.origin)
     return module
+
+
+def say_held_inputs(system: System) -> None:
+    """Say, once as a run starts, every input left unconnected that holds its start value."""
+    for line in system.held_lines():
+        print(f"note: {line}", file=sys.stderr)
 
 
 def simulate(study: Study):
@@ -217,6 +224,7 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     analysis = _analysis(study)
     folder = ResultFolder(Path(out_dir), overwrite)
     system = build_system(resolve(study))
+    say_held_inputs(system)
     with folder:
         try:
             outcome = record_run(study, system, folder.tmp, analysis, plots, progress)
@@ -248,7 +256,7 @@ def _kept(out: Path, where: Path) -> str:
 
 def _result(values: dict[str, Any], metrics: dict[str, Any], analysis, study: Study, files: list[Path],
             frame) -> RunResult:
-    table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds))
+    table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds), study)
     lines, warning = realtime_lines(values.get("realtime"))
     return RunResult(metrics, frame, "\n".join([table, *lines]), files, failed, [warning] if warning else [])
 
@@ -260,7 +268,11 @@ def _base_facts(study: Study) -> dict[str, Any]:
 
 def _run_json(study: Study, system, status: str, t_reached: float) -> dict[str, Any]:
     return {"status": status, "t_reached_s": t_reached, "study": study.to_data(),
-            "unconnected_inputs": system.unconnected_inputs, "order_sampled": [n.name for n in system.sampled_order]}
+            "unconnected_inputs": system.unconnected_inputs,
+            "held_inputs": {port: {"value": value if isinstance(value, (int, float, str)) else repr(value),
+                                   "unit": unit, "why": why}
+                            for port, value, unit, why in system.held_inputs},
+            "order_sampled": [n.name for n in system.sampled_order]}
 
 
 def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
@@ -275,7 +287,9 @@ def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
 def _run_in_memory(study: Study, plots: bool) -> RunResult:
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
-    rec = Simulation(build_system(resolve(study))).run()
+    system = build_system(resolve(study))
+    say_held_inputs(system)
+    rec = Simulation(system).run()
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = _base_facts(study)
