@@ -69,8 +69,8 @@ class System:
 
     def held_lines(self) -> list[str]:
         """One line per input left unconnected that holds its start value."""
-        return [f"{port} is unconnected: it holds {value:g} {unit} for the whole run ({why})"
-                if isinstance(value, (int, float)) else f"{port} is unconnected: it holds {value!r} ({why})"
+        return [f"{port} is unconnected: it holds {value:g}{'' if unit in ('', '1') else ' ' + unit} for the whole "
+                f"run ({why})" if isinstance(value, (int, float)) else f"{port} is unconnected: it holds {value!r} ({why})"
                 for port, value, unit, why in self.held_inputs]
 
 
