@@ -95,9 +95,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.results import atomic_write
+    from agrobot.orchestrator.results import atomic_write, write_frame
 
-    from .log import LogError, check_log
+    from .log import LogError, check_log, log_units
     from .recording import describe, import_recording, import_runs
 
     if args.list:
@@ -125,8 +125,8 @@ def run(args: argparse.Namespace) -> int:
         check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
     for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
-                     else (lambda p, f=f: f.to_csv(p, index=False, float_format="%.9g")))
+        f.attrs["units"] = log_units(f)
+        write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.results)
         atomic_write(path.with_name(path.stem + ".import.json"),
                      lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
         print(describe(rep))

@@ -126,7 +126,8 @@ def _missed(value: float, bound: Bound, unit: str | None) -> str:
     """How far a finite value lies on the wrong side of its bound."""
     gap = abs(value - bound.value)
     side = "above" if value > bound.value else "below" if value < bound.value else "at"
-    return f"{_number(gap)} {unit or ''} {side} the bound".replace("  ", " ") if side != "at" else "at the bound"
+    unit = "" if unit in (None, "", "1") else unit
+    return f"{_number(gap)} {unit} {side} the bound".replace("  ", " ") if side != "at" else "at the bound"
 
 
 def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], study=None) -> tuple[str, list[str]]:

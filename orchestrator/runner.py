@@ -148,7 +148,7 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
     failing; the outcome says which, and metrics.json holds the status."""
     base = _base_facts(study)
     sim = Simulation(system)
-    writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
+    writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format, sim.recorder.units)
     watch = Progress(sim.n_steps, sim.h) if progress else None
     if watch is not None:
         sim.add_observer(watch)
