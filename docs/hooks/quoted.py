@@ -39,7 +39,7 @@ QUOTES: dict[str, list[list[str]]] = {
                                 "--out", "{out}/diagnose"]],
 }
 # lines that change from one run to the next (wall time, progress, where the results went)
-VOLATILE = re.compile(r"^(progress:|wall_time_s\b|results written to|  ?\S+ took \d|\s*$)")
+VOLATILE = re.compile(r"^(progress:|wall_time_s\b|results written to|\[\s*[\d.]+ s\] |\w+ \.\.\. [\d.]+ s$|\w+: done in [\d.]+ s$|\s*$)")
 MARKER = re.compile(r"<!--\s*quoted:\s*([\w-]+)\s*-->\s*\n```[^\n]*\n(.*?)```", re.S)
 
 
