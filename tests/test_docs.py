@@ -117,6 +117,14 @@ def test_a_quoted_number_changed_by_hand_fails():
         f"{line.replace(value, f'{float(value) + 0.0001:.4f}')!r}"]
     # a line the program prints but the kept output has lost fails too
     assert quoted.mismatches("p", text, outputs=lambda name: "")
+    # a table of key figures, rounded as the page writes them
+    table = (ROOT / "docs" / "guidance-loop.md").read_text(encoding="utf-8")
+    value = quoted.figures("figure8-run")["euclid_max_curved"]
+    assert f"| `euclid_max_curved` | {value:.2f} m |" in table
+    assert quoted.table_mismatches("g", table) == []
+    wrong = table.replace(f"| `euclid_max_curved` | {value:.2f} m |", f"| `euclid_max_curved` | {value + 0.01:.2f} m |")
+    assert quoted.table_mismatches("g", wrong) == [f"g: quoted: figure8-run: euclid_max_curved = {value + 0.01:.2f}, "
+                                                   f"the program prints {value}"]
 
 
 @pytest.mark.slow

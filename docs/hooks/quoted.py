@@ -4,7 +4,9 @@ Every block of output a page quotes is marked by the comment ``<!-- quoted: NAME
 before its code fence; ``QUOTES[NAME]`` gives the commands that print it, and their output (stdout
 and stderr, progress and wall-clock lines left out) is kept in ``docs/hooks/quoted/NAME.txt``.
 ``mismatches`` lists every line of a marked block that the kept output does not print (a line
-ending in ``...`` is a quoted beginning; a line ``...`` stands for lines left out), so a number
+ending in ``...`` is a quoted beginning; a line ``...`` stands for lines left out); a marked
+Markdown table of key figures is checked figure by figure, rounded as written
+(``table_mismatches``). So a number
 changed by hand fails tests/test_docs.py, and a changed program changes the kept output when this
 script is run again::
 
@@ -85,9 +87,46 @@ def mismatches(page: str, text: str, outputs=kept) -> list[str]:
     return found
 
 
+TABLE = re.compile(r"<!--\s*quoted:\s*([\w-]+)\s*-->\s*\n((?:\|[^\n]*\n)+)")
+
+
+def figures(name: str, outputs=kept) -> dict[str, float]:
+    """The key figures of a kept run table: figure -> value."""
+    rows = re.findall(r"^(\w+)\s+(-?\d[\d.]*(?:e[-+]\d+)?|nan)\s", outputs(name), flags=re.M)
+    return {k: float(v) for k, v in rows}
+
+
+def table_mismatches(page: str, text: str, outputs=kept) -> list[str]:
+    """Rows of the marked Markdown tables (``| `figure` / `_other` | 0.19 / 0.19 m | ...``) whose
+    numbers are not the kept figures rounded as the page writes them."""
+    found = []
+    for match in TABLE.finditer(text):
+        name = match.group(1)
+        values = figures(name, outputs)
+        for row in match.group(2).splitlines():
+            cells = [c.strip() for c in row.strip("|").split("|")]
+            keys = re.findall(r"`(\w+)`", cells[0])
+            if not keys or len(cells) < 2:
+                continue
+            full = [keys[0]]
+            for k in keys[1:]:          # `_curved` after `euclid_mean_straight`: euclid_mean_curved
+                full.append(full[-1].rsplit("_", 1)[0] + k if k.startswith("_") else k)
+            numbers = [re.match(r"\s*(-?\d[\d.]*)", part) for part in cells[1].split(" / ")]
+            for key, number in zip(full, numbers):
+                if number is None:
+                    continue
+                quoted = number.group(1)
+                places = len(quoted.split(".")[1]) if "." in quoted else 0
+                if key not in values or round(values[key], places) != float(quoted):
+                    found.append(f"{page}: quoted: {name}: {key} = {quoted}, the program prints "
+                                 f"{values.get(key, 'nothing')}")
+    return found
+
+
 def check() -> list[str]:
     """Every page's mismatches."""
-    return [m for page in PAGES for m in mismatches(str(page.relative_to(ROOT)), page.read_text(encoding="utf-8"))]
+    return [m for page in PAGES for f in (mismatches, table_mismatches)
+            for m in f(str(page.relative_to(ROOT)), page.read_text(encoding="utf-8"))]
 
 
 def main(argv: list[str]) -> int:
