@@ -36,8 +36,7 @@ class StudySettings(BaseModel):
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
-    # inputs ("component.input") that may stay unconnected, holding their start value
-    allow_unconnected: list[str] = []
+    allow_unconnected: list[str] = []   # "component.input"s that may stay unconnected: they hold their start value
 
     @field_validator("bounds")
     @classmethod
