@@ -37,7 +37,7 @@ class Node:
     ratio: int                      # step / base_step
     sources: list[tuple[str, "Node", str]] = field(default_factory=list)  # (input, src node, output)
     seed: int = 0                   # the study seed the component's random stream is drawn from
-    initial: tuple[dict, dict, dict] = ({}, {}, {})     # (p, u, y) as built
+    initial: tuple[dict, dict, dict] = field(default_factory=lambda: ({}, {}, {}))   # (p, u, y) as built
 
     def restart(self) -> None:
         """The component as built: parameters, inputs and outputs (in place: callers may hold
