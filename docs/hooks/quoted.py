@@ -87,7 +87,7 @@ def mismatches(page: str, text: str, outputs=kept) -> list[str]:
     return found
 
 
-TABLE = re.compile(r"<!--\s*quoted:\s*([\w-]+)\s*-->\s*\n((?:\|[^\n]*\n)+)")
+TABLE = re.compile(r"<!--\s*quoted:\s*([\w-]+)\s*-->[ \t]*\n\s*\n?((?:\|[^\n]*\n)+)")
 
 
 def figures(name: str, outputs=kept) -> dict[str, float]:
