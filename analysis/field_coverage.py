@@ -134,6 +134,44 @@ METRIC_UNITS = {**{k: unit for k, (unit, _) in METRICS.items()},
 
 
 
+def unjudged(values: dict[str, float], study: Study) -> dict[str, str]:
+    """The coverage bounds are for the whole field and the whole route: a plan of the first
+    ``max_swaths`` swaths, one without headland passes, or a run that ended before its route did is
+    shown against them, not judged (orchestrator.key_figures prints why on the figure's line)."""
+    from agrobot.orchestrator.resolver import resolve
+
+    from .signals import component_named
+
+    p = resolve(study).parameters(component_named(study, "route"))
+    n = int(values.get("swaths_planned", 0))
+    whole = ("field_coverage_share", "coverage_share")
+    if p.get("max_swaths"):
+        return dict.fromkeys(whole, f"bounds for the whole field; this run plans {n} swath{'s' if n != 1 else ''} "
+                                    f"(max_swaths = {p['max_swaths']})")
+    done = values.get("route_done_share", 1.0)
+    if done < 0.999:
+        return dict.fromkeys(whole, f"bounds for the whole route; this run ended at {100 * done:.0f}% of it "
+                                    f"(stop_time {study.study.stop_time:g} s)")
+    if not p.get("headland_work", True):
+        return {"field_coverage_share": "bounds for the whole field; this run drives no headland pass (headland_work = 0)"}
+    return {}
+
+
+def reasons(values: dict[str, float], study: Study) -> dict[str, str]:
+    """Why a figure is nan: no adjacent passes for pass-to-pass, no sample of a kind."""
+    out = {}
+    for key in ("pass_to_pass_p95_m", "pass_to_pass_mean_m", "tractor_pass_to_pass_p95_m", "pass_to_pass_interval_s"):
+        out[key] = f"no two adjacent passes were driven ({int(values.get('swaths_planned', 0))} planned)"
+    for who in ("tractor", "implement"):
+        for q in ("rms", "p95", "max"):
+            out[f"{who}_xte_{q}_m"] = f"the {who} was never on a swath in this run"
+    out["xte_max_in_outage_m"] = out["outage_drift_max_m"] = "no GNSS outage in this run"
+    n = int(values.get("line_acquisitions", 0))
+    out["line_acquisition_p95_m"] = out["line_acquisition_p95_s"] = (
+        f"none of the {n} line acquisitions after a turn settled on its line" if n else "no turn into a line in this run")
+    return out
+
+
 # What a sweep plots (orchestrator.sweep.sweep_plots), with the bound each is judged by: the farmer's
 # figures (coverage, overlap, accuracy of the implement, time) and the field's limit.
 SWEEP_METRICS = {"coverage_share": COVERAGE_TARGET, "overlap_share": OVERLAP_TARGET, "implement_xte_p95_m": IMPLEMENT_XTE_P95_TARGET,

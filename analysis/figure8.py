@@ -86,6 +86,44 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     }
 
 
+def _next_time_on(study: Study, label: int, after: float) -> float | None:
+    """The first time after ``after`` at which the reference is on a segment ``label``
+    (models.figure8_path: 0 straight, 1 curve), from the reference's own parameters and
+    s(t) = v (t - t0 - T/2) past its ramp; None when the reference is not a figure-8's."""
+    from agrobot.components.models.figure8_path import Figure8Path
+    from agrobot.orchestrator.resolver import resolve
+
+    from .signals import component_named
+
+    p = resolve(study).parameters(component_named(study, "reference"))
+    if not {"speed", "radius", "centre_offset", "ramp_time"} <= set(p):
+        return None
+    path, v, ramp, t0 = Figure8Path(p["radius"], p["centre_offset"]), p["speed"], p["ramp_time"], study.study.start_time
+    s0 = v * max(after - t0 - ramp / 2.0, 0.0)
+    for s in s0 + np.arange(0.0, path.lap_length, 0.05):
+        if path.pose(s)[4] == label:
+            return t0 + ramp / 2.0 + s / v
+    return None
+
+
+def reasons(values: dict[str, float], study: Study) -> dict[str, str]:
+    """Why a figure is nan: no straight (or curve) between the settling and the run's end, with
+    the stop time that would reach one (orchestrator.key_figures prints it on the figure's line)."""
+    out = {}
+    settled = values.get("metrics_from_time_s", float("nan"))
+    end = study.study.start_time + values.get("sim_time_s", study.study.stop_time - study.study.start_time)
+    for kind, label in (("straight", 0), ("curved", 1)):
+        names = [f"euclid_{q}_{kind}{held}" for q in ("mean", "max") for held in ("", "_held")]
+        if not any(np.isnan(values.get(n, 0.0)) for n in names):
+            continue
+        where = "straight" if label == 0 else "curve"
+        t = _next_time_on(study, label, settled) if np.isfinite(settled) else None
+        need = f": run at least {int(np.ceil(t + 1.0))} s" if t is not None else ""
+        text = f"no {where} after the {settled:.0f} s settling (the run ends at {end:.0f} s){need}"
+        out.update({n: text for n in names if np.isnan(values.get(n, 0.0))})
+    return out
+
+
 # metric -> (SI unit, the paper's statement): a statement "< 0.40" is a bound that the run passes or
 # fails (orchestrator.key_figures prints them after a run or a sweep); the units label sweep plots too
 METRICS = {"euclid_mean_straight": ("m", None), "euclid_max_straight": ("m", f"< {PAPER_BOUNDS['euclid_max_straight']:.2f}"),

@@ -45,7 +45,7 @@ TRACKER_INPUTS = (
     inp("y", "m", 0.0, "estimated CG north position"),
     inp("heading", "rad", 0.0, "estimated yaw angle"),
     inp("yaw_rate_ref", "rad/s", 0.0, "reference yaw rate gamma_r (feed-forward)"),
-    inp("lateral_velocity", "m/s", 0.0, "estimated crab of the rear axle, left positive (feed-forward; 0: none)"),
+    inp("lateral_velocity", "m/s", 0.0, "estimated crab of the rear axle, left positive (feed-forward; 0: none)", optional=True),
 )
 TRACKER_OUTPUTS = (
     out("speed_desired", "m/s", 0.0, "desired speed v_d"),

@@ -39,7 +39,7 @@ class PoseEKF(Component):
     variables = (
         inp("gps_x", "m", 0.0, "GPS east position of R"),
         inp("gps_y", "m", 0.0, "GPS north position of R"),
-        inp("fix_valid", "1", 1.0, "1 when the GPS sample is a new fix"),
+        inp("fix_valid", "1", 1.0, "1 when the GPS sample is a new fix (unconnected: every sample is)", optional=True),
         inp("speed", "m/s", 0.0, "longitudinal speed (speed KF)"),
         inp("steer_angle", "rad", 0.0, "measured front wheel angle"),
         par("wheelbase", "m", 1.4, "L = l_f + l_r"),

@@ -20,7 +20,7 @@ class SpeedKF(Component):
         inp("y", "m", 0.0, "GPS north position"),
         inp("vel_east", "m/s", 0.0, "GPS east velocity"),
         inp("vel_north", "m/s", 0.0, "GPS north velocity"),
-        inp("fix_valid", "1", 1.0, "1 when the GPS sample is a new fix"),
+        inp("fix_valid", "1", 1.0, "1 when the GPS sample is a new fix (unconnected: every sample is)", optional=True),
         par("acceleration_psd", "m2/s3", 0.005, "white-acceleration spectral density q"),
         par("position_noise_std", "m", 0.02, "GPS position noise"),
         par("velocity_noise_std", "m/s", 0.02, "GPS velocity noise"),

@@ -154,8 +154,8 @@ def _write(jobs) -> None:
 
     for path, f, rep in jobs:
         path.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(path, (lambda p, f=f: f.to_parquet(p, index=False)) if path.suffix == ".parquet"
-                     else (lambda p, f=f: f.to_csv(p, index=False, float_format="%.9g")))
+        f.attrs["units"] = log_units(f)
+        write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.results)
         atomic_write(path.with_name(path.stem + ".import.json"),
                      lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
         print(describe(rep))

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.results import read_units
 
 # the canonical columns: name -> (SI unit, meaning)
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -50,12 +51,23 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     kind = "Parquet" if path.suffix == ".parquet" else "CSV"
     try:
         frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
+        stored = read_units(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    frame = check_log(frame, str(path), required, resample_jitter)
     audit = persisted_audit(path)            # the import's audit, when convert wrote the log
     if audit is not None:
         frame.attrs["audit"] = audit
-    return check_log(frame, str(path), required, resample_jitter)
+    frame.attrs["units"] = log_units(frame, stored)
+    return frame
+
+
+def log_units(frame: pd.DataFrame, stored: dict[str, str] | None = None) -> dict[str, str]:
+    """Column -> unit of a log: the canonical columns' SI units (COLUMNS), then what the file
+    stores (orchestrator.results: a Parquet file's metadata, a CSV file's NAME.units.json)."""
+    units = {c: COLUMNS[c][0] for c in frame.columns if c in COLUMNS}
+    units.update({c: u for c, u in (stored or frame.attrs.get("units", {})).items() if c in frame.columns})
+    return units
 
 
 def persisted_audit(path) -> list | None:

@@ -1,9 +1,18 @@
 """From a resolved model to the System the engine runs (after Drake's DiagramBuilder): component
 instances with their parameters in SI and their constant inputs, port and unit checks of every
-connection, the evaluation order of sampled components, and algebraic loops refused."""
+connection, the evaluation order of sampled components, and algebraic loops refused.
+
+Every input is driven: by a connection, a study constant (``[components.X.inputs]``) or, in a
+subsystem, an exported port. Any other input is refused unless its component declares it optional
+or the study lists it in ``[study] allow_unconnected``; those hold their start value
+(``System.held_inputs``, said when a run starts).
+
+A built System can be run again and again: ``System.restart`` (called by the engine when a run
+starts) returns every component's parameters, inputs, outputs and random stream to what they were
+when built, so a run is a function of the study and its seed alone."""
 from __future__ import annotations
 
-
+import copy
 import graphlib
 import math
 import zlib
@@ -27,6 +36,19 @@ class Node:
     step: float
     ratio: int                      # step / base_step
     sources: list[tuple[str, "Node", str]] = field(default_factory=list)  # (input, src node, output)
+    seed: int = 0                   # the study seed the component's random stream is drawn from
+    initial: tuple[dict, dict, dict] = field(default_factory=lambda: ({}, {}, {}))   # (p, u, y) as built
+
+    def restart(self) -> None:
+        """The component as built: parameters, inputs and outputs (in place: callers may hold
+        the dicts), a fresh random stream, no events."""
+        comp = self.component
+        p, u, y = self.initial
+        for mine, built in ((comp.p, p), (comp.u, u), (comp.y, y)):
+            mine.clear()
+            mine.update(copy.deepcopy(built))
+        comp.rng = component_seed(self.seed, self.name)
+        comp.events = []
 
 
 @dataclass
@@ -36,7 +58,20 @@ class System:
     sampled_order: list[Node]        # evaluated in this order at each sample instant
     continuous: list[Node]
     connections: list[Connection]
-    unconnected_inputs: list[str]
+    unconnected_inputs: list[str]    # inputs no connection drives (constants and held ones included)
+    # inputs left to their start value: ("component.input", value, unit, why)
+    held_inputs: list[tuple[str, object, str, str]] = field(default_factory=list)
+
+    def restart(self) -> None:
+        """Every component as built (the engine calls it when a run starts)."""
+        for node in self.nodes.values():
+            node.restart()
+
+    def held_lines(self) -> list[str]:
+        """One line per input left unconnected that holds its start value."""
+        return [f"{port} is unconnected: it holds {value:g}{'' if unit in ('', '1') else ' ' + unit} for the whole "
+                f"run ({why})" if isinstance(value, (int, float)) else f"{port} is unconnected: it holds {value!r} ({why})"
+                for port, value, unit, why in self.held_inputs]
 
 
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
@@ -79,7 +114,8 @@ def build_system(model: Model) -> System:
         if ratio < 1 or not math.isclose(ratio * base, step, rel_tol=1e-9, abs_tol=1e-12):
             raise StudyError(f"{where}: components.{name}.step: {step} s is not an integer multiple "
                              f"of study.base_step {base} s")
-        nodes[name] = Node(name, comp, step, ratio)
+        nodes[name] = Node(name, comp, step, ratio, seed=study.study.seed,
+                           initial=copy.deepcopy((comp.p, comp.u, comp.y)))
 
     connected: dict[tuple[str, str], Connection] = {}
     for i, conn in enumerate(study.connections):
@@ -115,11 +151,55 @@ def build_system(model: Model) -> System:
         node.component.connected_inputs = frozenset(i for t, i in connected if t == name)
     unconnected = [f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")
                    if (n, i) not in connected]
+    held = _held_inputs(study, specs, nodes, unconnected)
     _refuse_algebraic_loops(nodes, study.connections, where)
     sampled = [n for n in nodes.values() if n.component.sampled]
     order = _sampled_order(sampled, where)
     continuous = [n for n in nodes.values() if not n.component.sampled]
-    return System(study, nodes, order, continuous, list(study.connections), unconnected)
+    return System(study, nodes, order, continuous, list(study.connections), unconnected, held)
+
+
+def _held_inputs(study: Study, specs, nodes: dict[str, Node], unconnected: list[str]) -> list[tuple]:
+    """The inputs nothing drives that may hold their start value (declared optional, or listed in
+    ``study.allow_unconnected``); a StudyError names every other one and the three ways to drive it."""
+    where = study.where
+    allowed = {}
+    for i, item in enumerate(study.study.allow_unconnected):
+        comp_name, port = item.split(".", 1)
+        at = study.origin(f"study.allow_unconnected[{i}]")
+        if comp_name not in nodes:
+            raise StudyError(f"{at}: {item!r}: no component {comp_name!r}{did_you_mean(comp_name, nodes, n=1)}"
+                             + f" Components: {', '.join(sorted(nodes))}")
+        inputs = nodes[comp_name].component.declared("input")
+        if port not in inputs:
+            raise StudyError(f"{at}: {item!r}: {comp_name!r} has no input {port!r}{did_you_mean(port, inputs, n=1)}"
+                             + f" Inputs: {', '.join(sorted(inputs))}")
+        allowed[item] = i
+    exported = set()
+    if study.exports is not None:
+        for port in study.exports.inputs:
+            exported.update(f"{c}.{n}" for c, n in study.exports.input_targets(port))
+    held, missing = [], []
+    for item in unconnected:
+        comp_name, port = item.split(".", 1)
+        if port in specs[comp_name].inputs or item in exported:
+            continue
+        v = nodes[comp_name].component.declared("input")[port]
+        if v.optional:
+            held.append((item, v.start, v.unit, f"declared optional: {v.description}"))
+        elif item in allowed:
+            held.append((item, v.start, v.unit, "study.allow_unconnected"))
+        else:
+            missing.append(f"{item} ({v.description}; {v.unit})")
+    declared = {f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")}
+    if missing and exported <= declared:      # a wrong export is named by the subsystem's exports
+        first = missing[0].split(" ", 1)[0]
+        raise StudyError(
+            f"{where}: connections: {len(missing)} input{'s' if len(missing) > 1 else ''} connected to nothing: "
+            f"{', '.join(missing)}. Connect each (connections = [\"source.output -> {first}\"]), give it a "
+            f"value ([components.{first.split('.')[0]}.inputs]) or let it hold its start value "
+            f"([study] allow_unconnected = [\"{first}\"])")
+    return held
 
 
 def _direct(node: Node, input_name: str) -> bool:

@@ -31,14 +31,19 @@ class Variable:
     unit: str
     start: Any
     description: str
+    optional: bool = False     # an input that may stay unconnected: it then holds ``start``
 
     def __post_init__(self) -> None:
         if self.causality not in CAUSALITIES:
             raise ValueError(f"variable {self.name!r}: causality must be one of {CAUSALITIES}")
+        if self.optional and self.causality != "input":
+            raise ValueError(f"variable {self.name!r}: only an input can be optional")
 
 
-def inp(name: str, unit: str, start: Any, description: str) -> Variable:
-    return Variable(name, "input", unit, start, description)
+def inp(name: str, unit: str, start: Any, description: str, optional: bool = False) -> Variable:
+    """An input. A connection or a study constant must drive it, unless ``optional``: left
+    unconnected it then holds ``start`` for the whole run (said once when the run starts)."""
+    return Variable(name, "input", unit, start, description, optional)
 
 
 def out(name: str, unit: str, start: Any, description: str) -> Variable:

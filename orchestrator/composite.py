@@ -57,10 +57,13 @@ def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], d
         if isinstance(table, ExportedInput) and table.unit is not None:
             if units and table.unit.replace(" ", "") not in units:
                 raise StudyError(f"{where}: exports.inputs.{port}.unit: {table.unit!r}, but its targets take {sorted(units)}")
-            variables.append(Variable(port, "input", table.unit, table.start, table.description))
+            variables.append(Variable(port, "input", table.unit, table.start, table.description,
+                                      optional=all(_inner_port(system, c, n, "input", where).optional
+                                                   for c, n in targets)))
             continue
         first = system.nodes[targets[0][0]].component.declared("input")[targets[0][1]]
-        variables.append(Variable(port, "input", first.unit, first.start, first.description))
+        optional = all(system.nodes[c].component.declared("input")[n].optional for c, n in targets)
+        variables.append(Variable(port, "input", first.unit, first.start, first.description, optional))
     for port in exports.outputs:
         v = _inner_port(system, *exports.output_source(port), "output", f"{where}: exports.outputs.{port}")
         variables.append(Variable(port, "output", v.unit, v.start, v.description))

@@ -88,7 +88,7 @@ class Simulation:
             self.recorder.rows(self.t0, self.h, 0, 0)
         events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
         return Recording(self.columns, data, time.perf_counter() - self._start, completed, events,
-                         self.pacer.stats() if self.pacer is not None else None, self.ended_by)
+                         self.pacer.stats() if self.pacer is not None else None, self.ended_by, self.recorder.units)
 
     def partial(self) -> Recording:
         """What the run recorded up to where it stands (not completed)."""
@@ -111,6 +111,7 @@ class Simulation:
         self._start = time.perf_counter()
         self.published = published = {}
         self._drained = 0          # a restarted simulation records from its start again
+        sys_.restart()             # every component as built: a run depends on the study and seed alone
         for node in sys_.nodes.values():
             try:
                 node.component.initialize(self.t0, node.step)

@@ -128,10 +128,13 @@ def fmu_component_class(path: str | Path) -> type["FMUComponent"]:
         start = _start(fv, v.start)
         names = [v.name] + fv.element_names()
         ports_of[v.name] = names
-        variables.append(Variable(v.name, causality, unit, start, v.description or ""))
+        # an FMU's input has the start value its modelDescription must give (FMI): left
+        # unconnected it holds it, and the run says so (orchestrator.build)
+        held = causality == "input"
+        variables.append(Variable(v.name, causality, unit, start, v.description or "", held))
         for element, value in zip(fv.element_names(), np.asarray(start).ravel() if fv.shape else []):
             variables.append(Variable(element, causality, unit, value.item() if hasattr(value, "item") else value,
-                                      f"element of {v.name}"))
+                                      f"element of {v.name}", held))
         if unit in bases:
             port_units.update({n: bases[unit] for n in names})
     inputs = [n for n, (c, _) in fmi_vars.items() if c == "input"]

@@ -7,6 +7,12 @@ passes or fails; other text (``"steady-state error seen"``) is shown as a note; 
 ``BOUNDS_SOURCE`` names where its bounds come from (``"paper"``; default ``"analysis"``). A study
 adds or replaces bounds in ``[study] bounds = {figure = "< 0.30"}`` (source ``"study"``).
 
+Every ``nan`` and every FAIL of a run's table says why on its line. An analysis module may define
+``reasons(values, study) -> {figure: why}`` (a figure it could not compute: "no straight after the
+13 s settling: run at least 40 s") and ``unjudged(values, study) -> {figure: why}`` (a bound that
+does not fit what was run: "bounds for the whole field; this run plans 2 swaths"; the figure is
+shown, not judged). A FAIL the analysis gives no reason for says by how much it missed its bound.
+
 ``run_table`` is the table of a run, ``sweep_table`` that of a sweep (P50, P95 and max over the
 completed points, and the share within each bound), ``realtime_lines`` the pacing of a real-time
 run and whether it kept real time.
@@ -110,27 +116,53 @@ def _figures(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound]) -
     return rows
 
 
-def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound]) -> tuple[str, list[str]]:
-    """(the table, the failed bounds as lines) of one run."""
+def _hook(analysis, name: str, values: Mapping[str, Any], study) -> dict[str, str]:
+    """An analysis's ``reasons`` or ``unjudged`` for this run (empty without one or a study)."""
+    hook = getattr(analysis, name, None)
+    return dict(hook(values, study)) if hook is not None and study is not None else {}
+
+
+def _missed(value: float, bound: Bound, unit: str | None) -> str:
+    """How far a finite value lies on the wrong side of its bound."""
+    gap = abs(value - bound.value)
+    side = "above" if value > bound.value else "below" if value < bound.value else "at"
+    unit = "" if unit in (None, "", "1") else unit
+    return f"{_number(gap)} {unit} {side} the bound".replace("  ", " ") if side != "at" else "at the bound"
+
+
+def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], study=None) -> tuple[str, list[str]]:
+    """(the table, the failed bounds as lines) of one run; every nan and FAIL with its reason (the
+    analysis's ``reasons`` and ``unjudged`` for ``study``, see the module docstring)."""
     rows = _figures(values, analysis, judged)
+    why, unjudged = _hook(analysis, "reasons", values, study), _hook(analysis, "unjudged", values, study)
     width = max([len(k) for k, _, _ in rows] + [10])
     lines = [f"{'figure':<{width}}  {'value':>11}  {'unit':<6} {'bound':<22} check", "-" * (width + 50)]
-    failed = []
+    failed, skipped = [], 0
     for key, unit, note in rows:
         value = values.get(key, math.nan)
+        number = isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+        finite = number and math.isfinite(float(value))
         bound = judged.get(key)
-        if bound is not None:
-            ok = isinstance(value, (int, float)) and bound.holds(float(value))
+        reason = "" if finite or not number else why.get(key) or (
+            "not computed by the analysis" if key not in values else "not computed (the analysis says no more)")
+        if bound is not None and key in unjudged:
+            text, check, reason = f"{bound} ({bound.source})", "not judged", unjudged[key]
+            skipped += 1
+        elif bound is not None:
+            ok = number and bound.holds(float(value))
             text, check = f"{bound} ({bound.source})", "pass" if ok else "FAIL"
             if not ok:
-                failed.append(f"{key} = {_number(value)} {unit or ''} (bound {bound}, {bound.source})".replace("  ", " "))
+                reason = reason or why.get(key) or _missed(float(value), bound, unit)
+                failed.append(f"{key} = {_number(value)} {unit or ''} (bound {bound}, {bound.source}): {reason}"
+                              .replace("  ", " "))
         else:
             text, check = (note or ""), ""
-        lines.append(f"{key:<{width}}  {_number(value):>11}  {unit or '':<6} {text:<22} {check}".rstrip())
+        line = f"{key:<{width}}  {_number(value):>11}  {unit or '':<6} {text:<22} {check}".rstrip()
+        lines.append(f"{line}{' ' * max(1, width + 48 - len(line))} {reason}" if reason else line)
     if judged:
-        present = [k for k in judged if k in values]
-        lines.append(f"bounds: {len(present) - len(failed)} of {len(present)} met" if failed else
-                     f"bounds: all {len(present)} met")
+        present = [k for k in judged if k in values and k not in unjudged]
+        lines.append((f"bounds: {len(present) - len(failed)} of {len(present)} met" if failed else
+                      f"bounds: all {len(present)} met") + (f" ({skipped} not judged: see their lines)" if skipped else ""))
     return "\n".join(lines), failed
 
 

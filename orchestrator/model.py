@@ -140,7 +140,17 @@ class Model:
             spec["step"] = step
         if parameters:
             spec["parameters"] = dict(parameters)
-        return self.study.without(*names).with_component(into, **spec).with_connections(add=add)
+        # a boundary input nothing drives was accepted so inside: its constant, or left to its start
+        constants = {p: self.study.components[v["targets"][0][0]].inputs[v["targets"][0][1]]
+                     for p, v in inputs.items() if not v["source"]
+                     and v["targets"][0][1] in self.study.components[v["targets"][0][0]].inputs}
+        if constants:
+            spec["inputs"] = constants
+        held = [f"{into}.{p}" for p, v in inputs.items() if not v["source"] and p not in constants]
+        study = self.study.without(*names).with_component(into, **spec).with_connections(add=add)
+        if held:
+            study = study.with_values({"study.allow_unconnected": [*study.study.allow_unconnected, *held]})
+        return study
 
 
 def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any], origin: Callable[[str], str],

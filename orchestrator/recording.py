@@ -1,7 +1,9 @@
 """What a run records: every numeric scalar output of every component, kept at the instants it can
 change (multiples of the component's step) and held in between when the table is built; strings,
 bytes and whole arrays of an FMU are exchanged between components but not recorded (array elements
-are). The recorder is an observer of the engine (orchestrator.observers)."""
+are). The recorder is an observer of the engine (orchestrator.observers). Each column's unit is
+the output's declared one (``units``; time in s): the DataFrame carries them in
+``attrs["units"]``, the signal file in its metadata (orchestrator.results)."""
 from __future__ import annotations
 
 from array import array
@@ -23,11 +25,15 @@ class Recording:
     events: list[tuple[float, str, str]] = field(default_factory=list)   # (t, component, message)
     realtime: dict | None = None                                          # pacing statistics
     ended_by: dict | None = None          # {"component", "t", "reason"}: a component ended the run
+    units: dict[str, str] = field(default_factory=dict)                  # column -> unit ("t": s)
 
     def to_frame(self):
+        """The signals as a DataFrame, each column's unit in ``attrs["units"]``."""
         import pandas as pd
 
-        return pd.DataFrame(self.data, columns=["t"] + self.columns)
+        frame = pd.DataFrame(self.data, columns=["t"] + self.columns)
+        frame.attrs["units"] = dict(self.units)
+        return frame
 
 
 def _numeric_scalar(value) -> bool:
@@ -60,10 +66,12 @@ class SignalRecorder(Observer):
 
     def __init__(self, system, period: int) -> None:
         outputs: dict[str, list[str]] = {}
+        self.units = {"t": "s"}
         for node in system.nodes.values():
             for v in node.component.variables:
                 if v.causality == "output" and _numeric_scalar(v.start):
                     outputs.setdefault(node.name, []).append(v.name)
+                    self.units[f"{node.name}.{v.name}"] = v.unit
         self.columns = [f"{name}.{out}" for name, outs in outputs.items() for out in outs]
         self._layout = [(name, system.nodes[name].ratio, outs) for name, outs in outputs.items()]
         self._period = period

@@ -1,5 +1,9 @@
 """Writing results so that nothing is left half-written: each file goes to a temporary name in
-the same folder and is renamed over the target in one step."""
+the same folder and is renamed over the target in one step.
+
+Tables carry their columns' units: a DataFrame in ``attrs["units"]`` (column -> unit), a Parquet
+file in its schema metadata under the key ``units`` (JSON), a CSV file in ``NAME.units.json``
+beside it; ``read_units`` and ``read_table`` take them back."""
 from __future__ import annotations
 
 import json
@@ -39,17 +43,62 @@ def write_json(path: Path, data: dict[str, Any]) -> Path:
     return atomic_write(path, lambda p: p.write_text(json.dumps(data, indent=2, sort_keys=False) + "\n"))
 
 
+UNITS_KEY = b"units"          # the Parquet schema metadata key of the columns' units
+
+
+def units_metadata(units: dict[str, str]) -> dict[bytes, bytes]:
+    """Parquet schema metadata holding ``units`` (column -> unit)."""
+    return {UNITS_KEY: json.dumps(dict(units)).encode()}
+
+
+def units_file(path: Path) -> Path:
+    """Where a CSV table's units are kept: ``NAME.units.json`` beside ``NAME.csv``."""
+    return Path(path).with_name(Path(path).stem + ".units.json")
+
+
+def read_units(path: Path, schema=None) -> dict[str, str]:
+    """The units a table file stores (column -> unit; empty when it stores none)."""
+    path = Path(path)
+    if path.suffix == ".parquet":
+        if schema is None:
+            import pyarrow.parquet as pq
+
+            schema = pq.read_schema(path)
+        raw = (schema.metadata or {}).get(UNITS_KEY)
+        return json.loads(raw) if raw else {}
+    side = units_file(path)
+    return json.loads(side.read_text()) if side.is_file() else {}
+
+
+def write_frame(path: Path, frame: pd.DataFrame, **csv_options) -> Path:
+    """``frame`` to ``path`` (.parquet, else CSV), with its ``attrs["units"]``."""
+    path = Path(path)
+    units = dict(frame.attrs.get("units", {}))
+    if path.suffix == ".parquet":
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        def write(p: Path) -> None:
+            table = pa.Table.from_pandas(frame, preserve_index=False)
+            pq.write_table(table.replace_schema_metadata({**(table.schema.metadata or {}), **units_metadata(units)}), p)
+
+        return atomic_write(path, write)
+    if units:
+        atomic_write(units_file(path), lambda p: p.write_text(json.dumps(units, indent=1) + "\n"))
+    return atomic_write(path, lambda p: frame.to_csv(p, index=False, **csv_options))
+
+
 def write_table(path_stem: Path, frame: pd.DataFrame, fmt: str) -> Path:
-    if fmt == "parquet":
-        return atomic_write(path_stem.with_suffix(".parquet"), lambda p: frame.to_parquet(p, index=False))
-    return atomic_write(path_stem.with_suffix(".csv"), lambda p: frame.to_csv(p, index=False))
+    return write_frame(path_stem.with_suffix(".parquet" if fmt == "parquet" else ".csv"), frame)
 
 
 def read_table(path: Path) -> pd.DataFrame:
     path = Path(path)
-    if path.suffix == ".parquet":
-        return pd.read_parquet(path)
-    return pd.read_csv(path)
+    frame = pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    units = read_units(path)
+    if units:
+        frame.attrs["units"] = units
+    return frame
 
 
 class SignalWriter:
@@ -57,8 +106,9 @@ class SignalWriter:
     through pyarrow, or CSV lines), so a long run keeps flat memory and an interrupted one keeps
     every row up to its last block. ``close`` returns the file's path."""
 
-    def __init__(self, path_stem: Path, columns: list[str], fmt: str) -> None:
+    def __init__(self, path_stem: Path, columns: list[str], fmt: str, units: dict[str, str] | None = None) -> None:
         self.columns = ["t"] + list(columns)
+        self.units = dict(units or {})
         self.path = path_stem.with_suffix(".parquet" if fmt == "parquet" else ".csv")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rows = 0
@@ -67,9 +117,10 @@ class SignalWriter:
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            self._schema = pa.schema([(c, pa.float64()) for c in self.columns])
+            self._schema = pa.schema([(c, pa.float64()) for c in self.columns], metadata=units_metadata(self.units))
             self._parquet = pq.ParquetWriter(self.path, self._schema)
         else:
+            atomic_write(units_file(self.path), lambda p: p.write_text(json.dumps(self.units, indent=1) + "\n"))
             self._csv = open(self.path, "w", newline="")
             pd.DataFrame(columns=self.columns).to_csv(self._csv, index=False)
 

@@ -9,6 +9,7 @@ aside and moved into place when the run ends (orchestrator.output): a complete r
 from __future__ import annotations
 
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,7 +20,7 @@ from .engine import RunError, Simulation
 from .errors import ComputationError, Interrupted, Terminated, critical
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
-from .recording import Recording
+from .recording import Recording, SignalRecorder
 from .registry import import_study_module
 from .resolver import resolve
 from .results import SignalWriter, atomic_write, write_json
@@ -51,6 +52,12 @@ def _analysis(study: Study):
         raise StudyError(f"{study.path}: study.analysis: cannot import {study.study.analysis!r} ({exc})") from None
     check_study_bounds(module, study.study.bounds, study.origin)
     return module
+
+
+def say_held_inputs(system: System) -> None:
+    """Say, once as a run starts, every input left unconnected that holds its start value."""
+    for line in system.held_lines():
+        print(f"note: {line}", file=sys.stderr)
 
 
 def simulate(study: Study):
@@ -143,7 +150,8 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
     engine's class (orchestrator.compiled.select_engine), the Python engine by default."""
     sim = (simulation or Simulation)(system)
     base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
-    writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format)
+    recorder = getattr(sim, "recorder", None) or SignalRecorder(system, 1)     # the columns' units
+    writer = SignalWriter(folder / "signals", sim.columns, study.study.signals_format, recorder.units)
     watch = Progress(sim.n_steps, sim.h) if progress else None
     for observer in ([watch] if watch is not None else []) + list(observers):
         sim.add_observer(observer)
@@ -243,6 +251,7 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     folder = ResultFolder(Path(out_dir), overwrite, inputs=inputs)
     system = build_system(resolve(study))
     simulation = choose_engine(system, engine)
+    say_held_inputs(system)
     with folder:
         placed = place_output_parameters(study, Path(out_dir), folder.tmp, named, inputs)
         if placed is not study:
@@ -277,7 +286,7 @@ def _kept(out: Path, where: Path) -> str:
 
 def _result(values: dict[str, Any], metrics: dict[str, Any], analysis, study: Study, files: list[Path],
             frame) -> RunResult:
-    table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds))
+    table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds), study)
     lines, warning = realtime_lines(values.get("realtime"))
     return RunResult(metrics, frame, "\n".join([table, *lines]), files, failed, [warning] if warning else [])
 
@@ -289,7 +298,11 @@ def _base_facts(study: Study) -> dict[str, Any]:
 
 def _run_json(study: Study, system, status: str, t_reached: float) -> dict[str, Any]:
     return {"status": status, "t_reached_s": t_reached, "study": study.to_data(),
-            "unconnected_inputs": system.unconnected_inputs, "order_sampled": [n.name for n in system.sampled_order]}
+            "unconnected_inputs": system.unconnected_inputs,
+            "held_inputs": {port: {"value": value if isinstance(value, (int, float, str)) else repr(value),
+                                   "unit": unit, "why": why}
+                            for port, value, unit, why in system.held_inputs},
+            "order_sampled": [n.name for n in system.sampled_order]}
 
 
 def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
@@ -305,10 +318,13 @@ def _run_in_memory(study: Study, plots: bool, engine: str = "python", observers=
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
     system = build_system(resolve(study))
+    say_held_inputs(system)
     sim = choose_engine(system, engine)(system)
     for observer in observers:
         sim.add_observer(observer)
     rec = sim.run()
+    if not rec.units:                      # an engine without the Python recorder: the declared units
+        rec.units = SignalRecorder(system, 1).units
     frame = rec.to_frame()
     values = _metrics(analysis, frame, study)
     base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}

@@ -6,7 +6,9 @@ CSV file), so the memory an analysis needs grows with the columns it uses, never
 of the table. ``SignalTable`` answers the parts of a pandas DataFrame an analysis uses:
 ``table["name"]`` (a Series), ``"name" in table``, ``len(table)``, ``table.columns``,
 ``table.iloc[a:b:c]`` (a view, nothing read), ``reset_index(drop=True)``; ``to_pandas()`` reads
-the whole table when it is really wanted.
+the whole table when it is really wanted. The units the file stores (orchestrator.results) come
+back in ``table.units``, a column's in its Series' ``attrs["unit"]`` and a DataFrame's in
+``attrs["units"]``.
 """
 from __future__ import annotations
 
@@ -14,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from .results import read_units
 
 
 class _Columns:
@@ -28,10 +32,12 @@ class _Columns:
             self._parquet = pq.ParquetFile(self.path)
             self.names = list(self._parquet.schema_arrow.names)
             self.rows = self._parquet.metadata.num_rows
+            self.units = read_units(self.path, self._parquet.schema_arrow)
         else:
             self._parquet = None
             self.names = list(pd.read_csv(self.path, nrows=0).columns)
             self.rows = len(self.column(self.names[0])) if self.names else 0
+            self.units = read_units(self.path)
 
     def column(self, name: str) -> np.ndarray:
         if name not in self.read:
@@ -73,6 +79,11 @@ class SignalTable:
     def columns(self) -> pd.Index:
         return pd.Index(self._columns.names)
 
+    @property
+    def units(self) -> dict[str, str]:
+        """Column -> unit, as the file stores them (empty for a file that stores none)."""
+        return dict(self._columns.units)
+
     def __contains__(self, name: object) -> bool:
         return name in self._columns.names
 
@@ -81,13 +92,18 @@ class SignalTable:
 
     def __getitem__(self, name):
         if isinstance(name, (list, tuple)):
-            return pd.DataFrame({n: self[n] for n in name})
+            frame = pd.DataFrame({n: self[n] for n in name})
+            frame.attrs["units"] = {n: self._columns.units[n] for n in name if n in self._columns.units}
+            return frame
         if name not in self._columns.names:
             raise KeyError(name)
         rows = self._rows
         values = self._columns.column(name)[rows.start:rows.stop if rows.stop >= 0 else None:rows.step]
         index = pd.RangeIndex(len(rows)) if self._from_zero else pd.RangeIndex(rows.start, rows.stop, rows.step)
-        return pd.Series(values, index=index, name=name, copy=False)
+        series = pd.Series(values, index=index, name=name, copy=False)
+        if name in self._columns.units:
+            series.attrs["unit"] = self._columns.units[name]
+        return series
 
     @property
     def iloc(self) -> _Rows:

@@ -271,7 +271,9 @@ class Study(BaseModel):
         data: dict[str, Any] = {
             "study": {"name": f"{s.name}.{name}", "description": spec.description, "start_time": s.start_time,
                       "stop_time": s.stop_time, "base_step": spec.base_step or spec.step or s.base_step,
-                      "seed": s.seed},
+                      "seed": s.seed,
+                      "allow_unconnected": [a.split(".", 1)[1] for a in s.allow_unconnected
+                                            if a.startswith(f"{name}.") and a.count(".") >= 2]},
             "components": {k: v.model_dump(exclude_unset=True) for k, v in spec.components.items()},
             "connections": [str(c) for c in spec.connections],
             "exports": spec.exports.model_dump(),

@@ -38,6 +38,7 @@ class StudySettings(BaseModel):
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
     isolate_fmus: bool = False       # each FMU in a child process: a crash or a hang is a named error
     fmu_timeout: float = Field(default=60.0, gt=0, allow_inf_nan=False)   # s an isolated FMU's call may take
+    allow_unconnected: list[str] = []   # "component.input"s that may stay unconnected: they hold their start value
 
     @field_validator("bounds")
     @classmethod
@@ -46,6 +47,14 @@ class StudySettings(BaseModel):
             if not BOUND.match(text):
                 raise ValueError(f"bound {key} = {text!r}: expected a comparison and a number, e.g. '< 0.40' or '>= 0.99'")
         return value
+
+    @field_validator("allow_unconnected")
+    @classmethod
+    def _ports(cls, value: list[str]) -> list[str]:
+        for item in value:
+            if not PORT.match(item):
+                raise ValueError(f"allow_unconnected: {item!r}: expected 'component.input'")
+        return [item.strip() for item in value]
 
     @model_validator(mode="after")
     def _times(self) -> "StudySettings":

@@ -91,3 +91,74 @@ def test_readme_lists_every_registered_command():
     table = README.read_text(encoding="utf-8").split("## Commands", 1)[1].split("\n## ", 1)[0]
     listed = set(re.findall(r"^\| `([\w-]+)", table, flags=re.M))
     assert listed == {"run", "sweep", *registry().commands}
+
+
+# --- quoted outputs and section references ------------------------------------------------------
+
+import quoted  # noqa: E402  (docs/hooks/quoted.py: the outputs the pages quote)
+
+
+def test_every_quoted_output_is_what_the_program_printed():
+    assert quoted.check() == []
+    marked = {m.group(1) for page in quoted.PAGES for m in quoted.MARKER.finditer(page.read_text(encoding="utf-8"))}
+    assert marked == set(quoted.QUOTES)
+    assert all((quoted.KEPT / f"{name}.txt").is_file() for name in marked)
+
+
+def test_a_quoted_number_changed_by_hand_fails():
+    page = ROOT / "docs" / "runs-and-results.md"
+    text = page.read_text(encoding="utf-8")
+    line = next(l for l in quoted.kept("figure8-run").splitlines() if l.startswith("euclid_max_straight "))
+    value = line.split()[1]
+    assert f"\n{line}\n" in text
+    edited = text.replace(line, line.replace(value, f"{float(value) + 0.0001:.4f}"))
+    assert quoted.mismatches("runs-and-results.md", edited) == [
+        f"runs-and-results.md: quoted: figure8-run: the program does not print "
+        f"{line.replace(value, f'{float(value) + 0.0001:.4f}')!r}"]
+    # a line the program prints but the kept output has lost fails too
+    assert quoted.mismatches("p", text, outputs=lambda name: "")
+    # a table of key figures, rounded as the page writes them
+    table = (ROOT / "docs" / "guidance-loop.md").read_text(encoding="utf-8")
+    value = quoted.figures("figure8-run")["euclid_max_curved"]
+    assert f"| `euclid_max_curved` | {value:.2f} m |" in table
+    assert quoted.table_mismatches("g", table) == []
+    wrong = table.replace(f"| `euclid_max_curved` | {value:.2f} m |", f"| `euclid_max_curved` | {value + 0.01:.2f} m |")
+    assert quoted.table_mismatches("g", wrong) == [f"g: quoted: figure8-run: euclid_max_curved = {value + 0.01:.2f}, "
+                                                   f"the program prints {value}"]
+
+
+@pytest.mark.slow
+def test_the_kept_figure8_output_is_what_the_program_prints_now():
+    assert quoted.produce("figure8-run") == quoted.kept("figure8-run")
+
+
+def _slug(heading: str) -> str:
+    """Python-Markdown's toc slug (MkDocs' anchors)."""
+    text = re.sub(r"[^\w\s-]", "", heading).strip().lower()
+    return re.sub(r"[-\s]+", "-", text)
+
+
+def _anchors(path: Path) -> set[str]:
+    return {_slug(h) for h in re.findall(r"^#+\s+(.*?)\s*$", path.read_text(encoding="utf-8"), flags=re.M)}
+
+
+def test_links_and_references_to_readme_and_docs_sections_resolve():
+    readme_headings = set(re.findall(r"^#+\s+(.*?)\s*$", README.read_text(encoding="utf-8"), flags=re.M))
+    texts = [README, *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "studies").glob("*.toml")),
+             *sorted((ROOT / "tests" / "data").glob("*.md"))]
+    broken = []
+    for path in texts:
+        text = path.read_text(encoding="utf-8")
+        # 'README, "Section"' or 'README: "Section"' in prose and comments
+        for section in re.findall(r"README[,:]\s+\"([^\"]+)\"", text):
+            if section not in readme_headings:
+                broken.append(f"{path.name}: README section {section!r}")
+        # links with an anchor: [..](README.md#x), [..](#x), docs/page.md#x in comments
+        for target, anchor in re.findall(r"(?<![\w/.-])((?:docs/)?[\w./-]*\.md|)#([\w-]+)", text):
+            if (not target and path.suffix != ".md") or target in reference.PAGES:   # generated: the site build checks them
+                continue
+            base = path if not target else (ROOT / target if target.startswith("docs/") or target == "README.md"
+                                            else path.parent / target)
+            if not base.is_file() or anchor not in _anchors(base):
+                broken.append(f"{path.name}: {target or path.name}#{anchor}")
+    assert not broken, broken

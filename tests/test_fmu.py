@@ -138,7 +138,7 @@ def test_unusable_files_are_refused_naming_file_and_reason(first_order_fmu, tmp_
 
 def test_fmu_path_is_relative_to_the_study_file(first_order_fmu, tmp_path):
     (tmp_path / "plant.fmu").write_bytes(first_order_fmu.read_bytes())
-    st = toy_study({"lag": {"type": "plant.fmu"}}, [], path=str(tmp_path / "s.toml"))
+    st = toy_study({"lag": {"type": "plant.fmu", "inputs": {"u": 0.0}}}, [], path=str(tmp_path / "s.toml"))
     assert "lag" in build_system(resolve(st)).nodes
     with pytest.raises(StudyError, match="no such file"):
         build_system(resolve(toy_study({"lag": {"type": "missing.fmu"}}, [], path=str(tmp_path / "s.toml"))))

@@ -58,7 +58,7 @@ def test_an_algebraic_loop_through_declared_feedthrough_is_refused(fmus):
 def test_every_fmi2_type_and_structured_names(fmus):
     st = study({"src": {"type": "tests.toy_components:RateSource"},
                 "fmu": {"type": str(fmus["conformance2"]), "parameters": {"label": "tractor", "k": 2.0}},
-                "ints": {"type": "tests.toy_components:RateSink"}},
+                "ints": {"type": "tests.toy_components:RateSink", "inputs": {"u": 0.0}}},
                ["src.rate -> fmu.u", "src.count -> fmu.n_in", "src.on -> fmu.flag_in"])
     rec = run(st)
     frame = rec.to_frame()

@@ -140,7 +140,8 @@ def test_validation_errors_name_file_and_field():
 
 def test_edge_units_are_converted_and_wrong_units_refused():
     st = study({"g": {"type": "figure8_reference", "parameters": {"speed": "7.2 km/h"}},
-                "t": {"type": "tractor_yaw_plant", "parameters": {"psi0": "90 deg"}}}, [])
+                "t": {"type": "tractor_yaw_plant", "parameters": {"psi0": "90 deg"}}}, [],
+               allow_unconnected=["t.steer_angle", "t.speed"])
     system = build_system(resolve(st))
     assert math.isclose(system.nodes["g"].component.p["speed"], 2.0)
     assert math.isclose(system.nodes["t"].component.p["psi0"], math.pi / 2)

@@ -39,7 +39,7 @@ def test_pure_pursuit_fails_the_papers_straight_bound_on_screen_and_the_study_ca
                       None, plots=False)
     assert pursuit.metrics["euclid_max_straight"] > 0.40 > paper.metrics["euclid_max_straight"]
     row = next(line for line in pursuit.summary.splitlines() if line.startswith("euclid_max_straight "))
-    assert "< 0.40 (paper)" in row and row.endswith("FAIL")
+    assert "< 0.40 (paper)" in row and " FAIL  " in row and row.endswith("m above the bound")   # with its reason
     assert [f.split(" =")[0] for f in pursuit.failed_bounds] == ["euclid_max_straight"]
     row = next(line for line in paper.summary.splitlines() if line.startswith("euclid_max_straight "))
     assert row.endswith("pass")
