@@ -215,6 +215,10 @@ class INSEKF(Component):
         return np.array([self.s[0] + ox + self.s[6], self.s[1] + oy + self.s[7]]), H
 
     def step(self, t: float, dt: float) -> None:
+        with np.errstate(over="ignore", invalid="ignore"):      # a state blown up is caught and reset below
+            self._step(t, dt)
+
+    def _step(self, t: float, dt: float) -> None:
         u, p = self.u, self.p
         if self.previous is not None:
             self.predict(*self.previous, dt)
