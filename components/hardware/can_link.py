@@ -31,7 +31,7 @@ def open_bus(interface: str, channel: str, port: int = 0, bitrate: int = 0):
     if bitrate:
         options["bitrate"] = int(bitrate)
     bus = can.Bus(interface=interface, channel=channel, **options)
-    return LocalSenderBus(bus, channel) if interface == "udp_multicast" else bus
+    return LocalSenderBus(bus) if interface == "udp_multicast" else bus
 
 
 def _is_local(address: str, known: dict[str, bool]) -> bool:
@@ -52,8 +52,8 @@ class LocalSenderBus:
     from the bus's own socket (``fileno``) with their sender, those from another host refused
     and counted (``foreign``), the rest unpacked as python-can packs them (msgpack)."""
 
-    def __init__(self, bus, channel: str) -> None:
-        self.bus, self.channel, self.foreign, self._known = bus, channel, 0, {}
+    def __init__(self, bus) -> None:
+        self.bus, self.foreign, self._known = bus, 0, {}
         self.sock = socket.socket(fileno=os.dup(bus.fileno()))     # the same socket, its sender visible
         self.bound = self.sock.getsockname()
 
@@ -69,7 +69,7 @@ class LocalSenderBus:
                 self.foreign += 1
                 continue
             try:
-                return unpack_message(data, replace={"timestamp": time.time(), "channel": self.channel}, check=True)
+                return unpack_message(data, replace={"timestamp": time.time()}, check=True)
             except Exception:                  # noqa: BLE001 - an unreadable datagram is not a frame
                 self.foreign += 1
         return None
