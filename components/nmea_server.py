@@ -31,7 +31,8 @@ class NMEAServer(Component):
         *RECEIVER_INPUTS,
         par("host", "", "127.0.0.1", "address to listen on"),
         par("port", "1", 10110, "TCP port to listen on"),
-        par("client_buffer", "B", 65536, "bytes a client may leave unread before it is dropped"),
+        par("client_buffer", "B", 1 << 20, "bytes a client may leave unread before it is dropped (1 MiB: about "
+            "100 s of 20 Hz NMEA, so a guidance slow to start is not dropped)"),
         *DATUM_PARAMETERS,
         *RECEIVER_PARAMETERS,
         par("serial_port", "", "", "serial device to send on besides TCP (empty: TCP only)"),

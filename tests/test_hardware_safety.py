@@ -450,7 +450,7 @@ def test_a_can_flood_is_read_in_bounded_steps_and_stops_the_tractor_in_time(trac
 def test_a_client_that_never_reads_is_dropped_and_never_blocks_the_nmea_server():
     """One NMEA client reads, one never does (small receive buffer): the server's steps never
     wait, the stuck client is dropped with a message, the reading one gets every epoch."""
-    server = NMEAServer("nmea", {"port": 0, **GEO})                  # client_buffer 64 kB
+    server = NMEAServer("nmea", {"port": 0, "client_buffer": 16384, **GEO})
     server.initialize(0.0, DT)
     port = server.server.getsockname()[1]
     stuck = socket.socket()
