@@ -18,7 +18,7 @@ import pytest
 
 from agrobot.components.can_actuators import CANActuators
 from agrobot.components.can_tractor_link import CANTractorLink
-from agrobot.components.hardware.can_frames import crc8_j1850, load_dbc
+from agrobot.components.hardware.can_frames import crc8_j1850
 from agrobot.components.hardware.can_link import drain
 from agrobot.components.hardware.nmea import LocalFrame, _with_checksum, gga_vtg, receiver_sentences, parse_epoch
 from agrobot.components.ins_ekf import INSEKF
