@@ -7,11 +7,13 @@ Clocks, so that an import can be tested against known truth: the receiver's UTC 
 the host clock reads epoch + t (1 + drift) + offset; an NMEA sentence is stamped
 ``nmea_latency`` (plus up to ``nmea_latency_jitter``) after its epoch, a CAN frame when it is sent. With ``reference_log`` set, the
 same signals are also written as the measured log (t, delta_cmd, delta, v, yaw_rate, x, y): the
-simulation's own log, to compare an imported recording against.
+simulation's own log, to compare an imported recording against. A frame whose values are not
+finite is not recorded (the adapters never send one).
 """
 from __future__ import annotations
 
 import datetime
+import math
 from pathlib import Path
 
 from agrobot.orchestrator.component import Component, inp, par
@@ -98,9 +100,12 @@ class BusRecorder(Component):
         stamp = f"{self.host_time(t) + late:.6f} "
         self.nmea.write("".join(stamp + line + "\n" for line in data.decode("ascii").split("\r\n") if line))
         host = self.host_time(t)
-        frames = self.guidance.command(u["steer_angle_cmd"], u["speed_cmd"], u["safe_state"] <= 0.5)
-        frames += self.tractor.feedback(u["steer_angle_measured"], u["yaw_rate"], u["speed"], ready=u["machine_ready"] > 0.5,
-                                        lockout=u["machine_lockout"] > 0.5, dt=dt)
+        frames = []
+        if math.isfinite(u["steer_angle_cmd"]) and math.isfinite(u["speed_cmd"]):   # what the adapters would send
+            frames += self.guidance.command(u["steer_angle_cmd"], u["speed_cmd"], u["safe_state"] <= 0.5)
+        if all(math.isfinite(u[k]) for k in ("steer_angle_measured", "yaw_rate", "speed")):
+            frames += self.tractor.feedback(u["steer_angle_measured"], u["yaw_rate"], u["speed"],
+                                            ready=u["machine_ready"] > 0.5, lockout=u["machine_lockout"] > 0.5, dt=dt)
         for i, (fid, payload) in enumerate(frames):
             self.can(can.Message(timestamp=host + 1e-4 * i, arbitration_id=fid, data=payload,
                                  is_extended_id=self.guidance.extended, channel="can0"))

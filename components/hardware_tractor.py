@@ -69,6 +69,7 @@ class HardwareTractor(Component):
         except Exception:
             self.can.terminate()
             raise
+        self.gps.events[:0] = self.can.events
         self.events = self.gps.events        # one log for both adapters
         self.can.events = self.events
         for k in ("x_cg", "y_cg", "heading"):

@@ -34,7 +34,9 @@ With ``terrain_compensation = 0`` the antenna is taken as standing on flat groun
 in h). Outputs: the pose (R and CG = R + l_r (cos psi, sin psi)), the crab for the tracker's
 feed-forward, and the CG's cross-track standard deviation sqrt(n' P n), n the body's left axis,
 for a watchdog to stop on. The speed output (for the speed controller) is v_o (1 + e_v) through a
-first-order low-pass of ``speed_time_constant`` (the wheel speed's sample noise).
+first-order low-pass of ``speed_time_constant`` (the wheel speed's sample noise). A non-finite fix
+or IMU/odometry input is not used; a state that goes non-finite anyway is reset to the last finite
+one with the initial covariance (logged with its reason).
 """
 from __future__ import annotations
 
@@ -133,6 +135,7 @@ class INSEKF(Component):
         self.require(p["speed_time_constant"] >= 0, "parameter speed_time_constant must be >= 0")
         self.speed_gain = 1.0 - math.exp(-dt / p["speed_time_constant"]) if p["speed_time_constant"] > 0 else 1.0
         self.speed = 0.0
+        self.good, self.P0 = self.s.copy(), self.P.copy()
         self._publish(0.0, 0.0, t0)
 
     # --- the filter ----------------------------------------------------------------------------
@@ -212,26 +215,41 @@ class INSEKF(Component):
         return np.array([self.s[0] + ox + self.s[6], self.s[1] + oy + self.s[7]]), H
 
     def step(self, t: float, dt: float) -> None:
+        with np.errstate(over="ignore", invalid="ignore"):      # a state blown up is caught and reset below
+            self._step(t, dt)
+
+    def _step(self, t: float, dt: float) -> None:
         u, p = self.u, self.p
         if self.previous is not None:
             self.predict(*self.previous, dt)
         omega, roll, pitch = float(u["yaw_rate"]), float(u["roll"]), float(u["pitch"])
         v_o = float(u["speed"])
+        inputs = (omega, roll, pitch, float(u["accel_left"]), v_o)
+        if not all(map(math.isfinite, inputs)):           # a bad sample: no dead reckoning over it
+            self.previous = None
+            self._publish(0.0, 0.0, t)
+            return
         if abs(v_o) <= 1e-3:                                       # at rest: the gyro reads its bias
             H = np.zeros((1, N))
             H[0, 3] = 1.0
             self.update(np.array([omega]), np.array([self.s[3]]), H, np.array([[p["gyro_noise_psd"] / dt]]))
         used = 0.0
         fix = (float(u["gps_x"]), float(u["gps_y"]))
-        quality = int(u["fix_quality"])
-        if u["fix_valid"] > 0.5 and FIX_RANK.get(quality, 0) > 0 and fix != self.last_fix:
+        quality = int(u["fix_quality"]) if math.isfinite(u["fix_quality"]) else 0
+        if u["fix_valid"] > 0.5 and FIX_RANK.get(quality, 0) > 0 and fix != self.last_fix \
+                and all(map(math.isfinite, fix)):
             self.last_fix, self.last_fix_time, used = fix, t, float(quality)
             if quality != self.error_quality:
                 self.start_error(quality)
             r = p["fix_noise_std"] ** 2 + (p["antenna_height"] * p["attitude_noise_std"]) ** 2
             h, H = self.antenna(roll, pitch)
             self.update(np.array(fix), h, H, r * np.eye(2))
-        self.previous = (omega, roll, pitch, float(u["accel_left"]), v_o)
+        self.previous = inputs
+        if not (np.all(np.isfinite(self.s)) and np.all(np.isfinite(self.P))):
+            self.event(t, f"pose estimate went non-finite: reset to the last finite state ({self.good[0]:.3f} m, "
+                          f"{self.good[1]:.3f} m, {self.good[2]:.4f} rad) with the initial covariance")
+            self.s, self.P = self.good.copy(), self.P0.copy()
+        self.good = self.s.copy()
         self._publish(float(u["accel_left"]), v_o, t, used)
 
     def _publish(self, f_y: float, v_o: float, t: float, used: float = 0.0) -> None:

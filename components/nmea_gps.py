@@ -7,6 +7,13 @@ antenna) with pynmeagps, any talker (GN, GP, GL, ...), and converts latitude/lon
 east/north about the study's datum; other sentences (ZDA, GSA, GSV ...) are counted as unused. Bad checksums, partial lines, unknown sentences and fixes worse than
 ``min_fix_quality`` (4 = RTK fixed; 5, RTK float, is worse) are counted in outputs and flagged
 (``fix_valid`` = 0); none is fatal. ``fix_age`` is the time since the last good fix arrived.
+
+Every field is judged before use (hardware.nmea.PLAUSIBLE: finite and in its physical range); a
+sentence carrying a bad value is dropped and counted (``bad_values``), a GGA's fix downgraded to
+quality 0. Work per step is bounded: at most ``max_read_bytes`` are read and the newest
+``max_parse_bytes`` of them parsed (the rest counted in ``dropped_bytes``); a step that reads its
+whole allowance (the receiver sends faster than a step may take) cannot tell its newest fix, so
+its fixes are not used (``flooded_steps``) and the fix ages until the flood ends.
 """
 from __future__ import annotations
 
@@ -17,6 +24,14 @@ from agrobot.orchestrator.component import Component, out, par
 
 from .hardware.nmea import (DATUM_PARAMETERS, RTK_FIXED, Heading, LocalFrame, NMEAStream, Position,
                            PositionError, Velocity, fix_at_least)
+
+
+def finite(item) -> bool:
+    """Every measured field of a parsed item is finite (a GGA without a fix carries NaN by design,
+    GST's height error may be absent)."""
+    if isinstance(item, Position) and item.quality == 0:
+        return True
+    return all(math.isfinite(v) for k, v in vars(item).items() if isinstance(v, float) and k != "std_height")
 
 
 class NMEAGPS(Component):
@@ -30,6 +45,8 @@ class NMEAGPS(Component):
         par("connect_timeout", "s", 5.0, "how long to retry opening the port"),
         par("record_file", "", "", "record every line received, after the host's UNIX time of its arrival "
             "(empty: no recording)"),
+        par("max_read_bytes", "B", 16384, "bytes read per step at most (a step reading them all is flooded)"),
+        par("max_parse_bytes", "B", 4096, "the newest bytes of a step parsed (older ones counted as dropped)"),
         out("x", "m", 0.0, "east position of the antenna"),
         out("y", "m", 0.0, "north position of the antenna"),
         out("vel_east", "m/s", 0.0, "east velocity (VTG/RMC)"),
@@ -46,6 +63,9 @@ class NMEAGPS(Component):
         out("unknown_sentences", "1", 0.0, "sentences of an unknown talker or type so far"),
         out("partial_lines", "1", 0.0, "truncated lines and stray bytes so far"),
         out("poor_fixes", "1", 0.0, "fixes below min_fix_quality so far"),
+        out("bad_values", "1", 0.0, "sentences dropped for a non-finite or out-of-range field so far"),
+        out("dropped_bytes", "1", 0.0, "bytes skipped because more arrived than a step may take, so far"),
+        out("flooded_steps", "1", 0.0, "steps that read max_read_bytes, their fixes unused, so far"),
     )
     feedthrough = {}
 
@@ -58,6 +78,10 @@ class NMEAGPS(Component):
         self.last_good = t0
         self.port = self.record = None
         self.partial = b""
+        self.flooded = 0
+        self.require(int(p["max_read_bytes"]) >= int(p["max_parse_bytes"]) > 256,
+                     f"max_read_bytes {p['max_read_bytes']}, max_parse_bytes {p['max_parse_bytes']}: expected "
+                     "max_read_bytes >= max_parse_bytes > 256 (a sentence)")
         if p["record_file"]:
             try:
                 self.record = open(p["record_file"], "a", buffering=1, encoding="ascii", errors="replace")
@@ -75,16 +99,18 @@ class NMEAGPS(Component):
         self.event(t0, f"GPS port {p['url']} open")
 
     def read_available(self, t: float) -> bytes:
-        chunks = []
-        while True:
+        """What arrived since the last step, at most ``max_read_bytes``."""
+        chunks, left = [], int(self.p["max_read_bytes"])
+        while left > 0:
             try:
-                data = self.port.read(4096)
+                data = self.port.read(min(4096, left))
             except Exception as exc:           # noqa: BLE001 - a dropped link is a stale fix, not a crash
                 self.event(t, f"GPS read failed: {exc}")
                 break
             if not data:
                 break
             chunks.append(data)
+            left -= len(data)
         return b"".join(chunks)
 
     def step(self, t: float, dt: float) -> None:
@@ -93,13 +119,33 @@ class NMEAGPS(Component):
             *lines, self.partial = (self.partial + data).split(b"\n")
             stamp = f"{time.time():.6f} "
             self.record.write("".join(stamp + ln.rstrip(b"\r").decode("ascii", "replace") + "\n" for ln in lines if ln.strip()))
-        self.apply(t, self.stream.feed(data))
+        flooded = len(data) >= int(self.p["max_read_bytes"])
+        keep = int(self.p["max_parse_bytes"])
+        if len(data) > keep:                        # the newest lines only
+            tail = data[-keep:]
+            tail = tail[tail.find(b"\n") + 1:]
+            self.stream.counters.dropped_bytes += len(data) - len(tail)
+            self.stream.resync()
+            data = tail
+        items = self.stream.feed(data)
+        if flooded:
+            if not self.flooded:
+                self.event(t, f"GPS link flooded: {self.p['max_read_bytes']} bytes or more in one step; the fixes "
+                              "of such steps are not used")
+            self.flooded += 1
+            items = [it for it in items if not isinstance(it, Position)]
+        self.apply(t, items)
 
     def apply(self, t: float, items: list[Position | Velocity | PositionError | Heading]) -> None:
         """Update the outputs from parsed sentences (shared by the serial path and the tests)."""
         y, c = self.y, self.stream.counters
         y["fix_valid"] = y["heading_valid"] = 0.0
         for item in items:
+            if not finite(item):                  # the parser judges the fields; this holds if it is bypassed
+                c.bad_value += 1
+                if isinstance(item, Position):    # the fix downgraded
+                    y["fix_quality"] = 0.0
+                continue
             if isinstance(item, PositionError):
                 y["position_std"] = max(item.std_north, item.std_east)
                 continue
@@ -121,6 +167,7 @@ class NMEAGPS(Component):
         y["fix_age"] = t - self.last_good
         y["bad_checksums"], y["malformed_sentences"] = float(c.bad_checksum), float(c.malformed)
         y["unknown_sentences"], y["partial_lines"], y["poor_fixes"] = float(c.unknown), float(c.partial), float(c.poor_fix)
+        y["bad_values"], y["dropped_bytes"], y["flooded_steps"] = float(c.bad_value), float(c.dropped_bytes), float(getattr(self, "flooded", 0))
 
     def terminate(self) -> None:
         if getattr(self, "record", None) is not None:

@@ -7,6 +7,10 @@ connected to ``host:port`` (TCP) and, with ``serial_port`` set, to that serial d
 With ``record_file`` every sentence also goes to that file, after the host's UNIX time
 (``1777622400.050123 $GNGGA,...``), written as sent. Fault injection for tests: ``stop_after`` (s, the stream stops) and ``float_after`` (s, the fix
 quality drops to 5, RTK float); negative = never.
+
+The server listens on ``host`` (loopback by default; the address it bound is logged), and a write
+never waits: each client has at most ``client_buffer`` bytes queued (the socket's own send buffer
+included), and a client that lets more pile up (it does not read) is dropped with a message.
 """
 from __future__ import annotations
 
@@ -27,6 +31,8 @@ class NMEAServer(Component):
         *RECEIVER_INPUTS,
         par("host", "", "127.0.0.1", "address to listen on"),
         par("port", "1", 10110, "TCP port to listen on"),
+        par("client_buffer", "B", 1 << 20, "bytes a client may leave unread before it is dropped (1 MiB: about "
+            "100 s of 20 Hz NMEA, so a guidance slow to start is not dropped)"),
         *DATUM_PARAMETERS,
         *RECEIVER_PARAMETERS,
         par("serial_port", "", "", "serial device to send on besides TCP (empty: TCP only)"),
@@ -68,7 +74,11 @@ class NMEAServer(Component):
             self.require(False, f"cannot listen on {p['host']}:{p['port']}: {exc}")
         self.server.listen(4)
         self.server.setblocking(False)
+        host, port = self.server.getsockname()[:2]
+        reach = "this host only" if host.startswith("127.") else "every host that can reach this address"
+        self.event(t0, f"NMEA server listening on {host}:{port} ({reach})")
         self.clients: list[socket.socket] = []
+        self.pending: dict[socket.socket, bytes] = {}
         self.sent, self.stopped, self.floating = 0, False, False
 
     def step(self, t: float, dt: float) -> None:
@@ -79,7 +89,10 @@ class NMEAServer(Component):
             except (BlockingIOError, OSError):
                 break
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, int(p["client_buffer"]) // 2)
+            conn.setblocking(False)
             self.clients.append(conn)
+            self.pending[conn] = b""
             self.event(t, f"NMEA client {addr[0]}:{addr[1]} connected")
         if 0 <= p["stop_after"] <= t and not self.stopped:
             self.stopped = True
@@ -106,14 +119,34 @@ class NMEAServer(Component):
                 except Exception as exc:         # noqa: BLE001 - a full or gone line loses this epoch only
                     self.event(t, f"NMEA serial write failed: {exc}")
             for conn in list(self.clients):
-                try:
-                    conn.sendall(data)
-                except OSError:
-                    self.clients.remove(conn)
-                    conn.close()
-                    self.event(t, "NMEA client gone")
+                self.write(t, conn, data)
             self.sent += len(self.sentence_set)
         self.y["clients"], self.y["sentences_sent"] = float(len(self.clients)), float(self.sent)
+
+    def write(self, t: float, conn: socket.socket, data: bytes) -> None:
+        """Send what the client can take now; keep the rest; drop a client that falls behind."""
+        queued = self.pending[conn] + data
+        try:
+            sent = conn.send(queued)
+        except BlockingIOError:
+            sent = 0
+        except OSError:
+            self.drop(t, conn, "NMEA client gone")
+            return
+        self.pending[conn] = queued[sent:]
+        if len(self.pending[conn]) > int(self.p["client_buffer"]) // 2:
+            self.drop(t, conn, f"NMEA client dropped: it left more than {self.p['client_buffer']} bytes unread "
+                               "(it does not read)")
+
+    def drop(self, t: float, conn: socket.socket, why: str) -> None:
+        self.clients.remove(conn)
+        self.pending.pop(conn, None)
+        try:
+            where = "{}:{}".format(*conn.getpeername()[:2])
+        except OSError:
+            where = "?"
+        conn.close()
+        self.event(t, f"{why} ({where})")
 
     def terminate(self) -> None:
         if getattr(self, "record", None) is not None:

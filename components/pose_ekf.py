@@ -6,7 +6,9 @@
 
 measurement h(x) = [x, y] (GPS antenna at R), w ~ N(0, Q), v ~ N(0, R). At sample k the filter
 predicts with (v, delta) of sample k-1 and updates with the fix of sample k. Outputs: the pose at R
-and, for the tracker, the CG = R + l_r (cos psi, sin psi).
+and, for the tracker, the CG = R + l_r (cos psi, sin psi). A non-finite fix or input is not used;
+a state that goes non-finite anyway is reset to the last finite pose with the initial covariance
+(logged with its reason).
 """
 from __future__ import annotations
 
@@ -61,6 +63,7 @@ class PoseEKF(Component):
         self.Q = (p["position_process_std"] ** 2, p["heading_process_std"] ** 2)
         self.r = p["position_noise_std"] ** 2
         self.prev_input: tuple[float, float] | None = None
+        self.good = list(self.s)
         self._publish()
 
     def predict(self, v: float, delta: float, dt: float) -> None:
@@ -96,9 +99,18 @@ class PoseEKF(Component):
         u = self.u
         if self.prev_input is not None:
             self.predict(*self.prev_input, dt)
-        if u["fix_valid"] > 0.5:
-            self.update(float(u["gps_x"]), float(u["gps_y"]))
-        self.prev_input = (float(u["speed"]), float(u["steer_angle"]))
+        fix = (float(u["gps_x"]), float(u["gps_y"]))
+        if u["fix_valid"] > 0.5 and all(map(math.isfinite, fix)):
+            self.update(*fix)
+        inputs = (float(u["speed"]), float(u["steer_angle"]))
+        self.prev_input = inputs if all(map(math.isfinite, inputs)) else None
+        if not all(map(math.isfinite, self.s + self.P)):
+            self.event(t, f"pose estimate went non-finite: reset to the last finite pose ({self.good[0]:.3f} m, "
+                          f"{self.good[1]:.3f} m, {self.good[2]:.4f} rad) with the initial uncertainty")
+            self.s = list(self.good)
+            p0, h0 = self.p["position0_std"] ** 2, self.p["heading0_std"] ** 2
+            self.P = [p0, 0.0, 0.0, p0, 0.0, h0]
+        self.good = list(self.s)
         self._publish()
 
     def _publish(self) -> None:

@@ -6,9 +6,14 @@ mechanical lockout (ISO 11783-7 Guidance Machine Info, read by can_actuators wit
 ``protocol = "isobus"``): guidance disengages. So does a pose estimate whose own cross-track
 standard deviation passes ``max_position_std`` (an estimator that rides through a GNSS outage on
 dead reckoning: the user's bound on how far it may trust it). It stays tripped until every
-condition has been good for ``recovery_time``. Every trip and recovery is logged with its reason.
+condition has been good for ``recovery_time``. So does any input that is not finite (a NaN or
+inf command, fix age, quality or estimate uncertainty: something upstream is broken, whatever the
+stream's timing says); the wheel angle held is then the last finite one measured. Every trip and
+recovery is logged with its reason.
 """
 from __future__ import annotations
+
+import math
 
 from agrobot.orchestrator.component import Component, inp, out, par
 
@@ -16,7 +21,8 @@ from .hardware.nmea import fix_at_least
 
 REASONS = {0: "ok", 1: "stale GPS fix", 2: "GPS fix below the required quality",
            3: "steering system not ready", 4: "operator lockout of automatic steering",
-           5: "position estimate too uncertain"}
+           5: "position estimate too uncertain", 6: "non-finite command or estimate"}
+CHECKED = ("steer_angle_cmd", "speed_cmd", "fix_age", "fix_quality", "machine_ready", "machine_lockout", "position_std")
 
 
 class SafetyWatchdog(Component):
@@ -39,18 +45,23 @@ class SafetyWatchdog(Component):
         out("speed_cmd_out", "m/s", 0.0, "speed command to the actuators"),
         out("safe_state", "1", 0.0, "1 while tripped"),
         out("trip_reason", "1", 0.0, "0 ok, 1 stale fix, 2 poor fix, 3 steering not ready, 4 lockout, "
-            "5 estimate too uncertain"),
+            "5 estimate too uncertain, 6 non-finite command or estimate"),
     )
     feedthrough = {k: ("steer_angle_cmd", "speed_cmd", "steer_angle_measured", "fix_age", "fix_quality",
                        "machine_ready", "machine_lockout", "position_std")
                    for k in ("steer_angle_cmd_out", "speed_cmd_out", "safe_state", "trip_reason")}
 
     def initialize(self, t0: float, dt: float) -> None:
-        self.tripped, self.good_since, self.held = False, t0, 0.0
+        self.tripped, self.good_since, self.held, self.measured = False, t0, 0.0, 0.0
 
     def step(self, t: float, dt: float) -> None:
         u, p, y = self.u, self.p, self.y
-        if u["machine_lockout"] > 0.5:
+        if math.isfinite(u["steer_angle_measured"]):
+            self.measured = u["steer_angle_measured"]
+        bad = [k for k in CHECKED if not math.isfinite(u[k])]
+        if bad:
+            reason = 6
+        elif u["machine_lockout"] > 0.5:
             reason = 4
         elif u["machine_ready"] < 0.5:
             reason = 3
@@ -63,10 +74,11 @@ class SafetyWatchdog(Component):
         if reason:
             self.good_since = None
             if not self.tripped:
-                self.tripped, self.held = True, u["steer_angle_measured"]
+                self.tripped, self.held = True, self.measured
                 bound = (f"position std {u['position_std']:.3f} m, bound {p['max_position_std']:g} m, "
                          if p["max_position_std"] < float("inf") else "")
-                self.event(t, f"SAFE STATE: {REASONS[reason]} (fix age {u['fix_age']:.2f} s, quality "
+                what = f"{', '.join(f'{k} {u[k]}' for k in bad)}; " if bad else ""
+                self.event(t, f"SAFE STATE: {REASONS[reason]} ({what}fix age {u['fix_age']:.2f} s, quality "
                               f"{u['fix_quality']:.0f}, {bound}steering ready {u['machine_ready']:.0f}, lockout "
                               f"{u['machine_lockout']:.0f}); speed to 0, wheel angle held at {self.held:.4f} rad")
         else:

@@ -21,7 +21,8 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if duration is not None and not duration > 0:
         raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
     study = Study.load(study_path, overrides)
-    server = resolve(study).one(role="nmea_server", purpose="emulate")
+    model = resolve(study)
+    server = model.one(role="nmea_server", purpose="emulate")
     values = {f"{server}.port": nmea_port, "study.realtime": True}
     if duration is not None:
         values["study.stop_time"] = float(duration)
@@ -33,7 +34,7 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
         study = record_adapters(study, record_folder(record))
         named = (record / "gps.nmea", record / "can.log")
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
-    print(f"emulating {study.study.name}: NMEA on 127.0.0.1:{nmea_port}, real time, until "
+    print(f"emulating {study.study.name}: {reach(study, model, server, nmea_port)}, real time, until "
           f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
     try:
         result = run_study(study, out, plots=False, overwrite=overwrite, progress=progress, named=named)
@@ -50,11 +51,24 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     return 0
 
 
+def reach(study, model, server: str, nmea_port: int) -> str:
+    """Where the emulator listens, as its components bind: the NMEA server's host and port, and each
+    CAN link's bus (python-can's udp_multicast listens on every interface)."""
+    from .can_link import binding
+
+    host = study.components[server].parameters.get("host", "127.0.0.1")
+    parts = [f"NMEA on {host}:{nmea_port}" + ("" if str(host).startswith("127.") else " (reachable from other hosts)")]
+    for link in model.find(role="tractor_link"):
+        p = study.components[link].parameters if link in study.components else {}
+        parts.append(binding(p.get("interface", "virtual"), p.get("channel", "agrobot"), p.get("port", 0)))
+    return "; ".join(parts)
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from agrobot.orchestrator.cli import add_set_option
 
     p.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
-    p.add_argument("--nmea-port", type=int, required=True, help="TCP port on 127.0.0.1 for NMEA clients")
+    p.add_argument("--nmea-port", type=int, required=True, help="TCP port for NMEA clients (on the nmea_server's host, 127.0.0.1 by default)")
     from agrobot.orchestrator.cli import add_output_options
 
     add_output_options(p, "write the emulated tractor's signals here", required=False)

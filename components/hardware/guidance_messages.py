@@ -8,10 +8,14 @@
   mechanical lockout, steering readiness), Wheel-based Speed (PGN 65096) and the project's yaw
   rate (PGN 65312) from the tractor. Curvature and wheel angle through the wheelbase,
   kappa = tan(delta) / L, with ISO's sign (positive to the driver's right); frames are matched by
-  PGN (any source address), sent with the DBC's addresses or ``source_address``; reserved bits 1.
+  PGN and taken only from the peer's source address (``peer_address``: the DBC's sender by default,
+  -2 any), sent with the DBC's addresses or ``source_address``; reserved bits 1. ISO 11783-7
+  defines no counter or checksum for these messages (AgIsoStack++ agrees), so none is added.
 
 Both decode into the same dictionaries: a command {steer_angle_cmd, speed_cmd, engaged} and
 feedback {steer_angle, yaw_rate, speed, ready, lockout} (the last two only from ISOBUS, 1/0).
+A frame that does not decode is counted in ``bad``; one refused by a check (counter, checksum,
+a value outside its DBC range, a foreign sender) in ``refused``.
 """
 from __future__ import annotations
 
@@ -45,6 +49,10 @@ class AgrobotMessages:
     def bad(self) -> int:
         return self.codec.bad
 
+    @property
+    def refused(self) -> int:
+        return self.codec.bad_e2e + self.codec.out_of_range
+
     def command(self, steer_angle_cmd: float, speed_cmd: float, engaged: bool) -> list[tuple[int, bytes]]:
         return [self.codec.encode(SteerAngleCmd=steer_angle_cmd, SpeedCmd=max(0.0, speed_cmd), SafeState=int(not engaged))]
 
@@ -67,8 +75,8 @@ class IsobusMessages:
 
     extended = True
 
-    def __init__(self, db, side: str, wheelbase: float, source_address: int = -1) -> None:
-        self.db, self.wheelbase, self.bad = db, float(wheelbase), 0
+    def __init__(self, db, side: str, wheelbase: float, source_address: int = -1, peer_address: int = -1) -> None:
+        self.db, self.wheelbase, self.bad, self.refused = db, float(wheelbase), 0, 0
         self.messages = {m.name: m for m in db.messages}
         self.by_pgn = {_pgn(m.frame_id): m for m in db.messages}
         mine = ("GuidanceSystemCommand", "MachineSelectedSpeedCommand") if side == "guidance" else \
@@ -78,6 +86,9 @@ class IsobusMessages:
             fid = self.messages[name].frame_id
             self.ids[name] = fid if source_address < 0 else (fid & ~0xFF) | (int(source_address) & 0xFF)
         self.distance = 0.0                     # m, Wheel-based Machine Distance
+        theirs = [m for m in db.messages if m.name not in mine]
+        self.peers = None if peer_address == -2 else \
+            {m.frame_id & 0xFF for m in theirs} if peer_address < 0 else {int(peer_address) & 0xFF}
 
     def _frame(self, name: str, values: dict) -> tuple[int, bytes]:
         msg = self.messages[name]
@@ -124,21 +135,30 @@ class IsobusMessages:
         m = self.by_pgn.get(_pgn(msg.arbitration_id))
         if m is None or m.name not in names:
             return None, None
+        if self.peers is not None and msg.arbitration_id & 0xFF not in self.peers:
+            self.refused += 1            # the right message from the wrong sender
+            return None, None
         try:
             return m.name, m.decode(bytes(msg.data), decode_choices=False)
         except Exception:                # noqa: BLE001 - a bad frame is counted, never raised
             self.bad += 1
             return None, None
 
+    def _refuse(self):
+        self.refused += 1
+        return None
+
     def read_command(self, msg) -> dict | None:
         name, f = self._decode(msg, ("GuidanceSystemCommand", "MachineSelectedSpeedCommand"))
         if name == "GuidanceSystemCommand":
             if f["CurvatureCommand"] > 8031.75:          # 'not available'
                 return {"engaged": False}
+            if int(f["CurvatureCommandStatus"]) > 1:     # 2 error, 3 not available: not intended to steer
+                return {"engaged": False}
             return {"steer_angle_cmd": self.steer_angle(f["CurvatureCommand"]),
                     "engaged": int(f["CurvatureCommandStatus"]) == 1}
-        if name == "MachineSelectedSpeedCommand" and f["SpeedSetpointCommand"] <= 64.255:
-            return {"speed_cmd": f["SpeedSetpointCommand"]}
+        if name == "MachineSelectedSpeedCommand":
+            return {"speed_cmd": f["SpeedSetpointCommand"]} if f["SpeedSetpointCommand"] <= 64.255 else self._refuse()
         return None
 
     def read_feedback(self, msg) -> dict | None:
@@ -152,11 +172,12 @@ class IsobusMessages:
         if name == "WheelBasedSpeedAndDistance" and f["WheelBasedMachineSpeed"] <= 64.255:
             return {"speed": f["WheelBasedMachineSpeed"]}
         if name == "AgrobotYawRate":
-            return {"yaw_rate": f["YawRate"]}
+            return {"yaw_rate": f["YawRate"]} if -3.0 <= f["YawRate"] <= 3.0 else self._refuse()
         return None
 
 
-def messages_for(protocol: str, dbc: str, side: str, wheelbase: float, source_address: int = -1):
+def messages_for(protocol: str, dbc: str, side: str, wheelbase: float, source_address: int = -1,
+                 peer_address: int = -1):
     """The message set of a CAN component (``side``: 'guidance' or 'tractor'); ValueError/OSError
     name what is wrong."""
     if protocol not in PROTOCOLS:
@@ -165,4 +186,4 @@ def messages_for(protocol: str, dbc: str, side: str, wheelbase: float, source_ad
         return AgrobotMessages(load_dbc(dbc or DEFAULT_DBC), side)
     if not wheelbase > 0:
         raise ValueError(f"wheelbase {wheelbase}: expected a positive length (m) to convert curvature")
-    return IsobusMessages(load_dbc(dbc or ISOBUS_DBC), side, wheelbase, source_address)
+    return IsobusMessages(load_dbc(dbc or ISOBUS_DBC), side, wheelbase, source_address, peer_address)

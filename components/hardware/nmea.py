@@ -61,6 +61,27 @@ class StreamCounters:
     unknown: int = 0                # unknown talker or a sentence this adapter does not use
     partial: int = 0                # truncated lines, bytes before '$', overlong garbage
     poor_fix: int = 0               # GGA below the required fix quality
+    bad_value: int = 0              # a field not finite or outside its physical range (PLAUSIBLE)
+    dropped_bytes: int = 0          # bytes skipped unread because more arrived than a step may take
+
+
+# physical ranges of the fields the adapter uses (NaN and inf are outside every range): a sentence
+# carrying a value outside is dropped and counted; a GGA's fix is downgraded to quality 0
+PLAUSIBLE = {"lat": (-90.0, 90.0), "lon": (-180.0, 180.0), "alt": (-1000.0, 20000.0), "sep": (-200.0, 200.0),
+             "numSV": (0, 99), "speed": (0.0, 99.99), "course": (0.0, 360.0), "std": (0.0, 1000.0),
+             "heading": (0.0, 360.0)}
+
+
+class BadValue(ValueError):
+    """A field that parsed but is not a physical value (NaN, inf, out of range)."""
+
+
+def plausible(name: str, value: float) -> float:
+    """``value`` when finite and inside PLAUSIBLE[name]; ValueError naming the field otherwise."""
+    low, high = PLAUSIBLE[name]
+    if not (math.isfinite(value) and low <= value <= high):
+        raise BadValue(f"{name} {value!r}: expected a finite value in [{low:g}, {high:g}]")
+    return value
 
 
 @dataclass
@@ -70,6 +91,10 @@ class NMEAStream:
     max_line: int = 256
     counters: StreamCounters = field(default_factory=StreamCounters)
     _buffer: bytes = b""
+
+    def resync(self) -> None:
+        """Forget a partial line (the bytes before the next ones were skipped)."""
+        self._buffer = b""
 
     def feed(self, data: bytes) -> list[Position | Velocity | PositionError | Heading]:
         out: list[Position | Velocity | PositionError | Heading] = []
@@ -121,34 +146,38 @@ class NMEAStream:
             return None
         try:
             return self._fields(msg, ident)
+        except BadValue:
+            c.bad_value += 1
+            if ident == "GGA":                           # the fix is downgraded: no position this epoch
+                return Position(math.nan, math.nan, math.nan, 0, 0)
+            return None
         except (TypeError, ValueError, AttributeError):
             c.malformed += 1
             return None
 
     def _fields(self, msg, ident: str):
-        if ident == "GGA" and (msg.quality in ("", 0) or msg.lat == ""):
+        if ident == "GGA" and msg.quality in ("", 0):
             return Position(math.nan, math.nan, math.nan, 0, 0)    # a receiver without a fix says so
+        if ident == "GGA" and (msg.lat == "" or msg.lon == ""):
+            raise BadValue("a fix quality without a position")
         if (ident == "RMC" and msg.status == "V") or (ident == "VTG" and msg.sogk == "" and msg.sogn == "") \
                 or (ident == "GST" and msg.stdLat == ""):
             return None                                          # no fix: nothing to measure
         if ident == "GGA":
-            lat, lon, q = float(msg.lat), float(msg.lon), int(msg.quality)
-            if not (-90 <= lat <= 90 and -180 <= lon <= 180) or not 0 <= q <= 9:
-                raise ValueError("out of range")
-            alt = float(msg.alt) if msg.alt != "" else 0.0
-            sep = float(msg.sep) if getattr(msg, "sep", "") != "" else 0.0
-            sats = int(msg.numSV) if msg.numSV != "" else 0
+            q = int(msg.quality)
+            if not 0 <= q <= 9:
+                raise ValueError("quality out of range")
+            lat, lon = plausible("lat", float(msg.lat)), plausible("lon", float(msg.lon))
+            alt = plausible("alt", float(msg.alt)) if msg.alt != "" else 0.0
+            sep = plausible("sep", float(msg.sep)) if getattr(msg, "sep", "") != "" else 0.0
+            sats = int(plausible("numSV", float(msg.numSV))) if msg.numSV != "" else 0
             return Position(math.radians(lat), math.radians(lon), alt + sep, q, sats)
         if ident == "GST":
-            std = (float(msg.stdLat), float(msg.stdLong), float(msg.stdAlt) if msg.stdAlt != "" else math.nan)
-            if not all(v >= 0 for v in std[:2]):
-                raise ValueError("negative error")
+            std = (plausible("std", float(msg.stdLat)), plausible("std", float(msg.stdLong)),
+                   plausible("std", float(msg.stdAlt)) if msg.stdAlt != "" else math.nan)
             return PositionError(*std)
         if ident == "HDT":
-            heading = float(msg.headingT)
-            if not 0 <= heading <= 360:
-                raise ValueError("out of range")
-            return Heading(math.radians(heading))
+            return Heading(math.radians(plausible("heading", float(msg.headingT))))
         if ident == "VTG":
             if msg.sogk != "":
                 speed = float(msg.sogk) / 3.6
@@ -159,9 +188,7 @@ class NMEAStream:
             if msg.status != "A":
                 raise ValueError(f"RMC status {msg.status!r}")
             speed, course = float(msg.spd) * KNOTS, float(msg.cog) if msg.cog != "" else 0.0
-        if not (0 <= speed < 100 and 0 <= course <= 360):
-            raise ValueError("out of range")
-        return Velocity(speed, math.radians(course))
+        return Velocity(plausible("speed", speed), math.radians(plausible("course", course)))
 
 
 DATUM_PARAMETERS = (
