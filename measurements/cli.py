@@ -148,8 +148,9 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write(jobs) -> None:
-    from agrobot.orchestrator.results import atomic_write
+    from agrobot.orchestrator.results import atomic_write, write_frame
 
+    from .log import log_units
     from .recording import describe
 
     for path, f, rep in jobs:

@@ -1,7 +1,7 @@
 """ASAM MDF4 recordings (``.mf4``, ``.mdf``: Vector CANape/CANoe, ETAS INCA, loggers) read with asammdf.
 
 An MDF file holds channel groups, each sampled on its own time master channel. A file of signals
-becomes one table per channel group (measurements.tables.Table), its channels as columns with their
+becomes one table per channel group (``MDFGroup``; measurements.tables makes each a Table), its channels as columns with their
 units, values after the file's conversion rules (linear, rational, tabular: what asammdf applies for
 a physical value); the groups are then joined on time as several tables are. A channel whose
 conversion gives text (a value-to-text table) is left out and named. The table of a group is named
@@ -18,15 +18,14 @@ from __future__ import annotations
 
 import re
 import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from .log import LogError
-from .tables import Table
 
-MDF_SUFFIXES = (".mf4", ".mdf")
 BUS_CHANNEL = "CAN_DataFrame"
 _NAME = re.compile(r"[^A-Za-z0-9_]+")
 
@@ -94,9 +93,22 @@ def _group_name(mdf, index: int, taken: set[str]) -> str:
     return name
 
 
-def mdf_tables(path: Path) -> list[Table]:
-    """One Table per channel group of signals, with times (s) and units; the groups without a
-    numeric channel, and the text-valued channels, are named in the tables' notes."""
+@dataclass
+class MDFGroup:
+    """One channel group of signals: its name, channels (a column each), units, times [s], how the
+    times were found, and notes (channels left out)."""
+
+    name: str
+    frame: pd.DataFrame
+    units: dict
+    t: np.ndarray
+    time_how: str
+    notes: list
+
+
+def mdf_tables(path: Path) -> list[MDFGroup]:
+    """One group per channel group of signals, with times (s) and units; the text-valued channels
+    are named in its notes."""
     mdf = _open(path)
     try:
         start = _start_posix(mdf)
@@ -126,32 +138,11 @@ def mdf_tables(path: Path) -> list[Table]:
             if master is None or t is None:
                 raise LogError(f"{path}: channel group {table_name} has no time channel (a master channel of "
                                f"type time): MDF signals need one to be put on a clock")
-            frame = pd.DataFrame(columns)
-            table = Table(path, table_name, frame, units, notes=notes)
-            table.t = t + start
-            table.time_how = (f"the group's time channel{' + the header start time' if start else ''} "
-                              f"(MDF4 {path.name}, group {index})")
-            table.time_columns = ()
-            tables.append(table)
+            tables.append(MDFGroup(table_name, pd.DataFrame(columns), units, t + start,
+                                   f"the group's time channel{' + the header start time' if start else ''} "
+                                   f"(MDF4 {path.name}, group {index})", notes))
     finally:
         mdf.close()
     if not tables:
         raise LogError(f"{path}: no channel group of numeric signals (the file holds bus logging only, or text)")
     return tables
-
-
-def describe_mdf(path: Path) -> list[str]:
-    """``convert FILE.mf4 --list``: every group with its rate and every channel with its unit and range."""
-    lines = [f"MDF {path.name}: " + ("bus logging (CAN frames, decoded with the DBC)" if is_bus_logging(path)
-                                     else "channel groups of signals")]
-    if is_bus_logging(path):
-        return lines
-    for table in mdf_tables(path):
-        t = table.t
-        rate = (len(t) - 1) / (t[-1] - t[0]) if len(t) > 1 and t[-1] > t[0] else float("nan")
-        lines.append(f"  {table.name}: {len(t)} samples, {rate:.4g} Hz, {t[-1] - t[0]:.3f} s")
-        for name in table.frame.columns:
-            v = table.frame[name].to_numpy()
-            lines.append(f"    {name} [{table.units.get(name, 'no unit')}]: {np.nanmin(v):.6g} .. {np.nanmax(v):.6g}")
-        lines += [f"    note: {n}" for n in table.notes]
-    return lines

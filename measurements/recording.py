@@ -20,7 +20,7 @@ import pandas as pd
 
 from .import_report import describe
 from .log import LogError, check_log, read_log
-from .mdf4 import MDF_SUFFIXES, is_bus_logging
+from .mdf4 import is_bus_logging
 from .nmea_can import nmea_can_streams
 from .options import ImportOptions
 from .quirks import find_quirks, fixes_from_columns
@@ -29,7 +29,7 @@ from .raw_nmea import looks_like_nmea
 from .runs import assemble
 from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 from .streams import Streams
-from .tables import TABLE_SUFFIXES, TEXT_SUFFIXES, looks_like_table
+from .tables import MDF_SUFFIXES, TABLE_SUFFIXES, TEXT_SUFFIXES, looks_like_table
 
 __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_recording", "load_log", "positions",
            "recording_files"]

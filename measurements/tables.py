@@ -31,6 +31,7 @@ from .log import LogError
 from .streams import Series, is_boot_clock, iso
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
+MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
 TEXT_SUFFIXES = (".txt", ".dat", ".log", "")      # read as a table when their content is one
 PAIRS = (("s", "ns"), ("sec", "nsec"), ("secs", "nsecs"), ("sec", "nanosec"), ("seconds", "nanoseconds"),
          ("stamp_sec", "stamp_nanosec"), ("header.stamp.sec", "header.stamp.nanosec"),
@@ -356,15 +357,21 @@ def _clean(table: Table) -> None:
     table.frame, table.t = frame[keep].reset_index(drop=True), t[keep]
 
 
+def mdf_groups(path: Path) -> list[Table]:
+    """An MDF4 file's channel groups as tables, each on its own clock (measurements.mdf4)."""
+    from .mdf4 import mdf_tables
+
+    return [Table(path, g.name, g.frame, g.units, t=g.t, time_how=g.time_how, notes=g.notes)
+            for g in mdf_tables(path)]
+
+
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
                 mapped: tuple = ()) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
     table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
     ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
-    from .mdf4 import MDF_SUFFIXES, mdf_tables
-
     spec = parse_time(time)
-    tables = [t for p in paths for t in (mdf_tables(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
+    tables = [t for p in paths for t in (mdf_groups(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
     for t in tables:
         t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):

@@ -12,7 +12,7 @@ from pathlib import Path
 from .errors import Terminated, exit_code, install_signal_handlers
 from .registry import registry
 
-PROG = "python -m agrobot"
+PROG = f"python -m {__name__.split('.')[0]}"
 
 
 def add_set_option(parser: argparse.ArgumentParser, help: str = "override a parameter (or study.FIELD=VALUE); repeatable") -> None:

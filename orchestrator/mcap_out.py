@@ -221,7 +221,7 @@ class LiveView:
         listener = _listener(self.subscribed)
         try:
             self.server = foxglove.start_server(host=host, port=port, context=self.context, server_listener=listener,
-                                                name=f"agrobot {study.study.name}")
+                                                name=f"{__name__.split('.')[0]} {study.study.name}")
         except RuntimeError as exc:
             raise OutputError(f"--live {host}:{port}: cannot serve there ({exc}); choose another port with "
                               f"--live {host}:PORT") from None

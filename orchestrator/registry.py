@@ -2,8 +2,8 @@
 
 A project declares plugins in its ``pyproject.toml``::
 
-    [project.entry-points."agrobot.plugins"]
-    components = "agrobot.components:register"        # a callable taking the Registry
+    [project.entry-points."<root>.plugins"]        # <root>: the package holding this orchestrator
+    components = "<root>.components:register"        # a callable taking the Registry
 
 Each plugin's ``register(registry)`` adds what it brings: component packages (a study's
 ``type = "name"`` is looked up as ``<package>.name.COMPONENT``), command-line sub-commands, the
@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import entry_points
 from typing import Callable
 
-GROUP = "agrobot.plugins"
+ROOT = __name__.split(".")[0]          # the installed package this orchestrator lives in
+GROUP = f"{ROOT}.plugins"
 
 
 @dataclass

@@ -14,7 +14,7 @@ import re
 import stat
 from pathlib import Path
 
-from agrobot.orchestrator.errors import InputError
+from .errors import InputError
 
 WHOLE = 1 << 30           # bytes: 1 GiB read into memory
 STREAMED = 16 << 30       # bytes: 16 GiB read a piece at a time (time is the only cost)
