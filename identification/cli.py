@@ -52,13 +52,12 @@ def run(args: argparse.Namespace) -> int:
             from agrobot.measurements.cli import recording_options
             from agrobot.measurements.recording import describe
 
-            study = Study.load(args.study) if args.study else None
-            if args.method != "multisine":
-                from .from_log import identify_driving_log, wants_driving
+            from .from_log import choose_method, identify_driving_log
 
-                if args.method == "driving" or wants_driving(args.source, args.resample, recording_options(args), study):
-                    return identify_driving_log(args.source, args.out, study, plots=not args.no_plots,
-                                                resample=args.resample, recording=recording_options(args))
+            study = Study.load(args.study) if args.study else None
+            if choose_method(args.source, args.method, args.resample, recording_options(args), study) == "driving":
+                return identify_driving_log(args.source, args.out, study, plots=not args.no_plots,
+                                            resample=args.resample, recording=recording_options(args))
             report = identify_log(args.source, args.out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
                                   plots=not args.no_plots, resample=args.resample,
