@@ -13,7 +13,7 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 from .baseline import baseline_from_study
-from .candidates import STAGES, CannotDecide, Fit, Replay
+from .candidates import CannotDecide, Fit, Replay
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure

@@ -4,7 +4,6 @@ vendors and ISO 12188-2 quote (line acquisition, pass-to-pass at an interval), o
 (copies in tests/data). Expected values come from closed forms derived here, or a second method."""
 from __future__ import annotations
 
-import json
 import math
 import subprocess
 import sys

@@ -90,10 +90,11 @@ class RunResult:
                 for m in self.metrics.values()]
         return pd.DataFrame(rows, index=pd.Index(list(self.metrics), name="figure"))
 
-    def plot(self, *columns: str, x: str = "t", ax=None):
+    def plot(self, *columns: str, x: str = "t", ax=None, label: str = ""):
         """Plot ``columns`` against ``x`` (default: the time); without columns, the path driven
-        (the yaw plant's x_cg, y_cg, and the reference's x_ref, y_ref when there) or else every
-        signal. Returns the matplotlib Axes."""
+        (every ``.x_cg``/``.y_cg`` and ``.x_ref``/``.y_ref`` pair: the reference, the plant, the
+        estimate) or else every signal; ``label`` prefixes the legend's entries. Returns the
+        matplotlib Axes."""
         import matplotlib.pyplot as plt
 
         if ax is None:
@@ -102,13 +103,13 @@ class RunResult:
             path = [(c, c.replace(".x_", ".y_")) for c in self.signals.columns if c.endswith((".x_cg", ".x_ref"))]
             if path:
                 for cx, cy in path:
-                    ax.plot(self.signals[cx], self.signals[cy], label=cy.split(".")[0])
+                    ax.plot(self.signals[cx], self.signals[cy], label=f"{label} {cy.split('.')[0]}".strip())
                 ax.set(xlabel="east [m]", ylabel="north [m]", aspect="equal")
                 ax.legend()
                 return ax
             columns = tuple(c for c in self.signals.columns if c != x)
         for c in columns:
-            ax.plot(self.signals[x], self.signals[c], label=c)
+            ax.plot(self.signals[x], self.signals[c], label=f"{label} {c}".strip())
         ax.set_xlabel("t [s]" if x == "t" else x)
         ax.legend()
         return ax
