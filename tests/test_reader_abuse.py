@@ -9,8 +9,6 @@ import json
 import math
 import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,23 +16,12 @@ import pandas as pd
 import pytest
 
 from tests.reader_inputs import LAT0, write_candump, write_nmea, write_timelog
+from tests.commands import cli, refused
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 NMEA = DATA / "nmea_gpsd_testlogs"
 ISOXML = DATA / "isoxml_dev4ag_timelogs"
-
-
-def cli(*args, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=timeout)
-
-
-def refused(proc, *words):
-    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
-    for w in words:
-        assert w in proc.stderr, (w, proc.stderr)
-    return proc.stderr
 
 
 def converted(proc, *words):
