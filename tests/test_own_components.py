@@ -109,3 +109,24 @@ def test_the_script_and_python_m_find_a_module_beside_the_command_alike(tmp_path
     for launcher in ([sys.executable, "-m", "agrobot"], [str(script)]):
         done = _run(study, tmp_path, *launcher)
         assert done.returncode == 0, (launcher, done.stderr[-1500:])
+
+
+def test_what_a_component_declares_is_what_the_tools_find():
+    """The C core is the class's own (a subclass with other equations has none until it says so);
+    the linear model is inherited; a LINEAR_MODEL that cannot be loaded is refused by name."""
+    from agrobot.analysis.component_models import gps_sensor, linear_model_of
+    from agrobot.components.gps_sensor import GPSSensor
+    from agrobot.fmu_export.component_fmus import core_of
+    from agrobot.orchestrator.errors import InputError
+
+    class NoisierGPS(GPSSensor):
+        pass
+
+    class Broken(GPSSensor):
+        LINEAR_MODEL = "agrobot.analysis.component_models:no_such_model"
+
+    assert core_of(GPSSensor("gps", {}))[0] == "gps_sensor" and core_of(NoisierGPS("gps", {})) is None
+    assert linear_model_of(NoisierGPS("gps", {})) is gps_sensor
+    with pytest.raises(InputError, match="'gps' .*Broken.: LINEAR_MODEL = 'agrobot.analysis.component_models:no_such_model' "
+                                         "cannot be loaded"):
+        linear_model_of(Broken("gps", {}))
