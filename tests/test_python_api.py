@@ -111,3 +111,21 @@ def test_plan_from_python_covers_a_rectangle_with_the_swaths_its_width_needs(tmp
     assert not any(tmp_path.glob("*.png"))
     made.save(tmp_path / "plan")
     assert {"route.csv", "plan.json", "plan.png"} <= {p.name for p in (tmp_path / "plan").iterdir()}
+
+
+def test_convert_from_python_reads_a_generated_drive_and_saves_it_as_the_command_does(tmp_path):
+    """A 30 s NMEA drive east at 2 m/s (agrobot.measurements.generated_recordings): the GNSS speed is
+    2 m/s, x grows by 2 m/s, y stays; nothing is written until save."""
+    import agrobot
+    from agrobot.measurements.generated_recordings import write_nmea
+
+    nmea = write_nmea(tmp_path / "drive.nmea", 30.0)
+    rec = agrobot.convert(nmea)
+    log = rec.log
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["drive.nmea"]
+    assert np.median(log["gnss_speed"]) == pytest.approx(2.0, abs=0.02)
+    slope = np.polyfit(log["t"], log["x"], 1)[0]
+    assert slope == pytest.approx(2.0, rel=0.01) and np.ptp(log["y"]) < 0.05
+    rec.save(tmp_path / "drive.csv")
+    assert json.loads((tmp_path / "drive.import.json").read_text())["used"] == rec.report["used"]
+    assert len(np.loadtxt(tmp_path / "drive.csv", delimiter=",", skiprows=1, ndmin=2)) == len(log)
