@@ -96,6 +96,11 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     from agrobot.identification.from_log import choose_method, driving_report, write_driving
     from agrobot.identification.pipeline import identify_log, identify_study
 
+    if out is not None:
+        from agrobot.orchestrator.output import check_output
+
+        check_output(Path(out), overwrite=True)
+
     is_study = not isinstance(source, (str, Path)) or Path(source).suffix in STUDY_SUFFIXES or shipped_name(source)
     if is_study:
         vehicle = load(source, set)
