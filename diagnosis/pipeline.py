@@ -250,24 +250,32 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
+    if out is not None:
+        _write_all(out, result, replay, sel, study, options, log_path, plots, say)
+    return result
+
+
+def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say) -> None:
+    """The figures (each judged stage, the binned residuals, the noise floors), extended_study.toml
+    when every effect found has a study option, then diagnosis.json and report.md."""
+    base, final, effects = sel.base, sel.final, result["effects"]
+    found = [e for e in effects if e["id"] != "unexplained"]
     files = []
-    if plots and out is not None:
+    if plots:
         say("figures")
         touched = {s for f in sel.effects for s in f.stages}
-        for s in judged:
+        for s in replay.stages:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
                                       out / f"{s}.png", result["stages"][s]).name)
-        files.append(binned_figure(replay, base.values, final.values if effects else None, out / "binned.png").name)
+        files.append(binned_figure(replay, base.values, final.values if found else None, out / "binned.png").name)
         files.append(floors_figure(result, out / "noise_floors.png").name)
-    if out is not None and effects and None not in [e["study_option"] for e in effects] and options:
+    if found and None not in [e["study_option"] for e in found] and options:
         result["extended_study"] = "extended_study.toml"
         text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
-                                    f"{' + '.join(e['id'] for e in effects)} found by "
+                                    f"{' + '.join(e['id'] for e in found)} found by "
                                     f"`python -m agrobot diagnose {log_path}`")
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
-    if out is not None:
-        _write(out, result, files)
-    return result
+    _write(out, result, files)
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
