@@ -1,6 +1,11 @@
 """The linear models of the guidance loop's components on a straight (analysis.loop_models), each
 derived from the component's own step equations and parameters, without the nonlinearities a small
 signal beyond the dead bands does not see (dead bands, quantisation, saturations).
+
+A component names its model next to itself: ``LINEAR_MODEL = "agrobot.analysis.component_models:yaw_plant"``
+in its class (any ``module:function`` taking (component, step, speed) and returning a loop_blocks.Block),
+or a method ``lateral_linearisation`` (analysis.loop_models.block_of); ``OFF_THE_LATERAL_LOOP = True``
+for one that moves nothing of the lateral channel.
 """
 from __future__ import annotations
 
@@ -265,36 +270,35 @@ def computation_delay(comp, step: float, speed: float) -> Block:
     return delay_line(comp.name, ["steer_angle_cmd"], ["steer_angle_cmd_out"], int(comp.p["samples"]))
 
 
-def linear_models() -> dict[type, object]:
-    """Component class -> f(component, step, speed) -> Block."""
-    from agrobot.components.computation_delay import ComputationDelay
-    from agrobot.components.gps_sensor import GPSSensor
-    from agrobot.components.gyro_sensor import GyroSensor
-    from agrobot.components.imu_sensor import IMUSensor
-    from agrobot.components.ins_ekf import INSEKF
-    from agrobot.components.pose_ekf import PoseEKF
-    from agrobot.components.safety_watchdog import SafetyWatchdog
-    from agrobot.components.steering_hydraulics import SteeringHydraulics
-    from agrobot.components.tractor_yaw_plant import TractorYawPlant
-    from agrobot.components.yaw_rate_mpc import YawRateMPC
-    from agrobot.components.yaw_rate_notch import YawRateNotch
-
-    return {TractorYawPlant: yaw_plant, SteeringHydraulics: steering_hydraulics, GPSSensor: gps_sensor,
-            PoseEKF: pose_ekf, YawRateMPC: yaw_rate_mpc, YawRateNotch: yaw_rate_notch,
-            ComputationDelay: computation_delay, INSEKF: ins_ekf, IMUSensor: imu_sensor,
-            GyroSensor: lambda c, step, v: passthrough(c.name, {"yaw_rate": "yaw_rate_measured"}),
-            SafetyWatchdog: lambda c, step, v: passthrough(c.name, {"steer_angle_cmd": "steer_angle_cmd_out"})}
+def gyro_sensor(comp, step: float, speed: float) -> Block:
+    """The gyro without bias and noise: it reads the yaw rate."""
+    return passthrough(comp.name, {"yaw_rate": "yaw_rate_measured"})
 
 
-def off_the_lateral_loop() -> tuple[type, ...]:
-    """Components whose outputs do not move the lateral channel at first order on a straight:
-    the speed loop and its estimator (they set v), the implement and its side-shift (it reads the
-    tractor, nothing reads it back), status and recording."""
-    from agrobot.components.bus_recorder import BusRecorder
-    from agrobot.components.speed_drivetrain import SpeedDrivetrain
-    from agrobot.components.speed_kf import SpeedKF
-    from agrobot.components.speed_pid import SpeedPID
-    from agrobot.components.steering_status import SteeringStatus
-    from agrobot.components.trailed_implement import TrailedImplement
+def safety_watchdog(comp, step: float, speed: float) -> Block:
+    """The watchdog while nothing trips it: the command passes."""
+    return passthrough(comp.name, {"steer_angle_cmd": "steer_angle_cmd_out"})
 
-    return SpeedPID, SpeedDrivetrain, SpeedKF, TrailedImplement, SteeringStatus, BusRecorder
+
+def linear_model_of(comp):
+    """f(component, step, speed) -> Block that the component's class names in ``LINEAR_MODEL``
+    (``"module:function"``), None when it names none."""
+    from agrobot.orchestrator.errors import InputError
+    from agrobot.orchestrator.registry import import_study_module
+
+    name = getattr(type(comp), "LINEAR_MODEL", None)
+    if not name:
+        return None
+    module, _, function = name.partition(":")
+    try:
+        return getattr(import_study_module(module), function)
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"component {comp.name!r} ({type(comp).__module__}.{type(comp).__qualname__}): "
+                         f"LINEAR_MODEL = {name!r} cannot be loaded ({exc}); expected 'module:function'") from None
+
+
+def off_the_lateral_loop(comp) -> bool:
+    """The component's class says ``OFF_THE_LATERAL_LOOP = True``: its outputs do not move the
+    lateral channel at first order on a straight (the speed loop and its estimator set v; an
+    implement reads the tractor and nothing reads it back; status and recording)."""
+    return bool(getattr(type(comp), "OFF_THE_LATERAL_LOOP", False))

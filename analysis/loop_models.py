@@ -11,9 +11,10 @@ Each component on the loop becomes a discrete block at its own step, inputs and 
 
 - trackers and routes declare theirs (``lateral_linearisation(speed, dt, along_track_error)``: a python-control
   StateSpace whose labels are port names);
-- the yaw plant, steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF, yaw-rate MPC, notch, computation
-  delay and watchdog are linearised here, each from its own step equations and parameters without the nonlinearities a
-  small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
+- the other components name theirs in their class (``LINEAR_MODEL = "module:function"``: the yaw plant,
+  steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF, yaw-rate MPC, notch, computation delay and watchdog in
+  analysis.component_models), each from its own step equations and parameters without the nonlinearities
+  a small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
 - a composite subsystem is its inner network lifted over its step.
 
 A block may change from step to step with a period of its own (``Block.phases``: the INS EKF takes
@@ -37,7 +38,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .component_models import ins_ekf, linear_models, off_the_lateral_loop
+from .component_models import linear_model_of, off_the_lateral_loop
 from .loop_blocks import Block, NoLinearModel, OperatingPoint
 
 
@@ -206,7 +207,7 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
                                     f"{measured[k][j]:.6g} (finite differences); update lateral_linearisation")
 
 
-def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, off_loop: tuple) -> Block | None:
+def block_of(comp, step: float, ratio: int, op: OperatingPoint) -> Block | None:
     """The component's block, or None when it has none (network_of then checks that it is off the
     loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
     from agrobot.orchestrator.composite import CompositeComponent
@@ -217,11 +218,11 @@ def block_of(comp, step: float, ratio: int, op: OperatingPoint, models: dict, of
             check_tracker(comp, sys_, step, op)
         return Block.of(comp.name, list(sys_.input_labels), list(sys_.output_labels), sys_.A, sys_.B, sys_.C, sys_.D,
                         ratio, comp.sampled)
-    for cls, model in models.items():
-        if isinstance(comp, cls):
-            block = model(comp, step, op.speed)
-            block.ratio = ratio
-            return block
+    model = linear_model_of(comp)
+    if model is not None:
+        block = model(comp, step, op.speed)
+        block.ratio = ratio
+        return block
     if isinstance(comp, CompositeComponent):
         return composite(comp, step, ratio, op)
     return None
@@ -272,29 +273,33 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
     from agrobot.orchestrator.resolver import resolve
 
     system = build_system(resolve(study, resolver))
-    models, off_loop = linear_models(), off_the_lateral_loop()
     blocks: dict[str, Block] = {}
     for name, node in system.nodes.items():
-        block = block_of(node.component, node.step, node.ratio, op, models, off_loop)
+        block = block_of(node.component, node.step, node.ratio, op)
         if block is not None:
             blocks[name] = block
     sources = {(c.target, c.input): (c.source, c.output) for c in system.connections}
     order = [n.name for n in system.sampled_order]
     for name, block in blocks.items():
         comp = system.nodes[name].component
-        source = sources.get((name, "gps_y"), (None,))[0]
-        if models.get(type(comp)) is ins_ekf and source in system.nodes:
-            # a new fix every n-th of its steps: at the receiver's instants when the receiver steps first
+        fix = getattr(type(comp), "FIX_INPUT", None)
+        source = sources.get((name, fix), (None,))[0] if fix else None
+        if source in system.nodes:
+            # a model whose gains follow the cadence of its FIX_INPUT (a new fix every n-th of its steps):
+            # at the source's instants when the source steps first
             node = system.nodes[name]
             every = max(1, system.nodes[source].ratio // node.ratio)
             first = source in order and order.index(source) < order.index(name)
-            blocks[name] = ins_ekf(comp, node.step, op.speed, every, 0 if first else 1)
+            blocks[name] = linear_model_of(comp)(comp, node.step, op.speed, every, 0 if first else 1)
             blocks[name].ratio = node.ratio
     for (target, port), (source, output) in sources.items():
         if target in blocks and port in blocks[target].inputs and source not in blocks:
             comp = system.nodes[source].component
-            if comp.declared("input") and not isinstance(comp, off_loop):
+            if comp.declared("input") and not off_the_lateral_loop(comp):
                 raise NoLinearModel(f"{study.where}: {purpose}: component {source!r} ({_type_name(comp)}) drives "
-                                    f"{target}.{port} in the guidance loop and has no linear model (a method "
-                                    f"lateral_linearisation, or one in analysis.loop_models)")
+                                    f"{target}.{port} in the guidance loop and has no linear model: give its class "
+                                    f"a method lateral_linearisation(speed, dt, along_track_error) returning a "
+                                    f"python-control StateSpace labelled by its ports, or LINEAR_MODEL = "
+                                    f"'module:function' (as in analysis.component_models), or OFF_THE_LATERAL_LOOP "
+                                    f"= True when it moves nothing of the lateral channel")
     return Network(blocks, order, sources, study.study.base_step)

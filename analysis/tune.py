@@ -28,7 +28,6 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .component_models import linear_models, off_the_lateral_loop
 from .loop_blocks import NoLinearModel, OperatingPoint
 from .loop_models import block_of, network_of
 from .margins import Analysis, Margins, analyse, anatomy, margins_of
@@ -114,7 +113,7 @@ class Search:
                 op = OperatingPoint(op.speed, trim_along_track_error(params, self.excess), op.label)
             along = max(along, abs(op.along_track_error))
             node = net.blocks[self.an.tracker]
-            net.blocks[self.an.tracker] = block_of(tracker, self.step, node.ratio, op, linear_models(), off_the_lateral_loop())
+            net.blocks[self.an.tracker] = block_of(tracker, self.step, node.ratio, op)
             try:
                 loop = net.opened_at([self.an.steering_break])
                 ok = loop.spectral_radius() < 1.0

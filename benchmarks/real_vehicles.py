@@ -17,22 +17,18 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 REAL = ROOT.parent / "shared" / "realdata"
 if not REAL.is_dir():
     REAL = Path("/work/shared/realdata")
 
 
 def logs():
-    from tests.vehicle_logs import autokoopman_log, frictionmaps_log
+    from agrobot.measurements.f1tenth import autokoopman_log, frictionmaps_log
 
     folder = REAL / "f1tenth_frictionmaps" / "DataSets"
     for run in sorted(p.name for p in folder.iterdir() if p.is_dir()):
         yield f"F1TENTH FrictionMaps {run}", frictionmaps_log(folder / run)
-    import tests.vehicle_logs as vl
-
-    vl.AUTOKOOPMAN = REAL / "f1tenth_autokoopman_steps" / "F1tenthCar"
-    yield "F1TENTH AutoKoopman steps (41 x 3 s)", autokoopman_log()
+    yield "F1TENTH AutoKoopman steps (41 x 3 s)", autokoopman_log(REAL / "f1tenth_autokoopman_steps" / "F1tenthCar")
 
 
 def fmt(q: dict, f: str = "{:.3g}") -> str:

@@ -26,6 +26,7 @@ from .hardware.nmea import DATUM_PARAMETERS, RECEIVER_INPUTS, RECEIVER_PARAMETER
 class BusRecorder(Component):
     sampled = True
     roles = ("bus_recorder",)
+    OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         *RECEIVER_INPUTS,
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point sent to the tractor"),

@@ -7,6 +7,7 @@ from agrobot.orchestrator.component import Component, inp, out, par
 class GyroSensor(Component):
     sampled = True
     roles = ("gyro",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:gyro_sensor"   # its block in the margins' loop
     variables = (
         inp("yaw_rate", "rad/s", 0.0, "true yaw rate"),
         par("noise_std", "rad/s", 0.0, "white measurement noise (1 sigma)"),

@@ -26,6 +26,7 @@ from .models.terrain import GRAVITY, body_of
 class IMUSensor(Component):
     sampled = True
     roles = ("imu",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:imu_sensor"   # its block in the margins' loop
     variables = (
         inp("roll", "rad", 0.0, "true roll (left side up positive)"),
         inp("pitch", "rad", 0.0, "true pitch (nose up positive)"),

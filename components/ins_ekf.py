@@ -60,6 +60,8 @@ N = 8                                  # states
 class INSEKF(Component):
     sampled = True
     roles = ("pose_estimator",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:ins_ekf"   # its block in the margins' loop
+    FIX_INPUT = "gps_y"   # the input whose cadence sets its linear model's periodic gains
     variables = (
         inp("gps_x", "m", 0.0, "GNSS antenna east position"),
         inp("gps_y", "m", 0.0, "GNSS antenna north position"),

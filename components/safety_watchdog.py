@@ -28,6 +28,7 @@ CHECKED = ("steer_angle_cmd", "speed_cmd", "fix_age", "fix_quality", "machine_re
 class SafetyWatchdog(Component):
     sampled = True
     roles = ("watchdog",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:safety_watchdog"   # its block in the margins' loop
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle command from the controller"),
         inp("speed_cmd", "m/s", 0.0, "speed command from the controller"),

@@ -9,6 +9,7 @@ from agrobot.orchestrator.component import Component, out, par
 
 class SteeringStatus(Component):
     sampled = True
+    OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         par("not_ready_after", "s", -1.0, "fault injection: not ready from this time"),
         par("not_ready_until", "s", -1.0, "ready again from this time (negative: never)"),

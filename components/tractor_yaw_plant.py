@@ -76,6 +76,8 @@ def unstable_modes(model: str, params: TractorParameters, speeds=CHECKED_SPEEDS)
 class TractorYawPlant(Component):
     sampled = False
     roles = ("yaw_plant",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:yaw_plant"   # its block in the margins' loop
+    C_CORE = "tractor_yaw_plant"      # its C model core for FMU export: fmu_export/c/components/tractor_yaw_plant.c
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),

@@ -34,6 +34,7 @@ from .models.terrain import attitude, gradient_of_pull
 class TrailedImplement(Component):
     sampled = False
     roles = ("implement",)
+    OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("x_rear", "m", 0.0, "tractor rear axle east"),
         inp("y_rear", "m", 0.0, "tractor rear axle north"),

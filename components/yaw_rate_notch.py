@@ -34,6 +34,7 @@ def notch_coefficients(w0: float, zeta_z: float, zeta_p: float, dt: float) -> tu
 class YawRateNotch(Component):
     sampled = True
     roles = ("yaw_rate_filter",)
+    LINEAR_MODEL = "agrobot.analysis.component_models:yaw_rate_notch"   # its block in the margins' loop
     variables = (
         inp("yaw_rate", "rad/s", 0.0, "measured yaw rate"),
         par("frequency", "rad/s", 0.0, "notch centre w0 (0: pass through)"),

@@ -13,7 +13,7 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 from .baseline import baseline_from_study
-from .candidates import STAGES, CannotDecide, Fit, Replay
+from .candidates import CannotDecide, Fit, Replay
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
@@ -172,12 +172,13 @@ def coarser_clock(frame):
                  f"{rate / k:.3g} Hz to bound the cost (steering time constants below 0.1 s are not resolved)")
 
 
-def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
+def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
              recording=None, progress=None) -> dict:
-    """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
-    with the reason when the log cannot be used). Raises nothing for a bad log."""
-    out = Path(out_dir)
+    """Run the diagnosis and return its result; with ``out_dir`` it always writes diagnosis.json and
+    report.md there (verdict ``cannot decide`` with the reason when the log cannot be used), and the
+    figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log."""
+    out = Path(out_dir) if out_dir is not None else None
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
                     "findings": []}
@@ -199,7 +200,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
         result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
         result["split_time"] = float("nan")
-        _write(out, result, [])
+        if out is not None:
+            _write(out, result, [])
         return result
     say = progress or (lambda text: None)
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
@@ -248,23 +250,32 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
+    if out is not None:
+        _write_all(out, result, replay, sel, study, options, log_path, plots, say)
+    return result
+
+
+def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say) -> None:
+    """The figures (each judged stage, the binned residuals, the noise floors), extended_study.toml
+    when every effect found has a study option, then diagnosis.json and report.md."""
+    base, final, effects = sel.base, sel.final, result["effects"]
+    found = [e for e in effects if e["id"] != "unexplained"]
     files = []
     if plots:
         say("figures")
         touched = {s for f in sel.effects for s in f.stages}
-        for s in judged:
+        for s in replay.stages:
             files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
                                       out / f"{s}.png", result["stages"][s]).name)
-        files.append(binned_figure(replay, base.values, final.values if effects else None, out / "binned.png").name)
+        files.append(binned_figure(replay, base.values, final.values if found else None, out / "binned.png").name)
         files.append(floors_figure(result, out / "noise_floors.png").name)
-    if effects and None not in [e["study_option"] for e in effects] and options:
+    if found and None not in [e["study_option"] for e in found] and options:
         result["extended_study"] = "extended_study.toml"
         text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
-                                    f"{' + '.join(e['id'] for e in effects)} found by "
+                                    f"{' + '.join(e['id'] for e in found)} found by "
                                     f"`python -m agrobot diagnose {log_path}`")
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
-    return result
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:

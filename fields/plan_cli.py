@@ -111,25 +111,51 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "route (a large file for a large field)")
 
 
-def read_field(args: argparse.Namespace):
-    """(the field, why other files of a folder were not read)."""
+def read_field(path: Path, crs: str | None = None, name: str | None = None):
+    """(the field ``name`` of a file or folder, else its largest; why other files of a folder were not read)."""
     from .field import choose_field
     from .readers import read_fields, read_folder
 
-    fields, skipped = read_folder(args.field, args.crs) if args.field.is_dir() else (read_fields(args.field, args.crs), [])
-    return choose_field(fields, args.name, str(args.field)), skipped
+    fields, skipped = read_folder(path, crs) if Path(path).is_dir() else (read_fields(path, crs), [])
+    return choose_field(fields, name, str(path)), skipped
+
+
+def write_plan_files(folder: Path, p, applied, sections: int, summary: dict, route_step: float,
+                     route_uniform: bool) -> int:
+    """The plan's set (FILES) written into ``folder``; returns route.csv's rows."""
+    from agrobot.orchestrator.results import write_json
+
+    from .planner.export import draw_applied, draw_plan, write_applied_geojson, write_route_csv, write_route_geojson
+
+    rows = write_route_csv(p, folder / "route.csv", route_step, route_uniform)
+    write_route_geojson(p, folder / "route.geojson", route_step, route_uniform)
+    write_json(folder / "plan.json", summary | {"route_rows": rows, "route_step_m": route_step,
+                                                "route_uniform": route_uniform})
+    draw_plan(p, folder / "plan.png")
+    write_applied_geojson(p, applied, folder / "as_applied.geojson")
+    draw_applied(p, applied, sections, folder / "as_applied.png")
+    return rows
+
+
+def write_plan(out: Path, p, applied, sections: int, summary: dict, route_step: float, route_uniform: bool,
+               overwrite: bool = False) -> int:
+    """The plan's set written into a folder beside ``out`` and moved into place whole, under the rules
+    every command's --out follows (orchestrator.output); returns route.csv's rows."""
+    from agrobot.orchestrator.output import ResultFolder
+
+    with ResultFolder(out, overwrite, ("plan.json",), "plan", []) as folder:
+        rows = write_plan_files(folder.tmp, p, applied, sections, summary, route_step, route_uniform)
+        folder.commit("completed")
+    return rows
 
 
 def run(args: argparse.Namespace) -> int:
     from agrobot.orchestrator.output import ResultFolder
-    from agrobot.orchestrator.results import write_json
 
     from .field import FieldError
     from .obstacles import parse_point, read_obstacles, with_obstacles
     from .planner import plan
     from .planner.applied import as_applied, summary as applied_summary
-    from .planner.export import (draw_applied, draw_plan, write_applied_geojson, write_route_csv,
-                                 write_route_geojson)
     from .planner.sections import check_sections
 
     folder = ResultFolder(args.out, args.overwrite, ("plan.json",), "plan", [args.field, args.obstacles])
@@ -146,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
     settings.check("plan", OPTIONS)
     sections = check_sections(args.sections, settings.working_width, "plan: --sections") if args.sections else 0
     with folder:
-        field, skipped = read_field(args)
+        field, skipped = read_field(args.field, args.crs, args.name)
         for why in skipped:
             print(f"not read: {why}")
         obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
@@ -157,13 +183,7 @@ def run(args: argparse.Namespace) -> int:
         applied = as_applied(p, sections)
         summary = p.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in obstacles],
                                  "as_applied": applied_summary(p, applied, sections)}
-        rows = write_route_csv(p, folder.tmp / "route.csv", args.route_step, args.route_uniform)
-        write_route_geojson(p, folder.tmp / "route.geojson", args.route_step, args.route_uniform)
-        write_json(folder.tmp / "plan.json", summary | {"route_rows": rows, "route_step_m": args.route_step,
-                                                        "route_uniform": args.route_uniform})
-        draw_plan(p, folder.tmp / "plan.png")
-        write_applied_geojson(p, applied, folder.tmp / "as_applied.geojson")
-        draw_applied(p, applied, sections, folder.tmp / "as_applied.png")
+        rows = write_plan_files(folder.tmp, p, applied, sections, summary, args.route_step, args.route_uniform)
         folder.commit("completed")
     print(f"field {field.name!r} ({field.area_ha:.2f} ha, workable {summary['workable_ha']:.2f} ha) from {args.field}")
     print(f"  driving angle {summary['driving_angle_deg']:.1f} deg ({summary['driving_angle_how']}); order "

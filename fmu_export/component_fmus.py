@@ -1,6 +1,6 @@
 """One FMU per study component, from the same equations as the Python components: a C model core
-per component type (c/components/<type>.c) behind the shared sampled-model semantics
-(c/sampled_instance.c), FMI 2.0 or 3.0.
+per component type (c/components/<core>.c, the core its class names in ``C_CORE``; core_of) behind the
+shared sampled-model semantics (c/sampled_instance.c), FMI 2.0 or 3.0.
 
 The FMU keeps the component's name and port names; its numeric parameters are tunable FMU
 parameters with the study's values as starts; parameters that fix the code's shape (the yaw
@@ -159,25 +159,26 @@ def _gps_seed(comp: Component, name: str) -> dict[str, float]:
     return {"seed": float(int(comp.rng.integers(0, 2**52)))}
 
 
-SPECS: dict[str, CoreSpec] = {
-    "Figure8Reference": CoreSpec("figure8_reference.c"),
-    "TractorYawPlant": CoreSpec("tractor_yaw_plant.c", _plant_compiled,
+# C core name (a component class's ``C_CORE``) -> how it becomes a model core
+CORES: dict[str, CoreSpec] = {
+    "figure8_reference": CoreSpec("figure8_reference.c"),
+    "tractor_yaw_plant": CoreSpec("tractor_yaw_plant.c", _plant_compiled,
                                 ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
                                  "cornering_scale_rear", "terrain_file"), _plant_values),
-    "SteeringHydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay"),
-                                   runtime=_steering_runtime),
-    "SpeedDrivetrain": CoreSpec("speed_drivetrain.c", _substeps, ("internal_step",)),
-    "GPSSensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",) + GPS_QUALITY_PARAMETERS,
-                          extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
-                          extra_values=_gps_seed, runtime=_gps_runtime),
-    "SpeedKF": CoreSpec("speed_kf.c"),
-    "PoseEKF": CoreSpec("pose_ekf.c"),
-    "ComputationDelay": CoreSpec("computation_delay.c",
-                                 lambda comp, period: f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n", ("samples",),
-                                 runtime=_delay_runtime),
-    "KinematicTracker": CoreSpec("kinematic_tracker.c", extra_sources=("guidance_laws.c",)),
-    "SpeedPID": CoreSpec("speed_pid.c", extra_sources=("guidance_laws.c",)),
-    "YawRateMPC": CoreSpec("yaw_rate_mpc.c", _mpc_compiled,
+    "steering_hydraulics": CoreSpec("steering_hydraulics.c", _steering_compiled, ("internal_step", "command_delay"),
+                                    runtime=_steering_runtime),
+    "speed_drivetrain": CoreSpec("speed_drivetrain.c", _substeps, ("internal_step",)),
+    "gps_sensor": CoreSpec("gps_sensor.c", _gps_compiled, ("latency",) + GPS_QUALITY_PARAMETERS,
+                           extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
+                           extra_values=_gps_seed, runtime=_gps_runtime),
+    "speed_kf": CoreSpec("speed_kf.c"),
+    "pose_ekf": CoreSpec("pose_ekf.c"),
+    "computation_delay": CoreSpec("computation_delay.c",
+                                  lambda comp, period: f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n", ("samples",),
+                                  runtime=_delay_runtime),
+    "kinematic_tracker": CoreSpec("kinematic_tracker.c", extra_sources=("guidance_laws.c",)),
+    "speed_pid": CoreSpec("speed_pid.c", extra_sources=("guidance_laws.c",)),
+    "yaw_rate_mpc": CoreSpec("yaw_rate_mpc.c", _mpc_compiled,
                            ("num", "den", "prediction_horizon", "control_horizon", "Q", "R", "model_input",
                             "qp_solver", "qp_tolerance"),
                            dependencies=_mpc_dependencies,
@@ -191,19 +192,26 @@ def fmu_input_name(comp: Component, name: str) -> str:
     return f"{name}_in" if name in comp.declared("output") else name
 
 
+def core_of(comp: Component) -> tuple[str, CoreSpec] | None:
+    """(C core name, its spec) of a component: the ``C_CORE`` its own class declares (a subclass
+    with other equations declares its own), None when it has no C form."""
+    name = vars(type(comp)).get("C_CORE")
+    return (name, CORES[name]) if name in CORES else None
+
+
 def exportable(comp: Component) -> bool:
-    return type(comp).__name__ in SPECS
+    return core_of(comp) is not None
 
 
 def core_spec(system: System, name: str) -> CoreSpec:
-    """The C model core of the study component ``name``: the one place that says which component
-    type has which core (a ComponentExportError names the component otherwise)."""
+    """The C model core of the study component ``name`` (the ``C_CORE`` its class declares, core_of); a
+    ComponentExportError names the component when it has none."""
     comp = system.nodes[name].component
-    spec = SPECS.get(type(comp).__name__)
-    if spec is None:
+    core = core_of(comp)
+    if core is None:
         raise ComponentExportError(f"{system.study.path}: components.{name}: type {type(comp).__name__} has no FMU "
-                                   f"form; exportable types: {', '.join(sorted(SPECS))}")
-    return spec
+                                   f"form (its class declares no C_CORE of {', '.join(sorted(CORES))})")
+    return core[1]
 
 
 def core_parameters(system: System, name: str, spec: CoreSpec) -> list[tuple[str, float, str, str]]:

@@ -71,13 +71,12 @@ def _identify(args: argparse.Namespace, study, is_study: bool, out: Path):
             from agrobot.measurements.cli import recording_options
             from agrobot.measurements.recording import describe
 
-            if args.method != "multisine":
-                from .from_log import identify_driving_log, wants_driving
+            from .from_log import choose_method, identify_driving_log
 
-                if args.method == "driving" or wants_driving(args.source, args.resample, recording_options(args), study):
-                    identify_driving_log(args.source, out, study, plots=not args.no_plots,
-                                         resample=args.resample, recording=recording_options(args), shown_as=args.out)
-                    return None
+            if choose_method(args.source, args.method, args.resample, recording_options(args), study) == "driving":
+                identify_driving_log(args.source, out, study, plots=not args.no_plots,
+                                     resample=args.resample, recording=recording_options(args), shown_as=args.out)
+                return None
             report = identify_log(args.source, out, args.period, args.speed,
                                   tuple(args.band) if args.band else None, args.models, args.delay,
                                   plots=not args.no_plots, resample=args.resample,

@@ -26,7 +26,7 @@ Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd

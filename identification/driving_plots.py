@@ -18,7 +18,7 @@ def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]
 
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    L, K, K_sd, g = hidden["L"], hidden["K"], hidden["K_sd"], hidden["g"]
+    L, K, g = hidden["L"], hidden["K"], hidden["g"]
     offset = hidden["final"].get("steer_offset", 0.0)
     bias = report["parameters"].get("gyro_bias", {}).get("value", 0.0)
     w = hidden["windows"]

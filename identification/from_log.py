@@ -109,11 +109,61 @@ def wants_driving(source: Path, resample: bool, recording, study) -> bool:
     return False
 
 
-def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
-                         recording=None, shown_as: Path | None = None) -> int:
+def choose_method(source: Path, method: str = "auto", resample: bool = False, recording=None, study=None) -> str:
+    """How ``identify SOURCE`` identifies: ``"study"`` for a study file (its designed experiment,
+    simulated), else ``method`` for a log, where ``"auto"`` is ``"multisine"`` when delta_cmd
+    repeats with a period (wants_driving) and ``"driving"`` otherwise."""
+    if Path(source).suffix in (".toml", ".yaml", ".yml"):
+        return "study"
+    if method not in ("auto", "multisine", "driving"):
+        raise ValueError(f"method {method!r}: expected 'auto', 'multisine' or 'driving'")
+    if method != "auto":
+        return method
+    return "driving" if wants_driving(Path(source), resample, recording, study) else "multisine"
+
+
+def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None):
+    """(report, the figures' data): the ordinary-driving identification of a log
+    (identification.ordinary_driving), nothing written."""
+    from .ordinary_driving import identify_driving
+
+    say = progress or (lambda text: None)
+    frame, imported = _read(source, resample, recording, study)
+    say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
+    report = identify_driving(frame, str(source), study, progress=say)
+    hidden = report.pop("_plot")
+    if imported is not None:
+        report["recording"] = imported
+    return report, hidden
+
+
+def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, plots: bool = True,
+                  progress=None) -> list[str]:
+    """identification.json, the figures (when ``hidden``, the figures' data, is given) and
+    extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
     from agrobot.orchestrator.results import write_json
 
-    from .ordinary_driving import identify_driving, summary
+    from .pipeline import _json_default
+
+    out_dir = Path(out_dir)
+    files = []
+    if plots and hidden is not None:
+        from .driving_plots import write_driving_plots
+
+        if progress is not None:
+            progress("figures")
+        files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
+    report["figures"] = files
+    if study is not None:
+        report["extended_study"] = write_extended_study(report, study, out_dir, source)
+    write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
+    return files
+
+
+def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
+                         recording=None, shown_as: Path | None = None) -> int:
+    """``identify LOG --method driving``: identify, write, print the summary (progress on stderr)."""
+    from .ordinary_driving import summary
 
     start = time.perf_counter()
 
@@ -123,25 +173,8 @@ def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = 
         if PROGRESS["shown"]:
             print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
 
-    frame, imported = _read(source, resample, recording, study)
-    progress(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
-    report = identify_driving(frame, str(source), study, progress=progress)
-    hidden = report.pop("_plot")
-    if imported is not None:
-        report["recording"] = imported
-    out_dir = Path(out_dir)
-    files = []
-    if plots:
-        from .driving_plots import write_driving_plots
-
-        progress("figures")
-        files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
-    report["figures"] = files
-    if study is not None:
-        report["extended_study"] = write_extended_study(report, study, out_dir, source)
-    from .pipeline import _json_default
-
-    write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
+    report, hidden = driving_report(source, study, resample, recording, progress)
+    files = write_driving(report, hidden, out_dir, study, source, plots, progress)
     print(summary(report))
     print(f"\nwritten to {shown_as or out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
     return 0

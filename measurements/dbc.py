@@ -194,7 +194,7 @@ def _prepass(text: str, report: DBCReport) -> str:
             continue
         statement = [line]
         while not statement[-1].rstrip().endswith(";") and i + 1 < len(lines) and \
-                not lines[i + 1].split(" ", 1)[0].rstrip(":") in STATEMENTS:
+                lines[i + 1].split(" ", 1)[0].rstrip(":") not in STATEMENTS:
             i += 1
             statement.append(lines[i])
         i += 1

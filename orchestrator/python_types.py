@@ -1,10 +1,16 @@
 """Sub-resolver of Python component types (orchestrator.resolver): ``type = "name"`` is
 ``<package>.name.COMPONENT`` in the study's ``component_package``, then in every package a plugin
-registered (orchestrator.registry); ``type = "package.module:Class"`` is that class."""
+registered (orchestrator.registry), then the entry point ``name`` of the group ``agrobot.components``
+(any installed package may provide one: ``xte_monitor = "my_pkg.xte_monitor:XTEMonitor"``);
+``type = "package.module:Class"`` is that class. ``[study] components_path`` names a folder of the
+user's own modules (relative to the study file) where ``module:Class`` is looked for too."""
 from __future__ import annotations
 
 import importlib
 import pkgutil
+import sys
+from importlib.metadata import entry_points
+from pathlib import Path
 
 from .component import Component
 from .errors import did_you_mean
@@ -19,7 +25,35 @@ class PythonTypes:
         spec = study.components.get(name)
         if spec is None:
             return None
+        if study.study.components_path:
+            add_components_path(study)
         return resolve_type(spec.type, study.study.component_package, f"{study.where}: components.{name}")
+
+
+ENTRY_POINTS = "agrobot.components"
+
+
+def add_components_path(study: Study) -> Path:
+    """Put ``[study] components_path`` on sys.path (relative to the study file, or to a file it
+    extends that names it); refused by name when it is not a folder."""
+    text = study.study.components_path
+    candidates = [Path(text)] if Path(text).is_absolute() else [f / text for f in study.folders()] or [Path(text)]
+    folder = next((c for c in candidates if c.is_dir()), None)
+    if folder is None:
+        raise StudyError(f"{study.origin('study.components_path')}: {text!r}: no such folder (looked in "
+                         f"{', '.join(str(c) for c in candidates)})")
+    folder = str(folder.resolve())
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+        importlib.invalidate_caches()
+    return Path(folder)
+
+
+def entry_point_type(type_name: str):
+    """The class an installed package provides as entry point ``type_name`` of ``agrobot.components``,
+    None when none does."""
+    found = [ep for ep in entry_points(group=ENTRY_POINTS) if ep.name == type_name]
+    return found[0].load() if found else None
 
 
 def resolve_type(type_name: str, package: str | None, where: str) -> type[Component]:
@@ -43,16 +77,26 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
         except ModuleNotFoundError as exc:
             if exc.name is None or not module_name.startswith(exc.name):
                 raise StudyError(f"{where}: type {type_name!r}: importing {module_name!r} failed ({exc})") from None
+    if module is None and ":" not in type_name:
+        cls = entry_point_type(type_name)
+        if cls is not None:
+            return _checked(cls, type_name, where)
     if module is None:
-        known = _known_types(packages)
+        known = _known_types(packages) + [ep.name for ep in entry_points(group=ENTRY_POINTS)]
         raise StudyError(f"{where}: type {type_name!r}: no such component type: cannot import "
                          f"{' or '.join(repr(c) for c in candidates)}"
-                         + did_you_mean(type_name, known))
+                         + did_you_mean(type_name, known)
+                         + (" (a module of your own: put its folder in [study] components_path, relative to the "
+                            "study file)" if ":" in type_name else ""))
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")
+    return _checked(cls, type_name, where)
+
+
+def _checked(cls, type_name: str, where: str) -> type[Component]:
     if not (isinstance(cls, type) and issubclass(cls, Component)):
-        raise StudyError(f"{where}: type {type_name!r}: {attr!r} is not a Component class")
+        raise StudyError(f"{where}: type {type_name!r}: {getattr(cls, '__name__', cls)!r} is not a Component class")
     return cls
 
 

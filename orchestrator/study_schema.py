@@ -32,6 +32,7 @@ class StudySettings(BaseModel):
     seed: int = Field(ge=0)          # every random stream is seeded from it and the component's name
     signals_format: Literal["parquet", "csv"] = "parquet"        # the signal table's file format
     component_package: str | None = None   # look types up here first (default: registered packages)
+    components_path: str | None = None     # a folder of the user's own component modules, relative to the study file
     analysis: str | None = None      # module with the study's metrics and figures (analysis.figure8)
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss

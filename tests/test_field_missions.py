@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +25,7 @@ from agrobot.fields.planner.swaths import swath_lines as _swath_lines
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.commands import cli as _cli
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
@@ -352,9 +351,6 @@ def test_the_side_slope_option_tilts_tractor_and_implement():
 
 
 # --- command line: plan, bad fields, sweeps --------------------------------------------------------------------
-def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=300)
 
 
 def test_plan_command_writes_the_route_and_its_figures(tmp_path):

@@ -4,10 +4,7 @@ vendors and ISO 12188-2 quote (line acquisition, pass-to-pass at an interval), o
 (copies in tests/data). Expected values come from closed forms derived here, or a second method."""
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +18,7 @@ from agrobot.components.models import terrain
 from agrobot.components.tractor_yaw_plant import TractorYawPlant
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.commands import cli as _cli
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"
@@ -432,11 +430,6 @@ def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
             gaps.append(abs((np.array(hits[1].coords[0]) - np.array(hits[0].coords[0])) @ n) - spacing)
     assert len(gaps) > 50
     assert m["pass_to_pass_p95_m"] == pytest.approx(np.percentile(np.abs(gaps), 95), abs=1e-3)
-
-
-def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=300)
 
 
 def test_a_standing_implement_jittering_gives_a_strip_of_few_points():

@@ -8,8 +8,6 @@ from __future__ import annotations
 import json
 import math
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +17,7 @@ import pytest
 from agrobot.fields import FieldError, read_fields
 from agrobot.measurements.raw_nmea import read_nmea_file
 from agrobot.measurements.recording import ImportOptions, import_recording
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"             # copies of the published real sets, with their licences (tests/data/README.md)
@@ -26,11 +25,6 @@ NMEA = REAL / "nmea_gpsd_testlogs"
 ISOXML = REAL / "isoxml_dev4ag_timelogs"
 F2C = REAL / "fields2cover_data"
 IAM = REAL / "iam_field_open_autonomous_tractor"
-
-
-def cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300)
 
 
 # --- every real receiver -------------------------------------------------------------------------------

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +13,7 @@ import pytest
 from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
 from agrobot.diagnosis.pipeline import diagnose
 from agrobot.measurements.truth_tractor import make_log
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 CAR = ROOT / "studies" / "passenger_car.toml"
@@ -39,11 +38,6 @@ BO_ 344 ENGINE_DATA: 8 ECU
  SG_ XMISSION_SPEED : 7|16@0+ (0.01,0) [0|655.35] "km/h" ECU
  SG_ ENGINE_RPM : 23|16@0+ (1,0) [0|65535] "rpm" ECU
 """
-
-
-def cli(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300)
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """The readers under abuse: files that are not files, clocks that step back, impossible or jumping
 positions, padding, damaged TaskData, parcels of one name, swapped coordinates, deep nesting,
-bad lines among good ones. Each input is generated small (tests/reader_inputs.py) from known
+bad lines among good ones. Each input is generated small (measurements/generated_recordings.py) from known
 values, so the tests compare what the readers return with what was written; the large cases
 (a million NMEA lines, a day-long log, a long CAN log) are in benchmarks/reader_limits.py."""
 from __future__ import annotations
@@ -9,32 +9,19 @@ import json
 import math
 import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from tests.reader_inputs import LAT0, write_candump, write_nmea, write_timelog
+from agrobot.measurements.generated_recordings import LAT0, write_candump, write_nmea, write_timelog
+from tests.commands import cli, refused
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 NMEA = DATA / "nmea_gpsd_testlogs"
 ISOXML = DATA / "isoxml_dev4ag_timelogs"
-
-
-def cli(*args, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=timeout)
-
-
-def refused(proc, *words):
-    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
-    for w in words:
-        assert w in proc.stderr, (w, proc.stderr)
-    return proc.stderr
 
 
 def converted(proc, *words):

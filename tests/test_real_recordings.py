@@ -9,14 +9,13 @@ import json
 import math
 import re
 import shutil
-import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from tests.commands import cli, refused
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "tests" / "data"
@@ -28,17 +27,6 @@ ISOXML = REAL / "isoxml_dev4ag_timelogs"
 TOYOTA = OPENDBC / "dbc" / "generator" / "toyota" / "_toyota_2017.dbc"
 F1_SIGNALS = ("--signal", "delta_cmd=commandData.delta[rad]", "--signal", "yaw_rate=imuData.wz[deg/s]",
               "--signal", "v=pfOdomData.vx[m/s]", "--signal", "x=pfOdomData.x[m]", "--signal", "y=pfOdomData.y[m]")
-
-
-def cli(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", *map(str, args)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300)
-
-
-def refused(proc, *words):
-    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
-    for w in words:
-        assert w in proc.stderr, (w, proc.stderr)
 
 
 # --- every maker's DBC ---------------------------------------------------------------------------------

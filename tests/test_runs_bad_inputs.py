@@ -30,7 +30,7 @@ def test_a_study_file_that_is_not_utf8_is_refused_with_its_line_column_and_byte(
         assert words in proc.stderr, proc.stderr
     assert not (tmp_path / "o").exists()
     extended = tmp_path / "child.toml"                # the file it extends is named when that one is the culprit
-    extended.write_text(f'extends = "latin.toml"\n[study]\nname = "child"\n')
+    extended.write_text('extends = "latin.toml"\n[study]\nname = "child"\n')
     with pytest.raises(StudyError, match=r"latin\.toml: line"):
         Study.load(extended)
 

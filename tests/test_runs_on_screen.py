@@ -10,7 +10,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from agrobot.orchestrator.key_figures import parse_bound, run_table

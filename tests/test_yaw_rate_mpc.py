@@ -154,7 +154,7 @@ def test_step_applies_the_solution_of_its_own_qp_and_advances_the_model():
         r, y = rng.uniform(-1, 1), rng.uniform(-1, 1)
         applied = rng.uniform(-0.5, 0.5) if k else None
         if applied is not None:
-            ref.x = x_pred + ref.B * applied
+            ref.x = x_pred + ref.B * applied  # noqa: F821 (the previous pass set it)
         qp = ref.qp(r, y)
         du = exact_qp(qp.H, qp.g, qp.A, qp.lower, qp.upper, qp.box)
         u_expected = ref.u_prev + du[0]

@@ -17,7 +17,6 @@ import inspect
 import os
 import re
 import sys
-import typing
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -19,3 +19,24 @@ try:
     __version__ = _version("agrobot-guidance")
 except PackageNotFoundError:        # pragma: no cover - running from an uninstalled tree
     __version__ = "0+unknown"
+
+# The Python API (agrobot.api) and its results (agrobot.results), imported on first use so that
+# ``import agrobot`` stays light: ``from agrobot import run`` loads them.
+_API = {"run", "sweep", "identify", "diagnose", "convert", "plan", "margins", "load"}
+_RESULTS = {"RunResult", "Metric", "SweepResult", "Identification", "Diagnosis", "Recording", "PlanResult",
+            "LoopMargins"}
+__all__ = sorted(_API | _RESULTS)
+
+
+def __getattr__(name: str):
+    if name in _API or name in _RESULTS:
+        from importlib import import_module
+
+        value = getattr(import_module(f"{__name__}.{'api' if name in _API else 'results'}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

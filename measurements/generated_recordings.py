@@ -1,4 +1,4 @@
-"""Small generated recordings for the reader tests: an NMEA track, a candump log and an ISO 11783-10
+"""Small generated recordings for the reader tests and benchmarks: an NMEA track, a candump log and an ISO 11783-10
 time log, each with the fault a test puts into it (written here from known values, so that what a
 reader returns can be compared with what was written)."""
 from __future__ import annotations
