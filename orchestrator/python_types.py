@@ -1,6 +1,6 @@
 """Sub-resolver of Python component types (orchestrator.resolver): ``type = "name"`` is
 ``<package>.name.COMPONENT`` in the study's ``component_package``, then in every package a plugin
-registered (orchestrator.registry), then the entry point ``name`` of the group ``agrobot.components``
+registered (orchestrator.registry), then the entry point ``name`` of the group ``<root>.components`` (<root>: the package holding this orchestrator)
 (any installed package may provide one: ``xte_monitor = "my_pkg.xte_monitor:XTEMonitor"``);
 ``type = "package.module:Class"`` is that class. ``[study] components_path`` names a folder of the
 user's own modules (relative to the study file) where ``module:Class`` is looked for too."""
@@ -30,7 +30,7 @@ class PythonTypes:
         return resolve_type(spec.type, study.study.component_package, f"{study.where}: components.{name}")
 
 
-ENTRY_POINTS = "agrobot.components"
+ENTRY_POINTS = f"{__name__.split('.')[0]}.components"   # <root>.components of the installed package
 
 
 def add_components_path(study: Study) -> Path:
@@ -50,7 +50,7 @@ def add_components_path(study: Study) -> Path:
 
 
 def entry_point_type(type_name: str):
-    """The class an installed package provides as entry point ``type_name`` of ``agrobot.components``,
+    """The class an installed package provides as entry point ``type_name`` of ``<root>.components``,
     None when none does."""
     found = [ep for ep in entry_points(group=ENTRY_POINTS) if ep.name == type_name]
     return found[0].load() if found else None

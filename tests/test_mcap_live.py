@@ -58,7 +58,7 @@ def _at(frame: pd.DataFrame, t_ns: int) -> pd.Series:
 def figure8_mcap(tmp_path_factory):
     where = tmp_path_factory.mktemp("mcap")
     study = Study.load(STUDIES / "figure8.toml", ["study.stop_time=16"])
-    result = run_study(study, where / "run", plots=False, progress=False)
+    run_study(study, where / "run", plots=False, progress=False)
     frame = pd.read_parquet(where / "run" / "signals.parquet")
     _, note = write_study_mcap(study, frame, where / "run.mcap")
     assert "nominal origin" in note and "[output] origin" in note          # the choice is said, with its option

@@ -60,7 +60,7 @@ def test_the_own_component_page_runs(tmp_path):
 
 
 def _run(study: Path, cwd: Path, *launcher: str) -> subprocess.CompletedProcess:
-    return subprocess.run([*launcher, "run", str(study), "--out", str(cwd / "out"), "--no-plots"], cwd=cwd,
+    return subprocess.run([*launcher, "run", str(study), "--out", str(cwd / "out"), "--no-plots", "--overwrite"], cwd=cwd,
                           capture_output=True, text=True, timeout=300)
 
 
