@@ -50,11 +50,9 @@ def run(args: argparse.Namespace) -> int:
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
-    ties = [t for t in result.get("inconclusive", []) if t["effects"][0] == result["verdict"]]
-    print(f"verdict: {result['verdict']}" + (f" (inconclusive: or {', '.join(t['effects'][1] for t in ties)})"
-                                            if ties else ""))
-    for item in result.get("not_identifiable", []):
-        print(f"  {item['id']}: {item['why']}")
+    print(f"verdict: {result['verdict']} ({result['verdict_status']}): {result['verdict_statement']}")
+    for bullet in result.get("verdict_bullets", []):
+        print(f"  - {bullet}")
     for e in result["effects"]:
         if e["id"] == "unexplained":
             xc, ext = e["correlates_with"], e["extension"]

@@ -19,6 +19,8 @@ from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
 from .unexplained import stage_check
+from .study_fit import study_check
+from .verdict import audit_findings, conclude
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
@@ -46,7 +48,9 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         options = _study_options(f, baseline)
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
     except KeyError as missing:
-        options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
+        what = missing.args[0]
+        options, option_text = None, (f"(no study option carries this: {what})" if " " in what else
+                                      f"(the study has no {what} component to carry this option)")
     signals = ", ".join(f"{k} {DISPLAY[s][0] * f.rmse_before[k]:.4g} -> {shown(s, f.rmse_after[k], 4)}"
                         for s in f.stages for k in [SIGNALS[s][0]])
     fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
@@ -149,6 +153,55 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
+def identified_vehicle(frame, where: str, study, baseline) -> dict:
+    """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
+    study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
+    1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
+    held-out fit and its independent estimates (identification.comparisons)."""
+    from agrobot.identification.driving import NotEnoughDriving
+    from agrobot.identification.ordinary_driving import identify_driving
+
+    p = baseline.tractor
+    L = p.l_f + p.l_r
+    ours = {"understeer_gradient": (p.C_r * p.l_r - p.C_f * p.l_f) * p.m / (p.C_f * p.C_r * L),
+            "cornering_stiffness_front": p.C_f, "cornering_stiffness_rear": p.C_r,
+            "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
+    try:
+        rep = identify_driving(frame, where, study)
+    except (NotEnoughDriving, LogError) as exc:
+        return {"study": ours, "identified": None, "why_not": str(exc)}
+    tyre = rep["tyre_saturation"]
+    mine = {"understeer_gradient": rep["understeer_gradient"], "delay": rep["delay"],
+            "cornering_stiffness_front": rep["cornering_stiffness"]["front"],
+            "cornering_stiffness_rear": rep["cornering_stiffness"]["rear"],
+            "held_out_fit": rep["held_out_fit"]["value"], "final_model": rep["final_model"],
+            "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
+                                 "shape": tyre["parameters"]["shape"]["value"],
+                                 "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
+            "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"]}
+    return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", [])}
+
+
+def agreement(identified: dict, effects: list[dict], sel) -> list[str]:
+    """Where identify and diagnose, on one log, conclude differently about an effect both model
+    (tyre saturation), and why: identify's held-out segments are spread over the log, the
+    diagnosis holds out its last part."""
+    if not identified:
+        return []
+    ids = {e["id"] for e in effects}
+    sat = identified.get("tyre_saturation")
+    if sat and "tyre_saturation" not in ids:
+        tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
+        why = "; ".join(tried.reasons) if tried else "it was not fitted"
+        return [f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
+                f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on the "
+                f"log's last part, does not: {why}"]
+    if not sat and "tyre_saturation" in ids:
+        return ["the diagnosis finds tyre saturation where identify does not keep it: "
+                + "; ".join(identified.get("tyre_saturation_why_not") or ["-"])]
+    return []
+
+
 LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
 COARSE_RATE = 10.0       # Hz: the rate the steering and yaw stages need (MIN_RATE): every replay's cost grows
                          # with the samples, and a long log has the turns and speeds to judge at that rate
@@ -174,10 +227,11 @@ def coarser_clock(frame):
 
 def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None, progress=None) -> dict:
+             recording=None, progress=None, identify: bool = True) -> dict:
     """Run the diagnosis; always writes diagnosis.json and report.md (verdict ``cannot decide``
     with the reason when the log cannot be used). Raises nothing for a bad log."""
     out = Path(out_dir)
+    default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
                     "findings": []}
@@ -202,8 +256,12 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         _write(out, result, [])
         return result
     say = progress or (lambda text: None)
+    if identify and "yaw" in replay.stages:
+        say("identifying the vehicle on the same log (the model identify fits)")
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline)
+    identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
-    sel = select(replay, min_gain, seed=study.study.seed)
+    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
     say("effects selected; judging the stages against their noise floors")
     base = sel.base
     final, floors = sel.final, sel.floors
@@ -227,15 +285,26 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         e["not_identifiable"] = "; ".join(
             f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
             for n, p in bound.items())
-    answers = [e for e in effects if e not in unidentifiable]
     result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
                                   for e in unidentifiable]
-    result["verdict"] = answers[0]["id"] if answers else ("unexplained" if unexplained else "none")
+    result["audit"] = audit_findings(replay.frame.attrs)
+    p = baseline.tractor
+    moving = replay.speed[replay.speed > replay.min_speed]
+    verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
+                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
+    verdict["bullets"] += agreement(identified, effects, sel)
+    result["verdict"] = verdict["id"]
+    result["verdict_status"] = verdict["status"]
+    result["verdict_statement"] = verdict["statement"]
+    result["verdict_bullets"] = verdict["bullets"]
     result["inconclusive"] = sel.inconclusive
-    result["verdict_status"] = ("inconclusive" if any(t["effects"][0] == result["verdict"] for t in sel.inconclusive)
-                                else "conclusive")
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, base, floors) + ([note] if note else [])
+    p = baseline.tractor
+    result["log_vehicle"], mismatch = study_check(replay.frame, p.l_f + p.l_r, study_path.name)
+    if mismatch:
+        result["warnings"].insert(0, mismatch + (" (no --study given: the default study was used)"
+                                                 if default_study else ""))
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}

@@ -102,6 +102,9 @@ def markdown(result: dict, plots: list[str]) -> str:
 
         lines += ["The log was imported from a raw recording (details in diagnosis.json, `recording`):", "", "```",
                   describe(result["recording"]), "```", ""]
+    lines += [f"{result.get('verdict_statement', '')} ({result.get('verdict_status', '')}).", ""]
+    lines += [f"- {b}" for b in result.get("verdict_bullets", [])] + ([""] if result.get("verdict_bullets") else [])
+    lines += ["Every effect judged:", ""]
     for e in result["effects"]:
         lines += [f"- **{e['id']}**: {e['summary']}"]
         if e["id"] != "unexplained":

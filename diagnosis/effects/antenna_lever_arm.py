@@ -8,8 +8,8 @@ class AntennaLeverArm(Effect):
     id = "antenna_lever_arm"
     subsystem = "gps (antenna mounting)"
     stages = ("position",)
-    parameters = (Parameter("antenna_forward", "m", 0.5, -4.0, 4.0, "m", 1.0),
-                  Parameter("antenna_left", "m", 0.5, -2.0, 2.0, "m", 1.0))
+    parameters = (Parameter("antenna_forward", "m", 0.5, -4.0, 4.0, "m", 1.0, (-8.0, 8.0)),
+                  Parameter("antenna_left", "m", 0.5, -2.0, 2.0, "m", 1.0, (-4.0, 4.0)))
     starts = ((0.0, 0.0),)
     threshold = "lever arm >= 0.15 m"
     hypothesis = "the antenna is not where the model puts it: in turns it swings on a different radius"
