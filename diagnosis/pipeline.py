@@ -18,7 +18,7 @@ from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
-from .unexplained import stage_check
+from .unexplained import signature, stage_check
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -144,11 +144,14 @@ def _unexplained(checks: dict) -> dict | None:
     outcome = (f"takes {100 * gain:.0f}% off the held-out RMS" if gain >= 0.05 else
                f"does not carry over to the held-out part ({100 * gain:+.0f}% on its RMS): the misfit is not a "
                f"fixed function of one signal; extend the model by physics or record the conditions it happens in")
+    sig = signature(ext)
+    reading = (f"; its form: {sig['physical']}; the run that would tell: {sig['experiment']}" if gain >= 0.05 else
+               f"; the run that would tell: {sig['experiment']}")
     summary = (f"the {worst['stage']} stage stays {worst['ratio']:.1f} x its noise floor after the catalogued effects "
                f"(excess {shown(worst['stage'], worst['excess'])}); its residual correlates with {xc['signal']} "
                f"(rho {xc['rho']:.2f}); a data-driven {ext['kind']} on {ext['signal']}, fitted on the training part, "
-               f"{outcome}")
-    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit],
+               f"{outcome}{reading}")
+    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit], "signature": sig,
             "ratio_to_floor": worst["ratio"], "correlates_with": xc, "extension": ext,
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 

@@ -361,6 +361,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                                nl.at_bound(q), meaning=q.meaning)) for q in free_nl
                             if q.name in ("friction", "shape"))}}
     not_identifiable = [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")]
+    checks = physical_checks(frame, log, model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q,
                                         params_json.get("gyro_bias"), linear_range, L, min_speed)
     report = {
@@ -395,11 +396,42 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
          "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
         "not_identifiable": not_identifiable,
         "comparisons": comparisons,
+        "physical_checks": checks,
         "notes": notes,
     }
     report["_plot"] = {"log": log, "model": model, "test": test_segs, "linear": linear.values, "nl": nl.values,
                        "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
     return report
+
+
+PHYSICAL_COLUMNS = {"beta": ("side-slip angle at the centre of gravity", "rad"),
+                    "vy": ("lateral velocity at the centre of gravity", "m/s"),
+                    "a_y": ("lateral acceleration", "m/s2")}
+
+
+def physical_checks(frame, log, model, values: dict, segs) -> dict:
+    """The final model's side-slip beta = atan(v_y / v), lateral velocity v_y and lateral
+    acceleration a_y = dv_y/dt + v r (its states, never fitted to them) against the log's ``beta``
+    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS."""
+    have = [c for c in PHYSICAL_COLUMNS if c in frame and np.isfinite(frame[c].to_numpy(float)).sum() > 10]
+    if not have or not len(segs.idx):
+        return {}
+    yaw, vy = model.simulate_many([values], segs, lateral=True)
+    yaw, vy = yaw[0] - values.get("gyro_bias", 0.0), vy[0]
+    v = log.v[segs.idx]
+    pred = {"beta": np.arctan2(vy, np.maximum(v, 1e-3)), "vy": vy,
+            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw}
+    t = frame["t"].to_numpy(float)
+    out = {}
+    for c in have:
+        col = frame[c].to_numpy(float)
+        ok = np.isfinite(col)
+        meas = np.interp(log.t[segs.idx], t[ok], col[ok])
+        m, p_ = meas[segs.scored], pred[c][segs.scored]
+        out[c] = {"what": PHYSICAL_COLUMNS[c][0], "unit": PHYSICAL_COLUMNS[c][1], "fit_percent": fit_percent(m, p_),
+                  "rms": float(np.sqrt(np.mean((m - p_) ** 2))), "measured_std": float(np.std(m)),
+                  "how": "the final model's state on the held-out segments, driven by the input alone; never fitted to it"}
+    return out
 
 
 def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q, bias_q, linear_range,
@@ -479,6 +511,9 @@ def summary(report: dict) -> str:
         lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
                      f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
                      f"{ss['steer_offset']['value']:.3g} rad")
+    for c, chk in report.get("physical_checks", {}).items():
+        lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
+                     f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
     for c in report.get("comparisons", []):
         lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
                                                       for m, e in c["estimates"].items()) + " " + c["unit"]
