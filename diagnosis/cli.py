@@ -53,6 +53,11 @@ def run(args: argparse.Namespace) -> int:
     print(f"verdict: {result['verdict']} ({result['verdict_status']}): {result['verdict_statement']}")
     for bullet in result.get("verdict_bullets", []):
         print(f"  - {bullet}")
+    from .report import vehicle_lines
+
+    for line in vehicle_lines(result.get("identified_vehicle")):
+        if line and not line.startswith(("|---", "## ")):
+            print("  " + line)
     for e in result["effects"]:
         if e["id"] == "unexplained":
             xc, ext = e["correlates_with"], e["extension"]

@@ -74,10 +74,11 @@ BASELINES = {"tractor": STUDIES / "figure8.toml", "car": STUDIES / "passenger_ca
 
 
 def diagnose_hidden(case: tuple) -> dict:
-    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant[, vehicle]]]])
+    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant[, vehicle[, values]]]]])
     to ``folder`` and diagnose it (no plots) against the vehicle's baseline study (BASELINES);
     ``effect`` may be several ids joined by '+', ``healthy`` one or several of truth_tractor.HEALTHY
-    (a truth without fault that differs from the baseline)."""
+    (a truth without fault that differs from the baseline), ``values`` magnitudes that replace the
+    drawn ones (truth_tractor.make_log)."""
     from .pipeline import diagnose
 
     effect, seed, folder, *rest = case
@@ -85,7 +86,9 @@ def diagnose_hidden(case: tuple) -> dict:
     duration = rest[1] if len(rest) > 1 else 240.0
     healthy = rest[2] if len(rest) > 2 else None
     vehicle = rest[3] if len(rest) > 3 else "tractor"
-    frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy, vehicle=vehicle)
+    values = rest[4] if len(rest) > 4 else None
+    frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy, vehicle=vehicle,
+                            values=values)
     name = f"{vehicle}_{effect or 'none'}_{healthy.replace('+', '-') + '_' if healthy else ''}{seed}"
     log = Path(folder) / f"{name}.parquet"
     frame.to_parquet(log)

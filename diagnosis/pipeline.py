@@ -161,8 +161,8 @@ def identified_vehicle(frame, where: str, study, baseline) -> dict:
     study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
     held-out fit and its independent estimates (identification.comparisons)."""
-    from agrobot.identification.driving import NotEnoughDriving
     from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.orchestrator.errors import InputError
 
     p = baseline.tractor
     L = p.l_f + p.l_r
@@ -171,7 +171,7 @@ def identified_vehicle(frame, where: str, study, baseline) -> dict:
             "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
     try:
         rep = identify_driving(frame, where, study)
-    except (NotEnoughDriving, LogError) as exc:
+    except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
         return {"study": ours, "identified": None, "why_not": str(exc)}
     tyre = rep["tyre_saturation"]
     mine = {"understeer_gradient": rep["understeer_gradient"], "delay": rep["delay"],
@@ -182,7 +182,8 @@ def identified_vehicle(frame, where: str, study, baseline) -> dict:
                                  "shape": tyre["parameters"]["shape"]["value"],
                                  "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
             "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"]}
-    return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", [])}
+    return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
+            "physical_checks": rep.get("physical_checks", {})}
 
 
 def agreement(identified: dict, effects: list[dict], sel) -> list[str]:
@@ -296,6 +297,11 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
     verdict["bullets"] += agreement(identified, effects, sel)
+    for c in result.get("identified_vehicle", {}).get("comparisons", []):
+        if not c["agree"]:
+            verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
+                f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
+                + f" {c['unit']}: they disagree; {c['suggests']}")
     result["verdict"] = verdict["id"]
     result["verdict_status"] = verdict["status"]
     result["verdict_statement"] = verdict["statement"]

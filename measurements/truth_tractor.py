@@ -224,14 +224,16 @@ class Servo:
 def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
              scale: dict[str, float] | None = None, speeds: tuple[float, ...] | None = None,
              healthy: str | None = None, vehicle: str = "tractor",
-             values: dict[str, float] | None = None) -> tuple[pd.DataFrame, dict]:
+             values: dict[str, float] | None = None, lateral: bool = False) -> tuple[pd.DataFrame, dict]:
     """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
     EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
     sigma_f) to stress the diagnosis with a truth further from the baseline; ``healthy``: one or
     several of HEALTHY ('a+b'), ways the truth differs from the baseline without a fault
     (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay);
     ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering);
-    ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...)."""
+    ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...);
+    ``lateral``: add the measured lateral velocity at the centre of gravity ``vy`` [m/s] and the
+    side-slip ``beta`` = atan(vy / v) [rad] (an optical or GNSS/INS sensor; noise 0.005 m/s)."""
     if vehicle not in VEHICLES:
         raise ValueError(f"unknown vehicle {vehicle!r}; known: {sorted(VEHICLES)}")
     veh = VEHICLES[vehicle]
@@ -348,6 +350,10 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
+    if lateral:
+        vy_log = rec[idx, 2] + 0.005 * rng.standard_normal(n)
+        frame["vy"] = vy_log
+        frame["beta"] = np.arctan2(vy_log, np.maximum(frame["v"].to_numpy(float), 0.1))
     truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
              "vehicle": vehicle, "v_ref": v_ref,
              "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
