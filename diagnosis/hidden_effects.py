@@ -55,7 +55,7 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
     if effect == "position_reference":               # the point (m, both axes) and the clock (s) in one number
         err = math.hypot(params["position_forward"] + TRUTH_ANTENNA - truth["forward"],
                          params["position_left"] - truth["left"])
-        return err / 0.15 + abs(params["position_clock"] - truth["latency"]) / 0.04, 0.0, 1.0
+        return max(err / 0.15, abs(params["position_clock"] - truth["latency"]) / 0.04), 0.0, 1.0
     if effect == "gyro_scale":
         return params["gyro_scale"], truth["gyro_scale"], 0.02
     if effect == "speed_scale":
