@@ -205,6 +205,10 @@ class Replay:
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
             delta = self.replayed_steering(v) if self.command_only else None
+            shift = v.get("steering_clock", 0.0)
+            if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
+                d = self.delta if delta is None else delta
+                delta = np.interp(self.t + shift, self.t, d)
             curve = v.get("steering_ratio_curvature", 0.0)
             if curve:                       # the wheels turn delta (1 + c delta^2) for a reading of delta
                 d = self.delta if delta is None else delta

@@ -60,6 +60,8 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         return params["gyro_scale"], truth["gyro_scale"], 0.02
     if effect == "speed_scale":
         return params["speed_scale"], 1.0 + truth["slip"], 0.02
+    if effect == "steering_clock":
+        return params["steering_clock"], truth["steering_clock"], 0.04
     if effect == "steering_ratio_curve":
         return params["steering_ratio_curvature"], truth["ratio_curvature"], 0.25 * truth["ratio_curvature"]
     raise KeyError(effect)

@@ -46,7 +46,7 @@ UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_sat
 # effects real vehicles show, added after the catalogue above (drawn from a stream of their own so the
 # draws of the others stay): a localisation output at another point of the vehicle on a lagging clock,
 # and a steering ratio that varies with the angle (the wheels turn delta (1 + c delta^2) for a reading delta)
-LATER = ("position_reference", "steering_ratio_curve")
+LATER = ("position_reference", "steering_ratio_curve", "steering_clock")
 
 # healthy truths: ways a tractor with no fault differs from the baseline (the diagnosis must say "none")
 HEALTHY = ("servo", "servo_guard", "rear_relaxation", "relaxation", "noisy_sensors", "quiet_sensors",
@@ -113,11 +113,13 @@ def draw_unlisted(effect: str, rng: np.random.Generator) -> dict[str, float]:
 def draw_later(effect: str, rng: np.random.Generator, l_r: float) -> dict[str, float]:
     """Magnitudes of the LATER effects: a point 0.8-1.6 m ahead of the centre of gravity (given, as
     the antenna, from the rear axle: l_r + that) and up to 0.3 m aside, stamped 0.15-0.35 s late;
-    a ratio curvature c of 1.5-3 1/rad2 (8-17 % more wheel angle at 0.25 rad)."""
+    a ratio curvature c of 1.5-3 1/rad2 (8-17 % more wheel angle at 0.25 rad); the steering
+    channels (delta_cmd, delta) stamped 0.3-0.9 s late against the others."""
     sign = 1.0 if rng.random() < 0.5 else -1.0
     u = rng.uniform
     return {"position_reference": {"forward": l_r + u(0.8, 1.6), "left": sign * u(0.0, 0.3), "latency": u(0.15, 0.35)},
-            "steering_ratio_curve": {"ratio_curvature": u(1.5, 3.0)}}[effect]
+            "steering_ratio_curve": {"ratio_curvature": u(1.5, 3.0)},
+            "steering_clock": {"steering_clock": u(0.3, 0.9)}}[effect]
 
 
 def ratio_reading(delta: float, c: float) -> float:
@@ -350,6 +352,10 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
+    late = e.get("steering_clock", 0.0)
+    if late:                                  # the steering channels stamped late: delta_log(t) = delta(t - late)
+        for c in ("delta_cmd", "delta"):
+            frame[c] = np.interp(t_log - late, t_log, frame[c].to_numpy(float))
     if lateral:
         vy_log = rec[idx, 2] + 0.005 * rng.standard_normal(n)
         frame["vy"] = vy_log
