@@ -76,6 +76,9 @@ class Effect:
     hypothesis: ClassVar[str]                            # what it means on the tractor
     experiment: ClassVar[str]                            # the excitation that shows it apart from its rivals
     needs: ClassVar[tuple[str, ...]] = ()                # log columns it reads beyond its stages' (side slope: x, y)
+    secondary: ClassVar[tuple[str, ...]] = ()            # parameters whose bound leaves the effect found (each is
+                                                         # then "not identifiable" alone: a tyre's shape, not driven
+                                                         # past its peak)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

@@ -58,7 +58,8 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
     for p in f.effect.parameters:
         value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
         fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
-                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p)}
+                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p),
+                          "secondary": p.name in f.effect.secondary}
     return {
         "id": f.effect.id,
         "subsystem": f.effect.subsystem,
@@ -283,9 +284,13 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
     # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
-    unidentifiable = [e for e in effects if any(p["at_bound"] for p in e["fitted"].values())]
+    unidentifiable = [e for e in effects if any(p["at_bound"] and not p["secondary"] for p in e["fitted"].values())]
+    for e in effects:                   # a secondary parameter on its bound: the effect stands, that value does not
+        for n, p in e["fitted"].items():
+            if p["at_bound"] and p["secondary"]:
+                p["note"] = f"not identifiable from this log: ended on its {p['at_bound']} bound"
     for e in unidentifiable:
-        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"]}
+        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"] and not p["secondary"]}
         e["not_identifiable"] = "; ".join(
             f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
             for n, p in bound.items())
