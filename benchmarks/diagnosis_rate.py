@@ -92,8 +92,8 @@ def main() -> None:
 
     from agrobot.measurements.truth_tractor import HEALTHY, LATER
 
-    groups = {"singles": ["none", *EFFECTS], "combinations": list(COMBINATIONS), "unlisted": list(unlisted_cases()),
-              "later effects": list(LATER), "healthy": [f"healthy:{h}" for h in HEALTHY]}
+    groups = {"healthy": [f"healthy:{h}" for h in HEALTHY], "singles": ["none", *EFFECTS], "later effects": list(LATER),
+              "combinations": list(COMBINATIONS), "unlisted": list(unlisted_cases())}
     if args.vehicle == "car":
         # what a car's test drive at 10-30 m/s can show: its steering effects are a twentieth of the
         # tractor's angles (below the catalogue's materiality), and a drive that never turns round

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import multiprocessing
 import os
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -100,6 +101,8 @@ def diagnose_hidden(case: tuple) -> dict:
     log = Path(folder) / f"{name}.parquet"
     frame.to_parquet(log)
     result = diagnose(log, Path(folder) / name, plots=False, study_path=BASELINES[vehicle])
+    found = "+".join(sorted(e["id"] for e in result["effects"])) or "none"
+    print(f"{name}: {found} (expected {'+'.join(sorted(expected_ids(truth))) or 'none'})", file=sys.stderr, flush=True)
     return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}
 
 
