@@ -55,7 +55,8 @@ def study_check(frame, wheelbase: float, study_name: str) -> tuple[dict | None, 
         _, p = study_plant(load_study(shipped(name)))
         fits.append((abs(math.log(mine["wheelbase"] / (p.l_f + p.l_r))), name, p.l_f + p.l_r))
     best = min(fits)
-    text = (f"the log's vehicle (wheelbase {mine['wheelbase']:.3g} m from v tan(delta) / yaw_rate in gentle turns, "
+    text = (f"the log's vehicle (wheelbase {mine['wheelbase']:.3g} m from v tan({mine['from']}) / yaw_rate in gentle "
+            f"turns: an effective one, which understeer and a command's gain lengthen; "
             f"speeds {mine['speed_range'][0]:.3g}-{mine['speed_range'][1]:.3g} m/s, |{mine['from']}| up to "
             f"{math.degrees(mine['steering_range']):.3g} deg) is not the study's {study_name} (wheelbase {wheelbase:.3g} m)")
     if best[1] != study_name:

@@ -450,7 +450,8 @@ def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, d
                         ("steady-state regression", k_ss["value"], k_ss["std"]),
                         f"the steady states lie inside the linear range (|a_y| <= {linear_range['value']:.3g} m/s2) while "
                         f"the dynamic fit spans every |a_y|: a model structure is missing over part of the |a_y| range "
-                        f"(tyre saturation, a stiffness varying with speed, a steering ratio varying with the angle)"))
+                        f"(tyre saturation, a stiffness varying with speed, a steering ratio varying with the angle), "
+                        f"or a timing the dynamic fit cannot hold (the steering channels on another clock than the gyro)"))
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     if pieces and math.isfinite(delay_q["value"]):
