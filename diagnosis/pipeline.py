@@ -261,6 +261,11 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
         _write(out, result, [])
         return result
     say = progress or (lambda text: None)
+    result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
+                                                  study_path.name)
+    if mismatch:
+        mismatch += " (no --study given: the default study was used)" if default_study else ""
+        say(f"warning: {mismatch}")
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
         result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline)
@@ -314,11 +319,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path, study_path: str | Path |
     result["inconclusive"] = sel.inconclusive
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, base, floors) + ([note] if note else [])
-    p = baseline.tractor
-    result["log_vehicle"], mismatch = study_check(replay.frame, p.l_f + p.l_r, study_path.name)
     if mismatch:
-        result["warnings"].insert(0, mismatch + (" (no --study given: the default study was used)"
-                                                 if default_study else ""))
+        result["warnings"].insert(0, mismatch)
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
