@@ -462,8 +462,12 @@ def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, d
         if math.isfinite(extra):
             out.append(pair("command-to-yaw delay", "s", ("dynamic fit", delay_q["value"], delay_q["std"]),
                             ("cross-correlation of the gyro with the fitted model", delay_q["value"] - extra, 0.5 * log.h),
-                            f"the gyro lags the fitted model by {-extra:.3g} s on the held-out segments: a timing the "
-                            f"model does not hold (a clock offset between channel groups, or a delay varying over the log)"))
+                            (f"the gyro lags the fitted model by {-extra:.3g} s on the held-out segments: a timing the "
+                             f"model does not hold (a clock offset between channel groups, or a delay varying over the log)"
+                             if extra < 0 else
+                             f"the gyro leads the fitted model by {extra:.3g} s on the held-out segments: the response "
+                             f"leads its input, which no vehicle does: the steering channels are stamped late against "
+                             f"the gyro (a clock offset)")))
     if bias_q and {"x", "y", "t", "yaw_rate"} <= set(frame.columns):
         f = frame[["t", "x", "y", "yaw_rate", "v"]].dropna() if "v" in frame else None
         if f is not None and len(f) > 100:

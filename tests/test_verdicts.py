@@ -134,3 +134,10 @@ def test_the_logs_wheelbase_from_its_kinematics_names_the_study_that_fits():
     mine, warning = study_check(frame, 1.4, "figure8.toml")
     assert "f1tenth.toml" in warning and "1.4 m" in warning
     assert study_check(frame, 0.33, "f1tenth.toml")[1] is None
+
+
+def test_a_value_on_its_bound_counts_as_a_point():
+    """A delay fitted on its bound 0 (no std) against a cross-correlation of -0.78 +- 0.02 s: they
+    disagree (the response leads its input)."""
+    c = pair("delay", "s", ("fit", 0.0, float("nan")), ("xcorr", -0.78, 0.01), "clock")
+    assert not c["agree"] and c["estimates"]["fit"]["interval"] == [0.0, 0.0]
