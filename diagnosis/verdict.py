@@ -29,7 +29,7 @@ IMITATES = {
     "gap_bridged": ("actuator_delay", "gps_latency", "steering_rate_limit"),
     "scale_disagreement": ("gyro_scale", "speed_scale", "yaw_rate_bias", "tyre_saturation",
                            "speed_dependent_cornering", "steering_ratio_curve"),
-    "position_is_estimate": ("antenna_lever_arm", "gps_latency"),
+    "position_is_estimate": (),      # not a blocker: it renames (conclude says what a lever arm then is)
     "mislabelled_channel": ("*",),
 }
 
@@ -119,6 +119,10 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
     blockers = [f for f in audit if not f["resolved"]]
     bullets = []
     for f in blockers:
+        if f["kind"] == "position_is_estimate":
+            bullets.append(f"the positions are an estimate ({_finding_text(f)}): a lever arm found is the point the "
+                           f"estimate refers to and a latency the estimator's, not an antenna's mounting or a receiver's")
+            continue
         bullets.append(f"unresolved recording finding {_finding_text(f)}; it can imitate "
                        f"{', '.join(f['imitates']) or 'nothing the catalogue holds'}: those are not concluded while it stands")
     for e in effects:

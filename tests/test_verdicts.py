@@ -141,3 +141,12 @@ def test_a_value_on_its_bound_counts_as_a_point():
     disagree (the response leads its input)."""
     c = pair("delay", "s", ("fit", 0.0, float("nan")), ("xcorr", -0.78, 0.01), "clock")
     assert not c["agree"] and c["estimates"]["fit"]["interval"] == [0.0, 0.0]
+
+
+def test_a_position_that_is_an_estimate_renames_a_lever_arm_and_blocks_nothing():
+    audit = audit_findings({"audit": [{"kind": "position_is_estimate", "channels": ["x", "y"],
+                                       "meaning": "particle-filter pose", "resolved": False}]})
+    v = conclude([effect("antenna_lever_arm", antenna_forward=0.28, antenna_left=-0.12)], None, [], [], audit,
+                 Vehicle.from_table({"class": "scale_car", "length": 0.55, "width": 0.3}), 0.32, 0.21, 1.5)
+    assert v["status"] == "conclusive"
+    assert any("the point the estimate refers to" in b for b in v["bullets"])
