@@ -45,6 +45,7 @@ from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN
 from .effect import Effect, Parameter
 
+SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
 STRONG = -10.0         # dBIC below which the evidence is strong
 
@@ -151,6 +152,9 @@ class Selector:
         # the effects this log can judge: one of their stages replayed, the columns they read there
         self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs)]
+        if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
+            # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
+            self.catalogue = [e for e in self.catalogue if e.id not in SCALES]
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None

@@ -10,7 +10,8 @@ import math
 import numpy as np
 
 CANDIDATES = ("figure8.toml", "passenger_car.toml", "f1tenth.toml")
-MISMATCH = 0.3        # a wheelbase off by more than this share (in log ratio) is another vehicle
+MISMATCH = 0.5        # a wheelbase off by more than a factor e^0.5 = 1.65 is another vehicle (an effective
+                      # wheelbase from a command runs 20-50 % long: the gain and understeer)
 
 
 def log_vehicle(frame) -> dict | None:
