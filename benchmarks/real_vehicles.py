@@ -5,8 +5,11 @@ F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman st
 kind of car, 41 designed 3 s runs laid end to end), read by the recording importer (as ``convert``
 reads them: the longest run without a clock gap) through tests/vehicle_logs.py, against
 studies/f1tenth.toml.
-Prints one table: vehicle, seconds, delay, understeer gradient K, cornering stiffnesses, held-out
-fit, tyre saturation, the diagnosis' verdict and what was not judged.
+Prints one table: vehicle, seconds, the identified vehicle diagnose shares with identify (delay,
+held-out fit, tyre saturation), the independent estimates side by side (K from the dynamic fit and
+from steady states, the delay from the fit and from a cross-correlation, the gyro bias from the fit
+and from the GNSS course), the physical checks (beta, vy, a_y when the log has them), the verdict
+with its status and statement, what was not judged, and the time taken.
 """
 from __future__ import annotations
 
@@ -37,6 +40,16 @@ def fmt(q: dict, f: str = "{:.3g}") -> str:
     return f.format(q["value"]) + " [" + ", ".join(f.format(x) for x in q["interval"]) + "]"
 
 
+def both(comparisons: list[dict], quantity: str, f: str = "{:.3g}") -> str:
+    """The two estimates of a quantity, 'DISAGREE' when their intervals do not overlap."""
+    c = next((c for c in comparisons if c["quantity"].startswith(quantity)), None)
+    if c is None:
+        return "-"
+    text = "; ".join(f"{m.split(' ')[0]} " + f.format(e["value"]) + " [" + ", ".join(f.format(x) for x in e["interval"]) + "]"
+                     for m, e in c["estimates"].items())
+    return text + ("" if c["agree"] else " DISAGREE")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
@@ -55,27 +68,38 @@ def main() -> None:
         for k, (name, log) in enumerate(logs()):
             start = time.perf_counter()
             seconds = float(log["t"].iloc[-1] - log["t"].iloc[0])
-            try:
-                rep = identify_driving(log, name, study)
-                ident = {"delay [s]": fmt(rep["delay"]), "K [rad/(m/s2)]": fmt(rep["understeer_gradient"]),
-                         "C_f, C_r [N/rad]": f"{fmt(rep['cornering_stiffness']['front'], '{:.0f}')}; "
-                                             f"{fmt(rep['cornering_stiffness']['rear'], '{:.0f}')}",
-                         "held-out fit [%]": fmt(rep["held_out_fit"], "{:.0f}"),
-                         "tyre saturation": (f"mu {rep['tyre_saturation']['parameters']['friction']['value']:.2f}"
-                                             if rep["tyre_saturation"]["found"] else "not found")}
-            except InputError as exc:
-                ident = {"delay [s]": f"cannot judge: {exc}"}
             piece, _ = longest_stretch(log)         # what diagnose judges of a log with clock gaps
             path = base / f"log{k}.parquet"
             path.parent.mkdir(parents=True, exist_ok=True)
             log.drop(columns=[c for c in ("run",) if c in log]).to_parquet(path)
             res = diagnose(path, base / f"diagnosis{k}", study_path, plots=args.out is not None)
-            verdict = res["verdict"] + (" (inconclusive)" if res.get("verdict_status") == "inconclusive" else "")
+            rep = (res.get("identified_vehicle") or {}).get("identified")
+            if rep is not None:         # the model diagnose shares with identify, on the stretch it judged
+                comparisons = res["identified_vehicle"].get("comparisons", [])
+                ident = {"identified on": f"the diagnosed {piece['t'].iloc[-1] - piece['t'].iloc[0]:.0f} s",
+                         "delay [s]": fmt(rep["delay"]), "held-out fit [%]": f"{rep['held_out_fit']:.0f}",
+                         "tyre saturation": (f"mu {rep['tyre_saturation']['friction']:.2f}" if rep["tyre_saturation"]
+                                             else "not found")}
+            else:
+                try:
+                    full = identify_driving(log, name, study)
+                    comparisons = full.get("comparisons", [])
+                    ident = {"identified on": f"all {seconds:.0f} s (diagnose: cannot decide)",
+                             "delay [s]": fmt(full["delay"]), "held-out fit [%]": fmt(full["held_out_fit"], "{:.0f}"),
+                             "tyre saturation": (f"mu {full['tyre_saturation']['parameters']['friction']['value']:.2f}"
+                                                 if full["tyre_saturation"]["found"] else "not found")}
+                except InputError as exc:
+                    comparisons, ident = [], {"delay [s]": f"cannot judge: {exc}"}
+            ident["K: dynamic; steady [rad/(m/s2)]"] = both(comparisons, "understeer")
+            ident["delay: fit; xcorr [s]"] = both(comparisons, "command-to-yaw")
+            ident["gyro bias: fit; course [rad/s]"] = both(comparisons, "gyro bias", "{:.2g}")
+            checks = (res.get("identified_vehicle") or {}).get("physical_checks") or {}
+            ident["physical checks"] = "; ".join(f"{c} {v['fit_percent']:.0f} %" for c, v in checks.items()) or "no beta/vy/a_y"
+            verdict = f"{res['verdict']} ({res.get('verdict_status', '')})"
             if res["verdict"] == "cannot decide":
                 verdict += f": {res['reason'].split(': ', 1)[-1]}"
             else:
-                verdict += "".join(f"; {e['id']} {', '.join(f'{n} {v:.3g}' for n, v in e.get('parameters', {}).items())}"
-                                   for e in res["effects"] if e["id"] == res["verdict"])
+                verdict += ": " + res.get("verdict_statement", "")
             not_judged = "; ".join(f"{s}: {w.removeprefix('not judged: ')}" for s, w in res.get("not_judged", {}).items())
             rows.append({"vehicle": name, "seconds": f"{seconds:.0f} (diagnosed {piece['t'].iloc[-1]:.0f})", **ident,
                          "verdict": verdict, "not judged": not_judged or "-",
@@ -85,7 +109,7 @@ def main() -> None:
     print("| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))
     for r in rows:
-        print("| " + " | ".join(str(r.get(c, "")) for c in cols) + " |")
+        print("| " + " | ".join(str(r.get(c, "")).replace("|", "/") for c in cols) + " |")
 
 
 if __name__ == "__main__":

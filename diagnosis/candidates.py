@@ -205,9 +205,22 @@ class Replay:
             return steering_replay(self.cmd, self.h, v, self.delta[0])
         if stage == "yaw":
             delta = self.replayed_steering(v) if self.command_only else None
+            shift = v.get("steering_clock", 0.0)
+            if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
+                d = self.delta if delta is None else delta
+                delta = np.interp(self.t + shift, self.t, d)
+            curve = v.get("steering_ratio_curvature", 0.0)
+            if curve:                       # the wheels turn delta (1 + c delta^2) for a reading of delta
+                d = self.delta if delta is None else delta
+                delta = d * (1.0 + curve * d * d)
             if math.isfinite(v.get("tyre_friction", math.inf)):
-                return self.saturated_yaw_rate(v, delta)
-            return self.yaw.yaw_rate(v, delta)
+                r = self.saturated_yaw_rate(v, delta)
+            else:
+                r = self.yaw.yaw_rate(v, delta)
+            scale = v.get("gyro_scale", 1.0) / v.get("speed_scale", 1.0)
+            # the gyro reads s r + b; a wheel speed k x the ground speed drives the LPV model k times too
+            # fast, which near the kinematic yaw rate v delta / L is a yaw rate k times too high
+            return r if scale == 1.0 else scale * (r - v["yaw_rate_bias"]) + v["yaw_rate_bias"]
         track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
         if stage == "speed":
             k = self.chord_k

@@ -17,6 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
     p.add_argument("--resample", action="store_true",
                    help="interpolate a log whose clock jitters onto an even grid (its median step)")
+    p.add_argument("--mcap", action="store_true", help="also write diagnosis.mcap: the measured stages, the "
+                   "baseline's and the final model's replays and residuals on one time axis (Foxglove, PlotJuggler)")
     from agrobot.measurements.cli import add_recording_options
 
     add_recording_options(p)
@@ -51,18 +53,21 @@ def run(args: argparse.Namespace) -> int:
 
     with folder:
         result = diagnose(args.log, folder.tmp, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                          resample=args.resample, recording=recording_options(args), progress=progress)
+                          resample=args.resample, recording=recording_options(args), progress=progress, mcap=args.mcap)
         folder.commit()
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
-    ties = [t for t in result.get("inconclusive", []) if t["effects"][0] == result["verdict"]]
-    print(f"verdict: {result['verdict']}" + (f" (inconclusive: or {', '.join(t['effects'][1] for t in ties)})"
-                                            if ties else ""))
-    for item in result.get("not_identifiable", []):
-        print(f"  {item['id']}: {item['why']}")
+    print(f"verdict: {result['verdict']} ({result['verdict_status']}): {result['verdict_statement']}")
+    for bullet in result.get("verdict_bullets", []):
+        print(f"  - {bullet}")
+    from .report import vehicle_lines
+
+    for line in vehicle_lines(result.get("identified_vehicle")):
+        if line and not line.startswith(("|---", "## ")):
+            print("  " + line)
     for e in result["effects"]:
         if e["id"] == "unexplained":
             xc, ext = e["correlates_with"], e["extension"]

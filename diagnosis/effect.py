@@ -22,6 +22,21 @@ class Parameter:
     upper: float
     display_unit: str = ""
     display_factor: float = 1.0
+    limit: tuple[float, float] | None = None   # the physical limit the range widens toward when a fit ends
+                                               # on a bound of [lower, upper] (None: the bounds are the limit)
+
+    def widened(self, value: float) -> "Parameter | None":
+        """This parameter with the bound ``value`` ended on moved to the physical limit, or None
+        when that bound is the limit already (then the value is not identifiable from the log)."""
+        from dataclasses import replace
+
+        lo, hi = self.limit or (self.lower, self.upper)
+        span = self.upper - self.lower
+        if abs(value - self.upper) <= 5e-3 * span and hi > self.upper:
+            return replace(self, upper=hi)
+        if abs(value - self.lower) <= 5e-3 * span and lo < self.lower:
+            return replace(self, lower=lo)
+        return None
 
 
 class BaselineStudy:
@@ -61,6 +76,9 @@ class Effect:
     hypothesis: ClassVar[str]                            # what it means on the tractor
     experiment: ClassVar[str]                            # the excitation that shows it apart from its rivals
     needs: ClassVar[tuple[str, ...]] = ()                # log columns it reads beyond its stages' (side slope: x, y)
+    secondary: ClassVar[tuple[str, ...]] = ()            # parameters whose bound leaves the effect found (each is
+                                                         # then "not identifiable" alone: a tyre's shape, not driven
+                                                         # past its peak)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

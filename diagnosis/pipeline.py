@@ -18,7 +18,9 @@ from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
-from .unexplained import stage_check
+from .unexplained import signature, stage_check
+from .study_fit import study_check
+from .verdict import audit_findings, conclude
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
@@ -46,7 +48,9 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
         options = _study_options(f, baseline)
         option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
     except KeyError as missing:
-        options, option_text = None, f"(the study has no {missing.args[0]} component to carry this option)"
+        what = missing.args[0]
+        options, option_text = None, (f"(no study option carries this: {what})" if " " in what else
+                                      f"(the study has no {what} component to carry this option)")
     signals = ", ".join(f"{k} {DISPLAY[s][0] * f.rmse_before[k]:.4g} -> {shown(s, f.rmse_after[k], 4)}"
                         for s in f.stages for k in [SIGNALS[s][0]])
     fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
@@ -54,7 +58,8 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
     for p in f.effect.parameters:
         value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
         fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
-                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p)}
+                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p),
+                          "secondary": p.name in f.effect.secondary}
     return {
         "id": f.effect.id,
         "subsystem": f.effect.subsystem,
@@ -140,13 +145,66 @@ def _unexplained(checks: dict) -> dict | None:
     outcome = (f"takes {100 * gain:.0f}% off the held-out RMS" if gain >= 0.05 else
                f"does not carry over to the held-out part ({100 * gain:+.0f}% on its RMS): the misfit is not a "
                f"fixed function of one signal; extend the model by physics or record the conditions it happens in")
+    sig = signature(ext)
+    reading = (f"; its form: {sig['physical']}; the run that would tell: {sig['experiment']}" if gain >= 0.05 else
+               f"; the run that would tell: {sig['experiment']}")
     summary = (f"the {worst['stage']} stage stays {worst['ratio']:.1f} x its noise floor after the catalogued effects "
                f"(excess {shown(worst['stage'], worst['excess'])}); its residual correlates with {xc['signal']} "
                f"(rho {xc['rho']:.2f}); a data-driven {ext['kind']} on {ext['signal']}, fitted on the training part, "
-               f"{outcome}")
-    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit],
+               f"{outcome}{reading}")
+    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit], "signature": sig,
             "ratio_to_floor": worst["ratio"], "correlates_with": xc, "extension": ext,
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
+
+
+def identified_vehicle(frame, where: str, study, baseline) -> dict:
+    """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
+    study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
+    1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
+    held-out fit and its independent estimates (identification.comparisons)."""
+    from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.orchestrator.errors import InputError
+
+    p = baseline.tractor
+    L = p.l_f + p.l_r
+    ours = {"understeer_gradient": (p.C_r * p.l_r - p.C_f * p.l_f) * p.m / (p.C_f * p.C_r * L),
+            "cornering_stiffness_front": p.C_f, "cornering_stiffness_rear": p.C_r,
+            "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
+    try:
+        rep = identify_driving(frame, where, study)
+    except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
+        return {"study": ours, "identified": None, "why_not": str(exc)}
+    tyre = rep["tyre_saturation"]
+    mine = {"understeer_gradient": rep["understeer_gradient"], "delay": rep["delay"],
+            "cornering_stiffness_front": rep["cornering_stiffness"]["front"],
+            "cornering_stiffness_rear": rep["cornering_stiffness"]["rear"],
+            "held_out_fit": rep["held_out_fit"]["value"], "final_model": rep["final_model"],
+            "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
+                                 "shape": tyre["parameters"]["shape"]["value"],
+                                 "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
+            "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"]}
+    return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
+            "physical_checks": rep.get("physical_checks", {})}
+
+
+def agreement(identified: dict, effects: list[dict], sel) -> list[str]:
+    """Where identify and diagnose, on one log, conclude differently about an effect both model
+    (tyre saturation), and why: identify's held-out segments are spread over the log, the
+    diagnosis holds out its last part."""
+    if not identified:
+        return []
+    ids = {e["id"] for e in effects}
+    sat = identified.get("tyre_saturation")
+    if sat and "tyre_saturation" not in ids:
+        tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
+        why = "; ".join(tried.reasons) if tried else "it was not fitted"
+        return [f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
+                f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on the "
+                f"log's last part, does not: {why}"]
+    if not sat and "tyre_saturation" in ids:
+        return ["the diagnosis finds tyre saturation where identify does not keep it: "
+                + "; ".join(identified.get("tyre_saturation_why_not") or ["-"])]
+    return []
 
 
 LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
@@ -174,11 +232,14 @@ def coarser_clock(frame):
 
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None, progress=None) -> dict:
+             recording=None, progress=None, identify: bool = True, mcap: bool = False) -> dict:
     """Run the diagnosis and return its result; with ``out_dir`` it always writes diagnosis.json and
     report.md there (verdict ``cannot decide`` with the reason when the log cannot be used), and the
-    figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log."""
+    figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log.
+    ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``: with
+    ``out_dir``, diagnosis.mcap too (diagnosis.mcap)."""
     out = Path(out_dir) if out_dir is not None else None
+    default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
                     "findings": []}
@@ -204,8 +265,17 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
             _write(out, result, [])
         return result
     say = progress or (lambda text: None)
+    result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
+                                                  study_path.name)
+    if mismatch:
+        mismatch += " (no --study given: the default study was used)" if default_study else ""
+        say(f"warning: {mismatch}")
+    if identify and "yaw" in replay.stages:
+        say("identifying the vehicle on the same log (the model identify fits)")
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline)
+    identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
-    sel = select(replay, min_gain, seed=study.study.seed)
+    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
     say("effects selected; judging the stages against their noise floors")
     base = sel.base
     final, floors = sel.final, sel.floors
@@ -223,21 +293,38 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
     # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
-    unidentifiable = [e for e in effects if any(p["at_bound"] for p in e["fitted"].values())]
+    unidentifiable = [e for e in effects if any(p["at_bound"] and not p["secondary"] for p in e["fitted"].values())]
+    for e in effects:                   # a secondary parameter on its bound: the effect stands, that value does not
+        for n, p in e["fitted"].items():
+            if p["at_bound"] and p["secondary"]:
+                p["note"] = f"not identifiable from this log: ended on its {p['at_bound']} bound"
     for e in unidentifiable:
-        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"]}
+        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"] and not p["secondary"]}
         e["not_identifiable"] = "; ".join(
             f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
             for n, p in bound.items())
-    answers = [e for e in effects if e not in unidentifiable]
     result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
                                   for e in unidentifiable]
-    result["verdict"] = answers[0]["id"] if answers else ("unexplained" if unexplained else "none")
+    result["audit"] = audit_findings(replay.frame.attrs)
+    p = baseline.tractor
+    moving = replay.speed[replay.speed > replay.min_speed]
+    verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
+                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
+    verdict["bullets"] += agreement(identified, effects, sel)
+    for c in result.get("identified_vehicle", {}).get("comparisons", []):
+        if not c["agree"]:
+            verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
+                f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
+                + f" {c['unit']}: they disagree; {c['suggests']}")
+    result["verdict"] = verdict["id"]
+    result["verdict_status"] = verdict["status"]
+    result["verdict_statement"] = verdict["statement"]
+    result["verdict_bullets"] = verdict["bullets"]
     result["inconclusive"] = sel.inconclusive
-    result["verdict_status"] = ("inconclusive" if any(t["effects"][0] == result["verdict"] for t in sel.inconclusive)
-                                else "conclusive")
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, base, floors) + ([note] if note else [])
+    if mismatch:
+        result["warnings"].insert(0, mismatch)
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
@@ -252,6 +339,11 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     result["findings"] = items
     if out is not None:
         _write_all(out, result, replay, sel, study, options, log_path, plots, say)
+        if mcap:
+            from .mcap import write_diagnosis_mcap
+
+            say("diagnosis.mcap")
+            write_diagnosis_mcap(replay, sel.base.values, sel.final.values, out / "diagnosis.mcap", str(log_path))
     return result
 
 

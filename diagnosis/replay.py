@@ -198,18 +198,23 @@ def antenna_track(t: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray, v: Map
     """Dead-reckoned GPS reading (N, 2) in an arbitrary frame: psi = int(gamma_measured - bias),
     dR/dt = v (cos psi, sin psi) + u (-sin psi, cos psi) with u the rear axle's lateral velocity
     (the yaw model's side-slip, where known), antenna = R + Rot(psi) (a_forward, a_left), read
-    ``gps_latency`` late."""
+    ``gps_latency`` late. A position reference elsewhere adds its own offset and clock lag
+    (``position_forward``, ``position_left``, ``position_clock``, which may be negative: a clock
+    ahead); the gyro reads ``gyro_scale`` x the yaw rate, the wheel speed ``speed_scale`` x the
+    ground speed (both 1 when absent)."""
     h = float(t[1] - t[0])
-    psi = integrate(yaw_rate - v["yaw_rate_bias"], h)
+    speed = speed / v.get("speed_scale", 1.0)
+    psi = integrate((yaw_rate - v["yaw_rate_bias"]) / v.get("gyro_scale", 1.0), h)
     psi_mid = 0.5 * (psi[1:] + psi[:-1])
     v_mid = 0.5 * (speed[1:] + speed[:-1])
     u_mid = 0.5 * (lateral[1:] + lateral[:-1]) if lateral is not None else 0.0
     c, s = np.cos(psi_mid), np.sin(psi_mid)
     x = np.concatenate([[0.0], np.cumsum(h * (v_mid * c - u_mid * s))])
     y = np.concatenate([[0.0], np.cumsum(h * (v_mid * s + u_mid * c))])
-    dx, dy = body_to_world(v["antenna_forward"], v["antenna_left"], np.cos(psi), np.sin(psi))
+    dx, dy = body_to_world(v["antenna_forward"] + v.get("position_forward", 0.0),
+                           v["antenna_left"] + v.get("position_left", 0.0), np.cos(psi), np.sin(psi))
     ax, ay = x + dx, y + dy
-    lat = v["gps_latency"]
+    lat = v["gps_latency"] + v.get("position_clock", 0.0)
     if lat:
         ax, ay = np.interp(t - lat, t, ax), np.interp(t - lat, t, ay)
     return np.column_stack([ax, ay])

@@ -89,6 +89,40 @@ def _draw_levels(ax, levels: dict | None, k: float, unit: str, signed: bool = Tr
     ax.legend(fontsize=7, loc="upper right")
 
 
+def vehicle_lines(iv: dict | None) -> list[str]:
+    """The vehicle identify fits on this log beside the study's, the independent estimates and the
+    physical checks (markdown lines; console: the same lines without the table rule)."""
+    if not iv:
+        return []
+    if iv.get("identified") is None:
+        return [f"The vehicle could not be identified on this log: {iv.get('why_not', '')}", ""]
+    st, me = iv["study"], iv["identified"]
+
+    def q(d, f="{:.4g}"):
+        if not d.get("identifiable", True):
+            return f.format(d["value"]) + " (not identifiable)"
+        return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "]"
+
+    out = ["## This vehicle against the study", "",
+           f"Identified on this log by the model `identify` fits (input {me['input']}; final model "
+           f"{me['final_model']}, held-out fit {me['held_out_fit']:.0f} %):", "",
+           "| quantity | study | identified (95 %) |", "|---|---:|---:|",
+           f"| understeer gradient K [rad/(m/s2)] | {st['understeer_gradient']:.4g} | {q(me['understeer_gradient'])} |",
+           f"| cornering stiffness front [N/rad] | {st['cornering_stiffness_front']:.4g} | "
+           f"{q(me['cornering_stiffness_front'])} |",
+           f"| cornering stiffness rear [N/rad] | {st['cornering_stiffness_rear']:.4g} | "
+           f"{q(me['cornering_stiffness_rear'])} |",
+           f"| steering delay [s] | {st['delay']:.3g} | {q(me['delay'])} |", ""]
+    for c in iv.get("comparisons", []):
+        out.append(f"- {c['quantity']} [{c['unit']}]: " + "; ".join(
+            f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]" for m, e in c["estimates"].items())
+            + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}"))
+    for c, chk in iv.get("physical_checks", {}).items():
+        out.append(f"- physical check `{c}` ({chk['what']}): held-out fit {chk['fit_percent']:.0f} %, RMS "
+                   f"{chk['rms']:.3g} {chk['unit']} against a measured std of {chk['measured_std']:.3g}")
+    return out + [""]
+
+
 def markdown(result: dict, plots: list[str]) -> str:
     lines = [f"# Diagnosis of `{result['log']}`", "",
              f"Baseline model: `{result['study']}`. Fit on t < {result['split_time']:.1f} s, "
@@ -102,6 +136,10 @@ def markdown(result: dict, plots: list[str]) -> str:
 
         lines += ["The log was imported from a raw recording (details in diagnosis.json, `recording`):", "", "```",
                   describe(result["recording"]), "```", ""]
+    lines += [f"{result.get('verdict_statement', '')} ({result.get('verdict_status', '')}).", ""]
+    lines += [f"- {b}" for b in result.get("verdict_bullets", [])] + ([""] if result.get("verdict_bullets") else [])
+    lines += vehicle_lines(result.get("identified_vehicle"))
+    lines += ["Every effect judged:", ""]
     for e in result["effects"]:
         lines += [f"- **{e['id']}**: {e['summary']}"]
         if e["id"] != "unexplained":

@@ -42,9 +42,10 @@ from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncerta
 from .noise_floor import stage_floors
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
-from .catalogue import CATALOGUE, SIGNALS
-from .effect import Effect
+from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN
+from .effect import Effect, Parameter
 
+SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
 STRONG = -10.0         # dBIC below which the evidence is strong
 
@@ -134,20 +135,30 @@ class Selection:
 
 
 class Selector:
-    def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0) -> None:
+    def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0,
+                 saturation: dict | None = None) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
+        self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
         from .effects.tyre_saturation import LATERAL_KEY
 
         moving = replay.speed > replay.min_speed
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
-        self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0}
+        from .effects.steering_ratio_curve import DELTA_KEY
+
+        delta = np.abs(np.nan_to_num(replay.delta))[moving] if "yaw" in replay.stages else np.zeros(0)
+        self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0,
+                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
         # the effects this log can judge: one of their stages replayed, the columns they read there
         self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs)]
+        if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
+            # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
+            self.catalogue = [e for e in self.catalogue if e.id not in SCALES]
         self._cache: dict[tuple, Finding] = {}
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None
+        self.widened: list[str] = []
 
     def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
@@ -161,6 +172,15 @@ class Selector:
         else:
             starts = [{p.name: x for p, x in zip(effect.parameters, start)} for start in effect.starts]
         fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma, starts)
+        wider = widened(effect, fit.values)
+        if wider is not None:           # no verdict on a prior's edge: refit on the range widened to the limit
+            self.catalogue = [wider if e is effect else e for e in self.catalogue]
+            self.widened.append(f"{effect.id}: " + ", ".join(
+                f"{p.name} ended on {fit.values[p.name]:.4g} {p.unit}, searched again in [{w.lower:.4g}, {w.upper:.4g}]"
+                for p, w in zip(effect.parameters, wider.parameters) if (p.lower, p.upper) != (w.lower, w.upper)))
+            effect = wider
+            fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma,
+                         [{p.name: fit.values[p.name] for p in effect.parameters}])
         finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain)
         self._cache[key] = finding
         if effect.id not in self._first:
@@ -186,8 +206,10 @@ class Selector:
         removed: set[str] = set()
         for _ in range(self.max_effects):
             trials = first if not members else [self.add(model, members, e) for e in self.catalogue if e not in members]
+            # the recording before the vehicle: a supported recording effect (a position reference
+            # with its clock) joins before the vehicle effects it can imitate
             supported = sorted((f for f in trials if f.supported and f.effect.id not in removed),
-                               key=lambda f: f.delta_bic)
+                               key=lambda f: (not getattr(f.effect, "recording", False), f.delta_bic))
             if not supported:
                 pair = self.pair(model, members, removed)
                 if pair is None:
@@ -234,6 +256,7 @@ class Selector:
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
+        trace += [f"widened {w}" for w in self.widened]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
 
     def saturation_gate(self, base: Fit) -> str | None:
@@ -244,6 +267,11 @@ class Selector:
         effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
         if effect is None:
             return None
+        if self.saturation:                     # one vehicle model: what identify keeps is a candidate here
+            self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
+                                              "tyre_shape": min(max(self.saturation["shape"], 1.05), 1.95)}
+            return (f"tyre_saturation tried: identify keeps it on this log (friction {self.saturation['friction']:.3g}, "
+                    f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
         replay = self.replay
         keep = replay.scored("yaw")
         predicted = replay.predicted("yaw", base.values)[keep]
@@ -352,10 +380,33 @@ def restaged(effect: Effect, replay: Replay) -> Effect:
         effect = copy.copy(effect)
         effect.stages = tuple(dict.fromkeys("yaw" if s == "steering" else s for s in effect.stages))
     bounds = vehicle_bounds(replay.baseline.vehicle)
+    limits = replay.baseline.vehicle.physical_limits()
     if any(p.name in bounds for p in effect.parameters):
         effect = copy.copy(effect)
-        effect.parameters = tuple(replace(p, lower=bounds[p.name][0], upper=bounds[p.name][1]) if p.name in bounds else p
+        effect.parameters = tuple(_bounded(p, bounds[p.name], limits.get(p.name)) if p.name in bounds else p
                                   for p in effect.parameters)
+    return effect
+
+
+def _bounded(p: Parameter, prior: tuple[float, float], limit: tuple[float, float] | None) -> Parameter:
+    """``p`` searched first within the vehicle's ``prior`` range, widened at most to ``limit`` (the
+    class's physical limit; else the effect's own)."""
+    lo, hi = limit or p.limit or (p.lower, p.upper)
+    return replace(p, lower=prior[0], upper=prior[1], limit=(min(lo, prior[0]), max(hi, prior[1])))
+
+
+def widened(effect: Effect, values: dict[str, float]) -> Effect | None:
+    """The effect with the range of each parameter that ended on a prior bound widened to its
+    physical limit (Parameter.widened), or None when none can widen."""
+    params, moved = [], False
+    for p in effect.parameters:
+        w = p.widened(values[p.name])
+        moved |= w is not None
+        params.append(w or p)
+    if not moved:
+        return None
+    effect = copy.copy(effect)
+    effect.parameters = tuple(params)
     return effect
 
 
@@ -388,6 +439,7 @@ def _tie(best: Finding, rival: Finding, why: str) -> dict:
                           f"{rival.effect.experiment}"}
 
 
-def select(replay: Replay, min_gain: float = 0.05, seed: int = 0) -> Selection:
-    """``seed``: the study's, for the Monte Carlo of the position noise floor."""
-    return Selector(replay, min_gain, seed=seed).run()
+def select(replay: Replay, min_gain: float = 0.05, seed: int = 0, saturation: dict | None = None) -> Selection:
+    """``seed``: the study's, for the Monte Carlo of the position noise floor; ``saturation``:
+    identify's tyre saturation on the same log (then a candidate whatever the gate says)."""
+    return Selector(replay, min_gain, seed=seed, saturation=saturation).run()

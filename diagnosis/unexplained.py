@@ -43,8 +43,9 @@ def stage_signals(replay, stage: str, values: dict) -> dict[str, np.ndarray]:
         out = {"delta_cmd": replay.cmd, "delta_cmd_rate": np.gradient(replay.cmd, h),
                "delta_predicted": replay.predicted("steering", values)}
     elif stage == "yaw":
+        predicted = replay.predicted("yaw", values)
         out = {"delta": replay.delta, "v": replay.speed, "delta*v": replay.delta * replay.speed,
-               "yaw_rate_predicted": replay.predicted("yaw", values), "t": replay.t}
+               "yaw_rate_predicted": predicted, "lateral_acceleration": replay.speed * predicted, "t": replay.t}
         if {"x", "y"} <= set(replay.frame.columns):        # a heading from the GPS course
             out.update(cos_heading=np.cos(replay.heading), sin_heading=np.sin(replay.heading))
     elif stage == "speed":
@@ -247,3 +248,41 @@ def stage_check(replay, stage: str, values: dict, floors: dict, rms_fit: float, 
     out["correlates_with"] = best
     out["extension"] = _time_series_extension(replay, stage, values, signals)
     return out
+
+
+# what a data-driven extension's form says in physical terms, and the run that would tell
+SIGNATURES = {
+    "lateral": ("a static function of lateral acceleration: the tyres (a lateral force that falls behind C alpha, "
+                "or grows faster than it)",
+                "steady turns at rising speed up to the highest lateral acceleration of the log (a ramp steer)"),
+    "angle": ("a static function of the wheel angle: the steering geometry (a ratio varying with the angle, "
+              "Ackermann read at one wheel, a linkage's play)",
+              "steady circles at walking speed at several wheel angles up to full lock, both ways"),
+    "speed": ("a function of speed: a cornering stiffness or a sensor scale that changes with speed",
+              "the same steering sequence driven at three speeds"),
+    "lag": ("a dynamic lag: the residual follows {s} over a second (a delay, a lag or a mode the model lacks)",
+            "steering steps of a few degrees at two speeds: a delay shifts every step, a lag rounds it, a mode rings"),
+    "drift": ("a drift with time or heading: a bias that wanders, a slope, or a heading-dependent disturbance",
+              "the same loop driven clockwise and anticlockwise, and a minute standing still at the start and end"),
+    "gains": ("gains on the dead reckoning's inputs: a speed scale (wheel radius, slip) or a gyro scale",
+              "a straight run of known length and a full circle at constant speed"),
+}
+
+
+def signature(extension: dict) -> dict:
+    """{form, physical, experiment}: the extension that carries over, read as an engineer reads it."""
+    kind, sig = extension["kind"], extension["signal"]
+    if kind == "input_gains":
+        key = "gains"
+    elif sig in ("t", "cos_heading", "sin_heading"):
+        key = "drift"
+    elif kind == "fir":
+        key = "lag"
+    elif sig in ("lateral_acceleration", "yaw_rate_predicted"):
+        key = "lateral"
+    elif sig in ("delta", "abs_delta", "delta_cmd", "delta_predicted"):
+        key = "angle"
+    else:
+        key = "speed"
+    physical, experiment = SIGNATURES[key]
+    return {"form": key, "physical": physical.format(s=sig), "experiment": experiment}

@@ -212,9 +212,10 @@ class YawModel:
         """Gyro reading the model predicts, (S, L) on the segments' samples."""
         return self.simulate_many([values], segs)[0]
 
-    def simulate_many(self, sets: list[dict], segs: Segments | None = None) -> np.ndarray:
+    def simulate_many(self, sets: list[dict], segs: Segments | None = None, lateral: bool = False):
         """(R, S, L): the model under each of R parameter sets, all rows stepped together (the
-        per-step cost is Python overhead: a Jacobian's sets cost little more than one)."""
+        per-step cost is Python overhead: a Jacobian's sets cost little more than one);
+        ``lateral``: also the lateral velocity at the centre of gravity v_y, (yaw, v_y)."""
         sets = [{**self.DEFAULTS, **v} for v in sets]
         segs = segs or self.segs
         idx = segs.idx
@@ -246,10 +247,12 @@ class YawModel:
         r0 = vv[:, 0] * d / self.L                       # kinematic start
         z[:, 0], z[:, 1] = self.p.l_r * r0, r0
         out = np.empty((rows, L))
+        out_vy = np.empty((rows, L))
         hs = h / self.n_sub
         eye = np.eye(n)
         for j in range(L):
             out[:, j] = z[:, 1]
+            out_vy[:, j] = z[:, 0]
             if j == L - 1:
                 break
             d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
@@ -269,6 +272,9 @@ class YawModel:
             d = d_next
         out *= np.tile(self.low_speed_scale[idx], (R, 1))
         out += per_row("gyro_bias")[:, None]
+        if lateral:
+            out_vy *= np.tile(self.low_speed_scale[idx], (R, 1))
+            return out.reshape(R, S, L), out_vy.reshape(R, S, L)
         return out.reshape(R, S, L)
 
 

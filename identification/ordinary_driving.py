@@ -360,6 +360,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                                nl.at_bound(q), meaning=q.meaning)) for q in free_nl
                             if q.name in ("friction", "shape"))}}
     not_identifiable = [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")]
+    checks = physical_checks(frame, log, model, final.values, test_segs)
+    comparisons = independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q,
+                                        params_json.get("gyro_bias"), linear_range, L, min_speed)
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name, "final_model": final_name,
@@ -391,11 +394,89 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
          "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
         "not_identifiable": not_identifiable,
+        "comparisons": comparisons,
+        "physical_checks": checks,
         "notes": notes,
     }
     report["_plot"] = {"log": log, "model": model, "test": test_segs, "linear": linear.values, "nl": nl.values,
                        "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
     return report
+
+
+PHYSICAL_COLUMNS = {"beta": ("side-slip angle at the centre of gravity", "rad"),
+                    "vy": ("lateral velocity at the centre of gravity", "m/s"),
+                    "a_y": ("lateral acceleration", "m/s2")}
+
+
+def physical_checks(frame, log, model, values: dict, segs) -> dict:
+    """The final model's side-slip beta = atan(v_y / v), lateral velocity v_y and lateral
+    acceleration a_y = dv_y/dt + v r (its states, never fitted to them) against the log's ``beta``
+    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS."""
+    have = [c for c in PHYSICAL_COLUMNS if c in frame and np.isfinite(frame[c].to_numpy(float)).sum() > 10]
+    if not have or not len(segs.idx):
+        return {}
+    yaw, vy = model.simulate_many([values], segs, lateral=True)
+    yaw, vy = yaw[0] - values.get("gyro_bias", 0.0), vy[0]
+    v = log.v[segs.idx]
+    pred = {"beta": np.arctan2(vy, np.maximum(v, 1e-3)), "vy": vy,
+            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw}
+    t = frame["t"].to_numpy(float)
+    out = {}
+    for c in have:
+        col = frame[c].to_numpy(float)
+        ok = np.isfinite(col)
+        meas = np.interp(log.t[segs.idx], t[ok], col[ok])
+        m, p_ = meas[segs.scored], pred[c][segs.scored]
+        out[c] = {"what": PHYSICAL_COLUMNS[c][0], "unit": PHYSICAL_COLUMNS[c][1], "fit_percent": fit_percent(m, p_),
+                  "rms": float(np.sqrt(np.mean((m - p_) ** 2))), "measured_std": float(np.std(m)),
+                  "how": "the final model's state on the held-out segments, driven by the input alone; never fitted to it"}
+    return out
+
+
+def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q, bias_q, linear_range,
+                          L: float, min_speed: float) -> list[dict]:
+    """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states),
+    the delay (fit / cross-correlation of the gyro against the fitted model on the held-out
+    segments: a timing the model misses shows as a lag), the gyro bias (fit / GNSS course)."""
+    from agrobot.measurements.clocks import content_lag
+
+    from .comparisons import course_bias, pair
+
+    out = []
+    if ss and "understeer_gradient" in ss.as_dict():
+        k_ss = ss.as_dict()["understeer_gradient"]
+        out.append(pair("understeer gradient K", "rad/(m/s2)", ("dynamic fit", understeer["value"], understeer["std"]),
+                        ("steady-state regression", k_ss["value"], k_ss["std"]),
+                        f"the steady states lie inside the linear range (|a_y| <= {linear_range['value']:.3g} m/s2) while "
+                        f"the dynamic fit spans every |a_y|: a model structure is missing over part of the |a_y| range "
+                        f"(tyre saturation, a stiffness varying with speed, a steering ratio varying with the angle), "
+                        f"or a timing the dynamic fit cannot hold (the steering channels on another clock than the gyro)"))
+    pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
+              if test_segs.scored[i].sum() >= 10]
+    if pieces and math.isfinite(delay_q["value"]):
+        meas = np.concatenate([a for a, _ in pieces])
+        model = np.concatenate([b for _, b in pieces])
+        grid = np.arange(len(meas)) * log.h
+        extra, rho = content_lag(grid, model, grid, meas, step=log.h, search=1.0)
+        if math.isfinite(extra):
+            out.append(pair("command-to-yaw delay", "s", ("dynamic fit", delay_q["value"], delay_q["std"]),
+                            ("cross-correlation of the gyro with the fitted model", delay_q["value"] - extra, 0.5 * log.h),
+                            (f"the gyro lags the fitted model by {-extra:.3g} s on the held-out segments: a timing the "
+                             f"model does not hold (a clock offset between channel groups, or a delay varying over the log)"
+                             if extra < 0 else
+                             f"the gyro leads the fitted model by {extra:.3g} s on the held-out segments: the response "
+                             f"leads its input, which no vehicle does: the steering channels are stamped late against "
+                             f"the gyro (a clock offset)")))
+    if bias_q and {"x", "y", "t", "yaw_rate"} <= set(frame.columns):
+        f = frame[["t", "x", "y", "yaw_rate", "v"]].dropna() if "v" in frame else None
+        if f is not None and len(f) > 100:
+            cb = course_bias(*(f[c].to_numpy(float) for c in ("t", "x", "y", "yaw_rate", "v")), min_speed=min_speed)
+            if cb is not None:
+                out.append(pair("gyro bias", "rad/s", ("dynamic fit", bias_q["value"], bias_q["std"]),
+                                ("GNSS course", cb[0], cb[1]),
+                                "the yaw fit's bias is not the gyro's: it holds a steering offset or a side slope seen "
+                                "through the yaw rate (or the positions are not of a rigid point)"))
+    return out
 
 
 def summary(report: dict) -> str:
@@ -434,6 +515,13 @@ def summary(report: dict) -> str:
         lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
                      f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
                      f"{ss['steer_offset']['value']:.3g} rad")
+    for c, chk in report.get("physical_checks", {}).items():
+        lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
+                     f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
+    for c in report.get("comparisons", []):
+        lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
+                                                      for m, e in c["estimates"].items()) + " " + c["unit"]
+                     + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))
     for p_name, pj in report["parameters"].items():
         lines.append(f"  {p_name}: {q(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
     return "\n".join(lines)

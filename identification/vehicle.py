@@ -100,6 +100,19 @@ class Vehicle:
             return None
         return (-0.25 * self.length, self.length), (-0.5 * self.width, 0.5 * self.width)
 
+    def physical_limits(self) -> dict[str, tuple[float, float]]:
+        """How far a fitted parameter's range widens when the fit ends on the class's bound: the
+        values no vehicle of the class can exceed, beyond which a fit means something else (a
+        position reference elsewhere, a clock, a unit). A value between the class's range and this
+        limit is fitted, and judged against the class (diagnosis.plausibility)."""
+        out = {"yaw_rate_bias": (-10 * DEG, 10 * DEG), "tyre_friction": (0.05, 3.0)}
+        if self.slope_bound:
+            out["slope_east"] = out["slope_north"] = (-9.81 * math.sin(30 * DEG), 9.81 * math.sin(30 * DEG))
+        if self.length is not None and self.width is not None:
+            out["antenna_forward"] = (-2.0 * self.length, 3.0 * self.length)
+            out["antenna_left"] = (-2.0 * self.width, 2.0 * self.width)
+        return out
+
     def not_applicable(self) -> dict[str, str]:
         """Stages of the single-track (Ackermann, angle-steered) replay that do not apply to this
         vehicle, and why."""

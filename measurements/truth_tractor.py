@@ -43,6 +43,11 @@ EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steeri
 # faults outside the diagnosis catalogue: the diagnosis must call them "unexplained"
 UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_saturation")
 
+# effects real vehicles show, added after the catalogue above (drawn from a stream of their own so the
+# draws of the others stay): a localisation output at another point of the vehicle on a lagging clock,
+# and a steering ratio that varies with the angle (the wheels turn delta (1 + c delta^2) for a reading delta)
+LATER = ("position_reference", "steering_ratio_curve", "steering_clock")
+
 # healthy truths: ways a tractor with no fault differs from the baseline (the diagnosis must say "none")
 HEALTHY = ("servo", "servo_guard", "rear_relaxation", "relaxation", "noisy_sensors", "quiet_sensors",
            "one_speed", "field_driving", "servo+rear_relaxation+noisy_sensors")
@@ -103,6 +108,26 @@ def draw_unlisted(effect: str, rng: np.random.Generator) -> dict[str, float]:
             "gyro_scale_factor": {"gyro_scale": 1.0 + sign * u(0.08, 0.15)},
             "wheel_slip": {"slip": u(0.06, 0.12)},
             "tyre_saturation": {"alpha_s": u(2.0, 4.0) * DEG}}[effect]
+
+
+def draw_later(effect: str, rng: np.random.Generator, l_r: float) -> dict[str, float]:
+    """Magnitudes of the LATER effects: a point 0.8-1.6 m ahead of the centre of gravity (given, as
+    the antenna, from the rear axle: l_r + that) and up to 0.3 m aside, stamped 0.15-0.35 s late;
+    a ratio curvature c of 1.5-3 1/rad2 (8-17 % more wheel angle at 0.25 rad); the steering
+    channels (delta_cmd, delta) stamped 0.3-0.9 s late against the others."""
+    sign = 1.0 if rng.random() < 0.5 else -1.0
+    u = rng.uniform
+    return {"position_reference": {"forward": l_r + u(0.8, 1.6), "left": sign * u(0.0, 0.3), "latency": u(0.15, 0.35)},
+            "steering_ratio_curve": {"ratio_curvature": u(1.5, 3.0)},
+            "steering_clock": {"steering_clock": u(0.3, 0.9)}}[effect]
+
+
+def ratio_reading(delta: float, c: float) -> float:
+    """The reading d of a wheel angle delta = d (1 + c d^2) (fixed point; c d^2 < 0.5 here)."""
+    d = delta
+    for _ in range(8):
+        d = delta / (1.0 + c * d * d)
+    return d
 
 
 def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float]:
@@ -200,22 +225,26 @@ class Servo:
 
 def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
              scale: dict[str, float] | None = None, speeds: tuple[float, ...] | None = None,
-             healthy: str | None = None, vehicle: str = "tractor") -> tuple[pd.DataFrame, dict]:
+             healthy: str | None = None, vehicle: str = "tractor",
+             values: dict[str, float] | None = None, lateral: bool = False) -> tuple[pd.DataFrame, dict]:
     """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
     EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
     sigma_f) to stress the diagnosis with a truth further from the baseline; ``healthy``: one or
     several of HEALTHY ('a+b'), ways the truth differs from the baseline without a fault
     (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay);
-    ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering)."""
+    ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering);
+    ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...);
+    ``lateral``: add the measured lateral velocity at the centre of gravity ``vy`` [m/s] and the
+    side-slip ``beta`` = atan(vy / v) [rad] (an optical or GNSS/INS sensor; noise 0.005 m/s)."""
     if vehicle not in VEHICLES:
         raise ValueError(f"unknown vehicle {vehicle!r}; known: {sorted(VEHICLES)}")
     veh = VEHICLES[vehicle]
     speeds = speeds or veh["speeds"]
     rng = np.random.default_rng(seed)
     ids = effect_list(effect)
-    unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED]
+    unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED and i not in LATER]
     if unknown:
-        raise ValueError(f"unknown truth effects {unknown}; known: {EFFECTS + UNLISTED}")
+        raise ValueError(f"unknown truth effects {unknown}; known: {EFFECTS + UNLISTED + LATER}")
     e: dict[str, float] = {}
     for i in [i for i in ids if i in EFFECTS] or [None]:
         e.update(draw_effect(i, rng))
@@ -228,6 +257,12 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
             e[key] *= veh["steer_scale"]
     hv = draw_healthy(healthy, np.random.default_rng([seed, 2])) if healthy else {}
     p = dict(veh["table"])
+    later = np.random.default_rng([seed, 3])
+    for i in ids:
+        if i in LATER:
+            e.update(draw_later(i, later, p["l_r"] * (scale or {}).get("l_r", 1.0)))
+    e.update(values or {})
+    curve = e.get("ratio_curvature", 0.0)
     for key, factor in (scale or {}).items():
         p[key] *= factor
     for k, lo, hi in (("C_f", 0.85, 1.15), ("C_r", 0.85, 1.15), ("sigma_f", 0.9, 1.1)):
@@ -258,7 +293,8 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         if servo is None:
             k = int(math.floor((time - delay) * 20.0 + 1e-9))
             c = cmd[min(max(k, 0), len(cmd) - 1)]
-            err = c - sensor_gain * delta           # the loop closes on the sensor's reading
+            reading = ratio_reading(delta, curve) if curve else delta
+            err = c - sensor_gain * reading         # the loop closes on the sensor's reading
             err = err - dead if err > dead else (err + dead if err < -dead else 0.0)
             want = max(-rate, min(rate, err / tau))
             d_delta, d_spool = spool, (want - spool) / tau_spool
@@ -309,12 +345,21 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     frame = pd.DataFrame({
         "t": t_log,
         "delta_cmd": cmd,
-        "delta": q * np.round((sensor_gain * delta[idx] + 0.05 * DEG * noise[0]) / q),
+        "delta": q * np.round((sensor_gain * np.array([ratio_reading(d, curve) for d in delta[idx]])
+                               + 0.05 * DEG * noise[0]) / q),
         "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
         "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2],
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
+    late = e.get("steering_clock", 0.0)
+    if late:                                  # the steering channels stamped late: delta_log(t) = delta(t - late)
+        for c in ("delta_cmd", "delta"):
+            frame[c] = np.interp(t_log - late, t_log, frame[c].to_numpy(float))
+    if lateral:
+        vy_log = rec[idx, 2] + 0.005 * rng.standard_normal(n)
+        frame["vy"] = vy_log
+        frame["beta"] = np.arctan2(vy_log, np.maximum(frame["v"].to_numpy(float), 0.1))
     truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
              "vehicle": vehicle, "v_ref": v_ref,
              "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}

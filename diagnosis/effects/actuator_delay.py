@@ -8,7 +8,7 @@ class ActuatorDelay(Effect):
     id = "actuator_delay"
     subsystem = "steering"
     stages = ("steering",)
-    parameters = (Parameter("command_delay", "s", 0.1, 0.0, 0.6, "s", 1.0),)
+    parameters = (Parameter("command_delay", "s", 0.1, 0.0, 0.6, "s", 1.0, (0.0, 2.0)),)
     starts = ((0.05,), (0.15,), (0.3,))
     threshold = "delay >= 0.05 s"
     hypothesis = "the wheels follow the command late: a transport delay in the valve drive or the bus"

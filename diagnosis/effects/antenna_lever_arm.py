@@ -1,4 +1,5 @@
-"""The antenna is not where the model puts it: in turns it swings on a different radius."""
+"""The position's reference point (a GNSS antenna, or a localisation filter's frame) is not where the model
+puts it: in turns it swings on a different radius."""
 import math
 
 from ..effect import Effect, Parameter
@@ -8,11 +9,12 @@ class AntennaLeverArm(Effect):
     id = "antenna_lever_arm"
     subsystem = "gps (antenna mounting)"
     stages = ("position",)
-    parameters = (Parameter("antenna_forward", "m", 0.5, -4.0, 4.0, "m", 1.0),
-                  Parameter("antenna_left", "m", 0.5, -2.0, 2.0, "m", 1.0))
+    parameters = (Parameter("antenna_forward", "m", 0.5, -4.0, 4.0, "m", 1.0, (-8.0, 8.0)),
+                  Parameter("antenna_left", "m", 0.5, -2.0, 2.0, "m", 1.0, (-4.0, 4.0)))
     starts = ((0.0, 0.0),)
     threshold = "lever arm >= 0.15 m"
-    hypothesis = "the antenna is not where the model puts it: in turns it swings on a different radius"
+    hypothesis = ("the position's reference point (a GNSS antenna, or the frame a localisation filter reports) is "
+                  "not where the model puts it: in turns it swings on a different radius")
     experiment = ("tight turns both ways at low speed: a lever arm swings the antenna "
                   "on a different radius, independent of speed")
 

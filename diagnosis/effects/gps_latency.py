@@ -6,7 +6,7 @@ class GPSLatency(Effect):
     id = "gps_latency"
     subsystem = "gps"
     stages = ("position",)
-    parameters = (Parameter("gps_latency", "s", 0.1, 0.0, 1.0, "s", 1.0),)
+    parameters = (Parameter("gps_latency", "s", 0.1, 0.0, 1.0, "s", 1.0, (0.0, 2.0)),)
     starts = ((0.05,), (0.25,))
     threshold = "latency >= 0.05 s"
     hypothesis = "the GPS reports where the antenna was a moment ago"

@@ -23,7 +23,8 @@ class SideSlope(Effect):
     subsystem = "yaw (terrain: a side slope)"
     stages = ("yaw",)
     needs = ("x", "y")            # the heading, from the GPS course, resolves the fall line
-    parameters = (Parameter("slope_east", "m/s2", 0.5, -3.0, 3.0), Parameter("slope_north", "m/s2", 0.5, -3.0, 3.0))
+    parameters = (Parameter("slope_east", "m/s2", 0.5, -3.0, 3.0, limit=(-4.9, 4.9)),
+                  Parameter("slope_north", "m/s2", 0.5, -3.0, 3.0, limit=(-4.9, 4.9)))
     starts = ((0.0, 0.0),)
     threshold = "slope >= 1.5 deg"
     hypothesis = "the field is tilted: gravity pulls sideways, by an amount that follows the heading"

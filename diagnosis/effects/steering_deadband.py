@@ -12,7 +12,7 @@ class SteeringDeadband(Effect):
     id = "steering_deadband"
     subsystem = "steering"
     stages = ("steering",)
-    parameters = (Parameter("steering_deadband", "rad", 0.02, 0.0, 0.12, "deg", 1 / DEG),)
+    parameters = (Parameter("steering_deadband", "rad", 0.02, 0.0, 0.12, "deg", 1 / DEG, (0.0, 0.3)),)
     starts = ((0.5 * DEG,), (2.0 * DEG,), (4.0 * DEG,))
     threshold = "dead-band >= the baseline's + 0.4 deg"
     hypothesis = "small steering corrections are not executed: play in the linkage or a valve dead-band"

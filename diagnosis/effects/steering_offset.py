@@ -10,7 +10,7 @@ class SteeringOffset(Effect):
     id = "steering_offset"
     subsystem = "steering angle sensor (wheel angle seen by the tyres)"
     stages = ("yaw",)
-    parameters = (Parameter("steer_angle_offset", "rad", 0.02, -0.15, 0.15, "deg", 1 / DEG),)
+    parameters = (Parameter("steer_angle_offset", "rad", 0.02, -0.15, 0.15, "deg", 1 / DEG, (-0.35, 0.35)),)
     starts = ((0.0,),)
     threshold = "|offset| >= 0.3 deg"
     hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"

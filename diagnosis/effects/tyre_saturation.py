@@ -18,8 +18,9 @@ class TyreSaturation(Effect):
     id = "tyre_saturation"
     subsystem = "yaw (tyres: lateral force saturation, simplified Magic Formula)"
     stages = ("yaw",)
-    parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0), Parameter("tyre_shape", "1", 0.3, 1.05, 1.95))
+    parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0, limit=(0.05, 3.0)), Parameter("tyre_shape", "1", 0.3, 1.05, 1.95))
     starts = ((1.0, 1.3), (0.3, 1.3))
+    secondary = ("tyre_shape",)
     threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
                  "99th percentile of |a_y|: the log drives into the saturation")
     hypothesis = ("the tyres saturate: in hard turns the lateral force falls behind C alpha, and the yaw rate "

@@ -8,7 +8,7 @@ class YawRateBias(Effect):
     id = "yaw_rate_bias"
     subsystem = "gyro"
     stages = ("yaw", "position")
-    parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "deg/s", 180.0 / math.pi),)
+    parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "deg/s", 180.0 / math.pi, (-0.2, 0.2)),)
     starts = ((0.0,),)
     threshold = "|bias| >= 0.229 deg/s"
     hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
