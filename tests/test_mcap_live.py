@@ -37,6 +37,7 @@ def _read(path: Path):
         reader = mcap_reader.make_reader(f, decoder_factories=[DecoderFactory()])
         summary = reader.get_summary()
         schemas = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+        typed = [c.topic for c in summary.channels.values() if c.message_encoding != "json"]
         messages: dict[str, list] = {}
         for schema, channel, message in reader.iter_messages():
             if channel.message_encoding == "json":
@@ -44,7 +45,7 @@ def _read(path: Path):
         f.seek(0)
         reader = mcap_reader.make_reader(f, decoder_factories=[DecoderFactory()])
         for schema, channel, message, decoded in reader.iter_decoded_messages(
-                topics=[t for t in schemas if not t.startswith("/signals/")]):
+                topics=typed):
             messages.setdefault(channel.topic, []).append((message.log_time, decoded))
     return schemas, messages
 
@@ -281,3 +282,30 @@ def test_a_sweep_writes_each_points_mcap_on_request(tmp_path):
         _, messages = _read(path)
         speeds.add(round(max(m["speed_ref"] for _, m in messages["/signals/reference"]), 6))
     assert speeds == {1.5, 2.5}
+
+
+def test_a_diagnosis_mcap_holds_measured_replays_and_residuals_on_the_logs_time(tmp_path):
+    from agrobot.diagnosis.baseline import baseline_from_study
+    from agrobot.diagnosis.candidates import Replay
+    from agrobot.diagnosis.mcap import write_diagnosis_mcap
+    from agrobot.measurements.truth_tractor import make_log
+    from agrobot.orchestrator.study import load_study
+
+    frame, _ = make_log(5, "steering_offset", duration=60.0)
+    replay = Replay(frame, baseline_from_study(load_study(STUDIES / "figure8.toml")))
+    base = dict(replay.baseline.values)
+    final = {**base, "steer_angle_offset": base["steer_angle_offset"] + 0.02}
+    write_diagnosis_mcap(replay, base, final, tmp_path / "d.mcap", "log.csv")
+    schemas, messages = _read(tmp_path / "d.mcap")
+    assert {f"/diagnosis/{s}" for s in replay.stages} | {"/diagnosis/log"} <= set(schemas)
+    steering = messages["/diagnosis/steering"]
+    assert len(steering) == len(replay.t)
+    # the measured wheel angle is the log's own delta at the same time (the original table, not the replay's)
+    log_delta = np.interp([m["t"] for _, m in steering], frame["t"], frame["delta"])
+    np.testing.assert_allclose([m["measured"] for _, m in steering], log_delta, atol=1e-9)
+    for _, m in steering[::97]:
+        assert m["residual_baseline"] == pytest.approx(m["measured"] - m["baseline"], abs=1e-12)
+        assert m["residual_final"] == pytest.approx(m["measured"] - m["final"], abs=1e-12)
+    # the final model (an offset of the wheel angle the plant sees) is another replay of the yaw rate
+    yaw = messages["/diagnosis/yaw"]
+    assert max(abs(m["final"] - m["baseline"]) for _, m in yaw if m["final"] is not None) > 1e-3
