@@ -82,8 +82,10 @@ BASELINES = {"tractor": STUDIES / "figure8.toml", "car": STUDIES / "passenger_ca
 
 
 def diagnose_hidden(case: tuple) -> dict:
-    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant[, vehicle[, values]]]]])
-    to ``folder`` and diagnose it (no plots) against the vehicle's baseline study (BASELINES);
+    """Write the log of (effect, seed, folder[, TABLE scale[, duration[, healthy variant[, vehicle[, values[,
+    identify]]]]]]) to ``folder`` and diagnose it (no plots) against the vehicle's baseline study (BASELINES);
+    ``identify`` (default False: the truths' catalogue is judged on the diagnosis alone, five times cheaper)
+    identifies the vehicle on the same log first, as ``diagnose`` does for a user;
     ``effect`` may be several ids joined by '+', ``healthy`` one or several of truth_tractor.HEALTHY
     (a truth without fault that differs from the baseline), ``values`` magnitudes that replace the
     drawn ones (truth_tractor.make_log)."""
@@ -95,12 +97,13 @@ def diagnose_hidden(case: tuple) -> dict:
     healthy = rest[2] if len(rest) > 2 else None
     vehicle = rest[3] if len(rest) > 3 else "tractor"
     values = rest[4] if len(rest) > 4 else None
+    identify = bool(rest[5]) if len(rest) > 5 else False
     frame, truth = make_log(seed, effect, scale=scale, duration=duration, healthy=healthy, vehicle=vehicle,
                             values=values)
     name = f"{vehicle}_{effect or 'none'}_{healthy.replace('+', '-') + '_' if healthy else ''}{seed}"
     log = Path(folder) / f"{name}.parquet"
     frame.to_parquet(log)
-    result = diagnose(log, Path(folder) / name, plots=False, study_path=BASELINES[vehicle])
+    result = diagnose(log, Path(folder) / name, plots=False, study_path=BASELINES[vehicle], identify=identify)
     found = "+".join(sorted(e["id"] for e in result["effects"])) or "none"
     print(f"{name}: {found} (expected {'+'.join(sorted(expected_ids(truth))) or 'none'})", file=sys.stderr, flush=True)
     return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}

@@ -12,6 +12,9 @@ from agrobot.diagnosis.catalogue import CATALOGUE
 from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
+# a position reference point other than the antenna is written into a study as the antenna's position: the
+# baseline reads it back as the antenna, not as a reference offset
+READ_BACK_AS_THE_ANTENNA = {"position_reference"}
 
 
 @pytest.mark.parametrize("effect", CATALOGUE, ids=lambda e: e.id)
@@ -22,13 +25,23 @@ def test_the_study_option_of_an_effect_carries_its_fitted_value(effect):
         fitted = dict(base.values)
         for p in effect.parameters:                     # a value inside the bounds, away from the baseline
             fitted[p.name] = p.lower + 0.1 * (p.upper - p.lower)
-        options = effect.options(fitted, base.values, base.study)
+        try:
+            options = effect.options(fitted, base.values, base.study)
+        except KeyError as why:     # no study option (a correction of the recording): it says what to do instead
+            assert len(str(why)) > 20 and any(w in str(why) for w in ("log", "shift", "lookup", "divide")), why
+            return
         if {role for role, _, _ in options} <= set(base.components):
             break
     else:
         pytest.fail(f"no shipped study has the components of {effect.id}'s options {options}")
     extended = study.with_values({f"{base.components[role]}.{name}": value for role, name, value in options})
     again = baseline_from_study(extended).values
+    if effect.id in READ_BACK_AS_THE_ANTENNA:
+        moved = {name: value for role, name, value in options if role == "yaw_plant"}
+        assert again["antenna_forward"] == pytest.approx(moved["antenna_forward"]) if "antenna_forward" in again \
+            else extended.parameters(base.components["yaw_plant"])["antenna_forward"] == pytest.approx(
+                moved["antenna_forward"])
+        return
     for p in effect.parameters:
         assert again[p.name] == pytest.approx(fitted[p.name], rel=1e-9, abs=1e-12), p.name
     untouched = set(base.values) - {p.name for p in effect.parameters} - {"cornering_reference_speed"}
@@ -39,5 +52,5 @@ def test_the_study_option_of_an_effect_carries_its_fitted_value(effect):
 def test_an_effect_is_material_far_from_the_baseline_and_not_at_it(effect):
     base = baseline_from_study(Study.load(ROOT / "studies" / "figure8.toml")).values
     assert not effect.material(base, base)
-    assert effect.stages and all(s in ("steering", "yaw", "position") for s in effect.stages)
+    assert effect.stages and all(s in ("steering", "yaw", "position", "speed") for s in effect.stages)
     assert all(len(start) == len(effect.parameters) for start in effect.starts)
