@@ -329,6 +329,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
     the reference (the receiver, else the gyro's group), the pairs' findings)."""
     pairs = aud.zero_lag_pairs()
     findings, offsets = [], {}
+    agreeing: dict[frozenset, list] = {}    # group pairs a direct comparison finds on one clock: its interval
     reference = "gnss" if aud.streams.gnss is not None else aud.group("yaw_rate")
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
@@ -342,6 +343,8 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             meaning += "; one group, one clock: a lag within a group is the sensors' own latency"
         elif small:
             meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
+            if ga != gb and est["rho"] >= STRONG_RHO:
+                agreeing[frozenset((ga, gb))] = iv
         elif strong:
             meaning += ("; the clocks disagree: identification and diagnosis would take it for a delay or a lever arm "
                         "until aligned (--align)")
@@ -367,6 +370,15 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                                     f"two yaw-rate sources disagree ({b} is {s:.3g} times {a}, {late:+.3f} s late)"
                                     f"{says}: {a} is the one identification and diagnosis use; --signal yaw_rate=... "
                                     f"chooses the other"))
+    # an offset that a direct comparison of the same two groups excludes is not a clock
+    for group in [g for g in offsets if frozenset((reference, g)) in agreeing
+                  and not agreeing[frozenset((reference, g))][0] <= offsets[g][0] <= agreeing[frozenset((reference, g))][1]]:
+        late, _, evidence = offsets.pop(group)      # evidence that disagrees: not a clock, not aligned
+        for f in findings:
+            if f["kind"] == "clock_offset" and evidence.split(":")[0] in f["meaning"]:
+                f["meaning"] += (f"; not aligned: a direct comparison finds {group} and {reference} on one clock, so "
+                                 f"this {late:+.3f} s is a lag of the signals compared (a filter, a latency), not a clock")
+                f["resolved"] = True
     return offsets, findings
 
 
