@@ -29,8 +29,8 @@ class BusRecorder(Component):
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         *RECEIVER_INPUTS,
-        inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point sent to the tractor"),
-        inp("speed_cmd", "m/s", 0.0, "speed set-point sent to the tractor"),
+        inp("steer_angle_cmd", "rad", 0.0, "wheel-angle set-point sent to the tractor", optional=True),
+        inp("speed_cmd", "m/s", 0.0, "speed set-point sent to the tractor (a study that sends none: 0)", optional=True),
         inp("safe_state", "1", 0.0, "1 while the guidance holds the tractor safe (a study without a watchdog: 0)",
             optional=True),
         inp("steer_angle_measured", "rad", 0.0, "wheel angle the tractor reports"),
