@@ -42,7 +42,7 @@ from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncerta
 from .noise_floor import stage_floors
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
-from .catalogue import CATALOGUE, SIGNALS, UNCERTAIN
+from .catalogue import CATALOGUE, SIGNALS
 from .effect import Effect, Parameter
 
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
