@@ -2,6 +2,7 @@
 spectra, cross-correlations, residuals by speed and amplitude), baseline against the winner."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -89,6 +90,11 @@ def _draw_levels(ax, levels: dict | None, k: float, unit: str, signed: bool = Tr
     ax.legend(fontsize=7, loc="upper right")
 
 
+# a person reads angles in degrees (the report's one unit system): SI unit -> (factor, shown unit)
+DEGREES = {"rad": (180 / math.pi, "deg"), "rad/s": (180 / math.pi, "deg/s"),
+           "rad/(m/s2)": (180 / math.pi, "deg/(m/s2)"), "N/rad": (math.pi / 180, "N/deg")}
+
+
 def vehicle_lines(iv: dict | None) -> list[str]:
     """The vehicle identify fits on this log beside the study's, the independent estimates and the
     physical checks (markdown lines; console: the same lines without the table rule)."""
@@ -97,25 +103,29 @@ def vehicle_lines(iv: dict | None) -> list[str]:
     if iv.get("identified") is None:
         return [f"The vehicle could not be identified on this log: {iv.get('why_not', '')}", ""]
     st, me = iv["study"], iv["identified"]
+    k_deg, c_deg = DEGREES["rad/(m/s2)"][0], DEGREES["N/rad"][0]
 
-    def q(d, f="{:.4g}"):
+    def q(d, k=1.0, f="{:.4g}"):
         if not d.get("identifiable", True):
-            return f.format(d["value"]) + " (not identifiable)"
-        return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "]"
+            return f.format(k * d["value"]) + " (not identifiable)"
+        return f.format(k * d["value"]) + " [" + ", ".join(f.format(k * x) for x in d["interval"]) + "]"
 
     out = ["## This vehicle against the study", "",
            f"Identified on this log by the model `identify` fits (input {me['input']}; final model "
            f"{me['final_model']}, held-out fit {me['held_out_fit']:.0f} %):", "",
            "| quantity | study | identified (95 %) |", "|---|---:|---:|",
-           f"| understeer gradient K [rad/(m/s2)] | {st['understeer_gradient']:.4g} | {q(me['understeer_gradient'])} |",
-           f"| cornering stiffness front [N/rad] | {st['cornering_stiffness_front']:.4g} | "
-           f"{q(me['cornering_stiffness_front'])} |",
-           f"| cornering stiffness rear [N/rad] | {st['cornering_stiffness_rear']:.4g} | "
-           f"{q(me['cornering_stiffness_rear'])} |",
+           f"| understeer gradient K [deg/(m/s2)] | {k_deg * st['understeer_gradient']:.4g} | "
+           f"{q(me['understeer_gradient'], k_deg)} |",
+           f"| cornering stiffness front [N/deg] | {c_deg * st['cornering_stiffness_front']:.4g} | "
+           f"{q(me['cornering_stiffness_front'], c_deg)} |",
+           f"| cornering stiffness rear [N/deg] | {c_deg * st['cornering_stiffness_rear']:.4g} | "
+           f"{q(me['cornering_stiffness_rear'], c_deg)} |",
            f"| steering delay [s] | {st['delay']:.3g} | {q(me['delay'])} |", ""]
     for c in iv.get("comparisons", []):
-        out.append(f"- {c['quantity']} [{c['unit']}]: " + "; ".join(
-            f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]" for m, e in c["estimates"].items())
+        k, unit = DEGREES.get(c["unit"], (1.0, c["unit"]))
+        out.append(f"- {c['quantity']} [{unit}]: " + "; ".join(
+            f"{m} {k * e['value']:.4g} [{k * e['interval'][0]:.4g}, {k * e['interval'][1]:.4g}]"
+            for m, e in c["estimates"].items())
             + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}"))
     for c, chk in iv.get("physical_checks", {}).items():
         out.append(f"- physical check `{c}` ({chk['what']}): held-out fit {chk['fit_percent']:.0f} %, RMS "

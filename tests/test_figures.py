@@ -2,6 +2,8 @@
 compared with the metrics, the bounds and roots computed here by a second route."""
 from __future__ import annotations
 
+import re
+
 import math
 from pathlib import Path
 from types import SimpleNamespace
@@ -206,5 +208,5 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
 
     text = markdown(res, [])
     body = "\n".join(line for line in text.splitlines() if not line.startswith("Baseline model:"))
-    assert "rad" not in body.replace("radians", ""), [line for line in body.splitlines() if "rad" in line]
+    assert not re.search(r"\brad\b", body), [line for line in body.splitlines() if re.search(r"\brad\b", line)]
     assert "| steering | deg |" in text and "| yaw | deg/s |" in text and "**yaw** [deg/s]" in text
