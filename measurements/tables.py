@@ -208,7 +208,13 @@ def _column(table: Table, name: str) -> str | None:
 
 
 def _datetime(values: pd.Series, where: str) -> tuple[np.ndarray, str]:
-    parsed = pd.to_datetime(values, errors="coerce", utc=False, format="mixed")
+    try:
+        parsed = pd.to_datetime(values, errors="coerce", utc=False, format="mixed")
+    except (ValueError, OverflowError, pd.errors.OutOfBoundsDatetime) as exc:    # a date beyond 1677-2262, mixed zones
+        raise LogError(f"{where}: the dates do not parse as one clock ({type(exc).__name__}: {exc}); first value "
+                       f"{values.iloc[0]!r}; expected date strings between 1677 and 2262, or --time 'COLUMN[s]'") from None
+    if not pd.api.types.is_datetime64_any_dtype(parsed):
+        raise LogError(f"{where}: the dates do not parse as one clock (mixed time zones?); first value {values.iloc[0]!r}")
     if parsed.dt.tz is None:
         note = "date strings without a time zone, taken as UTC"
         parsed = parsed.dt.tz_localize("UTC")
