@@ -162,6 +162,7 @@ def test_the_route_component_evaluates_a_window_and_matches_a_whole_route_projec
     route.route = RouteWindow(route.path, origin, rotation)
     route.end = (route.route.size - 1) * ROUTE_STEP
     route.i_cg = route.i_impl = 0
+    route.sections = None                 # no section control (initialize sets it from the parameters)
     whole = route.path.grid(0, route.path.grid_size())
     xy = to_mission(np.column_stack([whole["x"], whole["y"]]), origin, rotation)
     h = whole["heading"] - rotation
