@@ -63,7 +63,10 @@ def check_inputs(out: Path, inputs: Iterable[Path | str | None], flag: str = "--
     for given in inputs:
         if given is None:
             continue
-        source = Path(given).resolve()
+        try:
+            source = Path(given).resolve()
+        except (RuntimeError, OSError):       # a symlink loop: the reader names it, it is no output's place
+            continue
         if target == source:
             raise OutputError(f"{flag} {out}: is the input {given}; choose another {flag}")
         if _inside(source, target):

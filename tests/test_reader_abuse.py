@@ -58,7 +58,7 @@ def test_devices_links_loops_and_sizes_are_refused_before_anything_is_read(tmp_p
     refused(cli("convert", log, "--out", tmp_path / "b.csv", "--max-file-size", "4K"),
             "above the 4 kB limit", "--max-file-size")
     converted(cli("convert", log, "--out", tmp_path / "b.csv", "--max-file-size", f"{size}"))
-    refused(cli("convert", log, "--out", tmp_path / "b.csv", "--max-file-size", "lots"), "500M")
+    refused(cli("convert", log, "--out", tmp_path / "b.csv", "--overwrite", "--max-file-size", "lots"), "500M")
 
 
 # --- NMEA -----------------------------------------------------------------------------------------------------
@@ -282,7 +282,8 @@ def _custom_bags(folder: Path) -> list[Path]:
 def test_bags_with_only_unknown_types_are_refused_by_every_command_naming_the_topics(tmp_path):
     for bag in _custom_bags(tmp_path):
         for command in ("convert", "identify", "diagnose"):
-            refused(cli(command, bag, "--out", tmp_path / (f"{command}.csv" if command == "convert" else command)),
+            refused(cli(command, bag, "--out", tmp_path / (f"{command}.csv" if command == "convert" else command),
+                        "--overwrite"),
                     "no topic of a known type",
                     "/tractor/drive (agro_msgs/msg/Drive)", "--signal")
         refused(cli("fields", bag, "--from-track"), "no topic of a known type")
