@@ -112,7 +112,7 @@ class TractorYawPlant(Component):
         par("terrain_file", FILE_UNIT, "", "the ground as a height grid: CSV x, y, z in metres, mission frame "
             "(empty: the plane of slope_angle)"),
         par("tyre_friction", "1", 0.0, "extension: tyre friction mu of the Magic Formula (0 = linear tyres)"),
-        par("tyre_shape", "1", 1.3, "extension: Magic Formula shape factor C (1 < C < 2)"),
+        par("tyre_shape", "1", 1.3, "extension: Magic Formula shape factor C (1 < C < 2: a peak; 0 < C < 1: none)"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -170,8 +170,8 @@ class TractorYawPlant(Component):
         self.require(p["model"] != "transfer_function" or not (self._slope or self._cornering or self._saturation),
                      "slope_angle, terrain_file, cornering_speed_slope and tyre_friction need a physical model "
                      "(bicycle, rlf, rlfr)")
-        self.require(not self._saturation or 1.0 < float(p["tyre_shape"]) < 2.0,
-                     f"parameter tyre_shape={p['tyre_shape']}: expected 1 < C < 2")
+        self.require(not self._saturation or 0.0 < float(p["tyre_shape"]) < 2.0,
+                     f"parameter tyre_shape={p['tyre_shape']}: expected 0 < C < 2")
         try:
             self._ground = ground_of(p["slope_angle"], p["slope_downhill_heading"], p["terrain_file"])
         except ValueError as exc:

@@ -10,6 +10,7 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from agrobot.components.models.tyre import force_limit_share
 from agrobot.studies import shipped
 from agrobot.measurements.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
 
@@ -65,7 +66,7 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         # an equivalent friction C_f a_s / F_zf; the Magic Formula differs in shape, hence 35 %
         m, lf, lr = truth.get("m", TABLE["m"]), TABLE["l_f"], TABLE["l_r"]
         mu = truth["C_f"] * truth["alpha_s"] / (m * 9.81 * lr / (lf + lr))
-        return params["tyre_friction"], mu, 0.35 * mu
+        return params["tyre_friction"] * force_limit_share(params["tyre_shape"]), mu, 0.35 * mu
     if effect == "steering_clock":
         return params["steering_clock"], truth["steering_clock"], 0.04
     if effect == "steering_ratio_curve":

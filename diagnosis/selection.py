@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from .candidates import STAGES, Fit, Replay, _fit, fit_baseline, merged, uncertain
@@ -269,7 +270,8 @@ class Selector:
             return None
         if self.saturation:                     # one vehicle model: what identify keeps is a candidate here
             self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
-                                              "tyre_shape": min(max(self.saturation["shape"], 1.05), 1.95)}
+                                              "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
+                                                                 SHAPE_BOUNDS[1])}
             return (f"tyre_saturation tried: identify keeps it on this log (friction {self.saturation['friction']:.3g}, "
                     f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
         replay = self.replay

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import math
 
+from agrobot.components.models.tyre import force_limit_share
+
 HUMAN_REACTION = 0.3          # s: no steering actuator is slower; a longer "delay" is a clock
 RECEIVER_LATENCY = 0.5        # s: a GNSS receiver or a localisation filter reports within this
 
@@ -91,7 +93,7 @@ def judge_values(effect: dict, vehicle, wheelbase: float, l_r: float, speed: flo
         out.append(f"a clock offset of {p['position_clock']:.2f} s is more than a stamping delay: the channel groups "
                    f"were recorded on different clocks")
     if eid == "tyre_saturation":
-        mu = p.get("tyre_friction", 0.0)
+        mu = p.get("tyre_friction", 0.0) * force_limit_share(p.get("tyre_shape", 1.3))   # the force it reaches
         hi = vehicle.friction_range[1]
         if mu > hi:
             out.append(f"a friction of {mu:.2f} is above what tyres give on this vehicle's ground "

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from agrobot.components.models.tyre import linear_share_limit
+from agrobot.components.models.tyre import SHAPE_BOUNDS, linear_share_limit
 from agrobot.components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, TractorParameters
 
 from .driving import (Z95, DrivingLog, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
@@ -58,7 +58,7 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
         out += [FreeParameter("friction", "1", mu_lo, mu_hi, 0.3, "tyre friction coefficient mu (peak force / load)"),
-                FreeParameter("shape", "1", 1.05, 1.95, 0.3, "Magic Formula shape factor C")]
+                FreeParameter("shape", "1", *SHAPE_BOUNDS, 0.3, "Magic Formula shape factor C")]
     return out
 
 
@@ -338,7 +338,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         share = linear_share_limit(shape)
         lin_range = mu * GRAVITY * share
         eps = 1e-4
-        d_share = (linear_share_limit(min(shape + eps, 1.95)) - linear_share_limit(shape - eps)) / (2 * eps)
+        d_share = (linear_share_limit(min(shape + eps, SHAPE_BOUNDS[1])) - linear_share_limit(shape - eps)) / (2 * eps)
         lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
         linear_range = {**_quantity(lin_range, lr_sd, "m/s2"),
                         "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "

@@ -92,7 +92,8 @@ def _run(args: argparse.Namespace) -> int:
     live = _live_view(study, args.live, args.live_wait) if args.live else None
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
-                           progress=not args.no_progress, engine=args.engine, observers=[live] if live else [])
+                           progress=not args.no_progress, engine=args.engine, observers=[live] if live else [],
+                           named=tuple(Path(value) for _, value in chosen))
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)

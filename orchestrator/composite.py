@@ -16,6 +16,7 @@ host's; ``dt`` must be a whole number of the inner base steps.
 """
 from __future__ import annotations
 
+import contextvars
 import json
 from pathlib import Path
 from typing import Any, ClassVar
@@ -98,7 +99,9 @@ def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     return {out: tuple(i for i in exports.inputs if exports.output_source(out) in reach[i]) for out in exports.outputs}
 
 
-_OPEN: list[Path] = []          # the study files being resolved as subsystems, outermost first (any resolver)
+# the study files being resolved as subsystems, outermost first (any resolver); per thread and
+# per task, so that studies resolved side by side (a sweep's threads) never see each other's
+_OPEN: contextvars.ContextVar[tuple[Path, ...]] = contextvars.ContextVar("open_subsystem_files", default=())
 
 
 class SubsystemTypes:
@@ -116,7 +119,7 @@ class SubsystemTypes:
         if spec is None or not spec.type.lower().endswith(SUBSYSTEM_SUFFIXES):
             return None
         path = study.file_path(spec.type).resolve()
-        chain = list(_OPEN) or ([Path(study.path).resolve()] if study.path is not None else [])
+        chain = list(_OPEN.get()) or ([Path(study.path).resolve()] if study.path is not None else [])
         if path in chain:
             cycle = chain[chain.index(path):] + [path]
             raise StudyError(f"{study.where}: components.{name}.type = {spec.type!r}: a study that uses itself as a "
@@ -125,11 +128,11 @@ class SubsystemTypes:
             sub = Study.load(path)
         except StudyError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: subsystem {exc}") from None
-        _OPEN[:] = chain + [path]
+        token = _OPEN.set(tuple(chain + [path]))
         try:
             return self.composite_class(sub, f"{study.where}: components.{name}.type", resolver)
         finally:
-            _OPEN[:] = chain
+            _OPEN.reset(token)
 
     def composite_class(self, sub: Study, where: str, resolver) -> type["CompositeComponent"]:
         """A Component class whose ports are ``sub``'s exports."""

@@ -362,10 +362,18 @@ class FMUComponent(Component):
                                     f"(last successful time {last.value:.6g} s)")
 
     def terminate(self) -> None:
-        """Nothing to release between runs (the instance is reset and reused)."""
+        """Nothing to release between runs (the instance is reset and reused), unless the FMU's
+        own process has ended (an isolated FMU that crashed, exited or hung): then its process
+        and unpacked folder go now, not whenever the garbage collector reaches this object."""
+        slave = getattr(self, "_slave", None)
+        if slave is not None and hasattr(slave, "alive") and not slave.alive():
+            self._release()
 
     def __del__(self) -> None:
-        slave = getattr(self, "_slave", None)
+        self._release()
+
+    def _release(self) -> None:
+        slave, self._slave = getattr(self, "_slave", None), None
         if slave is not None:
             try:
                 slave.terminate()
@@ -378,6 +386,7 @@ class FMUComponent(Component):
             if hasattr(slave, "close"):         # an isolated FMU: its process ends
                 slave.close()
         remove_unpacked(getattr(self, "_unpacked", None))
+        self._unpacked = None
 
 
 def _equal(a, b) -> bool:

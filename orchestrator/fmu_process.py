@@ -147,6 +147,9 @@ class RemoteSlave:
             raise AttributeError(name)
         return lambda *args, **kw: self.call(name, *args, **kw)
 
+    def alive(self) -> bool:
+        return self._proc.is_alive()
+
     def kill(self) -> None:
         if self._proc.is_alive():
             self._proc.kill()

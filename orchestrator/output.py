@@ -364,7 +364,8 @@ def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Pat
                             inputs: Iterable[Path] = ()):
     """The study with its output parameters checked against ``--out``: a path inside ``--out`` is
     written into the staging folder (and so moves with the result); a path outside it only when
-    the user named it on the command line (``--set``, or one of ``named``); an input never."""
+    the user named it on the command line (``--set``, or one of ``named``, a file or a folder that
+    holds it); an input never."""
     out = Path(out).resolve()
     named = {Path(p).resolve() for p in named}
     moved = {}
@@ -374,7 +375,7 @@ def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Pat
         if _inside(full, out):
             moved[key] = str(Path(staging) / full.relative_to(out))
             Path(moved[key]).parent.mkdir(parents=True, exist_ok=True)
-        elif full not in named and not study.origin(field).startswith("--set"):
+        elif not any(_inside(full, n) for n in named) and not study.origin(field).startswith("--set"):
             raise OutputError(f"{study.origin(field)} = {str(path)!r}: writes outside --out {out}; name it on the "
                               f"command line (--set {key}={path}) or give a path inside --out")
     return study.with_values(moved) if moved else study

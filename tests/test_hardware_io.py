@@ -288,8 +288,11 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), recor
                             *(["--record", str(tmp_path / "emulator_recording")] if record else [])],
                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        ready = emu.stdout.readline()               # printed once the study is loaded, before the run
-        assert "emulating" in ready, f"emulator did not start: {ready}{emu.stderr.read() if emu.poll() is not None else ''}"
+        ready = ""                                  # the --set echoes come first, then "emulating" once loaded
+        while "emulating" not in ready:
+            line = emu.stdout.readline()
+            assert line, f"emulator did not start: {ready}{emu.stderr.read() if emu.poll() is not None else ''}"
+            ready += line
         time.sleep(1.0)                             # the NMEA server listens once initialised
         guidance = subprocess.run([sys.executable, "-m", "agrobot", "run", "studies/figure8_hil.toml",
                                    "--out", str(hil_out), "--no-plots", "--set", f"study.stop_time={guidance_s}",

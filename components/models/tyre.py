@@ -7,7 +7,8 @@ Simplified Magic Formula (Pacejka; B, C, D with E = 0), one per axle::
 so that dF_y/dalpha = C_alpha at alpha = 0 (the linear model's cornering stiffness); ``mu`` is the
 friction coefficient (peak force over load) and ``C`` the shape factor (1 < C < 2: the force peaks
 at atan(B alpha) = pi / (2 C) and falls to D sin(C pi / 2) at large slip; Pacejka's lateral value
-is about 1.3). F_z is the axle's static load, m g l_r / L front and m g l_f / L rear.
+is about 1.3; C < 1: no peak, the force rises towards D sin(C pi / 2) and approaches it as
+1 / alpha, as a rational saturation C_alpha alpha / (1 + |alpha| / alpha_s) does). F_z is the axle's static load, m g l_r / L front and m g l_f / L rear.
 
 The single-track equations are those of models.yaw_dynamics with the axle forces C alpha replaced
 by F_y(alpha)::
@@ -40,6 +41,15 @@ def magic_formula(alpha, stiffness, peak, shape):
     if np.any(linear):
         F, k = np.where(linear, stiffness * alpha, F), np.where(linear, stiffness, k)
     return F, k
+
+
+SHAPE_BOUNDS = (0.5, 1.95)      # the shape factors a fit may take (C < 1: a tyre without a peak)
+
+
+def force_limit_share(shape: float) -> float:
+    """The largest force over D the Magic Formula reaches: 1 at its peak (C >= 1), sin(C pi / 2)
+    approached at large slip (C < 1); the friction a tyre shows is mu times this."""
+    return 1.0 if shape >= 1.0 else float(np.sin(shape * np.pi / 2))
 
 
 def axle_loads(m: float, l_f: float, l_r: float) -> tuple[float, float]:

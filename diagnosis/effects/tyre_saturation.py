@@ -6,7 +6,7 @@ stiffnesses stay the baseline's refitted ones (the small-slip slope). The linear
 """
 import math
 
-from agrobot.components.models.tyre import linear_share_limit
+from agrobot.components.models.tyre import SHAPE_BOUNDS, linear_share_limit
 from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from ..effect import Effect, Parameter
@@ -18,7 +18,7 @@ class TyreSaturation(Effect):
     id = "tyre_saturation"
     subsystem = "yaw (tyres: lateral force saturation, simplified Magic Formula)"
     stages = ("yaw",)
-    parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0, limit=(0.05, 3.0)), Parameter("tyre_shape", "1", 0.3, 1.05, 1.95))
+    parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0, limit=(0.05, 3.0)), Parameter("tyre_shape", "1", 0.3, *SHAPE_BOUNDS))
     starts = ((1.0, 1.3), (0.3, 1.3))
     secondary = ("tyre_shape",)
     threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
