@@ -217,13 +217,15 @@ def _datetime(values: pd.Series, where: str) -> tuple[np.ndarray, str]:
         raise LogError(f"{where}: the dates do not parse as one clock (mixed time zones?); first value {values.iloc[0]!r}")
     if parsed.dt.tz is None:
         note = "date strings without a time zone, taken as UTC"
-        parsed = parsed.dt.tz_localize("UTC")
     else:
         note = "date strings with their zone"
+        parsed = parsed.dt.tz_convert("UTC").dt.tz_localize(None)
     if parsed.isna().all():
         raise LogError(f"{where}: no value parses as a date and time (first: {values.iloc[0]!r})")
-    secs = (parsed - pd.Timestamp(0, tz="UTC")).dt.total_seconds().to_numpy(float)
-    return secs, note
+    # POSIX seconds in numpy, at the resolution pandas parsed (a date outside 1677-2262 has no ns stamp)
+    stamps = parsed.to_numpy()
+    secs = (stamps - np.datetime64(0, "s")) / np.timedelta64(1, "s")
+    return np.where(np.isnat(stamps), np.nan, secs).astype(float), note
 
 
 def _magnitude_unit(x: np.ndarray) -> tuple[float, str]:
