@@ -59,6 +59,8 @@ def run(args: argparse.Namespace) -> int:
                   f"counter-clockwise)")
         for problem in s["problems"]:
             print(f"    problem: {problem}")
+        if f.properties.get("repaired"):
+            print(f"    repaired: {f.properties['repaired']}")
     if folder is not None:
         summaries = [f.summary() for f in fields]
         with folder:

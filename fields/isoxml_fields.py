@@ -22,6 +22,7 @@ from agrobot.orchestrator.source_files import regular_file
 
 from .coordinates import Coordinates
 from .field import Field, FieldError, GuidanceLine, polygon
+from .shapes import repaired_parts
 
 HOLE_TYPES = {"WaterSurface", "Building", "Road", "Obstacle"}
 
@@ -109,21 +110,14 @@ def _partfield(path: Path, pf, crs, skipped: list) -> Field:
 
 
 def _valid(boundary: Polygon, where: str) -> tuple[Polygon, str | None]:
-    """The boundary, or its repair by shapely.make_valid (the largest polygon of it) and what was done."""
-    if boundary.is_valid:
+    """The boundary, or the largest polygon of its repair (fields.shapes.repaired_parts) and what was done."""
+    parts, note = repaired_parts(boundary, where)
+    if note is None:
         return boundary, None
-    from shapely import make_valid
-    from shapely.validation import explain_validity
-
-    why = explain_validity(boundary)
-    parts = [g for g in getattr(make_valid(boundary), "geoms", [make_valid(boundary)]) if isinstance(g, Polygon)]
-    if not parts:
-        raise FieldError(f"{where}: the boundary is invalid ({why}) and shapely.make_valid leaves no polygon of it")
     from shapely.geometry.polygon import orient
 
     best = orient(max(parts, key=lambda g: g.area), 1.0)
-    return best, (f"the boundary was invalid ({why}); repaired with shapely.make_valid: {best.area:.0f} m2 kept"
-                  + (f" of {sum(g.area for g in parts):.0f} m2 in {len(parts)} parts" if len(parts) > 1 else ""))
+    return best, (f"{note}: {best.area:.0f} m2 kept" + (f" of {sum(g.area for g in parts):.0f} m2" if len(parts) > 1 else ""))
 
 
 def _with_external_files(path: Path, text: str) -> str:

@@ -56,24 +56,6 @@ def kml_root(path: Path):
         raise FieldError(f"{path}: not a readable {'KMZ' if path.suffix.lower() == '.kmz' else 'KML'} file: {exc}") from None
 
 
-def valid_shape(poly: Polygon, props: dict, where: str) -> tuple[object, dict]:
-    """The polygon, or its repair by shapely.make_valid (its polygons; a line or point left by the
-    repair dropped) with what was done in ``props["repaired"]``."""
-    if poly.is_valid:
-        return poly, props
-    from shapely import make_valid
-    from shapely.geometry import MultiPolygon
-    from shapely.validation import explain_validity
-
-    why = explain_validity(poly)
-    fixed = make_valid(poly)
-    parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, Polygon) and g.area > 0]
-    if not parts:
-        raise FieldError(f"{where}: the polygon is invalid ({why}) and shapely.make_valid leaves no area of it")
-    note = (f"the polygon was invalid ({why}); repaired with shapely.make_valid into {len(parts)} polygon(s)")
-    return (parts[0] if len(parts) == 1 else MultiPolygon(parts)), {**props, "repaired": note}
-
-
 def read_kml_shapes(path: Path) -> list[tuple[object, dict]]:
     """[(shapely Polygon or LineString, {"name": ...})] of every placemark's geometry."""
     root = kml_root(path)
@@ -90,7 +72,7 @@ def read_kml_shapes(path: Path) -> list[tuple[object, dict]]:
                 inner = [_coordinates(b, where) for b in geom if _local(b.tag) == "innerBoundaryIs"]
                 if not outer or len(outer[0]) < 3:
                     raise FieldError(f"{where}: a Polygon without an outer ring of three points or more")
-                shapes.append(valid_shape(Polygon(outer[0], [h for h in inner if len(h) >= 3]), {"name": name}, where))
+                shapes.append((Polygon(outer[0], [h for h in inner if len(h) >= 3]), {"name": name}))
             elif kind == "LineString":
                 pts = _coordinates(geom, where)
                 if len(pts) >= 2:

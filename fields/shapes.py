@@ -1,11 +1,12 @@
 """Shapely geometries (GeoJSON, WKT, KML) as fields: a field per polygon, each in its own local
-frame, every field with a name of its own."""
+frame, every field with a name of its own; an invalid polygon (a ring that crosses itself) is
+repaired with ``shapely.make_valid`` and named (``properties["repaired"]``)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
-from shapely.geometry import LineString, MultiLineString
+from shapely.geometry import LineString, MultiLineString, MultiPolygon, Polygon
 
 from .coordinates import Coordinates
 from .field import Field, FieldError, GuidanceLine, polygon, polygons
@@ -27,11 +28,32 @@ def distinct_names(fields: list[Field]) -> list[Field]:
     return fields
 
 
+def repaired_parts(poly, where: str) -> tuple[list[Polygon], str | None]:
+    """(polygons, note): ``poly`` as it is when valid (note None), else the polygons of its repair
+    by shapely.make_valid (a line or point left by the repair dropped) and what was done."""
+    if poly.is_valid:
+        return list(getattr(poly, "geoms", [poly])), None
+    from shapely import make_valid
+    from shapely.validation import explain_validity
+
+    why = explain_validity(poly)
+    fixed = make_valid(poly)
+    parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, Polygon) and g.area > 0]
+    if not parts:
+        raise FieldError(f"{where}: the polygon is invalid ({why}) and shapely.make_valid leaves no area of it")
+    return parts, f"the polygon was invalid ({why}); repaired with shapely.make_valid into {len(parts)} polygon(s)"
+
+
 def fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str | None) -> list[Field]:
     """A field per polygon, each in its own local frame (a file may hold fields continents apart);
     a line goes to the field it crosses most."""
     polys = []
-    for geom, props in shapes:         # the parcels of one MultiPolygon feature: name_1, name_2 ...
+    for i, (geom, props) in enumerate(shapes):     # the parcels of one MultiPolygon feature: name_1, name_2 ...
+        if isinstance(geom, (Polygon, MultiPolygon)):
+            label = props.get("Name") or props.get("name") or props.get("id")
+            fixed, note = repaired_parts(geom, f"{path}: " + (f"{label!r}" if label else f"geometry {i}"))
+            if note:
+                geom, props = (fixed[0] if len(fixed) == 1 else MultiPolygon(fixed)), {**props, "repaired": note}
         parts = polygons(geom)
         base = props.get("Name") or props.get("name") or props.get("id")
         for k, p in enumerate(parts, 1):

@@ -4,6 +4,9 @@ as a boundary polygon of its own, an invalid KML polygon repaired and named; gen
 a known truth (tests/import_recordings.py)."""
 from __future__ import annotations
 
+import json
+
+import numpy as np
 import pytest
 
 from agrobot.fields.readers import read_fields, read_folder
@@ -47,3 +50,32 @@ def test_a_self_intersecting_kml_polygon_is_repaired_and_named_beside_a_good_one
         assert abs(fields[f"bowtie_{k}"].boundary.area / fields["square"].boundary.area - 0.25) < 0.01
         assert "make_valid" in fields[f"bowtie_{k}"].properties["repaired"]
         assert fields[f"bowtie_{k}"].boundary.is_valid
+
+
+@pytest.mark.parametrize("suffix", [".geojson", ".wkt"])
+def test_a_self_intersecting_polygon_in_geojson_or_wkt_is_repaired_and_named(tmp_path, suffix):
+    """The bow tie of the KML test in the other shape formats: two triangles of a quarter of the
+    square on the same corners each (an area computed independently, by the shoelace formula)."""
+    bow = [[5.0, 52.0], [5.01, 52.01], [5.01, 52.0], [5.0, 52.01], [5.0, 52.0]]
+    square = [[5.0, 52.0], [5.01, 52.0], [5.01, 52.01], [5.0, 52.01], [5.0, 52.0]]
+    if suffix == ".geojson":
+        feats = [{"type": "Feature", "properties": {"name": n}, "geometry": {"type": "Polygon", "coordinates": [r]}}
+                 for n, r in (("bowtie", bow), ("square", square))]
+        (tmp_path / "f.geojson").write_text(json.dumps({"type": "FeatureCollection", "features": feats}))
+        fields = {f.name: f for f in read_fields(tmp_path / "f.geojson")}
+        names = ("bowtie_1", "bowtie_2")
+    else:
+        ring = ", ".join(f"{x} {y}" for x, y in bow)
+        (tmp_path / "f.wkt").write_text(f"POLYGON (({ring}))\n")
+        fields = {f.name: f for f in read_fields(tmp_path / "f.wkt", "EPSG:4326")}
+        names = ("f_1", "f_2")
+    assert set(names) <= set(fields)
+    local = fields[names[0]].boundary
+    xy = np.asarray(local.exterior.coords)
+    shoelace = 0.5 * abs(np.dot(xy[:-1, 0], xy[1:, 1]) - np.dot(xy[1:, 0], xy[:-1, 1]))
+    # the square's area on the ground: 0.01 deg of longitude x 0.01 deg of latitude near 52 N
+    ground = (0.01 * np.pi / 180 * 6371000 * np.cos(np.radians(52.005))) * (0.01 * np.pi / 180 * 6371000)
+    for name in names:
+        assert fields[name].boundary.is_valid and "make_valid" in fields[name].properties["repaired"]
+        assert abs(fields[name].boundary.area / ground - 0.25) < 0.01
+    assert abs(shoelace - local.area) < 1e-6 * local.area
