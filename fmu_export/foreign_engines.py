@@ -1,4 +1,4 @@
-"""An exported SSP run by other co-simulation engines (libcosim, fmpy's SSP master, cofmupy), each
+"""An exported SSP (or one FMU) run by other co-simulation engines (libcosim, fmpy's SSP master, cofmupy), each
 returning a table with a time column ``t`` and ``component.output`` columns, and the distance
 between two runs' CG tracks. Used by tests/test_foreign_engines.py and
 benchmarks/foreign_engines.py; the engines are imported only when called."""
@@ -37,11 +37,33 @@ def libcosim_run(unpacked: Path, stop: float, step: float) -> pd.DataFrame:
     """libcosim on the unpacked SSP (its step from the API), every real output recorded after
     each step (row k: t = (k + 1) step)."""
     from libcosimpy.CosimExecution import CosimExecution
+
+    _quiet_libcosim()
+    return _libcosim_record(CosimExecution.from_ssp_file(str(unpacked), step_size=int(round(step * 1e9))), stop, step)
+
+
+def libcosim_fmu_run(fmu: Path, stop: float, step: float, name: str = "loop") -> pd.DataFrame:
+    """libcosim on one FMU (instance ``name``), recorded as ``libcosim_run`` records an SSP."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    _quiet_libcosim()
+    execution = CosimExecution.from_step_size(step_size=int(round(step * 1e9)))
+    execution.add_local_slave(CosimLocalSlave(fmu_path=str(fmu), instance_name=name))
+    return _libcosim_record(execution, stop, step)
+
+
+def _quiet_libcosim() -> None:
     from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-    from libcosimpy.CosimObserver import CosimObserver
 
     log_output_level(CosimLogLevel.WARNING)
-    execution = CosimExecution.from_ssp_file(str(unpacked), step_size=int(round(step * 1e9)))
+
+
+def _libcosim_record(execution, stop: float, step: float) -> pd.DataFrame:
+    """Step ``execution`` to ``stop``, every real output of every instance read after each step
+    (row k: t = (k + 1) step; columns ``instance.variable``)."""
+    from libcosimpy.CosimObserver import CosimObserver
+
     observer = CosimObserver.create_last_value()
     execution.add_observer(observer)
     watched = []

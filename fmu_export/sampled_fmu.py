@@ -55,6 +55,8 @@ class SampledModel:
     dependencies: dict[str, list[str]]           # output -> inputs read at the same sample instant
     core_source: str                             # the generated model core (C)
     extra_sources: list[str] = field(default_factory=list)   # files of c/ (or c/components/) the core includes
+    units: dict[str, str] = field(default_factory=dict)      # further generated translation units (file: C text)
+    input_starts: list[float] | None = None      # the inputs' start values (default 0; the core defines MODEL_IN_START)
 
 
 def _initial_dependencies(model: SampledModel, output: str) -> list[str]:
@@ -83,7 +85,8 @@ def _declare(model: SampledModel, variable) -> None:
     for i, (name, start, unit, desc) in enumerate(model.parameters):
         variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
     for i, (name, unit, desc) in enumerate(model.inputs):
-        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc, 0.0)
+        variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc,
+                 model.input_starts[i] if model.input_starts is not None else 0.0)
     for i, (name, unit, desc) in enumerate(model.outputs):
         variable(name, VR_OUTPUT0 + i, "output", "discrete", unit, desc, None, "calculated")
 
@@ -120,7 +123,7 @@ def _fmi2_description(model: SampledModel) -> str:
     # at initialisation the outputs also follow every parameter (the first sample is computed from them)
     initial = "\n".join(f'      <Unknown index="{index[n]}" dependencies="{" ".join(str(index[d]) for d in _initial_dependencies(model, n))}"/>'
                          for n, _, _ in model.outputs)
-    sources = f'      <File name="{model.identifier}.c"/>'
+    sources = "\n".join(f'      <File name="{name}"/>' for name in _compiled_files(model))
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <fmiModelDescription fmiVersion="2.0" modelName="{model.identifier}" guid="{model.token}"
   description={quoteattr(model.description)} generationTool="agrobot-guidance fmu_export"
@@ -185,11 +188,16 @@ def _fmi3_build_description(model: SampledModel) -> str:
 <fmiBuildDescription fmiVersion="3.0">
   <BuildConfiguration modelIdentifier="{model.identifier}">
     <SourceFileSet language="C99">
-      <SourceFile name="{model.identifier}.c"/>
+{chr(10).join(f'      <SourceFile name="{name}"/>' for name in _compiled_files(model))}
     </SourceFileSet>
   </BuildConfiguration>
 </fmiBuildDescription>
 """
+
+
+def _compiled_files(model: SampledModel) -> list[str]:
+    """The files the build compiles: the FMU's unit, then the further generated units."""
+    return [f"{model.identifier}.c", *model.units]
 
 
 def model_description(model: SampledModel, fmi_version: int) -> str:
@@ -203,6 +211,8 @@ def write_sources(model: SampledModel, root: Path, fmi_version: int) -> None:
     sources.mkdir(parents=True, exist_ok=True)
     core = f"{model.identifier}_model.c"
     (sources / core).write_text(model.core_source)
+    for name, text in model.units.items():
+        (sources / name).write_text(text)
     for name in ["sampled_instance.c", WRAPPERS[fmi_version], *model.extra_sources]:
         shutil.copy(C_DIR / name, sources / Path(name).name)      # one flat folder: the includes find each other
     (sources / f"{model.identifier}.c").write_text(

@@ -48,7 +48,11 @@ static void si_log(SampledInstance *s, const char *fmt, ...) {
 
 static void si_reset(SampledInstance *s) {
     memcpy(s->par, MODEL_PAR_START, sizeof s->par);
+#ifdef MODEL_IN_START
+    memcpy(s->in, MODEL_IN_START, sizeof(double) * MODEL_NIN);   /* the inputs' declared starts */
+#else
     memset(s->in, 0, sizeof s->in);
+#endif
     memset(s->out, 0, sizeof s->out);
     model_start(&s->state, s->par);
     s->mode = MODE_INSTANTIATED;

@@ -107,8 +107,9 @@ class CompiledSimulation:
         self.ended_by = None
 
     @staticmethod
-    def prepare(system: System, cores: dict[str, CCore]):
-        """(library, key, compiled now) of the system's shape: compiled once, then cached."""
+    def sources(system: System, cores: dict[str, CCore]) -> tuple[dict[str, str], list, list]:
+        """({file name: C text} of the system's shape: one unit per component, c<i>.c, and
+        loop.c), the include folders, every file the units include."""
         lay = layout(system, cores, SignalRecorder(system, 1).columns)
         units = {f"c{i}.c": component_unit(i, name, cores[name], float(system.nodes[name].step),
                                            not system.nodes[name].component.sampled)
@@ -116,7 +117,12 @@ class CompiledSimulation:
         units["loop.c"] = loop_unit(system, cores, lay)
         dirs = sorted({d for c in cores.values() for d in c.include_dirs})
         files = [f for c in cores.values() for f in c.files]
-        return library(units, dirs, files)
+        return units, dirs, files
+
+    @staticmethod
+    def prepare(system: System, cores: dict[str, CCore]):
+        """(library, key, compiled now) of the system's shape: compiled once, then cached."""
+        return library(*CompiledSimulation.sources(system, cores))
 
     @property
     def chunk_period(self) -> int:
@@ -124,6 +130,16 @@ class CompiledSimulation:
 
     def add_observer(self, observer) -> None:
         self.observers.append(observer)
+
+    def initial_vectors(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Initialise the Python components (parameter checks, outputs at t0) and return the
+        loop's run-time arguments: parameters, initial published outputs, initial inputs."""
+        for name, node in self.system.nodes.items():
+            try:
+                node.component.initialize(self.t0, node.step)
+            except (ComponentError, ValueError, ArithmeticError) as exc:
+                raise ParameterError(f"{self.system.study.path}: components.{name}: {exc}") from None
+        return self._vectors()
 
     def _vectors(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The run-time arguments: parameters, initial published outputs, initial inputs."""
@@ -138,12 +154,7 @@ class CompiledSimulation:
     def start(self) -> None:
         """Initialise the components (checks, outputs at t0) and run the whole loop."""
         began = time.perf_counter()
-        for name, node in self.system.nodes.items():
-            try:
-                node.component.initialize(self.t0, node.step)
-            except (ComponentError, ValueError, ArithmeticError) as exc:
-                raise ParameterError(f"{self.system.study.path}: components.{name}: {exc}") from None
-        par, pub0, in0 = self._vectors()
+        par, pub0, in0 = self.initial_vectors()
         width = 1 + len(self.layout.columns)
         columns = np.empty((width, self.n_steps + 1)) if self.record else None
         ptr = ctypes.POINTER(ctypes.c_double)

@@ -75,7 +75,11 @@ def component_unit(index: int, name: str, core: CCore, period: float, continuous
 def loop_unit(system, cores: dict[str, CCore], lay: Layout) -> str:
     """The loop: ``int agc_run(par, pub0, in0, n_steps, rec)``; ``rec`` (may be NULL) receives
     the signals column by column (1 + len(columns) columns of n_steps + 1 rows: a table's layout,
-    no copy to make one), column 0 left to the caller (time)."""
+    no copy to make one), column 0 left to the caller (time). The steps 1-2 and 4 of base step k
+    are also functions of their own (``agc_start_all``, ``agc_sample_phase``,
+    ``agc_continuous_phase``: the states, parameters, published outputs and inputs passed in), so
+    a caller holding the loop's state itself (the whole-loop FMU, fmu_export.loop_fmu) steps it
+    one base step at a time with the same code."""
     idx = {n: i for i, n in enumerate(lay.names)}
     nodes = system.nodes
 
@@ -103,20 +107,20 @@ def loop_unit(system, cores: dict[str, CCore], lay: Layout) -> str:
     continuous = [n.name for n in system.continuous]
     n = len(lay.names)
     widest = max([len(c.outputs) for c in cores.values()] + [1])
-    body = []
-    body += ["    if (k > 0) {"]
+    phase_sample = ["    if (k > 0) {"]
     for name in continuous:
-        body += ["    " + line for line in due(name, [call(name, "outputs")])]
-    body += ["    }"]
+        phase_sample += ["    " + line for line in due(name, [call(name, "outputs")])]
+    phase_sample += ["    }"]
     for name in sampled:
-        body += due(name, gather(name) + [call(name, "sample")])
-    body += ["    if (rec) {", "        double *row = rec + k;"]
-    body += [f"        row[{c + 1} * rows] = pub[{at}];" for c, (_, at) in enumerate(lay.columns)]
-    body += ["    }", "    if (k == n_steps) break;"]
+        phase_sample += due(name, gather(name) + [call(name, "sample")])
+    phase_continuous = [f"    double scratch[{widest}];"]
     for name in continuous:
-        body += due(name, gather(name))
+        phase_continuous += due(name, gather(name))
     for name in continuous:
-        body += due(name, [call(name, "continuous")])
+        phase_continuous += due(name, [call(name, "continuous")])
+    record = ["        if (rec) {", "            double *row = rec + k;"]
+    record += [f"            row[{c + 1} * rows] = pub[{at}];" for c, (_, at) in enumerate(lay.columns)]
+    record += ["        }"]
     decls = "\n".join(f"unsigned long agc_size_{i}(void); void agc_start_{i}(void *, const double *); "
                       f"void agc_sample_{i}(void *, const double *, const double *, double *);"
                       + (f" void agc_outputs_{i}(void *, const double *, double *);" if name in continuous else "")
@@ -130,8 +134,24 @@ def loop_unit(system, cores: dict[str, CCore], lay: Layout) -> str:
 #define N_NODES {n}
 const char *agc_token(void);
 
+/* every component's state from its parameters */
+void agc_start_all(void *const *st, const double *par) {{
+{chr(10).join(f"    agc_start_{i}(st[{i}], par + {lay.par[i]});" for i in range(n))}
+}}
+
+/* base step k, steps 1-2: continuous outputs g(x_k) (k > 0), then the sampled components due */
+void agc_sample_phase(void *const *st, const double *par, double *pub, double *in, long k) {{
+{chr(10).join(phase_sample)}
+}}
+
+/* base step k, step 4: the continuous components due read their inputs, then step to k + 1 */
+void agc_continuous_phase(void *const *st, const double *par, double *pub, double *in, long k) {{
+    (void)pub;
+{chr(10).join(phase_continuous)}
+}}
+
 int agc_run(const double *par, const double *pub0, const double *in0, long n_steps, double *rec) {{
-    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}], scratch[{widest}];
+    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}];
     void *st[N_NODES];
     const long rows = n_steps + 1;
     unsigned long sizes[N_NODES] = {{{", ".join(f"agc_size_{i}()" for i in range(n))}}};
@@ -141,12 +161,14 @@ int agc_run(const double *par, const double *pub0, const double *in0, long n_ste
     }}
     memcpy(pub, pub0, sizeof(double) * {lay.n_pub});
     memcpy(in, in0, sizeof(double) * {lay.n_in});
-{chr(10).join(f"    agc_start_{i}(st[{i}], par + {lay.par[i]});" for i in range(n))}
+    agc_start_all(st, par);
     for (long k = 0; k <= n_steps; k++) {{
-{chr(10).join(body)}
+        agc_sample_phase(st, par, pub, in, k);
+{chr(10).join(record)}
+        if (k == n_steps) break;
+        agc_continuous_phase(st, par, pub, in, k);
     }}
     for (int i = 0; i < N_NODES; i++) free(st[i]);
     return 0;
 }}
 """
-

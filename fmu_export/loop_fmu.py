@@ -1,0 +1,189 @@
+"""A study's whole loop as one co-simulation FMU (FMI 2.0 or 3.0): the compiled engine's C
+(orchestrator.compiled: one unit per component core and the loop unit, the very text its cached
+library is built from) behind the sampled-model semantics every exported FMU shares
+(c/sampled_instance.c), with the study's base step as the sample period.
+
+The model core written here only holds the loop's state by value (base step k, the published
+outputs, the inputs, every component's state) and steps it: at t_k = t0 + k h the FMU's outputs
+are the loop's row k (``agc_sample_phase``: continuous outputs g(x_k), then the sampled
+components due at k, in the system's order), and doStep commits step 4 (``agc_continuous_phase``:
+the continuous components step to k + 1). The recorded signals of the study's run at t_k are
+therefore the FMU's outputs at t_k.
+
+Ports: the study's ``[exports]`` when it declares them (an exported input is written into its
+inner inputs before the components due read them; its start is the study's value), else every
+signal the study records (``component.output``) as an output and no input. The study's
+parameters, initial outputs and constant inputs are compiled in (the FMU has no parameters: the
+loop's buffers are sized for its delays): change the study and export again.
+"""
+from __future__ import annotations
+
+import ctypes
+import re
+from pathlib import Path
+
+from agrobot.orchestrator.build import System
+from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
+from agrobot.orchestrator.compiled.engine import refusal
+from agrobot.orchestrator.compiled.generate import layout
+from agrobot.orchestrator.recording import SignalRecorder
+
+from .sampled_fmu import C_DIR, SampledModel, build_fmu, c_array, c_strings, token_of
+
+ALIGN = 16          # bytes: each component's state starts on this boundary in the loop's state
+
+
+def identifier(name: str) -> str:
+    """A C identifier (the FMU's modelIdentifier) from a study name."""
+    ident = re.sub(r"\W", "_", name)
+    return ident if ident[:1].isalpha() else f"loop_{ident}"
+
+
+def loop_ports(system: System, lay) -> tuple[list, list, list[int], list[tuple[int, int]], list[float], str]:
+    """(inputs, outputs as (name, unit, description), the published index of each output, the
+    (loop input slot, FMU input) pairs, the inputs' starts, a line saying which ports were chosen)."""
+    study, nodes = system.study, system.nodes
+    pub_of = {c: at for c, at in lay.columns}
+    idx = {n: i for i, n in enumerate(lay.names)}
+
+    def variable(comp: str, port: str):
+        return next(v for v in nodes[comp].component.variables if v.name == port)
+
+    exports = study.exports
+    if exports is None or not (exports.inputs or exports.outputs):
+        outputs = [(c, variable(*c.split(".", 1)).unit or "1", variable(*c.split(".", 1)).description)
+                   for c, _ in lay.columns]
+        return [], outputs, [at for _, at in lay.columns], [], [], (
+            f"ports: every signal the study records ({len(outputs)} outputs, no input): it declares no [exports] "
+            f"(declare [exports] outputs/inputs to choose the FMU's ports)")
+    outputs, out_at = [], []
+    for port in exports.outputs:
+        comp, out = exports.output_source(port)
+        v = variable(comp, out)
+        outputs.append((port, v.unit or "1", v.description))
+        out_at.append(pub_of.get(f"{comp}.{out}", None))
+        if out_at[-1] is None:                     # an output the run does not record: where the loop publishes it
+            out_at[-1] = lay.pub[idx[comp]] + _port_index(system, comp, out, "output")
+    inputs, slots, starts = [], [], []
+    connected = {f"{dst}.{inp}" for dst, node in nodes.items() for inp, _, _ in node.sources}
+    for j, port in enumerate(exports.inputs):
+        targets = exports.input_targets(port)
+        spec = exports.inputs[port]
+        for comp, inp in targets:
+            if f"{comp}.{inp}" in connected:
+                raise CompiledRefused(f"{study.path}: exports.inputs.{port} = {comp}.{inp}: that input is connected "
+                                      f"inside the study; an exported input must drive unconnected inputs")
+        if targets:
+            v = variable(*targets[0])
+            unit, desc, start = v.unit or "1", v.description, float(nodes[targets[0][0]].component.u[targets[0][1]])
+        else:
+            unit, desc, start = spec.unit or "1", spec.description, float(spec.start)
+        inputs.append((port, unit, desc))
+        starts.append(start)
+        slots += [(lay.inp[idx[comp]] + _port_index(system, comp, inp, "input"), j) for comp, inp in targets]
+    return inputs, outputs, out_at, slots, starts, (
+        f"ports: the study's [exports] ({len(inputs)} inputs, {len(outputs)} outputs)")
+
+
+def _port_index(system: System, comp: str, port: str, causality: str) -> int:
+    """Where ``port`` sits among the component's inputs or outputs (the order of its C core's IN_/OUT_)."""
+    return [v.name for v in system.nodes[comp].component.variables if v.causality == causality].index(port)
+
+
+def loop_model(system: System) -> tuple[SampledModel, str]:
+    """(the whole loop of ``system`` as a sampled model, the line saying which ports it has).
+    CompiledRefused names the components without a C core."""
+    cores, missing = cores_of(system)
+    why = refusal(system, missing)
+    if why:
+        raise CompiledRefused(f"{system.study.path}: export-fmu: {why}; only a study whose every component has a C "
+                              f"core becomes one FMU (export-ssp writes one FMU per component)")
+    units, _, files = CompiledSimulation.sources(system, cores)
+    sim = CompiledSimulation(system, cores)           # compiles the shape (or finds it cached): the states' sizes
+    try:
+        par, pub0, in0 = sim.initial_vectors()
+    finally:
+        sim.terminate()
+    lay = sim.layout
+    sizes = []
+    for i in range(len(lay.names)):
+        size = getattr(sim.lib, f"agc_size_{i}")
+        size.restype = ctypes.c_ulong
+        sizes.append(int(size()))
+    offsets, total = [], 0
+    for size in sizes:
+        offsets.append(total)
+        total += -(-max(size, 1) // ALIGN) * ALIGN
+    inputs, outputs, out_at, slots, starts, note = loop_ports(system, lay)
+    s = system.study.study
+    ident = identifier(s.name)
+    fmu_units = {f"agc_c{i}.c": units[f"c{i}.c"] + f"\n/* the loop FMU holds this state in {sizes[i]} bytes */\n"
+                 f"typedef char agc_state_fits_{i}[(sizeof(ModelState) <= {sizes[i]}) ? 1 : -1];\n"
+                 for i in range(len(lay.names))}
+    fmu_units["agc_loop.c"] = units["loop.c"]
+    n = len(lay.names)
+    body = "\n".join([
+        f"/* {ident}: the whole loop of {Path(str(system.study.path)).name} ({n} components), one base step "
+        f"{float(s.base_step)!r} s a sample (generated by fmu_export.loop_fmu) */",
+        "#include <math.h>", "#include <stdlib.h>", "#include <string.h>",
+        "#define MODEL_NPAR 0", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
+        f"#define MODEL_PERIOD {float(s.base_step)!r}",
+        "static const double MODEL_PAR_START[1] = {0.0};",
+        'static const char *const MODEL_PAR_NAMES[1] = {""};',
+        f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{c_strings(i[0] for i in inputs)}}};",
+        f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{c_strings(o[0] for o in outputs)}}};",
+        f"static const double LOOP_IN_START[MODEL_NIN + 1] = {{{c_array(starts) or '0.0'}}};",
+        "#define MODEL_IN_START LOOP_IN_START",
+        "void agc_start_all(void *const *st, const double *par);",
+        "void agc_sample_phase(void *const *st, const double *par, double *pub, double *in, long k);",
+        "void agc_continuous_phase(void *const *st, const double *par, double *pub, double *in, long k);",
+        f"#define LOOP_N {n}",
+        f"static const double LOOP_PAR[{max(len(par), 1)}] = {{{c_array(par) or '0.0'}}};",
+        f"static const double LOOP_PUB0[{max(len(pub0), 1)}] = {{{c_array(pub0) or '0.0'}}};",
+        f"static const double LOOP_IN0[{max(len(in0), 1)}] = {{{c_array(in0) or '0.0'}}};",
+        f"static const unsigned long LOOP_OFFSET[LOOP_N] = {{{', '.join(map(str, offsets))}}};",
+        f"static const int LOOP_OUT[MODEL_NOUT + 1] = {{{', '.join(map(str, out_at)) or '0'}}};",
+        f"#define LOOP_NSLOT {len(slots)}",
+        f"static const int LOOP_SLOT[LOOP_NSLOT + 1][2] = {{{', '.join(f'{{{a}, {b}}}' for a, b in slots) or '{0, 0}'}}};",
+        "typedef struct {",
+        "    long k;                                   /* the base step whose row the next sample gives */",
+        f"    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}];",
+        f"    unsigned char mem[{max(total, ALIGN)}] __attribute__((aligned({ALIGN})));   /* the components' states */",
+        "} ModelState;",
+        "static void loop_states(ModelState *s, void **st) {",
+        "    for (int i = 0; i < LOOP_N; i++) st[i] = s->mem + LOOP_OFFSET[i];",
+        "}",
+        "static void model_start(ModelState *s, const double *p) {",
+        "    void *st[LOOP_N];",
+        "    (void)p;",
+        "    memset(s, 0, sizeof *s);",
+        f"    memcpy(s->pub, LOOP_PUB0, sizeof(double) * {lay.n_pub});",
+        f"    memcpy(s->in, LOOP_IN0, sizeof(double) * {lay.n_in});",
+        "    loop_states(s, st);",
+        "    agc_start_all(st, LOOP_PAR);",
+        "}",
+        "static void model_sample(ModelState *s, const double *p, const double *in, double *out) {",
+        "    void *st[LOOP_N];",
+        "    (void)p;",
+        "    loop_states(s, st);",
+        "    for (int j = 0; j < LOOP_NSLOT; j++) s->in[LOOP_SLOT[j][0]] = in[LOOP_SLOT[j][1]];",
+        "    agc_sample_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    for (int o = 0; o < MODEL_NOUT; o++) out[o] = s->pub[LOOP_OUT[o]];",
+        "    agc_continuous_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    s->k++;",
+        "}", ""])
+    token = token_of(body + "".join(fmu_units.values()) + sim.key)
+    core = body.replace("#define MODEL_NPAR 0", f'#define MODEL_TOKEN "{token}"\n#define MODEL_NPAR 0')
+    description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
+                   f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
+    deps = {o[0]: [i[0] for i in inputs] for o in outputs}
+    model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,
+                         [p.relative_to(C_DIR).as_posix() for p in sorted(set(files))], fmu_units,
+                         starts if inputs else None)
+    return model, note
+
+
+def export_loop(system: System, out: Path, fmi_version: int = 2) -> tuple[Path, str]:
+    """Write the whole loop of ``system`` as one FMU at ``out`` ((the FMU, the ports line))."""
+    model, note = loop_model(system)
+    return build_fmu(model, out, fmi_version), note
