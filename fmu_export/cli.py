@@ -1,7 +1,8 @@
-"""``export-controller``: the FMU export tool's sub-command."""
+"""The FMU export tool's sub-commands: ``export-controller``, ``export-ssp``, ``export-fmu``."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 
@@ -54,6 +55,38 @@ def run_ssp(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_loop_arguments(p: argparse.ArgumentParser) -> None:
+    from agrobot.orchestrator.cli import add_output_options, add_set_option
+
+    p.add_argument("study", type=Path, help="study whose every component has a C core (e.g. studies/figure8.toml)")
+    add_output_options(p, "the .fmu to write, e.g. fmus/figure8_loop.fmu", file=True)
+    p.add_argument("--fmi-version", type=int, default=2, choices=(2, 3), help="FMI version of the FMU (default 2)")
+    add_set_option(p)
+
+
+def run_loop(args: argparse.Namespace) -> int:
+    from agrobot.orchestrator.observers import Stage
+    from agrobot.orchestrator.output import ResultFile, study_inputs
+    from agrobot.orchestrator.study import Study
+
+    from .loop_fmu import export_loop
+
+    study = Study.load(args.study, args.set)
+    if study.sweep is not None:
+        study = study.without("sweep")
+        print(f"{args.study}: its [sweep] is left out: the FMU is the study's own point (--set the values to export "
+              f"another)", file=sys.stderr)
+    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".fmu",)), \
+            Stage(f"export-fmu: compiling the loop of {len(study.components)} components into {args.out.name} "
+                  f"(the compiled engine's C, cmake and the C compiler)"):
+        out, note = export_loop(study, args.out, args.fmi_version)
+    print(note, file=sys.stderr)
+    s = study.study
+    print(f"{args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation, the whole loop, one sample every "
+          f"base step of {s.base_step:g} s; run it with that communication step)")
+    return 0
+
+
 def register(registry) -> None:
     from agrobot.orchestrator.compiled import register_core_provider
 
@@ -63,5 +96,7 @@ def register(registry) -> None:
     registry.add_command("export-controller",
                          "export the study's guidance controller (tracker + MPC + speed PID) as an FMU",
                          add_arguments, run)
+    registry.add_command("export-fmu", "export the study's whole loop as one FMU (every component compiled from its "
+                         "C core)", add_loop_arguments, run_loop)
     registry.add_command("export-ssp", "export the study as an SSP 1.0 archive (one FMU per component)",
                          add_ssp_arguments, run_ssp)

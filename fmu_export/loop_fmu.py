@@ -22,15 +22,21 @@ import ctypes
 import re
 from pathlib import Path
 
-from agrobot.orchestrator.build import System
+from agrobot.orchestrator.build import System, build_system
 from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
 from agrobot.orchestrator.compiled.engine import refusal
-from agrobot.orchestrator.compiled.generate import layout
-from agrobot.orchestrator.recording import SignalRecorder
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
 
-from .sampled_fmu import C_DIR, SampledModel, build_fmu, c_array, c_strings, token_of
+from .packaging import PackagingError, check_fmu_target
+from .sampled_fmu import C_DIR, WRAPPERS, SampledModel, build_fmu, c_array, c_strings, token_of
 
 ALIGN = 16          # bytes: each component's state starts on this boundary in the loop's state
+
+
+class LoopExportError(InputError):
+    """The loop FMU cannot be written where asked (the message names the option and why)."""
 
 
 def identifier(name: str) -> str:
@@ -183,7 +189,15 @@ def loop_model(system: System) -> tuple[SampledModel, str]:
     return model, note
 
 
-def export_loop(system: System, out: Path, fmi_version: int = 2) -> tuple[Path, str]:
-    """Write the whole loop of ``system`` as one FMU at ``out`` ((the FMU, the ports line))."""
-    model, note = loop_model(system)
-    return build_fmu(model, out, fmi_version), note
+def export_loop(study: Study, out: Path, fmi_version: int = 2) -> tuple[Path, str]:
+    """Write the whole loop of ``study`` as one FMU at ``out`` ((the FMU, the ports line))."""
+    if out.suffix != ".fmu":
+        raise LoopExportError(f"--out {out}: expected a path ending in .fmu")
+    if fmi_version not in WRAPPERS:
+        raise LoopExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, WRAPPERS))}")
+    try:
+        check_fmu_target(out)
+        model, note = loop_model(build_system(resolve(study)))
+        return build_fmu(model, out, fmi_version), note
+    except PackagingError as exc:
+        raise LoopExportError(str(exc)) from None
