@@ -61,6 +61,10 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("study", type=Path, help="study whose every component has a C core (e.g. studies/figure8.toml)")
     add_output_options(p, "the .fmu to write, e.g. fmus/figure8_loop.fmu", file=True)
     p.add_argument("--fmi-version", type=int, default=2, choices=(2, 3), help="FMI version of the FMU (default 2)")
+    p.add_argument("--components", default=None, metavar="NAME,NAME",
+                   help="export only these components (a subsystem, e.g. tractor,steering,gps): the inputs they do "
+                        "not feed each other become the FMU's inputs, all their outputs its outputs (default: the "
+                        "whole study)")
     add_set_option(p)
 
 
@@ -72,18 +76,19 @@ def run_loop(args: argparse.Namespace) -> int:
     from .loop_fmu import export_loop
 
     study = Study.load(args.study, args.set)
+    names = [n.strip() for n in args.components.split(",") if n.strip()] if args.components is not None else None
     if study.sweep is not None:
         study = study.without("sweep")
         print(f"{args.study}: its [sweep] is left out: the FMU is the study's own point (--set the values to export "
               f"another)", file=sys.stderr)
+    count = len(names) if names is not None else len(study.components)
     with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".fmu",)), \
-            Stage(f"export-fmu: compiling the loop of {len(study.components)} components into {args.out.name} "
+            Stage(f"export-fmu: compiling the loop of {count} components into {args.out.name} "
                   f"(the compiled engine's C, cmake and the C compiler)"):
-        out, note = export_loop(study, args.out, args.fmi_version)
+        out, note = export_loop(study, args.out, args.fmi_version, names)
     print(note, file=sys.stderr)
-    s = study.study
-    print(f"{args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation, the whole loop, one sample every "
-          f"base step of {s.base_step:g} s; run it with that communication step)")
+    what = f"the subsystem {', '.join(names)}" if names is not None else "the whole loop"
+    print(f"{args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation, {what})")
     return 0
 
 

@@ -45,7 +45,7 @@ def identifier(name: str) -> str:
     return ident if ident[:1].isalpha() else f"loop_{ident}"
 
 
-def loop_ports(system: System, lay) -> tuple[list, list, list[int], list[tuple[int, int]], list[float], str]:
+def loop_ports(system: System, lay, declared: str = "the study's [exports]") -> tuple[list, list, list[int], list[tuple[int, int]], list[float], str]:
     """(inputs, outputs as (name, unit, description), the published index of each output, the
     (loop input slot, FMU input) pairs, the inputs' starts, a line saying which ports were chosen)."""
     study, nodes = system.study, system.nodes
@@ -88,7 +88,7 @@ def loop_ports(system: System, lay) -> tuple[list, list, list[int], list[tuple[i
         starts.append(start)
         slots += [(lay.inp[idx[comp]] + _port_index(system, comp, inp, "input"), j) for comp, inp in targets]
     return inputs, outputs, out_at, slots, starts, (
-        f"ports: the study's [exports] ({len(inputs)} inputs, {len(outputs)} outputs)")
+        f"ports: {declared} ({len(inputs)} inputs, {len(outputs)} outputs)")
 
 
 def _port_index(system: System, comp: str, port: str, causality: str) -> int:
@@ -96,9 +96,10 @@ def _port_index(system: System, comp: str, port: str, causality: str) -> int:
     return [v.name for v in system.nodes[comp].component.variables if v.causality == causality].index(port)
 
 
-def loop_model(system: System) -> tuple[SampledModel, str]:
-    """(the whole loop of ``system`` as a sampled model, the line saying which ports it has).
-    CompiledRefused names the components without a C core."""
+def loop_model(system: System, declared: str = "the study's [exports]") -> tuple[SampledModel, str]:
+    """(the whole loop of ``system`` as a sampled model, the line saying which ports it has:
+    ``declared`` says where its [exports] come from). CompiledRefused names the components
+    without a C core."""
     cores, missing = cores_of(system)
     why = refusal(system, missing)
     if why:
@@ -120,7 +121,7 @@ def loop_model(system: System) -> tuple[SampledModel, str]:
     for size in sizes:
         offsets.append(total)
         total += -(-max(size, 1) // ALIGN) * ALIGN
-    inputs, outputs, out_at, slots, starts, note = loop_ports(system, lay)
+    inputs, outputs, out_at, slots, starts, note = loop_ports(system, lay, declared)
     s = system.study.study
     ident = identifier(s.name)
     fmu_units = {f"agc_c{i}.c": units[f"c{i}.c"] + f"\n/* the loop FMU holds this state in {sizes[i]} bytes */\n"
@@ -183,21 +184,40 @@ def loop_model(system: System) -> tuple[SampledModel, str]:
     description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
                    f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
     deps = {o[0]: [i[0] for i in inputs] for o in outputs}
+    note += f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use)"
     model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,
                          [p.relative_to(C_DIR).as_posix() for p in sorted(set(files))], fmu_units,
                          starts if inputs else None)
     return model, note
 
 
-def export_loop(study: Study, out: Path, fmi_version: int = 2) -> tuple[Path, str]:
-    """Write the whole loop of ``study`` as one FMU at ``out`` ((the FMU, the ports line))."""
+def subsystem(study: Study, components: list[str]) -> Study:
+    """The named components of ``study`` as a study of their own (orchestrator.model's
+    ``extract``): every input not fed inside the group an exported input (start: the study's
+    constant or the input's start), every output of the group an exported output, named
+    ``component_port``."""
+    unknown = [n for n in components if n not in study.components]
+    if unknown or not components:
+        raise LoopExportError(f"{study.path}: --components {','.join(components)}: "
+                              + (f"no component named {', '.join(unknown)}; " if unknown else "none given; ")
+                              + f"expected names of {', '.join(study.components)}")
+    return resolve(study).extract(components, name=f"{study.study.name}_{'_'.join(components)}")
+
+
+def export_loop(study: Study, out: Path, fmi_version: int = 2, components: list[str] | None = None) -> tuple[Path, str]:
+    """Write the whole loop of ``study`` (or of the subsystem of ``components``) as one FMU at
+    ``out`` ((the FMU, the ports line))."""
     if out.suffix != ".fmu":
         raise LoopExportError(f"--out {out}: expected a path ending in .fmu")
     if fmi_version not in WRAPPERS:
         raise LoopExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, WRAPPERS))}")
+    if components is not None:
+        study = subsystem(study, components)
     try:
         check_fmu_target(out)
-        model, note = loop_model(build_system(resolve(study)))
+        model, note = loop_model(build_system(resolve(study)), "the study's [exports]" if components is None else
+                                 "the subsystem's boundary: the inputs its components do not feed each other, "
+                                 "every output, named component_port")
         return build_fmu(model, out, fmi_version), note
     except PackagingError as exc:
         raise LoopExportError(str(exc)) from None

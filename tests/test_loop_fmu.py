@@ -23,22 +23,26 @@ QUIET = ["gps.position_noise_std=0", "gps.velocity_noise_std=0", "steering.poten
          f"study.stop_time={STOP}"]
 
 
-@pytest.fixture(scope="module")
-def exported(tmp_path_factory):
-    """(the FMU, the Python engine's recording) of the quiet figure-8; compiled once, in a cache
-    of the module's own."""
-    from agrobot.fmu_export.loop_fmu import export_loop
-
+@pytest.fixture(scope="module", autouse=True)
+def cache(tmp_path_factory):
+    """The module's own compiled-engine cache: each shape compiled once, nothing left behind."""
     old = os.environ.get("AGROBOT_CACHE")
     os.environ["AGROBOT_CACHE"] = str(tmp_path_factory.mktemp("compiled-cache"))
-    try:
-        study = Study.load(shipped("figure8.toml"), QUIET)
-        fmu, note = export_loop(study, tmp_path_factory.mktemp("fmu") / "figure8.fmu", 2)
-    finally:
-        if old is None:
-            os.environ.pop("AGROBOT_CACHE", None)
-        else:
-            os.environ["AGROBOT_CACHE"] = old
+    yield
+    if old is None:
+        os.environ.pop("AGROBOT_CACHE", None)
+    else:
+        os.environ["AGROBOT_CACHE"] = old
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    """(the FMU, the line saying which ports it has, the Python engine's recording) of the quiet
+    figure-8, exported once."""
+    from agrobot.fmu_export.loop_fmu import export_loop
+
+    study = Study.load(shipped("figure8.toml"), QUIET)
+    fmu, note = export_loop(study, tmp_path_factory.mktemp("fmu") / "figure8.fmu", 2)
     assert study.study.base_step == H
     return fmu, note, Simulation(build_system(resolve(study))).run()
 
@@ -95,3 +99,38 @@ def test_a_study_with_components_without_a_c_core_exits_2_naming_them(tmp_path, 
     assert "tractor_side.toml" in line and "gyro (type GyroSensor" in line and "steering_status" in line
     assert "Traceback" not in err
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_a_named_subsystem_in_fmi3_takes_its_inputs_as_the_study_takes_its_constants(tmp_path):
+    """The tractor plant with its steering and GPS (export-fmu --components), FMI 3.0: its free
+    inputs (wheel-angle command, speed) given by fmpy equal the study's subsystem run in Python
+    with those inputs held at the same constants."""
+    from fmpy import read_model_description, simulate_fmu
+    from fmpy.validation import validate_fmu
+
+    from agrobot.fmu_export.loop_fmu import export_loop, subsystem
+
+    names = ["tractor", "steering", "gps"]
+    study = Study.load(shipped("figure8.toml"), QUIET)
+    fmu, note = export_loop(study, tmp_path / "tractor.fmu", 3, names)
+    assert validate_fmu(str(fmu)) == []
+    md = read_model_description(str(fmu))
+    assert md.fmiVersion == "3.0"
+    assert sorted(v.name for v in md.modelVariables if v.causality == "input") == ["steering_steer_angle_cmd",
+                                                                                  "tractor_speed"]
+    given = {"steering_steer_angle_cmd": 0.1, "tractor_speed": 2.0}
+    sub = subsystem(study, names).with_values({"steering.inputs.steer_angle_cmd": 0.1, "tractor.inputs.speed": 2.0})
+    rec = Simulation(build_system(resolve(sub))).run()
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    assert outputs == [c.replace(".", "_", 1) for c in rec.columns]
+    res = simulate_fmu(str(fmu), stop_time=STOP, step_size=H, output_interval=H, output=outputs, start_values=given)
+    frame = {c: res[c.replace(".", "_", 1)] for c in rec.columns}
+    worst = relative_difference(rec, frame)
+    assert max(worst.values()) < 1e-9, {k: v for k, v in worst.items() if v >= 1e-9}
+    from agrobot.components.models.yaw_dynamics import TractorParameters
+
+    tractor = TractorParameters.of(build_system(resolve(sub)).nodes["tractor"].component.p)
+    wheelbase = tractor.l_f + tractor.l_r
+    yaw_rate = rec.data[:, 1 + rec.columns.index("tractor.yaw_rate")]
+    # turning as commanded: near the kinematic v tan(delta) / L (a little less: the tyres slip)
+    assert yaw_rate[-1] == pytest.approx(2.0 * np.tan(0.1) / wheelbase, rel=0.1)
