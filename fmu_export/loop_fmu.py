@@ -101,10 +101,9 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     ``declared`` says where its [exports] come from). CompiledRefused names the components
     without a C core."""
     cores, missing = cores_of(system)
-    why = refusal(system, missing)
-    if why:
-        raise CompiledRefused(f"{system.study.path}: export-fmu: {why}; only a study whose every component has a C "
-                              f"core becomes one FMU (export-ssp writes one FMU per component)")
+    if missing:             # (a study paced in real time is exported too: the FMU is paced by its master)
+        raise CompiledRefused(f"{system.study.path}: export-fmu: {refusal(system, missing)}; only a study whose "
+                              f"every component has a C core becomes one FMU (export-ssp writes one FMU per component)")
     units, _, files = CompiledSimulation.sources(system, cores)
     sim = CompiledSimulation(system, cores)           # compiles the shape (or finds it cached): the states' sizes
     try:
@@ -184,10 +183,11 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
                    f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
     deps = {o[0]: [i[0] for i in inputs] for o in outputs}
-    note += f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use)"
+    note += (f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use); "
+             f"the study's parameters and seed are compiled in (--set them and export again)")
     model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,
                          [p.relative_to(C_DIR).as_posix() for p in sorted(set(files))], fmu_units,
-                         starts if inputs else None)
+                         starts if inputs else None, float(s.stop_time))
     return model, note
 
 

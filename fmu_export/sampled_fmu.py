@@ -57,6 +57,7 @@ class SampledModel:
     extra_sources: list[str] = field(default_factory=list)   # files of c/ (or c/components/) the core includes
     units: dict[str, str] = field(default_factory=dict)      # further generated translation units (file: C text)
     input_starts: list[float] | None = None      # the inputs' start values (default 0; the core defines MODEL_IN_START)
+    stop_time: float | None = None               # s: the default experiment's end, when the model has one
 
 
 def _initial_dependencies(model: SampledModel, output: str) -> list[str]:
@@ -93,6 +94,7 @@ def _declare(model: SampledModel, variable) -> None:
 
 def _shared_elements(model: SampledModel, rows: list[str]) -> str:
     """UnitDefinitions, LogCategories, DefaultExperiment and ModelVariables: alike in FMI 2.0 and 3.0."""
+    stop = f' stopTime="{float(model.stop_time)!r}"' if model.stop_time is not None else ""
     return f"""  <UnitDefinitions>
 {_unit_definitions(_units(model), "    ")}
   </UnitDefinitions>
@@ -100,7 +102,7 @@ def _shared_elements(model: SampledModel, rows: list[str]) -> str:
     <Category name="logStatusError" description="errors: refused calls and values"/>
     <Category name="logAll" description="everything else"/>
   </LogCategories>
-  <DefaultExperiment startTime="0.0" stepSize="{float(model.period)!r}"/>
+  <DefaultExperiment startTime="0.0"{stop} stepSize="{float(model.period)!r}"/>
   <ModelVariables>
 {chr(10).join(rows)}
   </ModelVariables>"""
