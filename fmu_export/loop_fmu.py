@@ -20,11 +20,13 @@ from __future__ import annotations
 
 import ctypes
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 from agrobot.orchestrator.build import System, build_system
 from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
 from agrobot.orchestrator.compiled.engine import refusal
+from agrobot.orchestrator.composite import exported_ports, inner_feedthrough
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
@@ -45,55 +47,53 @@ def identifier(name: str) -> str:
     return ident if ident[:1].isalpha() else f"loop_{ident}"
 
 
-def loop_ports(system: System, lay, declared: str = "the study's [exports]") -> tuple[list, list, list[int], list[tuple[int, int]], list[float], str]:
-    """(inputs, outputs as (name, unit, description), the published index of each output, the
-    (loop input slot, FMU input) pairs, the inputs' starts, a line saying which ports were chosen)."""
+@dataclass
+class Ports:
+    """The FMU's ports and where they sit in the loop."""
+
+    inputs: list[tuple[str, str, str]]           # (name, unit, description)
+    outputs: list[tuple[str, str, str]]
+    out_at: list[int]                            # the published value each output reads
+    slots: list[tuple[int, int]]                 # (loop input slot, FMU input) written before each sample
+    starts: list[float]                          # the inputs' starts
+    dependencies: dict[str, list[str]]           # output -> the inputs it reads in the same instant
+    note: str                                    # the line saying which ports were chosen
+
+
+def loop_ports(system: System, lay, declared: str = "the study's [exports]") -> Ports:
+    """The ports of the loop's FMU: the study's [exports] (checked and declared as for a
+    subsystem, orchestrator.composite), else every recorded signal as an output."""
     study, nodes = system.study, system.nodes
-    pub_of = {c: at for c, at in lay.columns}
     idx = {n: i for i, n in enumerate(lay.names)}
 
-    def variable(comp: str, port: str):
-        return next(v for v in nodes[comp].component.variables if v.name == port)
+    def where(comp: str, port: str, causality: str) -> int:
+        """The port's place in the loop's published values (outputs) or inputs (the C core's order)."""
+        names = [v.name for v in nodes[comp].component.variables if v.causality == causality]
+        return (lay.pub if causality == "output" else lay.inp)[idx[comp]] + names.index(port)
 
     exports = study.exports
     if exports is None or not (exports.inputs or exports.outputs):
-        outputs = [(c, variable(*c.split(".", 1)).unit or "1", variable(*c.split(".", 1)).description)
-                   for c, _ in lay.columns]
-        return [], outputs, [at for _, at in lay.columns], [], [], (
+        declared_as = {f"{n}.{v.name}": v for n, node in nodes.items() for v in node.component.variables}
+        outputs = [(c, declared_as[c].unit or "1", declared_as[c].description) for c, _ in lay.columns]
+        return Ports([], outputs, [at for _, at in lay.columns], [], [], {}, (
             f"ports: every signal the study records ({len(outputs)} outputs, no input): it declares no [exports] "
-            f"(declare [exports] outputs/inputs to choose the FMU's ports)")
-    outputs, out_at = [], []
-    for port in exports.outputs:
-        comp, out = exports.output_source(port)
-        v = variable(comp, out)
-        outputs.append((port, v.unit or "1", v.description))
-        out_at.append(pub_of.get(f"{comp}.{out}", None))
-        if out_at[-1] is None:                     # an output the run does not record: where the loop publishes it
-            out_at[-1] = lay.pub[idx[comp]] + _port_index(system, comp, out, "output")
-    inputs, slots, starts = [], [], []
-    connected = {f"{dst}.{inp}" for dst, node in nodes.items() for inp, _, _ in node.sources}
-    for j, port in enumerate(exports.inputs):
+            f"(declare [exports] outputs/inputs to choose the FMU's ports)"))
+    variables, _ = exported_ports(system, study, study.where)
+    inputs = [(v.name, v.unit or "1", v.description) for v in variables if v.causality == "input"]
+    outputs = [(v.name, v.unit or "1", v.description) for v in variables if v.causality == "output"]
+    out_at = [where(*exports.output_source(port), "output") for port, _, _ in outputs]
+    slots, starts = [], []
+    for j, (port, _, _) in enumerate(inputs):
         targets = exports.input_targets(port)
-        spec = exports.inputs[port]
-        for comp, inp in targets:
-            if f"{comp}.{inp}" in connected:
-                raise CompiledRefused(f"{study.path}: exports.inputs.{port} = {comp}.{inp}: that input is connected "
-                                      f"inside the study; an exported input must drive unconnected inputs")
-        if targets:
-            v = variable(*targets[0])
-            unit, desc, start = v.unit or "1", v.description, float(nodes[targets[0][0]].component.u[targets[0][1]])
-        else:
-            unit, desc, start = spec.unit or "1", spec.description, float(spec.start)
-        inputs.append((port, unit, desc))
-        starts.append(start)
-        slots += [(lay.inp[idx[comp]] + _port_index(system, comp, inp, "input"), j) for comp, inp in targets]
-    return inputs, outputs, out_at, slots, starts, (
-        f"ports: {declared} ({len(inputs)} inputs, {len(outputs)} outputs)")
-
-
-def _port_index(system: System, comp: str, port: str, causality: str) -> int:
-    """Where ``port`` sits among the component's inputs or outputs (the order of its C core's IN_/OUT_)."""
-    return [v.name for v in system.nodes[comp].component.variables if v.causality == causality].index(port)
+        # the study's value of the first target (a constant it gives, else the input's start)
+        starts.append(float(nodes[targets[0][0]].component.u[targets[0][1]]) if targets
+                      else float(exports.inputs[port].start))
+        slots += [(where(comp, inp, "input"), j) for comp, inp in targets]
+    # continuous components publish from their state: only connections and sampled feedthrough carry
+    # an input to an output within the instant
+    reach = inner_feedthrough(system, exports)
+    return Ports(inputs, outputs, out_at, slots, starts, {o: list(reach.get(o, ())) for o, _, _ in outputs},
+                 f"ports: {declared} ({len(inputs)} inputs, {len(outputs)} outputs)")
 
 
 def loop_model(system: System, declared: str = "the study's [exports]") -> tuple[SampledModel, str]:
@@ -120,7 +120,10 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     for size in sizes:
         offsets.append(total)
         total += -(-max(size, 1) // ALIGN) * ALIGN
-    inputs, outputs, out_at, slots, starts, note = loop_ports(system, lay, declared)
+    ports = loop_ports(system, lay, declared)
+    inputs, outputs, out_at, slots, starts, note = (ports.inputs, ports.outputs, ports.out_at, ports.slots,
+                                                    ports.starts, ports.note)
+    deps = {o: ports.dependencies.get(o, []) for o, _, _ in outputs}
     s = system.study.study
     ident = identifier(s.name)
     fmu_units = {f"agc_c{i}.c": units[f"c{i}.c"] + f"\n/* the loop FMU holds this state in {sizes[i]} bytes */\n"
@@ -150,7 +153,8 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
         f"static const unsigned long LOOP_OFFSET[LOOP_N] = {{{', '.join(map(str, offsets))}}};",
         f"static const int LOOP_OUT[MODEL_NOUT + 1] = {{{', '.join(map(str, out_at)) or '0'}}};",
         f"#define LOOP_NSLOT {len(slots)}",
-        f"static const int LOOP_SLOT[LOOP_NSLOT + 1][2] = {{{', '.join(f'{{{a}, {b}}}' for a, b in slots) or '{0, 0}'}}};",
+        f"static const int LOOP_SLOT[LOOP_NSLOT + 1][2] = "
+        f"{{{', '.join(f'{{{a}, {b}}}' for a, b in slots) or '{0, 0}'}}};",
         "typedef struct {",
         "    long k;                                   /* the base step whose row the next sample gives */",
         f"    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}];",
@@ -182,7 +186,6 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     core = body.replace("#define MODEL_NPAR 0", f'#define MODEL_TOKEN "{token}"\n#define MODEL_NPAR 0')
     description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
                    f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
-    deps = {o[0]: [i[0] for i in inputs] for o in outputs}
     note += (f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use); "
              f"the study's parameters and seed are compiled in (--set them and export again)")
     model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,

@@ -39,7 +39,7 @@ def _inner_port(system: System, comp: str, name: str, causality: str, field: str
     return declared[name]
 
 
-def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], dict[str, tuple[str, ...]]]:
+def exported_ports(system: System, sub: Study, where: str) -> tuple[list[Variable], dict[str, tuple[str, ...]]]:
     """Port variables of the composite and, when it is sampled, its feedthrough."""
     exports = sub.exports
     variables: list[Variable] = []
@@ -73,11 +73,11 @@ def _exported(system: System, sub: Study, where: str) -> tuple[list[Variable], d
             variables.append(Variable(f"{comp}.{v.name}", "parameter", v.unit, None, f"{comp}: {v.description}"))
     feedthrough: dict[str, tuple[str, ...]] = {}
     if all(node.component.sampled for node in system.nodes.values()):
-        feedthrough = _inner_feedthrough(system, exports)
+        feedthrough = inner_feedthrough(system, exports)
     return variables, feedthrough
 
 
-def _inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
+def inner_feedthrough(system: System, exports) -> dict[str, tuple[str, ...]]:
     """Exported output -> exported inputs it reaches in the same instant: a path of connections
     and inner direct feedthrough (every inner component is sampled)."""
     edges: dict[tuple[str, str], set[tuple[str, str]]] = {}          # port -> ports it drives
@@ -151,7 +151,7 @@ def _composite_class(sub: Study, where: str, resolver) -> type["CompositeCompone
         system = build_system(resolver.resolve(sub))
     except StudyError as exc:
         raise StudyError(f"{where}: in the subsystem: {exc}") from None
-    variables, feedthrough = _exported(system, sub, sub.where)
+    variables, feedthrough = exported_ports(system, sub, sub.where)
     sampled = all(node.component.sampled for node in system.nodes.values())
     attrs = {"variables": tuple(variables), "feedthrough": feedthrough, "sampled": sampled,
              "subsystem": sub, "resolver": resolver, "type_name": sub.where, "roles": tuple(sub.exports.roles)}
