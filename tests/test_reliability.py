@@ -69,7 +69,10 @@ def test_a_real_time_composite_run_interrupted_keeps_its_signals(tmp_path):
     out = tmp_path / "rt"
     proc = _start(["run", "studies/figure8_hardware_layout.toml", "--set", "study.realtime=true", "--out", str(out),
                    "--no-plots"])
-    time.sleep(6.0)
+    end = time.time() + 120.0                   # start-up (imports, the study) takes seconds on a loaded machine
+    while not list(out.parent.glob(f".{out.name}.*")) and time.time() < end and proc.poll() is None:
+        time.sleep(0.1)
+    time.sleep(3.0)                             # then three seconds of real time: 300 instants at 10 ms
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143 and "Traceback" not in err, err
