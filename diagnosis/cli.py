@@ -17,6 +17,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--min-gain", type=float, default=0.05, help="least held-out RMS reduction to accept an extension")
     p.add_argument("--resample", action="store_true",
                    help="interpolate a log whose clock jitters onto an even grid (its median step)")
+    p.add_argument("--no-identify", action="store_true",
+                   help="do not identify the vehicle on the same log first (faster: the report then has no "
+                        "identified vehicle beside the study's, and tyre saturation is judged by the diagnosis alone)")
     p.add_argument("--mcap", action="store_true", help="also write diagnosis.mcap: the measured stages, the "
                    "baseline's and the final model's replays and residuals on one time axis (Foxglove, PlotJuggler)")
     from agrobot.measurements.cli import add_recording_options
@@ -53,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
 
     with folder:
         result = diagnose(args.log, folder.tmp, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                          resample=args.resample, recording=recording_options(args), progress=progress, mcap=args.mcap)
+                          resample=args.resample, recording=recording_options(args), progress=progress, mcap=args.mcap,
+                          identify=not args.no_identify)
         folder.commit()
     if result.get("recording"):
         print(describe(result["recording"]))

@@ -160,6 +160,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
     what the log lacks."""
     from agrobot.measurements import LogError
+    from agrobot.measurements.audit import minimum
 
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
@@ -186,7 +187,14 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     segs = cut_segments(log, min_speed, SEGMENT, BURN_IN)
     driven = segs.seconds * log.h
     excitation = float(np.std((log.v * log.u / L)[log.v >= min_speed])) if np.any(log.v >= min_speed) else 0.0
-    if driven < MIN_DRIVING or segs.held_out.sum() < 1 or (~segs.held_out).sum() < 2:
+    if driven < MIN_DRIVING:               # the nominal length is guidance down to its floor (measurements.audit)
+        try:
+            notes.append(minimum(driven, MIN_DRIVING, f"the driving (v >= {min_speed:.2g} m/s, no clock gap, "
+                                                      f"stretches of 1 s or more)"))
+        except LogError as exc:
+            raise NotEnoughDriving(f"{where}: {exc}: record {MIN_DRIVING - driven:.0f} s more of driving with turns") \
+                from None
+    if segs.held_out.sum() < 1 or (~segs.held_out).sum() < 2:
         raise NotEnoughDriving(f"{where}: {driven:.1f} s of driving (v >= {min_speed:.2g} m/s, no clock gap, stretches of "
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "

@@ -78,7 +78,8 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     frame, truth = make_log(7, "actuator_delay")
     frame.to_csv(tmp_path / "log.csv", index=False)
     proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(tmp_path / "log.csv"),
-                           "--out", str(tmp_path / "d"), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
+                           "--out", str(tmp_path / "d"), "--no-plots", "--no-identify"], capture_output=True, text=True,
+                          cwd=ROOT)
     assert proc.returncode == 0, proc.stderr
     res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert res["verdict"] == "actuator_delay" and "verdict: actuator_delay" in proc.stdout
@@ -120,7 +121,8 @@ def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path)
     frame, _ = make_log(5, None, duration=120.0)
     frame.drop(index=range(1000, 1100)).to_csv(tmp_path / "gap.csv", index=False)
     proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(tmp_path / "gap.csv"), "--out",
-                           str(tmp_path / "out"), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
+                           str(tmp_path / "out"), "--no-plots", "--no-identify"], capture_output=True, text=True,
+                          cwd=ROOT)
     assert proc.returncode == 0 and "Traceback" not in proc.stderr
     assert "longest stretch without a gap, t = 55.0-120.0 s of 0.0-120.0 s" in proc.stderr
 
@@ -142,7 +144,7 @@ def test_report_shows_the_verdict_the_candidates_and_the_evidence_plots(tmp_path
 
     frame, truth = make_log(8, "steering_offset")
     frame.to_csv(tmp_path / "log.csv", index=False)
-    res = diagnose(tmp_path / "log.csv", tmp_path / "out")
+    res = diagnose(tmp_path / "log.csv", tmp_path / "out", identify=False)
     report = (tmp_path / "out" / "report.md").read_text()
     assert res["verdict"] == "steering_offset" and "## Verdict: **steering_offset**" in report
     assert report.count("| steering_offset |") == 1 and "## Baseline residuals" in report

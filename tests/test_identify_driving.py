@@ -158,3 +158,21 @@ def test_extended_study_plant_saturates_at_the_friction_limit():
     mu = 0.5
     assert peak_lateral(mu) <= mu * 9.81 * 1.02
     assert peak_lateral(0.0) > 1.5 * mu * 9.81
+
+
+def test_the_minimum_driving_is_guidance_down_to_its_floor():
+    """20 s of driving is the nominal minimum: 19 s is identified with a warning naming both
+    numbers, under two thirds of it (13.3 s) the log is refused naming the floor."""
+    from agrobot.identification.ordinary_driving import MIN_DRIVING
+    from agrobot.measurements.truth_tractor import make_log
+    from agrobot.studies import shipped
+
+    figure8 = Study.load(shipped("figure8.toml"))
+    frame, _ = make_log(5, None, duration=40.0)
+    rep = identify_driving(frame[frame.t < 20.0].copy(), "short.csv", figure8)
+    seconds = rep["seconds_driven"]
+    assert 2 / 3 * MIN_DRIVING <= seconds < MIN_DRIVING
+    warned = [n for n in rep["notes"] if n.startswith("warning:")]
+    assert len(warned) == 1 and f"{seconds:.3g} s" in warned[0] and "20 s" in warned[0] and "13.3 s" in warned[0]
+    with pytest.raises(NotEnoughDriving, match=r"under the floor 13\.3 s"):
+        identify_driving(frame[frame.t < 13.0].copy(), "shorter.csv", figure8)
