@@ -19,6 +19,7 @@ import pytest
 from agrobot.orchestrator.mcap_out import write_study_mcap
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.figure_checks import apart_in_greyscale, has_unit
 
 pytest.importorskip("foxglove")
 mcap_reader = pytest.importorskip("mcap.reader")
@@ -103,13 +104,22 @@ def test_a_figure8_mcap_holds_the_documented_topics_with_the_signals_values(figu
     assert np.min(np.hypot(*(points[:, None, :] - ref[None, ::50, :]).transpose(2, 0, 1)), axis=0).max() < 0.06
 
 
-def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(tmp_path):
+FIELD_SECTION = ["field.max_swaths=1", "field.headland_work=0"]
+
+
+@pytest.fixture(scope="module")
+def field_run(tmp_path_factory):
+    """(study, signals, metrics.json) of a field mission planned as one swath of a 0.15 ha plot, driven whole."""
+    where = tmp_path_factory.mktemp("field")
+    study = Study.load(STUDIES / "field_plot_mounted.toml", FIELD_SECTION)
+    run_study(study, where / "run", plots=False, progress=False)
+    return study, pd.read_parquet(where / "run" / "signals.parquet"), json.loads((where / "run" / "metrics.json").read_text())
+
+
+def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(field_run, tmp_path):
     from shapely.geometry import Point, shape
 
-    study = Study.load(STUDIES / "field_coverage.toml", ["field.max_swaths=2", "field.headland_work=0",
-                                                         "study.stop_time=20"])
-    run_study(study, tmp_path / "run", plots=False, progress=False)
-    frame = pd.read_parquet(tmp_path / "run" / "signals.parquet")
+    study, frame, _ = field_run
     write_study_mcap(study, frame, tmp_path / "field.mcap")
     schemas, messages = _read(tmp_path / "field.mcap")
     assert schemas["/field"] == "foxglove.GeoJSON" and schemas["/implement/pose"] == "foxglove.PoseInFrame"
@@ -225,27 +235,6 @@ def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
     assert [t for t, _ in positions] == [round((t - log["t"].iloc[0]) * 1e9) for t in log["t"]]
 
 
-def _luminance(color) -> float:
-    from matplotlib.colors import to_rgb
-
-    r, g, b = to_rgb(color)
-    return 0.299 * r + 0.587 * g + 0.114 * b
-
-
-def _apart_in_greyscale(ax) -> list[str]:
-    """Pairs of labelled lines of ``ax`` that only their hue tells apart: the same line style, marker and
-    width (within half), and luminances closer than 0.15 (they merge when printed in grey)."""
-    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
-    clashes = []
-    for i, a in enumerate(lines):
-        for b in lines[i + 1:]:
-            same_look = (a.get_linestyle() == b.get_linestyle() and a.get_marker() == b.get_marker()
-                         and 0.5 <= a.get_linewidth() / max(b.get_linewidth(), 1e-9) <= 2.0)
-            if same_look and abs(_luminance(a.get_color()) - _luminance(b.get_color())) < 0.15:
-                clashes.append(f"{a.get_label()} / {b.get_label()}")
-    return clashes
-
-
 def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_grey(figure8_mcap):
     import matplotlib
 
@@ -265,7 +254,36 @@ def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_gre
             assert f"no {where} judged" in title
     for ax in fig.axes:
         assert "[m]" in ax.get_xlabel() and "[m]" in ax.get_ylabel()
-        assert _apart_in_greyscale(ax) == []
+        assert apart_in_greyscale(ax) == []
+
+
+def test_the_coverage_figure_says_its_conclusion_labels_units_and_reads_in_grey(field_run, tmp_path):
+    """The title carries the coverage, overlap and skipped area of metrics.json and the judgement of the goal
+    (the analysis's bounds); on a one-swath section the coverage bounds are said not judged, on the same figures
+    taken as a whole route's they are judged and missed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from agrobot.analysis.field_coverage import COVERAGE_TARGET, OVERLAP_TARGET, coverage_figure, coverage_verdict
+
+    study, frame, m = field_run
+    fig = coverage_figure(frame, study)
+    fig.savefig(tmp_path / "coverage.png", dpi=60)
+    map_ax, bar = fig.axes
+    title = map_ax.get_title()
+    head = (f"Coverage {100 * m['coverage_share']:.1f} %, overlap {100 * m['overlap_share']:.1f} %, "
+            f"{m['skipped_area_m2']:.0f} m² skipped")
+    assert head in title
+    assert m["overlap_share"] <= OVERLAP_TARGET and "overlap within the goal" in title
+    assert "coverage not judged: bounds for the whole field; this run plans 1 swath (max_swaths = 1)" in title
+    whole = Study.load(STUDIES / "field_plot_mounted.toml")      # the same figures judged as a whole route's
+    assert m["coverage_share"] < COVERAGE_TARGET
+    judged = coverage_verdict({**m, "route_done_share": 1.0}, whole).split("\n")[1]
+    assert judged.startswith("BEYOND the goal: ") and "overlap" not in judged
+    for name, key in (("coverage", "coverage_share"), ("whole-field coverage", "field_coverage_share")):
+        assert f"{name} {100 * m[key]:.1f} % (goal >= {100 * COVERAGE_TARGET:g} %)" in judged
+    assert has_unit(map_ax.get_xlabel()) and has_unit(map_ax.get_ylabel()) and has_unit(bar.get_ylabel())
+    assert apart_in_greyscale(map_ax) == []
 
 
 def test_a_sweep_writes_each_points_mcap_on_request(tmp_path):
