@@ -151,14 +151,16 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
+def _watch_live(study: Path, out: Path, sets: list[str], topics: tuple[str, ...]):
+    """Run ``study`` with --live (waiting for a viewer), connect a Foxglove WebSocket client, subscribe to
+    ``topics`` when they are advertised and keep every message until the server closes at the run's end:
+    (the process, its stdout and stderr, advertised channels by topic, topic -> [(log time ns, payload)])."""
     from websockets.sync.client import connect
 
     port = _free_port()
-    out = tmp_path / "run"
-    run = subprocess.Popen([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out", str(out),
-                            "--set", "study.stop_time=40", "--no-plots", "--live", f"127.0.0.1:{port}",
-                            "--live-wait", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    run = subprocess.Popen([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(out), "--no-plots",
+                            *[a for x in sets for a in ("--set", x)], "--live", f"127.0.0.1:{port}", "--live-wait", "60"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
     try:
         deadline, ws = time.time() + 90, None
         while ws is None:
@@ -178,7 +180,7 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
                     op = json.loads(message)
                     if op["op"] == "advertise":
                         channels.update({c["topic"]: c for c in op["channels"]})
-                        wanted = [channels[t] for t in ("/signals/tractor", "/vehicle/pose") if t in channels]
+                        wanted = [channels[t] for t in topics if t in channels]
                         subscriptions = {10 + k: c for k, c in enumerate(wanted)}
                         ws.send(json.dumps({"op": "subscribe", "subscriptions": [
                             {"id": k, "channelId": c["id"]} for k, c in subscriptions.items()]}))
@@ -190,6 +192,13 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
     finally:
         if run.poll() is None:
             run.kill()
+    return run, stdout, stderr, channels, got
+
+
+def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
+    out = tmp_path / "run"
+    run, stdout, stderr, channels, got = _watch_live(STUDIES / "figure8.toml", out, ["study.stop_time=40"],
+                                                     ("/signals/tractor", "/vehicle/pose"))
     assert run.returncode == 0, stderr
     assert channels["/vehicle/pose"]["schemaName"] == "foxglove.PoseInFrame"
     assert channels["/signals/tractor"]["encoding"] == "json"
@@ -202,6 +211,35 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
         row = frame.iloc[int(round(values["t"] / 0.01))]
         assert t_ns == round(values["t"] * 1e9)
         assert values["x_cg"] == row["tractor.x_cg"] and values["heading"] == row["tractor.heading"]
+
+
+def test_the_live_view_follows_a_real_time_run_of_the_hardware_layout(tmp_path):
+    """figure8_hil.toml without its hardware tractor (which needs the emulator or a tractor): its layout,
+    figure8_hardware_layout.toml, paced in real time as figure8_hil.toml is (study.realtime). The run is paced
+    and the live view sends its instants as they happen, from the start to the end of the run, at up to 20 a
+    second of wall time (here one per 50 ms base step at most), with the estimate's pose on the map (the truth of
+    a hardware tractor is unknown) and the values of the run."""
+    out, stop = tmp_path / "run", 7.0        # the analysis judges from 5 s after the reference's 1 s ramp
+    run, stdout, stderr, channels, got = _watch_live(
+        STUDIES / "figure8_hardware_layout.toml", out,
+        ["study.realtime=true", f"study.stop_time={stop:g}", "reference.ramp_time=1"],
+        ("/signals/ekf", "/estimate/pose"))
+    assert run.returncode == 0, stderr
+    realtime = json.loads((out / "metrics.json").read_text())["realtime"]
+    assert realtime["steps"] == round(stop / 0.05) + 1 and "steps of 50 ms" in stdout           # paced
+    assert channels["/estimate/pose"]["schemaName"] == "foxglove.PoseInFrame" and "/vehicle/pose" not in channels
+    frame = pd.read_parquet(out / "signals.parquet")
+    ekf = [(t, json.loads(p)) for t, p in got["/signals/ekf"]]
+    times = np.array([values["t"] for _, values in ekf])
+    # paced at the wall clock, the view sees the run as it goes: from its first second to its last, at most one
+    # instant per base step, and not fewer than half the 20 a second it may send
+    assert times[0] <= 1.0 and times[-1] >= stop - 1.0 and np.all(np.diff(times) >= 0.05 - 1e-9)
+    assert 0.5 * 20 * stop <= len(ekf) <= stop / 0.05 + 1
+    assert abs(len(got["/estimate/pose"]) - len(ekf)) <= 2
+    for t_ns, values in ekf:
+        row = frame.iloc[int(round(values["t"] / 0.05))]
+        assert t_ns == round(values["t"] * 1e9)
+        assert values["x_cg"] == row["ekf.x_cg"] and values["heading"] == row["ekf.heading"]
 
 
 def test_a_port_in_use_is_refused_with_its_number(tmp_path):
