@@ -203,6 +203,11 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
         assert final.patches[j].get_height() < level["misfit"][j]
     labels = [t.get_text() for t in ax.get_xticklabels()]
     assert all("no misfit" in label for label in labels)
+    # the title says the verdict with the highest stage of diagnosis.json against its floor
+    ratio = {s: res["stages"][s]["rms_test"] / res["stages"][s]["floor"] for s in stages}
+    top = max(ratio, key=ratio.get)
+    assert ax.get_title().startswith(f"Diagnosis: no fault; the study explains the log to its noise floor (highest: "
+                                     f"{top} {ratio[top]:.2f} x its floor, no misfit)")
     # report.md: every residual in deg, deg/s, m or m/s; radians only in the note on study-file values
     from agrobot.diagnosis.report import markdown
 
