@@ -272,6 +272,8 @@ def verdict_title(result: dict) -> str:
     verdict, status = result["verdict"], result.get("verdict_status", "conclusive")
     if verdict == "none":
         judged = {s: st for s, st in result["stages"].items() if st.get("judged", True)}
+        if not judged:
+            return "Diagnosis: no fault found (no stage could be judged)"
         worst = max(judged, key=lambda s: judged[s]["rms_test"] / judged[s]["floor"])
         return (f"Diagnosis: no fault; the study explains the log to its noise floor (highest: {worst} "
                 f"{judged[worst]['rms_test'] / judged[worst]['floor']:.2f} x its floor, no misfit)")
