@@ -33,13 +33,12 @@ from agrobot.orchestrator.study import Study
 
 from .field_ground import ground_metrics
 from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _swath_frames,
-                           applied_strips, mission, sections_of)
+                           applied_strips, field_frame, mission, sections_of)
 from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     from shapely import contains_xy
-    from shapely.ops import unary_union
 
     field, plan, conv, _ = mission(study)
     settings = plan.settings
@@ -50,13 +49,7 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
     xte_t = _cross_track(s["x"].to_numpy(), s["y"].to_numpy(), np.where(seg == SWATH, swath, -99), frames)
     xte_i = _cross_track(s["ix"].to_numpy(), s["iy"].to_numpy(), np.where(iseg == SWATH, swath, -99), frames)
     boundary = _shape(field.boundary, conv)
-    workable = _shape(plan.workable, conv)
     sections = sections_of(study)
-    strips = applied_strips(s, settings.working_width, sections)
-    union = unary_union(strips) if strips else None
-    covered = union.intersection(workable).area if union is not None else 0.0
-    swept = sum(st.intersection(workable).area for st in strips)
-    overlap = max(swept - covered, 0.0)
     crossings = 0
     for xs, ys in ((s["x"], s["y"]), (s["ix"], s["iy"])):
         inside = contains_xy(boundary, xs.to_numpy(), ys.to_numpy())
@@ -71,27 +64,64 @@ def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
                     f"{name}_xte_swaths_p95_m": p95})       # the judged part in the name: swaths, turns excluded
     out["pass_to_pass_p95_m"] = float(np.percentile(np.abs(p2p), 95)) if len(p2p) else math.nan
     out["pass_to_pass_mean_m"] = float(np.mean(p2p)) if len(p2p) else math.nan
-    area = workable.area
-    field_covered = union.intersection(boundary).area if union is not None else 0.0
-    field_swept = sum(st.intersection(boundary).area for st in strips)
-    out.update(field_coverage_share=field_covered / boundary.area, coverage_share=covered / area,
-               overlap_share=overlap / area, skipped_area_m2=area - covered,
-               covered_area_m2=covered, overlap_area_m2=overlap, workable_area_m2=area,
-               field_area_m2=boundary.area, boundary_crossings=float(crossings),
-               field_overlap_share=max(field_swept - field_covered, 0.0) / boundary.area,
-               field_skipped_area_m2=boundary.area - field_covered,
-               applied_outside_m2=union.difference(boundary).area if union is not None else 0.0,
-               sections=float(sections))
+    out.update(coverage(s, study, field, plan, conv)[1], boundary_crossings=float(crossings), sections=float(sections))
     out.update(plan_figures(plan, sections))
     for kind, name in ((SWATH, "swath"), (HEADLAND, "headland"), (TURN, "turn"), (TRANSIT, "transit")):
         m = seg == kind
         out[f"{name}_time_s"] = float(dt[m].sum())
         out[f"{name}_distance_m"] = float(dist[m].sum())
     out["mission_time_s"] = float(s["t"].iloc[-1] - s["t"].iloc[0])
-    out["route_done_share"] = float(s["progress"].max())
-    out["swaths_planned"] = float(len(plan.swaths))
     out.update(ground_metrics(frame, study, s, plan, conv, frames))
     return out
+
+
+def coverage(s: pd.DataFrame, study: Study, field, plan, conv) -> tuple[list, dict[str, float]]:
+    """(the implement's applied strips in the mission frame, the coverage figures): the strips united
+    (shapely) against the workable area and the whole field: covered, overlap (swept area - covered
+    area: worked more than once) and skipped area, their shares; and how much of the route was run."""
+    from shapely.ops import unary_union
+
+    strips = applied_strips(s, plan.settings.working_width, sections_of(study))
+    workable, boundary = _shape(plan.workable, conv), _shape(field.boundary, conv)
+    union = unary_union(strips) if strips else None
+    covered = union.intersection(workable).area if union is not None else 0.0
+    overlap = max(sum(st.intersection(workable).area for st in strips) - covered, 0.0)
+    area = workable.area
+    field_covered = union.intersection(boundary).area if union is not None else 0.0
+    field_swept = sum(st.intersection(boundary).area for st in strips)
+    return strips, dict(field_coverage_share=field_covered / boundary.area, coverage_share=covered / area,
+                        overlap_share=overlap / area, skipped_area_m2=area - covered,
+                        covered_area_m2=covered, overlap_area_m2=overlap, workable_area_m2=area,
+                        field_area_m2=boundary.area,
+                        field_overlap_share=max(field_swept - field_covered, 0.0) / boundary.area,
+                        field_skipped_area_m2=boundary.area - field_covered,
+                        applied_outside_m2=union.difference(boundary).area if union is not None else 0.0,
+                        route_done_share=float(s["progress"].max()), swaths_planned=float(len(plan.swaths)))
+
+
+GOAL_NAMES = {"coverage_share": "coverage", "field_coverage_share": "whole-field coverage", "overlap_share": "overlap"}
+
+
+def coverage_verdict(values: dict[str, float], study: Study) -> str:
+    """The coverage figure's conclusion: coverage and overlap of the workable area, the skipped area, and
+    whether the goal holds (the coverage, field coverage and overlap bounds, with the study's own
+    ``[study] bounds`` over ours), the bounds that do not fit the run said not judged (``unjudged``)."""
+    from types import SimpleNamespace
+
+    from agrobot.orchestrator.key_figures import bounds
+
+    why_not = unjudged(values, study)
+    goal = {k: b for k, b in bounds(SimpleNamespace(METRICS=METRICS), study.study.bounds).items()
+            if k in GOAL_NAMES and k not in why_not}
+    missed = [f"{GOAL_NAMES[k]} {100 * values[k]:.1f} % (goal {b.op} {100 * b.value:g} %)"
+              for k, b in goal.items() if not b.holds(values[k])]
+    verdict = "within the goal" if not missed else "BEYOND the goal: " + ", ".join(missed)
+    if why_not:
+        judged = f"{', '.join(GOAL_NAMES[k] for k in goal)} {verdict}; " if goal else ""
+        verdict = f"{judged}coverage not judged: {next(iter(why_not.values()))}"
+    return (f"Coverage {100 * values['coverage_share']:.1f} %, overlap {100 * values['overlap_share']:.1f} %, "
+            f"{values['skipped_area_m2']:.0f} m² skipped (workable area {values['workable_area_m2'] / 1e4:.2f} ha):\n"
+            f"{verdict}")
 
 
 def plan_figures(plan, sections: int) -> dict[str, float]:
@@ -186,6 +216,30 @@ def summary(values: dict[str, float]) -> str:
     return "\n".join(lines)
 
 
+def coverage_figure(frame: pd.DataFrame, study: Study):
+    """The field in east/north coloured by the times the implement worked each spot (from the strips
+    the metrics judge, carried back from the mission frame), titled with its conclusion
+    (coverage_verdict on the same figures as metrics)."""
+    import matplotlib.pyplot as plt
+    from shapely.affinity import affine_transform
+
+    from agrobot.fields.planner.export import times_worked, times_worked_colorbar
+
+    field, plan, conv, _ = mission(study)
+    strips, values = coverage(_samples(frame, study), study, field, plan, conv)
+    to_field, _ = field_frame(plan)
+    fig, ax = plt.subplots(figsize=(9, 8))
+    times_worked_colorbar(fig, ax, times_worked(ax, [affine_transform(st, to_field) for st in strips],
+                                                field.boundary, plan.workable))
+    for geom, style, label in ((field.boundary, "k-", "field"), (plan.workable, "k:", "workable area")):
+        bx, by = geom.exterior.xy
+        ax.plot(bx, by, style, lw=1, label=label)
+    ax.set(aspect="equal", xlabel="east [m]", ylabel="north [m]")
+    ax.set_title(f"Field {field.name!r} ({field.area_ha:.2f} ha). {coverage_verdict(values, study)}", fontsize=9)
+    ax.legend(fontsize=8, loc="lower right")
+    return fig
+
+
 def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     import matplotlib
 
@@ -197,7 +251,7 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
 
     field, plan, _, _ = mission(study)
     s = _in_field_frame(_samples(frame, study), plan)        # east/north, the frame of plan.png
-    boundary, workable = field.boundary, plan.workable
+    boundary = field.boundary
     frames = _swath_frames(plan, np.asarray)
     swath = s["swath"].to_numpy().astype(int)
     xte_t = _cross_track(s["x"].to_numpy(), s["y"].to_numpy(), np.where(s["segment"] == SWATH, swath, -99), frames)
@@ -210,18 +264,7 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
         plt.close(fig)
         written.append(out_dir / name)
 
-    from agrobot.fields.planner.export import times_worked, times_worked_colorbar
-
-    fig, ax = plt.subplots(figsize=(9, 8))
-    strips = applied_strips(s, plan.settings.working_width, sections_of(study))
-    times_worked_colorbar(fig, ax, times_worked(ax, strips, boundary, workable))
-    for geom, style, label in ((boundary, "k-", "field"), (workable, "k:", "workable")):
-        bx, by = geom.exterior.xy
-        ax.plot(bx, by, style, lw=1, label=label)
-    ax.set(aspect="equal", xlabel="east [m]", ylabel="north [m]",
-           title=f"field {field.name!r} ({field.area_ha:.2f} ha): times the implement worked each spot")
-    ax.legend(fontsize=8, loc="lower right")
-    save(fig, "coverage.png")
+    save(coverage_figure(frame, study), "coverage.png")
 
     fig, ax = plt.subplots(figsize=(9, 8))
     bx, by = boundary.exterior.xy

@@ -53,17 +53,25 @@ def _samples(frame: pd.DataFrame, study: Study) -> pd.DataFrame:
     return out
 
 
-def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
-    """The samples' positions from the mission frame back to the field's east/north frame:
-    p_field = R(rotation) p_mission + origin (the inverse of components.field_route.to_mission)."""
+def field_frame(plan) -> tuple[list[float], float]:
+    """(the affine map from the mission frame back to the field's east/north frame, as shapely's
+    ``affine_transform`` takes it: p_field = R(rotation) p_mission + origin, the inverse of
+    components.field_route.to_mission; the rotation [rad])."""
     from agrobot.components.field_route import route_frame
 
     origin, rotation = route_frame(plan.path)
     c, sn = math.cos(rotation), math.sin(rotation)
+    return [c, -sn, sn, c, float(origin[0]), float(origin[1])], rotation
+
+
+def _in_field_frame(s: pd.DataFrame, plan) -> pd.DataFrame:
+    """The samples' positions and headings from the mission frame back to the field's east/north frame
+    (field_frame)."""
+    (a11, a12, a21, a22, ox, oy), rotation = field_frame(plan)
     out = s.copy()
     for a, b in (("x", "y"), ("ix", "iy")):
         mx, my = s[a].to_numpy(), s[b].to_numpy()
-        out[a], out[b] = origin[0] + c * mx - sn * my, origin[1] + sn * mx + c * my
+        out[a], out[b] = ox + a11 * mx + a12 * my, oy + a21 * mx + a22 * my
     if "ih" in s:
         out["ih"] = s["ih"].to_numpy() + rotation
     return out

@@ -215,6 +215,8 @@ def _field_geojson(field, plan) -> dict:
 
 
 def mcap_scene(study, frame=None):
-    """The scene of a study's run (orchestrator.mcap_out), or None when it has no vehicle to show."""
+    """The scene of a study's run (orchestrator.mcap_out), or None when it has no vehicle to show: a simulated
+    plant, an implement or a GNSS receiver, or, where the tractor is hardware (its truth unknown), the pose
+    estimator's estimate and the reference."""
     scene = VehicleScene(study, frame)
-    return scene if (scene.plant or scene.implement or scene.gnss) else None
+    return scene if (scene.plant or scene.implement or scene.gnss or scene.estimate or scene.reference) else None

@@ -3,6 +3,7 @@ spectra, cross-correlations, residuals by speed and amplitude), baseline against
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -263,6 +264,35 @@ def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
     return path
 
 
+def verdict_title(result: dict) -> str:
+    """The verdict figure's conclusion, from the result: the effect found with its fitted values (in the
+    report's units) and its held-out gain, and the verdict's status when it is not conclusive; the stage
+    left unexplained and how far above its floor; or that the study explains the log."""
+    effects = {e["id"]: e for e in result["effects"]}
+    verdict, status = result["verdict"], result.get("verdict_status", "conclusive")
+    if verdict == "none":
+        judged = {s: st for s, st in result["stages"].items() if st.get("judged", True)}
+        if not judged:
+            return "Diagnosis: no fault found (no stage could be judged)"
+        worst = max(judged, key=lambda s: judged[s]["rms_test"] / judged[s]["floor"])
+        return (f"Diagnosis: no fault; the study explains the log to its noise floor (highest: {worst} "
+                f"{judged[worst]['rms_test'] / judged[worst]['floor']:.2f} x its floor, no misfit)")
+    if verdict == "unexplained":
+        u = effects["unexplained"]
+        gain = u["held_out_gain"]
+        return (f"Diagnosis: unexplained misfit, the {u['stage']} stage at {u['ratio_to_floor']:.1f} x its noise floor "
+                + (f"(a data-driven extension takes {100 * gain:.0f} % off held out)" if gain >= 0.05 else
+                   "(no data-driven extension carries over to the held-out part)"))
+    e = effects[verdict]
+    values = []
+    for name, value in e["parameters_display"].items():
+        m = re.fullmatch(r"(.*?) \[(.*)\]", name)
+        values.append(f"{m.group(1)} {value:.3g} {m.group(2)}" if m else f"{name} {value:.3g}")
+    others = [x.replace("_", " ") for x in effects if x not in (verdict, "unexplained")]
+    return (f"Diagnosis: {verdict.replace('_', ' ')}, {', '.join(values)} (held-out gain {100 * e['held_out_gain']:.0f} %)"
+            + ("" if status == "conclusive" else f": {status}") + (f"; also {', '.join(others)}" if others else ""))
+
+
 def floors_figure(result: dict, path: Path) -> Path:
     """Held-out residual RMS of each stage in multiples of its noise floor: baseline, the final
     model without each found effect, the final model, and the data-driven extension."""
@@ -273,24 +303,27 @@ def floors_figure(result: dict, path: Path) -> Path:
     stages = [s for s, st in result["stages"].items() if st.get("judged", True)]
     found = [e["id"] for e in result["effects"] if e["id"] != "unexplained"]
     by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
-    series = [("baseline", lambda s, st: st["rms_baseline_test"], "tab:red")]
-    series += [(f"without {eid}", (lambda eid: lambda s, st: st["rms_without"].get(eid, np.nan))(eid), None)
-               for eid in found]
-    series += [("final model", lambda s, st: st["rms_test"], "tab:green"),
+    # each series differs in lightness or hatch as well as hue (it reads in grey): dark red, hatched white,
+    # mid green, dotted pale purple
+    series = [("baseline", lambda s, st: st["rms_baseline_test"], "#b2182b", None)]
+    series += [(f"without {eid}", (lambda eid: lambda s, st: st["rms_without"].get(eid, np.nan))(eid), "white",
+                ("//", "\\\\", "xx", "--", "++")[i % 5]) for i, eid in enumerate(found)]
+    series += [("final model", lambda s, st: st["rms_test"], "#4dac26", None),
                ("+ data-driven extension", lambda s, st: by_stage[s]["extension"]["rms_after"] if s in by_stage else np.nan,
-                "tab:purple")]
+                "#c2a5cf", "..")]
     fig, ax = plt.subplots(figsize=(11, 4.6))
     width = 0.8 / len(series)
-    for i, (label, get, color) in enumerate(series):
+    for i, (label, get, color, hatch) in enumerate(series):
         ratios = [get(s, result["stages"][s]) / result["stages"][s]["floor"] for s in stages]
-        ax.bar(np.arange(len(stages)) + (i - (len(series) - 1) / 2) * width, ratios, width, label=label, color=color)
+        ax.bar(np.arange(len(stages)) + (i - (len(series) - 1) / 2) * width, ratios, width, label=label, color=color,
+               hatch=hatch, edgecolor="0.2", linewidth=0.5)
     ax.axhline(1.0, color="0.5", lw=1, label="noise floor")
     judged = [result["stages"][s] for s in stages]        # each stage's own judgement: healthy and misfit levels
     xs = np.arange(len(stages))
     ax.hlines([st.get("healthy_level", st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45, color="k",
               lw=2.5, label="healthy level (what a fault-free tractor leaves)")
     ax.hlines([st.get("misfit_level", RATIO * st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45,
-              color="tab:red", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
+              color="#d6604d", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
     ax.set_yscale("log")
     from matplotlib.ticker import StrMethodFormatter
 
@@ -298,8 +331,9 @@ def floors_figure(result: dict, path: Path) -> Path:
     ax.set_xticks(range(len(stages)), [f"{s}\nfinal: {'MISFIT' if result['stages'][s]['misfit'] else 'no misfit'}\nfloor "
                                        f"{UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"
                                        for s in stages])
-    ax.set(ylabel="held-out residual RMS / noise floor [-]",
-           title=f"What each model leaves, against the noise floor (verdict: {result['verdict']})")
+    ax.set(ylabel="held-out residual RMS / noise floor [-]", xlabel="stage: the final model's judgement, its noise floor")
+    ax.set_title(f"{verdict_title(result)}\nwhat each model leaves of the held-out residual, against the noise floor",
+                 fontsize=10)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3, axis="y", which="both")
     fig.tight_layout()

@@ -203,6 +203,11 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
         assert final.patches[j].get_height() < level["misfit"][j]
     labels = [t.get_text() for t in ax.get_xticklabels()]
     assert all("no misfit" in label for label in labels)
+    # the title says the verdict with the highest stage of diagnosis.json against its floor
+    ratio = {s: res["stages"][s]["rms_test"] / res["stages"][s]["floor"] for s in stages}
+    top = max(ratio, key=ratio.get)
+    assert ax.get_title().startswith(f"Diagnosis: no fault; the study explains the log to its noise floor (highest: "
+                                     f"{top} {ratio[top]:.2f} x its floor, no misfit)")
     # report.md: every residual in deg, deg/s, m or m/s; radians only in the note on study-file values
     from agrobot.diagnosis.report import markdown
 
@@ -210,3 +215,76 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
     body = "\n".join(line for line in text.splitlines() if not line.startswith("Baseline model:"))
     assert not re.search(r"\brad\b", body), [line for line in body.splitlines() if re.search(r"\brad\b", line)]
     assert "| steering | deg |" in text and "| yaw | deg/s |" in text and "**yaw** [deg/s]" in text
+
+
+def _verdict(effects: list[tuple[str, dict, float]], unexplained: dict | None = None, status="conclusive") -> dict:
+    """A diagnosis result of the JSON's shape: four judged stages (floor 1 in SI), the final model at 1.05 x floor,
+    the baseline at 3 x; ``effects``: (id, parameters_display, held-out gain) found, best first."""
+    stages = {s: {"stage": s, "floor": f, "healthy_level": 1.1 * f, "misfit_level": 1.5 * f, "misfit": False,
+                  "rms_test": 1.05 * f, "rms_baseline_test": 3 * f,
+                  "rms_without": {eid: (2 + k) * f for k, (eid, _, _) in enumerate(effects)}}
+              for s, f in (("steering", 0.002), ("yaw", 0.005), ("position", 0.02), ("speed", 0.03))}
+    found = [{"id": eid, "parameters_display": shown, "held_out_gain": gain} for eid, shown, gain in effects]
+    if unexplained:
+        stages[unexplained["stage"]].update(misfit=True, rms_test=unexplained["ratio_to_floor"] * stages[unexplained["stage"]]["floor"])
+        found.append({"id": "unexplained", **unexplained, "by_stage": {unexplained["stage"]: {"extension": {
+            "rms_after": 1.2 * stages[unexplained["stage"]]["floor"]}}}})
+    verdict = effects[0][0] if effects else "unexplained" if unexplained else "none"
+    return {"verdict": verdict, "verdict_status": status, "stages": stages, "effects": found}
+
+
+def _drawn_floors(result, tmp_path, monkeypatch):
+    from agrobot.diagnosis.report import floors_figure
+
+    kept = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    floors_figure(result, tmp_path / "noise_floors.png")
+    return kept[0].axes[0]
+
+
+@pytest.mark.parametrize("case", ["one effect", "two effects, inconclusive", "unexplained", "none"])
+def test_the_verdict_figure_says_the_verdict_with_its_numbers_labels_units_and_reads_in_grey(case, tmp_path, monkeypatch):
+    from tests.figure_checks import apart_in_greyscale, has_unit
+
+    result = {"one effect": lambda: _verdict([("actuator_delay", {"command_delay [s]": 0.2134}, 0.6412)]),
+              "two effects, inconclusive": lambda: _verdict(
+                  [("steering_offset", {"steer_angle_offset [deg]": -1.234}, 0.3), ("yaw_rate_bias", {
+                      "yaw_rate_bias [deg/s]": 0.0567, "scale [-]": 1.02}, 0.1)], status="inconclusive"),
+              "unexplained": lambda: _verdict([], {"stage": "yaw", "ratio_to_floor": 2.37, "held_out_gain": 0.41}),
+              "none": lambda: _verdict([])}[case]()
+    ax = _drawn_floors(result, tmp_path, monkeypatch)
+    title = ax.get_title().split("\n")[0]
+    expected = {"one effect": "Diagnosis: actuator delay, command_delay 0.213 s (held-out gain 64 %)",
+                "two effects, inconclusive": "Diagnosis: steering offset, steer_angle_offset -1.23 deg (held-out gain 30 %)"
+                                             ": inconclusive; also yaw rate bias",
+                "unexplained": "Diagnosis: unexplained misfit, the yaw stage at 2.4 x its noise floor "
+                               "(a data-driven extension takes 41 % off held out)",
+                "none": "Diagnosis: no fault; the study explains the log to its noise floor (highest: steering 1.05 x "
+                        "its floor, no misfit)"}[case]
+    assert title == expected
+    assert has_unit(ax.get_ylabel())
+    ticks = [t.get_text() for t in ax.get_xticklabels()]        # each stage's floor in the report's units
+    assert "floor 0.11 deg" in ticks[0] and "floor 0.29 deg/s" in ticks[1] and "floor 0.02 m" in ticks[2]
+    assert apart_in_greyscale(ax) == []
+
+
+def test_the_greyscale_check_finds_what_only_hue_tells_apart():
+    """The check itself can fail: two solid lines of equal luminance (red 0.30, green 0.29), two unhatched bars
+    alike in grey, and the former five-colour coverage map whose grey, green and orange merge."""
+    from matplotlib.colors import ListedColormap
+
+    from tests.figure_checks import apart_in_greyscale
+
+    fig, (a, b, c) = plt.subplots(1, 3)
+    a.plot([0, 1], [0, 1], color="#ff0000", label="red")
+    a.plot([0, 1], [1, 0], color="#00807f", label="teal")
+    a.plot([0, 1], [1, 1], color="#ff0000", ls="--", label="dashed red")
+    b.bar([0], [1], color="tab:red", label="baseline")
+    b.bar([1], [1], color="tab:blue", label="other")
+    b.bar([2], [1], color="white", hatch="//", label="hatched")
+    a.legend(), b.legend()
+    c.pcolormesh(np.arange(5.0).reshape(1, 5), cmap=ListedColormap(["#bdbdbd", "#d7301f", "#a6d96a", "#fdae61", "#7b3294"]))
+    assert [x.split(" (")[0] for x in apart_in_greyscale(a)] == ["red / teal"]
+    assert [x.split(" (")[0] for x in apart_in_greyscale(b)] == ["baseline / other"]
+    assert apart_in_greyscale(c) and "colour map" in apart_in_greyscale(c)[0]
+    plt.close(fig)

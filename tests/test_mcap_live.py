@@ -19,6 +19,7 @@ import pytest
 from agrobot.orchestrator.mcap_out import write_study_mcap
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.figure_checks import apart_in_greyscale, has_unit
 
 pytest.importorskip("foxglove")
 mcap_reader = pytest.importorskip("mcap.reader")
@@ -103,13 +104,22 @@ def test_a_figure8_mcap_holds_the_documented_topics_with_the_signals_values(figu
     assert np.min(np.hypot(*(points[:, None, :] - ref[None, ::50, :]).transpose(2, 0, 1)), axis=0).max() < 0.06
 
 
-def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(tmp_path):
+FIELD_SECTION = ["field.max_swaths=1", "field.headland_work=0"]
+
+
+@pytest.fixture(scope="module")
+def field_run(tmp_path_factory):
+    """(study, signals, metrics.json) of a field mission planned as one swath of a 0.15 ha plot, driven whole."""
+    where = tmp_path_factory.mktemp("field")
+    study = Study.load(STUDIES / "field_plot_mounted.toml", FIELD_SECTION)
+    run_study(study, where / "run", plots=False, progress=False)
+    return study, pd.read_parquet(where / "run" / "signals.parquet"), json.loads((where / "run" / "metrics.json").read_text())
+
+
+def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(field_run, tmp_path):
     from shapely.geometry import Point, shape
 
-    study = Study.load(STUDIES / "field_coverage.toml", ["field.max_swaths=2", "field.headland_work=0",
-                                                         "study.stop_time=20"])
-    run_study(study, tmp_path / "run", plots=False, progress=False)
-    frame = pd.read_parquet(tmp_path / "run" / "signals.parquet")
+    study, frame, _ = field_run
     write_study_mcap(study, frame, tmp_path / "field.mcap")
     schemas, messages = _read(tmp_path / "field.mcap")
     assert schemas["/field"] == "foxglove.GeoJSON" and schemas["/implement/pose"] == "foxglove.PoseInFrame"
@@ -141,14 +151,16 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
+def _watch_live(study: Path, out: Path, sets: list[str], topics: tuple[str, ...]):
+    """Run ``study`` with --live (waiting for a viewer), connect a Foxglove WebSocket client, subscribe to
+    ``topics`` when they are advertised and keep every message until the server closes at the run's end:
+    (the process, its stdout and stderr, advertised channels by topic, topic -> [(log time ns, payload)])."""
     from websockets.sync.client import connect
 
     port = _free_port()
-    out = tmp_path / "run"
-    run = subprocess.Popen([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out", str(out),
-                            "--set", "study.stop_time=40", "--no-plots", "--live", f"127.0.0.1:{port}",
-                            "--live-wait", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
+    run = subprocess.Popen([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(out), "--no-plots",
+                            *[a for x in sets for a in ("--set", x)], "--live", f"127.0.0.1:{port}", "--live-wait", "60"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT)
     try:
         deadline, ws = time.time() + 90, None
         while ws is None:
@@ -168,7 +180,7 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
                     op = json.loads(message)
                     if op["op"] == "advertise":
                         channels.update({c["topic"]: c for c in op["channels"]})
-                        wanted = [channels[t] for t in ("/signals/tractor", "/vehicle/pose") if t in channels]
+                        wanted = [channels[t] for t in topics if t in channels]
                         subscriptions = {10 + k: c for k, c in enumerate(wanted)}
                         ws.send(json.dumps({"op": "subscribe", "subscriptions": [
                             {"id": k, "channelId": c["id"]} for k, c in subscriptions.items()]}))
@@ -180,6 +192,13 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
     finally:
         if run.poll() is None:
             run.kill()
+    return run, stdout, stderr, channels, got
+
+
+def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
+    out = tmp_path / "run"
+    run, stdout, stderr, channels, got = _watch_live(STUDIES / "figure8.toml", out, ["study.stop_time=40"],
+                                                     ("/signals/tractor", "/vehicle/pose"))
     assert run.returncode == 0, stderr
     assert channels["/vehicle/pose"]["schemaName"] == "foxglove.PoseInFrame"
     assert channels["/signals/tractor"]["encoding"] == "json"
@@ -192,6 +211,35 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
         row = frame.iloc[int(round(values["t"] / 0.01))]
         assert t_ns == round(values["t"] * 1e9)
         assert values["x_cg"] == row["tractor.x_cg"] and values["heading"] == row["tractor.heading"]
+
+
+def test_the_live_view_follows_a_real_time_run_of_the_hardware_layout(tmp_path):
+    """figure8_hil.toml without its hardware tractor (which needs the emulator or a tractor): its layout,
+    figure8_hardware_layout.toml, paced in real time as figure8_hil.toml is (study.realtime). The run is paced
+    and the live view sends its instants as they happen, from the start to the end of the run, at up to 20 a
+    second of wall time (here one per 50 ms base step at most), with the estimate's pose on the map (the truth of
+    a hardware tractor is unknown) and the values of the run."""
+    out, stop = tmp_path / "run", 7.0        # the analysis judges from 5 s after the reference's 1 s ramp
+    run, stdout, stderr, channels, got = _watch_live(
+        STUDIES / "figure8_hardware_layout.toml", out,
+        ["study.realtime=true", f"study.stop_time={stop:g}", "reference.ramp_time=1"],
+        ("/signals/ekf", "/estimate/pose"))
+    assert run.returncode == 0, stderr
+    realtime = json.loads((out / "metrics.json").read_text())["realtime"]
+    assert realtime["steps"] == round(stop / 0.05) + 1 and "steps of 50 ms" in stdout           # paced
+    assert channels["/estimate/pose"]["schemaName"] == "foxglove.PoseInFrame" and "/vehicle/pose" not in channels
+    frame = pd.read_parquet(out / "signals.parquet")
+    ekf = [(t, json.loads(p)) for t, p in got["/signals/ekf"]]
+    times = np.array([values["t"] for _, values in ekf])
+    # paced at the wall clock, the view sees the run as it goes: from its first second to its last, at most one
+    # instant per base step, and not fewer than half the 20 a second it may send
+    assert times[0] <= 1.0 and times[-1] >= stop - 1.0 and np.all(np.diff(times) >= 0.05 - 1e-9)
+    assert 0.5 * 20 * stop <= len(ekf) <= stop / 0.05 + 1
+    assert abs(len(got["/estimate/pose"]) - len(ekf)) <= 2
+    for t_ns, values in ekf:
+        row = frame.iloc[int(round(values["t"] / 0.05))]
+        assert t_ns == round(values["t"] * 1e9)
+        assert values["x_cg"] == row["ekf.x_cg"] and values["heading"] == row["ekf.heading"]
 
 
 def test_a_port_in_use_is_refused_with_its_number(tmp_path):
@@ -225,27 +273,6 @@ def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
     assert [t for t, _ in positions] == [round((t - log["t"].iloc[0]) * 1e9) for t in log["t"]]
 
 
-def _luminance(color) -> float:
-    from matplotlib.colors import to_rgb
-
-    r, g, b = to_rgb(color)
-    return 0.299 * r + 0.587 * g + 0.114 * b
-
-
-def _apart_in_greyscale(ax) -> list[str]:
-    """Pairs of labelled lines of ``ax`` that only their hue tells apart: the same line style, marker and
-    width (within half), and luminances closer than 0.15 (they merge when printed in grey)."""
-    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
-    clashes = []
-    for i, a in enumerate(lines):
-        for b in lines[i + 1:]:
-            same_look = (a.get_linestyle() == b.get_linestyle() and a.get_marker() == b.get_marker()
-                         and 0.5 <= a.get_linewidth() / max(b.get_linewidth(), 1e-9) <= 2.0)
-            if same_look and abs(_luminance(a.get_color()) - _luminance(b.get_color())) < 0.15:
-                clashes.append(f"{a.get_label()} / {b.get_label()}")
-    return clashes
-
-
 def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_grey(figure8_mcap):
     import matplotlib
 
@@ -265,7 +292,36 @@ def test_the_trajectory_figure_says_its_conclusion_labels_units_and_reads_in_gre
             assert f"no {where} judged" in title
     for ax in fig.axes:
         assert "[m]" in ax.get_xlabel() and "[m]" in ax.get_ylabel()
-        assert _apart_in_greyscale(ax) == []
+        assert apart_in_greyscale(ax) == []
+
+
+def test_the_coverage_figure_says_its_conclusion_labels_units_and_reads_in_grey(field_run, tmp_path):
+    """The title carries the coverage, overlap and skipped area of metrics.json and the judgement of the goal
+    (the analysis's bounds); on a one-swath section the coverage bounds are said not judged, on the same figures
+    taken as a whole route's they are judged and missed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from agrobot.analysis.field_coverage import COVERAGE_TARGET, OVERLAP_TARGET, coverage_figure, coverage_verdict
+
+    study, frame, m = field_run
+    fig = coverage_figure(frame, study)
+    fig.savefig(tmp_path / "coverage.png", dpi=60)
+    map_ax, bar = fig.axes
+    title = map_ax.get_title()
+    head = (f"Coverage {100 * m['coverage_share']:.1f} %, overlap {100 * m['overlap_share']:.1f} %, "
+            f"{m['skipped_area_m2']:.0f} m² skipped")
+    assert head in title
+    assert m["overlap_share"] <= OVERLAP_TARGET and "overlap within the goal" in title
+    assert "coverage not judged: bounds for the whole field; this run plans 1 swath (max_swaths = 1)" in title
+    whole = Study.load(STUDIES / "field_plot_mounted.toml")      # the same figures judged as a whole route's
+    assert m["coverage_share"] < COVERAGE_TARGET
+    judged = coverage_verdict({**m, "route_done_share": 1.0}, whole).split("\n")[1]
+    assert judged.startswith("BEYOND the goal: ") and "overlap" not in judged
+    for name, key in (("coverage", "coverage_share"), ("whole-field coverage", "field_coverage_share")):
+        assert f"{name} {100 * m[key]:.1f} % (goal >= {100 * COVERAGE_TARGET:g} %)" in judged
+    assert has_unit(map_ax.get_xlabel()) and has_unit(map_ax.get_ylabel()) and has_unit(bar.get_ylabel())
+    assert apart_in_greyscale(map_ax) == []
 
 
 def test_a_sweep_writes_each_points_mcap_on_request(tmp_path):

@@ -142,8 +142,9 @@ def write_applied_geojson(plan: Plan, applied, target: FilePath) -> None:
 
 def times_worked(ax, strips, boundary, workable, cells: float = 1.5e6):
     """A raster (at most ``cells`` cells) of how many times each spot of the field was worked,
-    drawn on ``ax``: grey where the implement cannot reach, red skipped, green once, orange and
-    purple more. Returns the colour mesh (for a colour bar)."""
+    drawn on ``ax``: pale grey where the implement cannot reach, dark red skipped, green once, orange
+    and purple more; the five classes also differ in lightness (luminance 0.93, 0.13, 0.74, 0.49, 0.32),
+    so that the figure reads in grey. Returns the colour mesh (for a colour bar)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from shapely import contains_xy
 
@@ -159,7 +160,7 @@ def times_worked(ax, strips, boundary, workable, cells: float = 1.5e6):
     count = np.clip(count, 0, 3)
     count[~contains_xy(workable, gx, gy) & (count == 0)] = -1       # the implement cannot reach it (corners)
     count[~contains_xy(boundary, gx, gy)] = np.nan
-    cmap = ListedColormap(["#bdbdbd", "#d7301f", "#a6d96a", "#fdae61", "#7b3294"])
+    cmap = ListedColormap(["#eeeeee", "#67000d", "#a6d96a", "#e66101", "#5e3c99"], name="times worked")
     return ax.pcolormesh(gx, gy, count, cmap=cmap, norm=BoundaryNorm([-1.5, -0.5, 0.5, 1.5, 2.5, 3.5], 5),
                          shading="auto")
 
@@ -167,7 +168,7 @@ def times_worked(ax, strips, boundary, workable, cells: float = 1.5e6):
 def times_worked_colorbar(fig, ax, mesh) -> None:
     cb = fig.colorbar(mesh, ax=ax, ticks=[-1, 0, 1, 2, 3], shrink=0.8)
     cb.ax.set_yticklabels(["not reachable", "0 (skipped)", "1", "2 (overlap)", "3+"])
-    cb.set_label("times worked")
+    cb.set_label("times the implement worked the spot [passes]")
 
 
 def draw_applied(plan: Plan, applied, sections: int, target: FilePath) -> None:
