@@ -115,7 +115,7 @@ def coverage_verdict(values: dict[str, float], study: Study) -> str:
             if k in GOAL_NAMES and k not in why_not}
     missed = [f"{GOAL_NAMES[k]} {100 * values[k]:.1f} % (goal {b.op} {100 * b.value:g} %)"
               for k, b in goal.items() if not b.holds(values[k])]
-    verdict = "within the goal" if not missed else "BEYOND the goal: " + ", ".join(missed)
+    verdict = "within the goal" if not missed else "MISSES the goal: " + ", ".join(missed)
     if why_not:
         judged = f"{', '.join(GOAL_NAMES[k] for k in goal)} {verdict}; " if goal else ""
         verdict = f"{judged}coverage not judged: {next(iter(why_not.values()))}"

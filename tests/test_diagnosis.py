@@ -20,7 +20,7 @@ from agrobot.measurements.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180
-SEEDS = (101, 102)           # not used while the diagnosis was tuned (seeds 1-3)
+SEEDS = (101,)          # not used while tuning (seeds 1-3); more seeds: benchmarks/diagnosis_rate.py --seeds N
 
 
 @pytest.fixture(scope="module")

@@ -317,7 +317,7 @@ def test_the_coverage_figure_says_its_conclusion_labels_units_and_reads_in_grey(
     whole = Study.load(STUDIES / "field_plot_mounted.toml")      # the same figures judged as a whole route's
     assert m["coverage_share"] < COVERAGE_TARGET
     judged = coverage_verdict({**m, "route_done_share": 1.0}, whole).split("\n")[1]
-    assert judged.startswith("BEYOND the goal: ") and "overlap" not in judged
+    assert judged.startswith("MISSES the goal: ") and "overlap" not in judged
     for name, key in (("coverage", "coverage_share"), ("whole-field coverage", "field_coverage_share")):
         assert f"{name} {100 * m[key]:.1f} % (goal >= {100 * COVERAGE_TARGET:g} %)" in judged
     assert has_unit(map_ax.get_xlabel()) and has_unit(map_ax.get_ylabel()) and has_unit(bar.get_ylabel())
