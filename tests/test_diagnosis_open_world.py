@@ -132,7 +132,7 @@ def test_two_explanations_that_fit_equally_well_are_reported_inconclusive(monkey
     monkeypatch.setattr(selection, "CATALOGUE", CATALOGUE + (Twin(),))
     frame, _ = make_log(SEED, "steering_offset")
     frame.to_parquet(tmp_path / "log.parquet")
-    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False, identify=False)
     assert len(res["inconclusive"]) == 1
     tie = res["inconclusive"][0]
     assert set(tie["effects"]) == {"steering_offset", "steering_offset_twin"}
@@ -147,12 +147,12 @@ def test_a_log_that_cannot_support_a_verdict_says_so(tmp_path):
 
     frame, _ = make_log(SEED, None, duration=120.0, speeds=(2.0,))
     frame.to_parquet(tmp_path / "log.parquet")
-    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False, identify=False)
     text = " ".join(res["warnings"])
     assert "lasts 120 s" in text and "speed hardly varies" in text
     noise = frame.assign(delta_cmd=frame["delta_cmd"] * 0.05, delta=frame["delta"] * 0.05)
     noise.to_parquet(tmp_path / "quiet.parquet")
-    quiet = diagnose(tmp_path / "quiet.parquet", tmp_path / "out2", plots=False)
+    quiet = diagnose(tmp_path / "quiet.parquet", tmp_path / "out2", plots=False, identify=False)
     assert quiet["verdict"] == "cannot decide" or any("noise" in w or "excitation" in w for w in quiet["warnings"])
 
 

@@ -66,7 +66,7 @@ def test_f1tenth_command_only_log_is_judged_through_the_yaw_rate(ds1):
 def test_yaw_column_under_another_name_is_named(ds1, tmp_path):
     _, even = ds1
     even.rename(columns={"yaw_rate": "YawRate"}).to_parquet(tmp_path / "log.parquet")
-    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", F1TENTH, plots=False)
+    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", F1TENTH, plots=False, identify=False)
     text = res.get("reason", "") + " ".join(res.get("warnings", []))
     assert "YawRate" in text and "rename it to yaw_rate" in text
     assert res["verdict"] != "actuator_delay"
@@ -75,7 +75,7 @@ def test_yaw_column_under_another_name_is_named(ds1, tmp_path):
 def test_tractor_log_with_yawrate_column_warns_beside_its_steering_verdict(tmp_path):
     frame, _ = make_log(1000, "actuator_delay", duration=90.0)
     frame.rename(columns={"yaw_rate": "YawRate"}).to_parquet(tmp_path / "log.parquet")
-    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "log.parquet", tmp_path / "out", plots=False, identify=False)
     assert "yaw" in res["not_judged"] and "YawRate" in res["not_judged"]["yaw"]
     assert any(w.startswith("the log's columns:") and "YawRate" in w for w in res["warnings"])
 
@@ -83,10 +83,10 @@ def test_tractor_log_with_yawrate_column_warns_beside_its_steering_verdict(tmp_p
 def test_short_logs_judged_with_a_warning_or_refused_naming_the_minimum(tmp_path):
     frame, _ = make_log(1000, None, duration=59.98)
     frame.to_parquet(tmp_path / "short.parquet")
-    res = diagnose(tmp_path / "short.parquet", tmp_path / "a", plots=False)
+    res = diagnose(tmp_path / "short.parquet", tmp_path / "a", plots=False, identify=False)
     assert res["verdict"] != "cannot decide" and any("the log lasts 60 s" in w for w in res["warnings"])
     frame[frame["t"] < 25.0].to_parquet(tmp_path / "shorter.parquet")
-    res = diagnose(tmp_path / "shorter.parquet", tmp_path / "b", plots=False)
+    res = diagnose(tmp_path / "shorter.parquet", tmp_path / "b", plots=False, identify=False)
     assert res["verdict"] == "cannot decide" and "at least 30 s" in res["reason"] and "held-out" in res["reason"]
 
 

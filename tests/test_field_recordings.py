@@ -72,8 +72,8 @@ def test_imported_recording_equals_the_simulations_own_log(lever_recording):
 def test_round_trip_finds_the_hidden_effect_as_from_the_simulation_log(lever_recording, tmp_path):
     from agrobot.diagnosis.pipeline import diagnose
 
-    raw = diagnose(lever_recording, tmp_path / "raw", plots=False)
-    own = diagnose(lever_recording / "simulation_log.csv", tmp_path / "own", plots=False)
+    raw = diagnose(lever_recording, tmp_path / "raw", plots=False, identify=False)
+    own = diagnose(lever_recording / "simulation_log.csv", tmp_path / "own", plots=False, identify=False)
     assert raw["verdict"] == own["verdict"] == "antenna_lever_arm"
     found = {}
     for name, result in (("raw", raw), ("own", own)):
@@ -398,7 +398,7 @@ def test_a_steering_offset_in_a_recording_is_named_with_its_value(tmp_path):
     results = {}
     for name, values in (("offset", {"tractor.tractor.steer_angle_offset": 0.03}), ("clean", None)):
         folder = record(tmp_path / name / "recording", 240.0, values)
-        results[name] = diagnose(folder, tmp_path / name / "diagnosis", plots=False)
+        results[name] = diagnose(folder, tmp_path / name / "diagnosis", plots=False, identify=False)
     res = results["offset"]
     offset = next((e for e in res["effects"] if e["id"] == "steering_offset"), None)
     assert offset is not None, res["selection_trace"]

@@ -181,7 +181,7 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
 
     frame, _ = make_log(101, None)
     frame.to_csv(tmp_path / "log.csv", index=False)
-    res = diagnose(tmp_path / "log.csv", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "log.csv", tmp_path / "out", plots=False, identify=False)
     assert res["verdict"] == "none"
     kept = []
     monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))

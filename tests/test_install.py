@@ -62,7 +62,7 @@ def test_non_editable_install_has_one_top_level_name_and_runs_from_another_folde
                           "f, _ = make_log(3, None, duration=60.0); f.to_csv('log.csv', index=False)"],
                          capture_output=True, text=True, cwd=work, env=env, timeout=300)
     assert log.returncode == 0, log.stderr
-    diag = subprocess.run(agrobot + ["diagnose", "log.csv", "--out", "d", "--no-plots"], capture_output=True,
+    diag = subprocess.run(agrobot + ["diagnose", "log.csv", "--out", "d", "--no-plots", "--no-identify"], capture_output=True,
                           text=True, cwd=work, env=env, timeout=600)
     assert diag.returncode == 0, diag.stdout + diag.stderr
     assert (work / "d" / "diagnosis.json").is_file()

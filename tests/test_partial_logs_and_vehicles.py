@@ -84,7 +84,8 @@ def test_a_cars_can_log_alone_converts_and_says_what_is_missing(car_can, tmp_pat
 
 def test_diagnosing_the_can_log_judges_the_yaw_stage_only_with_the_studys_steering_ratio(car_can, tmp_path):
     folder, _ = car_can
-    proc = cli("diagnose", folder / "drive.log", "--dbc", folder / "maker.dbc", "--study", CAR, "--out", tmp_path / "d")
+    proc = cli("diagnose", folder / "drive.log", "--dbc", folder / "maker.dbc", "--study", CAR, "--out", tmp_path / "d",
+               "--no-identify")
     assert proc.returncode == 0, proc.stderr
     res = json.loads((tmp_path / "d" / "diagnosis.json").read_text())
     assert res["stages_judged"] == ["yaw"] and res["verdict"] == "none", res.get("selection_trace")
@@ -98,7 +99,7 @@ def test_diagnosing_the_can_log_judges_the_yaw_stage_only_with_the_studys_steeri
 def test_imu_and_gnss_without_steering_still_find_an_antenna_lever_arm(tmp_path):
     frame, truth = make_log(SEED, "antenna_lever_arm")
     frame.drop(columns=["delta_cmd", "delta"]).to_parquet(tmp_path / "imu_gnss.parquet")
-    res = diagnose(tmp_path / "imu_gnss.parquet", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "imu_gnss.parquet", tmp_path / "out", plots=False, identify=False)
     assert res["stages_judged"] == ["position", "speed"]
     assert res["not_judged"]["yaw"] == "not judged: no delta"
     assert [e["id"] for e in res["effects"]] == ["antenna_lever_arm"], res["selection_trace"]
@@ -114,7 +115,7 @@ def test_float32_positions_are_named_as_the_limit_of_the_position_stage(tmp_path
     lat32, lon32 = np.float32(lat).astype(float), np.float32(lon).astype(float)
     x, y, _ = pymap3d.geodetic2enu(lat32, lon32, 0.0, 54.5, 10.2, 0.0, deg=True)
     frame.assign(x=x, y=y).to_parquet(tmp_path / "f32.parquet")
-    res = diagnose(tmp_path / "f32.parquet", tmp_path / "out", plots=False)
+    res = diagnose(tmp_path / "f32.parquet", tmp_path / "out", plots=False, identify=False)
     why = res["not_judged"]["position"]
     assert "steps of" in why and "float32" in why, why
     assert set(res["stages_judged"]) == {"steering", "yaw"} and res["verdict"] == "none"

@@ -255,7 +255,8 @@ def test_a_jittered_log_is_diagnosed_with_resample(tmp_path):
     frame.to_csv(path, index=False)
     even = read_log(path, resample_jitter=True)
     assert np.allclose(np.diff(even["t"]), np.median(np.diff(frame["t"])))
-    proc = subprocess.run(CMD + ["diagnose", str(path), "--out", str(tmp_path / "d"), "--no-plots", "--resample"],
+    proc = subprocess.run(CMD + ["diagnose", str(path), "--out", str(tmp_path / "d"), "--no-plots", "--resample",
+                                 "--no-identify"],
                           cwd=ROOT, capture_output=True, text=True)
     assert proc.returncode == 0 and "verdict: none" in proc.stdout, proc.stderr
 

@@ -121,11 +121,13 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
 
 
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
-             resample: bool = False, recording=None, plots: bool = True, progress=None) -> Diagnosis:
+             resample: bool = False, recording=None, plots: bool = True, progress=None,
+             identify: bool = True) -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it,
     diagnosis.json, report.md, the figures and extended_study.toml go there. A log that cannot be
-    judged gives the verdict ``"cannot decide"`` with its ``reason``."""
+    judged gives the verdict ``"cannot decide"`` with its ``reason``. ``identify``: identify the
+    vehicle on the same log first (one vehicle model for both; False is faster)."""
     from agrobot.diagnosis.pipeline import diagnose as run_diagnosis
 
     if not 0.2 <= fit_fraction <= 0.8:
@@ -138,7 +140,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
 
         check_output(Path(out), overwrite=True)
     result = run_diagnosis(log, Path(out) if out is not None else None, path, fit_fraction, min_gain,
-                           plots=plots, resample=resample, recording=recording, progress=progress)
+                           plots=plots, resample=resample, recording=recording, progress=progress,
+                           identify=identify)
     return Diagnosis(result, Path(out) if out is not None else None)
 
 
