@@ -101,14 +101,19 @@ def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, mi
     return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
 
 
-def group(stages: set[str], members: list[Effect], available=STAGES) -> tuple[tuple[str, ...], list[Effect]]:
+def group(stages: set[str], members: list[Effect], available=STAGES,
+          block: tuple[str, ...] = ()) -> tuple[tuple[str, ...], list[Effect]]:
     """The stages and the members coupled to ``stages`` through shared stages (transitively),
-    among the ``available`` stages (a partial log judges fewer)."""
+    among the ``available`` stages (a partial log judges fewer); ``block``: stages that couple
+    whole (Replay.side_slip_block: the track reads the yaw model's side-slip)."""
     stages = set(stages) & set(available)
     stages, related = set(stages), []
     changed = True
     while changed:
         changed = False
+        if stages & set(block) and not set(block) <= stages:
+            stages |= set(block)
+            changed = True
         for f in members:
             if f not in related and stages & set(f.stages):
                 related.append(f)
@@ -163,7 +168,7 @@ class Selector:
 
     def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
-        stages, related = group(set(effect.stages), members, self.replay.stages)
+        stages, related = group(set(effect.stages), members, self.replay.stages, self.replay.side_slip_block)
         key = (effect.id, tuple(sorted(f.id for f in related)))
         hit = self._cache.get(key)
         if hit is not None:
@@ -191,7 +196,7 @@ class Selector:
     def drop(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """``model`` judged against itself refitted without ``effect`` (a member)."""
         others = [f for f in members if f is not effect]
-        stages, related = group(set(effect.stages), others, self.replay.stages)
+        stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
@@ -201,7 +206,8 @@ class Selector:
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
         trace_gate = self.saturation_gate(base)
-        model, members, trace, inconclusive = base, [], [trace_gate] if trace_gate else [], []
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate) if x]
+        model, members, trace, inconclusive = base, [], notes, []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
@@ -320,7 +326,8 @@ class Selector:
             for b in pool[i + 1:]:
                 if not set(a.stages) & set(b.stages):
                     continue
-                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages)
+                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages,
+                                        self.replay.side_slip_block)
                 starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
                 fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
                 ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)
