@@ -443,8 +443,9 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
 def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
     """Re-fit each stage's uncertain parameters (no extension); returns the fit and the per-stage
     noise levels used to normalise later fits. Where the track reads the yaw model's side-slip
-    (Replay.side_slip_block) the yaw stage's parameters are then refitted on the whole block,
-    weighed by the stage-wise noise levels: the yaw rate fixes the understeer gradient
+    (Replay.side_slip_block) the yaw stage's parameters are then refitted on the whole block
+    (each stage weighed by its own residual level, _fit), and the levels taken again from that
+    fit: the yaw rate fixes the understeer gradient
     m/L (l_r/C_f - l_f/C_r) and the yaw mode but hardly C_r, which sets the rear axle's side-slip
     m l_f a_y / (L C_r) that the track sees."""
     values = dict(replay.baseline.values)

@@ -2,10 +2,12 @@
 elimination, so that effects that mimic each other are separated by evidence, not by the order
 in which they were tried.
 
-The model is the baseline plus a set S of catalogue effects. Stages couple only through the
-effects that touch several of them (the gyro bias: yaw and position), so each trial refits the
-*group* of a candidate: the effects of S that share a stage with it (transitively), their
-parameters, the candidate's and the stages' uncertain parameters, scored on the group's stages.
+The model is the baseline plus a set S of catalogue effects. Stages couple through the
+effects that touch several of them (the gyro bias: yaw and position), and, where the track sees
+the yaw model's side-slip (a car at highway speed: Replay.side_slip_block), through the yaw
+model's values, so each trial refits the *group* of a candidate: the effects of S that share a
+stage with it (transitively), their parameters, the candidate's and the stages' uncertain
+parameters, scored on the group's stages.
 
 - forward: every effect not in S is refitted jointly with its group; the supported one with the
   lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
