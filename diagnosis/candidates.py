@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import pandas as pd
@@ -47,6 +48,9 @@ MAX_POSITION_STEP = 0.01       # m: coarser positions (float32 latitude/longitud
 COARSE_DELTA = 0.2 * math.pi / 180    # rad: a wheel-angle sensor this coarse biases the yaw refit
 HARD_MIN_DURATION = 30.0      # s: shorter logs are refused; up to min_duration they are judged with a warning
 MIN_COMMANDED_YAW = 0.0125     # rad/s: 0.5 deg of steering at 2 m/s on the paper tractor's 1.4 m wheelbase
+SIDE_SLIP_LOOSENESS = 0.15     # the fraction of C_r a yaw-rate fit leaves loose (the truths' stiffness spread)
+SIDE_SLIP_ARM = 0.15           # m: the smallest material lever arm (effects.antenna_lever_arm)
+REWEIGHTS = 4                  # at most this many refits of a side-slip block at its own residual levels
 
 
 def position_step(xy: np.ndarray) -> float:
@@ -267,6 +271,48 @@ class Replay:
                                                              "relaxation_scale")}}
         return self.yaw.rear_lateral_velocity(v)
 
+    def side_slip_arm(self) -> float:
+        """The rear axle's steady side-slip velocity per unit yaw rate at the log's 95th-percentile
+        speed, m l_f v^2 / (L C_r) [m] (the rear tyres carry m a_y l_f / L at a slip angle u_R / v):
+        the same track as a point that far from the axle. 0.05 m for the paper tractor at 3 m/s,
+        6 m for a car at 30 m/s."""
+        p = self.baseline.tractor
+        moving = self.speed[np.isfinite(self.speed) & (self.speed > self.min_speed)]
+        v = float(np.percentile(moving, 95)) if len(moving) else 0.0
+        return p.m * p.l_f * v * v / ((p.l_f + p.l_r) * p.C_r)
+
+    @cached_property
+    def side_slip_block(self) -> tuple[str, ...]:
+        """The stages fitted and scored as one block because the track reads the yaw model's
+        side-slip (lateral): yaw, position and speed, when SIDE_SLIP_LOOSENESS of the side-slip
+        arm reaches the smallest material lever arm (SIDE_SLIP_ARM); otherwise (a tractor at
+        field speeds, no yaw stage, a coarse wheel angle whose side-slip takes the study's own
+        stiffnesses) empty. The yaw rate fixes the understeer gradient m/L (l_r/C_f - l_f/C_r)
+        and the yaw mode but leaves C_r loose by a tenth, which at 30 m/s is a side-slip error of
+        0.6 m x the yaw rate: a forward antenna point would soak it up."""
+        if "yaw" not in self.stages or self.coarse_delta or not {"position", "speed"} & set(self.stages):
+            return ()
+        if SIDE_SLIP_LOOSENESS * self.side_slip_arm() < SIDE_SLIP_ARM:
+            return ()
+        return tuple(s for s in STAGES if s in ("yaw", "position", "speed") and s in self.stages)
+
+    def side_slip_note(self) -> str:
+        """The block choice in words (the selection's trace)."""
+        arm = self.side_slip_arm()
+        joined = bool(self.side_slip_block)
+        if "yaw" not in self.stages or not {"position", "speed"} & set(self.stages):
+            return ""
+        why = (f"the rear axle's side-slip at the log's 95th-percentile speed is that of a point {arm:.2f} m "
+               f"from it; {100 * SIDE_SLIP_LOOSENESS:.0f} % of it, what the yaw rate leaves C_r loose by, is "
+               f"{SIDE_SLIP_LOOSENESS * arm:.2f} m {'>=' if joined else '<'} {SIDE_SLIP_ARM:g} m (the smallest "
+               f"material lever arm)")
+        if self.coarse_delta:
+            return f"side-slip: the study's own stiffnesses (a coarse wheel angle); {why}"
+        if joined:
+            return (f"side-slip: the cornering stiffnesses fitted on the yaw rate and the track together, each fit "
+                    f"of these stages weighed by its own residual levels: {why}")
+        return f"side-slip: the cornering stiffnesses fitted on the yaw rate alone: {why}"
+
     def measured(self, stage: str) -> np.ndarray:
         return {"steering": self.delta, "yaw": self.gyro, "position": self.gps, "speed": self.track_speed}[stage]
 
@@ -355,6 +401,23 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
             sol = least_squares(fun, x0, bounds=(lo, hi), diff_step=1e-3, max_nfev=150, x_scale=1.0)
             if best is None or sol.cost < best.cost:
                 best = sol
+        block = getattr(replay, "side_slip_block", ())
+        if len(block) > 1 and set(block) <= set(stages):
+            # the block's stages weighed by their own levels, sigma_s^2 = RSS_s / n_eff,s (iterated): the
+            # stationary point of the score's sum_s n_eff,s ln RSS_s. The baseline's levels would weigh a
+            # track misfit by an unmodelled effect (a latency: 20x the noise) 400x too little against the
+            # yaw rate, leaving the side-slip where the yaw rate alone puts it
+            sigma = dict(sigma)
+            for _ in range(REWEIGHTS):
+                v = values_of(best.x)
+                level = {}
+                for s in stages:
+                    r = replay.residuals(s, v, "fit")
+                    level[s] = math.sqrt(float(r @ r) / max(effective_size(r), 1.0)) or sigma[s]
+                if all(abs(level[s] / sigma[s] - 1.0) < 0.02 for s in stages):
+                    break
+                sigma.update(level)
+                best = least_squares(fun, best.x, bounds=(lo, hi), diff_step=1e-3, max_nfev=150, x_scale=1.0)
         values = values_of(best.x)
     else:
         values = dict(base_values)
@@ -379,14 +442,24 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
 
 def fit_baseline(replay: Replay) -> tuple[Fit, dict[str, float]]:
     """Re-fit each stage's uncertain parameters (no extension); returns the fit and the per-stage
-    noise levels used to normalise later fits."""
+    noise levels used to normalise later fits. Where the track reads the yaw model's side-slip
+    (Replay.side_slip_block) the yaw stage's parameters are then refitted on the whole block
+    (each stage weighed by its own residual level, _fit), and the levels taken again from that
+    fit: the yaw rate fixes the understeer gradient
+    m/L (l_r/C_f - l_f/C_r) and the yaw mode but hardly C_r, which sets the rear axle's side-slip
+    m l_f a_y / (L C_r) that the track sees."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     for s in replay.stages:
         values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
-    fit = _fit(replay, values, [], replay.stages, [{}], sigma)
-    for s in replay.stages:
-        sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
+    block = replay.side_slip_block
+    for joint in ((False, True) if block else (False,)):
+        if joint:
+            free = list(dict.fromkeys(p for s in block for p in uncertain(replay, s)))
+            values = _fit(replay, values, free, block, [{}], sigma).values
+        fit = _fit(replay, values, [], replay.stages, [{}], sigma)
+        for s in replay.stages:
+            sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
     return fit, sigma
 
 

@@ -275,6 +275,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
         result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline)
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
+    if replay.side_slip_note():
+        say(replay.side_slip_note())
     sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
     say("effects selected; judging the stages against their noise floors")
     base = sel.base

@@ -2,10 +2,12 @@
 elimination, so that effects that mimic each other are separated by evidence, not by the order
 in which they were tried.
 
-The model is the baseline plus a set S of catalogue effects. Stages couple only through the
-effects that touch several of them (the gyro bias: yaw and position), so each trial refits the
-*group* of a candidate: the effects of S that share a stage with it (transitively), their
-parameters, the candidate's and the stages' uncertain parameters, scored on the group's stages.
+The model is the baseline plus a set S of catalogue effects. Stages couple through the
+effects that touch several of them (the gyro bias: yaw and position), and, where the track sees
+the yaw model's side-slip (a car at highway speed: Replay.side_slip_block), through the yaw
+model's values, so each trial refits the *group* of a candidate: the effects of S that share a
+stage with it (transitively), their parameters, the candidate's and the stages' uncertain
+parameters, scored on the group's stages.
 
 - forward: every effect not in S is refitted jointly with its group; the supported one with the
   lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
@@ -101,14 +103,19 @@ def _judge(effect: Effect, with_: Fit, without: Fit, stages, baseline_values, mi
     return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
 
 
-def group(stages: set[str], members: list[Effect], available=STAGES) -> tuple[tuple[str, ...], list[Effect]]:
+def group(stages: set[str], members: list[Effect], available=STAGES,
+          block: tuple[str, ...] = ()) -> tuple[tuple[str, ...], list[Effect]]:
     """The stages and the members coupled to ``stages`` through shared stages (transitively),
-    among the ``available`` stages (a partial log judges fewer)."""
+    among the ``available`` stages (a partial log judges fewer); ``block``: stages that couple
+    whole (Replay.side_slip_block: the track reads the yaw model's side-slip)."""
     stages = set(stages) & set(available)
     stages, related = set(stages), []
     changed = True
     while changed:
         changed = False
+        if stages & set(block) and not set(block) <= stages:
+            stages |= set(block)
+            changed = True
         for f in members:
             if f not in related and stages & set(f.stages):
                 related.append(f)
@@ -163,7 +170,7 @@ class Selector:
 
     def add(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
-        stages, related = group(set(effect.stages), members, self.replay.stages)
+        stages, related = group(set(effect.stages), members, self.replay.stages, self.replay.side_slip_block)
         key = (effect.id, tuple(sorted(f.id for f in related)))
         hit = self._cache.get(key)
         if hit is not None:
@@ -191,7 +198,7 @@ class Selector:
     def drop(self, model: Fit, members: list[Effect], effect: Effect) -> Finding:
         """``model`` judged against itself refitted without ``effect`` (a member)."""
         others = [f for f in members if f is not effect]
-        stages, related = group(set(effect.stages), others, self.replay.stages)
+        stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
@@ -201,7 +208,8 @@ class Selector:
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
         trace_gate = self.saturation_gate(base)
-        model, members, trace, inconclusive = base, [], [trace_gate] if trace_gate else [], []
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate) if x]
+        model, members, trace, inconclusive = base, [], notes, []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
@@ -320,7 +328,8 @@ class Selector:
             for b in pool[i + 1:]:
                 if not set(a.stages) & set(b.stages):
                     continue
-                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages)
+                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages,
+                                        self.replay.side_slip_block)
                 starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
                 fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
                 ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)

@@ -361,6 +361,7 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         frame["vy"] = vy_log
         frame["beta"] = np.arctan2(vy_log, np.maximum(frame["v"].to_numpy(float), 0.1))
     truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
+             "sigma_f": p["sigma_f"],
              "vehicle": vehicle, "v_ref": v_ref,
              "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
     return frame, truth
