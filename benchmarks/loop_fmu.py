@@ -88,7 +88,7 @@ def main() -> None:
         table += [("as shipped", *row) for row in case(shipped, args.fmi_version, Path(tmp), "compiled")]
     s = quiet.study
     print(f"{args.study}: {s.stop_time:g} s simulated, base step {s.base_step:g} s, FMI {args.fmi_version}.0")
-    print(f"| case | measurement | value |\n|---|---|---|")
+    print("| case | measurement | value |\n|---|---|---|")
     for row in table:
         print("| " + " | ".join(row) + " |")
 
