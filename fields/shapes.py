@@ -28,6 +28,9 @@ def distinct_names(fields: list[Field]) -> list[Field]:
     return fields
 
 
+SLIVER_SHARE = 0.1      # a part of a repaired polygon smaller than this share of its largest part is a sliver
+
+
 def repaired_parts(poly, where: str) -> tuple[list[Polygon], str | None]:
     """(polygons, note): ``poly`` as it is when valid (note None), else the polygons of its repair
     by shapely.make_valid (a line or point left by the repair dropped) and what was done."""
@@ -41,7 +44,15 @@ def repaired_parts(poly, where: str) -> tuple[list[Polygon], str | None]:
     parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, Polygon) and g.area > 0]
     if not parts:
         raise FieldError(f"{where}: the polygon is invalid ({why}) and shapely.make_valid leaves no area of it")
-    return parts, f"the polygon was invalid ({why}); repaired with shapely.make_valid into {len(parts)} polygon(s)"
+    # a sliver the repair cuts off where a ring touches itself is not a field of its own
+    largest = max(g.area for g in parts)
+    kept = [g for g in parts if g.area >= SLIVER_SHARE * largest]
+    dropped = sum(g.area for g in parts) - sum(g.area for g in kept)
+    note = f"the polygon was invalid ({why}); repaired with shapely.make_valid into {len(kept)} polygon(s)"
+    if len(kept) < len(parts):
+        note += (f"; {len(parts) - len(kept)} sliver(s) under {100 * SLIVER_SHARE:.0f} % of the largest part left out "
+                 f"({100 * dropped / (dropped + sum(g.area for g in kept)):.1f} % of the area)")
+    return kept, note
 
 
 def fields_from_shapes(path: Path, shapes: list, crs: str | None, declared: str | None) -> list[Field]:

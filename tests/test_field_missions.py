@@ -41,8 +41,10 @@ REAL_FIELD_FILES = {
     "fields2cover_data/envelope1.xml": ({}, {}),
     "fields2cover_data/test.json": ({}, {}),
     "fields2cover_data/test_2_cell.json": ({}, {}),
-    "fields2cover_data/strips.geojson": ({}, {"strips_1": "not a simple polygon", "strips_2": "not a simple polygon",
-                                              "strips_3": "not a simple polygon"}),
+    # rings that touch themselves: repaired (fields.shapes.repaired_parts), then each strip too narrow to plan
+    "fields2cover_data/strips.geojson": ({}, {"strips_1": "narrower than two working widths",
+                                              "strips_2": "narrower than two working widths",
+                                              "strips_3": "narrower than two working widths"}),
     "fields2cover_data/test_ring.json": ({}, {"Ring": "narrower than two working widths"}),
     "iam_field_open_autonomous_tractor/datasets/iam_field/field_boundaries.csv": (SMALL_IMPLEMENT, {}),
     "isoxml_dev4ag_timelogs/PARTFIELDS_TASKDATA.XML": ({}, {}),
@@ -369,7 +371,7 @@ def test_plan_command_writes_the_route_and_its_figures(tmp_path):
 
 
 @pytest.mark.parametrize("args,expect", [
-    (("{real}/fields2cover_data/strips.geojson", "--name", "strips_1"), ("strips_1", "not a simple polygon")),
+    (("{real}/fields2cover_data/strips.geojson", "--name", "strips_1"), ("strips_1", "narrower than two working widths")),
     (("{studies}/fields/iam_field_boundaries.csv", "--crs", "EPSG:6677"), ("narrower than two working widths",)),
     (("{studies}/fields/test_parcel.json", "--headland-passes", "1"), ("do not fit the headland", "1 headland pass")),
     (("{studies}/fields/iam_field_boundaries.csv", "--crs", "EPSG:99999"), ("EPSG:99999",)),

@@ -260,11 +260,12 @@ def test_fields2cover_fields_read_and_a_broken_boundary_is_named(tmp_path):
     ring = read_fields(F2C / "test_ring.json")[0]
     assert ring.origin is None and ring.holes == 1 and ring.boundary.area == pytest.approx(36.0)
     strips = read_fields(F2C / "strips.geojson")
-    assert all("Self-intersection" in " ".join(s.problems()) for s in strips)
+    assert len(strips) == 3 and all(s.boundary.is_valid and "Self-intersection" in s.properties["repaired"]
+                                    and "sliver" in s.properties["repaired"] for s in strips)
     proc = cli("fields", F2C, "--out", tmp_path / "f")
     assert proc.returncode == 0, proc.stderr
     assert "not read:" in proc.stdout and "swaths.geojson: no Polygon" in proc.stdout
-    assert "problem: the boundary is not a simple polygon" in proc.stdout
+    assert "repaired: the polygon was invalid (Self-intersection" in proc.stdout
     assert (tmp_path / "f" / "fields.png").stat().st_size > 20000
     back = read_fields(tmp_path / "f" / "fields.geojson")
     assert sorted(round(x.area_ha, 2) for x in back if x.origin) == \
