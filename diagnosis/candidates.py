@@ -281,6 +281,10 @@ class Replay:
         v = float(np.percentile(moving, 95)) if len(moving) else 0.0
         return p.m * p.l_f * v * v / ((p.l_f + p.l_r) * p.C_r)
 
+    def _track_reads_side_slip(self) -> bool:
+        """The yaw stage is replayed and a track stage (position, speed) reads its side-slip."""
+        return "yaw" in self.stages and bool({"position", "speed"} & set(self.stages))
+
     @cached_property
     def side_slip_block(self) -> tuple[str, ...]:
         """The stages fitted and scored as one block because the track reads the yaw model's
@@ -290,7 +294,7 @@ class Replay:
         stiffnesses) empty. The yaw rate fixes the understeer gradient m/L (l_r/C_f - l_f/C_r)
         and the yaw mode but leaves C_r loose by a tenth, which at 30 m/s is a side-slip error of
         0.6 m x the yaw rate: a forward antenna point would soak it up."""
-        if "yaw" not in self.stages or self.coarse_delta or not {"position", "speed"} & set(self.stages):
+        if not self._track_reads_side_slip() or self.coarse_delta:
             return ()
         if SIDE_SLIP_LOOSENESS * self.side_slip_arm() < SIDE_SLIP_ARM:
             return ()
@@ -300,7 +304,7 @@ class Replay:
         """The block choice in words (the selection's trace)."""
         arm = self.side_slip_arm()
         joined = bool(self.side_slip_block)
-        if "yaw" not in self.stages or not {"position", "speed"} & set(self.stages):
+        if not self._track_reads_side_slip():
             return ""
         why = (f"the rear axle's side-slip at the log's 95th-percentile speed is that of a point {arm:.2f} m "
                f"from it; {100 * SIDE_SLIP_LOOSENESS:.0f} % of it, what the yaw rate leaves C_r loose by, is "
