@@ -18,7 +18,7 @@ from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
-from .unexplained import signature, stage_check
+from .unexplained import RATIO, signature, stage_check
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -204,12 +204,13 @@ def same_stretches(identified: dict, replay, values: dict[str, float]) -> None:
     held["diagnosis_rms"] = float(np.sqrt(np.mean(r[inside] ** 2))) if inside.sum() >= 10 else float("nan")
 
 
-def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05) -> list[str]:
+def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05, floor: float = 0.0) -> list[str]:
     """Where identify and diagnose, on one log, conclude differently, and why: about an effect both
     model (tyre saturation; identify's held-out segments are spread over the log, the diagnosis
     holds out its last part), and about the vehicle itself: when one model of it leaves materially
-    less of the gyro unexplained than the other on the same unseen stretches, the poorer one's
-    verdict is relative to a model that misses what the better one has."""
+    less of the gyro unexplained than the other on the same unseen stretches (and the poorer is a
+    misfit, above RATIO x the yaw stage's noise ``floor``), the poorer one's verdict is relative to a
+    model that misses what the better one has."""
     if not identified:
         return []
     out = []
@@ -231,7 +232,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     k = DISPLAY["yaw"][0]
     where = (f"on the {held['seconds']:.0f} s of identify's held-out segments after t = "
              f"{held['windows'][0][0]:.1f} s, which neither fit saw")
-    if min(mine, theirs) >= (1 - min_gain) * max(mine, theirs):
+    if min(mine, theirs) >= (1 - min_gain) * max(mine, theirs) or max(mine, theirs) <= RATIO * floor:
         if out:                     # an effect concluded differently: the two models still fit alike
             out[-1] += (f"; yet the two models of this vehicle fit alike {where} (yaw rate RMS {k * mine:.3g} deg/s "
                         f"identify's, {k * theirs:.3g} deg/s the diagnosis's): the difference is in the stretches "
@@ -359,7 +360,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
     same_stretches(identified, replay, final.values)
-    verdict["bullets"] += agreement(identified, effects, sel, min_gain)
+    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"]:
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(

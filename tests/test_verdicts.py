@@ -188,3 +188,4 @@ def test_both_models_of_the_vehicle_are_scored_on_the_same_unseen_stretches_and_
     (bullet,) = agreement(alike, [], Sel())
     assert bullet.startswith("identify keeps tyre saturation") and "fit alike" in bullet
     assert agreement(_identified(0.098), [], Sel()) == []              # no diagnosis score: nothing claimed
+    assert agreement(better, [], Sel(), floor=0.08) == []                # both within 1.5 x the floor: alike
