@@ -240,7 +240,11 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     else:
         if mine < theirs:
             params = identified.get("parameters") or {}
-            named = ", ".join(f"{n} {v['value']:.3g} {v['unit']}" for n, v in params.items()
+            def shown_value(q: dict) -> str:          # degrees at the edge, no unit for a ratio
+                f, unit = {"rad": (180 / math.pi, " deg"), "rad/s": (180 / math.pi, " deg/s"),
+                           "1": (1.0, "")}.get(q["unit"], (1.0, " " + q["unit"]))
+                return f"{f * q['value']:.3g}{unit}"
+            named = ", ".join(f"{n} {shown_value(q)}" for n, q in params.items()
                               if n in ("steer_gain", "delay", "lag", "steer_offset", "friction", "shape", "gyro_bias"))
             out.append(f"the vehicle model identify fits ({identified['final_model']}; {named}) leaves "
                        f"{k * mine:.3g} deg/s of the yaw rate unexplained {where}, the diagnosis's final model "

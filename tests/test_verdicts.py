@@ -163,7 +163,8 @@ class _Replay:
 
 def _identified(rms, **more):
     return {"final_model": "linear", "tyre_saturation": None, "tyre_saturation_why_not": [],
-            "parameters": {"steer_gain": {"value": 0.7, "interval": [0.65, 0.75], "unit": "1"}},
+            "parameters": {"steer_gain": {"value": 0.7, "interval": [0.65, 0.75], "unit": "1"},
+                           "steer_offset": {"value": 0.01, "interval": [0.0, 0.02], "unit": "rad"}},
             "held_out_yaw": {"windows": [(10.0, 20.0)], "seconds": 10.0, "rms": rms}, **more}
 
 
@@ -177,7 +178,8 @@ def test_both_models_of_the_vehicle_are_scored_on_the_same_unseen_stretches_and_
     same_stretches(better, _Replay(), {})
     assert better["held_out_yaw"]["diagnosis_rms"] == pytest.approx(0.1)     # only the window's samples
     (bullet,) = agreement(better, [], Sel())
-    assert "better described by identify's model" in bullet and "steer_gain 0.7" in bullet
+    assert "better described by identify's model" in bullet and "steer_gain 0.7," in bullet
+    assert f"steer_offset {math.degrees(0.01):.3g} deg)" in bullet                 # degrees at the edge
     assert f"{math.degrees(0.05):.3g} deg/s" in bullet and f"{math.degrees(0.1):.3g} deg/s" in bullet
     poorer = _identified(0.2)
     same_stretches(poorer, _Replay(), {})
