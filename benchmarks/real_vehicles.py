@@ -9,11 +9,14 @@ Prints one table: vehicle, seconds, the identified vehicle diagnose shares with 
 held-out fit, tyre saturation), the independent estimates side by side (K from the dynamic fit and
 from steady states, the delay from the fit and from a cross-correlation, the gyro bias from the fit
 and from the GNSS course), the physical checks (beta, vy, a_y when the log has them), the verdict
-with its status and statement, what was not judged, and the time taken.
+with its status and statement, what was not judged, and the time taken; and the yaw-rate misfit of
+identify's model and of the diagnosis's on the same unseen stretches (identify's held-out segments
+after the diagnosis's split).
 """
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
 import time
@@ -80,6 +83,11 @@ def main() -> None:
                          "delay [s]": fmt(rep["delay"]), "held-out fit [%]": f"{rep['held_out_fit']:.0f}",
                          "tyre saturation": (f"mu {rep['tyre_saturation']['friction']:.2f}" if rep["tyre_saturation"]
                                              else "not found")}
+                held = rep.get("held_out_yaw") or {}
+                if "diagnosis_rms" in held:    # both models on identify's held-out segments after the split
+                    ident["yaw RMS, same unseen stretches: identify; diagnose [deg/s]"] = (
+                        f"{math.degrees(held['rms']):.3g}; {math.degrees(held['diagnosis_rms']):.3g} "
+                        f"({held['seconds']:.0f} s)")
             else:
                 try:
                     full = identify_driving(log, name, study)

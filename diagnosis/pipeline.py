@@ -18,7 +18,7 @@ from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
-from .unexplained import signature, stage_check
+from .unexplained import RATIO, signature, stage_check
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -157,12 +157,12 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
-def identified_vehicle(frame, where: str, study, baseline) -> dict:
+def identified_vehicle(frame, where: str, study, baseline, t_split: float = math.inf) -> dict:
     """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
     study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
     held-out fit and its independent estimates (identification.comparisons)."""
-    from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
     from agrobot.orchestrator.errors import InputError
 
     p = baseline.tractor
@@ -182,29 +182,80 @@ def identified_vehicle(frame, where: str, study, baseline) -> dict:
             "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
                                  "shape": tyre["parameters"]["shape"]["value"],
                                  "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
-            "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"]}
+            "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
+            "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}
+                           for k, q in rep["parameters"].items()},
+            "held_out_yaw": held_out_misfit(rep, t_split)}
     return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
             "physical_checks": rep.get("physical_checks", {})}
 
 
-def agreement(identified: dict, effects: list[dict], sel) -> list[str]:
-    """Where identify and diagnose, on one log, conclude differently about an effect both model
-    (tyre saturation), and why: identify's held-out segments are spread over the log, the
-    diagnosis holds out its last part."""
+def same_stretches(identified: dict, replay, values: dict[str, float]) -> None:
+    """The diagnosis's final model scored on the stretches where identify's model was scored
+    (identify's held-out segments after the diagnosis's split: neither fit saw them): the gyro's RMS
+    misfit of each model there, in ``identified["held_out_yaw"]``."""
+    held = (identified or {}).get("held_out_yaw")
+    if not held or "yaw" not in replay.stages:
+        return
+    t, r = replay.residual_series("yaw", values)
+    inside = np.zeros(len(t), bool)
+    for a, b in held["windows"]:
+        inside |= (t >= a) & (t <= b)
+    held["diagnosis_rms"] = float(np.sqrt(np.mean(r[inside] ** 2))) if inside.sum() >= 10 else float("nan")
+
+
+def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05, floor: float = 0.0) -> list[str]:
+    """Where identify and diagnose, on one log, conclude differently, and why: about an effect both
+    model (tyre saturation; identify's held-out segments are spread over the log, the diagnosis
+    holds out its last part), and about the vehicle itself: when one model of it leaves materially
+    less of the gyro unexplained than the other on the same unseen stretches (and the poorer is a
+    misfit, above RATIO x the yaw stage's noise ``floor``), the poorer one's verdict is relative to a
+    model that misses what the better one has."""
     if not identified:
         return []
+    out = []
     ids = {e["id"] for e in effects}
     sat = identified.get("tyre_saturation")
     if sat and "tyre_saturation" not in ids:
         tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
         why = "; ".join(tried.reasons) if tried else "it was not fitted"
-        return [f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
-                f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on the "
-                f"log's last part, does not: {why}"]
+        out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
+                   f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
+                   f"the log's last part, does not: {why}")
     if not sat and "tyre_saturation" in ids:
-        return ["the diagnosis finds tyre saturation where identify does not keep it: "
-                + "; ".join(identified.get("tyre_saturation_why_not") or ["-"])]
-    return []
+        out.append("the diagnosis finds tyre saturation where identify does not keep it: "
+                   + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
+    held = identified.get("held_out_yaw") or {}
+    mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
+    if not (math.isfinite(mine) and math.isfinite(theirs)):
+        return out
+    k = DISPLAY["yaw"][0]
+    where = (f"on the {held['seconds']:.0f} s of identify's held-out segments after t = "
+             f"{held['windows'][0][0]:.1f} s, which neither fit saw")
+    if min(mine, theirs) >= (1 - min_gain) * max(mine, theirs) or max(mine, theirs) <= RATIO * floor:
+        if out:                     # an effect concluded differently: the two models still fit alike
+            out[-1] += (f"; yet the two models of this vehicle fit alike {where} (yaw rate RMS {k * mine:.3g} deg/s "
+                        f"identify's, {k * theirs:.3g} deg/s the diagnosis's): the difference is in the stretches "
+                        f"each judges on, not in the vehicle")
+    else:
+        if mine < theirs:
+            params = identified.get("parameters") or {}
+            def shown_value(q: dict) -> str:          # degrees at the edge, no unit for a ratio
+                f, unit = {"rad": (180 / math.pi, " deg"), "rad/s": (180 / math.pi, " deg/s"),
+                           "1": (1.0, "")}.get(q["unit"], (1.0, " " + q["unit"]))
+                return f"{f * q['value']:.3g}{unit}"
+            named = ", ".join(f"{n} {shown_value(q)}" for n, q in params.items()
+                              if n in ("steer_gain", "delay", "lag", "steer_offset", "friction", "shape", "gyro_bias"))
+            out.append(f"the vehicle model identify fits ({identified['final_model']}; {named}) leaves "
+                       f"{k * mine:.3g} deg/s of the yaw rate unexplained {where}, the diagnosis's final model "
+                       f"{k * theirs:.3g} deg/s: this vehicle is better described by identify's model, and what the "
+                       f"diagnosis names (or leaves unexplained) is relative to a baseline that lacks part of it: put "
+                       f"identify's stiffnesses, delay and steering gain into the study's yaw plant and diagnose again")
+        else:
+            out.append(f"the diagnosis's final model leaves {k * theirs:.3g} deg/s of the yaw rate unexplained {where}, "
+                       f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
+                       f"vehicle beyond what identify's single-track model holds")
+    return out
 
 
 LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
@@ -272,7 +323,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
         say(f"warning: {mismatch}")
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
-        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline)
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.t_split)
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
     if replay.side_slip_note():
@@ -312,7 +363,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     moving = replay.speed[replay.speed > replay.min_speed]
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
-    verdict["bullets"] += agreement(identified, effects, sel)
+    same_stretches(identified, replay, final.values)
+    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"]:
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(

@@ -128,6 +128,12 @@ def vehicle_lines(iv: dict | None) -> list[str]:
             f"{m} {k * e['value']:.4g} [{k * e['interval'][0]:.4g}, {k * e['interval'][1]:.4g}]"
             for m, e in c["estimates"].items())
             + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}"))
+    held = me.get("held_out_yaw") or {}
+    if math.isfinite(held.get("diagnosis_rms", math.nan)):
+        k = DEGREES["rad/s"][0]
+        out.append(f"- yaw rate on the same unseen stretches ({held['seconds']:.0f} s of identify's held-out segments "
+                   f"after the diagnosis's split) [deg/s]: RMS misfit {k * held['rms']:.4g} identify's model, "
+                   f"{k * held['diagnosis_rms']:.4g} the diagnosis's final model")
     for c, chk in iv.get("physical_checks", {}).items():
         out.append(f"- physical check `{c}` ({chk['what']}): held-out fit {chk['fit_percent']:.0f} %, RMS "
                    f"{chk['rms']:.3g} {chk['unit']} against a measured std of {chk['measured_std']:.3g}")

@@ -150,3 +150,44 @@ def test_a_position_that_is_an_estimate_renames_a_lever_arm_and_blocks_nothing()
                  Vehicle.from_table({"class": "scale_car", "length": 0.55, "width": 0.3}), 0.32, 0.21, 1.5)
     assert v["status"] == "conclusive"
     assert any("the point the estimate refers to" in b for b in v["bullets"])
+
+
+class _Replay:
+    """A replay whose yaw residual is known: 0.1 rad/s inside [10, 20] s, 0.3 rad/s elsewhere."""
+    stages = ("yaw",)
+
+    def residual_series(self, stage, values):
+        t = np.arange(0.0, 40.0, 0.1)
+        return t, np.where((t >= 10) & (t <= 20), 0.1, 0.3)
+
+
+def _identified(rms, **more):
+    return {"final_model": "linear", "tyre_saturation": None, "tyre_saturation_why_not": [],
+            "parameters": {"steer_gain": {"value": 0.7, "interval": [0.65, 0.75], "unit": "1"},
+                           "steer_offset": {"value": 0.01, "interval": [0.0, 0.02], "unit": "rad"}},
+            "held_out_yaw": {"windows": [(10.0, 20.0)], "seconds": 10.0, "rms": rms}, **more}
+
+
+def test_both_models_of_the_vehicle_are_scored_on_the_same_unseen_stretches_and_a_better_one_is_named():
+    from agrobot.diagnosis.pipeline import agreement, same_stretches
+
+    class Sel:
+        first_step = ()
+
+    better = _identified(0.05)
+    same_stretches(better, _Replay(), {})
+    assert better["held_out_yaw"]["diagnosis_rms"] == pytest.approx(0.1)     # only the window's samples
+    (bullet,) = agreement(better, [], Sel())
+    assert "better described by identify's model" in bullet and "steer_gain 0.7," in bullet
+    assert f"steer_offset {math.degrees(0.01):.3g} deg)" in bullet                 # degrees at the edge
+    assert f"{math.degrees(0.05):.3g} deg/s" in bullet and f"{math.degrees(0.1):.3g} deg/s" in bullet
+    poorer = _identified(0.2)
+    same_stretches(poorer, _Replay(), {})
+    (bullet,) = agreement(poorer, [], Sel())
+    assert "beyond what identify's single-track model holds" in bullet
+    alike = _identified(0.098, tyre_saturation={"friction": 0.5, "held_out_gain": 0.2})
+    same_stretches(alike, _Replay(), {})
+    (bullet,) = agreement(alike, [], Sel())
+    assert bullet.startswith("identify keeps tyre saturation") and "fit alike" in bullet
+    assert agreement(_identified(0.098), [], Sel()) == []              # no diagnosis score: nothing claimed
+    assert agreement(better, [], Sel(), floor=0.08) == []                # both within 1.5 x the floor: alike

@@ -77,6 +77,10 @@ def test_identify_and_diagnose_name_tyre_saturation_together(runs):
     assert identified["final_model"] == "tyre_saturation"
     assert res["verdict"] == "tyre_saturation", (res["selection_trace"], res["verdict_bullets"])
     assert not any("does not" in b and "tyre saturation" in b for b in res["verdict_bullets"])
+    # one vehicle: on the same unseen stretches both models leave no more than noise (1.5 x the floor)
+    held, floor = identified["held_out_yaw"], res["noise_floor"]["yaw"]
+    assert held["seconds"] > 10 and max(held["rms"], held["diagnosis_rms"]) <= 1.5 * floor, (held, floor)
+    assert not any("better described" in b or "beyond what identify" in b for b in res["verdict_bullets"])
 
 
 def test_the_models_side_slip_is_scored_against_a_measured_one_held_out():

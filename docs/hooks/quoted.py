@@ -30,7 +30,7 @@ F1TENTH = "/tmp/f1tenth"          # the folder the identification page names
 _DS5 = ["convert", "tests/data/f1tenth_frictionmaps/DataSets/DS5",
         "--signal", "delta_cmd=commandData.delta[rad]", "--signal", "yaw_rate=imuData.wz[deg/s]",
         "--signal", "v=pfOdomData.vx[m/s]", "--signal", "x=pfOdomData.x[m]", "--signal", "y=pfOdomData.y[m]",
-        "--out", f"{F1TENTH}/ds5.csv"]
+        "--out", f"{F1TENTH}/ds5.csv", "--overwrite"]
 # NAME -> the commands (arguments of ``python -m agrobot``) whose output the pages quote; every
 # command but the last prepares its input and is not kept. {out}: a fresh folder.
 QUOTES: dict[str, list[list[str]]] = {
