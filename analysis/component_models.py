@@ -90,31 +90,39 @@ def yaw_plant(comp, step: float, speed: float) -> Block:
     On a plane (``slope_angle``) the deviations are about the steady state that holds the line
     against the pull (plant_ground); the pull across the heading turns with it, dv_y/dt gains
     (d a_lat / d psi) psi, roll and pitch follow the heading (d roll / d psi psi, ...), and the antenna's
-    lever, leaning with them, moves by (d lever / d psi) psi east and north (outputs x_antenna, roll and
-    pitch, the lateral channel's share of them, only on a plane)."""
+    lever, leaning with them, moves by (d lever / d psi) psi east and north; the line runs along the
+    velocity, the body turned by the crab angle psi_0 = -v_y0 / v off it, so a change of the crab
+    moves R along the line, x' = (v_y0 / v) v_y (outputs x_antenna, roll and pitch, the lateral
+    channel's share of them, only on a plane). The crab angle (0.5 deg on 10 deg) is left out elsewhere."""
     from agrobot.components.models.yaw_dynamics import lateral_disturbance_column, zoh_discretize
 
     p = comp.p
     Ay, By, Cy, vy, params = _yaw_dynamics(comp, speed)
-    tilted = plant_ground(comp, speed) is not None
+    ground = plant_ground(comp, speed)
+    tilted = ground is not None
     slope = _per_heading(p) if tilted else {"lever_north": float(p["antenna_forward"])}
     n = len(By)
-    A = np.zeros((n + 2, n + 2))
+    m = n + 3 if tilted else n + 2                   # on a plane also x: the crab's share of the along-track motion
+    A = np.zeros((m, m))
     A[:n, :n] = Ay
     A[n, :n] = Cy                                    # psi' = gamma
     A[n + 1, :n], A[n + 1, n] = vy, speed            # y' = v psi + v_y
     if tilted:
         A[:n, n] += lateral_disturbance_column(n) * slope["pull"]      # the pull turning with psi
-    B = np.concatenate([By, [0.0, 0.0]]).reshape(-1, 1)
-    e = np.eye(n + 2)
-    gamma, psi, y, lr = np.concatenate([Cy, [0, 0]]), e[n], e[n + 1], params.l_r
+        A[n + 2, :n] = vy * ground.crab / speed      # x' = v cos psi - v_y sin psi, sin psi_0 = -v_y0 / v
+    B = np.concatenate([By, np.zeros(m - n)]).reshape(-1, 1)
+    e = np.eye(m)
+    gamma, psi, y, lr = np.concatenate([Cy, np.zeros(m - n)]), e[n], e[n + 1], params.l_r
     f = slope["lever_north"]
-    lateral = np.concatenate([vy, [0, 0]])
+    turning = _on_the_plane(p, 0.0)["lever_east"] if tilted else f     # the plant's antenna velocity: the lever
+    lateral = np.concatenate([vy, np.zeros(m - n)])                   # turned by gamma, its lean held
     vel_rear = speed * psi + lateral - lr * gamma
     rows = {"yaw_rate": gamma, "lateral_velocity": lateral, "heading": psi, "y_cg": y, "y_rear": y - lr * psi,
-            "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi, "vel_north_antenna": vel_rear + f * gamma}
+            "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi,
+            "vel_north_antenna": vel_rear + turning * gamma}
     if tilted:                                       # the lateral channel's share of these: nil on level ground
-        rows |= {"x_antenna": slope["lever_east"] * psi, "roll": slope["roll"] * psi, "pitch": slope["pitch"] * psi}
+        rows |= {"x_antenna": e[n + 2] + slope["lever_east"] * psi, "roll": slope["roll"] * psi,
+                 "pitch": slope["pitch"] * psi}
     Ad, Bd = zoh_discretize(A, B, step)
     return Block.of(comp.name, ["steer_angle"], list(rows), Ad, Bd, np.array(list(rows.values())), sampled=False)
 
