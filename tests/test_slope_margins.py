@@ -11,11 +11,11 @@ import math
 import numpy as np
 import pytest
 
-from agrobot.analysis.component_models import INS_INPUTS, INS_OUTPUTS, imu_sensor, ins_ekf, plant_ground, yaw_plant
-from agrobot.analysis.loop_blocks import LEVEL
+from agrobot.analysis.component_models import INS_OUTPUTS, imu_sensor, ins_ekf, plant_ground, yaw_plant
 from agrobot.components.models.terrain import GRAVITY, attitude, ground_of, lever_offset
 from agrobot.components.models.yaw_dynamics import TractorParameters
 from agrobot.components.tractor_yaw_plant import TractorYawPlant
+from tests.test_margins_models import ins_differences
 
 DEG = math.pi / 180.0
 SLOPE = 10 * DEG
@@ -175,7 +175,7 @@ def test_ins_ekf_block_on_a_slope_is_the_jacobian_of_its_step(downhill=-60 * DEG
     slope's f_y, k learnt): each input stepped by +-eps for 25 steps, the central differences of its
     outputs follow the block with the ground (the learnt k coupled through f_y, the tilted antenna)
     to 1 % (after 200 s the variance of k is still settling; after 800 s they agree to 1e-3, too long
-    a run for the suite); the level block misses it."""
+    a run for the suite); a fix moves the crab, which it cannot on level ground."""
     from agrobot.components.ins_ekf import INSEKF
 
     speed, every = 2.0, 5
@@ -197,26 +197,9 @@ def test_ins_ekf_block_on_a_slope_is_the_jacobian_of_its_step(downhill=-60 * DEG
         ekf.step(i * DT, DT)
     assert ekf.s[5] == pytest.approx(k, rel=1e-3)          # the filter keeps the crab it was given
     block = ins_ekf(ekf, DT, speed, every, 0, g)
-    flat = ins_ekf(ekf, DT, speed, every, 0)
-    steps, eps, differs = 25, 1e-6, False
-
-    def run(port, delta):
-        fresh = copy.deepcopy(ekf)
-        rows = []
-        for i in range(steps):
-            u = inputs(start + i)
-            u[port] += delta
-            fresh.u.update(u)
-            fresh.step((start + i) * DT, DT)
-            rows.append([fresh.y[o] for o in INS_OUTPUTS])
-        return np.array(rows)
-
-    for port in INS_INPUTS:
-        measured = (run(port, eps) - run(port, -eps)) / (2 * eps)
-        u = np.zeros((steps, len(INS_INPUTS)))
-        u[:, INS_INPUTS.index(port)] = 1.0
-        declared = _run_block(block, u)
+    differences = ins_differences(ekf, inputs, start, block)
+    for port, (measured, declared) in differences.items():
         assert np.allclose(measured, declared, rtol=1e-2, atol=2e-6), (port, measured[:6], declared[:6])
-        differs |= not np.allclose(measured, _run_block(flat, u), rtol=1e-2, atol=1e-4)
-    assert differs
-    assert LEVEL.level and not g.level
+    # on level ground a fix moves no crab (k uncoupled, f_y = 0); here it does, through the learnt k
+    crab = differences["gps_y"][0][:, INS_OUTPUTS.index("lateral_velocity")]
+    assert np.abs(crab).max() > 1e-5                       # 1.7e-5 (m/s) / m here, 0 on level ground
