@@ -72,7 +72,8 @@ def test_behind_a_tractor_on_a_side_slope_the_implement_hangs_L_beta_plus_the_cr
 
 
 def trapezoid(path: Path) -> Path:
-    """A 0.33 ha trapezoid, one edge slanted (UTM 32N): swaths of different lengths and turns."""
+    """A 0.32 ha quadrilateral, two of its edges slanted (UTM 32N): swaths of different lengths,
+    turns between them."""
     pts = [[0, 0], [60, 0], [68, 52], [0, 48], [0, 0]]
     ring = [[300000.0 + x, 5700000.0 + y] for x, y in pts]
     path.write_text(json.dumps({"type": "FeatureCollection", "crs": {"type": "name", "properties": {"name": "EPSG:32632"}},
