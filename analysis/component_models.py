@@ -13,39 +13,116 @@ import math
 
 import numpy as np
 
-from .loop_blocks import Block, delay_line, lifted, passthrough
+from .loop_blocks import LEVEL, Block, Ground, delay_line, lifted, passthrough
 
 
-def yaw_plant(comp, step: float, speed: float) -> Block:
-    """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)
-    with the pose on the straight: psi' = gamma, y_cg' = v psi + v_y; R = CG - l_r psi, the
-    antenna a lever arm f ahead of R: y_ant = y_R + f psi, its velocity + f gamma."""
+def _yaw_dynamics(comp, speed: float):
+    """(A, B, C, v_y row, parameters) of the plant's yaw dynamics at v (models.yaw_dynamics; v_y =
+    l_r gamma for a transfer-function model), as its step uses them."""
     from agrobot.components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
-                                                state_space, with_cornering_scale, zoh_discretize)
+                                                state_space, with_cornering_scale)
 
     p = comp.p
     params = TractorParameters.of(p)
     if p["model"] == "transfer_function":
         Ay, By, Cy = controllable_canonical(p["tf_num"], p["tf_den"])
-        vy = params.l_r * Cy
-    else:
-        if float(p["cornering_speed_slope"]):
-            params = with_cornering_scale(params, cornering_scale(speed, p["cornering_speed_slope"],
-                                                                  p["cornering_reference_speed"]))
-        Ay, By, Cy = state_space(p["model"], params, speed)
-        vy = np.eye(len(By))[0]
+        return Ay, By, Cy, params.l_r * Cy, params
+    if float(p["cornering_speed_slope"]):
+        params = with_cornering_scale(params, cornering_scale(speed, p["cornering_speed_slope"],
+                                                              p["cornering_reference_speed"]))
+    Ay, By, Cy = state_space(p["model"], params, speed)
+    return Ay, By, Cy, np.eye(len(By))[0], params
+
+
+def _on_the_plane(p, heading: float) -> dict[str, float]:
+    """Roll, pitch, the pull across the heading and the antenna's lever (east, north) of a plant
+    heading ``heading`` on its plane (models.terrain, as the plant's step computes them)."""
+    from agrobot.components.models.terrain import attitude, ground_of, lever_offset, slope_pull
+
+    gx, gy = ground_of(p["slope_angle"], p["slope_downhill_heading"]).gradient(0.0, 0.0)
+    pe, pn = slope_pull(gx, gy)
+    roll, pitch = attitude(gx, gy, heading)
+    ox, oy = lever_offset(roll, pitch, heading, p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+    return {"roll": roll, "pitch": pitch, "pull": -pe * math.sin(heading) + pn * math.cos(heading),
+            "lever_east": ox, "lever_north": oy}
+
+
+def _per_heading(p, eps: float = 1e-6) -> dict[str, float]:
+    """d/d psi at psi = 0 of _on_the_plane's values (central differences)."""
+    up, down = _on_the_plane(p, eps), _on_the_plane(p, -eps)
+    return {k: (up[k] - down[k]) / (2 * eps) for k in up}
+
+
+def plant_ground(comp, speed: float) -> Ground | None:
+    """The ground under the yaw plant ``comp`` driving straight east at ``speed`` on its plane
+    (``slope_angle``, ``slope_downhill_heading``), None on level ground: roll, pitch and the pull across
+    the heading a_lat and their change with psi (models.terrain), the left specific force the IMU reads
+    there, f_y = g sin(roll) cos(pitch) (models.terrain.body_of with no acceleration), and the rear
+    axle's crab: the yaw dynamics' steady state holding the line against the pull, gamma = 0,
+
+        A z + B delta + E a_lat = 0,   C z = 0        (n + 1 equations in z, delta)
+
+    whose v_y (state 0) is R's sideways velocity (gamma = 0: every point of the body moves alike).
+    A height grid (``terrain_file``) is not linearised here: None (the caller says so)."""
+    from agrobot.components.models.terrain import GRAVITY
+    from agrobot.components.models.yaw_dynamics import lateral_disturbance_column
+
+    p = comp.p
+    if not float(p.get("slope_angle", 0.0) or 0.0) or p.get("terrain_file") or p.get("model") == "transfer_function":
+        return None
+    here, slope = _on_the_plane(p, 0.0), _per_heading(p)
+    A, B, C, _, _ = _yaw_dynamics(comp, speed)
+    n = len(B)
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n], M[:n, n], M[n, :n] = A, B, C
+    rhs = np.concatenate([-lateral_disturbance_column(n) * here["pull"], [0.0]])
+    z = np.linalg.solve(M, rhs)
+    return Ground(roll=here["roll"], pitch=here["pitch"], roll_per_heading=slope["roll"],
+                  pitch_per_heading=slope["pitch"], pull=here["pull"], pull_per_heading=slope["pull"],
+                  specific_force=GRAVITY * math.sin(here["roll"]) * math.cos(here["pitch"]), crab=float(z[0]))
+
+
+def yaw_plant(comp, step: float, speed: float) -> Block:
+    """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)
+    with the pose on the straight: psi' = gamma, y_cg' = v psi + v_y; R = CG - l_r psi, the
+    antenna a lever arm f ahead of R: y_ant = y_R + f psi, its velocity + f gamma.
+
+    On a plane (``slope_angle``) the deviations are about the steady state that holds the line
+    against the pull (plant_ground); the pull across the heading turns with it, dv_y/dt gains
+    (d a_lat / d psi) psi, roll and pitch follow the heading (d roll / d psi psi, ...), and the antenna's
+    lever, leaning with them, moves by (d lever / d psi) psi east and north; the line runs along the
+    velocity, the body turned by the crab angle psi_0 = -v_y0 / v off it, so a change of the crab
+    moves R along the line, x' = (v_y0 / v) v_y (outputs x_antenna, roll and pitch, the lateral
+    channel's share of them, only on a plane). The crab angle (0.5 deg on 10 deg) is left out elsewhere."""
+    from agrobot.components.models.yaw_dynamics import lateral_disturbance_column, zoh_discretize
+
+    p = comp.p
+    Ay, By, Cy, vy, params = _yaw_dynamics(comp, speed)
+    ground = plant_ground(comp, speed)
+    tilted = ground is not None
+    slope = _per_heading(p) if tilted else {"lever_north": float(p["antenna_forward"])}
     n = len(By)
-    A = np.zeros((n + 2, n + 2))
+    m = n + 3 if tilted else n + 2                   # on a plane also x: the crab's share of the along-track motion
+    A = np.zeros((m, m))
     A[:n, :n] = Ay
     A[n, :n] = Cy                                    # psi' = gamma
     A[n + 1, :n], A[n + 1, n] = vy, speed            # y' = v psi + v_y
-    B = np.concatenate([By, [0.0, 0.0]]).reshape(-1, 1)
-    e = np.eye(n + 2)
-    gamma, psi, y, lr, f = np.concatenate([Cy, [0, 0]]), e[n], e[n + 1], params.l_r, float(p["antenna_forward"])
-    lateral = np.concatenate([vy, [0, 0]])
+    if tilted:
+        A[:n, n] += lateral_disturbance_column(n) * slope["pull"]      # the pull turning with psi
+        A[n + 2, :n] = vy * ground.crab / speed      # x' = v cos psi - v_y sin psi, sin psi_0 = -v_y0 / v
+    B = np.concatenate([By, np.zeros(m - n)]).reshape(-1, 1)
+    e = np.eye(m)
+    gamma, psi, y, lr = np.concatenate([Cy, np.zeros(m - n)]), e[n], e[n + 1], params.l_r
+    f = slope["lever_north"]
+    turning = _on_the_plane(p, 0.0)["lever_east"] if tilted else f     # the plant's antenna velocity: the lever
+    lateral = np.concatenate([vy, np.zeros(m - n)])                   # turned by gamma, its lean held
     vel_rear = speed * psi + lateral - lr * gamma
     rows = {"yaw_rate": gamma, "lateral_velocity": lateral, "heading": psi, "y_cg": y, "y_rear": y - lr * psi,
-            "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi, "vel_north_antenna": vel_rear + f * gamma}
+            "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi,
+            "vel_north_antenna": vel_rear + turning * gamma}
+    if tilted:                                       # the lateral channel's share of these: nil on level ground
+        rows |= {"x_antenna": e[n + 2] + slope["lever_east"] * psi, "roll": slope["roll"] * psi,
+                 "pitch": slope["pitch"] * psi}
     Ad, Bd = zoh_discretize(A, B, step)
     return Block.of(comp.name, ["steer_angle"], list(rows), Ad, Bd, np.array(list(rows.values())), sampled=False)
 
@@ -84,10 +161,12 @@ def steering_hydraulics(comp, step: float, speed: float) -> Block:
     return Block.of(comp.name, ["steer_angle_cmd"], ["steer_angle", "steer_angle_measured"], A, B, C, sampled=False)
 
 
-def gps_sensor(comp, step: float, speed: float) -> Block:
+def gps_sensor(comp, step: float, speed: float, ground: Ground = LEVEL) -> Block:
     """The true antenna position and velocity ``latency`` / step samples late (noise, bias and
-    dropouts left out)."""
-    return delay_line(comp.name, ["y_true", "vel_north_true"], ["y", "vel_north"], int(round(comp.p["latency"] / step)))
+    dropouts left out); on a slope the east position too (its lateral-channel share: the leaning
+    antenna turning with the heading)."""
+    ports = ["y", "vel_north"] + ([] if ground.level else ["x"])
+    return delay_line(comp.name, [f"{p}_true" for p in ports], ports, int(round(comp.p["latency"] / step)))
 
 
 def pose_ekf(comp, step: float, speed: float) -> Block:
@@ -125,27 +204,33 @@ def pose_ekf(comp, step: float, speed: float) -> Block:
     return Block.of(comp.name, ["gps_y", "steer_angle"], ["y_rear", "heading", "y_cg"], A, B, C, D)
 
 
-INS_INPUTS = ["gps_x", "gps_y", "yaw_rate", "roll", "accel_left"]
+INS_INPUTS = ["gps_x", "gps_y", "yaw_rate", "roll", "accel_left", "pitch"]
 INS_OUTPUTS = ["y_rear", "heading", "y_cg", "lateral_velocity"]
 
 
-def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int = 0) -> Block:
-    """The GNSS/INS EKF (components.ins_ekf) on the straight, level ground, k at its initial value
-    k0 (f_y = 0 leaves k unobservable and uncoupled), its gains periodic: a fix every ``fix_every``-th
-    of its steps, at the steps j = ``fix_phase`` (mod fix_every). The covariance recursion is run with
-    the component's own predict and update until the gains of a whole cycle settle; then, all eight
-    states s = [x, y, psi, b_g, e_v, k, b_x, b_y] and the inputs of the previous step (the component
-    predicts with them):
+def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int = 0, ground: Ground = LEVEL) -> Block:
+    """The GNSS/INS EKF (components.ins_ekf) on the straight, its gains periodic: a fix every
+    ``fix_every``-th of its steps, at the steps j = ``fix_phase`` (mod fix_every). On level ground k
+    stays at its initial value k0 (f_y = 0 leaves k unobservable and uncoupled); on a slope
+    (``ground``: roll phi_0, pitch theta_0, the steady left specific force f_0 the IMU reads) the filter
+    has learnt the crab, k0 = -crab / (f_0 v) (Ground.slip_compliance), and k is coupled and observable.
+    The covariance recursion is run with the component's own predict and update at that operating
+    point until the gains of a whole cycle settle; then, all eight states s = [x, y, psi, b_g, e_v, k,
+    b_x, b_y] and the inputs of the previous step (the component predicts with them):
 
-        s- = F s + dt (0, -k0 v f_y', omega', 0, ...)   F = I + the component's own Jacobian entries,
-                                                         b_x, b_y decaying by exp(-dt / T)
-        s  = s- + K_j (z - H s- + (0, h roll))         on a fix step (H: the component's antenna Jacobian;
-                                                         the antenna's lean -h roll with terrain compensation)
+        s- = F s + dt (0, -k0 v f_y', omega' / (cos phi_0 cos theta_0), 0, ...)
+                                          F = I + the component's own Jacobian entries at (phi_0, theta_0,
+                                          f_0, k0): on a slope y' gains -f_0 v k and -k0 f_0 v e_v;
+                                          b_x, b_y decaying by exp(-dt / T)
+        s  = s- + K_j (z - H s- - (dh/dphi) phi - (dh/dtheta) theta)    on a fix step (H: the component's
+                                          antenna Jacobian at phi_0, theta_0; dh/dphi, dh/dtheta the
+                                          antenna's lean with terrain compensation, nil without)
 
-    outputs the updated R (north), heading, CG = R + l_r psi and the crab -k0 v f_y of this step."""
-    key = (repr(sorted(comp.p.items())), step, speed, fix_every, fix_phase)
+    outputs the updated R (north), heading, CG = R + l_r psi and the crab's deviation
+    -v (k0 f_y + f_0 k + k0 f_0 e_v) of this step."""
+    key = (repr(sorted(comp.p.items())), step, speed, fix_every, fix_phase, ground)
     if key not in _INS_BLOCKS:
-        _INS_BLOCKS[key] = _ins_ekf(comp, step, speed, fix_every, fix_phase)
+        _INS_BLOCKS[key] = _ins_ekf(comp, step, speed, fix_every, fix_phase, ground)
     block = _INS_BLOCKS[key]
     return Block(comp.name, block.inputs, block.outputs, block.A, block.B, block.C, block.D, block.ratio,
                  block.sampled, block.phases)
@@ -154,54 +239,75 @@ def ins_ekf(comp, step: float, speed: float, fix_every: int = 1, fix_phase: int 
 _INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters and operating point (seconds each)
 
 
-def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) -> Block:
+def _lean(p, roll: float, pitch: float, eps: float = 1e-7) -> np.ndarray:
+    """d (antenna east, north) / d (roll, pitch) at psi = 0 as the filter models the antenna
+    (nil without terrain compensation): a 2 x 2 matrix, central differences of models.terrain."""
+    from agrobot.components.models.terrain import lever_offset
+
+    if not p["terrain_compensation"]:
+        return np.zeros((2, 2))
+    lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+    out = np.zeros((2, 2))
+    for j, (dr, dp) in enumerate(((eps, 0.0), (0.0, eps))):
+        up = lever_offset(roll + dr, pitch + dp, 0.0, *lever)
+        down = lever_offset(roll - dr, pitch - dp, 0.0, *lever)
+        out[:, j] = (np.array(up) - np.array(down)) / (2 * eps)
+    return out
+
+
+def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int, ground: Ground) -> Block:
     from agrobot.components.ins_ekf import INSEKF
 
     p = comp.p
-    ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": 0.0})
+    k0 = (ground.slip_compliance(speed) if not ground.level else float(p["slip_compliance0"])) \
+        if p["crab_estimate"] else 0.0
+    roll, pitch, f0 = ground.roll, ground.pitch, ground.specific_force
+    ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": k0})
     ekf.initialize(0.0, step)
     n, R = 8, (p["fix_noise_std"] ** 2 + (p["antenna_height"] * p["attitude_noise_std"]) ** 2) * np.eye(2)
     gains, previous = [None] * fix_every, None
     for cycle in range(20000):
         for j in range(fix_every):
-            ekf.predict(0.0, 0.0, 0.0, 0.0, speed, step)
+            ekf.predict(0.0, roll, pitch, f0, speed, step)
+            ekf.s[:3] = 0.0                                      # stay at the operating point (psi = 0)
             if j == fix_phase % fix_every:
-                h, H = ekf.antenna(0.0, 0.0)
+                h, H = ekf.antenna(roll, pitch)
                 gains[j] = np.linalg.solve(H @ ekf.P @ H.T + R, H @ ekf.P).T
                 ekf.update(h, h, H, R)
         K = gains[fix_phase % fix_every]
         if previous is not None and np.allclose(previous, K, rtol=1e-10, atol=1e-14):
             break
         previous = K.copy()
-    k0 = float(p["slip_compliance0"]) if p["crab_estimate"] else 0.0
     ekf.s = np.array([0.0, 0.0, 0.0, 0.0, 0.0, k0, 0.0, 0.0])
-    _, entries, _ = ekf.jacobian(0.0, 0.0, 0.0, 0.0, speed, step)
+    _, entries, tilt = ekf.jacobian(0.0, roll, pitch, f0, speed, step)
     F = np.eye(n)
     for (i, j), f in entries.items():
         F[i, j] += f
     F[6, 6] = F[7, 7] = math.exp(-step / p["degraded_time_constant"])
-    _, H = ekf.antenna(0.0, 0.0)
-    lean = -float(p["antenna_height"]) if p["terrain_compensation"] else 0.0     # d(antenna north) / d roll
-    # X = [s; omega'; f_y'], u = (gps_x, gps_y, yaw_rate, roll, accel_left)
+    _, H = ekf.antenna(roll, pitch)
+    lean = _lean(p, roll, pitch)                                 # d(antenna) / d(roll, pitch)
+    # X = [s; omega'; f_y'], u = (gps_x, gps_y, yaw_rate, roll, accel_left, pitch)
     G = np.zeros((n, 2))
-    G[1, 1], G[2, 0] = -step * k0 * speed, step                  # from f_y' and omega'
+    G[1, 1], G[2, 0] = -step * k0 * speed, step / tilt           # from f_y' and omega'
     M = np.hstack([F, G])                                        # s- from X
     lr = float(p["l_r"])
     out = np.zeros((4, n))
     out[0, 1], out[1, 2], out[2, 1], out[2, 2] = 1.0, 1.0, 1.0, lr
-    crab = np.array([0.0, 0.0, 0.0, 0.0, -k0 * speed])           # lateral_velocity from this step's f_y
-    hold = np.zeros((2, 5))
+    out[3, 4], out[3, 5] = -k0 * f0 * speed, -f0 * speed         # the crab -k f_y v(1 + e_v) about k0, f0
+    crab = np.array([0.0, 0.0, 0.0, 0.0, -k0 * speed, 0.0])      # lateral_velocity from this step's f_y
+    hold = np.zeros((2, 6))
     hold[0, 2] = hold[1, 4] = 1.0                                # omega', f_y' <- this step's inputs
     phases = []
     for j in range(fix_every):
         if gains[j] is None:
-            Ms, Ns = M, np.zeros((n, 5))
+            Ms, Ns = M, np.zeros((n, 6))
         else:
             K = gains[j]
             Ms = M - K @ H @ M
-            Ns = np.zeros((n, 5))
+            Ns = np.zeros((n, 6))
             Ns[:, 0:2] = K
-            Ns[:, 3] = K[:, 1] * -lean
+            Ns[:, 3] = -K @ lean[:, 0]
+            Ns[:, 5] = -K @ lean[:, 1]
         A = np.vstack([Ms, np.zeros((2, n + 2))])
         B = np.vstack([Ns, hold])
         C = out @ Ms
@@ -213,16 +319,24 @@ def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int) ->
     return block
 
 
-def imu_sensor(comp, step: float, speed: float) -> Block:
-    """The IMU (components.imu_sensor) level and heading east without bias and noise: the gyro reads
-    the heading rate (cos(phi) cos(theta) = 1 to first order), roll reads roll, and the left specific
-    force is the north acceleration by a difference over one sample plus the gravity of the roll,
-    f_y = (v_n - v_n') / dt + g phi (the east acceleration is 0 on the operating point)."""
+def imu_sensor(comp, step: float, speed: float, ground: Ground = LEVEL) -> Block:
+    """The IMU (components.imu_sensor) heading east without bias and noise, on the ground's roll phi
+    and pitch theta: the gyro reads the heading rate about its up axis, cos(phi) cos(theta) gamma; roll
+    and pitch read roll and pitch; the left specific force (models.terrain.body_of, the east
+    acceleration 0 on the operating point) is the north acceleration by a difference over one sample
+    and the gravity of the attitude,
+
+        f_y = cos(phi) (v_n - v_n') / dt + g (cos(phi) cos(theta) d phi - sin(phi) sin(theta) d theta)
+
+    (level ground: f_y = (v_n - v_n') / dt + g phi)."""
     from agrobot.components.models.terrain import GRAVITY
 
-    return Block.of(comp.name, ["yaw_rate", "vel_north", "roll"], ["yaw_rate", "accel_left", "roll"],
-                    A=[[0.0]], B=[[0.0, 1.0, 0.0]], C=[[0.0], [-1.0 / step], [0.0]],
-                    D=[[1.0, 0.0, 0.0], [0.0, 1.0 / step, GRAVITY], [0.0, 0.0, 1.0]])
+    cr, sr = math.cos(ground.roll), math.sin(ground.roll)
+    cp, sp = math.cos(ground.pitch), math.sin(ground.pitch)
+    return Block.of(comp.name, ["yaw_rate", "vel_north", "roll", "pitch"], ["yaw_rate", "accel_left", "roll", "pitch"],
+                    A=[[0.0]], B=[[0.0, 1.0, 0.0, 0.0]], C=[[0.0], [-cr / step], [0.0], [0.0]],
+                    D=[[cr * cp, 0.0, 0.0, 0.0], [0.0, cr / step, GRAVITY * cr * cp, -GRAVITY * sr * sp],
+                       [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 
 def yaw_rate_mpc(comp, step: float, speed: float) -> Block:

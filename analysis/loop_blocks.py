@@ -16,13 +16,45 @@ class NoLinearModel(InputError):
 
 
 @dataclass(frozen=True)
+class Ground:
+    """The ground under the tractor at the operating point (heading east; analysis.component_models.
+    plant_ground): its roll and pitch and their change with the heading, the in-plane gravity across
+    the heading a_lat = P . (-sin psi, cos psi) (left positive) and its change with the heading, the
+    left specific force the IMU reads when driving straight there (g sin(roll) cos(pitch)), and the
+    rear axle's steady sideways velocity (its crab, left positive). All zero: level ground."""
+
+    roll: float = 0.0
+    pitch: float = 0.0
+    roll_per_heading: float = 0.0        # d roll / d psi
+    pitch_per_heading: float = 0.0       # d pitch / d psi
+    pull: float = 0.0                    # a_lat [m/s2]
+    pull_per_heading: float = 0.0        # d a_lat / d psi [m/s2/rad]
+    specific_force: float = 0.0          # f_y [m/s2]
+    crab: float = 0.0                    # [m/s]
+
+    @property
+    def level(self) -> bool:
+        return not any((self.roll, self.pitch, self.roll_per_heading, self.pitch_per_heading, self.pull,
+                        self.pull_per_heading, self.specific_force, self.crab))
+
+    def slip_compliance(self, speed: float) -> float:
+        """k of the INS's crab model v_lat = -k f_y v that matches this crab (0 on level ground)."""
+        return -self.crab / (self.specific_force * speed) if self.specific_force and speed else 0.0
+
+
+LEVEL = Ground()
+
+
+@dataclass(frozen=True)
 class OperatingPoint:
     """A straight line heading east at ``speed``, the CG on the reference's line
-    ``along_track_error`` behind its point (a time-based reference: what the speed loop leaves)."""
+    ``along_track_error`` behind its point (a time-based reference: what the speed loop leaves), on
+    ``ground`` (None: the ground of the study's yaw plant, found when its network is built)."""
 
     speed: float
     along_track_error: float = 0.0
     label: str = ""
+    ground: Ground | None = None
 
 
 @dataclass

@@ -2,7 +2,10 @@
 straight line, wired by its own connections, run on the orchestrator's schedule.
 
 Operating point: the tractor drives a straight line heading east (psi = 0) at speed v, on its
-reference, wheels centred. First-order deviations split into a longitudinal channel (east positions,
+reference, wheels centred; on a side slope (the yaw plant's plane) wheels and tyres hold the line
+against the pull, the IMU reads the slope's roll, pitch and specific force, and the INS has learnt the
+crab (component_models.plant_ground; the crab angle itself, 0.5 deg on 10 deg, is left out of psi).
+First-order deviations split into a longitudinal channel (east positions,
 speeds) and a lateral channel (north positions and velocities, heading, yaw rate, wheel angles); on a
 straight the two do not couple, so the steering loop is the lateral channel alone and the speed loop
 (speed PID, drivetrain, speed KF) only sets the operating point.
@@ -34,12 +37,12 @@ for the linear blocks, the multirate sampling included.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .component_models import linear_model_of, off_the_lateral_loop
-from .loop_blocks import Block, NoLinearModel, OperatingPoint
+from .component_models import linear_model_of, off_the_lateral_loop, plant_ground, yaw_plant
+from .loop_blocks import LEVEL, Block, Ground, NoLinearModel, OperatingPoint
 
 
 # --- the network -----------------------------------------------------------------------------------
@@ -207,6 +210,35 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
                                     f"{measured[k][j]:.6g} (finite differences); update lateral_linearisation")
 
 
+def _ground_argument(model, op: OperatingPoint) -> dict:
+    """{"ground": op.ground} for a linear model that takes the ground (the IMU, the INS), else {}."""
+    import inspect
+
+    if op.ground is None or "ground" not in inspect.signature(model).parameters:
+        return {}
+    return {"ground": op.ground}
+
+
+def ground_of(system, speed: float) -> Ground:
+    """The ground under the tractor at the operating point: that of the built system's yaw plant
+    (component_models.plant_ground; level when it has no slope)."""
+    for node in system.nodes.values():
+        comp = node.component
+        if linear_model_of(comp) is yaw_plant:
+            ground = plant_ground(comp, speed)
+            if ground is not None:
+                return ground
+    return LEVEL
+
+
+def study_ground(study, speed: float, resolver=None) -> Ground:
+    """ground_of the study's system."""
+    from agrobot.orchestrator.build import build_system
+    from agrobot.orchestrator.resolver import resolve
+
+    return ground_of(build_system(resolve(study, resolver)), speed)
+
+
 def block_of(comp, step: float, ratio: int, op: OperatingPoint) -> Block | None:
     """The component's block, or None when it has none (network_of then checks that it is off the
     loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
@@ -220,7 +252,7 @@ def block_of(comp, step: float, ratio: int, op: OperatingPoint) -> Block | None:
                         ratio, comp.sampled)
     model = linear_model_of(comp)
     if model is not None:
-        block = model(comp, step, op.speed)
+        block = model(comp, step, op.speed, **_ground_argument(model, op))
         block.ratio = ratio
         return block
     if isinstance(comp, CompositeComponent):
@@ -273,6 +305,8 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
     from agrobot.orchestrator.resolver import resolve
 
     system = build_system(resolve(study, resolver))
+    if op.ground is None:
+        op = replace(op, ground=ground_of(system, op.speed))
     blocks: dict[str, Block] = {}
     for name, node in system.nodes.items():
         block = block_of(node.component, node.step, node.ratio, op)
@@ -290,7 +324,8 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
             node = system.nodes[name]
             every = max(1, system.nodes[source].ratio // node.ratio)
             first = source in order and order.index(source) < order.index(name)
-            blocks[name] = linear_model_of(comp)(comp, node.step, op.speed, every, 0 if first else 1)
+            model = linear_model_of(comp)
+            blocks[name] = model(comp, node.step, op.speed, every, 0 if first else 1, **_ground_argument(model, op))
             blocks[name].ratio = node.ratio
     for (target, port), (source, output) in sources.items():
         if target in blocks and port in blocks[target].inputs and source not in blocks:

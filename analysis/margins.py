@@ -2,7 +2,9 @@
 (analysis.loop_models), and the delay at which its simulation loses stability.
 
 The loop is linearised on a straight at each operating point the reference declares (the figure-8:
-its speed; a field route: the work and turn speeds) and opened at three places:
+its speed; a field route: the work and turn speeds), on the yaw plant's side slope when it has one
+(analysis.loop_models: the pull turning with the heading, the tilted IMU, the INS with its learnt
+crab), and opened at three places:
 
 - the steering command (the whole loop: yaw-rate and path loops closed): its delay margin is the
   extra actuator delay the loop tolerates, the number the simulation checks;
@@ -34,7 +36,7 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
 from .loop_blocks import NoLinearModel, OperatingPoint
-from .loop_models import OpenLoop, network_of
+from .loop_models import OpenLoop, network_of, study_ground
 from .loop_anatomy import Anatomy, anatomy
 from .margins_simulation import simulate
 
@@ -208,7 +210,17 @@ def analyse(study: Study, speed_excess_value: float | None = None, progress: Cal
         if spec.get("turn_radius"):
             notes.append(f"{label}: linearised on a straight; its curves of {spec['turn_radius']:g} m radius are not "
                          f"(--simulate checks the course)")
-        op = OperatingPoint(float(spec["speed"]), float(e), label)
+        ground = study_ground(study, float(spec["speed"]))
+        if model.parameters(an.offset_key.split(".")[0]).get("terrain_file"):
+            notes.append(f"{label}: the yaw plant's ground is a height grid: linearised on level ground (a plane, "
+                         f"slope_angle, is linearised on its slope)")
+        if not ground.level:
+            notes.append(f"{label}: on the yaw plant's side slope: roll {math.degrees(ground.roll):.2f} deg, pitch "
+                         f"{math.degrees(ground.pitch):.2f} deg, pull across the heading {ground.pull:+.3f} m/s2 "
+                         f"({ground.pull_per_heading:+.3f} m/s2/rad with the heading), IMU f_y {ground.specific_force:+.3f} "
+                         f"m/s2, the crab {100 * ground.crab:+.2f} cm/s learnt by the INS (k = "
+                         f"{ground.slip_compliance(float(spec['speed'])):.2e} s2/m)")
+        op = OperatingPoint(float(spec["speed"]), float(e), label, ground)
         loops = open_loops(study, an, op)
         margins = {name: margins_of(loop) for name, loop in loops.items()}
         ok = loops["whole loop"].spectral_radius() < STABLE_RADIUS

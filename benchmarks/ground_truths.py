@@ -1,6 +1,6 @@
 """Guidance on real ground: the figures of docs/slopes-and-outages.md, from commands anyone can rerun.
 
-    python3 benchmarks/ground_truths.py [--quick] [--only slope|outage|bridging|iso] [--figure docs/img/outage_drift.png]
+    python3 benchmarks/ground_truths.py [--quick] [--only slope|shapes|outage|bridging|iso] [--figure docs/img/outage_drift.png]
 
 1. Side slope: the tractor's and the implement's cross-track error on the swaths of a real parcel
    across a 10 deg side slope with RTK noise, with and without terrain compensation and the crab
@@ -91,6 +91,30 @@ def slope_table(seeds: list[int]) -> None:
     print("command: python -m agrobot run studies/field_coverage.toml --out OUT --set field.max_swaths=3 "
           "--set field.headland_work=0 --set \"tractor.slope_angle=10 deg\" --set \"tractor.slope_downhill_heading=-90 deg\""
           " [--set ekf.terrain_compensation=0] [--set ekf.crab_estimate=0] [--set study.seed=N]\n")
+
+
+def shapes_table(seeds: list[int]) -> None:
+    """The slope on other field shapes, the side-shift's integral before (0.5 1/s) and now: a field with
+    a bay (ISOXML euDZYo7, 4 swaths) and a generated trapezoid (tests/test_slope_implement.py, 3 swaths)."""
+    import tempfile
+
+    from tests.test_slope_implement import trapezoid
+
+    folder = Path(tempfile.mkdtemp())
+    bay = (f"field.path={REAL / 'isoxml_dev4ag_timelogs' / 'TASKDATA.XML'}", "field.name=euDZYo7", "field.max_swaths=4")
+    trap = (f"field.path={trapezoid(folder / 'trapezoid.geojson')}", "field.max_swaths=3")
+    print("1b. Side slope of 10 deg on other field shapes: swath P95 (turns excluded)")
+    head = f"{'field, side-shift k_i':<48}{'tractor P95':>22}{'implement P95':>22}"
+    print(head + "\n" + "-" * len(head))
+    for name, field in (("euDZYo7 (a bay), 4 swaths", bay), ("trapezoid, 3 swaths", trap)):
+        for ki in (0.5, 2.0):
+            over = (*field, "field.headland_work=0", *SLOPE, f"implement.side_shift_integral={ki}")
+            ms = [run("field_coverage.toml", over, seed).metrics for seed in seeds]
+            print(f"{name + f', k_i {ki:g} 1/s':<48}{spread([m['tractor_xte_swaths_p95_m'] for m in ms]):>22}"
+                  f"{spread([m['implement_xte_swaths_p95_m'] for m in ms]):>22}", flush=True)
+    print("command: python -m agrobot run studies/field_coverage.toml --out OUT --set field.path=FIELD [--set field.name=NAME] "
+          "--set field.max_swaths=N --set field.headland_work=0 --set \"tractor.slope_angle=10 deg\" "
+          "--set \"tractor.slope_downhill_heading=-90 deg\" [--set implement.side_shift_integral=0.5] [--set study.seed=N]\n")
 
 
 def outage_runs(quality, seeds: list[int]):
@@ -246,12 +270,14 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true", help="one seed")
     parser.add_argument("--figure", type=Path, default=None, help="write the outage figure (PNG) there")
-    parser.add_argument("--only", choices=("slope", "outage", "bridging", "iso"), default=None)
+    parser.add_argument("--only", choices=("slope", "shapes", "outage", "bridging", "iso"), default=None)
     args = parser.parse_args()
     seeds = [27] if args.quick else [27, 28, 29]
     t0 = time.perf_counter()
     if args.only in (None, "slope"):
         slope_table(seeds)
+    if args.only in (None, "shapes"):
+        shapes_table(seeds)
     if args.only in (None, "outage"):
         outage_table(seeds, args.figure)
     if args.only in (None, "outage", "bridging"):
