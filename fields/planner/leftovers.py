@@ -17,7 +17,8 @@ length the long side of its smallest rotated rectangle. Its kind, the first that
 Whether a pass of its own would work it: one pass of the working width w along its medial axis
 covers a piece at most w wide; the tractor can drive that axis when the axis (here the long centre
 line of its smallest rotated rectangle, clipped to the piece) keeps the tractor's half width inside
-the field. Such passes are named (``pass_m``), not driven: the route does not join them.
+the field. fields.planner.leftover_passes drives such passes, and passes round the corners at the
+tightest radius; what they leave is named here with why.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ class Leftover:
     why: str                    # why it is not worked, and what would work it
     centroid: tuple[float, float]
     pass_m: float = 0.0         # m: a pass of its own along its medial axis that would cover it (0: none)
+    shape: Polygon | None = None  # the piece itself
 
     def summary(self) -> dict:
         return {"kind": self.kind, "area_m2": round(self.area, 2), "width_m": round(self.width, 2),
@@ -106,13 +108,14 @@ def leftovers(plan, covered) -> tuple[list[Leftover], float]:
             axis = centre_line(piece)
             if axis.length > 0 and tractor_room.buffer(1e-6).contains(axis):
                 pass_m = float(axis.length)
-                why += f"; one pass of its own along its medial axis ({pass_m:.0f} m) would cover it, not joined into " \
-                       "the route"
+                why += f"; one pass of its own along its medial axis ({pass_m:.0f} m) would cover it" + (
+                    ": no such pass keeps its run-in and run-out inside the field and works it" if s.leftover_passes else
+                    ", not driven: leftover passes are off (--leftover-passes on)")
             else:
                 why += "; a pass along its medial axis would take the tractor within its half width of the boundary"
         else:
             why += f"; wider ({width:.1f} m) than one pass of {s.working_width:g} m"
         named.append(Leftover(kind, float(piece.area), width, length, why,
-                              (float(piece.centroid.x), float(piece.centroid.y)), pass_m))
+                              (float(piece.centroid.x), float(piece.centroid.y)), pass_m, piece))
     named.sort(key=lambda x: -x.area)
     return named, slivers

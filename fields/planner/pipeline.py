@@ -1,6 +1,7 @@
 """A coverage plan of a field, in stages (after Fields2Cover):
 
     headland -> decomposition -> swaths (an angle objective) -> route order -> turns -> speed profile
+             -> passes of their own for what is left (fields.planner.leftover_passes)
 
 Before any of it the settings and the field are checked (finite values in range, coordinates on
 the Earth, a number of swaths that fits memory, a turn radius the field can hold), so that a plan
@@ -10,13 +11,14 @@ to 3) when a turn at a slanted edge or a corner leaves the field.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass, field as dc_field, replace
 
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
 
 from ..field import Field, FieldError
-from . import decomposition, headland, route_order, swaths
+from . import decomposition, headland, leftover_passes, route_order, swaths
+from .applied import as_applied
 from .path import Path
 from .settings import Settings
 from .speed import speed_profile
@@ -134,10 +136,38 @@ def _layout(field: Field, settings: Settings, n: int, order: str, skip: int, whe
     segments = Joiner(field, settings, n, where, notes, pieces).join(route)
     if order == "optimised":
         route, segments = _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces)
-    path = Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
     inner = pieces[0] if len(pieces) == 1 else unary_union(pieces)
-    return Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
-                path, tuple(notes + widened), tuple(pieces), tuple(angles))
+    draft = Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
+                 _path(segments, settings), tuple(notes + widened), tuple(pieces), tuple(angles))
+    first = max([count] + [sw.index + 1 for c in cells for sw in c.swaths])    # numbers no swath has
+    return _with_leftover_passes(draft, first, where, pieces)
+
+
+def _path(segments, settings: Settings) -> Path:
+    return Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
+
+
+def _with_leftover_passes(draft: Plan, first: int, where: str, pieces) -> Plan:
+    """The plan with passes of its own for what it leaves (fields.planner.leftover_passes) driven
+    after the rest, when ``leftover_passes`` is on and the route works the whole field; the choice in
+    the notes either way."""
+    s = draft.settings
+    if s.max_swaths or not s.headland_work:
+        return draft
+    if not s.leftover_passes:
+        return replace(draft, notes=draft.notes + ("leftover passes off: what the route leaves is named in plan.json, "
+                                                   "not worked (--leftover-passes on works it)",))
+    extra, what = leftover_passes.passes(draft, as_applied(draft).shape, first)
+    if not extra:
+        return replace(draft, notes=draft.notes + (f"leftover passes: {what}",))
+    notes: list[str] = []
+    segments, joined = Joiner(draft.field, s, draft.headland_passes, where, notes, pieces).more(
+        list(draft.path.segments), extra)
+    k = len(draft.route.passes)
+    route = Route(draft.route.passes + tuple(joined), draft.route.cell_starts | frozenset(range(k, k + len(joined))),
+                  draft.route.how + f"; then {len(joined)} leftover pass(es)")
+    return replace(draft, route=route, path=_path(segments, s), notes=draft.notes + tuple(notes) + (
+        f"leftover passes (--leftover-passes off to leave them): {what}",))
 
 
 def idle_distance(segments) -> float:

@@ -102,6 +102,31 @@ class Joiner:
             self._end(pose)
         return self.segments
 
+    def more(self, segments: list[Segment], passes: Sequence[Swath]) -> tuple[list[Segment], list[Swath]]:
+        """Further passes after a joined route (before its transit to the end point): each by a
+        turn, else a transit along a headland pass, as a move to another cell; a pass that cannot be
+        joined inside the field is left out (the notes say so). (segments, the passes joined)."""
+        s = self.settings
+        self.segments = list(segments)
+        end = s.end_point
+        if end is not None and self.segments and self.segments[-1].kind == TRANSIT and \
+                math.hypot(*(self.segments[-1].points[-1, :2] - np.asarray(end))) < 1e-6:
+            self.segments.pop()
+        p = self.segments[-1].points[-1]
+        pose, last, joined = (float(p[0]), float(p[1]), float(p[2])), None, []
+        for sw in passes:
+            try:
+                pose = self._swath(sw, pose, last, True, None)
+            except FieldError:
+                self.notes.append(f"a leftover pass of {sw.length:.0f} m from ({sw.start[0]:.1f}, {sw.start[1]:.1f}) m: "
+                                  f"no turn onto it inside the field; left out")
+                continue
+            joined.append(sw)
+            last = sw
+        if end is not None:
+            self._end(pose)
+        return self.segments, joined
+
     # --- the user's start and end points ------------------------------------------------------------
     def _start(self, route: Route) -> tuple[float, float, float]:
         """The start pose: at the user's point, facing the first pass's entry."""
