@@ -28,7 +28,7 @@ from shapely import maximum_inscribed_circle
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
-from .curved_swaths import curvature, tractor_line
+from .curved_swaths import curvature, smooth_parts, tractor_line
 from .headland import ring_path
 from .leftovers import MIN_AREA, centre_line, leftovers
 from .sampling import POLYLINE_STEP
@@ -37,6 +37,7 @@ from .types import Swath
 
 MIN_GAIN = 2.0          # m^2 of ground not worked before that a pass of its own must work
 END_MARGIN = 1.0        # m a corner pass runs on beyond the last point whose strip reaches the piece
+KAPPA_SLACK = 1.25      # the rings' arcs at R sampled every 0.5 m read up to this over 1/R; a reflex corner far more
 
 
 def strip(points: np.ndarray, width: float) -> Polygon:
@@ -46,7 +47,7 @@ def strip(points: np.ndarray, width: float) -> Polygon:
 
 def drivable(points: np.ndarray, settings, inside: Polygon) -> bool:
     """The pass within the curvature 1/R, and the tractor on it (run-in and run-out included) inside."""
-    if len(points) > 2 and np.max(curvature(points)) > 1.05 / settings.turn_radius:
+    if len(points) > 2 and np.max(curvature(points)) > KAPPA_SLACK / settings.turn_radius:
         return False
     d0 = points[1] - points[0]
     d1 = points[-1] - points[-2]
@@ -85,9 +86,8 @@ def corner_passes(plan, todo, inside: Polygon) -> tuple[list[np.ndarray], object
         for ring in ring_path(plan.field, (k + 0.5) * w, s.turn_radius):
             xy = ring[:, :2]
             near = shapely.dwithin(shapely.points(xy), todo, 0.5 * w)
-            for part in runs(xy, near, margin):
-                if len(part) < 2:
-                    continue
+            for part in (p for run in runs(xy, near, margin)
+                         for p in smooth_parts(LineString(run), KAPPA_SLACK / s.turn_radius)):   # cut at a reflex corner
                 gained = strip(part, w).intersection(todo).area
                 if gained >= MIN_GAIN and drivable(part, s, inside):
                     chosen.append(part)
