@@ -117,19 +117,26 @@ def R_TIP(p) -> float:
     return p.settings.turn_radius + 0.5 * p.settings.working_width + 1.0
 
 
-def test_a_neck_left_between_pieces_gets_a_pass_along_its_medial_axis_and_a_wide_one_does_not():
-    """The neck of two 60 x 50 m halves (hand-built plan, as in test_whole_field): its band 32 x 2 m
-    at y = 25 is worked by one straight pass along y = 25, its run-in and run-out (8.1 m) inside the
-    field; a band 5 m wide (wider than the working width) gets none."""
+def test_a_neck_left_between_pieces_gets_passes_along_its_medial_axis_and_a_too_wide_one_none():
+    """The neck of two 60 x 50 m halves (hand-built, as in test_whole_field), 14 m wide: a band
+    32 x 2 m at y = 25 is worked by one straight pass along y = 25, its run-in and run-out (8.1 m)
+    inside the field; a band 5 m across by two, w - overlap apart about y = 25 (2.95 m: 5 <= 3 + 2.95);
+    a band 13 m across (over 3 + 3 x 2.95, four passes) gets none."""
     field = Polygon([(0, 0), (60, 0), (60, 18), (80, 18), (80, 0), (140, 0), (140, 50), (80, 50), (80, 32), (60, 32),
                      (60, 50), (0, 50)])
     s = Settings()
     inside = field.buffer(-s.half_width)
-    neck = Polygon([(54, 24), (86, 24), (86, 26), (54, 26)])
-    (line,), rest = axis_passes(SimpleNamespace(settings=s), neck, inside)
+    owner = SimpleNamespace(settings=s)
+
+    def band(half: float) -> Polygon:
+        return Polygon([(54, 25 - half), (86, 25 - half), (86, 25 + half), (54, 25 + half)])
+
+    (line,), rest = axis_passes(owner, band(1.0), inside)
     assert sorted(line[:, 0]) == pytest.approx([54.0, 86.0], abs=0.05)
     assert line[:, 1] == pytest.approx([25.0, 25.0], abs=0.05)
-    assert rest.area < 0.05 * neck.area
-    wide = Polygon([(54, 22.5), (86, 22.5), (86, 27.5), (54, 27.5)])
-    none, rest = axis_passes(SimpleNamespace(settings=s), wide, inside)
-    assert none == [] and rest.area == pytest.approx(wide.area)
+    assert rest.area < 0.05 * band(1.0).area
+    two, rest = axis_passes(owner, band(2.5), inside)
+    assert sorted(float(p[0, 1]) for p in two) == pytest.approx([25 - 1.475, 25 + 1.475], abs=0.05)
+    assert rest.area < 0.05 * band(2.5).area
+    none, rest = axis_passes(owner, band(6.5), inside)
+    assert none == [] and rest.area == pytest.approx(band(6.5).area)

@@ -8,9 +8,10 @@ the route and joined by the planner's own turns and headland transits (fields.pl
   leaves (R + w/2)^2 (1 - pi/4) (6.5 m^2 for R = 4 m, w = 3 m), the most a forward pass can reach.
   The corner pass beside the outer pass is cheaper than a whole extra headland round: only the
   stretch at the corner is driven twice.
-- **Medial-axis passes**: a piece at most w wide (a neck or a strip between the inner field's
-  pieces, a strip along a pass) along the long centre line of its smallest rotated rectangle
-  (leftovers.centre_line).
+- **Medial-axis passes**: along the long centre line of a piece's smallest rotated rectangle
+  (leftovers.centre_line; a neck or a strip between the inner field's pieces, a band along the
+  middle of a field too narrow for more headland passes, a strip along a pass): one pass for a piece
+  at most w across, m side by side (w - overlap apart) for one up to w + (m - 1)(w - overlap).
 
 A pass is kept when its strip works at least MIN_GAIN m^2 not worked before, its curvature is
 within 1/R, and the tractor keeps its half width inside the field on it and on its straight run-in
@@ -24,19 +25,19 @@ import math
 
 import numpy as np
 import shapely
-from shapely import maximum_inscribed_circle
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
 from .curved_swaths import curvature, smooth_parts, tractor_line
 from .headland import ring_path
-from .leftovers import MIN_AREA, centre_line, leftovers
+from .leftovers import MIN_AREA, centre_line, leftovers, long_axis
 from .sampling import POLYLINE_STEP
 from .turns import outside, polyline_path
 from .types import Swath
 
 MIN_GAIN = 2.0          # m^2 of ground not worked before that a pass of its own must work
 END_MARGIN = 1.0        # m a corner pass runs on beyond the last point whose strip reaches the piece
+MAX_ACROSS = 4          # passes side by side along one leftover's centre line, at most
 KAPPA_SLACK = 1.25      # the rings' arcs at R sampled every 0.5 m read up to this over 1/R; a reflex corner far more
 
 
@@ -96,18 +97,22 @@ def corner_passes(plan, todo, inside: Polygon) -> tuple[list[np.ndarray], object
 
 
 def axis_passes(plan, todo, inside: Polygon) -> tuple[list[np.ndarray], object]:
-    """Straight passes along the centre line of each piece left no wider than the working width."""
+    """Straight passes along the centre line of each piece left (leftovers.long_axis): m of them
+    side by side, w - overlap apart, m the fewest that span its width (at most MAX_ACROSS)."""
     s = plan.settings
     chosen = []
     for piece in [g for g in getattr(todo, "geoms", [todo]) if isinstance(g, Polygon) and g.area >= MIN_AREA]:
-        if 2.0 * float(maximum_inscribed_circle(piece, tolerance=0.01).length) > s.working_width:
+        across = long_axis(piece)[2]
+        m = max(1, math.ceil((across - s.working_width) / s.spacing - 1e-9) + 1)
+        if m > MAX_ACROSS:
             continue
-        axis = centre_line(piece)
-        if axis.length < POLYLINE_STEP:
-            continue
-        part = np.asarray(axis.coords)[[0, -1]]
-        if strip(part, s.working_width).intersection(piece).area >= MIN_GAIN and drivable(part, s, inside):
-            chosen.append(part)
+        for j in range(m):
+            axis = centre_line(piece, (j - 0.5 * (m - 1)) * s.spacing)
+            if axis.length < POLYLINE_STEP:
+                continue
+            part = np.asarray(axis.coords)[[0, -1]]
+            if strip(part, s.working_width).intersection(piece).area >= MIN_GAIN and drivable(part, s, inside):
+                chosen.append(part)
     if chosen:
         todo = todo.difference(unary_union([strip(p, s.working_width) for p in chosen]))
     return chosen, todo
@@ -138,6 +143,6 @@ def passes(plan, covered, first_index: int) -> tuple[list[Swath], str]:
         at = p[-1]
     swaths = [Swath(first_index + i, first_index + i, p) for i, p in enumerate(ordered)]
     length = sum(sw.length for sw in swaths)
-    return swaths, (f"{len(corners)} corner pass(es) at the turn radius {s.turn_radius:g} m and {len(axes)} pass(es) "
-                    f"along a leftover's medial axis, {length:.0f} m, work {left.area - todo.area:.0f} of the "
+    return swaths, (f"{len(corners)} pass(es) along the boundary at the turn radius {s.turn_radius:g} m (the corners) "
+                    f"and {len(axes)} along a leftover's medial axis, {length:.0f} m, work {left.area - todo.area:.0f} of the "
                     f"{left.area:.0f} m^2 the route leaves")

@@ -57,14 +57,24 @@ def _parts(geom) -> list[Polygon]:
     return [g for g in getattr(geom, "geoms", []) if isinstance(g, Polygon)]
 
 
-def centre_line(piece: Polygon) -> LineString:
-    """The long centre line of the piece's smallest rotated rectangle, clipped to the piece."""
+def long_axis(piece: Polygon) -> tuple[np.ndarray, np.ndarray, float]:
+    """(a, b, across): the long centre line a-b of the piece's smallest rotated rectangle (from the
+    mid-point of one short side to the other's) and the rectangle's short side."""
     xy = np.asarray(piece.minimum_rotated_rectangle.exterior.coords)[:4]
     sides = np.hypot(*np.diff(np.vstack([xy, xy[:1]]), axis=0).T)
     k = int(np.argmax(sides[:2]))                           # a long side from corner k
     a = 0.5 * (xy[k] + xy[(k + 3) % 4])                     # mid-points of the two short sides
     b = 0.5 * (xy[(k + 1) % 4] + xy[(k + 2) % 4])
-    clipped = LineString([a, b]).intersection(piece)
+    return a, b, float(sides[(k + 1) % 4])
+
+
+def centre_line(piece: Polygon, offset: float = 0.0) -> LineString:
+    """The long centre line of the piece's smallest rotated rectangle (moved ``offset`` to its
+    left), clipped to the piece: its longest part inside."""
+    a, b, _ = long_axis(piece)
+    d = (b - a) / max(float(np.hypot(*(b - a))), 1e-12)
+    left = offset * np.array([-d[1], d[0]])
+    clipped = LineString([a + left, b + left]).intersection(piece)
     parts = [g for g in getattr(clipped, "geoms", [clipped]) if isinstance(g, LineString) and not g.is_empty]
     return max(parts, key=lambda g: g.length) if parts else LineString()
 
