@@ -16,7 +16,8 @@ the route and joined by the planner's own turns and headland transits (fields.pl
 A pass is kept when its strip works at least MIN_GAIN m^2 not worked before, its curvature is
 within 1/R, and the tractor keeps its half width inside the field on it and on its straight run-in
 and run-out (the implement's length and ``settle``; on a curve the rear axle runs outside the
-implement's line: curved_swaths.tractor_line). The passes are driven nearest first from where the
+implement's line: curved_swaths.tractor_line); where it would not, the pass is cut there (CUT m
+either side left out, a straight pass shortened from that end) and its parts judged again. The passes are driven nearest first from where the
 route ends, each entered from its nearer end.
 """
 from __future__ import annotations
@@ -38,6 +39,7 @@ from .types import Swath
 MIN_GAIN = 2.0          # m^2 of ground not worked before that a pass of its own must work
 END_MARGIN = 1.0        # m a corner pass runs on beyond the last point whose strip reaches the piece
 MAX_ACROSS = 4          # passes side by side along one leftover's centre line, at most
+CUT = 3.0               # m left out either side of where a pass would take the tractor out of the field
 KAPPA_SLACK = 1.25      # the rings' arcs at R sampled every 0.5 m read up to this over 1/R; a reflex corner far more
 
 
@@ -46,16 +48,38 @@ def strip(points: np.ndarray, width: float) -> Polygon:
     return LineString(points).buffer(0.5 * width, cap_style="flat")
 
 
-def drivable(points: np.ndarray, settings, inside: Polygon) -> bool:
-    """The pass within the curvature 1/R, and the tractor on it (run-in and run-out included) inside."""
-    if len(points) > 2 and np.max(curvature(points)) > KAPPA_SLACK / settings.turn_radius:
-        return False
+def off_field(points: np.ndarray, settings, inside: Polygon) -> np.ndarray | None:
+    """Where the pass is not drivable: its first point with a curvature over 1/R, or the first point
+    of the tractor on it (run-in and run-out included) outside ``inside``; None when it is drivable."""
+    if len(points) > 2:
+        bent = np.flatnonzero(curvature(points) > KAPPA_SLACK / settings.turn_radius)
+        if len(bent):
+            return points[bent[0] + 1]
     d0 = points[1] - points[0]
     d1 = points[-1] - points[-2]
     run_in = points[0] - settings.lead * d0 / max(float(np.hypot(*d0)), 1e-12)
     run_out = points[-1] + settings.lead * d1 / max(float(np.hypot(*d1)), 1e-12)
     axle = tractor_line(points, settings.hitch_offset, settings.drawbar, settings.lead)
-    return outside(polyline_path(np.vstack([run_in, axle, run_out])), inside) is None
+    return outside(polyline_path(np.vstack([run_in, axle, run_out])), inside)
+
+
+def drivable_parts(points: np.ndarray, settings, inside: Polygon) -> list[np.ndarray]:
+    """The pass, or where the tractor would leave the field its drivable parts either side (CUT m
+    round the point left out; parts under 2 m dropped)."""
+    if len(points) < 2 or float(np.sum(np.hypot(*np.diff(points, axis=0).T))) < 2.0:
+        return []
+    bad = off_field(points, settings, inside)
+    if bad is None:
+        return [points]
+    i = int(np.argmin(np.hypot(points[:, 0] - bad[0], points[:, 1] - bad[1])))
+    cut = max(1, int(math.ceil(CUT / POLYLINE_STEP)))
+    if len(points) == 2:                                    # a straight pass: shorten it from its nearer end
+        d = points[1] - points[0]
+        step = CUT * d / max(float(np.hypot(*d)), 1e-12)
+        shorter = np.array([points[0] + step, points[1]]) if i == 0 else np.array([points[0], points[1] - step])
+        return drivable_parts(shorter, settings, inside)
+    return drivable_parts(points[:max(i - cut, 0)], settings, inside) + \
+        drivable_parts(points[i + cut + 1:], settings, inside)
 
 
 def runs(ring: np.ndarray, near: np.ndarray, margin: int) -> list[np.ndarray]:
@@ -89,10 +113,10 @@ def corner_passes(plan, todo, inside: Polygon) -> tuple[list[np.ndarray], object
             near = shapely.dwithin(shapely.points(xy), todo, 0.5 * w)
             for part in (p for run in runs(xy, near, margin)
                          for p in smooth_parts(LineString(run), KAPPA_SLACK / s.turn_radius)):   # cut at a reflex corner
-                gained = strip(part, w).intersection(todo).area
-                if gained >= MIN_GAIN and drivable(part, s, inside):
-                    chosen.append(part)
-                    todo = todo.difference(strip(part, w))
+                for piece in drivable_parts(part, s, inside):
+                    if strip(piece, w).intersection(todo).area >= MIN_GAIN:
+                        chosen.append(piece)
+                        todo = todo.difference(strip(piece, w))
     return chosen, todo
 
 
@@ -110,9 +134,9 @@ def axis_passes(plan, todo, inside: Polygon) -> tuple[list[np.ndarray], object]:
             axis = centre_line(piece, (j - 0.5 * (m - 1)) * s.spacing)
             if axis.length < POLYLINE_STEP:
                 continue
-            part = np.asarray(axis.coords)[[0, -1]]
-            if strip(part, s.working_width).intersection(piece).area >= MIN_GAIN and drivable(part, s, inside):
-                chosen.append(part)
+            for part in drivable_parts(np.asarray(axis.coords)[[0, -1]], s, inside):
+                if strip(part, s.working_width).intersection(piece).area >= MIN_GAIN:
+                    chosen.append(part)
     if chosen:
         todo = todo.difference(unary_union([strip(p, s.working_width) for p in chosen]))
     return chosen, todo
@@ -144,5 +168,5 @@ def passes(plan, covered, first_index: int) -> tuple[list[Swath], str]:
     swaths = [Swath(first_index + i, first_index + i, p) for i, p in enumerate(ordered)]
     length = sum(sw.length for sw in swaths)
     return swaths, (f"{len(corners)} pass(es) along the boundary at the turn radius {s.turn_radius:g} m (the corners) "
-                    f"and {len(axes)} along a leftover's medial axis, {length:.0f} m, work {left.area - todo.area:.0f} of the "
+                    f"and {len(axes)} along a leftover's medial axis, {length:.0f} m, to work {left.area - todo.area:.0f} of the "
                     f"{left.area:.0f} m^2 the route leaves")

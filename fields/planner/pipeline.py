@@ -166,8 +166,9 @@ def _with_leftover_passes(draft: Plan, first: int, where: str, pieces) -> Plan:
     k = len(draft.route.passes)
     route = Route(draft.route.passes + tuple(joined), draft.route.cell_starts | frozenset(range(k, k + len(joined))),
                   draft.route.how + f"; then {len(joined)} leftover pass(es)")
-    return replace(draft, route=route, path=_path(segments, s), notes=draft.notes + tuple(notes) + (
-        f"leftover passes (--leftover-passes off to leave them): {what}",))
+    return replace(draft, route=route, path=_path(segments, s), notes=draft.notes + (
+        f"leftover passes (--leftover-passes off to leave them): {what}; {len(joined)} of the {len(extra)} joined into "
+        "the route",) + tuple(notes))
 
 
 def idle_distance(segments) -> float:

@@ -104,8 +104,9 @@ class Joiner:
 
     def more(self, segments: list[Segment], passes: Sequence[Swath]) -> tuple[list[Segment], list[Swath]]:
         """Further passes after a joined route (before its transit to the end point): each by a
-        turn, else a transit along a headland pass, as a move to another cell; a pass that cannot be
-        joined inside the field is left out (the notes say so). (segments, the passes joined)."""
+        turn, else a transit along a headland pass, as a move to another cell, driven either way; a
+        pass that cannot be joined inside the field is left out (the notes say so). (segments, the
+        passes joined, as driven)."""
         s = self.settings
         self.segments = list(segments)
         end = s.end_point
@@ -113,16 +114,21 @@ class Joiner:
                 math.hypot(*(self.segments[-1].points[-1, :2] - np.asarray(end))) < 1e-6:
             self.segments.pop()
         p = self.segments[-1].points[-1]
-        pose, last, joined = (float(p[0]), float(p[1]), float(p[2])), None, []
+        pose, last, joined, missed = (float(p[0]), float(p[1]), float(p[2])), None, [], []
         for sw in passes:
-            try:
-                pose = self._swath(sw, pose, last, True, None)
-            except FieldError:
-                self.notes.append(f"a leftover pass of {sw.length:.0f} m from ({sw.start[0]:.1f}, {sw.start[1]:.1f}) m: "
-                                  f"no turn onto it inside the field; left out")
-                continue
-            joined.append(sw)
-            last = sw
+            for way in (sw, sw.reversed()):                 # either way along it
+                try:
+                    pose = self._swath(way, pose, last, True, None)
+                except FieldError:
+                    continue
+                joined.append(way)
+                last = way
+                break
+            else:
+                missed.append(sw)
+        if missed:
+            self.notes.append(f"{len(missed)} leftover pass(es), {sum(sw.length for sw in missed):.0f} m: no turn onto "
+                              f"them inside the field either way; left out")
         if end is not None:
             self._end(pose)
         return self.segments, joined
@@ -197,7 +203,8 @@ class Joiner:
             path = straight(run_in, sw.start)
         run_out = sw.end + s.lead * d_out
         axle = tractor_line(sw.points, s.hitch_offset, s.drawbar, s.lead)
-        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(axle)),
+        work = sw.points if len(sw.points) > 2 else None             # a curved swath: the implement on it, not the axle
+        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(axle), work),
                           Segment(TURN, -1, straight(sw.end, run_out))]
         return run_out[0], run_out[1], math.atan2(d_out[1], d_out[0])
 
