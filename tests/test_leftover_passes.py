@@ -89,7 +89,8 @@ def test_the_corners_are_worked_by_passes_of_their_own_and_only_their_tips_are_l
     assert 1.0 - left_on / f.area >= 0.99
     assert crossings(on) == 0
     # the passes are driven after the rest, as swaths of the route, and the plan says so
-    extra = on.route.passes[len(off.route.passes):]
+    extra = on.leftover_passes
+    assert len(on.swaths) == len(off.swaths) and off.leftover_passes == ()
     first = max(sw.index for sw in off.swaths)
     assert len(extra) >= 4 and all(sw.index > first for sw in extra)
     last = [seg for seg in on.path.segments if seg.kind == SWATH][-len(extra):]

@@ -44,6 +44,7 @@ class Plan:
     notes: tuple[str, ...] = dc_field(default_factory=tuple)
     pieces: tuple[Polygon, ...] = ()        # the inner field's pieces, the largest first
     angles: tuple[float, ...] = ()          # the driving angle [rad] of each piece
+    leftover_passes: tuple[Swath, ...] = ()  # driven after the route's passes, as driven (fields.planner.leftover_passes)
 
     @property
     def order_how(self) -> str:
@@ -51,7 +52,8 @@ class Plan:
 
     @property
     def swaths(self) -> list[Swath]:
-        """The swaths as driven (oriented, extended), in driving order."""
+        """The field's swaths as driven (oriented, extended), in driving order (the leftovers' own
+        passes, driven after them, are ``leftover_passes``)."""
         return self.route.swaths
 
     def summary(self) -> dict:
@@ -60,7 +62,8 @@ class Plan:
                 "workable_ha": round(self.workable.area / 1e4, 4), "driving_angle_deg": round(math.degrees(self.angle), 2),
                 "pieces": len(self.pieces), "piece_angles_deg": [round(math.degrees(a), 2) for a in self.angles],
                 "driving_angle_how": self.angle_how, "order": self.order_how, "headland_passes": self.headland_passes,
-                "swaths": len(self.swaths), "turns": max(len(self.swaths) - 1, 0),
+                "swaths": len(self.swaths), "leftover_passes": len(self.leftover_passes),
+                "turns": max(len(self.swaths) + len(self.leftover_passes) - 1, 0),
                 "distance_m": round(self.path.length, 1), "working_distance_m": round(dist[SWATH] + dist[HEADLAND], 1),
                 "turn_distance_m": round(dist[TURN], 1), "transit_distance_m": round(dist[TRANSIT], 1),
                 "estimated_time_s": round(self.path.time(), 1), "working_width_m": self.settings.working_width,
@@ -163,10 +166,9 @@ def _with_leftover_passes(draft: Plan, first: int, where: str, pieces) -> Plan:
     notes: list[str] = []
     segments, joined = Joiner(draft.field, s, draft.headland_passes, where, notes, pieces).more(
         list(draft.path.segments), extra)
-    k = len(draft.route.passes)
-    route = Route(draft.route.passes + tuple(joined), draft.route.cell_starts | frozenset(range(k, k + len(joined))),
-                  draft.route.how + f"; then {len(joined)} leftover pass(es)")
-    return replace(draft, route=route, path=_path(segments, s), notes=draft.notes + (
+    route = Route(draft.route.passes, draft.route.cell_starts, draft.route.how + f"; then {len(joined)} leftover "
+                  "pass(es)")
+    return replace(draft, route=route, leftover_passes=tuple(joined), path=_path(segments, s), notes=draft.notes + (
         f"leftover passes (--leftover-passes off to leave them): {what}; {len(joined)} of the {len(extra)} joined into "
         "the route",) + tuple(notes))
 
