@@ -164,8 +164,12 @@ def _with_leftover_passes(draft: Plan, first: int, where: str, pieces) -> Plan:
     if not extra:
         return replace(draft, notes=draft.notes + (f"leftover passes: {what}",))
     notes: list[str] = []
-    segments, joined = Joiner(draft.field, s, draft.headland_passes, where, notes, pieces).more(
-        list(draft.path.segments), extra)
+    try:
+        segments, joined = Joiner(draft.field, s, draft.headland_passes, where, notes, pieces).more(
+            list(draft.path.segments), extra)
+    except FieldError:                    # no way from the last of them to the user's end point: the route as it was
+        return replace(draft, notes=draft.notes + (f"leftover passes: {what}; left out: no way from them to the "
+                                                   "end point inside the field",))
     route = Route(draft.route.passes, draft.route.cell_starts, draft.route.how + f"; then {len(joined)} leftover "
                   "pass(es)")
     return replace(draft, route=route, leftover_passes=tuple(joined), path=_path(segments, s), notes=draft.notes + (
