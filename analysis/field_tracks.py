@@ -83,7 +83,7 @@ def _swath_frames(plan, conv) -> dict[int, np.ndarray]:
     The swaths of a line that crosses a hole or a bay are parts of one line (one offset of a curve):
     they are joined, turned the same way, in their order along it."""
     parts: dict[int, list[np.ndarray]] = {}
-    for sw in plan.swaths:
+    for sw in [*plan.swaths, *plan.leftover_passes]:           # the leftovers' own passes: lines of their own
         parts.setdefault(int(sw.line), []).append(np.asarray(conv(sw.points[:, :2]), float))
     out = {}
     for line, pieces in parts.items():

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 
 from agrobot.fields import FieldError, read_fields
-from agrobot.fields.planner import HEADLAND, SWATH, Settings, plan
+from agrobot.fields.planner import Settings, plan
 
 REAL = next((p / "shared" / "realdata" for p in Path(__file__).resolve().parents if (p / "shared" / "realdata").is_dir()),
             Path("../shared/realdata"))
@@ -26,16 +26,11 @@ FILES = ["fields2cover_data/Envelope.xml", "fields2cover_data/envelope1.xml", "f
 
 def planned_cover(p) -> tuple[float, float]:
     """(covered, overlap) shares of the workable area by the plan's own working strips (swaths and
-    headland passes, the working width about their centre lines)."""
-    from shapely.geometry import LineString
-    from shapely.ops import unary_union
+    headland passes, the working width about the implement's line: fields.planner.applied)."""
+    from agrobot.fields.planner.applied import areas, working_strips
 
-    w = p.settings.working_width
-    strips = [LineString(s.points[:, :2]).buffer(0.5 * w, cap_style="flat") for s in p.path.segments
-              if s.kind in (SWATH, HEADLAND)]
-    covered = unary_union(strips).intersection(p.workable).area
-    swept = sum(s.intersection(p.workable).area for s in strips)
-    return covered / p.workable.area, (swept - covered) / p.workable.area
+    a = areas(working_strips(p), p.workable, p.workable)
+    return a.covered / p.workable.area, a.overlap / p.workable.area
 
 
 def main() -> None:

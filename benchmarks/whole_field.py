@@ -5,8 +5,11 @@ working (turns and transits) for each route order on one headland, and the plan'
 time to plan 1,000 swaths (a 3,050 x 150 m strip worked across).
 
     python3 benchmarks/whole_field.py [--max-ha 30] [--sections 6] [--headland-corners tight] [--missions N]
+        [--leftover-passes on|off] [--no-orders] [--files a.json,b.xml]
 
-Each field's leftovers (fields.planner.leftovers) are counted with their area and the largest
+The plans work what their routes leave by passes of their own (fields.planner.leftover_passes;
+--leftover-passes off leaves it); the idle distances by order leave those passes out. Each field's
+leftovers (fields.planner.leftovers) are counted with their area and the largest
 named with its kind. With --missions N the first N fields are also driven (studies/field_coverage.toml,
 the guidance stack with the trailed implement and the same sections, a section of --mission-swaths
 swaths without the headland, which a whole field's mission would take hours): the driven
@@ -35,30 +38,37 @@ from plan_every_field import FILES, REAL
 ORDERS = ("boustrophedon", "skip", "optimised")
 
 
-def one_field(field: Field, sections: int, corners: str) -> str:
+def one_field(field: Field, sections: int, corners: str, orders: bool = True, passes: bool = True) -> str:
     t0, c0 = time.perf_counter(), time.process_time()
-    p = plan(field, Settings(headland_corners=corners))
+    p = plan(field, Settings(headland_corners=corners, leftover_passes=passes))
     seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     whole, cut = as_applied(p), as_applied(p, sections)
     named, slivers = leftovers(p, whole.shape)
     big = named[0] if named else None
     left = (f"{len(named):>5}{100 * sum(x.area for x in named) / whole.field:>8.2f}{100 * slivers / whole.field:>7.2f}"
             f"  {(big.kind + f' {big.area:.0f} m2, {big.width:.1f} m wide') if big else '-':<34}")
-    idle = []
-    try:                          # one headland for every order: the widest the orders need
-        n = max(p.headland_passes, plan(field, Settings(order="boustrophedon", headland_corners=corners)).headland_passes)
-    except FieldError:
-        n = p.headland_passes
-    for order in ORDERS:
-        try:
-            q = plan(field, Settings(order=order, headland_passes=n, headland_corners=corners))
-            idle.append(f"{idle_distance(q.path.segments):>10.0f}")
-        except FieldError:
-            idle.append(f"{'refused':>10}")
+    idle = _idle(field, p, corners) if orders else [f"{'-':>10}"] * len(ORDERS)
     return (f"{field.area_ha:>8.2f}{len(p.pieces):>4}{100 * whole.field_coverage_share:>9.2f}"
             f"{100 * whole.coverage_share:>8.2f}{100 * whole.overlap_share:>8.2f}{100 * cut.overlap_share:>8.2f}"
             f"{100 * cut.field_coverage_share:>8.2f}{crossings(p):>6}" + "".join(idle) + f"{seconds:>8.1f}{cpu:>7.1f}"
             + left)
+
+
+def _idle(field: Field, p, corners: str) -> list[str]:
+    """Metres driven without working for each route order on one headland (the leftovers' own passes left out)."""
+    idle = []
+    try:                          # one headland for every order: the widest the orders need
+        n = max(p.headland_passes, plan(field, Settings(order="boustrophedon", headland_corners=corners,
+                                                         leftover_passes=False)).headland_passes)
+    except FieldError:
+        n = p.headland_passes
+    for order in ORDERS:
+        try:
+            q = plan(field, Settings(order=order, headland_passes=n, headland_corners=corners, leftover_passes=False))
+            idle.append(f"{idle_distance(q.path.segments):>10.0f}")
+        except FieldError:
+            idle.append(f"{'refused':>10}")
+    return idle
 
 
 def mission(path: str, name: str, sections: int, swaths: int) -> str:
@@ -81,6 +91,12 @@ def main() -> None:
     parser.add_argument("--max-ha", type=float, default=30.0, help="fields larger than this are listed, not planned")
     parser.add_argument("--sections", type=int, default=6)
     parser.add_argument("--headland-corners", default=Settings().headland_corners, choices=("tight", "parallel"))
+    parser.add_argument("--leftover-passes", default="on", choices=("on", "off"),
+                        help="work what the route leaves by passes of their own (fields.planner.leftover_passes)")
+    parser.add_argument("--no-orders", action="store_true", help="leave out the idle distance by route order (3 more "
+                        "plans per field)")
+    parser.add_argument("--files", default="", help="comma-separated file names: plan only their fields (and not the "
+                        "1,000 swaths)")
     parser.add_argument("--missions", type=int, default=0, help="drive a section of the first N fields")
     parser.add_argument("--mission-swaths", type=int, default=3)
     parser.add_argument("--no-plans", action="store_true", help="only the missions (with --missions)")
@@ -90,14 +106,18 @@ def main() -> None:
           f"{'ovl S %':>8}{'fld S %':>8}{'cross':>6}" + "".join(f"{o[:9]:>10}" for o in ORDERS) + f"{'plan s':>8}{'cpu s':>7}"
           f"{'left':>5}{'left %':>8}{'sliv %':>7}  largest leftover")
     print(f"{'':<58}(% of the whole field; S: with {args.sections} sections; idle m without working by order)")
-    for name in [] if args.no_plans else FILES:
+    print(f"leftover passes {args.leftover_passes} (--leftover-passes {'off' if args.leftover_passes == 'on' else 'on'} "
+          f"to {'leave' if args.leftover_passes == 'on' else 'work'} what the route leaves)")
+    chosen = [w for w in args.files.split(",") if w]
+    for name in [] if args.no_plans else [f for f in FILES if not chosen or any(f.endswith(w) for w in chosen)]:
         for field in read_fields(REAL / name):
             label = f"{name.split('/')[-1][:25]:<26}{field.name[:23]:<24}"
             if field.area_ha > args.max_ha:
                 print(f"{label}{field.area_ha:>8.2f}  (larger than --max-ha {args.max_ha:g})", flush=True)
                 continue
             try:
-                print(label + one_field(field, args.sections, args.headland_corners), flush=True)
+                print(label + one_field(field, args.sections, args.headland_corners, not args.no_orders,
+                                        args.leftover_passes == "on"), flush=True)
             except FieldError as exc:
                 print(f"{label}{field.area_ha:>8.2f}  refused: {str(exc).split(': ', 2)[-1][:100]}", flush=True)
     if args.missions:
@@ -117,7 +137,7 @@ def main() -> None:
                     done += 1
                 except Exception as exc:             # noqa: BLE001 - a field the mission refuses is named, the rest go on
                     print(f"{label}  not driven: {str(exc).splitlines()[0][:100]}", flush=True)
-    if args.no_plans:
+    if args.no_plans or chosen:
         return
     strip = Field("1,000 swaths", Polygon([(0, 0), (3050, 0), (3050, 150), (0, 150)]), None, "generated", "local metres")
     for order in ("auto", "optimised"):

@@ -90,6 +90,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--headland-corners", default=d.headland_corners, choices=("tight", "parallel"),
                    help=f"tight: every pass rounds its corners at the turn radius; parallel: each outer pass a "
                         f"working width wider ({d.headland_corners})")
+    p.add_argument("--leftover-passes", default="on" if d.leftover_passes else "off", choices=("on", "off"),
+                   help="work what the route leaves (corners beyond the headland's, necks, strips) by passes of their "
+                        "own after the rest (on)")
     p.add_argument("--overlap", type=finite, default=d.overlap, help=f"m between adjacent passes ({d.overlap:g})")
     p.add_argument("--sections", type=int, default=0, help="the implement's sections, switched off over worked "
                    "ground and outside the field, for the as-applied map (0: no section control)")
@@ -168,7 +171,8 @@ def run(args: argparse.Namespace) -> int:
                         drawbar=args.drawbar, settle=args.settle, max_swaths=args.max_swaths,
                         guidance_line=args.guidance_line, swath_pattern=args.swath_pattern, headland_order=args.headland_order,
                         headland_corners=args.headland_corners, route_seconds=args.route_seconds,
-                        start_point=args.start, end_point=args.end, overlap=args.overlap)
+                        start_point=args.start, end_point=args.end, overlap=args.overlap,
+                        leftover_passes=args.leftover_passes == "on")
     settings.check("plan", OPTIONS)
     sections = check_sections(args.sections, settings.working_width, "plan: --sections") if args.sections else 0
     with folder:

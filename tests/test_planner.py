@@ -230,7 +230,7 @@ def test_a_swath_is_a_polyline_and_a_route_a_sequence_of_typed_passes(small_plan
     assert np.allclose(sw.reversed().start, sw.end) and sw.extended(1.0).length == pytest.approx(sw.length + 2.0)
     assert sum(len(c.swaths) for c in small_plan.cells) == len(route.swaths)
     kinds = [seg.kind for seg in small_plan.path.segments]
-    assert kinds.count(SWATH) == len(route.swaths) and kinds[0] == TURN
+    assert kinds.count(SWATH) == len(route.swaths) + len(small_plan.leftover_passes) and kinds[0] == TURN
 
 
 # --- values checked before any work -----------------------------------------------------------------------------
@@ -350,4 +350,5 @@ def test_the_compact_route_file_reproduces_the_route_sampled_on_demand(tmp_path)
         assert np.abs(np.interp(u["s"], c["s"], c[col]) - u[col]).max() < tol, col
     doc = json.loads((compact / "route.geojson").read_text())
     kinds = [f["properties"]["kind"] for f in doc["features"]]
-    assert kinds.count("swath") == json.loads((compact / "plan.json").read_text())["swaths"]
+    summary = json.loads((compact / "plan.json").read_text())
+    assert kinds.count("swath") == summary["swaths"] + summary["leftover_passes"]      # the leftovers' own passes too

@@ -95,7 +95,7 @@ def test_every_piece_of_a_split_inner_field_is_worked_and_joined_inside_the_fiel
 @pytest.mark.parametrize("order", ["first", "last"])
 def test_the_headland_passes_are_driven_first_or_last(order):
     f = parcel()
-    p = plan(f, Settings(headland_order=order, working_width=6.0))
+    p = plan(f, Settings(headland_order=order, working_width=6.0, leftover_passes=False))   # (those come after all)
     kinds = [seg.kind for seg in p.path.segments if seg.kind in WORKING]
     first_swath, last_swath = kinds.index(SWATH), len(kinds) - 1 - kinds[::-1].index(SWATH)
     if order == "first":
@@ -138,9 +138,11 @@ def test_a_section_switches_off_over_worked_ground_after_its_latency_or_at_the_e
         assert off_at == pytest.approx(expected, abs=0.15)
 
 
-def test_the_as_applied_map_is_written_with_the_plan(tmp_path):
+def test_the_as_applied_map_is_written_with_the_plan(tmp_path, capsys):
     out = tmp_path / "plan"
-    assert main(["plan", PARCEL, "--width", "6", "--sections", "4", "--out", str(out)]) == 0
+    assert main(["plan", PARCEL, "--width", "6", "--sections", "4", "--leftover-passes", "off", "--out", str(out)]) == 0
+    assert "note: leftover passes off" in capsys.readouterr().out          # the choice printed, and its option
+    assert any(n.startswith("leftover passes off") for n in json.loads((out / "plan.json").read_text())["notes"])
     summary = json.loads((out / "plan.json").read_text())["as_applied"]
     doc = json.loads((out / "as_applied.geojson").read_text())
     covered = [f for f in doc["features"] if f["properties"]["kind"] == "covered"]

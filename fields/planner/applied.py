@@ -64,10 +64,11 @@ def areas(strips: list, field: Polygon, workable: Polygon) -> AsApplied:
 
 
 def working_strips(plan) -> list:
-    """The whole working width about every swath and headland pass (no section control)."""
+    """The whole working width about every swath and headland pass (no section control): about the
+    implement's line (a curved swath's own, the rear axle running outside it), else the path's."""
     w = plan.settings.working_width
-    return [LineString(seg.points[:, :2]).buffer(0.5 * w, cap_style="flat") for seg in plan.path.segments
-            if seg.kind in WORKING]
+    return [LineString(seg.points[:, :2] if seg.work is None else seg.work).buffer(0.5 * w, cap_style="flat")
+            for seg in plan.path.segments if seg.kind in WORKING]
 
 
 def as_applied(plan, sections: int = 0) -> AsApplied:

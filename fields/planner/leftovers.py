@@ -17,7 +17,8 @@ length the long side of its smallest rotated rectangle. Its kind, the first that
 Whether a pass of its own would work it: one pass of the working width w along its medial axis
 covers a piece at most w wide; the tractor can drive that axis when the axis (here the long centre
 line of its smallest rotated rectangle, clipped to the piece) keeps the tractor's half width inside
-the field. Such passes are named (``pass_m``), not driven: the route does not join them.
+the field. fields.planner.leftover_passes drives such passes, and passes round the corners at the
+tightest radius; what they leave is named here with why.
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ class Leftover:
     why: str                    # why it is not worked, and what would work it
     centroid: tuple[float, float]
     pass_m: float = 0.0         # m: a pass of its own along its medial axis that would cover it (0: none)
+    shape: Polygon | None = None  # the piece itself
 
     def summary(self) -> dict:
         return {"kind": self.kind, "area_m2": round(self.area, 2), "width_m": round(self.width, 2),
@@ -55,14 +57,24 @@ def _parts(geom) -> list[Polygon]:
     return [g for g in getattr(geom, "geoms", []) if isinstance(g, Polygon)]
 
 
-def centre_line(piece: Polygon) -> LineString:
-    """The long centre line of the piece's smallest rotated rectangle, clipped to the piece."""
+def long_axis(piece: Polygon) -> tuple[np.ndarray, np.ndarray, float]:
+    """(a, b, across): the long centre line a-b of the piece's smallest rotated rectangle (from the
+    mid-point of one short side to the other's) and the rectangle's short side."""
     xy = np.asarray(piece.minimum_rotated_rectangle.exterior.coords)[:4]
     sides = np.hypot(*np.diff(np.vstack([xy, xy[:1]]), axis=0).T)
     k = int(np.argmax(sides[:2]))                           # a long side from corner k
     a = 0.5 * (xy[k] + xy[(k + 3) % 4])                     # mid-points of the two short sides
     b = 0.5 * (xy[(k + 1) % 4] + xy[(k + 2) % 4])
-    clipped = LineString([a, b]).intersection(piece)
+    return a, b, float(sides[(k + 1) % 4])
+
+
+def centre_line(piece: Polygon, offset: float = 0.0) -> LineString:
+    """The long centre line of the piece's smallest rotated rectangle (moved ``offset`` to its
+    left), clipped to the piece: its longest part inside."""
+    a, b, _ = long_axis(piece)
+    d = (b - a) / max(float(np.hypot(*(b - a))), 1e-12)
+    left = offset * np.array([-d[1], d[0]])
+    clipped = LineString([a + left, b + left]).intersection(piece)
     parts = [g for g in getattr(clipped, "geoms", [clipped]) if isinstance(g, LineString) and not g.is_empty]
     return max(parts, key=lambda g: g.length) if parts else LineString()
 
@@ -106,13 +118,14 @@ def leftovers(plan, covered) -> tuple[list[Leftover], float]:
             axis = centre_line(piece)
             if axis.length > 0 and tractor_room.buffer(1e-6).contains(axis):
                 pass_m = float(axis.length)
-                why += f"; one pass of its own along its medial axis ({pass_m:.0f} m) would cover it, not joined into " \
-                       "the route"
+                why += f"; one pass of its own along its medial axis ({pass_m:.0f} m) would cover it" + (
+                    ": no such pass keeps its run-in and run-out inside the field and works it" if s.leftover_passes else
+                    ", not driven: leftover passes are off (--leftover-passes on)")
             else:
                 why += "; a pass along its medial axis would take the tractor within its half width of the boundary"
         else:
             why += f"; wider ({width:.1f} m) than one pass of {s.working_width:g} m"
         named.append(Leftover(kind, float(piece.area), width, length, why,
-                              (float(piece.centroid.x), float(piece.centroid.y)), pass_m))
+                              (float(piece.centroid.x), float(piece.centroid.y)), pass_m, piece))
     named.sort(key=lambda x: -x.area)
     return named, slivers

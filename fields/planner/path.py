@@ -50,6 +50,7 @@ class Path:
         self._last = np.append(self._first[1:], len(self._v)) - 1
         self._kind = np.array([seg.kind for seg in segments])
         self._index = np.array([seg.index for seg in segments])
+        self._work = tuple(seg.work for seg in segments)
         self._s0 = self._s[self._first]
         self.length = float(self._s[-1])
         self.speed = speed(self._s0, self._s[self._last], self._kind)
@@ -63,8 +64,8 @@ class Path:
     @property
     def segments(self) -> list[Segment]:
         """The segments (their vertices views into the path's)."""
-        return [Segment(int(k), int(i), self._v[a:b + 1]) for k, i, a, b in
-                zip(self._kind, self._index, self._first, self._last)]
+        return [Segment(int(k), int(i), self._v[a:b + 1], w) for k, i, a, b, w in
+                zip(self._kind, self._index, self._first, self._last, self._work)]
 
     @property
     def starts(self) -> np.ndarray:

@@ -1,6 +1,7 @@
 """A coverage plan of a field, in stages (after Fields2Cover):
 
     headland -> decomposition -> swaths (an angle objective) -> route order -> turns -> speed profile
+             -> passes of their own for what is left (fields.planner.leftover_passes)
 
 Before any of it the settings and the field are checked (finite values in range, coordinates on
 the Earth, a number of swaths that fits memory, a turn radius the field can hold), so that a plan
@@ -10,13 +11,14 @@ to 3) when a turn at a slanted edge or a corner leaves the field.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass, field as dc_field, replace
 
 from shapely.geometry import MultiPolygon, Polygon
 from shapely.ops import unary_union
 
 from ..field import Field, FieldError
-from . import decomposition, headland, route_order, swaths
+from . import decomposition, headland, leftover_passes, route_order, swaths
+from .applied import as_applied
 from .path import Path
 from .settings import Settings
 from .speed import speed_profile
@@ -42,6 +44,7 @@ class Plan:
     notes: tuple[str, ...] = dc_field(default_factory=tuple)
     pieces: tuple[Polygon, ...] = ()        # the inner field's pieces, the largest first
     angles: tuple[float, ...] = ()          # the driving angle [rad] of each piece
+    leftover_passes: tuple[Swath, ...] = ()  # driven after the route's passes, as driven (fields.planner.leftover_passes)
 
     @property
     def order_how(self) -> str:
@@ -49,7 +52,8 @@ class Plan:
 
     @property
     def swaths(self) -> list[Swath]:
-        """The swaths as driven (oriented, extended), in driving order."""
+        """The field's swaths as driven (oriented, extended), in driving order (the leftovers' own
+        passes, driven after them, are ``leftover_passes``)."""
         return self.route.swaths
 
     def summary(self) -> dict:
@@ -58,7 +62,8 @@ class Plan:
                 "workable_ha": round(self.workable.area / 1e4, 4), "driving_angle_deg": round(math.degrees(self.angle), 2),
                 "pieces": len(self.pieces), "piece_angles_deg": [round(math.degrees(a), 2) for a in self.angles],
                 "driving_angle_how": self.angle_how, "order": self.order_how, "headland_passes": self.headland_passes,
-                "swaths": len(self.swaths), "turns": max(len(self.swaths) - 1, 0),
+                "swaths": len(self.swaths), "leftover_passes": len(self.leftover_passes),
+                "turns": max(len(self.swaths) + len(self.leftover_passes) - 1, 0),
                 "distance_m": round(self.path.length, 1), "working_distance_m": round(dist[SWATH] + dist[HEADLAND], 1),
                 "turn_distance_m": round(dist[TURN], 1), "transit_distance_m": round(dist[TRANSIT], 1),
                 "estimated_time_s": round(self.path.time(), 1), "working_width_m": self.settings.working_width,
@@ -134,10 +139,42 @@ def _layout(field: Field, settings: Settings, n: int, order: str, skip: int, whe
     segments = Joiner(field, settings, n, where, notes, pieces).join(route)
     if order == "optimised":
         route, segments = _least_idle(field, route, segments, cells, skip, settings, rings, n, where, notes, pieces)
-    path = Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
     inner = pieces[0] if len(pieces) == 1 else unary_union(pieces)
-    return Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
-                path, tuple(notes + widened), tuple(pieces), tuple(angles))
+    draft = Plan(field, settings, angles[0], hows[0], n, inner, headland.workable(field, settings, n), tuple(cells), route,
+                 _path(segments, settings), tuple(notes + widened), tuple(pieces), tuple(angles))
+    first = max([count] + [sw.index + 1 for c in cells for sw in c.swaths])    # numbers no swath has
+    return _with_leftover_passes(draft, first, where, pieces)
+
+
+def _path(segments, settings: Settings) -> Path:
+    return Path(segments, lambda starts, ends, kinds: speed_profile(starts, ends, kinds, settings))
+
+
+def _with_leftover_passes(draft: Plan, first: int, where: str, pieces) -> Plan:
+    """The plan with passes of its own for what it leaves (fields.planner.leftover_passes) driven
+    after the rest, when ``leftover_passes`` is on and the route works the whole field; the choice in
+    the notes either way."""
+    s = draft.settings
+    if s.max_swaths or not s.headland_work:
+        return draft
+    if not s.leftover_passes:
+        return replace(draft, notes=draft.notes + ("leftover passes off: what the route leaves is named in plan.json, "
+                                                   "not worked (--leftover-passes on works it)",))
+    extra, what = leftover_passes.passes(draft, as_applied(draft).shape, first)
+    if not extra:
+        return replace(draft, notes=draft.notes + (f"leftover passes: {what}",))
+    notes: list[str] = []
+    try:
+        segments, joined = Joiner(draft.field, s, draft.headland_passes, where, notes, pieces).more(
+            list(draft.path.segments), extra)
+    except FieldError:                    # no way from the last of them to the user's end point: the route as it was
+        return replace(draft, notes=draft.notes + (f"leftover passes: {what}; left out: no way from them to the "
+                                                   "end point inside the field",))
+    route = Route(draft.route.passes, draft.route.cell_starts, draft.route.how + f"; then {len(joined)} leftover "
+                  "pass(es)")
+    return replace(draft, route=route, leftover_passes=tuple(joined), path=_path(segments, s), notes=draft.notes + (
+        f"leftover passes (--leftover-passes off to leave them): {what}; {len(joined)} of the {len(extra)} joined into "
+        "the route",) + tuple(notes))
 
 
 def idle_distance(segments) -> float:

@@ -40,6 +40,7 @@ class Settings:
     drawbar: float = 2.5                  # m hitch to implement axle (0: a mounted implement)
     headland_work: bool = True            # drive the headland passes
     headland_order: str = "last"          # last: after the swaths (innermost out); first: before them (outermost in)
+    leftover_passes: bool = True          # work what the route leaves by passes of their own (fields.planner.leftover_passes)
     headland_corners: str = "parallel"    # parallel: pass k rounds its corners at R + (n - 1 - k) w; tight: every pass at R
     settle: float = 5.0                   # m driven straight before a swath beyond the implement's length
     swath_extension: float = 0.1          # m each swath works on beyond its strip's reach (lift and drop margin)

@@ -102,6 +102,37 @@ class Joiner:
             self._end(pose)
         return self.segments
 
+    def more(self, segments: list[Segment], passes: Sequence[Swath]) -> tuple[list[Segment], list[Swath]]:
+        """Further passes after a joined route (before its transit to the end point): each by a
+        turn, else a transit along a headland pass, as a move to another cell, driven either way; a
+        pass that cannot be joined inside the field is left out (the notes say so). (segments, the
+        passes joined, as driven)."""
+        s = self.settings
+        self.segments = list(segments)
+        end = s.end_point
+        if end is not None and self.segments and self.segments[-1].kind == TRANSIT and \
+                math.hypot(*(self.segments[-1].points[-1, :2] - np.asarray(end))) < 1e-6:
+            self.segments.pop()
+        p = self.segments[-1].points[-1]
+        pose, last, joined, missed = (float(p[0]), float(p[1]), float(p[2])), None, [], []
+        for sw in passes:
+            for way in (sw, sw.reversed()):                 # either way along it
+                try:
+                    pose = self._swath(way, pose, last, True, None)
+                except FieldError:
+                    continue
+                joined.append(way)
+                last = way
+                break
+            else:
+                missed.append(sw)
+        if missed:
+            self.notes.append(f"{len(missed)} leftover pass(es), {sum(sw.length for sw in missed):.0f} m: no turn onto "
+                              f"them inside the field either way; left out")
+        if end is not None:
+            self._end(pose)
+        return self.segments, joined
+
     # --- the user's start and end points ------------------------------------------------------------
     def _start(self, route: Route) -> tuple[float, float, float]:
         """The start pose: at the user's point, facing the first pass's entry."""
@@ -172,7 +203,8 @@ class Joiner:
             path = straight(run_in, sw.start)
         run_out = sw.end + s.lead * d_out
         axle = tractor_line(sw.points, s.hitch_offset, s.drawbar, s.lead)
-        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(axle)),
+        work = sw.points if len(sw.points) > 2 else None             # a curved swath: the implement on it, not the axle
+        self.segments += [Segment(TURN, -1, path), Segment(SWATH, sw.line, polyline_path(axle), work),
                           Segment(TURN, -1, straight(sw.end, run_out))]
         return run_out[0], run_out[1], math.atan2(d_out[1], d_out[0])
 

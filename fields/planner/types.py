@@ -107,9 +107,12 @@ class Segment:
     kind: int                   # SWATH, TURN, HEADLAND or TRANSIT
     index: int                  # the swath's line, the headland ring, or -1
     points: np.ndarray          # (N >= 2, 4) x, y, heading, curvature
+    work: np.ndarray | None = None  # (M, 2): the implement's line where it is not the path's (a curved swath)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _frozen(self.points))
+        if self.work is not None:
+            object.__setattr__(self, "work", _frozen(self.work))
 
     @property
     def length(self) -> float:
