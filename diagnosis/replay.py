@@ -285,21 +285,38 @@ class SaturatedYawReplay:
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """The gyro's yaw rate under the replay's values ``v`` (without the slope's share)."""
+        return self.yaw_rates([v], [self.log.u if delta is None else delta])[0]
+
+    def yaw_rates(self, sets: list[Mapping[str, float]], inputs: list[np.ndarray]) -> list[np.ndarray]:
+        """``yaw_rate`` under each set, driven by its wheel angle: the sets of one wheel angle in one
+        batched simulation (YawModel.simulate_many), each row with its own relaxation lengths."""
         from dataclasses import replace as _replace
 
-        if delta is not None:
-            self.log.u = np.asarray(delta, float)
         p = self.params
-        scale = v["relaxation_scale"]
-        self.model.p = _replace(p, sigma_f=p.sigma_f * scale, sigma_r=p.sigma_r * scale)
         Fzf, Fzr = self.loads
-        values = {"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
-                  "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
-                  "friction": v["tyre_friction"], "shape": v["tyre_shape"],
-                  "cornering_speed_slope": v["cornering_speed_slope"],
-                  "cornering_reference_speed": v["cornering_reference_speed"]}
-        sim = self.model.simulate(values)
-        out = np.empty(len(self.log.t))
-        for i, (s, a, b) in enumerate(self.rows):
-            out[a:b] = sim[i, a - s: b - s]
+        S = len(self.rows)
+        out: list[np.ndarray | None] = [None] * len(sets)
+        groups: dict[bytes, list[int]] = {}
+        for i, d in enumerate(inputs):
+            groups.setdefault(np.asarray(d, float).tobytes(), []).append(i)
+        for members in groups.values():
+            self.log.u = np.asarray(inputs[members[0]], float)
+            scales = [float(sets[i]["relaxation_scale"]) for i in members]
+            if len(set(scales)) == 1:
+                sigma_f, sigma_r = p.sigma_f * scales[0], p.sigma_r * scales[0]
+            else:                           # per row (rates() broadcasts them with the states)
+                sigma_f = np.repeat([p.sigma_f * k for k in scales], S)
+                sigma_r = np.repeat([p.sigma_r * k for k in scales], S)
+            self.model.p = _replace(p, sigma_f=sigma_f, sigma_r=sigma_r)
+            values = [{"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
+                       "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
+                       "friction": v["tyre_friction"], "shape": v["tyre_shape"],
+                       "cornering_speed_slope": v["cornering_speed_slope"],
+                       "cornering_reference_speed": v["cornering_reference_speed"]} for v in (sets[i] for i in members)]
+            sims = self.model.simulate_many(values)
+            for i, sim in zip(members, sims):
+                rate = np.empty(len(self.log.t))
+                for j, (s, a, b) in enumerate(self.rows):
+                    rate[a:b] = sim[j, a - s: b - s]
+                out[i] = rate
         return out
