@@ -218,6 +218,8 @@ class Replay:
             saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]
             rates = dict(zip(saturated, self.saturated_yaw_rates([sets[i] for i in saturated],
                                                                  [inputs[i] for i in saturated])))
+            linear = [i for i in range(len(sets)) if i not in rates]
+            self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
             out = []
             for i, v in enumerate(sets):
                 r = rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i])

@@ -101,3 +101,31 @@ def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monke
         assert ours.values[p.name] == pytest.approx(theirs.values[p.name], rel=1e-6, abs=1e-9)
         assert ours.std[p.name] == pytest.approx(theirs.std[p.name], rel=1e-4)
     assert ours.rss["yaw"] == pytest.approx(theirs.rss["yaw"], rel=1e-9)
+
+
+def test_recursions_side_by_side_equal_each_alone():
+    from agrobot.diagnosis.replay import blocked_recursion
+
+    rng = np.random.default_rng(3)
+    R, N, n, m = 3, 997, 3, 5
+    A = 0.9 * np.eye(n) + 0.1 * rng.standard_normal((R, N, n, n)) / np.sqrt(n)
+    b = rng.standard_normal((R, N, n, m))
+    for row in (1, (1, 0)):
+        together = blocked_recursion(A, b, row)
+        for r in range(R):
+            np.testing.assert_array_equal(together[r], blocked_recursion(A[r], b[r], row))
+
+
+def test_linear_yaw_sets_replayed_together_equal_each_alone(replay):
+    """The linear yaw model under sets that differ in the values it is nonlinear in, with the
+    measured wheel angle and with a shifted one (the steering clock): one batched recursion."""
+    base = {**replay.baseline.values, "tyre_friction": math.inf}
+    sets = [{**base, "cornering_front_scale": 1.0 + 0.01 * i, "relaxation_scale": 1.0 + 0.02 * i,
+             "steering_clock": 0.02 * (i % 2)} for i in range(4)]
+    replay.yaw._cache.clear()
+    together = replay.residuals_many("yaw", sets, "fit", "test")
+    assert len(replay.yaw._cache) >= 2 * len(sets)
+    for v, r in zip(sets, together):
+        replay.yaw._cache.clear()
+        for a, b in zip(r, replay.residuals("yaw", v, "fit", "test")):
+            np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * np.max(np.abs(b)))
