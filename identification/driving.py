@@ -344,7 +344,7 @@ def forward_jacobian(residuals_many, x: np.ndarray, lower: np.ndarray, upper: np
     least_squares(diff_step=rel_step) calls): h = rel sign(x) max(|x|, floor), sign(0) = +1 (positive
     when not ``signed``); sqrt(eps) sign(x) max(1, |x|) where h rounds away; reversed where x + h
     leaves [lower, upper] and the reverse fits, else the longer side's distance; h = (x + h) - x,
-    exactly representable. ``f0``: f(x) when known, else evaluated with the steps."""
+    exactly representable; J column-major like scipy's. ``f0``: f(x) when known, else evaluated with the steps."""
     x = np.asarray(x, float)
     sign = np.where(x >= 0, 1.0, -1.0) if signed else np.ones_like(x)
     h = rel_step * sign * np.maximum(np.abs(x), floor)
@@ -362,10 +362,10 @@ def forward_jacobian(residuals_many, x: np.ndarray, lower: np.ndarray, upper: np
     if f0 is None:
         f0, out = out[0], out[1:]
     f0 = np.asarray(f0, float)
-    J = np.empty((len(f0), len(x)))
+    J = np.empty((len(x), len(f0)))
     for i, (f, p) in enumerate(zip(out, points)):
-        J[:, i] = (np.asarray(f, float) - f0) / (p[i] - x[i])
-    return J
+        J[i] = (np.asarray(f, float) - f0) / (p[i] - x[i])
+    return J.T          # column-major, as scipy's: least_squares' products then sum in the same order
 
 
 def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, segs: Segments,

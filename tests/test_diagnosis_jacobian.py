@@ -63,6 +63,9 @@ def test_batched_jacobian_equals_scipys_own_finite_differences(replay):
     # a step of the other sign differs by 4e-7 of a column (the offset, nearly linear), of another size
     # by 1e-4 to 1e-3; the same steps agree to rounding (here exactly)
     assert np.max(np.linalg.norm(J - reference, axis=0) / scale) < 1e-9
+    # laid out as scipy's (column-major): least_squares' products with it then sum in the same order (a
+    # fit ending near a bound, where the steps are 1e-12, moved by 1e-8 with a row-major copy)
+    assert J.flags.f_contiguous == reference.flags.f_contiguous and J.strides == reference.strides
     # without f0 the base point rides in the same batch
     assert np.max(np.linalg.norm(forward_jacobian(many, x, lo, hi) - reference, axis=0) / scale) < 1e-9
 
@@ -83,24 +86,28 @@ def test_one_batched_replay_equals_one_replay_per_set(replay):
 
 
 def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monkeypatch):
-    """The same fit with scipy's internal finite differences (jac dropped, diff_step=1e-3)."""
+    """The same fits with scipy's internal finite differences (jac dropped, diff_step=1e-3): the
+    yaw stage's stiffnesses, and the steering's dead-band with its time constant."""
     import agrobot.diagnosis.candidates as candidates
+    from agrobot.diagnosis.catalogue import CATALOGUE
 
-    sigma = {"yaw": 0.01}
-    free = list(UNCERTAIN["yaw"][:2])
+    deadband = next(e for e in CATALOGUE if e.id == "steering_deadband").parameters
+    problems = [(list(UNCERTAIN["yaw"][:2]), ("yaw",), {"yaw": 0.01}),
+                (list(deadband) + list(UNCERTAIN["steering"]), ("steering",), {"steering": 0.002})]
     start = {**replay.baseline.values}
-    ours = _fit(replay, start, free, ("yaw",), [{}], sigma)
+    ours = [_fit(replay, start, free, stages, [{}], sigma) for free, stages, sigma in problems]
     real = candidates.least_squares
 
     def scipy_own(fun, x0, jac=None, **kw):
         return real(fun, x0, diff_step=1e-3, **kw)
 
     monkeypatch.setattr(candidates, "least_squares", scipy_own)
-    theirs = _fit(replay, start, free, ("yaw",), [{}], sigma)
-    for p in free:
-        assert ours.values[p.name] == pytest.approx(theirs.values[p.name], rel=1e-6, abs=1e-9)
-        assert ours.std[p.name] == pytest.approx(theirs.std[p.name], rel=1e-4)
-    assert ours.rss["yaw"] == pytest.approx(theirs.rss["yaw"], rel=1e-9)
+    for fit, (free, stages, sigma) in zip(ours, problems):
+        theirs = _fit(replay, start, free, stages, [{}], sigma)
+        for p in free:
+            assert fit.values[p.name] == pytest.approx(theirs.values[p.name], rel=1e-10, abs=1e-15)
+            assert fit.std[p.name] == pytest.approx(theirs.std[p.name], rel=1e-8)
+        assert fit.rss[stages[0]] == pytest.approx(theirs.rss[stages[0]], rel=1e-12)
 
 
 def test_recursions_side_by_side_equal_each_alone():
