@@ -209,8 +209,9 @@ class Replay:
         return self.predicted_many(stage, [v])[0]
 
     def predicted_many(self, stage: str, sets: list[dict[str, float]]) -> list[np.ndarray]:
-        """``predicted`` under each of several value sets; the yaw stage with saturating tyres
-        simulates them all in one batched pass (a Jacobian's n + 1 sets cost little more than one)."""
+        """``predicted`` under each of several value sets; the yaw stage replays them side by side
+        (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
+        stepped sets cost less than as many replays."""
         if stage == "steering":
             return [steering_replay(self.cmd, self.h, v, self.delta[0]) for v in sets]
         if stage == "yaw":
