@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
+from agrobot.identification.driving import forward_jacobian
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
@@ -205,34 +206,55 @@ class Replay:
 
     def predicted(self, stage: str, v: dict[str, float]) -> np.ndarray:
         """The stage's simulated signal on every sample (position: the dead-reckoned track)."""
+        return self.predicted_many(stage, [v])[0]
+
+    def predicted_many(self, stage: str, sets: list[dict[str, float]]) -> list[np.ndarray]:
+        """``predicted`` under each of several value sets; the yaw stage replays them side by side
+        (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
+        stepped sets cost less than as many replays."""
         if stage == "steering":
-            return steering_replay(self.cmd, self.h, v, self.delta[0])
+            return [steering_replay(self.cmd, self.h, v, self.delta[0]) for v in sets]
         if stage == "yaw":
-            delta = self.replayed_steering(v) if self.command_only else None
-            shift = v.get("steering_clock", 0.0)
-            if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
-                d = self.delta if delta is None else delta
-                delta = np.interp(self.t + shift, self.t, d)
-            curve = v.get("steering_ratio_curvature", 0.0)
-            if curve:                       # the wheels turn delta (1 + c delta^2) for a reading of delta
-                d = self.delta if delta is None else delta
-                delta = d * (1.0 + curve * d * d)
-            if math.isfinite(v.get("tyre_friction", math.inf)):
-                r = self.saturated_yaw_rate(v, delta)
-            else:
-                r = self.yaw.yaw_rate(v, delta)
-            scale = v.get("gyro_scale", 1.0) / v.get("speed_scale", 1.0)
-            # the gyro reads s r + b; a wheel speed k x the ground speed drives the LPV model k times too
-            # fast, which near the kinematic yaw rate v delta / L is a yaw rate k times too high
-            return r if scale == 1.0 else scale * (r - v["yaw_rate_bias"]) + v["yaw_rate_bias"]
-        track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
-        if stage == "speed":
-            k = self.chord_k
-            out = np.full(len(self.t), np.nan)
-            d = track[2 * k:] - track[:-2 * k]
-            out[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
+            inputs = [self.yaw_input(v) for v in sets]
+            saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]
+            rates = dict(zip(saturated, self.saturated_yaw_rates([sets[i] for i in saturated],
+                                                                 [inputs[i] for i in saturated])))
+            linear = [i for i in range(len(sets)) if i not in rates]
+            self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
+            out = []
+            for i, v in enumerate(sets):
+                r = rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i])
+                scale = v.get("gyro_scale", 1.0) / v.get("speed_scale", 1.0)
+                # the gyro reads s r + b; a wheel speed k x the ground speed drives the LPV model k times too
+                # fast, which near the kinematic yaw rate v delta / L is a yaw rate k times too high
+                out.append(r if scale == 1.0 else scale * (r - v["yaw_rate_bias"]) + v["yaw_rate_bias"])
             return out
-        return track
+        out = []
+        for v in sets:
+            track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
+            if stage == "speed":
+                k = self.chord_k
+                speed = np.full(len(self.t), np.nan)
+                d = track[2 * k:] - track[:-2 * k]
+                speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
+                track = speed
+            out.append(track)
+        return out
+
+    def yaw_input(self, v: dict[str, float]) -> np.ndarray | None:
+        """The wheel angle driving the yaw stage under ``v``: None for the measured one as it is,
+        else the angle replayed from the command, read ``steering_clock`` earlier, through the
+        steering ratio's curve."""
+        delta = self.replayed_steering(v) if self.command_only else None
+        shift = v.get("steering_clock", 0.0)
+        if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
+            d = self.delta if delta is None else delta
+            delta = np.interp(self.t + shift, self.t, d)
+        curve = v.get("steering_ratio_curvature", 0.0)
+        if curve:                       # the wheels turn delta (1 + c delta^2) for a reading of delta
+            d = self.delta if delta is None else delta
+            delta = d * (1.0 + curve * d * d)
+        return delta
 
     def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
         """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
@@ -246,17 +268,22 @@ class Replay:
             cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]))
         return cache[key]
 
-    def saturated_yaw_rate(self, v: dict[str, float], delta: np.ndarray | None) -> np.ndarray:
-        """The yaw stage with Magic Formula tyres (SaturatedYawReplay), plus the linear model's
+    def saturated_yaw_rates(self, sets: list[dict[str, float]], inputs: list[np.ndarray | None]) -> list[np.ndarray]:
+        """The yaw stage with Magic Formula tyres (SaturatedYawReplay) under each set, driven by its
+        wheel angle (None: the measured one), all in one batched simulation, plus the linear model's
         response to a side slope."""
+        if not sets:
+            return []
+        inputs = [self.delta if d is None else d for d in inputs]
         if getattr(self, "_saturated", None) is None:
             self._saturated = SaturatedYawReplay(self.baseline.yaw_model, self.baseline.tractor, self.t, self.h,
-                                                 self.delta if delta is None else delta, self.speed, self.min_speed)
-        out = self._saturated.yaw_rate(v, self.delta if delta is None else delta)
-        if v["slope_north"] or v["slope_east"]:
-            R = self.yaw.responses(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                                   v["cornering_reference_speed"], v["relaxation_scale"])
-            out = out + v["slope_north"] * R[:, 2] + v["slope_east"] * R[:, 3]
+                                                 inputs[0], self.speed, self.min_speed)
+        out = self._saturated.yaw_rates(sets, inputs)
+        for i, v in enumerate(sets):
+            if v["slope_north"] or v["slope_east"]:
+                R = self.yaw.responses(v["cornering_front_scale"], v["cornering_rear_scale"],
+                                       v["cornering_speed_slope"], v["cornering_reference_speed"], v["relaxation_scale"])
+                out[i] = out[i] + v["slope_north"] * R[:, 2] + v["slope_east"] * R[:, 3]
         return out
 
     def lateral(self, v: dict[str, float]) -> np.ndarray | None:
@@ -323,13 +350,20 @@ class Replay:
     def residuals(self, stage: str, v: dict[str, float], *parts: str) -> np.ndarray | tuple[np.ndarray, ...]:
         """The stage's residuals on each named part ("fit", "test"), from one simulation; one
         part gives an array, several a tuple."""
-        pred = self.predicted(stage, v)
-        if stage == "position":
-            out = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
-        else:
-            res = self.measured(stage) - pred
-            out = tuple(res[self.masks[stage][p]] for p in parts)
-        return out[0] if len(parts) == 1 else out
+        return self.residuals_many(stage, [v], *parts)[0]
+
+    def residuals_many(self, stage: str, sets: list[dict[str, float]], *parts: str) -> list:
+        """``residuals`` under each of several value sets (predicted_many: batched where the stage
+        simulates)."""
+        out = []
+        for pred in self.predicted_many(stage, sets):
+            if stage == "position":
+                res = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
+            else:
+                r = self.measured(stage) - pred
+                res = tuple(r[self.masks[stage][p]] for p in parts)
+            out.append(res[0] if len(parts) == 1 else res)
+        return out
 
     def scored(self, stage: str) -> np.ndarray:
         """Samples of a time-series stage scored in either part (for plots and evidence)."""
@@ -392,9 +426,21 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
             v[p.name] = float(xi) * p.scale
         return v
 
+    def residuals_many(xs: list[np.ndarray]) -> list[np.ndarray]:
+        sets = [values_of(x) for x in xs]
+        per_stage = [replay.residuals_many(s, sets, "fit") for s in stages]
+        return [np.concatenate([r[i] / sigma[s] for s, r in zip(stages, per_stage)]) for i in range(len(xs))]
+
+    last: dict[str, np.ndarray] = {}
+
     def fun(x: np.ndarray) -> np.ndarray:
-        v = values_of(x)
-        return np.concatenate([replay.residuals(s, v, "fit") / sigma[s] for s in stages])
+        last["x"], last["f"] = np.array(x, float), residuals_many([x])[0]
+        return last["f"]
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        """scipy's forward differences (diff_step=1e-3), the n stepped sets in one batched replay."""
+        f0 = last["f"] if "x" in last and np.array_equal(last["x"], x) else fun(x)
+        return forward_jacobian(residuals_many, x, lo, hi, rel_step=1e-3, f0=f0)
 
     best = None
     if free:
@@ -402,7 +448,7 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
         hi = np.array([p.upper / p.scale for p in free])
         for start in starts:
             x0 = np.clip([start.get(p.name, base_values[p.name]) / p.scale for p in free], lo + 1e-9, hi - 1e-9)
-            sol = least_squares(fun, x0, bounds=(lo, hi), diff_step=1e-3, max_nfev=150, x_scale=1.0)
+            sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=150, x_scale=1.0)
             if best is None or sol.cost < best.cost:
                 best = sol
         block = getattr(replay, "side_slip_block", ())
@@ -421,7 +467,7 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
                 if all(abs(level[s] / sigma[s] - 1.0) < 0.02 for s in stages):
                     break
                 sigma.update(level)
-                best = least_squares(fun, best.x, bounds=(lo, hi), diff_step=1e-3, max_nfev=150, x_scale=1.0)
+                best = least_squares(fun, best.x, jac=jac, bounds=(lo, hi), max_nfev=150, x_scale=1.0)
         values = values_of(best.x)
     else:
         values = dict(base_values)

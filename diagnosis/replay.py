@@ -64,17 +64,54 @@ class YawReplay:
         hit = self._cache.get(key)
         if hit is not None and steering is None:
             return hit
-        Ad, Bd = self._discrete(front_scale, rear_scale, speed_slope, v_ref, relaxation_scale)
-        inputs, columns = self.inputs, [0, 0, 1, 1]
-        if steering is not None:
-            inputs, columns = np.column_stack([inputs, midpoints(np.asarray(steering, float))]), columns + [0]
-        both = blocked_recursion(Ad[self.index], Bd[self.index][:, :, columns] * inputs[:, None, :], row=(1, 0))
-        out = both[:, 0, :4]
-        if len(self._cache) > 64:
+        return self._recurse([(front_scale, rear_scale, speed_slope, v_ref, relaxation_scale)], [steering])[0]
+
+    def _recurse(self, yaws: list[tuple], steerings: list[np.ndarray | None]) -> list[np.ndarray]:
+        """``responses`` of several sets of the nonlinear values (front, rear, slope, v_ref,
+        relaxation), each with its wheel angle or None, in one blocked recursion (the sets side by
+        side; a set's arithmetic is that of its own recursion); cached like ``responses``."""
+        wide = any(s is not None for s in steerings)
+        columns = [0, 0, 1, 1] + ([0] if wide else [])
+        A, b = [], []
+        for yaw, steering in zip(yaws, steerings):
+            Ad, Bd = self._discrete(*yaw)
+            inputs = self.inputs
+            if wide:
+                extra = np.zeros(len(inputs)) if steering is None else midpoints(np.asarray(steering, float))
+                inputs = np.column_stack([inputs, extra])
+            A.append(Ad[self.index])
+            b.append(Bd[self.index][:, :, columns] * inputs[:, None, :])
+        both = (blocked_recursion(A[0], b[0], row=(1, 0))[None] if len(yaws) == 1
+                else blocked_recursion(np.stack(A), np.stack(b), row=(1, 0)))
+        if len(self._cache) + 2 * len(yaws) > 64:
             self._cache.clear()
-        self._cache[key] = out
-        self._cache[key + ("v_y",)] = both[:, 1, :4]
-        return both[:, 0, :]
+        for yaw, z in zip(yaws, both):
+            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            self._cache[key] = z[:, 0, :4]
+            self._cache[key + ("v_y",)] = z[:, 1, :4]
+        return [z[:, 0, :] for z in both]
+
+    def prepare(self, sets: list[Mapping[str, float]], inputs: list[np.ndarray | None]) -> None:
+        """Compute, in one batched recursion, what ``yaw_rate`` of each set (with its wheel angle
+        or None) would simulate one set at a time, into the caches it reads."""
+        if len(self._cache) + 3 * len(sets) > 64:      # room for them all: nothing they need is dropped
+            self._cache.clear()
+        todo: dict[tuple, tuple] = {}
+        for v, delta in zip(sets, inputs):
+            yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                   v["cornering_reference_speed"], v["relaxation_scale"])
+            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            memo = None if delta is None else self._cache.get(("input", id(delta)) + key)
+            if (key in self._cache or key in todo) and (delta is None or (memo is not None and memo[0] is delta)):
+                continue
+            todo[key if delta is None else key + ("input", id(delta))] = (yaw, delta, key)
+        if len(todo) < 2:
+            return
+        jobs = list(todo.values())
+        out = self._recurse([y for y, _, _ in jobs], [d for _, d, _ in jobs])
+        for (yaw, delta, key), z in zip(jobs, out):
+            if delta is not None:
+                self._cache[("input", id(delta)) + key] = (delta, z[:, 4])
 
     def _discrete(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0):
@@ -150,40 +187,46 @@ class YawReplay:
 def blocked_recursion(A: np.ndarray, b: np.ndarray, row, block: int = 0) -> np.ndarray:
     """Row ``row`` of Z_{k-1} for the time-varying recursion Z_k = A_k Z_{k-1} + b_k, Z_{-1} = 0
     (A: (N, n, n), b: (N, n, m)); the output at sample k is the state before its update, (N, m),
-    or (N, len(row), m) for a tuple of rows.
+    or (N, len(row), m) for a tuple of rows. R recursions at once: A (R, N, n, n), b (R, N, n, m),
+    output with a leading R axis.
 
     Blocked: the N steps are cut into ~sqrt(N) blocks run side by side from a zero state, with
     Phi = A_last ... A_first of each block; the block ends are chained, Z_end(j) = Zl_end(j) +
     Phi(j) Z_end(j-1), and the blocks run again side by side from their true start states. About
-    3 sqrt(N) Python steps instead of N; the blocks sit on the last axis (contiguous), so each step
-    is a few elementwise products over all blocks."""
-    N, n, m = b.shape
+    3 sqrt(N) Python steps instead of N; the blocks (of every recursion) sit on the last axis
+    (contiguous), so each step is a few elementwise products over all blocks."""
+    many = b.ndim == 4
+    A, b = (A, b) if many else (A[None], b[None])
+    R, N, n, m = b.shape
     L = block or max(1, int(math.ceil(0.5 * math.sqrt(N))))
     J = -(-N // L)
     pad = J * L - N
     if pad:
-        A = np.concatenate([A, np.broadcast_to(np.eye(n), (pad, n, n))])
-        b = np.concatenate([b, np.zeros((pad, n, m))])
-    # (L, n, n, J) and (L, n, m, J): step k of every block side by side
-    At = np.ascontiguousarray(A.reshape(J, L, n, n).transpose(1, 2, 3, 0))[:, :, :, None, :]
-    bt = np.ascontiguousarray(b.reshape(J, L, n, m).transpose(1, 2, 3, 0))
-    z = np.zeros((n, m, J))
-    phi = np.broadcast_to(np.eye(n)[:, :, None], (n, n, J))
+        A = np.concatenate([A, np.broadcast_to(np.eye(n), (R, pad, n, n))], axis=1)
+        b = np.concatenate([b, np.zeros((R, pad, n, m))], axis=1)
+    # (L, n, n, R J) and (L, n, m, R J): step k of every block side by side
+    At = np.ascontiguousarray(A.reshape(R, J, L, n, n).transpose(2, 3, 4, 0, 1)).reshape(L, n, n, R * J)[:, :, :, None, :]
+    bt = np.ascontiguousarray(b.reshape(R, J, L, n, m).transpose(2, 3, 4, 0, 1)).reshape(L, n, m, R * J)
+    z = np.zeros((n, m, R * J))
+    phi = np.broadcast_to(np.eye(n)[:, :, None], (n, n, R * J))
     for k in range(L):
         z = (At[k] * z[None]).sum(axis=1) + bt[k]
         phi = (At[k] * phi[None]).sum(axis=1)
-    start = np.zeros((J, n, m))                       # true state before each block
-    end_z, end_phi = z.transpose(2, 0, 1), phi.transpose(2, 0, 1)
-    for j in range(1, J):
-        start[j] = end_z[j - 1] + end_phi[j - 1] @ start[j - 1]
+    start = np.zeros((R, J, n, m))                    # true state before each block
+    end_z = z.reshape(n, m, R, J).transpose(2, 3, 0, 1)
+    end_phi = phi.reshape(n, n, R, J).transpose(2, 3, 0, 1)
+    for r in range(R):
+        for j in range(1, J):
+            start[r, j] = end_z[r, j - 1] + end_phi[r, j - 1] @ start[r, j - 1]
     rows = [row] if isinstance(row, int) else list(row)
-    Z = np.empty((L, len(rows), m, J))                # state before step k of each block
-    z = start.transpose(1, 2, 0)
+    Z = np.empty((L, len(rows), m, R * J))            # state before step k of each block
+    z = start.transpose(2, 3, 0, 1).reshape(n, m, R * J)
     for k in range(L):
         Z[k] = z[rows]
         z = (At[k] * z[None]).sum(axis=1) + bt[k]
-    Z = Z.transpose(3, 0, 1, 2).reshape(J * L, len(rows), m)[:N]
-    return Z[:, 0, :] if isinstance(row, int) else Z
+    Z = Z.reshape(L, len(rows), m, R, J).transpose(3, 4, 0, 1, 2).reshape(R, J * L, len(rows), m)[:, :N]
+    Z = Z[..., 0, :] if isinstance(row, int) else Z
+    return Z if many else Z[0]
 
 
 def integrate(x: np.ndarray, h: float) -> np.ndarray:
@@ -285,21 +328,38 @@ class SaturatedYawReplay:
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """The gyro's yaw rate under the replay's values ``v`` (without the slope's share)."""
+        return self.yaw_rates([v], [self.log.u if delta is None else delta])[0]
+
+    def yaw_rates(self, sets: list[Mapping[str, float]], inputs: list[np.ndarray]) -> list[np.ndarray]:
+        """``yaw_rate`` under each set, driven by its wheel angle: the sets of one wheel angle in one
+        batched simulation (YawModel.simulate_many), each row with its own relaxation lengths."""
         from dataclasses import replace as _replace
 
-        if delta is not None:
-            self.log.u = np.asarray(delta, float)
         p = self.params
-        scale = v["relaxation_scale"]
-        self.model.p = _replace(p, sigma_f=p.sigma_f * scale, sigma_r=p.sigma_r * scale)
         Fzf, Fzr = self.loads
-        values = {"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
-                  "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
-                  "friction": v["tyre_friction"], "shape": v["tyre_shape"],
-                  "cornering_speed_slope": v["cornering_speed_slope"],
-                  "cornering_reference_speed": v["cornering_reference_speed"]}
-        sim = self.model.simulate(values)
-        out = np.empty(len(self.log.t))
-        for i, (s, a, b) in enumerate(self.rows):
-            out[a:b] = sim[i, a - s: b - s]
+        S = len(self.rows)
+        out: list[np.ndarray | None] = [None] * len(sets)
+        groups: dict[bytes, list[int]] = {}
+        for i, d in enumerate(inputs):
+            groups.setdefault(np.asarray(d, float).tobytes(), []).append(i)
+        for members in groups.values():
+            self.log.u = np.asarray(inputs[members[0]], float)
+            scales = [float(sets[i]["relaxation_scale"]) for i in members]
+            if len(set(scales)) == 1:
+                sigma_f, sigma_r = p.sigma_f * scales[0], p.sigma_r * scales[0]
+            else:                           # per row (rates() broadcasts them with the states)
+                sigma_f = np.repeat([p.sigma_f * k for k in scales], S)
+                sigma_r = np.repeat([p.sigma_r * k for k in scales], S)
+            self.model.p = _replace(p, sigma_f=sigma_f, sigma_r=sigma_r)
+            values = [{"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
+                       "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
+                       "friction": v["tyre_friction"], "shape": v["tyre_shape"],
+                       "cornering_speed_slope": v["cornering_speed_slope"],
+                       "cornering_reference_speed": v["cornering_reference_speed"]} for v in (sets[i] for i in members)]
+            sims = self.model.simulate_many(values)
+            for i, sim in zip(members, sims):
+                rate = np.empty(len(self.log.t))
+                for j, (s, a, b) in enumerate(self.rows):
+                    rate[a:b] = sim[j, a - s: b - s]
+                out[i] = rate
         return out

@@ -336,6 +336,38 @@ def effective_size(res_rows: list[np.ndarray]) -> float:
     return n * (1 - rho) / (1 + rho)
 
 
+def forward_jacobian(residuals_many, x: np.ndarray, lower: np.ndarray, upper: np.ndarray, rel_step: float = 1e-3,
+                     f0: np.ndarray | None = None, floor: float = 0.0, signed: bool = True) -> np.ndarray:
+    """J[:, i] = (f(x + h_i e_i) - f(x)) / h_i, every point in one call ``residuals_many(points)`` (a
+    list of residual vectors, one per point): a batched simulation of n + 1 parameter sets costs
+    little more than one. The steps are scipy's (optimize._numdiff.approx_derivative, which
+    least_squares(diff_step=rel_step) calls): h = rel sign(x) max(|x|, floor), sign(0) = +1 (positive
+    when not ``signed``); sqrt(eps) sign(x) max(1, |x|) where h rounds away; reversed where x + h
+    leaves [lower, upper] and the reverse fits, else the longer side's distance; h = (x + h) - x,
+    exactly representable; J column-major like scipy's. ``f0``: f(x) when known, else evaluated with the steps."""
+    x = np.asarray(x, float)
+    sign = np.where(x >= 0, 1.0, -1.0) if signed else np.ones_like(x)
+    h = rel_step * sign * np.maximum(np.abs(x), floor)
+    h = np.where((x + h) - x == 0, np.finfo(float).eps ** 0.5 * sign * np.maximum(1.0, np.abs(x)), h)
+    below, above = x - lower, upper - x
+    fits = np.abs(h) <= np.maximum(below, above)
+    h = np.where(((x + h < lower) | (x + h > upper)) & fits, -h, h)
+    h = np.where(fits, h, np.where(above >= below, above, -below))
+    points = []
+    for i in range(len(x)):
+        xi = x.copy()
+        xi[i] = x[i] + h[i]
+        points.append(xi)
+    out = residuals_many(points if f0 is not None else [x] + points)
+    if f0 is None:
+        f0, out = out[0], out[1:]
+    f0 = np.asarray(f0, float)
+    J = np.empty((len(x), len(f0)))
+    for i, (f, p) in enumerate(zip(out, points)):
+        J[i] = (np.asarray(f, float) - f0) / (p[i] - x[i])
+    return J.T          # column-major, as scipy's: least_squares' products then sum in the same order
+
+
 def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, segs: Segments,
         max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
     """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
@@ -353,12 +385,8 @@ def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, se
 
     def jac(x):
         """Forward differences, every perturbed set simulated in one batched pass."""
-        steps = 1e-3 * np.maximum(np.abs(x), 1.0)
-        steps = np.where(x + steps > hi, -steps, steps)
-        xs = [x] + [x + steps[i] * np.eye(len(x))[i] for i in range(len(x))]
-        sims = model.simulate_many([values_of(xi) for xi in xs], segs)
-        base = sims[0][mask]
-        return np.column_stack([(base - sims[i + 1][mask]) / steps[i] for i in range(len(x))])
+        return forward_jacobian(lambda xs: [(r_meas - s)[mask] for s in model.simulate_many(
+            [values_of(xi) for xi in xs], segs)], x, lo, hi, floor=1.0, signed=False)
 
     x0 = np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
     sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=max_nfev, x_scale=1.0, ftol=1e-6, xtol=1e-6)

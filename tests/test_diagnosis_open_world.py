@@ -99,20 +99,11 @@ def test_catalogued_and_unlisted_together(runs, case):
             assert abs(est - true) <= tol
 
 
-def test_noise_floors_match_the_truth_sensors():
-    """The floors are estimated from the log alone; the truth's sensor noise is known: gyro 0.005
-    rad/s, speed 0.02 m/s, GPS 0.02 m per axis (measurements.truth_tractor)."""
-    from agrobot.diagnosis.baseline import baseline_from_study
-    from agrobot.diagnosis.candidates import Replay
-    from agrobot.diagnosis.noise_floor import stage_floors
-    from agrobot.diagnosis.selection import select
-    from agrobot.orchestrator.study import load_study
-    from tests.test_diagnosis import ROOT
-
-    frame, _ = make_log(SEED, "steering_offset")
-    replay = Replay(frame, baseline_from_study(load_study(ROOT / "studies" / "figure8.toml")))
-    sel = select(replay)
-    sensors = stage_floors(replay, sel.model.values)["_sensors"]
+def test_noise_floors_match_the_truth_sensors(runs):
+    """The floors are estimated from the log alone (here one with three effects, under the model
+    the diagnosis selected); the truth's sensor noise is known: gyro 0.005 rad/s, speed 0.02 m/s,
+    GPS 0.02 m per axis (measurements.truth_tractor)."""
+    sensors = runs["actuator_delay+steering_offset+antenna_lever_arm"]["result"]["noise_floor"]["sensors"]
     assert sensors["yaw_rate"] == pytest.approx(0.005, rel=0.15)
     assert sensors["v"] == pytest.approx(0.02, rel=0.15)
     assert sensors["gps"] == pytest.approx(0.02, rel=0.15)
