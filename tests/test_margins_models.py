@@ -309,10 +309,27 @@ def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
         assert np.abs(declared).max() > 1e-3 or port in ("gps_x", "roll", "accel_left", "pitch")   # pitch: east only, level
 
 
+def impulse_differences(component, trim: dict, port: str, outputs, dt: float, eps: float = 1e-6,
+                        steps: int = 3) -> np.ndarray:
+    """(steps, outputs): central differences of a component's outputs over ``steps`` steps after an
+    impulse of +-eps on input ``port`` at the first, each from a copy at the trim ``trim``."""
+    import copy
+
+    def run(delta):
+        fresh = copy.deepcopy(component)
+        rows = []
+        for k in range(steps):
+            fresh.u.update(trim)
+            fresh.u[port] += delta if k == 0 else 0.0
+            fresh.step((k + 1) * dt, dt)
+            rows.append([fresh.y[o] for o in outputs])
+        return np.array(rows)
+    return (run(eps) - run(-eps)) / (2 * eps)
+
+
 def test_imu_block_is_the_jacobian_of_its_step():
     """The IMU without bias or noise, level, heading east at 2 m/s: central differences of its gyro,
     left specific force and roll over 3 steps for each input against the block."""
-    import copy
 
     from agrobot.analysis.component_models import imu_sensor
     from agrobot.components.imu_sensor import IMUSensor
@@ -326,19 +343,8 @@ def test_imu_block_is_the_jacobian_of_its_step():
     imu.u.update(trim)
     imu.step(0.0, 0.01)
     block = imu_sensor(imu, 0.01, 2.0)
-    eps = 1e-6
     for port in trim:
-        def run(delta):
-            fresh = copy.deepcopy(imu)
-            rows = []
-            for k in range(3):
-                fresh.u.update(trim)
-                fresh.u[port] += delta if k == 0 else 0.0
-                fresh.step((k + 1) * 0.01, 0.01)
-                rows.append([fresh.y[o] for o in block.outputs])
-            return np.array(rows)
-
-        measured = (run(eps) - run(-eps)) / (2 * eps)
+        measured = impulse_differences(imu, trim, port, block.outputs, 0.01)
         u = np.zeros((3, len(block.inputs)))
         if port in block.inputs:
             u[0, block.inputs.index(port)] = 1.0

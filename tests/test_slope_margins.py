@@ -5,7 +5,6 @@ IMU's and the INS's blocks against short nonlinear runs of the components themse
 shows that the level-ground block misses what the slope adds."""
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -15,7 +14,7 @@ from agrobot.analysis.component_models import INS_OUTPUTS, imu_sensor, ins_ekf, 
 from agrobot.components.models.terrain import GRAVITY, attitude, ground_of, lever_offset
 from agrobot.components.models.yaw_dynamics import TractorParameters
 from agrobot.components.tractor_yaw_plant import TractorYawPlant
-from tests.test_margins_models import ins_differences
+from tests.test_margins_models import impulse_differences, ins_differences
 
 DEG = math.pi / 180.0
 SLOPE = 10 * DEG
@@ -147,19 +146,9 @@ def test_imu_block_on_a_slope_is_the_jacobian_of_its_step():
     imu.u.update(trim)
     imu.step(0.0, DT)
     block, level = imu_sensor(imu, DT, 2.0, g), imu_sensor(imu, DT, 2.0)
-    eps, differs = 1e-6, False
+    differs = False
     for port in ("roll", "pitch", "yaw_rate", "vel_north"):
-        def run(delta):
-            fresh = copy.deepcopy(imu)
-            rows = []
-            for k in range(3):
-                fresh.u.update(trim)
-                fresh.u[port] += delta if k == 0 else 0.0
-                fresh.step((k + 1) * DT, DT)
-                rows.append([fresh.y[o] for o in block.outputs])
-            return np.array(rows)
-
-        measured = (run(eps) - run(-eps)) / (2 * eps)
+        measured = impulse_differences(imu, trim, port, block.outputs, DT)
         u = np.zeros((3, len(block.inputs)))
         u[0, block.inputs.index(port)] = 1.0
         assert np.allclose(measured, _run_block(block, u), rtol=1e-5, atol=1e-5), port
