@@ -152,7 +152,8 @@ def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], 
             ok = number and bound.holds(float(value))
             text, check = f"{bound} ({bound.source})", "pass" if ok else "FAIL"
             if not ok:
-                reason = reason or why.get(key) or _missed(float(value), bound, unit)
+                # a number on the wrong side: how far; a nan or missing figure: why the analysis has none
+                reason = _missed(float(value), bound, unit) if finite else reason
                 failed.append(f"{key} = {_number(value)} {unit or ''} (bound {bound}, {bound.source}): {reason}"
                               .replace("  ", " "))
         else:

@@ -169,6 +169,12 @@ def test_coverage_bounds_follow_what_was_run():
     # ended before its route did
     _, failed = run_table({**values, "route_done_share": 0.4}, field_coverage, judged, whole)
     assert not failed
+    # a number on the wrong side of its bound says how far, not why a figure would be missing
+    table, failed = run_table({**values, "implement_xte_p95_m": 0.0595}, field_coverage, judged, whole)
+    line = _line(table, "implement_xte_p95_m")
+    assert "FAIL" in line and "0.0095 m above the bound" in line and "never on a swath" not in line, line
+    table, failed = run_table({**values, "implement_xte_p95_m": math.nan}, field_coverage, judged, whole)
+    assert "the implement was never on a swath in this run" in _line(table, "implement_xte_p95_m")
 
 
 def test_a_fail_or_nan_without_the_analysis_reason_still_says_why():
