@@ -173,6 +173,8 @@ class FieldRoute(Component):
         par("headland_work", "1", 1, "1: drive and work the headland passes"),
         par("headland_order", "", "last", "last: the headland passes after the swaths; first: before them"),
         par("max_swaths", "1", 0, "0: every swath; N: the first N (a section of the field)"),
+        par("leftover_passes", "1", 1, "1: what the route leaves (corners, necks, strips) is worked by passes of its "
+            "own after it (fields.planner.leftover_passes); 0: named in the plan only"),
         par("settle", "m", 5.0, "straight run before a swath beyond the implement's length"),
         par("swath_extension", "m", 0.1, "each swath worked on beyond its strip's reach (lift and drop margin)"),
         par("sections", "1", 0, "0: the whole width works along every swath and headland pass; N: N sections "
@@ -224,6 +226,13 @@ class FieldRoute(Component):
         self.end = (self.route.size - 1) * ROUTE_STEP          # s of the last grid point
         self.i_cg = self.i_impl = 0
         self.sections = section_control(self.p, plan, origin, rotation, self.require)
+        n = len(plan.leftover_passes)
+        if self.p["leftover_passes"]:
+            self.event(t0, f"{n} leftover pass(es) of their own after the route (parameter leftover_passes = 0 "
+                           f"leaves what the route leaves unworked, named in the plan)")
+        else:
+            self.event(t0, "leftover passes off: what the route leaves is named, not worked (parameter "
+                           "leftover_passes = 1 works it)")
         self.travelled, self.last_pose = 0.0, None
         self.step(t0, dt)
 

@@ -141,3 +141,14 @@ def test_a_neck_left_between_pieces_gets_passes_along_its_medial_axis_and_a_too_
     assert rest.area < 0.05 * band(2.5).area
     none, rest = axis_passes(owner, band(6.5), inside)
     assert none == [] and rest.area == pytest.approx(band(6.5).area)
+
+
+def test_a_mission_takes_the_leftover_passes_from_its_route_parameter():
+    """field.leftover_passes in a study reaches the planner (0: named only); its default is the
+    planner's."""
+    from agrobot.components.field_route import FieldRoute, settings_of
+
+    default = next(v.start for v in FieldRoute("field", {}).variables if v.name == "leftover_passes")
+    assert bool(default) is Settings().leftover_passes is True
+    assert settings_of({"leftover_passes": 0.0}).leftover_passes is False
+    assert settings_of({"leftover_passes": 1.0}).leftover_passes is True
