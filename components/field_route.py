@@ -216,6 +216,8 @@ class FieldRoute(Component):
         from agrobot.fields import FieldError
 
         self.require(bool(self.p["path"]), "parameter path: expected the field's file or folder")
+        self.require(self.p["leftover_passes"] in (0, 1), f"parameter leftover_passes = {self.p['leftover_passes']!r}: "
+                     f"expected 1 (work what the route leaves) or 0 (name it only)")
         try:
             _, plan = planned(str(self.p["path"]), str(self.p["crs"]), str(self.p["name"]), settings_of(self.p))
         except (FieldError, ValueError, OSError) as exc:

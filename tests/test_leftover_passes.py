@@ -152,3 +152,10 @@ def test_a_mission_takes_the_leftover_passes_from_its_route_parameter():
     assert bool(default) is Settings().leftover_passes is True
     assert settings_of({"leftover_passes": 0.0}).leftover_passes is False
     assert settings_of({"leftover_passes": 1.0}).leftover_passes is True
+
+
+def test_a_leftover_passes_value_other_than_0_or_1_exits_2_naming_it(cli, tmp_path):
+    res = cli("run", "studies/field_plot_mounted.toml", "--out", str(tmp_path / "out"),
+              "--set", "field.leftover_passes=2", "--set", "study.stop_time=1")
+    assert res.returncode == 2 and "leftover_passes = 2" in res.stderr and "Traceback" not in res.stderr, res.stderr
+    assert not (tmp_path / "out").exists()
