@@ -406,7 +406,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "physical_checks": checks,
         "notes": notes,
     }
-    report["_plot"] = {"log": log, "model": model, "test": test_segs, "linear": linear.values, "nl": nl.values,
+    report["_plot"] = {"log": log, "model": model, "test": test_segs, "test_pred": pred, "linear": linear.values, "nl": nl.values,
                        "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
     return report
 
@@ -420,7 +420,7 @@ def held_out_misfit(report: dict, t_from: float) -> dict | None:
     if not plot:
         return None
     log, segs = plot["log"], plot["test"]
-    pred = plot["model"].simulate(plot["final"], segs)
+    pred = plot["test_pred"]               # the final model on the held-out segments, as judged above
     t = log.t[segs.idx]
     keep = segs.scored & (t >= t_from)
     if keep.sum() < 10:
