@@ -1,7 +1,10 @@
 """The replay of a log, the baseline fit and the least-squares fit of any set of parameters
 (the selection of several effects is diagnosis.selection).
 
-The log is split in time: the first ``fit_fraction`` is for fitting, the rest is held out. Each
+The log is split in time: the first ``fit_fraction`` is for fitting, the rest is held out; when the
+held-out part drives beyond the conditions of the fit part (``split_conditions``: its lateral
+acceleration or speed well above what the fit saw), it would test extrapolation rather than the
+model, and every third ``window`` of the log is held out instead (``split="blocks"``). Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages
 (the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly.
 
@@ -52,6 +55,30 @@ MIN_COMMANDED_YAW = 0.0125     # rad/s: 0.5 deg of steering at 2 m/s on the pape
 SIDE_SLIP_LOOSENESS = 0.15     # the fraction of C_r a yaw-rate fit leaves loose (the truths' stiffness spread)
 SIDE_SLIP_ARM = 0.15           # m: the smallest material lever arm (effects.antenna_lever_arm)
 REWEIGHTS = 4                  # at most this many refits of a side-slip block at its own residual levels
+SPLITS = ("auto", "tail", "blocks")
+BEYOND = 1.5                   # the held-out part's 95th percentile above this x the fit part's: beyond its conditions
+BEYOND_MARGIN = {"lateral acceleration |v yaw_rate|": 0.5, "speed": 0.5}    # m/s2, m/s: and by at least this much
+
+
+def split_conditions(t: np.ndarray, speed: np.ndarray, gyro: np.ndarray, moving: np.ndarray,
+                     t_split: float) -> str | None:
+    """Why the part after ``t_split`` lies beyond the conditions of the part before (the 95th
+    percentile of |a_y| = |v r| or of the speed, while moving, above BEYOND x the fit part's and by
+    BEYOND_MARGIN), or None. A log driven harder in its last part (faster, nearer the grip limit)
+    held out there judges a model fitted on gentler driving on conditions it never saw."""
+    before, after = moving & (t < t_split), moving & (t >= t_split)
+    if before.sum() < 20 or after.sum() < 20:
+        return None
+    a = np.abs(speed * gyro)
+    for name, x, unit in (("lateral acceleration |v yaw_rate|", a, "m/s2"), ("speed", np.abs(speed), "m/s")):
+        ok = np.isfinite(x)
+        if (before & ok).sum() < 20 or (after & ok).sum() < 20:
+            continue
+        p0, p1 = (float(np.percentile(x[m & ok], 95)) for m in (before, after))
+        if p1 > BEYOND * p0 and p1 - p0 >= BEYOND_MARGIN[name]:
+            return (f"the log's last part (t >= {t_split:.1f} s) is driven beyond its first: 95th percentile of the "
+                    f"{name} {p1:.3g} {unit} against {p0:.3g} {unit}")
+    return None
 
 
 def position_step(xy: np.ndarray) -> float:
@@ -82,6 +109,7 @@ class Replay:
     frame: pd.DataFrame
     baseline: Baseline
     fit_fraction: float = 0.6
+    split: str = "auto"                 # SPLITS: the last part held out, every third window, or chosen
     burn_in: float = 3.0
     window: float = 10.0
     min_speed: float = 0.3
@@ -132,7 +160,8 @@ class Replay:
         t_split = self.t[0] + self.fit_fraction * duration
         after_burn = self.t >= self.t[0] + self.burn_in
         self.t_split = t_split
-        steering = {"fit": after_burn & (self.t < t_split), "test": self.t >= t_split}
+        held = self._held_out(t_split, moving)
+        steering = {"fit": after_burn & ~held, "test": held}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
         self.masks = {"steering": steering, "yaw": {k: m & moving for k, m in steering.items()}}
         # speed: the GPS chord speed (1 s chords, centred) where a chord exists and the tractor moves
@@ -151,7 +180,7 @@ class Replay:
         starts = np.arange(0, len(self.t) - L + 1, L)
         rows = starts[:, None] + np.arange(L)[None, :]
         rows = rows[np.all(moving[rows], axis=1)]
-        self.windows = {"fit": rows[self.t[rows[:, -1]] < t_split], "test": rows[self.t[rows[:, 0]] >= t_split]}
+        self.windows = {"fit": rows[~held[rows].any(axis=1)], "test": rows[held[rows].all(axis=1)]}
         if "position" in self.stages and (len(self.windows["fit"]) < 3 or len(self.windows["test"]) < 2):
             why = (f"too few {self.window:.0f} s stretches of driving for the position and speed replays "
                    f"({len(self.windows['fit'])} to fit, {len(self.windows['test'])} held out; need 3 and 2)")
@@ -161,6 +190,35 @@ class Replay:
                 if stage in self.stages:
                     self.not_judged[stage] = f"not judged: {why}"
             self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+
+    def _held_out(self, t_split: float, moving: np.ndarray) -> np.ndarray:
+        """The held-out samples: after ``t_split`` (split "tail"), or every third ``window`` of the
+        log (split "blocks"; "auto" takes it when the last part lies beyond the first's conditions,
+        split_conditions). Sets ``split`` to the one taken and ``split_note`` to why."""
+        if self.split not in SPLITS:
+            raise ValueError(f"split {self.split!r}: expected one of {SPLITS}")
+        self.split_note = None
+        if self.split == "auto":
+            why = split_conditions(self.t, self.speed, self.gyro, moving, t_split)
+            self.split = "blocks" if why else "tail"
+            if why:
+                self.split_note = (f"{why}: held out there, it would judge a model fitted on gentler driving on "
+                                   f"conditions it never saw; every third {self.window:.0f} s of the log is held out "
+                                   f"instead (--split tail holds out the last {100 * (1 - self.fit_fraction):.0f} %)")
+        return self.unseen(self.t)
+
+    def unseen(self, t: np.ndarray) -> np.ndarray:
+        """Whether times ``t`` fall in the held-out part of the split taken."""
+        t = np.asarray(t, float)
+        if self.split == "tail":
+            return t >= self.t_split
+        return np.floor((t - self.t[0]) / self.window).astype(int) % 3 == 2
+
+    def held_out_spans(self) -> list[tuple[float, float]]:
+        """The held-out part as (start, end) times."""
+        held = self.masks["steering"]["test"].astype(int)
+        edges = np.flatnonzero(np.diff(np.r_[0, held, 0]))
+        return [(float(self.t[a]), float(self.t[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
 
     def commanded_yaw(self) -> float:
         """The excitation of the steering command as the yaw rate it asks for, std(v delta_cmd / L):

@@ -20,6 +20,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-identify", action="store_true",
                    help="do not identify the vehicle on the same log first (faster: the report then has no "
                         "identified vehicle beside the study's, and tyre saturation is judged by the diagnosis alone)")
+    p.add_argument("--split", choices=("auto", "tail", "blocks"), default="auto",
+                   help="what is held out: the log's last part (tail, the --fit-fraction rest), every third 10 s "
+                        "(blocks), or auto (default): blocks when the last part is driven beyond the first's conditions "
+                        "(lateral acceleration or speed 1.5 x higher), said in the warnings")
     p.add_argument("--mcap", action="store_true", help="also write diagnosis.mcap: the measured stages, the "
                    "baseline's and the final model's replays and residuals on one time axis (Foxglove, PlotJuggler)")
     from agrobot.measurements.cli import add_recording_options
@@ -57,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     with folder:
         result = diagnose(args.log, folder.tmp, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
                           resample=args.resample, recording=recording_options(args), progress=progress, mcap=args.mcap,
-                          identify=not args.no_identify)
+                          identify=not args.no_identify, split=args.split)
         folder.commit()
     if result.get("recording"):
         print(describe(result["recording"]))

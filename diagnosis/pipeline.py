@@ -107,7 +107,8 @@ def _warnings(replay: Replay, base: Fit, floors: dict) -> list[str]:
                     "track": "no speed column: the yaw replay runs on the speed of the GPS track"}[replay.speed_source])
     duration = replay.t[-1] - replay.t[0]
     if duration < 180:
-        out.append(f"the log lasts {duration:.0f} s: with {duration * (1 - replay.fit_fraction):.0f} s held out, "
+        held = float(replay.masks["steering"]["test"].sum()) * replay.h
+        out.append(f"the log lasts {duration:.0f} s: with {held:.0f} s held out, "
                    f"small effects cannot be confirmed (record at least 180 s, better 400 s)")
     asked = replay.commanded_yaw() if "steering" in replay.stages else math.inf
     if asked < 0.05:               # 2 deg of steering at 2 m/s on the paper tractor
@@ -157,11 +158,12 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
-def identified_vehicle(frame, where: str, study, baseline, t_split: float = math.inf) -> dict:
+def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
     """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
     study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
-    held-out fit and its independent estimates (identification.comparisons)."""
+    held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
+    samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
     from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
     from agrobot.orchestrator.errors import InputError
 
@@ -185,7 +187,7 @@ def identified_vehicle(frame, where: str, study, baseline, t_split: float = math
             "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
             "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}
                            for k, q in rep["parameters"].items()},
-            "held_out_yaw": held_out_misfit(rep, t_split)}
+            "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None}
     return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
             "physical_checks": rep.get("physical_checks", {})}
 
@@ -204,10 +206,11 @@ def same_stretches(identified: dict, replay, values: dict[str, float]) -> None:
     held["diagnosis_rms"] = float(np.sqrt(np.mean(r[inside] ** 2))) if inside.sum() >= 10 else float("nan")
 
 
-def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05, floor: float = 0.0) -> list[str]:
+def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05, floor: float = 0.0,
+              held_part: str = "the log's last part") -> list[str]:
     """Where identify and diagnose, on one log, conclude differently, and why: about an effect both
     model (tyre saturation; identify's held-out segments are spread over the log, the diagnosis
-    holds out its last part), and about the vehicle itself: when one model of it leaves materially
+    holds out ``held_part``), and about the vehicle itself: when one model of it leaves materially
     less of the gyro unexplained than the other on the same unseen stretches (and the poorer is a
     misfit, above RATIO x the yaw stage's noise ``floor``), the poorer one's verdict is relative to a
     model that misses what the better one has."""
@@ -221,7 +224,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
         why = "; ".join(tried.reasons) if tried else "it was not fitted"
         out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
                    f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
-                   f"the log's last part, does not: {why}")
+                   f"{held_part}, does not: {why}")
     if not sat and "tyre_saturation" in ids:
         out.append("the diagnosis finds tyre saturation where identify does not keep it: "
                    + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
@@ -230,8 +233,8 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     if not (math.isfinite(mine) and math.isfinite(theirs)):
         return out
     k = DISPLAY["yaw"][0]
-    where = (f"on the {held['seconds']:.0f} s of identify's held-out segments after t = "
-             f"{held['windows'][0][0]:.1f} s, which neither fit saw")
+    where = (f"on the {held['seconds']:.0f} s of identify's held-out segments inside the diagnosis's held-out "
+             f"part ({held_part}), which neither fit saw")
     if min(mine, theirs) >= (1 - min_gain) * max(mine, theirs) or max(mine, theirs) <= RATIO * floor:
         if out:                     # an effect concluded differently: the two models still fit alike
             out[-1] += (f"; yet the two models of this vehicle fit alike {where} (yaw rate RMS {k * mine:.3g} deg/s "
@@ -256,6 +259,13 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
                        f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
                        f"vehicle beyond what identify's single-track model holds")
     return out
+
+
+def held_part(replay) -> str:
+    """The diagnosis's held-out part in words."""
+    if replay.split == "tail":
+        return f"the log's last {100 * (1 - replay.fit_fraction):.0f} %, t >= {replay.t_split:.1f} s"
+    return f"every third {replay.window:.0f} s of the log"
 
 
 LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
@@ -283,12 +293,13 @@ def coarser_clock(frame):
 
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None, progress=None, identify: bool = True, mcap: bool = False) -> dict:
+             recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto") -> dict:
     """Run the diagnosis and return its result; with ``out_dir`` it always writes diagnosis.json and
     report.md there (verdict ``cannot decide`` with the reason when the log cannot be used), and the
     figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log.
     ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``: with
-    ``out_dir``, diagnosis.mcap too (diagnosis.mcap)."""
+    ``out_dir``, diagnosis.mcap too (diagnosis.mcap); ``split``: what is held out (diagnosis.candidates.SPLITS:
+    the last part, every third window, or chosen by the log's conditions)."""
     out = Path(out_dir) if out_dir is not None else None
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
@@ -307,7 +318,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
             result["recording"] = imported
         frame, note = coarser_clock(frame)
         note = "; ".join(x for x in (stretch, note) if x) or None
-        replay = Replay(frame, baseline, fit_fraction=fit_fraction)
+        replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
     except (LogError, CannotDecide) as exc:
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
         result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
@@ -323,9 +334,12 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
         say(f"warning: {mismatch}")
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
-        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.t_split)
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen)
     identified = result.get("identified_vehicle", {}).get("identified") or {}
-    say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}")
+    say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}; "
+        f"held out: {held_part(replay)}")
+    if replay.split_note:
+        say(replay.split_note)
     if replay.side_slip_note():
         say(replay.side_slip_note())
     sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
@@ -335,7 +349,9 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     judged = replay.stages
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
               for s in judged}
-    result["split_time"] = replay.t_split
+    result["split_time"] = replay.t_split if replay.split == "tail" else float("nan")
+    result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
+                       "why": replay.split_note}
     result["baseline_refit"] = {k: base.values[k] for k in REFIT}
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
@@ -364,7 +380,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
     same_stretches(identified, replay, final.values)
-    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0))
+    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"]:
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
@@ -376,7 +392,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     result["verdict_bullets"] = verdict["bullets"]
     result["inconclusive"] = sel.inconclusive
     result["selection_trace"] = sel.trace
-    result["warnings"] = _warnings(replay, base, floors) + ([note] if note else [])
+    result["warnings"] = _warnings(replay, base, floors) + ([note] if note else []) + (
+        [replay.split_note] if replay.split_note else [])
     if mismatch:
         result["warnings"].insert(0, mismatch)
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},

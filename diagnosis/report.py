@@ -36,7 +36,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             t, r = replay.residual_series(stage, v)
             ax[0, 0].plot(t, k * r, ".", ms=1, color=color, label=label)
         ax[0, 0].set(title="antenna position residual after per-window alignment", xlabel="t [s]", ylabel=f"[{unit}]")
-        ax[0, 0].axvline(replay.t_split, color="k", ls="--", lw=0.8)
+        _shade_held_out(ax[0, 0], replay)
         _draw_levels(ax[0, 0], levels, k, unit, signed=False)
         track = replay.gps
         ax[0, 1].plot(track[:, 0], track[:, 1], lw=0.6, color="k")
@@ -44,7 +44,8 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     else:
         keep = replay.scored(stage)
         t = replay.t
-        window = (t >= replay.t_split) & (t < replay.t_split + 30)
+        first = replay.held_out_spans()[0][0]
+        window = (t >= first) & (t < first + 30)
         ax[0, 0].plot(t[window], k * replay.measured(stage)[window], color="k", lw=1, label="measured")
         for label, v, color in models:
             ax[0, 0].plot(t[window], k * replay.predicted(stage, v)[window], color=color, lw=1, label=label)
@@ -56,9 +57,10 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             lags, rho, bound = cross_correlation(res[keep], x[keep], 1 / replay.h)
             ax[1, 1].plot(lags, rho, color=color, label=label)
         ax[1, 1].axhspan(-bound, bound, color="0.85", label="95% bound (white)")
-        ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s of the held-out part", xlabel="t [s]", ylabel=f"[{unit}]")
+        _shade_held_out(ax[0, 0], replay, (first, first + 30))
+        ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s from the first held-out stretch", xlabel="t [s]", ylabel=f"[{unit}]")
         ax[0, 1].set(title="residual (measured - simulated)", xlabel="t [s]", ylabel=f"[{unit}]")
-        ax[0, 1].axvline(replay.t_split, color="k", ls="--", lw=0.8)
+        _shade_held_out(ax[0, 1], replay)
         _draw_levels(ax[0, 1], levels, k, unit)
         ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel=f"PSD [({unit})^2/Hz]")
         ax[1, 1].set(title=f"residual x {({'steering': 'delta_cmd', 'speed': 'v'}).get(stage, 'delta')} cross-correlation",
@@ -67,7 +69,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         if a.get_legend_handles_labels()[0]:
             a.legend(fontsize=7)
             a.grid(alpha=0.3)
-    fig.suptitle(f"{stage} stage (dashed: start of the held-out part)")
+    fig.suptitle(f"{stage} stage (grey: held out)")
     fig.tight_layout()
     atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
     plt.close(fig)
@@ -132,7 +134,7 @@ def vehicle_lines(iv: dict | None) -> list[str]:
     if math.isfinite(held.get("diagnosis_rms", math.nan)):
         k = DEGREES["rad/s"][0]
         out.append(f"- yaw rate on the same unseen stretches ({held['seconds']:.0f} s of identify's held-out segments "
-                   f"after the diagnosis's split) [deg/s]: RMS misfit {k * held['rms']:.4g} identify's model, "
+                   f"inside the diagnosis's held-out part) [deg/s]: RMS misfit {k * held['rms']:.4g} identify's model, "
                    f"{k * held['diagnosis_rms']:.4g} the diagnosis's final model")
     for c, chk in iv.get("physical_checks", {}).items():
         out.append(f"- physical check `{c}` ({chk['what']}): held-out fit {chk['fit_percent']:.0f} %, RMS "
@@ -140,10 +142,26 @@ def vehicle_lines(iv: dict | None) -> list[str]:
     return out + [""]
 
 
+def _shade_held_out(ax, replay, within: tuple[float, float] = (-math.inf, math.inf)) -> None:
+    """Grey spans over the held-out part."""
+    for a, b in replay.held_out_spans():
+        if b > within[0] and a < within[1]:
+            ax.axvspan(max(a, within[0]), min(b, within[1]), color="0.9", zorder=0)
+
+
+def split_sentence(result: dict) -> str:
+    """What the fit saw and what was held out, and why when the split was not the last part."""
+    split = result.get("split") or {}
+    if split.get("kind", "tail") == "tail":
+        return f"Fit on t < {result['split_time']:.1f} s, measured on the rest (held out)."
+    spans = ", ".join(f"{a:.0f}-{b:.0f} s" for a, b in split["spans"])
+    return (f"Held out: {split['held_out']} ({spans}), fit on the rest" + (f"; {split['why']}" if split.get("why") else "")
+            + ".")
+
+
 def markdown(result: dict, plots: list[str]) -> str:
     lines = [f"# Diagnosis of `{result['log']}`", "",
-             f"Baseline model: `{result['study']}`. Fit on t < {result['split_time']:.1f} s, "
-             f"measured on the rest (held out). {UNITS_NOTE}", "",
+             f"Baseline model: `{result['study']}`. {split_sentence(result)} {UNITS_NOTE}", "",
              f"## Verdict: **{result['verdict']}**", ""]
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]

@@ -411,18 +411,19 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     return report
 
 
-def held_out_misfit(report: dict, t_from: float) -> dict | None:
-    """The identified final model's gyro misfit on its held-out segments at t >= ``t_from``: samples
-    neither this fit nor a fit on the log before ``t_from`` has seen, so that another model of the
-    same vehicle (the diagnosis's) can be scored on the same stretches. Returns {"windows": [(t0, t1)],
-    "seconds", "rms" [rad/s]}, or None without such samples."""
+def held_out_misfit(report: dict, unseen) -> dict | None:
+    """The identified final model's gyro misfit on its held-out segments where ``unseen(t)`` (a
+    boolean array of the sample times) holds: samples neither this fit nor another fit that held them
+    out has seen, so that another model of the same vehicle (the diagnosis's) can be scored on the
+    same stretches. Returns {"windows": [(t0, t1)], "seconds", "rms" [rad/s]}, or None without such
+    samples."""
     plot = report.get("_plot")
     if not plot:
         return None
     log, segs = plot["log"], plot["test"]
     pred = plot["test_pred"]               # the final model on the held-out segments, as judged above
     t = log.t[segs.idx]
-    keep = segs.scored & (t >= t_from)
+    keep = segs.scored & np.asarray(unseen(t), bool)
     if keep.sum() < 10:
         return None
     windows = [(float(t[i][keep[i]].min()), float(t[i][keep[i]].max())) for i in range(len(segs.idx)) if keep[i].any()]

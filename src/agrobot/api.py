@@ -122,18 +122,22 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
 
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
              resample: bool = False, recording=None, plots: bool = True, progress=None,
-             identify: bool = True) -> Diagnosis:
+             identify: bool = True, split: str = "auto") -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it,
     diagnosis.json, report.md, the figures and extended_study.toml go there. A log that cannot be
     judged gives the verdict ``"cannot decide"`` with its ``reason``. ``identify``: identify the
-    vehicle on the same log first (one vehicle model for both; False is faster)."""
+    vehicle on the same log first (one vehicle model for both; False is faster). ``split``: what
+    is held out, "tail" (the last 1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto"
+    (blocks when the last part is driven beyond the first's conditions)."""
+    from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnose as run_diagnosis
+    from agrobot.orchestrator.study import StudyError
 
     if not 0.2 <= fit_fraction <= 0.8:
-        from agrobot.orchestrator.study import StudyError
-
         raise StudyError(f"fit_fraction {fit_fraction:g}: expected a share in [0.2, 0.8]")
+    if split not in SPLITS:
+        raise StudyError(f"split {split!r}: expected one of {', '.join(SPLITS)}")
     path = None if study is None else load(study).path
     if out is not None:
         from agrobot.orchestrator.output import check_output
@@ -141,7 +145,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         check_output(Path(out), overwrite=True)
     result = run_diagnosis(log, Path(out) if out is not None else None, path, fit_fraction, min_gain,
                            plots=plots, resample=resample, recording=recording, progress=progress,
-                           identify=identify)
+                           identify=identify, split=split)
     return Diagnosis(result, Path(out) if out is not None else None)
 
 
