@@ -92,6 +92,11 @@ class Effect:
         """[(role, parameter, SI value)]: the component options that carry the fitted effect."""
         raise NotImplementedError
 
+    def applies(self, replay) -> bool:
+        """Whether this log can judge the effect beyond its stages and columns (a command's gain
+        needs the command to drive the yaw stage)."""
+        return True
+
     def hypothesis_for(self, stages) -> str:
         """The hypothesis in terms of the stages this log judged it on (a log without GPS is not
         told about the GPS track)."""

@@ -67,6 +67,8 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         m, lf, lr = truth.get("m", TABLE["m"]), TABLE["l_f"], TABLE["l_r"]
         mu = truth["C_f"] * truth["alpha_s"] / (m * 9.81 * lr / (lf + lr))
         return params["tyre_friction"] * force_limit_share(params["tyre_shape"]), mu, 0.35 * mu
+    if effect == "steering_gain":                # a command-only log of a sensor read g x the angle, the loop
+        return params["steering_gain"], 1.0 / truth["sensor_gain"], 0.03     # closed on it: wheels turn cmd / g
     if effect == "steering_clock":
         return params["steering_clock"], truth["steering_clock"], 0.04
     if effect == "steering_ratio_curve":

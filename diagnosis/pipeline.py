@@ -228,6 +228,13 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     if not sat and "tyre_saturation" in ids:
         out.append("the diagnosis finds tyre saturation where identify does not keep it: "
                    + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
+    gain = next((e["parameters"]["steering_gain"] for e in effects if e["id"] == "steering_gain"), None)
+    steer = (identified.get("parameters") or {}).get("steer_gain")
+    if gain is not None and steer and abs(gain - steer["value"]) >= 0.05:
+        lo, hi = steer.get("interval") or (math.nan, math.nan)
+        out.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
+                   f"each fit trades part of it for its other parameters (identify's free stiffnesses and lag, the "
+                   f"diagnosis's study steering and bounded stiffness scales); steady circles at walking speed tell")
     held = identified.get("held_out_yaw") or {}
     mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
     if not (math.isfinite(mine) and math.isfinite(theirs)):

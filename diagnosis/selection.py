@@ -159,7 +159,7 @@ class Selector:
                             DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
         # the effects this log can judge: one of their stages replayed, the columns they read there
         self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
-                          and all(c in replay.frame for c in e.needs)]
+                          and all(c in replay.frame for c in e.needs) and e.applies(replay)]
         if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
             # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
             self.catalogue = [e for e in self.catalogue if e.id not in SCALES]

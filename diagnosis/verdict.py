@@ -107,6 +107,17 @@ def judge_values(effect: dict, vehicle, wheelbase: float, l_r: float, speed: flo
         s = p.get(key)
         if s is not None and not 0.7 <= s <= 1.4:
             out.append(f"a {what} scale factor of {s:.3g} is no sensor error: a unit or a channel is wrong")
+    k = p.get("steering_gain")
+    if eid == "steering_gain" and k is not None and not 0.7 <= k <= 1.4:
+        if abs(k * 180 / math.pi - 1.0) < 0.1 or abs(k * math.pi / 180 - 1.0) < 0.1:
+            out.append(f"a steering command gain of {k:.3g} is a unit: the command is in degrees where radians "
+                       f"are expected, or the other way round")
+        elif 1 / 30 <= k <= 1 / 8:
+            out.append(f"a steering command gain of {k:.3g} is a steering ratio (1:{1 / k:.0f}): the command is the "
+                       f"handwheel's angle, not the road wheels'")
+        else:
+            out.append(f"a steering command gain of {k:.3g} is no calibration error: the command is another quantity "
+                       f"or in another unit")
     if eid == "steering_offset" and abs(p.get("steer_angle_offset", 0.0)) > math.radians(8):
         out.append(f"a steering offset of {math.degrees(p['steer_angle_offset']):.1f} deg is more than a misaligned "
                    f"zero: the steering channel is another quantity (a handwheel angle, a command in another unit)")

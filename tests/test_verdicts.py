@@ -50,6 +50,9 @@ def test_a_lever_arm_outside_the_outline_is_not_a_mounting_and_the_verdict_says_
     ("tyre_saturation", {"tyre_friction": 1.8, "tyre_shape": 1.3}, "above what tyres give"),
     ("yaw_rate_bias", {"yaw_rate_bias": math.radians(3.0)}, "beyond what a gyro of this class"),
     ("gyro_scale", {"gyro_scale": 57.3}, "a unit or a channel is wrong"),
+    ("steering_gain", {"steering_gain": 1 / 16.0}, "a steering ratio (1:16)"),
+    ("steering_gain", {"steering_gain": math.pi / 180}, "in degrees where radians"),
+    ("steering_gain", {"steering_gain": 2.5}, "another quantity"),
 ])
 def test_values_no_vehicle_of_the_class_has_are_named(eid, params, words):
     notes = judge_values(effect(eid, **params), CAR, 2.97, 1.5, 20.0)
@@ -58,7 +61,8 @@ def test_values_no_vehicle_of_the_class_has_are_named(eid, params, words):
 
 @pytest.mark.parametrize("eid, params", [("actuator_delay", {"command_delay": 0.2}),
                                          ("tyre_saturation", {"tyre_friction": 1.0, "tyre_shape": 1.3}),
-                                         ("yaw_rate_bias", {"yaw_rate_bias": math.radians(0.5)})])
+                                         ("yaw_rate_bias", {"yaw_rate_bias": math.radians(0.5)}),
+                                         ("steering_gain", {"steering_gain": 1.25})])
 def test_values_the_vehicle_can_have_pass(eid, params):
     assert judge_values(effect(eid, **params), CAR, 2.97, 1.5, 20.0) == []
 
@@ -191,3 +195,8 @@ def test_both_models_of_the_vehicle_are_scored_on_the_same_unseen_stretches_and_
     assert bullet.startswith("identify keeps tyre saturation") and "fit alike" in bullet
     assert agreement(_identified(0.098), [], Sel()) == []              # no diagnosis score: nothing claimed
     assert agreement(better, [], Sel(), floor=0.08) == []                # both within 1.5 x the floor: alike
+    gain = [{"id": "steering_gain", "parameters": {"steering_gain": 0.9}}]
+    (bullet,) = agreement(_identified(0.098), gain, Sel())              # the two estimates of the command's gain
+    assert bullet.startswith("the command's gain: the diagnosis 0.9, identify 0.7 [0.65, 0.75]")
+    gain[0]["parameters"]["steering_gain"] = 0.72
+    assert agreement(_identified(0.098), gain, Sel()) == []             # within the materiality (0.05)
