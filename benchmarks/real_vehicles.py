@@ -11,7 +11,8 @@ from steady states, the delay from the fit and from a cross-correlation, the gyr
 and from the GNSS course), the physical checks (beta, vy, a_y when the log has them), the verdict
 with its status and statement, what was not judged, and the time taken; and the yaw-rate misfit of
 identify's model and of the diagnosis's on the same unseen stretches (identify's held-out segments
-after the diagnosis's split).
+inside the diagnosis's held-out part), and what the diagnosis held out (the last 40 %, or every third
+10 s when the last part is driven beyond the first's conditions).
 """
 from __future__ import annotations
 
@@ -84,7 +85,7 @@ def main() -> None:
                          "tyre saturation": (f"mu {rep['tyre_saturation']['friction']:.2f}" if rep["tyre_saturation"]
                                              else "not found")}
                 held = rep.get("held_out_yaw") or {}
-                if "diagnosis_rms" in held:    # both models on identify's held-out segments after the split
+                if "diagnosis_rms" in held:    # both models on identify's held-out segments inside the diagnosis's
                     ident["yaw RMS, same unseen stretches: identify; diagnose [deg/s]"] = (
                         f"{math.degrees(held['rms']):.3g}; {math.degrees(held['diagnosis_rms']):.3g} "
                         f"({held['seconds']:.0f} s)")
@@ -103,6 +104,8 @@ def main() -> None:
             ident["gyro bias: fit; course [rad/s]"] = both(comparisons, "gyro bias", "{:.2g}")
             checks = (res.get("identified_vehicle") or {}).get("physical_checks") or {}
             ident["physical checks"] = "; ".join(f"{c} {v['fit_percent']:.0f} %" for c, v in checks.items()) or "no beta/vy/a_y"
+            split = res.get("split") or {}
+            ident["held out"] = split.get("held_out", "-")
             verdict = f"{res['verdict']} ({res.get('verdict_status', '')})"
             if res["verdict"] == "cannot decide":
                 verdict += f": {res['reason'].split(': ', 1)[-1]}"
