@@ -58,9 +58,13 @@ def test_f1tenth_command_only_log_is_judged_through_the_yaw_rate(ds1):
     top = next((e for e in res["effects"] if e["id"] == res["verdict"]), None)
     if top is not None:
         assert not any(p["at_bound"] for p in top.get("fitted", {}).values())
-    # the scale car's gyro-bias range (3 deg/s), not the tractor's 0.2 rad/s
+    # the scale car's gyro-bias range (3 deg/s), not the tractor's 0.2 rad/s; an end of it the fit
+    # reaches is widened toward the physical limit, and the trace says so
     bias = [f for f in res["findings"] if f["id"] == "yaw_rate_bias"]
-    assert bias and bias[0]["fitted"]["yaw_rate_bias"]["bounds"][1] == pytest.approx(math.radians(3.0))
+    lo, hi = bias[0]["fitted"]["yaw_rate_bias"]["bounds"] if bias else (None, None)
+    widened = any(line.startswith("widened yaw_rate_bias") for line in res["selection_trace"])
+    assert lo == pytest.approx(-math.radians(3.0)) or widened, (lo, hi)
+    assert hi == pytest.approx(math.radians(3.0)) or widened, (lo, hi)
 
 
 def test_yaw_column_under_another_name_is_named(ds1, tmp_path):
