@@ -165,6 +165,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
     held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
     samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
     from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
+    from agrobot.measurements.audit import require_causal
     from agrobot.orchestrator.errors import InputError
 
     p = baseline.tractor
@@ -173,6 +174,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
             "cornering_stiffness_front": p.C_f, "cornering_stiffness_rear": p.C_r,
             "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
     try:
+        require_causal(frame, where)              # identify refuses a response leading its input
         rep = identify_driving(frame, where, study)
     except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
         return {"study": ours, "identified": None, "why_not": str(exc)}
@@ -268,6 +270,21 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     return out
 
 
+def explained_findings(audit: list[dict], effects: list[dict], tolerance: float = 0.05) -> list[dict]:
+    """The audit's findings with a response leading its input resolved where the diagnosis names
+    the steering channels' clock at least that late (the clock = the lead + the vehicle's own
+    delay): the recording explained, what it imitates is judged again."""
+    clock = next((e["parameters"]["steering_clock"] for e in effects if e["id"] == "steering_clock"), None)
+    for f in audit:
+        if f["kind"] == "response_leads_input" and not f["resolved"] and clock is not None \
+                and isinstance(f.get("value"), (int, float)) and clock >= f["value"] - tolerance:
+            f["resolved"] = True
+            f["meaning"] = (f"{f.get('meaning') or ''}; explained by the diagnosis: the steering channels stamped "
+                            f"{clock:.3f} s late (steering_clock), {clock - f['value']:+.3f} s of it the vehicle's "
+                            f"own delay").lstrip("; ")
+    return audit
+
+
 def held_part(replay) -> str:
     """The diagnosis's held-out part in words."""
     if replay.split == "tail":
@@ -320,7 +337,8 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
         recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
         from agrobot.identification.from_log import read_uneven
 
-        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study)
+        # a response leading its input is not refused here: its finding is judged as a candidate (steering_clock)
+        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
         if imported is not None:
             result["recording"] = imported
         frame, note = coarser_clock(frame)
@@ -381,7 +399,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
             for n, p in bound.items())
     result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
                                   for e in unidentifiable]
-    result["audit"] = audit_findings(replay.frame.attrs)
+    result["audit"] = explained_findings(audit_findings(replay.frame.attrs), effects)
     p = baseline.tractor
     moving = replay.speed[replay.speed > replay.min_speed]
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,

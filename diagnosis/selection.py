@@ -208,7 +208,7 @@ class Selector:
     def run(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
         trace_gate = self.saturation_gate(base)
-        notes = [x for x in (self.replay.side_slip_note(), trace_gate) if x]
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
         model, members, trace, inconclusive = base, [], notes, []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
@@ -267,6 +267,22 @@ class Selector:
         final, floors = self.evaluate(model)
         trace += [f"widened {w}" for w in self.widened]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def audit_start(self) -> str | None:
+        """The import audit's unresolved finding that the yaw rate answers the steering before it
+        (response_leads_input) is a candidate like any effect: steering_clock starts from its lead."""
+        from .verdict import audit_findings
+
+        lead = next((f for f in audit_findings(self.replay.frame.attrs)
+                     if f["kind"] == "response_leads_input" and not f["resolved"]), None)
+        effect = next((e for e in self.catalogue if e.id == "steering_clock"), None)
+        if lead is None or effect is None or not isinstance(lead.get("value"), (int, float)):
+            return None
+        (p,) = effect.parameters
+        start = min(max(float(lead["value"]), p.lower), p.upper - 1e-6 * (p.upper - p.lower))
+        self._first["steering_clock"] = {"steering_clock": start}
+        return (f"steering_clock started at {start:.3f} s: the import audit finds the yaw rate answering the steering "
+                f"{lead['value']:.3f} s before it (response_leads_input, unresolved)")
 
     def saturation_gate(self, base: Fit) -> str | None:
         """Tyre saturation is tried only where the linear model's misfit grows with |a_y|: in the

@@ -9,9 +9,11 @@ import time
 from pathlib import Path
 
 
-def _read(source: Path, resample: bool, recording, study):
+def _read(source: Path, resample: bool, recording, study, causal: bool = True):
     """The log as measurements.load_log reads it; a table with clock gaps or jitter (ordinary
-    logging) is checked piece by piece between its gaps, each piece on its own even clock."""
+    logging) is checked piece by piece between its gaps, each piece on its own even clock.
+    ``causal``: refuse a log whose response leads its input (measurements.audit.require_causal);
+    False leaves the unresolved finding on the log for a reader that judges it (the diagnosis)."""
     import numpy as np
     import pandas as pd
 
@@ -30,11 +32,13 @@ def _read(source: Path, resample: bool, recording, study):
         if is_recording(Path(source)) or not ("gap" in str(exc) or "unevenly" in str(exc)):
             raise
     else:
-        require_causal(loaded[0], str(source))          # a response leading its input: refused, said why
+        if causal:
+            require_causal(loaded[0], str(source))      # a response leading its input: refused, said why
         return loaded
     frame = pd.read_parquet(source) if Path(source).suffix == ".parquet" else pd.read_csv(source)
     frame.attrs.setdefault("audit", persisted_audit(source) or [])
-    require_causal(frame, str(source))
+    if causal:
+        require_causal(frame, str(source))
     t = frame["t"].to_numpy(float)
     if np.any(np.diff(t) <= 0):
         i = int(np.argmax(np.diff(t) <= 0))
@@ -77,10 +81,11 @@ def longest_stretch(frame, gap: float | None = None):
     return even, (float(t[a]), float(t[b - 1]))
 
 
-def read_uneven(source: Path, resample: bool = False, recording=None, study=None):
+def read_uneven(source: Path, resample: bool = False, recording=None, study=None, causal: bool = True):
     """(log, import report, note): the log as load_log reads it; a table whose clock has gaps or
-    jitter (ordinary logging) gives its longest gap-free stretch on an even clock, and says so."""
-    frame, imported = _read(source, resample, recording, study)
+    jitter (ordinary logging) gives its longest gap-free stretch on an even clock, and says so
+    (``causal``: as _read)."""
+    frame, imported = _read(source, resample, recording, study, causal)
     t = frame["t"].to_numpy(float)
     import numpy as np
 
