@@ -232,15 +232,16 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
                    + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
     gain = next((e["parameters"]["steering_gain"] for e in effects if e["id"] == "steering_gain"), None)
     steer = (identified.get("parameters") or {}).get("steer_gain")
+    both = []                     # two estimates of one quantity, said apart from the models' fit below
     if gain is not None and steer and abs(gain - steer["value"]) >= 0.05:
         lo, hi = steer.get("interval") or (math.nan, math.nan)
-        out.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
+        both.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
                    f"each fit trades part of it for its other parameters (identify's free stiffnesses and lag, the "
                    f"diagnosis's study steering and bounded stiffness scales); steady circles at walking speed tell")
     held = identified.get("held_out_yaw") or {}
     mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
     if not (math.isfinite(mine) and math.isfinite(theirs)):
-        return out
+        return out + both
     k = DISPLAY["yaw"][0]
     where = (f"on the {held['seconds']:.0f} s of identify's held-out segments inside the diagnosis's held-out "
              f"part ({held_part}), which neither fit saw")
@@ -267,7 +268,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
             out.append(f"the diagnosis's final model leaves {k * theirs:.3g} deg/s of the yaw rate unexplained {where}, "
                        f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
                        f"vehicle beyond what identify's single-track model holds")
-    return out
+    return out + both
 
 
 def explained_findings(audit: list[dict], effects: list[dict], tolerance: float = 0.05) -> list[dict]:
