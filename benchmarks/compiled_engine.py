@@ -23,7 +23,7 @@ import numpy as np
 
 from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.compiled import CompiledSimulation, cores_of
-from agrobot.orchestrator.compiled.engine import refusal
+from agrobot.orchestrator.compiled.simulation import refusal
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study

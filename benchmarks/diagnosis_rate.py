@@ -1,6 +1,6 @@
 """How often the diagnosis finds what is hidden: ``python3 benchmarks/diagnosis_rate.py [--seeds N]``.
 
-Logs from measurements/truth_tractor.py with seeds 1000.. (never used while tuning), diagnosed
+Logs from src/agrobot/measurements/truth_tractor.py with seeds 1000.. (never used while tuning), diagnosed
 without being told what is in them. Three groups:
 
 - singles: each catalogue effect alone, and none;

@@ -25,7 +25,7 @@ STEPS = ["x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=trajectory.col
 def recordings(root: Path, quick: bool):
     """(name, path, ImportOptions) of every recording."""
     from agrobot.measurements.recording import ImportOptions
-    from agrobot.measurements.signals import parse_signal
+    from agrobot.measurements.signal_expressions import parse_signal
 
     def opts(signals=(), **kw):
         return ImportOptions(signals=[parse_signal(s) for s in signals], **kw)

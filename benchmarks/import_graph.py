@@ -1,6 +1,6 @@
 """The import graph of the packages: import circles, upward imports, the largest modules.
 
-    python benchmarks/import_graph.py [ROOT] [--allow-pending]
+    python benchmarks/import_graph.py [PACKAGE_DIR] [--allow-pending]   (default src/agrobot)
 
 Layers, lowest first: ``orchestrator`` <- ``fields`` (field geometry and the coverage planner, a
 library the route component uses) <- ``components`` <- the tools (``identification``, ``diagnosis``,
@@ -158,7 +158,7 @@ def pending_upward(pair: tuple[str, str]) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("root", nargs="?", type=Path, default=Path(__file__).resolve().parents[1])
+    parser.add_argument("root", nargs="?", type=Path, default=Path(__file__).resolve().parents[1] / "src" / "agrobot")
     parser.add_argument("--allow-pending", action="store_true",
                         help="do not fail on the circles and upward imports listed in PENDING (reported all the same)")
     parser.add_argument("--largest", type=int, default=10, help="how many of the largest modules to list")

@@ -41,7 +41,7 @@ def _log_row(root: Path, path: Path, fmt: str, options) -> tuple:
 
 def logs(root: Path) -> list[tuple]:
     from agrobot.measurements.recording import ImportOptions
-    from agrobot.measurements.signals import parse_signal
+    from agrobot.measurements.signal_expressions import parse_signal
 
     rows = []
     for path in sorted((root / "nmea_gpsd_testlogs").glob("*.log")):

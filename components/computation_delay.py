@@ -17,7 +17,7 @@ class ComputationDelay(Component):
     sampled = True
     roles = ("computation_delay",)
     LINEAR_MODEL = "agrobot.analysis.component_models:computation_delay"   # its block in the margins' loop
-    C_CORE = "computation_delay"      # its C model core for FMU export: fmu_export/c/components/computation_delay.c
+    C_CORE = "computation_delay"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/computation_delay.c
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle command as computed"),
         inp("pedal_valve_voltage", "V", 6.0, "pedal valve voltage as computed"),

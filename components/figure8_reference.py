@@ -16,7 +16,7 @@ from .models.figure8_path import Figure8Path
 class Figure8Reference(Component):
     sampled = True
     roles = ("reference",)
-    C_CORE = "figure8_reference"      # its C model core for FMU export: fmu_export/c/components/figure8_reference.c
+    C_CORE = "figure8_reference"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/figure8_reference.c
     variables = (
         par("speed", "m/s", 2.0, "reference speed along the path"),
         par("radius", "m", 10.0, "radius of the two loops"),

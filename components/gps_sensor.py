@@ -93,7 +93,7 @@ class GPSSensor(Component):
     sampled = True
     roles = ("gps",)
     LINEAR_MODEL = "agrobot.analysis.component_models:gps_sensor"   # its block in the margins' loop
-    C_CORE = "gps_sensor"      # its C model core for FMU export: fmu_export/c/components/gps_sensor.c
+    C_CORE = "gps_sensor"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/gps_sensor.c
     variables = (
         inp("x_true", "m", 0.0, "true antenna east position"),
         inp("y_true", "m", 0.0, "true antenna north position"),

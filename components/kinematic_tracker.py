@@ -85,7 +85,7 @@ def static_law(gains: Mapping[str, Mapping[str, float]], inputs: tuple[str, ...]
 class KinematicTracker(Component):
     sampled = True
     roles = ("tracker",)
-    C_CORE = "kinematic_tracker"      # its C model core for FMU export: fmu_export/c/components/kinematic_tracker.c
+    C_CORE = "kinematic_tracker"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/kinematic_tracker.c
     variables = TRACKER_INPUTS + SPEED_LAW + (
         par("l_r", "m", 0.4, "rear axle to CG"),
         par("lookahead", "m", 0.0, "steered point a ahead of the rear axle (0: a = l_r, the paper's law)"),

@@ -39,7 +39,7 @@ class PoseEKF(Component):
     sampled = True
     roles = ("pose_estimator",)
     LINEAR_MODEL = "agrobot.analysis.component_models:pose_ekf"   # its block in the margins' loop
-    C_CORE = "pose_ekf"      # its C model core for FMU export: fmu_export/c/components/pose_ekf.c
+    C_CORE = "pose_ekf"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/pose_ekf.c
     variables = (
         inp("gps_x", "m", 0.0, "GPS east position of R"),
         inp("gps_y", "m", 0.0, "GPS north position of R"),

@@ -27,7 +27,7 @@ def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: f
 class SpeedDrivetrain(Component):
     sampled = False
     roles = ("drivetrain",)
-    C_CORE = "speed_drivetrain"      # its C model core for FMU export: fmu_export/c/components/speed_drivetrain.c
+    C_CORE = "speed_drivetrain"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_drivetrain.c
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("pedal_valve_voltage", "V", 6.0, "voltage of the electro-mechanic pedal valve"),

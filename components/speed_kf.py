@@ -15,7 +15,7 @@ from agrobot.orchestrator.component import Component, inp, out, par
 class SpeedKF(Component):
     sampled = True
     roles = ("speed_estimator",)
-    C_CORE = "speed_kf"      # its C model core for FMU export: fmu_export/c/components/speed_kf.c
+    C_CORE = "speed_kf"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_kf.c
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("x", "m", 0.0, "GPS east position"),

@@ -15,7 +15,7 @@ from .models.pid import DiscretePID
 class SpeedPID(Component):
     sampled = True
     roles = ("speed_controller",)
-    C_CORE = "speed_pid"      # its C model core for FMU export: fmu_export/c/components/speed_pid.c
+    C_CORE = "speed_pid"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_pid.c
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("speed_desired", "m/s", 0.0, "desired speed v_d (kinematic tracker)"),

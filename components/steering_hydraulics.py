@@ -48,7 +48,7 @@ class SteeringHydraulics(Component):
     sampled = False
     roles = ("steering",)
     LINEAR_MODEL = "agrobot.analysis.component_models:steering_hydraulics"   # its block in the margins' loop
-    C_CORE = "steering_hydraulics"      # its C model core for FMU export: fmu_export/c/components/steering_hydraulics.c
+    C_CORE = "steering_hydraulics"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/steering_hydraulics.c
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "desired front wheel angle (from the yaw-rate MPC)"),
         par("kp", "V/rad", 150.0, "low-level PI proportional gain"),

@@ -21,7 +21,7 @@ integrated with the midpoint rule; the rear-axle point R (GPS antenna) is CG - l
 Below ``min_speed`` the dynamics use min_speed (the slip equations divide by v_x) and the yaw rate
 is scaled by v_x/min_speed, so a tractor at rest does not turn.
 
-Extensions (off by default; each is an entry of the diagnosis catalogue, see diagnosis/effects/):
+Extensions (off by default; each is an entry of the diagnosis catalogue, see src/agrobot/diagnosis/effects/):
 ``steer_angle_offset`` (the tyres see delta + offset: a wheel-angle sensor zeroed wrongly),
 ``cornering_speed_slope`` (C_f, C_r scaled by 1 + k (v_x - v_ref)), ``slope_angle`` with
 ``slope_downhill_heading`` (side slope: a_lat = g sin(phi) sin(psi_d - psi) at the CG, physical
@@ -77,7 +77,7 @@ class TractorYawPlant(Component):
     sampled = False
     roles = ("yaw_plant",)
     LINEAR_MODEL = "agrobot.analysis.component_models:yaw_plant"   # its block in the margins' loop
-    C_CORE = "tractor_yaw_plant"      # its C model core for FMU export: fmu_export/c/components/tractor_yaw_plant.c
+    C_CORE = "tractor_yaw_plant"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/tractor_yaw_plant.c
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),

@@ -15,7 +15,7 @@ class YawRateMPC(Component):
     sampled = True
     roles = ("yaw_rate_controller",)
     LINEAR_MODEL = "agrobot.analysis.component_models:yaw_rate_mpc"   # its block in the margins' loop
-    C_CORE = "yaw_rate_mpc"      # its C model core for FMU export: fmu_export/c/components/yaw_rate_mpc.c
+    C_CORE = "yaw_rate_mpc"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/yaw_rate_mpc.c
     variables = (
         inp("yaw_rate_ref", "rad/s", 0.0, "desired yaw rate gamma_d"),
         inp("yaw_rate", "rad/s", 0.0, "measured yaw rate"),

@@ -11,14 +11,14 @@ At each macro instant t_k = t0 + k*h (never accumulated):
     t_k + step; their outputs stay private until step 1 (continuous) or step 2 (advancing) of
     that instant.
 A component raising EndRun (an FMU's terminate request) ends the run cleanly at the last instant
-recorded in full; ``Recording.ended_by`` says who asked, when and why.
+recorded in full; ``RecordedSignals.ended_by`` says who asked, when and why.
 Step 2 at k = 0 propagates the outputs at t0 before anything integrates.
 
 From ``start`` to ``terminate`` the BLAS libraries run on one thread (threadpoolctl): the
 components' matrices are a few rows wide, and on a busy machine a BLAS thread pool spends more
 waking its threads than computing (a 6x6 matrix exponential: 18 ms instead of 20 us at load 6).
 
-Recording the signals (orchestrator.recording), pacing against the wall clock
+RecordedSignals the signals (orchestrator.signal_recorder), pacing against the wall clock
 (orchestrator.realtime) and reporting progress are observers (orchestrator.observers): the
 engine calls their hooks and takes no part in what they do.
 """
@@ -37,7 +37,7 @@ from .component import ComponentError, EndRun
 from .errors import ComputationError, InputError
 from .observers import Observer
 from .realtime import RealTimePacer
-from .recording import Recording, SignalRecorder
+from .signal_recorder import RecordedSignals, SignalRecorder
 from .schedule import WRITE_EVERY, Schedule, budget
 
 
@@ -48,7 +48,7 @@ class ParameterError(InputError):
 class RunError(ComputationError):
     """A component failed mid-run; ``partial`` holds what was recorded before the failure."""
 
-    def __init__(self, message: str, partial: "Recording") -> None:
+    def __init__(self, message: str, partial: "RecordedSignals") -> None:
         super().__init__(message)
         self.partial = partial
 
@@ -82,19 +82,19 @@ class Simulation:
         """Watch the run (before ``start``)."""
         self.observers.append(observer)
 
-    def _recording(self, rows: int, completed: bool) -> Recording:
+    def _recording(self, rows: int, completed: bool) -> RecordedSignals:
         """The rows recorded since the last ``drain`` up to base step ``rows`` (absolute)."""
         data = self.recorder.rows(self.t0, self.h, self._drained, rows) if self.record else \
             self.recorder.rows(self.t0, self.h, 0, 0)
         events = sorted((t, node.name, msg) for node in self.system.nodes.values() for t, msg in node.component.events)
-        return Recording(self.columns, data, time.perf_counter() - self._start, completed, events,
+        return RecordedSignals(self.columns, data, time.perf_counter() - self._start, completed, events,
                          self.pacer.stats() if self.pacer is not None else None, self.ended_by, self.recorder.units)
 
-    def partial(self) -> Recording:
+    def partial(self) -> RecordedSignals:
         """What the run recorded up to where it stands (not completed)."""
         return self._recording(self.k, False)
 
-    def run(self) -> Recording:
+    def run(self) -> RecordedSignals:
         """Initialise, step to stop_time, record; components are terminated afterwards."""
         try:
             self.start()
@@ -228,7 +228,7 @@ class Simulation:
         self._drained = self.k
         return data
 
-    def finish(self) -> Recording:
+    def finish(self) -> RecordedSignals:
         """The last instant (publish, sampled steps, record; nothing integrates past stop_time)."""
         if self.ended_by is not None:             # the last instant is recorded already
             return self._recording(self.k, True)

@@ -5,7 +5,7 @@ defines, and only those:
 - ``started(sim)``: every component initialised and its outputs at t0 published;
 - ``instant(k)``: before base step k is taken (real-time pacing, orchestrator.realtime);
 - ``recorded(phase)``: every output of instant k is published (``sim.published``), before
-  anything integrates past t_k (the signal recorder, orchestrator.recording); ``phase`` is
+  anything integrates past t_k (the signal recorder, orchestrator.signal_recorder); ``phase`` is
   k modulo the schedule's period;
 - ``advanced(k)``: a call to ``Simulation.advance`` has reached base step k (progress).
 

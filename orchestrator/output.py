@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Iterable
 
 from .errors import InputError, critical
-from .results import UMASK
+from .atomic_files import UMASK
 
 MARKERS = ("run.json", "metrics.json")          # a run's signature files
 STAGING = "staging-"

@@ -20,10 +20,10 @@ from .engine import RunError, Simulation
 from .errors import ComputationError, Interrupted, Terminated, critical
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
-from .recording import Recording, SignalRecorder
+from .signal_recorder import RecordedSignals, SignalRecorder
 from .registry import import_study_module
 from .resolver import resolve
-from .results import SignalWriter, atomic_write, write_json
+from .atomic_files import SignalWriter, atomic_write, write_json
 from .schedule import WRITE_EVERY
 from .signal_table import SignalTable
 from .study import Study, StudyError
@@ -34,7 +34,7 @@ class AnalysisError(ComputationError):
 
 
 @dataclass
-class RunResult:
+class RunOutcome:
     metrics: dict[str, Any]
     frame: Any                  # a DataFrame (in memory) or the folder's SignalTable (read by column)
     summary: str                # the key figures with their bounds, and the real-time pacing
@@ -66,7 +66,7 @@ def simulate(study: Study):
     return Simulation(system).run(), system
 
 
-def _run_facts(rec: Recording) -> dict[str, Any]:
+def _run_facts(rec: RecordedSignals) -> dict[str, Any]:
     """Real-time statistics, the number of logged events and who ended the run early (a
     component's terminate request), for metrics.json."""
     facts: dict[str, Any] = {"events": len(rec.events)}
@@ -77,16 +77,16 @@ def _run_facts(rec: Recording) -> dict[str, Any]:
     return facts
 
 
-def _status(rec: Recording) -> str:
+def _status(rec: RecordedSignals) -> str:
     """'completed', or 'ended' when a component asked to end the run before the stop time."""
     return "ended" if rec.ended_by is not None else "completed"
 
 
-def _t_end(study: Study, rec: Recording) -> float:
+def _t_end(study: Study, rec: RecordedSignals) -> float:
     return rec.ended_by["t"] if rec.ended_by is not None else study.study.stop_time
 
 
-def write_events(out_dir: Path, rec: Recording) -> Path:
+def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
     """events.log: one line per component event, 't [s]  component  message'."""
     lines = [f"{t:10.3f}  {name}  {msg}" for t, name, msg in rec.events]
     return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
@@ -96,7 +96,7 @@ CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal tabl
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
-def _stream(sim: Simulation, writer) -> Recording:
+def _stream(sim: Simulation, writer) -> RecordedSignals:
     """Run ``sim`` to its stop time, writing the signal table block by block (every CHUNK_STEPS
     base steps). The engine is advanced about REPORT_EVERY_S of wall time at a time, so that
     progress moves as often whether the run is paced in real time or runs 500 times faster.
@@ -234,7 +234,7 @@ def choose_engine(system: System, engine: str):
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
               progress: bool = True, engine: str = "python", observers=(),
-              named: tuple[Path, ...] = ()) -> RunResult:
+              named: tuple[Path, ...] = ()) -> RunOutcome:
     """Simulate and analyse ``study``. With ``out_dir``: the output folder is checked and locked
     before anything runs (orchestrator.output), the run is recorded into a fresh folder beside it
     (``record_run``) and moved into place or beside it. A file the study writes besides
@@ -285,10 +285,10 @@ def _kept(out: Path, where: Path) -> str:
 
 
 def _result(values: dict[str, Any], metrics: dict[str, Any], analysis, study: Study, files: list[Path],
-            frame) -> RunResult:
+            frame) -> RunOutcome:
     table, failed = run_table(values, analysis, bounds(analysis, study.study.bounds), study)
     lines, warning = realtime_lines(values.get("realtime"))
-    return RunResult(metrics, frame, "\n".join([table, *lines]), files, failed, [warning] if warning else [])
+    return RunOutcome(metrics, frame, "\n".join([table, *lines]), files, failed, [warning] if warning else [])
 
 
 def _base_facts(study: Study) -> dict[str, Any]:
@@ -314,7 +314,7 @@ def _metrics(analysis, frame, study: Study) -> dict[str, Any]:
         raise AnalysisError(f"{study.path}: study.analysis {study.study.analysis!r}: {exc}") from None
 
 
-def _run_in_memory(study: Study, plots: bool, engine: str = "python", observers=()) -> RunResult:
+def _run_in_memory(study: Study, plots: bool, engine: str = "python", observers=()) -> RunOutcome:
     """No output folder: simulate, analyse, return (tests, benchmarks)."""
     analysis = _analysis(study)
     system = build_system(resolve(study))

@@ -6,7 +6,7 @@ CSV file), so the memory an analysis needs grows with the columns it uses, never
 of the table. ``SignalTable`` answers the parts of a pandas DataFrame an analysis uses:
 ``table["name"]`` (a Series), ``"name" in table``, ``len(table)``, ``table.columns``,
 ``table.iloc[a:b:c]`` (a view, nothing read), ``reset_index(drop=True)``; ``to_pandas()`` reads
-the whole table when it is really wanted. The units the file stores (orchestrator.results) come
+the whole table when it is really wanted. The units the file stores (orchestrator.atomic_files) come
 back in ``table.units``, a column's in its Series' ``attrs["unit"]`` and a DataFrame's in
 ``attrs["units"]``.
 """
@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .results import read_units
+from .atomic_files import read_units
 
 
 class _Columns:

@@ -41,7 +41,7 @@ from .resolver import resolve
 from .errors import critical
 from .mcap_out import wants_mcap
 from .registry import import_study_module
-from .results import UMASK, atomic_write, write_json, write_table
+from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 
 

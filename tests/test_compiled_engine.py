@@ -66,7 +66,7 @@ def cache(tmp_path_factory):
 
 def test_the_shipped_studies_it_takes_are_the_figure8_family(cache):
     from agrobot.orchestrator.compiled import cores_of
-    from agrobot.orchestrator.compiled.engine import refusal
+    from agrobot.orchestrator.compiled.simulation import refusal
 
     takes = set()
     for name in ("figure8.toml", "robustness.toml", "speed_sweep.toml", "figure8_pure_pursuit.toml", "field_test.toml"):

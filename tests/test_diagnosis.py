@@ -1,6 +1,6 @@
 """The diagnosis names an effect hidden in logs it has never seen.
 
-The logs come from measurements/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
+The logs come from src/agrobot/measurements/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
 own steering loop with an unmodelled spool lag, parameters drawn around the paper's, its own
 sensor noise); the effect and its size are drawn there and compared here only.
 """

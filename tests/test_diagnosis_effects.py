@@ -1,6 +1,6 @@
 """Each catalogue effect is a complete object: the component options it writes into a study carry
 exactly the value it fitted, read back through the baseline (the same path a diagnosis takes).
-A new effect in diagnosis/effects/ is picked up here without editing this file."""
+A new effect in src/agrobot/diagnosis/effects/ is picked up here without editing this file."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -1,6 +1,6 @@
 """Several causes at once, causes outside the catalogue, honest verdicts.
 
-The logs come from measurements/truth_tractor.py (independent of the replay); the hidden effects
+The logs come from src/agrobot/measurements/truth_tractor.py (independent of the replay); the hidden effects
 and their sizes are drawn there. Tuning used seeds 1-3. Seed 7001 was the first reserved seed: its
 first run exposed a flaw (the steering replay smeared a fractional command delay over a sample)
 that was fixed in the model, so it was retired; SEED 7002 was first run as this test.

@@ -211,7 +211,7 @@ def _tables() -> dict[str, bytes]:
 def test_a_mutated_table_recording_is_audited_or_refused_by_name(name, edits, align, max_gap):
     """The audit and the alignment on a recording with one file damaged."""
     from agrobot.measurements.recording import ImportOptions
-    from agrobot.measurements.signals import parse_signal
+    from agrobot.measurements.signal_expressions import parse_signal
     from tests.import_recordings import SIGNALS
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -13,7 +13,7 @@ import pytest
 from agrobot.measurements import LogError, read_log
 from agrobot.measurements.audit import require_causal
 from agrobot.measurements.recording import ImportOptions, import_recording
-from agrobot.measurements.signals import parse_signal
+from agrobot.measurements.signal_expressions import parse_signal
 from tests.import_recordings import DELAY, SIGNALS, write_recording
 
 LATE = 0.85

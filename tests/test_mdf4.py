@@ -15,7 +15,7 @@ import pytest
 from agrobot.measurements.log import LogError
 from agrobot.measurements.options import ImportOptions
 from agrobot.measurements.recording import import_recording
-from agrobot.measurements.signals import parse_signal
+from agrobot.measurements.signal_expressions import parse_signal
 from agrobot.measurements.generated_recordings import write_candump
 
 asammdf = pytest.importorskip("asammdf")

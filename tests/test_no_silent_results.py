@@ -20,7 +20,7 @@ from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.key_figures import bounds, run_table
 from agrobot.orchestrator.resolver import resolve
-from agrobot.orchestrator.results import read_table, write_frame, write_table
+from agrobot.orchestrator.atomic_files import read_table, write_frame, write_table
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.signal_table import SignalTable
 from agrobot.orchestrator.study import Study, StudyError

@@ -219,7 +219,7 @@ def test_infinite_times_are_refused_with_the_field_named(tmp_path):
 def test_result_files_get_the_usual_permissions_not_mkstemps_0600(tmp_path):
     import os
 
-    from agrobot.orchestrator.results import write_json
+    from agrobot.orchestrator.atomic_files import write_json
 
     mask = os.umask(0)
     os.umask(mask)

@@ -1,6 +1,6 @@
 """The readers under abuse: files that are not files, clocks that step back, impossible or jumping
 positions, padding, damaged TaskData, parcels of one name, swapped coordinates, deep nesting,
-bad lines among good ones. Each input is generated small (measurements/generated_recordings.py) from known
+bad lines among good ones. Each input is generated small (src/agrobot/measurements/generated_recordings.py) from known
 values, so the tests compare what the readers return with what was written; the large cases
 (a million NMEA lines, a day-long log, a long CAN log) are in benchmarks/reader_limits.py."""
 from __future__ import annotations

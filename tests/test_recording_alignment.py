@@ -102,7 +102,7 @@ def _lag(t: np.ndarray, x: np.ndarray, y: np.ndarray, max_lag: float = 0.3, step
 
 def _imported(folder: Path):
     from agrobot.measurements.recording import ImportOptions, import_recording
-    from agrobot.measurements.signals import parse_signal
+    from agrobot.measurements.signal_expressions import parse_signal
 
     return import_recording(folder, ImportOptions(signals=[parse_signal(s) for s in SIGNALS]))
 

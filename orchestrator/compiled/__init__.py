@@ -11,7 +11,7 @@ The orchestrator's part is generic: it knows no component; orchestrator.compiled
 a core provides.
 """
 from .cores import CCore, NoCCore, register_core_provider
-from .engine import ENGINES, CompiledRefused, CompiledSimulation, cores_of, select_engine
+from .simulation import ENGINES, CompiledRefused, CompiledSimulation, cores_of, select_engine
 from .toolchain import CompileError, CompilerMissing
 
 __all__ = ["CCore", "NoCCore", "register_core_provider", "ENGINES", "CompiledRefused", "CompiledSimulation",

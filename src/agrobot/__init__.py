@@ -1,7 +1,9 @@
 """agrobot: co-simulation of autonomous-tractor guidance after Kayacan et al., "Towards Agrobots".
 
-One import root for everything the project installs. The subpackages are the repository's top-level
-folders, mapped into this package at install time (``setup.py``):
+One import root for everything the project installs: this folder, ``src/agrobot``. The design's
+top-level folders (``components/``, ``orchestrator/``, ``studies/``) are linked into it, so every
+subpackage is a folder of this name on disk and static tools (mypy, an editor, an import graph) read
+the tree as Python imports it:
 
     agrobot.orchestrator    the co-simulation library (study files, resolver, engine, sweeps)
     agrobot.components      the guidance loop's components, one per module

@@ -118,7 +118,7 @@ class RunResult:
         """Write the run as ``run --out`` does: signals (the study's format), metrics.json, the
         study (study.toml) and the analysis's figures; returns the folder."""
         from agrobot.orchestrator.registry import import_study_module
-        from agrobot.orchestrator.results import write_json, write_table
+        from agrobot.orchestrator.atomic_files import write_json, write_table
 
         def write(tmp: Path) -> None:
             write_table(tmp / "signals", self.signals, self.study.study.signals_format)
@@ -257,7 +257,7 @@ class Diagnosis:
 
     def save(self, folder: str | Path) -> Path:
         """diagnosis.json and report.md (the figures are drawn by ``diagnose(..., out=folder)``)."""
-        from agrobot.orchestrator.results import write_json
+        from agrobot.orchestrator.atomic_files import write_json
 
         def write(tmp: Path) -> None:
             write_json(tmp / "diagnosis.json", _jsonable(self.result))
@@ -286,7 +286,7 @@ class Recording:
         """The log as ``path`` (.csv or .parquet) and the import report beside it
         (<name>.import.json), as ``convert --out`` writes them."""
         from agrobot.measurements.log import LogError
-        from agrobot.orchestrator.results import atomic_write
+        from agrobot.orchestrator.atomic_files import atomic_write
 
         path = Path(path)
         if path.suffix not in (".csv", ".parquet"):

@@ -1,0 +1,104 @@
+"""What a run records: every numeric scalar output of every component, kept at the instants it can
+change (multiples of the component's step) and held in between when the table is built; strings,
+bytes and whole arrays of an FMU are exchanged between components but not recorded (array elements
+are). The recorder is an observer of the engine (orchestrator.observers). Each column's unit is
+the output's declared one (``units``; time in s): the DataFrame carries them in
+``attrs["units"]``, the signal file in its metadata (orchestrator.atomic_files)."""
+from __future__ import annotations
+
+from array import array
+from dataclasses import dataclass, field
+from operator import itemgetter
+from typing import Any, Callable
+
+import numpy as np
+
+from .observers import Observer
+from .schedule import Schedule
+
+
+@dataclass
+class RecordedSignals:
+    columns: list[str]
+    data: np.ndarray            # shape (n_samples, 1 + n_signals); column 0 is time
+    wall_time_s: float
+    completed: bool
+    events: list[tuple[float, str, str]] = field(default_factory=list)   # (t, component, message)
+    realtime: dict | None = None                                          # pacing statistics
+    ended_by: dict | None = None          # {"component", "t", "reason"}: a component ended the run
+    units: dict[str, str] = field(default_factory=dict)                  # column -> unit ("t": s)
+
+    def to_frame(self):
+        """The signals as a DataFrame, each column's unit in ``attrs["units"]``."""
+        import pandas as pd
+
+        frame = pd.DataFrame(self.data, columns=["t"] + self.columns)
+        frame.attrs["units"] = dict(self.units)
+        return frame
+
+
+def _numeric_scalar(value) -> bool:
+    return isinstance(value, (int, float, np.number)) and not isinstance(value, (str, bytes))
+
+
+def _single(key: str):
+    return lambda d: (d[key],)
+
+
+class _Buffer:
+    """Outputs of one component at multiples of its ratio (base steps per step)."""
+
+    __slots__ = ("name", "ratio", "width", "get", "buf")
+
+    def __init__(self, name: str, ratio: int, outputs: list[str]) -> None:
+        self.name, self.ratio, self.width = name, ratio, len(outputs)
+        self.get: Callable[[dict], Any] = itemgetter(*outputs) if len(outputs) > 1 else _single(outputs[0])
+        self.buf = array("d")
+
+    def table(self, rows: int) -> np.ndarray:
+        """(rows, width): sample j of the buffer held over base steps j*ratio .. (j+1)*ratio - 1."""
+        kept = np.frombuffer(self.buf, dtype=float).reshape(-1, self.width)
+        return np.repeat(kept, self.ratio, axis=0)[:rows] if rows else kept[:0]
+
+
+class SignalRecorder(Observer):
+    """The signal table of a system: ``columns`` (``component.output``) and, after a run or part
+    of one, ``rows(first, last)``, time first."""
+
+    def __init__(self, system, period: int) -> None:
+        outputs: dict[str, list[str]] = {}
+        self.units = {"t": "s"}
+        for node in system.nodes.values():
+            for v in node.component.variables:
+                if v.causality == "output" and _numeric_scalar(v.start):
+                    outputs.setdefault(node.name, []).append(v.name)
+                    self.units[f"{node.name}.{v.name}"] = v.unit
+        self.columns = [f"{name}.{out}" for name, outs in outputs.items() for out in outs]
+        self._layout = [(name, system.nodes[name].ratio, outs) for name, outs in outputs.items()]
+        self._period = period
+        self._buffers: list[_Buffer] = []
+        self._due: Schedule | list = []
+        self._published: dict = {}
+
+    def started(self, sim) -> None:
+        self._buffers = [_Buffer(name, ratio, outs) for name, ratio, outs in self._layout]
+        self._due = Schedule(self._buffers, lambda b: b.ratio)
+        self._published = sim.published
+
+    def recorded(self, phase: int) -> None:
+        published = self._published
+        for b in self._due[phase]:
+            b.buf.extend(b.get(published[b.name]))
+
+    def rows(self, t0: float, h: float, first: int, last: int) -> np.ndarray:
+        """Time and signals of base steps ``first`` .. ``last - 1`` (``first``: where the buffers
+        were last cleared)."""
+        n = max(last - first, 0)
+        if not n or not self._buffers:
+            return np.empty((0, 1 + len(self.columns)))
+        times = (t0 + (first + np.arange(n)) * h).reshape(-1, 1)
+        return np.hstack([times] + [b.table(n) for b in self._buffers])
+
+    def clear(self) -> None:
+        for b in self._buffers:
+            del b.buf[:]

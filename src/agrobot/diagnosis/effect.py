@@ -1,0 +1,107 @@
+"""What a diagnosis effect is: a complete object.
+
+An effect names the subsystem it lives in, the replay stages whose residuals it changes, its
+parameters (SI, with the bounds searched and a typical scale for the optimiser), the values of
+those parameters in the baseline study, a materiality threshold (smaller fitted values are not
+worth a model change, whatever the statistics say) and the component options that switch it on
+in a study. Adding one is one class in one file of ``src/agrobot/diagnosis/effects/`` plus its test; the
+catalogue finds it there.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar, Mapping
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str                 # key of the replay's value mapping
+    unit: str                 # SI unit
+    scale: float              # typical magnitude (optimiser scaling)
+    lower: float
+    upper: float
+    display_unit: str = ""
+    display_factor: float = 1.0
+    limit: tuple[float, float] | None = None   # the physical limit the range widens toward when a fit ends
+                                               # on a bound of [lower, upper] (None: the bounds are the limit)
+
+    def widened(self, value: float) -> "Parameter | None":
+        """This parameter with the bound ``value`` ended on moved to the physical limit, or None
+        when that bound is the limit already (then the value is not identifiable from the log)."""
+        from dataclasses import replace
+
+        lo, hi = self.limit or (self.lower, self.upper)
+        span = self.upper - self.lower
+        if abs(value - self.upper) <= 5e-3 * span and hi > self.upper:
+            return replace(self, upper=hi)
+        if abs(value - self.lower) <= 5e-3 * span and lo < self.lower:
+            return replace(self, lower=lo)
+        return None
+
+
+class BaselineStudy:
+    """The baseline study as the effects read it: component names and resolved (SI) parameters
+    by role (``steering``, ``yaw_plant``, ``gps``, ``gyro``), each optional but the first two."""
+
+    def __init__(self, model, names: Mapping[str, str]) -> None:
+        self.model, self.study = model, model.study
+        self.names = dict(names)
+        self._params = {role: model.parameters(name) for role, name in names.items()}
+
+    def has(self, role: str) -> bool:
+        return role in self.names
+
+    def parameters(self, role: str, default: Mapping[str, float] | None = None) -> Mapping[str, float]:
+        if role not in self._params:
+            if default is None:
+                raise KeyError(role)
+            return default
+        return self._params[role]
+
+    def step(self, role: str) -> float:
+        spec = self.study.components[self.names[role]]
+        return spec.step or self.study.study.base_step
+
+
+class Effect:
+    """One catalogue entry. Subclasses set the class attributes and implement ``baseline``,
+    ``material`` and ``options``."""
+
+    id: ClassVar[str]
+    subsystem: ClassVar[str]
+    stages: ClassVar[tuple[str, ...]]
+    parameters: ClassVar[tuple[Parameter, ...]]
+    starts: ClassVar[tuple[tuple[float, ...], ...]]      # starting values of the parameters
+    threshold: ClassVar[str]                             # the materiality rule, in words
+    hypothesis: ClassVar[str]                            # what it means on the tractor
+    experiment: ClassVar[str]                            # the excitation that shows it apart from its rivals
+    needs: ClassVar[tuple[str, ...]] = ()                # log columns it reads beyond its stages' (side slope: x, y)
+    secondary: ClassVar[tuple[str, ...]] = ()            # parameters whose bound leaves the effect found (each is
+                                                         # then "not identifiable" alone: a tyre's shape, not driven
+                                                         # past its peak)
+
+    def baseline(self, study: BaselineStudy) -> dict[str, float]:
+        """The replay values of this effect's parameters in the baseline study."""
+        raise NotImplementedError
+
+    def material(self, fitted: Mapping[str, float], base: Mapping[str, float]) -> bool:
+        raise NotImplementedError
+
+    def options(self, fitted: Mapping[str, float], base: Mapping[str, float],
+                study: BaselineStudy) -> list[tuple[str, str, float]]:
+        """[(role, parameter, SI value)]: the component options that carry the fitted effect."""
+        raise NotImplementedError
+
+    def applies(self, replay) -> bool:
+        """Whether this log can judge the effect beyond its stages and columns (a command's gain
+        needs the command to drive the yaw stage)."""
+        return True
+
+    def hypothesis_for(self, stages) -> str:
+        """The hypothesis in terms of the stages this log judged it on (a log without GPS is not
+        told about the GPS track)."""
+        return self.hypothesis
+
+    def display(self, fitted: Mapping[str, float]) -> dict[str, float]:
+        """The fitted parameters as a person reads them ('name [unit]' -> value)."""
+        return {f"{p.name} [{p.display_unit or p.unit}]": fitted[p.name] * p.display_factor for p in self.parameters}

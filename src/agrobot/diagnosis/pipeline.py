@@ -1,0 +1,474 @@
+"""``diagnose``: log + baseline study -> DIR/diagnosis.json, DIR/report.md (+ plots) and, when an
+extension wins and the study has its component, DIR/extended_study.toml that switches it on."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from agrobot.measurements import LogError
+from agrobot.orchestrator.atomic_files import atomic_write, write_json
+from agrobot.orchestrator.study import load_study
+from agrobot.studies import shipped
+
+from .baseline import baseline_from_study
+from .candidates import CannotDecide, CandidateFit, Replay
+from .catalogue import DISPLAY, SIGNALS, shown
+from .evidence import stage_evidence
+from .report import binned_figure, floors_figure, markdown, stage_figure
+from .selection import Finding, select
+from .unexplained import RATIO, signature, stage_check
+from .study_fit import study_check
+from .verdict import audit_findings, conclude
+
+REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
+
+DEFAULT_STUDY = shipped("figure8.toml")
+CANNOT_DECIDE = "cannot decide"
+
+
+def _study_options(finding: Finding, baseline) -> list[tuple[str, str, float]]:
+    """(component, parameter, SI value) that switch the finding's effect on in the study."""
+    out = []
+    for role, name, value in finding.effect.options(finding.fit.values, baseline.values, baseline.study):
+        comp = baseline.components.get(role)
+        if comp is None:
+            raise KeyError(role)
+        out.append((comp, name, float(value)))
+    return out
+
+
+def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
+    """The one JSON shape of a judged effect, whether it is in the final model (``effects``,
+    judged by its drop-one comparison) or tried alone against the baseline (``findings``):
+    every fitted parameter with its value, standard deviation, 95 % interval and the bounds it
+    was searched in, so that anyone can see how far it is from them."""
+    try:
+        options = _study_options(f, baseline)
+        option_text = ", ".join(f"components.{c}.parameters.{n} = {v:.6g}" for c, n, v in options)
+    except KeyError as missing:
+        what = missing.args[0]
+        options, option_text = None, (f"(no study option carries this: {what})" if " " in what else
+                                      f"(the study has no {what} component to carry this option)")
+    signals = ", ".join(f"{k} {DISPLAY[s][0] * f.rmse_before[k]:.4g} -> {shown(s, f.rmse_after[k], 4)}"
+                        for s in f.stages for k in [SIGNALS[s][0]])
+    fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
+    fitted = {}
+    for p in f.effect.parameters:
+        value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
+        fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
+                          "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p),
+                          "secondary": p.name in f.effect.secondary}
+    return {
+        "id": f.effect.id,
+        "subsystem": f.effect.subsystem,
+        "hypothesis": f.effect.hypothesis_for(f.stages),
+        "parameters": {p.name: f.fit.values[p.name] for p in f.effect.parameters},
+        "parameters_display": f.effect.display(f.fit.values),
+        "fitted": fitted,
+        "delta_bic": f.delta_bic,
+        "held_out_gain": f.gain,
+        "gain_by_signal": f.gain_by_signal,
+        "rmse_before": f.rmse_before,
+        "rmse_after": f.rmse_after,
+        "residual_by_stage": {s: {"rms_without": f.rmse_before[SIGNALS[s][0]], "rms_with": f.rmse_after[SIGNALS[s][0]],
+                                  "unit": SIGNALS[s][1]} for s in f.stages},
+        "supported": f.supported,
+        "reasons": f.reasons,
+        "material": f.material,
+        "materiality": f.effect.threshold,
+        "n_eff": f.fit.n_eff,
+        "refit_baseline": {k: f.fit.values[k] for k in REFIT if k in f.fit.values},
+        "study_option": option_text,
+        "summary": (f"{f.effect.id} in the {f.effect.subsystem}: {f.effect.hypothesis_for(f.stages)}. Fitted {fitted_text}; "
+                    f"held-out RMS {signals}; dBIC {f.delta_bic:.0f}."),
+        "inconclusive_with": [t["effects"][1] for t in inconclusive if t["effects"][0] == f.effect.id],
+        "_options": options,
+    }
+
+
+def at_bound(value: float, p) -> str | None:
+    """'lower' or 'upper' when a fitted value ends within 0.5 % of the searched range of a bound."""
+    span = p.upper - p.lower
+    for side, b in (("lower", p.lower), ("upper", p.upper)):
+        if abs(value - b) <= 5e-3 * span:
+            return side
+    return None
+
+
+def _warnings(replay: Replay, base: CandidateFit, floors: dict) -> list[str]:
+    """What makes a verdict on this log fragile."""
+    out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
+    if replay.not_judged:
+        out.append(f"the log's columns: {', '.join(map(str, replay.frame.columns))}")
+    if replay.speed_source != "v" and set(replay.stages) & {"yaw", "position"}:
+        out.append({"gnss_speed": "no wheel speed v: the yaw and position replays run on the receiver's speed over ground",
+                    "track": "no speed column: the yaw replay runs on the speed of the GPS track"}[replay.speed_source])
+    duration = replay.t[-1] - replay.t[0]
+    if duration < 180:
+        held = float(replay.masks["steering"]["test"].sum()) * replay.h
+        out.append(f"the log lasts {duration:.0f} s: with {held:.0f} s held out, "
+                   f"small effects cannot be confirmed (record at least 180 s, better 400 s)")
+    asked = replay.commanded_yaw() if "steering" in replay.stages else math.inf
+    if asked < 0.05:               # 2 deg of steering at 2 m/s on the paper tractor
+        out.append(f"little steering excitation: delta_cmd varies by {math.degrees(float(np.std(replay.cmd))):.2g} deg "
+                   f"(std), asking for {math.degrees(asked):.3g} deg/s of yaw rate; steering and yaw effects need turns and steps "
+                   f"(several degrees on a tractor)")
+    moving = replay.speed[replay.speed > replay.min_speed]
+    spread = float(np.percentile(moving, 90) - np.percentile(moving, 10)) if len(moving) else 0.0
+    if spread < 0.5:
+        out.append(f"the speed hardly varies (10-90% spread {spread:.2f} m/s): speed-dependent effects "
+                   f"(cornering stiffness, GPS latency against antenna position) cannot be told apart")
+    for stage, column in (("steering", replay.delta), ("yaw", replay.gyro)):
+        if stage not in replay.stages:
+            continue
+        mask = replay.masks[stage]["test"]
+        spread = float(np.std(column[mask]))
+        if spread < 3 * floors[stage]:
+            out.append(f"the {SIGNALS[stage][0]} signal is mostly noise: std {spread:.3g} against a noise floor of "
+                       f"{floors[stage]:.3g} {SIGNALS[stage][1]}")
+        elif base.rmse_test[stage] > 0.9 * spread:
+            out.append(f"the baseline explains almost none of {SIGNALS[stage][0]}: held-out RMS "
+                       f"{shown(stage, base.rmse_test[stage])} against a signal std of {shown(stage, spread)}; "
+                       f"check the study and the log's columns")
+    return out
+
+
+def _unexplained(checks: dict) -> dict | None:
+    misfit = [c for c in checks.values() if c["misfit"]]
+    if not misfit:
+        return None
+    worst = max(misfit, key=lambda c: c["ratio"])
+    xc = worst["correlates_with"]
+    ext = worst["extension"]
+    gain = ext["held_out_gain"]
+    outcome = (f"takes {100 * gain:.0f}% off the held-out RMS" if gain >= 0.05 else
+               f"does not carry over to the held-out part ({100 * gain:+.0f}% on its RMS): the misfit is not a "
+               f"fixed function of one signal; extend the model by physics or record the conditions it happens in")
+    sig = signature(ext)
+    reading = (f"; its form: {sig['physical']}; the run that would tell: {sig['experiment']}" if gain >= 0.05 else
+               f"; the run that would tell: {sig['experiment']}")
+    summary = (f"the {worst['stage']} stage stays {worst['ratio']:.1f} x its noise floor after the catalogued effects "
+               f"(excess {shown(worst['stage'], worst['excess'])}); its residual correlates with {xc['signal']} "
+               f"(rho {xc['rho']:.2f}); a data-driven {ext['kind']} on {ext['signal']}, fitted on the training part, "
+               f"{outcome}{reading}")
+    return {"id": "unexplained", "stage": worst["stage"], "stages": [c["stage"] for c in misfit], "signature": sig,
+            "ratio_to_floor": worst["ratio"], "correlates_with": xc, "extension": ext,
+            "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
+
+
+def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
+    """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
+    study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
+    1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
+    held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
+    samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
+    from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
+    from agrobot.measurements.audit import require_causal
+    from agrobot.orchestrator.errors import InputError
+
+    p = baseline.tractor
+    L = p.l_f + p.l_r
+    ours = {"understeer_gradient": (p.C_r * p.l_r - p.C_f * p.l_f) * p.m / (p.C_f * p.C_r * L),
+            "cornering_stiffness_front": p.C_f, "cornering_stiffness_rear": p.C_r,
+            "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
+    try:
+        require_causal(frame, where)              # identify refuses a response leading its input
+        rep = identify_driving(frame, where, study)
+    except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
+        return {"study": ours, "identified": None, "why_not": str(exc)}
+    tyre = rep["tyre_saturation"]
+    mine = {"understeer_gradient": rep["understeer_gradient"], "delay": rep["delay"],
+            "cornering_stiffness_front": rep["cornering_stiffness"]["front"],
+            "cornering_stiffness_rear": rep["cornering_stiffness"]["rear"],
+            "held_out_fit": rep["held_out_fit"]["value"], "final_model": rep["final_model"],
+            "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
+                                 "shape": tyre["parameters"]["shape"]["value"],
+                                 "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
+            "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
+            "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}
+                           for k, q in rep["parameters"].items()},
+            "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None}
+    return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
+            "physical_checks": rep.get("physical_checks", {})}
+
+
+def same_stretches(identified: dict, replay, values: dict[str, float]) -> None:
+    """The diagnosis's final model scored on the stretches where identify's model was scored
+    (identify's held-out segments after the diagnosis's split: neither fit saw them): the gyro's RMS
+    misfit of each model there, in ``identified["held_out_yaw"]``."""
+    held = (identified or {}).get("held_out_yaw")
+    if not held or "yaw" not in replay.stages:
+        return
+    t, r = replay.residual_series("yaw", values)
+    inside = np.zeros(len(t), bool)
+    for a, b in held["windows"]:
+        inside |= (t >= a) & (t <= b)
+    held["diagnosis_rms"] = float(np.sqrt(np.mean(r[inside] ** 2))) if inside.sum() >= 10 else float("nan")
+
+
+def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05, floor: float = 0.0,
+              held_part: str = "the log's last part") -> list[str]:
+    """Where identify and diagnose, on one log, conclude differently, and why: about an effect both
+    model (tyre saturation; identify's held-out segments are spread over the log, the diagnosis
+    holds out ``held_part``), and about the vehicle itself: when one model of it leaves materially
+    less of the gyro unexplained than the other on the same unseen stretches (and the poorer is a
+    misfit, above RATIO x the yaw stage's noise ``floor``), the poorer one's verdict is relative to a
+    model that misses what the better one has."""
+    if not identified:
+        return []
+    out = []
+    ids = {e["id"] for e in effects}
+    sat = identified.get("tyre_saturation")
+    if sat and "tyre_saturation" not in ids:
+        tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
+        why = "; ".join(tried.reasons) if tried else "it was not fitted"
+        out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
+                   f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
+                   f"{held_part}, does not: {why}")
+    if not sat and "tyre_saturation" in ids:
+        out.append("the diagnosis finds tyre saturation where identify does not keep it: "
+                   + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
+    gain = next((e["parameters"]["steering_gain"] for e in effects if e["id"] == "steering_gain"), None)
+    steer = (identified.get("parameters") or {}).get("steer_gain")
+    both = []                     # two estimates of one quantity, said apart from the models' fit below
+    if gain is not None and steer and abs(gain - steer["value"]) >= 0.05:
+        lo, hi = steer.get("interval") or (math.nan, math.nan)
+        both.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
+                   f"each fit trades part of it for its other parameters (identify's free stiffnesses and lag, the "
+                   f"diagnosis's study steering and bounded stiffness scales); steady circles at walking speed tell")
+    held = identified.get("held_out_yaw") or {}
+    mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
+    if not (math.isfinite(mine) and math.isfinite(theirs)):
+        return out + both
+    k = DISPLAY["yaw"][0]
+    where = (f"on the {held['seconds']:.0f} s of identify's held-out segments inside the diagnosis's held-out "
+             f"part ({held_part}), which neither fit saw")
+    if min(mine, theirs) >= (1 - min_gain) * max(mine, theirs) or max(mine, theirs) <= RATIO * floor:
+        if out:                     # an effect concluded differently: the two models still fit alike
+            out[-1] += (f"; yet the two models of this vehicle fit alike {where} (yaw rate RMS {k * mine:.3g} deg/s "
+                        f"identify's, {k * theirs:.3g} deg/s the diagnosis's): the difference is in the stretches "
+                        f"each judges on, not in the vehicle")
+    else:
+        if mine < theirs:
+            params = identified.get("parameters") or {}
+            def shown_value(q: dict) -> str:          # degrees at the edge, no unit for a ratio
+                f, unit = {"rad": (180 / math.pi, " deg"), "rad/s": (180 / math.pi, " deg/s"),
+                           "1": (1.0, "")}.get(q["unit"], (1.0, " " + q["unit"]))
+                return f"{f * q['value']:.3g}{unit}"
+            named = ", ".join(f"{n} {shown_value(q)}" for n, q in params.items()
+                              if n in ("steer_gain", "delay", "lag", "steer_offset", "friction", "shape", "gyro_bias"))
+            out.append(f"the vehicle model identify fits ({identified['final_model']}; {named}) leaves "
+                       f"{k * mine:.3g} deg/s of the yaw rate unexplained {where}, the diagnosis's final model "
+                       f"{k * theirs:.3g} deg/s: this vehicle is better described by identify's model, and what the "
+                       f"diagnosis names (or leaves unexplained) is relative to a baseline that lacks part of it: put "
+                       f"identify's stiffnesses, delay and steering gain into the study's yaw plant and diagnose again")
+        else:
+            out.append(f"the diagnosis's final model leaves {k * theirs:.3g} deg/s of the yaw rate unexplained {where}, "
+                       f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
+                       f"vehicle beyond what identify's single-track model holds")
+    return out + both
+
+
+def explained_findings(audit: list[dict], effects: list[dict], tolerance: float = 0.05) -> list[dict]:
+    """The audit's findings with a response leading its input resolved where the diagnosis names
+    the steering channels' clock at least that late (the clock = the lead + the vehicle's own
+    delay): the recording explained, what it imitates is judged again."""
+    clock = next((e["parameters"]["steering_clock"] for e in effects if e["id"] == "steering_clock"), None)
+    for f in audit:
+        if f["kind"] == "response_leads_input" and not f["resolved"] and clock is not None \
+                and isinstance(f.get("value"), (int, float)) and clock >= f["value"] - tolerance:
+            f["resolved"] = True
+            f["meaning"] = (f"{f.get('meaning') or ''}; explained by the diagnosis: the steering channels stamped "
+                            f"{clock:.3f} s late (steering_clock), {clock - f['value']:+.3f} s of it the vehicle's "
+                            f"own delay").lstrip("; ")
+    return audit
+
+
+def held_part(replay) -> str:
+    """The diagnosis's held-out part in words."""
+    if replay.split == "tail":
+        return f"the log's last {100 * (1 - replay.fit_fraction):.0f} %, t >= {replay.t_split:.1f} s"
+    return f"every third {replay.window:.0f} s of the log"
+
+
+LONG_LOG = 600.0          # s: beyond this a log faster than COARSE_RATE is averaged down to it (cost)
+COARSE_RATE = 10.0       # Hz: the rate the steering and yaw stages need (MIN_RATE): every replay's cost grows
+                         # with the samples, and a long log has the turns and speeds to judge at that rate
+
+
+def coarser_clock(frame):
+    """(frame, note): a long fast log averaged over blocks of k samples to at most COARSE_RATE
+    (the cost of every replay grows with the samples; the dynamics judged live below 5 Hz)."""
+    t = frame["t"].to_numpy(float)
+    if len(t) < 3 or t[-1] - t[0] <= LONG_LOG:
+        return frame, None
+    rate = 1.0 / float(np.median(np.diff(t)))
+    k = int(rate // COARSE_RATE)
+    if k < 2:
+        return frame, None
+    n = len(frame) // k * k
+    numeric = frame.select_dtypes("number").iloc[:n]
+    out = numeric.groupby(np.arange(n) // k).mean().reset_index(drop=True)
+    out.attrs = dict(frame.attrs)
+    return out, (f"the log lasts {t[-1] - t[0]:.0f} s at {rate:.3g} Hz: averaged over blocks of {k} samples to "
+                 f"{rate / k:.3g} Hz to bound the cost (steering time constants below 0.1 s are not resolved)")
+
+
+def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
+             fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
+             recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto") -> dict:
+    """Run the diagnosis and return its result; with ``out_dir`` it always writes diagnosis.json and
+    report.md there (verdict ``cannot decide`` with the reason when the log cannot be used), and the
+    figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log.
+    ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``: with
+    ``out_dir``, diagnosis.mcap too (diagnosis.mcap); ``split``: what is held out (diagnosis.candidates.SPLITS:
+    the last part, every third window, or chosen by the log's conditions)."""
+    out = Path(out_dir) if out_dir is not None else None
+    default_study = not study_path
+    study_path = Path(study_path) if study_path else DEFAULT_STUDY
+    result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
+                    "findings": []}
+    try:
+        study = load_study(study_path)
+        baseline = baseline_from_study(study)
+        from agrobot.measurements.recording import ImportOptions
+
+        recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
+        from agrobot.identification.from_log import read_uneven
+
+        # a response leading its input is not refused here: its finding is judged as a candidate (steering_clock)
+        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
+        if imported is not None:
+            result["recording"] = imported
+        frame, note = coarser_clock(frame)
+        note = "; ".join(x for x in (stretch, note) if x) or None
+        replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+    except (LogError, CannotDecide) as exc:
+        reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
+        result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
+        result["split_time"] = float("nan")
+        if out is not None:
+            _write(out, result, [])
+        return result
+    say = progress or (lambda text: None)
+    result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
+                                                  study_path.name)
+    if mismatch:
+        mismatch += " (no --study given: the default study was used)" if default_study else ""
+        say(f"warning: {mismatch}")
+    if identify and "yaw" in replay.stages:
+        say("identifying the vehicle on the same log (the model identify fits)")
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen)
+    identified = result.get("identified_vehicle", {}).get("identified") or {}
+    say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}; "
+        f"held out: {held_part(replay)}")
+    if replay.split_note:
+        say(replay.split_note)
+    if replay.side_slip_note():
+        say(replay.side_slip_note())
+    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
+    say("effects selected; judging the stages against their noise floors")
+    base = sel.base
+    final, floors = sel.final, sel.floors
+    judged = replay.stages
+    checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
+              for s in judged}
+    result["split_time"] = replay.t_split if replay.split == "tail" else float("nan")
+    result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
+                       "why": replay.split_note}
+    result["baseline_refit"] = {k: base.values[k] for k in REFIT}
+    result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
+    result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
+    result["stages_judged"] = list(judged)
+    result["not_judged"] = dict(replay.not_judged)
+    effects = [finding_json(f, baseline, sel.inconclusive) for f in sel.effects]
+    options = [o for e in effects for o in (e.pop("_options") or [])]
+    unexplained = _unexplained(checks)
+    result["effects"] = effects + ([unexplained] if unexplained else [])
+    # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
+    unidentifiable = [e for e in effects if any(p["at_bound"] and not p["secondary"] for p in e["fitted"].values())]
+    for e in effects:                   # a secondary parameter on its bound: the effect stands, that value does not
+        for n, p in e["fitted"].items():
+            if p["at_bound"] and p["secondary"]:
+                p["note"] = f"not identifiable from this log: ended on its {p['at_bound']} bound"
+    for e in unidentifiable:
+        bound = {n: p for n, p in e["fitted"].items() if p["at_bound"] and not p["secondary"]}
+        e["not_identifiable"] = "; ".join(
+            f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
+            for n, p in bound.items())
+    result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
+                                  for e in unidentifiable]
+    result["audit"] = explained_findings(audit_findings(replay.frame.attrs), effects)
+    p = baseline.tractor
+    moving = replay.speed[replay.speed > replay.min_speed]
+    verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
+                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
+    same_stretches(identified, replay, final.values)
+    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0), held_part(replay))
+    for c in result.get("identified_vehicle", {}).get("comparisons", []):
+        if not c["agree"]:
+            verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
+                f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
+                + f" {c['unit']}: they disagree; {c['suggests']}")
+    result["verdict"] = verdict["id"]
+    result["verdict_status"] = verdict["status"]
+    result["verdict_statement"] = verdict["statement"]
+    result["verdict_bullets"] = verdict["bullets"]
+    result["inconclusive"] = sel.inconclusive
+    result["selection_trace"] = sel.trace
+    result["warnings"] = _warnings(replay, base, floors) + ([note] if note else []) + (
+        [replay.split_note] if replay.split_note else [])
+    if mismatch:
+        result["warnings"].insert(0, mismatch)
+    result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
+                            "rms_baseline_test": base.rmse_test[s],
+                            "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
+                        for s in judged}
+    result["stages"].update({s: {"stage": s, "judged": False, "reason": why} for s, why in replay.not_judged.items()})
+    result["residuals"] = {s: stage_evidence(replay, s, base.values) for s in judged}
+    if effects:
+        result["extended_residuals"] = {s: stage_evidence(replay, s, final.values) for s in judged}
+    items = [finding_json(f, baseline) for f in sel.first_step]
+    for item in items:
+        item.pop("_options", None)
+    result["findings"] = items
+    if out is not None:
+        _write_all(out, result, replay, sel, study, options, log_path, plots, say)
+        if mcap:
+            from .mcap import write_diagnosis_mcap
+
+            say("diagnosis.mcap")
+            write_diagnosis_mcap(replay, sel.base.values, sel.final.values, out / "diagnosis.mcap", str(log_path))
+    return result
+
+
+def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say) -> None:
+    """The figures (each judged stage, the binned residuals, the noise floors), extended_study.toml
+    when every effect found has a study option, then diagnosis.json and report.md."""
+    base, final, effects = sel.base, sel.final, result["effects"]
+    found = [e for e in effects if e["id"] != "unexplained"]
+    files = []
+    if plots:
+        say("figures")
+        touched = {s for f in sel.effects for s in f.stages}
+        for s in replay.stages:
+            files.append(stage_figure(replay, s, base.values, final.values if s in touched else None,
+                                      out / f"{s}.png", result["stages"][s]).name)
+        files.append(binned_figure(replay, base.values, final.values if found else None, out / "binned.png").name)
+        files.append(floors_figure(result, out / "noise_floors.png").name)
+    if found and None not in [e["study_option"] for e in found] and options:
+        result["extended_study"] = "extended_study.toml"
+        text = study.extension_toml({f"{c}.{name}": value for c, name, value in options},
+                                    f"{' + '.join(e['id'] for e in found)} found by "
+                                    f"`python -m agrobot diagnose {log_path}`")
+        atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
+    _write(out, result, files)
+
+
+def _write(out: Path, result: dict, plots: list[str]) -> None:
+    from agrobot.identification.from_log import finite_for_json
+
+    write_json(out / "diagnosis.json", finite_for_json(result))
+    atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

@@ -1,0 +1,483 @@
+"""Several effects at once: forward selection with a joint refit, and backward
+elimination, so that effects that mimic each other are separated by evidence, not by the order
+in which they were tried.
+
+The model is the baseline plus a set S of catalogue effects. Stages couple through the
+effects that touch several of them (the gyro bias: yaw and position), and, where the track sees
+the yaw model's side-slip (a car at highway speed: Replay.side_slip_block), through the yaw
+model's values, so each trial refits the *group* of a candidate: the effects of S that share a
+stage with it (transitively), their parameters, the candidate's and the stages' uncertain
+parameters, scored on the group's stages.
+
+- forward: every effect not in S is refitted jointly with its group; the supported one with the
+  lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
+  material) joins S;
+- backward: every other member f of S is tested by refitting its group without it; f stays only
+  if the model with f is still supported against the model without it (same rules);
+- a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
+  and is no longer supported once the best has joined, the two explain the same misfit and the
+  data cannot tell which: the pair is reported as inconclusive with the experiment that would
+  separate them;
+- pairs: when no single candidate is supported but a stage is still above its noise floor
+  (unexplained.is_misfit), pairs of effects of that stage are fitted together (a dead-band with a
+  rate limit fits badly alone); a supported pair joins S;
+- stop when nothing more is supported (at most ``max_effects`` steps);
+- absorbed: an effect of a stage that is still misfit at the end leaves S only when the stage's
+  data-driven extension, fitted without it, beats it by ``min_gain`` on the held-out part and the
+  effect adds less than ``min_gain`` on top of that extension: a named effect that explains a
+  residual about as well as a free map stays (Selector.absorbed).
+
+Each effect of the final model is reported by its drop-one comparison: the final model against
+the final model refitted without it (held-out RMS per stage with and without it).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from agrobot.components.models.tyre import SHAPE_BOUNDS
+from agrobot.components.models.yaw_dynamics import GRAVITY
+
+from .candidates import STAGES, CandidateFit, Replay, _fit, fit_baseline, merged, uncertain
+from .noise_floor import stage_floors
+from .simplification import healthy_levels
+from .unexplained import extension, is_misfit
+from .catalogue import CATALOGUE, SIGNALS
+from .effect import Effect, Parameter
+
+SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
+TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
+STRONG = -10.0         # dBIC below which the evidence is strong
+
+
+@dataclass
+class Finding:
+    """One effect judged against the same model without it."""
+
+    effect: Effect
+    fit: CandidateFit                          # the model with the effect (its group refitted)
+    delta_bic: float
+    gain_by_signal: dict[str, float]
+    rmse_before: dict[str, float]     # held-out, without the effect
+    rmse_after: dict[str, float]      # held-out, with it
+    material: bool
+    supported: bool
+    reasons: list[str]
+    stages: tuple[str, ...] = ()
+    without: CandidateFit | None = None        # the model refitted without the effect (drop-one only)
+
+    @property
+    def gain(self) -> float:
+        return self.gain_by_signal[SIGNALS[main_stage(self.effect, self.stages)][0]]
+
+
+def main_stage(effect: Effect, scored) -> str:
+    """The effect's first stage among those scored (a partial log may lack its first)."""
+    return next(s for s in effect.stages if s in scored)
+
+
+def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain) -> Finding:
+    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py."""
+    n_total = sum(with_.n_eff[s] for s in stages)
+    dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in stages)
+    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
+    names = {s: SIGNALS[s][0] for s in stages}
+    before = {names[s]: without.rmse_test[s] for s in stages}
+    after = {names[s]: with_.rmse_test[s] for s in stages}
+    gains = {k: 1.0 - after[k] / before[k] if before[k] > 0 else 0.0 for k in before}
+    material = bool(effect.material(with_.values, baseline_values))
+    reasons = []
+    if dbic >= STRONG:
+        reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
+    main = names[main_stage(effect, stages)]
+    if gains[main] < min_gain:
+        reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
+    worse = [k for k, g in gains.items() if g < -0.05]
+    if worse:
+        reasons.append(f"held-out RMS rises for {worse}")
+    if not material:
+        reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
+    return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
+
+
+def group(stages: set[str], members: list[Effect], available=STAGES,
+          block: tuple[str, ...] = ()) -> tuple[tuple[str, ...], list[Effect]]:
+    """The stages and the members coupled to ``stages`` through shared stages (transitively),
+    among the ``available`` stages (a partial log judges fewer); ``block``: stages that couple
+    whole (Replay.side_slip_block: the track reads the yaw model's side-slip)."""
+    stages = set(stages) & set(available)
+    stages, related = set(stages), []
+    changed = True
+    while changed:
+        changed = False
+        if stages & set(block) and not set(block) <= stages:
+            stages |= set(block)
+            changed = True
+        for f in members:
+            if f not in related and stages & set(f.stages):
+                related.append(f)
+                stages |= set(f.stages)
+                changed = True
+    return tuple(s for s in STAGES if s in stages and s in available), related
+
+
+def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> CandidateFit:
+    free = list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] + [p for e in effects for p in e.parameters]))
+    return _fit(replay, values, free, stages, starts, sigma)
+
+
+@dataclass
+class Selection:
+    base: CandidateFit
+    sigma: dict[str, float]
+    model: CandidateFit
+    effects: list[Finding]                       # drop-one judgement of each effect of the final model
+    first_step: list[Finding]                    # every catalogue effect against the baseline
+    final: CandidateFit                                   # the final model scored on every stage
+    floors: dict                                 # each stage's noise floor under it (noise_floor.py)
+    inconclusive: list[dict] = field(default_factory=list)
+    trace: list[str] = field(default_factory=list)
+
+
+class Selector:
+    def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0,
+                 saturation: dict | None = None) -> None:
+        self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
+        self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
+        from .effects.tyre_saturation import LATERAL_KEY
+
+        moving = replay.speed > replay.min_speed
+        a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
+        # the baseline's values, and what a materiality rule reads of the log itself
+        from .effects.steering_ratio_curve import DELTA_KEY
+
+        delta = np.abs(np.nan_to_num(replay.delta))[moving] if "yaw" in replay.stages else np.zeros(0)
+        self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0,
+                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
+        # the effects this log can judge: one of their stages replayed, the columns they read there
+        self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
+                          and all(c in replay.frame for c in e.needs) and e.applies(replay)]
+        if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
+            # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
+            self.catalogue = [e for e in self.catalogue if e.id not in SCALES]
+        self._cache: dict[tuple, Finding] = {}
+        self._first: dict[str, dict[str, float]] = {}
+        self._evaluated: tuple | None = None
+        self.widened: list[str] = []
+
+    def add(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
+        """The model with ``effect`` joined to its group, judged against ``model``."""
+        stages, related = group(set(effect.stages), members, self.replay.stages, self.replay.side_slip_block)
+        key = (effect.id, tuple(sorted(f.id for f in related)))
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        if effect.id in self._first:
+            starts = [self._first[effect.id]]
+        else:
+            starts = [{p.name: x for p, x in zip(effect.parameters, start)} for start in effect.starts]
+        fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma, starts)
+        wider = widened(effect, fit.values)
+        if wider is not None:           # no verdict on a prior's edge: refit on the range widened to the limit
+            self.catalogue = [wider if e is effect else e for e in self.catalogue]
+            self.widened.append(f"{effect.id}: " + ", ".join(
+                f"{p.name} ended on {fit.values[p.name]:.4g} {p.unit}, searched again in [{w.lower:.4g}, {w.upper:.4g}]"
+                for p, w in zip(effect.parameters, wider.parameters) if (p.lower, p.upper) != (w.lower, w.upper)))
+            effect = wider
+            fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma,
+                         [{p.name: fit.values[p.name] for p in effect.parameters}])
+        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain)
+        self._cache[key] = finding
+        if effect.id not in self._first:
+            self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
+        return finding
+
+    def drop(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
+        """``model`` judged against itself refitted without ``effect`` (a member)."""
+        others = [f for f in members if f is not effect]
+        stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
+        reset = {p.name: self.base_values[p.name] for p in effect.parameters}
+        without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
+        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
+        finding.without = merged(model, without, reset)      # the model to fall back to
+        return finding
+
+    def run(self) -> Selection:
+        base, self.sigma = fit_baseline(self.replay)
+        trace_gate = self.saturation_gate(base)
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
+        model, members, trace, inconclusive = base, [], notes, []
+        first = [self.add(base, [], e) for e in self.catalogue]
+        first.sort(key=lambda f: (not f.supported, f.delta_bic))
+        removed: set[str] = set()
+        for _ in range(self.max_effects):
+            trials = first if not members else [self.add(model, members, e) for e in self.catalogue if e not in members]
+            # the recording before the vehicle: a supported recording effect (a position reference
+            # with its clock) joins before the vehicle effects it can imitate
+            supported = sorted((f for f in trials if f.supported and f.effect.id not in removed),
+                               key=lambda f: (not getattr(f.effect, "recording", False), f.delta_bic))
+            if not supported:
+                pair = self.pair(model, members, removed)
+                if pair is None:
+                    break
+                a, b, fit, dbic = pair
+                members = members + [a, b]
+                model = merged(model, fit)
+                trace.append(f"+ {a.id} and {b.id} together (neither alone is supported; dBIC {dbic:.1f})")
+                continue
+            best = supported[0]
+            rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
+                      and set(f.effect.stages) & set(best.effect.stages)]
+            # a rival that is not supported itself (dBIC not strong, or immaterial) but within TIE of
+            # the best and with evidence for it: the log cannot tell the two apart
+            near = [f for f in trials if f not in supported and f.effect is not best.effect and f.delta_bic < 0
+                    and 0.0 <= f.delta_bic - best.delta_bic < TIE and set(f.effect.stages) & set(best.effect.stages)
+                    and f.effect.id not in removed]
+            for rival in near:
+                inconclusive.append(_tie(best, rival, "it is not supported on its own (" + "; ".join(rival.reasons)
+                                         + ") but its evidence is within the margin of the chosen one's"))
+            members = members + [best.effect]
+            model = merged(model, best.fit)
+            trace.append(f"+ {best.effect.id} (dBIC {best.delta_bic:.1f})")
+            for rival in rivals:
+                again = self.add(model, members, rival.effect)
+                if not again.supported:
+                    inconclusive.append(_tie(best, rival, "both are supported alone, and with the chosen one in the "
+                                                          "model the other adds nothing"))
+            for f in list(members[:-1]):
+                check = self.drop(model, members, f)
+                if not check.supported:
+                    members = [m for m in members if m is not f]
+                    model = check.without
+                    removed.add(f.id)
+                    trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
+        model, members = self.absorbed(model, members, trace)
+        seen, ties = set(), []
+        for t in inconclusive:                       # one entry per pair, the chosen effect still in the model
+            key = tuple(t["effects"])
+            if key not in seen and t["effects"][0] in {m.id for m in members}:
+                seen.add(key)
+                ties.append(t)
+        inconclusive = ties
+        effects = [self.drop(model, members, f) for f in members]
+        effects.sort(key=lambda f: f.delta_bic)
+        final, floors = self.evaluate(model)
+        trace += [f"widened {w}" for w in self.widened]
+        return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def audit_start(self) -> str | None:
+        """The import audit's unresolved finding that the yaw rate answers the steering before it
+        (response_leads_input) is a candidate like any effect: steering_clock starts from its lead."""
+        from .verdict import audit_findings
+
+        lead = next((f for f in audit_findings(self.replay.frame.attrs)
+                     if f["kind"] == "response_leads_input" and not f["resolved"]), None)
+        effect = next((e for e in self.catalogue if e.id == "steering_clock"), None)
+        if lead is None or effect is None or not isinstance(lead.get("value"), (int, float)):
+            return None
+        (p,) = effect.parameters
+        start = min(max(float(lead["value"]), p.lower), p.upper - 1e-6 * (p.upper - p.lower))
+        self._first["steering_clock"] = {"steering_clock": start}
+        return (f"steering_clock started at {start:.3f} s: the import audit finds the yaw rate answering the steering "
+                f"{lead['value']:.3f} s before it (response_leads_input, unresolved)")
+
+    def saturation_gate(self, base: CandidateFit) -> str | None:
+        """Tyre saturation is tried only where the linear model's misfit grows with |a_y|: in the
+        top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
+        vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
+        the predicted yaw rate there (with the split "blocks", below the middle band's level).
+        Otherwise it is left out (and the trace says why)."""
+        effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
+        if effect is None:
+            return None
+        if self.saturation:                     # one vehicle model: what identify keeps is a candidate here
+            self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
+                                              "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
+                                                                 SHAPE_BOUNDS[1])}
+            return (f"tyre_saturation tried: identify keeps it on this log (friction {self.saturation['friction']:.3g}, "
+                    f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
+        replay = self.replay
+        keep = replay.scored("yaw")
+        predicted = replay.predicted("yaw", base.values)[keep]
+        res = replay.gyro[keep] - predicted
+        a_y = np.abs(replay.speed[keep] * replay.gyro[keep])
+        top = a_y >= np.percentile(a_y, 90)
+        signed = (res * np.sign(predicted))[top]
+        n_eff = max(2.0, len(signed) * base.n_eff.get("yaw", len(res)) / max(base.n.get("yaw", len(res)), 1))
+        mean, se = float(signed.mean()), float(signed.std() / math.sqrt(n_eff))
+        shortfall = -mean / max(float(np.mean(np.abs(predicted[top]))), 1e-9)
+        than = ""
+        if replay.split == "blocks":
+            # the baseline was fitted over the hard driving too: its linear compromise leaves no mean
+            # shortfall at the top but an excess in the middle; the shortfall is taken against the
+            # middle band (20-80 % of |a_y|) instead
+            mid = (a_y >= np.percentile(a_y, 20)) & (a_y <= np.percentile(a_y, 80))
+            level = float(np.mean((res * np.sign(predicted))[mid])) / max(float(np.mean(np.abs(predicted[mid]))), 1e-9)
+            mean -= level * float(np.mean(np.abs(predicted[top])))
+            shortfall += level
+            than = f" against the middle band of |a_y| (where it is {100 * level:+.0f} % of the predicted yaw rate)"
+        text = (f"where |a_y| > {np.percentile(a_y, 90):.3g} m/s2 the baseline's yaw residual signed by the turn "
+                f"is {mean:+.3g} rad/s{than} (t = {mean / se if se > 0 else 0.0:.1f}, {100 * shortfall:.0f} % of the "
+                f"predicted yaw rate)")
+        if se > 0 and mean / se < -3.0 and shortfall > 0.05:
+            return f"tyre_saturation tried: {text}"
+        self.catalogue = [e for e in self.catalogue if e is not effect]
+        return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
+
+    def evaluate(self, model: CandidateFit) -> tuple[CandidateFit, dict]:
+        """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
+        values: the end of the selection and the report ask for the same model)."""
+        key = tuple(sorted(model.values.items()))
+        if self._evaluated is None or self._evaluated[0] != key:
+            final = _fit(self.replay, model.values, [], self.replay.stages, [{}], self.sigma)
+            floors = stage_floors(self.replay, model.values, seed=self.seed)
+            floors["_healthy"] = healthy_levels(self.replay, model.values, floors, seed=self.seed)
+            self._evaluated = (key, final, floors)
+        return self._evaluated[1], self._evaluated[2]
+
+    def misfit_stages(self, model: CandidateFit) -> list[str]:
+        final, floors = self.evaluate(model)
+        return [s for s in self.replay.stages if is_misfit(s, final.rmse_test[s], floors)]
+
+    def pair(self, model: CandidateFit, members: list[Effect], removed: set[str]):
+        """Two effects of one misfit stage that only explain it together (a dead-band with a rate
+        limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
+        misfit = self.misfit_stages(model)
+        # (a nonlinear effect is not paired: its replay is costly and a pair is for two small
+        # steering nonlinearities that only fit together)
+        pool = [e for e in self.catalogue if e not in members and e.id not in removed and set(e.stages) & set(misfit)
+                and e.id != "tyre_saturation"]
+        best = None
+        for i, a in enumerate(pool):
+            for b in pool[i + 1:]:
+                if not set(a.stages) & set(b.stages):
+                    continue
+                stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages,
+                                        self.replay.side_slip_block)
+                starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
+                fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
+                ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)
+                jb = _judge(b, fit, model, stages, self.base_values, self.min_gain)
+                dbic = ja.delta_bic + len(b.parameters) * math.log(max(sum(fit.n_eff[s] for s in stages), 2.0))
+                ok = dbic < STRONG and ja.material and jb.material and max(ja.gain, jb.gain) >= self.min_gain \
+                    and not any(g < -0.05 for g in ja.gain_by_signal.values())
+                if ok and (best is None or dbic < best[3]):
+                    best = (a, b, fit, dbic)
+        return best
+
+    def absorbed(self, model: CandidateFit, members: list[Effect], trace: list[str]) -> tuple[CandidateFit, list[Effect]]:
+        """Parsimony that favours a named effect. An effect in a stage that
+        stays misfit may only have soaked up part of a misfit it does not explain; it is tested
+        against the stage's data-driven extension E (kind and signal chosen with the effect), on
+        the held-out part:
+
+        - named: the model with the effect, no extension;
+        - data-driven: the model refitted without the effect, plus E;
+        - on top: the effect's gain when E is fitted on both sides.
+
+        The effect leaves only when the data-driven model beats the named one by ``min_gain``
+        *and* the effect adds less than ``min_gain`` on top of E: a named effect that explains the
+        residual about as well as a free map stays (it is what a user can act on)."""
+        misfit = set(self.misfit_stages(model))
+        for f in list(members):
+            if not misfit & set(f.stages):
+                continue
+            check = self.drop(model, members, f)
+            on_top, versus = {}, {}
+            for stage in check.stages:
+                if stage in misfit:
+                    best = extension(self.replay, stage, model.values)
+                    with_ = best["rms_after"]
+                    free = extension(self.replay, stage, check.without.values, like=best)["rms_after"]
+                    named = model.rmse_test[stage]
+                else:
+                    with_ = named = model.rmse_test[stage]
+                    free = check.without.rmse_test[stage]
+                on_top[stage] = 1.0 - with_ / free if free > 0 else 0.0
+                versus[stage] = 1.0 - free / named if named > 0 else 0.0
+            text = ", ".join(f"{100 * on_top[s]:.1f}% on top, the free map {100 * versus[s]:+.1f}% against it ({s})"
+                             for s in on_top)
+            if max(on_top.values()) < self.min_gain and max(versus.values()) >= self.min_gain:
+                members = [m for m in members if m is not f]
+                model = check.without
+                trace.append(f"- {f.id}: the data-driven extension without it does better on the held-out part and "
+                             f"it adds nothing on top ({text}; < {100 * self.min_gain:.0f}%)")
+            else:
+                trace.append(f"= {f.id} stays: {text}")
+        return model, members
+
+
+def restaged(effect: Effect, replay: Replay) -> Effect:
+    """The effect as this log and this vehicle judge it: on a log with only the steering command,
+    a steering effect is judged in the yaw stage (the replayed steering drives the yaw model); its
+    parameters are searched within what the study's [vehicle] allows (vehicle_bounds)."""
+    if getattr(replay, "command_only", False) and "steering" in effect.stages:
+        effect = copy.copy(effect)
+        effect.stages = tuple(dict.fromkeys("yaw" if s == "steering" else s for s in effect.stages))
+    bounds = vehicle_bounds(replay.baseline.vehicle)
+    limits = replay.baseline.vehicle.physical_limits()
+    if any(p.name in bounds for p in effect.parameters):
+        effect = copy.copy(effect)
+        effect.parameters = tuple(_bounded(p, bounds[p.name], limits.get(p.name)) if p.name in bounds else p
+                                  for p in effect.parameters)
+    return effect
+
+
+def _bounded(p: Parameter, prior: tuple[float, float], limit: tuple[float, float] | None) -> Parameter:
+    """``p`` searched first within the vehicle's ``prior`` range, widened at most to ``limit`` (the
+    class's physical limit; else the effect's own)."""
+    lo, hi = limit or p.limit or (p.lower, p.upper)
+    return replace(p, lower=prior[0], upper=prior[1], limit=(min(lo, prior[0]), max(hi, prior[1])))
+
+
+def widened(effect: Effect, values: dict[str, float]) -> Effect | None:
+    """The effect with the range of each parameter that ended on a prior bound widened to its
+    physical limit (Parameter.widened), or None when none can widen."""
+    params, moved = [], False
+    for p in effect.parameters:
+        w = p.widened(values[p.name])
+        moved |= w is not None
+        params.append(w or p)
+    if not moved:
+        return None
+    effect = copy.copy(effect)
+    effect.parameters = tuple(params)
+    return effect
+
+
+def vehicle_bounds(vehicle) -> dict[str, tuple[float, float]]:
+    """Search ranges from the vehicle's class and outline (none when the study does not say):
+    a gyro bias a gyro of its class can have, a slope its roads or fields can have (as the lateral
+    pull g sin(phi)), an antenna inside its outline."""
+    out = {}
+    if vehicle.gyro_bias_bound:
+        out["yaw_rate_bias"] = (-vehicle.gyro_bias_bound, vehicle.gyro_bias_bound)
+    if vehicle.slope_bound:
+        pull = GRAVITY * math.sin(vehicle.slope_bound)
+        out["slope_east"] = out["slope_north"] = (-pull, pull)
+    if vehicle.kind:
+        out["tyre_friction"] = vehicle.friction_range
+    arm = vehicle.lever_arm_bounds()
+    if arm:
+        out["antenna_forward"], out["antenna_left"] = arm
+    return out
+
+
+def _tie(best: Finding, rival: Finding, why: str) -> dict:
+    margin = rival.delta_bic - best.delta_bic
+    return {"effects": [best.effect.id, rival.effect.id],
+            "delta_bic": [best.delta_bic, rival.delta_bic],
+            "margin": margin,
+            "why": f"{rival.effect.id} is within {margin:.1f} of {best.effect.id}'s dBIC (a tie below {TIE:g}): {why}",
+            "chosen": best.effect.id,
+            "experiment": f"to tell {best.effect.id} from {rival.effect.id}: {best.effect.experiment}; "
+                          f"{rival.effect.experiment}"}
+
+
+def select(replay: Replay, min_gain: float = 0.05, seed: int = 0, saturation: dict | None = None) -> Selection:
+    """``seed``: the study's, for the Monte Carlo of the position noise floor; ``saturation``:
+    identify's tyre saturation on the same log (then a candidate whatever the gate says)."""
+    return Selector(replay, min_gain, seed=seed, saturation=saturation).run()

@@ -1,0 +1,167 @@
+"""``fields PATH``: what a field file or folder holds (fields, area, rings, guidance lines,
+headland, validity) and a drawing of it; ``--out DIR`` writes fields.png, fields.json and the
+fields as GeoJSON (longitude/latitude) for any GIS."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", type=Path, help="a GeoJSON, WKT, GML, KML/KMZ or ISO 11783-10 TaskData file, a polygon "
+                   "CSV, an AgOpenGPS field folder, or a folder of such files; with --from-track a GNSS track (any "
+                   "recording convert reads: NMEA, a bag, a TLG time log, a lat/lon table)")
+    p.add_argument("--crs", default=None, help="the coordinates' CRS when the file does not name it (EPSG:6677 ...)")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "folder for fields.png, fields.json, fields.geojson", required=False, plots=True)
+    p.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; default "
+                   "1G for a file read whole, 16G for a recording read as a stream)")
+    t = p.add_argument_group("a field from a track (--from-track)")
+    t.add_argument("--from-track", action="store_true", help="the field a machine worked: the outline of the ground "
+                   "its track covered and its straight passes as AB lines (write it with --out, plan it with plan "
+                   "OUT/fields.geojson)")
+    t.add_argument("--width", type=float, default=None, help="working width [m] (default: the recording's, ISO DDI 67, "
+                   "else the spacing of the passes)")
+    t.add_argument("--signal", action="append", default=[], metavar="COLUMN=EXPR[unit]",
+                   help="a table's position columns: --signal lat=TABLE.COLUMN --signal lon=TABLE.COLUMN")
+    t.add_argument("--time", default=None, metavar="COLUMN[unit|datetime]", help="a table's time column (as convert)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from agrobot.orchestrator.source_files import set_limit
+    from agrobot.orchestrator.output import ResultFolder
+    from agrobot.orchestrator.atomic_files import atomic_write, write_json
+
+    from .readers import read_fields, read_folder
+
+    set_limit(args.max_file_size)
+
+    folder = None if args.out is None else \
+        ResultFolder(args.out, args.overwrite, ("fields.json",), "fields", [args.source])
+    if args.from_track:
+        fields, skipped = [track_field(args)], []
+    else:
+        fields, skipped = read_folder(args.source, args.crs) if args.source.is_dir() else \
+            (read_fields(args.source, args.crs), [])
+    print(f"{args.source}: {len(fields)} field(s)")
+    for why in skipped:
+        print(f"  not read: {why}")
+    print(f"{'field':32s} {'area [ha]':>10s} {'rings':>5s} {'lines':>5s} {'headland':>8s}  valid  coordinates")
+    for f in fields:
+        s = f.summary()
+        print(f"{f.name[:32]:32s} {s['area_ha']:10.3f} {s['rings']:5d} {len(s['lines']):5d} "
+              f"{'yes' if s['headland'] else 'no':>8s}  {'yes' if s['valid'] else 'NO':5s}  {f.crs}")
+        for g in s["lines"]:
+            print(f"    {g['kind']} {g['name']!r}: {g['length_m']:.1f} m, heading {g['heading_deg']:.1f} deg (east = 0, "
+                  f"counter-clockwise)")
+        for problem in s["problems"]:
+            print(f"    problem: {problem}")
+        if f.properties.get("repaired"):
+            print(f"    repaired: {f.properties['repaired']}")
+    if folder is not None:
+        summaries = [f.summary() for f in fields]
+        with folder:
+            write_json(folder.tmp / "fields.json", {"source": str(args.source), "fields": summaries})
+            atomic_write(folder.tmp / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
+            if not args.no_plots:
+                draw(fields, folder.tmp / "fields.png", str(args.source))
+            folder.commit()
+        local = [f.name for f in fields if f.origin is None]
+        print(f"written: {args.out}/{'' if args.no_plots else 'fields.png, '}fields.json, fields.geojson"
+              + (f" (without {', '.join(local)}: local coordinates, no longitude/latitude)" if local else ""))
+    return 0
+
+
+def track_field(args: argparse.Namespace):
+    """The field of the track in ``args.source`` (measurements reads the recording)."""
+    from agrobot.measurements.recording import ImportOptions, positions
+    from agrobot.measurements.signal_expressions import parse_signal
+
+    from .track import field_from_track
+
+    options = ImportOptions(signals=[parse_signal(s) for s in args.signal], time=args.time)
+    t, lat, lon, report = positions(args.source, options)
+    width = args.width or report.get("working_width_m")
+    f = field_from_track(t, lat, lon, args.source.stem or args.source.name, str(args.source), width)
+    if args.width is None and width is not None:
+        f.properties["working_width_from"] = "the recording's ISO 11783 actual working width (DDI 67), median"
+    print(f"track {args.source}: {f.properties['track_fixes']} fixes in {f.properties['track_pieces']} piece(s), "
+          f"{f.properties['track_length_m']:.0f} m; working width {f.properties['working_width_m']:g} m "
+          f"({f.properties['working_width_from']}); {f.properties['passes']} straight passes")
+    return f
+
+
+def geojson(fields) -> dict:
+    """The fields with a geographic reference as a GeoJSON FeatureCollection in longitude/latitude
+    (RFC 7946); a field in local coordinates has no place in it."""
+    import numpy as np
+    from shapely.geometry import LineString, Polygon, mapping
+
+    feats = []
+    for f in fields:
+        if f.origin is None:
+            continue
+        conv = f.to_geodetic
+        poly = Polygon(conv(np.asarray(f.boundary.exterior.coords)),
+                       [conv(np.asarray(h.coords)) for h in f.boundary.interiors])
+        props = {"name": f.name, "area_ha": round(f.area_ha, 4), "kind": "boundary"}
+        feats.append({"type": "Feature", "properties": props, "geometry": mapping(poly)})
+        for g in f.lines:
+            feats.append({"type": "Feature", "properties": {"name": g.name, "field": f.name, "kind": g.kind},
+                          "geometry": mapping(LineString(conv(g.points)))})
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def draw(fields, path: Path, title: str) -> Path:
+    """Each field in its local frame, side by side (at most 12), with holes, headland and lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from agrobot.orchestrator.atomic_files import atomic_write
+
+    shown = fields[:12]
+    cols = min(4, len(shown))
+    rows = math.ceil(len(shown) / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+    for ax, f in zip(axes.flat, shown):
+        x, y = f.boundary.exterior.xy
+        ax.fill(x, y, color="#cfe8b0", edgecolor="#2f6b1f", lw=1.2, label="boundary")
+        for k, hole in enumerate(f.boundary.interiors):
+            hx, hy = hole.xy
+            ax.fill(hx, hy, color="white", edgecolor="#8a3b12", lw=1, label="hole" if k == 0 else None)
+        if f.headland is not None:
+            hx, hy = f.headland.exterior.xy
+            ax.plot(hx, hy, "--", color="#7a5c00", lw=1, label="headland")
+        for k, g in enumerate(f.lines):
+            ax.plot(g.points[:, 0], g.points[:, 1], color="tab:blue", lw=1.2, label="guidance line" if k == 0 else None)
+        ax.set_title(f"{f.name[:28]}\n{f.area_ha:.2f} ha, {f.holes} hole(s), {len(f.lines)} line(s)"
+                     + ("" if not f.problems() else f"\nINVALID: {f.problems()[0][:36]}..."), fontsize=9)
+        ax.set_aspect("equal")
+        ax.set_xlabel("east [m]" + ("" if f.origin else " (local)"), fontsize=8)
+        ax.set_ylabel("north [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.grid(alpha=0.3)
+        if f.holes or f.lines or f.headland is not None:
+            ax.legend(fontsize=6, loc="best")
+    for ax in list(axes.flat)[len(shown):]:
+        ax.axis("off")
+    fig.suptitle(f"{title}: {len(fields)} field(s)" + (f", first {len(shown)} shown" if len(fields) > len(shown) else ""),
+                 fontsize=10)
+    fig.tight_layout()
+    atomic_write(path, lambda p: fig.savefig(p, dpi=100, format="png"))
+    plt.close(fig)
+    return path
+
+
+def register(registry) -> None:
+    from .plan_cli import register as register_plan
+
+    register_plan(registry)
+    registry.add_command("fields", "list and draw the fields in a file or folder (GeoJSON, WKT, GML, KML, ISOXML, "
+                                   "AgOpenGPS), or make one from a GNSS track (--from-track)",
+                         add_arguments, run)

@@ -1,0 +1,226 @@
+"""A study's whole loop as one co-simulation FMU (FMI 2.0 or 3.0): the compiled engine's C
+(orchestrator.compiled: one unit per component core and the loop unit, the very text its cached
+library is built from) behind the sampled-model semantics every exported FMU shares
+(c/sampled_instance.c), with the study's base step as the sample period.
+
+The model core written here only holds the loop's state by value (base step k, the published
+outputs, the inputs, every component's state) and steps it: at t_k = t0 + k h the FMU's outputs
+are the loop's row k (``agc_sample_phase``: continuous outputs g(x_k), then the sampled
+components due at k, in the system's order), and doStep commits step 4 (``agc_continuous_phase``:
+the continuous components step to k + 1). The recorded signals of the study's run at t_k are
+therefore the FMU's outputs at t_k.
+
+Ports: the study's ``[exports]`` when it declares them (an exported input is written into its
+inner inputs before the components due read them; its start is the study's value), else every
+signal the study records (``component.output``) as an output and no input. The study's
+parameters, initial outputs and constant inputs are compiled in (the FMU has no parameters: the
+loop's buffers are sized for its delays): change the study and export again.
+"""
+from __future__ import annotations
+
+import ctypes
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from agrobot.orchestrator.build import System, build_system
+from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
+from agrobot.orchestrator.compiled.simulation import refusal
+from agrobot.orchestrator.composite import exported_ports, inner_feedthrough
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import Study
+
+from .packaging import PackagingError, check_fmu_target
+from .sampled_fmu import C_DIR, WRAPPERS, SampledModel, build_fmu, c_array, c_strings, token_of
+
+ALIGN = 16          # bytes: each component's state starts on this boundary in the loop's state
+
+
+class LoopExportError(InputError):
+    """The loop FMU cannot be written where asked (the message names the option and why)."""
+
+
+def identifier(name: str) -> str:
+    """A C identifier (the FMU's modelIdentifier) from a study name."""
+    ident = re.sub(r"\W", "_", name)
+    return ident if ident[:1].isalpha() else f"loop_{ident}"
+
+
+@dataclass
+class Ports:
+    """The FMU's ports and where they sit in the loop."""
+
+    inputs: list[tuple[str, str, str]]           # (name, unit, description)
+    outputs: list[tuple[str, str, str]]
+    out_at: list[int]                            # the published value each output reads
+    slots: list[tuple[int, int]]                 # (loop input slot, FMU input) written before each sample
+    starts: list[float]                          # the inputs' starts
+    dependencies: dict[str, list[str]]           # output -> the inputs it reads in the same instant
+    note: str                                    # the line saying which ports were chosen
+
+
+def loop_ports(system: System, lay, declared: str = "the study's [exports]") -> Ports:
+    """The ports of the loop's FMU: the study's [exports] (checked and declared as for a
+    subsystem, orchestrator.composite), else every recorded signal as an output."""
+    study, nodes = system.study, system.nodes
+    idx = {n: i for i, n in enumerate(lay.names)}
+
+    def where(comp: str, port: str, causality: str) -> int:
+        """The port's place in the loop's published values (outputs) or inputs (the C core's order)."""
+        names = [v.name for v in nodes[comp].component.variables if v.causality == causality]
+        return (lay.pub if causality == "output" else lay.inp)[idx[comp]] + names.index(port)
+
+    exports = study.exports
+    if exports is None or not (exports.inputs or exports.outputs):
+        declared_as = {f"{n}.{v.name}": v for n, node in nodes.items() for v in node.component.variables}
+        outputs = [(c, declared_as[c].unit or "1", declared_as[c].description) for c, _ in lay.columns]
+        return Ports([], outputs, [at for _, at in lay.columns], [], [], {}, (
+            f"ports: every signal the study records ({len(outputs)} outputs, no input): it declares no [exports] "
+            f"(declare [exports] outputs/inputs to choose the FMU's ports)"))
+    variables, _ = exported_ports(system, study, study.where)
+    inputs = [(v.name, v.unit or "1", v.description) for v in variables if v.causality == "input"]
+    outputs = [(v.name, v.unit or "1", v.description) for v in variables if v.causality == "output"]
+    out_at = [where(*exports.output_source(port), "output") for port, _, _ in outputs]
+    slots, starts = [], []
+    for j, (port, _, _) in enumerate(inputs):
+        targets = exports.input_targets(port)
+        # the study's value of the first target (a constant it gives, else the input's start)
+        starts.append(float(nodes[targets[0][0]].component.u[targets[0][1]]) if targets
+                      else float(exports.inputs[port].start))
+        slots += [(where(comp, inp, "input"), j) for comp, inp in targets]
+    # continuous components publish from their state: only connections and sampled feedthrough carry
+    # an input to an output within the instant
+    reach = inner_feedthrough(system, exports)
+    return Ports(inputs, outputs, out_at, slots, starts, {o: list(reach.get(o, ())) for o, _, _ in outputs},
+                 f"ports: {declared} ({len(inputs)} inputs, {len(outputs)} outputs)")
+
+
+def loop_model(system: System, declared: str = "the study's [exports]") -> tuple[SampledModel, str]:
+    """(the whole loop of ``system`` as a sampled model, the line saying which ports it has:
+    ``declared`` says where its [exports] come from). CompiledRefused names the components
+    without a C core."""
+    cores, missing = cores_of(system)
+    if missing:             # (a study paced in real time is exported too: the FMU is paced by its master)
+        raise CompiledRefused(f"{system.study.path}: export-fmu: {refusal(system, missing)}; only a study whose "
+                              f"every component has a C core becomes one FMU (export-ssp writes one FMU per component)")
+    units, _, files = CompiledSimulation.sources(system, cores)
+    sim = CompiledSimulation(system, cores)           # compiles the shape (or finds it cached): the states' sizes
+    try:
+        par, pub0, in0 = sim.initial_vectors()
+    finally:
+        sim.terminate()
+    lay = sim.layout
+    sizes = []
+    for i in range(len(lay.names)):
+        size = getattr(sim.lib, f"agc_size_{i}")
+        size.restype = ctypes.c_ulong
+        sizes.append(int(size()))
+    offsets, total = [], 0
+    for size in sizes:
+        offsets.append(total)
+        total += -(-max(size, 1) // ALIGN) * ALIGN
+    ports = loop_ports(system, lay, declared)
+    inputs, outputs, out_at, slots, starts, note = (ports.inputs, ports.outputs, ports.out_at, ports.slots,
+                                                    ports.starts, ports.note)
+    deps = {o: ports.dependencies.get(o, []) for o, _, _ in outputs}
+    s = system.study.study
+    ident = identifier(s.name)
+    fmu_units = {f"agc_c{i}.c": units[f"c{i}.c"] + f"\n/* the loop FMU holds this state in {sizes[i]} bytes */\n"
+                 f"typedef char agc_state_fits_{i}[(sizeof(ModelState) <= {sizes[i]}) ? 1 : -1];\n"
+                 for i in range(len(lay.names))}
+    fmu_units["agc_loop.c"] = units["loop.c"]
+    n = len(lay.names)
+    body = "\n".join([
+        f"/* {ident}: the whole loop of {Path(str(system.study.path)).name} ({n} components), one base step "
+        f"{float(s.base_step)!r} s a sample (generated by fmu_export.loop_fmu) */",
+        "#include <math.h>", "#include <stdlib.h>", "#include <string.h>",
+        "#define MODEL_NPAR 0", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
+        f"#define MODEL_PERIOD {float(s.base_step)!r}",
+        "static const double MODEL_PAR_START[1] = {0.0};",
+        'static const char *const MODEL_PAR_NAMES[1] = {""};',
+        f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{c_strings(i[0] for i in inputs)}}};",
+        f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{c_strings(o[0] for o in outputs)}}};",
+        f"static const double LOOP_IN_START[MODEL_NIN + 1] = {{{c_array(starts) or '0.0'}}};",
+        "#define MODEL_IN_START LOOP_IN_START",
+        "void agc_start_all(void *const *st, const double *par);",
+        "void agc_sample_phase(void *const *st, const double *par, double *pub, double *in, long k);",
+        "void agc_continuous_phase(void *const *st, const double *par, double *pub, double *in, long k);",
+        f"#define LOOP_N {n}",
+        f"static const double LOOP_PAR[{max(len(par), 1)}] = {{{c_array(par) or '0.0'}}};",
+        f"static const double LOOP_PUB0[{max(len(pub0), 1)}] = {{{c_array(pub0) or '0.0'}}};",
+        f"static const double LOOP_IN0[{max(len(in0), 1)}] = {{{c_array(in0) or '0.0'}}};",
+        f"static const unsigned long LOOP_OFFSET[LOOP_N] = {{{', '.join(map(str, offsets))}}};",
+        f"static const int LOOP_OUT[MODEL_NOUT + 1] = {{{', '.join(map(str, out_at)) or '0'}}};",
+        f"#define LOOP_NSLOT {len(slots)}",
+        f"static const int LOOP_SLOT[LOOP_NSLOT + 1][2] = "
+        f"{{{', '.join(f'{{{a}, {b}}}' for a, b in slots) or '{0, 0}'}}};",
+        "typedef struct {",
+        "    long k;                                   /* the base step whose row the next sample gives */",
+        f"    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}];",
+        f"    unsigned char mem[{max(total, ALIGN)}] __attribute__((aligned({ALIGN})));   /* the components' states */",
+        "} ModelState;",
+        "static void loop_states(ModelState *s, void **st) {",
+        "    for (int i = 0; i < LOOP_N; i++) st[i] = s->mem + LOOP_OFFSET[i];",
+        "}",
+        "static void model_start(ModelState *s, const double *p) {",
+        "    void *st[LOOP_N];",
+        "    (void)p;",
+        "    memset(s, 0, sizeof *s);",
+        f"    memcpy(s->pub, LOOP_PUB0, sizeof(double) * {lay.n_pub});",
+        f"    memcpy(s->in, LOOP_IN0, sizeof(double) * {lay.n_in});",
+        "    loop_states(s, st);",
+        "    agc_start_all(st, LOOP_PAR);",
+        "}",
+        "static void model_sample(ModelState *s, const double *p, const double *in, double *out) {",
+        "    void *st[LOOP_N];",
+        "    (void)p;",
+        "    loop_states(s, st);",
+        "    for (int j = 0; j < LOOP_NSLOT; j++) s->in[LOOP_SLOT[j][0]] = in[LOOP_SLOT[j][1]];",
+        "    agc_sample_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    for (int o = 0; o < MODEL_NOUT; o++) out[o] = s->pub[LOOP_OUT[o]];",
+        "    agc_continuous_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    s->k++;",
+        "}", ""])
+    token = token_of(body + "".join(fmu_units.values()) + sim.key)
+    core = body.replace("#define MODEL_NPAR 0", f'#define MODEL_TOKEN "{token}"\n#define MODEL_NPAR 0')
+    description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
+                   f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
+    note += (f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use); "
+             f"the study's parameters and seed are compiled in (--set them and export again)")
+    model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,
+                         [p.relative_to(C_DIR).as_posix() for p in sorted(set(files))], fmu_units,
+                         starts if inputs else None, float(s.stop_time))
+    return model, note
+
+
+def subsystem(study: Study, components: list[str]) -> Study:
+    """The named components of ``study`` as a study of their own (orchestrator.model's
+    ``extract``): every input not fed inside the group an exported input (start: the study's
+    constant or the input's start), every output of the group an exported output, named
+    ``component_port``."""
+    unknown = [n for n in components if n not in study.components]
+    if unknown or not components:
+        raise LoopExportError(f"{study.path}: --components {','.join(components)}: "
+                              + (f"no component named {', '.join(unknown)}; " if unknown else "none given; ")
+                              + f"expected names of {', '.join(study.components)}")
+    return resolve(study).extract(components, name=f"{study.study.name}_{'_'.join(components)}")
+
+
+def export_loop(study: Study, out: Path, fmi_version: int = 2, components: list[str] | None = None) -> tuple[Path, str]:
+    """Write the whole loop of ``study`` (or of the subsystem of ``components``) as one FMU at
+    ``out`` ((the FMU, the ports line))."""
+    if out.suffix != ".fmu":
+        raise LoopExportError(f"--out {out}: expected a path ending in .fmu")
+    if fmi_version not in WRAPPERS:
+        raise LoopExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, WRAPPERS))}")
+    if components is not None:
+        study = subsystem(study, components)
+    try:
+        check_fmu_target(out)
+        model, note = loop_model(build_system(resolve(study)), "the study's [exports]" if components is None else
+                                 "the subsystem's boundary: the inputs its components do not feed each other, "
+                                 "every output, named component_port")
+        return build_fmu(model, out, fmi_version), note
+    except PackagingError as exc:
+        raise LoopExportError(str(exc)) from None

@@ -1,0 +1,232 @@
+"""``identify LOG``: which method a measured log gets, and the driving method's outputs
+(identification.json, the figures, the summary on the terminal, progress on stderr)."""
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+
+def _read(source: Path, resample: bool, recording, study, causal: bool = True):
+    """The log as measurements.load_log reads it; a table with clock gaps or jitter (ordinary
+    logging) is checked piece by piece between its gaps, each piece on its own even clock.
+    ``causal``: refuse a log whose response leads its input (measurements.audit.require_causal);
+    False leaves the unresolved finding on the log for a reader that judges it (the diagnosis)."""
+    import numpy as np
+    import pandas as pd
+
+    from agrobot.measurements import LogError, load_log
+    from agrobot.measurements.log import DEGREE_SUSPECT, check_log, yaw_rate_in_radians
+    from agrobot.measurements.recording import ImportOptions, is_recording
+
+
+    from agrobot.measurements.audit import require_causal
+    from agrobot.measurements.log import persisted_audit
+
+    try:
+        loaded = load_log(source, ("t",), resample_jitter=resample,
+                          recording=(recording or ImportOptions()).for_vehicle(study))
+    except LogError as exc:
+        if is_recording(Path(source)) or not ("gap" in str(exc) or "unevenly" in str(exc)):
+            raise
+    else:
+        if causal:
+            require_causal(loaded[0], str(source))      # a response leading its input: refused, said why
+        return loaded
+    frame = pd.read_parquet(source) if Path(source).suffix == ".parquet" else pd.read_csv(source)
+    frame.attrs.setdefault("audit", persisted_audit(source) or [])
+    if causal:
+        require_causal(frame, str(source))
+    t = frame["t"].to_numpy(float)
+    if np.any(np.diff(t) <= 0):
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise LogError(f"{source}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
+    # every check of a log but the even clock (identification.driving puts each piece on its own)
+    even = frame.iloc[:3].assign(t=[0.0, 0.01, 0.02])
+    for c in frame.columns:
+        if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
+            bad = ~np.isfinite(frame[c].to_numpy(float))
+            if bad.any():
+                raise LogError(f"{source}: column {c!r} has {int(bad.sum())} NaN or infinite values (first at row "
+                               f"{int(np.argmax(bad))}, t = {t[int(np.argmax(bad))]:.4g} s)")
+    peaks = frame.abs().max().to_frame().T
+    # a fast yaw rate is judged on the motion of the longest stretch (measurements.log.yaw_rate_in_radians)
+    fast = "yaw_rate" in frame and len(frame) > 10 and float(peaks["yaw_rate"].iloc[0]) > DEGREE_SUSPECT["yaw_rate"][0]
+    why = yaw_rate_in_radians(longest_stretch(frame)[0]) if fast else None
+    if why:
+        even, peaks = even.drop(columns="yaw_rate"), peaks.drop(columns="yaw_rate")
+        frame.attrs.setdefault("notes", []).append(f"column 'yaw_rate' read as rad/s: {why}")
+    check_log(pd.concat([even, peaks.assign(t=0.03)], ignore_index=True), str(source), ("t",))
+    return frame, None
+
+
+def longest_stretch(frame, gap: float | None = None):
+    """(the longest stretch of the log without a clock gap, on an even clock of its median step;
+    (start, end) of it in the log's time). A gap: a step longer than max(0.5 s, 5 median steps)."""
+    import numpy as np
+    import pandas as pd
+
+    t = frame["t"].to_numpy(float)
+    step = float(np.median(np.diff(t)))
+    cuts = np.flatnonzero(np.diff(t) > (gap or max(0.5, 5 * step))) + 1
+    a, b = max(zip(np.r_[0, cuts], np.r_[cuts, len(t)]), key=lambda ab: ab[1] - ab[0])
+    piece = frame.iloc[a:b]
+    step = float(np.median(np.diff(piece["t"])))
+    grid = piece["t"].iloc[0] + step * np.arange(int((piece["t"].iloc[-1] - piece["t"].iloc[0]) / step) + 1)
+    even = pd.DataFrame({c: np.interp(grid, piece["t"], piece[c]) for c in piece.columns
+                         if c != "t" and pd.api.types.is_numeric_dtype(piece[c])})
+    even.insert(0, "t", grid - grid[0])
+    return even, (float(t[a]), float(t[b - 1]))
+
+
+def read_uneven(source: Path, resample: bool = False, recording=None, study=None, causal: bool = True):
+    """(log, import report, note): the log as load_log reads it; a table whose clock has gaps or
+    jitter (ordinary logging) gives its longest gap-free stretch on an even clock, and says so
+    (``causal``: as _read)."""
+    frame, imported = _read(source, resample, recording, study, causal)
+    t = frame["t"].to_numpy(float)
+    import numpy as np
+
+    dt = np.diff(t)
+    if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):
+        even, (a, b) = longest_stretch(frame)
+        return even, imported, (f"the log's clock has gaps or jitter: its longest stretch without a gap, t = "
+                                f"{a:.1f}-{b:.1f} s of {t[0]:.1f}-{t[-1]:.1f} s, is judged on an even "
+                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock")
+    return frame, imported, None
+
+
+def wants_driving(source: Path, resample: bool, recording, study) -> bool:
+    """True unless delta_cmd repeats itself with a period (a designed multisine experiment)."""
+    from agrobot.measurements import LogError
+
+    from .experiment import detect_period
+
+    frame, _ = _read(source, resample, recording, study)
+    if "delta_cmd" not in frame or "delta" not in frame:
+        return True
+    try:
+        detect_period(frame["delta_cmd"].to_numpy(float))
+    except LogError:
+        return True
+    return False
+
+
+def choose_method(source: Path, method: str = "auto", resample: bool = False, recording=None, study=None) -> str:
+    """How ``identify SOURCE`` identifies: ``"study"`` for a study file (its designed experiment,
+    simulated), else ``method`` for a log, where ``"auto"`` is ``"multisine"`` when delta_cmd
+    repeats with a period (wants_driving) and ``"driving"`` otherwise."""
+    if Path(source).suffix in (".toml", ".yaml", ".yml"):
+        return "study"
+    if method not in ("auto", "multisine", "driving"):
+        raise ValueError(f"method {method!r}: expected 'auto', 'multisine' or 'driving'")
+    if method != "auto":
+        return method
+    return "driving" if wants_driving(Path(source), resample, recording, study) else "multisine"
+
+
+def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None):
+    """(report, the figures' data): the ordinary-driving identification of a log
+    (identification.ordinary_driving), nothing written."""
+    from .ordinary_driving import identify_driving
+
+    say = progress or (lambda text: None)
+    frame, imported = _read(source, resample, recording, study)
+    say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
+    report = identify_driving(frame, str(source), study, progress=say)
+    hidden = report.pop("_plot")
+    if imported is not None:
+        report["recording"] = imported
+    return report, hidden
+
+
+def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, plots: bool = True,
+                  progress=None) -> list[str]:
+    """identification.json, the figures (when ``hidden``, the figures' data, is given) and
+    extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
+    from agrobot.orchestrator.atomic_files import write_json
+
+    from .pipeline import _json_default
+
+    out_dir = Path(out_dir)
+    files = []
+    if plots and hidden is not None:
+        from .driving_plots import write_driving_plots
+
+        if progress is not None:
+            progress("figures")
+        files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
+    report["figures"] = files
+    if study is not None:
+        report["extended_study"] = write_extended_study(report, study, out_dir, source)
+    write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
+    return files
+
+
+def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
+                         recording=None, shown_as: Path | None = None) -> int:
+    """``identify LOG --method driving``: identify, write, print the summary (progress on stderr)."""
+    from .ordinary_driving import summary
+
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:
+        from agrobot.orchestrator.observers import PROGRESS
+
+        if PROGRESS["shown"]:
+            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+
+    report, hidden = driving_report(source, study, resample, recording, progress)
+    files = write_driving(report, hidden, out_dir, study, source, plots, progress)
+    print(summary(report))
+    print(f"\nwritten to {shown_as or out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
+    return 0
+
+
+def finite_for_json(v):
+    """JSON has no infinity: a non-finite number is written as null."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    if isinstance(v, dict):
+        return {k: finite_for_json(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [finite_for_json(x) for x in v]
+    return v
+
+
+def write_extended_study(report: dict, study, out_dir: Path, source) -> str | None:
+    """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
+    steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
+    the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
+    from agrobot.orchestrator.resolver import resolve
+    from agrobot.orchestrator.atomic_files import atomic_write
+
+    model = resolve(study)
+    plant = model.find(role="yaw_plant")
+    if not plant:
+        return None
+    values = {}
+    for key, name in (("front", "C_f"), ("rear", "C_r")):
+        s = report["cornering_stiffness"][key]
+        if s["identifiable"]:
+            values[f"{plant[0]}.{name}"] = s["value"]
+    params = report["parameters"]
+    steering = model.find(role="steering")
+    if steering and params["delay"]["identifiable"]:
+        values[f"{steering[0]}.command_delay"] = params["delay"]["value"]
+    gyro = model.find(role="gyro")
+    bias = params.get("gyro_bias", {})
+    if gyro and bias.get("identifiable") and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
+        values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
+    tyre = report["tyre_saturation"]
+    if tyre["found"]:
+        values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
+        if tyre["parameters"]["shape"]["identifiable"]:
+            values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]
+    if not values:
+        return None
+    text = study.extension_toml(values, f"identified from {source} by `python -m agrobot identify`")
+    atomic_write(Path(out_dir) / "extended_study.toml", lambda p: p.write_text(text))
+    return "extended_study.toml"

@@ -1,0 +1,171 @@
+"""``convert``: a raw recording (NMEA, CAN with any maker's DBC, ROS bags, ISO 11783-10 time logs,
+other tools' tables) to the measured log (CSV or Parquet), with its import report beside it, or
+``--list`` of what it holds; and the recording options ``identify`` and ``diagnose`` share."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """Options for reading a raw recording (ignored for a CSV/Parquet log)."""
+    g = p.add_argument_group("raw recordings (a folder or one file: NMEA, CAN logs, ROS bags, ISO 11783-10 TaskData, "
+                             "tables)")
+    g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (any maker's: what cannot be "
+                   "decoded is left out and named; default: the project's agrobot_tractor.dbc; "
+                   "components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
+    g.add_argument("--signal", action="append", default=[], metavar="COLUMN=EXPR[unit]",
+                   help="a log column from an expression of signals: Message.Signal (CAN), /topic.field (ROS), "
+                        "TABLE.COLUMN or COLUMN (tables); sums, differences and numbers (A+B, -0.5*(A+B), A*3.6); "
+                        "[unit] any unit pint knows (deg, deg/s, km/h, g), else the source's own; an angle, rate or "
+                        "speed without any unit must be declared; lat/lon in degrees become x/y; repeatable")
+    g.add_argument("--bus", default=None, help="the CAN bus to read when a log holds several (can0, can1, or a "
+                   "Vector channel number)")
+    g.add_argument("--time", default=None, metavar="COLUMN[unit|datetime]",
+                   help="a table's time: COLUMN[s|ms|us|ns], COLUMN[datetime], SECONDS+NANOSECONDS, DATE+TIME[datetime], "
+                        "or TABLE.COLUMN for tables without their own (default: found by name, e.g. t, time, s+ns)")
+    g.add_argument("--keep-spikes", action="store_true", help="keep the samples found to be spikes (they are "
+                   "named in the report either way)")
+    g.add_argument("--steering-ratio", type=float, default=None, metavar="R",
+                   help="the recording's steering angles are handwheel angles: divide delta and delta_cmd by R "
+                        "(default: the study's steering_ratio for identify/diagnose, else 1)")
+    g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle (default 1.4, the paper tractor)")
+    g.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; "
+                   "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
+    g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
+    g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
+    g.add_argument("--max-gap", type=float, default=0.5, metavar="SECONDS",
+                   help="a channel's gap up to this is bridged (linear; a command held) and named; a longer one, or "
+                        "a silence of every channel, splits the log (default 0.5 s; 0 bridges nothing)")
+    g.add_argument("--align", default="auto", metavar="auto|none|GROUP=SECONDS",
+                   help="clock offsets between channel groups (a file, topic or bus): auto corrects those the audit "
+                        "finds on strong evidence (two speeds, gyro vs GNSS course, v r vs lateral acceleration); none "
+                        "keeps the stamps; GROUP=SECONDS moves GROUP earlier by SECONDS (default auto)")
+    g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
+                   help="use this span, s after the recording's first fix, instead of a run")
+
+
+def recording_options(args: argparse.Namespace):
+    """ImportOptions from the parsed options; a LogError names the bad one."""
+    from .log import LogError
+    from .recording import ImportOptions
+    from agrobot.orchestrator.source_files import set_limit
+
+    set_limit(getattr(args, "max_file_size", None))
+
+    if args.wheelbase is not None and not 0.1 <= args.wheelbase <= 10.0:
+        raise LogError(f"--wheelbase {args.wheelbase:g}: expected metres, 0.1 (a 1:10 model car) to 10")
+    if args.run is not None and args.run < 1:
+        raise LogError(f"--run {args.run}: runs are numbered from 1")
+    if args.time_range is not None and not 0 <= args.time_range[0] < args.time_range[1]:
+        raise LogError(f"--time-range {args.time_range[0]:g} {args.time_range[1]:g}: expected 0 <= START < END (s)")
+    if args.run is not None and args.time_range is not None:
+        raise LogError("--run and --time-range: give one of them")
+    if args.dbc is not None and not args.dbc.is_file():
+        raise LogError(f"--dbc {args.dbc}: no such file")
+    from .signal_expressions import parse_signal
+    from .tables import parse_time
+
+    if args.steering_ratio is not None and not 0.05 <= args.steering_ratio <= 50.0:
+        raise LogError(f"--steering-ratio {args.steering_ratio:g}: expected the handwheel-to-road-wheel ratio, "
+                       f"0.05 to 50 (a car: 12-20)")
+    signals = [parse_signal(s) for s in args.signal]
+    columns = [s.column for s in signals]
+    twice = sorted({c for c in columns if columns.count(c) > 1})
+    if twice:
+        raise LogError(f"--signal: column {twice[0]!r} is given {columns.count(twice[0])} times; give each column once")
+    parse_time(getattr(args, "time", None))
+    options = ImportOptions(dbc=args.dbc, signals=signals, rate=args.rate,
+                            run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
+                            bus=getattr(args, "bus", None), time=getattr(args, "time", None),
+                            keep_spikes=getattr(args, "keep_spikes", False),
+                            max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"))
+    from .audit import parse_align
+
+    parse_align(options.align)
+    if args.steering_ratio is not None:
+        options.steering_ratio = args.steering_ratio
+    if args.wheelbase is not None:
+        options.wheelbase = args.wheelbase
+    return options
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", type=Path, help="a folder or one file: NMEA (*.nmea, *.gps, a .log/.txt of "
+                   "sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), ROS bags (*.bag, *.db3, *.mcap, a "
+                   "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin), tables (*.csv, "
+                   "*.tsv, *.parquet: a folder of them is joined on time)")
+    from agrobot.orchestrator.cli import add_output_options
+
+    add_output_options(p, "the log to write (.csv or .parquet); the import report goes beside it as "
+                          "<name>.import.json", required=False, file=True)
+    p.add_argument("--list", action="store_true", help="print what the recording holds (topics and types, CAN "
+                   "messages and signals with units and rates, table columns with ranges) and write nothing")
+    p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
+    p.add_argument("--mcap", action="store_true", help="also write each log as <name>.mcap for Foxglove/PlotJuggler")
+    add_recording_options(p)
+
+
+def run(args: argparse.Namespace) -> int:
+    from .log import LogError, check_log
+    from .recording import import_recording, import_runs
+
+    if args.list:
+        from .listing import list_source
+
+        options = recording_options(args)
+        print("\n".join(list_source(args.source, options)))
+        return 0
+    if args.out is None:
+        raise LogError("convert: give --out LOG.csv (or .parquet), or --list to see what the recording holds")
+    from agrobot.orchestrator.output import ResultFile, check_output_file
+
+    inputs = [args.source, args.dbc]
+    target = ResultFile(args.out, args.overwrite, inputs, suffixes=(".csv", ".parquet"))
+    options = recording_options(args)
+    if args.all_runs:
+        if options.run is not None or options.time_range is not None:
+            raise LogError("--all-runs: not with --run or --time-range")
+        jobs = [(args.out.with_name(f"{args.out.stem}_run{rep['used']['run']:02d}{args.out.suffix}"), f, rep)
+                for f, rep in import_runs(args.source, options)]
+    else:
+        jobs = [(args.out, *import_recording(args.source, options))]
+    for path, f, rep in jobs:             # every log checked before the first is written
+        checked = check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
+        rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
+        for written in (path, path.with_name(path.stem + ".import.json")) + ((path.with_suffix(".mcap"),) if args.mcap else ()):
+            check_output_file(written, args.overwrite, inputs)
+    with target:
+        _write(jobs)
+    if args.mcap:          # after every log is in place: an MCAP that fails loses none of them
+        from .log_mcap import write_log_mcap
+
+        for path, f, _ in jobs:
+            print(f"written: {write_log_mcap(f, path.with_suffix('.mcap'), str(args.source))}")
+    return 0
+
+
+def _write(jobs) -> None:
+    from agrobot.orchestrator.atomic_files import atomic_write, write_frame
+
+    from .log import log_units
+    from .recording import describe
+
+    for path, f, rep in jobs:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        f.attrs["units"] = log_units(f)
+        write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.atomic_files)
+        atomic_write(path.with_name(path.stem + ".import.json"),
+                     lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
+        print(describe(rep))
+        print(f"written: {path} ({len(f)} rows) and {path.with_name(path.stem + '.import.json').name}", file=sys.stdout)
+
+
+def register(registry) -> None:
+    registry.add_command("convert", "a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log, tables) as a measured "
+                                    "log, or --list what it holds",
+                         add_arguments, run)
+    registry.add_section("vehicle", "measurements: steering_ratio (handwheel / road wheel) and wheelbase [m] for reading "
+                                    "the vehicle's recordings")

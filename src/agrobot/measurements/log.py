@@ -1,0 +1,342 @@
+"""The measured log: one column table, one reader (DESIGN.md, 'Measured data').
+
+A log is a table (CSV or Parquet) with a time column ``t`` [s] and named signals in SI units
+(``COLUMNS``); more columns are allowed. Every refusal names the file, the column and what was
+expected. Identification, diagnosis and the tests read logs through ``read_log`` only. A log that
+``convert`` wrote carries its import's audit (``frame.attrs["audit"]``, measurements.audit),
+restored from the Parquet metadata or the ``<name>.import.json`` beside it (measurements.load_log
+audits any other table on its own columns).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.atomic_files import read_units
+
+# the canonical columns: name -> (SI unit, meaning)
+COLUMNS: dict[str, tuple[str, str]] = {
+    "t": ("s", "time"),
+    "delta_cmd": ("rad", "front wheel angle commanded to the steering"),
+    "delta": ("rad", "front wheel angle measured (potentiometer)"),
+    "v": ("m/s", "longitudinal speed"),
+    "yaw_rate": ("rad/s", "yaw rate (gyro)"),
+    "x": ("m", "GPS antenna east of the datum"),
+    "y": ("m", "GPS antenna north of the datum"),
+}
+CANONICAL = tuple(COLUMNS)
+
+# A column whose largest magnitude passes this bound is almost surely in degrees: no tractor
+# steers beyond 70 deg (1.22 rad) or yaws faster than 3 rad/s (172 deg/s).
+DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s")}
+
+
+class LogError(InputError, ValueError):
+    """A log that cannot be used as it is."""
+
+
+def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_jitter: bool = False) -> pd.DataFrame:
+    # ``required``: the columns the caller cannot do without (("t",) for a partial log)
+    """Load and check a log: columns present and numeric, no NaN or infinity, time in seconds,
+    increasing and evenly sampled (a gap is named; clock jitter is refused, or put on an even grid
+    with ``resample_jitter``, the ``--resample`` option of the commands), angles in radians
+    (degrees are detected and named), speed against the GPS track (check_units)."""
+    from agrobot.orchestrator.source_files import checked_path, regular_file
+
+    path = regular_file(checked_path(path, LogError, "log not found"), LogError)
+    kind = "Parquet" if path.suffix == ".parquet" else "CSV"
+    try:
+        frame = pd.read_parquet(path) if kind == "Parquet" else pd.read_csv(path)
+        stored = read_units(path)
+    except Exception as exc:
+        raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    frame = check_log(frame, str(path), required, resample_jitter)
+    audit = persisted_audit(path)            # the import's audit, when convert wrote the log
+    if audit is not None:
+        frame.attrs["audit"] = audit
+    frame.attrs["units"] = log_units(frame, stored)
+    return frame
+
+
+def log_units(frame: pd.DataFrame, stored: dict[str, str] | None = None) -> dict[str, str]:
+    """Column -> unit of a log: the canonical columns' SI units (COLUMNS), then what the file
+    stores (orchestrator.atomic_files: a Parquet file's metadata, a CSV file's NAME.units.json)."""
+    units = {c: COLUMNS[c][0] for c in frame.columns if c in COLUMNS}
+    units.update({c: u for c, u in (stored or frame.attrs.get("units", {})).items() if c in frame.columns})
+    return units
+
+
+def persisted_audit(path) -> list | None:
+    """The findings written beside a log (its ``<name>.import.json``, as ``convert`` writes it),
+    or None: reading a log back restores frame.attrs["audit"]."""
+    import json
+    from pathlib import Path
+
+    side = Path(path).with_name(Path(path).stem + ".import.json")
+    if not side.is_file():
+        return None
+    try:
+        report = json.loads(side.read_text())
+    except (OSError, ValueError):
+        return None
+    found = report.get("audit", {}).get("findings") if isinstance(report, dict) else None
+    return list(found) if isinstance(found, list) else None
+
+
+def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
+              resample_jitter: bool = False) -> pd.DataFrame:
+    """The checks of read_log on a table already in memory (an imported recording); ``path``
+    names it in the messages. ``required`` columns must be there; every canonical column that is
+    there is checked the same way (a partial log: the tools say what they cannot judge)."""
+    missing = [c for c in required if c not in frame.columns]
+    if missing:
+        raise LogError(f"{path}: missing columns {missing}; a log needs "
+                       + ", ".join(f"{c} [{COLUMNS[c][0]}]" if c in COLUMNS else c for c in required))
+    if not any(c in frame.columns for c in CANONICAL[1:]):
+        raise LogError(f"{path}: none of the log's columns ({', '.join(CANONICAL[1:])}) is in it; found "
+                       f"{', '.join(map(str, frame.columns[:12]))}")
+    if len(frame) < 3:
+        raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
+    checked = tuple(dict.fromkeys(tuple(required) + tuple(c for c in CANONICAL if c in frame.columns)))
+    for c in checked:
+        if not pd.api.types.is_numeric_dtype(frame[c]):
+            raise LogError(f"{path}: column {c!r} is not numeric (first value {frame[c].iloc[0]!r})")
+        for what, bad in (("NaN", frame[c].isna().to_numpy()), ("infinite", np.isinf(frame[c].to_numpy(float)))):
+            if bad.any():
+                raise LogError(f"{path}: column {c!r} has {int(bad.sum())} {what} values (first at row "
+                               f"{int(np.argmax(bad))}, t = {frame['t'].iloc[int(np.argmax(bad))]})")
+    if len(frame) < 3:
+        raise LogError(f"{path}: {len(frame)} rows; a log needs many samples")
+    t = frame["t"].to_numpy(dtype=float)
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
+    step = float(np.median(dt))
+    if step >= 9.5:           # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
+        unit, factor = ("microseconds", 1e6) if step > 1000 else ("milliseconds", 1e3)
+        raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a vehicle log samples at 0.1-100 Hz, "
+                       f"so it looks like {unit}: the log must hold seconds (divide t by {factor:g})")
+    if dt.max() > 1.5 * step:
+        i = int(np.argmax(dt))
+        raise LogError(f"{path}: column 't' has a gap of {dt[i]:.4g} s at t = {t[i]:.4g} s (row {i + 1}); "
+                       f"expected an even step of {step:.4g} s: cut the log at the gap or fill it")
+    grid = {c: resolution(frame[c].to_numpy(float)) for c in ("x", "y") if c in frame}
+    if np.max(np.abs(dt - step)) > 0.01 * step:
+        if resample_jitter:
+            attrs = dict(frame.attrs)
+            frame = resample(frame, step)
+            frame.attrs.update(attrs)
+        else:
+            i = int(np.argmax(np.abs(dt - step)))
+            raise LogError(f"{path}: column 't' is unevenly sampled: step {dt[i]:.4g} s at row {i + 1}, typical "
+                           f"{step:.4g} s; pass --resample to interpolate the log onto an even {step:.4g} s grid")
+    for c, (bound, unit) in DEGREE_SUSPECT.items():
+        if c in checked:
+            peak = robust_peak(frame[c].to_numpy(float))
+            if peak > bound and c == "yaw_rate" and (why := yaw_rate_in_radians(frame)):
+                frame.attrs.setdefault("notes", []).append(
+                    f"column 'yaw_rate' reaches {peak:.3g} rad/s, more than {bound} rad/s, and is read as rad/s: {why}")
+            elif peak > bound and c in frame.attrs.get("declared", {}):
+                frame.attrs.setdefault("notes", []).append(
+                    f"warning: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than {bound} {unit}, "
+                    f"which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
+                    f"[{frame.attrs['declared'][c]}] (the user's word stands)")
+            elif peak > bound:
+                raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
+                               f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
+                               f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}; a raw recording: declare the "
+                               f"unit, --signal '{c}=...[deg{'/s' if unit == 'rad/s' else ''}]')")
+    check_units(frame, path)
+    quantised = {c: q for c, q in grid.items() if q > 0}
+    if quantised:        # read on the samples as written, before any resampling
+        frame.attrs["resolution"] = {**frame.attrs.get("resolution", {}), **quantised}
+    return frame
+
+
+def robust_peak(x: np.ndarray) -> float:
+    """The 99.5th percentile of |x| (the largest value for fewer than 200 samples, after the
+    median of 3 has removed single glitches)."""
+    x = np.abs(np.asarray(x, float))
+    x = x[np.isfinite(x)]
+    if len(x) == 0:
+        return 0.0
+    if len(x) >= 200:
+        return float(np.percentile(x, 99.5))
+    if len(x) >= 3:
+        from scipy.ndimage import median_filter
+
+        return float(median_filter(x, size=3, mode="nearest").max())
+    return float(x.max())
+
+
+def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarray]:
+    """(k, d): the GPS displacement over ``span`` seconds centred on sample i + k, d[i] =
+    gps[i + 2k] - gps[i]. Chords average the 2 cm noise that point-to-point differences amplify."""
+    k = max(1, int(round(0.5 * span / h)))
+    return k, gps[2 * k:] - gps[:-2 * k]
+
+
+def speed_estimate(frame: pd.DataFrame) -> tuple[np.ndarray | None, str]:
+    """(speed [m/s], where from): the wheel speed v, else the receiver's speed over ground
+    (gnss_speed), else the speed of the GPS track over 1 s chords ("track"); (None, "none")."""
+    if "v" in frame:
+        return frame["v"].to_numpy(float), "v"
+    if "gnss_speed" in frame:
+        return frame["gnss_speed"].to_numpy(float), "gnss_speed"
+    if {"x", "y"} <= set(frame.columns):
+        t = frame["t"].to_numpy(float)
+        gps = frame[["x", "y"]].to_numpy(float)
+        h = float(np.median(np.diff(t)))
+        k, d = chords(gps, h)
+        speed = np.full(len(t), np.nan)
+        speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
+        ok = np.isfinite(speed)
+        if ok.sum() >= 2:
+            return np.interp(np.arange(len(t)), np.flatnonzero(ok), speed[ok]), "track"
+    return None, "none"
+
+
+def check_units(frame: pd.DataFrame, where: str) -> None:
+    """Speed against the speed of the GPS track over 1 s chords (when v, x, y are logged): 3.6
+    means km/h; a track that hardly moves while v says it does means x, y are not metres."""
+    if not {"t", "v", "x", "y"} <= set(frame.columns) or len(frame) < 10:
+        return
+    t = frame["t"].to_numpy(float)
+    h = float(np.median(np.diff(t)))
+    k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+    track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
+    v = frame["v"].to_numpy(float)[k:-k]
+    fast = v > 0.5
+    if fast.sum() < 100:
+        return
+    ratio = float(np.median(v[fast]) / max(np.median(track[fast]), 1e-9))
+    if "v" in frame.attrs.get("declared", {}) and not 0.67 < ratio < 1.5:
+        frame.attrs.setdefault("notes", []).append(
+            f"warning: column 'v' is {ratio:.2f} times the speed of the GPS track; kept as declared "
+            f"[{frame.attrs['declared']['v']}] (the user's word stands)")
+        return
+    if abs(ratio - 3.6) < 0.4:
+        raise LogError(f"{where}: column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
+                       f"the log must hold m/s (divide v by 3.6)")
+    if ratio > 50:
+        raise LogError(f"{where}: columns 'x', 'y' move {ratio:.0f} times slower than 'v' says: they look like "
+                       f"degrees of latitude/longitude, or they do not follow the tractor at all (noise, a "
+                       f"fixed point); the log must hold the GPS position in metres east/north of a datum")
+    if not 0.67 < ratio < 1.5:
+        raise LogError(f"{where}: column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
+                       f"check the units of v, x and y (m/s and m)")
+    if "yaw_rate" in frame.columns:
+        _check_yaw_rate_unit(frame, where, h, k, d)
+
+
+def _track_turn_ratio(frame: pd.DataFrame, h: float, k: int, d: np.ndarray) -> float | None:
+    """Heading change over 2 s, integrated yaw rate against the GPS course (1 s chords) while
+    moving: the regression slope, 1 in rad/s and 57 in deg/s (None: too little moving)."""
+    from scipy.integrate import cumulative_trapezoid
+
+    L = max(1, int(round(2.0 / h)))
+    if len(d) <= L + 100:
+        return None
+    course = np.arctan2(d[:, 1], d[:, 0])
+    psi = cumulative_trapezoid(frame["yaw_rate"].to_numpy(float), dx=h, initial=0.0)[k:-k]
+    fast = (frame["v"].to_numpy(float) > 0.3)[k:-k]
+    dc = np.angle(np.exp(1j * (course[L:] - course[:-L])))
+    dp = psi[L:] - psi[:-L]
+    ok = fast[L:] & fast[:-L]
+    if ok.sum() > 100 and dc[ok] @ dc[ok] > 0:
+        return float(dc[ok] @ dp[ok] / (dc[ok] @ dc[ok]))
+    return None
+
+
+# A yaw rate above DEGREE_SUSPECT's bound is still rad/s when the vehicle's motion says so: at
+# |v| > MOVING m/s a ground vehicle turns no tighter than MAX_CURVATURE (a 0.4 m radius) and
+# no harder than MAX_LATERAL (2 g, beyond any tyre); deg/s would be 57 times either.
+MOVING, MAX_CURVATURE, MAX_LATERAL = 0.5, 2.5, 19.6
+
+
+def yaw_rate_in_radians(frame: pd.DataFrame) -> str | None:
+    """The evidence that a fast yaw_rate column is in rad/s, or None: integrated, it turns as the
+    track (x, y) turns; else, with the speed v, its curvature |r|/|v| and lateral acceleration
+    |v r| stay physical while moving."""
+    if not {"t", "v", "yaw_rate"} <= set(frame.columns) or len(frame) < 10:
+        return None
+    t = frame["t"].to_numpy(float)
+    h = float(np.median(np.diff(t)))
+    if {"x", "y"} <= set(frame.columns):
+        k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+        slope = _track_turn_ratio(frame, h, k, d) if len(d) else None
+        if slope is not None and 0.5 < slope < 2.0:
+            return f"integrated, it turns {slope:.2f} times as fast as the track (x, y)"
+        if slope is not None and slope > 20:
+            return None
+    v, r = frame["v"].to_numpy(float), frame["yaw_rate"].to_numpy(float)
+    moving = np.abs(v) > MOVING
+    if moving.sum() < 100:
+        return None
+    curvature, lateral = robust_peak(r[moving] / v[moving]), robust_peak(r[moving] * v[moving])
+    if curvature <= MAX_CURVATURE and lateral <= MAX_LATERAL:
+        return (f"while moving (|v| > {MOVING} m/s) it turns no tighter than {1 / curvature:.2g} m radius and "
+                f"|v yaw_rate| reaches {lateral:.3g} m/s2 (in deg/s it would be 57 times that)")
+    return None
+
+
+def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:
+    """The track's evidence (_track_turn_ratio): a slope above 20 is deg/s."""
+    slope = _track_turn_ratio(frame, h, k, d)
+    if slope is not None and slope > 20:
+        if "yaw_rate" in frame.attrs.get("declared", {}):
+            frame.attrs.setdefault("notes", []).append(
+                f"warning: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track, which looks like "
+                f"deg/s; kept as declared [{frame.attrs['declared']['yaw_rate']}] (the user's word stands)")
+            return
+        raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
+                       f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")
+
+
+def resolution(x: np.ndarray, min_repeat: float = 2.0) -> float:
+    """The step q of a quantised signal (its values lie on a grid x0 + k q: a potentiometer's
+    counts, a float32 position far from its origin), or 0 when the values are not on a grid.
+
+    q is the smallest gap between distinct values; the signal is quantised when every gap is a
+    whole multiple of q (within 2 %) and values repeat (fewer distinct values than samples /
+    ``min_repeat``, so that a smooth signal sampled once per level is not taken for a grid)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    levels = np.unique(x)
+    if len(levels) < 3 or len(levels) > len(x) / min_repeat:
+        return 0.0
+    gaps = np.diff(levels)
+    q = float(gaps.min())
+    if q <= 0 or q < 1e-12 * max(float(np.abs(levels).max()), 1.0):
+        return 0.0
+    ratio = gaps / q
+    return q if float(np.max(np.abs(ratio - np.round(ratio)))) < 0.02 else 0.0
+
+
+def split(frame: pd.DataFrame, fraction: float) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """(first ``fraction`` of the duration, the rest): a fit part and a held-out part."""
+    t = frame["t"].to_numpy(dtype=float)
+    cut = t[0] + fraction * (t[-1] - t[0])
+    return frame[t < cut].reset_index(drop=True), frame[t >= cut].reset_index(drop=True)
+
+
+def resample(frame: pd.DataFrame, step: float | None = None) -> pd.DataFrame:
+    """The log on an even time grid t0, t0 + step, ... (default step: the median interval), every
+    numeric column linearly interpolated: for logs whose clock jitters by a fraction of a step."""
+    t = frame["t"].to_numpy(dtype=float)
+    if len(t) < 2 or np.any(np.diff(t) <= 0):
+        raise LogError("resampling needs a time column 't' that increases")
+    step = float(np.median(np.diff(t))) if step is None else float(step)
+    if step <= 0:
+        raise LogError(f"resampling step {step} s must be > 0")
+    grid = t[0] + step * np.arange(int(np.floor((t[-1] - t[0]) / step + 1e-9)) + 1)
+    columns = {"t": grid}
+    for c in frame.columns:
+        if c != "t" and pd.api.types.is_numeric_dtype(frame[c]):
+            columns[c] = np.interp(grid, t, frame[c].to_numpy(dtype=float))
+    return pd.DataFrame(columns)

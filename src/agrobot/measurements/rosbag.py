@@ -1,0 +1,355 @@
+"""ROS bags as a recording: ROS 1 ``.bag``, ROS 2 ``.db3`` or ``.mcap`` files, or a
+rosbag2 folder, read with rosbags (no ROS install).
+
+Standard messages are mapped by their type, without options (TYPE_MAP):
+
+- ``sensor_msgs/NavSatFix``: latitude, longitude, altitude -> x, y about the first fix; status ->
+  ``fix_quality`` (NO_FIX -1 -> 0, FIX 0 -> 1, SBAS 1 -> 2 (differential), GBAS 2 -> 4 (ground-based
+  augmentation, RTK's class)); the covariance's horizontal part -> ``position_std``;
+- ``sensor_msgs/Imu``: ``yaw_rate`` from angular_velocity.z;
+- ``nav_msgs/Odometry``: ``v`` from twist.twist.linear.x, ``yaw_rate`` from twist.twist.angular.z
+  (an IMU's wins);
+- ``geometry_msgs/TwistStamped``: ``v`` and ``yaw_rate`` likewise;
+- ``ackermann_msgs/AckermannDriveStamped``: ``delta_cmd`` from drive.steering_angle, ``speed_cmd``
+  from drive.speed.
+
+Any numeric field of any topic, custom messages included: ``--signal COLUMN=/topic[.field.path]``
+(``a.b[2].c``; a message with one numeric field needs no path), in expressions with units
+(measurements.signal_expressions: a standard message's field has its SI unit, a custom one's must be
+declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees become x/y.
+Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
+the messages' header stamps where they have a header with a stamp, else the bag's receive times;
+every topic is on that one clock, and the report says which each topic used.
+"""
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .log import LogError
+from .streams import Series, Streams, gnss_table, iso
+
+# ackermann_msgs is not in the rosbags type stores; its layout (ROS 1 and 2 alike)
+ACKERMANN = {
+    "ackermann_msgs/msg/AckermannDrive": "float32 steering_angle\nfloat32 steering_angle_velocity\nfloat32 speed\n"
+                                         "float32 acceleration\nfloat32 jerk\n",
+    "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\nackermann_msgs/AckermannDrive drive\n",
+}
+NAVSAT_QUALITY = {-1: 0, 0: 1, 1: 2, 2: 4}
+
+# type -> [(column, field path)], in the order a column is taken from (the first type that has it wins)
+TYPE_MAP: dict[str, list[tuple[str, str]]] = {
+    "sensor_msgs/msg/NavSatFix": [("lat", "latitude"), ("lon", "longitude"), ("height", "altitude"),
+                                  ("fix_quality", "status.status"), ("position_std", "position_covariance")],
+    "sensor_msgs/msg/Imu": [("yaw_rate", "angular_velocity.z")],
+    "ackermann_msgs/msg/AckermannDriveStamped": [("delta_cmd", "drive.steering_angle"), ("speed_cmd", "drive.speed")],
+    "nav_msgs/msg/Odometry": [("v", "twist.twist.linear.x"), ("yaw_rate", "twist.twist.angular.z")],
+    "geometry_msgs/msg/TwistStamped": [("v", "twist.linear.x"), ("yaw_rate", "twist.angular.z")],
+}
+_PATH = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?)*$")
+
+
+# the units of standard messages' fields (REP 103: SI, angles in radians; NavSatFix in degrees)
+FIELD_UNITS = [
+    (("sensor_msgs/msg/NavSatFix",), {"latitude": "deg", "longitude": "deg", "altitude": "m"}),
+    (("sensor_msgs/msg/Imu",), {"angular_velocity.": "rad/s", "linear_acceleration.": "m/s^2"}),
+    (("nav_msgs/msg/Odometry",), {"twist.twist.linear.": "m/s", "twist.twist.angular.": "rad/s",
+                                  "pose.pose.position.": "m"}),
+    (("geometry_msgs/msg/TwistStamped",), {"twist.linear.": "m/s", "twist.angular.": "rad/s"}),
+    (("geometry_msgs/msg/Twist",), {"linear.": "m/s", "angular.": "rad/s"}),
+    (("geometry_msgs/msg/PoseStamped",), {"pose.position.": "m"}),
+    (("ackermann_msgs/msg/AckermannDriveStamped",), {"drive.steering_angle": "rad", "drive.speed": "m/s",
+                                                     "drive.steering_angle_velocity": "rad/s"}),
+    (("ackermann_msgs/msg/AckermannDrive",), {"steering_angle": "rad", "speed": "m/s"}),
+]
+
+
+def field_unit(msgtype: str, path: str) -> str | None:
+    """The SI unit of a standard message's field (None: a custom message, or a field without one)."""
+    for types, fields in FIELD_UNITS:
+        if msgtype in types:
+            for prefix, unit in fields.items():
+                if path == prefix or (prefix.endswith(".") and path.startswith(prefix)):
+                    return unit
+    return None
+
+
+def split_name(name: str, topics: list[str]) -> tuple[str, str]:
+    """(topic, field path) of ``/topic.field.path``: the longest topic of the bag that prefixes it
+    (a topic name may hold dots only where the bag says so), else up to the first dot."""
+    known = [t for t in topics if name == t or name.startswith(t + ".")]
+    if known:
+        topic = max(known, key=len)
+        return topic, name[len(topic) + 1:]
+    head, _, tail = name.rpartition("/")
+    topic, _, path = tail.partition(".")
+    return f"{head}/{topic}", path
+
+
+def typestore():
+    """The ROS 2 type store with the ackermann messages added (bags that carry their own
+    definitions, every ROS 1 bag, use those)."""
+    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    types = {}
+    for name, text in ACKERMANN.items():
+        types.update(get_types_from_msg(text, name))
+    store.register(types)
+    return store
+
+
+def field(msg, path: str):
+    """The value at ``a.b[2].c`` of a deserialised message; a LookupError names the missing part."""
+    value = msg
+    for part in path.split(".") if path else ():
+        name, _, index = part.partition("[")
+        if not hasattr(value, name):
+            have = [k for k in getattr(value, "__dataclass_fields__", {}) if not k.startswith("__")]
+            raise LookupError(f"no field {name!r} (fields: {', '.join(have)})")
+        value = getattr(value, name)
+        if index:
+            value = value[int(index.rstrip("]"))]
+    return value
+
+
+def _numeric_field(msg) -> str | None:
+    """The one numeric field of a message (std_msgs/Float64.data), or None."""
+    fields = [k for k in getattr(msg, "__dataclass_fields__", {}) if not k.startswith("__")]
+    numeric = [k for k in fields if isinstance(getattr(msg, k), (int, float, np.number)) and not isinstance(getattr(msg, k), bool)]
+    return numeric[0] if len(numeric) == 1 else None
+
+
+def _stamp(msg, receive_ns: int) -> tuple[float, bool]:
+    header = getattr(msg, "header", None)
+    stamp = getattr(header, "stamp", None)
+    if stamp is not None:
+        sec, nsec = getattr(stamp, "sec", getattr(stamp, "secs", 0)), getattr(stamp, "nanosec", getattr(stamp, "nsecs", 0))
+        if sec or nsec:
+            return sec + 1e-9 * nsec, True
+    return receive_ns * 1e-9, False
+
+
+def _value(column: str, path: str, raw):
+    if column == "position_std":                       # a 3x3 covariance, row-major: east, north variances
+        cov = np.asarray(raw, float)
+        return math.sqrt(max(cov[0] + cov[4], 0.0)) if cov.size >= 5 and cov[0] + cov[4] > 0 else math.nan
+    if column == "fix_quality":
+        return float(NAVSAT_QUALITY.get(int(raw), 0))
+    return float(raw)
+
+
+def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]:
+    """(column -> (times, values in the column's unit), report) of the bags: the standard types
+    by TYPE_MAP, the ``given`` expressions (SignalSpec) by their ``/topic.field`` names. A
+    LogError names the bag, the topic or the field."""
+    from rosbags.highlevel import AnyReader
+
+    try:
+        reader = AnyReader([Path(p) for p in paths], default_typestore=typestore())
+        reader.open()
+    except Exception as exc:                         # noqa: BLE001 - rosbags raises many kinds
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    try:
+        return _read(reader, given, source)
+    finally:
+        reader.close()
+
+
+def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
+    from .signal_expressions import SignalSpec, evaluate, unknown_name
+
+    topics = {c.topic: c.msgtype for c in reader.connections}
+    wanted: dict[str, dict[str, str]] = {}            # topic -> {name: field path}
+    for spec in given:
+        for name in spec.names:
+            if not name.startswith("/"):
+                raise LogError(f"{source}: --signal {spec}: {name!r} is not a topic's field; a ROS bag's signals are "
+                               f"named /topic.field.path (topics: {', '.join(sorted(topics))})")
+            topic, path = split_name(name, list(topics))
+            if topic not in topics:
+                near = unknown_name(str(source), spec, topic, sorted(topics), "topic")
+                raise LogError(str(near).split(" (convert")[0].split("; ")[0] + "; topics: "
+                               + ", ".join(f"{t} ({m})" for t, m in sorted(topics.items())))
+            wanted.setdefault(topic, {})[name] = path
+    taken = {g.column for g in given}
+    auto: dict[str, SignalSpec] = {}
+    for msgtype, fields in TYPE_MAP.items():
+        for topic in sorted(t for t, m in topics.items() if m == msgtype):
+            for column, path in fields:
+                if column not in taken:
+                    name = f"{topic}.{path}"
+                    wanted.setdefault(topic, {})[name] = path
+                    auto[column] = SignalSpec(column, ((name, 1.0),), 0.0, None, f"{column}={name}")
+                    taken.add(column)
+                elif column == "yaw_rate" and "yaw_rate" in auto and auto["yaw_rate"].names[0].split(".")[0] != topic:
+                    # another gyro: kept as yaw_rate_2 ... for the audit to compare (the first is used)
+                    alt = f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}"
+                    name = f"{topic}.{path}"
+                    wanted.setdefault(topic, {})[name] = path
+                    auto[alt] = SignalSpec(alt, ((name, 1.0),), 0.0, None, f"{alt}={name}")
+    rows: dict[str, list] = {t: [] for t in wanted}
+    header_used: dict[str, bool] = {}
+    connections = [c for c in reader.connections if c.topic in wanted]
+    # rosbags reads every topic when given no connection: nothing wanted, nothing read
+    for conn, receive_ns, raw in (reader.messages(connections=connections) if connections else ()):
+        try:
+            msg = reader.deserialize(raw, conn.msgtype)
+        except Exception as exc:                     # noqa: BLE001 - an unknown type or a broken message
+            raise LogError(f"{source}: topic {conn.topic}: cannot decode its messages of type {conn.msgtype} "
+                           f"({type(exc).__name__}: {exc}); the bag carries no definition for it and the standard "
+                           f"type stores do not know it") from None
+        t, from_header = _stamp(msg, receive_ns)
+        header_used.setdefault(conn.topic, from_header)
+        values = []
+        for name, path in wanted[conn.topic].items():
+            try:
+                p = path or _numeric_field(msg)
+                if p is None:
+                    raise LookupError("the message has several fields: give one, /topic.field")
+                column = next((c for c, s in auto.items() if s.names[0] == name), "")
+                values.append(_value(column, p, field(msg, p)))
+            except (LookupError, TypeError, ValueError, IndexError) as exc:
+                raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}): field "
+                               f"{path or '(the only numeric field)'}: {exc}") from None
+        rows[conn.topic].append((t, receive_ns * 1e-9, *values))
+    series: dict[str, Series] = {}
+    report_topics, stamps = {}, {}
+    for topic, names in wanted.items():
+        data = np.array(rows[topic], float)
+        if len(data) == 0:
+            if any(n in s.names for s in given for n in names):
+                raise LogError(f"{source}: topic {topic} holds no message")
+            continue
+        data = data[np.argsort(data[:, 0], kind="stable")]
+        data = data[np.concatenate([[True], np.diff(data[:, 0]) > 0])]
+        for i, (name, path) in enumerate(names.items(), 2):
+            series[name] = Series(data[:, 0], data[:, i], field_unit(topics[topic], path), name)
+        late = data[:, 1] - data[:, 0]                 # receive time - header stamp
+        if header_used.get(topic) and len(late):
+            stamps[topic] = {"median": float(np.median(late)), "p95": float(np.percentile(late, 95)),
+                             "min": float(late.min()), "max": float(late.max())}
+        report_topics[topic] = {"type": topics[topic], "messages": int(len(data)),
+                                "rate_hz": float(1.0 / np.median(np.diff(data[:, 0]))) if len(data) > 1 else math.nan,
+                                "time": "header stamps" if header_used.get(topic) else "bag receive times",
+                                "columns": {}}
+    signals: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for spec in list(given) + list(auto.values()):
+        if not all(n in series for n in spec.names):
+            continue
+        if spec.column in ("fix_quality", "position_std"):
+            s = series[spec.names[0]]
+            signals[spec.column] = (s.t, s.values)
+            how = spec.names[0]
+        elif spec.column in ("lat", "lon", "height") and spec in auto.values():
+            s = series[spec.names[0]]
+            signals[spec.column] = (s.t, s.values)
+            how = spec.names[0]
+        else:
+            t, v, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source))
+            signals[spec.column] = (t, v)
+        for n in spec.names:
+            topic = split_name(n, list(topics))[0]
+            if topic in report_topics:
+                report_topics[topic]["columns"][spec.column] = how
+    report = {"topics": report_topics, "stamp_vs_receive": stamps,
+              "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
+    others = [s for c, s in auto.items() if c.startswith("yaw_rate_") and c in signals]
+    if others:
+        report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
+                             + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
+                             + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
+    return signals, report
+
+
+def list_bag(paths: list[Path]) -> list[str]:
+    """``--list``: each topic, its type, count and rate, and the numeric fields of its first message."""
+    from rosbags.highlevel import AnyReader
+
+    try:
+        reader = AnyReader([Path(p) for p in paths], default_typestore=typestore())
+        reader.open()
+    except Exception as exc:                         # noqa: BLE001
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    lines = []
+    try:
+        lines.append(f"ROS bag {', '.join(p.name for p in paths)}: {len(reader.connections)} topic(s), "
+                     f"{(reader.end_time - reader.start_time) * 1e-9:.1f} s")
+        for conn in sorted(reader.connections, key=lambda c: c.topic):
+            count = conn.msgcount
+            rate = count / max((reader.end_time - reader.start_time) * 1e-9, 1e-9)
+            used = [c for c, _ in TYPE_MAP.get(conn.msgtype, [])]
+            lines.append(f"  {conn.topic} ({conn.msgtype}): {count} messages, about {rate:.3g} Hz"
+                         + (f"; read without options as {', '.join(used)}" if used else ""))
+            first = next(reader.messages(connections=[conn]), None)
+            if first is None:
+                continue
+            try:
+                msg = reader.deserialize(first[2], conn.msgtype)
+            except Exception as exc:                 # noqa: BLE001
+                lines.append(f"    (cannot decode: {type(exc).__name__}: {exc})")
+                continue
+            for path, value in _numeric_paths(msg)[:40]:
+                unit = field_unit(conn.msgtype, path)
+                lines.append(f"    {conn.topic}.{path}{f' [{unit}]' if unit else ''}: {value:.6g} (first message)")
+    finally:
+        reader.close()
+    return lines
+
+
+def _numeric_paths(msg, prefix: str = "") -> list[tuple[str, float]]:
+    out = []
+    for k in getattr(msg, "__dataclass_fields__", {}):
+        if k.startswith("__"):
+            continue
+        v = getattr(msg, k)
+        path = f"{prefix}{k}"
+        if isinstance(v, bool):
+            continue
+        if isinstance(v, (int, float, np.number)):
+            out.append((path, float(v)))
+        elif isinstance(v, np.ndarray) and v.dtype.kind in "iuf" and v.size <= 9:
+            out += [(f"{path}[{i}]", float(x)) for i, x in enumerate(v.ravel())]
+        elif hasattr(v, "__dataclass_fields__") and k not in ("header", "stamp"):
+            out += _numeric_paths(v, path + ".")
+    return out
+
+
+def bag_streams(paths: list[Path], options, source: Path):
+    """The recording's streams from ROS bags."""
+    signals, topics = read_bags(paths, list(options.signals), source)
+    report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None,
+                    "notes": list(topics.pop("choices", [])), "stamp_vs_receive": topics.pop("stamp_vs_receive", {}),
+                    "bag": topics, "clocks": {"reference": "the bag's clock: header stamps (receive times where a "
+                                                           "message has no header)"}}
+    gnss = None
+    if "lat" in signals and "lon" in signals:
+        t, lat = signals.pop("lat")
+        lon = np.interp(t, *signals.pop("lon"))
+        height = np.interp(t, *signals.pop("height")) if "height" in signals else np.zeros(len(t))
+        quality = np.interp(t, *signals.pop("fix_quality")) if "fix_quality" in signals else np.ones(len(t))
+        std = np.interp(t, *signals.pop("position_std")) if "position_std" in signals else np.full(len(t), np.nan)
+        fix = (quality > 0) & np.isfinite(lat) & np.isfinite(lon)
+        if fix.sum() >= 2:
+            gnss = gnss_table(t[fix], lat[fix], lon[fix], height[fix], quality[fix], None, std[fix])
+            report["first_fix_utc"] = iso(float(t[fix][0]))
+        else:
+            report["notes"].append(f"the NavSatFix topic holds {int(fix.sum())} messages with a fix: no positions")
+    for column in ("height", "fix_quality", "position_std"):
+        signals.pop(column, None)
+    if not signals and gnss is None:
+        raise LogError(f"{source}: no topic of a known type (NavSatFix, Imu, Odometry, TwistStamped, "
+                       f"AckermannDriveStamped) and no --signal; topics: "
+                       + ", ".join(f"{t} ({m})" for t, m in topics["topics_not_used"].items())
+                       + "; map a field with --signal COLUMN=/topic.field[unit] (convert SOURCE --list shows the fields)")
+    columns = {c: how for v in topics["topics"].values() for c, how in v["columns"].items() if c in signals}
+    if gnss is not None:
+        columns.update({"x": "NavSatFix latitude/longitude -> east of the run's first fix (pymap3d)",
+                        "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
+    report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
+    held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
+    groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
+    return Streams(gnss, signals, report, held, {}, groups=groups)

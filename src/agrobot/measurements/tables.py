@@ -1,0 +1,572 @@
+"""Other tools' tables (CSV, TSV, Parquet) as a recording: one table, or several on their own
+clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
+
+A table is read by pandas, recognised by its content as well as its suffix (a ``.txt`` of
+numbers in columns is a table); a first row of numbers only means a file without a header, its
+columns named ``col1``, ``col2`` ...; a row wrapped whole in quotes (``"1.0,2.5,3"``) is unwrapped. A header's unit in brackets, ``speed [km/h]`` or
+``speed (km/h)``, is the column's unit (the name is what precedes it). A column is named by
+``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
+table has it.
+
+Time, per table: ``--time`` names it (``COLUMN[unit]`` with any pint time unit, ``COLUMN[datetime]``
+for date strings, ``SECONDS+NANOSECONDS`` for a pair of integer columns, ``A+B[datetime]`` for a
+date and a time in two columns; ``TABLE.COLUMN`` takes it from one table for the tables without
+their own, row by row: the same number of rows, or one fewer, a value per interval), else it is
+found by name (a seconds + nanoseconds pair such as ``s, ns`` or ``sec, nsec``; ``t``, ``time``,
+``timestamp``, ``stamp``, ``%time`` ...; its unit from its header, else from its size: POSIX
+nanoseconds, microseconds, milliseconds or seconds), else ``--rate``. Date strings without a zone
+are taken as UTC (said so). Rows whose time is missing are dropped, repeated times kept once,
+and the counts named.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .log import LogError
+from .streams import Series, is_boot_clock, iso
+
+TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
+MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
+TEXT_SUFFIXES = (".txt", ".dat", ".log", "")      # read as a table when their content is one
+PAIRS = (("s", "ns"), ("sec", "nsec"), ("secs", "nsecs"), ("sec", "nanosec"), ("seconds", "nanoseconds"),
+         ("stamp_sec", "stamp_nanosec"), ("header.stamp.sec", "header.stamp.nanosec"),
+         ("header.stamp.secs", "header.stamp.nsecs"), ("field.header.stamp.secs", "field.header.stamp.nsecs"))
+TIME_NAMES = ("t", "time", "timestamp", "time_s", "times", "stamp", "%time", "utc", "datetime", "date_time",
+              "unix_time", "posix_time", "ts", "time_stamp", "gps_time")
+_UNIT_IN_HEADER = re.compile(r"^\s*(.*?)\s*[\[(]\s*([^\[\]()]+?)\s*[\])]\s*$")
+
+
+@dataclass
+class Table:
+    """One file: its columns (numbers where they are), units from its header, its times."""
+
+    path: Path
+    name: str
+    frame: pd.DataFrame
+    units: dict = field(default_factory=dict)
+    headerless: bool = False
+    t: np.ndarray | None = None
+    time_how: str = ""
+    time_columns: tuple = ()
+    notes: list = field(default_factory=list)
+    mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
+
+
+def _lines(path: Path, n: int = 20) -> list[str]:
+    with open(path, encoding="utf-8", errors="replace") as f:
+        return [line.strip() for line, _ in zip(f, range(n)) if line.strip()]
+
+
+def _unquoted(line: str) -> str:
+    """A row wrapped whole in one pair of quotes, unwrapped ("1,2,3" -> 1,2,3)."""
+    return line[1:-1].replace('""', '"') if len(line) > 1 and line[0] == line[-1] == '"' and '","' not in line else line
+
+
+def _quoted_rows(path: Path) -> bool:
+    """Every row one quoted field holding separators: the writer quoted whole rows."""
+    lines = _lines(path)
+    return bool(lines) and all(len(x) > 2 and x[0] == x[-1] == '"' and '","' not in x and
+                               any(s in x for s in ",;\t|") for x in lines)
+
+
+def looks_like_table(path: Path) -> bool:
+    """A text file of rows with the same number of fields, mostly numbers (a header allowed)."""
+    import re as _re
+
+    try:
+        lines = [_unquoted(x) for x in _lines(path, 12)]
+    except OSError:
+        return False
+    if len(lines) < 3 or any(len(x) > 4000 for x in lines):
+        return False
+    split = [_re.split(r"[,;\t|]|\s+", x.strip()) for x in lines[1:]]
+    widths = {len(r) for r in split}
+    numeric = sum(_is_number(v) for r in split for v in r) / max(sum(len(r) for r in split), 1)
+    return len(widths) == 1 and numeric > 0.8
+
+
+def read_table(path: Path) -> Table:
+    """A table file with its header's units; a LogError names the file when it is not a table."""
+    import io
+
+    suffix = path.suffix.lower()
+    notes = []
+    try:
+        if suffix in (".parquet", ".pq"):
+            frame, headerless = pd.read_parquet(path), False
+        else:
+            text = None
+            if _quoted_rows(path):
+                with open(path, encoding="utf-8", errors="replace") as f:
+                    text = "".join(_unquoted(line.strip()) + "\n" for line in f)
+                notes.append("every row is wrapped in quotes: unwrapped")
+            src = io.StringIO(text) if text is not None else path
+            sep = "\t" if suffix == ".tsv" else _separator(path, text)
+            head = pd.read_csv(src, sep=sep, nrows=1, header=None, dtype=str, skip_blank_lines=True)
+            if text is not None:
+                src = io.StringIO(text)
+            first = [str(x).strip() for x in head.iloc[0].tolist()] if len(head) else []
+            headerless = bool(first) and all(_is_number(x) for x in first if x not in ("", "nan"))
+            frame = pd.read_csv(src, sep=sep, header=None if headerless else "infer",
+                                engine="python" if sep == r"\s+" else "c")
+    except Exception as exc:            # noqa: BLE001 - pandas raises many kinds
+        raise LogError(f"{path}: cannot read as a table ({suffix}): {type(exc).__name__}: {exc}") from None
+    if headerless:
+        frame.columns = [f"col{i + 1}" for i in range(frame.shape[1])]
+    if frame.shape[1] == 0 or len(frame) == 0:
+        raise LogError(f"{path}: an empty table")
+    units, names, drop = {}, [], []
+    for k, c in enumerate(frame.columns):
+        text = str(c).strip()
+        m = _UNIT_IN_HEADER.match(text)
+        name, unit = (m.group(1), m.group(2)) if m and m.group(1) else (text, None)
+        if name.startswith("Unnamed:") or name == "":
+            name = f"col{k + 1}"
+            col = frame[c]
+            if pd.api.types.is_numeric_dtype(col) and col.nunique() <= 1:
+                notes.append(f"column {k + 1} has no name and one value ({col.iloc[0]}): an index the writer left, "
+                             f"ignored")
+                drop.append(name)
+        names.append(name)
+        if unit:
+            units[name] = unit
+    frame.columns = names
+    frame = frame.drop(columns=drop)
+    return Table(path, path.stem, frame, units, headerless, notes=notes)
+
+
+def _separator(path: Path, text: str | None = None) -> str:
+    """The CSV's field separator: the one of , ; tab | that splits its first lines alike, else
+    white space where it splits them alike (a text dump), else a comma."""
+    import csv
+
+    if text is None:
+        with open(path, newline="", encoding="utf-8", errors="replace") as f:
+            sample = "".join(f.readline() for _ in range(20))
+    else:
+        sample = "\n".join(text.splitlines()[:20])
+    try:
+        return csv.Sniffer().sniff(sample, delimiters=",;\t|").delimiter
+    except csv.Error:
+        rows = [len(x.split()) for x in sample.splitlines() if x.strip()]
+        return r"\s+" if rows and min(rows) > 1 and len(set(rows)) == 1 else ","
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def table_files(source: Path) -> list[Path]:
+    if source.is_file():
+        return [source] if source.suffix.lower() in TABLE_SUFFIXES else []
+    return sorted(p for p in source.iterdir() if p.is_file() and p.suffix.lower() in TABLE_SUFFIXES)
+
+
+# --- time ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TimeSpec:
+    """``--time``: the column(s), and their unit or 'datetime'."""
+
+    columns: tuple[str, ...]
+    unit: str | None
+    text: str
+
+
+def parse_time(text: str | None) -> TimeSpec | None:
+    if text is None:
+        return None
+    m = re.match(r"^(.*?)(?:\[([^\[\]]+)\])?\s*$", text.strip())
+    body, unit = m.group(1).strip(), (m.group(2) or "").strip() or None
+    columns = tuple(c.strip() for c in body.split("+"))
+    if not body or not all(columns) or len(columns) > 2:
+        raise LogError(f"--time {text!r}: expected COLUMN[unit] (s, ms, us, ns, h ...), COLUMN[datetime], "
+                       f"SECONDS+NANOSECONDS, or DATE+TIME[datetime]")
+    if unit and unit != "datetime":
+        from .signal_expressions import check_unit
+        from agrobot.orchestrator.units import base_unit
+
+        b = check_unit(unit, f"--time {text!r}")
+        if b.exponents != base_unit("s").exponents:
+            raise LogError(f"--time {text!r}: {unit!r} is not a unit of time; expected s, ms, us, ns or datetime")
+    return TimeSpec(columns, unit, text)
+
+
+def _column(table: Table, name: str) -> str | None:
+    """The table's column called ``name`` or ``TABLE.name``."""
+    if name.startswith(table.name + ".") and name[len(table.name) + 1:] in table.frame:
+        return name[len(table.name) + 1:]
+    return name if name in table.frame else None
+
+
+def _datetime(values: pd.Series, where: str) -> tuple[np.ndarray, str]:
+    try:
+        parsed = pd.to_datetime(values, errors="coerce", utc=False, format="mixed")
+    except (ValueError, OverflowError, pd.errors.OutOfBoundsDatetime) as exc:    # a date beyond 1677-2262, mixed zones
+        raise LogError(f"{where}: the dates do not parse as one clock ({type(exc).__name__}: {exc}); first value "
+                       f"{values.iloc[0]!r}; expected date strings between 1677 and 2262, or --time 'COLUMN[s]'") from None
+    if not pd.api.types.is_datetime64_any_dtype(parsed):
+        raise LogError(f"{where}: the dates do not parse as one clock (mixed time zones?); first value {values.iloc[0]!r}")
+    if parsed.dt.tz is None:
+        note = "date strings without a time zone, taken as UTC"
+    else:
+        note = "date strings with their zone"
+        parsed = parsed.dt.tz_convert("UTC").dt.tz_localize(None)
+    if parsed.isna().all():
+        raise LogError(f"{where}: no value parses as a date and time (first: {values.iloc[0]!r})")
+    # POSIX seconds in numpy, at the resolution pandas parsed (a date outside 1677-2262 has no ns stamp)
+    stamps = parsed.to_numpy()
+    secs = (stamps - np.datetime64(0, "s")) / np.timedelta64(1, "s")
+    return np.where(np.isnat(stamps), np.nan, secs).astype(float), note
+
+
+def _magnitude_unit(x: np.ndarray) -> tuple[float, str]:
+    """A time column's unit from its size: POSIX ns, us, ms or s; else seconds (a relative clock)."""
+    big = float(np.nanmedian(np.abs(x))) if np.isfinite(x).any() else 0.0
+    for limit, factor, unit in ((1e17, 1e-9, "ns"), (1e14, 1e-6, "us"), (1e11, 1e-3, "ms")):
+        if big > limit:
+            return factor, f"POSIX {unit} (from its size)"
+    return 1.0, "s" + (" (POSIX, from its size)" if big > 1e8 else " (no unit stated: taken as seconds; "
+                                                                       "declare another with --time 'COLUMN[ms]')")
+
+
+def time_like(table: Table) -> list[str]:
+    """Columns that could be a clock: named as one, or increasing throughout (a header-less dump)."""
+    lower = {str(c).lower(): c for c in table.frame.columns}
+    named = [lower[n] for n in TIME_NAMES if n in lower] + [lower[s] for s, ns in PAIRS if s in lower and ns in lower]
+    rising = []
+    for c in table.frame.columns:
+        x = pd.to_numeric(table.frame[c], errors="coerce").to_numpy(float)
+        if len(x) >= 3 and np.isfinite(x).all() and np.all(np.diff(x) > 0) and c not in named:
+            rising.append(c)
+    return list(dict.fromkeys(named + rising))
+
+
+def time_of(table: Table, spec: TimeSpec | None) -> bool:
+    """Set ``table.t`` from the spec or the table's own columns (by name; in a table without a
+    header, the first column that increases throughout, the guess said); False when it has none.
+    Other columns that could be the clock are named in the table's notes."""
+    found = _time_of(table, spec)
+    others = [c for c in time_like(table) if c not in table.time_columns]
+    if found and others and spec is None:
+        table.notes.append(f"time: {'+'.join(map(str, table.time_columns))} used; other columns that could be the clock: "
+                           f"{', '.join(map(str, others[:5]))} (--time COLUMN[unit] picks one)")
+    return found
+
+
+def _time_of(table: Table, spec: TimeSpec | None) -> bool:
+    f = table.frame
+    where = str(table.path)
+    if spec is not None:
+        cols = [_column(table, c) for c in spec.columns]
+        if all(cols):
+            table.time_columns = tuple(cols)
+            if spec.unit == "datetime":
+                text = f[cols[0]].astype(str) if len(cols) == 1 else f[cols[0]].astype(str) + " " + f[cols[1]].astype(str)
+                table.t, note = _datetime(text, f"{where}: --time {spec.text}")
+                table.time_how = f"{'+'.join(cols)} ({note})"
+            elif len(cols) == 2:
+                table.t = _numbers(f[cols[0]], where, cols[0]) + 1e-9 * _numbers(f[cols[1]], where, cols[1])
+                table.time_how = f"{cols[0]} + {cols[1]} x 1e-9 (seconds and nanoseconds)"
+            else:
+                x = _numbers(f[cols[0]], where, cols[0]) if pd.api.types.is_numeric_dtype(f[cols[0]]) else None
+                if x is None:
+                    raise LogError(f"{where}: --time {spec.text}: column {cols[0]!r} holds text "
+                                   f"({f[cols[0]].iloc[0]!r}); for date strings write --time '{cols[0]}[datetime]'")
+                if spec.unit:
+                    from agrobot.orchestrator.units import base_unit
+
+                    table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
+                else:
+                    factor, how = _magnitude_unit(x)
+                    table.t, table.time_how = x * factor, f"{cols[0]} [{how}]"
+            return True
+        if len(spec.columns) == 1 and "." in spec.columns[0]:
+            return False                          # another table's clock, row by row (join_rows)
+        missing = [c for c, k in zip(spec.columns, cols) if not k]
+        raise LogError(f"{where}: --time {spec.text}: no column {missing[0]!r}; columns: "
+                       f"{', '.join(map(str, f.columns[:20]))}")
+    lower = {str(c).lower(): c for c in f.columns}
+    for s, ns in PAIRS:
+        if s in lower and ns in lower and pd.api.types.is_numeric_dtype(f[lower[s]]):
+            table.t = _numbers(f[lower[s]], where, s) + 1e-9 * _numbers(f[lower[ns]], where, ns)
+            table.time_columns = (lower[s], lower[ns])
+            table.time_how = f"{lower[s]} + {lower[ns]} x 1e-9 (seconds and nanoseconds, found by name)"
+            return True
+    for name in TIME_NAMES:
+        if name in lower:
+            c = lower[name]
+            table.time_columns = (c,)
+            if not pd.api.types.is_numeric_dtype(f[c]):
+                table.t, note = _datetime(f[c].astype(str), f"{where}: column {c!r}")
+                table.time_how = f"{c} ({note}; found by name)"
+            elif c in table.units:
+                from .signal_expressions import check_unit
+
+                table.t = _numbers(f[c], where, c) * check_unit(table.units[c], f"{where}: column {c!r}").factor
+                table.time_how = f"{c} [{table.units[c]}] (found by name)"
+            else:
+                x = _numbers(f[c], where, c)
+                factor, how = _magnitude_unit(x)
+                if c == "%time":                     # rostopic echo -p: receive time in ns
+                    factor, how = 1e-9, "ns (rostopic's %time)"
+                table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
+            return True
+    first = f.columns[0] if len(f.columns) > 1 else None
+    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
+            and _even(f[first].to_numpy(float)):
+        c = first
+        x = _numbers(f[c], where, c)
+        factor, how = _magnitude_unit(x)
+        table.t, table.time_columns = x * factor, (c,)
+        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
+                          f"--time COLUMN[unit] picks another)")
+        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
+        return True
+    return False
+
+
+def _even(x: np.ndarray) -> bool:
+    """Steps of a clock: 90 % of them within half the median step of it."""
+    dt = np.diff(x)
+    med = float(np.median(dt)) if len(dt) else 0.0
+    return med > 0 and float(np.mean(np.abs(dt - med) <= 0.5 * med)) >= 0.9
+
+
+def _numbers(col: pd.Series, where: str, name: str) -> np.ndarray:
+    x = pd.to_numeric(col, errors="coerce").to_numpy(float)
+    if not np.isfinite(x).any():
+        raise LogError(f"{where}: column {name!r} holds no number (first value {col.iloc[0]!r})")
+    return x
+
+
+def _clean(table: Table) -> None:
+    """Rows without a time dropped, rows in time order, a repeated time kept once (counted)."""
+    t = table.t
+    ok = np.isfinite(t)
+    if (~ok).any():
+        table.notes.append(f"{int((~ok).sum())} rows without a time dropped")
+    frame, t = table.frame[ok].reset_index(drop=True), t[ok]
+    order = np.argsort(t, kind="stable")
+    if np.any(np.diff(t) < 0):
+        table.notes.append(f"{int(np.sum(np.diff(t) < 0))} times step back: rows put in time order")
+    frame, t = frame.iloc[order].reset_index(drop=True), t[order]
+    keep = np.concatenate([[True], np.diff(t) > 0]) if len(t) else np.array([], bool)
+    if (~keep).any():
+        table.notes.append(f"{int((~keep).sum())} rows repeat the time before them: the first kept")
+    table.frame, table.t = frame[keep].reset_index(drop=True), t[keep]
+
+
+def mdf_groups(path: Path) -> list[Table]:
+    """An MDF4 file's channel groups as tables, each on its own clock (measurements.mdf4)."""
+    from .mdf4 import mdf_tables
+
+    return [Table(path, g.name, g.frame, g.units, t=g.t, time_how=g.time_how, notes=g.notes)
+            for g in mdf_tables(path)]
+
+
+def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
+                mapped: tuple = ()) -> list[Table]:
+    """The tables with their times; a table without a time of its own takes the ``--time``
+    table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
+    ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
+    spec = parse_time(time)
+    tables = [t for p in paths for t in (mdf_groups(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
+    for t in tables:
+        t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
+    if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
+        raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
+                       + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
+    timed = [t for t in tables if t.t is not None or time_of(t, spec)]      # an MDF group has its own clock
+    clock = next((t for t in timed if spec is not None and t.time_columns), None)
+    for t in tables:
+        if t.t is not None:
+            continue
+        n = len(t.frame)
+        if clock is not None and len(clock.frame) in (n, n + 1) and clock.frame.shape[1] == len(clock.time_columns):
+            t.t = clock.t[:n].copy()
+            t.time_how = (f"row by row from {clock.name} ({clock.time_how})"
+                          + ("; one row fewer: a value per interval, at its start" if n + 1 == len(clock.frame) else ""))
+        elif rate is not None:
+            t.t = np.arange(n) / rate
+            t.time_how = f"row k at k / {rate:g} Hz (--rate; the table has no time column)"
+        else:                 # refused when a column of it is asked for (untimed)
+            t.time_how = ""
+    for t in tables:
+        if t.t is not None:
+            _clean(t)
+    return tables
+
+
+def untimed(t: Table) -> LogError:
+    return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
+                    f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
+                    f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
+                    f"of another table), or give --rate HZ")
+
+
+# --- names ----------------------------------------------------------------------------------------
+def catalog(tables: list[Table]) -> dict[str, tuple[Table, str]]:
+    """Name -> (table, column) of every data column: TABLE.COLUMN, and COLUMN where one table has it."""
+    names: dict[str, tuple[Table, str]] = {}
+    owners: dict[str, list] = {}
+    for t in tables:
+        for c in t.frame.columns:
+            if c in t.time_columns:
+                continue
+            names[f"{t.name}.{c}"] = (t, c)
+            owners.setdefault(str(c), []).append((t, c))
+    for c, where in owners.items():
+        if len(where) == 1:
+            names.setdefault(c, where[0])
+    return names
+
+
+def ambiguous(tables: list[Table], name: str) -> list[str]:
+    return [f"{t.name}.{name}" for t in tables if name in t.frame.columns]
+
+
+def table_series(tables: list[Table], name: str) -> Series | None:
+    found = catalog(tables).get(name)
+    if found is None:
+        return None
+    t, c = found
+    if t.t is None:
+        raise untimed(t)
+    x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
+    ok = np.isfinite(x)
+    return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
+
+
+def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
+    """A LogError naming each table's span when the tables that give columns share no time."""
+    chosen = [t for t in tables if t.name in used and t.t is not None and len(t.t)]
+    if len(chosen) < 2:
+        return
+    lo, hi = max(float(t.t[0]) for t in chosen), min(float(t.t[-1]) for t in chosen)
+    if hi <= lo:
+        boot = any(is_boot_clock(t.t) for t in chosen) and not all(is_boot_clock(t.t) for t in chosen)
+        raise LogError(f"{source}: the tables' clocks do not overlap: "
+                       + "; ".join(f"{t.path.name} {iso(float(t.t[0]))} to {iso(float(t.t[-1]))} ({t.time_how})"
+                                   for t in chosen)
+                       + ("; one counts from its start, another from 1970: give them one clock" if boot else
+                          "; expected tables of one recording, on one clock"))
+
+
+def describe_table(t: Table) -> list[str]:
+    """``--list`` lines: rows, time, each column's range and unit."""
+    lines = [f"table {t.path.name} ({t.name}): {len(t.frame)} rows"
+             + (", no header: columns named col1, col2 ..." if t.headerless else "")]
+    if t.t is not None and len(t.t) > 1:
+        dt = np.diff(t.t)
+        lines.append(f"  time: {t.time_how}; {iso(float(t.t[0]))} + {t.t[-1] - t.t[0]:.3f} s, median step "
+                     f"{float(np.median(dt)):.4g} s ({1 / float(np.median(dt)):.3g} Hz)")
+    for c in t.frame.columns:
+        if c in t.time_columns:
+            continue
+        col = t.frame[c]
+        unit = f" [{t.units[c]}]" if c in t.units else ""
+        if pd.api.types.is_numeric_dtype(col) and col.notna().any():
+            x = col.to_numpy(float)
+            lo, hi = np.nanpercentile(x, [0.5, 99.5]) if len(x) > 20 else (np.nanmin(x), np.nanmax(x))
+            lines.append(f"  {t.name}.{c}{unit}: {np.nanmin(x):.6g} .. {np.nanmax(x):.6g} (99% within {lo:.4g} .. "
+                         f"{hi:.4g})" + (" constant" if np.nanmin(x) == np.nanmax(x) else ""))
+        else:
+            lines.append(f"  {t.name}.{c}{unit}: text, e.g. {str(col.dropna().iloc[0])[:30]!r}"
+                         if col.notna().any() else f"  {t.name}.{c}: empty")
+    lines += [f"  note: {n}" for n in t.notes]
+    return lines
+
+
+
+
+# --- the recording's streams -------------------------------------------------------------------------
+ALIASES = {"lat": ("lat", "latitude"), "lon": ("lon", "longitude", "lng", "long")}
+
+
+def _holders(tables: list[Table], name: str) -> list[str]:
+    """TABLE.COLUMN of every table with a column called ``name`` (any letter case)."""
+    return [f"{t.name}.{c}" for t in tables for c in t.frame.columns
+            if str(c).lower() == name and c not in t.time_columns]
+
+
+def table_streams(paths: list[Path], options, source: Path):
+    """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
+    table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
+    v, yaw_rate, x, y: SI, the log's convention, unless the header gives a unit)."""
+    from .log import CANONICAL
+    from .signal_expressions import SignalSpec, evaluate, target_unit, unknown_name
+    from .streams import Streams
+
+    tables = read_tables(paths, options.time, options.rate, source,
+                         tuple(n for s in options.signals for n in s.names))
+    specs = list(options.signals)
+    given = {s.column for s in specs}
+    notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
+    auto: set[str] = set()
+    for column in tuple(CANONICAL[1:]) + ("lat", "lon"):
+        if given:                # the user's mapping is the whole of it: no column taken by its name
+            break
+        for alias in ALIASES.get(column, (column,)):
+            # the log's own names only in a table laid out as a log (a 't' column, the names as
+            # written): elsewhere 'V' or 'delta' may be a command, and a bare number has no unit
+            hits = _holders(tables, alias) if column in ALIASES else \
+                [f"{t.name}.{alias}" for t in tables if alias in t.frame.columns and "t" in t.time_columns]
+            if len(hits) == 1:
+                specs.append(SignalSpec(column, ((hits[0], 1.0),), 0.0, None, f"{column}={hits[0]}"))
+                auto.add(column)
+                break
+            if len(hits) > 1:
+                notes.append(f"{alias} is a column of several tables ({', '.join(hits)}): map one with "
+                             f"--signal {column}=TABLE.{alias.split('.')[-1]}")
+                break
+    if not specs:
+        raise LogError(f"{source}: no column to take: name them with --signal COLUMN=TABLE.COLUMN[unit] (the log's "
+                       f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
+                       + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
+                       + " (convert SOURCE --list shows their ranges)")
+    names = catalog(tables)
+    signals, columns, used, groups = {}, {}, set(), {}
+    for spec in specs:
+        found = {}
+        for name in spec.names:
+            s = table_series(tables, name)
+            if s is None:
+                several = ambiguous(tables, name)
+                if len(several) > 1:
+                    raise LogError(f"{source}: --signal {spec}: column {name!r} is in several tables "
+                                   f"({', '.join(several)}); name one as TABLE.COLUMN")
+                raise unknown_name(str(source), spec, name, list(names), "column")
+            if len(s.t) < 2:
+                raise LogError(f"{source}: --signal {spec}: column {s.label} holds {len(s.t)} numbers")
+            if spec.column in auto and s.unit is None and spec.unit is None:
+                s.unit = target_unit(spec.column)
+                s.label += " (no unit in the header: the log's convention)"
+            found[name] = s
+            used.add(s.label.split(".")[0])
+        t, values, how = evaluate(spec, found, str(source), options.wheelbase or 1.4)
+        ok = np.isfinite(values)
+        signals[spec.column] = (t[ok], values[ok])
+        groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
+        columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
+            ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
+    spans_overlap(tables, used, source)
+    boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
+    report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
+              "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
+                                  "start": iso(float(t.t[0])) if t.t is not None and len(t.t) else None,
+                                  "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
+                         for t in tables},
+              "columns": {**columns, "t": "the tables' clock, s from the run's start"},
+              "clocks": {"reference": "the tables' own time columns"
+                                      + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
+    held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
+    return Streams(None, signals, report, held, {}, groups=groups)
