@@ -8,16 +8,29 @@ samples the outputs hold the first command received.
 """
 from __future__ import annotations
 
+from pathlib import Path
 from collections import deque
 
+from agrobot.orchestrator.compiled.cores import CoreDescription, capacity
 from agrobot.orchestrator.component import Component, inp, out, par
+
+from .models.loop_blocks import Block, delay_line
+
+
+def _delay_compiled(comp, period: float) -> str:
+    return f"#define DELAY_SAMPLES {int(comp.p['samples'])}\n"
+
+
+def _delay_runtime(comp, period: float) -> tuple[str, dict[str, float]]:
+    samples = int(comp.p["samples"])
+    return (f"#define DELAY_CAPACITY {capacity(samples)}\n#define DELAY_SAMPLES ((int)p[P__samples])\n",
+            {"_samples": float(samples)})
 
 
 class ComputationDelay(Component):
     sampled = True
     roles = ("computation_delay",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:computation_delay"   # its block in the margins' loop
-    C_CORE = "computation_delay"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/computation_delay.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), _delay_compiled, ("samples",), runtime=_delay_runtime)
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle command as computed"),
         inp("pedal_valve_voltage", "V", 6.0, "pedal valve voltage as computed"),
@@ -36,6 +49,9 @@ class ComputationDelay(Component):
         u = self.u
         self.buffer.append((u["steer_angle_cmd"], u["pedal_valve_voltage"]))
         self.y["steer_angle_cmd_out"], self.y["pedal_valve_voltage_out"] = self.buffer[0]
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        return delay_line(self.name, ["steer_angle_cmd"], ["steer_angle_cmd_out"], int(self.p["samples"]))
 
 
 COMPONENT = ComputationDelay

@@ -6,8 +6,10 @@ s(t) = v t^2 / (2 T) for t < T (start ramp), v (t - T/2) afterwards; the referen
 """
 from __future__ import annotations
 
+from pathlib import Path
 import math
 
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, out, par
 
 from .models.figure8_path import Figure8Path
@@ -16,7 +18,7 @@ from .models.figure8_path import Figure8Path
 class Figure8Reference(Component):
     sampled = True
     roles = ("reference",)
-    C_CORE = "figure8_reference"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/figure8_reference.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"))   # its C model core, beside this file
     variables = (
         par("speed", "m/s", 2.0, "reference speed along the path"),
         par("radius", "m", 10.0, "radius of the two loops"),

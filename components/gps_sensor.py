@@ -36,14 +36,18 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from pathlib import Path
 
 import numpy as np
 
+from agrobot.orchestrator.compiled.cores import CoreDescription, capacity
 from agrobot.orchestrator.component import Component, inp, out, par
 from agrobot.orchestrator.units import FILE_UNIT
 
 from .hardware.nmea import FIX_RANK, RTK_FIXED
+from .models.c_sources import delay_steps
 from .models.sensor_grades import DEGRADED_ERROR_TIME_CONSTANT, FIX_ERROR_STD, gauss_markov_step
+from .models.loop_blocks import Block, Ground, LEVEL, delay_line
 
 GGA_QUALITIES = tuple(range(10))
 BRIDGING = -1                                  # the bridging mode's code in a window (not a GGA quality)
@@ -89,11 +93,34 @@ def gga_qualities(path: str) -> tuple[np.ndarray, np.ndarray]:
     return t - t[0], np.asarray(qualities, int)
 
 
+def _gps_compiled(comp, period: float) -> str:
+    lag = delay_steps(comp.p["latency"], period)
+    return f"#define LAG {lag}\n#define LATENCY {float(comp.p['latency'])!r}\n"
+
+
+def _gps_runtime(comp, period: float) -> tuple[str, dict[str, float]]:
+    lag = delay_steps(comp.p["latency"], period)
+    return (f"#define LAG_CAPACITY {capacity(lag)}\n#define LAG ((int)p[P__lag])\n#define LATENCY (p[P__latency])\n",
+            {"_lag": float(lag), "_latency": float(comp.p["latency"])})
+
+
+def _gps_seed(comp, name: str) -> dict[str, float]:
+    return {"seed": float(int(comp.rng.integers(0, 2**52)))}
+
+
+# what the C core leaves out: its receiver has an RTK fix or random dropouts (no outage windows, no
+# quality log, no degraded fixes or bridged corrections)
+NOT_IN_C_CORE = ("outages", "quality_log", "quality_log_start", "rtk_float_error_std", "dgps_error_std",
+                 "single_error_std", "degraded_error_time_constant", "bridging_error_start", "bridging_error_rate",
+                 "bridging_timeout", "bridging_time_constant")
+
+
 class GPSSensor(Component):
     sampled = True
     roles = ("gps",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:gps_sensor"   # its block in the margins' loop
-    C_CORE = "gps_sensor"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/gps_sensor.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), _gps_compiled, ("latency",), NOT_IN_C_CORE,
+                             extra_parameters=(("seed", 0.0, "1", "seed of the noise generator (xoshiro256**)"),),
+                             extra_values=_gps_seed, runtime=_gps_runtime)      # its C model core, beside this file
     variables = (
         inp("x_true", "m", 0.0, "true antenna east position"),
         inp("y_true", "m", 0.0, "true antenna north position"),
@@ -137,7 +164,7 @@ class GPSSensor(Component):
         self.require(p["latency"] >= 0 and math.isclose(lag, round(lag), abs_tol=1e-9),
                      f"latency {p['latency']} s must be a non-negative multiple of the step {dt} s")
         self.require(0 <= p["dropout_probability"] <= 1, "dropout_probability must be in [0, 1]")
-        self.lag = int(round(lag))
+        self.lag = delay_steps(p["latency"], dt)
         self.history: deque = deque(maxlen=self.lag + 1)
         self.outage_left = 0
         self.last_fix_time = t0
@@ -262,6 +289,13 @@ class GPSSensor(Component):
         y["fix_valid"], y["fix_quality"] = 1.0, float(quality)
         self.last_fix_time = t
         y["fix_age"] = p["latency"]
+
+    def linear_model(self, step: float, speed: float, ground: Ground = LEVEL) -> Block:
+        """The true antenna position and velocity ``latency`` / step samples late (noise, bias and
+        dropouts left out); on a slope the east position too (its lateral-channel share: the leaning
+        antenna turning with the heading)."""
+        ports = ["y", "vel_north"] + ([] if ground.level else ["x"])
+        return delay_line(self.name, [f"{p}_true" for p in ports], ports, delay_steps(self.p["latency"], step))
 
 
 COMPONENT = GPSSensor

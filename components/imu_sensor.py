@@ -21,12 +21,12 @@ from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models import sensor_grades as grade
 from .models.terrain import GRAVITY, body_of
+from .models.loop_blocks import Block, Ground, LEVEL
 
 
 class IMUSensor(Component):
     sampled = True
     roles = ("imu",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:imu_sensor"   # its block in the margins' loop
     variables = (
         inp("roll", "rad", 0.0, "true roll (left side up positive)"),
         inp("pitch", "rad", 0.0, "true pitch (nose up positive)"),
@@ -87,6 +87,25 @@ class IMUSensor(Component):
         self.in_run = grade.gauss_markov_step(self.in_run, self.phi, p["gyro_bias_instability"], w[4])
         y["roll"] = roll + self.attitude_bias[0] + p["attitude_noise_std"] * w[5]
         y["pitch"] = pitch + self.attitude_bias[1] + p["attitude_noise_std"] * w[6]
+
+    def linear_model(self, step: float, speed: float, ground: Ground = LEVEL) -> Block:
+        """The IMU (components.imu_sensor) heading east without bias and noise, on the ground's roll phi
+        and pitch theta: the gyro reads the heading rate about its up axis, cos(phi) cos(theta) gamma; roll
+        and pitch read roll and pitch; the left specific force (models.terrain.body_of, the east
+        acceleration 0 on the operating point) is the north acceleration by a difference over one sample
+        and the gravity of the attitude,
+
+            f_y = cos(phi) (v_n - v_n') / dt + g (cos(phi) cos(theta) d phi - sin(phi) sin(theta) d theta)
+
+        (level ground: f_y = (v_n - v_n') / dt + g phi)."""
+        from agrobot.components.models.terrain import GRAVITY
+
+        cr, sr = math.cos(ground.roll), math.sin(ground.roll)
+        cp, sp = math.cos(ground.pitch), math.sin(ground.pitch)
+        return Block.of(self.name, ["yaw_rate", "vel_north", "roll", "pitch"], ["yaw_rate", "accel_left", "roll", "pitch"],
+                        A=[[0.0]], B=[[0.0, 1.0, 0.0, 0.0]], C=[[0.0], [-cr / step], [0.0], [0.0]],
+                        D=[[cr * cp, 0.0, 0.0, 0.0], [0.0, cr / step, GRAVITY * cr * cp, -GRAVITY * sr * sp],
+                           [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
 
 
 COMPONENT = IMUSensor

@@ -50,6 +50,7 @@ from .hardware.nmea import FIX_RANK
 from .models import sensor_grades as grade
 from .models.terrain import lever_offset
 from .pose_ekf import POSE_OUTPUTS, POSE_START
+from .models.loop_blocks import Block, Ground, LEVEL
 
 # the wandering error's std by GGA quality (models.sensor_grades.FIX_ERROR_STD: the defaults)
 QUALITY_PARAMETER = {4: "rtk_fixed_bias_std", 5: "rtk_float_std", 2: "dgps_std", 3: "dgps_std", 9: "dgps_std",
@@ -57,10 +58,97 @@ QUALITY_PARAMETER = {4: "rtk_fixed_bias_std", 5: "rtk_float_std", 2: "dgps_std",
 N = 8                                  # states
 
 
+_INS_BLOCKS: dict[tuple, Block] = {}        # the settled gains, per parameters and operating point (seconds each)
+
+INS_INPUTS = ["gps_x", "gps_y", "yaw_rate", "roll", "accel_left", "pitch"]
+
+
+INS_OUTPUTS = ["y_rear", "heading", "y_cg", "lateral_velocity"]
+
+
+def _lean(p, roll: float, pitch: float, eps: float = 1e-7) -> np.ndarray:
+    """d (antenna east, north) / d (roll, pitch) at psi = 0 as the filter models the antenna
+    (nil without terrain compensation): a 2 x 2 matrix, central differences of models.terrain."""
+    from agrobot.components.models.terrain import lever_offset
+
+    if not p["terrain_compensation"]:
+        return np.zeros((2, 2))
+    lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+    out = np.zeros((2, 2))
+    for j, (dr, dp) in enumerate(((eps, 0.0), (0.0, eps))):
+        up = lever_offset(roll + dr, pitch + dp, 0.0, *lever)
+        down = lever_offset(roll - dr, pitch - dp, 0.0, *lever)
+        out[:, j] = (np.array(up) - np.array(down)) / (2 * eps)
+    return out
+
+
+def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int, ground: Ground) -> Block:
+    from agrobot.components.ins_ekf import INSEKF
+
+    p = comp.p
+    k0 = (ground.slip_compliance(speed) if not ground.level else float(p["slip_compliance0"])) \
+        if p["crab_estimate"] else 0.0
+    roll, pitch, f0 = ground.roll, ground.pitch, ground.specific_force
+    ekf = INSEKF(comp.name, {**p, "x0": 0.0, "y0": 0.0, "psi0": 0.0, "slip_compliance0": k0})
+    ekf.initialize(0.0, step)
+    n, R = 8, (p["fix_noise_std"] ** 2 + (p["antenna_height"] * p["attitude_noise_std"]) ** 2) * np.eye(2)
+    gains, previous = [None] * fix_every, None
+    for cycle in range(20000):
+        for j in range(fix_every):
+            ekf.predict(0.0, roll, pitch, f0, speed, step)
+            ekf.s[:3] = 0.0                                      # stay at the operating point (psi = 0)
+            if j == fix_phase % fix_every:
+                h, H = ekf.antenna(roll, pitch)
+                gains[j] = np.linalg.solve(H @ ekf.P @ H.T + R, H @ ekf.P).T
+                ekf.update(h, h, H, R)
+        K = gains[fix_phase % fix_every]
+        if previous is not None and np.allclose(previous, K, rtol=1e-10, atol=1e-14):
+            break
+        previous = K.copy()
+    ekf.s = np.array([0.0, 0.0, 0.0, 0.0, 0.0, k0, 0.0, 0.0])
+    _, entries, tilt = ekf.jacobian(0.0, roll, pitch, f0, speed, step)
+    F = np.eye(n)
+    for (i, j), f in entries.items():
+        F[i, j] += f
+    F[6, 6] = F[7, 7] = math.exp(-step / p["degraded_time_constant"])
+    _, H = ekf.antenna(roll, pitch)
+    lean = _lean(p, roll, pitch)                                 # d(antenna) / d(roll, pitch)
+    # X = [s; omega'; f_y'], u = (gps_x, gps_y, yaw_rate, roll, accel_left, pitch)
+    G = np.zeros((n, 2))
+    G[1, 1], G[2, 0] = -step * k0 * speed, step / tilt           # from f_y' and omega'
+    M = np.hstack([F, G])                                        # s- from X
+    lr = float(p["l_r"])
+    out = np.zeros((4, n))
+    out[0, 1], out[1, 2], out[2, 1], out[2, 2] = 1.0, 1.0, 1.0, lr
+    out[3, 4], out[3, 5] = -k0 * f0 * speed, -f0 * speed         # the crab -k f_y v(1 + e_v) about k0, f0
+    crab = np.array([0.0, 0.0, 0.0, 0.0, -k0 * speed, 0.0])      # lateral_velocity from this step's f_y
+    hold = np.zeros((2, 6))
+    hold[0, 2] = hold[1, 4] = 1.0                                # omega', f_y' <- this step's inputs
+    phases = []
+    for j in range(fix_every):
+        if gains[j] is None:
+            Ms, Ns = M, np.zeros((n, 6))
+        else:
+            K = gains[j]
+            Ms = M - K @ H @ M
+            Ns = np.zeros((n, 6))
+            Ns[:, 0:2] = K
+            Ns[:, 3] = -K @ lean[:, 0]
+            Ns[:, 5] = -K @ lean[:, 1]
+        A = np.vstack([Ms, np.zeros((2, n + 2))])
+        B = np.vstack([Ns, hold])
+        C = out @ Ms
+        D = out @ Ns
+        D[3] += crab
+        phases.append((A, B, C, D))
+    block = Block.of(comp.name, INS_INPUTS, INS_OUTPUTS, *phases[0])
+    block.phases = phases if fix_every > 1 else None
+    return block
+
+
 class INSEKF(Component):
     sampled = True
     roles = ("pose_estimator",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:ins_ekf"   # its block in the margins' loop
     FIX_INPUT = "gps_y"   # the input whose cadence sets its linear model's periodic gains
     variables = (
         inp("gps_x", "m", 0.0, "GNSS antenna east position"),
@@ -274,6 +362,33 @@ class INSEKF(Component):
         y["speed"], y["lateral_velocity"] = self.speed, -k * f_y * v
         y["gyro_bias"], y["odometry_scale_error"], y["slip_compliance"] = float(b_g), float(e_v), float(k)
         y["fix_used"], y["time_since_fix"] = used, t - self.last_fix_time
+
+    def linear_model(self, step: float, speed: float, fix_every: int = 1, fix_phase: int = 0, ground: Ground = LEVEL) -> Block:
+        """The GNSS/INS EKF (components.ins_ekf) on the straight, its gains periodic: a fix every
+        ``fix_every``-th of its steps, at the steps j = ``fix_phase`` (mod fix_every). On level ground k
+        stays at its initial value k0 (f_y = 0 leaves k unobservable and uncoupled); on a slope
+        (``ground``: roll phi_0, pitch theta_0, the steady left specific force f_0 the IMU reads) the filter
+        has learnt the crab, k0 = -crab / (f_0 v) (Ground.slip_compliance), and k is coupled and observable.
+        The covariance recursion is run with the component's own predict and update at that operating
+        point until the gains of a whole cycle settle; then, all eight states s = [x, y, psi, b_g, e_v, k,
+        b_x, b_y] and the inputs of the previous step (the component predicts with them):
+
+            s- = F s + dt (0, -k0 v f_y', omega' / (cos phi_0 cos theta_0), 0, ...)
+                                              F = I + the component's own Jacobian entries at (phi_0, theta_0,
+                                              f_0, k0): on a slope y' gains -f_0 v k and -k0 f_0 v e_v;
+                                              b_x, b_y decaying by exp(-dt / T)
+            s  = s- + K_j (z - H s- - (dh/dphi) phi - (dh/dtheta) theta)    on a fix step (H: the component's
+                                              antenna Jacobian at phi_0, theta_0; dh/dphi, dh/dtheta the
+                                              antenna's lean with terrain compensation, nil without)
+
+        outputs the updated R (north), heading, CG = R + l_r psi and the crab's deviation
+        -v (k0 f_y + f_0 k + k0 f_0 e_v) of this step."""
+        key = (repr(sorted(self.p.items())), step, speed, fix_every, fix_phase, ground)
+        if key not in _INS_BLOCKS:
+            _INS_BLOCKS[key] = _ins_ekf(self, step, speed, fix_every, fix_phase, ground)
+        block = _INS_BLOCKS[key]
+        return Block(self.name, block.inputs, block.outputs, block.A, block.B, block.C, block.D, block.ratio,
+                     block.sampled, block.phases)
 
 
 COMPONENT = INSEKF

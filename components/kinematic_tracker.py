@@ -22,10 +22,13 @@ steady offset (the feedback needs no error to cancel the crab).
 """
 from __future__ import annotations
 
+from pathlib import Path
 import math
 from typing import Mapping
 
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
+from .models.c_sources import GUIDANCE_LAWS
 
 
 def inverse_kinematics(xdot: float, ydot: float, psi: float, l_r: float, crab: float = 0.0) -> tuple[float, float]:
@@ -85,7 +88,7 @@ def static_law(gains: Mapping[str, Mapping[str, float]], inputs: tuple[str, ...]
 class KinematicTracker(Component):
     sampled = True
     roles = ("tracker",)
-    C_CORE = "kinematic_tracker"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/kinematic_tracker.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), extra_sources=GUIDANCE_LAWS)
     variables = TRACKER_INPUTS + SPEED_LAW + (
         par("l_r", "m", 0.4, "rear axle to CG"),
         par("lookahead", "m", 0.0, "steered point a ahead of the rear axle (0: a = l_r, the paper's law)"),

@@ -12,9 +12,15 @@ a state that goes non-finite anyway is reset to the last finite pose with the in
 """
 from __future__ import annotations
 
+from pathlib import Path
 import math
 
+import numpy as np
+
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
+
+from .models.loop_blocks import Block
 
 
 # what every pose estimator starts from and gives (this EKF, the GNSS/INS one): swappable in a study
@@ -38,8 +44,7 @@ POSE_OUTPUTS = (
 class PoseEKF(Component):
     sampled = True
     roles = ("pose_estimator",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:pose_ekf"   # its block in the margins' loop
-    C_CORE = "pose_ekf"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/pose_ekf.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"))   # its C model core, beside this file
     variables = (
         inp("gps_x", "m", 0.0, "GPS east position of R"),
         inp("gps_y", "m", 0.0, "GPS north position of R"),
@@ -124,6 +129,40 @@ class PoseEKF(Component):
         out_["x_rear"], out_["y_rear"], out_["heading"] = x, y, psi
         out_["x_cg"], out_["y_cg"] = x + lr * math.cos(psi), y + lr * math.sin(psi)
         out_["heading_std"] = math.sqrt(self.P[5])
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        """The EKF (components.pose_ekf) on the straight with its steady-state gain: the covariance
+        recursion run with the component's own predict and update until it settles, then
+
+            y- = y + T v psi,  psi- = psi + T v delta_{k-1} / L,  (y, psi) = (y-, psi-) + K (z - y-)
+
+        outputs the updated R, heading and CG = R + l_r psi."""
+        from agrobot.components.pose_ekf import PoseEKF
+
+        ekf = PoseEKF(self.name, {**self.p, "x0": 0.0, "y0": 0.0, "psi0": 0.0})
+        ekf.initialize(0.0, step)
+        P = None
+        for _ in range(100000):
+            ekf.predict(speed, 0.0, step)
+            previous, P = P, list(ekf.P)
+            ekf.update(0.0, 0.0)
+            if previous is not None and np.allclose(previous, P, rtol=1e-12, atol=0.0):
+                break
+        p11, p12, p13, p22, p23, p33 = P
+        Pm = np.array([[p11, p12, p13], [p12, p22, p23], [p13, p23, p33]])
+        S = Pm[:2, :2] + ekf.r * np.eye(2)
+        K = Pm[:, :2] @ np.linalg.inv(S)                  # columns: gps_x, gps_y
+        ky, kpsi = K[1, 1], K[2, 1]
+        T, L, lr = step, self.p["wheelbase"], self.p["l_r"]
+        M = np.array([[1.0, T * speed, 0.0], [0.0, 1.0, T * speed / L]])      # (y-, psi-) from (y, psi, delta_prev)
+        U = np.array([[1.0 - ky, 0.0], [-kpsi, 1.0]])                          # update, innovation z - y-
+        Kz = np.array([ky, kpsi])
+        A = np.vstack([U @ M, [0.0, 0.0, 0.0]])
+        B = np.array([[ky, 0.0], [kpsi, 0.0], [0.0, 1.0]])                      # inputs (gps_y, steer_angle)
+        out = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, lr]])                    # y_rear, heading, y_cg
+        C = out @ U @ M
+        D = np.column_stack([out @ Kz, np.zeros(3)])
+        return Block.of(self.name, ["gps_y", "steer_angle"], ["y_rear", "heading", "y_cg"], A, B, C, D)
 
 
 COMPONENT = PoseEKF

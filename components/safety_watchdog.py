@@ -18,6 +18,7 @@ import math
 from agrobot.orchestrator.component import Component, inp, out, par
 
 from .hardware.nmea import fix_at_least
+from .models.loop_blocks import Block, passthrough
 
 REASONS = {0: "ok", 1: "stale GPS fix", 2: "GPS fix below the required quality",
            3: "steering system not ready", 4: "operator lockout of automatic steering",
@@ -28,7 +29,6 @@ CHECKED = ("steer_angle_cmd", "speed_cmd", "fix_age", "fix_quality", "machine_re
 class SafetyWatchdog(Component):
     sampled = True
     roles = ("watchdog",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:safety_watchdog"   # its block in the margins' loop
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "wheel-angle command from the controller"),
         inp("speed_cmd", "m/s", 0.0, "speed command from the controller"),
@@ -93,6 +93,10 @@ class SafetyWatchdog(Component):
             y["steer_angle_cmd_out"], y["speed_cmd_out"] = self.held, 0.0
         else:
             y["steer_angle_cmd_out"], y["speed_cmd_out"] = u["steer_angle_cmd"], u["speed_cmd"]
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        """The watchdog while nothing trips it: the command passes."""
+        return passthrough(self.name, {"steer_angle_cmd": "steer_angle_cmd_out"})
 
 
 COMPONENT = SafetyWatchdog

@@ -11,11 +11,14 @@ paper observed.
 """
 from __future__ import annotations
 
+from pathlib import Path
 import math
 
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
 
 from .steering_hydraulics import valve_opening
+from .models.c_sources import substeps_define
 
 
 def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: float) -> float:
@@ -27,7 +30,7 @@ def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: f
 class SpeedDrivetrain(Component):
     sampled = False
     roles = ("drivetrain",)
-    C_CORE = "speed_drivetrain"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_drivetrain.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), substeps_define, ("internal_step",))
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("pedal_valve_voltage", "V", 6.0, "voltage of the electro-mechanic pedal valve"),

@@ -7,15 +7,17 @@ Output speed = |v|, the speed of the antenna point R (= v_x of the tractor, no r
 """
 from __future__ import annotations
 
+from pathlib import Path
 import math
 
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
 
 
 class SpeedKF(Component):
     sampled = True
     roles = ("speed_estimator",)
-    C_CORE = "speed_kf"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_kf.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"))   # its C model core, beside this file
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("x", "m", 0.0, "GPS east position"),

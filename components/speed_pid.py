@@ -7,15 +7,18 @@ k_ff is a nominal (linear) pedal-per-speed feed-forward; the drivetrain's map is
 """
 from __future__ import annotations
 
+from pathlib import Path
+from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
 
 from .models.pid import DiscretePID
+from .models.c_sources import GUIDANCE_LAWS
 
 
 class SpeedPID(Component):
     sampled = True
     roles = ("speed_controller",)
-    C_CORE = "speed_pid"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/speed_pid.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), extra_sources=GUIDANCE_LAWS)
     OFF_THE_LATERAL_LOOP = True   # moves nothing of the lateral channel at first order (margins)
     variables = (
         inp("speed_desired", "m/s", 0.0, "desired speed v_d (kinematic tracker)"),

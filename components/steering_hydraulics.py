@@ -25,10 +25,16 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from pathlib import Path
 
+import numpy as np
+
+from agrobot.orchestrator.compiled.cores import CoreDescription, capacity
 from agrobot.orchestrator.component import Component, inp, out, par
 
+from .models.c_sources import delay_steps, substeps_define
 from .models.pid import DiscretePID
+from .models.loop_blocks import Block, delay_line, lifted
 
 
 def valve_opening(voltage: float, neutral: float, deadband: float, full_scale: float) -> float:
@@ -44,11 +50,21 @@ def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
 
+def _steering_compiled(comp, period: float) -> str:
+    return substeps_define(comp, period) + f"#define DELAY_STEPS {delay_steps(comp.p['command_delay'], period)}\n"
+
+
+def _steering_runtime(comp, period: float) -> tuple[str, dict[str, float]]:
+    steps = delay_steps(comp.p["command_delay"], period)
+    return (substeps_define(comp, period) + f"#define DELAY_CAPACITY {capacity(steps)}\n"
+            "#define DELAY_STEPS ((int)p[P__delay_steps])\n", {"_delay_steps": float(steps)})
+
+
 class SteeringHydraulics(Component):
     sampled = False
     roles = ("steering",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:steering_hydraulics"   # its block in the margins' loop
-    C_CORE = "steering_hydraulics"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/steering_hydraulics.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), _steering_compiled, ("internal_step", "command_delay"),
+                             runtime=_steering_runtime)      # its C model core, beside this file
     variables = (
         inp("steer_angle_cmd", "rad", 0.0, "desired front wheel angle (from the yaw-rate MPC)"),
         par("kp", "V/rad", 150.0, "low-level PI proportional gain"),
@@ -90,8 +106,8 @@ class SteeringHydraulics(Component):
             self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
         self.require(p["quantization_guard"] in (0, 1), f"parameter quantization_guard must be 0 or 1, "
                      f"got {p['quantization_guard']!r}")
-        delay_steps = int(round(float(p["command_delay"]) / dt))
-        self.command_history = deque([0.0] * delay_steps, maxlen=delay_steps + 1)
+        steps = delay_steps(p["command_delay"], dt)
+        self.command_history = deque([0.0] * steps, maxlen=steps + 1)
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
@@ -166,6 +182,39 @@ class SteeringHydraulics(Component):
         y["steer_angle_measured"] = quantize(delta, res)
         y["valve_voltage"] = voltage
         y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        """The hydraulics' substep (components.steering_hydraulics) beyond its dead bands, lifted over
+        the substeps of one step, with the command delay in whole steps:
+
+            e = c - delta;  I <- I + k_i h e;  o <- o + alpha (s_o (k_p e + I) - o);  delta <- delta + r_s o
+
+        s_o = 1 / (V_max - V_n - V_db) the valve's slope above its dead band, alpha = 1 - exp(-h / tau_valve),
+        r_s = h Q_max / V_rad. The potentiometer reads delta."""
+        p = self.p
+        m = max(1, int(round(step / p["internal_step"])))
+        h = step / m
+        s_o = 1.0 / (p["voltage_max"] - p["neutral_voltage"] - p["deadband"])
+        alpha = 1.0 - math.exp(-h / p["valve_time_constant"])
+        rs = h * p["max_flow"] / p["volume_per_rad"]
+        kp, kih = p["kp"], p["ki"] * h
+        A1 = np.array([[1.0, 0.0, -kih], [alpha * s_o, 1.0 - alpha, -alpha * s_o * kp], [0.0, 0.0, 1.0]])
+        B1 = np.array([kih, alpha * s_o * kp, 0.0])
+        A1[2] += rs * A1[1]                               # delta uses the new opening
+        B1[2] += rs * B1[1]
+        As, Bs = lifted(A1, B1.reshape(3, 1), m)
+        d = delay_steps(p["command_delay"], step)
+        line = delay_line("", ["c"], ["c"], d)
+        # state [I, o, delta; registers]; the hydraulics act on the delayed command
+        n = 3 + line.n
+        A = np.zeros((n, n))
+        A[:3, :3] = As
+        A[:3, 3:] = Bs @ line.C
+        A[3:, 3:] = line.A
+        B = np.vstack([Bs @ line.D, line.B])
+        C = np.zeros((2, n))
+        C[:, 2] = 1.0
+        return Block.of(self.name, ["steer_angle_cmd"], ["steer_angle", "steer_angle_measured"], A, B, C, sampled=False)
 
 
 COMPONENT = SteeringHydraulics

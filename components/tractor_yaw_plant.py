@@ -42,13 +42,15 @@ from __future__ import annotations
 
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 
+from agrobot.orchestrator.compiled.cores import CoreDescription, NoCCore, c_array
 from agrobot.orchestrator.component import Component, ComponentError, inp, out, par
-
 from agrobot.orchestrator.units import FILE_UNIT
 
+from .models.loop_blocks import Block, Ground
 from .models.paper_models import G_2ND
 from .models.terrain import attitude, ground_of, lever_offset, slope_pull
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical, cornering_scale,
@@ -57,6 +59,26 @@ from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllab
 MODELS = PHYSICAL_MODELS + ("transfer_function",)
 CHECKED_SPEEDS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
 
+
+
+def _plant_compiled(comp, period: float) -> str:
+    """The yaw model as C: its index among PHYSICAL_MODELS, or a transfer function's canonical form."""
+    model = comp.p["model"]
+    if model == "transfer_function":          # yaw rate from num/den in controllable canonical form
+        A, B, C = controllable_canonical(comp.p["tf_num"], comp.p["tf_den"])
+        n = A.shape[0]
+        return (f"#define YAW_MODEL 3\n#define TF_ORDER {n}\nstatic const double TF_A[{n * n}] = {{{c_array(A)}}};\n"
+                f"static const double TF_B[{n}] = {{{c_array(B)}}};\nstatic const double TF_C[{n}] = {{{c_array(C)}}};\n")
+    if model not in PHYSICAL_MODELS:
+        raise NoCCore(f"model = {model!r} has no C form (its core covers {', '.join(PHYSICAL_MODELS)} and "
+                      f"transfer_function)")
+    return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n"
+
+
+def _plant_values(comp) -> dict[str, float]:
+    """The core's m, I, l_f, l_r, C_f, C_r, sigma_f, sigma_r: the named set resolved, cornering scales applied."""
+    params = TractorParameters.of(comp.p)
+    return {k: getattr(params, k) for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f", "sigma_r")}
 
 class UnstableModelWarning(UserWarning):
     """The plant's linear yaw model has a pole in the right half plane."""
@@ -73,11 +95,49 @@ def unstable_modes(model: str, params: TractorParameters, speeds=CHECKED_SPEEDS)
     return out
 
 
+def _yaw_dynamics(comp, speed: float):
+    """(A, B, C, v_y row, parameters) of the plant's yaw dynamics at v (models.yaw_dynamics; v_y =
+    l_r gamma for a transfer-function model), as its step uses them."""
+    from agrobot.components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
+                                                state_space, with_cornering_scale)
+
+    p = comp.p
+    params = TractorParameters.of(p)
+    if p["model"] == "transfer_function":
+        Ay, By, Cy = controllable_canonical(p["tf_num"], p["tf_den"])
+        return Ay, By, Cy, params.l_r * Cy, params
+    if float(p["cornering_speed_slope"]):
+        params = with_cornering_scale(params, cornering_scale(speed, p["cornering_speed_slope"],
+                                                              p["cornering_reference_speed"]))
+    Ay, By, Cy = state_space(p["model"], params, speed)
+    return Ay, By, Cy, np.eye(len(By))[0], params
+
+
+def _on_the_plane(p, heading: float) -> dict[str, float]:
+    """Roll, pitch, the pull across the heading and the antenna's lever (east, north) of a plant
+    heading ``heading`` on its plane (models.terrain, as the plant's step computes them)."""
+    from agrobot.components.models.terrain import attitude, ground_of, lever_offset, slope_pull
+
+    gx, gy = ground_of(p["slope_angle"], p["slope_downhill_heading"]).gradient(0.0, 0.0)
+    pe, pn = slope_pull(gx, gy)
+    roll, pitch = attitude(gx, gy, heading)
+    ox, oy = lever_offset(roll, pitch, heading, p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+    return {"roll": roll, "pitch": pitch, "pull": -pe * math.sin(heading) + pn * math.cos(heading),
+            "lever_east": ox, "lever_north": oy}
+
+
+def _per_heading(p, eps: float = 1e-6) -> dict[str, float]:
+    """d/d psi at psi = 0 of _on_the_plane's values (central differences)."""
+    up, down = _on_the_plane(p, eps), _on_the_plane(p, -eps)
+    return {k: (up[k] - down[k]) / (2 * eps) for k in up}
+
+
 class TractorYawPlant(Component):
     sampled = False
     roles = ("yaw_plant",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:yaw_plant"   # its block in the margins' loop
-    C_CORE = "tractor_yaw_plant"      # its C model core for FMU export: src/agrobot/fmu_export/c/components/tractor_yaw_plant.c
+    c_core = CoreDescription(Path(__file__).with_suffix(".c"), _plant_compiled,     # its C model core, beside this file
+                             ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
+                              "cornering_scale_rear"), ("terrain_file", "tyre_friction", "tyre_shape"), _plant_values)
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),
@@ -288,6 +348,78 @@ class TractorYawPlant(Component):
         if self._slope:                      # level ground: no pull, zero roll and pitch at every pose
             self._update_ground()
         self._set_outputs(v, gamma1, vy1)
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)
+        with the pose on the straight: psi' = gamma, y_cg' = v psi + v_y; R = CG - l_r psi, the
+        antenna a lever arm f ahead of R: y_ant = y_R + f psi, its velocity + f gamma.
+
+        On a plane (``slope_angle``) the deviations are about the steady state that holds the line
+        against the pull (plant_ground); the pull across the heading turns with it, dv_y/dt gains
+        (d a_lat / d psi) psi, roll and pitch follow the heading (d roll / d psi psi, ...), and the antenna's
+        lever, leaning with them, moves by (d lever / d psi) psi east and north; the line runs along the
+        velocity, the body turned by the crab angle psi_0 = -v_y0 / v off it, so a change of the crab
+        moves R along the line, x' = (v_y0 / v) v_y (outputs x_antenna, roll and pitch, the lateral
+        channel's share of them, only on a plane). The crab angle (0.5 deg on 10 deg) is left out elsewhere."""
+        from agrobot.components.models.yaw_dynamics import lateral_disturbance_column, zoh_discretize
+
+        p = self.p
+        Ay, By, Cy, vy, params = _yaw_dynamics(self, speed)
+        ground = self.linear_ground(speed)
+        tilted = ground is not None
+        slope = _per_heading(p) if tilted else {"lever_north": float(p["antenna_forward"])}
+        n = len(By)
+        m = n + 3 if tilted else n + 2                   # on a plane also x: the crab's share of the along-track motion
+        A = np.zeros((m, m))
+        A[:n, :n] = Ay
+        A[n, :n] = Cy                                    # psi' = gamma
+        A[n + 1, :n], A[n + 1, n] = vy, speed            # y' = v psi + v_y
+        if tilted:
+            A[:n, n] += lateral_disturbance_column(n) * slope["pull"]      # the pull turning with psi
+            A[n + 2, :n] = vy * ground.crab / speed      # x' = v cos psi - v_y sin psi, sin psi_0 = -v_y0 / v
+        B = np.concatenate([By, np.zeros(m - n)]).reshape(-1, 1)
+        e = np.eye(m)
+        gamma, psi, y, lr = np.concatenate([Cy, np.zeros(m - n)]), e[n], e[n + 1], params.l_r
+        f = slope["lever_north"]
+        turning = _on_the_plane(p, 0.0)["lever_east"] if tilted else f     # the plant's antenna velocity: the lever
+        lateral = np.concatenate([vy, np.zeros(m - n)])                   # turned by gamma, its lean held
+        vel_rear = speed * psi + lateral - lr * gamma
+        rows = {"yaw_rate": gamma, "lateral_velocity": lateral, "heading": psi, "y_cg": y, "y_rear": y - lr * psi,
+                "vel_north_rear": vel_rear, "y_antenna": y - lr * psi + f * psi,
+                "vel_north_antenna": vel_rear + turning * gamma}
+        if tilted:                                       # the lateral channel's share of these: nil on level ground
+            rows |= {"x_antenna": e[n + 2] + slope["lever_east"] * psi, "roll": slope["roll"] * psi,
+                     "pitch": slope["pitch"] * psi}
+        Ad, Bd = zoh_discretize(A, B, step)
+        return Block.of(self.name, ["steer_angle"], list(rows), Ad, Bd, np.array(list(rows.values())), sampled=False)
+
+    def linear_ground(self, speed: float) -> Ground | None:
+        """The ground under the yaw plant ``self`` driving straight east at ``speed`` on its plane
+        (``slope_angle``, ``slope_downhill_heading``), None on level ground: roll, pitch and the pull across
+        the heading a_lat and their change with psi (models.terrain), the left specific force the IMU reads
+        there, f_y = g sin(roll) cos(pitch) (models.terrain.body_of with no acceleration), and the rear
+        axle's crab: the yaw dynamics' steady state holding the line against the pull, gamma = 0,
+
+            A z + B delta + E a_lat = 0,   C z = 0        (n + 1 equations in z, delta)
+
+        whose v_y (state 0) is R's sideways velocity (gamma = 0: every point of the body moves alike).
+        A height grid (``terrain_file``) is not linearised here: None (the caller says so)."""
+        from agrobot.components.models.terrain import GRAVITY
+        from agrobot.components.models.yaw_dynamics import lateral_disturbance_column
+
+        p = self.p
+        if not float(p.get("slope_angle", 0.0) or 0.0) or p.get("terrain_file") or p.get("model") == "transfer_function":
+            return None
+        here, slope = _on_the_plane(p, 0.0), _per_heading(p)
+        A, B, C, _, _ = _yaw_dynamics(self, speed)
+        n = len(B)
+        M = np.zeros((n + 1, n + 1))
+        M[:n, :n], M[:n, n], M[n, :n] = A, B, C
+        rhs = np.concatenate([-lateral_disturbance_column(n) * here["pull"], [0.0]])
+        z = np.linalg.solve(M, rhs)
+        return Ground(roll=here["roll"], pitch=here["pitch"], roll_per_heading=slope["roll"],
+                      pitch_per_heading=slope["pitch"], pull=here["pull"], pull_per_heading=slope["pull"],
+                      specific_force=GRAVITY * math.sin(here["roll"]) * math.cos(here["pitch"]), crab=float(z[0]))
 
 
 COMPONENT = TractorYawPlant

@@ -19,6 +19,8 @@ import numpy as np
 
 from agrobot.orchestrator.component import Component, inp, out, par
 
+from .models.loop_blocks import Block, passthrough
+
 
 def notch_coefficients(w0: float, zeta_z: float, zeta_p: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """(b, a) of the discrete notch, a[0] = 1."""
@@ -34,7 +36,6 @@ def notch_coefficients(w0: float, zeta_z: float, zeta_p: float, dt: float) -> tu
 class YawRateNotch(Component):
     sampled = True
     roles = ("yaw_rate_filter",)
-    LINEAR_MODEL = "agrobot.analysis.component_models:yaw_rate_notch"   # its block in the margins' loop
     variables = (
         inp("yaw_rate", "rad/s", 0.0, "measured yaw rate"),
         par("frequency", "rad/s", 0.0, "notch centre w0 (0: pass through)"),
@@ -68,6 +69,19 @@ class YawRateNotch(Component):
         self.x = [u, self.x[0]]
         self.y_prev = [y, self.y_prev[0]]
         self.y["yaw_rate_filtered"] = y
+
+    def linear_model(self, step: float, speed: float) -> Block:
+        """The notch's difference equation (components.yaw_rate_notch), or a unit gain at frequency 0."""
+        from scipy.signal import tf2ss
+
+        from agrobot.components.yaw_rate_notch import notch_coefficients
+
+        p = self.p
+        if float(p["frequency"]) == 0.0:
+            return passthrough(self.name, {"yaw_rate": "yaw_rate_filtered"})
+        b, a = notch_coefficients(float(p["frequency"]), float(p["notch_damping"]), float(p["pole_damping"]), step)
+        A, B, C, D = tf2ss(b, a)
+        return Block.of(self.name, ["yaw_rate"], ["yaw_rate_filtered"], A, B, C, D)
 
 
 COMPONENT = YawRateNotch

@@ -103,5 +103,5 @@ def test_a_component_without_an_fmu_form_is_named(tmp_path):
     from agrobot.fmu_export.component_fmus import ComponentExportError, component_model
 
     system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["tractor.tyre_friction=0.8"])))
-    with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: tyre_friction = 0.8 has no FMU form"):
+    with pytest.raises(ComponentExportError, match="figure8.toml: components.tractor: tyre_friction = 0.8 has no C form"):
         component_model(system, "tractor")

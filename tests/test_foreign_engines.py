@@ -97,7 +97,7 @@ def test_cofmupy_runs_the_figure8_fmus(unpacked, own_run):
      ["figure8_hil.toml", "no FMU form for", "watchdog (SafetyWatchdog)", "tractor (HardwareTractor)"]),
     (["export-ssp", "studies/figure8.toml", "--out", "{tmp}/x.fmu"], ["--out", "expected a path ending in .ssp"]),
     (["export-ssp", "studies/figure8.toml", "--out", "{tmp}/mf.ssp", "--set", "tractor.tyre_friction=0.8"],
-     ["figure8.toml: components.tractor: tyre_friction = 0.8 has no FMU form"]),
+     ["figure8.toml: components.tractor: tyre_friction = 0.8 has no C form"]),
     (["run", "{tmp}/bad.ssp", "--out", "{tmp}/out"], ["bad.ssp: not an SSP archive"]),
 ])
 def test_bad_ssp_invocations_are_named_without_a_traceback(tmp_path, args, words):

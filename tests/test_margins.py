@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agrobot.analysis.loop_blocks import NoLinearModel
+from agrobot.components.models.loop_blocks import NoLinearModel
 from agrobot.analysis.margins import analyse, anatomy, margins_of
 from agrobot.analysis.margins_simulation import simulated_run
 from agrobot.components.stanley import Stanley

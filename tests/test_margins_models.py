@@ -7,9 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agrobot.analysis.component_models import (gps_sensor, pose_ekf, steering_hydraulics, yaw_plant, yaw_rate_mpc,
-                                       yaw_rate_notch)
-from agrobot.analysis.loop_blocks import Block, OperatingPoint
+from agrobot.components.models.loop_blocks import Block, OperatingPoint
 from agrobot.analysis.loop_models import network_of
 from agrobot.components.kinematic_tracker import TRACKER_INPUTS, KinematicTracker
 from agrobot.components.pure_pursuit import PurePursuit
@@ -113,7 +111,7 @@ def test_steering_block_is_the_hydraulics_step_without_its_dead_bands():
     params = {"deadband": 0.0, "potentiometer_resolution": 0.0, "quantization_guard": 0, "command_delay": 0.03}
     comp = SteeringHydraulics("steering", params)
     comp.initialize(0.0, 0.01)
-    block = steering_hydraulics(comp, 0.01, 2.0)
+    block = comp.linear_model(0.01, 2.0)
     cmd = 0.02 * np.sin(np.arange(300) * 0.01 * 3.0) + 0.01 * (np.arange(300) > 40)
     sim = []
     for c in cmd:
@@ -132,7 +130,7 @@ def test_yaw_plant_block_against_the_plant_on_a_straight(model):
 
     plant = TractorYawPlant("tractor", {"model": model, "antenna_forward": 0.5})
     plant.initialize(0.0, 0.01)
-    block = yaw_plant(plant, 0.01, 2.0)
+    block = plant.linear_model(0.01, 2.0)
     delta = 0.01 * np.sin(np.arange(600) * 0.01 * 2.0)
     sim = []
     for d in delta:
@@ -160,7 +158,7 @@ def test_ekf_block_against_the_filter_after_it_settles():
     for k in range(4000):                                 # settle on the straight
         ekf.u.update(gps_x=v * 0.05 * k, gps_y=0.0, fix_valid=1.0, speed=v, steer_angle=0.0)
         ekf.step(k * 0.05, 0.05)
-    block = pose_ekf(ekf, 0.05, v)
+    block = ekf.linear_model(0.05, v)
     rng = np.random.default_rng(1)
     z, d = 1e-3 * rng.standard_normal(200), 1e-3 * rng.standard_normal(200)
     sim = []
@@ -180,7 +178,7 @@ def test_mpc_block_equals_the_qp_mpc_while_no_constraint_is_active(model_input):
 
     mpc = YawRateMPC("mpc", {"model_input": model_input})
     mpc.initialize(0.0, 0.05)
-    block = yaw_rate_mpc(mpc, 0.05, 2.0)
+    block = mpc.linear_model(0.05, 2.0)
     rng = np.random.default_rng(0)
     u = 1e-3 * rng.standard_normal((200, 3))            # (steer_angle, yaw_rate, yaw_rate_ref)
     qp = []
@@ -205,7 +203,7 @@ def test_notch_and_gps_latency_blocks_against_their_components():
         notch.u["yaw_rate"] = value
         notch.step(0.0, 0.05)
         sim.append(notch.y["yaw_rate_filtered"])
-    np.testing.assert_allclose(run_block(yaw_rate_notch(notch, 0.05, 2.0), x.reshape(-1, 1))[:, 0], sim, atol=1e-12)
+    np.testing.assert_allclose(run_block(notch.linear_model(0.05, 2.0), x.reshape(-1, 1))[:, 0], sim, atol=1e-12)
 
     gps = GPSSensor("gps", {"position_noise_std": 0.0, "velocity_noise_std": 0.0, "latency": 0.15})
     gps.initialize(0.0, 0.05)
@@ -214,7 +212,7 @@ def test_notch_and_gps_latency_blocks_against_their_components():
         gps.u.update(y_true=value, vel_north_true=-value)
         gps.step(0.0, 0.05)
         sim.append([gps.y["y"], gps.y["vel_north"]])
-    np.testing.assert_allclose(run_block(gps_sensor(gps, 0.05, 2.0), np.column_stack([x, -x])), sim, atol=1e-15)
+    np.testing.assert_allclose(run_block(gps.linear_model(0.05, 2.0), np.column_stack([x, -x])), sim, atol=1e-15)
 
 
 # --- the network ----------------------------------------------------------------------------
@@ -255,7 +253,7 @@ def ins_differences(ekf, inputs, start: int, block, steps: int = 25, eps: float 
     outputs, and the block's response to the unit step."""
     import copy
 
-    from agrobot.analysis.component_models import INS_INPUTS, INS_OUTPUTS
+    from agrobot.components.ins_ekf import INS_INPUTS, INS_OUTPUTS
 
     def run(port, delta):
         fresh = copy.deepcopy(ekf)
@@ -286,7 +284,6 @@ def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
     value held between its fixes): the central differences of its outputs
     follow the block with the periodic gains (the fix steps first), to 1e-3 relative (the filter
     after 200 s is that close to its settled gains)."""
-    from agrobot.analysis.component_models import ins_ekf
     from agrobot.components.ins_ekf import INSEKF
 
     dt, every = 0.01, 5
@@ -303,7 +300,7 @@ def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
     for k in range(start):
         ekf.u.update(inputs(k))
         ekf.step(k * dt, dt)
-    block = ins_ekf(ekf, dt, speed, every, 0)
+    block = ekf.linear_model(dt, speed, every, 0)
     for port, (measured, declared) in ins_differences(ekf, inputs, start, block).items():
         assert np.allclose(measured, declared, rtol=1e-3, atol=1e-6), (port, measured[:6], declared[:6])
         assert np.abs(declared).max() > 1e-3 or port in ("gps_x", "roll", "accel_left", "pitch")   # pitch: east only, level
@@ -331,7 +328,6 @@ def test_imu_block_is_the_jacobian_of_its_step():
     """The IMU without bias or noise, level, heading east at 2 m/s: central differences of its gyro,
     left specific force and roll over 3 steps for each input against the block."""
 
-    from agrobot.analysis.component_models import imu_sensor
     from agrobot.components.imu_sensor import IMUSensor
 
     zero = {k: 0.0 for k in ("gyro_noise_psd", "gyro_bias_std", "gyro_bias_instability", "accel_noise_psd",
@@ -342,7 +338,7 @@ def test_imu_block_is_the_jacobian_of_its_step():
     trim = {"roll": 0.0, "pitch": 0.0, "heading": 0.0, "yaw_rate": 0.0, "vel_east": 2.0, "vel_north": 0.0}
     imu.u.update(trim)
     imu.step(0.0, 0.01)
-    block = imu_sensor(imu, 0.01, 2.0)
+    block = imu.linear_model(0.01, 2.0)
     for port in trim:
         measured = impulse_differences(imu, trim, port, block.outputs, 0.01)
         u = np.zeros((3, len(block.inputs)))

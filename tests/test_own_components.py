@@ -113,20 +113,31 @@ def test_the_script_and_python_m_find_a_module_beside_the_command_alike(tmp_path
 
 def test_what_a_component_declares_is_what_the_tools_find():
     """The C core is the class's own (a subclass with other equations has none until it says so);
-    the linear model is inherited; a LINEAR_MODEL that cannot be loaded is refused by name."""
-    from agrobot.analysis.component_models import gps_sensor, linear_model_of
+    the linear model is inherited; a LINEAR_MODEL that cannot be loaded is refused by name; one that
+    can is called with the component first."""
+    from agrobot.analysis.loop_models import linear_model_of
     from agrobot.components.gps_sensor import GPSSensor
-    from agrobot.fmu_export.component_fmus import core_of
+    from agrobot.orchestrator.compiled.cores import description_of
+    from agrobot.orchestrator.component import Component
     from agrobot.orchestrator.errors import InputError
 
     class NoisierGPS(GPSSensor):
         pass
 
-    class Broken(GPSSensor):
-        LINEAR_MODEL = "agrobot.analysis.component_models:no_such_model"
+    class Broken(Component):
+        LINEAR_MODEL = "agrobot.analysis.loop_models:no_such_model"
+        variables = ()
 
-    assert core_of(GPSSensor("gps", {}))[0] == "gps_sensor" and core_of(NoisierGPS("gps", {})) is None
-    assert linear_model_of(NoisierGPS("gps", {})) is gps_sensor
-    with pytest.raises(InputError, match="'gps' .*Broken.: LINEAR_MODEL = 'agrobot.analysis.component_models:no_such_model' "
+    class Named(Component):
+        LINEAR_MODEL = "agrobot.analysis.loop_models:off_the_lateral_loop"
+        variables = ()
+
+    assert description_of(GPSSensor("gps", {})).source.name == "gps_sensor.c"
+    assert description_of(NoisierGPS("gps", {})) is None
+    noisier = NoisierGPS("gps", {})
+    assert linear_model_of(noisier).__func__ is GPSSensor.linear_model
+    named = Named("n", {})
+    assert linear_model_of(named)() is False                    # off_the_lateral_loop(named)
+    with pytest.raises(InputError, match="'gps' .*Broken.: LINEAR_MODEL = 'agrobot.analysis.loop_models:no_such_model' "
                                          "cannot be loaded"):
         linear_model_of(Broken("gps", {}))

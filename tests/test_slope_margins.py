@@ -1,4 +1,4 @@
-"""The guidance loop's linear model on a side slope (analysis.component_models with a Ground): the
+"""The guidance loop's linear model on a side slope (the components' linear_model with a Ground): the
 operating point against the closed form of the tyres holding the line, and the yaw plant's, the
 IMU's and the INS's blocks against short nonlinear runs of the components themselves on the slope
 (deviations from the trimmed run; central differences of the settled filter). Each check also
@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from agrobot.analysis.component_models import INS_OUTPUTS, imu_sensor, ins_ekf, plant_ground, yaw_plant
+from agrobot.components.ins_ekf import INS_OUTPUTS
 from agrobot.components.models.terrain import GRAVITY, attitude, ground_of, lever_offset
 from agrobot.components.models.yaw_dynamics import TractorParameters
 from agrobot.components.tractor_yaw_plant import TractorYawPlant
@@ -50,7 +50,7 @@ def test_the_operating_point_on_a_slope_is_the_tyres_holding_the_line(downhill):
     the rear's share l_f / L at the slip angle F_r / C_r, so R crabs at -k f_y v, k = m l_f / (L C_r),
     f_y = g sin(roll) cos(pitch) the IMU's reading (the rear axle's steady slip, by hand)."""
     plant = _plant(downhill)
-    g = plant_ground(plant, 2.0)
+    g = plant.linear_ground(2.0)
     p = TractorParameters.of(plant.p)
     assert g.pull == pytest.approx(GRAVITY * math.sin(SLOPE) * math.sin(downhill), rel=1e-9)
     assert g.pull_per_heading == pytest.approx(-GRAVITY * math.sin(SLOPE) * math.cos(downhill), abs=1e-6)
@@ -59,7 +59,7 @@ def test_the_operating_point_on_a_slope_is_the_tyres_holding_the_line(downhill):
     k = p.m * p.l_f / ((p.l_f + p.l_r) * p.C_r)
     assert g.crab == pytest.approx(-k * -g.pull * 2.0, rel=1e-6)          # the tyres push -pull uphill
     assert g.slip_compliance(2.0) * g.specific_force == pytest.approx(-g.crab / 2.0, rel=1e-12)
-    assert plant_ground(TractorYawPlant("flat", {"model": "rlf"}), 2.0) is None
+    assert TractorYawPlant("flat", {"model": "rlf"}).linear_ground(2.0) is None
 
 
 def trimmed(plant_of, speed: float, seconds: float = 12.0):
@@ -96,9 +96,9 @@ def test_yaw_plant_block_on_a_slope_against_the_plant():
     level block (no pull turning with the heading, no tilt) does not."""
     speed, downhill = 2.0, -60 * DEG
     trim, psi0 = trimmed(lambda: _plant(downhill), speed)
-    block = yaw_plant(_plant(downhill), DT, speed)
-    level = yaw_plant(TractorYawPlant("tractor", {"model": "rlf", "antenna_height": 2.5, "antenna_forward": 0.5}),
-                      DT, speed)
+    block = _plant(downhill).linear_model(DT, speed)
+    level = TractorYawPlant("tractor", {"model": "rlf", "antenna_height": 2.5, "antenna_forward": 0.5}).linear_model(
+        DT, speed)
     settle = int(12.0 / DT)
     delta = 0.005 * np.sin(np.arange(600) * DT * 2.0)
 
@@ -136,7 +136,7 @@ def test_imu_block_on_a_slope_is_the_jacobian_of_its_step():
     with the ground; the level block misses the tilt's share."""
     from agrobot.components.imu_sensor import IMUSensor
 
-    g = plant_ground(_plant(-60 * DEG), 2.0)
+    g = _plant(-60 * DEG).linear_ground(2.0)
     zero = {k: 0.0 for k in ("gyro_noise_psd", "gyro_bias_std", "gyro_bias_instability", "accel_noise_psd",
                              "accel_bias_std", "attitude_bias_std", "attitude_noise_std")}
     imu = IMUSensor("imu", zero)
@@ -145,7 +145,7 @@ def test_imu_block_on_a_slope_is_the_jacobian_of_its_step():
     trim = {"roll": g.roll, "pitch": g.pitch, "heading": 0.0, "yaw_rate": 0.0, "vel_east": 2.0, "vel_north": 0.0}
     imu.u.update(trim)
     imu.step(0.0, DT)
-    block, level = imu_sensor(imu, DT, 2.0, g), imu_sensor(imu, DT, 2.0)
+    block, level = imu.linear_model(DT, 2.0, g), imu.linear_model(DT, 2.0)
     differs = False
     for port in ("roll", "pitch", "yaw_rate", "vel_north"):
         measured = impulse_differences(imu, trim, port, block.outputs, DT)
@@ -168,7 +168,7 @@ def test_ins_ekf_block_on_a_slope_is_the_jacobian_of_its_step(downhill=-60 * DEG
     from agrobot.components.ins_ekf import INSEKF
 
     speed, every = 2.0, 5
-    g = plant_ground(_plant(downhill), speed)
+    g = _plant(downhill).linear_ground(speed)
     k = g.slip_compliance(speed)
     params = {"antenna_height": 2.5, "antenna_forward": 0.5, "slip_compliance0": k}
     ekf = INSEKF("ekf", {"x0": 0.0, "y0": 0.0, "psi0": 0.0, **params})
@@ -185,7 +185,7 @@ def test_ins_ekf_block_on_a_slope_is_the_jacobian_of_its_step(downhill=-60 * DEG
         ekf.u.update(inputs(i))
         ekf.step(i * DT, DT)
     assert ekf.s[5] == pytest.approx(k, rel=1e-3)          # the filter keeps the crab it was given
-    block = ins_ekf(ekf, DT, speed, every, 0, g)
+    block = ekf.linear_model(DT, speed, every, 0, g)
     differences = ins_differences(ekf, inputs, start, block)
     for port, (measured, declared) in differences.items():
         assert np.allclose(measured, declared, rtol=1e-2, atol=2e-6), (port, measured[:6], declared[:6])

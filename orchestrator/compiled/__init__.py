@@ -1,5 +1,5 @@
-"""The compiled engine: when every component of a study has a C core (a project registers where
-the cores come from: ``register_core_provider``), the study's whole loop (its wiring, rates,
+"""The compiled engine: when every component of a study has a C core (its class declares it,
+``c_core``: orchestrator.compiled.cores), the study's whole loop (its wiring, rates,
 initial values and parameters, the master algorithm's order and sample-and-hold) is generated
 as C, compiled once per shape and cached, and run by one call per run.
 
@@ -10,9 +10,9 @@ as C, compiled once per shape and cached, and run by one call per run.
 The orchestrator's part is generic: it knows no component; orchestrator.compiled.cores says what
 a core provides.
 """
-from .cores import CCore, NoCCore, register_core_provider
+from .cores import CCore, CoreDescription, NoCCore
 from .simulation import ENGINES, CompiledRefused, CompiledSimulation, cores_of, select_engine
 from .toolchain import CompileError, CompilerMissing
 
-__all__ = ["CCore", "NoCCore", "register_core_provider", "ENGINES", "CompiledRefused", "CompiledSimulation",
+__all__ = ["CCore", "CoreDescription", "NoCCore", "ENGINES", "CompiledRefused", "CompiledSimulation",
            "cores_of", "select_engine", "CompileError", "CompilerMissing"]

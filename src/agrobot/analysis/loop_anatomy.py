@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .loop_blocks import NoLinearModel
+from agrobot.components.models.loop_blocks import NoLinearModel
 
 @dataclass
 class Anatomy:

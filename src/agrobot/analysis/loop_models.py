@@ -4,7 +4,7 @@ straight line, wired by its own connections, run on the orchestrator's schedule.
 Operating point: the tractor drives a straight line heading east (psi = 0) at speed v, on its
 reference, wheels centred; on a side slope (the yaw plant's plane) wheels and tyres hold the line
 against the pull, the IMU reads the slope's roll, pitch and specific force, and the INS has learnt the
-crab (component_models.plant_ground; the crab angle itself, 0.5 deg on 10 deg, is left out of psi).
+crab (the plant's ``linear_ground``; the crab angle itself, 0.5 deg on 10 deg, is left out of psi).
 First-order deviations split into a longitudinal channel (east positions,
 speeds) and a lateral channel (north positions and velocities, heading, yaw rate, wheel angles); on a
 straight the two do not couple, so the steering loop is the lateral channel alone and the speed loop
@@ -14,10 +14,12 @@ Each component on the loop becomes a discrete block at its own step, inputs and 
 
 - trackers and routes declare theirs (``lateral_linearisation(speed, dt, along_track_error)``: a python-control
   StateSpace whose labels are port names);
-- the other components name theirs in their class (``LINEAR_MODEL = "module:function"``: the yaw plant,
-  steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF, yaw-rate MPC, notch, computation delay and watchdog in
-  analysis.component_models), each from its own step equations and parameters without the nonlinearities
-  a small signal beyond the dead bands does not see (dead bands, quantisation, saturations);
+- the other components build theirs in their class (a method ``linear_model(step, speed)`` returning a
+  components.models.loop_blocks.Block: the yaw plant, steering, GPS, gyro, IMU, pose EKF, GNSS/INS EKF,
+  yaw-rate MPC, notch, computation delay and watchdog), each from its own step equations and parameters
+  without the nonlinearities a small signal beyond the dead bands does not see (dead bands, quantisation,
+  saturations); a class may instead name a function, ``LINEAR_MODEL = "module:function"`` taking the
+  component first;
 - a composite subsystem is its inner network lifted over its step.
 
 A block may change from step to step with a period of its own (``Block.phases``: the INS EKF takes
@@ -36,13 +38,15 @@ for the linear blocks, the multirate sampling included.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .component_models import linear_model_of, off_the_lateral_loop, plant_ground, yaw_plant
-from .loop_blocks import LEVEL, Block, Ground, NoLinearModel, OperatingPoint
+from agrobot.components.models.loop_blocks import LEVEL, Block, Ground, NoLinearModel, OperatingPoint
+from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.registry import import_study_module
 
 
 # --- the network -----------------------------------------------------------------------------------
@@ -210,6 +214,32 @@ def check_tracker(comp, lin, step: float, op: OperatingPoint, steps: int = 4, ep
                                     f"{measured[k][j]:.6g} (finite differences); update lateral_linearisation")
 
 
+def linear_model_of(comp):
+    """f(step, speed, ...) -> Block of the component: its method ``linear_model``, or the
+    ``module:function`` its class names in ``LINEAR_MODEL`` (called with the component first); None
+    when it has neither."""
+    method = getattr(comp, "linear_model", None)
+    if callable(method):
+        return method
+    name = getattr(type(comp), "LINEAR_MODEL", None)
+    if not name:
+        return None
+    module, _, function = name.partition(":")
+    try:
+        model = getattr(import_study_module(module), function)
+    except (ImportError, AttributeError) as exc:
+        raise InputError(f"component {comp.name!r} ({type(comp).__module__}.{type(comp).__qualname__}): "
+                         f"LINEAR_MODEL = {name!r} cannot be loaded ({exc}); expected 'module:function'") from None
+    return functools.partial(model, comp)
+
+
+def off_the_lateral_loop(comp) -> bool:
+    """The component's class says ``OFF_THE_LATERAL_LOOP = True``: its outputs do not move the
+    lateral channel at first order on a straight (the speed loop and its estimator set v; an
+    implement reads the tractor and nothing reads it back; status and recording)."""
+    return bool(getattr(type(comp), "OFF_THE_LATERAL_LOOP", False))
+
+
 def _ground_argument(model, op: OperatingPoint) -> dict:
     """{"ground": op.ground} for a linear model that takes the ground (the IMU, the INS), else {}."""
     import inspect
@@ -221,11 +251,11 @@ def _ground_argument(model, op: OperatingPoint) -> dict:
 
 def ground_of(system, speed: float) -> Ground:
     """The ground under the tractor at the operating point: that of the built system's yaw plant
-    (component_models.plant_ground; level when it has no slope)."""
+    (its ``linear_ground``; level when it has no slope)."""
     for node in system.nodes.values():
         comp = node.component
-        if linear_model_of(comp) is yaw_plant:
-            ground = plant_ground(comp, speed)
+        if hasattr(comp, "linear_ground"):
+            ground = comp.linear_ground(speed)
             if ground is not None:
                 return ground
     return LEVEL
@@ -252,7 +282,7 @@ def block_of(comp, step: float, ratio: int, op: OperatingPoint) -> Block | None:
                         ratio, comp.sampled)
     model = linear_model_of(comp)
     if model is not None:
-        block = model(comp, step, op.speed, **_ground_argument(model, op))
+        block = model(step, op.speed, **_ground_argument(model, op))
         block.ratio = ratio
         return block
     if isinstance(comp, CompositeComponent):
@@ -325,7 +355,7 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
             every = max(1, system.nodes[source].ratio // node.ratio)
             first = source in order and order.index(source) < order.index(name)
             model = linear_model_of(comp)
-            blocks[name] = model(comp, node.step, op.speed, every, 0 if first else 1, **_ground_argument(model, op))
+            blocks[name] = model(node.step, op.speed, every, 0 if first else 1, **_ground_argument(model, op))
             blocks[name].ratio = node.ratio
     for (target, port), (source, output) in sources.items():
         if target in blocks and port in blocks[target].inputs and source not in blocks:
@@ -334,7 +364,8 @@ def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver
                 raise NoLinearModel(f"{study.where}: {purpose}: component {source!r} ({_type_name(comp)}) drives "
                                     f"{target}.{port} in the guidance loop and has no linear model: give its class "
                                     f"a method lateral_linearisation(speed, dt, along_track_error) returning a "
-                                    f"python-control StateSpace labelled by its ports, or LINEAR_MODEL = "
-                                    f"'module:function' (as in analysis.component_models), or OFF_THE_LATERAL_LOOP "
+                                    f"python-control StateSpace labelled by its ports, or a method "
+                                    f"linear_model(step, speed) returning a Block (as the shipped components have), "
+                                    f"or OFF_THE_LATERAL_LOOP "
                                     f"= True when it moves nothing of the lateral channel")
     return Network(blocks, order, sources, study.study.base_step)

@@ -35,7 +35,7 @@ import numpy as np
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .loop_blocks import NoLinearModel, OperatingPoint
+from agrobot.components.models.loop_blocks import NoLinearModel, OperatingPoint
 from .loop_models import OpenLoop, network_of, study_ground
 from .loop_anatomy import Anatomy, anatomy
 from .margins_simulation import simulate

@@ -28,7 +28,7 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .loop_blocks import NoLinearModel, OperatingPoint
+from agrobot.components.models.loop_blocks import NoLinearModel, OperatingPoint
 from .loop_models import block_of, network_of
 from .margins import Analysis, Margins, analyse, anatomy, margins_of
 

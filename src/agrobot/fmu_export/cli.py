@@ -93,11 +93,6 @@ def run_loop(args: argparse.Namespace) -> int:
 
 
 def register(registry) -> None:
-    from agrobot.orchestrator.compiled import register_core_provider
-
-    from .loop_cores import loop_core
-
-    register_core_provider(loop_core)           # the compiled engine's C cores
     registry.add_command("export-controller",
                          "export the study's guidance controller (tracker + MPC + speed PID) as an FMU",
                          add_arguments, run)

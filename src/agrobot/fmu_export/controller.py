@@ -20,16 +20,18 @@ from pathlib import Path
 import numpy as np
 
 from agrobot.components.kinematic_tracker import KinematicTracker
+from agrobot.components.models.c_sources import GUIDANCE_LAWS, QP_SOLVER
 from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
 from agrobot.components.speed_pid import SpeedPID
 from agrobot.components.yaw_rate_mpc import YawRateMPC
 from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.compiled.cores import c_array
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
 from .packaging import PackagingError, check_fmu_target
-from .sampled_fmu import SampledModel, build_fmu, c_array, c_strings, token_of
+from .sampled_fmu import SampledModel, build_fmu, c_strings, token_of
 
 MODEL_IDENTIFIER = "guidance_controller"
 C_DIR = Path(__file__).with_name("c")
@@ -154,7 +156,7 @@ def sampled_model(design: ControllerDesign) -> SampledModel:
                    f"speed PID cascade; sampled every {float(design.sample_time)} s, outputs follow the inputs "
                    f"of each sample instant")
     return SampledModel(MODEL_IDENTIFIER, guid, description, design.sample_time, design.parameters, design.inputs,
-                        design.outputs, design.dependencies, source, ["guidance_laws.c", "qp_active_set.c", "qp_active_set.h"])
+                        design.outputs, design.dependencies, source, [*GUIDANCE_LAWS, *QP_SOLVER])
 
 
 def export_controller(study: Study, out: Path, fmi_version: int = 2) -> Path:

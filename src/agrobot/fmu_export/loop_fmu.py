@@ -25,6 +25,7 @@ from pathlib import Path
 
 from agrobot.orchestrator.build import System, build_system
 from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
+from agrobot.orchestrator.compiled.cores import c_array
 from agrobot.orchestrator.compiled.simulation import refusal
 from agrobot.orchestrator.composite import exported_ports, inner_feedthrough
 from agrobot.orchestrator.errors import InputError
@@ -32,7 +33,7 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
 from .packaging import PackagingError, check_fmu_target
-from .sampled_fmu import C_DIR, WRAPPERS, SampledModel, build_fmu, c_array, c_strings, token_of
+from .sampled_fmu import WRAPPERS, SampledModel, build_fmu, c_strings, token_of
 
 ALIGN = 16          # bytes: each component's state starts on this boundary in the loop's state
 
@@ -189,7 +190,7 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     note += (f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step to use); "
              f"the study's parameters and seed are compiled in (--set them and export again)")
     model = SampledModel(ident, token, description, float(s.base_step), [], inputs, outputs, deps, core,
-                         [p.relative_to(C_DIR).as_posix() for p in sorted(set(files))], fmu_units,
+                         sorted(set(files)), fmu_units,
                          starts if inputs else None, float(s.stop_time))
     return model, note
 

@@ -17,18 +17,12 @@ from xml.sax.saxutils import quoteattr
 
 from agrobot.orchestrator.units import base_unit
 
-import numpy as np
 
 from .packaging import package_fmu
 
 C_DIR = Path(__file__).with_name("c")
 VR_TIME, VR_INPUT0, VR_OUTPUT0 = 999, 1000, 2000       # as c/sampled_instance.c numbers them
 WRAPPERS = {2: "fmi2_cs.c", 3: "fmi3_cs.c"}
-
-
-def c_array(values) -> str:
-    """Numbers as the body of a C double array initialiser (repr: every digit kept)."""
-    return ", ".join(repr(float(v)) for v in np.asarray(values, dtype=float).ravel())
 
 
 def c_strings(names) -> str:
@@ -54,7 +48,7 @@ class SampledModel:
     outputs: list[tuple[str, str, str]]
     dependencies: dict[str, list[str]]           # output -> inputs read at the same sample instant
     core_source: str                             # the generated model core (C)
-    extra_sources: list[str] = field(default_factory=list)   # files of c/ (or c/components/) the core includes
+    extra_sources: list = field(default_factory=list)   # C files the core includes (paths, or names in c/)
     units: dict[str, str] = field(default_factory=dict)      # further generated translation units (file: C text)
     input_starts: list[float] | None = None      # the inputs' start values (default 0; the core defines MODEL_IN_START)
     stop_time: float | None = None               # s: the default experiment's end, when the model has one

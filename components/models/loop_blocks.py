@@ -1,6 +1,6 @@
-"""The pieces of a linear guidance-loop network (analysis.loop_models): the operating point, a
-discrete block with named ports (y = C x + D u, x <- A x + B u, possibly periodic), delay lines,
-pass-throughs and the lifting of a fast block over a slower step.
+"""The pieces of a linear guidance-loop network (analysis.loop_models; each component builds its own block,
+``linear_model``): the operating point, a discrete block with named ports (y = C x + D u, x <- A x + B u,
+possibly periodic), delay lines, pass-throughs and the lifting of a fast block over a slower step.
 """
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ class NoLinearModel(InputError):
 
 @dataclass(frozen=True)
 class Ground:
-    """The ground under the tractor at the operating point (heading east; analysis.component_models.
-    plant_ground): its roll and pitch and their change with the heading, the in-plane gravity across
+    """The ground under the tractor at the operating point (heading east; the yaw plant's
+    linear_ground): its roll and pitch and their change with the heading, the in-plane gravity across
     the heading a_lat = P . (-sin psi, cos psi) (left positive) and its change with the heading, the
     left specific force the IMU reads when driving straight there (g sin(roll) cos(pitch)), and the
     rear axle's steady sideways velocity (its crab, left positive). All zero: level ground."""
