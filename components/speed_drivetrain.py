@@ -18,7 +18,7 @@ from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
 
 from .steering_hydraulics import valve_opening
-from .models.c_sources import substeps_define
+from .models.c_sources import substeps, substeps_define
 
 
 def steady_state_speed(pedal: float, v_max: float, dead_zone: float, exponent: float) -> float:
@@ -54,7 +54,7 @@ class SpeedDrivetrain(Component):
         p = self.p
         self.require(0 <= p["pedal_dead_zone"] < 1, "pedal_dead_zone must be in [0, 1)")
         self.require(p["time_constant"] > 0 and p["internal_step"] > 0, "time constants must be > 0")
-        self.substeps = max(1, int(round(dt / p["internal_step"])))
+        self.substeps = substeps(dt, p["internal_step"])
         self.pedal, self.v = float(p["pedal0"]), float(p["speed0"])
         self.y["pedal_position"], self.y["speed"] = self.pedal, self.v
 

@@ -32,7 +32,7 @@ import numpy as np
 from agrobot.orchestrator.compiled.cores import CoreDescription, capacity
 from agrobot.orchestrator.component import Component, inp, out, par
 
-from .models.c_sources import delay_steps, substeps_define
+from .models.c_sources import delay_steps, substeps, substeps_define
 from .models.pid import DiscretePID
 from .models.loop_blocks import Block, delay_line, lifted
 
@@ -101,7 +101,7 @@ class SteeringHydraulics(Component):
         self.require(0 <= p["deadband"] < p["voltage_max"] - p["neutral_voltage"],
                      "deadband must be >= 0 and below the valve's voltage span")
         self.require(p["internal_step"] > 0 and p["valve_time_constant"] > 0, "time constants must be > 0")
-        self.substeps = max(1, int(round(dt / p["internal_step"])))
+        self.substeps = substeps(dt, p["internal_step"])
         for key in ("command_delay", "angle_deadband", "rate_limit"):
             self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
         self.require(p["quantization_guard"] in (0, 1), f"parameter quantization_guard must be 0 or 1, "
@@ -192,7 +192,7 @@ class SteeringHydraulics(Component):
         s_o = 1 / (V_max - V_n - V_db) the valve's slope above its dead band, alpha = 1 - exp(-h / tau_valve),
         r_s = h Q_max / V_rad. The potentiometer reads delta."""
         p = self.p
-        m = max(1, int(round(step / p["internal_step"])))
+        m = substeps(step, p["internal_step"])
         h = step / m
         s_o = 1.0 / (p["voltage_max"] - p["neutral_voltage"] - p["deadband"])
         alpha = 1.0 - math.exp(-h / p["valve_time_constant"])

@@ -1,6 +1,6 @@
 """What the components' C cores share: the guidance laws and the QP solver the tracker, the speed PID
 and the MPC include (the controller FMU includes them too), the one rounding of a delay to whole
-steps, and the substep count of a continuous core."""
+steps, and the one substep count of a continuous component."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -15,6 +15,11 @@ def delay_steps(delay: float, step: float) -> int:
     return int(round(float(delay) / float(step)))
 
 
+def substeps(step: float, internal_step: float) -> int:
+    """Internal steps per step of a component that integrates at ``internal_step``: max(1, round(h / h_i))."""
+    return max(1, int(round(float(step) / float(internal_step))))
+
+
 def substeps_define(comp, period: float) -> str:
-    """``SUBSTEPS``: internal steps per sample of a core that integrates at ``internal_step``."""
-    return f"#define SUBSTEPS {max(1, delay_steps(period, comp.p['internal_step']))}\n"
+    """``SUBSTEPS`` of a C core that integrates at the component's ``internal_step``."""
+    return f"#define SUBSTEPS {substeps(period, comp.p['internal_step'])}\n"
