@@ -9,6 +9,8 @@ import pytest
 
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.catalogue import CATALOGUE
+from agrobot.diagnosis.plausibility import VehicleContext
+from agrobot.identification.vehicle import Vehicle
 from agrobot.orchestrator.study import Study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,3 +56,14 @@ def test_an_effect_is_material_far_from_the_baseline_and_not_at_it(effect):
     assert not effect.material(base, base)
     assert effect.stages and all(s in ("steering", "yaw", "position", "speed") for s in effect.stages)
     assert all(len(start) == len(effect.parameters) for start in effect.starts)
+
+
+@pytest.mark.parametrize("effect", CATALOGUE, ids=lambda e: e.id)
+def test_an_effect_judges_its_starting_values_plausible_on_every_vehicle_class(effect):
+    """Its rule (``Effect.plausibility``, the default passes everything) returns reasons as text and
+    none for the values the search starts from, on a tractor and a car, with and without an outline."""
+    for table in ({"class": "tractor", "length": 5.0, "width": 2.5}, {"class": "car"}, {}):
+        ctx = VehicleContext(Vehicle.from_table(table), 2.9, 1.4, 2.0)
+        for start in effect.starts:
+            reasons = effect.plausibility(dict(zip((p.name for p in effect.parameters), start)), ctx)
+            assert reasons == [], (table, start, reasons)

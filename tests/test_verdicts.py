@@ -2,13 +2,17 @@
 generated cases (the end-to-end cases on simulated truths: tests/test_verdicts_truths.py)."""
 from __future__ import annotations
 
+import ast
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from agrobot.diagnosis.effect import Parameter
+from agrobot.diagnosis import verdict as verdict_module
+from agrobot.diagnosis.catalogue import CATALOGUE, EFFECT_IDS
+from agrobot.diagnosis.effect import Effect, Parameter
 from agrobot.diagnosis.unexplained import signature
 from agrobot.diagnosis.verdict import audit_findings, conclude, judge_values
 from agrobot.identification.comparisons import course_bias, pair
@@ -65,6 +69,49 @@ def test_values_no_vehicle_of_the_class_has_are_named(eid, params, words):
                                          ("steering_gain", {"steering_gain": 1.25})])
 def test_values_the_vehicle_can_have_pass(eid, params):
     assert judge_values(effect(eid, **params), CAR, 2.97, 1.5, 20.0) == []
+
+
+def test_the_verdict_compares_no_effect_id_each_effect_judges_itself():
+    """verdict.py names an effect only in the audit's table of what a finding can imitate: no
+    comparison, branch or lookup on an effect's id; the rules are the effects' own."""
+    tree = ast.parse(Path(verdict_module.__file__).read_text())
+    table = next(n for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "IMITATES")
+    in_table = {id(n) for n in ast.walk(table)}
+    named = [n for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in EFFECT_IDS]
+    assert named and all(id(n) in in_table for n in named), [(n.lineno, n.value) for n in named if id(n) not in in_table]
+    compares = [n for n in ast.walk(tree) if isinstance(n, (ast.Compare, ast.Match))]
+    assert not any(isinstance(c, ast.Constant) and c.value in EFFECT_IDS
+                   for n in compares for c in ast.walk(n)), "an effect id compared in verdict.py"
+
+
+class _Wobble(Effect):
+    """A toy effect with its own rule, known to no catalogue file."""
+    id = "toy_wobble"
+    subsystem = "toy"
+    stages = ("yaw",)
+    parameters = (Parameter("wobble", "m", 0.1, 0.0, 5.0),)
+    starts = ((0.0,),)
+    threshold = hypothesis = experiment = "toy"
+
+    def plausibility(self, values, ctx):
+        if values["wobble"] > 0.1 * ctx.vehicle.width:
+            return [f"a wobble of {values['wobble']:g} m is over a tenth of the {ctx.vehicle.width:g} m width"]
+        return []
+
+
+def test_an_effect_is_judged_by_its_own_rule_without_the_verdict_knowing_it():
+    catalogue = CATALOGUE + (_Wobble(),)
+    assert judge_values(effect("toy_wobble", wobble=0.1), CAR, 2.97, 1.5, 20.0, catalogue) == []
+    v = conclude([effect("toy_wobble", wobble=0.5)], None, [], [], [], CAR, 2.97, 1.5, 20.0, catalogue=catalogue)
+    assert v["status"] == "implausible"
+    assert v["statement"].endswith("a wobble of 0.5 m is over a tenth of the 1.9 m width")
+    # a catalogue effect's rule replaced by a subclass's: the subclass's rule judges
+    lenient = type("Lenient", (type(next(e for e in CATALOGUE if e.id == "actuator_delay")),),
+                   {"plausibility": lambda self, values, ctx: []})()
+    assert judge_values(effect("actuator_delay", command_delay=0.9), CAR, 2.97, 1.5, 20.0, (lenient,)) == []
+    # an effect without a rule of its own passes whatever it fitted; an id no catalogue holds is not judged
+    assert judge_values(effect("side_slope", slope_east=4.9, slope_north=4.9), CAR, 2.97, 1.5, 20.0) == []
+    assert judge_values(effect("toy_wobble", wobble=9.0), CAR, 2.97, 1.5, 20.0) == []
 
 
 def test_an_unresolved_audit_finding_keeps_the_effects_it_imitates_from_being_concluded():

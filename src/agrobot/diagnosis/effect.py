@@ -4,13 +4,16 @@ An effect names the subsystem it lives in, the replay stages whose residuals it 
 parameters (SI, with the bounds searched and a typical scale for the optimiser), the values of
 those parameters in the baseline study, a materiality threshold (smaller fitted values are not
 worth a model change, whatever the statistics say) and the component options that switch it on
-in a study. Adding one is one class in one file of ``src/agrobot/diagnosis/effects/`` plus its test; the
-catalogue finds it there.
+in a study, and the rule that judges its fitted values against the vehicle (``plausibility``). Adding
+one is one class in one file of ``src/agrobot/diagnosis/effects/`` plus its test; the catalogue finds it
+there and the verdict calls its rule.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import ClassVar, Mapping
+
+from .plausibility import VehicleContext
 
 
 @dataclass(frozen=True)
@@ -91,6 +94,11 @@ class Effect:
                 study: BaselineStudy) -> list[tuple[str, str, float]]:
         """[(role, parameter, SI value)]: the component options that carry the fitted effect."""
         raise NotImplementedError
+
+    def plausibility(self, values: Mapping[str, float], ctx: VehicleContext) -> list[str]:
+        """What fitted values that no vehicle of this class has suggest instead, one reason per rule
+        broken (empty: they fit the vehicle; the default for an effect without a rule)."""
+        return []
 
     def applies(self, replay) -> bool:
         """Whether this log can judge the effect beyond its stages and columns (a command's gain

@@ -3,6 +3,8 @@ from agrobot.components.models.steering_equivalent import FirstOrderSteering
 
 from ..effect import Effect, Parameter
 
+HUMAN_REACTION = 0.3          # s: no steering actuator is slower; a longer "delay" is a clock
+
 
 class ActuatorDelay(Effect):
     id = "actuator_delay"
@@ -23,3 +25,11 @@ class ActuatorDelay(Effect):
 
     def options(self, fitted, base, study):
         return [("steering", "command_delay", fitted["command_delay"])]
+
+    def plausibility(self, values, ctx):
+        """A delay longer than a human reaction is a clock offset, not an actuator."""
+        if values.get("command_delay", 0.0) > HUMAN_REACTION:
+            return [f"a steering delay of {values['command_delay']:.2f} s is longer than a human reaction "
+                    f"({HUMAN_REACTION:g} s): no steering actuator is that slow; the steering channels are probably "
+                    f"stamped on a clock that lags the gyro's (a recording problem)"]
+        return []

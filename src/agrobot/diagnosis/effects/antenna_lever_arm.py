@@ -3,6 +3,7 @@ puts it: in turns it swings on a different radius."""
 import math
 
 from ..effect import Effect, Parameter
+from ..plausibility import reference_point
 
 
 class AntennaLeverArm(Effect):
@@ -29,3 +30,7 @@ class AntennaLeverArm(Effect):
     def options(self, fitted, base, study):
         return [("yaw_plant", "antenna_forward", fitted["antenna_forward"]),
                 ("yaw_plant", "antenna_left", fitted["antenna_left"])]
+
+    def plausibility(self, values, ctx):
+        """The antenna lies inside the vehicle's outline."""
+        return reference_point(values, ctx)

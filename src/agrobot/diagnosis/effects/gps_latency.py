@@ -1,6 +1,8 @@
 """The GPS reports where the antenna was a moment ago."""
 from ..effect import Effect, Parameter
 
+RECEIVER_LATENCY = 0.5        # s: a GNSS receiver or a localisation filter reports within this
+
 
 class GPSLatency(Effect):
     id = "gps_latency"
@@ -22,3 +24,10 @@ class GPSLatency(Effect):
         """The sensor delays by whole samples: the latency is rounded to its step."""
         step = study.step("gps")
         return [("gps", "latency", round(fitted["gps_latency"] / step) * step)]
+
+    def plausibility(self, values, ctx):
+        """A latency longer than a receiver or a filter takes is a clock offset."""
+        if values.get("gps_latency", 0.0) > RECEIVER_LATENCY:
+            return [f"a position latency of {values['gps_latency']:.2f} s is longer than a receiver or a localisation "
+                    f"filter takes ({RECEIVER_LATENCY:g} s): the positions' clock is offset"]
+        return []

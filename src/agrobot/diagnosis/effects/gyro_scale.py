@@ -1,6 +1,7 @@
 """The gyro reads s x the yaw rate (a scale-factor error, or a unit off by a factor): the yaw
 rate is too high or too low in every turn, and the dead-reckoned heading turns s times too far."""
 from ..effect import Effect, Parameter
+from ..plausibility import scale_factor
 
 
 class GyroScale(Effect):
@@ -22,3 +23,7 @@ class GyroScale(Effect):
 
     def options(self, fitted, base, study):
         raise KeyError("gyro scale factor (divide the log's yaw_rate by it)")
+
+    def plausibility(self, values, ctx):
+        """A scale factor outside 0.7-1.4 is a unit or a channel, no sensor error."""
+        return scale_factor("gyro", values.get("gyro_scale"))

@@ -10,6 +10,9 @@ when both parts are material (diagnosis.selection tries recording effects first)
 import math
 
 from ..effect import Effect, Parameter
+from ..plausibility import reference_point
+
+STAMPING_DELAY = 2.0          # s: a stamping delay is shorter; a longer offset is another clock
 
 
 class PositionReference(Effect):
@@ -43,4 +46,12 @@ class PositionReference(Effect):
             step = study.step("gps") if study.has("gps") else 0.0
             lag = round(fitted["position_clock"] / step) * step if step else fitted["position_clock"]
             out.append(("gps", "latency", study.parameters("gps", {"latency": 0.0})["latency"] + lag))
+        return out
+
+    def plausibility(self, values, ctx):
+        """The point lies inside the vehicle's outline and the clock is off by a stamping delay at most."""
+        out = reference_point(values, ctx)
+        if abs(values.get("position_clock", 0.0)) > STAMPING_DELAY:
+            out.append(f"a clock offset of {values['position_clock']:.2f} s is more than a stamping delay: the "
+                       f"channel groups were recorded on different clocks")
         return out

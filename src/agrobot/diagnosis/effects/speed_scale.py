@@ -2,6 +2,7 @@
 reckoning runs k times too far and, near the kinematic yaw rate v delta / L, the yaw model turns
 k times too fast (its LPV speed is k times too high)."""
 from ..effect import Effect, Parameter
+from ..plausibility import scale_factor
 
 
 class SpeedScale(Effect):
@@ -23,3 +24,7 @@ class SpeedScale(Effect):
 
     def options(self, fitted, base, study):
         raise KeyError("speed scale factor (divide the log's v by it)")
+
+    def plausibility(self, values, ctx):
+        """A scale factor outside 0.7-1.4 is a unit or a channel, no sensor error."""
+        return scale_factor("speed", values.get("speed_scale"))

@@ -2,7 +2,10 @@
 calibrated wrong, a command in another scale. Judged where the yaw stage is driven by the
 command (no measured wheel angle): the yaw rate is k times the expected one in every turn at low
 speed, unlike a ratio curve (off only in tight turns) or soft tyres (off only at speed)."""
+import math
+
 from ..effect import Effect, Parameter
+from ..plausibility import CALIBRATION
 
 
 class SteeringGain(Effect):
@@ -30,3 +33,17 @@ class SteeringGain(Effect):
 
     def options(self, fitted, base, study):
         raise KeyError("steering command gain (multiply the log's delta_cmd by it)")
+
+    def plausibility(self, values, ctx):
+        """A gain outside ``CALIBRATION`` is a unit (180/pi), a steering ratio (1:8 to 1:30) or another quantity."""
+        k = values.get("steering_gain")
+        if k is None or CALIBRATION[0] <= k <= CALIBRATION[1]:
+            return []
+        if abs(k * 180 / math.pi - 1.0) < 0.1 or abs(k * math.pi / 180 - 1.0) < 0.1:
+            return [f"a steering command gain of {k:.3g} is a unit: the command is in degrees where radians "
+                    f"are expected, or the other way round"]
+        if 1 / 30 <= k <= 1 / 8:
+            return [f"a steering command gain of {k:.3g} is a steering ratio (1:{1 / k:.0f}): the command is the "
+                    f"handwheel's angle, not the road wheels'"]
+        return [f"a steering command gain of {k:.3g} is no calibration error: the command is another quantity "
+                f"or in another unit"]

@@ -25,3 +25,11 @@ class SteeringOffset(Effect):
 
     def options(self, fitted, base, study):
         return [("yaw_plant", "steer_angle_offset", fitted["steer_angle_offset"])]
+
+    def plausibility(self, values, ctx):
+        """An offset over 8 deg is more than a misaligned zero."""
+        if abs(values.get("steer_angle_offset", 0.0)) > math.radians(8):
+            return [f"a steering offset of {math.degrees(values['steer_angle_offset']):.1f} deg is more than a "
+                    f"misaligned zero: the steering channel is another quantity (a handwheel angle, a command in "
+                    f"another unit)"]
+        return []

@@ -6,7 +6,7 @@ stiffnesses stay the baseline's refitted ones (the small-slip slope). The linear
 """
 import math
 
-from agrobot.components.models.tyre import SHAPE_BOUNDS, linear_share_limit
+from agrobot.components.models.tyre import SHAPE_BOUNDS, force_limit_share, linear_share_limit
 from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from ..effect import Effect, Parameter
@@ -42,6 +42,16 @@ class TyreSaturation(Effect):
     def options(self, fitted, base, study):
         return [("yaw_plant", "tyre_friction", fitted["tyre_friction"]),
                 ("yaw_plant", "tyre_shape", fitted["tyre_shape"])]
+
+    def plausibility(self, values, ctx):
+        """The friction the force reaches, mu x the shape's share of it, is within the class's range."""
+        mu = values.get("tyre_friction", 0.0) * force_limit_share(values.get("tyre_shape", 1.3))
+        hi = ctx.vehicle.friction_range[1]
+        if mu > hi:
+            return [f"a friction of {mu:.2f} is above what tyres give on this vehicle's ground "
+                    f"({hi:g} for a {ctx.vehicle.kind or 'vehicle'}): the lateral acceleration is overstated (a speed or "
+                    f"gyro scale factor) or the mass and inertia are not this vehicle's"]
+        return []
 
     def display(self, fitted):
         return {"tyre_friction [-]": fitted["tyre_friction"], "tyre_shape [-]": fitted["tyre_shape"]}

@@ -27,3 +27,12 @@ class YawRateBias(Effect):
 
     def options(self, fitted, base, study):
         return [("gyro", "bias", fitted["yaw_rate_bias"])]
+
+    def plausibility(self, values, ctx):
+        """A bias beyond the gyro class's drift is no drift."""
+        bound = ctx.vehicle.gyro_bias_bound
+        if bound and abs(values.get("yaw_rate_bias", 0.0)) > bound:
+            return [f"a gyro bias of {math.degrees(values['yaw_rate_bias']):.2f} deg/s is beyond what a gyro of this "
+                    f"class drifts ({math.degrees(bound):g} deg/s): a steering offset or a side slope seen through the "
+                    f"yaw rate, or a gyro mounted tilted"]
+        return []
