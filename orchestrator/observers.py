@@ -138,6 +138,17 @@ class Stage:
             self._out.close()
 
 
+def timed_progress():
+    """A ``progress(text)`` that prints each line on stderr with the seconds since it was made
+    (nothing with --no-progress or --quiet)."""
+    start = time.perf_counter()
+
+    def progress(text: str) -> None:
+        if PROGRESS["shown"]:
+            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+    return progress
+
+
 def report_progress(done: float, total: float, unit: str) -> None:
     """What an analysis or a tool may call while it works ("12 of 40 swaths"): shown by the
     innermost running Stage, nothing otherwise."""

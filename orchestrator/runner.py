@@ -41,6 +41,8 @@ class RunOutcome:
     files: list[Path]
     failed_bounds: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    record: dict[str, Any] | None = None    # what run.json holds (a run in memory)
+    events: str = ""                        # what events.log holds (a run in memory)
 
 
 def _analysis(study: Study):
@@ -86,10 +88,16 @@ def _t_end(study: Study, rec: RecordedSignals) -> float:
     return rec.ended_by["t"] if rec.ended_by is not None else study.study.stop_time
 
 
-def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
-    """events.log: one line per component event, 't [s]  component  message'."""
+def events_text(rec: RecordedSignals) -> str:
+    """What events.log holds: one line per component event, 't [s]  component  message'."""
     lines = [f"{t:10.3f}  {name}  {msg}" for t, name, msg in rec.events]
-    return atomic_write(out_dir / "events.log", lambda p: p.write_text("\n".join(lines) + ("\n" if lines else "")))
+    return "\n".join(lines) + ("\n" if lines else "")
+
+
+def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
+    """events.log (events_text)."""
+    text = events_text(rec)
+    return atomic_write(out_dir / "events.log", lambda p: p.write_text(text))
 
 
 CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at most)
@@ -329,4 +337,7 @@ def _run_in_memory(study: Study, plots: bool, engine: str = "python", observers=
     values = _metrics(analysis, frame, study)
     base = {**_base_facts(study), "engine": getattr(sim, "engine_name", "python")}
     values.update(sim_time_s=base["sim_time_s"], wall_time_s=rec.wall_time_s, **_run_facts(rec))
-    return _result(values, {**base, "status": _status(rec), **values}, analysis, study, [], frame)
+    done = _result(values, {**base, "status": _status(rec), **values}, analysis, study, [], frame)
+    done.record = _run_json(study, system, _status(rec), _t_end(study, rec))
+    done.events = events_text(rec)
+    return done

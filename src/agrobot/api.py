@@ -51,17 +51,24 @@ def load(study, set: Mapping[str, Any] | None = None):
 
 
 def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, plots: bool = True,
-        overwrite: bool = False, progress: bool = False) -> RunResult:
-    """Simulate and analyse a study. Without ``out`` nothing is written; with it, the run is
-    recorded there as ``run --out`` does (signals streamed, metrics.json, figures)."""
+        overwrite: bool = False, progress: bool = False, engine: str = "python") -> RunResult:
+    """Simulate and analyse a study. Without ``out`` nothing is written (``save`` writes it
+    later); with it, the run is recorded there as ``run --out`` does (signals streamed, events.log,
+    run.json, metrics.json, figures) under the output rule (orchestrator.output)."""
     from agrobot.orchestrator.runner import run_study
 
     study = load(study, set)
     done = run_study(study, Path(out) if out is not None else None, plots=plots and out is not None,
-                     overwrite=overwrite, progress=progress)
-    signals = done.frame if out is None else done.frame.to_pandas()
-    return RunResult(study, signals, judged_metrics(done.metrics, study), dict(done.metrics), done.summary,
-                     list(done.warnings), Path(out) if out is not None else None)
+                     overwrite=overwrite, progress=progress, engine=engine)
+    if out is None:
+        return RunResult(study, done.frame, judged_metrics(done.metrics, study), dict(done.metrics), done.summary,
+                         list(done.warnings), None, dict(done.record or {}), done.events)
+    import json
+
+    folder = Path(out)
+    return RunResult(study, done.frame.to_pandas(), judged_metrics(done.metrics, study), dict(done.metrics),
+                     done.summary, list(done.warnings), folder, json.loads((folder / "run.json").read_text()),
+                     (folder / "events.log").read_text())
 
 
 def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, workers: int = 1,
@@ -86,122 +93,181 @@ def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = 
 def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any] | None = None,
              period: float | None = None, speed: float | None = None, band: tuple[float, float] | None = None,
              models: list[str] | None = None, delay: bool = False, resample: bool = False, recording=None,
-             out: str | Path | None = None, plots: bool = True, progress=None) -> Identification:
+             out: str | Path | None = None, plots: bool = True, progress=None,
+             overwrite: bool = False) -> Identification:
     """Identify the yaw dynamics. ``source`` a study (its multisine experiment, simulated: ``set``
     applies to it) or a measured log or raw recording; for a log the method is chosen as the
     command chooses it (identification.from_log.choose_method: ``"auto"`` is multisine when
     delta_cmd repeats with a period, else ordinary driving). ``study``: the vehicle a log comes
     from (path, name or Study), default the paper's tractor. ``recording``: a
-    measurements.ImportOptions for a raw recording."""
+    measurements.ImportOptions for a raw recording. ``out``: checked before anything is computed,
+    written as ``Identification.save`` writes."""
     from agrobot.identification.from_log import choose_method, driving_report, write_driving
-    from agrobot.identification.pipeline import identify_log, identify_study
+    from agrobot.identification.pipeline import log_identification, study_identification
+    from agrobot.orchestrator.output import study_inputs
 
-    if out is not None:
-        from agrobot.orchestrator.output import check_output
-
-        check_output(Path(out), overwrite=True)
-
+    check_identify(band, speed, period)
     is_study = not isinstance(source, (str, Path)) or Path(source).suffix in STUDY_SUFFIXES or shipped_name(source)
+    vehicle = load(source, set) if is_study else load(study) if study is not None else None
+    inputs = [source, *study_inputs(vehicle), getattr(recording, "dbc", None)] if isinstance(source, (str, Path)) \
+        else study_inputs(vehicle)
+    if out is not None:
+        Identification.check(out, overwrite, inputs)
     if is_study:
-        vehicle = load(source, set)
-        report = identify_study(vehicle, Path(out) if out is not None else None, plots)
-        return Identification(str(vehicle.path), "study", report, vehicle)
-    vehicle = load(study) if study is not None else None
-    chosen = choose_method(Path(source), method, resample, recording, vehicle)
-    if chosen == "driving":
-        report, figures = driving_report(Path(source), vehicle, resample, recording, progress)
-        result = Identification(str(source), chosen, report, vehicle, figures)
-        if out is not None:
-            write_driving(report, figures, Path(out), vehicle, source, plots, progress)
-        return result
-    report = identify_log(Path(source), Path(out) if out is not None else None, period, speed,
-                          tuple(band) if band else None, models, delay, plots=plots, resample=resample,
-                          recording=recording, study=vehicle)
-    return Identification(str(source), chosen, report, vehicle)
+        report, write = study_identification(vehicle)
+        result = Identification(str(vehicle.path), "study", report, vehicle, write, inputs)
+    else:
+        chosen = _named(source, choose_method, Path(source), method, resample, recording, vehicle)
+        if chosen == "driving":
+            report, figures = driving_report(Path(source), vehicle, resample, recording, progress)
+
+            def write(tmp: Path, plots: bool) -> None:
+                write_driving(report, figures, tmp, vehicle, source, plots, progress)
+        else:
+            report, write = _named(source, log_identification, Path(source), period, speed,
+                                   tuple(band) if band else None, models, delay, resample, recording, vehicle)
+        result = Identification(str(source), chosen, report, vehicle, write, inputs)
+    if out is not None:
+        result.save(out, overwrite, plots)
+    return result
+
+
+def check_identify(band, speed, period) -> None:
+    """The identification's numbers: 0 < F_MIN < F_MAX, a positive speed and period."""
+    from agrobot.orchestrator.study import StudyError
+
+    if band is not None and not 0 < band[0] < band[1]:
+        raise StudyError(f"--band {band[0]:g} {band[1]:g}: expected 0 < F_MIN < F_MAX [Hz]")
+    for option, value in (("--speed", speed), ("--period", period)):
+        if value is not None and not value > 0:
+            raise StudyError(f"{option} {value:g}: expected a positive number")
+
+
+def _named(source, compute, *args):
+    """``compute(*args)``, a ValueError (an unknown method or model structure) as a StudyError
+    naming ``source``."""
+    from agrobot.orchestrator.errors import InputError
+    from agrobot.orchestrator.study import StudyError
+
+    try:
+        return compute(*args)
+    except ValueError as exc:
+        if isinstance(exc, InputError):       # a LogError is both
+            raise
+        raise StudyError(f"{source}: {exc}") from None
 
 
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
              resample: bool = False, recording=None, plots: bool = True, progress=None,
-             identify: bool = True, split: str = "auto") -> Diagnosis:
+             identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False) -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
-    figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it,
-    diagnosis.json, report.md, the figures and extended_study.toml go there. A log that cannot be
-    judged gives the verdict ``"cannot decide"`` with its ``reason``. ``identify``: identify the
-    vehicle on the same log first (one vehicle model for both; False is faster). ``split``: what
-    is held out, "tail" (the last 1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto"
-    (blocks when the last part is driven beyond the first's conditions)."""
+    figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it (checked
+    before anything is computed), diagnosis.json, report.md, the figures and extended_study.toml go
+    there as ``Diagnosis.save`` writes them. A log that cannot be judged gives the verdict
+    ``"cannot decide"`` with its ``reason``. ``identify``: identify the vehicle on the same log first
+    (one vehicle model for both; False is faster). ``split``: what is held out, "tail" (the last
+    1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto" (blocks when the last part is
+    driven beyond the first's conditions). ``mcap``: diagnosis.mcap too."""
     from agrobot.diagnosis.candidates import SPLITS
-    from agrobot.diagnosis.pipeline import diagnose as run_diagnosis
+    from agrobot.diagnosis.pipeline import diagnosis
+    from agrobot.orchestrator.output import study_inputs
     from agrobot.orchestrator.study import StudyError
 
     if not 0.2 <= fit_fraction <= 0.8:
-        raise StudyError(f"fit_fraction {fit_fraction:g}: expected a share in [0.2, 0.8]")
+        raise StudyError(f"--fit-fraction {fit_fraction:g}: expected a share in [0.2, 0.8]")
     if split not in SPLITS:
         raise StudyError(f"split {split!r}: expected one of {', '.join(SPLITS)}")
-    path = None if study is None else load(study).path
+    baseline = None if study is None else load(study)
+    inputs = [log, getattr(recording, "dbc", None), *study_inputs(baseline)]
     if out is not None:
-        from agrobot.orchestrator.output import check_output
+        Diagnosis.check(out, overwrite, inputs)
+    found, write = diagnosis(log, None if baseline is None else baseline.path, fit_fraction, min_gain, plots=plots,
+                             resample=resample, recording=recording, progress=progress, identify=identify,
+                             mcap=mcap, split=split)
+    result = Diagnosis(found, None, write, inputs)
+    if out is not None:
+        result.save(out, overwrite)
+    return result
 
-        check_output(Path(out), overwrite=True)
-    result = run_diagnosis(log, Path(out) if out is not None else None, path, fit_fraction, min_gain,
-                           plots=plots, resample=resample, recording=recording, progress=progress,
-                           identify=identify, split=split)
-    return Diagnosis(result, Path(out) if out is not None else None)
 
-
-def convert(source, out: str | Path | None = None, *, options=None, **fields) -> Recording:
+def convert(source, out: str | Path | None = None, *, options=None, overwrite: bool = False, **fields) -> Recording:
     """Read a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log, tables) as a measured log.
     ``options`` a measurements.ImportOptions, or its fields as keywords (``dbc=``, ``signals=``,
     ``run=``, ``time_range=`` ...). With ``out`` (.csv or .parquet) the log and its import report
     are written as ``convert --out`` writes them."""
     from dataclasses import replace
 
-    from agrobot.measurements.log import check_log
+    from agrobot.measurements.cli import checked_log
     from agrobot.measurements.options import ImportOptions
     from agrobot.measurements.recording import import_recording
+    from agrobot.orchestrator.output import OutputLock, check_output_file
 
     options = replace(options or ImportOptions(), **fields)
-    log, report = import_recording(source, options)
-    check_log(log, f"{source} ({report['used']['how']})", ("t",))
-    result = Recording(str(source), log, report)
+    inputs = [source, options.dbc]
     if out is not None:
-        result.save(out)
+        check_output_file(Path(out), overwrite, inputs, (".csv", ".parquet"))
+        with OutputLock(Path(out)):
+            pass
+    log, report = import_recording(source, options)
+    checked_log(source, log, report)
+    result = Recording(str(source), log, report, [options.dbc])
+    if out is not None:
+        result.save(out, overwrite)
     return result
 
 
 def plan(field, *, name: str | None = None, crs: str | None = None, sections: int = 0, obstacles=(),
-         out: str | Path | None = None, **settings) -> PlanResult:
+         out: str | Path | None = None, overwrite: bool = False, route_step: float | None = None,
+         route_uniform: bool = False, option_names: dict[str, str] | None = None, **settings) -> PlanResult:
     """A coverage plan of ``field`` (a field file or folder, or a fields.Field): ``settings`` are
     fields.planner.Settings' fields in SI units (``working_width=6.0``, ``driving_angle`` in
-    radians, ``order="optimised"`` ...); ``obstacles`` round ones as (east, north, radius) in m, or a
-    GeoJSON file's path; ``sections`` the implement's sections for the as-applied figures."""
-    from agrobot.fields.field import Field
-    from agrobot.fields.obstacles import circle, read_obstacles, with_obstacles
-    from agrobot.fields.plan_cli import read_field
-    from agrobot.fields.planner import plan as make_plan
-    from agrobot.fields.planner.applied import as_applied, summary as applied_summary
+    radians, ``order="optimised"`` ...); ``obstacles`` round ones as (east, north, radius) in m or
+    fields.obstacles.Obstacle, and GeoJSON files' paths; ``sections`` the implement's sections for
+    the as-applied figures. ``out``: checked before anything is computed, written as
+    ``PlanResult.save`` writes (``route_step``, ``route_uniform``); ``option_names``: how the caller
+    calls each setting, for the messages."""
+    from agrobot.fields.field import Field, FieldError
     from agrobot.fields.planner.sections import check_sections
     from agrobot.fields.planner.settings import Settings
 
+    given = [obstacles] if isinstance(obstacles, (str, Path)) else list(obstacles)
+    inputs = [] if isinstance(field, Field) else [field, *[o for o in given if isinstance(o, (str, Path))]]
+    if out is not None:
+        PlanResult.check(out, overwrite, inputs)
+    if route_step is not None and not route_step > 0:
+        raise FieldError(f"--route-step {route_step:g}: expected a positive number of metres")
     chosen = Settings(**settings)
-    chosen.check("plan")
-    sections = check_sections(sections, chosen.working_width, "plan: sections") if sections else 0
+    chosen.check("plan", option_names)
+    where = "plan: --sections" if option_names else "plan: sections"
+    sections = check_sections(sections, chosen.working_width, where) if sections else 0
+    result = _plan(field, crs, name, given, chosen, sections)
+    result.inputs = inputs
+    if out is not None:
+        result.save(out, overwrite, route_step, route_uniform)
+    return result
+
+
+def _plan(field, crs, name, obstacles: list, chosen, sections: int) -> PlanResult:
+    """The plan of ``field`` with ``obstacles`` (files read against the field, circles, Obstacles)."""
+    from agrobot.fields.field import Field
+    from agrobot.fields.obstacles import Obstacle, circle, read_obstacles, with_obstacles
+    from agrobot.fields.plan_cli import read_field
+    from agrobot.fields.planner import plan as make_plan
+    from agrobot.fields.planner.applied import as_applied, summary as applied_summary
+
     skipped: list[str] = []
     if not isinstance(field, Field):
         field, skipped = read_field(Path(field), crs, name)
-    if isinstance(obstacles, (str, Path)):
-        found = read_obstacles(Path(obstacles), field)
-    else:
-        found = [circle(f"obstacle {k + 1}", x, y, r, "plan: obstacles") for k, (x, y, r) in enumerate(obstacles)]
+    found = [ob if isinstance(ob, Obstacle) else circle(f"obstacle {k + 1}", *ob, "plan: obstacles")
+             for k, ob in enumerate(o for o in obstacles if not isinstance(o, (str, Path)))]
+    for path in (o for o in obstacles if isinstance(o, (str, Path))):
+        found += read_obstacles(Path(path), field)
     field = with_obstacles(field, found)
     made = make_plan(field, chosen)
     applied = as_applied(made, sections)
     summary = made.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in found],
                                 "as_applied": applied_summary(made, applied, sections)}
-    result = PlanResult(made, summary, applied, sections)
-    if out is not None:
-        result.save(out)
-    return result
+    return PlanResult(made, summary, applied, sections)
 
 
 def margins(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *,

@@ -28,14 +28,33 @@ def _jsonable(data: Any) -> Any:
     return finite_for_json(json.loads(json.dumps(data, default=_json_default)))
 
 
-def _written(folder: str | Path, write, overwrite: bool = True) -> Path:
-    """Write a result's files with ``write(tmp_folder)`` into a fresh folder moved into place as a
-    whole (orchestrator.output.ResultFolder): an interrupted save leaves ``folder`` as it was."""
-    from agrobot.orchestrator.output import ResultFolder
+class Saved:
+    """What every result's ``save(folder, overwrite=False)`` goes through: the one output rule of
+    orchestrator.output (a new or empty folder is written; a folder holding this kind of result's
+    SIGNATURE file is replaced only with ``overwrite``; any other folder, or one that is, holds or
+    lies inside an input, is refused), one writer at a time, the files written aside and moved into
+    place whole."""
 
-    with ResultFolder(Path(folder), overwrite=overwrite) as out:
-        write(out.tmp)
-        return out.commit("completed")
+    SIGNATURE: tuple[str, ...] = ()
+    WHAT = "result"
+
+    @classmethod
+    def check(cls, folder: str | Path, overwrite: bool = False, inputs=()) -> None:
+        """Refuse ``folder`` before anything is computed, as ``save`` would (a folder another
+        command is writing to included)."""
+        from agrobot.orchestrator.output import OutputLock, check_output
+
+        check_output(Path(folder), overwrite, cls.SIGNATURE, cls.WHAT, list(inputs))
+        with OutputLock(Path(folder)):
+            pass
+
+    def _save(self, folder: str | Path, overwrite: bool, write) -> Path:
+        """``write(staging_folder)`` under the rule; returns the folder."""
+        from agrobot.orchestrator.output import ResultFolder
+
+        with ResultFolder(Path(folder), overwrite, self.SIGNATURE, self.WHAT, getattr(self, "inputs", [])) as out:
+            write(out.tmp)
+            return out.commit("completed")
 
 
 @dataclass(frozen=True)
@@ -52,10 +71,14 @@ class Metric:
 
 
 @dataclass
-class RunResult:
+class RunResult(Saved):
     """One run of a study (``agrobot.run``): ``signals`` one column per port (``"tractor.x_cg"``)
     and ``t``; ``metrics`` name -> Metric (the analysis's key figures judged against their bounds);
-    ``facts`` everything metrics.json records (status, seed, wall time ...)."""
+    ``facts`` everything metrics.json records (status, seed, wall time ...); ``record`` what
+    run.json holds, ``events`` what events.log holds."""
+
+    SIGNATURE = ("run.json", "metrics.json")
+    WHAT = "run"
 
     study: Any
     signals: pd.DataFrame
@@ -64,6 +87,15 @@ class RunResult:
     summary: str
     warnings: list[str] = field(default_factory=list)
     folder: Path | None = None
+    record: dict[str, Any] = field(default_factory=dict, repr=False)
+    events: str = field(default="", repr=False)
+
+    @property
+    def inputs(self) -> list[Path]:
+        """The study's files (never written over)."""
+        from agrobot.orchestrator.output import study_inputs
+
+        return study_inputs(self.study)
 
     @property
     def status(self) -> str:
@@ -114,21 +146,22 @@ class RunResult:
         ax.legend()
         return ax
 
-    def save(self, folder: str | Path, plots: bool = True) -> Path:
-        """Write the run as ``run --out`` does: signals (the study's format), metrics.json, the
-        study (study.toml) and the analysis's figures; returns the folder."""
-        from agrobot.orchestrator.registry import import_study_module
+    def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
+        """Write the run as ``run --out`` does: the signals (the study's format), events.log,
+        run.json, metrics.json and the analysis's figures; returns the folder."""
         from agrobot.orchestrator.atomic_files import write_json, write_table
+        from agrobot.orchestrator.registry import import_study_module
 
         def write(tmp: Path) -> None:
             write_table(tmp / "signals", self.signals, self.study.study.signals_format)
-            (tmp / "study.toml").write_text(self.study.to_toml())
+            (tmp / "events.log").write_text(self.events)
+            write_json(tmp / "run.json", self.record)
             analysis = import_study_module(self.study.study.analysis) if self.study.study.analysis else None
             if plots and analysis is not None and hasattr(analysis, "plots"):
                 analysis.plots(self.signals, self.study, tmp)
-            write_json(tmp / "metrics.json", _jsonable(self.facts))
+            write_json(tmp / "metrics.json", self.facts)
 
-        self.folder = _written(folder, write)
+        self.folder = self._save(folder, overwrite, write)
         return self.folder
 
     def __str__(self) -> str:
@@ -171,16 +204,20 @@ class SweepResult:
 
 
 @dataclass
-class Identification:
+class Identification(Saved):
     """The yaw dynamics identified from ``source`` by ``method`` (``"study"``: a study's simulated
     multisine experiment; ``"multisine"``: a measured periodic experiment; ``"driving"``: ordinary
     driving, a time-domain fit). ``report`` is what identification.json holds."""
+
+    SIGNATURE = ("identification.json",)
+    WHAT = "identification"
 
     source: str
     method: str
     report: dict[str, Any]
     study: Any = None
-    _figures: Any = field(default=None, repr=False)      # what the figures are drawn from
+    _write: Any = field(default=None, repr=False)      # write(folder, plots): the files, figures included
+    inputs: list = field(default_factory=list, repr=False)
 
     def summary(self) -> str:
         """What an engineer reads first (the text ``identify`` prints)."""
@@ -193,32 +230,31 @@ class Identification:
     def to_json(self) -> str:
         return json.dumps(_jsonable(self.report), indent=2)
 
-    def save(self, folder: str | Path, plots: bool = True) -> Path:
-        """identification.json and the figures (and, for ordinary driving with a study,
-        extended_study.toml); returns the folder."""
-        def write(tmp: Path) -> None:
-            if self.method == "driving":
-                from agrobot.identification.from_log import write_driving
+    def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
+        """identification.json and the figures (for a study, experiment_log.csv; for ordinary
+        driving with a study, extended_study.toml); returns the folder."""
+        from agrobot.identification.pipeline import write_outputs
 
-                write_driving(dict(self.report), self._figures, tmp, self.study, self.source, plots)
-            else:
-                from agrobot.identification.pipeline import write_outputs
-
-                write_outputs(self.report, self._figures, tmp, plots and self._figures is not None)
-        return _written(folder, write)
+        write = self._write or (lambda tmp, plots: write_outputs(self.report, None, tmp, False))
+        return self._save(folder, overwrite, lambda tmp: write(tmp, plots))
 
     def __str__(self) -> str:
         return self.summary()
 
 
 @dataclass
-class Diagnosis:
+class Diagnosis(Saved):
     """What the simulation gets wrong about a measured log (diagnosis.pipeline): the ``verdict``
     (an effect's id, ``"unexplained"``, ``"none"`` or ``"cannot decide"``), the effects found and
     the first step's findings, the stages' residuals; ``result`` is what diagnosis.json holds."""
 
+    SIGNATURE = ("diagnosis.json",)
+    WHAT = "diagnosis"
+
     result: dict[str, Any]
     folder: Path | None = None
+    _write: Any = field(default=None, repr=False)      # write(folder): the files, figures included
+    inputs: list = field(default_factory=list, repr=False)
 
     @property
     def verdict(self) -> str:
@@ -255,14 +291,14 @@ class Diagnosis:
 
         return markdown(self.result, sorted(p.name for p in self.folder.glob("*.png")) if self.folder else [])
 
-    def save(self, folder: str | Path) -> Path:
-        """diagnosis.json and report.md (the figures are drawn by ``diagnose(..., out=folder)``)."""
-        from agrobot.orchestrator.atomic_files import write_json
+    def save(self, folder: str | Path, overwrite: bool = False) -> Path:
+        """diagnosis.json, report.md, the figures and extended_study.toml, as ``diagnose --out``
+        writes them; returns the folder."""
+        from agrobot.diagnosis.pipeline import _write as write_bare
 
-        def write(tmp: Path) -> None:
-            write_json(tmp / "diagnosis.json", _jsonable(self.result))
-            (tmp / "report.md").write_text(self.report())
-        return _written(folder, write)
+        write = self._write or (lambda tmp: write_bare(tmp, self.result, []))
+        self.folder = self._save(folder, overwrite, write)
+        return self.folder
 
     def __str__(self) -> str:
         return f"verdict: {self.verdict}" + (f" ({self.reason})" if self.reason else "")
@@ -276,26 +312,25 @@ class Recording:
     source: str
     log: pd.DataFrame
     report: dict[str, Any]
+    inputs: list = field(default_factory=list, repr=False)
 
     def describe(self) -> str:
         from agrobot.measurements.recording import describe
 
         return describe(self.report)
 
-    def save(self, path: str | Path) -> Path:
+    def save(self, path: str | Path, overwrite: bool = False) -> Path:
         """The log as ``path`` (.csv or .parquet) and the import report beside it
-        (<name>.import.json), as ``convert --out`` writes them."""
-        from agrobot.measurements.log import LogError
-        from agrobot.orchestrator.atomic_files import atomic_write
+        (<name>.import.json), as ``convert --out`` writes them: an existing file is replaced only
+        with ``overwrite``, the recording read (or any input) never."""
+        from agrobot.measurements.cli import write_converted
+        from agrobot.orchestrator.output import ResultFile, check_output_file
 
         path = Path(path)
-        if path.suffix not in (".csv", ".parquet"):
-            raise LogError(f"{path}: expected a .csv or .parquet file")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(path, (lambda p: self.log.to_parquet(p, index=False)) if path.suffix == ".parquet"
-                     else (lambda p: self.log.to_csv(p, index=False, float_format="%.9g")))
-        atomic_write(path.with_name(path.stem + ".import.json"),
-                     lambda p: p.write_text(json.dumps(self.report, indent=2, default=float)))
+        inputs = [self.source, *self.inputs]
+        with ResultFile(path, overwrite, inputs, suffixes=(".csv", ".parquet")):
+            check_output_file(path.with_name(path.stem + ".import.json"), overwrite, inputs)
+            write_converted(path, self.log, self.report)
         return path
 
     def __str__(self) -> str:
@@ -303,14 +338,18 @@ class Recording:
 
 
 @dataclass
-class PlanResult:
+class PlanResult(Saved):
     """A coverage plan of a field (fields.planner): ``plan`` the headland, swaths, route and path;
     ``summary`` what plan.json holds (distances, time, angle, the as-applied figures)."""
+
+    SIGNATURE = ("plan.json",)
+    WHAT = "plan"
 
     plan: Any
     summary: dict[str, Any]
     applied: Any
     sections: int = 0
+    inputs: list = field(default_factory=list, repr=False)
 
     def route(self, step: float | None = None, uniform: bool = False) -> pd.DataFrame:
         """The route as route.csv holds it: s, x, y, heading, curvature, speed, kind (by name),
@@ -338,21 +377,25 @@ class PlanResult:
         ax.set(xlabel="east [m]", ylabel="north [m]", aspect="equal")
         return ax
 
-    def save(self, folder: str | Path, route_step: float | None = None, route_uniform: bool = False) -> Path:
+    def save(self, folder: str | Path, overwrite: bool = False, route_step: float | None = None,
+             route_uniform: bool = False) -> Path:
         """route.csv, route.geojson, plan.json, plan.png, as_applied.geojson, as_applied.png, as
         ``plan --out`` writes them (one set, moved into place whole); returns the folder."""
-        from agrobot.fields.plan_cli import write_plan
+        from agrobot.fields.plan_cli import write_plan_files
         from agrobot.fields.planner.sampling import EXPORT_STEP
 
-        write_plan(Path(folder), self.plan, self.applied, self.sections, self.summary,
-                   EXPORT_STEP if route_step is None else route_step, route_uniform)
-        return Path(folder)
+        step = EXPORT_STEP if route_step is None else route_step
+        return self._save(folder, overwrite, lambda tmp: write_plan_files(
+            tmp, self.plan, self.applied, self.sections, self.summary, step, route_uniform))
 
 
 @dataclass
-class LoopMargins:
+class LoopMargins(Saved):
     """Gain, phase and delay margins of a study's guidance loop at each operating point of its
     reference (analysis.margins): ``analysis`` holds the open loops and the margins."""
+
+    SIGNATURE = ("margins.json",)
+    WHAT = "margins"
 
     analysis: Any
 
@@ -379,7 +422,7 @@ class LoopMargins:
 
         return report(self.analysis)
 
-    def save(self, folder: str | Path, plots: bool = True) -> Path:
+    def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
         """margins.json and the Bode and Nyquist plots; returns the folder."""
         from agrobot.analysis.margin_plots import write_plots
         from agrobot.analysis.margins import write_json
@@ -388,7 +431,7 @@ class LoopMargins:
             if plots:
                 write_plots(self.analysis, tmp)
             write_json(self.analysis, tmp / "margins.json")
-        return _written(folder, write)
+        return self._save(folder, overwrite, write)
 
     def __str__(self) -> str:
         return self.report()

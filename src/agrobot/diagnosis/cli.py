@@ -34,35 +34,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with a verdict (the strongest effect, 'unexplained' or 'none'); 2 when the log or study cannot be used (the
     verdict 'cannot decide' and the reason are still written)."""
-    from agrobot.orchestrator.study import StudyError
-
-    from .pipeline import CANNOT_DECIDE, diagnose
-
-    from agrobot.orchestrator.output import ResultFolder
-    from agrobot.orchestrator.study_files import study_chain
-
-    if not 0.2 <= args.fit_fraction <= 0.8:
-        raise StudyError("--fit-fraction must be in [0.2, 0.8]")
-    folder = ResultFolder(args.out, args.overwrite, ("diagnosis.json",), "diagnosis",
-                          [args.log, args.dbc, *study_chain(args.study)])
+    from agrobot.api import diagnose
+    from agrobot.orchestrator.observers import timed_progress
     from agrobot.measurements.cli import recording_options
     from agrobot.measurements.recording import describe
 
-    import time
+    from .pipeline import CANNOT_DECIDE
 
-    start = time.perf_counter()
-
-    def progress(text: str) -> None:
-        from agrobot.orchestrator.observers import PROGRESS
-
-        if PROGRESS["shown"]:
-            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
-
-    with folder:
-        result = diagnose(args.log, folder.tmp, args.study, args.fit_fraction, args.min_gain, plots=not args.no_plots,
-                          resample=args.resample, recording=recording_options(args), progress=progress, mcap=args.mcap,
-                          identify=not args.no_identify, split=args.split)
-        folder.commit()
+    result = diagnose(args.log, args.study, args.out, fit_fraction=args.fit_fraction, min_gain=args.min_gain,
+                      plots=not args.no_plots, resample=args.resample, recording=recording_options(args),
+                      progress=timed_progress(), mcap=args.mcap, identify=not args.no_identify, split=args.split,
+                      overwrite=args.overwrite).result
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:

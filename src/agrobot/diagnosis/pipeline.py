@@ -3,6 +3,7 @@ extension wins and the study has its component, DIR/extended_study.toml that swi
 from __future__ import annotations
 
 import math
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -319,13 +320,24 @@ def coarser_clock(frame):
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
              recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto") -> dict:
-    """Run the diagnosis and return its result; with ``out_dir`` it always writes diagnosis.json and
-    report.md there (verdict ``cannot decide`` with the reason when the log cannot be used), and the
-    figures and extended_study.toml; without, nothing is written. Raises nothing for a bad log.
-    ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``: with
-    ``out_dir``, diagnosis.mcap too (diagnosis.mcap); ``split``: what is held out (diagnosis.candidates.SPLITS:
-    the last part, every third window, or chosen by the log's conditions)."""
-    out = Path(out_dir) if out_dir is not None else None
+    """``diagnosis`` written into the existing folder ``out_dir`` when given (a caller that has
+    already placed its output: the commands go through agrobot.api, which stages it)."""
+    result, write = diagnosis(log_path, study_path, fit_fraction, min_gain, plots, resample, recording, progress,
+                              identify, mcap, split)
+    if out_dir is not None:
+        write(Path(out_dir))
+    return result
+
+
+def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fraction: float = 0.6,
+              min_gain: float = 0.05, plots: bool = True, resample: bool = False, recording=None, progress=None,
+              identify: bool = True, mcap: bool = False, split: str = "auto"):
+    """Run the diagnosis; returns (result, write), nothing written: ``write(folder)`` writes
+    diagnosis.json and report.md (verdict ``cannot decide`` with the reason when the log cannot be
+    used), and the figures and extended_study.toml. Raises nothing for a bad log.
+    ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``:
+    ``write`` adds diagnosis.mcap; ``split``: what is held out (diagnosis.candidates.SPLITS: the last
+    part, every third window, or chosen by the log's conditions)."""
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
@@ -349,9 +361,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
         result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
         result["split_time"] = float("nan")
-        if out is not None:
-            _write(out, result, [])
-        return result
+        return result, partial(_write, result=result, plots=[])
     say = progress or (lambda text: None)
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
                                                   study_path.name)
@@ -434,19 +444,15 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
-    if out is not None:
-        _write_all(out, result, replay, sel, study, options, log_path, plots, say)
-        if mcap:
-            from .mcap import write_diagnosis_mcap
-
-            say("diagnosis.mcap")
-            write_diagnosis_mcap(replay, sel.base.values, sel.final.values, out / "diagnosis.mcap", str(log_path))
-    return result
+    return result, partial(_write_all, result=result, replay=replay, sel=sel, study=study, options=options,
+                           log_path=log_path, plots=plots, say=say, mcap=mcap)
 
 
-def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say) -> None:
+def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say,
+               mcap: bool = False) -> None:
     """The figures (each judged stage, the binned residuals, the noise floors), extended_study.toml
-    when every effect found has a study option, then diagnosis.json and report.md."""
+    when every effect found has a study option, then diagnosis.json and report.md (and
+    diagnosis.mcap with ``mcap``)."""
     base, final, effects = sel.base, sel.final, result["effects"]
     found = [e for e in effects if e["id"] != "unexplained"]
     files = []
@@ -465,6 +471,11 @@ def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log
                                     f"`python -m agrobot diagnose {log_path}`")
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
+    if mcap:
+        from .mcap import write_diagnosis_mcap
+
+        say("diagnosis.mcap")
+        write_diagnosis_mcap(replay, sel.base.values, sel.final.values, out / "diagnosis.mcap", str(log_path))
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:

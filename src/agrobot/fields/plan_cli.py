@@ -17,6 +17,7 @@ any work (finite, in range, a turn radius the field can hold), the message namin
 from __future__ import annotations
 
 import argparse
+import json
 import math
 from pathlib import Path
 
@@ -140,58 +141,33 @@ def write_plan_files(folder: Path, p, applied, sections: int, summary: dict, rou
     return rows
 
 
-def write_plan(out: Path, p, applied, sections: int, summary: dict, route_step: float, route_uniform: bool,
-               overwrite: bool = False) -> int:
-    """The plan's set written into a folder beside ``out`` and moved into place whole, under the rules
-    every command's --out follows (orchestrator.output); returns route.csv's rows."""
-    from agrobot.orchestrator.output import ResultFolder
-
-    with ResultFolder(out, overwrite, ("plan.json",), "plan", []) as folder:
-        rows = write_plan_files(folder.tmp, p, applied, sections, summary, route_step, route_uniform)
-        folder.commit("completed")
-    return rows
-
-
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.output import ResultFolder
+    """Parse, plan through agrobot.api, print."""
+    from agrobot.api import plan
 
-    from .field import FieldError
-    from .obstacles import parse_point, read_obstacles, with_obstacles
-    from .planner import plan
-    from .planner.applied import as_applied, summary as applied_summary
-    from .planner.sections import check_sections
+    from .obstacles import parse_point
 
-    folder = ResultFolder(args.out, args.overwrite, ("plan.json",), "plan", [args.field, args.obstacles])
-    if not args.route_step > 0:
-        raise FieldError(f"--route-step {args.route_step:g}: expected a positive number of metres")
-    settings = Settings(working_width=args.width, headland_passes=args.headland_passes,
-                        driving_angle=None if args.angle is None else math.radians(args.angle),
-                        angle_objective=args.angle_objective, turn_radius=args.turn_radius, work_speed=args.work_speed,
-                        turn_speed=args.turn_speed, order=args.order, hitch_offset=args.hitch_offset,
-                        drawbar=args.drawbar, settle=args.settle, max_swaths=args.max_swaths,
-                        guidance_line=args.guidance_line, swath_pattern=args.swath_pattern, headland_order=args.headland_order,
-                        headland_corners=args.headland_corners, route_seconds=args.route_seconds,
-                        start_point=args.start, end_point=args.end, overlap=args.overlap,
-                        leftover_passes=args.leftover_passes == "on")
-    settings.check("plan", OPTIONS)
-    sections = check_sections(args.sections, settings.working_width, "plan: --sections") if args.sections else 0
-    with folder:
-        field, skipped = read_field(args.field, args.crs, args.name)
-        for why in skipped:
-            print(f"not read: {why}")
-        obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
-        if args.obstacles is not None:
-            obstacles += read_obstacles(args.obstacles, field)
-        field = with_obstacles(field, obstacles)
-        p = plan(field, settings)
-        applied = as_applied(p, sections)
-        summary = p.summary() | {"not_read": skipped, "obstacles": [ob.name for ob in obstacles],
-                                 "as_applied": applied_summary(p, applied, sections)}
-        rows = write_plan_files(folder.tmp, p, applied, sections, summary, args.route_step, args.route_uniform)
-        folder.commit("completed")
+    settings = dict(working_width=args.width, headland_passes=args.headland_passes,
+                    driving_angle=None if args.angle is None else math.radians(args.angle),
+                    angle_objective=args.angle_objective, turn_radius=args.turn_radius, work_speed=args.work_speed,
+                    turn_speed=args.turn_speed, order=args.order, hitch_offset=args.hitch_offset,
+                    drawbar=args.drawbar, settle=args.settle, max_swaths=args.max_swaths,
+                    guidance_line=args.guidance_line, swath_pattern=args.swath_pattern,
+                    headland_order=args.headland_order, headland_corners=args.headland_corners,
+                    route_seconds=args.route_seconds, start_point=args.start, end_point=args.end,
+                    overlap=args.overlap, leftover_passes=args.leftover_passes == "on")
+    obstacles = [parse_point(text, "plan", k) for k, text in enumerate(args.obstacle)]
+    made = plan(args.field, name=args.name, crs=args.crs, sections=args.sections,
+                obstacles=obstacles + ([args.obstacles] if args.obstacles is not None else []), out=args.out,
+                overwrite=args.overwrite, route_step=args.route_step, route_uniform=args.route_uniform,
+                option_names=OPTIONS, **settings)
+    summary, field, sections = made.summary, made.plan.field, made.sections
+    for why in summary["not_read"]:
+        print(f"not read: {why}")
+    rows = json.loads((args.out / "plan.json").read_text())["route_rows"]
     print(f"field {field.name!r} ({field.area_ha:.2f} ha, workable {summary['workable_ha']:.2f} ha) from {args.field}")
     print(f"  driving angle {summary['driving_angle_deg']:.1f} deg ({summary['driving_angle_how']}); order "
-          f"{summary['order']}; {summary['headland_passes']} headland pass(es) of {settings.working_width:g} m")
+          f"{summary['order']}; {summary['headland_passes']} headland pass(es) of {args.width:g} m")
     print(f"  {summary['swaths']} swaths, {summary['turns']} turns; {summary['distance_m'] / 1000:.2f} km in all, "
           f"{summary['working_distance_m'] / 1000:.2f} km working, {summary['turn_distance_m'] / 1000:.2f} km turning; "
           f"about {summary['estimated_time_s'] / 3600:.2f} h")

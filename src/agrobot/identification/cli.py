@@ -31,64 +31,27 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.study import Study, StudyError
-
-    from .pipeline import summary
-
-    if args.band is not None and not 0 < args.band[0] < args.band[1]:
-        raise StudyError(f"--band {args.band[0]:g} {args.band[1]:g}: expected 0 < F_MIN < F_MAX [Hz]")
-    for option, value in (("--speed", args.speed), ("--period", args.period)):
-        if value is not None and not value > 0:
-            raise StudyError(f"{option} {value:g}: expected a positive number")
-    from agrobot.orchestrator.output import ResultFolder, study_inputs
+    """Parse, identify through agrobot.api, print."""
+    from agrobot.api import identify
+    from agrobot.orchestrator.observers import timed_progress
+    from agrobot.measurements.cli import recording_options
+    from agrobot.measurements.recording import describe
 
     is_study = args.source.suffix in (".toml", ".yaml", ".yml")
-    study = Study.load(args.source, args.set) if is_study else Study.load(args.study) if args.study else None
-    folder = ResultFolder(args.out, args.overwrite, ("identification.json",), "identification",
-                          [args.source, args.study, args.dbc, *study_inputs(study)])
-    with folder:
-        report = _identify(args, study, is_study, folder.tmp)
-        folder.commit()
-    if report is None:          # ordinary driving: its summary is printed
+    found = identify(args.source, study=None if is_study else args.study, method=args.method, set=args.set,
+                     period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,
+                     resample=args.resample, recording=None if is_study else recording_options(args),
+                     out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite)
+    if found.method == "driving":
+        figures = found.report.get("figures", [])
+        print(found.summary())
+        print(f"\nwritten to {args.out}/identification.json" + (f" and {', '.join(figures)}" if figures else ""))
         return 0
-    print(summary(report))
+    if "recording" in found.report:
+        print(describe(found.report["recording"]))
+    print(found.summary())
     print(f"\nwritten to {args.out}/identification.json")
     return 0
-
-
-def _identify(args: argparse.Namespace, study, is_study: bool, out: Path):
-    """The report of a multisine identification written into ``out``; None for ordinary driving
-    (written and summed up by identify_driving_log)."""
-    from agrobot.orchestrator.errors import InputError
-    from agrobot.orchestrator.study import StudyError
-
-    from .pipeline import identify_log, identify_study
-
-    try:
-        if is_study:
-            return identify_study(study, out, plots=not args.no_plots)
-        else:
-            from agrobot.measurements.cli import recording_options
-            from agrobot.measurements.recording import describe
-
-            from .from_log import choose_method, identify_driving_log
-
-            if choose_method(args.source, args.method, args.resample, recording_options(args), study) == "driving":
-                identify_driving_log(args.source, out, study, plots=not args.no_plots,
-                                     resample=args.resample, recording=recording_options(args), shown_as=args.out)
-                return None
-            report = identify_log(args.source, out, args.period, args.speed,
-                                  tuple(args.band) if args.band else None, args.models, args.delay,
-                                  plots=not args.no_plots, resample=args.resample,
-                                  recording=recording_options(args),
-                                  study=study)
-            if "recording" in report:
-                print(describe(report["recording"]))
-            return report
-    except ValueError as exc:      # e.g. an unknown model structure
-        if isinstance(exc, InputError):       # a LogError is both
-            raise
-        raise StudyError(f"{args.source}: {exc}") from None
 
 
 def register(registry) -> None:

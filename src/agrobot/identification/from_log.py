@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
-import time
 from pathlib import Path
 
 
@@ -163,26 +161,6 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
         report["extended_study"] = write_extended_study(report, study, out_dir, source)
     write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
     return files
-
-
-def identify_driving_log(source: Path, out_dir: Path, study=None, plots: bool = True, resample: bool = False,
-                         recording=None, shown_as: Path | None = None) -> int:
-    """``identify LOG --method driving``: identify, write, print the summary (progress on stderr)."""
-    from .ordinary_driving import summary
-
-    start = time.perf_counter()
-
-    def progress(text: str) -> None:
-        from agrobot.orchestrator.observers import PROGRESS
-
-        if PROGRESS["shown"]:
-            print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
-
-    report, hidden = driving_report(source, study, resample, recording, progress)
-    files = write_driving(report, hidden, out_dir, study, source, plots, progress)
-    print(summary(report))
-    print(f"\nwritten to {shown_as or out_dir}/identification.json" + (f" and {', '.join(files)}" if files else ""))
-    return 0
 
 
 def finite_for_json(v):

@@ -3,6 +3,7 @@ parameters -> time-domain validation -> speed dependence; JSON, plots and the pa
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -131,6 +132,16 @@ def build_report(analyses: dict[float, dict], main_speed: float, validation: dic
 
 
 def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> dict[str, Any]:
+    """``study_identification`` written into the existing folder ``out_dir`` when given."""
+    report, write = study_identification(study)
+    if out_dir is not None:
+        write(Path(out_dir), plots)
+    return report
+
+
+def study_identification(study: Study):
+    """The identification of a study's simulated experiment: (report, write), nothing written;
+    ``write(folder, plots)`` writes identification.json, the figures and experiment_log.csv."""
     cfg: IdentificationConfig = config_of(study)
     seed = study.study.seed
     params = tractor_parameters(study)
@@ -155,18 +166,30 @@ def identify_study(study: Study, out_dir: Path | None, plots: bool = True) -> di
         validation[f"{band[0]:g}-{band[1]:g}Hz"] = simulate_experiment(
             study, cfg, main, band, "full", 1, cfg.validation_periods, seed + 7919 * (j + 1))
     report = build_report(analyses, main, validation, params, notes, f"study {study.path}")
-    if out_dir is not None:
-        write_outputs(report, analyses, out_dir, plots)
-        write_table(Path(out_dir) / "experiment_log", experiment_to_log([experiments[main]]), "csv")
-    return report
+    return report, partial(_write_study, report=report, analyses=analyses, experiment=experiments[main])
+
+
+def _write_study(out_dir: Path, plots: bool, report: dict, analyses: dict, experiment) -> None:
+    write_outputs(report, analyses, out_dir, plots)
+    write_table(Path(out_dir) / "experiment_log", experiment_to_log([experiment]), "csv")
 
 
 def identify_log(path: Path, out_dir: Path | None, period: float | None = None, speed: float | None = None,
                  band=None, models=None, delay: bool = False, plots: bool = True,
                  resample: bool = False, recording=None, study: Study | None = None) -> dict[str, Any]:
-    """Identification from a measured log; ``study``: the vehicle it comes from (its yaw plant's
-    m, l_f, l_r, stiffnesses for the physical back-out and the starts; its [vehicle] table for
-    reading a recording), else the paper's tractor."""
+    """``log_identification`` written into the existing folder ``out_dir`` when given."""
+    report, write = log_identification(path, period, speed, band, models, delay, resample, recording, study)
+    if out_dir is not None:
+        write(Path(out_dir), plots)
+    return report
+
+
+def log_identification(path: Path, period: float | None = None, speed: float | None = None, band=None, models=None,
+                       delay: bool = False, resample: bool = False, recording=None, study: Study | None = None):
+    """Identification from a measured periodic experiment: (report, write), nothing written;
+    ``write(folder, plots)`` writes identification.json and the figures. ``study``: the vehicle it
+    comes from (its yaw plant's m, l_f, l_r, stiffnesses for the physical back-out and the starts;
+    its [vehicle] table for reading a recording), else the paper's tractor."""
     from agrobot.measurements.recording import ImportOptions
 
     params = tractor_parameters(study)
@@ -178,9 +201,7 @@ def identify_log(path: Path, out_dir: Path | None, period: float | None = None, 
     report = build_report(analyses, exp.speed, {"log": exp}, params, exp.notes, f"log {path}")
     if imported is not None:
         report["recording"] = imported
-    if out_dir is not None:
-        write_outputs(report, analyses, out_dir, plots)
-    return report
+    return report, lambda folder, plots: write_outputs(report, analyses, folder, plots)
 
 
 def write_outputs(report: dict, analyses: dict, out_dir: Path, plots: bool) -> None:

@@ -109,7 +109,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .log import LogError, check_log
+    from .log import LogError
     from .recording import import_recording, import_runs
 
     if args.list:
@@ -133,8 +133,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
     for path, f, rep in jobs:             # every log checked before the first is written
-        checked = check_log(f, f"{args.source} ({rep['used']['how']})", ("t",))
-        rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
+        checked_log(args.source, f, rep)
         for written in (path, path.with_name(path.stem + ".import.json")) + ((path.with_suffix(".mcap"),) if args.mcap else ()):
             check_output_file(written, args.overwrite, inputs)
     with target:
@@ -147,18 +146,33 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write(jobs) -> None:
+def checked_log(source, f, rep: dict):
+    """``f`` checked as a measured log (a LogError names ``source``); its warnings go into ``rep``."""
+    from .log import check_log
+
+    checked = check_log(f, f"{source} ({rep['used']['how']})", ("t",))
+    rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
+    return checked
+
+
+def write_converted(path: Path, f, rep: dict) -> None:
+    """The log ``f`` as ``path`` (its units in the metadata) and its import report beside it."""
     from agrobot.orchestrator.atomic_files import atomic_write, write_frame
 
     from .log import log_units
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    f.attrs["units"] = log_units(f)
+    write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.atomic_files)
+    atomic_write(path.with_name(path.stem + ".import.json"),
+                 lambda p: p.write_text(json.dumps(rep, indent=2, default=float)))
+
+
+def _write(jobs) -> None:
     from .recording import describe
 
     for path, f, rep in jobs:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        f.attrs["units"] = log_units(f)
-        write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.atomic_files)
-        atomic_write(path.with_name(path.stem + ".import.json"),
-                     lambda p, rep=rep: p.write_text(json.dumps(rep, indent=2, default=float)))
+        write_converted(path, f, rep)
         print(describe(rep))
         print(f"written: {path} ({len(f)} rows) and {path.with_name(path.stem + '.import.json').name}", file=sys.stdout)
 

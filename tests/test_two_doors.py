@@ -1,0 +1,133 @@
+"""Both doors, one implementation: each command run on the command line and through agrobot.api
+on the same small input writes the same files with the same contents (wall times and the paths
+of the inputs aside); every result's ``save`` follows the command line's output rule."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import agrobot
+from agrobot.orchestrator.output import OutputError
+
+SHORT = "study.stop_time=15"
+VOLATILE = {"wall_time_s", "realtime", "log", "study_file", "source"}
+
+
+def _content(path: Path):
+    if path.suffix == ".json":
+        return _stable(json.loads(path.read_text()))
+    if path.suffix in (".csv", ".parquet"):
+        return pd.read_parquet(path) if path.suffix == ".parquet" else pd.read_csv(path)
+    if path.suffix == ".png":
+        return "figure"
+    return path.read_text()
+
+
+def _stable(data):
+    if isinstance(data, dict):
+        return {k: _stable(v) for k, v in data.items() if k not in VOLATILE}
+    if isinstance(data, list):
+        return [_stable(v) for v in data]
+    return data
+
+
+def same_files(a: Path, b: Path) -> None:
+    names = sorted(p.name for p in a.iterdir())
+    assert names == sorted(p.name for p in b.iterdir())
+    for name in names:
+        left, right = _content(a / name), _content(b / name)
+        if isinstance(left, pd.DataFrame):
+            pd.testing.assert_frame_equal(left, right, check_dtype=False)
+        else:
+            assert left == right, name
+
+
+def test_run_writes_alike_through_both_doors_and_when_saved(cli, tmp_path):
+    proc = cli("run", "studies/figure8.toml", "--out", tmp_path / "cli", "--set", SHORT, "--no-plots")
+    assert proc.returncode == 0, proc.stderr
+    agrobot.run("figure8", {"study.stop_time": 15}, out=tmp_path / "api", plots=False)
+    same_files(tmp_path / "cli", tmp_path / "api")
+    saved = agrobot.run("figure8", {"study.stop_time": 15}).save(tmp_path / "saved", plots=False)
+    same_files(tmp_path / "cli", saved)
+
+
+def _drive(tmp_path: Path) -> Path:
+    from agrobot.measurements.generated_recordings import write_nmea
+
+    return write_nmea(tmp_path / "drive.nmea", 20.0)
+
+
+def test_convert_writes_alike_through_both_doors(cli, tmp_path):
+    nmea = _drive(tmp_path)
+    (tmp_path / "cli").mkdir()
+    proc = cli("convert", nmea, "--out", tmp_path / "cli" / "drive.csv")
+    assert proc.returncode == 0, proc.stderr
+    agrobot.convert(nmea, out=tmp_path / "api" / "drive.csv")
+    same_files(tmp_path / "cli", tmp_path / "api")
+
+
+def _short_log(tmp_path: Path) -> Path:
+    log = tmp_path / "short.csv"
+    log.write_text("t,delta_cmd,delta,v,yaw_rate,x,y\n0,0,0,1,0,0,0\n0.1,0,0,1,0,0.1,0\n")
+    return log
+
+
+def test_diagnose_writes_alike_through_both_doors(cli, tmp_path):
+    log = _short_log(tmp_path)
+    proc = cli("diagnose", log, "--out", tmp_path / "cli")
+    assert proc.returncode == 2 and "cannot decide" in proc.stderr
+    agrobot.diagnose(log, out=tmp_path / "api")
+    same_files(tmp_path / "cli", tmp_path / "api")
+
+
+def _field(tmp_path: Path) -> Path:
+    field = tmp_path / "rect.geojson"
+    ring = [[x, y] for x, y in [(0, 0), (200, 0), (200, 150), (0, 150), (0, 0)]]
+    field.write_text(json.dumps({"type": "FeatureCollection", "features": [{"type": "Feature", "properties":
+                     {"name": "rect"}, "geometry": {"type": "Polygon", "coordinates": [ring]}}]}))
+    return field
+
+
+def test_plan_writes_alike_through_both_doors(cli, tmp_path):
+    field = _field(tmp_path)
+    proc = cli("plan", field, "--out", tmp_path / "cli", "--width", "6", "--angle", "0", "--headland-passes", "3")
+    assert proc.returncode == 0, proc.stderr
+    agrobot.plan(field, out=tmp_path / "api", working_width=6.0, driving_angle=0.0, headland_passes=3)
+    same_files(tmp_path / "cli", tmp_path / "api")
+
+
+def test_a_diagnosis_never_replaces_a_run(tmp_path):
+    run = agrobot.run("figure8", {"study.stop_time": 15}, out=tmp_path / "out", plots=False)
+    before = sorted(p.name for p in run.folder.iterdir())
+    with pytest.raises(OutputError, match="not a diagnosis result"):
+        agrobot.diagnose(_short_log(tmp_path), out=tmp_path / "out", overwrite=True)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == before
+
+
+def test_a_diagnosis_saved_twice_is_replaced_with_overwrite_only(tmp_path):
+    found = agrobot.diagnose(_short_log(tmp_path))
+    found.save(tmp_path / "d")
+    with pytest.raises(OutputError, match="earlier diagnosis result"):
+        found.save(tmp_path / "d")
+    found.save(tmp_path / "d", overwrite=True)
+    assert (tmp_path / "d" / "diagnosis.json").is_file()
+
+
+def test_a_recording_is_never_saved_over_its_input(tmp_path):
+    log = tmp_path / "drive.csv"
+    agrobot.convert(_drive(tmp_path), out=log)
+    text = log.read_text()
+    with pytest.raises(OutputError, match="is the input"):
+        agrobot.convert(log, out=log, overwrite=True)
+    assert log.read_text() == text
+    with pytest.raises(OutputError, match="exists"):
+        agrobot.convert(tmp_path / "drive.nmea").save(log)
+
+
+def test_a_saved_run_holds_run_json_and_events_log(tmp_path):
+    folder = agrobot.run("figure8", {"study.stop_time": 15}).save(tmp_path / "run", plots=False)
+    assert json.loads((folder / "run.json").read_text())["status"] == "completed"
+    assert (folder / "events.log").is_file()
