@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 
 from agrobot.measurements import readers
-from agrobot.measurements.generated_recordings import write_nmea
+from harness.generated_recordings import write_nmea
 from agrobot.measurements.listing import list_source
 from agrobot.measurements.log import LogError
 from agrobot.measurements.options import ImportOptions
