@@ -1,6 +1,6 @@
 """How often the diagnosis finds what is hidden: ``python3 benchmarks/diagnosis_rate.py [--seeds N]``.
 
-Logs from src/agrobot/measurements/truth_tractor.py with seeds 1000.. (never used while tuning), diagnosed
+Logs from harness/truth_tractor.py with seeds 1000.. (never used while tuning), diagnosed
 without being told what is in them. Three groups:
 
 - singles: each catalogue effect alone, and none;
@@ -16,7 +16,7 @@ without being told what is in them. Three groups:
 
 A log counts as right when the set of effects found is exactly the hidden set (hidden_effects.expected_ids:
 an unlisted fault counts as ``unexplained``, an antenna lever arm with a latency as one position_reference) and every catalogued effect's headline parameter is within the tolerance
-of diagnosis.hidden_effects.recovered. Prints one table, then the time per diagnosis of a 420 s log
+of harness.hidden_effects.recovered. Prints one table, then the time per diagnosis of a 420 s log
 (the issue's budget is 15 s). ``--scale-truth sigma_f=2`` moves the truth further from the baseline;
 ``--effects none side_slope a+b`` picks the hidden effects; ``--duration`` sets the log length;
 ``--identify`` which logs identify the vehicle first, as ``diagnose`` does by default (tyre: those
@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))          # the test harness (harness/), beside the package
 
 
 COMBINATIONS = ("actuator_delay+gps_latency", "steering_offset+yaw_rate_bias", "steering_offset+side_slope",
@@ -40,7 +42,7 @@ COMBINATIONS = ("actuator_delay+gps_latency", "steering_offset+yaw_rate_bias", "
 
 
 def unlisted_cases() -> tuple[str, ...]:
-    from agrobot.measurements.truth_tractor import UNLISTED
+    from harness.truth_tractor import UNLISTED
 
     return UNLISTED + ("wheel_slip+actuator_delay", "tyre_saturation+gps_latency",
                        "steering_sensor_gain+yaw_rate_bias", "gyro_scale_factor+steering_deadband")
@@ -48,7 +50,7 @@ def unlisted_cases() -> tuple[str, ...]:
 
 def score(run: dict) -> tuple:
     """(case, exact set found, exact set with every parameter in tolerance, found set)."""
-    from agrobot.diagnosis.hidden_effects import expected_ids, recovered
+    from harness.hidden_effects import expected_ids, recovered
 
     res = run["result"]
     if run.get("healthy"):
@@ -63,7 +65,7 @@ def score(run: dict) -> tuple:
 def timing(duration: float, cases: list[str]) -> list[tuple[str, float]]:
     """Seconds per diagnosis (with plots) of one log of ``duration`` s per case, in this process."""
     from agrobot.diagnosis.pipeline import diagnose
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
 
     out = []
     with tempfile.TemporaryDirectory() as folder:
@@ -94,9 +96,9 @@ def main() -> None:
                     help="the truth and its baseline: the paper's tractor (figure8.toml) or a passenger car at "
                          "10-30 m/s (passenger_car.toml)")
     args = ap.parse_args()
-    from agrobot.diagnosis.hidden_effects import EFFECTS, diagnose_many
+    from harness.hidden_effects import EFFECTS, diagnose_many
 
-    from agrobot.measurements.truth_tractor import HEALTHY, LATER
+    from harness.truth_tractor import HEALTHY, LATER
 
     groups = {"healthy": [f"healthy:{h}" for h in HEALTHY], "singles": ["none", *EFFECTS], "later effects": list(LATER),
               "combinations": list(COMBINATIONS), "unlisted": list(unlisted_cases())}

@@ -2,7 +2,7 @@
 
     python3 benchmarks/reader_limits.py [--cases nmea_1m,day_10hz,can_1h] [--repo PATH] [--keep DIR]
 
-Each case is generated (agrobot.measurements.generated_recordings: a straight drive at 2 m/s, written from known
+Each case is generated (harness.generated_recordings: a straight drive at 2 m/s, written from known
 values), then converted by ``python -m agrobot convert`` in a child process with the code
 tree ``--repo`` (default: this one) on its PYTHONPATH; its peak resident memory is the child's
 ``ru_maxrss`` (resource.getrusage(RUSAGE_CHILDREN), read in a fresh parent per case, so that
@@ -26,8 +26,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))          # the test harness (harness/), beside the package
 
-from agrobot.measurements.generated_recordings import candump_lines, nmea_lines  # noqa: E402  - the generators the tests use
+from harness.generated_recordings import candump_lines, nmea_lines  # noqa: E402  - the generators the tests use
 
 
 def _write_nmea(path: Path, seconds: float) -> int:

@@ -1,6 +1,6 @@
 """The diagnosis names an effect hidden in logs it has never seen.
 
-The logs come from src/agrobot/measurements/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
+The logs come from harness/truth_tractor.py (the paper's equations in scalar form, Heun at 200 Hz, its
 own steering loop with an unmodelled spool lag, parameters drawn around the paper's, its own
 sensor noise); the effect and its size are drawn there and compared here only.
 """
@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agrobot.diagnosis.hidden_effects import EFFECTS, diagnose_many, recovered
-from agrobot.measurements.truth_tractor import make_log
+from harness.hidden_effects import EFFECTS, diagnose_many, recovered
+from harness.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180

@@ -15,7 +15,7 @@ from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay, _fit
 from agrobot.diagnosis.catalogue import UNCERTAIN
 from agrobot.identification.driving import forward_jacobian
-from agrobot.measurements.truth_tractor import make_log
+from harness.truth_tractor import make_log
 from agrobot.orchestrator.study import load_study
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -14,7 +14,7 @@ from agrobot.components.models.yaw_dynamics import TractorParameters, state_spac
 from agrobot.diagnosis.pipeline import diagnose
 from agrobot.diagnosis.replay import YawReplay
 from agrobot.identification.vehicle import Vehicle, VehicleError
-from agrobot.measurements.truth_tractor import make_log
+from harness.truth_tractor import make_log
 from tests.vehicle_logs import ROOT_STUDIES, frictionmaps_log
 
 F1TENTH = ROOT_STUDIES / "f1tenth.toml"

@@ -3,7 +3,7 @@ baseline the way real ones do (the paper's servo steering on a 1-deg potentiomet
 lengths, sensor noise, one speed, field driving), detection kept, a named effect kept against a
 free map, and the healthy level the misfit is judged against.
 
-Truths from measurements.truth_tractor (healthy variants: HEALTHY). Tuning used seeds 1-7 and the
+Truths from harness.truth_tractor (healthy variants: HEALTHY). Tuning used seeds 1-7 and the
 benchmark's 1000-1003; SEED was first run as this test.
 """
 from __future__ import annotations
@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
+from harness.hidden_effects import diagnose_many, expected_ids, recovered
 from agrobot.measurements.log import resolution
-from agrobot.measurements.truth_tractor import DEG, HEALTHY, make_log
+from harness.truth_tractor import DEG, HEALTHY, make_log
 
 SEED = 8801
 # faults hidden in a healthy-but-different truth: detection must survive the higher healthy level

@@ -8,8 +8,8 @@ import pytest
 
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay, split_conditions
-from agrobot.diagnosis.hidden_effects import BASELINES
-from agrobot.measurements.truth_tractor import make_log
+from harness.hidden_effects import BASELINES
+from harness.truth_tractor import make_log
 from agrobot.orchestrator.study import Study
 
 GENTLE_THEN_HARD = (1.0, 1.5, 1.0, 1.5, 1.0, 1.5, 1.0, 3.0, 3.0, 3.5, 3.0, 3.5)     # m/s, 20 s each
@@ -79,8 +79,8 @@ def test_the_conditions_rule_needs_a_material_rise():
 def test_a_truth_driven_harder_at_its_end_is_diagnosed_on_blocks(tmp_path, effect):
     """A saturating tyre (the truth's F = C a / (1 + |a| / a_s)) on a log whose last 40 % is driven
     at twice the speed: held out every third window, the saturation is named with the truth's
-    friction (diagnosis.hidden_effects.recovered); the same driving without a fault is 'none'."""
-    from agrobot.diagnosis.hidden_effects import expected_ids, recovered
+    friction (harness.hidden_effects.recovered); the same driving without a fault is 'none'."""
+    from harness.hidden_effects import expected_ids, recovered
     from agrobot.diagnosis.pipeline import diagnose
 
     frame, truth = make_log(1000, effect, duration=240.0, speeds=GENTLE_THEN_HARD)

@@ -229,7 +229,7 @@ def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
     (empty / "notes.md").write_text("nothing recorded here\n")
     cases = [
         (["convert", str(tmp_path / "nowhere"), "--out", str(tmp_path / "a.csv")], "nowhere: no such file or folder"),
-        (["convert", str(empty), "--out", str(tmp_path / "a.csv")], "no recording in it: expected NMEA files"),
+        (["convert", str(empty), "--out", str(tmp_path / "a.csv")], "no recording in it: expected ROS bags"),
         (["convert", str(lever_recording), "--out", str(tmp_path / "a.csv"), "--signal", "delta=Foo"],
          "--signal delta=Foo: no signal 'Foo'"),
         (["convert", str(lever_recording), "--out", str(tmp_path / "a.csv"), "--signal", "v=TractorFeedback.Nope"],

@@ -177,7 +177,7 @@ def test_diagnosis_figures_agree_with_the_verdict_and_the_report_uses_one_unit_s
     the healthy level that explains it, and the final model's bar stays under the misfit level."""
     from agrobot.diagnosis.pipeline import diagnose
     from agrobot.diagnosis.report import floors_figure
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
 
     frame, _ = make_log(101, None)
     frame.to_csv(tmp_path / "log.csv", index=False)

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from agrobot.orchestrator.errors import InputError
-from agrobot.measurements.generated_recordings import write_candump, write_nmea, write_timelog
+from harness.generated_recordings import write_candump, write_nmea, write_timelog
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data"

@@ -164,7 +164,7 @@ def test_the_minimum_driving_is_guidance_down_to_its_floor():
     """20 s of driving is the nominal minimum: 19 s is identified with a warning naming both
     numbers, under two thirds of it (13.3 s) the log is refused naming the floor."""
     from agrobot.identification.ordinary_driving import MIN_DRIVING
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
     from agrobot.studies import shipped
 
     figure8 = Study.load(shipped("figure8.toml"))

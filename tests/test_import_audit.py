@@ -252,7 +252,7 @@ def test_a_run_just_under_the_minimum_is_used_with_a_warning(tmp_path):
                                           ("text", "no column to take"), ("align", "larger than the recording")])
 def test_bad_input_exits_2_naming_it_and_writes_nothing(tmp_path, capsys, case, expect):
     from agrobot.orchestrator.cli import main
-    from agrobot.measurements.generated_recordings import write_timelog
+    from harness.generated_recordings import write_timelog
 
     extra = []
     if case == "impossible":                        # a time log whose every fix is impossible
@@ -320,7 +320,7 @@ def test_a_plain_log_table_is_audited_on_its_own_columns(tmp_path, late_none):
 
 
 def test_signal_works_for_nmea_and_an_unknown_name_is_refused_with_the_near_names(tmp_path):
-    from agrobot.measurements.generated_recordings import write_nmea
+    from harness.generated_recordings import write_nmea
 
     nmea = write_nmea(tmp_path / "gps.nmea", 60.0)
     frame, report = import_recording(nmea, ImportOptions(signals=[parse_signal("v=gnss.speed")]))

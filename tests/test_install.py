@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+from harness.truth_tractor import make_log
+
 ROOT = Path(__file__).resolve().parent.parent
 pytestmark = pytest.mark.slow
 
@@ -57,11 +59,8 @@ def test_non_editable_install_has_one_top_level_name_and_runs_from_another_folde
                          capture_output=True, text=True, cwd=work, env=env, timeout=300)
     assert run.returncode == 0, run.stderr
     assert (work / "r" / "signals.parquet").is_file()
-    # a log to diagnose, with the default (shipped) study
-    log = subprocess.run([str(python), "-c", "from agrobot.measurements.truth_tractor import make_log; "
-                          "f, _ = make_log(3, None, duration=60.0); f.to_csv('log.csv', index=False)"],
-                         capture_output=True, text=True, cwd=work, env=env, timeout=300)
-    assert log.returncode == 0, log.stderr
+    # a log to diagnose, with the default (shipped) study; drawn here: the harness is not installed
+    make_log(3, None, duration=60.0)[0].to_csv(work / "log.csv", index=False)
     diag = subprocess.run(agrobot + ["diagnose", "log.csv", "--out", "d", "--no-plots", "--no-identify"], capture_output=True,
                           text=True, cwd=work, env=env, timeout=600)
     assert diag.returncode == 0, diag.stdout + diag.stderr

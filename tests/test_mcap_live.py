@@ -255,7 +255,7 @@ def test_a_port_in_use_is_refused_with_its_number(tmp_path):
 
 
 def test_convert_writes_the_log_as_mcap_beside_it(tmp_path):
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
     from agrobot.orchestrator.cli import main
 
     frame, _ = make_log(3, None, duration=40.0)
@@ -344,7 +344,7 @@ def test_a_diagnosis_mcap_holds_measured_replays_and_residuals_on_the_logs_time(
     from agrobot.diagnosis.baseline import baseline_from_study
     from agrobot.diagnosis.candidates import Replay
     from agrobot.diagnosis.mcap import write_diagnosis_mcap
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
     from agrobot.orchestrator.study import load_study
 
     frame, _ = make_log(5, "steering_offset", duration=60.0)

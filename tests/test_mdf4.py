@@ -16,7 +16,7 @@ from agrobot.measurements.log import LogError
 from agrobot.measurements.options import ImportOptions
 from agrobot.measurements.recording import import_recording
 from agrobot.measurements.signal_expressions import parse_signal
-from agrobot.measurements.generated_recordings import write_candump
+from harness.generated_recordings import write_candump
 
 asammdf = pytest.importorskip("asammdf")
 ROOT = Path(__file__).resolve().parent.parent
@@ -80,7 +80,7 @@ def test_mdf4_bus_logging_decodes_as_the_same_frames_in_a_candump(tmp_path):
     assert len(from_mdf) == len(from_candump) > 500
     for column in from_candump.columns:
         np.testing.assert_allclose(from_mdf[column], from_candump[column], rtol=0, atol=1e-9)
-    # the candump's truth (measurements.generated_recordings.candump_lines): wheel angle 0.2 sin(0.5 t), 2 m/s
+    # the candump's truth (harness.generated_recordings.candump_lines): wheel angle 0.2 sin(0.5 t), 2 m/s
     assert np.max(np.abs(from_mdf["v"] - 2.0)) < 1e-9
     assert np.max(np.abs(from_mdf["delta"])) == pytest.approx(0.2, abs=2e-4)
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
+from harness.hidden_effects import diagnose_many, expected_ids, recovered
 from agrobot.diagnosis.pipeline import diagnose
-from agrobot.measurements.truth_tractor import make_log
+from harness.truth_tractor import make_log
 from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -134,7 +134,7 @@ def test_the_passenger_car_study_runs_at_highway_speed(tmp_path):
 
 
 def test_diagnosis_holds_at_highway_speed_against_the_car_study():
-    """Car truths (measurements.truth_tractor VEHICLES['car'], 10-30 m/s) diagnosed against
+    """Car truths (harness.truth_tractor VEHICLES['car'], 10-30 m/s) diagnosed against
     studies/passenger_car.toml: clean is none, each fault is found with its value (the dead
     reckoning carries the side-slip, the cornering slope is relative to the car's 20 m/s)."""
     import tempfile

@@ -114,10 +114,10 @@ def test_plan_from_python_covers_a_rectangle_with_the_swaths_its_width_needs(tmp
 
 
 def test_convert_from_python_reads_a_generated_drive_and_saves_it_as_the_command_does(tmp_path):
-    """A 30 s NMEA drive east at 2 m/s (agrobot.measurements.generated_recordings): the GNSS speed is
+    """A 30 s NMEA drive east at 2 m/s (harness.generated_recordings): the GNSS speed is
     2 m/s, x grows by 2 m/s, y stays; nothing is written until save."""
     import agrobot
-    from agrobot.measurements.generated_recordings import write_nmea
+    from harness.generated_recordings import write_nmea
 
     nmea = write_nmea(tmp_path / "drive.nmea", 30.0)
     rec = agrobot.convert(nmea)

@@ -1,6 +1,6 @@
 """The readers under abuse: files that are not files, clocks that step back, impossible or jumping
 positions, padding, damaged TaskData, parcels of one name, swapped coordinates, deep nesting,
-bad lines among good ones. Each input is generated small (src/agrobot/measurements/generated_recordings.py) from known
+bad lines among good ones. Each input is generated small (harness/generated_recordings.py) from known
 values, so the tests compare what the readers return with what was written; the large cases
 (a million NMEA lines, a day-long log, a long CAN log) are in benchmarks/reader_limits.py."""
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from agrobot.measurements.generated_recordings import LAT0, write_candump, write_nmea, write_timelog
+from harness.generated_recordings import LAT0, write_candump, write_nmea, write_timelog
 from tests.commands import cli, refused
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -1,15 +1,15 @@
 """A recording finding is a candidate like any effect: the import audit's 'the yaw rate answers
 the steering before it' (response_leads_input) on a log whose steering channels are stamped late
-(measurements.truth_tractor's steering_clock, drawn there, 0.75 s on this seed) is not a refusal in
+(harness.truth_tractor's steering_clock, drawn there, 0.75 s on this seed) is not a refusal in
 the diagnosis but the start of its steering_clock fit, and once the fit explains it the finding is
 resolved; identify, which has no such candidate, still refuses the log and the diagnosis says why."""
 from __future__ import annotations
 
 import pytest
 
-from agrobot.diagnosis.hidden_effects import BASELINES, recovered
+from harness.hidden_effects import BASELINES, recovered
 from agrobot.diagnosis.pipeline import diagnose, explained_findings
-from agrobot.measurements.truth_tractor import make_log
+from harness.truth_tractor import make_log
 
 
 def test_a_lead_is_explained_only_by_a_clock_at_least_that_late():

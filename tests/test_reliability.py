@@ -233,7 +233,7 @@ def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
 ])
 def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
     from agrobot.measurements import LogError, read_log
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     path = tmp_path / "log.csv"
@@ -247,7 +247,7 @@ def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
 
 def test_a_jittered_log_is_diagnosed_with_resample(tmp_path):
     from agrobot.measurements import read_log
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     frame["t"] += np.random.default_rng(1).uniform(-0.002, 0.002, len(frame))
@@ -327,7 +327,7 @@ def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_pa
                                                 f'[components.gps]\ntype = "no_such_component"\n')
     (tmp_path / "bad_edit.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
                                             f'connections_remove = ["gps.x -> nowhere.x"]\n')
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
 
     frame, _ = make_log(5, None, duration=120.0)
     frame.assign(delta=np.degrees(frame["delta"])).to_csv(tmp_path / "degrees.csv", index=False)

@@ -1,6 +1,6 @@
 """The command's gain (diagnosis.effects.steering_gain): on a log without a measured wheel angle the
 yaw stage is driven by the command replayed, and wheels that turn k x the command are named with k.
-The truth (measurements.truth_tractor): a wheel-angle sensor reading g x the angle with the steering
+The truth (harness.truth_tractor): a wheel-angle sensor reading g x the angle with the steering
 loop closed on it turns the wheels delta_cmd / g; the log without its delta column is that command's
 gain, k = 1 / g, drawn by the truth, never by the diagnosis."""
 from __future__ import annotations
@@ -9,9 +9,9 @@ import pytest
 
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
-from agrobot.diagnosis.hidden_effects import BASELINES, recovered
+from harness.hidden_effects import BASELINES, recovered
 from agrobot.diagnosis.selection import Selector
-from agrobot.measurements.truth_tractor import make_log
+from harness.truth_tractor import make_log
 from agrobot.orchestrator.study import Study
 
 

@@ -1,4 +1,4 @@
-"""Verdicts on simulated truths (measurements.truth_tractor, an independent model): each effect
+"""Verdicts on simulated truths (harness.truth_tractor, an independent model): each effect
 real vehicles show and the catalogue now holds is found with its value; an effect beyond its
 prior range is named with its value; a localisation output ahead of the centre of gravity on a
 lagging clock is named as such, not as an antenna lever arm and a latency; a saturating truth is
@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from agrobot.diagnosis.hidden_effects import diagnose_many, expected_ids, recovered
-from agrobot.measurements.truth_tractor import TABLE
+from harness.hidden_effects import diagnose_many, expected_ids, recovered
+from harness.truth_tractor import TABLE
 
 pytestmark = pytest.mark.slow
 
@@ -87,7 +87,7 @@ def test_the_models_side_slip_is_scored_against_a_measured_one_held_out():
     """The truth logs its lateral velocity at the centre of gravity; the identified model's state,
     never fitted to it, follows it; a sign-flipped sensor does not."""
     from agrobot.identification.ordinary_driving import identify_driving
-    from agrobot.measurements.truth_tractor import make_log
+    from harness.truth_tractor import make_log
     from agrobot.orchestrator.study import load_study
     from agrobot.studies import shipped
 

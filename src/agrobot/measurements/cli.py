@@ -1,6 +1,7 @@
 """``convert``: a raw recording (NMEA, CAN with any maker's DBC, ROS bags, ISO 11783-10 time logs,
 other tools' tables) to the measured log (CSV or Parquet), with its import report beside it, or
-``--list`` of what it holds; and the recording options ``identify`` and ``diagnose`` share."""
+``--list`` of what it holds; and the recording options ``identify`` and ``diagnose`` share. The
+formats the help names are the readers' (measurements.readers), in their order of precedence."""
 from __future__ import annotations
 
 import argparse
@@ -8,11 +9,12 @@ import json
 import sys
 from pathlib import Path
 
+from . import readers
+
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
     """Options for reading a raw recording (ignored for a CSV/Parquet log)."""
-    g = p.add_argument_group("raw recordings (a folder or one file: NMEA, CAN logs, ROS bags, ISO 11783-10 TaskData, "
-                             "tables)")
+    g = p.add_argument_group(f"raw recordings (a folder or one file: {readers.names()})")
     g.add_argument("--dbc", type=Path, default=None, help="DBC decoding the CAN logs (any maker's: what cannot be "
                    "decoded is left out and named; default: the project's agrobot_tractor.dbc; "
                    "components/hardware/isobus_guidance.dbc for ISO 11783-7 guidance)")
@@ -93,16 +95,15 @@ def recording_options(args: argparse.Namespace):
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("source", type=Path, help="a folder or one file: NMEA (*.nmea, *.gps, a .log/.txt of "
-                   "sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), ROS bags (*.bag, *.db3, *.mcap, a "
-                   "rosbag2 folder), ISO 11783-10 TaskData (TASKDATA.XML with TLGnnnnn.xml/.bin), tables (*.csv, "
-                   "*.tsv, *.parquet: a folder of them is joined on time)")
+    p.add_argument("source", type=Path, help=f"a folder or one file: {readers.described()}; in this order of "
+                   "precedence: a file is read as the first of these formats that claims it, and the first format "
+                   "a folder holds makes the recording (NMEA files and CAN logs are read together)")
     from agrobot.orchestrator.cli import add_output_options
 
     add_output_options(p, "the log to write (.csv or .parquet); the import report goes beside it as "
                           "<name>.import.json", required=False, file=True)
-    p.add_argument("--list", action="store_true", help="print what the recording holds (topics and types, CAN "
-                   "messages and signals with units and rates, table columns with ranges) and write nothing")
+    p.add_argument("--list", action="store_true", help=f"print what the recording holds ({readers.listed()}) and "
+                   "write nothing")
     p.add_argument("--all-runs", action="store_true", help="write every run, as <name>_run01.csv ...")
     p.add_argument("--mcap", action="store_true", help="also write each log as <name>.mcap for Foxglove/PlotJuggler")
     add_recording_options(p)
@@ -178,8 +179,7 @@ def _write(jobs) -> None:
 
 
 def register(registry) -> None:
-    registry.add_command("convert", "a raw recording (NMEA, CAN, ROS bag, ISO 11783-10 time log, tables) as a measured "
-                                    "log, or --list what it holds",
+    registry.add_command("convert", f"a raw recording ({readers.names()}) as a measured log, or --list what it holds",
                          add_arguments, run)
     registry.add_section("vehicle", "measurements: steering_ratio (handwheel / road wheel) and wheelbase [m] for reading "
                                     "the vehicle's recordings")

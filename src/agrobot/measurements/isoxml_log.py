@@ -34,7 +34,7 @@ import pandas as pd
 from .log import LogError
 from .quirks import ordered_in_time
 from agrobot.orchestrator.source_files import regular_file
-from .streams import Streams, iso
+from .streams import Reader, Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
 PTN_LAYOUT = {"A": ("<i", 1e-7), "B": ("<i", 1e-7), "C": ("<i", 1e-3), "D": ("<B", 1.0), "E": ("<H", 0.1),
@@ -308,3 +308,44 @@ def _repeated_logs(tables: list) -> list[str]:
         else:
             seen[key] = head.stem
     return notes
+
+
+def list_timelogs(paths: list[Path], source: Path) -> list[str]:
+    """``--list``: each time log, its records and span, and its columns (DDIs) with their ranges."""
+    out = []
+    for head in timelog_files(paths):
+        try:
+            table, info = read_timelog(head)
+        except LogError as exc:
+            out.append(f"time log {head.name}: not read: {exc}")
+            continue
+        out.append(f"time log {head.name}: {info['records']} records from {iso(float(table['utc'].min()))}, "
+                   f"{table['utc'].max() - table['utc'].min():.0f} s")
+        for c, unit in info["units"].items():
+            x = table[c].to_numpy(float)
+            seen = f"{np.nanmin(x):.6g} .. {np.nanmax(x):.6g}" if np.isfinite(x).any() else "no value"
+            out.append(f"  {c}: {seen} [{unit}]")
+    if not out:
+        out.append(f"{source}: a TaskData without time logs")
+    return out
+
+
+class TimeLogReader(Reader):
+    """ISO 11783-10 TaskData: TASKDATA.XML and its time logs (TLGnnnnn.xml headers, .bin records)."""
+
+    kind, name, listed = "isoxml", "ISO 11783-10 TaskData", "time logs with their DDIs"
+    files = "ISOXML: TASKDATA.XML with TLGnnnnn.xml/.bin"
+    suffixes = (".xml", ".bin")
+
+    def claims(self, path: Path) -> bool:
+        name = path.name.upper()
+        return super().claims(path) and (name == "TASKDATA.XML" or name.startswith("TLG"))
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path) -> Streams:
+        return timelog_streams(files[self.kind], options, source)
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        return list_timelogs(paths, source)
+
+
+READER = TimeLogReader()

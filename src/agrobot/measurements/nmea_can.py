@@ -1,6 +1,7 @@
 """NMEA files and CAN logs as one recording's streams: the receiver's epochs merged from every
 NMEA file, the CAN columns decoded with the DBC (or --signal expressions), and the CAN clock put
-on the receiver's UTC (measurements.clocks)."""
+on the receiver's UTC (measurements.clocks). Their two readers (NMEA, CAN) read their files
+together, whichever of them makes the recording."""
 from __future__ import annotations
 
 import math
@@ -13,10 +14,13 @@ import pandas as pd
 from .clocks import align_clocks
 from .log import LogError
 from .options import ImportOptions
+from .mdf4 import is_bus_logging
 from .raw_can import (
+    CAN_SUFFIXES,
     CANDUMP_FORMAT,
     CANRecording,
     choose_sources,
+    list_can,
     load_dbc,
     merge,
     messages_of,
@@ -24,9 +28,18 @@ from .raw_can import (
     series,
     signal_names,
 )
-from .raw_nmea import read_nmea_file
+from .raw_nmea import NMEA_SUFFIXES, NMEA_TEXT_SUFFIXES, list_nmea, looks_like_nmea, read_nmea_file
 from .signal_expressions import evaluate, unknown_name
-from .streams import HELD, Streams, iso
+from .streams import HELD, Reader, Series, Streams, iso
+from .tables import MDF_SUFFIXES
+
+
+def nmea_can_recording(files: dict[str, list[Path]], options: ImportOptions, source: Path) -> Streams:
+    """The streams of the NMEA files and CAN logs; ``--signal`` over NMEA alone takes receiver fields."""
+    streams = nmea_can_streams(source, options, files)
+    if not files["can"] and options.signals:
+        _receiver_signals(streams, options, source)
+    return streams
 
 
 def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list[Path]]) -> Streams:
@@ -144,3 +157,72 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
                        + (f"; unknown identifiers: {', '.join(unknown)}" if unknown else "")
                        + "); give the vehicle's DBC with --dbc, and map signals with --signal COLUMN=Message.Signal")
     return raw, units
+
+
+RECEIVER_FIELDS = {"speed": "m/s", "course": "rad", "heading": "rad", "height": "m", "quality": "", "position_std": "m"}
+
+
+def _receiver_signals(streams: Streams, options: ImportOptions, source: Path) -> None:
+    """``--signal`` over an NMEA recording: the receiver's fields (gnss.speed, gnss.course,
+    gnss.heading, gnss.height, gnss.quality, gnss.position_std; SI); a name it does not hold is
+    refused with the near names."""
+    g = streams.gnss
+    if g is None:
+        raise LogError(f"{source}: --signal {options.signals[0]}: the NMEA holds no fix to take a signal from")
+    utc = g["utc"].to_numpy(float)
+    series = {}
+    for name, unit in RECEIVER_FIELDS.items():
+        x = g[name].to_numpy(float)
+        ok = np.isfinite(x)
+        if ok.sum() >= 2:
+            series[f"gnss.{name}"] = Series(utc[ok], x[ok], unit or None, f"gnss.{name}")
+    for spec in options.signals:
+        for name in spec.names:
+            if name not in series:
+                raise unknown_name(str(source), spec, name, sorted(series), "receiver field")
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        streams.signals[spec.column] = (t, values)
+        streams.groups[spec.column] = "gnss"
+        streams.report.setdefault("columns", {})[spec.column] = how
+
+
+class _Together(Reader):
+    """A reader whose files are read with the other's: NMEA and CAN make one recording."""
+
+    streamed = True
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path) -> Streams:
+        return nmea_can_recording(files, options, source)
+
+
+class NMEAReader(_Together):
+    """NMEA 0183 files: by their suffix, or a .log/.txt whose first lines are sentences."""
+
+    kind, name, listed = "nmea", "NMEA", "NMEA sentences and fixes"
+    files = "*.nmea, *.gps, *.nma, a .log/.txt of sentences"
+    suffixes = NMEA_SUFFIXES + NMEA_TEXT_SUFFIXES
+
+    def claims(self, path: Path) -> bool:
+        suffix = path.suffix.lower()
+        return ((suffix in NMEA_SUFFIXES and not path.is_dir())
+                or (suffix in NMEA_TEXT_SUFFIXES and looks_like_nmea(path)))
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        return list_nmea(paths)
+
+
+class CANReader(_Together):
+    """CAN logs python-can reads (candump, Vector, PEAK), and MDF4 files of bus logging."""
+
+    kind, name, listed = "can", "CAN logs", "CAN messages and signals with units and rates"
+    files = "*.log candump, *.asc, *.blf, *.trc, MDF4 bus logging *.mf4/*.mdf"
+    suffixes = CAN_SUFFIXES + MDF_SUFFIXES
+
+    def claims(self, path: Path) -> bool:
+        return super().claims(path) and (path.suffix.lower() in CAN_SUFFIXES or is_bus_logging(path))
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        return list_can(paths, options)
+
+
+NMEA, CAN = NMEAReader(), CANReader()

@@ -371,3 +371,57 @@ def choose_sources(db, dbc_name: str, given: list[SignalSpec] = ()) -> tuple[dic
                     f"{' ...' if len(names) > 12 else ''}); map one with --signal {c}=Message.Signal")
                 for c in CAN_COLUMNS if c not in chosen}
     return chosen, unmapped, how
+
+
+def list_can(paths: list[Path], options) -> list[str]:
+    """``--list``: the DBC's load report, then each CAN log's buses, messages and signals (units,
+    declared ranges, the values seen, rates); a log of several buses without --bus, bus by bus."""
+    db, report = load_dbc(options.dbc)
+    out = report.lines() if report is not None else ["DBC: the project's agrobot_tractor.dbc"]
+    out[0] += f": {len(db.messages)} messages"
+    for p in paths:
+        try:
+            rec = read_can_file(p, db, options.bus)
+        except LogError as exc:
+            if "choose one with --bus" not in str(exc):
+                raise
+            rec = None
+            out.append(f"CAN log {p.name}: {exc}")
+            for bus in _buses(p):
+                out += _can_one(read_can_file(p, db, bus), db, f" on bus {bus}")
+            continue
+        out += _can_one(rec, db, "")
+    return out
+
+
+def _buses(path: Path) -> list[str]:
+    import can
+
+    seen: Counter = Counter()
+    for frame in can.LogReader(str(path)):
+        seen[str(frame.channel)] += 1
+    return [b for b, _ in seen.most_common()]
+
+
+def _can_one(rec, db, where: str) -> list[str]:
+    out = [f"CAN log {rec.path.name}{where}: {rec.counts['frames']} frames, {rec.counts['decoded']} decoded; buses "
+           + ", ".join(f"{b} ({n})" for b, n in rec.buses.most_common())
+           + (f"; identifiers the DBC does not hold: {', '.join(f'{k} ({v})' for k, v in rec.unknown_ids.most_common(8))}"
+              if rec.unknown_ids else "")]
+    by_name = {m.name: m for m in db.messages}
+    for name, table in sorted(rec.messages.items()):
+        m = by_name[name]
+        t = table["t"].to_numpy(float)
+        rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else float("nan")
+        out.append(f"  {name} ({m.frame_id:#x}{', 29-bit' if m.is_extended_frame else ''}): {len(t)} frames at {rate:.3g} Hz"
+                   + (", multiplexed" if m.is_multiplexed() else ""))
+        for s in m.signals:
+            if s.name not in table:
+                continue
+            x = table[s.name].to_numpy(float)
+            seen = f"{np.nanmin(x):.6g} .. {np.nanmax(x):.6g}" if np.isfinite(x).any() else "no value"
+            declared = f"declared [{s.minimum:g}|{s.maximum:g}]" if s.minimum is not None and s.maximum is not None else ""
+            flag = rec.outside_range.get(f"{name}.{s.name}")
+            out.append(f"    {name}.{s.name} [{(s.unit or '').strip() or 'no unit'}]: {seen} {declared}"
+                       + (f"; {flag['outside']} of {flag['of']} values outside it (kept)" if flag else ""))
+    return out

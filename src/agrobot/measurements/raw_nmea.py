@@ -26,6 +26,10 @@ import pandas as pd
 
 from .log import LogError
 from .quirks import ordered_in_time
+from .streams import iso
+
+NMEA_SUFFIXES = (".nmea", ".gps", ".nma")
+NMEA_TEXT_SUFFIXES = (".log", ".txt")      # NMEA when they hold sentences
 
 KNOTS = 1852.0 / 3600.0
 USED = ("GGA", "RMC", "VTG", "ZDA", "HDT", "THS", "GST")
@@ -356,3 +360,26 @@ def _utc(frame: pd.DataFrame, dates: list, notes: list[str], path: Path) -> np.n
     notes.append(f"{path.name}: no RMC or ZDA date and no host stamps: times are seconds of the day "
                  f"(date unknown, shown as 1970-01-01)")
     return DAY * day + tod
+
+
+def list_nmea(paths: list[Path]) -> list[str]:
+    """``--list``: each NMEA file's epochs, fixes, rate and span, its sentences and the ranges of its fields."""
+    out = []
+    for p in paths:
+        try:
+            rec = read_nmea_file(p)
+        except LogError as exc:
+            out.append(f"NMEA {p.name}: not read: {exc}")
+            continue
+        e = rec.epochs
+        fix = e[e["quality"] > 0]
+        rate = 1.0 / float(np.median(np.diff(e["utc"]))) if len(e) > 1 else float("nan")
+        out.append(f"NMEA {p.name}: {len(e)} epochs ({len(fix)} with a fix) at {rate:.3g} Hz from {iso(float(e['utc'].iloc[0]))}, "
+                   f"{e['utc'].iloc[-1] - e['utc'].iloc[0]:.1f} s; fix qualities "
+                   + ", ".join(f"{int(k)}: {int(v)}" for k, v in e["quality"].value_counts().sort_index().items()))
+        out.append("  sentences: " + ", ".join(f"{k} {v}" for k, v in rec.counts.most_common() if k not in ("lines",)))
+        for c in ("speed", "heading", "position_std"):
+            if e[c].notna().any():
+                out.append(f"  {c}: {e[c].min():.4g} .. {e[c].max():.4g}")
+        out += [f"  note: {n}" for n in rec.notes]
+    return out

@@ -1,9 +1,10 @@
 """A raw field recording as one measured log, and a report of how: the readers' dispatcher.
 
-The readers (measurements.raw_nmea, raw_can, rosbag, isoxml_log, tables) each turn their files
-into Streams (measurements.streams); this module chooses them by the files it finds, merges NMEA
-with CAN on one clock, finds the quirks (measurements.quirks: spikes, position quantisation) and
-puts everything on one grid. No reader imports it.
+The readers (measurements.readers: ROS bags, ISO 11783-10 time logs, NMEA with CAN on one clock,
+tables) each turn their files into Streams (measurements.streams); this module gives each file to
+the first reader that claims it, has the first reader that holds files make the streams, finds
+the quirks (measurements.quirks: spikes, position quantisation) and puts everything on one grid.
+No reader imports it.
 
 Time base: the receiver's UTC where there is one (a fix is valid at its epoch's time), else the
 source's own clock (a logger's boot-time clock is reported as such, never as a 1970 date); the
@@ -18,94 +19,61 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
+
+from . import readers
 from .import_report import describe
 from .log import LogError, check_log, read_log
-from .mdf4 import is_bus_logging
-from .nmea_can import nmea_can_streams
 from .options import ImportOptions
 from .quirks import find_quirks, fixes_from_columns
-from .raw_can import CAN_SUFFIXES
-from .raw_nmea import looks_like_nmea
 from .runs import assemble
-from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 from .streams import Streams
-from .tables import MDF_SUFFIXES, TABLE_SUFFIXES, TEXT_SUFFIXES, looks_like_table
 
 __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_recording", "load_log", "positions",
            "recording_files"]
 
-NMEA_SUFFIXES = (".nmea", ".gps", ".nma")
-
-
-BAG_SUFFIXES = (".bag", ".db3", ".mcap")
-KINDS = ("nmea", "can", "bag", "isoxml", "table")
-
 
 def is_recording(source: Path) -> bool:
-    """A folder, or a file that is a raw recording rather than a table (CSV/Parquet)."""
+    """A folder, or a file that is a raw recording rather than a table (CSV/Parquet): its suffix
+    is one a raw format's reader may claim (measurements.readers)."""
     source = Path(source)
-    suffix = source.suffix.lower()
-    return source.is_dir() or suffix in NMEA_SUFFIXES + CAN_SUFFIXES + BAG_SUFFIXES + MDF_SUFFIXES + (".txt", ".xml", ".bin")
+    return source.is_dir() or source.suffix.lower() in readers.raw_suffixes()
 
 
 def recording_files(source: Path) -> dict[str, list[Path]]:
-    """The files of a folder or the one file, by kind (KINDS): NMEA (a ``.log``/``.txt`` holding
-    sentences counts), CAN logs, ROS bags (ROS 1 ``.bag``, ROS 2 ``.db3``/``.mcap`` or a rosbag2
-    folder with metadata.yaml), ISO 11783-10 TaskData (TASKDATA.XML, or TLGnnnnn.xml/.bin) and
-    tables (CSV, TSV, Parquet)."""
+    """The files of a folder or the one file, by kind (every reader's, measurements.readers): each
+    file goes to the first reader that claims it, as does each folder inside (a rosbag2 folder); a
+    folder that a reader claims whole (a rosbag2 folder) is that reader's alone."""
     source = checked_path(source, LogError)
-    kinds: dict[str, list[Path]] = {k: [] for k in KINDS}
-    if source.is_dir() and (source / "metadata.yaml").is_file():
-        kinds["bag"].append(source)                   # a rosbag2 folder is one bag
+    kinds: dict[str, list[Path]] = {k: [] for k in readers.kinds()}
+    whole = readers.claimant(source) if source.is_dir() else None
+    if whole is not None:
+        kinds[whole.kind].append(source)
         return kinds
     files = regular_files(source) if source.is_dir() else [source]
     for p in files:
         if not source.is_dir():
             regular_file(p, LogError, None)        # before a byte is read; the size limit by kind below
-        suffix, name = p.suffix.lower(), p.name.upper()
-        if suffix in NMEA_SUFFIXES or (suffix in (".log", ".txt") and looks_like_nmea(p)):
-            kinds["nmea"].append(p)
-        elif suffix in CAN_SUFFIXES:
-            kinds["can"].append(p)
-        elif suffix in MDF_SUFFIXES:                  # bus logging is a CAN log, signals are tables
-            kinds["can" if is_bus_logging(p) else "table"].append(p)
-        elif suffix in BAG_SUFFIXES:
-            kinds["bag"].append(p)
-        elif name == "TASKDATA.XML" or (name.startswith("TLG") and suffix in (".xml", ".bin")):
-            kinds["isoxml"].append(p)
-        elif suffix in TABLE_SUFFIXES or (suffix in TEXT_SUFFIXES and looks_like_table(p)):
-            kinds["table"].append(p)          # a table by its content: a .txt dump of one topic field
-    for kind, paths in kinds.items():
-        for p in paths:
-            regular_file(p, LogError, "streamed" if kind in ("nmea", "can", "bag") else "whole")
+        reader = readers.claimant(p)
+        if reader is not None:
+            kinds[reader.kind].append(p)
+    for reader in readers.READERS:
+        for p in kinds[reader.kind]:
+            regular_file(p, LogError, "streamed" if reader.streamed else "whole")
     if source.is_dir():
-        kinds["bag"] += [d for d in sorted(source.iterdir()) if d.is_dir() and (d / "metadata.yaml").is_file()]
+        for d in sorted(source.iterdir()):
+            reader = readers.claimant(d) if d.is_dir() else None
+            if reader is not None:
+                kinds[reader.kind].append(d)
     return kinds
 
 
 def _streams(source: Path, options: ImportOptions) -> Streams:
     kinds = recording_files(source)
-    if kinds["bag"]:
-        from .rosbag import bag_streams
-
-        streams = bag_streams(kinds["bag"], options, source)
-    elif kinds["isoxml"]:
-        from .isoxml_log import timelog_streams
-
-        streams = timelog_streams(kinds["isoxml"], options, source)
-    elif kinds["nmea"] or kinds["can"]:
-        streams = nmea_can_streams(source, options, kinds)
-        if not kinds["can"] and options.signals:
-            _receiver_signals(streams, options, source)
-    elif kinds["table"]:
-        from .tables import table_streams
-
-        streams = table_streams(kinds["table"], options, source)
-    else:
-        raise LogError(f"{source}: no recording in it: expected NMEA files (*.nmea, *.gps, or a .log/.txt holding "
-                       f"sentences), CAN logs (*.log candump, *.asc, *.blf, *.trc), a ROS bag (*.bag, *.db3, *.mcap, "
-                       f"or a rosbag2 folder), an ISO 11783-10 TaskData (TASKDATA.XML with TLG files) or tables "
-                       f"(*.csv, *.tsv, *.parquet)")
+    reader = readers.first_held(kinds)
+    if reader is None:
+        raise LogError(readers.no_recording(source))
+    streams = reader.streams(kinds, options, source)
     ignored = [p.name for k in ("table",) for p in kinds[k] if streams.report.get("files", {}).get(k) is None]
     if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
         streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
@@ -114,36 +82,6 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
 
     streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
     return streams
-
-
-RECEIVER_FIELDS = {"speed": "m/s", "course": "rad", "heading": "rad", "height": "m", "quality": "", "position_std": "m"}
-
-
-def _receiver_signals(streams: Streams, options: ImportOptions, source: Path) -> None:
-    """``--signal`` over an NMEA recording: the receiver's fields (gnss.speed, gnss.course,
-    gnss.heading, gnss.height, gnss.quality, gnss.position_std; SI); a name it does not hold is
-    refused with the near names."""
-    from .signal_expressions import evaluate, unknown_name
-    from .streams import Series
-
-    g = streams.gnss
-    if g is None:
-        raise LogError(f"{source}: --signal {options.signals[0]}: the NMEA holds no fix to take a signal from")
-    utc = g["utc"].to_numpy(float)
-    series = {}
-    for name, unit in RECEIVER_FIELDS.items():
-        x = g[name].to_numpy(float)
-        ok = np.isfinite(x)
-        if ok.sum() >= 2:
-            series[f"gnss.{name}"] = Series(utc[ok], x[ok], unit or None, f"gnss.{name}")
-    for spec in options.signals:
-        for name in spec.names:
-            if name not in series:
-                raise unknown_name(str(source), spec, name, sorted(series), "receiver field")
-        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
-        streams.signals[spec.column] = (t, values)
-        streams.groups[spec.column] = "gnss"
-        streams.report.setdefault("columns", {})[spec.column] = how
 
 
 def _steered(streams: Streams, options: ImportOptions) -> Streams:

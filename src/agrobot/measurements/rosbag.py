@@ -30,7 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from .log import LogError
-from .streams import Series, Streams, gnss_table, iso
+from .streams import Reader, Series, Streams, gnss_table, iso
+
+BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 
 # ackermann_msgs is not in the rosbags type stores; its layout (ROS 1 and 2 alike)
 ACKERMANN = {
@@ -353,3 +355,24 @@ def bag_streams(paths: list[Path], options, source: Path):
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
     return Streams(gnss, signals, report, held, {}, groups=groups)
+
+
+class BagReader(Reader):
+    """ROS bags: ROS 1 and ROS 2 files, and rosbag2 folders (a metadata.yaml in them)."""
+
+    kind, name, listed = "bag", "ROS bags", "ROS topics and types"
+    files = "*.bag, *.db3, *.mcap, a rosbag2 folder"
+    suffixes = BAG_SUFFIXES
+    streamed = True
+
+    def claims(self, path: Path) -> bool:
+        return super().claims(path) or (path.is_dir() and (path / "metadata.yaml").is_file())
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path) -> Streams:
+        return bag_streams(files[self.kind], options, source)
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        return list_bag(paths)
+
+
+READER = BagReader()

@@ -5,13 +5,16 @@ the receiver's fixes, if any, and named signals, each on its own time stamps, in
 the import report so far. ``measurements.recording`` chooses the reader and puts the streams on
 one grid; no reader imports it. A ``Series`` is one raw signal as a source holds it (its own
 times, its values in the source's unit, that unit when the source states one), the operand of a
-``--signal`` expression (measurements.signal_expressions).
+``--signal`` expression (measurements.signal_expressions). A ``Reader`` is one recording format
+as the converter, the listing and the help see it; measurements.readers holds them in their
+order of precedence.
 """
 from __future__ import annotations
 
 import datetime
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -48,6 +51,37 @@ class Streams:
     resolution: dict = field(default_factory=dict)
     breaks: list = field(default_factory=list)      # {stream, start, end (POSIX s), why}: never joined across
     groups: dict = field(default_factory=dict)      # column -> the file, topic or bus it came from (one clock)
+
+
+class Reader:
+    """One recording format. ``kind`` names its files (the import report's ``files``), ``name``
+    and ``files`` are how the help names it (every suffix among ``files``), ``listed`` what
+    ``--list`` shows of it; ``suffixes`` are every suffix it may claim, by the name alone or by
+    the content. ``raw``: a file of it alone is a raw recording (False: a table, read as a log
+    when it is one); ``streamed``: its files are read as streams (the larger size limit), not
+    whole. Which reader gets a file, and which reader's files make the recording, is decided by
+    the order of measurements.readers.READERS."""
+
+    kind: str = ""
+    name: str = ""
+    files: str = ""
+    listed: str = ""
+    suffixes: tuple[str, ...] = ()
+    raw: bool = True
+    streamed: bool = False
+
+    def claims(self, path: Path) -> bool:
+        """Whether ``path`` (a file, or a folder inside the recording or the recording itself)
+        is of this format; by default a file with one of the suffixes."""
+        return path.suffix.lower() in self.suffixes and not path.is_dir()
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path) -> "Streams":
+        """The recording's streams from its files of this kind (``files``: every kind's, by kind)."""
+        raise NotImplementedError
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        """``convert --list``: what the files of this kind hold, as lines."""
+        raise NotImplementedError
 
 
 def gnss_table(t, lat, lon, height=None, quality=None, speed=None, position_std=None) -> pd.DataFrame:

@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
-from .streams import Series, is_boot_clock, iso
+from .streams import Reader, Series, is_boot_clock, iso
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
@@ -570,3 +570,42 @@ def table_streams(paths: list[Path], options, source: Path):
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
     held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
     return Streams(None, signals, report, held, {}, groups=groups)
+
+
+def list_tables(paths: list[Path], options) -> list[str]:
+    """``--list``: each table's columns with their ranges and the time found, joined as the
+    converter joins them; where they cannot be, each alone, saying why."""
+    try:
+        tables = read_tables(paths, options.time, options.rate, paths[0].parent,
+                             tuple(n for s in options.signals for n in s.names))
+    except LogError as exc:                   # each table alone, saying why the set has no clock
+        out = [f"tables: {exc}"]
+        for p in paths:
+            try:
+                out += describe_table(read_table(p))
+            except LogError as why:
+                out.append(f"table {p.name}: not read: {why}")
+        return out
+    return [line for t in tables for line in describe_table(t)]
+
+
+class TableReader(Reader):
+    """Other tools' tables: by their suffix, MDF4 files of signals, and text files of columns."""
+
+    kind, name, listed = "table", "tables", "table columns with ranges"
+    files = ("*.csv, *.tsv, *.parquet, *.pq, MDF4 signals *.mf4/*.mdf, a .txt/.dat/.log of columns: a folder of "
+             "them is joined on time")
+    suffixes = TABLE_SUFFIXES + MDF_SUFFIXES + TEXT_SUFFIXES
+    raw = False
+
+    def claims(self, path: Path) -> bool:
+        return super().claims(path) and (path.suffix.lower() not in TEXT_SUFFIXES or looks_like_table(path))
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path):
+        return table_streams(files[self.kind], options, source)
+
+    def listing(self, paths: list[Path], options, source: Path) -> list[str]:
+        return list_tables(paths, options)
+
+
+READER = TableReader()

@@ -5,7 +5,7 @@ axle) in scalar form, integrated with Heun's method at 200 Hz (the project's pla
 steps with matrix exponentials), with its own steering loop (first order, rate limit, a 15 ms
 spool lag the baseline does not model), its own parameters drawn around the paper's values, and
 its own sensors sampled at 20 Hz. Any combination of catalogue effects can be injected, and
-faults the diagnosis catalogue does not list (UNLISTED); the diagnosis under test is not told which. Tests and benchmarks both use it (diagnosis.hidden_effects runs the diagnosis
+faults the diagnosis catalogue does not list (UNLISTED); the diagnosis under test is not told which. Tests and benchmarks both use it (harness.hidden_effects runs the diagnosis
 on its logs).
 """
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Diagnosis on logs with a hidden effect from the independent truth tractor
-(measurements.truth_tractor): one runner for the tests and the benchmark, and the stated
+(harness.truth_tractor): one runner for the tests and the benchmark, and the stated
 tolerances of each effect's headline parameter."""
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from pathlib import Path
 
 from agrobot.components.models.tyre import force_limit_share
 from agrobot.studies import shipped
-from agrobot.measurements.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
+from harness.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
 
 __all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recovered"]
 
