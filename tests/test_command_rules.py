@@ -217,7 +217,7 @@ def test_staging_folders_of_a_killed_run_are_removed_by_the_next(tmp_path, capsy
 
 
 def test_a_full_disk_is_named_and_the_earlier_result_kept(tmp_path, capsys, monkeypatch):
-    from agrobot.orchestrator import results
+    from agrobot.orchestrator import atomic_files
 
     study = _study(tmp_path)
     out = tmp_path / "res"
@@ -227,13 +227,13 @@ def test_a_full_disk_is_named_and_the_earlier_result_kept(tmp_path, capsys, monk
     def full(self, block):
         raise OSError(errno.ENOSPC, "No space left on device", str(self.path))
 
-    monkeypatch.setattr(results.SignalWriter, "append", full)
+    monkeypatch.setattr(atomic_files.SignalWriter, "append", full)
     code, _, err = _cli(["run", study, "--out", out, "--overwrite"], capsys)
     assert code == 2 and "disk is full" in err and "signals.csv" in err and "Traceback" not in err, err
     assert (out / "signals.csv").read_bytes() == before and not _leftovers(tmp_path)
     # a command that writes a file: the same
     log = _log(tmp_path)
-    monkeypatch.setattr(results.pd.DataFrame, "to_csv", lambda *a, **k: (_ for _ in ()).throw(
+    monkeypatch.setattr(atomic_files.pd.DataFrame, "to_csv", lambda *a, **k: (_ for _ in ()).throw(
         OSError(errno.ENOSPC, "No space left on device")))
     code, _, err = _cli(["convert", log, "--out", tmp_path / "c.csv"], capsys)
     assert code == 2 and "disk is full" in err and not (tmp_path / "c.csv").exists(), err
