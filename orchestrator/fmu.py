@@ -19,11 +19,16 @@ comes from ``modelDescription.xml``, read as the standard writes it (no vendor a
 - a terminate request (fmi2Discard with fmi2Terminated, FMI 3.0 terminateSimulation, or an event
   update asking to terminate) ends the run cleanly (EndRun), reported in metrics.json as ``ended_by``.
 One instance is kept per component and ``reset()`` between runs.
+
+Imported where used: fmpy (start-up: 0.06 s on every command, which loads this module through the
+component registry), agrobot.orchestrator.fmu_process (it imports fmpy), scipy.integrate (start-up:
+0.05 s; model-exchange FMUs only).
 """
 from __future__ import annotations
 
 import ctypes
 import re
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -194,8 +199,6 @@ class FMUComponent(Component):
             self._slave = RemoteSlave(cls.__name__, kwargs, f"{self.name}: FMU {self.fmu_path.name}", self.call_timeout)
         else:
             if self.isolate:
-                import sys
-
                 print(f"note: {self.name}: a model-exchange FMU runs in this process (isolate_fmus isolates "
                       f"co-simulation FMUs)", file=sys.stderr)
             self._slave = cls(**kwargs)

@@ -217,7 +217,7 @@ def test_staging_folders_of_a_killed_run_are_removed_by_the_next(tmp_path, capsy
 
 
 def test_a_full_disk_is_named_and_the_earlier_result_kept(tmp_path, capsys, monkeypatch):
-    from agrobot.orchestrator import results
+    from agrobot.orchestrator import atomic_files as results
 
     study = _study(tmp_path)
     out = tmp_path / "res"
