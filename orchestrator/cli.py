@@ -2,9 +2,10 @@
 registered by a tool (orchestrator.registry). Errors become exit codes and one-line messages
 through one table (orchestrator.errors).
 
-Imported where used: agrobot.orchestrator.engine, agrobot.orchestrator.runner, agrobot.orchestrator.output (start-up:
-0.3 s of numpy and pandas on every command, --help included), agrobot.orchestrator.mcap_out (the same;
---mcap and --live only), agrobot.orchestrator.sweep (the same and 0.1 s more; the sweep command only).
+Imported where used: orchestrator.engine, orchestrator.runner, orchestrator.output (start-up: 0.3 s of numpy
+and pandas, measured from this module alone; loaded after the signal handlers, so that an interrupt while they
+load ends as a named one), orchestrator.mcap_out (the same; --mcap and --live only), orchestrator.sweep (the
+same and 0.03 s more; the sweep command only).
 """
 from __future__ import annotations
 

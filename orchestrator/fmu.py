@@ -21,8 +21,7 @@ comes from ``modelDescription.xml``, read as the standard writes it (no vendor a
 One instance is kept per component and ``reset()`` between runs.
 
 Imported where used: fmpy (start-up: 0.06 s on every command, which loads this module through the
-component registry), agrobot.orchestrator.fmu_process (it imports fmpy), scipy.integrate (start-up:
-0.05 s; model-exchange FMUs only).
+component registry), scipy.integrate (start-up: 0.05 s; model-exchange FMUs only).
 """
 from __future__ import annotations
 
@@ -37,6 +36,7 @@ import numpy as np
 
 from .component import Component, ComponentError, EndRun, Variable
 from .fmu_description import FMUError, base_units, inspect_fmu, variable_unit
+from .fmu_process import RemoteSlave
 from .fmu_unpack import fmu_entries, remove as remove_unpacked, unpack
 from .study import Study, StudyError
 from .units import BaseUnit
@@ -194,8 +194,6 @@ class FMUComponent(Component):
         kwargs = dict(guid=token, unzipDirectory=str(self._unpacked), modelIdentifier=kind.modelIdentifier,
                       instanceName=self.name)
         if self.isolate and not self.model_exchange:
-            from .fmu_process import RemoteSlave
-
             self._slave = RemoteSlave(cls.__name__, kwargs, f"{self.name}: FMU {self.fmu_path.name}", self.call_timeout)
         else:
             if self.isolate:

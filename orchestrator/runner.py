@@ -6,8 +6,8 @@ and the analysis reads them back by column (orchestrator.signal_table). The fold
 aside and moved into place when the run ends (orchestrator.output): a complete run replaces what
 ``--out`` held; an interrupted or failed one never replaces a complete result and goes beside it.
 
-Imported where used: agrobot.orchestrator.compiled (start-up: 0.02 s on every command, which loads this
-module; --engine compiled or auto only).
+Imported where used: orchestrator.compiled (start-up: 0.016 s on every command, which loads this module;
+--engine compiled or auto only).
 """
 from __future__ import annotations
 
