@@ -3,7 +3,10 @@ the same folder and is renamed over the target in one step.
 
 Tables carry their columns' units: a DataFrame in ``attrs["units"]`` (column -> unit), a Parquet
 file in its schema metadata under the key ``units`` (JSON), a CSV file in ``NAME.units.json``
-beside it; ``read_units`` and ``read_table`` take them back."""
+beside it; ``read_units`` and ``read_table`` take them back.
+
+Imported where used: pyarrow.parquet (start-up: 0.03 s on every command, which loads this module).
+"""
 from __future__ import annotations
 
 import json
@@ -13,6 +16,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import pandas as pd
+import pyarrow as pa
 
 
 def _umask() -> int:
@@ -75,7 +79,6 @@ def write_frame(path: Path, frame: pd.DataFrame, **csv_options) -> Path:
     path = Path(path)
     units = dict(frame.attrs.get("units", {}))
     if path.suffix == ".parquet":
-        import pyarrow as pa
         import pyarrow.parquet as pq
 
         def write(p: Path) -> None:
@@ -114,7 +117,6 @@ class SignalWriter:
         self.rows = 0
         self._parquet = None
         if fmt == "parquet":
-            import pyarrow as pa
             import pyarrow.parquet as pq
 
             self._schema = pa.schema([(c, pa.float64()) for c in self.columns], metadata=units_metadata(self.units))
@@ -129,8 +131,6 @@ class SignalWriter:
             return
         frame = pd.DataFrame(block, columns=self.columns)
         if self._parquet is not None:
-            import pyarrow as pa
-
             self._parquet.write_table(pa.Table.from_pandas(frame, schema=self._schema, preserve_index=False))
         else:
             frame.to_csv(self._csv, header=False, index=False)

@@ -7,6 +7,8 @@ message; nothing prints a traceback for a user's mistake.
 from __future__ import annotations
 
 import difflib
+import signal
+import threading
 from typing import Iterable
 
 
@@ -58,8 +60,6 @@ def _defer(kind, frame) -> bool:
         _CRITICAL["pending"] = kind          # raised when the critical section ends
         return True
     if _importing(frame):
-        import signal
-
         _CRITICAL["pending"] = kind
         signal.setitimer(signal.ITIMER_REAL, RETRY_S)
         return True
@@ -100,9 +100,6 @@ def install_signal_handlers() -> None:
     """SIGINT and SIGTERM end the main thread's work as KeyboardInterrupt / Terminated (deferred
     past a ``critical`` block, and past the import of a module), so that every run saves its
     partial results on either signal and no half-imported module is left behind."""
-    import signal
-    import threading
-
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _handler)
         signal.signal(signal.SIGINT, _handler)

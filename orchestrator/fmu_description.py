@@ -1,5 +1,8 @@
 """An FMU's model description, read and checked (fmpy): what a study file reader and the FMU
-component both need to know of an FMU without loading its binary."""
+component both need to know of an FMU without loading its binary.
+
+Imported where used: fmpy (start-up: 0.06 s on every command, which loads this module).
+"""
 from __future__ import annotations
 
 import zipfile

@@ -15,9 +15,13 @@ what it has and ends when asked:
 
 The child ignores SIGINT (Ctrl-C reaches the whole process group: the parent decides) and ends
 with its parent (PR_SET_PDEATHSIG on Linux).
+
+Imported where used: fmpy (start-up: 0.06 s on every command, which loads this module through the FMU
+component; the child process loads it).
 """
 from __future__ import annotations
 
+import ctypes
 import multiprocessing
 import signal
 import time
@@ -33,8 +37,6 @@ def _child(conn, cls_name: str, kwargs: dict[str, Any]) -> None:
     """The child's loop: make the fmpy instance, then answer (method, args, kwargs) until closed."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        import ctypes
-
         ctypes.CDLL("libc.so.6").prctl(1, int(signal.SIGKILL))     # PR_SET_PDEATHSIG: end with the parent
     except (OSError, AttributeError):
         pass
@@ -68,8 +70,6 @@ def _child(conn, cls_name: str, kwargs: dict[str, Any]) -> None:
 
 def _do_step3(slave, t: float, dt: float):
     """fmi3DoStep with its output arguments, as values: (status exception, event, terminate, early, last)."""
-    import ctypes
-
     from fmpy.fmi1 import FMICallException
     from fmpy.fmi3 import fmi3Boolean, fmi3Float64
 

@@ -25,8 +25,10 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
+import pandas as pd
 
 from .errors import did_you_mean
+from .study_files import StudyError
 from .study_schema import BOUND
 
 _OPS = {"<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge, "==": operator.eq,
@@ -80,8 +82,6 @@ def bounds(analysis, study_bounds: Mapping[str, str] | None = None) -> dict[str,
 def check_study_bounds(analysis, study_bounds: Mapping[str, str], origin) -> None:
     """Refuse, before anything runs, a bound on a figure the analysis does not compute
     (``origin(field)`` says where the bound was given: Study.origin)."""
-    from .study_files import StudyError
-
     known = known_figures(analysis) | {"sim_time_s", "wall_time_s", "events"}
     if analysis is None or not known_figures(analysis):
         return
@@ -170,8 +170,6 @@ def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], 
 def sweep_table(table, analysis, judged: Mapping[str, Bound], skip: set[str] = frozenset()) -> str:
     """P50, P95 and max of each key figure over the completed points; the share of all points
     within each bound (a failed point counts as outside). ``skip``: the swept parameters."""
-    import pandas as pd
-
     done = table[table["status"] == "completed"] if "status" in table else table
     numeric = {c: 0.0 for c in done.columns if c not in skip and pd.api.types.is_numeric_dtype(done[c])}
     rows = [(k, unit) for k, unit, _ in _figures(numeric, analysis, judged)

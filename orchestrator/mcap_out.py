@@ -15,11 +15,15 @@ Topics (generic: the orchestrator knows nothing of the system simulated):
 
 Times: log times are the simulated time in nanoseconds from the study's start time (a run has no
 date); the MCAP's metadata record ``run`` names the study and its start time.
+
+Imported where used: foxglove (the mcap extra).
 """
 from __future__ import annotations
 
 import math
 import os
+import threading
+import time
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -27,6 +31,9 @@ import numpy as np
 import pandas as pd
 
 from .output import OutputError
+from .registry import import_study_module
+from .resolver import resolve
+from .study import parse_study
 
 SIGNALS_PREFIX = "/signals/"
 
@@ -148,8 +155,6 @@ def wants_mcap(study) -> bool:
 
 def with_mcap(study):
     """The study with ``[output] mcap = true`` (``sweep --mcap``: every point writes its MCAP)."""
-    from .study import parse_study
-
     data = study.to_data()
     data["output"] = {**data.get("output", {}), "mcap": True}
     return parse_study(data, study.path)
@@ -157,8 +162,6 @@ def with_mcap(study):
 
 def study_signal_facts(study) -> tuple[dict[str, int], dict[str, str], dict[str, str]]:
     """(component -> base steps between its steps, column -> unit, column -> description) of a study."""
-    from .resolver import resolve
-
     model = resolve(study)
     h = float(study.study.base_step)
     ratios, units, descriptions = {}, {}, {}
@@ -178,8 +181,6 @@ def study_signal_facts(study) -> tuple[dict[str, int], dict[str, str], dict[str,
 
 def study_scene(study, frame=None):
     """The scene the study's analysis module offers (``mcap_scene(study, frame)``), or None."""
-    from .registry import import_study_module
-
     if not study.study.analysis:
         return None
     factory = getattr(import_study_module(study.study.analysis), "mcap_scene", None)
@@ -211,8 +212,6 @@ class LiveView:
 
     def __init__(self, study, host: str = "127.0.0.1", port: int = 8765, rate: float = LIVE_RATE_HZ,
                  wait: float = 0.0) -> None:
-        import threading
-
         import foxglove
 
         self.study, self.rate, self.wait = study, float(rate), float(wait)
@@ -244,8 +243,6 @@ class LiveView:
         self._k = k                  # the base step being taken (sim.k moves only between calls of advance)
 
     def started(self, sim) -> None:
-        import time
-
         self.sim = sim
         self.signals = SignalChannels(self.context, list(sim.columns), {c: 1 for c in self._ratios}, self._units,
                                       self._descriptions)
@@ -259,8 +256,6 @@ class LiveView:
         self._next = time.perf_counter()
 
     def recorded(self, phase: int) -> None:
-        import time
-
         now = time.perf_counter()
         if now < self._next:
             return

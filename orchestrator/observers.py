@@ -11,6 +11,8 @@ defines, and only those:
 
 ``Stage`` and ``report_progress`` tell the same of the steps of a command outside the engine
 (an analysis, a compiler run).
+
+Imported where used: tqdm (start-up: 0.012 s on every command; the bar is drawn on a terminal only).
 """
 from __future__ import annotations
 

@@ -19,6 +19,7 @@
 """
 from __future__ import annotations
 
+import ctypes
 import errno
 import fcntl
 import json
@@ -32,6 +33,7 @@ from typing import Iterable
 
 from .errors import InputError, critical
 from .atomic_files import UMASK
+from .study_files import study_chain
 
 MARKERS = ("run.json", "metrics.json")          # a run's signature files
 STAGING = "staging-"
@@ -239,8 +241,6 @@ def swap_folder(new: Path, target: Path) -> Path | None:
         os.replace(new, target)
         return None
     try:
-        import ctypes
-
         libc = ctypes.CDLL(None, use_errno=True)
         if libc.renameat2(-100, os.fsencode(new), -100, os.fsencode(target), 2) == 0:   # AT_FDCWD, RENAME_EXCHANGE
             return new
@@ -341,8 +341,6 @@ class ResultFile:
 
 def study_inputs(study) -> list[Path]:
     """The files a study was read from: its file and the files it extends."""
-    from .study_files import study_chain
-
     return list(study_chain(study.path)) if study is not None and study.path is not None else []
 
 

@@ -5,6 +5,9 @@ The signals are streamed to the folder while the run goes (memory stays flat in 
 and the analysis reads them back by column (orchestrator.signal_table). The folder is written
 aside and moved into place when the run ends (orchestrator.output): a complete run replaces what
 ``--out`` held; an interrupted or failed one never replaces a complete result and goes beside it.
+
+Imported where used: orchestrator.compiled (start-up: 0.016 s on every command, which loads this module;
+--engine compiled or auto only).
 """
 from __future__ import annotations
 
@@ -20,6 +23,7 @@ from .engine import RunError, Simulation
 from .errors import ComputationError, Interrupted, Terminated, critical
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
+from .output import ResultFolder, disk_full, place_output_parameters, study_inputs
 from .signal_recorder import RecordedSignals, SignalRecorder
 from .registry import import_study_module
 from .resolver import resolve
@@ -209,8 +213,6 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
         _write_status(folder, study, system, facts, _t_end(study, rec))
         return Outcome(status, facts, exc, files, table)
     except Exception as exc:                    # a bug in the analysis: the signals are kept all the same
-        from .output import disk_full
-
         if disk_full(exc):                      # the output's trouble, not the analysis's (a named error)
             raise
         facts.update(status="analysis_failed", error=f"{type(exc).__name__}: {exc}")
@@ -230,8 +232,6 @@ def choose_engine(system: System, engine: str):
     why, is printed on stderr (orchestrator.compiled.select_engine)."""
     if engine == "python":
         return Simulation
-    import sys
-
     from .compiled import select_engine
 
     factory, note = select_engine(system, engine)
@@ -252,8 +252,6 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     what was kept. ``engine``: python, compiled or auto (orchestrator.compiled)."""
     if out_dir is None:
         return _run_in_memory(study, plots, engine, observers)
-    from .output import ResultFolder, place_output_parameters, study_inputs
-
     analysis = _analysis(study)
     inputs = study_inputs(study)
     folder = ResultFolder(Path(out_dir), overwrite, inputs=inputs)

@@ -17,6 +17,8 @@ import math
 from fractions import Fraction
 from typing import Any, Callable, Iterable, Sequence
 
+from .study_files import StudyError
+
 TABLE_LIMIT = 4096                 # phases held as a table; beyond, due lists are made when met
 MAX_BASE_STEPS = 2_000_000_000     # a run longer than this is refused (hours of stepping at best)
 MAX_HELD_BYTES = 2 * 1024 ** 3     # the signal rows held in memory between two writes
@@ -76,8 +78,6 @@ def budget(where: str, base_step: float, span: float, steps: Iterable[float], ra
     """The cost of a run, computed before anything is built: base steps, the schedule's period
     and the bytes of signal rows held between two writes (a write falls on a multiple of the
     period, at least ``chunk`` base steps apart). Raises a StudyError past a limit."""
-    from .study_files import StudyError
-
     steps = list(steps)
     n_steps = span / base_step
     period = math.lcm(*ratios) if ratios else 1

@@ -12,6 +12,7 @@ from operator import itemgetter
 from typing import Any, Callable
 
 import numpy as np
+import pandas as pd
 
 from .observers import Observer
 from .schedule import Schedule
@@ -30,8 +31,6 @@ class RecordedSignals:
 
     def to_frame(self):
         """The signals as a DataFrame, each column's unit in ``attrs["units"]``."""
-        import pandas as pd
-
         frame = pd.DataFrame(self.data, columns=["t"] + self.columns)
         frame.attrs["units"] = dict(self.units)
         return frame

@@ -9,6 +9,8 @@ of the table. ``SignalTable`` answers the parts of a pandas DataFrame an analysi
 the whole table when it is really wanted. The units the file stores (orchestrator.atomic_files) come
 back in ``table.units``, a column's in its Series' ``attrs["unit"]`` and a DataFrame's in
 ``attrs["units"]``.
+
+Imported where used: pyarrow.parquet (start-up: 0.03 s on every command, which loads this module).
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow.csv as pacsv
 
 from .atomic_files import read_units
 
@@ -44,8 +47,6 @@ class _Columns:
             if self._parquet is not None:
                 values = self._parquet.read(columns=[name]).column(0).to_numpy()
             else:
-                import pyarrow.csv as pacsv
-
                 options = pacsv.ConvertOptions(include_columns=[name])
                 values = pacsv.read_csv(self.path, convert_options=options).column(0).to_numpy()
             self.read[name] = values

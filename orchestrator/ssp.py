@@ -20,6 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from .errors import InputError
+from .fmu_description import base_units, inspect_fmu, variable_unit
+from .fmu_unpack import unpack
+from .units import base_unit
 
 NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
       "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
@@ -38,8 +41,6 @@ ALLOW_OUTSIDE = "SSP_ALLOW_OUTSIDE_PATHS"      # =1: an archive's components may
 def _extract(path: Path) -> Path:
     """The folder an .ssp archive is unpacked to (once per process, removed at exit): its
     SystemStructure.ssd and the FMUs its components name, nothing else (orchestrator.fmu_unpack)."""
-    from .fmu_unpack import unpack
-
     path = path.resolve()
     if path not in _EXTRACTED:
         if not zipfile.is_zipfile(path):
@@ -65,8 +66,6 @@ def _annotation(element, tag: str):
 
 def _fmu_facts(fmu: Path) -> tuple[float | None, dict[str, tuple[str, Any]]]:
     """(default step size, variable name -> (unit, BaseUnit or None)) of an FMU."""
-    from .fmu_description import base_units, inspect_fmu, variable_unit
-
     md = inspect_fmu(fmu)
     bases = base_units(md)
     units = {}
@@ -78,8 +77,6 @@ def _fmu_facts(fmu: Path) -> tuple[float | None, dict[str, tuple[str, Any]]]:
 
 
 def _value(where: str, param, fmu_unit: tuple[str, Any] | None) -> Any:
-    from .units import base_unit
-
     for kind in ("Real", "Integer", "Boolean", "String", "Enumeration"):
         el = param.find(f"ssv:{kind}", NS)
         if el is None:

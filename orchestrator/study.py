@@ -32,6 +32,7 @@ import copy
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
+import tomli_w
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .errors import did_you_mean
@@ -152,8 +153,6 @@ class Study(BaseModel):
         return data
 
     def to_toml(self) -> str:
-        import tomli_w
-
         data = self.to_data()
         order = ["connections", "study"] + [k for k in data if k not in ("connections", "study")]
         return tomli_w.dumps({k: data[k] for k in order if k in data}, multiline_strings=False)
@@ -171,8 +170,6 @@ class Study(BaseModel):
             pristine = False
         if not pristine:
             return header + extended.to_toml()
-        import tomli_w
-
         overlay: dict[str, Any] = {"extends": Path(self.path).resolve().as_posix()}
         skeleton = {"components": {n: {} for n in self.components}, "subsystems": {n: {"components": {
             c: {} for c in s.components}} for n, s in self.subsystems.items()}, "study": {},

@@ -1,7 +1,11 @@
 """Reading study files: TOML or YAML, an SSP archive or its SSD, ``extends`` (a file merged over
 the study it names, with ``connections_remove``/``connections_add`` editing the parent's
 connections), ``--set`` overrides and dotted keys into the file's tables. Plain dictionaries in,
-plain dictionaries out: validation is the schema's (orchestrator.study_schema)."""
+plain dictionaries out: validation is the schema's (orchestrator.study_schema).
+
+Imported where used: yaml (start-up: 0.03 s on every command, which loads this module; YAML
+study files only), orchestrator.ssp (SSP archives and SSDs only: it loads the FMU and unit modules, 0.02 s,
+which reading a study file otherwise does not)."""
 from __future__ import annotations
 
 import copy

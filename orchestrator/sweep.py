@@ -15,10 +15,14 @@ long point keeps flat memory, orchestrator.runner.record_run); the parent adds t
 and moves the folder into place in one step, so ``points/pNNNN`` is either whole or absent, and a
 point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
 (``--scheduler ADDRESS``) the worker records into its own temporary folder and sends the files.
+
+Imported where used: distributed (the dask extra), matplotlib (start-up: 0.9 s in every worker
+process, which never plots; the Agg backend is chosen before pyplot loads).
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
+import ctypes
 import hashlib
 import itertools
 import json
@@ -26,8 +30,10 @@ import multiprocessing
 import os
 import re
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import time
 import traceback
 from dataclasses import dataclass
@@ -35,12 +41,18 @@ from pathlib import Path
 from typing import Any, Iterator
 
 import pandas as pd
+from tqdm import tqdm
 
 from .build import build_system
+from .compiled import select_engine
+from .engine import RunError, Simulation
 from .resolver import resolve
-from .errors import critical
-from .mcap_out import wants_mcap
+from .errors import InputError, critical
+from .key_figures import bounds, sweep_table
+from .mcap_out import wants_mcap, write_study_mcap
+from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs, swap_folder
 from .registry import import_study_module
+from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
 from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 
@@ -90,13 +102,8 @@ def watch_parent(parent: int) -> None:
     """Worker initialiser: the worker ends with the sweep that started it, whatever ends the sweep
     (SIGKILL included). Linux: the kernel sends SIGKILL when the parent dies (PR_SET_PDEATHSIG);
     elsewhere, and as a back-up, a daemon thread exits when the parent is gone (a new parent id)."""
-    import signal
-    import threading
-
     signal.signal(signal.SIGINT, signal.SIG_IGN)        # Ctrl-C reaches the whole group: the parent decides
     try:
-        import ctypes
-
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, int(signal.SIGKILL))   # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
@@ -115,17 +122,11 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
     never raises (a failure is a result, with its kind: input, run, analysis or bug). ``engine``:
     python, compiled or auto (orchestrator.compiled); ``keep_signals`` False: the point's signal
     table is removed once its metrics are computed."""
-    from .engine import RunError
-    from .errors import InputError
-    from .runner import AnalysisError, _analysis, record_run
-
     target = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="sweep-point-"))
     try:
         system = build_system(resolve(study))
         simulation = None
         if engine != "python":
-            from .compiled import select_engine
-
             simulation = select_engine(system, engine)[0]
         if not keep_signals and not wants_mcap(study):
             result = _metrics_only(study, system, simulation)
@@ -135,8 +136,6 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
         outcome = record_run(study, system, target, _analysis(study), plots=False, progress=False,
                              simulation=simulation)
         if outcome.complete and wants_mcap(study):
-            from .mcap_out import write_study_mcap
-
             write_study_mcap(study, outcome.table.to_pandas(), target / "run.mcap")
     except InputError as exc:           # the point's values refused when its components start
         result = {"status": "failed", "kind": "input", "error": str(exc)}
@@ -158,9 +157,6 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
 
 def _metrics_only(study: Study, system, simulation) -> dict[str, Any]:
     """A point run in memory: its metrics, no file (its signals are dropped once analysed)."""
-    from .engine import RunError, Simulation
-    from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status
-
     try:
         rec = (simulation or Simulation)(system).run()
     except RunError as exc:
@@ -250,8 +246,6 @@ class SweepRun:
             try:
                 system = build_system(resolve(point_study(self.study, point)))
                 if i == 0 and self.engine != "python":
-                    from .compiled import select_engine
-
                     note = select_engine(system, self.engine)[1]
                     if note and self.engine == "auto":
                         print(note, file=sys.stderr)
@@ -297,8 +291,6 @@ class SweepRun:
     def store(self, point: Point, result: dict[str, Any], folder: Path | None = None) -> dict[str, Any]:
         """Add the point's record to the folder its worker wrote (or write the files it sent) and
         move the folder into place in one step."""
-        from .output import swap_folder
-
         folder = folder if folder is not None and folder.is_dir() else self.new_folder(point)
         kept = self.record_path(point)
         if kept.exists() and json.loads(kept.read_text()).get("status") == "completed":
@@ -337,8 +329,6 @@ class SweepRun:
         """Run the points not yet done, under ``--out``'s lock (orchestrator.output): into ``--out``
         itself when it is new, empty or this sweep's (resumed), into a staging folder swapped into
         place at the end with ``--overwrite`` (an interrupted one goes beside ``--out``)."""
-        from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs
-
         inputs = study_inputs(self.study)
         check_output(self.out, self.overwrite, ("sweep.json",), "sweep", inputs, resume=not self.overwrite)
         if self.overwrite and self.out.is_dir() and any(self.out.iterdir()):
@@ -517,8 +507,6 @@ def _execute_dask(jobs, workers: int, scheduler: str):
 
 
 def _progress(total: int, initial: int, enabled: bool):
-    from tqdm import tqdm
-
     return tqdm(total=total, initial=initial, desc="sweep points", unit="pt", disable=not enabled,
                 dynamic_ncols=True)
 
@@ -542,9 +530,6 @@ def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[st
     """(the text a sweep ends with, its failures grouped by reason): the key figures over the
     completed points with their bounds (orchestrator.key_figures), the sweep analysis's own
     summary (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
-    from .key_figures import bounds, sweep_table
-    from .runner import _analysis
-
     analysis = _analysis(study)
     done = int((table["status"] == "completed").sum()) if "status" in table else 0
     lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "

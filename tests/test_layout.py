@@ -5,7 +5,9 @@ folders followed):
 - imports at the top of the module; a function-level import only for an optional extra or a measured
   start-up cost, and then named in the module docstring, in a paragraph that starts ``Imported where
   used:`` and lists the modules (``Imported where used: matplotlib (start-up), ortools (the fields
-  extra).``). An import inside ``if TYPE_CHECKING:`` is not a run-time import and is not counted.
+  extra).``). A module of the package may be named from below its root (``orchestrator.ssp``: the
+  orchestrator names no project). An import inside ``if TYPE_CHECKING:`` is not a run-time import
+  and is not counted.
 """
 from __future__ import annotations
 
@@ -72,7 +74,8 @@ def long_functions(tree: ast.AST) -> list[tuple[str, int]]:
 
 
 def _covered(target: str, declared: list[str]) -> bool:
-    return any(target == d or target.startswith(d + ".") for d in declared)
+    names = [target] + ([target.split(".", 1)[1]] if target.startswith(PACKAGE.name + ".") else [])
+    return any(n == d or n.startswith(d + ".") for n in names for d in declared)
 
 
 @pytest.mark.parametrize("path", _modules(), ids=lambda p: _name(p))
@@ -97,3 +100,4 @@ def test_the_rule_finds_what_it_forbids():
     assert declared == ["matplotlib"]
     imports = function_imports(tree, "agrobot.pkg.mod", False)
     assert [t for _, t in imports if not _covered(t, declared)] == ["agrobot.pkg.sibling"]
+    assert _covered("agrobot.pkg.sibling", ["pkg.sibling"]) and not _covered("numpy.pkg", ["pkg"])

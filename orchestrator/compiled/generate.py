@@ -72,6 +72,80 @@ def component_unit(index: int, name: str, core: CCore, period: float, continuous
                       f"{{ model_sample((ModelState *)st, p, in, out); }}", outputs])
 
 
+class _LoopText:
+    """The pieces of the loop's C text for one system: which component reads what, when it is due,
+    how each phase calls it."""
+
+    def __init__(self, system, cores: dict[str, CCore], lay: Layout) -> None:
+        self.idx = {n: i for i, n in enumerate(lay.names)}
+        self.nodes, self.cores, self.lay = system.nodes, cores, lay
+        self.sampled = [n.name for n in system.sampled_order]
+        self.continuous = [n.name for n in system.continuous]
+
+    def gather(self, name: str) -> list[str]:
+        """A component's inputs copied from the published outputs they are connected to:
+        ``in[inp_i + j] = pub[pub_src + o]``."""
+        lay, idx, cores = self.lay, self.idx, self.cores
+        i, core = idx[name], cores[name]
+        lines = []
+        for inp, src, out in self.nodes[name].sources:
+            j = core.inputs.index(inp)
+            lines.append(f"in[{lay.inp[i] + j}] = pub[{lay.pub[idx[src.name]] + cores[src.name].outputs.index(out)}];")
+        return lines
+
+    def due(self, name: str, body: list[str]) -> list[str]:
+        """``body`` in a block run when the component is due: at every k its ratio divides."""
+        ratio = self.nodes[name].ratio
+        cond = "" if ratio == 1 else f"if (k % {ratio} == 0) "
+        return [f"    {cond}{{", *[f"        {line}" for line in body], "    }"]
+
+    def call(self, name: str, what: str) -> str:
+        """The call of a component's ``outputs``, ``sample`` (outputs published) or ``continuous``
+        (outputs to scratch: a continuous step publishes only through ``outputs``) function."""
+        i, lay = self.idx[name], self.lay
+        if what == "outputs":
+            return f"agc_outputs_{i}(st[{i}], par + {lay.par[i]}, pub + {lay.pub[i]});"
+        out = f"pub + {lay.pub[i]}" if what == "sample" else "scratch"
+        return f"agc_sample_{i}(st[{i}], par + {lay.par[i]}, in + {lay.inp[i]}, {out});"
+
+    def sample_phase(self) -> list[str]:
+        """Steps 1-2: (k > 0) the continuous components due publish g(x_k); then the sampled
+        components due, in order, read their inputs and step."""
+        lines = ["    if (k > 0) {"]
+        for name in self.continuous:
+            lines += ["    " + line for line in self.due(name, [self.call(name, "outputs")])]
+        lines += ["    }"]
+        for name in self.sampled:
+            lines += self.due(name, self.gather(name) + [self.call(name, "sample")])
+        return lines
+
+    def continuous_phase(self) -> list[str]:
+        """Step 4: every continuous component due reads its inputs, then each steps (all reads
+        before any step)."""
+        widest = max([len(c.outputs) for c in self.cores.values()] + [1])
+        lines = [f"    double scratch[{widest}];"]
+        for name in self.continuous:
+            lines += self.due(name, self.gather(name))
+        for name in self.continuous:
+            lines += self.due(name, [self.call(name, "continuous")])
+        return lines
+
+    def record(self) -> list[str]:
+        """Step 3: the row of t_k, column c + 1 of ``rec`` (column-major, ``rows`` long)."""
+        lines = ["        if (rec) {", "            double *row = rec + k;"]
+        lines += [f"            row[{c + 1} * rows] = pub[{at}];" for c, (_, at) in enumerate(self.lay.columns)]
+        return lines + ["        }"]
+
+    def declarations(self) -> str:
+        """The prototypes of every component unit's functions (``agc_outputs_<i>`` only for a
+        continuous one)."""
+        return "\n".join(f"unsigned long agc_size_{i}(void); void agc_start_{i}(void *, const double *); "
+                         f"void agc_sample_{i}(void *, const double *, const double *, double *);"
+                         + (f" void agc_outputs_{i}(void *, const double *, double *);"
+                            if name in self.continuous else "")
+                         for i, name in enumerate(self.lay.names))
+
+
 def loop_unit(system, cores: dict[str, CCore], lay: Layout) -> str:
     """The loop: ``int agc_run(par, pub0, in0, n_steps, rec)``; ``rec`` (may be NULL) receives
     the signals column by column (1 + len(columns) columns of n_steps + 1 rows: a table's layout,
@@ -80,51 +154,10 @@ def loop_unit(system, cores: dict[str, CCore], lay: Layout) -> str:
     ``agc_continuous_phase``: the states, parameters, published outputs and inputs passed in), so
     a caller holding the loop's state itself (the whole-loop FMU, fmu_export.loop_fmu) steps it
     one base step at a time with the same code."""
-    idx = {n: i for i, n in enumerate(lay.names)}
-    nodes = system.nodes
-
-    def gather(name: str) -> list[str]:
-        i, core = idx[name], cores[name]
-        lines = []
-        for inp, src, out in nodes[name].sources:
-            j = core.inputs.index(inp)
-            lines.append(f"in[{lay.inp[i] + j}] = pub[{lay.pub[idx[src.name]] + cores[src.name].outputs.index(out)}];")
-        return lines
-
-    def due(name: str, body: list[str]) -> list[str]:
-        ratio = nodes[name].ratio
-        cond = "" if ratio == 1 else f"if (k % {ratio} == 0) "
-        return [f"    {cond}{{", *[f"        {line}" for line in body], "    }"]
-
-    def call(name: str, what: str) -> str:
-        i = idx[name]
-        if what == "outputs":
-            return f"agc_outputs_{i}(st[{i}], par + {lay.par[i]}, pub + {lay.pub[i]});"
-        out = f"pub + {lay.pub[i]}" if what == "sample" else "scratch"
-        return f"agc_sample_{i}(st[{i}], par + {lay.par[i]}, in + {lay.inp[i]}, {out});"
-
-    sampled = [n.name for n in system.sampled_order]
-    continuous = [n.name for n in system.continuous]
+    text = _LoopText(system, cores, lay)
     n = len(lay.names)
-    widest = max([len(c.outputs) for c in cores.values()] + [1])
-    phase_sample = ["    if (k > 0) {"]
-    for name in continuous:
-        phase_sample += ["    " + line for line in due(name, [call(name, "outputs")])]
-    phase_sample += ["    }"]
-    for name in sampled:
-        phase_sample += due(name, gather(name) + [call(name, "sample")])
-    phase_continuous = [f"    double scratch[{widest}];"]
-    for name in continuous:
-        phase_continuous += due(name, gather(name))
-    for name in continuous:
-        phase_continuous += due(name, [call(name, "continuous")])
-    record = ["        if (rec) {", "            double *row = rec + k;"]
-    record += [f"            row[{c + 1} * rows] = pub[{at}];" for c, (_, at) in enumerate(lay.columns)]
-    record += ["        }"]
-    decls = "\n".join(f"unsigned long agc_size_{i}(void); void agc_start_{i}(void *, const double *); "
-                      f"void agc_sample_{i}(void *, const double *, const double *, double *);"
-                      + (f" void agc_outputs_{i}(void *, const double *, double *);" if name in continuous else "")
-                      for i, name in enumerate(lay.names))
+    decls, phase_sample, phase_continuous, record = (text.declarations(), text.sample_phase(),
+                                                     text.continuous_phase(), text.record())
     return f"""/* A study's loop, generated by orchestrator.compiled (see its docstring): nothing here names the
  * study, so studies of one shape share a library. */
 #include <stdlib.h>

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..build import System
 from ..component import ComponentError
-from ..engine import ParameterError, RunError
+from ..engine import ParameterError, RunError, Simulation
 from ..errors import InputError
 from ..signal_recorder import RecordedSignals, SignalRecorder
 from .cores import CCore, NoCCore, c_core
@@ -56,8 +56,6 @@ def select_engine(system: System, engine: str):
     """(a Simulation-like class for ``system``, a line saying which engine runs and why, or None).
     ``compiled`` on a system it cannot take raises CompiledRefused; ``auto`` falls back to the
     Python engine and says why."""
-    from ..engine import Simulation
-
     if engine not in ENGINES:
         raise InputError(f"--engine {engine!r}: expected one of {', '.join(ENGINES)}")
     if engine == "python":

@@ -15,6 +15,7 @@ the tree as Python imports it:
     agrobot.fmu_export      the controller and subsystems as FMUs and SSPs
     agrobot.studies         the shipped study files (package data)
 """
+from importlib import import_module as _import_module
 from importlib.metadata import PackageNotFoundError, version as _version
 
 try:
@@ -32,9 +33,7 @@ __all__ = sorted(_API | _RESULTS)
 
 def __getattr__(name: str):
     if name in _API or name in _RESULTS:
-        from importlib import import_module
-
-        value = getattr(import_module(f"{__name__}.{'api' if name in _API else 'results'}"), name)
+        value = getattr(_import_module(f"{__name__}.{'api' if name in _API else 'results'}"), name)
         globals()[name] = value
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

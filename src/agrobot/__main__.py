@@ -7,19 +7,18 @@ modules is ``[study] components_path``).
 import os
 import sys
 
+from agrobot.extras import missing_extra_message
+from agrobot.orchestrator.cli import main as cli_main
+
 
 def main() -> int:
     """Run the command; a module of an optional extra that is not installed is named with the
     extra to install (exit 2, agrobot.extras)."""
-    from agrobot.orchestrator.cli import main as cli_main
-
     if "" not in sys.path and os.getcwd() not in sys.path:
         sys.path.insert(0, os.getcwd())
     try:
         return cli_main()
     except ModuleNotFoundError as exc:
-        from agrobot.extras import missing_extra_message
-
         message = missing_extra_message(exc)
         if message is None:
             raise
