@@ -1,12 +1,11 @@
 """Co-simulation components of the tractor guidance loop, one per module. A study names a
 component by its module (``type = "tractor_yaw_plant"``); each module exposes ``COMPONENT``.
 The package registers itself with the orchestrator (pyproject.toml, entry point ``components``)."""
+from .hardware.record import record_study
 
 
 def register(registry) -> None:
     """Orchestrator plugin: this package's component types."""
-    from .hardware.record import record_study
-
     registry.add_component_package(__name__)
     for former in ("orchestrator", "components", "analysis", "diagnosis", "fields", "fmu_export", "identification",
                    "measurements"):          # study files of the release before the one import root

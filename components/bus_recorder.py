@@ -9,6 +9,8 @@ the host clock reads epoch + t (1 + drift) + offset; an NMEA sentence is stamped
 same signals are also written as the measured log (t, delta_cmd, delta, v, yaw_rate, x, y): the
 simulation's own log, to compare an imported recording against. A frame whose values are not
 finite is not recorded (the adapters never send one).
+
+Imported where used: can (the hardware extra, python-can).
 """
 from __future__ import annotations
 

@@ -31,6 +31,8 @@ correction age a as the vendors document it, horizontal RMS
 xFill table: 1-5 cm after 1-5 min, 5-9 cm after 6-10 min, 10-15 cm after 11-20 min), each axis
 sigma_h(a) / sqrt(2) times a unit Gauss-Markov wander of ``bridging_time_constant`` (the bridged
 solution drifts slowly, it is not white). ``correction_age`` is a (0 with live corrections).
+
+Imported where used: pynmeagps (the hardware extra).
 """
 from __future__ import annotations
 

@@ -98,8 +98,6 @@ class IMUSensor(Component):
             f_y = cos(phi) (v_n - v_n') / dt + g (cos(phi) cos(theta) d phi - sin(phi) sin(theta) d theta)
 
         (level ground: f_y = (v_n - v_n') / dt + g phi)."""
-        from agrobot.components.models.terrain import GRAVITY
-
         cr, sr = math.cos(ground.roll), math.sin(ground.roll)
         cp, sp = math.cos(ground.pitch), math.sin(ground.pitch)
         return Block.of(self.name, ["yaw_rate", "vel_north", "roll", "pitch"], ["yaw_rate", "accel_left", "roll", "pitch"],

@@ -69,8 +69,6 @@ INS_OUTPUTS = ["y_rear", "heading", "y_cg", "lateral_velocity"]
 def _lean(p, roll: float, pitch: float, eps: float = 1e-7) -> np.ndarray:
     """d (antenna east, north) / d (roll, pitch) at psi = 0 as the filter models the antenna
     (nil without terrain compensation): a 2 x 2 matrix, central differences of models.terrain."""
-    from agrobot.components.models.terrain import lever_offset
-
     if not p["terrain_compensation"]:
         return np.zeros((2, 2))
     lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
@@ -83,8 +81,6 @@ def _lean(p, roll: float, pitch: float, eps: float = 1e-7) -> np.ndarray:
 
 
 def _ins_ekf(comp, step: float, speed: float, fix_every: int, fix_phase: int, ground: Ground) -> Block:
-    from agrobot.components.ins_ekf import INSEKF
-
     p = comp.p
     k0 = (ground.slip_compliance(speed) if not ground.level else float(p["slip_compliance0"])) \
         if p["crab_estimate"] else 0.0

@@ -14,6 +14,8 @@ quality 0. Work per step is bounded: at most ``max_read_bytes`` are read and the
 ``max_parse_bytes`` of them parsed (the rest counted in ``dropped_bytes``); a step that reads its
 whole allowance (the receiver sends faster than a step may take) cannot tell its newest fix, so
 its fixes are not used (``flooded_steps``) and the fix ages until the flood ends.
+
+Imported where used: serial (the hardware extra, pyserial).
 """
 from __future__ import annotations
 

@@ -11,6 +11,8 @@ quality drops to 5, RTK float); negative = never.
 The server listens on ``host`` (loopback by default; the address it bound is logged), and a write
 never waits: each client has at most ``client_buffer`` bytes queued (the socket's own send buffer
 included), and a client that lets more pile up (it does not read) is dropped with a message.
+
+Imported where used: serial (the hardware extra, pyserial).
 """
 from __future__ import annotations
 

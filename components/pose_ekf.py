@@ -137,8 +137,6 @@ class PoseEKF(Component):
             y- = y + T v psi,  psi- = psi + T v delta_{k-1} / L,  (y, psi) = (y-, psi-) + K (z - y-)
 
         outputs the updated R, heading and CG = R + l_r psi."""
-        from agrobot.components.pose_ekf import PoseEKF
-
         ekf = PoseEKF(self.name, {**self.p, "x0": 0.0, "y0": 0.0, "psi0": 0.0})
         ekf.initialize(0.0, step)
         P = None

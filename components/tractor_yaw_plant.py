@@ -52,7 +52,8 @@ from agrobot.orchestrator.units import FILE_UNIT
 
 from .models.loop_blocks import Block, Ground
 from .models.paper_models import G_2ND
-from .models.terrain import attitude, ground_of, lever_offset, slope_pull
+from .models.terrain import GRAVITY, attitude, ground_of, lever_offset, slope_pull
+from .models.tyre import ros2_step
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical, cornering_scale,
                                   lateral_disturbance_column, state_space, with_cornering_scale, zoh_discretize)
 
@@ -98,9 +99,6 @@ def unstable_modes(model: str, params: TractorParameters, speeds=CHECKED_SPEEDS)
 def _yaw_dynamics(comp, speed: float):
     """(A, B, C, v_y row, parameters) of the plant's yaw dynamics at v (models.yaw_dynamics; v_y =
     l_r gamma for a transfer-function model), as its step uses them."""
-    from agrobot.components.models.yaw_dynamics import (TractorParameters, controllable_canonical, cornering_scale,
-                                                state_space, with_cornering_scale)
-
     p = comp.p
     params = TractorParameters.of(p)
     if p["model"] == "transfer_function":
@@ -116,8 +114,6 @@ def _yaw_dynamics(comp, speed: float):
 def _on_the_plane(p, heading: float) -> dict[str, float]:
     """Roll, pitch, the pull across the heading and the antenna's lever (east, north) of a plant
     heading ``heading`` on its plane (models.terrain, as the plant's step computes them)."""
-    from agrobot.components.models.terrain import attitude, ground_of, lever_offset, slope_pull
-
     gx, gy = ground_of(p["slope_angle"], p["slope_downhill_heading"]).gradient(0.0, 0.0)
     pe, pn = slope_pull(gx, gy)
     roll, pitch = attitude(gx, gy, heading)
@@ -306,8 +302,6 @@ class TractorYawPlant(Component):
 
     def _saturated_step(self, v: float, delta: float, dt: float) -> np.ndarray:
         """The state after dt with Magic Formula tyres (models.tyre.ros2_step, sub-steps <= 2 ms)."""
-        from .models.tyre import ros2_step
-
         scale = cornering_scale(v, self.p["cornering_speed_slope"], self.p["cornering_reference_speed"]) \
             if self._cornering else 1.0
         tyre = {"mu": float(self.p["tyre_friction"]), "shape": float(self.p["tyre_shape"]),
@@ -361,8 +355,6 @@ class TractorYawPlant(Component):
         velocity, the body turned by the crab angle psi_0 = -v_y0 / v off it, so a change of the crab
         moves R along the line, x' = (v_y0 / v) v_y (outputs x_antenna, roll and pitch, the lateral
         channel's share of them, only on a plane). The crab angle (0.5 deg on 10 deg) is left out elsewhere."""
-        from agrobot.components.models.yaw_dynamics import lateral_disturbance_column, zoh_discretize
-
         p = self.p
         Ay, By, Cy, vy, params = _yaw_dynamics(self, speed)
         ground = self.linear_ground(speed)
@@ -404,9 +396,6 @@ class TractorYawPlant(Component):
 
         whose v_y (state 0) is R's sideways velocity (gamma = 0: every point of the body moves alike).
         A height grid (``terrain_file``) is not linearised here: None (the caller says so)."""
-        from agrobot.components.models.terrain import GRAVITY
-        from agrobot.components.models.yaw_dynamics import lateral_disturbance_column
-
         p = self.p
         if not float(p.get("slope_angle", 0.0) or 0.0) or p.get("terrain_file") or p.get("model") == "transfer_function":
             return None

@@ -97,8 +97,6 @@ class YawRateMPC(Component):
         du = K [x_k; u_{k-1}; gamma - gamma_d], K = -(H^-1 G)[0], with its model advanced by the measured
         wheel angle (x_k = A x_{k-1} + B delta_m) or by its last command (x_k = A x_{k-1} + B u_{k-1});
         state [x_{k-1}; u_{k-1}], inputs (steer_angle, yaw_rate, yaw_rate_ref)."""
-        from agrobot.components.models.condensed_mpc import CondensedTrackingMPC
-
         p = self.p
         mpc = CondensedTrackingMPC(p["num"], p["den"], step, int(p["prediction_horizon"]), int(p["control_horizon"]),
                                    float(p["Q"]), float(p["R"]), float(p["steer_limit"]), float(p["steer_rate_limit"]) * step)

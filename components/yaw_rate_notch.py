@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.signal import bilinear, tf2ss
 
 from agrobot.orchestrator.component import Component, inp, out, par
 
@@ -24,8 +25,6 @@ from .models.loop_blocks import Block, passthrough
 
 def notch_coefficients(w0: float, zeta_z: float, zeta_p: float, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """(b, a) of the discrete notch, a[0] = 1."""
-    from scipy.signal import bilinear
-
     warped = 2.0 / dt * math.tan(w0 * dt / 2.0)          # the analogue centre that maps onto w0
     b = [1.0, 2.0 * zeta_z * warped, warped ** 2]
     a = [1.0, 2.0 * zeta_p * warped, warped ** 2]
@@ -72,10 +71,6 @@ class YawRateNotch(Component):
 
     def linear_model(self, step: float, speed: float) -> Block:
         """The notch's difference equation (components.yaw_rate_notch), or a unit gain at frequency 0."""
-        from scipy.signal import tf2ss
-
-        from agrobot.components.yaw_rate_notch import notch_coefficients
-
         p = self.p
         if float(p["frequency"]) == 0.0:
             return passthrough(self.name, {"yaw_rate": "yaw_rate_filtered"})

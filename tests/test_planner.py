@@ -25,6 +25,7 @@ from agrobot.fields.planner.sampling import ROUTE_STEP
 from agrobot.orchestrator.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "src" / "agrobot"          # the import root; its modules named here without "agrobot."
 FAST = dict(working_width=6.0)              # a wide implement: few swaths, quick plans
 
 
@@ -55,7 +56,7 @@ def small_plan():
 def _imports(path: Path, package: str) -> set[str]:
     """Modules of ``package`` that the file imports (at the top or inside functions)."""
     tree = ast.parse(path.read_text())
-    here = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+    here = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
     base = here.rsplit(".", 1)[0] if path.name != "__init__.py" else here
     out = set()
     for node in ast.walk(tree):
@@ -64,18 +65,18 @@ def _imports(path: Path, package: str) -> set[str]:
                 parts = base.split(".")
                 mod = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else []))
             else:
-                mod = node.module or ""
+                mod = (node.module or "").removeprefix("agrobot.")
             names = [f"{mod}.{a.name}" for a in node.names]
             out |= {n for n in [mod] + names if n.startswith(package)}
         elif isinstance(node, ast.Import):
-            out |= {a.name for a in node.names if a.name.startswith(package)}
+            out |= {a.name.removeprefix("agrobot.") for a in node.names
+                    if a.name.removeprefix("agrobot.").startswith(package)}
     return out
 
 
 def test_the_planner_stages_are_modules_without_import_circles_or_crowding():
-    package = ROOT / "src" / "agrobot"
-    files = sorted((package / "fields").rglob("*.py"))
-    modules = {".".join(f.relative_to(package).with_suffix("").parts).removesuffix(".__init__"): f for f in files}
+    files = sorted((PACKAGE / "fields").rglob("*.py"))
+    modules = {".".join(f.relative_to(PACKAGE).with_suffix("").parts).removesuffix(".__init__"): f for f in files}
     for stage in ("headland", "decomposition", "swaths", "objectives", "route_order", "turns", "path", "speed"):
         assert f"fields.planner.{stage}" in modules
     graph = {m: {i for i in _imports(f, "fields") if i in modules and i != m} for m, f in modules.items()}
@@ -94,10 +95,10 @@ def test_the_planner_stages_are_modules_without_import_circles_or_crowding():
     for m in graph:
         if m not in state:
             visit(m, [])
-    for f in (package / "fields" / "planner").glob("*.py"):
+    for f in (PACKAGE / "fields" / "planner").glob("*.py"):
         assert len(f.read_text().splitlines()) <= 500, f
     # the route component reads a Path, not a command-line module
-    assert not {i for i in _imports(ROOT / "components" / "field_route.py", "fields") if "cli" in i}
+    assert not {i for i in _imports(PACKAGE / "components" / "field_route.py", "fields") if "cli" in i}
 
 
 # --- the path and its speed ------------------------------------------------------------------------------

@@ -1,7 +1,10 @@
 """CAN frames through cantools: the DBC that lays them out (the project's own by default) and a
 codec for one outgoing and one incoming message, with the end-to-end checks the DBC defines: a
 rolling 4-bit ``Counter`` and a ``Checksum`` byte, CRC-8/SAE-J1850 over bytes 0-6 followed by
-the identifier's low byte (so a frame cannot pass as another message)."""
+the identifier's low byte (so a frame cannot pass as another message).
+
+Imported where used: cantools (the hardware extra).
+"""
 from __future__ import annotations
 
 import math

@@ -6,6 +6,8 @@ another is refused), and on ``udp_multicast`` only from an address of this host:
 that bus to every interface (("", port)) and drops the datagram's sender, so LocalSenderBus reads
 the datagrams itself through the bus's socket. Work per step is bounded: ``drain`` reads at most
 ``max_frames`` frames; sending never waits (timeout 0), a frame the interface cannot take is counted.
+
+Imported where used: can (the hardware extra, python-can).
 """
 from __future__ import annotations
 
@@ -110,8 +112,6 @@ class RecordingBus:
         self.log = can.Logger(path)
 
     def send(self, msg, timeout=None) -> None:
-        import time
-
         if not msg.timestamp:
             msg.timestamp = time.time()
         msg.is_rx = False                        # the log marks it transmitted

@@ -7,11 +7,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agrobot.orchestrator.cli import add_output_options, add_set_option
 from agrobot.orchestrator.engine import RunError
 from agrobot.orchestrator.errors import Interrupted, Terminated, install_signal_handlers
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study, StudyError
+
+from .can_link import binding
+from .record import record_adapters, record_folder
 
 
 def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None,
@@ -29,8 +33,6 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     study = study.with_values(values)
     named: tuple[Path, ...] = ()
     if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
-        from .record import record_adapters, record_folder
-
         study = record_adapters(study, record_folder(record))
         named = (record / "gps.nmea", record / "can.log")
     install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
@@ -54,8 +56,6 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
 def reach(study, model, server: str, nmea_port: int) -> str:
     """Where the emulator listens, as its components bind: the NMEA server's host and port, and each
     CAN link's bus (python-can's udp_multicast listens on every interface)."""
-    from .can_link import binding
-
     host = study.components[server].parameters.get("host", "127.0.0.1")
     parts = [f"NMEA on {host}:{nmea_port}" + ("" if str(host).startswith("127.") else " (reachable from other hosts)")]
     for link in model.find(role="tractor_link"):
@@ -65,12 +65,8 @@ def reach(study, model, server: str, nmea_port: int) -> str:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_set_option
-
     p.add_argument("study", type=Path, help="a study with an nmea_server, e.g. studies/tractor_emulator.toml")
     p.add_argument("--nmea-port", type=int, required=True, help="TCP port for NMEA clients (on the nmea_server's host, 127.0.0.1 by default)")
-    from agrobot.orchestrator.cli import add_output_options
-
     add_output_options(p, "write the emulated tractor's signals here", required=False)
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
     p.add_argument("--record", type=Path, default=None, metavar="DIR",

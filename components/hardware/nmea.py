@@ -1,5 +1,8 @@
 """NMEA 0183 in and out: a byte stream parser that never raises, sentence writers, and the local
-east/north/up frame about a datum (pymap3d, WGS-84)."""
+east/north/up frame about a datum (pymap3d, WGS-84).
+
+Imported where used: pynmeagps, pymap3d (the hardware extra).
+"""
 from __future__ import annotations
 
 import datetime

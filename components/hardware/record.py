@@ -7,6 +7,10 @@ would, as raw NMEA (host-stamped) and a candump CAN log.
 - A study with a simulated tractor (the component of role ``tractor``) gets a ``bus_recorder``
   wired to the tractor's outputs and to what feeds its set-point inputs: the recording takes no
   real-time wait. DIR also receives ``simulation_log.csv``, the same signals as the measured log.
+
+Imported where used: agrobot.components.hardware_tractor (start-up: 15 ms of CPU on every command, measured:
+the components plugin loads this module; the hardware tractor brings the CAN message sets and the NMEA
+receiver).
 """
 from __future__ import annotations
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import daqp
 import numpy as np
+from proxsuite import proxqp
 
 from .yaw_dynamics import controllable_canonical, zoh_discretize
 
@@ -174,8 +175,6 @@ class CondensedTrackingMPC:
         return self._proxsuite(qp, bl, bu)
 
     def _proxsuite(self, qp: QPData, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, int]:
-        from proxsuite import proxqp
-
         # bounds on the moves as ordinary inequality rows: proxsuite's box-constraint mode
         # returned wrong answers (outside the box) on instances of this shape
         if self._solver is None:

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
+from scipy.interpolate import RegularGridInterpolator
 
 GRAVITY = 9.81
 
@@ -54,8 +56,6 @@ class HeightGrid:
     grid the edge values hold (flat beyond the edge)."""
 
     def __init__(self, xs: np.ndarray, ys: np.ndarray, z: np.ndarray, where: str = "height grid") -> None:
-        from scipy.interpolate import RegularGridInterpolator
-
         try:
             xs, ys, z = np.asarray(xs, float), np.asarray(ys, float), np.asarray(z, float)
         except (TypeError, ValueError) as exc:
@@ -74,8 +74,6 @@ class HeightGrid:
     @classmethod
     def read_csv(cls, path: str | Path) -> "HeightGrid":
         """A CSV with columns x, y, z (metres, the mission frame), one row per node of a full grid."""
-        import pandas as pd
-
         where = str(path)
         try:
             table = pd.read_csv(path)

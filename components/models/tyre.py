@@ -22,6 +22,7 @@ and its Jacobian, batched over any leading axes, for a stiff (Rosenbrock) integr
 from __future__ import annotations
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .yaw_dynamics import GRAVITY
 
@@ -62,8 +63,6 @@ def linear_share_limit(shape: float, share: float = 0.95) -> float:
     """F/D of an axle where the Magic Formula's force has fallen to ``share`` of the linear tyre's
     C_alpha alpha: in steady cornering every axle carries F/F_z = a_y / g, so the linear model holds
     up to |a_y| = mu g times this number."""
-    from scipy.optimize import brentq
-
     x_peak = min(float(np.tan(np.pi / (2 * shape))), 1e6) if shape > 1 else 1e6
     x = brentq(lambda x: np.sin(shape * np.arctan(x)) / (shape * x) - share, 1e-9, x_peak)
     return float(np.sin(shape * np.arctan(x)))

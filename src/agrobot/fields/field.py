@@ -4,6 +4,8 @@ Coordinates are metres east/north of ``origin`` (latitude, longitude in degrees)
 plane of the WGS-84 ellipsoid there (pymap3d's ENU, the frame the measured logs use): a field of a
 few kilometres is flat to millimetres in it. A field read in local coordinates with no geographic
 reference (an AgOpenGPS field has one: its StartFix) has ``origin`` None. Geometry is shapely's.
+
+Imported where used: pymap3d (the hardware extra).
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from dataclasses import dataclass, field as dc_field
 
 import numpy as np
 from shapely.geometry import LineString, MultiPolygon, Polygon
+from shapely.geometry.polygon import orient
 from shapely.validation import explain_validity
 
 from agrobot.orchestrator.errors import InputError
@@ -123,8 +126,6 @@ def local_frame(lonlat_rings: list[np.ndarray], origin: tuple[float, float] | No
 
 def polygon(exterior: np.ndarray, holes: list[np.ndarray] = ()) -> Polygon:
     """A shapely polygon from rings ((N, 2), closed or not), exterior counter-clockwise."""
-    from shapely.geometry.polygon import orient
-
     return orient(Polygon(exterior, [h for h in holes if len(h) >= 3]), 1.0)
 
 

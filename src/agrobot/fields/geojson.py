@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 
 from shapely import wkt as shapely_wkt
+from shapely.geometry import shape
 
 from agrobot.orchestrator.source_files import regular_file
 
@@ -25,8 +26,6 @@ def read_geojson(path: Path, crs: str | None = None) -> list[Field]:
     except RecursionError:
         raise FieldError(f"{path}: JSON nested deeper than a GeoJSON ever is (Python's parser gives up); "
                          f"expected a FeatureCollection of Features with Polygon geometries") from None
-    from shapely.geometry import shape
-
     if not isinstance(data, dict) or "type" not in data:
         raise FieldError(f"{path}: not GeoJSON: expected an object with a 'type' (FeatureCollection, Feature or a geometry)")
     feats = data.get("features") if data["type"] == "FeatureCollection" else \

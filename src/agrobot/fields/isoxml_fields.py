@@ -8,15 +8,20 @@ As terminals write them: elements kept in external files (``<XFR A="PFD00001" B=
 ``PFD00001.XML`` beside it, whose root is ``XFC``) are read in place; an empty or degenerate
 guidance pattern, or a partfield without a boundary, is skipped and named (the field's
 ``properties["skipped"]``), never the whole file refused; an invalid boundary (a ring that
-crosses itself) is repaired with ``shapely.make_valid`` and named (``properties["repaired"]``)."""
+crosses itself) is repaired with ``shapely.make_valid`` and named (``properties["repaired"]``).
+
+Imported where used: isoxml (the fields extra).
+"""
 from __future__ import annotations
 
 import math
 import warnings
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 from shapely.geometry import Polygon
+from shapely.geometry.polygon import orient
 
 from agrobot.orchestrator.source_files import regular_file
 
@@ -114,8 +119,6 @@ def _valid(boundary: Polygon, where: str) -> tuple[Polygon, str | None]:
     parts, note = repaired_parts(boundary, where)
     if note is None:
         return boundary, None
-    from shapely.geometry.polygon import orient
-
     best = orient(max(parts, key=lambda g: g.area), 1.0)
     return best, (f"{note}: {best.area:.0f} m2 kept" + (f" of {sum(g.area for g in parts):.0f} m2" if len(parts) > 1 else ""))
 
@@ -123,8 +126,6 @@ def _valid(boundary: Polygon, where: str) -> tuple[Polygon, str | None]:
 def _with_external_files(path: Path, text: str) -> str:
     """The TaskData with every external file reference (XFR, ISO 11783-10 section 6.2: A the file
     name without suffix, B = 1 XML) replaced by the elements of that file (root XFC)."""
-    import xml.etree.ElementTree as ET
-
     if "<XFR" not in text:
         return text
     try:

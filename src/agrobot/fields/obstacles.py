@@ -8,6 +8,8 @@ it, and section control switches off over it.
 A file of obstacles is GeoJSON: Point features with a ``radius`` property [m] (or ``radius_m``) and
 Polygon features, in longitude/latitude when the field has a geographic reference, else in the
 field's local metres (east, north); a feature's ``name`` property names it in messages.
+
+Imported where used: pymap3d (the hardware extra).
 """
 from __future__ import annotations
 

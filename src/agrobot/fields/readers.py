@@ -41,6 +41,7 @@ from .coordinates import Coordinates
 from .field import Field, FieldError, polygon
 from .geojson import read_geojson, read_wkt
 from .isoxml_fields import read_isoxml
+from .kml import read_kml_shapes
 from .shapes import distinct_names, fields_from_shapes
 
 __all__ = ["Coordinates", "aog_file", "is_agopengps", "kind_of", "read_agopengps", "read_fields", "read_folder",
@@ -155,8 +156,6 @@ def read_fields(path: str | Path, crs: str | None = None) -> list[Field]:
         raise FieldError(f"{path}: not a field file: expected .geojson/.json, .wkt, .xml (GML or ISO 11783-10 "
                          f"TaskData), .kml/.kmz, .csv, or an AgOpenGPS field folder (a GNSS track: --from-track)")
     if kind == "kml":
-        from .kml import read_kml_shapes
-
         return fields_from_shapes(path, read_kml_shapes(path), crs, "EPSG:4326")
     if kind == "xml":
         root = _xml(path)

@@ -6,7 +6,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from shapely import make_valid
 from shapely.geometry import LineString, MultiLineString, MultiPolygon, Polygon
+from shapely.validation import explain_validity
 
 from .coordinates import Coordinates
 from .field import Field, FieldError, GuidanceLine, polygon, polygons
@@ -36,9 +38,6 @@ def repaired_parts(poly, where: str) -> tuple[list[Polygon], str | None]:
     by shapely.make_valid (a line or point left by the repair dropped) and what was done."""
     if poly.is_valid:
         return list(getattr(poly, "geoms", [poly])), None
-    from shapely import make_valid
-    from shapely.validation import explain_validity
-
     why = explain_validity(poly)
     fixed = make_valid(poly)
     parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, Polygon) and g.area > 0]

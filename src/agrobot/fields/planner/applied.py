@@ -15,9 +15,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from shapely import contains_xy
 from shapely.geometry import LineString, Polygon
 from shapely.ops import unary_union
 
+from .leftovers import leftovers
 from .sections import CoverageMap, SectionLayout, open_sections, paint_strip
 from .types import WORKING
 
@@ -125,8 +127,6 @@ def crossings(plan, step: float = 0.25) -> int:
     """Times the tractor's side (the path's centre line kept ``half_width`` inside) leaves the
     field or enters a hole or an obstacle: runs of path points, every ``step`` m, outside the field
     shrunk by the half width (1 cm tolerance)."""
-    from shapely import contains_xy
-
     inside = plan.field.boundary.buffer(-plan.settings.half_width + 0.01)
     count, was_in = 0, True
     for s in plan.path.knots(step, uniform=True):
@@ -155,7 +155,5 @@ def summary(plan, applied: AsApplied, sections: int) -> dict:
 
 def leftover_summary(plan, applied: AsApplied) -> dict:
     """The field left unworked, piece by piece with its area and why (fields.planner.leftovers)."""
-    from .leftovers import leftovers
-
     named, slivers = leftovers(plan, applied.shape)
     return {"leftovers": [x.summary() for x in named], "leftover_slivers_m2": round(slivers, 2)}

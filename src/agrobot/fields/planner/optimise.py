@@ -18,6 +18,8 @@ for every pair at once in closed form:
 The solver starts from the cheapest arc from the start and improves the route by guided local
 search for at most ``route_seconds``; the order it returns is then joined by the real turns
 (fields.planner.turns), and a move whose turn would leave the field goes along the headland.
+
+Imported where used: ortools (the fields extra).
 """
 from __future__ import annotations
 

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from .curves import Limits, connect
+from .optimise import order as optimised
 from .settings import Settings
 from .types import Cell, HeadlandPass, Route, Swath
 
@@ -139,8 +140,6 @@ def route(cells: list[Cell], skip: int, order: str, settings: Settings, rings: l
 
 def _optimised(cells: list[Cell], skip: int, settings: Settings, rings: list[HeadlandPass], start) -> Route:
     """The order of fields.planner.optimise, from the pattern's order (boustrophedon or skip) on."""
-    from .optimise import order as optimised
-
     swaths = [sw for c in cells for sw in c.swaths]
     position = {sw.index: k for k, sw in enumerate(swaths)}
     piece = np.array([c.piece for c in cells for _ in c.swaths])

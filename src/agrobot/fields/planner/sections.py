@@ -23,6 +23,8 @@ import numpy as np
 from shapely import contains_xy
 from shapely.geometry import Polygon
 
+from ..field import FieldError
+
 FRESH = 2.0             # working widths of travel before a section's own work counts as worked
 MAX_CELLS = 2.0e7       # raster cells at most (80 MB of float32)
 ACROSS = 4              # decision points across each section at least
@@ -55,8 +57,6 @@ class SectionLayout:
 
 def check_sections(count, width: float, where: str) -> int:
     """The section count: a whole number from 1 to 64 whose sections are at least 5 cm wide."""
-    from ..field import FieldError
-
     try:
         n = int(count)
     except (TypeError, ValueError):

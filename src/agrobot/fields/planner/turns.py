@@ -16,7 +16,7 @@ from typing import Sequence
 
 import numpy as np
 from shapely import contains_xy
-from shapely.geometry import Polygon
+from shapely.geometry import Point, Polygon
 from shapely.ops import unary_union
 
 from ..field import Field, FieldError
@@ -156,8 +156,6 @@ class Joiner:
         self.segments.append(Segment(TRANSIT, -1, path))
 
     def _check_point(self, name: str, x: float, y: float) -> None:
-        from shapely.geometry import Point, Polygon
-
         point = Point(x, y)
         if self.inside.contains(point):
             return
