@@ -1,24 +1,35 @@
-"""``margins`` and ``tune``: the analysis tools' sub-commands."""
+"""``margins`` and ``tune``: the analysis tools' sub-commands.
+
+Imported where used: agrobot.analysis.margin_plots (start-up: it loads matplotlib.pyplot, about 1.1 s here, on
+every command, ``--help`` included; the Bode and Nyquist plots alone need it).
+"""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import time
 from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, field_validator
 
+from agrobot.orchestrator.atomic_files import atomic_write
+from agrobot.orchestrator.cli import add_output_options, add_set_option
+from agrobot.orchestrator.observers import PROGRESS
+from agrobot.orchestrator.output import ResultFile, ResultFolder, study_inputs
+from agrobot.orchestrator.study import Study, StudyError
+
+from .margins import analyse, report, write_json
+from .margins_simulation import simulated_delay_limit
+from .tune import Targets, comparison, identified_values, propose, simulated_check
+
 
 def _progress(line: str) -> None:
-    from agrobot.orchestrator.observers import PROGRESS
-
     if PROGRESS["shown"]:
         print(line, flush=True)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_output_options, add_set_option
-
     p.add_argument("study", type=Path, help="a guidance study: tracker, yaw-rate controller, steering, yaw plant, "
                    "a reference (figure-8 or field route)")
     add_set_option(p)
@@ -33,8 +44,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def _simulated_lines(analysis, duration: float) -> list[str]:
     """Bisection on the steering command delay around the prediction at the reference's first
     operating point (the figure-8's path, a route's work speed: where a run spends its time)."""
-    from .margins_simulation import simulated_delay_limit
-
     an = analysis.anatomy
     main = analysis.points[0]
     predicted = main.delay_limit
@@ -54,26 +63,17 @@ def _simulated_lines(analysis, duration: float) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.study import Study, StudyError
-
-    from .margins import analyse, report
-
     if not args.duration > 0:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
     study = Study.load(args.study, args.set)
     folder = None
     if args.out is not None:
-        from agrobot.orchestrator.output import ResultFolder, study_inputs
-
         folder = ResultFolder(args.out, args.overwrite, ("margins.json",), "margins", study_inputs(study))
-    import contextlib
-
     with folder if folder is not None else contextlib.nullcontext():
         analysis = analyse(study, progress=_progress)
         print(report(analysis))
         if folder is not None:
             from .margin_plots import write_plots
-            from .margins import write_json
 
             files = (write_plots(analysis, folder.tmp) if not args.no_plots else []) \
                 + [write_json(analysis, folder.tmp / "margins.json")]
@@ -92,10 +92,6 @@ def run(args: argparse.Namespace) -> int:
 # --- tune ------------------------------------------------------------------------------------
 
 def add_tune_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_output_options, add_set_option
-
-    from .tune import Targets
-
     t = Targets()
     p.add_argument("study", type=Path, help="a guidance study (its yaw plant: the tractor as identified)")
     add_output_options(p, "the tuned study file to write (.toml): it extends STUDY", file=True)
@@ -119,10 +115,6 @@ def add_tune_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_tune(args: argparse.Namespace) -> int:
-    from agrobot.orchestrator.study import Study, StudyError
-
-    from .tune import Targets, comparison, identified_values, propose, simulated_check
-
     for option, value in (("--delay-margin", args.delay_margin), ("--phase-margin", args.phase_margin),
                           ("--gain-margin", args.gain_margin), ("--along-track-error", args.along_track_error)):
         if not (math.isfinite(value) and value >= 0):
@@ -133,9 +125,6 @@ def run_tune(args: argparse.Namespace) -> int:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
     if not 0 < args.grid <= 4:
         raise StudyError(f"--grid {args.grid:g}: expected a number in (0, 4]")
-    from agrobot.orchestrator.output import ResultFile, study_inputs
-    from agrobot.orchestrator.atomic_files import atomic_write
-
     study = Study.load(args.study, args.set)
     target = ResultFile(args.out, args.overwrite, [*study_inputs(study), args.identified], suffixes=(".toml",))
     identified = identified_values(study, args.identified, args.model) if args.identified else None

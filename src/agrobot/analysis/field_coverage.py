@@ -19,27 +19,38 @@
 
 Plots: the field coloured by coverage count, the track coloured by cross-track error, and the
 error histograms.
+
+Imported where used: matplotlib (start-up: pyplot, about 1.1 s here, would be paid by every run of a field study
+and by each of its sweep workers, which read this module for their metrics, plots or not).
 """
 from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
+from shapely import contains_xy
+from shapely.affinity import affine_transform
+from shapely.ops import unary_union
 
 from agrobot.fields.planner import HEADLAND, SWATH, TRANSIT, TURN
+from agrobot.fields.planner.applied import applied_outside, as_applied
+from agrobot.fields.planner.export import times_worked, times_worked_colorbar
+from agrobot.orchestrator.atomic_files import atomic_write
+from agrobot.orchestrator.key_figures import bounds
+from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
 from .field_ground import ground_metrics
 from .field_tracks import (_cross_track, _in_field_frame, _pass_to_pass, _samples, _shape, _stats, _swath_frames,
                            applied_strips, field_frame, mission, sections_of)
 from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
+from .signal_roles import component_named
 
 
 def metrics(frame: pd.DataFrame, study: Study) -> dict[str, float]:
-    from shapely import contains_xy
-
     field, plan, conv, _ = mission(study)
     settings = plan.settings
     s = _samples(frame, study)
@@ -79,8 +90,6 @@ def coverage(s: pd.DataFrame, study: Study, field, plan, conv) -> tuple[list, di
     """(the implement's applied strips in the mission frame, the coverage figures): the strips united
     (shapely) against the workable area and the whole field: covered, overlap (swept area - covered
     area: worked more than once) and skipped area, their shares; and how much of the route was run."""
-    from shapely.ops import unary_union
-
     strips = applied_strips(s, plan.settings.working_width, sections_of(study))
     workable, boundary = _shape(plan.workable, conv), _shape(field.boundary, conv)
     union = unary_union(strips) if strips else None
@@ -106,10 +115,6 @@ def coverage_verdict(values: dict[str, float], study: Study) -> str:
     """The coverage figure's conclusion: coverage and overlap of the workable area, the skipped area, and
     whether the goal holds (the coverage, field coverage and overlap bounds, with the study's own
     ``[study] bounds`` over ours), the bounds that do not fit the run said not judged (``unjudged``)."""
-    from types import SimpleNamespace
-
-    from agrobot.orchestrator.key_figures import bounds
-
     why_not = unjudged(values, study)
     goal = {k: b for k, b in bounds(SimpleNamespace(METRICS=METRICS), study.study.bounds).items()
             if k in GOAL_NAMES and k not in why_not}
@@ -127,8 +132,6 @@ def coverage_verdict(values: dict[str, float], study: Study) -> str:
 def plan_figures(plan, sections: int) -> dict[str, float]:
     """The plan's own as-applied figures (fields.planner.applied, the same sections with perfect
     look-ahead on the planned path), beside the driven ones: ``plan_*`` of the same names."""
-    from agrobot.fields.planner.applied import applied_outside, as_applied
-
     a = as_applied(plan, sections)
     return {"plan_field_coverage_share": a.field_coverage_share, "plan_field_overlap_share": a.overlap_share,
             "plan_field_skipped_area_m2": a.skipped, "plan_applied_outside_m2": applied_outside(a, plan.field.boundary)}
@@ -168,10 +171,6 @@ def unjudged(values: dict[str, float], study: Study) -> dict[str, str]:
     """The coverage bounds are for the whole field and the whole route: a plan of the first
     ``max_swaths`` swaths, one without headland passes, or a run that ended before its route did is
     shown against them, not judged (orchestrator.key_figures prints why on the figure's line)."""
-    from agrobot.orchestrator.resolver import resolve
-
-    from .signal_roles import component_named
-
     p = resolve(study).parameters(component_named(study, "route"))
     n = int(values.get("swaths_planned", 0))
     whole = ("field_coverage_share", "coverage_share")
@@ -221,9 +220,6 @@ def coverage_figure(frame: pd.DataFrame, study: Study):
     the metrics judge, carried back from the mission frame), titled with its conclusion
     (coverage_verdict on the same figures as metrics)."""
     import matplotlib.pyplot as plt
-    from shapely.affinity import affine_transform
-
-    from agrobot.fields.planner.export import times_worked, times_worked_colorbar
 
     field, plan, conv, _ = mission(study)
     strips, values = coverage(_samples(frame, study), study, field, plan, conv)
@@ -246,8 +242,6 @@ def plots(frame: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
-
-    from agrobot.orchestrator.atomic_files import atomic_write
 
     field, plan, _, _ = mission(study)
     s = _in_field_frame(_samples(frame, study), plan)        # east/north, the frame of plan.png

@@ -11,7 +11,9 @@ import math
 import numpy as np
 import pandas as pd
 
+from agrobot.components.hardware.nmea import RTK_FIXED
 from agrobot.fields.planner import SWATH, TURN
+from agrobot.fields.planner.sampling import ROUTE_STEP
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
@@ -80,8 +82,6 @@ def _tractor_gps(study: Study) -> str | None:
 def route_samples(path, until: float) -> dict[str, np.ndarray]:
     """The route's columns (fields.planner.path.COLUMNS) on the trackers' grid s = k ROUTE_STEP up to
     arc length ``until`` (the part a run drove: memory that of the drive, not of the whole plan)."""
-    from agrobot.fields.planner.sampling import ROUTE_STEP
-
     stop = min(path.grid_size(ROUTE_STEP), int(math.ceil(max(until, 0.0) / ROUTE_STEP)) + 2)
     return path.grid(0, stop, ROUTE_STEP)
 
@@ -163,8 +163,6 @@ def _outage_metrics(rows: _RowsAt, study: Study, s: pd.DataFrame, xte: np.ndarra
     the estimate's drift at its end (estimated CG - true CG: horizontal, as receivers quote their
     accuracy, and across the tractor's heading, what guidance feels), and when the watchdog stopped
     the tractor in it."""
-    from agrobot.components.hardware.nmea import RTK_FIXED
-
     out: dict[str, float] = {}
     gps = _tractor_gps(study)
     if gps is None or f"{gps}.fix_quality" not in rows:

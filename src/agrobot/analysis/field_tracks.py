@@ -8,8 +8,12 @@ import math
 
 import numpy as np
 import pandas as pd
+from shapely.geometry import LineString, Polygon
 
+from agrobot.components.field_route import planned, route_frame, section_mask, settings_of, to_mission
 from agrobot.fields.planner import SWATH
+from agrobot.fields.planner.applied import block_strips
+from agrobot.fields.planner.sections import SectionLayout
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
@@ -19,8 +23,6 @@ STEP = 0.1          # s: the geometry's sampling of the trajectories
 
 def mission(study: Study):
     """(field, plan, to_mission) of the study's route component (planned as the run planned it)."""
-    from agrobot.components.field_route import planned, route_frame, settings_of, to_mission
-
     name = component_named(study, "route")
     p = resolve(study).parameters(name)
     field, plan = planned(str(p["path"]), str(p["crs"]), str(p["name"]), settings_of(p))
@@ -29,8 +31,6 @@ def mission(study: Study):
 
 
 def _shape(geom, conv):
-    from shapely.geometry import Polygon
-
     return Polygon(conv(np.asarray(geom.exterior.coords)), [conv(np.asarray(h.coords)) for h in geom.interiors])
 
 
@@ -57,8 +57,6 @@ def field_frame(plan) -> tuple[list[float], float]:
     """(the affine map from the mission frame back to the field's east/north frame, as shapely's
     ``affine_transform`` takes it: p_field = R(rotation) p_mission + origin, the inverse of
     components.field_route.to_mission; the rotation [rad])."""
-    from agrobot.components.field_route import route_frame
-
     origin, rotation = route_frame(plan.path)
     c, sn = math.cos(rotation), math.sin(rotation)
     return [c, -sn, sn, c, float(origin[0]), float(origin[1])], rotation
@@ -145,8 +143,6 @@ def _thinned(xy: np.ndarray, spacing: float = 0.05) -> np.ndarray:
 
 def _strips(s: pd.DataFrame, width: float):
     """The implement's swept strips: one per run of working samples."""
-    from shapely.geometry import LineString
-
     work = s["working"].to_numpy() > 0.5
     edges = np.diff(np.concatenate([[0], work.astype(int), [0]]))
     strips = []
@@ -164,10 +160,6 @@ def applied_strips(s: pd.DataFrame, width: float, sections: int) -> list:
     of a run of poses), about the implement's true working point and heading."""
     if not sections:
         return _strips(s, width)
-    from agrobot.components.field_route import section_mask
-    from agrobot.fields.planner.applied import block_strips
-    from agrobot.fields.planner.sections import SectionLayout
-
     on = section_mask(s["mask0"].to_numpy(), s["mask1"].to_numpy(), sections)
     return block_strips(s["ix"].to_numpy(), s["iy"].to_numpy(), s["ih"].to_numpy(), on, SectionLayout(width, sections))
 

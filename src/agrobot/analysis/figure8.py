@@ -1,5 +1,9 @@
 """Figure-8 tracking (paper section VI-B): Euclidean error of the CG on straights and curves,
-speed and yaw-rate tracking, the paper's figures as PNG."""
+speed and yaw-rate tracking, the paper's figures as PNG.
+
+Imported where used: matplotlib (start-up: pyplot, about 1.1 s here, would be paid by every run of a figure-8
+study and by each of its sweep workers, which read this module for their metrics, plots or not).
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -7,9 +11,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.components.models.figure8_path import Figure8Path
+from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .signal_roles import between_samples, rms, runs, sample_rows, signal
+from .signal_roles import between_samples, component_named, rms, runs, sample_rows, signal
 from .mcap_scene import mcap_scene  # noqa: F401 - the run's MCAP scene (orchestrator.mcap_out)
 
 # The paper's reported bounds (abstract and section VI-B): Euclidean error below 40 cm on
@@ -90,11 +96,6 @@ def _next_time_on(study: Study, label: int, after: float) -> float | None:
     """The first time after ``after`` at which the reference is on a segment ``label``
     (models.figure8_path: 0 straight, 1 curve), from the reference's own parameters and
     s(t) = v (t - t0 - T/2) past its ramp; None when the reference is not a figure-8's."""
-    from agrobot.components.models.figure8_path import Figure8Path
-    from agrobot.orchestrator.resolver import resolve
-
-    from .signal_roles import component_named
-
     p = resolve(study).parameters(component_named(study, "reference"))
     if not {"speed", "radius", "centre_offset", "ramp_time"} <= set(p):
         return None

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from agrobot.orchestrator.composite import CompositeComponent
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
@@ -33,8 +34,6 @@ class Anatomy:
 
 def _steering(study: Study, purpose: str) -> tuple[tuple[str, str], str, float, float]:
     """(break, delay key, own delay, step) of the steering, at the top level or inside a subsystem."""
-    from agrobot.orchestrator.composite import CompositeComponent
-
     model = resolve(study)
     found = model.find(role="steering")
     if len(found) == 1:
@@ -102,8 +101,6 @@ def anatomy(study: Study, purpose: str = "the margins") -> Anatomy:
 
 def _plant(study: Study, purpose: str) -> tuple[str, float]:
     """(key of the yaw plant's initial north position y0, its value), at the top level or in a subsystem."""
-    from agrobot.orchestrator.composite import CompositeComponent
-
     model = resolve(study)
     plants = model.find(role="yaw_plant")
     if len(plants) == 1:

@@ -39,14 +39,18 @@ for the linear blocks, the multirate sampling included.
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from agrobot.components.models.loop_blocks import LEVEL, Block, Ground, NoLinearModel, OperatingPoint
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.composite import CompositeComponent
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.registry import import_study_module
+from agrobot.orchestrator.resolver import resolve
 
 
 # --- the network -----------------------------------------------------------------------------------
@@ -242,8 +246,6 @@ def off_the_lateral_loop(comp) -> bool:
 
 def _ground_argument(model, op: OperatingPoint) -> dict:
     """{"ground": op.ground} for a linear model that takes the ground (the IMU, the INS), else {}."""
-    import inspect
-
     if op.ground is None or "ground" not in inspect.signature(model).parameters:
         return {}
     return {"ground": op.ground}
@@ -263,17 +265,12 @@ def ground_of(system, speed: float) -> Ground:
 
 def study_ground(study, speed: float, resolver=None) -> Ground:
     """ground_of the study's system."""
-    from agrobot.orchestrator.build import build_system
-    from agrobot.orchestrator.resolver import resolve
-
     return ground_of(build_system(resolve(study, resolver)), speed)
 
 
 def block_of(comp, step: float, ratio: int, op: OperatingPoint) -> Block | None:
     """The component's block, or None when it has none (network_of then checks that it is off the
     loop: off the lateral channel, reading nothing, or driving nothing the loop reads)."""
-    from agrobot.orchestrator.composite import CompositeComponent
-
     if hasattr(comp, "lateral_linearisation"):
         sys_ = comp.lateral_linearisation(op.speed, step, op.along_track_error)
         if "tracker" in comp.roles:
@@ -331,9 +328,6 @@ def composite(comp, step: float, ratio: int, op: OperatingPoint) -> Block:
 def network_of(study, op: OperatingPoint, purpose: str = "the margins", resolver=None) -> Network:
     """The study's lateral loop at the operating point (see the module docstring); its components'
     classes found by ``resolver`` (orchestrator.resolver; default: the default resolver)."""
-    from agrobot.orchestrator.build import build_system
-    from agrobot.orchestrator.resolver import resolve
-
     system = build_system(resolve(study, resolver))
     if op.ground is None:
         op = replace(op, ground=ground_of(system, op.speed))

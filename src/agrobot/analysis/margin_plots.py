@@ -4,6 +4,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
 from .margins import LOOPS, Analysis, Margins, PointResult
@@ -26,11 +28,7 @@ def _phase_deg(L: np.ndarray) -> np.ndarray:
 
 
 def bode(result: PointResult, title: str, path: Path) -> Path:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(2, 3, figsize=(15, 7.5), sharex="col")
     for col, (name, loop) in enumerate(result.open_loops.items()):
         m: Margins = result.loops[name]
@@ -82,11 +80,7 @@ def bode(result: PointResult, title: str, path: Path) -> Path:
 
 
 def nyquist(result: PointResult, title: str, path: Path) -> Path:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     fig, axes = plt.subplots(1, 3, figsize=(15, 5.4))
     circle = np.exp(1j * np.linspace(0, 2 * math.pi, 361))
     for ax, (name, loop) in zip(axes, result.open_loops.items()):

@@ -26,6 +26,8 @@ from typing import Callable
 
 import numpy as np
 
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
@@ -37,9 +39,6 @@ SATURATED = 0.10              # unstable: the steering command at its angle or r
 
 def simulate(study: Study, duration: float):
     """The study's signals over its first ``duration`` seconds (in memory)."""
-    from agrobot.orchestrator.build import build_system
-    from agrobot.orchestrator.engine import Simulation
-
     study = study.with_values({"study.stop_time": min(study.study.stop_time, study.study.start_time + duration)})
     return Simulation(build_system(resolve(study))).run().to_frame()
 

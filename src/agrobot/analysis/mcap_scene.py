@@ -15,12 +15,20 @@ schemas, found from the study's components by their roles:
 - ``/field`` (foxglove.GeoJson, once): the field boundary, its swaths and the route, longitude/latitude.
 
 ``world`` is the simulation's east/north frame (the mission frame of a field mission), z up.
+
+Imported where used: agrobot.analysis.field_tracks (start-up: it loads the field planner, about 1.2 s here,
+which every run of a study would pay, a figure-8's and each of its sweep workers included, as the study's
+analysis module imports this one; a field mission alone needs it), agrobot.components.field_route (start-up: the
+same), foxglove (the mcap extra), pymap3d (the hardware extra).
 """
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
+from shapely import transform
+from shapely.geometry import LineString, mapping
 
 from agrobot.orchestrator.resolver import resolve
 
@@ -134,8 +142,6 @@ class VehicleScene:
             self._ch["/reference/path"].log(SceneUpdate(entities=[SceneEntity(
                 timestamp=_timestamp(t_ns), frame_id="world", id="reference_path", lines=[line])]), log_time=t_ns)
         if "/field" in self._ch:
-            import json
-
             self._ch["/field"].log(GeoJson(geojson=json.dumps(self.field_geojson)), log_time=t_ns)
 
     def step(self, t_ns: int, value) -> None:
@@ -202,9 +208,6 @@ def _route_frame(plan):
 
 def _field_geojson(field, plan) -> dict:
     """The boundary, the swaths and the route as a GeoJSON FeatureCollection in longitude/latitude."""
-    from shapely import transform
-    from shapely.geometry import LineString, mapping
-
     def geo(geom):
         return mapping(transform(geom, lambda xy: field.to_geodetic(xy)))
     features = [{"type": "Feature", "properties": {"kind": "boundary", "name": field.name}, "geometry": geo(field.boundary)}]

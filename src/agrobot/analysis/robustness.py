@@ -10,8 +10,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import StrMethodFormatter
 
 from agrobot.orchestrator.atomic_files import write_json
 
@@ -56,12 +59,7 @@ def summary(table: pd.DataFrame, study) -> str:
 
 
 def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import StrMethodFormatter
-
     out_dir = Path(out_dir)
     summary = summarise(table)
     written = [write_json(out_dir / "robustness.json", {"study": study.study.name, **summary})]
@@ -91,12 +89,7 @@ def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:
 def compare(tables: dict[str, pd.DataFrame], out: Path) -> Path:
     """One figure: each run's max error over its bound, the larger of straight / 0.40 m and curved /
     0.60 m (within the bounds below 1), against the delay, one colour per study."""
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.ticker import StrMethodFormatter
-
     fig, ax = plt.subplots(figsize=(7, 4))
     for i, (name, table) in enumerate(tables.items()):
         done = table[table["status"] == "completed"]

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
@@ -40,11 +42,7 @@ def speed_column(table: pd.DataFrame, study: Study) -> str:
 
 
 def plots(table: pd.DataFrame, study: Study, out_dir: Path) -> list[Path]:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     p = tractor_parameters(study)
     col = speed_column(table, study)
     speeds = np.linspace(float(table[col].min()), float(table[col].max()), 26)

@@ -26,6 +26,7 @@ from agrobot.components.speed_pid import SpeedPID
 from agrobot.components.yaw_rate_mpc import YawRateMPC
 from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.compiled.cores import c_array
+from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
@@ -198,8 +199,6 @@ def controller_feeds(study: Study, design: ControllerDesign) -> dict[str, str]:
 def run_with_exported_controller(study_path: Path, fmu: Path, overrides: list[str] | None = None):
     """Run a study as written and with the FMU in place of its three controllers:
     (python frame, FMU frame, study)."""
-    from agrobot.orchestrator.engine import Simulation
-
     study = Study.load(study_path, overrides or [])
     with_fmu = controller_study(study, controller_design(study), str(fmu))
     python_frame = Simulation(build_system(resolve(study))).run().to_frame()

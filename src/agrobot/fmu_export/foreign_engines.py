@@ -1,7 +1,11 @@
 """An exported SSP (or one FMU) run by other co-simulation engines (libcosim, fmpy's SSP master, cofmupy), each
 returning a table with a time column ``t`` and ``component.output`` columns, and the distance
 between two runs' CG tracks. Used by tests/test_foreign_engines.py and
-benchmarks/foreign_engines.py; the engines are imported only when called."""
+benchmarks/foreign_engines.py.
+
+Imported where used: libcosimpy (the test extra), cofmupy (optional: the README's test command installs it
+apart, without its pinned dependencies).
+"""
 from __future__ import annotations
 
 import contextlib
@@ -10,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from fmpy.ssp.simulation import simulate_ssp
 
 SSD = "{http://ssp-standard.org/SSP1/SystemStructureDescription}"
 
@@ -84,8 +89,6 @@ def _libcosim_record(execution, stop: float, step: float) -> pd.DataFrame:
 
 def fmpy_ssp_run(ssp: Path, stop: float, step: float) -> pd.DataFrame:
     """fmpy's SSP master; it reads each output after doStep, so row k holds the state at t_k + h."""
-    from fmpy.ssp.simulation import simulate_ssp
-
     res = simulate_ssp(str(ssp), stop_time=stop, step_size=step)
     return pd.DataFrame({"t": res["time"] + step, "tractor.x_cg": res["tractor.x_cg"], "tractor.y_cg": res["tractor.y_cg"]})
 

@@ -12,6 +12,9 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+import fmpy
+from fmpy.build import build_platform_binary
+
 FMI_HEADERS = {2: ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"),
                3: ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")}
 
@@ -72,8 +75,6 @@ def _output_to(path: Path):
 
 def check_fmu_target(out: Path) -> None:
     """Before building: ``out`` must be a file path whose folder can be written."""
-    import os
-
     if out.is_dir():
         raise PackagingError(f"--out {out}: is a folder; expected a file path ending in .fmu")
     base = out.parent
@@ -104,9 +105,6 @@ def write_archive(out: Path, entries: dict[str, Path | str], what: str) -> Path:
 
 
 def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
-    import fmpy
-    from fmpy.build import build_platform_binary
-
     if out.suffix != ".fmu":
         raise PackagingError(f"{out}: expected a path ending in .fmu")
     fmpy_c = Path(fmpy.__file__).with_name("c-code")

@@ -8,12 +8,16 @@ keeps the study's component and port names (an input that shares an output's nam
 gives start and stop time. The orchestrator's study annotation (orchestrator.ssp) carries what SSP 1.0 has
 no element for (base step, each component's step, seed), for this project's own import (another
 engine is given its step by its own API: libcosim's ``from_ssp_file(path, step_size)``). The SSD is validated against the SSP 1.0 schema before
-the archive is written (atomically)."""
+the archive is written (atomically).
+
+Imported where used: lxml (the fmu-export extra)."""
 from __future__ import annotations
 
 import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
+
+import fmpy
 
 from agrobot.orchestrator.build import System, build_system
 from agrobot.orchestrator.errors import InputError
@@ -115,7 +119,6 @@ def system_structure(system: System, models: dict) -> str:
 
 def validate_ssd(text: str) -> list[str]:
     """Errors of the SSD against the SSP 1.0 schema (fmpy ships the standard's XSD files)."""
-    import fmpy
     from lxml import etree
 
     schema = etree.XMLSchema(etree.parse(str(Path(fmpy.__file__).parent / "ssp/schema/SystemStructureDescription.xsd")))
