@@ -9,7 +9,19 @@ import json
 import sys
 from pathlib import Path
 
+from agrobot.orchestrator.atomic_files import atomic_write, write_frame
+from agrobot.orchestrator.cli import add_output_options
+from agrobot.orchestrator.output import ResultFile, check_output_file
+from agrobot.orchestrator.source_files import set_limit
+
 from . import readers
+from .audit import parse_align
+from .listing import list_source
+from .log import LogError, check_log, log_units
+from .log_mcap import write_log_mcap
+from .recording import ImportOptions, describe, import_recording, import_runs
+from .signal_expressions import parse_signal
+from .tables import parse_time
 
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
@@ -51,10 +63,6 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
 
 def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
-    from .log import LogError
-    from .recording import ImportOptions
-    from agrobot.orchestrator.source_files import set_limit
-
     set_limit(getattr(args, "max_file_size", None))
 
     if args.wheelbase is not None and not 0.1 <= args.wheelbase <= 10.0:
@@ -67,9 +75,6 @@ def recording_options(args: argparse.Namespace):
         raise LogError("--run and --time-range: give one of them")
     if args.dbc is not None and not args.dbc.is_file():
         raise LogError(f"--dbc {args.dbc}: no such file")
-    from .signal_expressions import parse_signal
-    from .tables import parse_time
-
     if args.steering_ratio is not None and not 0.05 <= args.steering_ratio <= 50.0:
         raise LogError(f"--steering-ratio {args.steering_ratio:g}: expected the handwheel-to-road-wheel ratio, "
                        f"0.05 to 50 (a car: 12-20)")
@@ -84,8 +89,6 @@ def recording_options(args: argparse.Namespace):
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
                             keep_spikes=getattr(args, "keep_spikes", False),
                             max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"))
-    from .audit import parse_align
-
     parse_align(options.align)
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio
@@ -98,8 +101,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", type=Path, help=f"a folder or one file: {readers.described()}; in this order of "
                    "precedence: a file is read as the first of these formats that claims it, and the first format "
                    "a folder holds makes the recording (NMEA files and CAN logs are read together)")
-    from agrobot.orchestrator.cli import add_output_options
-
     add_output_options(p, "the log to write (.csv or .parquet); the import report goes beside it as "
                           "<name>.import.json", required=False, file=True)
     p.add_argument("--list", action="store_true", help=f"print what the recording holds ({readers.listed()}) and "
@@ -110,19 +111,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .log import LogError
-    from .recording import import_recording, import_runs
-
     if args.list:
-        from .listing import list_source
-
         options = recording_options(args)
         print("\n".join(list_source(args.source, options)))
         return 0
     if args.out is None:
         raise LogError("convert: give --out LOG.csv (or .parquet), or --list to see what the recording holds")
-    from agrobot.orchestrator.output import ResultFile, check_output_file
-
     inputs = [args.source, args.dbc]
     target = ResultFile(args.out, args.overwrite, inputs, suffixes=(".csv", ".parquet"))
     options = recording_options(args)
@@ -140,8 +134,6 @@ def run(args: argparse.Namespace) -> int:
     with target:
         _write(jobs)
     if args.mcap:          # after every log is in place: an MCAP that fails loses none of them
-        from .log_mcap import write_log_mcap
-
         for path, f, _ in jobs:
             print(f"written: {write_log_mcap(f, path.with_suffix('.mcap'), str(args.source))}")
     return 0
@@ -149,8 +141,6 @@ def run(args: argparse.Namespace) -> int:
 
 def checked_log(source, f, rep: dict):
     """``f`` checked as a measured log (a LogError names ``source``); its warnings go into ``rep``."""
-    from .log import check_log
-
     checked = check_log(f, f"{source} ({rep['used']['how']})", ("t",))
     rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
     return checked
@@ -158,10 +148,6 @@ def checked_log(source, f, rep: dict):
 
 def write_converted(path: Path, f, rep: dict) -> None:
     """The log ``f`` as ``path`` (its units in the metadata) and its import report beside it."""
-    from agrobot.orchestrator.atomic_files import atomic_write, write_frame
-
-    from .log import log_units
-
     path.parent.mkdir(parents=True, exist_ok=True)
     f.attrs["units"] = log_units(f)
     write_frame(path, f, float_format="%.9g")           # the units in its metadata (orchestrator.atomic_files)
@@ -170,8 +156,6 @@ def write_converted(path: Path, f, rep: dict) -> None:
 
 
 def _write(jobs) -> None:
-    from .recording import describe
-
     for path, f, rep in jobs:
         write_converted(path, f, rep)
         print(describe(rep))

@@ -18,12 +18,16 @@ repairs the text before cantools sees it, and isolates what cannot be repaired. 
 5. message by message: each ``BO_`` block with its signals loaded alone, and the ones that still
    fail left out and named with cantools' reason (the whole file is never refused when one
    message of it can be read).
+
+Imported where used: cantools (the hardware extra).
 """
 from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from agrobot.orchestrator.source_files import regular_file
 
 from .log import LogError
 
@@ -66,8 +70,6 @@ def load_dbc_file(path: str | Path):
     """(cantools database, DBCReport): every message of the DBC that can be decoded; a LogError
     names the file when nothing in it is a DBC message."""
     import cantools
-
-    from agrobot.orchestrator.source_files import regular_file
 
     path = regular_file(path, LogError)
     try:

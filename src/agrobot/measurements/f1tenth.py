@@ -17,6 +17,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .recording import ImportOptions, import_recording, import_runs
+from .signal_expressions import parse_signal
+
 FRICTIONMAPS_SIGNALS = ("delta_cmd=commandData.delta[rad]", "yaw_rate=imuData.wz[deg/s]", "v=pfOdomData.vx[m/s]",
                         "x=pfOdomData.x[m]", "y=pfOdomData.y[m]")
 AUTOKOOPMAN_SIGNALS = ("x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=trajectory.col3[rad]",
@@ -25,9 +28,6 @@ AUTOKOOPMAN_SIGNALS = ("x=trajectory.col1[m]", "y=trajectory.col2[m]", "heading=
 
 def _import(folder: Path, signals, **options) -> pd.DataFrame:
     """Every run the importer finds in the recording, each at its start on the recording's clock."""
-    from agrobot.measurements.recording import ImportOptions, import_recording, import_runs
-    from agrobot.measurements.signal_expressions import parse_signal
-
     opts = ImportOptions(signals=[parse_signal(s) for s in signals], **options)
     runs = import_runs(folder, opts) or [import_recording(folder, opts)]
     starts = [rep["used"].get("start", 0.0) for _, rep in runs]

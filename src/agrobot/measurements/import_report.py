@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+from .audit import describe_audit
+
 
 def describe(report: dict) -> str:
     """A few lines for the terminal: files, clocks, gaps, runs, what was used, what is missing."""
@@ -50,7 +52,5 @@ def describe(report: dict) -> str:
     for column, why in report.get("missing", {}).items():
         lines.append(f"  missing {column}: {why}")
     if report.get("audit"):
-        from .audit import describe_audit
-
         lines += describe_audit(report["audit"])
     return "\n".join(lines)

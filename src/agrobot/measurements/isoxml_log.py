@@ -19,6 +19,8 @@ between fixes to ``track_speed``. Where the records carry the GNSS time (PTN H, 
 terminal's clock (TIM) is compared with it and the offset named. PTN D (status) is ISO's:
 0 no GPS, 1 GNSS, 2 DGNSS, 3 precise GNSS, 4 RTK fixed, 5 RTK float, ... 15 not available; it is
 kept as ``fix_quality`` with GGA's codes where they agree (0-5) and 15 -> NaN (unknown).
+
+Imported where used: isoxml (the fields extra).
 """
 from __future__ import annotations
 
@@ -31,10 +33,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.orchestrator.source_files import regular_file
+from agrobot.orchestrator.units import base_unit
+
 from .log import LogError
 from .quirks import ordered_in_time
-from agrobot.orchestrator.source_files import regular_file
-from .streams import Reader, Streams, iso
+from .signal_expressions import SignalSpec, evaluate, unknown_name
+from .streams import Reader, Series, Streams, iso
 
 EPOCH_1980 = datetime.datetime(1980, 1, 1, tzinfo=datetime.timezone.utc).timestamp()
 PTN_LAYOUT = {"A": ("<i", 1e-7), "B": ("<i", 1e-7), "C": ("<i", 1e-3), "D": ("<B", 1.0), "E": ("<H", 0.1),
@@ -152,8 +157,6 @@ def read_timelog(xml: Path) -> tuple[pd.DataFrame, dict]:
 def ddi_to_si(unit: str) -> tuple[float, str | None]:
     """(factor, SI unit) of an ISO 11783-11 unit (mm/s -> 0.001 m/s, 0.001 deg -> rad ...);
     (1, None) for one pint does not know."""
-    from agrobot.orchestrator.units import base_unit
-
     text = UNIT_ALIASES.get((unit or "").strip(), (unit or "").strip())
     try:
         b = base_unit(text)
@@ -237,9 +240,6 @@ def timelog_streams(paths: list[Path], options, source: Path):
 def _mapped(signals: dict, info: dict, options, source: Path, report: dict) -> dict:
     """{column: (t, values, how)} of the ``--signal`` expressions over the time log's columns
     (named as listed, or DDInnn), and the machine's measured speed as ``v`` when not mapped."""
-    from .signal_expressions import SignalSpec, evaluate, unknown_name
-    from .streams import Series
-
     series = {c: Series(t, v, info["si"].get(c), c) for c, (t, v) in signals.items()}
     for c, ddi in info["ddi"].items():
         if c in series:

@@ -1,7 +1,10 @@
 """A measured log as an MCAP file (``convert --mcap``): every column on the topic ``/signals/log`` (JSON,
 one message per row, units from the log's conventions, measurements.log.COLUMNS) and the antenna's
 position on ``/log/position`` (foxglove.Point3InFrame, frame ``world``: east/north of the log's datum), on
-the log's own time axis (log times: seconds from its first row, in ns)."""
+the log's own time axis (log times: seconds from its first row, in ns).
+
+Imported where used: foxglove (the mcap extra).
+"""
 from __future__ import annotations
 
 import math

@@ -13,10 +13,14 @@ reads MDF4 bus logging with asammdf).
 
 Times: the group's master channel in seconds from the file's start, plus the header's start time
 (POSIX seconds) where it is a date, so that groups and other sources share one clock.
+
+Imported where used: asammdf (the mdf extra).
 """
 from __future__ import annotations
 
+import gc
 import re
+import sys
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,9 +57,6 @@ def _open(path: Path):
 
 
 def _collect_quietly() -> None:
-    import gc
-    import sys
-
     hook, sys.unraisablehook = sys.unraisablehook, lambda _: None
     try:
         gc.collect()

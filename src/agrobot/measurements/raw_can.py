@@ -15,6 +15,8 @@ several buses without it is refused with the buses named. Columns come from ``--
 expressions (measurements.signal_expressions), else from SOURCES (the project's messages, then ISO 11783-7
 guidance), else from a signal matched by name and unit (GUESSES). ISO 11783-7 curvature is
 positive to the driver's right, the log's angles to the left: those sources carry the sign -1.
+
+Imported where used: can (python-can, the hardware extra).
 """
 from __future__ import annotations
 
@@ -28,6 +30,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.components.hardware.can_frames import DEFAULT_DBC, load_dbc as project_dbc
+from agrobot.orchestrator.units import base_unit
+
+from .dbc import load_dbc_file
 from .log import LogError
 from .quirks import ordered_in_time
 from .signal_expressions import SignalSpec
@@ -88,13 +94,9 @@ class CANRecording:
 def load_dbc(path: str | Path | None):
     """(database, DBCReport or None): the DBC (None: the project's own agrobot_tractor.dbc); a
     LogError names the file when nothing in it can be read."""
-    from agrobot.components.hardware.can_frames import DEFAULT_DBC, load_dbc as load
-
-    from .dbc import load_dbc_file
-
     if path is None:
         try:
-            return load(None), None
+            return project_dbc(None), None
         except Exception as exc:             # noqa: BLE001 - cantools raises many kinds
             raise LogError(f"{DEFAULT_DBC}: cannot read as a DBC: {exc}") from None
     if not Path(path).is_file():
@@ -330,8 +332,6 @@ GUESSES = {
 
 
 def _guess(db, column: str, taken: set) -> SignalSpec | None:
-    from agrobot.orchestrator.units import base_unit
-
     pattern, unit = GUESSES[column]
     want = base_unit(unit).exponents
     for m in db.messages:

@@ -22,6 +22,7 @@ import pandas as pd
 from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 
 from . import readers
+from .audit import audit_frame, audit_streams
 from .import_report import describe
 from .log import LogError, check_log, read_log
 from .options import ImportOptions
@@ -78,8 +79,6 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
     if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
         streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
     streams = _steered(find_quirks(fixes_from_columns(streams, source), options), options)
-    from .audit import audit_streams
-
     streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
     return streams
 
@@ -143,8 +142,6 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
     if not is_recording(source) and not (recording is not None and recording.maps_a_table):
         frame = read_log(source, required, resample_jitter)
         if "audit" not in frame.attrs:        # a table as it is: the audit of its own columns
-            from .audit import audit_frame
-
             frame.attrs["audit"] = audit_frame(frame)
         return frame, None
     frame, report = import_recording(source, recording)

@@ -20,6 +20,8 @@ declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees be
 Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
 the messages' header stamps where they have a header with a stamp, else the bag's receive times;
 every topic is on that one clock, and the report says which each topic used.
+
+Imported where used: rosbags (the bags extra).
 """
 from __future__ import annotations
 
@@ -30,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .log import LogError
+from .signal_expressions import SignalSpec, evaluate, unknown_name
 from .streams import Reader, Series, Streams, gnss_table, iso
 
 BAG_SUFFIXES = (".bag", ".db3", ".mcap")
@@ -162,10 +165,28 @@ def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]
 
 
 def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
-    from .signal_expressions import SignalSpec, evaluate, unknown_name
-
+    """(column -> (times, values), report) of an open bag: the topics' fields that ``given`` names
+    and the standard types' (TYPE_MAP), read message by message, then evaluated."""
     topics = {c.topic: c.msgtype for c in reader.connections}
-    wanted: dict[str, dict[str, str]] = {}            # topic -> {name: field path}
+    wanted = _named_fields(given, topics, source)
+    auto = _standard_fields(given, topics, wanted)
+    rows, header_used = _messages(reader, wanted, auto, source)
+    series, report_topics, stamps = _topic_series(rows, header_used, wanted, topics, given, source)
+    signals = _evaluated(given, auto, series, topics, report_topics, source)
+    report = {"topics": report_topics, "stamp_vs_receive": stamps,
+              "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
+    others = [s for c, s in auto.items() if c.startswith("yaw_rate_") and c in signals]
+    if others:
+        report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
+                             + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
+                             + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
+    return signals, report
+
+
+def _named_fields(given: list, topics: dict[str, str], source: Path) -> dict[str, dict[str, str]]:
+    """topic -> {name: field path} of every ``/topic.field`` the ``given`` expressions name; a
+    LogError names a name that is not a topic's field, or a topic the bag does not hold."""
+    wanted: dict[str, dict[str, str]] = {}
     for spec in given:
         for name in spec.names:
             if not name.startswith("/"):
@@ -177,22 +198,34 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
                 raise LogError(str(near).split(" (convert")[0].split("; ")[0] + "; topics: "
                                + ", ".join(f"{t} ({m})" for t, m in sorted(topics.items())))
             wanted.setdefault(topic, {})[name] = path
+    return wanted
+
+
+def _standard_fields(given: list, topics: dict[str, str], wanted: dict) -> dict[str, SignalSpec]:
+    """column -> expression of the standard types' fields (TYPE_MAP; the first topic of the first
+    type that has a column gives it, a column ``given`` is not taken), added to ``wanted``. Another
+    gyro topic is kept as yaw_rate_2 ... for the audit to compare (the first is used)."""
     taken = {g.column for g in given}
     auto: dict[str, SignalSpec] = {}
     for msgtype, fields in TYPE_MAP.items():
         for topic in sorted(t for t, m in topics.items() if m == msgtype):
             for column, path in fields:
                 if column not in taken:
-                    name = f"{topic}.{path}"
-                    wanted.setdefault(topic, {})[name] = path
-                    auto[column] = SignalSpec(column, ((name, 1.0),), 0.0, None, f"{column}={name}")
                     taken.add(column)
                 elif column == "yaw_rate" and "yaw_rate" in auto and auto["yaw_rate"].names[0].split(".")[0] != topic:
-                    # another gyro: kept as yaw_rate_2 ... for the audit to compare (the first is used)
-                    alt = f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}"
-                    name = f"{topic}.{path}"
-                    wanted.setdefault(topic, {})[name] = path
-                    auto[alt] = SignalSpec(alt, ((name, 1.0),), 0.0, None, f"{alt}={name}")
+                    column = f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}"
+                else:
+                    continue
+                name = f"{topic}.{path}"
+                wanted.setdefault(topic, {})[name] = path
+                auto[column] = SignalSpec(column, ((name, 1.0),), 0.0, None, f"{column}={name}")
+    return auto
+
+
+def _messages(reader, wanted: dict, auto: dict, source: Path) -> tuple[dict[str, list], dict[str, bool]]:
+    """(topic -> rows (stamp, receive time, every wanted field's value), topic -> whether its
+    stamps are the headers'): the wanted topics' messages, decoded; a LogError names a message
+    that cannot be decoded or a field it lacks."""
     rows: dict[str, list] = {t: [] for t in wanted}
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
@@ -218,6 +251,14 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
                 raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}): field "
                                f"{path or '(the only numeric field)'}: {exc}") from None
         rows[conn.topic].append((t, receive_ns * 1e-9, *values))
+    return rows, header_used
+
+
+def _topic_series(rows: dict, header_used: dict, wanted: dict, topics: dict, given: list,
+                  source: Path) -> tuple[dict[str, Series], dict, dict]:
+    """(name -> Series, topic -> its report, topic -> receive time - header stamp statistics) of
+    the rows: sorted by stamp, a repeated stamp dropped (the first kept); a topic ``given`` names
+    that holds no message is refused."""
     series: dict[str, Series] = {}
     report_topics, stamps = {}, {}
     for topic, names in wanted.items():
@@ -238,6 +279,14 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
                                 "rate_hz": float(1.0 / np.median(np.diff(data[:, 0]))) if len(data) > 1 else math.nan,
                                 "time": "header stamps" if header_used.get(topic) else "bag receive times",
                                 "columns": {}}
+    return series, report_topics, stamps
+
+
+def _evaluated(given: list, auto: dict, series: dict, topics: dict, report_topics: dict,
+               source: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """column -> (times, values) of every expression whose names the bag holds (``given`` first,
+    then the standard fields); a fix's quality and error, and the standard positions, are taken
+    as they are (no unit conversion). Each topic's report names the columns it gave."""
     signals: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for spec in list(given) + list(auto.values()):
         if not all(n in series for n in spec.names):
@@ -257,14 +306,7 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
             topic = split_name(n, list(topics))[0]
             if topic in report_topics:
                 report_topics[topic]["columns"][spec.column] = how
-    report = {"topics": report_topics, "stamp_vs_receive": stamps,
-              "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
-    others = [s for c, s in auto.items() if c.startswith("yaw_rate_") and c in signals]
-    if others:
-        report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
-                             + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
-                             + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
-    return signals, report
+    return signals
 
 
 def list_bag(paths: list[Path]) -> list[str]:

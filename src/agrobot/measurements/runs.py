@@ -8,6 +8,8 @@ shorter than ``min_stop`` bridged) with every stream present. One run is used: t
 ``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
 Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
 signals are interpolated linearly onto the log's grid; the set-points are held (the last frame).
+
+Imported where used: pymap3d (the hardware extra).
 """
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .audit import minimum
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed, iso
@@ -75,19 +78,57 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     canonical column the recording holds, then the extras (the receiver's speed, fix quality,
     heading and position error, and any other mapped signal); the missing columns are named."""
     gnss, sig, report = streams.gnss, streams.signals, copy.deepcopy(streams.report)
-    # the streams that set the log's span and its gaps: the positions and the canonical columns
-    # (an extra column, logged now and then, is held or interpolated within that span)
+    times = _timed(source, streams)
+    u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
+    step = _grid_step(streams, options)
+    bridge = max(GAP_MIN, float(options.max_gap))
+    least = {name: max(HELD_GAP if name in streams.held else GAP_MIN, bridge) for name, _ in times}
+    report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
+    grid = _grid(source, times, u0, step)
+    covered = _covered_grid(grid, times, least, u0, streams, report)
+    long_runs = _runs(grid, u0, step, covered, _speed(grid, streams, report), options, report)
+    pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
+    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
+                      "utc_start_s": float(grid[pick][0])}
+    t = grid[pick]
+    columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
+    for c in CANONICAL[1:]:
+        if c in sig:
+            columns[c] = _held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
+    if gnss is not None:
+        columns.update(_receiver_columns(t, streams, report))
+    for c, (tc, vc) in sig.items():
+        if c not in columns:
+            columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
+    report["rate_hz"] = 1.0 / step
+    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
+                            if c in sig or c in streams.resolution}
+    present = [c for c in CANONICAL if c in columns]
+    report["present"] = present + [c for c in columns if c not in CANONICAL]
+    why = report.get("can", {}).get("columns_without_a_signal", {})
+    report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
+    order = present + [c for c in columns if c not in CANONICAL]
+    return pd.DataFrame(columns)[order], report
+
+
+def _timed(source: Path, streams: Streams) -> list[tuple[str, np.ndarray]]:
+    """(name, times) of the streams that set the log's span and its gaps: the positions and the
+    canonical columns (an extra column, logged now and then, is held or interpolated within that
+    span); every signal when the recording holds none of those."""
+    gnss, sig = streams.gnss, streams.signals
     times = ([("gnss", gnss["utc"].to_numpy(float))] if gnss is not None else []) + \
         [(c, t) for c, (t, _) in sig.items() if c in CANONICAL]
     times = times or [(c, t) for c, (t, _) in sig.items()]
     if not times:
         raise LogError(f"{source}: nothing with a time stamp in it")
-    u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
-    step = _grid_step(streams, options)
+    return times
+
+
+def _grid(source: Path, times: list, u0: float, step: float) -> np.ndarray:
+    """The log's grid: u0 + k step for every whole k within the span all ``times`` share
+    [max of the starts, min of the ends]; refused when they share less than two steps, or more
+    than MAX_SAMPLES of them (a damaged clock)."""
     lo, hi = max(float(t[0]) for _, t in times), min(float(t[-1]) for _, t in times)
-    bridge = max(GAP_MIN, float(options.max_gap))
-    least = {name: max(HELD_GAP if name in streams.held else GAP_MIN, bridge) for name, _ in times}
-    report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
     if hi - lo < 2 * step:
         spans = ", ".join(f"{name} {t[0] - u0:.1f}-{t[-1] - u0:.1f} s" for name, t in times)
         raise LogError(f"{source}: the streams overlap for {max(hi - lo, 0):.3g} s ({spans}); nothing to align")
@@ -96,7 +137,14 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         raise LogError(f"{source}: the streams span {hi - lo:.4g} s ({spans}): {(hi - lo) / step:.3g} samples at "
                        f"{1 / step:g} Hz, above {MAX_SAMPLES:.0e}; a time stamp far from the others, or choose a span "
                        f"with --time-range or a lower --rate")
-    grid = u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
+    return u0 + step * np.arange(math.ceil((lo - u0) / step - 1e-9), math.floor((hi - u0) / step + 1e-9) + 1)
+
+
+def _covered_grid(grid: np.ndarray, times: list, least: dict, u0: float, streams: Streams,
+                  report: dict) -> np.ndarray:
+    """True where the grid may be used: not within a break (named in report["gaps"] and
+    report["splits"]), inside every stream's stretch without a gap longer than its ``least``, and
+    not where every stream is silent at once (a split, however short)."""
     covered = np.ones(len(grid), bool)
     for b in streams.breaks:                  # never bridged: the samples on either side are not one step apart
         i0 = int(np.searchsorted(grid, b["start"], side="right"))
@@ -110,13 +158,28 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     for name, t in times:
         covered &= _covered(t, grid, least[name])
         silent &= ~_covered(t, grid, HELD_GAP if name in streams.held else GAP_MIN)
-    covered &= ~silent
+    return covered & ~silent
+
+
+def _speed(grid: np.ndarray, streams: Streams, report: dict) -> np.ndarray | None:
+    """The speed on the grid that tells driving from standing: the column v, else the receiver's
+    speed over ground, else none (report["runs_by"] says which)."""
+    gnss, sig = streams.gnss, streams.signals
     if "v" in sig:
         v, report["runs_by"] = np.interp(grid, *sig["v"]), "the speed column v"
     elif gnss is not None:
         v, report["runs_by"] = np.interp(grid, gnss["utc"], gnss_speed(gnss, streams.breaks)), "the receiver's speed over ground"
     else:
         v, report["runs_by"] = None, "no speed in the recording: every stretch without a gap is a run"
+    return v
+
+
+def _runs(grid: np.ndarray, u0: float, step: float, covered: np.ndarray, v: np.ndarray | None,
+          options: ImportOptions, report: dict) -> list[dict]:
+    """The runs, numbered from 1: the stretches driving (|v| > min_speed; a stop shorter than
+    min_stop bridged; every stretch without a gap when there is no speed) with every stream
+    present, at least min_run long; none that long: the longest, when the minimum's floor allows
+    it (measurements.audit.minimum, a note)."""
     moving = np.abs(v) > options.min_speed if v is not None else np.ones(len(grid), bool)   # reversing drives too
     report["driving_s"] = float(moving.sum() * step)
     report["silent_while_driving_s"] = float((moving & ~covered).sum() * step)
@@ -129,8 +192,6 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
                      "mean_speed": float(v[a:b].mean()) if v is not None else math.nan, "utc_start": iso(grid[a])})
     long_runs = [r for r in runs if r["duration"] >= options.min_run]
     if not long_runs and runs:            # the minimum is guidance down to its floor (measurements.audit.minimum)
-        from .audit import minimum
-
         best = max(runs, key=lambda r: r["duration"])
         try:
             warning = minimum(best["duration"], options.min_run, "the longest run", "s")
@@ -143,46 +204,36 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
         r["run"] = i
     report["runs"] = long_runs
     report["short_runs_ignored"] = len(runs) - len(long_runs)
-    pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
-    report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
-                      "utc_start_s": float(grid[pick][0])}
-    t = grid[pick]
-    columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
-    for c in CANONICAL[1:]:
-        if c in sig:
-            columns[c] = _held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
-    if gnss is not None:
-        import pymap3d
+    return long_runs
 
-        utc = gnss["utc"].to_numpy(float)
-        lat, lon, height = (np.interp(t, utc, gnss[k]) for k in ("lat", "lon", "height"))
-        datum = (float(lat[0]), float(lon[0]), float(height[0]))
-        columns["x"], columns["y"], _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
-        report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
-        if np.isfinite(gnss["speed"].to_numpy(float)).mean() > 0.5:      # the receiver's own (Doppler) speed
-            columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
-        else:                                                              # none: the track's, named so
-            columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
-        columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
-        for extra in ("heading", "position_std"):
-            if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
-                ok = np.isfinite(gnss[extra].to_numpy(float))
-                x = gnss[extra].to_numpy(float)[ok]
-                columns[extra] = np.interp(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
-                if extra == "heading":
-                    columns[extra] = np.angle(np.exp(1j * columns[extra]))
-    for c, (tc, vc) in sig.items():
-        if c not in columns:
-            columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
-    report["rate_hz"] = 1.0 / step
-    report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
-                            if c in sig or c in streams.resolution}
-    present = [c for c in CANONICAL if c in columns]
-    report["present"] = present + [c for c in columns if c not in CANONICAL]
-    why = report.get("can", {}).get("columns_without_a_signal", {})
-    report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
-    order = present + [c for c in columns if c not in CANONICAL]
-    return pd.DataFrame(columns)[order], report
+
+def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str, np.ndarray]:
+    """The receiver's columns at ``t``: x, y east and north of the first fix (pymap3d's
+    geodetic -> ENU on WGS-84; the datum in the report), its own (Doppler) speed as gnss_speed or,
+    without one, the track's as track_speed, fix_quality held, heading (unwrapped, interpolated,
+    wrapped to (-pi, pi]) and position_std where given."""
+    import pymap3d
+
+    gnss = streams.gnss
+    columns: dict[str, np.ndarray] = {}
+    utc = gnss["utc"].to_numpy(float)
+    lat, lon, height = (np.interp(t, utc, gnss[k]) for k in ("lat", "lon", "height"))
+    datum = (float(lat[0]), float(lon[0]), float(height[0]))
+    columns["x"], columns["y"], _ = pymap3d.geodetic2enu(lat, lon, height, *datum, deg=True)
+    report["datum"] = {"latitude_deg": datum[0], "longitude_deg": datum[1], "height_m": datum[2]}
+    if np.isfinite(gnss["speed"].to_numpy(float)).mean() > 0.5:      # the receiver's own (Doppler) speed
+        columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
+    else:                                                              # none: the track's, named so
+        columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
+    columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
+    for extra in ("heading", "position_std"):
+        if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
+            ok = np.isfinite(gnss[extra].to_numpy(float))
+            x = gnss[extra].to_numpy(float)[ok]
+            columns[extra] = np.interp(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
+            if extra == "heading":
+                columns[extra] = np.angle(np.exp(1j * columns[extra]))
+    return columns
 
 
 def _standstill_or_silence(report: dict) -> str:

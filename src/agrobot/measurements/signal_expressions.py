@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from agrobot.orchestrator.units import base_unit
+
 from .log import COLUMNS, LogError
 from .streams import Series
 
@@ -88,8 +90,6 @@ def parse_signal(text: str) -> SignalSpec:
 
 def check_unit(unit: str, where: str):
     """The unit as orchestrator.units reads it (pint); a LogError when pint does not know it."""
-    from agrobot.orchestrator.units import base_unit
-
     unit = ALIASES.get(unit.strip(), unit)
     try:
         found = base_unit(unit)
@@ -215,8 +215,6 @@ def target_unit(column: str) -> str | None:
 def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4
              ) -> tuple[np.ndarray, np.ndarray, str]:
     """(times, values in the column's unit, how) of ``spec`` from the named series."""
-    from agrobot.orchestrator.units import base_unit
-
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
     lo = max(float(series[n].t[0]) for n, _ in spec.terms)
@@ -281,8 +279,6 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
 
 
 def _known(unit: str) -> bool:
-    from agrobot.orchestrator.units import base_unit
-
     try:
         return base_unit(unit) is not None
     except Exception:                                # noqa: BLE001
@@ -295,8 +291,6 @@ def _bare(spec: SignalSpec) -> str:
 
 
 def _to_column(spec, t, value, have, unit_text, where, wheelbase, notes):
-    from agrobot.orchestrator.units import base_unit
-
     want_text = target_unit(spec.column)
     how = f"{spec} [{unit_text}]"
     if want_text is None:                        # an extra column: SI of its own unit

@@ -20,6 +20,8 @@ and the counts named.
 """
 from __future__ import annotations
 
+import csv
+import io
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,8 +29,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .log import LogError
-from .streams import Reader, Series, is_boot_clock, iso
+from agrobot.orchestrator.units import base_unit
+
+from .log import CANONICAL, LogError
+from .mdf4 import mdf_tables
+from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
+from .streams import Reader, Series, Streams, is_boot_clock, iso
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
@@ -76,15 +82,13 @@ def _quoted_rows(path: Path) -> bool:
 
 def looks_like_table(path: Path) -> bool:
     """A text file of rows with the same number of fields, mostly numbers (a header allowed)."""
-    import re as _re
-
     try:
         lines = [_unquoted(x) for x in _lines(path, 12)]
     except OSError:
         return False
     if len(lines) < 3 or any(len(x) > 4000 for x in lines):
         return False
-    split = [_re.split(r"[,;\t|]|\s+", x.strip()) for x in lines[1:]]
+    split = [re.split(r"[,;\t|]|\s+", x.strip()) for x in lines[1:]]
     widths = {len(r) for r in split}
     numeric = sum(_is_number(v) for r in split for v in r) / max(sum(len(r) for r in split), 1)
     return len(widths) == 1 and numeric > 0.8
@@ -92,8 +96,6 @@ def looks_like_table(path: Path) -> bool:
 
 def read_table(path: Path) -> Table:
     """A table file with its header's units; a LogError names the file when it is not a table."""
-    import io
-
     suffix = path.suffix.lower()
     notes = []
     try:
@@ -143,8 +145,6 @@ def read_table(path: Path) -> Table:
 def _separator(path: Path, text: str | None = None) -> str:
     """The CSV's field separator: the one of , ; tab | that splits its first lines alike, else
     white space where it splits them alike (a text dump), else a comma."""
-    import csv
-
     if text is None:
         with open(path, newline="", encoding="utf-8", errors="replace") as f:
             sample = "".join(f.readline() for _ in range(20))
@@ -191,9 +191,6 @@ def parse_time(text: str | None) -> TimeSpec | None:
         raise LogError(f"--time {text!r}: expected COLUMN[unit] (s, ms, us, ns, h ...), COLUMN[datetime], "
                        f"SECONDS+NANOSECONDS, or DATE+TIME[datetime]")
     if unit and unit != "datetime":
-        from .signal_expressions import check_unit
-        from agrobot.orchestrator.units import base_unit
-
         b = check_unit(unit, f"--time {text!r}")
         if b.exponents != base_unit("s").exponents:
             raise LogError(f"--time {text!r}: {unit!r} is not a unit of time; expected s, ms, us, ns or datetime")
@@ -282,8 +279,6 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                     raise LogError(f"{where}: --time {spec.text}: column {cols[0]!r} holds text "
                                    f"({f[cols[0]].iloc[0]!r}); for date strings write --time '{cols[0]}[datetime]'")
                 if spec.unit:
-                    from agrobot.orchestrator.units import base_unit
-
                     table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
                 else:
                     factor, how = _magnitude_unit(x)
@@ -309,8 +304,6 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                 table.t, note = _datetime(f[c].astype(str), f"{where}: column {c!r}")
                 table.time_how = f"{c} ({note}; found by name)"
             elif c in table.units:
-                from .signal_expressions import check_unit
-
                 table.t = _numbers(f[c], where, c) * check_unit(table.units[c], f"{where}: column {c!r}").factor
                 table.time_how = f"{c} [{table.units[c]}] (found by name)"
             else:
@@ -367,8 +360,6 @@ def _clean(table: Table) -> None:
 
 def mdf_groups(path: Path) -> list[Table]:
     """An MDF4 file's channel groups as tables, each on its own clock (measurements.mdf4)."""
-    from .mdf4 import mdf_tables
-
     return [Table(path, g.name, g.frame, g.units, t=g.t, time_how=g.time_how, notes=g.notes)
             for g in mdf_tables(path)]
 
@@ -502,10 +493,6 @@ def table_streams(paths: list[Path], options, source: Path):
     """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
     table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
     v, yaw_rate, x, y: SI, the log's convention, unless the header gives a unit)."""
-    from .log import CANONICAL
-    from .signal_expressions import SignalSpec, evaluate, target_unit, unknown_name
-    from .streams import Streams
-
     tables = read_tables(paths, options.time, options.rate, source,
                          tuple(n for s in options.signals for n in s.names))
     specs = list(options.signals)
