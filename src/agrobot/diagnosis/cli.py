@@ -1,11 +1,10 @@
 """``diagnose``: the diagnosis tool's sub-command.
 
 ``python -m agrobot --help`` loads this module; a deferred import's cost is measured on top of what
-that loads already (on a shared 2-core machine).
+that loads already.
 
-Imported where used: agrobot.api (start-up: 20-50 ms on every command, the API and its
-result classes), agrobot.diagnosis.pipeline (start-up: 1.5-4.5 s on every command, the replay, fitting and
-figure stack), agrobot.diagnosis.report (start-up: 1-3 s on every command, matplotlib).
+Imported where used: agrobot.diagnosis.pipeline (start-up: 0.75-0.85 s on every command, the replay,
+fitting and figure stack), agrobot.diagnosis.report (start-up: 0.7 s on every command, matplotlib).
 """
 from __future__ import annotations
 
@@ -13,6 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from agrobot.api import diagnose
 from agrobot.measurements.cli import add_recording_options, recording_options
 from agrobot.measurements.recording import describe
 from agrobot.orchestrator.cli import add_output_options
@@ -43,8 +43,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Exit 0 with a verdict (the strongest effect, 'unexplained' or 'none'); 2 when the log or study cannot be used (the
     verdict 'cannot decide' and the reason are still written)."""
-    from agrobot.api import diagnose
-
     from .pipeline import CANNOT_DECIDE
 
     result = diagnose(args.log, args.study, args.out, fit_fraction=args.fit_fraction, min_gain=args.min_gain,

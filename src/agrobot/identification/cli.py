@@ -1,16 +1,10 @@
-"""``identify``: the identification tool's sub-command and its study table ([identification]).
-
-``python -m agrobot --help`` loads this module; a deferred import's cost is measured on top of what
-that loads already (on a shared 2-core machine).
-
-Imported where used: agrobot.api (start-up: 20-50 ms on every command, the API and its
-result classes).
-"""
+"""``identify``: the identification tool's sub-command and its study table ([identification])."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
+from agrobot.api import identify
 from agrobot.measurements.cli import add_recording_options, recording_options
 from agrobot.measurements.recording import describe
 from agrobot.orchestrator.cli import add_output_options, add_set_option
@@ -40,8 +34,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Parse, identify through agrobot.api, print."""
-    from agrobot.api import identify
-
     is_study = args.source.suffix in (".toml", ".yaml", ".yml")
     found = identify(args.source, study=None if is_study else args.study, method=args.method, set=args.set,
                      period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,
