@@ -27,6 +27,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from agrobot.identification.driving import forward_jacobian
+from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
@@ -442,8 +443,6 @@ class Replay:
 
 def _named(need: str, columns) -> str:
     """A missing need in words, with the log's column that looks like it (YawRate for yaw_rate)."""
-    from agrobot.identification.ordinary_driving import similar_columns
-
     text = NEED_TEXT.get(need, need)
     near = similar_columns(columns, need) if need in ("delta", "delta_cmd", "yaw_rate", "v", "x", "y") else []
     return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")

@@ -10,7 +10,7 @@ there and the verdict calls its rule.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar, Mapping
 
 from .plausibility import VehicleContext
@@ -31,8 +31,6 @@ class Parameter:
     def widened(self, value: float) -> "Parameter | None":
         """This parameter with the bound ``value`` ended on moved to the physical limit, or None
         when that bound is the limit already (then the value is not identifiable from the log)."""
-        from dataclasses import replace
-
         lo, hi = self.limit or (self.lower, self.upper)
         span = self.upper - self.lower
         if abs(value - self.upper) <= 5e-3 * span and hi > self.upper:

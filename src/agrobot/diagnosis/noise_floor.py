@@ -20,6 +20,8 @@ import math
 import numpy as np
 from scipy.signal import welch
 
+from .replay import aligned_residuals, antenna_track
+
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
 
 
@@ -48,8 +50,6 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     if not {"position", "speed"} & set(replay.stages):
         floors["_sensors"] = sensors
         return floors
-    from .replay import aligned_residuals, antenna_track
-
     # GPS white level: from the aligned position residual, window by window, each axis
     rows = np.concatenate([replay.windows["fit"], replay.windows["test"]])
     nominal = replay.predicted("position", values)

@@ -8,8 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
+from agrobot.identification.from_log import finite_for_json, read_uneven
+from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
 from agrobot.measurements import LogError
+from agrobot.measurements.audit import require_causal
+from agrobot.measurements.recording import ImportOptions
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
+from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
@@ -17,6 +22,7 @@ from .baseline import baseline_from_study
 from .candidates import CannotDecide, CandidateFit, Replay
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
+from .mcap import write_diagnosis_mcap
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
 from .unexplained import RATIO, signature, stage_check
@@ -165,10 +171,6 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
     held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
     samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
-    from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
-    from agrobot.measurements.audit import require_causal
-    from agrobot.orchestrator.errors import InputError
-
     p = baseline.tractor
     L = p.l_f + p.l_r
     ours = {"understeer_gradient": (p.C_r * p.l_r - p.C_f * p.l_f) * p.m / (p.C_f * p.C_r * L),
@@ -343,34 +345,16 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
                     "findings": []}
     try:
-        study = load_study(study_path)
-        baseline = baseline_from_study(study)
-        from agrobot.measurements.recording import ImportOptions
-
-        recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
-        from agrobot.identification.from_log import read_uneven
-
-        # a response leading its input is not refused here: its finding is judged as a candidate (steering_clock)
-        frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
-        if imported is not None:
-            result["recording"] = imported
-        frame, note = coarser_clock(frame)
-        note = "; ".join(x for x in (stretch, note) if x) or None
-        replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+        study, baseline, frame, replay, note = _replay_of(log_path, study_path, result, fit_fraction, resample,
+                                                          recording, split)
     except (LogError, CannotDecide) as exc:
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
         result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"
         result["split_time"] = float("nan")
         return result, partial(_write, result=result, plots=[])
     say = progress or (lambda text: None)
-    result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
-                                                  study_path.name)
-    if mismatch:
-        mismatch += " (no --study given: the default study was used)" if default_study else ""
-        say(f"warning: {mismatch}")
-    if identify and "yaw" in replay.stages:
-        say("identifying the vehicle on the same log (the model identify fits)")
-        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen)
+    mismatch = _vehicle_of_log(result, replay, frame, study, baseline, study_path.name, default_study,
+                               identify, log_path, say)
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}; "
         f"held out: {held_part(replay)}")
@@ -380,24 +364,82 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         say(replay.side_slip_note())
     sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
     say("effects selected; judging the stages against their noise floors")
-    base = sel.base
     final, floors = sel.final, sel.floors
-    judged = replay.stages
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
-              for s in judged}
+              for s in replay.stages}
+    _describe_selection(result, replay, sel)
+    effects, options, unidentifiable = _judged_effects(sel, baseline)
+    unexplained = _unexplained(checks)
+    result["effects"] = effects + ([unexplained] if unexplained else [])
+    result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
+                                  for e in unidentifiable]
+    result["audit"] = explained_findings(audit_findings(replay.frame.attrs), effects)
+    _conclude(result, replay, baseline, sel, effects, unexplained, unidentifiable, identified, min_gain)
+    result["inconclusive"] = sel.inconclusive
+    result["selection_trace"] = sel.trace
+    result["warnings"] = _warnings(replay, sel.base, floors) + ([note] if note else []) + (
+        [replay.split_note] if replay.split_note else [])
+    if mismatch:
+        result["warnings"].insert(0, mismatch)
+    _stage_results(result, replay, sel, checks, effects, baseline)
+    return result, partial(_write_all, result=result, replay=replay, sel=sel, study=study, options=options,
+                           log_path=log_path, plots=plots, say=say, mcap=mcap)
+
+
+def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, resample: bool, recording, split: str):
+    """(study, baseline, frame, replay, note): the study's baseline and the log read for its vehicle
+    (a recording with the study's steering ratio and wheelbase; a clock with gaps cut to its longest
+    stretch; a long fast log averaged down, coarser_clock), replayed; ``note`` says what was changed.
+    Raises LogError or CannotDecide."""
+    study = load_study(study_path)
+    baseline = baseline_from_study(study)
+    recording = (recording or ImportOptions()).for_vehicle(study)     # the study's steering ratio, wheelbase
+    # a response leading its input is not refused here: its finding is judged as a candidate (steering_clock)
+    frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
+    if imported is not None:
+        result["recording"] = imported
+    frame, note = coarser_clock(frame)
+    note = "; ".join(x for x in (stretch, note) if x) or None
+    replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+    return study, baseline, frame, replay, note
+
+
+def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_name: str, default_study: bool,
+                    identify: bool, log_path, say) -> str | None:
+    """The log's own vehicle against the study's (``log_vehicle``; the mismatch warning returned, or
+    None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
+    (``identified_vehicle``)."""
+    result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
+                                                  study_name)
+    if mismatch:
+        mismatch += " (no --study given: the default study was used)" if default_study else ""
+        say(f"warning: {mismatch}")
+    if identify and "yaw" in replay.stages:
+        say("identifying the vehicle on the same log (the model identify fits)")
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen)
+    return mismatch
+
+
+def _describe_selection(result: dict, replay: Replay, sel) -> None:
+    """What the selection stood on: the split, the baseline's refitted values, each judged stage's
+    noise level and floor, the stages judged and those not."""
+    judged = replay.stages
     result["split_time"] = replay.t_split if replay.split == "tail" else float("nan")
     result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
                        "why": replay.split_note}
-    result["baseline_refit"] = {k: base.values[k] for k in REFIT}
+    result["baseline_refit"] = {k: sel.base.values[k] for k in REFIT}
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
-    result["noise_floor"] = {s: floors[s] for s in judged} | {"sensors": floors["_sensors"]}
+    result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
+
+
+def _judged_effects(sel, baseline) -> tuple[list[dict], list, list[dict]]:
+    """(effects, study options, unidentifiable): the final model's effects as JSON (finding_json);
+    a parameter that ends on its bound is not an answer: the effect is "not identifiable from this
+    log" (unidentifiable), unless the parameter is secondary (then that value alone is noted)."""
     effects = [finding_json(f, baseline, sel.inconclusive) for f in sel.effects]
     options = [o for e in effects for o in (e.pop("_options") or [])]
-    unexplained = _unexplained(checks)
-    result["effects"] = effects + ([unexplained] if unexplained else [])
-    # a parameter that ends on its bound is not an answer: the effect is "not identifiable from this log"
     unidentifiable = [e for e in effects if any(p["at_bound"] and not p["secondary"] for p in e["fitted"].values())]
     for e in effects:                   # a secondary parameter on its bound: the effect stands, that value does not
         for n, p in e["fitted"].items():
@@ -408,15 +450,19 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         e["not_identifiable"] = "; ".join(
             f"{n} ended on its {p['at_bound']} bound {p['bounds'][0 if p['at_bound'] == 'lower' else 1]:g} {p['unit']}"
             for n, p in bound.items())
-    result["not_identifiable"] = [{"id": e["id"], "why": f"not identifiable from this log: {e['not_identifiable']}"}
-                                  for e in unidentifiable]
-    result["audit"] = explained_findings(audit_findings(replay.frame.attrs), effects)
+    return effects, options, unidentifiable
+
+
+def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], unexplained: dict | None,
+              unidentifiable: list[dict], identified: dict, min_gain: float) -> None:
+    """The verdict (diagnosis.verdict.conclude at the log's median moving speed), with the bullets
+    of its agreement with identify's model and of every independent estimate that disagrees."""
     p = baseline.tractor
     moving = replay.speed[replay.speed > replay.min_speed]
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
-    same_stretches(identified, replay, final.values)
-    verdict["bullets"] += agreement(identified, effects, sel, min_gain, floors.get("yaw", 0.0), held_part(replay))
+    same_stretches(identified, replay, sel.final.values)
+    verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"]:
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
@@ -426,12 +472,13 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     result["verdict_status"] = verdict["status"]
     result["verdict_statement"] = verdict["statement"]
     result["verdict_bullets"] = verdict["bullets"]
-    result["inconclusive"] = sel.inconclusive
-    result["selection_trace"] = sel.trace
-    result["warnings"] = _warnings(replay, base, floors) + ([note] if note else []) + (
-        [replay.split_note] if replay.split_note else [])
-    if mismatch:
-        result["warnings"].insert(0, mismatch)
+
+
+def _stage_results(result: dict, replay: Replay, sel, checks: dict, effects: list[dict], baseline) -> None:
+    """Each stage's judgement (stage_check, the baseline's held-out RMS, the RMS without each found
+    effect; the stages not judged with why), its residual evidence under the baseline and the final
+    model, and the findings of the selection's first step (each effect alone against the baseline)."""
+    judged, base, final = replay.stages, sel.base, sel.final
     result["stages"] = {s: {**{k: v for k, v in checks[s].items() if k not in ("correlates_with", "extension", "whiteness")},
                             "rms_baseline_test": base.rmse_test[s],
                             "rms_without": {f.effect.id: f.rmse_before[SIGNALS[s][0]] for f in sel.effects if s in f.stages}}
@@ -444,8 +491,6 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     for item in items:
         item.pop("_options", None)
     result["findings"] = items
-    return result, partial(_write_all, result=result, replay=replay, sel=sel, study=study, options=options,
-                           log_path=log_path, plots=plots, say=say, mcap=mcap)
 
 
 def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log_path, plots: bool, say,
@@ -472,14 +517,10 @@ def _write_all(out: Path, result: dict, replay: Replay, sel, study, options, log
         atomic_write(out / "extended_study.toml", lambda p: p.write_text(text))
     _write(out, result, files)
     if mcap:
-        from .mcap import write_diagnosis_mcap
-
         say("diagnosis.mcap")
         write_diagnosis_mcap(replay, sel.base.values, sel.final.values, out / "diagnosis.mcap", str(log_path))
 
 
 def _write(out: Path, result: dict, plots: list[str]) -> None:
-    from agrobot.identification.from_log import finite_for_json
-
     write_json(out / "diagnosis.json", finite_for_json(result))
     atomic_write(out / "report.md", lambda p: p.write_text(markdown(result, plots)))

@@ -16,8 +16,10 @@ from dataclasses import replace
 from typing import Mapping
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 
 from agrobot.components.models import steering_equivalent
+from agrobot.identification.driving import DrivingLog, Segments, YawModel
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, zoh_discretize)
@@ -231,8 +233,6 @@ def blocked_recursion(A: np.ndarray, b: np.ndarray, row, block: int = 0) -> np.n
 
 def integrate(x: np.ndarray, h: float) -> np.ndarray:
     """Cumulative trapezoid from 0 (scipy), on the log's even step ``h``."""
-    from scipy.integrate import cumulative_trapezoid
-
     return cumulative_trapezoid(x, dx=h, initial=0.0)
 
 
@@ -308,8 +308,6 @@ class SaturatedYawReplay:
 
     def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
                  v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0) -> None:
-        from agrobot.identification.driving import DrivingLog, Segments, YawModel
-
         n = len(t)
         P, B = max(2, int(round(piece / h))), int(round(burn_in / h))
         rows = [(max(0, a - B), a, min(n, a + P)) for a in range(0, n, P)]
@@ -333,8 +331,6 @@ class SaturatedYawReplay:
     def yaw_rates(self, sets: list[Mapping[str, float]], inputs: list[np.ndarray]) -> list[np.ndarray]:
         """``yaw_rate`` under each set, driven by its wheel angle: the sets of one wheel angle in one
         batched simulation (YawModel.simulate_many), each row with its own relaxation lengths."""
-        from dataclasses import replace as _replace
-
         p = self.params
         Fzf, Fzr = self.loads
         S = len(self.rows)
@@ -350,7 +346,7 @@ class SaturatedYawReplay:
             else:                           # per row (rates() broadcasts them with the states)
                 sigma_f = np.repeat([p.sigma_f * k for k in scales], S)
                 sigma_r = np.repeat([p.sigma_r * k for k in scales], S)
-            self.model.p = _replace(p, sigma_f=sigma_f, sigma_r=sigma_r)
+            self.model.p = replace(p, sigma_f=sigma_f, sigma_r=sigma_r)
             values = [{"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
                        "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
                        "friction": v["tyre_friction"], "shape": v["tyre_shape"],

@@ -6,12 +6,16 @@ import math
 import re
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
+from matplotlib.ticker import StrMethodFormatter
 import numpy as np
 
+from agrobot.measurements.recording import describe
 from agrobot.orchestrator.atomic_files import atomic_write
 
 from .catalogue import DISPLAY, SIGNALS
-from .evidence import cross_correlation, spectrum
+from .evidence import AMPLITUDE_BINS_DEG, SPEED_BINS, binned, cross_correlation, spectrum
 from .unexplained import RATIO
 
 UNIT_SCALE = DISPLAY          # every number of the report and its plots: angles in degrees, SI otherwise
@@ -23,9 +27,7 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     """The stage's measured and simulated signal, residual, spectrum and cross-correlation;
     ``levels`` (the stage's judgement: floor, healthy_level, misfit) draws the RMS levels the verdict
     compares the residual with."""
-    import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     k, unit = UNIT_SCALE[stage]
     rows = 1 if stage == "position" else 2
@@ -160,15 +162,27 @@ def split_sentence(result: dict) -> str:
 
 
 def markdown(result: dict, plots: list[str]) -> str:
+    """report.md: the verdict and every effect judged, each stage's residual against its noise floor,
+    each catalogue effect alone against the baseline, the baseline's residuals, the figures."""
     lines = [f"# Diagnosis of `{result['log']}`", "",
              f"Baseline model: `{result['study']}`. {split_sentence(result)} {UNITS_NOTE}", "",
              f"## Verdict: **{result['verdict']}**", ""]
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
         return "\n".join(lines)
-    if result.get("recording"):
-        from agrobot.measurements.recording import describe
+    lines += _verdict_lines(result)
+    lines += _stage_table(result)
+    lines += _findings_table(result)
+    lines += _residual_lines(result)
+    lines += [""] + [f"![{p}]({p})" for p in plots] + [""]
+    return "\n".join(lines)
 
+
+def _verdict_lines(result: dict) -> list[str]:
+    """The verdict's statement and bullets, the identified vehicle, every effect judged with the
+    study option that switches it on, the inconclusive pairs and the warnings."""
+    lines = []
+    if result.get("recording"):
         lines += ["The log was imported from a raw recording (details in diagnosis.json, `recording`):", "", "```",
                   describe(result["recording"]), "```", ""]
     lines += [f"{result.get('verdict_statement', '')} ({result.get('verdict_status', '')}).", ""]
@@ -189,18 +203,25 @@ def markdown(result: dict, plots: list[str]) -> str:
                       f"against {tie['delta_bic'][1]:.0f}); {a} is kept. Separate them with a new run, {tie['experiment']}."]
     for w in result.get("warnings", []):
         lines += ["", f"> Warning: {w}"]
-    lines += ["", "## Residual by stage against the noise floor (held-out RMS)", "",
-              "The floor is the sensors' white noise, estimated from the log (top of the residual spectrum; for the",
-              "position and speed stages propagated through the dead reckoning). 'without X': the final model",
-              "refitted without effect X. 'healthy': what a tractor with no fault, described exactly by the",
-              "study, leaves in this log's replay (the baseline's own simplifications: the steering's first-order",
-              "equivalent, a quantised wheel-angle sensor; see below). A stage is misfit above "
-              f"{RATIO:.1f} x its floor and a material excess over the healthy level.", "",
-              "| " + " | ".join(["stage", "unit", "floor", "healthy", "baseline"]
-                                + [f"without {e['id']}" for e in result["effects"] if e["id"] != "unexplained"]
-                                + ["final", "x floor", "excess over healthy (materiality)", "data-driven extension"]) + " |",
-              "|---|---|---:|---:|---:|" + "---:|" * sum(e["id"] != "unexplained" for e in result["effects"])
-              + "---:|---:|---:|---|"]
+    return lines
+
+
+def _stage_table(result: dict) -> list[str]:
+    """Each stage's held-out RMS against its floor and healthy level: baseline, without each found
+    effect, final (x floor, excess over healthy against the materiality), the data-driven extension;
+    then how each healthy level was found."""
+    lines = ["", "## Residual by stage against the noise floor (held-out RMS)", "",
+             "The floor is the sensors' white noise, estimated from the log (top of the residual spectrum; for the",
+             "position and speed stages propagated through the dead reckoning). 'without X': the final model",
+             "refitted without effect X. 'healthy': what a tractor with no fault, described exactly by the",
+             "study, leaves in this log's replay (the baseline's own simplifications: the steering's first-order",
+             "equivalent, a quantised wheel-angle sensor; see below). A stage is misfit above "
+             f"{RATIO:.1f} x its floor and a material excess over the healthy level.", "",
+             "| " + " | ".join(["stage", "unit", "floor", "healthy", "baseline"]
+                               + [f"without {e['id']}" for e in result["effects"] if e["id"] != "unexplained"]
+                               + ["final", "x floor", "excess over healthy (materiality)", "data-driven extension"]) + " |",
+             "|---|---|---:|---:|---:|" + "---:|" * sum(e["id"] != "unexplained" for e in result["effects"])
+             + "---:|---:|---:|---|"]
     by_stage = next((e["by_stage"] for e in result["effects"] if e["id"] == "unexplained"), {})
     for stage, st in result.get("stages", {}).items():
         k, unit = UNIT_SCALE[stage]
@@ -220,16 +241,27 @@ def markdown(result: dict, plots: list[str]) -> str:
     lines += ["", "How the healthy level was found:", ""]
     lines += [f"- {stage}: {st.get('healthy_how', 'the noise floor')}" for stage, st in result.get("stages", {}).items()
               if st.get("judged", True)]
-    lines += [""]
-    lines += ["## Each catalogue effect alone against the baseline, best first", "",
-              "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",
-              "|---|---|---:|---:|---|---|---|"]
+    return lines + [""]
+
+
+def _findings_table(result: dict) -> list[str]:
+    """Each catalogue effect fitted alone against the baseline, best first: dBIC, held-out gain,
+    parameters, supported or why not."""
+    lines = ["## Each catalogue effect alone against the baseline, best first", "",
+             "| effect | subsystem | dBIC | held-out gain | parameters | supported | why not |",
+             "|---|---|---:|---:|---|---|---|"]
     for f in result["findings"]:
         params = ", ".join(f"{k} = {v:.4g}" for k, v in f["parameters_display"].items())
         lines.append(f"| {f['id']} | {f['subsystem']} | {f['delta_bic']:.1f} | "
                      f"{100 * f['held_out_gain']:.1f}% | {params} | {'yes' if f['supported'] else 'no'} | "
                      f"{'; '.join(f['reasons'])} |")
-    lines += ["", "## Baseline residuals", ""]
+    return lines
+
+
+def _residual_lines(result: dict) -> list[str]:
+    """The baseline's residual per stage: RMS (fit, held out), mean, cross-correlations against
+    their 95 % bound, mean by speed, RMS by steering amplitude."""
+    lines = ["", "## Baseline residuals", ""]
     for stage, ev in result["residuals"].items():
         k, unit = UNIT_SCALE[stage]
         lines.append(f"- **{stage}** [{unit}]: RMS {k * ev['rms_fit']:.4g} (fit) / {k * ev['rms_test']:.4g} (held out)"
@@ -245,18 +277,13 @@ def markdown(result: dict, plots: list[str]) -> str:
             cells = ", ".join(f"{b['from']:.0f}-{b['to']:.0f} deg: rms {k * b['rms']:.3g}"
                               for b in ev["by_steering_amplitude_deg"])
             lines.append(f"  - RMS [{unit}] by |delta_cmd|: {cells}")
-    lines += [""] + [f"![{p}]({p})" for p in plots] + [""]
-    return "\n".join(lines)
+    return lines
 
 
 def binned_figure(replay, base: dict, winner: dict | None, path: Path) -> Path:
     """Residual mean (with its standard error) by speed and RMS by steering amplitude, for the
     steering and yaw stages, baseline against the winner."""
-    import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from .evidence import AMPLITUDE_BINS_DEG, SPEED_BINS, binned
 
     stages = [s for s in ("steering", "yaw") if s in replay.stages]
     fig, ax = plt.subplots(max(len(stages), 1), 2, figsize=(12, 3 * max(len(stages), 1)), squeeze=False)
@@ -320,9 +347,7 @@ def verdict_title(result: dict) -> str:
 def floors_figure(result: dict, path: Path) -> Path:
     """Held-out residual RMS of each stage in multiples of its noise floor: baseline, the final
     model without each found effect, the final model, and the data-driven extension."""
-    import matplotlib
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     stages = [s for s, st in result["stages"].items() if st.get("judged", True)]
     found = [e["id"] for e in result["effects"] if e["id"] != "unexplained"]
@@ -349,8 +374,6 @@ def floors_figure(result: dict, path: Path) -> Path:
     ax.hlines([st.get("misfit_level", RATIO * st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45,
               color="#d6604d", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
     ax.set_yscale("log")
-    from matplotlib.ticker import StrMethodFormatter
-
     ax.yaxis.set_major_formatter(StrMethodFormatter("{x:g}")), ax.yaxis.set_minor_formatter(StrMethodFormatter("{x:g}"))
     ax.set_xticks(range(len(stages)), [f"{s}\nfinal: {'MISFIT' if result['stages'][s]['misfit'] else 'no misfit'}\nfloor "
                                        f"{UNIT_SCALE[s][0] * result['stages'][s]['floor']:.2g} {UNIT_SCALE[s][1]}"

@@ -47,6 +47,9 @@ from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS
 from .effect import Effect, Parameter
+from .effects.steering_ratio_curve import DELTA_KEY
+from .effects.tyre_saturation import LATERAL_KEY
+from .verdict import audit_findings
 
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
@@ -147,13 +150,9 @@ class Selector:
                  saturation: dict | None = None) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
         self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
-        from .effects.tyre_saturation import LATERAL_KEY
-
         moving = replay.speed > replay.min_speed
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
-        from .effects.steering_ratio_curve import DELTA_KEY
-
         delta = np.abs(np.nan_to_num(replay.delta))[moving] if "yaw" in replay.stages else np.zeros(0)
         self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0,
                             DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
@@ -271,8 +270,6 @@ class Selector:
     def audit_start(self) -> str | None:
         """The import audit's unresolved finding that the yaw rate answers the steering before it
         (response_leads_input) is a candidate like any effect: steering_clock starts from its lead."""
-        from .verdict import audit_findings
-
         lead = next((f for f in audit_findings(self.replay.frame.attrs)
                      if f["kind"] == "response_leads_input" and not f["resolved"]), None)
         effect = next((e for e in self.catalogue if e.id == "steering_clock"), None)

@@ -9,6 +9,10 @@ import math
 
 import numpy as np
 
+from agrobot.identification.ordinary_driving import study_plant
+from agrobot.orchestrator.study import load_study
+from agrobot.studies import shipped
+
 CANDIDATES = ("figure8.toml", "passenger_car.toml", "f1tenth.toml")
 MISMATCH = 0.5        # a wheelbase off by more than a factor e^0.5 = 1.65 is another vehicle (an effective
                       # wheelbase from a command runs 20-50 % long: the gain and understeer)
@@ -40,11 +44,6 @@ def log_vehicle(frame) -> dict | None:
 def study_check(frame, wheelbase: float, study_name: str) -> tuple[dict | None, str | None]:
     """(the log's vehicle, a warning naming the shipped study that fits better) when its
     wheelbase is off the study's by more than MISMATCH in log ratio; (vehicle, None) otherwise."""
-    from agrobot.orchestrator.study import load_study
-    from agrobot.studies import shipped
-
-    from agrobot.identification.ordinary_driving import study_plant
-
     mine = log_vehicle(frame)
     if mine is None or not mine["wheelbase"] > 0:
         return mine, None

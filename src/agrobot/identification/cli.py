@@ -4,10 +4,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agrobot.api import identify
+from agrobot.measurements.cli import add_recording_options, recording_options
+from agrobot.measurements.recording import describe
+from agrobot.orchestrator.cli import add_output_options, add_set_option
+from agrobot.orchestrator.observers import timed_progress
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from agrobot.orchestrator.cli import add_output_options, add_set_option
-
     p.add_argument("source", type=Path, help="study file (.toml/.yaml), log (.csv/.parquet), or a raw recording "
                    "(a folder of *.nmea files and CAN logs)")
     add_output_options(p, "output folder (identification.json, figures)", plots=True)
@@ -25,18 +29,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
-    from agrobot.measurements.cli import add_recording_options
-
     add_recording_options(p)
 
 
 def run(args: argparse.Namespace) -> int:
     """Parse, identify through agrobot.api, print."""
-    from agrobot.api import identify
-    from agrobot.orchestrator.observers import timed_progress
-    from agrobot.measurements.cli import recording_options
-    from agrobot.measurements.recording import describe
-
     is_study = args.source.suffix in (".toml", ".yaml", ".yml")
     found = identify(args.source, study=None if is_study else args.study, method=args.method, set=args.set,
                      period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
 from .driving import steady_state_gain
@@ -11,10 +13,7 @@ from .plots import _save
 
 
 def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]:
-    import matplotlib
-
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []

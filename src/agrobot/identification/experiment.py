@@ -12,6 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from agrobot.measurements import LogError, load_log
 from agrobot.measurements.audit import require_causal
+from agrobot.measurements.log import speed_estimate
 from agrobot.orchestrator.runner import simulate
 from agrobot.orchestrator.study import Study, StudyError
 from agrobot.orchestrator.units import UnitError, to_si
@@ -166,8 +167,6 @@ def read_log(path: Path, resample: bool = False, recording=None) -> tuple[pd.Dat
                        + "; ".join(f"no {c} ({WHY[c]})" for c in missing)
                        + f"; the log has {', '.join(map(str, frame.columns))}")
     if "v" not in frame:                              # the receiver's speed, else the track's, with a note
-        from agrobot.measurements.log import speed_estimate
-
         speed, source = speed_estimate(frame)
         if speed is not None:
             frame = frame.assign(v=speed)

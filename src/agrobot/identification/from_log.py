@@ -6,23 +6,27 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
+
+from agrobot.measurements import LogError, load_log
+from agrobot.measurements.audit import require_causal
+from agrobot.measurements.log import DEGREE_SUSPECT, check_log, persisted_audit, yaw_rate_in_radians
+from agrobot.measurements.recording import ImportOptions, is_recording
+from agrobot.orchestrator.atomic_files import atomic_write, write_json
+from agrobot.orchestrator.resolver import resolve
+
+from .driving_plots import write_driving_plots
+from .experiment import detect_period
+from .ordinary_driving import identify_driving
+from .pipeline import _json_default
+
 
 def _read(source: Path, resample: bool, recording, study, causal: bool = True):
     """The log as measurements.load_log reads it; a table with clock gaps or jitter (ordinary
     logging) is checked piece by piece between its gaps, each piece on its own even clock.
     ``causal``: refuse a log whose response leads its input (measurements.audit.require_causal);
     False leaves the unresolved finding on the log for a reader that judges it (the diagnosis)."""
-    import numpy as np
-    import pandas as pd
-
-    from agrobot.measurements import LogError, load_log
-    from agrobot.measurements.log import DEGREE_SUSPECT, check_log, yaw_rate_in_radians
-    from agrobot.measurements.recording import ImportOptions, is_recording
-
-
-    from agrobot.measurements.audit import require_causal
-    from agrobot.measurements.log import persisted_audit
-
     try:
         loaded = load_log(source, ("t",), resample_jitter=resample,
                           recording=(recording or ImportOptions()).for_vehicle(study))
@@ -63,9 +67,6 @@ def _read(source: Path, resample: bool, recording, study, causal: bool = True):
 def longest_stretch(frame, gap: float | None = None):
     """(the longest stretch of the log without a clock gap, on an even clock of its median step;
     (start, end) of it in the log's time). A gap: a step longer than max(0.5 s, 5 median steps)."""
-    import numpy as np
-    import pandas as pd
-
     t = frame["t"].to_numpy(float)
     step = float(np.median(np.diff(t)))
     cuts = np.flatnonzero(np.diff(t) > (gap or max(0.5, 5 * step))) + 1
@@ -85,8 +86,6 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
     (``causal``: as _read)."""
     frame, imported = _read(source, resample, recording, study, causal)
     t = frame["t"].to_numpy(float)
-    import numpy as np
-
     dt = np.diff(t)
     if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):
         even, (a, b) = longest_stretch(frame)
@@ -98,10 +97,6 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
 
 def wants_driving(source: Path, resample: bool, recording, study) -> bool:
     """True unless delta_cmd repeats itself with a period (a designed multisine experiment)."""
-    from agrobot.measurements import LogError
-
-    from .experiment import detect_period
-
     frame, _ = _read(source, resample, recording, study)
     if "delta_cmd" not in frame or "delta" not in frame:
         return True
@@ -128,8 +123,6 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None):
     """(report, the figures' data): the ordinary-driving identification of a log
     (identification.ordinary_driving), nothing written."""
-    from .ordinary_driving import identify_driving
-
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
@@ -144,15 +137,9 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
                   progress=None) -> list[str]:
     """identification.json, the figures (when ``hidden``, the figures' data, is given) and
     extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
-    from agrobot.orchestrator.atomic_files import write_json
-
-    from .pipeline import _json_default
-
     out_dir = Path(out_dir)
     files = []
     if plots and hidden is not None:
-        from .driving_plots import write_driving_plots
-
         if progress is not None:
             progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
@@ -178,9 +165,6 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
     steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
     the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
-    from agrobot.orchestrator.resolver import resolve
-    from agrobot.orchestrator.atomic_files import atomic_write
-
     model = resolve(study)
     plant = model.find(role="yaw_plant")
     if not plant:

@@ -18,13 +18,20 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from agrobot.components.models.tyre import SHAPE_BOUNDS, linear_share_limit
 from agrobot.components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, TractorParameters
+from agrobot.measurements import LogError
+from agrobot.measurements.audit import minimum
+from agrobot.measurements.clocks import content_lag
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import StudyError
 
-from .driving import (Z95, DrivingLog, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
+from .comparisons import course_bias, pair
+from .driving import (Z95, DrivingLog, FitResult, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
@@ -83,9 +90,6 @@ def missing_text(frame, needs: dict[str, str]) -> str | None:
 
 
 def study_plant(study) -> tuple[str, TractorParameters]:
-    from agrobot.orchestrator.resolver import resolve
-    from agrobot.orchestrator.study import StudyError
-
     if study is None:
         return "rlf", TractorParameters()
     resolved = resolve(study)
@@ -159,13 +163,73 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                      progress=None, max_rate: float = 25.0) -> dict:
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
     what the log lacks."""
-    from agrobot.measurements import LogError
-    from agrobot.measurements.audit import minimum
-
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
     L = vehicle.wheelbase or (p.l_f + p.l_r)
+    input_name = _steering_input(frame, where, vehicle)
+    command = input_name == "delta_cmd"
+    log = even_grid(frame, input_name, max_rate=max_rate)
+    notes = list(log.notes)
+    notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
+                 "steering chain" if command else "input: the measured wheel angle delta")
+    min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes)
+    say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
+    say("judging on the held-out segments")
+    held = _judge_saturation(log, fits, min_gain)
+    saturation = not held.reasons
+    linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
+    final = nl if saturation else linear
+    pred = held.sims[1] if saturation else held.sims[0]
+    params_json, stiff = _parameters(final, fits, saturation)
+    K, K_sd, understeer, char = _understeer(final, fits.free, L)
+    g = final.values.get("steer_gain", 1.0)
+    g_sd = final.std("steer_gain") if command else 0.0
+    linear_range = _linear_range(saturation, nl, log, min_speed)
+    # the independent check: steady-state regression inside the linear range
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=final.values["delay"])
+    ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
+    checks = physical_checks(frame, log, fits.model, final.values, test_segs)
+    comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
+                                        params_json.get("gyro_bias"), linear_range, L, min_speed)
+    report = {
+        "method": "output error, single-track model LPV in speed, segments held out",
+        "source": where, "model": model_name, "input": input_name,
+        "final_model": "tyre_saturation" if saturation else "linear",
+        "samples_per_second": 1 / log.h, "seconds_driven": driven,
+        "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
+                     "burn_in_s": BURN_IN, "min_speed": min_speed},
+        "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
+                    "axle_loads": list(fits.loads)},
+        "understeer_gradient": understeer,
+        "characteristic_speed": char,
+        "delay": params_json["delay"],
+        "held_out_fit": _held_out_fit(log, test_segs, held, pred, study),
+        "cornering_stiffness": stiff,
+        "parameters": params_json,
+        "steady_state_gain": {"unit": "(rad/s) per rad of input", "rows": _gain_rows(log, min_speed, K, K_sd, L, g, g_sd),
+                              "formula": "g v / (L + K v^2)"},
+        "linear_range": linear_range,
+        "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
+        "residual_by_lateral_acceleration": _residual_bins(held),
+        "steady_state_regression": ss.as_dict() if ss else
+        {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
+         "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
+        "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
+        "comparisons": comparisons,
+        "physical_checks": checks,
+        "notes": notes,
+    }
+    report["_plot"] = {"log": log, "model": fits.model, "test": test_segs, "test_pred": pred, "linear": linear.values,
+                       "nl": nl.values, "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
+    return report
+
+
+def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
+    """The log's steering input: the measured wheel angle ``delta``, else the command ``delta_cmd``;
+    raises when the vehicle has no yaw dynamics to identify or the log lacks a column it needs
+    (a torque-commanded steering needs the measured angle)."""
     if vehicle.steering == "none" or vehicle.drive != "ackermann":
         why = vehicle.not_applicable().get("yaw")
         raise NotEnoughDriving(f"{where}: the yaw dynamics are not identified: {why}")
@@ -177,12 +241,14 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     if vehicle.steering == "torque" and "delta" not in frame:
         raise NotEnoughDriving(f"{where}: the steering is commanded in torque (vehicle.steering = 'torque') and the "
                                f"log has no measured wheel angle delta: delta_cmd is not an angle the wheels follow")
-    input_name = "delta" if "delta" in frame else "delta_cmd"
-    command = input_name == "delta_cmd"
-    log = even_grid(frame, input_name, max_rate=max_rate)
-    notes = list(log.notes)
-    notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
-                 "steering chain" if command else "input: the measured wheel angle delta")
+    return "delta" if "delta" in frame else "delta_cmd"
+
+
+def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, notes: list[str]):
+    """(min_speed, segments, seconds driven): the log cut into segments of driving above
+    max(0.2, 0.1 x the 90th percentile of |v|); raises NotEnoughDriving below MIN_DRIVING s (past
+    its floor, measurements.audit.minimum; above it a note), without two fit and one held-out
+    segment, or when the steering asks for less than MIN_EXCITATION rad/s of yaw rate (std of v u / L)."""
     min_speed = max(0.2, 0.1 * float(np.percentile(np.abs(log.v), 90)))
     segs = cut_segments(log, min_speed, SEGMENT, BURN_IN)
     driven = segs.seconds * log.h
@@ -204,9 +270,30 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
                                f"of steering at {max(np.median(log.v), 0.5):.2g} m/s)")
-    say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+    return min_speed, segs, driven
 
-    # gyro bias standing still
+
+@dataclass
+class _Fits:
+    """identify_driving's fits on the fit segments: the linear model everywhere and where the tyres
+    are linear (|a_y| <= LINEAR_TYRE; the same fit when that part is short), the tyre-saturation
+    model; the gyro bias standing still (None: fitted)."""
+    model: YawModel
+    loads: tuple
+    free: list[FreeParameter]
+    free_nl: list[FreeParameter]
+    fit_segs: Segments
+    test_segs: Segments
+    linear: FitResult
+    linear_low: FitResult
+    nl: FitResult
+    bias_info: dict | None
+
+
+def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
+    """(fixed values, the bias's quantity): the gyro bias as the mean reading over the samples
+    standing still (|v| < STANDSTILL, at least 2 s; its std error with one independent sample per
+    0.5 s), else nothing fixed (the bias is fitted)."""
     still = np.abs(log.v) < STANDSTILL
     fixed: dict[str, float] = {}
     bias_info = None
@@ -215,6 +302,16 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         b, b_sd = float(rs.mean()), float(rs.std() / math.sqrt(max(1.0, still.sum() * log.h / 0.5)))
         fixed["gyro_bias"] = b
         bias_info = _quantity(b, b_sd, "rad/s", how=f"mean gyro reading over {still.sum() * log.h:.1f} s standing still")
+    return fixed, bias_info
+
+
+def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: str, p: TractorParameters, L: float,
+                command: bool, min_speed: float, driven: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
+    """The linear fit from the study's cornering coefficients per unit load (clipped to the
+    vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
+    again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
+    the linear one, the friction started near the data's top |a_y| / g, else near its upper bound."""
+    fixed, bias_info = _standstill_bias(log)
     free = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=False)
     Fz = YawModel(model_name, p, log, segs).loads
     lo, hi = cornering_bounds(vehicle)
@@ -240,16 +337,42 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     ay_fit = np.abs(log.a_y[fit_segs.idx][fit_segs.scored])
     mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
     nl = None
-    nl = None
     for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
         trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
         if nl is None or trial.rss < nl.rss:
             nl = trial
         if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
             break
-    say("judging on the held-out segments")
+    return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
+
+
+@dataclass
+class _HeldOut:
+    """The three fits simulated on the held-out segments (linear, saturation, linear in the linear
+    range), their residuals on the scored samples, and the verdict's numbers on tyre saturation."""
+    r_test: np.ndarray
+    sims: list
+    a_test: np.ndarray
+    y: np.ndarray
+    res_lin: np.ndarray
+    res_nl: np.ndarray
+    res_low: np.ndarray
+    hi_q: float
+    growth: float
+    gain_top: float
+    gain_all: float
+    dbic: float
+    reasons: list[str]
+
+
+def _judge_saturation(log: DrivingLog, fits: _Fits, min_gain: float) -> _HeldOut:
+    """Tyre saturation is found when dBIC (saturation - linear) < -10, the held-out RMS in the top
+    third of |a_y| falls by ``min_gain`` and the friction is off its bounds (``reasons``: what
+    failed). Beside it, ``growth``: the linear model's signed misfit at high |a_y| against its
+    standard error (n_eff from the fit's autocorrelation)."""
+    linear, linear_low, nl, test_segs = fits.linear, fits.linear_low, fits.nl, fits.test_segs
     r_test = log.r[test_segs.idx]
-    sims = model.simulate_many([linear.values, nl.values, linear_low.values], test_segs)
+    sims = fits.model.simulate_many([linear.values, nl.values, linear_low.values], test_segs)
     a_test = np.abs(log.a_y[test_segs.idx])[test_segs.scored]
     y = r_test[test_segs.scored]
     res_lin, res_nl = y - sims[0][test_segs.scored], y - sims[1][test_segs.scored]
@@ -266,7 +389,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     gain_top = 1 - rms(res_nl[top]) / max(rms(res_lin[top]), 1e-12)
     gain_all = 1 - rms(res_nl) / max(rms(res_lin), 1e-12)
     dbic = nl.bic - linear.bic
-    mu_param = next(q for q in free_nl if q.name == "friction")
+    mu_param = next(q for q in fits.free_nl if q.name == "friction")
     reasons = []
     if dbic >= -10:
         reasons.append(f"dBIC {dbic:.1f} is not below -10")
@@ -274,12 +397,14 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         reasons.append(f"held-out RMS at high |a_y| falls by {100 * gain_top:.1f} % < {100 * min_gain:.0f} %")
     if nl.at_bound(mu_param):
         reasons.append(f"the friction ended on its {nl.at_bound(mu_param)} bound: not identifiable from this log")
-    saturation = not reasons
-    final = nl if saturation else linear
-    final_name = "tyre_saturation" if saturation else "linear"
+    return _HeldOut(r_test, sims, a_test, y, res_lin, res_nl, res_low, hi_q, growth, gain_top, gain_all, dbic, reasons)
 
-    # per-segment held-out fit of the final model
-    pred = sims[1] if saturation else sims[0]
+
+def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, study) -> dict:
+    """The final model's held-out fit, 100 (1 - |y - y_model| / |y - mean y|), overall and per
+    segment, with a 95 % interval from a percentile bootstrap over the held-out segments (400
+    draws, seeded by the study)."""
+    r_test, y, sims = held.r_test, held.y, held.sims
     per_segment = []
     for i in range(len(test_segs.idx)):
         m = test_segs.scored[i]
@@ -288,7 +413,6 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                                 "fit_percent": fit_percent(r_test[i][m], pred[i][m]),
                                 "rms": float(np.sqrt(np.mean((r_test[i][m] - pred[i][m]) ** 2)))})
     overall = fit_percent(y, pred[test_segs.scored])
-    # interval: percentile bootstrap over the held-out segments of the pooled fit (seeded by the study)
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     rng = np.random.default_rng(getattr(getattr(study, "study", None), "seed", 0) or 0)
@@ -298,23 +422,38 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         boot.append(fit_percent(np.concatenate([pieces[k][0] for k in pick]), np.concatenate([pieces[k][1] for k in pick])))
     fit_lo, fit_hi = (float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))) if boot else (overall, overall)
     fit_sd = float(np.std(boot)) if boot else 0.0
+    return {"value": overall, "std": fit_sd, "interval": [fit_lo, fit_hi],
+            "unit": "%", "how": "100 (1 - |y - y_model| / |y - mean y|) on the held-out samples; "
+            "interval: 2.5-97.5 % of a bootstrap over the held-out segments", "per_segment": per_segment,
+            "linear_model": fit_percent(y, sims[0][test_segs.scored]),
+            "saturation_model": fit_percent(y, sims[1][test_segs.scored])}
 
-    # derived quantities with their intervals (delta method on the fit's covariance)
-    cf, cr = final.values["c_f"], final.values["c_r"]
-    K = understeer_gradient(cf, cr)
-    K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+
+def _parameters(final: FitResult, fits: _Fits, saturation: bool) -> tuple[dict, dict]:
+    """(parameters, cornering stiffnesses): every fitted parameter of the final model with its 95 %
+    interval and bounds, the standing-still gyro bias; each axle's stiffness C = c F_z [N/rad]
+    from its coefficient per unit load."""
     params_json = {}
-    for q in (free_nl if saturation else free):
+    for q in (fits.free_nl if saturation else fits.free):
         params_json[q.name] = _quantity(final.values[q.name], final.std(q.name), q.unit, (q.lower, q.upper),
                                         final.at_bound(q), meaning=q.meaning)
-    if bias_info:
-        params_json["gyro_bias"] = {**bias_info, "bounds": None, "identifiable": True}
+    if fits.bias_info:
+        params_json["gyro_bias"] = {**fits.bias_info, "bounds": None, "identifiable": True}
     stiff = {}
-    for key, q, load in (("front", "c_f", Fz[0]), ("rear", "c_r", Fz[1])):
+    for key, q, load in (("front", "c_f", fits.loads[0]), ("rear", "c_r", fits.loads[1])):
         entry = params_json[q]
         stiff[key] = {**_quantity(entry["value"] * load, entry["std"] * load, "N/rad"),
                       "identifiable": entry["identifiable"], "per_axle_load": entry,
                       **({"note": entry["note"]} if "note" in entry else {})}
+    return params_json, stiff
+
+
+def _understeer(final: FitResult, free: list[FreeParameter], L: float):
+    """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
+    its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|)."""
+    cf, cr = final.values["c_f"], final.values["c_r"]
+    K = understeer_gradient(cf, cr)
+    K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
@@ -331,8 +470,12 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     else:
         char = {"kind": "neutral steer", "value": math.inf, "std": math.inf, "unit": "m/s"}
     char["interval"] = [char["value"] - Z95 * char["std"], char["value"] + Z95 * char["std"]]
-    g = final.values.get("steer_gain", 1.0)
-    g_sd = final.std("steer_gain") if command else 0.0
+    return K, K_sd, understeer, char
+
+
+def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: float, g: float, g_sd: float) -> list[dict]:
+    """The steady-state yaw-rate gain G = g v / (L + K v^2) at 12 speeds up to the 99th percentile
+    of the driving's, with its 95 % interval (delta method on K and g)."""
     speeds = np.linspace(max(min_speed, 0.1), float(np.percentile(log.v[log.v >= min_speed], 99)), 12)
     gain_rows = []
     for s in speeds:
@@ -340,7 +483,13 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         dG_dK = -g * s ** 3 / (L + K * s * s) ** 2
         sd = math.sqrt((dG_dK * K_sd) ** 2 + (G / g * g_sd) ** 2)
         gain_rows.append({"speed": float(s), "gain": G, "interval": [G - Z95 * sd, G + Z95 * sd]})
-    delay_q = params_json["delay"]
+    return gain_rows
+
+
+def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: float) -> dict:
+    """How far in |a_y| the linear model holds: with saturation, where the Magic Formula's force
+    falls 5 % below the linear tyre's, mu g x share(C) (std by the delta method on mu and C);
+    without, the 99th percentile of the driving's |a_y|."""
     if saturation:
         mu, shape = nl.values["friction"], nl.values["shape"]
         share = linear_share_limit(shape)
@@ -348,67 +497,34 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         eps = 1e-4
         d_share = (linear_share_limit(min(shape + eps, SHAPE_BOUNDS[1])) - linear_share_limit(shape - eps)) / (2 * eps)
         lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
-        linear_range = {**_quantity(lin_range, lr_sd, "m/s2"),
-                        "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
-                               f"x {share:.3f} (shape {shape:.2f})"}
-    else:
-        top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
-        linear_range = {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
-                        "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
+        return {**_quantity(lin_range, lr_sd, "m/s2"),
+                "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
+                       f"x {share:.3f} (shape {shape:.2f})"}
+    top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
+    return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
+            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
 
-    # the independent check: steady-state regression inside the linear range
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=final.values["delay"])
-    ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
-    tyre = {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
-            "found": saturation, "why_not": reasons, "delta_bic": dbic,
-            "held_out_gain": gain_all, "held_out_gain_high_lateral": gain_top,
-            "misfit_at_high_lateral_t": growth, "high_lateral_from": hi_q,
+
+def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[FreeParameter], saturation: bool) -> dict:
+    """The tyre-saturation verdict: found or why not, dBIC, held-out gains, the misfit's growth at
+    high |a_y|, the fitted friction and shape with their intervals."""
+    return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
+            "found": saturation, "why_not": held.reasons, "delta_bic": held.dbic,
+            "held_out_gain": held.gain_all, "held_out_gain_high_lateral": held.gain_top,
+            "misfit_at_high_lateral_t": held.growth, "high_lateral_from": held.hi_q,
             "parameters": {k: params_json_nl for k, params_json_nl in
                            ((q.name, _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper),
                                                nl.at_bound(q), meaning=q.meaning)) for q in free_nl
                             if q.name in ("friction", "shape"))}}
-    not_identifiable = [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")]
-    checks = physical_checks(frame, log, model, final.values, test_segs)
-    comparisons = independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q,
-                                        params_json.get("gyro_bias"), linear_range, L, min_speed)
-    report = {
-        "method": "output error, single-track model LPV in speed, segments held out",
-        "source": where, "model": model_name, "input": input_name, "final_model": final_name,
-        "samples_per_second": 1 / log.h, "seconds_driven": driven,
-        "segments": {"fit": int(len(fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
-                     "burn_in_s": BURN_IN, "min_speed": min_speed},
-        "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
-                    "axle_loads": list(Fz)},
-        "understeer_gradient": understeer,
-        "characteristic_speed": char,
-        "delay": delay_q,
-        "held_out_fit": {"value": overall, "std": fit_sd, "interval": [fit_lo, fit_hi],
-                         "unit": "%", "how": "100 (1 - |y - y_model| / |y - mean y|) on the held-out samples; "
-                         "interval: 2.5-97.5 % of a bootstrap over the held-out segments", "per_segment": per_segment,
-                         "linear_model": fit_percent(y, sims[0][test_segs.scored]),
-                         "saturation_model": fit_percent(y, sims[1][test_segs.scored])},
-        "cornering_stiffness": stiff,
-        "parameters": params_json,
-        "steady_state_gain": {"unit": "(rad/s) per rad of input", "rows": gain_rows,
-                              "formula": "g v / (L + K v^2)"},
-        "linear_range": linear_range,
-        "tyre_saturation": tyre,
-        "residual_by_lateral_acceleration": {
-            "linear": _bins(a_test, res_lin, [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30]),
-            "linear_fitted_in_linear_range": _bins(a_test, res_low * np.sign(y), [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30],
-                                                    signed=True),
-            "saturation": _bins(a_test, res_nl, [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30])},
-        "steady_state_regression": ss.as_dict() if ss else
-        {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
-         "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
-        "not_identifiable": not_identifiable,
-        "comparisons": comparisons,
-        "physical_checks": checks,
-        "notes": notes,
-    }
-    report["_plot"] = {"log": log, "model": model, "test": test_segs, "test_pred": pred, "linear": linear.values, "nl": nl.values,
-                       "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
-    return report
+
+
+def _residual_bins(held: _HeldOut) -> dict:
+    """The held-out residual's RMS by |a_y| bin: the linear model, the linear model fitted in the
+    linear range (signed by the turn's direction, with its mean), the saturation model."""
+    edges = [0, 0.5, 1, 2, 3, 4, 6, 8, 10, 15, 30]
+    return {"linear": _bins(held.a_test, held.res_lin, edges),
+            "linear_fitted_in_linear_range": _bins(held.a_test, held.res_low * np.sign(held.y), edges, signed=True),
+            "saturation": _bins(held.a_test, held.res_nl, edges)}
 
 
 def held_out_misfit(report: dict, unseen) -> dict | None:
@@ -466,10 +582,6 @@ def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, d
     """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states),
     the delay (fit / cross-correlation of the gyro against the fitted model on the held-out
     segments: a timing the model misses shows as a lag), the gyro bias (fit / GNSS course)."""
-    from agrobot.measurements.clocks import content_lag
-
-    from .comparisons import course_bias, pair
-
     out = []
     if ss and "understeer_gradient" in ss.as_dict():
         k_ss = ss.as_dict()["understeer_gradient"]

@@ -8,9 +8,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.signal import lsim
 
 from agrobot.components.models import paper_models
-from agrobot.components.models.yaw_dynamics import TractorParameters
+from agrobot.components.models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical,
+                                                    transfer_function)
+from agrobot.measurements.recording import ImportOptions
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.atomic_files import write_json, write_table
 from agrobot.orchestrator.study import Study
@@ -20,6 +23,7 @@ from .experiment import (Experiment, IdentificationConfig, config_of, experiment
                          experiment_to_log, read_log, simulate_experiment)
 from .fitting import Fit, fit
 from .physical import rlfr_physical
+from .plots import root_notes, write_plots
 
 PAPER = {
     "models": {name: {"num": list(tf.num), "den": list(tf.den)} for name, tf in paper_models.IDENTIFIED.items()},
@@ -31,8 +35,6 @@ PAPER = {
 def starting_points(model: str, params: TractorParameters, speed: float) -> list[tuple]:
     """Extra NLS starts: the physical model with the given parameters at the experiment's speed,
     and the paper's identified model (when it has this structure)."""
-    from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, transfer_function
-
     starts = []
     if model in PHYSICAL_MODELS:
         starts.append(transfer_function(model, params, speed))
@@ -62,10 +64,6 @@ def analyse(exp: Experiment, models: list[str], delay: bool, params: TractorPara
 def simulate_fit(f: Fit, u: np.ndarray, fs: float) -> np.ndarray:
     """Output of the fitted continuous model for an input sampled at fs, linearly interpolated
     between samples (the measured steering angle is a sampled continuous signal)."""
-    from scipy.signal import lsim
-
-    from agrobot.components.models.yaw_dynamics import controllable_canonical
-
     A, B, C = controllable_canonical(f.num, f.den)
     t = np.arange(len(u)) / fs
     _, y, _ = lsim((A, B.reshape(-1, 1), C.reshape(1, -1), np.zeros((1, 1))), u, t, interp=True)
@@ -190,8 +188,6 @@ def log_identification(path: Path, period: float | None = None, speed: float | N
     ``write(folder, plots)`` writes identification.json and the figures. ``study``: the vehicle it
     comes from (its yaw plant's m, l_f, l_r, stiffnesses for the physical back-out and the starts;
     its [vehicle] table for reading a recording), else the paper's tractor."""
-    from agrobot.measurements.recording import ImportOptions
-
     params = tractor_parameters(study)
     frame, imported = read_log(path, resample, (recording or ImportOptions()).for_vehicle(study))
     exp = experiment_from_log(frame, str(path), period, speed, band)
@@ -208,8 +204,6 @@ def write_outputs(report: dict, analyses: dict, out_dir: Path, plots: bool) -> N
     out_dir = Path(out_dir)
     write_json(out_dir / "identification.json", json.loads(json.dumps(report, default=_json_default)))
     if plots:
-        from .plots import write_plots
-
         write_plots(analyses, report["main_speed"], out_dir)
 
 
@@ -260,7 +254,5 @@ def summary(report: dict) -> str:
                      f"C_r {best['C_r']:.0f} N/rad, sigma_f {best['sigma_f']:.4f} m, sigma_r {best['sigma_r']:.4f} m"
                      f"; paper: 8000+-500, 90000+-7000, 0.1942, 1.6657"
                      + ("; several solutions fit about equally" if phys["several_fit_equally"] else ""))
-    from .plots import root_notes
-
     notes = root_notes(report)
     return "\n".join(lines + ([""] + notes if notes else []))

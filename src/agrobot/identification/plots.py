@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
 
@@ -65,14 +67,19 @@ def _db_limits(values: np.ndarray) -> tuple[float, float]:
 
 
 def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
-    import matplotlib
-
+    """frf.png, nonlinear_distortion.png and poles_zeros.png in ``out_dir``; returns their paths."""
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     out_dir.mkdir(parents=True, exist_ok=True)
-    written = []
     main = analyses[main_speed]
+    return [_frf_figure(main, main_speed, out_dir / "frf.png"),
+            _distortion_figure(main, out_dir / "nonlinear_distortion.png"),
+            _poles_zeros_figure(analyses, list(main["fits"]), out_dir / "poles_zeros.png")]
+
+
+def _frf_figure(main: dict, main_speed: float, path: Path) -> Path:
+    """The measured FRF with each fitted model (magnitude 20 log10 |G|, unwrapped phase), and its
+    uncertainty: the noise and nonlinear variances of G in dB (10 log10)."""
     r = main["frf"]
     fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 8), gridspec_kw={"height_ratios": [3, 2, 2]})
     db = lambda x: 20 * np.log10(np.abs(x))  # noqa: E731
@@ -100,9 +107,12 @@ def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     a1.legend(fontsize=7, ncol=2), a3.legend(fontsize=7)
     a1.set_title(f"Steering angle to yaw rate at {main_speed:g} m/s")
     fig.tight_layout()
-    written.append(_save(fig, out_dir / "frf.png", plt))
+    return _save(fig, path, plt)
 
-    d = main.get("frf_wide", r).detection
+
+def _distortion_figure(main: dict, path: Path) -> Path:
+    """The output's level at the excited, odd and even lines against the noise level (10 log10)."""
+    d = main.get("frf_wide", main["frf"]).detection
     fig, ax = plt.subplots(figsize=(7, 4))
     for kind, style in (("excited", "k^"), ("odd", "ro"), ("even", "bs")):
         sel = d["kind"] == kind
@@ -111,9 +121,12 @@ def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     ax.set_xlabel("frequency [Hz]"), ax.set_ylabel("yaw-rate level [dB]"), ax.grid(alpha=0.3), ax.legend(fontsize=7)
     ax.set_title("Nonlinear contributions at the non-excited lines")
     fig.tight_layout()
-    written.append(_save(fig, out_dir / "nonlinear_distortion.png", plt))
+    return _save(fig, path, plt)
 
-    names = list(main["fits"])
+
+def _poles_zeros_figure(analyses: dict, names: list[str], path: Path) -> Path:
+    """Poles and zeros of each model per speed in the s-plane at the physical scale (physical_scale);
+    those beyond OFF_SCALE x the top measured angular frequency drawn at the edge and listed."""
     roots = {v: {n: (f.poles, f.zeros) for n, f in a["fits"].items()} for v, a in analyses.items()}
     w_top = 2 * np.pi * max(float(np.max(a["frf"].freq)) for a in analyses.values())
     fig, axes = plt.subplots(1, len(names), figsize=(3.8 * len(names), 5.2), squeeze=False)
@@ -148,8 +161,7 @@ def write_plots(analyses: dict, main_speed: float, out_dir: Path) -> list[Path]:
     fig.suptitle(f"Poles and zeros at the physical scale (up to {OFF_SCALE:g} x the top measured frequency, "
                  f"{w_top / (2 * np.pi):.2g} Hz); RHP: right half-plane (non-minimum phase)", fontsize=9)
     fig.tight_layout(rect=(0, 0.1, 1, 1))        # room below for the off-scale lists
-    written.append(_save(fig, out_dir / "poles_zeros.png", plt))
-    return written
+    return _save(fig, path, plt)
 
 
 def _save(fig, path: Path, plt) -> Path:

@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 
 @dataclass
@@ -47,8 +48,6 @@ def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window
                    tolerance: float = 0.01, relative: float = 0.05) -> dict[str, np.ndarray]:
     """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring); u is
     taken ``delay`` s earlier than v and r."""
-    from numpy.lib.stride_tricks import sliding_window_view
-
     h = float(np.median(np.diff(t)))
     nw, ns = max(2, int(round(window / h))), int(round((settle + delay) / h))
     n = len(t)
