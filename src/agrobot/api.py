@@ -26,7 +26,7 @@ import json
 import tempfile
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.output import OutputLock, check_output_file, study_inputs
@@ -48,8 +48,10 @@ def shipped_name(study) -> bool:
         and shipped(f"{study}.toml").is_file()
 
 
-def load(study, set: Mapping[str, Any] | None = None):
-    """The Study named by ``study`` (a path, a shipped study's name, or a Study) with ``set`` applied."""
+def load(study, set: Mapping[str, Any] | Sequence[str] | None = None):
+    """The Study named by ``study`` (a path, a shipped study's name, or a Study) with ``set`` applied:
+    a mapping of values, or ``key=value`` strings as ``--set`` writes them (parsed and reported as the
+    command line does)."""
     if not isinstance(study, Study):
         if shipped_name(study):
             study = shipped(f"{study}.toml")
@@ -57,7 +59,11 @@ def load(study, set: Mapping[str, Any] | None = None):
             names = sorted(p.stem for p in shipped().glob("*.toml"))
             raise StudyError(f"{study}: no such study file, nor a shipped study (shipped: {', '.join(names)})")
         study = Study.load(study)
-    return study.with_values(dict(set)) if set else study
+    if not set:
+        return study
+    if not isinstance(set, Mapping) and all(isinstance(item, str) for item in set):
+        return study.with_overrides(list(set))
+    return study.with_values(dict(set))
 
 
 def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, plots: bool = True,
