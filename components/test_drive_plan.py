@@ -1,5 +1,5 @@
 """A field test drive for identification and diagnosis (``driving_plan``, the plan the truth
-tractor of measurements.truth_tractor drives too): 20 s segments cycling through a steering
+tractor of harness/truth_tractor.py drives too): 20 s segments cycling through a steering
 multisine, steps, a headland-like turn and small corrections, at speeds cycling through ``speeds``
 (smooth 3 s changes, from rest). The steering command is held at 20 Hz; the plan is drawn from
 the component's random stream (the study seed)."""

@@ -11,6 +11,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from agrobot.components.models.tyre import force_limit_share
+from agrobot.diagnosis.pipeline import diagnose
 from agrobot.studies import shipped
 from harness.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
 
@@ -92,8 +93,6 @@ def diagnose_hidden(case: tuple) -> dict:
     ``effect`` may be several ids joined by '+', ``healthy`` one or several of truth_tractor.HEALTHY
     (a truth without fault that differs from the baseline), ``values`` magnitudes that replace the
     drawn ones (truth_tractor.make_log)."""
-    from .pipeline import diagnose
-
     effect, seed, folder, *rest = case
     scale = rest[0] if rest else None
     duration = rest[1] if len(rest) > 1 else 240.0

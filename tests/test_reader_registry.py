@@ -1,4 +1,4 @@
-"""The recording formats are one registry (measurements.readers): the converter, ``convert --list``
+"""The recording formats are one registry (measurements.recording_readers): the converter, ``convert --list``
 and the help read it, so a format is named everywhere by being registered, and the registry's order
 decides which reader claims a file and which reader's files make the recording."""
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from agrobot.measurements import readers
+from agrobot.measurements import recording_readers as readers
 from harness.generated_recordings import write_nmea
 from agrobot.measurements.listing import list_source
 from agrobot.measurements.log import LogError

@@ -55,7 +55,7 @@ def test_run_writes_alike_through_both_doors_and_when_saved(cli, tmp_path):
 
 
 def _drive(tmp_path: Path) -> Path:
-    from agrobot.measurements.generated_recordings import write_nmea
+    from harness.generated_recordings import write_nmea
 
     return write_nmea(tmp_path / "drive.nmea", 20.0)
 

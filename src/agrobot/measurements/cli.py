@@ -1,7 +1,7 @@
 """``convert``: a raw recording (NMEA, CAN with any maker's DBC, ROS bags, ISO 11783-10 time logs,
 other tools' tables) to the measured log (CSV or Parquet), with its import report beside it, or
 ``--list`` of what it holds; and the recording options ``identify`` and ``diagnose`` share. The
-formats the help names are the readers' (measurements.readers), in their order of precedence."""
+formats the help names are the readers' (measurements.recording_readers), in their order of precedence."""
 from __future__ import annotations
 
 import argparse
@@ -14,7 +14,7 @@ from agrobot.orchestrator.cli import add_output_options
 from agrobot.orchestrator.output import ResultFile, check_output_file
 from agrobot.orchestrator.source_files import set_limit
 
-from . import readers
+from . import recording_readers as readers
 from .audit import parse_align
 from .listing import list_source
 from .log import LogError, check_log, log_units

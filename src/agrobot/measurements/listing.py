@@ -1,5 +1,5 @@
 """``convert SOURCE --list``: what a recording holds, so that a user can choose its signals: each
-format's reader lists its files (measurements.readers, in their order): ROS topics with their
+format's reader lists its files (measurements.recording_readers, in their order): ROS topics with their
 types and numeric fields, ISO 11783-10 time logs with their DDIs, NMEA sentences and fixes, CAN
 messages and signals (units, declared ranges, the values seen, rates, buses) with the DBC's load
 report, table columns with their ranges and the time found."""
@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import readers
+from . import recording_readers as readers
 from .log import LogError
 from .recording import recording_files
 

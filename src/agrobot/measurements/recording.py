@@ -1,6 +1,6 @@
 """A raw field recording as one measured log, and a report of how: the readers' dispatcher.
 
-The readers (measurements.readers: ROS bags, ISO 11783-10 time logs, NMEA with CAN on one clock,
+The readers (measurements.recording_readers: ROS bags, ISO 11783-10 time logs, NMEA with CAN on one clock,
 tables) each turn their files into Streams (measurements.streams); this module gives each file to
 the first reader that claims it, has the first reader that holds files make the streams, finds
 the quirks (measurements.quirks: spikes, position quantisation) and puts everything on one grid.
@@ -21,7 +21,7 @@ import pandas as pd
 
 from agrobot.orchestrator.source_files import checked_path, regular_file, regular_files
 
-from . import readers
+from . import recording_readers as readers
 from .audit import audit_frame, audit_streams
 from .import_report import describe
 from .log import LogError, check_log, read_log
@@ -36,13 +36,13 @@ __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_r
 
 def is_recording(source: Path) -> bool:
     """A folder, or a file that is a raw recording rather than a table (CSV/Parquet): its suffix
-    is one a raw format's reader may claim (measurements.readers)."""
+    is one a raw format's reader may claim (measurements.recording_readers)."""
     source = Path(source)
     return source.is_dir() or source.suffix.lower() in readers.raw_suffixes()
 
 
 def recording_files(source: Path) -> dict[str, list[Path]]:
-    """The files of a folder or the one file, by kind (every reader's, measurements.readers): each
+    """The files of a folder or the one file, by kind (every reader's, measurements.recording_readers): each
     file goes to the first reader that claims it, as does each folder inside (a rosbag2 folder); a
     folder that a reader claims whole (a rosbag2 folder) is that reader's alone."""
     source = checked_path(source, LogError)

@@ -6,7 +6,7 @@ the import report so far. ``measurements.recording`` chooses the reader and puts
 one grid; no reader imports it. A ``Series`` is one raw signal as a source holds it (its own
 times, its values in the source's unit, that unit when the source states one), the operand of a
 ``--signal`` expression (measurements.signal_expressions). A ``Reader`` is one recording format
-as the converter, the listing and the help see it; measurements.readers holds them in their
+as the converter, the listing and the help see it; measurements.recording_readers holds them in their
 order of precedence.
 """
 from __future__ import annotations
@@ -60,7 +60,7 @@ class Reader:
     the content. ``raw``: a file of it alone is a raw recording (False: a table, read as a log
     when it is one); ``streamed``: its files are read as streams (the larger size limit), not
     whole. Which reader gets a file, and which reader's files make the recording, is decided by
-    the order of measurements.readers.READERS."""
+    the order of measurements.recording_readers.READERS."""
 
     kind: str = ""
     name: str = ""
