@@ -12,28 +12,14 @@ folders followed):
 from __future__ import annotations
 
 import ast
-import os
 import re
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-PACKAGE = ROOT / "src" / "agrobot"
+from tests.package_tree import PACKAGE, module_name, package_files
+
 MAX_LINES = 80
 DEFERRED = re.compile(r"Imported where used:(.*?)(?:\n\s*\n|\Z)", re.S)
-
-
-def _modules() -> list[Path]:
-    found = []
-    for folder, _, files in os.walk(PACKAGE, followlinks=True):
-        found += [Path(folder) / f for f in files if f.endswith(".py")]
-    return sorted(found)
-
-
-def _name(path: Path) -> str:
-    parts = ["agrobot", *path.relative_to(PACKAGE).with_suffix("").parts]
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
 def declared_deferred(docstring: str | None) -> list[str]:
@@ -78,12 +64,12 @@ def _covered(target: str, declared: list[str]) -> bool:
     return any(n == d or n.startswith(d + ".") for n in names for d in declared)
 
 
-@pytest.mark.parametrize("path", _modules(), ids=lambda p: _name(p))
+@pytest.mark.parametrize("path", package_files(), ids=module_name)
 def test_functions_are_short_and_imports_at_the_top(path):
     tree = ast.parse(path.read_text(encoding="utf-8"))
     assert long_functions(tree) == [], f"{path}: functions over {MAX_LINES} lines"
     declared = declared_deferred(ast.get_docstring(tree))
-    stray = [f"line {line}: {target}" for line, target in function_imports(tree, _name(path), path.name == "__init__.py")
+    stray = [f"line {line}: {target}" for line, target in function_imports(tree, module_name(path), path.name == "__init__.py")
              if not _covered(target, declared)]
     assert stray == [], (f"{path}: imports inside functions that the module docstring does not name in an "
                          f"'Imported where used:' paragraph (an optional extra or a measured start-up cost): {stray}")

@@ -197,7 +197,9 @@ def _watch_live(study: Path, out: Path, sets: list[str], topics: tuple[str, ...]
 
 def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
     out = tmp_path / "run"
-    run, stdout, stderr, channels, got = _watch_live(STUDIES / "figure8.toml", out, ["study.stop_time=40"],
+    # the whole 160 s: the view sends at most 20 instants a second of wall time, and a quiet machine runs
+    # 40 s of the study in 0.12-0.25 s (3-4 instants)
+    run, stdout, stderr, channels, got = _watch_live(STUDIES / "figure8.toml", out, ["study.stop_time=160"],
                                                      ("/signals/tractor", "/vehicle/pose"))
     assert run.returncode == 0, stderr
     assert channels["/vehicle/pose"]["schemaName"] == "foxglove.PoseInFrame"

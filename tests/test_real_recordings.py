@@ -404,7 +404,7 @@ def test_no_import_circle_in_measurements_and_components_do_not_import_it():
         return any(d == b or (d not in seen and reaches(d, b, seen + (d,))) for d in deps[a])
     assert [m for m in names if reaches(m, m)] == []
     readers = ("raw_can", "raw_nmea", "nmea_can", "rosbag", "isoxml_log", "tables", "mdf4", "streams",
-               "signal_expressions", "dbc", "quirks", "log", "readers")
+               "signal_expressions", "dbc", "quirks", "log", "recording_readers")
     assert not any(reaches(r, "recording") for r in readers)
     for p in (ROOT / "components").rglob("*.py"):
         assert "measurements" not in {(n.module or "").split(".")[0] for n in ast.walk(ast.parse(p.read_text()))

@@ -4,7 +4,6 @@ every module from the installed package without running it; one name per thing."
 from __future__ import annotations
 
 import ast
-import os
 import re
 import subprocess
 import sys
@@ -13,24 +12,11 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-PACKAGE = ROOT / "src" / "agrobot"
+from tests.package_tree import PACKAGE, ROOT, module_name, package_files
+
 DESIGN_FOLDERS = ("components", "orchestrator", "studies")     # the design card's top-level folders
 # module names that are a convention of every tool package (its command layer, its staged pipeline)
 CONVENTIONS = {"__init__", "__main__", "cli", "pipeline"}
-
-
-def _package_files() -> list[Path]:
-    """Every .py file of the package as an import would see it (the linked folders followed)."""
-    found = []
-    for folder, _, files in os.walk(PACKAGE, followlinks=True):
-        found += [Path(folder) / f for f in files if f.endswith(".py")]
-    return sorted(found)
-
-
-def _module_name(path: Path) -> str:
-    parts = ["agrobot", *path.relative_to(PACKAGE).with_suffix("").parts]
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
 def test_the_design_folders_stay_at_the_top_and_are_the_import_names():
@@ -52,7 +38,7 @@ def test_mypy_finds_every_agrobot_module(tmp_path):
     missing = [line for line in out.splitlines() if re.search(r'module named "agrobot', line)]
     assert missing == [], missing[:10]
     parsed = set(re.findall(r"Parsing \S+ \((agrobot[\w.]*)\)", out))
-    on_disk = {_module_name(p) for p in _package_files()}
+    on_disk = {module_name(p) for p in package_files()}
     assert on_disk - parsed == set(), sorted(on_disk - parsed)[:10]
 
 
@@ -78,7 +64,7 @@ def test_an_import_graph_is_drawn_from_the_tree():
     the graph, and the layers' imports are there (the API imports the orchestrator)."""
     grimp = pytest.importorskip("grimp")
     graph = grimp.build_graph("agrobot")
-    on_disk = {_module_name(p) for p in _package_files()}
+    on_disk = {module_name(p) for p in package_files()}
     assert on_disk <= set(graph.modules), sorted(on_disk - set(graph.modules))[:10]
     assert graph.direct_import_exists(importer="agrobot.components.steering_hydraulics",
                                       imported="agrobot.orchestrator.component")
@@ -88,7 +74,7 @@ def test_an_import_graph_is_drawn_from_the_tree():
 def test_one_name_per_thing():
     """No two modules of one name (apart from each package's command layer and pipeline) and no two
     public classes of one name in the package."""
-    files = _package_files()
+    files = package_files()
     modules = Counter(p.stem for p in files if p.stem not in CONVENTIONS)
     assert [m for m, n in modules.items() if n > 1] == []
     classes: Counter[str] = Counter()
