@@ -11,8 +11,8 @@ writes (or call the result's ``save(folder)`` later).
     margins(study)                       -> LoopMargins     the guidance loop's stability margins
 
 A study is a study file's path, a shipped study's name (``"figure8"``: agrobot.studies) or a
-``Study``; ``set`` maps dotted keys to values (``{"tracker.lookahead": 3.0, "study.stop_time": 30}``,
-as ``--set`` on the command line).
+``Study``; ``set`` maps dotted keys to values (``{"tracker.lookahead": 3.0, "study.stop_time": 30}``),
+or lists ``key=value`` strings as ``--set`` on the command line writes them.
 
 Each function imports its own command's package where it is used, so that ``from agrobot import run``
 and each command that goes through this module load no other command's package (1.2 s of them together).
