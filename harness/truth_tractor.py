@@ -239,12 +239,31 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     if vehicle not in VEHICLES:
         raise ValueError(f"unknown vehicle {vehicle!r}; known: {sorted(VEHICLES)}")
     veh = VEHICLES[vehicle]
-    speeds = speeds or veh["speeds"]
     rng = np.random.default_rng(seed)
     ids = effect_list(effect)
     unknown = [i for i in ids if i not in EFFECTS and i not in UNLISTED and i not in LATER]
     if unknown:
         raise ValueError(f"unknown truth effects {unknown}; known: {EFFECTS + UNLISTED + LATER}")
+    e, hv, p, tau = _drawn_truth(seed, rng, ids, veh, scale, healthy, values)
+    if hv.get("plan") == "field":
+        t_log, cmd, speed_of = field_plan(rng, duration)
+    else:
+        t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=hv.get("speeds", speeds or veh["speeds"]))
+    cmd = cmd * veh["steer_scale"]
+    rec, times, sub = _driven(rng, e, hv, p, veh, tau, len(t_log), cmd, speed_of)
+    frame = _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral)
+    truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
+             "sigma_f": p["sigma_f"],
+             "vehicle": vehicle, "v_ref": veh["v_ref"],
+             "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
+    return frame, truth
+
+
+def _drawn_truth(seed, rng, ids, veh, scale, healthy, values) -> tuple[dict, dict, dict, float]:
+    """(the effects' magnitudes, the healthy differences, the vehicle's parameters, the steering's time
+    constant), drawn in this order: the catalogue's effects from ``rng``, unlisted, healthy and later
+    ones from streams of their own (so adding one leaves the others' draws), then the parameters'
+    spread from ``rng``."""
     e: dict[str, float] = {}
     for i in [i for i in ids if i in EFFECTS] or [None]:
         e.update(draw_effect(i, rng))
@@ -262,25 +281,24 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         if i in LATER:
             e.update(draw_later(i, later, p["l_r"] * (scale or {}).get("l_r", 1.0)))
     e.update(values or {})
-    curve = e.get("ratio_curvature", 0.0)
     for key, factor in (scale or {}).items():
         p[key] *= factor
     for k, lo, hi in (("C_f", 0.85, 1.15), ("C_r", 0.85, 1.15), ("sigma_f", 0.9, 1.1)):
         p[k] *= rng.uniform(lo, hi)
     p["sigma_f"] *= hv.get("sigma_f_factor", 1.0)
-    sigma_r = hv.get("sigma_r", 0.0)
-    tau = veh["tau"] * rng.uniform(0.8, 1.2)
-    tau_spool = 0.015
+    return e, hv, p, veh["tau"] * rng.uniform(0.8, 1.2)
+
+
+def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.ndarray, int]:
+    """(the states at 200 Hz, their times, the substeps per 20 Hz sample): the steering loop, the
+    relaxed-tyre yaw dynamics with the truth's faults and the pose, by Heun's method from a drawn
+    heading. State: delta, spool, v_y, r, alpha_f, psi, x, y, alpha_r."""
     rate = e.get("rate", veh["rate"])
     dead = veh["deadband"] + e.get("deadband", 0.0)
-    delay, offset = e.get("delay", 0.0), e.get("offset", 0.0)
+    delay, offset, curve = e.get("delay", 0.0), e.get("offset", 0.0), e.get("ratio_curvature", 0.0)
     k_corner, v_ref = e.get("k", 0.0), veh["v_ref"]
     slope, downhill = e.get("slope", 0.0), e.get("downhill", 0.0)
-    if hv.get("plan") == "field":
-        t_log, cmd, speed_of = field_plan(rng, duration)
-    else:
-        t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=hv.get("speeds", speeds))
-    cmd = cmd * veh["steer_scale"]
+    sigma_r, tau_spool = hv.get("sigma_r", 0.0), 0.015
     m, I, lf, lr, sf = p["m"], p["I"], p["l_f"], p["l_r"], p["sigma_f"]
     g_slope = G * math.sin(slope)
     sensor_gain = e.get("sensor_gain", 1.0)
@@ -317,7 +335,6 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
 
     sub = 10                                  # 200 Hz internal steps per 20 Hz sample
     h = 0.05 / sub
-    n = len(t_log)
     state = (0.0,) * 5 + (rng.uniform(-math.pi, math.pi), 0.0, 0.0, 0.0)
     rec = np.empty((n * sub, 9))
     times = np.arange(n * sub) * h
@@ -332,6 +349,15 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         s1 = tuple(a + h * b for a, b in zip(state, k1))
         k2 = deriv(t0 + h, s1)
         state = tuple(a + 0.5 * h * (b + c) for a, b, c in zip(state, k1, k2))
+    return rec, times, sub
+
+
+def _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral) -> pd.DataFrame:
+    """The log the machine would record at 20 Hz: the antenna's position (lever arm, latency), the
+    wheel-angle sensor (gain, ratio curve, resolution), the speed (slip) and the gyro (scale, bias),
+    each with its noise; channels stamped late where the truth says so."""
+    n, lr = len(t_log), p["l_r"]
+    curve, sensor_gain = e.get("ratio_curvature", 0.0), e.get("sensor_gain", 1.0)
     delta, r, psi, x, y = rec[:, 0], rec[:, 3], rec[:, 5], rec[:, 6], rec[:, 7]
     fwd, left = e.get("forward", 0.0), e.get("left", 0.0)
     c, s = np.cos(psi), np.sin(psi)
@@ -354,14 +380,10 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     })
     late = e.get("steering_clock", 0.0)
     if late:                                  # the steering channels stamped late: delta_log(t) = delta(t - late)
-        for c in ("delta_cmd", "delta"):
-            frame[c] = np.interp(t_log - late, t_log, frame[c].to_numpy(float))
+        for col in ("delta_cmd", "delta"):
+            frame[col] = np.interp(t_log - late, t_log, frame[col].to_numpy(float))
     if lateral:
         vy_log = rec[idx, 2] + 0.005 * rng.standard_normal(n)
         frame["vy"] = vy_log
         frame["beta"] = np.arctan2(vy_log, np.maximum(frame["v"].to_numpy(float), 0.1))
-    truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
-             "sigma_f": p["sigma_f"],
-             "vehicle": vehicle, "v_ref": v_ref,
-             "healthy": healthy or "", **{f"healthy_{k}": v for k, v in hv.items()}}
-    return frame, truth
+    return frame
