@@ -262,8 +262,12 @@ class SweepRun:
                 raise StudyError(f"--out {self.out}: holds points run with --engine {old.get('engine', 'python')}; "
                                  f"resume with that engine, or choose another folder")
         else:
-            write_json(manifest, {"study_file": self.where, "hash": digest, "engine": self.engine,
-                                  "points": [{"point": p.key, "seed": p.seed, **p.values} for p in self.points]})
+            write_json(manifest, self.manifest())
+
+    def manifest(self) -> dict[str, Any]:
+        """What sweep.json holds: the study file, the resolved study's hash, the engine, the points."""
+        return {"study_file": self.where, "hash": sweep_hash(self.study), "engine": self.engine,
+                "points": [{"point": p.key, "seed": p.seed, **p.values} for p in self.points]}
 
     # --- bookkeeping --------------------------------------------------------------------------
     def record_path(self, point: Point) -> Path:

@@ -27,7 +27,7 @@ except PackageNotFoundError:        # pragma: no cover - running from an uninsta
 # ``import agrobot`` stays light: ``from agrobot import run`` loads them.
 _API = {"run", "sweep", "identify", "diagnose", "convert", "plan", "margins", "load"}
 _RESULTS = {"RunResult", "Metric", "SweepResult", "Identification", "Diagnosis", "Recording", "PlanResult",
-            "LoopMargins"}
+            "LoopMargins", "load_result"}
 __all__ = sorted(_API | _RESULTS)
 
 

@@ -9,6 +9,8 @@ writes (or call the result's ``save(folder)`` later).
     convert(source, ...)                 -> Recording       a raw recording as a measured log
     plan(field, ...)                     -> PlanResult      a coverage plan of a field
     margins(study)                       -> LoopMargins     the guidance loop's stability margins
+    load_result(folder)                  -> the typed result a command's --out (or save) wrote there
+                                                            (agrobot.results)
 
 A study is a study file's path, a shipped study's name (``"figure8"``: agrobot.studies) or a
 ``Study``; ``set`` maps dotted keys to values (``{"tracker.lookahead": 3.0, "study.stop_time": 30}``),
@@ -23,6 +25,7 @@ the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s).
 from __future__ import annotations
 
 import json
+import os
 import tempfile
 from dataclasses import replace
 from pathlib import Path
@@ -83,21 +86,28 @@ def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = No
                      (folder / "events.log").read_text())
 
 
-def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, workers: int = 1,
+def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, retry_failed: bool = False, progress: bool = False,
-          plots: bool = False) -> SweepResult:
-    """Every point of the study's [sweep] section, on ``workers`` processes (or a Dask
-    ``scheduler``). ``out`` keeps the points (rerun to resume); without it they go to a temporary
-    folder removed at the end."""
+          plots: bool = False, engine: str = "python", keep_signals: bool | None = None,
+          overwrite: bool = False) -> SweepResult:
+    """Every point of the study's [sweep] section, on ``workers`` processes (default: every core,
+    as ``sweep`` does) or a Dask ``scheduler``, with ``engine`` (as ``--engine``; ``keep_signals``
+    as ``--keep-signals``). ``out`` keeps the points (rerun to resume); without it they go to a
+    temporary folder removed at the end."""
     study = load(study, set)
+    workers = os.cpu_count() or 1 if workers is None else workers
+    if workers < 1:
+        raise StudyError(f"workers={workers}: must be >= 1")
     if out is None:
         with tempfile.TemporaryDirectory(prefix="agrobot-sweep-") as tmp:
-            table = SweepRun(study, Path(tmp) / "sweep").run(workers, scheduler, retry_failed, progress=progress)
-        return SweepResult(study, table, sweep_summary(study, table)[0])
-    table = SweepRun(study, Path(out)).run(workers, scheduler, retry_failed, progress=progress)
+            runner = SweepRun(study, Path(tmp) / "sweep", engine=engine, keep_signals=keep_signals)
+            table = runner.run(workers, scheduler, retry_failed, progress=progress)
+        return SweepResult(study, table, sweep_summary(study, table)[0], None, engine)
+    runner = SweepRun(study, Path(out), overwrite, engine=engine, keep_signals=keep_signals)
+    table = runner.run(workers, scheduler, retry_failed, progress=progress)
     if plots:
         sweep_plots(study, table, Path(out) / "plots")
-    return SweepResult(study, table, sweep_summary(study, table)[0], Path(out))
+    return SweepResult(study, table, sweep_summary(study, table)[0], Path(out), engine)
 
 
 def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any] | None = None,

@@ -19,17 +19,21 @@ the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), matplotlib
 from __future__ import annotations
 
 import json
+import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
 
-from agrobot.orchestrator.atomic_files import write_json, write_table
+from agrobot.orchestrator.atomic_files import read_table, write_json, write_table
+from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.key_figures import bounds, declared
 from agrobot.orchestrator.output import (OutputLock, ResultFile, ResultFolder, check_output, check_output_file,
                                          study_inputs)
 from agrobot.orchestrator.registry import import_study_module
+from agrobot.orchestrator.study import load_study, parse_study
+from agrobot.orchestrator.sweep import SweepRun, sweep_summary
 
 
 def _jsonable(data: Any) -> Any:
@@ -167,6 +171,21 @@ class RunResult(Saved):
         self.folder = self._save(folder, overwrite, write)
         return self.folder
 
+    @classmethod
+    def from_folder(cls, folder: Path) -> "RunResult":
+        """A run as ``run --out`` or ``save`` left it: the study from run.json (as it ran, every
+        --set applied), the signals, the key figures judged against the study's bounds."""
+        record, facts = _read_json(folder / "run.json"), _read_json(folder / "metrics.json")
+        study = _study_of(folder / "run.json", facts.get("study_file"), record.get("study"))
+        tables = sorted(folder.glob("signals.*"))
+        if not tables:
+            raise InputError(f"{folder}: a run folder without its signals (signals.parquet or signals.csv)")
+        metrics = {k: v for k, v in facts.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+        events = (folder / "events.log").read_text() if (folder / "events.log").is_file() else ""
+        return cls(study, read_table(tables[0]), judged_metrics(metrics, study), facts,
+                   f"run {facts.get('study', folder.name)}: {facts.get('status', '?')} (loaded from {folder})",
+                   [], folder, record, events)
+
     def __str__(self) -> str:
         return self.summary
 
@@ -190,14 +209,48 @@ def judged_metrics(values: dict[str, Any], study) -> dict[str, Metric]:
 
 
 @dataclass
-class SweepResult:
+class SweepResult(Saved):
     """Every point of a sweep (``agrobot.sweep``): ``table`` one row per point (the swept values,
     status, key figures); ``summary`` the sweep's key-figure table; ``folder`` where the points are."""
+
+    SIGNATURE = ("sweep.json",)
+    WHAT = "sweep"
 
     study: Any
     table: pd.DataFrame
     summary: str
     folder: Path | None = None
+    engine: str = "python"
+
+    @property
+    def inputs(self) -> list[Path]:
+        return study_inputs(self.study)
+
+    def save(self, folder: str | Path, overwrite: bool = False) -> Path:
+        """The sweep as ``sweep --out`` leaves it: every point's folder (when the points were kept),
+        sweep.json and the results table; without kept points, sweep.json and the table only (a
+        later ``sweep --out`` on that folder runs the points again). Returns the folder."""
+        def write(tmp: Path) -> None:
+            if self.folder is not None and (self.folder / "sweep.json").is_file():
+                shutil.copytree(self.folder, tmp, dirs_exist_ok=True, ignore=shutil.ignore_patterns(".running"))
+                return
+            runner = SweepRun(self.study, tmp, engine=self.engine)
+            write_json(tmp / "sweep.json", runner.manifest())
+            write_table(tmp / "results", self.table, runner.fmt)
+
+        self.folder = self._save(folder, overwrite, write)
+        return self.folder
+
+    @classmethod
+    def from_folder(cls, folder: Path) -> "SweepResult":
+        manifest = _read_json(folder / "sweep.json")
+        study = _study_of(folder / "sweep.json", manifest.get("study_file"))
+        tables = sorted(folder.glob("results.*"))
+        if not tables:
+            raise InputError(f"{folder}: a sweep folder without its results table (results.parquet or results.csv): "
+                             f"rerun the sweep with --out {folder} to finish it")
+        table = read_table(tables[0])
+        return cls(study, table, sweep_summary(study, table)[0], folder, manifest.get("engine", "python"))
 
     def __str__(self) -> str:
         return self.summary
@@ -237,6 +290,15 @@ class Identification(Saved):
 
         write = self._write or (lambda tmp, plots: write_outputs(self.report, None, tmp, False))
         return self._save(folder, overwrite, lambda tmp: write(tmp, plots))
+
+    @classmethod
+    def from_folder(cls, folder: Path) -> "Identification":
+        """An identification as ``identify --out`` or ``save`` left it (identification.json)."""
+        report = _read_json(folder / "identification.json")
+        source = str(report.get("source", folder))
+        study = Path(source).suffix in (".toml", ".yaml", ".yml")
+        method = "driving" if "segments" in report else "study" if study else "multisine"
+        return cls(source, method, report)
 
     def __str__(self) -> str:
         return self.summary()
@@ -299,6 +361,14 @@ class Diagnosis(Saved):
         write = self._write or (lambda tmp: write_bare(tmp, self.result, []))
         self.folder = self._save(folder, overwrite, write)
         return self.folder
+
+    @classmethod
+    def from_folder(cls, folder: Path) -> "Diagnosis":
+        """A diagnosis as ``diagnose --out`` or ``save`` left it (diagnosis.json)."""
+        return cls(_read_json(folder / "diagnosis.json"), folder)
+
+    def __repr__(self) -> str:
+        return f"Diagnosis(verdict={self.verdict!r}, effects={[e.get('id') for e in self.effects]}, folder={self.folder})"
 
     def __str__(self) -> str:
         return f"verdict: {self.verdict}" + (f" ({self.reason})" if self.reason else "")
@@ -435,3 +505,39 @@ class LoopMargins(Saved):
     def __str__(self) -> str:
         return self.report()
 
+
+
+LOADABLE = {"run.json": RunResult, "sweep.json": SweepResult, "identification.json": Identification,
+            "diagnosis.json": Diagnosis}
+
+
+def load_result(folder: str | Path):
+    """The typed result a command or ``save`` wrote into ``folder``: a RunResult (run.json), a
+    SweepResult (sweep.json), an Identification (identification.json) or a Diagnosis
+    (diagnosis.json); anything else is refused with what was looked for."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: no such folder (expected what run, sweep, identify or diagnose --out wrote)")
+    for name, kind in LOADABLE.items():
+        if (folder / name).is_file():
+            return kind.from_folder(folder)
+    raise InputError(f"{folder}: holds none of {', '.join(LOADABLE)}: not a folder that run, sweep, identify or "
+                     f"diagnose --out (or a result's save) wrote")
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{path}: missing (the folder is not a whole result)") from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path}: cannot read as JSON: {exc}") from None
+
+
+def _study_of(where: Path, study_file: str | None, data: dict | None = None):
+    """The study a result ran: ``data`` (the resolved study it recorded) or its study file."""
+    if data:
+        return parse_study(data, study_file or where)
+    if study_file and Path(study_file).is_file():
+        return load_study(study_file)
+    raise InputError(f"{where}: names no study file that exists ({study_file!r}); the result cannot be judged")
