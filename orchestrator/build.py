@@ -51,6 +51,9 @@ class Node:
         comp.events = []
 
 
+ACKNOWLEDGED = "study.allow_unconnected"      # a held input the study names: recorded, not said
+
+
 @dataclass
 class System:
     study: Study
@@ -68,10 +71,11 @@ class System:
             node.restart()
 
     def held_lines(self) -> list[str]:
-        """One line per input left unconnected that holds its start value."""
+        """One line per input left unconnected that holds its start value, but those the study
+        lists in ``study.allow_unconnected`` (its author's choice, recorded in run.json)."""
         return [f"{port} is unconnected: it holds {value:g}{'' if unit in ('', '1') else ' ' + unit} for the whole "
                 f"run ({why})" if isinstance(value, (int, float)) else f"{port} is unconnected: it holds {value!r} ({why})"
-                for port, value, unit, why in self.held_inputs]
+                for port, value, unit, why in self.held_inputs if why != ACKNOWLEDGED]
 
 
 def component_seed(study_seed: int, name: str) -> np.random.Generator:
@@ -185,10 +189,10 @@ def _held_inputs(study: Study, specs, nodes: dict[str, Node], unconnected: list[
         if port in specs[comp_name].inputs or item in exported:
             continue
         v = nodes[comp_name].component.declared("input")[port]
-        if v.optional:
+        if item in allowed:
+            held.append((item, v.start, v.unit, ACKNOWLEDGED))
+        elif v.optional:
             held.append((item, v.start, v.unit, f"declared optional: {v.description}"))
-        elif item in allowed:
-            held.append((item, v.start, v.unit, "study.allow_unconnected"))
         else:
             missing.append(f"{item} ({v.description}; {v.unit})")
     declared = {f"{n}.{i}" for n, node in nodes.items() for i in node.component.declared("input")}

@@ -116,7 +116,7 @@ def _figures(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound]) -
     return rows
 
 
-def _hook(analysis, name: str, values: Mapping[str, Any], study) -> dict[str, str]:
+def hook(analysis, name: str, values: Mapping[str, Any], study) -> dict[str, str]:
     """An analysis's ``reasons`` or ``unjudged`` for this run (empty without one or a study)."""
     hook = getattr(analysis, name, None)
     return dict(hook(values, study)) if hook is not None and study is not None else {}
@@ -134,7 +134,7 @@ def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], 
     """(the table, the failed bounds as lines) of one run; every nan and FAIL with its reason (the
     analysis's ``reasons`` and ``unjudged`` for ``study``, see the module docstring)."""
     rows = _figures(values, analysis, judged)
-    why, unjudged = _hook(analysis, "reasons", values, study), _hook(analysis, "unjudged", values, study)
+    why, unjudged = hook(analysis, "reasons", values, study), hook(analysis, "unjudged", values, study)
     width = max([len(k) for k, _, _ in rows] + [10])
     lines = [f"{'figure':<{width}}  {'value':>11}  {'unit':<6} {'bound':<22} check", "-" * (width + 50)]
     failed, skipped = [], 0

@@ -28,7 +28,7 @@ import pandas as pd
 
 from agrobot.orchestrator.atomic_files import read_table, write_json, write_table
 from agrobot.orchestrator.errors import InputError
-from agrobot.orchestrator.key_figures import bounds, declared
+from agrobot.orchestrator.key_figures import bounds, declared, hook
 from agrobot.orchestrator.output import (OutputLock, ResultFile, ResultFolder, check_output, check_output_file,
                                          study_inputs)
 from agrobot.orchestrator.registry import import_study_module
@@ -192,18 +192,20 @@ class RunResult(Saved):
 
 def judged_metrics(values: dict[str, Any], study) -> dict[str, Metric]:
     """name -> Metric: the study's analysis's declared figures (METRICS, METRIC_UNITS) and the
-    figures a bound names, judged by orchestrator.key_figures (the bounds the run's table shows)."""
+    figures a bound names, judged by orchestrator.key_figures (the bounds the run's table shows); a
+    bound the analysis says the run cannot judge (``unjudged``) is neither passed nor failed."""
     analysis = import_study_module(study.study.analysis) if study.study.analysis else None
     table = declared(analysis)
     units = dict(getattr(analysis, "METRIC_UNITS", None) or {})
     judged = bounds(analysis, study.study.bounds)
+    not_judged = hook(analysis, "unjudged", values, study)
     out = {}
     for key, value in values.items():
         if key in ("study", "study_file", "status", "seed") or isinstance(value, (dict, list, str)):
             continue
         unit = table.get(key, (units.get(key), None))[0] or units.get(key)
         b = judged.get(key)
-        passed = None if b is None else (isinstance(value, (int, float)) and b.holds(float(value)))
+        passed = None if b is None or key in not_judged else (isinstance(value, (int, float)) and b.holds(float(value)))
         out[key] = Metric(key, value, unit, None if b is None else str(b), None if b is None else b.source, passed)
     return out
 

@@ -125,6 +125,12 @@ def reasons(values: dict[str, float], study: Study) -> dict[str, str]:
     return out
 
 
+
+def unjudged(values: dict[str, float], study: Study) -> dict[str, str]:
+    """The bounds a run too short to reach a straight or a curve after the settling cannot judge:
+    shown with why, neither passed nor failed (a nan for any other reason still fails)."""
+    return reasons(values, study)
+
 # metric -> (SI unit, the paper's statement): a statement "< 0.40" is a bound that the run passes or
 # fails (orchestrator.key_figures prints them after a run or a sweep); the units label sweep plots too
 METRICS = {"euclid_mean_straight": ("m", None), "euclid_max_straight": ("m", f"< {PAPER_BOUNDS['euclid_max_straight']:.2f}"),
