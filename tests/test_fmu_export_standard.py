@@ -110,7 +110,7 @@ def test_communication_steps_that_do_not_divide_the_period_are_refused_with_a_me
     d, base = _running(fmu, np.random.default_rng(2))
     with pytest.raises(Exception, match="DoStep"):
         d.step(0.15, 0.03)
-    assert "must divide the sample period" in capsys.readouterr().out
+    assert "is neither a whole multiple of the sample period 0.05 s nor divides it" in capsys.readouterr().out
     with pytest.raises(Exception, match="DoStep"):
         d.step(0.5, 0.05)                        # not where the last step ended
     assert "last step ended at t = 0.15" in capsys.readouterr().out

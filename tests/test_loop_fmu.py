@@ -88,6 +88,37 @@ def test_fmpy_and_libcosim_run_the_loop_fmu_as_the_python_engine_runs_the_study(
     assert max(worst.values()) < 1e-9, {k: v for k, v in worst.items() if v >= 1e-9}
 
 
+
+def test_fmpy_runs_the_loop_fmu_with_its_defaults(exported):
+    """fmpy's simulate_fmu with its defaults: over a long experiment it doubles the default
+    experiment's step until at most 1000 steps (40 s: 0.04 s, 4 sample periods; the 160 s figure-8:
+    0.16 s), and each such step is taken as that many samples. The outputs at its output times
+    are the Python run's at those instants."""
+    from fmpy import simulate_fmu
+
+    fmu, _, rec = exported
+    long = simulate_fmu(str(fmu), stop_time=40.0)           # nothing but the stop time
+    step = float(np.diff(long["time"])[0])
+    assert step == pytest.approx(4 * H) and long["time"][-1] == pytest.approx(40.0)
+    res = simulate_fmu(str(fmu), output_interval=step)      # the same step over the study's own 4 s
+    rows = np.rint(res["time"] / H).astype(int)
+    assert len(rows) == round(STOP / step) + 1
+    for j, name in enumerate(rec.columns):
+        ours = rec.data[rows, j + 1]
+        scale = max(np.abs(rec.data[:, j + 1]).max(), 1e-12)
+        assert np.abs(np.asarray(res[name], float) - ours).max() / scale < 1e-9, name
+        assert np.asarray(long[name], float)[: len(rows)] == pytest.approx(np.asarray(res[name], float), abs=1e-12)
+
+
+def test_a_step_neither_multiple_nor_divisor_of_the_period_is_refused_with_the_numbers_in_order(exported, capsys):
+    from fmpy import simulate_fmu
+
+    fmu, _, _ = exported
+    with pytest.raises(Exception, match="DoStep"):
+        simulate_fmu(str(fmu), step_size=0.015, output_interval=0.015, stop_time=0.1)
+    said = capsys.readouterr().out
+    assert "communication step 0.015 s is neither a whole multiple of the sample period 0.01 s nor divides it" in said
+
 def test_a_study_with_components_without_a_c_core_exits_2_naming_them(tmp_path, capsys):
     from agrobot.orchestrator.cli import main
 

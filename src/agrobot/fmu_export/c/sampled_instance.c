@@ -4,8 +4,9 @@
  * - sample instants t_k = t0 + k * MODEL_PERIOD; at an instant the outputs are y_k = g(x_k, u_k),
  *   computed when an output is read after an input or parameter changed (get after set recomputes,
  *   any number of times); doStep(t_k, h) commits x_k+1 = f(x_k, u_k) once;
- * - between instants the outputs hold: a communication step h must divide MODEL_PERIOD (h = period
- *   included) and doStep must start where the last one ended;
+ * - between instants the outputs hold: a communication step h divides MODEL_PERIOD (h = period
+ *   included), or is a whole multiple m of it and is taken as m samples with the inputs held (a
+ *   master's default step); doStep must start where the last one ended;
  * - the call sequence is checked (instantiated -> initialization -> step -> terminated; reset from
  *   any), an input or parameter that is NaN or infinite is refused; each refusal is an error status
  *   with a logger message that names the variable or the call.
@@ -191,7 +192,23 @@ static SIStatus si_set(SampledInstance *s, const unsigned vr[], size_t n, const 
     return SI_OK;
 }
 
-/* doStep(t, h): t must be the current communication point and h must divide the period. */
+/* One step of h <= MODEL_PERIOD from the current point: commit the sample due there, if any. */
+static void si_advance(SampledInstance *s, double h) {
+    if (si_at_sample(s)) {
+        si_refresh(s);
+        s->state = s->next;
+        s->stepped = 1;
+    }
+    s->time += h;
+    if (fabs(si_grid_offset(s, s->time)) < 1e-6) {        /* land exactly on the grid: no drift */
+        double k = floor((s->time - s->t0) / MODEL_PERIOD + 0.5);
+        s->time = s->t0 + k * MODEL_PERIOD;
+    }
+    s->pending = 0;
+}
+
+/* doStep(t, h): t must be the current communication point; h divides the period, or is a whole
+ * multiple m of it starting on a sample instant (m samples, the inputs held over them). */
 static SIStatus si_do_step(SampledInstance *s, double t, double h) {
     if (!si_check_mode(s, "doStep", IN_MODES(MODE_STEP))) return SI_ERROR;
     double tol = 1e-9 * (fabs(t) > 1.0 ? fabs(t) : 1.0) + 1e-9 * MODEL_PERIOD;
@@ -199,21 +216,24 @@ static SIStatus si_do_step(SampledInstance *s, double t, double h) {
         si_log(s, "doStep from t = %.9g s, but the last step ended at t = %.9g s", t, s->time);
         return SI_ERROR;
     }
-    double ratio = MODEL_PERIOD / h;
-    if (!(h > 0.0) || ratio < 1.0 - 1e-9 || fabs(ratio - floor(ratio + 0.5)) > 1e-6 * ratio) {
-        si_log(s, "communication step %.9g s must divide the sample period %.9g s", h, (double)MODEL_PERIOD);
+    double per = MODEL_PERIOD / h, times = h / MODEL_PERIOD;
+    int divides = h > 0.0 && per >= 1.0 - 1e-9 && fabs(per - floor(per + 0.5)) <= 1e-6 * per;
+    int multiple = h > 0.0 && times >= 1.0 - 1e-9 && fabs(times - floor(times + 0.5)) <= 1e-6 * times;
+    if (!divides && !multiple) {
+        si_log(s, "communication step %.9g s is neither a whole multiple of the sample period %.9g s nor divides it "
+               "(step / period = %.6g): use a step of n x %.9g s or %.9g s / n", h, (double)MODEL_PERIOD, times,
+               (double)MODEL_PERIOD, (double)MODEL_PERIOD);
         return SI_ERROR;
     }
-    if (si_at_sample(s)) {
-        si_refresh(s);
-        s->state = s->next;
-        s->stepped = 1;
+    if (divides) {
+        si_advance(s, h);
+        return SI_OK;
     }
-    s->time = t + h;
-    if (fabs(si_grid_offset(s, s->time)) < 1e-6) {        /* land exactly on the grid: no drift */
-        double k = floor((s->time - s->t0) / MODEL_PERIOD + 0.5);
-        s->time = s->t0 + k * MODEL_PERIOD;
+    if (!si_at_sample(s)) {
+        si_log(s, "a communication step of %.9g s (%.0f sample periods) must start on a sample instant; t = %.9g s is "
+               "between two", h, floor(times + 0.5), t);
+        return SI_ERROR;
     }
-    s->pending = 0;
+    for (long m = (long)floor(times + 0.5); m > 0; m--) si_advance(s, MODEL_PERIOD);
     return SI_OK;
 }
