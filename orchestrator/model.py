@@ -119,6 +119,8 @@ class Model:
         settings = {**data["study"], "name": name or f"{study.study.name}_subsystem", "base_step": base}
         settings.pop("analysis", None)
         settings.pop("realtime", None)
+        if settings.get("allow_unconnected"):        # the group's own held inputs only
+            settings["allow_unconnected"] = [i for i in settings["allow_unconnected"] if i.split(".", 1)[0] in names]
         sub = {"study": settings,
                "components": {n: data["components"][n] for n in names},
                "connections": [str(c) for c in internal],

@@ -219,8 +219,8 @@ class Study(BaseModel):
         return self.derive(data)
 
     def without(self, *names: str) -> "Study":
-        """Drop components or subsystems (with every connection touching them) or whole tables
-        (``sweep``, ``exports``, a tool's table)."""
+        """Drop components or subsystems (with every connection touching them and the inputs of
+        theirs the study lets hold) or whole tables (``sweep``, ``exports``, a tool's table)."""
         data = self.to_data()
         gone = set()
         for name in names:
@@ -233,6 +233,9 @@ class Study(BaseModel):
             else:
                 raise StudyError(f"{self.where}: without({name!r}): no such component or table")
         data["connections"] = [str(c) for c in self.connections if c.source not in gone and c.target not in gone]
+        held = data.get("study", {}).get("allow_unconnected")
+        if held:
+            data["study"]["allow_unconnected"] = [item for item in held if item.split(".", 1)[0] not in gone]
         return self.derive(data)
 
     def with_connections(self, add: Iterable[str] = (), remove: Iterable[str] = ()) -> "Study":

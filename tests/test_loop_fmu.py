@@ -69,7 +69,7 @@ def test_fmpy_and_libcosim_run_the_loop_fmu_as_the_python_engine_runs_the_study(
     md = read_model_description(str(fmu))
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     assert outputs == rec.columns and "every signal the study records" in note    # figure8 declares no [exports]
-    assert not [v for v in md.modelVariables if v.causality in ("input", "parameter")]
+    assert not [v for v in md.modelVariables if v.causality == "input"]
     assert float(md.defaultExperiment.stepSize) == H
     units = {v.name: v.unit for v in md.modelVariables}
     assert units["tractor.x_cg"] == "m" and units["tractor.yaw_rate"] == "rad/s"
@@ -109,6 +109,37 @@ def test_fmpy_runs_the_loop_fmu_with_its_defaults(exported):
         assert np.abs(np.asarray(res[name], float) - ours).max() / scale < 1e-9, name
         assert np.asarray(long[name], float)[: len(rows)] == pytest.approx(np.asarray(res[name], float), abs=1e-12)
 
+
+
+def test_the_loop_fmus_parameters_set_by_a_master_give_the_study_run_with_them(exported, capsys):
+    """Parameters a master sets before the initialization ends (fmpy's start_values) give the
+    study run by the Python engine with the same --set; one that shapes what is built (the
+    reference's radius: the reference's path, a compiled-in output at t0) is not offered; one set
+    during the run is refused by name."""
+    from fmpy import read_model_description, simulate_fmu
+
+    fmu, note, base = exported
+    md = read_model_description(str(fmu))
+    params = {v.name: v for v in md.modelVariables if v.causality == "parameter"}
+    assert {"tracker.lookahead", "tractor.C_f", "speed_controller.kp"} <= params.keys()
+    assert "reference.radius" not in params and "reference.radius" in note
+    assert {v.variability for v in params.values()} == {"fixed"}
+    changed = {"tracker.lookahead": 2.4, "tractor.C_f": 6000.0}
+    res = simulate_fmu(str(fmu), start_values=changed, output_interval=H)
+    rec = Simulation(build_system(resolve(Study.load(shipped("figure8.toml"), QUIET + [
+        f"{k}={v}" for k, v in changed.items()])))).run()
+    worst = relative_difference(rec, res)
+    assert max(worst.values()) < 1e-9, {k: v for k, v in worst.items() if v >= 1e-9}
+    assert max(relative_difference(base, res).values()) > 1e-4            # the parameters did change the run
+    with pytest.raises(Exception):
+        simulate_fmu(str(fmu), stop_time=0.1, input=None, output_interval=H,
+                     step_finished=lambda time, recorder: _set_during_run(recorder, params["tracker.lookahead"]))
+    assert "tracker.lookahead is a fixed parameter: set it before the initialization ends" in capsys.readouterr().out
+
+
+def _set_during_run(recorder, variable) -> bool:
+    recorder.fmu.setReal([variable.valueReference], [2.0])
+    return True
 
 def test_a_step_neither_multiple_nor_divisor_of_the_period_is_refused_with_the_numbers_in_order(exported, capsys):
     from fmpy import simulate_fmu

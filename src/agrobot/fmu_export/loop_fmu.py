@@ -12,9 +12,15 @@ therefore the FMU's outputs at t_k.
 
 Ports: the study's ``[exports]`` when it declares them (an exported input is written into its
 inner inputs before the components due read them; its start is the study's value), else every
-signal the study records (``component.output``) as an output and no input. The study's
-parameters, initial outputs and constant inputs are compiled in (the FMU has no parameters: the
-loop's buffers are sized for its delays): change the study and export again.
+signal the study records (``component.output``) as an output and no input.
+
+Parameters: every run-time parameter of a C core that a master can change without another build
+is an FMU parameter named ``component.parameter``, fixed (set before the initialization ends: a
+core may cache what it derives from one during the run). A parameter is kept compiled in when
+changing it changes what is
+built: the generated defines (a buffer sized for a delay, a horizon), a value the core derives in
+Python from it, or an output at t0 (``tunable_parameters`` perturbs each and compares); those are
+named in the export's note. The seed and the initial outputs are compiled in.
 """
 from __future__ import annotations
 
@@ -27,8 +33,9 @@ import numpy as np
 
 from agrobot.orchestrator.build import System, build_system
 from agrobot.orchestrator.compiled import CompiledRefused, CompiledSimulation, cores_of
-from agrobot.orchestrator.compiled.cores import c_array
+from agrobot.orchestrator.compiled.cores import c_array, c_core, core_parameters, description_of
 from agrobot.orchestrator.compiled.simulation import refusal
+from agrobot.orchestrator.component import ComponentError
 from agrobot.orchestrator.composite import exported_ports, inner_feedthrough
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
@@ -135,6 +142,60 @@ def compiled_loop(system: System) -> CompiledLoop:
     return CompiledLoop(units, files, sim, par, pub0, in0, sizes)
 
 
+
+@dataclass
+class Tunable:
+    """The loop's parameters a master may set: (FMU name, index in the loop's parameter vector,
+    value, unit, description), and those compiled in."""
+
+    parameters: list[tuple[str, int, float, str, str]]
+    fixed: list[str]
+
+
+def _built_from(system: System, name: str) -> tuple:
+    """What building component ``name`` makes of its parameters: the core's defines, its run-time
+    values, its outputs at t0."""
+    node = system.nodes[name]
+    node.component.initialize(float(system.study.study.start_time), node.step)
+    core = c_core(system, name)
+    return core.source, [v for _, v in core.parameters], dict(node.component.y)
+
+
+def tunable_parameters(system: System, names: list[str]) -> Tunable:
+    """Each C core's run-time parameter, in the loop's order (``names``), tunable when a change of
+    it (x 1.1 + 0.01) leaves ``_built_from`` as it was; restored after."""
+    tunable, fixed, at = [], [], 0
+    for name in names:
+        comp = system.nodes[name].component
+        listed = core_parameters(comp, description_of(comp), "")
+        base = _built_from(system, name)
+        for j, (pname, value, unit, text) in enumerate(listed):
+            if pname not in comp.p:                 # the core's own (a seed): compiled in
+                continue
+            try:
+                comp.p[pname] = value * 1.1 + 0.01
+                built = _built_from(system, name)
+                same = built[0] == base[0] and _equal(built[1], base[1], skip=j) and _equal_outputs(built[2], base[2])
+            except (ComponentError, ValueError, ArithmeticError, TypeError, RuntimeError):
+                same = False   # a value the component refuses (a switch, a count): kept as built
+            finally:
+                comp.p[pname] = value
+            if same:
+                tunable.append((f"{name}.{pname}", at + j, value, unit, text))
+            else:
+                fixed.append(f"{name}.{pname}")
+        _built_from(system, name)                   # as the study built it
+        at += len(c_core(system, name).parameters)
+    return Tunable(tunable, fixed)
+
+
+def _equal(a: list, b: list, skip: int) -> bool:
+    return len(a) == len(b) and all(x == y for i, (x, y) in enumerate(zip(a, b)) if i != skip)
+
+
+def _equal_outputs(a: dict, b: dict) -> bool:
+    return a.keys() == b.keys() and all(np.array_equal(np.asarray(a[k]), np.asarray(b[k])) for k in a)
+
 def state_offsets(sizes: list[int]) -> tuple[list[int], int]:
     """(each component's offset in the loop's state, the state's bytes): the states one after the
     other, each of max(size, 1) bytes rounded up to a multiple of ALIGN."""
@@ -155,20 +216,25 @@ def fmu_units(loop: CompiledLoop) -> dict[str, str]:
     return units
 
 
-def _core_tables(ident: str, system: System, ports: Ports, loop: CompiledLoop, offsets: list[int]) -> list[str]:
-    """The model core's head: the sampled-model macros (no parameter, the ports, the base step as
-    period), the loop's phases, and its constant tables (parameters, initial values, state offsets,
-    the published value each output reads, the input slots each FMU input writes)."""
+def _core_tables(ident: str, system: System, ports: Ports, loop: CompiledLoop, offsets: list[int],
+                 tunable: Tunable) -> list[str]:
+    """The model core's head: the sampled-model macros (the tunable parameters, the ports, the base
+    step as period), the loop's phases, and its constant tables (parameters, where each tunable one
+    sits among them, initial values, state offsets, the published value each output reads, the
+    input slots each FMU input writes)."""
     s, n = system.study.study, len(offsets)
     inputs, outputs, slots = ports.inputs, ports.outputs, ports.slots
+    tuned = tunable.parameters
     return [
         f"/* {ident}: the whole loop of {Path(str(system.study.path)).name} ({n} components), one base step "
         f"{float(s.base_step)!r} s a sample (generated by fmu_export.loop_fmu) */",
         "#include <math.h>", "#include <stdlib.h>", "#include <string.h>",
-        "#define MODEL_NPAR 0", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
+        f"#define MODEL_NPAR {len(tuned)}", "#define MODEL_PAR_FIXED 1", f"#define MODEL_NIN {len(inputs)}", f"#define MODEL_NOUT {len(outputs)}",
         f"#define MODEL_PERIOD {float(s.base_step)!r}",
-        "static const double MODEL_PAR_START[1] = {0.0};",
-        'static const char *const MODEL_PAR_NAMES[1] = {""};',
+        f"static const double MODEL_PAR_START[MODEL_NPAR + 1] = {{{c_array([t[2] for t in tuned]) or '0.0'}}};",
+        f"static const char *const MODEL_PAR_NAMES[MODEL_NPAR + 1] = {{{c_strings(t[0] for t in tuned)}}};",
+        f"static const int LOOP_TUNE[MODEL_NPAR + 1] = {{{', '.join(str(t[1]) for t in tuned) or '0'}}};",
+        f"#define LOOP_NPAR {max(len(loop.par), 1)}",
         f"static const char *const MODEL_IN_NAMES[MODEL_NIN + 1] = {{{c_strings(i[0] for i in inputs)}}};",
         f"static const char *const MODEL_OUT_NAMES[MODEL_NOUT + 1] = {{{c_strings(o[0] for o in outputs)}}};",
         f"static const double LOOP_IN_START[MODEL_NIN + 1] = {{{c_array(ports.starts) or '0.0'}}};",
@@ -177,7 +243,7 @@ def _core_tables(ident: str, system: System, ports: Ports, loop: CompiledLoop, o
         "void agc_sample_phase(void *const *st, const double *par, double *pub, double *in, long k);",
         "void agc_continuous_phase(void *const *st, const double *par, double *pub, double *in, long k);",
         f"#define LOOP_N {n}",
-        f"static const double LOOP_PAR[{max(len(loop.par), 1)}] = {{{c_array(loop.par) or '0.0'}}};",
+        f"static const double LOOP_PAR[LOOP_NPAR] = {{{c_array(loop.par) or '0.0'}}};",
         f"static const double LOOP_PUB0[{max(len(loop.pub0), 1)}] = {{{c_array(loop.pub0) or '0.0'}}};",
         f"static const double LOOP_IN0[{max(len(loop.in0), 1)}] = {{{c_array(loop.in0) or '0.0'}}};",
         f"static const unsigned long LOOP_OFFSET[LOOP_N] = {{{', '.join(map(str, offsets))}}};",
@@ -188,35 +254,41 @@ def _core_tables(ident: str, system: System, ports: Ports, loop: CompiledLoop, o
 
 
 def _core_functions(lay, total: int) -> list[str]:
-    """The model core's state (base step k, published values, inputs, the components' states by
-    value) and its functions: start, and a sample (write the FMU inputs into their slots, the
-    sample phase, read the outputs, the continuous phase to k + 1)."""
+    """The model core's state (base step k, the loop's parameters with the tunable ones written in,
+    published values, inputs, the components' states by value) and its functions: start, and a
+    sample (the tunable parameters and the FMU inputs written into their slots, the sample phase,
+    the outputs read, the continuous phase to k + 1)."""
     return [
         "typedef struct {",
         "    long k;                                   /* the base step whose row the next sample gives */",
+        "    double par[LOOP_NPAR];                    /* the loop's parameters, the tunable ones as set */",
         f"    double pub[{max(lay.n_pub, 1)}], in[{max(lay.n_in, 1)}];",
         f"    unsigned char mem[{max(total, ALIGN)}] __attribute__((aligned({ALIGN})));   /* the components' states */",
         "} ModelState;",
         "static void loop_states(ModelState *s, void **st) {",
         "    for (int i = 0; i < LOOP_N; i++) st[i] = s->mem + LOOP_OFFSET[i];",
         "}",
+        "static void loop_tuned(ModelState *s, const double *p) {",
+        "    for (int i = 0; i < MODEL_NPAR; i++) s->par[LOOP_TUNE[i]] = p[i];",
+        "}",
         "static void model_start(ModelState *s, const double *p) {",
         "    void *st[LOOP_N];",
-        "    (void)p;",
         "    memset(s, 0, sizeof *s);",
+        "    memcpy(s->par, LOOP_PAR, sizeof s->par);",
+        "    loop_tuned(s, p);",
         f"    memcpy(s->pub, LOOP_PUB0, sizeof(double) * {lay.n_pub});",
         f"    memcpy(s->in, LOOP_IN0, sizeof(double) * {lay.n_in});",
         "    loop_states(s, st);",
-        "    agc_start_all(st, LOOP_PAR);",
+        "    agc_start_all(st, s->par);",
         "}",
         "static void model_sample(ModelState *s, const double *p, const double *in, double *out) {",
         "    void *st[LOOP_N];",
-        "    (void)p;",
+        "    loop_tuned(s, p);",
         "    loop_states(s, st);",
         "    for (int j = 0; j < LOOP_NSLOT; j++) s->in[LOOP_SLOT[j][0]] = in[LOOP_SLOT[j][1]];",
-        "    agc_sample_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    agc_sample_phase(st, s->par, s->pub, s->in, s->k);",
         "    for (int o = 0; o < MODEL_NOUT; o++) out[o] = s->pub[LOOP_OUT[o]];",
-        "    agc_continuous_phase(st, LOOP_PAR, s->pub, s->in, s->k);",
+        "    agc_continuous_phase(st, s->par, s->pub, s->in, s->k);",
         "    s->k++;",
         "}", ""]
 
@@ -233,16 +305,21 @@ def loop_model(system: System, declared: str = "the study's [exports]") -> tuple
     s = system.study.study
     ident = identifier(s.name)
     units = fmu_units(loop)
-    body = "\n".join(_core_tables(ident, system, ports, loop, offsets) + _core_functions(lay, total))
+    tunable = tunable_parameters(system, lay.names)
+    body = "\n".join(_core_tables(ident, system, ports, loop, offsets, tunable) + _core_functions(lay, total))
     token = token_of(body + "".join(units.values()) + loop.sim.key)
-    core = body.replace("#define MODEL_NPAR 0", f'#define MODEL_TOKEN "{token}"\n#define MODEL_NPAR 0')
+    core = body.replace("#define MODEL_NPAR ", f'#define MODEL_TOKEN "{token}"\n#define MODEL_NPAR ', 1)
     description = (f"the whole loop of {Path(str(system.study.path)).name} ({', '.join(lay.names)}), compiled from the "
                    f"components' C cores; one sample every base step of {float(s.base_step)!r} s")
-    note = ports.note + (f"; one sample every {float(s.base_step)!r} s (the study's base step: the communication step "
-                         f"to use); the study's parameters and seed are compiled in (--set them and export again)")
-    model = SampledModel(ident, token, description, float(s.base_step), [], ports.inputs, ports.outputs, deps, core,
+    fixed = ", ".join(tunable.fixed[:6]) + (f" and {len(tunable.fixed) - 6} more" if len(tunable.fixed) > 6 else "")
+    note = ports.note + (f"; one sample every {float(s.base_step)!r} s (the study's base step, or a whole multiple of "
+                         f"it, as the communication step); {len(tunable.parameters)} parameters to set before the "
+                         f"initialization ends (component.parameter); compiled in: the seed" + (f", {fixed}" if fixed else "")
+                         + " (--set them and export again)")
+    parameters = [(name, value, unit, text) for name, _, value, unit, text in tunable.parameters]
+    model = SampledModel(ident, token, description, float(s.base_step), parameters, ports.inputs, ports.outputs, deps, core,
                          sorted(set(loop.files)), units,
-                         ports.starts if ports.inputs else None, float(s.stop_time))
+                         ports.starts if ports.inputs else None, float(s.stop_time), "fixed")
     return model, note
 
 

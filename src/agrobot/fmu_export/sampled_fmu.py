@@ -52,6 +52,7 @@ class SampledModel:
     units: dict[str, str] = field(default_factory=dict)      # further generated translation units (file: C text)
     input_starts: list[float] | None = None      # the inputs' start values (default 0; the core defines MODEL_IN_START)
     stop_time: float | None = None               # s: the default experiment's end, when the model has one
+    parameter_variability: str = "tunable"       # or "fixed": set before the initialization ends (MODEL_PAR_FIXED)
 
 
 def _initial_dependencies(model: SampledModel, output: str) -> list[str]:
@@ -76,9 +77,9 @@ def _units(model: SampledModel) -> list[str]:
 
 def _declare(model: SampledModel, variable) -> None:
     """Call ``variable(name, vr, causality, variability, unit, description, start, initial)`` for
-    every parameter (tunable, exact), input and output (discrete, calculated) of the model."""
+    every parameter (tunable or fixed, exact), input and output (discrete, calculated) of the model."""
     for i, (name, start, unit, desc) in enumerate(model.parameters):
-        variable(name, i, "parameter", "tunable", unit, desc, start, "exact")
+        variable(name, i, "parameter", model.parameter_variability, unit, desc, start, "exact")
     for i, (name, unit, desc) in enumerate(model.inputs):
         variable(name, VR_INPUT0 + i, "input", "discrete", unit, desc,
                  model.input_starts[i] if model.input_starts is not None else 0.0)

@@ -10,6 +10,7 @@
  * - the call sequence is checked (instantiated -> initialization -> step -> terminated; reset from
  *   any), an input or parameter that is NaN or infinite is refused; each refusal is an error status
  *   with a logger message that names the variable or the call.
+ * Parameters are tunable, or fixed (MODEL_PAR_FIXED: set before the initialization ends).
  * Value references: parameters 0.., time VR_TIME, inputs VR_INPUT0.., outputs VR_OUTPUT0.. */
 #include <math.h>
 #include <stdarg.h>
@@ -17,6 +18,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#ifndef MODEL_PAR_FIXED
+#define MODEL_PAR_FIXED 0     /* 1: parameters are set before the initialization ends (variability fixed) */
+#endif
 #define VR_TIME 999u            /* FMI 3.0's independent variable */
 #define VR_INPUT0 1000u
 #define VR_OUTPUT0 2000u
@@ -172,6 +176,10 @@ static SIStatus si_set(SampledInstance *s, const unsigned vr[], size_t n, const 
         if (r < MODEL_NPAR) {
             what = MODEL_PAR_NAMES[r];
             slot = &s->par[r];
+            if (MODEL_PAR_FIXED && s->mode == MODE_STEP) {
+                si_log(s, "%s is a fixed parameter: set it before the initialization ends", what);
+                return SI_ERROR;
+            }
         } else if (r >= VR_INPUT0 && r < VR_INPUT0 + MODEL_NIN) {
             what = MODEL_IN_NAMES[r - VR_INPUT0];
             slot = &s->in[r - VR_INPUT0];
