@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .component import Component
 from .errors import did_you_mean
-from .registry import import_study_module, registry
+from .registry import failed_plugins_note, import_study_module, registry
 from .study import Study, StudyError
 
 
@@ -53,7 +53,14 @@ def entry_point_type(type_name: str):
     """The class an installed package provides as entry point ``type_name`` of ``<root>.components``,
     None when none does."""
     found = [ep for ep in entry_points(group=ENTRY_POINTS) if ep.name == type_name]
-    return found[0].load() if found else None
+    if not found:
+        return None
+    try:
+        return found[0].load()
+    except Exception as exc:  # noqa: BLE001 - any fault of a third party's code
+        dist = getattr(getattr(found[0], "dist", None), "name", None) or "an unknown distribution"
+        raise StudyError(f"type {type_name!r}: the entry point of {dist} ({ENTRY_POINTS}: {found[0].value}) cannot "
+                         f"be loaded: {type(exc).__name__}: {exc}") from None
 
 
 def resolve_type(type_name: str, package: str | None, where: str) -> type[Component]:
@@ -67,7 +74,8 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
         packages = ([package] if package else []) + registry().component_packages
         if not packages:
             raise StudyError(f"{where}: type {type_name!r}: no component package is registered (install the "
-                             f"project: pip install -e .) and study.component_package is not set")
+                             f"project: pip install -e .) and study.component_package is not set"
+                             + failed_plugins_note())
         candidates, attr = [f"{p}.{type_name}" for p in dict.fromkeys(packages)], "COMPONENT"
     module = None
     for module_name in candidates:
@@ -87,7 +95,7 @@ def resolve_type(type_name: str, package: str | None, where: str) -> type[Compon
                          f"{' or '.join(repr(c) for c in candidates)}"
                          + did_you_mean(type_name, known)
                          + (" (a module of your own: put its folder in [study] components_path, relative to the "
-                            "study file)" if ":" in type_name else ""))
+                            "study file)" if ":" in type_name else "") + failed_plugins_note())
     cls = getattr(module, attr, None)
     if cls is None:
         raise StudyError(f"{where}: type {type_name!r}: module {module_name!r} has no {attr!r}")

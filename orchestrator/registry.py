@@ -14,7 +14,9 @@ The orchestrator itself names no package, table or tool of any project.
 from __future__ import annotations
 
 import argparse
+import copy
 import importlib
+import sys
 import warnings
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -51,6 +53,7 @@ class Registry:
     run_options: list[RunOption] = field(default_factory=list)
     module_aliases: dict[str, str] = field(default_factory=dict)  # former top-level name -> its current one
     loaded: list[str] = field(default_factory=list)
+    failed: dict[str, str] = field(default_factory=dict)   # entry point -> why it was left out
 
     def add_component_package(self, package: str) -> None:
         if package not in self.component_packages:
@@ -80,20 +83,40 @@ _REGISTRY: Registry | None = None
 
 
 def registry() -> Registry:
-    """The registry, filled once from the installed plugins."""
+    """The registry, filled once from the installed plugins. A plugin that cannot be imported or
+    whose ``register`` raises is named in one warning line (its distribution, entry point and
+    error), left out whole (what it registered before failing is dropped) and remembered in
+    ``failed``: every command that does not need it works."""
     global _REGISTRY
     if _REGISTRY is None:
         reg = Registry()
         for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
+            before = copy.deepcopy(reg)
             try:
-                plugin = ep.load()
-            except ImportError as exc:
-                raise ImportError(f"orchestrator plugin {ep.name!r} ({ep.value}) cannot be imported: {exc} "
-                                  f"(is a script's folder shadowing a package of that name on sys.path?)") from exc
-            plugin(reg)
+                ep.load()(reg)
+            except Exception as exc:  # noqa: BLE001 - any fault of a third party's code
+                reg = before
+                reg.failed[ep.name] = _failure(ep, exc)
+                print(f"warning: {reg.failed[ep.name]}; its components and commands are unavailable", file=sys.stderr)
+                continue
             reg.loaded.append(ep.name)
         _REGISTRY = reg
     return _REGISTRY
+
+
+def _failure(ep, exc: Exception) -> str:
+    """One line naming a plugin that failed: distribution, entry point, the error."""
+    dist = getattr(getattr(ep, "dist", None), "name", None) or "an unknown distribution"
+    what = "cannot be imported" if isinstance(exc, ImportError) else "failed to register"
+    hint = " (is a script's folder shadowing a package of that name on sys.path?)" if isinstance(exc, ImportError) else ""
+    return (f"plugin {ep.name!r} of {dist} ({GROUP}: {ep.value}) {what}: {type(exc).__name__}: "
+            f"{str(exc).splitlines()[0] if str(exc) else ''}{hint}")
+
+
+def failed_plugins_note() -> str:
+    """'' or a sentence naming the plugins that failed (for a message about something not found)."""
+    failed = registry().failed
+    return "" if not failed else " Plugins that failed to load: " + "; ".join(failed.values()) + "."
 
 
 _NOTED: set[str] = set()
