@@ -42,7 +42,7 @@ def test_a_broken_plugin_is_named_once_and_every_command_still_works(tmp_path):
         assert "'raiser' of brokenplug (agrobot.plugins: brokenplug:register) failed to register: RuntimeError: " \
                "boom in register" in warnings[1]
     out = tmp_path / "run"
-    done = _agrobot(env, "run", "studies/figure8.toml", "--set", "study.stop_time=8", "--out", str(out), "--no-plots")
+    done = _agrobot(env, "run", "studies/figure8.toml", "--set", "study.stop_time=15", "--out", str(out), "--no-plots")
     assert done.returncode == 0, done.stderr
     assert (out / "run.json").is_file()
 
