@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from .log import LogError
+from .mdf4_links import check_links
 
 BUS_CHANNEL = "CAN_DataFrame"
 _NAME = re.compile(r"[^A-Za-z0-9_]+")
@@ -45,6 +46,7 @@ def _open(path: Path):
     if not head.startswith(b"MDF "):
         raise LogError(f"{path}: not an MDF file: an ASAM MDF file starts with 'MDF ' (its identification "
                        f"block), this one with {head[:8]!r}")
+    check_links(path)
     why = None
     try:
         with warnings.catch_warnings():
