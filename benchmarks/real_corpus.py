@@ -347,7 +347,11 @@ def _shifted(kin, yaw, ok, lag: int):
 
 
 def reference_numbers(rec: dict, roots: dict) -> dict:
+    """The second method's numbers; [recording.reference] shift moves a channel earlier by a
+    latency its publisher measured."""
     ch = read_reference(rec, roots)
+    for name, seconds in rec["reference"].get("shift", {}).items():
+        ch[name] = (ch[name][0] - seconds, ch[name][1])
     cs = course_and_speed(ch)
     out = {"rates": {k: rates(*v) for k, v in ch.items()}, "reversing": reversing(ch),
            "top_speed": float(np.percentile(cs[2], 99)) if cs is not None and len(cs[2]) else math.nan,
@@ -364,7 +368,8 @@ def import_options(rec: dict):
 
     c = rec.get("convert", {})
     return ImportOptions(signals=[parse_signal(s) for s in c.get("signals", [])], time=c.get("time"),
-                         wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"))
+                         wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"),
+                         align=c.get("align", "auto"))
 
 
 def study_path(rec: dict, roots: dict) -> str | None:
