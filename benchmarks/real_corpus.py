@@ -17,7 +17,7 @@ reference number, the project's, and whether they agree:
   the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation; beside identify's
   steering gain (agree within 30 %).
 * command-to-yaw delay: that lag, found by cross-correlation over -1..1 s; beside identify's
-  delay plus its lag (agree within 0.08 s).
+  delay plus its lag (agree within 0.08 s; a delay on its zero bound does not agree).
 * identify's understeer gradient and held-out fit, the audit's findings and the published figures,
   printed without a verdict.
 
@@ -491,9 +491,11 @@ def kinematic_rows(ref: dict, ident) -> list[tuple]:
              f"{k['seconds']:.0f} s)", f"steer_gain {_f(gain)}",
              _agree(None if gain is None or math.isnan(slope) else abs(gain - slope) <= 0.3 * abs(slope)))]
     total = None if got.get("delay") is None else got["delay"] + (got.get("lag") or 0.0)
+    verdict = _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)
+    if got.get("delay") is not None and got["delay"] < 1e-6:
+        verdict = "NO (on its zero bound)"        # a verdict never sits on a bound
     rows.append(("command-to-yaw delay [s]", f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
-                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}",
-                 _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)))
+                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}", verdict))
     return rows
 
 
