@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from agrobot.identification.driving import forward_jacobian
+from agrobot.estimation import covariance, effective_size, forward_jacobian
 from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
@@ -126,6 +126,11 @@ class Replay:
             return f[name].to_numpy(float) if name in f else np.full(n, np.nan)
 
         self.cmd, self.delta, self.gyro = column("delta_cmd"), column("delta"), column("yaw_rate")
+        # a yaw rate from the GNSS course says nothing on slow stretches (nan): not judged there, and
+        # bridged linearly for the dead-reckoned track
+        self.yaw_measured = np.isfinite(self.gyro)
+        if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
+            self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
         vehicle = self.baseline.vehicle
         # no measured wheel angle, an angle-commanded steering: the yaw stage is driven by the
         # steering replayed from delta_cmd, whose parameters it then judges; ``delta`` holds the
@@ -164,7 +169,7 @@ class Replay:
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
-        self.masks = {"steering": steering, "yaw": {k: m & moving for k, m in steering.items()}}
+        self.masks = {"steering": steering, "yaw": {k: m & moving & self.yaw_measured for k, m in steering.items()}}
         # speed: the GPS chord speed (1 s chords, centred) where a chord exists and the tractor moves
         k, d = chords(self.gps, self.h)
         self.chord_k, self.chord_span = k, 2 * k * self.h
@@ -455,15 +460,6 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     return tuple(UNCERTAIN[stage]) + tuple(extra)
 
 
-def effective_size(res: np.ndarray) -> float:
-    """n (1 - rho1)/(1 + rho1) with rho1 the lag-1 autocorrelation, clipped to [0, 0.98]."""
-    r = res - res.mean()
-    denom = float(r @ r)
-    rho = float(r[1:] @ r[:-1]) / denom if denom > 0 else 0.0
-    rho = min(max(rho, 0.0), 0.98)
-    return len(res) * (1 - rho) / (1 + rho)
-
-
 @dataclass
 class CandidateFit:
     """One fitted model: its values and, per stage, its residual sums on both parts."""
@@ -538,15 +534,10 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
         rmse[s] = float(np.sqrt(np.mean(rt ** 2)))
     std = {}
     if best is not None:
-        J = best.jac
-        dof = max(1, len(best.fun) - len(free))
-        inflation = sum(n.values()) / max(sum(n_eff.values()), 1.0)
-        try:
-            cov = np.linalg.inv(J.T @ J) * (2 * best.cost / dof) * inflation
-            for i, p in enumerate(free):
+        cov = covariance(best.jac, 2 * best.cost, sum(n.values()), sum(n_eff.values()))
+        for i, p in enumerate(free):
+            if np.isfinite(cov[i, i]):
                 std[p.name] = float(math.sqrt(max(cov[i, i], 0.0)) * p.scale)
-        except np.linalg.LinAlgError:
-            pass
     return CandidateFit(values, rss, n, n_eff, rmse, std, tuple(p.name for p in free))
 
 
