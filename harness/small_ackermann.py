@@ -88,3 +88,16 @@ def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None
                           "x": rec[k_p, 2] + 0.02 * noise[3][k_p], "y": rec[k_p, 3] + 0.02 * noise[4][k_p]})
     return frame, {**tr, "wheelbase": WHEELBASE, "gain_left": tr["gain"] * (1 + tr["asymmetry"]),
                    "gain_right": tr["gain"] * (1 - tr["asymmetry"]), "heading_rate": heading_rate}
+
+
+def write_study(folder) -> "Path":
+    """A study of the machine: the figure-8 study's components with a [vehicle] table of a small
+    robot of 1.27 m wheelbase (2.0 x 1.1 m outline)."""
+    from pathlib import Path
+
+    from agrobot.studies import shipped
+
+    path = Path(folder) / "small_ackermann.toml"
+    path.write_text(Path(shipped("figure8.toml")).read_text() + f'\n[vehicle]\nclass = "robot"\nwheelbase = {WHEELBASE}\n'
+                    'length = 2.0\nwidth = 1.1\nsteering = "angle"\ndrive = "ackermann"\n')
+    return path

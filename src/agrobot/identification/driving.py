@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
 from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian
@@ -59,6 +60,13 @@ class DrivingLog:
     notes: list[str] = field(default_factory=list)
     measured: np.ndarray | None = None         # where r is measured (a course: not on slow stretches)
     update_times: np.ndarray | None = None     # the yaw measurement's own update times (None: every sample)
+    kernel: np.ndarray | None = None           # the averaging a derived yaw rate applies (None: a gyro's)
+
+    def as_measured(self, r: np.ndarray) -> np.ndarray:
+        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``)."""
+        if self.kernel is None:
+            return r
+        return convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
 
     def updates_in(self, segs: "Segments", mask: np.ndarray | None = None) -> int | None:
         """How many of the yaw measurement's own updates fall on the scored samples (None: one
@@ -277,6 +285,7 @@ class YawModel:
                 z = z + hs * (1.5 * k1 + 0.5 * k2)
             d = d_next
         out *= np.tile(self.low_speed_scale[idx], (R, 1))
+        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
         out += per_row("gyro_bias")[:, None]
         if lateral:
             out_vy *= np.tile(self.low_speed_scale[idx], (R, 1))

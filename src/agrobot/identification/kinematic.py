@@ -48,14 +48,15 @@ def map_parameters(fit_bias: bool) -> list[Parameter]:
 
 
 def predicted(log: DrivingLog, values: dict, L: float) -> np.ndarray:
-    """r = v tan(w(t - tau)) / L + b on every sample (u before its run's start: its first value)."""
+    """r = v tan(w(t - tau)) / L + b on every sample (u before its run's start: its first value), as
+    the yaw measurement sees it (DrivingLog.as_measured)."""
     tau = values["delay"]
     u = log.u
     if tau > 0:
         tq = np.maximum(log.t - tau, log.run_start())
         u = np.interp(tq + log.run * 1e6, log.t + log.run * 1e6, log.u)
     w = np.where(u > 0, values["gain_left"], values["gain_right"]) * u + values["steer_offset"]
-    return log.v * np.tan(np.clip(w, -1.3, 1.3)) / L + values.get("gyro_bias", 0.0)
+    return log.as_measured(log.v * np.tan(np.clip(w, -1.3, 1.3)) / L) + values.get("gyro_bias", 0.0)
 
 
 def fit_map(log: DrivingLog, fit_segs: Segments, L: float, fixed: dict) -> dict:

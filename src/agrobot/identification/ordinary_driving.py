@@ -178,6 +178,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
+    log.kernel = measured.kernel(log.h)
     notes = list(log.notes) + [measured.text]
     notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
                  "steering chain" if command else "input: the measured wheel angle delta")
@@ -249,6 +250,7 @@ def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, v
     part = kinematic_report(log, segs, L, fixed, p95)
     smap = part["steering_map"]
     params = {k: smap[k] for k in ("gain_left", "gain_right", "steer_offset", "delay", "gyro_bias") if k in smap}
+    params["steer_gain"] = smap["gain"]                   # the mean of both sides
     if bias_info:
         params["gyro_bias"] = {**bias_info, "identifiable": True}
     return {"method": "kinematic model r = v tan(delta) / L, segments held out", "source": where, "model": "kinematic",

@@ -18,7 +18,8 @@ and interpolated linearly onto the rows: a yaw rate averaged over about two upda
 without delay. Noise model: the heading's white noise sigma_psi from its third differences on its
 updates (var(d3) = 20 sigma_psi^2; the motion's jerk is far smaller), so the derived yaw rate on
 the rows has variance sigma_psi^2 / dt_u^2 on average over the interpolation (dt_u its update
-interval). Latency: an update is stamped on the first row that carries it, up to one row late; a
+interval). The model's yaw rate is averaged alike before it is compared (``kernel``: what the
+derivation does to the true yaw rate). Latency: an update is stamped on the first row that carries it, up to one row late; a
 receiver's own latency adds to the fitted delay (the two are not told apart).
 """
 from __future__ import annotations
@@ -45,6 +46,7 @@ class YawMeasurement:
     latency: float                # s: the stamping latency of its updates (up to one row)
     update_times: np.ndarray | None = None    # its yaw-rate samples' times (None: every row)
     course_speed: float | None = None
+    chord_updates: int = 1                    # a course: the updates a chord spans
 
     @property
     def text(self) -> str:
@@ -54,6 +56,28 @@ class YawMeasurement:
         return (f"yaw measured by: {self.kind}{speed}, {self.update_hz:.3g} Hz updates, differenced on its own updates "
                 f"(yaw-rate noise {self.noise:.2g} rad/s on the rows; stamped up to {1e3 * self.latency:.0f} ms late, "
                 f"a receiver latency is in the fitted delay); no gyro yaw_rate in the log")
+
+    def kernel(self, h: float) -> np.ndarray | None:
+        """The weights (odd length, sum 1) on a grid of step ``h`` with which the derived yaw rate
+        averages the true one: a gyro none; a heading differenced over its update interval dt_u and
+        interpolated between its midpoints, a box of dt_u convolved with a triangle of half-width dt_u;
+        a course of chords T = m dt_u long differenced over T, a triangle of half-width T."""
+        if self.kind == "gyro" or not math.isfinite(self.update_hz):
+            return None
+        dt = 1.0 / self.update_hz
+        fine = dt / 50.0
+        if self.kind == "GNSS course":
+            span = self.chord_updates * dt
+            s = np.arange(-span, span + fine / 2, fine)
+            w = np.maximum(0.0, 1.0 - np.abs(s) / span)
+        else:
+            s = np.arange(-dt, dt + fine / 2, fine)
+            w = np.convolve(np.maximum(0.0, 1.0 - np.abs(s) / dt), np.ones(int(round(dt / fine))), mode="same")
+        half = int(s[-1] // h)
+        if half < 1:
+            return None
+        k = np.interp(np.arange(-half, half + 1) * h, s, w)
+        return k / k.sum()
 
     def as_dict(self) -> dict:
         return {"kind": self.kind, "update_hz": self.update_hz, "noise": self.noise, "latency": self.latency,
@@ -135,7 +159,7 @@ def from_course(frame: pd.DataFrame, where: str, course_speed: float) -> tuple[n
     sigma = _noise(course[fwd][::m])
     h = float(np.median(np.diff(t)))
     return rows, YawMeasurement("GNSS course", 1.0 / dt_u, sigma / (m * dt_u), h if dt_u > 1.5 * h else 0.0, tr,
-                                course_speed)
+                                course_speed, m)
 
 
 def with_yaw_rate(frame: pd.DataFrame, where: str, course_speed: float = COURSE_SPEED
