@@ -10,10 +10,13 @@ r = v tan(w) / (L + K v^2), integrated at 200 Hz (Heun). Sensors, in 20 Hz rows:
 5 Hz and held between its updates (0.3 deg noise), the positions ``x``, ``y`` at 10 Hz, held
 (2 cm noise); no gyro. Driving: a path follower's steering, steps and ramps whose size keeps the
 lateral acceleration mostly below 0.4 m/s2 at each speed (larger at walking pace).
+
+Imported where used: agrobot.studies (only for the study written beside a log).
 """
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -90,11 +93,9 @@ def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None
                    "gain_right": tr["gain"] * (1 - tr["asymmetry"]), "heading_rate": heading_rate}
 
 
-def write_study(folder) -> "Path":
+def write_study(folder) -> Path:
     """A study of the machine: the figure-8 study's components with a [vehicle] table of a small
     robot of 1.27 m wheelbase (2.0 x 1.1 m outline)."""
-    from pathlib import Path
-
     from agrobot.studies import shipped
 
     path = Path(folder) / "small_ackermann.toml"

@@ -166,11 +166,13 @@ def with_yaw_rate(frame: pd.DataFrame, where: str, course_speed: float = COURSE_
                   ) -> tuple[pd.DataFrame, YawMeasurement | None]:
     """(the log with a ``yaw_rate``, what measured it): the gyro's when the log has one (or a yaw
     rate derived before, frame.attrs["yaw_measurement"]), else derived from ``heading``, else from
-    the course of ``x``, ``y``; (the log, None) when it has none of them. A derived yaw rate is nan
+    the course of ``x``, ``y``; (the log, None) when it has none of them or a gyro under another name. A derived yaw rate is nan
     where its measurement says nothing (a slow stretch for the course)."""
     known = frame.attrs.get("yaw_measurement")
     if "yaw_rate" in frame:
         return frame, known or YawMeasurement("gyro", float("nan"), float("nan"), 0.0)
+    if any(str(c).replace("_", "").replace("-", "").replace(" ", "").lower() == "yawrate" for c in frame.columns):
+        return frame, None           # a gyro under another name (YawRate): the caller says to rename it
     if "heading" in frame:
         rows, m = from_heading(frame, where)
     elif {"x", "y"} <= set(frame.columns):
