@@ -92,3 +92,17 @@ def test_diagnose_judges_the_yaw_stage_on_the_heading(small_study, tmp_path):
     assert "yaw" in result["stages_judged"]
     # the yaw stage's floor is at least the heading's own noise, not the interpolated rows' top band
     assert result["noise_floor"]["yaw"] >= 0.99 * result["yaw_measurement"]["noise"]
+
+
+def test_a_command_held_for_seconds_is_driving_not_a_multisine(small_study, tmp_path):
+    """The machine's path-follower command (random steps held 1.5-4 s) repeats itself at short lags
+    inside its holds, but has no period: identify takes the log as ordinary driving."""
+    from agrobot.identification.experiment import detect_period
+    from agrobot.identification.from_log import choose_method
+
+    frame, _ = make_small_log(5, duration=120.0)
+    with pytest.raises(LogError):
+        detect_period(frame["delta_cmd"].to_numpy(float))
+    path = tmp_path / "small.csv"
+    frame.drop(columns=["x", "y"]).to_csv(path, index=False)
+    assert choose_method(path, study=Study.load(small_study)) == "driving"

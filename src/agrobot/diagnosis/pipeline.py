@@ -431,7 +431,8 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     if measured is not None:
         result["yaw_measurement"] = measured.as_dict()
     frame, note = coarser_clock(frame)
-    note = "; ".join(x for x in (stretch, note) if x) or None
+    said = measured.text if measured is not None and measured.kind != "gyro" else None
+    note = "; ".join(x for x in (stretch, note, said) if x) or None
     replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
     return study, baseline, frame, replay, note
 
