@@ -85,3 +85,20 @@ def test_identify_and_diagnose_report_one_offset_side_by_side(tmp_path):
     said = [b for b in result["verdict_bullets"] if b.startswith("the steering offset: identify")]
     assert len(said) == 1 and "diagnose" in said[0]
     assert "they agree" in said[0] or "a different model structure" in said[0]
+
+
+@pytest.mark.slow
+def test_identify_and_diagnose_agree_where_their_models_coincide(tmp_path):
+    """The same machine with an offset alone (gain 1, no asymmetry): the diagnosis's steering is then
+    identify's map, and the two offsets agree within their intervals, both holding the truth's."""
+    from agrobot.diagnosis.pipeline import diagnosis
+    from harness.small_ackermann import make_small_log, write_study
+
+    frame, truth = make_small_log(1, duration=180.0, truth={"gain": 1.0, "asymmetry": 0.0})
+    path = tmp_path / "small.csv"
+    frame.to_csv(path, index=False)
+    result, _ = diagnosis(path, write_study(tmp_path), plots=False)
+    said = [b for b in result["verdict_bullets"] if b.startswith("the steering offset: identify")]
+    assert len(said) == 1 and "they agree" in said[0], said
+    fitted = next(e for e in result["effects"] if e["id"] == "steering_offset")["fitted"]["steer_angle_offset"]
+    assert fitted["interval"][0] <= truth["offset"] <= fitted["interval"][1]

@@ -24,6 +24,7 @@ from functools import cached_property
 
 import numpy as np
 import pandas as pd
+from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
 from agrobot.estimation import covariance, effective_size, forward_jacobian
@@ -129,6 +130,8 @@ class Replay:
         # a yaw rate from the GNSS course says nothing on slow stretches (nan): not judged there, and
         # bridged linearly for the dead-reckoned track
         self.yaw_measured = np.isfinite(self.gyro)
+        derived = f.attrs.get("yaw_measurement")
+        self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
         if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
             self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
         vehicle = self.baseline.vehicle
@@ -424,6 +427,7 @@ class Replay:
         simulates)."""
         out = []
         for pred in self.predicted_many(stage, sets):
+            pred = self.seen(stage, pred)
             if stage == "position":
                 res = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
             else:
@@ -443,7 +447,14 @@ class Replay:
             r = aligned_residuals(self.predicted(stage, v), self.gps, rows)
             return self.t[rows].ravel(), np.hypot(r[..., 0], r[..., 1]).ravel()
         keep = self.scored(stage)
-        return self.t[keep], (self.measured(stage) - self.predicted(stage, v))[keep]
+        return self.t[keep], (self.measured(stage) - self.seen(stage, self.predicted(stage, v)))[keep]
+
+    def seen(self, stage: str, pred: np.ndarray) -> np.ndarray:
+        """A stage's prediction as its measurement sees it: a yaw rate derived from a heading or a
+        course averages the true one (identification.yaw_measurement's kernel), the model's alike."""
+        if stage != "yaw" or self.yaw_kernel is None:
+            return pred
+        return convolve1d(pred, self.yaw_kernel[::-1], mode="nearest")
 
 
 def _named(need: str, columns) -> str:
