@@ -70,13 +70,17 @@ def test_identify_fits_the_tractor_on_the_gnss_course():
     assert understeer_gradient(1.0, 2.0) > 0          # the formula's sign: understeer positive
 
 
-@pytest.mark.parametrize("case, expect", [("frozen", "never updates"), ("degrees", "expected radians")])
-def test_a_heading_that_cannot_measure_yaw_is_named(case, expect):
+@pytest.mark.parametrize("case, expect", [("frozen", "never updates"), ("degrees", "expected radians"),
+                                          ("compass", "a compass heading")])
+def test_a_heading_that_cannot_measure_yaw_is_named(small_study, case, expect):
     frame, _ = make_small_log(3, duration=60.0)
     frame = frame.drop(columns=["x", "y"])
-    frame["heading"] = 0.3 if case == "frozen" else np.degrees(frame["heading"]) + 180.0
+    if case == "compass":                   # clockwise from north: the yaw rate's sign reversed
+        frame["heading"] = np.angle(np.exp(1j * (math.pi / 2 - frame["heading"])))
+    else:
+        frame["heading"] = 0.3 if case == "frozen" else np.degrees(frame["heading"]) + 180.0
     with pytest.raises(LogError) as err:
-        with_yaw_rate(frame, "small.csv")
+        identify_driving(frame, "small.csv", Study.load(small_study))
     assert "small.csv" in str(err.value) and "'heading'" in str(err.value) and expect in str(err.value)
 
 

@@ -261,6 +261,9 @@ class Replay:
                 why[stage] = (f"not judged: the log samples at {rate:.3g} Hz; the {stage} stage needs "
                               f"{MIN_RATE[stage]:g} Hz or more (steering time constants of tens of ms, yaw modes "
                               f"near 2 Hz)")
+            elif stage in ("position", "speed") and getattr(f.attrs.get("yaw_measurement"), "kind", "") == "GNSS course":
+                why[stage] = (f"not judged: the yaw rate comes from the GNSS course of these positions (no gyro, no "
+                              f"heading): the {stage} stage would judge the positions against themselves")
             elif stage in ("position", "speed") and step > MAX_POSITION_STEP:
                 why[stage] = (f"not judged: the positions move in steps of {step:.3g} m (float32 latitude/longitude?); "
                               f"the {stage} stage judges centimetres")

@@ -38,7 +38,7 @@ from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawMode
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
-from .yaw_measurement import COURSE_SPEED, with_yaw_rate
+from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
@@ -179,6 +179,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
     log.kernel = measured.kernel(log.h)
+    check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
     notes = list(log.notes) + [measured.text]
     notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
                  "steering chain" if command else "input: the measured wheel angle delta")

@@ -182,3 +182,19 @@ def with_yaw_rate(frame: pd.DataFrame, where: str, course_speed: float = COURSE_
     out = frame.assign(yaw_rate=rows)
     out.attrs = {**frame.attrs, "yaw_measurement": m}
     return out, m
+
+
+def check_sign(r: np.ndarray, asked: np.ndarray, where: str, measured: YawMeasurement) -> None:
+    """A derived yaw rate turning against the steering (correlation with v u below -0.3 where both
+    move) is a heading counted clockwise (a compass heading): refused, said how to give it."""
+    if measured.kind == "gyro":
+        return
+    ok = np.isfinite(r) & np.isfinite(asked) & (np.abs(asked) > 0)
+    if ok.sum() < 50 or np.std(r[ok]) == 0 or np.std(asked[ok]) == 0:
+        return
+    rho = float(np.corrcoef(r[ok], asked[ok])[0, 1])
+    if rho < -0.3:
+        column = "'heading'" if measured.kind == "dual-antenna heading" else "'x', 'y'"
+        raise LogError(f"{where}: column {column}: the yaw rate from the {measured.kind} turns against the steering "
+                       f"(correlation {rho:.2f} with v x steering): expected the yaw angle counter-clockwise "
+                       f"(from east toward north); a compass heading (clockwise from north) is pi/2 - heading")
