@@ -287,6 +287,8 @@ def shared_estimates(identified: dict, effects: list[dict]) -> list[str]:
         return []
     sd = (mine["interval"][1] - mine["interval"][0]) / (2 * Z95)
     effect = next((e for e in effects if e["id"] == "steering_offset"), None)
+    if effect is None and mine["interval"][0] <= 0.0 <= mine["interval"][1]:
+        return []                       # neither finds an offset: nothing to set side by side
     theirs = (effect["fitted"]["steer_angle_offset"]["value"], effect["fitted"]["steer_angle_offset"]["std"]) if effect \
         else (0.0, math.nan)
     kinematic = identified.get("final_model") == "kinematic"
