@@ -127,13 +127,7 @@ class Replay:
             return f[name].to_numpy(float) if name in f else np.full(n, np.nan)
 
         self.cmd, self.delta, self.gyro = column("delta_cmd"), column("delta"), column("yaw_rate")
-        # a yaw rate from the GNSS course says nothing on slow stretches (nan): not judged there, and
-        # bridged linearly for the dead-reckoned track
-        self.yaw_measured = np.isfinite(self.gyro)
-        derived = f.attrs.get("yaw_measurement")
-        self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
-        if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
-            self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
+        self._read_yaw(f)
         vehicle = self.baseline.vehicle
         # no measured wheel angle, an angle-commanded steering: the yaw stage is driven by the
         # steering replayed from delta_cmd, whose parameters it then judges; ``delta`` holds the
@@ -199,6 +193,16 @@ class Replay:
                 if stage in self.stages:
                     self.not_judged[stage] = f"not judged: {why}"
             self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+
+    def _read_yaw(self, f: pd.DataFrame) -> None:
+        """What measures the yaw (identification.yaw_measurement): a yaw rate from the GNSS course
+        says nothing on slow stretches (nan): not judged there (``yaw_measured``), bridged linearly
+        for the dead-reckoned track; one derived from a heading averages the true one (``yaw_kernel``)."""
+        self.yaw_measured = np.isfinite(self.gyro)
+        derived = f.attrs.get("yaw_measurement")
+        self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
+        if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
+            self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
 
     def _held_out(self, t_split: float, moving: np.ndarray) -> np.ndarray:
         """The held-out samples: after ``t_split`` (split "tail"), or every third ``window`` of the
