@@ -198,7 +198,7 @@ class Replay:
         """What measures the yaw (identification.yaw_measurement): a yaw rate from the GNSS course
         says nothing on slow stretches (nan): not judged there (``yaw_measured``), bridged linearly
         for the dead-reckoned track; one derived from a heading averages the true one (``yaw_kernel``)."""
-        self.yaw_measured = np.isfinite(self.gyro)
+        self.yaw_measured = np.isfinite(self.gyro) if "yaw_rate" in f else np.ones(len(self.t), bool)
         derived = f.attrs.get("yaw_measurement")
         self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
         if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
