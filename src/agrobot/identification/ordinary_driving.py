@@ -1,7 +1,10 @@
 """``identify LOG --study S`` on ordinary driving: the steps, the verdicts and the results' JSON.
 
 1. The log's steering input (measured wheel angle delta, else the command delta_cmd), speed v and
-   gyro yaw_rate on an even clock, cut into segments of driving; every third one held out.
+   gyro yaw_rate (without a gyro: a dual-antenna heading or the GNSS course differenced on its own
+   updates, identification.yaw_measurement) on an even clock, cut into segments of driving; every
+   third one held out. Where the turns are too gentle for the tyres to matter (the kinematic
+   regime, identification.kinematic) the steering map is fitted instead of steps 3-5.
 2. Gyro bias from the samples standing still (|v| < 2 cm/s, at least 2 s), else fitted.
 3. Linear single-track model (identification.driving) fitted on the fit segments: cornering
    coefficients, delay, lag, offset, gain (command input), bias.
