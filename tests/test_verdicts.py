@@ -15,6 +15,7 @@ from agrobot.diagnosis.catalogue import CATALOGUE, EFFECT_IDS
 from agrobot.diagnosis.effect import Effect, Parameter
 from agrobot.diagnosis.unexplained import signature
 from agrobot.diagnosis.verdict import audit_findings, conclude, judge_values
+from agrobot.estimation import Z95
 from agrobot.identification.comparisons import course_bias, pair
 from agrobot.identification.vehicle import Vehicle
 
@@ -146,7 +147,7 @@ def test_two_estimates_disagree_only_when_their_intervals_do_not_overlap():
     differ = pair("K", "rad/(m/s2)", ("dynamic", 0.0027, 0.0002), ("steady", 0.0011, 0.0002), "structure")
     assert agree["agree"] and agree["suggests"] == ""
     assert not differ["agree"] and differ["suggests"] == "structure"
-    assert differ["estimates"]["steady"]["interval"] == pytest.approx([0.0011 - 1.96 * 0.0002, 0.0011 + 1.96 * 0.0002])
+    assert differ["estimates"]["steady"]["interval"] == pytest.approx([0.0011 - Z95 * 0.0002, 0.0011 + Z95 * 0.0002])
 
 
 def test_the_gyro_bias_from_the_gnss_course_of_a_circle():

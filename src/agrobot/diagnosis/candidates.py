@@ -24,9 +24,10 @@ from functools import cached_property
 
 import numpy as np
 import pandas as pd
+from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
-from agrobot.identification.driving import forward_jacobian
+from agrobot.estimation import covariance, effective_size, forward_jacobian
 from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
@@ -126,6 +127,7 @@ class Replay:
             return f[name].to_numpy(float) if name in f else np.full(n, np.nan)
 
         self.cmd, self.delta, self.gyro = column("delta_cmd"), column("delta"), column("yaw_rate")
+        self._read_yaw(f)
         vehicle = self.baseline.vehicle
         # no measured wheel angle, an angle-commanded steering: the yaw stage is driven by the
         # steering replayed from delta_cmd, whose parameters it then judges; ``delta`` holds the
@@ -164,7 +166,7 @@ class Replay:
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
-        self.masks = {"steering": steering, "yaw": {k: m & moving for k, m in steering.items()}}
+        self.masks = {"steering": steering, "yaw": {k: m & moving & self.yaw_measured for k, m in steering.items()}}
         # speed: the GPS chord speed (1 s chords, centred) where a chord exists and the tractor moves
         k, d = chords(self.gps, self.h)
         self.chord_k, self.chord_span = k, 2 * k * self.h
@@ -191,6 +193,16 @@ class Replay:
                 if stage in self.stages:
                     self.not_judged[stage] = f"not judged: {why}"
             self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+
+    def _read_yaw(self, f: pd.DataFrame) -> None:
+        """What measures the yaw (identification.yaw_measurement): a yaw rate from the GNSS course
+        says nothing on slow stretches (nan): not judged there (``yaw_measured``), bridged linearly
+        for the dead-reckoned track; one derived from a heading averages the true one (``yaw_kernel``)."""
+        self.yaw_measured = np.isfinite(self.gyro) if "yaw_rate" in f else np.ones(len(self.t), bool)
+        derived = f.attrs.get("yaw_measurement")
+        self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
+        if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
+            self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
 
     def _held_out(self, t_split: float, moving: np.ndarray) -> np.ndarray:
         """The held-out samples: after ``t_split`` (split "tail"), or every third ``window`` of the
@@ -253,6 +265,9 @@ class Replay:
                 why[stage] = (f"not judged: the log samples at {rate:.3g} Hz; the {stage} stage needs "
                               f"{MIN_RATE[stage]:g} Hz or more (steering time constants of tens of ms, yaw modes "
                               f"near 2 Hz)")
+            elif stage in ("position", "speed") and getattr(f.attrs.get("yaw_measurement"), "kind", "") == "GNSS course":
+                why[stage] = (f"not judged: the yaw rate comes from the GNSS course of these positions (no gyro, no "
+                              f"heading): the {stage} stage would judge the positions against themselves")
             elif stage in ("position", "speed") and step > MAX_POSITION_STEP:
                 why[stage] = (f"not judged: the positions move in steps of {step:.3g} m (float32 latitude/longitude?); "
                               f"the {stage} stage judges centimetres")
@@ -419,6 +434,7 @@ class Replay:
         simulates)."""
         out = []
         for pred in self.predicted_many(stage, sets):
+            pred = self.seen(stage, pred)
             if stage == "position":
                 res = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
             else:
@@ -438,7 +454,14 @@ class Replay:
             r = aligned_residuals(self.predicted(stage, v), self.gps, rows)
             return self.t[rows].ravel(), np.hypot(r[..., 0], r[..., 1]).ravel()
         keep = self.scored(stage)
-        return self.t[keep], (self.measured(stage) - self.predicted(stage, v))[keep]
+        return self.t[keep], (self.measured(stage) - self.seen(stage, self.predicted(stage, v)))[keep]
+
+    def seen(self, stage: str, pred: np.ndarray) -> np.ndarray:
+        """A stage's prediction as its measurement sees it: a yaw rate derived from a heading or a
+        course averages the true one (identification.yaw_measurement's kernel), the model's alike."""
+        if stage != "yaw" or self.yaw_kernel is None:
+            return pred
+        return convolve1d(pred, self.yaw_kernel[::-1], mode="nearest")
 
 
 def _named(need: str, columns) -> str:
@@ -453,15 +476,6 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
     return tuple(UNCERTAIN[stage]) + tuple(extra)
-
-
-def effective_size(res: np.ndarray) -> float:
-    """n (1 - rho1)/(1 + rho1) with rho1 the lag-1 autocorrelation, clipped to [0, 0.98]."""
-    r = res - res.mean()
-    denom = float(r @ r)
-    rho = float(r[1:] @ r[:-1]) / denom if denom > 0 else 0.0
-    rho = min(max(rho, 0.0), 0.98)
-    return len(res) * (1 - rho) / (1 + rho)
 
 
 @dataclass
@@ -538,15 +552,10 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
         rmse[s] = float(np.sqrt(np.mean(rt ** 2)))
     std = {}
     if best is not None:
-        J = best.jac
-        dof = max(1, len(best.fun) - len(free))
-        inflation = sum(n.values()) / max(sum(n_eff.values()), 1.0)
-        try:
-            cov = np.linalg.inv(J.T @ J) * (2 * best.cost / dof) * inflation
-            for i, p in enumerate(free):
+        cov = covariance(best.jac, 2 * best.cost, sum(n.values()), sum(n_eff.values()))
+        for i, p in enumerate(free):
+            if np.isfinite(cov[i, i]):
                 std[p.name] = float(math.sqrt(max(cov[i, i], 0.0)) * p.scale)
-        except np.linalg.LinAlgError:
-            pass
     return CandidateFit(values, rss, n, n_eff, rmse, std, tuple(p.name for p in free))
 
 

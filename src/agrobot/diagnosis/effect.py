@@ -10,34 +10,13 @@ there and the verdict calls its rule.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
 from typing import ClassVar, Mapping
+
+from agrobot.estimation import Parameter
 
 from .plausibility import VehicleContext
 
-
-@dataclass(frozen=True)
-class Parameter:
-    name: str                 # key of the replay's value mapping
-    unit: str                 # SI unit
-    scale: float              # typical magnitude (optimiser scaling)
-    lower: float
-    upper: float
-    display_unit: str = ""
-    display_factor: float = 1.0
-    limit: tuple[float, float] | None = None   # the physical limit the range widens toward when a fit ends
-                                               # on a bound of [lower, upper] (None: the bounds are the limit)
-
-    def widened(self, value: float) -> "Parameter | None":
-        """This parameter with the bound ``value`` ended on moved to the physical limit, or None
-        when that bound is the limit already (then the value is not identifiable from the log)."""
-        lo, hi = self.limit or (self.lower, self.upper)
-        span = self.upper - self.lower
-        if abs(value - self.upper) <= 5e-3 * span and hi > self.upper:
-            return replace(self, upper=hi)
-        if abs(value - self.lower) <= 5e-3 * span and lo < self.lower:
-            return replace(self, lower=lo)
-        return None
+__all__ = ["Parameter", "BaselineStudy", "Effect"]     # Parameter: the shared estimation type
 
 
 class BaselineStudy:

@@ -6,7 +6,9 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
 
     sigma^2 = mean_{f in [0.35 fs, 0.5 fs]} S(f) * fs / 2     (S: one-sided Welch density)
 
-- steering, yaw: the white level of the stage's residual (wheel-angle sensor, gyro);
+- steering, yaw: the white level of the stage's residual (wheel-angle sensor, gyro); a yaw rate
+  derived from a heading or course (identification.yaw_measurement): at least its noise read on
+  the heading's own updates (the rows' top band holds only the interpolation);
 - speed: the GPS chord speed against the dead-reckoned chord speed; both are 1 s means, so the floor
   is propagated: var = 2 sigma_gps^2 / T^2 + sigma_v^2 / (T / h)   (T the chord span);
 - position: the dead-reckoned track integrates the gyro's and the speed's noise, so the floor is the
@@ -47,6 +49,10 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     for stage, sensor in (("steering", "delta"), ("yaw", "yaw_rate")):
         if stage in replay.stages:
             floors[stage] = sensors[sensor] = white_level(replay.residual_series(stage, values)[1], fs)
+    derived = replay.frame.attrs.get("yaw_measurement")
+    if "yaw" in replay.stages and derived is not None and math.isfinite(derived.noise):
+        # a yaw rate from a heading held between its updates: its noise from its own updates, not the rows'
+        floors["yaw"] = sensors["yaw_rate"] = max(floors["yaw"], derived.noise)
     if not {"position", "speed"} & set(replay.stages):
         floors["_sensors"] = sensors
         return floors

@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from agrobot.estimation import Z95, compare
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
+from agrobot.identification.yaw_measurement import with_yaw_rate
 from agrobot.measurements import LogError
 from agrobot.measurements.audit import require_causal
 from agrobot.measurements.recording import ImportOptions
@@ -241,6 +243,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
         both.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
                    f"each fit trades part of it for its other parameters (identify's free stiffnesses and lag, the "
                    f"diagnosis's study steering and bounded stiffness scales); steady circles at walking speed tell")
+    both += shared_estimates(identified, effects)
     held = identified.get("held_out_yaw") or {}
     mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
     if not (math.isfinite(mine) and math.isfinite(theirs)):
@@ -272,6 +275,34 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
                        f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
                        f"vehicle beyond what identify's single-track model holds")
     return out + both
+
+
+def shared_estimates(identified: dict, effects: list[dict]) -> list[str]:
+    """The steering offset both tools estimate on the log (estimation.compare): identify's beside
+    the diagnosis's (its steering_offset effect, else the baseline's none); when they disagree, why
+    (a different model structure: identify's steering map has a gain per side, the diagnosis's
+    steering the study's gain, so a gain error and a left/right asymmetry move its offset)."""
+    mine = (identified.get("parameters") or {}).get("steer_offset")
+    if not mine or not mine.get("interval") or not all(math.isfinite(x) for x in mine["interval"]):
+        return []
+    sd = (mine["interval"][1] - mine["interval"][0]) / (2 * Z95)
+    effect = next((e for e in effects if e["id"] == "steering_offset"), None)
+    if effect is None and mine["interval"][0] <= 0.0 <= mine["interval"][1]:
+        return []                       # neither finds an offset: nothing to set side by side
+    theirs = (effect["fitted"]["steer_angle_offset"]["value"], effect["fitted"]["steer_angle_offset"]["std"]) if effect \
+        else (0.0, math.nan)
+    kinematic = identified.get("final_model") == "kinematic"
+    why = ("a different model structure: identify's steering map has a gain per side (kinematic regime), the "
+           "diagnosis's steering the study's unit gain, so a gain error and a left/right asymmetry move its offset"
+           if kinematic else "a different model structure or different stretches (identify: segments spread over "
+                             "the log; the diagnosis: its fit part)")
+    c = compare("steering offset", "rad", ("identify", mine["value"], sd),
+                ("diagnose" if effect else "diagnose (no steering_offset supported: none)", *theirs), why)
+    text = "; ".join(f"{m} {math.degrees(e['value']):.3g} deg" + (f" [{math.degrees(e['interval'][0]):.3g}, "
+                                                                  f"{math.degrees(e['interval'][1]):.3g}]"
+                                                                  if math.isfinite(e["std"]) else "")
+                     for m, e in c["estimates"].items())
+    return [f"the steering offset: {text}: " + ("they agree" if c["agree"] else f"they differ: {c['suggests']}")]
 
 
 def explained_findings(audit: list[dict], effects: list[dict], tolerance: float = 0.05) -> list[dict]:
@@ -398,8 +429,12 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
     if imported is not None:
         result["recording"] = imported
+    frame, measured = with_yaw_rate(frame, str(log_path))       # no gyro: the yaw rate from a heading or course
+    if measured is not None:
+        result["yaw_measurement"] = measured.as_dict()
     frame, note = coarser_clock(frame)
-    note = "; ".join(x for x in (stretch, note) if x) or None
+    said = measured.text if measured is not None and measured.kind != "gyro" else None
+    note = "; ".join(x for x in (stretch, note, said) if x) or None
     replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
     return study, baseline, frame, replay, note
 

@@ -9,23 +9,9 @@ import math
 
 import numpy as np
 
-Z95 = 1.96
+from agrobot.estimation import compare
 
-
-def pair(quantity: str, unit: str, a: tuple[str, float, float], b: tuple[str, float, float],
-         suggests: str) -> dict:
-    """{quantity, unit, estimates: {method: {value, interval}}, agree, suggests}: ``a`` and ``b``
-    are (method, value, std); they agree when their 95 % intervals overlap (or a value is unknown;
-    a value without a std, one on its bound, counts as a point)."""
-    est = {}
-    for method, value, sd in (a, b):
-        w = Z95 * sd if math.isfinite(sd) else 0.0        # a value on its bound has no interval: the value alone
-        est[method] = {"value": value, "std": sd, "interval": [value - w, value + w]}
-    (ia, ib) = (est[a[0]]["interval"], est[b[0]]["interval"])
-    known = all(math.isfinite(x) for x in ia + ib)
-    agree = (not known) or (ia[0] <= ib[1] and ib[0] <= ia[1])
-    return {"quantity": quantity, "unit": unit, "estimates": est, "agree": bool(agree),
-            "suggests": "" if agree else suggests}
+pair = compare           # the shared rule (agrobot.estimation.compare): intervals that overlap agree
 
 
 def course_bias(t: np.ndarray, x: np.ndarray, y: np.ndarray, r: np.ndarray, v: np.ndarray,

@@ -30,14 +30,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
+from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian
 from agrobot.orchestrator.errors import InputError
 
 from agrobot.components.models.tyre import GAMMA_ROS2, axle_loads, rates
 from agrobot.components.models.yaw_dynamics import GRAVITY, TractorParameters
 
-Z95 = 1.959964
 
 
 class NotEnoughDriving(InputError, ValueError):
@@ -57,6 +58,25 @@ class DrivingLog:
     h: float
     input_name: str
     notes: list[str] = field(default_factory=list)
+    measured: np.ndarray | None = None         # where r is measured (a course: not on slow stretches)
+    update_times: np.ndarray | None = None     # the yaw measurement's own update times (None: every sample)
+    kernel: np.ndarray | None = None           # the averaging a derived yaw rate applies (None: a gyro's)
+
+    def as_measured(self, r: np.ndarray) -> np.ndarray:
+        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``)."""
+        if self.kernel is None:
+            return r
+        return convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
+
+    def updates_in(self, segs: "Segments", mask: np.ndarray | None = None) -> int | None:
+        """How many of the yaw measurement's own updates fall on the scored samples (None: one
+        per sample)."""
+        if self.update_times is None:
+            return None
+        lo = np.searchsorted(self.update_times, self.t - 0.5 * self.h)
+        fresh = np.searchsorted(self.update_times, self.t + 0.5 * self.h) > lo
+        keep = segs.scored if mask is None else segs.scored & mask
+        return int(fresh[segs.idx][keep].sum())
 
     @property
     def a_y(self) -> np.ndarray:
@@ -68,10 +88,12 @@ class DrivingLog:
         return self.t[first][np.cumsum(first) - 1]
 
 
-def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None) -> DrivingLog:
+def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None,
+              update_times: np.ndarray | None = None) -> DrivingLog:
     """Interpolate each gap-free stretch of the log onto an even clock (its median step, no finer
     than ``max_rate``: a faster log is averaged over the coarser step first); a step longer than
-    ``gap`` (default max(0.5 s, 5 median steps)) splits."""
+    ``gap`` (default max(0.5 s, 5 median steps)) splits; a yaw rate not measured (nan) is 0 and
+    marked in ``measured``."""
     t = frame["t"].to_numpy(float)
     dt = np.diff(t)
     step = float(np.median(dt))
@@ -100,7 +122,9 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
             parts[key].append(np.interp(grid, t[a:b], x))
         parts["run"].append(np.full(len(grid), k))
     arrays = {k: np.concatenate(v) for k, v in parts.items()}
-    return DrivingLog(arrays["t"], arrays["u"], arrays["v"], arrays["r"], arrays["run"], h, input_name, notes)
+    measured = np.isfinite(arrays["r"])
+    return DrivingLog(arrays["t"], arrays["u"], arrays["v"], np.where(measured, arrays["r"], 0.0), arrays["run"], h,
+                      input_name, notes, measured, update_times)
 
 
 @dataclass
@@ -126,7 +150,7 @@ def cut_segments(log: DrivingLog, min_speed: float, length: float = 10.0, burn_i
     about ``length`` s, each simulated from ``burn_in`` s before it (less where its stretch starts
     the run: a quarter of what precedes its end); every ``hold_every``-th piece is held out."""
     h = log.h
-    moving = log.v >= min_speed
+    moving = (log.v >= min_speed) & (log.measured if log.measured is not None else True)
     pieces = []
     edges = np.flatnonzero(np.diff(np.r_[0, moving.astype(int), 0]))
     for a, b in zip(edges[::2], edges[1::2]):
@@ -166,16 +190,6 @@ def _pieces(a: int, b: int, h: float, length: float, min_length: float) -> list[
     k = max(1, int(round(n * h / length)))
     bounds = np.linspace(a, b, k + 1).round().astype(int)
     return list(zip(bounds[:-1], bounds[1:]))
-
-
-@dataclass(frozen=True)
-class FreeParameter:
-    name: str
-    unit: str
-    lower: float
-    upper: float
-    scale: float
-    meaning: str
 
 
 class YawModel:
@@ -271,6 +285,7 @@ class YawModel:
                 z = z + hs * (1.5 * k1 + 0.5 * k2)
             d = d_next
         out *= np.tile(self.low_speed_scale[idx], (R, 1))
+        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
         out += per_row("gyro_bias")[:, None]
         if lateral:
             out_vy *= np.tile(self.low_speed_scale[idx], (R, 1))
@@ -292,7 +307,7 @@ def steady_state_gain(speed, K: float, L: float, gain: float = 1.0):
 @dataclass
 class FitResult:
     values: dict[str, float]
-    free: list[FreeParameter]
+    free: list[Parameter]
     cov: np.ndarray
     rss: float
     n: int
@@ -303,12 +318,8 @@ class FitResult:
         i = [p.name for p in self.free].index(name)
         return float(math.sqrt(max(self.cov[i, i], 0.0)))
 
-    def at_bound(self, p: FreeParameter) -> str | None:
-        x, span = self.values[p.name], p.upper - p.lower
-        for side, b in (("lower", p.lower), ("upper", p.upper)):
-            if abs(x - b) <= 2e-3 * span:
-                return side
-        return None
+    def at_bound(self, p: Parameter) -> str | None:
+        return p.at_bound(self.values[p.name])
 
     def interval_of(self, grad: dict[str, float]) -> float:
         """Standard deviation of a derived quantity with gradient ``grad`` (delta method; a
@@ -323,52 +334,7 @@ class FitResult:
         return self.n_eff * math.log(self.rss / self.n) + len(self.free) * math.log(self.n_eff)
 
 
-def effective_size(res_rows: list[np.ndarray]) -> float:
-    """sum over segments of n (1 - rho1) / (1 + rho1), rho1 the pooled lag-1 autocorrelation."""
-    num = den = 0.0
-    n = 0
-    for r in res_rows:
-        r = r - r.mean() if len(r) else r
-        num += float(r[1:] @ r[:-1]) if len(r) > 1 else 0.0
-        den += float(r @ r)
-        n += len(r)
-    rho = min(max(num / den, 0.0), 0.98) if den > 0 else 0.0
-    return n * (1 - rho) / (1 + rho)
-
-
-def forward_jacobian(residuals_many, x: np.ndarray, lower: np.ndarray, upper: np.ndarray, rel_step: float = 1e-3,
-                     f0: np.ndarray | None = None, floor: float = 0.0, signed: bool = True) -> np.ndarray:
-    """J[:, i] = (f(x + h_i e_i) - f(x)) / h_i, every point in one call ``residuals_many(points)`` (a
-    list of residual vectors, one per point): a batched simulation of n + 1 parameter sets costs
-    little more than one. The steps are scipy's (optimize._numdiff.approx_derivative, which
-    least_squares(diff_step=rel_step) calls): h = rel sign(x) max(|x|, floor), sign(0) = +1 (positive
-    when not ``signed``); sqrt(eps) sign(x) max(1, |x|) where h rounds away; reversed where x + h
-    leaves [lower, upper] and the reverse fits, else the longer side's distance; h = (x + h) - x,
-    exactly representable; J column-major like scipy's. ``f0``: f(x) when known, else evaluated with the steps."""
-    x = np.asarray(x, float)
-    sign = np.where(x >= 0, 1.0, -1.0) if signed else np.ones_like(x)
-    h = rel_step * sign * np.maximum(np.abs(x), floor)
-    h = np.where((x + h) - x == 0, np.finfo(float).eps ** 0.5 * sign * np.maximum(1.0, np.abs(x)), h)
-    below, above = x - lower, upper - x
-    fits = np.abs(h) <= np.maximum(below, above)
-    h = np.where(((x + h < lower) | (x + h > upper)) & fits, -h, h)
-    h = np.where(fits, h, np.where(above >= below, above, -below))
-    points = []
-    for i in range(len(x)):
-        xi = x.copy()
-        xi[i] = x[i] + h[i]
-        points.append(xi)
-    out = residuals_many(points if f0 is not None else [x] + points)
-    if f0 is None:
-        f0, out = out[0], out[1:]
-    f0 = np.asarray(f0, float)
-    J = np.empty((len(x), len(f0)))
-    for i, (f, p) in enumerate(zip(out, points)):
-        J[i] = (np.asarray(f, float) - f0) / (p[i] - x[i])
-    return J.T          # column-major, as scipy's: least_squares' products then sum in the same order
-
-
-def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, segs: Segments,
+def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: Segments,
         max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
     """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
     ``mask``, (S, L), when given)."""
@@ -393,19 +359,11 @@ def fit(model: YawModel, free: list[FreeParameter], start: dict, fixed: dict, se
     values = values_of(sol.x)
     res = sol.fun
     rows = [(r_meas - model.simulate(values, segs))[i][mask[i]] for i in range(len(segs.idx))]
-    n, n_eff = len(res), effective_size(rows)
-    dof = max(1, n - len(free))
+    n, n_eff = len(res), effective_size(rows, updates=model.log.updates_in(segs, mask))
     # a parameter on its bound is held there: the covariance is that of the others (its own: nan)
     span = hi - lo
-    active = (np.abs(sol.x - lo) <= 2e-3 * span) | (np.abs(sol.x - hi) <= 2e-3 * span)
-    cov_x = np.full((len(free), len(free)), np.nan)
-    inner = np.flatnonzero(~active)
-    if len(inner):
-        J = sol.jac[:, inner]
-        try:
-            cov_x[np.ix_(inner, inner)] = np.linalg.pinv(J.T @ J) * (2 * sol.cost / dof) * (n / max(n_eff, 1.0))
-        except np.linalg.LinAlgError:
-            cov_x[np.ix_(inner, inner)] = np.inf
+    held = (np.abs(sol.x - lo) <= 2e-3 * span) | (np.abs(sol.x - hi) <= 2e-3 * span)
+    cov_x = covariance(sol.jac, 2 * sol.cost, n, n_eff, held)
     scale = np.array([p.scale for p in free])
     return FitResult(values, free, cov_x * np.outer(scale, scale), float(res @ res), n, n_eff, res)
 

@@ -182,15 +182,23 @@ def hold_factor(r: np.ndarray, tol: float) -> float:
 
 
 def detect_period(r: np.ndarray, min_samples: int = 8) -> int:
-    """Smallest N with r[t] == r[t - N] (to 1e-6 of its range) over most of the record. A command
+    """Smallest N with r[t] == r[t - N] (to 1e-6 of its range) over most of the samples where the
+    command moves. A command
     held over m log samples (a 20 Hz command in a 100 Hz log) repeats itself at every lag below m:
     the search starts beyond m, in steps of m when m is whole."""
     scale = np.ptp(r) or 1.0
     hold = hold_factor(r, 1e-6 * scale)
     step = int(round(hold)) if abs(hold - round(hold)) < 0.05 else 1
     first = max(min_samples, int(math.ceil(hold)) + 1)
+    moves = np.r_[False, np.abs(np.diff(r)) > 1e-6 * scale]
+
     def match(N: int) -> float:
-        return float(np.mean(np.abs(r[N:] - r[:-N]) <= 1e-6 * scale))
+        """The share of the samples where the command moves that repeat N samples later (a command
+        held for seconds repeats itself at any short lag inside its holds: not a period)."""
+        m = moves[N:]
+        if m.sum() < 10:
+            return 0.0
+        return float(np.mean((np.abs(r[N:] - r[:-N]) <= 1e-6 * scale)[m]))
 
     for N in range(step * -(-first // step), len(r) // 2 + 1, step):
         if match(N) > 0.45:

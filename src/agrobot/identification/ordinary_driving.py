@@ -1,7 +1,10 @@
 """``identify LOG --study S`` on ordinary driving: the steps, the verdicts and the results' JSON.
 
 1. The log's steering input (measured wheel angle delta, else the command delta_cmd), speed v and
-   gyro yaw_rate on an even clock, cut into segments of driving; every third one held out.
+   gyro yaw_rate (without a gyro: a dual-antenna heading or the GNSS course differenced on its own
+   updates, identification.yaw_measurement) on an even clock, cut into segments of driving; every
+   third one held out. Where the turns are too gentle for the tyres to matter (the kinematic
+   regime, identification.kinematic) the steering map is fitted instead of steps 3-5.
 2. Gyro bias from the samples standing still (|v| < 2 cm/s, at least 2 s), else fitted.
 3. Linear single-track model (identification.driving) fitted on the fit segments: cornering
    coefficients, delay, lag, offset, gain (command input), bias.
@@ -31,10 +34,14 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 
 from .comparisons import course_bias, pair
-from .driving import (Z95, DrivingLog, FitResult, FreeParameter, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
+from agrobot.estimation import Z95, Parameter
+
+from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
+from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
+from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
@@ -50,22 +57,22 @@ def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
     return 1.0, 30.0
 
 
-def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool) -> list[FreeParameter]:
+def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool) -> list[Parameter]:
     lo, hi = cornering_bounds(vehicle)
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
-    out = [FreeParameter("c_f", "1/rad", lo, hi, 5.0, "front cornering stiffness / front axle load"),
-           FreeParameter("c_r", "1/rad", lo, hi, 5.0, "rear cornering stiffness / rear axle load"),
-           FreeParameter("delay", "s", 0.0, 0.5, 0.1, "steering delay (input to the wheels)"),
-           FreeParameter("lag", "s", 0.0, 0.5, 0.1, "steering first-order lag"),
-           FreeParameter("steer_offset", "rad", -0.1, 0.1, 0.02, "wheel angle the tyres see at zero input")]
+    out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
+           Parameter("c_r", "1/rad", 5.0, lo, hi, meaning="rear cornering stiffness / rear axle load"),
+           Parameter("delay", "s", 0.1, 0.0, 0.5, meaning="steering delay (input to the wheels)"),
+           Parameter("lag", "s", 0.1, 0.0, 0.5, meaning="steering first-order lag"),
+           Parameter("steer_offset", "rad", 0.02, -0.1, 0.1, meaning="wheel angle the tyres see at zero input")]
     if command_input:
-        out.append(FreeParameter("steer_gain", "1", 0.5, 1.5, 0.2, "wheel angle per commanded angle"))
+        out.append(Parameter("steer_gain", "1", 0.2, 0.5, 1.5, meaning="wheel angle per commanded angle"))
     if fit_bias:
-        out.append(FreeParameter("gyro_bias", "rad/s", -bias, bias, 0.01, "gyro bias"))
+        out.append(Parameter("gyro_bias", "rad/s", 0.01, -bias, bias, meaning="gyro bias"))
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
-        out += [FreeParameter("friction", "1", mu_lo, mu_hi, 0.3, "tyre friction coefficient mu (peak force / load)"),
-                FreeParameter("shape", "1", *SHAPE_BOUNDS, 0.3, "Magic Formula shape factor C")]
+        out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, meaning="tyre friction coefficient mu (peak force / load)"),
+                Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C")]
     return out
 
 
@@ -160,21 +167,32 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
-                     progress=None, max_rate: float = 25.0) -> dict:
+                     progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
+                     dynamic: bool = False) -> dict:
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
-    what the log lacks."""
+    what the log lacks. Without a gyro the yaw rate comes from a heading or the GNSS course above
+    ``course_speed`` (identification.yaw_measurement); in the kinematic regime (identification.kinematic)
+    the steering map is fitted instead of the tyres, unless ``dynamic``."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
     L = vehicle.wheelbase or (p.l_f + p.l_r)
+    frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
-    log = even_grid(frame, input_name, max_rate=max_rate)
-    notes = list(log.notes)
+    log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
+    log.kernel = measured.kernel(log.h)
+    check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
+    notes = list(log.notes) + [measured.text]
     notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
                  "steering chain" if command else "input: the measured wheel angle delta")
-    min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes)
+    floor = course_speed if measured.kind == "GNSS course" else 0.0
+    min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+    p95 = lateral_p95(log, min_speed)
+    if p95 < KINEMATIC_LATERAL and not dynamic:
+        say("kinematic regime: fitting the steering map")
+        return _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95)
     fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
@@ -220,10 +238,35 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "comparisons": comparisons,
         "physical_checks": checks,
         "notes": notes,
+        "yaw_measurement": measured.as_dict(),
+        "regime": {"kinematic": False, "lateral_acceleration_p95": p95, "threshold": KINEMATIC_LATERAL,
+                   "says": f"dynamic regime: 95 % of |v r| up to {p95:.2g} m/s2 (kinematic below {KINEMATIC_LATERAL:g})"},
     }
     report["_plot"] = {"log": log, "model": fits.model, "test": test_segs, "test_pred": pred, "linear": linear.values,
                        "nl": nl.values, "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
     return report
+
+
+def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95) -> dict:
+    """The report in the kinematic regime (identification.kinematic): the steering map in place of
+    the tyres; the dynamic fit is what ``dynamic=True`` asks for."""
+    fixed, bias_info = _standstill_bias(log)
+    part = kinematic_report(log, segs, L, fixed, p95)
+    smap = part["steering_map"]
+    params = {k: smap[k] for k in ("gain_left", "gain_right", "steer_offset", "delay", "gyro_bias") if k in smap}
+    params["steer_gain"] = smap["gain"]                   # the mean of both sides
+    if bias_info:
+        params["gyro_bias"] = {**bias_info, "identifiable": True}
+    return {"method": "kinematic model r = v tan(delta) / L, segments held out", "source": where, "model": "kinematic",
+            "input": input_name, "final_model": "kinematic", "samples_per_second": 1 / log.h, "seconds_driven": driven,
+            "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
+                         "burn_in_s": BURN_IN, "min_speed": min_speed},
+            "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
+            **{k: v for k, v in part.items() if k != "_plot"}, "delay": smap["delay"], "parameters": params,
+            "not_identifiable": [f"{k}: {v['note']}" for k, v in params.items() if v.get("note")],
+            "linear_range": {"value": float("nan"), "note": part["regime"]["says"]},
+            "steady_state_regression": {"note": part["regime"]["says"]}, "comparisons": [], "physical_checks": {},
+            "notes": notes, "yaw_measurement": measured.as_dict(), "_plot": part["_plot"]}
 
 
 def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
@@ -233,7 +276,8 @@ def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
     if vehicle.steering == "none" or vehicle.drive != "ackermann":
         why = vehicle.not_applicable().get("yaw")
         raise NotEnoughDriving(f"{where}: the yaw dynamics are not identified: {why}")
-    gap = missing_text(frame, {"yaw_rate": "the gyro's yaw rate is the output fitted",
+    gap = missing_text(frame, {"yaw_rate": "the gyro's yaw rate is the output fitted; without a gyro, a dual-antenna "
+                                           "heading 'heading' [rad] or positions x, y for the GNSS course",
                                "delta|delta_cmd": "a steering angle, measured or commanded, is the input",
                                "v": "the speed schedules the model"})
     if gap:
@@ -244,12 +288,12 @@ def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
     return "delta" if "delta" in frame else "delta_cmd"
 
 
-def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, notes: list[str]):
+def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, notes: list[str], floor: float = 0.0):
     """(min_speed, segments, seconds driven): the log cut into segments of driving above
-    max(0.2, 0.1 x the 90th percentile of |v|); raises NotEnoughDriving below MIN_DRIVING s (past
+    max(0.2, floor, 0.1 x the 90th percentile of |v|); raises NotEnoughDriving below MIN_DRIVING s (past
     its floor, measurements.audit.minimum; above it a note), without two fit and one held-out
     segment, or when the steering asks for less than MIN_EXCITATION rad/s of yaw rate (std of v u / L)."""
-    min_speed = max(0.2, 0.1 * float(np.percentile(np.abs(log.v), 90)))
+    min_speed = max(0.2, floor, 0.1 * float(np.percentile(np.abs(log.v), 90)))
     segs = cut_segments(log, min_speed, SEGMENT, BURN_IN)
     driven = segs.seconds * log.h
     excitation = float(np.std((log.v * log.u / L)[log.v >= min_speed])) if np.any(log.v >= min_speed) else 0.0
@@ -280,8 +324,8 @@ class _Fits:
     model; the gyro bias standing still (None: fitted)."""
     model: YawModel
     loads: tuple
-    free: list[FreeParameter]
-    free_nl: list[FreeParameter]
+    free: list[Parameter]
+    free_nl: list[Parameter]
     fit_segs: Segments
     test_segs: Segments
     linear: FitResult
@@ -294,6 +338,8 @@ def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
     """(fixed values, the bias's quantity): the gyro bias as the mean reading over the samples
     standing still (|v| < STANDSTILL, at least 2 s; its std error with one independent sample per
     0.5 s), else nothing fixed (the bias is fitted)."""
+    if log.update_times is not None:           # a yaw rate from a heading or a course: no gyro, no bias
+        return {"gyro_bias": 0.0}, None
     still = np.abs(log.v) < STANDSTILL
     fixed: dict[str, float] = {}
     bias_info = None
@@ -448,7 +494,7 @@ def _parameters(final: FitResult, fits: _Fits, saturation: bool) -> tuple[dict, 
     return params_json, stiff
 
 
-def _understeer(final: FitResult, free: list[FreeParameter], L: float):
+def _understeer(final: FitResult, free: list[Parameter], L: float):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|)."""
     cf, cr = final.values["c_f"], final.values["c_r"]
@@ -505,7 +551,7 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
             "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
 
 
-def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[FreeParameter], saturation: bool) -> dict:
+def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
     """The tyre-saturation verdict: found or why not, dBIC, held-out gains, the misfit's growth at
     high |a_y|, the fitted friction and shape with their intervals."""
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
@@ -629,6 +675,8 @@ def summary(report: dict) -> str:
     lines = [f"identification from driving ({report['source']}): {report['model']} model, input {report['input']}, "
              f"{report['seconds_driven']:.0f} s of driving, {report['segments']['held_out']} segment(s) held out"]
     lines += [f"  {n}" for n in report["notes"]]
+    if report.get("final_model") == "kinematic":
+        return "\n".join(lines + kinematic_summary(report))
     K = report["understeer_gradient"]
     lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
                  + ("" if K["identifiable"] else "; not identifiable from this log"))

@@ -1,0 +1,104 @@
+"""A 'measured' log of a small Ackermann machine (a converted riding mower, wheelbase 1.27 m) at
+0.3-1.5 m/s, written from its own equations, not the project's code path.
+
+The machine: a steering motor closing a first-order loop (time constant 0.15 s) on a
+potentiometer's reading u, which tracks the command delta_cmd; the wheels turn the steering map
+of the reading, w = g_left u (u > 0) | g_right u (u <= 0) + offset (a gain error, a left/right
+asymmetry, a zero moved); the yaw from the kinematic single track with a small understeer,
+r = v tan(w) / (L + K v^2), integrated at 200 Hz (Heun). Sensors, in 20 Hz rows: the reading
+``delta`` (0.1 deg noise), the speed ``v`` (2 cm/s noise), a dual-antenna ``heading`` updated at
+5 Hz and held between its updates (0.3 deg noise), the positions ``x``, ``y`` at 10 Hz, held
+(2 cm noise); no gyro. Driving: a path follower's steering, steps and ramps whose size keeps the
+lateral acceleration mostly below 0.4 m/s2 at each speed (larger at walking pace).
+
+Imported where used: agrobot.studies (only for the study written beside a log).
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+DEG = math.pi / 180
+WHEELBASE = 1.27
+TRUTH = dict(gain=0.85, asymmetry=0.15, offset=0.035, understeer=0.01, servo=0.15)
+
+
+def steering_map(u, gain: float, asymmetry: float, offset: float):
+    """w = g_left u (u > 0) | g_right u (u <= 0) + offset, g_left/right = gain (1 +- asymmetry)."""
+    u = np.asarray(u, float)
+    return np.where(u > 0, gain * (1 + asymmetry), gain * (1 - asymmetry)) * u + offset
+
+
+def _plan(rng: np.random.Generator, duration: float, rate: float):
+    """(t, command, speed) at ``rate``: speed held 8-20 s at 0.3-1.5 m/s; steering changed every
+    1.5-4 s to a value whose steady lateral acceleration stays below about 0.4 m/s2."""
+    n = int(round(duration * rate))
+    t = np.arange(n) / rate
+    speed, cmd = np.empty(n), np.empty(n)
+    k, v = 0, 0.8
+    while k < n:
+        m = min(n, k + int(rng.uniform(8.0, 20.0) * rate))
+        v_new = rng.uniform(0.3, 1.5)
+        speed[k:m] = v + (v_new - v) * np.clip(np.arange(m - k) / (1.5 * rate), 0, 1)
+        v = v_new
+        k = m
+    k, c = 0, 0.0
+    while k < n:
+        m = min(n, k + int(rng.uniform(1.5, 4.0) * rate))
+        top = min(0.6, math.atan(0.35 * WHEELBASE / max(float(speed[k:m].max()), 0.3) ** 2))
+        c_new = rng.uniform(-1.0, 1.0) * top
+        cmd[k:m] = c + (c_new - c) * np.clip(np.arange(m - k) / (0.5 * rate), 0, 1)
+        c = c_new
+        k = m
+    return t, cmd, speed
+
+
+def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None,
+                   heading_rate: float = 5.0) -> tuple[pd.DataFrame, dict]:
+    """The log and its truth (``truth`` replaces entries of TRUTH)."""
+    tr = {**TRUTH, **(truth or {})}
+    rng = np.random.default_rng(seed)
+    rate, sub = 20.0, 10
+    t, cmd, speed = _plan(rng, duration, rate)
+    h = 1.0 / (rate * sub)
+    n = len(t)
+    u, psi, x, y = 0.0, rng.uniform(-math.pi, math.pi), 0.0, 0.0
+    rec = np.empty((n, 5))
+    for i in range(n):
+        rec[i] = (u, psi, x, y, speed[i])
+        v = speed[i]
+        for _ in range(sub):
+            def deriv(s):
+                uu, pp = s[0], s[1]
+                w = float(steering_map(uu, tr["gain"], tr["asymmetry"], tr["offset"]))
+                r = v * math.tan(w) / (WHEELBASE + tr["understeer"] * v * v)
+                return ((cmd[i] - uu) / tr["servo"], r, v * math.cos(pp), v * math.sin(pp))
+            s0 = (u, psi, x, y)
+            k1 = deriv(s0)
+            s1 = tuple(a + h * b for a, b in zip(s0, k1))
+            k2 = deriv(s1)
+            u, psi, x, y = (a + 0.5 * h * (b + c) for a, b, c in zip(s0, k1, k2))
+    noise = rng.standard_normal((6, n))
+    hold_h = np.floor(t * heading_rate + 1e-9) / heading_rate          # the last 5 Hz update at or before t
+    k_h = np.round(hold_h * rate).astype(int)
+    heading = np.angle(np.exp(1j * (rec[k_h, 1] + 0.3 * DEG * noise[2][k_h])))
+    k_p = np.round(np.floor(t * 10.0 + 1e-9) / 10.0 * rate).astype(int)
+    frame = pd.DataFrame({"t": t, "delta_cmd": cmd, "delta": rec[:, 0] + 0.1 * DEG * noise[0],
+                          "v": rec[:, 4] + 0.02 * noise[1], "heading": heading,
+                          "x": rec[k_p, 2] + 0.02 * noise[3][k_p], "y": rec[k_p, 3] + 0.02 * noise[4][k_p]})
+    return frame, {**tr, "wheelbase": WHEELBASE, "gain_left": tr["gain"] * (1 + tr["asymmetry"]),
+                   "gain_right": tr["gain"] * (1 - tr["asymmetry"]), "heading_rate": heading_rate}
+
+
+def write_study(folder) -> Path:
+    """A study of the machine: the figure-8 study's components with a [vehicle] table of a small
+    robot of 1.27 m wheelbase (2.0 x 1.1 m outline)."""
+    from agrobot.studies import shipped
+
+    path = Path(folder) / "small_ackermann.toml"
+    path.write_text(Path(shipped("figure8.toml")).read_text() + f'\n[vehicle]\nclass = "robot"\nwheelbase = {WHEELBASE}\n'
+                    'length = 2.0\nwidth = 1.1\nsteering = "angle"\ndrive = "ackermann"\n')
+    return path
