@@ -50,6 +50,7 @@ import math
 import numpy as np
 
 from .clocks import parabolic_peak
+from .direction import check_direction
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
@@ -58,6 +59,7 @@ SEARCH = 3.0            # s: lags searched either way
 LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still within the stamps' jitter
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
+HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
 MOVING = 1.0            # m/s: the GNSS course is read above this speed
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -83,12 +85,15 @@ def channel_gaps(t: np.ndarray, least: float = GAP_MIN) -> tuple[np.ndarray, np.
     return i, dt[i]
 
 
-def channel_row(name: str, group: str, t: np.ndarray, t0: float) -> dict:
+def channel_row(name: str, group: str, t: np.ndarray, t0: float, updates: dict | None = None) -> dict:
+    """One channel's line of the table: its rate is that of its updates (``updates``: how a held
+    channel was found, measurements.channel_updates: its rows' rate and the hold factor)."""
     t = np.asarray(t, float)
     dt = np.diff(t)
     step = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
     i, length = channel_gaps(t)
-    return {"channel": name, "group": group, "samples": int(len(t)),
+    held = {"rows_hz": float(updates["rows_hz"]), "held": float(updates["held"])} if updates else {}
+    return {"channel": name, "group": group, "samples": int(len(t)), **held,
             "start_s": float(t[0] - t0) if len(t) else math.nan, "end_s": float(t[-1] - t0) if len(t) else math.nan,
             "rate_hz": 1.0 / step if step > 0 else math.nan, "repeated_stamps": int(np.sum(dt == 0)),
             "gaps": int(len(i)), "longest_gap_s": float(length.max()) if len(i) else 0.0,
@@ -262,7 +267,11 @@ class Auditor:
         self.pairs: list[dict] = []
 
     def group(self, channel: str) -> str:
-        return self.groups.get(channel, "gnss" if channel in ("gnss_speed", "course_rate", "x", "y") else channel)
+        """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
+        and positions) is the file of the lat/lon columns where a table holds them."""
+        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y"):
+            return self.groups.get("gnss", "gnss")
+        return self.groups.get(channel, channel)
 
     def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
         """([channels], stamps): the channels that share their stamps exactly, together (the
@@ -281,7 +290,9 @@ class Auditor:
         return out
 
     def channels(self) -> list[dict]:
-        return [channel_row(", ".join(names), self.group(names[0]) if names != ["gnss"] else "gnss", t, self.t0)
+        updates = self.streams.report.get("updates", {})
+        return [channel_row(", ".join(names), self.group(names[0]), t, self.t0,
+                            next((updates[n] for n in names if n in updates), None))
                 for names, t in self.stamped()]
 
     def zero_lag_pairs(self) -> list[dict]:
@@ -290,8 +301,9 @@ class Auditor:
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
-            if "v" in sig:
-                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, *sig["v"], through_origin=True,
+            if "v" in sig:          # the speed over ground is a magnitude: |v| against it
+                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]),
+                                                               through_origin=True,
                                                                mask=_moving(tg, speed, 0.3)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
@@ -333,17 +345,20 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
     pairs = aud.zero_lag_pairs()
     findings, offsets = [], {}
     agreeing: dict[frozenset, list] = {}    # group pairs a direct comparison finds on one clock: its interval
-    reference = "gnss" if aud.streams.gnss is not None else aud.group("yaw_rate")
+    reference = aud.group("gnss") if aud.streams.gnss is not None else aud.group("yaw_rate")
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
         late, iv = est["lag"], est["interval"]
-        strong = (est["rho"] >= STRONG_RHO and iv is not None and abs(late) >= ALIGN_MIN
-                  and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late))
+        judged = est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
+        strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
         meaning = (f"{name}: {b} ({gb}) follows {a} ({ga}) {late:+.3f} s late (correlation {est['rho']:.2f} over "
                    f"{est['seconds']:.0f} s)")
         if ga == gb:
-            meaning += "; one group, one clock: a lag within a group is the sensors' own latency"
+            findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
+                f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
+                f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
+                f"{STRONG_RHO} or interval wider than +-{HALF_WIDTH} s); nothing moved"), resolved=True))
         elif small:
             meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
             if ga != gb and est["rho"] >= STRONG_RHO:
@@ -357,8 +372,10 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
-            meaning += "; too weak to correct (correlation or interval): named, not aligned"
-        findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or ga == gb))
+            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO}, an interval "
+                        f"within +-{HALF_WIDTH} s that excludes zero and is narrower than the offset): not acted on")
+        if ga != gb:
+            findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
         if math.isfinite(s) and est["rho"] >= 0.5:
             off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
@@ -502,6 +519,20 @@ def stamp_findings(report: dict) -> list[dict]:
     return out
 
 
+def held_findings(report: dict) -> list[dict]:
+    """The channels held in slower updates than their rows (report["updates"],
+    measurements.channel_updates): judged on their updates, so resolved."""
+    out = []
+    for name, u in (report.get("updates") or {}).items():
+        what = "the positions" if name == "gnss" else name
+        out.append(finding("held_samples", [name], u["held"], None, "rows per update",
+                           f"{what}: {u['updates_hz']:.3g} Hz updates in {u['rows_hz']:.3g} Hz rows (held x"
+                           f"{u['held']:.2g}): " + ("a set-point, held as it is sent" if u.get("set_point") else
+                                                    "its rate, noise, derived speed, course and lags are judged on "
+                                                    "its updates at their own times"), resolved=True))
+    return out
+
+
 def position_estimate(aud: Auditor, report: dict) -> list[dict]:
     """x, y given as columns (a localisation, odometry), not the receiver's fixes."""
     sig = aud.streams.signals
@@ -545,8 +576,9 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
         if g in offsets:
             streams.signals[c] = (t - offsets[g], x)
             moved.append(c)
-    if "gnss" in offsets and streams.gnss is not None:
-        streams.gnss = streams.gnss.assign(utc=streams.gnss["utc"] - offsets["gnss"])
+    g = group_of("gnss")
+    if g in offsets and streams.gnss is not None:
+        streams.gnss = streams.gnss.assign(utc=streams.gnss["utc"] - offsets[g])
         moved.append("gnss")
     return moved
 
@@ -607,6 +639,8 @@ def audit_streams(streams, options, source) -> dict:
                                 f"channel is on the terminal's clock, so they agree with each other: only the "
                                 f"absolute time is off", resolved=True))
     findings += stamp_findings(streams.report)
+    findings += held_findings(streams.report)
+    findings += check_direction(streams, options, source, t0)
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
     findings += position_estimate(aud, streams.report)
     return {"channels": channels, "findings": findings,
@@ -666,7 +700,9 @@ def describe_audit(audit: dict) -> list[str]:
     for r in audit.get("channels", []):
         names = r["channel"].split(", ")
         name = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
+        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz"
+                     + (f" updates in {r['rows_hz']:.3g} Hz rows (held x{r['held']:.2g})" if r.get("held") else "")
+                     + f"  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
                      f"{r['end_s']:.2f} s  gaps {r['gaps']}"
                      + (f" (longest {r['longest_gap_s']:.2f} s, at {', '.join(f'{x:g}' for x in r['gaps_at_s'])} s)"
                         if r["gaps"] else "")
