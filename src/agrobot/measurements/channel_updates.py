@@ -25,8 +25,8 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   heading, a noise level, a cross-correlation) is computed on them. Set-points (a command, held by
   nature) keep their rows; their update rate is still reported.
 
-A channel that must follow the machine (``MUST_CHANGE``: a heading, a yaw rate, a speed, the
-positions) and never changes while another channel does is refused, and so is a recording in which
+A heading (``MUST_CHANGE``) that never changes while the course of the fixes turns by more than
+TURNED rad is refused, and so is a recording in which
 no channel changes at all (a file of zeros): the error names the file, the channel and what was
 expected.
 """
@@ -36,6 +36,7 @@ import math
 
 import numpy as np
 
+from .direction import course
 from .log import LogError, resolution
 from .streams import Streams, gnss_speed
 
@@ -44,10 +45,9 @@ REGULAR = 1.5           # the median update interval at least this many row peri
 STILL = 2.0             # a run of repeats longer than this many update periods is no hold
 STANDING = 0.1          # m/s: below this the machine stands
 MIN_SAMPLES = 20
-MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading)",
-               "yaw_rate": "a yaw rate that changes as the machine turns",
-               "v": "a speed that changes as the machine drives",
-               "gnss": "positions that change as the machine drives"}
+TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
+MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
+                          "noise alone changes it)"}
 
 
 def changed(values: np.ndarray) -> np.ndarray:
@@ -113,6 +113,15 @@ def _motion(streams: Streams):
     return None
 
 
+def _turned(streams: Streams) -> float:
+    """How far the course of the fixes turns over the recording [rad] (0 without fixes)."""
+    if streams.gnss is None or len(streams.gnss) < MIN_SAMPLES:
+        return 0.0
+    c = course(streams.gnss)[1]
+    c = np.unwrap(c[np.isfinite(c)])
+    return float(np.ptp(c)) if len(c) else 0.0
+
+
 def _refuse_constant(streams: Streams, source) -> None:
     """A LogError for a recording in which nothing changes, or a MUST_CHANGE channel that never does."""
     series = {c: x for c, (_, x) in streams.signals.items() if len(x) >= MIN_SAMPLES}
@@ -127,7 +136,7 @@ def _refuse_constant(streams: Streams, source) -> None:
         raise LogError(f"{source}: no channel changes: every one of {', '.join(named(c) for c in sorted(constant))} "
                        f"holds one value throughout (a file of zeros or of a logger that was not recording?); "
                        f"expected measurements that change as the machine drives")
-    for c in sorted(constant & set(MUST_CHANGE)):
+    for c in sorted(c for c in constant & set(MUST_CHANGE) if _turned(streams) > TURNED):
         x = np.asarray(series[c], float).reshape(len(series[c]), -1)[0]
         raise LogError(f"{source}: channel {named(c)} never updates: all {len(series[c])} samples hold "
                        f"{', '.join(f'{v:g}' for v in x)} while other channels change; expected {MUST_CHANGE[c]}: "

@@ -15,8 +15,9 @@ reversing it is the heading + pi. The evidence, the first available of:
    the other way reversing (r = v tan(delta) / L with v < 0), the majority sign again forward;
    read where |delta| > STEERED rad and the course turns faster than TURNING rad/s.
 
-Reversing stretches are the runs of reversing evidence (forward-free; pauses of no evidence
-bridged) of at least REVERSE_MIN s. The speed ``v`` (else the receiver's) is then judged there: signed
+A machine changes direction only through a stop: each moving stretch between stops is judged
+whole by its evidence's majority (a lag between the steering and the course, a noisy heading, do
+not cut a drive into pieces), and named reversing when at least REVERSE_MIN s long. The speed ``v`` (else the receiver's) is then judged there: signed
 when it is negative on most of them; otherwise it is unsigned and never passes as forward driving:
 the import is refused, naming the stretches and the remedy, unless ``--sign-speed`` asks to make it
 negative there (printed, with the stretches).
@@ -36,7 +37,7 @@ MOVING = 0.2            # m/s: the course is read above this track speed
 AGREE = math.radians(45.0)
 STEERED, TURNING = 0.05, 0.05
 RATE_CHORD = 0.5        # s: the course rate over chords this far either side
-MAJORITY, MAJORITY_SHARE = 1.0, 0.5     # s, and the net share of one sign within it
+REVERSE_SHARE = 0.5     # a stretch reverses when its votes' net share is below -this (75 % reversing)
 REVERSE_MIN = 1.0       # s: a shorter stretch of reversing evidence is not named
 STOP = 0.1              # m/s: a reversing stretch is signed out to where the speed falls below this
 SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the reversing samples
@@ -79,17 +80,6 @@ def _rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
         whole = (idx[hi] - idx[lo] == hi - lo) & (span > 0)         # no interruption inside the chord
         out[idx[whole]] = (u[hi] - u[lo])[whole] / span[whole]
     return out
-
-
-def _majority(t: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """The evidence's sign over MAJORITY s windows (0 where neither sign has MAJORITY_SHARE of it)."""
-    h = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
-    w = max(1, int(round(MAJORITY / h)))
-    kernel = np.ones(w)
-    votes = np.convolve(e.astype(float), kernel, "same")
-    seen = np.convolve((e != 0).astype(float), kernel, "same")
-    share = np.divide(votes, seen, out=np.zeros(len(e)), where=seen > 0)
-    return np.where(share > MAJORITY_SHARE, 1, np.where(share < -MAJORITY_SHARE, -1, 0)) * (e != 0)
 
 
 def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
@@ -144,16 +134,19 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
     return by_steering(t, c, rate, sig[steer], steer) if steer else None
 
 
-def reversing(t: np.ndarray, e: np.ndarray) -> list[tuple[float, float]]:
-    """(start, end) of the stretches of reversing evidence (no forward evidence inside, pauses
-    without evidence bridged) at least REVERSE_MIN long."""
+def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, float]]:
+    """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
+    each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
+    when the net share of its evidence is below -REVERSE_SHARE, and named when at least
+    REVERSE_MIN long with at least 5 votes."""
     out = []
-    maybe = e <= 0
-    edges = np.diff(np.concatenate([[0], maybe.astype(int), [0]]))
+    moving = np.isfinite(c)
+    edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        back = np.flatnonzero(e[a:b] < 0)
-        if len(back) and t[a + back[-1]] - t[a + back[0]] >= REVERSE_MIN:
-            out.append((float(t[a + back[0]]), float(t[a + back[-1]])))
+        votes = e[a:b]
+        seen = int(np.sum(votes != 0))
+        if seen >= 5 and votes.sum() / seen < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+            out.append((float(t[a]), float(t[b - 1])))
     return out
 
 
@@ -197,7 +190,7 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     if found is None:
         return []
     e, how = found
-    stretches = reversing(t, _majority(t, e))
+    stretches = reversing(t, c, e)
     if not stretches:
         return []
     when = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in stretches)
