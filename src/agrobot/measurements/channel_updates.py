@@ -20,7 +20,10 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
 - a held channel is replaced by its updates: each value once, at the middle between the last row
   that still holds the old value and the first that holds the new one (the update happened between
   them; the first row alone would make every update up to a row late, and a rate from such times
-  spiky), so
+  spiky; the first row's held value, of an unknown age, is left out); where those times fit a regular clock (the sensor's: a receiver's epochs, a heading's
+  fixed rate) within the rows' own jitter (residual std at most CLOCK_FIT rows after a running mean
+  over CLOCK_WINDOW updates of a line through the update numbers, each the time since the first
+  in periods, rounded), they are put on it. So
   every quantity the audit and the log derive from it (the track's speed and course, a rate from a
   heading, a noise level, a cross-correlation) is computed on them. Set-points (a command, held by
   nature) keep their rows; their update rate is still reported.
@@ -44,6 +47,8 @@ HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the c
 REGULAR = 1.5           # the median update interval at least this many row periods
 STILL = 2.0             # a run of repeats longer than this many update periods is no hold
 STANDING = 0.1          # m/s: below this the machine stands
+CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this many
+CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
 MIN_SAMPLES = 20
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
 MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
@@ -90,8 +95,10 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     ends = np.append(at[1:], len(t))
     every = max(1, int(round(period / row)))
     for a, b in zip(at, ends):
-        keep.append(a)
-        if t[b - 1] - t[a] <= STILL * period:
+        short = t[b - 1] - t[a] <= STILL * period
+        if a > 0 or not short:          # the first row's value is of an unknown age: not an update seen
+            keep.append(a)
+        if short:
             continue
         if moving is not None and np.mean(moving(t[a:b])) > 0.5:
             stale += 1
@@ -100,9 +107,24 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     keep = np.array(keep, int)
     times = t[keep].copy()
     first = np.isin(keep, at) & (keep > 0)
-    times[first] = 0.5 * (t[keep[first] - 1] + t[keep[first]])
+    times[first] = regular_times(0.5 * (t[keep[first] - 1] + t[keep[first]]), period, row)
     return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
             "stale": stale}
+
+
+def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
+    """Update times ``tm`` (known to a row) on the sensor's regular clock where they fit one
+    (module docstring), else as they are."""
+    if len(tm) < 2 * CLOCK_WINDOW:
+        return tm
+    slope, offset = period, float(tm[0])
+    for _ in range(3):                  # the update numbers, then the clock's period refined on them
+        n = np.round((tm - offset) / slope)
+        slope, offset = np.polyfit(n, tm, 1)
+    r = tm - (offset + slope * n)
+    pad = np.pad(r, CLOCK_WINDOW // 2, mode="edge")
+    drift = np.convolve(pad, np.ones(CLOCK_WINDOW) / CLOCK_WINDOW, "valid")
+    return offset + slope * n + drift if float(np.std(r - drift)) <= CLOCK_FIT * row else tm
 
 
 def _motion(streams: Streams):
