@@ -269,7 +269,7 @@ class Auditor:
     def group(self, channel: str) -> str:
         """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
         and positions) is the file of the lat/lon columns where a table holds them."""
-        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y"):
+        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y") and channel not in self.streams.signals:
             return self.groups.get("gnss", "gnss")
         return self.groups.get(channel, channel)
 
@@ -292,7 +292,7 @@ class Auditor:
     def channels(self) -> list[dict]:
         updates = self.streams.report.get("updates", {})
         return [channel_row(", ".join(names), self.group(names[0]), t, self.t0,
-                            next((updates[n] for n in names if n in updates), None))
+                            updates[names[0]] if all(n in updates for n in names) else None)
                 for names, t in self.stamped()]
 
     def zero_lag_pairs(self) -> list[dict]:

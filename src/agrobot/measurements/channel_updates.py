@@ -9,7 +9,9 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
 - an **update** is a sample whose value differs from the one before (exactly: a held value is a copy;
   a measured value with noise never repeats exactly);
 - the channel is **held** when at least HELD_SHARE of its row steps are exact repeats, the median
-  interval between updates is at least REGULAR row periods, and its changes are not single steps of
+  interval between updates is at least REGULAR row periods, at least REGULAR_SHARE of the intervals
+  lie within half that period and a row of it (a sensor's rate, not a state that switches now and
+  then), and its changes are not single steps of
   a grid (a quantised signal that moves slowly also repeats, but changes by one quantum at a time:
   the median change is then within 1.5 quanta; measurements.log.resolution finds the quantum);
   its update period P is the median interval between updates, ``held`` = P / the row period;
@@ -45,6 +47,7 @@ from .streams import Streams, gnss_speed
 
 HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the channel may be held
 REGULAR = 1.5           # the median update interval at least this many row periods
+REGULAR_SHARE = 0.6     # ... and this share of the intervals within half a period and a row of it
 STILL = 2.0             # a run of repeats longer than this many update periods is no hold
 STANDING = 0.1          # m/s: below this the machine stands
 CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this many
@@ -88,9 +91,12 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     dt = np.diff(t)
     row = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
     at = np.flatnonzero(change)
-    period = float(np.median(np.diff(t[at])))
+    intervals = np.diff(t[at])
+    period = float(np.median(intervals))
     if not row > 0 or period < REGULAR * row or any(_single_steps(x[:, k], change) for k in range(x.shape[1])):
         return None
+    if np.mean(np.abs(intervals - period) <= 0.5 * period + row) < REGULAR_SHARE:
+        return None                     # changes at irregular times: a state or an event, not a sampled hold
     keep, stale = [], 0
     ends = np.append(at[1:], len(t))
     every = max(1, int(round(period / row)))
