@@ -2,8 +2,11 @@
 say about each other's clocks, scales and labels.
 
 Per channel (a log column on its own stamps, or the receiver's fixes ``gnss``): samples, rate
-(1 / median step), gaps (silences longer than max(3 steps, 0.2 s): count, longest, when),
-repeated stamps, and its group (the file, topic or bus it came from: one clock).
+(1 / median step of its updates: a channel held in faster rows is judged on its own updates,
+measurements.channel_updates, and its rows' rate and hold factor are given beside), gaps (silences
+longer than max(3 steps, 0.2 s): count, longest, when), repeated stamps, and its group (the file,
+topic or bus it came from: one clock; the receiver's fixes given as a table's lat/lon columns
+share that table's).
 
 Between channels, from signals that must agree (Kayacan et al. section 2's kinematic relations):
 
@@ -24,7 +27,17 @@ Findings: dicts {kind, channels, value, interval ([lo, hi] or None), unit, meani
 Kinds:
 
 - ``clock_offset``: the second group's stamps are ``value`` s late against the first's (a pair
-  with no physical lag); resolved when aligned (``--align``) or too small to matter;
+  with no physical lag); acted on (aligned by ``--align auto``) only on evidence: correlation at
+  least STRONG_RHO, an interval of half-width at most HALF_WIDTH s that excludes zero and is
+  narrower than the offset, the offset at least ALIGN_MIN; below that it is "too weak to judge",
+  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
+- ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
+  clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
+- ``held_samples``: a channel updated slower than its rows (``value`` rows per update), judged on
+  its updates (resolved);
+- ``reversing``: stretches where the course is opposite the heading or the steering (or a declared
+  direction channel says so), measurements.direction: resolved when the speed is negative there
+  or made so by ``--sign-speed``; otherwise the import is refused;
 - ``response_leads_input``: the yaw rate answers ``value`` s before the steering x speed that
   causes it; resolved when an alignment removed it;
 - ``response_lag``: the lag of that causal pair when it is causal (information, resolved);
