@@ -6,7 +6,7 @@ faster than MOVING m/s. Driving forward the course is the heading (plus a fixed 
 reversing it is the heading + pi. The evidence, the first available of:
 
 1. a declared direction channel (``--signal direction=...`` or ``gear=...``): negative = reversing;
-2. a heading (``heading``, any convention): its sense (clockwise or not) is the one whose rate follows
+2. a heading (``heading``, else the receiver's own, any convention): its sense (clockwise or not) is the one whose rate follows
    the course rate; the offset between the course and the heading takes two values pi apart (the
    axis of the doubled angles), and forward is the one the machine keeps longer (a machine drives
    forward more than it reverses); a sample is forward within AGREE of it, reversing within AGREE
@@ -126,8 +126,13 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
         x = np.interp(t, *sig[declared])
         return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
     rate = _rate(t, c)
-    if "heading" in sig and len(sig["heading"][0]) > 3:
-        found = by_heading(t, c, rate, sig["heading"])
+    heading = sig.get("heading")
+    g = streams.gnss
+    if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:
+        ok = np.isfinite(g["heading"].to_numpy(float))          # the receiver's own (HDT, THS)
+        heading = (g["utc"].to_numpy(float)[ok], g["heading"].to_numpy(float)[ok])
+    if heading is not None and len(heading[0]) > 3:
+        found = by_heading(t, c, rate, heading)
         if found is not None:
             return found
     steer = next((n for n in ("delta", "delta_cmd") if n in sig), None)
