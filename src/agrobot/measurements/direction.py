@@ -214,8 +214,8 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
                   "map the machine's signed speed (--signal v=...) and give --sign-speed if it is unsigned too")
         raise LogError(f"{source}: the machine reverses at {when} (by {how}) while "
                        f"{chans[0]} stays positive: an unsigned speed would pass as forward driving; expected a "
-                       f"signed speed (negative reversing): {remedy}, or map a direction channel "
-                       f"(--signal direction=TABLE.COLUMN, negative reversing)")
+                       f"signed speed (negative reversing): {remedy} (a direction channel, --signal "
+                       f"direction=TABLE.COLUMN negative reversing, says where)")
     name, ts, vs = speed
     flip = _within(ts, [_to_stops(ts, vs, a, b) for a, b in stretches])
     signed = np.where(flip, -np.abs(vs), vs)
