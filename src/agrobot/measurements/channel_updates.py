@@ -114,6 +114,8 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     times = t[keep].copy()
     first = np.isin(keep, at) & (keep > 0)
     times[first] = regular_times(0.5 * (t[keep[first] - 1] + t[keep[first]]), period, row)
+    ahead = times > np.maximum.accumulate(np.concatenate([[-np.inf], times[:-1]]))   # increasing, always
+    keep, times = keep[ahead], times[ahead]
     return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
             "stale": stale}
 
