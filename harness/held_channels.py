@@ -9,7 +9,8 @@ POSIX seconds, the row clock jittered by up to 4 ms): ``lat``, ``lon`` [deg] hel
 fixes, ``heading`` [deg, clockwise from north] held from the 5 Hz heading, ``speed`` [m/s] the
 wheel encoder's ``speed_scale`` x the speed, unsigned unless ``signed``, ``speed_late`` s late
 (a filter), ``steer`` [rad] the wheel angle measured on every row, and, with ``gear``, ``gear`` (+1
-forward, -1 reverse). ``split``: the speed and steering in ``drive.csv`` on a clock ``late`` s
+forward, -1 reverse); with ``gyro``, ``gyro`` [rad/s] that factor x the yaw rate; with ``lateral``,
+``ay`` [m/s2] that factor x v r. ``split``: the speed and steering in ``drive.csv`` on a clock ``late`` s
 late, the positions and heading in ``gnss.csv``.
 """
 from __future__ import annotations
@@ -70,7 +71,8 @@ def held(rows: np.ndarray, rate: float, phase: float, t: np.ndarray, x: np.ndarr
 
 def write_machine_log(folder: Path, seconds: float = 90.0, seed: int = 3, reverse: tuple[float, float] | None = None,
                       signed: bool = False, gear: bool = False, speed_scale: float = 0.9, speed_late: float = 0.0,
-                      steady: bool = False, split: bool = False, late: float = 0.0) -> Path:
+                      steady: bool = False, split: bool = False, late: float = 0.0, gyro: float | None = None,
+                      lateral: float | None = None) -> Path:
     """The recording's folder (module docstring); its truth is ``truth(seconds, seed, reverse)``."""
     folder.mkdir(parents=True, exist_ok=True)
     drive = truth(seconds, seed, reverse, steady)
@@ -88,6 +90,11 @@ def write_machine_log(folder: Path, seconds: float = 90.0, seed: int = 3, revers
     steer = np.interp(rows, t, drive["delta"].to_numpy()) + 0.003 * noise[1]
     gnss = pd.DataFrame({"time": rows + START, "lat": lat, "lon": lon, "heading": heading})
     machine = pd.DataFrame({"time": rows + START + (late if split else 0.0), "speed": speed, "steer": steer})
+    r_rows = np.interp(rows, t, drive["r"].to_numpy())
+    if gyro is not None:
+        machine["gyro"] = gyro * r_rows + 0.005 * noise[2]
+    if lateral is not None:
+        machine["ay"] = lateral * np.interp(rows, t, drive["v"].to_numpy()) * r_rows + 0.05 * noise[3]
     if gear:
         machine["gear"] = np.where(np.interp(rows, t, drive["v"].to_numpy()) < -0.05, -1, 1)
     for frame in (gnss, machine):
@@ -101,8 +108,9 @@ def write_machine_log(folder: Path, seconds: float = 90.0, seed: int = 3, revers
     return folder
 
 
-def signals(split: bool = False, gear: bool = False) -> list[str]:
+def signals(split: bool = False, gear: bool = False, gyro: bool = False, lateral: bool = False) -> list[str]:
     """The --signal mapping a user gives for this recording."""
     g, m = ("gnss", "drive") if split else ("log", "log")
     out = [f"lat={g}.lat", f"lon={g}.lon", f"heading={g}.heading[deg]", f"v={m}.speed[m/s]", f"delta={m}.steer[rad]"]
-    return out + ([f"direction={m}.gear"] if gear else [])
+    return (out + ([f"direction={m}.gear"] if gear else []) + ([f"yaw_rate={m}.gyro[rad/s]"] if gyro else [])
+            + ([f"ay={m}.ay[m/s^2]"] if lateral else []))

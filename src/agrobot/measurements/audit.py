@@ -43,6 +43,9 @@ Kinds:
 - ``response_lag``: the lag of that causal pair when it is causal (information, resolved);
 - ``scale_disagreement``: the second channel is ``value`` times the first (two speeds, gyro vs
   course, ``v r`` vs lateral acceleration, two gyros);
+- ``opposite_sign``: the same, ``value`` negative: the second channel (or the yaw rate against
+  v tan(delta) / L, by the correlation or over a steady turn by the means) has the opposite sign, a
+  sign convention; named with its evidence, never as a scale;
 - ``mislabelled_channel``: a "gyro" whose mean is g, a gyro/accelerometer pair swapped, an
   "angle" that is a rate;
 - ``ambiguous_channel``: two plausible sources of one quantity that disagree;
@@ -73,6 +76,8 @@ LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still wit
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
 HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
+STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
+MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
 MOVING = 1.0            # m/s: the GNSS course is read above this speed
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -161,7 +166,9 @@ def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
 
 def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
     """How late b is against a: b(t) = s a(t - lag). {lag, interval, rho, scale, scale_interval,
-    seconds} or None when they share too little. ``mask(grid) -> bool`` limits the samples
+    seconds, inverted, edge} or None when they share too little: where the correlation's most
+    negative value outweighs its most positive, b answers a with the opposite sign (``inverted``,
+    rho that of -b, the scale negative); ``edge``: the peak sits on the search's bound. ``mask(grid) -> bool`` limits the samples
     (e.g. moving)."""
     ta, tb = np.asarray(ta, float), np.asarray(tb, float)
     if len(ta) < 20 or len(tb) < 20:
@@ -183,6 +190,10 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         return None
     shift = int(round(search / step))
     rho = _xcorr(a, b, (oka, okb), shift)
+    finite = rho[np.isfinite(rho)]
+    inverted = bool(finite.size) and -float(finite.min()) > float(finite.max())
+    if inverted:                        # b answers a with the opposite sign: judged as -b, the scale negative
+        b, rho = -b, np.where(np.isfinite(rho), -rho, -np.inf)
     whole, r = _peak(rho, step, shift)
     if not math.isfinite(whole):
         return None
@@ -210,8 +221,12 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         half = _half_width(rho, step, shift, r)
         interval = [whole - half, whole + half] if half is not None else None
         scale_interval = None
+    if inverted:
+        scale = -scale
+        scale_interval = None if scale_interval is None else [-scale_interval[1], -scale_interval[0]]
     return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
-            "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags)}
+            "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags), "inverted": inverted,
+            "edge": abs(whole) >= search - 2 * step}
 
 
 def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float | None:
@@ -345,7 +360,30 @@ class Auditor:
         t, d = sig[steer]
         u = np.interp(t, *sig["v"]) * np.tan(np.clip(d, -1.4, 1.4)) / self.L
         found = lag(t, u, *sig["yaw_rate"], mask=_moving(*sig["v"], 0.3))
-        return None if found is None else {**found, "input": steer}
+        changes = int(np.count_nonzero(np.diff(d))) + int(np.count_nonzero(np.diff(sig["v"][1])))
+        return None if found is None else {**found, "input": steer, "input_changes": changes}
+
+    def steady_sign(self) -> dict | None:
+        """An opposite_sign finding where the yaw rate's mean and the kinematic v tan(delta) / L's,
+        over a steady turn while moving (|mean| above STEADY rad/s and twice its spread), have
+        opposite signs; None otherwise."""
+        sig = self.streams.signals
+        steer = "delta" if "delta" in sig else "delta_cmd" if "delta_cmd" in sig else None
+        if steer is None or "v" not in sig or "yaw_rate" not in sig:
+            return None
+        t, r = sig["yaw_rate"]
+        v = np.interp(t, *sig["v"])
+        u = v * np.tan(np.clip(np.interp(t, *sig[steer]), -1.4, 1.4)) / self.L
+        moving = np.abs(v) > 0.3
+        if moving.sum() < 100:
+            return None
+        mu, spread, mr = float(np.mean(u[moving])), float(np.std(u[moving])), float(np.mean(r[moving]))
+        if abs(mu) < max(STEADY, 2 * spread) or mr / mu >= 0:
+            return None
+        seconds = float(np.sum(np.diff(t)[moving[1:]]))
+        return opposite_sign([steer, "v", "yaw_rate"], mr / mu, None,
+                             f"a steady turn ({seconds:.0f} s moving): yaw_rate's mean {mr:+.3g} rad/s is {mr / mu:.3g} "
+                             f"times v tan({steer}) / L's {mu:+.3g} rad/s (L {self.L:g} m)")
 
 
 def _interval_text(iv, unit="s", digits=3) -> str:
@@ -362,11 +400,13 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
         late, iv = est["lag"], est["interval"]
-        judged = est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
+        judged = (est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
+                  and not est["edge"])
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
-        meaning = (f"{name}: {b} ({gb}) follows {a} ({ga}) {late:+.3f} s late (correlation {est['rho']:.2f} over "
-                   f"{est['seconds']:.0f} s)")
+        meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
+                   f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
+                   + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
         if ga == gb:
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
                 f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
@@ -390,7 +430,10 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if ga != gb:
             findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
-        if math.isfinite(s) and est["rho"] >= 0.5:
+        if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
+            findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
+                                                          f"{est['rho']:.2f} with the sign turned)"))
+        elif math.isfinite(s) and est["rho"] >= 0.5:
             off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
             if off:
                 what = _scale_meaning(name, a, b, s)
@@ -413,6 +456,16 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                                  f"this {late:+.3f} s is a lag of the signals compared (a filter, a latency), not a clock")
                 f["resolved"] = True
     return offsets, findings
+
+
+def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
+    """A negative scale between channels that measure one quantity: a sign finding (``what``
+    gives its evidence), not a scale."""
+    return finding("opposite_sign", channels, s, interval, "ratio",
+                   f"{what}: {channels[-1]} has the opposite sign of "
+                   f"what {', '.join(channels[:-1])} predict, at {abs(s):.3g} times its size; a sign convention (a "
+                   f"steering angle's, an axis mounted upside down): declare it with --signal "
+                   f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
 
 def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
@@ -643,6 +696,9 @@ def audit_streams(streams, options, source) -> dict:
     causal = aud.causal() if applied else causal_before
     if causal is not None:
         findings.append(_causality(causal, causal_before, applied))
+    steady = aud.steady_sign()
+    if steady is not None and not any(f["kind"] == "opposite_sign" and "yaw_rate" in f["channels"] for f in findings):
+        findings.append(steady)
     findings += mislabelled(aud)
     clock = streams.report.get("terminal_clock")
     if clock:
@@ -668,8 +724,18 @@ def _causality(now: dict, before: dict | None, applied: dict) -> dict:
     late, iv = now["lag"], now["interval"]
     hi = iv[1] if iv else late
     what = f"yaw_rate follows v tan({now['input']}) / L {late:+.3f} s late (correlation {now['rho']:.2f})"
-    if now["rho"] < 0.3:
-        return finding("response_lag", chans, late, iv, "s", what + ": too weak to judge causality", resolved=True)
+    weak = [why for why, bad in (("correlation below 0.3", now["rho"] < 0.3),
+                                 (f"the peak on the search's bound (+-{SEARCH:g} s)", now.get("edge")),
+                                 (f"an input that barely changes ({now.get('input_changes', 0)} changes of "
+                                  f"{now['input']} and v)", now.get("input_changes", MIN_INPUT_CHANGES) < MIN_INPUT_CHANGES))
+            if bad]
+    if weak:
+        return finding("response_lag", chans, late, iv, "s", what + ": too weak to judge causality ("
+                       + "; ".join(weak) + ")", resolved=True)
+    if now.get("inverted") and now["rho"] >= 0.5:
+        return opposite_sign(chans, now["scale"], now["scale_interval"], f"yaw_rate is {now['scale']:.3g} times v "
+                             f"tan({now['input']}) / L, {late:+.3f} s late (correlation {now['rho']:.2f} with the sign "
+                             f"turned)")
     if hi < -LEAD_TOLERANCE:
         return finding("response_leads_input", chans, -late, None if iv is None else [-iv[1], -iv[0]], "s",
                        f"the yaw rate answers {-late:.3f} s BEFORE the steering x speed that causes it: the channels' "
