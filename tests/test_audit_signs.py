@@ -63,3 +63,15 @@ def test_a_steady_turn_of_opposite_sign_is_a_sign_finding_and_its_lag_too_weak_t
     lag = kinds(found, "response_lag")
     assert all("too weak to judge" in f["meaning"] for f in lag), lag
     assert not kinds(found, "response_leads_input")
+
+
+def test_a_gyro_against_the_course_of_quantised_positions_keeps_its_scale(tmp_path):
+    """Positions on a 0.11 m grid (1e-6 deg) make the course rate of the fixes noisy: a gyro of
+    scale 1 must not read as a scale disagreement (a regression on a noisy regressor shrinks it)."""
+    rec = write_machine_log(tmp_path / "rec", seconds=120.0, speed_scale=1.0, gyro=1.0)
+    log = pd.read_csv(rec / "log.csv")
+    log["lat"], log["lon"] = log["lat"].round(6), log["lon"].round(6)
+    log.to_csv(rec / "log.csv", index=False, float_format="%.13g")
+    found = import_recording(rec, options(signals(gyro=True)))[0].attrs["audit"]
+    assert not [f for f in found if f["kind"] in ("scale_disagreement", "opposite_sign")
+                and "course_rate" in f["channels"]], found

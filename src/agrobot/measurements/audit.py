@@ -78,6 +78,7 @@ STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
 HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
 STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
+SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
 MOVING = 1.0            # m/s: the GNSS course is read above this speed
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -198,7 +199,8 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     if not math.isfinite(whole):
         return None
     k = int(round(whole / step))
-    scale = _slope(a, b, oka, okb, k, through_origin)
+    width = int(round(SCALE_SPAN / step))
+    scale = _slope(a, b, oka, okb, k, through_origin, width)
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -211,7 +213,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
             lp, rp = _peak(p, step, shift)
             if math.isfinite(lp) and rp > 0.3:
                 lags.append(lp)
-                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin))
+                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin, width))
     if len(lags) >= 3:
         se = 2.0 * float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
         interval = [whole - max(se, step), whole + max(se, step)]
@@ -237,7 +239,22 @@ def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float 
     return max(float(near.max() - near.min()) * step / 2, step)
 
 
-def _slope(a, b, oka, okb, k, through_origin):
+def _masked_mean(x: np.ndarray, ok: np.ndarray, width: int) -> np.ndarray:
+    """The centred moving average of x over ``width`` samples, of its valid samples only."""
+    from scipy.ndimage import uniform_filter1d
+
+    if width <= 1:
+        return x
+    w = ok.astype(float)
+    return uniform_filter1d(np.where(ok, x, 0.0), width, mode="nearest") / np.maximum(
+        uniform_filter1d(w, width, mode="nearest"), 1e-12)
+
+
+def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
+    """The regression slope of b[i + k] on a[i], both averaged over ``width`` samples first (the
+    same linear filter on both keeps their scale; it removes the sample noise of a derived rate, a
+    course from quantised or held positions, that would shrink a regression on it)."""
+    a, b = _masked_mean(a, oka, width), _masked_mean(b, okb, width)
     n = len(a)
     lo, hi = max(0, -k), min(n, n - k)
     sel = oka[lo:hi] & okb[lo + k:hi + k]
