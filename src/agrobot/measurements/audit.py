@@ -479,8 +479,8 @@ def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
     """A negative scale between channels that measure one quantity: a sign finding (``what``
     gives its evidence), not a scale."""
     return finding("opposite_sign", channels, s, interval, "ratio",
-                   f"{what}: {channels[-1]} has the opposite sign of "
-                   f"what {', '.join(channels[:-1])} predict, at {abs(s):.3g} times its size; a sign convention (a "
+                   f"{what}: {channels[-1]}'s sign is opposite to the one "
+                   f"expected from {', '.join(channels[:-1])}, at {abs(s):.3g} times the size; a sign convention (a "
                    f"steering angle's, an axis mounted upside down): declare it with --signal "
                    f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
