@@ -31,6 +31,7 @@ IMITATES = {
     "gap_bridged": ("actuator_delay", "gps_latency", "steering_rate_limit"),
     "scale_disagreement": ("gyro_scale", "speed_scale", "yaw_rate_bias", "tyre_saturation",
                            "speed_dependent_cornering", "steering_ratio_curve"),
+    "opposite_sign": ("gyro_scale", "speed_scale", "yaw_rate_bias", "steering_ratio_curve"),
     "position_is_estimate": (),      # not a blocker: it renames (conclude says what a lever arm then is)
     "mislabelled_channel": ("*",),
 }

@@ -2,8 +2,11 @@
 say about each other's clocks, scales and labels.
 
 Per channel (a log column on its own stamps, or the receiver's fixes ``gnss``): samples, rate
-(1 / median step), gaps (silences longer than max(3 steps, 0.2 s): count, longest, when),
-repeated stamps, and its group (the file, topic or bus it came from: one clock).
+(1 / median step of its updates: a channel held in faster rows is judged on its own updates,
+measurements.channel_updates, and its rows' rate and hold factor are given beside), gaps (silences
+longer than max(3 steps, 0.2 s): count, longest, when), repeated stamps, and its group (the file,
+topic or bus it came from: one clock; the receiver's fixes given as a table's lat/lon columns
+share that table's).
 
 Between channels, from signals that must agree (Kayacan et al. section 2's kinematic relations):
 
@@ -24,12 +27,25 @@ Findings: dicts {kind, channels, value, interval ([lo, hi] or None), unit, meani
 Kinds:
 
 - ``clock_offset``: the second group's stamps are ``value`` s late against the first's (a pair
-  with no physical lag); resolved when aligned (``--align``) or too small to matter;
+  with no physical lag); acted on (aligned by ``--align auto``) only on evidence: correlation at
+  least STRONG_RHO, an interval of half-width at most HALF_WIDTH s that excludes zero and is
+  narrower than the offset, the offset at least ALIGN_MIN; below that it is "too weak to judge",
+  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
+- ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
+  clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
+- ``held_samples``: a channel updated slower than its rows (``value`` rows per update), judged on
+  its updates (resolved);
+- ``reversing``: stretches where the course is opposite the heading or the steering (or a declared
+  direction channel says so), measurements.direction: resolved when the speed is negative there
+  or made so by ``--sign-speed``; otherwise the import is refused;
 - ``response_leads_input``: the yaw rate answers ``value`` s before the steering x speed that
   causes it; resolved when an alignment removed it;
 - ``response_lag``: the lag of that causal pair when it is causal (information, resolved);
 - ``scale_disagreement``: the second channel is ``value`` times the first (two speeds, gyro vs
   course, ``v r`` vs lateral acceleration, two gyros);
+- ``opposite_sign``: the same, ``value`` negative: the second channel (or the yaw rate against
+  v tan(delta) / L, by the correlation or over a steady turn by the means) has the opposite sign, a
+  sign convention; named with its evidence, never as a scale;
 - ``mislabelled_channel``: a "gyro" whose mean is g, a gyro/accelerometer pair swapped, an
   "angle" that is a rate;
 - ``ambiguous_channel``: two plausible sources of one quantity that disagree;
@@ -50,6 +66,7 @@ import math
 import numpy as np
 
 from .clocks import parabolic_peak
+from .direction import check_direction
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
@@ -58,6 +75,10 @@ SEARCH = 3.0            # s: lags searched either way
 LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still within the stamps' jitter
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
+HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
+STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
+MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
+SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
 MOVING = 1.0            # m/s: the GNSS course is read above this speed
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -83,12 +104,15 @@ def channel_gaps(t: np.ndarray, least: float = GAP_MIN) -> tuple[np.ndarray, np.
     return i, dt[i]
 
 
-def channel_row(name: str, group: str, t: np.ndarray, t0: float) -> dict:
+def channel_row(name: str, group: str, t: np.ndarray, t0: float, updates: dict | None = None) -> dict:
+    """One channel's line of the table: its rate is that of its updates (``updates``: how a held
+    channel was found, measurements.channel_updates: its rows' rate and the hold factor)."""
     t = np.asarray(t, float)
     dt = np.diff(t)
     step = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
     i, length = channel_gaps(t)
-    return {"channel": name, "group": group, "samples": int(len(t)),
+    held = {"rows_hz": float(updates["rows_hz"]), "held": float(updates["held"])} if updates else {}
+    return {"channel": name, "group": group, "samples": int(len(t)), **held,
             "start_s": float(t[0] - t0) if len(t) else math.nan, "end_s": float(t[-1] - t0) if len(t) else math.nan,
             "rate_hz": 1.0 / step if step > 0 else math.nan, "repeated_stamps": int(np.sum(dt == 0)),
             "gaps": int(len(i)), "longest_gap_s": float(length.max()) if len(i) else 0.0,
@@ -143,7 +167,9 @@ def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
 
 def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
     """How late b is against a: b(t) = s a(t - lag). {lag, interval, rho, scale, scale_interval,
-    seconds} or None when they share too little. ``mask(grid) -> bool`` limits the samples
+    seconds, inverted, edge} or None when they share too little: where the correlation's most
+    negative value outweighs its most positive, b answers a with the opposite sign (``inverted``,
+    rho that of -b, the scale negative); ``edge``: the peak sits on the search's bound. ``mask(grid) -> bool`` limits the samples
     (e.g. moving)."""
     ta, tb = np.asarray(ta, float), np.asarray(tb, float)
     if len(ta) < 20 or len(tb) < 20:
@@ -165,11 +191,16 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         return None
     shift = int(round(search / step))
     rho = _xcorr(a, b, (oka, okb), shift)
+    finite = rho[np.isfinite(rho)]
+    inverted = bool(finite.size) and -float(finite.min()) > float(finite.max())
+    if inverted:                        # b answers a with the opposite sign: judged as -b, the scale negative
+        b, rho = -b, np.where(np.isfinite(rho), -rho, -np.inf)
     whole, r = _peak(rho, step, shift)
     if not math.isfinite(whole):
         return None
     k = int(round(whole / step))
-    scale = _slope(a, b, oka, okb, k, through_origin)
+    width = int(round(SCALE_SPAN / step))
+    scale = _slope(a, b, oka, okb, k, through_origin, width)
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -182,7 +213,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
             lp, rp = _peak(p, step, shift)
             if math.isfinite(lp) and rp > 0.3:
                 lags.append(lp)
-                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin))
+                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin, width))
     if len(lags) >= 3:
         se = 2.0 * float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
         interval = [whole - max(se, step), whole + max(se, step)]
@@ -192,8 +223,12 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         half = _half_width(rho, step, shift, r)
         interval = [whole - half, whole + half] if half is not None else None
         scale_interval = None
+    if inverted:
+        scale = -scale
+        scale_interval = None if scale_interval is None else [-scale_interval[1], -scale_interval[0]]
     return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
-            "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags)}
+            "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags), "inverted": inverted,
+            "edge": abs(whole) >= search - 2 * step}
 
 
 def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float | None:
@@ -204,7 +239,22 @@ def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float 
     return max(float(near.max() - near.min()) * step / 2, step)
 
 
-def _slope(a, b, oka, okb, k, through_origin):
+def _masked_mean(x: np.ndarray, ok: np.ndarray, width: int) -> np.ndarray:
+    """The centred moving average of x over ``width`` samples, of its valid samples only."""
+    from scipy.ndimage import uniform_filter1d
+
+    if width <= 1:
+        return x
+    w = ok.astype(float)
+    return uniform_filter1d(np.where(ok, x, 0.0), width, mode="nearest") / np.maximum(
+        uniform_filter1d(w, width, mode="nearest"), 1e-12)
+
+
+def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
+    """The regression slope of b[i + k] on a[i], both averaged over ``width`` samples first (the
+    same linear filter on both keeps their scale; it removes the sample noise of a derived rate, a
+    course from quantised or held positions, that would shrink a regression on it)."""
+    a, b = _masked_mean(a, oka, width), _masked_mean(b, okb, width)
     n = len(a)
     lo, hi = max(0, -k), min(n, n - k)
     sel = oka[lo:hi] & okb[lo + k:hi + k]
@@ -262,7 +312,11 @@ class Auditor:
         self.pairs: list[dict] = []
 
     def group(self, channel: str) -> str:
-        return self.groups.get(channel, "gnss" if channel in ("gnss_speed", "course_rate", "x", "y") else channel)
+        """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
+        and positions) is the file of the lat/lon columns where a table holds them."""
+        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y") and channel not in self.streams.signals:
+            return self.groups.get("gnss", "gnss")
+        return self.groups.get(channel, channel)
 
     def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
         """([channels], stamps): the channels that share their stamps exactly, together (the
@@ -281,7 +335,9 @@ class Auditor:
         return out
 
     def channels(self) -> list[dict]:
-        return [channel_row(", ".join(names), self.group(names[0]) if names != ["gnss"] else "gnss", t, self.t0)
+        updates = self.streams.report.get("updates", {})
+        return [channel_row(", ".join(names), self.group(names[0]), t, self.t0,
+                            updates[names[0]] if all(n in updates for n in names) else None)
                 for names, t in self.stamped()]
 
     def zero_lag_pairs(self) -> list[dict]:
@@ -290,8 +346,9 @@ class Auditor:
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
-            if "v" in sig:
-                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, *sig["v"], through_origin=True,
+            if "v" in sig:          # the speed over ground is a magnitude: |v| against it
+                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]),
+                                                               through_origin=True,
                                                                mask=_moving(tg, speed, 0.3)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
@@ -320,7 +377,30 @@ class Auditor:
         t, d = sig[steer]
         u = np.interp(t, *sig["v"]) * np.tan(np.clip(d, -1.4, 1.4)) / self.L
         found = lag(t, u, *sig["yaw_rate"], mask=_moving(*sig["v"], 0.3))
-        return None if found is None else {**found, "input": steer}
+        changes = int(np.count_nonzero(np.diff(d))) + int(np.count_nonzero(np.diff(sig["v"][1])))
+        return None if found is None else {**found, "input": steer, "input_changes": changes}
+
+    def steady_sign(self) -> dict | None:
+        """An opposite_sign finding where the yaw rate's mean and the kinematic v tan(delta) / L's,
+        over a steady turn while moving (|mean| above STEADY rad/s and twice its spread), have
+        opposite signs; None otherwise."""
+        sig = self.streams.signals
+        steer = "delta" if "delta" in sig else "delta_cmd" if "delta_cmd" in sig else None
+        if steer is None or "v" not in sig or "yaw_rate" not in sig:
+            return None
+        t, r = sig["yaw_rate"]
+        v = np.interp(t, *sig["v"])
+        u = v * np.tan(np.clip(np.interp(t, *sig[steer]), -1.4, 1.4)) / self.L
+        moving = np.abs(v) > 0.3
+        if moving.sum() < 100:
+            return None
+        mu, spread, mr = float(np.mean(u[moving])), float(np.std(u[moving])), float(np.mean(r[moving]))
+        if abs(mu) < max(STEADY, 2 * spread) or mr / mu >= 0:
+            return None
+        seconds = float(np.sum(np.diff(t)[moving[1:]]))
+        return opposite_sign([steer, "v", "yaw_rate"], mr / mu, None,
+                             f"a steady turn ({seconds:.0f} s moving): yaw_rate's mean {mr:+.3g} rad/s is {mr / mu:.3g} "
+                             f"times v tan({steer}) / L's {mu:+.3g} rad/s (L {self.L:g} m)")
 
 
 def _interval_text(iv, unit="s", digits=3) -> str:
@@ -333,17 +413,22 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
     pairs = aud.zero_lag_pairs()
     findings, offsets = [], {}
     agreeing: dict[frozenset, list] = {}    # group pairs a direct comparison finds on one clock: its interval
-    reference = "gnss" if aud.streams.gnss is not None else aud.group("yaw_rate")
+    reference = aud.group("gnss") if aud.streams.gnss is not None else aud.group("yaw_rate")
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
         late, iv = est["lag"], est["interval"]
-        strong = (est["rho"] >= STRONG_RHO and iv is not None and abs(late) >= ALIGN_MIN
-                  and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late))
+        judged = (est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
+                  and not est["edge"])
+        strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
-        meaning = (f"{name}: {b} ({gb}) follows {a} ({ga}) {late:+.3f} s late (correlation {est['rho']:.2f} over "
-                   f"{est['seconds']:.0f} s)")
+        meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
+                   f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
+                   + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
         if ga == gb:
-            meaning += "; one group, one clock: a lag within a group is the sensors' own latency"
+            findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
+                f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
+                f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
+                f"{STRONG_RHO} or interval wider than +-{HALF_WIDTH} s); nothing moved"), resolved=True))
         elif small:
             meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
             if ga != gb and est["rho"] >= STRONG_RHO:
@@ -357,10 +442,15 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
-            meaning += "; too weak to correct (correlation or interval): named, not aligned"
-        findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or ga == gb))
+            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO}, an interval "
+                        f"within +-{HALF_WIDTH} s that excludes zero and is narrower than the offset): not acted on")
+        if ga != gb:
+            findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
-        if math.isfinite(s) and est["rho"] >= 0.5:
+        if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
+            findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
+                                                          f"{est['rho']:.2f} with the sign turned)"))
+        elif math.isfinite(s) and est["rho"] >= 0.5:
             off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
             if off:
                 what = _scale_meaning(name, a, b, s)
@@ -383,6 +473,16 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                                  f"this {late:+.3f} s is a lag of the signals compared (a filter, a latency), not a clock")
                 f["resolved"] = True
     return offsets, findings
+
+
+def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
+    """A negative scale between channels that measure one quantity: a sign finding (``what``
+    gives its evidence), not a scale."""
+    return finding("opposite_sign", channels, s, interval, "ratio",
+                   f"{what}: {channels[-1]}'s sign is opposite to the one "
+                   f"expected from {', '.join(channels[:-1])}, at {abs(s):.3g} times the size; a sign convention (a "
+                   f"steering angle's, an axis mounted upside down): declare it with --signal "
+                   f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
 
 def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
@@ -502,6 +602,20 @@ def stamp_findings(report: dict) -> list[dict]:
     return out
 
 
+def held_findings(report: dict) -> list[dict]:
+    """The channels held in slower updates than their rows (report["updates"],
+    measurements.channel_updates): judged on their updates, so resolved."""
+    out = []
+    for name, u in (report.get("updates") or {}).items():
+        what = "the positions" if name == "gnss" else name
+        out.append(finding("held_samples", [name], u["held"], None, "rows per update",
+                           f"{what}: {u['updates_hz']:.3g} Hz updates in {u['rows_hz']:.3g} Hz rows (held x"
+                           f"{u['held']:.2g}): " + ("a set-point, held as it is sent" if u.get("set_point") else
+                                                    "its rate, noise, derived speed, course and lags are judged on "
+                                                    "its updates at their own times"), resolved=True))
+    return out
+
+
 def position_estimate(aud: Auditor, report: dict) -> list[dict]:
     """x, y given as columns (a localisation, odometry), not the receiver's fixes."""
     sig = aud.streams.signals
@@ -545,8 +659,9 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
         if g in offsets:
             streams.signals[c] = (t - offsets[g], x)
             moved.append(c)
-    if "gnss" in offsets and streams.gnss is not None:
-        streams.gnss = streams.gnss.assign(utc=streams.gnss["utc"] - offsets["gnss"])
+    g = group_of("gnss")
+    if g in offsets and streams.gnss is not None:
+        streams.gnss = streams.gnss.assign(utc=streams.gnss["utc"] - offsets[g])
         moved.append("gnss")
     return moved
 
@@ -598,6 +713,9 @@ def audit_streams(streams, options, source) -> dict:
     causal = aud.causal() if applied else causal_before
     if causal is not None:
         findings.append(_causality(causal, causal_before, applied))
+    steady = aud.steady_sign()
+    if steady is not None and not any(f["kind"] == "opposite_sign" and "yaw_rate" in f["channels"] for f in findings):
+        findings.append(steady)
     findings += mislabelled(aud)
     clock = streams.report.get("terminal_clock")
     if clock:
@@ -607,6 +725,8 @@ def audit_streams(streams, options, source) -> dict:
                                 f"channel is on the terminal's clock, so they agree with each other: only the "
                                 f"absolute time is off", resolved=True))
     findings += stamp_findings(streams.report)
+    findings += held_findings(streams.report)
+    findings += check_direction(streams, options, source, t0)
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
     findings += position_estimate(aud, streams.report)
     return {"channels": channels, "findings": findings,
@@ -621,8 +741,18 @@ def _causality(now: dict, before: dict | None, applied: dict) -> dict:
     late, iv = now["lag"], now["interval"]
     hi = iv[1] if iv else late
     what = f"yaw_rate follows v tan({now['input']}) / L {late:+.3f} s late (correlation {now['rho']:.2f})"
-    if now["rho"] < 0.3:
-        return finding("response_lag", chans, late, iv, "s", what + ": too weak to judge causality", resolved=True)
+    weak = [why for why, bad in (("correlation below 0.3", now["rho"] < 0.3),
+                                 (f"the peak on the search's bound (+-{SEARCH:g} s)", now.get("edge")),
+                                 (f"an input that barely changes ({now.get('input_changes', 0)} changes of "
+                                  f"{now['input']} and v)", now.get("input_changes", MIN_INPUT_CHANGES) < MIN_INPUT_CHANGES))
+            if bad]
+    if weak:
+        return finding("response_lag", chans, late, iv, "s", what + ": too weak to judge causality ("
+                       + "; ".join(weak) + ")", resolved=True)
+    if now.get("inverted") and now["rho"] >= 0.5:
+        return opposite_sign(chans, now["scale"], now["scale_interval"], f"yaw_rate is {now['scale']:.3g} times v "
+                             f"tan({now['input']}) / L, {late:+.3f} s late (correlation {now['rho']:.2f} with the sign "
+                             f"turned)")
     if hi < -LEAD_TOLERANCE:
         return finding("response_leads_input", chans, -late, None if iv is None else [-iv[1], -iv[0]], "s",
                        f"the yaw rate answers {-late:.3f} s BEFORE the steering x speed that causes it: the channels' "
@@ -666,7 +796,9 @@ def describe_audit(audit: dict) -> list[str]:
     for r in audit.get("channels", []):
         names = r["channel"].split(", ")
         name = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
+        lines.append(f"    {name:<14} {r['rate_hz']:7.3g} Hz"
+                     + (f" updates in {r['rows_hz']:.3g} Hz rows (held x{r['held']:.2g})" if r.get("held") else "")
+                     + f"  {r['samples']:>7} samples  {r['start_s']:8.2f}-"
                      f"{r['end_s']:.2f} s  gaps {r['gaps']}"
                      + (f" (longest {r['longest_gap_s']:.2f} s, at {', '.join(f'{x:g}' for x in r['gaps_at_s'])} s)"
                         if r["gaps"] else "")

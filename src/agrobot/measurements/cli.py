@@ -57,6 +57,10 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    help="clock offsets between channel groups (a file, topic or bus): auto corrects those the audit "
                         "finds on strong evidence (two speeds, gyro vs GNSS course, v r vs lateral acceleration); none "
                         "keeps the stamps; GROUP=SECONDS moves GROUP earlier by SECONDS (default auto)")
+    g.add_argument("--sign-speed", action="store_true",
+                   help="the speed is unsigned (a receiver's speed over ground, an encoder without direction): make "
+                        "it negative where the audit finds the machine reversing (the course against a direction "
+                        "channel, the heading or the steering); without it such a recording is refused")
     g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
                    help="use this span, s after the recording's first fix, instead of a run")
 
@@ -88,7 +92,8 @@ def recording_options(args: argparse.Namespace):
                             run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
                             keep_spikes=getattr(args, "keep_spikes", False),
-                            max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"))
+                            max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"),
+                            sign_speed=getattr(args, "sign_speed", False))
     parse_align(options.align)
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio

@@ -26,6 +26,7 @@ class ImportOptions:
     keep_spikes: bool = False                   # keep the samples found to be spikes (they are named either way)
     max_gap: float = 0.5                        # s: a channel's gap up to this is bridged (linear; held for a command)
     align: str = "auto"                         # auto | none | GROUP=SECONDS (measurements.audit.parse_align)
+    sign_speed: bool = False                    # an unsigned speed made negative where the machine reverses
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .channel_updates import keep_updates
 from .log import LogError, resolution
 from .options import ImportOptions
 from .streams import Streams, gnss_table, iso
@@ -119,12 +120,15 @@ def fixes_from_columns(streams: Streams, source: Path) -> Streams:
     """lat/lon columns (a table's, a custom topic's, a CAN GNSS message's) as the receiver's fixes."""
     sig = streams.signals
     if streams.gnss is None and "lat" in sig and "lon" in sig:
+        streams.groups.setdefault("gnss", streams.groups.get("lat", "gnss"))     # the fixes keep their file's clock
         t, lat = sig.pop("lat")
         lon = np.interp(t, *sig.pop("lon"))
         height = np.interp(t, *sig.pop("height")) if "height" in sig else None
         ok = np.isfinite(lat) & np.isfinite(lon) & ((np.abs(lat) > 0) | (np.abs(lon) > 0))
         if ok.sum() < 2:
-            raise LogError(f"{source}: the lat/lon columns hold {int(ok.sum())} positions")
+            raise LogError(f"{source}: the lat/lon columns ({streams.report.get('columns', {}).get('lat', 'lat')}, "
+                           f"{streams.report.get('columns', {}).get('lon', 'lon')}) hold {int(ok.sum())} positions: "
+                           f"every value is 0 or not a number; expected latitude and longitude in degrees")
         bad = ok & ((np.abs(lat) > 90) | (np.abs(lon) > 180))
         if bad.any():
             raise LogError(f"{source}: lat/lon {lat[bad][0]:g}, {lon[bad][0]:g} are not degrees of latitude/longitude "
@@ -139,9 +143,10 @@ def fixes_from_columns(streams: Streams, source: Path) -> Streams:
 
 
 def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
-    """Spikes found (and masked unless kept) in every measured signal; position quantisation
-    read on the raw fixes."""
+    """Held channels reduced to their updates (measurements.channel_updates); spikes found (and
+    masked unless kept) in every measured signal; position quantisation read on the raw fixes."""
     report = streams.report
+    keep_updates(streams, report.get("source", "the recording"))
     t0 = min([float(t[0]) for t, _ in streams.signals.values() if len(t)]
               + ([float(streams.gnss["utc"].iloc[0])] if streams.gnss is not None else []), default=0.0)
     found = []

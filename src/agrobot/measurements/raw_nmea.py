@@ -1,7 +1,7 @@
 """A recorded NMEA 0183 file as a table of GNSS epochs .
 
-A line is a sentence, optionally after a host timestamp (UNIX seconds, ``1777622400.05 $GNGGA,...``,
-candump style ``(1777622400.050000) $GNGGA,...``, or ISO 8601, ``2026-05-01T08:00:00.05Z $GNGGA,...``;
+A line is a sentence (or several glued together, each read with its own checksum), optionally
+after a host timestamp (UNIX seconds, ``1777622400.05 $GNGGA,...``, candump style ``(1777622400.050000) $GNGGA,...``, or ISO 8601, ``2026-05-01T08:00:00.05Z $GNGGA,...``;
 separated by blanks, a comma or a semicolon); lines starting with ``#`` are comments. Any talker
 (GP, GN, GL, GA, GB, BD, IN, ...). GGA opens an epoch (UTC time of day, position at whatever
 precision the receiver writes, fix quality kept as its code: 1 GPS, 2 DGPS, 4 RTK fixed, 5 RTK
@@ -186,6 +186,17 @@ def _lines(path: Path):
         yield number + 1, rest
 
 
+def _sentences(text: bytes) -> list[tuple[bytes, bytes]]:
+    """(body between '$' and '*', its two checksum digits) of each sentence in ``text`` from its
+    first '$': a line may carry several sentences glued together ('$..*hh$..*hh'); '$' opens a
+    sentence and appears nowhere inside one (NMEA 0183 reserved character)."""
+    out = []
+    for piece in text.split(b"$")[1:]:
+        star = piece.rfind(b"*")
+        out.append((piece[:star], piece[star + 1:star + 3]) if star >= 0 else (piece.rstrip(), b""))
+    return out
+
+
 def _batches(path: Path, first_line: dict, size: int = 20000):
     """Batches of (line number, host prefix, sentence id, fields, checksum ok) of the sentences this
     reader uses, and the counts of everything else (comments, binary, unused sentences)."""
@@ -205,16 +216,15 @@ def _batches(path: Path, first_line: dict, size: int = 20000):
             counts[kind] += 1
             first_line.setdefault(kind, number)
             continue
-        star = line.rfind(b"*")
-        body = line[start + 1:star] if star > start else line[start + 1:]
-        talker = body[2:5] if not body.startswith(b"P") else b"proprietary"
-        ident = talker.decode("ascii", "replace")
-        if ident not in USED:
-            counts[f"unused {ident}"] += 1
-            continue
-        batch.append((number, line[:start], ident, body.split(b",")))
-        bodies.append(body)
-        given.append(line[star + 1:star + 3] if star > start else b"")
+        for body, checksum in _sentences(line[start:]):
+            talker = body[2:5] if not body.startswith(b"P") else b"proprietary"
+            ident = talker.decode("ascii", "replace")
+            if ident not in USED:
+                counts[f"unused {ident}"] += 1
+                continue
+            batch.append((number, line[:start], ident, body.split(b",")))
+            bodies.append(body)
+            given.append(checksum)
         if len(batch) >= size:
             yield batch, _checksums_ok(bodies, given), counts
             batch, bodies, given = [], [], []

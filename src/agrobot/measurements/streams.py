@@ -22,6 +22,7 @@ import pandas as pd
 HELD = ("delta_cmd", "speed_cmd")  # set-points: held between frames, not interpolated
 # POSIX seconds before this (1973-03-03) are not dates: a clock counting from the logger's boot
 BOOT_CLOCK_LIMIT = 1e8
+SPEED_CHORD = 0.2     # s: a track's speed from fixes at least this far either side
 
 
 @dataclass
@@ -117,7 +118,9 @@ def is_boot_clock(t: np.ndarray) -> bool:
 
 def gnss_speed(gnss: pd.DataFrame, breaks: list | None = None) -> np.ndarray:
     """Speed over ground per epoch: RMC/VTG where given, else from position chords (central
-    differences within each stretch between ``breaks``, never across one)."""
+    differences over k fixes either side, k fixes spanning at least SPEED_CHORD s, within each
+    stretch between ``breaks``, never across one: a fix's time known to a fraction of its period
+    then barely moves the speed)."""
     speed = gnss["speed"].to_numpy(float)
     utc = gnss["utc"].to_numpy(float)
     if np.isfinite(speed).mean() > 0.5:
@@ -126,7 +129,17 @@ def gnss_speed(gnss: pd.DataFrame, breaks: list | None = None) -> np.ndarray:
     east = np.radians(gnss["lon"].to_numpy() - gnss["lon"].iloc[0]) * 6.371e6 * math.cos(math.radians(gnss["lat"].iloc[0]))
     out = np.zeros(len(utc))
     cuts = np.searchsorted(utc, [b["start"] for b in breaks or ()], side="right")
+    k = max(1, int(round(SPEED_CHORD / float(np.median(np.diff(utc)))))) if len(utc) > 1 else 1
     for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [len(utc)]])):
         if b - a >= 2:
-            out[a:b] = np.hypot(np.gradient(east[a:b], utc[a:b]), np.gradient(north[a:b], utc[a:b]))
+            out[a:b] = _chord_speed(utc[a:b], east[a:b], north[a:b], min(k, (b - a - 1) // 2 or 1))
     return out
+
+
+def _chord_speed(t: np.ndarray, east: np.ndarray, north: np.ndarray, k: int) -> np.ndarray:
+    """|d(east, north)/dt| by central chords of k samples either side (one-sided at the ends)."""
+    n = len(t)
+    i = np.arange(n)
+    lo, hi = np.clip(i - k, 0, n - 1), np.clip(i + k, 0, n - 1)
+    dt = np.maximum(t[hi] - t[lo], 1e-9)
+    return np.hypot(east[hi] - east[lo], north[hi] - north[lo]) / dt

@@ -1,0 +1,216 @@
+"""What each channel carries: its own updates, not the rows it is written in.
+
+A logger that writes every channel on every row holds a slower channel's last value until it
+updates (a 5 Hz heading in 20 Hz rows repeats each value about four times). Judged on its rows such
+a channel looks 20 Hz, its noise looks smaller than it is, and a rate or a speed derived from it is
+a spike at each update and zero between. The rule, on each channel's own samples (the receiver's
+fixes as one channel: a fix updates when its latitude or longitude changes):
+
+- an **update** is a sample whose value differs from the one before (exactly: a held value is a copy;
+  a measured value with noise never repeats exactly);
+- the channel is **held** when at least HELD_SHARE of its row steps are exact repeats, the median
+  interval between updates is at least REGULAR row periods, at least REGULAR_SHARE of the intervals
+  lie within half that period and a row of it (a sensor's rate, not a state that switches now and
+  then), and its changes are not single steps of
+  a grid (a quantised signal that moves slowly also repeats, but changes by one quantum at a time:
+  the median change is then within 1.5 quanta; measurements.log.resolution finds the quantum);
+  its update period P is the median interval between updates, ``held`` = P / the row period;
+- a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
+  else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
+  constant, not a gap); while the machine moves it is a stale value (a dropped update) and only
+  its first row is kept, so that the silence is a gap the audit names;
+- a held channel is replaced by its updates: each value once, at the middle between the last row
+  that still holds the old value and the first that holds the new one (the update happened between
+  them; the first row alone would make every update up to a row late, and a rate from such times
+  spiky; the first row's held value, of an unknown age, is left out); where those times fit a regular clock (the sensor's: a receiver's epochs, a heading's
+  fixed rate) within the rows' own jitter (residual std at most CLOCK_FIT rows after a running mean
+  over CLOCK_WINDOW updates of a line through the update numbers, each the time since the first
+  in periods, rounded), they are put on it. So
+  every quantity the audit and the log derive from it (the track's speed and course, a rate from a
+  heading, a noise level, a cross-correlation) is computed on them. Set-points (a command, held by
+  nature) keep their rows; their update rate is still reported.
+
+A heading (``MUST_CHANGE``) that never changes while the course of the fixes turns by more than
+TURNED rad is refused, and so is a recording in which
+no channel changes at all (a file of zeros): the error names the file, the channel and what was
+expected.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .direction import course
+from .log import LogError, resolution
+from .streams import Streams, gnss_speed
+
+HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the channel may be held
+REGULAR = 1.5           # the median update interval at least this many row periods
+REGULAR_SHARE = 0.6     # ... and this share of the intervals within half a period and a row of it
+STILL = 2.0             # a run of repeats longer than this many update periods is no hold
+STANDING = 0.1          # m/s: below this the machine stands
+CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this many
+CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
+MIN_SAMPLES = 20
+TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
+MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
+                          "noise alone changes it)"}
+
+
+def changed(values: np.ndarray) -> np.ndarray:
+    """True at each sample whose value (any column of a 2-D array) differs from the one before
+    (the first sample counts as an update)."""
+    x = np.asarray(values, float).reshape(len(values), -1)
+    out = np.ones(len(x), bool)
+    out[1:] = np.any(x[1:] != x[:-1], axis=1) & ~np.all(np.isnan(x[1:]) & np.isnan(x[:-1]), axis=1)
+    return out
+
+
+def _single_steps(x: np.ndarray, change: np.ndarray) -> bool:
+    """Whether a column moves one quantum at a time (a slow signal on a grid, not a held one)."""
+    x = np.asarray(x, float)
+    q = resolution(x)
+    steps = np.abs(np.diff(x[change]))
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return q > 0 and len(steps) > 0 and float(np.median(steps)) <= 1.5 * q
+
+
+def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
+    """{rows_hz, updates_hz, held, keep (indices of the samples kept), times (theirs: an update's
+    between its row and the one before), stale (runs dropped)} of a
+    held channel (module docstring), or None when it is not held. ``moving(times) -> bool``: the
+    machine moves at those times (None: it is taken as standing in a long run)."""
+    t = np.asarray(t, float)
+    x = np.asarray(values, float).reshape(len(t), -1)
+    if len(t) < MIN_SAMPLES:
+        return None
+    change = changed(x)
+    if 1.0 - change[1:].mean() < HELD_SHARE or change.sum() < 5:
+        return None
+    dt = np.diff(t)
+    row = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
+    at = np.flatnonzero(change)
+    intervals = np.diff(t[at])
+    period = float(np.median(intervals))
+    if not row > 0 or period < REGULAR * row or any(_single_steps(x[:, k], change) for k in range(x.shape[1])):
+        return None
+    if np.mean(np.abs(intervals - period) <= 0.5 * period + row) < REGULAR_SHARE:
+        return None                     # changes at irregular times: a state or an event, not a sampled hold
+    keep, stale = [], 0
+    ends = np.append(at[1:], len(t))
+    every = max(1, int(round(period / row)))
+    for a, b in zip(at, ends):
+        short = t[b - 1] - t[a] <= STILL * period
+        if a > 0 or not short:          # the first row's value is of an unknown age: not an update seen
+            keep.append(a)
+        if short:
+            continue
+        if moving is not None and np.mean(moving(t[a:b])) > 0.5:
+            stale += 1
+            continue
+        keep.extend(range(a + every, b, every))
+    keep = np.array(keep, int)
+    times = t[keep].copy()
+    first = np.isin(keep, at) & (keep > 0)
+    times[first] = regular_times(0.5 * (t[keep[first] - 1] + t[keep[first]]), period, row)
+    ahead = times > np.maximum.accumulate(np.concatenate([[-np.inf], times[:-1]]))   # increasing, always
+    keep, times = keep[ahead], times[ahead]
+    return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
+            "stale": stale}
+
+
+def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
+    """Update times ``tm`` (known to a row) on the sensor's regular clock where they fit one
+    (module docstring), else as they are."""
+    if len(tm) < 2 * CLOCK_WINDOW:
+        return tm
+    slope, offset = period, float(tm[0])
+    for _ in range(3):                  # the update numbers, then the clock's period refined on them
+        n = np.round((tm - offset) / slope)
+        slope, offset = np.polyfit(n, tm, 1)
+    r = tm - (offset + slope * n)
+    pad = np.pad(r, CLOCK_WINDOW // 2, mode="edge")
+    drift = np.convolve(pad, np.ones(CLOCK_WINDOW) / CLOCK_WINDOW, "valid")
+    return offset + slope * n + drift if float(np.std(r - drift)) <= CLOCK_FIT * row else tm
+
+
+def _motion(streams: Streams):
+    """moving(times) from the speed v, else None (the track is judged after its own updates)."""
+    if "v" in streams.signals and len(streams.signals["v"][0]) > 1:
+        tv, v = streams.signals["v"]
+        return lambda times: np.abs(np.interp(times, tv, v)) > STANDING
+    return None
+
+
+def _turned(streams: Streams) -> float:
+    """How far the course of the fixes turns over the recording [rad] (0 without fixes)."""
+    if streams.gnss is None or len(streams.gnss) < MIN_SAMPLES:
+        return 0.0
+    c = course(streams.gnss)[1]
+    c = np.unwrap(c[np.isfinite(c)])
+    return float(np.ptp(c)) if len(c) else 0.0
+
+
+def _refuse_constant(streams: Streams, source) -> None:
+    """A LogError for a recording in which nothing changes, or a MUST_CHANGE channel that never does."""
+    series = {c: x for c, (_, x) in streams.signals.items() if len(x) >= MIN_SAMPLES}
+    if streams.gnss is not None and len(streams.gnss) >= MIN_SAMPLES:
+        series["gnss"] = streams.gnss[["lat", "lon"]].to_numpy(float)
+    constant = {c for c, x in series.items() if changed(x).sum() == 1}
+    labels = streams.report.get("columns", {})
+
+    def named(c):
+        return "the positions (lat, lon)" if c == "gnss" else f"{c} ({labels.get(c, c)})"
+    if series and constant == set(series):
+        raise LogError(f"{source}: no channel changes: every one of {', '.join(named(c) for c in sorted(constant))} "
+                       f"holds one value throughout (a file of zeros or of a logger that was not recording?); "
+                       f"expected measurements that change as the machine drives")
+    for c in sorted(c for c in constant & set(MUST_CHANGE) if _turned(streams) > TURNED):
+        x = np.asarray(series[c], float).reshape(len(series[c]), -1)[0]
+        raise LogError(f"{source}: channel {named(c)} never updates: all {len(series[c])} samples hold "
+                       f"{', '.join(f'{v:g}' for v in x)} while other channels change; expected {MUST_CHANGE[c]}: "
+                       f"map the channel that carries it (--signal {c if c != 'gnss' else 'lat'}=TABLE.COLUMN) or "
+                       f"leave it out")
+
+
+def keep_updates(streams: Streams, source) -> list[dict]:
+    """Every held channel of ``streams`` replaced by its updates, in place (module docstring); the
+    notes per channel: {channel, rows_hz, updates_hz, held, stale} (also streams.report["updates"])."""
+    _refuse_constant(streams, source)
+    notes = []
+    moving = _motion(streams)
+    if streams.gnss is not None:
+        g = streams.gnss
+        found = holding(g["utc"].to_numpy(float), g[["lat", "lon"]].to_numpy(float), moving)
+        if found is not None:
+            streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
+            notes.append({"channel": "gnss", **_said(found)})
+    if moving is None and streams.gnss is not None and len(streams.gnss) > 2:
+        tg, sg = streams.gnss["utc"].to_numpy(float), gnss_speed(streams.gnss, streams.breaks)
+        moving = lambda times: np.interp(times, tg, sg) > STANDING        # noqa: E731
+    for c, (t, x) in list(streams.signals.items()):
+        found = holding(t, x, moving)
+        if found is None:
+            continue
+        if c not in streams.held:
+            streams.signals[c] = (found["times"], x[found["keep"]])
+        notes.append({"channel": c, **_said(found), "set_point": c in streams.held})
+    if notes:
+        streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
+        streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
+    return notes
+
+
+def _said(found: dict) -> dict:
+    return {k: v for k, v in found.items() if k not in ("keep", "times")}
+
+
+def note_text(n: dict) -> str:
+    """One held channel as the report says it."""
+    what = "the positions" if n["channel"] == "gnss" else n["channel"]
+    text = (f"{what}: {n['updates_hz']:.3g} Hz updates in {n['rows_hz']:.3g} Hz rows (held x{n['held']:.2g}): "
+            + ("a set-point, kept as held" if n.get("set_point") else "judged and logged on its updates"))
+    if n.get("stale"):
+        text += f"; {n['stale']} value(s) held longer than {STILL:g} updates while moving dropped (a gap)"
+    return text

@@ -1,0 +1,228 @@
+"""Which way the machine moves: the sign of its speed checked against the course.
+
+The course is the direction of motion, read from the receiver's fixes (on their own updates,
+measurements.channel_updates): the chord of the fixes CHORD s either side, where the track moves
+faster than MOVING m/s. Driving forward the course is the heading (plus a fixed mounting offset);
+reversing it is the heading + pi. The evidence, the first available of:
+
+1. a declared direction channel (``--signal direction=...`` or ``gear=...``): negative = reversing;
+2. a heading (``heading``, else the receiver's own, any convention): its sense (clockwise or not) is the one whose rate follows
+   the course rate; the offset between the course and the heading takes two values pi apart (the
+   axis of the doubled angles), and forward is the one the machine keeps longer (a machine drives
+   forward more than it reverses); a sample is forward within AGREE of it, reversing within AGREE
+   of the other;
+3. the steering (``delta``, else ``delta_cmd``): the course turns the way the wheels steer forward and
+   the other way reversing (r = v tan(delta) / L with v < 0), the majority sign again forward;
+   read where |delta| > STEERED rad and the course turns faster than TURNING rad/s.
+
+A machine changes direction only through a stop: each moving stretch between stops is judged
+whole by its evidence's majority (a lag between the steering and the course, a noisy heading, do
+not cut a drive into pieces), and named reversing when at least REVERSE_MIN s long. The speed ``v`` (else the receiver's) is then judged there: signed
+when it is negative on most of them; otherwise it is unsigned and never passes as forward driving:
+the import is refused, naming the stretches and the remedy, unless ``--sign-speed`` asks to make it
+negative there (printed, with the stretches).
+
+Imported where used: measurements.audit (the finding's shape; it imports this module).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .log import LogError
+
+CHORD = 0.25            # s: the course from the fixes this far either side
+MOVING = 0.2            # m/s: the course is read above this track speed
+AGREE = math.radians(45.0)
+STEERED, TURNING = 0.05, 0.05
+RATE_CHORD = 0.5        # s: the course rate over chords this far either side
+REVERSE_SHARE = 0.5     # a stretch reverses when its votes' net share is below -this (75 % reversing)
+REVERSE_MIN = 1.0       # s: a shorter stretch of reversing evidence is not named
+STOP = 0.1              # m/s: a reversing stretch is signed out to where the speed falls below this
+SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the reversing samples
+
+
+def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t, course [rad, ENU, unwrapped within moving stretches], track speed [m/s]) of the fixes;
+    course NaN where the track moves slower than MOVING."""
+    t = gnss["utc"].to_numpy(float)
+    lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
+    north = np.radians(lat - lat[0]) * 6.371e6
+    east = np.radians(lon - lon[0]) * 6.371e6 * math.cos(math.radians(float(lat[0])))
+    h = float(np.median(np.diff(t))) if len(t) > 1 else math.nan
+    k = max(1, int(round(CHORD / h))) if h > 0 else 1
+    c, speed = np.full(len(t), np.nan), np.zeros(len(t))
+    if len(t) > 2 * k + 2:
+        de, dn, dt = east[2 * k:] - east[:-2 * k], north[2 * k:] - north[:-2 * k], t[2 * k:] - t[:-2 * k]
+        speed[k:-k] = np.hypot(de, dn) / np.maximum(dt, 1e-6)
+        c[k:-k] = np.arctan2(dn, de)
+    c[speed < MOVING] = np.nan
+    return t, c, speed
+
+
+def _wrap(x):
+    return np.angle(np.exp(1j * np.asarray(x, float)))
+
+
+def _rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """d(angle)/dt of a possibly interrupted angle by chords of RATE_CHORD s either side (NaN where
+    the angle is, and across its interruptions: the course is not read at a stop)."""
+    out = np.full(len(t), np.nan)
+    ok = np.isfinite(angle)
+    if ok.sum() > 3:
+        idx = np.flatnonzero(ok)
+        k = max(1, int(round(RATE_CHORD / float(np.median(np.diff(t))))))
+        u = np.unwrap(angle[idx])
+        i = np.arange(len(idx))
+        lo, hi = np.clip(i - k, 0, len(idx) - 1), np.clip(i + k, 0, len(idx) - 1)
+        span = t[idx[hi]] - t[idx[lo]]
+        whole = (idx[hi] - idx[lo] == hi - lo) & (span > 0)         # no interruption inside the chord
+        out[idx[whole]] = (u[hi] - u[lo])[whole] / span[whole]
+    return out
+
+
+def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
+    """Evidence (+1 forward, -1 reversing, 0 none) from a heading (module docstring), or None when
+    its rate does not follow the course's."""
+    th, h = heading
+    inside = (t >= th[0]) & (t <= th[-1]) & np.isfinite(c)
+    if inside.sum() < 20:
+        return None
+    hu = np.interp(t, th, np.unwrap(h))
+    hr = np.gradient(hu, t)
+    ok = inside & np.isfinite(rate)
+    if ok.sum() < 20 or np.std(rate[ok]) == 0 or np.std(hr[ok]) == 0:
+        return None
+    sense = float(np.corrcoef(rate[ok], hr[ok])[0, 1])
+    if not abs(sense) > 0.3:
+        return None
+    diff = _wrap(c - math.copysign(1.0, sense) * hu)
+    axis = 0.5 * float(np.angle(np.mean(np.exp(2j * diff[inside]))))
+    near = np.abs(_wrap(diff - axis)) < math.pi / 2
+    forward = axis if near[inside].mean() >= 0.5 else axis + math.pi
+    off = np.abs(_wrap(diff - forward))
+    e = np.where(off < AGREE, 1, np.where(off > math.pi - AGREE, -1, 0))
+    return np.where(inside, e, 0), (f"the course against the heading (offset {math.degrees(_wrap(forward)):.0f} deg, "
+                                    f"{'same' if sense > 0 else 'opposite'} sense)")
+
+
+def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
+    """Evidence from the steering: the course turns with the wheels forward, against them reversing."""
+    d = np.interp(t, *steer)
+    ok = np.isfinite(rate) & (np.abs(d) > STEERED) & (np.abs(rate) > TURNING)
+    if ok.sum() < 20:
+        return None
+    e = np.where(ok, np.sign(rate * d), 0).astype(int)
+    majority = 1 if e.sum() >= 0 else -1
+    return e * majority, f"the course rate against the steering {name}"
+
+
+def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
+    """The first evidence available (module docstring): (per fix +1/-1/0, how it was read)."""
+    sig = streams.signals
+    declared = next((n for n in ("direction", "gear") if n in sig), None)
+    if declared:
+        x = np.interp(t, *sig[declared])
+        return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
+    rate = _rate(t, c)
+    heading = sig.get("heading")
+    g = streams.gnss
+    if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:
+        ok = np.isfinite(g["heading"].to_numpy(float))          # the receiver's own (HDT, THS)
+        heading = (g["utc"].to_numpy(float)[ok], g["heading"].to_numpy(float)[ok])
+    if heading is not None and len(heading[0]) > 3:
+        found = by_heading(t, c, rate, heading)
+        if found is not None:
+            return found
+    steer = next((n for n in ("delta", "delta_cmd") if n in sig), None)
+    return by_steering(t, c, rate, sig[steer], steer) if steer else None
+
+
+def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, float]]:
+    """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
+    each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
+    when the net share of its evidence is below -REVERSE_SHARE, and named when at least
+    REVERSE_MIN long with at least 5 votes."""
+    out = []
+    moving = np.isfinite(c)
+    edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        votes = e[a:b]
+        seen = int(np.sum(votes != 0))
+        if seen >= 5 and votes.sum() / seen < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+            out.append((float(t[a]), float(t[b - 1])))
+    return out
+
+
+def _within(times: np.ndarray, stretches) -> np.ndarray:
+    inside = np.zeros(len(times), bool)
+    for a, b in stretches:
+        inside |= (times >= a) & (times <= b)
+    return inside
+
+
+def _to_stops(ts: np.ndarray, vs: np.ndarray, a: float, b: float) -> tuple[float, float]:
+    """A reversing stretch widened to the stops either side (the speed under STOP, up to 3 s away):
+    the course is read only above MOVING, the machine reverses from standstill to standstill."""
+    still = np.abs(vs) < STOP
+    before = np.flatnonzero(still & (ts <= a) & (ts >= a - 3.0))
+    after = np.flatnonzero(still & (ts >= b) & (ts <= b + 3.0))
+    return (float(ts[before[-1]]) if len(before) else a, float(ts[after[0]]) if len(after) else b)
+
+
+def judged_speed(streams):
+    """(name, times, values) of the speed the log carries as the machine's: v, else the
+    receiver's own speed; None when the log has only the track's (a magnitude by definition)."""
+    if "v" in streams.signals:
+        return ("v", *streams.signals["v"])
+    g = streams.gnss
+    speed = g["speed"].to_numpy(float)
+    if np.isfinite(speed).mean() > 0.5:
+        return "gnss_speed", g["utc"].to_numpy(float), speed
+    return None
+
+
+def check_direction(streams, options, source, t0: float) -> list[dict]:
+    """The direction findings of a recording with fixes; a LogError for an unsigned speed while
+    reversing unless ``options.sign_speed`` (then the speed is negated there, in place)."""
+    from .audit import finding
+
+    if streams.gnss is None or len(streams.gnss) < 20:
+        return []
+    t, c, _ = course(streams.gnss)
+    found = evidence(streams, t, c)
+    if found is None:
+        return []
+    e, how = found
+    stretches = reversing(t, c, e)
+    if not stretches:
+        return []
+    when = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in stretches)
+    total = sum(b - a for a, b in stretches)
+    speed = judged_speed(streams)
+    chans = [speed[0] if speed else "track_speed", "course"]
+    if speed is not None:
+        name, ts, vs = speed
+        inside = _within(ts, stretches) & (np.abs(vs) > 0.05)
+        if inside.sum() and np.mean(vs[inside] < 0) >= SIGNED_SHARE:
+            return [finding("reversing", chans, total, None, "s",
+                            f"the machine reverses at {when} ({how}); {name} is negative there: a signed speed",
+                            resolved=True)]
+    if not getattr(options, "sign_speed", False) or speed is None:
+        remedy = ("--sign-speed makes it negative there" if speed is not None else
+                  "map the machine's signed speed (--signal v=...) and give --sign-speed if it is unsigned too")
+        raise LogError(f"{source}: the machine reverses at {when} (by {how}) while "
+                       f"{chans[0]} stays positive: an unsigned speed would pass as forward driving; expected a "
+                       f"signed speed (negative reversing): {remedy} (a direction channel, --signal "
+                       f"direction=TABLE.COLUMN negative reversing, says where)")
+    name, ts, vs = speed
+    flip = _within(ts, [_to_stops(ts, vs, a, b) for a, b in stretches])
+    signed = np.where(flip, -np.abs(vs), vs)
+    if name == "v":
+        streams.signals["v"] = (ts, signed)
+    else:
+        streams.gnss = streams.gnss.assign(speed=signed)
+    return [finding("reversing", chans, total, None, "s",
+                    f"the machine reverses at {when} ({how}); {name} was unsigned: made negative there "
+                    f"(--sign-speed; {int(flip.sum())} samples)", resolved=True)]
