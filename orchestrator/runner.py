@@ -28,7 +28,7 @@ from .signal_recorder import RecordedSignals, SignalRecorder
 from .registry import import_study_module
 from .resolver import resolve
 from .atomic_files import SignalWriter, atomic_write, write_json
-from .schedule import WRITE_EVERY
+from .schedule import WRITE_BYTES, WRITE_EVERY, block_rows
 from .signal_table import SignalTable
 from .study import Study, StudyError
 
@@ -104,17 +104,21 @@ def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text(text))
 
 
-CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at most)
+CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at least; schedule.block_rows)
+CHUNK_BYTES = WRITE_BYTES     # ... or more, while the rows held stay under this
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
 def _stream(sim: Simulation, writer) -> RecordedSignals:
-    """Run ``sim`` to its stop time, writing the signal table block by block (every CHUNK_STEPS
-    base steps). The engine is advanced about REPORT_EVERY_S of wall time at a time, so that
-    progress moves as often whether the run is paced in real time or runs 500 times faster.
-    An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
+    """Run ``sim`` to its stop time, writing the signal table block by block: every CHUNK_STEPS
+    base steps, or more while they hold under CHUNK_BYTES (schedule.block_rows); a run paced in real
+    time every CHUNK_STEPS (what a crash would lose stays short). The engine is advanced about
+    REPORT_EVERY_S of wall time at a time, so that progress moves as often whether the run is paced in
+    real time or runs 500 times faster. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
     the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
     period = sim.chunk_period
+    chunk = CHUNK_STEPS if getattr(sim, "pacer", None) is not None else \
+        block_rows(len(sim.columns), CHUNK_STEPS, CHUNK_BYTES)
     step, drained = period, 0
     try:
         sim.start()
@@ -123,8 +127,8 @@ def _stream(sim: Simulation, writer) -> RecordedSignals:
             sim.advance(min(sim.k + step, sim.n_steps))
             took = time.perf_counter() - began
             rate = step / took if took > 0 else float("inf")
-            step = period * max(1, min(CHUNK_STEPS // period, int(REPORT_EVERY_S * rate) // period))
-            if sim.k - drained >= CHUNK_STEPS and sim.k % period == 0:
+            step = period * max(1, min(chunk // period, int(REPORT_EVERY_S * rate) // period))
+            if sim.k - drained >= chunk and sim.k % period == 0:
                 with critical():
                     writer.append(sim.drain())
                     drained = sim.k

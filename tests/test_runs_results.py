@@ -167,6 +167,7 @@ def test_the_recorders_hold_at_most_two_blocks_while_a_long_run_streams(tmp_path
     from agrobot.orchestrator.engine import Simulation
 
     monkeypatch.setattr(runner, "CHUNK_STEPS", 200)
+    monkeypatch.setattr(runner, "CHUNK_BYTES", 0)
     held = []
     advance = Simulation.advance
 
