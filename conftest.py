@@ -27,8 +27,13 @@ SLOW_FIXTURES = {
 }
 
 
+SLOW_TIMEOUT_S = 1200       # a slow test's limit (pytest-timeout; the others have pyproject's timeout = 300)
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         heavy = SLOW_FIXTURES.get(item.path.name, set())
         if heavy & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+        if item.get_closest_marker("slow") is not None and item.get_closest_marker("timeout") is None:
+            item.add_marker(pytest.mark.timeout(SLOW_TIMEOUT_S))
