@@ -293,7 +293,11 @@ class TractorYawPlant(Component):
         y["vel_east_rear"] = v * c - v_lat_rear * s
         y["vel_north_rear"] = v * s + v_lat_rear * c
         roll, pitch = self._attitude
-        dx, dy = lever_offset(roll, pitch, self.psi, *self._lever)
+        if roll == 0.0 and pitch == 0.0:    # level: lever_offset's sums with cos 0 = 1, sin 0 = 0, to the bit
+            forward, left = self._lever[0], self._lever[1]
+            dx, dy = c * forward - s * left, s * forward + c * left
+        else:
+            dx, dy = lever_offset(roll, pitch, self.psi, *self._lever)
         y["x_antenna"], y["y_antenna"] = y["x_rear"] + dx, y["y_rear"] + dy
         y["vel_east_antenna"] = y["vel_east_rear"] - gamma * dy
         y["vel_north_antenna"] = y["vel_north_rear"] + gamma * dx
