@@ -43,6 +43,7 @@ def _status(folder: Path) -> str:
     return json.loads((folder / "metrics.json").read_text())["status"]
 
 
+@pytest.mark.slow
 def test_an_interrupted_rerun_keeps_the_complete_result_and_its_figures(tmp_path):
     """Ctrl-C on a rerun into a complete result: the result and its figures stay in --out as
     they were, the partial run goes beside it, named, and the message says both."""
