@@ -18,6 +18,7 @@ SLOW_FIXTURES = {
     "test_diagnosis_open_world.py": {"runs"},
     "test_diagnosis_specificity.py": {"runs"},
     "test_diagnosis_real_vehicles.py": {"ds1"},
+    "test_verdicts_truths.py": {"runs"},                # six truths diagnosed
     "test_identify_driving.py": {"ds5"},                # a real log identified by the driving method
     "test_identification.py": {"study_run"},            # the paper's section IV experiment, every speed
     "test_figure8_closed_loop.py": {"cli_run"},         # the 160 s figure-8 through the command
