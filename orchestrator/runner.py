@@ -231,17 +231,37 @@ def _write_status(folder: Path, study: Study, system, facts: dict[str, Any], t_r
         write_json(folder / "run.json", _run_json(study, system, facts["status"], t_reached))
 
 
+COMPILED_HELD_BYTES = 512 * 1024 ** 2     # auto: a longer run's table streams through the Python engine
+
+
+def _announced(factory, note: str):
+    """``factory`` that prints ``note`` on stderr once the run is accepted (its budget checked)."""
+    def make(system: System):
+        sim = factory(system)
+        print(note, file=sys.stderr)
+        return sim
+    return make
+
+
 def choose_engine(system: System, engine: str):
     """The engine's class for ``engine`` (python, compiled, auto); the choice of ``auto``, and
-    why, is printed on stderr (orchestrator.compiled.select_engine)."""
+    why, is printed on stderr when the run starts (orchestrator.compiled.select_engine). ``auto``
+    keeps the Python engine for a run whose signal table passes COMPILED_HELD_BYTES: the compiled
+    engine holds the whole table until the run ends, the Python one writes it as it goes."""
     if engine == "python":
         return Simulation
+    if engine == "auto":
+        s = system.study.study
+        rows = int(round((s.stop_time - s.start_time) / s.base_step)) + 1
+        held = rows * (len(SignalRecorder(system, 1).columns) + 1) * 8
+        if held > COMPILED_HELD_BYTES:
+            return _announced(Simulation, f"engine: python (the compiled engine would hold the run's {rows} rows, "
+                                          f"{held / 1024 ** 3:.3g} GB, in memory; the Python engine writes them as "
+                                          f"it goes; --engine compiled forces it)")
     from .compiled import select_engine
 
     factory, note = select_engine(system, engine)
-    if note and engine == "auto":
-        print(note, file=sys.stderr)
-    return factory
+    return _announced(factory, note) if note and engine == "auto" else factory
 
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,
