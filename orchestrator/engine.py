@@ -71,7 +71,7 @@ class Simulation:
         self.columns = self.recorder.columns
         self.cost = budget(f"{system.study.path}", self.h, s.stop_time - s.start_time, [nd.step for nd in nodes],
                            [nd.ratio for nd in nodes], len(self.columns) if record else 0,
-                           block_rows(len(self.columns)))
+                           block_rows(len(self.columns), self.n_steps + 1))
         self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.observers: list[Observer] = [o for o in (self.pacer, self.recorder if record else None) if o is not None]
         self.observers += list(observers)

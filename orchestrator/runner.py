@@ -104,21 +104,21 @@ def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text(text))
 
 
-CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at least; schedule.block_rows)
-CHUNK_BYTES = WRITE_BYTES     # ... or more, while the rows held stay under this
+CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table ...
+CHUNK_BYTES = WRITE_BYTES     # ... unless the whole run's table fits in this (schedule.block_rows)
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
 def _stream(sim: Simulation, writer) -> RecordedSignals:
     """Run ``sim`` to its stop time, writing the signal table block by block: every CHUNK_STEPS
-    base steps, or more while they hold under CHUNK_BYTES (schedule.block_rows); a run paced in real
-    time every CHUNK_STEPS (what a crash would lose stays short). The engine is advanced about
+    base steps, or once after the run when its whole table fits in CHUNK_BYTES (schedule.block_rows;
+    not a run paced in real time: what a crash would lose stays short). The engine is advanced about
     REPORT_EVERY_S of wall time at a time, so that progress moves as often whether the run is paced in
     real time or runs 500 times faster. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
     the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
     period = sim.chunk_period
     chunk = CHUNK_STEPS if getattr(sim, "pacer", None) is not None else \
-        block_rows(len(sim.columns), CHUNK_STEPS, CHUNK_BYTES)
+        block_rows(len(sim.columns), sim.n_steps + 1, CHUNK_STEPS, CHUNK_BYTES)
     step, drained = period, 0
     try:
         sim.start()
