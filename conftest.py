@@ -18,6 +18,7 @@ SLOW_FIXTURES = {
     "test_diagnosis_open_world.py": {"runs"},
     "test_diagnosis_specificity.py": {"runs"},
     "test_diagnosis_real_vehicles.py": {"ds1"},
+    "test_verdicts_truths.py": {"runs"},                # six truths diagnosed
     "test_identify_driving.py": {"ds5"},                # a real log identified by the driving method
     "test_identification.py": {"study_run"},            # the paper's section IV experiment, every speed
     "test_figure8_closed_loop.py": {"cli_run"},         # the 160 s figure-8 through the command
@@ -27,8 +28,13 @@ SLOW_FIXTURES = {
 }
 
 
+SLOW_TIMEOUT_S = 1200       # a slow test's limit (pytest-timeout; the others have pyproject's timeout = 300)
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         heavy = SLOW_FIXTURES.get(item.path.name, set())
         if heavy & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+        if item.get_closest_marker("slow") is not None and item.get_closest_marker("timeout") is None:
+            item.add_marker(pytest.mark.timeout(SLOW_TIMEOUT_S))

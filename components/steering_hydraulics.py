@@ -112,30 +112,39 @@ class SteeringHydraulics(Component):
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
         self.opening = 0.0
+        self._per_step: dict[float, tuple] = {}
         self.y["steer_angle"] = self.delta
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
+
+    def _constants(self, dt: float) -> tuple:
+        """The substep's constants for step ``dt`` (made once per run and step: the parameters are
+        fixed from ``initialize`` on)."""
+        p = self.p
+        h = dt / self.substeps
+        vn, db = p["neutral_voltage"], p["deadband"]
+        res = p["potentiometer_resolution"]
+        pi = self.pi
+        return (h, vn, db, 1.0 / (p["voltage_max"] - vn - db), h * p["max_flow"] / p["volume_per_rad"],
+                p["angle_limit"], res, 1.0 - math.exp(-h / p["valve_time_constant"]),
+                pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit,
+                p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0),
+                p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0)
 
     def step(self, t: float, dt: float) -> None:
         """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
         (a call costs as much as the arithmetic here); tests check it against those functions."""
-        p = self.p
-        h = dt / self.substeps
-        vn, db = p["neutral_voltage"], p["deadband"]
-        opening_scale = 1.0 / (p["voltage_max"] - vn - db)
-        rate_step = h * p["max_flow"] / p["volume_per_rad"]
-        lim, res = p["angle_limit"], p["potentiometer_resolution"]
-        alpha = 1.0 - math.exp(-h / p["valve_time_constant"])
+        constants = self._per_step.get(dt)
+        if constants is None:
+            constants = self._per_step[dt] = self._constants(dt)
+        h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, inv_res = \
+            constants
         pi = self.pi
-        kp, ki_h, v_lo, v_hi, i_lim = pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit
         integral = pi.integral
         history = self.command_history
         history.append(float(self.u["steer_angle_cmd"]))
         cmd = history[0]
-        dead = p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0)
-        max_move = p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf
         delta, opening = self.delta, self.opening
         v_rel = 0.0
-        inv_res = 1.0 / res if res > 0 else 0.0
         for _ in range(self.substeps):
             error = cmd - (res * round(delta * inv_res) if inv_res else delta)
             if dead:

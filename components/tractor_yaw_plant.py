@@ -243,6 +243,7 @@ class TractorYawPlant(Component):
         self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._update_ground()
+        self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
         self._set_outputs(0.0, 0.0, 0.0)
 
     def _update_ground(self) -> None:
@@ -292,8 +293,11 @@ class TractorYawPlant(Component):
         y["vel_east_rear"] = v * c - v_lat_rear * s
         y["vel_north_rear"] = v * s + v_lat_rear * c
         roll, pitch = self._attitude
-        dx, dy = lever_offset(roll, pitch, self.psi, self.p["antenna_forward"], self.p["antenna_left"],
-                              self.p["antenna_height"])
+        if roll == 0.0 and pitch == 0.0:    # level: lever_offset's sums with cos 0 = 1, sin 0 = 0, to the bit
+            forward, left = self._lever[0], self._lever[1]
+            dx, dy = c * forward - s * left, s * forward + c * left
+        else:
+            dx, dy = lever_offset(roll, pitch, self.psi, *self._lever)
         y["x_antenna"], y["y_antenna"] = y["x_rear"] + dx, y["y_rear"] + dy
         y["vel_east_antenna"] = y["vel_east_rear"] - gamma * dy
         y["vel_north_antenna"] = y["vel_north_rear"] + gamma * dx
@@ -321,7 +325,8 @@ class TractorYawPlant(Component):
         if self._saturation:
             z = self._saturated_step(v_eff, delta, dt)
         else:
-            Ad, Bd, _ = self.discretized(v_eff, dt)
+            hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
+            Ad, Bd, _ = hit if hit is not None else self.discretized(v_eff, dt)
             z = Ad @ self.z
         a_lat = -self._pull[0] * math.sin(self.psi) + self._pull[1] * math.cos(self.psi) if self._slope else 0.0
         if self._saturation:

@@ -29,11 +29,12 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
     parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
 
 
-def add_engine_option(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--engine", choices=("python", "compiled", "auto"), default="python",
-                        help="python (default): the Python components; compiled: the study's whole loop from the "
-                             "components' C cores, one compiled program (every component needs one); auto: compiled "
-                             "when it can, and says why not otherwise")
+def add_engine_option(parser: argparse.ArgumentParser, default: str = "python") -> None:
+    parser.add_argument("--engine", choices=("python", "compiled", "auto"), default=default,
+                        help=f"python: the Python components; compiled: the study's whole loop from the "
+                             f"components' C cores, one compiled program (every component needs one and a C compiler "
+                             f"is found); auto: compiled when it can, the Python engine otherwise, saying which ran "
+                             f"and why (default: {default})")
 OUT_RULE = ("a new or empty folder is written; an earlier result of this command is replaced (in one step, when "
             "the command ends) only with --overwrite; anything else, or an input, is refused")
 
@@ -76,7 +77,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
                         "the MCAP's topics at 20 instants a second of wall time)")
     p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
                    help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
-    add_engine_option(p)
+    add_engine_option(p, "auto")
     add_isolate_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
@@ -98,9 +99,14 @@ def _run(args: argparse.Namespace) -> int:
             study = study.with_overrides(args.set + _isolated(args))
     mcap = _mcap_path(args, study)
     live = _live_view(study, args.live, args.live_wait) if args.live else None
+    engine = args.engine
+    if live is not None and engine == "auto":
+        engine = "python"
+        print("engine: python (--live watches every instant, which the compiled engine does not show)",
+              file=sys.stderr)
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
-                           progress=not args.no_progress, engine=args.engine, observers=[live] if live else [],
+                           progress=not args.no_progress, engine=engine, observers=[live] if live else [],
                            named=tuple(Path(value) for _, value in chosen))
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",

@@ -32,13 +32,14 @@ import numpy as np
 
 from threadpoolctl import threadpool_limits
 
-from .build import Node, System
+from .build import System
 from .component import ComponentError, EndRun
 from .errors import ComputationError, InputError
+from .instants import instant_functions
 from .observers import Observer
 from .realtime import RealTimePacer
 from .signal_recorder import RecordedSignals, SignalRecorder
-from .schedule import WRITE_EVERY, Schedule, budget
+from .schedule import Schedule, block_rows, budget
 
 
 class ParameterError(InputError):
@@ -66,11 +67,11 @@ class Simulation:
         nodes = list(system.nodes.values())
         period = math.lcm(*(node.ratio for node in nodes)) if nodes else 1
         self._period = period
-        self._pulls = {nd.name: [(i, src.name, o) for i, src, o in nd.sources] for nd in nodes}
         self.recorder = SignalRecorder(system, period)
         self.columns = self.recorder.columns
         self.cost = budget(f"{system.study.path}", self.h, s.stop_time - s.start_time, [nd.step for nd in nodes],
-                           [nd.ratio for nd in nodes], len(self.columns) if record else 0, WRITE_EVERY)
+                           [nd.ratio for nd in nodes], len(self.columns) if record else 0,
+                           block_rows(len(self.columns), self.n_steps + 1))
         self.pacer = RealTimePacer(self.h, s.realtime_tolerance) if s.realtime else None
         self.observers: list[Observer] = [o for o in (self.pacer, self.recorder if record else None) if o is not None]
         self.observers += list(observers)
@@ -121,25 +122,9 @@ class Simulation:
             except OSError as exc:          # a device or port that cannot be opened: the environment
                 raise RunError(f"initialising {node.name!r}: {exc}", self._recording(0, False)) from exc
             published[node.name] = dict(node.component.y)
-        pulls = self._pulls
-
-        def entry(node: Node):
-            comp = node.component
-            return node.name, comp.step, comp.u, pulls[node.name], node.step, comp, node.ratio == 1
-
         sampled = {nd.name for nd in sys_.sampled_order}
-
-        def due(nodes: list[Node]):
-            """(sampled steps, actuations, continuous steps, advances) of the nodes due at a phase."""
-            s_nodes = [nd for nd in nodes if nd.name in sampled]
-            return ([entry(nd) for nd in s_nodes],
-                    [(nd.component.u, pulls[nd.name], nd.component.actuate) for nd in s_nodes
-                     if nd.component.actuate is not None],
-                    [entry(nd) for nd in nodes if nd.name not in sampled],
-                    [(nd.component.u, pulls[nd.name], nd.component.advance, nd.step) for nd in s_nodes
-                     if nd.component.advance is not None])
-
-        self._due = Schedule(list(sys_.sampled_order) + list(sys_.continuous), lambda nd: nd.ratio, due)
+        self._due = Schedule(list(sys_.sampled_order) + list(sys_.continuous), lambda nd: nd.ratio,
+                             lambda nodes: instant_functions(nodes, sampled, published))
         # a continuous component stepping every base step publishes its live outputs: every
         # continuous input is pulled before any continuous component steps, so nobody sees a value
         # early. Slower ones publish a copy at the end of their step interval.
@@ -157,45 +142,27 @@ class Simulation:
         """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, actuate,
         continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
         instant k_end too, without integrating past it (the last instant of a run)."""
-        published, period, schedule = self.published, self._period, self._due
+        period, schedule = self._period, self._due
         before, after = self._instant, self._recorded
         last = k_end if final else -1
         k, recorded = self.k, self.k
+        t0, h = self.t0, self.h
         try:
             for k in range(self.k, k_end + 1 if final else k_end):
                 for hook in before:
                     hook(k)
-                t = self.t0 + k * self.h
+                t = t0 + k * h
                 phase = k % period
-                due_s, due_a, continuous, advancing = schedule[phase]
-                if k:
-                    for name, _, _, _, _, comp, live in continuous:
-                        if not live:
-                            published[name] = dict(comp.y)
-                for name, step, u, sources, dt, comp, _ in due_s:
-                    for inp, src, out in sources:
-                        u[inp] = published[src][out]
-                    step(t, dt)
-                    published[name] = comp.y
+                publish_and_step, actuate, integrate = schedule[phase]
+                publish_and_step(t, k)
                 for hook in after:
                     hook(phase)
-                for u, sources, actuate in due_a:
-                    for inp, src, out in sources:
-                        u[inp] = published[src][out]
+                if actuate is not None:
                     actuate(t)
                 recorded = k + 1
                 if k == last:
                     break
-                for _, _, u, sources, _, _, _ in continuous:
-                    for inp, src, out in sources:
-                        u[inp] = published[src][out]
-                for u, sources, _, _ in advancing:
-                    for inp, src, out in sources:
-                        u[inp] = published[src][out]
-                for _, step, _, _, dt, _, _ in continuous:
-                    step(t, dt)
-                for _, _, advance, dt in advancing:
-                    advance(t, dt)
+                integrate(t)
         except EndRun as request:
             if recorded == 0:
                 raise RunError(f"at t = {self.t0:.6g} s: {request.component} ended the run before its first "

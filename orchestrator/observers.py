@@ -142,12 +142,14 @@ class Stage:
 
 def timed_progress():
     """A ``progress(text)`` that prints each line on stderr with the seconds since it was made
-    (nothing with --no-progress or --quiet)."""
+    (nothing with --no-progress or --quiet); ``progress.terminal``: stderr is a terminal (a counted
+    stage draws a tqdm bar there, orchestrator.work_progress)."""
     start = time.perf_counter()
 
     def progress(text: str) -> None:
         if PROGRESS["shown"]:
             print(f"[{time.perf_counter() - start:6.1f} s] {text}", file=sys.stderr, flush=True)
+    progress.terminal = sys.stderr.isatty()           # counted stages draw a bar there (work_progress)
     return progress
 
 

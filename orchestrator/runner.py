@@ -28,7 +28,7 @@ from .signal_recorder import RecordedSignals, SignalRecorder
 from .registry import import_study_module
 from .resolver import resolve
 from .atomic_files import SignalWriter, atomic_write, write_json
-from .schedule import WRITE_EVERY
+from .schedule import WRITE_BYTES, WRITE_EVERY, block_rows
 from .signal_table import SignalTable
 from .study import Study, StudyError
 
@@ -104,17 +104,21 @@ def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
     return atomic_write(out_dir / "events.log", lambda p: p.write_text(text))
 
 
-CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table (at most)
+CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table ...
+CHUNK_BYTES = WRITE_BYTES     # ... unless the whole run's table fits in this (schedule.block_rows)
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
 
 
 def _stream(sim: Simulation, writer) -> RecordedSignals:
-    """Run ``sim`` to its stop time, writing the signal table block by block (every CHUNK_STEPS
-    base steps). The engine is advanced about REPORT_EVERY_S of wall time at a time, so that
-    progress moves as often whether the run is paced in real time or runs 500 times faster.
-    An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
+    """Run ``sim`` to its stop time, writing the signal table block by block: every CHUNK_STEPS
+    base steps, or once after the run when its whole table fits in CHUNK_BYTES (schedule.block_rows;
+    not a run paced in real time: what a crash would lose stays short). The engine is advanced about
+    REPORT_EVERY_S of wall time at a time, so that progress moves as often whether the run is paced in
+    real time or runs 500 times faster. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
     the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
     period = sim.chunk_period
+    chunk = CHUNK_STEPS if getattr(sim, "pacer", None) is not None else \
+        block_rows(len(sim.columns), sim.n_steps + 1, CHUNK_STEPS, CHUNK_BYTES)
     step, drained = period, 0
     try:
         sim.start()
@@ -123,8 +127,8 @@ def _stream(sim: Simulation, writer) -> RecordedSignals:
             sim.advance(min(sim.k + step, sim.n_steps))
             took = time.perf_counter() - began
             rate = step / took if took > 0 else float("inf")
-            step = period * max(1, min(CHUNK_STEPS // period, int(REPORT_EVERY_S * rate) // period))
-            if sim.k - drained >= CHUNK_STEPS and sim.k % period == 0:
+            step = period * max(1, min(chunk // period, int(REPORT_EVERY_S * rate) // period))
+            if sim.k - drained >= chunk and sim.k % period == 0:
                 with critical():
                     writer.append(sim.drain())
                     drained = sim.k
@@ -227,17 +231,37 @@ def _write_status(folder: Path, study: Study, system, facts: dict[str, Any], t_r
         write_json(folder / "run.json", _run_json(study, system, facts["status"], t_reached))
 
 
+COMPILED_HELD_BYTES = 512 * 1024 ** 2     # auto: a longer run's table streams through the Python engine
+
+
+def _announced(factory, note: str):
+    """``factory`` that prints ``note`` on stderr once the run is accepted (its budget checked)."""
+    def make(system: System):
+        sim = factory(system)
+        print(note, file=sys.stderr)
+        return sim
+    return make
+
+
 def choose_engine(system: System, engine: str):
     """The engine's class for ``engine`` (python, compiled, auto); the choice of ``auto``, and
-    why, is printed on stderr (orchestrator.compiled.select_engine)."""
+    why, is printed on stderr when the run starts (orchestrator.compiled.select_engine). ``auto``
+    keeps the Python engine for a run whose signal table passes COMPILED_HELD_BYTES: the compiled
+    engine holds the whole table until the run ends, the Python one writes it as it goes."""
     if engine == "python":
         return Simulation
+    if engine == "auto":
+        s = system.study.study
+        rows = int(round((s.stop_time - s.start_time) / s.base_step)) + 1
+        held = rows * (len(SignalRecorder(system, 1).columns) + 1) * 8
+        if held > COMPILED_HELD_BYTES:
+            return _announced(Simulation, f"engine: python (the compiled engine would hold the run's {rows} rows, "
+                                          f"{held / 1024 ** 3:.3g} GB, in memory; the Python engine writes them as "
+                                          f"it goes; --engine compiled forces it)")
     from .compiled import select_engine
 
     factory, note = select_engine(system, engine)
-    if note and engine == "auto":
-        print(note, file=sys.stderr)
-    return factory
+    return _announced(factory, note) if note and engine == "auto" else factory
 
 
 def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite: bool = False,

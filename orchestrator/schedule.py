@@ -22,7 +22,8 @@ from .study_files import StudyError
 TABLE_LIMIT = 4096                 # phases held as a table; beyond, due lists are made when met
 MAX_BASE_STEPS = 2_000_000_000     # a run longer than this is refused (hours of stepping at best)
 MAX_HELD_BYTES = 2 * 1024 ** 3     # the signal rows held in memory between two writes
-WRITE_EVERY = 10_000               # base steps between two writes of the signal table (at most)
+WRITE_EVERY = 10_000               # base steps between two writes of the signal table ...
+WRITE_BYTES = 32 * 1024 ** 2       # ... unless the whole run's table fits in this: one write after it
 
 
 class Schedule:
@@ -52,6 +53,13 @@ class Schedule:
     def sets(self) -> int:
         """Distinct due lists made so far (the memory the schedule holds)."""
         return len(self._cache)
+
+
+def block_rows(columns: int, rows: int, steps: int = WRITE_EVERY, held_bytes: int = WRITE_BYTES) -> int:
+    """Base steps between two writes of a signal table of ``columns`` signals (and time) over a run
+    of ``rows`` rows: the whole run when its table fits in ``held_bytes`` (a write costs 30 ms
+    whatever its rows: a 160 s figure-8 is written once, after the run), else ``steps``."""
+    return max(rows, steps) if rows * (columns + 1) * 8 <= held_bytes else steps
 
 
 def common_step(steps: Iterable[float]) -> float | None:

@@ -68,6 +68,7 @@ def test_json_has_the_promised_shape_and_findings_come_best_first(hidden):
     assert bics == sorted(bics)
 
 
+@pytest.mark.slow
 def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tmp_path):
     """The extended study written by the diagnosis runs, and the plant it builds shows the fitted
     delay: the steering's step response moves ~d later than the baseline's."""
@@ -102,6 +103,7 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     (lambda f: f.assign(v=3.6 * f["v"]), ["'v'", "km/h"]),
     (lambda f: f.assign(x=50.86 + f["x"] / 111e3, y=4.67 + f["y"] / 70e3), ["'x', 'y'", "latitude/longitude"]),
 ])
+@pytest.mark.slow
 def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
     frame, _ = make_log(5, None, duration=120.0)
     log = tmp_path / "bad.csv"
@@ -117,6 +119,7 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "out"]          # no lock or staging left
 
 
+@pytest.mark.slow
 def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path):
     frame, _ = make_log(5, None, duration=120.0)
     frame.drop(index=range(1000, 1100)).to_csv(tmp_path / "gap.csv", index=False)
@@ -139,6 +142,7 @@ def test_gyro_in_degrees_per_second_is_caught_even_when_small():
         Replay(frame, baseline_from_study(load_study(ROOT / "studies" / "figure8.toml")))
 
 
+@pytest.mark.slow
 def test_report_shows_the_verdict_the_candidates_and_the_evidence_plots(tmp_path):
     from agrobot.diagnosis.pipeline import diagnose
 

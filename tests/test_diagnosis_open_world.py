@@ -109,6 +109,7 @@ def test_noise_floors_match_the_truth_sensors(runs):
     assert sensors["gps"] == pytest.approx(0.02, rel=0.15)
 
 
+@pytest.mark.slow
 def test_two_explanations_that_fit_equally_well_are_reported_inconclusive(monkeypatch, tmp_path):
     """A catalogue holding a twin of steering_offset (same physics, another name): the data cannot
     tell them apart, so the result must name both and the experiment, whichever it keeps."""

@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT / "docs" / "hooks"))
 import reference  # noqa: E402  (docs/hooks/reference.py: the generator the site build runs)
 
 
+@pytest.mark.slow
 def test_site_builds_strictly(tmp_path):
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(tmp_path / "site")],

@@ -290,6 +290,7 @@ def _run(study: str, *overrides: str):
     return run_study(Study.load(STUDIES / study, list(overrides)), None, plots=False)
 
 
+@pytest.mark.slow
 def test_a_real_plot_is_covered_by_the_guidance_stack():
     """The IAM plot (shipped in studies/fields), whole, at 2 m/s with RTK noise: the farmers' bars (coverage, overlap, RTK-class errors)."""
     m = _run("field_plot_mounted.toml").metrics
@@ -332,6 +333,7 @@ def test_the_coverage_metric_agrees_with_a_monte_carlo_count():
     ("isoxml_dev4ag_timelogs/TASKDATA.XML", ("field.name=euDZYo7",)),             # a bay: two cells
     ("fields2cover_data/test_2_cell.json", ("field.name=field1",)),
 ])
+@pytest.mark.slow
 def test_field_coverage_runs_a_section_of_each_real_field_file(path, extra):
     """--set field.path=... runs any field: 3 swaths of each with the trailed implement."""
     m = _run("field_coverage.toml", f"field.path={REAL / path}", "field.max_swaths=3", *extra).metrics
@@ -340,6 +342,7 @@ def test_field_coverage_runs_a_section_of_each_real_field_file(path, extra):
     assert m["swath_time_s"] > 0 and m["turn_time_s"] > 0
 
 
+@pytest.mark.slow
 def test_the_side_slope_option_tilts_tractor_and_implement():
     """tractor.slope_angle alone moves the implement too (wired from the tractor): passive, it
     hangs downhill by more than L beta; the side-shift brings it back within RTK class."""
@@ -355,6 +358,7 @@ def test_the_side_slope_option_tilts_tractor_and_implement():
 # --- command line: plan, bad fields, sweeps --------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_plan_command_writes_the_route_and_its_figures(tmp_path):
     out = tmp_path / "plan"
     res = _cli("plan", str(STUDIES / "fields" / "iam_field_boundaries.csv"), "--crs", "EPSG:6677", "--out", str(out),
@@ -388,6 +392,7 @@ def test_bad_fields_exit_2_naming_the_field_and_the_value(tmp_path, args, expect
     assert not out.exists() or not any(out.iterdir())
 
 
+@pytest.mark.slow
 def test_an_agopengps_field_is_driven_along_its_ab_line(tmp_path):
     """A farmer's AgOpenGPS folder (written from a real partfield): --set field.path=FOLDER runs it,
     and field.guidance_line takes the driving angle from its AB line."""
@@ -414,6 +419,7 @@ def test_a_bad_field_in_a_study_exits_2_before_anything_is_written(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheduler", [None, "local"], ids=["pool", "dask"])
 def test_a_speed_and_angle_sweep_of_a_field_mission_runs(tmp_path, scheduler):
     """The shipped sweep, cut to 2 x 2 points, on the process pool and on a local Dask cluster

@@ -53,6 +53,7 @@ def lever_recording(tmp_path_factory) -> Path:
     return folder
 
 
+@pytest.mark.slow
 def test_imported_recording_equals_the_simulations_own_log(lever_recording):
     frame, report = import_recording(lever_recording)
     both = against_simulation(frame, report, lever_recording)
@@ -69,6 +70,7 @@ def test_imported_recording_equals_the_simulations_own_log(lever_recording):
     assert report["clocks"]["can_clock"]["method"].startswith("same host clock")
 
 
+@pytest.mark.slow
 def test_round_trip_finds_the_hidden_effect_as_from_the_simulation_log(lever_recording, tmp_path):
     from agrobot.diagnosis.pipeline import diagnose
 
@@ -223,6 +225,7 @@ def test_isobus_recording_decodes_through_the_wheelbase(tmp_path):
         import_recording(folder)
 
 
+@pytest.mark.slow
 def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()
@@ -354,6 +357,7 @@ def test_watchdog_disengages_when_the_machine_is_locked_out_or_not_ready(fault, 
         tractor.terminate()
 
 
+@pytest.mark.slow
 def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_log(tmp_path):
     """The paper's experiment (a 50 s odd-odd multisine on the steering, 2 m/s) driven on the simulated
     tractor and recorded on its buses: the fits from the recording equal those from the simulation's
@@ -387,6 +391,7 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
     assert proc.returncode == 0 and "used: run 1" in proc.stdout, proc.stderr
 
 
+@pytest.mark.slow
 def test_a_steering_offset_in_a_recording_is_named_with_its_value(tmp_path):
     """A 0.03 rad (1.7 deg) wheel-angle offset on the project's own plant, through
     the recording path, is named with its value: a free input map that could also carry an offset

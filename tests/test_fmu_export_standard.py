@@ -229,3 +229,22 @@ def test_two_source_fmus_link_into_one_library_with_their_prefixes(exported, tmp
     symbols = subprocess.run(["nm", "--defined-only", str(lib)], capture_output=True, text=True).stdout
     assert f"left_fmi{version}DoStep" in symbols and f"right_fmi{version}DoStep" in symbols
     assert "agrobot_qp_solve" not in re.sub(r"\b[tbdr] \S+", "", symbols)      # only local symbols besides the API
+
+
+# the FMI 2.0 co-simulation API (the standard's fmi2Functions.h: common and co-simulation functions)
+FMI2_CS_API = ("GetTypesPlatform", "GetVersion", "SetDebugLogging", "Instantiate", "FreeInstance", "SetupExperiment",
+               "EnterInitializationMode", "ExitInitializationMode", "Terminate", "Reset", "GetReal", "GetInteger",
+               "GetBoolean", "GetString", "SetReal", "SetInteger", "SetBoolean", "SetString", "GetFMUstate",
+               "SetFMUstate", "FreeFMUstate", "SerializedFMUstateSize", "SerializeFMUstate", "DeSerializeFMUstate",
+               "GetDirectionalDerivative", "SetRealInputDerivatives", "GetRealOutputDerivatives", "DoStep",
+               "CancelStep", "GetStatus", "GetRealStatus", "GetIntegerStatus", "GetBooleanStatus", "GetStringStatus")
+
+
+def test_the_fmi2_wrapper_defines_every_function_of_the_co_simulation_api():
+    """Read from the wrapper's source, without compiling: each function is defined, written out or
+    made by its NO_VARIABLES(kind, type) macro (fmi2Get<kind> and fmi2Set<kind>)."""
+    source = (ROOT / "src/agrobot/fmu_export/c/fmi2_cs.c").read_text(encoding="utf-8")
+    defined = set(re.findall(r"^(?:const\s+)?\w+\s*\*?\s*fmi2(\w+)\s*\(", source, flags=re.M))
+    for kind in re.findall(r"^NO_VARIABLES\((\w+),", source, flags=re.M):
+        defined |= {f"Get{kind}", f"Set{kind}"}
+    assert not [f for f in FMI2_CS_API if f not in defined], sorted(defined)

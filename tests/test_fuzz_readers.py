@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -140,6 +141,7 @@ def test_a_mutated_nmea_capture_is_read_or_refused_by_name(kind, edits):
         _import(path)
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(edits=_mutations())
 def test_a_mutated_candump_is_read_or_refused_by_name(edits):

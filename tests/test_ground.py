@@ -287,6 +287,7 @@ def test_a_log_without_gga_is_named(tmp_path):
 
 
 # --- closed loop on real fields ---------------------------------------------------------------------------
+@pytest.mark.slow
 def test_on_a_10_degree_side_slope_tractor_and_implement_hold_2_5_cm():
     """Two swaths of a real parcel across a 10 deg side slope, RTK noise, the antenna 2.5 m up: with
     terrain compensation and the crab estimate (the field studies' default) the tractor's and the
@@ -298,6 +299,7 @@ def test_on_a_10_degree_side_slope_tractor_and_implement_hold_2_5_cm():
     assert off["tractor_xte_rms_m"] == pytest.approx(2.5 * math.sin(10 * DEG), rel=0.15)
 
 
+@pytest.mark.slow
 def test_through_a_gnss_outage_the_estimator_drifts_within_its_own_uncertainty_and_the_watchdog_stops_on_it(tmp_path):
     """A 40 s outage on the second swath of a real parcel (the estimator has learnt its gyro's bias on
     the first and in the turn): the estimate rides through on the IMU and the
@@ -326,6 +328,7 @@ def test_through_a_gnss_outage_the_estimator_drifts_within_its_own_uncertainty_a
     assert "SAFE STATE: position estimate too uncertain" in events and "bound 0.05 m" in events, events
 
 
+@pytest.mark.slow
 def test_line_acquisition_after_each_turn_against_a_second_computation():
     """Three swaths of a real partfield: acquisition from the end of each turn (where the route
     straightens) until the CG is within 5 cm of the swath's line for 2 s, recomputed here from the

@@ -309,6 +309,7 @@ def _hil(tmp_path: Path, guidance_s: float, emulator_sets: list[str] = (), recor
         pd.read_parquet(emu_out / "signals.parquet"), guidance
 
 
+@pytest.mark.slow
 def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
     """The emulator in its own process (NMEA over TCP, CAN over UDP multicast), the guidance in
     real time with both adapters, 30 s of the figure-8."""
@@ -365,6 +366,7 @@ def test_hardware_in_the_loop_figure8_tracks_like_the_simulation(tmp_path):
 
 @pytest.mark.parametrize("fault, words", [("nmea.stop_after", "stale GPS fix"),
                                           ("nmea.float_after", "below the required quality")])
+@pytest.mark.slow
 def test_hil_watchdog_catches_a_stopped_or_float_gps_stream(tmp_path, fault, words):
     metrics, sig, events, _, _ = _hil(tmp_path, 14.0, [f"{fault}=9.0"])
     # (a trip at start-up, before the first fix arrives, is expected and not this one)

@@ -50,6 +50,7 @@ def test_f1tenth_ds5_delay_understeer_saturation_and_held_out_fit(ds5):
         assert len(p["interval"]) == 2 and (p["bounds"] is None or len(p["bounds"]) == 2), name
 
 
+@pytest.mark.slow
 def test_f1tenth_slow_run_says_what_it_cannot_identify(study):
     """DS3 is driven at one speed (1.2-1.5 m/s, |a_y| < 2 m/s2): the cornering stiffnesses are not
     identifiable and the steady-state regression refuses (gain and K not told apart); the delay is."""
@@ -60,6 +61,7 @@ def test_f1tenth_slow_run_says_what_it_cannot_identify(study):
     assert not rep["tyre_saturation"]["found"]
 
 
+@pytest.mark.slow
 def test_two_encodings_of_one_drive_agree(study):
     """DS1 imported at its fastest stream's rate (39 Hz) and at 20 Hz: delay and K agree within
     their intervals."""
@@ -69,6 +71,7 @@ def test_two_encodings_of_one_drive_agree(study):
     assert within(a["understeer_gradient"], b["understeer_gradient"])
 
 
+@pytest.mark.slow
 def test_autokoopman_asymmetry_is_a_steering_offset(study):
     """The step runs turn less to the left than to the right (README: an offset of about
     -0.015 rad with a gain of 0.77-0.9): the fit names the offset with an interval excluding zero."""
@@ -100,6 +103,7 @@ def simulated_log(stop: float = 150.0):
                          "v": f["car.yaw_rate"] * 0 + f["plan.speed_cmd"], "yaw_rate": f["gyro.yaw_rate_measured"]})
 
 
+@pytest.mark.slow
 def test_simulated_truth_recovered_and_regression_agrees(study):
     log = simulated_log()
     rep = identify_driving(log, "simulated", study)

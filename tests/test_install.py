@@ -14,7 +14,6 @@ import pytest
 from harness.truth_tractor import make_log
 
 ROOT = Path(__file__).resolve().parent.parent
-pytestmark = pytest.mark.slow
 
 
 def _venv(tmp: Path) -> Path:
@@ -25,6 +24,7 @@ def _venv(tmp: Path) -> Path:
     return env_dir / "bin" / "python"
 
 
+@pytest.mark.slow
 def test_non_editable_install_has_one_top_level_name_and_runs_from_another_folder(tmp_path):
     python = _venv(tmp_path)
     pip = [str(python), "-m", "pip", "install", "-q", "--disable-pip-version-check"]
@@ -71,3 +71,14 @@ def test_non_editable_install_has_one_top_level_name_and_runs_from_another_folde
     assert plan.returncode == 0, plan.stdout + plan.stderr
     assert (work / "p" / "plan.json").is_file()
     assert sysconfig.get_paths()["purelib"] != str(site)
+
+
+def test_every_package_given_data_ships_some():
+    """What a non-editable install ships besides the modules: each package of pyproject's
+    [tool.setuptools.package-data] has files its patterns match (C cores, studies, a DBC)."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["setuptools"]["package-data"]
+    empty = [package for package, patterns in data.items()
+             if not any(f for pattern in patterns for f in (ROOT / "src" / Path(*package.split("."))).glob(pattern))]
+    assert not empty, empty

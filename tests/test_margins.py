@@ -61,6 +61,7 @@ def test_every_shipped_study_is_covered_here():
     assert shipped == set(SIMULATED) | set(SWEEPS) | set(NO_LOOP)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", SIMULATED)
 def test_the_simulation_loses_stability_where_the_margins_say(name):
     """The steering command delayed by 0.8 x (a route: 0.6 x) the predicted limit: the tractor

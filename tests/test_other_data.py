@@ -167,6 +167,7 @@ def test_ros1_ros2_and_mcap_bags_round_trip_to_the_same_log_as_the_receivers_nme
         pd.testing.assert_frame_equal(logs[kind], logs["ros1"], check_exact=False, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_any_topic_field_by_signal_and_bad_bags_are_named(bags, tmp_path):
     proc = cli("convert", bags["ros1"], "--out", tmp_path / "a.csv", "--signal", "gyro_z=/imu.angular_velocity.z",
                "--signal", "v=/fix.altitude[m/s]")     # a declared unit overrides the field's own
@@ -210,6 +211,7 @@ def test_every_binary_time_log_is_read_to_its_last_byte():
         assert any(unit.startswith("mm ") for unit in info["units"].values())        # working width in mm
 
 
+@pytest.mark.slow
 def test_a_taskdata_converts_to_a_log_and_bad_time_logs_are_named(tmp_path):
     proc = cli("convert", ISOXML, "--out", tmp_path / "tlg.csv")
     assert proc.returncode == 0, proc.stderr
@@ -352,6 +354,7 @@ def test_an_agopengps_field_folder_reads_as_the_field_it_was_written_from(tmp_pa
     assert proc.returncode == 2 and "Field.txt: no StartFix line" in proc.stderr
 
 
+@pytest.mark.slow
 def test_geojson_wkt_and_isoxml_guidance_patterns_and_bad_field_files(tmp_path):
     real = read_fields(F2C / "test.json")[0]
     lonlat = real.to_geodetic(np.asarray(real.boundary.exterior.coords))

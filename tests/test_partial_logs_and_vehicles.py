@@ -82,6 +82,7 @@ def test_a_cars_can_log_alone_converts_and_says_what_is_missing(car_can, tmp_pat
     assert np.abs(log["v"] - truth["v"].clip(lower=0)).max() < 0.01 / 3.6 + 1e-9
 
 
+@pytest.mark.slow
 def test_diagnosing_the_can_log_judges_the_yaw_stage_only_with_the_studys_steering_ratio(car_can, tmp_path):
     folder, _ = car_can
     proc = cli("diagnose", folder / "drive.log", "--dbc", folder / "maker.dbc", "--study", CAR, "--out", tmp_path / "d",
@@ -133,6 +134,7 @@ def test_the_passenger_car_study_runs_at_highway_speed(tmp_path):
     assert np.abs(lateral).max() < 5.0                      # m/s^2: the plan is scaled for a car
 
 
+@pytest.mark.slow
 def test_diagnosis_holds_at_highway_speed_against_the_car_study():
     """Car truths (harness.truth_tractor VEHICLES['car'], 10-30 m/s) diagnosed against
     studies/passenger_car.toml: clean is none, each fault is found with its value (the dead

@@ -332,6 +332,7 @@ def test_plan_on_a_folder_names_the_files_it_could_not_read(tmp_path, capsys):
     assert any("broken.geojson" in why for why in json.loads((out / "plan.json").read_text())["not_read"])
 
 
+@pytest.mark.slow
 def test_the_compact_route_file_reproduces_the_route_sampled_on_demand(tmp_path):
     """route.csv (points of the path at most about 0.3 m apart where it curves, straights by their
     ends, the speed ramps every 0.5 m), interpolated linearly, against --route-uniform at the

@@ -36,6 +36,7 @@ def steps_m(log: pd.DataFrame) -> np.ndarray:
 
 
 # --- only regular files, a size limit that names itself ------------------------------------------------------
+@pytest.mark.slow
 def test_devices_links_loops_and_sizes_are_refused_before_anything_is_read(tmp_path):
     for name in ("zero.geojson", "zero.nmea", "zero.log", "zero.bag"):
         (tmp_path / name).symlink_to("/dev/zero")
@@ -223,6 +224,7 @@ def test_swapped_coordinates_and_coordinates_beyond_the_earth_are_refused_by_val
     refused(cli("fields", csv), "coordinate 1e+300")
 
 
+@pytest.mark.slow
 def test_bad_geometry_text_area_deep_nesting_and_agopengps_without_field_txt_are_named(tmp_path):
     cases = {"ragged": {"type": "Polygon", "coordinates": [[[0, 0], [1], [1, 1], [0, 0]]]},
              "text": {"type": "Polygon", "coordinates": [[["a", "b"], [1, 0], [1, 1], [0, 0]]]},
@@ -279,6 +281,7 @@ def _custom_bags(folder: Path) -> list[Path]:
     return bags
 
 
+@pytest.mark.slow
 def test_bags_with_only_unknown_types_are_refused_by_every_command_naming_the_topics(tmp_path):
     for bag in _custom_bags(tmp_path):
         for command in ("convert", "identify", "diagnose"):
@@ -292,6 +295,7 @@ def test_bags_with_only_unknown_types_are_refused_by_every_command_naming_the_to
 
 
 # --- CAN ---------------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_malformed_candump_line_is_skipped_with_its_line_number_and_the_format(tmp_path):
     clean = write_candump(tmp_path / "clean.log", 30.0)
     bad = write_candump(tmp_path / "bad.log", 30.0, bad={100: "(1777622405.000000) can0 280#ZZZZ",

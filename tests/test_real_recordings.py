@@ -30,6 +30,7 @@ F1_SIGNALS = ("--signal", "delta_cmd=commandData.delta[rad]", "--signal", "yaw_r
 
 
 # --- every maker's DBC ---------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_every_makers_dbc_loads_and_nothing_is_lost_unnamed():
     import cantools
 
@@ -117,6 +118,7 @@ def test_a_split_handwheel_angle_is_summed_and_a_declared_range_is_a_note_not_a_
     assert "on the logger's clock (since its start, not a date)" in proc.stdout and "1970" not in proc.stdout
 
 
+@pytest.mark.slow
 def test_can_list_and_bad_dbc_signal_and_unit_are_named(toyota_log, tmp_path):
     log = toyota_log[0]
     proc = cli("convert", log, "--dbc", TOYOTA, "--list")
@@ -167,6 +169,7 @@ def test_extended_frames_on_two_buses_and_a_multiplexed_message(tmp_path):
 
 
 # --- tables --------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_the_f1tenth_tables_join_on_time_with_the_gyro_declared_in_degrees(tmp_path):
     out = tmp_path / "ds1.csv"
     proc = cli("convert", F1 / "DS1", *F1_SIGNALS, "--out", out)
@@ -363,6 +366,7 @@ def test_agopengps_names_in_any_case_and_a_folder_names_the_field_it_cannot_read
     assert proc.returncode == 0 and "not read:" in proc.stdout and "Oxted" in proc.stdout
 
 
+@pytest.mark.slow
 def test_a_harvesters_track_becomes_a_field_the_planner_replans(tmp_path):
     proc = cli("fields", ISOXML / "TLG00002.xml", "--from-track", "--out", tmp_path / "f")
     assert proc.returncode == 0, proc.stderr

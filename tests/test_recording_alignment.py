@@ -125,6 +125,7 @@ def test_the_importer_keeps_command_and_yaw_rate_aligned_across_clocks(recording
     assert abs(found - expected) < 0.006, (found, expected, step)                            # half a step: 12 ms
 
 
+@pytest.mark.slow
 def test_the_identification_finds_the_delay_through_the_importer(recording):
     from agrobot.identification.ordinary_driving import identify_driving
     from agrobot.orchestrator.study import Study

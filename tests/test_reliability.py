@@ -46,6 +46,7 @@ def _wait_for_rows(out: Path, timeout: float = 60.0) -> None:
     raise AssertionError("the run wrote no signals")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum, status", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_a_long_run_stopped_by_a_signal_keeps_every_row_and_says_interrupted(tmp_path, signum, status):
     out = tmp_path / "long"
@@ -80,6 +81,7 @@ def test_a_real_time_composite_run_interrupted_keeps_its_signals(tmp_path):
     assert len(frame) > 50 and json.loads((out / "run.json").read_text())["status"] == "interrupted"
 
 
+@pytest.mark.slow
 def test_a_failed_run_never_replaces_a_complete_result(tmp_path):
     study = tmp_path / "fails.toml"
     out = tmp_path / "out"
@@ -99,6 +101,7 @@ def test_a_failed_run_never_replaces_a_complete_result(tmp_path):
     assert len(pd.read_csv(failed / "signals.csv")) == 10          # t = 0 .. 0.45, it fails at 0.5
 
 
+@pytest.mark.slow
 def test_out_is_checked_before_any_computation(tmp_path):
     foreign = tmp_path / "mine"
     foreign.mkdir()
@@ -120,6 +123,7 @@ def test_out_is_checked_before_any_computation(tmp_path):
     assert (foreign / "thesis.tex").read_text() == "precious" and not (foreign / "metrics.json").exists()
 
 
+@pytest.mark.slow
 def test_a_second_run_into_the_same_folder_is_refused_while_the_first_runs(tmp_path):
     out = tmp_path / "busy"
     first = _start(["run", "studies/figure8.toml", "--set", "study.stop_time=1e5", "--out", str(out), "--no-plots"])
@@ -134,6 +138,7 @@ def test_a_second_run_into_the_same_folder_is_refused_while_the_first_runs(tmp_p
     assert first.returncode == 143
 
 
+@pytest.mark.slow
 def test_result_files_follow_the_users_umask(tmp_path):
     out = tmp_path / "u"
     proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--set", "study.stop_time=20", "--out", str(out)],
@@ -177,6 +182,7 @@ def _sweep(out: Path, stop: str) -> subprocess.Popen:
                    "--no-progress", "--set", f"study.stop_time={stop}"])
 
 
+@pytest.mark.slow
 def test_sweep_workers_end_with_their_parent_even_on_sigkill(tmp_path):
     proc = _sweep(tmp_path / "sw", "300")
     end = time.time() + 60
@@ -194,6 +200,7 @@ def test_sweep_workers_end_with_their_parent_even_on_sigkill(tmp_path):
     assert not any(_alive(w) for w in workers)
 
 
+@pytest.mark.slow
 def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
     out = tmp_path / "sw"
     proc = _sweep(out, "150")
@@ -245,6 +252,7 @@ def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
     assert str(path) in str(err.value)
 
 
+@pytest.mark.slow
 def test_a_jittered_log_is_diagnosed_with_resample(tmp_path):
     from agrobot.measurements import read_log
     from harness.truth_tractor import make_log
@@ -319,6 +327,7 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args, code, words", BAD, ids=[" ".join(a[:2]) + f" #{i}" for i, (a, _, _) in enumerate(BAD)])
 def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_path, args, code, words):
     (tmp_path / "header.csv").write_text("t,delta_cmd,delta,v,yaw_rate,x,y\n")
@@ -378,6 +387,7 @@ def test_the_documented_metric_table_uses_the_printed_names():
     assert set(names) <= set(METRICS), set(names) - set(METRICS)
 
 
+@pytest.mark.slow
 def test_identification_works_on_logs_at_10_20_50_and_100_hz(tmp_path):
     """The same experiment logged at four rates (the command held at 20 Hz in the 50 and 100 Hz
     logs, decimated to 10 Hz): the RLF model identified from each log has the same steady-state

@@ -69,6 +69,7 @@ mode = "grid"
     return path
 
 
+@pytest.mark.slow
 def test_a_sweep_whose_points_all_fail_for_one_reason_exits_2_and_says_it(tmp_path):
     study = _sweep_study(tmp_path, [0.2, 0.4, 0.6])          # each fails, at its own instant, for one reason
     proc = subprocess.run(CMD + ["sweep", str(study), "--out", str(tmp_path / "s"), "--workers", "1", "--no-progress"],

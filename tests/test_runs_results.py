@@ -43,6 +43,7 @@ def _status(folder: Path) -> str:
     return json.loads((folder / "metrics.json").read_text())["status"]
 
 
+@pytest.mark.slow
 def test_an_interrupted_rerun_keeps_the_complete_result_and_its_figures(tmp_path):
     """Ctrl-C on a rerun into a complete result: the result and its figures stay in --out as
     they were, the partial run goes beside it, named, and the message says both."""
@@ -167,6 +168,7 @@ def test_the_recorders_hold_at_most_two_blocks_while_a_long_run_streams(tmp_path
     from agrobot.orchestrator.engine import Simulation
 
     monkeypatch.setattr(runner, "CHUNK_STEPS", 200)
+    monkeypatch.setattr(runner, "CHUNK_BYTES", 0)
     held = []
     advance = Simulation.advance
 

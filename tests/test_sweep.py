@@ -52,6 +52,7 @@ def test_points_expand_as_grid_or_zip_with_seeds(tmp_path):
                                                   {"reference.speed": 2.5, "tracker.k_c": 1.2}]
 
 
+@pytest.mark.slow
 def test_three_point_sweep_equals_three_separate_runs(tmp_path):
     path = sweep_file(tmp_path, THREE)
     table = run_sweep(path, tmp_path / "out")
@@ -69,6 +70,7 @@ def test_three_point_sweep_equals_three_separate_runs(tmp_path):
     assert pd.read_parquet(tmp_path / "out/results.parquet").shape[0] == 3
 
 
+@pytest.mark.slow
 def test_killed_sweep_resumes_without_rerunning_finished_points(tmp_path):
     body = '[sweep]\nseeds = [3]\n[sweep.parameters]\n"reference.speed" = [1.0, 1.5, 2.0, 2.5]\n'
     path = sweep_file(tmp_path, body)
@@ -94,6 +96,7 @@ def test_killed_sweep_resumes_without_rerunning_finished_points(tmp_path):
     pd.testing.assert_frame_equal(comparable(resumed), comparable(whole), check_exact=True)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_gives_the_same_table(tmp_path):
     path = sweep_file(tmp_path, THREE)
     pool = run_sweep(path, tmp_path / "pool", workers=2)
@@ -165,6 +168,7 @@ def test_bad_monte_carlo_sections_are_refused_by_field(tmp_path, body, words):
     assert "sweep" in str(err.value)
 
 
+@pytest.mark.slow
 def test_robustness_study_runs_on_the_sweep_machinery_and_summarises(tmp_path):
     """A short version of studies/robustness.toml (6 draws, 40 s): every point completes, the
     summary counts them and its percentiles match the table."""

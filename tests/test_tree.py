@@ -27,6 +27,7 @@ def test_the_design_folders_stay_at_the_top_and_are_the_import_names():
     assert not (ROOT / "setup.py").exists(), "no import hook: the package folder is the import root"
 
 
+@pytest.mark.slow
 def test_mypy_finds_every_agrobot_module(tmp_path):
     """mypy, run outside the checkout on the installed package, parses every module and misses none."""
     pytest.importorskip("mypy")

@@ -38,6 +38,7 @@ def perturbed(tmp_path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_tuned_gains_for_a_perturbed_tractor_hold_their_margins_and_the_bounds(perturbed, tmp_path):
     """Targets: 0.3 s delay margin, 45 deg, 6 dB (a coarse grid, for time). Predicted margins meet
     them; in simulation the loop holds with the 0.3 s extra delay the target asks and with 0.8 x the
@@ -60,6 +61,7 @@ def test_tuned_gains_for_a_perturbed_tractor_hold_their_margins_and_the_bounds(p
     assert m["euclid_max_straight"] < 0.40 and m["euclid_max_curved"] < 0.60, m
 
 
+@pytest.mark.slow
 def test_tune_writes_a_small_study_that_extends_the_original(perturbed, tmp_path):
     out = tmp_path / "tuned.toml"
     proc = subprocess.run([sys.executable, "-m", "agrobot", "tune", str(perturbed), "--out", str(out),

@@ -10,8 +10,6 @@ import pytest
 from harness.hidden_effects import diagnose_many, expected_ids, recovered
 from harness.truth_tractor import TABLE
 
-pytestmark = pytest.mark.slow
-
 SEED = 9301
 L_R = TABLE["l_r"]
 CASES = {

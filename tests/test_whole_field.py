@@ -76,6 +76,7 @@ def test_the_whole_field_of_a_real_parcel_is_covered_and_never_crossed(parcel_pl
     assert applied_outside(a, p.field.boundary) < 1.0         # m^2: the implement keeps inside the field
 
 
+@pytest.mark.slow
 def test_every_piece_of_a_split_inner_field_is_worked_and_joined_inside_the_field():
     f = dumbbell()
     p = plan(f, Settings(order="skip"))

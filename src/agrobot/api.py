@@ -70,10 +70,11 @@ def load(study, set: Mapping[str, Any] | Sequence[str] | None = None):
 
 
 def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, plots: bool = True,
-        overwrite: bool = False, progress: bool = False, engine: str = "python") -> RunResult:
+        overwrite: bool = False, progress: bool = False, engine: str = "auto") -> RunResult:
     """Simulate and analyse a study. Without ``out`` nothing is written (``save`` writes it
     later); with it, the run is recorded there as ``run --out`` does (signals streamed, events.log,
-    run.json, metrics.json, figures) under the output rule (orchestrator.output)."""
+    run.json, metrics.json, figures) under the output rule (orchestrator.output). ``engine``: as
+    ``run --engine`` (auto: the compiled engine where it can, saying which ran and why; python)."""
     study = load(study, set)
     done = run_study(study, Path(out) if out is not None else None, plots=plots and out is not None,
                      overwrite=overwrite, progress=progress, engine=engine)

@@ -393,7 +393,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         say(replay.split_note)
     if replay.side_slip_note():
         say(replay.side_slip_note())
-    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"))
+    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"),
+                 progress=say)
     say("effects selected; judging the stages against their noise floors")
     final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])

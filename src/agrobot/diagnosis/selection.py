@@ -40,6 +40,7 @@ import numpy as np
 
 from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
+from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, CandidateFit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
@@ -147,8 +148,9 @@ class Selection:
 
 class Selector:
     def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0,
-                 saturation: dict | None = None) -> None:
+                 saturation: dict | None = None, progress=None) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
+        self.progress = progress                # the tool's progress lines (orchestrator.work_progress)
         self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
         moving = replay.speed > replay.min_speed
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
@@ -166,6 +168,7 @@ class Selector:
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None
         self.widened: list[str] = []
+        self.work = Work(None, "", 0)
 
     def add(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
@@ -174,6 +177,7 @@ class Selector:
         hit = self._cache.get(key)
         if hit is not None:
             return hit
+        self.work.step()
         if effect.id in self._first:
             starts = [self._first[effect.id]]
         else:
@@ -205,6 +209,11 @@ class Selector:
         return finding
 
     def run(self) -> Selection:
+        """The selection, its candidate fits counted on the progress lines."""
+        with Work(self.progress, "fitting the candidate effects", len(self.catalogue), "fits") as self.work:
+            return self._select()
+
+    def _select(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
         trace_gate = self.saturation_gate(base)
         notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
@@ -213,6 +222,8 @@ class Selector:
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
         removed: set[str] = set()
         for _ in range(self.max_effects):
+            if members:
+                self.work.more(len(self.catalogue) - len(members))
             trials = first if not members else [self.add(model, members, e) for e in self.catalogue if e not in members]
             # the recording before the vehicle: a supported recording effect (a position reference
             # with its clock) joins before the vehicle effects it can imitate
@@ -474,7 +485,9 @@ def _tie(best: Finding, rival: Finding, why: str) -> dict:
                           f"{rival.effect.experiment}"}
 
 
-def select(replay: Replay, min_gain: float = 0.05, seed: int = 0, saturation: dict | None = None) -> Selection:
+def select(replay: Replay, min_gain: float = 0.05, seed: int = 0, saturation: dict | None = None,
+           progress=None) -> Selection:
     """``seed``: the study's, for the Monte Carlo of the position noise floor; ``saturation``:
-    identify's tyre saturation on the same log (then a candidate whatever the gate says)."""
-    return Selector(replay, min_gain, seed=seed, saturation=saturation).run()
+    identify's tyre saturation on the same log (then a candidate whatever the gate says); ``progress``:
+    the tool's progress callable (the candidate fits counted, orchestrator.work_progress)."""
+    return Selector(replay, min_gain, seed=seed, saturation=saturation, progress=progress).run()

@@ -32,6 +32,7 @@ from agrobot.measurements.audit import minimum
 from agrobot.measurements.clocks import content_lag
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
+from agrobot.orchestrator.work_progress import Work
 
 from .comparisons import course_bias, pair
 from agrobot.estimation import Z95, Parameter
@@ -369,26 +370,30 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
     if fit_segs.seconds * log.h < driven * (1 - 1 / 3) - 1:
         notes.append(f"fitted on {fit_segs.seconds * log.h:.0f} s of segments spread over the log (cost bound); "
                      f"held out: {test_segs.seconds * log.h:.0f} s")
-    say("fitting the linear model")
-    linear = fit(model, free, start, fixed, fit_segs)
-    a_fit = np.abs(log.a_y[fit_segs.idx])
-    low = a_fit <= LINEAR_TYRE
-    if (low & fit_segs.scored).sum() * log.h >= 0.5 * MIN_DRIVING and (~low & fit_segs.scored).sum() * log.h >= 5.0:
-        say(f"fitting the linear model where |a_y| <= {LINEAR_TYRE:g} m/s2")
-        linear_low = fit(model, free, linear.values, fixed, fit_segs, mask=low)
-    else:
-        linear_low = linear
-    say("fitting the tyre-saturation model")
-    free_nl = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=True)
-    ay_fit = np.abs(log.a_y[fit_segs.idx][fit_segs.scored])
-    mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
-    nl = None
-    for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
-        trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
-        if nl is None or trial.rss < nl.rss:
-            nl = trial
-        if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
-            break
+    with Work(say, "fitting the vehicle models (linear, linear range, tyre saturation)", 3, "fits") as work:
+        say("fitting the linear model")
+        linear = fit(model, free, start, fixed, fit_segs)
+        work.step()
+        a_fit = np.abs(log.a_y[fit_segs.idx])
+        low = a_fit <= LINEAR_TYRE
+        if (low & fit_segs.scored).sum() * log.h >= 0.5 * MIN_DRIVING and (~low & fit_segs.scored).sum() * log.h >= 5.0:
+            say(f"fitting the linear model where |a_y| <= {LINEAR_TYRE:g} m/s2")
+            linear_low = fit(model, free, linear.values, fixed, fit_segs, mask=low)
+            work.step()
+        else:
+            linear_low = linear
+        say("fitting the tyre-saturation model")
+        free_nl = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=True)
+        ay_fit = np.abs(log.a_y[fit_segs.idx][fit_segs.scored])
+        mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
+        nl = None
+        for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
+            trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
+            work.step()
+            if nl is None or trial.rss < nl.rss:
+                nl = trial
+            if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
+                break
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
 
 
