@@ -302,12 +302,14 @@ class Replay:
 
     def yaw_input(self, v: dict[str, float]) -> np.ndarray | None:
         """The wheel angle driving the yaw stage under ``v``: None for the measured one as it is,
-        else the angle replayed from the command (times the command's gain), read ``steering_clock``
+        else the angle replayed from the command or the reading (times the steering map's gain, left
+        and right), read ``steering_clock``
         earlier, through the steering ratio's curve."""
         delta = self.replayed_steering(v) if self.command_only else None
-        gain = v.get("steering_gain", 1.0)
-        if gain != 1.0 and delta is not None:       # the wheels turn k x the command
-            delta = gain * delta
+        gain, asym = v.get("steering_gain", 1.0), v.get("steering_asymmetry", 0.0)
+        if gain != 1.0 or asym:         # the wheels turn k (1 + a sign(delta)) x the command or the reading
+            d = self.delta if delta is None else delta
+            delta = gain * d * (1.0 + asym * np.sign(d))
         shift = v.get("steering_clock", 0.0)
         if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
             d = self.delta if delta is None else delta
