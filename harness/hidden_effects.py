@@ -19,7 +19,8 @@ __all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recov
 
 
 # truth faults the catalogue has since named: truth id -> the effect a right diagnosis names
-NAMED = {"gyro_scale_factor": "gyro_scale", "wheel_slip": "speed_scale", "tyre_saturation": "tyre_saturation"}
+NAMED = {"gyro_scale_factor": "gyro_scale", "wheel_slip": "speed_scale", "tyre_saturation": "tyre_saturation",
+         "steering_sensor_gain": "steering_gain"}
 
 
 def expected_ids(truth: dict) -> set[str]:

@@ -26,9 +26,9 @@ COMBINATIONS = (
     "steering_rate_limit+side_slope+yaw_rate_bias",
 )
 # unlisted fault -> the stages its misfit must be found in
-UNLISTED_STAGES = {"steering_sensor_gain": {"yaw"}}
+UNLISTED_STAGES = {"gyro_drift": {"yaw"}}
 # faults of the truth's unlisted group the catalogue has since named (hidden_effects.NAMED)
-NAMED_FAULTS = ("gyro_scale_factor", "wheel_slip", "tyre_saturation")
+NAMED_FAULTS = ("gyro_scale_factor", "wheel_slip", "tyre_saturation", "steering_sensor_gain")
 MIXED = ("wheel_slip+actuator_delay", "tyre_saturation+gps_latency")
 
 

@@ -18,7 +18,7 @@ from agrobot.orchestrator.study import Study, StudyError
 from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
-from .effect import BaselineStudy
+from .effect import BaselineStudy, Parameter
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -57,3 +57,36 @@ def baseline_from_study(study: Study) -> Baseline:
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
     return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))
+
+
+def widened_ranges(params, values) -> dict[str, Parameter]:
+    """{name: the parameter with the range widened to its limit} for each of ``params`` whose
+    value ended on a prior bound that is not the limit (Parameter.widened)."""
+    return {p.name: w for p in params if (w := p.widened(values[p.name])) is not None}
+
+
+def refit_summary(start: dict[str, float], fitted: dict[str, float], params) -> list[dict]:
+    """What the baseline refit did to each re-fitted parameter: its study value, the value fitted,
+    whether it moved (by 2 % or more), the range it was searched in, and the bound it ended on
+    (``at_bound``: 'lower'/'upper' of the last range searched, within 0.5 % of it; then the value is
+    no estimate: the log does not fix it)."""
+    out = []
+    for p in params:
+        a, b = float(start[p.name]), float(fitted[p.name])
+        span = p.upper - p.lower
+        edge = next((side for side, x in (("lower", p.lower), ("upper", p.upper)) if abs(b - x) <= 5e-3 * span), None)
+        out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
+                    "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
+    return out
+
+
+def refit_statement(summary: list[dict]) -> str:
+    """One line: the parameters the refit moved and those that ended on a bound."""
+    moved = ", ".join(f"{r['name']} {r['study']:.3g} -> {r['value']:.3g}" for r in summary if r["moved"]) or "none"
+    edge = [r for r in summary if r["at_bound"]]
+    text = f"the baseline refit moved {moved}"
+    if edge:
+        text += ("; ended on a bound (no estimate: the log does not fix them, their values are not concluded): "
+                 + ", ".join(f"{r['name']} on its {r['at_bound']} bound {r['bounds'][r['at_bound'] == 'upper']:.3g}"
+                             for r in edge))
+    return text

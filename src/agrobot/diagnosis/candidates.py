@@ -31,7 +31,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline
+from .baseline import Baseline, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
@@ -454,7 +454,8 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     """The baseline parameters refitted with a stage: the yaw stage of a command-only log also
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
-    return tuple(UNCERTAIN[stage]) + tuple(extra)
+    wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
+    return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra))
 
 
 def effective_size(res: np.ndarray) -> float:
@@ -562,8 +563,13 @@ def fit_baseline(replay: Replay) -> tuple[CandidateFit, dict[str, float]]:
     m l_f a_y / (L C_r) that the track sees."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
+    replay.widened_uncertain = {}
     for s in replay.stages:
         values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
+        wider = widened_ranges(uncertain(replay, s), values)
+        if wider:                   # a value on a prior edge is no estimate: searched again out to the limit
+            replay.widened_uncertain.update(wider)
+            values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
         if joint:

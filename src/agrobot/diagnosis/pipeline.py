@@ -18,14 +18,15 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
-from .baseline import baseline_from_study
-from .candidates import CannotDecide, CandidateFit, Replay
+from .baseline import baseline_from_study, refit_statement, refit_summary
+from .candidates import CannotDecide, CandidateFit, Replay, uncertain
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
 from .unexplained import RATIO, signature, stage_check
+from .plausibility import kinematic, understeer
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -428,6 +429,8 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
     result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
                        "why": replay.split_note}
     result["baseline_refit"] = {k: sel.base.values[k] for k in REFIT}
+    params = list(dict.fromkeys(p for s in judged for p in uncertain(replay, s)))
+    result["baseline_refit_summary"] = refit_summary(replay.baseline.values, sel.base.values, params)
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
     result["stages_judged"] = list(judged)
@@ -459,8 +462,15 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     of its agreement with identify's model and of every independent estimate that disagrees."""
     p = baseline.tractor
     moving = replay.speed[replay.speed > replay.min_speed]
+    mine = result.get("log_vehicle") or {}
+    mismatch, lateral = mine.get("mismatch"), mine.get("lateral_acceleration_p99")
+    K = identified.get("understeer_gradient") if identified else None
+    result["understeer_note"] = understeer(K["value"], baseline.vehicle, lateral) if K else kinematic(lateral)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
-                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
+                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
+                       antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
+                       before=[x for x in (mismatch, kinematic(lateral)) if x])
+    verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
@@ -472,6 +482,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     result["verdict_status"] = verdict["status"]
     result["verdict_statement"] = verdict["statement"]
     result["verdict_bullets"] = verdict["bullets"]
+    result["before_verdict"] = verdict["before"]
 
 
 def _stage_results(result: dict, replay: Replay, sel, checks: dict, effects: list[dict], baseline) -> None:
