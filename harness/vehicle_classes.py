@@ -13,11 +13,12 @@ steering map planted on a truth log.
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
 
-from harness.truth_tractor import DEG, VEHICLES
+from harness.truth_tractor import DEG, VEHICLES, make_log
 
 ACKERMANN = dict(m=120.0, I=30.0, l_f=0.6, l_r=0.67, C_f=3000.0, C_r=3000.0, sigma_f=0.02)
 ACKERMANN_STEERING = dict(tau=0.035, rate=1.5, deadband=0.002)     # the study's first-order equivalent
@@ -118,3 +119,28 @@ def steering_map(frame, gain: float = 1.0, asymmetry: float = 0.0, curvature: fl
 def full_lock_radii(wheelbase: float, lock: float, **planted) -> tuple[float, float]:
     """(left, right) turning radius at +-``lock`` of reading under the map: L / tan(|M(+-lock)|)."""
     return tuple(wheelbase / math.tan(abs(float(wheel_angle(np.array([s * lock]), **planted)[0]))) for s in (1, -1))
+
+
+def diagnose_planted(case: tuple) -> dict:
+    """Write and diagnose (no plots, no identify) the log of (vehicle, truth effect or None, planted
+    steering map {gain, asymmetry, curvature, offset}, seed, folder, command_only, duration[, values])
+    against the vehicle's baseline study (the tractor's: studies/figure8.toml; the small machine's:
+    ``study``)."""
+    from agrobot.diagnosis.pipeline import diagnose
+    from agrobot.studies import shipped
+
+    vehicle, effect, planted, seed, folder, command_only, duration, *rest = case
+    frame, truth = make_log(seed, effect, duration=duration, vehicle=vehicle, values=rest[0] if rest else None)
+    frame = steering_map(frame, **planted)
+    if command_only:
+        frame = frame.drop(columns=["delta"])
+    name = f"{vehicle}_{effect or 'map'}_{'-'.join(f'{k}{v:g}' for k, v in planted.items())}_{seed}" \
+        + ("_cmd" if command_only else "")
+    log = Path(folder) / f"{name}.parquet"
+    frame.to_parquet(log)
+    own = Path(folder) / name
+    own.mkdir(exist_ok=True)
+    base = study(own) if vehicle == "ackermann" else shipped("figure8.toml")
+    result = diagnose(log, None, base, plots=False, identify=False)
+    print(f"{name}: {result['verdict']} ({result['verdict_status']})", file=sys.stderr, flush=True)
+    return {"case": name, "truth": truth, "planted": planted, "result": result}

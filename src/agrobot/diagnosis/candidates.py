@@ -31,7 +31,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, widened_ranges
+from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
@@ -455,7 +455,8 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
     wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
-    return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra))
+    held = getattr(replay, "held_uncertain", ())           # and those it holds (the kinematic regime)
+    return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
 def effective_size(res: np.ndarray) -> float:
@@ -563,7 +564,7 @@ def fit_baseline(replay: Replay) -> tuple[CandidateFit, dict[str, float]]:
     m l_f a_y / (L C_r) that the track sees."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
-    replay.widened_uncertain = {}
+    replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
     for s in replay.stages:
         values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
         wider = widened_ranges(uncertain(replay, s), values)

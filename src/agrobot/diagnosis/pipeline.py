@@ -18,7 +18,7 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
-from .baseline import baseline_from_study, refit_statement, refit_summary
+from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
 from .candidates import CannotDecide, CandidateFit, Replay, uncertain
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
@@ -430,7 +430,8 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
                        "why": replay.split_note}
     result["baseline_refit"] = {k: sel.base.values[k] for k in REFIT}
     params = list(dict.fromkeys(p for s in judged for p in uncertain(replay, s)))
-    result["baseline_refit_summary"] = refit_summary(replay.baseline.values, sel.base.values, params)
+    result["baseline_refit_summary"] = refit_summary(replay.baseline.values, sel.base.values, params,
+                                                     getattr(replay, "held_uncertain", ()))
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
     result["stages_judged"] = list(judged)
@@ -463,13 +464,13 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     p = baseline.tractor
     moving = replay.speed[replay.speed > replay.min_speed]
     mine = result.get("log_vehicle") or {}
-    mismatch, lateral = mine.get("mismatch"), mine.get("lateral_acceleration_p99")
+    mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
     K = identified.get("understeer_gradient") if identified else None
-    result["understeer_note"] = understeer(K["value"], baseline.vehicle, lateral) if K else kinematic(lateral)
+    result["understeer_note"] = understeer(K["value"], baseline.vehicle, share) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
-                       before=[x for x in (mismatch, kinematic(lateral)) if x])
+                       before=[x for x in (mismatch, kinematic(share)) if x])
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))

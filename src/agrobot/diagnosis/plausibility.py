@@ -25,7 +25,8 @@ CLASS_OUTLINE = {"tractor": (0.45, 0.6, 1.0), "car": (0.35, 0.3, 0.65), "truck":
 # (0.5-4 deg/g: 0.001-0.007), a tractor more on soft tyres; a small machine either way, within 10 deg/g
 UNDERSTEER = {"tractor": (-0.002, 0.03), "car": (-0.001, 0.012), "truck": (-0.001, 0.015),
               "scale_car": (-0.02, 0.02), "robot": (-0.02, 0.02), None: (-0.02, 0.03)}
-KINEMATIC = 1.0               # m/s2: below this lateral acceleration tyres barely slip: r = v tan(delta) / L
+KINEMATIC = 0.015             # the kinematic regime: the axles' slip angles at the log's lateral acceleration
+                              # (99th percentile) under 1.5 % of its steering angle: r = v tan(delta) / L
 
 
 @dataclass(frozen=True)
@@ -103,13 +104,32 @@ def slope(phi: float, vehicle: Vehicle) -> list[str]:
             f"something else (a steering offset or a left/right asymmetry of the steering map, a gyro bias)"]
 
 
-def understeer(K: float, vehicle: Vehicle, lateral_p99: float | None) -> str | None:
+def slip_share(p, lateral_p99: float, steering_p99: float) -> float:
+    """The largest axle slip angle the study's tyres take at the log's lateral acceleration,
+    alpha_f = m a_y l_r / (L C_f), alpha_r = m a_y l_f / (L C_r), over the log's steering angle (99th
+    percentiles): how far the tyres move the yaw rate off r = v tan(delta) / L."""
+    L = p.l_f + p.l_r
+    alpha = p.m * lateral_p99 / L * max(p.l_r / p.C_f, p.l_f / p.C_r)
+    return alpha / steering_p99 if steering_p99 > 0 else math.inf
+
+
+def kinematic(share: float | None) -> str | None:
+    """What a log in the kinematic regime (slip_share below KINEMATIC) cannot tell (None: the tyres'
+    slip shows in it)."""
+    if share is None or share >= KINEMATIC:
+        return None
+    return (f"the kinematic regime: at the log's lateral acceleration the study's tyres slip {100 * share:.2g} % of "
+            f"its steering angle (99th percentiles), and the model is r = v tan(delta) / L; an understeer gradient, "
+            f"a critical or a characteristic speed and the cornering stiffnesses are not identifiable at these "
+            f"speeds (held at the study's)")
+
+
+def understeer(K: float, vehicle: Vehicle, share: float | None) -> str | None:
     """Why an understeer gradient K [rad/(m/s2)] is not concluded (None: it is one this class has):
-    a log in the kinematic regime (|a_y| below KINEMATIC: r = v tan(delta) / L, the tyres' slip
-    unseen) cannot tell it; outside the class's range (UNDERSTEER) it is a steering map or a
-    wheelbase, not tyres."""
-    if kinematic(lateral_p99):
-        return kinematic(lateral_p99)
+    a log in the kinematic regime (``share``: slip_share) cannot tell it; outside the class's range
+    (UNDERSTEER) it is a steering map or a wheelbase, not tyres."""
+    if kinematic(share):
+        return "not identifiable at these speeds: " + kinematic(share)
     lo, hi = UNDERSTEER.get(vehicle.kind, UNDERSTEER[None])
     if lo <= K <= hi:
         return None
@@ -117,14 +137,3 @@ def understeer(K: float, vehicle: Vehicle, lateral_p99: float | None) -> str | N
     return (f"an understeer gradient of {deg_g:.3g} deg/g is not of a {vehicle.kind or 'vehicle'} "
             f"({math.degrees(lo) * 9.81:.2g} to {math.degrees(hi) * 9.81:.2g} deg/g): a steering map off in gain or "
             f"asymmetric, or a wrong wheelbase, reads as tyres")
-
-
-def kinematic(lateral_p99: float | None) -> str | None:
-    """What a log in the kinematic regime (99th percentile of |a_y| below KINEMATIC) cannot tell
-    (None: it reaches the tyres' range)."""
-    if lateral_p99 is None or lateral_p99 >= KINEMATIC:
-        return None
-    return (f"the kinematic regime: the log's lateral acceleration reaches {lateral_p99:.2g} m/s2 (99th percentile), "
-            f"below {KINEMATIC:g} m/s2 the tyres hardly slip and the model is r = v tan(delta) / L; an understeer "
-            f"gradient, a critical or a characteristic speed and the cornering stiffnesses are not identifiable at "
-            f"these speeds")
