@@ -475,7 +475,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
-        if not c["agree"]:
+        if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
                 f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
                 + f" {c['unit']}: they disagree; {c['suggests']}")

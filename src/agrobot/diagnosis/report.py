@@ -196,8 +196,9 @@ def refit_lines(result: dict) -> list[str]:
            "| parameter | study | fitted | moved | searched in | ended on a bound |", "|---|---:|---:|---|---|---|"]
     for r in rows:
         edge = f"**{r['at_bound']}** (no estimate)" if r["at_bound"] else "no"
+        searched = f"[{r['bounds'][0]:.3g}, {r['bounds'][1]:.3g}]" if r["bounds"] else f"held: {r.get('held')}"
         out.append(f"| {r['name']} [{r['unit']}] | {r['study']:.4g} | {r['value']:.4g} | {'yes' if r['moved'] else 'no'} "
-                   f"| [{r['bounds'][0]:.3g}, {r['bounds'][1]:.3g}] | {edge} |")
+                   f"| {searched} | {edge} |")
     return out + [""]
 
 
