@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from agrobot.diagnosis.pipeline import diagnose
+from agrobot.studies import shipped
 from harness.truth_tractor import DEG, VEHICLES, make_log
 
 ACKERMANN = dict(m=120.0, I=30.0, l_f=0.6, l_r=0.67, C_f=3000.0, C_r=3000.0, sigma_f=0.02)
@@ -126,9 +128,6 @@ def diagnose_planted(case: tuple) -> dict:
     steering map {gain, asymmetry, curvature, offset}, seed, folder, command_only, duration[, values])
     against the vehicle's baseline study (the tractor's: studies/figure8.toml; the small machine's:
     ``study``)."""
-    from agrobot.diagnosis.pipeline import diagnose
-    from agrobot.studies import shipped
-
     vehicle, effect, planted, seed, folder, command_only, duration, *rest = case
     frame, truth = make_log(seed, effect, duration=duration, vehicle=vehicle, values=rest[0] if rest else None)
     frame = steering_map(frame, **planted)
