@@ -41,7 +41,7 @@ EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steeri
 
 
 # faults outside the diagnosis catalogue: the diagnosis must call them "unexplained"
-UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_saturation", "gyro_drift")
+UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_saturation")
 
 # effects real vehicles show, added after the catalogue above (drawn from a stream of their own so the
 # draws of the others stay): a localisation output at another point of the vehicle on a lagging clock,
@@ -100,17 +100,14 @@ def draw_unlisted(effect: str, rng: np.random.Generator) -> dict[str, float]:
       logged steering slower than its rate limit: a catalogued steering_rate_limit, rightly found);
     - gyro_scale_factor: the gyro reads s x the yaw rate;
     - wheel_slip: the logged speed (wheel speed) is (1 + slip) x the ground speed;
-    - tyre_saturation: the tyre forces saturate, F = C alpha / (1 + |alpha| / alpha_s);
-    - gyro_drift: the gyro's bias drifts, d (t - the log's mid-time), d of 0.25-0.4 mrad/s per s (a
-      bias that warms up: no constant bias the catalogue holds).
+    - tyre_saturation: the tyre forces saturate, F = C alpha / (1 + |alpha| / alpha_s).
     """
     sign = 1.0 if rng.random() < 0.5 else -1.0
     u = rng.uniform
     return {"steering_sensor_gain": {"sensor_gain": 1.0 + u(0.12, 0.2)},
             "gyro_scale_factor": {"gyro_scale": 1.0 + sign * u(0.08, 0.15)},
             "wheel_slip": {"slip": u(0.06, 0.12)},
-            "tyre_saturation": {"alpha_s": u(2.0, 4.0) * DEG},
-            "gyro_drift": {"drift": sign * u(2.5e-4, 4e-4)}}[effect]
+            "tyre_saturation": {"alpha_s": u(2.0, 4.0) * DEG}}[effect]
 
 
 def draw_later(effect: str, rng: np.random.Generator, l_r: float) -> dict[str, float]:
@@ -377,8 +374,7 @@ def _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral
         "delta": q * np.round((sensor_gain * np.array([ratio_reading(d, curve) for d in delta[idx]])
                                + 0.05 * DEG * noise[0]) / q),
         "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
-        "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2]
-        + e.get("drift", 0.0) * (t_log - 0.5 * (t_log[0] + t_log[-1])),
+        "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2],
         "x": gx + 0.02 * noise[3],
         "y": gy + 0.02 * noise[4],
     })
