@@ -19,7 +19,8 @@ __all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recov
 
 
 # truth faults the catalogue has since named: truth id -> the effect a right diagnosis names
-NAMED = {"gyro_scale_factor": "gyro_scale", "wheel_slip": "speed_scale", "tyre_saturation": "tyre_saturation"}
+NAMED = {"gyro_scale_factor": "gyro_scale", "wheel_slip": "speed_scale", "tyre_saturation": "tyre_saturation",
+         "steering_sensor_gain": "steering_gain"}
 
 
 def expected_ids(truth: dict) -> set[str]:
@@ -111,14 +112,15 @@ def diagnose_hidden(case: tuple) -> dict:
     return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}
 
 
-def diagnose_many(cases: list[tuple[str | None, int, str]], workers: int = 2) -> list[dict]:
-    """diagnose_hidden over worker processes, each with single-threaded BLAS: two processes
-    spinning two BLAS threads each on two cores run 3x slower than one process."""
+def diagnose_many(cases: list[tuple], workers: int = 2, run=None) -> list[dict]:
+    """diagnose_hidden (or ``run``, a module-level function of one case) over worker processes, each
+    with single-threaded BLAS: two processes spinning two BLAS threads each on two cores run 3x slower
+    than one process."""
     saved = {k: os.environ.get(k) for k in BLAS_THREADS}
     os.environ.update({k: "1" for k in BLAS_THREADS})
     try:
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            return list(pool.map(diagnose_hidden, cases))
+            return list(pool.map(run or diagnose_hidden, cases))
     finally:
         for k, v in saved.items():
             if v is None:

@@ -321,7 +321,7 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
         v = speed_of(time)
         scale = max(0.2, 1.0 + k_corner * (v - v_ref) * (2.0 / v_ref))      # relative: k per m/s at 2 m/s
         cf, cr = p["C_f"] * scale, p["C_r"] * scale
-        vv = max(v, 0.8)          # the slip equations divide by v; below 0.8 m/s scaled (v / vv)
+        vv = max(v, veh.get("min_speed", 0.8))    # the slip equations divide by v; below it scaled (v / vv)
         ar = ar_state if sigma_r > 0 else (vy - lr * r) / vv
         a_lat = g_slope * math.sin(downhill - psi)
         sat_f, sat_r = 1.0 + abs(af) / alpha_s, 1.0 + abs(ar) / alpha_s

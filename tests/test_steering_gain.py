@@ -15,13 +15,14 @@ from harness.truth_tractor import make_log
 from agrobot.orchestrator.study import Study
 
 
-def test_the_gain_is_a_candidate_only_where_the_command_drives_the_yaw_stage():
+def test_the_gain_is_a_candidate_for_every_steering_type():
+    """A measured wheel angle carries a potentiometer's gain as a command carries a servo's."""
     baseline = baseline_from_study(Study.load(BASELINES["tractor"]))
     frame, _ = make_log(1000, None, duration=90.0)
     measured = Selector(Replay(frame, baseline))
     commanded = Selector(Replay(frame.drop(columns=["delta"]), baseline))
-    assert "steering_gain" not in {e.id for e in measured.catalogue}
-    assert "steering_gain" in {e.id for e in commanded.catalogue}
+    assert {"steering_gain", "steering_asymmetry"} <= {e.id for e in measured.catalogue}
+    assert {"steering_gain", "steering_asymmetry"} <= {e.id for e in commanded.catalogue}
 
 
 @pytest.mark.slow

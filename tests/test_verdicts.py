@@ -111,7 +111,7 @@ def test_an_effect_is_judged_by_its_own_rule_without_the_verdict_knowing_it():
                    {"plausibility": lambda self, values, ctx: []})()
     assert judge_values(effect("actuator_delay", command_delay=0.9), CAR, 2.97, 1.5, 20.0, (lenient,)) == []
     # an effect without a rule of its own passes whatever it fitted; an id no catalogue holds is not judged
-    assert judge_values(effect("side_slope", slope_east=4.9, slope_north=4.9), CAR, 2.97, 1.5, 20.0) == []
+    assert judge_values(effect("speed_dependent_cornering", cornering_speed_slope=1.9), CAR, 2.97, 1.5, 20.0) == []
     assert judge_values(effect("toy_wobble", wobble=9.0), CAR, 2.97, 1.5, 20.0) == []
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from agrobot.components.models.steering_equivalent import FirstOrderSteering
 from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParameters
 from agrobot.orchestrator.resolver import resolve
@@ -18,7 +20,8 @@ from agrobot.orchestrator.study import Study, StudyError
 from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
-from .effect import BaselineStudy
+from .effect import BaselineStudy, Parameter
+from .plausibility import KINEMATIC, slip_share
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -57,3 +60,62 @@ def baseline_from_study(study: Study) -> Baseline:
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
     return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))
+
+
+def widened_ranges(params, values) -> dict[str, Parameter]:
+    """{name: the parameter with the range widened to its limit} for each of ``params`` whose
+    value ended on a prior bound that is not the limit (Parameter.widened)."""
+    return {p.name: w for p in params if (w := p.widened(values[p.name])) is not None}
+
+
+TYRE_SCALES = ("cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
+
+
+def replay_slip_share(replay) -> float | None:
+    """plausibility.slip_share of the replayed log (None without a moving yaw stage)."""
+    moving = np.isfinite(replay.speed) & (replay.speed > replay.min_speed) & np.isfinite(replay.gyro)
+    if "yaw" not in replay.stages or moving.sum() < 50:
+        return None
+    lateral = float(np.percentile(np.abs(replay.speed * replay.gyro)[moving], 99))
+    steering = float(np.nanpercentile(np.abs(replay.delta[moving]), 99))
+    return slip_share(replay.baseline.tractor, lateral, steering)
+
+
+def held_tyres(replay) -> tuple[str, ...]:
+    """The tyre scales the baseline refit holds at the study's: all of them on a log in the kinematic
+    regime (slip_share below KINEMATIC: the yaw rate does not fix them, and freed they would take up a
+    steering map's error as oversteer), none otherwise."""
+    share = replay_slip_share(replay)
+    return TYRE_SCALES if share is not None and share < KINEMATIC else ()
+
+
+def refit_summary(start: dict[str, float], fitted: dict[str, float], params, held=()) -> list[dict]:
+    """What the baseline refit did to each re-fitted parameter: its study value, the value fitted,
+    whether it moved (by 2 % or more), the range it was searched in, and the bound it ended on
+    (``at_bound``: 'lower'/'upper' of the last range searched, within 0.5 % of it; then the value is
+    no estimate: the log does not fix it)."""
+    out = []
+    for p in params:
+        a, b = float(start[p.name]), float(fitted[p.name])
+        span = p.upper - p.lower
+        edge = next((side for side, x in (("lower", p.lower), ("upper", p.upper)) if abs(b - x) <= 5e-3 * span), None)
+        out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
+                    "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
+    return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]), "unit": "1", "moved": False,
+                   "bounds": [], "at_bound": None, "held": "the kinematic regime: not identifiable at these speeds"}
+                  for n in held]
+
+
+def refit_statement(summary: list[dict]) -> str:
+    """One line: the parameters the refit moved and those that ended on a bound."""
+    moved = ", ".join(f"{r['name']} {r['study']:.3g} -> {r['value']:.3g}" for r in summary if r["moved"]) or "none"
+    edge = [r for r in summary if r["at_bound"]]
+    text = f"the baseline refit moved {moved}"
+    held = [r["name"] for r in summary if r.get("held")]
+    if held:
+        text += f"; held at the study's ({summary[-1]['held']}): {', '.join(held)}"
+    if edge:
+        text += ("; ended on a bound (no estimate: the log does not fix them, their values are not concluded): "
+                 + ", ".join(f"{r['name']} on its {r['at_bound']} bound {r['bounds'][r['at_bound'] == 'upper']:.3g}"
+                             for r in edge))
+    return text

@@ -32,7 +32,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline
+from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
 
@@ -317,12 +317,14 @@ class Replay:
 
     def yaw_input(self, v: dict[str, float]) -> np.ndarray | None:
         """The wheel angle driving the yaw stage under ``v``: None for the measured one as it is,
-        else the angle replayed from the command (times the command's gain), read ``steering_clock``
+        else the angle replayed from the command or the reading (times the steering map's gain, left
+        and right), read ``steering_clock``
         earlier, through the steering ratio's curve."""
         delta = self.replayed_steering(v) if self.command_only else None
-        gain = v.get("steering_gain", 1.0)
-        if gain != 1.0 and delta is not None:       # the wheels turn k x the command
-            delta = gain * delta
+        gain, asym = v.get("steering_gain", 1.0), v.get("steering_asymmetry", 0.0)
+        if gain != 1.0 or asym:         # the wheels turn k (1 + a sign(delta)) x the command or the reading
+            d = self.delta if delta is None else delta
+            delta = gain * d * (1.0 + asym * np.sign(d))
         shift = v.get("steering_clock", 0.0)
         if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
             d = self.delta if delta is None else delta
@@ -475,7 +477,9 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     """The baseline parameters refitted with a stage: the yaw stage of a command-only log also
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
-    return tuple(UNCERTAIN[stage]) + tuple(extra)
+    wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
+    held = getattr(replay, "held_uncertain", ())           # and those it holds (the kinematic regime)
+    return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
 @dataclass
@@ -569,8 +573,13 @@ def fit_baseline(replay: Replay) -> tuple[CandidateFit, dict[str, float]]:
     m l_f a_y / (L C_r) that the track sees."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
+    replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
     for s in replay.stages:
         values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
+        wider = widened_ranges(uncertain(replay, s), values)
+        if wider:                   # a value on a prior edge is no estimate: searched again out to the limit
+            replay.widened_uncertain.update(wider)
+            values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
         if joint:

@@ -28,10 +28,12 @@ CATALOGUE: tuple[Effect, ...] = _collect()
 EFFECT_IDS = tuple(e.id for e in CATALOGUE)
 
 # the baseline's re-fitted ("uncertain") parameters of each stage
+# (searched first in the prior range, widened to the physical limit when a fit ends on its edge)
 UNCERTAIN = {
-    "steering": (Parameter("steering_time_constant", "s", 0.05, 0.005, 1.0),),
-    "yaw": (Parameter("cornering_front_scale", "1", 0.2, 0.4, 2.5), Parameter("cornering_rear_scale", "1", 0.2, 0.4, 2.5),
-            Parameter("relaxation_scale", "1", 0.2, 0.3, 3.0)),
+    "steering": (Parameter("steering_time_constant", "s", 0.05, 0.005, 1.0, limit=(0.001, 3.0)),),
+    "yaw": (Parameter("cornering_front_scale", "1", 0.2, 0.4, 2.5, limit=(0.05, 20.0)),
+            Parameter("cornering_rear_scale", "1", 0.2, 0.4, 2.5, limit=(0.05, 20.0)),
+            Parameter("relaxation_scale", "1", 0.2, 0.3, 3.0, limit=(0.05, 10.0))),
     "position": (),
     "speed": (),
 }

@@ -54,12 +54,14 @@ def run(args: argparse.Namespace) -> int:
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
+    for note in result.get("before_verdict", []):
+        print(f"before the verdict: {note}")
     print(f"verdict: {result['verdict']} ({result['verdict_status']}): {result['verdict_statement']}")
     for bullet in result.get("verdict_bullets", []):
         print(f"  - {bullet}")
     from .report import vehicle_lines
 
-    for line in vehicle_lines(result.get("identified_vehicle")):
+    for line in vehicle_lines(result.get("identified_vehicle"), result.get("understeer_note")):
         if line and not line.startswith(("|---", "## ")):
             print("  " + line)
     for e in result["effects"]:

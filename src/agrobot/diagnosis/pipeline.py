@@ -20,14 +20,15 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
-from .baseline import baseline_from_study
-from .candidates import CannotDecide, CandidateFit, Replay
+from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
+from .candidates import CannotDecide, CandidateFit, Replay, uncertain
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .selection import Finding, select
 from .unexplained import RATIO, signature, stage_check
+from .plausibility import kinematic, understeer
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -464,6 +465,9 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
     result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
                        "why": replay.split_note}
     result["baseline_refit"] = {k: sel.base.values[k] for k in REFIT}
+    params = list(dict.fromkeys(p for s in judged for p in uncertain(replay, s)))
+    result["baseline_refit_summary"] = refit_summary(replay.baseline.values, sel.base.values, params,
+                                                     getattr(replay, "held_uncertain", ()))
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
     result["stages_judged"] = list(judged)
@@ -495,12 +499,19 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     of its agreement with identify's model and of every independent estimate that disagrees."""
     p = baseline.tractor
     moving = replay.speed[replay.speed > replay.min_speed]
+    mine = result.get("log_vehicle") or {}
+    mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
+    K = identified.get("understeer_gradient") if identified else None
+    result["understeer_note"] = understeer(K["value"], baseline.vehicle, share) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
-                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0)
+                       p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
+                       antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
+                       before=[x for x in (mismatch, kinematic(share)) if x])
+    verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
-        if not c["agree"]:
+        if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
                 f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
                 + f" {c['unit']}: they disagree; {c['suggests']}")
@@ -508,6 +519,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     result["verdict_status"] = verdict["status"]
     result["verdict_statement"] = verdict["statement"]
     result["verdict_bullets"] = verdict["bullets"]
+    result["before_verdict"] = verdict["before"]
 
 
 def _stage_results(result: dict, replay: Replay, sel, checks: dict, effects: list[dict], baseline) -> None:

@@ -16,34 +16,65 @@ if TYPE_CHECKING:
 
 CALIBRATION = (0.7, 1.4)      # a scale factor or a gain errs inside this; outside it is a unit or a channel
 
+# a class's outline when the [vehicle] table gives no length and width, in wheelbases: (rear overhang
+# behind the rear axle, front overhang ahead of the front axle, width); "vehicle": no class declared
+CLASS_OUTLINE = {"tractor": (0.45, 0.6, 1.0), "car": (0.35, 0.3, 0.65), "truck": (0.5, 0.35, 0.6),
+                 "scale_car": (0.3, 0.4, 0.9), "robot": (0.3, 0.3, 0.9), None: (0.5, 0.5, 1.0)}
+
+# understeer gradient K [rad/(m/s2)] a class's vehicle has: (lowest, highest); a road vehicle understeers
+# (0.5-4 deg/g: 0.001-0.007), a tractor more on soft tyres; a small machine either way, within 10 deg/g
+UNDERSTEER = {"tractor": (-0.002, 0.03), "car": (-0.001, 0.012), "truck": (-0.001, 0.015),
+              "scale_car": (-0.02, 0.02), "robot": (-0.02, 0.02), None: (-0.02, 0.03)}
+KINEMATIC = 0.03              # the kinematic regime: the axles' slip angles at the log's lateral acceleration
+                              # (99th percentile) under 3 % of its steering angle: r = v tan(delta) / L; a stiffness
+                              # off by 2.5 x then moves the yaw rate by less than 8 %
+
 
 @dataclass(frozen=True)
 class VehicleContext:
     """The vehicle a value is judged against: its ``[vehicle]`` table, the wheelbase and the rear
-    axle's distance from the centre of gravity ``l_r`` [m], and the log's median moving speed [m/s]."""
+    axle's distance from the centre of gravity ``l_r`` [m], the log's median moving speed [m/s] and
+    the study's antenna (forward, left) from the rear axle [m]."""
 
     vehicle: Vehicle
     wheelbase: float
     l_r: float
     speed: float
+    antenna: tuple[float, float] = (0.0, 0.0)
 
     def outline(self) -> tuple[tuple[float, float], tuple[float, float], str]:
         """((forward lo, hi), (left lo, hi)) of the vehicle from its rear axle, and how it is known:
-        the [vehicle] table's length and width, else a wheelbase-sized box (overhangs of half a
-        wheelbase, a width of one)."""
+        the [vehicle] table's length and width, else its class's default outline (CLASS_OUTLINE)."""
         arm, wb = self.vehicle.lever_arm_bounds(), self.wheelbase
         if arm:
             return arm[0], arm[1], f"its outline ({self.vehicle.length:g} m long, {self.vehicle.width:g} m wide)"
-        return ((-0.5 * wb, 1.5 * wb), (-0.5 * wb, 0.5 * wb),
-                f"a {wb:.3g} m wheelbase with half a wheelbase of overhang (the study has no [vehicle] length)")
+        rear, front, width = CLASS_OUTLINE.get(self.vehicle.kind, CLASS_OUTLINE[None])
+        return ((-rear * wb, (1 + front) * wb), (-0.5 * width * wb, 0.5 * width * wb),
+                f"the default outline of {self.defaults_named()}")
+
+    def defaults_named(self) -> str:
+        """The class's default outline in words (for a [vehicle] table without length and width)."""
+        rear, front, width = CLASS_OUTLINE.get(self.vehicle.kind, CLASS_OUTLINE[None])
+        wb = self.wheelbase
+        return (f"a {self.vehicle.kind or 'vehicle of no declared class'} of wheelbase {wb:.3g} m: "
+                f"{(1 + rear + front) * wb:.3g} m long ({rear * wb:.2g} m behind the rear axle, {front * wb:.2g} m "
+                f"ahead of the front one), {width * wb:.3g} m wide")
+
+    def defaults_note(self) -> str | None:
+        """What the verdict assumes of a vehicle whose dimensions the study does not give (None: it gives them)."""
+        if self.vehicle.lever_arm_bounds():
+            return None
+        return (f"the study's [vehicle] table gives no length and width: the class's defaults are used, "
+                f"{self.defaults_named()} (set vehicle.length and vehicle.width to judge against the real outline)")
 
 
 def reference_point(values: Mapping[str, float], ctx: VehicleContext) -> list[str]:
-    """The point the positions are put at (the antenna's place plus a reference point's offset, each
-    0 where the effect has no such parameter) must lie inside the outline; outside it, the clock
+    """The point the positions are put at (the antenna's place, or the study's antenna plus a reference
+    point's offset) must lie inside the outline; outside it, the clock
     offset that moves the track as far is |forward - l_r| / speed."""
-    fwd = values.get("antenna_forward", 0.0) + values.get("position_forward", 0.0)
-    left = values.get("antenna_left", 0.0) + values.get("position_left", 0.0)
+    ant = ctx.antenna if "position_forward" in values and "antenna_forward" not in values else (0.0, 0.0)
+    fwd = values.get("antenna_forward", 0.0) + values.get("position_forward", 0.0) + ant[0]
+    left = values.get("antenna_left", 0.0) + values.get("position_left", 0.0) + ant[1]
     (f_lo, f_hi), (l_lo, l_hi), how = ctx.outline()
     if f_lo <= fwd <= f_hi and l_lo <= left <= l_hi:
         return []
@@ -61,3 +92,49 @@ def scale_factor(what: str, s: float | None) -> list[str]:
     if s is None or lo <= s <= hi:
         return []
     return [f"a {what} scale factor of {s:.3g} is no sensor error: a unit or a channel is wrong"]
+
+
+def slope(phi: float, vehicle: Vehicle) -> list[str]:
+    """A side slope steeper than the class's ground (Vehicle.slope_bound; 20 deg for no class) is no
+    slope but a lateral pull the model lacks."""
+    bound = vehicle.slope_bound or math.radians(20.0)
+    if abs(phi) <= bound:
+        return []
+    return [f"a side slope of {math.degrees(phi):.1f} deg is steeper than the ground a "
+            f"{vehicle.kind or 'vehicle'} drives ({math.degrees(bound):.0f} deg): the yaw rate is pulled one way by "
+            f"something else (a steering offset or a left/right asymmetry of the steering map, a gyro bias)"]
+
+
+def slip_share(p, lateral_p99: float, steering_p99: float) -> float:
+    """The largest axle slip angle the study's tyres take at the log's lateral acceleration,
+    alpha_f = m a_y l_r / (L C_f), alpha_r = m a_y l_f / (L C_r), over the log's steering angle (99th
+    percentiles): how far the tyres move the yaw rate off r = v tan(delta) / L."""
+    L = p.l_f + p.l_r
+    alpha = p.m * lateral_p99 / L * max(p.l_r / p.C_f, p.l_f / p.C_r)
+    return alpha / steering_p99 if steering_p99 > 0 else math.inf
+
+
+def kinematic(share: float | None) -> str | None:
+    """What a log in the kinematic regime (slip_share below KINEMATIC) cannot tell (None: the tyres'
+    slip shows in it)."""
+    if share is None or share >= KINEMATIC:
+        return None
+    return (f"the kinematic regime: at the log's lateral acceleration the study's tyres slip {100 * share:.2g} % of "
+            f"its steering angle (99th percentiles), and the model is r = v tan(delta) / L; an understeer gradient, "
+            f"a critical or a characteristic speed and the cornering stiffnesses are not identifiable at these "
+            f"speeds (held at the study's)")
+
+
+def understeer(K: float, vehicle: Vehicle, share: float | None) -> str | None:
+    """Why an understeer gradient K [rad/(m/s2)] is not concluded (None: it is one this class has):
+    a log in the kinematic regime (``share``: slip_share) cannot tell it; outside the class's range
+    (UNDERSTEER) it is a steering map or a wheelbase, not tyres."""
+    if kinematic(share):
+        return "not identifiable at these speeds: " + kinematic(share)
+    lo, hi = UNDERSTEER.get(vehicle.kind, UNDERSTEER[None])
+    if lo <= K <= hi:
+        return None
+    deg_g = math.degrees(K) * 9.81
+    return (f"an understeer gradient of {deg_g:.3g} deg/g is not of a {vehicle.kind or 'vehicle'} "
+            f"({math.degrees(lo) * 9.81:.2g} to {math.degrees(hi) * 9.81:.2g} deg/g): a steering map off in gain or "
+            f"asymmetric, or a wrong wheelbase, reads as tyres")

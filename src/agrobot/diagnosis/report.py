@@ -100,9 +100,10 @@ DEGREES = {"rad": (180 / math.pi, "deg"), "rad/s": (180 / math.pi, "deg/s"),
            "rad/(m/s2)": (180 / math.pi, "deg/(m/s2)"), "N/rad": (math.pi / 180, "N/deg")}
 
 
-def vehicle_lines(iv: dict | None) -> list[str]:
+def vehicle_lines(iv: dict | None, understeer_note: str | None = None) -> list[str]:
     """The vehicle identify fits on this log beside the study's, the independent estimates and the
-    physical checks (markdown lines; console: the same lines without the table rule)."""
+    physical checks (markdown lines; console: the same lines without the table rule);
+    ``understeer_note``: why the identified understeer gradient is not concluded (printed in its place)."""
     if not iv:
         return []
     if iv.get("identified") is None:
@@ -120,7 +121,7 @@ def vehicle_lines(iv: dict | None) -> list[str]:
            f"{me['final_model']}, held-out fit {me['held_out_fit']:.0f} %):", "",
            "| quantity | study | identified (95 %) |", "|---|---:|---:|",
            f"| understeer gradient K [deg/(m/s2)] | {k_deg * st['understeer_gradient']:.4g} | "
-           f"{q(me['understeer_gradient'], k_deg)} |",
+           f"{understeer_note or q(me['understeer_gradient'], k_deg)} |",
            f"| cornering stiffness front [N/deg] | {c_deg * st['cornering_stiffness_front']:.4g} | "
            f"{q(me['cornering_stiffness_front'], c_deg)} |",
            f"| cornering stiffness rear [N/deg] | {c_deg * st['cornering_stiffness_rear']:.4g} | "
@@ -166,7 +167,7 @@ def markdown(result: dict, plots: list[str]) -> str:
     each catalogue effect alone against the baseline, the baseline's residuals, the figures."""
     lines = [f"# Diagnosis of `{result['log']}`", "",
              f"Baseline model: `{result['study']}`. {split_sentence(result)} {UNITS_NOTE}", "",
-             f"## Verdict: **{result['verdict']}**", ""]
+             *before_verdict(result), f"## Verdict: **{result['verdict']}**", ""]
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
         return "\n".join(lines)
@@ -178,6 +179,29 @@ def markdown(result: dict, plots: list[str]) -> str:
     return "\n".join(lines)
 
 
+def before_verdict(result: dict) -> list[str]:
+    """What is said before any verdict: the study not being the log's vehicle, a log in the kinematic
+    regime, the class's default outline taken for a vehicle without dimensions."""
+    notes = result.get("before_verdict") or []
+    return ["## Before the verdict", "", *[f"- {n}" for n in notes], ""] if notes else []
+
+
+def refit_lines(result: dict) -> list[str]:
+    """The baseline refit: each parameter's study value, the value fitted, moved or not, and the
+    bound it ended on (no estimate then)."""
+    rows = result.get("baseline_refit_summary") or []
+    if not rows:
+        return []
+    out = ["", "Baseline refit (the study's uncertain parameters fitted to this log before any effect):", "",
+           "| parameter | study | fitted | moved | searched in | ended on a bound |", "|---|---:|---:|---|---|---|"]
+    for r in rows:
+        edge = f"**{r['at_bound']}** (no estimate)" if r["at_bound"] else "no"
+        searched = f"[{r['bounds'][0]:.3g}, {r['bounds'][1]:.3g}]" if r["bounds"] else f"held: {r.get('held')}"
+        out.append(f"| {r['name']} [{r['unit']}] | {r['study']:.4g} | {r['value']:.4g} | {'yes' if r['moved'] else 'no'} "
+                   f"| {searched} | {edge} |")
+    return out + [""]
+
+
 def _verdict_lines(result: dict) -> list[str]:
     """The verdict's statement and bullets, the identified vehicle, every effect judged with the
     study option that switches it on, the inconclusive pairs and the warnings."""
@@ -187,7 +211,8 @@ def _verdict_lines(result: dict) -> list[str]:
                   describe(result["recording"]), "```", ""]
     lines += [f"{result.get('verdict_statement', '')} ({result.get('verdict_status', '')}).", ""]
     lines += [f"- {b}" for b in result.get("verdict_bullets", [])] + ([""] if result.get("verdict_bullets") else [])
-    lines += vehicle_lines(result.get("identified_vehicle"))
+    lines += refit_lines(result)
+    lines += vehicle_lines(result.get("identified_vehicle"), result.get("understeer_note"))
     lines += ["Every effect judged:", ""]
     for e in result["effects"]:
         lines += [f"- **{e['id']}**: {e['summary']}"]

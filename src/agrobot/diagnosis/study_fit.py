@@ -14,8 +14,8 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 CANDIDATES = ("figure8.toml", "passenger_car.toml", "f1tenth.toml")
-MISMATCH = 0.5        # a wheelbase off by more than a factor e^0.5 = 1.65 is another vehicle (an effective
-                      # wheelbase from a command runs 20-50 % long: the gain and understeer)
+MISMATCH = math.log(1.3)     # the log's turns and the study's wheelbase more than 30 % apart: named before any verdict
+SIZE = math.log(1.3)         # a shipped study is suggested only for a vehicle of its size: within 30 % of the log's
 
 
 def log_vehicle(frame) -> dict | None:
@@ -37,6 +37,7 @@ def log_vehicle(frame) -> dict | None:
         return None
     L = float(np.median(v[gentle] * np.tan(np.abs(d[gentle])) / np.abs(r[gentle])))
     return {"wheelbase": L, "from": steer, "samples": int(gentle.sum()),
+            "lateral_acceleration_p99": float(np.percentile(a_y[moving], 99)),
             "speed_range": [float(np.percentile(v[moving], 10)), float(np.percentile(v[moving], 90))],
             "steering_range": float(np.percentile(np.abs(d[moving]), 99))}
 
@@ -55,12 +56,19 @@ def study_check(frame, wheelbase: float, study_name: str) -> tuple[dict | None, 
         _, p = study_plant(load_study(shipped(name)))
         fits.append((abs(math.log(mine["wheelbase"] / (p.l_f + p.l_r))), name, p.l_f + p.l_r))
     best = min(fits)
-    text = (f"the log's vehicle (wheelbase {mine['wheelbase']:.3g} m from v tan({mine['from']}) / yaw_rate in gentle "
-            f"turns: an effective one, which understeer and a command's gain lengthen; "
-            f"speeds {mine['speed_range'][0]:.3g}-{mine['speed_range'][1]:.3g} m/s, |{mine['from']}| up to "
-            f"{math.degrees(mine['steering_range']):.3g} deg) is not the study's {study_name} (wheelbase {wheelbase:.3g} m)")
-    if best[1] != study_name:
-        text += f"; studies/{best[1]} (wheelbase {best[2]:.3g} m) fits better: pass --study studies/{best[1]}"
+    ratio = wheelbase / mine["wheelbase"]
+    text = (f"the log's turns are not the study's vehicle: wheelbase {mine['wheelbase']:.3g} m from "
+            f"v tan({mine['from']}) / yaw_rate in gentle turns (an effective one, which understeer and a steering "
+            f"map's gain lengthen; speeds {mine['speed_range'][0]:.3g}-{mine['speed_range'][1]:.3g} m/s, "
+            f"|{mine['from']}| up to {math.degrees(mine['steering_range']):.3g} deg) against the study's {study_name} "
+            f"{wheelbase:.3g} m ({100 * (ratio - 1):+.0f} %): either the study is another vehicle, or its steering "
+            f"map is off (the wheels turn {ratio:.2g} x the angle the log says; the steering_gain the verdict "
+            f"judges tells)")
+    if best[0] <= SIZE and best[1] != study_name:
+        text += f"; studies/{best[1]} (wheelbase {best[2]:.3g} m) is of the log's size: try --study studies/{best[1]}"
     else:
-        text += "; no shipped study fits it: write a study with its [vehicle] table"
+        text += (f"; no shipped study is of the log's size (nearest studies/{best[1]}, {best[2]:.3g} m): if the "
+                 f"study's wheelbase is the vehicle's, the steering map is the cause, else write a study with its "
+                 f"[vehicle] table")
+    mine["mismatch"] = text
     return mine, text

@@ -72,10 +72,23 @@ def _judge(effect: dict, ctx: VehicleContext, rules: Mapping[str, Effect]) -> li
 
 def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
              audit: list[dict], vehicle, wheelbase: float, l_r: float, speed: float,
-             catalogue: Iterable[Effect] = CATALOGUE) -> dict:
+             catalogue: Iterable[Effect] = CATALOGUE, antenna: tuple[float, float] = (0.0, 0.0),
+             before: Iterable[str] = ()) -> dict:
     """The verdict object: ``id`` (an effect id, 'unexplained' or 'none'), ``status`` (conclusive,
-    inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line) and
-    ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included."""
+    inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line),
+    ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included,
+    and ``before``: what is said before any verdict (``before`` given: the study not being the log's
+    vehicle; the class's default outline where the study gives no dimensions). ``antenna``: the
+    study's antenna from the rear axle [m] (a reference point's offset is from it)."""
+    ctx = VehicleContext(vehicle, wheelbase, l_r, speed, antenna)
+    before = list(before) + [n for n in [ctx.defaults_note()] if n and vehicle.declared]
+    verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue)
+    verdict["before"] = before
+    return verdict
+
+
+def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
+             audit: list[dict], ctx: VehicleContext, catalogue: Iterable[Effect]) -> dict:
     blockers = [f for f in audit if not f["resolved"]]
     bullets = []
     for f in blockers:
@@ -85,7 +98,7 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
             continue
         bullets.append(f"unresolved recording finding {_finding_text(f)}; it can imitate "
                        f"{', '.join(f['imitates']) or 'nothing the catalogue holds'}: those are not concluded while it stands")
-    ctx, rules = VehicleContext(vehicle, wheelbase, l_r, speed), {e.id: e for e in catalogue}
+    rules = {e.id: e for e in catalogue}
     for e in effects:
         e["judgement"] = _judge(e, ctx, rules)
         e["blocked_by"] = [f["kind"] for f in blockers if "*" in f["imitates"] or e["id"] in f["imitates"]]

@@ -8,6 +8,7 @@ import math
 from agrobot.components.models.yaw_dynamics import GRAVITY
 
 from ..effect import Effect, Parameter
+from ..plausibility import slope
 
 DEG = math.pi / 180.0
 
@@ -42,6 +43,12 @@ class SideSlope(Effect):
     def options(self, fitted, base, study):
         phi, psi_d = slope_angle_and_heading(fitted)
         return [("yaw_plant", "slope_angle", phi), ("yaw_plant", "slope_downhill_heading", psi_d)]
+
+    def plausibility(self, values, ctx):
+        """A slope no ground of the class has is a lateral pull of another cause."""
+        if "slope_east" not in values or "slope_north" not in values:
+            return []
+        return slope(slope_angle_and_heading(values)[0], ctx.vehicle)
 
     def display(self, fitted):
         phi, psi_d = slope_angle_and_heading(fitted)

@@ -1,7 +1,8 @@
-"""The wheels turn k x the steering command: a servo's travel per command, a steering ratio
-calibrated wrong, a command in another scale. Judged where the yaw stage is driven by the
-command (no measured wheel angle): the yaw rate is k times the expected one in every turn at low
-speed, unlike a ratio curve (off only in tight turns) or soft tyres (off only at speed)."""
+"""The wheels turn k x the steering command or the wheel-angle reading: a servo's travel per command,
+a steering ratio or a potentiometer calibrated wrong, a command in another scale. Judged for every
+steering type (the yaw stage driven by the measured angle, or by the command replayed): the yaw rate
+is k times the expected one in every turn at low speed (r = v tan(k delta) / L), unlike a ratio curve
+(off only in tight turns) or soft tyres (off only at speed)."""
 import math
 
 from ..effect import Effect, Parameter
@@ -10,20 +11,16 @@ from ..plausibility import CALIBRATION
 
 class SteeringGain(Effect):
     id = "steering_gain"
-    subsystem = "steering command (wheel angle per commanded angle)"
+    subsystem = "steering map (wheel angle per commanded or measured angle)"
     stages = ("yaw",)
     parameters = (Parameter("steering_gain", "1", 0.1, 0.7, 1.4, "-", 1.0, (0.01, 3.0)),)
     starts = ((1.0,), (0.85,), (1.15,))
     threshold = "|k - 1| >= 0.05"
-    hypothesis = ("the wheels turn k x the commanded angle: a servo's travel per command, a steering ratio "
-                  "calibrated wrong, or a command in another scale")
+    hypothesis = ("the wheels turn k x the commanded (or measured) angle: a servo's travel per command, a steering "
+                  "ratio or a potentiometer calibrated wrong, or a command in another scale")
     experiment = ("steady circles at walking speed at three commanded angles each way: the kinematic yaw rate "
                   "v tan(k delta_cmd) / L against the gyro gives the same k at every angle (a ratio curve changes "
                   "with the angle, soft tyres with the speed)")
-
-    def applies(self, replay) -> bool:
-        """Only where the wheel angle is the command replayed (a measured one carries its own scale)."""
-        return bool(getattr(replay, "command_only", False))
 
     def baseline(self, study):
         return {"steering_gain": 1.0}
@@ -32,7 +29,7 @@ class SteeringGain(Effect):
         return abs(fitted["steering_gain"] - 1.0) >= 0.05
 
     def options(self, fitted, base, study):
-        raise KeyError("steering command gain (multiply the log's delta_cmd by it)")
+        raise KeyError("steering map gain (multiply the log's delta_cmd and delta by it)")
 
     def plausibility(self, values, ctx):
         """A gain outside ``CALIBRATION`` is a unit (180/pi), a steering ratio (1:8 to 1:30) or another quantity."""

@@ -1,0 +1,32 @@
+"""A value on a bound is never concluded: the baseline refit widens a parameter that ended on its
+prior range's edge to the physical limit, and says which parameters it moved and which ended on a
+bound. The truth: a tractor log (harness.truth_tractor) whose rear stiffness the paper's baseline
+puts on the prior edge of its scale (the yaw rate hardly fixes C_r)."""
+from __future__ import annotations
+
+from agrobot.diagnosis.baseline import baseline_from_study, refit_statement, refit_summary
+from agrobot.diagnosis.candidates import Replay, fit_baseline, uncertain
+from agrobot.diagnosis.catalogue import UNCERTAIN
+from agrobot.orchestrator.study import Study
+from harness.hidden_effects import BASELINES
+from harness.truth_tractor import make_log
+
+
+def test_the_baseline_refit_widens_a_prior_edge_and_says_what_it_moved_and_what_ended_on_a_bound():
+    frame, _ = make_log(1000, "steering_offset", duration=120.0)
+    baseline = baseline_from_study(Study.load(BASELINES["tractor"]))
+    replay = Replay(frame, baseline)
+    fit, _ = fit_baseline(replay)
+    params = list(dict.fromkeys(p for s in replay.stages for p in uncertain(replay, s)))
+    rows = {r["name"]: r for r in refit_summary(baseline.values, fit.values, params)}
+    prior = {p.name: p for ps in UNCERTAIN.values() for p in ps}
+    assert set(rows) == {p.name for p in params} and any(r["moved"] for r in rows.values())
+    for name, r in rows.items():
+        span = prior[name].upper - prior[name].lower
+        on_prior_edge = min(abs(r["value"] - prior[name].lower), abs(r["value"] - prior[name].upper)) <= 5e-3 * span
+        # a value on the prior range's edge was searched again on the range widened to the limit
+        assert not on_prior_edge or r["bounds"] != [prior[name].lower, prior[name].upper], r
+    assert rows["cornering_rear_scale"]["bounds"][0] < prior["cornering_rear_scale"].lower     # widened here
+    text = refit_statement(list(rows.values()))
+    assert "cornering_rear_scale 1 ->" in text
+    assert ("ended on a bound" in text) == any(r["at_bound"] for r in rows.values())
