@@ -2,8 +2,8 @@
 ``python3 benchmarks/quirk_composition.py [--n 300] [--seed 5400] [--classes a b ...] [--clean N]``.
 
 Random compositions of quirk classes (harness.quirk_recordings: each a seeded, compatible subset
-of 1-4 classes planted on a 90 s recording of a mower, a utility vehicle or a tractor, as one CSV
-or one CSV per device) are converted as a user converts them (agrobot.api.convert, default
+of 1-4 classes planted on a 90 s recording of a mower, a utility vehicle or a tractor, as one CSV,
+one CSV per device, or a dual-antenna receiver's NMEA) are converted as a user converts them (agrobot.api.convert, default
 options; the --signal mapping a user gives where a class needs one), and so are ``--clean``
 recordings with no quirk. Per class the table prints: planted, named with the right number,
 missed (an import that refuses counts as missed, its first words printed), and invented: how
@@ -37,7 +37,8 @@ them: kind, channels, value, interval, meaning; the import's notes and log as co
 - duplicate_stamps: a note or finding of the file giving the count of repeated stamps;
 - out_of_order: a note or finding of the file giving the count of rows out of order (from the
   rows moved to every step back written);
-- clock_jump: a finding giving the step within 0.05 s and its moment within 1.0 s.
+- clock_jump: a finding giving the step within 0.05 s and its moment within 1.0 s;
+- nmea_checksum: a note giving the count of sentences with a bad checksum.
 
 A refusal is a miss, except for raw_units when the refusal names the channel and the factor.
 
@@ -269,6 +270,10 @@ def named_jump(res, t) -> bool:
                for f in of_kind(res, "jump", "step", "clock"))
 
 
+def named_checksum(res, t) -> bool:
+    return any(near(numbers(x), t["count"], 0.0) for x in res["notes"] if "checksum" in str(x))
+
+
 def _mentions(res, *words) -> bool:
     return any(any(w in str(x).lower() for w in words) for x in res["notes"] + [f["meaning"] for f in res["findings"]])
 
@@ -286,7 +291,7 @@ JUDGES = {      # class: (named, claimed on a clean recording)
     "quoted_rows": (named_quoted, lambda r: _mentions(r, "quote")),
     "fix_quality_drop": (named_fix, lambda r: bool(of_kind(r, "fix", "quality")) or wrong_fix_quality(r)),
     "mode_stretches": (named_modes, lambda r: bool(of_kind(r, "mode", "manual"))),
-    "heading_no_gyro": (named_heading, lambda r: r["ok"] and "heading" in r["log"]),
+    "heading_no_gyro": (named_heading, lambda r: r["ok"] and "heading" in r["log"] and r["truth"]["layout"] != "nmea"),
     "clock_offset": (named_offset(0.05), realigned),
     "leap_seconds": (named_offset(0.1), lambda r: any(near([abs(f["value"])], 18.0, 1.0) for f in of_kind(r, *CLOCK))),
     "gps_week_rollover": (named_rollover, lambda r: _mentions(r, "1024 week", "rollover")),
@@ -297,6 +302,7 @@ JUDGES = {      # class: (named, claimed on a clean recording)
     "duplicate_stamps": (named_duplicates, lambda r: _mentions(r, "repeat the time", "duplicate")),
     "out_of_order": (named_order, lambda r: _mentions(r, "step back", "out of order")),
     "clock_jump": (named_jump, lambda r: bool(of_kind(r, "jump"))),
+    "nmea_checksum": (named_checksum, lambda r: _mentions(r, "checksum")),
 }
 
 

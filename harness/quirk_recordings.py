@@ -8,7 +8,9 @@ or tractor). Its channels are written as a logger writes them, in one of two lay
 - ``table``: one CSV, one row one clock, 20 Hz rows: t, lat, lon, fix_quality, v, yaw_rate,
   delta_cmd, delta (and heading, mode, yaw_rate_2 where a class adds them);
 - ``devices``: one CSV per device on its own stamps: gnss.csv (10 Hz: t, lat, lon, fix_quality),
-  imu.csv (50 Hz: t, yaw_rate), vehicle.csv (20 Hz: t, delta_cmd, delta, v).
+  imu.csv (50 Hz: t, yaw_rate), vehicle.csv (20 Hz: t, delta_cmd, delta, v);
+- ``nmea``: a dual-antenna receiver's gnss.nmea at 10 Hz: GGA (position, fix quality), RMC (speed
+  and course over ground, the date), HDT (heading).
 
 Values are SI in the log's convention (rad, rad/s, m/s) unless a class says otherwise; t is POSIX
 seconds. A clean recording has noise only (positions 1 cm, yaw rate 0.003 rad/s, speed 0.01 m/s,
@@ -58,12 +60,14 @@ from typing import Callable
 
 import numpy as np
 
+from harness.generated_recordings import sentence
 from harness.quirk_drive import EARTH, LAT0, MACHINES, Drive, make_drive
 
 START = 1_777_622_400.0             # POSIX s: 2026-05-01 08:00 UTC, the drive's t = 0
 WEEK_ROLLOVER = 1024 * 7 * 86400.0  # s: a 10-bit GPS week counter's period
 LEAP_SECONDS = 18.0                 # s: GPS time ahead of UTC since 2017
-LAYOUTS = ("table", "devices")
+LAYOUTS = ("table", "devices", "nmea")
+CSV = ("table", "devices")
 SHEET_RATES = {"log": 20.0, "gnss": 10.0, "imu": 50.0, "vehicle": 20.0, "imu2": 40.0}
 NOISE = {"position": 0.01, "yaw_rate": 0.003, "v": 0.01, "delta": 0.002, "delta_cmd": 0.0}
 
@@ -102,6 +106,7 @@ class Recording:
     noise: dict = field(default_factory=lambda: dict(NOISE))
     files: list = field(default_factory=list)
     written: dict = field(default_factory=dict)       # per file: rows, stamps stepping back, repeated stamps
+    corrupt: set = field(default_factory=set)          # NMEA: the rows whose GGA is corrupted
 
     def holder(self, column: str) -> Sheet | None:
         return next((s for s in self.sheets.values() if column in s.columns), None)
@@ -131,7 +136,7 @@ CLASSES: dict[str, QuirkClass] = {}
 CLOCKS = ("clock_offset", "leap_seconds", "gps_week_rollover", "clock_jump")
 
 
-def quirk(stage: str, layouts=LAYOUTS, excludes=()):
+def quirk(stage: str, layouts=CSV, excludes=()):
     def register(fn):
         name = fn.__name__.removeprefix("plant_")
         CLASSES[name] = QuirkClass(name, stage, tuple(layouts), tuple(excludes), fn)
@@ -159,14 +164,20 @@ def _sampled(drive: Drive, rng, name: str, t: np.ndarray, noise: dict) -> dict:
 
 def build_sheets(rec: Recording, rng, duration: float) -> None:
     """The layout's sheets of the drive, clean."""
-    names = ("log",) if rec.layout == "table" else ("gnss", "imu", "vehicle")
+    names = {"table": ("log",), "devices": ("gnss", "imu", "vehicle"), "nmea": ("gnss",)}[rec.layout]
     for name in names:
         t = np.arange(0.0, duration - 1e-9, 1.0 / SHEET_RATES[name])
         rec.sheets[name] = Sheet(name, t, _sampled(rec.drive, rng, name, t, rec.noise))
+    if rec.layout == "nmea":                 # a dual-antenna receiver: heading, speed and course over ground
+        s, d = rec.sheets["gnss"], rec.drive
+        psi, v = d.at("psi", s.t), d.at("v", s.t)
+        s.columns["heading"] = np.mod(90.0 - np.degrees(psi) + 0.2 * rng.standard_normal(len(s.t)), 360.0)
+        s.columns["speed"] = np.abs(v)
+        s.columns["course"] = np.mod(90.0 - np.degrees(np.where(v < 0, psi + math.pi, psi)), 360.0)
 
 
 # --- drive-stage classes -----------------------------------------------------------------------------
-@quirk("drive")
+@quirk("drive", layouts=LAYOUTS)
 def plant_reversing_unsigned(rec: Recording, rng) -> dict:
     """Stretches backing up, the speed written unsigned (the course opposite the heading there)."""
     rec.planted["reversing_unsigned"] = {"count": int(rng.integers(1, 3))}
@@ -223,7 +234,7 @@ def _free(rec: Recording, rng, choices) -> str | None:
     return c
 
 
-@quirk("channel")
+@quirk("channel", layouts=LAYOUTS)
 def plant_held_channel(rec: Recording, rng) -> dict:
     """One channel (positions: lat and lon together) updated every ``factor``-th row, held between."""
     c = _free(rec, rng, ("heading", "lat", "yaw_rate", "v", "delta"))
@@ -277,7 +288,7 @@ def plant_quoted_rows(rec: Recording, rng) -> dict:
     return {"files": sorted(rec.sheets)}
 
 
-@quirk("channel")
+@quirk("channel", layouts=LAYOUTS)
 def plant_fix_quality_drop(rec: Recording, rng) -> dict:
     """The fix falls from RTK fixed (4) to DGPS (2) or RTK float (5) for 5-15 s, once to three
     times; the positions noisier there (0.3 m DGPS, 0.05 m float)."""
@@ -318,10 +329,10 @@ def plant_heading_no_gyro(rec: Recording, rng) -> dict:
             "noise_deg": sigma, "gyro": None}
 
 
-@quirk("channel")
+@quirk("channel", layouts=LAYOUTS)
 def plant_channel_dropouts(rec: Recording, rng) -> dict:
     """One channel's 5-15 silences of 0.2-0.7 s (its cells blank; the other columns go on)."""
-    c = _free(rec, rng, ("delta", "yaw_rate", "v"))
+    c = _free(rec, rng, ("delta", "yaw_rate", "v", "heading"))
     if c is None:
         return {}
     s = rec.holder(c)
@@ -408,7 +419,7 @@ def plant_leap_seconds(rec: Recording, rng) -> dict:
     return {"group": "gnss", "late_s": LEAP_SECONDS}
 
 
-@quirk("file", layouts=("devices",), excludes=CLOCKS)
+@quirk("file", layouts=("devices", "nmea"), excludes=CLOCKS)
 def plant_gps_week_rollover(rec: Recording, rng) -> dict:
     """The receiver's dates (written as date strings) 1024 weeks early."""
     s = rec.sheets["gnss"]
@@ -422,7 +433,7 @@ def _file(rec: Recording, rng) -> Sheet:
     return rec.sheets[names[int(rng.integers(len(names)))]]
 
 
-@quirk("file")
+@quirk("file", layouts=LAYOUTS)
 def plant_duplicate_stamps(rec: Recording, rng) -> dict:
     """5-20 rows written twice with one stamp: half the copies identical, half with the next row's values."""
     s = _file(rec, rng)
@@ -463,11 +474,21 @@ def plant_clock_jump(rec: Recording, rng) -> dict:
     return {"file": s.name, "at_s": at, "by_s": by}
 
 
+@quirk("text", layouts=("nmea",))
+def plant_nmea_checksum(rec: Recording, rng) -> dict:
+    """5-20 GGA sentences with one character changed in transmission, the checksum left as sent
+    (https://github.com/ros-drivers/nmea_navsat_driver/issues/150)."""
+    s = rec.sheets["gnss"]
+    rows = np.sort(rng.choice(np.arange(2, len(s.t) - 2), int(rng.integers(5, 21)), replace=False))
+    rec.corrupt = {int(r) for r in rows}
+    return {"count": len(rows), "sentence": "GGA", "rows": [int(r) for r in rows]}
+
+
 # --- composition and writing ----------------------------------------------------------------------------
 ORDER = ("reversing_unsigned", "mode_stretches", "heading_no_gyro", "mislabelled_channel", "two_yaw_sources",
          "raw_units", "held_channel", "channel_dropouts", "fix_quality_drop", "one_clock_weak", "units_row",
          "quoted_rows", "clock_offset", "leap_seconds", "gps_week_rollover", "clock_jump", "duplicate_stamps",
-         "out_of_order")
+         "out_of_order", "nmea_checksum")
 
 
 def compatible(classes, layout: str) -> bool:
@@ -538,6 +559,9 @@ def write(rec: Recording, folder: Path) -> None:
     """Each sheet as a CSV (a units row under the header, every row one quoted field where the
     classes say so)."""
     folder.mkdir(parents=True, exist_ok=True)
+    if rec.layout == "nmea":
+        write_nmea(rec, rec.sheets["gnss"], folder / "gnss.nmea")
+        return
     for s in rec.sheets.values():
         names = list(s.columns)
         rows = [["t", *names]]
@@ -556,3 +580,34 @@ def write(rec: Recording, folder: Path) -> None:
         steps = np.diff(s.t)
         rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)),
                                "repeated": int(np.sum(steps == 0))}
+
+
+def _dm(value: float, width: int) -> str:
+    d = int(abs(value))
+    return f"{d:0{width}d}{(abs(value) - d) * 60:010.7f}"
+
+
+def write_nmea(rec: Recording, s: Sheet, path: Path) -> None:
+    """The receiver's epochs as GGA (position, fix quality), RMC (speed and course over ground,
+    the date) and HDT (the dual antenna's heading, where it has one) sentences."""
+    lines = []
+    for i, t in enumerate(s.t):
+        when = datetime.datetime.fromtimestamp(START + float(t), datetime.timezone.utc)
+        hms = when.strftime("%H%M%S.") + f"{when.microsecond // 10000:02d}"
+        lat, lon = float(s.columns["lat"][i]), float(s.columns["lon"][i])
+        pos = f"{_dm(lat, 2)},{'N' if lat >= 0 else 'S'},{_dm(lon, 3)},{'E' if lon >= 0 else 'W'}"
+        gga = f"GPGGA,{hms},{pos},{int(s.columns['fix_quality'][i])},14,0.7,12.0,M,47.0,M,,"
+        line = sentence(gga)
+        if i in rec.corrupt:                      # one digit changed after the checksum was computed
+            k = line.index(".", 20) + 3
+            line = line[:k] + str((int(line[k]) + 3) % 10) + line[k + 1:]
+        lines.append(line)
+        rmc = (f"GPRMC,{hms},A,{pos},{s.columns['speed'][i] / (1852 / 3600):.3f},{s.columns['course'][i]:.2f},"
+               f"{when.strftime('%d%m%y')},,,A")
+        lines.append(sentence(rmc))
+        if np.isfinite(s.columns["heading"][i]):
+            lines.append(sentence(f"GPHDT,{s.columns['heading'][i]:.2f},T"))
+    path.write_text("\n".join(lines) + "\n")
+    rec.files.append(path)
+    steps = np.diff(s.t)
+    rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)), "repeated": int(np.sum(steps == 0))}
