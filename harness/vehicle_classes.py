@@ -3,16 +3,8 @@ benchmarks/diagnosis_rate.py: the paper tractor and a passenger car (harness.tru
 and a small Ackermann machine (a converted mower: wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna
 heading and no gyro), added to the truth's vehicles here under the name ``small_ackermann``.
 
-Steering-map effects (the potentiometer's map from reading to road-wheel angle is wrong and the
-steering loop closes on the reading, so both logged angles are the reading f(wheels) of the
-wheels the truth turned; wheels = f^-1(reading)):
-
-- ``steering_map_gain``: wheels = g x reading, g in 1 +- (0.05-0.30);
-- ``steering_map_asymmetry``: wheels = (1 + a) x reading to the left (reading > 0) and (1 - a) x
-  reading to the right, a in 0.10-0.25 (a 1.13 m against a 1.90 m radius at full lock is a = 0.25);
-- ``steering_map_offset``: wheels = reading + o, o = +-(0.03-0.045) rad x the vehicle's steering scale;
-- ``steering_map_curve``: wheels = reading (1 + c reading^2), c in 1.5-3 1/rad2 (truth_tractor's
-  steering_ratio_curve, the same map).
+The steering-map effects (gain error, left/right asymmetry, offset, nonlinear map) are
+harness.steering_maps': both logged angles become the reading of the wheels the truth turned.
 
 The small machine's heading: the truth's yaw angle (the integral of its yaw rate before the gyro's
 noise is added is not in the truth's log, so the gyro's log, 0.005 rad/s noise, is integrated:
@@ -30,6 +22,7 @@ import numpy as np
 from agrobot.diagnosis.pipeline import diagnose
 from harness import truth_tractor
 from harness.hidden_effects import BASELINES, expected_ids, recovered
+from harness.steering_maps import MAP_EFFECTS, MAP_IDS, draw_map, reading
 from harness.truth_tractor import DEG, make_log
 
 SMALL = dict(table=dict(m=320.0, I=110.0, l_f=0.72, l_r=0.55, C_f=15000.0, C_r=18000.0, sigma_f=0.12),
@@ -38,35 +31,6 @@ SMALL = dict(table=dict(m=320.0, I=110.0, l_f=0.72, l_r=0.55, C_f=15000.0, C_r=1
              resolution=0.1 * DEG, gyro_noise=0.005, v_ref=1.0)
 truth_tractor.VEHICLES.setdefault("small_ackermann", SMALL)
 CLASS_BASELINES = {**BASELINES, "small_ackermann": BASELINES["tractor"]}   # no shipped study of its size
-MAP_EFFECTS = ("steering_map_gain", "steering_map_asymmetry", "steering_map_offset", "steering_map_curve")
-
-
-def draw_map(effect: str, rng: np.random.Generator, steer_scale: float) -> dict:
-    sign = 1.0 if rng.random() < 0.5 else -1.0
-    u = rng.uniform
-    return {"steering_map_gain": {"map_gain": 1.0 + sign * u(0.05, 0.30)},
-            "steering_map_asymmetry": {"map_asymmetry": u(0.10, 0.25)},
-            "steering_map_offset": {"map_offset": sign * u(0.03, 0.045) * steer_scale},
-            "steering_map_curve": {"map_curvature": u(1.5, 3.0)}}[effect]
-
-
-def reading(wheels: np.ndarray, p: dict) -> np.ndarray:
-    """The reading f(wheels) of the wheel angles under the map ``p`` (the inverse of wheels = f^-1)."""
-    w = np.asarray(wheels, float)
-    if "map_gain" in p:
-        return w / p["map_gain"]
-    if "map_asymmetry" in p:
-        return np.where(w > 0, w / (1 + p["map_asymmetry"]), w / (1 - p["map_asymmetry"]))
-    if "map_offset" in p:
-        return w - p["map_offset"]
-    if "map_curvature" in p:
-        d = w.copy()
-        for _ in range(8):
-            d = w / (1.0 + p["map_curvature"] * d * d)
-        return d
-    return w
-
-
 def heading_instead_of_gyro(frame, rng: np.random.Generator, truth: dict):
     """The log with a dual-antenna heading [rad, ENU] and no yaw_rate (see the module docstring):
     the gyro's bias and scale taken out before it is integrated, the heading as late as the
@@ -97,11 +61,6 @@ def class_log(effect: str, seed: int, vehicle: str, duration: float):
     if vehicle == "small_ackermann":
         frame = heading_instead_of_gyro(frame, rng, truth)
     return frame, truth
-
-
-# the catalogue's id of each map effect (an asymmetry has none yet: the name a right diagnosis would give it)
-MAP_IDS = {"steering_map_gain": "steering_gain", "steering_map_asymmetry": "steering_asymmetry",
-           "steering_map_offset": "steering_offset", "steering_map_curve": "steering_ratio_curve"}
 
 
 def expected(truth: dict) -> set[str]:
