@@ -24,9 +24,9 @@ hiding tyre saturation, the default; all; none).
 
 Vehicle classes (``--classes tractor car small_ackermann``, or ``--quick``: one seed of 120 s logs, a
 few minutes on two free cores): the paper tractor, a passenger car and a small Ackermann machine
-(wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna heading and no gyro; harness.vehicle_classes), each
+(wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna heading and no gyro; harness.diagnosis_classes), each
 clean and with each steering-map effect hidden (gain error, left/right asymmetry, offset, nonlinear
-map; without --quick also an actuator delay, a GPS latency and an offset with a gyro bias; harness.vehicle_classes names the ids a right diagnosis gives and the parameters' tolerances).
+map; without --quick also an actuator delay, a GPS latency and an offset with a gyro bias; harness.diagnosis_classes names the ids a right diagnosis gives and the parameters' tolerances).
 Per class: detection (the exact set named, each headline parameter within its tolerance) and false
 alarms (a clean log with any effect);
 a class the code cannot yet judge (a refusal, a failure) is printed as a row with its error.
@@ -92,7 +92,7 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
-    from harness.vehicle_classes import MAP_EFFECTS, diagnose_class_case
+    from harness.diagnosis_classes import MAP_EFFECTS, diagnose_class_case
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
@@ -101,7 +101,7 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             rows = list(pool.map(diagnose_class_case, cases))
     print(f"\nvehicle classes ({seeds} seed(s), {duration:.0f} s logs, {time.perf_counter() - t0:.0f} s): "
-          f"right: the exact set named (harness.vehicle_classes.MAP_IDS), its parameters within tolerance; clean: any "
+          f"right: the exact set named (harness.diagnosis_classes.MAP_IDS), its parameters within tolerance; clean: any "
           f"effect named is a false alarm")
     print("| vehicle | hidden | right | found instead (or the error) |\n|---|---|---|---|")
     for r in rows:
@@ -138,7 +138,7 @@ def main() -> None:
                     help="the truth and its baseline: the paper's tractor (figure8.toml) or a passenger car at "
                          "10-30 m/s (passenger_car.toml)")
     ap.add_argument("--classes", nargs="+", default=None, choices=("tractor", "car", "small_ackermann"),
-                    help="the vehicle-class table over the steering-map effects (harness.vehicle_classes) only")
+                    help="the vehicle-class table over the steering-map effects (harness.diagnosis_classes) only")
     ap.add_argument("--quick", action="store_true",
                     help="the vehicle-class table of the three classes, one seed, 120 s logs (a few minutes)")
     args = ap.parse_args()
