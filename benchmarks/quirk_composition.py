@@ -72,9 +72,10 @@ GROUP_CHANNELS = {"imu": {"yaw_rate"}, "vehicle": {"delta_cmd", "delta", "v"}, "
 NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 
 
-def run(seed: int, folder: Path, classes) -> dict:
-    """Compose, convert; {truth, ok, error, findings, channels, alignment, notes, log, report}."""
-    truth = compose(seed, folder, classes=classes)
+def run(seed: int, folder: Path, classes, among=None) -> dict:
+    """Compose (``classes``, or drawn ``among`` some), convert; {truth, ok, error, findings,
+    channels, alignment, notes, log, report}."""
+    truth = compose(seed, folder, classes=classes, among=among)
     out = {"truth": truth, "ok": False, "error": "", "findings": [], "channels": [], "alignment": {}, "notes": [],
            "log": None, "report": {}}
     try:
@@ -341,8 +342,7 @@ def main(argv=None) -> int:
     rows, clean = [], []
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.n):
-            rows.append(run(args.seed + k, Path(tmp) / f"q{k}", classes=None if not args.classes else
-                            _drawn(args.seed + k, args.classes)))
+            rows.append(run(args.seed + k, Path(tmp) / f"q{k}", None, args.classes))
         for k in range(clean_n):
             clean.append(run(args.seed + 100_000 + k, Path(tmp) / f"c{k}", classes=[]))
     refused = sum(not r["ok"] for r in rows)
@@ -354,14 +354,6 @@ def main(argv=None) -> int:
     print(f"all planted quirks: {named}/{len(planted)} named ({100 * named / max(len(planted), 1):.1f} %); "
           f"clean recordings with any claim: {sum(any(j[1](r) for j in JUDGES.values()) for r in clean)}/{len(clean)}")
     return 0
-
-
-def _drawn(seed: int, among) -> None | list:
-    """A composition's classes drawn among ``among`` (harness.quirk_recordings.draw_classes, same seed stream)."""
-    from harness.quirk_recordings import draw_classes
-
-    rng = np.random.default_rng([seed, 7])
-    return draw_classes(rng, "devices" if rng.random() < 0.5 else "table", 4, among) or None
 
 
 if __name__ == "__main__":

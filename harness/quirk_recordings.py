@@ -515,7 +515,8 @@ def compose(seed: int, folder: Path, classes=None, layout: str | None = None, ma
     the classes to plant (None: a random compatible subset; [] a clean recording); ``layout``,
     ``machine``: None draws them; ``among``: the classes a random subset is drawn from."""
     rng = np.random.default_rng(seed)
-    layout = layout or str(rng.choice(LAYOUTS))
+    fitting = [x for x in LAYOUTS if any(x in CLASSES[c].layouts for c in among or ORDER)]
+    layout = layout or str(rng.choice(fitting))
     machine = machine or str(rng.choice(sorted(MACHINES)))
     if classes is None:
         classes = draw_classes(rng, layout, most, among)
