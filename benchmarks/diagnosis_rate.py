@@ -107,7 +107,8 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
     for r in rows:
         right = r["found"] is not None and set(r["found"]) == set(r["expected"]) and r["in_tolerance"]
         r["right"] = right
-        what = r["error"] if r["found"] is None else "+".join(r["found"]) or "none"
+        what = r["error"] if r["found"] is None else ("+".join(r["found"]) or "none") + (
+            f" (not judged: {', '.join(r['not_judged'])})" if r.get("not_judged") else "")
         print(f"| {r['vehicle']} | {r['effect']} | {'yes' if right else 'no'} | {'' if right else what} |")
     print("\n| vehicle | detection | false alarms | failed to run |\n|---|---|---|---|")
     for v in vehicles:

@@ -95,7 +95,8 @@ def within(effect_id: str, params: dict, truth: dict) -> bool:
 
 
 def diagnose_class_case(case: tuple) -> dict:
-    """(effect, seed, folder, vehicle, duration) -> {vehicle, effect, seed, truth, found, error}:
+    """(effect, seed, folder, vehicle, duration) -> {vehicle, effect, seed, truth, found, expected,
+    in_tolerance, not_judged (the stages the diagnosis could not judge), error}:
     the log written and diagnosed against the class's baseline (CLASS_BASELINES, no identify first);
     a refusal or a failure is a row with its error, never a crash."""
     effect, seed, folder, vehicle, duration = case
@@ -110,6 +111,9 @@ def diagnose_class_case(case: tuple) -> dict:
         out["found"] = sorted(e["id"] for e in result["effects"])
         out["expected"] = sorted(expected(truth))
         out["in_tolerance"] = all(within(e["id"], e["parameters"], truth) for e in result["effects"])
+        skipped = result.get("not_judged") or {}
+        out["not_judged"] = [f"{k}: {str(v).removeprefix('not judged: ')}" for k, v in skipped.items()] \
+            if isinstance(skipped, dict) else [str(x) for x in skipped]
     except Exception as exc:        # noqa: BLE001 - the benchmark prints a class the code cannot handle as a row
         out["error"] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:160] if str(exc) else ''}"
     print(f"{vehicle} {effect} {seed}: {out['found'] if out['found'] is not None else out['error']}",
