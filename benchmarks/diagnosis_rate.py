@@ -110,7 +110,7 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
         what = r["error"] if r["found"] is None else ("+".join(r["found"]) or "none") + (
             f" (not judged: {', '.join(r['not_judged'])})" if r.get("not_judged") else "")
         print(f"| {r['vehicle']} | {r['effect']} | {'yes' if right else 'no'} | {'' if right else what} |")
-    print("\n| vehicle | detection | false alarms | failed to run |\n|---|---|---|---|")
+    print("\n| vehicle | detection | false alarms | failed to run | logs with a stage not judged |\n|---|---|---|---|---|")
     for v in vehicles:
         mine = [r for r in rows if r["vehicle"] == v]
         faulty = [r for r in mine if r["effect"] != "none"]
@@ -118,7 +118,14 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
         alarms = sum(not r["right"] for r in clean)
         print(f"| {v} | {sum(r['right'] for r in faulty)}/{len(faulty)} "
               f"({100 * sum(r['right'] for r in faulty) / max(len(faulty), 1):.0f} %) | {alarms}/{len(clean)} "
-              f"({100 * alarms / max(len(clean), 1):.0f} %) | {sum(r['found'] is None for r in mine)} |")
+              f"({100 * alarms / max(len(clean), 1):.0f} %) | {sum(r['found'] is None for r in mine)} | "
+              f"{sum(bool(r.get('not_judged')) for r in mine)} {_skipped(mine)}|")
+
+
+def _skipped(rows: list[dict]) -> str:
+    """The stages not judged and why, as the first log that skipped them says."""
+    first = next((r["not_judged"] for r in rows if r.get("not_judged")), [])
+    return f"({'; '.join(first)}) " if first else ""
 
 
 def main() -> None:
