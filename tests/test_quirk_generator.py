@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 
 import numpy as np
 import pytest
@@ -32,12 +33,11 @@ def read(path) -> dict[str, np.ndarray]:
     return out
 
 
+NUMERIC = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
+
+
 def _number(text: str) -> bool:
-    try:
-        float(text)
-        return True
-    except ValueError:
-        return False
+    return bool(NUMERIC.match(text))
 
 
 def course_and_speed(g: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
