@@ -21,6 +21,15 @@ of harness.hidden_effects.recovered. Prints one table, then the time per diagnos
 ``--effects none side_slope a+b`` picks the hidden effects; ``--duration`` sets the log length;
 ``--identify`` which logs identify the vehicle first, as ``diagnose`` does by default (tyre: those
 hiding tyre saturation, the default; all; none).
+
+Vehicle classes (``--classes tractor car small_ackermann``, or ``--quick``: one seed of 120 s logs, a
+few minutes on two free cores): the paper tractor, a passenger car and a small Ackermann machine
+(wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna heading and no gyro; harness.diagnosis_classes), each
+clean and with each steering-map effect hidden (gain error, left/right asymmetry, offset, nonlinear
+map; without --quick also an actuator delay, a GPS latency and an offset with a gyro bias; harness.diagnosis_classes names the ids a right diagnosis gives and the parameters' tolerances).
+Per class: detection (the exact set named, each headline parameter within its tolerance) and false
+alarms (a clean log with any effect);
+a class the code cannot yet judge (a refusal, a failure) is printed as a row with its error.
 """
 from __future__ import annotations
 
@@ -78,6 +87,47 @@ def timing(duration: float, cases: list[str]) -> list[tuple[str, float]]:
     return out
 
 
+def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, effects: tuple) -> None:
+    """Detection and false-alarm rates per vehicle class over the steering-map effects and clean logs."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from harness.diagnosis_classes import MAP_EFFECTS, diagnose_class_case
+
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as folder:
+        cases = [(e, 1000 + s, folder, v, duration) for v in vehicles for e in ("none", *MAP_EFFECTS, *effects)
+                 for s in range(seeds) if not (v == "small_ackermann" and "yaw_rate_bias" in e)]   # no gyro
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+            rows = list(pool.map(diagnose_class_case, cases))
+    print(f"\nvehicle classes ({seeds} seed(s), {duration:.0f} s logs, {time.perf_counter() - t0:.0f} s): "
+          f"right: the exact set named (harness.diagnosis_classes.MAP_IDS), its parameters within tolerance; clean: any "
+          f"effect named is a false alarm")
+    print("| vehicle | hidden | right | found instead (or the error) |\n|---|---|---|---|")
+    for r in rows:
+        right = r["found"] is not None and set(r["found"]) == set(r["expected"]) and r["in_tolerance"]
+        r["right"] = right
+        what = r["error"] if r["found"] is None else ("+".join(r["found"]) or "none") + (
+            f" (not judged: {', '.join(r['not_judged'])})" if r.get("not_judged") else "")
+        print(f"| {r['vehicle']} | {r['effect']} | {'yes' if right else 'no'} | {'' if right else what} |")
+    print("\n| vehicle | detection | false alarms | failed to run | logs with a stage not judged |\n|---|---|---|---|---|")
+    for v in vehicles:
+        mine = [r for r in rows if r["vehicle"] == v]
+        faulty = [r for r in mine if r["effect"] != "none"]
+        clean = [r for r in mine if r["effect"] == "none"]
+        alarms = sum(not r["right"] for r in clean)
+        print(f"| {v} | {sum(r['right'] for r in faulty)}/{len(faulty)} "
+              f"({100 * sum(r['right'] for r in faulty) / max(len(faulty), 1):.0f} %) | {alarms}/{len(clean)} "
+              f"({100 * alarms / max(len(clean), 1):.0f} %) | {sum(r['found'] is None for r in mine)} | "
+              f"{sum(bool(r.get('not_judged')) for r in mine)} {_skipped(mine)}|")
+
+
+def _skipped(rows: list[dict]) -> str:
+    """The stages not judged and why, as the first log that skipped them says."""
+    first = next((r["not_judged"] for r in rows if r.get("not_judged")), [])
+    return f"({'; '.join(first)}) " if first else ""
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=3)
@@ -95,7 +145,16 @@ def main() -> None:
     ap.add_argument("--vehicle", default="tractor", choices=("tractor", "car"),
                     help="the truth and its baseline: the paper's tractor (figure8.toml) or a passenger car at "
                          "10-30 m/s (passenger_car.toml)")
+    ap.add_argument("--classes", nargs="+", default=None, choices=("tractor", "car", "small_ackermann"),
+                    help="the vehicle-class table over the steering-map effects (harness.diagnosis_classes) only")
+    ap.add_argument("--quick", action="store_true",
+                    help="the vehicle-class table of the three classes, one seed, 120 s logs (a few minutes)")
     args = ap.parse_args()
+    if args.quick or args.classes:
+        class_table(args.classes or ["tractor", "car", "small_ackermann"], 1 if args.quick else args.seeds,
+                    120.0 if args.quick else args.duration, args.workers,
+                    () if args.quick else ("actuator_delay", "gps_latency", "steering_offset", "steering_offset+yaw_rate_bias"))
+        return
     from harness.hidden_effects import EFFECTS, diagnose_many
 
     from harness.truth_tractor import HEALTHY, LATER

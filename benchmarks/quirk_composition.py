@@ -1,0 +1,360 @@
+"""Does the import audit name what it has not seen?
+``python3 benchmarks/quirk_composition.py [--n 300] [--seed 5400] [--classes a b ...] [--clean N]``.
+
+Random compositions of quirk classes (harness.quirk_recordings: each a seeded, compatible subset
+of 1-4 classes planted on a 90 s recording of a mower, a utility vehicle or a tractor, as one CSV,
+one CSV per device, or a dual-antenna receiver's NMEA) are converted as a user converts them (agrobot.api.convert, default
+options; the --signal mapping a user gives where a class needs one), and so are ``--clean``
+recordings with no quirk. Per class the table prints: planted, named with the right number,
+missed (an import that refuses counts as missed, its first words printed), and invented: how
+many clean recordings the audit claims the class on.
+
+Named, per class, and its tolerance (the audit's findings are read as measurements.audit emits
+them: kind, channels, value, interval, meaning; the import's notes and log as convert returns them):
+
+- reversing_unsigned: a finding whose kind says reversing, direction or sign, holding each
+  stretch where the truth's speed is negative, both ends within 1.0 s;
+- held_channel: a finding (kind: held, update) or a channel row (update_hz) for the channel giving
+  its update rate within 10 % (or the hold factor);
+- one_clock_weak: nothing realigned and no unresolved clock_offset or response_leads_input;
+- units_row: the log's angles, rates and speed in SI: their 90th percentiles of |x| within 3 % of
+  the truth's at the log's times;
+- quoted_rows: the import reads every file and the log's speed within 3 % as above;
+- fix_quality_drop: a ``fix_quality`` column equal to the source's code on 95 % of the log's
+  samples (the source's own times), or a finding naming each stretch within 1.0 s;
+- mode_stretches: a finding (kind: mode, manual) naming the manual and the paused stretch within 1.0 s;
+- heading_no_gyro: the import does not refuse, and the log's ``heading`` follows the truth's
+  (median error under 2 deg, ENU or compass convention);
+- clock_offset, leap_seconds: a clock_offset finding on the group's channels, or the alignment's
+  found offset, within 0.05 s (leap seconds: 0.1 s) of the truth, either sign convention;
+- gps_week_rollover: a finding or note giving 1024 weeks (619315200 s within a day);
+- channel_dropouts: a gap finding on the channel whose longest gap is within 1.5 row periods of
+  the truth's;
+- raw_units: a finding on the channel giving the factor (57.3 or 3.6) within 3 %, or the log's
+  channel in SI within 3 %;
+- two_yaw_sources: a finding on both gyros giving the scale (or its inverse) within 0.02;
+- mislabelled_channel: a mislabelled_channel finding on the channel;
+- duplicate_stamps: a note or finding of the file giving the count of repeated stamps;
+- out_of_order: a note or finding of the file giving the count of rows out of order (from the
+  rows moved to every step back written);
+- clock_jump: a finding giving the step within 0.05 s and its moment within 1.0 s;
+- nmea_checksum: a note giving the count of sentences with a bad checksum.
+
+A refusal is a miss, except for raw_units when the refusal names the channel and the factor.
+
+Invented: on a clean recording, the class's claim (the same finding kinds, or for one_clock_weak and
+clock_offset a realignment or an unresolved clock finding; for heading_no_gyro a heading the source
+does not hold; for fix_quality_drop also a log whose fix_quality differs from the source's RTK fixed 4
+on 5 % of its samples: a value the recording did not say). Targets: named >= 95 %,
+invented <= 5 %.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))          # the test harness (harness/), beside the package
+
+from agrobot.api import convert                                   # noqa: E402
+from agrobot.measurements.signal_expressions import parse_signal  # noqa: E402
+from harness.quirk_recordings import ORDER, START, compose        # noqa: E402
+
+GROUP_CHANNELS = {"imu": {"yaw_rate"}, "vehicle": {"delta_cmd", "delta", "v"}, "gnss": {"gnss", "x", "y", "gnss_speed",
+                                                                                      "course_rate", "lat", "lon"}}
+NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+
+
+def run(seed: int, folder: Path, classes, among=None) -> dict:
+    """Compose (``classes``, or drawn ``among`` some), convert; {truth, ok, error, findings,
+    channels, alignment, notes, log, report}."""
+    truth = compose(seed, folder, classes=classes, among=among)
+    out = {"truth": truth, "ok": False, "error": "", "findings": [], "channels": [], "alignment": {}, "notes": [],
+           "log": None, "report": {}}
+    try:
+        rec = convert(folder, signals=[parse_signal(s) for s in truth["signals"] or []])
+    except Exception as exc:         # noqa: BLE001 - a refusal is a miss, printed
+        out["error"] = f"{type(exc).__name__}: {exc}"
+        return out
+    audit = rec.report.get("audit", {})
+    out.update(ok=True, findings=audit.get("findings", []), channels=audit.get("channels", []),
+               alignment=audit.get("alignment", {}), notes=rec.report.get("notes", []), log=rec.log, report=rec.report)
+    return out
+
+
+# --- reading the audit -----------------------------------------------------------------------------------
+def numbers(x) -> list[float]:
+    """Every number in a finding (its values, intervals, lists, and the numbers in its text)."""
+    if isinstance(x, bool) or x is None:
+        return []
+    if isinstance(x, (int, float)):
+        return [float(x)] if math.isfinite(x) else []
+    if isinstance(x, str):
+        return [float(n) for n in NUMBER.findall(x)]
+    if isinstance(x, dict):
+        return [n for v in x.values() for n in numbers(v)]
+    if isinstance(x, (list, tuple)):
+        return [n for v in x for n in numbers(v)]
+    return []
+
+
+def of_kind(res: dict, *words) -> list[dict]:
+    return [f for f in res["findings"] if any(w in f["kind"] for w in words)]
+
+
+def naming(findings: list[dict], channels) -> list[dict]:
+    """The findings that name one of ``channels`` (a row's 'a, b' names split)."""
+    want = set(channels)
+    return [f for f in findings if want & {n.strip() for c in f["channels"] for n in str(c).split(",")}]
+
+
+def near(values, target: float, tol: float) -> bool:
+    return any(abs(v - target) <= tol for v in values)
+
+
+def covers(values, stretches, tol: float) -> bool:
+    """Each [start, end] has both ends among ``values`` within ``tol``."""
+    return all(near(values, a, tol) and near(values, b, tol) for a, b in stretches)
+
+
+def log_truth_times(res: dict) -> np.ndarray:
+    """The log's samples on the truth's clock (s from the recording's start)."""
+    start = res["report"].get("used", {}).get("utc_start_s", START)
+    return start - START + res["log"]["t"].to_numpy(float)
+
+
+def p90_ratio(res: dict, column: str, truth_column: str, absolute: bool = False) -> float:
+    """p90(|log column|) / p90(|truth|) at the log's times (nan without the column)."""
+    log = res["log"]
+    if log is None or column not in log:
+        return math.nan
+    x = np.abs(log[column].to_numpy(float))
+    y = np.abs(res["truth"]["drive"].at(truth_column, log_truth_times(res)))
+    return float(np.percentile(x, 90) / max(np.percentile(y, 90), 1e-12))
+
+
+# --- per class: named (with the truth) and claimed (on a clean recording) --------------------------------
+REVERSING = ("revers", "direction", "sign")
+HELD = ("held", "update")
+GAPS = ("gap_bridged", "gap_split")
+CLOCK = ("clock_offset",)
+
+
+def named_reversing(res, t) -> bool:
+    return any(covers(numbers(f), t["stretches"], 1.0) for f in of_kind(res, *REVERSING))
+
+
+def named_held(res, t) -> bool:
+    names = {"position": {"gnss", "x", "y", "lat", "lon"}}.get(t["channel"], {t["channel"]})
+    targets = (t["update_hz"], 1.0 / t["update_hz"], float(t["factor"]))
+    found = [n for f in naming(of_kind(res, *HELD), names) for n in numbers(f)]
+    found += [v for r in res["channels"] if names & {n.strip() for n in r["channel"].split(",")}
+              for k, v in r.items() if "update" in k and isinstance(v, (int, float))]
+    return any(near(found, x, 0.1 * x) for x in targets)
+
+
+def realigned(res) -> bool:
+    moved = bool(res["alignment"].get("offsets_s"))
+    return moved or any(not f["resolved"] for f in of_kind(res, "clock_offset", "response_leads_input"))
+
+
+def named_one_clock(res, t) -> bool:
+    return res["ok"] and not realigned(res)
+
+
+def named_units(res, t) -> bool:
+    if not res["ok"]:
+        return False
+    pairs = [("delta", "delta"), ("yaw_rate", "yaw_rate"), ("v", "v")]
+    ratios = [p90_ratio(res, c, c) for c, _ in pairs if c in t["units"] and res["log"] is not None and c in res["log"]]
+    return bool(ratios) and all(abs(r - 1) <= 0.03 for r in ratios)
+
+
+def named_quoted(res, t) -> bool:
+    if not res["ok"]:
+        return False
+    return "v" not in res["log"] or abs(p90_ratio(res, "v", "v") - 1) <= 0.03 or "reversing_unsigned" in res["truth"]["planted"]
+
+
+def named_fix(res, t) -> bool:
+    if any(covers(numbers(f), [s[:2] for s in t["stretches"]], 1.0) for f in of_kind(res, "fix", "quality")):
+        return True
+    if not res["ok"] or "fix_quality" not in res["log"]:
+        return False
+    times = log_truth_times(res)
+    want = np.full(len(times), 4.0)
+    for a, b, code in t["stretches"]:
+        want[(times >= a) & (times < b)] = code
+    return float(np.mean(res["log"]["fix_quality"].to_numpy(float) == want)) >= 0.95
+
+
+def named_modes(res, t) -> bool:
+    return any(covers(numbers(f), t["manual"] + t["paused"], 1.0) for f in of_kind(res, "mode", "manual"))
+
+
+def heading_error(res) -> float:
+    """Median |log heading - truth| [deg], the better of the ENU and the compass convention."""
+    if not res["ok"] or "heading" not in res["log"]:
+        return math.inf
+    h = res["log"]["heading"].to_numpy(float)
+    psi = res["truth"]["drive"].at("psi", log_truth_times(res))
+    return min(float(np.median(np.degrees(np.abs(np.angle(np.exp(1j * (h - ref))))))) for ref in (psi, math.pi / 2 - psi))
+
+
+def named_heading(res, t) -> bool:
+    return heading_error(res) < 2.0
+
+
+def named_offset(tol: float):
+    def judge(res, t) -> bool:
+        chans = GROUP_CHANNELS[t["group"]]
+        found = [abs(f["value"]) for f in naming(of_kind(res, *CLOCK), chans)]
+        found += [abs(o["late_s"]) for g, o in res["alignment"].get("found", {}).items() if g == t["group"]]
+        return near(found, abs(t["late_s"]), tol)
+    return judge
+
+
+def named_rollover(res, t) -> bool:
+    values = [abs(n) for f in res["findings"] for n in numbers(f)] + [abs(n) for s in res["notes"] for n in numbers(s)]
+    return near(values, abs(t["late_s"]), 86400.0) or any("1024" in str(x) and "week" in str(x).lower()
+                                                         for x in res["findings"] + res["notes"])
+
+
+def named_dropouts(res, t) -> bool:
+    rate = {"log": 20.0, "gnss": 10.0, "imu": 50.0, "vehicle": 20.0}[t["file"]]
+    return any(near([f["value"]], t["longest_s"], 1.5 / rate) for f in naming(of_kind(res, *GAPS), {t["channel"]}))
+
+
+def named_raw_units(res, t) -> bool:
+    k = t["factor"]
+    if not res["ok"] and t["channel"] in res["error"] and near(numbers(res["error"]), k, 0.03 * k):
+        return True             # refused, naming the channel and the factor
+    if any(near(numbers(f), k, 0.03 * k) or near(numbers(f), 1 / k, 0.03 / k) for f in naming(res["findings"], {t["channel"]})):
+        return True
+    return res["ok"] and abs(p90_ratio(res, t["channel"], t["channel"]) - 1) <= 0.03
+
+
+def named_two_gyros(res, t) -> bool:
+    s = t["scale"]
+    found = [f for f in of_kind(res, "ambiguous_channel", "scale_disagreement")
+             if {"yaw_rate", "yaw_rate_2"} <= set(f["channels"])]
+    return any(near([f["value"]], s, 0.02) or near([f["value"]], 1 / s, 0.02) for f in found)
+
+
+def named_mislabel(res, t) -> bool:
+    return bool(naming(of_kind(res, "mislabelled"), {t["channel"]}))
+
+
+def file_notes(res, t, *words) -> list:
+    tags = [s for s in res["notes"] if str(s).startswith(f"{t['file']}.") and any(w in str(s) for w in words)]
+    return tags + [f for f in res["findings"] if any(w in f["kind"] or w in f["meaning"] for w in words)]
+
+
+def named_duplicates(res, t) -> bool:
+    return any(near(numbers(x), t["count"], 0.0) for x in file_notes(res, t, "repeat", "duplicate"))
+
+
+def named_order(res, t) -> bool:
+    most = res["truth"]["written"][t["file"]]["step_backs"]
+    return any(any(t["count"] <= n <= most for n in numbers(x)) for x in file_notes(res, t, "order", "step back"))
+
+
+def named_jump(res, t) -> bool:
+    return any(near([abs(n) for n in numbers(f)], abs(t["by_s"]), 0.05) and near(numbers(f), t["at_s"], 1.0)
+               for f in of_kind(res, "jump", "step", "clock"))
+
+
+def named_checksum(res, t) -> bool:
+    return any(near(numbers(x), t["count"], 0.0) for x in res["notes"] if "checksum" in str(x))
+
+
+def _mentions(res, *words) -> bool:
+    return any(any(w in str(x).lower() for w in words) for x in res["notes"] + [f["meaning"] for f in res["findings"]])
+
+
+def wrong_fix_quality(res) -> bool:
+    """A clean recording is RTK fixed (4) throughout: a log that says otherwise on 5 % of its samples."""
+    return res["ok"] and "fix_quality" in res["log"] and float(np.mean(res["log"]["fix_quality"] != 4.0)) > 0.05
+
+
+JUDGES = {      # class: (named, claimed on a clean recording)
+    "reversing_unsigned": (named_reversing, lambda r: bool(of_kind(r, *REVERSING))),
+    "held_channel": (named_held, lambda r: bool(of_kind(r, *HELD))),
+    "one_clock_weak": (named_one_clock, realigned),
+    "units_row": (named_units, lambda r: _mentions(r, "units row", "row of units")),
+    "quoted_rows": (named_quoted, lambda r: _mentions(r, "quote")),
+    "fix_quality_drop": (named_fix, lambda r: bool(of_kind(r, "fix", "quality")) or wrong_fix_quality(r)),
+    "mode_stretches": (named_modes, lambda r: bool(of_kind(r, "mode", "manual"))),
+    "heading_no_gyro": (named_heading, lambda r: r["ok"] and "heading" in r["log"] and r["truth"]["layout"] != "nmea"),
+    "clock_offset": (named_offset(0.05), realigned),
+    "leap_seconds": (named_offset(0.1), lambda r: any(near([abs(f["value"])], 18.0, 1.0) for f in of_kind(r, *CLOCK))),
+    "gps_week_rollover": (named_rollover, lambda r: _mentions(r, "1024 week", "rollover")),
+    "channel_dropouts": (named_dropouts, lambda r: bool(of_kind(r, *GAPS))),
+    "raw_units": (named_raw_units, lambda r: _mentions(r, "mix-up", "looks like degrees", "km/h")),
+    "two_yaw_sources": (named_two_gyros, lambda r: bool(of_kind(r, "ambiguous_channel"))),
+    "mislabelled_channel": (named_mislabel, lambda r: bool(of_kind(r, "mislabelled"))),
+    "duplicate_stamps": (named_duplicates, lambda r: _mentions(r, "repeat the time", "duplicate")),
+    "out_of_order": (named_order, lambda r: _mentions(r, "step back", "out of order")),
+    "clock_jump": (named_jump, lambda r: bool(of_kind(r, "jump"))),
+    "nmea_checksum": (named_checksum, lambda r: _mentions(r, "checksum")),
+}
+
+
+def why_missed(res: dict) -> str:
+    if not res["ok"]:
+        return "refused: " + res["error"].split("\n")[0][:90]
+    kinds = sorted({f["kind"] for f in res["findings"]})
+    return "findings: " + (", ".join(kinds) or "none")
+
+
+def table(rows: list[dict], clean: list[dict], classes) -> list[str]:
+    """The per-class table: planted, named, missed, invented on the clean recordings."""
+    out = [f"| class | planted | named | missed | named % | invented (of {len(clean)} clean) | invented % | a miss |",
+           "|---|---|---|---|---|---|---|---|"]
+    for c in classes:
+        hits = [r for r in rows if c in r["truth"]["planted"]]
+        named = [JUDGES[c][0](r, r["truth"]["planted"][c]) for r in hits]
+        claimed = sum(bool(JUDGES[c][1](r)) for r in clean)
+        miss = next((why_missed(r) for r, ok in zip(hits, named) if not ok), "")
+        pct = f"{100 * sum(named) / len(hits):.0f}" if hits else "-"
+        out.append(f"| {c} | {len(hits)} | {sum(named)} | {len(hits) - sum(named)} | {pct} | {claimed} | "
+                   f"{100 * claimed / max(len(clean), 1):.0f} | {miss[:110]} |")
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--n", type=int, default=300, help="random compositions (default 300)")
+    p.add_argument("--seed", type=int, default=5400, help="the first composition's seed (default 5400)")
+    p.add_argument("--clean", type=int, default=None, help="clean recordings (default n / 5, at least 20)")
+    p.add_argument("--classes", nargs="+", default=None, choices=ORDER, metavar="CLASS",
+                   help=f"draw compositions among these classes only ({', '.join(ORDER)})")
+    args = p.parse_args(argv)
+    clean_n = args.clean if args.clean is not None else max(20, args.n // 5)
+    started = time.perf_counter()
+    rows, clean = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(args.n):
+            rows.append(run(args.seed + k, Path(tmp) / f"q{k}", None, args.classes))
+        for k in range(clean_n):
+            clean.append(run(args.seed + 100_000 + k, Path(tmp) / f"c{k}", classes=[]))
+    refused = sum(not r["ok"] for r in rows)
+    print(f"{args.n} compositions (seeds {args.seed}..{args.seed + args.n - 1}), {clean_n} clean; "
+          f"{refused} refused by the import; {time.perf_counter() - started:.0f} s")
+    print("\n".join(table(rows, clean, args.classes or ORDER)))
+    planted = [(c, r) for r in rows for c in r["truth"]["planted"]]
+    named = sum(JUDGES[c][0](r, r["truth"]["planted"][c]) for c, r in planted)
+    print(f"all planted quirks: {named}/{len(planted)} named ({100 * named / max(len(planted), 1):.1f} %); "
+          f"clean recordings with any claim: {sum(any(j[1](r) for j in JUDGES.values()) for r in clean)}/{len(clean)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
