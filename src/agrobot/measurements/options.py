@@ -26,6 +26,9 @@ class ImportOptions:
     keep_spikes: bool = False                   # keep the samples found to be spikes (they are named either way)
     max_gap: float = 0.5                        # s: a channel's gap up to this is bridged (linear; held for a command)
     align: str = "auto"                         # auto | none | GROUP=SECONDS (measurements.audit.parse_align)
+    where: str | None = None                    # the stretches judged: 'mode == auto' (measurements.modes)
+    keep_unexplained: bool = False              # keep the stretches the command does not explain (measurements.modes)
+    said: set = field(default_factory=set, repr=False, compare=False)   # selection lines printed already
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table

@@ -251,11 +251,12 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
     """(frame, units, headerless) of a text table: comments and quotes taken off, the delimiter
     read from the content, the header's rows (names, units) parsed (_header)."""
     with open(path, encoding="utf-8", errors="replace") as f:
-        lines = [line.strip() for line in f]
+        lines = [line.strip().strip("\x00").strip() for line in f]
     rows, more = _content(lines)
     notes += more
     if not rows:
-        raise LogError(f"{path}: an empty table")
+        raise LogError(f"{path}: an empty table (no row of text in it: blank, zero bytes or comments only); expected a "
+                       f"header and rows of numbers")
     sep = "\t" if suffix == ".tsv" else _delimiter(rows)
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
