@@ -33,6 +33,8 @@ from agrobot.orchestrator.units import base_unit
 
 from .log import CANONICAL, LogError
 from .mdf4 import mdf_tables
+from .quirks import fixes_from_columns
+from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
 from .streams import Reader, Series, Streams, is_boot_clock, iso
 
@@ -612,7 +614,23 @@ def describe_table(t: Table) -> list[str]:
 
 
 # --- the recording's streams -------------------------------------------------------------------------
-ALIASES = {"lat": ("lat", "latitude"), "lon": ("lon", "longitude", "lng", "long")}
+ALIASES = {"lat": ("lat", "latitude"), "lon": ("lon", "longitude", "lng", "long"),
+           "fix_quality": ("fix_quality", "gps_quality", "gnss_quality", "fix_type", "quality")}
+
+
+def fixes_as_given(streams: Streams, source: Path) -> Streams:
+    """lat/lon signals as the receiver's fixes (measurements.quirks.fixes_from_columns) with the fix
+    quality the source gives (its fix_quality signal, held at its own times), NaN where it gives
+    none: a quality is never assumed."""
+    given = streams.signals.pop("fix_quality", None) if "lat" in streams.signals else None
+    before = streams.gnss
+    streams = fixes_from_columns(streams, source)
+    if streams.gnss is not None and streams.gnss is not before:
+        utc = streams.gnss["utc"].to_numpy(float)
+        streams.gnss["quality"] = held(utc, *given) if given is not None else np.nan
+        if given is not None:
+            streams.report.setdefault("columns", {})["fix_quality"] = "the source's fix quality, held at its own times"
+    return streams
 
 
 def _holders(tables: list[Table], name: str) -> list[str]:
@@ -631,8 +649,10 @@ def table_streams(paths: list[Path], options, source: Path):
     given = {s.column for s in specs}
     notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
     auto: set[str] = set()
-    for column in tuple(CANONICAL[1:]) + ("lat", "lon"):
+    for column in tuple(CANONICAL[1:]) + ("lat", "lon", "fix_quality"):
         if given:                # the user's mapping is the whole of it: no column taken by its name
+            break
+        if column == "fix_quality" and "lat" not in auto:      # a quality of fixes the table holds
             break
         for alias in ALIASES.get(column, (column,)):
             # the log's own names only in a table laid out as a log (a 't' column, the names as
@@ -687,8 +707,8 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(None, signals, report, held, {}, groups=groups)
+    return fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}, {},
+                                  groups=groups), source)
 
 
 def list_tables(paths: list[Path], options) -> list[str]:
