@@ -1,10 +1,18 @@
 """Other tools' tables (CSV, TSV, Parquet) as a recording: one table, or several on their own
 clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
 
-A table is read by pandas, recognised by its content as well as its suffix (a ``.txt`` of
-numbers in columns is a table); a first row of numbers only means a file without a header, its
-columns named ``col1``, ``col2`` ...; a row wrapped whole in quotes (``"1.0,2.5,3"``) is unwrapped. A header's unit in brackets, ``speed [km/h]`` or
-``speed (km/h)``, is the column's unit (the name is what precedes it). A column is named by
+A table is read as it comes, recognised by its content as well as its suffix (a ``.txt`` of
+numbers in columns is a table): lines starting with ``#`` or ``//`` are comments; rows wrapped
+whole in quotes (``"1.0,2.5,3"``) are unwrapped; the delimiter (``,`` ``;`` tab ``|`` or white
+space) is the one that splits the rows below the header alike into the most numbers. The header
+is the rows before the first that holds a number: none means a file without a header, its
+columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units under it
+(``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows of
+names are joined with ``_`` (a group's name over its columns). A header's unit in brackets,
+``speed [km/h]`` or ``speed (km/h)``, is the column's unit (the name is what precedes it). A
+column that holds no number is named with why (empty, text); a table of text only is refused.
+With lat/lon columns, a ``fix_quality`` column (or ``quality``, ``gps_quality`` ...) is the
+receiver's fix quality, held at its own times; without one the log has none (never assumed). A column is named by
 ``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
 table has it.
 
