@@ -92,3 +92,5 @@ def test_without_a_mode_the_hand_driven_stretch_is_found_named_and_left_out(tmp_
     assert len(kept) == len(truth) and "kept (--keep-unexplained)" in capsys.readouterr().err
     follower = judged(truth[truth["t"] < HAND[0]].reset_index(drop=True), "log", ImportOptions())
     assert len(follower) == int((truth["t"] < HAND[0]).sum()) and "selection" not in follower.attrs
+    saturated = truth.assign(delta=np.clip(truth["delta_cmd"], -0.2, 0.2))     # follows, up to its stop
+    assert not unexplained_mask(saturated[saturated["t"] < HAND[0]].reset_index(drop=True))[0].any()

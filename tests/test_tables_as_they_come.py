@@ -94,7 +94,7 @@ def test_a_column_of_text_is_named_with_why_and_a_table_of_text_only_is_refused(
     assert "column 'mode' holds no number: text such as 'auto'" in notes
     text = tmp_path / "text.csv"
     text.write_text("name,kind\nleft,wheel\nright,wheel\nfront,axle\n")
-    with pytest.raises(LogError, match="text.csv: a table of text only: no row holds a number"):
+    with pytest.raises(LogError, match="text.csv: a table of text only, no column to take: no row holds a number"):
         read_table(text)
     run = subprocess.run([sys.executable, "-m", "agrobot", "convert", str(text), "--out", str(tmp_path / "out.csv")],
                          capture_output=True, text=True)

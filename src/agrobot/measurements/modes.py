@@ -8,7 +8,10 @@ The steering's relation to its command: delta(t) = a delta_cmd(t - d) + b, fitte
 squares on the rows that fit it (a trimmed fit: the rows whose residual is within 3 times the
 median, twice), d the delay of 0-1 s that fits best. A stretch is not explained where the RMS of
 the residual over UNEXPLAINED_WINDOW exceeds UNEXPLAINED_RATIO times its median over the log and
-UNEXPLAINED_FLOOR, for UNEXPLAINED_MIN seconds or more. Both selections are printed (times, count,
+UNEXPLAINED_FLOOR, and UNRELATED times the larger standard deviation of delta or of its fit there
+(two unrelated signals: a saturated or rate-limited steering still follows its command), for
+UNEXPLAINED_MIN seconds or more (blips under half a window dropped first; shorter agreements
+inside such a stretch belong to it). Both selections are printed (times, count,
 share of the log) and kept in ``frame.attrs["selection"]``.
 """
 from __future__ import annotations
@@ -27,6 +30,7 @@ UNEXPLAINED_WINDOW = 2.0        # s: the residual's RMS is taken over this windo
 UNEXPLAINED_RATIO = 4.0         # x the log's median RMS of the residual
 UNEXPLAINED_FLOOR = 0.01        # rad (0.57 deg): a smaller residual is explained
 UNEXPLAINED_MIN = 3.0           # s: a shorter stretch is not named
+UNRELATED = 0.8                 # the residual's RMS against the larger motion of delta or of its fit
 _TERM = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(==|!=|<=|>=|<|>|=)\s*(?:'([^']*)'|\"([^\"]*)\"|([^\s'\"]+))\s*$")
 
 
@@ -153,15 +157,23 @@ def unexplained_mask(frame: pd.DataFrame) -> tuple[np.ndarray, dict]:
             best = (k, e, rms)
     k, e, _ = best
     e = np.concatenate([np.full(k, np.nan), e])
+    fitted = np.concatenate([np.full(k, np.nan), delta[k:] - e[k:]])
     n = max(int(round(UNEXPLAINED_WINDOW / step)), 3)
-    rolling = pd.Series(e ** 2).rolling(n, center=True, min_periods=max(n // 2, 2)).mean().pow(0.5).to_numpy()
+
+    def window(x):
+        return pd.Series(x).rolling(n, center=True, min_periods=max(n // 2, 2))
+    rolling = window(e ** 2).mean().pow(0.5).to_numpy()
+    motion = np.fmax(window(delta).std().to_numpy(), window(fitted).std().to_numpy())
     typical = float(np.nanmedian(rolling))
     limit = max(UNEXPLAINED_RATIO * typical, UNEXPLAINED_FLOOR)
-    mask = np.nan_to_num(rolling, nan=0.0) > limit
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        if (b - a) * step < UNEXPLAINED_MIN:
-            mask[a:b] = False
+    unrelated = rolling > UNRELATED * np.fmax(np.nan_to_num(motion), UNEXPLAINED_FLOOR)
+    mask = (np.nan_to_num(rolling, nan=0.0) > limit) & unrelated
+    # blips under half a window dropped, shorter agreements inside a stretch joined, short stretches dropped
+    for value, shorter in ((True, UNEXPLAINED_WINDOW / 2), (False, UNEXPLAINED_MIN), (True, UNEXPLAINED_MIN)):
+        edges = np.diff(np.concatenate([[0], (mask == value).astype(int), [0]]))
+        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+            if (b - a) * step < shorter and (value or (0 < a and b < len(mask))):
+                mask[a:b] = not value
     return mask, {"delay_s": k * step, "typical_rms_rad": typical, "threshold_rad": limit}
 
 

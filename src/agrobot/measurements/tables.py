@@ -160,7 +160,7 @@ def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], 
     other rows are more of the names (a group's name over its columns, joined with '_')."""
     first = next((i for i, r in enumerate(rows) if any(_is_number(v) for v in r)), None)
     if first is None:
-        raise LogError(f"{path}: a table of text only: no row holds a number (first rows: "
+        raise LogError(f"{path}: a table of text only, no column to take: no row holds a number (first rows: "
                        + "; ".join(",".join(r[:6]) for r in rows[:3]) + "); expected a header and rows of numbers")
     width = max((len(r) for r in rows[first:first + 50]), default=0)
     if first == 0:
