@@ -177,7 +177,7 @@ def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], 
         for k in range(1, width):
             r[k] = r[k] or r[k - 1]
     names = ["_".join(dict.fromkeys(r[k] for r in name_rows if r[k])) for k in range(width)]
-    names = _unique([n or f"col{k + 1}" for k, n in enumerate(names)])
+    names = _unique([n or f"Unnamed: {k}" for k, n in enumerate(names)])      # named col<k+1> by read_table
     units, unknown = {}, []
     for name, cell in zip(names, units_row or []):
         unit = declared_unit(cell) if cell else ""
