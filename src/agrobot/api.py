@@ -115,18 +115,20 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
              period: float | None = None, speed: float | None = None, band: tuple[float, float] | None = None,
              models: list[str] | None = None, delay: bool = False, resample: bool = False, recording=None,
              out: str | Path | None = None, plots: bool = True, progress=None,
-             overwrite: bool = False) -> Identification:
+             overwrite: bool = False, where: str | None = None, keep_unexplained: bool = False) -> Identification:
     """Identify the yaw dynamics. ``source`` a study (its multisine experiment, simulated: ``set``
     applies to it) or a measured log or raw recording; for a log the method is chosen as the
     command chooses it (identification.from_log.choose_method: ``"auto"`` is multisine when
     delta_cmd repeats with a period, else ordinary driving). ``study``: the vehicle a log comes
     from (path, name or Study), default the paper's tractor. ``recording``: a
-    measurements.ImportOptions for a raw recording. ``out``: checked before anything is computed,
+    measurements.ImportOptions for a raw recording. ``where``/``keep_unexplained``: the stretches
+    judged (measurements.modes, the ``--where`` option). ``out``: checked before anything is computed,
     written as ``Identification.save`` writes."""
     from agrobot.identification.from_log import choose_method, driving_report, write_driving
     from agrobot.identification.pipeline import log_identification, study_identification
 
     check_identify(band, speed, period)
+    recording = _stretches(recording, where, keep_unexplained)
     is_study = not isinstance(source, (str, Path)) or Path(source).suffix in STUDY_SUFFIXES or shipped_name(source)
     vehicle = load(source, set) if is_study else load(study) if study is not None else None
     inputs = [source, *study_inputs(vehicle), getattr(recording, "dbc", None)] if isinstance(source, (str, Path)) \
@@ -152,6 +154,18 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     return result
 
 
+def _stretches(recording, where: str | None, keep_unexplained: bool):
+    """The recording options with the stretches judged (measurements.modes); ``where`` checked."""
+    if where is None and not keep_unexplained:
+        return recording
+    from agrobot.measurements.modes import parse_where
+    from agrobot.measurements.options import ImportOptions
+
+    if where is not None:
+        parse_where(where)
+    return replace(recording or ImportOptions(), where=where, keep_unexplained=keep_unexplained)
+
+
 def check_identify(band, speed, period) -> None:
     """The identification's numbers: 0 < F_MIN < F_MAX, a positive speed and period."""
     if band is not None and not 0 < band[0] < band[1]:
@@ -174,7 +188,8 @@ def _named(source, compute, *args):
 
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
              resample: bool = False, recording=None, plots: bool = True, progress=None,
-             identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False) -> Diagnosis:
+             identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False,
+             where: str | None = None, keep_unexplained: bool = False) -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it (checked
     before anything is computed), diagnosis.json, report.md, the figures and extended_study.toml go
@@ -182,7 +197,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     ``"cannot decide"`` with its ``reason``. ``identify``: identify the vehicle on the same log first
     (one vehicle model for both; False is faster). ``split``: what is held out, "tail" (the last
     1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto" (blocks when the last part is
-    driven beyond the first's conditions). ``mcap``: diagnosis.mcap too."""
+    driven beyond the first's conditions). ``mcap``: diagnosis.mcap too. ``where``/``keep_unexplained``:
+    the stretches judged (measurements.modes, the ``--where`` option)."""
     from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnosis
 
@@ -191,6 +207,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     if split not in SPLITS:
         raise StudyError(f"split {split!r}: expected one of {', '.join(SPLITS)}")
     baseline = None if study is None else load(study)
+    recording = _stretches(recording, where, keep_unexplained)
     inputs = [log, getattr(recording, "dbc", None), *study_inputs(baseline)]
     if out is not None:
         Diagnosis.check(out, overwrite, inputs)

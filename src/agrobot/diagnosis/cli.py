@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from agrobot.api import diagnose
-from agrobot.measurements.cli import add_recording_options, recording_options
+from agrobot.measurements.cli import add_mode_options, add_recording_options, recording_options
 from agrobot.measurements.recording import describe
 from agrobot.orchestrator.cli import add_output_options
 from agrobot.orchestrator.observers import timed_progress
@@ -37,6 +37,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(lateral acceleration or speed 1.5 x higher), said in the warnings")
     p.add_argument("--mcap", action="store_true", help="also write diagnosis.mcap: the measured stages, the "
                    "baseline's and the final model's replays and residuals on one time axis (Foxglove, PlotJuggler)")
+    add_mode_options(p)
     add_recording_options(p)
 
 

@@ -5,7 +5,7 @@ import argparse
 from pathlib import Path
 
 from agrobot.api import identify
-from agrobot.measurements.cli import add_recording_options, recording_options
+from agrobot.measurements.cli import add_mode_options, add_recording_options, recording_options
 from agrobot.measurements.recording import describe
 from agrobot.orchestrator.cli import add_output_options, add_set_option
 from agrobot.orchestrator.observers import timed_progress
@@ -29,6 +29,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
+    add_mode_options(p)
     add_recording_options(p)
 
 

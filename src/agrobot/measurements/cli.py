@@ -19,6 +19,7 @@ from .audit import parse_align
 from .listing import list_source
 from .log import LogError, check_log, log_units
 from .log_mcap import write_log_mcap
+from .modes import parse_where
 from .recording import ImportOptions, describe, import_recording, import_runs
 from .signal_expressions import parse_signal
 from .tables import parse_time
@@ -65,6 +66,17 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    help="use this span, s after the recording's first fix, instead of a run")
 
 
+def add_mode_options(p: argparse.ArgumentParser) -> None:
+    """The stretches judged (measurements.modes): --where and --keep-unexplained."""
+    p.add_argument("--where", default=None, metavar="'COLUMN OP VALUE'",
+                   help="judge only the stretches where a mode or engagement channel says so: COLUMN OP VALUE with OP "
+                        "== != < <= > >=, joined by and/or (e.g. 'mode == auto', 'engaged == 1 and v > 0.5'); the "
+                        "stretches are printed; a raw recording's channel is mapped with --signal")
+    p.add_argument("--keep-unexplained", action="store_true",
+                   help="keep the stretches where the steering command does not explain the steering (driven by hand "
+                        "or remote; found and left out by default, printed either way)")
+
+
 def recording_options(args: argparse.Namespace):
     """ImportOptions from the parsed options; a LogError names the bad one."""
     set_limit(getattr(args, "max_file_size", None))
@@ -93,8 +105,12 @@ def recording_options(args: argparse.Namespace):
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
                             keep_spikes=getattr(args, "keep_spikes", False),
                             max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"),
-                            sign_speed=getattr(args, "sign_speed", False))
+                            sign_speed=getattr(args, "sign_speed", False),
+                            where=getattr(args, "where", None),
+                            keep_unexplained=getattr(args, "keep_unexplained", False))
     parse_align(options.align)
+    if options.where is not None:
+        parse_where(options.where)
     if args.steering_ratio is not None:
         options.steering_ratio = args.steering_ratio
     if args.wheelbase is not None:

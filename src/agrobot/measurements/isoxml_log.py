@@ -216,7 +216,7 @@ def timelog_streams(paths: list[Path], options, source: Path):
         quality = np.where(status <= 5, status, np.nan)
         gnss = pd.DataFrame({"utc": table["utc"][ok], "lat": table["lat"][ok], "lon": table["lon"][ok],
                              "height": table["height"][ok] if "height" in table else 0.0,
-                             "quality": np.where(np.isfinite(quality), quality, 1.0)[ok.to_numpy()],
+                             "quality": quality[ok.to_numpy()],           # 15, not available: NaN
                              "speed": np.nan, "course": np.nan, "heading": np.nan, "position_std": np.nan}).reset_index(drop=True)
         if np.all(status[ok.to_numpy()] == 15):
             report["notes"].append("PositionStatus is 15 (not available) in every record: the receiver's fix quality "

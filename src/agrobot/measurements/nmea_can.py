@@ -31,7 +31,7 @@ from .raw_can import (
 from .raw_nmea import NMEA_SUFFIXES, NMEA_TEXT_SUFFIXES, list_nmea, looks_like_nmea, read_nmea_file
 from .signal_expressions import evaluate, unknown_name
 from .streams import HELD, Reader, Series, Streams, iso
-from .tables import MDF_SUFFIXES
+from .tables import MDF_SUFFIXES, fixes_as_given
 
 
 def nmea_can_recording(files: dict[str, list[Path]], options: ImportOptions, source: Path) -> Streams:
@@ -104,8 +104,8 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
         report["columns"]["t"] = "the CAN logger's timestamps, s from the run's start"
     else:
         report["clocks"] = {"reference": "receiver UTC (NMEA GGA time and RMC/ZDA date)"}
-    return Streams(gnss, raw, report, set(HELD) & set(raw), {}, [b for n in nmea for b in n.breaks] + can_breaks,
-                   groups={c: "can" for c in raw})
+    return fixes_as_given(Streams(gnss, raw, report, set(HELD) & set(raw), {},
+                                  [b for n in nmea for b in n.breaks] + can_breaks, groups={c: "can" for c in raw}), source)
 
 
 def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, options: ImportOptions, report: dict):

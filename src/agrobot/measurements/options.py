@@ -27,6 +27,9 @@ class ImportOptions:
     max_gap: float = 0.5                        # s: a channel's gap up to this is bridged (linear; held for a command)
     align: str = "auto"                         # auto | none | GROUP=SECONDS (measurements.audit.parse_align)
     sign_speed: bool = False                    # an unsigned speed made negative where the machine reverses
+    where: str | None = None                    # the stretches judged: 'mode == auto' (measurements.modes)
+    keep_unexplained: bool = False              # keep the stretches the command does not explain (measurements.modes)
+    said: set = field(default_factory=set, repr=False, compare=False)   # selection lines printed already
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table

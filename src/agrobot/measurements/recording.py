@@ -25,6 +25,7 @@ from . import recording_readers as readers
 from .audit import audit_frame, audit_streams
 from .import_report import describe
 from .log import LogError, check_log, read_log
+from .modes import judged
 from .options import ImportOptions
 from .quirks import find_quirks, fixes_from_columns
 from .runs import assemble
@@ -143,13 +144,16 @@ def load_log(source: str | Path, required: tuple[str, ...] = ("t",), resample_ji
         frame = read_log(source, required, resample_jitter)
         if "audit" not in frame.attrs:        # a table as it is: the audit of its own columns
             frame.attrs["audit"] = audit_frame(frame)
-        return frame, None
+        return judged(frame, source, recording), None
     frame, report = import_recording(source, recording)
     where = f"{source} ({report['used']['how']}, {report['used']['start']:.1f}-{report['used']['end']:.1f} s)"
     frame = check_log(frame, where, required, resample_jitter)
     report.setdefault("notes", []).extend(n for n in frame.attrs.get("notes", []) if n.startswith("warning:"))
     frame.attrs["resolution"] = dict(report.get("resolution", {}))
     frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
+    frame = judged(frame, source, recording)
+    if frame.attrs.get("selection"):
+        report["selection"] = list(frame.attrs["selection"])
     return frame, report
 
 

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .log import LogError
+from .runs import held as in_force
 from .signal_expressions import SignalSpec, evaluate, unknown_name
 from .streams import Reader, Series, Streams, gnss_table, iso
 
@@ -374,9 +375,9 @@ def bag_streams(paths: list[Path], options, source: Path):
         t, lat = signals.pop("lat")
         lon = np.interp(t, *signals.pop("lon"))
         height = np.interp(t, *signals.pop("height")) if "height" in signals else np.zeros(len(t))
-        quality = np.interp(t, *signals.pop("fix_quality")) if "fix_quality" in signals else np.ones(len(t))
+        quality = in_force(t, *signals.pop("fix_quality")) if "fix_quality" in signals else np.full(len(t), np.nan)
         std = np.interp(t, *signals.pop("position_std")) if "position_std" in signals else np.full(len(t), np.nan)
-        fix = (quality > 0) & np.isfinite(lat) & np.isfinite(lon)
+        fix = (quality != 0) & np.isfinite(lat) & np.isfinite(lon)          # NaN: a quality not given
         if fix.sum() >= 2:
             gnss = gnss_table(t[fix], lat[fix], lon[fix], height[fix], quality[fix], None, std[fix])
             report["first_fix_utc"] = iso(float(t[fix][0]))

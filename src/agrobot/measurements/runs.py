@@ -28,6 +28,7 @@ from .streams import Streams, gnss_speed, iso
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 MAX_SAMPLES = 5e7      # rows of one log grid (a day at 500 Hz): more is a damaged clock, not a recording
 HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
+DISCRETE = ("fix_quality", "mode", "engaged", "gear", "direction")   # codes: held at their own times, never interpolated
 
 
 def gaps(t: np.ndarray, what: str, origin: float, least: float = GAP_MIN) -> list[dict]:
@@ -55,10 +56,24 @@ def _stretches(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
-def _held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """The value in force at each grid time: the last one sent at or before it (1 ms tolerance)."""
-    i = np.clip(np.searchsorted(t, grid + 1e-3, side="right") - 1, 0, len(t) - 1)
-    return values[i]
+def held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The value in force at each grid time: the last one sent at or before it (1 ms tolerance);
+    NaN before the first (the source has said nothing yet)."""
+    i = np.searchsorted(t, grid + 1e-3, side="right") - 1
+    out = np.asarray(values, float)[np.clip(i, 0, max(len(t) - 1, 0))]
+    return np.where(i >= 0, out, np.nan)
+
+
+def within(grid: np.ndarray, t: np.ndarray, values: np.ndarray, least: float = GAP_MIN) -> np.ndarray:
+    """``values`` at ``t`` interpolated linearly onto ``grid``, NaN where the source is silent: outside
+    its span, or between two samples further apart than GAP_PERIODS of its periods and ``least``."""
+    ok = np.isfinite(values)
+    t, values = t[ok], values[ok]
+    if len(t) < 2:
+        return np.full(len(grid), np.nan)
+    j = np.clip(np.searchsorted(t, grid), 1, len(t) - 1)
+    said = np.minimum(np.abs(t[j] - grid), np.abs(t[j - 1] - grid)) <= 1e-3      # a sample at the grid time
+    return np.where(_covered(t, grid, least) | said, np.interp(grid, t, values), np.nan)
 
 
 def _grid_step(streams: Streams, options: ImportOptions) -> float:
@@ -94,12 +109,12 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     columns: dict[str, np.ndarray] = {"t": step * np.arange(len(t))}      # whole steps: no rounding creep
     for c in CANONICAL[1:]:
         if c in sig:
-            columns[c] = _held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
+            columns[c] = held(t, *sig[c]) if c in streams.held else np.interp(t, *sig[c])
     if gnss is not None:
         columns.update(_receiver_columns(t, streams, report))
     for c, (tc, vc) in sig.items():
         if c not in columns:
-            columns[c] = _held(t, tc, vc) if c in streams.held else np.interp(t, tc, vc)
+            columns[c] = held(t, tc, vc) if c in streams.held or c in DISCRETE else within(t, tc, vc, bridge)
     report["rate_hz"] = 1.0 / step
     report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
                             if c in sig or c in streams.resolution}
@@ -210,7 +225,8 @@ def _runs(grid: np.ndarray, u0: float, step: float, covered: np.ndarray, v: np.n
 def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str, np.ndarray]:
     """The receiver's columns at ``t``: x, y east and north of the first fix (pymap3d's
     geodetic -> ENU on WGS-84; the datum in the report), its own (Doppler) speed as gnss_speed or,
-    without one, the track's as track_speed, fix_quality held, heading (unwrapped, interpolated,
+    without one, the track's as track_speed, fix_quality held where the receiver gives it (else not written, a note),
+    heading (unwrapped, interpolated within its own updates, NaN where it is silent,
     wrapped to (-pi, pi]) and position_std where given."""
     import pymap3d
 
@@ -225,12 +241,17 @@ def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str
         columns["gnss_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
     else:                                                              # none: the track's, named so
         columns["track_speed"] = np.interp(t, utc, gnss_speed(gnss, streams.breaks))
-    columns["fix_quality"] = _held(t, utc, gnss["quality"].to_numpy(float))
+    quality = gnss["quality"].to_numpy(float)
+    if np.isfinite(quality).any():                     # the receiver's word, held; NaN where it says nothing
+        columns["fix_quality"] = held(t, utc, quality)
+    else:
+        report.setdefault("notes", []).append("fix_quality: the recording does not give the receiver's fix quality: "
+                                              "not written")
     for extra in ("heading", "position_std"):
         if extra in gnss and np.isfinite(gnss[extra]).sum() >= 2:
             ok = np.isfinite(gnss[extra].to_numpy(float))
             x = gnss[extra].to_numpy(float)[ok]
-            columns[extra] = np.interp(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
+            columns[extra] = within(t, utc[ok], np.unwrap(x) if extra == "heading" else x)
             if extra == "heading":
                 columns[extra] = np.angle(np.exp(1j * columns[extra]))
     return columns

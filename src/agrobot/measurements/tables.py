@@ -1,10 +1,18 @@
 """Other tools' tables (CSV, TSV, Parquet) as a recording: one table, or several on their own
 clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
 
-A table is read by pandas, recognised by its content as well as its suffix (a ``.txt`` of
-numbers in columns is a table); a first row of numbers only means a file without a header, its
-columns named ``col1``, ``col2`` ...; a row wrapped whole in quotes (``"1.0,2.5,3"``) is unwrapped. A header's unit in brackets, ``speed [km/h]`` or
-``speed (km/h)``, is the column's unit (the name is what precedes it). A column is named by
+A table is read as it comes, recognised by its content as well as its suffix (a ``.txt`` of
+numbers in columns is a table): lines starting with ``#`` or ``//`` are comments; rows wrapped
+whole in quotes (``"1.0,2.5,3"``) are unwrapped; the delimiter (``,`` ``;`` tab ``|`` or white
+space) is the one that splits the rows below the header alike into the most numbers. The header
+is the rows before the first that holds a number: none means a file without a header, its
+columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units under it
+(``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows of
+names are joined with ``_`` (a group's name over its columns). A header's unit in brackets,
+``speed [km/h]`` or ``speed (km/h)``, is the column's unit (the name is what precedes it). A
+column that holds no number is named with why (empty, text); a table of text only is refused.
+With lat/lon columns, a ``fix_quality`` column (or ``quality``, ``gps_quality`` ...) is the
+receiver's fix quality, held at its own times; without one the log has none (never assumed). A column is named by
 ``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
 table has it.
 
@@ -33,6 +41,8 @@ from agrobot.orchestrator.units import base_unit
 
 from .log import CANONICAL, LogError
 from .mdf4 import mdf_tables
+from .quirks import fixes_from_columns
+from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
 from .streams import Reader, Series, Streams, is_boot_clock, iso
 
@@ -63,6 +73,16 @@ class Table:
     mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
 
 
+COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
+DELIMITERS = (",", ";", "\t", "|")
+_EPOCH = re.compile(r"^(?:(?:unix|posix|epoch|utc|gps)\s+)*(?:epoch\s+|time\s+)?(s|sec|secs|seconds|ms|milliseconds|us|"
+                    r"microseconds|ns|nanoseconds)(?:\s+since\s+(?:the\s+)?(?:unix\s+)?epoch|\s+\(?(?:unix|posix|"
+                    r"epoch|utc)\)?)?$")
+_SHORT = {"sec": "s", "secs": "s", "seconds": "s", "milliseconds": "ms", "microseconds": "us", "nanoseconds": "ns"}
+NO_UNIT = ("", "-", "--", "1", "none", "n/a", "na", "unitless", "dimensionless", "#", "text", "string", "enum")
+DATE_UNITS = ("datetime", "date", "iso", "iso 8601", "iso8601", "date time", "yyyy-mm-dd hh:mm:ss", "utc date")
+
+
 def _lines(path: Path, n: int = 20) -> list[str]:
     with open(path, encoding="utf-8", errors="replace") as f:
         return [line.strip() for line, _ in zip(f, range(n)) if line.strip()]
@@ -70,25 +90,129 @@ def _lines(path: Path, n: int = 20) -> list[str]:
 
 def _unquoted(line: str) -> str:
     """A row wrapped whole in one pair of quotes, unwrapped ("1,2,3" -> 1,2,3)."""
-    return line[1:-1].replace('""', '"') if len(line) > 1 and line[0] == line[-1] == '"' and '","' not in line else line
+    return line[1:-1].replace('""', '"') if _wrapped(line) else line
 
 
-def _quoted_rows(path: Path) -> bool:
-    """Every row one quoted field holding separators: the writer quoted whole rows."""
-    lines = _lines(path)
-    return bool(lines) and all(len(x) > 2 and x[0] == x[-1] == '"' and '","' not in x and
-                               any(s in x for s in ",;\t|") for x in lines)
+def _wrapped(line: str) -> bool:
+    return len(line) > 2 and line[0] == line[-1] == '"' and not any(f'"{s}"' in line for s in DELIMITERS + (" ",))
+
+
+def _content(lines: list[str]) -> tuple[list[str], list[str]]:
+    """(the rows, notes): blank and comment lines left out, rows wrapped whole in quotes unwrapped
+    (when most rows are: a writer that quoted whole rows)."""
+    notes = []
+    rows = [x for x in lines if x and not x.startswith(COMMENTS)]
+    comments = sum(1 for x in lines if x.startswith(COMMENTS))
+    if comments:
+        notes.append(f"{comments} comment line(s) (starting with {' or '.join(COMMENTS)}) left out")
+    if rows and sum(map(_wrapped, rows)) > len(rows) / 2:
+        rows = [_unquoted(x) for x in rows]
+        notes.append("every row is wrapped in quotes: unwrapped")
+    return rows, notes
+
+
+def _split(row: str, sep: str) -> list[str]:
+    if sep == " ":
+        return row.split()
+    return [x.strip() for x in next(csv.reader([row], delimiter=sep))]
+
+
+def _delimiter(rows: list[str]) -> str:
+    """The field separator read from the content: of , ; tab | and white space, the one that
+    splits the rows below the header into one number (> 1) of fields, most of them numbers; else
+    a comma."""
+    sample = rows[len(rows) // 3:][:60] or rows
+    best, score = None, (0.0, 0)
+    for sep in DELIMITERS + (" ",):
+        widths = [len(_split(r, sep)) for r in sample]
+        width = max(set(widths), key=widths.count)
+        if width < 2 or widths.count(width) < 0.9 * len(widths):
+            continue
+        fields = [v for r in sample for v in _split(r, sep)]
+        numeric = round(sum(_is_number(v) for v in fields) / max(len(fields), 1), 2)
+        if (numeric, width) > score:
+            best, score = sep, (numeric, width)
+    return best or ","
+
+
+def declared_unit(text: str) -> str | None:
+    """A units row's cell as a unit: pint's units, 'Unix epoch seconds' (and the like) -> s, ms ...,
+    a date's 'datetime', '' for none; None where it is not a unit."""
+    text = text.strip().strip("[]()").strip()
+    low = text.lower()
+    if low in NO_UNIT:
+        return ""
+    if low in DATE_UNITS:
+        return "datetime"
+    m = _EPOCH.match(low)
+    if m:
+        return _SHORT.get(m.group(1), m.group(1))
+    try:
+        check_unit(text, "")
+    except LogError:
+        return None
+    return text
+
+
+def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], dict, int]:
+    """(names, units, first data row) of the rows' header: the rows before the first that holds a
+    number; the first is the names, a row of units (most of its cells units) gives the units,
+    other rows are more of the names (a group's name over its columns, joined with '_')."""
+    first = next((i for i, r in enumerate(rows) if any(_is_number(v) for v in r)), None)
+    if first is None:
+        raise LogError(f"{path}: a table of text only, no column to take: no row holds a number (first rows: "
+                       + "; ".join(",".join(r[:6]) for r in rows[:3]) + "); expected a header and rows of numbers")
+    width = max((len(r) for r in rows[first:first + 50]), default=0)
+    if first == 0:
+        return [f"col{i + 1}" for i in range(width)], {}, 0
+    head = [(list(r) + [""] * width)[:width] for r in rows[:first]]
+    units_row, name_rows = None, [head[0]]
+    for r in head[1:]:
+        cells = [declared_unit(v) for v in r if v]
+        if units_row is None and cells and sum(c is not None for c in cells) >= 0.5 * len(cells):
+            units_row = r
+        else:
+            name_rows.append(r)
+    for r in name_rows[:-1]:                      # a group's name spans the cells after it (merged cells)
+        for k in range(1, width):
+            r[k] = r[k] or r[k - 1]
+    names = ["_".join(dict.fromkeys(r[k] for r in name_rows if r[k])) for k in range(width)]
+    names = _unique([n or f"Unnamed: {k}" for k, n in enumerate(names)])      # named col<k+1> by read_table
+    units, unknown = {}, []
+    for name, cell in zip(names, units_row or []):
+        unit = declared_unit(cell) if cell else ""
+        if unit:
+            units[name] = unit
+        elif unit is None:
+            unknown.append(f"{name} {cell!r}")
+    if units_row is not None:
+        notes.append("a units row under the header, its units used: " + ", ".join(f"{n} [{u}]" for n, u in units.items())
+                     + (f"; not units, ignored: {', '.join(unknown)} (declare one with --signal COLUMN=NAME[unit])"
+                        if unknown else ""))
+    if len(name_rows) > 1:
+        notes.append(f"a header of {len(name_rows)} rows of names, joined with '_': {', '.join(names[:6])}")
+    return names, units, first
+
+
+def _unique(names: list[str]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        seen[n] = seen.get(n, 0) + 1
+        out.append(n if seen[n] == 1 else f"{n}_{seen[n]}")
+    return out
 
 
 def looks_like_table(path: Path) -> bool:
     """A text file of rows with the same number of fields, mostly numbers (a header allowed)."""
     try:
-        lines = [_unquoted(x) for x in _lines(path, 12)]
+        lines, _ = _content(_lines(path, 40))
     except OSError:
         return False
     if len(lines) < 3 or any(len(x) > 4000 for x in lines):
         return False
-    split = [re.split(r"[,;\t|]|\s+", x.strip()) for x in lines[1:]]
+    sep = _delimiter(lines)
+    split = [_split(x, sep) for x in lines[-12:]]
     widths = {len(r) for r in split}
     numeric = sum(_is_number(v) for r in split for v in r) / max(sum(len(r) for r in split), 1)
     return len(widths) == 1 and numeric > 0.8
@@ -97,32 +221,20 @@ def looks_like_table(path: Path) -> bool:
 def read_table(path: Path) -> Table:
     """A table file with its header's units; a LogError names the file when it is not a table."""
     suffix = path.suffix.lower()
-    notes = []
+    notes: list[str] = []
+    units: dict = {}
     try:
         if suffix in (".parquet", ".pq"):
             frame, headerless = pd.read_parquet(path), False
         else:
-            text = None
-            if _quoted_rows(path):
-                with open(path, encoding="utf-8", errors="replace") as f:
-                    text = "".join(_unquoted(line.strip()) + "\n" for line in f)
-                notes.append("every row is wrapped in quotes: unwrapped")
-            src = io.StringIO(text) if text is not None else path
-            sep = "\t" if suffix == ".tsv" else _separator(path, text)
-            head = pd.read_csv(src, sep=sep, nrows=1, header=None, dtype=str, skip_blank_lines=True)
-            if text is not None:
-                src = io.StringIO(text)
-            first = [str(x).strip() for x in head.iloc[0].tolist()] if len(head) else []
-            headerless = bool(first) and all(_is_number(x) for x in first if x not in ("", "nan"))
-            frame = pd.read_csv(src, sep=sep, header=None if headerless else "infer",
-                                engine="python" if sep == r"\s+" else "c")
+            frame, units, headerless = _text_table(path, suffix, notes)
+    except LogError:
+        raise
     except Exception as exc:            # noqa: BLE001 - pandas raises many kinds
         raise LogError(f"{path}: cannot read as a table ({suffix}): {type(exc).__name__}: {exc}") from None
-    if headerless:
-        frame.columns = [f"col{i + 1}" for i in range(frame.shape[1])]
     if frame.shape[1] == 0 or len(frame) == 0:
         raise LogError(f"{path}: an empty table")
-    units, names, drop = {}, [], []
+    names, drop = [], []
     for k, c in enumerate(frame.columns):
         text = str(c).strip()
         m = _UNIT_IN_HEADER.match(text)
@@ -137,24 +249,54 @@ def read_table(path: Path) -> Table:
         names.append(name)
         if unit:
             units[name] = unit
+        elif text in units:
+            units[name] = units.pop(text)
     frame.columns = names
     frame = frame.drop(columns=drop)
+    notes += _text_columns(frame)
     return Table(path, path.stem, frame, units, headerless, notes=notes)
 
 
-def _separator(path: Path, text: str | None = None) -> str:
-    """The CSV's field separator: the one of , ; tab | that splits its first lines alike, else
-    white space where it splits them alike (a text dump), else a comma."""
-    if text is None:
-        with open(path, newline="", encoding="utf-8", errors="replace") as f:
-            sample = "".join(f.readline() for _ in range(20))
-    else:
-        sample = "\n".join(text.splitlines()[:20])
-    try:
-        return csv.Sniffer().sniff(sample, delimiters=",;\t|").delimiter
-    except csv.Error:
-        rows = [len(x.split()) for x in sample.splitlines() if x.strip()]
-        return r"\s+" if rows and min(rows) > 1 and len(set(rows)) == 1 else ","
+def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dict, bool]:
+    """(frame, units, headerless) of a text table: comments and quotes taken off, the delimiter
+    read from the content, the header's rows (names, units) parsed (_header)."""
+    with open(path, encoding="utf-8", errors="replace") as f:
+        lines = [line.strip().strip("\x00").strip() for line in f]
+    rows, more = _content(lines)
+    notes += more
+    if not rows:
+        raise LogError(f"{path}: an empty table (no row of text in it: blank, zero bytes or comments only); expected a "
+                       f"header and rows of numbers")
+    sep = "\t" if suffix == ".tsv" else _delimiter(rows)
+    names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
+    frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
+                        engine="python" if sep == " " else "c", skipinitialspace=True)
+    names = (names + [f"col{i + 1}" for i in range(len(names), frame.shape[1])])[:frame.shape[1]]
+    frame.columns = names
+    if sep not in (",", "\t"):
+        notes.append(f"fields separated by {'white space' if sep == ' ' else repr(sep)} (read from the content)")
+    return frame, units, first == 0
+
+
+def _text_columns(frame: pd.DataFrame) -> list[str]:
+    """Each column that holds no number, named with why: empty, or text (with an example)."""
+    out = []
+    for c in frame.columns:
+        col = frame[c]
+        if pd.api.types.is_numeric_dtype(col) and col.notna().any():
+            continue
+        if col.isna().all():
+            out.append(f"column {c!r} holds no number: every value is missing")
+            continue
+        x = pd.to_numeric(col, errors="coerce")
+        text = col[x.isna() & col.notna()]
+        if x.notna().any():
+            out.append(f"column {c!r} holds no number in {len(text)} of {len(col)} rows: text such as "
+                       f"{str(text.iloc[0])[:30]!r} (row {int(text.index[0]) + 1} of the data)")
+        else:
+            out.append(f"column {c!r} holds no number: text such as {str(text.iloc[0])[:30]!r} (a label, a mode "
+                       f"or a date: not a signal)")
+    return out
 
 
 def _is_number(text: str) -> bool:
@@ -480,7 +622,23 @@ def describe_table(t: Table) -> list[str]:
 
 
 # --- the recording's streams -------------------------------------------------------------------------
-ALIASES = {"lat": ("lat", "latitude"), "lon": ("lon", "longitude", "lng", "long")}
+ALIASES = {"lat": ("lat", "latitude"), "lon": ("lon", "longitude", "lng", "long"),
+           "fix_quality": ("fix_quality", "gps_quality", "gnss_quality", "fix_type", "quality")}
+
+
+def fixes_as_given(streams: Streams, source: Path) -> Streams:
+    """lat/lon signals as the receiver's fixes (measurements.quirks.fixes_from_columns) with the fix
+    quality the source gives (its fix_quality signal, held at its own times), NaN where it gives
+    none: a quality is never assumed."""
+    given = streams.signals.pop("fix_quality", None) if "lat" in streams.signals else None
+    before = streams.gnss
+    streams = fixes_from_columns(streams, source)
+    if streams.gnss is not None and streams.gnss is not before:
+        utc = streams.gnss["utc"].to_numpy(float)
+        streams.gnss["quality"] = held(utc, *given) if given is not None else np.nan
+        if given is not None:
+            streams.report.setdefault("columns", {})["fix_quality"] = "the source's fix quality, held at its own times"
+    return streams
 
 
 def _holders(tables: list[Table], name: str) -> list[str]:
@@ -499,8 +657,10 @@ def table_streams(paths: list[Path], options, source: Path):
     given = {s.column for s in specs}
     notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
     auto: set[str] = set()
-    for column in tuple(CANONICAL[1:]) + ("lat", "lon"):
+    for column in tuple(CANONICAL[1:]) + ("lat", "lon", "fix_quality"):
         if given:                # the user's mapping is the whole of it: no column taken by its name
+            break
+        if column == "fix_quality" and "lat" not in auto:      # a quality of fixes the table holds
             break
         for alias in ALIASES.get(column, (column,)):
             # the log's own names only in a table laid out as a log (a 't' column, the names as
@@ -555,8 +715,8 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-    return Streams(None, signals, report, held, {}, groups=groups)
+    return fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}, {},
+                                  groups=groups), source)
 
 
 def list_tables(paths: list[Path], options) -> list[str]:
