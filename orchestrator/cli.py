@@ -77,7 +77,8 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
                    help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
     p.add_argument("--live-viewers", type=int, default=16, metavar="N",
-                   help="with --live: serve at most N viewers at once (default 16); one more is refused with the reason")
+                   help="with --live: serve at most N viewers at once (default 16, at most 64); one more is refused with the "
+                        "reason")
     add_engine_option(p)
     add_isolate_option(p)
     for option in registry().run_options:

@@ -20,8 +20,8 @@ Bounds, so that no number of viewers, and no slow one, holds the run:
   own process: its work never takes the run's interpreter lock.
 
 Protocol with the parent: one JSON line on standard output once listening (``{"listening": port}``) or
-refused (``{"error": text}``, exit 2); standard input closed (the parent ended or died): the relay closes
-every viewer, writes one JSON line of counts and exits.
+refused (``{"error": text}``, exit 2); standard input closed (the parent ended or died): the relay writes
+one JSON line of counts, lets its viewers drain (3 s at most) and exits.
 
     python -P live_relay.py --upstream ws://127.0.0.1:PORT --host HOST --port PORT --max-viewers N --queue N
 """
@@ -134,17 +134,18 @@ class Relay:
         finally:
             for task in tasks:
                 task.cancel()
-            self.counts["dropped"] += queue.dropped
             await server.close()
 
     async def _from_server(self, server, viewer, queue: ViewerQueue) -> None:
         """Every frame of the server into the viewer's queue, never waiting on the viewer."""
         try:
             async for frame in server:
+                dropped = queue.dropped
                 if not queue.put(frame):
                     self.counts["closed_slow"] += 1
                     await viewer.close(POLICY_VIOLATION, "viewer too slow: its control messages filled its queue")
                     break
+                self.counts["dropped"] += queue.dropped - dropped
         except ConnectionClosed:
             pass
         queue.finish()
@@ -179,19 +180,27 @@ async def run(args: argparse.Namespace) -> int:
     try:
         server = await serve(relay.handle, args.host, args.port, subprotocols=list(SUBPROTOCOLS),
                              select_subprotocol=relay.choose, process_request=relay.check_request, compression=None,
-                             close_timeout=2, max_size=2 ** 20)
+                             close_timeout=2, max_size=2 ** 20, backlog=1024)
     except (OSError, OverflowError) as exc:
-        print(json.dumps({"error": str(exc)}), flush=True)
+        _say({"error": str(exc)})
         return 2
-    print(json.dumps({"listening": server.sockets[0].getsockname()[1]}), flush=True)
+    _say({"listening": server.sockets[0].getsockname()[1]})
     await _stdin_closed()
+    _say(dict(relay.counts))                       # first: a relay starved of the processor still reports
     server.close(close_connections=False)          # the viewers left drain their queues, then close
     try:
         await asyncio.wait_for(server.wait_closed(), 3)
     except asyncio.TimeoutError:
         pass
-    print(json.dumps(dict(relay.counts)), flush=True)
     return 0
+
+
+def _say(line: dict) -> None:
+    """One JSON line to the parent (gone: nothing to tell)."""
+    try:
+        print(json.dumps(line), flush=True)
+    except (BrokenPipeError, ValueError):
+        pass
 
 
 class RelayProcess:
@@ -200,10 +209,12 @@ class RelayProcess:
 
     def __init__(self, upstream_port: int, host: str, port: int, max_viewers: int, queue: int,
                  timeout: float = 30.0) -> None:
+        # a session of its own: Ctrl-C reaches the run, which stops the relay
         self.proc = subprocess.Popen(
             [sys.executable, "-P", os.path.abspath(__file__), "--upstream", f"ws://127.0.0.1:{upstream_port}",
              "--host", host, "--port", str(port), "--max-viewers", str(max_viewers), "--queue", str(queue)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, start_new_session=True)
+        self.late = False
         first = self._line(timeout)
         if "listening" not in first:
             self._end(5.0)
@@ -229,13 +240,22 @@ class RelayProcess:
             self.proc.kill()
             self.proc.wait()
 
+    def finish(self) -> None:
+        """Tell the relay to end (its standard input closed): it reports, then closes its viewers once their
+        server has gone."""
+        if not self.proc.stdin.closed:
+            self.proc.stdin.close()
+
     def stop(self, timeout: float = 10.0) -> dict:
-        """Close the relay (its standard input): its counts of viewers by subprotocol, refused, dropped."""
-        if self.proc.poll() is not None:
+        """End the relay: its counts of viewers by subprotocol, refused, dropped ({} and ``late`` if none came
+        within ``timeout`` seconds)."""
+        if self.proc.poll() is not None:          # ended before: its error is on the run's standard error
+            self.late = True
             return {}
         deadline = time.monotonic() + timeout
-        self.proc.stdin.close()
+        self.finish()
         counts = self._line(timeout)
+        self.late = not counts
         self._end(max(deadline - time.monotonic(), 0.1))
         self.proc.stdout.close()
         return counts

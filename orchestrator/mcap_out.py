@@ -206,6 +206,7 @@ def write_study_mcap(study, signals: pd.DataFrame, path: Path) -> tuple[Path, st
 
 LIVE_RATE_HZ = 20.0        # wall-clock instants a second sent to the live view
 LIVE_MAX_VIEWERS = 16      # viewers served at once (run --live-viewers N); one more is refused with the reason
+LIVE_VIEWERS_CEILING = 64  # --live-viewers at most: each viewer costs the run's machine (docs/foxglove.md)
 LIVE_QUEUE_FRAMES = 256    # frames waiting per viewer; past it the oldest message data is dropped
 MAX_PORT = 65535
 
@@ -217,8 +218,9 @@ def check_live_options(host: str, port: int, wait: float, max_viewers: int) -> N
         raise OutputError(f"--live {where}: port {port} is beyond 0-{MAX_PORT}")
     if not (math.isfinite(wait) and wait >= 0):
         raise OutputError(f"--live-wait {wait}: expected a finite number of seconds >= 0")
-    if not 1 <= max_viewers <= 1024:
-        raise OutputError(f"--live-viewers {max_viewers}: expected 1 to 1024 viewers")
+    if not 1 <= max_viewers <= LIVE_VIEWERS_CEILING:
+        raise OutputError(f"--live-viewers {max_viewers}: expected 1 to {LIVE_VIEWERS_CEILING} viewers (each one "
+                          f"costs the run's machine; see docs/foxglove.md)")
 
 
 class LiveView:
@@ -258,7 +260,7 @@ class LiveView:
         self.scene = study_scene(study)
         self._track = getattr(self.scene, "track", None)
         self.sent = 0
-        self.viewers: dict = {}
+        self.viewers: dict | None = {}
         self._next = 0.0
 
     @property
@@ -269,6 +271,8 @@ class LiveView:
     def report(self) -> str:
         """What the view did: instants sent, viewers by subprotocol, refused, messages dropped for slow viewers."""
         v = self.viewers
+        if v is None:
+            return f"{self.sent} instants sent to {self.url}; the relay's counts of viewers did not come in time"
         served = {p: n for p, n in v.items() if p.startswith("foxglove.")}
         text = f"{self.sent} instants sent to {self.url}; {sum(served.values())} viewers"
         if served:
@@ -332,9 +336,13 @@ class LiveView:
         self.sent += 1
 
     def stop(self) -> None:
-        """The SDK's server first (the relay drains what its viewers wait for and closes them), then the relay."""
+        """The relay told to end (it reports first), the SDK's server stopped (the relay drains what its viewers
+        wait for and closes them), the relay's counts."""
+        self.relay.finish()
         self.server.stop()
         self.viewers = self.relay.stop()
+        if not self.viewers and self.relay.late:
+            self.viewers = None
 
 
 def _listener(event, resend: set):
