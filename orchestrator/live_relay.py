@@ -215,23 +215,23 @@ class RelayProcess:
              "--host", host, "--port", str(port), "--max-viewers", str(max_viewers), "--queue", str(queue)],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, start_new_session=True)
         self.late = False
-        first = self._line(timeout)
+        first = self._line(timeout) or {}
         if "listening" not in first:
             self._end(5.0)
             raise RelayRefused(first.get("error", "the relay ended before it listened"))
         self.port = int(first["listening"])
 
-    def _line(self, timeout: float) -> dict:
-        """The relay's next JSON line within ``timeout`` seconds ({} if none)."""
+    def _line(self, timeout: float) -> dict | None:
+        """The relay's next JSON line within ``timeout`` seconds (None if none)."""
         with selectors.DefaultSelector() as selector:
             selector.register(self.proc.stdout, selectors.EVENT_READ)
             if not selector.select(timeout):
-                return {}
+                return None
         line = self.proc.stdout.readline()
         try:
-            return json.loads(line) if line.strip() else {}
+            return json.loads(line) if line.strip() else None
         except json.JSONDecodeError:
-            return {}
+            return None
 
     def _end(self, timeout: float) -> None:
         try:
@@ -255,10 +255,10 @@ class RelayProcess:
         deadline = time.monotonic() + timeout
         self.finish()
         counts = self._line(timeout)
-        self.late = not counts
+        self.late = counts is None
         self._end(max(deadline - time.monotonic(), 0.1))
         self.proc.stdout.close()
-        return counts
+        return counts or {}
 
 
 class RelayRefused(RuntimeError):
