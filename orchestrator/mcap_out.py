@@ -12,8 +12,8 @@ Topics (generic: the orchestrator knows nothing of the system simulated):
   object with ``channels(context)`` (its typed channels), ``static(t_ns)`` (messages logged once at the
   start: a path, a field) and ``step(t_ns, value)`` (messages of one instant, ``value(column)`` giving
   the signal ``component.output`` or NaN) and ``every``, the base steps between two scene instants;
-  live, an optional ``track(value)`` is called at every base step (what the scene gathers from every step,
-  such as the path driven so far) and ``static`` again when a viewer subscribes.
+  live, an optional ``track(value)`` is called at every scene instant of simulated time (what the scene
+  gathers from the whole run, such as the path driven so far) and ``static`` again when a viewer subscribes.
 
 Times: log times are the simulated time in nanoseconds from the study's start time (a run has no
 date); the MCAP's metadata record ``run`` names the study and its start time.
@@ -259,6 +259,7 @@ class LiveView:
         self._ratios, self._units, self._descriptions = ratios, units, descriptions
         self.scene = study_scene(study)
         self._track = getattr(self.scene, "track", None)
+        self._every = max(int(getattr(self.scene, "every", 1)), 1)
         self.sent = 0
         self.viewers: dict | None = {}
         self._next = 0.0
@@ -318,7 +319,7 @@ class LiveView:
         self._value = value
 
     def recorded(self, phase: int) -> None:
-        if self._track is not None:
+        if self._track is not None and self._k % self._every == 0:
             self._track(self._value)
         now = time.perf_counter()
         if now < self._next:

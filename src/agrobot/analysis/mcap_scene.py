@@ -12,7 +12,8 @@ schemas, found from the study's components by their roles:
   nominal origin, said in the message's frame and the MCAP's metadata);
 - ``/reference/pose`` (foxglove.PoseInFrame): the reference point; ``/reference/path``
   (foxglove.SceneUpdate, once): the reference path driven, as a line strip (live, where the run's signals
-  are not known in advance: the path driven so far, gathered at every base step and sent again twice a
+  are not known in advance: the path driven so far, gathered at every scene instant of simulated time
+  (20 Hz) and sent again twice a
   second of wall time while it grows, at most LIVE_PATH_POINTS points);
 - ``/field`` (foxglove.GeoJson, once): the field boundary, its swaths and the route, longitude/latitude.
 
@@ -161,7 +162,7 @@ class VehicleScene:
             self.growing.sent()
 
     def track(self, value) -> None:
-        """Live, at every base step: the reference point joins the path driven so far."""
+        """Live, at every scene instant of simulated time: the reference point joins the path driven so far."""
         if self.growing is not None:
             self.growing.add(value(f"{self.reference}.x_ref"), value(f"{self.reference}.y_ref"))
 
