@@ -77,6 +77,9 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
                         "the MCAP's topics at 20 instants a second of wall time)")
     p.add_argument("--live-wait", type=float, default=0.0, metavar="SECONDS",
                    help="with --live: wait up to SECONDS for a viewer to subscribe before the run starts")
+    p.add_argument("--live-viewers", type=int, default=16, metavar="N",
+                   help="with --live: serve at most N viewers at once (default 16, at most 64); one more is refused with the "
+                        "reason")
     add_engine_option(p, "auto")
     add_isolate_option(p)
     for option in registry().run_options:
@@ -98,7 +101,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.set or _isolated(args):
             study = study.with_overrides(args.set + _isolated(args))
     mcap = _mcap_path(args, study)
-    live = _live_view(study, args.live, args.live_wait) if args.live else None
+    live = _live_view(study, args.live, args.live_wait, args.live_viewers) if args.live else None
     engine = args.engine
     if live is not None and engine == "auto":
         engine = "python"
@@ -119,7 +122,7 @@ def _run(args: argparse.Namespace) -> int:
     finally:
         if live is not None:
             live.stop()
-            print(f"live view: {live.sent} instants sent to {live.url}")
+            print(f"live view: {live.report}")
     ended = result.metrics.get("ended_by")
     if ended:
         print(f"the run ended at t = {ended['t']:.6g} s, before the stop time: {ended['component']} asked "
@@ -133,7 +136,7 @@ def _run(args: argparse.Namespace) -> int:
     return _write_mcap(study, result, mcap) if mcap is not None else 0
 
 
-def _live_view(study, where: str, wait: float):
+def _live_view(study, where: str, wait: float, viewers: int):
     """The live view's server, bound where ``--live`` says (loopback unless a host is named)."""
     from .mcap_out import LiveView
     from .output import OutputError
@@ -143,8 +146,9 @@ def _live_view(study, where: str, wait: float):
         port_number = int(port)
     except ValueError:
         raise OutputError(f"--live {where}: expected HOST:PORT or PORT (a number), e.g. 127.0.0.1:8765") from None
-    view = LiveView(study, host or "127.0.0.1", port_number, wait=wait)
-    print(f"live view: serving {view.url} (Foxglove: open a connection, Foxglove WebSocket, to this address)",
+    view = LiveView(study, host or "127.0.0.1", port_number, wait=wait, max_viewers=viewers)
+    print(f"live view: serving {view.url} to at most {viewers} viewers (Foxglove, Lichtblick: open a connection, "
+          f"Foxglove WebSocket, to this address)",
           flush=True)
     return view
 

@@ -11,12 +11,15 @@ Topics (generic: the orchestrator knows nothing of the system simulated):
 - whatever a *scene* adds: a project's analysis module may define ``mcap_scene(study)`` returning an
   object with ``channels(context)`` (its typed channels), ``static(t_ns)`` (messages logged once at the
   start: a path, a field) and ``step(t_ns, value)`` (messages of one instant, ``value(column)`` giving
-  the signal ``component.output`` or NaN) and ``every``, the base steps between two scene instants.
+  the signal ``component.output`` or NaN) and ``every``, the base steps between two scene instants;
+  live, an optional ``track(value)`` is called at every scene instant of simulated time (what the scene
+  gathers from the whole run, such as the path driven so far) and ``static`` again when a viewer subscribes.
 
 Times: log times are the simulated time in nanoseconds from the study's start time (a run has no
 date); the MCAP's metadata record ``run`` names the study and its start time.
 
-Imported where used: foxglove (the mcap extra).
+Imported where used: foxglove (the mcap extra), orchestrator.live_relay (--live only: it loads asyncio and
+websockets).
 """
 from __future__ import annotations
 
@@ -202,38 +205,88 @@ def write_study_mcap(study, signals: pd.DataFrame, path: Path) -> tuple[Path, st
 
 
 LIVE_RATE_HZ = 20.0        # wall-clock instants a second sent to the live view
+LIVE_MAX_VIEWERS = 16      # viewers served at once (run --live-viewers N); one more is refused with the reason
+LIVE_VIEWERS_CEILING = 64  # --live-viewers at most: each viewer costs the run's machine (docs/foxglove.md)
+LIVE_QUEUE_FRAMES = 256    # frames waiting per viewer; past it the oldest message data is dropped
+MAX_PORT = 65535
+
+
+def check_live_options(host: str, port: int, wait: float, max_viewers: int) -> None:
+    """The live view's options before anything starts: an OutputError (exit 2) naming the one out of range."""
+    where = f"{host}:{port}"
+    if not 0 <= port <= MAX_PORT:
+        raise OutputError(f"--live {where}: port {port} is beyond 0-{MAX_PORT}")
+    if not (math.isfinite(wait) and wait >= 0):
+        raise OutputError(f"--live-wait {wait}: expected a finite number of seconds >= 0")
+    if not 1 <= max_viewers <= LIVE_VIEWERS_CEILING:
+        raise OutputError(f"--live-viewers {max_viewers}: expected 1 to {LIVE_VIEWERS_CEILING} viewers (each one "
+                          f"costs the run's machine; see docs/foxglove.md)")
 
 
 class LiveView:
     """An observer (orchestrator.observers) serving the running study over the Foxglove WebSocket protocol,
     with the MCAP's topics: at most ``rate`` instants a second of wall time (the latest values of every
     component and the scene), so that the run is not slowed. ``wait`` seconds at the start for a viewer to
-    subscribe (0: start at once). ``stop()`` closes the server."""
+    subscribe (0: start at once). ``stop()`` closes the server.
+
+    The SDK's server listens on the loopback at a port of its own; viewers reach it through the relay
+    (orchestrator.live_relay, its own process) at ``host:port``, which speaks ``foxglove.websocket.v1`` beside
+    the SDK's ``foxglove.sdk.v1``, serves at most ``max_viewers`` at once and drops a slow viewer's oldest
+    messages: the run logs to the SDK's channels, which never wait on a viewer."""
 
     def __init__(self, study, host: str = "127.0.0.1", port: int = 8765, rate: float = LIVE_RATE_HZ,
-                 wait: float = 0.0) -> None:
+                 wait: float = 0.0, max_viewers: int = LIVE_MAX_VIEWERS) -> None:
         import foxglove
 
-        self.study, self.rate, self.wait = study, float(rate), float(wait)
+        from .live_relay import RelayProcess, RelayRefused
+
+        check_live_options(host, port, wait, max_viewers)
+        self.study, self.rate, self.wait, self.max_viewers = study, float(rate), float(wait), int(max_viewers)
         self.context = foxglove.Context()
         self.subscribed = threading.Event()
-        listener = _listener(self.subscribed)
+        self._resend: set[str] = set()
+        self.server = foxglove.start_server(host="127.0.0.1", port=0, context=self.context,
+                                            server_listener=_listener(self.subscribed, self._resend),
+                                            name=f"{__name__.split('.')[0]} {study.study.name}")
         try:
-            self.server = foxglove.start_server(host=host, port=port, context=self.context, server_listener=listener,
-                                                name=f"{__name__.split('.')[0]} {study.study.name}")
-        except RuntimeError as exc:
+            self.relay = RelayProcess(self.server.port, host, port, self.max_viewers, LIVE_QUEUE_FRAMES)
+        except RelayRefused as exc:
+            self.server.stop()
             raise OutputError(f"--live {host}:{port}: cannot serve there ({exc}); choose another port with "
                               f"--live {host}:PORT") from None
-        self.host, self.port = host, self.server.port
+        self.host, self.port = host, self.relay.port
         ratios, units, descriptions = study_signal_facts(study)
         self._ratios, self._units, self._descriptions = ratios, units, descriptions
         self.scene = study_scene(study)
+        self._track = getattr(self.scene, "track", None)
+        self._every = max(int(getattr(self.scene, "every", 1)), 1)
         self.sent = 0
+        self.viewers: dict | None = {}
         self._next = 0.0
 
     @property
     def url(self) -> str:
         return f"ws://{self.host}:{self.port}"
+
+    @property
+    def report(self) -> str:
+        """What the view did: instants sent, viewers by subprotocol, refused, messages dropped for slow viewers."""
+        v = self.viewers
+        if v is None:
+            return f"{self.sent} instants sent to {self.url}; the relay's counts of viewers did not come in time"
+        served = {p: n for p, n in v.items() if p.startswith("foxglove.")}
+        text = f"{self.sent} instants sent to {self.url}; {sum(served.values())} viewers"
+        if served:
+            text += " (" + ", ".join(f"{n} {p}" for p, n in sorted(served.items())) + ")"
+        if v.get("refused_full"):
+            text += f"; {v['refused_full']} refused beyond {self.max_viewers} at once (--live-viewers N)"
+        if v.get("refused_subprotocol"):
+            text += f"; {v['refused_subprotocol']} refused without a Foxglove subprotocol"
+        if v.get("dropped"):
+            text += f"; {v['dropped']} messages dropped for slow viewers"
+        if v.get("closed_slow"):
+            text += f"; {v['closed_slow']} viewers closed as too slow"
+        return text
 
     # observer hooks
     advanced = None
@@ -250,19 +303,12 @@ class LiveView:
             self.scene.channels(self.context)
         if self.wait > 0:
             self.subscribed.wait(self.wait)
+        self._resend.clear()
         if self.scene is not None:
             self.scene.static(0)
         self._period = 1.0 / self.rate if self.rate > 0 else 0.0
         self._next = time.perf_counter()
-
-    def recorded(self, phase: int) -> None:
-        now = time.perf_counter()
-        if now < self._next:
-            return
-        self._next = now + self._period
-        sim = self.sim
         published = sim.published
-        t = sim.t0 + self._k * sim.h
 
         def value(column: str) -> float:
             comp, _, port = column.partition(".")
@@ -270,21 +316,43 @@ class LiveView:
                 return float(published[comp][port])
             except (KeyError, TypeError, ValueError):
                 return math.nan
+        self._value = value
+
+    def recorded(self, phase: int) -> None:
+        if self._track is not None and self._k % self._every == 0:
+            self._track(self._value)
+        now = time.perf_counter()
+        if now < self._next:
+            return
+        self._next = now + self._period
+        sim = self.sim
+        t = sim.t0 + self._k * sim.h
         t_ns = int(round((t - sim.t0) * 1e9))
-        self.signals.log(0, t, value, t_ns)
+        self.signals.log(0, t, self._value, t_ns)
         if self.scene is not None:
-            self.scene.step(t_ns, value)
+            if self._resend:                 # a viewer subscribed since: the messages logged once, again
+                self._resend.clear()
+                self.scene.static(t_ns)
+            self.scene.step(t_ns, self._value)
         self.sent += 1
 
     def stop(self) -> None:
+        """The relay told to end (it reports first), the SDK's server stopped (the relay drains what its viewers
+        wait for and closes them), the relay's counts."""
+        self.relay.finish()
         self.server.stop()
+        self.viewers = self.relay.stop()
+        if not self.viewers and self.relay.late:
+            self.viewers = None
 
 
-def _listener(event):
-    """A foxglove.ServerListener that sets ``event`` when a viewer subscribes to a channel."""
+def _listener(event, resend: set):
+    """A foxglove.ServerListener that sets ``event`` when a viewer subscribes to a channel and adds the
+    channel's topic to ``resend``."""
     import foxglove
 
     class Listener(foxglove.ServerListener):
         def on_subscribe(self, client, channel) -> None:
+            resend.add(channel.topic)
             event.set()
     return Listener()

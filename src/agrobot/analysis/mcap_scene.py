@@ -11,7 +11,10 @@ schemas, found from the study's components by their roles:
   geodetic origin (the field's for a field mission; else the study's ``[output] origin``; else a
   nominal origin, said in the message's frame and the MCAP's metadata);
 - ``/reference/pose`` (foxglove.PoseInFrame): the reference point; ``/reference/path``
-  (foxglove.SceneUpdate, once): the reference path driven, as a line strip;
+  (foxglove.SceneUpdate, once): the reference path driven, as a line strip (live, where the run's signals
+  are not known in advance: the path driven so far, gathered at every scene instant of simulated time
+  (20 Hz) and sent again twice a
+  second of wall time while it grows, at most LIVE_PATH_POINTS points);
 - ``/field`` (foxglove.GeoJson, once): the field boundary, its swaths and the route, longitude/latitude.
 
 ``world`` is the simulation's east/north frame (the mission frame of a field mission), z up.
@@ -36,6 +39,8 @@ from agrobot.orchestrator.resolver import resolve
 NOMINAL_ORIGIN = (50.8632, 4.6858)
 SCENE_STEP = 0.05          # s between two scene instants (20 Hz)
 PATH_SPACING = 0.05        # m between two points of the reference path's line
+LIVE_PATH_POINTS = 1000    # points of the live path at most (past it, every other point is dropped: 1.3 ms to send)
+LIVE_PATH_EVERY = 10       # scene instants between two sendings of a grown live path (0.5 s at 20 Hz of wall time)
 
 
 def _yaw_quaternion(heading: float):
@@ -75,6 +80,8 @@ class VehicleScene:
             keep = np.r_[True, np.diff(np.floor(s / PATH_SPACING)) > 0]
             keep[-1] = True
             self.path = xy[keep]
+        self.growing = GrowingPath(PATH_SPACING, LIVE_PATH_POINTS) if frame is None and self.reference else None
+        self._since_path = 0
         self._ch = {}
 
     @property
@@ -126,27 +133,47 @@ class VehicleScene:
                 self._ch[topic] = PoseInFrameChannel(topic, context=context)
         for topic in self.gnss.values():
             self._ch[topic] = LocationFixChannel(topic, context=context)
-        if self.path is not None:
+        if self.path is not None or self.growing is not None:
             self._ch["/reference/path"] = SceneUpdateChannel("/reference/path", context=context)
         if self.field_geojson is not None:
             self._ch["/field"] = GeoJsonChannel("/field", context=context)
 
     def static(self, t_ns: int) -> None:
-        from foxglove.messages import (Color, GeoJson, LinePrimitive, LinePrimitiveLineType, Point3, SceneEntity,
-                                       SceneUpdate)
+        from foxglove.messages import GeoJson
 
-        if "/reference/path" in self._ch:
-            line = LinePrimitive(type=LinePrimitiveLineType.LineStrip, thickness=0.05, scale_invariant=False,
-                                 points=[Point3(x=float(x), y=float(y), z=0.0) for x, y in self.path],
-                                 color=Color(r=0.4, g=0.4, b=0.4, a=1.0))
-            self._ch["/reference/path"].log(SceneUpdate(entities=[SceneEntity(
-                timestamp=_timestamp(t_ns), frame_id="world", id="reference_path", lines=[line])]), log_time=t_ns)
+        self._log_path(t_ns)
         if "/field" in self._ch:
             self._ch["/field"].log(GeoJson(geojson=json.dumps(self.field_geojson)), log_time=t_ns)
+
+    def _log_path(self, t_ns: int) -> None:
+        from foxglove.messages import Color, LinePrimitive, LinePrimitiveLineType, Point3, SceneEntity, SceneUpdate
+
+        if "/reference/path" not in self._ch:
+            return
+        path = self.path if self.growing is None else self.growing.points()
+        if not len(path):
+            return
+        line = LinePrimitive(type=LinePrimitiveLineType.LineStrip, thickness=0.05, scale_invariant=False,
+                             points=[Point3(x=float(x), y=float(y), z=0.0) for x, y in path],
+                             color=Color(r=0.4, g=0.4, b=0.4, a=1.0))
+        self._ch["/reference/path"].log(SceneUpdate(entities=[SceneEntity(
+            timestamp=_timestamp(t_ns), frame_id="world", id="reference_path", lines=[line])]), log_time=t_ns)
+        if self.growing is not None:
+            self.growing.sent()
+
+    def track(self, value) -> None:
+        """Live, at every scene instant of simulated time: the reference point joins the path driven so far."""
+        if self.growing is not None:
+            self.growing.add(value(f"{self.reference}.x_ref"), value(f"{self.reference}.y_ref"))
 
     def step(self, t_ns: int, value) -> None:
         from foxglove.messages import (FrameTransform, FrameTransforms, LocationFix, Pose, PoseInFrame, Quaternion,
                                        Vector3)
+        if self.growing is not None:
+            self._since_path += 1
+            if self.growing.grown and (self._since_path >= LIVE_PATH_EVERY or self.growing.never_sent):
+                self._since_path = 0
+                self._log_path(t_ns)
 
         stamp = _timestamp(t_ns)
         transforms = []
@@ -198,6 +225,35 @@ class VehicleScene:
                                                 altitude=0.0), log_time=t_ns)
         if transforms:
             self._ch["/tf"].log(FrameTransforms(transforms=transforms), log_time=t_ns)
+
+
+class GrowingPath:
+    """A path gathered point by point: a point joins when it lies ``spacing`` or more from the last one; past
+    ``most`` points every other one is dropped and the spacing doubles (memory and message size bounded)."""
+
+    def __init__(self, spacing: float, most: int) -> None:
+        self.spacing, self.most = float(spacing), int(most)
+        self.xy: list[tuple[float, float]] = []
+        self.grown, self.never_sent = False, True
+
+    def add(self, x: float, y: float) -> None:
+        if not (math.isfinite(x) and math.isfinite(y)):
+            return
+        if self.xy:
+            last = self.xy[-1]
+            if math.hypot(x - last[0], y - last[1]) < self.spacing:
+                return
+        self.xy.append((x, y))
+        self.grown = True
+        if len(self.xy) > self.most:
+            self.xy = self.xy[::2] + ([self.xy[-1]] if len(self.xy) % 2 == 0 else [])
+            self.spacing *= 2.0
+
+    def points(self) -> list[tuple[float, float]]:
+        return list(self.xy)
+
+    def sent(self) -> None:
+        self.grown = self.never_sent = False
 
 
 def _route_frame(plan):

@@ -92,7 +92,7 @@ def gnss_table(t, lat, lon, height=None, quality=None, speed=None, position_std=
     def col(x, fill):
         return np.full(n, fill, float) if x is None else np.asarray(x, float)
     return pd.DataFrame({"utc": np.asarray(t, float), "lat": np.asarray(lat, float), "lon": np.asarray(lon, float),
-                         "height": col(height, 0.0), "quality": col(quality, 1.0), "speed": col(speed, math.nan),
+                         "height": col(height, 0.0), "quality": col(quality, math.nan), "speed": col(speed, math.nan),
                          "course": math.nan, "heading": math.nan, "position_std": col(position_std, math.nan)})
 
 
