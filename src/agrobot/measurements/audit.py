@@ -67,6 +67,7 @@ import numpy as np
 
 from .clocks import parabolic_peak
 from .direction import check_direction
+from .findings import finding
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
@@ -84,13 +85,6 @@ MOVING = 1.0            # m/s: the GNSS course is read above this speed
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 G = 9.80665
-
-
-def finding(kind: str, channels, value: float, interval, unit: str, meaning: str, resolved: bool = False) -> dict:
-    """One finding in the shape every consumer reads (module docstring)."""
-    return {"kind": kind, "channels": [str(c) for c in channels], "value": float(value),
-            "interval": None if interval is None else [float(interval[0]), float(interval[1])],
-            "unit": unit, "meaning": meaning, "resolved": bool(resolved)}
 
 
 # --- channels ---------------------------------------------------------------------------------

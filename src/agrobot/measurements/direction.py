@@ -22,7 +22,6 @@ when it is negative on most of them; otherwise it is unsigned and never passes a
 the import is refused, naming the stretches and the remedy, unless ``--sign-speed`` asks to make it
 negative there (printed, with the stretches).
 
-Imported where used: measurements.audit (the finding's shape; it imports this module).
 """
 from __future__ import annotations
 
@@ -30,6 +29,7 @@ import math
 
 import numpy as np
 
+from .findings import finding
 from .log import LogError
 
 CHORD = 0.25            # s: the course from the fixes this far either side
@@ -186,8 +186,6 @@ def judged_speed(streams):
 def check_direction(streams, options, source, t0: float) -> list[dict]:
     """The direction findings of a recording with fixes; a LogError for an unsigned speed while
     reversing unless ``options.sign_speed`` (then the speed is negated there, in place)."""
-    from .audit import finding
-
     if streams.gnss is None or len(streams.gnss) < 20:
         return []
     t, c, _ = course(streams.gnss)
