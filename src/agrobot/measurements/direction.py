@@ -21,7 +21,6 @@ not cut a drive into pieces), and named reversing when at least REVERSE_MIN s lo
 when it is negative on most of them; otherwise it is unsigned and never passes as forward driving:
 the import is refused, naming the stretches and the remedy, unless ``--sign-speed`` asks to make it
 negative there (printed, with the stretches).
-
 """
 from __future__ import annotations
 
