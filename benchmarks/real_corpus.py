@@ -1,0 +1,562 @@
+"""Real machines of five classes, each read twice: by a second method on the raw files (numpy and
+pandas, no agrobot) and by the project (agrobot.api.convert's audit, agrobot.api.identify):
+
+    python3 benchmarks/real_corpus.py [--manifest benchmarks/real_corpus.toml] [--only NAME]
+        [--timeout SECONDS] [--realdata DIR] [--corpus DIR] [--no-identify]
+
+The recordings, their vehicles, licences, origins and how the project reads each are listed in
+benchmarks/real_corpus.toml (docs/real_corpus.md). Per recording and quantity one row: the
+reference number, the project's, and whether they agree:
+
+* rate of each key channel: the reference counts the channel's own value changes (a held value is
+  not an update) and its rows; the project's is the audit's rate for that column; they agree within
+  25 % of the updates' rate.
+* reversing: the share of moving time (|v| > 0.2 m/s) driven backwards, from a signed speed or from
+  the course against the heading; the project's is the share of v < 0 in the converted log.
+* yaw/kinematic slope: the regression of the yaw rate on v tan(delta/N)/L (N the steering ratio, L
+  the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation; beside identify's
+  steering gain (agree within 30 %).
+* command-to-yaw delay: that lag, found by cross-correlation over -1..1 s; beside identify's
+  delay plus its lag (agree within 0.08 s; a delay on its zero bound does not agree).
+* identify's understeer gradient and held-out fit, the audit's findings and the published figures,
+  printed without a verdict.
+
+Every exception of a recording is caught and printed as its row: what fails today is information.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import signal
+import sys
+import time
+import tomllib
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parent.parent
+ROOTS = {"realdata": Path("/work/shared/realdata"), "corpus": Path("/work/corpus_data")}
+MOVING = 0.2            # m/s: moving, for the reversing share
+KINEMATIC_MIN_SPEED = 0.2   # m/s: the slope and the delay are computed above it
+NOT_CHANNELS = ("commands",)   # [recording.reference] lists that are not channels
+GRID = 0.02             # s: the common grid of the slope and the cross-correlation
+
+
+# --- the second method: the raw files, read with pandas ---------------------------------------
+def _column(frame: pd.DataFrame, name: str) -> np.ndarray:
+    """A column by name, or by 0-based index written '#N'."""
+    if name.startswith("#"):
+        return pd.to_numeric(frame.iloc[:, int(name[1:])], errors="coerce").to_numpy(float)
+    return pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
+
+
+def _times(folder: Path, spec: str, frame: pd.DataFrame, read) -> np.ndarray:
+    """A table's times: 's+ns' (seconds plus nanoseconds), 'FILE:COLUMN' (another file's), a column."""
+    if spec == "s+ns":
+        return _column(frame, "s") + 1e-9 * _column(frame, "ns")
+    if ":" in spec:
+        other, col = spec.split(":")
+        return _column(read(folder / other), col)
+    return _column(frame, spec)
+
+
+def read_tables(folder: Path, ref: dict) -> dict:
+    """channel -> (t, x) in SI from [file, time, column, scale(, offset)] per channel."""
+    header = None if ref.get("header") == "none" else "infer"
+    cache: dict = {}
+
+    def read(path: Path) -> pd.DataFrame:
+        if path not in cache:
+            cache[path] = pd.read_csv(path, header=header if header is None else 0)
+        return cache[path]
+
+    out = {}
+    for name, spec in ref.items():
+        if not isinstance(spec, list) or name in NOT_CHANNELS:
+            continue
+        file, tspec, col, scale, *offset = spec
+        frame = read(folder / file)
+        t, x = _times(folder, tspec, frame, read), _column(frame, col)
+        n = min(len(t), len(x))                  # an input with one row per interval: one row shorter
+        t, x = t[:n], (x[:n] + (offset[0] if offset else 0.0)) * scale
+        keep = np.isfinite(t) & np.isfinite(x)
+        if np.nanmedian(t) > 1e8:                # Unix times: a row of zeros is not a sample
+            keep &= t > 1e8
+        out[name] = (t[keep], x[keep])
+    return out
+
+
+def _nmea_time(hhmmss: str) -> float:
+    return int(hhmmss[:2]) * 3600 + int(hhmmss[2:4]) * 60 + float(hhmmss[4:])
+
+
+def _degrees(value: str, hemisphere: str) -> float:
+    d = float(value[: value.index(".") - 2]) + float(value[value.index(".") - 2:]) / 60
+    return -d if hemisphere in "SW" else d
+
+
+def _from_east(compass_deg: str) -> float:
+    """A compass angle [deg, clockwise from north] as an angle [rad] counter-clockwise from east."""
+    return math.pi / 2 - math.radians(float(compass_deg))
+
+
+def read_nmea(path: Path) -> dict:
+    """GGA positions and fix quality, RMC/VTG speed and course, HDT/PASHR heading, each sentence
+    found by its '$' (two glued on one line are two sentences)."""
+    rows: dict[str, list] = {"lat": [], "lon": [], "quality": [], "speed": [], "course": [], "heading": []}
+    last = math.nan
+    text = path.read_text(errors="replace")
+    for s in re.findall(r"\$[A-Z]{2}[A-Z]{3},[^$\r\n]*", text):
+        f = s.split("*")[0].split(",")
+        kind = f[0][3:]
+        try:
+            if kind in ("GGA", "RMC", "HDT") or f[0] == "$PASHR":
+                last = _nmea_time(f[1]) if kind != "HDT" and f[1] else last
+            if kind == "GGA" and f[2]:
+                rows["lat"].append((last, _degrees(f[2], f[3])))
+                rows["lon"].append((last, _degrees(f[4], f[5])))
+                rows["quality"].append((last, float(f[6])))
+            elif kind == "RMC" and f[7]:
+                rows["speed"].append((last, float(f[7]) * 0.514444))
+                if f[8]:
+                    rows["course"].append((last, _from_east(f[8])))
+            elif kind == "HDT" and f[1]:
+                rows["heading"].append((last, _from_east(f[1])))
+            elif f[0] == "$PASHR" and f[2]:
+                rows["heading"].append((last, _from_east(f[2])))
+        except (ValueError, IndexError):
+            continue
+    return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+
+
+PTN_BYTES = {"A": ("<i4", 1e-7), "B": ("<i4", 1e-7), "C": ("<i4", 1e-3), "D": ("<u1", 1), "E": ("<u2", 0.1),
+             "F": ("<u2", 0.1), "G": ("<u1", 1), "H": ("<u4", 1e-3), "I": ("<u2", 1)}
+
+
+def read_tlg(folder: Path, stem: str) -> dict:
+    """An ISO 11783-10 binary time log: per record the time of day [ms] and day, the position
+    fields its PTN leaves empty, then N (DLV index, int32 value) pairs."""
+    xml = next(p for p in folder.iterdir() if p.stem.upper() == stem.upper() and p.suffix.upper() == ".XML")
+    binary = next(p for p in folder.iterdir() if p.stem.upper() == stem.upper() and p.suffix.upper() == ".BIN")
+    tim = ET.parse(xml).getroot()
+    ptn = [k for k, v in (tim.find("PTN").attrib.items() if tim.find("PTN") is not None else []) if v == ""]
+    ddis = [d.get("A") for d in tim.findall("DLV")]
+    data, i = binary.read_bytes(), 0
+    out: dict[str, list] = {k: [] for k in ["t", *ptn, *(f"DDI {d}" for d in ddis)]}
+    while i + 6 <= len(data):
+        ms, day = np.frombuffer(data, "<u4", 1, i)[0], np.frombuffer(data, "<u2", 1, i + 4)[0]
+        t, i = float(day) * 86400 + ms / 1000, i + 6
+        for k in ptn:
+            dtype, scale = PTN_BYTES[k]
+            out[k].append((t, float(np.frombuffer(data, dtype, 1, i)[0]) * scale))
+            i += np.dtype(dtype).itemsize
+        n, i = data[i], i + 1
+        for _ in range(n):
+            out[f"DDI {ddis[data[i]]}"].append((t, float(np.frombuffer(data, "<i4", 1, i + 1)[0])))
+            i += 5
+    names = {"A": "lat", "B": "lon", "D": "quality", "H": "gnss_time"}
+    return {names.get(k, k): (np.array([a for a, _ in v]), np.array([b for _, b in v]))
+            for k, v in out.items() if k != "t" and v}
+
+
+def read_optitrack(path: Path) -> dict:
+    """A Motive export (7 lines above the data; Y up): x = X, y = -Z, heading = the rotation about
+    Y from the quaternion (x, y, z, w) in columns 3-6."""
+    frame = pd.read_csv(path, skiprows=7, header=None)
+    t = frame[1].to_numpy(float)
+    qx, qy, qz, qw = (frame[k].to_numpy(float) for k in (2, 3, 4, 5))
+    yaw = np.arctan2(2 * (qw * qy + qx * qz), 1 - 2 * (qy**2 + qx**2))
+    return {"x": (t, frame[6].to_numpy(float)), "y": (t, -frame[8].to_numpy(float)), "heading": (t, yaw)}
+
+
+def read_rosbag(path: Path, ref: dict) -> dict:
+    """channel -> (receive time, field) from [topic, field.path, scale(, offset)], read with the
+    rosbags library."""
+    from rosbags.highlevel import AnyReader
+
+    wanted = {name: spec for name, spec in ref.items() if isinstance(spec, list) and name not in NOT_CHANNELS}
+    rows: dict[str, list] = {name: [] for name in wanted}
+    with AnyReader([path]) as reader:
+        topics = {spec[0] for spec in wanted.values()}
+        for conn, stamp, raw in reader.messages([c for c in reader.connections if c.topic in topics]):
+            msg = reader.deserialize(raw, conn.msgtype)
+            for name, (topic, field, scale, *offset) in wanted.items():
+                if topic == conn.topic:
+                    value = msg
+                    for part in field.split("."):
+                        value = getattr(value, part)
+                    rows[name].append((stamp * 1e-9, (float(value) + (offset[0] if offset else 0.0)) * scale))
+    return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+
+
+def read_reference(rec: dict, roots: dict) -> dict:
+    path = roots[rec["root"]] / rec["path"]
+    ref = rec["reference"]
+    kind = ref["kind"]
+    if kind == "tables":
+        folder = path.parent if path.is_file() else path
+        return read_tables(folder, ref)
+    if kind == "nmea":
+        return read_nmea(path)
+    if kind == "tlg":
+        return read_tlg(path, ref["file"])
+    if kind == "optitrack":
+        return read_optitrack(path)
+    if kind == "rosbag":
+        return read_rosbag(path, ref)
+    raise ValueError(f"reference kind {kind!r}")
+
+
+# --- the reference numbers --------------------------------------------------------------------
+def rates(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+    """(rows, own updates) per second over the time the channel covers: the span less its gaps
+    (intervals over 3 x the median row interval), so that a gap is not read as a slow rate, and
+    a held value (a row repeating the last value) is not an update."""
+    if len(t) < 3:
+        return math.nan, math.nan
+    dt = np.diff(t)
+    covered = dt <= 3 * np.median(dt)
+    seconds = float(dt[covered].sum())
+    if seconds <= 0:
+        return math.nan, math.nan
+    return int(covered.sum()) / seconds, int(np.count_nonzero((np.diff(x) != 0) & covered)) / seconds
+
+
+def local_xy(lat: tuple, lon: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """East and north [m] of a position from its first (equirectangular: a field's extent)."""
+    t, la = lat
+    lo = np.interp(t, *lon)
+    r = 6371000.0
+    return t, np.radians(lo - lo[0]) * r * math.cos(math.radians(la[0])), np.radians(la - la[0]) * r
+
+
+def positions(ch: dict):
+    """(t, x, y) on the position's own updates (a held position is not a new one), or None."""
+    if "x" in ch and "y" in ch:
+        t, x = ch["x"]
+        y = np.interp(t, *ch["y"])
+    elif "lat" in ch and "lon" in ch:
+        t, x, y = local_xy(ch["lat"], ch["lon"])
+    else:
+        return None
+    new = np.r_[True, (np.diff(x) != 0) | (np.diff(y) != 0)]
+    return t[new], x[new], y[new]
+
+
+def course_and_speed(ch: dict):
+    """The course and the unsigned speed of the positions' own updates, at their midpoints."""
+    p = positions(ch)
+    if p is None or len(p[0]) < 3:
+        return None
+    t, x, y = p
+    dt = np.diff(t)
+    ok = dt > 0
+    tm = (t[1:] + t[:-1])[ok] / 2
+    return tm, np.arctan2(np.diff(y)[ok], np.diff(x)[ok]), np.hypot(np.diff(x), np.diff(y))[ok] / dt[ok]
+
+
+def reversing(ch: dict) -> tuple[float, str]:
+    """The share of moving time driven backwards, and how it was found."""
+    if "v" in ch:
+        t, v = ch["v"]
+        moving = np.abs(v) > MOVING
+        if moving.any() and (v < 0).any():
+            return float(np.mean(v[moving] < 0)), "signed speed"
+    cs = course_and_speed(ch)
+    if cs is not None and "heading" in ch:
+        tm, course, speed = cs
+        heading = np.interp(tm, ch["heading"][0], np.unwrap(ch["heading"][1]))
+        moving = speed > MOVING
+        if not moving.any():
+            return math.nan, "never moving"
+        turn = np.exp(1j * (course - heading))[moving]
+        mount = np.angle(np.median(turn.real) + 1j * np.median(turn.imag))    # the body axis against the track
+        share = float(np.mean(np.abs(np.angle(turn * np.exp(-1j * mount))) > math.pi / 2))
+        return share, f"course against heading (mount {math.degrees(mount):.0f} deg taken as forward)"
+    if "v" in ch:
+        return 0.0, "speed never negative"
+    return math.nan, "no speed, no heading"
+
+
+def yaw_rate_of(ch: dict):
+    """(t, r): the gyro, else the derivative of the unwrapped heading on its own updates."""
+    if "yaw_rate" in ch:
+        return ch["yaw_rate"]
+    if "heading" in ch:
+        t, h = ch["heading"]
+        new = np.r_[True, np.diff(h) != 0]
+        t, h = t[new], np.unwrap(h[new])
+        return (t[1:] + t[:-1]) / 2, np.diff(h) / np.diff(t)
+    return None
+
+
+def speed_of(ch: dict):
+    if "v" in ch:
+        return ch["v"]
+    cs = course_and_speed(ch)
+    return None if cs is None else (cs[0], cs[2])
+
+
+def kinematic(ch: dict, vehicle: dict) -> dict | None:
+    """The yaw rate against v tan(delta/N)/L on a 50 Hz grid (|v| above KINEMATIC_MIN_SPEED):
+    the lag of the best correlation in -1..1 s, the correlation there and at zero, the slope there."""
+    delta = ch.get("delta")
+    r, v = yaw_rate_of(ch), speed_of(ch)
+    if delta is None or r is None or v is None or "wheelbase" not in vehicle:
+        return None
+    lo = max(delta[0][0], r[0][0], v[0][0])
+    hi = min(delta[0][-1], r[0][-1], v[0][-1])
+    if hi - lo < 2.0:
+        return None
+    t = np.arange(lo, hi, GRID)
+    n = vehicle.get("steering_ratio", 1.0)
+    kin = np.interp(t, *v) * np.tan(np.interp(t, *delta) / n) / vehicle["wheelbase"]
+    yaw = np.interp(t, *r)
+    ok = np.abs(np.interp(t, *v)) > KINEMATIC_MIN_SPEED
+    best = (-2.0, 0)
+    corr0 = math.nan
+    if np.std(kin[ok]) < 0.02 * np.abs(kin[ok]).mean() + 1e-9:    # a constant input: the ratio of means
+        m = ok
+        return {"delay": math.nan, "corr": math.nan, "corr0": math.nan, "slope": math.nan,
+                "ratio": float(np.mean(yaw[m]) / np.mean(kin[m])), "seconds": float(m.sum() * GRID)}
+    for lag in range(-int(1.0 / GRID), int(1.0 / GRID) + 1):
+        a, b, m = _shifted(kin, yaw, ok, lag)
+        if m.sum() < 20 or np.std(a[m]) == 0 or np.std(b[m]) == 0:
+            continue
+        c = float(np.corrcoef(a[m], b[m])[0, 1])
+        corr0 = c if lag == 0 else corr0
+        best = max(best, (c, lag))
+    if best[0] == -2.0:
+        return None
+    a, b, m = _shifted(kin, yaw, ok, best[1])
+    slope = float(np.polyfit(a[m], b[m], 1)[0])
+    ratio = float(np.mean(b[m]) / np.mean(a[m])) if abs(np.mean(a[m])) > 1e-3 else math.nan
+    return {"delay": best[1] * GRID, "corr": best[0], "corr0": corr0, "slope": slope, "ratio": ratio,
+            "seconds": float(m.sum() * GRID)}
+
+
+def _shifted(kin, yaw, ok, lag: int):
+    """kin(t) against yaw(t + lag): the yaw rate answering lag samples after the input."""
+    if lag >= 0:
+        return kin[: len(kin) - lag], yaw[lag:], ok[: len(ok) - lag]
+    return kin[-lag:], yaw[: len(yaw) + lag], ok[-lag:]
+
+
+def reference_numbers(rec: dict, roots: dict) -> dict:
+    """The second method's numbers; [recording.reference] shift moves a channel earlier by a
+    latency its publisher measured."""
+    ch = read_reference(rec, roots)
+    for name, seconds in rec["reference"].get("shift", {}).items():
+        ch[name] = (ch[name][0] - seconds, ch[name][1])
+    cs = course_and_speed(ch)
+    out = {"rates": {k: rates(*v) for k, v in ch.items()}, "reversing": reversing(ch),
+           "top_speed": float(np.percentile(cs[2], 99)) if cs is not None and len(cs[2]) else math.nan,
+           "kinematic": kinematic(ch, rec.get("vehicle", {})), "channels": ch}
+    if "quality" in ch:
+        out["quality"] = sorted({int(q) for q in ch["quality"][1]})
+    return out
+
+
+# --- the project's numbers --------------------------------------------------------------------
+def import_options(rec: dict):
+    from agrobot.measurements.options import ImportOptions
+    from agrobot.measurements.signal_expressions import parse_signal
+
+    c = rec.get("convert", {})
+    return ImportOptions(signals=[parse_signal(s) for s in c.get("signals", [])], time=c.get("time"),
+                         wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"),
+                         align=c.get("align", "auto"))
+
+
+def study_path(rec: dict, roots: dict) -> str | None:
+    s = rec.get("convert", {}).get("study")
+    if s is None:
+        return None
+    return str(ROOT / s) if (ROOT / s).exists() else str(roots[rec["root"]] / s)
+
+
+def project_import(rec: dict, roots: dict) -> dict:
+    """convert: the audit's rate per log column, its findings, the log's reversing share."""
+    from agrobot import api
+
+    done = api.convert(roots[rec["root"]] / rec["path"], options=import_options(rec))
+    audit = done.report.get("audit", {})
+    channel_rates = {}
+    for r in audit.get("channels", []):
+        for name in r["channel"].split(", "):
+            channel_rates[name] = r["rate_hz"]
+    log = done.log
+    out = {"rates": channel_rates, "rows_hz": done.report.get("rate_hz"),
+           "findings": [f"{f['kind']}{'' if f['resolved'] else '!'} {f['value']:.3g} {f['unit']}".strip()
+                        for f in audit.get("findings", [])],
+           "quirks": list(done.report.get("quirks", [])), "columns": [c for c in log.columns if c != "t"],
+           "seconds": float(log["t"].iloc[-1] - log["t"].iloc[0]) if len(log) else 0.0}
+    if "v" in log:
+        v = log["v"].to_numpy(float)
+        moving = np.abs(v) > MOVING
+        out["reversing"] = float(np.mean(v[moving] < 0)) if moving.any() else math.nan
+    if "fix_quality" in log:
+        out["quality"] = sorted({int(q) for q in log["fix_quality"].dropna()})
+    return out
+
+
+def _value(report: dict, *keys):
+    q = report
+    for k in keys:
+        if not isinstance(q, dict) or k not in q:
+            return None
+        q = q[k]
+    return q.get("value") if isinstance(q, dict) else q
+
+
+def project_identify(rec: dict, roots: dict) -> dict:
+    """identify: delay (+ lag), steering gain and offset, understeer gradient, held-out fit, wheelbase."""
+    from agrobot import api
+
+    done = api.identify(str(roots[rec["root"]] / rec["path"]), recording=import_options(rec),
+                        study=study_path(rec, roots), plots=False)
+    rep = done.report
+    return {"method": done.method, "delay": _value(rep, "delay"), "lag": _value(rep, "parameters", "lag"),
+            "steer_gain": _value(rep, "parameters", "steer_gain"),
+            "steer_offset": _value(rep, "parameters", "steer_offset"),
+            "K": _value(rep, "understeer_gradient"), "fit": _value(rep, "held_out_fit"),
+            "wheelbase": _value(rep, "vehicle", "wheelbase"), "input": rep.get("input")}
+
+
+# --- the table --------------------------------------------------------------------------------
+class TimedOut(Exception):
+    pass
+
+
+def _alarm(signum, frame):
+    raise TimedOut()
+
+
+def guarded(what: str, timeout: float, compute, *args):
+    """compute(*args), or the text of what it raised (a timeout included)."""
+    signal.signal(signal.SIGALRM, _alarm)
+    signal.setitimer(signal.ITIMER_REAL, timeout)
+    try:
+        return compute(*args)
+    except TimedOut:
+        return f"{what}: no result within --timeout {timeout:g} s"
+    except BaseException as exc:          # noqa: BLE001 - every failure is a row of the table
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        return f"{what} failed: {type(exc).__name__}: {' '.join(str(exc).split())}"
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+
+
+def _f(x, fmt: str = "{:.3g}") -> str:
+    return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else fmt.format(x)
+
+
+def _agree(ok) -> str:
+    return "-" if ok is None else "yes" if ok else "NO"
+
+
+CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "v": ("v",), "x": ("gnss", "x"),
+             "y": ("gnss", "y"), "lat": ("gnss", "lat"), "lon": ("gnss", "lon"), "heading": ("heading",)}
+
+
+def rate_rows(ref: dict, imp, commands: list) -> list[tuple]:
+    """A measured channel's rate is its updates'; a command's, its messages' (a repeated command
+    is sent again)."""
+    rows = []
+    for name, (rows_hz, updates_hz) in ref["rates"].items():
+        names = CANONICAL.get(name)
+        if names is None:
+            continue
+        project = None if isinstance(imp, str) else next((imp["rates"][n] for n in names if n in imp["rates"]), None)
+        truth = rows_hz if name in commands else updates_hz
+        ok = None if project is None or not truth else abs(project - truth) <= 0.25 * truth
+        rows.append((f"rate {name} [Hz]" + (" (a command)" if name in commands else ""),
+                     f"{_f(updates_hz)} updates in {_f(rows_hz)} rows", _f(project), _agree(ok)))
+    return rows
+
+
+def kinematic_rows(ref: dict, ident) -> list[tuple]:
+    k = ref["kinematic"]
+    if k is None:
+        return []
+    got = ident if isinstance(ident, dict) else {}
+    gain = got.get("steer_gain")
+    slope = k["slope"] if not math.isnan(k["slope"]) else k["ratio"]
+    rows = [("yaw / kinematic slope", f"{_f(k['slope'])} (ratio of means {_f(k['ratio'])}, r {_f(k['corr'], '{:.2f}')}, "
+             f"{k['seconds']:.0f} s)", f"steer_gain {_f(gain)}",
+             _agree(None if gain is None or math.isnan(slope) else abs(gain - slope) <= 0.3 * abs(slope)))]
+    total = None if got.get("delay") is None else got["delay"] + (got.get("lag") or 0.0)
+    verdict = _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)
+    if got.get("delay") is not None and got["delay"] < 1e-6:
+        verdict = "NO (on its zero bound)"        # a verdict never sits on a bound
+    rows.append(("command-to-yaw delay [s]", f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
+                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}", verdict))
+    return rows
+
+
+def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> list[tuple]:
+    ref = guarded("reference", timeout, reference_numbers, rec, roots)
+    if isinstance(ref, str):
+        return [("reference", ref, "-", "-")]
+    imp = guarded("convert", timeout, project_import, rec, roots)
+    rows = rate_rows(ref, imp, rec["reference"].get("commands", []))
+    share, how = ref["reversing"]
+    project = None if isinstance(imp, str) else imp.get("reversing")
+    rows.append(("reversing [% of moving]", f"{_f(100 * share, '{:.1f}')} ({how})", _f(None if project is None else 100 * project, "{:.1f}"),
+                 _agree(None if project is None or math.isnan(share) else abs(project - share) <= 0.02)))
+    if "quality" in ref:
+        rows.append(("fix quality values", str(ref["quality"]), str(imp.get("quality", "-")) if isinstance(imp, dict) else "-",
+                     _agree(None if not isinstance(imp, dict) or "quality" not in imp else imp["quality"] == ref["quality"])))
+    rows.append(("top speed [m/s] (99 %, positions)", _f(ref["top_speed"]), "-", "-"))
+    ident = guarded("identify", timeout, project_identify, rec, roots) if identify else "not run (--no-identify)"
+    rows += kinematic_rows(ref, ident)
+    if isinstance(ident, dict):
+        rows.append(("identify: K [rad/(m/s2)]; fit [%]; L [m]", "-",
+                     f"{_f(ident['K'])}; {_f(ident['fit'], '{:.0f}')}; {_f(ident['wheelbase'])} ({ident['method']}, "
+                     f"input {ident['input']}, offset {_f(ident['steer_offset'])} rad)", "-"))
+    else:
+        rows.append(("identify", "-", ident, "-"))
+    rows.append(("audit findings (! unresolved)", "-", imp if isinstance(imp, str) else
+                 "; ".join(imp["findings"]) or "none", "-"))
+    if isinstance(imp, dict) and imp["quirks"]:
+        rows.append(("import quirks", "-", "; ".join(imp["quirks"]), "-"))
+    rows.append(("published", rec["reference"].get("published", "-"), "-", "-"))
+    return rows
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--manifest", type=Path, default=ROOT / "benchmarks" / "real_corpus.toml")
+    p.add_argument("--only", help="the recording of this name (or names containing it)")
+    p.add_argument("--timeout", type=float, default=300.0, help="seconds per step of a recording")
+    p.add_argument("--realdata", type=Path, default=ROOTS["realdata"])
+    p.add_argument("--corpus", type=Path, default=ROOTS["corpus"])
+    p.add_argument("--no-identify", action="store_true", help="the audit and the references only")
+    args = p.parse_args(argv)
+    roots = {"realdata": args.realdata, "corpus": args.corpus}
+    recs = tomllib.loads(args.manifest.read_text())["recording"]
+    recs = [r for r in recs if not args.only or args.only in r["name"]]
+    if not recs:
+        print(f"error: --only {args.only}: no recording of that name in {args.manifest}", file=sys.stderr)
+        return 2
+    print("| recording | class | quantity | reference (numpy, raw files) | project | agrees |\n|---|---|---|---|---|---|")
+    for rec in recs:
+        start = time.perf_counter()
+        if not (roots[rec["root"]] / rec["path"]).exists():
+            rows = [("files", f"missing: {roots[rec['root']] / rec['path']}", "-", "-")]
+        else:
+            rows = recording_rows(rec, roots, args.timeout, not args.no_identify)
+        for q, r, pj, a in rows:
+            cells = (rec["name"], rec["class"], q, r, pj, a)
+            print("| " + " | ".join(str(c).replace("|", "/").replace("\n", " ") for c in cells) + " |", flush=True)
+        print(f"{rec['name']}: {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
