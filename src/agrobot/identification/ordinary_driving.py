@@ -168,22 +168,23 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False) -> dict:
+                     dynamic: bool = False, wheelbase: float | None = None) -> dict:
     """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
     what the log lacks. Without a gyro the yaw rate comes from a heading or the GNSS course above
     ``course_speed`` (identification.yaw_measurement); in the kinematic regime (identification.kinematic)
-    the steering map is fitted instead of the tyres, unless ``dynamic``."""
+    the steering map is fitted instead of the tyres, unless ``dynamic``. ``wheelbase``: the one given
+    with the recording (--wheelbase), before the study's (wheelbase_of)."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
-    L = vehicle.wheelbase or (p.l_f + p.l_r)
+    L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
     frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
     log.kernel = measured.kernel(log.h)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
-    notes = list(log.notes) + [measured.text]
+    notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}"]
     notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
                  "steering chain" if command else "input: the measured wheel angle delta")
     floor = course_speed if measured.kind == "GNSS course" else 0.0
@@ -192,7 +193,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     p95 = lateral_p95(log, min_speed)
     if p95 < KINEMATIC_LATERAL and not dynamic:
         say("kinematic regime: fitting the steering map")
-        return _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95)
+        return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95)
     fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
@@ -218,7 +219,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "samples_per_second": 1 / log.h, "seconds_driven": driven,
         "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
                      "burn_in_s": BURN_IN, "min_speed": min_speed},
-        "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
+        "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
                     "axle_loads": list(fits.loads)},
         "understeer_gradient": understeer,
         "characteristic_speed": char,
@@ -247,9 +248,11 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     return report
 
 
-def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95) -> dict:
+def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes,
+               p95) -> dict:
     """The report in the kinematic regime (identification.kinematic): the steering map in place of
-    the tyres; the dynamic fit is what ``dynamic=True`` asks for."""
+    the tyres; the dynamic fit is what ``dynamic=True`` asks for. ``wheelbase``: (L, where from)."""
+    L, L_from = wheelbase
     fixed, bias_info = _standstill_bias(log)
     part = kinematic_report(log, segs, L, fixed, p95)
     smap = part["steering_map"]
@@ -261,12 +264,27 @@ def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, v
             "input": input_name, "final_model": "kinematic", "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
                          "burn_in_s": BURN_IN, "min_speed": min_speed},
-            "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
+            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
             **{k: v for k, v in part.items() if k != "_plot"}, "delay": smap["delay"], "parameters": params,
             "not_identifiable": [f"{k}: {v['note']}" for k, v in params.items() if v.get("note")],
             "linear_range": {"value": float("nan"), "note": part["regime"]["says"]},
             "steady_state_regression": {"note": part["regime"]["says"]}, "comparisons": [], "physical_checks": {},
             "notes": notes, "yaw_measurement": measured.as_dict(), "_plot": part["_plot"]}
+
+
+def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, study) -> tuple[float, str]:
+    """(L [m], where it comes from): the one given with the recording (--wheelbase), else the study's
+    [vehicle] wheelbase, else its yaw plant's l_f + l_r (the paper tractor's without a study)."""
+    where = getattr(study, "path", None)
+    if given:
+        passed = (f"; the study's {vehicle.wheelbase:.3g} m passed over" if vehicle.wheelbase and
+                  abs(vehicle.wheelbase - given) > 1e-9 else "")
+        return float(given), f"given with the recording (--wheelbase){passed}"
+    if vehicle.wheelbase:
+        return float(vehicle.wheelbase), f"the [vehicle] table of {where}"
+    if study is not None:
+        return p.l_f + p.l_r, f"l_f + l_r of the yaw plant of {where} (--wheelbase gives the vehicle's)"
+    return p.l_f + p.l_r, "the paper tractor's l_f + l_r: no study and no --wheelbase given (either gives the vehicle's)"
 
 
 def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
