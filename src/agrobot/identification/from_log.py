@@ -143,8 +143,8 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
     out_dir = Path(out_dir)
     files = []
-    if plots and hidden is not None and report.get("final_model") == "kinematic":
-        report["figures_note"] = "no figures in the kinematic regime (they show the tyres' model)"
+    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
+        report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
         if progress is not None:
             progress("figures")

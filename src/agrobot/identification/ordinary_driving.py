@@ -39,6 +39,7 @@ from agrobot.estimation import Z95, Parameter
 from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
+from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
@@ -190,6 +191,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     floor = course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+    if is_steady_turn(log, L, segs, MIN_EXCITATION):
+        say("a steady turn at a constant input: the steady-state gain only")
+        return _steady_turn(log, segs, (L, L_from), where, input_name, driven, min_speed, vehicle, p, measured, notes)
     p95 = lateral_p95(log, min_speed)
     if p95 < KINEMATIC_LATERAL and not dynamic:
         say("kinematic regime: fitting the steering map")
@@ -272,6 +276,29 @@ def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_
             "notes": notes, "yaw_measurement": measured.as_dict(), "_plot": part["_plot"]}
 
 
+def _steady_turn(log, segs, wheelbase, where, input_name, driven, min_speed, vehicle, p, measured, notes) -> dict:
+    """The report of a steady turn at a constant input (identification.steady_turn): its
+    steady-state gain, the dynamics not identifiable."""
+    L, L_from = wheelbase
+    _, bias = _standstill_bias(log)
+    part = steady_turn_parts(log, L, segs, bias, measured.kind == "gyro")
+    nan = float("nan")
+    return {"method": "steady-state gain r / (v tan(u) / L) of a steady turn", "source": where, "model": "steady turn",
+            "input": input_name, "final_model": "steady_turn", "samples_per_second": 1 / log.h, "seconds_driven": driven,
+            "segments": {"fit": int(len(segs.idx)), "held_out": 0, "length_s": SEGMENT, "burn_in_s": BURN_IN,
+                         "min_speed": min_speed},
+            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I,
+                        "l_f": p.l_f, "l_r": p.l_r},
+            **{k: v for k, v in part.items() if k != "says"}, "delay": part["parameters"]["delay"],
+            "regime": {"kinematic": False, "steady_turn": True, "says": part["says"]},
+            "held_out_fit": {"value": nan, "std": nan, "interval": [nan, nan], "unit": "%", "per_segment": [],
+                             "linear_model": nan, "saturation_model": nan, "note": part["says"]},
+            "not_identifiable": [f"{k}: {v['note']}" for k, v in part["parameters"].items() if v.get("note")],
+            "linear_range": {"value": nan, "note": part["says"]}, "steady_state_regression": {"note": part["says"]},
+            "comparisons": [], "physical_checks": {}, "notes": notes, "yaw_measurement": measured.as_dict(),
+            "_plot": {}}
+
+
 def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, study) -> tuple[float, str]:
     """(L [m], where it comes from): the one given with the recording (--wheelbase), else the study's
     [vehicle] wheelbase, else its yaw plant's l_f + l_r (the paper tractor's without a study)."""
@@ -327,7 +354,7 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
-    if excitation < MIN_EXCITATION:
+    if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
@@ -695,6 +722,8 @@ def summary(report: dict) -> str:
     lines += [f"  {n}" for n in report["notes"]]
     if report.get("final_model") == "kinematic":
         return "\n".join(lines + kinematic_summary(report))
+    if report.get("final_model") == "steady_turn":
+        return "\n".join(lines + steady_turn_summary(report))
     K = report["understeer_gradient"]
     lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
                  + ("" if K["identifiable"] else "; not identifiable from this log"))
