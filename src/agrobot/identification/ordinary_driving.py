@@ -36,6 +36,7 @@ from agrobot.orchestrator.study import StudyError
 from .comparisons import course_bias, pair
 from agrobot.estimation import Z95, Parameter
 
+from .delay_bound import DELAY_LIMIT, delay_verdict
 from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
@@ -63,7 +64,7 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
     out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
            Parameter("c_r", "1/rad", 5.0, lo, hi, meaning="rear cornering stiffness / rear axle load"),
-           Parameter("delay", "s", 0.1, 0.0, 0.5, meaning="steering delay (input to the wheels)"),
+           Parameter("delay", "s", 0.1, 0.0, 0.5, limit=DELAY_LIMIT, meaning="steering delay (input to the wheels)"),
            Parameter("lag", "s", 0.1, 0.0, 0.5, meaning="steering first-order lag"),
            Parameter("steer_offset", "rad", 0.02, -0.1, 0.1, meaning="wheel angle the tyres see at zero input")]
     if command_input:
@@ -204,14 +205,17 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
     final = nl if saturation else linear
+    final, params_json, stiff = _final_parameters(log, fits, final, saturation)
+    if final is not (nl if saturation else linear):            # the delay searched below zero: its prediction
+        held.sims[1 if saturation else 0] = fits.model.simulate(final.values, test_segs)
     pred = held.sims[1] if saturation else held.sims[0]
-    params_json, stiff = _parameters(final, fits, saturation)
     K, K_sd, understeer, char = _understeer(final, fits.free, L)
     g = final.values.get("steer_gain", 1.0)
     g_sd = final.std("steer_gain") if command else 0.0
     linear_range = _linear_range(saturation, nl, log, min_speed)
     # the independent check: steady-state regression inside the linear range
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=final.values["delay"])
+    # (a clock offset, a negative delay, is left to the fit: the windows hold u from the same clock)
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
     ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
@@ -520,12 +524,27 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
             "saturation_model": fit_percent(y, sims[1][test_segs.scored])}
 
 
-def _parameters(final: FitResult, fits: _Fits, saturation: bool) -> tuple[dict, dict]:
+def _final_parameters(log: DrivingLog, fits: _Fits, final: FitResult, saturation: bool):
+    """(the final fit, its parameters, the cornering stiffnesses): a delay ended on its zero bound is
+    fitted again with the delay searched below zero (identification.delay_bound) and judged there."""
+    free = fits.free_nl if saturation else fits.free
+    delay = next(p for p in free if p.name == "delay")
+    wide = delay.widened(final.values["delay"])
+    if wide is None:
+        return (final, *_parameters(final, free, fits))
+    free = [wide if p is delay else p for p in free]
+    final = fit(fits.model, free, {**final.values, "delay": -0.1}, _standstill_bias(log)[0], fits.fit_segs)
+    params_json, stiff = _parameters(final, free, fits)
+    params_json["delay"] = delay_verdict(params_json["delay"])
+    return final, params_json, stiff
+
+
+def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[dict, dict]:
     """(parameters, cornering stiffnesses): every fitted parameter of the final model with its 95 %
     interval and bounds, the standing-still gyro bias; each axle's stiffness C = c F_z [N/rad]
     from its coefficient per unit load."""
     params_json = {}
-    for q in (fits.free_nl if saturation else fits.free):
+    for q in free:
         params_json[q.name] = _quantity(final.values[q.name], final.std(q.name), q.unit, (q.lower, q.upper),
                                         final.at_bound(q), meaning=q.meaning)
     if fits.bias_info:
