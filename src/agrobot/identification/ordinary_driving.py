@@ -48,6 +48,8 @@ from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
+INPUT_NOTE = {True: "input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the "
+                    "whole steering chain", False: "input: the measured wheel angle delta"}
 STANDSTILL = 0.02             # m/s
 SEGMENT = 4.0                 # s
 BURN_IN = 1.0                 # s
@@ -171,11 +173,9 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
                      dynamic: bool = False, wheelbase: float | None = None) -> dict:
-    """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
-    what the log lacks. Without a gyro the yaw rate comes from a heading or the GNSS course above
-    ``course_speed`` (identification.yaw_measurement); in the kinematic regime (identification.kinematic)
-    the steering map is fitted instead of the tyres, unless ``dynamic``. ``wheelbase``: the one given
-    with the recording (--wheelbase), before the study's (wheelbase_of)."""
+    """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
+    Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
@@ -186,9 +186,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
     log.kernel = measured.kernel(log.h)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
-    notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}"]
-    notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
-                 "steering chain" if command else "input: the measured wheel angle delta")
+    notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]
     floor = course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
@@ -198,16 +196,14 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     p95 = lateral_p95(log, min_speed)
     if p95 < KINEMATIC_LATERAL and not dynamic:
         say("kinematic regime: fitting the steering map")
-        return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95)
+        return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
+                          measured, notes, p95)
     fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
-    final = nl if saturation else linear
-    final, params_json, stiff = _final_parameters(log, fits, final, saturation)
-    if final is not (nl if saturation else linear):            # the delay searched below zero: its prediction
-        held.sims[1 if saturation else 0] = fits.model.simulate(final.values, test_segs)
+    final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
     K, K_sd, understeer, char = _understeer(final, fits.free, L)
     g = final.values.get("steer_gain", 1.0)
@@ -524,9 +520,11 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
             "saturation_model": fit_percent(y, sims[1][test_segs.scored])}
 
 
-def _final_parameters(log: DrivingLog, fits: _Fits, final: FitResult, saturation: bool):
+def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool):
     """(the final fit, its parameters, the cornering stiffnesses): a delay ended on its zero bound is
-    fitted again with the delay searched below zero (identification.delay_bound) and judged there."""
+    fitted again with the delay searched below zero (identification.delay_bound), judged there, and
+    its held-out prediction put in ``held.sims``."""
+    final = fits.nl if saturation else fits.linear
     free = fits.free_nl if saturation else fits.free
     delay = next(p for p in free if p.name == "delay")
     wide = delay.widened(final.values["delay"])
@@ -536,6 +534,7 @@ def _final_parameters(log: DrivingLog, fits: _Fits, final: FitResult, saturation
     final = fit(fits.model, free, {**final.values, "delay": -0.1}, _standstill_bias(log)[0], fits.fit_segs)
     params_json, stiff = _parameters(final, free, fits)
     params_json["delay"] = delay_verdict(params_json["delay"])
+    held.sims[1 if saturation else 0] = fits.model.simulate(final.values, fits.test_segs)
     return final, params_json, stiff
 
 
