@@ -530,10 +530,18 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
     wide = delay.widened(final.values["delay"])
     if wide is None:
         return (final, *_parameters(final, free, fits))
-    free = [wide if p is delay else p for p in free]
-    final = fit(fits.model, free, {**final.values, "delay": -0.1}, _standstill_bias(log)[0], fits.fit_segs)
+    # a lag on its zero bound (its physical limit) stays there: a negative delay and a lag trade off
+    on_zero = [p for p in free if p.name == "lag" and final.at_bound(p) == "lower"]
+    before = _parameters(final, free, fits)[0]
+    fixed = {**_standstill_bias(log)[0], **{p.name: p.lower for p in on_zero}}
+    free = [wide if p is delay else p for p in free if p not in on_zero]
+    final = min((fit(fits.model, free, {**final.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
+                 for d in (final.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
     params_json, stiff = _parameters(final, free, fits)
     params_json["delay"] = delay_verdict(params_json["delay"])
+    for p in on_zero:
+        params_json[p.name] = {**before[p.name], "note": before[p.name]["note"] + "; held there while the delay "
+                               "was searched below zero"}
     held.sims[1 if saturation else 0] = fits.model.simulate(final.values, fits.test_segs)
     return final, params_json, stiff
 
