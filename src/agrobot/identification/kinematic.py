@@ -149,7 +149,8 @@ def kinematic_report(log: DrivingLog, segs: Segments, L: float, fixed: dict, p95
         fitted = fit_map(log, fit_segs, L, fixed, [wide if p.name == "delay" else p for p in fitted["free"]])
     smap = steering_map(fitted, log, L)
     if wide is not None:
-        smap["delay"] = delay_verdict(smap["delay"])
+        smap["delay"] = delay_verdict(smap["delay"], [p.name for p in fitted["free"][:2]
+                                                      if p.at_bound(fitted["values"][p.name])])
     pred = predicted(log, fitted["values"], L)[test_segs.idx]
     y, yhat = log.r[test_segs.idx][test_segs.scored], pred[test_segs.scored]
     fit_pct = float(100.0 * (1.0 - np.linalg.norm(y - yhat) / max(np.linalg.norm(y - y.mean()), 1e-12)))

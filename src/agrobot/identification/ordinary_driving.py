@@ -538,7 +538,8 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
     final = min((fit(fits.model, free, {**final.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
                  for d in (final.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
     params_json, stiff = _parameters(final, free, fits)
-    params_json["delay"] = delay_verdict(params_json["delay"])
+    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
+    params_json["delay"] = delay_verdict(params_json["delay"], shaping)
     for p in on_zero:
         params_json[p.name] = {**before[p.name], "note": before[p.name]["note"] + "; held there while the delay "
                                "was searched below zero"}
