@@ -523,25 +523,28 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
 def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool):
     """(the final fit, its parameters, the cornering stiffnesses): a delay ended on its zero bound is
     fitted again with the delay searched below zero (identification.delay_bound), judged there, and
-    its held-out prediction put in ``held.sims``."""
-    final = fits.nl if saturation else fits.linear
-    free = fits.free_nl if saturation else fits.free
-    delay = next(p for p in free if p.name == "delay")
-    wide = delay.widened(final.values["delay"])
+    its held-out prediction put in ``held.sims``; the first fit stays when the delay is not decided
+    because the response's own parameters sit on their bounds."""
+    first, first_free = (fits.nl, fits.free_nl) if saturation else (fits.linear, fits.free)
+    delay = next(p for p in first_free if p.name == "delay")
+    wide = delay.widened(first.values["delay"])
     if wide is None:
-        return (final, *_parameters(final, free, fits))
+        return (first, *_parameters(first, first_free, fits))
     # a lag on its zero bound (its physical limit) stays there: a negative delay and a lag trade off
-    on_zero = [p for p in free if p.name == "lag" and final.at_bound(p) == "lower"]
-    before = _parameters(final, free, fits)[0]
+    on_zero = [p for p in first_free if p.name == "lag" and first.at_bound(p) == "lower"]
+    before = _parameters(first, first_free, fits)
     fixed = {**_standstill_bias(log)[0], **{p.name: p.lower for p in on_zero}}
-    free = [wide if p is delay else p for p in free if p not in on_zero]
-    final = min((fit(fits.model, free, {**final.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
-                 for d in (final.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
-    params_json, stiff = _parameters(final, free, fits)
+    free = [wide if p is delay else p for p in first_free if p not in on_zero]
+    final = min((fit(fits.model, free, {**first.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
+                 for d in (first.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
     shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
-    params_json["delay"] = delay_verdict(params_json["delay"], shaping)
+    verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
+    if shaping:
+        return first, {**before[0], "delay": verdict}, before[1]
+    params_json, stiff = _parameters(final, free, fits)
+    params_json["delay"] = verdict
     for p in on_zero:
-        params_json[p.name] = {**before[p.name], "note": before[p.name]["note"] + "; held there while the delay "
+        params_json[p.name] = {**before[0][p.name], "note": before[0][p.name]["note"] + "; held there while the delay "
                                "was searched below zero"}
     held.sims[1 if saturation else 0] = fits.model.simulate(final.values, fits.test_segs)
     return final, params_json, stiff
