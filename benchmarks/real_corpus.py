@@ -420,7 +420,7 @@ def project_identify(rec: dict, roots: dict) -> dict:
     done = api.identify(str(roots[rec["root"]] / rec["path"]), recording=import_options(rec),
                         study=study_path(rec, roots), plots=False)
     rep = done.report
-    return {"method": done.method, "delay": _value(rep, "delay"), "lag": _value(rep, "parameters", "lag"),
+    return {"method": done.method, "delay": _value(rep, "delay"), "delay_verdict": (rep.get("delay") or {}).get("verdict"), "lag": _value(rep, "parameters", "lag"),
             "steer_gain": _value(rep, "parameters", "steer_gain"),
             "steer_offset": _value(rep, "parameters", "steer_offset"),
             "K": _value(rep, "understeer_gradient"), "fit": _value(rep, "held_out_fit"),
@@ -492,10 +492,11 @@ def kinematic_rows(ref: dict, ident) -> list[tuple]:
              _agree(None if gain is None or math.isnan(slope) else abs(gain - slope) <= 0.3 * abs(slope)))]
     total = None if got.get("delay") is None else got["delay"] + (got.get("lag") or 0.0)
     verdict = _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)
-    if got.get("delay") is not None and got["delay"] < 1e-6:
+    if got.get("delay") is not None and 0 <= got["delay"] < 1e-6:
         verdict = "NO (on its zero bound)"        # a verdict never sits on a bound
+    said = f" ({got['delay_verdict']})" if got.get("delay_verdict") else ""
     rows.append(("command-to-yaw delay [s]", f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
-                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}", verdict))
+                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}{said}", verdict))
     return rows
 
 

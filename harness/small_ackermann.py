@@ -93,6 +93,23 @@ def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None
                    "gain_right": tr["gain"] * (1 - tr["asymmetry"]), "heading_rate": heading_rate}
 
 
+def make_circle_log(seed: int, command: float = 0.25, speed: float = 0.8, duration: float = 90.0,
+                    bias: float = 0.004) -> tuple[pd.DataFrame, dict]:
+    """A circle test of the machine: 5 s standing, then the speed ramped to ``speed`` in 2 s with
+    the steering command held at ``command`` throughout; a gyro ``yaw_rate`` (bias ``bias`` rad/s,
+    0.5 deg/s noise) and ``delta_cmd``, ``v`` at 50 Hz. The truth's steady-state gain
+    k = r / (v tan(command) / L) = tan(w(command)) L / (tan(command) (L + K v^2)) from the steering map."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(duration * 50)) / 50.0
+    v = speed * np.clip((t - 5.0) / 2.0, 0.0, 1.0)
+    w = float(steering_map(command, TRUTH["gain"], TRUTH["asymmetry"], TRUTH["offset"]))
+    r = v * math.tan(w) / (WHEELBASE + TRUTH["understeer"] * v * v)
+    frame = pd.DataFrame({"t": t, "delta_cmd": np.full_like(t, command), "v": v + 0.01 * rng.standard_normal(len(t)),
+                          "yaw_rate": r + bias + 0.5 * DEG * rng.standard_normal(len(t))})
+    k = math.tan(w) * WHEELBASE / (math.tan(command) * (WHEELBASE + TRUTH["understeer"] * speed ** 2))
+    return frame, {"steady_gain": k, "wheelbase": WHEELBASE, "bias": bias}
+
+
 def write_study(folder) -> Path:
     """A study of the machine: the figure-8 study's components with a [vehicle] table of a small
     robot of 1.27 m wheelbase (2.0 x 1.1 m outline)."""

@@ -27,6 +27,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "with a period, else driving)")
     p.add_argument("--study", type=Path, default=None, help="log: the vehicle's study (its yaw plant's mass and axle "
                    "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
+    p.add_argument("--course-speed", type=float, default=None, help="log without a gyro or heading: the speed "
+                   "[m/s] above which the GNSS course measures the yaw rate (default 1)")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     add_mode_options(p)
@@ -39,7 +41,8 @@ def run(args: argparse.Namespace) -> int:
     found = identify(args.source, study=None if is_study else args.study, method=args.method, set=args.set,
                      period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,
                      resample=args.resample, recording=None if is_study else recording_options(args),
-                     out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite)
+                     out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite,
+                     course_speed=args.course_speed)
     if found.method == "driving":
         figures = found.report.get("figures", [])
         print(found.summary())

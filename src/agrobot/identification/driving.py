@@ -87,6 +87,18 @@ class DrivingLog:
         first = np.r_[True, self.run[1:] != self.run[:-1]]
         return self.t[first][np.cumsum(first) - 1]
 
+    def run_end(self) -> np.ndarray:
+        last = np.r_[self.run[1:] != self.run[:-1], True]
+        return self.t[last][::-1][np.cumsum(last[::-1]) - 1][::-1]
+
+    def delayed_input(self, tau: float) -> np.ndarray:
+        """u(t - tau) on every sample, per run, clipped to the run's first and last samples; a
+        negative tau (a clock offset: the response stamped before its input) reads ahead."""
+        if tau == 0:
+            return self.u
+        tq = np.clip(self.t - tau, self.run_start(), self.run_end())
+        return np.interp(tq + self.run * 1e6, self.t + self.run * 1e6, self.u)
+
 
 def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None,
               update_times: np.ndarray | None = None) -> DrivingLog:
@@ -209,17 +221,10 @@ class YawModel:
         # scaled by v / min_sim_speed, as in the plant: a car at rest does not turn
         self.v_sim = np.maximum(log.v, min_sim_speed)
         self.low_speed_scale = np.clip(log.v / min_sim_speed, 0.0, 1.0)
-        self.t0 = log.run_start()
 
     def wheel_angle(self, values: dict) -> np.ndarray:
         """w = g u(t - tau) + delta_0 on every sample (u before its run's start: its first value)."""
-        log = self.log
-        tau = values.get("delay", 0.0)
-        u = log.u
-        if tau > 0:
-            # per run: interpolate at t - tau, clipped to the run's first sample
-            tq = np.maximum(log.t - tau, self.t0)
-            u = np.interp(tq + log.run * 1e6, log.t + log.run * 1e6, log.u)
+        u = self.log.delayed_input(values.get("delay", 0.0))
         return values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0)
 
     def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:

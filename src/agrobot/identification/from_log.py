@@ -120,13 +120,17 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
     return "driving" if wants_driving(Path(source), resample, recording, study) else "multisine"
 
 
-def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None):
+def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
+                   course_speed: float | None = None):
     """(report, the figures' data): the ordinary-driving identification of a log
-    (identification.ordinary_driving), nothing written."""
+    (identification.ordinary_driving), nothing written; the wheelbase given with ``recording``
+    (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor (None: its default)."""
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
-    report = identify_driving(frame, str(source), study, progress=say)
+    more = {} if course_speed is None else {"course_speed": course_speed}
+    report = identify_driving(frame, str(source), study, progress=say, wheelbase=getattr(recording, "wheelbase", None),
+                              **more)
     hidden = report.pop("_plot")
     if imported is not None:
         report["recording"] = imported
@@ -139,8 +143,8 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
     out_dir = Path(out_dir)
     files = []
-    if plots and hidden is not None and report.get("final_model") == "kinematic":
-        report["figures_note"] = "no figures in the kinematic regime (they show the tyres' model)"
+    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
+        report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
         if progress is not None:
             progress("figures")

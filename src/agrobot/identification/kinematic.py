@@ -25,6 +25,7 @@ from scipy.optimize import least_squares
 
 from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian, interval
 
+from .delay_bound import DELAY_LIMIT, delay_verdict
 from .driving import DrivingLog, Segments
 
 KINEMATIC_LATERAL = 0.5        # m/s2: 95th percentile of |v r| below which the tyres do not matter
@@ -41,7 +42,7 @@ def map_parameters(fit_bias: bool) -> list[Parameter]:
     out = [Parameter("gain_left", "1", 0.2, 0.3, 2.0, meaning="wheel angle per unit input, turning left (u > 0)"),
            Parameter("gain_right", "1", 0.2, 0.3, 2.0, meaning="wheel angle per unit input, turning right (u < 0)"),
            Parameter("steer_offset", "rad", 0.02, -0.2, 0.2, meaning="wheel angle at zero input"),
-           Parameter("delay", "s", 0.1, 0.0, 0.5, meaning="delay from the input to the yaw")]
+           Parameter("delay", "s", 0.1, 0.0, 0.5, limit=DELAY_LIMIT, meaning="delay from the input to the yaw")]
     if fit_bias:
         out.append(Parameter("gyro_bias", "rad/s", 0.01, -0.1, 0.1, meaning="gyro bias"))
     return out
@@ -50,19 +51,16 @@ def map_parameters(fit_bias: bool) -> list[Parameter]:
 def predicted(log: DrivingLog, values: dict, L: float) -> np.ndarray:
     """r = v tan(w(t - tau)) / L + b on every sample (u before its run's start: its first value), as
     the yaw measurement sees it (DrivingLog.as_measured)."""
-    tau = values["delay"]
-    u = log.u
-    if tau > 0:
-        tq = np.maximum(log.t - tau, log.run_start())
-        u = np.interp(tq + log.run * 1e6, log.t + log.run * 1e6, log.u)
+    u = log.delayed_input(values["delay"])
     w = np.where(u > 0, values["gain_left"], values["gain_right"]) * u + values["steer_offset"]
     return log.as_measured(log.v * np.tan(np.clip(w, -1.3, 1.3)) / L) + values.get("gyro_bias", 0.0)
 
 
-def fit_map(log: DrivingLog, fit_segs: Segments, L: float, fixed: dict) -> dict:
+def fit_map(log: DrivingLog, fit_segs: Segments, L: float, fixed: dict, free: list[Parameter] | None = None) -> dict:
     """Least squares of the measured yaw rate on the fit segments' scored samples; returns the
-    values, the standard deviations (nan on a bound), n, n_eff and the parameters."""
-    free = map_parameters("gyro_bias" not in fixed)
+    values, the standard deviations (nan on a bound), n, n_eff and the parameters (``free``:
+    map_parameters unless given)."""
+    free = free or map_parameters("gyro_bias" not in fixed)
     idx, mask = fit_segs.idx, fit_segs.scored
     y = log.r[idx][mask]
     lo = np.array([p.lower / p.scale for p in free])
@@ -75,7 +73,7 @@ def fit_map(log: DrivingLog, fit_segs: Segments, L: float, fixed: dict) -> dict:
         return y - predicted(log, values_of(x), L)[idx][mask]
 
     best = None
-    for delay in (0.05, 0.25):
+    for delay in (0.05, 0.25) + ((-0.2,) if free[3].lower < 0 else ()):
         x0 = np.array([1.0 / 0.2, 1.0 / 0.2, 0.0, delay / 0.1] + ([0.0] if len(free) > 4 else []))
         sol = least_squares(fun, x0, bounds=(lo, hi), x_scale=1.0,
                             jac=lambda x: forward_jacobian(lambda xs: [fun(xi) for xi in xs], x, lo, hi, floor=1.0))
@@ -146,7 +144,13 @@ def kinematic_report(log: DrivingLog, segs: Segments, L: float, fixed: dict, p95
     stiffness or saturation ("not identifiable at these speeds", with the lateral acceleration)."""
     fit_segs, test_segs = segs.take(~segs.held_out), segs.take(segs.held_out)
     fitted = fit_map(log, fit_segs, L, fixed)
+    wide = fitted["free"][3].widened(fitted["values"]["delay"])     # on its zero bound: searched below it
+    if wide is not None:
+        fitted = fit_map(log, fit_segs, L, fixed, [wide if p.name == "delay" else p for p in fitted["free"]])
     smap = steering_map(fitted, log, L)
+    if wide is not None:
+        smap["delay"] = delay_verdict(smap["delay"], [p.name for p in fitted["free"][:2]
+                                                      if p.at_bound(fitted["values"][p.name])])
     pred = predicted(log, fitted["values"], L)[test_segs.idx]
     y, yhat = log.r[test_segs.idx][test_segs.scored], pred[test_segs.scored]
     fit_pct = float(100.0 * (1.0 - np.linalg.norm(y - yhat) / max(np.linalg.norm(y - y.mean()), 1e-12)))
@@ -181,6 +185,7 @@ def kinematic_summary(report: dict) -> list[str]:
             f"understeer gradient, critical and characteristic speed: {NOT_AT_THESE_SPEEDS}",
             f"steering map: gain {q(m['gain'])}, asymmetry {q(m['asymmetry'])} (left {m['gain_left']['value']:.3g}, "
             f"right {m['gain_right']['value']:.3g}), offset {q(m['steer_offset'])} "
-            f"({math.degrees(m['steer_offset']['value']):.2f} deg), delay {q(m['delay'])}",
+            f"({math.degrees(m['steer_offset']['value']):.2f} deg), delay {q(m['delay'])}"
+            + (f"; {m['delay']['note']}" if "note" in m["delay"] else ""),
             f"turn radius at the largest input: left {r['left']['radius']:.3g} m, right {r['right']['radius']:.3g} m",
             f"held-out fit: {report['held_out_fit']['value']:.1f} %"]

@@ -37,9 +37,11 @@ from agrobot.orchestrator.work_progress import Work
 from .comparisons import course_bias, pair
 from agrobot.estimation import Z95, Parameter
 
+from .delay_bound import DELAY_LIMIT, delay_verdict
 from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
+from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
@@ -47,6 +49,8 @@ from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
+INPUT_NOTE = {True: "input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the "
+                    "whole steering chain", False: "input: the measured wheel angle delta"}
 STANDSTILL = 0.02             # m/s
 SEGMENT = 4.0                 # s
 BURN_IN = 1.0                 # s
@@ -63,7 +67,7 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
     out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
            Parameter("c_r", "1/rad", 5.0, lo, hi, meaning="rear cornering stiffness / rear axle load"),
-           Parameter("delay", "s", 0.1, 0.0, 0.5, meaning="steering delay (input to the wheels)"),
+           Parameter("delay", "s", 0.1, 0.0, 0.5, limit=DELAY_LIMIT, meaning="steering delay (input to the wheels)"),
            Parameter("lag", "s", 0.1, 0.0, 0.5, meaning="steering first-order lag"),
            Parameter("steer_offset", "rad", 0.02, -0.1, 0.1, meaning="wheel angle the tyres see at zero input")]
     if command_input:
@@ -169,45 +173,46 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False) -> dict:
-    """The identification report (a JSON-able dict); raises NotEnoughDriving or a LogError naming
-    what the log lacks. Without a gyro the yaw rate comes from a heading or the GNSS course above
-    ``course_speed`` (identification.yaw_measurement); in the kinematic regime (identification.kinematic)
-    the steering map is fitted instead of the tyres, unless ``dynamic``."""
+                     dynamic: bool = False, wheelbase: float | None = None) -> dict:
+    """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
+    Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
-    L = vehicle.wheelbase or (p.l_f + p.l_r)
+    L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
     frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
     log.kernel = measured.kernel(log.h)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
-    notes = list(log.notes) + [measured.text]
-    notes.append("input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the whole "
-                 "steering chain" if command else "input: the measured wheel angle delta")
+    notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]
     floor = course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
+    if is_steady_turn(log, L, segs, MIN_EXCITATION):
+        say("a steady turn at a constant input: the steady-state gain only")
+        return _steady_turn(log, segs, (L, L_from), where, input_name, driven, min_speed, vehicle, p, measured, notes)
     p95 = lateral_p95(log, min_speed)
     if p95 < KINEMATIC_LATERAL and not dynamic:
         say("kinematic regime: fitting the steering map")
-        return _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95)
+        return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
+                          measured, notes, p95)
     fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
-    final = nl if saturation else linear
+    final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
-    params_json, stiff = _parameters(final, fits, saturation)
     K, K_sd, understeer, char = _understeer(final, fits.free, L)
     g = final.values.get("steer_gain", 1.0)
     g_sd = final.std("steer_gain") if command else 0.0
     linear_range = _linear_range(saturation, nl, log, min_speed)
     # the independent check: steady-state regression inside the linear range
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=final.values["delay"])
+    # (a clock offset, a negative delay, is left to the fit: the windows hold u from the same clock)
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
     ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
@@ -219,7 +224,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "samples_per_second": 1 / log.h, "seconds_driven": driven,
         "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
                      "burn_in_s": BURN_IN, "min_speed": min_speed},
-        "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
+        "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
                     "axle_loads": list(fits.loads)},
         "understeer_gradient": understeer,
         "characteristic_speed": char,
@@ -248,9 +253,11 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     return report
 
 
-def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes, p95) -> dict:
+def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes,
+               p95) -> dict:
     """The report in the kinematic regime (identification.kinematic): the steering map in place of
-    the tyres; the dynamic fit is what ``dynamic=True`` asks for."""
+    the tyres; the dynamic fit is what ``dynamic=True`` asks for. ``wheelbase``: (L, where from)."""
+    L, L_from = wheelbase
     fixed, bias_info = _standstill_bias(log)
     part = kinematic_report(log, segs, L, fixed, p95)
     smap = part["steering_map"]
@@ -262,12 +269,50 @@ def _kinematic(log, segs, L, where, model_name, input_name, driven, min_speed, v
             "input": input_name, "final_model": "kinematic", "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
                          "burn_in_s": BURN_IN, "min_speed": min_speed},
-            "vehicle": {"class": vehicle.kind, "wheelbase": L, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
+            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
             **{k: v for k, v in part.items() if k != "_plot"}, "delay": smap["delay"], "parameters": params,
             "not_identifiable": [f"{k}: {v['note']}" for k, v in params.items() if v.get("note")],
             "linear_range": {"value": float("nan"), "note": part["regime"]["says"]},
             "steady_state_regression": {"note": part["regime"]["says"]}, "comparisons": [], "physical_checks": {},
             "notes": notes, "yaw_measurement": measured.as_dict(), "_plot": part["_plot"]}
+
+
+def _steady_turn(log, segs, wheelbase, where, input_name, driven, min_speed, vehicle, p, measured, notes) -> dict:
+    """The report of a steady turn at a constant input (identification.steady_turn): its
+    steady-state gain, the dynamics not identifiable."""
+    L, L_from = wheelbase
+    _, bias = _standstill_bias(log)
+    part = steady_turn_parts(log, L, segs, bias, measured.kind == "gyro")
+    nan = float("nan")
+    return {"method": "steady-state gain r / (v tan(u) / L) of a steady turn", "source": where, "model": "steady turn",
+            "input": input_name, "final_model": "steady_turn", "samples_per_second": 1 / log.h, "seconds_driven": driven,
+            "segments": {"fit": int(len(segs.idx)), "held_out": 0, "length_s": SEGMENT, "burn_in_s": BURN_IN,
+                         "min_speed": min_speed},
+            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I,
+                        "l_f": p.l_f, "l_r": p.l_r},
+            **{k: v for k, v in part.items() if k != "says"}, "delay": part["parameters"]["delay"],
+            "regime": {"kinematic": False, "steady_turn": True, "says": part["says"]},
+            "held_out_fit": {"value": nan, "std": nan, "interval": [nan, nan], "unit": "%", "per_segment": [],
+                             "linear_model": nan, "saturation_model": nan, "note": part["says"]},
+            "not_identifiable": [f"{k}: {v['note']}" for k, v in part["parameters"].items() if v.get("note")],
+            "linear_range": {"value": nan, "note": part["says"]}, "steady_state_regression": {"note": part["says"]},
+            "comparisons": [], "physical_checks": {}, "notes": notes, "yaw_measurement": measured.as_dict(),
+            "_plot": {}}
+
+
+def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, study) -> tuple[float, str]:
+    """(L [m], where it comes from): the one given with the recording (--wheelbase), else the study's
+    [vehicle] wheelbase, else its yaw plant's l_f + l_r (the paper tractor's without a study)."""
+    where = getattr(study, "path", None)
+    if given:
+        passed = (f"; the study's {vehicle.wheelbase:.3g} m passed over" if vehicle.wheelbase and
+                  abs(vehicle.wheelbase - given) > 1e-9 else "")
+        return float(given), f"given with the recording (--wheelbase){passed}"
+    if vehicle.wheelbase:
+        return float(vehicle.wheelbase), f"the [vehicle] table of {where}"
+    if study is not None:
+        return p.l_f + p.l_r, f"l_f + l_r of the yaw plant of {where} (--wheelbase gives the vehicle's)"
+    return p.l_f + p.l_r, "the paper tractor's l_f + l_r: no study and no --wheelbase given (either gives the vehicle's)"
 
 
 def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
@@ -310,7 +355,7 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
-    if excitation < MIN_EXCITATION:
+    if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
@@ -480,12 +525,42 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
             "saturation_model": fit_percent(y, sims[1][test_segs.scored])}
 
 
-def _parameters(final: FitResult, fits: _Fits, saturation: bool) -> tuple[dict, dict]:
+def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool):
+    """(the final fit, its parameters, the cornering stiffnesses): a delay ended on its zero bound is
+    fitted again with the delay searched below zero (identification.delay_bound), judged there, and
+    its held-out prediction put in ``held.sims``; the first fit stays when the delay is not decided
+    because the response's own parameters sit on their bounds."""
+    first, first_free = (fits.nl, fits.free_nl) if saturation else (fits.linear, fits.free)
+    delay = next(p for p in first_free if p.name == "delay")
+    wide = delay.widened(first.values["delay"])
+    if wide is None:
+        return (first, *_parameters(first, first_free, fits))
+    # a lag on its zero bound (its physical limit) stays there: a negative delay and a lag trade off
+    on_zero = [p for p in first_free if p.name == "lag" and first.at_bound(p) == "lower"]
+    before = _parameters(first, first_free, fits)
+    fixed = {**_standstill_bias(log)[0], **{p.name: p.lower for p in on_zero}}
+    free = [wide if p is delay else p for p in first_free if p not in on_zero]
+    final = min((fit(fits.model, free, {**first.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
+                 for d in (first.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
+    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
+    verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
+    if shaping:
+        return first, {**before[0], "delay": verdict}, before[1]
+    params_json, stiff = _parameters(final, free, fits)
+    params_json["delay"] = verdict
+    for p in on_zero:
+        params_json[p.name] = {**before[0][p.name], "note": before[0][p.name]["note"] + "; held there while the delay "
+                               "was searched below zero"}
+    held.sims[1 if saturation else 0] = fits.model.simulate(final.values, fits.test_segs)
+    return final, params_json, stiff
+
+
+def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[dict, dict]:
     """(parameters, cornering stiffnesses): every fitted parameter of the final model with its 95 %
     interval and bounds, the standing-still gyro bias; each axle's stiffness C = c F_z [N/rad]
     from its coefficient per unit load."""
     params_json = {}
-    for q in (fits.free_nl if saturation else fits.free):
+    for q in free:
         params_json[q.name] = _quantity(final.values[q.name], final.std(q.name), q.unit, (q.lower, q.upper),
                                         final.at_bound(q), meaning=q.meaning)
     if fits.bias_info:
@@ -682,6 +757,8 @@ def summary(report: dict) -> str:
     lines += [f"  {n}" for n in report["notes"]]
     if report.get("final_model") == "kinematic":
         return "\n".join(lines + kinematic_summary(report))
+    if report.get("final_model") == "steady_turn":
+        return "\n".join(lines + steady_turn_summary(report))
     K = report["understeer_gradient"]
     lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
                  + ("" if K["identifiable"] else "; not identifiable from this log"))

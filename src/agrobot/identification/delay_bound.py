@@ -1,0 +1,50 @@
+"""A delay that ends on its zero bound is not concluded: it is searched again below zero, down to
+DELAY_LIMIT, and judged there.
+
+A delay is never negative, but a fit of the yaw on an input read from another clock is: the yaw
+stamped before the input that causes it is a clock offset between the two channels (their clocks
+are not to be trusted), not a delay. So, after the widened fit, with the 95 % interval [lo, hi]:
+
+* hi < 0: a clock offset of ``value`` s, said so (align the channels and identify again);
+* lo < 0 <= hi: not told apart from no delay: the delay is below hi;
+* on DELAY_LIMIT still: cannot decide (the input and the yaw do not line up within that);
+* lo >= 0: a delay, as any other;
+* and whatever the interval, cannot decide when parameters that shape the response (a cornering
+  stiffness, a steering gain) sit on their bounds: the delay then only makes up for them.
+"""
+from __future__ import annotations
+
+import math
+
+DELAY_LIMIT = (-1.0, 0.5)      # s: how far the delay is searched when it ends on its zero bound
+WIDENED = (f"ended on its bound 0 s and was searched again down to {DELAY_LIMIT[0]:g} s (a negative delay is a "
+           f"clock offset between the input's and the yaw's channels)")
+
+
+def delay_verdict(q: dict, shaping_on_bound: list[str] = ()) -> dict:
+    """The delay's quantity after the widened fit (value, std, interval, unit), judged as the
+    module says (``shaping_on_bound``: the names of the response's parameters on a bound): adds
+    ``verdict``, ``identifiable`` and a ``note``."""
+    lo, hi = q["interval"]
+    out = {**q, "widened": WIDENED}
+    if shaping_on_bound:
+        return {**out, "verdict": "cannot decide: on its bound", "identifiable": False, "value": float("nan"),
+                "on_bound": 0.0, "searched_below_zero": q["value"],
+                "note": f"cannot decide: on its bound 0 s; searched below zero it goes to {q['value']:.3g} s "
+                        f"[{lo:.3g}, {hi:.3g}], but {', '.join(shaping_on_bound)} sit on their bounds: the delay "
+                        f"only makes up for a response the model does not pin down (drive more, or in a wider "
+                        f"range of speeds and turns)"}
+    if not math.isfinite(q["std"]) or abs(q["value"] - DELAY_LIMIT[0]) < 5e-3:
+        return {**out, "verdict": "cannot decide: on its bound", "identifiable": False, "value": float("nan"),
+                "on_bound": q["value"], "note": f"cannot decide: on its bound {q['value']:.3g} s after it {WIDENED}: "
+                f"the input and the yaw do not line up within {-DELAY_LIMIT[0]:g} s"}
+    if hi < 0:
+        return {**out, "verdict": "clock offset", "identifiable": False, "clock_offset": q["value"],
+                "note": f"not a delay: the yaw answers {-q['value']:.3g} s [{-hi:.3g}, {-lo:.3g}] before its input, "
+                        f"a clock offset between the input's and the yaw's channels (their clocks are not to be "
+                        f"trusted); move them with convert --align GROUP=SECONDS and identify again"}
+    if lo < 0:
+        return {**out, "verdict": "below its upper limit", "identifiable": False, "upper_limit": hi,
+                "note": f"not told apart from no delay: its 95 % interval [{lo:.3g}, {hi:.3g}] s reaches below zero; "
+                        f"the delay is at most {hi:.3g} s"}
+    return {**out, "verdict": "delay", "identifiable": True}
