@@ -64,12 +64,13 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))          # the test harness (harness/), beside the package
 
 from agrobot.api import convert                                   # noqa: E402
+from agrobot.measurements.modes import stretches, unexplained_mask  # noqa: E402
 from agrobot.measurements.signal_expressions import parse_signal  # noqa: E402
 from harness.quirk_recordings import ORDER, START, compose        # noqa: E402
 
 GROUP_CHANNELS = {"imu": {"yaw_rate"}, "vehicle": {"delta_cmd", "delta", "v"}, "gnss": {"gnss", "x", "y", "gnss_speed",
                                                                                       "course_rate", "lat", "lon"}}
-NUMBER = re.compile(r"[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+NUMBER = re.compile(r"(?<![\d.])[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")     # "17.8-25.0 s": two numbers, not -25
 
 
 def run(seed: int, folder: Path, classes, among=None) -> dict:
@@ -78,11 +79,20 @@ def run(seed: int, folder: Path, classes, among=None) -> dict:
     truth = compose(seed, folder, classes=classes, among=among)
     out = {"truth": truth, "ok": False, "error": "", "findings": [], "channels": [], "alignment": {}, "notes": [],
            "log": None, "report": {}}
+    signals = [parse_signal(s) for s in truth["signals"] or []]
     try:
-        rec = convert(folder, signals=[parse_signal(s) for s in truth["signals"] or []])
+        rec = convert(folder, signals=signals)
     except Exception as exc:         # noqa: BLE001 - a refusal is a miss, printed
         out["error"] = f"{type(exc).__name__}: {exc}"
-        return out
+        if "--sign-speed" not in out["error"]:
+            return out
+        out["refusal"] = out["error"]          # the remedy it names, applied as a user would
+        try:
+            rec = convert(folder, signals=signals, sign_speed=True)
+        except Exception as again:   # noqa: BLE001
+            out["error"] = f"{type(again).__name__}: {again}"
+            return out
+        out["error"] = ""
     audit = rec.report.get("audit", {})
     out.update(ok=True, findings=audit.get("findings", []), channels=audit.get("channels", []),
                alignment=audit.get("alignment", {}), notes=rec.report.get("notes", []), log=rec.log, report=rec.report)
@@ -148,7 +158,9 @@ CLOCK = ("clock_offset",)
 
 
 def named_reversing(res, t) -> bool:
-    return any(covers(numbers(f), t["stretches"], 1.0) for f in of_kind(res, *REVERSING))
+    """A finding, or the refusal whose remedy was applied, names every reversing stretch."""
+    said = [numbers(f) for f in of_kind(res, *REVERSING)] + [numbers(res.get("refusal", ""))]
+    return any(covers(n, t["stretches"], 1.0) for n in said)
 
 
 def named_held(res, t) -> bool:
@@ -196,7 +208,15 @@ def named_fix(res, t) -> bool:
 
 
 def named_modes(res, t) -> bool:
-    return any(covers(numbers(f), t["manual"] + t["paused"], 1.0) for f in of_kind(res, "mode", "manual"))
+    """The hand-driven stretches found where identify and diagnose read the log (measurements.modes:
+    the command does not explain the steering there); a paused stretch drives nothing to explain."""
+    if any(covers(numbers(f), t["manual"] + t["paused"], 1.0) for f in of_kind(res, "mode", "manual")):
+        return True
+    if not res["ok"] or not {"delta", "delta_cmd"} <= set(res["log"].columns):
+        return False
+    found, _ = unexplained_mask(res["log"])
+    at = log_truth_times(res)
+    return bool(t["manual"]) and covers([x for a, b in stretches(found, at) for x in (a, b)], t["manual"], 1.0)
 
 
 def heading_error(res) -> float:
