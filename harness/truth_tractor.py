@@ -34,7 +34,17 @@ VEHICLES = {
     "car": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
                 tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(10.0, 20.0, 30.0), steer_scale=0.05,
                 resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0),
+    # a small Ackermann field robot (a converted mower: 120 kg, wheelbase l_f + l_r = 1.27 m, outline
+    # 1.9 m x 1.1 m) with a fast servo steering, driven at 0.5-0.85 m/s by default: lateral
+    # accelerations below 1 m/s2, the kinematic regime r = v tan(delta) / L (make_log's ``speeds``
+    # drives it faster); harness.vehicle_classes.study is its baseline study
+    "small_ackermann": dict(table=dict(m=120.0, I=30.0, l_f=0.6, l_r=0.67, C_f=3000.0, C_r=3000.0, sigma_f=0.02),
+                            tau=0.035, rate=1.5, deadband=0.002, speeds=(0.5, 0.65, 0.85), steer_scale=1.0,
+                            resolution=0.1 * DEG, gyro_noise=0.005, v_ref=0.65, min_speed=0.3,
+                            length=1.9, width=1.1),
 }
+SMALL_ACKERMANN = VEHICLES["small_ackermann"]
+SMALL_WHEELBASE = SMALL_ACKERMANN["table"]["l_f"] + SMALL_ACKERMANN["table"]["l_r"]     # 1.27 m
 
 EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steering_offset", "yaw_rate_bias",
            "gps_latency", "speed_dependent_cornering", "side_slope", "antenna_lever_arm")
