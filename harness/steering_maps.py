@@ -33,19 +33,29 @@ def wheel_angle(reading, gain: float = 1.0, asymmetry: float = 0.0, curvature: f
 
 
 def reading(wheels, gain: float = 1.0, asymmetry: float = 0.0, curvature: float = 0.0,
-            offset: float = 0.0) -> np.ndarray:
-    """M^-1(wheels): the reading [rad] that turns the wheels to ``wheels`` [rad]. With k > 0 and
-    |a| < 1 the reading has the sign of wheels - o; r (1 + c r^2) = (wheels - o) / (k (1 + a sign))
-    is solved by Newton's method (one root while 1 + 3 c r^2 > 0)."""
+            offset: float = 0.0):
+    """M^-1(wheels): the reading [rad] that turns the wheels to ``wheels`` [rad] (an array, or a
+    float for a float: the truth's integrators call it every step). With k > 0 and |a| < 1 the
+    reading has the sign of wheels - o; r (1 + c r^2) = (wheels - o) / (k (1 + a sign)) is solved by
+    Newton's method from r = that ratio (one root while 1 + 3 c r^2 > 0)."""
     if gain <= 0 or abs(asymmetry) >= 1:
         raise ValueError(f"the steering map must increase with the reading: gain {gain} > 0 and "
                          f"|asymmetry| {asymmetry} < 1 expected")
-    w = np.asarray(wheels, float) - offset
-    target = w / (gain * (1.0 + asymmetry * np.sign(w)))
-    d = target.copy()
-    for _ in range(40):
-        d = d - (d + curvature * d ** 3 - target) / (1.0 + 3.0 * curvature * d * d)
-    if not np.allclose(wheel_angle(d, gain, asymmetry, curvature, offset), wheels, atol=1e-9, rtol=0):
+    scalar = np.ndim(wheels) == 0
+    w = float(wheels) - offset if scalar else np.asarray(wheels, float) - offset
+    side = (w > 0) - (w < 0) if scalar else np.sign(w)
+    target = w / (gain * (1.0 + asymmetry * side))
+    d = target
+    for _ in range(60):
+        step = (d + curvature * d ** 3 - target) / (1.0 + 3.0 * curvature * d * d)
+        d = d - step
+        if (abs(step) if scalar else np.max(np.abs(step), initial=0.0)) <= 1e-15:
+            break
+    miss = abs(d + curvature * d ** 3 - target) if scalar else np.max(np.abs(d + curvature * d ** 3 - target),
+                                                                     initial=0.0)
+    slope = 1.0 + 3.0 * curvature * d * d                    # M' / (k (1 + a sign)): the branch M increases on
+    rising = (slope > 0 and d * target >= 0) if scalar else bool(np.all((slope > 0) & (d * target >= 0)))
+    if not (miss <= 1e-9 and rising):
         raise ValueError(f"the steering map (curvature {curvature}) does not increase over the wheels' "
                          f"angles up to {math.degrees(float(np.max(np.abs(w)))):.1f} deg")
     return d
