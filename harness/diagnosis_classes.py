@@ -1,7 +1,8 @@
 """Diagnosis logs of three vehicle classes with steering-map effects hidden in them, for
-benchmarks/diagnosis_rate.py: the paper tractor and a passenger car (harness.truth_tractor as it is),
-and a small Ackermann machine (a converted mower: wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna
-heading and no gyro), added to the truth's vehicles here under the name ``small_ackermann``.
+benchmarks/diagnosis_rate.py: the paper tractor, a passenger car and the small Ackermann machine
+(harness.truth_tractor.VEHICLES: wheelbase 1.27 m; driven here at 0.3-1.5 m/s, CLASS_SPEEDS, with
+a dual-antenna heading and no gyro), each judged against its own baseline study (the small
+machine's: harness.vehicle_classes.study).
 
 The steering-map effects (gain error, left/right asymmetry, offset, nonlinear map) are
 harness.steering_maps': both logged angles become the reading of the wheels the truth turned.
@@ -22,15 +23,18 @@ import numpy as np
 from agrobot.diagnosis.pipeline import diagnose
 from harness import truth_tractor
 from harness.hidden_effects import BASELINES, expected_ids, recovered
-from harness.steering_maps import MAP_EFFECTS, MAP_IDS, draw_map, reading
+from harness.steering_maps import MAP_EFFECTS, MAP_IDS, draw_map, read_through
 from harness.truth_tractor import DEG, make_log
+from harness.vehicle_classes import study
 
-SMALL = dict(table=dict(m=320.0, I=110.0, l_f=0.72, l_r=0.55, C_f=15000.0, C_r=18000.0, sigma_f=0.12),
-             tau=truth_tractor.STEERING_TIME_CONSTANT, rate=truth_tractor.STEERING_RATE,
-             deadband=truth_tractor.STEERING_DEADBAND, speeds=(0.3, 0.8, 1.5), steer_scale=1.0,
-             resolution=0.1 * DEG, gyro_noise=0.005, v_ref=1.0)
-truth_tractor.VEHICLES.setdefault("small_ackermann", SMALL)
-CLASS_BASELINES = {**BASELINES, "small_ackermann": BASELINES["tractor"]}   # no shipped study of its size
+CLASS_SPEEDS = {"small_ackermann": (0.3, 0.8, 1.5)}      # the benchmark drives the small machine faster
+
+
+def baseline_study(vehicle: str, folder: Path) -> Path:
+    """The class's baseline study: hidden_effects.BASELINES', the small machine's written in ``folder``."""
+    return study(folder, speeds=CLASS_SPEEDS[vehicle]) if vehicle == "small_ackermann" else BASELINES[vehicle]
+
+
 def heading_instead_of_gyro(frame, rng: np.random.Generator, truth: dict):
     """The log with a dual-antenna heading [rad, ENU] and no yaw_rate (see the module docstring):
     the gyro's bias and scale taken out before it is integrated, the heading as late as the
@@ -51,13 +55,13 @@ def heading_instead_of_gyro(frame, rng: np.random.Generator, truth: dict):
 def class_log(effect: str, seed: int, vehicle: str, duration: float):
     """(log frame, truth) of one case: a truth_tractor effect id or a MAP_EFFECTS one, or None."""
     is_map = effect in MAP_EFFECTS
-    frame, truth = make_log(seed, None if is_map or effect == "none" else effect, duration=duration, vehicle=vehicle)
+    frame, truth = make_log(seed, None if is_map or effect == "none" else effect, duration=duration, vehicle=vehicle,
+                            speeds=CLASS_SPEEDS.get(vehicle))
     rng = np.random.default_rng([seed, 11])
     if is_map:
         p = draw_map(effect, rng, truth_tractor.VEHICLES[vehicle]["steer_scale"])
-        for c in ("delta_cmd", "delta"):
-            frame[c] = reading(frame[c].to_numpy(float), p)
-        truth.update(p, effects=[effect], effect=effect)
+        frame = read_through(frame, **p)
+        truth.update({f"map_{k}": v for k, v in p.items()}, effects=[effect], effect=effect)
     if vehicle == "small_ackermann":
         frame = heading_instead_of_gyro(frame, rng, truth)
     return frame, truth
@@ -97,7 +101,7 @@ def within(effect_id: str, params: dict, truth: dict) -> bool:
 def diagnose_class_case(case: tuple) -> dict:
     """(effect, seed, folder, vehicle, duration) -> {vehicle, effect, seed, truth, found, expected,
     in_tolerance, not_judged (the stages the diagnosis could not judge), error}:
-    the log written and diagnosed against the class's baseline (CLASS_BASELINES, no identify first);
+    the log written and diagnosed against the class's baseline (baseline_study, no identify first);
     a refusal or a failure is a row with its error, never a crash."""
     effect, seed, folder, vehicle, duration = case
     out = {"vehicle": vehicle, "effect": effect, "seed": seed, "found": None, "error": "", "truth": None}
@@ -106,8 +110,9 @@ def diagnose_class_case(case: tuple) -> dict:
         out["truth"] = {k: v for k, v in truth.items() if isinstance(v, (int, float, str, list))}
         log = Path(folder) / f"{vehicle}_{effect}_{seed}.parquet"
         frame.to_parquet(log)
-        result = diagnose(log, Path(folder) / log.stem, plots=False, study_path=CLASS_BASELINES[vehicle],
-                          identify=False)
+        out_dir = Path(folder) / log.stem
+        out_dir.mkdir(exist_ok=True)
+        result = diagnose(log, out_dir, plots=False, study_path=baseline_study(vehicle, out_dir), identify=False)
         out["found"] = sorted(e["id"] for e in result["effects"])
         out["expected"] = sorted(expected(truth))
         out["in_tolerance"] = all(within(e["id"], e["parameters"], truth) for e in result["effects"])

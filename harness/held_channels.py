@@ -1,8 +1,9 @@
-"""A small Ackermann machine's recording as its logger writes it, for the audit's tests: every
-channel in one 20 Hz row, the slower ones held (a dual-antenna heading that updates at 5 Hz and RTK
-positions at 10 Hz repeat their last value until the next update), with a known truth.
+"""The small Ackermann machine's recording (harness.truth_tractor.VEHICLES["small_ackermann"]) as
+its logger writes it, for the audit's tests: every channel in one 20 Hz row, the slower ones held
+(a dual-antenna heading that updates at 5 Hz and RTK positions at 10 Hz repeat their last value
+until the next update), with a known truth.
 
-The truth: a kinematic bicycle (wheelbase ``L``) with a smooth random steering, driving forward at
+The truth: a kinematic bicycle (wheelbase ``L``, the machine's l_f + l_r) with a smooth random steering, driving forward at
 about 1.4 m/s and, within ``reverse`` (start, end) s, backing up at 0.8 m/s (stopping before and
 after); yaw rate r = v tan(delta) / L with v signed, the track its integral. The rows (``log.csv``,
 POSIX seconds, the row clock jittered by up to 4 ms): ``lat``, ``lon`` [deg] held from the 10 Hz
@@ -21,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-L = 0.9
+from harness.truth_tractor import SMALL_WHEELBASE as L
+
 H = 0.002
 FORWARD, BACKWARD = 1.4, 0.8
 START = 1.7e9

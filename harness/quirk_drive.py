@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from harness.truth_tractor import SMALL_WHEELBASE
+
 STEER_DELAY = 0.10      # s
 STEER_TAU = 0.12        # s
 H = 0.01                # s: the fine grid
@@ -24,7 +26,7 @@ LAT0, LON0 = 52.0, 5.0
 
 # machines the recordings come from: wheelbase [m], cruising speeds [m/s], steering reach [rad]
 MACHINES = {
-    "mower": dict(wheelbase=1.27, speeds=(0.5, 1.5), steer=0.35),        # a converted riding mower
+    "mower": dict(wheelbase=SMALL_WHEELBASE, speeds=(0.5, 1.5), steer=0.35),     # truth_tractor's small Ackermann machine
     "utility": dict(wheelbase=1.9, speeds=(2.0, 5.0), steer=0.25),       # a by-wire utility vehicle
     "tractor": dict(wheelbase=2.6, speeds=(1.5, 3.0), steer=0.30),
 }

@@ -1,17 +1,21 @@
-"""A 'measured' log of a small Ackermann machine (a converted riding mower, wheelbase 1.27 m) at
-0.3-1.5 m/s, written from its own equations, not the project's code path.
+"""A 'measured' log of the small Ackermann machine (harness.truth_tractor.VEHICLES["small_ackermann"]:
+a converted riding mower, wheelbase 1.27 m) at 0.3-1.5 m/s, written from its own kinematic equations,
+not the project's code path.
 
 The machine: a steering motor closing a first-order loop (time constant 0.15 s) on a
 potentiometer's reading u, which tracks the command delta_cmd; the wheels turn the steering map
-of the reading, w = g_left u (u > 0) | g_right u (u <= 0) + offset (a gain error, a left/right
-asymmetry, a zero moved); the yaw from the kinematic single track with a small understeer,
+of the reading (harness.steering_maps.wheel_angle), w = g (1 + a sign u) u + offset (a gain error,
+a left/right asymmetry, a zero moved); the yaw from the kinematic single track with a small understeer,
 r = v tan(w) / (L + K v^2), integrated at 200 Hz (Heun). Sensors, in 20 Hz rows: the reading
 ``delta`` (0.1 deg noise), the speed ``v`` (2 cm/s noise), a dual-antenna ``heading`` updated at
 5 Hz and held between its updates (0.3 deg noise), the positions ``x``, ``y`` at 10 Hz, held
 (2 cm noise); no gyro. Driving: a path follower's steering, steps and ramps whose size keeps the
 lateral acceleration mostly below 0.4 m/s2 at each speed (larger at walking pace).
 
-Imported where used: agrobot.studies (only for the study written beside a log).
+The study beside a log: harness.vehicle_classes.study (the machine's baseline study).
+
+Imported where used: harness.vehicle_classes (only for the study written beside a log; it loads
+the diagnosis).
 """
 from __future__ import annotations
 
@@ -21,15 +25,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-DEG = math.pi / 180
-WHEELBASE = 1.27
+from harness.steering_maps import wheel_angle
+from harness.truth_tractor import DEG, SMALL_WHEELBASE as WHEELBASE
+
 TRUTH = dict(gain=0.85, asymmetry=0.15, offset=0.035, understeer=0.01, servo=0.15)
-
-
-def steering_map(u, gain: float, asymmetry: float, offset: float):
-    """w = g_left u (u > 0) | g_right u (u <= 0) + offset, g_left/right = gain (1 +- asymmetry)."""
-    u = np.asarray(u, float)
-    return np.where(u > 0, gain * (1 + asymmetry), gain * (1 - asymmetry)) * u + offset
 
 
 def _plan(rng: np.random.Generator, duration: float, rate: float):
@@ -73,7 +72,7 @@ def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None
         for _ in range(sub):
             def deriv(s):
                 uu, pp = s[0], s[1]
-                w = float(steering_map(uu, tr["gain"], tr["asymmetry"], tr["offset"]))
+                w = float(wheel_angle(uu, tr["gain"], tr["asymmetry"], offset=tr["offset"]))
                 r = v * math.tan(w) / (WHEELBASE + tr["understeer"] * v * v)
                 return ((cmd[i] - uu) / tr["servo"], r, v * math.cos(pp), v * math.sin(pp))
             s0 = (u, psi, x, y)
@@ -111,11 +110,7 @@ def make_circle_log(seed: int, command: float = 0.25, speed: float = 0.8, durati
 
 
 def write_study(folder) -> Path:
-    """A study of the machine: the figure-8 study's components with a [vehicle] table of a small
-    robot of 1.27 m wheelbase (2.0 x 1.1 m outline)."""
-    from agrobot.studies import shipped
+    """The machine's baseline study in ``folder`` (harness.vehicle_classes.study)."""
+    from harness.vehicle_classes import study
 
-    path = Path(folder) / "small_ackermann.toml"
-    path.write_text(Path(shipped("figure8.toml")).read_text() + f'\n[vehicle]\nclass = "robot"\nwheelbase = {WHEELBASE}\n'
-                    'length = 2.0\nwidth = 1.1\nsteering = "angle"\ndrive = "ackermann"\n')
-    return path
+    return study(folder)

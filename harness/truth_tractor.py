@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from agrobot.components.test_drive_plan import driving_plan
+from harness import steering_maps
 
 DEG = math.pi / 180
 G = 9.81
@@ -34,7 +35,17 @@ VEHICLES = {
     "car": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
                 tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(10.0, 20.0, 30.0), steer_scale=0.05,
                 resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0),
+    # a small Ackermann field robot (a converted mower: 120 kg, wheelbase l_f + l_r = 1.27 m, outline
+    # 1.9 m x 1.1 m) with a fast servo steering, driven at 0.5-0.85 m/s by default: lateral
+    # accelerations below 1 m/s2, the kinematic regime r = v tan(delta) / L (make_log's ``speeds``
+    # drives it faster); harness.vehicle_classes.study is its baseline study
+    "small_ackermann": dict(table=dict(m=120.0, I=30.0, l_f=0.6, l_r=0.67, C_f=3000.0, C_r=3000.0, sigma_f=0.02),
+                            tau=0.035, rate=1.5, deadband=0.002, speeds=(0.5, 0.65, 0.85), steer_scale=1.0,
+                            resolution=0.1 * DEG, gyro_noise=0.005, v_ref=0.65, min_speed=0.3,
+                            length=1.9, width=1.1),
 }
+SMALL_ACKERMANN = VEHICLES["small_ackermann"]
+SMALL_WHEELBASE = SMALL_ACKERMANN["table"]["l_f"] + SMALL_ACKERMANN["table"]["l_r"]     # 1.27 m
 
 EFFECTS = ("actuator_delay", "steering_deadband", "steering_rate_limit", "steering_offset", "yaw_rate_bias",
            "gps_latency", "speed_dependent_cornering", "side_slope", "antenna_lever_arm")
@@ -45,7 +56,8 @@ UNLISTED = ("steering_sensor_gain", "gyro_scale_factor", "wheel_slip", "tyre_sat
 
 # effects real vehicles show, added after the catalogue above (drawn from a stream of their own so the
 # draws of the others stay): a localisation output at another point of the vehicle on a lagging clock,
-# and a steering ratio that varies with the angle (the wheels turn delta (1 + c delta^2) for a reading delta)
+# and a steering ratio that varies with the angle (the wheels turn delta (1 + c delta^2) for a reading
+# delta: harness.steering_maps with curvature c)
 LATER = ("position_reference", "steering_ratio_curve", "steering_clock")
 
 # healthy truths: ways a tractor with no fault differs from the baseline (the diagnosis must say "none")
@@ -120,14 +132,6 @@ def draw_later(effect: str, rng: np.random.Generator, l_r: float) -> dict[str, f
     return {"position_reference": {"forward": l_r + u(0.8, 1.6), "left": sign * u(0.0, 0.3), "latency": u(0.15, 0.35)},
             "steering_ratio_curve": {"ratio_curvature": u(1.5, 3.0)},
             "steering_clock": {"steering_clock": u(0.3, 0.9)}}[effect]
-
-
-def ratio_reading(delta: float, c: float) -> float:
-    """The reading d of a wheel angle delta = d (1 + c d^2) (fixed point; c d^2 < 0.5 here)."""
-    d = delta
-    for _ in range(8):
-        d = delta / (1.0 + c * d * d)
-    return d
 
 
 def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float]:
@@ -311,7 +315,7 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
         if servo is None:
             k = int(math.floor((time - delay) * 20.0 + 1e-9))
             c = cmd[min(max(k, 0), len(cmd) - 1)]
-            reading = ratio_reading(delta, curve) if curve else delta
+            reading = steering_maps.reading(delta, curvature=curve) if curve else delta
             err = c - sensor_gain * reading         # the loop closes on the sensor's reading
             err = err - dead if err > dead else (err + dead if err < -dead else 0.0)
             want = max(-rate, min(rate, err / tau))
@@ -371,7 +375,7 @@ def _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral
     frame = pd.DataFrame({
         "t": t_log,
         "delta_cmd": cmd,
-        "delta": q * np.round((sensor_gain * np.array([ratio_reading(d, curve) for d in delta[idx]])
+        "delta": q * np.round((sensor_gain * steering_maps.reading(delta[idx], curvature=curve)
                                + 0.05 * DEG * noise[0]) / q),
         "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
         "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2],

@@ -12,13 +12,13 @@ import pytest
 from agrobot.measurements import LogError
 from agrobot.measurements.recording import ImportOptions, import_recording
 from agrobot.measurements.signal_expressions import parse_signal
-from harness.held_channels import signals, write_machine_log
+from harness.held_channels import L, signals, write_machine_log
 
 SCALE = 0.9
 
 
 def options(signal_list, **kw) -> ImportOptions:
-    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=0.9, **kw)
+    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=L, **kw)
 
 
 @pytest.fixture(scope="module")

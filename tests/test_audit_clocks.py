@@ -9,13 +9,13 @@ import pytest
 
 from agrobot.measurements.recording import ImportOptions, import_recording
 from agrobot.measurements.signal_expressions import parse_signal
-from harness.held_channels import signals, write_machine_log
+from harness.held_channels import L, signals, write_machine_log
 
 LATENCY = 0.3
 
 
 def options(signal_list, **kw) -> ImportOptions:
-    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=0.9, **kw)
+    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=L, **kw)
 
 
 def test_a_lag_within_one_file_is_a_sensor_latency_and_nothing_moves(tmp_path):

@@ -10,7 +10,7 @@ import pytest
 from agrobot.measurements import LogError
 from agrobot.measurements.recording import ImportOptions, import_recording
 from agrobot.measurements.signal_expressions import parse_signal
-from harness.held_channels import BACKWARD, signals, truth, write_machine_log
+from harness.held_channels import BACKWARD, L, signals, truth, write_machine_log
 
 REVERSE = (40.0, 50.0)
 SECONDS = 75.0
@@ -18,7 +18,7 @@ ROW0 = 0.5          # the first row's time in the drive (harness.held_channels)
 
 
 def options(signal_list, **kw) -> ImportOptions:
-    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=0.9, **kw)
+    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=L, **kw)
 
 
 def backing_up() -> tuple[float, float]:

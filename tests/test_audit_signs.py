@@ -13,11 +13,11 @@ import pandas as pd
 
 from agrobot.measurements.recording import ImportOptions, import_recording
 from agrobot.measurements.signal_expressions import parse_signal
-from harness.held_channels import signals, write_machine_log
+from harness.held_channels import L, signals, write_machine_log
 
 
 def options(signal_list, **kw) -> ImportOptions:
-    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=0.9, **kw)
+    return ImportOptions(signals=[parse_signal(s) for s in signal_list], wheelbase=L, **kw)
 
 
 def kinds(found, kind):
@@ -43,7 +43,7 @@ def test_a_gyro_of_opposite_sign_against_the_kinematic_yaw_rate_is_a_sign_findin
     assert not kinds(found, "response_lag")
 
 
-def write_steady_turn(path, seconds=40.0, delta=0.2, speed=1.0, gyro=-1.07, wheelbase=0.9):
+def write_steady_turn(path, seconds=40.0, delta=0.2, speed=1.0, gyro=-1.07, wheelbase=L):
     """A 100 Hz table of a steady turn: steering and speed constant (the speed set once, at 20 s,
     from 0.9 x to ``speed``), a gyro ``gyro`` x v tan(delta) / L with noise."""
     rng = np.random.default_rng(5)

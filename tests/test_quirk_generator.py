@@ -178,13 +178,17 @@ def test_an_nmea_recording_reverses_against_its_heading_and_carries_its_bad_chec
 
 
 def test_the_steering_maps_turn_the_wheels_as_their_truth_says():
-    from harness.steering_maps import reading
+    from harness.steering_maps import reading, wheel_angle
 
     wheels = np.linspace(-0.4, 0.4, 81)
     left = wheels > 0
-    r = reading(wheels, {"map_asymmetry": 0.2})
+    r = reading(wheels, asymmetry=0.2)
     assert np.allclose(r[left] * 1.2, wheels[left]) and np.allclose(r[~left] * 0.8, wheels[~left])
-    assert np.allclose(reading(wheels, {"map_gain": 1.25}) * 1.25, wheels)
-    assert np.allclose(reading(wheels, {"map_offset": 0.04}) + 0.04, wheels)
-    d = reading(wheels, {"map_curvature": 2.0})
+    assert np.allclose(reading(wheels, gain=1.25) * 1.25, wheels)
+    assert np.allclose(reading(wheels, offset=0.04) + 0.04, wheels)
+    d = reading(wheels, curvature=2.0)
     assert np.allclose(d * (1 + 2.0 * d ** 2), wheels, atol=1e-9)
+    planted = dict(gain=0.85, asymmetry=-0.15, curvature=1.5, offset=0.035)      # the forward map undoes it
+    assert np.allclose(wheel_angle(reading(wheels, **planted), **planted), wheels, atol=1e-9)
+    assert np.allclose(reading(wheel_angle(wheels, **planted), **planted), wheels, atol=1e-9)
+    assert np.allclose(wheel_angle(0.3, **planted), 0.85 * 0.3 * 0.85 * (1 + 1.5 * 0.09) + 0.035)

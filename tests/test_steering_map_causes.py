@@ -3,10 +3,10 @@ left/right asymmetry, an offset, a nonlinear map, the actuator's own delay and r
 the diagnosis with their planted values, never read as the tyres (oversteer, a cornering stiffness
 changing with speed, saturation).
 
-The truths: harness.truth_tractor's tractor and harness.vehicle_classes' small Ackermann machine
-(wheelbase 1.27 m at 0.5-0.85 m/s: the kinematic regime); a steering map planted on the log
-(vehicle_classes.steering_map: the wheels turn k r (1 + a sign r) (1 + c r^2) + offset for a command
-or reading r) or the truth's own delay, rate limit and offset, drawn there, never by the diagnosis."""
+The truths: harness.truth_tractor's tractor and its small Ackermann machine (wheelbase 1.27 m at
+0.5-0.85 m/s: the kinematic regime; harness.vehicle_classes.study its baseline); a steering map
+planted on the log (harness.steering_maps: the wheels turn k r (1 + a sign r) (1 + c r^2) + offset
+for a command or reading r) or the truth's own delay, rate limit and offset, drawn there, never by the diagnosis."""
 from __future__ import annotations
 
 import math
@@ -18,23 +18,24 @@ from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
 from agrobot.orchestrator.study import Study
 from harness.hidden_effects import diagnose_many
+from harness.steering_maps import wheel_angle
 from harness.truth_tractor import make_log
-from harness.vehicle_classes import diagnose_planted, full_lock_radii, study, wheel_angle
+from harness.vehicle_classes import diagnose_planted, full_lock_radii, study
 
 SEED = 5501
 TYRES = {"speed_dependent_cornering", "tyre_saturation", "side_slope"}
 # (vehicle, truth effect, planted map, command only, values) -> the effect named, its parameter, the truth, tolerance
 CASES = {
-    "ackermann gain": (("ackermann", None, {"gain": 0.8}, False), "steering_gain", "steering_gain", 0.8, 0.03),
-    "ackermann asymmetry": (("ackermann", None, {"asymmetry": 0.2}, False), "steering_asymmetry",
+    "ackermann gain": (("small_ackermann", None, {"gain": 0.8}, False), "steering_gain", "steering_gain", 0.8, 0.03),
+    "ackermann asymmetry": (("small_ackermann", None, {"asymmetry": 0.2}, False), "steering_asymmetry",
                             "steering_asymmetry", 0.2, 0.03),
-    "ackermann offset": (("ackermann", "steering_offset", {}, False, {"offset": 0.035}), "steering_offset",
+    "ackermann offset": (("small_ackermann", "steering_offset", {}, False, {"offset": 0.035}), "steering_offset",
                          "steer_angle_offset", 0.035, math.radians(0.3)),
-    "ackermann curve": (("ackermann", None, {"curvature": 0.8}, False), "steering_ratio_curve",
+    "ackermann curve": (("small_ackermann", None, {"curvature": 0.8}, False), "steering_ratio_curve",
                         "steering_ratio_curvature", 0.8, 0.2),
-    "ackermann delay": (("ackermann", "actuator_delay", {}, False, {"delay": 0.2}), "actuator_delay",
+    "ackermann delay": (("small_ackermann", "actuator_delay", {}, False, {"delay": 0.2}), "actuator_delay",
                         "command_delay", 0.2, 0.03),
-    "ackermann rate": (("ackermann", "steering_rate_limit", {}, False, {"rate": math.radians(20)}),
+    "ackermann rate": (("small_ackermann", "steering_rate_limit", {}, False, {"rate": math.radians(20)}),
                        "steering_rate_limit", "steering_rate_limit", math.radians(20), math.radians(4)),
     "tractor gain": (("tractor", None, {"gain": 1.2}, False), "steering_gain", "steering_gain", 1.2, 0.03),
     "tractor asymmetry": (("tractor", None, {"asymmetry": -0.15}, False), "steering_asymmetry",
@@ -50,7 +51,7 @@ def test_the_asymmetry_drives_the_yaw_model_as_the_planted_map_turns_the_wheels(
     """The replay's wheel angle under steering_asymmetry a is the harness's map k r (1 + a sign r): the
     issue's machine turning on 1.13 m to the left and 1.90 m to the right at full lock."""
     baseline = baseline_from_study(Study.load(study(tmp_path)))
-    frame, _ = make_log(SEED, None, duration=70.0, vehicle="ackermann")
+    frame, _ = make_log(SEED, None, duration=70.0, vehicle="small_ackermann")
     replay = Replay(frame, baseline)
     v = dict(baseline.values, steering_gain=1.1, steering_asymmetry=0.15)
     np.testing.assert_allclose(replay.yaw_input(v), wheel_angle(replay.delta, gain=1.1, asymmetry=0.15))
