@@ -122,6 +122,7 @@ def test_a_whole_plan_covers_the_workable_field(file, name, overrides):
     assert p.field.boundary.area - p.workable.area < field.boundary.length * 1e-3 + 400
 
 
+@pytest.mark.slow
 def test_a_field_with_a_bay_and_a_hole_is_split_into_cells_and_covered():
     """A U-shaped field (a bay cut into its top) with a pond: the lines crossing the bay or the
     pond give two swaths each, the planner splits them into cells, each swath is driven once,

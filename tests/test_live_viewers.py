@@ -89,7 +89,7 @@ def _mcap_channels(path: Path) -> dict:
 
 def test_both_subprotocols_are_served_every_mcap_topic_and_one_viewer_too_many_is_refused(tmp_path):
     out, port = tmp_path / "run", _free_port()
-    run = _start_run(STUDIES / "figure8.toml", out, port, "--set", "study.stop_time=40", "--live-wait", "60",
+    run = _start_run(STUDIES / "figure8.toml", out, port, "--set", "study.stop_time=160", "--live-wait", "60",
                      "--live-viewers", "2", "--mcap")
 
     async def watch():

@@ -215,6 +215,7 @@ def test_the_live_view_serves_the_running_study_to_a_websocket_client(tmp_path):
         assert values["x_cg"] == row["tractor.x_cg"] and values["heading"] == row["tractor.heading"]
 
 
+@pytest.mark.slow
 def test_the_live_view_follows_a_real_time_run_of_the_hardware_layout(tmp_path):
     """figure8_hil.toml without its hardware tractor (which needs the emulator or a tractor): its layout,
     figure8_hardware_layout.toml, paced in real time as figure8_hil.toml is (study.realtime). The run is paced

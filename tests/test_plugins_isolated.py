@@ -4,6 +4,8 @@ left out whole; every command that does not need it works; a study naming a type
 have brought gets the plugin's error in its message."""
 from __future__ import annotations
 
+import pytest
+
 import os
 import subprocess
 import sys
@@ -31,6 +33,7 @@ def _agrobot(env: dict, *args: str) -> subprocess.CompletedProcess:
                           cwd=ROOT, timeout=300)
 
 
+@pytest.mark.slow
 def test_a_broken_plugin_is_named_once_and_every_command_still_works(tmp_path):
     env = _broken_distribution(tmp_path / "site")
     for args in (["--version"], ["run", "--help"], ["plan", "--help"]):

@@ -194,6 +194,7 @@ def test_the_f1tenth_tables_join_on_time_with_the_gyro_declared_in_degrees(tmp_p
     assert not (tmp_path / "b.csv").exists() and not (tmp_path / "c.csv").exists()
 
 
+@pytest.mark.slow
 def test_gyro_spikes_are_named_masked_or_kept(tmp_path):
     run = tmp_path / "DS1"
     shutil.copytree(F1 / "DS1", run)
@@ -285,6 +286,7 @@ def test_tables_whose_clocks_do_not_overlap_are_refused_naming_both(tmp_path):
 
 
 # --- ROS bags with custom topics ----------------------------------------------------------------------
+@pytest.mark.slow
 def test_a_bag_with_only_rosout_and_a_custom_topic_is_listed_and_read_with_a_declared_unit(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore, get_types_from_msg

@@ -222,6 +222,7 @@ def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
     np.testing.assert_array_equal(merged["speed_rms_error"].to_numpy(), kept.set_index("point")["speed_rms_error"].to_numpy())
 
 
+@pytest.mark.slow
 def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
     """Exit 2 naming the address, not a hang: the subprocess timeout is the guard (how fast it gives
     up, CONNECT_TIMEOUT, is a figure for a benchmark, not a test on a shared machine)."""

@@ -32,6 +32,7 @@ def _log(tmp_path: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_identify_writes_alike_through_both_doors_and_loads_back(cli, tmp_path):
     log = _log(tmp_path)
     proc = cli("identify", log, "--method", "driving", "--out", tmp_path / "cli", "--no-plots")
@@ -52,6 +53,7 @@ def test_a_run_loads_back_as_it_ran(tmp_path):
     assert loaded.failed == ran.failed and loaded.study.study.stop_time == 20
 
 
+@pytest.mark.slow
 def test_sweep_runs_on_every_core_by_default_and_alike_through_both_doors(cli, tmp_path, monkeypatch):
     seen = []
     from agrobot.orchestrator import sweep as sweep_module
