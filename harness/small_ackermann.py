@@ -101,7 +101,7 @@ def make_circle_log(seed: int, command: float = 0.25, speed: float = 0.8, durati
     rng = np.random.default_rng(seed)
     t = np.arange(int(duration * 50)) / 50.0
     v = speed * np.clip((t - 5.0) / 2.0, 0.0, 1.0)
-    w = float(steering_map(command, TRUTH["gain"], TRUTH["asymmetry"], TRUTH["offset"]))
+    w = float(wheel_angle(command, TRUTH["gain"], TRUTH["asymmetry"], offset=TRUTH["offset"]))
     r = v * math.tan(w) / (WHEELBASE + TRUTH["understeer"] * v * v)
     frame = pd.DataFrame({"t": t, "delta_cmd": np.full_like(t, command), "v": v + 0.01 * rng.standard_normal(len(t)),
                           "yaw_rate": r + bias + 0.5 * DEG * rng.standard_normal(len(t))})

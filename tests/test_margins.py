@@ -129,7 +129,8 @@ def test_gain_margin_against_a_gain_on_the_steering_command():
 
 # --- the linear analysis itself --------------------------------------------------------------
 
-@pytest.mark.parametrize("name", ["figure8", "figure8_stanley", "figure8_rlfr", "figure8_hardware_layout", "field_coverage"])
+@pytest.mark.parametrize("name", ["figure8", "figure8_stanley", "figure8_rlfr", "figure8_hardware_layout",
+                                  pytest.param("field_coverage", marks=pytest.mark.slow)])
 def test_delay_margin_from_the_frequency_response_and_from_the_poles_agree(name):
     """Two methods: phase margin / crossover on the opened loop, and the closed-loop poles with the
     steering's own command delay raised step by step (0.01 s)."""

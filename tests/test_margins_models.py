@@ -274,10 +274,13 @@ def ins_differences(ekf, inputs, start: int, block, steps: int = 25, eps: float 
     return out
 
 
-@pytest.mark.parametrize("params, speed", [({"antenna_height": 2.5}, 2.0), ({"antenna_height": 2.5}, 1.0),
-                                           ({"antenna_height": 1.0, "antenna_forward": 0.8, "slip_compliance0": 0.006,
-                                             "l_r": 0.6}, 2.0),
-                                           ({"antenna_height": 2.5, "terrain_compensation": 0, "crab_estimate": 0}, 2.0)])
+@pytest.mark.parametrize("params, speed", [({"antenna_height": 2.5}, 2.0),
+                                           pytest.param({"antenna_height": 2.5}, 1.0, marks=pytest.mark.slow),
+                                           pytest.param({"antenna_height": 1.0, "antenna_forward": 0.8,
+                                                         "slip_compliance0": 0.006, "l_r": 0.6}, 2.0,
+                                                        marks=pytest.mark.slow),
+                                           pytest.param({"antenna_height": 2.5, "terrain_compensation": 0,
+                                                         "crab_estimate": 0}, 2.0, marks=pytest.mark.slow)])
 def test_ins_ekf_block_is_the_jacobian_of_its_step(params, speed):
     """The INS EKF settled on a straight (a fix every 5th step at the true antenna, wheel speed v, level),
     then each lateral input stepped by +-eps for 25 steps (a receiver's
