@@ -94,7 +94,8 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
 
 @pytest.mark.parametrize("edit, words", [
     (lambda f: f.drop(columns=["delta_cmd", "delta", "yaw_rate"]), ["nothing to judge", "steering not judged: no delta_cmd",
-                                                                    "position not judged: no yaw_rate"]),
+                                                                    "position not judged: the yaw rate comes from the GNSS "
+                                                                    "course of these positions"]),
     (lambda f: f.assign(delta=np.degrees(f["delta"])), ["'delta'", "looks like degrees"]),
     (lambda f: f.assign(yaw_rate=np.degrees(f["yaw_rate"])), ["'yaw_rate'", "deg"]),
     (lambda f: f.assign(v=f["v"].where(f.index != 300, np.nan)), ["'v'", "NaN", "row 300"]),

@@ -311,7 +311,7 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
     (["diagnose", "{tmp}/ms.csv", "--out", "{tmp}/d"], 2, ["'t'", "milliseconds"]),
     (["identify", "{tmp}/ms.csv", "--out", "{tmp}/i"], 2, ["'t'", "milliseconds"]),
     (["identify", "{tmp}/degrees.csv", "--out", "{tmp}/i"], 2, ["'delta'", "degrees"]),
-    (["identify", "{tmp}/missing.csv", "--out", "{tmp}/i"], 2, ["identification not possible", "no yaw_rate"]),
+    (["identify", "{tmp}/missing.csv", "--out", "{tmp}/i"], 2, ["identification from driving not possible", "no yaw_rate"]),
     (["identify", "studies/identification.toml", "--out", "{tmp}/i", "--set", "gyro.noise_std=loud"], 2,
      ["noise_std", "'loud'"]),
     (["export-controller", "nope.toml", "--out", "{tmp}/c.fmu"], 2, ["nope.toml"]),
@@ -342,7 +342,8 @@ def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_pa
     frame, _ = make_log(5, None, duration=120.0)
     frame.assign(delta=np.degrees(frame["delta"])).to_csv(tmp_path / "degrees.csv", index=False)
     frame.assign(t=frame["t"] * 1000).to_csv(tmp_path / "ms.csv", index=False)
-    frame.drop(columns=["yaw_rate"]).to_csv(tmp_path / "missing.csv", index=False)
+    # no gyro, no heading and no positions: nothing measures the yaw (a GNSS course would)
+    frame.drop(columns=["yaw_rate", "x", "y"]).to_csv(tmp_path / "missing.csv", index=False)
     proc = subprocess.run(CMD + [a.format(tmp=tmp_path) for a in args], cwd=ROOT, capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == code, proc.stderr

@@ -17,8 +17,9 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   its update period P is the median interval between updates, ``held`` = P / the row period;
 - a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
   else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
-  constant, not a gap); while the machine moves it is a stale value (a dropped update) and only
-  its first row is kept, so that the silence is a gap the audit names;
+  constant, not a gap); for the positions, while the machine moves, it is a stale value (a dropped
+  update: moving positions change) and only its first row is kept, so that the silence is a gap the
+  audit names; any other channel (a speed at a cruise, a yaw rate on a straight) is kept every P;
 - a held channel is replaced by its updates: each value once, at the middle between the last row
   that still holds the old value and the first that holds the new one (the update happened between
   them; the first row alone would make every update up to a row late, and a rate from such times
@@ -43,7 +44,7 @@ import numpy as np
 
 from .direction import course
 from .log import LogError, resolution
-from .streams import Streams, gnss_speed
+from .streams import Streams
 
 HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the channel may be held
 REGULAR = 1.5           # the median update interval at least this many row periods
@@ -186,11 +187,10 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         if found is not None:
             streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
             notes.append({"channel": "gnss", **_said(found)})
-    if moving is None and streams.gnss is not None and len(streams.gnss) > 2:
-        tg, sg = streams.gnss["utc"].to_numpy(float), gnss_speed(streams.gnss, streams.breaks)
-        moving = lambda times: np.interp(times, tg, sg) > STANDING        # noqa: E731
     for c, (t, x) in list(streams.signals.items()):
-        found = holding(t, x, moving)
+        # a speed, a rate or an angle may stay put while the machine moves (a cruise, a straight):
+        # only positions must change then, so only theirs are judged stale
+        found = holding(t, x, None)
         if found is None:
             continue
         if c not in streams.held:
