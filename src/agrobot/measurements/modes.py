@@ -100,10 +100,15 @@ def _condition(frame: pd.DataFrame, c: Condition, source) -> np.ndarray:
             ">": lambda: x > v, ">=": lambda: x >= v}[c.op]()
 
 
+def index_runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(first, one past the last) row of each True stretch of ``mask``."""
+    edges = np.diff(np.concatenate([[0], np.asarray(mask).astype(int), [0]]))
+    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+
+
 def stretches(mask: np.ndarray, t: np.ndarray) -> list[tuple[float, float]]:
     """(start, end) times of the True stretches of ``mask`` on the log's clock."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return [(float(t[a]), float(t[b - 1])) for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))]
+    return [(float(t[a]), float(t[b - 1])) for a, b in index_runs(mask)]
 
 
 def _described(what: str, mask: np.ndarray, t: np.ndarray) -> str:
@@ -170,8 +175,7 @@ def unexplained_mask(frame: pd.DataFrame) -> tuple[np.ndarray, dict]:
     mask = (np.nan_to_num(rolling, nan=0.0) > limit) & unrelated
     # blips under half a window dropped, shorter agreements inside a stretch joined, short stretches dropped
     for value, shorter in ((True, UNEXPLAINED_WINDOW / 2), (False, UNEXPLAINED_MIN), (True, UNEXPLAINED_MIN)):
-        edges = np.diff(np.concatenate([[0], (mask == value).astype(int), [0]]))
-        for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        for a, b in index_runs(mask == value):
             if (b - a) * step < shorter and (value or (0 < a and b < len(mask))):
                 mask[a:b] = not value
     return mask, {"delay_s": k * step, "typical_rms_rad": typical, "threshold_rad": limit}
