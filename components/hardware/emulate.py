@@ -1,30 +1,26 @@
 """``python -m agrobot emulate STUDY --nmea-port PORT``: run a study holding an
 ``nmea_server`` in real time until its stop time or until interrupted (Ctrl-C, SIGTERM); the
 signals recorded so far are written either way, and the exit status is 130 (Ctrl-C) or 143
-(SIGTERM)."""
+(SIGTERM). The command parses, calls agrobot.api.emulate and prints.
+
+Imported where used: agrobot.api (start-up: it loads the results' modules, on every command,
+``--help`` included; only the emulate command's run needs it)."""
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
 from agrobot.orchestrator.cli import add_output_options, add_set_option
-from agrobot.orchestrator.engine import RunError
-from agrobot.orchestrator.errors import Interrupted, Terminated, install_signal_handlers
 from agrobot.orchestrator.resolver import resolve
-from agrobot.orchestrator.runner import run_study
-from agrobot.orchestrator.study import Study, StudyError
+from agrobot.orchestrator.study import Study
 
 from .can_link import binding
 from .record import record_adapters, record_folder
 
 
-def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[str], duration: float | None,
-            record: Path | None = None, overwrite: bool = False, progress: bool = True) -> int:
-    if not 0 <= nmea_port <= 65535:
-        raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
-    if duration is not None and not duration > 0:
-        raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
-    study = Study.load(study_path, overrides)
+def emulated_study(study: Study, nmea_port: int, duration: float | None, record: Path | None):
+    """(the study served in real time on ``nmea_port``, its model, the NMEA server's name, the files
+    the user named): ``duration`` its stop time, ``record`` the buses recorded as a field log."""
     model = resolve(study)
     server = model.one(role="nmea_server", purpose="emulate")
     values = {f"{server}.port": nmea_port, "study.realtime": True}
@@ -35,22 +31,7 @@ def emulate(study_path: Path, nmea_port: int, out: Path | None, overrides: list[
     if record is not None:             # the receiver's NMEA with host stamps and the CAN bus, as a field log has them
         study = record_adapters(study, record_folder(record))
         named = (record / "gps.nmea", record / "can.log")
-    install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
-    print(f"emulating {study.study.name}: {reach(study, model, server, nmea_port)}, real time, until "
-          f"t = {study.study.stop_time:g} s or Ctrl-C", flush=True)
-    try:
-        result = run_study(study, out, plots=False, overwrite=overwrite, progress=progress, named=named)
-    except Interrupted as exc:
-        print(f"emulator stopped {exc}", flush=True)
-        return exc.exit_status
-    except RunError as exc:
-        cause = exc.__cause__
-        print(f"emulator stopped: {exc}", flush=True)
-        if isinstance(cause, KeyboardInterrupt):
-            return 143 if isinstance(cause, Terminated) else 130
-        return 1
-    print(result.summary, flush=True)
-    return 0
+    return study, model, server, named
 
 
 def reach(study, model, server: str, nmea_port: int) -> str:
@@ -75,8 +56,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    return emulate(args.study, args.nmea_port, args.out, args.set, args.duration, args.record, args.overwrite,
-                   not args.no_progress)
+    """Parse, emulate through agrobot.api (until the end), print how it ended."""
+    from agrobot.api import emulate
+
+    done = emulate(args.study, args.nmea_port, args.set, args.out, duration=args.duration, record=args.record,
+                   overwrite=args.overwrite, progress=not args.no_progress,
+                   announce=lambda line: print(line, flush=True))
+    print(done.stopped or done.summary, flush=True)
+    return done.exit_status
 
 
 def register(registry) -> None:

@@ -9,6 +9,11 @@ writes (or call the result's ``save(folder)`` later).
     convert(source, ...)                 -> Recording       a raw recording as a measured log
     plan(field, ...)                     -> PlanResult      a coverage plan of a field
     margins(study)                       -> LoopMargins     the guidance loop's stability margins
+    fields(source)                       -> FieldsResult    the fields of a file, a folder or a GNSS track
+    export_controller(study, out=...)    -> ExportedFile    the guidance controller as an FMU
+    export_fmu(study, out=...)           -> ExportedFile    the whole loop (or a subsystem) as one FMU
+    export_ssp(study, out=...)           -> ExportedFile    the study as an SSP archive
+    emulate(study, nmea_port)            -> EmulationResult the hardware emulator, run to its end
     load_result(folder)                  -> the typed result a command's --out (or save) wrote there
                                                             (agrobot.results)
 
@@ -20,26 +25,33 @@ Each function imports its own command's package where it is used, so that ``from
 and each command that goes through this module load no other command's package (1.2 s of them together).
 
 Imported where used: agrobot.identification (start-up: 0.6 s), agrobot.diagnosis (1.0 s), agrobot.fields (0.6 s,
-the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s).
+the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), agrobot.fmu_export (0.25 s, fmpy),
+agrobot.components.hardware (the emulator's buses), agrobot.orchestrator.engine and .observers (the emulator's
+and the exports' progress), pandas (an emulator's empty result).
 """
 from __future__ import annotations
 
 import json
 import os
+import sys
 import tempfile
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from agrobot.orchestrator.errors import InputError
+import pandas as pd
+
+from agrobot.orchestrator.engine import RunError
+from agrobot.orchestrator.errors import InputError, Interrupted, Terminated, install_signal_handlers
+from agrobot.orchestrator.observers import Stage
 from agrobot.orchestrator.output import OutputLock, check_output_file, study_inputs
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study, StudyError
 from agrobot.orchestrator.sweep import SweepRun, sweep_plots, sweep_summary
 from agrobot.studies import shipped
 
-from .results import (Diagnosis, Identification, LoopMargins, PlanResult, Recording, RunResult, SweepResult,
-                      judged_metrics)
+from .results import (Diagnosis, EmulationResult, ExportedFile, FieldsResult, Identification, LoopMargins,
+                      PlanResult, Recording, RunResult, SweepResult, judged_metrics)
 
 STUDY_SUFFIXES = (".toml", ".yaml", ".yml")
 
@@ -299,13 +311,159 @@ def _plan(field, crs, name, obstacles: list, chosen, sections: int) -> PlanResul
     return PlanResult(made, summary, applied, sections)
 
 
-def margins(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *,
-            progress=None) -> LoopMargins:
+def margins(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: str | Path | None = None, *,
+            progress=None, overwrite: bool = False, plots: bool = True) -> LoopMargins:
     """Gain, phase and delay margins of the study's guidance loop, linearised from its own
-    components (analysis.margins); ``out`` writes margins.json and the Bode and Nyquist plots."""
+    components (analysis.margins); ``out`` (checked before anything is computed) writes margins.json
+    and the Bode and Nyquist plots as ``LoopMargins.save`` writes them."""
     from agrobot.analysis.margins import analyse
 
-    result = LoopMargins(analyse(load(study, set), progress=progress))
+    study = load(study, set)
     if out is not None:
-        result.save(out)
+        LoopMargins.check(out, overwrite, study_inputs(study))
+    result = LoopMargins(analyse(study, progress=progress), study_inputs(study))
+    if out is not None:
+        result.save(out, overwrite, plots)
     return result
+
+
+def fields(source, *, crs: str | None = None, out: str | Path | None = None, overwrite: bool = False,
+           plots: bool = True, from_track: bool = False, width: float | None = None, signals: Sequence[str] = (),
+           time: str | None = None, max_file_size: str | None = None) -> FieldsResult:
+    """The fields a field file or folder holds (GeoJSON, WKT, GML, KML, ISOXML, AgOpenGPS, polygon
+    CSV), or with ``from_track`` the field a GNSS track worked (``width`` [m], else the
+    recording's; ``signals``/``time`` a table's columns as ``--signal``/``--time`` write them).
+    ``out``: checked before anything is read, written as ``FieldsResult.save`` writes."""
+    from agrobot.fields.readers import read_fields, read_folder
+    from agrobot.orchestrator.source_files import set_limit
+
+    set_limit(max_file_size)
+    source = Path(source)
+    if out is not None:
+        FieldsResult.check(out, overwrite, [source])
+    if from_track:
+        found, track = _track_field(source, width, signals, time)
+        result = FieldsResult(str(source), [found], [], track, [source])
+    else:
+        found, skipped = read_folder(source, crs) if source.is_dir() else (read_fields(source, crs), [])
+        result = FieldsResult(str(source), found, skipped, None, [source])
+    if out is not None:
+        result.save(out, overwrite, plots)
+    return result
+
+
+def _track_field(source: Path, width: float | None, signals: Sequence[str], time: str | None):
+    """(the field the track in ``source`` worked, the line that describes the track)."""
+    from agrobot.fields.track import field_from_track
+    from agrobot.measurements.recording import ImportOptions, positions
+    from agrobot.measurements.signal_expressions import parse_signal
+
+    t, lat, lon, report = positions(source, ImportOptions(signals=[parse_signal(s) for s in signals], time=time))
+    chosen = width or report.get("working_width_m")
+    f = field_from_track(t, lat, lon, source.stem or source.name, str(source), chosen)
+    if width is None and chosen is not None:
+        f.properties["working_width_from"] = "the recording's ISO 11783 actual working width (DDI 67), median"
+    p = f.properties
+    return f, (f"track {source}: {p['track_fixes']} fixes in {p['track_pieces']} piece(s), {p['track_length_m']:.0f} m; "
+               f"working width {p['working_width_m']:g} m ({p['working_width_from']}); {p['passes']} straight passes")
+
+
+def _export(kind: str, study, out, overwrite: bool, build, stage: str) -> ExportedFile:
+    """``build(study)`` -> (bytes, note) under ``Stage(stage)`` (``{name}``: the file's name),
+    ``out`` checked before it."""
+    inputs = study_inputs(study)
+    if out is not None:
+        ExportedFile.check(out, kind, overwrite, inputs)
+    with Stage(stage.format(name=Path(out).name if out is not None else f"the {kind[1:].upper()}")):
+        data, note = build(study)
+    result = ExportedFile(kind, data, note, inputs)
+    if out is not None:
+        result.save(out, overwrite)
+    return result
+
+
+def export_controller(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: str | Path | None = None, *,
+                      fmi_version: int = 2, overwrite: bool = False) -> ExportedFile:
+    """The study's guidance controller (tracker, yaw-rate MPC, speed PID) as an FMI
+    ``fmi_version``.0 co-simulation FMU (fmu_export.controller); ``out`` (a .fmu, checked before
+    the build) writes it as ``ExportedFile.save`` does."""
+    from agrobot.fmu_export.controller import export_controller as build
+
+    return _export(".fmu", load(study, set), out, overwrite, lambda s: (build(s, fmi_version), ""),
+                   "export-controller: generating the C code and compiling {name} (cmake and the C compiler)")
+
+
+def export_fmu(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: str | Path | None = None, *,
+               fmi_version: int = 2, components: Sequence[str] | None = None, overwrite: bool = False) -> ExportedFile:
+    """The study's whole loop (or the subsystem of ``components``) as one FMU from the compiled
+    engine's C (fmu_export.loop_fmu); a study's [sweep] is left out, and said so (the FMU is the
+    study's own point); ``note`` the FMU's ports."""
+    from agrobot.fmu_export.loop_fmu import export_loop
+
+    study = load(study, set)
+    if study.sweep is not None:
+        study = study.without("sweep")
+        print(f"{study.path}: its [sweep] is left out: the FMU is the study's own point (--set the values to export "
+              f"another)", file=sys.stderr)
+    names = None if components is None else list(components)
+    count = len(names) if names is not None else len(study.components)
+    return _export(".fmu", study, out, overwrite, lambda s: export_loop(s, fmi_version, names),
+                   f"export-fmu: compiling the loop of {count} components into {{name}} "
+                   f"(the compiled engine's C, cmake and the C compiler)")
+
+
+def export_ssp(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: str | Path | None = None, *,
+               overwrite: bool = False) -> ExportedFile:
+    """The study as an SSP 1.0 archive: SystemStructure.ssd and one FMI 2.0 FMU per component
+    (fmu_export.ssp_export)."""
+    from agrobot.fmu_export.ssp_export import export_ssp as build
+
+    study = load(study, set)
+    return _export(".ssp", study, out, overwrite, lambda s: (build(s), ""),
+                   f"export-ssp: compiling {len(study.components)} FMUs, one per component (cmake and the C "
+                   f"compiler), and validating the SSD")
+
+
+def emulate(study, nmea_port: int, set: Mapping[str, Any] | Sequence[str] | None = None,
+            out: str | Path | None = None, *, duration: float | None = None, record: str | Path | None = None,
+            overwrite: bool = False, progress: bool = True, announce=None) -> EmulationResult:
+    """Serve the study's simulated tractor (it holds an ``nmea_server``) in real time: NMEA over
+    TCP on ``nmea_port``, its CAN links on their buses, until its stop time, ``duration`` seconds,
+    or Ctrl-C/SIGTERM. Runs to that end (a blocking call, as ``run``: the engine's signal handlers
+    and its real-time pacing belong to the main thread, and a run that stops keeps what it
+    recorded); bound it with ``duration``, or run it in a process of its own to hold a handle.
+    ``out``: the signals recorded, streamed there as they come (interrupted: what was recorded so
+    far, as ``run --out`` keeps it); ``record``: the buses as a field log (DIR/gps.nmea,
+    DIR/can.log). ``announce(line)``: told where it listens before it starts."""
+    from agrobot.components.hardware.emulate import emulated_study, reach
+
+    if not 0 <= nmea_port <= 65535:
+        raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
+    if duration is not None and not duration > 0:
+        raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
+    study, model, server, named = emulated_study(load(study, set), nmea_port, duration,
+                                                 None if record is None else Path(record))
+    install_signal_handlers()                   # SIGTERM ends the run like Ctrl-C: partial results are kept
+    if announce is not None:
+        announce(f"emulating {study.study.name}: {reach(study, model, server, nmea_port)}, real time, until "
+                 f"t = {study.study.stop_time:g} s or Ctrl-C")
+    try:
+        done = run_study(study, None if out is None else Path(out), plots=False, overwrite=overwrite,
+                         progress=progress, named=named)
+    except Interrupted as exc:
+        return _stopped(study, f" {exc}", exc.exit_status)
+    except RunError as exc:
+        cause = exc.__cause__
+        status = (143 if isinstance(cause, Terminated) else 130) if isinstance(cause, KeyboardInterrupt) else 1
+        return _stopped(study, f": {exc}", status)
+    signals = done.frame if out is None else done.frame.to_pandas()
+    return EmulationResult(study, signals, judged_metrics(done.metrics, study), dict(done.metrics), done.summary,
+                           list(done.warnings), None if out is None else Path(out), dict(done.record or {}),
+                           done.events)
+
+
+def _stopped(study, message: str, exit_status: int) -> EmulationResult:
+    """The emulator's result when it did not complete (``message`` says how it stopped)."""
+    status = "failed" if exit_status == 1 else "interrupted"
+    return EmulationResult(study, pd.DataFrame(), {}, {"status": status}, f"emulator stopped{message}",
+                           exit_status=exit_status, stopped=f"emulator stopped{message}")

@@ -9,6 +9,9 @@ simulation result.
     Recording       a raw recording read as a measured log, with its import report
     PlanResult      a coverage plan of a field with its as-applied figures
     LoopMargins     gain, phase and delay margins at the study's operating points
+    FieldsResult    the fields a file, a folder or a GNSS track holds
+    ExportedFile    an FMU or SSP archive made from a study, in memory until saved
+    EmulationResult a run of the hardware emulator (a RunResult) and how it stopped
 
 What a result reads or writes with another command's package is imported where it is used, so that a
 result loads no command's package it does not need (1.2 s of them together).
@@ -26,7 +29,7 @@ from typing import Any
 
 import pandas as pd
 
-from agrobot.orchestrator.atomic_files import read_table, write_json, write_table
+from agrobot.orchestrator.atomic_files import atomic_write, read_table, write_json, write_table
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.key_figures import bounds, declared, hook
 from agrobot.orchestrator.output import (OutputLock, ResultFile, ResultFolder, check_output, check_output_file,
@@ -469,6 +472,8 @@ class LoopMargins(Saved):
     WHAT = "margins"
 
     analysis: Any
+    inputs: list = field(default_factory=list, repr=False)
+    files: list[str] = field(default_factory=list, repr=False)      # the names the last save wrote
 
     @property
     def points(self) -> list:
@@ -499,13 +504,81 @@ class LoopMargins(Saved):
         from agrobot.analysis.margins import write_json
 
         def write(tmp: Path) -> None:
-            if plots:
-                write_plots(self.analysis, tmp)
-            write_json(self.analysis, tmp / "margins.json")
+            files = (write_plots(self.analysis, tmp) if plots else []) + [write_json(self.analysis, tmp / "margins.json")]
+            self.files = [f.name for f in files]
         return self._save(folder, overwrite, write)
 
     def __str__(self) -> str:
         return self.report()
+
+
+
+@dataclass
+class FieldsResult(Saved):
+    """The fields of a field file or folder, or of a GNSS track (``fields`` command): ``fields``
+    the fields.Field objects, ``skipped`` why files of a folder were not read, ``track`` the line
+    describing the track a field was made from (None for a file)."""
+
+    SIGNATURE = ("fields.json",)
+    WHAT = "fields"
+
+    source: str
+    fields: list
+    skipped: list[str] = field(default_factory=list)
+    track: str | None = None
+    inputs: list = field(default_factory=list, repr=False)
+
+    def summaries(self) -> list[dict]:
+        """What fields.json holds of each field (area, rings, lines, headland, validity)."""
+        return [f.summary() for f in self.fields]
+
+    def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
+        """fields.json, fields.geojson (longitude/latitude) and fields.png, as ``fields --out``
+        writes them; returns the folder."""
+        from agrobot.fields.cli import write_fields
+
+        return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots))
+
+
+@dataclass
+class ExportedFile:
+    """An archive a study was exported as (``export-controller``, ``export-fmu``: an FMU;
+    ``export-ssp``: an SSP), its bytes held in memory; ``note`` what the export says of its ports.
+    ``save`` writes it under the one-file rule of orchestrator.output: an input never, an existing
+    file only with ``overwrite``, one writer at a time, written under a unique temporary name
+    beside it and renamed into place."""
+
+    kind: str                   # ".fmu" or ".ssp"
+    data: bytes = field(repr=False)
+    note: str = ""
+    inputs: list = field(default_factory=list, repr=False)
+    path: Path | None = None
+
+    @staticmethod
+    def check(path: str | Path, kind: str, overwrite: bool = False, inputs=()) -> None:
+        """Refuse ``path`` as ``save`` would, before anything is built (a file another command
+        is writing included)."""
+        check_output_file(Path(path), overwrite, list(inputs), (kind,))
+        with OutputLock(Path(path)):
+            pass
+
+    def save(self, path: str | Path, overwrite: bool = False) -> Path:
+        """The archive at ``path``; returns it."""
+        path = Path(path)
+        with ResultFile(path, overwrite, self.inputs, suffixes=(self.kind,)):
+            atomic_write(path, lambda tmp: tmp.write_bytes(self.data))
+        self.path = path
+        return path
+
+
+@dataclass
+class EmulationResult(RunResult):
+    """A run of the hardware emulator (``emulate``): a RunResult (the signals when it completed
+    in memory) and how it stopped: ``exit_status`` 0 (its stop time), 130 (Ctrl-C), 143 (SIGTERM)
+    or 1 (failed), ``stopped`` the message when it did not complete."""
+
+    exit_status: int = 0
+    stopped: str | None = None
 
 
 

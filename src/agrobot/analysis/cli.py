@@ -6,7 +6,6 @@ every command, ``--help`` included; the Bode and Nyquist plots alone need it).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
 import time
 from pathlib import Path
@@ -16,10 +15,9 @@ from pydantic import BaseModel, ConfigDict, field_validator
 from agrobot.orchestrator.atomic_files import atomic_write
 from agrobot.orchestrator.cli import add_output_options, add_set_option
 from agrobot.orchestrator.observers import PROGRESS
-from agrobot.orchestrator.output import ResultFile, ResultFolder, study_inputs
+from agrobot.orchestrator.output import ResultFile, study_inputs
 from agrobot.orchestrator.study import Study, StudyError
 
-from .margins import analyse, report, write_json
 from .margins_simulation import simulated_delay_limit
 from .tune import Targets, comparison, identified_values, propose, simulated_check
 
@@ -63,30 +61,21 @@ def _simulated_lines(analysis, duration: float) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Parse, analyse through agrobot.api, print."""
+    from agrobot.api import margins
+
     if not args.duration > 0:
         raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
-    study = Study.load(args.study, args.set)
-    folder = None
+    found = margins(args.study, args.set, args.out, progress=_progress, overwrite=args.overwrite,
+                    plots=not args.no_plots)
+    print(found.report())
     if args.out is not None:
-        folder = ResultFolder(args.out, args.overwrite, ("margins.json",), "margins", study_inputs(study))
-    with folder if folder is not None else contextlib.nullcontext():
-        analysis = analyse(study, progress=_progress)
-        print(report(analysis))
-        if folder is not None:
-            from .margin_plots import write_plots
-
-            files = (write_plots(analysis, folder.tmp) if not args.no_plots else []) \
-                + [write_json(analysis, folder.tmp / "margins.json")]
-            folder.commit()
-    if folder is not None:
-        print(f"\nwritten to {args.out}/ ({', '.join(f.name for f in files)})")
+        print(f"\nwritten to {args.out}/ ({', '.join(found.files)})")
     else:
         print("\n(--out DIR writes the Bode and Nyquist plots; --simulate checks the delay limit in simulation)")
     if args.simulate:
-        print("\n".join(_simulated_lines(analysis, args.duration)))
+        print("\n".join(_simulated_lines(found.analysis, args.duration)))
     return 0
-
-
 
 
 # --- tune ------------------------------------------------------------------------------------

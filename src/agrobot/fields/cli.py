@@ -15,16 +15,10 @@ from pathlib import Path
 import numpy as np
 from shapely.geometry import LineString, Polygon, mapping
 
-from agrobot.measurements.recording import ImportOptions, positions
-from agrobot.measurements.signal_expressions import parse_signal
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.cli import add_output_options
-from agrobot.orchestrator.output import ResultFolder
-from agrobot.orchestrator.source_files import set_limit
 
 from .plan_cli import register as register_plan
-from .readers import read_fields, read_folder
-from .track import field_from_track
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -47,21 +41,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    set_limit(args.max_file_size)
+    """Parse, read through agrobot.api, print."""
+    from agrobot.api import fields as read
 
-    folder = None if args.out is None else \
-        ResultFolder(args.out, args.overwrite, ("fields.json",), "fields", [args.source])
-    if args.from_track:
-        fields, skipped = [track_field(args)], []
-    else:
-        fields, skipped = read_folder(args.source, args.crs) if args.source.is_dir() else \
-            (read_fields(args.source, args.crs), [])
-    print(f"{args.source}: {len(fields)} field(s)")
-    for why in skipped:
+    found = read(args.source, crs=args.crs, out=args.out, overwrite=args.overwrite, plots=not args.no_plots,
+                 from_track=args.from_track, width=args.width, signals=args.signal, time=args.time,
+                 max_file_size=args.max_file_size)
+    if found.track is not None:
+        print(found.track)
+    print(f"{args.source}: {len(found.fields)} field(s)")
+    for why in found.skipped:
         print(f"  not read: {why}")
     print(f"{'field':32s} {'area [ha]':>10s} {'rings':>5s} {'lines':>5s} {'headland':>8s}  valid  coordinates")
-    for f in fields:
-        s = f.summary()
+    for f, s in zip(found.fields, found.summaries()):
         print(f"{f.name[:32]:32s} {s['area_ha']:10.3f} {s['rings']:5d} {len(s['lines']):5d} "
               f"{'yes' if s['headland'] else 'no':>8s}  {'yes' if s['valid'] else 'NO':5s}  {f.crs}")
         for g in s["lines"]:
@@ -71,32 +63,19 @@ def run(args: argparse.Namespace) -> int:
             print(f"    problem: {problem}")
         if f.properties.get("repaired"):
             print(f"    repaired: {f.properties['repaired']}")
-    if folder is not None:
-        summaries = [f.summary() for f in fields]
-        with folder:
-            write_json(folder.tmp / "fields.json", {"source": str(args.source), "fields": summaries})
-            atomic_write(folder.tmp / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
-            if not args.no_plots:
-                draw(fields, folder.tmp / "fields.png", str(args.source))
-            folder.commit()
-        local = [f.name for f in fields if f.origin is None]
+    if args.out is not None:
+        local = [f.name for f in found.fields if f.origin is None]
         print(f"written: {args.out}/{'' if args.no_plots else 'fields.png, '}fields.json, fields.geojson"
               + (f" (without {', '.join(local)}: local coordinates, no longitude/latitude)" if local else ""))
     return 0
 
 
-def track_field(args: argparse.Namespace):
-    """The field of the track in ``args.source`` (measurements reads the recording)."""
-    options = ImportOptions(signals=[parse_signal(s) for s in args.signal], time=args.time)
-    t, lat, lon, report = positions(args.source, options)
-    width = args.width or report.get("working_width_m")
-    f = field_from_track(t, lat, lon, args.source.stem or args.source.name, str(args.source), width)
-    if args.width is None and width is not None:
-        f.properties["working_width_from"] = "the recording's ISO 11783 actual working width (DDI 67), median"
-    print(f"track {args.source}: {f.properties['track_fixes']} fixes in {f.properties['track_pieces']} piece(s), "
-          f"{f.properties['track_length_m']:.0f} m; working width {f.properties['working_width_m']:g} m "
-          f"({f.properties['working_width_from']}); {f.properties['passes']} straight passes")
-    return f
+def write_fields(folder: Path, source: str, fields, plots: bool = True) -> None:
+    """fields.json, fields.geojson and (``plots``) fields.png of ``fields`` read from ``source``."""
+    write_json(folder / "fields.json", {"source": source, "fields": [f.summary() for f in fields]})
+    atomic_write(folder / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
+    if plots:
+        draw(fields, folder / "fields.png", source)
 
 
 def geojson(fields) -> dict:

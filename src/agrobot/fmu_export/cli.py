@@ -1,8 +1,9 @@
-"""The FMU export tool's sub-commands: ``export-controller``, ``export-ssp``, ``export-fmu``.
+"""The FMU export tool's sub-commands: ``export-controller``, ``export-ssp``, ``export-fmu``: each
+parses, calls its function of agrobot.api (which builds the archive and writes it under the output
+rule) and prints.
 
-Imported where used: agrobot.fmu_export.controller (start-up: with the two next, fmpy and the controller's
-components, 0.25 s on every command, ``--help`` included), agrobot.fmu_export.ssp_export (start-up: the
-same), agrobot.fmu_export.loop_fmu (start-up: the same).
+Imported where used: agrobot.api (start-up: with the exporters it imports where used, fmpy and the
+controller's components, 0.25 s on every command, ``--help`` included).
 """
 from __future__ import annotations
 
@@ -11,9 +12,6 @@ import sys
 from pathlib import Path
 
 from agrobot.orchestrator.cli import add_output_options, add_set_option
-from agrobot.orchestrator.observers import Stage
-from agrobot.orchestrator.output import ResultFile, study_inputs
-from agrobot.orchestrator.study import Study
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -24,13 +22,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .controller import export_controller
+    from agrobot.api import export_controller
 
-    study = Study.load(args.study, args.set)
-    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".fmu",)), \
-            Stage(f"export-controller: generating the C code and compiling {args.out.name} (cmake and the C compiler)"):
-        out = export_controller(study, args.out, args.fmi_version)
-    print(f"controller of {args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation)")
+    made = export_controller(args.study, args.set, args.out, fmi_version=args.fmi_version, overwrite=args.overwrite)
+    print(f"controller of {args.study} exported to {made.path} (FMI {args.fmi_version}.0 co-simulation)")
     return 0
 
 
@@ -41,13 +36,10 @@ def add_ssp_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_ssp(args: argparse.Namespace) -> int:
-    from .ssp_export import export_ssp
+    from agrobot.api import export_ssp
 
-    study = Study.load(args.study, args.set)
-    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".ssp",)), Stage(f"export-ssp: compiling {len(study.components)} FMUs, one per component (cmake and the C "
-               f"compiler), and validating the SSD"):
-        out = export_ssp(study, args.out)
-    print(f"{args.study} exported to {out} (SSP 1.0: SystemStructure.ssd and one FMI 2.0 FMU per component)")
+    made = export_ssp(args.study, args.set, args.out, overwrite=args.overwrite)
+    print(f"{args.study} exported to {made.path} (SSP 1.0: SystemStructure.ssd and one FMI 2.0 FMU per component)")
     return 0
 
 
@@ -63,22 +55,14 @@ def add_loop_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_loop(args: argparse.Namespace) -> int:
-    from .loop_fmu import export_loop
+    from agrobot.api import export_fmu
 
-    study = Study.load(args.study, args.set)
     names = [n.strip() for n in args.components.split(",") if n.strip()] if args.components is not None else None
-    if study.sweep is not None:
-        study = study.without("sweep")
-        print(f"{args.study}: its [sweep] is left out: the FMU is the study's own point (--set the values to export "
-              f"another)", file=sys.stderr)
-    count = len(names) if names is not None else len(study.components)
-    with ResultFile(args.out, args.overwrite, study_inputs(study), suffixes=(".fmu",)), \
-            Stage(f"export-fmu: compiling the loop of {count} components into {args.out.name} "
-                  f"(the compiled engine's C, cmake and the C compiler)"):
-        out, note = export_loop(study, args.out, args.fmi_version, names)
-    print(note, file=sys.stderr)
+    made = export_fmu(args.study, args.set, args.out, fmi_version=args.fmi_version, components=names,
+                      overwrite=args.overwrite)
+    print(made.note, file=sys.stderr)
     what = f"the subsystem {', '.join(names)}" if names is not None else "the whole loop"
-    print(f"{args.study} exported to {out} (FMI {args.fmi_version}.0 co-simulation, {what})")
+    print(f"{args.study} exported to {made.path} (FMI {args.fmi_version}.0 co-simulation, {what})")
     return 0
 
 

@@ -96,8 +96,9 @@ def component_model(system: System, name: str) -> SampledModel:
     return SampledModel(name, token, description, period, parameters, inputs, outputs, deps, source, list(spec.files))
 
 
-def export_component(system: System, name: str, out: Path, fmi_version: int = 2) -> Path:
-    return build_fmu(component_model(system, name), out, fmi_version)
+def export_component(system: System, name: str, fmi_version: int = 2) -> bytes:
+    """The FMU of the study component ``name``, as the archive's bytes."""
+    return build_fmu(component_model(system, name), fmi_version)
 
 
 def non_exportable(system: System) -> list[str]:

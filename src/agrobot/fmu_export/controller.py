@@ -31,7 +31,7 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .packaging import PackagingError, check_fmu_target
+from .packaging import PackagingError
 from .sampled_fmu import SampledModel, build_fmu, c_strings, token_of
 
 MODEL_IDENTIFIER = "guidance_controller"
@@ -160,19 +160,14 @@ def sampled_model(design: ControllerDesign) -> SampledModel:
                         design.outputs, design.dependencies, source, [*GUIDANCE_LAWS, *QP_SOLVER])
 
 
-def export_controller(study: Study, out: Path, fmi_version: int = 2) -> Path:
-    """Write ``out`` (.fmu, FMI ``fmi_version``.0): sources, modelDescription.xml, the binary for this platform."""
-    if out.suffix != ".fmu":
-        raise ExportError(f"--out {out}: expected a path ending in .fmu")
+def export_controller(study: Study, fmi_version: int = 2) -> bytes:
+    """The controller's FMU (FMI ``fmi_version``.0): sources, modelDescription.xml, the binary for
+    this platform, as the archive's bytes (agrobot.api.export_controller writes it)."""
     if fmi_version not in FMI_VERSIONS:
         raise ExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, FMI_VERSIONS))}")
-    try:
-        check_fmu_target(out)
-    except PackagingError as exc:
-        raise ExportError(str(exc)) from None
     model = sampled_model(controller_design(study))
     try:
-        return build_fmu(model, out, fmi_version)
+        return build_fmu(model, fmi_version)
     except PackagingError as exc:
         raise ExportError(str(exc)) from None
 

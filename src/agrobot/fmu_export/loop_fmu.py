@@ -41,7 +41,7 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 
-from .packaging import PackagingError, check_fmu_target
+from .packaging import PackagingError
 from .sampled_fmu import WRAPPERS, SampledModel, build_fmu, c_strings, token_of
 
 ALIGN = 16          # bytes: each component's state starts on this boundary in the loop's state
@@ -336,20 +336,17 @@ def subsystem(study: Study, components: list[str]) -> Study:
     return resolve(study).extract(components, name=f"{study.study.name}_{'_'.join(components)}")
 
 
-def export_loop(study: Study, out: Path, fmi_version: int = 2, components: list[str] | None = None) -> tuple[Path, str]:
-    """Write the whole loop of ``study`` (or of the subsystem of ``components``) as one FMU at
-    ``out`` ((the FMU, the ports line))."""
-    if out.suffix != ".fmu":
-        raise LoopExportError(f"--out {out}: expected a path ending in .fmu")
+def export_loop(study: Study, fmi_version: int = 2, components: list[str] | None = None) -> tuple[bytes, str]:
+    """The whole loop of ``study`` (or the subsystem of ``components``) as one FMU: (the archive's
+    bytes, the ports line); agrobot.api.export_fmu writes it."""
     if fmi_version not in WRAPPERS:
         raise LoopExportError(f"--fmi-version {fmi_version}: expected one of {', '.join(map(str, WRAPPERS))}")
     if components is not None:
         study = subsystem(study, components)
     try:
-        check_fmu_target(out)
         model, note = loop_model(build_system(resolve(study)), "the study's [exports]" if components is None else
                                  "the subsystem's boundary: the inputs its components do not feed each other, "
                                  "every output, named component_port")
-        return build_fmu(model, out, fmi_version), note
+        return build_fmu(model, fmi_version), note
     except PackagingError as exc:
         raise LoopExportError(str(exc)) from None

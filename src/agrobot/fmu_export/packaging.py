@@ -1,10 +1,12 @@
 """Build and package an FMI 2.0 or 3.0 FMU from a folder holding ``modelDescription.xml`` and
 ``sources/``: the FMI headers (from fmpy) are added to the sources, the binary for this platform
 is built with fmpy.build (CMake + the C compiler, hidden visibility: only the functions the FMI
-headers mark for export leave the binary), and the archive is written atomically."""
+headers mark for export leave the binary), and the archive made in memory: what writes it is the
+result's ``save`` (agrobot.results.ExportedFile: the one output rule, written aside and renamed)."""
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import shutil
 import sys
@@ -73,40 +75,21 @@ def _output_to(path: Path):
             os.close(saved[1])
 
 
-def check_fmu_target(out: Path) -> None:
-    """Before building: ``out`` must be a file path whose folder can be written."""
-    if out.is_dir():
-        raise PackagingError(f"--out {out}: is a folder; expected a file path ending in .fmu")
-    base = out.parent
-    while not base.exists() and base != base.parent:
-        base = base.parent
-    if not base.is_dir() or not os.access(base, os.W_OK | os.X_OK):
-        raise PackagingError(f"--out {out}: cannot write there ({base} is not a writable folder)")
+def archive(entries: dict[str, Path | str | bytes]) -> bytes:
+    """The zip archive of ``entries`` (a member name -> a file, text or bytes), made in memory."""
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as zf:
+        for name, content in entries.items():
+            if isinstance(content, Path):
+                zf.write(content, name)
+            else:
+                zf.writestr(name, content)
+    return buffer.getvalue()
 
 
-def write_archive(out: Path, entries: dict[str, Path | str], what: str) -> Path:
-    """Write the zip archive ``out`` atomically: ``entries`` maps a member name to a file or to
-    text; a temporary file beside ``out`` is moved into place, and removed if anything fails."""
-    partial = out.with_name(f".{out.name}.tmp")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
-            for name, content in entries.items():
-                if isinstance(content, Path):
-                    zf.write(content, name)
-                else:
-                    zf.writestr(name, content)
-        partial.replace(out)
-    except OSError as exc:
-        raise PackagingError(f"--out {out}: cannot write the {what}: {exc}") from None
-    finally:
-        partial.unlink(missing_ok=True)
-    return out
-
-
-def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
-    if out.suffix != ".fmu":
-        raise PackagingError(f"{out}: expected a path ending in .fmu")
+def package_fmu(source_root: Path, fmi_version: int = 2, name: str = "model.fmu") -> bytes:
+    """The FMU of ``source_root`` (modelDescription.xml, sources/) with the binary for this
+    platform, as the archive's bytes; ``name`` for the messages."""
     fmpy_c = Path(fmpy.__file__).with_name("c-code")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp) / "fmu"
@@ -123,8 +106,5 @@ def package_fmu(source_root: Path, out: Path, fmi_version: int = 2) -> Path:
                     "CMAKE_C_STANDARD_LIBRARIES:STRING": "-lm", "CMAKE_C_FLAGS:STRING": "-O2 -fvisibility=hidden"})
         except Exception as exc:
             tail = log.read_text(errors="replace")[-2000:] if log.exists() else ""
-            raise PackagingError(f"building {out.name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None
-        check_fmu_target(out)
-        files = {path.relative_to(root).as_posix(): path for path in sorted(root.rglob("*")) if path.is_file()}
-        write_archive(out, files, "FMU")
-    return out
+            raise PackagingError(f"building {name} failed (needs cmake and a C compiler): {exc}\n{tail}") from None
+        return archive({path.relative_to(root).as_posix(): path for path in sorted(root.rglob("*")) if path.is_file()})

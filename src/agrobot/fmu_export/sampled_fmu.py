@@ -220,10 +220,10 @@ def write_sources(model: SampledModel, root: Path, fmi_version: int) -> None:
     (root / "modelDescription.xml").write_text(model_description(model, fmi_version))
 
 
-def build_fmu(model: SampledModel, out: Path, fmi_version: int = 2) -> Path:
-    """Generate the sources, build the binary for this platform and write ``out`` atomically."""
+def build_fmu(model: SampledModel, fmi_version: int = 2) -> bytes:
+    """Generate the sources and build the binary for this platform: the FMU's bytes."""
     if fmi_version not in WRAPPERS:
         raise ValueError(f"FMI version {fmi_version}: expected 2 or 3")
     with tempfile.TemporaryDirectory() as tmp:
         write_sources(model, Path(tmp), fmi_version)
-        return package_fmu(Path(tmp), out, fmi_version)
+        return package_fmu(Path(tmp), fmi_version, f"{model.identifier}.fmu")

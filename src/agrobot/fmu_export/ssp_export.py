@@ -8,12 +8,11 @@ keeps the study's component and port names (an input that shares an output's nam
 gives start and stop time. The orchestrator's study annotation (orchestrator.ssp) carries what SSP 1.0 has
 no element for (base step, each component's step, seed), for this project's own import (another
 engine is given its step by its own API: libcosim's ``from_ssp_file(path, step_size)``). The SSD is validated against the SSP 1.0 schema before
-the archive is written (atomically).
+the archive is made (in memory: agrobot.api.export_ssp writes it).
 
 Imported where used: lxml (the fmu-export extra)."""
 from __future__ import annotations
 
-import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -27,7 +26,7 @@ from agrobot.orchestrator.study import Study
 from agrobot.orchestrator.units import base_unit
 
 from .component_fmus import component_model, fmu_input_name, non_exportable
-from .packaging import PackagingError, check_fmu_target, write_archive
+from .packaging import PackagingError, archive
 from .sampled_fmu import build_fmu
 
 SSD_NS = {"ssd": "http://ssp-standard.org/SSP1/SystemStructureDescription",
@@ -126,14 +125,9 @@ def validate_ssd(text: str) -> list[str]:
     return [] if schema.validate(doc) else [f"line {e.line}: {e.message}" for e in schema.error_log]
 
 
-def export_ssp(study: Study, out: Path) -> Path:
-    """Write ``out`` (.ssp): every component as an FMU, the SSD validated against the schema."""
-    if out.suffix != ".ssp":
-        raise SSPExportError(f"--out {out}: expected a path ending in .ssp")
-    try:
-        check_fmu_target(out)
-    except PackagingError as exc:
-        raise SSPExportError(str(exc).replace(".fmu", ".ssp")) from None
+def export_ssp(study: Study) -> bytes:
+    """The study as an SSP archive's bytes: every component as an FMU, the SSD validated against
+    the schema (agrobot.api.export_ssp writes it)."""
     system = build_system(resolve(study))
     missing = non_exportable(system)
     if missing:
@@ -144,16 +138,10 @@ def export_ssp(study: Study, out: Path) -> Path:
     errors = validate_ssd(ssd)
     if errors:
         raise SSPExportError("internal: the SystemStructure.ssd does not validate: " + "; ".join(errors[:5]))
-    with tempfile.TemporaryDirectory() as tmp:
-        fmus = {}
-        for name, model in models.items():
-            try:
-                fmus[name] = build_fmu(model, Path(tmp) / f"{name}.fmu", 2)
-            except PackagingError as exc:
-                raise SSPExportError(str(exc)) from None
+    fmus = {}
+    for name, model in models.items():
         try:
-            write_archive(out, {"SystemStructure.ssd": ssd, **{f"resources/{n}.fmu": path for n, path in fmus.items()}},
-                          "SSP")
+            fmus[name] = build_fmu(model, 2)
         except PackagingError as exc:
             raise SSPExportError(str(exc)) from None
-    return out
+    return archive({"SystemStructure.ssd": ssd, **{f"resources/{n}.fmu": data for n, data in fmus.items()}})
