@@ -105,12 +105,12 @@ def time_c(fmu: Path, frame, feeds, tmp: Path) -> np.ndarray:
 
 
 def measure(seconds: float = 60.0) -> dict:
-    from agrobot.fmu_export.controller import export_controller
+    from agrobot.api import export_controller
 
     st, frame, feeds = recorded_inputs(seconds)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        fmu = export_controller(st, tmp / "guidance_controller.fmu")
+        fmu = export_controller(st, out=tmp / "guidance_controller.fmu").path
         rows = {"Python components (tracker + MPC + PID)": time_python(st, frame, feeds),
                 "FMU through fmpy (set, doStep, get)": time_fmpy(fmu, frame, feeds),
                 "FMU C step alone (C harness)": time_c(fmu, frame, feeds, tmp)}

@@ -20,14 +20,15 @@ def max_position_difference(a, b) -> float:
 
 
 def main() -> None:
-    from agrobot.fmu_export.controller import export_controller, run_with_exported_controller
+    from agrobot.api import export_controller
+    from agrobot.fmu_export.controller import run_with_exported_controller
     from agrobot.orchestrator.build import build_system
     from agrobot.orchestrator.engine import Simulation
     from agrobot.orchestrator.resolver import resolve
     from agrobot.orchestrator.study import load_study
 
     with tempfile.TemporaryDirectory() as tmp:
-        fmu = export_controller(load_study(STUDY), Path(tmp) / "guidance_controller.fmu")
+        fmu = export_controller(load_study(STUDY), out=Path(tmp) / "guidance_controller.fmu").path
         smooth = run_with_exported_controller(STUDY, fmu, ["steering.potentiometer_resolution=0"])
         quantised = run_with_exported_controller(STUDY, fmu)
     nudged = Simulation(build_system(resolve(load_study(STUDY, ["tracker.k_s=0.6000000000006"])))).run().to_frame()

@@ -37,7 +37,7 @@ def cofmupy_or_none(unpacked: Path) -> pd.DataFrame | None:
 
 def main() -> None:
     from agrobot.analysis.figure8 import metrics
-    from agrobot.fmu_export.ssp_export import export_ssp
+    from agrobot.api import export_ssp
     from agrobot.orchestrator.build import build_system
     from agrobot.orchestrator.engine import Simulation
     from agrobot.orchestrator.resolver import resolve
@@ -50,7 +50,7 @@ def main() -> None:
         where = args.out or Path(tmp)
         where.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
-        ssp = export_ssp(Study.load(ROOT / "studies/figure8.toml"), where / "figure8.ssp")
+        ssp = export_ssp(Study.load(ROOT / "studies/figure8.toml"), out=where / "figure8.ssp", overwrite=True).path
         export_s = time.perf_counter() - t0
         unpacked = where / "unpacked"
         with zipfile.ZipFile(ssp) as zf:

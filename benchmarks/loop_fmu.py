@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from compiled_engine import NO_QUANTISATION, QUIET, base, timed, worst  # noqa: E402
 
 from agrobot.fmu_export.foreign_engines import libcosim_fmu_run  # noqa: E402
-from agrobot.fmu_export.loop_fmu import export_loop  # noqa: E402
+from agrobot.api import export_fmu  # noqa: E402
 from agrobot.orchestrator.compiled import CompiledSimulation  # noqa: E402
 from agrobot.orchestrator.engine import Simulation  # noqa: E402
 
@@ -57,7 +57,7 @@ def tail(rec):
 def case(study, fmi_version: int, folder: Path, reference: str) -> list[tuple[str, str]]:
     s = study.study
     began = time.perf_counter()
-    fmu, _ = export_loop(study, folder / f"{s.name}_{reference}.fmu", fmi_version)
+    fmu = export_fmu(study, out=folder / f"{s.name}_{reference}.fmu", fmi_version=fmi_version, overwrite=True).path
     export = time.perf_counter() - began
     factory = Simulation if reference == "python" else CompiledSimulation
     rec, ref_time = timed(factory, study)

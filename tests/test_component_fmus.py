@@ -60,7 +60,10 @@ def component_fmus(recorded, tmp_path_factory):
 
     system, _ = recorded
     where = tmp_path_factory.mktemp("components")
-    return {name: export_component(system, name, where / f"{name}.fmu") for name in system.nodes}
+    fmus = {name: where / f"{name}.fmu" for name in system.nodes}
+    for name, path in fmus.items():
+        path.write_bytes(export_component(system, name))
+    return fmus
 
 
 TOLERANCE = {"tractor": 1e-8, "ekf": 1e-8}          # m, rad: exact discretisation, expm by another method

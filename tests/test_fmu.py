@@ -26,7 +26,9 @@ FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
 def first_order_fmu(tmp_path_factory) -> Path:
     from agrobot.fmu_export.packaging import package_fmu
 
-    return package_fmu(FIRST_ORDER_SOURCES, tmp_path_factory.mktemp("fmu") / "first_order.fmu")
+    out = tmp_path_factory.mktemp("fmu") / "first_order.fmu"
+    out.write_bytes(package_fmu(FIRST_ORDER_SOURCES))
+    return out
 
 
 @pytest.fixture(scope="session")

@@ -28,9 +28,9 @@ H = 0.01
 
 @pytest.fixture(scope="module")
 def figure8_ssp(tmp_path_factory) -> Path:
-    from agrobot.fmu_export.ssp_export import export_ssp
+    from agrobot.api import export_ssp
 
-    return export_ssp(Study.load(ROOT / "studies/figure8.toml"), tmp_path_factory.mktemp("ssp") / "figure8.ssp")
+    return export_ssp(Study.load(ROOT / "studies/figure8.toml"), out=tmp_path_factory.mktemp("ssp") / "figure8.ssp").path
 
 
 @pytest.fixture(scope="module")

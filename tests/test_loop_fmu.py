@@ -39,10 +39,11 @@ def cache(tmp_path_factory):
 def exported(tmp_path_factory):
     """(the FMU, the line saying which ports it has, the Python engine's recording) of the quiet
     figure-8, exported once."""
-    from agrobot.fmu_export.loop_fmu import export_loop
+    from agrobot.api import export_fmu
 
     study = Study.load(shipped("figure8.toml"), QUIET)
-    fmu, note = export_loop(study, tmp_path_factory.mktemp("fmu") / "figure8.fmu", 2)
+    made = export_fmu(study, out=tmp_path_factory.mktemp("fmu") / "figure8.fmu", fmi_version=2)
+    fmu, note = made.path, made.note
     assert study.study.base_step == H
     return fmu, note, Simulation(build_system(resolve(study))).run()
 
@@ -170,11 +171,13 @@ def test_a_named_subsystem_in_fmi3_takes_its_inputs_as_the_study_takes_its_const
     from fmpy import read_model_description, simulate_fmu
     from fmpy.validation import validate_fmu
 
-    from agrobot.fmu_export.loop_fmu import export_loop, subsystem
+    from agrobot.api import export_fmu
+    from agrobot.fmu_export.loop_fmu import subsystem
 
     names = ["tractor", "steering", "gps"]
     study = Study.load(shipped("figure8.toml"), QUIET)
-    fmu, note = export_loop(study, tmp_path / "tractor.fmu", 3, names)
+    made = export_fmu(study, out=tmp_path / "tractor.fmu", fmi_version=3, components=names)
+    fmu = made.path
     assert validate_fmu(str(fmu)) == []
     md = read_model_description(str(fmu))
     assert md.fmiVersion == "3.0"
