@@ -4,13 +4,16 @@ of the inputs aside); every result's ``save`` follows the command line's output 
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
 import agrobot
+from agrobot import api
 from agrobot.orchestrator.output import OutputError
+from agrobot.results import ExportedFile
 
 SHORT = "study.stop_time=15"
 VOLATILE = {"wall_time_s", "realtime", "log", "study_file", "source"}
@@ -131,3 +134,82 @@ def test_a_saved_run_holds_run_json_and_events_log(tmp_path):
     folder = agrobot.run("figure8", {"study.stop_time": 15}).save(tmp_path / "run", plots=False)
     assert json.loads((folder / "run.json").read_text())["status"] == "completed"
     assert (folder / "events.log").is_file()
+
+
+def test_margins_write_alike_through_both_doors_and_when_saved(cli, tmp_path):
+    study = Path(__file__).resolve().parents[1] / "studies/figure8.toml"
+    proc = cli("margins", study, "--out", tmp_path / "cli", "--no-plots")
+    assert proc.returncode == 0, proc.stderr
+    found = agrobot.margins(study, out=tmp_path / "api", plots=False)
+    same_files(tmp_path / "cli", tmp_path / "api")
+    assert found.report() in proc.stdout and "written to" in proc.stdout
+    same_files(tmp_path / "cli", found.save(tmp_path / "saved", plots=False))
+    with pytest.raises(OutputError, match="earlier margins result"):
+        found.save(tmp_path / "saved")
+
+
+def test_fields_write_alike_through_both_doors(cli, tmp_path):
+    field = _field(tmp_path)
+    proc = cli("fields", field, "--out", tmp_path / "cli")
+    assert proc.returncode == 0, proc.stderr
+    found = api.fields(field, out=tmp_path / "api")
+    same_files(tmp_path / "cli", tmp_path / "api")
+    assert [f.name for f in found.fields] == ["rect"] and "rect" in proc.stdout
+    assert abs(found.fields[0].area_ha - 3.0) < 1e-9           # 200 m x 150 m
+    with pytest.raises(OutputError, match="lies inside the input"):
+        api.fields(tmp_path, out=tmp_path / "cli" / "inner")
+
+
+def _track(tmp_path: Path) -> Path:
+    """A lat/lon table of four 100 m passes 6 m apart joined by turns (1 fix a second)."""
+    lat0, rows, t = 48.0, ["t,lat,lon"], 0
+    per_lat, per_lon = 1 / 111_320.0, 1 / (111_320.0 * math.cos(math.radians(lat0)))
+    for k in range(4):
+        xs = [2.0 * i for i in range(51)][:: -1 if k % 2 else 1]
+        turn = [(xs[-1] + (2.0 if k % 2 == 0 else -2.0) * math.sin(math.pi * a / 5), 6.0 * (k + a / 5))
+                for a in range(1, 5)]
+        for x, y in [(x, 6.0 * k) for x in xs] + turn:
+            rows.append(f"{t},{lat0 + y * per_lat:.9f},{11.0 + x * per_lon:.9f}")
+            t += 1
+    path = tmp_path / "track.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return path
+
+
+def test_a_field_from_a_track_alike_through_both_doors(cli, tmp_path):
+    track, columns = _track(tmp_path), ["track.lat[deg]", "track.lon[deg]"]
+    proc = cli("fields", track, "--from-track", "--width", "6", "--signal", f"lat={columns[0]}", "--signal",
+               f"lon={columns[1]}", "--time", "t[s]", "--out", tmp_path / "cli", "--no-plots")
+    assert proc.returncode == 0, proc.stderr
+    found = api.fields(track, from_track=True, width=6.0, signals=[f"lat={columns[0]}", f"lon={columns[1]}"],
+                       time="t[s]", out=tmp_path / "api", plots=False)
+    same_files(tmp_path / "cli", tmp_path / "api")
+    assert found.track in proc.stdout and "4 straight passes" in found.track
+    assert len(found.fields[0].lines) == 4
+
+
+def test_an_exported_file_is_written_aside_and_refused_over_a_file_or_an_input(tmp_path):
+    made = ExportedFile(".fmu", b"PK archive bytes", inputs=[tmp_path / "study.toml"])
+    stale = tmp_path / ".c.fmu.tmp"                  # another writer's temporary file: never ours
+    stale.write_text("someone else's")
+    assert made.save(tmp_path / "c.fmu").read_bytes() == b"PK archive bytes"
+    assert stale.read_text() == "someone else's"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".c.fmu.tmp", "c.fmu"]
+    with pytest.raises(OutputError, match="exists; pass --overwrite"):
+        ExportedFile(".fmu", b"other").save(tmp_path / "c.fmu")
+    assert made.save(tmp_path / "c.fmu", overwrite=True) == tmp_path / "c.fmu"
+    with pytest.raises(OutputError, match="expected a path ending in .fmu"):
+        made.save(tmp_path / "c.ssp")
+    (tmp_path / "study.toml").write_text("x")
+    with pytest.raises(OutputError, match="is the input"):
+        ExportedFile(".fmu", b"x", inputs=[tmp_path / "s.fmu"]).save(tmp_path / "s.fmu", overwrite=True)
+
+
+def test_an_export_refuses_its_output_before_it_builds(tmp_path, monkeypatch):
+    import agrobot.fmu_export.controller as controller
+
+    monkeypatch.setattr(controller, "export_controller", lambda *a: pytest.fail("built before the check"))
+    (tmp_path / "c.fmu").write_text("earlier")
+    with pytest.raises(OutputError, match="exists"):
+        api.export_controller("figure8", out=tmp_path / "c.fmu")
+    assert (tmp_path / "c.fmu").read_text() == "earlier"
