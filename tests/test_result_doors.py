@@ -5,13 +5,17 @@ from __future__ import annotations
 
 import math
 import os
+import re
+import zipfile
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
 import agrobot
+import agrobot.api
 from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.study import StudyError
 from harness.truth_tractor import make_log
 from tests.test_two_doors import same_files
 
@@ -92,3 +96,79 @@ def test_a_folder_of_no_result_is_refused_by_name(tmp_path):
     (tmp_path / "half" / "run.json").write_text("{}")
     with pytest.raises(InputError, match="metrics.json: missing"):
         agrobot.load_result(tmp_path / "half")
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def same_archive(a: Path, b: Path) -> None:
+    """The same members, and the same bytes in every member but the built binaries (and the
+    FMUs nested in an SSP, whose text members are compared in turn)."""
+    with zipfile.ZipFile(a) as left, zipfile.ZipFile(b) as right:
+        assert left.namelist() == right.namelist()
+        for name in left.namelist():
+            if name.endswith(".fmu"):
+                nested = [Path(a).with_name(f"{side}-{Path(name).name}") for side in ("a", "b")]
+                nested[0].write_bytes(left.read(name))
+                nested[1].write_bytes(right.read(name))
+                same_archive(*nested)
+            elif not name.startswith("binaries/"):
+                assert left.read(name) == right.read(name), name
+
+
+@pytest.mark.slow
+def test_the_exports_write_alike_through_both_doors(cli, tmp_path):
+    study = ROOT / "studies/figure8.toml"
+    for command, export, name, options in (("export-controller", agrobot.api.export_controller, "c.fmu", {}),
+                                           ("export-fmu", agrobot.api.export_fmu, "tractor.fmu",
+                                            {"components": ["tractor", "steering"]})):
+        flags = ["--components", "tractor,steering"] if options else []
+        proc = cli(command, study, "--out", tmp_path / f"cli-{name}", *flags)
+        assert proc.returncode == 0, proc.stderr
+        made = export(study, out=tmp_path / f"api-{name}", **options)
+        assert made.path == tmp_path / f"api-{name}" and str(made.path.name) in proc.stdout.replace("cli-", "api-")
+        same_archive(tmp_path / f"cli-{name}", made.path)
+        assert made.note == "" or made.note in proc.stderr
+        assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+@pytest.mark.slow
+def test_ssp_export_writes_alike_through_both_doors(cli, tmp_path):
+    study = ROOT / "studies/figure8.toml"
+    proc = cli("export-ssp", study, "--out", tmp_path / "cli.ssp")
+    assert proc.returncode == 0, proc.stderr
+    same_archive(tmp_path / "cli.ssp", agrobot.api.export_ssp(study, out=tmp_path / "api.ssp").path)
+
+
+def _ports_named_alike(folder: Path) -> None:
+    """The NMEA server's port (0: the system's choice, another on every run) as PORT in events.log."""
+    events = folder / "events.log"
+    events.write_text(re.sub(r"127\.0\.0\.1:\d+", "127.0.0.1:PORT", events.read_text()))
+
+
+@pytest.mark.slow
+def test_the_emulator_writes_alike_through_both_doors_and_when_saved(cli, tmp_path):
+    study, seconds = ROOT / "studies/tractor_emulator.toml", "6"      # its analysis needs more than 5 s
+    proc = cli("emulate", study, "--nmea-port", "0", "--duration", seconds, "--out", tmp_path / "cli", "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    done = agrobot.api.emulate(study, 0, duration=6.0, out=tmp_path / "api", progress=False)
+    assert done.exit_status == 0 and done.stopped is None and len(done.signals) == 601      # 6 s of 10 ms steps
+    kept = agrobot.api.emulate(study, 0, duration=6.0, progress=False).save(tmp_path / "saved")
+    for folder in (tmp_path / "cli", tmp_path / "api", kept):
+        _ports_named_alike(folder)
+    same_files(tmp_path / "cli", tmp_path / "api")
+    same_files(tmp_path / "cli", kept)
+
+
+def test_an_emulator_that_stops_says_how(tmp_path, monkeypatch):
+    from agrobot.orchestrator.errors import Interrupted
+
+    def interrupted(*args, **kwargs):
+        raise Interrupted("at t = 2 s; the signals up to then are in OUT", 130)
+
+    monkeypatch.setattr(agrobot.api, "run_study", interrupted)
+    done = agrobot.api.emulate(ROOT / "studies/tractor_emulator.toml", 0, duration=6.0, progress=False)
+    assert (done.exit_status, done.status) == (130, "interrupted")
+    assert done.stopped == "emulator stopped at t = 2 s; the signals up to then are in OUT"
+    with pytest.raises(StudyError, match="--nmea-port 70000: expected a TCP port"):
+        agrobot.api.emulate(ROOT / "studies/tractor_emulator.toml", 70000)
