@@ -424,6 +424,7 @@ class PlanResult(Saved):
     applied: Any
     sections: int = 0
     inputs: list = field(default_factory=list, repr=False)
+    route_rows: int | None = None          # route.csv's rows, once saved
 
     def route(self, step: float | None = None, uniform: bool = False) -> pd.DataFrame:
         """The route as route.csv holds it: s, x, y, heading, curvature, speed, kind (by name),
@@ -459,8 +460,11 @@ class PlanResult(Saved):
         from agrobot.fields.planner.sampling import EXPORT_STEP
 
         step = EXPORT_STEP if route_step is None else route_step
-        return self._save(folder, overwrite, lambda tmp: write_plan_files(
-            tmp, self.plan, self.applied, self.sections, self.summary, step, route_uniform))
+
+        def write(tmp: Path) -> None:
+            self.route_rows = write_plan_files(tmp, self.plan, self.applied, self.sections, self.summary, step,
+                                               route_uniform)
+        return self._save(folder, overwrite, write)
 
 
 @dataclass
@@ -504,7 +508,8 @@ class LoopMargins(Saved):
         from agrobot.analysis.margins import write_json
 
         def write(tmp: Path) -> None:
-            files = (write_plots(self.analysis, tmp) if plots else []) + [write_json(self.analysis, tmp / "margins.json")]
+            files = (write_plots(self.analysis, tmp) if plots else []) + [write_json(self.analysis,
+                                                                                     tmp / "margins.json")]
             self.files = [f.name for f in files]
         return self._save(folder, overwrite, write)
 

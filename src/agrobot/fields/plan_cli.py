@@ -22,7 +22,6 @@ this module; only the plan command's run needs it), agrobot.fields.planner.expor
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -167,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
     summary, field, sections = made.summary, made.plan.field, made.sections
     for why in summary["not_read"]:
         print(f"not read: {why}")
-    rows = json.loads((args.out / "plan.json").read_text())["route_rows"]
+    rows = made.route_rows
     print(f"field {field.name!r} ({field.area_ha:.2f} ha, workable {summary['workable_ha']:.2f} ha) from {args.field}")
     print(f"  driving angle {summary['driving_angle_deg']:.1f} deg ({summary['driving_angle_how']}); order "
           f"{summary['order']}; {summary['headland_passes']} headland pass(es) of {args.width:g} m")
