@@ -30,7 +30,8 @@ H = 0.01
 def figure8_ssp(tmp_path_factory) -> Path:
     from agrobot.api import export_ssp
 
-    return export_ssp(Study.load(ROOT / "studies/figure8.toml"), out=tmp_path_factory.mktemp("ssp") / "figure8.ssp").path
+    out = tmp_path_factory.mktemp("ssp") / "figure8.ssp"
+    return export_ssp(Study.load(ROOT / "studies/figure8.toml"), out=out).path
 
 
 @pytest.fixture(scope="module")

@@ -25,9 +25,8 @@ Each function imports its own command's package where it is used, so that ``from
 and each command that goes through this module load no other command's package (1.2 s of them together).
 
 Imported where used: agrobot.identification (start-up: 0.6 s), agrobot.diagnosis (1.0 s), agrobot.fields (0.6 s,
-the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), agrobot.fmu_export (0.25 s, fmpy),
-agrobot.components.hardware (the emulator's buses), agrobot.orchestrator.engine and .observers (the emulator's
-and the exports' progress), pandas (an emulator's empty result).
+the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), agrobot.fmu_export (0.25 s, fmpy)
+and agrobot.components.hardware (the emulator's buses).
 """
 from __future__ import annotations
 
@@ -46,6 +45,7 @@ from agrobot.orchestrator.errors import InputError, Interrupted, Terminated, ins
 from agrobot.orchestrator.observers import Stage
 from agrobot.orchestrator.output import OutputLock, check_output_file, study_inputs
 from agrobot.orchestrator.runner import run_study
+from agrobot.orchestrator.source_files import set_limit
 from agrobot.orchestrator.study import Study, StudyError
 from agrobot.orchestrator.sweep import SweepRun, sweep_plots, sweep_summary
 from agrobot.studies import shipped
@@ -335,7 +335,6 @@ def fields(source, *, crs: str | None = None, out: str | Path | None = None, ove
     recording's; ``signals``/``time`` a table's columns as ``--signal``/``--time`` write them).
     ``out``: checked before anything is read, written as ``FieldsResult.save`` writes."""
     from agrobot.fields.readers import read_fields, read_folder
-    from agrobot.orchestrator.source_files import set_limit
 
     set_limit(max_file_size)
     source = Path(source)
@@ -364,7 +363,8 @@ def _track_field(source: Path, width: float | None, signals: Sequence[str], time
     if width is None and chosen is not None:
         f.properties["working_width_from"] = "the recording's ISO 11783 actual working width (DDI 67), median"
     p = f.properties
-    return f, (f"track {source}: {p['track_fixes']} fixes in {p['track_pieces']} piece(s), {p['track_length_m']:.0f} m; "
+    return f, (f"track {source}: {p['track_fixes']} fixes in {p['track_pieces']} piece(s), "
+               f"{p['track_length_m']:.0f} m; "
                f"working width {p['working_width_m']:g} m ({p['working_width_from']}); {p['passes']} straight passes")
 
 

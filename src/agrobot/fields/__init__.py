@@ -10,7 +10,8 @@ from importlib import import_module
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:              # what static tools read; at run time __getattr__ loads each name
-    from .field import Field as Field, FieldError as FieldError, GuidanceLine as GuidanceLine, choose_field as choose_field
+    from .field import (Field as Field, FieldError as FieldError, GuidanceLine as GuidanceLine,
+                        choose_field as choose_field)
     from .readers import read_fields as read_fields
 
 _HOME = {"Field": "field", "FieldError": "field", "GuidanceLine": "field", "choose_field": "field",

@@ -15,9 +15,10 @@ complete: an interrupted or failed plan leaves ``--out`` as it was (an earlier p
 any work (finite, in range, a turn radius the field can hold), the message naming the option.
 
 Imported where used: agrobot.api (start-up: 9 ms of CPU on every command, measured: the fields plugin loads
-this module; only the plan command's run needs it), agrobot.fields.planner.export, .readers, .field, .obstacles
-(start-up: with the planner they load, 0.2 s on every command, ``--help`` included, measured with
-``python3 -X importtime -m agrobot --help``; only a plan reads a field or writes its files).
+this module; only the plan command's run needs it), agrobot.fields.planner (start-up: with the planner's stages
+it loads, 0.2 s on every command, ``--help`` included, measured with ``python3 -X importtime -m agrobot --help``;
+only a plan's files need it), agrobot.fields.readers (the same: only a plan reads a field), agrobot.fields.field (the
+same), agrobot.fields.obstacles (the same).
 """
 from __future__ import annotations
 
