@@ -25,7 +25,7 @@ Each function imports its own command's package where it is used, so that ``from
 and each command that goes through this module load no other command's package (1.2 s of them together).
 
 Imported where used: agrobot.identification (start-up: 0.6 s), agrobot.diagnosis (1.0 s), agrobot.fields (0.6 s,
-the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), agrobot.fmu_export (0.25 s, fmpy)
+the planner), agrobot.measurements (0.2 s), agrobot.analysis (0.2 s), agrobot.fmu_export (0.25 s, fmpy),
 and agrobot.components.hardware (the emulator's buses).
 """
 from __future__ import annotations
