@@ -6,8 +6,9 @@ every start-up, ``--help`` included, without the readers.
 """
 from __future__ import annotations
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from .first_use import loader
 
 if TYPE_CHECKING:              # what static tools read; at run time __getattr__ loads each name
     from .field import (Field as Field, FieldError as FieldError, GuidanceLine as GuidanceLine,
@@ -18,10 +19,4 @@ _HOME = {"Field": "field", "FieldError": "field", "GuidanceLine": "field", "choo
          "read_fields": "readers"}
 __all__ = list(_HOME)
 
-
-def __getattr__(name: str):
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = loader(__name__, _HOME, globals())

@@ -7,8 +7,9 @@ planner (0.2 s of start-up, measured with ``python3 -X importtime -m agrobot --h
 """
 from __future__ import annotations
 
-from importlib import import_module
 from typing import TYPE_CHECKING
+
+from ..first_use import loader
 
 if TYPE_CHECKING:              # what static tools read; at run time __getattr__ loads each name
     from .path import Path as Path
@@ -23,10 +24,4 @@ _HOME = {"Path": "path", "Plan": "pipeline", "plan": "pipeline", "Settings": "se
                                        "Route", "Segment", "Swath")}}
 __all__ = list(_HOME)
 
-
-def __getattr__(name: str):
-    if name not in _HOME:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(f".{_HOME[name]}", __name__), name)
-    globals()[name] = value
-    return value
+__getattr__ = loader(__name__, _HOME, globals())
