@@ -209,16 +209,16 @@ def _pieces(a: int, b: int, h: float, length: float, min_length: float) -> list[
 class YawModel:
     """The single-track model of the study driven through delay, gain, offset and lag; simulates
     every segment side by side. ``values``: the free parameters by name (others at their defaults).
-    ``kernel``: the C kernel (single_track_kernel), the Python reference, or ``auto`` (C where a
-    compiler is found)."""
+    ``kernel``: ``c`` (single_track_kernel), ``python`` (the reference) or ``auto`` (C where a
+    compiler is found; default single_track_kernel.DEFAULT)."""
 
     DEFAULTS = {"delay": 0.0, "lag": 0.0, "gyro_bias": 0.0, "steer_offset": 0.0, "steer_gain": 1.0,
                 "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
-                 max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str = "auto") -> None:
+                 max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str | None = None) -> None:
         self.model, self.p, self.log, self.segs = model, params, log, segs
-        self.kernel = kernel            # the simulations' code: "c", "python" (the reference) or "auto"
+        self.kernel = kernel or single_track_kernel.DEFAULT     # "c", "python" (the reference) or "auto"
         self.loads = axle_loads(params.m, params.l_f, params.l_r)
         self.L = params.l_f + params.l_r
         self.n_sub = max(1, int(math.ceil(log.h / max_substep)))
@@ -378,13 +378,19 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
     def values_of(x):
         return {**fixed, **{p.name: float(xi) * p.scale for p, xi in zip(free, x)}}
 
+    last: dict[str, np.ndarray] = {}
+
     def fun(x):
-        return (r_meas - model.simulate(values_of(x), segs))[mask]
+        last["x"], last["f"] = np.array(x, float), (r_meas - model.simulate(values_of(x), segs))[mask]
+        return last["f"]
 
     def jac(x):
-        """Forward differences, every perturbed set simulated in one batched pass."""
+        """Forward differences, every perturbed set simulated in one batched pass (f(x): the last
+        residuals when they were at x, as least_squares asks; rows are simulated alike alone or
+        batched, so the columns are the same)."""
+        f0 = last["f"] if "x" in last and np.array_equal(last["x"], x) else None
         return forward_jacobian(lambda xs: [(r_meas - s)[mask] for s in model.simulate_many(
-            [values_of(xi) for xi in xs], segs)], x, lo, hi, floor=1.0, signed=False)
+            [values_of(xi) for xi in xs], segs)], x, lo, hi, f0=f0, floor=1.0, signed=False)
 
     x0 = np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
     sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=max_nfev, x_scale=1.0, ftol=1e-6, xtol=1e-6)

@@ -14,6 +14,7 @@
  *
  * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
 #include <math.h>
+#include <stddef.h>
 
 enum { P_A, P_C, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
        P_FZF, P_FZR, N_PAR };
@@ -22,31 +23,41 @@ enum { BICYCLE = 0, RLF = 1, RLFR = 2 };
 typedef struct { int model, n; const double *p; double Cf, Cr; } Row;
 
 
-/* (F_y, dF_y/dalpha) of the simplified Magic Formula; an infinite peak D: the linear tyre */
-static void magic_formula(double alpha, double C, double D, double shape, double *F, double *k) {
+/* (F_y, dF_y/dalpha) of the simplified Magic Formula (k: NULL when the slope is not needed); an
+ * infinite peak D: the linear tyre */
+static inline void magic_formula(double alpha, double C, double D, double shape, double *F, double *k) {
     if (!isfinite(D)) {
         *F = C * alpha;
-        *k = C;
+        if (k)
+            *k = C;
         return;
     }
     double B = C / (shape * D), x = B * alpha, phase = shape * atan(x);
     *F = D * sin(phase);
-    *k = D * cos(phase) * shape * B / (1.0 + x * x);
+    if (k)
+        *k = D * cos(phase) * shape * B / (1.0 + x * x);
 }
 
 
-/* dz/dt and its Jacobian of the single-track model, z = [v_y, gamma (, alpha_f) (, alpha_r)] */
-static void rates(const Row *q, double v, double delta, const double *z, double *f, double J[4][4]) {
+/* dz/dt and its Jacobian J (NULL: not needed) of the single-track model, z = [v_y, gamma (, alpha_f)
+ * (, alpha_r)] */
+static inline void rates(const Row *q, double v, double delta, const double *z, double *f, double J[4][4]) {
     const double *p = q->p;
     double m = p[P_M], I = p[P_I], lf = p[P_LF], lr = p[P_LR], mu = p[P_MU], shape = p[P_SHAPE];
     double vy = z[0], g = z[1];
     double a_f = q->model == BICYCLE ? (vy + lf * g) / v - delta : z[2];
     double a_r = q->model == RLFR ? z[3] : (vy - lr * g) / v;
-    double Ff, kf, Fr, kr, dFf[4] = {0.0, 0.0, 0.0, 0.0}, dFr[4] = {0.0, 0.0, 0.0, 0.0};
-    magic_formula(a_f, q->Cf, mu * p[P_FZF], shape, &Ff, &kf);
-    magic_formula(a_r, q->Cr, mu * p[P_FZR], shape, &Fr, &kr);
+    double Ff, kf = 0.0, Fr, kr = 0.0, dFf[4] = {0.0, 0.0, 0.0, 0.0}, dFr[4] = {0.0, 0.0, 0.0, 0.0};
+    magic_formula(a_f, q->Cf, mu * p[P_FZF], shape, &Ff, J ? &kf : NULL);
+    magic_formula(a_r, q->Cr, mu * p[P_FZR], shape, &Fr, J ? &kr : NULL);
     f[0] = -v * g - (Ff + Fr) / m;
     f[1] = (-lf * Ff + lr * Fr) / I;
+    if (q->model != BICYCLE)
+        f[2] = (vy + lf * g - v * (a_f + delta)) / p[P_SIGMA_F];
+    if (q->model == RLFR)
+        f[3] = (vy - lr * g - v * a_r) / p[P_SIGMA_R];
+    if (!J)
+        return;
     if (q->model == BICYCLE) {
         dFf[0] = kf / v;
         dFf[1] = kf * lf / v;
@@ -59,7 +70,7 @@ static void rates(const Row *q, double v, double delta, const double *z, double 
         dFr[0] = kr / v;
         dFr[1] = -kr * lr / v;
     }
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < q->n; i++) {
         J[0][i] = -(dFf[i] + dFr[i]) / m;
         J[1][i] = (-lf * dFf[i] + lr * dFr[i]) / I;
         J[2][i] = J[3][i] = 0.0;
@@ -67,14 +78,12 @@ static void rates(const Row *q, double v, double delta, const double *z, double 
     J[0][1] -= v;
     if (q->model != BICYCLE) {
         double sf = p[P_SIGMA_F];
-        f[2] = (vy + lf * g - v * (a_f + delta)) / sf;
         J[2][0] = 1.0 / sf;
         J[2][1] = lf / sf;
         J[2][2] = -v / sf;
     }
     if (q->model == RLFR) {
         double sr = p[P_SIGMA_R];
-        f[3] = (vy - lr * g - v * a_r) / sr;
         J[3][0] = 1.0 / sr;
         J[3][1] = -lr / sr;
         J[3][3] = -v / sr;
@@ -84,7 +93,7 @@ static void rates(const Row *q, double v, double delta, const double *z, double 
 
 /* The inverse of the n x n matrix A (n <= 4) by Gauss-Jordan elimination with partial pivoting;
  * 0 when A is singular */
-static int invert(int n, double A[4][4], double M[4][4]) {
+static inline int invert(int n, double A[4][4], double M[4][4]) {
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
             M[i][j] = i == j ? 1.0 : 0.0;
@@ -119,10 +128,10 @@ static int invert(int n, double A[4][4], double M[4][4]) {
 
 
 /* One ROS2 step of length hs from inputs (v0, d0) to (v1, d1); 0 when I - gamma hs J is singular */
-static int ros2_step(const Row *q, double hs, double v0, double v1, double d0, double d1, double *z) {
+static inline int ros2_step(const Row *q, double hs, double v0, double v1, double d0, double d1, double *z) {
     const double gamma = 1.0 + 1.0 / sqrt(2.0);
     int n = q->n;
-    double f0[4], f1[4], J[4][4], A[4][4], M[4][4], k1[4], k2[4], z1[4];
+    double f0[4], f1[4], J[4][4], A[4][4], M[4][4], k1[4], k2[4], z1[4] = {0.0, 0.0, 0.0, 0.0};
     rates(q, v0, d0, z, f0, J);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
@@ -135,7 +144,7 @@ static int ros2_step(const Row *q, double hs, double v0, double v1, double d0, d
             k1[i] += M[i][j] * f0[j];
         z1[i] = z[i] + hs * k1[i];
     }
-    rates(q, v1, d1, z1, f1, J);
+    rates(q, v1, d1, z1, f1, NULL);
     for (int i = 0; i < n; i++) {
         k2[i] = 0.0;
         for (int j = 0; j < n; j++)
@@ -148,7 +157,7 @@ static int ros2_step(const Row *q, double hs, double v0, double v1, double d0, d
 
 
 /* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs */
-static int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
+static inline int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
                         double *vy) {
     const double *p = q->p;
     double a = p[P_A], c = p[P_C], slope = p[P_SLOPE], hs = h / sub;
@@ -189,8 +198,19 @@ static int simulate_row(Row *q, long L, int sub, double h, const double *w, cons
 long single_track_simulate(int model, long rows, long S, long L, int sub, double h, const double *w,
                            const double *v, const double *par, double *yaw, double *vy) {
     for (long i = 0; i < rows; i++) {
-        Row q = {model, model == BICYCLE ? 2 : (model == RLF ? 3 : 4), par + i * N_PAR, 0.0, 0.0};
-        if (!simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L))
+        const double *pi = par + i * N_PAR;
+        int ok;
+        if (model == BICYCLE) {
+            Row q = {BICYCLE, 2, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        } else if (model == RLF) {
+            Row q = {RLF, 3, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        } else {
+            Row q = {RLFR, 4, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        }
+        if (!ok)
             return i;
     }
     return -1;
