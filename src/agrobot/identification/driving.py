@@ -18,9 +18,10 @@ the mass and CG position (g_0 = 9.81 m/s2).
 
 The log is cut into segments of driving (v above ``min_speed``, no clock gap), each simulated from
 a kinematic state with a burn-in before the samples it is scored on; every third segment is held
-out. Segments run side by side (vectorised), so a simulation costs one pass over the longest
-segment, and the fit uses at most ``max_fit_seconds`` of segments spread over the log: the cost
-grows linearly with the log's length at most. Least squares (scipy, bounded); intervals from the
+out. The segments are simulated by a compiled kernel (single_track_kernel: C, one row after
+another; the reference is the Python path, every row stepped together), and the fit uses at most
+``max_fit_seconds`` of segments spread over the log: the cost grows linearly with the log's length
+at most. Least squares (scipy, bounded); intervals from the
 Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
 """
 from __future__ import annotations
