@@ -41,7 +41,8 @@ def _load() -> ctypes.CDLL:
 
 def choose(kernel: str) -> str:
     """``c`` or ``python`` for the asked ``kernel``: ``auto`` is C where a C compiler is found, else
-    Python with one note on stderr (per process); ``c`` without a compiler raises CompilerMissing."""
+    Python with one note on stderr (per process) saying why; ``c`` raises that reason (CompilerMissing,
+    CompileError, an OSError of the cache folder)."""
     if kernel not in KERNELS:
         raise InputError(f"kernel {kernel!r}: expected one of {', '.join(KERNELS)}")
     if kernel == "python":
@@ -49,7 +50,7 @@ def choose(kernel: str) -> str:
     if "lib" not in _STATE and "missing" not in _STATE:
         try:
             _STATE["lib"] = _load()
-        except (CompilerMissing, CompileError) as exc:
+        except (CompilerMissing, CompileError, OSError) as exc:      # OSError: the cache folder not writable
             _STATE["missing"] = exc
     if "lib" in _STATE:
         return "c"
