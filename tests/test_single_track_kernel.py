@@ -76,6 +76,18 @@ def test_the_kernel_takes_relaxation_lengths_per_row():
     assert_close(*both("rlfr", [SETS[0], SETS[2]], log, params, segs))
 
 
+def test_sets_that_differ_in_the_gyro_bias_alone_are_each_their_own():
+    """A Jacobian's bias column: the same simulation, shifted by the bias, in any order."""
+    log = driving_log(heading=True)
+    model = YawModel("rlf", P, log, cut_segments(log, 0.02, length=4.0), min_sim_speed=0.3, kernel="c")
+    sets = [SETS[0], {**SETS[0], "gyro_bias": 0.03}, SETS[1], {**SETS[1], "gyro_bias": -0.02}]
+    many = model.simulate_many(sets)
+    for got, v in zip(many, sets):
+        np.testing.assert_array_equal(got, model.simulate(v))
+    np.testing.assert_allclose(many[1] - many[0], 0.02, rtol=1e-12)
+    np.testing.assert_allclose(many[3] - many[2], -0.02, rtol=1e-12)
+
+
 @pytest.mark.parametrize("slope", [0.0, 0.25])
 def test_the_kernel_reaches_the_steady_turn(slope):
     """Constant speed and wheel angle: the bicycle settles at v delta / (L + K v^2), K of the

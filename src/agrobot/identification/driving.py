@@ -240,13 +240,40 @@ class YawModel:
     def simulate_many(self, sets: list[dict], segs: Segments | None = None, lateral: bool = False):
         """(R, S, L): the model under each of R parameter sets, all rows in one call (the C kernel
         steps them one after another; the Python path steps them together: a Jacobian's sets cost
-        little more than one); ``lateral``: also the lateral velocity at the centre of gravity
-        v_y, (yaw, v_y)."""
+        little more than one; sets that differ only in the gyro bias are simulated once);
+        ``lateral``: also the lateral velocity at the centre of gravity v_y, (yaw, v_y)."""
         sets = [{**self.DEFAULTS, **v} for v in sets]
         segs = segs or self.segs
         idx = segs.idx
         S, L = idx.shape
         R = len(sets)
+        distinct, which = self._distinct(sets)
+        yaw, vy = self._simulate_rows(distinct, idx)
+        pick = (which[:, None] * S + np.arange(S)).ravel()          # (R S,): each set's rows
+        low_speed = np.tile(self.low_speed_scale[idx], (R, 1))
+        out = yaw[pick] * low_speed
+        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
+        out += np.repeat([float(v["gyro_bias"]) for v in sets], S)[:, None]
+        if lateral:
+            return out.reshape(R, S, L), (vy[pick] * low_speed).reshape(R, S, L)
+        return out.reshape(R, S, L)
+
+    def _distinct(self, sets: list[dict]) -> tuple[list[dict], np.ndarray]:
+        """(the sets that differ in more than the gyro bias, which of them each set is); every set
+        its own when the vehicle's parameters are per row (the replays' relaxation lengths)."""
+        if any(np.ndim(getattr(self.p, k)) for k in ("m", "I", "l_f", "l_r", "sigma_f", "sigma_r")):
+            return sets, np.arange(len(sets))
+        first: dict[tuple, int] = {}
+        which = [first.setdefault(tuple((k, v[k]) for k in sorted(v) if k != "gyro_bias"), len(first)) for v in sets]
+        distinct = [None] * len(first)
+        for v, i in zip(sets, which):
+            distinct[i] = distinct[i] or v
+        return distinct, np.array(which, int)
+
+    def _simulate_rows(self, sets: list[dict], idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(yaw rate, v_y), each (R S, L), of the single-track model under each set (before the
+        low-speed scaling, the measurement's averaging and the gyro bias)."""
+        S = len(idx)
         w = np.concatenate([self.wheel_angle(v)[idx] for v in sets])          # (R S, L)
         rows = {key: np.repeat([float(v[key]) for v in sets], S) for key in self.DEFAULTS.keys() | {"c_f", "c_r"}}
         h = self.log.h
@@ -257,18 +284,8 @@ class YawModel:
         # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
         c = 1.0 - lag / h * (1.0 - a)
         if single_track_kernel.choose(self.kernel) == "c":
-            out, out_vy = single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx],
-                                                       self._packed(rows, a, c))
-        else:
-            out, out_vy = self._simulate_python(w, np.tile(self.v_sim[idx], (R, 1)), rows, a, c)
-        low_speed = np.tile(self.low_speed_scale[idx], (R, 1))
-        out *= low_speed
-        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
-        out += rows["gyro_bias"][:, None]
-        if lateral:
-            out_vy *= low_speed
-            return out.reshape(R, S, L), out_vy.reshape(R, S, L)
-        return out.reshape(R, S, L)
+            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c))
+        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c)
 
     def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The C kernel's per-row parameters (single_track_kernel.PARAMETERS), (R S, P)."""
