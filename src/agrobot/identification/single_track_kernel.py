@@ -57,8 +57,11 @@ def choose(kernel: str) -> str:
     if kernel == "c":
         raise _STATE["missing"]
     if not _STATE.get("said"):
-        print(f"note: the yaw model's simulations run in Python, 10 to 40 times slower than its C kernel "
-              f"({_STATE['missing']})", file=sys.stderr)
+        why = _STATE["missing"]
+        why = "no C compiler was found ($CC, cc, gcc; the Debian package gcc installs one)" \
+            if isinstance(why, CompilerMissing) else f"its C kernel could not be built: {why}"
+        print(f"note: the yaw model's simulations run in Python, 10 to 40 times slower than in C: {why}",
+              file=sys.stderr)
         _STATE["said"] = True
     return "python"
 
