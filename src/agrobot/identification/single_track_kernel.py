@@ -70,7 +70,9 @@ def simulate(model: str, sub: int, h: float, w: np.ndarray, v: np.ndarray, par: 
     """(yaw rate, lateral velocity), each (rows, L): row i driven by the wheel angle asked w[i] at
     the speed v[i mod S] (v: (S, L)) with the parameters par[i] (PARAMETERS' order), from the
     kinematic state; ``sub`` ROS2 substeps per sample step h."""
-    lib = _STATE.get("lib") or _load()
+    if "lib" not in _STATE:
+        _STATE["lib"] = _load()
+    lib = _STATE["lib"]
     w = np.ascontiguousarray(w, float)
     v = np.ascontiguousarray(v, float)
     par = np.ascontiguousarray(par, float)
