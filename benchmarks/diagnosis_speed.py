@@ -1,7 +1,7 @@
 """How long ``identify`` and ``diagnose`` take against the log's duration, now and on the code before,
 in one run (the machine is shared: both sides see the same load).
 
-    python benchmarks/diagnosis_speed.py [--cases tractor f1tenth hour] [--before e6f6b16] [--no-before]
+    python benchmarks/diagnosis_speed.py [--cases tractor f1tenth hour] [--before 1368bd1] [--no-before]
 
 Logs:
 
@@ -120,7 +120,7 @@ def table(rows: list[tuple]) -> str:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=tuple(LOGS), default=list(LOGS))
-    parser.add_argument("--before", default="e6f6b16", help="the commit to compare with (default e6f6b16)")
+    parser.add_argument("--before", default="1368bd1", help="the commit to compare with (default 1368bd1)")
     parser.add_argument("--no-before", action="store_true", help="only the code of this tree")
     args = parser.parse_args()
     load = os.getloadavg()[0]

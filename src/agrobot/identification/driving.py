@@ -18,9 +18,10 @@ the mass and CG position (g_0 = 9.81 m/s2).
 
 The log is cut into segments of driving (v above ``min_speed``, no clock gap), each simulated from
 a kinematic state with a burn-in before the samples it is scored on; every third segment is held
-out. Segments run side by side (vectorised), so a simulation costs one pass over the longest
-segment, and the fit uses at most ``max_fit_seconds`` of segments spread over the log: the cost
-grows linearly with the log's length at most. Least squares (scipy, bounded); intervals from the
+out. The segments are simulated by a compiled kernel (single_track_kernel: C, one row after
+another; the reference is the Python path, every row stepped together), and the fit uses at most
+``max_fit_seconds`` of segments spread over the log: the cost grows linearly with the log's length
+at most. Least squares (scipy, bounded); intervals from the
 Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
 """
 from __future__ import annotations
@@ -36,8 +37,10 @@ from scipy.optimize import least_squares
 from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian
 from agrobot.orchestrator.errors import InputError
 
-from agrobot.components.models.tyre import GAMMA_ROS2, axle_loads, rates
+from agrobot.components.models.tyre import GAMMA_ROS2, N_STATES, axle_loads, rates
 from agrobot.components.models.yaw_dynamics import GRAVITY, TractorParameters
+
+from . import single_track_kernel
 
 
 
@@ -206,14 +209,17 @@ def _pieces(a: int, b: int, h: float, length: float, min_length: float) -> list[
 
 class YawModel:
     """The single-track model of the study driven through delay, gain, offset and lag; simulates
-    every segment side by side. ``values``: the free parameters by name (others at their defaults)."""
+    every segment side by side. ``values``: the free parameters by name (others at their defaults).
+    ``kernel``: ``c`` (single_track_kernel), ``python`` (the reference) or ``auto`` (C where a
+    compiler is found; default single_track_kernel.DEFAULT)."""
 
     DEFAULTS = {"delay": 0.0, "lag": 0.0, "gyro_bias": 0.0, "steer_offset": 0.0, "steer_gain": 1.0,
                 "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
-                 max_substep: float = 0.02, min_sim_speed: float = 0.05) -> None:
+                 max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str | None = None) -> None:
         self.model, self.p, self.log, self.segs = model, params, log, segs
+        self.kernel = kernel or single_track_kernel.DEFAULT     # "c", "python" (the reference) or "auto"
         self.loads = axle_loads(params.m, params.l_f, params.l_r)
         self.L = params.l_f + params.l_r
         self.n_sub = max(1, int(math.ceil(log.h / max_substep)))
@@ -232,42 +238,87 @@ class YawModel:
         return self.simulate_many([values], segs)[0]
 
     def simulate_many(self, sets: list[dict], segs: Segments | None = None, lateral: bool = False):
-        """(R, S, L): the model under each of R parameter sets, all rows stepped together (the
-        per-step cost is Python overhead: a Jacobian's sets cost little more than one);
+        """(R, S, L): the model under each of R parameter sets, all rows in one call (the C kernel
+        steps them one after another; the Python path steps them together: a Jacobian's sets cost
+        little more than one; sets that differ only in the gyro bias are simulated once);
         ``lateral``: also the lateral velocity at the centre of gravity v_y, (yaw, v_y)."""
         sets = [{**self.DEFAULTS, **v} for v in sets]
         segs = segs or self.segs
         idx = segs.idx
         S, L = idx.shape
         R = len(sets)
+        distinct, which = self._distinct(sets)
+        yaw, vy = self._simulate_rows(distinct, idx)
+        pick = (which[:, None] * S + np.arange(S)).ravel()          # (R S,): each set's rows
+        low_speed = np.tile(self.low_speed_scale[idx], (R, 1))
+        out = yaw[pick] * low_speed
+        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
+        out += np.repeat([float(v["gyro_bias"]) for v in sets], S)[:, None]
+        if lateral:
+            return out.reshape(R, S, L), (vy[pick] * low_speed).reshape(R, S, L)
+        return out.reshape(R, S, L)
+
+    def _distinct(self, sets: list[dict]) -> tuple[list[dict], np.ndarray]:
+        """(the sets that differ in more than the gyro bias, which of them each set is); every set
+        its own when the vehicle's parameters are per row (the replays' relaxation lengths)."""
+        if any(np.ndim(getattr(self.p, k)) for k in ("m", "I", "l_f", "l_r", "sigma_f", "sigma_r")):
+            return sets, np.arange(len(sets))
+        first: dict[tuple, int] = {}
+        which = [first.setdefault(tuple((k, v[k]) for k in sorted(v) if k != "gyro_bias"), len(first)) for v in sets]
+        distinct = [None] * len(first)
+        for v, i in zip(sets, which):
+            distinct[i] = distinct[i] or v
+        return distinct, np.array(which, int)
+
+    def _simulate_rows(self, sets: list[dict], idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(yaw rate, v_y), each (R S, L), of the single-track model under each set (before the
+        low-speed scaling, the measurement's averaging and the gyro bias)."""
+        S = len(idx)
         w = np.concatenate([self.wheel_angle(v)[idx] for v in sets])          # (R S, L)
-        vv = np.tile(self.v_sim[idx], (R, 1))
+        rows = {key: np.repeat([float(v[key]) for v in sets], S) for key in self.DEFAULTS.keys() | {"c_f", "c_r"}}
         h = self.log.h
-
-        def per_row(key):
-            return np.repeat([float(v[key]) for v in sets], S)
-
-        lag = per_row("lag")
+        lag = rows["lag"]
         a = np.where(lag > 1e-6, np.exp(-h / np.maximum(lag, 1e-6)), 0.0)
         # the lag's exact step for an input linear between samples (first-order hold):
         # d+ = a d + (1 - a) w_j + c (w_j+1 - w_j), c = 1 - (T/h)(1 - a): c -> 1 as T -> 0 (no lag,
         # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
         c = 1.0 - lag / h * (1.0 - a)
+        if single_track_kernel.choose(self.kernel) == "c":
+            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c))
+        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c)
+
+    def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """The C kernel's per-row parameters (single_track_kernel.PARAMETERS), (R S, P)."""
         Fzf, Fzr = self.loads
-        Cf, Cr = per_row("c_f") * Fzf, per_row("c_r") * Fzr
-        mu = per_row("friction")
-        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": per_row("shape"), "C_f": Cf, "C_r": Cr}
-        slope, v_ref = per_row("cornering_speed_slope"), per_row("cornering_reference_speed")
+        p = self.p
+        columns = {"lag_decay": a, "hold_gain": c, "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
+                   "mu": rows["friction"], "shape": rows["shape"],
+                   "cornering_speed_slope": rows["cornering_speed_slope"],
+                   "cornering_reference_speed": rows["cornering_reference_speed"],
+                   "sigma_f": p.sigma_f, "sigma_r": p.sigma_r, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
+                   "F_zf": Fzf, "F_zr": Fzr}
+        n = len(a)
+        return np.stack([np.broadcast_to(np.asarray(columns[k], float), (n,)) for k in single_track_kernel.PARAMETERS],
+                        axis=1)
+
+    def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray):
+        """The reference path: every row stepped together, (yaw rate, v_y) each (rows, L), from the
+        kinematic state; ``n_sub`` ROS2 substeps per sample (components.models.tyre.rates)."""
+        Fzf, Fzr = self.loads
+        Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
+        mu = rows["friction"]
+        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
+        slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
         speed_scaled = bool(np.any(slope != 0.0))
-        n = {"bicycle": 2, "rlf": 3, "rlfr": 4}[self.model]
-        rows = R * S
-        z = np.zeros((rows, n))
+        n = N_STATES[self.model]
+        n_rows, L = w.shape
+        z = np.zeros((n_rows, n))
         d = w[:, 0].copy()
         r0 = vv[:, 0] * d / self.L                       # kinematic start
         z[:, 0], z[:, 1] = self.p.l_r * r0, r0
-        out = np.empty((rows, L))
-        out_vy = np.empty((rows, L))
-        hs = h / self.n_sub
+        out = np.empty((n_rows, L))
+        out_vy = np.empty((n_rows, L))
+        hs = self.log.h / self.n_sub
         eye = np.eye(n)
         for j in range(L):
             out[:, j] = z[:, 1]
@@ -280,8 +331,8 @@ class YawModel:
                 v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])
                 v1 = vv[:, j] + s1 * (vv[:, j + 1] - vv[:, j])
                 if speed_scaled:        # C x max(0.2, 1 + k (v - v_ref)), the speed-dependent cornering
-                    c = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
-                    tyre["C_f"], tyre["C_r"] = Cf * c, Cr * c
+                    scale = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
+                    tyre["C_f"], tyre["C_r"] = Cf * scale, Cr * scale
                 f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
                 M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
                 k1 = np.einsum("sij,sj->si", M, f0)
@@ -289,13 +340,7 @@ class YawModel:
                 k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
                 z = z + hs * (1.5 * k1 + 0.5 * k2)
             d = d_next
-        out *= np.tile(self.low_speed_scale[idx], (R, 1))
-        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
-        out += per_row("gyro_bias")[:, None]
-        if lateral:
-            out_vy *= np.tile(self.low_speed_scale[idx], (R, 1))
-            return out.reshape(R, S, L), out_vy.reshape(R, S, L)
-        return out.reshape(R, S, L)
+        return out, out_vy
 
 
 def understeer_gradient(c_f: float, c_r: float) -> float:
@@ -351,19 +396,26 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
     def values_of(x):
         return {**fixed, **{p.name: float(xi) * p.scale for p, xi in zip(free, x)}}
 
+    last: dict[str, np.ndarray] = {}
+
     def fun(x):
-        return (r_meas - model.simulate(values_of(x), segs))[mask]
+        last["x"], last["f"] = np.array(x, float), (r_meas - model.simulate(values_of(x), segs))[mask]
+        return last["f"]
 
     def jac(x):
-        """Forward differences, every perturbed set simulated in one batched pass."""
+        """Forward differences, every perturbed set simulated in one batched pass (f(x): the last
+        residuals when they were at x, as least_squares asks; rows are simulated alike alone or
+        batched, so the columns are the same)."""
+        f0 = last["f"] if "x" in last and np.array_equal(last["x"], x) else None
         return forward_jacobian(lambda xs: [(r_meas - s)[mask] for s in model.simulate_many(
-            [values_of(xi) for xi in xs], segs)], x, lo, hi, floor=1.0, signed=False)
+            [values_of(xi) for xi in xs], segs)], x, lo, hi, f0=f0, floor=1.0, signed=False)
 
     x0 = np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
     sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=max_nfev, x_scale=1.0, ftol=1e-6, xtol=1e-6)
     values = values_of(sol.x)
     res = sol.fun
-    rows = [(r_meas - model.simulate(values, segs))[i][mask[i]] for i in range(len(segs.idx))]
+    residual = r_meas - model.simulate(values, segs)
+    rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
     n, n_eff = len(res), effective_size(rows, updates=model.log.updates_in(segs, mask))
     # a parameter on its bound is held there: the covariance is that of the others (its own: nan)
     span = hi - lo

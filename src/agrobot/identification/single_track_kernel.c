@@ -1,0 +1,220 @@
+/* The yaw model's segment simulation (identification.driving.YawModel.simulate_many) row by row:
+ * the single-track model (components/models/tyre.py: bicycle, rlf, rlfr; linear tyres, or the
+ * simplified Magic Formula F = D sin(C atan(B alpha)), D = mu F_z, B = C_alpha / (C D)) driven by
+ * the wheel angle through the first-order lag with a first-order hold
+ *
+ *     d+ = a d + (1 - a) w_j + c (w_j+1 - w_j),   a = exp(-h / T),  c = 1 - (T / h)(1 - a),
+ *
+ * the cornering stiffnesses scaled by max(0.2, 1 + k (v - v_ref)) at the substep's mean speed
+ * when k != 0, and each sample's step cut into SUB substeps of the L-stable Rosenbrock method
+ * (Verwer's ROS2, gamma = 1 + 1/sqrt 2):
+ *
+ *     (I - gamma h J) k1 = f(z, u0),  (I - gamma h J) k2 = f(z + h k1, u1) - 2 k1,
+ *     z+ = z + h (3 k1 + k2) / 2.
+ *
+ * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
+#include <math.h>
+#include <stddef.h>
+
+enum { P_A, P_C, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
+       P_FZF, P_FZR, N_PAR };
+enum { BICYCLE = 0, RLF = 1, RLFR = 2 };
+
+typedef struct { int model, n; const double *p; double Cf, Cr; } Row;
+
+
+/* (F_y, dF_y/dalpha) of the simplified Magic Formula (k: NULL when the slope is not needed); an
+ * infinite peak D: the linear tyre */
+static inline void magic_formula(double alpha, double C, double D, double shape, double *F, double *k) {
+    if (!isfinite(D)) {
+        *F = C * alpha;
+        if (k)
+            *k = C;
+        return;
+    }
+    double B = C / (shape * D), x = B * alpha, phase = shape * atan(x);
+    *F = D * sin(phase);
+    if (k)
+        *k = D * cos(phase) * shape * B / (1.0 + x * x);
+}
+
+
+/* dz/dt and its Jacobian J (NULL: not needed) of the single-track model, z = [v_y, gamma (, alpha_f)
+ * (, alpha_r)] */
+static inline void rates(const Row *q, double v, double delta, const double *z, double *f, double J[4][4]) {
+    const double *p = q->p;
+    double m = p[P_M], I = p[P_I], lf = p[P_LF], lr = p[P_LR], mu = p[P_MU], shape = p[P_SHAPE];
+    double vy = z[0], g = z[1];
+    double a_f = q->model == BICYCLE ? (vy + lf * g) / v - delta : z[2];
+    double a_r = q->model == RLFR ? z[3] : (vy - lr * g) / v;
+    double Ff, kf = 0.0, Fr, kr = 0.0, dFf[4] = {0.0, 0.0, 0.0, 0.0}, dFr[4] = {0.0, 0.0, 0.0, 0.0};
+    magic_formula(a_f, q->Cf, mu * p[P_FZF], shape, &Ff, J ? &kf : NULL);
+    magic_formula(a_r, q->Cr, mu * p[P_FZR], shape, &Fr, J ? &kr : NULL);
+    f[0] = -v * g - (Ff + Fr) / m;
+    f[1] = (-lf * Ff + lr * Fr) / I;
+    if (q->model != BICYCLE)
+        f[2] = (vy + lf * g - v * (a_f + delta)) / p[P_SIGMA_F];
+    if (q->model == RLFR)
+        f[3] = (vy - lr * g - v * a_r) / p[P_SIGMA_R];
+    if (!J)
+        return;
+    if (q->model == BICYCLE) {
+        dFf[0] = kf / v;
+        dFf[1] = kf * lf / v;
+    } else {
+        dFf[2] = kf;
+    }
+    if (q->model == RLFR) {
+        dFr[3] = kr;
+    } else {
+        dFr[0] = kr / v;
+        dFr[1] = -kr * lr / v;
+    }
+    for (int i = 0; i < q->n; i++) {
+        J[0][i] = -(dFf[i] + dFr[i]) / m;
+        J[1][i] = (-lf * dFf[i] + lr * dFr[i]) / I;
+        J[2][i] = J[3][i] = 0.0;
+    }
+    J[0][1] -= v;
+    if (q->model != BICYCLE) {
+        double sf = p[P_SIGMA_F];
+        J[2][0] = 1.0 / sf;
+        J[2][1] = lf / sf;
+        J[2][2] = -v / sf;
+    }
+    if (q->model == RLFR) {
+        double sr = p[P_SIGMA_R];
+        J[3][0] = 1.0 / sr;
+        J[3][1] = -lr / sr;
+        J[3][3] = -v / sr;
+    }
+}
+
+
+/* The inverse of the n x n matrix A (n <= 4) by Gauss-Jordan elimination with partial pivoting;
+ * 0 when A is singular */
+static inline int invert(int n, double A[4][4], double M[4][4]) {
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            M[i][j] = i == j ? 1.0 : 0.0;
+    for (int col = 0; col < n; col++) {
+        int piv = col;
+        for (int i = col + 1; i < n; i++)
+            if (fabs(A[i][col]) > fabs(A[piv][col]))
+                piv = i;
+        if (A[piv][col] == 0.0)
+            return 0;
+        for (int j = 0; j < n; j++) {
+            double t = A[col][j]; A[col][j] = A[piv][j]; A[piv][j] = t;
+            t = M[col][j]; M[col][j] = M[piv][j]; M[piv][j] = t;
+        }
+        double inv = 1.0 / A[col][col];
+        for (int j = 0; j < n; j++) {
+            A[col][j] *= inv;
+            M[col][j] *= inv;
+        }
+        for (int i = 0; i < n; i++) {
+            double e = A[i][col];
+            if (i == col || e == 0.0)
+                continue;
+            for (int j = 0; j < n; j++) {
+                A[i][j] -= e * A[col][j];
+                M[i][j] -= e * M[col][j];
+            }
+        }
+    }
+    return 1;
+}
+
+
+/* One ROS2 step of length hs from inputs (v0, d0) to (v1, d1); 0 when I - gamma hs J is singular */
+static inline int ros2_step(const Row *q, double hs, double v0, double v1, double d0, double d1, double *z) {
+    const double gamma = 1.0 + 1.0 / sqrt(2.0);
+    int n = q->n;
+    double f0[4], f1[4], J[4][4], A[4][4], M[4][4], k1[4], k2[4], z1[4] = {0.0, 0.0, 0.0, 0.0};
+    rates(q, v0, d0, z, f0, J);
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            A[i][j] = (i == j ? 1.0 : 0.0) - gamma * hs * J[i][j];
+    if (!invert(n, A, M))
+        return 0;
+    for (int i = 0; i < n; i++) {
+        k1[i] = 0.0;
+        for (int j = 0; j < n; j++)
+            k1[i] += M[i][j] * f0[j];
+        z1[i] = z[i] + hs * k1[i];
+    }
+    rates(q, v1, d1, z1, f1, NULL);
+    for (int i = 0; i < n; i++) {
+        k2[i] = 0.0;
+        for (int j = 0; j < n; j++)
+            k2[i] += M[i][j] * (f1[j] - 2.0 * k1[j]);
+    }
+    for (int i = 0; i < n; i++)
+        z[i] = z[i] + hs * (1.5 * k1[i] + 0.5 * k2[i]);
+    return 1;
+}
+
+
+/* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs */
+static inline int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
+                        double *vy) {
+    const double *p = q->p;
+    double a = p[P_A], c = p[P_C], slope = p[P_SLOPE], hs = h / sub;
+    double z[4] = {0.0, 0.0, 0.0, 0.0}, d = w[0];
+    double r0 = v[0] * d / (p[P_LF] + p[P_LR]);
+    z[0] = p[P_LR] * r0;
+    z[1] = r0;
+    for (long j = 0; j < L; j++) {
+        yaw[j] = z[1];
+        vy[j] = z[0];
+        if (j == L - 1)
+            break;
+        double d_next = a * d + (1.0 - a) * w[j] + c * (w[j + 1] - w[j]);
+        for (int k = 0; k < sub; k++) {
+            double s0 = (double)k / sub, s1 = (double)(k + 1) / sub;
+            double v0 = v[j] + s0 * (v[j + 1] - v[j]), v1 = v[j] + s1 * (v[j + 1] - v[j]);
+            q->Cf = p[P_CF];
+            q->Cr = p[P_CR];
+            if (slope != 0.0) {
+                double scale = 1.0 + slope * (0.5 * (v0 + v1) - p[P_VREF]);
+                if (scale < 0.2)
+                    scale = 0.2;
+                q->Cf *= scale;
+                q->Cr *= scale;
+            }
+            if (!ros2_step(q, hs, v0, v1, d + s0 * (d_next - d), d + s1 * (d_next - d), z))
+                return 0;
+        }
+        d = d_next;
+    }
+    return 1;
+}
+
+
+/* rows rows of L samples: row i driven by w[i L ..] at speed v[(i mod S) L ..], parameters
+ * par[i N_PAR ..]; writes the yaw rate and the lateral velocity at the centre of gravity.
+ * Returns -1 on success, else the first row whose Rosenbrock matrix was singular. */
+long single_track_simulate(int model, long rows, long S, long L, int sub, double h, const double *w,
+                           const double *v, const double *par, double *yaw, double *vy) {
+    for (long i = 0; i < rows; i++) {
+        const double *pi = par + i * N_PAR;
+        int ok;
+        if (model == BICYCLE) {
+            Row q = {BICYCLE, 2, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        } else if (model == RLF) {
+            Row q = {RLF, 3, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        } else {
+            Row q = {RLFR, 4, pi, 0.0, 0.0};
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+        }
+        if (!ok)
+            return i;
+    }
+    return -1;
+}
+
+
+long single_track_parameter_count(void) { return N_PAR; }
