@@ -37,7 +37,8 @@ class StudySettings(BaseModel):
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
-    isolate_fmus: bool = False       # each FMU in a child process: a crash or a hang is a named error
+    isolate_fmus: bool | None = None   # each co-simulation FMU in a child process (a crash or a hang a named error);
+    #                                    default: those from outside the project; false: none (faster, said when run)
     fmu_timeout: float = Field(default=60.0, gt=0, allow_inf_nan=False)   # s an isolated FMU's call may take
     allow_unconnected: list[str] = []   # "component.input"s that may stay unconnected: they hold their start value
 
