@@ -97,6 +97,10 @@ def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] 
     ``resume``: such a folder is written into again without ``--overwrite`` (a sweep resumes)."""
     out = Path(out)
     check_inputs(out, inputs)
+    here = Path.cwd().resolve()
+    if out.resolve() == here or out.resolve() in here.parents:
+        raise OutputError(f"--out {str(out)!r}: is the working folder{'' if out.resolve() == here else ' or holds it'}; a "
+                          f"result folder is replaced whole when the command ends: name a new folder, e.g. --out results")
     if out.exists() and not out.is_dir():
         raise OutputError(f"--out {out}: is a file, not a folder")
     if out.is_dir() and any(out.iterdir()):
