@@ -23,7 +23,7 @@ from typing import Any, Callable
 
 
 @dataclass(frozen=True)
-class Range:
+class PhysicalRange:
     what: str
     applies: Callable[[str, str], bool]
     low: float
@@ -41,15 +41,15 @@ class Range:
 
 
 RANGES = (
-    Range("mass in kg", lambda name, unit: unit == "kg", 0.0, 1e6, low_open=True),
-    Range("moment of inertia in kg m^2", lambda name, unit: unit in ("kg m^2", "kg*m^2", "kg m2"), 0.0, 1e8,
+    PhysicalRange("mass in kg", lambda name, unit: unit == "kg", 0.0, 1e6, low_open=True),
+    PhysicalRange("moment of inertia in kg m^2", lambda name, unit: unit in ("kg m^2", "kg*m^2", "kg m2"), 0.0, 1e8,
           low_open=True),
-    Range("delay in s", lambda name, unit: unit == "s" and re.search(r"(delay|latency|latency_jitter)$", name) is not None,
+    PhysicalRange("delay in s", lambda name, unit: unit == "s" and re.search(r"(delay|latency|latency_jitter)$", name) is not None,
           0.0, 3600.0),
-    Range("wait in s", lambda name, unit: unit == "s" and re.search(r"(timeout|wait)$", name) is not None, 0.0,
+    PhysicalRange("wait in s", lambda name, unit: unit == "s" and re.search(r"(timeout|wait)$", name) is not None, 0.0,
           math.inf, low_open=True),
-    Range("TCP/UDP port", lambda name, unit: name == "port" or name.endswith("_port"), 0, 65535, integer=True),
-    Range("count", lambda name, unit: unit in ("1", "") and (name.startswith("n_") or name.endswith("_count")),
+    PhysicalRange("TCP/UDP port", lambda name, unit: name == "port" or name.endswith("_port"), 0, 65535, integer=True),
+    PhysicalRange("count", lambda name, unit: unit in ("1", "") and (name.startswith("n_") or name.endswith("_count")),
           0, 1e7, integer=True),
 )
 
