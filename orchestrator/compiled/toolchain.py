@@ -7,9 +7,9 @@ so a library of another shape is never used. The library is written aside and mo
 The cache is trusted only when it is ours: its folders (and the library) owned by this user and
 writable by no one else (a folder that is not is refused, named, before anything is loaded), and a
 library is loaded only when the SHA-256 of its bytes is the one recorded when it was built
-(``libloop.sha256`` beside it; hashed from the open file that is then loaded, so no constructor of a
-planted or damaged library runs). A library that does not match (truncated, damaged, replaced) is
-built again."""
+(``libloop.sha256`` beside it), checked before it is loaded, so no constructor of a planted or
+damaged library runs (and, the folder being writable by this user alone, none can replace it between
+the check and the load). A library that does not match (truncated, damaged, replaced) is built again."""
 from __future__ import annotations
 
 import ctypes
@@ -118,22 +118,17 @@ def _digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def _verified(folder: Path) -> int | None:
-    """An open descriptor of ``folder``'s library when the folder and the library are ours and the
-    library's bytes hash to the digest recorded when it was built; None otherwise (built again)."""
+def _verified(folder: Path) -> bool:
+    """``folder``'s library may be loaded: the folder and the library are ours alone and the
+    library's bytes hash to the digest recorded when it was built (else it is built again)."""
     try:
-        if untrusted(folder) or untrusted(folder / LIBRARY):
-            return None
+        if untrusted(folder) or untrusted(folder / LIBRARY) or untrusted(folder / DIGEST):
+            return False
         recorded = (folder / DIGEST).read_text().strip()
-        fd = os.open(folder / LIBRARY, os.O_RDONLY | os.O_NOFOLLOW)
+        with open(folder / LIBRARY, "rb") as f:
+            return _digest(f.read()) == recorded
     except (OSError, UnicodeError):
-        return None
-    with os.fdopen(os.dup(fd), "rb") as f:
-        ok = _digest(f.read()) == recorded
-    if not ok:
-        os.close(fd)
-        return None
-    return fd
+        return False
 
 
 def _build(key: str, folder: Path, units: dict[str, str], include_dirs: list[Path]) -> None:
@@ -170,18 +165,13 @@ def library(units: dict[str, str], include_dirs: list[Path], files: list[Path]) 
     if key in _LOADED:
         return _LOADED[key], key, False
     folder = trusted_root() / key
-    fd, built = _verified(folder), False
-    if fd is None:
+    built = not _verified(folder)
+    if built:
         _build(key, folder, units, include_dirs)
-        built = True
-        fd = _verified(folder)
-        if fd is None:
+        if not _verified(folder):
             raise CompileError(f"{folder / LIBRARY}: the library just built does not match its recorded digest; "
                                f"remove {folder}")
-    try:
-        lib = ctypes.CDLL(f"/proc/self/fd/{fd}" if os.path.isdir("/proc/self/fd") else str(folder / LIBRARY))
-    finally:
-        os.close(fd)
+    lib = ctypes.CDLL(str(folder / LIBRARY))      # checked in a folder only this user may write
     lib.agc_token.restype = ctypes.c_char_p
     if lib.agc_token().decode() != key:
         raise CompileError(f"{folder / LIBRARY}: the cached library answers another shape ({lib.agc_token().decode()}); "
