@@ -15,21 +15,16 @@ from agrobot.orchestrator.engine import RunError
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import load_study
 from tests.fmu_build import build_test_fmu
+from tests.test_fmu_isolation import FAIL_TIME, STEP, STUDY
 
 ROOT = Path(__file__).resolve().parent.parent
-FAIL_TIME, STEP = 0.5, 0.1
-STUDY = f"""[study]
-name = "crash"
-stop_time = 2.0
-base_step = {STEP}
-seed = 1
-signals_format = "csv"
-{{isolate}}
 
-[components.m]
-type = "misbehaving.fmu"
-parameters = {{{{ fail_time = {FAIL_TIME}, fail_mode = 1 }}}}
-"""
+
+def _study(folder: Path, name: str, isolate: str) -> Path:
+    """The misbehaving FMU crashing at FAIL_TIME (fail_mode 1), ``isolate``: the study's line for it (or none)."""
+    path = folder / name
+    path.write_text(STUDY.format(mode=1, timeout=60.0).replace("isolate_fmus = true\n", isolate))
+    return path
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +35,7 @@ def folder(tmp_path_factory) -> Path:
 
 
 def test_a_foreign_fmu_runs_isolated_by_default_and_its_crash_is_named_with_the_signals_kept(folder, tmp_path):
-    study = folder / "default.toml"
-    study.write_text(STUDY.format(isolate=""))
+    study = _study(folder, "default.toml", "")
     with pytest.raises(RunError) as err:
         run_study(load_study(study), tmp_path / "out", plots=False, progress=False)
     assert "crashed (signal SIGSEGV) in doStep at t = 0.5 s" in str(err.value), str(err.value)
@@ -50,8 +44,7 @@ def test_a_foreign_fmu_runs_isolated_by_default_and_its_crash_is_named_with_the_
 
 
 def test_in_process_a_fatal_signal_names_the_component_and_the_call(folder, tmp_path):
-    study = folder / "in_process.toml"
-    study.write_text(STUDY.format(isolate="isolate_fmus = false"))
+    study = _study(folder, "in_process.toml", "isolate_fmus = false\n")
     done = subprocess.run([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(tmp_path / "out"),
                            "--no-progress", "--engine", "python"], capture_output=True, text=True, timeout=120,
                           cwd=ROOT)
