@@ -81,3 +81,12 @@ def test_run_into_the_working_folder_is_refused(tmp_path, monkeypatch):
         with pytest.raises(OutputError, match="working folder"):
             agrobot.run(FIGURE8, out=out)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.txt"]
+
+
+def test_an_error_message_line_is_bounded():
+    from agrobot.orchestrator.errors import MESSAGE_LINE_LIMIT, exit_code
+    from agrobot.orchestrator.study import StudyError
+
+    code, message = exit_code(StudyError("study.base_step: " + ", ".join(f"{k * 1e-9:.9g}" for k in range(40_000))))
+    assert code == 2 and len(message) < MESSAGE_LINE_LIMIT + 200 and "characters cut" in message
+    assert message.startswith("error: study.base_step: 0, 1e-09") or "study.base_step: 0, 1e-09" in message
