@@ -153,6 +153,7 @@ print((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) * 1024)
 """
 
 
+@pytest.mark.slow
 def test_the_mcap_of_a_long_run_is_streamed_in_bounded_memory(tmp_path):
     """A signal table written as a run writes it (row groups of 2,000 rows) of 192 MB: writing its MCAP
     holds a few row groups, not the table."""
