@@ -25,7 +25,10 @@ TOY = '[study]\nname = "toy"\nstop_time = 1.0\nbase_step = 0.01\nseed = 1\n[comp
 def command(tree: Path, args: list[str], cache: Path, **kw) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}:{ROOT}", "AGROBOT_CACHE": str(cache),
            "OPENBLAS_NUM_THREADS": "1"}
-    return subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600, **kw)
+    try:
+        return subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=120, **kw)
+    except subprocess.TimeoutExpired as exc:       # a case that hangs fails; the next ones still run
+        return subprocess.CompletedProcess(args, None, exc.stdout or "", f"timed out after {exc.timeout} s")
 
 
 def agrobot(tree, cache, *args, **kw):

@@ -528,7 +528,7 @@ class FMUTypes:
         return cls
 
 
-PROJECT_TOOL = "agrobot"        # generationTool of the FMUs the project's exporters write (fmu_export)
+PROJECT_TOOL = __name__.split(".")[0]   # how the generationTool of the FMUs the project's exporters write begins
 
 
 def ours(model_description) -> bool:
