@@ -40,10 +40,9 @@ class BusRecorder(Component):
         inp("speed", "m/s", 0.0, "speed the tractor reports"),
         inp("machine_ready", "1", 1.0, "steering system ready", optional=True),
         inp("machine_lockout", "1", 0.0, "operator lockout active", optional=True),
-        par("directory", "", "", "folder for the recording (created)"),
-        par("nmea_file", "", "gps.nmea", "NMEA file name in the folder"),
-        par("can_file", "", "can.log", "CAN log name in the folder (.log candump, .asc, .blf)"),
-        par("reference_log", "", "", "also write the simulation's own measured log here (CSV; empty: no)"),
+        par("nmea_record_file", "", "", "the NMEA recording (host-stamped sentences)"),
+        par("can_record_file", "", "", "the CAN recording (.log candump, .asc, .blf by its suffix)"),
+        par("reference_record_file", "", "", "also write the simulation's own measured log here (CSV; empty: no)"),
         par("protocol", "", "agrobot", f"CAN message set: {' or '.join(PROTOCOLS)}"),
         par("dbc", "", "", "DBC (empty: the protocol's own)"),
         par("wheelbase", "m", 1.4, "isobus: curvature = tan(wheel angle) / wheelbase"),
@@ -60,7 +59,8 @@ class BusRecorder(Component):
         import can
 
         p = self.p
-        self.require(bool(p["directory"]), "directory: expected the folder to record into")
+        self.require(bool(p["nmea_record_file"]) and bool(p["can_record_file"]),
+                     "nmea_record_file, can_record_file: expected the files to record into")
         self.sentences, self.epoch = receiver_settings(self)
         self.require(p["nmea_latency"] >= 0, f"nmea_latency {p['nmea_latency']}: expected >= 0 s")
         try:
@@ -68,18 +68,16 @@ class BusRecorder(Component):
             self.tractor = messages_for(p["protocol"], p["dbc"], "tractor", p["wheelbase"])
         except (OSError, KeyError, ValueError) as exc:
             self.require(False, f"CAN messages (protocol {p['protocol']!r}): {exc}")
-        folder = Path(p["directory"])
         self.nmea = self.can = self.reference = None
         try:
-            folder.mkdir(parents=True, exist_ok=True)
-            self.nmea = open(folder / p["nmea_file"], "w", buffering=1 << 16, encoding="ascii")
-            self.can = can.Logger(str(folder / p["can_file"]))
-            if p["reference_log"]:
-                self.reference = open(p["reference_log"], "w", encoding="ascii")
+            self.nmea = open(p["nmea_record_file"], "w", buffering=1 << 16, encoding="ascii")
+            self.can = can.Logger(str(p["can_record_file"]))
+            if p["reference_record_file"]:
+                self.reference = open(p["reference_record_file"], "w", encoding="ascii")
                 self.reference.write("t,delta_cmd,delta,v,yaw_rate,x,y\n")
         except (OSError, ValueError) as exc:
             self.terminate()
-            self.require(False, f"cannot record into {folder}: {exc}")
+            self.require(False, f"cannot record into {Path(p['nmea_record_file']).parent}: {exc}")
         self.frame = LocalFrame.of(p)
         self.epoch_posix = self.epoch.timestamp()
 

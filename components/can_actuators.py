@@ -59,7 +59,8 @@ class CANActuators(Component):
         self.foreign += got.foreign
         if got.flooded:
             if not self.flooded:
-                self.event(t, f"CAN feedback flooded: {got.read} frames in one step; such steps' frames are not used")
+                self.event(t, f"CAN feedback flooded: {got.read} frames or datagrams in one step ({got.foreign} refused: "
+                                  f"another channel or host, or no frame); such steps' frames are not used")
             self.flooded += 1
         else:
             for frame in got.frames:
@@ -68,7 +69,7 @@ class CANActuators(Component):
                 self.last_feedback, self.received = t, self.received + 1
         y["feedback_age"] = t - self.last_feedback
         y["frames_received"], y["bad_frames"] = float(self.received), float(m.bad)
-        y["refused_frames"] = float(m.refused + self.foreign + getattr(self.bus, "foreign", 0))
+        y["refused_frames"] = float(m.refused + self.foreign)
         y["flooded_steps"], y["unsafe_commands"] = float(self.flooded), float(self.unsafe)
 
     def actuate(self, t: float) -> None:

@@ -65,7 +65,8 @@ class CANTractorLink(Component):
         self.refused += got.foreign
         if got.flooded:
             if not self.flooded:
-                self.event(t, f"CAN commands flooded: {got.read} frames in one step; such steps accept no command")
+                self.event(t, f"CAN commands flooded: {got.read} frames or datagrams in one step ({got.foreign} refused: "
+                                  f"another channel or host, or no frame); such steps accept no command")
             self.flooded += 1
         for frame in ([] if got.flooded else got.frames):
             if not self.within_limits(frame):
@@ -97,7 +98,7 @@ class CANTractorLink(Component):
             frames = self.messages.feedback(report[0], report[1], max(0.0, report[2]), ready=ready, lockout=lockout,
                                             dt=dt)
             send(self.bus, frames, self.messages.extended)
-        y["refused_commands"] = float(self.refused + self.messages.refused + getattr(self.bus, "foreign", 0))
+        y["refused_commands"] = float(self.refused + self.messages.refused)
         y["flooded_steps"] = float(self.flooded)
 
     def terminate(self) -> None:

@@ -87,9 +87,6 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .engine import RunError
-    from .runner import AnalysisError, run_study
-
     chosen = [(o, getattr(args, o.flag.lstrip("-").replace("-", "_"), None)) for o in registry().run_options]
     chosen = [(o, v) for o, v in chosen if v is not None]
     if not chosen:
@@ -101,6 +98,15 @@ def _run(args: argparse.Namespace) -> int:
         if args.set or _isolated(args):
             study = study.with_overrides(args.set + _isolated(args))
     mcap = _mcap_path(args, study)
+    with _mcap_lock(args, mcap):
+        return _run_study(args, study, mcap, tuple(Path(value) for _, value in chosen))
+
+
+def _run_study(args: argparse.Namespace, study, mcap: Path | None, named: tuple[Path, ...]) -> int:
+    """The run of ``_run``'s study, its report and its MCAP."""
+    from .engine import RunError
+    from .runner import AnalysisError, run_study
+
     live = _live_view(study, args.live, args.live_wait, args.live_viewers) if args.live else None
     engine = args.engine
     if live is not None and engine == "auto":
@@ -110,7 +116,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,
                            progress=not args.no_progress, engine=engine, observers=[live] if live else [],
-                           named=tuple(Path(value) for _, value in chosen))
+                           named=named)
     except AnalysisError as exc:
         print(f"error: {exc}; the signals are in {getattr(exc, 'where', args.out)}{getattr(exc, 'kept', '')}",
               file=sys.stderr)
@@ -154,27 +160,39 @@ def _live_view(study, where: str, wait: float, viewers: int):
 
 
 def _mcap_path(args: argparse.Namespace, study) -> Path | None:
-    """Where ``--mcap`` writes: OUT/run.mcap by default (or with the study's ``[output] mcap = true``), else the
-    file named (checked before the run)."""
+    """Where ``--mcap`` writes: OUT/run.mcap by default (or with the study's ``[output] mcap = true``: it goes
+    and is replaced with the folder), else the file named, checked before the run under the rule of every
+    written file (orchestrator.output: an existing file only with --overwrite, an input never)."""
     from .mcap_out import check_mcap_path, wants_mcap
+    from .output import study_inputs
 
     if args.mcap is None:
         return None if not wants_mcap(study) else args.out / "run.mcap"
     if args.mcap == "":
         return args.out / "run.mcap"
-    return check_mcap_path(Path(args.mcap))
+    return check_mcap_path(Path(args.mcap), args.overwrite, study_inputs(study))
+
+
+def _mcap_lock(args: argparse.Namespace, path: Path | None):
+    """One writer per ``--mcap FILE`` from before the run until the file is in place (orchestrator.output);
+    OUT/run.mcap is under --out's own lock and staging."""
+    from .output import OutputLock
+
+    if path is None or args.mcap in (None, ""):
+        return contextlib.nullcontext()
+    return OutputLock(path, "--mcap")
 
 
 def _write_mcap(study, result, path: Path) -> int:
-    """The run's MCAP after its other results are in place: a failure here loses none of them."""
+    """The run's MCAP after its other results are in place: a failure here loses none of them. The signals
+    are read back from the result's file block by block (memory flat in the run's length)."""
     from .mcap_out import write_study_mcap
+    from .output import OutputError
 
     try:
-        frame = result.frame.to_pandas() if hasattr(result.frame, "to_pandas") else result.frame
-        _, note = write_study_mcap(study, frame, path)
-    except OSError as exc:
-        print(f"error: --mcap {path}: cannot be written ({exc}); the run's other results are in place",
-              file=sys.stderr)
+        _, note = write_study_mcap(study, result.frame, path)
+    except OutputError as exc:
+        print(f"error: {exc}; the run's other results are in place", file=sys.stderr)
         return 2
     print(f"MCAP written to {path} (open it in Foxglove or PlotJuggler; topics: docs/foxglove.md)"
           + (f"; {note}" if note else ""))

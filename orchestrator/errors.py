@@ -117,9 +117,24 @@ EXIT_TABLE: list[tuple[type[BaseException], int, str]] = [
 ]
 
 
+MESSAGE_LINE_LIMIT = 2000     # characters of one line of an error message; a longer line is cut in its middle
+
+
+def bounded(message: str, limit: int = MESSAGE_LINE_LIMIT) -> str:
+    """``message`` with every line longer than ``limit`` cut in its middle, saying how much was cut
+    (a list of every value a nested study offered is no message)."""
+    def cut(line: str) -> str:
+        if len(line) <= limit:
+            return line
+        keep = limit // 2
+        return f"{line[:keep]} [... {len(line) - 2 * keep} characters cut ...] {line[-keep:]}"
+    return "\n".join(cut(line) for line in message.split("\n"))
+
+
 def exit_code(exc: BaseException) -> tuple[int, str] | None:
-    """(exit code, message) for a known error kind, None for a bug (let it raise)."""
+    """(exit code, message) for a known error kind, None for a bug (let it raise); the message's
+    lines bounded (``bounded``)."""
     for kind, code, template in EXIT_TABLE:
         if isinstance(exc, kind):
-            return getattr(exc, "exit_status", code), template.format(exc=exc)
+            return getattr(exc, "exit_status", code), bounded(template.format(exc=exc))
     return None

@@ -36,6 +36,7 @@ import numpy as np
 
 from .component import Component, ComponentError, EndRun, Variable
 from .fmu_description import FMUError, base_units, inspect_fmu, variable_unit
+from .fatal_calls import named, watch
 from .fmu_process import RemoteSlave
 from .fmu_unpack import fmu_entries, remove as remove_unpacked, unpack
 from .study import Study, StudyError
@@ -171,6 +172,7 @@ class FMUComponent(Component):
 
     isolate: bool = False               # in a child process (orchestrator.fmu_process)
     call_timeout: float = 60.0          # s, for an isolated FMU's calls
+    in_process_note: str = ""           # a foreign FMU the study keeps in this process: where it said so
 
     def __init__(self, name, parameters=None, rng=None) -> None:
         super().__init__(name, parameters, rng)
@@ -199,13 +201,21 @@ class FMUComponent(Component):
             if self.isolate:
                 print(f"note: {self.name}: a model-exchange FMU runs in this process (isolate_fmus isolates "
                       f"co-simulation FMUs)", file=sys.stderr)
+            elif self.in_process_note:
+                print(f"note: {self.name}: FMU {self.fmu_path.name} runs in this process, for speed "
+                      f"({self.in_process_note}): a crash in it ends the run, named on stderr", file=sys.stderr)
+            watch()
             self._slave = cls(**kwargs)
         self._slave.instantiate()
         self.instantiations += 1
 
+    def _label(self, what: str) -> str:
+        """The name a fatal signal's dump gives a call into this FMU (orchestrator.fatal_calls)."""
+        return f"FMU component '{self.name}' ({self.fmu_path.name}): {what}"
+
     def _call(self, what: str, fn, *args):
         try:
-            return fn(*args)
+            return fn(*args) if self.isolate else named(self._label(what), fn, *args)
         except EndRun:
             raise
         except Exception as exc:     # fmpy raises FMICallException on a non-OK status
@@ -326,7 +336,10 @@ class FMUComponent(Component):
         from fmpy.fmi2 import fmi2Discard
 
         try:
-            self._slave.doStep(t, dt)
+            if self.isolate:
+                self._slave.doStep(t, dt)
+            else:
+                named(self._label("doStep"), self._slave.doStep, t, dt)
         except FMICallException as exc:
             if exc.status == fmi2Discard and self._terminated2():
                 raise EndRun(self.name, f"fmi2DoStep from t = {t:.6g} s returned fmi2Discard with fmi2Terminated") from None
@@ -353,8 +366,8 @@ class FMUComponent(Component):
                                      f"({FMICallException(*failed)})")
         else:
             try:
-                s.fmi3DoStep(s.component, t, dt, fmi3Boolean(True), ctypes.byref(event), ctypes.byref(terminate),
-                             ctypes.byref(early), ctypes.byref(last))
+                named(self._label("doStep"), s.fmi3DoStep, s.component, t, dt, fmi3Boolean(True),
+                      ctypes.byref(event), ctypes.byref(terminate), ctypes.byref(early), ctypes.byref(last))
             except FMICallException as exc:
                 if not terminate.value:
                     raise ComponentError(f"{self.name}: FMU {self.fmu_path.name}: doStep at t = {t:.6g} s failed ({exc})") from None
@@ -504,6 +517,20 @@ class FMUTypes:
             cls = fmu_component_class(study.file_path(spec.type))
         except FMUError as exc:
             raise StudyError(f"{study.where}: components.{name}.type: {exc}") from None
-        if study.study.isolate_fmus:
+        isolate = study.study.isolate_fmus
+        foreign = not ours(cls.model_description)
+        if isolate is None:          # the default: a co-simulation FMU from outside the project in its own process
+            isolate = foreign and not cls.model_exchange
+        if isolate:
             cls = type(cls.__name__, (cls,), {"isolate": True, "call_timeout": study.study.fmu_timeout})
+        elif foreign:
+            cls = type(cls.__name__, (cls,), {"in_process_note": f"{study.origin('study.isolate_fmus')} = false"})
         return cls
+
+
+PROJECT_TOOL = __name__.split(".")[0]   # how the generationTool of the FMUs the project's exporters write begins
+
+
+def ours(model_description) -> bool:
+    """An FMU the project's own exporters generated (its C is the project's, compiled here)."""
+    return str(getattr(model_description, "generationTool", "") or "").startswith(PROJECT_TOOL)

@@ -13,6 +13,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from .component import Component
 from .errors import did_you_mean
+from .parameter_ranges import range_refusal
 from .study import Study, StudyError
 from .units import FILE_UNIT, UnitError, to_si
 
@@ -183,6 +184,9 @@ def resolved_parameters(cls: type[Component], name: str, values: dict[str, Any],
             raise StudyError(f"{where}: got {value!r}, expected a number"
                              + (f" in {params[key].unit} (or a string like '1.5 {params[key].unit}')"
                                 if params[key].unit not in ("", "1") else ""))
+        why = range_refusal(key, params[key].unit, start, converted[key])
+        if why is not None:
+            raise StudyError(f"{where}: {why}")
     return converted
 
 

@@ -78,16 +78,16 @@ def check_inputs(out: Path, inputs: Iterable[Path | str | None], flag: str = "--
             raise OutputError(f"{flag} {out}: lies inside the input {given}; choose a {flag} outside it")
 
 
-def _check_parent(out: Path) -> None:
+def _check_parent(out: Path, flag: str = "--out") -> None:
     base = _nearest_existing(out.parent.resolve())
     if not base.is_dir():
-        raise OutputError(f"--out {out}: cannot write there ({base} is not a folder)")
+        raise OutputError(f"{flag} {out}: cannot write there ({base} is not a folder)")
     if not os.access(base, os.W_OK | os.X_OK):
-        raise OutputError(f"--out {out}: cannot create it, {base} is not writable")
+        raise OutputError(f"{flag} {out}: cannot create it, {base} is not writable")
     try:                    # permissions are not the whole story (/proc, a read-only mount, a full disk)
         os.rmdir(tempfile.mkdtemp(prefix=".probe.", dir=base))
     except OSError as exc:
-        raise OutputError(f"--out {out}: cannot create folders in {base}: {exc.strerror or exc}") from None
+        raise OutputError(f"{flag} {out}: cannot create folders in {base}: {exc.strerror or exc}") from None
 
 
 def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] = MARKERS, what: str = "run",
@@ -97,6 +97,10 @@ def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] 
     ``resume``: such a folder is written into again without ``--overwrite`` (a sweep resumes)."""
     out = Path(out)
     check_inputs(out, inputs)
+    here = Path.cwd().resolve()
+    if out.resolve() == here or out.resolve() in here.parents:
+        raise OutputError(f"--out {str(out)!r}: is the working folder{'' if out.resolve() == here else ' or holds it'}; a "
+                          f"result folder is replaced whole when the command ends: name a new folder, e.g. --out results")
     if out.exists() and not out.is_dir():
         raise OutputError(f"--out {out}: is a file, not a folder")
     if out.is_dir() and any(out.iterdir()):
@@ -113,29 +117,30 @@ def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] 
 
 
 def check_output_file(out: Path, overwrite: bool = False, inputs: Iterable[Path | str | None] = (),
-                      suffixes: tuple[str, ...] = ()) -> None:
-    """The rule for a command that writes one file: a new file is written, an existing one is
-    replaced only with ``--overwrite``, an input never."""
+                      suffixes: tuple[str, ...] = (), flag: str = "--out") -> None:
+    """The rule for every single file a command writes (``--out``, ``--mcap``, a recording): a new
+    file is written, an existing one is replaced only with ``--overwrite``, an input never.
+    ``flag``: the option (or study key) that named the file, for the message."""
     out = Path(out)
-    if suffixes and out.suffix not in suffixes:
-        raise OutputError(f"--out {out}: expected a path ending in {' or '.join(suffixes)}")
-    check_inputs(out, inputs)
+    if suffixes and out.suffix.lower() not in suffixes:
+        raise OutputError(f"{flag} {out}: expected a path ending in {' or '.join(suffixes)}")
+    check_inputs(out, inputs, flag)
     if out.is_dir():
-        raise OutputError(f"--out {out}: is a folder, expected the {out.suffix or ''} file to write".replace("  ", " "))
+        raise OutputError(f"{flag} {out}: is a folder, expected the {out.suffix or ''} file to write".replace("  ", " "))
     if out.exists() and not overwrite:
-        raise OutputError(f"--out {out}: exists; pass --overwrite to replace it, or choose another name")
+        raise OutputError(f"{flag} {out}: exists; pass --overwrite to replace it, or choose another name")
     if out.exists() and not os.access(out.parent, os.W_OK | os.X_OK):
-        raise OutputError(f"--out {out}: its folder is not writable")
-    _check_parent(out)
+        raise OutputError(f"{flag} {out}: its folder is not writable")
+    _check_parent(out, flag)
 
 
 def disk_full(exc: BaseException) -> bool:
     return isinstance(exc, OSError) and exc.errno in DISK_FULL
 
 
-def disk_full_error(out: Path, exc: OSError, kept: str) -> OutputError:
+def disk_full_error(out: Path, exc: OSError, kept: str, flag: str = "--out") -> OutputError:
     where = f" while writing {Path(exc.filename).name}" if getattr(exc, "filename", None) else ""
-    return OutputError(f"--out {out}: the disk is full ({exc.strerror or os.strerror(exc.errno)}){where}; "
+    return OutputError(f"{flag} {out}: the disk is full ({exc.strerror or os.strerror(exc.errno)}){where}; "
                        f"nothing was written to {out} ({kept}); free some space and run the command again")
 
 
@@ -144,8 +149,9 @@ class OutputLock:
     file before it lets go; whoever locks a file that was removed meanwhile tries again, so two
     writers never hold locks on two files of one name."""
 
-    def __init__(self, out: Path) -> None:
+    def __init__(self, out: Path, flag: str = "--out") -> None:
         self.out = Path(out)
+        self.flag = flag
         self.path = self.out.parent / f".{self.out.name}.lock"
         self._fd: int | None = None
 
@@ -153,19 +159,19 @@ class OutputLock:
         try:
             self.out.parent.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
-            raise OutputError(f"--out {self.out}: cannot create {self.out.parent}: {exc.strerror or exc}") from None
+            raise OutputError(f"{self.flag} {self.out}: cannot create {self.out.parent}: {exc.strerror or exc}") from None
         for _ in range(100):
             try:
                 fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o666 & ~UMASK)
             except OSError as exc:
-                raise OutputError(f"--out {self.out}: cannot create its lock {self.path}: {exc.strerror or exc}") from None
+                raise OutputError(f"{self.flag} {self.out}: cannot create its lock {self.path}: {exc.strerror or exc}") from None
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
                 holder = os.pread(fd, 32, 0).decode(errors="replace").strip()
                 os.close(fd)
-                raise OutputError(f"--out {self.out}: another run or command{f' (process {holder})' if holder else ''} "
-                                  f"is writing to it; wait for it or choose another folder") from None
+                raise OutputError(f"{self.flag} {self.out}: another run or command{f' (process {holder})' if holder else ''} "
+                                  f"is writing to it; wait for it or choose another name") from None
             try:
                 same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
             except FileNotFoundError:
@@ -176,7 +182,7 @@ class OutputLock:
                 self._fd = fd
                 return self
             os.close(fd)                 # its holder removed it while we waited: take the new one
-        raise OutputError(f"--out {self.out}: could not take its lock {self.path}")
+        raise OutputError(f"{self.flag} {self.out}: could not take its lock {self.path}")
 
     def release(self) -> None:
         if self._fd is None:
@@ -324,10 +330,11 @@ class ResultFile:
     the block, a full disk named."""
 
     def __init__(self, out: Path, overwrite: bool = False, inputs: Iterable[Path | str | None] = (),
-                 suffixes: tuple[str, ...] = ()) -> None:
+                 suffixes: tuple[str, ...] = (), flag: str = "--out") -> None:
         self.out = Path(out)
-        check_output_file(self.out, overwrite, inputs, suffixes)
-        self._lock = OutputLock(self.out)
+        self.flag = flag
+        check_output_file(self.out, overwrite, inputs, suffixes, flag)
+        self._lock = OutputLock(self.out, flag)
 
     def __enter__(self) -> "ResultFile":
         self._lock.acquire()
@@ -336,7 +343,7 @@ class ResultFile:
     def __exit__(self, kind, exc, tb) -> None:
         self._lock.release()
         if exc is not None and disk_full(exc):
-            raise disk_full_error(self.out, exc, "an earlier file of that name is as it was") from None
+            raise disk_full_error(self.out, exc, "an earlier file of that name is as it was", self.flag) from None
 
 
 def study_inputs(study) -> list[Path]:
@@ -358,22 +365,61 @@ def output_parameters(study) -> list[tuple[str, str, Path]]:
     return found
 
 
+class WrittenAside:
+    """The files a run writes outside ``--out`` (output parameters), each under a unique temporary name
+    beside its target while the run goes; ``finish(keep)`` renames each over its target (the recording
+    up to where the run stopped) or, ``keep`` false (a full disk), removes them all."""
+
+    def __init__(self) -> None:
+        self.files: list[tuple[Path, Path]] = []     # (temporary, target)
+
+    def add(self, target: Path) -> Path:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".writing{target.suffix}", dir=target.parent)
+        os.close(fd)
+        self.files.append((Path(tmp), target))
+        return Path(tmp)
+
+    def finish(self, keep: bool = True) -> list[Path]:
+        done = []
+        with critical():
+            for tmp, target in self.files:
+                if keep and tmp.exists():
+                    os.chmod(tmp, 0o666 & ~UMASK)
+                    os.replace(tmp, target)
+                    done.append(target)
+                else:
+                    tmp.unlink(missing_ok=True)
+        self.files = []
+        return done
+
+
 def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Path] = (),
-                            inputs: Iterable[Path] = ()):
-    """The study with its output parameters checked against ``--out``: a path inside ``--out`` is
-    written into the staging folder (and so moves with the result); a path outside it only when
-    the user named it on the command line (``--set``, or one of ``named``, a file or a folder that
-    holds it); an input never."""
+                            inputs: Iterable[Path] = (), overwrite: bool = False):
+    """(the study with its output parameters placed, a WrittenAside): a path inside ``--out`` is
+    written into the staging folder (and so moves with the result); a path outside it only when the
+    user named it on the command line (``--set``, or one of ``named``, a file or a folder that holds
+    it), under the rule of every written file (check_output_file: an existing file replaced only with
+    ``overwrite``), to a unique temporary name renamed over it when the run ends; an input never."""
     out = Path(out).resolve()
     named = {Path(p).resolve() for p in named}
-    moved = {}
-    for key, field, path in output_parameters(study):
-        full = path.resolve()
-        check_inputs(full, inputs, flag=f"{study.origin(field)}:")
-        if _inside(full, out):
-            moved[key] = str(Path(staging) / full.relative_to(out))
-            Path(moved[key]).parent.mkdir(parents=True, exist_ok=True)
-        elif not any(_inside(full, n) for n in named) and not study.origin(field).startswith("--set"):
-            raise OutputError(f"{study.origin(field)} = {str(path)!r}: writes outside --out {out}; name it on the "
-                              f"command line (--set {key}={path}) or give a path inside --out")
-    return study.with_values(moved) if moved else study
+    moved: dict[str, str] = {}
+    aside = WrittenAside()
+    try:
+        for key, field, path in output_parameters(study):
+            full = path.resolve()
+            flag = f"{study.origin(field)}:"
+            check_inputs(full, inputs, flag=flag)
+            if _inside(full, out):
+                moved[key] = str(Path(staging) / full.relative_to(out))
+                Path(moved[key]).parent.mkdir(parents=True, exist_ok=True)
+                continue
+            if not any(_inside(full, n) for n in named) and not study.origin(field).startswith("--set"):
+                raise OutputError(f"{study.origin(field)} = {str(path)!r}: writes outside --out {out}; name it on "
+                                  f"the command line (--set {key}={path}) or give a path inside --out")
+            check_output_file(full, overwrite, inputs, flag=flag)
+            full.parent.mkdir(parents=True, exist_ok=True)
+            moved[key] = str(aside.add(full))
+    except BaseException:
+        aside.finish(keep=False)
+        raise
+    return (study.with_values(moved) if moved else study), aside

@@ -283,15 +283,20 @@ def run_study(study: Study, out_dir: Path | None, plots: bool = True, overwrite:
     simulation = choose_engine(system, engine)
     say_held_inputs(system)
     with folder:
-        placed = place_output_parameters(study, Path(out_dir), folder.tmp, named, inputs)
-        if placed is not study:
-            study, system = placed, build_system(resolve(placed))
+        placed, aside = place_output_parameters(study, Path(out_dir), folder.tmp, named, inputs, overwrite)
         try:
+            if placed is not study:
+                study, system = placed, build_system(resolve(placed))
             outcome = record_run(study, system, folder.tmp, analysis, plots, progress, observers, simulation)
         except KeyboardInterrupt as exc:        # a second signal while the first one's results were saved
             if not (folder.tmp / "metrics.json").exists():
+                aside.finish(keep=False)
                 raise
             outcome = Outcome("interrupted", json.loads((folder.tmp / "metrics.json").read_text()), exc, [])
+        except BaseException:
+            aside.finish(keep=False)
+            raise
+        aside.finish(keep=not disk_full(getattr(outcome.error, "__cause__", None)))
         tmp = folder.tmp
         where = folder.commit(outcome.status)
     kept = _kept(Path(out_dir), where)

@@ -37,7 +37,8 @@ class StudySettings(BaseModel):
     realtime: bool = False           # pace the base step against the wall clock
     realtime_tolerance: float = Field(default=0.002, ge=0)   # s: lateness that counts as a deadline miss
     bounds: dict[str, str] = {}      # key figure -> "< 0.30": judged after the run (orchestrator.key_figures)
-    isolate_fmus: bool = False       # each FMU in a child process: a crash or a hang is a named error
+    isolate_fmus: bool | None = None   # each co-simulation FMU in a child process (a crash or a hang a named error);
+    #                                    default: those from outside the project; false: none (faster, said when run)
     fmu_timeout: float = Field(default=60.0, gt=0, allow_inf_nan=False)   # s an isolated FMU's call may take
     allow_unconnected: list[str] = []   # "component.input"s that may stay unconnected: they hold their start value
 
@@ -171,6 +172,9 @@ class SubsystemSpec(BaseModel):
     _names = field_validator("components")(classmethod(lambda cls, v: check_component_names(v)))
 
 
+MAX_SWEEP_POINTS = 1_000_000     # a sweep's points at most: its table and folders are held and listed
+
+
 class SweepRange(BaseModel):
     """Inclusive range: ``{start, stop, step}`` or ``{start, stop, num}``."""
 
@@ -189,6 +193,12 @@ class SweepRange(BaseModel):
         if self.step is not None and (self.step == 0 or (self.stop - self.start) * self.step < 0):
             raise ValueError(f"empty range: from {self.start} to {self.stop} by {self.step}")
         return self
+
+    def count(self) -> float:
+        """How many values (computed, not listed: a range of 10^12 values is refused by its count)."""
+        if self.num is not None:
+            return float(self.num)
+        return math.floor((self.stop - self.start) / self.step + 1e-9) + 1.0
 
     def values(self) -> list[float]:
         if self.num is not None:
@@ -231,7 +241,29 @@ class Sweep(BaseModel):
         elif draws or self.samples is not None:
             raise ValueError(f"'samples' and {{uniform = [a, b]}} ({', '.join(draws) or 'none here'}) need "
                              f"mode = 'monte_carlo'")
+        points = self.points()
+        if points > MAX_SWEEP_POINTS:
+            raise ValueError(f"{points:.3g} points ({self._how()}), more than the {MAX_SWEEP_POINTS:,} a sweep may hold "
+                             f"(each point is a row of the sweep's table and a folder); split the sweep")
         return self
+
+    def _counts(self) -> list[float]:
+        return [v.count() if isinstance(v, SweepRange) else 1.0 if isinstance(v, Uniform) else float(len(v))
+                for v in self.parameters.values()]
+
+    def points(self) -> float:
+        """How many points the sweep has (before any is made): samples x seeds, the grid's product or
+        the zip's length."""
+        seeds = float(len(self.seeds)) if self.seeds else 1.0
+        if self.mode == "monte_carlo":
+            return float(self.samples or 0)            # each draw has its own seed
+        counts = self._counts()
+        return (math.prod(counts) if self.mode == "grid" else min(counts, default=0.0)) * seeds
+
+    def _how(self) -> str:
+        if self.mode == "monte_carlo":
+            return f"samples = {self.samples}"
+        return " x ".join(f"{k}: {c:.3g}" for k, c in zip(self.parameters, self._counts()))
 
     @field_validator("parameters")
     @classmethod

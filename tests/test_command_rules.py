@@ -248,8 +248,9 @@ def test_an_output_parameter_outside_out_needs_the_command_line(tmp_path, capsys
     code, _, err = _cli(["run", study, "--out", tmp_path / "o1"], capsys)
     assert code == 2 and "writes outside --out" in err and "record_file" in err, err
     assert victim.read_text() == "keep me\n"
-    code, _, err = _cli(["run", study, "--out", tmp_path / "o2", "--set", f"r.record_file={victim}"], capsys)
-    assert code == 0 and victim.read_text().startswith("keep me\n0.0"), err
+    code, _, err = _cli(["run", study, "--out", tmp_path / "o2", "--set", f"r.record_file={victim}", "--overwrite"],
+                        capsys)
+    assert code == 0 and victim.read_text().startswith("0.0"), err      # a written file: replaced, with --overwrite
     inside = tmp_path / "o3" / "nmea" / "rec.txt"          # inside --out: goes with the result
     study = _study(tmp_path, extra.format(inside), "rec3.toml")
     code, _, err = _cli(["run", study, "--out", tmp_path / "o3"], capsys)

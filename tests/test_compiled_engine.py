@@ -107,7 +107,8 @@ def test_a_library_of_another_shape_is_never_used(cache, monkeypatch):
     a, _ = compiled_run("figure8.toml", QUIET + ["study.stop_time=1"])
     wrong = "f" * 32
     (cache / "compiled" / wrong).mkdir()
-    (cache / "compiled" / wrong / "libloop.so").write_bytes((cache / "compiled" / a.key / "libloop.so").read_bytes())
+    for name in ("libloop.so", "libloop.sha256"):       # a whole cached library (its digest too), of another shape
+        (cache / "compiled" / wrong / name).write_bytes((cache / "compiled" / a.key / name).read_bytes())
     monkeypatch.setattr(toolchain, "shape_key", lambda *args: wrong)
     with pytest.raises(CompileError, match=f"answers another shape \\({a.key}\\)"):
         compiled_run("figure8.toml", QUIET + ["study.stop_time=1", "tractor.model=rlfr"])

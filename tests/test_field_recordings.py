@@ -29,7 +29,7 @@ def record(folder: Path, stop: float, values: dict | None = None, overrides: tup
     study = record_study(study, folder)
     if values:
         study = study.with_values(values)
-    run_study(study, folder.parent / (folder.name + "_run"), plots=False, overwrite=True)
+    run_study(study, folder.parent / (folder.name + "_run"), plots=False, overwrite=True, named=(folder,))
     return folder
 
 
@@ -374,7 +374,7 @@ def test_identify_from_a_recorded_multisine_experiment_matches_the_simulation_lo
     study = study.with_connections(remove=["plan.speed_cmd -> tractor.speed_cmd"]).with_component(
         "tractor", inputs={"speed_cmd": 2.0})
     folder = tmp_path / "multisine"
-    run_study(record_study(study, folder), tmp_path / "run", plots=False)
+    run_study(record_study(study, folder), tmp_path / "run", plots=False, named=(folder,))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         raw = identify_log(folder, None, period=50.0, models=["second_order", "bicycle"])

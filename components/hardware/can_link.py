@@ -49,13 +49,17 @@ def _is_local(address: str, known: dict[str, bool]) -> bool:
     return known[address]
 
 
+NOT_A_FRAME = object()     # what a bus's recv gives for a datagram that is no frame for this side (read, refused)
+
+
 class LocalSenderBus:
     """A python-can udp_multicast bus that takes frames from this host only: datagrams are read
-    from the bus's own socket (``fileno``) with their sender, those from another host refused
-    and counted (``foreign``), the rest unpacked as python-can packs them (msgpack)."""
+    from the bus's own socket (``fileno``) with their sender, one per ``recv``; one from another
+    host or that does not unpack (python-can packs frames with msgpack) is NOT_A_FRAME, so that a
+    flood of junk uses up the step's allowance (``drain``) as a flood of frames does."""
 
     def __init__(self, bus) -> None:
-        self.bus, self.foreign, self._known = bus, 0, {}
+        self.bus, self._known = bus, {}
         self.sock = socket.socket(fileno=os.dup(bus.fileno()))     # the same socket, its sender visible
         self.bound = self.sock.getsockname()
 
@@ -65,16 +69,15 @@ class LocalSenderBus:
     def recv(self, timeout=None):
         from can.interfaces.udp_multicast.utils import unpack_message
 
-        while select.select([self.sock], [], [], timeout or 0.0)[0]:
-            data, sender = self.sock.recvfrom(4096)
-            if not _is_local(sender[0], self._known):
-                self.foreign += 1
-                continue
-            try:
-                return unpack_message(data, replace={"timestamp": time.time()}, check=True)
-            except Exception:                  # noqa: BLE001 - an unreadable datagram is not a frame
-                self.foreign += 1
-        return None
+        if not select.select([self.sock], [], [], timeout or 0.0)[0]:
+            return None
+        data, sender = self.sock.recvfrom(4096)
+        if not _is_local(sender[0], self._known):
+            return NOT_A_FRAME
+        try:
+            return unpack_message(data, replace={"timestamp": time.time()}, check=True)
+        except Exception:                      # noqa: BLE001 - an unreadable datagram is not a frame
+            return NOT_A_FRAME
 
     def shutdown(self) -> None:
         self.sock.close()
@@ -118,13 +121,9 @@ class RecordingBus:
         self.bus.send(msg, timeout)
         self.log(msg)
 
-    @property
-    def foreign(self) -> int:
-        return getattr(self.bus, "foreign", 0)
-
     def recv(self, timeout=None):
         msg = self.bus.recv(timeout)
-        if msg is not None:
+        if msg is not None and msg is not NOT_A_FRAME:
             self.log(msg)
         return msg
 
@@ -178,8 +177,9 @@ def binding(interface: str, channel: str, port: int = 0, bus=None) -> str:
 
 
 class Drained:
-    """What one bounded read gave: decoded frames in order, the frames read, whether the step's
-    allowance was used up (``flooded``) and the frames refused for their channel (``foreign``)."""
+    """What one bounded read gave: decoded frames in order, the frames and datagrams read, whether
+    the step's allowance was used up (``flooded``) and what was read but refused (``foreign``: a
+    frame of another channel, a datagram of another host or that is no frame)."""
 
     def __init__(self) -> None:
         self.frames: list[dict] = []
@@ -188,15 +188,16 @@ class Drained:
 
 
 def drain(bus, read, channel=None, max_frames: int = 64) -> Drained:
-    """At most ``max_frames`` frames waiting on the bus, those ``read`` (a message set's reader)
-    decodes kept; a frame python-can reports on another channel than ``channel`` is refused."""
+    """At most ``max_frames`` frames or datagrams waiting on the bus (what is no frame counts against
+    the allowance as a frame does), those ``read`` (a message set's reader) decodes kept; a frame
+    python-can reports on another channel than ``channel``, and NOT_A_FRAME, are refused."""
     got = Drained()
     while got.read < max_frames:
         msg = bus.recv(timeout=0.0)
         if msg is None:
             return got
         got.read += 1
-        if channel is not None and msg.channel is not None and str(msg.channel) != str(channel):
+        if msg is NOT_A_FRAME or (channel is not None and msg.channel is not None and str(msg.channel) != str(channel)):
             got.foreign += 1
             continue
         frame = read(msg)

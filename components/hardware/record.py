@@ -73,6 +73,7 @@ def record_study(study, value):
         raise StudyError(f"{study.where}: --record: the study already has a component named {RECORDER!r}")
     folder.mkdir(parents=True, exist_ok=True)
     step = study.components[tractor].step if tractor in study.components else None
-    params = {"directory": str(folder), "reference_log": str(folder / "simulation_log.csv"), **FIELD_DATUM}
+    params = {"nmea_record_file": str(folder / "gps.nmea"), "can_record_file": str(folder / "can.log"),
+              "reference_record_file": str(folder / "simulation_log.csv"), **FIELD_DATUM}
     return study.with_component(RECORDER, type=RECORDER, step=max(0.05, step or 0.05), parameters=params) \
         .with_connections(add=add)

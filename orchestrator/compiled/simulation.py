@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..signal_recorder import RecordedSignals, SignalRecorder
 from .cores import CCore, NoCCore, c_core
 from .generate import component_unit, layout, loop_unit
-from .toolchain import CompilerMissing, library
+from .toolchain import CompilerMissing, UntrustedCache, library
 
 ENGINES = ("python", "compiled", "auto")
 
@@ -66,7 +66,7 @@ def select_engine(system: System, engine: str):
     if not why:
         try:
             prepared = CompiledSimulation.prepare(system, cores)
-        except CompilerMissing as exc:
+        except (CompilerMissing, UntrustedCache) as exc:     # auto: the Python engine, saying why
             if engine == "compiled":
                 raise
             why = str(exc)

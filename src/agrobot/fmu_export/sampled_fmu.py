@@ -75,6 +75,10 @@ def _units(model: SampledModel) -> list[str]:
     return sorted({u for _, _, u, _ in model.parameters} | {u for _, u, _ in model.inputs + model.outputs} | {"s"})
 
 
+INPUT_BOUND = 1e9       # |input| at most, in SI: the declared range; sampled_instance.c refuses a value beyond it
+INPUT_RANGE = f' min="{-INPUT_BOUND!r}" max="{INPUT_BOUND!r}"'
+
+
 def _declare(model: SampledModel, variable) -> None:
     """Call ``variable(name, vr, causality, variability, unit, description, start, initial)`` for
     every parameter (tunable or fixed, exact), input and output (discrete, calculated) of the model."""
@@ -111,7 +115,8 @@ def _fmi2_description(model: SampledModel) -> str:
         attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
         if initial:
             attrs += f' initial="{initial}"'
-        real = f"<Real unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "") + "/>"
+        real = f"<Real unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "") \
+            + (INPUT_RANGE if causality == "input" else "") + "/>"
         rows.append(f"    <ScalarVariable {attrs} description={quoteattr(description)}>{real}</ScalarVariable>")
 
     _declare(model, variable)
@@ -152,7 +157,8 @@ def _fmi3_description(model: SampledModel) -> str:
         attrs = f'name={quoteattr(name)} valueReference="{vr}" causality="{causality}" variability="{variability}"'
         if initial:
             attrs += f' initial="{initial}"'
-        attrs += f" unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "")
+        attrs += f" unit={quoteattr(unit)}" + (f' start="{float(start)!r}"' if start is not None else "") \
+            + (INPUT_RANGE if causality == "input" else "")
         rows.append(f"    <Float64 {attrs} description={quoteattr(description)}/>")
 
     rows.append(f'    <Float64 name="time" valueReference="{VR_TIME}" causality="independent" '

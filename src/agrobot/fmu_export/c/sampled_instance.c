@@ -24,6 +24,7 @@
 #define VR_TIME 999u            /* FMI 3.0's independent variable */
 #define VR_INPUT0 1000u
 #define VR_OUTPUT0 2000u
+#define SI_INPUT_BOUND 1e9      /* |input| at most (SI): the declared min/max of every input (sampled_fmu.INPUT_BOUND) */
 
 typedef enum { MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEP, MODE_TERMINATED } Mode;
 typedef enum { SI_OK = 0, SI_ERROR = 3 } SIStatus;        /* fmi2/fmi3 OK and Error have these values */
@@ -192,6 +193,10 @@ static SIStatus si_set(SampledInstance *s, const unsigned vr[], size_t n, const 
         }
         if (!isfinite(v[i])) {
             si_log(s, "%s = %g refused: the value must be finite", what, v[i]);
+            return SI_ERROR;
+        }
+        if (r >= VR_INPUT0 && fabs(v[i]) > SI_INPUT_BOUND) {      /* the declared range: the state is never poisoned */
+            si_log(s, "%s = %g refused: beyond its declared range [-%g, %g]", what, v[i], SI_INPUT_BOUND, SI_INPUT_BOUND);
             return SI_ERROR;
         }
         if (*slot != v[i]) s->pending = 0;
