@@ -23,7 +23,8 @@ def test_an_input_beyond_the_declared_range_is_refused_and_the_state_kept(tmp_pa
     from agrobot.fmu_export.component_fmus import export_component
 
     system = build_system(resolve(Study.load(ROOT / "studies/figure8.toml", ["study.stop_time=5"])))
-    fmu = export_component(system, "tractor", tmp_path / "tractor.fmu")
+    fmu = tmp_path / "tractor.fmu"
+    fmu.write_bytes(export_component(system, "tractor"))
     md = read_model_description(str(fmu))
     inputs = [v for v in md.modelVariables if v.causality == "input"]
     outputs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
