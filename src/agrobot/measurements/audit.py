@@ -71,8 +71,10 @@ from .findings import finding
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
+from .time_base import gps_minus_utc, leap_meaning
 
 SEARCH = 3.0            # s: lags searched either way
+WIDE_SEARCH = 30.0      # s: ... and this far between two clocks that no lag within SEARCH explains
 LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still within the stamps' jitter
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
@@ -171,6 +173,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
     if hi - lo < 10.0:
         return None
+    search = min(search, max(SEARCH, (hi - lo) / 3))     # a wide search keeps two thirds of the span compared
     da, db = np.median(np.diff(ta)), np.median(np.diff(tb))
     step = float(np.clip(min(da, db) / 2, 0.02, 0.05))
     if (hi - lo) / step > 400_000:
@@ -192,6 +195,12 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     whole, r = _peak(rho, step, shift)
     if not math.isfinite(whole):
         return None
+    if search > SEARCH and abs(whole) > SEARCH:       # a wide search: b moved by its peak, judged again near it
+        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin)
+        if fine is None:
+            return None
+        iv = fine["interval"]
+        return {**fine, "lag": fine["lag"] + whole, "interval": None if iv is None else [iv[0] + whole, iv[1] + whole]}
     k = int(round(whole / step))
     width = int(round(SCALE_SPAN / step))
     scale = _slope(a, b, oka, okb, k, through_origin, width)
@@ -334,14 +343,14 @@ class Auditor:
                             updates[names[0]] if all(n in updates for n in names) else None)
                 for names, t in self.stamped()]
 
-    def zero_lag_pairs(self) -> list[dict]:
-        """Every pair with no physical lag: (name, a, b, lag dict)."""
+    def zero_lag_pairs(self, search: float = SEARCH) -> list[dict]:
+        """Every pair with no physical lag: (name, a, b, lag dict), lags searched +-``search`` s."""
         sig, out = self.streams.signals, []
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
-                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]),
+                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
                                                                through_origin=True,
                                                                mask=_moving(tg, speed, 0.3)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
@@ -351,15 +360,15 @@ class Auditor:
                 t, r = sig[gyro]
                 r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
-                            lag(tg[ok], course_rate[ok], t, r, mask=_moving(tg, speed)), "rad/s"))
+                            lag(tg[ok], course_rate[ok], t, r, search, mask=_moving(tg, speed)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
         if lateral and "v" in sig and "yaw_rate" in sig:
             t, r = sig["yaw_rate"]
             vr = np.interp(t, *sig["v"]) * r
-            out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral]), "m/s2"))
+            out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral], search), "m/s2"))
         for other in sorted(c for c in sig if c.startswith("yaw_rate_")):
             if "yaw_rate" in sig:
-                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other]), "rad/s"))
+                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
         return [p for p in out if p[3] is not None]
 
     def causal(self) -> dict | None:
@@ -401,18 +410,51 @@ def _interval_text(iv, unit="s", digits=3) -> str:
     return f" [{iv[0]:+.{digits}f}, {iv[1]:+.{digits}f}] {unit}" if iv else " (no interval: too few stretches)"
 
 
+def _judged(est: dict) -> bool:
+    """A lag strong enough to act on: correlation at least STRONG_RHO, an interval within
+    +-HALF_WIDTH s, the peak inside the search."""
+    iv = est["interval"]
+    return est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"]
+
+
+def widened(aud: Auditor, pairs: list) -> list:
+    """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
+    +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
+    the wider lag replaces the first where it is strong (_judged) and beyond SEARCH."""
+    weak = {(p[0], p[1], p[2]) for p in pairs if aud.group(p[1]) != aud.group(p[2]) and not _judged(p[3])}
+    if not weak:
+        return pairs
+    wide = {(p[0], p[1], p[2]): p for p in aud.zero_lag_pairs(WIDE_SEARCH) if (p[0], p[1], p[2]) in weak}
+    return [wide[k] if (k := (p[0], p[1], p[2])) in wide and abs(wide[k][3]["lag"]) > SEARCH
+            and (_judged(wide[k][3]) or _leap(aud, wide[k][3], aud.group(k[1]), aud.group(k[2])) is not None)
+            else p for p in pairs]
+
+
+def _leap(aud: Auditor, est: dict, ga: str, gb: str) -> float | None:
+    """The GPS - UTC leap seconds of the recording's date (signed as the lag) when a strong lag
+    (correlation at least STRONG_RHO, not on the search's bound) between the receiver's clock and
+    another has an interval that holds that count and not zero; else None."""
+    iv, leap = est["interval"], gps_minus_utc(aud.t0)
+    if not leap or iv is None or est["rho"] < STRONG_RHO or est["edge"] or aud.group("gnss") not in (ga, gb):
+        return None
+    signed = math.copysign(leap, est["lag"])
+    return signed if iv[0] <= signed <= iv[1] and (iv[0] > 0 or iv[1] < 0) else None
+
+
 def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], list[dict]]:
     """({group: (seconds late, interval, evidence)} of the groups an offset was found for against
     the reference (the receiver, else the gyro's group), the pairs' findings)."""
-    pairs = aud.zero_lag_pairs()
+    pairs = widened(aud, aud.zero_lag_pairs())
     findings, offsets = [], {}
     agreeing: dict[frozenset, list] = {}    # group pairs a direct comparison finds on one clock: its interval
     reference = aud.group("gnss") if aud.streams.gnss is not None else aud.group("yaw_rate")
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
         late, iv = est["lag"], est["interval"]
-        judged = (est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
-                  and not est["edge"])
+        judged = _judged(est)
+        leap = _leap(aud, est, ga, gb)
+        if leap is not None and not judged:         # a known count of seconds inside the interval: that count
+            late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
@@ -428,6 +470,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             if ga != gb and est["rho"] >= STRONG_RHO:
                 agreeing[frozenset((ga, gb))] = iv
         elif strong:
+            meaning += leap_meaning(late, aud.t0) if "gnss" in (ga, gb) or aud.group("gnss") in (ga, gb) else ""
             meaning += ("; the clocks disagree: identification and diagnosis would take it for a delay or a lever arm "
                         "until aligned (--align)")
             base = {reference: 0.0, **{g: o[0] for g, o in offsets.items()}}
@@ -596,6 +639,18 @@ def stamp_findings(report: dict) -> list[dict]:
     return out
 
 
+def time_base_findings(report: dict, t0: float) -> list[dict]:
+    """The readers' findings on their files' clocks (report["time_base"]: {finding, at},
+    measurements.time_base), each moment given in s from the recording's start."""
+    out = []
+    for x in report.get("time_base") or []:
+        f = dict(x["finding"])
+        if x.get("at") is not None:
+            f["meaning"] += f" (at {x['at'] - t0:.2f} s from the recording's start)"
+        out.append(f)
+    return out
+
+
 def held_findings(report: dict) -> list[dict]:
     """The channels held in slower updates than their rows (report["updates"],
     measurements.channel_updates): judged on their updates, so resolved."""
@@ -719,6 +774,7 @@ def audit_streams(streams, options, source) -> dict:
                                 f"channel is on the terminal's clock, so they agree with each other: only the "
                                 f"absolute time is off", resolved=True))
     findings += stamp_findings(streams.report)
+    findings += time_base_findings(streams.report, t0)
     findings += held_findings(streams.report)
     findings += check_direction(streams, options, source, t0)
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))

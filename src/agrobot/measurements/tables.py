@@ -45,6 +45,7 @@ from .quirks import fixes_from_columns
 from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
 from .streams import Reader, Series, Streams, is_boot_clock, iso
+from .time_base import clock_steps, rollover_between, rollover_by_written, rollover_finding
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
@@ -71,6 +72,7 @@ class Table:
     time_columns: tuple = ()
     notes: list = field(default_factory=list)
     mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
+    time_base: list = field(default_factory=list)  # {finding, at}: its clock's steps and rollover (measurements.time_base)
 
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
@@ -490,6 +492,9 @@ def _clean(table: Table) -> None:
     if (~ok).any():
         table.notes.append(f"{int((~ok).sum())} rows without a time dropped")
     frame, t = table.frame[ok].reset_index(drop=True), t[ok]
+    data = [pd.to_numeric(frame[c], errors="coerce").to_numpy(float) for c in frame.columns if c not in table.time_columns]
+    t, steps = clock_steps(t, data, table.path.name)
+    table.time_base += steps
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):
         table.notes.append(f"{int(np.sum(np.diff(t) < 0))} times step back: rows put in time order")
@@ -536,7 +541,24 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
     for t in tables:
         if t.t is not None:
             _clean(t)
+    _rollover(tables)
     return tables
+
+
+def _rollover(tables: list[Table]) -> None:
+    """Tables dated k x 1024 weeks before the others moved onto their dates; a table alone dated
+    so before it was written named (measurements.time_base)."""
+    dated = {t.name: t for t in tables if t.t is not None and len(t.t) and not is_boot_clock(t.t)}
+    moves = rollover_between({n: (float(t.t[0]), float(t.t[-1])) for n, t in dated.items()})
+    for name, move in moves.items():
+        t = dated[name]
+        against = ", ".join(n for n in dated if n not in moves)
+        t.time_base.append({"at": None, "finding": rollover_finding(t.path.name, move, float(t.t[0]), against)})
+        t.t = t.t + move
+    for name, t in dated.items():
+        said = rollover_by_written(t.path, float(t.t[-1]), t.path.name) if name not in moves else None
+        if said is not None:
+            t.time_base.append({"at": None, "finding": said})
 
 
 def untimed(t: Table) -> LogError:
@@ -708,6 +730,7 @@ def table_streams(paths: list[Path], options, source: Path):
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
+              "time_base": [x for t in tables if t.name in used for x in t.time_base],
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
                                   "start": iso(float(t.t[0])) if t.t is not None and len(t.t) else None,
                                   "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
