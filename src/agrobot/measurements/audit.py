@@ -317,7 +317,7 @@ class Auditor:
     def group(self, channel: str) -> str:
         """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
         and positions) is the file of the lat/lon columns where a table holds them."""
-        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y") and channel not in self.streams.signals:
+        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y", "heading") and channel not in self.streams.signals:
             return self.groups.get("gnss", "gnss")
         return self.groups.get(channel, channel)
 
@@ -325,8 +325,12 @@ class Auditor:
         """([channels], stamps): the channels that share their stamps exactly, together (the
         receiver's fixes as ``gnss``); ``only`` limits the channels."""
         out: list[tuple[list[str], np.ndarray]] = []
-        if self.streams.gnss is not None:
-            out.append((["gnss"], self.streams.gnss["utc"].to_numpy(float)))
+        g = self.streams.gnss
+        if g is not None:
+            out.append((["gnss"], g["utc"].to_numpy(float)))
+            own = np.isfinite(g["heading"].to_numpy(float)) if "heading" in g else np.zeros(len(g), bool)
+            if own.sum() >= 20 and "heading" not in self.streams.signals:      # the receiver's own heading
+                out.append((["heading"], g["utc"].to_numpy(float)[own]))
         for c, (t, _) in self.streams.signals.items():
             if only is not None and c not in only:
                 continue
@@ -602,7 +606,7 @@ def gaps_findings(aud: Auditor, max_gap: float) -> list[dict]:
     """The gaps of the channels that set the log's span (the receiver's fixes, the canonical
     columns; runs.assemble): bridged up to ``max_gap``, else splitting the log."""
     out = []
-    for names, t in aud.stamped(only=CANONICAL):
+    for names, t in aud.stamped(only=CANONICAL + ("heading",)):
         if names == ["gnss"] or (names[0] == "gnss" and len(names) > 1):
             names = ["gnss"] + [n for n in names if n != "gnss"]
         c = ", ".join(names)
@@ -766,6 +770,8 @@ def audit_streams(streams, options, source) -> dict:
     if steady is not None and not any(f["kind"] == "opposite_sign" and "yaw_rate" in f["channels"] for f in findings):
         findings.append(steady)
     findings += mislabelled(aud)
+    unit_mixups(aud, findings, options)
+    findings += out_of_range(aud)
     clock = streams.report.get("terminal_clock")
     if clock:
         findings.append(finding("terminal_clock", ["t", "gnss_time"], clock["offset_s"], clock["range_s"], "s",
@@ -776,13 +782,77 @@ def audit_streams(streams, options, source) -> dict:
     findings += stamp_findings(streams.report)
     findings += time_base_findings(streams.report, t0)
     findings += held_findings(streams.report)
-    findings += check_direction(streams, options, source, t0)
+    try:
+        findings += check_direction(streams, options, source, t0)
+        refusal = None
+    except LogError as exc:           # every other channel judged before it refuses
+        refusal = exc
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
     findings += position_estimate(aud, streams.report)
+    if refusal is not None:
+        raise with_findings(refusal, findings)
     return {"channels": channels, "findings": findings,
             "alignment": {"mode": how, "offsets_s": applied, "channels_moved": moved,
                           "found": {g: {"late_s": o[0], "interval_s": o[1], "evidence": o[2]}
                                     for g, o in offsets.items()}}}
+
+
+def with_findings(exc: LogError, findings: list[dict]) -> LogError:
+    """A refusal that lists the audit's other findings (one refusal hides none of them)."""
+    said = [f"{f['kind']} ({', '.join(f['channels'])}): {f['meaning']}" for f in findings]
+    if not said:
+        return exc
+    return LogError(f"{exc}\nthe audit's other findings ({len(said)}):\n" + "\n".join(f"  - {x}" for x in said))
+
+
+MIXUPS = {"yaw_rate": (180 / math.pi, "deg/s", "rad/s"), "v": (3.6, "km/h", "m/s")}
+MIXUP_TOLERANCE = 0.03      # a scale within 3 % of a unit factor is that unit
+
+
+def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
+    """A channel whose unit no one declared (taken as the log's SI convention) that a channel of
+    another source measures at a unit factor's scale (57.3: deg/s for rad/s; 3.6: km/h for m/s;
+    within MIXUP_TOLERANCE and its interval) is in that unit: converted in place, its finding
+    resolved with the factor and the option that keeps it as it is."""
+    columns = aud.streams.report.get("columns", {})
+    for f in findings:
+        b = f["channels"][-1]
+        if f["kind"] != "scale_disagreement" or b not in MIXUPS or b not in aud.streams.signals:
+            continue
+        k, unit, si = MIXUPS[b]
+        iv = f["interval"]
+        assumed = "the log's convention" in str(columns.get(b, ""))
+        if not assumed or abs(f["value"] / k - 1) > MIXUP_TOLERANCE or (iv is not None and not iv[0] <= k <= iv[1]):
+            continue
+        t, x = aud.streams.signals[b]
+        aud.streams.signals[b] = (t, x / k)
+        columns[b] = f"{columns[b]}; / {k:.4g}: {unit} (the audit's scale against {f['channels'][0]})"
+        f["resolved"] = True
+        f["meaning"] += (f"; {b} declared no unit and was taken as {si}: it is in {unit}, divided by {k:.4g} (declare "
+                         f"its unit with --signal {b}=COLUMN[{si}] to keep it as written)")
+
+
+# a ground vehicle's channel beyond these is not a measurement (a sentinel, an overflow, a wrong field)
+PHYSICAL = {"v": (100.0, "m/s"), "gnss_speed": (100.0, "m/s"), "yaw_rate": (10.0, "rad/s"), "delta": (1.57, "rad"),
+            "delta_cmd": (1.57, "rad")}
+
+
+def out_of_range(aud: Auditor) -> list[dict]:
+    """Each channel with samples beyond its physical range (PHYSICAL): how many, the largest, when."""
+    out = []
+    for c, (bound, unit) in PHYSICAL.items():
+        if c not in aud.streams.signals:
+            continue
+        t, x = aud.streams.signals[c]
+        bad = np.abs(x) > bound
+        if bad.any():
+            i = np.flatnonzero(bad)
+            out.append(finding("out_of_range", [c], float(np.max(np.abs(x[bad]))), None, unit,
+                               f"{c}: {len(i)} of {len(x)} samples beyond {bound:g} {unit}, which no ground vehicle "
+                               f"reaches (the largest {np.max(np.abs(x[bad])):.4g} {unit}, the first at "
+                               f"{t[i[0]] - aud.t0:.2f} s): a sentinel, an overflow, a wrong field or unit; mask them "
+                               f"(--time-range around them) or map the right field"))
+    return out
 
 
 def _causality(now: dict, before: dict | None, applied: dict) -> dict:

@@ -64,7 +64,7 @@ def _wrap(x):
     return np.angle(np.exp(1j * np.asarray(x, float)))
 
 
-def _rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """d(angle)/dt of a possibly interrupted angle by chords of RATE_CHORD s either side (NaN where
     the angle is, and across its interruptions: the course is not read at a stop)."""
     out = np.full(len(t), np.nan)
@@ -124,7 +124,7 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
     if declared:
         x = np.interp(t, *sig[declared])
         return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
-    rate = _rate(t, c)
+    rate = angle_rate(t, c)
     heading = sig.get("heading")
     g = streams.gnss
     if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:

@@ -39,6 +39,7 @@ import pandas as pd
 
 from agrobot.orchestrator.units import base_unit
 
+from .headings import as_yaw
 from .log import CANONICAL, LogError
 from .mdf4 import mdf_tables
 from .quirks import fixes_from_columns
@@ -697,6 +698,10 @@ def table_streams(paths: list[Path], options, source: Path):
                 notes.append(f"{alias} is a column of several tables ({', '.join(hits)}): map one with "
                              f"--signal {column}=TABLE.{alias.split('.')[-1]}")
                 break
+    heading = _holders(tables, "heading") if not given else []
+    if len(heading) == 1:           # a dual-antenna or INS heading: the yaw angle (measurements.headings)
+        specs.append(SignalSpec("heading", ((heading[0], 1.0),), 0.0, None, f"heading={heading[0]}"))
+        auto.add("heading")
     if not specs:
         raise LogError(f"{source}: no column to take: name them with --signal COLUMN=TABLE.COLUMN[unit] (the log's "
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
@@ -738,8 +743,13 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    return fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}, {},
-                                  groups=groups), source)
+    streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals},
+                                     {}, groups=groups), source)
+    if "heading" in streams.signals:
+        spec = next(s for s in specs if s.column == "heading")
+        as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
+               "no unit in the header" not in columns.get("heading", ""))
+    return streams
 
 
 def list_tables(paths: list[Path], options) -> list[str]:
