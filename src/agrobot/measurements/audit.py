@@ -545,9 +545,12 @@ def mislabelled(aud: Auditor) -> list[dict]:
         r = sig["yaw_rate"][1]
         m, s = float(np.median(r)), float(np.std(r))
         if abs(abs(m) - G) < 0.12 * G and s < 0.3 * abs(m):
+            aud.streams.signals.pop("yaw_rate")          # not a yaw rate: never written as one
             out.append(finding("mislabelled_channel", ["yaw_rate"], m, None, "rad/s",
                                f"the 'gyro' yaw_rate sits at {m:.3g} (std {s:.2g}): that is g in m/s2, an "
-                               f"accelerometer's vertical axis, not a yaw rate; map the gyro's z axis"))
+                               f"accelerometer's vertical axis, not a yaw rate: left out of the log; map the gyro's z "
+                               f"axis (--signal yaw_rate=...)"))
+            sig = aud.streams.signals
     lateral = next((c for c in LATERAL if c in sig), None)
     if lateral and "v" in sig and "yaw_rate" in sig:
         t, r = sig["yaw_rate"]
@@ -812,7 +815,7 @@ MIXUP_TOLERANCE = 0.03      # a scale within 3 % of a unit factor is that unit
 def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
     """A channel whose unit no one declared (taken as the log's SI convention) that a channel of
     another source measures at a unit factor's scale (57.3: deg/s for rad/s; 3.6: km/h for m/s;
-    within MIXUP_TOLERANCE and its interval) is in that unit: converted in place, its finding
+    within MIXUP_TOLERANCE) is in that unit: converted in place, its finding
     resolved with the factor and the option that keeps it as it is."""
     columns = aud.streams.report.get("columns", {})
     for f in findings:
@@ -820,9 +823,8 @@ def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
         if f["kind"] != "scale_disagreement" or b not in MIXUPS or b not in aud.streams.signals:
             continue
         k, unit, si = MIXUPS[b]
-        iv = f["interval"]
         assumed = "the log's convention" in str(columns.get(b, ""))
-        if not assumed or abs(f["value"] / k - 1) > MIXUP_TOLERANCE or (iv is not None and not iv[0] <= k <= iv[1]):
+        if not assumed or abs(f["value"] / k - 1) > MIXUP_TOLERANCE:
             continue
         t, x = aud.streams.signals[b]
         aud.streams.signals[b] = (t, x / k)
@@ -852,6 +854,16 @@ def out_of_range(aud: Auditor) -> list[dict]:
                                f"reaches (the largest {np.max(np.abs(x[bad])):.4g} {unit}, the first at "
                                f"{t[i[0]] - aud.t0:.2f} s): a sentinel, an overflow, a wrong field or unit; mask them "
                                f"(--time-range around them) or map the right field"))
+    for s in aud.streams.report.get("spikes") or []:       # masked already as spikes: named for what they are
+        bound, unit = PHYSICAL.get(s["column"], (math.inf, ""))
+        beyond = [v for v in s["values"] if abs(v) > bound]
+        if beyond:
+            out.append(finding("out_of_range", [s["column"]], max(map(abs, beyond)), None, unit,
+                               f"{s['column']}: {len(beyond)} spike(s) beyond {bound:g} {unit}, which no ground vehicle "
+                               f"reaches (the largest {max(map(abs, beyond)):.4g} {unit}, at "
+                               f"{', '.join(f'{x:g}' for x in s['times_s'][:5])} s): a sentinel or an overflow; "
+                               + ("kept (--keep-spikes)" if s.get("kept") else "masked as spikes"),
+                               resolved=not s.get("kept")))
     return out
 
 
