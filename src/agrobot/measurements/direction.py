@@ -40,6 +40,7 @@ REVERSE_SHARE = 0.5     # a stretch reverses when its votes' net share is below 
 REVERSE_MIN = 1.0       # s: a shorter stretch of reversing evidence is not named
 STOP = 0.1              # m/s: a reversing stretch is signed out to where the speed falls below this
 SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the reversing samples
+RUN_MIN, RUN_VOTES = 2.0, 10    # s, votes: a run of reversing evidence alone inside a forward stretch
 
 
 def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -142,7 +143,8 @@ def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, 
     """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
     each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
     when the net share of its evidence is below -REVERSE_SHARE, and named when at least
-    REVERSE_MIN long with at least 5 votes."""
+    REVERSE_MIN long with at least 5 votes; inside a stretch judged forward, a run of consecutive
+    reversing votes (_reversing_runs) is one too."""
     out = []
     moving = np.isfinite(c)
     edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
@@ -151,7 +153,18 @@ def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, 
         seen = int(np.sum(votes != 0))
         if seen >= 5 and votes.sum() / seen < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
             out.append((float(t[a]), float(t[b - 1])))
+        else:           # a stop too brief for the fixes to show it: a run of reversing evidence alone
+            out += _reversing_runs(t[a:b], votes)
     return out
+
+
+def _reversing_runs(t: np.ndarray, votes: np.ndarray) -> list[tuple[float, float]]:
+    """(start, end) of the runs of consecutive reversing votes at least RUN_MIN s and RUN_VOTES
+    votes long inside a stretch judged forward (a machine that backs up with a stop shorter than
+    the fixes' chords between)."""
+    edges = np.diff(np.concatenate([[0], (votes < 0).astype(int), [0]]))
+    return [(float(t[a]), float(t[b - 1])) for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))
+            if b - a >= RUN_VOTES and t[b - 1] - t[a] >= RUN_MIN]
 
 
 def _within(times: np.ndarray, stretches) -> np.ndarray:
@@ -162,13 +175,18 @@ def _within(times: np.ndarray, stretches) -> np.ndarray:
 
 
 def _to_stops(ts: np.ndarray, vs: np.ndarray, a: float, b: float) -> tuple[float, float]:
-    """A reversing stretch widened to the stops either side (the speed under STOP, up to 3 s away):
-    the course is read only above MOVING, the machine reverses from standstill to standstill."""
-    still = np.abs(vs) < STOP
-    before = np.flatnonzero(still & (ts <= a) & (ts >= a - 3.0))
-    after = np.flatnonzero(still & (ts >= b) & (ts <= b + 3.0))
-    return (float(ts[before[-1]]) if len(before) else a, float(ts[after[0]]) if len(after) else b)
-
+    """A reversing stretch widened to the stops either side: the slowest sample up to 3 s away when
+    it is slower than STOP or a quarter of the stretch's median speed (the course is read only
+    above MOVING, the machine reverses from standstill to standstill; a quick turnaround is never
+    quite at rest between two samples)."""
+    inside = (ts >= a) & (ts <= b)
+    slow = max(STOP, 0.25 * float(np.median(np.abs(vs[inside])))) if inside.any() else STOP
+    out = []
+    for lo, hi, edge in ((a - 3.0, a, a), (b, b + 3.0, b)):
+        near = np.flatnonzero((ts >= lo) & (ts <= hi))
+        k = near[int(np.argmin(np.abs(vs[near])))] if len(near) else None
+        out.append(float(ts[k]) if k is not None and abs(vs[k]) < slow else edge)
+    return out[0], out[1]
 
 def judged_speed(streams):
     """(name, times, values) of the speed the log carries as the machine's: v, else the
@@ -195,9 +213,11 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     stretches = reversing(t, c, e)
     if not stretches:
         return []
+    speed = judged_speed(streams)
+    if speed is not None:       # from standstill to standstill: the evidence is read only while moving
+        stretches = [_to_stops(speed[1], speed[2], a, b) for a, b in stretches]
     when = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in stretches)
     total = sum(b - a for a, b in stretches)
-    speed = judged_speed(streams)
     chans = [speed[0] if speed else "track_speed", "course"]
     if speed is not None:
         name, ts, vs = speed
@@ -214,7 +234,7 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
                        f"signed speed (negative reversing): {remedy} (a direction channel, --signal "
                        f"direction=TABLE.COLUMN negative reversing, says where)")
     name, ts, vs = speed
-    flip = _within(ts, [_to_stops(ts, vs, a, b) for a, b in stretches])
+    flip = _within(ts, stretches)
     signed = np.where(flip, -np.abs(vs), vs)
     if name == "v":
         streams.signals["v"] = (ts, signed)
