@@ -658,6 +658,27 @@ def time_base_findings(report: dict, t0: float) -> list[dict]:
     return out
 
 
+def mode_findings(report: dict, t0: float) -> list[dict]:
+    """A declared mode or engagement column's stretches (report["mode_columns"]: {label: [(value,
+    start, end)]}): every value but the one held longest named with its stretches, s from the
+    recording's start."""
+    out = []
+    for label, runs in (report.get("mode_columns") or {}).items():
+        total: dict[str, float] = {}
+        for value, a, b in runs:
+            total[value] = total.get(value, 0.0) + b - a
+        if len(total) < 2:
+            continue
+        main = max(total, key=total.get)
+        others = [(v, a, b) for v, a, b in runs if v != main]
+        when = "; ".join(f"{v} at {a - t0:.1f}-{b - t0:.1f} s" for v, a, b in others)
+        out.append(finding("mode_stretches", [label], len(others), None, "stretches",
+                           f"{label}: {main} for {total[main]:.0f} s, and {when}: stretches driven otherwise, where "
+                           f"the steering need not follow its command; identify and diagnose leave out the stretches "
+                           f"the command does not explain (--keep-unexplained keeps them)", resolved=True))
+    return out
+
+
 def held_findings(report: dict) -> list[dict]:
     """The channels held in slower updates than their rows (report["updates"],
     measurements.channel_updates): judged on their updates, so resolved."""
@@ -784,6 +805,7 @@ def audit_streams(streams, options, source) -> dict:
                                 f"absolute time is off", resolved=True))
     findings += stamp_findings(streams.report)
     findings += time_base_findings(streams.report, t0)
+    findings += mode_findings(streams.report, t0)
     findings += held_findings(streams.report)
     try:
         findings += check_direction(streams, options, source, t0)

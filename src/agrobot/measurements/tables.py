@@ -664,6 +664,30 @@ def fixes_as_given(streams: Streams, source: Path) -> Streams:
     return streams
 
 
+MODE_NAMES = ("mode", "control_mode", "drive_mode", "driving_mode", "state", "autonomy", "engaged", "engagement",
+              "auto_mode", "operation_mode")
+MODE_VALUES = 12        # a mode column takes at most this many values
+
+
+def mode_runs(table: Table) -> dict[str, list[tuple[str, float, float]]]:
+    """{column: [(value, start, end POSIX s)]} of each text column named as a mode or engagement
+    channel (MODE_NAMES) with few values: its stretches, as the rows give them."""
+    out = {}
+    if table.t is None or len(table.t) < 2:
+        return out
+    for c in table.frame.columns:
+        col = table.frame[c]
+        if str(c).lower() not in MODE_NAMES or pd.api.types.is_numeric_dtype(col):
+            continue
+        values = col.astype(str).to_numpy()
+        if len(set(values)) > MODE_VALUES:
+            continue
+        cuts = np.flatnonzero(values[1:] != values[:-1]) + 1
+        starts, ends = np.concatenate([[0], cuts]), np.concatenate([cuts, [len(values)]])
+        out[str(c)] = [(str(values[a]), float(table.t[a]), float(table.t[b - 1])) for a, b in zip(starts, ends)]
+    return out
+
+
 def _holders(tables: list[Table], name: str) -> list[str]:
     """TABLE.COLUMN of every table with a column called ``name`` (any letter case)."""
     return [f"{t.name}.{c}" for t in tables for c in t.frame.columns
@@ -736,6 +760,7 @@ def table_streams(paths: list[Path], options, source: Path):
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
               "time_base": [x for t in tables if t.name in used for x in t.time_base],
+              "mode_columns": {f"{t.path.name} {c}": runs for t in tables if t.name in used for c, runs in mode_runs(t).items()},
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
                                   "start": iso(float(t.t[0])) if t.t is not None and len(t.t) else None,
                                   "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
