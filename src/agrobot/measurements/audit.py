@@ -658,6 +658,33 @@ def time_base_findings(report: dict, t0: float) -> list[dict]:
     return out
 
 
+FIX_NAMES = {0: "no fix", 1: "GPS", 2: "DGPS", 3: "PPS", 4: "RTK fixed", 5: "RTK float", 6: "dead reckoning",
+             7: "manual", 8: "simulation"}      # NMEA GGA fix quality codes
+
+
+def fix_quality_findings(gnss, t0: float) -> list[dict]:
+    """The receiver's fix quality where it leaves the one it holds longest: each stretch with its
+    code, s from the recording's start (the positions' noise differs there)."""
+    if gnss is None or "quality" not in gnss:
+        return []
+    q, t = gnss["quality"].to_numpy(float), gnss["utc"].to_numpy(float)
+    ok = np.isfinite(q)
+    q, t = q[ok], t[ok]
+    if len(q) < 2 or len(np.unique(q)) < 2:
+        return []
+    cuts = np.flatnonzero(q[1:] != q[:-1]) + 1
+    runs = [(q[a], t[a], t[b - 1]) for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [len(q)]]))]
+    main = max(set(q), key=lambda c: float(np.sum(q == c)))
+    others = [(c, a, b) for c, a, b in runs if c != main]
+    when = "; ".join(f"{FIX_NAMES.get(int(c), 'code')} ({int(c)}) at {a - t0:.1f}-{b - t0:.1f} s" for c, a, b in others[:20])
+    return [finding("fix_quality_changes", ["fix_quality"], len(others), None, "stretches",
+                    f"the receiver's fix is {FIX_NAMES.get(int(main), 'code')} ({int(main)}) on "
+                    f"{100 * float(np.mean(q == main)):.0f} % of its epochs, and {when}"
+                    + (f" (and {len(others) - 20} more)" if len(others) > 20 else "")
+                    + ": the positions' noise differs there; the log's fix_quality column holds the source's codes",
+                    resolved=True)]
+
+
 def mode_findings(report: dict, t0: float) -> list[dict]:
     """A declared mode or engagement column's stretches (report["mode_columns"]: {label: [(value,
     start, end)]}): every value but the one held longest named with its stretches, s from the
@@ -806,6 +833,7 @@ def audit_streams(streams, options, source) -> dict:
     findings += stamp_findings(streams.report)
     findings += time_base_findings(streams.report, t0)
     findings += mode_findings(streams.report, t0)
+    findings += fix_quality_findings(streams.gnss, t0)
     findings += held_findings(streams.report)
     try:
         findings += check_direction(streams, options, source, t0)
