@@ -478,7 +478,12 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             meaning += ("; the clocks disagree: identification and diagnosis would take it for a delay or a lever arm "
                         "until aligned (--align)")
             base = {reference: 0.0, **{g: o[0] for g, o in offsets.items()}}
-            if ga in base and gb not in base:
+            half = (iv[1] - iv[0]) / 2
+            if leap is not None and late == leap and reference == aud.group("gnss") in (ga, gb) \
+                    and reference not in offsets:    # GPS time against UTC: the receiver's stamps are the ones off
+                own = -late if ga == reference else late
+                offsets[reference] = (own, [own - half, own + half], name)
+            elif ga in base and gb not in base:
                 offsets[gb] = (base[ga] + late, [base[ga] + iv[0], base[ga] + iv[1]], name)
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)

@@ -13,7 +13,9 @@ reversing it is the heading + pi. The evidence, the first available of:
    of the other;
 3. the steering (``delta``, else ``delta_cmd``): the course turns the way the wheels steer forward and
    the other way reversing (r = v tan(delta) / L with v < 0), the majority sign again forward;
-   read where |delta| > STEERED rad and the course turns faster than TURNING rad/s.
+   read where |delta| > STEERED rad and the course turns faster than TURNING rad/s, each vote
+   weighed by |course rate x delta| against its median (at most 1): a vote where the wheels
+   barely steer or the course barely turns counts less.
 
 A machine changes direction only through a stop: each moving stretch between stops is judged
 whole by its evidence's majority (a lag between the steering and the course, a noisy heading, do
@@ -113,7 +115,8 @@ def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
     ok = np.isfinite(rate) & (np.abs(d) > STEERED) & (np.abs(rate) > TURNING)
     if ok.sum() < 20:
         return None
-    e = np.where(ok, np.sign(rate * d), 0).astype(int)
+    product = np.where(ok, rate * d, 0.0)          # a vote weighed by how clearly the course turns with the wheels
+    e = np.clip(product / max(float(np.median(np.abs(product[ok]))), 1e-12), -1.0, 1.0)
     majority = 1 if e.sum() >= 0 else -1
     return e * majority, f"the course rate against the steering {name}"
 
@@ -151,7 +154,7 @@ def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, 
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
         votes = e[a:b]
         seen = int(np.sum(votes != 0))
-        if seen >= 5 and votes.sum() / seen < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+        if seen >= 5 and votes.sum() / np.sum(np.abs(votes)) < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
             out.append((float(t[a]), float(t[b - 1])))
         else:           # a stop too brief for the fixes to show it: a run of reversing evidence alone
             out += _reversing_runs(t[a:b], votes)
