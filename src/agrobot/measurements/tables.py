@@ -722,6 +722,12 @@ def table_streams(paths: list[Path], options, source: Path):
                 notes.append(f"{alias} is a column of several tables ({', '.join(hits)}): map one with "
                              f"--signal {column}=TABLE.{alias.split('.')[-1]}")
                 break
+    lat = next((spec for spec in specs if spec.column == "lat"), None)
+    if given and lat is not None and "fix_quality" not in given:     # the receiver's own word beside its fixes
+        home = lat.names[0].split(".")[0]
+        quality = [h for a in ALIASES["fix_quality"] for h in _holders(tables, a) if h.split(".")[0] == home]
+        if quality:
+            specs.append(SignalSpec("fix_quality", ((quality[0], 1.0),), 0.0, None, f"fix_quality={quality[0]}"))
     heading = _holders(tables, "heading") if not given else []
     if len(heading) == 1:           # a dual-antenna or INS heading: the yaw angle (measurements.headings)
         specs.append(SignalSpec("heading", ((heading[0], 1.0),), 0.0, None, f"heading={heading[0]}"))
