@@ -457,7 +457,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         late, iv = est["lag"], est["interval"]
         judged = _judged(est)
         leap = _leap(aud, est, ga, gb)
-        if leap is not None and not judged:         # a known count of seconds inside the interval: that count
+        if leap is not None:            # a known count of seconds inside the interval: that count, exactly
             late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
