@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 
 import numpy as np
 import pytest
@@ -96,3 +97,28 @@ def test_a_refusal_lists_the_other_findings(tmp_path):
     assert "--sign-speed" in text and "clock_jump" in text
     assert f"{abs(truth['planted']['clock_jump']['by_s']):.3f}" in text
     assert not math.isnan(truth["planted"]["clock_jump"]["at_s"])
+
+
+def test_a_receivers_repeated_epochs_are_counted(tmp_path):
+    truth = compose(2, tmp_path, classes=["duplicate_stamps"], layout="nmea")["planted"]["duplicate_stamps"]
+    notes = [n for n in convert(tmp_path).report["notes"] if "repeat the time" in n]
+    assert notes and notes[0].startswith(f"gnss.nmea: {truth['count']} GGA")
+
+
+def test_a_receivers_heading_gaps_and_holds_are_named(tmp_path):
+    truth = compose(2, tmp_path, classes=["channel_dropouts"], layout="nmea")["planted"]["channel_dropouts"]
+    assert truth["channel"] == "heading"
+    gaps = [f for f in convert(tmp_path).report["audit"]["findings"]
+            if f["kind"].startswith("gap_") and f["channels"] == ["heading"]]
+    assert max(f["value"] for f in gaps) == pytest.approx(truth["longest_s"], abs=0.15)
+
+
+def test_a_mode_column_and_fix_quality_changes_are_named_with_their_stretches(tmp_path):
+    truth = compose(7, tmp_path, classes=["mode_stretches", "fix_quality_drop"], layout="table")["planted"]
+    rec = convert(tmp_path)
+    modes, = findings(rec, "mode_stretches")
+    fixes, = findings(rec, "fix_quality_changes")
+    for (a, b), text in [(s, modes["meaning"]) for s in truth["mode_stretches"]["manual"]] + \
+            [(s[:2], fixes["meaning"]) for s in truth["fix_quality_drop"]["stretches"]]:
+        said = [float(x) for pair in re.findall(r"(\d+\.\d)-(\d+\.\d) s", text) for x in pair]
+        assert min(abs(x - a) for x in said) < 1.0 and min(abs(x - b) for x in said) < 1.0
