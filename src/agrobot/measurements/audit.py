@@ -52,11 +52,12 @@ Kinds:
 - ``position_is_estimate``: x, y from a localisation or odometry, not a receiver's fixes;
 - ``gap_bridged``: a channel's gaps up to ``--max-gap`` bridged (linear; held for a command);
 - ``gap_split``: a channel's gaps longer than ``--max-gap`` (they split the log);
-- ``clock_jump``, ``gps_week_rollover``: a file's clock stepped, its dates 1024 weeks early
-  (measurements.time_base; an offset of the date's leap seconds is a ``clock_offset`` named so);
+- ``clock_jump``: a file's clock stepped (measurements.time_base; an offset of the date's leap
+  seconds is a ``clock_offset`` named so);
+- ``gps_week_rollover``: a file's dates 1024 weeks early (measurements.time_base);
 - ``out_of_range``: samples beyond a ground vehicle's physical range (PHYSICAL);
-- ``mode_stretches``, ``fix_quality_changes``: a mode column's, the receiver's fix quality's
-  stretches away from the value held longest;
+- ``mode_stretches``: a mode column's stretches away from the value it holds longest;
+- ``fix_quality_changes``: the receiver's fix quality's stretches away from the one it holds longest;
 - ``stamp_vs_receive``: header stamps against the receive times of the same messages;
 - ``terminal_clock``: a terminal's clock against the GNSS time of the same records.
 
