@@ -694,6 +694,22 @@ def _holders(tables: list[Table], name: str) -> list[str]:
             if str(c).lower() == name and c not in t.time_columns]
 
 
+def _receiver_specs(tables: list[Table], specs: list, given: set, auto: set) -> None:
+    """With a user's mapping, the fix quality column beside the mapped lat (the receiver's own
+    word); without one, a ``heading`` column (a dual-antenna or INS heading: the yaw angle,
+    measurements.headings). Added to ``specs`` (and ``auto``) in place."""
+    lat = next((spec for spec in specs if spec.column == "lat"), None)
+    if given and lat is not None and "fix_quality" not in given:
+        home = lat.names[0].split(".")[0]
+        quality = [h for a in ALIASES["fix_quality"] for h in _holders(tables, a) if h.split(".")[0] == home]
+        if quality:
+            specs.append(SignalSpec("fix_quality", ((quality[0], 1.0),), 0.0, None, f"fix_quality={quality[0]}"))
+    heading = _holders(tables, "heading") if not given else []
+    if len(heading) == 1:
+        specs.append(SignalSpec("heading", ((heading[0], 1.0),), 0.0, None, f"heading={heading[0]}"))
+        auto.add("heading")
+
+
 def table_streams(paths: list[Path], options, source: Path):
     """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
     table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
@@ -722,16 +738,7 @@ def table_streams(paths: list[Path], options, source: Path):
                 notes.append(f"{alias} is a column of several tables ({', '.join(hits)}): map one with "
                              f"--signal {column}=TABLE.{alias.split('.')[-1]}")
                 break
-    lat = next((spec for spec in specs if spec.column == "lat"), None)
-    if given and lat is not None and "fix_quality" not in given:     # the receiver's own word beside its fixes
-        home = lat.names[0].split(".")[0]
-        quality = [h for a in ALIASES["fix_quality"] for h in _holders(tables, a) if h.split(".")[0] == home]
-        if quality:
-            specs.append(SignalSpec("fix_quality", ((quality[0], 1.0),), 0.0, None, f"fix_quality={quality[0]}"))
-    heading = _holders(tables, "heading") if not given else []
-    if len(heading) == 1:           # a dual-antenna or INS heading: the yaw angle (measurements.headings)
-        specs.append(SignalSpec("heading", ((heading[0], 1.0),), 0.0, None, f"heading={heading[0]}"))
-        auto.add("heading")
+    _receiver_specs(tables, specs, given, auto)
     if not specs:
         raise LogError(f"{source}: no column to take: name them with --signal COLUMN=TABLE.COLUMN[unit] (the log's "
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
