@@ -7,7 +7,7 @@ reversing it is the heading + pi. The evidence, the first available of:
 
 1. a declared direction channel (``--signal direction=...`` or ``gear=...``): negative = reversing;
 2. a heading (``heading``, else the receiver's own, any convention): its sense (clockwise or not) is the one whose rate follows
-   the course rate; the offset between the course and the heading takes two values pi apart (the
+   the course rate (by the ranks' correlation); the offset between the course and the heading takes two values pi apart (the
    axis of the doubled angles), and forward is the one the machine keeps longer (a machine drives
    forward more than it reverses); a sample is forward within AGREE of it, reversing within AGREE
    of the other;
@@ -84,6 +84,13 @@ def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return out
 
 
+def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Spearman's correlation (of the ranks): a course rate's spikes where the course flips at a
+    turnaround or a stop do not outweigh the rest."""
+    ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
 def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
     """Evidence (+1 forward, -1 reversing, 0 none) from a heading (module docstring), or None when
     its rate does not follow the course's."""
@@ -96,7 +103,7 @@ def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
     ok = inside & np.isfinite(rate)
     if ok.sum() < 20 or np.std(rate[ok]) == 0 or np.std(hr[ok]) == 0:
         return None
-    sense = float(np.corrcoef(rate[ok], hr[ok])[0, 1])
+    sense = rank_correlation(rate[ok], hr[ok])
     if not abs(sense) > 0.3:
         return None
     diff = _wrap(c - math.copysign(1.0, sense) * hu)

@@ -4,8 +4,8 @@ radians, ENU (anticlockwise from east), unwrapped on its own stamps.
 Its unit is the declared one (a header's ``[deg]``, a units row, ``--signal heading=...[deg]``);
 undeclared, values beyond 2 pi + 0.1 are degrees (no angle in radians reaches them), said so.
 Its sense is read against the track: the course of the fixes (measurements.direction.course) turns
-with an anticlockwise heading and against a clockwise one (correlation of the two rates at least
-0.3 either way; reversing turns the course by pi, not its rate). A clockwise heading is a compass
+with an anticlockwise heading and against a clockwise one (rank correlation of the two rates at
+least 0.3 either way; reversing turns the course by pi, not its rate). A clockwise heading is a compass
 heading from north, psi = pi/2 - heading; without a track to judge by, a heading in degrees is
 taken as receivers write it (clockwise from north) and one in radians as ENU, said so.
 """
@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from .direction import angle_rate, course
+from .direction import angle_rate, course, rank_correlation
 
 SENSE = 0.3             # the least |correlation| of the heading's rate with the course's that decides its sense
 
@@ -32,7 +32,7 @@ def sense(gnss, t: np.ndarray, psi: np.ndarray) -> int:
     hr = np.gradient(np.interp(tc, t, np.unwrap(psi)), tc)
     if np.std(rate[inside]) == 0 or np.std(hr[inside]) == 0:
         return 0
-    rho = float(np.corrcoef(rate[inside], hr[inside])[0, 1])
+    rho = rank_correlation(rate[inside], hr[inside])
     return 0 if not abs(rho) >= SENSE else (1 if rho > 0 else -1)
 
 
