@@ -257,9 +257,14 @@ def plant_one_clock_weak(rec: Recording, rng) -> dict:
     s = rec.sheets["log"]
     gyro, pos = rng.uniform(0.02, 0.04), rng.uniform(0.03, 0.05)
     n = len(s.t)
+    held = rec.planted.get("held_channel", {})
+
+    def noise(column: str, sigma: float) -> np.ndarray:      # a held channel's noise changes with its updates only
+        e = sigma * rng.standard_normal(n)
+        return e[(np.arange(n) // held["factor"]) * held["factor"]] if column in held.get("columns", ()) else e
     if "yaw_rate" in s.columns:
-        s.columns["yaw_rate"] = s.columns["yaw_rate"] + gyro * rng.standard_normal(n)
-    s.columns["lat"] = s.columns["lat"] + np.degrees(pos * rng.standard_normal(n) / EARTH)
+        s.columns["yaw_rate"] = s.columns["yaw_rate"] + noise("yaw_rate", gyro)
+    s.columns["lat"] = s.columns["lat"] + np.degrees(noise("lat", pos) / EARTH)
     return {"offset_s": 0.0, "file": s.name, "gyro_noise": gyro, "position_noise": pos}
 
 

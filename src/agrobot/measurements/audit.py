@@ -52,6 +52,12 @@ Kinds:
 - ``position_is_estimate``: x, y from a localisation or odometry, not a receiver's fixes;
 - ``gap_bridged``: a channel's gaps up to ``--max-gap`` bridged (linear; held for a command);
 - ``gap_split``: a channel's gaps longer than ``--max-gap`` (they split the log);
+- ``clock_jump``: a file's clock stepped (measurements.time_base; an offset of the date's leap
+  seconds is a ``clock_offset`` named so);
+- ``gps_week_rollover``: a file's dates 1024 weeks early (measurements.time_base);
+- ``out_of_range``: samples beyond a ground vehicle's physical range (PHYSICAL);
+- ``mode_stretches``: a mode column's stretches away from the value it holds longest;
+- ``fix_quality_changes``: the receiver's fix quality's stretches away from the one it holds longest;
 - ``stamp_vs_receive``: header stamps against the receive times of the same messages;
 - ``terminal_clock``: a terminal's clock against the GNSS time of the same records.
 
@@ -71,8 +77,10 @@ from .findings import finding
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
+from .time_base import gps_minus_utc, leap_meaning
 
 SEARCH = 3.0            # s: lags searched either way
+WIDE_SEARCH = 30.0      # s: ... and this far between two clocks that no lag within SEARCH explains
 LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still within the stamps' jitter
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
@@ -171,6 +179,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
     if hi - lo < 10.0:
         return None
+    search = min(search, max(SEARCH, (hi - lo) / 3))     # a wide search keeps two thirds of the span compared
     da, db = np.median(np.diff(ta)), np.median(np.diff(tb))
     step = float(np.clip(min(da, db) / 2, 0.02, 0.05))
     if (hi - lo) / step > 400_000:
@@ -192,6 +201,12 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     whole, r = _peak(rho, step, shift)
     if not math.isfinite(whole):
         return None
+    if search > SEARCH and abs(whole) > SEARCH:       # a wide search: b moved by its peak, judged again near it
+        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin)
+        if fine is None:
+            return None
+        iv = fine["interval"]
+        return {**fine, "lag": fine["lag"] + whole, "interval": None if iv is None else [iv[0] + whole, iv[1] + whole]}
     k = int(round(whole / step))
     width = int(round(SCALE_SPAN / step))
     scale = _slope(a, b, oka, okb, k, through_origin, width)
@@ -308,7 +323,7 @@ class Auditor:
     def group(self, channel: str) -> str:
         """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
         and positions) is the file of the lat/lon columns where a table holds them."""
-        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y") and channel not in self.streams.signals:
+        if channel in ("gnss", "gnss_speed", "course_rate", "x", "y", "heading") and channel not in self.streams.signals:
             return self.groups.get("gnss", "gnss")
         return self.groups.get(channel, channel)
 
@@ -316,8 +331,12 @@ class Auditor:
         """([channels], stamps): the channels that share their stamps exactly, together (the
         receiver's fixes as ``gnss``); ``only`` limits the channels."""
         out: list[tuple[list[str], np.ndarray]] = []
-        if self.streams.gnss is not None:
-            out.append((["gnss"], self.streams.gnss["utc"].to_numpy(float)))
+        g = self.streams.gnss
+        if g is not None:
+            out.append((["gnss"], g["utc"].to_numpy(float)))
+            own = np.isfinite(g["heading"].to_numpy(float)) if "heading" in g else np.zeros(len(g), bool)
+            if own.sum() >= 20 and "heading" not in self.streams.signals:      # the receiver's own heading
+                out.append((["heading"], g["utc"].to_numpy(float)[own]))
         for c, (t, _) in self.streams.signals.items():
             if only is not None and c not in only:
                 continue
@@ -334,14 +353,14 @@ class Auditor:
                             updates[names[0]] if all(n in updates for n in names) else None)
                 for names, t in self.stamped()]
 
-    def zero_lag_pairs(self) -> list[dict]:
-        """Every pair with no physical lag: (name, a, b, lag dict)."""
+    def zero_lag_pairs(self, search: float = SEARCH) -> list[dict]:
+        """Every pair with no physical lag: (name, a, b, lag dict), lags searched +-``search`` s."""
         sig, out = self.streams.signals, []
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
-                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]),
+                out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
                                                                through_origin=True,
                                                                mask=_moving(tg, speed, 0.3)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
@@ -351,15 +370,15 @@ class Auditor:
                 t, r = sig[gyro]
                 r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
-                            lag(tg[ok], course_rate[ok], t, r, mask=_moving(tg, speed)), "rad/s"))
+                            lag(tg[ok], course_rate[ok], t, r, search, mask=_moving(tg, speed)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
         if lateral and "v" in sig and "yaw_rate" in sig:
             t, r = sig["yaw_rate"]
             vr = np.interp(t, *sig["v"]) * r
-            out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral]), "m/s2"))
+            out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral], search), "m/s2"))
         for other in sorted(c for c in sig if c.startswith("yaw_rate_")):
             if "yaw_rate" in sig:
-                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other]), "rad/s"))
+                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
         return [p for p in out if p[3] is not None]
 
     def causal(self) -> dict | None:
@@ -401,18 +420,51 @@ def _interval_text(iv, unit="s", digits=3) -> str:
     return f" [{iv[0]:+.{digits}f}, {iv[1]:+.{digits}f}] {unit}" if iv else " (no interval: too few stretches)"
 
 
+def _judged(est: dict) -> bool:
+    """A lag strong enough to act on: correlation at least STRONG_RHO, an interval within
+    +-HALF_WIDTH s, the peak inside the search."""
+    iv = est["interval"]
+    return est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"]
+
+
+def widened(aud: Auditor, pairs: list) -> list:
+    """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
+    +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
+    the wider lag replaces the first where it is strong (_judged) and beyond SEARCH."""
+    weak = {(p[0], p[1], p[2]) for p in pairs if aud.group(p[1]) != aud.group(p[2]) and not _judged(p[3])}
+    if not weak:
+        return pairs
+    wide = {(p[0], p[1], p[2]): p for p in aud.zero_lag_pairs(WIDE_SEARCH) if (p[0], p[1], p[2]) in weak}
+    return [wide[k] if (k := (p[0], p[1], p[2])) in wide and abs(wide[k][3]["lag"]) > SEARCH
+            and (_judged(wide[k][3]) or _leap(aud, wide[k][3], aud.group(k[1]), aud.group(k[2])) is not None)
+            else p for p in pairs]
+
+
+def _leap(aud: Auditor, est: dict, ga: str, gb: str) -> float | None:
+    """The GPS - UTC leap seconds of the recording's date (signed as the lag) when a strong lag
+    (correlation at least STRONG_RHO, not on the search's bound) between the receiver's clock and
+    another has an interval that holds that count and not zero; else None."""
+    iv, leap = est["interval"], gps_minus_utc(aud.t0)
+    if not leap or iv is None or est["rho"] < STRONG_RHO or est["edge"] or aud.group("gnss") not in (ga, gb):
+        return None
+    signed = math.copysign(leap, est["lag"])
+    return signed if iv[0] <= signed <= iv[1] and (iv[0] > 0 or iv[1] < 0) else None
+
+
 def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], list[dict]]:
     """({group: (seconds late, interval, evidence)} of the groups an offset was found for against
     the reference (the receiver, else the gyro's group), the pairs' findings)."""
-    pairs = aud.zero_lag_pairs()
+    pairs = widened(aud, aud.zero_lag_pairs())
     findings, offsets = [], {}
     agreeing: dict[frozenset, list] = {}    # group pairs a direct comparison finds on one clock: its interval
     reference = aud.group("gnss") if aud.streams.gnss is not None else aud.group("yaw_rate")
     for name, a, b, est, unit in pairs:
         ga, gb = aud.group(a), aud.group(b)
         late, iv = est["lag"], est["interval"]
-        judged = (est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH
-                  and not est["edge"])
+        judged = _judged(est)
+        leap = _leap(aud, est, ga, gb)
+        if leap is not None:            # a known count of seconds inside the interval: that count, exactly
+            late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
         small = iv is not None and abs(late) < ALIGN_MIN
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
@@ -428,10 +480,16 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             if ga != gb and est["rho"] >= STRONG_RHO:
                 agreeing[frozenset((ga, gb))] = iv
         elif strong:
+            meaning += leap_meaning(late, aud.t0) if "gnss" in (ga, gb) or aud.group("gnss") in (ga, gb) else ""
             meaning += ("; the clocks disagree: identification and diagnosis would take it for a delay or a lever arm "
                         "until aligned (--align)")
             base = {reference: 0.0, **{g: o[0] for g, o in offsets.items()}}
-            if ga in base and gb not in base:
+            half = (iv[1] - iv[0]) / 2
+            if leap is not None and late == leap and reference == aud.group("gnss") in (ga, gb) \
+                    and reference not in offsets:    # GPS time against UTC: the receiver's stamps are the ones off
+                own = -late if ga == reference else late
+                offsets[reference] = (own, [own - half, own + half], name)
+            elif ga in base and gb not in base:
                 offsets[gb] = (base[ga] + late, [base[ga] + iv[0], base[ga] + iv[1]], name)
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
@@ -498,9 +556,12 @@ def mislabelled(aud: Auditor) -> list[dict]:
         r = sig["yaw_rate"][1]
         m, s = float(np.median(r)), float(np.std(r))
         if abs(abs(m) - G) < 0.12 * G and s < 0.3 * abs(m):
+            aud.streams.signals.pop("yaw_rate")          # not a yaw rate: never written as one
             out.append(finding("mislabelled_channel", ["yaw_rate"], m, None, "rad/s",
                                f"the 'gyro' yaw_rate sits at {m:.3g} (std {s:.2g}): that is g in m/s2, an "
-                               f"accelerometer's vertical axis, not a yaw rate; map the gyro's z axis"))
+                               f"accelerometer's vertical axis, not a yaw rate: left out of the log; map the gyro's z "
+                               f"axis (--signal yaw_rate=...)"))
+            sig = aud.streams.signals
     lateral = next((c for c in LATERAL if c in sig), None)
     if lateral and "v" in sig and "yaw_rate" in sig:
         t, r = sig["yaw_rate"]
@@ -559,7 +620,7 @@ def gaps_findings(aud: Auditor, max_gap: float) -> list[dict]:
     """The gaps of the channels that set the log's span (the receiver's fixes, the canonical
     columns; runs.assemble): bridged up to ``max_gap``, else splitting the log."""
     out = []
-    for names, t in aud.stamped(only=CANONICAL):
+    for names, t in aud.stamped(only=CANONICAL + ("heading",)):
         if names == ["gnss"] or (names[0] == "gnss" and len(names) > 1):
             names = ["gnss"] + [n for n in names if n != "gnss"]
         c = ", ".join(names)
@@ -593,6 +654,66 @@ def stamp_findings(report: dict) -> list[dict]:
                            f"{name}: the messages arrive {s['median']:.3f} s after their header stamps (median; 95 % "
                            f"within {s['p95']:.3f} s, from {s['min']:.3f} to {s['max']:.3f} s); the log uses the header "
                            f"stamps (the time of the measurement), not the receive times", resolved=True))
+    return out
+
+
+def time_base_findings(report: dict, t0: float) -> list[dict]:
+    """The readers' findings on their files' clocks (report["time_base"]: {finding, at},
+    measurements.time_base), each moment given in s from the recording's start."""
+    out = []
+    for x in report.get("time_base") or []:
+        f = dict(x["finding"])
+        if x.get("at") is not None:
+            f["meaning"] += f" (at {x['at'] - t0:.2f} s from the recording's start)"
+        out.append(f)
+    return out
+
+
+FIX_NAMES = {0: "no fix", 1: "GPS", 2: "DGPS", 3: "PPS", 4: "RTK fixed", 5: "RTK float", 6: "dead reckoning",
+             7: "manual", 8: "simulation"}      # NMEA GGA fix quality codes
+
+
+def fix_quality_findings(gnss, t0: float) -> list[dict]:
+    """The receiver's fix quality where it leaves the one it holds longest: each stretch with its
+    code, s from the recording's start (the positions' noise differs there)."""
+    if gnss is None or "quality" not in gnss:
+        return []
+    q, t = gnss["quality"].to_numpy(float), gnss["utc"].to_numpy(float)
+    ok = np.isfinite(q)
+    q, t = q[ok], t[ok]
+    if len(q) < 2 or len(np.unique(q)) < 2:
+        return []
+    cuts = np.flatnonzero(q[1:] != q[:-1]) + 1
+    runs = [(q[a], t[a], t[b - 1]) for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [len(q)]]))]
+    main = max(set(q), key=lambda c: float(np.sum(q == c)))
+    others = [(c, a, b) for c, a, b in runs if c != main]
+    when = "; ".join(f"{FIX_NAMES.get(int(c), 'code')} ({int(c)}) at {a - t0:.1f}-{b - t0:.1f} s" for c, a, b in others[:20])
+    return [finding("fix_quality_changes", ["fix_quality"], len(others), None, "stretches",
+                    f"the receiver's fix is {FIX_NAMES.get(int(main), 'code')} ({int(main)}) on "
+                    f"{100 * float(np.mean(q == main)):.0f} % of its epochs, and {when}"
+                    + (f" (and {len(others) - 20} more)" if len(others) > 20 else "")
+                    + ": the positions' noise differs there; the log's fix_quality column holds the source's codes",
+                    resolved=True)]
+
+
+def mode_findings(report: dict, t0: float) -> list[dict]:
+    """A declared mode or engagement column's stretches (report["mode_columns"]: {label: [(value,
+    start, end)]}): every value but the one held longest named with its stretches, s from the
+    recording's start."""
+    out = []
+    for label, runs in (report.get("mode_columns") or {}).items():
+        total: dict[str, float] = {}
+        for value, a, b in runs:
+            total[value] = total.get(value, 0.0) + b - a
+        if len(total) < 2:
+            continue
+        main = max(total, key=total.get)
+        others = [(v, a, b) for v, a, b in runs if v != main]
+        when = "; ".join(f"{v} at {a - t0:.1f}-{b - t0:.1f} s" for v, a, b in others)
+        out.append(finding("mode_stretches", [label], len(others), None, "stretches",
+                           f"{label}: {main} for {total[main]:.0f} s, and {when}: stretches driven otherwise, where "
+                           f"the steering need not follow its command; identify and diagnose leave out the stretches "
+                           f"the command does not explain (--keep-unexplained keeps them)", resolved=True))
     return out
 
 
@@ -711,6 +832,8 @@ def audit_streams(streams, options, source) -> dict:
     if steady is not None and not any(f["kind"] == "opposite_sign" and "yaw_rate" in f["channels"] for f in findings):
         findings.append(steady)
     findings += mislabelled(aud)
+    unit_mixups(aud, findings, options)
+    findings += out_of_range(aud)
     clock = streams.report.get("terminal_clock")
     if clock:
         findings.append(finding("terminal_clock", ["t", "gnss_time"], clock["offset_s"], clock["range_s"], "s",
@@ -719,14 +842,90 @@ def audit_streams(streams, options, source) -> dict:
                                 f"channel is on the terminal's clock, so they agree with each other: only the "
                                 f"absolute time is off", resolved=True))
     findings += stamp_findings(streams.report)
+    findings += time_base_findings(streams.report, t0)
+    findings += mode_findings(streams.report, t0)
+    findings += fix_quality_findings(streams.gnss, t0)
     findings += held_findings(streams.report)
-    findings += check_direction(streams, options, source, t0)
+    try:
+        findings += check_direction(streams, options, source, t0)
+        refusal = None
+    except LogError as exc:           # every other channel judged before it refuses
+        refusal = exc
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
     findings += position_estimate(aud, streams.report)
+    if refusal is not None:
+        raise with_findings(refusal, findings)
     return {"channels": channels, "findings": findings,
             "alignment": {"mode": how, "offsets_s": applied, "channels_moved": moved,
                           "found": {g: {"late_s": o[0], "interval_s": o[1], "evidence": o[2]}
                                     for g, o in offsets.items()}}}
+
+
+def with_findings(exc: LogError, findings: list[dict]) -> LogError:
+    """A refusal that lists the audit's other findings (one refusal hides none of them)."""
+    said = [f"{f['kind']} ({', '.join(f['channels'])}): {f['meaning']}" for f in findings]
+    if not said:
+        return exc
+    return LogError(f"{exc}\nthe audit's other findings ({len(said)}):\n" + "\n".join(f"  - {x}" for x in said))
+
+
+MIXUPS = {"yaw_rate": (180 / math.pi, "deg/s", "rad/s"), "v": (3.6, "km/h", "m/s")}
+MIXUP_TOLERANCE = 0.03      # a scale within 3 % of a unit factor is that unit
+
+
+def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
+    """A channel whose unit no one declared (taken as the log's SI convention) that a channel of
+    another source measures at a unit factor's scale (57.3: deg/s for rad/s; 3.6: km/h for m/s;
+    within MIXUP_TOLERANCE) is in that unit: converted in place, its finding
+    resolved with the factor and the option that keeps it as it is."""
+    columns = aud.streams.report.get("columns", {})
+    for f in findings:
+        b = f["channels"][-1]
+        if f["kind"] != "scale_disagreement" or b not in MIXUPS or b not in aud.streams.signals:
+            continue
+        k, unit, si = MIXUPS[b]
+        assumed = "the log's convention" in str(columns.get(b, ""))
+        if not assumed or abs(f["value"] / k - 1) > MIXUP_TOLERANCE:
+            continue
+        t, x = aud.streams.signals[b]
+        aud.streams.signals[b] = (t, x / k)
+        columns[b] = f"{columns[b]}; / {k:.4g}: {unit} (the audit's scale against {f['channels'][0]})"
+        f["resolved"] = True
+        f["meaning"] += (f"; {b} declared no unit and was taken as {si}: it is in {unit}, divided by {k:.4g} (declare "
+                         f"its unit with --signal {b}=COLUMN[{si}] to keep it as written)")
+
+
+# a ground vehicle's channel beyond these is not a measurement (a sentinel, an overflow, a wrong field)
+PHYSICAL = {"v": (100.0, "m/s"), "gnss_speed": (100.0, "m/s"), "yaw_rate": (10.0, "rad/s"), "delta": (1.57, "rad"),
+            "delta_cmd": (1.57, "rad")}
+
+
+def out_of_range(aud: Auditor) -> list[dict]:
+    """Each channel with samples beyond its physical range (PHYSICAL): how many, the largest, when."""
+    out = []
+    for c, (bound, unit) in PHYSICAL.items():
+        if c not in aud.streams.signals:
+            continue
+        t, x = aud.streams.signals[c]
+        bad = np.abs(x) > bound
+        if bad.any():
+            i = np.flatnonzero(bad)
+            out.append(finding("out_of_range", [c], float(np.max(np.abs(x[bad]))), None, unit,
+                               f"{c}: {len(i)} of {len(x)} samples beyond {bound:g} {unit}, which no ground vehicle "
+                               f"reaches (the largest {np.max(np.abs(x[bad])):.4g} {unit}, the first at "
+                               f"{t[i[0]] - aud.t0:.2f} s): a sentinel, an overflow, a wrong field or unit; mask them "
+                               f"(--time-range around them) or map the right field"))
+    for s in aud.streams.report.get("spikes") or []:       # masked already as spikes: named for what they are
+        bound, unit = PHYSICAL.get(s["column"], (math.inf, ""))
+        beyond = [v for v in s["values"] if abs(v) > bound]
+        if beyond:
+            out.append(finding("out_of_range", [s["column"]], max(map(abs, beyond)), None, unit,
+                               f"{s['column']}: {len(beyond)} spike(s) beyond {bound:g} {unit}, which no ground vehicle "
+                               f"reaches (the largest {max(map(abs, beyond)):.4g} {unit}, at "
+                               f"{', '.join(f'{x:g}' for x in s['times_s'][:5])} s): a sentinel or an overflow; "
+                               + ("kept (--keep-spikes)" if s.get("kept") else "masked as spikes"),
+                               resolved=not s.get("kept")))
+    return out
 
 
 def _causality(now: dict, before: dict | None, applied: dict) -> dict:

@@ -187,6 +187,7 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         if found is not None:
             streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
             notes.append({"channel": "gnss", **_said(found)})
+        notes += _receiver_heading(streams)
     for c, (t, x) in list(streams.signals.items()):
         # a speed, a rate or an angle may stay put while the machine moves (a cruise, a straight):
         # only positions must change then, so only theirs are judged stale
@@ -200,6 +201,21 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
         streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
     return notes
+
+
+def _receiver_heading(streams: Streams) -> list[dict]:
+    """The receiver's own heading (HDT, THS) held in its epochs: kept at its updates only (NaN
+    between them, where the epochs repeat it)."""
+    g = streams.gnss
+    h = g["heading"].to_numpy(float) if "heading" in g else np.zeros(0)
+    ok = np.flatnonzero(np.isfinite(h))
+    found = holding(g["utc"].to_numpy(float)[ok], h[ok], None) if len(ok) >= MIN_SAMPLES else None
+    if found is None:
+        return []
+    kept = np.full(len(h), np.nan)
+    kept[ok[found["keep"]]] = h[ok[found["keep"]]]
+    streams.gnss = g.assign(heading=kept)
+    return [{"channel": "heading", **_said(found)}]
 
 
 def _said(found: dict) -> dict:

@@ -15,7 +15,7 @@ from agrobot.orchestrator.output import ResultFile, check_output_file
 from agrobot.orchestrator.source_files import set_limit
 
 from . import recording_readers as readers
-from .audit import parse_align
+from .audit import parse_align, with_findings
 from .listing import list_source
 from .log import LogError, check_log, log_units
 from .log_mcap import write_log_mcap
@@ -162,7 +162,10 @@ def run(args: argparse.Namespace) -> int:
 
 def checked_log(source, f, rep: dict):
     """``f`` checked as a measured log (a LogError names ``source``); its warnings go into ``rep``."""
-    checked = check_log(f, f"{source} ({rep['used']['how']})", ("t",))
+    try:
+        checked = check_log(f, f"{source} ({rep['used']['how']})", ("t",))
+    except LogError as exc:              # the refusal lists what the audit found besides
+        raise with_findings(exc, rep.get("audit", {}).get("findings", [])) from None
     rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
     return checked
 

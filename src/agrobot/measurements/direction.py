@@ -7,13 +7,15 @@ reversing it is the heading + pi. The evidence, the first available of:
 
 1. a declared direction channel (``--signal direction=...`` or ``gear=...``): negative = reversing;
 2. a heading (``heading``, else the receiver's own, any convention): its sense (clockwise or not) is the one whose rate follows
-   the course rate; the offset between the course and the heading takes two values pi apart (the
+   the course rate (by the ranks' correlation); the offset between the course and the heading takes two values pi apart (the
    axis of the doubled angles), and forward is the one the machine keeps longer (a machine drives
    forward more than it reverses); a sample is forward within AGREE of it, reversing within AGREE
    of the other;
 3. the steering (``delta``, else ``delta_cmd``): the course turns the way the wheels steer forward and
    the other way reversing (r = v tan(delta) / L with v < 0), the majority sign again forward;
-   read where |delta| > STEERED rad and the course turns faster than TURNING rad/s.
+   read where |delta| > STEERED rad and the course turns faster than TURNING rad/s, each vote
+   weighed by |course rate x delta| against its median (at most 1): a vote where the wheels
+   barely steer or the course barely turns counts less.
 
 A machine changes direction only through a stop: each moving stretch between stops is judged
 whole by its evidence's majority (a lag between the steering and the course, a noisy heading, do
@@ -40,6 +42,7 @@ REVERSE_SHARE = 0.5     # a stretch reverses when its votes' net share is below 
 REVERSE_MIN = 1.0       # s: a shorter stretch of reversing evidence is not named
 STOP = 0.1              # m/s: a reversing stretch is signed out to where the speed falls below this
 SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the reversing samples
+RUN_MIN, RUN_VOTES = 2.0, 10    # s, votes: a run of reversing evidence alone inside a forward stretch
 
 
 def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -64,7 +67,7 @@ def _wrap(x):
     return np.angle(np.exp(1j * np.asarray(x, float)))
 
 
-def _rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """d(angle)/dt of a possibly interrupted angle by chords of RATE_CHORD s either side (NaN where
     the angle is, and across its interruptions: the course is not read at a stop)."""
     out = np.full(len(t), np.nan)
@@ -81,6 +84,13 @@ def _rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return out
 
 
+def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Spearman's correlation (of the ranks): a course rate's spikes where the course flips at a
+    turnaround or a stop do not outweigh the rest."""
+    ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
 def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
     """Evidence (+1 forward, -1 reversing, 0 none) from a heading (module docstring), or None when
     its rate does not follow the course's."""
@@ -93,7 +103,7 @@ def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
     ok = inside & np.isfinite(rate)
     if ok.sum() < 20 or np.std(rate[ok]) == 0 or np.std(hr[ok]) == 0:
         return None
-    sense = float(np.corrcoef(rate[ok], hr[ok])[0, 1])
+    sense = rank_correlation(rate[ok], hr[ok])
     if not abs(sense) > 0.3:
         return None
     diff = _wrap(c - math.copysign(1.0, sense) * hu)
@@ -112,7 +122,8 @@ def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
     ok = np.isfinite(rate) & (np.abs(d) > STEERED) & (np.abs(rate) > TURNING)
     if ok.sum() < 20:
         return None
-    e = np.where(ok, np.sign(rate * d), 0).astype(int)
+    product = np.where(ok, rate * d, 0.0)          # a vote weighed by how clearly the course turns with the wheels
+    e = np.clip(product / max(float(np.median(np.abs(product[ok]))), 1e-12), -1.0, 1.0)
     majority = 1 if e.sum() >= 0 else -1
     return e * majority, f"the course rate against the steering {name}"
 
@@ -124,7 +135,7 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
     if declared:
         x = np.interp(t, *sig[declared])
         return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
-    rate = _rate(t, c)
+    rate = angle_rate(t, c)
     heading = sig.get("heading")
     g = streams.gnss
     if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:
@@ -142,16 +153,28 @@ def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, 
     """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
     each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
     when the net share of its evidence is below -REVERSE_SHARE, and named when at least
-    REVERSE_MIN long with at least 5 votes."""
+    REVERSE_MIN long with at least 5 votes; inside a stretch judged forward, a run of consecutive
+    reversing votes (_reversing_runs) is one too."""
     out = []
     moving = np.isfinite(c)
     edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
         votes = e[a:b]
         seen = int(np.sum(votes != 0))
-        if seen >= 5 and votes.sum() / seen < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+        if seen >= 5 and votes.sum() / np.sum(np.abs(votes)) < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
             out.append((float(t[a]), float(t[b - 1])))
+        else:           # a stop too brief for the fixes to show it: a run of reversing evidence alone
+            out += _reversing_runs(t[a:b], votes)
     return out
+
+
+def _reversing_runs(t: np.ndarray, votes: np.ndarray) -> list[tuple[float, float]]:
+    """(start, end) of the runs of consecutive reversing votes at least RUN_MIN s and RUN_VOTES
+    votes long inside a stretch judged forward (a machine that backs up with a stop shorter than
+    the fixes' chords between)."""
+    edges = np.diff(np.concatenate([[0], (votes < 0).astype(int), [0]]))
+    return [(float(t[a]), float(t[b - 1])) for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))
+            if b - a >= RUN_VOTES and t[b - 1] - t[a] >= RUN_MIN]
 
 
 def _within(times: np.ndarray, stretches) -> np.ndarray:
@@ -162,13 +185,18 @@ def _within(times: np.ndarray, stretches) -> np.ndarray:
 
 
 def _to_stops(ts: np.ndarray, vs: np.ndarray, a: float, b: float) -> tuple[float, float]:
-    """A reversing stretch widened to the stops either side (the speed under STOP, up to 3 s away):
-    the course is read only above MOVING, the machine reverses from standstill to standstill."""
-    still = np.abs(vs) < STOP
-    before = np.flatnonzero(still & (ts <= a) & (ts >= a - 3.0))
-    after = np.flatnonzero(still & (ts >= b) & (ts <= b + 3.0))
-    return (float(ts[before[-1]]) if len(before) else a, float(ts[after[0]]) if len(after) else b)
-
+    """A reversing stretch widened to the stops either side: the slowest sample up to 3 s away when
+    it is slower than STOP or a quarter of the stretch's median speed (the course is read only
+    above MOVING, the machine reverses from standstill to standstill; a quick turnaround is never
+    quite at rest between two samples)."""
+    inside = (ts >= a) & (ts <= b)
+    slow = max(STOP, 0.25 * float(np.median(np.abs(vs[inside])))) if inside.any() else STOP
+    out = []
+    for lo, hi, edge in ((a - 3.0, a, a), (b, b + 3.0, b)):
+        near = np.flatnonzero((ts >= lo) & (ts <= hi))
+        k = near[int(np.argmin(np.abs(vs[near])))] if len(near) else None
+        out.append(float(ts[k]) if k is not None and abs(vs[k]) < slow else edge)
+    return out[0], out[1]
 
 def judged_speed(streams):
     """(name, times, values) of the speed the log carries as the machine's: v, else the
@@ -195,9 +223,11 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     stretches = reversing(t, c, e)
     if not stretches:
         return []
+    speed = judged_speed(streams)
+    if speed is not None:       # from standstill to standstill: the evidence is read only while moving
+        stretches = [_to_stops(speed[1], speed[2], a, b) for a, b in stretches]
     when = ", ".join(f"{a - t0:.1f}-{b - t0:.1f} s" for a, b in stretches)
     total = sum(b - a for a, b in stretches)
-    speed = judged_speed(streams)
     chans = [speed[0] if speed else "track_speed", "course"]
     if speed is not None:
         name, ts, vs = speed
@@ -214,7 +244,7 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
                        f"signed speed (negative reversing): {remedy} (a direction channel, --signal "
                        f"direction=TABLE.COLUMN negative reversing, says where)")
     name, ts, vs = speed
-    flip = _within(ts, [_to_stops(ts, vs, a, b) for a, b in stretches])
+    flip = _within(ts, stretches)
     signed = np.where(flip, -np.abs(vs), vs)
     if name == "v":
         streams.signals["v"] = (ts, signed)

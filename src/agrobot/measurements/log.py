@@ -149,7 +149,7 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
             elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
                                f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
-                               f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}; a raw recording: declare the "
+                               f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}: degrees are {180 / math.pi:.1f} times radians; a raw recording: declare the "
                                f"unit, --signal '{c}=...[deg{'/s' if unit == 'rad/s' else ''}]')")
     check_units(frame, path)
     quantised = {c: q for c, q in grid.items() if q > 0}

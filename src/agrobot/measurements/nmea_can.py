@@ -50,7 +50,8 @@ def nmea_can_streams(source: Path, options: ImportOptions, kinds: dict[str, list
     wanted = messages_of(db, choose_sources(db, dbc_name, list(options.signals))[0].values()) if can_files else None
     cans = [read_can_file(p, db, options.bus, wanted) for p in can_files]
     report: dict = {"source": str(source), "files": {"nmea": [str(n.path) for n in nmea], "can": [str(c.path) for c in cans]},
-                    "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes]}
+                    "dbc": dbc_name if cans else None, "notes": [x for n in nmea for x in n.notes],
+                    "time_base": [x for n in nmea for x in n.time_base]}
     for c in cans:
         report["notes"] += c.notes
         if c.bad_lines:

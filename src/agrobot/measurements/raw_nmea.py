@@ -27,6 +27,7 @@ import pandas as pd
 from .log import LogError
 from .quirks import ordered_in_time
 from .streams import iso
+from .time_base import rollover_by_written
 
 NMEA_SUFFIXES = (".nmea", ".gps", ".nma")
 NMEA_TEXT_SUFFIXES = (".log", ".txt")      # NMEA when they hold sentences
@@ -48,6 +49,7 @@ class NMEARecording:
     counts: Counter = field(default_factory=Counter)
     notes: list[str] = field(default_factory=list)
     breaks: list[dict] = field(default_factory=list)     # where the clock stepped back (measurements.quirks)
+    time_base: list[dict] = field(default_factory=list)  # {finding, at}: its dates (measurements.time_base)
 
     @property
     def has_host_time(self) -> bool:
@@ -270,9 +272,14 @@ def read_nmea_file(path: str | Path) -> NMEARecording:  # noqa: C901 - one pass 
         notes.append(f"{path.name}: {counts[kind]} line(s) with {kind} removed, the sentence after it read (the first "
                      f"at line {n})" if kind.startswith("binary data before") else
                      f"{path.name}: {counts[kind]} line(s) skipped: {kind} (the first at line {n})")
+    if counts["repeated epoch"]:
+        notes.append(f"{path.name}: {counts['repeated epoch']} GGA sentence(s) repeat the time of an epoch already "
+                     f"read (an epoch written twice): the first kept")
     frame, breaks = ordered_in_time(frame, path.name, notes)
+    said = rollover_by_written(path, float(frame["utc"].iloc[-1]), path.name) if len(frame) else None
     return NMEARecording(path, frame[["utc", "host", "lat", "lon", "height", "quality", "speed", "course", "heading",
-                                      "position_std"]].reset_index(drop=True), counts, notes, breaks)
+                                      "position_std"]].reset_index(drop=True), counts, notes, breaks,
+                         [{"at": None, "finding": said}] if said else [])
 
 
 def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line, state):
@@ -306,9 +313,9 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                 day_index += 1                       # past midnight
             last_tod = tod
             key = (day_index, round(tod, 3))
-            if key in epochs.recent:
+            if key in epochs.recent:          # the epoch written again: its sentences leave the first as read
                 counts["repeated epoch"] += 1
-                return day_index, last_tod, epochs.recent[key]
+                return day_index, last_tod, None
             quality = int(f[6]) if f[6] else 0
             fix = quality != 0 and bool(f[2])
             if fix:
@@ -324,7 +331,7 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                 d = datetime.date(yy + (2000 if yy < 69 else 1900), int(f[9][2:4]), int(f[9][0:2]))
                 dates.append((host, tod, _date_seconds(d)))
             i = epochs.recent.get((day_index, round(tod, 3)))
-            if i is not None and f[2] == b"A" and f[7]:
+            if i is not None and f[2] == b"A" and f[7] and not math.isfinite(epochs.get(i, "speed")):
                 epochs.set(i, "speed", float(f[7]) * KNOTS)
                 epochs.set(i, "course", math.radians(float(f[8])) if f[8] else math.nan)
             counts["RMC"] += 1

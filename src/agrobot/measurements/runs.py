@@ -115,6 +115,8 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     for c, (tc, vc) in sig.items():
         if c not in columns:
             columns[c] = held(t, tc, vc) if c in streams.held or c in DISCRETE else within(t, tc, vc, bridge)
+            if c == "heading":              # an angle, unwrapped on its stamps: wrapped to (-pi, pi]
+                columns[c] = np.angle(np.exp(1j * columns[c]))
     report["rate_hz"] = 1.0 / step
     report["resolution"] = {c: float(streams.resolution.get(c, 0.0)) for c in list(sig) + ["x", "y"]
                             if c in sig or c in streams.resolution}

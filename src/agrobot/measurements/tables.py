@@ -39,12 +39,14 @@ import pandas as pd
 
 from agrobot.orchestrator.units import base_unit
 
+from .headings import as_yaw
 from .log import CANONICAL, LogError
 from .mdf4 import mdf_tables
 from .quirks import fixes_from_columns
 from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
 from .streams import Reader, Series, Streams, is_boot_clock, iso
+from .time_base import clock_steps, rollover_between, rollover_by_written, rollover_finding
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
@@ -71,6 +73,7 @@ class Table:
     time_columns: tuple = ()
     notes: list = field(default_factory=list)
     mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
+    time_base: list = field(default_factory=list)  # {finding, at}: its clock's steps and rollover (measurements.time_base)
 
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
@@ -490,6 +493,9 @@ def _clean(table: Table) -> None:
     if (~ok).any():
         table.notes.append(f"{int((~ok).sum())} rows without a time dropped")
     frame, t = table.frame[ok].reset_index(drop=True), t[ok]
+    data = [pd.to_numeric(frame[c], errors="coerce").to_numpy(float) for c in frame.columns if c not in table.time_columns]
+    t, steps = clock_steps(t, data, table.path.name)
+    table.time_base += steps
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):
         table.notes.append(f"{int(np.sum(np.diff(t) < 0))} times step back: rows put in time order")
@@ -536,7 +542,24 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
     for t in tables:
         if t.t is not None:
             _clean(t)
+    _rollover(tables)
     return tables
+
+
+def _rollover(tables: list[Table]) -> None:
+    """Tables dated k x 1024 weeks before the others moved onto their dates; a table alone dated
+    so before it was written named (measurements.time_base)."""
+    dated = {t.name: t for t in tables if t.t is not None and len(t.t) and not is_boot_clock(t.t)}
+    moves = rollover_between({n: (float(t.t[0]), float(t.t[-1])) for n, t in dated.items()})
+    for name, move in moves.items():
+        t = dated[name]
+        against = ", ".join(n for n in dated if n not in moves)
+        t.time_base.append({"at": None, "finding": rollover_finding(t.path.name, move, float(t.t[0]), against)})
+        t.t = t.t + move
+    for name, t in dated.items():
+        said = rollover_by_written(t.path, float(t.t[-1]), t.path.name) if name not in moves else None
+        if said is not None:
+            t.time_base.append({"at": None, "finding": said})
 
 
 def untimed(t: Table) -> LogError:
@@ -641,10 +664,50 @@ def fixes_as_given(streams: Streams, source: Path) -> Streams:
     return streams
 
 
+MODE_NAMES = ("mode", "control_mode", "drive_mode", "driving_mode", "state", "autonomy", "engaged", "engagement",
+              "auto_mode", "operation_mode")
+MODE_VALUES = 12        # a mode column takes at most this many values
+
+
+def mode_runs(table: Table) -> dict[str, list[tuple[str, float, float]]]:
+    """{column: [(value, start, end POSIX s)]} of each text column named as a mode or engagement
+    channel (MODE_NAMES) with few values: its stretches, as the rows give them."""
+    out = {}
+    if table.t is None or len(table.t) < 2:
+        return out
+    for c in table.frame.columns:
+        col = table.frame[c]
+        if str(c).lower() not in MODE_NAMES or pd.api.types.is_numeric_dtype(col):
+            continue
+        values = col.astype(str).to_numpy()
+        if len(set(values)) > MODE_VALUES:
+            continue
+        cuts = np.flatnonzero(values[1:] != values[:-1]) + 1
+        starts, ends = np.concatenate([[0], cuts]), np.concatenate([cuts, [len(values)]])
+        out[str(c)] = [(str(values[a]), float(table.t[a]), float(table.t[b - 1])) for a, b in zip(starts, ends)]
+    return out
+
+
 def _holders(tables: list[Table], name: str) -> list[str]:
     """TABLE.COLUMN of every table with a column called ``name`` (any letter case)."""
     return [f"{t.name}.{c}" for t in tables for c in t.frame.columns
             if str(c).lower() == name and c not in t.time_columns]
+
+
+def _receiver_specs(tables: list[Table], specs: list, given: set, auto: set) -> None:
+    """With a user's mapping, the fix quality column beside the mapped lat (the receiver's own
+    word); without one, a ``heading`` column (a dual-antenna or INS heading: the yaw angle,
+    measurements.headings). Added to ``specs`` (and ``auto``) in place."""
+    lat = next((spec for spec in specs if spec.column == "lat"), None)
+    if given and lat is not None and "fix_quality" not in given:
+        home = lat.names[0].split(".")[0]
+        quality = [h for a in ALIASES["fix_quality"] for h in _holders(tables, a) if h.split(".")[0] == home]
+        if quality:
+            specs.append(SignalSpec("fix_quality", ((quality[0], 1.0),), 0.0, None, f"fix_quality={quality[0]}"))
+    heading = _holders(tables, "heading") if not given else []
+    if len(heading) == 1:
+        specs.append(SignalSpec("heading", ((heading[0], 1.0),), 0.0, None, f"heading={heading[0]}"))
+        auto.add("heading")
 
 
 def table_streams(paths: list[Path], options, source: Path):
@@ -675,6 +738,7 @@ def table_streams(paths: list[Path], options, source: Path):
                 notes.append(f"{alias} is a column of several tables ({', '.join(hits)}): map one with "
                              f"--signal {column}=TABLE.{alias.split('.')[-1]}")
                 break
+    _receiver_specs(tables, specs, given, auto)
     if not specs:
         raise LogError(f"{source}: no column to take: name them with --signal COLUMN=TABLE.COLUMN[unit] (the log's "
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
@@ -708,6 +772,8 @@ def table_streams(paths: list[Path], options, source: Path):
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
+              "time_base": [x for t in tables if t.name in used for x in t.time_base],
+              "mode_columns": {f"{t.path.name} {c}": runs for t in tables if t.name in used for c, runs in mode_runs(t).items()},
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
                                   "start": iso(float(t.t[0])) if t.t is not None and len(t.t) else None,
                                   "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
@@ -715,8 +781,13 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    return fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}, {},
-                                  groups=groups), source)
+    streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals},
+                                     {}, groups=groups), source)
+    if "heading" in streams.signals:
+        spec = next(s for s in specs if s.column == "heading")
+        as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
+               "no unit in the header" not in columns.get("heading", ""))
+    return streams
 
 
 def list_tables(paths: list[Path], options) -> list[str]:
