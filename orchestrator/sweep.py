@@ -22,6 +22,7 @@ process, which never plots; the Agg backend is chosen before pyplot loads).
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import ctypes
 import hashlib
 import itertools
@@ -48,13 +49,15 @@ from .compiled import select_engine
 from .engine import RunError, Simulation
 from .resolver import resolve
 from .errors import InputError, critical
-from .key_figures import bounds, sweep_table
+from .key_figures import sweep_table
 from .mcap_out import wants_mcap, write_study_mcap
 from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs, swap_folder
 from .registry import import_study_module
 from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
 from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
+from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
+from .sweep_judgement import failing_groups, judgement_lines, point_row, severity, sweep_bounds, with_oscillation
 
 
 @dataclass(frozen=True)
@@ -114,6 +117,24 @@ def watch_parent(parent: int) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, daemon=True, name="watch-parent").start()
+
+
+@contextlib.contextmanager
+def main_file_hidden() -> Iterator[None]:
+    """While workers start: a ``__main__`` whose file does not exist (a script read from standard
+    input, ``python3 - < script.py``: ``'<stdin>'``) is not named to them. The spawn start method
+    runs the parent's main file again in every worker; with none to run, each worker died at start
+    and every point was lost. The points need nothing from ``__main__``."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    hidden = path is not None and not os.path.isfile(path)
+    if hidden:
+        del main.__file__
+    try:
+        yield
+    finally:
+        if hidden:
+            main.__file__ = path
 
 
 def simulate_point(study: Study, folder: str | None = None, engine: str = "python",
@@ -196,13 +217,16 @@ def sweep_hash(study: Study) -> str:
 
 class SweepRun:
     def __init__(self, study: Study, out_dir: Path, overwrite: bool = False, engine: str = "python",
-                 keep_signals: bool | None = None) -> None:
+                 keep_signals: bool | str | None = None, accept_cost: bool = False) -> None:
         self.study, self.out, self.overwrite = study, Path(out_dir), overwrite
-        self.engine = engine
-        self.keep_signals = engine == "python" if keep_signals is None else keep_signals
+        self.engine, self.accept_cost = engine, accept_cost
         self.where = str(study.path)
         self.kept_in = self.out                 # where an interrupted sweep's finished points are
         self.points = expand(study)
+        self.signals = policy(keep_signals, engine, len(self.points))     # orchestrator.sweep_cost
+        self.keep_signals = self.signals != "none"
+        self.nominal: dict[str, Any] = {}       # the nominal run's metrics (orchestrator.sweep_judgement)
+        self.keeper: SignalKeeper | None = None
         self.fmt = study.study.signals_format
         self._into(self.out)
 
@@ -246,7 +270,11 @@ class SweepRun:
             try:
                 system = build_system(resolve(point_study(self.study, point)))
                 if i == 0 and self.engine != "python":
+                    print(f"sweep: compiling the study's loop for --engine {self.engine} (once; a loop compiled "
+                          f"before is taken from the cache) ...", file=sys.stderr, flush=True)
+                    start = time.perf_counter()
                     note = select_engine(system, self.engine)[1]
+                    print(f"sweep: the loop ready in {time.perf_counter() - start:.1f} s", file=sys.stderr)
                     if note and self.engine == "auto":
                         print(note, file=sys.stderr)
             except StudyError as exc:
@@ -314,6 +342,8 @@ class SweepRun:
         return record
 
     def table(self) -> pd.DataFrame:
+        """One row per stored point (its parameters, status, error, metrics) and its oscillation
+        ratio to the nominal run (orchestrator.sweep_judgement)."""
         rows = []
         for point in self.points:
             path = self.record_path(point)
@@ -322,7 +352,64 @@ class SweepRun:
             rec = json.loads(path.read_text())
             rows.append({"point": rec["point"], "seed": rec["seed"], **rec["parameters"],
                          "status": rec["status"], "error": rec["error"], **rec["metrics"]})
-        return pd.DataFrame(rows)
+        return with_oscillation(pd.DataFrame(rows), self.study, self.nominal_metrics())
+
+    # --- the nominal run, and the cost told before it is paid ------------------------------------
+    def nominal_metrics(self) -> dict[str, Any]:
+        """The nominal run's metrics (empty when it did not complete or has not run)."""
+        path = self.folder / "nominal" / "metrics.json"
+        if not self.nominal and path.exists():
+            record = json.loads(path.read_text())
+            self.nominal = record["metrics"] if record["status"] == "completed" else {}
+        return self.nominal
+
+    def run_nominal(self) -> tuple[dict[str, Any], Path | None]:
+        """(record, folder to move into ``nominal/`` or None when it is there already): the study with
+        its own values (no swept value set) run here, before the points, timed and weighed: the
+        oscillation bound's reference and the measure of the sweep's cost (orchestrator.sweep_cost)."""
+        path = self.folder / "nominal" / "metrics.json"
+        if path.exists():
+            return json.loads(path.read_text()), None
+        print("sweep: the nominal run (the study's own values) first: the reference of the oscillation bound and "
+              "the measure of the sweep's cost ...", file=sys.stderr, flush=True)
+        self.running_dir.mkdir(parents=True, exist_ok=True)
+        folder = Path(tempfile.mkdtemp(prefix="nominal.", dir=self.running_dir))
+        start = time.perf_counter()
+        result = simulate_point(self.study.without("sweep"), str(folder), self.engine, keep_signals=True)
+        elapsed = time.perf_counter() - start
+        signal_bytes, other_bytes = folder_bytes(folder)
+        record = {"point": "nominal", "seed": self.study.study.seed, "parameters": {}, "status": result["status"],
+                  "error": result.get("error"), "error_kind": result.get("kind"), "elapsed_s": elapsed,
+                  "signal_bytes": signal_bytes, "other_bytes": other_bytes + 1024,
+                  "metrics": {k: v for k, v in (result.get("metrics") or {}).items()
+                              if isinstance(v, (int, float)) and not isinstance(v, bool)}}
+        write_json(folder / "metrics.json", record)
+        return record, folder
+
+    def announce_cost(self, todo: int, workers: int) -> None:
+        """Print the sweep's expected time and disk use; refuse one beyond the limits (CostRefused)
+        unless ``accept_cost``; then keep the nominal run in ``nominal/``."""
+        record, folder = self.run_nominal()
+        cost = estimate(todo, workers, record["elapsed_s"], record["signal_bytes"], record["other_bytes"],
+                        self.signals)
+        print(cost.line(self.signals, record["elapsed_s"]), file=sys.stderr, flush=True)
+        check_cost(cost, self.folder, self.accept_cost)
+        if folder is not None:
+            with critical():
+                old = swap_folder(folder, self.folder / "nominal")
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        self.nominal = {}
+        self.nominal_metrics()
+        if record["status"] != "completed":
+            print(f"sweep: the nominal run failed ({str(record.get('error') or '').splitlines()[0][:200]}); the "
+                  f"points are not judged against it", file=sys.stderr)
+
+    def _keep_signals_of(self, point: Point, record: dict[str, Any]) -> None:
+        """Under the ``worst`` policy: the point's signals kept while it is among the worst or in the sample."""
+        if self.keeper is not None:
+            row = point_row(record, self.study, self.nominal)
+            self.keeper.keep(point.key, severity(row, sweep_bounds(self.study, self.nominal)), self.points_dir)
 
     def write_table(self) -> Path:
         return write_table(self.folder / "results", self.table(), self.fmt)
@@ -352,16 +439,32 @@ class SweepRun:
             return self._run(workers, scheduler, retry_failed, progress)
 
     def _run(self, workers: int, scheduler: str | None, retry_failed: bool, progress: bool) -> pd.DataFrame:
+        fresh = not (self.folder / "sweep.json").exists()
         self.validate()
         self._remove_stale()
         done = self.finished(retry_failed)
         todo = [p for p in self.points if p.key not in done]
+        try:
+            self.announce_cost(len(todo), workers)
+        except CostRefused:
+            self._remove_stale()
+            if fresh:                 # nothing of this sweep is left behind
+                (self.folder / "sweep.json").unlink(missing_ok=True)
+                with contextlib.suppress(OSError):
+                    self.points_dir.rmdir()
+            raise
+        if self.signals == "worst":
+            self.keeper = SignalKeeper(sample_points([p.key for p in self.points]))
+            for point in self.points:
+                if point.key in done:
+                    self._keep_signals_of(point, json.loads(self.record_path(point).read_text()))
         bar = _progress(len(self.points), len(done), progress)
         failures = sum(1 for p in self.points if p.key in done
                        and json.loads(self.record_path(p).read_text())["status"] != "completed")
         try:
             for point, result, folder in self._execute(todo, workers, scheduler):
                 record = self.store(point, result, folder)
+                self._keep_signals_of(point, record)
                 failures += record["status"] != "completed"
                 bar.update(1)
                 bar.set_postfix(failures=failures)
@@ -393,9 +496,10 @@ class SweepRun:
             os.environ.setdefault(var, "1")
         if scheduler is None:
             ctx = multiprocessing.get_context("spawn")
-            with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
-                                        initargs=(os.getpid(),)) as pool:
-                futures = {pool.submit(simulate_point, point, str(folder)): (p, folder) for p, point, folder in jobs}
+            with main_file_hidden(), cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                                            initializer=watch_parent, initargs=(os.getpid(),)) as pool:
+                futures = {pool.submit(simulate_point, point, str(folder), "python", self.keep_signals): (p, folder)
+                           for p, point, folder in jobs}
                 try:
                     for fut in cf.as_completed(futures):
                         point, folder = futures[fut]
@@ -408,7 +512,8 @@ class SweepRun:
                     pool.shutdown(wait=False, cancel_futures=True)
                     raise
             return
-        yield from _execute_dask(jobs, workers, scheduler)
+        with main_file_hidden():
+            yield from _execute_dask(jobs, workers, scheduler, self.keep_signals)
 
     def _execute_batched(self, todo: list[Point], workers: int, scheduler: str | None, shared: bool):
         """As ``_execute``, BATCH points per task (the compiled engine); tasks are submitted as
@@ -440,24 +545,8 @@ class SweepRun:
         pending: dict = {}
         queue = iter(batches)
         try:
-            while True:
-                while len(pending) < 2 * workers:
-                    batch = next(queue, None)
-                    if batch is None:
-                        break
-                    jobs, folders = job(batch)
-                    pending[submit(jobs)] = (batch, folders)
-                if not pending:
-                    break
-                for fut in wait_first(pending.keys()):
-                    batch, folders = pending.pop(fut)
-                    try:
-                        results = fut.result()
-                    except Exception as exc:  # a worker process died (killed, out of memory)
-                        results = [{"status": "failed", "kind": "bug",
-                                    "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
-                    for point, result, folder in zip(batch, results, folders):
-                        yield point, result, folder
+            with main_file_hidden():
+                yield from _drain(queue, pending, job, submit, wait_first, workers)
         finally:
             if scheduler is None:
                 for proc in list((pool._processes or {}).values()):
@@ -467,6 +556,27 @@ class SweepRun:
                 pool.close()
                 if cluster is not None:
                     cluster.close()
+
+
+def _drain(queue, pending: dict, job, submit, wait_first, workers: int):
+    """(point, result, folder) as batches finish, 2 x ``workers`` batches in flight at most."""
+    while True:
+        while len(pending) < 2 * workers:
+            batch = next(queue, None)
+            if batch is None:
+                break
+            jobs, folders = job(batch)
+            pending[submit(jobs)] = (batch, folders)
+        if not pending:
+            break
+        for fut in wait_first(pending.keys()):
+            batch, folders = pending.pop(fut)
+            try:
+                results = fut.result()
+            except Exception as exc:  # a worker process died (killed, out of memory)
+                results = [{"status": "failed", "kind": "bug",
+                            "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
+            yield from zip(batch, results, folders)
 
 
 def _result(fut) -> dict[str, Any]:
@@ -483,7 +593,7 @@ class SchedulerError(StudyError):
     """The --scheduler address does not lead to a Dask scheduler (exit 2)."""
 
 
-def _execute_dask(jobs, workers: int, scheduler: str):
+def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True):
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
@@ -499,7 +609,8 @@ def _execute_dask(jobs, workers: int, scheduler: str):
                                  f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
                                  f"expected an address like tcp://HOST:8786, or 'local'") from None
     try:
-        futures = {client.submit(simulate_point, point, str(folder) if folder else None, pure=False,
+        futures = {client.submit(simulate_point, point, str(folder) if folder else None, "python", keep_signals,
+                                 pure=False,
                                  key=f"{p.key}-{time.time_ns()}"): (p, folder) for p, point, folder in jobs}
         for fut in as_completed(futures):
             point, folder = futures[fut]
@@ -530,17 +641,22 @@ def failure_reasons(table: pd.DataFrame) -> list[tuple[str, list[str]]]:
     return sorted(groups.items(), key=lambda item: -len(item[1]))
 
 
-def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[str, list[str]]]]:
+def sweep_summary(study: Study, table: pd.DataFrame,
+                  nominal: dict[str, Any] | None = None) -> tuple[str, list[tuple[str, list[str]]]]:
     """(the text a sweep ends with, its failures grouped by reason): the key figures over the
-    completed points with their bounds (orchestrator.key_figures), the sweep analysis's own
-    summary (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
+    completed points with their bounds (orchestrator.key_figures) and the oscillation bound
+    against the ``nominal`` run's metrics, the points outside a bound named and grouped by what
+    they share (orchestrator.sweep_judgement), the sweep analysis's own summary
+    (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
     analysis = _analysis(study)
     done = int((table["status"] == "completed").sum()) if "status" in table else 0
     lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "
              f"{len(table) - done} failed"]
     if done:
-        text = sweep_table(table, analysis, bounds(analysis, study.study.bounds), set(study.sweep.parameters))
+        judged = sweep_bounds(study, nominal)
+        text = sweep_table(table, analysis, judged, set(study.sweep.parameters))
         lines += [text] if text else []
+        lines += judgement_lines(study, table, judged, nominal)
         if study.sweep.analysis:
             module = import_study_module(study.sweep.analysis)
             if hasattr(module, "summary"):
@@ -564,11 +680,13 @@ def _parameter_unit(study: Study, name: str) -> str:
     return declared[param].unit if param in declared else ""
 
 
-def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
+def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path, nominal: dict[str, Any] | None = None) -> list[Path]:
     """The metrics that matter against the first swept parameter (one line per other value / seed),
     and the sweep analysis module's own plots (``sweep.analysis``). The study's analysis module
     chooses them: ``SWEEP_METRICS`` {metric: bound drawn as a line, or None}; without it, every
-    metric but counters and wall time (all stay in results.parquet)."""
+    metric but counters and wall time (all stay in results.parquet). The oscillation ratio to the
+    ``nominal`` run is drawn with its bound, and the points outside any bound are ringed in red
+    (orchestrator.sweep_judgement)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -589,6 +707,13 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     chosen = getattr(analysis, "SWEEP_METRICS", None)
     metrics = [c for c in ok.columns if c not in skip and pd.api.types.is_numeric_dtype(ok[c])]
     metrics = [m for m in chosen if m in metrics] if chosen else [m for m in metrics if metric_units.get(m) != "count"]
+    judged = sweep_bounds(study, nominal)
+    chosen = {**(chosen or {}), **{k: b.value for k, b in judged.items() if k.endswith("_vs_nominal")}}
+    metrics += [k for k in chosen if k.endswith("_vs_nominal") and k in ok and k not in metrics]
+    metric_units.update({k: "1" for k in chosen if k.endswith("_vs_nominal")})
+    outside = pd.Series(False, index=ok.index)
+    for _, _, mask in failing_groups(ok, judged):
+        outside |= mask
     cols = 3
     rows = -(-len(metrics) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 2.8 * rows), squeeze=False)
@@ -599,6 +724,10 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
             g = g.sort_values(x)
             text = ", ".join(map(str, label if isinstance(label, tuple) else (label,)))
             ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=text if group_cols else None)
+        if outside.any():
+            ax.plot(ok.loc[outside, x], ok.loc[outside, metric], "o", ms=7, mfc="none", mec="tab:red", mew=1.2,
+                    label=f"outside a bound ({int(outside.sum())})")
+            ax.legend(fontsize=7)
         unit = metric_units.get(metric)
         bound = (chosen or {}).get(metric)
         if bound is not None:
