@@ -16,7 +16,7 @@ and moves the folder into place in one step, so ``points/pNNNN`` is either whole
 point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
 (``--scheduler ADDRESS``) the worker records into its own temporary folder and sends the files.
 
-Imported where used: distributed (the dask extra), matplotlib (start-up: 0.9 s in every worker
+Imported where used: distributed and psutil (the dask extra; psutil comes with distributed), matplotlib (start-up: 0.9 s in every worker
 process, which never plots; the Agg backend is chosen before pyplot loads).
 """
 from __future__ import annotations
@@ -24,6 +24,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import ctypes
+import errno
 import hashlib
 import itertools
 import json
@@ -51,7 +52,8 @@ from .resolver import resolve
 from .errors import InputError, critical
 from .key_figures import sweep_table
 from .mcap_out import wants_mcap, write_study_mcap
-from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs, swap_folder
+from .output import (OutputError, OutputLock, ResultFolder, check_output, disk_full, remove_stale_staging,
+                     study_inputs, swap_folder)
 from .registry import import_study_module
 from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
 from .atomic_files import UMASK, atomic_write, write_json, write_table
@@ -160,6 +162,11 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
             write_study_mcap(study, outcome.table.to_pandas(), target / "run.mcap")
     except InputError as exc:           # the point's values refused when its components start
         result = {"status": "failed", "kind": "input", "error": str(exc)}
+    except OSError as exc:
+        if not disk_full(exc):
+            raise
+        result = {"status": "failed", "kind": DISK_FULL, "error": f"{exc.strerror or exc}", "errno": exc.errno,
+                  "filename": str(exc.filename or "")}
     except Exception as exc:  # a bug in a component: record it, the sweep goes on
         result = {"status": "failed", "kind": "bug", "error": f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"}
     else:
@@ -170,10 +177,19 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
             text = str(error) if kind != "bug" else \
                 f"{type(error).__name__}: {error}\n{''.join(traceback.format_exception(error))}"
             result.update(kind=kind, error=text)
-    if folder is None:
+    if folder is None and result.get("kind") != DISK_FULL:
         result["files"] = {p.name: p.read_bytes() for p in target.iterdir() if p.is_file()}
+    if folder is None:
         shutil.rmtree(target, ignore_errors=True)
     return result
+
+
+DISK_FULL = "disk_full"        # a point's kind of failure that ends the sweep (SweepDiskFull)
+
+
+class SweepDiskFull(OutputError):
+    """The disk filled while the sweep wrote a point (exit 2): the point is removed, the points
+    finished before it are kept (a rerun resumes)."""
 
 
 def _metrics_only(study: Study, system, simulation) -> dict[str, Any]:
@@ -383,7 +399,16 @@ class SweepRun:
                   "signal_bytes": signal_bytes, "other_bytes": other_bytes + 1024,
                   "metrics": {k: v for k, v in (result.get("metrics") or {}).items()
                               if isinstance(v, (int, float)) and not isinstance(v, bool)}}
-        write_json(folder / "metrics.json", record)
+        try:
+            if result.get("kind") == DISK_FULL:
+                raise OSError(result.get("errno") or errno.ENOSPC, result["error"])
+            write_json(folder / "metrics.json", record)
+        except OSError as exc:
+            if not disk_full(exc):
+                raise
+            shutil.rmtree(folder, ignore_errors=True)
+            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while the nominal run was "
+                                f"written; it was removed: free some space and run the command again") from None
         return record, folder
 
     def announce_cost(self, todo: int, workers: int) -> None:
@@ -463,16 +488,38 @@ class SweepRun:
                        and json.loads(self.record_path(p).read_text())["status"] != "completed")
         try:
             for point, result, folder in self._execute(todo, workers, scheduler):
-                record = self.store(point, result, folder)
+                record = self._store_or_stop(point, result, folder)
                 self._keep_signals_of(point, record)
                 failures += record["status"] != "completed"
                 bar.update(1)
                 bar.set_postfix(failures=failures)
         finally:
             bar.close()
-            self.write_table()
+            try:
+                self.write_table()
+            except OSError as exc:          # a full disk: the table is made again from the points on resume
+                if not disk_full(exc):
+                    raise
             self._remove_stale()
         return self.table()
+
+    def _store_or_stop(self, point: Point, result: dict[str, Any], folder: Path | None) -> dict[str, Any]:
+        """``store``; on a full disk (the worker's or ours) the point's folder is removed and the
+        sweep ends with SweepDiskFull, the points finished before it kept."""
+        try:
+            if result.get("kind") == DISK_FULL:
+                raise OSError(result.get("errno") or errno.ENOSPC, result["error"], result.get("filename") or None)
+            return self.store(point, result, folder)
+        except OSError as exc:
+            if not disk_full(exc):
+                raise
+            if folder is not None:
+                shutil.rmtree(folder, ignore_errors=True)
+            kept = (f"the {len(self.finished())} points finished before it are kept in {self.out}: free some space "
+                    f"and run the same command again to resume") if self.folder == self.out else \
+                f"{self.out} holds what it held before (--overwrite): free some space and run the command again"
+            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while point {point.key} "
+                                f"was written; that point was removed and {kept}") from None
 
     def _remove_stale(self) -> None:
         """Files and point folders left half-written by a run that was killed or interrupted."""
@@ -536,6 +583,7 @@ class SweepRun:
         else:
             from distributed import Client, LocalCluster, wait
 
+            before = _children()
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) \
                 if scheduler == "local" else None
             pool = Client(cluster) if cluster is not None else Client(scheduler, timeout=CONNECT_TIMEOUT)
@@ -547,15 +595,19 @@ class SweepRun:
         try:
             with main_file_hidden():
                 yield from _drain(queue, pending, job, submit, wait_first, workers)
+        except BaseException:
+            if scheduler is not None:
+                _abandon_cluster(pool, cluster, before)
+            raise
         finally:
             if scheduler is None:
                 for proc in list((pool._processes or {}).values()):
                     proc.terminate()
                 pool.shutdown(wait=False, cancel_futures=True)
-            else:
-                pool.close()
-                if cluster is not None:
-                    cluster.close()
+        if scheduler is not None:
+            pool.close()
+            if cluster is not None:
+                cluster.close()
 
 
 def _drain(queue, pending: dict, job, submit, wait_first, workers: int):
@@ -597,6 +649,7 @@ def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True)
     from distributed import Client, LocalCluster, as_completed
 
     cluster = None
+    before = _children()
     if scheduler == "local":
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                dashboard_address=None)
@@ -615,10 +668,51 @@ def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True)
         for fut in as_completed(futures):
             point, folder = futures[fut]
             yield point, _result(fut), folder
-    finally:
-        client.close()
+    except BaseException:
+        _abandon_cluster(client, cluster, before)
+        raise
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _children() -> set[int]:
+    """The process ids of this process's children, grandchildren included, but multiprocessing's
+    resource tracker (shared with the rest of the process; killed, its successor reports every
+    resource it did not know)."""
+    import psutil
+
+    out = set()
+    for child in psutil.Process().children(recursive=True):
+        with contextlib.suppress(psutil.Error):
+            if not any("resource_tracker" in part for part in child.cmdline()):
+                out.add(child.pid)
+    return out
+
+
+def _abandon_cluster(client, cluster, before: set[int]) -> None:
+    """An interrupted Dask sweep ends now: the local cluster's processes (those started since
+    ``before``) are killed rather than asked to finish (its orderly close waited some 13 s, and a
+    second Ctrl-C inside it left the process hanging until SIGKILL), then the client and cluster
+    are closed within a second each. SIGINT and SIGTERM are held off meanwhile: a second Ctrl-C
+    cannot cut the clean-up in half. The points in flight are dropped (their folders are in
+    .running, removed by the sweep; a rerun does them again)."""
+    import psutil
+
+    main = threading.current_thread() is threading.main_thread()
+    held = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)} if main else {}
+    try:
         if cluster is not None:
-            cluster.close()
+            for pid in _children() - before:
+                with contextlib.suppress(psutil.Error):
+                    psutil.Process(pid).kill()
+        for close in (client.close, getattr(cluster, "close", None)):
+            if close is not None:
+                with contextlib.suppress(Exception):
+                    close(timeout=1)
+    finally:
+        for sig, handler in held.items():
+            signal.signal(sig, handler)
 
 
 def _progress(total: int, initial: int, enabled: bool):

@@ -140,8 +140,9 @@ def _existing(folder: Path) -> Path:
     return folder
 
 
-def sample_points(keys: list[str], size: int = SAMPLE) -> set[str]:
-    """``size`` point keys spread evenly over the sweep (the first included)."""
+def sample_points(keys: list[str], size: int | None = None) -> set[str]:
+    """``size`` (default SAMPLE) point keys spread evenly over the sweep (the first included)."""
+    size = SAMPLE if size is None else size
     if len(keys) <= size:
         return set(keys)
     step = len(keys) / size
@@ -152,8 +153,8 @@ class SignalKeeper:
     """Under the ``worst`` policy: keeps the signals of the WORST points of highest severity seen
     so far and of the sample; removes every other point's signal files once it is stored."""
 
-    def __init__(self, sample: set[str], worst: int = WORST) -> None:
-        self.sample, self.worst = sample, worst
+    def __init__(self, sample: set[str], worst: int | None = None) -> None:
+        self.sample, self.worst = sample, WORST if worst is None else worst
         self.heap: list[tuple[float, str]] = []        # (severity, key): the kept worst, least severe first
 
     def keep(self, key: str, score: float, points_dir: Path) -> None:

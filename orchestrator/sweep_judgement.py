@@ -11,10 +11,10 @@ cannot see it. The measure is the steering-rate RMS of the point over that of th
 
 Why 3: on the figure-8 the steering rate of a loop that tracks is set by the path's curvature
 and the speed: across studies/robustness.toml's 200 draws the draws that track stay within
-0.5-1.9 x the nominal's 5.2 deg/s (speed 1.0-2.5 m/s against 2.0, every yaw model and delay),
-while the draws that hunt (RLFR model above 1.7 m/s) steer at 4.3-9.5 x. A sweep analysis module
-(``sweep.analysis``) may name its own measure and bound: ``OSCILLATION = (metric, ratio)``, or
-None for none.
+0.52-1.90 x the nominal's 5.1 deg/s (speed 1.0-2.5 m/s against 2.0, every yaw model and delay),
+while the 24 draws that hunt (RLFR model above 1.7 m/s) steer at 4.43-9.74 x (measured with
+``sweep studies/robustness.toml --engine compiled``). A sweep analysis module (``sweep.analysis``)
+may name its own measure and bound: ``OSCILLATION = (metric, ratio)``, or None for none.
 
 The points outside a bound are grouped by the bounds they fail; each group is described by what
 its points share (``shared``): a choice all of them took that not every point took, a numeric
