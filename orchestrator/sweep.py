@@ -59,7 +59,7 @@ from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, rec
 from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
-from .sweep_judgement import failing_groups, judgement_lines, point_row, severity, sweep_bounds, with_oscillation
+from .sweep_judgement import failing_groups, judgement_lines, nominal_from_table, point_row, severity, sweep_bounds, with_oscillation
 
 
 @dataclass(frozen=True)
@@ -746,6 +746,7 @@ def sweep_summary(study: Study, table: pd.DataFrame,
     done = int((table["status"] == "completed").sum()) if "status" in table else 0
     lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "
              f"{len(table) - done} failed"]
+    nominal = nominal or nominal_from_table(table, study)
     if done:
         judged = sweep_bounds(study, nominal)
         text = sweep_table(table, analysis, judged, set(study.sweep.parameters))
@@ -801,7 +802,7 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path, nominal: dict[
     chosen = getattr(analysis, "SWEEP_METRICS", None)
     metrics = [c for c in ok.columns if c not in skip and pd.api.types.is_numeric_dtype(ok[c])]
     metrics = [m for m in chosen if m in metrics] if chosen else [m for m in metrics if metric_units.get(m) != "count"]
-    judged = sweep_bounds(study, nominal)
+    judged = sweep_bounds(study, nominal or nominal_from_table(table, study))
     chosen = {**(chosen or {}), **{k: b.value for k, b in judged.items() if k.endswith("_vs_nominal")}}
     metrics += [k for k in chosen if k.endswith("_vs_nominal") and k in ok and k not in metrics]
     metric_units.update({k: "1" for k in chosen if k.endswith("_vs_nominal")})

@@ -1,20 +1,16 @@
 """Each point of a sweep judged on its own, and the points that fail named with what they share.
 
 Bounds judged per point: the study analysis's and the study's (orchestrator.key_figures), and
-the oscillation bound. Oscillation: a loop that hunts (a limit cycle of the steering) may track
-its path within every error bound while its actuator works ten times as hard; its error bounds
-cannot see it. The measure is the steering-rate RMS of the point over that of the nominal run
-(the study with its own values, no swept value set), ``OSCILLATION_METRIC / nominal``, bounded by
-``OSCILLATION_RATIO``:
+the oscillation bound. Oscillation: a loop that hunts (a limit cycle of an actuator) may track
+its reference within every error bound while its actuator works ten times as hard; its error
+bounds cannot see it. The measure is a metric of the point (an actuator's rate RMS) over that of
+the nominal run (the study with its own values, no swept value set), bounded:
 
-    r = rms(d delta / dt)_point / rms(d delta / dt)_nominal <= 3
+    r = metric_point / metric_nominal <= ratio
 
-Why 3: on the figure-8 the steering rate of a loop that tracks is set by the path's curvature
-and the speed: across studies/robustness.toml's 200 draws the draws that track stay within
-0.52-1.90 x the nominal's 5.1 deg/s (speed 1.0-2.5 m/s against 2.0, every yaw model and delay),
-while the 24 draws that hunt (RLFR model above 1.7 m/s) steer at 4.43-9.74 x (measured with
-``sweep studies/robustness.toml --engine compiled``). A sweep analysis module (``sweep.analysis``)
-may name its own measure and bound: ``OSCILLATION = (metric, ratio)``, or None for none.
+The analysis that computes the metric names it and its bound, with the reason for the number:
+``OSCILLATION = (metric, ratio)`` in the sweep analysis module (``sweep.analysis``), else in the
+study's analysis module (``study.analysis``); None or absent: no oscillation bound.
 
 The points outside a bound are grouped by the bounds they fail; each group is described by what
 its points share (``shared``): a choice all of them took that not every point took, a numeric
@@ -36,8 +32,6 @@ from .registry import import_study_module
 from .runner import _analysis
 from .study import Study
 
-OSCILLATION_METRIC = "steer_rate_rms"
-OSCILLATION_RATIO = 3.0
 SHARED_MIN_POINTS = 3
 CHOICES_UP_TO = 6            # a swept parameter with at most this many distinct values is a choice
 CHANCE = 0.01                # a condition random draws would all meet by chance less often than this is shared
@@ -45,12 +39,26 @@ PRECISION = 0.75             # on a grid: a condition is shared when this share 
 
 
 def oscillation(study: Study) -> tuple[str, float] | None:
-    """(metric, largest ratio to the nominal) judged for ``study``'s sweep, None for none."""
-    if study.sweep is not None and study.sweep.analysis:
-        module = import_study_module(study.sweep.analysis)
-        if hasattr(module, "OSCILLATION"):
-            return module.OSCILLATION
-    return OSCILLATION_METRIC, OSCILLATION_RATIO
+    """(metric, largest ratio to the nominal) judged for ``study``'s sweep, None for none: the
+    sweep analysis's ``OSCILLATION``, else the study analysis's."""
+    names = [study.sweep.analysis if study.sweep is not None else None, study.study.analysis]
+    for name in names:
+        if name:
+            module = import_study_module(name)
+            if hasattr(module, "OSCILLATION"):
+                return module.OSCILLATION
+    return None
+
+
+def nominal_from_table(table: pd.DataFrame, study: Study) -> dict[str, float]:
+    """The nominal run's oscillation metric as a table of points holds it (metric / ratio; a table
+    saved without its nominal run), empty when it does not."""
+    chosen = oscillation(study)
+    if chosen is None or chosen[0] not in table or ratio_column(chosen[0]) not in table:
+        return {}
+    ratio = table[ratio_column(chosen[0])].astype(float)
+    values = (table[chosen[0]].astype(float) / ratio)[np.isfinite(ratio) & (ratio > 0)]
+    return {chosen[0]: float(values.median())} if len(values) else {}
 
 
 def ratio_column(metric: str) -> str:
@@ -160,8 +168,8 @@ def by_chance(n: int, share: float, choice: bool) -> float:
 
 
 def shared(table: pd.DataFrame, failing: pd.Series, parameters: list[str], drawn: bool) -> str:
-    """What the failing points share, and how many points of that region fail: "tractor.model =
-    rlfr, reference.speed >= 1.72 (swept 1-2.5): 23 of the 27 points there fail". A condition is
+    """What the failing points share, and how many points of that region fail: "plant.model =
+    b, source.rate >= 1.72 (swept 1-2.5): 23 of the 27 points there fail". A condition is
     kept when it is not chance: for random draws (``drawn``, a Monte Carlo) when ``by_chance`` is
     below ``CHANCE``; for values placed on a grid when at least ``PRECISION`` of its points fail."""
     n = int(failing.sum())
@@ -209,11 +217,11 @@ def judgement_lines(study: Study, table: pd.DataFrame, judged: Mapping[str, Boun
     chosen = oscillation(study)
     if chosen is not None and nominal and ratio_column(chosen[0]) in table:
         lines.append(f"oscillation: {chosen[0]} of each point over the nominal run's ({_number(nominal[chosen[0]])}, "
-                     f"the study's own values), bound <= {chosen[1]:g} (a loop that hunts steers several times as hard "
-                     f"as one that tracks)")
+                     f"the study's own values), bound <= {chosen[1]:g} (a loop that hunts drives its actuator several "
+                     f"times as hard as one that tracks)")
         done = table[table["status"] == "completed"][chosen[0]].astype(float)
         if len(done) and float(nominal[chosen[0]]) > chosen[1] * float(done.median()):
-            lines.append(f"  warning: the nominal run itself steers at {float(nominal[chosen[0]]) / float(done.median()):.1f} x "
+            lines.append(f"  warning: the nominal run's {chosen[0]} is {float(nominal[chosen[0]]) / float(done.median()):.1f} x "
                          f"the points' median: it may hunt, and a point that hunts as it does passes")
     groups = failing_groups(table, judged)
     if not groups:

@@ -17,13 +17,14 @@ import pandas as pd
 from matplotlib.ticker import StrMethodFormatter
 
 from agrobot.orchestrator.atomic_files import write_json
-from agrobot.orchestrator.sweep_judgement import OSCILLATION_METRIC, OSCILLATION_RATIO
+from agrobot.orchestrator.sweep_judgement import ratio_column
 
-from .figure8 import PAPER_BOUNDS
+from .figure8 import OSCILLATION, PAPER_BOUNDS
 
 DELAY = "steering.command_delay"
 REQUIRED_DELAY = 0.1          # s: the bounds must hold up to here; beyond it is reported
-HUNTING = f"{OSCILLATION_METRIC}_vs_nominal"     # the sweep's oscillation ratio (orchestrator.sweep_judgement)
+HUNTING = ratio_column(OSCILLATION[0])      # the sweep's oscillation ratio (orchestrator.sweep_judgement)
+OSCILLATION_RATIO = OSCILLATION[1]
 
 
 def hunting(table: pd.DataFrame) -> np.ndarray:
