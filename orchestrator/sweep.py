@@ -393,6 +393,10 @@ class SweepRun:
         start = time.perf_counter()
         result = simulate_point(self.study.without("sweep"), str(folder), self.engine, keep_signals=True)
         elapsed = time.perf_counter() - start
+        if not self.keep_signals and result.get("kind") != DISK_FULL:     # timed as the points run: in memory
+            start = time.perf_counter()
+            simulate_point(self.study.without("sweep"), None, self.engine, keep_signals=False)
+            elapsed = time.perf_counter() - start
         signal_bytes, other_bytes = folder_bytes(folder)
         record = {"point": "nominal", "seed": self.study.study.seed, "parameters": {}, "status": result["status"],
                   "error": result.get("error"), "error_kind": result.get("kind"), "elapsed_s": elapsed,

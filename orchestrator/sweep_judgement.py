@@ -36,6 +36,7 @@ SHARED_MIN_POINTS = 3
 CHOICES_UP_TO = 6            # a swept parameter with at most this many distinct values is a choice
 CHANCE = 0.01                # a condition random draws would all meet by chance less often than this is shared
 PRECISION = 0.75             # on a grid: a condition is shared when this share of its points fail
+EDGE = 0.02                  # a failing range this close to an end of the swept span is open at that end
 
 
 def oscillation(study: Study) -> tuple[str, float] | None:
@@ -151,9 +152,12 @@ def _condition(name: str, values: pd.Series, inside: pd.Series) -> tuple[str, pd
     if all_hi <= all_lo or (lo <= all_lo and hi >= all_hi):
         return None
     swept = f"(swept {_number(all_lo)}-{_number(all_hi)})"
-    if hi >= all_hi:
+    edge = EDGE * (all_hi - all_lo)
+    if lo <= all_lo + edge and hi >= all_hi - edge:
+        return None
+    if hi >= all_hi - edge:
         return f"{name} >= {_number(lo)} {swept}", values >= lo
-    if lo <= all_lo:
+    if lo <= all_lo + edge:
         return f"{name} <= {_number(hi)} {swept}", values <= hi
     return f"{name} {_number(lo)}-{_number(hi)} {swept}", values.between(lo, hi)
 
