@@ -59,14 +59,9 @@ parameters = {{ "s.sleep" = {sleeps} }}
 @pytest.fixture(scope="module")
 def cache(tmp_path_factory):
     """One compiled-engine cache for the module: the figure-8's loop compiled once."""
-    folder = tmp_path_factory.mktemp("compiled-cache")
-    old = os.environ.get("AGROBOT_CACHE")
-    os.environ["AGROBOT_CACHE"] = str(folder)
-    yield folder
-    if old is None:
-        os.environ.pop("AGROBOT_CACHE", None)
-    else:
-        os.environ["AGROBOT_CACHE"] = old
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("AGROBOT_CACHE", str(tmp_path_factory.mktemp("compiled-cache")))
+        yield
 
 
 def hunt_study(tmp_path: Path, low: float, high: float, samples: int = 24) -> Study:
