@@ -28,6 +28,7 @@ import errno
 import hashlib
 import itertools
 import json
+import logging
 import multiprocessing
 import os
 import re
@@ -498,13 +499,14 @@ class SweepRun:
                 bar.update(1)
                 bar.set_postfix(failures=failures)
         finally:
-            bar.close()
-            try:
-                self.write_table()
-            except OSError as exc:          # a full disk: the table is made again from the points on resume
-                if not disk_full(exc):
-                    raise
-            self._remove_stale()
+            with critical():                # a second Ctrl-C waits for the table and the clean-up
+                bar.close()
+                try:
+                    self.write_table()
+                except OSError as exc:      # a full disk: the table is made again from the points on resume
+                    if not disk_full(exc):
+                        raise
+                self._remove_stale()
         return self.table()
 
     def _store_or_stop(self, point: Point, result: dict[str, Any], folder: Path | None) -> dict[str, Any]:
@@ -585,12 +587,9 @@ class SweepRun:
                                               self.keep_signals)
             wait_first = lambda fs: cf.wait(fs, return_when=cf.FIRST_COMPLETED)[0]  # noqa: E731
         else:
-            from distributed import Client, LocalCluster, wait
+            from distributed import wait
 
-            before = _children()
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) \
-                if scheduler == "local" else None
-            pool = Client(cluster) if cluster is not None else Client(scheduler, timeout=CONNECT_TIMEOUT)
+            pool, cluster, before = _dask_client(scheduler, workers)
             submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
                                               self.keep_signals, pure=False)
             wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
@@ -649,22 +648,37 @@ class SchedulerError(StudyError):
     """The --scheduler address does not lead to a Dask scheduler (exit 2)."""
 
 
-def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True):
-    from distributed import Client, LocalCluster, as_completed
+def _dask_client(scheduler: str, workers: int):
+    """(client, local cluster or None, this process's children before it started): a Dask client on
+    ``scheduler`` ('local': a cluster of ``workers`` processes started here). An interrupt while
+    the cluster starts kills what it started; an address that does not answer is a SchedulerError."""
+    from distributed import Client, LocalCluster
 
-    cluster = None
     before = _children()
-    if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
-    else:
-        try:
+    client = cluster = None
+    try:
+        if scheduler == "local":
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            client = Client(cluster)
+        else:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within "
-                                 f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
-                                 f"expected an address like tcp://HOST:8786, or 'local'") from None
+    except (OSError, TimeoutError, ValueError) as exc:
+        _abandon_cluster(client, cluster, before)
+        if scheduler == "local":
+            raise
+        raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within "
+                             f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
+                             f"expected an address like tcp://HOST:8786, or 'local'") from None
+    except BaseException:
+        _abandon_cluster(client, cluster, before)
+        raise
+    return client, cluster, before
+
+
+def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True):
+    from distributed import as_completed
+
+    client, cluster, before = _dask_client(scheduler, workers)
     try:
         futures = {client.submit(simulate_point, point, str(folder) if folder else None, "python", keep_signals,
                                  pure=False,
@@ -703,6 +717,8 @@ def _abandon_cluster(client, cluster, before: set[int]) -> None:
     .running, removed by the sweep; a rerun does them again)."""
     import psutil
 
+    for name in ("asyncio", "distributed", "tornado"):       # a cluster killed at start complains of it
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     main = threading.current_thread() is threading.main_thread()
     held = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)} if main else {}
     try:
@@ -710,7 +726,7 @@ def _abandon_cluster(client, cluster, before: set[int]) -> None:
             for pid in _children() - before:
                 with contextlib.suppress(psutil.Error):
                     psutil.Process(pid).kill()
-        for close in (client.close, getattr(cluster, "close", None)):
+        for close in (getattr(client, "close", None), getattr(cluster, "close", None)):
             if close is not None:
                 with contextlib.suppress(Exception):
                     close(timeout=1)

@@ -234,8 +234,8 @@ def test_a_double_ctrl_c_ends_a_dask_sweep_promptly_with_nothing_half_written(tm
         os.killpg(proc.pid, signal.SIGKILL)
         pytest.fail("a double Ctrl-C left the Dask sweep running")
     assert time.time() - start < 10
-    output = proc.stdout.read()
-    assert "interrupted" in output and "Traceback" not in output, output
+    output = proc.stdout.read()       # (the cluster's workers, hit by the Ctrl-C while they start, may print theirs)
+    assert "interrupted: finished points are kept" in output and "agrobot/orchestrator" not in output, output
     assert not (out / ".running").exists()
     for point in (out / "points").glob("*") if (out / "points").exists() else []:
         assert (point / "metrics.json").exists()
