@@ -16,8 +16,8 @@ and moves the folder into place in one step, so ``points/pNNNN`` is either whole
 point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
 (``--scheduler ADDRESS``) the worker records into its own temporary folder and sends the files.
 
-Imported where used: distributed and psutil (the dask extra; psutil comes with distributed), matplotlib (start-up: 0.9 s in every worker
-process, which never plots; the Agg backend is chosen before pyplot loads).
+Imported where used: distributed (the dask extra; the rest is in orchestrator.sweep_dask), matplotlib (start-up:
+0.9 s in every worker process, which never plots; the Agg backend is chosen before pyplot loads).
 """
 from __future__ import annotations
 
@@ -28,7 +28,6 @@ import errno
 import hashlib
 import itertools
 import json
-import logging
 import multiprocessing
 import os
 import re
@@ -59,6 +58,7 @@ from .registry import import_study_module
 from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
 from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
+from .sweep_dask import abandon_cluster, dask_client, execute_dask, point_result
 from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
 from .sweep_judgement import failing_groups, judgement_lines, nominal_from_table, point_row, severity, sweep_bounds, with_oscillation
 
@@ -556,7 +556,7 @@ class SweepRun:
                 try:
                     for fut in cf.as_completed(futures):
                         point, folder = futures[fut]
-                        yield point, _result(fut), folder
+                        yield point, point_result(fut), folder
                 except BaseException:
                     # interrupted: the points in flight are dropped (a rerun does them again) and
                     # their workers end now, not when their point would have finished
@@ -566,7 +566,7 @@ class SweepRun:
                     raise
             return
         with main_file_hidden():
-            yield from _execute_dask(jobs, workers, scheduler, self.keep_signals)
+            yield from execute_dask(simulate_point, jobs, workers, scheduler, self.keep_signals)
 
     def _execute_batched(self, todo: list[Point], workers: int, scheduler: str | None, shared: bool):
         """As ``_execute``, BATCH points per task (the compiled engine); tasks are submitted as
@@ -589,7 +589,7 @@ class SweepRun:
         else:
             from distributed import wait
 
-            pool, cluster, before = _dask_client(scheduler, workers)
+            pool, cluster, before = dask_client(scheduler, workers)
             submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
                                               self.keep_signals, pure=False)
             wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
@@ -600,7 +600,7 @@ class SweepRun:
                 yield from _drain(queue, pending, job, submit, wait_first, workers)
         except BaseException:
             if scheduler is not None:
-                _abandon_cluster(pool, cluster, before)
+                abandon_cluster(pool, cluster, before)
             raise
         finally:
             if scheduler is None:
@@ -632,107 +632,6 @@ def _drain(queue, pending: dict, job, submit, wait_first, workers: int):
                 results = [{"status": "failed", "kind": "bug",
                             "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
             yield from zip(batch, results, folders)
-
-
-def _result(fut) -> dict[str, Any]:
-    try:
-        return fut.result()
-    except Exception as exc:  # a worker process died (killed, out of memory)
-        return {"status": "failed", "kind": "bug", "error": f"worker lost: {type(exc).__name__}: {exc}"}
-
-
-CONNECT_TIMEOUT = 6.0        # s: a wrong --scheduler address fails well within 10 s
-
-
-class SchedulerError(StudyError):
-    """The --scheduler address does not lead to a Dask scheduler (exit 2)."""
-
-
-def _dask_client(scheduler: str, workers: int):
-    """(client, local cluster or None, this process's children before it started): a Dask client on
-    ``scheduler`` ('local': a cluster of ``workers`` processes started here). An interrupt while
-    the cluster starts kills what it started; an address that does not answer is a SchedulerError."""
-    from distributed import Client, LocalCluster
-
-    before = _children()
-    client = cluster = None
-    try:
-        if scheduler == "local":
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-            client = Client(cluster)
-        else:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
-    except (OSError, TimeoutError, ValueError) as exc:
-        _abandon_cluster(client, cluster, before)
-        if scheduler == "local":
-            raise
-        raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within "
-                             f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
-                             f"expected an address like tcp://HOST:8786, or 'local'") from None
-    except BaseException:
-        _abandon_cluster(client, cluster, before)
-        raise
-    return client, cluster, before
-
-
-def _execute_dask(jobs, workers: int, scheduler: str, keep_signals: bool = True):
-    from distributed import as_completed
-
-    client, cluster, before = _dask_client(scheduler, workers)
-    try:
-        futures = {client.submit(simulate_point, point, str(folder) if folder else None, "python", keep_signals,
-                                 pure=False,
-                                 key=f"{p.key}-{time.time_ns()}"): (p, folder) for p, point, folder in jobs}
-        for fut in as_completed(futures):
-            point, folder = futures[fut]
-            yield point, _result(fut), folder
-    except BaseException:
-        _abandon_cluster(client, cluster, before)
-        raise
-    client.close()
-    if cluster is not None:
-        cluster.close()
-
-
-def _children() -> set[int]:
-    """The process ids of this process's children, grandchildren included, but multiprocessing's
-    resource tracker (shared with the rest of the process; killed, its successor reports every
-    resource it did not know)."""
-    import psutil
-
-    out = set()
-    for child in psutil.Process().children(recursive=True):
-        with contextlib.suppress(psutil.Error):
-            if not any("resource_tracker" in part for part in child.cmdline()):
-                out.add(child.pid)
-    return out
-
-
-def _abandon_cluster(client, cluster, before: set[int]) -> None:
-    """An interrupted Dask sweep ends now: the local cluster's processes (those started since
-    ``before``) are killed rather than asked to finish (its orderly close waited some 13 s, and a
-    second Ctrl-C inside it left the process hanging until SIGKILL), then the client and cluster
-    are closed within a second each. SIGINT and SIGTERM are held off meanwhile: a second Ctrl-C
-    cannot cut the clean-up in half. The points in flight are dropped (their folders are in
-    .running, removed by the sweep; a rerun does them again)."""
-    import psutil
-
-    for name in ("asyncio", "distributed", "tornado"):       # a cluster killed at start complains of it
-        logging.getLogger(name).setLevel(logging.CRITICAL)
-    main = threading.current_thread() is threading.main_thread()
-    held = {s: signal.signal(s, signal.SIG_IGN) for s in (signal.SIGINT, signal.SIGTERM)} if main else {}
-    try:
-        if cluster is not None:
-            for pid in _children() - before:
-                with contextlib.suppress(psutil.Error):
-                    psutil.Process(pid).kill()
-        for close in (getattr(client, "close", None), getattr(cluster, "close", None)):
-            if close is not None:
-                with contextlib.suppress(Exception):
-                    close(timeout=1)
-    finally:
-        for sig, handler in held.items():
-            signal.signal(sig, handler)
 
 
 def _progress(total: int, initial: int, enabled: bool):
