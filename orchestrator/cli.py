@@ -211,9 +211,16 @@ def _sweep_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mcap", action="store_true", help="also write each point's run as points/<point>/run.mcap "
                    "(the study's [output] mcap = true does the same)")
     add_engine_option(p)
-    p.add_argument("--keep-signals", action=argparse.BooleanOptionalAction, default=None,
-                   help="write each point's signals (default: yes with the Python engine, no with the compiled "
-                        "one, whose Monte Carlo runs thousands of points)")
+    p.add_argument("--keep-signals", nargs="?", const="all", choices=("all", "worst", "none"), default=None,
+                   help="which points keep their signals: all (the option alone), worst (every point's metrics, the "
+                        "signals of the 10 points farthest outside their bounds and of a sample of 10), none "
+                        "(default: all up to 50 points with the Python engine, worst beyond; none with the compiled "
+                        "engine, whose Monte Carlo runs thousands of points)")
+    p.add_argument("--no-keep-signals", dest="keep_signals", action="store_const", const="none",
+                   help="keep no point's signals (--keep-signals none)")
+    p.add_argument("--accept-cost", action="store_true",
+                   help="run a sweep expected to take more than 12 h or 5 GB on disk (printed before it starts; "
+                        "refused without this)")
     add_isolate_option(p)
 
 
@@ -227,7 +234,8 @@ def _sweep(args: argparse.Namespace) -> int:
         from .mcap_out import with_mcap
 
         study = with_mcap(study)
-    runner = SweepRun(study, args.out, args.overwrite, engine=args.engine, keep_signals=args.keep_signals)
+    runner = SweepRun(study, args.out, args.overwrite, engine=args.engine, keep_signals=args.keep_signals,
+                      accept_cost=args.accept_cost)
     try:
         table = runner.run(args.workers, args.scheduler, args.retry_failed, progress=not args.no_progress)
     except KeyboardInterrupt as exc:
@@ -235,11 +243,14 @@ def _sweep(args: argparse.Namespace) -> int:
               f"{'' if runner.kept_in == args.out else f' with --out {runner.kept_in}'} to resume", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
     with Stage("drawing the sweep's figures"):
-        files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots")
-    text, reasons = sweep_summary(study, table)
+        files = [] if args.no_plots else sweep_plots(study, table, args.out / "plots", runner.nominal)
+    text, reasons = sweep_summary(study, table, runner.nominal)
     print(text)
     print(f"\nresults in {args.out}/results.{study.study.signals_format}, one folder per point in {args.out}/points"
           + (f"; plots: {', '.join(p.name for p in files)}" if files else ""))
+    if runner.keeper is not None:
+        print(f"signals kept (the worst points and a sample; --keep-signals all keeps every one): "
+              f"{', '.join(runner.keeper.kept())}")
     failed = sum(len(points) for _, points in reasons)
     if failed and failed == len(table) and len(reasons) == 1:
         print(f"error: every point failed: {reasons[0][0]}", file=sys.stderr)

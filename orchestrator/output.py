@@ -78,6 +78,26 @@ def check_inputs(out: Path, inputs: Iterable[Path | str | None], flag: str = "--
             raise OutputError(f"{flag} {out}: lies inside the input {given}; choose a {flag} outside it")
 
 
+DERIVED_NAME = len(f"..{STAGING}") + 8      # the longest name made from --out's: .NAME.staging-XXXXXXXX
+
+
+def check_name(out: Path, flag: str = "--out") -> None:
+    """Every part of ``out`` a name the file system takes (255 bytes on most), its last part short
+    enough for the names made from it (its lock, its staging folder)."""
+    base = _nearest_existing(Path(out).absolute().parent)
+    try:
+        limit = os.pathconf(base, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        limit = 255
+    parts = Path(out).parts
+    for i, part in enumerate(parts):
+        size = len(os.fsencode(part)) + (DERIVED_NAME if i == len(parts) - 1 else 0)
+        if size > limit:
+            raise OutputError(f"{flag} {out}: the name {part[:40]}... is {len(os.fsencode(part))} bytes; the file system "
+                              f"takes at most {limit - (DERIVED_NAME if i == len(parts) - 1 else 0)} here (its last "
+                              f"part leaves room for the names made from it); choose a shorter name")
+
+
 def _check_parent(out: Path, flag: str = "--out") -> None:
     base = _nearest_existing(out.parent.resolve())
     if not base.is_dir():
@@ -96,6 +116,7 @@ def check_output(out: Path, overwrite: bool = False, signature: tuple[str, ...] 
     (the module's rule). ``signature``: the files that mark a folder as this command's result;
     ``resume``: such a folder is written into again without ``--overwrite`` (a sweep resumes)."""
     out = Path(out)
+    check_name(out)
     check_inputs(out, inputs)
     here = Path.cwd().resolve()
     if out.resolve() == here or out.resolve() in here.parents:
@@ -122,6 +143,7 @@ def check_output_file(out: Path, overwrite: bool = False, inputs: Iterable[Path 
     file is written, an existing one is replaced only with ``--overwrite``, an input never.
     ``flag``: the option (or study key) that named the file, for the message."""
     out = Path(out)
+    check_name(out, flag)
     if suffixes and out.suffix.lower() not in suffixes:
         raise OutputError(f"{flag} {out}: expected a path ending in {' or '.join(suffixes)}")
     check_inputs(out, inputs, flag)

@@ -25,6 +25,10 @@ is checked against the installed tools when the study is resolved, orchestrator.
 ``without``, ``with_connections`` and ``subsystem`` return new studies; ``to_toml`` writes one
 back. Parameters keep the values as written ("8000 N/rad", "30 deg"); the resolved model
 (orchestrator.model) converts them to SI with the component's declared units.
+
+Imported where used: orchestrator.model and orchestrator.resolver (they import this module; only a
+``--set`` of a component parameter looks up the component's class, to refuse a misspelt name
+before saying the item was applied).
 """
 from __future__ import annotations
 
@@ -123,13 +127,15 @@ class Study(BaseModel):
         is read as TOML, else as a string), validated once. A field an override set is blamed on
         the override in every message about it (``origin``), here and when the study is resolved."""
         data = read_study_file(path)
-        return parse_study(data, path, _overridden(data, overrides, path))
+        set_by, applied = _overridden(data, overrides, path)
+        return _announced(parse_study(data, path, set_by), applied)
 
     def with_overrides(self, overrides: Iterable[str]) -> "Study":
         """This study with ``--set`` items applied (blamed on the items in messages, as by ``load``)."""
         data = self.to_data()
-        set_by = {**self._set_by, **_overridden(data, overrides, self.where)}
-        return parse_study(data, self.path if self.path is not None else "<study>", set_by)
+        set_by, applied = _overridden(data, overrides, self.where)
+        study = parse_study(data, self.path if self.path is not None else "<study>", {**self._set_by, **set_by})
+        return _announced(study, applied)
 
     def origin(self, field: str) -> str:
         """Where the value of ``field`` (``components.tracker.parameters.lookahead``) was given,
@@ -286,10 +292,10 @@ class Study(BaseModel):
 _UNSET = object()
 
 
-def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> dict[str, str]:
-    """Apply ``--set`` items to study data, saying what each changed (one line each, on stdout);
-    returns field -> item."""
-    set_by = {}
+def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> tuple[dict[str, str], list[str]]:
+    """Apply ``--set`` items to study data: (field -> item, one line per item saying what it changed,
+    printed by ``_announced`` once the study is known valid)."""
+    set_by, applied = {}, []
     for item in overrides:
         key, value = parse_override(item, path)
         before = copy.deepcopy(data)
@@ -299,8 +305,36 @@ def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> dict[st
         was = "not set in the file (the default)" if old is _UNSET else repr(old)
         kind = " (read as a string)" \
             if isinstance(value, str) and not item.split("=", 1)[1].strip().startswith(('"', "'")) else ""
-        print(f"--set {item}: {field} = {value!r}{kind}, was {was}")
-    return set_by
+        applied.append(f"--set {item}: {field} = {value!r}{kind}, was {was}")
+    return set_by, applied
+
+
+def _announced(study: "Study", applied: list[str]) -> "Study":
+    """Print what the ``--set`` items changed, after the study is parsed and each parameter an item
+    sets is one its component declares (a misspelt name is refused with nothing said applied)."""
+    if applied:
+        _check_set_parameters(study)
+        print("\n".join(applied))
+    return study
+
+
+def _check_set_parameters(study: "Study") -> None:
+    """Each ``components.C.parameters.P`` an override set names a parameter C's class declares; a
+    component whose type cannot be found here is left to the resolve, which names it."""
+    from .model import resolved_parameters
+    from .resolver import default_resolver
+
+    for field in study._set_by:
+        parts = field.split(".")
+        if len(parts) != 4 or parts[0] != "components" or parts[2] != "parameters" or parts[1] not in study.components:
+            continue
+        try:
+            cls = default_resolver().component_class(study, parts[1])
+        except Exception:  # noqa: BLE001 - an unknown type, a missing plugin: named by the resolve
+            continue
+        if parts[3] not in cls.declared("parameter"):
+            value = study.components[parts[1]].parameters[parts[3]]
+            resolved_parameters(cls, parts[1], {parts[3]: value}, study.origin)
 
 
 def _format_validation(path: Path, err: ValidationError, set_by: Mapping[str, str]) -> str:

@@ -16,13 +16,15 @@ and moves the folder into place in one step, so ``points/pNNNN`` is either whole
 point rerun (``--retry-failed``) replaces only a failed one. With a scheduler on other machines
 (``--scheduler ADDRESS``) the worker records into its own temporary folder and sends the files.
 
-Imported where used: distributed (the dask extra), matplotlib (start-up: 0.9 s in every worker
-process, which never plots; the Agg backend is chosen before pyplot loads).
+Imported where used: distributed (the dask extra; the rest is in orchestrator.sweep_dask), matplotlib (start-up:
+0.9 s in every worker process, which never plots; the Agg backend is chosen before pyplot loads).
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import ctypes
+import errno
 import hashlib
 import itertools
 import json
@@ -48,13 +50,17 @@ from .compiled import select_engine
 from .engine import RunError, Simulation
 from .resolver import resolve
 from .errors import InputError, critical
-from .key_figures import bounds, sweep_table
+from .key_figures import sweep_table
 from .mcap_out import wants_mcap, write_study_mcap
-from .output import OutputLock, ResultFolder, check_output, remove_stale_staging, study_inputs, swap_folder
+from .output import (OutputError, OutputLock, ResultFolder, check_output, disk_full, remove_stale_staging,
+                     study_inputs, swap_folder)
 from .registry import import_study_module
 from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
 from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
+from .sweep_dask import abandon_cluster, dask_client, execute_dask, point_result
+from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
+from .sweep_judgement import failing_groups, judgement_lines, nominal_from_table, point_row, severity, sweep_bounds, with_oscillation
 
 
 @dataclass(frozen=True)
@@ -116,6 +122,24 @@ def watch_parent(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="watch-parent").start()
 
 
+@contextlib.contextmanager
+def main_file_hidden() -> Iterator[None]:
+    """While workers start: a ``__main__`` whose file does not exist (a script read from standard
+    input, ``python3 - < script.py``: ``'<stdin>'``) is not named to them. The spawn start method
+    runs the parent's main file again in every worker; with none to run, each worker died at start
+    and every point was lost. The points need nothing from ``__main__``."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    hidden = path is not None and not os.path.isfile(path)
+    if hidden:
+        del main.__file__
+    try:
+        yield
+    finally:
+        if hidden:
+            main.__file__ = path
+
+
 def simulate_point(study: Study, folder: str | None = None, engine: str = "python",
                    keep_signals: bool = True) -> dict[str, Any]:
     """Worker: run one point into ``folder`` (None: a temporary folder whose files are returned);
@@ -139,6 +163,11 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
             write_study_mcap(study, outcome.table.to_pandas(), target / "run.mcap")
     except InputError as exc:           # the point's values refused when its components start
         result = {"status": "failed", "kind": "input", "error": str(exc)}
+    except OSError as exc:
+        if not disk_full(exc):
+            raise
+        result = {"status": "failed", "kind": DISK_FULL, "error": f"{exc.strerror or exc}", "errno": exc.errno,
+                  "filename": str(exc.filename or "")}
     except Exception as exc:  # a bug in a component: record it, the sweep goes on
         result = {"status": "failed", "kind": "bug", "error": f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}"}
     else:
@@ -149,10 +178,19 @@ def simulate_point(study: Study, folder: str | None = None, engine: str = "pytho
             text = str(error) if kind != "bug" else \
                 f"{type(error).__name__}: {error}\n{''.join(traceback.format_exception(error))}"
             result.update(kind=kind, error=text)
-    if folder is None:
+    if folder is None and result.get("kind") != DISK_FULL:
         result["files"] = {p.name: p.read_bytes() for p in target.iterdir() if p.is_file()}
+    if folder is None:
         shutil.rmtree(target, ignore_errors=True)
     return result
+
+
+DISK_FULL = "disk_full"        # a point's kind of failure that ends the sweep (SweepDiskFull)
+
+
+class SweepDiskFull(OutputError):
+    """The disk filled while the sweep wrote a point (exit 2): the point is removed, the points
+    finished before it are kept (a rerun resumes)."""
 
 
 def _metrics_only(study: Study, system, simulation) -> dict[str, Any]:
@@ -196,13 +234,16 @@ def sweep_hash(study: Study) -> str:
 
 class SweepRun:
     def __init__(self, study: Study, out_dir: Path, overwrite: bool = False, engine: str = "python",
-                 keep_signals: bool | None = None) -> None:
+                 keep_signals: bool | str | None = None, accept_cost: bool = False) -> None:
         self.study, self.out, self.overwrite = study, Path(out_dir), overwrite
-        self.engine = engine
-        self.keep_signals = engine == "python" if keep_signals is None else keep_signals
+        self.engine, self.accept_cost = engine, accept_cost
         self.where = str(study.path)
         self.kept_in = self.out                 # where an interrupted sweep's finished points are
         self.points = expand(study)
+        self.signals = policy(keep_signals, engine, len(self.points))     # orchestrator.sweep_cost
+        self.keep_signals = self.signals != "none"
+        self.nominal: dict[str, Any] = {}       # the nominal run's metrics (orchestrator.sweep_judgement)
+        self.keeper: SignalKeeper | None = None
         self.fmt = study.study.signals_format
         self._into(self.out)
 
@@ -246,7 +287,11 @@ class SweepRun:
             try:
                 system = build_system(resolve(point_study(self.study, point)))
                 if i == 0 and self.engine != "python":
+                    print(f"sweep: compiling the study's loop for --engine {self.engine} (once; a loop compiled "
+                          f"before is taken from the cache) ...", file=sys.stderr, flush=True)
+                    start = time.perf_counter()
                     note = select_engine(system, self.engine)[1]
+                    print(f"sweep: the loop ready in {time.perf_counter() - start:.1f} s", file=sys.stderr)
                     if note and self.engine == "auto":
                         print(note, file=sys.stderr)
             except StudyError as exc:
@@ -314,6 +359,8 @@ class SweepRun:
         return record
 
     def table(self) -> pd.DataFrame:
+        """One row per stored point (its parameters, status, error, metrics) and its oscillation
+        ratio to the nominal run (orchestrator.sweep_judgement)."""
         rows = []
         for point in self.points:
             path = self.record_path(point)
@@ -322,7 +369,77 @@ class SweepRun:
             rec = json.loads(path.read_text())
             rows.append({"point": rec["point"], "seed": rec["seed"], **rec["parameters"],
                          "status": rec["status"], "error": rec["error"], **rec["metrics"]})
-        return pd.DataFrame(rows)
+        return with_oscillation(pd.DataFrame(rows), self.study, self.nominal_metrics())
+
+    # --- the nominal run, and the cost told before it is paid ------------------------------------
+    def nominal_metrics(self) -> dict[str, Any]:
+        """The nominal run's metrics (empty when it did not complete or has not run)."""
+        path = self.folder / "nominal" / "metrics.json"
+        if not self.nominal and path.exists():
+            record = json.loads(path.read_text())
+            self.nominal = record["metrics"] if record["status"] == "completed" else {}
+        return self.nominal
+
+    def run_nominal(self) -> tuple[dict[str, Any], Path | None]:
+        """(record, folder to move into ``nominal/`` or None when it is there already): the study with
+        its own values (no swept value set) run here, before the points, timed and weighed: the
+        oscillation bound's reference and the measure of the sweep's cost (orchestrator.sweep_cost)."""
+        path = self.folder / "nominal" / "metrics.json"
+        if path.exists():
+            return json.loads(path.read_text()), None
+        print("sweep: the nominal run (the study's own values) first: the reference of the oscillation bound and "
+              "the measure of the sweep's cost ...", file=sys.stderr, flush=True)
+        self.running_dir.mkdir(parents=True, exist_ok=True)
+        folder = Path(tempfile.mkdtemp(prefix="nominal.", dir=self.running_dir))
+        start = time.perf_counter()
+        result = simulate_point(self.study.without("sweep"), str(folder), self.engine, keep_signals=True)
+        elapsed = time.perf_counter() - start
+        if not self.keep_signals and result.get("kind") != DISK_FULL:     # timed as the points run: in memory
+            start = time.perf_counter()
+            simulate_point(self.study.without("sweep"), None, self.engine, keep_signals=False)
+            elapsed = time.perf_counter() - start
+        signal_bytes, other_bytes = folder_bytes(folder)
+        record = {"point": "nominal", "seed": self.study.study.seed, "parameters": {}, "status": result["status"],
+                  "error": result.get("error"), "error_kind": result.get("kind"), "elapsed_s": elapsed,
+                  "signal_bytes": signal_bytes, "other_bytes": other_bytes + 1024,
+                  "metrics": {k: v for k, v in (result.get("metrics") or {}).items()
+                              if isinstance(v, (int, float)) and not isinstance(v, bool)}}
+        try:
+            if result.get("kind") == DISK_FULL:
+                raise OSError(result.get("errno") or errno.ENOSPC, result["error"])
+            write_json(folder / "metrics.json", record)
+        except OSError as exc:
+            if not disk_full(exc):
+                raise
+            shutil.rmtree(folder, ignore_errors=True)
+            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while the nominal run was "
+                                f"written; it was removed: free some space and run the command again") from None
+        return record, folder
+
+    def announce_cost(self, todo: int, workers: int) -> None:
+        """Print the sweep's expected time and disk use; refuse one beyond the limits (CostRefused)
+        unless ``accept_cost``; then keep the nominal run in ``nominal/``."""
+        record, folder = self.run_nominal()
+        cost = estimate(todo, workers, record["elapsed_s"], record["signal_bytes"], record["other_bytes"],
+                        self.signals)
+        print(cost.line(self.signals, record["elapsed_s"]), file=sys.stderr, flush=True)
+        check_cost(cost, self.folder, self.accept_cost)
+        if folder is not None:
+            with critical():
+                old = swap_folder(folder, self.folder / "nominal")
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        self.nominal = {}
+        self.nominal_metrics()
+        if record["status"] != "completed":
+            print(f"sweep: the nominal run failed ({str(record.get('error') or '').splitlines()[0][:200]}); the "
+                  f"points are not judged against it", file=sys.stderr)
+
+    def _keep_signals_of(self, point: Point, record: dict[str, Any]) -> None:
+        """Under the ``worst`` policy: the point's signals kept while it is among the worst or in the sample."""
+        if self.keeper is not None:
+            row = point_row(record, self.study, self.nominal)
+            self.keeper.keep(point.key, severity(row, sweep_bounds(self.study, self.nominal)), self.points_dir)
 
     def write_table(self) -> Path:
         return write_table(self.folder / "results", self.table(), self.fmt)
@@ -352,24 +469,63 @@ class SweepRun:
             return self._run(workers, scheduler, retry_failed, progress)
 
     def _run(self, workers: int, scheduler: str | None, retry_failed: bool, progress: bool) -> pd.DataFrame:
+        fresh = not (self.folder / "sweep.json").exists()
         self.validate()
         self._remove_stale()
         done = self.finished(retry_failed)
         todo = [p for p in self.points if p.key not in done]
+        try:
+            self.announce_cost(len(todo), workers)
+        except CostRefused:
+            self._remove_stale()
+            if fresh:                 # nothing of this sweep is left behind
+                (self.folder / "sweep.json").unlink(missing_ok=True)
+                with contextlib.suppress(OSError):
+                    self.points_dir.rmdir()
+            raise
+        if self.signals == "worst":
+            self.keeper = SignalKeeper(sample_points([p.key for p in self.points]))
+            for point in self.points:
+                if point.key in done:
+                    self._keep_signals_of(point, json.loads(self.record_path(point).read_text()))
         bar = _progress(len(self.points), len(done), progress)
         failures = sum(1 for p in self.points if p.key in done
                        and json.loads(self.record_path(p).read_text())["status"] != "completed")
         try:
             for point, result, folder in self._execute(todo, workers, scheduler):
-                record = self.store(point, result, folder)
+                record = self._store_or_stop(point, result, folder)
+                self._keep_signals_of(point, record)
                 failures += record["status"] != "completed"
                 bar.update(1)
                 bar.set_postfix(failures=failures)
         finally:
-            bar.close()
-            self.write_table()
-            self._remove_stale()
+            with critical():                # a second Ctrl-C waits for the table and the clean-up
+                bar.close()
+                try:
+                    self.write_table()
+                except OSError as exc:      # a full disk: the table is made again from the points on resume
+                    if not disk_full(exc):
+                        raise
+                self._remove_stale()
         return self.table()
+
+    def _store_or_stop(self, point: Point, result: dict[str, Any], folder: Path | None) -> dict[str, Any]:
+        """``store``; on a full disk (the worker's or ours) the point's folder is removed and the
+        sweep ends with SweepDiskFull, the points finished before it kept."""
+        try:
+            if result.get("kind") == DISK_FULL:
+                raise OSError(result.get("errno") or errno.ENOSPC, result["error"], result.get("filename") or None)
+            return self.store(point, result, folder)
+        except OSError as exc:
+            if not disk_full(exc):
+                raise
+            if folder is not None:
+                shutil.rmtree(folder, ignore_errors=True)
+            kept = (f"the {len(self.finished())} points finished before it are kept in {self.out}: free some space "
+                    f"and run the same command again to resume") if self.folder == self.out else \
+                f"{self.out} holds what it held before (--overwrite): free some space and run the command again"
+            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while point {point.key} "
+                                f"was written; that point was removed and {kept}") from None
 
     def _remove_stale(self) -> None:
         """Files and point folders left half-written by a run that was killed or interrupted."""
@@ -393,13 +549,14 @@ class SweepRun:
             os.environ.setdefault(var, "1")
         if scheduler is None:
             ctx = multiprocessing.get_context("spawn")
-            with cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
-                                        initargs=(os.getpid(),)) as pool:
-                futures = {pool.submit(simulate_point, point, str(folder)): (p, folder) for p, point, folder in jobs}
+            with main_file_hidden(), cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx,
+                                                            initializer=watch_parent, initargs=(os.getpid(),)) as pool:
+                futures = {pool.submit(simulate_point, point, str(folder), "python", self.keep_signals): (p, folder)
+                           for p, point, folder in jobs}
                 try:
                     for fut in cf.as_completed(futures):
                         point, folder = futures[fut]
-                        yield point, _result(fut), folder
+                        yield point, point_result(fut), folder
                 except BaseException:
                     # interrupted: the points in flight are dropped (a rerun does them again) and
                     # their workers end now, not when their point would have finished
@@ -408,7 +565,8 @@ class SweepRun:
                     pool.shutdown(wait=False, cancel_futures=True)
                     raise
             return
-        yield from _execute_dask(jobs, workers, scheduler)
+        with main_file_hidden():
+            yield from execute_dask(simulate_point, jobs, workers, scheduler, self.keep_signals)
 
     def _execute_batched(self, todo: list[Point], workers: int, scheduler: str | None, shared: bool):
         """As ``_execute``, BATCH points per task (the compiled engine); tasks are submitted as
@@ -429,85 +587,51 @@ class SweepRun:
                                               self.keep_signals)
             wait_first = lambda fs: cf.wait(fs, return_when=cf.FIRST_COMPLETED)[0]  # noqa: E731
         else:
-            from distributed import Client, LocalCluster, wait
+            from distributed import wait
 
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) \
-                if scheduler == "local" else None
-            pool = Client(cluster) if cluster is not None else Client(scheduler, timeout=CONNECT_TIMEOUT)
+            pool, cluster, before = dask_client(scheduler, workers)
             submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
                                               self.keep_signals, pure=False)
             wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
         pending: dict = {}
         queue = iter(batches)
         try:
-            while True:
-                while len(pending) < 2 * workers:
-                    batch = next(queue, None)
-                    if batch is None:
-                        break
-                    jobs, folders = job(batch)
-                    pending[submit(jobs)] = (batch, folders)
-                if not pending:
-                    break
-                for fut in wait_first(pending.keys()):
-                    batch, folders = pending.pop(fut)
-                    try:
-                        results = fut.result()
-                    except Exception as exc:  # a worker process died (killed, out of memory)
-                        results = [{"status": "failed", "kind": "bug",
-                                    "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
-                    for point, result, folder in zip(batch, results, folders):
-                        yield point, result, folder
+            with main_file_hidden():
+                yield from _drain(queue, pending, job, submit, wait_first, workers)
+        except BaseException:
+            if scheduler is not None:
+                abandon_cluster(pool, cluster, before)
+            raise
         finally:
             if scheduler is None:
                 for proc in list((pool._processes or {}).values()):
                     proc.terminate()
                 pool.shutdown(wait=False, cancel_futures=True)
-            else:
-                pool.close()
-                if cluster is not None:
-                    cluster.close()
+        if scheduler is not None:
+            pool.close()
+            if cluster is not None:
+                cluster.close()
 
 
-def _result(fut) -> dict[str, Any]:
-    try:
-        return fut.result()
-    except Exception as exc:  # a worker process died (killed, out of memory)
-        return {"status": "failed", "kind": "bug", "error": f"worker lost: {type(exc).__name__}: {exc}"}
-
-
-CONNECT_TIMEOUT = 6.0        # s: a wrong --scheduler address fails well within 10 s
-
-
-class SchedulerError(StudyError):
-    """The --scheduler address does not lead to a Dask scheduler (exit 2)."""
-
-
-def _execute_dask(jobs, workers: int, scheduler: str):
-    from distributed import Client, LocalCluster, as_completed
-
-    cluster = None
-    if scheduler == "local":
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SchedulerError(f"--scheduler {scheduler}: no Dask scheduler answered within "
-                                 f"{CONNECT_TIMEOUT:g} s ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}); "
-                                 f"expected an address like tcp://HOST:8786, or 'local'") from None
-    try:
-        futures = {client.submit(simulate_point, point, str(folder) if folder else None, pure=False,
-                                 key=f"{p.key}-{time.time_ns()}"): (p, folder) for p, point, folder in jobs}
-        for fut in as_completed(futures):
-            point, folder = futures[fut]
-            yield point, _result(fut), folder
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+def _drain(queue, pending: dict, job, submit, wait_first, workers: int):
+    """(point, result, folder) as batches finish, 2 x ``workers`` batches in flight at most."""
+    while True:
+        while len(pending) < 2 * workers:
+            batch = next(queue, None)
+            if batch is None:
+                break
+            jobs, folders = job(batch)
+            pending[submit(jobs)] = (batch, folders)
+        if not pending:
+            break
+        for fut in wait_first(pending.keys()):
+            batch, folders = pending.pop(fut)
+            try:
+                results = fut.result()
+            except Exception as exc:  # a worker process died (killed, out of memory)
+                results = [{"status": "failed", "kind": "bug",
+                            "error": f"worker lost: {type(exc).__name__}: {exc}"}] * len(batch)
+            yield from zip(batch, results, folders)
 
 
 def _progress(total: int, initial: int, enabled: bool):
@@ -530,17 +654,23 @@ def failure_reasons(table: pd.DataFrame) -> list[tuple[str, list[str]]]:
     return sorted(groups.items(), key=lambda item: -len(item[1]))
 
 
-def sweep_summary(study: Study, table: pd.DataFrame) -> tuple[str, list[tuple[str, list[str]]]]:
+def sweep_summary(study: Study, table: pd.DataFrame,
+                  nominal: dict[str, Any] | None = None) -> tuple[str, list[tuple[str, list[str]]]]:
     """(the text a sweep ends with, its failures grouped by reason): the key figures over the
-    completed points with their bounds (orchestrator.key_figures), the sweep analysis's own
-    summary (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
+    completed points with their bounds (orchestrator.key_figures) and the oscillation bound
+    against the ``nominal`` run's metrics, the points outside a bound named and grouped by what
+    they share (orchestrator.sweep_judgement), the sweep analysis's own summary
+    (``summary(table, study)`` of ``sweep.analysis``), the failures with their counts."""
     analysis = _analysis(study)
     done = int((table["status"] == "completed").sum()) if "status" in table else 0
     lines = [f"{study.study.name}: {len(table)} of {len(expand(study))} points, {done} completed, "
              f"{len(table) - done} failed"]
+    nominal = nominal or nominal_from_table(table, study)
     if done:
-        text = sweep_table(table, analysis, bounds(analysis, study.study.bounds), set(study.sweep.parameters))
+        judged = sweep_bounds(study, nominal)
+        text = sweep_table(table, analysis, judged, set(study.sweep.parameters))
         lines += [text] if text else []
+        lines += judgement_lines(study, table, judged, nominal)
         if study.sweep.analysis:
             module = import_study_module(study.sweep.analysis)
             if hasattr(module, "summary"):
@@ -564,11 +694,13 @@ def _parameter_unit(study: Study, name: str) -> str:
     return declared[param].unit if param in declared else ""
 
 
-def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
+def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path, nominal: dict[str, Any] | None = None) -> list[Path]:
     """The metrics that matter against the first swept parameter (one line per other value / seed),
     and the sweep analysis module's own plots (``sweep.analysis``). The study's analysis module
     chooses them: ``SWEEP_METRICS`` {metric: bound drawn as a line, or None}; without it, every
-    metric but counters and wall time (all stay in results.parquet)."""
+    metric but counters and wall time (all stay in results.parquet). The oscillation ratio to the
+    ``nominal`` run is drawn with its bound, and the points outside any bound are ringed in red
+    (orchestrator.sweep_judgement)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -589,6 +721,13 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
     chosen = getattr(analysis, "SWEEP_METRICS", None)
     metrics = [c for c in ok.columns if c not in skip and pd.api.types.is_numeric_dtype(ok[c])]
     metrics = [m for m in chosen if m in metrics] if chosen else [m for m in metrics if metric_units.get(m) != "count"]
+    judged = sweep_bounds(study, nominal or nominal_from_table(table, study))
+    chosen = {**(chosen or {}), **{k: b.value for k, b in judged.items() if k.endswith("_vs_nominal")}}
+    metrics += [k for k in chosen if k.endswith("_vs_nominal") and k in ok and k not in metrics]
+    metric_units.update({k: "1" for k in chosen if k.endswith("_vs_nominal")})
+    outside = pd.Series(False, index=ok.index)
+    for _, _, mask in failing_groups(ok, judged):
+        outside |= mask
     cols = 3
     rows = -(-len(metrics) // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 2.8 * rows), squeeze=False)
@@ -599,6 +738,10 @@ def sweep_plots(study: Study, table: pd.DataFrame, out_dir: Path) -> list[Path]:
             g = g.sort_values(x)
             text = ", ".join(map(str, label if isinstance(label, tuple) else (label,)))
             ax.plot(g[x], g[metric], "o" if scatter else "o-", ms=3, label=text if group_cols else None)
+        if outside.any():
+            ax.plot(ok.loc[outside, x], ok.loc[outside, metric], "o", ms=7, mfc="none", mec="tab:red", mew=1.2,
+                    label=f"outside a bound ({int(outside.sum())})")
+            ax.legend(fontsize=7)
         unit = metric_units.get(metric)
         bound = (chosen or {}).get(metric)
         if bound is not None:

@@ -101,26 +101,28 @@ def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = No
 
 def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, retry_failed: bool = False, progress: bool = False,
-          plots: bool = False, engine: str = "python", keep_signals: bool | None = None,
-          overwrite: bool = False) -> SweepResult:
+          plots: bool = False, engine: str = "python", keep_signals: bool | str | None = None,
+          overwrite: bool = False, accept_cost: bool = False) -> SweepResult:
     """Every point of the study's [sweep] section, on ``workers`` processes (default: every core,
     as ``sweep`` does) or a Dask ``scheduler``, with ``engine`` (as ``--engine``; ``keep_signals``
-    as ``--keep-signals``). ``out`` keeps the points (rerun to resume); without it they go to a
-    temporary folder removed at the end."""
+    True, False, "all", "worst" or "none" as ``--keep-signals``; ``accept_cost`` as ``--accept-cost``).
+    ``out`` keeps the points (rerun to resume); without it they go to a temporary folder removed at
+    the end. Works from any script, one read from standard input included."""
     study = load(study, set)
     workers = os.cpu_count() or 1 if workers is None else workers
     if workers < 1:
         raise StudyError(f"workers={workers}: must be >= 1")
     if out is None:
         with tempfile.TemporaryDirectory(prefix="agrobot-sweep-") as tmp:
-            runner = SweepRun(study, Path(tmp) / "sweep", engine=engine, keep_signals=keep_signals)
+            runner = SweepRun(study, Path(tmp) / "sweep", engine=engine, keep_signals=keep_signals,
+                              accept_cost=accept_cost)
             table = runner.run(workers, scheduler, retry_failed, progress=progress)
-        return SweepResult(study, table, sweep_summary(study, table)[0], None, engine)
-    runner = SweepRun(study, Path(out), overwrite, engine=engine, keep_signals=keep_signals)
+        return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], None, engine)
+    runner = SweepRun(study, Path(out), overwrite, engine=engine, keep_signals=keep_signals, accept_cost=accept_cost)
     table = runner.run(workers, scheduler, retry_failed, progress=progress)
     if plots:
-        sweep_plots(study, table, Path(out) / "plots")
-    return SweepResult(study, table, sweep_summary(study, table)[0], Path(out), engine)
+        sweep_plots(study, table, Path(out) / "plots", runner.nominal)
+    return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], Path(out), engine)
 
 
 def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any] | None = None,

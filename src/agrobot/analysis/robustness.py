@@ -17,11 +17,22 @@ import pandas as pd
 from matplotlib.ticker import StrMethodFormatter
 
 from agrobot.orchestrator.atomic_files import write_json
+from agrobot.orchestrator.sweep_judgement import ratio_column
 
-from .figure8 import PAPER_BOUNDS
+from .figure8 import OSCILLATION, PAPER_BOUNDS
 
 DELAY = "steering.command_delay"
 REQUIRED_DELAY = 0.1          # s: the bounds must hold up to here; beyond it is reported
+HUNTING = ratio_column(OSCILLATION[0])      # the sweep's oscillation ratio (orchestrator.sweep_judgement)
+OSCILLATION_RATIO = OSCILLATION[1]
+
+
+def hunting(table: pd.DataFrame) -> np.ndarray:
+    """The completed runs whose steering rate is beyond the sweep's oscillation bound (none when
+    the table has no ratio to the nominal run)."""
+    if HUNTING not in table:
+        return np.zeros(len(table), dtype=bool)
+    return ((table["status"] == "completed") & (table[HUNTING] > OSCILLATION_RATIO)).to_numpy()
 
 
 def within(table: pd.DataFrame) -> np.ndarray:
@@ -41,6 +52,7 @@ def summarise(table: pd.DataFrame) -> dict:
                     "max": float(x.max())} if len(x) else None
     inside = within(table)
     out["within_bounds"] = float(inside.mean()) if len(table) else float("nan")
+    out["hunting"] = int(hunting(table).sum())
     if DELAY in table:
         low = (table[DELAY] <= REQUIRED_DELAY).to_numpy()
         out["within_bounds_delay_le_0.1s"] = float(inside[low].mean()) if low.any() else float("nan")
@@ -55,6 +67,9 @@ def summary(table: pd.DataFrame, study) -> str:
     if "within_bounds_delay_le_0.1s" in s:
         low = int((table[DELAY] <= REQUIRED_DELAY).sum())
         text += f"; {s['within_bounds_delay_le_0.1s']:.0%} of the {low} with {DELAY} <= {REQUIRED_DELAY:g} s"
+    if HUNTING in table:
+        text += (f"\nhunting (steering rate over {OSCILLATION_RATIO:g} x the nominal run's): {s['hunting']} of "
+                 f"{s['runs']} runs")
     return text
 
 
@@ -70,6 +85,10 @@ def plots(table: pd.DataFrame, study, out_dir: Path) -> list[Path]:
     delay_ms = 1000 * done[DELAY]
     ax.scatter(delay_ms, done["euclid_max_straight"], s=10, label="max error, straights")
     ax.scatter(delay_ms, done["euclid_max_curved"], s=10, marker="x", label="max error, curves")
+    hunt = hunting(done)
+    if hunt.any():
+        ax.scatter(delay_ms[hunt], done["euclid_max_curved"][hunt], s=60, facecolors="none", edgecolors="tab:red",
+                   label=f"hunting: steering rate > {OSCILLATION_RATIO:g} x nominal ({int(hunt.sum())})")
     ax.axhline(PAPER_BOUNDS["euclid_max_straight"], color="C0", ls="--", lw=1, label="paper bound, straights (0.40 m)")
     ax.axhline(PAPER_BOUNDS["euclid_max_curved"], color="C1", ls="--", lw=1, label="paper bound, curves (0.60 m)")
     ax.set_yscale("log")

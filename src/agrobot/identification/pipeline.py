@@ -239,8 +239,9 @@ def summary(report: dict) -> str:
     for name, m in report["models"].items():
         lines.append(f"\n{name}: num {fmt(m['num'])} +- {fmt(m['num_std'])}")
         lines.append(f"{'':>{len(name)}}  den {fmt(m['den'])} +- {fmt(m['den_std'][1:])}")
-        lines.append(f"{'':>{len(name)}}  cost {m['cost']:.1f} (expected {m['cost_expected']:.1f}); "
-                     f"RMSE " + ", ".join(f"{b}: {v:.4f}" for b, v in m["validation_rmse"].items()))
+        rmse = ", ".join(f"{b}: {v:.4f}" for b, v in m["validation_rmse"].items()) \
+            or "not computed (no validation bands: the study's identification.validation_bands is empty)"
+        lines.append(f"{'':>{len(name)}}  cost {m['cost']:.1f} (expected {m['cost_expected']:.1f}); RMSE {rmse}")
         paper = PAPER["models"].get(name)
         if paper:
             lines.append(f"{'':>{len(name)}}  paper: num {fmt(paper['num'])} den {fmt(paper['den'])}; RMSE "
