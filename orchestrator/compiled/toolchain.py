@@ -100,8 +100,9 @@ def library(units: dict[str, str], include_dirs: list[Path], files: list[Path]) 
     if lib.agc_token().decode() != key:
         raise CompileError(f"{lib_path}: the cached library answers another shape ({lib.agc_token().decode()}); "
                            f"remove {folder}")
-    ptr = ctypes.POINTER(ctypes.c_double)
-    lib.agc_run.argtypes = [ptr, ptr, ptr, ctypes.c_long, ptr]
-    lib.agc_run.restype = ctypes.c_int
+    if hasattr(lib, "agc_run"):          # a loop's entry (another library binds its own functions)
+        ptr = ctypes.POINTER(ctypes.c_double)
+        lib.agc_run.argtypes = [ptr, ptr, ptr, ctypes.c_long, ptr]
+        lib.agc_run.restype = ctypes.c_int
     _LOADED[key] = lib
     return lib, key, built

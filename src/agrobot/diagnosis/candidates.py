@@ -116,6 +116,7 @@ class Replay:
     window: float = 10.0
     min_speed: float = 0.3
     min_duration: float = 60.0
+    kernel: str = "auto"                # the stage replays in C or in Python (replay_kernels.KERNELS)
 
     def __post_init__(self) -> None:
         f = self.frame
@@ -134,7 +135,7 @@ class Replay:
         # baseline's replayed angle for the evidence (correlations, binning)
         self.command_only = "delta" not in f and "delta_cmd" in f and vehicle.steering == "angle"
         if self.command_only:
-            self.delta = steering_replay(self.cmd, self.h, self.baseline.values, float(self.cmd[0]))
+            self.delta = steering_replay(self.cmd, self.h, self.baseline.values, float(self.cmd[0]), self.kernel)
         self.gps = np.column_stack([column("x"), column("y")])
         speed, self.speed_source = speed_estimate(f)
         self.speed = speed if speed is not None else np.full(n, np.nan)
@@ -178,7 +179,7 @@ class Replay:
         self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed) if has_track else np.zeros(n)
         if "yaw" in self.stages:
             self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
-                                 self.heading, min_speed=self.min_speed)
+                                 self.heading, min_speed=self.min_speed, kernel=self.kernel)
         L = int(round(self.window / self.h))
         starts = np.arange(0, len(self.t) - L + 1, L)
         rows = starts[:, None] + np.arange(L)[None, :]
@@ -287,7 +288,7 @@ class Replay:
         (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
         stepped sets cost less than as many replays."""
         if stage == "steering":
-            return [steering_replay(self.cmd, self.h, v, self.delta[0]) for v in sets]
+            return [steering_replay(self.cmd, self.h, v, self.delta[0], self.kernel) for v in sets]
         if stage == "yaw":
             inputs = [self.yaw_input(v) for v in sets]
             saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]
@@ -344,7 +345,7 @@ class Replay:
         if key not in cache:
             if len(cache) > 32:
                 cache.clear()
-            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]))
+            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]), self.kernel)
         return cache[key]
 
     def saturated_yaw_rates(self, sets: list[dict[str, float]], inputs: list[np.ndarray | None]) -> list[np.ndarray]:
