@@ -162,18 +162,17 @@ def expm_batched(M: np.ndarray) -> np.ndarray:
     return E
 
 
-def zoh_discretize(A: np.ndarray, B: np.ndarray, dt: float, exponential=None) -> tuple[np.ndarray, np.ndarray]:
+def zoh_discretize(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """Exact zero-order-hold discretisation: [Ad Bd; 0 I] = expm([A B; 0 0] dt).
     ``B`` is one input column (n,) or several (n, m); Bd has the same shape. A stack of systems
-    (A: (k, n, n), B: (k, n, m)) is discretised in one batched call (``exponential``, default
-    expm_batched)."""
+    (A: (k, n, n), B: (k, n, m)) is discretised in one batched call (expm_batched)."""
     n = A.shape[-1]
     Bm = B.reshape(*A.shape[:-2], n, -1)
     m = Bm.shape[-1]
     M = np.zeros((*A.shape[:-2], n + m, n + m))
     M[..., :n, :n] = A
     M[..., :n, n:] = Bm
-    E = expm(M * dt) if A.ndim == 2 else (exponential or expm_batched)(M * dt)
+    E = expm(M * dt) if A.ndim == 2 else expm_batched(M * dt)
     return E[..., :n, :n], E[..., :n, n:].reshape(B.shape)
 
 

@@ -168,7 +168,7 @@ class YawReplay:
         k = 1.0 / relaxation_scale - 1.0
         A, B = A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs + c * front_scale * Bf
         if self.kernel == "c":
-            return zoh_discretize(A, B, self.h, exponential=replay_kernels.expm_stack)
+            return replay_kernels.zoh_stack(A, B, self.h)
         return zoh_discretize(A, B, self.h)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:

@@ -1,6 +1,6 @@
 """The diagnosis's stage replays at compiled speed: replay_kernels.c (the steering's first-order
-equivalent, the yaw replay's indexed time-varying recursion, the stacked matrix exponential of its
-zero-order hold) compiled once per content by the compiled engine's toolchain
+equivalent, the yaw replay's indexed time-varying recursion, the zero-order hold of its systems at
+the log's speeds) compiled once per content by the compiled engine's toolchain
 (orchestrator.compiled.toolchain: $CC, cc or gcc; cached by hash under $AGROBOT_CACHE) and called
 through ctypes, which lets go of the interpreter lock while C runs. diagnosis.replay keeps the Python
 path as the reference; ``choose`` picks between them (``auto``: C where a compiler is found, else
@@ -20,21 +20,18 @@ from agrobot.orchestrator.errors import InputError
 
 SOURCE = Path(__file__).with_suffix(".c")
 KERNELS = ("auto", "c", "python")
-MAX_ORDER = 16                 # the C file's largest state (recursion) and matrix (exponential)
+MAX_ORDER = 16                 # the C file's largest state (recursion) and n + p (hold)
 _STATE: dict[str, object] = {}
-_DBL = ctypes.POINTER(ctypes.c_double)
-_LONG = ctypes.POINTER(ctypes.c_long)
 
 
 def _load() -> ctypes.CDLL:
     lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [], [])
-    L, D, I = ctypes.c_long, ctypes.c_double, ctypes.c_int
-    lib.steering_first_order.argtypes = [L, I, _DBL, _DBL, D, D, D, D, D, D, _DBL]
-    lib.steering_first_order.restype = None
-    lib.indexed_recursion.argtypes = [L, L, L, L, L, L, _DBL, _DBL, _LONG, _LONG, _DBL, L, _LONG, _DBL]
-    lib.indexed_recursion.restype = None
-    lib.expm_stack.argtypes = [L, L, L, _DBL, _DBL]
-    lib.expm_stack.restype = None
+    L, D, I, P = ctypes.c_long, ctypes.c_double, ctypes.c_int, ctypes.c_void_p
+    lib.steering_first_order.argtypes = [L, I, P, P, D, D, D, D, D, D, P]
+    lib.indexed_recursion.argtypes = [L, L, L, L, L, L, P, P, P, P, P, L, P, P]
+    lib.zoh_stack.argtypes = [L, L, L, L, P, P, P, P]
+    for f in (lib.steering_first_order, lib.indexed_recursion, lib.zoh_stack):
+        f.restype = None
     return lib
 
 
@@ -76,8 +73,8 @@ def steering_first_order(pieces: list[tuple[np.ndarray, float, float]], deadband
     n = len(commands[0])
     out = np.empty(n)
     (c1, a1, m1), (c2, a2, m2) = [(commands[i], *pieces[i][1:]) for i in (0, -1)]
-    _lib().steering_first_order(n, len(pieces), c1.ctypes.data_as(_DBL), c2.ctypes.data_as(_DBL), float(a1),
-                                float(m1), float(a2), float(m2), float(deadband), float(delta0), out.ctypes.data_as(_DBL))
+    _lib().steering_first_order(n, len(pieces), c1.ctypes.data, c2.ctypes.data, float(a1), float(m1), float(a2),
+                                float(m2), float(deadband), float(delta0), out.ctypes.data)
     return out
 
 
@@ -92,21 +89,25 @@ def indexed_recursion(A: np.ndarray, B: np.ndarray, index: np.ndarray, columns, 
             or len(columns) != m or (N and (index.min() < 0 or index.max() >= S)) or (m and columns.max() >= p):
         raise ValueError(f"shapes: A {A.shape}, B {B.shape}, index {index.shape}, columns {columns.shape}, u {u.shape}")
     out = np.empty((R, N, len(rows), m))
-    _lib().indexed_recursion(R, S, N, n, p, m, A.ctypes.data_as(_DBL), B.ctypes.data_as(_DBL),
-                             index.ctypes.data_as(_LONG), columns.ctypes.data_as(_LONG), u.ctypes.data_as(_DBL),
-                             len(rows), rows.ctypes.data_as(_LONG), out.ctypes.data_as(_DBL))
+    _lib().indexed_recursion(R, S, N, n, p, m, A.ctypes.data, B.ctypes.data, index.ctypes.data, columns.ctypes.data,
+                             u.ctypes.data, len(rows), rows.ctypes.data, out.ctypes.data)
     return out
 
 
-def expm_stack(M: np.ndarray) -> np.ndarray:
-    """exp of each matrix of a stack (k, q, q), as components.models.yaw_dynamics.expm_batched: the
-    squarings from the stack's largest 1-norm (scaled to at most 1/4), a degree-12 Taylor polynomial."""
-    M = _as(M, float)
-    norm = float(np.max(np.sum(np.abs(M), axis=-2))) if M.size else 0.0
-    squarings = max(0, int(math.ceil(math.log2(norm / 0.25)))) if norm > 0.25 else 0
-    q = M.shape[-1]
-    if q > MAX_ORDER:
-        raise ValueError(f"a {q} x {q} matrix: the kernel takes at most {MAX_ORDER}")
-    E = np.empty_like(M)
-    _lib().expm_stack(int(np.prod(M.shape[:-2])), q, squarings, M.ctypes.data_as(_DBL), E.ctypes.data_as(_DBL))
-    return E
+def _squarings(*parts: np.ndarray) -> int:
+    """expm_batched's squarings: the largest 1-norm in the stack, of the columns of ``parts`` side by
+    side, scaled to at most 1/4."""
+    norm = max(float(np.max(np.sum(np.abs(x), axis=-2), initial=0.0)) for x in parts)
+    return max(0, int(math.ceil(math.log2(norm / 0.25)))) if norm > 0.25 else 0
+
+
+def zoh_stack(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Ad, Bd) of each system of a stack (A: (k, n, n), B: (k, n, p)), [Ad Bd; 0 I] = exp([A B; 0 0] dt),
+    as yaw_dynamics.zoh_discretize with expm_batched (the series' products on the top block row only)."""
+    A, B = _as(A * dt, float), _as(B * dt, float)
+    (k, n, _), p = A.shape, B.shape[-1]
+    if n + p > MAX_ORDER or B.shape[:2] != (k, n):
+        raise ValueError(f"shapes: A {A.shape}, B {B.shape} (n + p at most {MAX_ORDER})")
+    Ad, Bd = np.empty_like(A), np.empty_like(B)
+    _lib().zoh_stack(k, n, p, _squarings(A, B), A.ctypes.data, B.ctypes.data, Ad.ctypes.data, Bd.ctypes.data)
+    return Ad, Bd
