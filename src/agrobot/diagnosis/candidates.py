@@ -34,7 +34,8 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
-from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
+from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
+                     steering_replay)
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -339,8 +340,8 @@ class Replay:
     def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
         """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
         a fit of the yaw stage's other parameters replays it once)."""
-        key = tuple(round(float(v[k]), 12) for k in ("steering_time_constant", "steering_deadband",
-                                                      "steering_rate_limit", "command_delay"))
+        key = exact(v[k] for k in ("steering_time_constant", "steering_deadband", "steering_rate_limit",
+                                   "command_delay"))
         cache = self.__dict__.setdefault("_steering_cache", {})
         if key not in cache:
             if len(cache) > 32:
@@ -496,8 +497,42 @@ class CandidateFit:
     free: tuple[str, ...] = ()          # the parameters this fit moved
 
 
+class Speculated(Exception):
+    """A fit asked for while its arguments are being collected (diagnosis.parallel_fits), to stop
+    the caller at its first fit."""
+
+
+def fit_key(base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
+            starts: list[dict[str, float]], sigma: dict[str, float]) -> tuple:
+    """Everything a fit's result depends on besides the replay, exact: two fits of one key are the
+    same fit (the replays are pure functions of the values)."""
+    return (tuple(sorted(base_values.items())), tuple(free), tuple(stages),
+            tuple(tuple(sorted(s.items())) for s in starts), tuple(sorted(sigma.items())))
+
+
 def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
          starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
+    """``fitted``, unless the same fit was computed ahead (``replay.fits_ahead``, by worker processes:
+    diagnosis.parallel_fits); while the fits ahead are being collected (``replay.collecting``), the
+    fit is noted and a stand-in returned (or Speculated raised)."""
+    args = (base_values, list(free), tuple(stages), starts, sigma)
+    collecting = replay.__dict__.get("collecting")
+    if collecting is not None:
+        collecting.append(args)
+        if replay.__dict__.get("collect_first"):
+            raise Speculated
+        return CandidateFit(dict(base_values), {s: 1.0 for s in stages}, {s: 1 for s in stages},
+                            {s: 1.0 for s in stages}, {s: 1.0 for s in stages}, {}, tuple(p.name for p in free))
+    ahead = replay.__dict__.get("fits_ahead")
+    if ahead:
+        hit = ahead.pop(fit_key(*args), None)
+        if hit is not None:
+            return hit
+    return fitted(replay, *args)
+
+
+def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
+           starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
     """Least squares over ``free`` (scaled by each parameter's typical size) from each start."""
     def values_of(x: np.ndarray) -> dict[str, float]:
         v = dict(base_values)

@@ -38,6 +38,12 @@ def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: f
                                         v["steering_rate_limit"], v["command_delay"], delta0)
 
 
+def exact(values) -> tuple[float, ...]:
+    """A cache key of parameter values, exact: a hit returns what a fresh replay would compute (the
+    replays are pure functions of the values, so a fit's result does not depend on what ran before it)."""
+    return tuple(float(x) for x in values)
+
+
 def midpoints(x: np.ndarray) -> np.ndarray:
     """Mean of consecutive samples; the last sample repeats."""
     return np.append(0.5 * (x[1:] + x[:-1]), x[-1])
@@ -50,7 +56,7 @@ class YawReplay:
         gamma = R0 + offset R1 + s_north R2 + s_east R3 + bias
 
     (a side slope with fall line psi_d and angle phi: s_east, s_north = g sin(phi) (cos, sin)(psi_d)).
-    Simulations are cached on the parameters that enter nonlinearly. ``kernel``
+    Simulations are cached on the parameters that enter nonlinearly (exact). ``kernel``
     (replay_kernels.KERNELS): the recursion and the hold's exponentials in C, or the Python reference
     (blocked_recursion, zoh_discretize)."""
 
@@ -72,7 +78,7 @@ class YawReplay:
                   relaxation_scale: float = 1.0, steering: np.ndarray | None = None) -> np.ndarray:
         """The four responses (N, 4); with ``steering`` (a wheel angle, N) its yaw-rate response
         too, as a fifth column of the same recursion (each column's arithmetic is its own)."""
-        key = (round(front_scale, 12), round(rear_scale, 12), round(speed_slope, 12), v_ref, round(relaxation_scale, 12))
+        key = exact((front_scale, rear_scale, speed_slope, v_ref, relaxation_scale))
         hit = self._cache.get(key)
         if hit is not None and steering is None:
             return hit
@@ -96,7 +102,7 @@ class YawReplay:
         if len(self._cache) + 2 * len(yaws) > 64:
             self._cache.clear()
         for yaw, z in zip(yaws, both):
-            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            key = exact(yaw)
             self._cache[key] = z[:, 0, :4]
             self._cache[key + ("v_y",)] = z[:, 1, :4]
         return [z[:, 0, :] for z in both]
@@ -110,7 +116,7 @@ class YawReplay:
         for v, delta in zip(sets, inputs):
             yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                    v["cornering_reference_speed"], v["relaxation_scale"])
-            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            key = exact(yaw)
             memo = None if delta is None else self._cache.get(("input", id(delta)) + key)
             if (key in self._cache or key in todo) and (delta is None or (memo is not None and memo[0] is delta)):
                 continue
@@ -183,7 +189,7 @@ class YawReplay:
         angle replayed from the command, when the log has none measured)."""
         yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                v["cornering_reference_speed"], v["relaxation_scale"])
-        key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+        key = exact(yaw)
         if delta is None:
             first = self.responses(*yaw)[:, 0]
         else:                                   # memoised on the input array and the yaw values
@@ -206,8 +212,8 @@ class YawReplay:
         """Lateral velocity of the rear-axle point R in the body frame, v_y - l_r gamma, from the
         model's states (the side-slip a dead reckoning along the heading leaves out: nothing for
         a tractor at 2 m/s, metres over 10 s for a car at 30 m/s)."""
-        key = (round(v["cornering_front_scale"], 12), round(v["cornering_rear_scale"], 12),
-               round(v["cornering_speed_slope"], 12), v["cornering_reference_speed"], round(v["relaxation_scale"], 12))
+        key = exact((v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                     v["cornering_reference_speed"], v["relaxation_scale"]))
         self.responses(*key)
         V = self._cache[key + ("v_y",)]
         vy = V[:, 0] + v["steer_angle_offset"] * V[:, 1] + v["slope_north"] * V[:, 2] + v["slope_east"] * V[:, 3]

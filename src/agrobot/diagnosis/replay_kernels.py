@@ -59,7 +59,9 @@ def choose(kernel: str) -> str:
 
 
 def _lib() -> ctypes.CDLL:
-    return _STATE.get("lib") or _load()          # type: ignore[return-value]
+    if "lib" not in _STATE:
+        _STATE["lib"] = _load()
+    return _STATE["lib"]                         # type: ignore[return-value]
 
 
 def _as(x, dtype) -> np.ndarray:
