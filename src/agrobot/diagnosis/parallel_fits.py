@@ -14,8 +14,8 @@ The workers are processes of the ``forkserver`` start method where the platform 
 ``spawn``): nothing is inherited but the replay, sent once to each worker, so the pool works from
 threads, and from any script (the workers do not run it again: FitPool._start).
 
-Imported where used: multiprocessing, types (only when the pool starts: a diagnosis on one worker
-never loads them).
+Imported where used: multiprocessing, threading, types (only for more than one worker: a diagnosis on
+one worker never loads them).
 """
 from __future__ import annotations
 
@@ -30,6 +30,7 @@ from .candidates import Replay, Speculated, fit_key, fitted
 from .selection import Selector
 
 _WORKER: dict[str, Replay] = {}
+PRELOAD = ["agrobot.diagnosis.candidates"]        # what the forkserver imports once for every worker
 
 
 def default_workers() -> int:
@@ -61,6 +62,17 @@ class FitPool:
         self.replay, self.workers = replay, max(1, int(workers))
         self._pool = None
 
+    def warm(self) -> None:
+        """Start the forkserver (a fresh interpreter importing the replay's modules, a second or two) in
+        the background, while the baseline is fitted: the workers fork from it when the pool starts."""
+        import multiprocessing
+        import multiprocessing.forkserver
+        import threading
+
+        if self.workers > 1 and "forkserver" in multiprocessing.get_all_start_methods():
+            multiprocessing.get_context("forkserver").set_forkserver_preload(PRELOAD)
+            threading.Thread(target=multiprocessing.forkserver.ensure_running, daemon=True).start()
+
     def _start(self):
         """A multiprocessing pool, every worker started now with the replay. The workers do not run the
         caller's main script again (spawn and forkserver would, and a script without a main guard
@@ -71,7 +83,7 @@ class FitPool:
         method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
         context = multiprocessing.get_context(method)
         if method == "forkserver":
-            context.set_forkserver_preload(["agrobot.diagnosis.candidates"])
+            context.set_forkserver_preload(PRELOAD)
         payload = pickle.dumps(self.replay, protocol=pickle.HIGHEST_PROTOCOL)
         main = sys.modules["__main__"]
         sys.modules["__main__"] = types.ModuleType("__main__")
@@ -121,6 +133,7 @@ class ParallelSelector(Selector):
     def __init__(self, *args, workers: int = 1, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.pool = FitPool(self.replay, workers)
+        self.pool.warm()
 
     def run(self):
         try:
