@@ -60,6 +60,11 @@ class FitPool:
 
     def __init__(self, replay: Replay, workers: int) -> None:
         self.replay, self.workers = replay, max(1, int(workers))
+        if self.workers > 1:
+            import multiprocessing
+
+            if multiprocessing.current_process().daemon:     # a daemonic process may not start any
+                self.workers = 1
         self._pool = None
 
     def warm(self) -> None:
@@ -101,7 +106,7 @@ class FitPool:
         replay.collecting, replay.collect_first = [], first_only
         try:
             batch()
-        except Speculated:
+        except Exception:       # noqa: BLE001 - noting is best effort: the real run meets any failure itself
             pass
         finally:
             noted = replay.__dict__.pop("collecting")
@@ -110,9 +115,13 @@ class FitPool:
         wanted = {fit_key(*args): args for args in noted}
         ready = {k: ready[k] for k in wanted if k in ready}          # what this batch may still ask for
         jobs = [(k, args) for k, args in wanted.items() if k not in ready]
-        if len(jobs) >= 2:
-            if self._pool is None:
+        if len(jobs) >= 2 and self._pool is None:
+            try:
                 self._pool = self._start()
+            except (OSError, AssertionError) as exc:   # AssertionError: inside a daemonic process (a Pool's worker)
+                print(f"note: the candidate fits run in this process only ({exc})", file=sys.stderr)
+                self.workers = 1
+        if len(jobs) >= 2 and self._pool is not None:
             done = self._pool.map(_fit_in_worker, [a for _, a in jobs], chunksize=1)
             ready.update((k, fit) for (k, _), fit in zip(jobs, done) if fit is not None)
         replay.fits_ahead = ready
