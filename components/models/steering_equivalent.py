@@ -49,17 +49,26 @@ def delayed_command(cmd: np.ndarray, h: float, delay: float) -> tuple[np.ndarray
     return cmd[np.clip(k - n - 1, 0, None)], later, f
 
 
+def step_pieces(cmd: np.ndarray, h: float, time_constant: float, rate_limit: float,
+                delay: float) -> list[tuple[np.ndarray, float, float]]:
+    """The pieces of each sample step on which the delayed held command is constant (one, or two
+    when the delay is not a whole number of samples), each (command, alpha, r s) with
+    alpha = 1 - exp(-s/tau) for the piece's length s."""
+    earlier, later, f = delayed_command(np.asarray(cmd, float), h, delay)
+    tau = max(time_constant, 1e-4)
+    pieces = [(later, h)] if f == 0.0 else [(earlier, f * h), (later, (1.0 - f) * h)]
+    return [(c, 1.0 - math.exp(-s / tau), rate_limit * s) for c, s in pieces]
+
+
 def simulate(cmd: np.ndarray, h: float, time_constant: float, deadband: float, rate_limit: float,
              delay: float, delta0: float) -> np.ndarray:
     """delta <- delta + clip(alpha dz(c - delta, D), -r s, r s), alpha = 1 - exp(-s/tau): the exact
     step of length s of ddelta/dt = dz(c - delta, D)/tau away from the limits, taken over each
     piece of the interval on which the delayed held command is constant (two pieces when the
     delay is not a whole number of samples, so a step of the command lands at its true time)."""
-    earlier, later, f = delayed_command(np.asarray(cmd, float), h, delay)
-    tau = max(time_constant, 1e-4)
-    pieces = [(later.tolist(), h)] if f == 0.0 else [(earlier.tolist(), f * h), (later.tolist(), (1.0 - f) * h)]
-    steps = [(c, 1.0 - math.exp(-s / tau), rate_limit * s) for c, s in pieces]
-    out = [0.0] * len(later)
+    steps = [(c.tolist(), alpha, move_max) for c, alpha, move_max in step_pieces(cmd, h, time_constant, rate_limit,
+                                                                                  delay)]
+    out = [0.0] * len(steps[0][0])
     d = float(delta0)
     for k in range(len(out)):
         out[k] = d

@@ -205,7 +205,7 @@ def _named(source, compute, *args):
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
              resample: bool = False, recording=None, plots: bool = True, progress=None,
              identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False,
-             where: str | None = None, keep_unexplained: bool = False) -> Diagnosis:
+             where: str | None = None, keep_unexplained: bool = False, workers: int | None = None) -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it (checked
     before anything is computed), diagnosis.json, report.md, the figures and extended_study.toml go
@@ -214,7 +214,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     (one vehicle model for both; False is faster). ``split``: what is held out, "tail" (the last
     1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto" (blocks when the last part is
     driven beyond the first's conditions). ``mcap``: diagnosis.mcap too. ``where``/``keep_unexplained``:
-    the stretches judged (measurements.modes, the ``--where`` option)."""
+    the stretches judged (measurements.modes, the ``--where`` option). ``workers``: processes for the
+    candidate fits (default: every core; the result is the same whatever their number)."""
     from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnosis
 
@@ -222,6 +223,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         raise StudyError(f"--fit-fraction {fit_fraction:g}: expected a share in [0.2, 0.8]")
     if split not in SPLITS:
         raise StudyError(f"split {split!r}: expected one of {', '.join(SPLITS)}")
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise StudyError(f"--workers {workers!r}: expected a whole number of processes, at least 1")
     baseline = None if study is None else load(study)
     recording = _stretches(recording, where, keep_unexplained)
     inputs = [log, getattr(recording, "dbc", None), *study_inputs(baseline)]
@@ -229,7 +232,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         Diagnosis.check(out, overwrite, inputs)
     found, write = diagnosis(log, None if baseline is None else baseline.path, fit_fraction, min_gain, plots=plots,
                              resample=resample, recording=recording, progress=progress, identify=identify,
-                             mcap=mcap, split=split)
+                             mcap=mcap, split=split, workers=workers)
     result = Diagnosis(found, None, write, inputs)
     if out is not None:
         result.save(out, overwrite)

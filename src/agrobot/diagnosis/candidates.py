@@ -34,7 +34,8 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
-from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
+from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
+                     steering_replay)
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -116,6 +117,7 @@ class Replay:
     window: float = 10.0
     min_speed: float = 0.3
     min_duration: float = 60.0
+    kernel: str = "auto"                # the stage replays in C or in Python (replay_kernels.KERNELS)
 
     def __post_init__(self) -> None:
         f = self.frame
@@ -134,7 +136,7 @@ class Replay:
         # baseline's replayed angle for the evidence (correlations, binning)
         self.command_only = "delta" not in f and "delta_cmd" in f and vehicle.steering == "angle"
         if self.command_only:
-            self.delta = steering_replay(self.cmd, self.h, self.baseline.values, float(self.cmd[0]))
+            self.delta = steering_replay(self.cmd, self.h, self.baseline.values, float(self.cmd[0]), self.kernel)
         self.gps = np.column_stack([column("x"), column("y")])
         speed, self.speed_source = speed_estimate(f)
         self.speed = speed if speed is not None else np.full(n, np.nan)
@@ -178,7 +180,7 @@ class Replay:
         self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed) if has_track else np.zeros(n)
         if "yaw" in self.stages:
             self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
-                                 self.heading, min_speed=self.min_speed)
+                                 self.heading, min_speed=self.min_speed, kernel=self.kernel)
         L = int(round(self.window / self.h))
         starts = np.arange(0, len(self.t) - L + 1, L)
         rows = starts[:, None] + np.arange(L)[None, :]
@@ -287,7 +289,7 @@ class Replay:
         (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
         stepped sets cost less than as many replays."""
         if stage == "steering":
-            return [steering_replay(self.cmd, self.h, v, self.delta[0]) for v in sets]
+            return [steering_replay(self.cmd, self.h, v, self.delta[0], self.kernel) for v in sets]
         if stage == "yaw":
             inputs = [self.yaw_input(v) for v in sets]
             saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]
@@ -338,13 +340,13 @@ class Replay:
     def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
         """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
         a fit of the yaw stage's other parameters replays it once)."""
-        key = tuple(round(float(v[k]), 12) for k in ("steering_time_constant", "steering_deadband",
-                                                      "steering_rate_limit", "command_delay"))
+        key = exact(v[k] for k in ("steering_time_constant", "steering_deadband", "steering_rate_limit",
+                                   "command_delay"))
         cache = self.__dict__.setdefault("_steering_cache", {})
         if key not in cache:
             if len(cache) > 32:
                 cache.clear()
-            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]))
+            cache[key] = steering_replay(self.cmd, self.h, v, float(self.cmd[0]), self.kernel)
         return cache[key]
 
     def saturated_yaw_rates(self, sets: list[dict[str, float]], inputs: list[np.ndarray | None]) -> list[np.ndarray]:
@@ -495,8 +497,42 @@ class CandidateFit:
     free: tuple[str, ...] = ()          # the parameters this fit moved
 
 
+class Speculated(Exception):
+    """A fit asked for while its arguments are being collected (diagnosis.parallel_fits), to stop
+    the caller at its first fit."""
+
+
+def fit_key(base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
+            starts: list[dict[str, float]], sigma: dict[str, float]) -> tuple:
+    """Everything a fit's result depends on besides the replay, exact: two fits of one key are the
+    same fit (the replays are pure functions of the values)."""
+    return (tuple(sorted(base_values.items())), tuple(free), tuple(stages),
+            tuple(tuple(sorted(s.items())) for s in starts), tuple(sorted(sigma.items())))
+
+
 def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
          starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
+    """``fitted``, unless the same fit was computed ahead (``replay.fits_ahead``, by worker processes:
+    diagnosis.parallel_fits); while the fits ahead are being collected (``replay.collecting``), the
+    fit is noted and a stand-in returned (or Speculated raised)."""
+    args = (base_values, list(free), tuple(stages), starts, sigma)
+    collecting = replay.__dict__.get("collecting")
+    if collecting is not None:
+        collecting.append(args)
+        if replay.__dict__.get("collect_first"):
+            raise Speculated
+        return CandidateFit(dict(base_values), {s: 1.0 for s in stages}, {s: 1 for s in stages},
+                            {s: 1.0 for s in stages}, {s: 1.0 for s in stages}, {}, tuple(p.name for p in free))
+    ahead = replay.__dict__.get("fits_ahead")
+    if ahead:
+        hit = ahead.pop(fit_key(*args), None)
+        if hit is not None:
+            return hit
+    return fitted(replay, *args)
+
+
+def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
+           starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
     """Least squares over ``free`` (scaled by each parameter's typical size) from each start."""
     def values_of(x: np.ndarray) -> dict[str, float]:
         v = dict(base_values)

@@ -26,7 +26,8 @@ from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
 from .report import binned_figure, floors_figure, markdown, stage_figure
-from .selection import Finding, select
+from .parallel_fits import ParallelSelector, default_workers
+from .selection import Finding
 from .unexplained import RATIO, signature, stage_check
 from .plausibility import kinematic, understeer
 from .study_fit import study_check
@@ -353,11 +354,12 @@ def coarser_clock(frame):
 
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
-             recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto") -> dict:
+             recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto",
+             workers: int | None = None) -> dict:
     """``diagnosis`` written into the existing folder ``out_dir`` when given (a caller that has
     already placed its output: the commands go through agrobot.api, which stages it)."""
     result, write = diagnosis(log_path, study_path, fit_fraction, min_gain, plots, resample, recording, progress,
-                              identify, mcap, split)
+                              identify, mcap, split, workers)
     if out_dir is not None:
         write(Path(out_dir))
     return result
@@ -365,13 +367,14 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
 
 def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fraction: float = 0.6,
               min_gain: float = 0.05, plots: bool = True, resample: bool = False, recording=None, progress=None,
-              identify: bool = True, mcap: bool = False, split: str = "auto"):
+              identify: bool = True, mcap: bool = False, split: str = "auto", workers: int | None = None):
     """Run the diagnosis; returns (result, write), nothing written: ``write(folder)`` writes
     diagnosis.json and report.md (verdict ``cannot decide`` with the reason when the log cannot be
     used), and the figures and extended_study.toml. Raises nothing for a bad log.
     ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``:
     ``write`` adds diagnosis.mcap; ``split``: what is held out (diagnosis.candidates.SPLITS: the last
-    part, every third window, or chosen by the log's conditions)."""
+    part, every third window, or chosen by the log's conditions); ``workers``: processes for the candidate
+    fits (diagnosis.parallel_fits; None: every core), the result the same whatever their number."""
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
@@ -394,8 +397,10 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         say(replay.split_note)
     if replay.side_slip_note():
         say(replay.side_slip_note())
-    sel = select(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"),
-                 progress=say)
+    workers = default_workers() if workers is None else max(1, int(workers))
+    say(f"candidate fits on {workers} worker process{'es' if workers > 1 else ''} (--workers)")
+    sel = ParallelSelector(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"),
+                           progress=say, workers=workers).run()
     say("effects selected; judging the stages against their noise floors")
     final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])

@@ -19,17 +19,29 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from agrobot.components.models import steering_equivalent
+from agrobot.diagnosis import replay_kernels
 from agrobot.identification.driving import DrivingLog, Segments, YawModel
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, zoh_discretize)
 
 
-def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float) -> np.ndarray:
+def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float,
+                    kernel: str = "auto") -> np.ndarray:
     """The steering's first-order equivalent (components.models.steering_equivalent) with the
-    replay's values."""
+    replay's values; ``kernel``: replay_kernels.KERNELS (the C loop, or the Python reference)."""
+    if replay_kernels.choose(kernel) == "c":
+        pieces = steering_equivalent.step_pieces(cmd, h, v["steering_time_constant"], v["steering_rate_limit"],
+                                                 v["command_delay"])
+        return replay_kernels.steering_first_order(pieces, v["steering_deadband"], delta0)
     return steering_equivalent.simulate(cmd, h, v["steering_time_constant"], v["steering_deadband"],
                                         v["steering_rate_limit"], v["command_delay"], delta0)
+
+
+def exact(values) -> tuple[float, ...]:
+    """A cache key of parameter values, exact: a hit returns what a fresh replay would compute (the
+    replays are pure functions of the values, so a fit's result does not depend on what ran before it)."""
+    return tuple(float(x) for x in values)
 
 
 def midpoints(x: np.ndarray) -> np.ndarray:
@@ -44,11 +56,14 @@ class YawReplay:
         gamma = R0 + offset R1 + s_north R2 + s_east R3 + bias
 
     (a side slope with fall line psi_d and angle phi: s_east, s_north = g sin(phi) (cos, sin)(psi_d)).
-    Simulations are cached on the parameters that enter nonlinearly."""
+    Simulations are cached on the parameters that enter nonlinearly (exact). ``kernel``
+    (replay_kernels.KERNELS): the recursion and the hold's exponentials in C, or the Python reference
+    (blocked_recursion, zoh_discretize)."""
 
     def __init__(self, model: str, params: TractorParameters, h: float, delta: np.ndarray, v: np.ndarray,
-                 heading: np.ndarray, speed_grid: float = 0.02, min_speed: float = 0.3):
+                 heading: np.ndarray, speed_grid: float = 0.02, min_speed: float = 0.3, kernel: str = "auto"):
         self.model, self.params, self.h = model, params, h
+        self.kernel = replay_kernels.choose(kernel)
         psi = midpoints(heading)
         self.inputs = np.column_stack([midpoints(delta), np.ones(len(delta)), np.cos(psi), -np.sin(psi)])
         self.bins = np.round(np.maximum(midpoints(v), min_speed) / speed_grid).astype(int)
@@ -57,12 +72,13 @@ class YawReplay:
         self.index = np.searchsorted(np.unique(self.bins), self.bins)
         self._parts: list[np.ndarray] | None = None
         self._cache: dict[tuple, np.ndarray] = {}
+        self._scales: dict[tuple[float, float], np.ndarray] = {}
 
     def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0, steering: np.ndarray | None = None) -> np.ndarray:
         """The four responses (N, 4); with ``steering`` (a wheel angle, N) its yaw-rate response
         too, as a fifth column of the same recursion (each column's arithmetic is its own)."""
-        key = (round(front_scale, 12), round(rear_scale, 12), round(speed_slope, 12), v_ref, round(relaxation_scale, 12))
+        key = exact((front_scale, rear_scale, speed_slope, v_ref, relaxation_scale))
         hit = self._cache.get(key)
         if hit is not None and steering is None:
             return hit
@@ -74,21 +90,19 @@ class YawReplay:
         side; a set's arithmetic is that of its own recursion); cached like ``responses``."""
         wide = any(s is not None for s in steerings)
         columns = [0, 0, 1, 1] + ([0] if wide else [])
-        A, b = [], []
+        systems, inputs = [], []
         for yaw, steering in zip(yaws, steerings):
-            Ad, Bd = self._discrete(*yaw)
-            inputs = self.inputs
+            systems.append(self._discrete(*yaw))
+            u = self.inputs
             if wide:
-                extra = np.zeros(len(inputs)) if steering is None else midpoints(np.asarray(steering, float))
-                inputs = np.column_stack([inputs, extra])
-            A.append(Ad[self.index])
-            b.append(Bd[self.index][:, :, columns] * inputs[:, None, :])
-        both = (blocked_recursion(A[0], b[0], row=(1, 0))[None] if len(yaws) == 1
-                else blocked_recursion(np.stack(A), np.stack(b), row=(1, 0)))
+                extra = np.zeros(len(u)) if steering is None else midpoints(np.asarray(steering, float))
+                u = np.column_stack([u, extra])
+            inputs.append(u)
+        both = self._recursion(systems, columns, inputs, (1, 0))
         if len(self._cache) + 2 * len(yaws) > 64:
             self._cache.clear()
         for yaw, z in zip(yaws, both):
-            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            key = exact(yaw)
             self._cache[key] = z[:, 0, :4]
             self._cache[key + ("v_y",)] = z[:, 1, :4]
         return [z[:, 0, :] for z in both]
@@ -102,7 +116,7 @@ class YawReplay:
         for v, delta in zip(sets, inputs):
             yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                    v["cornering_reference_speed"], v["relaxation_scale"])
-            key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+            key = exact(yaw)
             memo = None if delta is None else self._cache.get(("input", id(delta)) + key)
             if (key in self._cache or key in todo) and (delta is None or (memo is not None and memo[0] is delta)):
                 continue
@@ -114,6 +128,19 @@ class YawReplay:
         for (yaw, delta, key), z in zip(jobs, out):
             if delta is not None:
                 self._cache[("input", id(delta)) + key] = (delta, z[:, 4])
+
+    def _recursion(self, systems: list[tuple[np.ndarray, np.ndarray]], columns: list[int], inputs: list[np.ndarray],
+                   rows) -> np.ndarray:
+        """Rows ``rows`` of Z_{k-1}, Z_k = Ad(v_k) Z_{k-1} + Bd(v_k)[:, columns] * u_k, for each system
+        (Ad, Bd at the log's speeds) and its inputs u (N, m): (R, N, len(rows), m)."""
+        if self.kernel == "c":
+            return replay_kernels.indexed_recursion(np.stack([A for A, _ in systems]), np.stack([B for _, B in systems]),
+                                                    self.index, columns, np.stack(inputs), rows)
+        A = [Ad[self.index] for Ad, _ in systems]
+        b = [Bd[self.index][:, :, columns] * u[:, None, :] for (_, Bd), u in zip(systems, inputs)]
+        if len(systems) == 1:
+            return blocked_recursion(A[0], b[0], row=tuple(rows))[None]
+        return blocked_recursion(np.stack(A), np.stack(b), row=tuple(rows))
 
     def _discrete(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0):
@@ -138,24 +165,31 @@ class YawReplay:
                               np.column_stack([2 * (B - B2), np.zeros_like(E)]), np.column_stack([Bf, np.zeros_like(E)])))
             self._parts = [np.array(x) for x in zip(*parts)]
         A0, As, Af, Ar, B, Bs, Bf = self._parts
-        c = np.array([cornering_scale(v, speed_slope, v_ref) for v in self.speeds])[:, None, None]
+        c = self._scales.get((speed_slope, v_ref))
+        if c is None:
+            c = self._scales[(speed_slope, v_ref)] = np.array([cornering_scale(v, speed_slope, v_ref)
+                                                               for v in self.speeds])[:, None, None]
+            if len(self._scales) > 64:
+                self._scales = {(speed_slope, v_ref): c}
         k = 1.0 / relaxation_scale - 1.0
-        return zoh_discretize(A0 + k * As + c * (front_scale * Af + rear_scale * Ar),
-                              B + k * Bs + c * front_scale * Bf, self.h)
+        A, B = A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs + c * front_scale * Bf
+        if self.kernel == "c":
+            return replay_kernels.zoh_stack(A, B, self.h)
+        return zoh_discretize(A, B, self.h)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
-        Ad, Bd = self._discrete(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+        system = self._discrete(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                                 v["cornering_reference_speed"], v["relaxation_scale"])
         u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
-        return blocked_recursion(Ad[self.index], Bd[self.index][:, :, [0] * u.shape[1]] * u[:, None, :], row=1)
+        return self._recursion([system], [0] * u.shape[1], [u], (1,))[0, :, 0, :]
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """The yaw rate under ``v``, driven by the measured wheel angle, or by ``delta`` (a wheel
         angle replayed from the command, when the log has none measured)."""
         yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
                v["cornering_reference_speed"], v["relaxation_scale"])
-        key = (round(yaw[0], 12), round(yaw[1], 12), round(yaw[2], 12), yaw[3], round(yaw[4], 12))
+        key = exact(yaw)
         if delta is None:
             first = self.responses(*yaw)[:, 0]
         else:                                   # memoised on the input array and the yaw values
@@ -178,8 +212,8 @@ class YawReplay:
         """Lateral velocity of the rear-axle point R in the body frame, v_y - l_r gamma, from the
         model's states (the side-slip a dead reckoning along the heading leaves out: nothing for
         a tractor at 2 m/s, metres over 10 s for a car at 30 m/s)."""
-        key = (round(v["cornering_front_scale"], 12), round(v["cornering_rear_scale"], 12),
-               round(v["cornering_speed_slope"], 12), v["cornering_reference_speed"], round(v["relaxation_scale"], 12))
+        key = exact((v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
+                     v["cornering_reference_speed"], v["relaxation_scale"]))
         self.responses(*key)
         V = self._cache[key + ("v_y",)]
         vy = V[:, 0] + v["steer_angle_offset"] * V[:, 1] + v["slope_north"] * V[:, 2] + v["slope_east"] * V[:, 3]

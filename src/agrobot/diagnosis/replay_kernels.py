@@ -1,0 +1,115 @@
+"""The diagnosis's stage replays at compiled speed: replay_kernels.c (the steering's first-order
+equivalent, the yaw replay's indexed time-varying recursion, the zero-order hold of its systems at
+the log's speeds) compiled once per content by the compiled engine's toolchain
+(orchestrator.compiled.toolchain: $CC, cc or gcc; cached by hash under $AGROBOT_CACHE) and called
+through ctypes, which lets go of the interpreter lock while C runs. diagnosis.replay keeps the Python
+path as the reference; ``choose`` picks between them (``auto``: C where a compiler is found, else
+Python, said once per process).
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from agrobot.orchestrator.compiled.toolchain import CompileError, CompilerMissing, library
+from agrobot.orchestrator.errors import InputError
+
+SOURCE = Path(__file__).with_suffix(".c")
+KERNELS = ("auto", "c", "python")
+MAX_ORDER = 16                 # the C file's largest state (recursion) and n + p (hold)
+_STATE: dict[str, object] = {}
+
+
+def _load() -> ctypes.CDLL:
+    lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [], [])
+    L, D, I, P = ctypes.c_long, ctypes.c_double, ctypes.c_int, ctypes.c_void_p
+    lib.steering_first_order.argtypes = [L, I, P, P, D, D, D, D, D, D, P]
+    lib.indexed_recursion.argtypes = [L, L, L, L, L, L, P, P, P, P, P, L, P, P]
+    lib.zoh_stack.argtypes = [L, L, L, L, P, P, P, P]
+    for f in (lib.steering_first_order, lib.indexed_recursion, lib.zoh_stack):
+        f.restype = None
+    return lib
+
+
+def choose(kernel: str) -> str:
+    """``c`` or ``python`` for the asked ``kernel``: ``auto`` is C where a C compiler is found, else
+    Python with one note on stderr (per process); ``c`` without a compiler raises CompilerMissing."""
+    if kernel not in KERNELS:
+        raise InputError(f"kernel {kernel!r}: expected one of {', '.join(KERNELS)}")
+    if kernel == "python":
+        return "python"
+    if "lib" not in _STATE and "missing" not in _STATE:
+        try:
+            _STATE["lib"] = _load()
+        except (CompilerMissing, CompileError) as exc:
+            _STATE["missing"] = exc
+    if "lib" in _STATE:
+        return "c"
+    if kernel == "c":
+        raise _STATE["missing"]         # type: ignore[misc]
+    if not _STATE.get("said"):
+        print(f"note: the diagnosis's stage replays run in Python, several times slower ({_STATE['missing']})",
+              file=sys.stderr)
+        _STATE["said"] = True
+    return "python"
+
+
+def _lib() -> ctypes.CDLL:
+    if "lib" not in _STATE:
+        _STATE["lib"] = _load()
+    return _STATE["lib"]                         # type: ignore[return-value]
+
+
+def _as(x, dtype) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype)
+
+
+def steering_first_order(pieces: list[tuple[np.ndarray, float, float]], deadband: float, delta0: float) -> np.ndarray:
+    """The first-order equivalent's wheel angle (components.models.steering_equivalent.simulate) from
+    its one or two pieces per sample step, each (held command, alpha, r s)."""
+    commands = [_as(c, float) for c, _, _ in pieces]
+    n = len(commands[0])
+    out = np.empty(n)
+    (c1, a1, m1), (c2, a2, m2) = [(commands[i], *pieces[i][1:]) for i in (0, -1)]
+    _lib().steering_first_order(n, len(pieces), c1.ctypes.data, c2.ctypes.data, float(a1), float(m1), float(a2),
+                                float(m2), float(deadband), float(delta0), out.ctypes.data)
+    return out
+
+
+def indexed_recursion(A: np.ndarray, B: np.ndarray, index: np.ndarray, columns, u: np.ndarray, rows) -> np.ndarray:
+    """Rows ``rows`` of Z_{k-1} for Z_k = A[index_k] Z_{k-1} + B[index_k][:, columns] * u_k, Z_{-1} = 0,
+    R sets side by side: A (R, S, n, n), B (R, S, n, p), u (R, N, m); returns (R, N, len(rows), m)."""
+    A, B, u = _as(A, float), _as(B, float), _as(u, float)
+    index, columns, rows = _as(index, np.int_), _as(columns, np.int_), _as(rows, np.int_)
+    R, S, n, _ = A.shape
+    p, (N, m) = B.shape[-1], u.shape[1:]
+    if n > MAX_ORDER or m > MAX_ORDER or B.shape[:3] != (R, S, n) or u.shape[0] != R or len(index) != N \
+            or len(columns) != m or (N and (index.min() < 0 or index.max() >= S)) or (m and columns.max() >= p):
+        raise ValueError(f"shapes: A {A.shape}, B {B.shape}, index {index.shape}, columns {columns.shape}, u {u.shape}")
+    out = np.empty((R, N, len(rows), m))
+    _lib().indexed_recursion(R, S, N, n, p, m, A.ctypes.data, B.ctypes.data, index.ctypes.data, columns.ctypes.data,
+                             u.ctypes.data, len(rows), rows.ctypes.data, out.ctypes.data)
+    return out
+
+
+def _squarings(*parts: np.ndarray) -> int:
+    """expm_batched's squarings: the largest 1-norm in the stack, of the columns of ``parts`` side by
+    side, scaled to at most 1/4."""
+    norm = max(float(np.max(np.sum(np.abs(x), axis=-2), initial=0.0)) for x in parts)
+    return max(0, int(math.ceil(math.log2(norm / 0.25)))) if norm > 0.25 else 0
+
+
+def zoh_stack(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Ad, Bd) of each system of a stack (A: (k, n, n), B: (k, n, p)), [Ad Bd; 0 I] = exp([A B; 0 0] dt),
+    as yaw_dynamics.zoh_discretize with expm_batched (the series' products on the top block row only)."""
+    A, B = _as(A * dt, float), _as(B * dt, float)
+    (k, n, _), p = A.shape, B.shape[-1]
+    if n + p > MAX_ORDER or B.shape[:2] != (k, n):
+        raise ValueError(f"shapes: A {A.shape}, B {B.shape} (n + p at most {MAX_ORDER})")
+    Ad, Bd = np.empty_like(A), np.empty_like(B)
+    _lib().zoh_stack(k, n, p, _squarings(A, B), A.ctypes.data, B.ctypes.data, Ad.ctypes.data, Bd.ctypes.data)
+    return Ad, Bd
