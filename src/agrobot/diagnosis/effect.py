@@ -59,6 +59,8 @@ class Effect:
     secondary: ClassVar[tuple[str, ...]] = ()            # parameters whose bound leaves the effect found (each is
                                                          # then "not identifiable" alone: a tyre's shape, not driven
                                                          # past its peak)
+    imitated_by: ClassVar[tuple[str, ...]] = ()          # the import audit's finding kinds that can imitate it
+                                                         # (a clock offset: a delay, a latency)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

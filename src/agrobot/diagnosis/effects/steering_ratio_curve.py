@@ -16,6 +16,7 @@ class SteeringRatioCurve(Effect):
     hypothesis = "the steering ratio varies with the angle: the wheels turn more (or less) than the reading in tight turns"
     experiment = ("steady circles at walking speed at several wheel angles up to full lock: the kinematic "
                   "yaw rate v tan(delta) / L against the gyro gives the ratio at each angle")
+    imitated_by = ("scale_disagreement", "opposite_sign")
 
     def baseline(self, study):
         return {"steering_ratio_curvature": 0.0}
