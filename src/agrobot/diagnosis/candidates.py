@@ -35,6 +35,7 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, heading_estimate, steering_replay
+from .steering_map import mapped_steering
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -287,7 +288,7 @@ class Replay:
         (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
         stepped sets cost less than as many replays."""
         if stage == "steering":
-            return [steering_replay(self.cmd, self.h, v, self.delta[0]) for v in sets]
+            return [mapped_steering(self.cmd, self.h, v, self.delta[0]) for v in sets]     # read through the map
         if stage == "yaw":
             inputs = [self.yaw_input(v) for v in sets]
             saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]

@@ -60,6 +60,10 @@ class Effect:
                                                          # then "not identifiable" alone: a tyre's shape, not driven
                                                          # past its peak)
     imitated_by: ClassVar[tuple[str, ...]] = ()          # the import audit's finding kinds that can imitate it
+    tested_on: ClassVar[tuple[str, ...]] = ()            # stages it shows on only through another part of the
+                                                         # model: fitted on its other stages, tested on these too,
+                                                         # its held-out gain the best of all (a steering map on the
+                                                         # steering stage: the actuator's rate read through it)
                                                          # (a clock offset: a delay, a latency)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:

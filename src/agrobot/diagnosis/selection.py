@@ -48,6 +48,7 @@ from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS
 from .effect import Effect, Parameter
+from .effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from .effects.steering_ratio_curve import DELTA_KEY
 from .effects.tyre_saturation import LATERAL_KEY
 from .verdict import audit_findings
@@ -75,12 +76,21 @@ class Finding:
 
     @property
     def gain(self) -> float:
-        return self.gain_by_signal[SIGNALS[main_stage(self.effect, self.stages)][0]]
+        return self.gain_by_signal[shown_signal(self.effect, self.stages, self.gain_by_signal)]
 
 
 def main_stage(effect: Effect, scored) -> str:
     """The effect's first stage among those scored (a partial log may lack its first)."""
     return next(s for s in effect.stages if s in scored)
+
+
+def shown_signal(effect: Effect, scored, gains: dict[str, float]) -> str:
+    """The signal whose held-out gain judges the effect: its main stage's, or, for an effect also
+    tested on stages it shows on only through the model (Effect.tested_on), the best of its scored
+    stages'."""
+    if not effect.tested_on:
+        return SIGNALS[main_stage(effect, scored)][0]
+    return max((SIGNALS[s][0] for s in effect.stages if s in scored), key=lambda k: gains[k])
 
 
 def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain) -> Finding:
@@ -96,7 +106,7 @@ def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, b
     reasons = []
     if dbic >= STRONG:
         reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
-    main = names[main_stage(effect, stages)]
+    main = shown_signal(effect, stages, gains)
     if gains[main] < min_gain:
         reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
     worse = [k for k, g in gains.items() if g < -0.05]
@@ -129,8 +139,19 @@ def group(stages: set[str], members: list[Effect], available=STAGES,
 
 
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> CandidateFit:
-    free = list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] + [p for e in effects for p in e.parameters]))
-    return _fit(replay, values, free, stages, starts, sigma)
+    """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
+    effects are only tested on (Effect.tested_on; none of them acting there directly): those are
+    scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
+    also explains)."""
+    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
+    fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
+    free = list(dict.fromkeys([p for s in fit_on for p in uncertain(replay, s)] +
+                              [p for e in effects for p in e.parameters]))
+    fit = _fit(replay, values, free, fit_on, starts, sigma)
+    if fit_on == tuple(stages):
+        return fit
+    scored = _fit(replay, fit.values, [], tuple(stages), [{}], sigma)
+    return replace(scored, std=fit.std, free=fit.free)
 
 
 @dataclass
@@ -156,8 +177,11 @@ class Selector:
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
         delta = np.abs(np.nan_to_num(replay.delta))[moving] if "yaw" in replay.stages else np.zeros(0)
+        speed = np.nan_to_num(replay.speed)[moving]
         self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0,
-                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
+                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0,
+                            SPEED_KEY: float(np.percentile(speed, 95)) if len(speed) else 0.0,
+                            WHEELBASE_KEY: replay.baseline.tractor.l_f + replay.baseline.tractor.l_r}
         # the effects this log can judge: one of their stages replayed, the columns they read there
         self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs) and e.applies(replay)]

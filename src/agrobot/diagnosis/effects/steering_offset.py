@@ -4,6 +4,9 @@ import math
 from ..effect import Effect, Parameter
 
 DEG = math.pi / 180.0
+SPEED_KEY = "log_speed_p95"          # the log's 95th percentile of the moving speed [m/s], set by the selection
+WHEELBASE_KEY = "study_wheelbase"    # the study's wheelbase [m], set by the selection
+YAW_MATERIAL = 0.005                 # a yaw rate [rad/s] worth a model change (unexplained.MATERIAL's yaw)
 
 
 class SteeringOffset(Effect):
@@ -12,7 +15,8 @@ class SteeringOffset(Effect):
     stages = ("yaw",)
     parameters = (Parameter("steer_angle_offset", "rad", 0.02, -0.15, 0.15, "deg", 1 / DEG, (-0.35, 0.35)),)
     starts = ((0.0,),)
-    threshold = "|offset| >= 0.3 deg"
+    threshold = ("|offset| >= 0.3 deg, or its kinematic yaw rate v |offset| / L >= 0.005 rad/s at the log's "
+                 "95th-percentile speed (a car's small angles)")
     hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"
     experiment = ("straight runs at 1 and 3 m/s in both directions: an offset's "
                   "yaw rate grows with speed and keeps its sign")
@@ -21,7 +25,11 @@ class SteeringOffset(Effect):
         return {"steer_angle_offset": study.parameters("yaw_plant")["steer_angle_offset"]}
 
     def material(self, fitted, base):
-        return abs(fitted["steer_angle_offset"] - base["steer_angle_offset"]) >= 0.3 * DEG
+        """A zero a mechanic would reset, or one that turns the vehicle by a material yaw rate
+        r = v offset / L where it drives (a car's offset of 0.1 deg: 0.013 rad/s at 20 m/s)."""
+        offset = abs(fitted["steer_angle_offset"] - base["steer_angle_offset"])
+        yaw = base.get(SPEED_KEY, 0.0) * offset / base[WHEELBASE_KEY] if base.get(WHEELBASE_KEY) else 0.0
+        return offset >= 0.3 * DEG or yaw >= YAW_MATERIAL
 
     def options(self, fitted, base, study):
         return [("yaw_plant", "steer_angle_offset", fitted["steer_angle_offset"])]

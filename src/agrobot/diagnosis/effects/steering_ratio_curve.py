@@ -9,7 +9,8 @@ DELTA_KEY = "log_delta_p99"      # the log's 99th percentile of |delta| [rad], s
 class SteeringRatioCurve(Effect):
     id = "steering_ratio_curve"
     subsystem = "steering geometry (ratio varying with the angle)"
-    stages = ("yaw",)
+    stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
+    tested_on = ("steering",)
     parameters = (Parameter("steering_ratio_curvature", "1/rad2", 0.3, -1.5, 3.0, "1/rad2", 1.0, (-3.0, 8.0)),)
     starts = ((0.0,), (0.8,), (-0.5,))
     threshold = "the ratio changes by >= 4 % at the log's 99th percentile of |delta|"
