@@ -88,6 +88,11 @@ class Effect:
         needs the command to drive the yaw stage)."""
         return True
 
+    def for_log(self, log: Mapping[str, float]) -> "Effect":
+        """The effect with its ranges in the terms of this log (``log``: what the selection reads of
+        it, the baseline's values beside; a ratio curve's range at the log's steering angles)."""
+        return self
+
     def hypothesis_for(self, stages) -> str:
         """The hypothesis in terms of the stages this log judged it on (a log without GPS is not
         told about the GPS track)."""

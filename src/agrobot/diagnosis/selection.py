@@ -183,7 +183,8 @@ class Selector:
                             SPEED_KEY: float(np.percentile(speed, 95)) if len(speed) else 0.0,
                             WHEELBASE_KEY: replay.baseline.tractor.l_f + replay.baseline.tractor.l_r}
         # the effects this log can judge: one of their stages replayed, the columns they read there
-        self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
+        self.catalogue = [e for e in (restaged(x.for_log(self.base_values), replay) for x in CATALOGUE)
+                          if set(e.stages) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs) and e.applies(replay)]
         if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
             # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
