@@ -182,9 +182,10 @@ class Selector:
                             DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0,
                             SPEED_KEY: float(np.percentile(speed, 95)) if len(speed) else 0.0,
                             WHEELBASE_KEY: replay.baseline.tractor.l_f + replay.baseline.tractor.l_r}
-        # the effects this log can judge: one of their stages replayed, the columns they read there
+        # the effects this log can judge: one of the stages they act on replayed (not only one they are
+        # tested on: a steering map without the turns is a rate limit), the columns they read there
         self.catalogue = [e for e in (restaged(x.for_log(self.base_values), replay) for x in CATALOGUE)
-                          if set(e.stages) & set(replay.stages)
+                          if (set(e.stages) - set(e.tested_on)) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs) and e.applies(replay)]
         if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
             # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
