@@ -27,6 +27,11 @@ parameters, scored on the group's stages.
   effect adds less than ``min_gain`` on top of that extension: a named effect that explains a
   residual about as well as a free map stays (Selector.absorbed).
 
+An effect that shows on a stage only through another part of the model (Effect.tested_on: a
+steering map on the steering stage, whose actuator rate is a wheel rate read through the map) is
+fitted on the stages it acts on and scored on all of them; its held-out gain is the best of its
+stages' (a gain error is one parameter for the turns and for the rate a second effect would name).
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
