@@ -1,4 +1,9 @@
-"""The wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading."""
+"""The wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading.
+
+In a steady state the bicycle model turns at r = v o / (L + K v^2) for an offset o and at
+r = K a_s v / (L + K v^2) for a lateral pull a_s = g sin(phi) cos(heading - fall line) of a side slope
+(K the understeer gradient): the same speed dependence, so only the heading tells a slope from
+an offset; a log on few headings leaves the two tied (the selection then says so)."""
 import math
 
 from ..effect import Effect, Parameter
@@ -18,8 +23,9 @@ class SteeringOffset(Effect):
     threshold = ("|offset| >= 0.3 deg, or its kinematic yaw rate v |offset| / L >= 0.005 rad/s at the log's "
                  "95th-percentile speed (a car's small angles)")
     hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"
-    experiment = ("straight runs at 1 and 3 m/s in both directions: an offset's "
-                  "yaw rate grows with speed and keeps its sign")
+    experiment = ("straight runs on one line in both directions: an offset's yaw rate v o / (L + K v^2) keeps "
+                  "its sign, a side slope's (the same form with K g sin(phi) cos(heading - fall line) for o) "
+                  "reverses with the heading; speed alone does not tell them apart")
 
     def baseline(self, study):
         return {"steer_angle_offset": study.parameters("yaw_plant")["steer_angle_offset"]}
