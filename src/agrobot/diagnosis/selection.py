@@ -98,8 +98,12 @@ def shown_signal(effect: Effect, scored, gains: dict[str, float]) -> str:
     return max((SIGNALS[s][0] for s in effect.stages if s in scored), key=lambda k: gains[k])
 
 
-def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain) -> Finding:
-    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py."""
+def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain,
+           floors: dict | None = None) -> Finding:
+    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py.
+    ``floors``: the stages' noise floors (noise_floor.py); given, a signal whose held-out RMS rises
+    counts against the effect only where it is then misfit (unexplained.is_misfit): a track left
+    within its noise is no evidence against a gain that fixes the turns."""
     n_total = sum(with_.n_eff[s] for s in stages)
     dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in stages)
     dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
@@ -114,7 +118,8 @@ def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, b
     main = shown_signal(effect, stages, gains)
     if gains[main] < min_gain:
         reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
-    worse = [k for k, g in gains.items() if g < -0.05]
+    worse = [names[s] for s in stages if gains[names[s]] < -0.05
+             and (floors is None or is_misfit(s, with_.rmse_test[s], floors))]
     if worse:
         reasons.append(f"held-out RMS rises for {worse}")
     if not material:
@@ -199,6 +204,7 @@ class Selector:
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None
         self.widened: list[str] = []
+        self.floors: dict | None = None
         self.work = Work(None, "", 0)
 
     def add(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
@@ -223,7 +229,7 @@ class Selector:
             effect = wider
             fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma,
                          [{p.name: fit.values[p.name] for p in effect.parameters}])
-        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain)
+        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain, self.floors)
         self._cache[key] = finding
         if effect.id not in self._first:
             self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
@@ -235,7 +241,7 @@ class Selector:
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
-        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
+        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain, self.floors)
         finding.without = merged(model, without, reset)      # the model to fall back to
         return finding
 
@@ -246,6 +252,7 @@ class Selector:
 
     def _select(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
+        self.floors = self.evaluate(base)[1]         # the noise floors a rising signal is judged against
         trace_gate = self.saturation_gate(base)
         notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
         model, members, trace, inconclusive = base, [], notes, []
