@@ -10,9 +10,11 @@ import numpy as np
 import pytest
 
 from agrobot.components.models import steering_equivalent
+from agrobot.diagnosis.candidates import CandidateFit
 from agrobot.diagnosis.catalogue import CATALOGUE
 from agrobot.diagnosis.effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from agrobot.diagnosis.effects.steering_ratio_curve import DELTA_KEY
+from agrobot.diagnosis.selection import _judge
 from agrobot.diagnosis.steering_map import mapped_steering
 from harness.steering_maps import reading
 
@@ -79,3 +81,21 @@ def test_a_ratio_curve_is_searched_for_the_same_ratio_changes_at_a_cars_small_an
     assert q.limit[0] * d * d == pytest.approx(p.limit[0] * 0.3 ** 2)
     assert curve.for_log({DELTA_KEY: 0.4}) is curve
     assert curve.parameters[0] is p                               # the catalogue's own is left as it was
+
+
+def _fit_of(rmse: dict, rss: dict) -> CandidateFit:
+    return CandidateFit({"steering_gain": 1.25}, dict(rss), {s: 1000 for s in rss}, {s: 300.0 for s in rss}, dict(rmse))
+
+
+@pytest.mark.parametrize("track_after, supported", [(0.0236, True), (0.05, False)])
+def test_a_track_left_within_its_noise_does_not_count_against_a_gain_that_fixes_the_turns(track_after, supported):
+    """The yaw rate's held-out RMS falls by 22 %; the track's rises by 5.3 % to 0.0236 m on a 0.0227 m
+    floor (1.04 x: noise, as a car's map gain left it) or to 0.05 m (2.2 x its floor, 0.044 m above
+    it: misfit, then it counts)."""
+    gain = EFFECTS["steering_gain"]
+    floors = {"yaw": 0.0019, "position": 0.0227, "_healthy": {"yaw": 0.0024, "position": 0.0227}}
+    without = _fit_of({"yaw": 0.0040, "position": 0.0224}, {"yaw": 1.6e-5 * 1000, "position": 0.0224 ** 2 * 1000})
+    with_ = _fit_of({"yaw": 0.0031, "position": track_after}, {"yaw": 0.96e-5 * 1000, "position": 0.0224 ** 2 * 1000})
+    judged = _judge(gain, with_, without, ("yaw", "position"), {"steering_gain": 1.0}, 0.05, floors)
+    assert judged.supported is supported, judged.reasons
+    assert _judge(gain, with_, without, ("yaw", "position"), {"steering_gain": 1.0}, 0.05).supported is False
