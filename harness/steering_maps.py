@@ -11,7 +11,9 @@ machine whose map is off holds the reading M^-1 of the wheels the truth turned (
 Drawn map effects (``draw_map``, for the diagnosis-rate benchmark), one parameter each:
 ``steering_map_gain`` k in 1 +- (0.05-0.30); ``steering_map_asymmetry`` a in 0.10-0.25 (a 1.13 m
 against a 1.90 m radius at full lock is a = 0.25); ``steering_map_offset`` o = +-(0.03-0.045) rad x
-the vehicle's steering scale; ``steering_map_curve`` c in 1.5-3 1/rad2.
+the vehicle's steering scale; ``steering_map_curve`` c in 1.5-3 1/rad2 / the steering scale squared
+(the same ratio change c delta^2 at each vehicle's angles: a car steered 1/20 of the tractor's angles
+with c = 3 would turn 0.1 % more at its tightest, no fault to find).
 """
 from __future__ import annotations
 
@@ -78,4 +80,4 @@ def draw_map(effect: str, rng: np.random.Generator, steer_scale: float) -> dict:
     return {"steering_map_gain": {"gain": 1.0 + sign * u(0.05, 0.30)},
             "steering_map_asymmetry": {"asymmetry": u(0.10, 0.25)},
             "steering_map_offset": {"offset": sign * u(0.03, 0.045) * steer_scale},
-            "steering_map_curve": {"curvature": u(1.5, 3.0)}}[effect]
+            "steering_map_curve": {"curvature": u(1.5, 3.0) / steer_scale ** 2}}[effect]

@@ -72,17 +72,33 @@ def test_values_the_vehicle_can_have_pass(eid, params):
     assert judge_values(effect(eid, **params), CAR, 2.97, 1.5, 20.0) == []
 
 
-def test_the_verdict_compares_no_effect_id_each_effect_judges_itself():
-    """verdict.py names an effect only in the audit's table of what a finding can imitate: no
-    comparison, branch or lookup on an effect's id; the rules are the effects' own."""
+def test_the_verdict_names_no_effect_id_each_effect_judges_itself():
+    """verdict.py names no effect: no constant, comparison, branch or lookup on an effect's id; the
+    rules, and the audit findings that can imitate an effect, are the effects' own."""
     tree = ast.parse(Path(verdict_module.__file__).read_text())
-    table = next(n for n in tree.body if isinstance(n, ast.Assign) and n.targets[0].id == "IMITATES")
-    in_table = {id(n) for n in ast.walk(table)}
-    named = [n for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in EFFECT_IDS]
-    assert named and all(id(n) in in_table for n in named), [(n.lineno, n.value) for n in named if id(n) not in in_table]
-    compares = [n for n in ast.walk(tree) if isinstance(n, (ast.Compare, ast.Match))]
-    assert not any(isinstance(c, ast.Constant) and c.value in EFFECT_IDS
-                   for n in compares for c in ast.walk(n)), "an effect id compared in verdict.py"
+    named = [(n.lineno, n.value) for n in ast.walk(tree) if isinstance(n, ast.Constant) and n.value in EFFECT_IDS]
+    assert not named, named
+
+
+# what each unresolved audit finding kind keeps from being concluded, as the verdict's table held it
+# when it lived in verdict.py (a recording's clock imitates delays and latencies, a scale a bias or a tyre)
+IMITATED_BEFORE = {
+    "clock_offset": {"actuator_delay", "gps_latency", "position_reference", "antenna_lever_arm", "steering_rate_limit"},
+    "response_leads_input": {"actuator_delay", "gps_latency", "position_reference", "steering_rate_limit"},
+    "stamp_vs_receive": {"actuator_delay", "gps_latency", "position_reference"},
+    "gap_bridged": {"actuator_delay", "gps_latency", "steering_rate_limit"},
+    "scale_disagreement": {"gyro_scale", "speed_scale", "yaw_rate_bias", "tyre_saturation",
+                           "speed_dependent_cornering", "steering_ratio_curve"},
+    "opposite_sign": {"gyro_scale", "speed_scale", "yaw_rate_bias", "steering_ratio_curve"},
+    "position_is_estimate": set(),
+    "mislabelled_channel": {"*"},
+}
+
+
+@pytest.mark.parametrize("kind", IMITATED_BEFORE)
+def test_each_effect_names_the_audit_findings_that_imitate_it(kind):
+    found = audit_findings({"audit": [{"kind": kind}]})[0]["imitates"]
+    assert set(found) == IMITATED_BEFORE[kind] and len(found) == len(set(found))
 
 
 class _Wobble(Effect):
@@ -132,6 +148,20 @@ def test_an_unresolved_audit_finding_keeps_the_effects_it_imitates_from_being_co
     assert conclude([effect("actuator_delay", command_delay=0.9)], None, [], [], audit, CAR, 2.97, 1.5,
                     20.0)["status"] == "implausible"
     assert audit_findings({}) == [] and audit_findings({"audit": ["junk", {"no": "kind"}]}) == []
+
+
+def test_an_effect_unknown_to_the_verdict_is_blocked_by_the_finding_it_names():
+    """A toy effect that a clock offset can imitate is not concluded while one stands, without the
+    verdict knowing it."""
+    toy = type("ClockedWobble", (_Wobble,), {"imitated_by": ("clock_offset",)})()
+    catalogue = CATALOGUE + (toy,)
+    audit = audit_findings({"audit": [{"kind": "clock_offset", "value": 0.3, "unit": "s"}]}, catalogue)
+    assert "toy_wobble" in audit[0]["imitates"]
+    v = conclude([effect("toy_wobble", wobble=0.05)], None, [], [], audit, CAR, 2.97, 1.5, 20.0, catalogue=catalogue)
+    assert v["status"] == "not concluded" and "clock_offset" in v["statement"]
+    # the same finding read with the catalogue whose effects do not name it: concluded
+    assert conclude([effect("toy_wobble", wobble=0.05)], None, [], [], audit_findings(
+        {"audit": [{"kind": "clock_offset"}]}), CAR, 2.97, 1.5, 20.0, catalogue=catalogue)["status"] == "conclusive"
 
 
 def test_an_effect_on_its_physical_limit_is_the_verdict_not_none():

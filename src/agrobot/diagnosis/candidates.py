@@ -36,6 +36,7 @@ from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      steering_replay)
+from .steering_map import mapped_steering
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -289,7 +290,7 @@ class Replay:
         (saturating tyres: one batched simulation; linear: one blocked recursion), so a Jacobian's
         stepped sets cost less than as many replays."""
         if stage == "steering":
-            return [steering_replay(self.cmd, self.h, v, self.delta[0], self.kernel) for v in sets]
+            return [mapped_steering(self.cmd, self.h, v, self.delta[0], self.kernel) for v in sets]  # through the map
         if stage == "yaw":
             inputs = [self.yaw_input(v) for v in sets]
             saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]

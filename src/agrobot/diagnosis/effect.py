@@ -59,6 +59,12 @@ class Effect:
     secondary: ClassVar[tuple[str, ...]] = ()            # parameters whose bound leaves the effect found (each is
                                                          # then "not identifiable" alone: a tyre's shape, not driven
                                                          # past its peak)
+    imitated_by: ClassVar[tuple[str, ...]] = ()          # the import audit's finding kinds that can imitate it
+    tested_on: ClassVar[tuple[str, ...]] = ()            # stages it shows on only through another part of the
+                                                         # model: fitted on its other stages, tested on these too,
+                                                         # its held-out gain the best of all (a steering map on the
+                                                         # steering stage: the actuator's rate read through it)
+                                                         # (a clock offset: a delay, a latency)
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""
@@ -81,6 +87,11 @@ class Effect:
         """Whether this log can judge the effect beyond its stages and columns (a command's gain
         needs the command to drive the yaw stage)."""
         return True
+
+    def for_log(self, log: Mapping[str, float]) -> "Effect":
+        """The effect with its ranges in the terms of this log (``log``: what the selection reads of
+        it, the baseline's values beside; a ratio curve's range at the log's steering angles)."""
+        return self
 
     def hypothesis_for(self, stages) -> str:
         """The hypothesis in terms of the stages this log judged it on (a log without GPS is not

@@ -27,6 +27,11 @@ parameters, scored on the group's stages.
   effect adds less than ``min_gain`` on top of that extension: a named effect that explains a
   residual about as well as a free map stays (Selector.absorbed).
 
+An effect that shows on a stage only through another part of the model (Effect.tested_on: a
+steering map on the steering stage, whose actuator rate is a wheel rate read through the map) is
+fitted on the stages it acts on and scored on all of them; its held-out gain is the best of its
+stages' (a gain error is one parameter for the turns and for the rate a second effect would name).
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
@@ -48,6 +53,7 @@ from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS
 from .effect import Effect, Parameter
+from .effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from .effects.steering_ratio_curve import DELTA_KEY
 from .effects.tyre_saturation import LATERAL_KEY
 from .verdict import audit_findings
@@ -75,7 +81,7 @@ class Finding:
 
     @property
     def gain(self) -> float:
-        return self.gain_by_signal[SIGNALS[main_stage(self.effect, self.stages)][0]]
+        return self.gain_by_signal[shown_signal(self.effect, self.stages, self.gain_by_signal)]
 
 
 def main_stage(effect: Effect, scored) -> str:
@@ -83,8 +89,21 @@ def main_stage(effect: Effect, scored) -> str:
     return next(s for s in effect.stages if s in scored)
 
 
-def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain) -> Finding:
-    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py."""
+def shown_signal(effect: Effect, scored, gains: dict[str, float]) -> str:
+    """The signal whose held-out gain judges the effect: its main stage's, or, for an effect also
+    tested on stages it shows on only through the model (Effect.tested_on), the best of its scored
+    stages'."""
+    if not effect.tested_on:
+        return SIGNALS[main_stage(effect, scored)][0]
+    return max((SIGNALS[s][0] for s in effect.stages if s in scored), key=lambda k: gains[k])
+
+
+def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain,
+           floors: dict | None = None) -> Finding:
+    """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py.
+    ``floors``: the stages' noise floors (noise_floor.py); given, a signal whose held-out RMS rises
+    counts against the effect only where it is then misfit (unexplained.is_misfit): a track left
+    within its noise is no evidence against a gain that fixes the turns."""
     n_total = sum(with_.n_eff[s] for s in stages)
     dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in stages)
     dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
@@ -96,10 +115,11 @@ def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, b
     reasons = []
     if dbic >= STRONG:
         reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
-    main = names[main_stage(effect, stages)]
+    main = shown_signal(effect, stages, gains)
     if gains[main] < min_gain:
         reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
-    worse = [k for k, g in gains.items() if g < -0.05]
+    worse = [names[s] for s in stages if gains[names[s]] < -0.05
+             and (floors is None or is_misfit(s, with_.rmse_test[s], floors))]
     if worse:
         reasons.append(f"held-out RMS rises for {worse}")
     if not material:
@@ -129,8 +149,19 @@ def group(stages: set[str], members: list[Effect], available=STAGES,
 
 
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> CandidateFit:
-    free = list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] + [p for e in effects for p in e.parameters]))
-    return _fit(replay, values, free, stages, starts, sigma)
+    """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
+    effects are only tested on (Effect.tested_on; none of them acting there directly): those are
+    scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
+    also explains)."""
+    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
+    fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
+    free = list(dict.fromkeys([p for s in fit_on for p in uncertain(replay, s)] +
+                              [p for e in effects for p in e.parameters]))
+    fit = _fit(replay, values, free, fit_on, starts, sigma)
+    if fit_on == tuple(stages):
+        return fit
+    scored = _fit(replay, fit.values, [], tuple(stages), [{}], sigma)
+    return replace(scored, std=fit.std, free=fit.free)
 
 
 @dataclass
@@ -156,10 +187,15 @@ class Selector:
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
         delta = np.abs(np.nan_to_num(replay.delta))[moving] if "yaw" in replay.stages else np.zeros(0)
+        speed = np.nan_to_num(replay.speed)[moving]
         self.base_values = {**replay.baseline.values, LATERAL_KEY: float(np.percentile(a_y, 99)) if len(a_y) else 0.0,
-                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0}
-        # the effects this log can judge: one of their stages replayed, the columns they read there
-        self.catalogue = [e for e in (restaged(x, replay) for x in CATALOGUE) if set(e.stages) & set(replay.stages)
+                            DELTA_KEY: float(np.percentile(delta, 99)) if len(delta) else 0.0,
+                            SPEED_KEY: float(np.percentile(speed, 95)) if len(speed) else 0.0,
+                            WHEELBASE_KEY: replay.baseline.tractor.l_f + replay.baseline.tractor.l_r}
+        # the effects this log can judge: one of the stages they act on replayed (not only one they are
+        # tested on: a steering map without the turns is a rate limit), the columns they read there
+        self.catalogue = [e for e in (restaged(x.for_log(self.base_values), replay) for x in CATALOGUE)
+                          if (set(e.stages) - set(e.tested_on)) & set(replay.stages)
                           and all(c in replay.frame for c in e.needs) and e.applies(replay)]
         if getattr(replay, "command_only", False) and not {"position", "speed"} & set(replay.stages):
             # judged on the yaw rate alone, a sensor's scale is the command's unknown gain: not told apart
@@ -168,6 +204,7 @@ class Selector:
         self._first: dict[str, dict[str, float]] = {}
         self._evaluated: tuple | None = None
         self.widened: list[str] = []
+        self.floors: dict | None = None
         self.work = Work(None, "", 0)
 
     def add(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
@@ -192,7 +229,7 @@ class Selector:
             effect = wider
             fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma,
                          [{p.name: fit.values[p.name] for p in effect.parameters}])
-        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain)
+        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain, self.floors)
         self._cache[key] = finding
         if effect.id not in self._first:
             self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
@@ -204,7 +241,7 @@ class Selector:
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
-        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain)
+        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain, self.floors)
         finding.without = merged(model, without, reset)      # the model to fall back to
         return finding
 
@@ -215,6 +252,7 @@ class Selector:
 
     def _select(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
+        self.floors = self.evaluate(base)[1]         # the noise floors a rising signal is judged against
         trace_gate = self.saturation_gate(base)
         notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
         model, members, trace, inconclusive = base, [], notes, []

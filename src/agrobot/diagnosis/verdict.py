@@ -5,7 +5,8 @@ It is built from the judged effects and three checks an engineer makes before si
 - **the recording before the vehicle**: an unresolved finding of the import audit
   (``frame.attrs["audit"]``: a clock offset of a channel group, a response that leads its input, a
   position that is an estimate, ...) can imitate vehicle effects (delays, lever arms, biases,
-  latencies); while it stands, those are fitted and listed but not concluded;
+  latencies: each effect names the finding kinds that can imitate it, ``Effect.imitated_by``);
+  while it stands, those are fitted and listed but not concluded;
 - **causes that fit the vehicle**: each effect's fitted values are judged against the ``[vehicle]``
   table by the effect's own rule (``Effect.plausibility``: a point outside the outline, a steering
   delay longer than a human reaction, a friction above what tyres give, a bias beyond the gyro
@@ -23,30 +24,28 @@ from .catalogue import CATALOGUE
 from .effect import Effect
 from .plausibility import VehicleContext
 
-# audit finding kind -> the effects it can imitate
-IMITATES = {
-    "clock_offset": ("actuator_delay", "gps_latency", "position_reference", "antenna_lever_arm", "steering_rate_limit"),
-    "response_leads_input": ("actuator_delay", "gps_latency", "position_reference", "steering_rate_limit"),
-    "stamp_vs_receive": ("actuator_delay", "gps_latency", "position_reference"),
-    "gap_bridged": ("actuator_delay", "gps_latency", "steering_rate_limit"),
-    "scale_disagreement": ("gyro_scale", "speed_scale", "yaw_rate_bias", "tyre_saturation",
-                           "speed_dependent_cornering", "steering_ratio_curve"),
-    "opposite_sign": ("gyro_scale", "speed_scale", "yaw_rate_bias", "steering_ratio_curve"),
-    "position_is_estimate": (),      # not a blocker: it renames (conclude says what a lever arm then is)
-    "mislabelled_channel": ("*",),
-}
+# the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
+IMITATES_ANY = ("mislabelled_channel",)
 
 
-def audit_findings(attrs: dict) -> list[dict]:
+def imitated(kind: str, catalogue: Iterable[Effect] = CATALOGUE) -> list[str]:
+    """The effects an audit finding of ``kind`` can imitate: those whose ``imitated_by`` names it, in
+    the catalogue's order; ["*"] for a kind that imitates any (IMITATES_ANY)."""
+    if kind in IMITATES_ANY:
+        return ["*"]
+    return [e.id for e in catalogue if kind in e.imitated_by]
+
+
+def audit_findings(attrs: dict, catalogue: Iterable[Effect] = CATALOGUE) -> list[dict]:
     """The import audit's findings a log carries (``attrs["audit"]``, a list of dicts with kind,
-    channels, value, interval, unit, meaning, resolved), each with the effects it can imitate;
-    none when the log was not audited."""
+    channels, value, interval, unit, meaning, resolved), each with the effects it can imitate
+    (``imitated``); none when the log was not audited."""
     out = []
     for f in attrs.get("audit") or []:
         if not isinstance(f, dict) or "kind" not in f:
             continue
         out.append({**{k: f.get(k) for k in ("kind", "channels", "value", "interval", "unit", "meaning")},
-                    "resolved": bool(f.get("resolved", False)), "imitates": list(IMITATES.get(f["kind"], ()))})
+                    "resolved": bool(f.get("resolved", False)), "imitates": imitated(f["kind"], catalogue)})
     return out
 
 

@@ -14,6 +14,7 @@ class GyroScale(Effect):
     hypothesis = "the gyro reads a scaled yaw rate: a scale-factor error (or a unit off by a factor)"
     experiment = ("a full circle at constant speed, then the same circle the other way: the integrated gyro "
                   "turns s x 360 deg while the GNSS course turns 360 deg, at any speed")
+    imitated_by = ("scale_disagreement", "opposite_sign")
 
     def baseline(self, study):
         return {"gyro_scale": 1.0}

@@ -12,6 +12,7 @@ class SpeedDependentCornering(Effect):
     hypothesis = "the tyres' cornering stiffness changes with speed: one model does not fit every speed"
     experiment = ("the same steering multisine at 1, 2 and 3 m/s: only a speed-dependent "
                   "stiffness changes the yaw gain's shape with speed")
+    imitated_by = ("scale_disagreement",)
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

@@ -15,6 +15,7 @@ class SpeedScale(Effect):
     hypothesis = "the speed reads k x the ground speed: a wheel radius off, or the wheels slipping"
     experiment = ("a straight run of known length (or the GNSS speed over ground beside the wheel speed) at "
                   "constant speed, with and without draught: a radius error stays, slip grows with the pull")
+    imitated_by = ("scale_disagreement", "opposite_sign")
 
     def baseline(self, study):
         return {"speed_scale": 1.0}

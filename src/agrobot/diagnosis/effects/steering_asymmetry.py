@@ -9,7 +9,8 @@ from ..effect import Effect, Parameter
 class SteeringAsymmetry(Effect):
     id = "steering_asymmetry"
     subsystem = "steering map (wheel angle per angle, left against right)"
-    stages = ("yaw",)
+    stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
+    tested_on = ("steering",)
     parameters = (Parameter("steering_asymmetry", "1", 0.05, -0.4, 0.4, "-", 1.0, (-0.8, 0.8)),)
     starts = ((0.0,), (0.1,), (-0.1,))
     threshold = "|a| >= 0.04 (the left and the right gain differ by >= 8 %)"

@@ -12,7 +12,8 @@ from ..plausibility import CALIBRATION
 class SteeringGain(Effect):
     id = "steering_gain"
     subsystem = "steering map (wheel angle per commanded or measured angle)"
-    stages = ("yaw",)
+    stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
+    tested_on = ("steering",)
     parameters = (Parameter("steering_gain", "1", 0.1, 0.7, 1.4, "-", 1.0, (0.01, 3.0)),)
     starts = ((1.0,), (0.85,), (1.15,))
     threshold = "|k - 1| >= 0.05"

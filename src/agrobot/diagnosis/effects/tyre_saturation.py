@@ -27,6 +27,7 @@ class TyreSaturation(Effect):
                   "with it")
     experiment = ("steady turns at rising speed (a ramp of lateral acceleration to the limit): saturation caps "
                   "a_y near mu g, a stiffness or a steering gain does not")
+    imitated_by = ("scale_disagreement",)
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

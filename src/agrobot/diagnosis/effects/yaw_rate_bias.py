@@ -13,6 +13,7 @@ class YawRateBias(Effect):
     threshold = "|bias| >= 0.229 deg/s"
     hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
     experiment = "30 s standing still: a gyro bias reads a yaw rate with the vehicle at rest"
+    imitated_by = ("scale_disagreement", "opposite_sign")
 
     def hypothesis_for(self, stages):
         if "position" in stages:
