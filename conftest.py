@@ -1,5 +1,7 @@
 """Puts the repository root on sys.path so tests can name their own toy components, and gives the
 tests the command line as one fixture (``cli``: tests/commands.py)."""
+import os
+
 import pytest
 
 
@@ -31,6 +33,10 @@ SLOW_FIXTURES = {
 SLOW_TIMEOUT_S = 1200       # a slow test's limit (pytest-timeout; the others have pyproject's timeout = 300)
 
 
+def pytest_configure(config):
+    config.pluginmanager.register(LongestFilesFirst(), "agrobot-longest-files-first")
+
+
 def pytest_collection_modifyitems(config, items):
     for item in items:
         heavy = SLOW_FIXTURES.get(item.path.name, set())
@@ -38,3 +44,61 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.slow)
         if item.get_closest_marker("slow") is not None and item.get_closest_marker("timeout") is None:
             item.add_marker(pytest.mark.timeout(SLOW_TIMEOUT_S))
+
+
+# CPU seconds per test (set AGROBOT_TEST_CPU=FILE): each phase's process CPU time, children included
+# (a command the test starts), appended as "nodeid<TAB>phase<TAB>seconds" lines; wall time misleads on
+# a shared machine, CPU time does not
+_CPU_LOG = os.environ.get("AGROBOT_TEST_CPU")
+
+
+def _cpu_seconds():
+    import sys
+
+    t = os.times()
+    forked = getattr(sys.modules.get("tests.commands"), "forked_cpu_seconds", 0.0)    # tests/commands.py's
+    return t.user + t.system + t.children_user + t.children_system + forked
+
+
+if _CPU_LOG:
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_setup(item):
+        yield from _record_cpu(item, "setup")
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_call(item):
+        yield from _record_cpu(item, "call")
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_teardown(item):
+        yield from _record_cpu(item, "teardown")
+
+
+def _record_cpu(item, phase):
+    start = _cpu_seconds()
+    yield
+    with open(_CPU_LOG, "a") as log:
+        log.write(f"{item.nodeid}\t{phase}\t{_cpu_seconds() - start:.3f}\n")
+
+
+# The files that cost most, CPU seconds measured with AGROBOT_TEST_CPU (-n 0, one file at a time): its
+# fast tests', its slow tests'. With one xdist worker per file (--dist loadfile, and
+# --no-loadscope-reorder to keep this order instead of xdist's most-tests-first), a long file started
+# last holds one core while the others idle: these go first, the longest first.
+FILE_CPU_S = {
+}
+
+
+class LongestFilesFirst:
+    """Orders the selected tests' files by FILE_CPU_S, after -m has deselected (a file's slow cost
+    counts only where its slow tests run); the tests inside a file keep their order."""
+
+    @pytest.hookimpl(trylast=True)
+    def pytest_collection_modifyitems(self, config, items):
+        slow_files = {i.path.name for i in items if i.get_closest_marker("slow") is not None}
+
+        def cost(item):
+            fast, slow = FILE_CPU_S.get(item.path.name, (0.0, 0.0))
+            return -(fast + (slow if item.path.name in slow_files else 0.0))
+
+        items.sort(key=cost)
