@@ -86,6 +86,35 @@ def _record_cpu(item, phase):
 # --no-loadscope-reorder to keep this order instead of xdist's most-tests-first), a long file started
 # last holds one core while the others idle: these go first, the longest first.
 FILE_CPU_S = {
+    "test_diagnosis_real_vehicles.py": (3, 150),
+    "test_diagnosis_open_world.py": (3, 125),
+    "test_diagnosis_specificity.py": (1, 105),
+    "test_partial_logs_and_vehicles.py": (5, 90),
+    "test_verdicts_truths.py": (20, 75),
+    "test_steering_map_causes.py": (1, 82),
+    "test_field_missions.py": (25, 62),
+    "test_hardware_io.py": (1, 75),
+    "test_reader_abuse.py": (10, 62),
+    "test_whole_field.py": (10, 50),
+    "test_field_recordings.py": (24, 28),
+    "test_diagnosis.py": (1, 45),
+    "test_tree.py": (1, 36),
+    "test_reliability.py": (5, 33),
+    "test_live_viewers.py": (6, 30),
+    "test_ground.py": (16, 10),
+    "test_real_recordings.py": (10, 20),
+    "test_install.py": (1, 20),
+    "test_diagnosis_split.py": (3, 17),
+    "test_foreign_engines.py": (7, 10),
+    "test_python_api.py": (2, 15),
+    "test_result_doors.py": (3, 13),
+    "test_margins.py": (3, 12),
+    "test_other_data.py": (3, 12),
+    "test_fmu.py": (11, 1),
+    "test_identify_driving.py": (1, 10),
+    "test_steering_gain.py": (1, 10),
+    "test_heading_measures_yaw.py": (3, 10),
+    "test_fuzz_readers.py": (9, 1),
 }
 
 
