@@ -2,36 +2,37 @@
 ``python -m agrobot`` from the repository root; ``refused(proc, *words)`` asserts a clean refusal
 (exit 2, no traceback, the words in the message).
 
-Each command runs in a process of its own, forked from one that has already imported the command
-line (multiprocessing's forkserver, its modules loaded once per test process): the same module run
+Each command runs in a process of its own, forked from an interpreter that has already imported the
+command line (one per test process, started on first use with the same environment): the module run
 as ``__main__`` with the same arguments, working folder, module search path and environment, its own
-exit code, standard output and error, without the 1.5 CPU s an interpreter spends starting and
-importing numpy, pandas and scipy for each call. ``AGROBOT_TEST_CLI=subprocess``, or an environment
-changed since the forkserver started (a variable a module reads as it is imported), runs the real
+exit status, standard output and error, without the 1.5 CPU s an interpreter spends starting and
+importing numpy, pandas and scipy on each call. ``AGROBOT_TEST_CLI=subprocess``, or an environment
+changed since that interpreter started (a variable a module reads as it is imported), runs the real
 ``python -m agrobot``.
 
 Imported where used: atexit, runpy and traceback (in the forked command only)."""
 from __future__ import annotations
 
 import json
-import multiprocessing
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-PRELOAD = ["agrobot.extras", "agrobot.orchestrator.cli",         # what agrobot.__main__ imports at the top
-           "agrobot.analysis.margins", "agrobot.orchestrator.atomic_files", "agrobot.measurements.cli"]  # and main()
-_IGNORED = {"PYTEST_CURRENT_TEST"}      # pytest's per-test variable: read by no module as it loads
-_server: dict = {}
-forked_cpu_seconds = 0.0                # the forked commands' CPU time (a forkserver's child is not ours to wait)
+PRELOAD = ("agrobot.extras", "agrobot.orchestrator.cli",              # what agrobot.__main__ imports at the top
+           "agrobot.analysis.margins", "agrobot.orchestrator.atomic_files", "agrobot.measurements.cli")  # and main()
+_IGNORED = {"PYTEST_CURRENT_TEST"}          # pytest's per-test variable: read by no module as it loads
+_zygote: dict = {}
+forked_cpu_seconds = 0.0                    # the forked commands' CPU time (the zygote's children, not ours)
 
 
 def cli(*args, timeout: float = 300, cwd: Path = ROOT) -> subprocess.CompletedProcess:
     command = [sys.executable, "-m", "agrobot", *map(str, args)]
-    if os.environ.get("AGROBOT_TEST_CLI") == "subprocess" or not _server_matches():
+    if os.environ.get("AGROBOT_TEST_CLI") == "subprocess" or not _zygote_matches():
         return subprocess.run(command, capture_output=True, text=True, cwd=cwd, timeout=timeout)
     return _forked(command, timeout, Path(cwd))
 
@@ -47,50 +48,69 @@ def _environment() -> dict:
     return {k: v for k, v in os.environ.items() if k not in _IGNORED}
 
 
-def _server_matches() -> bool:
-    """The forkserver, started on first use with this environment and the module path a fresh
-    ``python -m`` has (sys.path without the working folder); False when the environment changed."""
-    if not _server:
-        fresh = subprocess.run([sys.executable, "-c", "import json, sys; print(json.dumps(sys.path[1:]))"], capture_output=True,
-                               text=True, cwd=ROOT, check=True)
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(PRELOAD)
-        _server.update(context=context, environment=_environment(), sys_path=json.loads(fresh.stdout))
-    return _server["environment"] == _environment()
+def _zygote_matches() -> bool:
+    """The zygote, started on first use (``python -c`` from the repository root, PRELOAD imported);
+    False when the environment changed since."""
+    if not _zygote or _zygote["process"].poll() is not None:
+        process = subprocess.Popen([sys.executable, "-c", "from tests.commands import _serve; _serve()"],
+                                   stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=ROOT, text=True)
+        _zygote.update(process=process, environment=_environment())
+    return _zygote["environment"] == _environment()
 
 
 def _forked(command: list[str], timeout: float, cwd: Path) -> subprocess.CompletedProcess:
+    global forked_cpu_seconds
+    process = _zygote["process"]
     with tempfile.TemporaryDirectory() as folder:
         out, err, cpu = (Path(folder) / name for name in ("stdout", "stderr", "cpu"))
-        out.touch()
-        err.touch()
-        process = _server["context"].Process(target=_run_agrobot, daemon=False,
-                                             args=(command[3:], str(cwd), str(out), str(err), str(cpu),
-                                                   _server["sys_path"], dict(os.environ)))
-        process.start()
-        process.join(timeout)
-        if process.is_alive():
-            process.kill()
-            process.join()
-            raise subprocess.TimeoutExpired(command, timeout, out.read_text(), err.read_text())
-        global forked_cpu_seconds
+        request = dict(args=command[3:], cwd=str(cwd), out=str(out), err=str(err), cpu=str(cpu),
+                       environment=dict(os.environ))
+        process.stdin.write(json.dumps(request) + "\n")
+        process.stdin.flush()
+        pid = int(process.stdout.readline())
+        expired = threading.Event()
+        limit = threading.Timer(timeout, lambda: (expired.set(), os.kill(pid, signal.SIGKILL)))
+        limit.start()
+        status = int(process.stdout.readline())
+        limit.cancel()
+        output, errors = out.read_text(), err.read_text()
+        if expired.is_set():
+            raise subprocess.TimeoutExpired(command, timeout, output, errors)
         forked_cpu_seconds += float(cpu.read_text()) if cpu.exists() else 0.0
-        return subprocess.CompletedProcess(command, process.exitcode, out.read_text(), err.read_text())
+        return subprocess.CompletedProcess(command, status, output, errors)
 
 
-def _run_agrobot(args, cwd, out, err, cpu, sys_path, environment):
-    """``python -m agrobot ARGS`` in a forked process: its output to the two files, the exit code
+def _serve():
+    """The zygote: PRELOAD imported, then for each request line a forked ``python -m agrobot``; it
+    answers the child's pid, then its exit status (negative: the signal that ended it)."""
+    import importlib
+
+    for name in PRELOAD:
+        importlib.import_module(name)
+    for line in sys.stdin:
+        request = json.loads(line)
+        pid = os.fork()
+        if pid == 0:
+            _run_agrobot(**request)
+        print(pid, flush=True)
+        _, status = os.waitpid(pid, 0)
+        print(os.waitstatus_to_exitcode(status), flush=True)
+
+
+def _run_agrobot(args, cwd, out, err, cpu, environment):
+    """``python -m agrobot ARGS`` in the forked child: its output to the two files, the exit status
     as the interpreter gives it (SystemExit's code; 1 and the traceback for an exception)."""
     import atexit
     import runpy
     import traceback
 
-    os.dup2(os.open(out, os.O_WRONLY), 1)
-    os.dup2(os.open(err, os.O_WRONLY), 2)
+    os.dup2(os.open(os.devnull, os.O_RDONLY), 0)
+    os.dup2(os.open(out, os.O_WRONLY | os.O_CREAT), 1)
+    os.dup2(os.open(err, os.O_WRONLY | os.O_CREAT), 2)
     os.chdir(cwd)
     os.environ.clear()
     os.environ.update(environment)
-    sys.path[:] = [cwd, *sys_path]
+    sys.path[0] = cwd                       # python -m's first entry: the working folder
     sys.argv = ["agrobot", *args]
     code = 0
     try:

@@ -17,6 +17,7 @@ from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study, StudyError, parse_study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -186,8 +187,7 @@ def test_tools_register_their_commands_and_tables():
 def test_an_unknown_top_level_table_is_refused_by_name(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(FIGURE8.read_text() + '\n[identifcation]\nspeeds = [1.0]\n')
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(bad), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("run", str(bad), "--out", str(tmp_path / "o"))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "unknown table 'identifcation'" in proc.stderr and "identification" in proc.stderr
 
