@@ -193,8 +193,7 @@ def test_study_identification_reproduces_section_iv(study_run):
 
 def test_the_same_command_on_the_experiments_log_gives_the_same_fits(study_run, tmp_path):
     out, _, rep = study_run
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(out / "experiment_log.csv"),
-                           "--out", str(tmp_path), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
+    proc = cli("identify", str(out / "experiment_log.csv"), "--out", str(tmp_path), "--no-plots")
     assert proc.returncode == 0, proc.stderr
     log_rep = json.loads((tmp_path / "identification.json").read_text())
     for name in ("second_order", "rlf"):

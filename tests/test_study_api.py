@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import ast
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -179,7 +177,7 @@ def test_tools_register_their_commands_and_tables():
     reg = registry()
     assert {"identify", "diagnose", "export-controller", "emulate"} <= set(reg.commands)
     assert "identification" in reg.sections and "agrobot.components" in reg.component_packages
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "--help"], capture_output=True, text=True, cwd=ROOT)
+    proc = cli("--help")
     for name in ("run", "sweep", "identify", "diagnose", "export-controller", "emulate"):
         assert name in proc.stdout
 
