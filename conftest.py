@@ -81,8 +81,9 @@ def _record_cpu(item, phase):
         log.write(f"{item.nodeid}\t{phase}\t{_cpu_seconds() - start:.3f}\n")
 
 
-# The files that cost most, CPU seconds measured with AGROBOT_TEST_CPU (-n 0, one file at a time): its
-# fast tests', its slow tests'. With one xdist worker per file (--dist loadfile, and
+# The files that cost most, in seconds: its fast tests' (CPU, AGROBOT_TEST_CPU with -n 0), its slow
+# tests' (the whole suite's --durations on two nearly idle cores; approximate, enough to order them).
+# With one xdist worker per file (--dist loadfile, and
 # --no-loadscope-reorder to keep this order instead of xdist's most-tests-first), a long file started
 # last holds one core while the others idle: these go first, the longest first.
 FILE_CPU_S = {
@@ -92,23 +93,23 @@ FILE_CPU_S = {
     "test_partial_logs_and_vehicles.py": (5, 90),
     "test_verdicts_truths.py": (20, 75),
     "test_steering_map_causes.py": (1, 82),
-    "test_field_missions.py": (25, 62),
+    "test_field_missions.py": (15, 62),
     "test_hardware_io.py": (1, 75),
-    "test_reader_abuse.py": (10, 62),
+    "test_reader_abuse.py": (5, 62),
     "test_whole_field.py": (10, 50),
     "test_field_recordings.py": (24, 28),
     "test_diagnosis.py": (1, 45),
     "test_tree.py": (1, 36),
     "test_reliability.py": (5, 33),
     "test_live_viewers.py": (6, 30),
-    "test_ground.py": (16, 10),
-    "test_real_recordings.py": (10, 20),
+    "test_ground.py": (9, 10),
+    "test_real_recordings.py": (7, 20),
     "test_install.py": (1, 20),
     "test_diagnosis_split.py": (3, 17),
     "test_foreign_engines.py": (7, 10),
     "test_python_api.py": (2, 15),
     "test_result_doors.py": (3, 13),
-    "test_margins.py": (3, 12),
+    "test_margins.py": (22, 24),
     "test_other_data.py": (3, 12),
     "test_fmu.py": (11, 1),
     "test_identify_driving.py": (1, 10),
