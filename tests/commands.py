@@ -13,6 +13,7 @@ changed since that interpreter started (a variable a module reads as it is impor
 Imported where used: atexit, runpy and traceback (in the forked command only)."""
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -51,7 +52,7 @@ def _environment() -> dict:
 def _zygote_matches() -> bool:
     """The zygote, started on first use (``python -c`` from the repository root, PRELOAD imported);
     False when the environment changed since."""
-    if not _zygote or _zygote["process"].poll() is not None:
+    if "process" not in _zygote or _zygote["process"].poll() is not None:
         process = subprocess.Popen([sys.executable, "-c", "from tests.commands import _serve; _serve()"],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, cwd=ROOT, text=True)
         _zygote.update(process=process, environment=_environment())
@@ -59,6 +60,20 @@ def _zygote_matches() -> bool:
 
 
 def _forked(command: list[str], timeout: float, cwd: Path) -> subprocess.CompletedProcess:
+    """One command through the zygote; interrupted (pytest-timeout, Ctrl-C), the zygote is ended with
+    its child so that the next call starts a fresh one instead of reading this one's answer."""
+    try:
+        return _through_zygote(command, timeout, cwd)
+    except BaseException:
+        if "pid" in _zygote:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(_zygote.pop("pid"), signal.SIGKILL)
+        _zygote.pop("process").kill()
+        _zygote.clear()
+        raise
+
+
+def _through_zygote(command: list[str], timeout: float, cwd: Path) -> subprocess.CompletedProcess:
     global forked_cpu_seconds
     process = _zygote["process"]
     with tempfile.TemporaryDirectory() as folder:
@@ -67,12 +82,13 @@ def _forked(command: list[str], timeout: float, cwd: Path) -> subprocess.Complet
                        environment=dict(os.environ))
         process.stdin.write(json.dumps(request) + "\n")
         process.stdin.flush()
-        pid = int(process.stdout.readline())
+        pid = _zygote["pid"] = int(process.stdout.readline())
         expired = threading.Event()
         limit = threading.Timer(timeout, lambda: (expired.set(), os.kill(pid, signal.SIGKILL)))
         limit.start()
         status = int(process.stdout.readline())
         limit.cancel()
+        del _zygote["pid"]
         output, errors = out.read_text(), err.read_text()
         if expired.is_set():
             raise subprocess.TimeoutExpired(command, timeout, output, errors)
