@@ -91,7 +91,7 @@ FILE_CPU_S = {
     "test_diagnosis_open_world.py": (3, 125),
     "test_diagnosis_specificity.py": (1, 105),
     "test_partial_logs_and_vehicles.py": (5, 90),
-    "test_verdicts_truths.py": (20, 75),
+    "test_verdicts_truths.py": (12, 75),
     "test_steering_map_causes.py": (1, 82),
     "test_field_missions.py": (15, 62),
     "test_hardware_io.py": (1, 75),
