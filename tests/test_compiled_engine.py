@@ -53,11 +53,17 @@ def assert_same_signals(a, b, rtol=1e-9):
 
 @pytest.fixture(scope="module")
 def cache(tmp_path_factory):
-    """One cache folder for the module: each shape is compiled once."""
+    """One cache folder for the module: each shape is compiled once (into it: the libraries an
+    earlier test file loaded in this process are set aside, or a shape they hold would not be built)."""
+    from agrobot.orchestrator.compiled import toolchain
+
     folder = tmp_path_factory.mktemp("compiled-cache")
     old = os.environ.get("AGROBOT_CACHE")
     os.environ["AGROBOT_CACHE"] = str(folder)
+    loaded = dict(toolchain._LOADED)
+    toolchain._LOADED.clear()
     yield folder
+    toolchain._LOADED.update(loaded)
     if old is None:
         os.environ.pop("AGROBOT_CACHE", None)
     else:

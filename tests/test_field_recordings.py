@@ -18,6 +18,7 @@ from agrobot.measurements import LogError
 from agrobot.measurements.recording import ImportOptions, import_recording, import_runs
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 EPOCH = 1777622400.0          # the recorder's default epoch, 2026-05-01T08:00:00Z
@@ -254,8 +255,7 @@ def test_convert_writes_the_log_and_its_report(lever_recording, tmp_path):
     from agrobot.measurements import read_log
 
     out = tmp_path / "converted" / "field.csv"
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "convert", str(lever_recording), "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("convert", str(lever_recording), "--out", str(out))
     assert proc.returncode == 0, proc.stderr
     assert "used: run 1 (the longest)" in proc.stdout
     log = read_log(out)                                   # the measured-log type, checks included

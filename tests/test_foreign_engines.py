@@ -21,6 +21,7 @@ from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 H = 0.01
@@ -102,12 +103,8 @@ def test_cofmupy_runs_the_figure8_fmus(unpacked, own_run):
     (["run", "{tmp}/bad.ssp", "--out", "{tmp}/out"], ["bad.ssp: not an SSP archive"]),
 ])
 def test_bad_ssp_invocations_are_named_without_a_traceback(tmp_path, args, words):
-    import subprocess
-    import sys
-
     (tmp_path / "bad.ssp").write_text("hello")
-    res = subprocess.run([sys.executable, "-m", "agrobot", *[a.format(tmp=tmp_path) for a in args]], cwd=ROOT,
-                         capture_output=True, text=True)
+    res = cli(*[a.format(tmp=tmp_path) for a in args])
     assert res.returncode == 2 and "Traceback" not in res.stderr
     assert all(w in res.stderr for w in words), res.stderr
     assert not list(tmp_path.glob("*.ssp.tmp")) and not (tmp_path / "hil.ssp").exists()

@@ -21,6 +21,7 @@ from agrobot.identification.fitting import fit
 from agrobot.identification.multisine import MultisineDesign, crest_factor, realisation
 from agrobot.identification.physical import MISPRINTS, appendix_as_printed, coefficients, rlfr_physical
 from agrobot.orchestrator.study import Study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 P = TractorParameters()
@@ -192,8 +193,7 @@ def test_study_identification_reproduces_section_iv(study_run):
 
 def test_the_same_command_on_the_experiments_log_gives_the_same_fits(study_run, tmp_path):
     out, _, rep = study_run
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(out / "experiment_log.csv"),
-                           "--out", str(tmp_path), "--no-plots"], capture_output=True, text=True, cwd=ROOT)
+    proc = cli("identify", str(out / "experiment_log.csv"), "--out", str(tmp_path), "--no-plots")
     assert proc.returncode == 0, proc.stderr
     log_rep = json.loads((tmp_path / "identification.json").read_text())
     for name in ("second_order", "rlf"):
@@ -216,8 +216,7 @@ def test_bad_logs_get_clear_errors(study_run, tmp_path, edit, words):
     frame = edit(pd.read_csv(out / "experiment_log.csv"))
     bad = tmp_path / "bad.csv"
     frame.to_csv(bad, index=False)
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(bad), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("identify", str(bad), "--out", str(tmp_path / "o"))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert str(bad) in proc.stderr
     for w in words:

@@ -30,6 +30,7 @@ from agrobot.analysis.margins_simulation import simulated_run
 from agrobot.components.stanley import Stanley
 from agrobot.orchestrator.component import Component, inp, out, par
 from agrobot.orchestrator.study import Study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "studies"
@@ -159,7 +160,9 @@ def test_margins_shrink_with_the_steering_delay_by_the_delay_added():
     assert slow.loops["whole loop"].delay == pytest.approx(base.loops["whole loop"].delay - 0.2, abs=0.012)
 
 
-@pytest.mark.parametrize("sweep, base", SWEEPS.items())
+@pytest.mark.parametrize("sweep, base", [pytest.param(sweep, base, marks=pytest.mark.slow)
+                                         if sweep == "field_speed_sweep" else (sweep, base)      # 12 CPU s
+                                         for sweep, base in SWEEPS.items()])
 def test_a_sweep_or_line_test_has_its_base_studys_loop_at_its_own_values(sweep, base):
     a = analyse(Study.load(STUDIES / f"{sweep}.toml"), speed_excess_value=0.17)
     b = analyse(Study.load(STUDIES / f"{base}.toml"), speed_excess_value=0.17)
@@ -193,8 +196,7 @@ def test_margins_command_prints_margins_and_writes_the_plots(tmp_path):
 
 
 def test_margins_command_on_a_study_without_a_loop_exits_2(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "margins", "studies/field_test.toml"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = cli("margins", "studies/field_test.toml", timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "no closed guidance loop" in proc.stderr
 

@@ -20,6 +20,7 @@ from agrobot.orchestrator.mcap_out import write_study_mcap
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
 from tests.figure_checks import apart_in_greyscale, has_unit
+from tests.commands import cli
 
 pytest.importorskip("foxglove")
 mcap_reader = pytest.importorskip("mcap.reader")
@@ -138,9 +139,8 @@ def test_a_field_mission_mcap_shows_the_field_and_the_implement_on_the_map(field
 
 def test_a_bad_mcap_path_is_refused_before_the_run(tmp_path):
     out = tmp_path / "run"
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out", str(out),
-                           "--mcap", str(tmp_path / "no_such_folder" / "x.mcap")],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    proc = cli("run", str(STUDIES / "figure8.toml"), "--out", str(out), "--mcap",
+               str(tmp_path / "no_such_folder" / "x.mcap"), timeout=120)
     assert proc.returncode == 2 and "no_such_folder" in proc.stderr and "does not exist" in proc.stderr
     assert not out.exists()
 
@@ -250,9 +250,8 @@ def test_a_port_in_use_is_refused_with_its_number(tmp_path):
         busy.bind(("127.0.0.1", 0))
         busy.listen(1)
         port = busy.getsockname()[1]
-        proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(STUDIES / "figure8.toml"), "--out",
-                               str(tmp_path / "run"), "--live", f"127.0.0.1:{port}"],
-                              capture_output=True, text=True, timeout=120, cwd=ROOT)
+        proc = cli("run", str(STUDIES / "figure8.toml"), "--out", str(tmp_path / "run"), "--live",
+                   f"127.0.0.1:{port}", timeout=120)
     assert proc.returncode == 2 and f"127.0.0.1:{port}" in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "run").exists()
 

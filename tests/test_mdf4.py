@@ -4,8 +4,6 @@ the same log as the same data written as CSV tables, and the truth it was made f
 is a named error."""
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +15,7 @@ from agrobot.measurements.options import ImportOptions
 from agrobot.measurements.recording import import_recording
 from agrobot.measurements.signal_expressions import parse_signal
 from harness.generated_recordings import write_candump
+from tests.commands import cli
 
 asammdf = pytest.importorskip("asammdf")
 ROOT = Path(__file__).resolve().parent.parent
@@ -104,7 +103,6 @@ def test_a_damaged_or_foreign_mdf4_is_a_named_error(signal_files, tmp_path, cont
     assert str(bad) in str(err.value)
     if content is None:
         return
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "convert", str(bad), "--out", str(tmp_path / "x.csv")],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    proc = cli("convert", str(bad), "--out", str(tmp_path / "x.csv"), timeout=120)
     assert proc.returncode == 2 and expected in proc.stderr and "Traceback" not in proc.stderr
     assert not (tmp_path / "x.csv").exists()

@@ -4,8 +4,6 @@ with the signals and the logs."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 import types
 import warnings
 from pathlib import Path
@@ -27,6 +25,7 @@ from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.signal_table import SignalTable
 from agrobot.orchestrator.study import Study, StudyError
 from agrobot.studies import shipped
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 CUT = "reference.x_ref -> tracker.x_ref"
@@ -62,8 +61,7 @@ def test_the_cli_refuses_a_deleted_connection_in_one_line_and_says_the_held_inpu
     study = tmp_path / "cut.toml"
     study.write_text(f'extends = "{shipped("figure8.toml")}"\nconnections_remove = ["{CUT}"]\n'
                      '[study]\nstop_time = 0.5\n')
-    done = subprocess.run([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(tmp_path / "out")],
-                          capture_output=True, text=True, timeout=120, cwd=ROOT)
+    done = cli("run", str(study), "--out", str(tmp_path / "out"), timeout=120)
     assert done.returncode == 2, done.stderr
     assert "tracker.x_ref" in done.stderr and "Traceback" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1, done.stderr

@@ -3,8 +3,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +13,7 @@ from agrobot.orchestrator.engine import RunError, Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import StudyError, load_study, parse_study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -188,8 +187,7 @@ def test_failure_mid_run_keeps_recorded_results(tmp_path):
 def test_cli_reports_bad_study_without_traceback(tmp_path, edit, words):
     bad = tmp_path / "bad.toml"
     bad.write_text(edit((ROOT / "studies/figure8.toml").read_text()))
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(bad), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("run", str(bad), "--out", str(tmp_path / "o"))
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
     assert str(bad) in proc.stderr
@@ -199,9 +197,7 @@ def test_cli_reports_bad_study_without_traceback(tmp_path, edit, words):
 
 
 def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies/figure8.toml"),
-                           "--out", str(tmp_path), "--set", "study.stop_time=5"],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("run", str(ROOT / "studies/figure8.toml"), "--out", str(tmp_path), "--set", "study.stop_time=5")
     assert proc.returncode == 1 and "Traceback" not in proc.stderr
     assert "run too short for metrics" in proc.stderr and "study.analysis" in proc.stderr
     assert (tmp_path / "signals.parquet").exists()
@@ -209,9 +205,8 @@ def test_a_run_too_short_for_the_analysis_keeps_its_signals_and_says_why(tmp_pat
 
 
 def test_infinite_times_are_refused_with_the_field_named(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies" / "figure8.toml"),
-                           "--out", str(tmp_path / "o"), "--set", "study.stop_time=inf"], capture_output=True,
-                          text=True, cwd=ROOT)
+    proc = cli("run", str(ROOT / "studies" / "figure8.toml"), "--out", str(tmp_path / "o"),
+               "--set", "study.stop_time=inf")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "study.stop_time" in proc.stderr and "finite" in proc.stderr
 

@@ -8,7 +8,6 @@ import ast
 import json
 import math
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ from agrobot.fields.planner import objectives, route_order
 from agrobot.fields.planner.curves import connect
 from agrobot.fields.planner.sampling import ROUTE_STEP
 from agrobot.orchestrator.cli import main
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "src" / "agrobot"          # the import root; its modules named here without "agrobot."
@@ -285,8 +285,7 @@ def test_plan_refuses_bad_values_with_exit_2_naming_them(tmp_path, capsys, monke
 
 # --- the files, as one set ---------------------------------------------------------------------------------------
 def _plan_cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "agrobot", "plan", *args], cwd=ROOT, capture_output=True,
-                          text=True, timeout=300)
+    return cli("plan", *args, timeout=300)
 
 
 def test_plan_writes_its_files_as_one_set_and_an_interrupted_plan_keeps_the_earlier(tmp_path, capsys, monkeypatch):

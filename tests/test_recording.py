@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -58,8 +59,7 @@ def test_the_can_recording_is_a_candump_log_the_dbc_decodes(recording):
 def test_record_into_a_file_is_refused_by_name(tmp_path):
     target = tmp_path / "a_file"
     target.write_text("x")
-    res = subprocess.run([sys.executable, "-m", "agrobot", "emulate", "studies/tractor_emulator.toml",
-                          "--nmea-port", "0", "--duration", "1", "--record", str(target)],
-                         cwd=ROOT, capture_output=True, text=True, timeout=60)
+    res = cli("emulate", "studies/tractor_emulator.toml", "--nmea-port", "0", "--duration", "1", "--record", str(target),
+              timeout=60)
     assert res.returncode == 2 and "--record" in res.stderr and "is a file" in res.stderr
     assert target.read_text() == "x"

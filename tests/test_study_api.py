@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import ast
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +15,7 @@ from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study, StudyError, parse_study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -178,7 +177,7 @@ def test_tools_register_their_commands_and_tables():
     reg = registry()
     assert {"identify", "diagnose", "export-controller", "emulate"} <= set(reg.commands)
     assert "identification" in reg.sections and "agrobot.components" in reg.component_packages
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "--help"], capture_output=True, text=True, cwd=ROOT)
+    proc = cli("--help")
     for name in ("run", "sweep", "identify", "diagnose", "export-controller", "emulate"):
         assert name in proc.stdout
 
@@ -186,8 +185,7 @@ def test_tools_register_their_commands_and_tables():
 def test_an_unknown_top_level_table_is_refused_by_name(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text(FIGURE8.read_text() + '\n[identifcation]\nspeeds = [1.0]\n')
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "run", str(bad), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("run", str(bad), "--out", str(tmp_path / "o"))
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "unknown table 'identifcation'" in proc.stderr and "identification" in proc.stderr
 

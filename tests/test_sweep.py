@@ -16,6 +16,7 @@ import pytest
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study, StudyError, load_study
 from agrobot.orchestrator.sweep import SweepRun, expand
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = "study.stop_time=20.0"
@@ -116,8 +117,7 @@ def test_dask_local_cluster_gives_the_same_table(tmp_path):
 def test_bad_sweeps_fail_before_running_anything(tmp_path, body, words):
     path = sweep_file(tmp_path, body)
     out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "sweep", str(path), "--out", str(out),
-                           "--no-progress"], capture_output=True, text=True, cwd=ROOT)
+    proc = cli("sweep", str(path), "--out", str(out), "--no-progress")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     for w in words:
         assert w in proc.stderr

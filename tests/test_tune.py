@@ -14,6 +14,7 @@ from agrobot.analysis.tune import Targets, propose
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
@@ -96,8 +97,7 @@ def test_identified_model_becomes_plant_and_controller_model(tmp_path):
 def test_tune_bad_options_exit_2_with_a_message(tmp_path, args, words):
     (tmp_path / "ident.json").write_text(json.dumps({"models": {"second_order": {"num": [291.0], "den": [1, 10.9, 242]}}}))
     argv = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "tune", "studies/figure8.toml", *argv, "--no-simulation"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=900)
+    proc = cli("tune", "studies/figure8.toml", *argv, "--no-simulation", timeout=900)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     for word in words:
         assert word in proc.stderr, proc.stderr

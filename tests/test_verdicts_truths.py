@@ -89,7 +89,8 @@ def test_the_models_side_slip_is_scored_against_a_measured_one_held_out():
     from agrobot.orchestrator.study import load_study
     from agrobot.studies import shipped
 
-    frame, _ = make_log(SEED, None, duration=150.0, lateral=True)
+    # 60 s: fits 93-96 %, the flipped sensor -123 % (150 s gave 93-95 % and -109 %, at twice the CPU)
+    frame, _ = make_log(SEED, None, duration=60.0, lateral=True)
     study = load_study(shipped("figure8.toml"))
     checks = identify_driving(frame, "truth", study)["physical_checks"]
     assert set(checks) == {"vy", "beta"}
