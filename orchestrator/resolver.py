@@ -26,10 +26,10 @@ from pydantic import ValidationError
 from .component import Component
 from .composite import SubsystemTypes
 from .fmu import FMUTypes
-from .model import Model
+from .model import Model, resolved_parameters
 from .python_types import PythonTypes
 from .registry import registry
-from .study import Study, StudyError
+from .study import SET_PARAMETER_CHECKS, Study, StudyError
 from .study_schema import TABLES
 
 
@@ -99,3 +99,23 @@ def check_tables(study: Study) -> None:
             problems = "; ".join(f"{'.'.join(map(str, (name, *e['loc'])))}: {e['msg'].removeprefix('Value error, ')}"
                                  for e in err.errors())
             raise StudyError(f"{study.where}: {problems}") from None
+
+
+def check_set_parameters(study: Study) -> None:
+    """Each ``components.C.parameters.P`` an override sets names a parameter C's class declares (a
+    misspelt one is refused, with its nearest names, before the override is said applied); a
+    component whose type cannot be found here is left to the resolve, which names it."""
+    for field in study._set_by:
+        parts = field.split(".")
+        if len(parts) != 4 or parts[0] != "components" or parts[2] != "parameters" or parts[1] not in study.components:
+            continue
+        try:
+            cls = default_resolver().component_class(study, parts[1])
+        except Exception:  # noqa: BLE001 - an unknown type, a missing plugin: named by the resolve
+            continue
+        if parts[3] not in cls.declared("parameter"):
+            value = study.components[parts[1]].parameters[parts[3]]
+            resolved_parameters(cls, parts[1], {parts[3]: value}, study.origin)
+
+
+SET_PARAMETER_CHECKS.append(check_set_parameters)

@@ -26,15 +26,15 @@ is checked against the installed tools when the study is resolved, orchestrator.
 back. Parameters keep the values as written ("8000 N/rad", "30 deg"); the resolved model
 (orchestrator.model) converts them to SI with the component's declared units.
 
-Imported where used: orchestrator.model and orchestrator.resolver (they import this module; only a
-``--set`` of a component parameter looks up the component's class, to refuse a misspelt name
-before saying the item was applied).
+A ``--set`` of a component parameter is checked against the component's class before the item is
+said applied: the check is registered in ``SET_PARAMETER_CHECKS`` by orchestrator.resolver, which
+knows the classes (a study itself resolves none).
 """
 from __future__ import annotations
 
 import copy
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any, Callable, Iterable, Mapping
 
 import tomli_w
 from pydantic import BaseModel, ConfigDict, PrivateAttr, ValidationError, field_validator, model_validator
@@ -309,32 +309,19 @@ def _overridden(data: dict[str, Any], overrides: Iterable[str], path) -> tuple[d
     return set_by, applied
 
 
+SET_PARAMETER_CHECKS: list[Callable[["Study"], None]] = []
+"""Checks of what the ``--set`` items name, run before they are said applied (registered by the
+modules that know the component classes: orchestrator.resolver)."""
+
+
 def _announced(study: "Study", applied: list[str]) -> "Study":
     """Print what the ``--set`` items changed, after the study is parsed and each parameter an item
     sets is one its component declares (a misspelt name is refused with nothing said applied)."""
     if applied:
-        _check_set_parameters(study)
+        for check in SET_PARAMETER_CHECKS:
+            check(study)
         print("\n".join(applied))
     return study
-
-
-def _check_set_parameters(study: "Study") -> None:
-    """Each ``components.C.parameters.P`` an override set names a parameter C's class declares; a
-    component whose type cannot be found here is left to the resolve, which names it."""
-    from .model import resolved_parameters
-    from .resolver import default_resolver
-
-    for field in study._set_by:
-        parts = field.split(".")
-        if len(parts) != 4 or parts[0] != "components" or parts[2] != "parameters" or parts[1] not in study.components:
-            continue
-        try:
-            cls = default_resolver().component_class(study, parts[1])
-        except Exception:  # noqa: BLE001 - an unknown type, a missing plugin: named by the resolve
-            continue
-        if parts[3] not in cls.declared("parameter"):
-            value = study.components[parts[1]].parameters[parts[3]]
-            resolved_parameters(cls, parts[1], {parts[3]: value}, study.origin)
 
 
 def _format_validation(path: Path, err: ValidationError, set_by: Mapping[str, str]) -> str:

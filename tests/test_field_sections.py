@@ -115,7 +115,7 @@ def test_sections_take_the_designed_overlap_away_and_match_the_plan(driven):
 
 @pytest.mark.parametrize("setting,named", [
     ("field.sections=100", "sections = 100"), ("field.sections=2.5", "sections = 2.5"),
-    ("field.section_on_delay=-0.1", "section_on_delay = -0.1"), ("field.section_off_delay=30", "section_off_delay = 30"),
+    ("field.section_on_delay=-0.1", "got -0.1"), ("field.section_off_delay=30", "section_off_delay = 30"),
 ])
 def test_bad_section_settings_exit_2_naming_the_value(tmp_path, capsys, setting, named):
     field = quad_field(tmp_path / "quad.geojson")
