@@ -62,7 +62,12 @@ def _unpacked() -> set[str]:
 @pytest.mark.parametrize("mode, words", [(1, "crashed (signal SIGSEGV) in doStep at t = 0.5 s"),
                                          (2, "ended its process (exit code 3) in doStep at t = 0.5 s"),
                                          (3, "doStep at t = 0.5 s did not return within 1 s")])
-def test_a_crash_an_exit_and_a_hang_are_named_errors_and_the_signals_are_kept(folder, tmp_path, mode, words):
+def test_a_crash_an_exit_and_a_hang_are_named_errors_and_the_signals_are_kept(folder, tmp_path, mode, words,
+                                                                            monkeypatch):
+    own = tmp_path / "tmp"              # the run's own temporary folder: other processes' FMUs are not counted
+    own.mkdir()
+    monkeypatch.setenv("TMPDIR", str(own))
+    monkeypatch.setattr(tempfile, "tempdir", str(own))
     before = _unpacked()
     out = tmp_path / "out"
     with pytest.raises(RunError) as err:
