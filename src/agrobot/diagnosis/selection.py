@@ -31,6 +31,10 @@ An effect that shows on a stage only through another part of the model (Effect.t
 steering map on the steering stage, whose actuator rate is a wheel rate read through the map) is
 fitted on the stages it acts on and scored on all of them; its held-out gain is the best of its
 stages' (a gain error is one parameter for the turns and for the rate a second effect would name).
+Such a stage is evidence for it (in dBIC and gain) only where the model without it leaves that stage
+misfit and the effect's held-out RMS falls there (evidence_stages): on a steering stage the
+baseline explains to its noise, a map bending the rate limit is no evidence, and an asymmetry must
+not outweigh an offset the straight driving shows.
 
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
@@ -78,10 +82,11 @@ class Finding:
     reasons: list[str]
     stages: tuple[str, ...] = ()
     without: CandidateFit | None = None        # the model refitted without the effect (drop-one only)
+    evidence: tuple[str, ...] = ()             # the stages counted for it (evidence_stages)
 
     @property
     def gain(self) -> float:
-        return self.gain_by_signal[shown_signal(self.effect, self.stages, self.gain_by_signal)]
+        return self.gain_by_signal[shown_signal(self.effect, self.evidence or self.stages, self.gain_by_signal)]
 
 
 def main_stage(effect: Effect, scored) -> str:
@@ -98,24 +103,42 @@ def shown_signal(effect: Effect, scored, gains: dict[str, float]) -> str:
     return max((SIGNALS[s][0] for s in effect.stages if s in scored), key=lambda k: gains[k])
 
 
+def evidence_stages(effect: Effect, stages, gains: dict[str, float], without: CandidateFit,
+                    floors: dict | None) -> tuple[str, ...]:
+    """The stages that are evidence for ``effect``: all it acts on, and a stage it is only tested on
+    (Effect.tested_on: a steering map on the actuator's rate, read through the map) only where the
+    model without it leaves that stage misfit (above its noise floor, unexplained.is_misfit) and
+    the effect's held-out RMS falls there. A stage already explained to its noise has nothing left
+    for the effect to explain; a fall in its fitted RSS there is the map bending the rate limit
+    (r / M'), not the map itself, and would outweigh the turns that tell a map from an offset."""
+    def counts(s: str) -> bool:
+        if s not in effect.tested_on:
+            return True
+        misfit = floors is None or is_misfit(s, without.rmse_test[s], floors)
+        return misfit and gains[SIGNALS[s][0]] > 0.0
+    counted = tuple(s for s in stages if counts(s))
+    return counted or tuple(stages)
+
+
 def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain,
            floors: dict | None = None) -> Finding:
     """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py.
     ``floors``: the stages' noise floors (noise_floor.py); given, a signal whose held-out RMS rises
     counts against the effect only where it is then misfit (unexplained.is_misfit): a track left
     within its noise is no evidence against a gain that fixes the turns."""
-    n_total = sum(with_.n_eff[s] for s in stages)
-    dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in stages)
-    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
     names = {s: SIGNALS[s][0] for s in stages}
     before = {names[s]: without.rmse_test[s] for s in stages}
     after = {names[s]: with_.rmse_test[s] for s in stages}
     gains = {k: 1.0 - after[k] / before[k] if before[k] > 0 else 0.0 for k in before}
+    counted = evidence_stages(effect, stages, gains, without, floors)
+    n_total = sum(with_.n_eff[s] for s in counted)
+    dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in counted)
+    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
     material = bool(effect.material(with_.values, baseline_values))
     reasons = []
     if dbic >= STRONG:
         reasons.append(f"dBIC {dbic:.1f} is not below {STRONG:.0f}")
-    main = shown_signal(effect, stages, gains)
+    main = shown_signal(effect, counted, gains)
     if gains[main] < min_gain:
         reasons.append(f"held-out {main} RMS falls by {100 * gains[main]:.1f}% < {100 * min_gain:.0f}%")
     worse = [names[s] for s in stages if gains[names[s]] < -0.05
@@ -124,7 +147,8 @@ def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, b
         reasons.append(f"held-out RMS rises for {worse}")
     if not material:
         reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
-    return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages))
+    return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages),
+                   evidence=counted)
 
 
 def group(stages: set[str], members: list[Effect], available=STAGES,
