@@ -109,8 +109,8 @@ def test_without_a_compiler_auto_runs_python_and_says_so_once(monkeypatch, capsy
     def missing():
         raise CompilerMissing("no C compiler (test)")
 
-    monkeypatch.setattr(single_track_kernel, "_STATE", {})
-    monkeypatch.setattr(single_track_kernel, "_load", missing)
+    monkeypatch.setattr(single_track_kernel.LIBRARY, "state", {})
+    monkeypatch.setattr(single_track_kernel.LIBRARY, "load", missing)
     assert single_track_kernel.choose("auto") == "python"
     assert single_track_kernel.choose("auto") == "python"
     assert capsys.readouterr().err.count("run in Python") == 1

@@ -10,18 +10,16 @@ from __future__ import annotations
 
 import ctypes
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
 
-from agrobot.orchestrator.compiled.toolchain import CompileError, CompilerMissing, library
-from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.compiled.optional_library import KERNELS as KERNELS  # the kernels a caller may ask
+from agrobot.orchestrator.compiled.optional_library import OptionalLibrary
+from agrobot.orchestrator.compiled.toolchain import library
 
 SOURCE = Path(__file__).with_suffix(".c")
-KERNELS = ("auto", "c", "python")
 MAX_ORDER = 16                 # the C file's largest state (recursion) and n + p (hold)
-_STATE: dict[str, object] = {}
 
 
 def _load() -> ctypes.CDLL:
@@ -35,33 +33,9 @@ def _load() -> ctypes.CDLL:
     return lib
 
 
-def choose(kernel: str) -> str:
-    """``c`` or ``python`` for the asked ``kernel``: ``auto`` is C where a C compiler is found, else
-    Python with one note on stderr (per process); ``c`` without a compiler raises CompilerMissing."""
-    if kernel not in KERNELS:
-        raise InputError(f"kernel {kernel!r}: expected one of {', '.join(KERNELS)}")
-    if kernel == "python":
-        return "python"
-    if "lib" not in _STATE and "missing" not in _STATE:
-        try:
-            _STATE["lib"] = _load()
-        except (CompilerMissing, CompileError) as exc:
-            _STATE["missing"] = exc
-    if "lib" in _STATE:
-        return "c"
-    if kernel == "c":
-        raise _STATE["missing"]         # type: ignore[misc]
-    if not _STATE.get("said"):
-        print(f"note: the diagnosis's stage replays run in Python, several times slower ({_STATE['missing']})",
-              file=sys.stderr)
-        _STATE["said"] = True
-    return "python"
-
-
-def _lib() -> ctypes.CDLL:
-    if "lib" not in _STATE:
-        _STATE["lib"] = _load()
-    return _STATE["lib"]                         # type: ignore[return-value]
+LIBRARY = OptionalLibrary(_load, "the diagnosis's stage replays run in Python, several times slower")
+choose = LIBRARY.choose
+_lib = LIBRARY.lib
 
 
 def _as(x, dtype) -> np.ndarray:

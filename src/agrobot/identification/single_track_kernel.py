@@ -8,22 +8,20 @@ picks between them (``auto``: C where a compiler is found, else Python, said onc
 from __future__ import annotations
 
 import ctypes
-import sys
 from pathlib import Path
 
 import numpy as np
 
-from agrobot.orchestrator.compiled.toolchain import CompileError, CompilerMissing, library
-from agrobot.orchestrator.errors import InputError
+from agrobot.orchestrator.compiled.optional_library import KERNELS as KERNELS  # the kernels a caller may ask
+from agrobot.orchestrator.compiled.optional_library import OptionalLibrary
+from agrobot.orchestrator.compiled.toolchain import library
 
 SOURCE = Path(__file__).with_suffix(".c")
-KERNELS = ("auto", "c", "python")
 DEFAULT = "auto"             # what a YawModel runs unless told (``python``: the reference everywhere)
 MODELS = {"bicycle": 0, "rlf": 1, "rlfr": 2}
 # per-row parameters in the C file's P_ order
 PARAMETERS = ("lag_decay", "hold_gain", "C_f", "C_r", "mu", "shape", "cornering_speed_slope",
               "cornering_reference_speed", "sigma_f", "sigma_r", "m", "I", "l_f", "l_r", "F_zf", "F_zr")
-_STATE: dict[str, object] = {}
 
 
 def _load() -> ctypes.CDLL:
@@ -39,40 +37,15 @@ def _load() -> ctypes.CDLL:
     return lib
 
 
-def choose(kernel: str) -> str:
-    """``c`` or ``python`` for the asked ``kernel``: ``auto`` is C where a C compiler is found, else
-    Python with one note on stderr (per process) saying why; ``c`` raises that reason (CompilerMissing,
-    CompileError, an OSError of the cache folder)."""
-    if kernel not in KERNELS:
-        raise InputError(f"kernel {kernel!r}: expected one of {', '.join(KERNELS)}")
-    if kernel == "python":
-        return "python"
-    if "lib" not in _STATE and "missing" not in _STATE:
-        try:
-            _STATE["lib"] = _load()
-        except (CompilerMissing, CompileError, OSError) as exc:      # OSError: the cache folder not writable
-            _STATE["missing"] = exc
-    if "lib" in _STATE:
-        return "c"
-    if kernel == "c":
-        raise _STATE["missing"]
-    if not _STATE.get("said"):
-        why = _STATE["missing"]
-        why = "no C compiler was found ($CC, cc, gcc; the Debian package gcc installs one)" \
-            if isinstance(why, CompilerMissing) else f"its C kernel could not be built: {why}"
-        print(f"note: the yaw model's simulations run in Python, 10 to 40 times slower than in C: {why}",
-              file=sys.stderr)
-        _STATE["said"] = True
-    return "python"
+LIBRARY = OptionalLibrary(_load, "the yaw model's simulations run in Python, 10 to 40 times slower than in C")
+choose = LIBRARY.choose
 
 
 def simulate(model: str, sub: int, h: float, w: np.ndarray, v: np.ndarray, par: np.ndarray):
     """(yaw rate, lateral velocity), each (rows, L): row i driven by the wheel angle asked w[i] at
     the speed v[i mod S] (v: (S, L)) with the parameters par[i] (PARAMETERS' order), from the
     kinematic state; ``sub`` ROS2 substeps per sample step h."""
-    if "lib" not in _STATE:
-        _STATE["lib"] = _load()
-    lib = _STATE["lib"]
+    lib = LIBRARY.lib()
     w = np.ascontiguousarray(w, float)
     v = np.ascontiguousarray(v, float)
     par = np.ascontiguousarray(par, float)
