@@ -38,6 +38,16 @@ def cli(*args, timeout: float = 300, cwd: Path = ROOT) -> subprocess.CompletedPr
     return _forked(command, timeout, Path(cwd))
 
 
+def in_process(argv, capsys) -> tuple[int, str, str]:
+    """The command line's ``main`` called in this process: (exit code, stdout, stderr), for a test
+    that patches the product (a failing write, a signal) where a forked command would not see it."""
+    from agrobot.orchestrator.cli import main
+
+    code = main([str(a) for a in argv])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
 def refused(proc: subprocess.CompletedProcess, *words: str) -> str:
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr
     for w in words:

@@ -14,6 +14,7 @@ import pytest
 from agrobot.orchestrator.cli import build_parser, main
 from agrobot.orchestrator.component import Component, out, par
 from agrobot.orchestrator.output import OutputLock
+from tests.commands import in_process as _cli
 
 ROOT = Path(__file__).resolve().parent.parent
 FIELD = ROOT / "studies" / "fields" / "test_parcel.json"
@@ -66,12 +67,6 @@ def _log(tmp_path: Path) -> Path:
     path = tmp_path / "log.csv"
     pd.DataFrame({"t": t, "x": t, "y": [0.0] * 50}).to_csv(path, index=False)
     return path
-
-
-def _cli(argv, capsys) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 # verb -> (argv without --out, the folder (or file) --out names, what marks an earlier result of the verb)

@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 from agrobot.orchestrator import sweep_cost
-from agrobot.orchestrator.cli import main
 from agrobot.orchestrator.study import Study
 from agrobot.orchestrator.sweep import SweepRun, sweep_plots, sweep_summary
+from tests.commands import in_process as cli
 
 ROOT = Path(__file__).resolve().parents[1]
 HUNT = """extends = "{figure8}"
@@ -75,12 +75,6 @@ def toy(tmp_path: Path, sleeps="[0.0, 0.0]", stop: float = 1.0, name: str = "toy
     path = tmp_path / name
     path.write_text(TOY.format(sleeps=sleeps, stop=stop))
     return path
-
-
-def cli(argv, capsys) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def test_hunting_draws_are_named_with_the_speed_range_that_causes_them(tmp_path, cache, monkeypatch):

@@ -17,7 +17,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from agrobot.orchestrator.cli import main
+from tests.commands import in_process as _cli
 from agrobot.orchestrator.output import OutputError, OutputLock
 
 pytest.importorskip("foxglove")
@@ -44,12 +44,6 @@ def _study(tmp_path: Path, stop: float = 1.0, extra: str = "", name: str = "toy.
     path = tmp_path / name
     path.write_text(TOY.format(stop=stop, extra=extra))
     return path
-
-
-def _cli(argv, capsys) -> tuple[int, str, str]:
-    code = main([str(a) for a in argv])
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def _messages(path: Path) -> list[float]:
