@@ -29,11 +29,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pandas as pd
 
 from .findings import finding
 from .log import LogError
 
-CHORD = 0.25            # s: the course from the fixes this far either side
+CHORD = 0.25            # s: the course from the fixes this far either side (at least)
+CHORD_NOISE = 8.0       # a chord at least this many position sigmas long: the course within ~10 deg
+NOISE_WINDOW = 41       # fixes: the position noise is read over this many
 MOVING = 0.2            # m/s: the course is read above this track speed
 AGREE = math.radians(45.0)
 STEERED, TURNING = 0.05, 0.05
@@ -42,25 +45,52 @@ REVERSE_SHARE = 0.5     # a stretch reverses when its votes' net share is below 
 REVERSE_MIN = 1.0       # s: a shorter stretch of reversing evidence is not named
 STOP = 0.1              # m/s: a reversing stretch is signed out to where the speed falls below this
 SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the reversing samples
+SCALE = 2.0             # a heading's rate within this factor of the course's (a gyro in deg/s is not one)
+AXIS_WINDOW = 30        # s: the course-heading axis is read over this window (a drifting heading)
+STILL, STILL_SAMPLES = 0.05, 20    # m/s, samples: a gyro's bias read at standstill
 RUN_MIN, RUN_VOTES = 2.0, 10    # s, votes: a run of reversing evidence alone inside a forward stretch
 
 
 def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(t, course [rad, ENU, unwrapped within moving stretches], track speed [m/s]) of the fixes;
-    course NaN where the track moves slower than MOVING."""
+    """(t, course [rad, ENU], track speed [m/s]) on the fixes' own updates (a held fix is not a new
+    one); course NaN where the track moves slower than MOVING. The chord is CHORD s either side,
+    lengthened (x2, x4, x8) where the positions' local noise sigma would turn it by more than
+    about 10 deg: a chord shorter than CHORD_NOISE sigma is not read (a DGPS fix at mower speed)."""
     t = gnss["utc"].to_numpy(float)
     lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
+    new = np.r_[True, (np.diff(lat) != 0) | (np.diff(lon) != 0)]
+    t, lat, lon = t[new], lat[new], lon[new]
     north = np.radians(lat - lat[0]) * 6.371e6
     east = np.radians(lon - lon[0]) * 6.371e6 * math.cos(math.radians(float(lat[0])))
     h = float(np.median(np.diff(t))) if len(t) > 1 else math.nan
-    k = max(1, int(round(CHORD / h))) if h > 0 else 1
+    k0 = max(1, int(round(CHORD / h))) if h > 0 else 1
     c, speed = np.full(len(t), np.nan), np.zeros(len(t))
-    if len(t) > 2 * k + 2:
+    if len(t) <= 2 * k0 + 2:
+        return t, c, speed
+    need = CHORD_NOISE * position_noise(east, north)
+    todo = np.ones(len(t), bool)
+    for k in (k0, 2 * k0, 4 * k0, 8 * k0):
+        if len(t) <= 2 * k + 2:
+            break
         de, dn, dt = east[2 * k:] - east[:-2 * k], north[2 * k:] - north[:-2 * k], t[2 * k:] - t[:-2 * k]
-        speed[k:-k] = np.hypot(de, dn) / np.maximum(dt, 1e-6)
-        c[k:-k] = np.arctan2(dn, de)
+        span = np.hypot(de, dn)
+        take = np.zeros(len(t), bool)
+        take[k:-k] = todo[k:-k] & (span >= need[k:-k])
+        speed[take] = (span / np.maximum(dt, 1e-6))[take[k:-k]]
+        c[take] = np.arctan2(dn, de)[take[k:-k]]
+        todo &= ~take
     c[speed < MOVING] = np.nan
     return t, c, speed
+
+
+def position_noise(east: np.ndarray, north: np.ndarray) -> np.ndarray:
+    """Each fix's local position noise sigma [m]: the running median (NOISE_WINDOW fixes) of the
+    second differences' size, / 0.6745 / sqrt(6) (a second difference of white noise has variance 6 sigma^2; a
+    smooth drive adds a h^2, which the median of a few fixes ignores only in part: an upper bound)."""
+    d2 = np.hypot(np.diff(east, 2), np.diff(north, 2)) / math.sqrt(2.0)
+    d2 = np.r_[d2[:1], d2, d2[-1:]] if len(d2) else np.zeros(len(east))
+    local = pd.Series(d2).rolling(NOISE_WINDOW, center=True, min_periods=1).median().to_numpy()
+    return local / 0.6745 / math.sqrt(6.0)
 
 
 def _wrap(x):
@@ -91,9 +121,9 @@ def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.corrcoef(ra, rb)[0, 1])
 
 
-def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
+def by_heading(t, c, rate, heading, what: str = "the heading") -> tuple[np.ndarray, str] | None:
     """Evidence (+1 forward, -1 reversing, 0 none) from a heading (module docstring), or None when
-    its rate does not follow the course's."""
+    its rate does not follow the course's (in rank, and in size within SCALE where both turn)."""
     th, h = heading
     inside = (t >= th[0]) & (t <= th[-1]) & np.isfinite(c)
     if inside.sum() < 20:
@@ -104,16 +134,50 @@ def by_heading(t, c, rate, heading) -> tuple[np.ndarray, str] | None:
     if ok.sum() < 20 or np.std(rate[ok]) == 0 or np.std(hr[ok]) == 0:
         return None
     sense = rank_correlation(rate[ok], hr[ok])
-    if not abs(sense) > 0.3:
+    turning = ok & (np.abs(rate) > TURNING) & (np.abs(hr) > TURNING)
+    size = float(np.median(np.abs(rate[turning] / hr[turning]))) if turning.sum() >= 20 else 1.0
+    if not abs(sense) > 0.3 or not 1 / SCALE <= size <= SCALE:
         return None
     diff = _wrap(c - math.copysign(1.0, sense) * hu)
-    axis = 0.5 * float(np.angle(np.mean(np.exp(2j * diff[inside]))))
+    axis = local_axis(t, diff, inside)
     near = np.abs(_wrap(diff - axis)) < math.pi / 2
     forward = axis if near[inside].mean() >= 0.5 else axis + math.pi
     off = np.abs(_wrap(diff - forward))
     e = np.where(off < AGREE, 1, np.where(off > math.pi - AGREE, -1, 0))
-    return np.where(inside, e, 0), (f"the course against the heading (offset {math.degrees(_wrap(forward)):.0f} deg, "
-                                    f"{'same' if sense > 0 else 'opposite'} sense)")
+    return np.where(inside, e, 0), (f"the course against {what} (offset {math.degrees(float(np.median(_wrap(forward[inside])))):.0f}"
+                                    f" deg, {'same' if sense > 0 else 'opposite'} sense)")
+
+
+def local_axis(t: np.ndarray, diff: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """The axis of the course less the heading [rad], per fix: half the angle of the mean of
+    exp(2i diff) over AXIS_WINDOW s around it (doubled, a reversal's pi vanishes; local, a drifting
+    heading, such as an integrated gyro's, is followed), unwrapped over time."""
+    z = pd.Series(np.where(inside, np.exp(2j * diff), np.nan + 0j))
+    when = pd.to_datetime(t - t[0], unit="s")
+    re = pd.Series(z.to_numpy().real, index=when).rolling(f"{AXIS_WINDOW}s", center=True, min_periods=1).mean()
+    im = pd.Series(z.to_numpy().imag, index=when).rolling(f"{AXIS_WINDOW}s", center=True, min_periods=1).mean()
+    doubled = np.angle(re.to_numpy() + 1j * im.to_numpy())
+    ok = np.isfinite(doubled)
+    out = np.zeros(len(t))
+    if ok.any():
+        out[ok] = 0.5 * np.unwrap(doubled[ok])
+        out = np.interp(np.arange(len(t)), np.flatnonzero(ok), out[ok])
+    return out
+
+
+def gyro_heading(streams) -> tuple[np.ndarray, np.ndarray] | None:
+    """(t, the yaw rate integrated [rad]) of a gyro: its bias the median yaw rate at standstill
+    (|v| < STILL on STILL_SAMPLES or more of its samples), else 0; None without a gyro."""
+    sig = streams.signals
+    if "yaw_rate" not in sig or len(sig["yaw_rate"][0]) < 20:
+        return None
+    tr, r = (np.asarray(x, float) for x in sig["yaw_rate"])
+    bias = 0.0
+    if "v" in sig:
+        still = np.abs(np.interp(tr, *sig["v"])) < STILL
+        bias = float(np.median(r[still])) if still.sum() >= STILL_SAMPLES else 0.0
+    step = np.diff(tr)
+    return tr, np.r_[0.0, np.cumsum(0.5 * (r[1:] + r[:-1] - 2 * bias) * step)]
 
 
 def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
@@ -143,6 +207,11 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
         heading = (g["utc"].to_numpy(float)[ok], g["heading"].to_numpy(float)[ok])
     if heading is not None and len(heading[0]) > 3:
         found = by_heading(t, c, rate, heading)
+        if found is not None:
+            return found
+    gyro = gyro_heading(streams)
+    if gyro is not None:
+        found = by_heading(t, c, rate, gyro, "the yaw rate integrated")
         if found is not None:
             return found
     steer = next((n for n in ("delta", "delta_cmd") if n in sig), None)
