@@ -26,6 +26,9 @@ import pandas as pd
 from .log import LogError
 
 OPERATORS = ("==", "!=", "<=", ">=", "<", ">")
+MODE_NAMES = ("mode", "control_mode", "drive_mode", "driving_mode", "state", "autonomy", "engaged", "engagement",
+              "auto_mode", "operation_mode")
+MODE_VALUES = 12        # a mode channel takes at most this many values
 UNEXPLAINED_WINDOW = 2.0        # s: the residual's RMS is taken over this window
 UNEXPLAINED_RATIO = 4.0         # x the log's median RMS of the residual
 UNEXPLAINED_FLOOR = 0.01        # rad (0.57 deg): a smaller residual is explained
@@ -41,6 +44,41 @@ class Condition:
     column: str
     op: str
     value: float | str
+
+
+def is_mode_name(name) -> bool:
+    """A mode or engagement channel by its name (MODE_NAMES, any letter case; a TABLE.COLUMN's
+    column)."""
+    return str(name).split(".")[-1].lower() in MODE_NAMES
+
+
+def mode_codes(t: np.ndarray, values) -> tuple[np.ndarray, np.ndarray, list | None] | None:
+    """(times, codes, labels) of a mode channel on the rows that say a value (a blank cell says
+    nothing: the mode in force holds, a channel written at a lower rate or only when it changes):
+    text as codes 0, 1, ... into ``labels`` (their order of first appearance), numbers as they are
+    (labels None); None when it takes more than MODE_VALUES values (not a mode)."""
+    col = pd.Series(values)
+    number = pd.to_numeric(col, errors="coerce")
+    text = col.astype(str).str.strip()
+    said = col.notna().to_numpy() & (text != "").to_numpy() & (text.str.lower() != "nan").to_numpy()
+    if not said.any():
+        return None
+    t = np.asarray(t, float)[said]
+    if number[said].notna().all():
+        x = number[said].to_numpy(float)
+        return (t, x, None) if len(np.unique(x)) <= MODE_VALUES else None
+    labels = list(dict.fromkeys(text[said]))
+    if len(labels) > MODE_VALUES:
+        return None
+    return t, text[said].map({v: float(i) for i, v in enumerate(labels)}).to_numpy(float), labels
+
+
+def decoded(codes: np.ndarray, labels: list) -> np.ndarray:
+    """A mode channel's codes (NaN: not said yet) as its text values (None where not said)."""
+    out = np.full(len(codes), None, dtype=object)
+    ok = np.isfinite(codes)
+    out[ok] = np.asarray(labels, dtype=object)[codes[ok].astype(int)]
+    return out
 
 
 def parse_where(text: str) -> list[list[Condition]]:

@@ -22,6 +22,7 @@ import pandas as pd
 
 from .audit import minimum
 from .log import CANONICAL, LogError
+from .modes import decoded
 from .options import ImportOptions
 from .streams import Streams, gnss_speed, iso
 
@@ -115,6 +116,8 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     for c, (tc, vc) in sig.items():
         if c not in columns:
             columns[c] = held(t, tc, vc) if c in streams.held or c in DISCRETE else within(t, tc, vc, bridge)
+            if c in streams.labels:         # a mode channel's text values
+                columns[c] = decoded(columns[c], streams.labels[c])
             if c == "heading":              # an angle, unwrapped on its stamps: wrapped to (-pi, pi]
                 columns[c] = np.angle(np.exp(1j * columns[c]))
     report["rate_hz"] = 1.0 / step

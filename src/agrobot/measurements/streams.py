@@ -52,6 +52,7 @@ class Streams:
     resolution: dict = field(default_factory=dict)
     breaks: list = field(default_factory=list)      # {stream, start, end (POSIX s), why}: never joined across
     groups: dict = field(default_factory=dict)      # column -> the file, topic or bus it came from (one clock)
+    labels: dict = field(default_factory=dict)      # column -> the text values of a mode channel's codes
 
 
 class Reader:

@@ -41,6 +41,7 @@ from agrobot.orchestrator.units import base_unit
 
 from .headings import as_yaw
 from .log import CANONICAL, LogError
+from .modes import is_mode_name, mode_codes
 from .mdf4 import mdf_tables
 from .quirks import fixes_from_columns
 from .runs import held
@@ -664,28 +665,50 @@ def fixes_as_given(streams: Streams, source: Path) -> Streams:
     return streams
 
 
-MODE_NAMES = ("mode", "control_mode", "drive_mode", "driving_mode", "state", "autonomy", "engaged", "engagement",
-              "auto_mode", "operation_mode")
-MODE_VALUES = 12        # a mode column takes at most this many values
-
-
 def mode_runs(table: Table) -> dict[str, list[tuple[str, float, float]]]:
-    """{column: [(value, start, end POSIX s)]} of each text column named as a mode or engagement
-    channel (MODE_NAMES) with few values: its stretches, as the rows give them."""
+    """{column: [(value, start, end POSIX s)]} of each column named as a mode or engagement
+    channel (measurements.modes.MODE_NAMES) with few values: its stretches, as the rows give them
+    (a blank cell holds the value in force)."""
     out = {}
     if table.t is None or len(table.t) < 2:
         return out
     for c in table.frame.columns:
-        col = table.frame[c]
-        if str(c).lower() not in MODE_NAMES or pd.api.types.is_numeric_dtype(col):
+        found = mode_codes(table.t, table.frame[c]) if is_mode_name(c) and c not in table.time_columns else None
+        if found is None:
             continue
-        values = col.astype(str).to_numpy()
-        if len(set(values)) > MODE_VALUES:
-            continue
+        t, codes, labels = found
+        values = np.array([labels[int(x)] for x in codes] if labels else [f"{x:g}" for x in codes], dtype=object)
         cuts = np.flatnonzero(values[1:] != values[:-1]) + 1
         starts, ends = np.concatenate([[0], cuts]), np.concatenate([cuts, [len(values)]])
-        out[str(c)] = [(str(values[a]), float(table.t[a]), float(table.t[b - 1])) for a, b in zip(starts, ends)]
+        last = [t[b] if b < len(t) else table.t[-1] for b in ends]     # in force until the next value said
+        out[str(c)] = [(str(values[a]), float(t[a]), float(e)) for a, e in zip(starts, last)]
     return out
+
+
+def mode_streams(tables: list[Table], mode_specs: list, used: set, source: Path) -> tuple[dict, dict, dict]:
+    """(column -> (t, codes), column -> labels, column -> table) of the mode and engagement
+    channels: each ``--signal`` naming one (a text column included), then every column so named in
+    a table that gives columns (its name in lower case), held at their own times in the log."""
+    signals, labels, groups = {}, {}, {}
+    wanted = [(spec.column, spec.names[0]) for spec in mode_specs]
+    wanted += [(str(c).lower(), f"{t.name}.{c}") for t in tables if t.name in used for c in t.frame.columns
+               if is_mode_name(c) and c not in t.time_columns]
+    for column, name in wanted:
+        found = catalog(tables).get(name)
+        if column in signals or found is None:
+            if found is None and any(spec.column == column for spec in mode_specs):
+                raise LogError(f"{source}: --signal {column}={name}: no such column (the tables' mode columns: "
+                               + ", ".join(f"{t.name}.{c}" for t in tables for c in t.frame.columns if is_mode_name(c))
+                               + ")")
+            continue
+        table, c = found
+        codes = mode_codes(table.t, table.frame[c]) if table.t is not None else None
+        if codes is None:
+            continue
+        signals[column], groups[column] = codes[:2], table.name
+        if codes[2] is not None:
+            labels[column] = codes[2]
+    return signals, labels, groups
 
 
 def _holders(tables: list[Table], name: str) -> list[str]:
@@ -716,8 +739,9 @@ def table_streams(paths: list[Path], options, source: Path):
     v, yaw_rate, x, y: SI, the log's convention, unless the header gives a unit)."""
     tables = read_tables(paths, options.time, options.rate, source,
                          tuple(n for s in options.signals for n in s.names))
-    specs = list(options.signals)
-    given = {s.column for s in specs}
+    specs = [s for s in options.signals if not is_mode_name(s.column)]
+    mode_specs = [s for s in options.signals if is_mode_name(s.column)]
+    given = {s.column for s in specs}          # a mode channel's mapping leaves the others found by name
     notes = [f"{t.path.name}: {n}" for t in tables for n in t.notes]
     auto: set[str] = set()
     for column in tuple(CANONICAL[1:]) + ("lat", "lon", "fix_quality"):
@@ -769,6 +793,11 @@ def table_streams(paths: list[Path], options, source: Path):
         groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
         columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
             ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
+    modes, labels, mode_groups = mode_streams(tables, mode_specs, used | {n.split(".")[0] for s in mode_specs
+                                                                        for n in s.names}, source)
+    signals.update(modes)
+    groups.update(mode_groups)
+    columns.update({c: f"{mode_groups[c]}: a mode channel, held at its own times" for c in modes})
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
@@ -781,8 +810,8 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals},
-                                     {}, groups=groups), source)
+    streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
+                                     | set(modes), {}, groups=groups, labels=labels), source)
     if "heading" in streams.signals:
         spec = next(s for s in specs if s.column == "heading")
         as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
