@@ -6,7 +6,11 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
 
     sigma^2 = mean_{f in [0.35 fs, 0.5 fs]} S(f) * fs / 2     (S: one-sided Welch density)
 
-- steering, yaw: the white level of the stage's residual (wheel-angle sensor, gyro); a yaw rate
+- steering, yaw: the white level of the stage's residual (wheel-angle sensor, gyro), read on the
+  sensor's own updates: a channel updated every m-th row (held, or interpolated between its
+  updates) has 1/m of the rows' independent samples and its noise sits below fs / (2 m), so the
+  residual is taken every m-th row at fs / m (m from the import's held_samples finding, else from
+  the log's exact repeats, measurements.channel_updates.holding); a yaw rate
   derived from a heading or course (identification.yaw_measurement): at least its noise read on
   the heading's own updates (the rows' top band holds only the interpolation);
 - speed: the GPS chord speed against the dead-reckoned chord speed; both are 1 s means, so the floor
@@ -21,6 +25,8 @@ import math
 
 import numpy as np
 from scipy.signal import welch
+
+from agrobot.measurements.channel_updates import holding
 
 from .replay import aligned_residuals, antenna_track
 
@@ -40,6 +46,27 @@ def white_level(x: np.ndarray, fs: float) -> float:
     return math.sqrt(float(np.mean(densities)) * fs / 2.0)
 
 
+def update_step(frame, sensor: str, h: float) -> int:
+    """Rows of the log per update of ``sensor`` (1: every row is one): the import's held_samples
+    finding on it (its updates' rate), else its exact repeats in the log."""
+    for f in frame.attrs.get("audit", []) or []:
+        if f.get("kind") == "held_samples" and sensor in f.get("channels", []) and f.get("updates_hz"):
+            return max(1, int(round(1.0 / (float(f["updates_hz"]) * h))))
+    if sensor in frame:
+        held = holding(frame["t"].to_numpy(float), frame[sensor].to_numpy(float))
+        if held is not None:
+            return max(1, int(round(held["held"])))
+    return 1
+
+
+def level_on_updates(x: np.ndarray, fs: float, step: int) -> float:
+    """white_level of ``x`` (along its last axis) on every ``step``-th sample, at fs / step."""
+    x = np.asarray(x, float)
+    if step <= 1 or x.shape[-1] < 16 * step:
+        return white_level(x, fs)
+    return white_level(x[..., ::step], fs / step)
+
+
 def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: int = 4) -> dict[str, float]:
     """The RMS a residual of each replayed stage would have if the model were right (same units
     as the stage's residual); ``values`` is the fitted model (its position track is perturbed)."""
@@ -48,7 +75,8 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     sensors: dict = {}
     for stage, sensor in (("steering", "delta"), ("yaw", "yaw_rate")):
         if stage in replay.stages:
-            floors[stage] = sensors[sensor] = white_level(replay.residual_series(stage, values)[1], fs)
+            step = update_step(replay.frame, sensor, replay.h)
+            floors[stage] = sensors[sensor] = level_on_updates(replay.residual_series(stage, values)[1], fs, step)
     derived = replay.frame.attrs.get("yaw_measurement")
     if "yaw" in replay.stages and derived is not None and math.isfinite(derived.noise):
         # a yaw rate from a heading held between its updates: its noise from its own updates, not the rows'

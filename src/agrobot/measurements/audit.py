@@ -728,6 +728,7 @@ def held_findings(report: dict) -> list[dict]:
                            f"{u['held']:.2g}): " + ("a set-point, held as it is sent" if u.get("set_point") else
                                                     "its rate, noise, derived speed, course and lags are judged on "
                                                     "its updates at their own times"), resolved=True))
+        out[-1]["updates_hz"] = float(u["updates_hz"])      # a noise floor is read on them (diagnosis.noise_floor)
     return out
 
 
