@@ -834,6 +834,7 @@ def audit_streams(streams, options, source) -> dict:
         findings.append(steady)
     findings += mislabelled(aud)
     unit_mixups(aud, findings, options)
+    findings += gyro_unit_by_steering(aud, causal, options)
     findings += out_of_range(aud)
     clock = streams.report.get("terminal_clock")
     if clock:
@@ -894,6 +895,48 @@ def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
         f["resolved"] = True
         f["meaning"] += (f"; {b} declared no unit and was taken as {si}: it is in {unit}, divided by {k:.4g} (declare "
                          f"its unit with --signal {b}=COLUMN[{si}] to keep it as written)")
+
+
+GYRO_SUSPECT = 3.0          # rad/s: a yaw rate whose 99.5th percentile of |r| passes this may be deg/s
+STEERING_EVIDENCE = 0.6     # the correlation of r with v tan(delta) / L that decides its unit
+
+
+def gyro_unit_by_steering(aud: Auditor, causal: dict | None, options) -> list[dict]:
+    """A yaw rate with no declared unit whose size passes GYRO_SUSPECT, with no other yaw source
+    that decided it: its unit read from the turns the steering implies, r = s v tan(delta) / L
+    (L the declared wheelbase, else 1.4 m). In rad/s s is the wheelbase's ratio and the tyres'
+    (0.3-3 on any machine), in deg/s 57.3 times that: deg/s where s is nearer 57.3 than 1 (on a
+    log scale: above sqrt(57.3) = 7.6) and the correlation reaches STEERING_EVIDENCE; then divided
+    by 57.3 and named, with the option that keeps it. Undecided: a finding that says why."""
+    sig, columns = aud.streams.signals, aud.streams.report.get("columns", {})
+    if "yaw_rate" not in sig or "the log's convention" not in str(columns.get("yaw_rate", "")) \
+            or "/ 57.3" in str(columns.get("yaw_rate", "")):
+        return []
+    t, r = sig["yaw_rate"]
+    peak = float(np.percentile(np.abs(r), 99.5)) if len(r) else 0.0
+    if not peak > GYRO_SUSPECT:
+        return []
+    k = 180 / math.pi
+    L = f"L {aud.L:g} m" + (" declared" if getattr(options, "wheelbase", None) else " assumed: --wheelbase gives the machine's")
+    if causal is None or not causal.get("rho", 0) >= STEERING_EVIDENCE or not math.isfinite(causal.get("scale", math.nan)):
+        why = "no steering and speed to compare" if causal is None else \
+            f"r against v tan({causal['input']}) / L correlates {causal.get('rho', math.nan):.2f} (below {STEERING_EVIDENCE})"
+        return [finding("unit_undecided", ["yaw_rate"], peak, None, "as written",
+                        f"yaw_rate reaches {peak:.3g} (99.5 %): rad/s or deg/s is not decided: {why}, and no other yaw "
+                        f"source measures it; declare its unit (--signal yaw_rate=COLUMN[deg/s] or [rad/s])")]
+    scale = abs(float(causal["scale"]))
+    if not scale > math.sqrt(k):
+        return [finding("unit_undecided", ["yaw_rate"], peak, None, "as written",
+                        f"yaw_rate reaches {peak:.3g} (99.5 %), yet it is {scale:.3g} times v tan({causal['input']}) / L "
+                        f"({L}; correlation {causal['rho']:.2f}): rad/s by the steering, too large by its size; declare "
+                        f"its unit (--signal yaw_rate=COLUMN[deg/s] or [rad/s])")]
+    sig["yaw_rate"] = (t, r / k)
+    columns["yaw_rate"] = f"{columns['yaw_rate']}; / {k:.4g}: deg/s (the audit's scale against the steering)"
+    return [finding("unit_by_steering", ["yaw_rate"], k, None, "factor",
+                    f"yaw_rate is {scale:.3g} times v tan({causal['input']}) / L ({L}; correlation "
+                    f"{causal['rho']:.2f}): nearer 57.3 (deg/s) than 1 (rad/s; passed over: the wheelbase and the tyres "
+                    f"explain 0.3-3), and reaches {peak:.3g} as written: it is in deg/s, divided by {k:.4g} (declare "
+                    f"--signal yaw_rate=COLUMN[rad/s] to keep it as written)", resolved=True)]
 
 
 # a ground vehicle's channel beyond these is not a measurement (a sentinel, an overflow, a wrong field)
