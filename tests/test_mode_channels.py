@@ -40,7 +40,7 @@ def test_where_selects_the_truths_stretches(tmp_path, layout, how, where, mappin
     truth = compose(11, tmp_path / "rec", classes=["mode_stretches"], layout=layout, machine="mower")
     if how != "text":
         rewrite_mode(tmp_path / "rec" / ("log.csv" if layout == "table" else "vehicle.csv"), how)
-    opts = ImportOptions(signals=[parse_signal(s) for s in mapping], where=where)
+    opts = ImportOptions(signals=[parse_signal(s) for s in mapping], where=where, min_stretch=5.0)
     frame, report = load_log(tmp_path / "rec", recording=opts)
     assert report["selection"] and "selects" in report["selection"][0]
     t = frame["t"].to_numpy() + report["used"]["utc_start_s"] - START       # on the truth's clock

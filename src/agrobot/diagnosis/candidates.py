@@ -105,6 +105,15 @@ def position_step(xy: np.ndarray) -> float:
     return max(steps) if steps else 0.0
 
 
+def near_joins(t: np.ndarray, joins, before: float, after: float) -> np.ndarray:
+    """Samples from ``before`` s ahead of a join (the first sample of a joined stretch) to
+    ``after`` s past it."""
+    out = np.zeros(len(t), bool)
+    for j in joins:
+        out |= (t >= j - before - 1e-9) & (t < j + after)
+    return out
+
+
 @dataclass
 class Replay:
     """The log's arrays, the split and the stage replays. A partial log replays the stages its
@@ -164,7 +173,11 @@ class Replay:
         except LogError as exc:
             raise CannotDecide(str(exc).removeprefix("log: ")) from None
         t_split = self.t[0] + self.fit_fraction * duration
-        after_burn = self.t >= self.t[0] + self.burn_in
+        # stretches joined on one clock (frame.attrs["joins"], identification.from_log.joined_stretches):
+        # each starts with its own burn-in, and no window or chord spans a join
+        settled = ~near_joins(self.t, f.attrs.get("joins", ()), 0.0, self.burn_in)
+        after_burn = (self.t >= self.t[0] + self.burn_in) & settled
+        moving = moving & settled
         self.t_split = t_split
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held}
@@ -175,6 +188,7 @@ class Replay:
         self.chord_k, self.chord_span = k, 2 * k * self.h
         self.track_speed = np.full(len(self.t), np.nan)
         self.track_speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / self.chord_span
+        self.track_speed[near_joins(self.t, f.attrs.get("joins", ()), k * self.h, k * self.h)] = np.nan
         has_chord = np.isfinite(self.track_speed)
         self.masks["speed"] = {p: m & has_chord for p, m in self.masks["yaw"].items()}
         has_track = {"x", "y"} <= set(f.columns) and "yaw_rate" in f

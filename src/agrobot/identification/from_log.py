@@ -77,7 +77,35 @@ def longest_stretch(frame, gap: float | None = None):
     even = pd.DataFrame({c: np.interp(grid, piece["t"], piece[c]) for c in piece.columns
                          if c != "t" and pd.api.types.is_numeric_dtype(piece[c])})
     even.insert(0, "t", grid - grid[0])
+    even.attrs = dict(frame.attrs)          # the audit's findings, the selection: the stretch's too
     return even, (float(t[a]), float(t[b - 1]))
+
+
+def joined_stretches(frame):
+    """(the stretches a selection keeps, frame.attrs["stretches"] (measurements.modes.judged),
+    each on an even clock of the log's median step, one after the other on one clock; the note
+    that says so), or None for fewer than two. frame.attrs["joins"] holds where each later one
+    starts: the replays burn in again there (diagnosis.candidates)."""
+    spans = frame.attrs.get("stretches") or []
+    if len(spans) < 2:
+        return None
+    t = frame["t"].to_numpy(float)
+    step = float(np.median(np.diff(t)))
+    numeric = [c for c in frame.columns if c != "t" and pd.api.types.is_numeric_dtype(frame[c])]
+    pieces, joins, start = [], [], 0.0
+    for a, b in spans:
+        inside = (t >= a - 1e-9) & (t <= b + 1e-9)
+        grid = a + step * np.arange(int(math.floor((b - a) / step + 1e-9)) + 1)
+        piece = pd.DataFrame({c: np.interp(grid, t[inside], frame[c].to_numpy(float)[inside]) for c in numeric})
+        piece.insert(0, "t", start + step * np.arange(len(grid)))
+        if pieces:
+            joins.append(start)
+        pieces.append(piece)
+        start += step * len(grid)
+    even = pd.concat(pieces, ignore_index=True)
+    even.attrs = {**frame.attrs, "joins": joins}
+    return even, (f"the {len(spans)} stretches judged are joined on one even {1 / step:.3g} Hz clock, each with its own "
+                  f"burn-in: " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in spans))
 
 
 def read_uneven(source: Path, resample: bool = False, recording=None, study=None, causal: bool = True):
@@ -85,6 +113,9 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
     jitter (ordinary logging) gives its longest gap-free stretch on an even clock, and says so
     (``causal``: as _read)."""
     frame, imported = _read(source, resample, recording, study, causal)
+    joined = joined_stretches(frame)
+    if joined is not None:
+        return joined[0], imported, joined[1]
     t = frame["t"].to_numpy(float)
     dt = np.diff(t)
     if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):

@@ -72,6 +72,10 @@ def add_mode_options(p: argparse.ArgumentParser) -> None:
                    help="judge only the stretches where a mode or engagement channel says so: COLUMN OP VALUE with OP "
                         "== != < <= > >=, joined by and/or (e.g. 'mode == auto', 'engaged == 1 and v > 0.5'); the "
                         "stretches are printed; a raw recording's channel is mapped with --signal")
+    p.add_argument("--min-stretch", type=float, default=15.0, metavar="SECONDS",
+                   help="a stretch that --where selects (or that is left between unexplained ones) shorter than this "
+                        "is left out; every longer one is judged (default 15 s: the replays' 3 s burn-in and a 10 s "
+                        "window, with margin)")
     p.add_argument("--keep-unexplained", action="store_true",
                    help="keep the stretches where the steering command does not explain the steering (driven by hand "
                         "or remote; found and left out by default, printed either way)")
@@ -107,7 +111,10 @@ def recording_options(args: argparse.Namespace):
                             max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"),
                             sign_speed=getattr(args, "sign_speed", False),
                             where=getattr(args, "where", None),
-                            keep_unexplained=getattr(args, "keep_unexplained", False))
+                            keep_unexplained=getattr(args, "keep_unexplained", False),
+                            min_stretch=getattr(args, "min_stretch", 15.0))
+    if not 0.0 <= options.min_stretch <= 3600.0:
+        raise LogError(f"--min-stretch {options.min_stretch:g}: expected seconds, 0 to 3600")
     parse_align(options.align)
     if options.where is not None:
         parse_where(options.where)

@@ -221,8 +221,9 @@ def unexplained_mask(frame: pd.DataFrame) -> tuple[np.ndarray, dict]:
 
 def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
     """The rows of ``frame`` that are judged: those ``options.where`` selects, less the stretches
-    the command does not explain (unless ``options.keep_unexplained``); what was chosen is printed
-    (to stderr) and kept in frame.attrs["selection"]."""
+    the command does not explain (unless ``options.keep_unexplained``), less the stretches left
+    shorter than ``options.min_stretch`` s; what was chosen is printed (to stderr) and kept in
+    frame.attrs["selection"], the stretches judged (start, end) in frame.attrs["stretches"]."""
     where = getattr(options, "where", None)
     keep = np.ones(len(frame), bool)
     lines = []
@@ -243,14 +244,42 @@ def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
                 keep = ~found
     if not lines:
         return frame
+    keep, line = long_enough(frame["t"].to_numpy(float), keep, getattr(options, "min_stretch", 15.0), source)
+    lines.append(line)
+    _say(lines, options)
+    attrs = dict(frame.attrs)
+    t = frame["t"].to_numpy(float)
+    out = frame[keep].reset_index(drop=True) if not keep.all() else frame
+    out.attrs.update(attrs)
+    out.attrs["selection"] = lines
+    out.attrs["stretches"] = stretches(keep, t)
+    return out
+
+
+def long_enough(t: np.ndarray, keep: np.ndarray, least: float, source) -> tuple[np.ndarray, str]:
+    """(``keep`` less its stretches shorter than ``least`` s, the line naming every stretch judged
+    with its times and share of the log, and those left out); a LogError when none is that long."""
+    keep = keep.copy()
+    short = [(a, b) for a, b in index_runs(keep) if t[b - 1] - t[a] < least]
+    for a, b in short:
+        keep[a:b] = False
+    if not keep.any():
+        raise LogError(f"{source}: no selected stretch lasts --min-stretch {least:g} s; the longest lasts "
+                       f"{max(t[b - 1] - t[a] for a, b in short):.1f} s (a smaller --min-stretch takes it)")
+    span = float(t[-1] - t[0]) or 1.0
+    judged = "; ".join(f"{t[a]:.2f}-{t[b - 1]:.2f} s ({100 * (t[b - 1] - t[a]) / span:.0f} %)" for a, b in index_runs(keep))
+    line = f"judged: {len(index_runs(keep))} stretch(es) of at least {least:g} s (--min-stretch), each on its own: {judged}"
+    if short:
+        line += (f"; left out, shorter: {len(short)} ("
+                 + ", ".join(f"{t[a]:.2f}-{t[b - 1]:.2f} s" for a, b in short[:8]) + (" ..." if len(short) > 8 else "") + ")")
+    return keep, line
+
+
+def _say(lines: list[str], options) -> None:
+    """Print each selection line once (``options.said`` remembers those printed)."""
     said = getattr(options, "said", None)
     for line in lines:
         if said is None or line not in said:
             print(f"selection: {line}", file=sys.stderr)
             if said is not None:
                 said.add(line)
-    attrs = dict(frame.attrs)
-    out = frame[keep].reset_index(drop=True) if not keep.all() else frame
-    out.attrs.update(attrs)
-    out.attrs["selection"] = lines
-    return out

@@ -29,6 +29,7 @@ class ImportOptions:
     sign_speed: bool = False                    # an unsigned speed made negative where the machine reverses
     where: str | None = None                    # the stretches judged: 'mode == auto' (measurements.modes)
     keep_unexplained: bool = False              # keep the stretches the command does not explain (measurements.modes)
+    min_stretch: float = 15.0                   # s: a selected stretch shorter than this is left out (measurements.modes)
     said: set = field(default_factory=set, repr=False, compare=False)   # selection lines printed already
 
     def for_vehicle(self, study=None) -> "ImportOptions":
