@@ -173,11 +173,8 @@ class Replay:
         except LogError as exc:
             raise CannotDecide(str(exc).removeprefix("log: ")) from None
         t_split = self.t[0] + self.fit_fraction * duration
-        # stretches joined on one clock (frame.attrs["joins"], identification.from_log.joined_stretches):
-        # each starts with its own burn-in, and no window or chord spans a join
-        settled = ~near_joins(self.t, f.attrs.get("joins", ()), 0.0, self.burn_in)
-        after_burn = (self.t >= self.t[0] + self.burn_in) & settled
-        moving = moving & settled
+        settled = ~near_joins(self.t, f.attrs.get("joins", ()), 0.0, self.burn_in)    # each joined stretch burns in
+        after_burn, moving = (self.t >= self.t[0] + self.burn_in) & settled, moving & settled
         self.t_split = t_split
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held}

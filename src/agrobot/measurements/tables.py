@@ -685,11 +685,13 @@ def mode_runs(table: Table) -> dict[str, list[tuple[str, float, float]]]:
     return out
 
 
-def mode_streams(tables: list[Table], mode_specs: list, used: set, source: Path) -> tuple[dict, dict, dict]:
-    """(column -> (t, codes), column -> labels, column -> table) of the mode and engagement
-    channels: each ``--signal`` naming one (a text column included), then every column so named in
-    a table that gives columns (its name in lower case), held at their own times in the log."""
+def mode_streams(tables: list[Table], mode_specs: list, used: set, source: Path, into) -> tuple[dict, dict]:
+    """(column -> (t, codes), column -> labels) of the mode and engagement channels: each
+    ``--signal`` naming one (a text column included), then every column so named in a table that
+    gives columns (its name in lower case), held at their own times in the log; added to ``into``
+    (the signals, their groups and the columns' descriptions)."""
     signals, labels, groups = {}, {}, {}
+    used = used | {n.split(".")[0] for spec in mode_specs for n in spec.names}
     wanted = [(spec.column, spec.names[0]) for spec in mode_specs]
     wanted += [(str(c).lower(), f"{t.name}.{c}") for t in tables if t.name in used for c in t.frame.columns
                if is_mode_name(c) and c not in t.time_columns]
@@ -708,7 +710,10 @@ def mode_streams(tables: list[Table], mode_specs: list, used: set, source: Path)
         signals[column], groups[column] = codes[:2], table.name
         if codes[2] is not None:
             labels[column] = codes[2]
-    return signals, labels, groups
+    into[0].update(signals)
+    into[1].update(groups)
+    into[2].update({c: f"{groups[c]}: a mode channel, held at its own times" for c in signals})
+    return signals, labels
 
 
 def _holders(tables: list[Table], name: str) -> list[str]:
@@ -793,11 +798,7 @@ def table_streams(paths: list[Path], options, source: Path):
         groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
         columns[spec.column] = how + ("; found by its name" if spec.column in auto else "") + \
             ("; " + ", ".join(s.label for s in found.values() if "convention" in s.label) if spec.column in auto else "")
-    modes, labels, mode_groups = mode_streams(tables, mode_specs, used | {n.split(".")[0] for s in mode_specs
-                                                                        for n in s.names}, source)
-    signals.update(modes)
-    groups.update(mode_groups)
-    columns.update({c: f"{mode_groups[c]}: a mode channel, held at its own times" for c in modes})
+    modes, labels = mode_streams(tables, mode_specs, used, source, (signals, groups, columns))
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
