@@ -51,3 +51,35 @@ def test_where_selects_the_truths_stretches(tmp_path, layout, how, where, mappin
     assert len(t) > 100 and not inside.any()
     first_manual = other[0]
     assert t.min() < first_manual[0] and t.max() > first_manual[1]      # stretches on both sides kept
+
+
+def test_a_bags_text_mode_topic_selects_its_stretches(tmp_path):
+    """A ROS bag whose /mode topic (std_msgs/String, 1 Hz, sent only now and then) says 'auto',
+    then 'manual' from 20 to 35 s: --where 'mode == auto' keeps the rows outside that stretch."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    from agrobot.measurements.rosbag import typestore
+    from tests.import_recordings import truth
+    from tests.test_other_data import _imu, _navsat
+
+    drive = truth(60.0, h=0.01)
+    store = typestore()
+    string = store.types["std_msgs/msg/String"]
+    with Writer(tmp_path / "bag", version=8, storage_plugin=StoragePlugin.SQLITE3) as w:
+        fix = w.add_connection("/fix", "sensor_msgs/msg/NavSatFix", typestore=store)
+        imu = w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=store)
+        mode = w.add_connection("/mode", "std_msgs/msg/String", typestore=store)
+        for k, row in enumerate(drive.iloc[::10].itertuples()):
+            utc = 1.7e9 + row.t
+            w.write(fix, int(utc * 1e9), store.serialize_cdr(
+                _navsat(store, "sensor_msgs/msg/NavSatFix", utc, row.lat, row.lon, 10.0, 4), "sensor_msgs/msg/NavSatFix"))
+            w.write(imu, int((utc + 0.01) * 1e9), store.serialize_cdr(_imu(store, utc, row.r), "sensor_msgs/msg/Imu"))
+            if k % 10 == 0:
+                said = "manual" if 20.0 <= row.t < 35.0 else "auto"
+                w.write(mode, int((utc + 0.02) * 1e9), store.serialize_cdr(string(data=said), "std_msgs/msg/String"))
+    opts = ImportOptions(signals=[parse_signal("mode=/mode.data")], where="mode == auto", min_stretch=5.0)
+    frame, report = load_log(tmp_path / "bag", recording=opts)
+    t = frame["t"].to_numpy() + report["used"]["utc_start_s"] - (1.7e9 + float(drive["t"].iloc[0]))
+    assert len(t) > 100 and not ((t > 20.2) & (t < 34.8)).any()
+    assert t.min() < 19.0 and t.max() > 36.0
+    assert "selects" in report["selection"][0]

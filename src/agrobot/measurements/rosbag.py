@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .log import LogError
+from .modes import MODE_VALUES, is_mode_name
 from .runs import held as in_force
 from .signal_expressions import SignalSpec, evaluate, unknown_name
 from .streams import Reader, Series, Streams, gnss_table, iso
@@ -148,6 +149,17 @@ def _value(column: str, path: str, raw):
     return float(raw)
 
 
+def _mode_code(codes: dict, raw) -> float:
+    """A mode channel's value: a number as it is, a text as its code (first seen, first numbered;
+    at most MODE_VALUES texts)."""
+    if isinstance(raw, (int, float, np.number)) and not isinstance(raw, bool):
+        return float(raw)
+    text = (raw.decode(errors="replace") if isinstance(raw, bytes) else str(raw)).strip()
+    if text not in codes and len(codes) >= MODE_VALUES:
+        raise ValueError(f"more than {MODE_VALUES} values ({', '.join(list(codes)[:5])} ...): not a mode")
+    return float(codes.setdefault(text, len(codes)))
+
+
 def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]:
     """(column -> (times, values in the column's unit), report) of the bags: the standard types
     by TYPE_MAP, the ``given`` expressions (SignalSpec) by their ``/topic.field`` names. A
@@ -171,10 +183,13 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
     topics = {c.topic: c.msgtype for c in reader.connections}
     wanted = _named_fields(given, topics, source)
     auto = _standard_fields(given, topics, wanted)
-    rows, header_used = _messages(reader, wanted, auto, source)
+    labels = {n: {} for spec in given if is_mode_name(spec.column) for n in spec.names[:1]}    # a mode's text values
+    rows, header_used = _messages(reader, wanted, auto, source, labels)
     series, report_topics, stamps = _topic_series(rows, header_used, wanted, topics, given, source)
     signals = _evaluated(given, auto, series, topics, report_topics, source)
     report = {"topics": report_topics, "stamp_vs_receive": stamps,
+              "mode_labels": {spec.column: list(labels[spec.names[0]]) for spec in given
+                              if spec.names[0] in labels and labels[spec.names[0]] and spec.column in signals},
               "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
     others = [s for c, s in auto.items() if c.startswith("yaw_rate_") and c in signals]
     if others:
@@ -223,10 +238,11 @@ def _standard_fields(given: list, topics: dict[str, str], wanted: dict) -> dict[
     return auto
 
 
-def _messages(reader, wanted: dict, auto: dict, source: Path) -> tuple[dict[str, list], dict[str, bool]]:
+def _messages(reader, wanted: dict, auto: dict, source: Path, labels: dict) -> tuple[dict[str, list], dict[str, bool]]:
     """(topic -> rows (stamp, receive time, every wanted field's value), topic -> whether its
     stamps are the headers'): the wanted topics' messages, decoded; a LogError names a message
-    that cannot be decoded or a field it lacks."""
+    that cannot be decoded or a field it lacks. A mode channel's text (``labels``: name -> {text:
+    code}) is written as its code."""
     rows: dict[str, list] = {t: [] for t in wanted}
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
@@ -247,7 +263,8 @@ def _messages(reader, wanted: dict, auto: dict, source: Path) -> tuple[dict[str,
                 if p is None:
                     raise LookupError("the message has several fields: give one, /topic.field")
                 column = next((c for c, s in auto.items() if s.names[0] == name), "")
-                values.append(_value(column, p, field(msg, p)))
+                raw = field(msg, p)
+                values.append(_mode_code(labels[name], raw) if name in labels else _value(column, p, raw))
             except (LookupError, TypeError, ValueError, IndexError) as exc:
                 raise LogError(f"{source}: topic {conn.topic} ({conn.msgtype}): field "
                                f"{path or '(the only numeric field)'}: {exc}") from None
@@ -292,7 +309,7 @@ def _evaluated(given: list, auto: dict, series: dict, topics: dict, report_topic
     for spec in list(given) + list(auto.values()):
         if not all(n in series for n in spec.names):
             continue
-        if spec.column in ("fix_quality", "position_std"):
+        if spec.column in ("fix_quality", "position_std") or is_mode_name(spec.column):
             s = series[spec.names[0]]
             signals[spec.column] = (s.t, s.values)
             how = spec.names[0]
@@ -395,9 +412,9 @@ def bag_streams(paths: list[Path], options, source: Path):
         columns.update({"x": "NavSatFix latitude/longitude -> east of the run's first fix (pymap3d)",
                         "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
-    held = {c for c in ("delta_cmd", "speed_cmd") if c in signals}
+    held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
-    return Streams(gnss, signals, report, held, {}, groups=groups)
+    return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}))
 
 
 class BagReader(Reader):
