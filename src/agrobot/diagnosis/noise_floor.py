@@ -13,7 +13,8 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   the log's exact repeats, measurements.channel_updates.holding); a yaw rate
   derived from a heading or course (identification.yaw_measurement): at least its noise read on
   the heading's own updates (the rows' top band holds only the interpolation);
-- speed: the GPS chord speed against the dead-reckoned chord speed; both are 1 s means, so the floor
+- speed: the GPS chord speed against the dead-reckoned chord speed (the speed's and the positions'
+  white levels read on their own updates, as above); both are 1 s means, so the floor
   is propagated: var = 2 sigma_gps^2 / T^2 + sigma_v^2 / (T / h)   (T the chord span);
 - position: the dead-reckoned track integrates the gyro's and the speed's noise, so the floor is the
   aligned residual of the same windows when only noise of the estimated levels is present
@@ -88,9 +89,10 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     rows = np.concatenate([replay.windows["fit"], replay.windows["test"]])
     nominal = replay.predicted("position", values)
     res = aligned_residuals(nominal, replay.gps, rows)
-    sigma_gps = white_level(np.concatenate([res[..., 0], res[..., 1]]), fs)
-    sigma_v = white_level(replay.speed, fs)
-    sigma_gyro = sensors.get("yaw_rate") or white_level(replay.gyro, fs)     # no yaw stage: the gyro's own top band
+    sigma_gps = level_on_updates(np.concatenate([res[..., 0], res[..., 1]]), fs, update_step(replay.frame, "gnss", replay.h))
+    sigma_v = level_on_updates(replay.speed, fs, update_step(replay.frame, "v", replay.h))
+    sigma_gyro = sensors.get("yaw_rate") or level_on_updates(   # no yaw stage: the gyro's own top band
+        replay.gyro, fs, update_step(replay.frame, "yaw_rate", replay.h))
     span = replay.chord_span
     floors["speed"] = math.sqrt(2 * sigma_gps ** 2 / span ** 2 + sigma_v ** 2 * replay.h / span)
     rng = np.random.default_rng(seed)
