@@ -244,7 +244,8 @@ def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
                 keep = ~found
     if not lines:
         return frame
-    keep, line = long_enough(frame["t"].to_numpy(float), keep, getattr(options, "min_stretch", 15.0), source)
+    keep, line = long_enough(frame["t"].to_numpy(float), keep, getattr(options, "min_stretch", 15.0), source,
+                             refuse=bool(where))
     lines.append(line)
     _say(lines, options)
     attrs = dict(frame.attrs)
@@ -256,11 +257,14 @@ def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
     return out
 
 
-def long_enough(t: np.ndarray, keep: np.ndarray, least: float, source) -> tuple[np.ndarray, str]:
+def long_enough(t: np.ndarray, keep: np.ndarray, least: float, source, refuse: bool = True) -> tuple[np.ndarray, str]:
     """(``keep`` less its stretches shorter than ``least`` s, the line naming every stretch judged
-    with its times and share of the log, and those left out); a LogError when none is that long."""
+    with its times and share of the log, and those left out). None that long: a LogError
+    (``refuse``: a --where the user gave), else the longest alone, said."""
     keep = keep.copy()
     short = [(a, b) for a, b in index_runs(keep) if t[b - 1] - t[a] < least]
+    if not refuse and len(short) == len(index_runs(keep)) and short:
+        short.remove(max(short, key=lambda ab: t[ab[1] - 1] - t[ab[0]]))      # none long enough: the longest kept
     for a, b in short:
         keep[a:b] = False
     if not keep.any():
@@ -269,6 +273,8 @@ def long_enough(t: np.ndarray, keep: np.ndarray, least: float, source) -> tuple[
     span = float(t[-1] - t[0]) or 1.0
     judged = "; ".join(f"{t[a]:.2f}-{t[b - 1]:.2f} s ({100 * (t[b - 1] - t[a]) / span:.0f} %)" for a, b in index_runs(keep))
     line = f"judged: {len(index_runs(keep))} stretch(es) of at least {least:g} s (--min-stretch), each on its own: {judged}"
+    if any(t[b - 1] - t[a] < least for a, b in index_runs(keep)):
+        line = f"judged: none lasts {least:g} s (--min-stretch): the longest alone, {judged}"
     if short:
         line += (f"; left out, shorter: {len(short)} ("
                  + ", ".join(f"{t[a]:.2f}-{t[b - 1]:.2f} s" for a, b in short[:8]) + (" ..." if len(short) > 8 else "") + ")")
