@@ -35,7 +35,7 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 from .baseline import Baseline, held_tyres, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
-                     steering_replay)
+                     measured_yaw_rate, saturates, steering_plant, steering_replay, wheel_angle_input)
 from .steering_map import mapped_steering
 
 STAGES = ("steering", "yaw", "position", "speed")
@@ -304,19 +304,13 @@ class Replay:
             return [mapped_steering(self.cmd, self.h, v, self.delta[0], self.kernel) for v in sets]  # through the map
         if stage == "yaw":
             inputs = [self.yaw_input(v) for v in sets]
-            saturated = [i for i, v in enumerate(sets) if math.isfinite(v.get("tyre_friction", math.inf))]
+            saturated = [i for i, v in enumerate(sets) if saturates(v)]
             rates = dict(zip(saturated, self.saturated_yaw_rates([sets[i] for i in saturated],
                                                                  [inputs[i] for i in saturated])))
             linear = [i for i in range(len(sets)) if i not in rates]
             self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
-            out = []
-            for i, v in enumerate(sets):
-                r = rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i])
-                scale = v.get("gyro_scale", 1.0) / v.get("speed_scale", 1.0)
-                # the gyro reads s r + b; a wheel speed k x the ground speed drives the LPV model k times too
-                # fast, which near the kinematic yaw rate v delta / L is a yaw rate k times too high
-                out.append(r if scale == 1.0 else scale * (r - v["yaw_rate_bias"]) + v["yaw_rate_bias"])
-            return out
+            return [measured_yaw_rate(rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i]), v)
+                    for i, v in enumerate(sets)]
         out = []
         for v in sets:
             track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
@@ -331,29 +325,14 @@ class Replay:
 
     def yaw_input(self, v: dict[str, float]) -> np.ndarray | None:
         """The wheel angle driving the yaw stage under ``v``: None for the measured one as it is,
-        else the angle replayed from the command or the reading (times the steering map's gain, left
-        and right), read ``steering_clock``
-        earlier, through the steering ratio's curve."""
-        delta = self.replayed_steering(v) if self.command_only else None
-        gain, asym = v.get("steering_gain", 1.0), v.get("steering_asymmetry", 0.0)
-        if gain != 1.0 or asym:         # the wheels turn k (1 + a sign(delta)) x the command or the reading
-            d = self.delta if delta is None else delta
-            delta = gain * d * (1.0 + asym * np.sign(d))
-        shift = v.get("steering_clock", 0.0)
-        if shift:                       # the steering channels stamped ``shift`` late: delta(t + shift)
-            d = self.delta if delta is None else delta
-            delta = np.interp(self.t + shift, self.t, d)
-        curve = v.get("steering_ratio_curvature", 0.0)
-        if curve:                       # the wheels turn delta (1 + c delta^2) for a reading of delta
-            d = self.delta if delta is None else delta
-            delta = d * (1.0 + curve * d * d)
-        return delta
+        else the angle replayed from the command or the reading, through the effects' transforms of
+        the steering (replay.wheel_angle_input)."""
+        return wheel_angle_input(self.delta, self.replayed_steering(v) if self.command_only else None, self.t, v)
 
     def replayed_steering(self, v: dict[str, float]) -> np.ndarray:
         """The wheel angle replayed from delta_cmd under ``v`` (memoised on the steering's values:
         a fit of the yaw stage's other parameters replays it once)."""
-        key = exact(v[k] for k in ("steering_time_constant", "steering_deadband", "steering_rate_limit",
-                                   "command_delay"))
+        key = exact(steering_plant(v).values())
         cache = self.__dict__.setdefault("_steering_cache", {})
         if key not in cache:
             if len(cache) > 32:
@@ -372,12 +351,7 @@ class Replay:
             self._saturated = SaturatedYawReplay(self.baseline.yaw_model, self.baseline.tractor, self.t, self.h,
                                                  inputs[0], self.speed, self.min_speed)
         out = self._saturated.yaw_rates(sets, inputs)
-        for i, v in enumerate(sets):
-            if v["slope_north"] or v["slope_east"]:
-                R = self.yaw.responses(v["cornering_front_scale"], v["cornering_rear_scale"],
-                                       v["cornering_speed_slope"], v["cornering_reference_speed"], v["relaxation_scale"])
-                out[i] = out[i] + v["slope_north"] * R[:, 2] + v["slope_east"] * R[:, 3]
-        return out
+        return [self.yaw.with_slope(rate, v) for rate, v in zip(out, sets)]
 
     def lateral(self, v: dict[str, float]) -> np.ndarray | None:
         """The rear axle's lateral velocity (side-slip) from the yaw model under ``v``, where the

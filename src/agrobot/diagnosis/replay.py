@@ -8,6 +8,11 @@
 Every function takes the parameter values (SI units) as a mapping and returns arrays on the log's
 sample times. Inputs are taken as the mean of the two samples around each step (first-order hold
 in the integral sense), so a 20 Hz log replays without half-a-sample lag.
+
+No effect is named here: the values reach the model as the quantities the catalogue's effects carry
+(diagnosis.effect.QUANTITIES, catalogue.CATALOGUE.quantities: the steering's and the yaw model's
+parameters, the gyro's and the wheel speed's, the position's point and lag), and the wheel angle
+driving the yaw stage passes through the effects' transforms of the steering (Effect.wheel_angle).
 """
 from __future__ import annotations
 
@@ -20,6 +25,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from agrobot.components.models import steering_equivalent
 from agrobot.diagnosis import replay_kernels
+from agrobot.diagnosis.catalogue import CATALOGUE
 from agrobot.identification.driving import DrivingLog, Segments, YawModel
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
@@ -29,13 +35,55 @@ from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_w
 def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float,
                     kernel: str = "auto") -> np.ndarray:
     """The steering's first-order equivalent (components.models.steering_equivalent) with the
-    replay's values; ``kernel``: replay_kernels.KERNELS (the C loop, or the Python reference)."""
+    replay's values (its quantities, ``steering_plant``); ``kernel``: replay_kernels.KERNELS (the C
+    loop, or the Python reference)."""
+    q = steering_plant(v)
     if replay_kernels.choose(kernel) == "c":
-        pieces = steering_equivalent.step_pieces(cmd, h, v["steering_time_constant"], v["steering_rate_limit"],
-                                                 v["command_delay"])
-        return replay_kernels.steering_first_order(pieces, v["steering_deadband"], delta0)
-    return steering_equivalent.simulate(cmd, h, v["steering_time_constant"], v["steering_deadband"],
-                                        v["steering_rate_limit"], v["command_delay"], delta0)
+        pieces = steering_equivalent.step_pieces(cmd, h, q["time_constant"], q["rate_limit"], q["delay"])
+        return replay_kernels.steering_first_order(pieces, q["deadband"], delta0)
+    return steering_equivalent.simulate(cmd, h, q["time_constant"], q["deadband"], q["rate_limit"], q["delay"], delta0)
+
+
+def steering_plant(v: Mapping[str, float]) -> dict[str, float]:
+    """The steering's first-order equivalent under ``v``: time_constant, deadband, rate_limit, delay."""
+    return CATALOGUE.quantities(v, "steering")
+
+
+def yaw_plant(v: Mapping[str, float]) -> dict[str, float]:
+    """The yaw model's quantities under ``v`` (effect.QUANTITIES ``yaw.*``)."""
+    return CATALOGUE.quantities(v, "yaw")
+
+
+def nonlinear(q: Mapping[str, float]) -> tuple[float, float, float, float, float]:
+    """The yaw model's quantities that enter it nonlinearly, as YawReplay.responses takes them."""
+    return q["front_scale"], q["rear_scale"], q["speed_slope"], q["reference_speed"], q["relaxation_scale"]
+
+
+def saturates(v: Mapping[str, float]) -> bool:
+    """Whether the tyres under ``v`` saturate (a finite friction: the Magic Formula replay)."""
+    return math.isfinite(yaw_plant(v)["friction"])
+
+
+def wheel_angle_input(measured: np.ndarray, replayed: np.ndarray | None, t: np.ndarray,
+                      v: Mapping[str, float]) -> np.ndarray | None:
+    """The wheel angle driving the yaw stage under ``v``: the ``replayed`` angle (from the command),
+    or the ``measured`` one, through the transforms of the effects present (Effect.wheel_angle, in
+    their order); None: the measured angle as it is."""
+    delta = replayed
+    for effect in CATALOGUE.transforms(v):
+        x = effect.wheel_angle(measured if delta is None else delta, v, t)
+        if x is not None:
+            delta = x
+    return delta
+
+
+def measured_yaw_rate(rate: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+    """The yaw stage's reading of a replayed yaw rate (the gyro's bias in it): the gyro reads
+    s r + b; a wheel speed k x the ground speed drives the LPV model k times too fast, which near
+    the kinematic yaw rate v delta / L is a yaw rate k times too high: (s / k) (rate - b) + b."""
+    gyro = CATALOGUE.quantities(v, "gyro")
+    scale = gyro["gain"] / CATALOGUE.quantities(v, "speed")["gain"]
+    return rate if scale == 1.0 else scale * (rate - gyro["bias"]) + gyro["bias"]
 
 
 def exact(values) -> tuple[float, ...]:
@@ -114,8 +162,7 @@ class YawReplay:
             self._cache.clear()
         todo: dict[tuple, tuple] = {}
         for v, delta in zip(sets, inputs):
-            yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                   v["cornering_reference_speed"], v["relaxation_scale"])
+            yaw = nonlinear(yaw_plant(v))
             key = exact(yaw)
             memo = None if delta is None else self._cache.get(("input", id(delta)) + key)
             if (key in self._cache or key in todo) and (delta is None or (memo is not None and memo[0] is delta)):
@@ -179,16 +226,15 @@ class YawReplay:
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
-        system = self._discrete(v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                                v["cornering_reference_speed"], v["relaxation_scale"])
+        system = self._discrete(*nonlinear(yaw_plant(v)))
         u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
         return self._recursion([system], [0] * u.shape[1], [u], (1,))[0, :, 0, :]
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """The yaw rate under ``v``, driven by the measured wheel angle, or by ``delta`` (a wheel
         angle replayed from the command, when the log has none measured)."""
-        yaw = (v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-               v["cornering_reference_speed"], v["relaxation_scale"])
+        q = yaw_plant(v)
+        yaw = nonlinear(q)
         key = exact(yaw)
         if delta is None:
             first = self.responses(*yaw)[:, 0]
@@ -205,19 +251,28 @@ class YawReplay:
                 self._cache[("input", id(delta)) + key] = hit
             first = hit[1]
         R = self.responses(*yaw)
-        return first + v["steer_angle_offset"] * R[:, 1] + v["slope_north"] * R[:, 2] + \
-            v["slope_east"] * R[:, 3] + v["yaw_rate_bias"]
+        return first + q["steer_offset"] * R[:, 1] + q["slope_north"] * R[:, 2] + \
+            q["slope_east"] * R[:, 3] + CATALOGUE.quantities(v, "gyro")["bias"]
+
+    def with_slope(self, rate: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        """``rate`` plus this linear model's response to the side slope's lateral pull under ``v``
+        (a saturating replay's share of a slope)."""
+        q = yaw_plant(v)
+        if not (q["slope_north"] or q["slope_east"]):
+            return rate
+        R = self.responses(*nonlinear(q))
+        return rate + q["slope_north"] * R[:, 2] + q["slope_east"] * R[:, 3]
 
     def rear_lateral_velocity(self, v: Mapping[str, float]) -> np.ndarray:
         """Lateral velocity of the rear-axle point R in the body frame, v_y - l_r gamma, from the
         model's states (the side-slip a dead reckoning along the heading leaves out: nothing for
         a tractor at 2 m/s, metres over 10 s for a car at 30 m/s)."""
-        key = exact((v["cornering_front_scale"], v["cornering_rear_scale"], v["cornering_speed_slope"],
-                     v["cornering_reference_speed"], v["relaxation_scale"]))
+        q = yaw_plant(v)
+        key = exact(nonlinear(q))
         self.responses(*key)
         V = self._cache[key + ("v_y",)]
-        vy = V[:, 0] + v["steer_angle_offset"] * V[:, 1] + v["slope_north"] * V[:, 2] + v["slope_east"] * V[:, 3]
-        return vy - self.params.l_r * (self.yaw_rate(v) - v["yaw_rate_bias"])
+        vy = V[:, 0] + q["steer_offset"] * V[:, 1] + q["slope_north"] * V[:, 2] + q["slope_east"] * V[:, 3]
+        return vy - self.params.l_r * (self.yaw_rate(v) - CATALOGUE.quantities(v, "gyro")["bias"])
 
 
 def blocked_recursion(A: np.ndarray, b: np.ndarray, row, block: int = 0) -> np.ndarray:
@@ -272,26 +327,24 @@ def integrate(x: np.ndarray, h: float) -> np.ndarray:
 
 def antenna_track(t: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray, v: Mapping[str, float],
                   lateral: np.ndarray | None = None) -> np.ndarray:
-    """Dead-reckoned GPS reading (N, 2) in an arbitrary frame: psi = int(gamma_measured - bias),
-    dR/dt = v (cos psi, sin psi) + u (-sin psi, cos psi) with u the rear axle's lateral velocity
-    (the yaw model's side-slip, where known), antenna = R + Rot(psi) (a_forward, a_left), read
-    ``gps_latency`` late. A position reference elsewhere adds its own offset and clock lag
-    (``position_forward``, ``position_left``, ``position_clock``, which may be negative: a clock
-    ahead); the gyro reads ``gyro_scale`` x the yaw rate, the wheel speed ``speed_scale`` x the
-    ground speed (both 1 when absent)."""
+    """Dead-reckoned position reading (N, 2) in an arbitrary frame, under the quantities of ``v``: the
+    gyro reads s gamma + b and the wheel speed k v, so psi = int((gamma_measured - b) / s),
+    dR/dt = (v_measured / k) (cos psi, sin psi) + u (-sin psi, cos psi) with u the rear axle's lateral
+    velocity (the yaw model's side-slip, where known), the point read = R + Rot(psi) (forward, left),
+    ``lag`` late (negative: a clock ahead)."""
     h = float(t[1] - t[0])
-    speed = speed / v.get("speed_scale", 1.0)
-    psi = integrate((yaw_rate - v["yaw_rate_bias"]) / v.get("gyro_scale", 1.0), h)
+    gyro, point = CATALOGUE.quantities(v, "gyro"), CATALOGUE.quantities(v, "position")
+    speed = speed / CATALOGUE.quantities(v, "speed")["gain"]
+    psi = integrate((yaw_rate - gyro["bias"]) / gyro["gain"], h)
     psi_mid = 0.5 * (psi[1:] + psi[:-1])
     v_mid = 0.5 * (speed[1:] + speed[:-1])
     u_mid = 0.5 * (lateral[1:] + lateral[:-1]) if lateral is not None else 0.0
     c, s = np.cos(psi_mid), np.sin(psi_mid)
     x = np.concatenate([[0.0], np.cumsum(h * (v_mid * c - u_mid * s))])
     y = np.concatenate([[0.0], np.cumsum(h * (v_mid * s + u_mid * c))])
-    dx, dy = body_to_world(v["antenna_forward"] + v.get("position_forward", 0.0),
-                           v["antenna_left"] + v.get("position_left", 0.0), np.cos(psi), np.sin(psi))
+    dx, dy = body_to_world(point["forward"], point["left"], np.cos(psi), np.sin(psi))
     ax, ay = x + dx, y + dy
-    lat = v["gps_latency"] + v.get("position_clock", 0.0)
+    lat = point["lag"]
     if lat:
         ax, ay = np.interp(t - lat, t, ax), np.interp(t - lat, t, ay)
     return np.column_stack([ax, ay])
@@ -374,18 +427,18 @@ class SaturatedYawReplay:
             groups.setdefault(np.asarray(d, float).tobytes(), []).append(i)
         for members in groups.values():
             self.log.u = np.asarray(inputs[members[0]], float)
-            scales = [float(sets[i]["relaxation_scale"]) for i in members]
+            plants = [yaw_plant(sets[i]) for i in members]
+            scales = [float(q["relaxation_scale"]) for q in plants]
             if len(set(scales)) == 1:
                 sigma_f, sigma_r = p.sigma_f * scales[0], p.sigma_r * scales[0]
             else:                           # per row (rates() broadcasts them with the states)
                 sigma_f = np.repeat([p.sigma_f * k for k in scales], S)
                 sigma_r = np.repeat([p.sigma_r * k for k in scales], S)
             self.model.p = replace(p, sigma_f=sigma_f, sigma_r=sigma_r)
-            values = [{"c_f": v["cornering_front_scale"] * p.C_f / Fzf, "c_r": v["cornering_rear_scale"] * p.C_r / Fzr,
-                       "steer_offset": v["steer_angle_offset"], "gyro_bias": v["yaw_rate_bias"],
-                       "friction": v["tyre_friction"], "shape": v["tyre_shape"],
-                       "cornering_speed_slope": v["cornering_speed_slope"],
-                       "cornering_reference_speed": v["cornering_reference_speed"]} for v in (sets[i] for i in members)]
+            values = [{"c_f": q["front_scale"] * p.C_f / Fzf, "c_r": q["rear_scale"] * p.C_r / Fzr,
+                       "steer_offset": q["steer_offset"], "gyro_bias": CATALOGUE.quantities(sets[i], "gyro")["bias"],
+                       "friction": q["friction"], "shape": q["shape"], "cornering_speed_slope": q["speed_slope"],
+                       "cornering_reference_speed": q["reference_speed"]} for i, q in zip(members, plants)]
             sims = self.model.simulate_many(values)
             for i, sim in zip(members, sims):
                 rate = np.empty(len(self.log.t))

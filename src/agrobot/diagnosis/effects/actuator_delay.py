@@ -12,6 +12,7 @@ class ActuatorDelay(Effect):
     stages = ("steering",)
     parameters = (Parameter("command_delay", "s", 0.1, 0.0, 0.6, "s", 1.0, (0.0, 2.0)),)
     starts = ((0.05,), (0.15,), (0.3,))
+    enters = {"steering.delay": "command_delay"}
     threshold = "delay >= 0.05 s"
     hypothesis = "the wheels follow the command late: a transport delay in the valve drive or the bus"
     experiment = ("small fast steering steps (+/-2 deg) at any speed: a delay shifts "

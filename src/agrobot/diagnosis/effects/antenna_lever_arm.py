@@ -13,6 +13,7 @@ class AntennaLeverArm(Effect):
     parameters = (Parameter("antenna_forward", "m", 0.5, -4.0, 4.0, "m", 1.0, (-8.0, 8.0)),
                   Parameter("antenna_left", "m", 0.5, -2.0, 2.0, "m", 1.0, (-4.0, 4.0)))
     starts = ((0.0, 0.0),)
+    enters = {"position.forward": "antenna_forward", "position.left": "antenna_left"}
     threshold = "lever arm >= 0.15 m"
     hypothesis = ("the position's reference point (a GNSS antenna, or the frame a localisation filter reports) is "
                   "not where the model puts it: in turns it swings on a different radius")

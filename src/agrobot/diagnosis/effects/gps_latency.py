@@ -10,6 +10,7 @@ class GPSLatency(Effect):
     stages = ("position",)
     parameters = (Parameter("gps_latency", "s", 0.1, 0.0, 1.0, "s", 1.0, (0.0, 2.0)),)
     starts = ((0.05,), (0.25,))
+    enters = {"position.lag": "gps_latency"}
     threshold = "latency >= 0.05 s"
     hypothesis = "the GPS reports where the antenna was a moment ago"
     experiment = "straight runs at 1 and 3 m/s: a latency puts the fix behind by speed x latency, along the track"

@@ -10,6 +10,7 @@ class GyroScale(Effect):
     stages = ("yaw", "position")
     parameters = (Parameter("gyro_scale", "1", 0.1, 0.75, 1.3, "-", 1.0, (0.3, 3.0)),)
     starts = ((1.0,), (0.9,), (1.1,))
+    enters = {"gyro.gain": "gyro_scale"}
     threshold = "|s - 1| >= 0.04"
     hypothesis = "the gyro reads a scaled yaw rate: a scale-factor error (or a unit off by a factor)"
     experiment = ("a full circle at constant speed, then the same circle the other way: the integrated gyro "

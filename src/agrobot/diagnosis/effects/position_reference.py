@@ -23,6 +23,8 @@ class PositionReference(Effect):
                   Parameter("position_left", "m", 0.5, -2.0, 2.0, "m", 1.0, (-4.0, 4.0)),
                   Parameter("position_clock", "s", 0.1, -1.0, 1.0, "s", 1.0, (-3.0, 3.0)))
     starts = ((0.0, 0.0, 0.1), (0.5, 0.0, 0.3), (0.0, 0.0, -0.2))
+    enters = {"position.forward": "position_forward", "position.left": "position_left",
+              "position.lag": "position_clock"}
     threshold = "the point >= 0.15 m from the study's antenna and the clock off by >= 0.05 s"
     hypothesis = ("the positions are of another point of the vehicle (a localisation output) and stamped on a "
                   "clock offset from the gyro's")

@@ -27,6 +27,7 @@ class SideSlope(Effect):
     parameters = (Parameter("slope_east", "m/s2", 0.5, -3.0, 3.0, limit=(-4.9, 4.9)),
                   Parameter("slope_north", "m/s2", 0.5, -3.0, 3.0, limit=(-4.9, 4.9)))
     starts = ((0.0, 0.0),)
+    enters = {"yaw.slope_east": "slope_east", "yaw.slope_north": "slope_north"}
     threshold = "slope >= 1.5 deg"
     hypothesis = "the field is tilted: gravity pulls sideways, by an amount that follows the heading"
     experiment = "the same straight line driven both ways: a slope's pull reverses with the heading"

@@ -8,6 +8,8 @@ class SpeedDependentCornering(Effect):
     stages = ("yaw",)
     parameters = (Parameter("cornering_speed_slope", "s/m", 0.1, -0.35, 0.8, "1/(m/s)", 1.0, (-1.0, 2.0)),)
     starts = ((0.0,), (-0.2,), (0.3,))
+    enters = {"yaw.speed_slope": "cornering_speed_slope",
+              "yaw.reference_speed": "cornering_reference_speed"}
     threshold = "|k| >= 0.08 per m/s at a 2 m/s reference speed (0.16 / v_ref in general: the same relative change)"
     hypothesis = "the tyres' cornering stiffness changes with speed: one model does not fit every speed"
     experiment = ("the same steering multisine at 1, 2 and 3 m/s: only a speed-dependent "

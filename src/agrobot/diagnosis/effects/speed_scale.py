@@ -11,6 +11,7 @@ class SpeedScale(Effect):
     stages = ("yaw", "position", "speed")
     parameters = (Parameter("speed_scale", "1", 0.1, 0.8, 1.25, "-", 1.0, (0.3, 3.0)),)
     starts = ((1.0,), (1.08,), (0.93,))
+    enters = {"speed.gain": "speed_scale"}
     threshold = "|k - 1| >= 0.03"
     hypothesis = "the speed reads k x the ground speed: a wheel radius off, or the wheels slipping"
     experiment = ("a straight run of known length (or the GNSS speed over ground beside the wheel speed) at "

@@ -3,6 +3,8 @@ whose gain differs left and right. The wheels turn delta (1 + a sign(delta)) for
 reading delta: left turns (delta > 0) on a radius L / tan(delta (1 + a)), right ones on
 L / tan(delta (1 - a)); a common gain error is the steering_gain effect, an offset shifts both
 ways' zero alike (steering_offset), this one scales each side apart."""
+import numpy as np
+
 from ..effect import Effect, Parameter
 
 
@@ -11,6 +13,7 @@ class SteeringAsymmetry(Effect):
     subsystem = "steering map (wheel angle per angle, left against right)"
     stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
     tested_on = ("steering",)
+    order = 1.0                      # after the gain k: k x (1 + a sign x)
     parameters = (Parameter("steering_asymmetry", "1", 0.05, -0.4, 0.4, "-", 1.0, (-0.8, 0.8)),)
     starts = ((0.0,), (0.1,), (-0.1,))
     threshold = "|a| >= 0.04 (the left and the right gain differ by >= 8 %)"
@@ -24,6 +27,11 @@ class SteeringAsymmetry(Effect):
 
     def material(self, fitted, base):
         return abs(fitted["steering_asymmetry"]) >= 0.04
+
+    def wheel_angle(self, x, v, t):
+        """x (1 + a sign x): left turns (x > 0) 1 + a times, right ones 1 - a times."""
+        a = v["steering_asymmetry"]
+        return x * (1.0 + a * np.sign(x)) if a else None
 
     def options(self, fitted, base, study):
         raise KeyError("steering map asymmetry (a lookup of wheel angle against the reading, each side its gain)")

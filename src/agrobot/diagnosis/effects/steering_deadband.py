@@ -14,6 +14,7 @@ class SteeringDeadband(Effect):
     stages = ("steering",)
     parameters = (Parameter("steering_deadband", "rad", 0.02, 0.0, 0.12, "deg", 1 / DEG, (0.0, 0.3)),)
     starts = ((0.5 * DEG,), (2.0 * DEG,), (4.0 * DEG,))
+    enters = {"steering.deadband": "steering_deadband"}
     threshold = "dead-band >= the baseline's + 0.4 deg"
     hypothesis = "small steering corrections are not executed: play in the linkage or a valve dead-band"
     experiment = "slow ramps and small steps around straight ahead: a dead-band swallows only the smallest commands"

@@ -14,6 +14,7 @@ class SteeringGain(Effect):
     subsystem = "steering map (wheel angle per commanded or measured angle)"
     stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
     tested_on = ("steering",)
+    order = 0.0                      # the wheels turn k x the reading, then each side its own share (asymmetry)
     parameters = (Parameter("steering_gain", "1", 0.1, 0.7, 1.4, "-", 1.0, (0.01, 3.0)),)
     starts = ((1.0,), (0.85,), (1.15,))
     threshold = "|k - 1| >= 0.05"
@@ -28,6 +29,11 @@ class SteeringGain(Effect):
 
     def material(self, fitted, base):
         return abs(fitted["steering_gain"] - 1.0) >= 0.05
+
+    def wheel_angle(self, x, v, t):
+        """k x: the wheels turn k x the reading or the command."""
+        k = v["steering_gain"]
+        return None if k == 1.0 else k * x
 
     def options(self, fitted, base, study):
         raise KeyError("steering map gain (multiply the log's delta_cmd and delta by it)")

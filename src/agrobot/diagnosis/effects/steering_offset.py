@@ -20,6 +20,7 @@ class SteeringOffset(Effect):
     stages = ("yaw",)
     parameters = (Parameter("steer_angle_offset", "rad", 0.02, -0.15, 0.15, "deg", 1 / DEG, (-0.35, 0.35)),)
     starts = ((0.0,),)
+    enters = {"yaw.steer_offset": "steer_angle_offset"}
     threshold = ("|offset| >= 0.3 deg, or its kinematic yaw rate v |offset| / L >= 0.29 deg/s at the log's "
                  "95th-percentile speed (a car's small angles)")
     hypothesis = "the wheel-angle sensor is zeroed wrongly: straight driving needs a non-zero reading"

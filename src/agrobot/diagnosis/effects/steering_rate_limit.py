@@ -14,6 +14,7 @@ class SteeringRateLimit(Effect):
     stages = ("steering",)
     parameters = (Parameter("steering_rate_limit", "rad/s", 0.3, 0.03, 10.0, "deg/s", 1 / DEG, (0.01, 10.0)),)
     starts = ((0.8,), (0.4,), (0.2,))
+    enters = {"steering.rate_limit": "steering_rate_limit"}
     threshold = "rate limit <= 0.8 x the baseline's"
     hypothesis = "large steering moves are slower than the model: less pump flow than assumed"
     experiment = "large fast steering steps (+/-20 deg): a rate limit slows only the large moves"

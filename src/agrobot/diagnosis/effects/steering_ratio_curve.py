@@ -15,6 +15,7 @@ class SteeringRatioCurve(Effect):
     subsystem = "steering geometry (ratio varying with the angle)"
     stages = ("yaw", "steering")     # the turns, and the actuator's rate read through the map
     tested_on = ("steering",)
+    order = 3.0                      # last: the wheels turn g (1 + c g^2) for the angle g the rest gives
     parameters = (Parameter("steering_ratio_curvature", "1/rad2", 0.3, -1.5, 3.0, "1/rad2", 1.0, (-3.0, 8.0)),)
     starts = ((0.0,), (0.8,), (-0.5,))
     threshold = "the ratio changes by >= 4 % at the log's 99th percentile of |delta|"
@@ -42,6 +43,11 @@ class SteeringRatioCurve(Effect):
                                           limit=(p.limit[0] * k, p.limit[1] * k)) for p in self.parameters)
         scaled.starts = tuple(tuple(x * k for x in start) for start in self.starts)
         return scaled
+
+    def wheel_angle(self, x, v, t):
+        """x (1 + c x^2)."""
+        c = v["steering_ratio_curvature"]
+        return x * (1.0 + c * x * x) if c else None
 
     def options(self, fitted, base, study):
         raise KeyError("steering ratio curve (a lookup of wheel angle against the reading)")

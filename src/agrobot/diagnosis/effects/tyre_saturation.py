@@ -20,6 +20,7 @@ class TyreSaturation(Effect):
     stages = ("yaw",)
     parameters = (Parameter("tyre_friction", "1", 0.3, 0.1, 2.0, limit=(0.05, 3.0)), Parameter("tyre_shape", "1", 0.3, *SHAPE_BOUNDS))
     starts = ((1.0, 1.3), (0.3, 1.3))
+    enters = {"yaw.friction": "tyre_friction", "yaw.shape": "tyre_shape"}
     secondary = ("tyre_shape",)
     threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
                  "99th percentile of |a_y|: the log drives into the saturation")

@@ -10,6 +10,7 @@ class YawRateBias(Effect):
     stages = ("yaw", "position")
     parameters = (Parameter("yaw_rate_bias", "rad/s", 0.01, -0.2, 0.2, "deg/s", 180.0 / math.pi, (-0.2, 0.2)),)
     starts = ((0.0,),)
+    enters = {"gyro.bias": "yaw_rate_bias"}
     threshold = "|bias| >= 0.229 deg/s"
     hypothesis = "the gyro reads a constant offset: the integrated yaw rate turns away from the GPS track"
     experiment = "30 s standing still: a gyro bias reads a yaw rate with the vehicle at rest"
