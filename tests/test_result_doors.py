@@ -228,3 +228,11 @@ def test_a_diagnosis_an_export_and_a_converted_log_load_back(tmp_path):
     pd.testing.assert_frame_equal(back.log, log.log, check_dtype=False, rtol=1e-8)
     with pytest.raises(InputError, match="neither an exported .fmu or .ssp nor a log convert wrote"):
         agrobot.load_result(_short_log(tmp_path))
+
+
+def test_a_diagnosis_shows_its_verdict_in_a_line_not_its_evidence():
+    residuals = {"yaw": {"rms": 0.1, "series": list(range(20_000))}}      # what a long log's evidence weighs
+    found = agrobot.Diagnosis({"verdict": "actuator_delay", "effects": [{"id": "actuator_delay"}],
+                               "residuals": residuals})
+    assert repr(found) == "Diagnosis(verdict='actuator_delay', effects=['actuator_delay'], folder=None)"
+    assert str(found) == "verdict: actuator_delay"
