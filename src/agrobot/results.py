@@ -728,8 +728,7 @@ def load_result(path: str | Path):
 def _margins_point(data: dict, folder: Path):
     """An operating point's margins as margins.json holds them (null: the value a loop without that
     crossing has, analysis.margins.Margins)."""
-    from agrobot.analysis.margins import Margins, PointResult
-    from agrobot.components.models.loop_blocks import OperatingPoint
+    from agrobot.analysis.margins import Margins, OperatingPoint, PointResult
 
     def num(x, absent: float) -> float:
         return absent if x is None else float(x)
