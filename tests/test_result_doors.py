@@ -98,6 +98,10 @@ def test_a_folder_of_no_result_is_refused_by_name(tmp_path):
     (tmp_path / "half" / "run.json").write_text("{}")
     with pytest.raises(InputError, match="metrics.json: missing"):
         agrobot.load_result(tmp_path / "half")
+    (tmp_path / "plan").mkdir()
+    (tmp_path / "plan" / "plan.json").write_text("{}")
+    with pytest.raises(InputError, match="a plan .plan.json. is not read back"):
+        agrobot.load_result(tmp_path / "plan")
 
 
 ROOT = Path(__file__).resolve().parents[1]

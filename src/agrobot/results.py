@@ -722,6 +722,9 @@ def load_result(path: str | Path):
     for name, kind in LOADABLE.items():
         if (path / name).is_file():
             return kind.from_folder(path)
+    if (path / "plan.json").is_file():
+        raise InputError(f"{path}: a plan (plan.json) is not read back into a PlanResult (the plan's geometry is "
+                         f"not all in its files): read route.csv with pandas, or plan the field again")
     raise InputError(f"{path}: holds none of {', '.join(LOADABLE)}: not a folder that {WHAT_WROTE} wrote")
 
 
