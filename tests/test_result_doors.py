@@ -3,12 +3,14 @@ through the command line and through agrobot.api alike, and ``agrobot.load_resul
 back the typed result that wrote the folder (its data equal to the one in memory)."""
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -96,6 +98,10 @@ def test_a_folder_of_no_result_is_refused_by_name(tmp_path):
     (tmp_path / "half" / "run.json").write_text("{}")
     with pytest.raises(InputError, match="metrics.json: missing"):
         agrobot.load_result(tmp_path / "half")
+    (tmp_path / "plan").mkdir()
+    (tmp_path / "plan" / "plan.json").write_text("{}")
+    with pytest.raises(InputError, match="a plan .plan.json. is not read back"):
+        agrobot.load_result(tmp_path / "plan")
 
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -172,3 +178,65 @@ def test_an_emulator_that_stops_says_how(tmp_path, monkeypatch):
     assert done.stopped == "emulator stopped at t = 2 s; the signals up to then are in OUT"
     with pytest.raises(StudyError, match="--nmea-port 70000: expected a TCP port"):
         agrobot.api.emulate(ROOT / "studies/tractor_emulator.toml", 70000)
+
+
+def test_margins_load_back_with_their_study_as_analysed(tmp_path):
+    found = agrobot.margins("figure8", {"tracker.k_c": 2.0}, out=tmp_path / "m", plots=False)
+    loaded = agrobot.load_result(tmp_path / "m")
+    assert isinstance(loaded, agrobot.LoopMargins)
+    assert loaded.as_dict() == found.as_dict() and loaded.report() == found.report()
+    assert loaded.analysis.study.components["tracker"].parameters["k_c"] == 2.0      # the --set kept
+    assert loaded.delay_limit == found.delay_limit and math.isfinite(loaded.delay_limit)
+
+
+def _lonlat_field(tmp_path: Path) -> Path:
+    """A 200 m x 150 m field near 48 N 11 E with an AB line along its south edge, in longitude/latitude."""
+    lat0, per_lat = 48.0, 1 / 111_320.0
+    per_lon = per_lat / math.cos(math.radians(lat0))
+    corners = [(0, 0), (200, 0), (200, 150), (0, 150), (0, 0)]
+    ring = [[11.0 + x * per_lon, lat0 + y * per_lat] for x, y in corners]
+    line = [[11.0 + x * per_lon, lat0 + 10 * per_lat] for x in (10, 190)]
+    path = tmp_path / "geo.geojson"
+    path.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"name": "north"}, "geometry": {"type": "Polygon", "coordinates": [ring]}},
+        {"type": "Feature", "properties": {"name": "AB 1", "field": "north"},
+         "geometry": {"type": "LineString", "coordinates": line}}]}))
+    return path
+
+
+def test_fields_load_back_with_their_geometry_in_the_local_frame(tmp_path):
+    found = agrobot.api.fields(_lonlat_field(tmp_path), out=tmp_path / "f", plots=False)
+    loaded = agrobot.load_result(tmp_path / "f")
+    assert isinstance(loaded, agrobot.FieldsResult) and loaded.skipped == []
+    assert loaded.summaries() == json.loads(json.dumps(found.summaries()))
+    for mine, theirs in zip(loaded.fields, found.fields, strict=True):
+        assert abs(mine.area_ha - 3.0) < 0.01             # 200 m x 150 m, as planted (a spherical degree)
+        assert mine.boundary.hausdorff_distance(theirs.boundary) < 1e-6          # m
+        assert [g.name for g in mine.lines] == [g.name for g in theirs.lines]
+        for a, b in zip(mine.lines, theirs.lines):
+            assert abs(a.length - 180.0) < 0.5 and np.allclose(a.points, b.points, atol=1e-6)
+
+
+def test_a_diagnosis_an_export_and_a_converted_log_load_back(tmp_path):
+    from tests.test_two_doors import _drive, _short_log
+
+    found = agrobot.diagnose(_short_log(tmp_path), out=tmp_path / "d")
+    loaded = agrobot.load_result(tmp_path / "d")
+    assert isinstance(loaded, agrobot.Diagnosis) and loaded.verdict == "cannot decide"
+    assert loaded.result == json.loads(found.to_json())
+    archive = agrobot.ExportedFile(".fmu", b"PK archive bytes").save(tmp_path / "c.fmu")
+    assert agrobot.load_result(archive).data == b"PK archive bytes"
+    log = agrobot.convert(_drive(tmp_path), out=tmp_path / "drive.csv")
+    back = agrobot.load_result(tmp_path / "drive.csv")
+    assert isinstance(back, agrobot.Recording) and back.report == json.loads(json.dumps(log.report, default=float))
+    pd.testing.assert_frame_equal(back.log, log.log, check_dtype=False, rtol=1e-8)
+    with pytest.raises(InputError, match="neither an exported .fmu or .ssp nor a log convert wrote"):
+        agrobot.load_result(_short_log(tmp_path))
+
+
+def test_a_diagnosis_shows_its_verdict_in_a_line_not_its_evidence():
+    residuals = {"yaw": {"rms": 0.1, "series": list(range(20_000))}}      # what a long log's evidence weighs
+    found = agrobot.Diagnosis({"verdict": "actuator_delay", "effects": [{"id": "actuator_delay"}],
+                               "residuals": residuals})
+    assert repr(found) == "Diagnosis(verdict='actuator_delay', effects=['actuator_delay'], folder=None)"
+    assert str(found) == "verdict: actuator_delay"

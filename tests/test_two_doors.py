@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import pandas as pd
@@ -13,6 +14,7 @@ import pytest
 import agrobot
 from agrobot import api
 from agrobot.orchestrator.output import OutputError
+from agrobot.orchestrator.study import StudyError
 from agrobot.results import ExportedFile
 
 SHORT = "study.stop_time=15"
@@ -213,3 +215,36 @@ def test_an_export_refuses_its_output_before_it_builds(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match="exists"):
         api.export_controller("figure8", out=tmp_path / "c.fmu")
     assert (tmp_path / "c.fmu").read_text() == "earlier"
+
+
+def test_tune_writes_alike_through_both_doors_and_when_saved(cli, tmp_path):
+    study = Path(__file__).resolve().parents[1] / "studies/figure8.toml"
+    coarse = ["--grid", "0.25", "--no-simulation"]
+    proc = cli("tune", study, "--out", tmp_path / "cli.toml", *coarse)
+    assert proc.returncode == 0, proc.stderr
+    found = api.tune(study, out=tmp_path / "api.toml", grid=0.25, simulate=False)
+    assert (tmp_path / "api.toml").read_text() == (tmp_path / "cli.toml").read_text()
+    assert found.comparison() in proc.stdout and found.checked == []
+    assert found.save(tmp_path / "saved.toml").read_text() == found.text
+    tuned = agrobot.load(tmp_path / "api.toml")                  # the file extends the study, with the gains set
+    for key, value in found.values.items():
+        component, parameter = key.split(".", 1)
+        assert tuned.components[component].parameters[parameter] == value
+    with pytest.raises(OutputError, match="exists"):
+        found.save(tmp_path / "cli.toml")
+    with pytest.raises(OutputError, match="is the input"):
+        api.tune(tmp_path / "api.toml", out=tmp_path / "api.toml", overwrite=True, simulate=False)
+
+
+def test_tune_refuses_its_numbers_and_output_before_it_computes(tmp_path, monkeypatch):
+    import agrobot.analysis.tune as tune
+
+    monkeypatch.setattr(tune, "propose", lambda *a, **k: pytest.fail("computed before the checks"))
+    for options, words in (({"grid": 0}, "--grid 0: expected a number in (0, 4]"),
+                           ({"delay_margin": -1.0}, "--delay-margin -1: expected a number >= 0"),
+                           ({"duration": 0.0}, "--duration 0: expected a positive")):
+        with pytest.raises(StudyError, match=re.escape(words)):
+            api.tune("figure8", out=tmp_path / "t.toml", **options)
+    with pytest.raises(OutputError, match=".toml"):
+        api.tune("figure8", out=tmp_path / "t.txt")
+    assert list(tmp_path.iterdir()) == []

@@ -26,10 +26,10 @@ except PackageNotFoundError:        # pragma: no cover - running from an uninsta
 # The Python API (agrobot.api) and its results (agrobot.results), imported on first use so that
 # ``import agrobot`` stays light: ``from agrobot import run`` loads them. The ``fields`` command's function is
 # ``agrobot.api.fields`` (``agrobot.fields`` is the package).
-_API = {"run", "sweep", "identify", "diagnose", "convert", "plan", "margins", "load", "export_controller",
+_API = {"run", "sweep", "identify", "diagnose", "convert", "plan", "margins", "tune", "load", "export_controller",
         "export_fmu", "export_ssp", "emulate"}
 _RESULTS = {"RunResult", "Metric", "SweepResult", "Identification", "Diagnosis", "Recording", "PlanResult",
-            "LoopMargins", "FieldsResult", "ExportedFile", "EmulationResult", "load_result"}
+            "LoopMargins", "FieldsResult", "ExportedFile", "EmulationResult", "TunedStudy", "load_result"}
 __all__ = sorted(_API | _RESULTS)
 
 

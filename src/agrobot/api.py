@@ -9,12 +9,13 @@ writes (or call the result's ``save(folder)`` later).
     convert(source, ...)                 -> Recording       a raw recording as a measured log
     plan(field, ...)                     -> PlanResult      a coverage plan of a field
     margins(study)                       -> LoopMargins     the guidance loop's stability margins
+    tune(study, out=...)                 -> TunedStudy      tracker gains that meet margin targets
     fields(source)                       -> FieldsResult    the fields of a file, a folder or a GNSS track
     export_controller(study, out=...)    -> ExportedFile    the guidance controller as an FMU
     export_fmu(study, out=...)           -> ExportedFile    the whole loop (or a subsystem) as one FMU
     export_ssp(study, out=...)           -> ExportedFile    the study as an SSP archive
     emulate(study, nmea_port)            -> EmulationResult the hardware emulator, run to its end
-    load_result(folder)                  -> the typed result a command's --out (or save) wrote there
+    load_result(path)                    -> the typed result a command's --out (or save) wrote there
                                                             (agrobot.results)
 
 A study is a study file's path, a shipped study's name (``"figure8"``: agrobot.studies) or a
@@ -31,6 +32,7 @@ and agrobot.components.hardware (the emulator's buses).
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import tempfile
@@ -51,7 +53,7 @@ from agrobot.orchestrator.sweep import SweepRun, sweep_plots, sweep_summary
 from agrobot.studies import shipped
 
 from .results import (Diagnosis, EmulationResult, ExportedFile, FieldsResult, Identification, LoopMargins,
-                      PlanResult, Recording, RunResult, SweepResult, judged_metrics)
+                      PlanResult, Recording, RunResult, SweepResult, TunedStudy, check_file, judged_metrics)
 
 STUDY_SUFFIXES = (".toml", ".yaml", ".yml")
 
@@ -330,6 +332,53 @@ def margins(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: st
     if out is not None:
         result.save(out, overwrite, plots)
     return result
+
+
+def tune(study, set: Mapping[str, Any] | Sequence[str] | None = None, out: str | Path | None = None, *,
+         delay_margin: float | None = None, phase_margin: float | None = None, gain_margin: float | None = None,
+         along_track_error: float | None = None, identified: str | Path | None = None, model: str = "second_order",
+         grid: float = 1.0, simulate: bool = True, duration: float = 160.0, overwrite: bool = False,
+         progress=None) -> TunedStudy:
+    """Tracker gains from the study's plant that meet margin targets (analysis.tune): a delay
+    margin [s], a phase margin [deg] and a gain margin [dB] at the steering command, and a
+    time-based reference's along-track error [m] (None: analysis.tune.Targets' defaults);
+    ``identified`` an ``identify`` result (identification.json) whose ``model`` becomes the plant
+    and the yaw-rate controller's model; ``grid`` the searched grid's density. ``out`` (a .toml,
+    checked before anything is computed) gets the study file that extends the study, as
+    ``TunedStudy.save`` writes it; ``simulate`` (as ``tune`` without ``--no-simulation``) then
+    checks the proposal in ``duration`` s runs."""
+    from agrobot.analysis.tune import Targets, identified_values, propose
+
+    default = Targets()
+    targets = Targets(*(default_value if given is None else given for given, default_value in (
+        (delay_margin, default.delay), (phase_margin, default.phase_deg), (gain_margin, default.gain_db),
+        (along_track_error, default.along_track))))
+    check_tune(targets, grid, duration)
+    study = load(study, set)
+    inputs = [*study_inputs(study), *([identified] if identified is not None else [])]
+    if out is not None:
+        check_file(out, ".toml", overwrite, inputs)
+    values = identified_values(study, identified, model) if identified is not None else None
+    result = TunedStudy(propose(study, targets, progress, values, grid), inputs)
+    if out is not None:
+        result.save(out, overwrite)
+    if simulate:
+        result.simulate(duration, progress)
+    return result
+
+
+def check_tune(targets, grid: float, duration: float) -> None:
+    """tune's numbers: margins >= 0, a positive along-track budget and duration, 0 < grid <= 4."""
+    for option, value in (("--delay-margin", targets.delay), ("--phase-margin", targets.phase_deg),
+                          ("--gain-margin", targets.gain_db), ("--along-track-error", targets.along_track)):
+        if not (math.isfinite(value) and value >= 0):
+            raise StudyError(f"{option} {value:g}: expected a number >= 0")
+    if not targets.along_track > 0:
+        raise StudyError(f"--along-track-error {targets.along_track:g}: expected a positive number of metres")
+    if not duration > 0:
+        raise StudyError(f"--duration {duration:g}: expected a positive number of seconds")
+    if not 0 < grid <= 4:
+        raise StudyError(f"--grid {grid:g}: expected a number in (0, 4]")
 
 
 def fields(source, *, crs: str | None = None, out: str | Path | None = None, overwrite: bool = False,

@@ -12,6 +12,10 @@ simulation result.
     FieldsResult    the fields a file, a folder or a GNSS track holds
     ExportedFile    an FMU or SSP archive made from a study, in memory until saved
     EmulationResult a run of the hardware emulator (a RunResult) and how it stopped
+    TunedStudy      tracker gains proposed for margin targets, as a study file that extends the study
+
+``load_result(path)`` reads back what a command's ``--out`` (or a result's ``save``) wrote: a run,
+sweep, identification, diagnosis, margins or fields folder, an exported .fmu/.ssp, a converted log.
 
 What a result reads or writes with another command's package is imported where it is used, so that a
 result loads no command's package it does not need (1.2 s of them together).
@@ -27,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from agrobot.orchestrator.atomic_files import atomic_write, read_table, write_json, write_table
@@ -407,6 +412,12 @@ class Recording:
             write_converted(path, self.log, self.report)
         return path
 
+    @classmethod
+    def from_file(cls, path: Path) -> "Recording":
+        """A log ``convert --out`` (or ``save``) wrote, with its import report (<name>.import.json)."""
+        report = _read_json(path.with_name(path.stem + ".import.json"))
+        return cls(str(report.get("source", path)), read_table(path), report)
+
     def __str__(self) -> str:
         return self.describe()
 
@@ -503,15 +514,32 @@ class LoopMargins(Saved):
         return report(self.analysis)
 
     def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
-        """margins.json and the Bode and Nyquist plots; returns the folder."""
+        """margins.json (the margins and the study analysed, every --set applied) and the Bode and
+        Nyquist plots; returns the folder."""
         from agrobot.analysis.margin_plots import write_plots
-        from agrobot.analysis.margins import write_json
 
         def write(tmp: Path) -> None:
-            files = (write_plots(self.analysis, tmp) if plots else []) + [write_json(self.analysis,
-                                                                                     tmp / "margins.json")]
+            data = self.as_dict() | {"analysed_study": self.analysis.study.to_data()}
+            files = (write_plots(self.analysis, tmp) if plots else []) + [write_json(tmp / "margins.json", data)]
             self.files = [f.name for f in files]
         return self._save(folder, overwrite, write)
+
+    @classmethod
+    def from_folder(cls, folder: Path) -> "LoopMargins":
+        """Margins as ``margins --out`` or ``save`` left them (margins.json): the study as it was
+        analysed, the margins at each operating point (the open loops themselves are not saved:
+        ``open_loops`` is empty; ``agrobot.margins(result.analysis.study)`` computes them)."""
+        from agrobot.analysis.loop_anatomy import anatomy
+        from agrobot.analysis.margins import Analysis
+
+        data = _read_json(folder / "margins.json")
+        study = _study_of(folder / "margins.json", data.get("study"), data.get("analysed_study"))
+        an = anatomy(study, "margins")
+        if an.tracker != data.get("tracker") or ".".join(an.steering_break) != data.get("steering_command"):
+            raise InputError(f"{folder / 'margins.json'}: its tracker and steering command are not those of the "
+                             f"study it names ({study.where})")
+        return cls(Analysis(study, an, [_margins_point(p, folder) for p in data.get("operating_points", [])],
+                            list(data.get("notes", []))), study_inputs(study))
 
     def __str__(self) -> str:
         return self.report()
@@ -533,9 +561,11 @@ class FieldsResult(Saved):
     track: str | None = None
     inputs: list = field(default_factory=list, repr=False)
 
+    saved: list[dict] | None = field(default=None, repr=False)      # fields.json's summaries, when read back
+
     def summaries(self) -> list[dict]:
         """What fields.json holds of each field (area, rings, lines, headland, validity)."""
-        return [f.summary() for f in self.fields]
+        return list(self.saved) if self.saved is not None else [f.summary() for f in self.fields]
 
     def save(self, folder: str | Path, overwrite: bool = False, plots: bool = True) -> Path:
         """fields.json, fields.geojson (longitude/latitude) and fields.png, as ``fields --out``
@@ -543,6 +573,18 @@ class FieldsResult(Saved):
         from agrobot.fields.cli import write_fields
 
         return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots))
+
+    @classmethod
+    def from_folder(cls, folder: Path) -> "FieldsResult":
+        """Fields as ``fields --out`` or ``save`` left them: each field's summary from fields.json,
+        its boundary and guidance lines from fields.geojson, back in the field's local frame (the
+        headland polygon is not saved: ``summaries()`` gives fields.json's). A field in local
+        coordinates has no geometry in fields.geojson: it is named in ``skipped``."""
+        data = _read_json(folder / "fields.json")
+        features = _read_json(folder / "fields.geojson").get("features", [])
+        found, skipped = _saved_fields(folder, data.get("fields", []), features)
+        source = str(data.get("source", folder))
+        return cls(source, found, skipped, None, [], saved=list(data.get("fields", [])))
 
 
 @dataclass
@@ -563,17 +605,35 @@ class ExportedFile:
     def check(path: str | Path, kind: str, overwrite: bool = False, inputs=()) -> None:
         """Refuse ``path`` as ``save`` would, before anything is built (a file another command
         is writing included)."""
-        check_output_file(Path(path), overwrite, list(inputs), (kind,))
-        with OutputLock(Path(path)):
-            pass
+        check_file(path, kind, overwrite, inputs)
 
     def save(self, path: str | Path, overwrite: bool = False) -> Path:
         """The archive at ``path``; returns it."""
-        path = Path(path)
-        with ResultFile(path, overwrite, self.inputs, suffixes=(self.kind,)):
-            atomic_write(path, lambda tmp: tmp.write_bytes(self.data))
-        self.path = path
-        return path
+        self.path = save_file(path, self.kind, overwrite, self.inputs, lambda tmp: tmp.write_bytes(self.data))
+        return self.path
+
+    @classmethod
+    def from_file(cls, path: Path) -> "ExportedFile":
+        """An archive an export (or ``save``) wrote, its bytes read (its note is not in the file)."""
+        return cls(path.suffix, path.read_bytes(), "", [], path)
+
+
+def check_file(path: str | Path, suffix: str, overwrite: bool = False, inputs=()) -> None:
+    """Refuse ``path`` as ``save_file`` would (not ``suffix``, an input, an existing file without
+    ``overwrite``, a file another command is writing), before anything is computed."""
+    check_output_file(Path(path), overwrite, list(inputs), (suffix,))
+    with OutputLock(Path(path)):
+        pass
+
+
+def save_file(path: str | Path, suffix: str, overwrite: bool, inputs, write) -> Path:
+    """``write(temporary_path)`` moved to ``path`` under the one-file rule of orchestrator.output:
+    an input never, an existing file only with ``overwrite``, one writer at a time, written under a
+    unique temporary name beside it and renamed into place."""
+    path = Path(path)
+    with ResultFile(path, overwrite, inputs, suffixes=(suffix,)):
+        atomic_write(path, write)
+    return path
 
 
 @dataclass
@@ -587,22 +647,135 @@ class EmulationResult(RunResult):
 
 
 
+@dataclass
+class TunedStudy:
+    """Tracker gains proposed by ``tune`` (analysis.tune.propose) for margin targets: ``proposal``
+    the tuned study, the values set and the margins before and after; ``text`` the study file that
+    extends the study; ``checked`` the simulated check's lines, once ``simulate`` ran. ``save``
+    writes the study file under the one-file rule (``agrobot.load(path)`` reads it back as a Study)."""
+
+    proposal: Any = field(repr=False)
+    inputs: list = field(default_factory=list, repr=False)
+    checked: list[str] = field(default_factory=list, repr=False)
+    path: Path | None = None
+
+    @property
+    def study(self):
+        """The tuned Study."""
+        return self.proposal.study
+
+    @property
+    def values(self) -> dict[str, Any]:
+        """The values set (dotted keys, as ``set=`` takes them)."""
+        return dict(self.proposal.values)
+
+    @property
+    def text(self) -> str:
+        return self.proposal.text
+
+    def comparison(self) -> str:
+        """The values and the whole loop's margins, the study's against the proposal's (the table
+        ``tune`` prints)."""
+        from agrobot.analysis.tune import comparison
+
+        return comparison(self.proposal)
+
+    def simulate(self, duration: float = 160.0, progress=None) -> list[str]:
+        """The proposal simulated (its key figures against the paper's bounds, the steering
+        command delay at which it loses stability against the predicted one); kept in ``checked``."""
+        from agrobot.analysis.tune import simulated_check
+
+        self.checked = simulated_check(self.proposal, duration, progress)
+        return self.checked
+
+    def save(self, path: str | Path, overwrite: bool = False) -> Path:
+        """The study file (.toml) at ``path``, as ``tune --out`` writes it; returns it."""
+        self.path = save_file(path, ".toml", overwrite, self.inputs, lambda tmp: tmp.write_text(self.text))
+        return self.path
+
+    def __str__(self) -> str:
+        return self.comparison()
+
+
 LOADABLE = {"run.json": RunResult, "sweep.json": SweepResult, "identification.json": Identification,
-            "diagnosis.json": Diagnosis}
+            "diagnosis.json": Diagnosis, "margins.json": LoopMargins, "fields.json": FieldsResult}
+WHAT_WROTE = "run, sweep, identify, diagnose, margins or fields --out (or a result's save)"
 
 
-def load_result(folder: str | Path):
-    """The typed result a command or ``save`` wrote into ``folder``: a RunResult (run.json), a
-    SweepResult (sweep.json), an Identification (identification.json) or a Diagnosis
-    (diagnosis.json); anything else is refused with what was looked for."""
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise InputError(f"{folder}: no such folder (expected what run, sweep, identify or diagnose --out wrote)")
+def load_result(path: str | Path):
+    """The typed result a command or ``save`` wrote at ``path``: a folder holding run.json (a
+    RunResult, an emulator's run included), sweep.json (SweepResult), identification.json
+    (Identification), diagnosis.json (Diagnosis), margins.json (LoopMargins) or fields.json
+    (FieldsResult); an exported .fmu or .ssp (ExportedFile); a log ``convert`` wrote, its
+    <name>.import.json beside it (Recording). A tuned study is a study file (``agrobot.load``);
+    anything else is refused with what was looked for."""
+    path = Path(path)
+    if path.is_file():
+        if path.suffix in (".fmu", ".ssp"):
+            return ExportedFile.from_file(path)
+        if path.suffix in (".csv", ".parquet") and path.with_name(path.stem + ".import.json").is_file():
+            return Recording.from_file(path)
+        raise InputError(f"{path}: a file that is neither an exported .fmu or .ssp nor a log convert wrote (a .csv "
+                         f"or .parquet with its {path.stem}.import.json beside it); a result folder is read whole")
+    if not path.is_dir():
+        raise InputError(f"{path}: no such folder (expected what {WHAT_WROTE} wrote)")
     for name, kind in LOADABLE.items():
-        if (folder / name).is_file():
-            return kind.from_folder(folder)
-    raise InputError(f"{folder}: holds none of {', '.join(LOADABLE)}: not a folder that run, sweep, identify or "
-                     f"diagnose --out (or a result's save) wrote")
+        if (path / name).is_file():
+            return kind.from_folder(path)
+    if (path / "plan.json").is_file():
+        raise InputError(f"{path}: a plan (plan.json) is not read back into a PlanResult (the plan's geometry is "
+                         f"not all in its files): read route.csv with pandas, or plan the field again")
+    raise InputError(f"{path}: holds none of {', '.join(LOADABLE)}: not a folder that {WHAT_WROTE} wrote")
+
+
+def _margins_point(data: dict, folder: Path):
+    """An operating point's margins as margins.json holds them (null: the value a loop without that
+    crossing has, analysis.margins.Margins)."""
+    from agrobot.analysis.margins import Margins, OperatingPoint, PointResult
+
+    def num(x, absent: float) -> float:
+        return absent if x is None else float(x)
+
+    try:
+        loops = {name: Margins(num(m["gain_margin"], np.inf), m["gain_reduction"], num(m["phase_margin_deg"], np.inf),
+                               num(m["crossover_rad_s"], np.nan), num(m["delay_margin_s"], np.inf),
+                               num(m["phase_crossover_rad_s"], np.nan)) for name, m in data["loops"].items()}
+        op = OperatingPoint(float(data["speed_m_s"]), float(data["along_track_error_m"]), data["label"])
+        return PointResult(op, loops, {}, bool(data["closed_loop_stable"]), num(data["delay_limit_s"], np.inf),
+                           data.get("speed_excess_m_s"))
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InputError(f"{folder / 'margins.json'}: an operating point without {exc} as margins writes it") from None
+
+
+def _saved_fields(folder: Path, summaries: list[dict], features: list[dict]) -> tuple[list, list[str]]:
+    """The fields fields.geojson holds (a boundary feature, then its guidance lines), in the local
+    frame about each field's origin (fields.json), and what could not be rebuilt."""
+    from agrobot.fields.field import Field, GuidanceLine, local_frame, polygon
+
+    groups: list[list[dict]] = []
+    for feature in features:
+        if feature.get("properties", {}).get("kind") == "boundary":
+            groups.append([feature])
+        elif groups:
+            groups[-1].append(feature)
+    found, skipped, placed = [], [], iter(groups)
+    for summary in summaries:
+        if summary.get("origin_lat_lon_deg") is None:
+            skipped.append(f"{summary.get('name')}: in local coordinates, so fields.geojson holds none of its "
+                           f"geometry (its summary is in fields.json)")
+            continue
+        group = next(placed, None)
+        if group is None or group[0]["properties"].get("name") != summary.get("name"):
+            raise InputError(f"{folder / 'fields.geojson'}: no boundary of field {summary.get('name')!r} where "
+                             f"fields.json lists it")
+        _, to_local = local_frame([], tuple(summary["origin_lat_lon_deg"]))
+        rings = [to_local(np.asarray(ring, float)) for ring in group[0]["geometry"]["coordinates"]]
+        lines = [GuidanceLine(f["properties"]["name"], to_local(np.asarray(f["geometry"]["coordinates"], float)))
+                 for f in group[1:]]
+        found.append(Field(summary["name"], polygon(rings[0], rings[1:]), tuple(summary["origin_lat_lon_deg"]),
+                           summary.get("source", ""), summary.get("crs", ""), lines, None,
+                           dict(summary.get("properties") or {})))
+    return found, skipped
 
 
 def _read_json(path: Path) -> dict[str, Any]:

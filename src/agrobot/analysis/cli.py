@@ -2,7 +2,7 @@
 
 Imported where used: agrobot.analysis.margin_plots (start-up: it loads matplotlib.pyplot, about 1.1 s here, on
 every command, ``--help`` included; the Bode and Nyquist plots alone need it), agrobot.api (start-up: 0.1 s, measured
-with ``python3 -X importtime -m agrobot --help``; the margins command's run alone needs it).
+with ``python3 -X importtime -m agrobot --help``; the margins and tune commands' runs alone need it).
 """
 from __future__ import annotations
 
@@ -13,14 +13,12 @@ from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, field_validator
 
-from agrobot.orchestrator.atomic_files import atomic_write
 from agrobot.orchestrator.cli import add_output_options, add_set_option
 from agrobot.orchestrator.observers import PROGRESS
-from agrobot.orchestrator.output import ResultFile, study_inputs
-from agrobot.orchestrator.study import Study, StudyError
+from agrobot.orchestrator.study import StudyError
 
 from .margins_simulation import simulated_delay_limit
-from .tune import Targets, comparison, identified_values, propose, simulated_check
+from .tune import Targets
 
 
 def _progress(line: str) -> None:
@@ -105,27 +103,17 @@ def add_tune_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_tune(args: argparse.Namespace) -> int:
-    for option, value in (("--delay-margin", args.delay_margin), ("--phase-margin", args.phase_margin),
-                          ("--gain-margin", args.gain_margin), ("--along-track-error", args.along_track_error)):
-        if not (math.isfinite(value) and value >= 0):
-            raise StudyError(f"{option} {value:g}: expected a number >= 0")
-    if not args.along_track_error > 0:
-        raise StudyError(f"--along-track-error {args.along_track_error:g}: expected a positive number of metres")
-    if not args.duration > 0:
-        raise StudyError(f"--duration {args.duration:g}: expected a positive number of seconds")
-    if not 0 < args.grid <= 4:
-        raise StudyError(f"--grid {args.grid:g}: expected a number in (0, 4]")
-    study = Study.load(args.study, args.set)
-    target = ResultFile(args.out, args.overwrite, [*study_inputs(study), args.identified], suffixes=(".toml",))
-    identified = identified_values(study, args.identified, args.model) if args.identified else None
-    targets = Targets(args.delay_margin, args.phase_margin, args.gain_margin, args.along_track_error)
-    with target:
-        proposal = propose(study, targets, _progress, identified, args.grid)
-        atomic_write(args.out, lambda p: p.write_text(proposal.text))
-    print("\n" + comparison(proposal))
+    """Parse, tune through agrobot.api, print (the simulated check after the file is written)."""
+    from agrobot.api import tune
+
+    found = tune(args.study, args.set, args.out, delay_margin=args.delay_margin, phase_margin=args.phase_margin,
+                 gain_margin=args.gain_margin, along_track_error=args.along_track_error, identified=args.identified,
+                 model=args.model, grid=args.grid, simulate=False, duration=args.duration, overwrite=args.overwrite,
+                 progress=_progress)
+    print("\n" + found.comparison())
     print(f"\nwritten to {args.out} (extends {args.study})")
     if not args.no_simulation:
-        print("\n".join(simulated_check(proposal, args.duration, _progress)))
+        print("\n".join(found.simulate(args.duration, _progress)))
     return 0
 
 

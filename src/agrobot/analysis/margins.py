@@ -29,10 +29,8 @@ defers, on every command: ``--help`` loads this module through analysis.tune).
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -288,10 +286,3 @@ def as_dict(analysis: Analysis) -> dict:
                                  "crossover_rad_s": num(m.crossover), "delay_margin_s": num(m.delay),
                                  "phase_crossover_rad_s": num(m.phase_crossover)}
                           for name, m in r.loops.items()}} for r in analysis.points]}
-
-
-def write_json(analysis: Analysis, path):
-    """margins.json: as_dict(analysis); returns its path."""
-    path = Path(path)
-    path.write_text(json.dumps(as_dict(analysis), indent=2) + "\n")
-    return path
