@@ -45,6 +45,7 @@ class Screened:
     ids: tuple[str, ...]
     delta_bic: float
     fitted: bool
+    falls: dict[str, float]           # each stage's linearised fall in RSS, 1 - RSS_s,lin / RSS_s
 
     def text(self) -> str:
         return f"{' + '.join(self.ids)} (linearised dBIC {self.delta_bic:.1f})"
@@ -124,7 +125,7 @@ class Screen:
         dbic = k * math.log(max(sum(sizes), 2.0))
         for fall, n_eff in zip(falls, sizes):
             dbic += n_eff * math.log(max(1.0 - SAFETY * fall, 1e-300))
-        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong)
+        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong, dict(zip(stages, falls)))
 
     def pair(self, values: dict[str, float], related: list[Effect], a: Effect, b: Effect, stages: tuple[str, ...],
              pool: list[Effect]) -> bool:
