@@ -17,9 +17,12 @@ n_eff,s the larger of the model's and the predicted residual's (candidates.py), 
 parameters. A candidate whose dBIC_lin, with its fall in RSS taken SAFETY times, still cannot
 reach ``STRONG`` is not fitted: it could not be supported. SAFETY covers what the nonlinear fit
 finds beyond the linearisation: on the F1TENTH excerpt's 91 pair fits the fitted fall in RSS was
-at most 1.34 x the linearised one. The screen is not applied to an effect
-shown on a stage only through another part of the model (Effect.tested_on: it is scored where it
-is not fitted) nor to a group whose replay is not linearisable at the cost of a few replays.
+at most 1.34 x the linearised one.
+
+The selection screens its pairs (Selector.pair: the costly step, every two effects of a misfit
+stage); each effect alone is always fitted (the first step's findings are reported, and a later
+step's near rivals need their dBIC). The screen is not applied to an effect shown on a stage only
+through another part of the model (Effect.tested_on: it is scored where it is not fitted).
 """
 from __future__ import annotations
 
