@@ -31,6 +31,8 @@ map; without --quick also an actuator delay, a GPS latency and an offset with a 
 Per class: detection (the exact set named, each headline parameter within its tolerance) and false
 alarms (a clean log with any effect);
 a class the code cannot yet judge (a refusal, a failure) is printed as a row with its error.
+``--compare-screen`` diagnoses the class table's logs twice in one run, the diagnosis's pair screen
+off and on (diagnosis.screen), prints both tables and the logs whose diagnosis the screen changes.
 """
 from __future__ import annotations
 
@@ -89,9 +91,10 @@ def timing(duration: float, cases: list[str]) -> list[tuple[str, float]]:
 
 
 def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, effects: tuple,
-                first_seed: int = 1000) -> None:
+                first_seed: int = 1000, screens: tuple[bool, ...] = (True,)) -> None:
     """Detection and false-alarm rates per vehicle class over the steering-map effects and clean logs
-    (seeds ``first_seed``, ``first_seed`` + 1, ...)."""
+    (seeds ``first_seed``, ``first_seed`` + 1, ...); one table per entry of ``screens`` (the
+    diagnosis with its pair screen on or off, diagnosis.screen), the logs diagnosed in one run."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
@@ -99,11 +102,37 @@ def class_table(vehicles: list[str], seeds: int, duration: float, workers: int, 
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
-        cases = [(e, first_seed + s, folder, v, duration) for v in vehicles for e in ("none", *MAP_EFFECTS, *effects)
+        cases = [(e, first_seed + s, folder, v, duration, on) for on in screens for v in vehicles
+                 for e in ("none", *MAP_EFFECTS, *effects)
                  for s in range(seeds) if not (v == "small_ackermann" and "yaw_rate_bias" in e)]   # no gyro
         with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             rows = list(pool.map(diagnose_class_case, cases))
-    print(f"\nvehicle classes ({seeds} seed(s) from {first_seed}, {duration:.0f} s logs, {time.perf_counter() - t0:.0f} s): "
+    wall = time.perf_counter() - t0
+    for on in screens:
+        mine = [r for r in rows if r["screen"] == on]
+        label = "" if screens == (True,) else f"screen {'on' if on else 'off (--no-screen)'}, " \
+            f"{sum(r['seconds'] for r in mine):.0f} s of diagnosis; "
+        _class_rows(mine, vehicles, seeds, duration, first_seed, wall, label)
+    if len(screens) > 1:
+        _screen_changes(rows)
+
+
+def _screen_changes(rows: list[dict]) -> None:
+    """The logs whose diagnosis differs with the screen on and off (the effects named, their tolerance)."""
+    by_log: dict[tuple, dict] = {}
+    for r in rows:
+        by_log.setdefault((r["vehicle"], r["effect"], r["seed"]), {})[r["screen"]] = r
+    changed = [(k, pair) for k, pair in by_log.items()
+               if (pair[True]["found"], pair[True].get("in_tolerance")) != (pair[False]["found"],
+                                                                             pair[False].get("in_tolerance"))]
+    print(f"\nscreen on against off: {len(changed)} of {len(by_log)} logs diagnosed differently")
+    for (vehicle, effect, seed), pair in changed:
+        print(f"  {vehicle} {effect} {seed}: off {pair[False]['found']} on {pair[True]['found']}")
+
+
+def _class_rows(rows: list[dict], vehicles: list[str], seeds: int, duration: float, first_seed: int, wall: float,
+                label: str) -> None:
+    print(f"\nvehicle classes ({label}{seeds} seed(s) from {first_seed}, {duration:.0f} s logs, {wall:.0f} s): "
           f"right: the exact set named (harness.diagnosis_classes.MAP_IDS), its parameters within tolerance; clean: any "
           f"effect named is a false alarm")
     print("| vehicle | hidden | right | found instead (or the error) |\n|---|---|---|---|")
@@ -154,12 +183,15 @@ def main() -> None:
                     help="the vehicle-class table's first seed (another than 1000 checks a change on unseen logs)")
     ap.add_argument("--quick", action="store_true",
                     help="the vehicle-class table of the three classes, one seed, 120 s logs (a few minutes)")
+    ap.add_argument("--compare-screen", action="store_true",
+                    help="the vehicle-class table twice in one run, the diagnosis's pair screen off and on "
+                         "(diagnosis.screen), and the logs it changes")
     args = ap.parse_args()
     if args.quick or args.classes:
         class_table(args.classes or ["tractor", "car", "small_ackermann"], 1 if args.quick else args.seeds,
                     120.0 if args.quick else args.duration, args.workers,
                     () if args.quick else ("actuator_delay", "gps_latency", "steering_offset", "steering_offset+yaw_rate_bias"),
-                    args.first_seed)
+                    args.first_seed, (False, True) if args.compare_screen else (True,))
         return
     from harness.hidden_effects import EFFECTS, diagnose_many
 

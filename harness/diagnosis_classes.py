@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -99,20 +100,25 @@ def within(effect_id: str, params: dict, truth: dict) -> bool:
 
 
 def diagnose_class_case(case: tuple) -> dict:
-    """(effect, seed, folder, vehicle, duration) -> {vehicle, effect, seed, truth, found, expected,
-    in_tolerance, not_judged (the stages the diagnosis could not judge), error}:
-    the log written and diagnosed against the class's baseline (baseline_study, no identify first);
-    a refusal or a failure is a row with its error, never a crash."""
-    effect, seed, folder, vehicle, duration = case
-    out = {"vehicle": vehicle, "effect": effect, "seed": seed, "found": None, "error": "", "truth": None}
+    """(effect, seed, folder, vehicle, duration[, screen]) -> {vehicle, effect, seed, truth, found, expected,
+    in_tolerance, not_judged (the stages the diagnosis could not judge), error, screen, seconds}:
+    the log written and diagnosed against the class's baseline (baseline_study, no identify first;
+    ``screen`` False: every pair fitted, diagnosis.screen); a refusal or a failure is a row with its
+    error, never a crash."""
+    effect, seed, folder, vehicle, duration, *rest = case
+    screen = bool(rest[0]) if rest else True
+    out = {"vehicle": vehicle, "effect": effect, "seed": seed, "found": None, "error": "", "truth": None,
+           "screen": screen}
+    start = time.perf_counter()
     try:
         frame, truth = class_log(effect, seed, vehicle, duration)
         out["truth"] = {k: v for k, v in truth.items() if isinstance(v, (int, float, str, list))}
-        log = Path(folder) / f"{vehicle}_{effect}_{seed}.parquet"
+        log = Path(folder) / f"{vehicle}_{effect}_{seed}{'' if screen else '_no_screen'}.parquet"
         frame.to_parquet(log)
         out_dir = Path(folder) / log.stem
         out_dir.mkdir(exist_ok=True)
-        result = diagnose(log, out_dir, plots=False, study_path=baseline_study(vehicle, out_dir), identify=False)
+        result = diagnose(log, out_dir, plots=False, study_path=baseline_study(vehicle, out_dir), identify=False,
+                          screen=screen)
         out["found"] = sorted(e["id"] for e in result["effects"])
         out["expected"] = sorted(expected(truth))
         out["in_tolerance"] = all(within(e["id"], e["parameters"], truth) for e in result["effects"])
@@ -121,6 +127,7 @@ def diagnose_class_case(case: tuple) -> dict:
             if isinstance(skipped, dict) else [str(x) for x in skipped]
     except Exception as exc:        # noqa: BLE001 - the benchmark prints a class the code cannot handle as a row
         out["error"] = f"{type(exc).__name__}: {str(exc).splitlines()[0][:160] if str(exc) else ''}"
+    out["seconds"] = time.perf_counter() - start
     print(f"{vehicle} {effect} {seed}: {out['found'] if out['found'] is not None else out['error']}",
           file=sys.stderr, flush=True)
     return out

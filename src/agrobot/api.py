@@ -207,7 +207,8 @@ def _named(source, compute, *args):
 def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: float = 0.6, min_gain: float = 0.05,
              resample: bool = False, recording=None, plots: bool = True, progress=None,
              identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False,
-             where: str | None = None, keep_unexplained: bool = False, workers: int | None = None) -> Diagnosis:
+             where: str | None = None, keep_unexplained: bool = False, workers: int | None = None,
+             screen: bool = True) -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it (checked
     before anything is computed), diagnosis.json, report.md, the figures and extended_study.toml go
@@ -217,7 +218,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     1 - ``fit_fraction``), "blocks" (every third 10 s) or "auto" (blocks when the last part is
     driven beyond the first's conditions). ``mcap``: diagnosis.mcap too. ``where``/``keep_unexplained``:
     the stretches judged (measurements.modes, the ``--where`` option). ``workers``: processes for the
-    candidate fits (default: every core; the result is the same whatever their number)."""
+    candidate fits (default: every core; the result is the same whatever their number). ``screen``: False
+    fits every pair of effects, also those the linearised screen rules out (diagnosis.screen)."""
     from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnosis
 
@@ -234,7 +236,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         Diagnosis.check(out, overwrite, inputs)
     found, write = diagnosis(log, None if baseline is None else baseline.path, fit_fraction, min_gain, plots=plots,
                              resample=resample, recording=recording, progress=progress, identify=identify,
-                             mcap=mcap, split=split, workers=workers)
+                             mcap=mcap, split=split, workers=workers, screen=screen)
     result = Diagnosis(found, None, write, inputs)
     if out is not None:
         result.save(out, overwrite)

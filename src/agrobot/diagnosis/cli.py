@@ -37,6 +37,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(lateral acceleration or speed 1.5 x higher), said in the warnings")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="processes for the candidate fits (default: every core); the result is the same whatever N")
+    p.add_argument("--no-screen", action="store_true",
+                   help="fit every pair of effects, also those whose linearised gain cannot be supported (slower; "
+                        "the screen's decisions are in diagnosis.json's selection_trace)")
     p.add_argument("--mcap", action="store_true", help="also write diagnosis.mcap: the measured stages, the "
                    "baseline's and the final model's replays and residuals on one time axis (Foxglove, PlotJuggler)")
     add_mode_options(p)
@@ -51,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     result = diagnose(args.log, args.study, args.out, fit_fraction=args.fit_fraction, min_gain=args.min_gain,
                       plots=not args.no_plots, resample=args.resample, recording=recording_options(args),
                       progress=timed_progress(), mcap=args.mcap, identify=not args.no_identify, split=args.split,
-                      overwrite=args.overwrite, workers=args.workers).result
+                      overwrite=args.overwrite, workers=args.workers, screen=not args.no_screen).result
     if result.get("recording"):
         print(describe(result["recording"]))
     if result["verdict"] == CANNOT_DECIDE:

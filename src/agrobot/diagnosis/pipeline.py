@@ -355,11 +355,11 @@ def coarser_clock(frame):
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
              recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto",
-             workers: int | None = None) -> dict:
+             workers: int | None = None, screen: bool = True) -> dict:
     """``diagnosis`` written into the existing folder ``out_dir`` when given (a caller that has
     already placed its output: the commands go through agrobot.api, which stages it)."""
     result, write = diagnosis(log_path, study_path, fit_fraction, min_gain, plots, resample, recording, progress,
-                              identify, mcap, split, workers)
+                              identify, mcap, split, workers, screen)
     if out_dir is not None:
         write(Path(out_dir))
     return result
@@ -367,14 +367,16 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
 
 def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fraction: float = 0.6,
               min_gain: float = 0.05, plots: bool = True, resample: bool = False, recording=None, progress=None,
-              identify: bool = True, mcap: bool = False, split: str = "auto", workers: int | None = None):
+              identify: bool = True, mcap: bool = False, split: str = "auto", workers: int | None = None,
+              screen: bool = True):
     """Run the diagnosis; returns (result, write), nothing written: ``write(folder)`` writes
     diagnosis.json and report.md (verdict ``cannot decide`` with the reason when the log cannot be
     used), and the figures and extended_study.toml. Raises nothing for a bad log.
     ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``:
     ``write`` adds diagnosis.mcap; ``split``: what is held out (diagnosis.candidates.SPLITS: the last
     part, every third window, or chosen by the log's conditions); ``workers``: processes for the candidate
-    fits (diagnosis.parallel_fits; None: every core), the result the same whatever their number."""
+    fits (diagnosis.parallel_fits; None: every core), the result the same whatever their number; ``screen``:
+    pairs of effects whose linearised gain cannot be supported are not fitted (diagnosis.screen)."""
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
@@ -400,7 +402,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     workers = default_workers() if workers is None else max(1, int(workers))
     say(f"candidate fits on {workers} worker process{'es' if workers > 1 else ''} (--workers)")
     sel = ParallelSelector(replay, min_gain, seed=study.study.seed, saturation=identified.get("tyre_saturation"),
-                           progress=say, workers=workers).run()
+                           progress=say, workers=workers, screen=screen).run()
     say("effects selected; judging the stages against their noise floors")
     final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])

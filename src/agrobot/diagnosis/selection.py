@@ -53,6 +53,7 @@ from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, CandidateFit, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
+from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS
@@ -203,8 +204,10 @@ class Selection:
 
 class Selector:
     def __init__(self, replay: Replay, min_gain: float = 0.05, max_effects: int = 4, seed: int = 0,
-                 saturation: dict | None = None, progress=None) -> None:
+                 saturation: dict | None = None, progress=None, screen: bool = True) -> None:
         self.replay, self.min_gain, self.max_effects, self.seed = replay, min_gain, max_effects, seed
+        self.screening = screen                 # the linearised screen before the pair fits (diagnosis.screen)
+        self.screen: Screen | None = None
         self.progress = progress                # the tool's progress lines (orchestrator.work_progress)
         self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
         moving = replay.speed > replay.min_speed
@@ -276,6 +279,7 @@ class Selector:
 
     def _select(self) -> Selection:
         base, self.sigma = fit_baseline(self.replay)
+        self.screen = Screen(self.replay, self.sigma, STRONG) if self.screening else None
         self.floors = self.evaluate(base)[1]         # the noise floors a rising signal is judged against
         trace_gate = self.saturation_gate(base)
         notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
@@ -338,6 +342,7 @@ class Selector:
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
         trace += [f"widened {w}" for w in self.widened]
+        trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
 
     def audit_start(self) -> str | None:
@@ -427,6 +432,8 @@ class Selector:
                     continue
                 stages, related = group(set(a.stages) | set(b.stages), members, self.replay.stages,
                                         self.replay.side_slip_block)
+                if self.screen and not self.screen.pair(model.values, related, a, b, stages, pool):
+                    continue
                 starts = [{**self._first.get(a.id, {}), **self._first.get(b.id, {})}]
                 fit = _refit(self.replay, model.values, related + [a, b], stages, self.sigma, starts)
                 ja = _judge(a, fit, model, stages, self.base_values, self.min_gain)
