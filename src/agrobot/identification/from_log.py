@@ -16,6 +16,7 @@ from agrobot.measurements.recording import ImportOptions, is_recording
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.resolver import resolve
 
+from .blas_threads import one_blas_thread
 from .driving_plots import write_driving_plots
 from .experiment import detect_period
 from .ordinary_driving import identify_driving
@@ -120,15 +121,18 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
     return "driving" if wants_driving(Path(source), resample, recording, study) else "multisine"
 
 
+@one_blas_thread
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
-                   course_speed: float | None = None):
+                   course_speed: float | None = None, fit_seconds: float | None = None):
     """(report, the figures' data): the ordinary-driving identification of a log
     (identification.ordinary_driving), nothing written; the wheelbase given with ``recording``
-    (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor (None: its default)."""
+    (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor, ``fit_seconds``:
+    the most of the segments fitted (None: their defaults)."""
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
-    more = {} if course_speed is None else {"course_speed": course_speed}
+    more = ({} if course_speed is None else {"course_speed": course_speed}) | \
+        ({} if fit_seconds is None else {"max_fit_seconds": fit_seconds})
     report = identify_driving(frame, str(source), study, progress=say, wheelbase=getattr(recording, "wheelbase", None),
                               **more)
     hidden = report.pop("_plot")
