@@ -1,5 +1,8 @@
 """``identify LOG``: which method a measured log gets, and the driving method's outputs
-(identification.json, the figures, the summary on the terminal, progress on stderr)."""
+(identification.json, the figures, the summary on the terminal, progress on stderr).
+
+Imported where used: driving_plots (matplotlib: only a run that draws figures loads it).
+"""
 from __future__ import annotations
 
 import json
@@ -17,7 +20,6 @@ from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.resolver import resolve
 
 from .blas_threads import one_blas_thread
-from .driving_plots import write_driving_plots
 from .experiment import detect_period
 from .ordinary_driving import identify_driving
 from .pipeline import _json_default
@@ -150,6 +152,8 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
         report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
+        from .driving_plots import write_driving_plots
+
         if progress is not None:
             progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
