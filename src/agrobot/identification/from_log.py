@@ -1,7 +1,7 @@
 """``identify LOG``: which method a measured log gets, and the driving method's outputs
 (identification.json, the figures, the summary on the terminal, progress on stderr).
 
-Imported where used: driving_plots (matplotlib: only a run that draws figures loads it).
+Imported where used: identification.driving_plots (matplotlib: only a run that draws figures loads it).
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Section IV end to end: experiments -> FRF and nonlinearity analysis -> NLS fits -> physical
 parameters -> time-domain validation -> speed dependence; JSON, plots and the paper's numbers.
 
-Imported where used: plots (matplotlib: only a run that draws figures or prints the summary loads it).
+Imported where used: identification.plots (matplotlib: only a run that draws figures or prints the summary loads it).
 """
 from __future__ import annotations
 
