@@ -14,8 +14,9 @@ Logs:
   delay: 360,000 rows), against studies/figure8.toml.
 
 Each command runs in a fresh process (``python -m agrobot``, PYTHONPATH the tree's ``src``) under
-/usr/bin/time: wall and CPU seconds, the peak resident memory of its largest process, and the peak of
-the sum over the process and its worker processes (sampled from /proc every 0.1 s). A command that
+/usr/bin/time: wall seconds, CPU seconds of the process and its worker processes (sampled from /proc
+every 0.1 s: on a shared machine the wall time follows the load, the CPU time the code), the peak
+resident memory of its largest process, and the peak of the sum over the process and its workers. A command that
 runs past ``--cap`` seconds is stopped and shown as ``> cap``. The code before is the commit
 ``--before`` unpacked by ``git archive`` into a temporary folder; the logs are generated into a
 temporary folder and removed with it. For a log with a hidden effect the row says whether the
@@ -77,10 +78,13 @@ def hour_log(folder: Path) -> tuple[Path, float, str, set]:
 LOGS = {"tractor": tractor_log, "f1tenth": f1tenth_log, "hour": hour_log}
 
 
-def tree_rss_mb(pid: int) -> float:
-    """The resident memory [MB] of ``pid`` and every process descending from it (/proc)."""
+def tree_sample(pid: int) -> tuple[float, dict[int, float]]:
+    """(the resident memory [MB] of ``pid`` and every process descending from it, the CPU seconds
+    each of them has used so far), from /proc."""
     children: dict[int, list[int]] = {}
     rss: dict[int, float] = {}
+    cpu: dict[int, float] = {}
+    tick = os.sysconf("SC_CLK_TCK")
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
@@ -91,26 +95,31 @@ def tree_rss_mb(pid: int) -> float:
             continue
         children.setdefault(int(fields[1]), []).append(int(entry))
         rss[int(entry)] = int(fields[21]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-    total, todo = 0.0, [pid]
+        cpu[int(entry)] = (int(fields[11]) + int(fields[12])) / tick
+    total, seen, todo = 0.0, {}, [pid]
     while todo:
         p = todo.pop()
         total += rss.get(p, 0.0)
+        seen[p] = cpu.get(p, 0.0)
         todo += children.get(p, [])
-    return total
+    return total, seen
 
 
 def timed(tree: Path, argv: list[str], cap: float) -> dict:
-    """Wall and CPU seconds and peak memory (MB: the largest process, and the sum over the process
-    tree) of ``python -m agrobot ARGV`` with ``tree``'s code; stopped after ``cap`` seconds."""
+    """Wall and CPU seconds (the worker processes' too: their last sample) and peak memory (MB: the
+    largest process, and the sum over the process tree) of ``python -m agrobot ARGV`` with ``tree``'s
+    code; stopped after ``cap`` seconds."""
     start = time.perf_counter()
     proc = subprocess.Popen(["/usr/bin/time", "-f", "TIME %e %U %S %M", sys.executable, "-m", "agrobot", *argv],
                             cwd=tree, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": str(tree / "src")}, start_new_session=True)
-    peak, done = [0.0], threading.Event()
+    peak, used, done = [0.0], {}, threading.Event()
 
     def sample() -> None:
         while not done.wait(0.1):
-            peak[0] = max(peak[0], tree_rss_mb(proc.pid))
+            mb, cpu = tree_sample(proc.pid)
+            peak[0] = max(peak[0], mb)
+            used.update(cpu)
 
     sampler = threading.Thread(target=sample, daemon=True)
     sampler.start()
@@ -128,7 +137,7 @@ def timed(tree: Path, argv: list[str], cap: float) -> dict:
     cpu, largest = (float(last[-1].split()[2]) + float(last[-1].split()[3]), float(last[-1].split()[4]) / 1024) \
         if last else (float("nan"), float("nan"))
     verdict = next((line for line in out.splitlines() if line.lower().startswith("verdict")), "")
-    return {"wall": wall, "cpu": cpu, "peak_mb": largest, "tree_mb": peak[0], "capped": capped,
+    return {"wall": wall, "cpu": max(cpu, sum(used.values())), "peak_mb": largest, "tree_mb": peak[0], "capped": capped,
             "exit": proc.returncode, "verdict": verdict.strip()}
 
 
@@ -185,7 +194,7 @@ def measure(cases: list[str], before: str | None, cap: float) -> list[tuple]:
 
 
 def table(rows: list[tuple], cap: float) -> str:
-    lines = ["| log | command | code | wall [s] | CPU [s] | wall / log duration | peak memory [MB] (with workers) "
+    lines = ["| log | command | code | wall [s] | CPU with workers [s] | wall / log duration | peak memory [MB] (with workers) "
              "| names the hidden effect | target |",
              "|---|---|---|---:|---:|---:|---:|---|---|"]
     for case, seconds, command, name, r in rows:
