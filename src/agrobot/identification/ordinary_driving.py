@@ -213,7 +213,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         say("kinematic regime: fitting the steering map")
         return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
                           measured, notes, p95)
-    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
+    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
@@ -412,7 +412,7 @@ def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
 
 
 def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: str, p: TractorParameters, L: float,
-                command: bool, min_speed: float, driven: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
+                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
     """The linear fit from the study's cornering coefficients per unit load (clipped to the
     vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
