@@ -58,3 +58,14 @@ def test_the_bootstrap_from_sums_is_the_fit_of_the_drawn_samples():
                          np.concatenate([np.concatenate([pieces[k][1]] * c) for k, c in enumerate(row) if c]))
              for row in counts]
     assert np.allclose(_bootstrap_fit(pieces, counts), drawn, rtol=0, atol=1e-9)
+
+
+def test_a_fit_seconds_that_is_not_positive_is_refused(tmp_path, capsys):
+    from tests.commands import in_process
+
+    log = tmp_path / "log.csv"
+    log.write_text("t,delta,v,yaw_rate\n0,0,1,0\n0.1,0,1,0\n")
+    code, _, err = in_process(["identify", log, "--method", "driving", "--fit-seconds", "0", "--out",
+                               tmp_path / "out"], capsys)
+    assert code == 2 and "--fit-seconds 0: expected a positive number" in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
