@@ -69,3 +69,21 @@ def test_a_fit_seconds_that_is_not_positive_is_refused(tmp_path, capsys):
                                tmp_path / "out"], capsys)
     assert code == 2 and "--fit-seconds 0: expected a positive number" in err and "Traceback" not in err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_stretch_left_out_cuts_the_log_and_the_part_passed_over_is_said(tmp_path):
+    """A truth log whose wheels turn on their own for 15 s (40-55 s: the command does not explain
+    them; measurements.modes leaves the stretch out): the longest stretch left (55-120 s) is judged,
+    and the note names the selection, the seconds passed over (the 40 s before it) and the options."""
+    from agrobot.identification.from_log import read_uneven
+
+    frame, _ = make_log(1001, None, duration=120.0)
+    t = frame["t"].to_numpy()
+    hand = (t > 40.0) & (t < 55.0)
+    frame.loc[hand, "delta"] = 0.3 * np.sin(2 * np.pi * 0.4 * t[hand])
+    frame.to_parquet(tmp_path / "log.parquet")
+    even, _, note = read_uneven(tmp_path / "log.parquet")
+    assert "the selection left out" in note and "--keep-unexplained" in note
+    passed = float(note.split("passed over: ")[1].split(" s")[0])
+    longest = even["t"].iloc[-1] - even["t"].iloc[0]
+    assert 55.0 < longest < 70.0 and 30.0 < passed < 45.0, (longest, passed, note)

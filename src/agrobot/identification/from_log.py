@@ -92,9 +92,13 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
     dt = np.diff(t)
     if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):
         even, (a, b) = longest_stretch(frame)
-        return even, imported, (f"the log's clock has gaps or jitter: its longest stretch without a gap, t = "
+        passed = max(len(t) * float(np.median(dt)) - (b - a), 0.0)
+        why = (" (the stretches the selection left out cut it: --keep-unexplained or --where judge others)"
+               if frame.attrs.get("selection") else "")
+        return even, imported, (f"the log's clock has gaps or jitter{why}: its longest stretch without a gap, t = "
                                 f"{a:.1f}-{b:.1f} s of {t[0]:.1f}-{t[-1]:.1f} s, is judged on an even "
-                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock")
+                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock; passed over: {passed:.0f} s "
+                                f"of the log's other stretches")
     return frame, imported, None
 
 
