@@ -230,7 +230,8 @@ class Servo:
 def make_log(seed: int, effect: str | tuple | list | None = None, duration: float = 240.0,
              scale: dict[str, float] | None = None, speeds: tuple[float, ...] | None = None,
              healthy: str | None = None, vehicle: str = "tractor",
-             values: dict[str, float] | None = None, lateral: bool = False) -> tuple[pd.DataFrame, dict]:
+             values: dict[str, float] | None = None, lateral: bool = False,
+             rate: float = 20.0) -> tuple[pd.DataFrame, dict]:
     """The log and the truth; ``effect`` is None, one id, or several ('a+b' or a sequence) from
     EFFECTS and UNLISTED; ``scale`` multiplies entries of TABLE (m, I, l_f, l_r, C_f, C_r,
     sigma_f) to stress the diagnosis with a truth further from the baseline; ``healthy``: one or
@@ -239,7 +240,8 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering);
     ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...);
     ``lateral``: add the measured lateral velocity at the centre of gravity ``vy`` [m/s] and the
-    side-slip ``beta`` = atan(vy / v) [rad] (an optical or GNSS/INS sensor; noise 0.005 m/s)."""
+    side-slip ``beta`` = atan(vy / v) [rad] (an optical or GNSS/INS sensor; noise 0.005 m/s);
+    ``rate``: the command's and the sensors' rate [Hz], a divisor of the 200 Hz integration."""
     if vehicle not in VEHICLES:
         raise ValueError(f"unknown vehicle {vehicle!r}; known: {sorted(VEHICLES)}")
     veh = VEHICLES[vehicle]
@@ -250,11 +252,11 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
         raise ValueError(f"unknown truth effects {unknown}; known: {EFFECTS + UNLISTED + LATER}")
     e, hv, p, tau = _drawn_truth(seed, rng, ids, veh, scale, healthy, values)
     if hv.get("plan") == "field":
-        t_log, cmd, speed_of = field_plan(rng, duration)
+        t_log, cmd, speed_of = field_plan(rng, duration, rate)
     else:
-        t_log, cmd, speed_of = driving_plan(rng, duration, speeds_cycle=hv.get("speeds", speeds or veh["speeds"]))
+        t_log, cmd, speed_of = driving_plan(rng, duration, rate, speeds_cycle=hv.get("speeds", speeds or veh["speeds"]))
     cmd = cmd * veh["steer_scale"]
-    rec, times, sub = _driven(rng, e, hv, p, veh, tau, len(t_log), cmd, speed_of)
+    rec, times, sub = _driven(rng, e, hv, p, veh, tau, len(t_log), cmd, speed_of, rate)
     frame = _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral)
     truth = {"effect": "+".join(ids) or "none", "effects": ids, **e, "tau": tau, "C_f": p["C_f"], "C_r": p["C_r"],
              "sigma_f": p["sigma_f"],
@@ -293,8 +295,8 @@ def _drawn_truth(seed, rng, ids, veh, scale, healthy, values) -> tuple[dict, dic
     return e, hv, p, veh["tau"] * rng.uniform(0.8, 1.2)
 
 
-def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.ndarray, int]:
-    """(the states at 200 Hz, their times, the substeps per 20 Hz sample): the steering loop, the
+def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of, log_rate=20.0) -> tuple[np.ndarray, np.ndarray, int]:
+    """(the states at 200 Hz, their times, the substeps per sample at ``log_rate``): the steering loop, the
     relaxed-tyre yaw dynamics with the truth's faults and the pose, by Heun's method from a drawn
     heading. State: delta, spool, v_y, r, alpha_f, psi, x, y, alpha_r."""
     rate = e.get("rate", veh["rate"])
@@ -313,7 +315,7 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
     def deriv(time, s):
         delta, spool, vy, r, af, psi, x, y, ar_state = s
         if servo is None:
-            k = int(math.floor((time - delay) * 20.0 + 1e-9))
+            k = int(math.floor((time - delay) * log_rate + 1e-9))
             c = cmd[min(max(k, 0), len(cmd) - 1)]
             reading = steering_maps.reading(delta, curvature=curve) if curve else delta
             err = c - sensor_gain * reading         # the loop closes on the sensor's reading
@@ -337,8 +339,8 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
         return (d_delta, d_spool, dvy * (v / vv), dr * (v / vv), daf * (v / vv), r,
                 v * c_ - vy * s_, v * s_ + vy * c_, dar * (v / vv))
 
-    sub = 10                                  # 200 Hz internal steps per 20 Hz sample
-    h = 0.05 / sub
+    sub = int(round(200.0 / log_rate))        # 200 Hz internal steps per logged sample
+    h = (1.0 / log_rate) / sub
     state = (0.0,) * 5 + (rng.uniform(-math.pi, math.pi), 0.0, 0.0, 0.0)
     rec = np.empty((n * sub, 9))
     times = np.arange(n * sub) * h
@@ -346,7 +348,7 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
         rec[i] = state
         t0 = times[i]
         if servo is not None:                 # the servo runs at 1 kHz; the wheel angle enters linearly over the step
-            k = int(math.floor((t0 - delay) * 20.0 + 1e-9))
+            k = int(math.floor((t0 - delay) * log_rate + 1e-9))
             before = servo.delta
             servo_rate[0] = (servo.advance(cmd[min(max(k, 0), len(cmd) - 1)], h) - before) / h
         k1 = deriv(t0, state)
@@ -357,7 +359,7 @@ def _driven(rng, e, hv, p, veh, tau, n, cmd, speed_of) -> tuple[np.ndarray, np.n
 
 
 def _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral) -> pd.DataFrame:
-    """The log the machine would record at 20 Hz: the antenna's position (lever arm, latency), the
+    """The log the machine would record (20 Hz unless told): the antenna's position (lever arm, latency), the
     wheel-angle sensor (gain, ratio curve, resolution), the speed (slip) and the gyro (scale, bias),
     each with its noise; channels stamped late where the truth says so."""
     n, lr = len(t_log), p["l_r"]

@@ -132,7 +132,7 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
              models: list[str] | None = None, delay: bool = False, resample: bool = False, recording=None,
              out: str | Path | None = None, plots: bool = True, progress=None,
              overwrite: bool = False, where: str | None = None, keep_unexplained: bool = False,
-             course_speed: float | None = None) -> Identification:
+             course_speed: float | None = None, fit_seconds: float | None = None) -> Identification:
     """Identify the yaw dynamics. ``source`` a study (its multisine experiment, simulated: ``set``
     applies to it) or a measured log or raw recording; for a log the method is chosen as the
     command chooses it (identification.from_log.choose_method: ``"auto"`` is multisine when
@@ -141,11 +141,12 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     measurements.ImportOptions for a raw recording. ``where``/``keep_unexplained``: the stretches
     judged (measurements.modes, the ``--where`` option). ``out``: checked before anything is computed,
     written as ``Identification.save`` writes. ``course_speed``: the speed [m/s] above which the
-    GNSS course measures the yaw (driving method; None: 1 m/s)."""
+    GNSS course measures the yaw (driving method; None: 1 m/s). ``fit_seconds``: at most this much of
+    the log's segments fitted (driving method; None: 300 s; identification.ordinary_driving)."""
     from agrobot.identification.from_log import choose_method, driving_report, write_driving
     from agrobot.identification.pipeline import log_identification, study_identification
 
-    check_identify(band, speed, period, course_speed)
+    check_identify(band, speed, period, course_speed, fit_seconds)
     recording = _stretches(recording, where, keep_unexplained)
     is_study = not isinstance(source, (str, Path)) or Path(source).suffix in STUDY_SUFFIXES or shipped_name(source)
     vehicle = load(source, set) if is_study else load(study) if study is not None else None
@@ -159,7 +160,8 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     else:
         chosen = _named(source, choose_method, Path(source), method, resample, recording, vehicle)
         if chosen == "driving":
-            report, figures = driving_report(Path(source), vehicle, resample, recording, progress, course_speed)
+            report, figures = driving_report(Path(source), vehicle, resample, recording, progress, course_speed,
+                                             fit_seconds)
 
             def write(tmp: Path, plots: bool) -> None:
                 write_driving(report, figures, tmp, vehicle, source, plots, progress)
@@ -184,11 +186,13 @@ def _stretches(recording, where: str | None, keep_unexplained: bool):
     return replace(recording or ImportOptions(), where=where, keep_unexplained=keep_unexplained)
 
 
-def check_identify(band, speed, period, course_speed=None) -> None:
-    """The identification's numbers: 0 < F_MIN < F_MAX, a positive speed, period and course speed."""
+def check_identify(band, speed, period, course_speed=None, fit_seconds=None) -> None:
+    """The identification's numbers: 0 < F_MIN < F_MAX, a positive speed, period, course speed and
+    fitted seconds."""
     if band is not None and not 0 < band[0] < band[1]:
         raise StudyError(f"--band {band[0]:g} {band[1]:g}: expected 0 < F_MIN < F_MAX [Hz]")
-    for option, value in (("--speed", speed), ("--period", period), ("--course-speed", course_speed)):
+    for option, value in (("--speed", speed), ("--period", period), ("--course-speed", course_speed),
+                          ("--fit-seconds", fit_seconds)):
         if value is not None and not value > 0:
             raise StudyError(f"{option} {value:g}: expected a positive number")
 

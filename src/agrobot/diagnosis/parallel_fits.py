@@ -24,6 +24,8 @@ import os
 import pickle
 import sys
 
+from threadpoolctl import threadpool_limits
+
 from agrobot.orchestrator.work_progress import Work
 
 from .candidates import Replay, Speculated, fit_key, fitted
@@ -42,6 +44,8 @@ def default_workers() -> int:
 
 
 def _install(payload: bytes) -> None:
+    """A worker's replay, and its BLAS libraries on one thread (identification.blas_threads)."""
+    threadpool_limits(limits=1, user_api="blas")
     _WORKER["replay"] = pickle.loads(payload)
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from agrobot.estimation import Z95, compare
+from agrobot.identification.blas_threads import one_blas_thread
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
 from agrobot.identification.yaw_measurement import with_yaw_rate
@@ -365,6 +366,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
     return result
 
 
+@one_blas_thread
 def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fraction: float = 0.6,
               min_gain: float = 0.05, plots: bool = True, resample: bool = False, recording=None, progress=None,
               identify: bool = True, mcap: bool = False, split: str = "auto", workers: int | None = None,

@@ -29,6 +29,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    "distances for the physical parameters; its [vehicle] table for a recording); default the tractor")
     p.add_argument("--course-speed", type=float, default=None, help="log without a gyro or heading: the speed "
                    "[m/s] above which the GNSS course measures the yaw rate (default 1)")
+    p.add_argument("--fit-seconds", type=float, default=None, help="log, driving: fit at most this many seconds "
+                   "of the log's segments, evenly spread over it (default 300: a longer log's other segments are "
+                   "passed over, and said; a larger value fits more at a cost growing with them)")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     add_mode_options(p)
@@ -42,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
                      period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,
                      resample=args.resample, recording=None if is_study else recording_options(args),
                      out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite,
-                     course_speed=args.course_speed)
+                     course_speed=args.course_speed, fit_seconds=args.fit_seconds)
     if found.method == "driving":
         figures = found.report.get("figures", [])
         print(found.summary())

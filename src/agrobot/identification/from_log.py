@@ -1,5 +1,8 @@
 """``identify LOG``: which method a measured log gets, and the driving method's outputs
-(identification.json, the figures, the summary on the terminal, progress on stderr)."""
+(identification.json, the figures, the summary on the terminal, progress on stderr).
+
+Imported where used: identification.driving_plots (matplotlib: only a run that draws figures loads it).
+"""
 from __future__ import annotations
 
 import json
@@ -16,7 +19,7 @@ from agrobot.measurements.recording import ImportOptions, is_recording
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.resolver import resolve
 
-from .driving_plots import write_driving_plots
+from .blas_threads import one_blas_thread
 from .experiment import detect_period
 from .ordinary_driving import identify_driving
 from .pipeline import _json_default
@@ -120,9 +123,13 @@ def read_uneven(source: Path, resample: bool = False, recording=None, study=None
     dt = np.diff(t)
     if len(dt) and (dt.max() > 1.5 * np.median(dt) or np.max(np.abs(dt - np.median(dt))) > 0.01 * np.median(dt)):
         even, (a, b) = longest_stretch(frame)
-        return even, imported, (f"the log's clock has gaps or jitter: its longest stretch without a gap, t = "
+        passed = max(len(t) * float(np.median(dt)) - (b - a), 0.0)
+        why = (" (the stretches the selection left out cut it: --keep-unexplained or --where judge others)"
+               if frame.attrs.get("selection") else "")
+        return even, imported, (f"the log's clock has gaps or jitter{why}: its longest stretch without a gap, t = "
                                 f"{a:.1f}-{b:.1f} s of {t[0]:.1f}-{t[-1]:.1f} s, is judged on an even "
-                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock")
+                                f"{1 / float(np.median(np.diff(even['t']))):.3g} Hz clock; passed over: {passed:.0f} s "
+                                f"of the log's other stretches")
     return frame, imported, None
 
 
@@ -151,15 +158,18 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
     return "driving" if wants_driving(Path(source), resample, recording, study) else "multisine"
 
 
+@one_blas_thread
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
-                   course_speed: float | None = None):
+                   course_speed: float | None = None, fit_seconds: float | None = None):
     """(report, the figures' data): the ordinary-driving identification of a log
     (identification.ordinary_driving), nothing written; the wheelbase given with ``recording``
-    (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor (None: its default)."""
+    (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor, ``fit_seconds``:
+    the most of the segments fitted (None: their defaults)."""
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
-    more = {} if course_speed is None else {"course_speed": course_speed}
+    more = ({} if course_speed is None else {"course_speed": course_speed}) | \
+        ({} if fit_seconds is None else {"max_fit_seconds": fit_seconds})
     report = identify_driving(frame, str(source), study, progress=say, wheelbase=getattr(recording, "wheelbase", None),
                               **more)
     hidden = report.pop("_plot")
@@ -177,6 +187,8 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
         report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
+        from .driving_plots import write_driving_plots
+
         if progress is not None:
             progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]

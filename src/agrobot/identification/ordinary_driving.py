@@ -141,6 +141,20 @@ def _spread(segs: Segments, max_seconds: float, h: float) -> Segments:
     return segs.take(np.unique(np.linspace(0, len(per) - 1, k).round().astype(int)))
 
 
+def _fitted_part(segs: Segments, max_seconds: float, h: float) -> tuple[Segments, str | None]:
+    """(the segments fitted, what was passed over): the segments not held out, at most ``max_seconds``
+    of them evenly spread over the log (_spread: the fits' cost grows with the samples)."""
+    pool = segs.take(~segs.held_out)
+    fitted = _spread(pool, max_seconds, h)
+    if len(fitted.idx) == len(pool.idx):
+        return fitted, None
+    return fitted, (f"fitted on {fitted.seconds * h:.0f} s of the {pool.seconds * h:.0f} s of segments not held out "
+                    f"({len(fitted.idx)} of {len(pool.idx)}, evenly spread over the log; cost bound): passed over "
+                    f"{(pool.seconds - fitted.seconds) * h:.0f} s ({len(pool.idx) - len(fitted.idx)} segments); "
+                    f"--fit-seconds (now {max_seconds:g}) fits more; held out: "
+                    f"{segs.take(segs.held_out).seconds * h:.0f} s")
+
+
 def _bins(a: np.ndarray, res: np.ndarray, edges, signed: bool = False) -> list[dict]:
     out = []
     for lo, hi in zip(edges[:-1], edges[1:]):
@@ -199,7 +213,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         say("kinematic regime: fitting the steering map")
         return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
                           measured, notes, p95)
-    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, driven, max_fit_seconds, notes, say)
+    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
@@ -398,7 +412,7 @@ def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
 
 
 def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: str, p: TractorParameters, L: float,
-                command: bool, min_speed: float, driven: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
+                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
     """The linear fit from the study's cornering coefficients per unit load (clipped to the
     vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
@@ -410,11 +424,11 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
     start = {"c_f": float(np.clip(p.C_f / Fz[0], lo, hi)), "c_r": float(np.clip(p.C_r / Fz[1], lo, hi)),
              "delay": _delay_start(log, L), "lag": 0.05, "steer_offset": 0.0, "steer_gain": 1.0, "gyro_bias": 0.0}
     model = YawModel(model_name, p, log, segs, min_sim_speed=max(min_speed, 0.3))
-    fit_segs = _spread(segs.take(~segs.held_out), max_fit_seconds, log.h)
+    fit_segs, bound = _fitted_part(segs, max_fit_seconds, log.h)
     test_segs = segs.take(segs.held_out)
-    if fit_segs.seconds * log.h < driven * (1 - 1 / 3) - 1:
-        notes.append(f"fitted on {fit_segs.seconds * log.h:.0f} s of segments spread over the log (cost bound); "
-                     f"held out: {test_segs.seconds * log.h:.0f} s")
+    if bound:
+        notes.append(bound)
+        say(bound)
     with Work(say, "fitting the vehicle models (linear, linear range, tyre saturation)", 3, "fits") as work:
         say("fitting the linear model")
         linear = fit(model, free, start, fixed, fit_segs)
@@ -512,10 +526,9 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     rng = np.random.default_rng(getattr(getattr(study, "study", None), "seed", 0) or 0)
-    boot = []
-    for _ in range(400 if len(pieces) > 1 else 0):
-        pick = rng.integers(len(pieces), size=len(pieces))
-        boot.append(fit_percent(np.concatenate([pieces[k][0] for k in pick]), np.concatenate([pieces[k][1] for k in pick])))
+    picks = [np.bincount(rng.integers(len(pieces), size=len(pieces)), minlength=len(pieces))
+             for _ in range(400 if len(pieces) > 1 else 0)]
+    boot = list(_bootstrap_fit(pieces, np.array(picks))) if picks else []
     fit_lo, fit_hi = (float(np.percentile(boot, 2.5)), float(np.percentile(boot, 97.5))) if boot else (overall, overall)
     fit_sd = float(np.std(boot)) if boot else 0.0
     return {"value": overall, "std": fit_sd, "interval": [fit_lo, fit_hi],
@@ -523,6 +536,17 @@ def _held_out_fit(log: DrivingLog, test_segs: Segments, held: _HeldOut, pred, st
             "interval: 2.5-97.5 % of a bootstrap over the held-out segments", "per_segment": per_segment,
             "linear_model": fit_percent(y, sims[0][test_segs.scored]),
             "saturation_model": fit_percent(y, sims[1][test_segs.scored])}
+
+
+def _bootstrap_fit(pieces: list[tuple[np.ndarray, np.ndarray]], counts: np.ndarray) -> np.ndarray:
+    """fit_percent of each bootstrap draw (a row of ``counts``: how often each held-out piece (y,
+    y_model) is drawn), from the pieces' sums: with n, S = sum y, Q = sum y^2 and E = sum (y - y_model)^2
+    summed over the draw, 100 (1 - sqrt(E) / sqrt(Q - S^2 / n))."""
+    sums = np.array([(len(y), y.sum(), y @ y, (y - m) @ (y - m)) for y, m in pieces])
+    n, S, Q, E = (counts @ sums).T
+    den = np.sqrt(np.maximum(Q - S * S / n, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, 100.0 * (1.0 - np.sqrt(E) / den), np.nan)
 
 
 def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool):

@@ -1,5 +1,8 @@
 """Section IV end to end: experiments -> FRF and nonlinearity analysis -> NLS fits -> physical
-parameters -> time-domain validation -> speed dependence; JSON, plots and the paper's numbers."""
+parameters -> time-domain validation -> speed dependence; JSON, plots and the paper's numbers.
+
+Imported where used: identification.plots (matplotlib: only a run that draws figures or prints the summary loads it).
+"""
 from __future__ import annotations
 
 import json
@@ -23,7 +26,6 @@ from .experiment import (Experiment, IdentificationConfig, config_of, experiment
                          experiment_to_log, read_log, simulate_experiment)
 from .fitting import Fit, fit
 from .physical import rlfr_physical
-from .plots import root_notes, write_plots
 
 PAPER = {
     "models": {name: {"num": list(tf.num), "den": list(tf.den)} for name, tf in paper_models.IDENTIFIED.items()},
@@ -204,6 +206,8 @@ def write_outputs(report: dict, analyses: dict, out_dir: Path, plots: bool) -> N
     out_dir = Path(out_dir)
     write_json(out_dir / "identification.json", json.loads(json.dumps(report, default=_json_default)))
     if plots:
+        from .plots import write_plots
+
         write_plots(analyses, report["main_speed"], out_dir)
 
 
@@ -255,5 +259,7 @@ def summary(report: dict) -> str:
                      f"C_r {best['C_r']:.0f} N/rad, sigma_f {best['sigma_f']:.4f} m, sigma_r {best['sigma_r']:.4f} m"
                      f"; paper: 8000+-500, 90000+-7000, 0.1942, 1.6657"
                      + ("; several solutions fit about equally" if phys["several_fit_equally"] else ""))
+    from .plots import root_notes
+
     notes = root_notes(report)
     return "\n".join(lines + ([""] + notes if notes else []))
