@@ -44,7 +44,7 @@ def check_bag_file(path: Path) -> None:
 
 
 def _fail(path: Path, kind: str, at: int, what: str) -> LogError:
-    return LogError(f"{path}: a damaged {kind}: {what} (at byte offset {at})")
+    return LogError(f"{path}: cannot read as a {kind}, it is damaged: {what} (at byte offset {at})")
 
 
 def _read(f, at: int, n: int, size: int, path: Path, kind: str, what: str) -> bytes:
@@ -56,16 +56,17 @@ def _read(f, at: int, n: int, size: int, path: Path, kind: str, what: str) -> by
 
 
 def _ros1_fields(path: Path, header: bytes, at: int) -> dict[str, bytes]:
+    """The header fields of the record at ``at`` (its header follows a 4-byte length)."""
     fields, i = {}, 0
     while i < len(header):
         if i + 4 > len(header):
-            raise _fail(path, "ROS bag", at + i, "a header field's length is cut off")
+            raise _fail(path, "ROS bag", at + 4 + i, "a header field's length is cut off")
         n = U32.unpack_from(header, i)[0]
         if n > len(header) - i - 4:
-            raise _fail(path, "ROS bag", at + i, f"a header field declares {n} bytes, its header has {len(header) - i - 4} left")
+            raise _fail(path, "ROS bag", at + 4 + i, f"a header field declares {n} bytes, its header has {len(header) - i - 4} left")
         name, eq, value = header[i + 4:i + 4 + n].partition(b"=")
         if not eq:
-            raise _fail(path, "ROS bag", at + i, "a header field without '='")
+            raise _fail(path, "ROS bag", at + 4 + i, "a header field without '='")
         fields[name.decode("latin-1")] = value
         i += 4 + n
     if len(fields.get("op", b"")) != 1:
@@ -91,7 +92,7 @@ def _walk_ros1(path: Path, f) -> None:
         if at + 8 + n > size:
             raise _fail(path, "ROS bag", at, f"a record's field 'header_len' declares {n} bytes, the file has "
                                              f"{size - at - 8} left ({size} bytes)")
-        fields = _ros1_fields(path, _read(f, at + 4, n, size, path, "ROS bag", "a record header"), at + 4)
+        fields = _ros1_fields(path, _read(f, at + 4, n, size, path, "ROS bag", "a record header"), at)
         data_at = at + 4 + n
         data_len = U32.unpack(_read(f, data_at, 4, size, path, "ROS bag", "a record's data length"))[0]
         if data_at + 4 + data_len > size:

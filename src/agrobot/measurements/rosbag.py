@@ -177,8 +177,8 @@ def bag_messages(reader, connections: list, paths: list[Path]):
             yield conn, receive_ns, raw
     except Exception as exc:                         # noqa: BLE001 - rosbags raises many kinds on damaged bytes
         after = f" after topic {last[0]} at receive time {last[1] * 1e-9:.9f} s" if last else ""
-        raise LogError(f"{', '.join(map(str, paths))}: a damaged ROS bag: message {count + 1 if last else 1} cannot be "
-                       f"read{after} ({type(exc).__name__}: {exc})") from None
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag, it is damaged: message "
+                       f"{count + 1 if last else 1} cannot be read{after} ({type(exc).__name__}: {exc})") from None
 
 
 def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]:
