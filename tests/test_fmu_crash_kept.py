@@ -16,27 +16,20 @@ import numpy as np
 
 from agrobot.orchestrator.atomic_files import read_partial
 from tests.fmu_build import build_test_fmu
+from tests.test_fmu_isolation import FAIL_TIME as ISOLATED_FAIL
+from tests.test_fmu_isolation import STEP
+from tests.test_fmu_isolation import STUDY as ISOLATED
 
 ROOT = Path(__file__).resolve().parent.parent
-FAIL_TIME, STEP = 1.5, 0.1
-STUDY = f"""[study]
-name = "crashing"
-stop_time = 3.0
-base_step = {STEP}
-seed = 1
-realtime = true
-isolate_fmus = false
-
-[components.m]
-type = "misbehaving.fmu"
-parameters = {{ fail_time = {FAIL_TIME}, fail_mode = 1 }}
-"""
-
+FAIL_TIME = 1.5
+STUDY = ISOLATED.format(mode=1, timeout=60.0).replace("isolate_fmus = true", "isolate_fmus = false\nrealtime = true") \
+    .replace('signals_format = "csv"\n', "").replace(f"fail_time = {ISOLATED_FAIL}", f"fail_time = {FAIL_TIME}")
 
 def test_a_segfault_in_process_keeps_the_signals_recorded_until_it_and_names_where(tmp_path):
     build_test_fmu("misbehaving", tmp_path)
     study = tmp_path / "crashing.toml"
     study.write_text(STUDY)
+    assert "isolate_fmus = false" in STUDY and f"fail_time = {FAIL_TIME}" in STUDY and "parquet" not in STUDY
     done = subprocess.run([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(tmp_path / "out"),
                            "--no-progress", "--engine", "python", "--no-plots"], capture_output=True, text=True,
                           timeout=120, cwd=ROOT)

@@ -29,7 +29,7 @@ SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, database=N
 SECONDS = 10.0
 GROWTH_MB = 400.0
 # where the damage is; or a whole-file fault: its start (magic) or its having nothing to read
-WHERE = re.compile(r"offset|byte|record|message|frame|line|field|topic|DLV|magic|empty|no run|no record|no CAN frame")
+WHERE = re.compile(r"offset|byte|record|message|frame|line|field|topic|stream|DLV|magic|empty|no run|no record|no CAN frame")
 
 
 def _imu_bag(path: Path, ros1: bool) -> Path:
