@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from agrobot.orchestrator.atomic_files import read_partial
 from tests.fmu_build import build_test_fmu
@@ -25,6 +26,7 @@ FAIL_TIME = 1.5
 STUDY = ISOLATED.format(mode=1, timeout=60.0).replace("isolate_fmus = true", "isolate_fmus = false\nrealtime = true") \
     .replace('signals_format = "csv"\n', "").replace(f"fail_time = {ISOLATED_FAIL}", f"fail_time = {FAIL_TIME}")
 
+@pytest.mark.slow
 def test_a_segfault_in_process_keeps_the_signals_recorded_until_it_and_names_where(tmp_path):
     build_test_fmu("misbehaving", tmp_path)
     study = tmp_path / "crashing.toml"
