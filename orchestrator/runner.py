@@ -116,7 +116,10 @@ def _stream(sim: Simulation, writer) -> RecordedSignals:
     base steps, or once after the run when its whole table fits in CHUNK_BYTES (schedule.block_rows;
     not a run paced in real time: what a crash would lose stays short). The engine is advanced about
     REPORT_EVERY_S of wall time at a time, so that progress moves as often whether the run is paced in
-    real time or runs 500 times faster. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
+    real time or runs 500 times faster. Once a component has loaded a binary into this process
+    (fatal_calls.watching) the blocks also go to a crash-readable file (SignalWriter.spill) every
+    SPILL_EVERY_S, and the loop runs under a frame named after that file, which a fatal signal's
+    dump prints. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
     the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
     chunk = CHUNK_STEPS if getattr(sim, "pacer", None) is not None else \
         block_rows(len(sim.columns), sim.n_steps + 1, CHUNK_STEPS, CHUNK_BYTES)
