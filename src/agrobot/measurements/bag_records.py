@@ -8,8 +8,8 @@ the offset and the field:
 
 - ROS 1 (``#ROSBAG V2.0``; records ``header_len`` u32, header fields ``len`` u32 + ``name=value``,
   ``data_len`` u32, data): a length past the file's end, a header field past its header, a record
-  without ``op``; the bag header's ``index_pos`` and a chunk info's ``chunk_pos`` off a record
-  start; a chunk's declared uncompressed ``size`` above MAX_CHUNK, or unlike its data when stored
+  without ``op``; the bag header's ``index_pos`` (0 in a bag whose recording was cut: left to the
+  reader, which says so) and a chunk info's ``chunk_pos`` off a record start; a chunk's declared uncompressed ``size`` above MAX_CHUNK, or unlike its data when stored
   uncompressed.
 - MCAP (magic ``\\x89MCAP0\\r\\n``; records opcode u8, length u64, content; a footer and the magic
   at the end): a length past the file's end, a missing footer or end magic, a footer's summary
@@ -111,7 +111,7 @@ def _walk_ros1(path: Path, f) -> None:
                                                  f": an impossible chunk size (at most {MAX_CHUNK})")
         at = data_at + 4 + data_len
     for name, offset, where in pointed:
-        if offset not in starts and not (name == "index_pos" and offset == size):
+        if offset not in starts and not (name == "index_pos" and offset in (0, size)):   # 0: never indexed
             raise _fail(path, "ROS bag", where, f"field '{name}' points to offset {offset}, not a record's start "
                                                 f"(the file has {size} bytes)")
 
