@@ -1,6 +1,7 @@
 """The hostile cases of the third reliability pass on written files, the compiled cache, crashing FMUs,
-study values and flooded ports, run again as a careless user or neighbour would: each case is a
-command (its own process) and what must hold; the script prints one line per case and the count.
+study values, flooded ports and damaged binary recordings, run again as a careless user or neighbour
+would: each case is a command (its own process) and what must hold; the script prints one line per case
+and the count.
 
     python benchmarks/reliability_cases.py                 # this checkout's code
     python benchmarks/reliability_cases.py --tree /work/main   # another checkout's code, for comparison
@@ -11,6 +12,8 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
+import struct
 import subprocess
 import sys
 import tempfile
@@ -18,6 +21,7 @@ import textwrap
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))          # the tests' generators (tests/test_fuzz_binary_readers.py, tests/fmu_build.py)
 F8 = str(ROOT / "studies" / "figure8.toml")
 TOY = '[study]\nname = "toy"\nstop_time = 1.0\nbase_step = 0.01\nseed = 1\n[components.clock]\ntype = "tests.toy_components:Clock"\n'
 
@@ -89,6 +93,8 @@ def cases(tree: Path, work: Path):
     yield "--record over an earlier recording without --overwrite: exit 2, recording kept", \
         done.returncode == 2 and (rec / "gps.nmea").read_text() == "an earlier drive\n"
     yield from compiled_cases(tree, work, cache)
+    yield from reader_cases(tree, work, cache)
+    yield from emulator_and_crash_cases(tree, work, cache)
     for setting in ("tractor.m=inf", "steering.command_delay=nan"):
         done = agrobot(tree, cache, "run", F8, "--out", work / "o6", "--set", setting, "--engine", "compiled")
         yield f"--set {setting} --engine compiled: exit 2 naming it", \
@@ -139,6 +145,96 @@ def compiled_cases(tree: Path, work: Path, cache: Path):
     os.chmod(cache / "compiled", 0o700)
     yield "a cache folder others may write: --engine compiled refused naming it (exit 2)", \
         done.returncode == 2 and str(cache / "compiled") in done.stderr
+
+
+FUZZ = """
+    import random, struct, tempfile, time
+    from pathlib import Path
+    from agrobot.orchestrator.errors import InputError
+    from agrobot.measurements.recording import import_recording
+    from tests.test_fuzz_binary_readers import _base, damaged
+    rng, bad = random.Random(58), []
+    for kind in ("tlg", "ros1", "mcap", "blf"):
+        name, data = _base(kind)
+        for trial in range({n}):
+            edits = [(rng.choice(["flip", "cut", "truncate", "zero", "huge", "back"]), rng.random(),
+                      rng.choice([4, 8]), rng.randrange(256)) for _ in range(rng.randint(1, 3))]
+            with tempfile.TemporaryDirectory() as tmp:
+                path = Path(tmp) / name
+                path.write_bytes(damaged(data, edits))
+                if kind == "tlg":
+                    (Path(tmp) / "TLG00001.xml").write_bytes(_base("tlg_header")[1])
+                began = time.perf_counter()
+                try:
+                    import_recording(Path(tmp) if kind == "tlg" else path)
+                except InputError as exc:
+                    text = str(exc)
+                    if str(path) not in text or "MemoryError" in text or not any(
+                            w in text.replace(str(path), "") for w in ("offset", "byte", "record", "message",
+                                                                       "frame", "stream", "magic", "empty", "no ")):
+                        bad.append((kind, text[:160]))
+                except Exception as exc:
+                    bad.append((kind, type(exc).__name__))
+                if time.perf_counter() - began > 10:
+                    bad.append((kind, "slow"))
+    print(len(bad), bad[:3])
+"""
+
+
+def reader_cases(tree: Path, work: Path, cache: Path):
+    """Binary recordings with impossible sizes, and many damaged copies of each binary format."""
+    from tests.test_fuzz_binary_readers import _base
+
+    for kind, at, value in (("ros1", 13, struct.pack("<I", 0xFFFFFFF0)), ("mcap", 9, struct.pack("<Q", 1 << 62))):
+        name, data = _base(kind)
+        path = work / name
+        path.write_bytes(data[:at] + value + data[at + len(value):])
+        done = agrobot(tree, cache, "convert", path, "--out", work / f"{kind}.csv")
+        yield f"a {kind} bag declaring a record of {int.from_bytes(value, 'little')} bytes: exit 2 naming the " \
+              f"file and the byte offset", done.returncode == 2 and f"(at byte offset {at if kind == 'ros1' else 8})" \
+            in done.stderr and str(path) in done.stderr
+    done = python(tree, cache, FUZZ.format(n=100))
+    yield "100 damaged copies each of a TLG.bin, ROS 1 bag, MCAP and BLF: each read or refused naming the file " \
+          "and where, in seconds", done.returncode == 0 and done.stdout.split()[:1] == ["0"]
+
+
+CRASH = """[study]
+name = "crashing"
+stop_time = 3.0
+base_step = 0.1
+seed = 1
+realtime = true
+isolate_fmus = false
+[components.m]
+type = "misbehaving.fmu"
+parameters = { fail_time = 1.5, fail_mode = 1 }
+"""
+
+
+def emulator_and_crash_cases(tree: Path, work: Path, cache: Path):
+    """emulate --record over an earlier recording; a segfault in an FMU kept in this process."""
+    rec = work / "emulated"
+    rec.mkdir()
+    (rec / "gps.nmea").write_text("an earlier drive\n")
+    done = agrobot(tree, cache, "emulate", ROOT / "studies" / "tractor_emulator.toml", "--nmea-port", "0",
+                   "--duration", "1", "--record", rec, "--set", "can.interface=virtual", "--set", "can.channel=cases")
+    yield "emulate --record (no --out) over an earlier recording without --overwrite: exit 2, recording kept", \
+        done.returncode == 2 and (rec / "gps.nmea").read_text() == "an earlier drive\n"
+    from tests.fmu_build import build_test_fmu
+
+    build_test_fmu("misbehaving", work)
+    (work / "crashing.toml").write_text(CRASH)
+    done = agrobot(tree, cache, "run", work / "crashing.toml", "--out", work / "crashed", "--no-progress",
+                   "--engine", "python", "--no-plots")
+    named = re.search(r"the signals recorded until the crash: (\S+) \(", done.stderr)
+    read = python(tree, cache, f"""
+        from agrobot.orchestrator.atomic_files import read_partial
+        t = read_partial({named.group(1) if named else ''!r})["t"]
+        print(len(t), abs(t - [0.1 * k for k in range(len(t))]).max())""")
+    yield "an FMU kept in this process segfaults at t = 1.5 s: the dump names where the signals until then are, " \
+          "and they read back (t = 0 .. 1.2 s or later)", \
+        named is not None and read.returncode == 0 and int(read.stdout.split()[0]) >= 12 and \
+        float(read.stdout.split()[1]) < 1e-9
 
 
 def main() -> int:

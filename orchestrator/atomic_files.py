@@ -116,6 +116,7 @@ class SignalWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.rows = 0
         self._parquet = None
+        self._spill = None
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
@@ -126,18 +127,40 @@ class SignalWriter:
             self._csv = open(self.path, "w", newline="")
             pd.DataFrame(columns=self.columns).to_csv(self._csv, index=False)
 
+    @property
+    def partial(self) -> Path:
+        """Where the rows written so far can be read should the process die (``spill``): a CSV table
+        is that file itself (its lines flushed at each block), a Parquet one (readable only once
+        closed) an Arrow IPC stream beside it, ``NAME.partial.arrows`` (read_partial)."""
+        return self.path if self._parquet is None else self.path.with_name(self.path.stem + ".partial.arrows")
+
+    def spill(self) -> Path:
+        """From now on every block also goes to ``partial``, written through to the file, so that
+        a process killed by a fatal signal (an FMU's C code crashing) leaves every block appended
+        before it readable; removed by ``close``. Returns ``partial``."""
+        if self._parquet is not None and self._spill is None:
+            self._spill = pa.ipc.new_stream(pa.OSFile(str(self.partial), "wb"), self._schema)
+        return self.partial
+
     def append(self, block) -> None:
         if len(block) == 0:
             return
         frame = pd.DataFrame(block, columns=self.columns)
         if self._parquet is not None:
-            self._parquet.write_table(pa.Table.from_pandas(frame, schema=self._schema, preserve_index=False))
+            table = pa.Table.from_pandas(frame, schema=self._schema, preserve_index=False)
+            self._parquet.write_table(table)
+            if self._spill is not None:
+                self._spill.write_table(table)
         else:
             frame.to_csv(self._csv, header=False, index=False)
             self._csv.flush()
         self.rows += len(block)
 
     def close(self) -> Path:
+        if self._spill is not None:
+            self._spill.close()
+            self._spill = None
+            self.partial.unlink(missing_ok=True)
         if self._parquet is not None:
             self._parquet.close()
             self._parquet = None
@@ -145,3 +168,20 @@ class SignalWriter:
             self._csv.close()
         os.chmod(self.path, 0o666 & ~UMASK)
         return self.path
+
+
+def read_partial(path: Path) -> pd.DataFrame:
+    """The rows of an Arrow IPC stream left by a run that died (SignalWriter.spill): every complete
+    block, up to the first one cut short; the columns' units in ``attrs["units"]``."""
+    batches = []
+    with pa.ipc.open_stream(pa.OSFile(str(path), "rb")) as reader:
+        schema = reader.schema
+        try:
+            for batch in reader:
+                batches.append(batch)
+        except (OSError, pa.ArrowInvalid):      # the block being written when the process died
+            pass
+    frame = pa.Table.from_batches(batches, schema=schema).to_pandas()
+    raw = (schema.metadata or {}).get(UNITS_KEY)
+    frame.attrs["units"] = json.loads(raw) if raw else {}
+    return frame

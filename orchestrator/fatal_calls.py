@@ -3,7 +3,9 @@ it (a segmentation fault, an abort) leaves no Python exception to catch, so the 
 before it is made. ``faulthandler`` prints the Python frames of the crashing thread on SIGSEGV,
 SIGFPE, SIGABRT, SIGBUS and SIGILL; every call into a component's binary goes through a frame
 whose function name says the component and the call (``named(label, fn, *args)``), so the dump
-reads ``File ".../fatal_calls.py", line N in FMU component 'plant' (plant.fmu): doStep``.
+reads ``File ".../fatal_calls.py", line N in FMU component 'plant' (plant.fmu): doStep``. The run's
+loop goes through such a frame too once a binary is loaded in-process (``watching``), named after
+where the signals recorded until the crash are kept (orchestrator.runner).
 """
 from __future__ import annotations
 
@@ -13,8 +15,12 @@ import sys
 from typing import Any, Callable
 
 
+_watched: list[bool] = []
+
+
 def watch() -> None:
     """Print the crashing call on a fatal signal (faulthandler on stderr, once per process)."""
+    _watched[:] = [True]
     if not faulthandler.is_enabled():
         try:
             faulthandler.enable(file=sys.__stderr__ or sys.stderr)
@@ -36,3 +42,9 @@ def caller(label: str) -> Callable[..., Any]:
 def named(label: str, fn: Callable[..., Any], *args: Any) -> Any:
     """``fn(*args)``, a fatal signal during which is printed with ``label``."""
     return caller(label)(fn, *args)
+
+
+def watching() -> bool:
+    """True once a component has loaded a binary into this process (``watch``): a fatal signal in
+    it would end the process with no Python code run after it."""
+    return bool(_watched)

@@ -225,9 +225,17 @@ class OutputLock:
 
 def remove_stale_staging(out: Path) -> list[Path]:
     """Staging folders of earlier commands into ``out`` that were killed (only called by the
-    lock's holder: no live writer owns them); removed, and returned for a message."""
+    lock's holder: no live writer owns them); removed, and returned for a message. One that holds
+    the signals a run recorded until a crash killed it (``*.partial.arrows``) is moved beside
+    ``out`` as a failed result instead."""
     pattern = re.compile(rf"^\.{re.escape(out.name)}\.(?:{STAGING}|old\.)[A-Za-z0-9_]+$")
     found = [p for p in out.parent.iterdir() if pattern.match(p.name) and p.is_dir()] if out.parent.is_dir() else []
+    for path in [p for p in found if any(p.glob("*.partial.arrows"))]:
+        kept = _beside(out, "failed", MARKERS + ("signals.partial.arrows",))
+        shutil.rmtree(kept, ignore_errors=True)
+        os.replace(path, kept)
+        found.remove(path)
+        print(f"note: the signals recorded until an earlier run crashed are kept in {kept}", file=sys.stderr)
     for path in found:
         shutil.rmtree(path, ignore_errors=True)
     if found:

@@ -21,6 +21,7 @@ from typing import Any
 from .build import System, build_system
 from .engine import RunError, Simulation
 from .errors import ComputationError, Interrupted, Terminated, critical
+from .fatal_calls import named, watching
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
 from .output import ResultFolder, disk_full, place_output_parameters, study_inputs
@@ -107,6 +108,7 @@ def write_events(out_dir: Path, rec: RecordedSignals) -> Path:
 CHUNK_STEPS = WRITE_EVERY     # base steps between two writes of the signal table ...
 CHUNK_BYTES = WRITE_BYTES     # ... unless the whole run's table fits in this (schedule.block_rows)
 REPORT_EVERY_S = 1.0          # wall time between two calls of Simulation.advance (progress, signals)
+SPILL_EVERY_S = 0.1           # ... and between two blocks written when a crash could lose them (fatal_calls.watching)
 
 
 def _stream(sim: Simulation, writer) -> RecordedSignals:
@@ -114,30 +116,49 @@ def _stream(sim: Simulation, writer) -> RecordedSignals:
     base steps, or once after the run when its whole table fits in CHUNK_BYTES (schedule.block_rows;
     not a run paced in real time: what a crash would lose stays short). The engine is advanced about
     REPORT_EVERY_S of wall time at a time, so that progress moves as often whether the run is paced in
-    real time or runs 500 times faster. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
+    real time or runs 500 times faster. Once a component has loaded a binary into this process
+    (fatal_calls.watching) the blocks also go to a crash-readable file (SignalWriter.spill) every
+    SPILL_EVERY_S, and the loop runs under a frame named after that file, which a fatal signal's
+    dump prints. An interrupt outside the engine's step loop becomes the same RunError as one inside it (with
     the rows not yet written); draining and writing a block is never cut in half (errors.critical)."""
-    period = sim.chunk_period
     chunk = CHUNK_STEPS if getattr(sim, "pacer", None) is not None else \
         block_rows(len(sim.columns), sim.n_steps + 1, CHUNK_STEPS, CHUNK_BYTES)
-    step, drained = period, 0
     try:
         sim.start()
-        while sim.k < sim.n_steps:
-            began = time.perf_counter()
-            sim.advance(min(sim.k + step, sim.n_steps))
-            took = time.perf_counter() - began
-            rate = step / took if took > 0 else float("inf")
-            step = period * max(1, min(chunk // period, int(REPORT_EVERY_S * rate) // period))
-            if sim.k - drained >= chunk and sim.k % period == 0:
-                with critical():
-                    writer.append(sim.drain())
-                    drained = sim.k
+        if watching() and hasattr(writer, "spill"):     # a binary in this process: its crash ends it at once
+            where = writer.spill()
+            named(f"the signals recorded until the crash: {where} (Arrow IPC stream of the blocks written, "
+                  f"read by agrobot.orchestrator.atomic_files.read_partial)" if where.suffix == ".arrows" else
+                  f"the signals recorded until the crash: {where} (CSV, flushed at each block)",
+                  _advance, sim, writer, chunk, True)
+        else:
+            _advance(sim, writer, chunk)
         with critical():
             rec = sim.finish()
             writer.append(rec.data)
         return rec
     except KeyboardInterrupt as exc:
         raise RunError(f"at t = {sim.t0 + sim.k * sim.h:.6g} s: interrupted", sim.partial()) from exc
+
+
+def _advance(sim: Simulation, writer, chunk: int, spill: bool = False) -> None:
+    """Advance ``sim`` to its stop time about REPORT_EVERY_S of wall time at a time, appending a
+    block to ``writer`` every ``chunk`` base steps; ``spill`` (a run whose crash could leave no
+    Python code to run): SPILL_EVERY_S at a time (the step at most doubled from one advance to the
+    next), a block after every advance."""
+    period, every = sim.chunk_period, SPILL_EVERY_S if spill else REPORT_EVERY_S
+    step, drained = period, 0
+    while sim.k < sim.n_steps:
+        began = time.perf_counter()
+        sim.advance(min(sim.k + step, sim.n_steps))
+        took = time.perf_counter() - began
+        rate = step / took if took > 0 else float("inf")
+        grown = period * max(1, min(chunk // period, int(every * rate) // period))
+        step = min(grown, 2 * step) if spill else grown        # spilling: a step's cost is learnt first
+        if (spill or sim.k - drained >= chunk) and sim.k % period == 0 and sim.k > drained:
+            with critical():
+                writer.append(sim.drain())
+                drained = sim.k
 
 
 @dataclass

@@ -36,6 +36,7 @@ import math
 import os
 import sys
 import tempfile
+from contextlib import nullcontext
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
@@ -496,6 +497,7 @@ def emulate(study, nmea_port: int, set: Mapping[str, Any] | Sequence[str] | None
     far, as ``run --out`` keeps it); ``record``: the buses as a field log (DIR/gps.nmea,
     DIR/can.log). ``announce(line)``: told where it listens before it starts."""
     from agrobot.components.hardware.emulate import emulated_study, reach
+    from agrobot.components.hardware.record import recordings_aside
 
     if not 0 <= nmea_port <= 65535:
         raise StudyError(f"--nmea-port {nmea_port}: expected a TCP port, 0-65535")
@@ -508,8 +510,9 @@ def emulate(study, nmea_port: int, set: Mapping[str, Any] | Sequence[str] | None
         announce(f"emulating {study.study.name}: {reach(study, model, server, nmea_port)}, real time, until "
                  f"t = {study.study.stop_time:g} s or Ctrl-C")
     try:
-        done = run_study(study, None if out is None else Path(out), plots=False, overwrite=overwrite,
-                         progress=progress, named=named)
+        with nullcontext(study) if out is not None else recordings_aside(study, overwrite, record) as placed:
+            done = run_study(placed, None if out is None else Path(out), plots=False, overwrite=overwrite,
+                             progress=progress, named=named)
     except Interrupted as exc:
         return _stopped(study, f" {exc}", exc.exit_status)
     except RunError as exc:

@@ -217,10 +217,13 @@ def read_can_file(path: str | Path, db, bus: str | None = None, wanted: set[str]
             columns[msg.name].add(float(frame.timestamp), frame.arbitration_id & 0xFF if frame.is_extended_id else -1,
                                   values)
             counts["decoded"] += 1
-    except (OSError, ValueError, EOFError, can.CanError) as exc:
-        raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {exc}") from None
-    except Exception as exc:              # noqa: BLE001 - a reader choking on a foreign format
-        raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}): {type(exc).__name__}: {exc}") from None
+    except LogError:
+        raise
+    except Exception as exc:              # noqa: BLE001 - a reader choking on a foreign format or damaged bytes
+        where = f"frame {counts['frames'] + 1} (after {counts['frames']} read)" if counts["frames"] else "its first frame"
+        named = str(exc) if isinstance(exc, (OSError, ValueError, EOFError, can.CanError)) and str(exc) \
+            else f"{type(exc).__name__}: {exc}"
+        raise LogError(f"{path}: cannot read as a CAN log ({path.suffix}) at {where}: {named}") from None
     bad = [] if lines is None else lines.examples
     if lines is not None and lines.bad:
         counts["lines that are not frames"] = lines.bad

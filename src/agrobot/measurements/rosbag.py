@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .bag_records import check_bag_file
 from .log import LogError
 from .modes import MODE_VALUES, is_mode_name
 from .runs import held as in_force
@@ -160,17 +161,43 @@ def _mode_code(codes: dict, raw) -> float:
     return float(codes.setdefault(text, len(codes)))
 
 
+def open_bags(paths: list[Path]):
+    """An open rosbags AnyReader of ``paths``, each bag file's records checked first
+    (measurements.bag_records); a LogError names the file and what cannot be read."""
+    from rosbags.highlevel import AnyReader
+
+    paths = [Path(p) for p in paths]
+    for p in paths:
+        for file in (sorted(p.iterdir()) if p.is_dir() else [p]):
+            if file.suffix in (".bag", ".mcap") and file.is_file():
+                check_bag_file(file)
+    try:
+        reader = AnyReader(paths, default_typestore=typestore())
+        reader.open()
+    except Exception as exc:                         # noqa: BLE001 - rosbags raises many kinds
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    return reader
+
+
+def bag_messages(reader, connections: list, paths: list[Path]):
+    """(connection, receive time in ns, raw bytes) of ``connections``; damage found while reading
+    is a LogError naming the bag, the message count read and the last topic and receive time."""
+    count, last = 0, None
+    try:
+        for count, (conn, receive_ns, raw) in enumerate(reader.messages(connections=connections), 1):
+            last = (conn.topic, receive_ns)
+            yield conn, receive_ns, raw
+    except Exception as exc:                         # noqa: BLE001 - rosbags raises many kinds on damaged bytes
+        after = f" after topic {last[0]} at receive time {last[1] * 1e-9:.9f} s" if last else ""
+        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag, it is damaged: message "
+                       f"{count + 1 if last else 1} cannot be read{after} ({type(exc).__name__}: {exc})") from None
+
+
 def read_bags(paths: list[Path], given: list, source: Path) -> tuple[dict, dict]:
     """(column -> (times, values in the column's unit), report) of the bags: the standard types
     by TYPE_MAP, the ``given`` expressions (SignalSpec) by their ``/topic.field`` names. A
     LogError names the bag, the topic or the field."""
-    from rosbags.highlevel import AnyReader
-
-    try:
-        reader = AnyReader([Path(p) for p in paths], default_typestore=typestore())
-        reader.open()
-    except Exception as exc:                         # noqa: BLE001 - rosbags raises many kinds
-        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    reader = open_bags(paths)
     try:
         return _read(reader, given, source)
     finally:
@@ -247,7 +274,7 @@ def _messages(reader, wanted: dict, auto: dict, source: Path, labels: dict) -> t
     header_used: dict[str, bool] = {}
     connections = [c for c in reader.connections if c.topic in wanted]
     # rosbags reads every topic when given no connection: nothing wanted, nothing read
-    for conn, receive_ns, raw in (reader.messages(connections=connections) if connections else ()):
+    for conn, receive_ns, raw in (bag_messages(reader, connections, [source]) if connections else ()):
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:                     # noqa: BLE001 - an unknown type or a broken message
@@ -329,13 +356,7 @@ def _evaluated(given: list, auto: dict, series: dict, topics: dict, report_topic
 
 def list_bag(paths: list[Path]) -> list[str]:
     """``--list``: each topic, its type, count and rate, and the numeric fields of its first message."""
-    from rosbags.highlevel import AnyReader
-
-    try:
-        reader = AnyReader([Path(p) for p in paths], default_typestore=typestore())
-        reader.open()
-    except Exception as exc:                         # noqa: BLE001
-        raise LogError(f"{', '.join(map(str, paths))}: cannot read as a ROS bag: {type(exc).__name__}: {exc}") from None
+    reader = open_bags(paths)
     lines = []
     try:
         lines.append(f"ROS bag {', '.join(p.name for p in paths)}: {len(reader.connections)} topic(s), "
@@ -346,7 +367,7 @@ def list_bag(paths: list[Path]) -> list[str]:
             used = [c for c, _ in TYPE_MAP.get(conn.msgtype, [])]
             lines.append(f"  {conn.topic} ({conn.msgtype}): {count} messages, about {rate:.3g} Hz"
                          + (f"; read without options as {', '.join(used)}" if used else ""))
-            first = next(reader.messages(connections=[conn]), None)
+            first = next(bag_messages(reader, [conn], paths), None)
             if first is None:
                 continue
             try:
