@@ -26,7 +26,8 @@ def test_both_tools_use_the_same_rules():
 
     assert effect.Parameter is estimation.Parameter is ordinary_driving.Parameter is kinematic.Parameter
     assert candidates.effective_size is estimation.effective_size is driving.effective_size
-    assert candidates.covariance is estimation.covariance is driving.covariance
+    assert candidates.solution_covariance is estimation.solution_covariance is driving.solution_covariance
+    assert candidates.FitResult is estimation.FitResult is driving.FitResult is ordinary_driving.FitResult
     assert comparisons.pair is estimation.compare
 
 

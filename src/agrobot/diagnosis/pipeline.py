@@ -21,7 +21,7 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
-from .candidates import CannotDecide, CandidateFit, Replay, uncertain
+from .candidates import CannotDecide, FitResult, Replay, uncertain
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
@@ -67,7 +67,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
     fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     fitted = {}
     for p in f.effect.parameters:
-        value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
+        value, sd = f.fit.values[p.name], f.fit.std(p.name)
         fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
                           "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p),
                           "secondary": p.name in f.effect.secondary}
@@ -108,7 +108,7 @@ def at_bound(value: float, p) -> str | None:
     return None
 
 
-def _warnings(replay: Replay, base: CandidateFit, floors: dict) -> list[str]:
+def _warnings(replay: Replay, base: FitResult, floors: dict) -> list[str]:
     """What makes a verdict on this log fragile."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
     if replay.not_judged:
