@@ -90,8 +90,8 @@ class FitResult:
         if name not in self.names:
             return math.nan
         i = self.names.index(name)
-        c = self.cov[i, i]
-        return float(math.sqrt(max(c, 0.0))) if math.isfinite(c) else math.nan
+        c = float(self.cov[i, i])
+        return math.nan if math.isnan(c) else float(math.sqrt(max(c, 0.0)))     # inf: not seen by the residuals
 
     def at_bound(self, p: Parameter) -> str | None:
         return p.at_bound(self.values[p.name])
@@ -173,10 +173,16 @@ def effective_size(residuals, updates: int | None = None) -> float:
 
 
 def covariance(J: np.ndarray, rss: float, n: int, n_eff: float, held: np.ndarray | None = None) -> np.ndarray:
-    """(J'J)^+ RSS / (n - k) x n / n_eff on the parameters not ``held`` (on a bound: nan)."""
+    """(J'J)^+ RSS / (n - k) x n / n_eff on the parameters not ``held`` (on a bound: nan); one the
+    residuals do not depend on (a zero column of J, which the pseudo-inverse would give a zero
+    variance) has an infinite variance."""
     k = J.shape[1]
     held = np.zeros(k, bool) if held is None else np.asarray(held, bool)
     cov = np.full((k, k), np.nan)
+    norms = np.linalg.norm(J, axis=0) if len(J) else np.zeros(k)
+    blind = ~held & (norms <= 1e-12 * max(float(norms.max(initial=0.0)), 1e-300))
+    cov[blind, blind] = np.inf
+    held = held | blind
     inner = np.flatnonzero(~held)
     if len(inner):
         Ji = J[:, inner]

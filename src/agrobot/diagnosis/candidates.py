@@ -32,7 +32,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, held_tyres, widened_ranges
+from .baseline import Baseline, held_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      steering_replay)
@@ -490,7 +490,7 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
     wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
-    held = getattr(replay, "held_uncertain", ())           # and those it holds (the kinematic regime)
+    held = getattr(replay, "held_uncertain", ())           # and those it holds (not pinned by the log)
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
@@ -601,16 +601,25 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     (each stage weighed by its own residual level, _fit), and the levels taken again from that
     fit: the yaw rate fixes the understeer gradient
     m/L (l_r/C_f - l_f/C_r) and the yaw mode but hardly C_r, which sets the rear axle's side-slip
-    m l_f a_y / (L C_r) that the track sees."""
+    m l_f a_y / (L C_r) that the track sees. A parameter the log does not pin (baseline.unpinned: its
+    95 % interval from the stage's refit wider than half its value, or none) is held at the study's,
+    and listed with why in ``replay.held_uncertain``."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
     for s in replay.stages:
-        values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
-        wider = widened_ranges(uncertain(replay, s), values)
+        start = values
+        fit = _fit(replay, start, list(uncertain(replay, s)), (s,), [{}], sigma)
+        wider = widened_ranges(uncertain(replay, s), fit.values)
         if wider:                   # a value on a prior edge is no estimate: searched again out to the limit
             replay.widened_uncertain.update(wider)
-            values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
+            fit = _fit(replay, fit.values, list(uncertain(replay, s)), (s,), [{}], sigma)
+        loose = unpinned(fit)
+        if loose:                   # what the log does not pin stays at the study's; the others refitted so
+            replay.held_uncertain = {**replay.held_uncertain, **loose}
+            fit = _fit(replay, {**fit.values, **{k: start[k] for k in loose}}, list(uncertain(replay, s)), (s,), [{}],
+                       sigma)
+        values = fit.values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
         if joint:
