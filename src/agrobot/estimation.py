@@ -26,7 +26,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 Z95 = 1.959964
-AT_BOUND = 2e-3          # a value within this share of its range from a bound ends on it
+AT_BOUND = 2e-3          # a value within this share of its range from a bound ends on it (held there)
+REPORTED_AT_BOUND = 5e-3   # a reported value within this share of its range from a bound: no estimate
 
 
 @dataclass(frozen=True)
@@ -56,7 +57,7 @@ class Parameter:
         """This parameter with the bound ``value`` ended on moved to the physical limit, or None
         when that bound is the limit already (then the value is not identifiable from the log)."""
         lo, hi = self.limit or (self.lower, self.upper)
-        side = self.at_bound(value, 5e-3)
+        side = self.at_bound(value, REPORTED_AT_BOUND)
         if side == "upper" and hi > self.upper:
             return replace(self, upper=hi)
         if side == "lower" and lo < self.lower:

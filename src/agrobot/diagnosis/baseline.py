@@ -18,6 +18,7 @@ from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParam
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study, StudyError
 
+from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
@@ -117,8 +118,7 @@ def refit_summary(start: dict[str, float], fitted: dict[str, float], params, hel
     out = []
     for p in params:
         a, b = float(start[p.name]), float(fitted[p.name])
-        span = p.upper - p.lower
-        edge = next((side for side, x in (("lower", p.lower), ("upper", p.upper)) if abs(b - x) <= 5e-3 * span), None)
+        edge = p.at_bound(b, REPORTED_AT_BOUND)
         out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
                     "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
     why = held if isinstance(held, dict) else dict.fromkeys(held, KINEMATIC_HELD)

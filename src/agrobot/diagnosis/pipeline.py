@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agrobot.estimation import Z95, compare
+from agrobot.estimation import REPORTED_AT_BOUND, Z95, compare
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
 from agrobot.identification.yaw_measurement import with_yaw_rate
@@ -101,11 +101,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
 
 def at_bound(value: float, p) -> str | None:
     """'lower' or 'upper' when a fitted value ends within 0.5 % of the searched range of a bound."""
-    span = p.upper - p.lower
-    for side, b in (("lower", p.lower), ("upper", p.upper)):
-        if abs(value - b) <= 5e-3 * span:
-            return side
-    return None
+    return p.at_bound(value, REPORTED_AT_BOUND)
 
 
 def _warnings(replay: Replay, base: FitResult, floors: dict) -> list[str]:
