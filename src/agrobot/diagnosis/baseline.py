@@ -23,7 +23,7 @@ from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy, Parameter
-from .plausibility import KINEMATIC, slip_share
+from .plausibility import KINEMATIC, slip_share, understeer
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -108,6 +108,21 @@ def unpinned(fit) -> dict[str, str]:
         out[p.name] = ("not pinned by the log: " + (f"95 % interval +-{half:.2g} about {value:.3g}" if math.isfinite(half)
                        else "it ended on its bound" if math.isnan(half) else "the residuals do not depend on it"))
     return out
+
+
+def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, str]:
+    """{name: why} of the ``free`` cornering scales when with ``values`` they give the study's vehicle
+    an understeer gradient K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have
+    (plausibility.understeer): a steering map's gain or a wrong wheelbase taken up as tyres; else
+    empty."""
+    p = replay.baseline.tractor
+    names = [n for n in TYRE_SCALES[:2] if n in free]
+    if not names:
+        return {}
+    sf, sr = values["cornering_front_scale"], values["cornering_rear_scale"]
+    K = p.m / (p.l_f + p.l_r) * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
+    why = understeer(K, replay.baseline.vehicle, None)
+    return dict.fromkeys(names, f"implausible for the vehicle: at {sf:.3g} and {sr:.3g}, {why}") if why else {}
 
 
 def refit_summary(start: dict[str, float], fitted: dict[str, float], params, held=()) -> list[dict]:

@@ -32,7 +32,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, held_tyres, unpinned, widened_ranges
+from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      steering_replay)
@@ -602,8 +602,10 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     fit: the yaw rate fixes the understeer gradient
     m/L (l_r/C_f - l_f/C_r) and the yaw mode but hardly C_r, which sets the rear axle's side-slip
     m l_f a_y / (L C_r) that the track sees. A parameter the log does not pin (baseline.unpinned: its
-    95 % interval from the stage's refit wider than half its value, or none) is held at the study's,
-    and listed with why in ``replay.held_uncertain``."""
+    95 % interval from the stage's refit wider than half its value, or none), and cornering scales
+    that would give the vehicle an understeer gradient its class does not have
+    (baseline.implausible_tyres), are held at the study's and listed with why in
+    ``replay.held_uncertain``."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
@@ -614,12 +616,7 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
         if wider:                   # a value on a prior edge is no estimate: searched again out to the limit
             replay.widened_uncertain.update(wider)
             fit = _fit(replay, fit.values, list(uncertain(replay, s)), (s,), [{}], sigma)
-        loose = unpinned(fit)
-        if loose:                   # what the log does not pin stays at the study's; the others refitted so
-            replay.held_uncertain = {**replay.held_uncertain, **loose}
-            fit = _fit(replay, {**fit.values, **{k: start[k] for k in loose}}, list(uncertain(replay, s)), (s,), [{}],
-                       sigma)
-        values = fit.values
+        values = _held_where_loose(replay, fit, start, s, sigma).values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
         if joint:
@@ -629,6 +626,23 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
         for s in replay.stages:
             sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
     return fit, sigma
+
+
+def _held_where_loose(replay: Replay, fit: FitResult, start: dict[str, float], stage: str,
+                      sigma: dict[str, float]) -> FitResult:
+    """``fit`` (a stage's baseline refit) with what the log does not pin (baseline.unpinned) and
+    cornering scales its class does not have (baseline.implausible_tyres) put back to ``start`` (the
+    study's) and held there, the others refitted, until none is left."""
+    while fit.free:
+        loose = unpinned(fit)
+        loose |= implausible_tyres(replay, {**fit.values, **{k: start[k] for k in loose}},
+                                   {p.name for p in fit.free} - set(loose))
+        if not loose:
+            break
+        replay.held_uncertain = {**replay.held_uncertain, **loose}
+        fit = _fit(replay, {**fit.values, **{k: start[k] for k in loose}}, list(uncertain(replay, stage)), (stage,),
+                   [{}], sigma)
+    return fit
 
 
 def merged(model: FitResult, part: FitResult, reset: dict[str, float] | None = None) -> FitResult:
