@@ -60,6 +60,8 @@ def plausible(res: dict) -> str:
     """Whether what the diagnosis concluded fits the declared vehicle (diagnosis.plausibility): 'yes',
     or each objection: a judged effect's value no vehicle of its class has, an understeer gradient
     not concluded, the log's turns not the study's vehicle, a baseline value on its bound."""
+    if res["verdict"] == "cannot decide":
+        return "nothing concluded"
     said = [f"{e['id']}: {e['judgement'][0]}" for e in res.get("effects", []) if e.get("judgement")]
     if res.get("understeer_note"):
         said.append("understeer gradient not concluded: " + res["understeer_note"])
