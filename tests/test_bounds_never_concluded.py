@@ -34,3 +34,19 @@ def test_the_baseline_refit_widens_a_prior_edge_and_says_what_it_moved_and_what_
     text = refit_statement(list(rows.values()))
     assert "cornering_rear_scale (95 % interval" in text and "held at the study's (not pinned by the log)" in text
     assert ("ended on a bound" in text) == any(r["at_bound"] for r in rows.values())
+
+
+def test_the_baseline_refit_does_not_take_up_a_steering_gain_as_tyres():
+    """The tractor's wheels turn 1.27 x the reading (harness.diagnosis_classes, seed 1001): freed, the
+    rear cornering scale takes the gain up as oversteer (0.12, an understeer gradient no vehicle of
+    the class has); held at the study's it stays near the truth's (C_r 83 kN/rad against the study's
+    90), and the refit says why."""
+    from harness.diagnosis_classes import baseline_study, class_log
+
+    frame, truth = class_log("steering_map_gain", 1001, "tractor", 120.0)
+    baseline = baseline_from_study(Study.load(baseline_study("tractor", None)))
+    replay = Replay(frame, baseline)
+    fit, _ = fit_baseline(replay)
+    truth_scale = truth["C_r"] / baseline.tractor.C_r
+    assert abs(fit.values["cornering_rear_scale"] / truth_scale - 1.0) < 0.25
+    assert replay.held_uncertain["cornering_rear_scale"].startswith("implausible for the vehicle")
