@@ -130,13 +130,13 @@ def refit_summary(start: dict[str, float], fitted: dict[str, float], params, hel
     whether it moved (by 2 % or more), the range it was searched in, and the bound it ended on
     (``at_bound``: 'lower'/'upper' of the last range searched, within 0.5 % of it; then the value is
     no estimate: the log does not fix it)."""
+    why = held if isinstance(held, dict) else dict.fromkeys(held, KINEMATIC_HELD)
     out = []
-    for p in params:
+    for p in (p for p in params if p.name not in why):
         a, b = float(start[p.name]), float(fitted[p.name])
         edge = p.at_bound(b, REPORTED_AT_BOUND)
         out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
                     "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
-    why = held if isinstance(held, dict) else dict.fromkeys(held, KINEMATIC_HELD)
     return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]), "unit": "1", "moved": False,
                    "bounds": [], "at_bound": None, "held": w} for n, w in why.items()]
 

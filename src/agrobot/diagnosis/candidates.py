@@ -490,7 +490,7 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
     wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
-    held = getattr(replay, "held_uncertain", ())           # and those it holds (not pinned by the log)
+    held = replay.__dict__.get("held_in_selection", getattr(replay, "held_uncertain", ()))    # and those it holds
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
@@ -605,7 +605,8 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     95 % interval from the stage's refit wider than half its value, or none), and cornering scales
     that would give the vehicle an understeer gradient its class does not have
     (baseline.implausible_tyres), are held at the study's and listed with why in
-    ``replay.held_uncertain``."""
+    ``replay.held_uncertain``; the selection's refits, where an effect can pin them, free them again
+    (``replay.held_in_selection``: only the kinematic regime's)."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
@@ -625,6 +626,8 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
         fit = _fit(replay, values, [], replay.stages, [{}], sigma)
         for s in replay.stages:
             sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
+    # the selection frees again what only this refit held: an effect in the model can pin it
+    replay.held_in_selection = held_tyres(replay)
     return fit, sigma
 
 
