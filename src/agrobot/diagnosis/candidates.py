@@ -610,6 +610,7 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
+    replay.__dict__.pop("held_in_selection", None)
     for s in replay.stages:
         start = values
         fit = _fit(replay, start, list(uncertain(replay, s)), (s,), [{}], sigma)
