@@ -9,7 +9,9 @@ Prints one table: vehicle, seconds, the identified vehicle diagnose shares with 
 held-out fit, tyre saturation), the independent estimates side by side (K from the dynamic fit and
 from steady states, the delay from the fit and from a cross-correlation, the gyro bias from the fit
 and from the GNSS course), the physical checks (beta, vy, a_y when the log has them), the verdict
-with its status and statement, what was not judged, and the time taken; and the yaw-rate misfit of
+with its status and statement, whether it is plausible for the vehicle (a value its class has, an
+understeer gradient concluded, the study's wheelbase, nothing on a bound), what was not judged, and
+the time taken; and the yaw-rate misfit of
 identify's model and of the diagnosis's on the same unseen stretches (identify's held-out segments
 inside the diagnosis's held-out part), and what the diagnosis held out (the last 40 %, or every third
 10 s when the last part is driven beyond the first's conditions).
@@ -52,6 +54,21 @@ def both(comparisons: list[dict], quantity: str, f: str = "{:.3g}") -> str:
     text = "; ".join(f"{m.split(' ')[0]} " + f.format(e["value"]) + " [" + ", ".join(f.format(x) for x in e["interval"]) + "]"
                      for m, e in c["estimates"].items())
     return text + ("" if c["agree"] else " DISAGREE")
+
+
+def plausible(res: dict) -> str:
+    """Whether what the diagnosis concluded fits the declared vehicle (diagnosis.plausibility): 'yes',
+    or each objection: a judged effect's value no vehicle of its class has, an understeer gradient
+    not concluded, the log's turns not the study's vehicle, a baseline value on its bound."""
+    if res["verdict"] == "cannot decide":
+        return "nothing concluded"
+    said = [f"{e['id']}: {e['judgement'][0]}" for e in res.get("effects", []) if e.get("judgement")]
+    if res.get("understeer_note"):
+        said.append("understeer gradient not concluded: " + res["understeer_note"])
+    if (res.get("log_vehicle") or {}).get("mismatch"):
+        said.append("wheelbase: " + res["log_vehicle"]["mismatch"].split(": either")[0])
+    said += [f"{r['name']} on its {r['at_bound']} bound" for r in res.get("baseline_refit_summary") or [] if r["at_bound"]]
+    return "yes" if not said else "no: " + "; ".join(said)
 
 
 def main() -> None:
@@ -113,7 +130,7 @@ def main() -> None:
                 verdict += ": " + res.get("verdict_statement", "")
             not_judged = "; ".join(f"{s}: {w.removeprefix('not judged: ')}" for s, w in res.get("not_judged", {}).items())
             rows.append({"vehicle": name, "seconds": f"{seconds:.0f} (diagnosed {piece['t'].iloc[-1]:.0f})", **ident,
-                         "verdict": verdict, "not judged": not_judged or "-",
+                         "verdict": verdict, "plausible for the vehicle": plausible(res), "not judged": not_judged or "-",
                          "time [s]": f"{time.perf_counter() - start:.0f}"})
             print(f"{name}: done in {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
     cols = list(dict.fromkeys(k for r in rows for k in r))

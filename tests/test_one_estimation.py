@@ -26,7 +26,8 @@ def test_both_tools_use_the_same_rules():
 
     assert effect.Parameter is estimation.Parameter is ordinary_driving.Parameter is kinematic.Parameter
     assert candidates.effective_size is estimation.effective_size is driving.effective_size
-    assert candidates.covariance is estimation.covariance is driving.covariance
+    assert candidates.solution_covariance is estimation.solution_covariance is driving.solution_covariance
+    assert candidates.FitResult is estimation.FitResult is driving.FitResult is ordinary_driving.FitResult
     assert comparisons.pair is estimation.compare
 
 
@@ -102,3 +103,46 @@ def test_identify_and_diagnose_agree_where_their_models_coincide(tmp_path):
     assert len(said) == 1 and "they agree" in said[0], said
     fitted = next(e for e in result["effects"] if e["id"] == "steering_offset")["fitted"]["steer_angle_offset"]
     assert fitted["interval"][0] <= truth["offset"] <= fitted["interval"][1]
+
+
+def test_one_fit_result_merges_and_has_no_interval_for_what_the_residuals_do_not_see():
+    """A fit whose third parameter the residuals do not depend on (a zero Jacobian column): its
+    variance is infinite (the pseudo-inverse alone gives zero), and the baseline refit's rule holds
+    it; merging keeps each side's own variances."""
+    from agrobot.diagnosis.baseline import unpinned
+
+    rng = np.random.default_rng(2)
+    n = 400
+    X = np.column_stack([np.ones(n), np.linspace(-1, 1, n), np.zeros(n)])
+    y = 2.0 + 0.5 * X[:, 1] + 0.1 * rng.standard_normal(n)
+    coef, *_ = np.linalg.lstsq(X[:, :2], y, rcond=None)
+    r = y - X[:, :2] @ coef
+    free = tuple(estimation.Parameter(k, "1", 1.0, -10.0, 10.0) for k in ("a", "b", "c"))
+    cov = estimation.covariance(X, float(r @ r), n, estimation.effective_size(r))
+    fit = estimation.FitResult({"a": coef[0], "b": coef[1], "c": 0.3}, free, cov, {"y": float(r @ r)}, {"y": n},
+                               {"y": float(n)})
+    assert fit.std("c") == np.inf and fit.std("a") == pytest.approx(0.1 / np.sqrt(n), rel=0.15)
+    assert set(unpinned(fit)) == {"c"} and "do not depend" in unpinned(fit)["c"]
+    part = estimation.FitResult({**fit.values, "c": 0.7}, free[2:], np.array([[0.01]]), {"z": 1.0}, {"z": 10},
+                                {"z": 5.0})
+    both = fit.merged(part)
+    assert both.values["c"] == 0.7 and both.std("c") == pytest.approx(0.1) and both.std("a") == fit.std("a")
+    assert set(both.rss) == {"y", "z"} and both.n_total == n + 10
+
+
+def test_the_diagnosis_counts_a_yaw_rate_derived_from_a_heading_by_its_updates(tmp_path):
+    """The small machine's heading updates at 5 Hz in 20 Hz rows: the yaw stage's fit part holds a
+    quarter of its rows' updates, and its effective samples are never more (as identify's)."""
+    from agrobot.diagnosis.candidates import fitted
+    from agrobot.diagnosis.pipeline import _replay_of
+    from harness.small_ackermann import make_small_log, write_study
+
+    frame, truth = make_small_log(3, duration=90.0)
+    path = tmp_path / "small.csv"
+    frame.to_csv(path, index=False)
+    *_, replay, _ = _replay_of(path, write_study(tmp_path), {}, 0.6, False, None, "auto")
+    rows = int(replay.masks["yaw"]["fit"].sum())
+    assert replay.updates("yaw") == pytest.approx(rows * truth["heading_rate"] / 20.0, rel=0.05)
+    assert replay.updates("steering") is None
+    fit = fitted(replay, dict(replay.baseline.values), [], ("yaw",), [{}], {"yaw": 1.0})
+    assert fit.n["yaw"] == rows and fit.n_eff["yaw"] <= replay.updates("yaw")

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from agrobot.components.models import steering_equivalent
-from agrobot.diagnosis.candidates import CandidateFit
+from agrobot.estimation import FitResult
 from agrobot.diagnosis.catalogue import CATALOGUE
 from agrobot.diagnosis.effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from agrobot.diagnosis.effects.steering_ratio_curve import DELTA_KEY
@@ -83,8 +83,9 @@ def test_a_ratio_curve_is_searched_for_the_same_ratio_changes_at_a_cars_small_an
     assert curve.parameters[0] is p                               # the catalogue's own is left as it was
 
 
-def _fit_of(rmse: dict, rss: dict) -> CandidateFit:
-    return CandidateFit({"steering_gain": 1.25}, dict(rss), {s: 1000 for s in rss}, {s: 300.0 for s in rss}, dict(rmse))
+def _fit_of(rmse: dict, rss: dict) -> FitResult:
+    return FitResult({"steering_gain": 1.25}, (), np.zeros((0, 0)), dict(rss), {s: 1000 for s in rss}, {s: 300.0 for s in rss},
+                     dict(rmse))
 
 
 @pytest.mark.parametrize("track_after, supported", [(0.0236, True), (0.05, False)])

@@ -13,16 +13,21 @@ Covariance of a least-squares fit with Jacobian J (residuals r, n samples, k fre
     cov = (J' J)^+ RSS / (n - k) x n / n_eff
 
 a parameter on its bound is held there: the covariance is that of the others (its own: nan).
+
+One fit result (``FitResult``) for both tools: the values, the free parameters, their covariance
+and, per signal scored (identify's one yaw rate; the diagnosis's steering, yaw, position and speed
+stages), the residual sum of squares, samples and effective samples of the fit part.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 Z95 = 1.959964
-AT_BOUND = 2e-3          # a value within this share of its range from a bound ends on it
+AT_BOUND = 2e-3          # a value within this share of its range from a bound ends on it (held there)
+REPORTED_AT_BOUND = 5e-3   # a reported value within this share of its range from a bound: no estimate
 
 
 @dataclass(frozen=True)
@@ -52,12 +57,101 @@ class Parameter:
         """This parameter with the bound ``value`` ended on moved to the physical limit, or None
         when that bound is the limit already (then the value is not identifiable from the log)."""
         lo, hi = self.limit or (self.lower, self.upper)
-        side = self.at_bound(value, 5e-3)
+        side = self.at_bound(value, REPORTED_AT_BOUND)
         if side == "upper" and hi > self.upper:
             return replace(self, upper=hi)
         if side == "lower" and lo < self.lower:
             return replace(self, lower=lo)
         return None
+
+
+@dataclass
+class FitResult:
+    """One least-squares fit: ``values`` (every value the model reads), the ``free`` parameters and
+    their covariance ``cov`` (SI units; a parameter held on its bound: nan), and per signal scored
+    the fit part's residual sum of squares ``rss``, samples ``n`` and effective samples ``n_eff``,
+    and the held-out RMS ``rmse_test`` (where a part is held out)."""
+
+    values: dict[str, float]
+    free: tuple[Parameter, ...]
+    cov: np.ndarray
+    rss: dict[str, float]
+    n: dict[str, int]
+    n_eff: dict[str, float]
+    rmse_test: dict[str, float] = field(default_factory=dict)
+    residual_fit: np.ndarray | None = None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The free parameters' names."""
+        return tuple(p.name for p in self.free)
+
+    def std(self, name: str) -> float:
+        """The standard deviation of a free parameter (nan: held on its bound, or not free)."""
+        if name not in self.names:
+            return math.nan
+        i = self.names.index(name)
+        c = float(self.cov[i, i])
+        return math.nan if math.isnan(c) else float(math.sqrt(max(c, 0.0)))     # inf: not seen by the residuals
+
+    def at_bound(self, p: Parameter) -> str | None:
+        return p.at_bound(self.values[p.name])
+
+    def interval_of(self, grad: dict[str, float]) -> float:
+        """Standard deviation of a derived quantity with gradient ``grad`` (delta method; a
+        parameter held on its bound contributes nothing)."""
+        gvec = np.array([grad.get(n, 0.0) for n in self.names])
+        cov = np.nan_to_num(self.cov, nan=0.0)
+        return float(math.sqrt(max(gvec @ cov @ gvec, 0.0)))
+
+    @property
+    def rss_total(self) -> float:
+        return float(sum(self.rss.values()))
+
+    @property
+    def n_total(self) -> int:
+        return int(sum(self.n.values()))
+
+    @property
+    def n_eff_total(self) -> float:
+        return float(sum(self.n_eff.values()))
+
+    @property
+    def bic(self) -> float:
+        """n_eff ln(RSS / n) + k ln(n_eff), over every signal scored."""
+        return self.n_eff_total * math.log(self.rss_total / self.n_total) + len(self.free) * math.log(self.n_eff_total)
+
+    def merged(self, part: "FitResult", reset: dict[str, float] | None = None) -> "FitResult":
+        """This fit with the signals ``part`` scored, and the parameters it moved, taken from ``part``
+        (``reset``: further values, those of an effect that leaves the model); the covariance of
+        the parameters only this fit moved and that of ``part``'s, side by side."""
+        keep = [i for i, p in enumerate(self.free) if p.name not in part.names]
+        free = tuple(self.free[i] for i in keep) + tuple(part.free)
+        cov = np.full((len(free), len(free)), np.nan)
+        cov[:len(keep), :len(keep)] = self.cov[np.ix_(keep, keep)]
+        cov[len(keep):, len(keep):] = part.cov
+        values = {**self.values, **{k: part.values[k] for k in part.names}, **(reset or {})}
+        return FitResult(values, free, cov, {**self.rss, **part.rss}, {**self.n, **part.n},
+                         {**self.n_eff, **part.n_eff}, {**self.rmse_test, **part.rmse_test})
+
+
+def solution_covariance(jac: np.ndarray, cost: float, x: np.ndarray, free, n: int, n_eff: float) -> np.ndarray:
+    """``covariance`` of a bounded least-squares solution in scaled parameters x = value / scale
+    (scipy's ``jac`` and ``cost`` = RSS / 2), a parameter on its bound (Parameter.at_bound) held
+    there, returned in SI units."""
+    scale = np.array([p.scale for p in free], float)
+    held = np.array([p.at_bound(float(xi) * p.scale) is not None for p, xi in zip(free, x)], bool)
+    return covariance(jac, 2.0 * cost, n, n_eff, held) * np.outer(scale, scale)
+
+
+def updates_on(update_times: np.ndarray | None, t: np.ndarray, h: float, rows: np.ndarray) -> int | None:
+    """How many of a measurement's own updates (at ``update_times``) fall on ``rows`` (indices or a
+    mask) of the times ``t`` (spacing ``h``); None when it updates on every row."""
+    if update_times is None:
+        return None
+    lo = np.searchsorted(update_times, t - 0.5 * h)
+    fresh = np.searchsorted(update_times, t + 0.5 * h) > lo
+    return int(fresh[rows].sum())
 
 
 def effective_size(residuals, updates: int | None = None) -> float:
@@ -80,10 +174,16 @@ def effective_size(residuals, updates: int | None = None) -> float:
 
 
 def covariance(J: np.ndarray, rss: float, n: int, n_eff: float, held: np.ndarray | None = None) -> np.ndarray:
-    """(J'J)^+ RSS / (n - k) x n / n_eff on the parameters not ``held`` (on a bound: nan)."""
+    """(J'J)^+ RSS / (n - k) x n / n_eff on the parameters not ``held`` (on a bound: nan); one the
+    residuals do not depend on (a zero column of J, which the pseudo-inverse would give a zero
+    variance) has an infinite variance."""
     k = J.shape[1]
     held = np.zeros(k, bool) if held is None else np.asarray(held, bool)
     cov = np.full((k, k), np.nan)
+    norms = np.linalg.norm(J, axis=0) if len(J) else np.zeros(k)
+    blind = ~held & (norms <= 1e-12 * max(float(norms.max(initial=0.0)), 1e-300))
+    cov[blind, blind] = np.inf
+    held = held | blind
     inner = np.flatnonzero(~held)
     if len(inner):
         Ji = J[:, inner]

@@ -7,6 +7,7 @@ measured speed; every effect of the catalogue reads its own parameters' baseline
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,11 +18,12 @@ from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParam
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study, StudyError
 
+from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy, Parameter
-from .plausibility import KINEMATIC, slip_share
+from .plausibility import KINEMATIC, slip_share, understeer
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -81,12 +83,46 @@ def replay_slip_share(replay) -> float | None:
     return slip_share(replay.baseline.tractor, lateral, steering)
 
 
-def held_tyres(replay) -> tuple[str, ...]:
-    """The tyre scales the baseline refit holds at the study's: all of them on a log in the kinematic
-    regime (slip_share below KINEMATIC: the yaw rate does not fix them, and freed they would take up a
-    steering map's error as oversteer), none otherwise."""
+KINEMATIC_HELD = "the kinematic regime: not identifiable at these speeds"
+PINNED = 0.5        # a refitted value the log pins: its 95 % interval within +-50 % of it
+
+
+def held_tyres(replay) -> dict[str, str]:
+    """{name: why} of the tyre scales the baseline refit holds at the study's: all of them on a log
+    in the kinematic regime (slip_share below KINEMATIC: the yaw rate does not fix them, and freed
+    they would take up a steering map's error as oversteer), none otherwise."""
     share = replay_slip_share(replay)
-    return TYRE_SCALES if share is not None and share < KINEMATIC else ()
+    return dict.fromkeys(TYRE_SCALES, KINEMATIC_HELD) if share is not None and share < KINEMATIC else {}
+
+
+def unpinned(fit) -> dict[str, str]:
+    """{name: why} of a refit's free parameters the log does not pin (estimation's covariance rule):
+    a 95 % interval wider than PINNED x the value, none (on its bound) or infinite (the residuals do
+    not depend on it). Moved, such a value is no estimate but whatever else the model lacks (a
+    steering map's gain taken up as tyres): the refit holds it at the study's."""
+    out = {}
+    for p in fit.free:
+        value, half = fit.values[p.name], 1.96 * fit.std(p.name)
+        if half <= PINNED * abs(value):
+            continue
+        out[p.name] = ("not pinned by the log: " + (f"95 % interval +-{half:.2g} about {value:.3g}" if math.isfinite(half)
+                       else "it ended on its bound" if math.isnan(half) else "the residuals do not depend on it"))
+    return out
+
+
+def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, str]:
+    """{name: why} of the ``free`` cornering scales when with ``values`` they give the study's vehicle
+    an understeer gradient K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have
+    (plausibility.understeer): a steering map's gain or a wrong wheelbase taken up as tyres; else
+    empty."""
+    p = replay.baseline.tractor
+    names = [n for n in TYRE_SCALES[:2] if n in free]
+    if not names:
+        return {}
+    sf, sr = values["cornering_front_scale"], values["cornering_rear_scale"]
+    K = p.m / (p.l_f + p.l_r) * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
+    why = understeer(K, replay.baseline.vehicle, None)
+    return dict.fromkeys(names, f"implausible for the vehicle: at {sf:.3g} and {sr:.3g}, {why}") if why else {}
 
 
 def refit_summary(start: dict[str, float], fitted: dict[str, float], params, held=()) -> list[dict]:
@@ -94,16 +130,15 @@ def refit_summary(start: dict[str, float], fitted: dict[str, float], params, hel
     whether it moved (by 2 % or more), the range it was searched in, and the bound it ended on
     (``at_bound``: 'lower'/'upper' of the last range searched, within 0.5 % of it; then the value is
     no estimate: the log does not fix it)."""
+    why = held if isinstance(held, dict) else dict.fromkeys(held, KINEMATIC_HELD)
     out = []
-    for p in params:
+    for p in (p for p in params if p.name not in why):
         a, b = float(start[p.name]), float(fitted[p.name])
-        span = p.upper - p.lower
-        edge = next((side for side, x in (("lower", p.lower), ("upper", p.upper)) if abs(b - x) <= 5e-3 * span), None)
+        edge = p.at_bound(b, REPORTED_AT_BOUND)
         out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
                     "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
     return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]), "unit": "1", "moved": False,
-                   "bounds": [], "at_bound": None, "held": "the kinematic regime: not identifiable at these speeds"}
-                  for n in held]
+                   "bounds": [], "at_bound": None, "held": w} for n, w in why.items()]
 
 
 def refit_statement(summary: list[dict]) -> str:
@@ -111,9 +146,13 @@ def refit_statement(summary: list[dict]) -> str:
     moved = ", ".join(f"{r['name']} {r['study']:.3g} -> {r['value']:.3g}" for r in summary if r["moved"]) or "none"
     edge = [r for r in summary if r["at_bound"]]
     text = f"the baseline refit moved {moved}"
-    held = [r["name"] for r in summary if r.get("held")]
-    if held:
-        text += f"; held at the study's ({summary[-1]['held']}): {', '.join(held)}"
+    held = [(r["name"], *r["held"].split(": ", 1)) for r in summary if r.get("held")]
+    for kind in dict.fromkeys(k for _, k, _ in held):
+        mine = [(n, d) for n, k, d in held if k == kind]
+        if len({d for _, d in mine}) == 1:
+            text += f"; held at the study's ({kind}: {mine[0][1]}): {', '.join(n for n, _ in mine)}"
+        else:
+            text += f"; held at the study's ({kind}): " + ", ".join(f"{n} ({d})" for n, d in mine)
     if edge:
         text += ("; ended on a bound (no estimate: the log does not fix them, their values are not concluded): "
                  + ", ".join(f"{r['name']} on its {r['at_bound']} bound {r['bounds'][r['at_bound'] == 'upper']:.3g}"

@@ -19,7 +19,7 @@ RMS of its main signal falls by ``min_gain``, no other rises by 5%, and the valu
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -27,12 +27,12 @@ import pandas as pd
 from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
-from agrobot.estimation import covariance, effective_size, forward_jacobian
+from agrobot.estimation import FitResult, effective_size, forward_jacobian, solution_covariance, updates_on
 from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, held_tyres, widened_ranges
+from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, wheel_angle_input)
@@ -215,6 +215,7 @@ class Replay:
         self.yaw_measured = np.isfinite(self.gyro) if "yaw_rate" in f else np.ones(len(self.t), bool)
         derived = f.attrs.get("yaw_measurement")
         self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
+        self.yaw_update_times = getattr(derived, "update_times", None)
         if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
             self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
 
@@ -246,6 +247,14 @@ class Replay:
         held = self.masks["steering"]["test"].astype(int)
         edges = np.flatnonzero(np.diff(np.r_[0, held, 0]))
         return [(float(self.t[a]), float(self.t[b - 1])) for a, b in zip(edges[::2], edges[1::2])]
+
+    def updates(self, stage: str) -> int | None:
+        """The measurement's own updates on a stage's fit part, which bound its effective samples
+        (estimation.effective_size): a yaw rate derived from a 5 Hz heading on 20 Hz rows has a
+        quarter of the rows'; None: one per row."""
+        if stage != "yaw" or self.yaw_update_times is None:
+            return None
+        return updates_on(self.yaw_update_times, self.t, self.h, self.masks["yaw"]["fit"])
 
     def commanded_yaw(self) -> float:
         """The excitation of the steering command as the yaw rate it asks for, std(v delta_cmd / L):
@@ -466,21 +475,8 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     carries the steering's time constant."""
     extra = UNCERTAIN["steering"] if stage == "yaw" and getattr(replay, "command_only", False) else ()
     wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
-    held = getattr(replay, "held_uncertain", ())           # and those it holds (the kinematic regime)
+    held = replay.__dict__.get("held_in_selection", getattr(replay, "held_uncertain", ()))    # and those it holds
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
-
-
-@dataclass
-class CandidateFit:
-    """One fitted model: its values and, per stage, its residual sums on both parts."""
-
-    values: dict[str, float]
-    rss: dict[str, float]
-    n: dict[str, int]
-    n_eff: dict[str, float]
-    rmse_test: dict[str, float]
-    std: dict[str, float] = field(default_factory=dict)
-    free: tuple[str, ...] = ()          # the parameters this fit moved
 
 
 class Speculated(Exception):
@@ -497,7 +493,7 @@ def fit_key(base_values: dict[str, float], free: list[Parameter], stages: tuple[
 
 
 def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
-         starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
+         starts: list[dict[str, float]], sigma: dict[str, float]) -> FitResult:
     """``fitted``, unless the same fit was computed ahead (``replay.fits_ahead``, by worker processes:
     diagnosis.parallel_fits); while the fits ahead are being collected (``replay.collecting``), the
     fit is noted and a stand-in returned (or Speculated raised)."""
@@ -507,8 +503,9 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
         collecting.append(args)
         if replay.__dict__.get("collect_first"):
             raise Speculated
-        return CandidateFit(dict(base_values), {s: 1.0 for s in stages}, {s: 1 for s in stages},
-                            {s: 1.0 for s in stages}, {s: 1.0 for s in stages}, {}, tuple(p.name for p in free))
+        k = len(free)
+        return FitResult(dict(base_values), tuple(free), np.full((k, k), np.nan), {s: 1.0 for s in stages},
+                         {s: 1 for s in stages}, {s: 1.0 for s in stages}, {s: 1.0 for s in stages})
     ahead = replay.__dict__.get("fits_ahead")
     if ahead:
         hit = ahead.pop(fit_key(*args), None)
@@ -518,7 +515,7 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
 
 
 def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
-           starts: list[dict[str, float]], sigma: dict[str, float]) -> CandidateFit:
+           starts: list[dict[str, float]], sigma: dict[str, float]) -> FitResult:
     """Least squares over ``free`` (scaled by each parameter's typical size) from each start."""
     def values_of(x: np.ndarray) -> dict[str, float]:
         v = dict(base_values)
@@ -563,7 +560,7 @@ def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter],
                 level = {}
                 for s in stages:
                     r = replay.residuals(s, v, "fit")
-                    level[s] = math.sqrt(float(r @ r) / max(effective_size(r), 1.0)) or sigma[s]
+                    level[s] = math.sqrt(float(r @ r) / max(effective_size(r, updates=replay.updates(s)), 1.0)) or sigma[s]
                 if all(abs(level[s] / sigma[s] - 1.0) < 0.02 for s in stages):
                     break
                 sigma.update(level)
@@ -574,34 +571,39 @@ def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter],
     rss, n, n_eff, rmse = {}, {}, {}, {}
     for s in stages:
         r, rt = replay.residuals(s, values, "fit", "test")
-        rss[s], n[s], n_eff[s] = float(r @ r), len(r), effective_size(r)
+        rss[s], n[s], n_eff[s] = float(r @ r), len(r), effective_size(r, updates=replay.updates(s))
         rmse[s] = float(np.sqrt(np.mean(rt ** 2)))
-    std = {}
-    if best is not None:
-        cov = covariance(best.jac, 2 * best.cost, sum(n.values()), sum(n_eff.values()))
-        for i, p in enumerate(free):
-            if np.isfinite(cov[i, i]):
-                std[p.name] = float(math.sqrt(max(cov[i, i], 0.0)) * p.scale)
-    return CandidateFit(values, rss, n, n_eff, rmse, std, tuple(p.name for p in free))
+    cov = np.zeros((0, 0))
+    if best is not None:          # one on its bound held there
+        cov = solution_covariance(best.jac, best.cost, best.x, free, sum(n.values()), sum(n_eff.values()))
+    return FitResult(values, tuple(free), cov, rss, n, n_eff, rmse)
 
 
-def fit_baseline(replay: Replay) -> tuple[CandidateFit, dict[str, float]]:
+def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     """Re-fit each stage's uncertain parameters (no extension); returns the fit and the per-stage
     noise levels used to normalise later fits. Where the track reads the yaw model's side-slip
     (Replay.side_slip_block) the yaw stage's parameters are then refitted on the whole block
     (each stage weighed by its own residual level, _fit), and the levels taken again from that
     fit: the yaw rate fixes the understeer gradient
     m/L (l_r/C_f - l_f/C_r) and the yaw mode but hardly C_r, which sets the rear axle's side-slip
-    m l_f a_y / (L C_r) that the track sees."""
+    m l_f a_y / (L C_r) that the track sees. A parameter the log does not pin (baseline.unpinned: its
+    95 % interval from the stage's refit wider than half its value, or none), and cornering scales
+    that would give the vehicle an understeer gradient its class does not have
+    (baseline.implausible_tyres), are held at the study's and listed with why in
+    ``replay.held_uncertain``; the selection's refits, where an effect can pin them, free them again
+    (``replay.held_in_selection``: only the kinematic regime's)."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
     replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
+    replay.__dict__.pop("held_in_selection", None)
     for s in replay.stages:
-        values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
-        wider = widened_ranges(uncertain(replay, s), values)
+        start = values
+        fit = _fit(replay, start, list(uncertain(replay, s)), (s,), [{}], sigma)
+        wider = widened_ranges(uncertain(replay, s), fit.values)
         if wider:                   # a value on a prior edge is no estimate: searched again out to the limit
             replay.widened_uncertain.update(wider)
-            values = _fit(replay, values, list(uncertain(replay, s)), (s,), [{}], sigma).values
+            fit = _fit(replay, fit.values, list(uncertain(replay, s)), (s,), [{}], sigma)
+        values = _held_where_loose(replay, fit, start, s, sigma).values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
         if joint:
@@ -610,14 +612,29 @@ def fit_baseline(replay: Replay) -> tuple[CandidateFit, dict[str, float]]:
         fit = _fit(replay, values, [], replay.stages, [{}], sigma)
         for s in replay.stages:
             sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
+    # the selection frees again what only this refit held: an effect in the model can pin it
+    replay.held_in_selection = held_tyres(replay)
     return fit, sigma
 
 
-def merged(model: CandidateFit, part: CandidateFit, reset: dict[str, float] | None = None) -> CandidateFit:
+def _held_where_loose(replay: Replay, fit: FitResult, start: dict[str, float], stage: str,
+                      sigma: dict[str, float]) -> FitResult:
+    """``fit`` (a stage's baseline refit) with what the log does not pin (baseline.unpinned) and
+    cornering scales its class does not have (baseline.implausible_tyres) put back to ``start`` (the
+    study's) and held there, the others refitted, until none is left."""
+    while fit.free:
+        loose = unpinned(fit)
+        loose |= implausible_tyres(replay, {**fit.values, **{k: start[k] for k in loose}},
+                                   {p.name for p in fit.free} - set(loose))
+        if not loose:
+            break
+        replay.held_uncertain = {**replay.held_uncertain, **loose}
+        fit = _fit(replay, {**fit.values, **{k: start[k] for k in loose}}, list(uncertain(replay, stage)), (stage,),
+                   [{}], sigma)
+    return fit
+
+
+def merged(model: FitResult, part: FitResult, reset: dict[str, float] | None = None) -> FitResult:
     """``model`` with the stages that ``part`` scored, and the parameters it moved, taken from
-    ``part`` (``reset``: further values, those of an effect that leaves the model)."""
-    def upd(a, b):
-        return {**a, **b}
-    values = {**model.values, **{k: part.values[k] for k in part.free}, **(reset or {})}
-    return CandidateFit(values, upd(model.rss, part.rss), upd(model.n, part.n), upd(model.n_eff, part.n_eff),
-               upd(model.rmse_test, part.rmse_test), upd(model.std, part.std))
+    ``part`` (``reset``: further values, those of an effect that leaves the model): FitResult.merged."""
+    return model.merged(part, reset)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agrobot.estimation import Z95, compare
+from agrobot.estimation import REPORTED_AT_BOUND, Z95, compare
 from agrobot.identification.blas_threads import one_blas_thread
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
@@ -22,7 +22,7 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
-from .candidates import CannotDecide, CandidateFit, Replay, uncertain
+from .candidates import CannotDecide, FitResult, Replay, uncertain
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
@@ -68,7 +68,7 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
     fitted_text = ", ".join(f"{k} = {v:.4g}" for k, v in f.effect.display(f.fit.values).items())
     fitted = {}
     for p in f.effect.parameters:
-        value, sd = f.fit.values[p.name], f.fit.std.get(p.name, float("nan"))
+        value, sd = f.fit.values[p.name], f.fit.std(p.name)
         fitted[p.name] = {"value": value, "std": sd, "interval": [value - 1.96 * sd, value + 1.96 * sd],
                           "bounds": [p.lower, p.upper], "unit": p.unit, "at_bound": at_bound(value, p),
                           "secondary": p.name in f.effect.secondary}
@@ -102,14 +102,10 @@ def finding_json(f: Finding, baseline, inconclusive: list[dict] = ()) -> dict:
 
 def at_bound(value: float, p) -> str | None:
     """'lower' or 'upper' when a fitted value ends within 0.5 % of the searched range of a bound."""
-    span = p.upper - p.lower
-    for side, b in (("lower", p.lower), ("upper", p.upper)):
-        if abs(value - b) <= 5e-3 * span:
-            return side
-    return None
+    return p.at_bound(value, REPORTED_AT_BOUND)
 
 
-def _warnings(replay: Replay, base: CandidateFit, floors: dict) -> list[str]:
+def _warnings(replay: Replay, base: FitResult, floors: dict) -> list[str]:
     """What makes a verdict on this log fragile."""
     out = [f"the {stage} stage is {why}" for stage, why in replay.not_judged.items()]
     if replay.not_judged:

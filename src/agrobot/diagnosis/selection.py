@@ -51,7 +51,7 @@ from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.orchestrator.work_progress import Work
 
-from .candidates import STAGES, CandidateFit, Replay, _fit, fit_baseline, merged, uncertain
+from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, uncertain
 from .noise_floor import stage_floors
 from .screen import Screen
 from .simplification import healthy_levels
@@ -73,7 +73,7 @@ class Finding:
     """One effect judged against the same model without it."""
 
     effect: Effect
-    fit: CandidateFit                          # the model with the effect (its group refitted)
+    fit: FitResult                          # the model with the effect (its group refitted)
     delta_bic: float
     gain_by_signal: dict[str, float]
     rmse_before: dict[str, float]     # held-out, without the effect
@@ -82,7 +82,7 @@ class Finding:
     supported: bool
     reasons: list[str]
     stages: tuple[str, ...] = ()
-    without: CandidateFit | None = None        # the model refitted without the effect (drop-one only)
+    without: FitResult | None = None        # the model refitted without the effect (drop-one only)
     evidence: tuple[str, ...] = ()             # the stages counted for it (evidence_stages)
 
     @property
@@ -104,7 +104,7 @@ def shown_signal(effect: Effect, scored, gains: dict[str, float]) -> str:
     return max((SIGNALS[s][0] for s in effect.stages if s in scored), key=lambda k: gains[k])
 
 
-def evidence_stages(effect: Effect, stages, gains: dict[str, float], without: CandidateFit,
+def evidence_stages(effect: Effect, stages, gains: dict[str, float], without: FitResult,
                     floors: dict | None) -> tuple[str, ...]:
     """The stages that are evidence for ``effect``: all it acts on, and a stage it is only tested on
     (Effect.tested_on: a steering map on the actuator's rate, read through the map) only where the
@@ -121,7 +121,7 @@ def evidence_stages(effect: Effect, stages, gains: dict[str, float], without: Ca
     return counted or tuple(stages)
 
 
-def _judge(effect: Effect, with_: CandidateFit, without: CandidateFit, stages, baseline_values, min_gain,
+def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baseline_values, min_gain,
            floors: dict | None = None) -> Finding:
     """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py.
     ``floors``: the stages' noise floors (noise_floor.py); given, a signal whose held-out RMS rises
@@ -173,7 +173,7 @@ def group(stages: set[str], members: list[Effect], available=STAGES,
     return tuple(s for s in STAGES if s in stages and s in available), related
 
 
-def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> CandidateFit:
+def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> FitResult:
     """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
     effects are only tested on (Effect.tested_on; none of them acting there directly): those are
     scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
@@ -186,17 +186,17 @@ def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, s
     if fit_on == tuple(stages):
         return fit
     scored = _fit(replay, fit.values, [], tuple(stages), [{}], sigma)
-    return replace(scored, std=fit.std, free=fit.free)
+    return replace(scored, free=fit.free, cov=fit.cov)
 
 
 @dataclass
 class Selection:
-    base: CandidateFit
+    base: FitResult
     sigma: dict[str, float]
-    model: CandidateFit
+    model: FitResult
     effects: list[Finding]                       # drop-one judgement of each effect of the final model
     first_step: list[Finding]                    # every catalogue effect against the baseline
-    final: CandidateFit                                   # the final model scored on every stage
+    final: FitResult                                   # the final model scored on every stage
     floors: dict                                 # each stage's noise floor under it (noise_floor.py)
     inconclusive: list[dict] = field(default_factory=list)
     trace: list[str] = field(default_factory=list)
@@ -234,10 +234,12 @@ class Selector:
         self.floors: dict | None = None
         self.work = Work(None, "", 0)
 
-    def add(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
+    def add(self, model: FitResult, members: list[Effect], effect: Effect) -> Finding:
         """The model with ``effect`` joined to its group, judged against ``model``."""
         stages, related = group(set(effect.stages), members, self.replay.stages, self.replay.side_slip_block)
-        key = (effect.id, tuple(sorted(f.id for f in related)))
+        # reused only from the same model: a group's stages read the rest of it (the track reads the yaw
+        # model's side-slip, so a lever arm fitted before the tyres were refitted takes up their error)
+        key = (effect.id, tuple(sorted(f.id for f in related)), tuple(sorted(model.values.items())))
         hit = self._cache.get(key)
         if hit is not None:
             return hit
@@ -262,7 +264,7 @@ class Selector:
             self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
         return finding
 
-    def drop(self, model: CandidateFit, members: list[Effect], effect: Effect) -> Finding:
+    def drop(self, model: FitResult, members: list[Effect], effect: Effect) -> Finding:
         """``model`` judged against itself refitted without ``effect`` (a member)."""
         others = [f for f in members if f is not effect]
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
@@ -359,7 +361,7 @@ class Selector:
         return (f"steering_clock started at {start:.3f} s: the import audit finds the yaw rate answering the steering "
                 f"{lead['value']:.3f} s before it (response_leads_input, unresolved)")
 
-    def saturation_gate(self, base: CandidateFit) -> str | None:
+    def saturation_gate(self, base: FitResult) -> str | None:
         """Tyre saturation is tried only where the linear model's misfit grows with |a_y|: in the
         top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
         vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
@@ -402,7 +404,7 @@ class Selector:
         self.catalogue = [e for e in self.catalogue if e is not effect]
         return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
 
-    def evaluate(self, model: CandidateFit) -> tuple[CandidateFit, dict]:
+    def evaluate(self, model: FitResult) -> tuple[FitResult, dict]:
         """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
         values: the end of the selection and the report ask for the same model)."""
         key = tuple(sorted(model.values.items()))
@@ -413,11 +415,11 @@ class Selector:
             self._evaluated = (key, final, floors)
         return self._evaluated[1], self._evaluated[2]
 
-    def misfit_stages(self, model: CandidateFit) -> list[str]:
+    def misfit_stages(self, model: FitResult) -> list[str]:
         final, floors = self.evaluate(model)
         return [s for s in self.replay.stages if is_misfit(s, final.rmse_test[s], floors)]
 
-    def pair(self, model: CandidateFit, members: list[Effect], removed: set[str]):
+    def pair(self, model: FitResult, members: list[Effect], removed: set[str]):
         """Two effects of one misfit stage that only explain it together (a dead-band with a rate
         limit: each alone fits badly). (a, b, fit, dBIC) of the best supported pair, or None."""
         misfit = self.misfit_stages(model)
@@ -445,7 +447,7 @@ class Selector:
                     best = (a, b, fit, dbic)
         return best
 
-    def absorbed(self, model: CandidateFit, members: list[Effect], trace: list[str]) -> tuple[CandidateFit, list[Effect]]:
+    def absorbed(self, model: FitResult, members: list[Effect], trace: list[str]) -> tuple[FitResult, list[Effect]]:
         """Parsimony that favours a named effect. An effect in a stage that
         stays misfit may only have soaked up part of a misfit it does not explain; it is tested
         against the stage's data-driven extension E (kind and signal chosen with the effect), on

@@ -34,7 +34,8 @@ import pandas as pd
 from scipy.ndimage import convolve1d
 from scipy.optimize import least_squares
 
-from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian
+from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
+                                updates_on)
 from agrobot.orchestrator.errors import InputError
 
 from agrobot.components.models.tyre import GAMMA_ROS2, N_STATES, axle_loads, rates
@@ -74,12 +75,8 @@ class DrivingLog:
     def updates_in(self, segs: "Segments", mask: np.ndarray | None = None) -> int | None:
         """How many of the yaw measurement's own updates fall on the scored samples (None: one
         per sample)."""
-        if self.update_times is None:
-            return None
-        lo = np.searchsorted(self.update_times, self.t - 0.5 * self.h)
-        fresh = np.searchsorted(self.update_times, self.t + 0.5 * self.h) > lo
         keep = segs.scored if mask is None else segs.scored & mask
-        return int(fresh[segs.idx][keep].sum())
+        return updates_on(self.update_times, self.t, self.h, segs.idx[keep])
 
     @property
     def a_y(self) -> np.ndarray:
@@ -354,36 +351,6 @@ def steady_state_gain(speed, K: float, L: float, gain: float = 1.0):
     return gain * speed / (L + K * speed ** 2)
 
 
-@dataclass
-class FitResult:
-    values: dict[str, float]
-    free: list[Parameter]
-    cov: np.ndarray
-    rss: float
-    n: int
-    n_eff: float
-    residual_fit: np.ndarray
-
-    def std(self, name: str) -> float:
-        i = [p.name for p in self.free].index(name)
-        return float(math.sqrt(max(self.cov[i, i], 0.0)))
-
-    def at_bound(self, p: Parameter) -> str | None:
-        return p.at_bound(self.values[p.name])
-
-    def interval_of(self, grad: dict[str, float]) -> float:
-        """Standard deviation of a derived quantity with gradient ``grad`` (delta method; a
-        parameter held on its bound contributes nothing)."""
-        names = [p.name for p in self.free]
-        gvec = np.array([grad.get(n, 0.0) for n in names])
-        cov = np.nan_to_num(self.cov, nan=0.0)
-        return float(math.sqrt(max(gvec @ cov @ gvec, 0.0)))
-
-    @property
-    def bic(self) -> float:
-        return self.n_eff * math.log(self.rss / self.n) + len(self.free) * math.log(self.n_eff)
-
-
 def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: Segments,
         max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
     """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
@@ -417,12 +384,8 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
     residual = r_meas - model.simulate(values, segs)
     rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
     n, n_eff = len(res), effective_size(rows, updates=model.log.updates_in(segs, mask))
-    # a parameter on its bound is held there: the covariance is that of the others (its own: nan)
-    span = hi - lo
-    held = (np.abs(sol.x - lo) <= 2e-3 * span) | (np.abs(sol.x - hi) <= 2e-3 * span)
-    cov_x = covariance(sol.jac, 2 * sol.cost, n, n_eff, held)
-    scale = np.array([p.scale for p in free])
-    return FitResult(values, free, cov_x * np.outer(scale, scale), float(res @ res), n, n_eff, res)
+    cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)    # one on its bound held there
+    return FitResult(values, tuple(free), cov, {"yaw": float(res @ res)}, {"yaw": n}, {"yaw": n_eff}, residual_fit=res)
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:

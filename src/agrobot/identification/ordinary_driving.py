@@ -449,9 +449,9 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
             trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
             work.step()
-            if nl is None or trial.rss < nl.rss:
+            if nl is None or trial.rss_total < nl.rss_total:
                 nl = trial
-            if trial.rss <= linear.rss and not trial.at_bound(free_nl[-2]):
+            if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
 
@@ -494,7 +494,7 @@ def _judge_saturation(log: DrivingLog, fits: _Fits, min_gain: float) -> _HeldOut
     # linear, signed by the turn's direction (a saturating tyre turns less than the linear one
     # predicts: negative), against its standard error with the autocorrelation's n_eff
     signed = (res_low * np.sign(y))[a_test > max(LINEAR_TYRE, 0.0)] if linear_low is not linear else (res_lin * np.sign(y))[top]
-    n_top = max(2.0, len(signed) * linear.n_eff / max(linear.n, 1))
+    n_top = max(2.0, len(signed) * linear.n_eff_total / max(linear.n_total, 1))
     growth = float(signed.mean() / (signed.std() / math.sqrt(n_top))) if len(signed) > 2 and signed.std() > 0 else 0.0
     gain_top = 1 - rms(res_nl[top]) / max(rms(res_lin[top]), 1e-12)
     gain_all = 1 - rms(res_nl) / max(rms(res_lin), 1e-12)
@@ -565,7 +565,7 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
     fixed = {**_standstill_bias(log)[0], **{p.name: p.lower for p in on_zero}}
     free = [wide if p is delay else p for p in first_free if p not in on_zero]
     final = min((fit(fits.model, free, {**first.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
-                 for d in (first.values["delay"], -0.1)), key=lambda f: f.rss)          # from beyond it
+                 for d in (first.values["delay"], -0.1)), key=lambda f: f.rss_total)          # from beyond it
     shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
     verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
     if shaping:
