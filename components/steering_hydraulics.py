@@ -188,7 +188,7 @@ class SteeringHydraulics(Component):
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
-        y["steer_angle_measured"] = quantize(delta, res)
+        y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
         y["valve_voltage"] = voltage
         y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
 
