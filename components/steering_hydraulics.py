@@ -46,6 +46,12 @@ def valve_opening(voltage: float, neutral: float, deadband: float, full_scale: f
     return math.copysign(min(excess / (full_scale - deadband), 1.0), e)
 
 
+# x + 1.5 2^52 - 1.5 2^52 is round(x), half to even, as a float, for |x| < 2^51 (the sum keeps no
+# fraction, and the hardware rounds half to even): the potentiometer's level in the substep loop,
+# where |delta / resolution| stays below the stop's angle_limit / resolution, without a call
+ROUNDER = 1.5 * 2.0 ** 52
+
+
 def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
@@ -106,6 +112,9 @@ class SteeringHydraulics(Component):
             self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
         self.require(p["quantization_guard"] in (0, 1), f"parameter quantization_guard must be 0 or 1, "
                      f"got {p['quantization_guard']!r}")
+        res = p["potentiometer_resolution"]
+        self.require(res <= 0 or abs(p["angle_limit"]) / res < 2.0 ** 51,        # the substeps' rounding (ROUNDER)
+                     f"parameter potentiometer_resolution must be 0 (none) or above angle_limit / 2^51, got {res}")
         steps = delay_steps(p["command_delay"], dt)
         self.command_history = deque([0.0] * steps, maxlen=steps + 1)
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
@@ -132,7 +141,8 @@ class SteeringHydraulics(Component):
 
     def step(self, t: float, dt: float) -> None:
         """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
-        (a call costs as much as the arithmetic here); tests check it against those functions."""
+        (a call costs as much as the arithmetic here; the rounding by ROUNDER); tests check it
+        against those functions."""
         constants = self._per_step.get(dt)
         if constants is None:
             constants = self._per_step[dt] = self._constants(dt)
@@ -146,7 +156,7 @@ class SteeringHydraulics(Component):
         delta, opening = self.delta, self.opening
         v_rel = 0.0
         for _ in range(self.substeps):
-            error = cmd - (res * round(delta * inv_res) if inv_res else delta)
+            error = cmd - (res * ((delta * inv_res + ROUNDER) - ROUNDER) if inv_res else delta)
             if dead:
                 error = error - dead if error > dead else (error + dead if error < -dead else 0.0)
             raw = kp * error + integral

@@ -247,6 +247,7 @@ class TractorYawPlant(Component):
         self._offset = float(p["steer_angle_offset"])
         # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
         self._level = not (self._slope or self._saturation)
+        self._lists: dict[tuple[int, float], tuple[np.ndarray, list[float]]] = {}    # key: (Ad, Bd as floats)
         self._set_outputs(0.0, 0.0, 0.0)
 
     def _update_ground(self) -> None:
@@ -326,18 +327,23 @@ class TractorYawPlant(Component):
         speed = abs(v)
         vmin = self._min_speed
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
-        Ad, Bd, _ = hit if hit is not None else self.discretized(v_eff, dt)
-        z0 = self.z
-        z = Ad.dot(z0)                          # Ad @ z to the bit, without matmul's dispatch
-        z += Bd * delta
+        key = (int(round(v_eff / self._cache_res)), dt)
+        hit = self._lists.get(key)
+        if hit is None:
+            Ad, Bd, _ = self.discretized(v_eff, dt)
+            hit = self._lists[key] = (Ad, Bd.tolist())
+            if len(self._lists) > 20000:
+                self._lists.clear()
+        Ad, bd = hit
+        # Ad @ z + Bd delta to the bit: the product by Ad.dot (matmul's sums, without its dispatch),
+        # the sum on Python floats (numpy's, element by element): the state is a list of floats here
         if self._tf is None:                    # (v_y, gamma, ...)
-            vy0, gamma0 = z0[:2].tolist()
-            vy1, gamma1 = z[:2].tolist()
-            self.z = z
+            z0 = self.z
+            z = self.z = [w + b * delta for w, b in zip(Ad.dot(z0).tolist(), bd)]
+            vy0, gamma0, vy1, gamma1 = float(z0[0]), float(z0[1]), z[0], z[1]
         else:
             gamma0, vy0 = self._yaw_rate_and_lateral()
-            self.z = z
+            self.z = [w + b * delta for w, b in zip(Ad.dot(self.z).tolist(), bd)]
             gamma1, vy1 = self._yaw_rate_and_lateral()
         if scale != 1.0:
             gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
