@@ -155,10 +155,11 @@ class SteeringHydraulics(Component):
         cmd = history[0]
         delta, opening = self.delta, self.opening
         v_rel = 0.0
+        rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim
         for _ in range(self.substeps):
-            error = cmd - (res * ((delta * inv_res + ROUNDER) - ROUNDER) if inv_res else delta)
+            error = cmd - (res * ((delta * inv_res + rounder) - rounder) if inv_res else delta)
             if dead:
-                error = error - dead if error > dead else (error + dead if error < -dead else 0.0)
+                error = error - dead if error > dead else (error + dead if error < no_dead else 0.0)
             raw = kp * error + integral
             if raw > v_hi:
                 v_rel = v_hi
@@ -172,12 +173,12 @@ class SteeringHydraulics(Component):
                 integral += ki_h * error
                 if integral > i_lim:
                     integral = i_lim
-                elif integral < -i_lim:
-                    integral = -i_lim
+                elif integral < no_i:
+                    integral = no_i
             if v_rel > db:
                 target = (v_rel - db) * opening_scale
                 target = 1.0 if target > 1.0 else target
-            elif v_rel < -db:
+            elif v_rel < no_db:
                 target = (v_rel + db) * opening_scale
                 target = -1.0 if target < -1.0 else target
             else:
@@ -186,13 +187,13 @@ class SteeringHydraulics(Component):
             move = rate_step * opening
             if move > max_move:
                 move = max_move
-            elif move < -max_move:
-                move = -max_move
+            elif move < no_move:
+                move = no_move
             delta += move
             if delta > lim:
                 delta = lim
-            elif delta < -lim:
-                delta = -lim
+            elif delta < no_lim:
+                delta = no_lim
         pi.integral, pi.prev_error = integral, error
         voltage = vn + v_rel
         self.delta, self.opening = delta, opening
