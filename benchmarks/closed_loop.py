@@ -104,7 +104,8 @@ def through_run(study_path: Path, threads: str | None) -> float:
     if threads is not None:
         env["OPENBLAS_NUM_THREADS"] = threads
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([sys.executable, "-m", "agrobot", "run", str(study_path), "--out", f"{tmp}/r", "--no-plots"],
+        subprocess.run([sys.executable, "-m", "agrobot", "run", str(study_path), "--out", f"{tmp}/r", "--no-plots",
+                        "--engine", "python"],
                        check=True, capture_output=True, env=env)
         return json.loads(Path(f"{tmp}/r/metrics.json").read_text())["wall_time_s"]
 

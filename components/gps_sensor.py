@@ -174,7 +174,7 @@ class GPSSensor(Component):
                      "bias_std must be >= 0 and bias_time_constant > 0")
         # b_k+1 = phi b_k + sqrt(1 - phi^2) sigma_b w_k, phi = exp(-dt / T): stationary std sigma_b
         self.bias_phi = math.exp(-dt / p["bias_time_constant"])
-        self.bias = self.rng.standard_normal(2) * p["bias_std"] if p["bias_std"] > 0 else (0.0, 0.0)
+        self.bias = (self.rng.standard_normal(2) * p["bias_std"]).tolist() if p["bias_std"] > 0 else (0.0, 0.0)
         self.windows = self._windows(p["outages"])
         self.log = None
         if p["quality_log"]:
@@ -192,13 +192,13 @@ class GPSSensor(Component):
                           9: p["dgps_error_std"], 1: p["single_error_std"]}
         self.degraded_phi = math.exp(-dt / p["degraded_error_time_constant"])
         self.degraded = any(q not in (0, RTK_FIXED) for _, _, q in self.windows) or self.log is not None
-        self.wander = self.rng.standard_normal(2) if self.degraded else np.zeros(2)    # unit-std Gauss-Markov
+        self.wander = self.rng.standard_normal(2).tolist() if self.degraded else [0.0, 0.0]    # unit-std Gauss-Markov
         for key in ("bridging_error_start", "bridging_error_rate", "bridging_timeout"):
             self.require(p[key] >= 0, f"parameter {key} must be >= 0, got {p[key]}")
         self.require(p["bridging_time_constant"] > 0, "parameter bridging_time_constant must be > 0")
         self.bridging = any(q == BRIDGING for _, _, q in self.windows)
         self.bridging_phi = math.exp(-dt / p["bridging_time_constant"])
-        self.bridge_wander = self.rng.standard_normal(2) if self.bridging else np.zeros(2)
+        self.bridge_wander = self.rng.standard_normal(2).tolist() if self.bridging else [0.0, 0.0]
 
     def _windows(self, value) -> list[tuple[float, float, int]]:
         """The outage windows, checked: each [start_s, end_s] or [start_s, end_s, quality]."""
@@ -256,23 +256,22 @@ class GPSSensor(Component):
         self.history.append((u["x_true"], u["y_true"], u["vel_east_true"], u["vel_north_true"]))
         if self.outage_left == 0 and p["dropout_probability"] > 0 and self.rng.random() < p["dropout_probability"]:
             self.outage_left = max(1, int(round(p["dropout_duration"] / dt)))
-        noise = self.rng.standard_normal(4)
+        noise = self.rng.standard_normal(4).tolist()      # Python floats downstream
         if p["bias_std"] > 0:
-            w = self.rng.standard_normal(2)
+            w = self.rng.standard_normal(2).tolist()
             self.bias = [gauss_markov_step(b, self.bias_phi, p["bias_std"], wi) for b, wi in zip(self.bias, w)]
         degraded = (0.0, 0.0)
         quality = self.quality_at(t)
         if self.degraded:
             std = self.error_std.get(quality, 0.0)
             degraded = (std * self.wander[0], std * self.wander[1])
-            w = self.rng.standard_normal(2)
-            self.wander = np.array([gauss_markov_step(g, self.degraded_phi, 1.0, wi) for g, wi in zip(self.wander, w)])
+            w = self.rng.standard_normal(2).tolist()
+            self.wander = [gauss_markov_step(g, self.degraded_phi, 1.0, wi) for g, wi in zip(self.wander, w)]
         since = self.bridged_since(t) if self.bridging else None
         age = 0.0 if since is None else t - since
         if self.bridging:
-            w = self.rng.standard_normal(2)
-            self.bridge_wander = np.array([gauss_markov_step(g, self.bridging_phi, 1.0, wi)
-                                           for g, wi in zip(self.bridge_wander, w)])
+            w = self.rng.standard_normal(2).tolist()
+            self.bridge_wander = [gauss_markov_step(g, self.bridging_phi, 1.0, wi) for g, wi in zip(self.bridge_wander, w)]
             if since is not None and quality == BRIDGED_QUALITY:
                 axis = bridging_error(age, p["bridging_error_start"], p["bridging_error_rate"]) / math.sqrt(2.0)
                 degraded = (degraded[0] + axis * self.bridge_wander[0], degraded[1] + axis * self.bridge_wander[1])

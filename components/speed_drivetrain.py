@@ -17,7 +17,6 @@ import math
 from agrobot.orchestrator.compiled.cores import CoreDescription
 from agrobot.orchestrator.component import Component, inp, out, par
 
-from .steering_hydraulics import valve_opening
 from .models.c_sources import substeps, substeps_define
 
 
@@ -56,29 +55,42 @@ class SpeedDrivetrain(Component):
         self.require(p["time_constant"] > 0 and p["internal_step"] > 0, "time constants must be > 0")
         self.substeps = substeps(dt, p["internal_step"])
         self.pedal, self.v = float(p["pedal0"]), float(p["speed0"])
+        self._per_step: dict[float, tuple] = {}
         self.y["pedal_position"], self.y["speed"] = self.pedal, self.v
 
-    def step(self, t: float, dt: float) -> None:
+    def _constants(self, dt: float) -> tuple:
+        """The step's constants for step ``dt`` (made once per run and step: the parameters are
+        fixed from ``initialize`` on)."""
         p = self.p
         h = dt / self.substeps
-        vn = p["neutral_voltage"]
-        opening = valve_opening(float(self.u["pedal_valve_voltage"]), vn, p["deadband"],
-                                p["voltage_max"] - vn)
+        vn, db = p["neutral_voltage"], p["deadband"]
         decay = math.exp(-h / p["time_constant"])
+        return (vn, db, (p["voltage_max"] - vn) - db, h, p["pedal_rate_max"], decay, decay ** self.substeps,
+                p["max_speed"], p["pedal_dead_zone"], 1.0 - p["pedal_dead_zone"], p["speed_exponent"])
+
+    def step(self, t: float, dt: float) -> None:
+        """valve_opening and steady_state_speed inlined, their arithmetic unchanged (a call costs as
+        much as the arithmetic here)."""
+        constants = self._per_step.get(dt)
+        if constants is None:
+            constants = self._per_step[dt] = self._constants(dt)
+        vn, db, span, h, rate_max, decay, decay_step, v_max, p0, travel, expo = constants
+        e = float(self.u["pedal_valve_voltage"]) - vn
+        excess = abs(e) - db
+        opening = 0.0 if excess <= 0.0 else math.copysign(min(excess / span, 1.0), e)
         pedal, v = self.pedal, self.v
-        rate = h * opening * p["pedal_rate_max"]
-        v_max, p0, expo = p["max_speed"], p["pedal_dead_zone"], p["speed_exponent"]
+        rate = h * opening * rate_max
         if rate == 0.0 or (pedal == 0.0 and rate < 0.0) or (pedal == 1.0 and rate > 0.0):
             # the pedal does not move over this step: v_ss is constant, the lag is exact in one go
-            v_ss = steady_state_speed(pedal, v_max, p0, expo)
-            v = v_ss + (v - v_ss) * decay ** self.substeps
+            v_ss = v_max * min(max((pedal - p0) / travel, 0.0), 1.0) ** expo
+            v = v_ss + (v - v_ss) * decay_step
         else:
             for _ in range(self.substeps):
                 pedal = min(max(pedal + rate, 0.0), 1.0)
-                v_ss = steady_state_speed(pedal, v_max, p0, expo)
+                v_ss = v_max * min(max((pedal - p0) / travel, 0.0), 1.0) ** expo
                 v = v_ss + (v - v_ss) * decay
         self.pedal, self.v = pedal, v
-        self.y["pedal_position"], self.y["speed"] = pedal, v
-
+        y = self.y
+        y["pedal_position"], y["speed"] = pedal, v
 
 COMPONENT = SpeedDrivetrain

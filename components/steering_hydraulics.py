@@ -46,6 +46,12 @@ def valve_opening(voltage: float, neutral: float, deadband: float, full_scale: f
     return math.copysign(min(excess / (full_scale - deadband), 1.0), e)
 
 
+# x + 1.5 2^52 - 1.5 2^52 is round(x), half to even, as a float, for |x| < 2^51 (the sum keeps no
+# fraction, and the hardware rounds half to even): the potentiometer's level in the substep loop,
+# where |delta / resolution| stays below the stop's angle_limit / resolution, without a call
+ROUNDER = 1.5 * 2.0 ** 52
+
+
 def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
@@ -106,6 +112,9 @@ class SteeringHydraulics(Component):
             self.require(float(p[key]) >= 0, f"parameter {key} must be >= 0, got {p[key]}")
         self.require(p["quantization_guard"] in (0, 1), f"parameter quantization_guard must be 0 or 1, "
                      f"got {p['quantization_guard']!r}")
+        res = p["potentiometer_resolution"]
+        self.require(res <= 0 or abs(p["angle_limit"]) / res < 2.0 ** 51,        # the substeps' rounding (ROUNDER)
+                     f"parameter potentiometer_resolution must be 0 (none) or above angle_limit / 2^51, got {res}")
         steps = delay_steps(p["command_delay"], dt)
         self.command_history = deque([0.0] * steps, maxlen=steps + 1)
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
@@ -132,7 +141,8 @@ class SteeringHydraulics(Component):
 
     def step(self, t: float, dt: float) -> None:
         """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
-        (a call costs as much as the arithmetic here); tests check it against those functions."""
+        (a call costs as much as the arithmetic here; the rounding by ROUNDER); tests check it
+        against those functions."""
         constants = self._per_step.get(dt)
         if constants is None:
             constants = self._per_step[dt] = self._constants(dt)
@@ -145,10 +155,11 @@ class SteeringHydraulics(Component):
         cmd = history[0]
         delta, opening = self.delta, self.opening
         v_rel = 0.0
+        rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim
         for _ in range(self.substeps):
-            error = cmd - (res * round(delta * inv_res) if inv_res else delta)
+            error = cmd - (res * ((delta * inv_res + rounder) - rounder) if inv_res else delta)
             if dead:
-                error = error - dead if error > dead else (error + dead if error < -dead else 0.0)
+                error = error - dead if error > dead else (error + dead if error < no_dead else 0.0)
             raw = kp * error + integral
             if raw > v_hi:
                 v_rel = v_hi
@@ -162,12 +173,12 @@ class SteeringHydraulics(Component):
                 integral += ki_h * error
                 if integral > i_lim:
                     integral = i_lim
-                elif integral < -i_lim:
-                    integral = -i_lim
+                elif integral < no_i:
+                    integral = no_i
             if v_rel > db:
                 target = (v_rel - db) * opening_scale
                 target = 1.0 if target > 1.0 else target
-            elif v_rel < -db:
+            elif v_rel < no_db:
                 target = (v_rel + db) * opening_scale
                 target = -1.0 if target < -1.0 else target
             else:
@@ -176,19 +187,19 @@ class SteeringHydraulics(Component):
             move = rate_step * opening
             if move > max_move:
                 move = max_move
-            elif move < -max_move:
-                move = -max_move
+            elif move < no_move:
+                move = no_move
             delta += move
             if delta > lim:
                 delta = lim
-            elif delta < -lim:
-                delta = -lim
+            elif delta < no_lim:
+                delta = no_lim
         pi.integral, pi.prev_error = integral, error
         voltage = vn + v_rel
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
-        y["steer_angle_measured"] = quantize(delta, res)
+        y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
         y["valve_voltage"] = voltage
         y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
 

@@ -244,6 +244,10 @@ class TractorYawPlant(Component):
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._update_ground()
         self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+        self._offset = float(p["steer_angle_offset"])
+        # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
+        self._level = not (self._slope or self._saturation)
+        self._lists: dict[tuple[int, float], tuple[np.ndarray, list[float]]] = {}    # key: (Ad, Bd as floats)
         self._set_outputs(0.0, 0.0, 0.0)
 
     def _update_ground(self) -> None:
@@ -316,9 +320,60 @@ class TractorYawPlant(Component):
             z = ros2_step(self.p["model"], self.params, z, dt / n, v, v, delta, delta, **tyre)
         return z
 
+    def _level_step(self, v: float, delta: float, dt: float) -> None:
+        """``step`` on level ground with linear tyres, its arithmetic that of ``step`` in the same
+        order (the same result to the bit): z <- Ad(v) z + Bd(v) delta, the pose by the midpoint
+        rule, the outputs that move (pull, roll and pitch hold their level values)."""
+        speed = abs(v)
+        vmin = self._min_speed
+        v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
+        key = (int(round(v_eff / self._cache_res)), dt)
+        hit = self._lists.get(key)
+        if hit is None:
+            Ad, Bd, _ = self.discretized(v_eff, dt)
+            hit = self._lists[key] = (Ad, Bd.tolist())
+            if len(self._lists) > 20000:
+                self._lists.clear()
+        Ad, bd = hit
+        # Ad @ z + Bd delta to the bit: the product by Ad.dot (matmul's sums, without its dispatch),
+        # the sum on Python floats (numpy's, element by element): the state is a list of floats here
+        if self._tf is None:                    # (v_y, gamma, ...)
+            z0 = self.z
+            z = self.z = [w + b * delta for w, b in zip(Ad.dot(z0).tolist(), bd)]
+            vy0, gamma0, vy1, gamma1 = float(z0[0]), float(z0[1]), z[0], z[1]
+        else:
+            gamma0, vy0 = self._yaw_rate_and_lateral()
+            self.z = [w + b * delta for w, b in zip(Ad.dot(self.z).tolist(), bd)]
+            gamma1, vy1 = self._yaw_rate_and_lateral()
+        if scale != 1.0:
+            gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
+        psi = self.psi
+        psi_mid = psi + 0.25 * dt * (gamma0 + gamma1)
+        vy_mid = 0.5 * (vy0 + vy1)
+        c, s = math.cos(psi_mid), math.sin(psi_mid)
+        x = self.x = self.x + dt * (v * c - vy_mid * s)
+        y_pos = self.y_pos = self.y_pos + dt * (v * s + vy_mid * c)
+        psi = self.psi = psi + 0.5 * dt * (gamma0 + gamma1)
+        lr = self.params.l_r
+        c, s = math.cos(psi), math.sin(psi)
+        forward, left = self._lever[0], self._lever[1]
+        dx, dy = c * forward - s * left, s * forward + c * left
+        x_rear, y_rear = x - lr * c, y_pos - lr * s
+        v_lat_rear = vy1 - lr * gamma1
+        ve, vn = v * c - v_lat_rear * s, v * s + v_lat_rear * c
+        y = self.y
+        y["yaw_rate"], y["lateral_velocity"], y["heading"] = gamma1, vy1, psi
+        y["x_cg"], y["y_cg"], y["x_rear"], y["y_rear"] = x, y_pos, x_rear, y_rear
+        y["vel_east_rear"], y["vel_north_rear"] = ve, vn
+        y["x_antenna"], y["y_antenna"] = x_rear + dx, y_rear + dy
+        y["vel_east_antenna"], y["vel_north_antenna"] = ve - gamma1 * dy, vn + gamma1 * dx
+
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
-        delta = float(self.u["steer_angle"]) + self.p["steer_angle_offset"]
+        delta = float(self.u["steer_angle"]) + self._offset
+        if self._level:
+            self._level_step(v, delta, dt)
+            return
         vmin, speed = self._min_speed, abs(v)
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
         gamma0, vy0 = self._yaw_rate_and_lateral()

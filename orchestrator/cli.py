@@ -29,12 +29,12 @@ def add_set_option(parser: argparse.ArgumentParser, help: str = "override a para
     parser.add_argument("--set", action="append", default=[], metavar="COMP.PARAM=VALUE", help=help)
 
 
-def add_engine_option(parser: argparse.ArgumentParser, default: str = "python") -> None:
+def add_engine_option(parser: argparse.ArgumentParser, default: str = "auto") -> None:
     parser.add_argument("--engine", choices=("python", "compiled", "auto"), default=default,
-                        help=f"python: the Python components; compiled: the study's whole loop from the "
-                             f"components' C cores, one compiled program (every component needs one and a C compiler "
-                             f"is found); auto: compiled when it can, the Python engine otherwise, saying which ran "
-                             f"and why (default: {default})")
+                        help=f"python: the Python components (the reference engine); compiled: the study's whole "
+                             f"loop from the components' C cores, one compiled program (every component needs one and "
+                             f"a C compiler is found); auto: compiled when it can, the Python engine otherwise, saying "
+                             f"which ran and why (default: {default})")
 OUT_RULE = ("a new or empty folder is written; an earlier result of this command is replaced (in one step, when "
             "the command ends) only with --overwrite; anything else, or an input, is refused")
 
@@ -80,7 +80,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--live-viewers", type=int, default=16, metavar="N",
                    help="with --live: serve at most N viewers at once (default 16, at most 64); one more is refused with the "
                         "reason")
-    add_engine_option(p, "auto")
+    add_engine_option(p)
     add_isolate_option(p)
     for option in registry().run_options:
         p.add_argument(option.flag, default=None, metavar=option.metavar, help=option.help)
@@ -111,7 +111,7 @@ def _run_study(args: argparse.Namespace, study, mcap: Path | None, named: tuple[
     engine = args.engine
     if live is not None and engine == "auto":
         engine = "python"
-        print("engine: python (--live watches every instant, which the compiled engine does not show)",
+        print("engine: python (auto: --live watches every instant, which the compiled engine does not show)",
               file=sys.stderr)
     try:
         result = run_study(study, args.out, plots=not args.no_plots, overwrite=args.overwrite,

@@ -132,17 +132,20 @@ class Simulation:
             if node.ratio == 1:
                 published[node.name] = node.component.y
         self.k = 0
+        for observer in self.observers:
+            started = getattr(observer, "started", None)
+            if started is not None:
+                started(self)
+        # the other hooks as they stand once started (an observer may set them up there)
         hooks = {name: [getattr(o, name) for o in self.observers if getattr(o, name) is not None]
-                 for name in ("started", "instant", "recorded", "advanced")}
+                 for name in ("instant", "recorded", "advanced")}
         self._instant, self._recorded, self._advanced = hooks["instant"], hooks["recorded"], hooks["advanced"]
-        for hook in hooks["started"]:
-            hook(self)
 
     def advance(self, k_end: int, final: bool = False) -> None:
         """Take base steps k .. k_end - 1 in full (publish, sampled steps, record, actuate,
         continuous steps): afterwards the system stands at t0 + k_end h. ``final``: then take the
         instant k_end too, without integrating past it (the last instant of a run)."""
-        period, schedule = self._period, self._due
+        period, due = self._period, self._due.lookup
         before, after = self._instant, self._recorded
         last = k_end if final else -1
         k, recorded = self.k, self.k
@@ -153,7 +156,7 @@ class Simulation:
                     hook(k)
                 t = t0 + k * h
                 phase = k % period
-                publish_and_step, actuate, integrate = schedule[phase]
+                publish_and_step, actuate, integrate = due(phase)
                 publish_and_step(t, k)
                 for hook in after:
                     hook(phase)

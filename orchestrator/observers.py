@@ -2,7 +2,8 @@
 the simulation, never change it. The engine (orchestrator.engine) calls each hook an observer
 defines, and only those:
 
-- ``started(sim)``: every component initialised and its outputs at t0 published;
+- ``started(sim)``: every component initialised and its outputs at t0 published (the other hooks
+  are read after it: an observer may set them there);
 - ``instant(k)``: before base step k is taken (real-time pacing, orchestrator.realtime);
 - ``recorded(phase)``: every output of instant k is published (``sim.published``), before
   anything integrates past t_k (the signal recorder, orchestrator.signal_recorder); ``phase`` is

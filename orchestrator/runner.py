@@ -276,7 +276,7 @@ def choose_engine(system: System, engine: str):
         rows = int(round((s.stop_time - s.start_time) / s.base_step)) + 1
         held = rows * (len(SignalRecorder(system, 1).columns) + 1) * 8
         if held > COMPILED_HELD_BYTES:
-            return _announced(Simulation, f"engine: python (the compiled engine would hold the run's {rows} rows, "
+            return _announced(Simulation, f"engine: python (auto: the compiled engine would hold the run's {rows} rows, "
                                           f"{held / 1024 ** 3:.3g} GB, in memory; the Python engine writes them as "
                                           f"it goes; --engine compiled forces it)")
     from .compiled import select_engine

@@ -37,6 +37,9 @@ class Schedule:
         self.period = math.lcm(*self.ratios)
         self._cache: dict[tuple[int, ...], Any] = {}
         self._table = [self._lookup(j) for j in range(self.period)] if self.period <= table_limit else None
+        # ``lookup(phase)`` is ``schedule[phase]``: the table's own indexing when there is one (no
+        # Python call at each base step)
+        self.lookup: Callable[[int], Any] = self._table.__getitem__ if self._table is not None else self._lookup
 
     def _lookup(self, phase: int) -> Any:
         key = tuple(r for r in self.ratios if phase % r == 0)

@@ -6,7 +6,6 @@ the output's declared one (``units``; time in s): the DataFrame carries them in
 ``attrs["units"]``, the signal file in its metadata (orchestrator.atomic_files)."""
 from __future__ import annotations
 
-from array import array
 from dataclasses import dataclass, field
 from operator import itemgetter
 from typing import Any, Callable
@@ -14,6 +13,7 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
+from .errors import ComputationError
 from .observers import Observer
 from .schedule import Schedule
 
@@ -45,18 +45,24 @@ def _single(key: str):
 
 
 class _Buffer:
-    """Outputs of one component at multiples of its ratio (base steps per step)."""
+    """Outputs of one component at multiples of its ratio (base steps per step), as the Python
+    numbers they are (a list takes a tuple's items in one copy; an ``array('d')`` parses each one:
+    7 % of a figure-8 run), made floats when the table is asked for."""
 
     __slots__ = ("name", "ratio", "width", "get", "buf")
 
     def __init__(self, name: str, ratio: int, outputs: list[str]) -> None:
         self.name, self.ratio, self.width = name, ratio, len(outputs)
         self.get: Callable[[dict], Any] = itemgetter(*outputs) if len(outputs) > 1 else _single(outputs[0])
-        self.buf = array("d")
+        self.buf: list = []
 
     def table(self, rows: int) -> np.ndarray:
         """(rows, width): sample j of the buffer held over base steps j*ratio .. (j+1)*ratio - 1."""
-        kept = np.frombuffer(self.buf, dtype=float).reshape(-1, self.width)
+        try:
+            kept = np.array(self.buf, dtype=float).reshape(-1, self.width)
+        except (TypeError, ValueError) as exc:
+            raise ComputationError(f"component {self.name!r}: an output it declares numeric held a value that is "
+                                   f"not a number ({exc})") from None
         return np.repeat(kept, self.ratio, axis=0)[:rows] if rows else kept[:0]
 
 
@@ -83,6 +89,8 @@ class SignalRecorder(Observer):
         self._buffers = [_Buffer(name, ratio, outs) for name, ratio, outs in self._layout]
         self._published = sim.published
         self._due = Schedule(self._buffers, lambda b: b.ratio, self._keeper)
+        due = self._due.lookup
+        self.recorded = lambda phase: due(phase)()          # the hook, one call less at each base step
 
     def _keeper(self, buffers: list[_Buffer]):
         """One function for a due set: each buffer's outputs appended, as plain statements."""
@@ -95,6 +103,7 @@ class SignalRecorder(Observer):
         return space["keep"]
 
     def recorded(self, phase: int) -> None:
+        """Append the outputs due at ``phase`` (``started`` sets a quicker form of this hook)."""
         self._due[phase]()
 
     def rows(self, t0: float, h: float, first: int, last: int) -> np.ndarray:

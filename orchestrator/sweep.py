@@ -46,7 +46,8 @@ import pandas as pd
 from tqdm import tqdm
 
 from .build import build_system
-from .compiled import select_engine
+from .compiled import cores_of, select_engine
+from .compiled.simulation import refusal
 from .engine import RunError, Simulation
 from .resolver import resolve
 from .errors import InputError, critical
@@ -240,12 +241,18 @@ class SweepRun:
         self.where = str(study.path)
         self.kept_in = self.out                 # where an interrupted sweep's finished points are
         self.points = expand(study)
-        self.signals = policy(keep_signals, engine, len(self.points))     # orchestrator.sweep_cost
-        self.keep_signals = self.signals != "none"
+        self._keep_asked = keep_signals
+        self.ran = engine                       # the engine the points run with (auto: chosen on the first)
+        self._policy(engine)
         self.nominal: dict[str, Any] = {}       # the nominal run's metrics (orchestrator.sweep_judgement)
         self.keeper: SignalKeeper | None = None
         self.fmt = study.study.signals_format
         self._into(self.out)
+
+    def _policy(self, engine: str) -> None:
+        """Which points keep their signals (orchestrator.sweep_cost.policy) with ``engine``."""
+        self.signals = policy(self._keep_asked, engine, len(self.points))
+        self.keep_signals = self.signals != "none"
 
     def _into(self, folder: Path) -> None:
         """Write into ``folder`` (``--out``, or the staging folder of a sweep that replaces one)."""
@@ -287,13 +294,7 @@ class SweepRun:
             try:
                 system = build_system(resolve(point_study(self.study, point)))
                 if i == 0 and self.engine != "python":
-                    print(f"sweep: compiling the study's loop for --engine {self.engine} (once; a loop compiled "
-                          f"before is taken from the cache) ...", file=sys.stderr, flush=True)
-                    start = time.perf_counter()
-                    note = select_engine(system, self.engine)[1]
-                    print(f"sweep: the loop ready in {time.perf_counter() - start:.1f} s", file=sys.stderr)
-                    if note and self.engine == "auto":
-                        print(note, file=sys.stderr)
+                    self._choose_engine(system)
             except StudyError as exc:
                 raise StudyError(f"{exc}\n  (sweep point {point.key}: {point.values}, seed {point.seed})") from None
         manifest = self.folder / "sweep.json"
@@ -308,6 +309,21 @@ class SweepRun:
                                  f"resume with that engine, or choose another folder")
         else:
             write_json(manifest, self.manifest())
+
+    def _choose_engine(self, system) -> None:
+        """The compiled engine for the first point's ``system`` (compiled once, or taken from the
+        cache); auto: the engine chosen and why, printed, and the points run with it."""
+        if self.engine == "compiled" or not refusal(system, cores_of(system)[1]):
+            print(f"sweep: compiling the study's loop for --engine {self.engine} (once; a loop compiled "
+                  f"before is taken from the cache) ...", file=sys.stderr, flush=True)
+        start = time.perf_counter()
+        factory, note = select_engine(system, self.engine)
+        if factory is not Simulation:
+            print(f"sweep: the loop ready in {time.perf_counter() - start:.1f} s", file=sys.stderr)
+        if note and self.engine == "auto":
+            print(note, file=sys.stderr)
+            self.ran = "python" if factory is Simulation else "compiled"
+            self._policy(self.ran)
 
     def manifest(self) -> dict[str, Any]:
         """What sweep.json holds: the study file, the resolved study's hash, the engine, the points."""
@@ -539,7 +555,7 @@ class SweepRun:
         shared = scheduler in (None, "local")            # the workers see this machine's folders
         if not todo:
             return
-        if self.engine != "python":
+        if self.ran != "python":
             yield from self._execute_batched(todo, workers, scheduler, shared)
             return
         jobs = [(p, point_study(self.study, p), self.new_folder(p) if shared else None) for p in todo]

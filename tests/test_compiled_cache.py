@@ -95,3 +95,24 @@ def test_a_new_cache_is_private(cache):
     _load()
     assert cache.stat().st_mode & 0o077 == 0
     assert Path(cache).is_dir()
+
+
+@pytest.mark.parametrize("damaged", [False, True])
+def test_processes_compiling_one_shape_at_once_all_load_a_whole_library(cache, damaged):
+    """Four processes (pytest-xdist workers, sweep workers) building the same shape at once, in an
+    empty cache or over a damaged library: every one loads a library that runs, and the cache holds
+    that shape's folder alone (each build written aside under its own name and moved into place;
+    a damaged folder renamed aside before it is removed)."""
+    if damaged:
+        key = _built_by_another_process()
+        (cache / key / "libloop.so").write_bytes(b"\x7fELF damaged")
+    procs = [subprocess.Popen([sys.executable, "-c", BUILD + "print(toolchain.library({'loop.c': "
+                               f"{LOOP!r}}}, [], [])[0].agc_run(None, None, None, 2, None))"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for _ in range(4)]
+    outputs = [p.communicate(timeout=120) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [err for _, err in outputs]
+    keys = {out.split()[0] for out, _ in outputs}
+    assert len(keys) == 1 and all(out.split()[1] == "3" for out, _ in outputs)
+    assert [p.name for p in cache.iterdir()] == [keys.pop()]
+    lib, _, built = _load()
+    assert not built and lib.agc_run(None, None, None, 4, None) == 5

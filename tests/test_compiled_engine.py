@@ -166,7 +166,7 @@ def test_auto_says_why_it_runs_in_python(cache, tmp_path, capsys):
     code = main(["run", str(shipped("figure8_pure_pursuit.toml")), "--out", str(tmp_path / "r"), "--engine", "auto",
                  "--no-plots", "--set", "study.stop_time=15"])
     assert code == 0
-    assert "engine: python (the compiled engine cannot take this study: components without a C core: tracker" \
+    assert "engine: python (auto: the compiled engine cannot take this study: components without a C core: tracker" \
            in capsys.readouterr().err
 
 
@@ -224,3 +224,27 @@ def test_a_large_sweep_checks_each_parameters_extremes_and_choices_first(tmp_pat
         assert min(values) in [p.values[name] for p in checked] and max(values) in [p.values[name] for p in checked]
     assert {p.values["tractor.model"] for p in checked} == {"bicycle", "rlf", "rlfr", "transfer_function"}
     assert {p.values["gps.latency"] for p in checked} == {0.0, 0.05, 0.1}
+
+
+@pytest.mark.parametrize("study, engine, why", [
+    ("figure8.toml", "compiled", "engine: compiled (auto: a C compiler was found and every component has a C core; "
+                                 "--engine python for the reference engine)"),
+    ("figure8_pure_pursuit.toml", "python", "engine: python (auto: the compiled engine cannot take this study: "
+                                            "components without a C core: tracker (type PurePursuit has no C core)"),
+])
+def test_run_without_engine_is_auto_and_says_which_engine_ran_and_why(cache, tmp_path, capsys, study, engine, why):
+    """No --engine: the compiled engine where every component has a C core and a compiler is found,
+    the Python engine otherwise; stderr says which and why, metrics.json records the one that ran;
+    ``sweep`` and the API share the default."""
+    import inspect
+
+    import agrobot
+    from agrobot.orchestrator.cli import build_parser, main
+
+    code = main(["run", str(shipped(study)), "--out", str(tmp_path / "r"), "--no-plots", "--no-progress",
+                 "--set", "study.stop_time=15"])
+    assert code == 0
+    assert why in capsys.readouterr().err
+    assert json.loads((tmp_path / "r" / "metrics.json").read_text())["engine"] == engine
+    assert build_parser().parse_args(["sweep", "s.toml", "--out", "o"]).engine == "auto"
+    assert {inspect.signature(f).parameters["engine"].default for f in (agrobot.run, agrobot.sweep)} == {"auto"}

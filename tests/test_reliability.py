@@ -179,7 +179,7 @@ def _alive(pid: int) -> bool:
 
 def _sweep(out: Path, stop: str) -> subprocess.Popen:
     return _start(["sweep", "studies/speed_sweep.toml", "--out", str(out), "--workers", "2", "--no-plots",
-                   "--no-progress", "--set", f"study.stop_time={stop}"])
+                   "--no-progress", "--set", f"study.stop_time={stop}", "--engine", "python"])   # its workers
 
 
 @pytest.mark.slow
@@ -213,7 +213,7 @@ def test_a_sweep_stopped_by_sigterm_keeps_finished_points_and_resumes(tmp_path):
     kept = pd.read_parquet(out / "results.parquet")
     assert 3 <= len(kept) < 11 and set(kept["status"]) == {"completed"}
     again = subprocess.run(CMD + ["sweep", "studies/speed_sweep.toml", "--out", str(out), "--workers", "2",
-                                  "--no-plots", "--no-progress", "--set", "study.stop_time=150"],
+                                  "--no-plots", "--no-progress", "--set", "study.stop_time=150", "--engine", "python"],
                            cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     table = pd.read_parquet(out / "results.parquet")

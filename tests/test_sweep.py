@@ -77,7 +77,7 @@ def test_killed_sweep_resumes_without_rerunning_finished_points(tmp_path):
     path = sweep_file(tmp_path, body)
     out = tmp_path / "interrupted"
     cmd = [sys.executable, "-m", "agrobot", "sweep", str(path), "--out", str(out), "--workers", "1",
-           "--set", SHORT, "--no-progress", "--no-plots"]
+           "--set", SHORT, "--no-progress", "--no-plots", "--engine", "python"]     # points that take a while
     proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
     while not (out / "points/p0001/metrics.json").exists():

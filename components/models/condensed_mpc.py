@@ -205,7 +205,7 @@ class CondensedTrackingMPC:
         z, n = self._z, self._n
         if u_applied is not None:
             z[:n] = self._w[n:] + self.B * u_applied
-        u_prev = z[n]
+        u_prev = float(z[n])                            # Python floats from here: no numpy scalar arithmetic
         z[n + 1] = y_meas - r
         if self.solver_name == "daqp":
             np.dot(self.G, z, out=self._g)
@@ -214,7 +214,7 @@ class CondensedTrackingMPC:
             du, status = self._daqp(self._g, self._bu, self._bl)
         else:
             du, status = self._solve(self.qp(r, y_meas))
-        du0 = du[0]
+        du0 = float(du[0])
         if status <= 0 or du0 != du0:                   # failed or NaN: hold the previous input
             du, du0 = np.zeros(self.Nc), 0.0
         u = min(max(u_prev + du0, -self.u_max), self.u_max)

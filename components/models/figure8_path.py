@@ -9,6 +9,7 @@ Time based: arc length s(t) = v t^2 / (2 T) for t < T (a start ramp), v (t - T/2
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -24,19 +25,19 @@ class Figure8Path:
         if not (0 < self.radius < self.centre_offset):
             raise ValueError("need 0 < radius < centre_offset")
 
-    @property
+    @functools.cached_property      # the path is frozen: worked out once, not at each pose
     def theta(self) -> float:
         return math.asin(self.radius / self.centre_offset)
 
-    @property
+    @functools.cached_property      # the path is frozen: worked out once, not at each pose
     def straight_length(self) -> float:
         return 2.0 * math.sqrt(self.centre_offset**2 - self.radius**2)
 
-    @property
+    @functools.cached_property      # the path is frozen: worked out once, not at each pose
     def arc_angle(self) -> float:
         return math.pi + 2.0 * self.theta
 
-    @property
+    @functools.cached_property      # the path is frozen: worked out once, not at each pose
     def lap_length(self) -> float:
         return 2.0 * self.straight_length + 2.0 * self.radius * self.arc_angle
 

@@ -47,7 +47,7 @@ MARKER = re.compile(r"<!--\s*quoted:\s*([\w-]+)\s*-->\s*\n```[^\n]*\n(.*?)```", 
 
 def produce(name: str, python: str = sys.executable) -> str:
     """Run ``QUOTES[name]`` in the repository; the last command's output without VOLATILE lines."""
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "COLUMNS": "100"}
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "COLUMNS": "100"}
     with tempfile.TemporaryDirectory() as out:
         text = ""
         for argv in QUOTES[name]:

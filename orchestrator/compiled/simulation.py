@@ -74,9 +74,10 @@ def select_engine(system: System, engine: str):
         if engine == "compiled":
             raise CompiledRefused(f"{system.study.path}: --engine compiled: {why}; --engine auto or python runs "
                                   f"it in Python")
-        return Simulation, f"engine: python (the compiled engine cannot take this study: {why})"
+        return Simulation, f"engine: python (auto: the compiled engine cannot take this study: {why})"
     return (lambda sys_: CompiledSimulation(sys_, cores, prepared=prepared if sys_ is system else None)), \
-        "engine: compiled (every component has a C core; --engine python runs the Python components)"
+        "engine: compiled (auto: a C compiler was found and every component has a C core; --engine python for " \
+        "the reference engine)"
 
 
 class CompiledSimulation:

@@ -135,10 +135,9 @@ def _build(key: str, folder: Path, units: dict[str, str], include_dirs: list[Pat
     """Compile the shape ``key`` into ``folder`` (its library and the library's digest), written aside
     and moved into place; a folder there that failed the check is removed first."""
     if folder.exists() or folder.is_symlink():
-        if folder.is_dir() and not folder.is_symlink():
-            shutil.rmtree(folder, ignore_errors=True)
-        else:
-            folder.unlink()
+        if _verified(folder):            # another process placed the same shape meanwhile
+            return
+        _set_aside(folder)
     with tempfile.TemporaryDirectory(dir=folder.parent, prefix=f".{key}.", ignore_cleanup_errors=True) as tmp:
         work = Path(tmp)
         sources = {**units, "token.c": f'const char *agc_token(void) {{ return "{key}"; }}\n'}
@@ -155,6 +154,20 @@ def _build(key: str, folder: Path, units: dict[str, str], include_dirs: list[Pat
             os.replace(work, folder)
         except OSError:            # another process placed the same shape first: use its library
             pass
+
+
+def _set_aside(folder: Path) -> None:
+    """Remove a cache folder that failed the check: first renamed to a name of this process's own
+    (one step: a process loading the shape sees the folder whole or not at all), then deleted."""
+    aside = folder.with_name(f".{folder.name}.stale.{os.getpid()}.{os.urandom(4).hex()}")
+    try:
+        os.replace(folder, aside)
+    except FileNotFoundError:            # another process set it aside first
+        return
+    if aside.is_dir() and not aside.is_symlink():
+        shutil.rmtree(aside, ignore_errors=True)
+    else:
+        aside.unlink(missing_ok=True)
 
 
 def library(units: dict[str, str], include_dirs: list[Path], files: list[Path]) -> tuple[ctypes.CDLL, str, bool]:

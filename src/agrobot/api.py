@@ -104,7 +104,7 @@ def run(study, set: Mapping[str, Any] | None = None, out: str | Path | None = No
 
 def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = None, *, workers: int | None = None,
           scheduler: str | None = None, retry_failed: bool = False, progress: bool = False,
-          plots: bool = False, engine: str = "python", keep_signals: bool | str | None = None,
+          plots: bool = False, engine: str = "auto", keep_signals: bool | str | None = None,
           overwrite: bool = False, accept_cost: bool = False) -> SweepResult:
     """Every point of the study's [sweep] section, on ``workers`` processes (default: every core,
     as ``sweep`` does) or a Dask ``scheduler``, with ``engine`` (as ``--engine``; ``keep_signals``
