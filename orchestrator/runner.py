@@ -128,7 +128,7 @@ def _stream(sim: Simulation, writer) -> RecordedSignals:
         if watching() and hasattr(writer, "spill"):     # a binary in this process: its crash ends it at once
             where = writer.spill()
             named(f"the signals recorded until the crash: {where} (Arrow IPC stream of the blocks written, "
-                  f"read by agrobot.orchestrator.atomic_files.read_partial)" if where.suffix == ".arrows" else
+                  f"read by atomic_files.read_partial)" if where.suffix == ".arrows" else
                   f"the signals recorded until the crash: {where} (CSV, flushed at each block)",
                   _advance, sim, writer, chunk, True)
         else:

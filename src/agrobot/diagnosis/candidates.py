@@ -177,7 +177,7 @@ class Replay:
         after_burn, moving = (self.t >= self.t[0] + self.burn_in) & settled, moving & settled
         self.t_split = t_split
         held = self._held_out(t_split, moving)
-        steering = {"fit": after_burn & ~held, "test": held}
+        steering = {"fit": after_burn & ~held, "test": held & settled}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
         self.masks = {"steering": steering, "yaw": {k: m & moving & self.yaw_measured for k, m in steering.items()}}
         # speed: the GPS chord speed (1 s chords, centred) where a chord exists and the tractor moves

@@ -107,8 +107,12 @@ def joined_stretches(frame):
         start += step * len(grid)
     even = pd.concat(pieces, ignore_index=True)
     even.attrs = {**frame.attrs, "joins": joins}
+    first, last = frame.attrs.get("log_span", (t[0], t[-1]))
+    passed = max(last - first - sum(b - a for a, b in spans), 0.0)
     return even, (f"the {len(spans)} stretches judged are joined on one even {1 / step:.3g} Hz clock, each with its own "
-                  f"burn-in: " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in spans))
+                  f"burn-in: " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in spans)
+                  + f"; passed over: {passed:.0f} s that the selection left out (--keep-unexplained or --where "
+                    f"judge others, --min-stretch sets the shortest stretch judged)")
 
 
 def read_uneven(source: Path, resample: bool = False, recording=None, study=None, causal: bool = True):

@@ -34,7 +34,7 @@ Kinds:
 - ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
   clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
 - ``held_samples``: a channel updated slower than its rows (``value`` rows per update), judged on
-  its updates (resolved);
+  its updates (resolved); it alone also carries ``updates_hz``, its updates' rate;
 - ``reversing``: stretches where the course is opposite the heading or the steering (or a declared
   direction channel says so), measurements.direction: resolved when the speed is negative there
   or made so by ``--sign-speed``; otherwise the import is refused;

@@ -223,7 +223,8 @@ def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
     """The rows of ``frame`` that are judged: those ``options.where`` selects, less the stretches
     the command does not explain (unless ``options.keep_unexplained``), less the stretches left
     shorter than ``options.min_stretch`` s; what was chosen is printed (to stderr) and kept in
-    frame.attrs["selection"], the stretches judged (start, end) in frame.attrs["stretches"]."""
+    frame.attrs["selection"], the stretches judged (start, end) in frame.attrs["stretches"], the log's
+    first and last time in frame.attrs["log_span"]."""
     where = getattr(options, "where", None)
     keep = np.ones(len(frame), bool)
     lines = []
@@ -254,6 +255,7 @@ def judged(frame: pd.DataFrame, source, options) -> pd.DataFrame:
     out.attrs.update(attrs)
     out.attrs["selection"] = lines
     out.attrs["stretches"] = stretches(keep, t)
+    out.attrs["log_span"] = (float(t[0]), float(t[-1]))
     return out
 
 
