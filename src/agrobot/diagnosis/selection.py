@@ -305,6 +305,7 @@ class Selector:
                 members = members + [a, b]
                 model = merged(model, fit)
                 trace.append(f"+ {a.id} and {b.id} together (neither alone is supported; dBIC {dbic:.1f})")
+                model, members = self.still_supported(model, members, members[:-2], removed, trace)
                 continue
             best = supported[0]
             rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
@@ -325,13 +326,7 @@ class Selector:
                 if not again.supported:
                     inconclusive.append(_tie(best, rival, "both are supported alone, and with the chosen one in the "
                                                           "model the other adds nothing"))
-            for f in list(members[:-1]):
-                check = self.drop(model, members, f)
-                if not check.supported:
-                    members = [m for m in members if m is not f]
-                    model = check.without
-                    removed.add(f.id)
-                    trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
+            model, members = self.still_supported(model, members, members[:-1], removed, trace)
         model, members = self.absorbed(model, members, trace)
         seen, ties = set(), []
         for t in inconclusive:                       # one entry per pair, the chosen effect still in the model
@@ -346,6 +341,19 @@ class Selector:
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def still_supported(self, model: FitResult, members: list[Effect], earlier: list[Effect], removed: set[str],
+                        trace: list[str]) -> tuple[FitResult, list[Effect]]:
+        """(model, members) less each of the ``earlier`` members that the model with the ones added
+        since no longer supports (its drop-one test, with the others)."""
+        for f in list(earlier):
+            check = self.drop(model, members, f)
+            if not check.supported:
+                members = [m for m in members if m is not f]
+                model = check.without
+                removed.add(f.id)
+                trace.append(f"- {f.id} (with the others: dBIC {check.delta_bic:.1f}; {'; '.join(check.reasons)})")
+        return model, members
 
     def audit_start(self) -> str | None:
         """The import audit's unresolved finding that the yaw rate answers the steering before it
