@@ -7,6 +7,7 @@ from __future__ import annotations
 import errno
 from pathlib import Path
 
+import pytest
 
 from tests.commands import in_process
 
@@ -23,6 +24,7 @@ def _hidden(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.iterdir() if p.name.startswith("."))
 
 
+@pytest.mark.slow     # two real-time runs; the full-disk case stays fast
 def test_an_earlier_recording_is_refused_without_overwrite_and_replaced_with_it(tmp_path, capsys):
     folder = tmp_path / "field"
     folder.mkdir()

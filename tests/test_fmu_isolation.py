@@ -113,8 +113,11 @@ def _padded(fmu: Path, extra: dict[str, bytes], out: Path) -> Path:
     return out
 
 
-def test_only_the_entries_a_run_uses_are_unpacked_and_removed_after(folder, tmp_path):
+def test_only_the_entries_a_run_uses_are_unpacked_and_removed_after(folder, tmp_path, monkeypatch):
     import fmpy
+
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))     # other workers unpack FMUs too
 
     _padded(folder / "misbehaving.fmu", {"sources/misbehaving.c": b"int x;\n" * 1000,
                                          "binaries/win64/misbehaving.dll": b"\0" * 100_000,

@@ -161,7 +161,7 @@ def test_margins_shrink_with_the_steering_delay_by_the_delay_added():
 
 
 @pytest.mark.parametrize("sweep, base", [pytest.param(sweep, base, marks=pytest.mark.slow)
-                                         if sweep == "field_speed_sweep" else (sweep, base)      # 12 CPU s
+                                         if sweep in ("field_speed_sweep", "field_line_test") else (sweep, base)  # 12 CPU s
                                          for sweep, base in SWEEPS.items()])
 def test_a_sweep_or_line_test_has_its_base_studys_loop_at_its_own_values(sweep, base):
     a = analyse(Study.load(STUDIES / f"{sweep}.toml"), speed_excess_value=0.17)

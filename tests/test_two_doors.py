@@ -96,6 +96,7 @@ def _field(tmp_path: Path) -> Path:
     return field
 
 
+@pytest.mark.slow     # 6 CPU s; the other doors stay in the fast tier
 def test_plan_writes_alike_through_both_doors(cli, tmp_path):
     field = _field(tmp_path)
     proc = cli("plan", field, "--out", tmp_path / "cli", "--width", "6", "--angle", "0", "--headland-passes", "3")

@@ -139,6 +139,7 @@ def test_a_section_switches_off_over_worked_ground_after_its_latency_or_at_the_e
         assert off_at == pytest.approx(expected, abs=0.15)
 
 
+@pytest.mark.slow     # 5 CPU s
 def test_the_as_applied_map_is_written_with_the_plan(tmp_path, capsys):
     out = tmp_path / "plan"
     assert main(["plan", PARCEL, "--width", "6", "--sections", "4", "--leftover-passes", "off", "--out", str(out)]) == 0
@@ -153,6 +154,7 @@ def test_the_as_applied_map_is_written_with_the_plan(tmp_path, capsys):
 
 
 # --- obstacles ---------------------------------------------------------------------------------------------
+@pytest.mark.slow     # 5 CPU s
 def test_an_obstacle_is_never_crossed_by_the_tractor_or_the_implement():
     pole = circle("pole", 30.0, 40.0, 3.0, "test")
     f = with_obstacles(parcel(), [pole])
