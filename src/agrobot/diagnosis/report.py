@@ -37,7 +37,8 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
         for label, v, color in models:
             t, r = replay.residual_series(stage, v)
             ax[0, 0].plot(t, k * r, ".", ms=1, color=color, label=label)
-        ax[0, 0].set(title="antenna position residual after per-window alignment", xlabel="t [s]", ylabel=f"[{unit}]")
+        ax[0, 0].set(title="antenna position residual after per-window alignment", xlabel=_time_label(replay, ax[0, 0]),
+                     ylabel=f"[{unit}]")
         _shade_held_out(ax[0, 0], replay)
         _draw_levels(ax[0, 0], levels, k, unit, signed=False)
         track = replay.gps
@@ -60,8 +61,9 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
             ax[1, 1].plot(lags, rho, color=color, label=label)
         ax[1, 1].axhspan(-bound, bound, color="0.85", label="95% bound (white)")
         _shade_held_out(ax[0, 0], replay, (first, first + 30))
-        ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s from the first held-out stretch", xlabel="t [s]", ylabel=f"[{unit}]")
-        ax[0, 1].set(title="residual (measured - simulated)", xlabel="t [s]", ylabel=f"[{unit}]")
+        ax[0, 0].set(title=f"{SIGNALS[stage][0]}: 30 s from the first held-out stretch",
+                     xlabel=_time_label(replay, ax[0, 0], (first, first + 30)), ylabel=f"[{unit}]")
+        ax[0, 1].set(title="residual (measured - simulated)", xlabel=_time_label(replay, ax[0, 1]), ylabel=f"[{unit}]")
         _shade_held_out(ax[0, 1], replay)
         _draw_levels(ax[0, 1], levels, k, unit)
         ax[1, 0].set(title="residual spectrum", xlabel="f [Hz]", ylabel=f"PSD [({unit})^2/Hz]")
@@ -76,6 +78,17 @@ def stage_figure(replay, stage: str, base: dict, winner: dict | None, path: Path
     atomic_write(path, lambda p: fig.savefig(p, dpi=90, format="png"))
     plt.close(fig)
     return path
+
+
+def _time_label(replay, ax, span: tuple[float, float] | None = None) -> str:
+    """The time axis' label; a log whose judged stretches are joined (identification.from_log.
+    joined_stretches) runs on the joined clock: each join is drawn as a dotted line."""
+    joins = [j for j in replay.frame.attrs.get("joins", ()) if span is None or span[0] <= j <= span[1]]
+    for j in joins:
+        ax.axvline(j, color="0.3", ls=":", lw=1)
+    if not replay.frame.attrs.get("joins"):
+        return "t [s]"
+    return "t, judged stretches joined [s] (dotted: a join)"
 
 
 def _draw_levels(ax, levels: dict | None, k: float, unit: str, signed: bool = True) -> None:
