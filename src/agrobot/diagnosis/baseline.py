@@ -18,7 +18,7 @@ from agrobot.components.models.yaw_dynamics import PHYSICAL_MODELS, TractorParam
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study, StudyError
 
-from agrobot.estimation import REPORTED_AT_BOUND
+from agrobot.estimation import REPORTED_AT_BOUND, Z95
 from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
@@ -102,7 +102,7 @@ def unpinned(fit) -> dict[str, str]:
     steering map's gain taken up as tyres): the refit holds it at the study's."""
     out = {}
     for p in fit.free:
-        value, half = fit.values[p.name], 1.96 * fit.std(p.name)
+        value, half = fit.values[p.name], Z95 * fit.std(p.name)
         if half <= PINNED * abs(value):
             continue
         out[p.name] = ("not pinned by the log: " + (f"95 % interval +-{half:.2g} about {value:.3g}" if math.isfinite(half)
@@ -137,8 +137,11 @@ def refit_summary(start: dict[str, float], fitted: dict[str, float], params, hel
         edge = p.at_bound(b, REPORTED_AT_BOUND)
         out.append({"name": p.name, "study": a, "value": b, "unit": p.unit,
                     "moved": abs(b - a) > 0.02 * max(abs(a), 1e-9), "bounds": [p.lower, p.upper], "at_bound": edge})
-    return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]), "unit": "1", "moved": False,
-                   "bounds": [], "at_bound": None, "held": w} for n, w in why.items()]
+    by_name = {p.name: p for p in params}
+    return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]),
+                   "unit": by_name[n].unit if n in by_name else "1", "moved": False,
+                   "bounds": [by_name[n].lower, by_name[n].upper] if n in by_name else [], "at_bound": None,
+                   "held": w} for n, w in why.items()]
 
 
 def refit_statement(summary: list[dict]) -> str:

@@ -319,6 +319,16 @@ class Auditor:
         self.streams, self.groups, self.L, self.t0 = streams, groups, wheelbase, t0
         self.findings: list[dict] = []
         self.pairs: list[dict] = []
+        self.unit_converted: set[str] = set()     # channels the audit divided by a unit factor
+
+    def divide(self, channel: str, k: float, unit: str, against: str) -> None:
+        """``channel`` found in ``unit`` (k times its SI value): divided by k in place, its column
+        description says so, and it is not converted twice."""
+        t, x = self.streams.signals[channel]
+        self.streams.signals[channel] = (t, x / k)
+        columns = self.streams.report.setdefault("columns", {})
+        columns[channel] = f"{columns.get(channel, channel)}; / {k:.4g}: {unit} (the audit's scale against {against})"
+        self.unit_converted.add(channel)
 
     def group(self, channel: str) -> str:
         """The channel's clock: its file, topic or bus; the receiver's (``gnss``, its speed, course
@@ -889,9 +899,7 @@ def unit_mixups(aud: Auditor, findings: list[dict], options) -> None:
         assumed = "the log's convention" in str(columns.get(b, ""))
         if not assumed or abs(f["value"] / k - 1) > MIXUP_TOLERANCE:
             continue
-        t, x = aud.streams.signals[b]
-        aud.streams.signals[b] = (t, x / k)
-        columns[b] = f"{columns[b]}; / {k:.4g}: {unit} (the audit's scale against {f['channels'][0]})"
+        aud.divide(b, k, unit, f["channels"][0])
         f["resolved"] = True
         f["meaning"] += (f"; {b} declared no unit and was taken as {si}: it is in {unit}, divided by {k:.4g} (declare "
                          f"its unit with --signal {b}=COLUMN[{si}] to keep it as written)")
@@ -910,7 +918,7 @@ def gyro_unit_by_steering(aud: Auditor, causal: dict | None, options) -> list[di
     by 57.3 and named, with the option that keeps it. Undecided: a finding that says why."""
     sig, columns = aud.streams.signals, aud.streams.report.get("columns", {})
     if "yaw_rate" not in sig or "the log's convention" not in str(columns.get("yaw_rate", "")) \
-            or "/ 57.3" in str(columns.get("yaw_rate", "")):
+            or "yaw_rate" in aud.unit_converted:
         return []
     t, r = sig["yaw_rate"]
     peak = float(np.percentile(np.abs(r), 99.5)) if len(r) else 0.0
@@ -930,8 +938,7 @@ def gyro_unit_by_steering(aud: Auditor, causal: dict | None, options) -> list[di
                         f"yaw_rate reaches {peak:.3g} (99.5 %), yet it is {scale:.3g} times v tan({causal['input']}) / L "
                         f"({L}; correlation {causal['rho']:.2f}): rad/s by the steering, too large by its size; declare "
                         f"its unit (--signal yaw_rate=COLUMN[deg/s] or [rad/s])")]
-    sig["yaw_rate"] = (t, r / k)
-    columns["yaw_rate"] = f"{columns['yaw_rate']}; / {k:.4g}: deg/s (the audit's scale against the steering)"
+    aud.divide("yaw_rate", k, "deg/s", "the steering")
     return [finding("unit_by_steering", ["yaw_rate"], k, None, "factor",
                     f"yaw_rate is {scale:.3g} times v tan({causal['input']}) / L ({L}; correlation "
                     f"{causal['rho']:.2f}): nearer 57.3 (deg/s) than 1 (rad/s; passed over: the wheelbase and the tyres "

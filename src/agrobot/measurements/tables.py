@@ -695,8 +695,9 @@ def mode_streams(tables: list[Table], mode_specs: list, used: set, source: Path,
     wanted = [(spec.column, spec.names[0]) for spec in mode_specs]
     wanted += [(str(c).lower(), f"{t.name}.{c}") for t in tables if t.name in used for c in t.frame.columns
                if is_mode_name(c) and c not in t.time_columns]
+    names = catalog(tables)
     for column, name in wanted:
-        found = catalog(tables).get(name)
+        found = names.get(name)
         if column in signals or found is None:
             if found is None and any(spec.column == column for spec in mode_specs):
                 raise LogError(f"{source}: --signal {column}={name}: no such column (the tables' mode columns: "
