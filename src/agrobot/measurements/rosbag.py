@@ -6,7 +6,8 @@ Standard messages are mapped by their type, without options (TYPE_MAP):
 - ``sensor_msgs/NavSatFix``: latitude, longitude, altitude -> x, y about the first fix; status ->
   ``fix_quality`` (NO_FIX -1 -> 0, FIX 0 -> 1, SBAS 1 -> 2 (differential), GBAS 2 -> 4 (ground-based
   augmentation, RTK's class)); the covariance's horizontal part -> ``position_std``;
-- ``sensor_msgs/Imu``: ``yaw_rate`` from angular_velocity.z;
+- ``sensor_msgs/Imu``: ``yaw_rate`` from angular_velocity.z, or from the axis its accelerometer
+  names vertical when that is x or y (an IMU mounted on its side: measurements.imu_axes), named;
 - ``nav_msgs/Odometry``: ``v`` from twist.twist.linear.x, ``yaw_rate`` from twist.twist.angular.z
   (an IMU's wins);
 - ``geometry_msgs/TwistStamped``: ``v`` and ``yaw_rate`` likewise;
@@ -32,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .bag_records import check_bag_file
+from .imu_axes import AXES, describe, vertical_axis
 from .log import LogError
 from .modes import MODE_VALUES, is_mode_name
 from .runs import held as in_force
@@ -47,6 +49,8 @@ ACKERMANN = {
     "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\nackermann_msgs/AckermannDrive drive\n",
 }
 NAVSAT_QUALITY = {-1: 0, 0: 1, 1: 2, 2: 4}
+IMU = "sensor_msgs/msg/Imu"
+IMU_AXES_READ = tuple(f"linear_acceleration.{a}" for a in AXES) + ("angular_velocity.x", "angular_velocity.y")
 
 # type -> [(column, field path)], in the order a column is taken from (the first type that has it wins)
 TYPE_MAP: dict[str, list[tuple[str, str]]] = {
@@ -210,9 +214,11 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
     topics = {c.topic: c.msgtype for c in reader.connections}
     wanted = _named_fields(given, topics, source)
     auto = _standard_fields(given, topics, wanted)
+    _imu_axes_wanted(auto, topics, wanted)
     labels = {n: {} for spec in given if is_mode_name(spec.column) for n in spec.names[:1]}    # a mode's text values
     rows, header_used = _messages(reader, wanted, auto, source, labels)
     series, report_topics, stamps = _topic_series(rows, header_used, wanted, topics, given, source)
+    turned = _vertical_yaw_rates(auto, series, topics)
     signals = _evaluated(given, auto, series, topics, report_topics, source)
     report = {"topics": report_topics, "stamp_vs_receive": stamps,
               "mode_labels": {spec.column: list(labels[spec.names[0]]) for spec in given
@@ -223,7 +229,38 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
         report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
                              + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
                              + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
+    if turned:
+        report["choices"] = turned + report.get("choices", [])
     return signals, report
+
+
+def _imu_axes_wanted(auto: dict, topics: dict[str, str], wanted: dict) -> None:
+    """The accelerometer and the other gyro axes of each IMU topic a yaw rate is taken from,
+    added to ``wanted`` (read, not written: imu_axes names the vertical axis from them)."""
+    for spec in auto.values():
+        topic, path = split_name(spec.names[0], list(topics))
+        if spec.column.startswith("yaw_rate") and topics.get(topic) == IMU:
+            for p in IMU_AXES_READ:
+                wanted[topic].setdefault(f"{topic}.{p}", p)
+
+
+def _vertical_yaw_rates(auto: dict, series: dict, topics: dict[str, str]) -> list[str]:
+    """A yaw rate the standard map takes from an IMU's z whose accelerometer reads gravity on x
+    or y: that axis's angular velocity instead, signed as the reading; one note per IMU turned."""
+    notes = []
+    for column, spec in list(auto.items()):
+        topic, path = split_name(spec.names[0], list(topics))
+        if not column.startswith("yaw_rate") or topics.get(topic) != IMU or path != "angular_velocity.z":
+            continue
+        names = {a: f"{topic}.linear_acceleration.{a}" for a in AXES}
+        found = vertical_axis({a: series[n].values for a, n in names.items() if n in series})
+        if found is None or found[0] == "z" or f"{topic}.angular_velocity.{found[0]}" not in series:
+            continue
+        axis, sign, means = found
+        name = f"{topic}.angular_velocity.{axis}"
+        auto[column] = SignalSpec(column, ((name, sign),), 0.0, None, f"{column}={'-' if sign < 0 else ''}{name}")
+        notes.append(describe(topic, axis, sign, means))
+    return notes
 
 
 def _named_fields(given: list, topics: dict[str, str], source: Path) -> dict[str, dict[str, str]]:
