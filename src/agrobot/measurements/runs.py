@@ -275,7 +275,8 @@ def _standstill_or_silence(report: dict) -> str:
 
 def _missing_reason(column: str, report: dict) -> str:
     if column in ("x", "y"):
-        return "no positions: no NMEA with a fix, no NavSatFix topic, no TLG position"
+        return ("no positions: no NMEA with a fix, no NavSatFix topic, no TLG position (map a CAN, table or "
+                "bag position with --signal lat=...[deg] --signal lon=...[deg], or x=... y=... in metres)")
     return {"delta_cmd": "no steering command in the recording (map one with --signal delta_cmd=...)",
             "delta": "no wheel-angle measurement in the recording (map one with --signal delta=...; a handwheel "
                      "angle with --steering-ratio)",
