@@ -89,6 +89,22 @@ def _grid_step(streams: Streams, options: ImportOptions) -> float:
     return max(round(min(periods), 3), 0.02)
 
 
+def _faster_than_rows(streams: Streams, options: ImportOptions, step: float) -> str | None:
+    """The note of a grid at the GNSS epoch rate (no --rate) below the canonical signals' own
+    update rates (at least twice the rows'): what the rows leave out and the --rate that keeps it."""
+    if options.rate or streams.gnss is None:
+        return None
+    fast = {c: 1.0 / float(np.median(np.diff(t))) for c, (t, _) in streams.signals.items()
+            if c in CANONICAL and len(t) > 2 and np.median(np.diff(t)) > 0}
+    fast = {c: hz for c, hz in fast.items() if hz >= 2.0 / step}
+    if not fast:
+        return None
+    keep = min(200.0, max(round(hz) for hz in fast.values()))
+    return (f"rows at the GNSS epoch rate {1.0 / step:.3g} Hz (the default): "
+            + ", ".join(f"{c} ({hz:.3g} Hz)" for c, hz in sorted(fast.items(), key=lambda kv: -kv[1]))
+            + f" sampled at it, their updates between epochs left out; --rate {keep:g} keeps them")
+
+
 def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
     """The log on its grid for the run or range ``options`` choose, and the report of it: every
     canonical column the recording holds, then the extras (the receiver's speed, fix quality,
@@ -97,6 +113,9 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     times = _timed(source, streams)
     u0 = float(gnss["utc"].iloc[0]) if gnss is not None else min(float(t[0]) for _, t in times)
     step = _grid_step(streams, options)
+    note = _faster_than_rows(streams, options, step)
+    if note:
+        report.setdefault("notes", []).append(note)
     bridge = max(GAP_MIN, float(options.max_gap))
     least = {name: max(HELD_GAP if name in streams.held else GAP_MIN, bridge) for name, _ in times}
     report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
