@@ -18,7 +18,9 @@ Imported where used: asammdf (the mdf extra).
 """
 from __future__ import annotations
 
+import contextlib
 import gc
+import io
 import re
 import sys
 import warnings
@@ -32,6 +34,7 @@ from .log import LogError
 from .mdf4_links import check_links
 
 BUS_CHANNEL = "CAN_DataFrame"
+MDF_IDS = (b"MDF ", b"UnFinMF ")     # a finalized file; one a logger left unfinalized (ASAM MDF 4.1, ID block)
 _NAME = re.compile(r"[^A-Za-z0-9_]+")
 
 
@@ -43,18 +46,22 @@ def _open(path: Path):
         raise LogError(f"{path}: reading MDF4 needs asammdf (pip install asammdf)") from None
     with open(path, "rb") as f:
         head = f.read(8)
-    if not head.startswith(b"MDF "):
-        raise LogError(f"{path}: not an MDF file: an ASAM MDF file starts with 'MDF ' (its identification "
-                       f"block), this one with {head[:8]!r}")
+    if not head.startswith(MDF_IDS):
+        raise LogError(f"{path}: not an MDF file: an ASAM MDF file starts with 'MDF ' (or 'UnFinMF ' while "
+                       f"not finalized; its identification block), this one with {head[:8]!r}")
     check_links(path)
     why = None
     try:
-        with warnings.catch_warnings():
+        # asammdf prints the traceback of a failed finalization to stdout before it raises
+        with warnings.catch_warnings(), contextlib.redirect_stdout(io.StringIO()):
             warnings.simplefilter("ignore")
             return MDF(str(path))
     except Exception as exc:       # noqa: BLE001 - asammdf raises many kinds on a damaged file
         why = f"{type(exc).__name__}: {exc}"
     _collect_quietly()             # the half-built reader complains as it is collected: not the user's concern
+    if head.startswith(b"UnFinMF "):
+        raise LogError(f"{path}: an unfinalized MDF file (its logger did not close it) that asammdf cannot finalize "
+                       f"({why}); finalize it with the logger maker's tool and convert the finalized file")
     raise LogError(f"{path}: a damaged MDF file: asammdf cannot read it ({why})")
 
 
