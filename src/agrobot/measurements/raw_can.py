@@ -252,8 +252,8 @@ def read_can_file(path: str | Path, db, bus: str | None = None, wanted: set[str]
 
 
 def _scaled(msg, raw: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
-    """The message's raw values scaled; J1939 'error'/'not available' fields NaN; values outside
-    the DBC's declared range counted (kept)."""
+    """The message's raw values scaled; J1939 'error'/'not available' fields NaN, and the fields of
+    a frame whose own validity flag is 0; values outside the DBC's declared range counted (kept)."""
     table = raw.sort_values("t", kind="stable").reset_index(drop=True)
     for sig in msg.signals:
         if sig.name not in table:
@@ -277,6 +277,27 @@ def _scaled(msg, raw: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
                     "outside": int(out.sum()), "of": int(np.isfinite(x).sum()), "declared": [lo, hi],
                     "seen": [float(np.nanmin(x)), float(np.nanmax(x))]}
         table[sig.name] = x
+    return _flagged_invalid(msg, table, rec)
+
+
+VALID_FLAG = re.compile(r"valid$", re.I)
+
+
+def _flagged_invalid(msg, table: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
+    """A message that carries its own validity (one one-bit signal named ...Valid, as a GNSS/IMU
+    module's PositionValid): its other signals NaN in the frames where the flag is 0 (the sender
+    says they are not measurements), named in a note."""
+    flags = [s.name for s in msg.signals if s.length == 1 and VALID_FLAG.search(s.name) and s.name in table]
+    if len(flags) != 1:
+        return table
+    bad = table[flags[0]].to_numpy(float) == 0
+    others = [s.name for s in msg.signals if s.name in table and s.name != flags[0]]
+    if bad.any() and others:
+        table.loc[bad, others] = np.nan
+        span = table["t"].to_numpy(float)[bad]
+        rec.notes.append(f"{msg.name}: {int(bad.sum())} of {len(bad)} frames say {flags[0]} = 0 "
+                         f"(from {span[0] - table['t'].iloc[0]:.1f} to {span[-1] - table['t'].iloc[0]:.1f} s of the "
+                         f"message): their {', '.join(others)} are left out, not measurements")
     return table
 
 
