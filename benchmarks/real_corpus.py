@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 ROOTS = {"realdata": Path("/work/shared/realdata"), "corpus": Path("/work/corpus_data")}
 MOVING = 0.2            # m/s: moving, for the reversing share
 KINEMATIC_MIN_SPEED = 0.2   # m/s: the slope and the delay are computed above it
-NOT_CHANNELS = ("commands",)   # [recording.reference] lists that are not channels
+NOT_CHANNELS = ("commands", "samples")   # [recording.reference] lists that are not channels
 GRID = 0.02             # s: the common grid of the slope and the cross-correlation
 
 
@@ -193,6 +193,46 @@ def read_rosbag(path: Path, ref: dict) -> dict:
     return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
 
 
+def _group(frame_id: int, extended: bool):
+    """A 29-bit identifier's J1939 parameter group (priority and sender free; PDU1's destination
+    free), an 11-bit one as it is: a J1939 DBC's message matches any sender."""
+    if not extended:
+        return ("std", frame_id)
+    pf = (frame_id >> 16) & 0xFF
+    return ("pgn", (frame_id >> 8) & (0x3FFFF if pf >= 240 else 0x3FF00))
+
+
+def read_mf4can(path: Path, ref: dict) -> dict:
+    """channel -> (frame time, signal) from [message, signal, scale(, offset)]: the CAN frames of an
+    MDF4 bus log (asammdf) on ref's bus, decoded with ref's DBC (cantools); a frame whose message
+    says it is not valid (a one-bit signal named ...Valid at 0) is left out."""
+    import cantools
+    from asammdf import MDF
+
+    db = cantools.database.load_file(str(path.parent / ref["dbc"]))
+    mdf = MDF(str(path))
+    ids = mdf.get("CAN_DataFrame.ID")
+    data = mdf.get("CAN_DataFrame.DataBytes").samples
+    bus = mdf.get("CAN_DataFrame.BusChannel").samples
+    wanted = {name: spec for name, spec in ref.items() if isinstance(spec, list) and name not in NOT_CHANNELS}
+    by_id = {_group(m.frame_id, m.is_extended_frame): m for m in db.messages
+             if m.name in {spec[0] for spec in wanted.values()}}
+    ide = mdf.get("CAN_DataFrame.IDE").samples
+    rows: dict[str, list] = {name: [] for name in wanted}
+    for t, frame_id, raw, b, ext in zip(ids.timestamps, ids.samples.astype(np.int64), data, bus, ide):
+        msg = by_id.get(_group(int(frame_id), bool(ext)))
+        if msg is None or int(b) != int(ref.get("bus", b)):
+            continue
+        values = msg.decode(bytes(raw)[:msg.length], decode_choices=False)
+        if any(k.endswith("Valid") and v == 0 for k, v in values.items()):
+            continue
+        for name, (message, sig, scale, *offset) in wanted.items():
+            if message == msg.name:
+                rows[name].append((float(t), (float(values[sig]) + (offset[0] if offset else 0.0)) * scale))
+    mdf.close()
+    return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+
+
 def read_reference(rec: dict, roots: dict) -> dict:
     path = roots[rec["root"]] / rec["path"]
     ref = rec["reference"]
@@ -208,6 +248,8 @@ def read_reference(rec: dict, roots: dict) -> dict:
         return read_optitrack(path)
     if kind == "rosbag":
         return read_rosbag(path, ref)
+    if kind == "mf4can":
+        return read_mf4can(path, ref)
     raise ValueError(f"reference kind {kind!r}")
 
 
@@ -346,6 +388,57 @@ def _shifted(kin, yaw, ok, lag: int):
     return kin[-lag:], yaw[: len(yaw) + lag], ok[-lag:]
 
 
+def vertical_axis(ch: dict):
+    """(axis, mean reading [m/s2]) of the accelerometer axis (accel_x/_y/_z) whose mean is within
+    25 % of g, the others below 0.35 g; None without such channels or evidence."""
+    means = {a: float(np.mean(ch[f"accel_{a}"][1])) for a in "xyz" if f"accel_{a}" in ch}
+    if len(means) < 3:
+        return None
+    axis = max(means, key=lambda a: abs(means[a]))
+    level = all(abs(m) < 0.35 * 9.81 for a, m in means.items() if a != axis)
+    return (axis, means[axis]) if 0.75 * 9.81 <= abs(means[axis]) <= 1.25 * 9.81 and level else None
+
+
+def _best_lag(a: tuple, b: tuple, span: float = 1.0, step: float = GRID):
+    """(lag [s] at which b(t + lag) best follows a(t), correlation there, the grid, a, b)."""
+    lo, hi = max(a[0][0], b[0][0]), min(a[0][-1], b[0][-1])
+    t = np.arange(lo, hi, step)
+    x, y = np.interp(t, *a), np.interp(t, *b)
+    n = int(span / step)
+    best = (-2.0, 0)
+    for lag in range(-n, n + 1):
+        u, w = (x[: len(x) - lag], y[lag:]) if lag >= 0 else (x[-lag:], y[: len(y) + lag])
+        if np.std(u) > 0 and np.std(w) > 0:
+            best = max(best, (float(np.corrcoef(u, w)[0, 1]), lag))
+    return best[1] * step, best[0], t, x, y
+
+
+def second_yaw_source(ch: dict):
+    """yaw_rate_2 against yaw_rate: the lag of best correlation (-1..1 s), the correlation, and the
+    scale at that lag: the ratio of their standard deviations (reduced major axis: both are noisy),
+    beside least squares through the origin (biased low by the first's noise) and the median ratio
+    while turning (|yaw_rate| > 0.1 rad/s)."""
+    if "yaw_rate" not in ch or "yaw_rate_2" not in ch:
+        return None
+    lag, corr, t, x, y = _best_lag(ch["yaw_rate"], ch["yaw_rate_2"])
+    k = int(round(lag / GRID))
+    u, w = (x[: len(x) - k], y[k:]) if k >= 0 else (x[-k:], y[: len(y) + k])
+    turning = np.abs(u) > 0.1
+    return {"lag": lag, "corr": corr, "scale": float(np.sign(corr) * np.std(w) / np.std(u)),
+            "ls": float(np.dot(u, w) / np.dot(u, u)),
+            "turning": float(np.median(w[turning] / u[turning])) if turning.sum() > 20 else math.nan}
+
+
+def speed_against_positions(ch: dict):
+    """v against the speed of the positions' own updates: (lag of best correlation within +-5 s
+    (positive: the positions' speed later), correlation)."""
+    cs = course_and_speed(ch)
+    if cs is None or "v" not in ch or len(cs[0]) < 20:
+        return None
+    lag, corr, *_ = _best_lag(ch["v"], (cs[0], cs[2]), span=5.0, step=0.1)
+    return lag, corr
+
+
 def reference_numbers(rec: dict, roots: dict) -> dict:
     """The second method's numbers; [recording.reference] shift moves a channel earlier by a
     latency its publisher measured."""
@@ -355,21 +448,24 @@ def reference_numbers(rec: dict, roots: dict) -> dict:
     cs = course_and_speed(ch)
     out = {"rates": {k: rates(*v) for k, v in ch.items()}, "reversing": reversing(ch),
            "top_speed": float(np.percentile(cs[2], 99)) if cs is not None and len(cs[2]) else math.nan,
-           "kinematic": kinematic(ch, rec.get("vehicle", {})), "channels": ch}
+           "kinematic": kinematic(ch, rec.get("vehicle", {})), "channels": ch, "vertical": vertical_axis(ch),
+           "second_yaw": second_yaw_source(ch), "speed_lag": speed_against_positions(ch)}
     if "quality" in ch:
         out["quality"] = sorted({int(q) for q in ch["quality"][1]})
     return out
 
 
 # --- the project's numbers --------------------------------------------------------------------
-def import_options(rec: dict):
+def import_options(rec: dict, roots: dict):
     from agrobot.measurements.options import ImportOptions
     from agrobot.measurements.signal_expressions import parse_signal
 
     c = rec.get("convert", {})
+    dbc = c.get("dbc")
     return ImportOptions(signals=[parse_signal(s) for s in c.get("signals", [])], time=c.get("time"),
                          wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"),
-                         align=c.get("align", "auto"))
+                         align=c.get("align", "auto"), bus=c.get("bus"), rate=c.get("rate"),
+                         dbc=None if dbc is None else roots[rec["root"]] / Path(rec["path"]).parent / dbc)
 
 
 def study_path(rec: dict, roots: dict) -> str | None:
@@ -383,7 +479,7 @@ def project_import(rec: dict, roots: dict) -> dict:
     """convert: the audit's rate per log column, its findings, the log's reversing share."""
     from agrobot import api
 
-    done = api.convert(roots[rec["root"]] / rec["path"], options=import_options(rec))
+    done = api.convert(roots[rec["root"]] / rec["path"], options=import_options(rec, roots))
     audit = done.report.get("audit", {})
     channel_rates = {}
     for r in audit.get("channels", []):
@@ -393,6 +489,8 @@ def project_import(rec: dict, roots: dict) -> dict:
     out = {"rates": channel_rates, "rows_hz": done.report.get("rate_hz"),
            "findings": [f"{f['kind']}{'' if f['resolved'] else '!'} {f['value']:.3g} {f['unit']}".strip()
                         for f in audit.get("findings", [])],
+           "found": [(f["kind"], tuple(f.get("channels", [])), f["value"]) for f in audit.get("findings", [])],
+           "yaw_source": done.report.get("columns", {}).get("yaw_rate", ""),
            "quirks": list(done.report.get("quirks", [])), "columns": [c for c in log.columns if c != "t"],
            "seconds": float(log["t"].iloc[-1] - log["t"].iloc[0]) if len(log) else 0.0}
     if "v" in log:
@@ -417,7 +515,7 @@ def project_identify(rec: dict, roots: dict) -> dict:
     """identify: delay (+ lag), steering gain and offset, understeer gradient, held-out fit, wheelbase."""
     from agrobot import api
 
-    done = api.identify(str(roots[rec["root"]] / rec["path"]), recording=import_options(rec),
+    done = api.identify(str(roots[rec["root"]] / rec["path"]), recording=import_options(rec, roots),
                         study=study_path(rec, roots), plots=False)
     rep = done.report
     return {"method": done.method, "delay": _value(rep, "delay"), "delay_verdict": (rep.get("delay") or {}).get("verdict"), "lag": _value(rep, "parameters", "lag"),
@@ -460,22 +558,23 @@ def _agree(ok) -> str:
     return "-" if ok is None else "yes" if ok else "NO"
 
 
-CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "v": ("v",), "x": ("gnss", "x"),
+CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_rate_2": ("yaw_rate_2",), "v": ("v",), "x": ("gnss", "x"),
              "y": ("gnss", "y"), "lat": ("gnss", "lat"), "lon": ("gnss", "lon"), "heading": ("heading",)}
 
 
-def rate_rows(ref: dict, imp, commands: list) -> list[tuple]:
+def rate_rows(ref: dict, imp, commands: list, samples: list = ()) -> list[tuple]:
     """A measured channel's rate is its updates'; a command's, its messages' (a repeated command
-    is sent again)."""
+    is sent again), and so is a channel declared a sample per message (a quantised gyro repeats)."""
     rows = []
     for name, (rows_hz, updates_hz) in ref["rates"].items():
         names = CANONICAL.get(name)
         if names is None:
             continue
         project = None if isinstance(imp, str) else next((imp["rates"][n] for n in names if n in imp["rates"]), None)
-        truth = rows_hz if name in commands else updates_hz
+        truth = rows_hz if name in commands or name in samples else updates_hz
         ok = None if project is None or not truth else abs(project - truth) <= 0.25 * truth
-        rows.append((f"rate {name} [Hz]" + (" (a command)" if name in commands else ""),
+        said = " (a command)" if name in commands else " (a sample per message)" if name in samples else ""
+        rows.append((f"rate {name} [Hz]" + said,
                      f"{_f(updates_hz)} updates in {_f(rows_hz)} rows", _f(project), _agree(ok)))
     return rows
 
@@ -500,12 +599,48 @@ def kinematic_rows(ref: dict, ident) -> list[tuple]:
     return rows
 
 
+def _found(imp, kinds: tuple, channels: set):
+    """The value of the audit's first finding of ``kinds`` on exactly ``channels``, or None."""
+    if not isinstance(imp, dict):
+        return None
+    return next((v for k, c, v in imp["found"] if k in kinds and set(c) == channels), None)
+
+
+LAG_KINDS = ("clock_offset", "sensor_latency")
+
+
+def sensor_rows(ref: dict, imp) -> list[tuple]:
+    """The IMU's vertical axis, a second yaw-rate source's lag and scale, the speed's lag against
+    the positions: the reference beside the audit's finding on the same channels."""
+    rows = []
+    if ref["vertical"] is not None:
+        axis, mean = ref["vertical"]
+        src = imp.get("yaw_source", "") if isinstance(imp, dict) else ""
+        got = re.search(r"(angular_velocity\.|AngularRate)([xyzXYZ])", src)
+        rows.append(("IMU vertical axis (gravity)", f"{axis} ({mean:+.2f} m/s2)", src or "-",
+                     _agree(None if got is None else got.group(2).lower() == axis)))
+    if ref["second_yaw"] is not None:
+        y = ref["second_yaw"]
+        lag = _found(imp, LAG_KINDS, {"yaw_rate", "yaw_rate_2"})
+        rows.append(("yaw_rate_2 after yaw_rate [s]", f"{y['lag']:.2f} (r {y['corr']:.2f})", _f(lag),
+                     _agree(None if lag is None else abs(lag - y["lag"]) <= 0.08)))
+        scale = _found(imp, ("scale_disagreement", "ambiguous_channel"), {"yaw_rate", "yaw_rate_2"})
+        rows.append(("yaw_rate_2 / yaw_rate", f"{y['scale']:.3g} (least squares {y['ls']:.3g}, turning {_f(y['turning'])})",
+                     _f(scale), _agree(None if scale is None else abs(scale - y["scale"]) <= 0.1 * abs(y["scale"]))))
+    if ref["speed_lag"] is not None:
+        lag, corr = ref["speed_lag"]
+        got = _found(imp, LAG_KINDS, {"v", "gnss_speed"})
+        rows.append(("positions' speed after v [s]", f"{lag:.1f} (r {corr:.2f})", _f(got),
+                     _agree(None if got is None else abs(got - lag) <= 0.5)))
+    return rows
+
+
 def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> list[tuple]:
     ref = guarded("reference", timeout, reference_numbers, rec, roots)
     if isinstance(ref, str):
         return [("reference", ref, "-", "-")]
     imp = guarded("convert", timeout, project_import, rec, roots)
-    rows = rate_rows(ref, imp, rec["reference"].get("commands", []))
+    rows = rate_rows(ref, imp, rec["reference"].get("commands", []), rec["reference"].get("samples", []))
     share, how = ref["reversing"]
     project = None if isinstance(imp, str) else imp.get("reversing")
     rows.append(("reversing [% of moving]", f"{_f(100 * share, '{:.1f}')} ({how})", _f(None if project is None else 100 * project, "{:.1f}"),
@@ -514,6 +649,7 @@ def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> li
         rows.append(("fix quality values", str(ref["quality"]), str(imp.get("quality", "-")) if isinstance(imp, dict) else "-",
                      _agree(None if not isinstance(imp, dict) or "quality" not in imp else imp["quality"] == ref["quality"])))
     rows.append(("top speed [m/s] (99 %, positions)", _f(ref["top_speed"]), "-", "-"))
+    rows += sensor_rows(ref, imp)
     ident = guarded("identify", timeout, project_identify, rec, roots) if identify else "not run (--no-identify)"
     rows += kinematic_rows(ref, ident)
     if isinstance(ident, dict):
