@@ -433,8 +433,8 @@ def speed_against_positions(ch: dict):
     """v against the speed of the positions' own updates: (lag of best correlation within +-5 s
     (positive: the positions' speed later), correlation)."""
     cs = course_and_speed(ch)
-    if cs is None or "v" not in ch or len(cs[0]) < 20:
-        return None
+    if cs is None or "v" not in ch or len(cs[0]) < 20 or cs[0][-1] - cs[0][0] < 20.0:
+        return None                      # under 20 s, a 5 s lag search has no footing
     lag, corr, *_ = _best_lag(ch["v"], (cs[0], cs[2]), span=5.0, step=0.1)
     return lag, corr
 
