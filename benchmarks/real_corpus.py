@@ -629,7 +629,8 @@ def sensor_rows(ref: dict, imp) -> list[tuple]:
                      _f(scale), _agree(None if scale is None else abs(scale - y["scale"]) <= 0.1 * abs(y["scale"]))))
     if ref["speed_lag"] is not None:
         lag, corr = ref["speed_lag"]
-        got = _found(imp, LAG_KINDS, {"v", "gnss_speed"})
+        got = _found(imp, LAG_KINDS, {"v", "gnss_speed"})          # the audit's: v after gnss_speed
+        got = None if got is None else -got
         rows.append(("positions' speed after v [s]", f"{lag:.1f} (r {corr:.2f})", _f(got),
                      _agree(None if got is None else abs(got - lag) <= 0.5)))
     return rows
