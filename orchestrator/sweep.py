@@ -61,7 +61,8 @@ from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 from .sweep_dask import abandon_cluster, dask_client, execute_dask, point_result
 from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
-from .sweep_judgement import failing_groups, judgement_lines, nominal_from_table, point_row, severity, sweep_bounds, with_oscillation
+from .sweep_judgement import (RunTooShort, check_length, failing_groups, judgement_lines, nominal_from_table, point_row,
+                               severity, sweep_bounds, with_oscillation)
 
 
 @dataclass(frozen=True)
@@ -434,8 +435,11 @@ class SweepRun:
 
     def announce_cost(self, todo: int, workers: int) -> None:
         """Print the sweep's expected time and disk use; refuse one beyond the limits (CostRefused)
-        unless ``accept_cost``; then keep the nominal run in ``nominal/``."""
+        unless ``accept_cost``, or whose nominal run is too short for a bound (RunTooShort); then keep
+        the nominal run in ``nominal/``."""
         record, folder = self.run_nominal()
+        if record["status"] == "completed":          # its folder, in running/, goes with the refusal
+            check_length(self.study, record["metrics"], todo)
         cost = estimate(todo, workers, record["elapsed_s"], record["signal_bytes"], record["other_bytes"],
                         self.signals)
         print(cost.line(self.signals, record["elapsed_s"]), file=sys.stderr, flush=True)
@@ -492,7 +496,7 @@ class SweepRun:
         todo = [p for p in self.points if p.key not in done]
         try:
             self.announce_cost(len(todo), workers)
-        except CostRefused:
+        except (CostRefused, RunTooShort):
             self._remove_stale()
             if fresh:                 # nothing of this sweep is left behind
                 (self.folder / "sweep.json").unlink(missing_ok=True)

@@ -27,10 +27,10 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .key_figures import Bound, _number, bounds
+from .key_figures import Bound, _number, bounds, hook
 from .registry import import_study_module
 from .runner import _analysis
-from .study import Study
+from .study import Study, StudyError
 
 SHARED_MIN_POINTS = 3
 CHOICES_UP_TO = 6            # a swept parameter with at most this many distinct values is a choice
@@ -92,6 +92,30 @@ def sweep_bounds(study: Study, nominal: Mapping[str, Any] | None) -> dict[str, B
     if chosen is not None and _reference(nominal, chosen[0]) is not None:
         judged[ratio_column(chosen[0])] = Bound("<=", float(chosen[1]), "sweep: hunting", f"{chosen[1]:g}")
     return judged
+
+
+class RunTooShort(StudyError):
+    """A sweep whose nominal run ends before one of its bounds can be judged (exit 2)."""
+
+
+def check_length(study: Study, nominal: Mapping[str, Any], points: int) -> None:
+    """Refuse (RunTooShort) a sweep whose nominal run is too short for a bound: the study analysis's
+    ``stop_time_needed(values, study) -> {figure: s}`` names a bounded figure that needs a longer run.
+    Its points would run the same length and none judge that bound; their share within it would read
+    as 100 %. Told with the study file, ``study.stop_time`` and the stop time needed."""
+    analysis = _analysis(study)
+    judged = sweep_bounds(study, nominal)
+    short = {k: t for k, t in hook(analysis, "stop_time_needed", nominal, study).items() if k in judged}
+    if not nominal or not short:
+        return
+    need, why = max(short.values()), hook(analysis, "reasons", nominal, study)
+    stop, origin = study.study.stop_time, study.origin("study.stop_time")
+    given = f" ({origin.split(' (')[0]})" if origin.startswith("--set") else ""
+    reason = next((why[k] for k in short if k in why), "")
+    raise RunTooShort(f"{study.where}: study.stop_time = {stop:g} s{given} is too short for the bound"
+                      f"{'s' if len(short) > 1 else ''} on {', '.join(short)} ({reason}): the nominal run cannot "
+                      f"judge {'them' if len(short) > 1 else 'it'}, nor could any of the {points} points. Run at "
+                      f"least {need:g} s: --set study.stop_time={need:g}")
 
 
 def point_row(record: Mapping[str, Any], study: Study, nominal: Mapping[str, Any] | None) -> dict[str, Any]:

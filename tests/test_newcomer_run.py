@@ -3,16 +3,19 @@ input the study's author left open on purpose, counts printed with their noun's 
 short for its own bounds refused before its first point, a saved fields result loaded with its track."""
 from __future__ import annotations
 
+import math
 import types
 
+import numpy as np
 import pytest
 
+from agrobot.components.models.figure8_path import Figure8Path
 from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.mcap_out import LiveView
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 from agrobot.studies import shipped
-from tests.commands import cli
+from tests.commands import cli, refused
 
 STUDIES = sorted(p.name for p in shipped().glob("*.toml"))
 
@@ -39,3 +42,22 @@ def test_the_live_view_counts_with_the_noun_in_its_number(tmp_path):
                "--live-viewers", "1", "--set", "study.stop_time=20", timeout=120)
     assert done.returncode == 0, done.stderr
     assert "to at most 1 viewer (" in done.stdout and "1 viewers" not in done.stdout, done.stdout
+
+
+def test_a_sweep_too_short_for_a_bound_is_refused_before_any_point_runs(tmp_path):
+    """speed_sweep.toml cut to 30 s: the figure-8's reference (2 m/s, 8 s ramp, then 5 s settling)
+    reaches no straight before it ends, so euclid_max_straight has no value in any point. Refused
+    after the nominal run, naming the file, study.stop_time and the length that reaches a straight."""
+    out = tmp_path / "short"
+    done = cli("sweep", shipped("speed_sweep.toml"), "--out", out, "--engine", "python", "--workers", "1",
+               "--no-progress", "--set", "study.stop_time=30", timeout=300)
+    said = refused(done, str(shipped("speed_sweep.toml")), "study.stop_time = 30 s", "euclid_max_straight",
+                   "--set study.stop_time=")
+    need = float(said.rsplit("--set study.stop_time=", 1)[1].split()[0])
+    # the reference (2 m/s, ramp T = 8 s: s = v (t - T/2) past it) is settled at T + 5 s = 13 s; the
+    # first straight after that starts where the path's own segment label turns 0 (Figure8Path)
+    path, v, ramp = Figure8Path(10.0, 20.0), 2.0, 8.0
+    s = next(s for s in np.arange(v * (13.0 - ramp / 2), 1000.0, 0.01) if path.pose(s)[4] == 0)
+    assert need == math.ceil(ramp / 2 + s / v + 1.0), said
+    assert not (out / "points").exists() or not any((out / "points").iterdir())
+    assert not (out / "nominal").exists()
