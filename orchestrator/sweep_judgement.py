@@ -30,7 +30,7 @@ import pandas as pd
 from .key_figures import Bound, _number, bounds, hook
 from .registry import import_study_module
 from .runner import _analysis
-from .study import Study, StudyError
+from .study import Study
 
 SHARED_MIN_POINTS = 3
 CHOICES_UP_TO = 6            # a swept parameter with at most this many distinct values is a choice
@@ -94,28 +94,33 @@ def sweep_bounds(study: Study, nominal: Mapping[str, Any] | None) -> dict[str, B
     return judged
 
 
-class RunTooShort(StudyError):
-    """A sweep whose nominal run ends before one of its bounds can be judged (exit 2)."""
-
-
-def check_length(study: Study, nominal: Mapping[str, Any], points: int) -> None:
-    """Refuse (RunTooShort) a sweep whose nominal run is too short for a bound: the study analysis's
-    ``stop_time_needed(values, study) -> {figure: s}`` names a bounded figure that needs a longer run.
-    Its points would run the same length and none judge that bound; their share within it would read
-    as 100 %. Told with the study file, ``study.stop_time`` and the stop time needed."""
+def too_short(study: Study, nominal: Mapping[str, Any] | None) -> dict[str, float]:
+    """{bounded figure: the stop time (s) it needs} for the bounds the ``nominal`` run is too short
+    to judge: the study analysis's ``stop_time_needed(values, study) -> {figure: s}``. The points run
+    as long: those like it cannot judge them either."""
+    if not nominal:
+        return {}
     analysis = _analysis(study)
     judged = sweep_bounds(study, nominal)
-    short = {k: t for k, t in hook(analysis, "stop_time_needed", nominal, study).items() if k in judged}
-    if not nominal or not short:
-        return
-    need, why = max(short.values()), hook(analysis, "reasons", nominal, study)
+    return {k: t for k, t in hook(analysis, "stop_time_needed", nominal, study).items() if k in judged}
+
+
+def length_warning(study: Study, nominal: Mapping[str, Any] | None, points: int) -> str | None:
+    """The line a sweep prints before its first point when its nominal run is too short for a bound
+    (``too_short``): the study file, ``study.stop_time``, the bounds and the stop time needed."""
+    short = too_short(study, nominal)
+    if not short:
+        return None
+    need, why = max(short.values()), hook(_analysis(study), "reasons", nominal, study)
     stop, origin = study.study.stop_time, study.origin("study.stop_time")
     given = f" ({origin.split(' (')[0]})" if origin.startswith("--set") else ""
     reason = next((why[k] for k in short if k in why), "")
-    raise RunTooShort(f"{study.where}: study.stop_time = {stop:g} s{given} is too short for the bound"
-                      f"{'s' if len(short) > 1 else ''} on {', '.join(short)} ({reason}): the nominal run cannot "
-                      f"judge {'them' if len(short) > 1 else 'it'}, nor could any of the {points} points. Run at "
-                      f"least {need:g} s: --set study.stop_time={need:g}")
+    many = len(short) > 1
+    return (f"warning: {study.where}: study.stop_time = {stop:g} s{given} is too short for the bound"
+            f"{'s' if many else ''} on {', '.join(short)} ({reason}): the nominal run cannot judge "
+            f"{'them' if many else 'it'}, nor can those of the {points} points that run like it (the sweep's "
+            f"table counts them as not judged). To judge {'them' if many else 'it'}, run at least {need:g} s: "
+            f"--set study.stop_time={need:g}")
 
 
 def point_row(record: Mapping[str, Any], study: Study, nominal: Mapping[str, Any] | None) -> dict[str, Any]:

@@ -11,6 +11,7 @@ import pytest
 
 from agrobot.components.models.figure8_path import Figure8Path
 from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.mcap_out import LiveView
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
@@ -44,20 +45,65 @@ def test_the_live_view_counts_with_the_noun_in_its_number(tmp_path):
     assert "to at most 1 viewer (" in done.stdout and "1 viewers" not in done.stdout, done.stdout
 
 
-def test_a_sweep_too_short_for_a_bound_is_refused_before_any_point_runs(tmp_path):
-    """speed_sweep.toml cut to 30 s: the figure-8's reference (2 m/s, 8 s ramp, then 5 s settling)
-    reaches no straight before it ends, so euclid_max_straight has no value in any point. Refused
-    after the nominal run, naming the file, study.stop_time and the length that reaches a straight."""
-    out = tmp_path / "short"
-    done = cli("sweep", shipped("speed_sweep.toml"), "--out", out, "--engine", "python", "--workers", "1",
-               "--no-progress", "--set", "study.stop_time=30", timeout=300)
-    said = refused(done, str(shipped("speed_sweep.toml")), "study.stop_time = 30 s", "euclid_max_straight",
-                   "--set study.stop_time=")
-    need = float(said.rsplit("--set study.stop_time=", 1)[1].split()[0])
-    # the reference (2 m/s, ramp T = 8 s: s = v (t - T/2) past it) is settled at T + 5 s = 13 s; the
-    # first straight after that starts where the path's own segment label turns 0 (Figure8Path)
+def test_a_sweep_too_short_for_a_bound_says_so_before_any_point_and_counts_it_not_judged(tmp_path):
+    """A figure-8 sweep cut to 30 s: its nominal run (2 m/s, 8 s ramp, then 5 s settling) reaches no
+    straight before it ends, so euclid_max_straight has no value there. Said before the first point
+    runs (the file, study.stop_time, the stop time that reaches a straight), and the point without
+    the figure counted as not judged, not as within (it was 100 % within before)."""
+    study = tmp_path / "short.toml"
+    study.write_text(f'extends = "{shipped("figure8.toml").as_posix()}"\n[study]\nstop_time = 30.0\n'
+                     '[sweep]\n[sweep.parameters]\n"reference.speed" = [1.0, 2.0]\n')
+    done = cli("sweep", study, "--out", tmp_path / "out", "--engine", "python", "--workers", "1",
+               "--no-progress", "--no-plots", timeout=300)
+    assert done.returncode == 0, done.stderr
+    warning = next(line for line in done.stderr.splitlines() if line.startswith("warning: "))
+    assert f"{study}: study.stop_time = 30 s is too short for the bound on euclid_max_straight" in warning
+    assert done.stderr.index(warning) < done.stderr.index("sweep: 2 points on 1 worker")   # before any point
+    # the reference (ramp T = 8 s: s = v (t - T/2) past it) is settled at T + 5 s = 13 s; the first
+    # straight after that starts where the path's own segment label turns 0 (Figure8Path)
     path, v, ramp = Figure8Path(10.0, 20.0), 2.0, 8.0
     s = next(s for s in np.arange(v * (13.0 - ramp / 2), 1000.0, 0.01) if path.pose(s)[4] == 0)
-    assert need == math.ceil(ramp / 2 + s / v + 1.0), said
-    assert not (out / "points").exists() or not any((out / "points").iterdir())
-    assert not (out / "nominal").exists()
+    need = math.ceil(ramp / 2 + s / v + 1.0)
+    assert warning.endswith(f"run at least {need} s: --set study.stop_time={need}"), warning
+    row = next(line for line in done.stdout.splitlines() if line.startswith("euclid_max_straight "))
+    assert row.endswith(f"1 of 1 judged (100%); 1 not judged: run at least {need} s"), row
+
+
+def test_a_sweep_under_engine_auto_finds_the_c_cores_once_and_runs_its_points_with_the_choice(tmp_path, monkeypatch):
+    """The engine is chosen on the first point's system: its C cores found once (not again to
+    choose), and the nominal run and the points given the engine chosen, not 'auto' again."""
+    from agrobot.orchestrator import sweep as sweep_module
+    from agrobot.orchestrator.compiled import simulation
+
+    found = []
+
+    def counted(system):
+        found.append(system)
+        return simulation_cores_of(system)
+
+    simulation_cores_of = simulation.cores_of
+    monkeypatch.setattr(simulation, "cores_of", counted)
+    monkeypatch.setattr(sweep_module, "cores_of", counted)
+    study = Study.load(shipped("speed_sweep.toml"), ["study.stop_time=40"])
+    runner = sweep_module.SweepRun(study, tmp_path / "out", engine="auto")
+    runner.validate()
+    assert len(found) == 1
+    assert runner.ran in ("compiled", "python")
+    engines = []
+    monkeypatch.setattr(sweep_module, "simulate_point", lambda study, folder, engine, keep_signals: (
+        engines.append(engine) or {"status": "completed", "metrics": {}}))
+    runner.run_nominal()
+    assert engines and set(engines) == {runner.ran}
+
+
+def test_convert_checks_its_output_with_the_shared_file_check(tmp_path, monkeypatch):
+    """convert(out=...) refuses a file as every other saved result does (results.check_file), before reading."""
+    import agrobot
+    from agrobot import api
+
+    asked = []
+    monkeypatch.setattr(api, "check_file", lambda *a, **k: asked.append(a) or (_ for _ in ()).throw(
+        InputError("refused")))
+    with pytest.raises(InputError, match="refused"):
+        agrobot.convert(tmp_path / "nothing.nmea", out=tmp_path / "log.csv")
+    assert asked and asked[0][0] == tmp_path / "log.csv" and set(asked[0][1]) == {".csv", ".parquet"}

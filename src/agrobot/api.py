@@ -46,7 +46,7 @@ import pandas as pd
 from agrobot.orchestrator.engine import RunError
 from agrobot.orchestrator.errors import InputError, Interrupted, Terminated, install_signal_handlers
 from agrobot.orchestrator.observers import Stage
-from agrobot.orchestrator.output import OutputLock, check_output_file, study_inputs
+from agrobot.orchestrator.output import study_inputs
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.source_files import set_limit
 from agrobot.orchestrator.study import Study, StudyError
@@ -260,9 +260,7 @@ def convert(source, out: str | Path | None = None, *, options=None, overwrite: b
     options = replace(options or ImportOptions(), **fields)
     inputs = [source, options.dbc]
     if out is not None:
-        check_output_file(Path(out), overwrite, inputs, (".csv", ".parquet"))
-        with OutputLock(Path(out)):
-            pass
+        check_file(out, (".csv", ".parquet"), overwrite, inputs)
     log, report = import_recording(source, options)
     checked_log(source, log, report)
     result = Recording(str(source), log, report, [options.dbc])

@@ -618,10 +618,10 @@ class ExportedFile:
         return cls(path.suffix, path.read_bytes(), "", [], path)
 
 
-def check_file(path: str | Path, suffix: str, overwrite: bool = False, inputs=()) -> None:
-    """Refuse ``path`` as ``save_file`` would (not ``suffix``, an input, an existing file without
-    ``overwrite``, a file another command is writing), before anything is computed."""
-    check_output_file(Path(path), overwrite, list(inputs), (suffix,))
+def check_file(path: str | Path, suffix: str | tuple[str, ...], overwrite: bool = False, inputs=()) -> None:
+    """Refuse ``path`` as ``save_file`` would (not ``suffix``, or one of them, an input, an existing
+    file without ``overwrite``, a file another command is writing), before anything is computed."""
+    check_output_file(Path(path), overwrite, list(inputs), (suffix,) if isinstance(suffix, str) else tuple(suffix))
     with OutputLock(Path(path)):
         pass
 
