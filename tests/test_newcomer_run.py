@@ -107,3 +107,18 @@ def test_convert_checks_its_output_with_the_shared_file_check(tmp_path, monkeypa
     with pytest.raises(InputError, match="refused"):
         agrobot.convert(tmp_path / "nothing.nmea", out=tmp_path / "log.csv")
     assert asked and asked[0][0] == tmp_path / "log.csv" and set(asked[0][1]) == {".csv", ".parquet"}
+
+
+def test_a_field_from_a_track_loads_back_with_its_track_line(tmp_path):
+    """Four 100 m passes 6 m apart (tests.test_two_doors._track): the saved result, loaded back,
+    still says it was made from a track of 4 straight passes."""
+    import agrobot
+    import agrobot.api
+    from tests.test_two_doors import _track
+
+    track = _track(tmp_path)
+    made = agrobot.api.fields(track, from_track=True, width=6.0, signals=["lat=track.lat[deg]", "lon=track.lon[deg]"],
+                          time="t[s]", out=tmp_path / "field", plots=False)
+    back = agrobot.load_result(tmp_path / "field")
+    assert isinstance(back, agrobot.FieldsResult) and "4 straight passes" in made.track
+    assert back.track == made.track

@@ -572,19 +572,22 @@ class FieldsResult(Saved):
         writes them; returns the folder."""
         from agrobot.fields.cli import write_fields
 
-        return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots))
+        return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots, self.track))
 
     @classmethod
     def from_folder(cls, folder: Path) -> "FieldsResult":
         """Fields as ``fields --out`` or ``save`` left them: each field's summary from fields.json,
         its boundary and guidance lines from fields.geojson, back in the field's local frame (the
         headland polygon is not saved: ``summaries()`` gives fields.json's). A field in local
-        coordinates has no geometry in fields.geojson: it is named in ``skipped``."""
+        coordinates has no geometry in fields.geojson: it is named in ``skipped``. A field made from a
+        track comes back with its ``track`` line."""
         data = _read_json(folder / "fields.json")
         features = _read_json(folder / "fields.geojson").get("features", [])
         found, skipped = _saved_fields(folder, data.get("fields", []), features)
         source = str(data.get("source", folder))
-        return cls(source, found, skipped, None, [], saved=list(data.get("fields", [])))
+        track = data.get("track")
+        return cls(source, found, skipped, track if isinstance(track, str) else None, [],
+                   saved=list(data.get("fields", [])))
 
 
 @dataclass
