@@ -4,6 +4,7 @@ short for its own bounds refused before its first point, a saved fields result l
 from __future__ import annotations
 
 import math
+import re
 import types
 
 import numpy as np
@@ -122,3 +123,31 @@ def test_a_field_from_a_track_loads_back_with_its_track_line(tmp_path):
     back = agrobot.load_result(tmp_path / "field")
     assert isinstance(back, agrobot.FieldsResult) and "4 straight passes" in made.track
     assert back.track == made.track
+
+
+def _written_by_pages() -> dict[str, list[tuple[str, bool]]]:
+    """--out folder or file -> [(page, with --overwrite)] of every command the README and the docs
+    print (continuation lines joined; placeholders such as OUT, DIR, X.fmu, YOUR_STUDY left out)."""
+    root = shipped().parents[2]
+    command = re.compile(r"(?:python3? -m agrobot|^\$? ?agrobot|`agrobot) [a-z-]+ [^`\n]*?--out (\S+?)(?=[\s`]|$)([^`\n]*)",
+                         re.M)
+    written: dict[str, list[tuple[str, bool]]] = {}
+    for page in [root / "README.md", *sorted((root / "docs").glob("*.md"))]:
+        text = page.read_text(encoding="utf-8").replace("\\\n", " ")
+        for m in command.finditer(text):
+            out = m.group(1)
+            if re.fullmatch(r"[A-Z_]+(\.\w+)?|X\.\w+", out) or "YOUR" in out or "MY_" in out:
+                continue
+            written.setdefault(out, []).append((page.name, "--overwrite" in m.group(0)))
+    return written
+
+
+def test_each_page_of_the_docs_writes_its_own_folders():
+    """A newcomer following the README, then the pages, never meets 'pass --overwrite': no --out of
+    one page is another's, and a page that writes one twice says --overwrite the second time."""
+    written = _written_by_pages()
+    assert "results/figure8" in written and len(written) > 20              # the commands were found
+    shared = {out: pages for out, pages in written.items() if len({p for p, _ in pages}) > 1}
+    assert shared == {}
+    again = {out: pages for out, pages in written.items() if len(pages) > 1 and not all(o for _, o in pages[1:])}
+    assert again == {}
