@@ -120,12 +120,12 @@ def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = 
             runner = SweepRun(study, Path(tmp) / "sweep", engine=engine, keep_signals=keep_signals,
                               accept_cost=accept_cost)
             table = runner.run(workers, scheduler, retry_failed, progress=progress)
-        return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], None, engine)
+        return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], None, engine, runner.nominal)
     runner = SweepRun(study, Path(out), overwrite, engine=engine, keep_signals=keep_signals, accept_cost=accept_cost)
     table = runner.run(workers, scheduler, retry_failed, progress=progress)
     if plots:
         sweep_plots(study, table, Path(out) / "plots", runner.nominal)
-    return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], Path(out), engine)
+    return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], Path(out), engine, runner.nominal)
 
 
 def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any] | None = None,

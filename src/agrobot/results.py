@@ -221,7 +221,9 @@ def judged_metrics(values: dict[str, Any], study) -> dict[str, Metric]:
 @dataclass
 class SweepResult(Saved):
     """Every point of a sweep (``agrobot.sweep``): ``table`` one row per point (the swept values,
-    status, key figures); ``summary`` the sweep's key-figure table; ``folder`` where the points are."""
+    status, key figures); ``summary`` the sweep's key-figure table; ``folder`` where the points are;
+    ``nominal`` the nominal run's metrics (the oscillation bound's reference; the bounds it was too
+    short to judge), kept in ``nominal/metrics.json``."""
 
     SIGNATURE = ("sweep.json",)
     WHAT = "sweep"
@@ -231,6 +233,7 @@ class SweepResult(Saved):
     summary: str
     folder: Path | None = None
     engine: str = "python"
+    nominal: dict = field(default_factory=dict, repr=False)
 
     @property
     def inputs(self) -> list[Path]:
@@ -247,6 +250,10 @@ class SweepResult(Saved):
             runner = SweepRun(self.study, tmp, engine=self.engine)
             write_json(tmp / "sweep.json", runner.manifest())
             write_table(tmp / "results", self.table, runner.fmt)
+            if self.nominal:
+                (tmp / "nominal").mkdir()
+                write_json(tmp / "nominal" / "metrics.json", {"point": "nominal", "status": "completed",
+                                                              "metrics": self.nominal})
 
         self.folder = self._save(folder, overwrite, write)
         return self.folder
@@ -260,7 +267,11 @@ class SweepResult(Saved):
             raise InputError(f"{folder}: a sweep folder without its results table (results.parquet or results.csv): "
                              f"rerun the sweep with --out {folder} to finish it")
         table = read_table(tables[0])
-        return cls(study, table, sweep_summary(study, table)[0], folder, manifest.get("engine", "python"))
+        kept = folder / "nominal" / "metrics.json"
+        record = _read_json(kept) if kept.is_file() else {}
+        nominal = dict(record.get("metrics") or {}) if record.get("status") == "completed" else {}
+        return cls(study, table, sweep_summary(study, table, nominal)[0], folder, manifest.get("engine", "python"),
+                   nominal)
 
     def __str__(self) -> str:
         return self.summary
