@@ -151,3 +151,13 @@ def test_each_page_of_the_docs_writes_its_own_folders():
     assert shared == {}
     again = {out: pages for out, pages in written.items() if len(pages) > 1 and not all(o for _, o in pages[1:])}
     assert again == {}
+
+
+def test_a_figure8_run_ended_during_the_ramp_says_so_not_a_length_that_moves_with_it(tmp_path):
+    """Stopped at 6 s (the 8 s ramp not finished), the run says the speed still rises and names
+    the ramp; before, it asked for 11 s at 6 s and for 13 s at 8 s."""
+    done = cli("run", shipped("figure8.toml"), "--out", tmp_path / "r", "--no-plots", "--engine", "python",
+               "--set", "study.stop_time=6", timeout=120)
+    assert done.returncode == 1 and "Traceback" not in done.stderr, done.stderr
+    assert "the speed still rises at its end (t = 6 s)" in done.stderr and "reference.ramp_time" in done.stderr
+    assert "must last beyond" not in done.stderr

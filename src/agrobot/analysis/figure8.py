@@ -38,9 +38,15 @@ def tracking_error(frame: pd.DataFrame, study: Study, held: bool = False) -> np.
 
 
 def settled_index(t: np.ndarray, speed: np.ndarray, fraction: float = 0.999) -> int:
-    """First sample STARTUP_SETTLE_S after ``speed`` reaches ``fraction`` of its maximum."""
+    """First sample STARTUP_SETTLE_S after ``speed`` reaches ``fraction`` of its maximum (a run
+    that ends with the speed still rising has not reached it: said so, not a time that moves with
+    the run's end)."""
     t_full = t[int(np.argmax(speed >= fraction * speed.max()))]
     start = int(np.searchsorted(t, t_full + STARTUP_SETTLE_S))
+    if start >= len(t) - 1 and len(speed) > 1 and speed[-1] > speed[-2]:
+        raise ValueError(f"run too short for metrics: the speed still rises at its end (t = {t[-1]:g} s); the "
+                         f"metrics start {STARTUP_SETTLE_S:g} s after it has reached its speed: run past the "
+                         f"reference's ramp (reference.ramp_time) and {STARTUP_SETTLE_S:g} s more")
     if start >= len(t) - 1:
         raise ValueError(f"run too short for metrics: it must last beyond {t_full + STARTUP_SETTLE_S} s")
     return start
