@@ -17,7 +17,7 @@ from agrobot.orchestrator.mcap_out import LiveView
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 from agrobot.studies import shipped
-from tests.commands import cli, refused
+from tests.commands import cli
 
 STUDIES = sorted(p.name for p in shipped().glob("*.toml"))
 
