@@ -144,7 +144,7 @@ def _run_study(args: argparse.Namespace, study, mcap: Path | None, named: tuple[
 
 def _live_view(study, where: str, wait: float, viewers: int):
     """The live view's server, bound where ``--live`` says (loopback unless a host is named)."""
-    from .mcap_out import LiveView
+    from .mcap_out import LiveView, counted
     from .output import OutputError
 
     host, _, port = where.rpartition(":")
@@ -153,7 +153,7 @@ def _live_view(study, where: str, wait: float, viewers: int):
     except ValueError:
         raise OutputError(f"--live {where}: expected HOST:PORT or PORT (a number), e.g. 127.0.0.1:8765") from None
     view = LiveView(study, host or "127.0.0.1", port_number, wait=wait, max_viewers=viewers)
-    print(f"live view: serving {view.url} to at most {viewers} viewers (Foxglove, Lichtblick: open a connection, "
+    print(f"live view: serving {view.url} to at most {counted(viewers, 'viewer')} (Foxglove, Lichtblick: open a connection, "
           f"Foxglove WebSocket, to this address)",
           flush=True)
     return view

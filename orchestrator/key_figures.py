@@ -167,9 +167,12 @@ def run_table(values: Mapping[str, Any], analysis, judged: Mapping[str, Bound], 
     return "\n".join(lines), failed
 
 
-def sweep_table(table, analysis, judged: Mapping[str, Bound], skip: set[str] = frozenset()) -> str:
+def sweep_table(table, analysis, judged: Mapping[str, Bound], skip: set[str] = frozenset(),
+                short: Mapping[str, float] | None = None) -> str:
     """P50, P95 and max of each key figure over the completed points; the share of all points
-    within each bound (a failed point counts as outside). ``skip``: the swept parameters."""
+    within each bound (a failed point counts as outside). ``skip``: the swept parameters; ``short``:
+    {figure: stop time needed} of the bounds the nominal run was too short to judge: a point without
+    that figure is counted as not judged, neither within nor outside."""
     done = table[table["status"] == "completed"] if "status" in table else table
     numeric = {c: 0.0 for c in done.columns if c not in skip and pd.api.types.is_numeric_dtype(done[c])}
     rows = [(k, unit) for k, unit, _ in _figures(numeric, analysis, judged)
@@ -188,6 +191,11 @@ def sweep_table(table, analysis, judged: Mapping[str, Bound], skip: set[str] = f
         if bound is not None and len(table):
             inside = sum(bound.holds(float(v)) for v in done[key])
             within = f"{inside} of {len(table)} ({100 * inside / len(table):.0f}%)"
+            unjudged = int(done[key].isna().sum()) if key in (short or {}) else 0
+            if unjudged:             # too short to have the figure: not judged, not counted either way
+                n = len(table) - unjudged
+                within = (f"{inside} of {n} judged{f' ({100 * inside / n:.0f}%)' if n else ''}; {unjudged} "
+                          f"not judged: run at least {short[key]:g} s")
         lines.append(f"{key:<{width}}  {unit or '':<6}" + "".join(f"{_number(v):>11}" for v in stats)
                      + f"  {(f'{bound} ({bound.source})' if bound else ''):<22} {within}".rstrip())
     return "\n".join(lines)

@@ -109,7 +109,7 @@ class Relay:
     async def handle(self, viewer) -> None:
         if self.active >= self.max_viewers:
             self.counts["refused_full"] += 1
-            await viewer.close(TRY_AGAIN_LATER, f"live view full: {self.max_viewers} viewers at most "
+            await viewer.close(TRY_AGAIN_LATER, f"live view full: {self.max_viewers} viewer{'' if self.max_viewers == 1 else 's'} at most "
                                                 f"(--live-viewers N changes it)")
             return
         self.active += 1

@@ -321,6 +321,11 @@ def check_live_options(host: str, port: int, wait: float, max_viewers: int) -> N
                           f"costs the run's machine; see docs/foxglove.md)")
 
 
+def counted(n: int, noun: str) -> str:
+    """``n`` and its noun in the number it takes: 1 viewer, 2 viewers, 0 viewers."""
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
 class LiveView:
     """An observer (orchestrator.observers) serving the running study over the Foxglove WebSocket protocol,
     with the MCAP's topics: at most ``rate`` instants a second of wall time (the latest values of every
@@ -371,9 +376,9 @@ class LiveView:
         """What the view did: instants sent, viewers by subprotocol, refused, messages dropped for slow viewers."""
         v = self.viewers
         if v is None:
-            return f"{self.sent} instants sent to {self.url}; the relay's counts of viewers did not come in time"
+            return f"{counted(self.sent, 'instant')} sent to {self.url}; the relay's counts of viewers did not come in time"
         served = {p: n for p, n in v.items() if p.startswith("foxglove.")}
-        text = f"{self.sent} instants sent to {self.url}; {sum(served.values())} viewers"
+        text = f"{counted(self.sent, 'instant')} sent to {self.url}; {counted(sum(served.values()), 'viewer')}"
         if served:
             text += " (" + ", ".join(f"{n} {p}" for p, n in sorted(served.items())) + ")"
         if v.get("refused_full"):
@@ -381,9 +386,9 @@ class LiveView:
         if v.get("refused_subprotocol"):
             text += f"; {v['refused_subprotocol']} refused without a Foxglove subprotocol"
         if v.get("dropped"):
-            text += f"; {v['dropped']} messages dropped for slow viewers"
+            text += f"; {counted(v['dropped'], 'message')} dropped for slow viewers"
         if v.get("closed_slow"):
-            text += f"; {v['closed_slow']} viewers closed as too slow"
+            text += f"; {counted(v['closed_slow'], 'viewer')} closed as too slow"
         return text
 
     # observer hooks

@@ -61,7 +61,8 @@ from .atomic_files import UMASK, atomic_write, write_json, write_table
 from .study import Study, StudyError
 from .sweep_dask import abandon_cluster, dask_client, execute_dask, point_result
 from .sweep_cost import CostRefused, SignalKeeper, check_cost, estimate, folder_bytes, policy, sample_points
-from .sweep_judgement import failing_groups, judgement_lines, nominal_from_table, point_row, severity, sweep_bounds, with_oscillation
+from .sweep_judgement import (failing_groups, judgement_lines, length_warning, nominal_from_table, point_row, severity,
+                               sweep_bounds, too_short, with_oscillation)
 
 
 @dataclass(frozen=True)
@@ -311,13 +312,15 @@ class SweepRun:
             write_json(manifest, self.manifest())
 
     def _choose_engine(self, system) -> None:
-        """The compiled engine for the first point's ``system`` (compiled once, or taken from the
-        cache); auto: the engine chosen and why, printed, and the points run with it."""
-        if self.engine == "compiled" or not refusal(system, cores_of(system)[1]):
+        """The compiled engine for the first point's ``system`` (its C cores found once, compiled
+        once, or taken from the cache); auto: the engine chosen and why, printed, and the nominal run
+        and the points run with it (``ran``), not chosen again."""
+        found = cores_of(system)
+        if self.engine == "compiled" or not refusal(system, found[1]):
             print(f"sweep: compiling the study's loop for --engine {self.engine} (once; a loop compiled "
                   f"before is taken from the cache) ...", file=sys.stderr, flush=True)
         start = time.perf_counter()
-        factory, note = select_engine(system, self.engine)
+        factory, note = select_engine(system, self.engine, found)
         if factory is not Simulation:
             print(f"sweep: the loop ready in {time.perf_counter() - start:.1f} s", file=sys.stderr)
         if note and self.engine == "auto":
@@ -408,11 +411,11 @@ class SweepRun:
         self.running_dir.mkdir(parents=True, exist_ok=True)
         folder = Path(tempfile.mkdtemp(prefix="nominal.", dir=self.running_dir))
         start = time.perf_counter()
-        result = simulate_point(self.study.without("sweep"), str(folder), self.engine, keep_signals=True)
+        result = simulate_point(self.study.without("sweep"), str(folder), self.ran, keep_signals=True)
         elapsed = time.perf_counter() - start
         if not self.keep_signals and result.get("kind") != DISK_FULL:     # timed as the points run: in memory
             start = time.perf_counter()
-            simulate_point(self.study.without("sweep"), None, self.engine, keep_signals=False)
+            simulate_point(self.study.without("sweep"), None, self.ran, keep_signals=False)
             elapsed = time.perf_counter() - start
         signal_bytes, other_bytes = folder_bytes(folder)
         record = {"point": "nominal", "seed": self.study.study.seed, "parameters": {}, "status": result["status"],
@@ -434,8 +437,12 @@ class SweepRun:
 
     def announce_cost(self, todo: int, workers: int) -> None:
         """Print the sweep's expected time and disk use; refuse one beyond the limits (CostRefused)
-        unless ``accept_cost``; then keep the nominal run in ``nominal/``."""
+        unless ``accept_cost``, and say which bounds its nominal run is too short to judge (as are its
+        points: orchestrator.sweep_judgement.length_warning); then keep the nominal run in ``nominal/``."""
         record, folder = self.run_nominal()
+        warning = length_warning(self.study, record["metrics"], todo) if record["status"] == "completed" else None
+        if warning:
+            print(warning, file=sys.stderr, flush=True)
         cost = estimate(todo, workers, record["elapsed_s"], record["signal_bytes"], record["other_bytes"],
                         self.signals)
         print(cost.line(self.signals, record["elapsed_s"]), file=sys.stderr, flush=True)
@@ -599,14 +606,14 @@ class SweepRun:
             ctx = multiprocessing.get_context("spawn")
             pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=watch_parent,
                                           initargs=(os.getpid(),))
-            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.ran,  # noqa: E731
                                               self.keep_signals)
             wait_first = lambda fs: cf.wait(fs, return_when=cf.FIRST_COMPLETED)[0]  # noqa: E731
         else:
             from distributed import wait
 
             pool, cluster, before = dask_client(scheduler, workers)
-            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.engine,  # noqa: E731
+            submit = lambda jobs: pool.submit(simulate_points, self.study, jobs, self.ran,  # noqa: E731
                                               self.keep_signals, pure=False)
             wait_first = lambda fs: wait(list(fs), return_when="FIRST_COMPLETED").done  # noqa: E731
         pending: dict = {}
@@ -683,8 +690,8 @@ def sweep_summary(study: Study, table: pd.DataFrame,
              f"{len(table) - done} failed"]
     nominal = nominal or nominal_from_table(table, study)
     if done:
-        judged = sweep_bounds(study, nominal)
-        text = sweep_table(table, analysis, judged, set(study.sweep.parameters))
+        judged, short = sweep_bounds(study, nominal), too_short(study, nominal)
+        text = sweep_table(table, analysis, judged, set(study.sweep.parameters), short)
         lines += [text] if text else []
         lines += judgement_lines(study, table, judged, nominal)
         if study.sweep.analysis:

@@ -27,7 +27,7 @@ from typing import Any, Mapping
 import numpy as np
 import pandas as pd
 
-from .key_figures import Bound, _number, bounds
+from .key_figures import Bound, _number, bounds, hook
 from .registry import import_study_module
 from .runner import _analysis
 from .study import Study
@@ -92,6 +92,35 @@ def sweep_bounds(study: Study, nominal: Mapping[str, Any] | None) -> dict[str, B
     if chosen is not None and _reference(nominal, chosen[0]) is not None:
         judged[ratio_column(chosen[0])] = Bound("<=", float(chosen[1]), "sweep: hunting", f"{chosen[1]:g}")
     return judged
+
+
+def too_short(study: Study, nominal: Mapping[str, Any] | None) -> dict[str, float]:
+    """{bounded figure: the stop time (s) it needs} for the bounds the ``nominal`` run is too short
+    to judge: the study analysis's ``stop_time_needed(values, study) -> {figure: s}``. The points run
+    as long: those like it cannot judge them either."""
+    if not nominal:
+        return {}
+    analysis = _analysis(study)
+    judged = sweep_bounds(study, nominal)
+    return {k: t for k, t in hook(analysis, "stop_time_needed", nominal, study).items() if k in judged}
+
+
+def length_warning(study: Study, nominal: Mapping[str, Any] | None, points: int) -> str | None:
+    """The line a sweep prints before its first point when its nominal run is too short for a bound
+    (``too_short``): the study file, ``study.stop_time``, the bounds and the stop time needed."""
+    short = too_short(study, nominal)
+    if not short:
+        return None
+    need, why = max(short.values()), hook(_analysis(study), "reasons", nominal, study)
+    stop, origin = study.study.stop_time, study.origin("study.stop_time")
+    given = f" ({origin.split(' (')[0]})" if origin.startswith("--set") else ""
+    reason = next((why[k] for k in short if k in why), "")
+    many = len(short) > 1
+    return (f"warning: {study.where}: study.stop_time = {stop:g} s{given} is too short for the bound"
+            f"{'s' if many else ''} on {', '.join(short)} ({reason}): the nominal run cannot judge "
+            f"{'them' if many else 'it'}, nor can those of the {points} points that run like it (the sweep's "
+            f"table counts them as not judged). To judge {'them' if many else 'it'}, run at least {need:g} s: "
+            f"--set study.stop_time={need:g}")
 
 
 def point_row(record: Mapping[str, Any], study: Study, nominal: Mapping[str, Any] | None) -> dict[str, Any]:

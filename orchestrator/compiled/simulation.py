@@ -52,15 +52,15 @@ def refusal(system: System, missing: dict[str, str]) -> str:
     return ", ".join(parts)
 
 
-def select_engine(system: System, engine: str):
+def select_engine(system: System, engine: str, found: tuple[dict, dict] | None = None):
     """(a Simulation-like class for ``system``, a line saying which engine runs and why, or None).
     ``compiled`` on a system it cannot take raises CompiledRefused; ``auto`` falls back to the
-    Python engine and says why."""
+    Python engine and says why. ``found``: ``cores_of(system)`` when the caller has it already."""
     if engine not in ENGINES:
         raise InputError(f"--engine {engine!r}: expected one of {', '.join(ENGINES)}")
     if engine == "python":
         return Simulation, None
-    cores, missing = cores_of(system)
+    cores, missing = found if found is not None else cores_of(system)
     why = refusal(system, missing)
     prepared = None
     if not why:

@@ -46,7 +46,7 @@ import pandas as pd
 from agrobot.orchestrator.engine import RunError
 from agrobot.orchestrator.errors import InputError, Interrupted, Terminated, install_signal_handlers
 from agrobot.orchestrator.observers import Stage
-from agrobot.orchestrator.output import OutputLock, check_output_file, study_inputs
+from agrobot.orchestrator.output import study_inputs
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.source_files import set_limit
 from agrobot.orchestrator.study import Study, StudyError
@@ -120,12 +120,12 @@ def sweep(study, set: Mapping[str, Any] | None = None, out: str | Path | None = 
             runner = SweepRun(study, Path(tmp) / "sweep", engine=engine, keep_signals=keep_signals,
                               accept_cost=accept_cost)
             table = runner.run(workers, scheduler, retry_failed, progress=progress)
-        return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], None, engine)
+        return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], None, engine, runner.nominal)
     runner = SweepRun(study, Path(out), overwrite, engine=engine, keep_signals=keep_signals, accept_cost=accept_cost)
     table = runner.run(workers, scheduler, retry_failed, progress=progress)
     if plots:
         sweep_plots(study, table, Path(out) / "plots", runner.nominal)
-    return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], Path(out), engine)
+    return SweepResult(study, table, sweep_summary(study, table, runner.nominal)[0], Path(out), engine, runner.nominal)
 
 
 def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any] | None = None,
@@ -260,9 +260,7 @@ def convert(source, out: str | Path | None = None, *, options=None, overwrite: b
     options = replace(options or ImportOptions(), **fields)
     inputs = [source, options.dbc]
     if out is not None:
-        check_output_file(Path(out), overwrite, inputs, (".csv", ".parquet"))
-        with OutputLock(Path(out)):
-            pass
+        check_file(out, (".csv", ".parquet"), overwrite, inputs)
     log, report = import_recording(source, options)
     checked_log(source, log, report)
     result = Recording(str(source), log, report, [options.dbc])

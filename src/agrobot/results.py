@@ -221,7 +221,9 @@ def judged_metrics(values: dict[str, Any], study) -> dict[str, Metric]:
 @dataclass
 class SweepResult(Saved):
     """Every point of a sweep (``agrobot.sweep``): ``table`` one row per point (the swept values,
-    status, key figures); ``summary`` the sweep's key-figure table; ``folder`` where the points are."""
+    status, key figures); ``summary`` the sweep's key-figure table; ``folder`` where the points are;
+    ``nominal`` the nominal run's metrics (the oscillation bound's reference; the bounds it was too
+    short to judge), kept in ``nominal/metrics.json``."""
 
     SIGNATURE = ("sweep.json",)
     WHAT = "sweep"
@@ -231,6 +233,7 @@ class SweepResult(Saved):
     summary: str
     folder: Path | None = None
     engine: str = "python"
+    nominal: dict = field(default_factory=dict, repr=False)
 
     @property
     def inputs(self) -> list[Path]:
@@ -247,6 +250,10 @@ class SweepResult(Saved):
             runner = SweepRun(self.study, tmp, engine=self.engine)
             write_json(tmp / "sweep.json", runner.manifest())
             write_table(tmp / "results", self.table, runner.fmt)
+            if self.nominal:
+                (tmp / "nominal").mkdir()
+                write_json(tmp / "nominal" / "metrics.json", {"point": "nominal", "status": "completed",
+                                                              "metrics": self.nominal})
 
         self.folder = self._save(folder, overwrite, write)
         return self.folder
@@ -260,7 +267,11 @@ class SweepResult(Saved):
             raise InputError(f"{folder}: a sweep folder without its results table (results.parquet or results.csv): "
                              f"rerun the sweep with --out {folder} to finish it")
         table = read_table(tables[0])
-        return cls(study, table, sweep_summary(study, table)[0], folder, manifest.get("engine", "python"))
+        kept = folder / "nominal" / "metrics.json"
+        record = _read_json(kept) if kept.is_file() else {}
+        nominal = dict(record.get("metrics") or {}) if record.get("status") == "completed" else {}
+        return cls(study, table, sweep_summary(study, table, nominal)[0], folder, manifest.get("engine", "python"),
+                   nominal)
 
     def __str__(self) -> str:
         return self.summary
@@ -572,19 +583,22 @@ class FieldsResult(Saved):
         writes them; returns the folder."""
         from agrobot.fields.cli import write_fields
 
-        return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots))
+        return self._save(folder, overwrite, lambda tmp: write_fields(tmp, self.source, self.fields, plots, self.track))
 
     @classmethod
     def from_folder(cls, folder: Path) -> "FieldsResult":
         """Fields as ``fields --out`` or ``save`` left them: each field's summary from fields.json,
         its boundary and guidance lines from fields.geojson, back in the field's local frame (the
         headland polygon is not saved: ``summaries()`` gives fields.json's). A field in local
-        coordinates has no geometry in fields.geojson: it is named in ``skipped``."""
+        coordinates has no geometry in fields.geojson: it is named in ``skipped``. A field made from a
+        track comes back with its ``track`` line."""
         data = _read_json(folder / "fields.json")
         features = _read_json(folder / "fields.geojson").get("features", [])
         found, skipped = _saved_fields(folder, data.get("fields", []), features)
         source = str(data.get("source", folder))
-        return cls(source, found, skipped, None, [], saved=list(data.get("fields", [])))
+        track = data.get("track")
+        return cls(source, found, skipped, track if isinstance(track, str) else None, [],
+                   saved=list(data.get("fields", [])))
 
 
 @dataclass
@@ -618,10 +632,10 @@ class ExportedFile:
         return cls(path.suffix, path.read_bytes(), "", [], path)
 
 
-def check_file(path: str | Path, suffix: str, overwrite: bool = False, inputs=()) -> None:
-    """Refuse ``path`` as ``save_file`` would (not ``suffix``, an input, an existing file without
-    ``overwrite``, a file another command is writing), before anything is computed."""
-    check_output_file(Path(path), overwrite, list(inputs), (suffix,))
+def check_file(path: str | Path, suffix: str | tuple[str, ...], overwrite: bool = False, inputs=()) -> None:
+    """Refuse ``path`` as ``save_file`` would (not ``suffix``, or one of them, an input, an existing
+    file without ``overwrite``, a file another command is writing), before anything is computed."""
+    check_output_file(Path(path), overwrite, list(inputs), (suffix,) if isinstance(suffix, str) else tuple(suffix))
     with OutputLock(Path(path)):
         pass
 

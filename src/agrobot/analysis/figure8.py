@@ -38,9 +38,15 @@ def tracking_error(frame: pd.DataFrame, study: Study, held: bool = False) -> np.
 
 
 def settled_index(t: np.ndarray, speed: np.ndarray, fraction: float = 0.999) -> int:
-    """First sample STARTUP_SETTLE_S after ``speed`` reaches ``fraction`` of its maximum."""
+    """First sample STARTUP_SETTLE_S after ``speed`` reaches ``fraction`` of its maximum (a run
+    that ends with the speed still rising has not reached it: said so, not a time that moves with
+    the run's end)."""
     t_full = t[int(np.argmax(speed >= fraction * speed.max()))]
     start = int(np.searchsorted(t, t_full + STARTUP_SETTLE_S))
+    if start >= len(t) - 1 and len(speed) > 1 and speed[-1] > speed[-2]:
+        raise ValueError(f"run too short for metrics: the speed still rises at its end (t = {t[-1]:g} s); the "
+                         f"metrics start {STARTUP_SETTLE_S:g} s after it has reached its speed: run past the "
+                         f"reference's ramp (reference.ramp_time) and {STARTUP_SETTLE_S:g} s more")
     if start >= len(t) - 1:
         raise ValueError(f"run too short for metrics: it must last beyond {t_full + STARTUP_SETTLE_S} s")
     return start
@@ -107,23 +113,35 @@ def _next_time_on(study: Study, label: int, after: float) -> float | None:
     return None
 
 
-def reasons(values: dict[str, float], study: Study) -> dict[str, str]:
-    """Why a figure is nan: no straight (or curve) between the settling and the run's end, with
-    the stop time that would reach one (orchestrator.key_figures prints it on the figure's line)."""
-    out = {}
+def _short_of(values: dict[str, float], study: Study):
+    """(figures, the segment, the settling time, the run's end, the time the reference next
+    reaches that segment or None) for each segment kind whose figures are nan."""
     settled = values.get("metrics_from_time_s", float("nan"))
     end = study.study.start_time + values.get("sim_time_s", study.study.stop_time - study.study.start_time)
     for kind, label in (("straight", 0), ("curved", 1)):
         names = [f"euclid_{q}_{kind}{held}" for q in ("mean", "max") for held in ("", "_held")]
-        if not any(np.isnan(values.get(n, 0.0)) for n in names):
-            continue
-        where = "straight" if label == 0 else "curve"
-        t = _next_time_on(study, label, settled) if np.isfinite(settled) else None
+        missing = [n for n in names if np.isnan(values.get(n, 0.0))]
+        if missing:
+            t = _next_time_on(study, label, settled) if np.isfinite(settled) else None
+            yield missing, "straight" if label == 0 else "curve", settled, end, t
+
+
+def reasons(values: dict[str, float], study: Study) -> dict[str, str]:
+    """Why a figure is nan: no straight (or curve) between the settling and the run's end, with
+    the stop time that would reach one (orchestrator.key_figures prints it on the figure's line)."""
+    out = {}
+    for names, where, settled, end, t in _short_of(values, study):
         need = f": run at least {int(np.ceil(t + 1.0))} s" if t is not None else ""
-        text = f"no {where} after the {settled:.0f} s settling (the run ends at {end:.0f} s){need}"
-        out.update({n: text for n in names if np.isnan(values.get(n, 0.0))})
+        out.update(dict.fromkeys(names, f"no {where} after the {settled:.0f} s settling (the run ends at {end:.0f} s){need}"))
     return out
 
+
+def stop_time_needed(values: dict[str, float], study: Study) -> dict[str, float]:
+    """figure -> the stop time (s) that would give it a value, for the figures nan because the run
+    ends before the reference reaches a straight or a curve after the settling (a sweep refuses to
+    run points that cannot judge their bounds, orchestrator.sweep_judgement.check_length)."""
+    return {n: float(np.ceil(t + 1.0)) for names, _, _, _, t in _short_of(values, study) if t is not None
+            for n in names}
 
 
 def unjudged(values: dict[str, float], study: Study) -> dict[str, str]:

@@ -71,9 +71,11 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_fields(folder: Path, source: str, fields, plots: bool = True) -> None:
-    """fields.json, fields.geojson and (``plots``) fields.png of ``fields`` read from ``source``."""
-    write_json(folder / "fields.json", {"source": source, "fields": [f.summary() for f in fields]})
+def write_fields(folder: Path, source: str, fields, plots: bool = True, track: str | None = None) -> None:
+    """fields.json, fields.geojson and (``plots``) fields.png of ``fields`` read from ``source``;
+    ``track``: the line describing the GNSS track a field was made from, kept in fields.json."""
+    write_json(folder / "fields.json", {"source": source, "fields": [f.summary() for f in fields],
+                                        **({"track": track} if track is not None else {})})
     atomic_write(folder / "fields.geojson", lambda p: p.write_text(json.dumps(geojson(fields))))
     if plots:
         draw(fields, folder / "fields.png", source)
