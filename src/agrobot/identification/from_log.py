@@ -188,7 +188,7 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
     out_dir = Path(out_dir)
     files = []
-    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
+    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn", "skid_steer"):
         report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
         from .driving_plots import write_driving_plots
@@ -197,7 +197,7 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
             progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
     report["figures"] = files
-    if study is not None:
+    if study is not None and report.get("final_model") != "skid_steer":     # its study has no skid-steer plant
         report["extended_study"] = write_extended_study(report, study, out_dir, source)
     write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
     return files
