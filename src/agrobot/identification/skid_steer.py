@@ -282,7 +282,8 @@ def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
     for name, (lo, hi) in ranges.items():
         q = params.get(name)
         if q and q["identifiable"] and not lo <= q["value"] <= hi:
-            findings.append(f"{name} = {q['value']:.4g} {q['unit']} outside [{lo:.4g}, {hi:.4g}]: {why[name]}")
+            unit = "" if q["unit"] == "1" else " " + q["unit"]
+            findings.append(f"{name} = {q['value']:.4g}{unit} outside [{lo:.4g}, {hi:.4g}]{unit}: {why[name]}")
     return {"plausible": not findings, "findings": findings,
             "ranges": {k: [float(a), float(b)] for k, (a, b) in ranges.items()},
             "not_concluded": [f"{k}: {q['note']}" for k, q in params.items() if q.get("note")]}
