@@ -194,8 +194,6 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
-    if skid_steer.applies(frame, vehicle):        # no steering angle: the yaw against a turn rate
-        return skid_steer.identify_skid_steer(frame, where, study, say)
     model_name, p = study_plant(study)
     L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
     frame, measured = with_yaw_rate(frame, where, course_speed)
