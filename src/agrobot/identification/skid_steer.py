@@ -254,7 +254,8 @@ def _fits(log: DrivingLog, segs: Segments, vehicle: Vehicle, kind: str) -> dict:
     gain = 1.0 - out_ext["rmse"] / out_base["rmse"] if out_base["rmse"] > 0 else 0.0
     reasons = [why for bad, why in (
         (not dbic < -BIC_MARGIN, f"dBIC {dbic:.1f} (needs below -{BIC_MARGIN:g})"),
-        (not gain >= GAIN_MARGIN, f"it takes {100 * gain:.1f} % off the held-out RMS (needs {100 * GAIN_MARGIN:g} %)"),
+        (not gain >= GAIN_MARGIN, f"it changes the held-out RMS by {-100 * gain:+.1f} % (needs -{100 * GAIN_MARGIN:g} % "
+                                  f"or better)"),
         (not slope["identifiable"], slope.get("note", "s not identifiable")),
         (slope["interval"][0] <= 0 <= slope["interval"][1], "the 95 % interval of s holds 0")) if bad]
     kept = not reasons
@@ -348,4 +349,4 @@ def summary_lines(report: dict) -> list[str]:
                      + "; ".join(dep["why_not"]))
     lines.append(f"held-out fit: {hf['value']:.1f} %, RMSE {hf['rmse']:.4g} rad/s over {hf['samples']} samples")
     lines.append("plausible for a skid-steered vehicle: " + ("yes" if pl["plausible"] else "NO: " + "; ".join(pl["findings"])))
-    return lines + [f"  not concluded: {x}" for x in pl["not_concluded"]]
+    return lines + [f"  {x}" for x in pl["not_concluded"]]
