@@ -15,7 +15,8 @@ import pytest
 from scipy.signal import lsim
 
 from agrobot.api import diagnose, identify
-from agrobot.identification.skid_steer import identify_skid_steer
+from agrobot.identification.skid_steer import applies, identify_skid_steer
+from agrobot.identification.vehicle import Vehicle
 from agrobot.measurements import LogError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -97,6 +98,7 @@ def test_a_log_without_a_turn_rate_input_is_refused_naming_the_columns(tmp_path)
                           "--no-plots"], capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert "no delta or delta_cmd" in run.stderr and "odom_yaw_rate or turn_rate_cmd" in run.stderr
+    assert "--signal 'odom_yaw_rate=" in run.stderr
     assert not out.exists()
 
 
@@ -110,3 +112,23 @@ def test_identify_and_diagnose_on_a_skid_steer_log(tmp_path):
     result = diagnose(tmp_path / "husky_like.csv", out=tmp_path / "dg", plots=False).result
     assert result["verdict"] == "cannot decide" and "skid-steered vehicle" in result["reason"]
     assert "Ackermann" in result["reason"]
+
+
+class _SkidStudy:
+    """A study that declares a skid-steered robot (only its [vehicle] table is read)."""
+
+    path = "skid_robot.toml"
+
+    def section(self, name):
+        return {"class": "robot", "drive": "skid", "steering": "none"} if name == "vehicle" else None
+
+
+def test_a_declared_skid_steer_is_fitted_or_refused_by_its_declaration():
+    log = skid_log(K=0.6)
+    assert applies(log.assign(delta=0.0), Vehicle.from_table({"drive": "skid"}))      # declared: a delta does not count
+    assert not applies(log.assign(delta=0.0), Vehicle())                                # an Ackermann log stays one
+    rep = identify_skid_steer(log, "gen.csv", _SkidStudy())
+    assert "vehicle.drive = 'skid' declared" in rep["notes"][0] and _inside(rep, "yaw_gain", 0.6)
+    assert rep["plausibility"]["ranges"]["gyro_bias"][1] == pytest.approx(math.radians(3.0))   # the robot class's
+    with pytest.raises(LogError, match="yaw_rate_2 is a second yaw-rate source"):
+        identify_skid_steer(log.drop(columns="turn_rate_cmd").assign(yaw_rate_2=0.0), "gen.csv", _SkidStudy())

@@ -340,7 +340,8 @@ def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
     gap = missing_text(frame, {"yaw_rate": "the gyro's yaw rate is the output fitted; without a gyro, a dual-antenna "
                                            "heading 'heading' [rad] or positions x, y for the GNSS course",
                                "delta|delta_cmd": "a steering angle, measured or commanded, is the input; a skid-"
-                                                  "steered vehicle's is a turn rate: odom_yaw_rate or turn_rate_cmd",
+                                                  "steered vehicle's is a turn rate, odom_yaw_rate or turn_rate_cmd "
+                                                  "[rad/s]: --signal 'odom_yaw_rate=/odom.twist.twist.angular.z'",
                                "v": "the speed schedules the model"})
     if gap:
         raise LogError(f"{where}: identification from driving not possible: {gap}")
