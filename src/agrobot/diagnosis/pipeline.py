@@ -12,6 +12,8 @@ from agrobot.estimation import REPORTED_AT_BOUND, Z95, compare
 from agrobot.identification.blas_threads import one_blas_thread
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
+from agrobot.identification.skid_steer import why_not_diagnosed
+from agrobot.identification.vehicle import Vehicle
 from agrobot.identification.yaw_measurement import with_yaw_rate
 from agrobot.measurements import LogError
 from agrobot.measurements.audit import require_causal
@@ -436,6 +438,8 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     frame, imported, stretch = read_uneven(Path(log_path), resample, recording, study, causal=False)
     if imported is not None:
         result["recording"] = imported
+    if why_not_diagnosed(frame, Vehicle.of(study)):          # no steering angle: not the catalogue's vehicle
+        raise CannotDecide(why_not_diagnosed(frame, Vehicle.of(study)))
     frame, measured = with_yaw_rate(frame, str(log_path))       # no gyro: the yaw rate from a heading or course
     if measured is not None:
         result["yaw_measurement"] = measured.as_dict()

@@ -21,8 +21,10 @@ from agrobot.orchestrator.resolver import resolve
 
 from .blas_threads import one_blas_thread
 from .experiment import detect_period
+from . import skid_steer
 from .ordinary_driving import identify_driving
 from .pipeline import _json_default
+from .vehicle import Vehicle
 
 
 def _read(source: Path, resample: bool, recording, study, causal: bool = True):
@@ -166,7 +168,7 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
                    course_speed: float | None = None, fit_seconds: float | None = None):
     """(report, the figures' data): the ordinary-driving identification of a log
-    (identification.ordinary_driving), nothing written; the wheelbase given with ``recording``
+    (identification.ordinary_driving; a skid-steered vehicle's, identification.skid_steer), nothing written; the wheelbase given with ``recording``
     (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor, ``fit_seconds``:
     the most of the segments fitted (None: their defaults)."""
     say = progress or (lambda text: None)
@@ -174,8 +176,11 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
     more = ({} if course_speed is None else {"course_speed": course_speed}) | \
         ({} if fit_seconds is None else {"max_fit_seconds": fit_seconds})
-    report = identify_driving(frame, str(source), study, progress=say, wheelbase=getattr(recording, "wheelbase", None),
-                              **more)
+    if skid_steer.applies(frame, Vehicle.of(study)):       # no steering angle: the yaw against a turn rate
+        report = skid_steer.identify_skid_steer(frame, str(source), study, say)
+    else:
+        report = identify_driving(frame, str(source), study, progress=say,
+                                  wheelbase=getattr(recording, "wheelbase", None), **more)
     hidden = report.pop("_plot")
     if imported is not None:
         report["recording"] = imported
@@ -188,7 +193,7 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
     extended_study.toml (with ``study``) in ``out_dir``; returns the figures' names."""
     out_dir = Path(out_dir)
     files = []
-    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn"):
+    if plots and hidden is not None and report.get("final_model") in ("kinematic", "steady_turn", "skid_steer"):
         report["figures_note"] = f"no figures in the {report['final_model'].replace('_', ' ')} (they show the tyres' model)"
     elif plots and hidden is not None:
         from .driving_plots import write_driving_plots
@@ -197,7 +202,7 @@ def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, 
             progress("figures")
         files = [p.name for p in write_driving_plots(report, hidden, out_dir)]
     report["figures"] = files
-    if study is not None:
+    if study is not None and report.get("final_model") != "skid_steer":     # its study has no skid-steer plant
         report["extended_study"] = write_extended_study(report, study, out_dir, source)
     write_json(out_dir / "identification.json", finite_for_json(json.loads(json.dumps(report, default=_json_default))))
     return files

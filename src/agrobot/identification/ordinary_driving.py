@@ -41,6 +41,7 @@ from .delay_bound import DELAY_LIMIT, delay_verdict
 from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
+from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .steady_state import regression, steady_windows
 from .vehicle import Vehicle
@@ -338,7 +339,9 @@ def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
         raise NotEnoughDriving(f"{where}: the yaw dynamics are not identified: {why}")
     gap = missing_text(frame, {"yaw_rate": "the gyro's yaw rate is the output fitted; without a gyro, a dual-antenna "
                                            "heading 'heading' [rad] or positions x, y for the GNSS course",
-                               "delta|delta_cmd": "a steering angle, measured or commanded, is the input",
+                               "delta|delta_cmd": "a steering angle, measured or commanded, is the input; a skid-"
+                                                  "steered vehicle's is a turn rate, odom_yaw_rate or turn_rate_cmd "
+                                                  "[rad/s]: --signal 'odom_yaw_rate=/odom.twist.twist.angular.z'",
                                "v": "the speed schedules the model"})
     if gap:
         raise LogError(f"{where}: identification from driving not possible: {gap}")
@@ -783,6 +786,8 @@ def summary(report: dict) -> str:
         return "\n".join(lines + kinematic_summary(report))
     if report.get("final_model") == "steady_turn":
         return "\n".join(lines + steady_turn_summary(report))
+    if report.get("final_model") == "skid_steer":
+        return "\n".join(lines + skid_steer.summary_lines(report))
     K = report["understeer_gradient"]
     lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
                  + ("" if K["identifiable"] else "; not identifiable from this log"))

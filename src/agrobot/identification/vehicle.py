@@ -8,7 +8,7 @@ parameter may take on it.
     width = 0.30               # m, overall
     steering = "angle"         # angle (the command is a wheel angle) | torque (an electric steering's
                                # torque) | none (skid-steered: no steering angle)
-    drive = "ackermann"        # ackermann | skid | articulated
+    drive = "ackermann"        # ackermann | skid | differential (both: identification.skid_steer) | articulated
     steering_ratio = 1.0       # handwheel / road-wheel angle (a recording's CAN handwheel angle)
 
 Ranges a class gives (a fitted value outside them is not a property of such a vehicle): the gyro
@@ -31,7 +31,7 @@ CLASSES = {
     "robot": (3.0 * DEG, 10 * DEG, (0.2, 1.5), "a small mobile robot (hobby MEMS gyro)"),
 }
 STEERING = ("angle", "torque", "none")
-DRIVES = ("ackermann", "skid", "articulated")
+DRIVES = ("ackermann", "skid", "differential", "articulated")
 
 
 class VehicleError(ValueError):
