@@ -14,8 +14,9 @@
   holds unless that is itself an unfinished result (or nothing): it goes beside it, to
   ``NAME.interrupted`` or ``NAME.failed``, and the message says where. Staging folders left by a
   killed command are removed (and named) by the next command into the same ``--out``.
-- A full disk (ENOSPC, EDQUOT) is an ``OutputError`` naming the file; the staging folder is
-  removed, so ``--out`` holds what it held before.
+- A full disk (ENOSPC, EDQUOT), or a file past the largest size the file system or the process
+  allows (EFBIG), is an ``OutputError`` naming the file; the staging folder is removed, so
+  ``--out`` holds what it held before.
 """
 from __future__ import annotations
 
@@ -37,7 +38,7 @@ from .study_files import study_chain
 
 MARKERS = ("run.json", "metrics.json")          # a run's signature files
 STAGING = "staging-"
-DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)      # no room: the disk, the quota, a file's size limit
 
 
 class OutputError(InputError):
@@ -162,8 +163,10 @@ def disk_full(exc: BaseException) -> bool:
 
 def disk_full_error(out: Path, exc: OSError, kept: str, flag: str = "--out") -> OutputError:
     where = f" while writing {Path(exc.filename).name}" if getattr(exc, "filename", None) else ""
-    return OutputError(f"{flag} {out}: the disk is full ({exc.strerror or os.strerror(exc.errno)}){where}; "
-                       f"nothing was written to {out} ({kept}); free some space and run the command again")
+    what, then = ("a file grew past the largest size allowed here", "write it where larger files are allowed") \
+        if exc.errno == errno.EFBIG else ("the disk is full", "free some space")
+    return OutputError(f"{flag} {out}: {what} ({exc.strerror or os.strerror(exc.errno)}){where}; "
+                       f"nothing was written to {out} ({kept}); {then} and run the command again")
 
 
 class OutputLock:
