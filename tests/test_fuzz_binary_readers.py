@@ -31,7 +31,7 @@ SECONDS = 10.0
 GROWTH_MB = 400.0
 # where the damage is; or a whole-file fault: its start (magic) or its having nothing to read
 WHERE = re.compile(r"offset|byte|record|message|frame|line|field|topic|stream|DLV|magic|empty|no run|no record|no CAN frame|"
-                   r"page|table|SQLite")
+                   r"page|table")
 
 
 def _imu_bag(path: Path, ros1: bool, storage: str = "mcap") -> Path:

@@ -224,7 +224,7 @@ def _walk_sqlite(path: Path, f) -> None:
             if size <= INTEGRITY_CHECK_BYTES:
                 found = [row[0] for row in db.execute("PRAGMA integrity_check(3)")]
                 if found != ["ok"]:
-                    raise _fail(path, kind, None, f"SQLite finds it damaged: {'; '.join(map(str, found))}")
+                    raise _fail(path, kind, None, f"SQLite's check of its pages finds {'; '.join(map(str, found))}")
             columns = {t: {row[1] for row in db.execute(f"PRAGMA table_info({t})")} for t in BAG_TABLES}
             for table, wanted in BAG_TABLES.items():
                 if not wanted <= columns[table]:
@@ -232,7 +232,7 @@ def _walk_sqlite(path: Path, f) -> None:
                                                f"rosbag2 bag's); it has {', '.join(sorted(columns[table])) or 'none'}")
             _utf8_text(path, kind, db)
     except sqlite3.DatabaseError as exc:
-        raise _fail(path, kind, None, f"SQLite cannot read it: {exc}") from None
+        raise _fail(path, kind, None, f"SQLite's check of its pages cannot read them: {exc}") from None
 
 
 def _utf8_text(path: Path, kind: str, db) -> None:
