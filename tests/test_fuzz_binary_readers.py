@@ -228,6 +228,24 @@ def test_a_db3_message_that_does_not_decode_is_named_by_file_topic_and_number(tm
         import_recording(path)
 
 
+def test_a_db3_type_definition_missing_a_type_it_uses_is_named_by_its_row(tmp_path):
+    """The Imu definition's section 'MSG: geometry_msgs/Quaternion' renamed: its orientation field's type is
+    defined nowhere."""
+    import sqlite3
+
+    from agrobot.measurements.recording import import_recording
+
+    def renamed(path: Path) -> None:
+        with sqlite3.connect(path) as db:
+            db.execute("UPDATE message_definitions SET encoded_message_definition = replace(encoded_message_definition,"
+                       " 'MSG: geometry_msgs/Quaternion', 'MSG: geometry_msgs/Quaternixn')")
+        db.close()
+    path = _db3(tmp_path, "definition.db3", renamed)
+    with pytest.raises(InputError, match=rf"{path}: .*table 'message_definitions' row 1 \(sensor_msgs/msg/Imu\): the "
+                                         r"field type geometry_msgs/Quaternion has no MSG: section"):
+        import_recording(path)
+
+
 def test_the_valid_bases_read_their_known_values(tmp_path):
     """The undamaged files read whole: 50 yaw rates of 0.1 sin(0.5 t) from each bag, 200 frames
     at 20 Hz from the BLF (so a refusal above is the damage's, not the generator's)."""

@@ -23,10 +23,12 @@ the offset and the field:
   every page and index (``PRAGMA integrity_check``, the file opened read-only and immutable) on a
   file of at most INTEGRITY_CHECK_BYTES, above which a damaged page is named by the message being
   read when it is met; the tables a rosbag2 bag holds (``topics``, ``messages``) with their columns,
-  and the text of its small tables (topics, type definitions, metadata) in UTF-8.
+  the text of its small tables (topics, type definitions, metadata) in UTF-8, and each ``ros2msg``
+  type definition holding a ``MSG:`` section for every message type its fields use.
 """
 from __future__ import annotations
 
+import re
 import sqlite3
 import struct
 from contextlib import closing
@@ -231,6 +233,7 @@ def _walk_sqlite(path: Path, f) -> None:
                     raise _fail(path, kind, None, f"no table '{table}' with columns {', '.join(sorted(wanted))} (a "
                                                f"rosbag2 bag's); it has {', '.join(sorted(columns[table])) or 'none'}")
             _utf8_text(path, kind, db)
+            _definitions_whole(path, kind, db)
     except sqlite3.DatabaseError as exc:
         raise _fail(path, kind, None, f"SQLite's check of its pages cannot read them: {exc}") from None
 
@@ -248,3 +251,32 @@ def _utf8_text(path: Path, kind: str, db) -> None:
                 except UnicodeDecodeError as exc:
                     raise _fail(path, kind, None, f"table '{name}' row {row[0]}: a text that is not UTF-8 ({exc.reason} "
                                                f"at its byte {exc.start})") from None
+
+
+SECTION = re.compile(rb"^=+\s*$", re.M)
+
+
+def _message_type(name: bytes) -> bytes:
+    """``pkg/msg/Type`` or ``pkg/Type`` as ``pkg/Type``, without an array or bound suffix."""
+    parts = re.sub(rb"(\[.*\]|<=\d+)$", b"", name).split(b"/")
+    return parts[0] + b"/" + parts[-1]
+
+
+def _definitions_whole(path: Path, kind: str, db) -> None:
+    """Every ``ros2msg`` definition (table ``message_definitions``) defines, in a ``MSG: pkg/Type`` section,
+    each message type its fields use (a damaged section name leaves a field's type undefined)."""
+    if not list(db.execute("SELECT name FROM sqlite_master WHERE name = 'message_definitions'")):
+        return                                                     # an older rosbag2 bag: none stored
+    db.text_factory = bytes
+    rows = db.execute("SELECT rowid, topic_type, encoding, encoded_message_definition FROM message_definitions")
+    for row, topic_type, encoding, text in rows:
+        if encoding != b"ros2msg" or not text:
+            continue
+        sections = SECTION.split(text)
+        defined = {_message_type(topic_type)} | {_message_type(s.strip().splitlines()[0][4:].strip())
+                                                 for s in sections[1:] if s.strip().startswith(b"MSG:")}
+        for line in (x.split(b"#")[0].split() for s in sections for x in s.splitlines()):
+            if len(line) >= 2 and b"/" in line[0] and b"=" not in line[1] and _message_type(line[0]) not in defined:
+                raise _fail(path, kind, None, f"table 'message_definitions' row {row} ({topic_type.decode()}): the "
+                                              f"field type {line[0].decode()} has no MSG: section (a damaged "
+                                              f"definition)")
