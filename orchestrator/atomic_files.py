@@ -60,6 +60,12 @@ def units_file(path: Path) -> Path:
     return Path(path).with_name(Path(path).stem + ".units.json")
 
 
+def schema_units(schema: pa.Schema) -> dict[str, str]:
+    """The units an Arrow schema's metadata holds (column -> unit; empty when it holds none)."""
+    raw = (schema.metadata or {}).get(UNITS_KEY)
+    return json.loads(raw) if raw else {}
+
+
 def read_units(path: Path, schema=None) -> dict[str, str]:
     """The units a table file stores (column -> unit; empty when it stores none)."""
     path = Path(path)
@@ -68,8 +74,7 @@ def read_units(path: Path, schema=None) -> dict[str, str]:
             import pyarrow.parquet as pq
 
             schema = pq.read_schema(path)
-        raw = (schema.metadata or {}).get(UNITS_KEY)
-        return json.loads(raw) if raw else {}
+        return schema_units(schema)
     side = units_file(path)
     return json.loads(side.read_text()) if side.is_file() else {}
 
@@ -182,6 +187,5 @@ def read_partial(path: Path) -> pd.DataFrame:
         except (OSError, pa.ArrowInvalid):      # the block being written when the process died
             pass
     frame = pa.Table.from_batches(batches, schema=schema).to_pandas()
-    raw = (schema.metadata or {}).get(UNITS_KEY)
-    frame.attrs["units"] = json.loads(raw) if raw else {}
+    frame.attrs["units"] = schema_units(schema)
     return frame

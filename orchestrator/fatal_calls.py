@@ -5,7 +5,8 @@ SIGFPE, SIGABRT, SIGBUS and SIGILL; every call into a component's binary goes th
 whose function name says the component and the call (``named(label, fn, *args)``), so the dump
 reads ``File ".../fatal_calls.py", line N in FMU component 'plant' (plant.fmu): doStep``. The run's
 loop goes through such a frame too once a binary is loaded in-process (``watching``), named after
-where the signals recorded until the crash are kept (orchestrator.runner).
+where the signals recorded until the crash are kept (orchestrator.runner); ``forget`` when the run
+ends, so that a later run in the same process without such a binary writes no crash-readable file.
 """
 from __future__ import annotations
 
@@ -44,7 +45,12 @@ def named(label: str, fn: Callable[..., Any], *args: Any) -> Any:
     return caller(label)(fn, *args)
 
 
+def forget() -> None:
+    """The run that loaded a binary has ended (faulthandler stays on: it costs nothing)."""
+    _watched.clear()
+
+
 def watching() -> bool:
-    """True once a component has loaded a binary into this process (``watch``): a fatal signal in
-    it would end the process with no Python code run after it."""
+    """True once a component of the run going on has loaded a binary into this process (``watch``):
+    a fatal signal in it would end the process with no Python code run after it."""
     return bool(_watched)

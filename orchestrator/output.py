@@ -14,8 +14,9 @@
   holds unless that is itself an unfinished result (or nothing): it goes beside it, to
   ``NAME.interrupted`` or ``NAME.failed``, and the message says where. Staging folders left by a
   killed command are removed (and named) by the next command into the same ``--out``.
-- A full disk (ENOSPC, EDQUOT) is an ``OutputError`` naming the file; the staging folder is
-  removed, so ``--out`` holds what it held before.
+- A full disk (ENOSPC, EDQUOT), or a file past the largest size the file system or the process
+  allows (EFBIG), is an ``OutputError`` naming the file; the staging folder is removed, so
+  ``--out`` holds what it held before.
 """
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ import re
 import shutil
 import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterable
 
@@ -37,7 +39,7 @@ from .study_files import study_chain
 
 MARKERS = ("run.json", "metrics.json")          # a run's signature files
 STAGING = "staging-"
-DISK_FULL = (errno.ENOSPC, errno.EDQUOT)
+DISK_FULL = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)      # no room: the disk, the quota, a file's size limit
 
 
 class OutputError(InputError):
@@ -162,8 +164,10 @@ def disk_full(exc: BaseException) -> bool:
 
 def disk_full_error(out: Path, exc: OSError, kept: str, flag: str = "--out") -> OutputError:
     where = f" while writing {Path(exc.filename).name}" if getattr(exc, "filename", None) else ""
-    return OutputError(f"{flag} {out}: the disk is full ({exc.strerror or os.strerror(exc.errno)}){where}; "
-                       f"nothing was written to {out} ({kept}); free some space and run the command again")
+    what, then = ("a file grew past the largest size allowed here", "write it where larger files are allowed") \
+        if exc.errno == errno.EFBIG else ("the disk is full", "free some space")
+    return OutputError(f"{flag} {out}: {what} ({exc.strerror or os.strerror(exc.errno)}){where}; "
+                       f"nothing was written to {out} ({kept}); {then} and run the command again")
 
 
 class OutputLock:
@@ -396,31 +400,80 @@ def output_parameters(study) -> list[tuple[str, str, Path]]:
 
 
 class WrittenAside:
-    """The files a run writes outside ``--out`` (output parameters), each under a unique temporary name
-    beside its target while the run goes; ``finish(keep)`` renames each over its target (the recording
-    up to where the run stopped) or, ``keep`` false (a full disk), removes them all."""
+    """The files a run writes outside ``--out`` (output parameters), each locked (OutputLock) and under a
+    unique temporary name beside its target while the run goes; ``finish(keep)`` renames each over its
+    target (the recording up to where the run stopped) or, ``keep`` false (a full disk), removes them
+    all, and lets go of the locks."""
 
     def __init__(self) -> None:
-        self.files: list[tuple[Path, Path]] = []     # (temporary, target)
+        self.files: list[tuple[Path, Path, str]] = []     # (temporary, target, the option that named it)
+        self.locks: list[OutputLock] = []
 
-    def add(self, target: Path) -> Path:
+    def add(self, target: Path, flag: str = "--out") -> Path:
+        self.locks.append(OutputLock(target, flag).acquire())
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".writing{target.suffix}", dir=target.parent)
         os.close(fd)
-        self.files.append((Path(tmp), target))
+        self.files.append((Path(tmp), target, flag))
         return Path(tmp)
 
     def finish(self, keep: bool = True) -> list[Path]:
         done = []
         with critical():
-            for tmp, target in self.files:
+            for tmp, target, _ in self.files:
                 if keep and tmp.exists():
                     os.chmod(tmp, 0o666 & ~UMASK)
                     os.replace(tmp, target)
                     done.append(target)
                 else:
                     tmp.unlink(missing_ok=True)
-        self.files = []
+            for lock in self.locks:
+                lock.release()
+        self.files, self.locks = [], []
         return done
+
+    @contextmanager
+    def kept(self):
+        """``with aside.kept():`` the run writing these files; when it ends, stopped or not, each is
+        renamed over its target (what was written until then), but a full disk (the error or its cause)
+        removes them all and is an OutputError naming the file it filled."""
+        try:
+            yield self
+        except BaseException as exc:
+            cause = exc if disk_full(exc) else exc.__cause__
+            if not disk_full(cause) or not self.files:
+                self.finish(keep=True)
+                raise
+            tmp, target, flag = next((f for f in self.files if str(f[0]) == str(cause.filename)), self.files[0])
+            self.finish(keep=False)
+            raise disk_full_error(target, OSError(cause.errno, cause.strerror, str(target)), "none of its files was "
+                                  "kept", flag) from None
+        self.finish(keep=True)
+
+
+def write_aside(study, overwrite: bool, inputs: Iterable[Path], place=None, flag_of=None):
+    """(the study with its output parameters placed, a WrittenAside): each file the study writes
+    (``output_parameters``) is placed by ``place(key, field, path)`` when it returns a path (the
+    caller's own folder), else written aside under the rule of every written file (check_output_file:
+    an existing file replaced only with ``overwrite``, an input never; locked while written; a unique
+    temporary name renamed over it when the run ends). ``flag_of(field, path)``: the option that named
+    the file, for the messages (by default where the study set it)."""
+    moved: dict[str, str] = {}
+    aside = WrittenAside()
+    try:
+        for key, field, path in output_parameters(study):
+            full = path.resolve()
+            flag = flag_of(field, full) if flag_of is not None else f"{study.origin(field)}:"
+            check_inputs(full, inputs, flag=flag)
+            there = place(key, field, full) if place is not None else None
+            if there is None:
+                check_output_file(full, overwrite, inputs, flag=flag)
+                full.parent.mkdir(parents=True, exist_ok=True)
+                there = aside.add(full, flag)
+            moved[key] = str(there)
+    except BaseException:
+        aside.finish(keep=False)
+        raise
+    return (study.with_values(moved) if moved else study), aside
 
 
 def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Path] = (),
@@ -428,28 +481,17 @@ def place_output_parameters(study, out: Path, staging: Path, named: Iterable[Pat
     """(the study with its output parameters placed, a WrittenAside): a path inside ``--out`` is
     written into the staging folder (and so moves with the result); a path outside it only when the
     user named it on the command line (``--set``, or one of ``named``, a file or a folder that holds
-    it), under the rule of every written file (check_output_file: an existing file replaced only with
-    ``overwrite``), to a unique temporary name renamed over it when the run ends; an input never."""
+    it), written aside (``write_aside``); an input never."""
     out = Path(out).resolve()
     named = {Path(p).resolve() for p in named}
-    moved: dict[str, str] = {}
-    aside = WrittenAside()
-    try:
-        for key, field, path in output_parameters(study):
-            full = path.resolve()
-            flag = f"{study.origin(field)}:"
-            check_inputs(full, inputs, flag=flag)
-            if _inside(full, out):
-                moved[key] = str(Path(staging) / full.relative_to(out))
-                Path(moved[key]).parent.mkdir(parents=True, exist_ok=True)
-                continue
-            if not any(_inside(full, n) for n in named) and not study.origin(field).startswith("--set"):
-                raise OutputError(f"{study.origin(field)} = {str(path)!r}: writes outside --out {out}; name it on "
-                                  f"the command line (--set {key}={path}) or give a path inside --out")
-            check_output_file(full, overwrite, inputs, flag=flag)
-            full.parent.mkdir(parents=True, exist_ok=True)
-            moved[key] = str(aside.add(full))
-    except BaseException:
-        aside.finish(keep=False)
-        raise
-    return (study.with_values(moved) if moved else study), aside
+
+    def place(key: str, field: str, full: Path) -> Path | None:
+        if _inside(full, out):
+            inside = Path(staging) / full.relative_to(out)
+            inside.parent.mkdir(parents=True, exist_ok=True)
+            return inside
+        if not any(_inside(full, n) for n in named) and not study.origin(field).startswith("--set"):
+            raise OutputError(f"{study.origin(field)} = {str(full)!r}: writes outside --out {out}; name it on "
+                              f"the command line (--set {key}={full}) or give a path inside --out")
+        return None
+    return write_aside(study, overwrite, list(inputs), place)

@@ -21,7 +21,7 @@ from typing import Any
 from .build import System, build_system
 from .engine import RunError, Simulation
 from .errors import ComputationError, Interrupted, Terminated, critical
-from .fatal_calls import named, watching
+from .fatal_calls import forget, named, watching
 from .key_figures import bounds, check_study_bounds, realtime_lines, run_table
 from .observers import Progress, Stage
 from .output import ResultFolder, disk_full, place_output_parameters, study_inputs
@@ -212,7 +212,10 @@ def record_run(study: Study, system: System, folder: Path, analysis=None, plots:
     finally:
         if watch is not None:
             watch.close()
-        sim.terminate()
+        try:
+            sim.terminate()
+        finally:
+            forget()                            # a binary loaded by this run: the next run says so again
     facts = {**base, "status": _status(rec), "wall_time_s": rec.wall_time_s, **_run_facts(rec)}
     files: list[Path] = []
     table = None

@@ -1,5 +1,6 @@
 """Every binary reader fuzzed: a small valid file of each binary format (an ISO 11783 time log's
-TLG.bin, a ROS 1 bag, a ROS 2 MCAP bag, a Vector BLF CAN log), generated here from known values,
+TLG.bin, a ROS 1 bag, a ROS 2 bag as MCAP and as SQLite .db3, a Vector BLF CAN log), generated here
+from known values,
 is damaged (bytes flipped, cut, repeated, zeroed, the file truncated, a length or count made huge,
 an offset pointed back at an earlier byte) and read as a user's would
 (measurements.recording.import_recording). Each outcome is a log whose time increases, or an
@@ -29,11 +30,13 @@ SETTINGS = settings(max_examples=60, deadline=None, derandomize=True, database=N
 SECONDS = 10.0
 GROWTH_MB = 400.0
 # where the damage is; or a whole-file fault: its start (magic) or its having nothing to read
-WHERE = re.compile(r"offset|byte|record|message|frame|line|field|topic|stream|DLV|magic|empty|no run|no record|no CAN frame")
+WHERE = re.compile(r"offset|byte|record|message|frame|line|field|topic|stream|DLV|magic|empty|no run|no record|no CAN frame|"
+                   r"page|table")
 
 
-def _imu_bag(path: Path, ros1: bool) -> Path:
-    """50 IMU messages at 10 Hz, yaw rate 0.1 sin(0.5 t) rad/s (stamps 1000 s on)."""
+def _imu_bag(path: Path, ros1: bool, storage: str = "mcap") -> Path:
+    """50 IMU messages at 10 Hz, yaw rate 0.1 sin(0.5 t) rad/s (stamps 1000 s on); ROS 2: ``storage``
+    mcap or sqlite3 (the bag's file, .mcap or .db3)."""
     from rosbags.rosbag1 import Writer as Writer1
     from rosbags.rosbag2 import StoragePlugin
     from rosbags.rosbag2 import Writer as Writer2
@@ -43,7 +46,8 @@ def _imu_bag(path: Path, ros1: bool) -> Path:
     types = store.types
     imu, header, stamp = types["sensor_msgs/msg/Imu"], types["std_msgs/msg/Header"], types["builtin_interfaces/msg/Time"]
     vector, quaternion = types["geometry_msgs/msg/Vector3"], types["geometry_msgs/msg/Quaternion"]
-    with (Writer1(path) if ros1 else Writer2(path, version=8, storage_plugin=StoragePlugin.MCAP)) as w:
+    plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
+    with (Writer1(path) if ros1 else Writer2(path, version=8, storage_plugin=plugin)) as w:
         c = w.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=store)
         for k in range(50):
             t = 1000 + 0.1 * k
@@ -55,7 +59,7 @@ def _imu_bag(path: Path, ros1: bool) -> Path:
                       linear_acceleration_covariance=np.zeros(9))
             data = (store.serialize_ros1 if ros1 else store.serialize_cdr)(msg, "sensor_msgs/msg/Imu")
             w.write(c, int(t * 1e9), data)
-    return path if ros1 else next(path.glob("*.mcap"))
+    return path if ros1 else next(path.glob("*.mcap" if storage == "mcap" else "*.db3"))
 
 
 def _blf(path: Path) -> Path:
@@ -80,6 +84,7 @@ def _bases() -> dict[str, tuple[str, bytes]]:
                 "tlg_header": ("TLG00001.xml", (log / "TLG00001.xml").read_bytes()),
                 "ros1": ("drive.bag", _imu_bag(tmp / "drive.bag", True).read_bytes()),
                 "mcap": ("drive.mcap", _imu_bag(tmp / "rosbag2", False).read_bytes()),
+                "db3": ("drive.db3", _imu_bag(tmp / "sqlite", False, "sqlite3").read_bytes()),
                 "blf": ("bus.blf", _blf(tmp / "bus.blf").read_bytes())}
 
 
@@ -145,7 +150,7 @@ def read_or_refused(path: Path, shown: Path) -> str:
 
 
 @SETTINGS
-@given(kind=st.sampled_from(["tlg", "ros1", "mcap", "blf"]), edits=_edits())
+@given(kind=st.sampled_from(["tlg", "ros1", "mcap", "db3", "blf"]), edits=_edits())
 def test_a_damaged_binary_recording_is_read_or_refused_naming_the_file_and_where(kind, edits):
     name, data = _base(kind)
     with tempfile.TemporaryDirectory() as tmp:
@@ -178,12 +183,75 @@ def test_a_bag_declaring_a_huge_record_is_refused_at_its_offset_before_anything_
     assert time.perf_counter() - began < 5
 
 
+def _db3(tmp_path: Path, name: str, edit) -> Path:
+    """The .db3 base written to ``name`` and changed by ``edit(path)``."""
+    path = tmp_path / name
+    path.write_bytes(_base("db3")[1])
+    edit(path)
+    return path
+
+
+def test_a_db3_cut_short_is_refused_at_the_page_it_ends_in_or_by_its_declared_pages(tmp_path):
+    from agrobot.measurements.recording import import_recording
+
+    data = _base("db3")[1]
+    page = int.from_bytes(data[16:18], "big")           # the SQLite header's page size (big-endian)
+    cut = _db3(tmp_path, "cut.db3", lambda p: p.write_bytes(data[:len(data) // 2 + 100]))
+    ends = len(data) // 2 + 100
+    with pytest.raises(InputError, match=rf"ends {ends % page} bytes into a page of {page} bytes .*\(at byte offset "
+                                         rf"{ends - ends % page}\)"):
+        import_recording(cut)
+    pages = int.from_bytes(data[28:32], "big")
+    short = _db3(tmp_path, "short.db3", lambda p: p.write_bytes(data[:page * (pages - 1)]))
+    with pytest.raises(InputError, match=rf"declares {pages} pages of {page} bytes .* the file has {page * (pages - 1)}"
+                                         rf" .*\(at byte offset 28\)"):
+        import_recording(short)
+    text = _db3(tmp_path, "text.db3", lambda p: p.write_bytes(b"not a database at all, only text\n" * 10))
+    with pytest.raises(InputError, match=rf"{text}: .* does not start with the SQLite magic"):
+        import_recording(text)
+
+
+def test_a_db3_message_that_does_not_decode_is_named_by_file_topic_and_number(tmp_path):
+    """Message 7 of /imu (receive time 1000.6 s) given two bytes, which no Imu message fits."""
+    import sqlite3
+
+    from agrobot.measurements.recording import import_recording
+
+    def broken(path: Path) -> None:
+        with sqlite3.connect(path) as db:
+            db.execute("UPDATE messages SET data = x'0001' WHERE timestamp = 1000600000000")
+        db.close()
+    path = _db3(tmp_path, "blob.db3", broken)
+    with pytest.raises(InputError, match=rf"{path}: topic /imu: message 7 of the topic \(receive time "
+                                         r"1000.600000000 s\) cannot be decoded as sensor_msgs/msg/Imu: its bytes are "
+                                         r"damaged"):
+        import_recording(path)
+
+
+def test_a_db3_type_definition_missing_a_type_it_uses_is_named_by_its_row(tmp_path):
+    """The Imu definition's section 'MSG: geometry_msgs/Quaternion' renamed: its orientation field's type is
+    defined nowhere."""
+    import sqlite3
+
+    from agrobot.measurements.recording import import_recording
+
+    def renamed(path: Path) -> None:
+        with sqlite3.connect(path) as db:
+            db.execute("UPDATE message_definitions SET encoded_message_definition = replace(encoded_message_definition,"
+                       " 'MSG: geometry_msgs/Quaternion', 'MSG: geometry_msgs/Quaternixn')")
+        db.close()
+    path = _db3(tmp_path, "definition.db3", renamed)
+    with pytest.raises(InputError, match=rf"{path}: .*table 'message_definitions' row 1 \(sensor_msgs/msg/Imu\): the "
+                                         r"field type geometry_msgs/Quaternion has no MSG: section"):
+        import_recording(path)
+
+
 def test_the_valid_bases_read_their_known_values(tmp_path):
     """The undamaged files read whole: 50 yaw rates of 0.1 sin(0.5 t) from each bag, 200 frames
     at 20 Hz from the BLF (so a refusal above is the damage's, not the generator's)."""
     from agrobot.measurements.recording import import_recording
 
-    for kind in ("ros1", "mcap"):
+    for kind in ("ros1", "mcap", "db3"):
         name, data = _base(kind)
         (tmp_path / name).write_bytes(data)
         frame, _ = import_recording(tmp_path / name)

@@ -18,9 +18,13 @@ asammdf = pytest.importorskip("asammdf")
 
 @pytest.fixture(scope="module")
 def mf4(tmp_path_factory) -> Path:
+    return two_groups(tmp_path_factory.mktemp("links") / "drive.mf4")
+
+
+def two_groups(path: Path) -> Path:
+    """An MDF 4.10 file of two data groups (IMU: YawRate, Vehicle: Speed), 5 s at 100 Hz."""
     from asammdf import MDF, Signal
 
-    path = tmp_path_factory.mktemp("links") / "drive.mf4"
     t = np.arange(0.0, 5.0, 0.01)
     mdf = MDF(version="4.10")
     mdf.append([Signal(np.sin(t), t, name="YawRate", unit="rad/s")], acq_name="IMU")

@@ -85,37 +85,15 @@ def record_study(study, value):
 def recordings_aside(study, overwrite: bool, record: Path | None = None):
     """``with recordings_aside(study, overwrite, record) as placed:`` a run without ``--out`` (the
     emulator's) writes every file its study names (``record_file`` parameters: the recordings of
-    ``--record`` DIR) under the rule of a single written file: refused over an existing file without
-    ``overwrite``, an input never; locked while the run writes; written to a unique temporary name
-    beside it and renamed over it when the block ends, stopped or not (what was recorded until
-    then). A full disk is a named OutputError with every temporary file removed."""
-    from agrobot.orchestrator.output import (OutputLock, WrittenAside, check_output_file, disk_full,
-                                             disk_full_error, output_parameters, study_inputs)
+    ``--record`` DIR) under the rule of a single written file (orchestrator.output.write_aside), kept
+    when the block ends, stopped or not (what was recorded until then); a full disk is a named
+    OutputError with every temporary file removed."""
+    from agrobot.orchestrator.output import study_inputs, write_aside
 
-    aside, locks, moved, inputs = WrittenAside(), [], {}, study_inputs(study)
     record = None if record is None else Path(record).resolve()
-    try:
-        for key, field, path in output_parameters(study):
-            full = path.resolve()
-            flag = "--record" if record is not None and full.parent == record else f"{study.origin(field)}:"
-            check_output_file(full, overwrite, inputs, flag=flag)
-            locks.append(OutputLock(full, flag).acquire())
-            full.parent.mkdir(parents=True, exist_ok=True)
-            moved[key] = str(aside.add(full))
-        try:
-            yield study.with_values(moved) if moved else study
-        except BaseException as exc:
-            cause = exc if disk_full(exc) else exc.__cause__
-            if disk_full(cause):
-                targets = {str(tmp): target for tmp, target in aside.files}
-                target = targets.get(str(cause.filename), aside.files[0][1] if aside.files else record)
-                aside.finish(keep=False)
-                raise disk_full_error(target, OSError(cause.errno, cause.strerror, str(target)),
-                                      "no recording was kept", "--record") from None
-            aside.finish(keep=True)
-            raise
-        aside.finish(keep=True)
-    finally:
-        aside.finish(keep=False)             # a refusal before the run: the temporary files made so far
-        for lock in locks:
-            lock.release()
+
+    def flag_of(field: str, full: Path) -> str:
+        return "--record" if record is not None and full.parent == record else f"{study.origin(field)}:"
+    placed, aside = write_aside(study, overwrite, study_inputs(study), flag_of=flag_of)
+    with aside.kept():
+        yield placed

@@ -17,34 +17,51 @@ the offset and the field:
   declared uncompressed size is above MAX_CHUNK or unlike its records when stored uncompressed, a
   chunk index pointing outside the file.
 
-A ROS 2 ``.db3`` (SQLite) is left to SQLite, which checks its own pages.
+- ROS 2 ``.db3`` (SQLite, magic ``SQLite format 3\\0``; pages of a size the header gives): a file
+  shorter than its header, without the magic, with a page size that is no power of two from 512 to
+  65536, cut inside a page or shorter than the pages its header declares; then SQLite's own check of
+  every page and index (``PRAGMA integrity_check``, the file opened read-only and immutable) on a
+  file of at most INTEGRITY_CHECK_BYTES, above which a damaged page is named by the message being
+  read when it is met; the tables a rosbag2 bag holds (``topics``, ``messages``) with their columns,
+  the text of its small tables (topics, type definitions, metadata) in UTF-8, and each ``ros2msg``
+  type definition holding a ``MSG:`` section for every message type its fields use.
 """
 from __future__ import annotations
 
+import re
+import sqlite3
 import struct
+from contextlib import closing
 from pathlib import Path
 
 from .log import LogError
 
 ROS1_MAGIC = b"#ROSBAG V2.0\n"
 MCAP_MAGIC = b"\x89MCAP0\r\n"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+INTEGRITY_CHECK_BYTES = 1 << 30     # a larger .db3 is checked page by page as its messages are read
 MAX_CHUNK = 1 << 30            # a chunk's uncompressed bytes: a reader holds one whole chunk in memory
 U32, U64 = struct.Struct("<I"), struct.Struct("<Q")
 
 
 def check_bag_file(path: Path) -> None:
-    """LogError naming the file, the offset and the field when the ROS 1 bag or MCAP file at
-    ``path`` declares a record, chunk or offset its bytes cannot hold; other files pass."""
+    """LogError naming the file, the offset and the field when the ROS 1 bag, MCAP file or ROS 2
+    ``.db3`` at ``path`` declares a record, chunk, page or offset its bytes cannot hold; other files
+    pass."""
     with open(path, "rb") as f:
-        head = f.read(len(ROS1_MAGIC))
+        head = f.read(len(SQLITE_MAGIC))
         if head.startswith(MCAP_MAGIC):
             _walk_mcap(path, f)
-        elif head == ROS1_MAGIC:
+        elif head.startswith(ROS1_MAGIC):
             _walk_ros1(path, f)
+        elif head == SQLITE_MAGIC or Path(path).suffix.lower() == ".db3":
+            _walk_sqlite(path, f)
 
 
-def _fail(path: Path, kind: str, at: int, what: str) -> LogError:
-    return LogError(f"{path}: cannot read as a {kind}, it is damaged: {what} (at byte offset {at})")
+def _fail(path: Path, kind: str, at: int | None, what: str) -> LogError:
+    """``what`` is wrong with the file at byte offset ``at`` (None: the file as a whole)."""
+    return LogError(f"{path}: cannot read as a {kind}, it is damaged: {what}" + ("" if at is None else
+                                                                                f" (at byte offset {at})"))
 
 
 def _read(f, at: int, n: int, size: int, path: Path, kind: str, what: str) -> bytes:
@@ -181,3 +198,85 @@ def _mcap_chunk_index(path: Path, body: bytes, at: int, size: int) -> None:
     if stored > length or declared > MAX_CHUNK:
         raise _fail(path, "MCAP file", at, f"a chunk index declares {stored} stored and {declared} uncompressed bytes "
                                            f"for a chunk of {length}: an impossible chunk size (at most {MAX_CHUNK})")
+
+
+U16BE, U32BE = struct.Struct(">H"), struct.Struct(">I")
+BAG_TABLES = {"topics": {"id", "name", "type", "serialization_format"}, "messages": {"id", "topic_id", "timestamp", "data"}}
+
+
+def _walk_sqlite(path: Path, f) -> None:
+    """A ROS 2 .db3: its header against the file's size, SQLite's check of its pages, its tables."""
+    kind, size = "ROS 2 bag (SQLite)", f.seek(0, 2)
+    header = _read(f, 0, 100, size, path, kind, "the SQLite header")
+    if not header.startswith(SQLITE_MAGIC):
+        raise _fail(path, kind, 0, "the file does not start with the SQLite magic 'SQLite format 3'")
+    page = U16BE.unpack_from(header, 16)[0]
+    page = 65536 if page == 1 else page
+    if page < 512 or page & (page - 1):
+        raise _fail(path, kind, 16, f"the header's page size {page} is no power of two from 512 to 65536")
+    if size % page:
+        raise _fail(path, kind, size - size % page, f"the file ends {size % page} bytes into a page of {page} "
+                                                    f"bytes (cut short?)")
+    pages = U32BE.unpack_from(header, 28)[0]
+    if header[24:28] == header[92:96] and pages * page > size:       # the count is valid for this change
+        raise _fail(path, kind, 28, f"the header declares {pages} pages of {page} bytes ({pages * page} bytes), "
+                                    f"the file has {size} (cut short?)")
+    try:
+        with closing(sqlite3.connect(f"{Path(path).absolute().as_uri()}?mode=ro&immutable=1", uri=True)) as db:
+            if size <= INTEGRITY_CHECK_BYTES:
+                found = [row[0] for row in db.execute("PRAGMA integrity_check(3)")]
+                if found != ["ok"]:
+                    raise _fail(path, kind, None, f"SQLite's check of its pages finds {'; '.join(map(str, found))}")
+            columns = {t: {row[1] for row in db.execute(f"PRAGMA table_info({t})")} for t in BAG_TABLES}
+            for table, wanted in BAG_TABLES.items():
+                if not wanted <= columns[table]:
+                    raise _fail(path, kind, None, f"no table '{table}' with columns {', '.join(sorted(wanted))} (a "
+                                               f"rosbag2 bag's); it has {', '.join(sorted(columns[table])) or 'none'}")
+            _utf8_text(path, kind, db)
+            _definitions_whole(path, kind, db)
+    except sqlite3.DatabaseError as exc:
+        raise _fail(path, kind, None, f"SQLite's check of its pages cannot read them: {exc}") from None
+
+
+def _utf8_text(path: Path, kind: str, db) -> None:
+    """Every text of the bag's small tables (all but ``messages``) in UTF-8."""
+    db.text_factory = bytes
+    tables = [row[0] for row in db.execute("SELECT name FROM sqlite_master WHERE type = 'table'")]
+    for table in (t for t in tables if t != b"messages"):
+        name = table.decode("utf-8", "replace")
+        for row in db.execute(f'SELECT rowid, * FROM "{name}"'):
+            for value in row[1:]:
+                try:
+                    value.decode("utf-8") if isinstance(value, bytes) else None
+                except UnicodeDecodeError as exc:
+                    raise _fail(path, kind, None, f"table '{name}' row {row[0]}: a text that is not UTF-8 ({exc.reason} "
+                                               f"at its byte {exc.start})") from None
+
+
+SECTION = re.compile(rb"^=+\s*$", re.M)
+
+
+def _message_type(name: bytes) -> bytes:
+    """``pkg/msg/Type`` or ``pkg/Type`` as ``pkg/Type``, without an array or bound suffix."""
+    parts = re.sub(rb"(\[.*\]|<=\d+)$", b"", name).split(b"/")
+    return parts[0] + b"/" + parts[-1]
+
+
+def _definitions_whole(path: Path, kind: str, db) -> None:
+    """Every ``ros2msg`` definition (table ``message_definitions``) defines, in a ``MSG: pkg/Type`` section,
+    each message type its fields use (a damaged section name leaves a field's type undefined)."""
+    if not list(db.execute("SELECT name FROM sqlite_master WHERE name = 'message_definitions'")):
+        return                                                     # an older rosbag2 bag: none stored
+    db.text_factory = bytes
+    rows = db.execute("SELECT rowid, topic_type, encoding, encoded_message_definition FROM message_definitions")
+    for row, topic_type, encoding, text in rows:
+        if encoding != b"ros2msg" or not text:
+            continue
+        sections = SECTION.split(text)
+        defined = {_message_type(topic_type)} | {_message_type(s.strip().splitlines()[0][4:].strip())
+                                                 for s in sections[1:] if s.strip().startswith(b"MSG:")}
+        for line in (x.split(b"#")[0].split() for s in sections for x in s.splitlines()):
+            if len(line) >= 2 and b"/" in line[0] and b"=" not in line[1] and _message_type(line[0]) not in defined:
+                raise _fail(path, kind, None, f"table 'message_definitions' row {row} ({topic_type.decode()}): the "
+                                              f"field type {line[0].decode()} has no MSG: section (a damaged "
+                                              f"definition)")

@@ -173,7 +173,7 @@ def open_bags(paths: list[Path]):
     paths = [Path(p) for p in paths]
     for p in paths:
         for file in (sorted(p.iterdir()) if p.is_dir() else [p]):
-            if file.suffix in (".bag", ".mcap") and file.is_file():
+            if file.suffix in BAG_SUFFIXES and file.is_file():
                 check_bag_file(file)
     try:
         reader = AnyReader(paths, default_typestore=typestore())
@@ -315,9 +315,11 @@ def _messages(reader, wanted: dict, auto: dict, source: Path, labels: dict) -> t
         try:
             msg = reader.deserialize(raw, conn.msgtype)
         except Exception as exc:                     # noqa: BLE001 - an unknown type or a broken message
-            raise LogError(f"{source}: topic {conn.topic}: cannot decode its messages of type {conn.msgtype} "
-                           f"({type(exc).__name__}: {exc}); the bag carries no definition for it and the standard "
-                           f"type stores do not know it") from None
+            why = "its bytes are damaged" if conn.msgtype in reader.typestore.fielddefs else \
+                "the bag carries no definition for it and the standard type stores do not know it"
+            raise LogError(f"{source}: topic {conn.topic}: message {len(rows[conn.topic]) + 1} of the topic (receive "
+                           f"time {receive_ns * 1e-9:.9f} s) cannot be decoded as {conn.msgtype}: {why} "
+                           f"({type(exc).__name__}: {exc})") from None
         t, from_header = _stamp(msg, receive_ns)
         header_used.setdefault(conn.topic, from_header)
         values = []
