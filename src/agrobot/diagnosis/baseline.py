@@ -23,7 +23,7 @@ from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy, Parameter
-from .plausibility import KINEMATIC, slip_share, understeer
+from .plausibility import KINEMATIC, slip_share, study_understeer, understeer
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -120,7 +120,7 @@ def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, str]:
     if not names:
         return {}
     sf, sr = values["cornering_front_scale"], values["cornering_rear_scale"]
-    K = p.m / (p.l_f + p.l_r) * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
+    K = study_understeer(p, sf, sr)
     why = understeer(K, replay.baseline.vehicle, None)
     return dict.fromkeys(names, f"implausible for the vehicle: at {sf:.3g} and {sr:.3g}, {why}") if why else {}
 

@@ -30,7 +30,7 @@ from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import kinematic, understeer
+from .plausibility import kinematic, study_understeer, understeer
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -452,7 +452,7 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
     (``identified_vehicle``)."""
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
-                                                  study_name)
+                                                  study_name, study_understeer(baseline.tractor))
     if mismatch:
         mismatch += " (no --study given: the default study was used)" if default_study else ""
         say(f"warning: {mismatch}")

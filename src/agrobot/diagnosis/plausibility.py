@@ -105,6 +105,12 @@ def slope(phi: float, vehicle: Vehicle) -> list[str]:
             f"something else (a steering offset or a left/right asymmetry of the steering map, a gyro bias)"]
 
 
+def study_understeer(p, front_scale: float = 1.0, rear_scale: float = 1.0) -> float:
+    """The understeer gradient K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) [rad/(m/s2)] of yaw-plant
+    parameters ``p`` with its cornering stiffnesses scaled by s_f, s_r."""
+    return p.m / (p.l_f + p.l_r) * (p.l_r / (front_scale * p.C_f) - p.l_f / (rear_scale * p.C_r))
+
+
 def slip_share(p, lateral_p99: float, steering_p99: float) -> float:
     """The largest axle slip angle the study's tyres take at the log's lateral acceleration,
     alpha_f = m a_y l_r / (L C_f), alpha_r = m a_y l_f / (L C_r), over the log's steering angle (99th

@@ -1,0 +1,50 @@
+"""The log's wheelbase is read from its steady turns inside the tyres' linear range, selected on the
+steering input as well as the yaw rate.
+
+Independent truth: a 1:10 car of wheelbase 0.32 m driven by hand on a slippery floor, its steering
+held in 0.6 s steps (mostly at the 0.34 rad lock) at 0.4-4 m/s, whose tyres give at most 0.2 g and
+plough past their peak: a_y = a_kin / (1 + (a_kin / (2 mu g))^2), a_kin = v^2 tan(g delta) / L.
+Its turns selected on a small measured |v r| alone are mostly ploughing ones (the yaw rate falls
+short of the kinematic one), and read a wheelbase of about 0.5 m."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.diagnosis.study_fit import study_check
+
+
+def ploughing_car(gain: float = 1.0, L: float = 0.32, mu: float = 0.2, seconds: float = 120.0) -> pd.DataFrame:
+    rng = np.random.default_rng(5)
+    h = 0.02
+    t = np.arange(0, seconds, h)
+    levels = rng.choice([-0.34, -0.34, -0.34, -0.15, 0.15, 0.34, 0.34, 0.34], size=int(seconds / 0.6) + 1)
+    delta = levels[(t // 0.6).astype(int)]
+    v = 2.2 + 1.8 * np.sin(2 * np.pi * t / 40)
+    kinematic = v * np.tan(gain * np.interp(t - 0.1, t, delta)) / L          # 0.1 s from command to wheels
+    r_ss = kinematic / (1 + (v * kinematic / (2 * mu * 9.81)) ** 2)
+    r = np.zeros_like(t)
+    for k in range(1, len(t)):                                                # 0.08 s yaw lag
+        r[k] = r[k - 1] + h / 0.08 * (r_ss[k - 1] - r[k - 1])
+    return pd.DataFrame({"t": t, "v": v, "delta_cmd": delta, "yaw_rate": r + 0.005 * rng.standard_normal(len(t))})
+
+
+def test_a_car_whose_tyres_plough_is_not_taken_for_a_longer_one():
+    mine, warning = study_check(ploughing_car(), 0.32, "f1tenth.toml")
+    assert warning is None
+    assert mine["wheelbase"] == pytest.approx(0.32, rel=0.05)
+
+
+def test_a_steering_map_turning_the_wheels_half_the_command_is_named_with_its_ratio():
+    mine, warning = study_check(ploughing_car(gain=0.5), 0.32, "f1tenth.toml")
+    assert mine["wheelbase"] == pytest.approx(0.32 * np.tan(0.34) / np.tan(0.17), rel=0.05)
+    assert warning is not None and "0.48 x" in warning
+
+
+def test_a_log_without_steady_linear_turns_tells_no_wheelbase():
+    """Steering reversed every 0.3 s: no turn is steady for 0.5 s."""
+    frame = ploughing_car()
+    frame["delta_cmd"] = 0.2 * np.sign(np.sin(2 * np.pi * frame["t"] / 0.6))
+    mine, warning = study_check(frame, 0.32, "f1tenth.toml")
+    assert warning is None and mine["wheelbase"] is None and "too brief or too hard" in mine["why"]
