@@ -221,6 +221,8 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
     K, K_sd, understeer, char = _understeer(final, fits.free, L)
+    if command and (alike := one_speed(log, min_speed)):
+        understeer |= {"identifiable": False, "note": f"not identifiable from this log: {alike}"}
     g = final.values.get("steer_gain", 1.0)
     g_sd = final.std("steer_gain") if command else 0.0
     linear_range = _linear_range(saturation, nl, log, min_speed)
@@ -598,6 +600,20 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
     return params_json, stiff
 
 
+def one_speed(log: DrivingLog, min_speed: float) -> str | None:
+    """Why a fitted steering gain g and an understeer gradient K are not told apart (None: they
+    are): the steady yaw rate g v / (L + K v^2) of turns at one speed (the 90th percentile of the
+    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio."""
+    turning = (log.v >= min_speed) & (np.abs(log.u) > 0.03)
+    if turning.sum() < 10:
+        return None
+    lo, hi = np.percentile(log.v[turning], [10, 90])
+    if hi >= 1.5 * lo:
+        return None
+    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain and an "
+            f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
+
+
 def _understeer(final: FitResult, free: list[Parameter], L: float):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|)."""
@@ -784,10 +800,13 @@ def summary(report: dict) -> str:
     if report.get("final_model") == "steady_turn":
         return "\n".join(lines + steady_turn_summary(report))
     K = report["understeer_gradient"]
-    lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
-                 + ("" if K["identifiable"] else "; not identifiable from this log"))
-    ch = report["characteristic_speed"]
-    lines.append(f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s")
+    if K["identifiable"]:
+        ch = report["characteristic_speed"]
+        lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)",
+                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s"]
+    else:       # neither K nor the speed it sets is printed as a result
+        lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "
+                     f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
