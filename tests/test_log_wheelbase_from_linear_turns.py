@@ -48,3 +48,20 @@ def test_a_log_without_steady_linear_turns_tells_no_wheelbase():
     frame["delta_cmd"] = 0.2 * np.sign(np.sin(2 * np.pi * frame["t"] / 0.6))
     mine, warning = study_check(frame, 0.32, "f1tenth.toml")
     assert warning is None and mine["wheelbase"] is None and "too brief or too hard" in mine["why"]
+
+
+def test_an_understeer_gradient_beyond_the_class_is_read_against_the_logs_steady_turns():
+    """K = 0.036 rad/(m/s2) (20 deg/g) fitted on a scale car: with the study's wheelbase in the
+    log's linear turns the steering map is cleared and nothing is decided; with turns of twice the
+    wheelbase the steering map's gain is named with its ratio; an interval covering the class's
+    range is no estimate."""
+    from agrobot.diagnosis.plausibility import understeer
+    from agrobot.identification.vehicle import Vehicle
+
+    car = Vehicle.from_table({"class": "scale_car", "wheelbase": 0.32})
+    same = understeer(0.036, car, 0.5, study_check(ploughing_car(), 0.32, "f1tenth.toml")[0])
+    assert "cannot decide" in same and "not the cause" in same
+    half = understeer(0.036, car, 0.5, study_check(ploughing_car(gain=0.5), 0.32, "f1tenth.toml")[0])
+    assert "steering map's gain reads as tyres" in half and "0.48 x" in half
+    wide = understeer({"value": -0.029, "interval": [-0.103, 0.045], "identifiable": True}, car, 0.5)
+    assert wide.startswith("not identifiable from this log")

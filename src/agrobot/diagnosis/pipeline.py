@@ -507,7 +507,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     mine = result.get("log_vehicle") or {}
     mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
     K = identified.get("understeer_gradient") if identified else None
-    result["understeer_note"] = understeer(K["value"], baseline.vehicle, share) if K else kinematic(share)
+    result["understeer_note"] = understeer(K, baseline.vehicle, share, mine) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),

@@ -131,16 +131,36 @@ def kinematic(share: float | None) -> str | None:
             f"speeds (held at the study's)")
 
 
-def understeer(K: float, vehicle: Vehicle, share: float | None) -> str | None:
+def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = None) -> str | None:
     """Why an understeer gradient K [rad/(m/s2)] is not concluded (None: it is one this class has):
-    a log in the kinematic regime (``share``: slip_share) cannot tell it; outside the class's range
-    (UNDERSTEER) it is a steering map or a wheelbase, not tyres."""
+    a log in the kinematic regime (``share``: slip_share) cannot tell it; ``K`` given as identify's
+    quantity (a dict) that is not identifiable, or whose 95 % interval covers the class's whole
+    range (UNDERSTEER), is not pinned; outside the class's range the log's steady linear turns
+    (``turns``: study_fit.log_vehicle, with the study's wheelbase) tell a steering map's gain from
+    the tyres, and without them nothing is decided."""
     if kinematic(share):
         return "not identifiable at these speeds: " + kinematic(share)
     lo, hi = UNDERSTEER.get(vehicle.kind, UNDERSTEER[None])
+    kind, deg = vehicle.kind or "vehicle", lambda k: math.degrees(k) * 9.81      # noqa: E731
+    if isinstance(K, Mapping):
+        if not K.get("identifiable", True):
+            return "not identifiable from this log: " + K.get("note", "").removeprefix("not identifiable from this log: ")
+        a, b = K["interval"]
+        if a <= lo and b >= hi:
+            return (f"not identifiable from this log: its 95 % interval [{deg(a):.3g}, {deg(b):.3g}] deg/g covers "
+                    f"the whole range of a {kind} ({deg(lo):.2g} to {deg(hi):.2g} deg/g)")
+        K = K["value"]
     if lo <= K <= hi:
         return None
-    deg_g = math.degrees(K) * 9.81
-    return (f"an understeer gradient of {deg_g:.3g} deg/g is not of a {vehicle.kind or 'vehicle'} "
-            f"({math.degrees(lo) * 9.81:.2g} to {math.degrees(hi) * 9.81:.2g} deg/g): a steering map off in gain or "
-            f"asymmetric, or a wrong wheelbase, reads as tyres")
+    text = f"an understeer gradient of {deg(K):.3g} deg/g is not of a {kind} ({deg(lo):.2g} to {deg(hi):.2g} deg/g)"
+    if not turns or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return text + (": cannot decide whether a steering map's gain or the tyres: "
+                       + ((turns or {}).get("why") or "the log's steady turns were not read"))
+    ratio = turns["wheelbase"] / turns["study_wheelbase"]
+    said = (f"the log's steady turns under {turns['linear_lateral']:g} m/s2 give a wheelbase of "
+            f"{turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m ({100 * (ratio - 1):+.0f} %)")
+    if abs(math.log(ratio)) > math.log(1.1):
+        return f"{text}: a steering map's gain reads as tyres: {said}, the wheels turning {1 / ratio:.2g} x the input"
+    return (f"{text}: cannot decide: {said}, so the steering map's gain is not the cause; the fit spans lateral "
+            f"accelerations up to {turns['lateral_acceleration_p99']:.2g} m/s2 (99th percentile), where tyres past "
+            f"their linear range read as understeer")

@@ -79,6 +79,8 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
     wheelbase is off the study's by more than MISMATCH in log ratio; (vehicle, None) otherwise.
     ``understeer``: the study's K [rad/(m/s2)], allowed for in each turn."""
     mine = log_vehicle(frame, wheelbase, understeer)
+    if mine is not None:
+        mine |= {"study_wheelbase": float(wheelbase), "linear_lateral": LINEAR_LATERAL}
     if mine is None or not (mine["wheelbase"] or 0.0) > 0:
         return mine, None
     off = abs(math.log(mine["wheelbase"] / wheelbase))
