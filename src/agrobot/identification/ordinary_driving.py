@@ -507,7 +507,9 @@ def _judge_saturation(log: DrivingLog, fits: _Fits, min_gain: float) -> _HeldOut
         reasons.append(f"dBIC {dbic:.1f} is not below -10")
     if gain_top < min_gain:
         reasons.append(f"held-out RMS at high |a_y| falls by {100 * gain_top:.1f} % < {100 * min_gain:.0f} %")
-    if nl.at_bound(mu_param):
+    # on its upper bound (the class's highest) the log reaches the curve's bend but not its peak: the
+    # saturation stands with the friction "at least" that; on its lower bound it is no estimate
+    if nl.at_bound(mu_param) == "lower" or (nl.at_bound(mu_param) and reasons):
         reasons.append(f"the friction ended on its {nl.at_bound(mu_param)} bound: not identifiable from this log")
     return _HeldOut(r_test, sims, a_test, y, res_lin, res_nl, res_low, hi_q, growth, gain_top, gain_all, dbic, reasons)
 
@@ -674,14 +676,16 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
     """The tyre-saturation verdict: found or why not, dBIC, held-out gains, the misfit's growth at
     high |a_y|, the fitted friction and shape with their intervals."""
+    params = {q.name: _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper), nl.at_bound(q),
+                                meaning=q.meaning) for q in free_nl if q.name in ("friction", "shape")}
+    mu = params["friction"]
+    if saturation and mu.get("note") and "upper bound" in mu["note"]:
+        mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "
+               f"turns reach the tyres' bend but not their peak force"}
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
             "found": saturation, "why_not": held.reasons, "delta_bic": held.dbic,
             "held_out_gain": held.gain_all, "held_out_gain_high_lateral": held.gain_top,
-            "misfit_at_high_lateral_t": held.growth, "high_lateral_from": held.hi_q,
-            "parameters": {k: params_json_nl for k, params_json_nl in
-                           ((q.name, _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper),
-                                               nl.at_bound(q), meaning=q.meaning)) for q in free_nl
-                            if q.name in ("friction", "shape"))}}
+            "misfit_at_high_lateral_t": held.growth, "high_lateral_from": held.hi_q, "parameters": params}
 
 
 def _residual_bins(held: _HeldOut) -> dict:
@@ -816,7 +820,7 @@ def summary(report: dict) -> str:
     t = report["tyre_saturation"]
     if t["found"]:
         mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
-        lines.append(f"tyre saturation found: friction {q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+        lines.append(f"tyre saturation found: friction {mu['note'] if mu.get('at_least') else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
                      f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
                      f"{t['high_lateral_from']:.2g} m/s2")
     else:
