@@ -65,3 +65,16 @@ def test_an_understeer_gradient_beyond_the_class_is_read_against_the_logs_steady
     assert "steering map's gain reads as tyres" in half and "0.48 x" in half
     wide = understeer({"value": -0.029, "interval": [-0.103, 0.045], "identifiable": True}, car, 0.5)
     assert wide.startswith("not identifiable from this log")
+
+
+def test_a_fitted_steering_gain_is_checked_against_the_logs_steady_turns():
+    """The car's steering map is exact (gain 1): a fitted steering_gain of 1.23 disagrees with its
+    steady linear turns, one of 1.02 agrees; with a map of gain 0.5, 0.5 agrees."""
+    from agrobot.diagnosis.plausibility import steering_gain_check
+
+    exact = study_check(ploughing_car(), 0.32, "f1tenth.toml")[0]
+    fitted = lambda k: [{"id": "steering_gain", "parameters": {"steering_gain": k}}]      # noqa: E731
+    assert steering_gain_check(fitted(1.23), exact)[1] is False
+    assert steering_gain_check(fitted(1.02), exact)[1] is True
+    half = study_check(ploughing_car(gain=0.5), 0.32, "f1tenth.toml")[0]
+    assert steering_gain_check(fitted(0.5), half)[1] is True

@@ -30,7 +30,7 @@ from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import kinematic, study_understeer, understeer
+from .plausibility import kinematic, steering_gain_check, study_understeer, understeer
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -227,7 +227,8 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     sat = identified.get("tyre_saturation")
     if sat and "tyre_saturation" not in ids:
         tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
-        why = "; ".join(tried.reasons) if tried else "it was not fitted"
+        why = ("; ".join(tried.reasons) or f"supported on its own (dBIC {tried.delta_bic:.1f}, held-out gain "
+               f"{100 * tried.gain:.0f} %) but not kept beside the effects chosen") if tried else "it was not fitted"
         out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
                    f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
                    f"{held_part}, does not: {why}")
@@ -513,6 +514,10 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
                        before=[x for x in (mismatch, kinematic(share)) if x])
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
+    if (gain := steering_gain_check(effects, mine)) is not None:
+        verdict["bullets"].append(gain[0])
+        if not gain[1] and verdict["id"] == "steering_gain" and verdict["status"] == "conclusive":
+            verdict["status"], verdict["statement"] = "inconclusive", verdict["statement"] + "; but " + gain[0]
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):

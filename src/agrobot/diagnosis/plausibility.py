@@ -153,9 +153,10 @@ def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = No
     if lo <= K <= hi:
         return None
     text = f"an understeer gradient of {deg(K):.3g} deg/g is not of a {kind} ({deg(lo):.2g} to {deg(hi):.2g} deg/g)"
-    if not turns or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
-        return text + (": cannot decide whether a steering map's gain or the tyres: "
-                       + ((turns or {}).get("why") or "the log's steady turns were not read"))
+    if turns is None:
+        return text + ": a steering map off in gain or asymmetric, or tyres past their linear range, read so"
+    if not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return text + ": cannot decide whether a steering map's gain or the tyres: " + turns.get("why", "-")
     ratio = turns["wheelbase"] / turns["study_wheelbase"]
     said = (f"the log's steady turns under {turns['linear_lateral']:g} m/s2 give a wheelbase of "
             f"{turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m ({100 * (ratio - 1):+.0f} %)")
@@ -164,3 +165,19 @@ def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = No
     return (f"{text}: cannot decide: {said}, so the steering map's gain is not the cause; the fit spans lateral "
             f"accelerations up to {turns['lateral_acceleration_p99']:.2g} m/s2 (99th percentile), where tyres past "
             f"their linear range read as understeer")
+
+
+def steering_gain_check(effects: list[dict], turns: dict | None) -> tuple[str, bool] | None:
+    """(a bullet, whether they agree) comparing a fitted steering_gain k with the gain the log's
+    steady linear turns show, L_study / L_turns (``turns``: study_fit.log_vehicle); within 10 % they
+    agree. None: no steering_gain judged or no such turns."""
+    e = next((e for e in effects if e["id"] == "steering_gain"), None)
+    if e is None or not turns or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return None
+    k, steady = e["parameters"]["steering_gain"], turns["study_wheelbase"] / turns["wheelbase"]
+    agree = abs(math.log(k / steady)) <= math.log(1.1)
+    text = (f"the steering gain {k:.3g} against the log's steady turns under {turns['linear_lateral']:g} m/s2, which "
+            f"turn as a gain of {steady:.3g} would (wheelbase {turns['wheelbase']:.3g} m against the study's "
+            f"{turns['study_wheelbase']:.3g} m): ")
+    return text + ("they agree" if agree else "they disagree: the fitted gain also takes up what the model lacks in "
+                   "harder turns (tyres, understeer); the steady linear turns' is the steering map's"), agree
