@@ -220,9 +220,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
     final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
-    K, K_sd, understeer, char = _understeer(final, fits.free, L)
-    if command and (alike := one_speed(log, min_speed)):
-        understeer |= {"identifiable": False, "note": f"not identifiable from this log: {alike}"}
+    K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
     g = final.values.get("steer_gain", 1.0)
     g_sd = final.std("steer_gain") if command else 0.0
     linear_range = _linear_range(saturation, nl, log, min_speed)
@@ -616,17 +614,19 @@ def one_speed(log: DrivingLog, min_speed: float) -> str | None:
             f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
-def _understeer(final: FitResult, free: list[Parameter], L: float):
+def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
-    its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|)."""
+    its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
+    log cannot tell K from a fitted steering gain (one_speed), then K is not identifiable."""
     cf, cr = final.values["c_f"], final.values["c_r"]
     K = understeer_gradient(cf, cr)
     K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
-    understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd)),
-                           deg_per_g=math.degrees(K) * GRAVITY)
+    understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd) and not alike),
+                           deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
+                                                                    if alike else {}))
     if K > 0:
         vch = math.sqrt(L / K)
         char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
