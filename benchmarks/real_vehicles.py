@@ -1,5 +1,5 @@
 """Identify and diagnose every real vehicle log in ../shared/realdata:
-``python3 benchmarks/real_vehicles.py [--out DIR]``.
+``python3 benchmarks/real_vehicles.py [--out DIR] [--only NAME]``.
 
 F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman step runs (the same
 kind of car, 41 designed 3 s runs laid end to end), read by the recording importer (as ``convert``
@@ -101,6 +101,7 @@ def steady_turn_gains(log, L: float) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
+    ap.add_argument("--only", default="", help="the logs whose name contains this (DS3, AutoKoopman)")
     args = ap.parse_args()
     from agrobot.diagnosis.pipeline import diagnose
     from agrobot.identification.from_log import longest_stretch
@@ -115,6 +116,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         base = args.out or Path(tmp)
         for k, (name, log) in enumerate(logs()):
+            if args.only not in name:
+                continue
             start = time.perf_counter()
             seconds = float(log["t"].iloc[-1] - log["t"].iloc[0])
             piece, _ = longest_stretch(log)         # what diagnose judges of a log with clock gaps
