@@ -34,7 +34,7 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
 
-from .comparisons import course_bias, pair
+from .comparisons import course_bias, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict
@@ -42,7 +42,7 @@ from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawMode
                       fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
-from .steady_state import regression, steady_windows
+from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
@@ -227,10 +227,12 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     # the independent check: steady-state regression inside the linear range
     # (a clock offset, a negative delay, is left to the fit: the windows hold u from the same clock)
     windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
-    ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, linear_range["value"], fixed_gain=None if command else 1.0)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
-                                        params_json.get("gyro_bias"), linear_range, L, min_speed)
+                                        params_json.get("gyro_bias"), linear_range, L, min_speed,
+                                        _low_range_understeer(fits, saturation))
+    understeer, char = withheld_understeer(understeer, char, comparisons)
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
@@ -641,6 +643,16 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     return K, K_sd, understeer, char
 
 
+def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
+    """(K, std) of the linear model fitted where |a_y| <= LINEAR_TYRE (None: no such separate fit,
+    or the tyre-saturation model is the final one, already linear there)."""
+    low = fits.linear_low
+    if low is fits.linear or saturation:
+        return None
+    cf, cr = low.values["c_f"], low.values["c_r"]
+    return understeer_gradient(cf, cr), low.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+
+
 def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: float, g: float, g_sd: float) -> list[dict]:
     """The steady-state yaw-rate gain G = g v / (L + K v^2) at 12 speeds up to the 99th percentile
     of the driving's, with its 95 % interval (delta method on K and g)."""
@@ -748,19 +760,16 @@ def physical_checks(frame, log, model, values: dict, segs) -> dict:
 
 
 def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q, bias_q, linear_range,
-                          L: float, min_speed: float) -> list[dict]:
-    """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states),
+                          L: float, min_speed: float, low=None) -> list[dict]:
+    """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states in
+    their linear range, understeer_pair; ``low``: the dynamic fit's K where |a_y| <= LINEAR_TYRE),
     the delay (fit / cross-correlation of the gyro against the fitted model on the held-out
     segments: a timing the model misses shows as a lag), the gyro bias (fit / GNSS course)."""
     out = []
-    if ss and "understeer_gradient" in ss.as_dict():
-        k_ss = ss.as_dict()["understeer_gradient"]
-        out.append(pair("understeer gradient K", "rad/(m/s2)", ("dynamic fit", understeer["value"], understeer["std"]),
-                        ("steady-state regression", k_ss["value"], k_ss["std"]),
-                        f"the steady states lie inside the linear range (|a_y| <= {linear_range['value']:.3g} m/s2) while "
-                        f"the dynamic fit spans every |a_y|: a model structure is missing over part of the |a_y| range "
-                        f"(tyre saturation, a stiffness varying with speed, a steering ratio varying with the angle), "
-                        f"or a timing the dynamic fit cannot hold (the steering channels on another clock than the gyro)"))
+    if ss:
+        moving = np.abs(log.a_y[log.v >= min_speed])
+        out.append(understeer_pair(understeer, ss, linear_range, float(np.percentile(moving, 99)) if len(moving) else 0.0,
+                                   low))
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     if pieces and math.isfinite(delay_q["value"]):
@@ -831,11 +840,12 @@ def summary(report: dict) -> str:
     if "understeer_gradient" in ss:
         lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
                      f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
-                     f"{ss['steer_offset']['value']:.3g} rad")
+                     f"{ss['steer_offset']['value']:.3g} rad; linear range {ss['linear_limit']}"
+                     + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else ""))
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
-    for c in report.get("comparisons", []):
+    for c in (c for c in report.get("comparisons", []) if not (c["quantity"] == "understeer gradient K" and K.get("withheld"))):
         lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
                                                       for m, e in c["estimates"].items()) + " " + c["unit"]
                      + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))
