@@ -48,7 +48,8 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
     steady_state.in_linear_range), with why they differ: saturation not modelled (the dynamic fit
     spans |a_y| up to ``lateral_p99`` beyond the steady turns' linear limit, and the same model
     fitted where the tyres are linear, ``low`` (K, std), agrees with the steady turns), different
-    stretches (the |a_y| spans differ), else a different model structure."""
+    stretches (the |a_y| spans differ, or the steady turns' linear range was not read), else a
+    different model structure."""
     d = ss.as_dict()
     k_ss, lim = d["understeer_gradient"], ss.max_lateral
     span = (f"the steady turns: {ss.used} windows at a held input with |a_y| <= {lim:.3g} m/s2 ({ss.limit_how}); the "
@@ -58,6 +59,11 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
         why = (f"saturation not modelled: {span}, past the linear range; the same linear model fitted where the tyres "
                f"are linear gives K {_text(*low)}, agreeing with the steady turns: the tyres' bend, which the final "
                f"model lacks ({linear_range.get('how', '')}), reads there as more or less understeer")
+    elif ss.limit_how.startswith("not derived"):
+        why = (f"different stretches: {span}: with too few steady turns where the tyres are surely linear, their "
+               f"linear range is not read and their K takes in the tyres' bend, weighted by {ss.used} held turns "
+               f"where the dynamic fit weighs every segment alike (saturation not modelled: "
+               f"{linear_range.get('how', '')})")
     elif lateral_p99 > 1.05 * lim:
         why = (f"different stretches: {span}; beyond the linear range the tyres' bend (modelled or not: "
                f"{linear_range.get('how', '')}) or a stiffness varying with speed weighs on the dynamic fit alone")

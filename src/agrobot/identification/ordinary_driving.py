@@ -221,11 +221,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
     K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
-    g = final.values.get("steer_gain", 1.0)
-    g_sd = final.std("steer_gain") if command else 0.0
+    g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
     linear_range = _linear_range(saturation, nl, log, min_speed)
-    # the independent check: steady-state regression inside the linear range
-    # (a clock offset, a negative delay, is left to the fit: the windows hold u from the same clock)
+    # the independent check, steady turns in their linear range (a negative delay is left to the fit)
     windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
     ss = in_linear_range(windows, L, LINEAR_TYRE, linear_range["value"], fixed_gain=None if command else 1.0)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
