@@ -1,5 +1,5 @@
 """Identify and diagnose every real vehicle log in ../shared/realdata:
-``python3 benchmarks/real_vehicles.py [--out DIR]``.
+``python3 benchmarks/real_vehicles.py [--out DIR] [--only NAME]``.
 
 F1TENTH FrictionMaps DS1..DS5 (a 1:10 car driven by hand) and the AutoKoopman step runs (the same
 kind of car, 41 designed 3 s runs laid end to end), read by the recording importer (as ``convert``
@@ -11,7 +11,8 @@ from steady states, the delay from the fit and from a cross-correlation, the gyr
 and from the GNSS course), the physical checks (beta, vy, a_y when the log has them), the verdict
 with its status and statement, whether it is plausible for the vehicle (a value its class has, an
 understeer gradient concluded, the study's wheelbase, nothing on a bound), what was not judged, and
-the time taken; and the yaw-rate misfit of
+the time taken; the second method's steady linear turns (steady_turn_gains: the yaw rate on
+v tan(delta) / L per speed band, numpy only) beside the wheelbase diagnose reads from them; and the yaw-rate misfit of
 identify's model and of the diagnosis's on the same unseen stretches (identify's held-out segments
 inside the diagnosis's held-out part), and what the diagnosis held out (the last 40 %, or every third
 10 s when the last part is driven beyond the first's conditions).
@@ -58,26 +59,54 @@ def both(comparisons: list[dict], quantity: str, f: str = "{:.3g}") -> str:
 
 def plausible(res: dict) -> str:
     """Whether what the diagnosis concluded fits the declared vehicle (diagnosis.plausibility): 'yes',
-    or each objection: a judged effect's value no vehicle of its class has, an understeer gradient
-    not concluded, the log's turns not the study's vehicle, a baseline value on its bound."""
+    or each objection: a judged effect's value no vehicle of its class has, the log's turns not the
+    study's vehicle, a baseline value on its bound; what it withheld and why (an understeer gradient
+    not identifiable, or beyond the class and undecided) follows 'yes' as 'withheld'."""
     if res["verdict"] == "cannot decide":
         return "nothing concluded"
     said = [f"{e['id']}: {e['judgement'][0]}" for e in res.get("effects", []) if e.get("judgement")]
-    if res.get("understeer_note"):
-        said.append("understeer gradient not concluded: " + res["understeer_note"])
     if (res.get("log_vehicle") or {}).get("mismatch"):
         said.append("wheelbase: " + res["log_vehicle"]["mismatch"].split(": either")[0])
     said += [f"{r['name']} on its {r['at_bound']} bound" for r in res.get("baseline_refit_summary") or [] if r["at_bound"]]
-    return "yes" if not said else "no: " + "; ".join(said)
+    withheld = f"; withheld: understeer gradient, {res['understeer_note']}" if res.get("understeer_note") else ""
+    return ("yes" + withheld) if not said else "no: " + "; ".join(said) + withheld
+
+
+STEADY, LINEAR = 0.5, 2.0       # s the input is held; m/s2 of kinematic lateral acceleration
+
+
+def steady_turn_gains(log, L: float) -> str:
+    """The second method (numpy only): in each third of the moving speeds, the yaw rate regressed on
+    v tan(delta) / L through the origin over steady turns (the input held within 0.02 rad + 10 % for
+    STEADY s, |delta| > 0.03 rad, v^2 tan|delta| / L under LINEAR): the steering map's gain times
+    L over the log's wheelbase, at low speed; its fall with speed is understeer."""
+    import numpy as np
+
+    t, v, d, r = (log[c].to_numpy(float) for c in ("t", "v", "delta_cmd", "yaw_rate"))
+    n = max(2, int(round(STEADY / float(np.median(np.diff(t))))))
+    held = np.array([np.ptp(d[k - n + 1:k + 1]) if k >= n - 1 else np.inf for k in range(len(d))])
+    ok = np.isfinite(v) & np.isfinite(d) & np.isfinite(r) & (v > 0.2)
+    sel = ok & (held <= 0.02 + 0.1 * np.abs(d)) & (np.abs(d) > 0.03) & (v ** 2 * np.tan(np.abs(d)) / L < LINEAR)
+    if sel.sum() < 15:
+        return f"{sel.sum()} steady linear samples: none to read"
+    out = []
+    for lo, hi in zip(*(lambda e: (e[:-1], e[1:]))(np.percentile(v[sel], [0, 33, 67, 100]))):
+        m = sel & (v >= lo) & (v <= hi)
+        x = v[m] * np.tan(d[m]) / L
+        if m.sum() >= 5:
+            out.append(f"{np.median(v[m]):.2g} m/s: {float(x @ r[m] / (x @ x)):.2f} ({m.sum()})")
+    return "; ".join(out)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", type=Path, default=None, help="keep each log's outputs here")
+    ap.add_argument("--only", default="", help="the logs whose name contains this (DS3, AutoKoopman)")
     args = ap.parse_args()
     from agrobot.diagnosis.pipeline import diagnose
     from agrobot.identification.from_log import longest_stretch
     from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.identification.vehicle import Vehicle
     from agrobot.orchestrator.errors import InputError
     from agrobot.orchestrator.study import Study
 
@@ -87,6 +116,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         base = args.out or Path(tmp)
         for k, (name, log) in enumerate(logs()):
+            if args.only not in name:
+                continue
             start = time.perf_counter()
             seconds = float(log["t"].iloc[-1] - log["t"].iloc[0])
             piece, _ = longest_stretch(log)         # what diagnose judges of a log with clock gaps
@@ -129,6 +160,10 @@ def main() -> None:
             else:
                 verdict += ": " + res.get("verdict_statement", "")
             not_judged = "; ".join(f"{s}: {w.removeprefix('not judged: ')}" for s, w in res.get("not_judged", {}).items())
+            mine = res.get("log_vehicle") or {}
+            ident["steady linear turns: gain per speed (samples); log's wheelbase [m]"] = (
+                steady_turn_gains(piece, Vehicle.of(study).wheelbase) + "; L "
+                + (f"{mine['wheelbase']:.3g}" if mine.get("wheelbase") else f"none ({mine.get('why', '-')})"))
             rows.append({"vehicle": name, "seconds": f"{seconds:.0f} (diagnosed {piece['t'].iloc[-1]:.0f})", **ident,
                          "verdict": verdict, "plausible for the vehicle": plausible(res), "not judged": not_judged or "-",
                          "time [s]": f"{time.perf_counter() - start:.0f}"})

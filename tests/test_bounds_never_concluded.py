@@ -49,4 +49,20 @@ def test_the_baseline_refit_does_not_take_up_a_steering_gain_as_tyres():
     fit, _ = fit_baseline(replay)
     truth_scale = truth["C_r"] / baseline.tractor.C_r
     assert abs(fit.values["cornering_rear_scale"] / truth_scale - 1.0) < 0.25
-    assert replay.held_uncertain["cornering_rear_scale"].startswith("implausible for the vehicle")
+    assert replay.held_uncertain["cornering_rear_scale"].kind == "implausible for the vehicle"
+
+
+def test_the_refits_holds_carry_their_rule_and_numbers_as_data():
+    """A hold whose numbers hold a colon is grouped by its rule, not by where a string splits, and
+    the summary is JSON as diagnosis.json writes it."""
+    import json
+
+    from agrobot.diagnosis.baseline import Hold
+
+    why = {"cornering_front_scale": Hold("implausible for the vehicle", "at 0.5 and 2, K 30 deg/g: a steering map"),
+           "cornering_rear_scale": Hold("implausible for the vehicle", "at 0.5 and 2, K 30 deg/g: a steering map")}
+    rows = refit_summary({k: 1.0 for k in why}, {k: 1.0 for k in why}, [], why)
+    json.dumps(rows)
+    assert rows[0]["held"] == {"kind": "implausible for the vehicle", "detail": "at 0.5 and 2, K 30 deg/g: a steering map"}
+    assert ("held at the study's (implausible for the vehicle: at 0.5 and 2, K 30 deg/g: a steering map): "
+            "cornering_front_scale, cornering_rear_scale") in refit_statement(rows)

@@ -122,7 +122,7 @@ def test_one_fit_result_merges_and_has_no_interval_for_what_the_residuals_do_not
     fit = estimation.FitResult({"a": coef[0], "b": coef[1], "c": 0.3}, free, cov, {"y": float(r @ r)}, {"y": n},
                                {"y": float(n)})
     assert fit.std("c") == np.inf and fit.std("a") == pytest.approx(0.1 / np.sqrt(n), rel=0.15)
-    assert set(unpinned(fit)) == {"c"} and "do not depend" in unpinned(fit)["c"]
+    assert set(unpinned(fit)) == {"c"} and "do not depend" in unpinned(fit)["c"].detail
     part = estimation.FitResult({**fit.values, "c": 0.7}, free[2:], np.array([[0.01]]), {"z": 1.0}, {"z": 10},
                                 {"z": 5.0})
     both = fit.merged(part)

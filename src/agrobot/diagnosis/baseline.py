@@ -23,7 +23,7 @@ from agrobot.identification.vehicle import Vehicle
 
 from .catalogue import CATALOGUE
 from .effect import BaselineStudy, Parameter
-from .plausibility import KINEMATIC, slip_share, understeer
+from .plausibility import KINEMATIC, slip_share, study_understeer, understeer
 
 ROLES = ("steering", "yaw_plant", "gps", "gyro")       # the first two are required
 
@@ -83,11 +83,23 @@ def replay_slip_share(replay) -> float | None:
     return slip_share(replay.baseline.tractor, lateral, steering)
 
 
-KINEMATIC_HELD = "the kinematic regime: not identifiable at these speeds"
+@dataclass(frozen=True)
+class Hold:
+    """Why the baseline refit holds a parameter at the study's: ``kind`` (the rule) and ``detail``
+    (its numbers); refit_statement groups the parameters held by one kind."""
+
+    kind: str
+    detail: str
+
+    def as_dict(self) -> dict[str, str]:
+        return {"kind": self.kind, "detail": self.detail}
+
+
+KINEMATIC_HELD = Hold("the kinematic regime", "not identifiable at these speeds")
 PINNED = 0.5        # a refitted value the log pins: its 95 % interval within +-50 % of it
 
 
-def held_tyres(replay) -> dict[str, str]:
+def held_tyres(replay) -> dict[str, Hold]:
     """{name: why} of the tyre scales the baseline refit holds at the study's: all of them on a log
     in the kinematic regime (slip_share below KINEMATIC: the yaw rate does not fix them, and freed
     they would take up a steering map's error as oversteer), none otherwise."""
@@ -95,7 +107,7 @@ def held_tyres(replay) -> dict[str, str]:
     return dict.fromkeys(TYRE_SCALES, KINEMATIC_HELD) if share is not None and share < KINEMATIC else {}
 
 
-def unpinned(fit) -> dict[str, str]:
+def unpinned(fit) -> dict[str, Hold]:
     """{name: why} of a refit's free parameters the log does not pin (estimation's covariance rule):
     a 95 % interval wider than PINNED x the value, none (on its bound) or infinite (the residuals do
     not depend on it). Moved, such a value is no estimate but whatever else the model lacks (a
@@ -105,12 +117,12 @@ def unpinned(fit) -> dict[str, str]:
         value, half = fit.values[p.name], Z95 * fit.std(p.name)
         if half <= PINNED * abs(value):
             continue
-        out[p.name] = ("not pinned by the log: " + (f"95 % interval +-{half:.2g} about {value:.3g}" if math.isfinite(half)
-                       else "it ended on its bound" if math.isnan(half) else "the residuals do not depend on it"))
+        out[p.name] = Hold("not pinned by the log", f"95 % interval +-{half:.2g} about {value:.3g}" if math.isfinite(half)
+                           else "it ended on its bound" if math.isnan(half) else "the residuals do not depend on it")
     return out
 
 
-def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, str]:
+def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, Hold]:
     """{name: why} of the ``free`` cornering scales when with ``values`` they give the study's vehicle
     an understeer gradient K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have
     (plausibility.understeer): a steering map's gain or a wrong wheelbase taken up as tyres; else
@@ -120,9 +132,9 @@ def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, str]:
     if not names:
         return {}
     sf, sr = values["cornering_front_scale"], values["cornering_rear_scale"]
-    K = p.m / (p.l_f + p.l_r) * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
+    K = study_understeer(p, sf, sr)
     why = understeer(K, replay.baseline.vehicle, None)
-    return dict.fromkeys(names, f"implausible for the vehicle: at {sf:.3g} and {sr:.3g}, {why}") if why else {}
+    return dict.fromkeys(names, Hold("implausible for the vehicle", f"at {sf:.3g} and {sr:.3g}, {why}")) if why else {}
 
 
 def refit_summary(start: dict[str, float], fitted: dict[str, float], params, held=()) -> list[dict]:
@@ -141,7 +153,7 @@ def refit_summary(start: dict[str, float], fitted: dict[str, float], params, hel
     return out + [{"name": n, "study": float(start[n]), "value": float(fitted[n]),
                    "unit": by_name[n].unit if n in by_name else "1", "moved": False,
                    "bounds": [by_name[n].lower, by_name[n].upper] if n in by_name else [], "at_bound": None,
-                   "held": w} for n, w in why.items()]
+                   "held": w.as_dict()} for n, w in why.items()]
 
 
 def refit_statement(summary: list[dict]) -> str:
@@ -149,7 +161,7 @@ def refit_statement(summary: list[dict]) -> str:
     moved = ", ".join(f"{r['name']} {r['study']:.3g} -> {r['value']:.3g}" for r in summary if r["moved"]) or "none"
     edge = [r for r in summary if r["at_bound"]]
     text = f"the baseline refit moved {moved}"
-    held = [(r["name"], *r["held"].split(": ", 1)) for r in summary if r.get("held")]
+    held = [(r["name"], r["held"]["kind"], r["held"]["detail"]) for r in summary if r.get("held")]
     for kind in dict.fromkeys(k for _, k, _ in held):
         mine = [(n, d) for n, k, d in held if k == kind]
         if len({d for _, d in mine}) == 1:

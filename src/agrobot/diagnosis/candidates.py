@@ -594,7 +594,8 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
     (``replay.held_in_selection``: only the kinematic regime's)."""
     values = dict(replay.baseline.values)
     sigma = {s: 1.0 for s in replay.stages}
-    replay.widened_uncertain, replay.held_uncertain = {}, held_tyres(replay)
+    kinematic_held = held_tyres(replay)
+    replay.widened_uncertain, replay.held_uncertain = {}, dict(kinematic_held)
     replay.__dict__.pop("held_in_selection", None)
     for s in replay.stages:
         start = values
@@ -613,7 +614,7 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
         for s in replay.stages:
             sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0
     # the selection frees again what only this refit held: an effect in the model can pin it
-    replay.held_in_selection = held_tyres(replay)
+    replay.held_in_selection = kinematic_held
     return fit, sigma
 
 

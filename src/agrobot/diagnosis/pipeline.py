@@ -32,7 +32,7 @@ from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import kinematic, understeer
+from .plausibility import kinematic, steering_gain_check, study_understeer, understeer
 from .study_fit import study_check
 from .verdict import audit_findings, conclude
 
@@ -229,7 +229,8 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     sat = identified.get("tyre_saturation")
     if sat and "tyre_saturation" not in ids:
         tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
-        why = "; ".join(tried.reasons) if tried else "it was not fitted"
+        why = ("; ".join(tried.reasons) or f"supported on its own (dBIC {tried.delta_bic:.1f}, held-out gain "
+               f"{100 * tried.gain:.0f} %) but not kept beside the effects chosen") if tried else "it was not fitted"
         out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
                    f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
                    f"{held_part}, does not: {why}")
@@ -456,7 +457,7 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
     (``identified_vehicle``)."""
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
-                                                  study_name)
+                                                  study_name, study_understeer(baseline.tractor))
     if mismatch:
         mismatch += " (no --study given: the default study was used)" if default_study else ""
         say(f"warning: {mismatch}")
@@ -511,12 +512,16 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     mine = result.get("log_vehicle") or {}
     mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
     K = identified.get("understeer_gradient") if identified else None
-    result["understeer_note"] = understeer(K["value"], baseline.vehicle, share) if K else kinematic(share)
+    result["understeer_note"] = understeer(K, baseline.vehicle, share, mine) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
                        before=[x for x in (mismatch, kinematic(share)) if x])
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
+    if (gain := steering_gain_check(effects, mine)) is not None:
+        verdict["bullets"].append(gain[0])
+        if not gain[1] and verdict["id"] == "steering_gain" and verdict["status"] == "conclusive":
+            verdict["status"], verdict["statement"] = "inconclusive", verdict["statement"] + "; but " + gain[0]
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     for c in result.get("identified_vehicle", {}).get("comparisons", []):

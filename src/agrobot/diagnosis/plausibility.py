@@ -105,6 +105,12 @@ def slope(phi: float, vehicle: Vehicle) -> list[str]:
             f"something else (a steering offset or a left/right asymmetry of the steering map, a gyro bias)"]
 
 
+def study_understeer(p, front_scale: float = 1.0, rear_scale: float = 1.0) -> float:
+    """The understeer gradient K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) [rad/(m/s2)] of yaw-plant
+    parameters ``p`` with its cornering stiffnesses scaled by s_f, s_r."""
+    return p.m / (p.l_f + p.l_r) * (p.l_r / (front_scale * p.C_f) - p.l_f / (rear_scale * p.C_r))
+
+
 def slip_share(p, lateral_p99: float, steering_p99: float) -> float:
     """The largest axle slip angle the study's tyres take at the log's lateral acceleration,
     alpha_f = m a_y l_r / (L C_f), alpha_r = m a_y l_f / (L C_r), over the log's steering angle (99th
@@ -125,16 +131,55 @@ def kinematic(share: float | None) -> str | None:
             f"speeds (held at the study's)")
 
 
-def understeer(K: float, vehicle: Vehicle, share: float | None) -> str | None:
+def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = None) -> str | None:
     """Why an understeer gradient K [rad/(m/s2)] is not concluded (None: it is one this class has):
-    a log in the kinematic regime (``share``: slip_share) cannot tell it; outside the class's range
-    (UNDERSTEER) it is a steering map or a wheelbase, not tyres."""
+    a log in the kinematic regime (``share``: slip_share) cannot tell it; ``K`` given as identify's
+    quantity (a dict) that is not identifiable, or whose 95 % interval covers the class's whole
+    range (UNDERSTEER), is not pinned; outside the class's range the log's steady linear turns
+    (``turns``: study_fit.log_vehicle, with the study's wheelbase) tell a steering map's gain from
+    the tyres, and without them nothing is decided."""
     if kinematic(share):
         return "not identifiable at these speeds: " + kinematic(share)
     lo, hi = UNDERSTEER.get(vehicle.kind, UNDERSTEER[None])
+    kind, deg = vehicle.kind or "vehicle", lambda k: math.degrees(k) * 9.81      # noqa: E731
+    if isinstance(K, Mapping):
+        if K.get("withheld"):       # identify's dynamic and steady-state K disagree: its note has both and why
+            return K["note"]
+        if not K.get("identifiable", True):
+            return "not identifiable from this log: " + K.get("note", "").removeprefix("not identifiable from this log: ")
+        a, b = K["interval"]
+        if a <= lo and b >= hi:
+            return (f"not identifiable from this log: its 95 % interval [{deg(a):.3g}, {deg(b):.3g}] deg/g covers "
+                    f"the whole range of a {kind} ({deg(lo):.2g} to {deg(hi):.2g} deg/g)")
+        K = K["value"]
     if lo <= K <= hi:
         return None
-    deg_g = math.degrees(K) * 9.81
-    return (f"an understeer gradient of {deg_g:.3g} deg/g is not of a {vehicle.kind or 'vehicle'} "
-            f"({math.degrees(lo) * 9.81:.2g} to {math.degrees(hi) * 9.81:.2g} deg/g): a steering map off in gain or "
-            f"asymmetric, or a wrong wheelbase, reads as tyres")
+    text = f"an understeer gradient of {deg(K):.3g} deg/g is not of a {kind} ({deg(lo):.2g} to {deg(hi):.2g} deg/g)"
+    if turns is None:
+        return text + ": a steering map off in gain or asymmetric, or tyres past their linear range, read so"
+    if not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return text + ": cannot decide whether a steering map's gain or the tyres: " + turns.get("why", "-")
+    ratio = turns["wheelbase"] / turns["study_wheelbase"]
+    said = (f"the log's steady turns under {turns['linear_lateral']:g} m/s2 give a wheelbase of "
+            f"{turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m ({100 * (ratio - 1):+.0f} %)")
+    if abs(math.log(ratio)) > math.log(1.1):
+        return f"{text}: a steering map's gain reads as tyres: {said}, the wheels turning {1 / ratio:.2g} x the input"
+    return (f"{text}: cannot decide: {said}, so the steering map's gain is not the cause; the fit spans lateral "
+            f"accelerations up to {turns['lateral_acceleration_p99']:.2g} m/s2 (99th percentile), where tyres past "
+            f"their linear range read as understeer")
+
+
+def steering_gain_check(effects: list[dict], turns: dict | None) -> tuple[str, bool] | None:
+    """(a bullet, whether they agree) comparing a fitted steering_gain k with the gain the log's
+    steady linear turns show, L_study / L_turns (``turns``: study_fit.log_vehicle); within 10 % they
+    agree. None: no steering_gain judged or no such turns."""
+    e = next((e for e in effects if e["id"] == "steering_gain"), None)
+    if e is None or not turns or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return None
+    k, steady = e["parameters"]["steering_gain"], turns["study_wheelbase"] / turns["wheelbase"]
+    agree = abs(math.log(k / steady)) <= math.log(1.1)
+    text = (f"the steering gain {k:.3g} against the log's steady turns under {turns['linear_lateral']:g} m/s2, which "
+            f"turn as a gain of {steady:.3g} would (wheelbase {turns['wheelbase']:.3g} m against the study's "
+            f"{turns['study_wheelbase']:.3g} m): ")
+    return text + ("they agree" if agree else "they disagree: the fitted gain also takes up what the model lacks in "
+                   "harder turns (tyres, understeer); the steady linear turns' is the steering map's"), agree

@@ -1,6 +1,6 @@
-"""Is the study this log's vehicle? The log's own kinematics give its wheelbase, L = v delta / r
-in gentle steady turning (|a_y| small, the kinematic yaw rate), and its speed and steering
-ranges; they are compared with the study's wheelbase, and with the shipped studies, so that a log
+"""Is the study this log's vehicle? The log's own kinematics give its wheelbase, L = v tan(delta) / r
+- K v^2 in steady turning inside the tyres' linear range (selected on the steering input as well as
+the yaw rate: a saturating tyre's turns would lengthen it), and its speed and steering ranges; they are compared with the study's wheelbase, and with the shipped studies, so that a log
 diagnosed against the default study (a tractor) says when it comes from another vehicle.
 """
 from __future__ import annotations
@@ -8,45 +8,80 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from agrobot.identification.ordinary_driving import study_plant
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 CANDIDATES = ("figure8.toml", "passenger_car.toml", "f1tenth.toml")
+STEADY = 0.5                 # s the steering input is held before a turn's sample counts as steady
+LINEAR_LATERAL = 2.0         # m/s2 (0.2 g): a steady turn below it is in any tyre's linear range
+MIN_TURNS = 15               # samples of steady linear turning needed to read a wheelbase
 MISMATCH = math.log(1.3)     # the log's turns and the study's wheelbase more than 30 % apart: named before any verdict
 SIZE = math.log(1.3)         # a shipped study is suggested only for a vehicle of its size: within 30 % of the log's
 
 
-def log_vehicle(frame) -> dict | None:
-    """{wheelbase, speed_range, steering_range} of the log's vehicle, None when the log has no
-    gentle turns to read a wheelbase from (needs v, yaw_rate and delta or delta_cmd)."""
+def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
+    """The log's steady turns in the tyres' linear range (None: no v, yaw_rate and delta or
+    delta_cmd, or under 50 moving samples): samples whose steering input has stayed within
+    0.02 rad + 10 % of itself for STEADY s (the yaw rate has settled), |input| above 0.03 rad, turning
+    the input's way, with both the measured |v r| and the kinematic v^2 tan|delta| / L (L: the
+    study's ``wheelbase`` when given) under LINEAR_LATERAL. Selected on the input as well as the
+    yaw rate: a tyre that saturates turns less, and turns selected on the yaw rate alone lengthen
+    the wheelbase read from them. Each gives L_i = v tan|delta| / |r| (= L + K v^2 in steady
+    cornering). Returns {from, v, L_i, moving speeds, steering}."""
     steer = "delta" if "delta" in frame else "delta_cmd" if "delta_cmd" in frame else None
-    if steer is None or "v" not in frame or "yaw_rate" not in frame:
+    if steer is None or "v" not in frame or "yaw_rate" not in frame or "t" not in frame:
         return None
-    v, d, r = (frame[c].to_numpy(float) for c in ("v", steer, "yaw_rate"))
+    t, v, d, r = (frame[c].to_numpy(float) for c in ("t", "v", steer, "yaw_rate"))
     ok = np.isfinite(v) & np.isfinite(d) & np.isfinite(r)
-    v, d, r = v[ok], d[ok], r[ok]
-    moving = v > max(0.2, 0.1 * float(np.percentile(v, 90))) if len(v) else np.zeros(0, bool)
+    moving = ok & (v > max(0.2, 0.1 * float(np.percentile(v[ok], 90)))) if ok.any() else ok
     if moving.sum() < 50:
         return None
-    a_y = np.abs(v * r)
-    gentle = moving & (np.abs(d) > 0.02) & (np.abs(r) > 0.02) & (a_y < max(1.0, np.percentile(a_y[moving], 50)))
-    gentle &= np.sign(d) == np.sign(r)
-    if gentle.sum() < 30:
+    n = max(2, int(round(STEADY / float(np.median(np.diff(t))))))
+    held = sliding_window_view(np.r_[np.full(n - 1, np.nan), d], n)
+    with np.errstate(invalid="ignore"):
+        spread = np.nanmax(held, axis=1) - np.nanmin(held, axis=1)
+        kin = v ** 2 * np.tan(np.abs(d)) / wheelbase if wheelbase else np.zeros_like(v)
+        sel = (moving & (spread <= 0.02 + 0.1 * np.abs(d)) & (np.abs(d) > 0.03) & (np.sign(d) == np.sign(r))
+               & (np.abs(r) > 0.01) & (np.abs(v * r) < LINEAR_LATERAL) & (kin < LINEAR_LATERAL))
+    return {"from": steer, "v": v[sel], "L_i": v[sel] * np.tan(np.abs(d[sel])) / np.abs(r[sel]),
+            "moving_speed": v[moving], "steering": np.abs(d[moving]), "lateral": np.abs(v * r)[moving]}
+
+
+def log_vehicle(frame, wheelbase: float | None = None, understeer: float = 0.0) -> dict | None:
+    """{wheelbase, speed_range, steering_range, ...} of the log's vehicle from its steady turns
+    (steady_turns; ``wheelbase``, ``understeer``: the study's L and K): the wheelbase that with
+    the study's K gives each turn's L_i = L + K v^2, the median over the turns; ``wheelbase`` None
+    with ``why`` when fewer than MIN_TURNS samples are steady linear turns. None: no turning
+    channels or too little driving."""
+    turns = steady_turns(frame, wheelbase)
+    if turns is None:
         return None
-    L = float(np.median(v[gentle] * np.tan(np.abs(d[gentle])) / np.abs(r[gentle])))
-    return {"wheelbase": L, "from": steer, "samples": int(gentle.sum()),
-            "lateral_acceleration_p99": float(np.percentile(a_y[moving], 99)),
-            "speed_range": [float(np.percentile(v[moving], 10)), float(np.percentile(v[moving], 90))],
-            "steering_range": float(np.percentile(np.abs(d[moving]), 99))}
+    v = turns["moving_speed"]
+    out = {"from": turns["from"], "samples": int(len(turns["L_i"])),
+           "lateral_acceleration_p99": float(np.percentile(turns["lateral"], 99)),
+           "speed_range": [float(np.percentile(v, 10)), float(np.percentile(v, 90))],
+           "steering_range": float(np.percentile(turns["steering"], 99))}
+    if len(turns["L_i"]) < MIN_TURNS:
+        return {**out, "wheelbase": None,
+                "why": (f"{len(turns['L_i'])} samples of steady turning under {LINEAR_LATERAL:g} m/s2 (need "
+                        f"{MIN_TURNS}): the log's turns are too brief or too hard (tyres past their linear range) "
+                        f"to tell its wheelbase")}
+    wheel = np.median(turns["L_i"] - understeer * turns["v"] ** 2)
+    return {**out, "wheelbase": float(wheel), "turn_speeds": [float(np.percentile(turns["v"], 10)),
+                                                             float(np.percentile(turns["v"], 90))]}
 
 
-def study_check(frame, wheelbase: float, study_name: str) -> tuple[dict | None, str | None]:
+def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.0) -> tuple[dict | None, str | None]:
     """(the log's vehicle, a warning naming the shipped study that fits better) when its
-    wheelbase is off the study's by more than MISMATCH in log ratio; (vehicle, None) otherwise."""
-    mine = log_vehicle(frame)
-    if mine is None or not mine["wheelbase"] > 0:
+    wheelbase is off the study's by more than MISMATCH in log ratio; (vehicle, None) otherwise.
+    ``understeer``: the study's K [rad/(m/s2)], allowed for in each turn."""
+    mine = log_vehicle(frame, wheelbase, understeer)
+    if mine is not None:
+        mine |= {"study_wheelbase": float(wheelbase), "linear_lateral": LINEAR_LATERAL}
+    if mine is None or not (mine["wheelbase"] or 0.0) > 0:
         return mine, None
     off = abs(math.log(mine["wheelbase"] / wheelbase))
     if off <= MISMATCH:
@@ -58,8 +93,9 @@ def study_check(frame, wheelbase: float, study_name: str) -> tuple[dict | None, 
     best = min(fits)
     ratio = wheelbase / mine["wheelbase"]
     text = (f"the log's turns are not the study's vehicle: wheelbase {mine['wheelbase']:.3g} m from "
-            f"v tan({mine['from']}) / yaw_rate in gentle turns (an effective one, which understeer and a steering "
-            f"map's gain lengthen; speeds {mine['speed_range'][0]:.3g}-{mine['speed_range'][1]:.3g} m/s, "
+            f"v tan({mine['from']}) / yaw_rate in {mine['samples']} samples of steady turns under "
+            f"{LINEAR_LATERAL:g} m/s2 (at {mine['turn_speeds'][0]:.2g}-{mine['turn_speeds'][1]:.2g} m/s, the study's "
+            f"understeer allowed for; a steering map's gain lengthens it; the log's speeds {mine['speed_range'][0]:.3g}-{mine['speed_range'][1]:.3g} m/s, "
             f"|{mine['from']}| up to {math.degrees(mine['steering_range']):.3g} deg) against the study's {study_name} "
             f"{wheelbase:.3g} m ({100 * (ratio - 1):+.0f} %): either the study is another vehicle, or its steering "
             f"map is off (the wheels turn {ratio:.2g} x the angle the log says; the steering_gain the verdict "

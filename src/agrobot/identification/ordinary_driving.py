@@ -34,7 +34,7 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
 
-from .comparisons import course_bias, pair
+from .comparisons import course_bias, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict
@@ -43,7 +43,7 @@ from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawMode
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
-from .steady_state import regression, steady_windows
+from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
@@ -221,17 +221,17 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
     final, params_json, stiff = _final_parameters(log, fits, held, saturation)
     pred = held.sims[1] if saturation else held.sims[0]
-    K, K_sd, understeer, char = _understeer(final, fits.free, L)
-    g = final.values.get("steer_gain", 1.0)
-    g_sd = final.std("steer_gain") if command else 0.0
+    K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
+    g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
     linear_range = _linear_range(saturation, nl, log, min_speed)
-    # the independent check: steady-state regression inside the linear range
-    # (a clock offset, a negative delay, is left to the fit: the windows hold u from the same clock)
+    # the independent check, steady turns in their linear range (a negative delay is left to the fit)
     windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
-    ss = regression(windows, L, max_lateral=linear_range["value"], fixed_gain=None if command else 1.0)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, linear_range["value"], fixed_gain=None if command else 1.0)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
-                                        params_json.get("gyro_bias"), linear_range, L, min_speed)
+                                        params_json.get("gyro_bias"), linear_range, L, min_speed,
+                                        _low_range_understeer(fits, saturation))
+    understeer, char = withheld_understeer(understeer, char, comparisons)
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
@@ -508,7 +508,9 @@ def _judge_saturation(log: DrivingLog, fits: _Fits, min_gain: float) -> _HeldOut
         reasons.append(f"dBIC {dbic:.1f} is not below -10")
     if gain_top < min_gain:
         reasons.append(f"held-out RMS at high |a_y| falls by {100 * gain_top:.1f} % < {100 * min_gain:.0f} %")
-    if nl.at_bound(mu_param):
+    # on its upper bound (the class's highest) the log reaches the curve's bend but not its peak: the
+    # saturation stands with the friction "at least" that; on its lower bound it is no estimate
+    if nl.at_bound(mu_param) == "lower" or (nl.at_bound(mu_param) and reasons):
         reasons.append(f"the friction ended on its {nl.at_bound(mu_param)} bound: not identifiable from this log")
     return _HeldOut(r_test, sims, a_test, y, res_lin, res_nl, res_low, hi_q, growth, gain_top, gain_all, dbic, reasons)
 
@@ -601,17 +603,33 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
     return params_json, stiff
 
 
-def _understeer(final: FitResult, free: list[Parameter], L: float):
+def one_speed(log: DrivingLog, min_speed: float) -> str | None:
+    """Why a fitted steering gain g and an understeer gradient K are not told apart (None: they
+    are): the steady yaw rate g v / (L + K v^2) of turns at one speed (the 90th percentile of the
+    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio."""
+    turning = (log.v >= min_speed) & (np.abs(log.u) > 0.03)
+    if turning.sum() < 10:
+        return None
+    lo, hi = np.percentile(log.v[turning], [10, 90])
+    if hi >= 1.5 * lo:
+        return None
+    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain and an "
+            f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
+
+
+def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
-    its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|)."""
+    its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
+    log cannot tell K from a fitted steering gain (one_speed), then K is not identifiable."""
     cf, cr = final.values["c_f"], final.values["c_r"]
     K = understeer_gradient(cf, cr)
     K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
-    understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd)),
-                           deg_per_g=math.degrees(K) * GRAVITY)
+    understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd) and not alike),
+                           deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
+                                                                    if alike else {}))
     if K > 0:
         vch = math.sqrt(L / K)
         char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
@@ -624,6 +642,16 @@ def _understeer(final: FitResult, free: list[Parameter], L: float):
         char = {"kind": "neutral steer", "value": math.inf, "std": math.inf, "unit": "m/s"}
     char["interval"] = [char["value"] - Z95 * char["std"], char["value"] + Z95 * char["std"]]
     return K, K_sd, understeer, char
+
+
+def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
+    """(K, std) of the linear model fitted where |a_y| <= LINEAR_TYRE (None: no such separate fit,
+    or the tyre-saturation model is the final one, already linear there)."""
+    low = fits.linear_low
+    if low is fits.linear or saturation:
+        return None
+    cf, cr = low.values["c_f"], low.values["c_r"]
+    return understeer_gradient(cf, cr), low.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
 
 
 def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: float, g: float, g_sd: float) -> list[dict]:
@@ -661,14 +689,16 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
     """The tyre-saturation verdict: found or why not, dBIC, held-out gains, the misfit's growth at
     high |a_y|, the fitted friction and shape with their intervals."""
+    params = {q.name: _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper), nl.at_bound(q),
+                                meaning=q.meaning) for q in free_nl if q.name in ("friction", "shape")}
+    mu = params["friction"]
+    if saturation and mu.get("note") and "upper bound" in mu["note"]:
+        mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "
+               f"turns reach the tyres' bend but not their peak force"}
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
             "found": saturation, "why_not": held.reasons, "delta_bic": held.dbic,
             "held_out_gain": held.gain_all, "held_out_gain_high_lateral": held.gain_top,
-            "misfit_at_high_lateral_t": held.growth, "high_lateral_from": held.hi_q,
-            "parameters": {k: params_json_nl for k, params_json_nl in
-                           ((q.name, _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper),
-                                               nl.at_bound(q), meaning=q.meaning)) for q in free_nl
-                            if q.name in ("friction", "shape"))}}
+            "misfit_at_high_lateral_t": held.growth, "high_lateral_from": held.hi_q, "parameters": params}
 
 
 def _residual_bins(held: _HeldOut) -> dict:
@@ -731,19 +761,16 @@ def physical_checks(frame, log, model, values: dict, segs) -> dict:
 
 
 def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q, bias_q, linear_range,
-                          L: float, min_speed: float) -> list[dict]:
-    """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states),
+                          L: float, min_speed: float, low=None) -> list[dict]:
+    """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states in
+    their linear range, understeer_pair; ``low``: the dynamic fit's K where |a_y| <= LINEAR_TYRE),
     the delay (fit / cross-correlation of the gyro against the fitted model on the held-out
     segments: a timing the model misses shows as a lag), the gyro bias (fit / GNSS course)."""
     out = []
-    if ss and "understeer_gradient" in ss.as_dict():
-        k_ss = ss.as_dict()["understeer_gradient"]
-        out.append(pair("understeer gradient K", "rad/(m/s2)", ("dynamic fit", understeer["value"], understeer["std"]),
-                        ("steady-state regression", k_ss["value"], k_ss["std"]),
-                        f"the steady states lie inside the linear range (|a_y| <= {linear_range['value']:.3g} m/s2) while "
-                        f"the dynamic fit spans every |a_y|: a model structure is missing over part of the |a_y| range "
-                        f"(tyre saturation, a stiffness varying with speed, a steering ratio varying with the angle), "
-                        f"or a timing the dynamic fit cannot hold (the steering channels on another clock than the gyro)"))
+    if ss:
+        moving = np.abs(log.a_y[log.v >= min_speed])
+        out.append(understeer_pair(understeer, ss, linear_range, float(np.percentile(moving, 99)) if len(moving) else 0.0,
+                                   low))
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     if pieces and math.isfinite(delay_q["value"]):
@@ -789,10 +816,13 @@ def summary(report: dict) -> str:
     if report.get("final_model") == "skid_steer":
         return "\n".join(lines + skid_steer.summary_lines(report))
     K = report["understeer_gradient"]
-    lines.append(f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)"
-                 + ("" if K["identifiable"] else "; not identifiable from this log"))
-    ch = report["characteristic_speed"]
-    lines.append(f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s")
+    if K["identifiable"]:
+        ch = report["characteristic_speed"]
+        lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)",
+                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s"]
+    else:       # neither K nor the speed it sets is printed as a result
+        lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "
+                     f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
@@ -802,7 +832,7 @@ def summary(report: dict) -> str:
     t = report["tyre_saturation"]
     if t["found"]:
         mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
-        lines.append(f"tyre saturation found: friction {q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+        lines.append(f"tyre saturation found: friction {mu['note'] if mu.get('at_least') else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
                      f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
                      f"{t['high_lateral_from']:.2g} m/s2")
     else:
@@ -813,11 +843,12 @@ def summary(report: dict) -> str:
     if "understeer_gradient" in ss:
         lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
                      f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
-                     f"{ss['steer_offset']['value']:.3g} rad")
+                     f"{ss['steer_offset']['value']:.3g} rad; linear range {ss['linear_limit']}"
+                     + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else ""))
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
-    for c in report.get("comparisons", []):
+    for c in (c for c in report.get("comparisons", []) if not (c["quantity"] == "understeer gradient K" and K.get("withheld"))):
         lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
                                                       for m, e in c["estimates"].items()) + " " + c["unit"]
                      + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))

@@ -12,6 +12,12 @@ held within ``tolerance`` + ``relative`` |u| for ``settle`` s (plus the delay) b
 window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
 10 %, moving; each window contributes its means. Only windows with |a_y| below
 ``max_lateral`` enter (the linear tyre's range).
+
+The linear range in steady turns (linear_limit): the regression fitted where |a_y| is small (tyres
+on any ground are linear below 0.15 g) predicts every window's yaw rate; going up in |a_y|, bins of
+windows whose measured steady yaw gain stays within three standard errors of that prediction (the
+bin's scatter and the prediction's own) are linear; the first bin beyond it ends the range (tyres past their bend, or a steering map bending
+with the angle). The regression in the linear range (in_linear_range) uses the windows below that.
 """
 from __future__ import annotations
 
@@ -34,10 +40,13 @@ class SteadyState:
     bias: float
     used: int
     max_lateral: float
+    limit_how: str = ""
+    passed_over: int = 0
 
     def as_dict(self) -> dict:
         return {"method": "ordinary least squares on steady windows: L r = g (u v) + delta_0 v - K v^2 r + L b",
                 "windows": self.used, "max_lateral_acceleration": self.max_lateral,
+                "linear_limit": self.limit_how, "windows_passed_over": self.passed_over,
                 "understeer_gradient": {"value": self.K, "std": self.K_std,
                                         "interval": [self.K - 1.96 * self.K_std, self.K + 1.96 * self.K_std]},
                 "steer_gain": {"value": self.gain, "std": self.gain_std},
@@ -111,3 +120,57 @@ def regression(w: dict[str, np.ndarray], L: float, max_lateral: float = math.inf
         g, g_sd, (d0, K, Lb), (d0_sd, K_sd, _) = fixed_gain, 0.0, beta, sd
     return SteadyState({k: x[keep] for k, x in w.items()}, float(g), float(g_sd), float(d0), float(d0_sd),
                        float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral))
+
+
+def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.ndarray:
+    """Each window's measured steady yaw rate over the one ``fit`` predicts, (r - b) / ((g u +
+    delta_0) v / (L + K v^2)); NaN where the prediction is under 0.02 rad/s (no turn to compare)."""
+    pred = (fit.gain * w["u"] + fit.offset) * w["v"] / (L + fit.K * w["v"] ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.abs(pred) >= 0.02, (w["r"] - fit.bias) / pred, np.nan)
+
+
+def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, fixed_gain: float | None = None,
+                 per_bin: int = 8) -> tuple[float, str]:
+    """(|a_y| limit [m/s2], how it was found): the regression on the windows with |a_y| <= ``small``
+    is the reference; the windows above it, in bins of ``per_bin`` by |a_y|, stay linear while the
+    median of yaw_gain_ratio lies within 3 standard errors of 1: the median's (1.25 sd / sqrt(n))
+    and the reference's prediction's (delta method on its K and gain: v^2 sd_K / (L + K v^2),
+    sd_g / g) combined; the limit is the top |a_y| of the last such bin (at most ``cap``). Without a
+    reference fit the limit is ``cap``, said so."""
+    ref = regression(w, L, max_lateral=small, fixed_gain=fixed_gain)
+    if ref is None:
+        return cap, (f"not derived (fewer than 7 steady windows with |a_y| <= {small:.3g} m/s2, or turns there at "
+                     f"one speed): the windows up to {cap:.3g} m/s2 are used")
+    a = np.abs(w["a_y"])
+    ratio = yaw_gain_ratio(ref, w, L)
+    v2 = w["v"] ** 2
+    ref_sd = np.hypot(v2 * ref.K_std / (L + ref.K * v2), ref.gain_std / ref.gain)
+    order = [k for k in np.argsort(a) if a[k] > small and a[k] <= cap and np.isfinite(ratio[k])]
+    limit = min(small, cap)
+    for start in range(0, len(order) - per_bin + 1, per_bin):
+        chunk = order[start:start + per_bin] if len(order) - start >= 2 * per_bin else order[start:]
+        med = float(np.median(ratio[chunk]))
+        allowed = 3 * math.hypot(1.25 * float(np.std(ratio[chunk])) / math.sqrt(len(chunk)), float(np.median(ref_sd[chunk])))
+        if abs(med - 1.0) > allowed:
+            return limit, (f"where the steady yaw gain stays within 3 standard errors of the regression's on the "
+                           f"{ref.used} windows with |a_y| <= {small:.3g} m/s2: the {len(chunk)} windows at "
+                           f"{a[chunk[0]]:.3g}-{a[chunk[-1]]:.3g} m/s2 turn {100 * (med - 1):+.1f} % (3 standard errors: "
+                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)")
+        limit = float(a[chunk[-1]])
+        if len(chunk) > per_bin:
+            break
+    limit = max(limit, min(small, cap))
+    return limit, (f"every steady window up to {limit:.3g} m/s2 turns within 3 standard errors of the regression's on "
+                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2")
+
+
+def in_linear_range(w: dict[str, np.ndarray], L: float, small: float, cap: float,
+                    fixed_gain: float | None = None) -> SteadyState | None:
+    """The regression on the windows inside linear_limit's range (None: regression's reasons)."""
+    limit, how = linear_limit(w, L, small, cap, fixed_gain)
+    fit = regression(w, L, max_lateral=limit, fixed_gain=fixed_gain)
+    if fit is not None:
+        fit.limit_how = how
+        fit.passed_over = int((np.abs(w["a_y"]) > limit).sum())
+    return fit
