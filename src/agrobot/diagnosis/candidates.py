@@ -252,7 +252,12 @@ class Replay:
         """The measurement's own updates on a stage's fit part, which bound its effective samples
         (estimation.effective_size): a yaw rate derived from a 5 Hz heading on 20 Hz rows has a
         quarter of the rows'; None: one per row."""
-        if stage != "yaw" or self.yaw_update_times is None:
+        return self._fit_updates if stage == "yaw" else None
+
+    @cached_property
+    def _fit_updates(self) -> int | None:
+        """``updates`` of the yaw stage, counted once (the fit part is fixed with the replay)."""
+        if self.yaw_update_times is None:
             return None
         return updates_on(self.yaw_update_times, self.t, self.h, self.masks["yaw"]["fit"])
 
@@ -474,6 +479,13 @@ def _named(need: str, columns) -> str:
     text = NEED_TEXT.get(need, need)
     near = similar_columns(columns, need) if need in ("delta", "delta_cmd", "yaw_rate", "v", "x", "y") else []
     return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")
+
+
+def refit_free(replay: "Replay", stages, effects) -> list[Parameter]:
+    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones, then the
+    effects', each once (selection._refit fits them, screen.Screen linearises the same set)."""
+    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] +
+                              [p for e in effects for p in e.parameters]))
 
 
 def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:

@@ -51,7 +51,7 @@ from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.orchestrator.work_progress import Work
 
-from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, uncertain
+from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
 from .screen import Screen
 from .simplification import healthy_levels
@@ -180,9 +180,7 @@ def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, s
     also explains)."""
     tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
     fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
-    free = list(dict.fromkeys([p for s in fit_on for p in uncertain(replay, s)] +
-                              [p for e in effects for p in e.parameters]))
-    fit = _fit(replay, values, free, fit_on, starts, sigma)
+    fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
         return fit
     scored = _fit(replay, fit.values, [], tuple(stages), [{}], sigma)
