@@ -12,7 +12,8 @@ in the integral sense), so a 20 Hz log replays without half-a-sample lag.
 No effect is named here: the values reach the model as the quantities the catalogue's effects carry
 (diagnosis.effect.QUANTITIES, catalogue.CATALOGUE.quantities: the steering's and the yaw model's
 parameters, the gyro's and the wheel speed's, the position's point and lag), and the wheel angle
-driving the yaw stage passes through the effects' transforms of the steering (Effect.wheel_angle).
+driving the yaw stage, and the rear axle's side-slip the track reads, passes through the effects'
+transforms of the steering (Effect.wheel_angle).
 """
 from __future__ import annotations
 

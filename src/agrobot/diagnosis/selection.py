@@ -17,7 +17,9 @@ parameters, scored on the group's stages.
 - a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
   and is no longer supported once the best has joined, the two explain the same misfit and the
   data cannot tell which: the pair is reported as inconclusive with the experiment that would
-  separate them;
+  separate them; of two tied explanations the one with fewer parameters joins when the other is not
+  supported on top of it (Selector.simplest: a side slope on a log driven along one heading is a
+  steering offset's constant pull, its fall line not pinned);
 - pairs: when no single candidate is supported but a stage is still above its noise floor
   (unexplained.is_misfit), pairs of effects of that stage are fitted together (a dead-band with a
   rate limit fits badly alone); a supported pair joins S;
