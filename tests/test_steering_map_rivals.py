@@ -1,6 +1,7 @@
 """A steering map's rivals on generated logs with a known truth: the track's side-slip driven through
 the map (a gain error is no antenna lever arm), and a steering offset against a side slope on a log
-driven along one heading (harness.steering_maps plants the map, harness.truth_tractor drives the car)."""
+driven along one heading (harness.steering_maps plants the map, harness.truth_tractor drives the car);
+and the pair screen that rules such rivals out counts a measurement by its own updates."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -67,3 +68,34 @@ def test_a_slope_driven_on_every_heading_stays_a_slope():
     sel = selected(frame, BASELINES["tractor"], ("side_slope", "steering_offset"))
     assert [f.effect.id for f in sel.effects] == ["side_slope"], sel.trace
     assert not sel.inconclusive
+
+
+
+class HeldReading:
+    """A replay stand-in: white residuals r0 - p x, 400 rows, of a measurement with 100 updates of its own."""
+
+    def __init__(self) -> None:
+        rng = np.random.default_rng(7)
+        self.r0, self.x = rng.standard_normal(400), rng.standard_normal(400)
+
+    def residuals(self, stage, values, part):
+        return self.r0 - values["p"] * self.x
+
+    def residuals_many(self, stage, sets, part):
+        return [self.residuals(stage, v, part) for v in sets]
+
+    def updates(self, stage):
+        return 100
+
+
+def test_the_screen_counts_a_measurement_by_its_own_updates():
+    """400 rows of white residuals hold 400 effective samples by their autocorrelation, but the
+    measurement updated 100 times: the pair screen counts 100, as the fits do (estimation.effective_size)."""
+    from types import SimpleNamespace
+
+    from agrobot.diagnosis.screen import Screen
+    from agrobot.estimation import Parameter
+
+    candidate = SimpleNamespace(id="p", parameters=(Parameter("p", "1", 1.0, -1.0, 1.0),))
+    screened = Screen(HeldReading(), {"yaw": 1.0}, -10.0).judge({"p": 0.0}, [], [candidate], ("yaw",))
+    assert screened.sizes["yaw"] == 100.0, screened.sizes

@@ -50,6 +50,7 @@ class Screened:
     delta_bic: float
     fitted: bool
     falls: dict[str, float]           # each stage's linearised fall in RSS, 1 - RSS_s,lin / RSS_s
+    sizes: dict[str, float]           # each stage's n_eff,s
 
     def text(self) -> str:
         return f"{' + '.join(self.ids)} (linearised dBIC {self.delta_bic:.1f})"
@@ -130,7 +131,8 @@ class Screen:
         dbic = k * math.log(max(sum(sizes), 2.0))
         for fall, n_eff in zip(falls, sizes):
             dbic += n_eff * math.log(max(1.0 - SAFETY * fall, 1e-300))
-        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong, dict(zip(stages, falls)))
+        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong, dict(zip(stages, falls)),
+                        dict(zip(stages, sizes)))
 
     def pair(self, values: dict[str, float], related: list[Effect], a: Effect, b: Effect, stages: tuple[str, ...],
              pool: list[Effect]) -> bool:
