@@ -79,7 +79,6 @@ class FitResult:
     n: dict[str, int]
     n_eff: dict[str, float]
     rmse_test: dict[str, float] = field(default_factory=dict)
-    residual_fit: np.ndarray | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -252,7 +252,12 @@ class Replay:
         """The measurement's own updates on a stage's fit part, which bound its effective samples
         (estimation.effective_size): a yaw rate derived from a 5 Hz heading on 20 Hz rows has a
         quarter of the rows'; None: one per row."""
-        if stage != "yaw" or self.yaw_update_times is None:
+        return self._fit_updates if stage == "yaw" else None
+
+    @cached_property
+    def _fit_updates(self) -> int | None:
+        """``updates`` of the yaw stage, counted once (the fit part is fixed with the replay)."""
+        if self.yaw_update_times is None:
             return None
         return updates_on(self.yaw_update_times, self.t, self.h, self.masks["yaw"]["fit"])
 
@@ -320,9 +325,12 @@ class Replay:
             self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
             return [measured_yaw_rate(rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i]), v)
                     for i, v in enumerate(sets)]
+        inputs = [self.yaw_input(v) for v in sets] if "yaw" in self.stages else [None] * len(sets)
+        if "yaw" in self.stages and any(d is not None for d in inputs):
+            self.yaw.prepare(sets, inputs)         # the side-slips of the sets' wheel angles in one recursion
         out = []
-        for v in sets:
-            track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))
+        for v, delta in zip(sets, inputs):
+            track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v, delta))
             if stage == "speed":
                 k = self.chord_k
                 speed = np.full(len(self.t), np.nan)
@@ -362,17 +370,20 @@ class Replay:
         out = self._saturated.yaw_rates(sets, inputs)
         return [self.yaw.with_slope(rate, v) for rate, v in zip(out, sets)]
 
-    def lateral(self, v: dict[str, float]) -> np.ndarray | None:
+    def lateral(self, v: dict[str, float], delta: np.ndarray | None = None) -> np.ndarray | None:
         """The rear axle's lateral velocity (side-slip) from the yaw model under ``v``, where the
-        yaw stage is replayed (nothing for a tractor at 2 m/s; metres over 10 s for a car at 30 m/s).
+        yaw stage is replayed (nothing for a tractor at 2 m/s; metres over 10 s for a car at 30 m/s),
+        driven by the wheel angle that drives the yaw stage (``delta``: yaw_input(v), given when
+        known; through the steering map, so a gain error slips the rear axle as it turns the car).
         With a wheel angle quantised coarser than COARSE_DELTA the refitted stiffnesses carry the
         input's errors (a 1-deg potentiometer halves the rear one): the study's own values then."""
         if "yaw" not in self.stages:
             return None
+        delta = self.yaw_input(v) if delta is None else delta
         if self.coarse_delta:
             v = {**v, **{k: self.baseline.values[k] for k in ("cornering_front_scale", "cornering_rear_scale",
                                                              "relaxation_scale")}}
-        return self.yaw.rear_lateral_velocity(v)
+        return self.yaw.rear_lateral_velocity(v, delta)
 
     def side_slip_arm(self) -> float:
         """The rear axle's steady side-slip velocity per unit yaw rate at the log's 95th-percentile
@@ -468,6 +479,13 @@ def _named(need: str, columns) -> str:
     text = NEED_TEXT.get(need, need)
     near = similar_columns(columns, need) if need in ("delta", "delta_cmd", "yaw_rate", "v", "x", "y") else []
     return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")
+
+
+def refit_free(replay: "Replay", stages, effects) -> list[Parameter]:
+    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones, then the
+    effects', each once (selection._refit fits them, screen.Screen linearises the same set)."""
+    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] +
+                              [p for e in effects for p in e.parameters]))
 
 
 def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:

@@ -12,7 +12,8 @@ in the integral sense), so a 20 Hz log replays without half-a-sample lag.
 No effect is named here: the values reach the model as the quantities the catalogue's effects carry
 (diagnosis.effect.QUANTITIES, catalogue.CATALOGUE.quantities: the steering's and the yaw model's
 parameters, the gyro's and the wheel speed's, the position's point and lag), and the wheel angle
-driving the yaw stage passes through the effects' transforms of the steering (Effect.wheel_angle).
+driving the yaw stage, and the rear axle's side-slip the track reads, passes through the effects'
+transforms of the steering (Effect.wheel_angle).
 """
 from __future__ import annotations
 
@@ -149,10 +150,12 @@ class YawReplay:
         both = self._recursion(systems, columns, inputs, (1, 0))
         if len(self._cache) + 2 * len(yaws) > 64:
             self._cache.clear()
-        for yaw, z in zip(yaws, both):
+        for yaw, steering, z in zip(yaws, steerings, both):
             key = exact(yaw)
             self._cache[key] = z[:, 0, :4]
             self._cache[key + ("v_y",)] = z[:, 1, :4]
+            if steering is not None:        # the wheel angle's yaw-rate and lateral-velocity responses
+                self._cache[("input", id(steering)) + key] = (steering, z[:, 0, 4], z[:, 1, 4])
         return [z[:, 0, :] for z in both]
 
     def prepare(self, sets: list[Mapping[str, float]], inputs: list[np.ndarray | None]) -> None:
@@ -171,10 +174,7 @@ class YawReplay:
         if len(todo) < 2:
             return
         jobs = list(todo.values())
-        out = self._recurse([y for y, _, _ in jobs], [d for _, d, _ in jobs])
-        for (yaw, delta, key), z in zip(jobs, out):
-            if delta is not None:
-                self._cache[("input", id(delta)) + key] = (delta, z[:, 4])
+        self._recurse([y for y, _, _ in jobs], [d for _, d, _ in jobs])
 
     def _recursion(self, systems: list[tuple[np.ndarray, np.ndarray]], columns: list[int], inputs: list[np.ndarray],
                    rows) -> np.ndarray:
@@ -235,24 +235,28 @@ class YawReplay:
         angle replayed from the command, when the log has none measured)."""
         q = yaw_plant(v)
         yaw = nonlinear(q)
-        key = exact(yaw)
-        if delta is None:
-            first = self.responses(*yaw)[:, 0]
-        else:                                   # memoised on the input array and the yaw values
-            hit = self._cache.get(("input", id(delta)) + key)
-            if hit is None or hit[0] is not delta:
-                if key in self._cache:          # the four responses known: the input's alone
-                    column = self.response_to(np.asarray(delta, float)[:, None], v)[:, 0]
-                else:                           # all five in one recursion
-                    column = self.responses(*yaw, steering=delta)[:, 4]
-                hit = (delta, column)
-                if len(self._cache) > 64:
-                    self._cache.clear()
-                self._cache[("input", id(delta)) + key] = hit
-            first = hit[1]
+        first = self.responses(*yaw)[:, 0] if delta is None else self.driven(delta, yaw)[0]
         R = self.responses(*yaw)
         return first + q["steer_offset"] * R[:, 1] + q["slope_north"] * R[:, 2] + \
             q["slope_east"] * R[:, 3] + CATALOGUE.quantities(v, "gyro")["bias"]
+
+    def driven(self, delta: np.ndarray, yaw: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """(yaw rate, lateral velocity v_y): the responses to the wheel angle ``delta`` of the model
+        with the nonlinear values ``yaw``, memoised on the input array and the values."""
+        key = exact(yaw)
+        hit = self._cache.get(("input", id(delta)) + key)
+        if hit is None or hit[0] is not delta:
+            if key in self._cache:              # the four responses known: the input's alone
+                u = midpoints(np.asarray(delta, float))[:, None]
+                z = self._recursion([self._discrete(*yaw)], [0], [u], (1, 0))[0]
+                hit = (delta, z[:, 0, 0], z[:, 1, 0])
+                if len(self._cache) > 64:
+                    self._cache.clear()
+                self._cache[("input", id(delta)) + key] = hit
+            else:                               # all five in one recursion
+                self.responses(*yaw, steering=delta)
+                hit = self._cache[("input", id(delta)) + key]
+        return hit[1], hit[2]
 
     def with_slope(self, rate: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         """``rate`` plus this linear model's response to the side slope's lateral pull under ``v``
@@ -263,16 +267,19 @@ class YawReplay:
         R = self.responses(*nonlinear(q))
         return rate + q["slope_north"] * R[:, 2] + q["slope_east"] * R[:, 3]
 
-    def rear_lateral_velocity(self, v: Mapping[str, float]) -> np.ndarray:
+    def rear_lateral_velocity(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
         """Lateral velocity of the rear-axle point R in the body frame, v_y - l_r gamma, from the
         model's states (the side-slip a dead reckoning along the heading leaves out: nothing for
-        a tractor at 2 m/s, metres over 10 s for a car at 30 m/s)."""
+        a tractor at 2 m/s, metres over 10 s for a car at 30 m/s), driven like ``yaw_rate`` by the
+        measured wheel angle or by ``delta`` (the wheels' angle through a steering map: a gain of
+        0.8 turns the wheels, and so slips the rear axle, 0.8 x as much as the reading)."""
         q = yaw_plant(v)
         key = exact(nonlinear(q))
         self.responses(*key)
         V = self._cache[key + ("v_y",)]
-        vy = V[:, 0] + q["steer_offset"] * V[:, 1] + q["slope_north"] * V[:, 2] + q["slope_east"] * V[:, 3]
-        return vy - self.params.l_r * (self.yaw_rate(v) - CATALOGUE.quantities(v, "gyro")["bias"])
+        first = V[:, 0] if delta is None else self.driven(delta, key)[1]
+        vy = first + q["steer_offset"] * V[:, 1] + q["slope_north"] * V[:, 2] + q["slope_east"] * V[:, 3]
+        return vy - self.params.l_r * (self.yaw_rate(v, delta) - CATALOGUE.quantities(v, "gyro")["bias"])
 
 
 def blocked_recursion(A: np.ndarray, b: np.ndarray, row, block: int = 0) -> np.ndarray:

@@ -13,7 +13,8 @@ sees nothing; the secants' span holds the larger values the parameter can take):
     RSS_s,lin  = min_c |r_s - B_s c|^2          (each stage on its own: no joint fit does better on it)
     dBIC_lin   = sum_s n_eff,s ln(1 - SAFETY (1 - RSS_s,lin / RSS_s)) + k ln(sum_s n_eff,s)
 
-n_eff,s the larger of the model's and the predicted residual's (candidates.py), k the candidates'
+n_eff,s the larger of the model's and the predicted residual's (estimation.effective_size, at most the
+measurement's own updates on the fit part: Replay.updates), k the candidates'
 parameters. A candidate whose dBIC_lin, with its fall in RSS taken SAFETY times, still cannot
 reach ``STRONG`` is not fitted: it could not be supported. SAFETY covers what the nonlinear fit
 finds beyond the linearisation: on the F1TENTH excerpt's 91 pair fits the fitted fall in RSS was
@@ -33,7 +34,7 @@ import numpy as np
 
 from agrobot.estimation import effective_size
 
-from .candidates import uncertain
+from .candidates import refit_free
 from .effect import Effect, Parameter
 
 GRID = 3              # secant points across a candidate parameter's searched range
@@ -49,6 +50,7 @@ class Screened:
     delta_bic: float
     fitted: bool
     falls: dict[str, float]           # each stage's linearised fall in RSS, 1 - RSS_s,lin / RSS_s
+    sizes: dict[str, float]           # each stage's n_eff,s
 
     def text(self) -> str:
         return f"{' + '.join(self.ids)} (linearised dBIC {self.delta_bic:.1f})"
@@ -124,11 +126,13 @@ class Screen:
             left = r0 - B @ np.linalg.lstsq(B, r0, rcond=None)[0] if B.shape[1] else r0
             rss0 = float(r0 @ r0)
             falls.append(1.0 - float(left @ left) / rss0 if rss0 > 0 else 0.0)
-            sizes.append(max(effective_size(left), effective_size(r0)))
+            updates = self.replay.updates(s)
+            sizes.append(max(effective_size(left, updates), effective_size(r0, updates)))
         dbic = k * math.log(max(sum(sizes), 2.0))
         for fall, n_eff in zip(falls, sizes):
             dbic += n_eff * math.log(max(1.0 - SAFETY * fall, 1e-300))
-        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong, dict(zip(stages, falls)))
+        return Screened(tuple(e.id for e in candidates), dbic, dbic < self.strong, dict(zip(stages, falls)),
+                        dict(zip(stages, sizes)))
 
     def pair(self, values: dict[str, float], related: list[Effect], a: Effect, b: Effect, stages: tuple[str, ...],
              pool: list[Effect]) -> bool:
@@ -139,8 +143,7 @@ class Screen:
         members = related + [a, b]
         if any(set(e.tested_on) & set(stages) for e in members):
             return True
-        refitted = list(dict.fromkeys([p for s in stages for p in uncertain(self.replay, s)] +
-                                      [p for e in related for p in e.parameters]))
+        refitted = refit_free(self.replay, stages, related)
         screened = self.judge(values, refitted, [a, b], stages)
         key = (tuple(sorted(values.items())), tuple(e.id for e in pool))
         entry = self.rounds.setdefault(key, {"members": tuple(e.id for e in related), "pairs": {}})

@@ -17,7 +17,9 @@ parameters, scored on the group's stages.
 - a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
   and is no longer supported once the best has joined, the two explain the same misfit and the
   data cannot tell which: the pair is reported as inconclusive with the experiment that would
-  separate them;
+  separate them; of two tied explanations the one with fewer parameters joins when the other is not
+  supported on top of it (Selector.simplest: a side slope on a log driven along one heading is a
+  steering offset's constant pull, its fall line not pinned);
 - pairs: when no single candidate is supported but a stage is still above its noise floor
   (unexplained.is_misfit), pairs of effects of that stage are fitted together (a dead-band with a
   rate limit fits badly alone); a supported pair joins S;
@@ -51,7 +53,7 @@ from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.orchestrator.work_progress import Work
 
-from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, uncertain
+from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
 from .screen import Screen
 from .simplification import healthy_levels
@@ -180,9 +182,7 @@ def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, s
     also explains)."""
     tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
     fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
-    free = list(dict.fromkeys([p for s in fit_on for p in uncertain(replay, s)] +
-                              [p for e in effects for p in e.parameters]))
-    fit = _fit(replay, values, free, fit_on, starts, sigma)
+    fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
         return fit
     scored = _fit(replay, fit.values, [], tuple(stages), [{}], sigma)
@@ -310,6 +310,14 @@ class Selector:
             best = supported[0]
             rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
                       and set(f.effect.stages) & set(best.effect.stages)]
+            simpler = self.simplest(model, members, best, rivals)
+            if simpler is not best:
+                trace.append(f"= {simpler.effect.id} before {best.effect.id}: tied (dBIC {simpler.delta_bic:.1f} "
+                             f"against {best.delta_bic:.1f}), and {best.effect.id}'s further parameters add nothing "
+                             f"on top of it")
+                best = simpler
+                rivals = [f for f in supported if f is not best and abs(f.delta_bic - best.delta_bic) < TIE
+                          and set(f.effect.stages) & set(best.effect.stages)]
             # a rival that is not supported itself (dBIC not strong, or immaterial) but within TIE of
             # the best and with evidence for it: the log cannot tell the two apart
             near = [f for f in trials if f not in supported and f.effect is not best.effect and f.delta_bic < 0
@@ -341,6 +349,21 @@ class Selector:
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def simplest(self, model: FitResult, members: list[Effect], best: Finding, rivals: list[Finding]) -> Finding:
+        """Of two tied explanations (dBIC within TIE), the one with fewer parameters, when the other is not
+        supported on top of it: its further parameters are what the log does not pin (a side slope's fall line
+        on a log driven along one heading is a steering offset's constant pull, told apart only by the
+        heading changing). A recording effect chosen first (the position's point and clock) stays."""
+        if getattr(best.effect, "recording", False):
+            return best
+        for rival in sorted(rivals, key=lambda f: f.delta_bic):
+            if len(rival.effect.parameters) >= len(best.effect.parameters):
+                continue
+            on_top = self.add(merged(model, rival.fit), members + [rival.effect], best.effect)
+            if not on_top.supported:
+                return rival
+        return best
 
     def still_supported(self, model: FitResult, members: list[Effect], earlier: list[Effect], removed: set[str],
                         trace: list[str]) -> tuple[FitResult, list[Effect]]:
@@ -555,10 +578,12 @@ def vehicle_bounds(vehicle) -> dict[str, tuple[float, float]]:
 
 def _tie(best: Finding, rival: Finding, why: str) -> dict:
     margin = rival.delta_bic - best.delta_bic
+    fewer = "; the one with fewer parameters chosen" if margin < 0 else ""
     return {"effects": [best.effect.id, rival.effect.id],
             "delta_bic": [best.delta_bic, rival.delta_bic],
             "margin": margin,
-            "why": f"{rival.effect.id} is within {margin:.1f} of {best.effect.id}'s dBIC (a tie below {TIE:g}): {why}",
+            "why": f"{rival.effect.id} is within {abs(margin):.1f} of {best.effect.id}'s dBIC (a tie below {TIE:g}): "
+                   f"{why}{fewer}",
             "chosen": best.effect.id,
             "experiment": f"to tell {best.effect.id} from {rival.effect.id}: {best.effect.experiment}; "
                           f"{rival.effect.experiment}"}
