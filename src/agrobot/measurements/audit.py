@@ -77,7 +77,7 @@ from .findings import finding
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
-from .time_base import gps_minus_utc, leap_meaning
+from .time_base import LEAP_TOLERANCE, gps_minus_utc, leap_meaning
 
 SEARCH = 3.0            # s: lags searched either way
 WIDE_SEARCH = 30.0      # s: ... and this far between two clocks that no lag within SEARCH explains
@@ -453,12 +453,14 @@ def widened(aud: Auditor, pairs: list) -> list:
 def _leap(aud: Auditor, est: dict, ga: str, gb: str) -> float | None:
     """The GPS - UTC leap seconds of the recording's date (signed as the lag) when a strong lag
     (correlation at least STRONG_RHO, not on the search's bound) between the receiver's clock and
-    another has an interval that holds that count and not zero; else None."""
+    another has an interval that excludes zero and holds that count, or is judged (_judged) within
+    LEAP_TOLERANCE of it (the signals compared add their own latencies to the clocks'); else None."""
     iv, leap = est["interval"], gps_minus_utc(aud.t0)
     if not leap or iv is None or est["rho"] < STRONG_RHO or est["edge"] or aud.group("gnss") not in (ga, gb):
         return None
     signed = math.copysign(leap, est["lag"])
-    return signed if iv[0] <= signed <= iv[1] and (iv[0] > 0 or iv[1] < 0) else None
+    holds = iv[0] <= signed <= iv[1] or (_judged(est) and abs(est["lag"] - signed) < LEAP_TOLERANCE)
+    return signed if holds and (iv[0] > 0 or iv[1] < 0) else None
 
 
 def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], list[dict]]:
@@ -480,6 +482,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
                    f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
                    + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
+        if leap is not None and not iv[0] <= leap <= iv[1]:
+            meaning += (f"; measured {est['lag']:+.3f} s{_interval_text(iv)}: the leap count, the rest "
+                        f"({est['lag'] - leap:+.3f} s) a latency of the signals compared, not moved")
         if ga == gb:
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
                 f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "

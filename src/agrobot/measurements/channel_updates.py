@@ -185,6 +185,7 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         g = streams.gnss
         found = holding(g["utc"].to_numpy(float), g[["lat", "lon"]].to_numpy(float), moving)
         if found is not None:
+            g = _heading_apart(streams, g, found["keep"])
             streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
             notes.append({"channel": "gnss", **_said(found)})
         notes += _receiver_heading(streams)
@@ -201,6 +202,25 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
         streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
     return notes
+
+
+def _heading_apart(streams: Streams, g, keep: np.ndarray):
+    """The receiver's frame with its own heading (HDT, THS) taken out as a channel of its own, on
+    its epochs' stamps and the receiver's clock, where the positions' updates ``keep`` would drop
+    some of its samples (a 10 Hz heading beside 5 Hz positions is judged at 10 Hz); else ``g``."""
+    if "heading" not in g or "heading" in streams.signals:
+        return g
+    h = g["heading"].to_numpy(float)
+    ok = np.isfinite(h)
+    dropped = ok.copy()
+    dropped[keep] = False
+    if ok.sum() < MIN_SAMPLES or not dropped.any():
+        return g
+    streams.signals["heading"] = (g["utc"].to_numpy(float)[ok], h[ok])
+    streams.groups["heading"] = streams.groups.get("gnss", "gnss")
+    columns = streams.report.setdefault("columns", {})
+    columns["heading"] = "the receiver's own heading (ENU yaw), on its epochs: a channel apart from its held positions"
+    return g.assign(heading=np.nan)
 
 
 def _receiver_heading(streams: Streams) -> list[dict]:

@@ -42,6 +42,7 @@ BACK_STEPS = 2.0        # cadences: a step back larger than this, the rows after
 AHEAD_STEPS, AHEAD_MIN = 5.0, 0.5      # cadences, s: a leap forward at least this large is judged
 REGULAR_AFTER = 20      # rows after a step back that must come at the cadence
 MOVES = 3.0             # a column informs when its change over the skipped rows is this many times its one-row change
+LEAP_TOLERANCE = 0.5    # s: an offset between a receiver and another clock this close to the leap count is that count
 
 
 def gps_minus_utc(posix: float) -> float:
@@ -51,9 +52,9 @@ def gps_minus_utc(posix: float) -> float:
 
 def leap_meaning(late: float, when: float) -> str:
     """The words for an offset of ``late`` s between a receiver and the other clocks when it is
-    the GPS - UTC leap seconds of the date (within 0.5 s), else ''."""
+    the GPS - UTC leap seconds of the date (within LEAP_TOLERANCE), else ''."""
     leap = gps_minus_utc(when)
-    if leap and abs(abs(late) - leap) < 0.5:
+    if leap and abs(abs(late) - leap) < LEAP_TOLERANCE:
         return (f"; {abs(late):.3f} s is GPS time against UTC ({leap:.0f} leap seconds on "
                 f"{iso(when)[:10]}): one side's stamps are on GPS time, the other's on UTC")
     return ""
