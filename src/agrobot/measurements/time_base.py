@@ -10,7 +10,9 @@ file, a receiver's GPS week-number rollover, and the receiver's GPS time against
   d the change across the step, D1 and Dn its changes over one row and over the n rows the
   stamps skip, a column that moves over n rows (median Dn at least 3 median D1) says "one row"
   when d is within D1's 95 % and below Dn's 5 %, "a silence" when d is beyond D1's 99 %; the step
-  is a clock's when some column says one row and none says a silence. The stamps after it are
+  is a clock's when more than twice as many columns say one row as say a silence (a column of a
+  clock step says a silence by chance 1 %, one of a silence says one row under 5 %: one noisy
+  column among several does not veto the others). The stamps after it are
   moved back by the step onto the clock the file starts on (named, with its size and moment).
 - GPS week rollover (``gps_week_rollover``): a receiver with a 10-bit week counter dates its fixes
   1024 weeks (WEEK_ROLLOVER = 619,315,200 s) early once its epoch has passed. A file whose stamps
@@ -108,7 +110,7 @@ def clock_steps(t: np.ndarray, columns: list[np.ndarray], label: str) -> tuple[n
         if step is None:
             for k in ahead:
                 one, silence = _votes(columns, int(k), max(1, int(round(dt[k] / h))))
-                if one and not silence:
+                if one > 2 * silence:
                     step = int(k)
                     break
         if step is None:
