@@ -34,7 +34,8 @@ them: kind, channels, value, interval, meaning; the import's notes and log as co
   channel in SI within 3 %;
 - two_yaw_sources: a finding on both gyros giving the scale (or its inverse) within 0.02;
 - mislabelled_channel: a mislabelled_channel finding on the channel;
-- duplicate_stamps: a note or finding of the file giving the count of repeated stamps;
+- duplicate_stamps: a note or finding of the file giving the count of repeated stamps (those it
+  holds readable: an NMEA copy or original with a bad checksum repeats none);
 - out_of_order: a note or finding of the file giving the count of rows out of order (from the
   rows moved to every step back written);
 - clock_jump: a finding giving the step within 0.05 s and its moment within 1.0 s;
@@ -278,7 +279,8 @@ def file_notes(res, t, *words) -> list:
 
 
 def named_duplicates(res, t) -> bool:
-    return any(near(numbers(x), t["count"], 0.0) for x in file_notes(res, t, "repeat", "duplicate"))
+    """The count of repeated stamps the file holds readable (an NMEA copy with a corrupt checksum repeats none)."""
+    return any(near(numbers(x), t.get("readable", t["count"]), 0.0) for x in file_notes(res, t, "repeat", "duplicate"))
 
 
 def named_order(res, t) -> bool:

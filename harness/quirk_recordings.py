@@ -617,3 +617,6 @@ def write_nmea(rec: Recording, s: Sheet, path: Path) -> None:
     rec.files.append(path)
     steps = np.diff(s.t)
     rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)), "repeated": int(np.sum(steps == 0))}
+    if "duplicate_stamps" in rec.planted:       # a copy whose GGA or original's is corrupt repeats no readable epoch
+        intact = np.array([i not in rec.corrupt for i in range(len(s.t))])
+        rec.planted["duplicate_stamps"]["readable"] = int(np.sum(np.diff(s.t[intact]) == 0))
