@@ -24,7 +24,7 @@ them: kind, channels, value, interval, meaning; the import's notes and log as co
   samples (the source's own times), or a finding naming each stretch within 1.0 s;
 - mode_stretches: a finding (kind: mode, manual) naming the manual and the paused stretch within 1.0 s;
 - heading_no_gyro: the import does not refuse, and the log's ``heading`` follows the truth's
-  (median error under 2 deg, ENU or compass convention);
+  (median error under 2 deg where it is written, on at least 95 % of the log, ENU or compass convention);
 - clock_offset, leap_seconds: a clock_offset finding on the group's channels, or the alignment's
   found offset, within 0.05 s (leap seconds: 0.1 s) of the truth, either sign convention;
 - gps_week_rollover: a finding or note giving 1024 weeks (619315200 s within a day);
@@ -223,12 +223,17 @@ def named_modes(res, t) -> bool:
 
 
 def heading_error(res) -> float:
-    """Median |log heading - truth| [deg], the better of the ENU and the compass convention."""
+    """Median |log heading - truth| [deg] where the log has one (inf unless on 95 % of its samples:
+    beyond the heading's first and last update it is not written), the better of the ENU and the
+    compass convention."""
     if not res["ok"] or "heading" not in res["log"]:
         return math.inf
     h = res["log"]["heading"].to_numpy(float)
-    psi = res["truth"]["drive"].at("psi", log_truth_times(res))
-    return min(float(np.median(np.degrees(np.abs(np.angle(np.exp(1j * (h - ref))))))) for ref in (psi, math.pi / 2 - psi))
+    ok = np.isfinite(h)
+    if ok.mean() < 0.95:
+        return math.inf
+    psi = res["truth"]["drive"].at("psi", log_truth_times(res))[ok]
+    return min(float(np.median(np.degrees(np.abs(np.angle(np.exp(1j * (h[ok] - ref))))))) for ref in (psi, math.pi / 2 - psi))
 
 
 def named_heading(res, t) -> bool:
