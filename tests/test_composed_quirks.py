@@ -1,7 +1,7 @@
 """The import audit on quirks planted together (harness.quirk_recordings compositions, each drawn
 from its seed as benchmarks/quirk_composition.py draws it), each against the truth it was planted
 with: leap seconds beside a deg/s gyro, a receiver's heading beside held positions, a clock step
-in a file with one noisy column, duplicated NMEA epochs with bad checksums, held positions through
+in a file with one noisy column and in a file of noise only, duplicated NMEA epochs with bad checksums, held positions through
 a degraded fix."""
 from __future__ import annotations
 
@@ -55,6 +55,19 @@ def test_a_forward_clock_step_is_named_though_one_noisy_column_jumps(tmp_path):
     rec = convert(tmp_path)
     found = kinds(rec, "clock_jump")
     assert len(found) == 1 and found[0]["value"] == pytest.approx(truth["by_s"], abs=0.05)
+
+
+def test_a_forward_clock_step_in_a_file_of_noise_is_told_by_the_other_files(tmp_path):
+    """The IMU's file holds an accelerometer's vertical axis (noise about g) as its only column, and
+    its clock steps forward: nothing in it tells a step from a silence, but it starts with the other
+    files and ends the step after them."""
+    truth = composed(5512, tmp_path, {"clock_jump", "mislabelled_channel"})["planted"]["clock_jump"]
+    rec = convert(tmp_path)
+    found = kinds(rec, "clock_jump")
+    assert len(found) == 1 and found[0]["channels"] == [f"{truth['file']}.csv"]
+    assert found[0]["value"] == pytest.approx(truth["by_s"], abs=0.05)
+    moment = float(re.search(r"stamps \S+T\d\d:\d\d:(\d+\.\d+)Z", found[0]["meaning"]).group(1))
+    assert moment == pytest.approx(truth["at_s"], abs=1.0)
 
 
 def test_duplicated_epochs_are_counted_as_the_file_holds_them_readable(tmp_path):

@@ -12,8 +12,11 @@ file, a receiver's GPS week-number rollover, and the receiver's GPS time against
   when d is within D1's 95 % and below Dn's 5 %, "a silence" when d is beyond D1's 99 %; the step
   is a clock's when more than twice as many columns say one row as say a silence (a column of a
   clock step says a silence by chance 1 %, one of a silence says one row under 5 %: one noisy
-  column among several does not veto the others). The stamps after it are
-  moved back by the step onto the clock the file starts on (named, with its size and moment).
+  column among several does not veto the others); where no column tells (a file of noise about a
+  constant), a single leap forward is a clock's when the file starts with the recording's other
+  files and its end overruns theirs by the leap (span_step: a silence ends with the others). The
+  stamps after it are moved back by the step onto the clock the file starts on (named, with its
+  size and moment).
 - GPS week rollover (``gps_week_rollover``): a receiver with a 10-bit week counter dates its fixes
   1024 weeks (WEEK_ROLLOVER = 619,315,200 s) early once its epoch has passed. A file whose stamps
   are k x 1024 weeks (within a day) before the other files', and overlap them once moved, is moved
@@ -115,16 +118,40 @@ def clock_steps(t: np.ndarray, columns: list[np.ndarray], label: str) -> tuple[n
                     break
         if step is None:
             break
-        by = float(dt[step] - h)
-        at = float(t[step] + h)
-        t[step + 1:] -= by
-        found.append({"at": at, "finding": finding(
-            "clock_jump", [label], by, None, "s",
-            f"{label}: the logger's clock stepped {by:+.3f} s between rows {step + 1} and {step + 2} (stamps "
-            f"{iso(at - h)} then {iso(at + by)}; the rows come every {h:.4g} s and the values change across the step "
-            f"as over one row): the stamps after it moved {-by:+.3f} s back onto the clock the file starts on",
-            resolved=True)})
+        found.append(undo_step(t, step, h, label, "the values change across the step as over one row"))
     return t, found
+
+
+def undo_step(t: np.ndarray, step: int, h: float, label: str, evidence: str) -> dict:
+    """{finding, at} of the clock step between rows ``step`` and ``step`` + 1 of stamps ``t`` at
+    cadence ``h``, the stamps after it moved back by it in place; ``evidence`` says why a clock's."""
+    by = float(t[step + 1] - t[step] - h)
+    at = float(t[step] + h)
+    t[step + 1:] -= by
+    return {"at": at, "finding": finding(
+        "clock_jump", [label], by, None, "s",
+        f"{label}: the logger's clock stepped {by:+.3f} s between rows {step + 1} and {step + 2} (stamps "
+        f"{iso(at - h)} then {iso(at + by)}; the rows come every {h:.4g} s and {evidence}): the stamps after it "
+        f"moved {-by:+.3f} s back onto the clock the file starts on", resolved=True)}
+
+
+def span_step(t: np.ndarray, others: list[tuple[float, float]], tol: float) -> int | None:
+    """The row after which a file's clock stepped forward, told by the other files of the recording
+    (its columns too quiet to tell, clock_steps): its one leap forward (beyond max(AHEAD_STEPS h,
+    AHEAD_MIN)) is the amount by which its last stamp overruns theirs, within ``tol``, while it
+    starts with them and they agree with each other (a silence ends with the others; a clock that
+    stepped carries the file's end on by the step). None otherwise."""
+    if not others or len(t) < 30 or not np.isfinite(t).all():
+        return None
+    h = _cadence(t)
+    dt = np.diff(t)
+    ahead = np.flatnonzero(dt > max(AHEAD_STEPS * h, AHEAD_MIN))
+    starts, ends = np.array(others).T
+    if len(ahead) != 1 or np.ptp(starts) > tol or np.ptp(ends) > tol:
+        return None
+    k = int(ahead[0])
+    over = float(t[-1] - np.median(ends))
+    return k if abs(t[0] - np.median(starts)) <= tol and over > tol and abs(over - (dt[k] - h)) <= tol else None
 
 
 # --- GPS week rollover -------------------------------------------------------------------------------
