@@ -316,8 +316,11 @@ def plant_fix_quality_drop(rec: Recording, rng) -> dict:
                 stretches.append((float(a), float(b), int(rng.choice([2, 5]))))
                 break
     q = s.columns["fix_quality"]
+    held = rec.planted.get("held_channel", {})
+    n = len(s.t)            # held positions change fix with their updates: each row goes with its update's first
+    first = (np.arange(n) // held["factor"]) * held["factor"] if "lat" in held.get("columns", ()) else np.arange(n)
     for a, b, code in stretches:
-        inside = (s.t >= a) & (s.t < b)
+        inside = (s.t[first] >= a) & (s.t[first] < b)
         q[inside] = code
         sigma = 0.3 if code == 2 else 0.05
         e = per_update(rec, "lat", np.flatnonzero(inside), sigma * rng.standard_normal(inside.sum()))

@@ -1,8 +1,9 @@
 """The import audit on quirks planted together (harness.quirk_recordings compositions, each drawn
 from its seed as benchmarks/quirk_composition.py draws it), each against the truth it was planted
-with: leap seconds beside a deg/s gyro, a receiver's heading beside held positions, a clock step
-in a file with one noisy column and in a file of noise only, duplicated NMEA epochs with bad checksums, held positions through
-a degraded fix."""
+with: leap seconds beside a deg/s gyro, a receiver's heading beside held positions, a clock step in
+a file with one noisy column and in a file of noise only, duplicated NMEA epochs with bad
+checksums, held positions through a degraded fix, a speed in km/h beside held positions through a
+degraded fix; and a held channel that changes twice in one of its periods."""
 from __future__ import annotations
 
 import re
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from agrobot.api import convert
+from agrobot.measurements.channel_updates import holding
 from harness.quirk_recordings import START, compose
 
 
@@ -91,3 +93,28 @@ def test_held_positions_hold_a_degraded_fix_as_well(tmp_path):
     rec = convert(tmp_path, sign_speed=True)
     found = [f for f in kinds(rec, "held_samples") if f["channels"] == ["gnss"]]
     assert len(found) == 1 and found[0]["updates_hz"] == pytest.approx(held["update_hz"], rel=0.1)
+
+
+def test_a_speed_in_kmh_is_read_where_the_fix_is_at_its_usual_quality(tmp_path):
+    """A mower's speed in km/h (no unit said), its positions held x4 and falling to DGPS twice: the
+    DGPS stretches' noisy positions make the track's speed too fast; read without them, the scale is
+    3.6 and the speed is converted."""
+    truth = composed(9008, tmp_path, {"fix_quality_drop", "held_channel", "raw_units"})
+    assert truth["planted"]["raw_units"]["factor"] == 3.6
+    rec = convert(tmp_path)
+    found = [f for f in kinds(rec, "scale_disagreement") if f["channels"] == ["gnss_speed", "v"]]
+    assert len(found) == 1 and found[0]["value"] == pytest.approx(3.6, rel=0.03) and found[0]["resolved"]
+    t = rec.report["used"]["utc_start_s"] - START + rec.log["t"].to_numpy(float)
+    want = np.percentile(np.abs(truth["drive"].at("v", t)), 90)
+    assert np.percentile(np.abs(rec.log["v"].to_numpy(float)), 90) == pytest.approx(want, rel=0.03)
+
+
+def test_two_updates_in_one_period_keep_their_own_times():
+    """A 5 Hz channel held in 20 Hz rows that changes twice in one of its periods (rows 401 and 402):
+    on the sensor's clock both would take one time; each keeps its own, half a row apart at least."""
+    rows = 0.05 * np.arange(800)
+    x = np.repeat(np.random.default_rng(1).standard_normal(200), 4)
+    x[402] += 1.0                       # a second change inside the period that starts at row 400
+    found = holding(rows, x)
+    assert found is not None and found["held"] == pytest.approx(4.0)
+    assert np.min(np.diff(found["times"])) >= 0.025

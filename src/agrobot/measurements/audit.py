@@ -10,7 +10,9 @@ share that table's).
 
 Between channels, from signals that must agree (Kayacan et al. section 2's kinematic relations):
 
-- two speeds: the wheel speed ``v`` against the receiver's speed over ground;
+- two speeds: the wheel speed ``v`` against the receiver's speed over ground (its scale read where
+  the fix holds the quality it holds longest: a degraded fix's noise biases a speed from positions
+  upwards);
 - gyro against the GNSS course: ``yaw_rate`` against d(course)/dt of the track (1 s chords, |v| > 1 m/s);
 - ``v r`` against the lateral acceleration (a column ``ay``, ``a_y``, ``lat_acc``, ``acc_y``);
 - two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*``);
@@ -167,12 +169,13 @@ def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
     return ((k - shift) * step, best) if math.isfinite(k) else (math.nan, 0.0)
 
 
-def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
+def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False,
+        scale_mask=None) -> dict | None:
     """How late b is against a: b(t) = s a(t - lag). {lag, interval, rho, scale, scale_interval,
     seconds, inverted, edge} or None when they share too little: where the correlation's most
     negative value outweighs its most positive, b answers a with the opposite sign (``inverted``,
     rho that of -b, the scale negative); ``edge``: the peak sits on the search's bound. ``mask(grid) -> bool`` limits the samples
-    (e.g. moving)."""
+    (e.g. moving); ``scale_mask(grid) -> bool`` limits further those the scale is read on."""
     ta, tb = np.asarray(ta, float), np.asarray(tb, float)
     if len(ta) < 20 or len(tb) < 20:
         return None
@@ -202,14 +205,15 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     if not math.isfinite(whole):
         return None
     if search > SEARCH and abs(whole) > SEARCH:       # a wide search: b moved by its peak, judged again near it
-        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin)
+        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin, scale_mask)
         if fine is None:
             return None
         iv = fine["interval"]
         return {**fine, "lag": fine["lag"] + whole, "interval": None if iv is None else [iv[0] + whole, iv[1] + whole]}
     k = int(round(whole / step))
     width = int(round(SCALE_SPAN / step))
-    scale = _slope(a, b, oka, okb, k, through_origin, width)
+    oks = oka & scale_mask(grid) if scale_mask is not None else oka
+    scale = _slope(a, b, oks, okb, k, through_origin, width)
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -222,7 +226,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
             lp, rp = _peak(p, step, shift)
             if math.isfinite(lp) and rp > 0.3:
                 lags.append(lp)
-                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin, width))
+                scales.append(_slope(a, b, oks & sel, okb, int(round(lp / step)), through_origin, width))
     if len(lags) >= 3:
         se = 2.0 * float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
         interval = [whole - max(se, step), whole + max(se, step)]
@@ -312,6 +316,25 @@ def _moving(t_v, v, threshold=MOVING):
     return lambda grid: np.abs(np.interp(grid, t_v, v)) > threshold
 
 
+def _usual(best):
+    """mask(grid): where the receiver's fix is at its usual quality (``best``: usual_fix), or None."""
+    if best is None:
+        return None
+    tb, ok = best
+    return lambda grid: np.interp(grid, tb, ok.astype(float)) > 0.5
+
+
+def usual_fix(gnss):
+    """(utc, whether each fix is at the quality the receiver holds longest), or None when it does not
+    say its quality or holds it on less than half of its fixes."""
+    q = gnss["quality"].to_numpy(float) if "quality" in gnss else np.zeros(0)
+    if not np.isfinite(q).any():
+        return None
+    values, counts = np.unique(q[np.isfinite(q)], return_counts=True)
+    usual = q == values[np.argmax(counts)]
+    return (gnss["utc"].to_numpy(float), usual) if 0.5 <= usual.mean() < 1.0 else None
+
+
 class Auditor:
     """Collects the channel table and the findings of one recording (measurements.recording)."""
 
@@ -369,10 +392,11 @@ class Auditor:
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
+            best = usual_fix(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
                 out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
-                                                               through_origin=True,
-                                                               mask=_moving(tg, speed, 0.3)), "m/s"))
+                                                               through_origin=True, mask=_moving(tg, speed, 0.3),
+                                                               scale_mask=_usual(best)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
                 ok = np.isfinite(course_rate)
