@@ -3,7 +3,8 @@ from its seed as benchmarks/quirk_composition.py draws it), each against the tru
 with: leap seconds beside a deg/s gyro, a receiver's heading beside held positions, a clock step in
 a file with one noisy column and in a file of noise only, duplicated NMEA epochs with bad
 checksums, held positions through a degraded fix, a speed in km/h beside held positions through a
-degraded fix; and a held channel that changes twice in one of its periods."""
+degraded fix, devices on one clock whose gyro meets a slow mower's course for 10 s only; and a held
+channel that changes twice in one of its periods."""
 from __future__ import annotations
 
 import re
@@ -118,3 +119,14 @@ def test_two_updates_in_one_period_keep_their_own_times():
     found = holding(rows, x)
     assert found is not None and found["held"] == pytest.approx(4.0)
     assert np.min(np.diff(found["times"])) >= 0.025
+
+
+def test_a_chance_correlation_over_a_few_seconds_moves_no_clock(tmp_path):
+    """Three devices on one clock (no clock class planted), a mower above 1 m/s for about 10 s: the
+    gyro meets the course by chance 23 s away (correlation 0.78 over 10 s); no file is moved."""
+    truth = composed(9050, tmp_path, {"held_channel", "units_row"})
+    rec = convert(tmp_path)
+    assert rec.report["audit"]["alignment"]["offsets_s"] == {}
+    t = rec.report["used"]["utc_start_s"] - START + rec.log["t"].to_numpy(float)
+    want = np.percentile(np.abs(truth["drive"].at("yaw_rate", t)), 90)
+    assert np.percentile(np.abs(rec.log["yaw_rate"].to_numpy(float)), 90) == pytest.approx(want, rel=0.03)

@@ -30,8 +30,9 @@ Kinds:
 
 - ``clock_offset``: the second group's stamps are ``value`` s late against the first's (a pair
   with no physical lag); acted on (aligned by ``--align auto``) only on evidence: correlation at
-  least STRONG_RHO, an interval of half-width at most HALF_WIDTH s that excludes zero and is
-  narrower than the offset, the offset at least ALIGN_MIN; below that it is "too weak to judge",
+  least STRONG_RHO over at least EVIDENCE_S s of samples compared, an interval of half-width at
+  most HALF_WIDTH s that excludes zero and is narrower than the offset, the offset at least
+  ALIGN_MIN; below that it is "too weak to judge",
   resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
 - ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
   clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
@@ -87,6 +88,8 @@ LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still wit
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
 HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
+EVIDENCE_S = 30.0       # s: ... on at least this much of the two signals compared (a slow machine's course
+                        # read above MOVING for 10 s correlates by chance somewhere in a +-30 s search)
 STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
@@ -455,10 +458,11 @@ def _interval_text(iv, unit="s", digits=3) -> str:
 
 
 def _judged(est: dict) -> bool:
-    """A lag strong enough to act on: correlation at least STRONG_RHO, an interval within
-    +-HALF_WIDTH s, the peak inside the search."""
+    """A lag strong enough to act on: correlation at least STRONG_RHO over at least EVIDENCE_S s
+    of samples compared, an interval within +-HALF_WIDTH s, the peak inside the search."""
     iv = est["interval"]
-    return est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"]
+    return (est["rho"] >= STRONG_RHO and est["seconds"] >= EVIDENCE_S and iv is not None
+            and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"])
 
 
 def widened(aud: Auditor, pairs: list) -> list:
@@ -476,11 +480,12 @@ def widened(aud: Auditor, pairs: list) -> list:
 
 def _leap(aud: Auditor, est: dict, ga: str, gb: str) -> float | None:
     """The GPS - UTC leap seconds of the recording's date (signed as the lag) when a strong lag
-    (correlation at least STRONG_RHO, not on the search's bound) between the receiver's clock and
+    (correlation at least STRONG_RHO over EVIDENCE_S s, not on the search's bound) between the receiver's clock and
     another has an interval that excludes zero and holds that count, or is judged (_judged) within
     LEAP_TOLERANCE of it (the signals compared add their own latencies to the clocks'); else None."""
     iv, leap = est["interval"], gps_minus_utc(aud.t0)
-    if not leap or iv is None or est["rho"] < STRONG_RHO or est["edge"] or aud.group("gnss") not in (ga, gb):
+    if not leap or iv is None or est["rho"] < STRONG_RHO or est["seconds"] < EVIDENCE_S or est["edge"] \
+            or aud.group("gnss") not in (ga, gb):
         return None
     signed = math.copysign(leap, est["lag"])
     holds = iv[0] <= signed <= iv[1] or (_judged(est) and abs(est["lag"] - signed) < LEAP_TOLERANCE)
@@ -513,7 +518,8 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
                 f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
                 f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
-                f"{STRONG_RHO} or interval wider than +-{HALF_WIDTH} s); nothing moved"), resolved=True))
+                f"{STRONG_RHO}, under {EVIDENCE_S:g} s compared or interval wider than +-{HALF_WIDTH} s); nothing "
+                f"moved"), resolved=True))
         elif small:
             meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
             if ga != gb and est["rho"] >= STRONG_RHO:
@@ -533,8 +539,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
-            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO}, an interval "
-                        f"within +-{HALF_WIDTH} s that excludes zero and is narrower than the offset): not acted on")
+            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "
+                        f"{EVIDENCE_S:g} s, an interval within +-{HALF_WIDTH} s that excludes zero and is narrower "
+                        f"than the offset): not acted on")
         if ga != gb:
             findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
