@@ -3,8 +3,8 @@ from its seed as benchmarks/quirk_composition.py draws it), each against the tru
 with: leap seconds beside a deg/s gyro, a receiver's heading beside held positions, a clock step in
 a file with one noisy column and in a file of noise only, duplicated NMEA epochs with bad
 checksums, held positions through a degraded fix, a speed in km/h beside held positions through a
-degraded fix, devices on one clock whose gyro meets a slow mower's course for 10 s only; and a held
-channel that changes twice in one of its periods."""
+degraded fix, devices on one clock whose gyro meets a slow mower's course for 10 s only, a clock stepped back with a row
+written late just after it; and a held channel that changes twice in one of its periods."""
 from __future__ import annotations
 
 import re
@@ -130,3 +130,14 @@ def test_a_chance_correlation_over_a_few_seconds_moves_no_clock(tmp_path):
     t = rec.report["used"]["utc_start_s"] - START + rec.log["t"].to_numpy(float)
     want = np.percentile(np.abs(truth["drive"].at("yaw_rate", t)), 90)
     assert np.percentile(np.abs(rec.log["yaw_rate"].to_numpy(float)), 90) == pytest.approx(want, rel=0.03)
+
+
+def test_a_clock_step_back_is_named_though_a_row_written_late_follows_it(tmp_path):
+    """One table whose clock steps back 1.5 s at 39 s, a row written late a few rows after the step:
+    the rows after it still go on from it at the cadence (all but the late one): a clock's step."""
+    truth = composed(9063, tmp_path, {"clock_jump", "out_of_order", "quoted_rows", "units_row"})["planted"]
+    rec = convert(tmp_path)
+    found = kinds(rec, "clock_jump")
+    assert len(found) == 1 and found[0]["value"] == pytest.approx(truth["clock_jump"]["by_s"], abs=0.05)
+    said = [s for s in rec.report.get("notes", []) if "step back" in str(s)]
+    assert [int(re.search(r"(\d+) times step back", str(s)).group(1)) for s in said] == [truth["out_of_order"]["count"]]

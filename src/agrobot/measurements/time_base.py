@@ -2,8 +2,9 @@
 file, a receiver's GPS week-number rollover, and the receiver's GPS time against UTC.
 
 - Clock step (``clock_jump``): a file's rows come at a cadence h (the median step of its stamps).
-  A stamp that steps back by more than 2 h while the rows after it go on at the cadence (rows
-  written late return to the old sequence at once: out of order, not a clock) is a step of the
+  A stamp that steps back by more than 2 h while the rows after it go on at the cadence (the first
+  and 80 % of the next 20: rows written late return to the old sequence at once, out of order, not
+  a clock; one among them does not hide a step) is a step of the
   logger's clock; so is a stamp that leaps forward by more than max(5 h, 0.5 s) while the values
   change across it as they change over one row, not as over the time the stamps skip (a silence
   moves every signal on: the positions as far as the machine drives). Per numeric column, with
@@ -45,7 +46,8 @@ LEAP_TABLE = ((915148800.0, 13.0), (1136073600.0, 14.0), (1230768000.0, 15.0), (
               (1435708800.0, 17.0), (1483228800.0, 18.0))
 BACK_STEPS = 2.0        # cadences: a step back larger than this, the rows after it regular, is a clock step
 AHEAD_STEPS, AHEAD_MIN = 5.0, 0.5      # cadences, s: a leap forward at least this large is judged
-REGULAR_AFTER = 20      # rows after a step back that must come at the cadence
+REGULAR_AFTER = 20      # rows after a step back that must come at the cadence ...
+REGULAR_SHARE = 0.8     # ... this share of them, the first always
 MOVES = 3.0             # a column informs when its change over the skipped rows is this many times its one-row change
 LEAP_TOLERANCE = 0.5    # s: an offset between a receiver and another clock this close to the leap count is that count
 
@@ -73,9 +75,12 @@ def _cadence(t: np.ndarray) -> float:
 
 
 def _regular_after(t: np.ndarray, k: int, h: float) -> bool:
-    """The rows after row k + 1 come at the cadence (within half a step) for REGULAR_AFTER rows."""
+    """The rows after row k + 1 come at the cadence (within half a step): the first of them, and
+    REGULAR_SHARE of the REGULAR_AFTER after it (a row written late among them does not hide the
+    step; a row written late itself is followed at once by a leap back to the old sequence)."""
     dt = np.diff(t[k + 1:k + 2 + REGULAR_AFTER])
-    return len(dt) >= min(REGULAR_AFTER, 5) and bool(np.all(np.abs(dt - h) <= 0.5 * h))
+    at = np.abs(dt - h) <= 0.5 * h
+    return len(dt) >= min(REGULAR_AFTER, 5) and bool(at[0]) and float(np.mean(at)) >= REGULAR_SHARE
 
 
 def _votes(columns: list[np.ndarray], k: int, n: int) -> tuple[int, int]:
