@@ -17,8 +17,9 @@ them: kind, channels, value, interval, meaning; the import's notes and log as co
 - held_channel: a finding (kind: held, update) or a channel row (update_hz) for the channel giving
   its update rate within 10 % (or the hold factor);
 - one_clock_weak: nothing realigned and no unresolved clock_offset or response_leads_input;
-- units_row: the log's angles, rates and speed in SI: their 90th percentiles of |x| within 3 % of
-  the truth's at the log's times (a mislabelled channel left out: it holds another quantity);
+- units_row: the log's angles, rates and speed in SI: each the truth's times a scale within 3 % of 1
+  (least squares through the origin at the log's times; a mislabelled channel left out: it holds
+  another quantity);
 - quoted_rows: the import reads every file and the log's speed within 3 % as above;
 - fix_quality_drop: a ``fix_quality`` column equal to the source's code on 95 % of the log's
   samples (the source's own times), or a finding naming each stretch within 1.0 s;
@@ -182,12 +183,20 @@ def named_one_clock(res, t) -> bool:
     return res["ok"] and not realigned(res)
 
 
+def scale_to_truth(res: dict, column: str) -> float:
+    """The log's column as the truth's times a scale (least squares through the origin at the log's
+    times: noise another class adds to the log does not bias it, as it biases a percentile)."""
+    x = res["log"][column].to_numpy(float)
+    y = res["truth"]["drive"].at(column, log_truth_times(res))
+    ok = np.isfinite(x) & np.isfinite(y)
+    return float(x[ok] @ y[ok] / max(y[ok] @ y[ok], 1e-12))
+
+
 def named_units(res, t) -> bool:
     if not res["ok"]:
         return False
     other = res["truth"]["planted"].get("mislabelled_channel", {}).get("channel")   # holds another quantity
-    pairs = [("delta", "delta"), ("yaw_rate", "yaw_rate"), ("v", "v")]
-    ratios = [p90_ratio(res, c, c) for c, _ in pairs
+    ratios = [scale_to_truth(res, c) for c in ("delta", "yaw_rate", "v")
               if c in t["units"] and c != other and res["log"] is not None and c in res["log"]]
     return bool(ratios) and all(abs(r - 1) <= 0.03 for r in ratios)
 
