@@ -18,8 +18,8 @@ them: kind, channels, value, interval, meaning; the import's notes and log as co
   its update rate within 10 % (or the hold factor);
 - one_clock_weak: nothing realigned and no unresolved clock_offset or response_leads_input;
 - units_row: the log's angles, rates and speed in SI: each the truth's times a scale within 3 % of 1
-  (least squares through the origin at the log's times; a mislabelled channel left out: it holds
-  another quantity);
+  (least squares through the origin at the log's times, moved by the lag within +-1 s that fits
+  best; a mislabelled channel left out: it holds another quantity);
 - quoted_rows: the import reads every file and the log's speed within 3 % as above;
 - fix_quality_drop: a ``fix_quality`` column equal to the source's code on 95 % of the log's
   samples (the source's own times), or a finding naming each stretch within 1.0 s;
@@ -184,12 +184,20 @@ def named_one_clock(res, t) -> bool:
 
 
 def scale_to_truth(res: dict, column: str) -> float:
-    """The log's column as the truth's times a scale (least squares through the origin at the log's
-    times: noise another class adds to the log does not bias it, as it biases a percentile)."""
+    """The log's column as the truth's times a scale: least squares through the origin, the truth
+    taken at the log's times moved by the lag within +-1 s that fits best (another class's clock
+    offset left unaligned is not a unit; noise it adds to the log does not bias the scale, as it
+    biases a percentile)."""
     x = res["log"][column].to_numpy(float)
-    y = res["truth"]["drive"].at(column, log_truth_times(res))
-    ok = np.isfinite(x) & np.isfinite(y)
-    return float(x[ok] @ y[ok] / max(y[ok] @ y[ok], 1e-12))
+    t = log_truth_times(res)
+    best = (-1.0, math.nan)
+    for lag in np.arange(-1.0, 1.0001, 0.02):
+        y = res["truth"]["drive"].at(column, t + lag)
+        ok = np.isfinite(x) & np.isfinite(y)
+        fit = np.corrcoef(x[ok], y[ok])[0, 1] if ok.sum() > 10 else -1.0
+        if fit > best[0]:
+            best = (fit, float(x[ok] @ y[ok] / max(y[ok] @ y[ok], 1e-12)))
+    return best[1]
 
 
 def named_units(res, t) -> bool:
