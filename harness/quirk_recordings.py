@@ -251,17 +251,25 @@ def plant_held_channel(rec: Recording, rng) -> dict:
             "update_hz": s.rate / factor, "row_hz": s.rate, "factor": factor}
 
 
+def per_update(rec: Recording, column: str, rows: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Noise ``e`` drawn for the ascending ``rows`` as ``column`` carries it: a held channel's
+    changes with its updates only (each row takes its update's first row's draw)."""
+    held = rec.planted.get("held_channel", {})
+    if column not in held.get("columns", ()):
+        return e
+    k = rows // held["factor"]
+    return e[np.searchsorted(k, k)]
+
+
 @quirk("channel", layouts=("table",))
 def plant_one_clock_weak(rec: Recording, rng) -> dict:
     """One row, one clock, with the slow noisy channels that make weak spurious correlations."""
     s = rec.sheets["log"]
     gyro, pos = rng.uniform(0.02, 0.04), rng.uniform(0.03, 0.05)
     n = len(s.t)
-    held = rec.planted.get("held_channel", {})
 
-    def noise(column: str, sigma: float) -> np.ndarray:      # a held channel's noise changes with its updates only
-        e = sigma * rng.standard_normal(n)
-        return e[(np.arange(n) // held["factor"]) * held["factor"]] if column in held.get("columns", ()) else e
+    def noise(column: str, sigma: float) -> np.ndarray:
+        return per_update(rec, column, np.arange(n), sigma * rng.standard_normal(n))
     if "yaw_rate" in s.columns:
         s.columns["yaw_rate"] = s.columns["yaw_rate"] + noise("yaw_rate", gyro)
     s.columns["lat"] = s.columns["lat"] + np.degrees(noise("lat", pos) / EARTH)
@@ -296,7 +304,7 @@ def plant_quoted_rows(rec: Recording, rng) -> dict:
 @quirk("channel", layouts=LAYOUTS)
 def plant_fix_quality_drop(rec: Recording, rng) -> dict:
     """The fix falls from RTK fixed (4) to DGPS (2) or RTK float (5) for 5-15 s, once to three
-    times; the positions noisier there (0.3 m DGPS, 0.05 m float)."""
+    times; the positions noisier there (0.3 m DGPS, 0.05 m float; held positions hold it too)."""
     s = rec.holder("fix_quality")
     duration = float(s.t[-1])
     stretches = []
@@ -308,11 +316,15 @@ def plant_fix_quality_drop(rec: Recording, rng) -> dict:
                 stretches.append((float(a), float(b), int(rng.choice([2, 5]))))
                 break
     q = s.columns["fix_quality"]
+    held = rec.planted.get("held_channel", {})
+    n = len(s.t)            # held positions change fix with their updates: each row goes with its update's first
+    first = (np.arange(n) // held["factor"]) * held["factor"] if "lat" in held.get("columns", ()) else np.arange(n)
     for a, b, code in stretches:
-        inside = (s.t >= a) & (s.t < b)
+        inside = (s.t[first] >= a) & (s.t[first] < b)
         q[inside] = code
         sigma = 0.3 if code == 2 else 0.05
-        s.columns["lat"][inside] += np.degrees(sigma * rng.standard_normal(inside.sum()) / EARTH)
+        e = per_update(rec, "lat", np.flatnonzero(inside), sigma * rng.standard_normal(inside.sum()))
+        s.columns["lat"][inside] += np.degrees(e / EARTH)
     rec.taken.add("fix_quality")
     return {"stretches": [list(x) for x in sorted(stretches)], "channel": "fix_quality",
             "share": {str(c): float(np.mean(q == c)) for c in (2, 4, 5)}}
@@ -617,3 +629,6 @@ def write_nmea(rec: Recording, s: Sheet, path: Path) -> None:
     rec.files.append(path)
     steps = np.diff(s.t)
     rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)), "repeated": int(np.sum(steps == 0))}
+    if "duplicate_stamps" in rec.planted:       # a copy whose GGA or original's is corrupt repeats no readable epoch
+        intact = np.array([i not in rec.corrupt for i in range(len(s.t))])
+        rec.planted["duplicate_stamps"]["readable"] = int(np.sum(np.diff(s.t[intact]) == 0))

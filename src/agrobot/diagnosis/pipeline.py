@@ -17,6 +17,7 @@ from agrobot.identification.vehicle import Vehicle
 from agrobot.identification.yaw_measurement import with_yaw_rate
 from agrobot.measurements import LogError
 from agrobot.measurements.audit import require_causal
+from agrobot.measurements.modes import WhereError
 from agrobot.measurements.recording import ImportOptions
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.errors import InputError
@@ -372,7 +373,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
               screen: bool = True):
     """Run the diagnosis; returns (result, write), nothing written: ``write(folder)`` writes
     diagnosis.json and report.md (verdict ``cannot decide`` with the reason when the log cannot be
-    used), and the figures and extended_study.toml. Raises nothing for a bad log.
+    used), and the figures and extended_study.toml. Raises nothing for a bad log; a ``--where``
+    that does not fit it (measurements.modes.WhereError) is a usage error, raised.
     ``identify``: identify the vehicle on the same log first (the model ``identify`` fits); ``mcap``:
     ``write`` adds diagnosis.mcap; ``split``: what is held out (diagnosis.candidates.SPLITS: the last
     part, every third window, or chosen by the log's conditions); ``workers``: processes for the candidate
@@ -385,6 +387,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     try:
         study, baseline, frame, replay, note = _replay_of(log_path, study_path, result, fit_fraction, resample,
                                                           recording, split)
+    except WhereError:                            # a --where that does not fit the log: usage, nothing written
+        raise
     except (LogError, CannotDecide) as exc:
         reason = str(exc)                         # a LogError names the file already; a replay's refusal does not
         result["reason"] = reason if str(log_path) in reason else f"{log_path}: {reason}"

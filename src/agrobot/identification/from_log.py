@@ -76,14 +76,20 @@ def longest_stretch(frame, gap: float | None = None):
     step = float(np.median(np.diff(t)))
     cuts = np.flatnonzero(np.diff(t) > (gap or max(0.5, 5 * step))) + 1
     a, b = max(zip(np.r_[0, cuts], np.r_[cuts, len(t)]), key=lambda ab: ab[1] - ab[0])
-    piece = frame.iloc[a:b]
-    step = float(np.median(np.diff(piece["t"])))
-    grid = piece["t"].iloc[0] + step * np.arange(int((piece["t"].iloc[-1] - piece["t"].iloc[0]) / step) + 1)
-    even = pd.DataFrame({c: np.interp(grid, piece["t"], piece[c]) for c in piece.columns
-                         if c != "t" and pd.api.types.is_numeric_dtype(piece[c])})
-    even.insert(0, "t", grid - grid[0])
+    step = float(np.median(np.diff(t[a:b])))
+    even = on_even_clock(frame, slice(a, b), t[a], t[b - 1], step)
+    even["t"] -= t[a]
     even.attrs = dict(frame.attrs)          # the audit's findings, the selection: the stretch's too
     return even, (float(t[a]), float(t[b - 1]))
+
+
+def on_even_clock(frame, rows, a: float, b: float, step: float) -> pd.DataFrame:
+    """The numeric columns of ``frame``'s ``rows`` interpolated (linearly) on the even clock
+    t = a + k step, a <= t <= b; its t column that clock."""
+    t = frame["t"].to_numpy(float)[rows]
+    grid = a + step * np.arange(int(math.floor((b - a) / step + 1e-9)) + 1)
+    return pd.DataFrame({"t": grid, **{c: np.interp(grid, t, frame[c].to_numpy(float)[rows]) for c in frame.columns
+                                       if c != "t" and pd.api.types.is_numeric_dtype(frame[c])}})
 
 
 def joined_stretches(frame):
@@ -96,17 +102,14 @@ def joined_stretches(frame):
         return None
     t = frame["t"].to_numpy(float)
     step = float(np.median(np.diff(t)))
-    numeric = [c for c in frame.columns if c != "t" and pd.api.types.is_numeric_dtype(frame[c])]
     pieces, joins, start = [], [], 0.0
     for a, b in spans:
-        inside = (t >= a - 1e-9) & (t <= b + 1e-9)
-        grid = a + step * np.arange(int(math.floor((b - a) / step + 1e-9)) + 1)
-        piece = pd.DataFrame({c: np.interp(grid, t[inside], frame[c].to_numpy(float)[inside]) for c in numeric})
-        piece.insert(0, "t", start + step * np.arange(len(grid)))
+        piece = on_even_clock(frame, (t >= a - 1e-9) & (t <= b + 1e-9), a, b, step)
+        piece["t"] = start + step * np.arange(len(piece))
         if pieces:
             joins.append(start)
         pieces.append(piece)
-        start += step * len(grid)
+        start += step * len(piece)
     even = pd.concat(pieces, ignore_index=True)
     even.attrs = {**frame.attrs, "joins": joins}
     first, last = frame.attrs.get("log_span", (t[0], t[-1]))

@@ -10,7 +10,9 @@ share that table's).
 
 Between channels, from signals that must agree (Kayacan et al. section 2's kinematic relations):
 
-- two speeds: the wheel speed ``v`` against the receiver's speed over ground;
+- two speeds: the wheel speed ``v`` against the receiver's speed over ground (its scale read where
+  the fix holds the quality it holds longest: a degraded fix's noise biases a speed from positions
+  upwards);
 - gyro against the GNSS course: ``yaw_rate`` against d(course)/dt of the track (1 s chords, |v| > 1 m/s);
 - ``v r`` against the lateral acceleration (a column ``ay``, ``a_y``, ``lat_acc``, ``acc_y``);
 - two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*``);
@@ -28,8 +30,9 @@ Kinds:
 
 - ``clock_offset``: the second group's stamps are ``value`` s late against the first's (a pair
   with no physical lag); acted on (aligned by ``--align auto``) only on evidence: correlation at
-  least STRONG_RHO, an interval of half-width at most HALF_WIDTH s that excludes zero and is
-  narrower than the offset, the offset at least ALIGN_MIN; below that it is "too weak to judge",
+  least STRONG_RHO over at least EVIDENCE_S s of samples compared, an interval of half-width at
+  most HALF_WIDTH s that excludes zero and is narrower than the offset, the offset at least
+  ALIGN_MIN; below that it is "too weak to judge",
   resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
 - ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
   clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
@@ -77,7 +80,7 @@ from .findings import finding
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
-from .time_base import gps_minus_utc, leap_meaning
+from .time_base import LEAP_TOLERANCE, gps_minus_utc, leap_meaning
 
 SEARCH = 3.0            # s: lags searched either way
 WIDE_SEARCH = 30.0      # s: ... and this far between two clocks that no lag within SEARCH explains
@@ -85,6 +88,8 @@ LEAD_TOLERANCE = 0.05   # s: a response this far ahead of its input is still wit
 ALIGN_MIN = 0.08        # s: a smaller offset is not corrected (within a GNSS epoch's latency)
 STRONG_RHO = 0.6        # a lag trusted for alignment: correlation at least this
 HALF_WIDTH = 0.1        # s: ... and its interval's half-width at most this
+EVIDENCE_S = 30.0       # s: ... on at least this much of the two signals compared (a slow machine's course
+                        # read above MOVING for 10 s correlates by chance somewhere in a +-30 s search)
 STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
@@ -167,12 +172,13 @@ def _peak(rho: np.ndarray, step: float, shift: int) -> tuple[float, float]:
     return ((k - shift) * step, best) if math.isfinite(k) else (math.nan, 0.0)
 
 
-def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False) -> dict | None:
+def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool = False,
+        scale_mask=None) -> dict | None:
     """How late b is against a: b(t) = s a(t - lag). {lag, interval, rho, scale, scale_interval,
     seconds, inverted, edge} or None when they share too little: where the correlation's most
     negative value outweighs its most positive, b answers a with the opposite sign (``inverted``,
     rho that of -b, the scale negative); ``edge``: the peak sits on the search's bound. ``mask(grid) -> bool`` limits the samples
-    (e.g. moving)."""
+    (e.g. moving); ``scale_mask(grid) -> bool`` limits further those the scale is read on."""
     ta, tb = np.asarray(ta, float), np.asarray(tb, float)
     if len(ta) < 20 or len(tb) < 20:
         return None
@@ -202,14 +208,15 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     if not math.isfinite(whole):
         return None
     if search > SEARCH and abs(whole) > SEARCH:       # a wide search: b moved by its peak, judged again near it
-        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin)
+        fine = lag(ta, xa, tb - whole, xb, SEARCH, mask, through_origin, scale_mask)
         if fine is None:
             return None
         iv = fine["interval"]
         return {**fine, "lag": fine["lag"] + whole, "interval": None if iv is None else [iv[0] + whole, iv[1] + whole]}
     k = int(round(whole / step))
     width = int(round(SCALE_SPAN / step))
-    scale = _slope(a, b, oka, okb, k, through_origin, width)
+    oks = oka & scale_mask(grid) if scale_mask is not None else oka
+    scale = _slope(a, b, oks, okb, k, through_origin, width)
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -222,7 +229,7 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
             lp, rp = _peak(p, step, shift)
             if math.isfinite(lp) and rp > 0.3:
                 lags.append(lp)
-                scales.append(_slope(a, b, oka & sel, okb, int(round(lp / step)), through_origin, width))
+                scales.append(_slope(a, b, oks & sel, okb, int(round(lp / step)), through_origin, width))
     if len(lags) >= 3:
         se = 2.0 * float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
         interval = [whole - max(se, step), whole + max(se, step)]
@@ -312,6 +319,25 @@ def _moving(t_v, v, threshold=MOVING):
     return lambda grid: np.abs(np.interp(grid, t_v, v)) > threshold
 
 
+def _usual(best):
+    """mask(grid): where the receiver's fix is at its usual quality (``best``: usual_fix), or None."""
+    if best is None:
+        return None
+    tb, ok = best
+    return lambda grid: np.interp(grid, tb, ok.astype(float)) > 0.5
+
+
+def usual_fix(gnss):
+    """(utc, whether each fix is at the quality the receiver holds longest), or None when it does not
+    say its quality or holds it on less than half of its fixes."""
+    q = gnss["quality"].to_numpy(float) if "quality" in gnss else np.zeros(0)
+    if not np.isfinite(q).any():
+        return None
+    values, counts = np.unique(q[np.isfinite(q)], return_counts=True)
+    usual = q == values[np.argmax(counts)]
+    return (gnss["utc"].to_numpy(float), usual) if 0.5 <= usual.mean() < 1.0 else None
+
+
 class Auditor:
     """Collects the channel table and the findings of one recording (measurements.recording)."""
 
@@ -369,10 +395,11 @@ class Auditor:
         gnss = self.streams.gnss
         if gnss is not None and len(gnss) > 20:
             tg, speed, course_rate = gnss_rates(gnss)
+            best = usual_fix(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
                 out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
-                                                               through_origin=True,
-                                                               mask=_moving(tg, speed, 0.3)), "m/s"))
+                                                               through_origin=True, mask=_moving(tg, speed, 0.3),
+                                                               scale_mask=_usual(best)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
                 ok = np.isfinite(course_rate)
@@ -431,10 +458,11 @@ def _interval_text(iv, unit="s", digits=3) -> str:
 
 
 def _judged(est: dict) -> bool:
-    """A lag strong enough to act on: correlation at least STRONG_RHO, an interval within
-    +-HALF_WIDTH s, the peak inside the search."""
+    """A lag strong enough to act on: correlation at least STRONG_RHO over at least EVIDENCE_S s
+    of samples compared, an interval within +-HALF_WIDTH s, the peak inside the search."""
     iv = est["interval"]
-    return est["rho"] >= STRONG_RHO and iv is not None and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"]
+    return (est["rho"] >= STRONG_RHO and est["seconds"] >= EVIDENCE_S and iv is not None
+            and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"])
 
 
 def widened(aud: Auditor, pairs: list) -> list:
@@ -452,13 +480,16 @@ def widened(aud: Auditor, pairs: list) -> list:
 
 def _leap(aud: Auditor, est: dict, ga: str, gb: str) -> float | None:
     """The GPS - UTC leap seconds of the recording's date (signed as the lag) when a strong lag
-    (correlation at least STRONG_RHO, not on the search's bound) between the receiver's clock and
-    another has an interval that holds that count and not zero; else None."""
+    (correlation at least STRONG_RHO over EVIDENCE_S s, not on the search's bound) between the receiver's clock and
+    another has an interval that excludes zero and holds that count, or is judged (_judged) within
+    LEAP_TOLERANCE of it (the signals compared add their own latencies to the clocks'); else None."""
     iv, leap = est["interval"], gps_minus_utc(aud.t0)
-    if not leap or iv is None or est["rho"] < STRONG_RHO or est["edge"] or aud.group("gnss") not in (ga, gb):
+    if not leap or iv is None or est["rho"] < STRONG_RHO or est["seconds"] < EVIDENCE_S or est["edge"] \
+            or aud.group("gnss") not in (ga, gb):
         return None
     signed = math.copysign(leap, est["lag"])
-    return signed if iv[0] <= signed <= iv[1] and (iv[0] > 0 or iv[1] < 0) else None
+    holds = iv[0] <= signed <= iv[1] or (_judged(est) and abs(est["lag"] - signed) < LEAP_TOLERANCE)
+    return signed if holds and (iv[0] > 0 or iv[1] < 0) else None
 
 
 def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], list[dict]]:
@@ -480,11 +511,15 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
                    f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
                    + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
+        if leap is not None and not iv[0] <= leap <= iv[1]:
+            meaning += (f"; measured {est['lag']:+.3f} s{_interval_text(iv)}: the leap count, the rest "
+                        f"({est['lag'] - leap:+.3f} s) a latency of the signals compared, not moved")
         if ga == gb:
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
                 f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
                 f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
-                f"{STRONG_RHO} or interval wider than +-{HALF_WIDTH} s); nothing moved"), resolved=True))
+                f"{STRONG_RHO}, under {EVIDENCE_S:g} s compared or interval wider than +-{HALF_WIDTH} s); nothing "
+                f"moved"), resolved=True))
         elif small:
             meaning += f"; below {ALIGN_MIN} s: the clocks agree, nothing to correct"
             if ga != gb and est["rho"] >= STRONG_RHO:
@@ -504,8 +539,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             elif gb in base and ga not in base:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
-            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO}, an interval "
-                        f"within +-{HALF_WIDTH} s that excludes zero and is narrower than the offset): not acted on")
+            meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "
+                        f"{EVIDENCE_S:g} s, an interval within +-{HALF_WIDTH} s that excludes zero and is narrower "
+                        f"than the offset): not acted on")
         if ga != gb:
             findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]

@@ -26,7 +26,9 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   spiky; the first row's held value, of an unknown age, is left out); where those times fit a regular clock (the sensor's: a receiver's epochs, a heading's
   fixed rate) within the rows' own jitter (residual std at most CLOCK_FIT rows after a running mean
   over CLOCK_WINDOW updates of a line through the update numbers, each the time since the first
-  in periods, rounded), they are put on it. So
+  in periods, rounded), they are put on it, but for two updates that fall in one of its periods
+  (they keep their own times: one clock slot would give them one time, a rate between them
+  infinite). So
   every quantity the audit and the log derive from it (the track's speed and course, a rate from a
   heading, a noise level, a cross-correlation) is computed on them. Set-points (a command, held by
   nature) keep their rows; their update rate is still reported.
@@ -133,7 +135,12 @@ def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
     r = tm - (offset + slope * n)
     pad = np.pad(r, CLOCK_WINDOW // 2, mode="edge")
     drift = np.convolve(pad, np.ones(CLOCK_WINDOW) / CLOCK_WINDOW, "valid")
-    return offset + slope * n + drift if float(np.std(r - drift)) <= CLOCK_FIT * row else tm
+    if float(np.std(r - drift)) > CLOCK_FIT * row:
+        return tm
+    shared = np.zeros(len(n), bool)         # two updates in one of the clock's slots: each keeps its own time
+    shared[1:] |= np.diff(n) == 0
+    shared[:-1] |= np.diff(n) == 0
+    return np.where(shared, tm, offset + slope * n + drift)
 
 
 def _motion(streams: Streams):
@@ -185,6 +192,7 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         g = streams.gnss
         found = holding(g["utc"].to_numpy(float), g[["lat", "lon"]].to_numpy(float), moving)
         if found is not None:
+            g = _heading_apart(streams, g, found["keep"])
             streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
             notes.append({"channel": "gnss", **_said(found)})
         notes += _receiver_heading(streams)
@@ -201,6 +209,25 @@ def keep_updates(streams: Streams, source) -> list[dict]:
         streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
         streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
     return notes
+
+
+def _heading_apart(streams: Streams, g, keep: np.ndarray):
+    """The receiver's frame with its own heading (HDT, THS) taken out as a channel of its own, on
+    its epochs' stamps and the receiver's clock, where the positions' updates ``keep`` would drop
+    some of its samples (a 10 Hz heading beside 5 Hz positions is judged at 10 Hz); else ``g``."""
+    if "heading" not in g or "heading" in streams.signals:
+        return g
+    h = g["heading"].to_numpy(float)
+    ok = np.isfinite(h)
+    dropped = ok.copy()
+    dropped[keep] = False
+    if ok.sum() < MIN_SAMPLES or not dropped.any():
+        return g
+    streams.signals["heading"] = (g["utc"].to_numpy(float)[ok], h[ok])
+    streams.groups["heading"] = streams.groups.get("gnss", "gnss")
+    columns = streams.report.setdefault("columns", {})
+    columns["heading"] = "the receiver's own heading (ENU yaw), on its epochs: a channel apart from its held positions"
+    return g.assign(heading=np.nan)
 
 
 def _receiver_heading(streams: Streams) -> list[dict]:

@@ -13,6 +13,10 @@ UNEXPLAINED_FLOOR, and UNRELATED times the larger standard deviation of delta or
 UNEXPLAINED_MIN seconds or more (blips under half a window dropped first; shorter agreements
 inside such a stretch belong to it). Both selections are printed (times, count,
 share of the log) and kept in ``frame.attrs["selection"]``.
+
+A ``--where`` that does not fit the log (its syntax, a column the log lacks, a comparison the
+column's values cannot take) is a WhereError: a usage error, after which a command writes nothing;
+one that selects nothing is the log's content (a diagnosis says it cannot decide, and why).
 """
 from __future__ import annotations
 
@@ -35,6 +39,10 @@ UNEXPLAINED_FLOOR = 0.01        # rad (0.57 deg): a smaller residual is explaine
 UNEXPLAINED_MIN = 3.0           # s: a shorter stretch is not named
 UNRELATED = 0.8                 # the residual's RMS against the larger motion of delta or of its fit
 _TERM = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(==|!=|<=|>=|<|>|=)\s*(?:'([^']*)'|\"([^\"]*)\"|([^\s'\"]+))\s*$")
+
+
+class WhereError(LogError):
+    """A ``--where`` that does not fit the log: the command's usage, not the log's content."""
 
 
 @dataclass(frozen=True)
@@ -92,7 +100,7 @@ def parse_where(text: str) -> list[list[Condition]]:
         for piece in re.split(r"\s+and\s+", part):
             m = _TERM.match(piece)
             if not m:
-                raise LogError(usage)
+                raise WhereError(usage)
             word = next(g for g in m.groups()[2:] if g is not None)
             quoted = m.group(3) is not None or m.group(4) is not None
             try:
@@ -102,7 +110,7 @@ def parse_where(text: str) -> list[list[Condition]]:
             terms.append(Condition(m.group(1), "==" if m.group(2) == "=" else m.group(2), value))
         alternatives.append(terms)
     if not alternatives or not all(alternatives):
-        raise LogError(usage)
+        raise WhereError(usage)
     return alternatives
 
 
@@ -122,17 +130,17 @@ def _show(v) -> str:
 
 def _condition(frame: pd.DataFrame, c: Condition, source) -> np.ndarray:
     if c.column not in frame:
-        raise LogError(f"{source}: --where: no column {c.column!r}; the log has {', '.join(map(str, frame.columns))} "
+        raise WhereError(f"{source}: --where: no column {c.column!r}; the log has {', '.join(map(str, frame.columns))} "
                        f"(a raw recording's channel is mapped with --signal {c.column}=...)")
     col = frame[c.column]
     numeric = pd.api.types.is_numeric_dtype(col)
     if numeric and isinstance(c.value, str):
-        raise LogError(f"{source}: --where {c.column} {c.op} {c.value}: column {c.column!r} holds numbers "
+        raise WhereError(f"{source}: --where {c.column} {c.op} {c.value}: column {c.column!r} holds numbers "
                        f"({_held_values(col)}); compare it with a number")
     x = col.to_numpy(float) if numeric else col.astype(str).str.strip().to_numpy()
     v = c.value if numeric else str(c.value if isinstance(c.value, str) else _show(c.value))
     if not numeric and c.op not in ("==", "!="):
-        raise LogError(f"{source}: --where {c.column} {c.op} {c.value}: column {c.column!r} holds text "
+        raise WhereError(f"{source}: --where {c.column} {c.op} {c.value}: column {c.column!r} holds text "
                        f"({_held_values(col)}); compare it with == or !=")
     return {"==": lambda: x == v, "!=": lambda: x != v, "<": lambda: x < v, "<=": lambda: x <= v,
             ">": lambda: x > v, ">=": lambda: x >= v}[c.op]()

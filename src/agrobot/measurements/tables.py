@@ -47,7 +47,7 @@ from .quirks import fixes_from_columns
 from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
 from .streams import Reader, Series, Streams, is_boot_clock, iso
-from .time_base import clock_steps, rollover_between, rollover_by_written, rollover_finding
+from .time_base import clock_steps, rollover_between, rollover_by_written, rollover_finding, span_step, undo_step
 
 TABLE_SUFFIXES = (".csv", ".tsv", ".parquet", ".pq")
 MDF_SUFFIXES = (".mf4", ".mdf")          # ASAM MDF4: one table per channel group (measurements.mdf4)
@@ -544,7 +544,24 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
         if t.t is not None:
             _clean(t)
     _rollover(tables)
+    _stepped_by_span(tables)
     return tables
+
+
+def _stepped_by_span(tables: list[Table]) -> None:
+    """A table whose clock stepped forward where its columns could not tell, told by the other
+    tables' span (measurements.time_base.span_step; files that start or end together agree within
+    1.5 rows of the slowest): its later stamps moved back, named."""
+    dated = [t for t in tables if t.t is not None and len(t.t) > 30 and not is_boot_clock(t.t)]
+    if len(dated) < 2:
+        return
+    tol = 1.5 * max(float(np.median(np.diff(t.t))) for t in dated)
+    for t in dated:
+        k = span_step(t.t, [(float(o.t[0]), float(o.t[-1])) for o in dated if o is not t], tol)
+        if k is not None:
+            h = float(np.median(np.diff(t.t)))
+            t.time_base.append(undo_step(t.t, k, h, t.path.name, "no column tells a step from a silence, but the "
+                                         "file starts with the others and ends the step after them"))
 
 
 def _rollover(tables: list[Table]) -> None:

@@ -2,16 +2,22 @@
 file, a receiver's GPS week-number rollover, and the receiver's GPS time against UTC.
 
 - Clock step (``clock_jump``): a file's rows come at a cadence h (the median step of its stamps).
-  A stamp that steps back by more than 2 h while the rows after it go on at the cadence (rows
-  written late return to the old sequence at once: out of order, not a clock) is a step of the
+  A stamp that steps back by more than 2 h while the rows after it go on at the cadence (the first
+  and 80 % of the next 20: rows written late return to the old sequence at once, out of order, not
+  a clock; one among them does not hide a step) is a step of the
   logger's clock; so is a stamp that leaps forward by more than max(5 h, 0.5 s) while the values
   change across it as they change over one row, not as over the time the stamps skip (a silence
   moves every signal on: the positions as far as the machine drives). Per numeric column, with
   d the change across the step, D1 and Dn its changes over one row and over the n rows the
   stamps skip, a column that moves over n rows (median Dn at least 3 median D1) says "one row"
   when d is within D1's 95 % and below Dn's 5 %, "a silence" when d is beyond D1's 99 %; the step
-  is a clock's when some column says one row and none says a silence. The stamps after it are
-  moved back by the step onto the clock the file starts on (named, with its size and moment).
+  is a clock's when more than twice as many columns say one row as say a silence (a column of a
+  clock step says a silence by chance 1 %, one of a silence says one row under 5 %: one noisy
+  column among several does not veto the others); where no column tells (a file of noise about a
+  constant), a single leap forward is a clock's when the file starts with the recording's other
+  files and its end overruns theirs by the leap (span_step: a silence ends with the others). The
+  stamps after it are moved back by the step onto the clock the file starts on (named, with its
+  size and moment).
 - GPS week rollover (``gps_week_rollover``): a receiver with a 10-bit week counter dates its fixes
   1024 weeks (WEEK_ROLLOVER = 619,315,200 s) early once its epoch has passed. A file whose stamps
   are k x 1024 weeks (within a day) before the other files', and overlap them once moved, is moved
@@ -40,8 +46,10 @@ LEAP_TABLE = ((915148800.0, 13.0), (1136073600.0, 14.0), (1230768000.0, 15.0), (
               (1435708800.0, 17.0), (1483228800.0, 18.0))
 BACK_STEPS = 2.0        # cadences: a step back larger than this, the rows after it regular, is a clock step
 AHEAD_STEPS, AHEAD_MIN = 5.0, 0.5      # cadences, s: a leap forward at least this large is judged
-REGULAR_AFTER = 20      # rows after a step back that must come at the cadence
+REGULAR_AFTER = 20      # rows after a step back that must come at the cadence ...
+REGULAR_SHARE = 0.8     # ... this share of them, the first always
 MOVES = 3.0             # a column informs when its change over the skipped rows is this many times its one-row change
+LEAP_TOLERANCE = 0.5    # s: an offset between a receiver and another clock this close to the leap count is that count
 
 
 def gps_minus_utc(posix: float) -> float:
@@ -51,9 +59,9 @@ def gps_minus_utc(posix: float) -> float:
 
 def leap_meaning(late: float, when: float) -> str:
     """The words for an offset of ``late`` s between a receiver and the other clocks when it is
-    the GPS - UTC leap seconds of the date (within 0.5 s), else ''."""
+    the GPS - UTC leap seconds of the date (within LEAP_TOLERANCE), else ''."""
     leap = gps_minus_utc(when)
-    if leap and abs(abs(late) - leap) < 0.5:
+    if leap and abs(abs(late) - leap) < LEAP_TOLERANCE:
         return (f"; {abs(late):.3f} s is GPS time against UTC ({leap:.0f} leap seconds on "
                 f"{iso(when)[:10]}): one side's stamps are on GPS time, the other's on UTC")
     return ""
@@ -67,9 +75,12 @@ def _cadence(t: np.ndarray) -> float:
 
 
 def _regular_after(t: np.ndarray, k: int, h: float) -> bool:
-    """The rows after row k + 1 come at the cadence (within half a step) for REGULAR_AFTER rows."""
+    """The rows after row k + 1 come at the cadence (within half a step): the first of them, and
+    REGULAR_SHARE of the REGULAR_AFTER after it (a row written late among them does not hide the
+    step; a row written late itself is followed at once by a leap back to the old sequence)."""
     dt = np.diff(t[k + 1:k + 2 + REGULAR_AFTER])
-    return len(dt) >= min(REGULAR_AFTER, 5) and bool(np.all(np.abs(dt - h) <= 0.5 * h))
+    at = np.abs(dt - h) <= 0.5 * h
+    return len(dt) >= min(REGULAR_AFTER, 5) and bool(at[0]) and float(np.mean(at)) >= REGULAR_SHARE
 
 
 def _votes(columns: list[np.ndarray], k: int, n: int) -> tuple[int, int]:
@@ -107,21 +118,45 @@ def clock_steps(t: np.ndarray, columns: list[np.ndarray], label: str) -> tuple[n
         if step is None:
             for k in ahead:
                 one, silence = _votes(columns, int(k), max(1, int(round(dt[k] / h))))
-                if one and not silence:
+                if one > 2 * silence:
                     step = int(k)
                     break
         if step is None:
             break
-        by = float(dt[step] - h)
-        at = float(t[step] + h)
-        t[step + 1:] -= by
-        found.append({"at": at, "finding": finding(
-            "clock_jump", [label], by, None, "s",
-            f"{label}: the logger's clock stepped {by:+.3f} s between rows {step + 1} and {step + 2} (stamps "
-            f"{iso(at - h)} then {iso(at + by)}; the rows come every {h:.4g} s and the values change across the step "
-            f"as over one row): the stamps after it moved {-by:+.3f} s back onto the clock the file starts on",
-            resolved=True)})
+        found.append(undo_step(t, step, h, label, "the values change across the step as over one row"))
     return t, found
+
+
+def undo_step(t: np.ndarray, step: int, h: float, label: str, evidence: str) -> dict:
+    """{finding, at} of the clock step between rows ``step`` and ``step`` + 1 of stamps ``t`` at
+    cadence ``h``, the stamps after it moved back by it in place; ``evidence`` says why a clock's."""
+    by = float(t[step + 1] - t[step] - h)
+    at = float(t[step] + h)
+    t[step + 1:] -= by
+    return {"at": at, "finding": finding(
+        "clock_jump", [label], by, None, "s",
+        f"{label}: the logger's clock stepped {by:+.3f} s between rows {step + 1} and {step + 2} (stamps "
+        f"{iso(at - h)} then {iso(at + by)}; the rows come every {h:.4g} s and {evidence}): the stamps after it "
+        f"moved {-by:+.3f} s back onto the clock the file starts on", resolved=True)}
+
+
+def span_step(t: np.ndarray, others: list[tuple[float, float]], tol: float) -> int | None:
+    """The row after which a file's clock stepped forward, told by the other files of the recording
+    (its columns too quiet to tell, clock_steps): its one leap forward (beyond max(AHEAD_STEPS h,
+    AHEAD_MIN)) is the amount by which its last stamp overruns theirs, within ``tol``, while it
+    starts with them and they agree with each other (a silence ends with the others; a clock that
+    stepped carries the file's end on by the step). None otherwise."""
+    if not others or len(t) < 30 or not np.isfinite(t).all():
+        return None
+    h = _cadence(t)
+    dt = np.diff(t)
+    ahead = np.flatnonzero(dt > max(AHEAD_STEPS * h, AHEAD_MIN))
+    starts, ends = np.array(others).T
+    if len(ahead) != 1 or np.ptp(starts) > tol or np.ptp(ends) > tol:
+        return None
+    k = int(ahead[0])
+    over = float(t[-1] - np.median(ends))
+    return k if abs(t[0] - np.median(starts)) <= tol and over > tol and abs(over - (dt[k] - h)) <= tol else None
 
 
 # --- GPS week rollover -------------------------------------------------------------------------------
