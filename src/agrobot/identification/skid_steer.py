@@ -162,8 +162,7 @@ def fit(log: DrivingLog, segs: Segments, free: list[Parameter], start: dict, fix
     rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
     n, n_eff = len(sol.fun), effective_size(rows, updates=log.updates_in(segs))
     cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)
-    return FitResult(values, tuple(free), cov, {"yaw": float(sol.fun @ sol.fun)}, {"yaw": n}, {"yaw": n_eff},
-                     residual_fit=sol.fun)
+    return FitResult(values, tuple(free), cov, {"yaw": float(sol.fun @ sol.fun)}, {"yaw": n}, {"yaw": n_eff})
 
 
 def delay_start(log: DrivingLog, lo: float, hi: float) -> tuple[float, float]:
