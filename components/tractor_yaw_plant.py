@@ -128,6 +128,32 @@ def _per_heading(p, eps: float = 1e-6) -> dict[str, float]:
     return {k: (up[k] - down[k]) / (2 * eps) for k in up}
 
 
+def _affine(w: list, b: list, d: float) -> list:
+    """w + b d element by element, on Python floats."""
+    return [wi + bi * d for wi, bi in zip(w, b)]
+
+
+def _affine2(w: list, b: list, d: float) -> list:
+    w0, w1 = w
+    b0, b1 = b
+    return [w0 + b0 * d, w1 + b1 * d]
+
+
+def _affine3(w: list, b: list, d: float) -> list:
+    w0, w1, w2 = w
+    b0, b1, b2 = b
+    return [w0 + b0 * d, w1 + b1 * d, w2 + b2 * d]
+
+
+def _affine4(w: list, b: list, d: float) -> list:
+    w0, w1, w2, w3 = w
+    b0, b1, b2, b3 = b
+    return [w0 + b0 * d, w1 + b1 * d, w2 + b2 * d, w3 + b3 * d]
+
+
+_AFFINE = {2: _affine2, 3: _affine3, 4: _affine4}     # _affine unrolled for the physical models' states
+
+
 class TractorYawPlant(Component):
     sampled = False
     roles = ("yaw_plant",)
@@ -241,13 +267,13 @@ class TractorYawPlant(Component):
         self._min_speed, self._cache_res = float(p["min_speed"]), float(p["speed_cache_resolution"])
         self.z = np.zeros(n)
         self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
-        self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray, list]] = {}
         self._update_ground()
         self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
         self._offset = float(p["steer_angle_offset"])
         # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
         self._level = not (self._slope or self._saturation)
-        self._lists: dict[tuple[int, float], tuple[np.ndarray, list[float]]] = {}    # key: (Ad, Bd as floats)
+        self._affine = _AFFINE.get(n, _affine)
         self._set_outputs(0.0, 0.0, 0.0)
 
     def _update_ground(self) -> None:
@@ -256,8 +282,8 @@ class TractorYawPlant(Component):
         self._pull = slope_pull(gx, gy)
         self._attitude = attitude(gx, gy, self.psi)
 
-    def discretized(self, v: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(Ad, Bd, C) at speed v (cached on a grid of speed_cache_resolution)."""
+    def discretized(self, v: float, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+        """(Ad, Bd, C, Bd's entries as floats) at speed v (cached on a grid of speed_cache_resolution)."""
         key = (int(round(v / self._cache_res)), dt)
         hit = self._cache.get(key)
         if hit is None:
@@ -273,7 +299,7 @@ class TractorYawPlant(Component):
                 if self._slope:
                     B = np.column_stack([B, lateral_disturbance_column(A.shape[0])])
             Ad, Bd = zoh_discretize(A, B, dt)
-            hit = self._cache[key] = (Ad, Bd, C)
+            hit = self._cache[key] = (Ad, Bd, C, Bd.tolist())
             if len(self._cache) > 20000:
                 self._cache.clear()
         return hit
@@ -321,52 +347,39 @@ class TractorYawPlant(Component):
         return z
 
     def _level_step(self, v: float, delta: float, dt: float) -> None:
-        """``step`` on level ground with linear tyres, its arithmetic that of ``step`` in the same
-        order (the same result to the bit): z <- Ad(v) z + Bd(v) delta, the pose by the midpoint
-        rule, the outputs that move (pull, roll and pitch hold their level values)."""
+        """``step`` on level ground with linear tyres: z <- Ad(v) z + Bd(v) delta on a state of
+        Python floats (the product by Ad.dot, matmul's sums without its dispatch; the sum element
+        by element, as numpy's), the same to the bit; then ``_move``."""
         speed = abs(v)
         vmin = self._min_speed
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        key = (int(round(v_eff / self._cache_res)), dt)
-        hit = self._lists.get(key)
-        if hit is None:
-            Ad, Bd, _ = self.discretized(v_eff, dt)
-            hit = self._lists[key] = (Ad, Bd.tolist())
-            if len(self._lists) > 20000:
-                self._lists.clear()
-        Ad, bd = hit
-        # Ad @ z + Bd delta to the bit: the product by Ad.dot (matmul's sums, without its dispatch),
-        # the sum on Python floats (numpy's, element by element): the state is a list of floats here
+        hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
+        Ad, _, _, bd = hit if hit is not None else self.discretized(v_eff, dt)
         if self._tf is None:                    # (v_y, gamma, ...)
             z0 = self.z
-            z = self.z = [w + b * delta for w, b in zip(Ad.dot(z0).tolist(), bd)]
+            z = self.z = self._affine(Ad.dot(z0).tolist(), bd, delta)
             vy0, gamma0, vy1, gamma1 = float(z0[0]), float(z0[1]), z[0], z[1]
         else:
             gamma0, vy0 = self._yaw_rate_and_lateral()
-            self.z = [w + b * delta for w, b in zip(Ad.dot(self.z).tolist(), bd)]
+            self.z = self._affine(Ad.dot(self.z).tolist(), bd, delta)
             gamma1, vy1 = self._yaw_rate_and_lateral()
         if scale != 1.0:
             gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
+        self._move(v, dt, gamma0, vy0, gamma1, vy1)
+
+    def _move(self, v: float, dt: float, gamma0: float, vy0: float, gamma1: float, vy1: float) -> None:
+        """The pose by the midpoint rule over the step (yaw rate and lateral velocity from gamma0,
+        vy0 to gamma1, vy1), the ground under it and the outputs."""
         psi = self.psi
         psi_mid = psi + 0.25 * dt * (gamma0 + gamma1)
         vy_mid = 0.5 * (vy0 + vy1)
         c, s = math.cos(psi_mid), math.sin(psi_mid)
-        x = self.x = self.x + dt * (v * c - vy_mid * s)
-        y_pos = self.y_pos = self.y_pos + dt * (v * s + vy_mid * c)
-        psi = self.psi = psi + 0.5 * dt * (gamma0 + gamma1)
-        lr = self.params.l_r
-        c, s = math.cos(psi), math.sin(psi)
-        forward, left = self._lever[0], self._lever[1]
-        dx, dy = c * forward - s * left, s * forward + c * left
-        x_rear, y_rear = x - lr * c, y_pos - lr * s
-        v_lat_rear = vy1 - lr * gamma1
-        ve, vn = v * c - v_lat_rear * s, v * s + v_lat_rear * c
-        y = self.y
-        y["yaw_rate"], y["lateral_velocity"], y["heading"] = gamma1, vy1, psi
-        y["x_cg"], y["y_cg"], y["x_rear"], y["y_rear"] = x, y_pos, x_rear, y_rear
-        y["vel_east_rear"], y["vel_north_rear"] = ve, vn
-        y["x_antenna"], y["y_antenna"] = x_rear + dx, y_rear + dy
-        y["vel_east_antenna"], y["vel_north_antenna"] = ve - gamma1 * dy, vn + gamma1 * dx
+        self.x += dt * (v * c - vy_mid * s)
+        self.y_pos += dt * (v * s + vy_mid * c)
+        self.psi = psi + 0.5 * dt * (gamma0 + gamma1)
+        if self._slope:                      # level ground: no pull, zero roll and pitch at every pose
+            self._update_ground()
+        self._set_outputs(v, gamma1, vy1)
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
@@ -381,7 +394,7 @@ class TractorYawPlant(Component):
             z = self._saturated_step(v_eff, delta, dt)
         else:
             hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
-            Ad, Bd, _ = hit if hit is not None else self.discretized(v_eff, dt)
+            Ad, Bd, _, _ = hit if hit is not None else self.discretized(v_eff, dt)
             z = Ad @ self.z
         a_lat = -self._pull[0] * math.sin(self.psi) + self._pull[1] * math.cos(self.psi) if self._slope else 0.0
         if self._saturation:
@@ -392,16 +405,7 @@ class TractorYawPlant(Component):
             z += Bd * delta
         self.z = z
         gamma1, vy1 = self._yaw_rate_and_lateral()
-        gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
-        psi_mid = self.psi + 0.25 * dt * (gamma0 + gamma1)
-        vy_mid = 0.5 * (vy0 + vy1)
-        c, s = math.cos(psi_mid), math.sin(psi_mid)
-        self.x += dt * (v * c - vy_mid * s)
-        self.y_pos += dt * (v * s + vy_mid * c)
-        self.psi += 0.5 * dt * (gamma0 + gamma1)
-        if self._slope:                      # level ground: no pull, zero roll and pitch at every pose
-            self._update_ground()
-        self._set_outputs(v, gamma1, vy1)
+        self._move(v, dt, scale * gamma0, scale * vy0, scale * gamma1, scale * vy1)
 
     def linear_model(self, step: float, speed: float) -> Block:
         """Yaw dynamics at v (models.yaw_dynamics; v_y = l_r gamma for a transfer-function model)

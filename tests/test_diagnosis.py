@@ -17,10 +17,17 @@ import pytest
 
 from harness.hidden_effects import EFFECTS, diagnose_many, recovered
 from harness.truth_tractor import make_log
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parent.parent
 DEG = math.pi / 180
 SEEDS = (101,)          # not used while tuning (seeds 1-3); more seeds: benchmarks/diagnosis_rate.py --seeds N
+
+
+@pytest.fixture(scope="module")
+def log_120s():
+    """A clean 120 s log, made once: each test writes its own edit of it."""
+    return make_log(5, None, duration=120.0)[0]
 
 
 @pytest.fixture(scope="module")
@@ -105,13 +112,11 @@ def test_winning_extension_switches_on_in_the_study_and_reproduces_the_effect(tm
     (lambda f: f.assign(x=50.86 + f["x"] / 111e3, y=4.67 + f["y"] / 70e3), ["'x', 'y'", "latitude/longitude"]),
 ])
 @pytest.mark.slow
-def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
-    frame, _ = make_log(5, None, duration=120.0)
+def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, log_120s, edit, words):
     log = tmp_path / "bad.csv"
-    edit(frame).to_csv(log, index=False)
+    edit(log_120s).to_csv(log, index=False)
     out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(log), "--out", str(out)],
-                          capture_output=True, text=True, cwd=ROOT)
+    proc = cli("diagnose", log, "--out", out)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     for w in words:
         assert w in proc.stderr, proc.stderr
@@ -121,24 +126,20 @@ def test_bad_logs_get_cannot_decide_with_a_clear_message(tmp_path, edit, words):
 
 
 @pytest.mark.slow
-def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path):
-    frame, _ = make_log(5, None, duration=120.0)
-    frame.drop(index=range(1000, 1100)).to_csv(tmp_path / "gap.csv", index=False)
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "diagnose", str(tmp_path / "gap.csv"), "--out",
-                           str(tmp_path / "out"), "--no-plots", "--no-identify"], capture_output=True, text=True,
-                          cwd=ROOT)
+def test_a_log_with_a_gap_is_judged_on_its_longest_stretch_and_says_so(tmp_path, log_120s):
+    log_120s.drop(index=range(1000, 1100)).to_csv(tmp_path / "gap.csv", index=False)
+    proc = cli("diagnose", tmp_path / "gap.csv", "--out", tmp_path / "out", "--no-plots", "--no-identify")
     assert proc.returncode == 0 and "Traceback" not in proc.stderr
     assert "longest stretch without a gap, t = 55.0-120.0 s of 0.0-120.0 s" in proc.stderr
 
 
-def test_gyro_in_degrees_per_second_is_caught_even_when_small():
+def test_gyro_in_degrees_per_second_is_caught_even_when_small(log_120s):
     """Gentle driving keeps |yaw_rate| below the magnitude bound; the GPS turn rate gives it away."""
     from agrobot.diagnosis.baseline import baseline_from_study
     from agrobot.diagnosis.candidates import CannotDecide, Replay
     from agrobot.orchestrator.study import load_study
 
-    frame, _ = make_log(5, None, duration=120.0)
-    frame["yaw_rate"] = np.degrees(frame["yaw_rate"])
+    frame = log_120s.assign(yaw_rate=np.degrees(log_120s["yaw_rate"]))
     with pytest.raises(CannotDecide, match="deg/s"):
         Replay(frame, baseline_from_study(load_study(ROOT / "studies" / "figure8.toml")))
 

@@ -16,6 +16,7 @@ way at 0.65-1.03 x, the lowest on the 0.15 ha plot's 2.5 m turns).
 """
 from __future__ import annotations
 
+import functools
 import math
 import subprocess
 import sys
@@ -57,6 +58,12 @@ LINEARISED = ["steering.potentiometer_resolution=0", "steering.quantization_guar
               "gps.position_noise_std=0", "gps.velocity_noise_std=0"]
 
 
+@functools.lru_cache(maxsize=None)
+def analysed(name: str, *overrides: str, speed_excess_value: float | None = None):
+    """analyse() of a shipped study (with ``overrides``), once per module: the tests only read it."""
+    return analyse(Study.load(STUDIES / f"{name}.toml", list(overrides)), speed_excess_value=speed_excess_value)
+
+
 def test_every_shipped_study_is_covered_here():
     shipped = {p.stem for p in STUDIES.glob("*.toml")}
     assert shipped == set(SIMULATED) | set(SWEEPS) | set(NO_LOOP)
@@ -68,7 +75,7 @@ def test_the_simulation_loses_stability_where_the_margins_say(name):
     """The steering command delayed by 0.8 x (a route: 0.6 x) the predicted limit: the tractor
     started 0.3 m aside joins the undisturbed run; by 1.1 x it does not (module docstring)."""
     study = Study.load(STUDIES / f"{name}.toml")
-    analysis = analyse(study)
+    analysis = analysed(name)
     main = analysis.points[0]
     assert main.stable and 0.2 < main.delay_limit < 2.0
     duration, stable_below = SIMULATED[name]
@@ -117,7 +124,7 @@ def test_gain_margin_against_a_gain_on_the_steering_command():
     """A gain inserted before the steering: stable at the predicted gain margin / 1.15, unstable at
     x 1.15 (a fast oscillation at the phase crossover, which saturates the steering rate)."""
     study = Study.load(STUDIES / "figure8.toml")
-    analysis = analyse(study)
+    analysis = analysed("figure8")
     gm = analysis.points[0].loops["whole loop"].gain
     assert 2.0 < gm < 4.0
     wired = study.with_component("gain", type="tests.test_margins:SteeringCommandGain", step=0.05).with_connections(
@@ -135,7 +142,7 @@ def test_gain_margin_against_a_gain_on_the_steering_command():
 def test_delay_margin_from_the_frequency_response_and_from_the_poles_agree(name):
     """Two methods: phase margin / crossover on the opened loop, and the closed-loop poles with the
     steering's own command delay raised step by step (0.01 s)."""
-    analysis = analyse(Study.load(STUDIES / f"{name}.toml"), speed_excess_value=0.17)
+    analysis = analysed(name, speed_excess_value=0.17)
     for r in analysis.points:
         frequency = analysis.anatomy.own_delay + r.loops["whole loop"].delay
         assert r.delay_limit - 0.011 <= frequency <= r.delay_limit + 0.011, (r.op, frequency, r.delay_limit)
@@ -144,7 +151,7 @@ def test_delay_margin_from_the_frequency_response_and_from_the_poles_agree(name)
 def test_each_tracker_gets_its_own_margins_not_the_papers_law():
     """Pure pursuit and Stanley were analysed as the paper's law (delay margin 0.061 s) while
     their simulation stayed stable at 0.2 s: now each is analysed with its own law."""
-    limits = {name: analyse(Study.load(STUDIES / f"figure8{name}.toml"), speed_excess_value=0.17).points[0].delay_limit
+    limits = {name: analysed(f"figure8{name}", speed_excess_value=0.17).points[0].delay_limit
               for name in ("", "_pure_pursuit", "_stanley")}
     paper = analyse(Study.load(STUDIES / "figure8.toml", ["tracker.lookahead=0"]), speed_excess_value=0.17)
     assert paper.points[0].delay_limit < 0.15
@@ -154,7 +161,7 @@ def test_each_tracker_gets_its_own_margins_not_the_papers_law():
 def test_margins_shrink_with_the_steering_delay_by_the_delay_added():
     """The study's own steering delay raised by 0.2 s: the loop's delay limit stays where it was
     (it counts the delay in all) and the margin left shrinks by 0.2 s."""
-    base = analyse(Study.load(STUDIES / "figure8.toml"), speed_excess_value=0.17).points[0]
+    base = analysed("figure8", speed_excess_value=0.17).points[0]
     slow = analyse(Study.load(STUDIES / "figure8.toml", ["steering.command_delay=0.2"]), speed_excess_value=0.17).points[0]
     assert slow.delay_limit == pytest.approx(base.delay_limit, abs=0.011)
     assert slow.loops["whole loop"].delay == pytest.approx(base.loops["whole loop"].delay - 0.2, abs=0.012)
@@ -164,8 +171,8 @@ def test_margins_shrink_with_the_steering_delay_by_the_delay_added():
                                          if sweep in ("field_speed_sweep", "field_line_test") else (sweep, base)  # 12 CPU s
                                          for sweep, base in SWEEPS.items()])
 def test_a_sweep_or_line_test_has_its_base_studys_loop_at_its_own_values(sweep, base):
-    a = analyse(Study.load(STUDIES / f"{sweep}.toml"), speed_excess_value=0.17)
-    b = analyse(Study.load(STUDIES / f"{base}.toml"), speed_excess_value=0.17)
+    a = analysed(sweep, speed_excess_value=0.17)
+    b = analysed(base, speed_excess_value=0.17)
     for ra, rb in zip(a.points, b.points):
         assert ra.delay_limit == rb.delay_limit
         assert ra.loops["whole loop"].phase_deg == pytest.approx(rb.loops["whole loop"].phase_deg, abs=1e-9)

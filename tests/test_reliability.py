@@ -13,6 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from tests.commands import cli
+
 ROOT = Path(__file__).resolve().parent.parent
 CMD = [sys.executable, "-m", "agrobot"]
 
@@ -232,6 +234,14 @@ def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
     assert proc.returncode == 2 and "tcp://127.0.0.1:9" in proc.stderr and "Traceback" not in proc.stderr
 
 
+@pytest.fixture(scope="module")
+def clean_log():
+    """A 120 s generated log (harness.truth_tractor), made once: each test writes its own edit of it."""
+    from harness.truth_tractor import make_log
+
+    return make_log(5, None, duration=120.0)[0]
+
+
 @pytest.mark.parametrize("edit, words", [
     (lambda f: f.assign(t=f["t"] * 1000), ["'t'", "milliseconds", "divide t by 1000"]),
     (lambda f: f.assign(t=f["t"] * 1e6), ["'t'", "microseconds"]),
@@ -239,11 +249,10 @@ def test_a_wrong_scheduler_address_fails_fast_and_names_it(tmp_path):
     (lambda f: f.assign(v=f["v"] * 3.6), ["'v'", "km/h"]),
     (lambda f: f.assign(t=f["t"] + np.random.default_rng(0).uniform(-0.002, 0.002, len(f))), ["unevenly", "--resample"]),
 ])
-def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
+def test_measured_logs_are_checked_against_physics(tmp_path, clean_log, edit, words):
     from agrobot.measurements import LogError, read_log
-    from harness.truth_tractor import make_log
 
-    frame, _ = make_log(5, None, duration=120.0)
+    frame = clean_log
     path = tmp_path / "log.csv"
     edit(frame).to_csv(path, index=False)
     with pytest.raises(LogError) as err:
@@ -254,11 +263,10 @@ def test_measured_logs_are_checked_against_physics(tmp_path, edit, words):
 
 
 @pytest.mark.slow
-def test_a_jittered_log_is_diagnosed_with_resample(tmp_path):
+def test_a_jittered_log_is_diagnosed_with_resample(tmp_path, clean_log):
     from agrobot.measurements import read_log
-    from harness.truth_tractor import make_log
 
-    frame, _ = make_log(5, None, duration=120.0)
+    frame = clean_log.copy()
     frame["t"] += np.random.default_rng(1).uniform(-0.002, 0.002, len(frame))
     path = tmp_path / "jitter.csv"
     frame.to_csv(path, index=False)
@@ -330,22 +338,19 @@ BAD = [  # (arguments, exit code, words the message must hold); {tmp} is a fresh
 
 @pytest.mark.slow
 @pytest.mark.parametrize("args, code, words", BAD, ids=[" ".join(a[:2]) + f" #{i}" for i, (a, _, _) in enumerate(BAD)])
-def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_path, args, code, words):
+def test_bad_invocations_get_a_message_and_an_exit_code_never_a_traceback(tmp_path, clean_log, args, code, words):
     (tmp_path / "header.csv").write_text("t,delta_cmd,delta,v,yaw_rate,x,y\n")
     (tmp_path / "broken.toml").write_text("[study\nname = 1\n")
     (tmp_path / "unknown_type.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
                                                 f'[components.gps]\ntype = "no_such_component"\n')
     (tmp_path / "bad_edit.toml").write_text(f'extends = "{ROOT / "studies" / "figure8.toml"}"\n'
                                             f'connections_remove = ["gps.x -> nowhere.x"]\n')
-    from harness.truth_tractor import make_log
-
-    frame, _ = make_log(5, None, duration=120.0)
+    frame = clean_log
     frame.assign(delta=np.degrees(frame["delta"])).to_csv(tmp_path / "degrees.csv", index=False)
     frame.assign(t=frame["t"] * 1000).to_csv(tmp_path / "ms.csv", index=False)
     # no gyro, no heading and no positions: nothing measures the yaw (a GNSS course would)
     frame.drop(columns=["yaw_rate", "x", "y"]).to_csv(tmp_path / "missing.csv", index=False)
-    proc = subprocess.run(CMD + [a.format(tmp=tmp_path) for a in args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=120)
+    proc = cli(*[a.format(tmp=tmp_path) for a in args], timeout=120)
     assert proc.returncode == code, proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
     for w in words:
