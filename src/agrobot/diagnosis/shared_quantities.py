@@ -102,7 +102,7 @@ def diagnosis_side(effects: list[dict], sel, replay, wheelbase: float) -> dict:
             f = tried.get(s.effect)
             why = ("not tried" if f is None else "; ".join(f.reasons) or "supported alone but not kept beside the others")
             out[s.parameter] = {"value": float(values[s.parameter]), "std": math.nan, "fixed": True,
-                                "how": f"the study's value ({s.effect} not kept: {why})"}
+                                "how": "the study's value", "held": f"{s.effect} not kept: {why}"}
     mask = replay.masks["yaw"]["fit"] if "yaw" in replay.masks else np.zeros(len(replay.t), bool)
     t = replay.t[mask]
     return {"parameters": out, "time_constant": float(values.get("steering_time_constant", math.nan)),
@@ -114,15 +114,15 @@ def _diagnosis_delay(diag: dict, command: bool) -> dict | None:
     """The diagnosis's delay from identify's input: command_delay - steering_clock from the
     command, -steering_clock from the measured angle (stds added in quadrature; fixed when both are)."""
     p = diag["parameters"]
-    clock = p.get("steering_clock", {"value": 0.0, "std": math.nan, "fixed": True, "how": ""})
+    clock = p.get("steering_clock", {"value": 0.0, "std": math.nan, "fixed": True, "how": "", "held": ""})
     parts = [("-steering_clock", {**clock, "value": -clock["value"]})]
     if command and "command_delay" in p:
         parts.insert(0, ("command_delay", p["command_delay"]))
     free = [x for _, x in parts if not x["fixed"]]
-    held = "; ".join(f"{n.lstrip('-')} {x['how']}" for n, x in parts if x["fixed"] and x.get("how"))
-    how = " ".join(n for n, _ in parts).replace(" -", " - ") + (f"; {held}" if held else "")
+    held = "; ".join(x["held"] for _, x in parts if x["fixed"] and x.get("held"))
+    how = " ".join(n for n, _ in parts).replace(" -", " - ") + ("" if free else ", the study's values")
     return {"value": sum(x["value"] for _, x in parts), "std": math.sqrt(sum(x["std"] ** 2 for x in free)) if free
-            else math.nan, "fixed": not free, "how": how}
+            else math.nan, "fixed": not free, "how": how, "held": held}
 
 
 def _shown(value: float, sd: float, s: Shared) -> str:
@@ -156,27 +156,46 @@ def _fmt_span(span) -> str:
     return f"t {span[0]:.0f}-{span[1]:.0f} s" if span else "no span"
 
 
+MAP = SHARED[:3]                  # the steering map's gain, asymmetry and offset: they trade against each other
+
+
+def _held_map_parts(s: Shared, ident: dict, diag: dict) -> list[str]:
+    """The steering map's other parts the diagnosis holds at the study's value where identify's
+    estimate of them lies outside its interval away from that value: a different model structure."""
+    if s not in MAP:
+        return []
+    out = []
+    for o in MAP:
+        theirs, mine = diag["parameters"].get(o.parameter), ident["quantities"].get(o.identify_key)
+        if o is s or not theirs or not theirs["fixed"] or not mine:
+            continue
+        sd = mine["std"] if math.isfinite(mine["std"]) else 0.0
+        if abs(mine["value"] - theirs["value"]) > Z95 * sd:
+            out.append(f"a different model structure: the diagnosis's map holds its {o.quantity} at the study's "
+                       f"{_shown(theirs['value'], math.nan, o)}, identify's fits {_shown(mine['value'], mine['std'], o)} "
+                       f"(the map's gain, asymmetry and offset trade against each other)")
+    return out
+
+
 def _reasons(s: Shared, ident: dict, diag: dict, mine: dict, theirs: dict) -> list[str]:
     """Every reason that holds on this log why the two estimates of ``s`` can differ."""
     out = []
     if theirs["fixed"]:
-        out.append(f"the diagnosis holds it fixed at {_shown(theirs['value'], math.nan, s)}: {theirs['how']}")
-    asym = ident["quantities"].get("asymmetry")
-    one_gain = diag["parameters"].get("steering_asymmetry", {}).get("fixed", True)
-    if s.parameter in ("steering_gain", "steer_angle_offset") and asym and one_gain and \
-            abs(asym["value"]) > Z95 * (asym["std"] if math.isfinite(asym["std"]) else 0.0):
-        out.append(f"a different model structure: identify's map has a gain per side (asymmetry "
-                   f"{_shown(asym['value'], asym['std'], SHARED[1])}), the diagnosis's one gain for both sides")
+        out.append(f"the diagnosis holds it at the study's {_shown(theirs['value'], math.nan, s)} ({theirs['held']})")
+    out += _held_map_parts(s, ident, diag)
     if s.parameter == "steering_gain" and ident.get("final_model") not in ("kinematic", "steady_turn"):
         out.append("a different model structure: identify fits the gain beside free cornering stiffnesses and a "
                    "lag, the diagnosis beside the study's stiffnesses (bounded scales)")
     if s.parameter == "command_delay" and ident.get("input") == "delta_cmd" and math.isfinite(diag["time_constant"]):
         T, lag = diag["time_constant"], ident.get("lag")
         lagged = theirs["value"] + T - (lag or 0.0)
+        lo, hi = mine["value"] - Z95 * mine["std"], mine["value"] + Z95 * mine["std"]
+        inside = "inside" if lo <= lagged <= hi else "still outside"
         out.append(f"a different model structure: the diagnosis's steering has a first-order lag of {T:.3g} s beside "
                    f"its delay, identify's " + (f"a lag of {lag:.3g} s" if lag is not None else "a pure delay (which "
                                                 "takes up the lag)") +
-                   f": the diagnosis's delay + its lag{' - identify lag' if lag is not None else ''} is {lagged:.3g} s")
+                   f": the diagnosis's delay + its lag{' - identify lag' if lag is not None else ''} is {lagged:.3g} s, "
+                   f"{inside} identify's interval")
     if s.parameter == "yaw_rate_bias" and "standing still" in mine.get("how", ""):
         out.append(f"different stretches: identify's is the {mine['how']}, the diagnosis's is fitted while driving "
                    f"({_fmt_span(diag['span'])})")
