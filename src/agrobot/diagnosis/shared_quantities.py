@@ -177,6 +177,22 @@ def _held_map_parts(s: Shared, ident: dict, diag: dict) -> list[str]:
     return out
 
 
+def _delay_structure(ident: dict, diag: dict, mine: dict, theirs: dict) -> list[str]:
+    """A delay beside a first-order lag on one side and a pure delay (or another lag) on the other:
+    the two delays plus lags side by side (a lag T delays a slow input by about T)."""
+    lag, T = ident.get("lag"), diag["time_constant"] if ident.get("input") == "delta_cmd" else 0.0
+    if not (lag or T) or not math.isfinite(T):
+        return []
+    ours, yours = mine["value"] + (lag or 0.0), theirs["value"] + T
+    sd = mine["std"] if math.isfinite(mine["std"]) else 0.0
+    near = "apart by less" if abs(ours - yours) <= Z95 * sd else "apart by more"
+    theirs_text = f"a first-order lag of {T:.3g} s beside its delay" if T else "no lag from the measured angle"
+    mine_text = f"a lag of {lag:.3g} s beside its delay" if lag else "a pure delay (which takes up a lag)"
+    return [f"a different model structure: the diagnosis's steering has {theirs_text}, identify's {mine_text}: delay "
+            f"+ lag {ours:.3g} s identify's, {yours:.3g} s the diagnosis's, {near} than identify's 95 % half-width "
+            f"{Z95 * sd:.2g} s"]
+
+
 def _reasons(s: Shared, ident: dict, diag: dict, mine: dict, theirs: dict) -> list[str]:
     """Every reason that holds on this log why the two estimates of ``s`` can differ."""
     out = []
@@ -186,16 +202,11 @@ def _reasons(s: Shared, ident: dict, diag: dict, mine: dict, theirs: dict) -> li
     if s.parameter == "steering_gain" and ident.get("final_model") not in ("kinematic", "steady_turn"):
         out.append("a different model structure: identify fits the gain beside free cornering stiffnesses and a "
                    "lag, the diagnosis beside the study's stiffnesses (bounded scales)")
-    if s.parameter == "command_delay" and ident.get("input") == "delta_cmd" and math.isfinite(diag["time_constant"]):
-        T, lag = diag["time_constant"], ident.get("lag")
-        lagged = theirs["value"] + T - (lag or 0.0)
-        lo, hi = mine["value"] - Z95 * mine["std"], mine["value"] + Z95 * mine["std"]
-        inside = "inside" if lo <= lagged <= hi else "still outside"
-        out.append(f"a different model structure: the diagnosis's steering has a first-order lag of {T:.3g} s beside "
-                   f"its delay, identify's " + (f"a lag of {lag:.3g} s" if lag is not None else "a pure delay (which "
-                                                "takes up the lag)") +
-                   f": the diagnosis's delay + its lag{' - identify lag' if lag is not None else ''} is {lagged:.3g} s, "
-                   f"{inside} identify's interval")
+    if s.parameter == "steering_gain" and ident.get("final_model") == "steady_turn":
+        out.append("a different model structure: identify's is the steady-state gain r / (v tan(u) / L) of one "
+                   "steady turn, holding that side's gain, the offset and the understeer in one number")
+    if s.parameter == "command_delay":
+        out += _delay_structure(ident, diag, mine, theirs)
     if s.parameter == "yaw_rate_bias" and "standing still" in mine.get("how", ""):
         out.append(f"different stretches: identify's is the {mine['how']}, the diagnosis's is fitted while driving "
                    f"({_fmt_span(diag['span'])})")
