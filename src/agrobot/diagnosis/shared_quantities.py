@@ -121,6 +121,9 @@ def _diagnosis_delay(diag: dict, command: bool) -> dict | None:
     free = [x for _, x in parts if not x["fixed"]]
     held = "; ".join(x["held"] for _, x in parts if x["fixed"] and x.get("held"))
     how = " ".join(n for n, _ in parts).replace(" -", " - ") + ("" if free else ", the study's values")
+    act = p.get("command_delay")
+    if not command and act and not act["fixed"]:
+        how += f"; its command_delay {act['value']:.3g} s is from the command to the angle, which identify does not fit"
     return {"value": sum(x["value"] for _, x in parts), "std": math.sqrt(sum(x["std"] ** 2 for x in free)) if free
             else math.nan, "fixed": not free, "how": how, "held": held}
 
