@@ -105,4 +105,23 @@ def test_the_gain_is_compared_on_the_studys_wheelbase_and_a_held_gain_is_named()
     assert "the diagnosis its fit part t 3-54 s" in q["reasons"][-1]
     assert q["line"].startswith("steering gain: identify 0.85 [0.83, 0.87] ((g_left + g_right) / 2); diagnose 1 ")
     assert [s.parameter for s in SHARED] == ["steering_gain", "steering_asymmetry", "steer_angle_offset",
-                                             "command_delay", "yaw_rate_bias"]
+                                             "command_delay", "yaw_rate_bias", "understeer_gradient"]
+
+
+def test_both_understeer_gradients_hold_the_tractors_planted_stiffnesses(tmp_path):
+    """A healthy tractor with drawn stiffnesses: identify's K (its fitted cornering coefficients) and
+    the diagnosis's (the study's stiffnesses x its refitted scales) agree and lie within 5 % of
+    K = m / L (l_r / C_f - l_f / C_r) of the truth's."""
+    from agrobot.diagnosis.pipeline import diagnosis
+    from harness.hidden_effects import BASELINES
+    from harness.truth_tractor import TABLE, make_log
+
+    frame, truth = make_log(2, None, duration=150.0)
+    path = tmp_path / "tractor.parquet"
+    frame.to_parquet(path)
+    result, _ = diagnosis(path, BASELINES["tractor"], plots=False, workers=1)
+    L = TABLE["l_f"] + TABLE["l_r"]
+    K = TABLE["m"] / L * (TABLE["l_r"] / truth["C_f"] - TABLE["l_f"] / truth["C_r"])
+    q = _pair(result, "understeer gradient")
+    assert q["agree"] and " deg/g" in q["line"], q["line"]
+    assert all(e["value"] == pytest.approx(K, rel=0.05) for e in q["estimates"].values()), q["line"]

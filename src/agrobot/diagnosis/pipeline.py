@@ -490,7 +490,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     result["shared_quantities"] = shared_quantities((identified or {}).get("shared"),
-                                                    diagnosis_side(effects, sel, replay, p.l_f + p.l_r))
+                                                    diagnosis_side(effects, sel, replay, p))
     verdict["bullets"] += [q["line"] for q in result["shared_quantities"]]
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):

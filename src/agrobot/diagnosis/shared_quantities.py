@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.estimation import Z95, compare
 
 
@@ -48,7 +49,10 @@ SHARED = (Shared("steering gain", "1", (1.0, ""), "steer_gain", "steering_gain",
           Shared("steering offset", "rad", (180 / math.pi, " deg"), "steer_offset", "steer_angle_offset",
                  "steering_offset"),
           Shared("steering delay", "s", (1.0, " s"), "delay", "command_delay", "actuator_delay"),
-          Shared("gyro bias", "rad/s", (180 / math.pi, " deg/s"), "gyro_bias", "yaw_rate_bias", "yaw_rate_bias"))
+          Shared("gyro bias", "rad/s", (180 / math.pi, " deg/s"), "gyro_bias", "yaw_rate_bias", "yaw_rate_bias"),
+          Shared("understeer gradient", "rad/(m/s2)", (GRAVITY * 180 / math.pi, " deg/g"), "understeer_gradient",
+                 "understeer_gradient", "the baseline refit"))
+SCALES = ("cornering_front_scale", "cornering_rear_scale")
 
 
 def _estimate(q: dict | None) -> dict | None:
@@ -69,6 +73,9 @@ def identify_side(rep: dict) -> dict:
     smap = rep.get("steering_map") or {}
     if (a := _estimate(smap.get("asymmetry"))) is not None:
         out["asymmetry"] = {**a, "how": "(g_left - g_right) / (g_left + g_right)"}
+    K = rep.get("understeer_gradient") or {}
+    if (k := _estimate(K)) is not None:
+        out["understeer_gradient"] = {**k, "how": "withheld: " + K.get("note", "") if K.get("withheld") else ""}
     if "delay" in out:
         out["delay"]["how"] = {"delta_cmd": "from the command delta_cmd", "delta": "from the measured angle delta"}.get(
             rep.get("input"), "") + " to the yaw"
@@ -86,7 +93,25 @@ def identify_side(rep: dict) -> dict:
             "span": span}
 
 
-def diagnosis_side(effects: list[dict], sel, replay, wheelbase: float) -> dict:
+def understeer_of(final, tractor) -> dict:
+    """The diagnosis's understeer gradient K = m / L (l_r / (s_f C_f) - l_f / (s_r C_r)) from the
+    study's stiffnesses C and its refitted cornering scales s (delta method on the final fit's
+    covariance; held when neither scale is refitted)."""
+    p, v = tractor, final.values
+    L, sf, sr = p.l_f + p.l_r, v.get(SCALES[0], 1.0), v.get(SCALES[1], 1.0)
+    K = p.m / L * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
+    free = [n for n in SCALES if n in final.names and math.isfinite(final.std(n))]
+    sd = final.interval_of({SCALES[0]: -p.m * p.l_r / (L * p.C_f * sf ** 2),
+                            SCALES[1]: p.m * p.l_f / (L * p.C_r * sr ** 2)}) if free else math.nan
+    moved = free or sf != 1.0 or sr != 1.0
+    how = ("the study's stiffnesses x the refitted cornering scales" + ("" if free else " (the refit keeps no "
+                                                                         "covariance: no interval)")) if moved else \
+        "the study's stiffnesses"
+    return {"value": K, "std": sd, "fixed": not moved, "how": how,
+            "held": "neither cornering scale refitted on this log (the baseline refit's line says why)"}
+
+
+def diagnosis_side(effects: list[dict], sel, replay, tractor) -> dict:
     """The diagnosis's side: each shared parameter's {value, std, fixed, why} (an effect kept: its
     fit; else the study's value held, with what its trial alone said), its steering time constant,
     whether the yaw stage runs on the command, its wheelbase and the span it fits on."""
@@ -94,7 +119,7 @@ def diagnosis_side(effects: list[dict], sel, replay, wheelbase: float) -> dict:
     tried = {f.effect.id: f for f in getattr(sel, "first_step", ())}
     values = sel.final.values
     out = {}
-    for s in SHARED + (Shared("steering clock", "s", (1.0, " s"), "", "steering_clock", "steering_clock"),):
+    for s in SHARED[:-1] + (Shared("steering clock", "s", (1.0, " s"), "", "steering_clock", "steering_clock"),):
         if s.effect in kept:
             p = kept[s.effect]["fitted"][s.parameter]
             out[s.parameter] = {"value": p["value"], "std": p["std"], "fixed": False, "how": s.effect}
@@ -105,8 +130,10 @@ def diagnosis_side(effects: list[dict], sel, replay, wheelbase: float) -> dict:
                                 "how": "the study's value", "held": f"{s.effect} not kept: {why}"}
     mask = replay.masks["yaw"]["fit"] if "yaw" in replay.masks else np.zeros(len(replay.t), bool)
     t = replay.t[mask]
+    out["understeer_gradient"] = understeer_of(sel.final, tractor)
     return {"parameters": out, "time_constant": float(values.get("steering_time_constant", math.nan)),
-            "command_only": bool(getattr(replay, "command_only", False)), "wheelbase": wheelbase,
+            "command_only": bool(getattr(replay, "command_only", False)), "wheelbase": tractor.l_f + tractor.l_r,
+            "effects": sorted(kept),
             "span": [float(t.min()), float(t.max())] if len(t) else None, "split": replay.split}
 
 
@@ -196,6 +223,22 @@ def _delay_structure(ident: dict, diag: dict, mine: dict, theirs: dict) -> list[
             f"{Z95 * sd:.2g} s"]
 
 
+def _understeer_structure(ident: dict, diag: dict, mine: dict) -> list[str]:
+    """Where the two models' tyres differ: one saturates, or the diagnosis's stiffness changes with
+    speed; identify withholding its K (its two estimates disagree) is said with it."""
+    out = []
+    kept = set(diag.get("effects", ()))
+    if "speed_dependent_cornering" in kept:
+        out.append("a different model structure: the diagnosis's cornering stiffness changes with speed "
+                   "(speed_dependent_cornering): its K is the one at the reference speed")
+    if (ident.get("final_model") == "tyre_saturation") != ("tyre_saturation" in kept):
+        one = "identify's" if ident.get("final_model") == "tyre_saturation" else "the diagnosis's"
+        out.append(f"a different model structure: {one} tyres saturate (K of their linear part), the other's are linear")
+    if mine.get("how", "").startswith("withheld"):
+        out.append(f"identify {mine['how']}")
+    return out
+
+
 def _reasons(s: Shared, ident: dict, diag: dict, mine: dict, theirs: dict) -> list[str]:
     """Every reason that holds on this log why the two estimates of ``s`` can differ."""
     out = []
@@ -210,6 +253,8 @@ def _reasons(s: Shared, ident: dict, diag: dict, mine: dict, theirs: dict) -> li
                    "steady turn, holding that side's gain, the offset and the understeer in one number")
     if s.parameter == "command_delay":
         out += _delay_structure(ident, diag, mine, theirs)
+    if s.parameter == "understeer_gradient":
+        out += _understeer_structure(ident, diag, mine)
     if s.parameter == "yaw_rate_bias" and "standing still" in mine.get("how", ""):
         out.append(f"different stretches: identify's is the {mine['how']}, the diagnosis's is fitted while driving "
                    f"({_fmt_span(diag['span'])})")
