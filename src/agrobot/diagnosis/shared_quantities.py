@@ -12,7 +12,9 @@ L_study / L_i in the diagnosis's (the study's yaw plant's l_f + l_r). The steeri
 identify's delay from its input (the command: the whole chain; the measured angle: angle to yaw);
 the diagnosis's is command_delay - steering_clock from the command, -steering_clock from the
 measured angle (steering_clock > 0: the yaw answers the angle the log shows later). The gyro bias:
-identify's gyro_bias, the diagnosis's yaw_rate_bias.
+identify's gyro_bias, the diagnosis's yaw_rate_bias. The understeer gradient: identify's
+K = (1/c_f - 1/c_r) / g, the diagnosis's m / L (l_r / (s_f C_f) - l_f / (s_r C_r)) from the
+study's stiffnesses C and its refitted cornering scales s (the same K per unit axle load).
 
 A diagnosis parameter whose effect was not kept is held at the study's value (no interval). Two
 estimates agree when their 95 % intervals overlap (estimation.compare); otherwise every reason that
