@@ -273,12 +273,3 @@ def test_both_models_of_the_vehicle_are_scored_on_the_same_unseen_stretches_and_
     assert bullet.startswith("identify keeps tyre saturation") and "fit alike" in bullet
     assert agreement(_identified(0.098), [], Sel()) == []              # no diagnosis score: nothing claimed
     assert agreement(better, [], Sel(), floor=0.08) == []                # both within 1.5 x the floor: alike
-    gain = [{"id": "steering_gain", "parameters": {"steering_gain": 0.9}}]
-    (bullet,) = agreement(_identified(0.098), gain, Sel())              # the two estimates of the command's gain
-    assert bullet.startswith("the command's gain: the diagnosis 0.9, identify 0.7 [0.65, 0.75]")
-    alike = _identified(0.098, tyre_saturation={"friction": 0.5, "held_out_gain": 0.2})
-    same_stretches(alike, _Replay(), {})
-    tyre, said = agreement(alike, gain, Sel())      # the models' likeness is said of the tyre, not of the gain
-    assert "fit alike" in tyre and said.startswith("the command's gain") and "fit alike" not in said
-    gain[0]["parameters"]["steering_gain"] = 0.72
-    assert agreement(_identified(0.098), gain, Sel()) == []             # within the materiality (0.05)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agrobot.estimation import REPORTED_AT_BOUND, Z95, compare
+from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.identification.blas_threads import one_blas_thread
 from agrobot.identification.from_log import finite_for_json, read_uneven
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
@@ -32,6 +32,7 @@ from .mcap import write_diagnosis_mcap
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
+from .shared_quantities import diagnosis_side, identify_side, shared_quantities
 from .unexplained import RATIO, signature, stage_check
 from .plausibility import kinematic, steering_gain_check, study_understeer, understeer
 from .study_fit import study_check
@@ -196,7 +197,8 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
             "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
             "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}
                            for k, q in rep["parameters"].items()},
-            "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None}
+            "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None,
+            "shared": identify_side(rep)}
     return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
             "physical_checks": rep.get("physical_checks", {})}
 
@@ -238,19 +240,10 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
     if not sat and "tyre_saturation" in ids:
         out.append("the diagnosis finds tyre saturation where identify does not keep it: "
                    + "; ".join(identified.get("tyre_saturation_why_not") or ["-"]))
-    gain = next((e["parameters"]["steering_gain"] for e in effects if e["id"] == "steering_gain"), None)
-    steer = (identified.get("parameters") or {}).get("steer_gain")
-    both = []                     # two estimates of one quantity, said apart from the models' fit below
-    if gain is not None and steer and abs(gain - steer["value"]) >= 0.05:
-        lo, hi = steer.get("interval") or (math.nan, math.nan)
-        both.append(f"the command's gain: the diagnosis {gain:.3g}, identify {steer['value']:.3g} [{lo:.3g}, {hi:.3g}]: "
-                   f"each fit trades part of it for its other parameters (identify's free stiffnesses and lag, the "
-                   f"diagnosis's study steering and bounded stiffness scales); steady circles at walking speed tell")
-    both += shared_estimates(identified, effects)
     held = identified.get("held_out_yaw") or {}
     mine, theirs = held.get("rms", math.nan), held.get("diagnosis_rms", math.nan)
     if not (math.isfinite(mine) and math.isfinite(theirs)):
-        return out + both
+        return out
     k = DISPLAY["yaw"][0]
     where = (f"on the {held['seconds']:.0f} s of identify's held-out segments inside the diagnosis's held-out "
              f"part ({held_part}), which neither fit saw")
@@ -277,35 +270,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
             out.append(f"the diagnosis's final model leaves {k * theirs:.3g} deg/s of the yaw rate unexplained {where}, "
                        f"the vehicle model identify fits {k * mine:.3g} deg/s: the effects named here describe this "
                        f"vehicle beyond what identify's single-track model holds")
-    return out + both
-
-
-def shared_estimates(identified: dict, effects: list[dict]) -> list[str]:
-    """The steering offset both tools estimate on the log (estimation.compare): identify's beside
-    the diagnosis's (its steering_offset effect, else the baseline's none); when they disagree, why
-    (a different model structure: identify's steering map has a gain per side, the diagnosis's
-    steering the study's gain, so a gain error and a left/right asymmetry move its offset)."""
-    mine = (identified.get("parameters") or {}).get("steer_offset")
-    if not mine or not mine.get("interval") or not all(math.isfinite(x) for x in mine["interval"]):
-        return []
-    sd = (mine["interval"][1] - mine["interval"][0]) / (2 * Z95)
-    effect = next((e for e in effects if e["id"] == "steering_offset"), None)
-    if effect is None and mine["interval"][0] <= 0.0 <= mine["interval"][1]:
-        return []                       # neither finds an offset: nothing to set side by side
-    theirs = (effect["fitted"]["steer_angle_offset"]["value"], effect["fitted"]["steer_angle_offset"]["std"]) if effect \
-        else (0.0, math.nan)
-    kinematic = identified.get("final_model") == "kinematic"
-    why = ("a different model structure: identify's steering map has a gain per side (kinematic regime), the "
-           "diagnosis's steering the study's unit gain, so a gain error and a left/right asymmetry move its offset"
-           if kinematic else "a different model structure or different stretches (identify: segments spread over "
-                             "the log; the diagnosis: its fit part)")
-    c = compare("steering offset", "rad", ("identify", mine["value"], sd),
-                ("diagnose" if effect else "diagnose (no steering_offset supported: none)", *theirs), why)
-    text = "; ".join(f"{m} {math.degrees(e['value']):.3g} deg" + (f" [{math.degrees(e['interval'][0]):.3g}, "
-                                                                  f"{math.degrees(e['interval'][1]):.3g}]"
-                                                                  if math.isfinite(e["std"]) else "")
-                     for m, e in c["estimates"].items())
-    return [f"the steering offset: {text}: " + ("they agree" if c["agree"] else f"they differ: {c['suggests']}")]
+    return out
 
 
 def explained_findings(audit: list[dict], effects: list[dict], tolerance: float = 0.05) -> list[dict]:
@@ -528,6 +493,9 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
             verdict["status"], verdict["statement"] = "inconclusive", verdict["statement"] + "; but " + gain[0]
     same_stretches(identified, replay, sel.final.values)
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
+    result["shared_quantities"] = shared_quantities((identified or {}).get("shared"),
+                                                    diagnosis_side(effects, sel, replay, p))
+    verdict["bullets"] += [q["line"] for q in result["shared_quantities"]]
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
