@@ -363,6 +363,12 @@ class Auditor:
             return self.groups.get("gnss", "gnss")
         return self.groups.get(channel, channel)
 
+    def clock(self, channel: str) -> str:
+        """The clock the channel's times are on: its group's, or one that groups share (the topics
+        of a bag on its receive clock, Streams.clocks)."""
+        group = self.group(channel)
+        return (getattr(self.streams, "clocks", None) or {}).get(group, group)
+
     def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
         """([channels], stamps): the channels that share their stamps exactly, together (the
         receiver's fixes as ``gnss``); ``only`` limits the channels."""
@@ -469,7 +475,7 @@ def widened(aud: Auditor, pairs: list) -> list:
     """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
     +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
     the wider lag replaces the first where it is strong (_judged) and beyond SEARCH."""
-    weak = {(p[0], p[1], p[2]) for p in pairs if aud.group(p[1]) != aud.group(p[2]) and not _judged(p[3])}
+    weak = {(p[0], p[1], p[2]) for p in pairs if aud.clock(p[1]) != aud.clock(p[2]) and not _judged(p[3])}
     if not weak:
         return pairs
     wide = {(p[0], p[1], p[2]): p for p in aud.zero_lag_pairs(WIDE_SEARCH) if (p[0], p[1], p[2]) in weak}
@@ -514,10 +520,11 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if leap is not None and not iv[0] <= leap <= iv[1]:
             meaning += (f"; measured {est['lag']:+.3f} s{_interval_text(iv)}: the leap count, the rest "
                         f"({est['lag'] - leap:+.3f} s) a latency of the signals compared, not moved")
-        if ga == gb:
+        if aud.clock(a) == aud.clock(b):
+            one = f"one row, one clock ({ga})" if ga == gb else f"one clock ({aud.clock(a)})"
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
-                f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
-                f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
+                f"; {one}: a sensor's own latency (a filter, a fix's age), not a clock; nothing "
+                f"moved" if judged else f"; {one}: too weak to judge (correlation below "
                 f"{STRONG_RHO}, under {EVIDENCE_S:g} s compared or interval wider than +-{HALF_WIDTH} s); nothing "
                 f"moved"), resolved=True))
         elif small:
@@ -542,7 +549,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "
                         f"{EVIDENCE_S:g} s, an interval within +-{HALF_WIDTH} s that excludes zero and is narrower "
                         f"than the offset): not acted on")
-        if ga != gb:
+        if aud.clock(a) != aud.clock(b):
             findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
         if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
@@ -814,7 +821,8 @@ def parse_align(text: str | None) -> str | dict[str, float]:
 
 
 def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
-    """Every channel of each group moved earlier by its offset; the channels moved."""
+    """Every channel of each group (or clock that groups share) moved earlier by its offset; the
+    channels moved."""
     moved = []
     for c, (t, x) in list(streams.signals.items()):
         g = group_of(c)
@@ -860,7 +868,8 @@ def audit_streams(streams, options, source) -> dict:
     elif align == "auto":
         applied = {g: o[0] for g, o in offsets.items()}
         how = "auto: the offsets found strong (--align none keeps the stamps; --align GROUP=SECONDS sets one)"
-    moved = shift(streams, aud.group, applied) if applied else []
+    shared = getattr(streams, "clocks", None) or {}
+    moved = shift(streams, aud.clock, {shared.get(g, g): s for g, s in applied.items()}) if applied else []
     for f in pair_findings:
         if f["kind"] == "clock_offset" and applied:
             ga, gb = aud.group(f["channels"][0]), aud.group(f["channels"][1])

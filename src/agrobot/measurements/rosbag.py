@@ -20,7 +20,9 @@ Any numeric field of any topic, custom messages included: ``--signal COLUMN=/top
 declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees become x/y.
 Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
 the messages' header stamps where they have a header with a stamp, else the bag's receive times;
-every topic is on that one clock, and the report says which each topic used.
+every topic is on that one clock, and the report says which each topic used. Topics read on the
+bag's receive times, or whose header stamps sit within STAMP_ON_RECEIVE s of them, share the bag's
+clock (Streams.clocks): a lag between them is a sensor's own latency, never a clock to align.
 
 Imported where used: rosbags (the bags extra).
 """
@@ -50,6 +52,7 @@ ACKERMANN = {
 }
 NAVSAT_QUALITY = {-1: 0, 0: 1, 1: 2, 2: 4}
 IMU = "sensor_msgs/msg/Imu"
+STAMP_ON_RECEIVE = 0.08     # s: header stamps this close to the receive times (median) are on the bag's clock
 IMU_AXES_READ = tuple(f"linear_acceleration.{a}" for a in AXES) + ("angular_velocity.x", "angular_velocity.y")
 
 # type -> [(column, field path)], in the order a column is taken from (the first type that has it wins)
@@ -474,7 +477,19 @@ def bag_streams(paths: list[Path], options, source: Path):
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
-    return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}))
+    clocks = bag_clocks(topics["topics"], report["stamp_vs_receive"], paths)
+    return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}), clocks=clocks)
+
+
+def bag_clocks(report_topics: dict, stamps: dict, paths: list[Path]) -> dict[str, str]:
+    """topic -> the bag's clock, for the topics on it: one recorder stamps every message's
+    receive time, so a topic read on receive times is on it, and so is one whose header stamps sit
+    within STAMP_ON_RECEIVE s of its receive times (median): stamped by a clock that agrees with
+    the recorder's to better than the least offset the audit would align. A topic stamped farther
+    off keeps a clock of its own."""
+    bag = f"the bag's receive clock ({', '.join(Path(p).name for p in paths)})"
+    return {topic: bag for topic, v in report_topics.items()
+            if v.get("time") != "header stamps" or abs(stamps.get(topic, {}).get("median", math.inf)) <= STAMP_ON_RECEIVE}
 
 
 class BagReader(Reader):
