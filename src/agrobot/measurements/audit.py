@@ -77,6 +77,7 @@ import numpy as np
 from .clocks import parabolic_peak
 from .direction import check_direction
 from .findings import finding
+from .imu_axes import axis_findings
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
@@ -903,6 +904,7 @@ def audit_streams(streams, options, source) -> dict:
     findings += mode_findings(streams.report, t0)
     findings += fix_quality_findings(streams.gnss, t0)
     findings += held_findings(streams.report)
+    findings += axis_findings(streams.report)
     try:
         findings += check_direction(streams, options, source, t0)
         refusal = None
