@@ -96,3 +96,18 @@ def test_a_yaw_rate_mapped_from_the_vertical_axis_is_not_named(tmp_path, up, yaw
     write_drive(tmp_path, up, seconds=40.0)
     frame, _ = _import(tmp_path, yaw)
     assert not _axis(frame)
+
+
+def test_raw_zero_accelerations_at_the_declared_minimum_are_no_value_and_named(tmp_path):
+    """Every 10th IMU frame sends raw 0 on its accelerations (-64 m/s^2, the DBC's declared
+    minimum, beyond any ground vehicle): left out and named; the vertical axis is still x; the
+    angular rates' minimum (-256 deg/s, 4.5 rad/s) is a possible value and stays a value."""
+    pytest.importorskip("cantools")
+    write_drive(tmp_path, "X", seconds=40.0, sentinel_every=10)
+    frame, report = _import(tmp_path)
+    notes = " ".join(report["notes"])
+    for axis in "XYZ":
+        assert f"gnss_imu.Acceleration{axis}: 200 of 2000 values sit on the DBC's declared bound -64" in notes
+    assert not any(k.startswith("gnss_imu.AngularRate") for k in report["can"]["sentinels"])
+    found = _axis(frame)
+    assert len(found) == 1 and abs(found[0]["value"] - UP_READING) < 0.2

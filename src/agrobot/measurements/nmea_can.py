@@ -122,6 +122,10 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
     for c in cans:
         report["can"].setdefault("outside_declared_range", {}).update(c.outside_range)
         report["can"].setdefault("j1939_not_available", {}).update(c.not_available)
+        report["can"].setdefault("sentinels", {}).update(c.sentinels)
+        report["notes"] += [f"{name}: {d['count']} of {d['of']} values sit on the DBC's declared bound "
+                            f"{', '.join(f'{v:g}' for v in d['values'])} (the field's raw extreme, beyond what a ground "
+                            f"vehicle measures): the sender's 'no value', left out" for name, d in c.sentinels.items()]
     if options.bus is not None:
         report["can"]["bus"] = options.bus
     frames = merge(cans)
