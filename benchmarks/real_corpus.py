@@ -558,7 +558,7 @@ def _agree(ok) -> str:
     return "-" if ok is None else "yes" if ok else "NO"
 
 
-CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_rate_2": ("yaw_rate_2",), "v": ("v",), "x": ("gnss", "x"),
+CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_rate_2": ("yaw_rate_2", "odom_yaw_rate"), "v": ("v",), "x": ("gnss", "x"),
              "y": ("gnss", "y"), "lat": ("gnss", "lat"), "lon": ("gnss", "lon"), "heading": ("heading",)}
 
 
@@ -603,7 +603,10 @@ def _found(imp, kinds: tuple, channels: set):
     """The value of the audit's first finding of ``kinds`` on exactly ``channels``, or None."""
     if not isinstance(imp, dict):
         return None
-    return next((v for k, c, v in imp["found"] if k in kinds and set(c) == channels), None)
+    return next((v for k, c, v in imp["found"] if k in kinds and {SECOND.get(x, x) for x in c} == channels), None)
+
+
+SECOND = {"odom_yaw_rate": "yaw_rate_2"}      # a wheel odometry's turn rate is the second yaw-rate source compared
 
 
 LAG_KINDS = ("clock_offset", "sensor_latency")

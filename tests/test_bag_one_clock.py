@@ -1,7 +1,8 @@
 """Topics of one bag stamped by the recorder's computer share its clock: a wheel odometry whose
 yaw rate trails the gyro by its own filter (a rolling mean, planted 0.4 s) is a sensor latency,
 never a clock offset offered for realignment; a topic stamped by a clock 1.5 s off its receive
-times keeps a clock of its own."""
+times keeps a clock of its own. The wheel odometry's turn rate is written as odom_yaw_rate (the
+skid-steer model's input), said in the notes."""
 from __future__ import annotations
 
 import numpy as np
@@ -64,7 +65,7 @@ def _bag(folder, odom_clock: float) -> None:
 
 
 def _pair(frame):
-    return [f for f in frame.attrs["audit"] if sorted(f["channels"]) == ["yaw_rate", "yaw_rate_2"]
+    return [f for f in frame.attrs["audit"] if sorted(f["channels"]) == ["odom_yaw_rate", "yaw_rate"]
             and f["kind"] in ("clock_offset", "sensor_latency")]
 
 
@@ -77,6 +78,17 @@ def test_an_odometrys_filter_lag_on_the_bags_clock_is_a_sensor_latency_not_a_clo
     assert abs(abs(pair[0]["value"]) - LAG) < 0.05 and "the bag's receive clock" in pair[0]["meaning"]
     assert "--align" not in pair[0]["meaning"] and "clocks disagree" not in pair[0]["meaning"]
     assert not report["alignment"].get("applied") if isinstance(report.get("alignment"), dict) else True
+    # a wheel odometry's turn rate is the skid-steer model's input, named so in the notes
+    assert "odom_yaw_rate" in frame and "yaw_rate_2" not in frame
+    assert any("odom_yaw_rate: /wheels/odom.twist.twist.angular.z" in n and "skid-steer" in n for n in report["notes"])
+
+
+def test_a_fused_odometry_stays_a_second_yaw_rate_source(tmp_path):
+    from agrobot.measurements.rosbag import wheel_odometry
+
+    assert wheel_odometry("/husky_velocity_controller/odom", "nav_msgs/msg/Odometry")
+    assert not wheel_odometry("/odometry/filtered", "nav_msgs/msg/Odometry")
+    assert not wheel_odometry("/wheels/odom", "sensor_msgs/msg/Imu")
 
 
 def test_a_topic_stamped_by_a_clock_off_the_bags_keeps_its_own(tmp_path):

@@ -15,7 +15,7 @@ Between channels, from signals that must agree (Kayacan et al. section 2's kinem
   upwards);
 - gyro against the GNSS course: ``yaw_rate`` against d(course)/dt of the track (1 s chords, |v| > 1 m/s);
 - ``v r`` against the lateral acceleration (a column ``ay``, ``a_y``, ``lat_acc``, ``acc_y``);
-- two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*``);
+- two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*`` or a wheel odometry's ``odom_yaw_rate``);
 - steering x speed against yaw rate, ``v tan(delta) / L`` -> ``r``: the only pair with a physical
   lag (actuator, tyres), so it gives no clock offset but the causality check: a response never
   leads its input.
@@ -420,9 +420,10 @@ class Auditor:
             t, r = sig["yaw_rate"]
             vr = np.interp(t, *sig["v"]) * r
             out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral], search), "m/s2"))
-        for other in sorted(c for c in sig if c.startswith("yaw_rate_")):
+        for other in sorted(c for c in sig if c.startswith("yaw_rate_") or c == "odom_yaw_rate"):
             if "yaw_rate" in sig:
-                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
+                out.append(("two gyros" if other != "odom_yaw_rate" else "gyro vs wheel odometry", "yaw_rate", other,
+                            lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
         return [p for p in out if p[3] is not None]
 
     def causal(self) -> dict | None:
@@ -1114,7 +1115,8 @@ def audit_frame(frame) -> list[dict]:
     the causality check, the scales of redundant columns and the signs of a mislabel. A log
     that ``convert`` wrote carries its import's audit instead (measurements.log.persisted_audit)."""
     t = frame["t"].to_numpy(float)
-    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_"))]
+    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_")
+                                               or c == "odom_yaw_rate")]
     signals = {c: (t, frame[c].to_numpy(float)) for c in names}
     streams = Streams(None, signals, {}, {"delta_cmd"} & set(signals), {}, groups={c: "log" for c in signals})
     try:
