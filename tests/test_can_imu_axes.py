@@ -8,23 +8,9 @@ import pytest
 
 from agrobot.measurements.recording import ImportOptions, import_recording
 from agrobot.measurements.signal_expressions import parse_signal
+from tests.test_can_validity_flags import DBC as VALIDITY_DBC
 
-DBC = '''VERSION ""
-
-BS_:
-
-BU_:
-
-BO_ 3 gnss_pos: 8 Vector__XXX
- SG_ PositionValid : 0|1@1+ (1,0) [0|1] "" Vector__XXX
- SG_ Latitude : 1|28@1+ (1e-06,-90) [-90|90] "deg" Vector__XXX
- SG_ Longitude : 29|29@1+ (1e-06,-180) [-180|180] "deg" Vector__XXX
-
-BO_ 7 gnss_speed: 5 Vector__XXX
- SG_ SpeedValid : 0|1@1+ (1,0) [0|1] "" Vector__XXX
- SG_ Speed : 1|20@1+ (0.001,0) [0|1048.575] "m/s" Vector__XXX
-
-BO_ 9 gnss_imu: 8 Vector__XXX
+DBC = VALIDITY_DBC.split("BO_ 9 gnss_imu")[0] + '''BO_ 9 gnss_imu: 8 Vector__XXX
  SG_ AccelerationX : 1|10@1+ (0.125,-64) [-64|63.875] "m/s^2" Vector__XXX
  SG_ AccelerationY : 11|10@1+ (0.125,-64) [-64|63.875] "m/s^2" Vector__XXX
  SG_ AccelerationZ : 21|10@1+ (0.125,-64) [-64|63.875] "m/s^2" Vector__XXX

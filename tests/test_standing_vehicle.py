@@ -41,21 +41,21 @@ def _write(folder, kmh: float):
     (folder / "standing.log").write_text("\n".join(lines) + "\n")
 
 
-def test_a_standing_vehicle_is_named_standing_with_its_channels_values(tmp_path):
+def _refusal(folder, kmh: float) -> str:
     pytest.importorskip("cantools")
-    _write(tmp_path, 0.0)
+    _write(folder, kmh)
     with pytest.raises(LogError) as err:
-        import_recording(tmp_path / "standing.log", ImportOptions(dbc=tmp_path / "j1939.dbc"))
-    text = str(err.value)
+        import_recording(folder / "standing.log", ImportOptions(dbc=folder / "j1939.dbc"))
+    return str(err.value)
+
+
+def test_a_standing_vehicle_is_named_standing_with_its_channels_values(tmp_path):
+    text = _refusal(tmp_path, 0.0)
     assert "v (" in text and "holds 0 m/s" in text and "does not move in the recording" in text
     assert f"over its {SECONDS:.0f} s" in text
     assert "zeros" not in text and "not recording" not in text
 
 
 def test_a_speed_held_at_one_non_zero_value_is_named_held_not_standing(tmp_path):
-    pytest.importorskip("cantools")
-    _write(tmp_path, 36.0)
-    with pytest.raises(LogError) as err:
-        import_recording(tmp_path / "standing.log", ImportOptions(dbc=tmp_path / "j1939.dbc"))
-    text = str(err.value)
+    text = _refusal(tmp_path, 36.0)
     assert "holds 10 m/s" in text and "value held" in text and "does not move" not in text
