@@ -367,7 +367,10 @@ class Auditor:
     def clock(self, channel: str) -> str:
         """The clock the channel's times are on: its group's, or one that groups share (the topics
         of a bag on its receive clock, Streams.clocks)."""
-        group = self.group(channel)
+        return self.group_clock(self.group(channel))
+
+    def group_clock(self, group: str) -> str:
+        """The clock a group's times are on (Streams.clocks), the group itself where it has its own."""
         return (getattr(self.streams, "clocks", None) or {}).get(group, group)
 
     def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
@@ -870,8 +873,7 @@ def audit_streams(streams, options, source) -> dict:
     elif align == "auto":
         applied = {g: o[0] for g, o in offsets.items()}
         how = "auto: the offsets found strong (--align none keeps the stamps; --align GROUP=SECONDS sets one)"
-    shared = getattr(streams, "clocks", None) or {}
-    moved = shift(streams, aud.clock, {shared.get(g, g): s for g, s in applied.items()}) if applied else []
+    moved = shift(streams, aud.clock, {aud.group_clock(g): s for g, s in applied.items()}) if applied else []
     for f in pair_findings:
         if f["kind"] == "clock_offset" and applied:
             ga, gb = aud.group(f["channels"][0]), aud.group(f["channels"][1])

@@ -494,6 +494,9 @@ def bag_streams(paths: list[Path], options, source: Path):
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
+    fixes = next((topic for topic, v in topics["topics"].items() if "lat" in v["columns"]), None)
+    if gnss is not None and fixes is not None:
+        groups["gnss"] = fixes          # the receiver's fixes keep their topic's clock
     clocks = bag_clocks(topics["topics"], report["stamp_vs_receive"], paths)
     return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}), clocks=clocks)
 
