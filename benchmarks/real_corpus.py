@@ -465,6 +465,7 @@ def import_options(rec: dict, roots: dict):
     return ImportOptions(signals=[parse_signal(s) for s in c.get("signals", [])], time=c.get("time"),
                          wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"),
                          align=c.get("align", "auto"), bus=c.get("bus"), rate=c.get("rate"),
+                         sign_speed=bool(c.get("sign_speed", False)),
                          dbc=None if dbc is None else roots[rec["root"]] / Path(rec["path"]).parent / dbc)
 
 
