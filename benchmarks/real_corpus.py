@@ -465,6 +465,7 @@ def import_options(rec: dict, roots: dict):
     return ImportOptions(signals=[parse_signal(s) for s in c.get("signals", [])], time=c.get("time"),
                          wheelbase=c.get("wheelbase"), steering_ratio=c.get("steering_ratio"),
                          align=c.get("align", "auto"), bus=c.get("bus"), rate=c.get("rate"),
+                         sign_speed=bool(c.get("sign_speed", False)),
                          dbc=None if dbc is None else roots[rec["root"]] / Path(rec["path"]).parent / dbc)
 
 
@@ -558,7 +559,7 @@ def _agree(ok) -> str:
     return "-" if ok is None else "yes" if ok else "NO"
 
 
-CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_rate_2": ("yaw_rate_2",), "v": ("v",), "x": ("gnss", "x"),
+CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_rate_2": ("yaw_rate_2", "odom_yaw_rate"), "v": ("v",), "x": ("gnss", "x"),
              "y": ("gnss", "y"), "lat": ("gnss", "lat"), "lon": ("gnss", "lon"), "heading": ("heading",)}
 
 
@@ -603,7 +604,10 @@ def _found(imp, kinds: tuple, channels: set):
     """The value of the audit's first finding of ``kinds`` on exactly ``channels``, or None."""
     if not isinstance(imp, dict):
         return None
-    return next((v for k, c, v in imp["found"] if k in kinds and set(c) == channels), None)
+    return next((v for k, c, v in imp["found"] if k in kinds and {SECOND.get(x, x) for x in c} == channels), None)
+
+
+SECOND = {"odom_yaw_rate": "yaw_rate_2"}      # a wheel odometry's turn rate is the second yaw-rate source compared
 
 
 LAG_KINDS = ("clock_offset", "sensor_latency")

@@ -15,7 +15,7 @@ Between channels, from signals that must agree (Kayacan et al. section 2's kinem
   upwards);
 - gyro against the GNSS course: ``yaw_rate`` against d(course)/dt of the track (1 s chords, |v| > 1 m/s);
 - ``v r`` against the lateral acceleration (a column ``ay``, ``a_y``, ``lat_acc``, ``acc_y``);
-- two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*``);
+- two yaw-rate sources (``yaw_rate`` and ``yaw_rate_*`` or a wheel odometry's ``odom_yaw_rate``);
 - steering x speed against yaw rate, ``v tan(delta) / L`` -> ``r``: the only pair with a physical
   lag (actuator, tyres), so it gives no clock offset but the causality check: a response never
   leads its input.
@@ -77,6 +77,7 @@ import numpy as np
 from .clocks import parabolic_peak
 from .direction import check_direction
 from .findings import finding
+from .imu_axes import axis_findings
 from .log import CANONICAL, LogError
 from .options import ImportOptions
 from .streams import Streams, gnss_speed
@@ -363,6 +364,15 @@ class Auditor:
             return self.groups.get("gnss", "gnss")
         return self.groups.get(channel, channel)
 
+    def clock(self, channel: str) -> str:
+        """The clock the channel's times are on: its group's, or one that groups share (the topics
+        of a bag on its receive clock, Streams.clocks)."""
+        return self.group_clock(self.group(channel))
+
+    def group_clock(self, group: str) -> str:
+        """The clock a group's times are on (Streams.clocks), the group itself where it has its own."""
+        return (getattr(self.streams, "clocks", None) or {}).get(group, group)
+
     def stamped(self, only=None) -> list[tuple[list[str], np.ndarray]]:
         """([channels], stamps): the channels that share their stamps exactly, together (the
         receiver's fixes as ``gnss``); ``only`` limits the channels."""
@@ -413,9 +423,10 @@ class Auditor:
             t, r = sig["yaw_rate"]
             vr = np.interp(t, *sig["v"]) * r
             out.append(("v r vs lateral acceleration", "yaw_rate", lateral, lag(t, vr, *sig[lateral], search), "m/s2"))
-        for other in sorted(c for c in sig if c.startswith("yaw_rate_")):
+        for other in sorted(c for c in sig if c.startswith("yaw_rate_") or c == "odom_yaw_rate"):
             if "yaw_rate" in sig:
-                out.append(("two gyros", "yaw_rate", other, lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
+                out.append(("two gyros" if other != "odom_yaw_rate" else "gyro vs wheel odometry", "yaw_rate", other,
+                            lag(*sig["yaw_rate"], *sig[other], search), "rad/s"))
         return [p for p in out if p[3] is not None]
 
     def causal(self) -> dict | None:
@@ -469,7 +480,7 @@ def widened(aud: Auditor, pairs: list) -> list:
     """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
     +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
     the wider lag replaces the first where it is strong (_judged) and beyond SEARCH."""
-    weak = {(p[0], p[1], p[2]) for p in pairs if aud.group(p[1]) != aud.group(p[2]) and not _judged(p[3])}
+    weak = {(p[0], p[1], p[2]) for p in pairs if aud.clock(p[1]) != aud.clock(p[2]) and not _judged(p[3])}
     if not weak:
         return pairs
     wide = {(p[0], p[1], p[2]): p for p in aud.zero_lag_pairs(WIDE_SEARCH) if (p[0], p[1], p[2]) in weak}
@@ -514,10 +525,11 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if leap is not None and not iv[0] <= leap <= iv[1]:
             meaning += (f"; measured {est['lag']:+.3f} s{_interval_text(iv)}: the leap count, the rest "
                         f"({est['lag'] - leap:+.3f} s) a latency of the signals compared, not moved")
-        if ga == gb:
+        if aud.clock(a) == aud.clock(b):
+            one = f"one row, one clock ({ga})" if ga == gb else f"one clock ({aud.clock(a)})"
             findings.append(finding("sensor_latency", [a, b], late, iv, "s", meaning + (
-                f"; one row, one clock ({ga}): a sensor's own latency (a filter, a fix's age), not a clock; nothing "
-                f"moved" if judged else f"; one row, one clock ({ga}): too weak to judge (correlation below "
+                f"; {one}: a sensor's own latency (a filter, a fix's age), not a clock; nothing "
+                f"moved" if judged else f"; {one}: too weak to judge (correlation below "
                 f"{STRONG_RHO}, under {EVIDENCE_S:g} s compared or interval wider than +-{HALF_WIDTH} s); nothing "
                 f"moved"), resolved=True))
         elif small:
@@ -542,7 +554,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "
                         f"{EVIDENCE_S:g} s, an interval within +-{HALF_WIDTH} s that excludes zero and is narrower "
                         f"than the offset): not acted on")
-        if ga != gb:
+        if aud.clock(a) != aud.clock(b):
             findings.append(finding("clock_offset", [a, b], late, iv, "s", meaning, resolved=small or not strong))
         s, siv = est["scale"], est["scale_interval"]
         if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
@@ -814,7 +826,8 @@ def parse_align(text: str | None) -> str | dict[str, float]:
 
 
 def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
-    """Every channel of each group moved earlier by its offset; the channels moved."""
+    """Every channel of each group (or clock that groups share) moved earlier by its offset; the
+    channels moved."""
     moved = []
     for c, (t, x) in list(streams.signals.items()):
         g = group_of(c)
@@ -860,7 +873,7 @@ def audit_streams(streams, options, source) -> dict:
     elif align == "auto":
         applied = {g: o[0] for g, o in offsets.items()}
         how = "auto: the offsets found strong (--align none keeps the stamps; --align GROUP=SECONDS sets one)"
-    moved = shift(streams, aud.group, applied) if applied else []
+    moved = shift(streams, aud.clock, {aud.group_clock(g): s for g, s in applied.items()}) if applied else []
     for f in pair_findings:
         if f["kind"] == "clock_offset" and applied:
             ga, gb = aud.group(f["channels"][0]), aud.group(f["channels"][1])
@@ -894,6 +907,7 @@ def audit_streams(streams, options, source) -> dict:
     findings += mode_findings(streams.report, t0)
     findings += fix_quality_findings(streams.gnss, t0)
     findings += held_findings(streams.report)
+    findings += axis_findings(streams.report)
     try:
         findings += check_direction(streams, options, source, t0)
         refusal = None
@@ -1103,7 +1117,8 @@ def audit_frame(frame) -> list[dict]:
     the causality check, the scales of redundant columns and the signs of a mislabel. A log
     that ``convert`` wrote carries its import's audit instead (measurements.log.persisted_audit)."""
     t = frame["t"].to_numpy(float)
-    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_"))]
+    names = [c for c in frame.columns if c != "t" and (c in CANONICAL or c in LATERAL or str(c).startswith("yaw_rate_")
+                                               or c == "odom_yaw_rate")]
     signals = {c: (t, frame[c].to_numpy(float)) for c in names}
     streams = Streams(None, signals, {}, {"delta_cmd"} & set(signals), {}, groups={c: "log" for c in signals})
     try:

@@ -35,8 +35,8 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
 
 A heading (``MUST_CHANGE``) that never changes while the course of the fixes turns by more than
 TURNED rad is refused, and so is a recording in which
-no channel changes at all (a file of zeros): the error names the file, the channel and what was
-expected.
+no channel changes at all: the error names the file, each channel with the value it holds, and
+whether the vehicle stands (a speed below STANDING, positions that stay put) or a value was held.
 """
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ import math
 import numpy as np
 
 from .direction import course
-from .log import LogError, resolution
+from .log import COLUMNS, LogError, resolution
 from .streams import Streams
 
 HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the channel may be held
@@ -171,15 +171,38 @@ def _refuse_constant(streams: Streams, source) -> None:
     def named(c):
         return "the positions (lat, lon)" if c == "gnss" else f"{c} ({labels.get(c, c)})"
     if series and constant == set(series):
-        raise LogError(f"{source}: no channel changes: every one of {', '.join(named(c) for c in sorted(constant))} "
-                       f"holds one value throughout (a file of zeros or of a logger that was not recording?); "
-                       f"expected measurements that change as the machine drives")
+        raise LogError(f"{source}: no channel changes: " + _standing(streams, series, named)
+                       + "; expected measurements that change as the machine drives")
     for c in sorted(c for c in constant & set(MUST_CHANGE) if _turned(streams) > TURNED):
         x = np.asarray(series[c], float).reshape(len(series[c]), -1)[0]
         raise LogError(f"{source}: channel {named(c)} never updates: all {len(series[c])} samples hold "
                        f"{', '.join(f'{v:g}' for v in x)} while other channels change; expected {MUST_CHANGE[c]}: "
                        f"map the channel that carries it (--signal {c if c != 'gnss' else 'lat'}=TABLE.COLUMN) or "
                        f"leave it out")
+
+
+def _standing(streams: Streams, series: dict, named) -> str:
+    """What a recording whose every channel holds one value says: each channel's value (SI, its
+    unit), its span, and whether the vehicle moves (a speed below STANDING, or positions that stay
+    put, say it stands; a constant speed above it is a value held, not a measurement)."""
+    times = [t for t, _ in streams.signals.values() if len(t)]
+    if streams.gnss is not None and len(streams.gnss):
+        times.append(streams.gnss["utc"].to_numpy(float))
+    span = max(float(t[-1]) for t in times) - min(float(t[0]) for t in times) if times else 0.0
+    values = []
+    for c in sorted(series):
+        x = np.asarray(series[c], float).reshape(len(series[c]), -1)[0]
+        unit = COLUMNS.get(c, ("", ""))[0] if c != "gnss" else "deg"
+        values.append(f"{named(c)} holds {', '.join(f'{v:g}' for v in x)}{f' {unit}' if unit else ''}")
+    speeds = [float(np.asarray(series[c], float).ravel()[0]) for c in ("v", "gnss_speed") if c in series]
+    still = "gnss" in series or (speeds and all(abs(v) < STANDING for v in speeds))
+    moving = [v for v in speeds if abs(v) >= STANDING]
+    said = ("the vehicle does not move in the recording (a speed below "
+            f"{STANDING:g} m/s{' and positions that stay put' if 'gnss' in series else ''}): nothing in it to identify "
+            "or judge" if still and not moving else
+            f"a speed of {moving[0]:g} m/s that never changes is a value held (a sender or a logger not updating), "
+            "not a measurement" if moving else "nothing in it changes: no drive to judge")
+    return f"over its {span:.0f} s " + "; ".join(values) + f" throughout: {said}"
 
 
 def keep_updates(streams: Streams, source) -> list[dict]:

@@ -48,7 +48,8 @@ SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the
 SCALE = 2.0             # a heading's rate within this factor of the course's (a gyro in deg/s is not one)
 AXIS_WINDOW = 30        # s: the course-heading axis is read over this window (a drifting heading)
 STILL, STILL_SAMPLES = 0.05, 20    # m/s, samples: a gyro's bias read at standstill
-RUN_MIN, RUN_VOTES = 2.0, 10    # s, votes: a run of reversing evidence alone inside a forward stretch
+RUN_MIN, RUN_VOTES = 2.0, 5     # s, votes: a run of reversing evidence alone inside a forward stretch (the
+                                # duration decides above 2.5 Hz fixes; 5 votes, as a stretch needs, below)
 
 
 def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

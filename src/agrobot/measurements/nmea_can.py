@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from .clocks import align_clocks
+from .imu_axes import GRAVITY, axis_check, axis_siblings
 from .log import LogError
 from .options import ImportOptions
 from .mdf4 import is_bus_logging
@@ -121,6 +122,10 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
     for c in cans:
         report["can"].setdefault("outside_declared_range", {}).update(c.outside_range)
         report["can"].setdefault("j1939_not_available", {}).update(c.not_available)
+        report["can"].setdefault("sentinels", {}).update(c.sentinels)
+        report["notes"] += [f"{name}: {d['count']} of {d['of']} values sit on the DBC's declared bound "
+                            f"{', '.join(f'{v:g}' for v in d['values'])} (the field's raw extreme, beyond what a ground "
+                            f"vehicle measures): the sender's 'no value', left out" for name, d in c.sentinels.items()]
     if options.bus is not None:
         report["can"]["bus"] = options.bus
     frames = merge(cans)
@@ -145,6 +150,7 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
             continue
         t, values, text = evaluate(spec, found, f"{source} (DBC {dbc_name})", options.wheelbase or 1.4)
         raw[column] = (t, values)
+        _yaw_axis(db, frames, spec, report)
         units[column] = text + ("; matched by name and unit (--signal to choose another)" if column in guessed else "")
         for name in spec.names:
             message = name.rsplit(".", 1)[0]
@@ -158,6 +164,27 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
                        + (f"; unknown identifiers: {', '.join(unknown)}" if unknown else "")
                        + "); give the vehicle's DBC with --dbc, and map signals with --signal COLUMN=Message.Signal")
     return raw, units
+
+
+def _yaw_axis(db, frames: dict, spec, report: dict) -> None:
+    """A yaw rate read from one axis of a CAN IMU whose message (or another) carries its
+    accelerometer: the vertical axis by gravity checked against it (measurements.imu_axes); a
+    mismatch goes to report["imu_axes"] for the audit to name."""
+    if spec.column != "yaw_rate" or len(spec.names) != 1:
+        return
+    name = spec.names[0]
+    names = [f"{m}.{c}" for m, table in frames.items() for c in table.columns if c != "t"]
+    found = axis_siblings(name, [n for n in names if n.rsplit(".", 1)[0] == name.rsplit(".", 1)[0]] or names)
+    if found is None:
+        return
+    axis, accel = found
+    readings = {a: series(db, frames, n) for a, n in accel.items()}
+    if any(r is None or len(r.values) < 20 for r in readings.values()):
+        return
+    scale = {a: GRAVITY if (r.unit or "").strip().lower() in ("g", "gn") else 1.0 for a, r in readings.items()}
+    check = axis_check(spec.column, name, axis, accel, {a: r.values * scale[a] for a, r in readings.items()})
+    if check is not None:
+        report.setdefault("imu_axes", []).append(check)
 
 
 RECEIVER_FIELDS = {"speed": "m/s", "course": "rad", "heading": "rad", "height": "m", "quality": "", "position_std": "m"}

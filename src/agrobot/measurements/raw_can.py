@@ -8,7 +8,10 @@ offset). Multiplexed messages give, per frame, the signals of the multiplexer va
 (priority and source address free, and the destination of a PDU1 group), so one DBC decodes any
 sender; in 29-bit messages a byte-aligned unsigned field above J1939's valid range (0xFA.. for
 8 bits, 0xFAFF for 16 ...: 'error' and 'not available') is NaN, counted. A DBC's declared
-[min|max] is a plausibility note (values outside are counted and named, kept).
+[min|max] is a plausibility note (values outside are counted and named, kept), except a sentinel:
+a value exactly on a declared bound that is also the field's raw extreme (raw 0 or all ones) and
+beyond what a ground vehicle can measure (SENTINEL_LIMITS: an acceleration of -64 m/s^2 from raw
+0) is a sender's "no value", NaN, counted and named.
 
 Frames carry their bus (candump's ``can0``, a Vector channel ``1``): ``--bus`` chooses; a log of
 several buses without it is refused with the buses named. Columns come from ``--signal``
@@ -60,6 +63,10 @@ SOURCES: dict[str, tuple[SignalSpec, ...]] = {
 }
 CAN_COLUMNS = tuple(SOURCES)
 
+# |value| in SI that no ground vehicle's sensor measures: a declared bound beyond it is a sentinel
+# (an angular rate only in deg or rad units: an engine's rpm shares its dimension)
+SENTINEL_LIMITS = (("m/s^2", 50.0, ""), ("m/s", 100.0, ""), ("rad/s", 10.0, "deg|rad"))
+
 
 def _key(frame_id: int, extended: bool) -> tuple:
     """The J1939 parameter group of a 29-bit identifier: data page and PDU format, and the PDU
@@ -81,6 +88,7 @@ class CANRecording:
     buses: Counter = field(default_factory=Counter)
     outside_range: dict = field(default_factory=dict)
     not_available: dict = field(default_factory=dict)
+    sentinels: dict = field(default_factory=dict)         # Message.Signal -> {values, count, of}: a declared bound as "no value"
     bad_lines: list = field(default_factory=list)        # (line number, text) of the first lines that are not frames
     notes: list = field(default_factory=list)
     breaks: list = field(default_factory=list)           # on the logger's clock (measurements.quirks.ordered_in_time)
@@ -270,6 +278,12 @@ def _scaled(msg, raw: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
         offset = float(getattr(conv, "offset", getattr(sig, "offset", 0.0)) or 0.0)
         x = x * scale + offset
         lo, hi = sig.minimum, sig.maximum
+        bounds = sentinel_bounds(sig, scale, offset)
+        hit = np.isfinite(x) & np.isin(x, bounds)
+        if hit.any():
+            rec.sentinels[f"{msg.name}.{sig.name}"] = {"values": [float(b) for b in bounds], "count": int(hit.sum()),
+                                                       "of": int(np.isfinite(x).sum())}
+            x = np.where(hit, np.nan, x)
         if lo is not None and hi is not None and not (lo == 0 and hi == 0) and hi > lo:
             out = np.isfinite(x) & ((x < lo - 1e-9 * max(1.0, abs(lo))) | (x > hi + 1e-9 * max(1.0, abs(hi))))
             if out.any():
@@ -278,6 +292,24 @@ def _scaled(msg, raw: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
                     "seen": [float(np.nanmin(x)), float(np.nanmax(x))]}
         table[sig.name] = x
     return _flagged_invalid(msg, table, rec)
+
+
+def sentinel_bounds(sig, scale: float, offset: float) -> list[float]:
+    """The declared bounds of ``sig`` that are sentinels (module docstring): on the raw field's
+    extreme and beyond SENTINEL_LIMITS for the signal's unit."""
+    unit = (sig.unit or "").strip()
+    own = base_unit(unit) if unit else None
+    if own is None or sig.is_float or not scale:
+        return []
+    limit = next((lim for u, lim, words in SENTINEL_LIMITS if base_unit(u).exponents == own.exponents
+                  and (not words or re.search(words, unit, re.I))), None)
+    if limit is None:
+        return []
+    n = sig.length
+    extremes = (-(2 ** (n - 1)), 2 ** (n - 1) - 1) if sig.is_signed else (0, 2 ** n - 1)
+    decoded = [r * scale + offset for r in extremes]
+    return [b for b in (sig.minimum, sig.maximum) if b is not None and abs(b * own.factor) > limit
+            and any(math.isclose(b, d, rel_tol=1e-9, abs_tol=1e-9) for d in decoded)]
 
 
 VALID_FLAG = re.compile(r"valid$", re.I)

@@ -9,7 +9,8 @@ Standard messages are mapped by their type, without options (TYPE_MAP):
 - ``sensor_msgs/Imu``: ``yaw_rate`` from angular_velocity.z, or from the axis its accelerometer
   names vertical when that is x or y (an IMU mounted on its side: measurements.imu_axes), named;
 - ``nav_msgs/Odometry``: ``v`` from twist.twist.linear.x, ``yaw_rate`` from twist.twist.angular.z
-  (an IMU's wins);
+  (an IMU's wins: a wheel odometry's, one whose topic does not name a filter or fusion, is then
+  ``odom_yaw_rate``, the input of identify's skid-steer model; another source ``yaw_rate_2``);
 - ``geometry_msgs/TwistStamped``: ``v`` and ``yaw_rate`` likewise;
 - ``ackermann_msgs/AckermannDriveStamped``: ``delta_cmd`` from drive.steering_angle, ``speed_cmd``
   from drive.speed.
@@ -20,7 +21,9 @@ Any numeric field of any topic, custom messages included: ``--signal COLUMN=/top
 declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees become x/y.
 Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
 the messages' header stamps where they have a header with a stamp, else the bag's receive times;
-every topic is on that one clock, and the report says which each topic used.
+every topic is on that one clock, and the report says which each topic used. Topics read on the
+bag's receive times, or whose header stamps sit within STAMP_ON_RECEIVE s of them, share the bag's
+clock (Streams.clocks): a lag between them is a sensor's own latency, never a clock to align.
 
 Imported where used: rosbags (the bags extra).
 """
@@ -50,6 +53,8 @@ ACKERMANN = {
 }
 NAVSAT_QUALITY = {-1: 0, 0: 1, 1: 2, 2: 4}
 IMU = "sensor_msgs/msg/Imu"
+FUSED = re.compile(r"filter|ekf|ukf|fus|global|map|slam|visual|lidar|icp|gps|gnss", re.I)   # not a wheel odometry
+STAMP_ON_RECEIVE = 0.08     # s: header stamps this close to the receive times (median) are on the bag's clock
 IMU_AXES_READ = tuple(f"linear_acceleration.{a}" for a in AXES) + ("angular_velocity.x", "angular_velocity.y")
 
 # type -> [(column, field path)], in the order a column is taken from (the first type that has it wins)
@@ -229,6 +234,12 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
         report["choices"] = [f"yaw_rate: {auto['yaw_rate'].names[0]} (the first gyro topic) used; also "
                              + ", ".join(f"{s.names[0]} as {s.column}" for s in others)
                              + " (the audit compares them; --signal yaw_rate=/topic.angular_velocity.z chooses)"]
+    if "odom_yaw_rate" in auto and "odom_yaw_rate" in signals:
+        report.setdefault("choices", []).append(
+            f"odom_yaw_rate: {auto['odom_yaw_rate'].names[0]} (a wheel odometry's turn rate, beside the gyro's "
+            f"yaw_rate {auto['yaw_rate'].names[0]}): the input identify's skid-steer model takes "
+            f"(identification.skid_steer); the audit compares it with yaw_rate; --signal "
+            f"yaw_rate_2={auto['odom_yaw_rate'].names[0]} keeps it a second yaw-rate source only")
     if turned:
         report["choices"] = turned + report.get("choices", [])
     return signals, report
@@ -281,10 +292,17 @@ def _named_fields(given: list, topics: dict[str, str], source: Path) -> dict[str
     return wanted
 
 
+def wheel_odometry(topic: str, msgtype: str) -> bool:
+    """An Odometry topic whose name does not say it is fused or estimated otherwise (FUSED): a wheel
+    odometry, whose turn rate is the input of a skid-steered vehicle's yaw model."""
+    return msgtype == "nav_msgs/msg/Odometry" and not FUSED.search(topic)
+
+
 def _standard_fields(given: list, topics: dict[str, str], wanted: dict) -> dict[str, SignalSpec]:
     """column -> expression of the standard types' fields (TYPE_MAP; the first topic of the first
     type that has a column gives it, a column ``given`` is not taken), added to ``wanted``. Another
-    gyro topic is kept as yaw_rate_2 ... for the audit to compare (the first is used)."""
+    gyro topic is kept as yaw_rate_2 ... for the audit to compare (the first is used); a wheel
+    odometry's (wheel_odometry) as ``odom_yaw_rate``, identify's skid-steer input."""
     taken = {g.column for g in given}
     auto: dict[str, SignalSpec] = {}
     for msgtype, fields in TYPE_MAP.items():
@@ -293,7 +311,9 @@ def _standard_fields(given: list, topics: dict[str, str], wanted: dict) -> dict[
                 if column not in taken:
                     taken.add(column)
                 elif column == "yaw_rate" and "yaw_rate" in auto and auto["yaw_rate"].names[0].split(".")[0] != topic:
-                    column = f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}"
+                    column = ("odom_yaw_rate" if wheel_odometry(topic, msgtype) and "odom_yaw_rate" not in taken else
+                              f"yaw_rate_{sum(c.startswith('yaw_rate') for c in auto) + 1}")
+                    taken.add(column)
                 else:
                     continue
                 name = f"{topic}.{path}"
@@ -474,7 +494,22 @@ def bag_streams(paths: list[Path], options, source: Path):
     report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
     held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
-    return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}))
+    fixes = next((topic for topic, v in topics["topics"].items() if "lat" in v["columns"]), None)
+    if gnss is not None and fixes is not None:
+        groups["gnss"] = fixes          # the receiver's fixes keep their topic's clock
+    clocks = bag_clocks(topics["topics"], report["stamp_vs_receive"], paths)
+    return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}), clocks=clocks)
+
+
+def bag_clocks(report_topics: dict, stamps: dict, paths: list[Path]) -> dict[str, str]:
+    """topic -> the bag's clock, for the topics on it: one recorder stamps every message's
+    receive time, so a topic read on receive times is on it, and so is one whose header stamps sit
+    within STAMP_ON_RECEIVE s of its receive times (median): stamped by a clock that agrees with
+    the recorder's to better than the least offset the audit would align. A topic stamped farther
+    off keeps a clock of its own."""
+    bag = f"the bag's receive clock ({', '.join(Path(p).name for p in paths)})"
+    return {topic: bag for topic, v in report_topics.items()
+            if v.get("time") != "header stamps" or abs(stamps.get(topic, {}).get("median", math.inf)) <= STAMP_ON_RECEIVE}
 
 
 class BagReader(Reader):

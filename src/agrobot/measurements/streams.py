@@ -43,7 +43,9 @@ class Streams:
     where given heading, position_std), or None; ``signals`` column -> (time, SI values); ``held``
     the set-points among them; ``resolution`` each signal's step read on its own samples;
     ``breaks`` the spans a run must not bridge (a clock that stepped back, a position jump);
-    ``groups`` each signal's source (file, topic, bus): the channels that share a clock."""
+    ``groups`` each signal's source (file, topic, bus): the channels that share a clock;
+    ``clocks`` group -> the clock its times are on where groups share one (the topics of a bag on
+    its receive clock); a group not named is a clock of its own."""
 
     gnss: pd.DataFrame | None
     signals: dict[str, tuple[np.ndarray, np.ndarray]]
@@ -53,6 +55,7 @@ class Streams:
     breaks: list = field(default_factory=list)      # {stream, start, end (POSIX s), why}: never joined across
     groups: dict = field(default_factory=dict)      # column -> the file, topic or bus it came from (one clock)
     labels: dict = field(default_factory=dict)      # column -> the text values of a mode channel's codes
+    clocks: dict = field(default_factory=dict)      # group -> the clock groups share (a bag's receive clock)
 
 
 class Reader:
