@@ -213,11 +213,36 @@ def quantity(result: FitResult, p: Parameter) -> dict:
     return d
 
 
+def _input_on_its_updates(frame, where: str, name: str, notes: list[str]):
+    """The rows where the input is known: a blank (not finite) input cell between two of its updates
+    is interpolated (a channel updated slower than the log's rows); rows before its first update,
+    after its last, or in a silence longer than max(0.5 s, 5 of its median update steps) are left
+    out. A LogError naming the column when fewer than MIN_SECONDS of rows are left."""
+    u = frame[name].to_numpy(float)
+    t = frame["t"].to_numpy(float)
+    known = np.isfinite(u)
+    if known.all():
+        return frame
+    tk = t[known]
+    keep = np.zeros(len(t), bool)
+    if len(tk) >= 2:
+        gap = max(0.5, 5.0 * float(np.median(np.diff(tk))))
+        after = np.clip(np.searchsorted(tk, t, side="left"), 1, len(tk) - 1)
+        keep = (t >= tk[0]) & (t <= tk[-1]) & (tk[after] - tk[after - 1] <= gap)
+    if keep.sum() < 2 or t[keep][-1] - t[keep][0] < MIN_SECONDS:
+        raise LogError(f"{where}: the turn-rate input {name} has {int(known.sum())} finite cells of {len(u)} rows: "
+                       f"too few to identify against (needs {MIN_SECONDS:g} s of it updated at least every 0.5 s); "
+                       f"map a turn-rate channel that is recorded with the gyro")
+    notes.append(f"{name}: {int((~known).sum())} blank cells of {len(u)} rows (a channel updated slower than the "
+                 f"rows): interpolated between its updates; {int((~keep).sum())} rows outside them left out")
+    return frame.loc[keep].assign(**{name: np.interp(t[keep], tk, u[known])})
+
+
 def _log_of(frame, where: str, name: str, notes: list[str]) -> tuple[DrivingLog, Segments]:
     """The input and the gyro on an even clock, cut into segments (every sample: a skid-steered
     vehicle turns standing, and standing still it shows the bias); refused when the gyro turns
     against the input, or the log holds too little turning."""
-    log = even_grid(frame.assign(v=1.0), name, max_rate=25.0)
+    log = even_grid(_input_on_its_updates(frame, where, name, notes).assign(v=1.0), name, max_rate=25.0)
     notes += log.notes
     rho = float(np.corrcoef(log.r, log.u)[0, 1]) if np.std(log.r) > 0 and np.std(log.u) > 0 else 0.0
     if rho < -0.3:
