@@ -18,7 +18,10 @@ function of path curvature and speed, Pioneer P3-AT). A differential-drive robot
 as its wheels ask, K about 1. A K above PLAUSIBLE_GAIN is not skid steering: the odometry divides
 by an effective track already (ROS diff_drive_controller's wheel_separation_multiplier: 1.875 in
 the Clearpath Husky's husky_control/config/control.yaml, where K = 1 / 1.875 = 0.53 against the
-geometric track reads as 1 against the odometry), a wheel-speed scale, or a gyro scale.
+geometric track reads as 1 against the odometry), a wheel-speed scale, or a gyro scale. A K below
+PLAUSIBLE_GAIN[0] = 0.3 (an ICR expansion chi above 3.3, beyond the 1.5-2.5 measured on tracks and
+skid-steered wheels on soil and concrete) is not slip either: an input in deg/s reads K / 57.3, an
+input that is not this vehicle's turn rate, or the gyro's wrong axis.
 
 tau is the input's delay to the yaw: positive for a command (the drives' response); for the wheel
 odometry it is the odometry's own lateness against the gyro with its sign reversed (a rolling mean
@@ -41,9 +44,10 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
-from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, interval,
+from agrobot.estimation import (AT_BOUND, FitResult, Parameter, effective_size, forward_jacobian, interval,
                                 solution_covariance)
 from agrobot.measurements import LogError
+from agrobot.measurements.log import DEGREE_SUSPECT, robust_peak
 
 from .driving import DrivingLog, NotEnoughDriving, Segments, cut_segments, even_grid, fit_percent
 from .vehicle import Vehicle
@@ -54,10 +58,11 @@ INPUT_TEXT = {"wheel odometry": "the wheel odometry's yaw rate (v_R - v_L) / B",
 SKID_DRIVES = ("skid", "differential")
 EQUATION = "r(t) = y(t) + b,  T dy/dt + y = K w(t - tau)"
 EQUATION_SLOPE = "r(t) = y(t) + b,  T dy/dt + y = K (1 - s |w_d|) w_d,  w_d = w(t - tau)"
-PLAUSIBLE_GAIN = (0.0, 1.05)             # K against a geometric track (module docstring)
+PLAUSIBLE_GAIN = (0.3, 1.05)             # K against a geometric track (module docstring)
 PLAUSIBLE_DELAY = {"command": (0.0, 0.6), "wheel odometry": (-0.6, 0.3)}      # s
 PLAUSIBLE_LAG = {"tractor": 2.0, "truck": 2.0}                                  # s; other classes 1.0
 MIN_SECONDS = 20.0
+INPUT_SILENCE = 0.5                      # s: the longest the input may go without an update
 MIN_TURNING = 0.02                       # rad/s: std of the input turn rate
 SEGMENT, BURN_IN = 6.0, 2.0              # s
 BIC_MARGIN, GAIN_MARGIN = 10.0, 0.02
@@ -96,6 +101,10 @@ def turn_input(frame, where: str) -> tuple[str, list[str]]:
                        f"--signal 'turn_rate_cmd=/cmd_vel.angular.z' (a table: a column of that name in rad/s); "
                        f"the log has {', '.join(map(str, frame.columns))}")
     notes = [f"input: {have[0]}, {INPUT_TEXT[TURN_INPUTS[have[0]]]}"]
+    bound, unit = DEGREE_SUSPECT[have[0]]
+    if (peak := robust_peak(frame[have[0]].to_numpy(float))) > bound:
+        notes.append(f"warning: {have[0]} reaches {peak:.3g} (99.5 % of its values within), more than {bound:g} {unit}: "
+                     f"it looks like deg/s (declare its unit in its --signal: '{have[0]}=TOPIC[deg/s]')")
     if len(have) > 1:
         notes.append(f"passed over: {', '.join(have[1:])} (the measured wheel odometry is preferred to a command; "
                      f"leave {have[0]} out of the log, or its --signal, to fit the command)")
@@ -206,7 +215,9 @@ def quantity(result: FitResult, p: Parameter) -> dict:
          "unit": p.unit, "bounds": [p.lower, p.upper], "meaning": p.meaning,
          "identifiable": side is None and math.isfinite(sd)}
     if side:
-        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g} {p.unit}"
+        tol = AT_BOUND * (p.upper - p.lower)
+        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g} {p.unit} "
+                     f"(within {tol:.3g} of it, {100 * AT_BOUND:g} % of its range {p.lower:g}..{p.upper:g})"
                      + (" (no lag resolved: the yaw follows the input within a sample)" if p.name == "lag" else ""))
     elif not math.isfinite(sd):
         d["note"] = "not identifiable from this log: the residuals do not depend on it"
@@ -216,8 +227,8 @@ def quantity(result: FitResult, p: Parameter) -> dict:
 def _input_on_its_updates(frame, where: str, name: str, notes: list[str]):
     """The rows where the input is known: a blank (not finite) input cell between two of its updates
     is interpolated (a channel updated slower than the log's rows); rows before its first update,
-    after its last, or in a silence longer than max(0.5 s, 5 of its median update steps) are left
-    out. A LogError naming the column when fewer than MIN_SECONDS of rows are left."""
+    after its last, or in a silence longer than INPUT_SILENCE (the yaw's lag and delay are tenths of
+    a second) are left out. A LogError naming the column when fewer than MIN_SECONDS of rows are left."""
     u = frame[name].to_numpy(float)
     t = frame["t"].to_numpy(float)
     known = np.isfinite(u)
@@ -226,12 +237,11 @@ def _input_on_its_updates(frame, where: str, name: str, notes: list[str]):
     tk = t[known]
     keep = np.zeros(len(t), bool)
     if len(tk) >= 2:
-        gap = max(0.5, 5.0 * float(np.median(np.diff(tk))))
         after = np.clip(np.searchsorted(tk, t, side="left"), 1, len(tk) - 1)
-        keep = (t >= tk[0]) & (t <= tk[-1]) & (tk[after] - tk[after - 1] <= gap)
+        keep = (t >= tk[0]) & (t <= tk[-1]) & (tk[after] - tk[after - 1] <= INPUT_SILENCE)
     if keep.sum() < 2 or t[keep][-1] - t[keep][0] < MIN_SECONDS:
         raise LogError(f"{where}: the turn-rate input {name} has {int(known.sum())} finite cells of {len(u)} rows: "
-                       f"too few to identify against (needs {MIN_SECONDS:g} s of it updated at least every 0.5 s); "
+                       f"too few to identify against (needs {MIN_SECONDS:g} s of it updated at least every {INPUT_SILENCE:g} s); "
                        f"map a turn-rate channel that is recorded with the gyro")
     notes.append(f"{name}: {int((~known).sum())} blank cells of {len(u)} rows (a channel updated slower than the "
                  f"rows): interpolated between its updates; {int((~keep).sum())} rows outside them left out")
@@ -290,9 +300,10 @@ def _fits(log: DrivingLog, segs: Segments, vehicle: Vehicle, kind: str) -> dict:
 
 
 def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
-    """Each concluded value against what a skid-steered vehicle of its class can have: 0 < K <=
-    PLAUSIBLE_GAIN[1], tau in PLAUSIBLE_DELAY[kind], T up to PLAUSIBLE_LAG (1 s unless the class
-    says), |b| within the class's gyro bias; a value on a bound is not concluded (listed apart)."""
+    """Each value against what a skid-steered vehicle of its class can have: K in PLAUSIBLE_GAIN,
+    tau in PLAUSIBLE_DELAY[kind], T up to PLAUSIBLE_LAG (1 s unless the class says), |b| within the
+    class's gyro bias; a value on a bound is not concluded (listed apart), and named implausible too
+    when it lies outside that range (the fit went as far from it as it could)."""
     lag_hi = PLAUSIBLE_LAG.get(vehicle.kind or "", 1.0)
     bias_hi = vehicle.gyro_bias_bound or 3.0 * DEG
     ranges = {"yaw_gain": PLAUSIBLE_GAIN, "delay": PLAUSIBLE_DELAY[kind], "lag": (0.0, lag_hi),
@@ -300,15 +311,20 @@ def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
     why = {"yaw_gain": "the gyro turns more than the input asks: the odometry divides by an effective track already "
                        "(a wheel_separation_multiplier: K against the geometric track is K / multiplier), a wheel-speed "
                        "or gyro scale, or the input is not this vehicle's turn rate",
+           "yaw_gain_low": "the gyro turns far less than the input asks, more than any skid steering slips: the input "
+                           "in deg/s? (K x 57.3 = {deg:.3g}; declare its unit in its --signal: 'odom_yaw_rate=TOPIC[deg/s]'), or the "
+                           "input is not this vehicle's turn rate",
            "delay": f"not a {kind}'s delay to the yaw: a clock offset between the input's and the gyro's channels",
            "lag": "slower than a vehicle of this class turns: the input is not what drives the yaw",
            "gyro_bias": "beyond a gyro of this class: a gyro under a slope or the wrong axis"}
     findings = []
     for name, (lo, hi) in ranges.items():
         q = params.get(name)
-        if q and q["identifiable"] and not lo <= q["value"] <= hi:
+        if q and math.isfinite(q["value"]) and not lo <= q["value"] <= hi:
             unit = "" if q["unit"] == "1" else " " + q["unit"]
-            findings.append(f"{name} = {q['value']:.4g}{unit} outside [{lo:.4g}, {hi:.4g}]{unit}: {why[name]}")
+            reason = why["yaw_gain_low" if name == "yaw_gain" and q["value"] < lo else name]
+            findings.append(f"{name} = {q['value']:.4g}{unit}{'' if q['identifiable'] else ' (on its bound)'} outside "
+                            f"[{lo:.4g}, {hi:.4g}]{unit}: {reason.format(deg=q['value'] / DEG)}")
     return {"plausible": not findings, "findings": findings,
             "ranges": {k: [float(a), float(b)] for k, (a, b) in ranges.items()},
             "not_concluded": [f"{k}: {q['note']}" for k, q in params.items() if q.get("note")]}
