@@ -30,7 +30,7 @@ vehicle's inertia; stepped exactly for an input linear between samples, as ident
 steps the steering lag). b is the gyro bias (none for a yaw rate from a heading).
 
 Fitted by bounded least squares on segments of the log, every third one held out, with the
-project's estimation engine (estimation.FitResult, solution_covariance, effective_size: intervals
+project's estimation engine (identification.driving.fit, estimation.FitResult: intervals
 from the Jacobian inflated by n / n_eff, never more than the yaw measurement's own updates); a
 value on a bound is widened to its physical limit once (estimation.Parameter.widened) and, still
 there, not concluded. The turn-rate dependence s is kept when it wins on BIC by more than
@@ -41,15 +41,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
-from agrobot.estimation import (AT_BOUND, FitResult, Parameter, effective_size, forward_jacobian, interval,
-                                solution_covariance)
+from agrobot.estimation import (AT_BOUND, FitResult, Parameter, interval)
 from agrobot.measurements import LogError
 from agrobot.measurements.log import DEGREE_SUSPECT, robust_peak
 
 from .driving import DrivingLog, NotEnoughDriving, Segments, cut_segments, even_grid, fit_percent
+from .driving import fit as driving_fit
 from .vehicle import Vehicle
 
 TURN_INPUTS = {"odom_yaw_rate": "wheel odometry", "turn_rate_cmd": "command"}   # in order of preference
@@ -148,30 +147,23 @@ def simulate(log: DrivingLog, values: dict, segs: Segments) -> np.ndarray:
     return log.as_measured(y) + values.get("gyro_bias", 0.0)
 
 
+class SkidModel:
+    """The skid-steer model as identification.driving.fit reads a model: its log and ``simulate``."""
+
+    def __init__(self, log: DrivingLog):
+        self.log = log
+
+    def simulate(self, values: dict, segs: Segments) -> np.ndarray:
+        return simulate(self.log, values, segs)
+
+    def simulate_many(self, sets: list[dict], segs: Segments) -> list[np.ndarray]:
+        return [simulate(self.log, values, segs) for values in sets]
+
+
 def fit(log: DrivingLog, segs: Segments, free: list[Parameter], start: dict, fixed: dict | None = None) -> FitResult:
-    """Bounded least squares of the gyro against ``simulate`` on the segments' scored samples."""
-    fixed = fixed or {}
-    r_meas, mask = log.r[segs.idx], segs.scored
-    lo = np.array([p.lower / p.scale for p in free])
-    hi = np.array([p.upper / p.scale for p in free])
-
-    def values_of(x):
-        return {**fixed, **{p.name: float(xi) * p.scale for p, xi in zip(free, x)}}
-
-    def fun(x):
-        return (r_meas - simulate(log, values_of(x), segs))[mask]
-
-    def jac(x):
-        return forward_jacobian(lambda xs: [fun(xi) for xi in xs], x, lo, hi, floor=1.0, signed=False)
-
-    x0 = np.clip([start.get(p.name, 0.0) / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
-    sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), x_scale=1.0, ftol=1e-8, xtol=1e-8, max_nfev=60)
-    values = values_of(sol.x)
-    residual = r_meas - simulate(log, values, segs)
-    rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
-    n, n_eff = len(sol.fun), effective_size(rows, updates=log.updates_in(segs))
-    cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)
-    return FitResult(values, tuple(free), cov, {"yaw": float(sol.fun @ sol.fun)}, {"yaw": n}, {"yaw": n_eff})
+    """Bounded least squares of the gyro against ``simulate`` on the segments' scored samples
+    (identification.driving.fit)."""
+    return driving_fit(SkidModel(log), free, start, fixed or {}, segs, max_nfev=60)
 
 
 def delay_start(log: DrivingLog, lo: float, hi: float) -> tuple[float, float]:
