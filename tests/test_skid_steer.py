@@ -158,3 +158,14 @@ def test_a_turn_rate_input_in_degrees_per_second_is_named_implausible():
     assert not rep["plausibility"]["plausible"]
     assert any(f.startswith("yaw_gain") and "deg/s?" in f for f in rep["plausibility"]["findings"])
     assert any("looks like deg/s" in n for n in rep["notes"])
+
+
+def test_a_skid_steer_log_names_the_options_it_passes_over(tmp_path):
+    from agrobot.identification.from_log import driving_report
+    from agrobot.measurements.options import ImportOptions
+
+    skid_log(column="odom_yaw_rate", tau=-0.2, seconds=60.0).to_csv(tmp_path / "skid.csv", index=False)
+    report, _ = driving_report(tmp_path / "skid.csv", recording=ImportOptions(wheelbase=0.5), fit_seconds=30.0,
+                               course_speed=1.0)
+    passed = [n for n in report["notes"] if n.startswith("passed over: --")]
+    assert passed and all(o in passed[0] for o in ("--wheelbase", "--fit-seconds", "--course-speed"))
