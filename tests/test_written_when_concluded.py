@@ -75,3 +75,20 @@ def test_a_characteristic_speed_set_by_an_unidentified_k_is_not_identified():
     *_, K, char = _understeer(_Fit(), [P()], 0.32)
     assert K["identifiable"] and char["identifiable"]
     assert char["value"] == pytest.approx(math.sqrt(0.32 / ((1 / 5 - 1 / 10) / 9.81)))
+
+
+def test_the_diagnosis_carries_a_friction_known_only_as_at_least(monkeypatch):
+    """identify's friction on its class's top reaches the diagnosis flagged, not as a plain number."""
+    import pandas as pd
+
+    from agrobot.diagnosis import pipeline
+    from agrobot.diagnosis.baseline import baseline_from_study
+
+    study = Study.load(ROOT_STUDIES / "f1tenth.toml")
+    rep = report(withheld=False, at_least=True) | {
+        "held_out_fit": {"value": 90.0}, "final_model": "tyre_saturation", "input": "delta", "delay": _q(0.05)}
+    rep["tyre_saturation"] |= {"why_not": [], "held_out_gain": 0.1}
+    monkeypatch.setattr(pipeline, "identify_driving", lambda *a, **k: rep)
+    monkeypatch.setattr(pipeline, "require_causal", lambda *a, **k: None)
+    got = pipeline.identified_vehicle(pd.DataFrame({"t": [0.0, 1.0]}), "gen.csv", study, baseline_from_study(study))
+    assert got["identified"]["tyre_saturation"]["friction_at_least"] is True
