@@ -208,7 +208,8 @@ def quantity(result: FitResult, p: Parameter) -> dict:
          "identifiable": side is None and math.isfinite(sd)}
     if side:
         tol = AT_BOUND * (p.upper - p.lower)
-        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g} {p.unit} "
+        unit = "" if p.unit == "1" else " " + p.unit
+        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g}{unit} "
                      f"(within {tol:.3g} of it, {100 * AT_BOUND:g} % of its range {p.lower:g}..{p.upper:g})"
                      + (" (no lag resolved: the yaw follows the input within a sample)" if p.name == "lag" else ""))
     elif not math.isfinite(sd):
@@ -304,19 +305,19 @@ def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
                        "(a wheel_separation_multiplier: K against the geometric track is K / multiplier), a wheel-speed "
                        "or gyro scale, or the input is not this vehicle's turn rate",
            "yaw_gain_low": "the gyro turns far less than the input asks, more than any skid steering slips: the input "
-                           "in deg/s? (K x 57.3 = {deg:.3g}; declare its unit in its --signal: 'odom_yaw_rate=TOPIC[deg/s]'), or the "
+                           "in deg/s? (K x 57.3 = {deg:.3g}; declare its unit in its --signal: '{column}=TOPIC[deg/s]'), or the "
                            "input is not this vehicle's turn rate",
            "delay": f"not a {kind}'s delay to the yaw: a clock offset between the input's and the gyro's channels",
            "lag": "slower than a vehicle of this class turns: the input is not what drives the yaw",
            "gyro_bias": "beyond a gyro of this class: a gyro under a slope or the wrong axis"}
-    findings = []
+    findings, column = [], next(c for c, k in TURN_INPUTS.items() if k == kind)
     for name, (lo, hi) in ranges.items():
         q = params.get(name)
         if q and math.isfinite(q["value"]) and not lo <= q["value"] <= hi:
             unit = "" if q["unit"] == "1" else " " + q["unit"]
             reason = why["yaw_gain_low" if name == "yaw_gain" and q["value"] < lo else name]
             findings.append(f"{name} = {q['value']:.4g}{unit}{'' if q['identifiable'] else ' (on its bound)'} outside "
-                            f"[{lo:.4g}, {hi:.4g}]{unit}: {reason.format(deg=q['value'] / DEG)}")
+                            f"[{lo:.4g}, {hi:.4g}]{unit}: {reason.format(deg=q['value'] / DEG, column=column)}")
     return {"plausible": not findings, "findings": findings,
             "ranges": {k: [float(a), float(b)] for k, (a, b) in ranges.items()},
             "not_concluded": [f"{k}: {q['note']}" for k, q in params.items() if q.get("note")]}
