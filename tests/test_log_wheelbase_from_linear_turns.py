@@ -78,3 +78,24 @@ def test_a_fitted_steering_gain_is_checked_against_the_logs_steady_turns():
     assert steering_gain_check(fitted(1.02), exact)[1] is True
     half = study_check(ploughing_car(gain=0.5), 0.32, "f1tenth.toml")[0]
     assert steering_gain_check(fitted(0.5), half)[1] is True
+
+
+def test_a_steering_input_never_held_yields_no_steady_turn_even_at_the_log_start():
+    """A steering ramp of 0.2 rad/s (0.1 rad over the 0.5 s a turn must be held): no sample is a steady
+    turn, the log's first ones (with fewer than 0.5 s behind them) included."""
+    from agrobot.diagnosis.study_fit import steady_turns
+
+    t = np.arange(0.0, 2.0, 0.02)
+    delta = 0.1 + 0.2 * t
+    log = pd.DataFrame({"t": t, "v": np.full_like(t, 1.0), "delta": delta, "yaw_rate": np.tan(delta) / 2.5})
+    assert len(steady_turns(log, 2.5)["v"]) == 0
+
+
+def test_an_understeer_outside_its_class_without_steady_turns_says_so():
+    """A car's K of 0.05 rad/(m/s2) (28 deg/g, beyond any car's) on a log without steady linear turns:
+    the reason names them, not a bare dash."""
+    from agrobot.diagnosis.plausibility import understeer
+    from agrobot.identification.vehicle import Vehicle
+
+    text = understeer(0.05, Vehicle.from_table({"class": "car"}), None, {})
+    assert not text.rstrip().endswith("-") and "no steady turns to read a wheelbase from" in text

@@ -132,3 +132,42 @@ def test_a_declared_skid_steer_is_fitted_or_refused_by_its_declaration():
     assert rep["plausibility"]["ranges"]["gyro_bias"][1] == pytest.approx(math.radians(3.0))   # the robot class's
     with pytest.raises(LogError, match="yaw_rate_2 is a second yaw-rate source"):
         identify_skid_steer(log.drop(columns="turn_rate_cmd").assign(yaw_rate_2=0.0), "gen.csv", _SkidStudy())
+
+
+def test_a_turn_rate_input_updated_at_half_the_rows_rate_is_interpolated_between_its_updates(tmp_path):
+    log = skid_log(K=0.7, column="odom_yaw_rate", tau=-0.2)
+    log.loc[log.index % 2 == 1, "odom_yaw_rate"] = np.nan          # the odometry at half the gyro's rate
+    rep = identify_skid_steer(log, "gen.csv")
+    assert _inside(rep, "yaw_gain", 0.7) and rep["parameters"]["yaw_gain"]["identifiable"]
+    assert any("odom_yaw_rate: " in n and "blank cells" in n for n in rep["notes"])
+    few = skid_log(column="odom_yaw_rate", tau=-0.2)
+    few.loc[few.index % 50 != 0, "odom_yaw_rate"] = np.nan          # one update in 2.5 s: too few
+    few.to_csv(tmp_path / "few.csv", index=False)
+    with pytest.raises(LogError, match="odom_yaw_rate has .* finite cells"):
+        identify_skid_steer(few, "gen.csv")
+    run = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(tmp_path / "few.csv"), "--out",
+                          str(tmp_path / "out"), "--no-plots"], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert run.returncode == 2 and "Traceback" not in run.stderr and "odom_yaw_rate" in run.stderr
+
+
+def test_a_turn_rate_input_in_degrees_per_second_is_named_implausible():
+    log = skid_log(K=0.7)
+    log["turn_rate_cmd"] /= math.radians(1.0)                       # the command written in deg/s
+    rep = identify_skid_steer(log, "gen.csv")
+    K = rep["parameters"]["yaw_gain"]
+    assert K["value"] < 0.3
+    assert K["identifiable"] or "% of its range" in K["note"]           # on its bound: the tolerance said
+    assert not rep["plausibility"]["plausible"]
+    assert any(f.startswith("yaw_gain") and "deg/s?" in f and "turn_rate_cmd=" in f for f in rep["plausibility"]["findings"])
+    assert any("looks like deg/s" in n for n in rep["notes"])
+
+
+def test_a_skid_steer_log_names_the_options_it_passes_over(tmp_path):
+    from agrobot.identification.from_log import driving_report
+    from agrobot.measurements.options import ImportOptions
+
+    skid_log(column="odom_yaw_rate", tau=-0.2, seconds=60.0).to_csv(tmp_path / "skid.csv", index=False)
+    report, _ = driving_report(tmp_path / "skid.csv", recording=ImportOptions(wheelbase=0.5), fit_seconds=30.0,
+                               course_speed=1.0)
+    passed = [n for n in report["notes"] if n.startswith("passed over: --")]
+    assert passed and all(o in passed[0] for o in ("--wheelbase", "--fit-seconds", "--course-speed"))

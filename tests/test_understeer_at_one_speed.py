@@ -30,5 +30,6 @@ def test_one_speed_with_a_commanded_angle_concludes_no_understeer_gradient():
     assert rep["final_model"] != "kinematic", rep.get("regime")
     K = rep["understeer_gradient"]
     assert not K["identifiable"] and "one speed" in K["note"]
+    assert not rep["characteristic_speed"]["identifiable"] and "one speed" in rep["characteristic_speed"]["note"]
     text = summary(rep)
     assert "critical speed:" not in text and "characteristic speed:" not in text

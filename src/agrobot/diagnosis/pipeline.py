@@ -178,7 +178,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
     samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
     p = baseline.tractor
     L = p.l_f + p.l_r
-    ours = {"understeer_gradient": (p.C_r * p.l_r - p.C_f * p.l_f) * p.m / (p.C_f * p.C_r * L),
+    ours = {"understeer_gradient": study_understeer(p),
             "cornering_stiffness_front": p.C_f, "cornering_stiffness_rear": p.C_r,
             "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
     try:
@@ -192,6 +192,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
             "cornering_stiffness_rear": rep["cornering_stiffness"]["rear"],
             "held_out_fit": rep["held_out_fit"]["value"], "final_model": rep["final_model"],
             "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
+                                 "friction_at_least": bool(tyre["parameters"]["friction"].get("at_least")),
                                  "shape": tyre["parameters"]["shape"]["value"],
                                  "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
             "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
@@ -481,7 +482,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     mine = result.get("log_vehicle") or {}
     mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
     K = identified.get("understeer_gradient") if identified else None
-    result["understeer_note"] = understeer(K, baseline.vehicle, share, mine) if K else kinematic(share)
+    result["understeer_note"] = understeer(K, baseline.vehicle, share, mine or None) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),

@@ -158,7 +158,8 @@ def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = No
     if turns is None:
         return text + ": a steering map off in gain or asymmetric, or tyres past their linear range, read so"
     if not turns.get("wheelbase") or not turns.get("study_wheelbase"):
-        return text + ": cannot decide whether a steering map's gain or the tyres: " + turns.get("why", "-")
+        return text + ": cannot decide whether a steering map's gain or the tyres: " + turns.get(
+            "why", "the log has no steady turns to read a wheelbase from")
     ratio = turns["wheelbase"] / turns["study_wheelbase"]
     said = (f"the log's steady turns under {turns['linear_lateral']:g} m/s2 give a wheelbase of "
             f"{turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m ({100 * (ratio - 1):+.0f} %)")

@@ -40,9 +40,9 @@ def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
     if moving.sum() < 50:
         return None
     n = max(2, int(round(STEADY / float(np.median(np.diff(t))))))
-    held = sliding_window_view(np.r_[np.full(n - 1, np.nan), d], n)
+    held = sliding_window_view(np.r_[np.full(n - 1, np.inf), d], n)     # the first n - 1: not held STEADY s yet
     with np.errstate(invalid="ignore"):
-        spread = np.nanmax(held, axis=1) - np.nanmin(held, axis=1)
+        spread = np.max(held, axis=1) - np.min(held, axis=1)
         kin = v ** 2 * np.tan(np.abs(d)) / wheelbase if wheelbase else np.zeros_like(v)
         sel = (moving & (spread <= 0.02 + 0.1 * np.abs(d)) & (np.abs(d) > 0.03) & (np.sign(d) == np.sign(r))
                & (np.abs(r) > 0.01) & (np.abs(v * r) < LINEAR_LATERAL) & (kin < LINEAR_LATERAL))

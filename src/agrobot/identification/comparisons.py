@@ -59,7 +59,7 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
         why = (f"saturation not modelled: {span}, past the linear range; the same linear model fitted where the tyres "
                f"are linear gives K {_text(*low)}, agreeing with the steady turns: the tyres' bend, which the final "
                f"model lacks ({linear_range.get('how', '')}), reads there as more or less understeer")
-    elif ss.limit_how.startswith("not derived"):
+    elif not ss.limit_derived:
         why = (f"different stretches: {span}: with too few steady turns where the tyres are surely linear, their "
                f"linear range is not read and their K takes in the tyres' bend, weighted by {ss.used} held turns "
                f"where the dynamic fit weighs every segment alike (saturation not modelled: "

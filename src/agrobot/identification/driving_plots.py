@@ -17,34 +17,10 @@ def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]
 
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    L, K, g = hidden["L"], hidden["K"], hidden["g"]
-    offset = hidden["final"].get("steer_offset", 0.0)
-    bias = report["parameters"].get("gyro_bias", {}).get("value", 0.0)
-    w = hidden["windows"]
     lin = report["linear_range"]["value"]
-    fig, ax = plt.subplots(figsize=(7.5, 4.5))
     rows = report["steady_state_gain"]["rows"]
-    v = np.array([r["speed"] for r in rows])
-    ax.fill_between(v, [r["interval"][0] for r in rows], [r["interval"][1] for r in rows], color="tab:blue", alpha=0.2,
-                    label="95 % interval")
-    vv = np.linspace(v.min(), v.max(), 200)
-    ax.plot(vv, steady_state_gain(vv, K, L, g), color="tab:blue", label=f"identified: K = {K:.3g} rad/(m/s2)")
-    ax.plot(vv, steady_state_gain(vv, 0.0, L, 1.0), "k--", lw=0.8, label="kinematic v / L")
-    turning = np.abs(w["u"]) > 0.02
-    if np.any(turning):
-        u_eff = g * w["u"][turning] + offset
-        gain = (w["r"][turning] - bias) / u_eff * g
-        inside = np.abs(w["a_y"][turning]) <= lin
-        ax.plot(w["v"][turning][inside], gain[inside], "o", ms=4, color="tab:green",
-                label=f"steady windows, |a_y| <= {lin:.3g} m/s2")
-        ax.plot(w["v"][turning][~inside], gain[~inside], "x", ms=4, color="tab:red",
-                label=f"steady windows, |a_y| > {lin:.3g} m/s2 (beyond the linear range)")
-    ax.set(xlabel="speed v [m/s]", ylabel=f"yaw rate / {report['input']} [(rad/s)/rad]",
-           title=f"Steady-state yaw-rate gain ({Path(report['source']).name})")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    written.append(_save(fig, out_dir / "steady_state_gain.png", plt))
+    if rows:            # none when no single K is concluded (ordinary_driving._steady_gain)
+        written.append(_gain_figure(report, hidden, rows, out_dir))
 
     log, model, test = hidden["log"], hidden["model"], hidden["test"]
     sims = model.simulate_many([hidden["linear"], hidden["nl"]], test)
@@ -79,3 +55,34 @@ def write_driving_plots(report: dict, hidden: dict, out_dir: Path) -> list[Path]
     fig.tight_layout()
     written.append(_save(fig, out_dir / "misfit_by_lateral_acceleration.png", plt))
     return written
+
+def _gain_figure(report: dict, hidden: dict, rows: list[dict], out_dir: Path) -> Path:
+    """The steady-state yaw-rate gain against speed with its interval and the steady windows."""
+    L, K, g = hidden["L"], hidden["K"], hidden["g"]
+    offset = hidden["final"].get("steer_offset", 0.0)
+    bias = report["parameters"].get("gyro_bias", {}).get("value", 0.0)
+    w = hidden["windows"]
+    lin = report["linear_range"]["value"]
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    v = np.array([r["speed"] for r in rows])
+    ax.fill_between(v, [r["interval"][0] for r in rows], [r["interval"][1] for r in rows], color="tab:blue", alpha=0.2,
+                    label="95 % interval")
+    vv = np.linspace(v.min(), v.max(), 200)
+    ax.plot(vv, steady_state_gain(vv, K, L, g), color="tab:blue", label=f"identified: K = {K:.3g} rad/(m/s2)")
+    ax.plot(vv, steady_state_gain(vv, 0.0, L, 1.0), "k--", lw=0.8, label="kinematic v / L")
+    turning = np.abs(w["u"]) > 0.02
+    if np.any(turning):
+        u_eff = g * w["u"][turning] + offset
+        gain = (w["r"][turning] - bias) / u_eff * g
+        inside = np.abs(w["a_y"][turning]) <= lin
+        ax.plot(w["v"][turning][inside], gain[inside], "o", ms=4, color="tab:green",
+                label=f"steady windows, |a_y| <= {lin:.3g} m/s2")
+        ax.plot(w["v"][turning][~inside], gain[~inside], "x", ms=4, color="tab:red",
+                label=f"steady windows, |a_y| > {lin:.3g} m/s2 (beyond the linear range)")
+    ax.set(xlabel="speed v [m/s]", ylabel=f"yaw rate / {report['input']} [(rad/s)/rad]",
+           title=f"Steady-state yaw-rate gain ({Path(report['source']).name})")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return _save(fig, out_dir / "steady_state_gain.png", plt)
+

@@ -181,6 +181,11 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
         ({} if fit_seconds is None else {"max_fit_seconds": fit_seconds})
     if skid_steer.applies(frame, Vehicle.of(study)):       # no steering angle: the yaw against a turn rate
         report = skid_steer.identify_skid_steer(frame, str(source), study, say)
+        passed = [o for o, given in (("--wheelbase", getattr(recording, "wheelbase", None)),
+                                     ("--fit-seconds", fit_seconds), ("--course-speed", course_speed)) if given is not None]
+        if passed:
+            report["notes"].append(f"passed over: {', '.join(passed)} (the skid-steer model has no wheelbase, fits "
+                                   f"every segment and needs a gyro, not a GNSS course)")
     else:
         report = identify_driving(frame, str(source), study, progress=say,
                                   wheelbase=getattr(recording, "wheelbase", None), **more)
@@ -230,10 +235,13 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     plant = model.find(role="yaw_plant")
     if not plant:
         return None
-    values = {}
+    values, left_out = {}, []
+    if report["understeer_gradient"].get("withheld"):
+        left_out.append("C_f, C_r (they fix one understeer gradient K, and no single K is concluded: the dynamic "
+                        "fit's and the steady turns' disagree)")
     for key, name in (("front", "C_f"), ("rear", "C_r")):
         s = report["cornering_stiffness"][key]
-        if s["identifiable"]:
+        if s["identifiable"] and not left_out:
             values[f"{plant[0]}.{name}"] = s["value"]
     params = report["parameters"]
     steering = model.find(role="steering")
@@ -244,10 +252,15 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if gyro and bias.get("identifiable") and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
         values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
     tyre = report["tyre_saturation"]
-    if tyre["found"]:
+    if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):
+        left_out.append(f"tyre_friction (identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
+                        f"value: the study keeps its own)")
+    elif tyre["found"]:
         values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
         if tyre["parameters"]["shape"]["identifiable"]:
             values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]
+    if left_out:
+        report["extended_study_left_out"] = left_out
     if not values:
         return None
     text = study.extension_toml(values, f"identified from {source} by `python -m agrobot identify`")

@@ -247,8 +247,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "held_out_fit": _held_out_fit(log, test_segs, held, pred, study),
         "cornering_stiffness": stiff,
         "parameters": params_json,
-        "steady_state_gain": {"unit": "(rad/s) per rad of input", "rows": _gain_rows(log, min_speed, K, K_sd, L, g, g_sd),
-                              "formula": "g v / (L + K v^2)"},
+        "steady_state_gain": _steady_gain(log, min_speed, (K, K_sd, understeer), L, (g, g_sd), notes),
         "linear_range": linear_range,
         "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
         "residual_by_lateral_acceleration": _residual_bins(held),
@@ -621,9 +620,7 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
     log cannot tell K from a fitted steering gain (one_speed), then K is not identifiable."""
-    cf, cr = final.values["c_f"], final.values["c_r"]
-    K = understeer_gradient(cf, cr)
-    K_sd = final.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+    K, K_sd = _k_of(final)
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
@@ -641,6 +638,9 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     else:
         char = {"kind": "neutral steer", "value": math.inf, "std": math.inf, "unit": "m/s"}
     char["interval"] = [char["value"] - Z95 * char["std"], char["value"] + Z95 * char["std"]]
+    char["identifiable"] = understeer["identifiable"]          # v_ch is K's: identifiable where K is
+    if not understeer["identifiable"]:
+        char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
     return K, K_sd, understeer, char
 
 
@@ -650,8 +650,26 @@ def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] 
     low = fits.linear_low
     if low is fits.linear or saturation:
         return None
-    cf, cr = low.values["c_f"], low.values["c_r"]
-    return understeer_gradient(cf, cr), low.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+    return _k_of(low)
+
+
+def _k_of(fit: FitResult) -> tuple[float, float]:
+    """(K, its std) of a fit's c_f, c_r: K = (1/c_f - 1/c_r) / g, the std by the delta method on the
+    fit's covariance."""
+    cf, cr = fit.values["c_f"], fit.values["c_r"]
+    return understeer_gradient(cf, cr), fit.interval_of({"c_f": -1 / (GRAVITY * cf ** 2), "c_r": 1 / (GRAVITY * cr ** 2)})
+
+
+def _steady_gain(log: DrivingLog, min_speed: float, k: tuple, L: float, gain: tuple, notes: list[str]) -> dict:
+    """The steady-state yaw-rate gain's JSON: _gain_rows at K = k[0] (std k[1]), none (said in
+    ``notes``) when no single K is concluded (k[2], the understeer quantity, ``withheld``)."""
+    d = {"unit": "(rad/s) per rad of input", "formula": "g v / (L + K v^2)"}
+    if k[2].get("withheld"):
+        why = ("left out: no single K is concluded (the dynamic fit's and the steady turns' disagree), so no gain "
+               "curve is drawn from one")
+        notes.append(f"steady-state yaw-rate gain rows and figure {why}")
+        return d | {"rows": [], "note": why}
+    return d | {"rows": _gain_rows(log, min_speed, k[0], k[1], L, *gain)}
 
 
 def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: float, g: float, g_sd: float) -> list[dict]:
@@ -691,8 +709,8 @@ def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturati
     high |a_y|, the fitted friction and shape with their intervals."""
     params = {q.name: _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper), nl.at_bound(q),
                                 meaning=q.meaning) for q in free_nl if q.name in ("friction", "shape")}
-    mu = params["friction"]
-    if saturation and mu.get("note") and "upper bound" in mu["note"]:
+    mu, friction = params["friction"], next(q for q in free_nl if q.name == "friction")
+    if saturation and nl.at_bound(friction) == "upper":
         mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "
                f"turns reach the tyres' bend but not their peak force"}
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
@@ -854,4 +872,5 @@ def summary(report: dict) -> str:
                      + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))
     for p_name, pj in report["parameters"].items():
         lines.append(f"  {p_name}: {q(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
+    lines += [f"extended_study.toml leaves out {x}" for x in report.get("extended_study_left_out", [])]
     return "\n".join(lines)

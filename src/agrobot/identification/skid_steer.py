@@ -18,7 +18,10 @@ function of path curvature and speed, Pioneer P3-AT). A differential-drive robot
 as its wheels ask, K about 1. A K above PLAUSIBLE_GAIN is not skid steering: the odometry divides
 by an effective track already (ROS diff_drive_controller's wheel_separation_multiplier: 1.875 in
 the Clearpath Husky's husky_control/config/control.yaml, where K = 1 / 1.875 = 0.53 against the
-geometric track reads as 1 against the odometry), a wheel-speed scale, or a gyro scale.
+geometric track reads as 1 against the odometry), a wheel-speed scale, or a gyro scale. A K below
+PLAUSIBLE_GAIN[0] = 0.3 (an ICR expansion chi above 3.3, beyond the 1.5-2.5 measured on tracks and
+skid-steered wheels on soil and concrete) is not slip either: an input in deg/s reads K / 57.3, an
+input that is not this vehicle's turn rate, or the gyro's wrong axis.
 
 tau is the input's delay to the yaw: positive for a command (the drives' response); for the wheel
 odometry it is the odometry's own lateness against the gyro with its sign reversed (a rolling mean
@@ -27,7 +30,7 @@ vehicle's inertia; stepped exactly for an input linear between samples, as ident
 steps the steering lag). b is the gyro bias (none for a yaw rate from a heading).
 
 Fitted by bounded least squares on segments of the log, every third one held out, with the
-project's estimation engine (estimation.FitResult, solution_covariance, effective_size: intervals
+project's estimation engine (identification.driving.fit, estimation.FitResult: intervals
 from the Jacobian inflated by n / n_eff, never more than the yaw measurement's own updates); a
 value on a bound is widened to its physical limit once (estimation.Parameter.widened) and, still
 there, not concluded. The turn-rate dependence s is kept when it wins on BIC by more than
@@ -38,14 +41,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
-from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, interval,
-                                solution_covariance)
+from agrobot.estimation import (AT_BOUND, FitResult, Parameter, interval)
 from agrobot.measurements import LogError
+from agrobot.measurements.log import DEGREE_SUSPECT, robust_peak
 
 from .driving import DrivingLog, NotEnoughDriving, Segments, cut_segments, even_grid, fit_percent
+from .driving import fit as driving_fit
 from .vehicle import Vehicle
 
 TURN_INPUTS = {"odom_yaw_rate": "wheel odometry", "turn_rate_cmd": "command"}   # in order of preference
@@ -54,10 +57,11 @@ INPUT_TEXT = {"wheel odometry": "the wheel odometry's yaw rate (v_R - v_L) / B",
 SKID_DRIVES = ("skid", "differential")
 EQUATION = "r(t) = y(t) + b,  T dy/dt + y = K w(t - tau)"
 EQUATION_SLOPE = "r(t) = y(t) + b,  T dy/dt + y = K (1 - s |w_d|) w_d,  w_d = w(t - tau)"
-PLAUSIBLE_GAIN = (0.0, 1.05)             # K against a geometric track (module docstring)
+PLAUSIBLE_GAIN = (0.3, 1.05)             # K against a geometric track (module docstring)
 PLAUSIBLE_DELAY = {"command": (0.0, 0.6), "wheel odometry": (-0.6, 0.3)}      # s
 PLAUSIBLE_LAG = {"tractor": 2.0, "truck": 2.0}                                  # s; other classes 1.0
 MIN_SECONDS = 20.0
+INPUT_SILENCE = 0.5                      # s: the longest the input may go without an update
 MIN_TURNING = 0.02                       # rad/s: std of the input turn rate
 SEGMENT, BURN_IN = 6.0, 2.0              # s
 BIC_MARGIN, GAIN_MARGIN = 10.0, 0.02
@@ -96,6 +100,10 @@ def turn_input(frame, where: str) -> tuple[str, list[str]]:
                        f"--signal 'turn_rate_cmd=/cmd_vel.angular.z' (a table: a column of that name in rad/s); "
                        f"the log has {', '.join(map(str, frame.columns))}")
     notes = [f"input: {have[0]}, {INPUT_TEXT[TURN_INPUTS[have[0]]]}"]
+    bound, unit = DEGREE_SUSPECT[have[0]]
+    if (peak := robust_peak(frame[have[0]].to_numpy(float))) > bound:
+        notes.append(f"warning: {have[0]} reaches {peak:.3g} (99.5 % of its values within), more than {bound:g} {unit}: "
+                     f"it looks like deg/s (declare its unit in its --signal: '{have[0]}=TOPIC[deg/s]')")
     if len(have) > 1:
         notes.append(f"passed over: {', '.join(have[1:])} (the measured wheel odometry is preferred to a command; "
                      f"leave {have[0]} out of the log, or its --signal, to fit the command)")
@@ -139,30 +147,23 @@ def simulate(log: DrivingLog, values: dict, segs: Segments) -> np.ndarray:
     return log.as_measured(y) + values.get("gyro_bias", 0.0)
 
 
+class SkidModel:
+    """The skid-steer model as identification.driving.fit reads a model: its log and ``simulate``."""
+
+    def __init__(self, log: DrivingLog):
+        self.log = log
+
+    def simulate(self, values: dict, segs: Segments) -> np.ndarray:
+        return simulate(self.log, values, segs)
+
+    def simulate_many(self, sets: list[dict], segs: Segments) -> list[np.ndarray]:
+        return [simulate(self.log, values, segs) for values in sets]
+
+
 def fit(log: DrivingLog, segs: Segments, free: list[Parameter], start: dict, fixed: dict | None = None) -> FitResult:
-    """Bounded least squares of the gyro against ``simulate`` on the segments' scored samples."""
-    fixed = fixed or {}
-    r_meas, mask = log.r[segs.idx], segs.scored
-    lo = np.array([p.lower / p.scale for p in free])
-    hi = np.array([p.upper / p.scale for p in free])
-
-    def values_of(x):
-        return {**fixed, **{p.name: float(xi) * p.scale for p, xi in zip(free, x)}}
-
-    def fun(x):
-        return (r_meas - simulate(log, values_of(x), segs))[mask]
-
-    def jac(x):
-        return forward_jacobian(lambda xs: [fun(xi) for xi in xs], x, lo, hi, floor=1.0, signed=False)
-
-    x0 = np.clip([start.get(p.name, 0.0) / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
-    sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), x_scale=1.0, ftol=1e-8, xtol=1e-8, max_nfev=60)
-    values = values_of(sol.x)
-    residual = r_meas - simulate(log, values, segs)
-    rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
-    n, n_eff = len(sol.fun), effective_size(rows, updates=log.updates_in(segs))
-    cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)
-    return FitResult(values, tuple(free), cov, {"yaw": float(sol.fun @ sol.fun)}, {"yaw": n}, {"yaw": n_eff})
+    """Bounded least squares of the gyro against ``simulate`` on the segments' scored samples
+    (identification.driving.fit)."""
+    return driving_fit(SkidModel(log), free, start, fixed or {}, segs, max_nfev=60)
 
 
 def delay_start(log: DrivingLog, lo: float, hi: float) -> tuple[float, float]:
@@ -206,18 +207,45 @@ def quantity(result: FitResult, p: Parameter) -> dict:
          "unit": p.unit, "bounds": [p.lower, p.upper], "meaning": p.meaning,
          "identifiable": side is None and math.isfinite(sd)}
     if side:
-        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g} {p.unit}"
+        tol = AT_BOUND * (p.upper - p.lower)
+        unit = "" if p.unit == "1" else " " + p.unit
+        d["note"] = (f"not concluded: ended on its {side} bound {p.lower if side == 'lower' else p.upper:g}{unit} "
+                     f"(within {tol:.3g} of it, {100 * AT_BOUND:g} % of its range {p.lower:g}..{p.upper:g})"
                      + (" (no lag resolved: the yaw follows the input within a sample)" if p.name == "lag" else ""))
     elif not math.isfinite(sd):
         d["note"] = "not identifiable from this log: the residuals do not depend on it"
     return d
 
 
+def _input_on_its_updates(frame, where: str, name: str, notes: list[str]):
+    """The rows where the input is known: a blank (not finite) input cell between two of its updates
+    is interpolated (a channel updated slower than the log's rows); rows before its first update,
+    after its last, or in a silence longer than INPUT_SILENCE (the yaw's lag and delay are tenths of
+    a second) are left out. A LogError naming the column when fewer than MIN_SECONDS of rows are left."""
+    u = frame[name].to_numpy(float)
+    t = frame["t"].to_numpy(float)
+    known = np.isfinite(u)
+    if known.all():
+        return frame
+    tk = t[known]
+    keep = np.zeros(len(t), bool)
+    if len(tk) >= 2:
+        after = np.clip(np.searchsorted(tk, t, side="left"), 1, len(tk) - 1)
+        keep = (t >= tk[0]) & (t <= tk[-1]) & (tk[after] - tk[after - 1] <= INPUT_SILENCE)
+    if keep.sum() < 2 or t[keep][-1] - t[keep][0] < MIN_SECONDS:
+        raise LogError(f"{where}: the turn-rate input {name} has {int(known.sum())} finite cells of {len(u)} rows: "
+                       f"too few to identify against (needs {MIN_SECONDS:g} s of it updated at least every {INPUT_SILENCE:g} s); "
+                       f"map a turn-rate channel that is recorded with the gyro")
+    notes.append(f"{name}: {int((~known).sum())} blank cells of {len(u)} rows (a channel updated slower than the "
+                 f"rows): interpolated between its updates; {int((~keep).sum())} rows outside them left out")
+    return frame.loc[keep].assign(**{name: np.interp(t[keep], tk, u[known])})
+
+
 def _log_of(frame, where: str, name: str, notes: list[str]) -> tuple[DrivingLog, Segments]:
     """The input and the gyro on an even clock, cut into segments (every sample: a skid-steered
     vehicle turns standing, and standing still it shows the bias); refused when the gyro turns
     against the input, or the log holds too little turning."""
-    log = even_grid(frame.assign(v=1.0), name, max_rate=25.0)
+    log = even_grid(_input_on_its_updates(frame, where, name, notes).assign(v=1.0), name, max_rate=25.0)
     notes += log.notes
     rho = float(np.corrcoef(log.r, log.u)[0, 1]) if np.std(log.r) > 0 and np.std(log.u) > 0 else 0.0
     if rho < -0.3:
@@ -265,9 +293,10 @@ def _fits(log: DrivingLog, segs: Segments, vehicle: Vehicle, kind: str) -> dict:
 
 
 def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
-    """Each concluded value against what a skid-steered vehicle of its class can have: 0 < K <=
-    PLAUSIBLE_GAIN[1], tau in PLAUSIBLE_DELAY[kind], T up to PLAUSIBLE_LAG (1 s unless the class
-    says), |b| within the class's gyro bias; a value on a bound is not concluded (listed apart)."""
+    """Each value against what a skid-steered vehicle of its class can have: K in PLAUSIBLE_GAIN,
+    tau in PLAUSIBLE_DELAY[kind], T up to PLAUSIBLE_LAG (1 s unless the class says), |b| within the
+    class's gyro bias; a value on a bound is not concluded (listed apart), and named implausible too
+    when it lies outside that range (the fit went as far from it as it could)."""
     lag_hi = PLAUSIBLE_LAG.get(vehicle.kind or "", 1.0)
     bias_hi = vehicle.gyro_bias_bound or 3.0 * DEG
     ranges = {"yaw_gain": PLAUSIBLE_GAIN, "delay": PLAUSIBLE_DELAY[kind], "lag": (0.0, lag_hi),
@@ -275,15 +304,20 @@ def plausibility(params: dict, kind: str, vehicle: Vehicle) -> dict:
     why = {"yaw_gain": "the gyro turns more than the input asks: the odometry divides by an effective track already "
                        "(a wheel_separation_multiplier: K against the geometric track is K / multiplier), a wheel-speed "
                        "or gyro scale, or the input is not this vehicle's turn rate",
+           "yaw_gain_low": "the gyro turns far less than the input asks, more than any skid steering slips: the input "
+                           "in deg/s? (K x 57.3 = {deg:.3g}; declare its unit in its --signal: '{column}=TOPIC[deg/s]'), or the "
+                           "input is not this vehicle's turn rate",
            "delay": f"not a {kind}'s delay to the yaw: a clock offset between the input's and the gyro's channels",
            "lag": "slower than a vehicle of this class turns: the input is not what drives the yaw",
            "gyro_bias": "beyond a gyro of this class: a gyro under a slope or the wrong axis"}
-    findings = []
+    findings, column = [], next(c for c, k in TURN_INPUTS.items() if k == kind)
     for name, (lo, hi) in ranges.items():
         q = params.get(name)
-        if q and q["identifiable"] and not lo <= q["value"] <= hi:
+        if q and math.isfinite(q["value"]) and not lo <= q["value"] <= hi:
             unit = "" if q["unit"] == "1" else " " + q["unit"]
-            findings.append(f"{name} = {q['value']:.4g}{unit} outside [{lo:.4g}, {hi:.4g}]{unit}: {why[name]}")
+            reason = why["yaw_gain_low" if name == "yaw_gain" and q["value"] < lo else name]
+            findings.append(f"{name} = {q['value']:.4g}{unit}{'' if q['identifiable'] else ' (on its bound)'} outside "
+                            f"[{lo:.4g}, {hi:.4g}]{unit}: {reason.format(deg=q['value'] / DEG, column=column)}")
     return {"plausible": not findings, "findings": findings,
             "ranges": {k: [float(a), float(b)] for k, (a, b) in ranges.items()},
             "not_concluded": [f"{k}: {q['note']}" for k, q in params.items() if q.get("note")]}

@@ -41,6 +41,7 @@ class SteadyState:
     used: int
     max_lateral: float
     limit_how: str = ""
+    limit_derived: bool = True             # False: too few windows where the tyres are surely linear to read it
     passed_over: int = 0
 
     def as_dict(self) -> dict:
@@ -131,17 +132,17 @@ def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.n
 
 
 def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, fixed_gain: float | None = None,
-                 per_bin: int = 8) -> tuple[float, str]:
-    """(|a_y| limit [m/s2], how it was found): the regression on the windows with |a_y| <= ``small``
+                 per_bin: int = 8) -> tuple[float, str, bool]:
+    """(|a_y| limit [m/s2], how it was found, whether it was derived): the regression on the windows with |a_y| <= ``small``
     is the reference; the windows above it, in bins of ``per_bin`` by |a_y|, stay linear while the
     median of yaw_gain_ratio lies within 3 standard errors of 1: the median's (1.25 sd / sqrt(n))
     and the reference's prediction's (delta method on its K and gain: v^2 sd_K / (L + K v^2),
     sd_g / g) combined; the limit is the top |a_y| of the last such bin (at most ``cap``). Without a
-    reference fit the limit is ``cap``, said so."""
+    reference fit the limit is ``cap``, said so, not derived."""
     ref = regression(w, L, max_lateral=small, fixed_gain=fixed_gain)
     if ref is None:
         return cap, (f"not derived (fewer than 7 steady windows with |a_y| <= {small:.3g} m/s2, or turns there at "
-                     f"one speed): the windows up to {cap:.3g} m/s2 are used")
+                     f"one speed): the windows up to {cap:.3g} m/s2 are used"), False
     a = np.abs(w["a_y"])
     ratio = yaw_gain_ratio(ref, w, L)
     v2 = w["v"] ** 2
@@ -156,21 +157,21 @@ def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, f
             return limit, (f"where the steady yaw gain stays within 3 standard errors of the regression's on the "
                            f"{ref.used} windows with |a_y| <= {small:.3g} m/s2: the {len(chunk)} windows at "
                            f"{a[chunk[0]]:.3g}-{a[chunk[-1]]:.3g} m/s2 turn {100 * (med - 1):+.1f} % (3 standard errors: "
-                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)")
+                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)"), True
         limit = float(a[chunk[-1]])
         if len(chunk) > per_bin:
             break
     limit = max(limit, min(small, cap))
     return limit, (f"every steady window up to {limit:.3g} m/s2 turns within 3 standard errors of the regression's on "
-                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2")
+                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2"), True
 
 
 def in_linear_range(w: dict[str, np.ndarray], L: float, small: float, cap: float,
                     fixed_gain: float | None = None) -> SteadyState | None:
     """The regression on the windows inside linear_limit's range (None: regression's reasons)."""
-    limit, how = linear_limit(w, L, small, cap, fixed_gain)
+    limit, how, derived = linear_limit(w, L, small, cap, fixed_gain)
     fit = regression(w, L, max_lateral=limit, fixed_gain=fixed_gain)
     if fit is not None:
-        fit.limit_how = how
+        fit.limit_how, fit.limit_derived = how, derived
         fit.passed_over = int((np.abs(w["a_y"]) > limit).sum())
     return fit

@@ -37,7 +37,8 @@ CANONICAL = tuple(COLUMNS)
 
 # A column whose largest magnitude passes this bound is almost surely in degrees: no tractor
 # steers beyond 70 deg (1.22 rad) or yaws faster than 3 rad/s (172 deg/s).
-DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s")}
+DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s"),
+                  "odom_yaw_rate": (3.0, "rad/s"), "turn_rate_cmd": (3.0, "rad/s")}
 
 
 class LogError(InputError, ValueError):
