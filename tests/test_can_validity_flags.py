@@ -30,13 +30,14 @@ BO_ 9 gnss_imu: 8 Vector__XXX
 NO_FIX = 20.0          # s: the first fix
 
 
-def _write(folder):
+def _write(folder, speed_flag="SpeedValid"):
     """10 Hz positions and speed, 50 Hz gyro, for 80 s: a drive east at about 3 m/s; before
     NO_FIX the module sends its last stored position (3 km north) flagged PositionValid = 0."""
     import cantools
 
-    (folder / "module.dbc").write_text(DBC)
-    db = cantools.database.load_string(DBC)
+    dbc = DBC.replace("SpeedValid", speed_flag)
+    (folder / "module.dbc").write_text(dbc)
+    db = cantools.database.load_string(dbc)
     pos, spd, imu = (db.get_message_by_name(n) for n in ("gnss_pos", "gnss_speed", "gnss_imu"))
     lines = []
     for k, t in enumerate(np.arange(0.0, 80.0, 0.02)):
@@ -49,7 +50,8 @@ def _write(folder):
             lon = 10.20 + np.degrees(east / (6371000.0 * np.cos(np.radians(56.1))))
             data = pos.encode({"PositionValid": int(valid), "Latitude": lat, "Longitude": lon})
             lines.append(f"({stamp:.6f}) can0 003#{data.hex().upper()}")
-            data = spd.encode({"SpeedValid": int(valid), "Speed": v if valid else 0.0})
+            flag = int(valid) if speed_flag == "SpeedValid" else int(not valid)
+            data = spd.encode({speed_flag: flag, "Speed": v if valid else 0.0})
             lines.append(f"({stamp:.6f}) can0 007#{data.hex().upper()}")
         data = imu.encode({"ImuValid": 1, "AngularRateZ": 0.25 * round(4 * np.sin(t))})
         lines.append(f"({stamp:.6f}) can0 009#{data.hex().upper()}")
@@ -70,3 +72,14 @@ def test_frames_flagged_invalid_are_left_out_and_named(tmp_path):
     assert span < 80.0 - NO_FIX + 0.5                       # the stale stretch is not a drive
     assert np.ptp(frame["y"]) < 1.0                         # no 3 km jump north: the stale fixes are out
     assert frame["v"].min() > 2.4                           # no zero speed from the flagged frames
+
+
+def test_a_flag_named_invalid_marks_the_frames_it_sets_not_those_it_clears(tmp_path):
+    """SpeedInvalid = 1 before the first fix: those frames are left out, the valid ones (flag 0) kept."""
+    _write(tmp_path, speed_flag="SpeedInvalid")
+    frame, report = import_recording(tmp_path / "drive.log", ImportOptions(
+        dbc=tmp_path / "module.dbc", signals=[parse_signal(s) for s in (
+            "lat=gnss_pos.Latitude[deg]", "lon=gnss_pos.Longitude[deg]", "v=gnss_speed.Speed[m/s]")], rate=10.0))
+    notes = " ".join(report["notes"])
+    assert "gnss_speed: 200 of 800 frames say SpeedInvalid = 1" in notes
+    assert frame["v"].notna().mean() > 0.9 and frame["v"].min() > 2.4

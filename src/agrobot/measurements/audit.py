@@ -245,7 +245,8 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         scale_interval = None if scale_interval is None else [-scale_interval[1], -scale_interval[0]]
     return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
             "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags), "inverted": inverted,
-            "edge": abs(whole) >= search - 2 * step}
+            "edge": abs(whole) >= search - 2 * step,
+            "scale_share": float(np.sum(oks & okb) / max(1, np.sum(oka & okb)))}
 
 
 def _half_width(rho: np.ndarray, step: float, shift: int, peak: float) -> float | None:
@@ -328,14 +329,26 @@ def _usual(best):
     return lambda grid: np.interp(grid, tb, ok.astype(float)) > 0.5
 
 
+def _scale_stretch(est: dict) -> str:
+    """What a scale was read on when the receiver's degraded fixes were passed over (``scale_share``)."""
+    share = est.get("scale_share", 1.0)
+    return ("" if share >= 0.999 else f" (the scale read where the fix is at its usual quality, {100 * share:.0f} % of "
+            f"the samples compared; the degraded fixes' {100 * (1 - share):.0f} % passed over)")
+
+
+def held_longest(codes: np.ndarray) -> float:
+    """The code a receiver (or mode channel) holds on most of its finite samples."""
+    values, counts = np.unique(codes[np.isfinite(codes)], return_counts=True)
+    return float(values[np.argmax(counts)])
+
+
 def usual_fix(gnss):
     """(utc, whether each fix is at the quality the receiver holds longest), or None when it does not
     say its quality or holds it on less than half of its fixes."""
     q = gnss["quality"].to_numpy(float) if "quality" in gnss else np.zeros(0)
     if not np.isfinite(q).any():
         return None
-    values, counts = np.unique(q[np.isfinite(q)], return_counts=True)
-    usual = q == values[np.argmax(counts)]
+    usual = q == held_longest(q)
     return (gnss["utc"].to_numpy(float), usual) if 0.5 <= usual.mean() < 1.0 else None
 
 
@@ -563,7 +576,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         elif math.isfinite(s) and est["rho"] >= 0.5:
             off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
             if off:
-                what = _scale_meaning(name, a, b, s)
+                what = _scale_meaning(name, a, b, s) + _scale_stretch(est)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
         if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
             course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
@@ -743,7 +756,7 @@ def fix_quality_findings(gnss, t0: float) -> list[dict]:
         return []
     cuts = np.flatnonzero(q[1:] != q[:-1]) + 1
     runs = [(q[a], t[a], t[b - 1]) for a, b in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [len(q)]]))]
-    main = max(set(q), key=lambda c: float(np.sum(q == c)))
+    main = held_longest(q)
     others = [(c, a, b) for c, a, b in runs if c != main]
     when = "; ".join(f"{FIX_NAMES.get(int(c), 'code')} ({int(c)}) at {a - t0:.1f}-{b - t0:.1f} s" for c, a, b in others[:20])
     return [finding("fix_quality_changes", ["fix_quality"], len(others), None, "stretches",

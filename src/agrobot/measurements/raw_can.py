@@ -312,22 +312,30 @@ def sentinel_bounds(sig, scale: float, offset: float) -> list[float]:
             and any(math.isclose(b, d, rel_tol=1e-9, abs_tol=1e-9) for d in decoded)]
 
 
-VALID_FLAG = re.compile(r"valid$", re.I)
+VALID_FLAG = re.compile(r"(?<!in)(?<!not)(?<!not_)valid$", re.I)
+INVALID_FLAG = re.compile(r"(in|not_?)valid$", re.I)
 
 
 def _flagged_invalid(msg, table: pd.DataFrame, rec: CANRecording) -> pd.DataFrame:
     """A message that carries its own validity (one one-bit signal named ...Valid, as a GNSS/IMU
-    module's PositionValid): its other signals NaN in the frames where the flag is 0 (the sender
-    says they are not measurements), named in a note."""
-    flags = [s.name for s in msg.signals if s.length == 1 and VALID_FLAG.search(s.name) and s.name in table]
+    module's PositionValid, or ...Invalid / ...NotValid with the opposite sense): its other signals
+    NaN in the frames the flag marks invalid (the sender says they are not measurements), named in a
+    note. Several flags in one message are named and none applied (which signals each covers is not
+    declared)."""
+    bits = [s.name for s in msg.signals if s.length == 1 and s.name in table]
+    flags = [(n, 0.0) for n in bits if VALID_FLAG.search(n)] + [(n, 1.0) for n in bits if INVALID_FLAG.search(n)]
+    if len(flags) > 1:
+        rec.notes.append(f"{msg.name}: {len(flags)} validity flags ({', '.join(n for n, _ in flags)}): none applied, "
+                         f"the DBC does not say which signals each covers; every frame is kept")
     if len(flags) != 1:
         return table
-    bad = table[flags[0]].to_numpy(float) == 0
-    others = [s.name for s in msg.signals if s.name in table and s.name != flags[0]]
+    (flag, invalid_when), = flags
+    bad = table[flag].to_numpy(float) == invalid_when
+    others = [s.name for s in msg.signals if s.name in table and s.name != flag]
     if bad.any() and others:
         table.loc[bad, others] = np.nan
         span = table["t"].to_numpy(float)[bad]
-        rec.notes.append(f"{msg.name}: {int(bad.sum())} of {len(bad)} frames say {flags[0]} = 0 "
+        rec.notes.append(f"{msg.name}: {int(bad.sum())} of {len(bad)} frames say {flag} = {invalid_when:g} "
                          f"(from {span[0] - table['t'].iloc[0]:.1f} to {span[-1] - table['t'].iloc[0]:.1f} s of the "
                          f"message): their {', '.join(others)} are left out, not measurements")
     return table
