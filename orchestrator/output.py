@@ -162,10 +162,15 @@ def disk_full(exc: BaseException) -> bool:
     return isinstance(exc, OSError) and exc.errno in DISK_FULL
 
 
+def full_reason(exc: OSError) -> tuple[str, str]:
+    """(what happened, what to do) for a write refused by a full disk or a file-size limit."""
+    return ("a file grew past the largest size allowed here", "write it where larger files are allowed") \
+        if exc.errno == errno.EFBIG else ("the disk is full", "free some space")
+
+
 def disk_full_error(out: Path, exc: OSError, kept: str, flag: str = "--out") -> OutputError:
     where = f" while writing {Path(exc.filename).name}" if getattr(exc, "filename", None) else ""
-    what, then = ("a file grew past the largest size allowed here", "write it where larger files are allowed") \
-        if exc.errno == errno.EFBIG else ("the disk is full", "free some space")
+    what, then = full_reason(exc)
     return OutputError(f"{flag} {out}: {what} ({exc.strerror or os.strerror(exc.errno)}){where}; "
                        f"nothing was written to {out} ({kept}); {then} and run the command again")
 

@@ -52,6 +52,9 @@ def read_study_file(path: str | Path, _seen: tuple[Path, ...] = ()) -> dict[str,
     if not isinstance(parent, str):
         raise StudyError(f"{path}: field extends: expected a file name")
     parent_path = (path.parent / parent).resolve()
+    if not parent_path.is_file():
+        raise StudyError(f"{path}: field extends: {parent!r} is not a file; it is read from this file's own folder "
+                         f"({path.parent.resolve()}), so it names {parent_path}")
     if parent_path in _seen:
         raise StudyError(f"{path}: field extends: circular ({' -> '.join(map(str, _seen + (parent_path,)))})")
     base = read_study_file(parent_path, _seen + (path.resolve(),))

@@ -53,7 +53,7 @@ from .resolver import resolve
 from .errors import InputError, critical
 from .key_figures import sweep_table
 from .mcap_out import wants_mcap, write_study_mcap
-from .output import (OutputError, OutputLock, ResultFolder, check_output, disk_full, remove_stale_staging,
+from .output import (OutputError, OutputLock, ResultFolder, check_output, disk_full, full_reason, remove_stale_staging,
                      study_inputs, swap_folder)
 from .registry import import_study_module
 from .runner import AnalysisError, _analysis, _metrics, _run_facts, _status, record_run
@@ -431,8 +431,8 @@ class SweepRun:
             if not disk_full(exc):
                 raise
             shutil.rmtree(folder, ignore_errors=True)
-            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while the nominal run was "
-                                f"written; it was removed: free some space and run the command again") from None
+            raise SweepDiskFull(f"--out {self.out}: {full_reason(exc)[0]} ({exc.strerror or exc}) while the nominal run "
+                                f"was written; it was removed: {full_reason(exc)[1]} and run the command again") from None
         return record, folder
 
     def announce_cost(self, todo: int, workers: int) -> None:
@@ -544,10 +544,11 @@ class SweepRun:
                 raise
             if folder is not None:
                 shutil.rmtree(folder, ignore_errors=True)
-            kept = (f"the {len(self.finished())} points finished before it are kept in {self.out}: free some space "
+            what, then = full_reason(exc)
+            kept = (f"the {len(self.finished())} points finished before it are kept in {self.out}: {then} "
                     f"and run the same command again to resume") if self.folder == self.out else \
-                f"{self.out} holds what it held before (--overwrite): free some space and run the command again"
-            raise SweepDiskFull(f"--out {self.out}: the disk is full ({exc.strerror or exc}) while point {point.key} "
+                f"{self.out} holds what it held before (--overwrite): {then} and run the command again"
+            raise SweepDiskFull(f"--out {self.out}: {what} ({exc.strerror or exc}) while point {point.key} "
                                 f"was written; that point was removed and {kept}") from None
 
     def _remove_stale(self) -> None:
