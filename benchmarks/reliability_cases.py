@@ -34,6 +34,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))          # the tests' generators (tests/test_fuzz_binary_readers.py, tests/fmu_build.py)
+from harness.interrupts import ctrl_c_twice_in_flight  # noqa: E402  (after the path above)
+
 F8 = str(ROOT / "studies" / "figure8.toml")
 TOY = '[study]\nname = "toy"\nstop_time = 1.0\nbase_step = 0.01\nseed = 1\n[components.clock]\ntype = "tests.toy_components:Clock"\n'
 
@@ -442,14 +444,7 @@ def leftover_cases(tree: Path, work: Path, cache: Path):
     run = subprocess.Popen([sys.executable, "-m", "agrobot", "sweep", sleepers, "--out", out, "--workers", "2",
                             "--scheduler", "local", "--no-progress", "--no-plots"], cwd=ROOT, start_new_session=True,
                            env=environment(tree, cache), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    end = time.time() + 90
-    while time.time() < end and run.poll() is None and not list((out / ".running").glob("p*")):
-        time.sleep(0.1)
-    started = run.poll() is None and bool(list((out / ".running").glob("p*")))     # points in flight
-    time.sleep(1.0)
-    os.killpg(run.pid, signal.SIGINT)
-    time.sleep(0.3)
-    os.killpg(run.pid, signal.SIGINT)
+    started = ctrl_c_twice_in_flight(run, out / ".running")         # points in flight when interrupted
     sent = time.monotonic()
     try:
         run.communicate(timeout=15)

@@ -25,6 +25,7 @@ import pytest
 from agrobot.orchestrator import sweep_cost
 from agrobot.orchestrator.study import Study
 from agrobot.orchestrator.sweep import SweepRun, sweep_plots, sweep_summary
+from harness.interrupts import ctrl_c_twice_in_flight
 from tests.commands import in_process as cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -213,14 +214,7 @@ def test_a_double_ctrl_c_ends_a_dask_sweep_promptly_with_nothing_half_written(tm
            "--out", str(out), "--workers", "2", "--scheduler", "local", "--no-progress", "--no-plots"]
     proc = subprocess.Popen(cmd, cwd=ROOT, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             text=True)
-    deadline = time.time() + 90
-    while not list((out / ".running").glob("p*")):                 # points in flight on the cluster
-        assert time.time() < deadline and proc.poll() is None
-        time.sleep(0.1)
-    time.sleep(1.0)
-    os.killpg(proc.pid, signal.SIGINT)
-    time.sleep(0.3)
-    os.killpg(proc.pid, signal.SIGINT)
+    assert ctrl_c_twice_in_flight(proc, out / ".running")          # points in flight on the cluster
     start = time.time()
     try:
         proc.wait(timeout=10)
