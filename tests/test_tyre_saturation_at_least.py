@@ -31,3 +31,17 @@ def test_friction_beyond_the_class_keeps_saturation_as_at_least():
     mu = tyre["parameters"]["friction"]
     assert mu["at_least"] and mu["bounds"][1] <= 2.2 and not mu["identifiable"]
     assert "friction at least 1.8" in summary(rep)
+
+
+def test_diagnose_repeats_an_at_least_friction_as_at_least():
+    """identify's "at least 1.8" is not told on by diagnose as a friction of 1.8."""
+    import types
+
+    from agrobot.diagnosis.pipeline import agreement
+
+    identified = {"tyre_saturation": {"friction": 1.8, "friction_at_least": True, "shape": 1.3,
+                                      "held_out_gain": 0.3}}
+    lines = agreement(identified, [], types.SimpleNamespace(first_step=[]))
+    assert any("friction at least 1.8," in line for line in lines), lines
+    identified["tyre_saturation"]["friction_at_least"] = False
+    assert any("friction 1.8," in line for line in agreement(identified, [], types.SimpleNamespace(first_step=[])))

@@ -26,6 +26,7 @@ from agrobot.studies import shipped
 
 from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
 from .candidates import CannotDecide, FitResult, Replay, uncertain
+from .effects.tyre_saturation import friction_text
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
@@ -235,7 +236,7 @@ def agreement(identified: dict, effects: list[dict], sel, min_gain: float = 0.05
         tried = next((f for f in sel.first_step if f.effect.id == "tyre_saturation"), None)
         why = ("; ".join(tried.reasons) or f"supported on its own (dBIC {tried.delta_bic:.1f}, held-out gain "
                f"{100 * tried.gain:.0f} %) but not kept beside the effects chosen") if tried else "it was not fitted"
-        out.append(f"identify keeps tyre saturation (friction {sat['friction']:.3g}, held-out gain "
+        out.append(f"identify keeps tyre saturation (friction {friction_text(sat)}, held-out gain "
                    f"{100 * sat['held_out_gain']:.0f} % on segments spread over the log); the diagnosis, judged on "
                    f"{held_part}, does not: {why}")
     if not sat and "tyre_saturation" in ids:

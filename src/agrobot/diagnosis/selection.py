@@ -62,7 +62,7 @@ from .catalogue import CATALOGUE, SIGNALS
 from .effect import Effect, Parameter
 from .effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from .effects.steering_ratio_curve import DELTA_KEY
-from .effects.tyre_saturation import LATERAL_KEY
+from .effects.tyre_saturation import LATERAL_KEY, friction_text
 from .verdict import audit_findings
 
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
@@ -405,7 +405,7 @@ class Selector:
             self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
                                               "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
                                                                  SHAPE_BOUNDS[1])}
-            return (f"tyre_saturation tried: identify keeps it on this log (friction {self.saturation['friction']:.3g}, "
+            return (f"tyre_saturation tried: identify keeps it on this log (friction {friction_text(self.saturation)}, "
                     f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
         replay = self.replay
         keep = replay.scored("yaw")

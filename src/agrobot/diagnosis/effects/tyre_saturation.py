@@ -14,6 +14,11 @@ from ..effect import Effect, Parameter
 LATERAL_KEY = "log_lateral_acceleration_p99"     # the log's 99th percentile of |v r| [m/s2], set by the selection
 
 
+def friction_text(saturation: dict) -> str:
+    """Identify's friction as a reader should take it: "at least" where it ended on the class's top."""
+    return ("at least " if saturation.get("friction_at_least") else "") + f"{saturation['friction']:.3g}"
+
+
 class TyreSaturation(Effect):
     id = "tyre_saturation"
     subsystem = "yaw (tyres: lateral force saturation, simplified Magic Formula)"
