@@ -13,6 +13,24 @@ def cli():
     return run_cli
 
 
+@pytest.fixture(scope="session", autouse=True)
+def diagnoses_fit_on_their_share_of_the_cores():
+    """Under xdist, a diagnosis run in a test process fits its candidates on that process's share of
+    the cores (its default is every core: on two cores, two test processes each fitting ahead on two
+    workers spend CPU on fits the selection never asks for). The result is the same whatever the number
+    (tests/test_diagnosis_workers.py, which sets it); commands forked through ``cli`` keep the default."""
+    count = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
+    if count < 2:
+        yield
+        return
+    from agrobot.diagnosis import parallel_fits, pipeline
+
+    share = max(1, parallel_fits.default_workers() // count)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(pipeline, "default_workers", lambda: share)
+        yield
+
+
 # The long scenarios: a test that uses one of these module fixtures (a full-length study, a batch of
 # diagnoses, a compiled set of FMUs) is in the slow tier; the fast tier is pytest -m "not slow".
 SLOW_FIXTURES = {

@@ -11,6 +11,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from agrobot.components.models.tyre import force_limit_share
+from agrobot.diagnosis import pipeline
+from agrobot.diagnosis.parallel_fits import default_workers
 from agrobot.diagnosis.pipeline import diagnose
 from agrobot.studies import shipped
 from harness.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
@@ -112,14 +114,23 @@ def diagnose_hidden(case: tuple) -> dict:
     return {"effect": effect or "none", "healthy": healthy or "", "seed": seed, "truth": truth, "result": result}
 
 
+def _fit_on(cores: int) -> None:
+    """A case worker's diagnoses fit their candidates on ``cores`` processes (pipeline's default)."""
+    pipeline.default_workers = lambda: cores
+
+
 def diagnose_many(cases: list[tuple], workers: int = 2, run=None) -> list[dict]:
     """diagnose_hidden (or ``run``, a module-level function of one case) over worker processes, each
     with single-threaded BLAS: two processes spinning two BLAS threads each on two cores run 3x slower
-    than one process."""
+    than one process. Each diagnosis fits its candidates on its share of the cores (the result is the
+    same whatever the number: tests/test_diagnosis_workers.py), not on every core: two cases each
+    fitting ahead on two processes on two cores spend CPU on fits the selection never asks for."""
     saved = {k: os.environ.get(k) for k in BLAS_THREADS}
     os.environ.update({k: "1" for k in BLAS_THREADS})
+    share = max(1, default_workers() // max(1, int(workers)))
     try:
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=_fit_on, initargs=(share,)) as pool:
             return list(pool.map(run or diagnose_hidden, cases))
     finally:
         for k, v in saved.items():

@@ -244,7 +244,7 @@ def test_bad_recordings_and_options_are_named(lever_recording, tmp_path):
          "x.dbc: no such file"),
     ]
     for argv, expected in cases:
-        proc = subprocess.run([sys.executable, "-m", "agrobot", *argv], capture_output=True, text=True, cwd=ROOT)
+        proc = cli(*argv)
         assert proc.returncode == 2 and expected in proc.stderr, (argv, proc.stderr)
     assert not (tmp_path / "a.csv").exists()
 

@@ -108,19 +108,17 @@ def test_out_is_checked_before_any_computation(tmp_path):
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "thesis.tex").write_text("precious")
-    proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--out", str(foreign)], cwd=ROOT,
-                          capture_output=True, text=True)
+    proc = cli("run", "studies/figure8.toml", "--out", foreign)
     assert proc.returncode == 2 and "--out" in proc.stderr and "thesis.tex" in proc.stderr
     assert "euclid" not in proc.stdout + proc.stderr            # refused before the simulation, not after it
     assert (foreign / "thesis.tex").read_text() == "precious"
     a_file = tmp_path / "file.txt"
     a_file.write_text("x")
-    proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--out", str(a_file)], cwd=ROOT,
-                          capture_output=True, text=True)
+    proc = cli("run", "studies/figure8.toml", "--out", a_file)
     assert proc.returncode == 2 and "is a file" in proc.stderr and "Traceback" not in proc.stderr
     assert "euclid" not in proc.stdout + proc.stderr
-    proc = subprocess.run(CMD + ["run", "studies/figure8.toml", "--set", "study.stop_time=20", "--no-plots",
-                                 "--out", str(foreign), "--overwrite"], cwd=ROOT, capture_output=True, text=True)
+    proc = cli("run", "studies/figure8.toml", "--set", "study.stop_time=20", "--no-plots", "--out", foreign,
+               "--overwrite")
     assert proc.returncode == 2 and "thesis.tex" in proc.stderr, proc.stderr     # not a run's: never replaced
     assert (foreign / "thesis.tex").read_text() == "precious" and not (foreign / "metrics.json").exists()
 

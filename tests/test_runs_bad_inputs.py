@@ -17,13 +17,12 @@ CMD = [sys.executable, "-m", "agrobot"]
 FIGURE8 = ROOT / "studies" / "figure8.toml"
 
 
-def test_a_study_file_that_is_not_utf8_is_refused_with_its_line_column_and_byte(tmp_path):
+def test_a_study_file_that_is_not_utf8_is_refused_with_its_line_column_and_byte(tmp_path, cli):
     text = FIGURE8.read_text()
     latin = tmp_path / "latin.toml"
     latin.write_bytes(text.encode() + "# réglage du tracteur\n".encode("latin-1"))
     line = text.count("\n") + 1
-    proc = subprocess.run(CMD + ["run", str(latin), "--out", str(tmp_path / "o")], cwd=ROOT, capture_output=True,
-                          text=True)
+    proc = cli("run", latin, "--out", tmp_path / "o")
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     offset = len(text.encode()) + len("# r")
     for words in (str(latin), f"line {line}, column 4 (byte offset {offset})", "0xe9", "not UTF-8", "'# r'"):

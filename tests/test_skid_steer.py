@@ -5,9 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -19,7 +16,6 @@ from agrobot.identification.skid_steer import applies, identify_skid_steer
 from agrobot.identification.vehicle import Vehicle
 from agrobot.measurements import LogError
 
-ROOT = Path(__file__).resolve().parents[1]
 FINE = 200.0          # Hz: the truth is integrated on this grid, then sampled at the log's rate
 
 
@@ -88,14 +84,13 @@ def test_a_turn_rate_dependence_is_found_where_planted():
     assert "s |w_d|" in rep["equation"]
 
 
-def test_a_log_without_a_turn_rate_input_is_refused_naming_the_columns(tmp_path):
+def test_a_log_without_a_turn_rate_input_is_refused_naming_the_columns(tmp_path, cli):
     log = skid_log().drop(columns="turn_rate_cmd")
     with pytest.raises(LogError, match="odom_yaw_rate or turn_rate_cmd.*--signal 'odom_yaw_rate="):
         identify_skid_steer(log, "gen.csv")
     log.to_csv(tmp_path / "none.csv", index=False)
     out = tmp_path / "out"
-    run = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(tmp_path / "none.csv"), "--out", str(out),
-                          "--no-plots"], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    run = cli("identify", tmp_path / "none.csv", "--out", out, "--no-plots", timeout=120)
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert "no delta or delta_cmd" in run.stderr and "odom_yaw_rate or turn_rate_cmd" in run.stderr
     assert "--signal 'odom_yaw_rate=" in run.stderr
@@ -134,7 +129,7 @@ def test_a_declared_skid_steer_is_fitted_or_refused_by_its_declaration():
         identify_skid_steer(log.drop(columns="turn_rate_cmd").assign(yaw_rate_2=0.0), "gen.csv", _SkidStudy())
 
 
-def test_a_turn_rate_input_updated_at_half_the_rows_rate_is_interpolated_between_its_updates(tmp_path):
+def test_a_turn_rate_input_updated_at_half_the_rows_rate_is_interpolated_between_its_updates(tmp_path, cli):
     log = skid_log(K=0.7, column="odom_yaw_rate", tau=-0.2)
     log.loc[log.index % 2 == 1, "odom_yaw_rate"] = np.nan          # the odometry at half the gyro's rate
     rep = identify_skid_steer(log, "gen.csv")
@@ -145,8 +140,7 @@ def test_a_turn_rate_input_updated_at_half_the_rows_rate_is_interpolated_between
     few.to_csv(tmp_path / "few.csv", index=False)
     with pytest.raises(LogError, match="odom_yaw_rate has .* finite cells"):
         identify_skid_steer(few, "gen.csv")
-    run = subprocess.run([sys.executable, "-m", "agrobot", "identify", str(tmp_path / "few.csv"), "--out",
-                          str(tmp_path / "out"), "--no-plots"], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    run = cli("identify", tmp_path / "few.csv", "--out", tmp_path / "out", "--no-plots", timeout=120)
     assert run.returncode == 2 and "Traceback" not in run.stderr and "odom_yaw_rate" in run.stderr
 
 

@@ -6,8 +6,6 @@ refused by name, and a column holding no number is named with why."""
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -85,7 +83,7 @@ def test_a_header_of_two_rows_of_names_joins_them_and_keeps_the_units(tmp_path):
                        atol=1e-9)
 
 
-def test_a_column_of_text_is_named_with_why_and_a_table_of_text_only_is_refused(tmp_path):
+def test_a_column_of_text_is_named_with_why_and_a_table_of_text_only_is_refused(tmp_path, cli):
     truth = drive(10.0)
     rows = ["t,v,mode", "s,m/s,"] + [f"{float(t)!r},{float(v)!r},{'auto' if k % 20 < 10 else 'manual'}"
                                      for k, (t, v) in enumerate(zip(truth["t"], truth["v"]))]
@@ -96,7 +94,6 @@ def test_a_column_of_text_is_named_with_why_and_a_table_of_text_only_is_refused(
     text.write_text("name,kind\nleft,wheel\nright,wheel\nfront,axle\n")
     with pytest.raises(LogError, match="text.csv: a table of text only, no column to take: no row holds a number"):
         read_table(text)
-    run = subprocess.run([sys.executable, "-m", "agrobot", "convert", str(text), "--out", str(tmp_path / "out.csv")],
-                         capture_output=True, text=True)
+    run = cli("convert", text, "--out", tmp_path / "out.csv")
     assert run.returncode == 2 and "text.csv" in run.stderr and "Traceback" not in run.stderr
     assert "a table of text only" in run.stderr and not (tmp_path / "out.csv").exists()
