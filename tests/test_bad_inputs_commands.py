@@ -44,7 +44,8 @@ def inputs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-@pytest.mark.parametrize("command", ["convert", "identify", "diagnose"])
+@pytest.mark.parametrize("command", ["convert", pytest.param("identify", marks=pytest.mark.slow),
+                                     pytest.param("diagnose", marks=pytest.mark.slow)])
 def test_a_bad_input_exits_2_naming_it_and_writes_nothing_half(cli, inputs, tmp_path, case, command):
     out = tmp_path / ("out.csv" if command == "convert" else "out")
     extra = ZEROS_SIGNALS if case == "zeros" else ()

@@ -33,6 +33,7 @@ def _holds(est: dict, value: float) -> bool:
     return est["interval"][0] <= value <= est["interval"][1]
 
 
+@pytest.mark.slow
 def test_identify_and_diagnose_agree_on_the_planted_steering_gain_and_asymmetry(tmp_path):
     """identify's g_left, g_right become the diagnosis's k = (g_left + g_right) / 2 and
     a = (g_left - g_right) / (g_left + g_right): both estimates hold the planted 0.85 and 0.15 and
@@ -49,6 +50,7 @@ def test_identify_and_diagnose_agree_on_the_planted_steering_gain_and_asymmetry(
     assert {q["quantity"] for q in written} >= {"steering gain", "steering asymmetry", "steering offset"}
 
 
+@pytest.mark.slow
 def test_a_delay_against_a_delay_and_a_lag_is_named_with_both_numbers(tmp_path):
     """The same machine without its angle reading: identify's input is the command, its pure delay
     takes up the servo's 0.15 s lag; the diagnosis's steering has that lag beside a delay held at
@@ -64,6 +66,7 @@ def test_a_delay_against_a_delay_and_a_lag_is_named_with_both_numbers(tmp_path):
     assert f"identify {mine['value']:.3g} s [" in q["line"] and "they differ" in q["line"]
 
 
+@pytest.mark.slow
 def test_both_hold_the_planted_gyro_bias(tmp_path):
     """A tractor with a gyro bias: identify's gyro_bias and the diagnosis's yaw_rate_bias agree and
     both intervals hold the planted bias."""
@@ -108,6 +111,7 @@ def test_the_gain_is_compared_on_the_studys_wheelbase_and_a_held_gain_is_named()
                                              "command_delay", "yaw_rate_bias", "understeer_gradient"]
 
 
+@pytest.mark.slow
 def test_both_understeer_gradients_hold_the_tractors_planted_stiffnesses(tmp_path):
     """A healthy tractor with drawn stiffnesses: identify's K (its fitted cornering coefficients) and
     the diagnosis's (the study's stiffnesses x its refitted scales) agree and lie within 5 % of
