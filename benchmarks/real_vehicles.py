@@ -115,7 +115,9 @@ def main() -> None:
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         base = args.out or Path(tmp)
+        names = []
         for k, (name, log) in enumerate(logs()):
+            names.append(name)
             if args.only not in name:
                 continue
             start = time.perf_counter()
@@ -168,6 +170,8 @@ def main() -> None:
                          "verdict": verdict, "plausible for the vehicle": plausible(res), "not judged": not_judged or "-",
                          "time [s]": f"{time.perf_counter() - start:.0f}"})
             print(f"{name}: done in {time.perf_counter() - start:.0f} s", file=sys.stderr, flush=True)
+    if not rows:
+        ap.error(f"--only {args.only!r}: no log's name contains it; the logs: {'; '.join(names)}")
     cols = list(dict.fromkeys(k for r in rows for k in r))
     print("| " + " | ".join(cols) + " |")
     print("|" + "---|" * len(cols))

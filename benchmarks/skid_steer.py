@@ -127,6 +127,9 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--bag", type=Path, default=BAG)
     args = ap.parse_args()
+    if not args.bag.is_file():
+        ap.error(f"--bag {args.bag}: no such file (a ROS 1 bag with an IMU and a wheel odometry topic; the default is "
+                 f"{BAG}, fetched as benchmarks/real_corpus.toml says)")
     ch = read_bag(args.bag)
     t0 = min(ch["r"][0][0], ch["w"][0][0])
     spans = runs(*ch["v"])
