@@ -9,8 +9,9 @@ benchmarks/real_corpus.toml (docs/real_corpus.md). Per recording and quantity on
 reference number, the project's, and whether they agree:
 
 * rate of each key channel: the reference counts the channel's own value changes (a held value is
-  not an update) and its rows; the project's is the audit's rate for that column; they agree within
-  25 % of the updates' rate.
+  not an update, unless the channel's grid explains it: rates) and its rows; a fix's fields count
+  together and only while the machine moves (fix_rates); the project's is the audit's rate for that
+  column; they agree within 25 % of the updates' rate.
 * reversing: the share of moving time (|v| > 0.2 m/s) driven backwards, from a signed speed or from
   the course against the heading; the project's is the share of v < 0 in the converted log.
 * yaw/kinematic slope: the regression of the yaw rate on v tan(delta/N)/L (N the steering ratio, L
@@ -254,18 +255,71 @@ def read_reference(rec: dict, roots: dict) -> dict:
 
 
 # --- the reference numbers --------------------------------------------------------------------
-def rates(t: np.ndarray, x: np.ndarray) -> tuple[float, float]:
+def rates(t: np.ndarray, x: np.ndarray, counted: np.ndarray | None = None) -> tuple[float, float]:
     """(rows, own updates) per second over the time the channel covers: the span less its gaps
-    (intervals over 3 x the median row interval), so that a gap is not read as a slow rate, and
-    a held value (a row repeating the last value) is not an update."""
+    (intervals over 3 x the median row interval), so that a gap is not read as a slow rate.
+    A row that repeats the last value is a missed update only where the data can show it: when the
+    change that ends its run of repeats is more than one quantum (q, the smallest change of the
+    channel; 1.5 q allows for rounding). A signal on a coarse grid that moves less than a quantum
+    per row repeats at every row sent (its next change is then one quantum), so such repeats are
+    counted as updates; a run that ends with a jump of several quanta hid a signal that moved, not
+    sent. ``counted``: the row intervals judged (e.g. the positions' while the machine moves)."""
     if len(t) < 3:
         return math.nan, math.nan
     dt = np.diff(t)
     covered = dt <= 3 * np.median(dt)
+    if counted is not None:
+        covered &= counted
     seconds = float(dt[covered].sum())
     if seconds <= 0:
         return math.nan, math.nan
-    return int(covered.sum()) / seconds, int(np.count_nonzero((np.diff(x) != 0) & covered)) / seconds
+    x = np.asarray(x, float).reshape(len(t), -1)
+    change = np.any(np.diff(x, axis=0) != 0, axis=1)
+    return int(covered.sum()) / seconds, int(np.count_nonzero((change | _quantised_hold(x, change)) & covered)) / seconds
+
+
+def _quantised_hold(x: np.ndarray, change: np.ndarray) -> np.ndarray:
+    """Per row interval: a repeat whose run ends with a change of at most one quantum (rates) on
+    every column; False for a run the data never ends."""
+    ends = np.flatnonzero(change)
+    if not len(ends):
+        return np.zeros(len(change), bool)
+    steps = np.abs(np.diff(x, axis=0))
+    single = np.ones(len(change), bool)
+    for k in range(x.shape[1]):
+        moved = steps[:, k][steps[:, k] > 0]
+        q = float(moved.min()) if len(moved) else math.inf
+        single &= steps[:, k] <= 1.5 * q
+    end = ends[np.minimum(np.searchsorted(ends, np.arange(len(change))), len(ends) - 1)]
+    return ~change & (end >= np.arange(len(change))) & single[end]
+
+
+def fix_rates(ch: dict) -> dict:
+    """The positions' rates, counted as the receiver sends them: one fix updates when any of its
+    fields (latitude or longitude, x or y) changes, so a track along a meridian is not a missed
+    longitude; and only while the machine moves, because a standing machine's fix may repeat
+    (a receiver's static hold, a terminal that keeps the last fix) while a moving one must change.
+    A row interval moves when the distance between the fixes before and after its run of repeats,
+    over their time, exceeds MOVING (a fix that never changes again stands). Both fields get the
+    fix's rates."""
+    pair = ("x", "y") if "x" in ch and "y" in ch else ("lat", "lon") if "lat" in ch and "lon" in ch else None
+    if pair is None or len(ch[pair[0]][0]) < 3 or not np.array_equal(ch[pair[0]][0], ch[pair[1]][0]):
+        return {}
+    t = ch[pair[0]][0]
+    if pair == ("x", "y"):
+        east, north = ch["x"][1], ch["y"][1]
+    else:
+        _, east, north = local_xy(ch["lat"], ch["lon"])
+    change = (np.diff(east) != 0) | (np.diff(north) != 0)
+    at = np.r_[0, np.flatnonzero(change) + 1]            # rows that start a new fix
+    before = at[np.searchsorted(at, np.arange(len(t) - 1), side="right") - 1]   # the fix each row interval starts in
+    nxt = np.searchsorted(at, np.arange(1, len(t)))      # the first new fix at or after each row's end
+    after = at[np.minimum(nxt, len(at) - 1)]
+    span = np.where(nxt < len(at), t[after] - t[before], np.inf)
+    moving = np.hypot(east[after] - east[before], north[after] - north[before]) / span > MOVING
+    both = np.column_stack([ch[pair[0]][1], ch[pair[1]][1]])
+    r = rates(t, both, counted=moving)
+    return {pair[0]: r, pair[1]: r}
 
 
 def local_xy(lat: tuple, lon: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -446,7 +500,7 @@ def reference_numbers(rec: dict, roots: dict) -> dict:
     for name, seconds in rec["reference"].get("shift", {}).items():
         ch[name] = (ch[name][0] - seconds, ch[name][1])
     cs = course_and_speed(ch)
-    out = {"rates": {k: rates(*v) for k, v in ch.items()}, "reversing": reversing(ch),
+    out = {"rates": {k: rates(*v) for k, v in ch.items()} | fix_rates(ch), "reversing": reversing(ch),
            "top_speed": float(np.percentile(cs[2], 99)) if cs is not None and len(cs[2]) else math.nan,
            "kinematic": kinematic(ch, rec.get("vehicle", {})), "channels": ch, "vertical": vertical_axis(ch),
            "second_yaw": second_yaw_source(ch), "speed_lag": speed_against_positions(ch)}
