@@ -667,9 +667,13 @@ SECOND = {"odom_yaw_rate": "yaw_rate_2"}      # a wheel odometry's turn rate is 
 LAG_KINDS = ("clock_offset", "sensor_latency")
 
 
-def sensor_rows(ref: dict, imp) -> list[tuple]:
+def sensor_rows(ref: dict, imp, shift: dict | None = None) -> list[tuple]:
     """The IMU's vertical axis, a second yaw-rate source's lag and scale, the speed's lag against
-    the positions: the reference beside the audit's finding on the same channels."""
+    the positions: the reference beside the audit's finding on the same channels. The audit
+    measures a lag on the recording as read, before --align moves a channel (its finding names the
+    move), while the reference reads the channels after their ``shift`` (the same latency moved
+    earlier); so the positions' speed after v is compared after the move on both sides: the
+    audit's lag plus the seconds v was moved earlier."""
     rows = []
     if ref["vertical"] is not None:
         axis, mean = ref["vertical"]
@@ -688,8 +692,10 @@ def sensor_rows(ref: dict, imp) -> list[tuple]:
     if ref["speed_lag"] is not None:
         lag, corr = ref["speed_lag"]
         got = _found(imp, LAG_KINDS, {"v", "gnss_speed"})          # the audit's: v after gnss_speed
-        got = None if got is None else -got
-        rows.append(("positions' speed after v [s]", f"{lag:.1f} (r {corr:.2f})", _f(got),
+        moved = (shift or {}).get("v", 0.0)
+        got = None if got is None else -got + moved
+        said = f" (found {_f(got - moved)}, v moved {moved:g} s earlier)" if got is not None and moved else ""
+        rows.append(("positions' speed after v [s]", f"{lag:.1f} (r {corr:.2f})", _f(got) + said,
                      _agree(None if got is None else abs(got - lag) <= 0.5)))
     return rows
 
@@ -708,7 +714,7 @@ def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> li
         rows.append(("fix quality values", str(ref["quality"]), str(imp.get("quality", "-")) if isinstance(imp, dict) else "-",
                      _agree(None if not isinstance(imp, dict) or "quality" not in imp else imp["quality"] == ref["quality"])))
     rows.append(("top speed [m/s] (99 %, positions)", _f(ref["top_speed"]), "-", "-"))
-    rows += sensor_rows(ref, imp)
+    rows += sensor_rows(ref, imp, rec["reference"].get("shift"))
     ident = guarded("identify", timeout, project_identify, rec, roots) if identify else "not run (--no-identify)"
     rows += kinematic_rows(ref, ident)
     if isinstance(ident, dict):
