@@ -206,7 +206,9 @@ def _group(frame_id: int, extended: bool):
 def read_mf4can(path: Path, ref: dict) -> dict:
     """channel -> (frame time, signal) from [message, signal, scale(, offset)]: the CAN frames of an
     MDF4 bus log (asammdf) on ref's bus, decoded with ref's DBC (cantools); a frame whose message
-    says it is not valid (a one-bit signal named ...Valid at 0) is left out."""
+    says it is not valid (a one-bit signal named ...Valid at 0) is left out. Times are POSIX
+    seconds on the logger's clock (the file's start time plus the frame's), the clock a converted
+    log's stretch is stated on."""
     import cantools
     from asammdf import MDF
 
@@ -230,8 +232,9 @@ def read_mf4can(path: Path, ref: dict) -> dict:
         for name, (message, sig, scale, *offset) in wanted.items():
             if message == msg.name:
                 rows[name].append((float(t), (float(values[sig]) + (offset[0] if offset else 0.0)) * scale))
+    start = mdf.header.start_time.timestamp()
     mdf.close()
-    return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+    return {k: (start + np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
 
 
 def read_reference(rec: dict, roots: dict) -> dict:
@@ -355,8 +358,13 @@ def course_and_speed(ch: dict):
     return tm, np.arctan2(np.diff(y)[ok], np.diff(x)[ok]), np.hypot(np.diff(x), np.diff(y))[ok] / dt[ok]
 
 
-def reversing(ch: dict) -> tuple[float, str]:
-    """The share of moving time driven backwards, and how it was found."""
+def reversing(ch: dict, within: tuple | None = None) -> tuple[float, str]:
+    """The share of moving time driven backwards, and how it was found; ``within``: (start, end)
+    on the channels' clock, the stretch judged."""
+    if within is not None:
+        ch = {k: (t[(t >= within[0]) & (t <= within[1])], x[(t >= within[0]) & (t <= within[1])])
+              for k, (t, x) in ch.items()}
+        ch = {k: v for k, v in ch.items() if len(v[0]) >= 3}
     if "v" in ch:
         t, v = ch["v"]
         moving = np.abs(v) > MOVING
@@ -554,6 +562,9 @@ def project_import(rec: dict, roots: dict) -> dict:
         out["reversing"] = float(np.mean(v[moving] < 0)) if moving.any() else math.nan
     if "fix_quality" in log:
         out["quality"] = sorted({int(q) for q in log["fix_quality"].dropna()})
+    used = done.report.get("used") or {}
+    if "utc_start_s" in used and out["seconds"] > 0:
+        out["stretch"] = (float(used["utc_start_s"]), float(used["utc_start_s"]) + out["seconds"])
     return out
 
 
@@ -700,13 +711,30 @@ def sensor_rows(ref: dict, imp, shift: dict | None = None) -> list[tuple]:
     return rows
 
 
+POSIX_KINDS = ("tables", "rosbag", "mf4can")    # readers whose times can be POSIX (NMEA: time of day; TLG: 1980 days)
+
+
+def reversing_like_log(ref: dict, imp, kind: str) -> tuple[float, str]:
+    """The reference's reversing share on the stretch the converted log keeps (the project's share
+    is the log's, and convert keeps one run: a reversal outside it is not in the log), where both
+    clocks are POSIX (the log's stretch is stated in UTC; the reference's reader one of POSIX_KINDS
+    with times above 1e8 s); else over the whole recording."""
+    stretch = imp.get("stretch") if isinstance(imp, dict) else None
+    times = [t for t, _ in ref["channels"].values() if len(t)]
+    if stretch is None or kind not in POSIX_KINDS or not times or np.median(np.concatenate(times)) < 1e8:
+        return ref["reversing"]
+    share, how = reversing(ref["channels"], within=stretch)
+    start = min(float(t[0]) for t in times)
+    return share, f"{how}; on the stretch convert keeps, {stretch[0] - start:.0f}-{stretch[1] - start:.0f} s after the first sample"
+
+
 def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> list[tuple]:
     ref = guarded("reference", timeout, reference_numbers, rec, roots)
     if isinstance(ref, str):
         return [("reference", ref, "-", "-")]
     imp = guarded("convert", timeout, project_import, rec, roots)
     rows = rate_rows(ref, imp, rec["reference"].get("commands", []), rec["reference"].get("samples", []))
-    share, how = ref["reversing"]
+    share, how = reversing_like_log(ref, imp, rec["reference"]["kind"])
     project = None if isinstance(imp, str) else imp.get("reversing")
     rows.append(("reversing [% of moving]", f"{_f(100 * share, '{:.1f}')} ({how})", _f(None if project is None else 100 * project, "{:.1f}"),
                  _agree(None if project is None or math.isnan(share) else abs(project - share) <= 0.02)))
