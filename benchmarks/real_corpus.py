@@ -15,8 +15,9 @@ reference number, the project's, and whether they agree:
 * reversing: the share of moving time (|v| > 0.2 m/s) driven backwards, from a signed speed or from
   the course against the heading; the project's is the share of v < 0 in the converted log.
 * yaw/kinematic slope: the regression of the yaw rate on v tan(delta/N)/L (N the steering ratio, L
-  the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation; beside identify's
-  steering gain (agree within 30 %).
+  the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation, on the samples
+  whose tyres are linear (kinematic); beside the slope identify's steering gain and understeer
+  gradient predict on those samples (steady_slope; agree within 30 %).
 * command-to-yaw delay: that lag, found by cross-correlation over -1..1 s; beside identify's
   delay plus its lag (agree within 0.08 s; a delay on its zero bound does not agree).
 * identify's understeer gradient and held-out fit, the audit's findings and the published figures,
@@ -45,6 +46,7 @@ MOVING = 0.2            # m/s: moving, for the reversing share
 KINEMATIC_MIN_SPEED = 0.2   # m/s: the slope and the delay are computed above it
 NOT_CHANNELS = ("commands", "samples")   # [recording.reference] lists that are not channels
 GRID = 0.02             # s: the common grid of the slope and the cross-correlation
+G_ACC = 9.81            # m/s2
 
 
 # --- the second method: the raw files, read with pandas ---------------------------------------
@@ -407,7 +409,15 @@ def speed_of(ch: dict):
 
 def kinematic(ch: dict, vehicle: dict) -> dict | None:
     """The yaw rate against v tan(delta/N)/L on a 50 Hz grid (|v| above KINEMATIC_MIN_SPEED):
-    the lag of the best correlation in -1..1 s, the correlation there and at zero, the slope there."""
+    the lag of the best correlation in -1..1 s, the correlation there and at zero, and the slope
+    there on the samples whose tyres are linear. r = v delta / (L + K v^2) is a linear-tyre law:
+    past the tyres' peak the yaw rate is bounded by mu g / v whatever the steering asks, so a slope
+    over saturated turns measures the friction, not the steering. A tyre's force (Magic Formula,
+    shape 1.3) stays within 5 % of its initial slope up to a third of its peak, and the peak is at
+    least the largest lateral acceleration the tyres delivered (99th percentile of |v r|) and at
+    least 0.5 g (any ground driven on): the slope is taken where the lateral acceleration the
+    steering asks for, v^2 tan(delta/N)/L (the regressor, so that the choice does not bias the
+    slope), is at most a third of that; ``linear_v``/``linear_kin``: those samples."""
     delta = ch.get("delta")
     r, v = yaw_rate_of(ch), speed_of(ch)
     if delta is None or r is None or v is None or "wheelbase" not in vehicle:
@@ -437,10 +447,15 @@ def kinematic(ch: dict, vehicle: dict) -> dict | None:
     if best[0] == -2.0:
         return None
     a, b, m = _shifted(kin, yaw, ok, best[1])
-    slope = float(np.polyfit(a[m], b[m], 1)[0])
+    speed = _shifted(np.interp(t, *v), yaw, ok, best[1])[0]
+    limit = max(float(np.percentile(np.abs(speed * b)[m], 99)), 0.5 * G_ACC) / 3
+    linear = m & (np.abs(speed * a) <= limit)
+    linear = linear if linear.sum() >= 20 and np.std(a[linear]) > 0 else m
+    slope = float(np.polyfit(a[linear], b[linear], 1)[0])
     ratio = float(np.mean(b[m]) / np.mean(a[m])) if abs(np.mean(a[m])) > 1e-3 else math.nan
     return {"delay": best[1] * GRID, "corr": best[0], "corr0": corr0, "slope": slope, "ratio": ratio,
-            "seconds": float(m.sum() * GRID)}
+            "seconds": float(m.sum() * GRID), "linear_s": float(linear.sum() * GRID), "linear_g": limit / G_ACC,
+            "linear_v": speed[linear], "linear_kin": a[linear], "wheelbase": vehicle["wheelbase"]}
 
 
 def _shifted(kin, yaw, ok, lag: int):
@@ -645,6 +660,19 @@ def rate_rows(ref: dict, imp, commands: list, samples: list = ()) -> list[tuple]
     return rows
 
 
+def steady_slope(k: dict, gain, K) -> float | None:
+    """The slope of r on v tan(delta/N)/L that identify's steering gain g and understeer gradient
+    K predict on the reference's linear-tyre samples: r = g v delta / (L + K v^2) in steady state,
+    so each sample's slope is g L / (L + K v^2), averaged with the weights a least-squares slope
+    gives them (the regressor squared); g alone without K."""
+    if gain is None:
+        return None
+    if K is None or not math.isfinite(K) or "linear_v" not in k or not len(k["linear_v"]):
+        return float(gain)
+    w, L = k["linear_kin"] ** 2, k["wheelbase"]
+    return float(gain * np.sum(w * L / (L + K * k["linear_v"] ** 2)) / np.sum(w))
+
+
 def kinematic_rows(ref: dict, ident) -> list[tuple]:
     k = ref["kinematic"]
     if k is None:
@@ -652,9 +680,11 @@ def kinematic_rows(ref: dict, ident) -> list[tuple]:
     got = ident if isinstance(ident, dict) else {}
     gain = got.get("steer_gain")
     slope = k["slope"] if not math.isnan(k["slope"]) else k["ratio"]
+    predicted = steady_slope(k, gain, got.get("K"))
+    linear = f", tyres linear: {k['linear_s']:.0f} s under {k['linear_g']:.2f} g" if "linear_s" in k else ""
     rows = [("yaw / kinematic slope", f"{_f(k['slope'])} (ratio of means {_f(k['ratio'])}, r {_f(k['corr'], '{:.2f}')}, "
-             f"{k['seconds']:.0f} s)", f"steer_gain {_f(gain)}",
-             _agree(None if gain is None or math.isnan(slope) else abs(gain - slope) <= 0.3 * abs(slope)))]
+             f"{k['seconds']:.0f} s{linear})", f"{_f(predicted)} (steer_gain {_f(gain)}, K {_f(got.get('K'))})",
+             _agree(None if predicted is None or math.isnan(slope) else abs(predicted - slope) <= 0.3 * abs(slope)))]
     total = None if got.get("delay") is None else got["delay"] + (got.get("lag") or 0.0)
     verdict = _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)
     if got.get("delay") is not None and 0 <= got["delay"] < 1e-6:
