@@ -18,8 +18,9 @@ reference number, the project's, and whether they agree:
   the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation, on the samples
   whose tyres are linear (kinematic); beside the slope identify's steering gain and understeer
   gradient predict on those samples (steady_slope; agree within 30 %).
-* command-to-yaw delay: that lag, found by cross-correlation over -1..1 s; beside identify's
-  delay plus its lag (agree within 0.08 s; a delay on its zero bound does not agree).
+* command-to-yaw lag: that lag, found by cross-correlation over -1..1 s: the whole lag, of which
+  identify's delay plus its lag is a part (delay_rows: within it, 0.08 s either side; a delay on its
+  zero bound does not agree); the audit's response lag beside.
 * identify's understeer gradient and held-out fit, the audit's findings and the published figures,
   printed without a verdict.
 
@@ -673,7 +674,7 @@ def steady_slope(k: dict, gain, K) -> float | None:
     return float(gain * np.sum(w * L / (L + K * k["linear_v"] ** 2)) / np.sum(w))
 
 
-def kinematic_rows(ref: dict, ident) -> list[tuple]:
+def kinematic_rows(ref: dict, ident, imp=None) -> list[tuple]:
     k = ref["kinematic"]
     if k is None:
         return []
@@ -685,14 +686,29 @@ def kinematic_rows(ref: dict, ident) -> list[tuple]:
     rows = [("yaw / kinematic slope", f"{_f(k['slope'])} (ratio of means {_f(k['ratio'])}, r {_f(k['corr'], '{:.2f}')}, "
              f"{k['seconds']:.0f} s{linear})", f"{_f(predicted)} (steer_gain {_f(gain)}, K {_f(got.get('K'))})",
              _agree(None if predicted is None or math.isnan(slope) else abs(predicted - slope) <= 0.3 * abs(slope)))]
-    total = None if got.get("delay") is None else got["delay"] + (got.get("lag") or 0.0)
-    verdict = _agree(None if total is None or math.isnan(k["delay"]) else abs(total - k["delay"]) <= 0.08)
-    if got.get("delay") is not None and 0 <= got["delay"] < 1e-6:
+    return rows + delay_rows(k, got, imp)
+
+
+def delay_rows(k: dict, got: dict, imp) -> list[tuple]:
+    """The reference's lag of best correlation is the yaw rate's whole lag behind the kinematic
+    demand: any dead time and steering lag plus the vehicle's own yaw response (its tyres and
+    inertia: a car's single-track model lags 0.04-0.07 s at 20 km/h), or a clock offset where it is
+    negative. identify's delay + lag is the part in front of its model, so it lies between
+    min(0, that lag) and that lag (0.08 s allowed either side); a value on its zero bound does not
+    agree, and identify's "cannot decide" gives no number to compare. The audit's response lag
+    (the same cross-correlation as the reference's) is printed beside."""
+    lag = next((_found(imp, ("response_lag",), {"yaw_rate", "v", u}) for u in ("delta", "delta_cmd")
+                if _found(imp, ("response_lag",), {"yaw_rate", "v", u}) is not None), None)
+    delay = got.get("delay")
+    total = None if delay is None or not math.isfinite(delay) else delay + (got.get("lag") or 0.0)
+    verdict = _agree(None if total is None or math.isnan(k["delay"]) else
+                     min(0.0, k["delay"]) - 0.08 <= total <= k["delay"] + 0.08)
+    if delay is not None and 0 <= delay < 1e-6:
         verdict = "NO (on its zero bound)"        # a verdict never sits on a bound
     said = f" ({got['delay_verdict']})" if got.get("delay_verdict") else ""
-    rows.append(("command-to-yaw delay [s]", f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
-                 f"delay {_f(got.get('delay'))} + lag {_f(got.get('lag'))}{said}", verdict))
-    return rows
+    return [("command-to-yaw lag [s]; identify's delay + lag within it",
+             f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
+             f"delay {_f(delay)} + lag {_f(got.get('lag'))}{said}; audit's response lag {_f(lag)}", verdict)]
 
 
 def _found(imp, kinds: tuple, channels: set):
@@ -774,7 +790,7 @@ def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> li
     rows.append(("top speed [m/s] (99 %, positions)", _f(ref["top_speed"]), "-", "-"))
     rows += sensor_rows(ref, imp, rec["reference"].get("shift"))
     ident = guarded("identify", timeout, project_identify, rec, roots) if identify else "not run (--no-identify)"
-    rows += kinematic_rows(ref, ident)
+    rows += kinematic_rows(ref, ident, imp)
     if isinstance(ident, dict):
         rows.append(("identify: K [rad/(m/s2)]; fit [%]; L [m]", "-",
                      f"{_f(ident['K'])}; {_f(ident['fit'], '{:.0f}')}; {_f(ident['wheelbase'])} ({ident['method']}, "
