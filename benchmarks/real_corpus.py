@@ -261,27 +261,30 @@ def read_reference(rec: dict, roots: dict) -> dict:
 
 
 # --- the reference numbers --------------------------------------------------------------------
-def rates(t: np.ndarray, x: np.ndarray, counted: np.ndarray | None = None) -> tuple[float, float]:
-    """(rows, own updates) per second over the time the channel covers: the span less its gaps
-    (intervals over 3 x the median row interval), so that a gap is not read as a slow rate.
-    A row that repeats the last value is a missed update only where the data can show it: when the
-    change that ends its run of repeats is more than one quantum (q, the smallest change of the
-    channel; 1.5 q allows for rounding). A signal on a coarse grid that moves less than a quantum
-    per row repeats at every row sent (its next change is then one quantum), so such repeats are
-    counted as updates; a run that ends with a jump of several quanta hid a signal that moved, not
-    sent. ``counted``: the row intervals judged (e.g. the positions' while the machine moves)."""
+def rates(t: np.ndarray, x: np.ndarray, counted: np.ndarray | None = None) -> tuple[float, float, float]:
+    """(rows, fewest updates, most updates) per second over the time the channel covers: the span
+    less its gaps (intervals over 3 x the median row interval), so that a gap is not read as a slow
+    rate. What the values can show bounds the rate from both sides. Every change is an update: the
+    fewest. A repeat is a missed update only where the data can show it: when the change that ends
+    its run of repeats is more than one quantum (q, the smallest change of the channel; 1.5 q allows
+    for rounding), the signal moved while the value stood; a signal on a coarse grid that moves less
+    than a quantum per row repeats at every row sent, so a run ended by one quantum may be all
+    updates: the most. ``counted``: the row intervals judged (e.g. the positions' while the machine
+    moves)."""
     if len(t) < 3:
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     dt = np.diff(t)
     covered = dt <= 3 * np.median(dt)
     if counted is not None:
         covered &= counted
     seconds = float(dt[covered].sum())
     if seconds <= 0:
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     x = np.asarray(x, float).reshape(len(t), -1)
     change = np.any(np.diff(x, axis=0) != 0, axis=1)
-    return int(covered.sum()) / seconds, int(np.count_nonzero((change | _quantised_hold(x, change)) & covered)) / seconds
+    most = change | _quantised_hold(x, change)
+    return (int(covered.sum()) / seconds, int(np.count_nonzero(change & covered)) / seconds,
+            int(np.count_nonzero(most & covered)) / seconds)
 
 
 def _quantised_hold(x: np.ndarray, change: np.ndarray) -> np.ndarray:
@@ -645,19 +648,22 @@ CANONICAL = {"delta": ("delta", "delta_cmd"), "yaw_rate": ("yaw_rate",), "yaw_ra
 
 
 def rate_rows(ref: dict, imp, commands: list, samples: list = ()) -> list[tuple]:
-    """A measured channel's rate is its updates'; a command's, its messages' (a repeated command
-    is sent again), and so is a channel declared a sample per message (a quantised gyro repeats)."""
+    """A measured channel's rate is its updates', which the values bound from both sides (rates:
+    the changes, and the changes plus the repeats a coarse grid explains); a command's, its
+    messages' (a repeated command is sent again), and so is a channel declared a sample per
+    message (a quantised gyro repeats). They agree when the audit's rate lies in that range, 25 %
+    allowed beyond either end (the stamps' jitter)."""
     rows = []
-    for name, (rows_hz, updates_hz) in ref["rates"].items():
+    for name, (rows_hz, fewest, most) in ref["rates"].items():
         names = CANONICAL.get(name)
         if names is None:
             continue
         project = None if isinstance(imp, str) else next((imp["rates"][n] for n in names if n in imp["rates"]), None)
-        truth = rows_hz if name in commands or name in samples else updates_hz
-        ok = None if project is None or not truth else abs(project - truth) <= 0.25 * truth
+        lo, hi = (rows_hz, rows_hz) if name in commands or name in samples else (fewest, most)
+        ok = None if project is None or not hi else 0.75 * lo <= project <= 1.25 * hi
         said = " (a command)" if name in commands else " (a sample per message)" if name in samples else ""
-        rows.append((f"rate {name} [Hz]" + said,
-                     f"{_f(updates_hz)} updates in {_f(rows_hz)} rows", _f(project), _agree(ok)))
+        span = _f(fewest) if _f(fewest) == _f(most) else f"{_f(fewest)}-{_f(most)}"
+        rows.append((f"rate {name} [Hz]" + said, f"{span} updates in {_f(rows_hz)} rows", _f(project), _agree(ok)))
     return rows
 
 
