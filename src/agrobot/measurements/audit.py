@@ -114,7 +114,9 @@ def channel_gaps(t: np.ndarray, least: float = GAP_MIN) -> tuple[np.ndarray, np.
 
 def channel_row(name: str, group: str, t: np.ndarray, t0: float, updates: dict | None = None) -> dict:
     """One channel's line of the table: its rate is that of its updates (``updates``: how a held
-    channel was found, measurements.channel_updates: its rows' rate and the hold factor)."""
+    channel was found, measurements.channel_updates: its updates' rate, which a channel read at
+    irregular times has as a mean, its rows' rate and the hold factor; a set point keeps its rows,
+    each a message sent, and their rate)."""
     t = np.asarray(t, float)
     dt = np.diff(t)
     step = float(np.median(dt[dt > 0])) if (dt > 0).any() else math.nan
@@ -122,7 +124,9 @@ def channel_row(name: str, group: str, t: np.ndarray, t0: float, updates: dict |
     held = {"rows_hz": float(updates["rows_hz"]), "held": float(updates["held"])} if updates else {}
     return {"channel": name, "group": group, "samples": int(len(t)), **held,
             "start_s": float(t[0] - t0) if len(t) else math.nan, "end_s": float(t[-1] - t0) if len(t) else math.nan,
-            "rate_hz": 1.0 / step if step > 0 else math.nan, "repeated_stamps": int(np.sum(dt == 0)),
+            "rate_hz": float(updates["updates_hz"]) if updates and not updates.get("set_point")
+            else 1.0 / step if step > 0 else math.nan,
+            "repeated_stamps": int(np.sum(dt == 0)),
             "gaps": int(len(i)), "longest_gap_s": float(length.max()) if len(i) else 0.0,
             "gaps_at_s": [round(float(t[k] - t0), 2) for k in i[:5]]}
 

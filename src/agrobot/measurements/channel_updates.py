@@ -15,6 +15,11 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   a grid (a quantised signal that moves slowly also repeats, but changes by one quantum at a time:
   the median change is then within 1.5 quanta; measurements.log.resolution finds the quantum);
   its update period P is the median interval between updates, ``held`` = P / the row period;
+- a channel read at irregular times (polled in turn with others: most updates one row apart, some
+  several) is held too when its repeats are copies: after a change its value comes back to the one
+  before less than RETURN_SHARE as often as a row repeats (noise on a grid meets a value again by
+  chance about as often as it repeats), and it updates every REGULAR to POLLED rows on average (a
+  state holds for many); its P is then the mean interval between updates;
 - a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
   else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
   constant, not a gap); for the positions, while the machine moves, it is a stale value (a dropped
@@ -56,6 +61,8 @@ STANDING = 0.1          # m/s: below this the machine stands
 CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this many
 CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
 MIN_SAMPLES = 20
+RETURN_SHARE = 0.5      # a polled channel's value returns after a change less than this share of its repeats
+POLLED = 4.0            # rows: a channel read at irregular times updates at least this often on average
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
 MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
                           "noise alone changes it)"}
@@ -96,10 +103,12 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     at = np.flatnonzero(change)
     intervals = np.diff(t[at])
     period = float(np.median(intervals))
-    if not row > 0 or period < REGULAR * row or any(_single_steps(x[:, k], change) for k in range(x.shape[1])):
+    if not row > 0 or any(_single_steps(x[:, k], change) for k in range(x.shape[1])):
         return None
-    if np.mean(np.abs(intervals - period) <= 0.5 * period + row) < REGULAR_SHARE:
-        return None                     # changes at irregular times: a state or an event, not a sampled hold
+    if period < REGULAR * row or np.mean(np.abs(intervals - period) <= 0.5 * period + row) < REGULAR_SHARE:
+        period = _polled_period(t, x, change, row)
+        if period is None:
+            return None                 # changes at irregular times: a state or an event, not a sampled hold
     keep, stale = [], 0
     ends = np.append(at[1:], len(t))
     every = max(1, int(round(period / row)))
@@ -121,6 +130,25 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
     keep, times = keep[ahead], times[ahead]
     return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
             "stale": stale}
+
+
+def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float) -> float | None:
+    """The mean interval between the updates of a channel read at irregular times (a value polled in
+    turn with others, an OBD request answered when the bus allows), or None when its repeats are
+    not copies. Its repeats are copies when, after a change, the value comes back to the one before
+    it (x[i+2] = x[i] where x[i+1] differs) less than RETURN_SHARE as often as a row repeats (a signal
+    that meets a value again by chance, noise on a grid, returns about as often as it repeats), and
+    it updates every REGULAR to POLLED rows on average (a state or an event holds for many rows)."""
+    same = np.all(x[2:] == x[:-2], axis=1)
+    after = change[1:-1]
+    if after.sum() < MIN_SAMPLES:
+        return None
+    repeats = 1.0 - change[1:].mean()
+    if np.mean(same[after]) > RETURN_SHARE * repeats:
+        return None
+    at = np.flatnonzero(change)
+    period = float(t[at[-1]] - t[at[0]]) / (len(at) - 1)
+    return period if REGULAR * row <= period <= POLLED * row else None
 
 
 def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
