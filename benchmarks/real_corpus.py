@@ -8,12 +8,14 @@ The recordings, their vehicles, licences, origins and how the project reads each
 benchmarks/real_corpus.toml (docs/real_corpus.md). Per recording and quantity one row: the
 reference number, the project's, and whether they agree:
 
-* rate of each key channel: the reference counts the channel's own value changes (a held value is
-  not an update, unless the channel's grid explains it: rates) and its rows; a fix's fields count
-  together and only while the machine moves (fix_rates); the project's is the audit's rate for that
-  column; they agree within 25 % of the updates' rate.
+* rate of each key channel: the reference bounds the channel's own updates by its value changes
+  (a held value is not an update) and by those plus the repeats its grid explains (rates), beside
+  its rows; a fix's fields count together and only while the machine moves (fix_rates); the
+  project's is the audit's rate for that column; they agree when it lies in that range, 25 %
+  allowed beyond either end.
 * reversing: the share of moving time (|v| > 0.2 m/s) driven backwards, from a signed speed or from
-  the course against the heading; the project's is the share of v < 0 in the converted log.
+  the course against the heading, on the stretch the converted log keeps (reversing_like_log); the
+  project's is the share of v < 0 in the converted log.
 * yaw/kinematic slope: the regression of the yaw rate on v tan(delta/N)/L (N the steering ratio, L
   the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation, on the samples
   whose tyres are linear (kinematic); beside the slope identify's steering gain and understeer
@@ -703,8 +705,8 @@ def delay_rows(k: dict, got: dict, imp) -> list[tuple]:
     min(0, that lag) and that lag (0.08 s allowed either side); a value on its zero bound does not
     agree, and identify's "cannot decide" gives no number to compare. The audit's response lag
     (the same cross-correlation as the reference's) is printed beside."""
-    lag = next((_found(imp, ("response_lag",), {"yaw_rate", "v", u}) for u in ("delta", "delta_cmd")
-                if _found(imp, ("response_lag",), {"yaw_rate", "v", u}) is not None), None)
+    found = [_found(imp, ("response_lag",), {"yaw_rate", "v", u}) for u in ("delta", "delta_cmd")]
+    lag = next((x for x in found if x is not None), None)
     delay = got.get("delay")
     total = None if delay is None or not math.isfinite(delay) else delay + (got.get("lag") or 0.0)
     verdict = _agree(None if total is None or math.isnan(k["delay"]) else
