@@ -8,8 +8,8 @@ r_m = r + b::
     L r_m = g (u v) + delta_0 v - K (v^2 r_m) + L b      (+ K v^2 b, negligible)
 
 so L r_m regressed on [u v, v, v^2 r_m, 1] gives g, delta_0, -K and L b. Steady windows: the input
-held within ``tolerance`` + ``relative`` |u| for ``settle`` s (plus the delay) before and during a
-window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
+held (held_input: within HELD_TOLERANCE + HELD_RELATIVE |u|) for ``settle`` s (plus the delay)
+before and during a window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
 10 %, moving; each window contributes its means. Only windows with |a_y| below
 ``max_lateral`` enter (the linear tyre's range).
 
@@ -43,6 +43,7 @@ class SteadyState:
     limit_how: str = ""
     limit_derived: bool = True             # False: too few windows where the tyres are surely linear to read it
     passed_over: int = 0
+    fixed_gain: float | None = None        # a measured wheel angle: g = 1, not fitted
 
     def as_dict(self) -> dict:
         return {"method": "ordinary least squares on steady windows: L r = g (u v) + delta_0 v - K v^2 r + L b",
@@ -54,10 +55,31 @@ class SteadyState:
                 "steer_offset": {"value": self.offset, "std": self.offset_std}, "gyro_bias": self.bias}
 
 
-def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window: float = 0.3, settle: float = 0.4,
-                   tolerance: float = 0.01, relative: float = 0.05) -> dict[str, np.ndarray]:
-    """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring); u is
-    taken ``delay`` s earlier than v and r."""
+HELD_TOLERANCE = 0.01        # rad: a steady input moves less than this ...
+HELD_RELATIVE = 0.05         # ... plus this share of its own level
+
+
+def held_input(u: np.ndarray, run: np.ndarray, width: int) -> np.ndarray:
+    """Per sample j: whether the input has been held over the ``width`` samples ending at j, in one
+    run: max - min <= HELD_TOLERANCE + HELD_RELATIVE max |u| over them (nan: not held). The one rule
+    of a steady input, for the steady-state regression's windows (steady_windows) and the log's
+    steady turns of the study check (diagnosis.study_fit.steady_turns)."""
+    n = len(u)
+    out = np.zeros(n, bool)
+    if width < 1 or n < width:
+        return out
+    win = sliding_window_view(np.asarray(u, float), width)
+    hi, lo = win.max(axis=1), win.min(axis=1)
+    with np.errstate(invalid="ignore"):
+        ok = (hi - lo) <= HELD_TOLERANCE + HELD_RELATIVE * np.maximum(np.abs(hi), np.abs(lo))
+    out[width - 1:] = ok & (run[width - 1:] == run[: n - width + 1])
+    return out
+
+
+def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window: float = 0.3,
+                   settle: float = 0.4) -> dict[str, np.ndarray]:
+    """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring; the input
+    held by held_input); u is taken ``delay`` s earlier than v and r."""
     h = float(np.median(np.diff(t)))
     nw, ns = max(2, int(round(window / h))), int(round((settle + delay) / h))
     n = len(t)
@@ -72,15 +94,14 @@ def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window
 
     lag = int(round(delay / h))
     u_width = ns + nw - lag                                         # input held over [k - ns, k + nw - lag)
-    _, u_hi, u_lo = window_stats(u, u_width)
+    held = held_input(u, run, u_width)
     v_mean, v_hi, v_lo = window_stats(v, nw)
     r_mean, _, _ = window_stats(r, nw)
     u_mean, _, _ = window_stats(u, nw)
     run_same = run[: n - nw + 1] == run[nw - 1:]
     ks = np.arange(ns, n - nw + 1)
-    u_level = np.maximum(np.abs(u_hi[ks - ns]), np.abs(u_lo[ks - ns]))
-    ok = ((u_hi[ks - ns] - u_lo[ks - ns]) <= tolerance + relative * u_level) & (v_lo[ks] >= min_speed) & \
-         ((v_hi[ks] - v_lo[ks]) <= 0.1 * v_mean[ks]) & run_same[ks] & (run[ks - ns] == run[ks])
+    ok = held[ks - ns + u_width - 1] & (v_lo[ks] >= min_speed) & \
+        ((v_hi[ks] - v_lo[ks]) <= 0.1 * v_mean[ks]) & run_same[ks] & (run[ks - ns] == run[ks])
     rows, next_free = [], 0
     for k in ks[ok]:
         if k - ns >= next_free:
@@ -120,7 +141,13 @@ def regression(w: dict[str, np.ndarray], L: float, max_lateral: float = math.inf
     else:
         g, g_sd, (d0, K, Lb), (d0_sd, K_sd, _) = fixed_gain, 0.0, beta, sd
     return SteadyState({k: x[keep] for k, x in w.items()}, float(g), float(g_sd), float(d0), float(d0_sd),
-                       float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral))
+                       float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral), fixed_gain=fixed_gain)
+
+
+def same_regression(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> SteadyState | None:
+    """``fit``'s regression (its |a_y| limit, its gain fixed or fitted) on windows ``w`` (give them
+    ``fit``'s windows' |a_y|, so that the same windows are kept)."""
+    return regression(w, L, max_lateral=fit.max_lateral, fixed_gain=fit.fixed_gain)
 
 
 def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.ndarray:
