@@ -8,7 +8,10 @@ code, Heun at 200 Hz) with drawn stiffnesses C_f, C_r; its steady cornering give
 K = m / L (l_r / C_f - l_f / C_r) from the truth's parameters alone."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
+
+import pytest
 
 from harness.truth_tractor import TABLE, make_log
 
@@ -70,3 +73,23 @@ def test_a_hunting_input_is_a_steady_turn_for_neither_tool():
     assert len(turns["v"]) > 100 and len(w["u"]) > 20
     assert np.allclose(turns["L_i"], 1.4, rtol=1e-6)                      # held at 0.1 rad, not the hunting 0.05
     assert np.allclose(w["u"], 0.1)
+
+
+@pytest.mark.slow
+def test_the_diagnosis_k_has_an_interval_from_its_refitted_scales_that_holds_the_truth(tmp_path):
+    """A healthy tractor with drawn stiffnesses (seed 2, 150 s) diagnosed against its baseline: the
+    diagnosis's K = m / L (l_r / (s_f C_f) - l_f / (s_r C_r)) gets a 95 % interval (delta method on
+    the refitted scales' covariance) that holds the truth's K, and identify's and the diagnosis's
+    are compared interval with interval."""
+    from agrobot.diagnosis.pipeline import diagnosis
+    from harness.hidden_effects import BASELINES
+
+    frame, truth = make_log(2, None, duration=150.0)
+    path = tmp_path / "tractor.parquet"
+    frame.to_parquet(path)
+    result, _ = diagnosis(path, BASELINES["tractor"], plots=False, workers=1)
+    (q,) = [q for q in result["shared_quantities"] if q["quantity"] == "understeer gradient"]
+    mine = q["estimates"]["diagnose"]
+    assert math.isfinite(mine["std"]) and mine["std"] > 0, q["line"]
+    assert mine["interval"][0] <= true_understeer(truth) <= mine["interval"][1], (mine, true_understeer(truth))
+    assert q["line"].split("; diagnose ")[1].split(" (")[0].count("[") == 1, q["line"]

@@ -18,9 +18,10 @@ sd_dyn^2) (K_sim carries the dynamic fit's uncertainty 1:1), one test of one dif
 intervals that merely overlap would let estimates 2.8 standard errors apart pass.
 
 Where these still disagree, the dynamic model does not hold the measured steady turns. Then (the
-rule of withheld_understeer): if the dynamic fit spans |a_y| beyond the steady turns' linear range,
-or that range was not read from the turns, the tyres' bend weighs on one estimate and not the
-other: no single K is concluded (both numbers and why). If both span the same linear |a_y|, K,
+rule of withheld_understeer): if the dynamic fit spans |a_y| beyond the steady turns' linear range
+(ended by a bend in the turns, or tyres saturating in the dynamic fit), or that range was not read
+from the turns, the tyres' bend weighs on one estimate and not the other: no single K is concluded
+(both numbers and why). If both span linear |a_y| only (neither finds a bend), K,
 defined by steady cornering (delta = L / R + K a_y), is what the steady turns measure directly, and
 b shows the regression unbiased for the dynamic model's behaviour: the steady turns' K_ss - b is
 concluded, the dynamic fit's beside it with the share by which its model misses the steady turns
@@ -118,9 +119,11 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
                 else f"the regression's bias on the dynamic model's yaw rate not measured")
     span = (f"the steady turns: {ss.used} windows at a held input with |a_y| <= {lim:.3g} m/s2 ({ss.limit_how}); the "
             f"dynamic fit: every segment, |a_y| up to {lateral_p99:.3g} m/s2 (99th percentile)")
+    # beyond the steady turns' range the dynamic fit weighs tyres that may bend, unless neither side
+    # found a bend: the turns linear up to their top, the dynamic fit's tyres linear over the whole log
+    past = lateral_p99 > 1.05 * lim and (ss.limit_bent or linear_range.get("saturation", True))
     same_span = False
-    if low is not None and lateral_p99 > 1.05 * lim and \
-            compare("K", "", ("low", *low), ("ss", k_ss, sd), "")["agree"]:
+    if low is not None and past and compare("K", "", ("low", *low), ("ss", k_ss, sd), "")["agree"]:
         why = (f"saturation not modelled: {span}, past the linear range; the same linear model fitted where the tyres "
                f"are linear gives K {_text(*low)}, agreeing with the steady turns: the tyres' bend, which the final "
                f"model lacks ({linear_range.get('how', '')}), reads there as more or less understeer")
@@ -129,13 +132,14 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
                f"linear range is not read and their K takes in the tyres' bend, weighted by {ss.used} held turns "
                f"where the dynamic fit weighs every segment alike (saturation not modelled: "
                f"{linear_range.get('how', '')})")
-    elif lateral_p99 > 1.05 * lim:
+    elif past:
         why = (f"different stretches: {span}; beyond the linear range the tyres' bend (modelled or not: "
                f"{linear_range.get('how', '')}) or a stiffness varying with speed weighs on the dynamic fit alone")
     else:
         same_span = twin is not None
         miss = 100 * (k_ss - understeer["value"]) / abs(k_ss) if k_ss else math.nan
-        why = (f"a different model structure over the same |a_y| ({span}): the dynamic model's steady turns miss the "
+        why = (f"a different model structure over the same linear |a_y| ({span}; neither finds a bend): the dynamic "
+               f"model's steady turns miss the "
                f"measured ones by {miss:+.1f} % in K: its K comes from two stiffnesses fitted to transients through "
                f"held relaxation lengths, inertia, a delay and a lag (a relaxation length off, a coarse step, a "
                f"stiffness varying with speed or a steering ratio varying with the angle pull it)")

@@ -707,10 +707,11 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
         lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
         return {**_quantity(lin_range, lr_sd, "m/s2"),
                 "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
-                       f"x {share:.3f} (shape {shape:.2f})"}
+                       f"x {share:.3f} (shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
     return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
-            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
+            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)",
+            "saturation": False}
 
 
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:

@@ -42,6 +42,7 @@ class SteadyState:
     max_lateral: float
     limit_how: str = ""
     limit_derived: bool = True             # False: too few windows where the tyres are surely linear to read it
+    limit_bent: bool = False               # the range ends where a bin of windows turns off the reference's gain
     passed_over: int = 0
     fixed_gain: float | None = None        # a measured wheel angle: g = 1, not fitted
 
@@ -159,8 +160,8 @@ def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.n
 
 
 def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, fixed_gain: float | None = None,
-                 per_bin: int = 8) -> tuple[float, str, bool]:
-    """(|a_y| limit [m/s2], how it was found, whether it was derived): the regression on the windows with |a_y| <= ``small``
+                 per_bin: int = 8) -> tuple[float, str, bool, bool]:
+    """(|a_y| limit [m/s2], how it was found, whether it was derived, whether a bin bent off): the regression on the windows with |a_y| <= ``small``
     is the reference; the windows above it, in bins of ``per_bin`` by |a_y|, stay linear while the
     median of yaw_gain_ratio lies within 3 standard errors of 1: the median's (1.25 sd / sqrt(n))
     and the reference's prediction's (delta method on its K and gain: v^2 sd_K / (L + K v^2),
@@ -169,7 +170,7 @@ def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, f
     ref = regression(w, L, max_lateral=small, fixed_gain=fixed_gain)
     if ref is None:
         return cap, (f"not derived (fewer than 7 steady windows with |a_y| <= {small:.3g} m/s2, or turns there at "
-                     f"one speed): the windows up to {cap:.3g} m/s2 are used"), False
+                     f"one speed): the windows up to {cap:.3g} m/s2 are used"), False, False
     a = np.abs(w["a_y"])
     ratio = yaw_gain_ratio(ref, w, L)
     v2 = w["v"] ** 2
@@ -184,21 +185,21 @@ def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, f
             return limit, (f"where the steady yaw gain stays within 3 standard errors of the regression's on the "
                            f"{ref.used} windows with |a_y| <= {small:.3g} m/s2: the {len(chunk)} windows at "
                            f"{a[chunk[0]]:.3g}-{a[chunk[-1]]:.3g} m/s2 turn {100 * (med - 1):+.1f} % (3 standard errors: "
-                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)"), True
+                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)"), True, True
         limit = float(a[chunk[-1]])
         if len(chunk) > per_bin:
             break
     limit = max(limit, min(small, cap))
     return limit, (f"every steady window up to {limit:.3g} m/s2 turns within 3 standard errors of the regression's on "
-                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2"), True
+                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2"), True, False
 
 
 def in_linear_range(w: dict[str, np.ndarray], L: float, small: float, cap: float,
                     fixed_gain: float | None = None) -> SteadyState | None:
     """The regression on the windows inside linear_limit's range (None: regression's reasons)."""
-    limit, how, derived = linear_limit(w, L, small, cap, fixed_gain)
+    limit, how, derived, bent = linear_limit(w, L, small, cap, fixed_gain)
     fit = regression(w, L, max_lateral=limit, fixed_gain=fixed_gain)
     if fit is not None:
-        fit.limit_how, fit.limit_derived = how, derived
+        fit.limit_how, fit.limit_derived, fit.limit_bent = how, derived, bent
         fit.passed_over = int((np.abs(w["a_y"]) > limit).sum())
     return fit
