@@ -81,7 +81,8 @@ def identify_side(rep: dict) -> dict:
         out["asymmetry"] = {**a, "how": "(g_left - g_right) / (g_left + g_right)"}
     K = rep.get("understeer_gradient") or {}
     if (k := _estimate(K)) is not None:
-        out["understeer_gradient"] = {**k, "how": "withheld: " + K.get("note", "") if K.get("withheld") else ""}
+        out["understeer_gradient"] = {**k, "how": "withheld: " + K.get("note", "") if K.get("withheld") else
+                                      K.get("from", "")}
     if "delay" in out:
         out["delay"]["how"] = {"delta_cmd": "from the command delta_cmd", "delta": "from the measured angle delta"}.get(
             rep.get("input"), "") + " to the yaw"

@@ -116,7 +116,7 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
     k_ss, lim = k_m - bias, ss.max_lateral
     measured = (f"the regression's {_text(k_m, sd)} on the measured yaw less its structural bias {bias:+.2g} (the same "
                 f"regression on the dynamic model's own yaw rate over the same windows gives {twin[0]:.3g})" if twin
-                else f"the regression's bias on the dynamic model's yaw rate not measured")
+                else "the regression's bias on the dynamic model's yaw rate not measured")
     span = (f"the steady turns: {ss.used} windows at a held input with |a_y| <= {lim:.3g} m/s2 ({ss.limit_how}); the "
             f"dynamic fit: every segment, |a_y| up to {lateral_p99:.3g} m/s2 (99th percentile)")
     # beyond the steady turns' range the dynamic fit weighs tyres that may bend, unless neither side
