@@ -224,11 +224,8 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
     g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
     linear_range = _linear_range(saturation, nl, log, min_speed)
-    # the independent check, steady turns in their linear range (a negative delay is left to the fit)
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
-    ss = in_linear_range(windows, L, LINEAR_TYRE, linear_range["value"], fixed_gain=None if command else 1.0)
+    windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
-    twin = model_steady_state(fits.model, final.values, log, min_speed, max(final.values["delay"], 0.0), windows, ss)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
                                         params_json.get("gyro_bias"), linear_range, L, min_speed,
                                         _low_range_understeer(fits, saturation), twin)
@@ -651,6 +648,17 @@ def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = T
     if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
     return char
+
+
+def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_speed: float, cap: float,
+                  command: bool):
+    """(the steady windows, their regression in the linear range up to ``cap``, the same regression
+    on the model's own yaw rate: comparisons.model_steady_state): the independent check on K (a
+    negative delay is left to the fit)."""
+    delay = max(values["delay"], 0.0)
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=delay)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=None if command else 1.0)
+    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss)
 
 
 def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
