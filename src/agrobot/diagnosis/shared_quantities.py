@@ -262,7 +262,8 @@ def _delay_structure(ident: dict, diag: dict, mine: dict, theirs: dict) -> list[
 
 def _understeer_structure(ident: dict, diag: dict, mine: dict) -> list[str]:
     """Where the two models' tyres differ: one saturates, or the diagnosis's stiffness changes with
-    speed; identify withholding its K (its two estimates disagree) is said with it."""
+    speed; identify withholding its K (its two estimates disagree), or taking it from the steady
+    turns, is said with it."""
     out = []
     kept = set(diag.get("effects", ()))
     if "speed_dependent_cornering" in kept:
@@ -273,6 +274,9 @@ def _understeer_structure(ident: dict, diag: dict, mine: dict) -> list[str]:
         out.append(f"a different model structure: {one} tyres saturate (K of their linear part), the other's are linear")
     if mine.get("how", "").startswith("withheld"):
         out.append(f"identify {mine['how']}")
+    elif mine.get("how", "").startswith("the steady-state regression"):
+        out.append(f"a different model structure: identify's K is {mine['how']}, read from steady turns; the "
+                   f"diagnosis's from cornering scales fitted to the yaw dynamics")
     return out
 
 
