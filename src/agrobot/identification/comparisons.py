@@ -12,7 +12,8 @@ read as a disagreement. So the regression is run a second time, on the same wind
 final dynamic model's own simulated yaw rate (model_steady_state): its K there, K_sim, against
 the model's K_dyn measures the regression's structural bias b = K_sim - K_dyn on this log's
 windows, and the steady turns' estimate set beside the dynamic fit is K_ss - b; its std is the
-regression's (b is a difference on noise-free yaw rates, its std is negligible beside it). They
+regression's (b is read on noise-free yaw rates, and the fit's uncertainty moves K_sim and K_dyn
+alike, so cancels in it to first order). They
 agree when measured steady and simulated steady do: |K_ss - K_sim| <= 1.96 sqrt(sd_ss^2 +
 sd_dyn^2) (K_sim carries the dynamic fit's uncertainty 1:1), one test of one difference; two 95 %
 intervals that merely overlap would let estimates 2.8 standard errors apart pass.
