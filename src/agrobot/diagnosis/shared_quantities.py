@@ -14,7 +14,8 @@ the diagnosis's is command_delay - steering_clock from the command, -steering_cl
 measured angle (steering_clock > 0: the yaw answers the angle the log shows later). The gyro bias:
 identify's gyro_bias, the diagnosis's yaw_rate_bias. The understeer gradient: identify's
 K = (1/c_f - 1/c_r) / g, the diagnosis's m / L (l_r / (s_f C_f) - l_f / (s_r C_r)) from the
-study's stiffnesses C and its refitted cornering scales s (the same K per unit axle load).
+study's stiffnesses C and its refitted cornering scales s (the same K per unit axle load), its
+interval by the delta method on the refitted parameters' covariance (yaw_covariance).
 
 A diagnosis parameter whose effect was not kept is held at the study's value (no interval). Two
 estimates agree when their 95 % intervals overlap (estimation.compare); otherwise every reason that
@@ -30,7 +31,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from agrobot.components.models.yaw_dynamics import GRAVITY
-from agrobot.estimation import Z95, compare
+from agrobot.estimation import (Z95, FitResult, compare, effective_size, forward_jacobian,
+                                solution_covariance)
+
+from .candidates import uncertain
 
 
 @dataclass(frozen=True)
@@ -77,7 +81,8 @@ def identify_side(rep: dict) -> dict:
         out["asymmetry"] = {**a, "how": "(g_left - g_right) / (g_left + g_right)"}
     K = rep.get("understeer_gradient") or {}
     if (k := _estimate(K)) is not None:
-        out["understeer_gradient"] = {**k, "how": "withheld: " + K.get("note", "") if K.get("withheld") else ""}
+        out["understeer_gradient"] = {**k, "how": "withheld: " + K.get("note", "") if K.get("withheld") else
+                                      K.get("from", "")}
     if "delay" in out:
         out["delay"]["how"] = {"delta_cmd": "from the command delta_cmd", "delta": "from the measured angle delta"}.get(
             rep.get("input"), "") + " to the yaw"
@@ -95,20 +100,50 @@ def identify_side(rep: dict) -> dict:
             "span": span}
 
 
-def understeer_of(final, tractor) -> dict:
+def yaw_covariance(replay, values: dict[str, float]) -> FitResult | None:
+    """The covariance of the yaw stage's refitted baseline parameters (candidates.uncertain: the
+    cornering and relaxation scales, the steering's time constant on a command-only log; those the
+    refit held are left out) at the final model's ``values``: the forward-difference Jacobian of the
+    yaw residuals on the fit part, and the one covariance rule, RSS / (n - k) x n / n_eff with a
+    parameter on its bound held (estimation.solution_covariance). The selection's final fit scores
+    the model without refitting, so keeps none. None: no yaw stage, or no cornering scale refitted."""
+    if "yaw" not in getattr(replay, "stages", ()):
+        return None
+    free = [p for p in uncertain(replay, "yaw") if p.name in values]
+    if not any(p.name in SCALES for p in free):
+        return None
+
+    def many(xs: list[np.ndarray]) -> list[np.ndarray]:
+        sets = [{**values, **{p.name: float(x) * p.scale for p, x in zip(free, xi)}} for xi in xs]
+        return [np.asarray(r, float) for r in replay.residuals_many("yaw", sets, "fit")]
+
+    x = np.array([values[p.name] / p.scale for p in free])
+    f0 = many([x])[0]
+    lo, hi = (np.array([getattr(p, side) / p.scale for p in free]) for side in ("lower", "upper"))
+    jac = forward_jacobian(many, x, lo, hi, rel_step=1e-3, f0=f0)
+    rss, n, n_eff = float(f0 @ f0), len(f0), effective_size(f0, updates=replay.updates("yaw"))
+    cov = solution_covariance(jac, 0.5 * rss, x, free, n, n_eff)
+    return FitResult(dict(values), tuple(free), cov, {"yaw": rss}, {"yaw": n}, {"yaw": n_eff})
+
+
+def understeer_of(final, tractor, covariance: FitResult | None = None) -> dict:
     """The diagnosis's understeer gradient K = m / L (l_r / (s_f C_f) - l_f / (s_r C_r)) from the
-    study's stiffnesses C and its refitted cornering scales s (delta method on the final fit's
-    covariance; held when neither scale is refitted)."""
+    study's stiffnesses C and its refitted cornering scales s, its std by the delta method,
+    dK/ds_f = -m l_r / (L C_f s_f^2), dK/ds_r = m l_f / (L C_r s_r^2), on the scales' covariance:
+    the final fit's where it keeps one, else ``covariance`` (yaw_covariance); held (the study's
+    K, no interval) when neither scale is refitted."""
     p, v = tractor, final.values
     L, sf, sr = p.l_f + p.l_r, v.get(SCALES[0], 1.0), v.get(SCALES[1], 1.0)
     K = p.m / L * (p.l_r / (sf * p.C_f) - p.l_f / (sr * p.C_r))
-    free = [n for n in SCALES if n in final.names and math.isfinite(final.std(n))]
-    sd = final.interval_of({SCALES[0]: -p.m * p.l_r / (L * p.C_f * sf ** 2),
-                            SCALES[1]: p.m * p.l_f / (L * p.C_r * sr ** 2)}) if free else math.nan
-    moved = free or sf != 1.0 or sr != 1.0
-    how = ("the study's stiffnesses x the refitted cornering scales" + ("" if free else " (the refit keeps no "
-                                                                         "covariance: no interval)")) if moved else \
-        "the study's stiffnesses"
+    grad = {SCALES[0]: -p.m * p.l_r / (L * p.C_f * sf ** 2), SCALES[1]: p.m * p.l_f / (L * p.C_r * sr ** 2)}
+    fits = [f for f in (final, covariance) if f is not None]
+    fit = next((f for f in fits if any(n in f.names and math.isfinite(f.std(n)) for n in SCALES)), None)
+    sd = fit.interval_of(grad) if fit is not None else math.nan
+    moved = fit is not None or sf != 1.0 or sr != 1.0
+    how = ("the study's stiffnesses x the refitted cornering scales" + (
+        "" if fit is None else " (delta method on the final fit's covariance)" if fit is final else
+        " (delta method on the yaw stage's covariance of the refitted parameters at the final values)")) \
+        if moved else "the study's stiffnesses"
     return {"value": K, "std": sd, "fixed": not moved, "how": how,
             "held": "neither cornering scale refitted on this log (the baseline refit's line says why)"}
 
@@ -132,7 +167,7 @@ def diagnosis_side(effects: list[dict], sel, replay, tractor) -> dict:
                                 "how": "the study's value", "held": f"{s.effect} not kept: {why}"}
     mask = replay.masks["yaw"]["fit"] if "yaw" in replay.masks else np.zeros(len(replay.t), bool)
     t = replay.t[mask]
-    out["understeer_gradient"] = understeer_of(sel.final, tractor)
+    out["understeer_gradient"] = understeer_of(sel.final, tractor, yaw_covariance(replay, sel.final.values))
     return {"parameters": out, "time_constant": float(values.get("steering_time_constant", math.nan)),
             "command_only": bool(getattr(replay, "command_only", False)), "wheelbase": tractor.l_f + tractor.l_r,
             "effects": sorted(kept),
@@ -227,7 +262,8 @@ def _delay_structure(ident: dict, diag: dict, mine: dict, theirs: dict) -> list[
 
 def _understeer_structure(ident: dict, diag: dict, mine: dict) -> list[str]:
     """Where the two models' tyres differ: one saturates, or the diagnosis's stiffness changes with
-    speed; identify withholding its K (its two estimates disagree) is said with it."""
+    speed; identify withholding its K (its two estimates disagree), or taking it from the steady
+    turns, is said with it."""
     out = []
     kept = set(diag.get("effects", ()))
     if "speed_dependent_cornering" in kept:
@@ -238,6 +274,9 @@ def _understeer_structure(ident: dict, diag: dict, mine: dict) -> list[str]:
         out.append(f"a different model structure: {one} tyres saturate (K of their linear part), the other's are linear")
     if mine.get("how", "").startswith("withheld"):
         out.append(f"identify {mine['how']}")
+    elif mine.get("how", "").startswith("the steady-state regression"):
+        out.append(f"a different model structure: identify's K is {mine['how']}, read from steady turns; the "
+                   f"diagnosis's from cornering scales fitted to the yaw dynamics")
     return out
 
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from agrobot.identification.ordinary_driving import study_plant
+from agrobot.identification.steady_state import held_input
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
@@ -24,8 +24,9 @@ SIZE = math.log(1.3)         # a shipped study is suggested only for a vehicle o
 
 def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
     """The log's steady turns in the tyres' linear range (None: no v, yaw_rate and delta or
-    delta_cmd, or under 50 moving samples): samples whose steering input has stayed within
-    0.02 rad + 10 % of itself for STEADY s (the yaw rate has settled), |input| above 0.03 rad, turning
+    delta_cmd, or under 50 moving samples): samples whose steering input has been held for STEADY s
+    (the yaw rate has settled; identification.steady_state.held_input, the rule of the steady-state
+    regression's windows), |input| above 0.03 rad, turning
     the input's way, with both the measured |v r| and the kinematic v^2 tan|delta| / L (L: the
     study's ``wheelbase`` when given) under LINEAR_LATERAL. Selected on the input as well as the
     yaw rate: a tyre that saturates turns less, and turns selected on the yaw rate alone lengthen
@@ -39,12 +40,10 @@ def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
     moving = ok & (v > max(0.2, 0.1 * float(np.percentile(v[ok], 90)))) if ok.any() else ok
     if moving.sum() < 50:
         return None
-    n = max(2, int(round(STEADY / float(np.median(np.diff(t))))))
-    held = sliding_window_view(np.r_[np.full(n - 1, np.inf), d], n)     # the first n - 1: not held STEADY s yet
+    held = held_input(d, np.zeros(len(d), int), max(2, int(round(STEADY / float(np.median(np.diff(t)))))))
     with np.errstate(invalid="ignore"):
-        spread = np.max(held, axis=1) - np.min(held, axis=1)
         kin = v ** 2 * np.tan(np.abs(d)) / wheelbase if wheelbase else np.zeros_like(v)
-        sel = (moving & (spread <= 0.02 + 0.1 * np.abs(d)) & (np.abs(d) > 0.03) & (np.sign(d) == np.sign(r))
+        sel = (moving & held & (np.abs(d) > 0.03) & (np.sign(d) == np.sign(r))
                & (np.abs(r) > 0.01) & (np.abs(v * r) < LINEAR_LATERAL) & (kin < LINEAR_LATERAL))
     return {"from": steer, "v": v[sel], "L_i": v[sel] * np.tan(np.abs(d[sel])) / np.abs(r[sel]),
             "moving_speed": v[moving], "steering": np.abs(d[moving]), "lateral": np.abs(v * r)[moving]}

@@ -34,7 +34,7 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
 
-from .comparisons import course_bias, pair, understeer_pair, withheld_understeer
+from .comparisons import course_bias, model_steady_state, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict
@@ -224,14 +224,13 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
     g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
     linear_range = _linear_range(saturation, nl, log, min_speed)
-    # the independent check, steady turns in their linear range (a negative delay is left to the fit)
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=max(final.values["delay"], 0.0))
-    ss = in_linear_range(windows, L, LINEAR_TYRE, linear_range["value"], fixed_gain=None if command else 1.0)
+    windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
                                         params_json.get("gyro_bias"), linear_range, L, min_speed,
-                                        _low_range_understeer(fits, saturation))
-    understeer, char = withheld_understeer(understeer, char, comparisons)
+                                        _low_range_understeer(fits, saturation), twin)
+    understeer, char = withheld_understeer(understeer, char, comparisons, lambda k, sd: characteristic_speed(k, sd, L))
+    K, K_sd = understeer["value"], understeer["std"]
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
@@ -627,6 +626,13 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd) and not alike),
                            deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
                                                                     if alike else {}))
+    char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike)
+    return K, K_sd, understeer, char
+
+
+def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None) -> dict:
+    """The characteristic (K > 0) or critical (K < 0) speed sqrt(L / |K|) with its std (delta
+    method), identifiable where K is (``alike``: why K is not)."""
     if K > 0:
         vch = math.sqrt(L / K)
         char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
@@ -638,10 +644,21 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     else:
         char = {"kind": "neutral steer", "value": math.inf, "std": math.inf, "unit": "m/s"}
     char["interval"] = [char["value"] - Z95 * char["std"], char["value"] + Z95 * char["std"]]
-    char["identifiable"] = understeer["identifiable"]          # v_ch is K's: identifiable where K is
-    if not understeer["identifiable"]:
+    char["identifiable"] = identifiable          # v_ch is K's: identifiable where K is
+    if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
-    return K, K_sd, understeer, char
+    return char
+
+
+def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_speed: float, cap: float,
+                  command: bool):
+    """(the steady windows, their regression in the linear range up to ``cap``, the same regression
+    on the model's own yaw rate: comparisons.model_steady_state): the independent check on K (a
+    negative delay is left to the fit)."""
+    delay = max(values["delay"], 0.0)
+    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=delay)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=None if command else 1.0)
+    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss)
 
 
 def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
@@ -698,10 +715,11 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
         lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
         return {**_quantity(lin_range, lr_sd, "m/s2"),
                 "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
-                       f"x {share:.3f} (shape {shape:.2f})"}
+                       f"x {share:.3f} (shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
     return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
-            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)"}
+            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)",
+            "saturation": False}
 
 
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
@@ -779,16 +797,17 @@ def physical_checks(frame, log, model, values: dict, segs) -> dict:
 
 
 def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, delay_q, bias_q, linear_range,
-                          L: float, min_speed: float, low=None) -> list[dict]:
+                          L: float, min_speed: float, low=None, twin=None) -> list[dict]:
     """The pairs of identification.comparisons this log allows: K (dynamic fit / steady states in
-    their linear range, understeer_pair; ``low``: the dynamic fit's K where |a_y| <= LINEAR_TYRE),
+    their linear range, understeer_pair; ``low``: the dynamic fit's K where |a_y| <= LINEAR_TYRE; ``twin``:
+    the regression on the model's own yaw rate, comparisons.model_steady_state),
     the delay (fit / cross-correlation of the gyro against the fitted model on the held-out
     segments: a timing the model misses shows as a lag), the gyro bias (fit / GNSS course)."""
     out = []
     if ss:
         moving = np.abs(log.a_y[log.v >= min_speed])
         out.append(understeer_pair(understeer, ss, linear_range, float(np.percentile(moving, 99)) if len(moving) else 0.0,
-                                   low))
+                                   low, twin))
     pieces = [(r_test[i][test_segs.scored[i]], pred[i][test_segs.scored[i]]) for i in range(len(test_segs.idx))
               if test_segs.scored[i].sum() >= 10]
     if pieces and math.isfinite(delay_q["value"]):
@@ -836,7 +855,7 @@ def summary(report: dict) -> str:
     K = report["understeer_gradient"]
     if K["identifiable"]:
         ch = report["characteristic_speed"]
-        lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)",
+        lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)" + (f", {K['from']}" if "from" in K else ""),
                   f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s"]
     else:       # neither K nor the speed it sets is printed as a result
         lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "

@@ -8,8 +8,8 @@ r_m = r + b::
     L r_m = g (u v) + delta_0 v - K (v^2 r_m) + L b      (+ K v^2 b, negligible)
 
 so L r_m regressed on [u v, v, v^2 r_m, 1] gives g, delta_0, -K and L b. Steady windows: the input
-held within ``tolerance`` + ``relative`` |u| for ``settle`` s (plus the delay) before and during a
-window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
+held (held_input: within HELD_TOLERANCE + HELD_RELATIVE |u|) for ``settle`` s (plus the delay)
+before and during a window of ``window`` s (the yaw dynamics settle in a few tenths of a second), the speed within
 10 %, moving; each window contributes its means. Only windows with |a_y| below
 ``max_lateral`` enter (the linear tyre's range).
 
@@ -42,7 +42,9 @@ class SteadyState:
     max_lateral: float
     limit_how: str = ""
     limit_derived: bool = True             # False: too few windows where the tyres are surely linear to read it
+    limit_bent: bool = False               # the range ends where a bin of windows turns off the reference's gain
     passed_over: int = 0
+    fixed_gain: float | None = None        # a measured wheel angle: g = 1, not fitted
 
     def as_dict(self) -> dict:
         return {"method": "ordinary least squares on steady windows: L r = g (u v) + delta_0 v - K v^2 r + L b",
@@ -54,10 +56,31 @@ class SteadyState:
                 "steer_offset": {"value": self.offset, "std": self.offset_std}, "gyro_bias": self.bias}
 
 
-def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window: float = 0.3, settle: float = 0.4,
-                   tolerance: float = 0.01, relative: float = 0.05) -> dict[str, np.ndarray]:
-    """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring); u is
-    taken ``delay`` s earlier than v and r."""
+HELD_TOLERANCE = 0.01        # rad: a steady input moves less than this ...
+HELD_RELATIVE = 0.05         # ... plus this share of its own level
+
+
+def held_input(u: np.ndarray, run: np.ndarray, width: int) -> np.ndarray:
+    """Per sample j: whether the input has been held over the ``width`` samples ending at j, in one
+    run: max - min <= HELD_TOLERANCE + HELD_RELATIVE max |u| over them (nan: not held). The one rule
+    of a steady input, for the steady-state regression's windows (steady_windows) and the log's
+    steady turns of the study check (diagnosis.study_fit.steady_turns)."""
+    n = len(u)
+    out = np.zeros(n, bool)
+    if width < 1 or n < width:
+        return out
+    win = sliding_window_view(np.asarray(u, float), width)
+    hi, lo = win.max(axis=1), win.min(axis=1)
+    with np.errstate(invalid="ignore"):
+        ok = (hi - lo) <= HELD_TOLERANCE + HELD_RELATIVE * np.maximum(np.abs(hi), np.abs(lo))
+    out[width - 1:] = ok & (run[width - 1:] == run[: n - width + 1])
+    return out
+
+
+def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window: float = 0.3,
+                   settle: float = 0.4) -> dict[str, np.ndarray]:
+    """Means of (u, v, r) over non-overlapping steady windows (see the module's docstring; the input
+    held by held_input); u is taken ``delay`` s earlier than v and r."""
     h = float(np.median(np.diff(t)))
     nw, ns = max(2, int(round(window / h))), int(round((settle + delay) / h))
     n = len(t)
@@ -72,15 +95,14 @@ def steady_windows(t, u, v, r, run, min_speed: float, delay: float = 0.0, window
 
     lag = int(round(delay / h))
     u_width = ns + nw - lag                                         # input held over [k - ns, k + nw - lag)
-    _, u_hi, u_lo = window_stats(u, u_width)
+    held = held_input(u, run, u_width)
     v_mean, v_hi, v_lo = window_stats(v, nw)
     r_mean, _, _ = window_stats(r, nw)
     u_mean, _, _ = window_stats(u, nw)
     run_same = run[: n - nw + 1] == run[nw - 1:]
     ks = np.arange(ns, n - nw + 1)
-    u_level = np.maximum(np.abs(u_hi[ks - ns]), np.abs(u_lo[ks - ns]))
-    ok = ((u_hi[ks - ns] - u_lo[ks - ns]) <= tolerance + relative * u_level) & (v_lo[ks] >= min_speed) & \
-         ((v_hi[ks] - v_lo[ks]) <= 0.1 * v_mean[ks]) & run_same[ks] & (run[ks - ns] == run[ks])
+    ok = held[ks - ns + u_width - 1] & (v_lo[ks] >= min_speed) & \
+        ((v_hi[ks] - v_lo[ks]) <= 0.1 * v_mean[ks]) & run_same[ks] & (run[ks - ns] == run[ks])
     rows, next_free = [], 0
     for k in ks[ok]:
         if k - ns >= next_free:
@@ -120,7 +142,13 @@ def regression(w: dict[str, np.ndarray], L: float, max_lateral: float = math.inf
     else:
         g, g_sd, (d0, K, Lb), (d0_sd, K_sd, _) = fixed_gain, 0.0, beta, sd
     return SteadyState({k: x[keep] for k, x in w.items()}, float(g), float(g_sd), float(d0), float(d0_sd),
-                       float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral))
+                       float(K), float(K_sd), float(Lb / L), int(len(y)), float(max_lateral), fixed_gain=fixed_gain)
+
+
+def same_regression(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> SteadyState | None:
+    """``fit``'s regression (its |a_y| limit, its gain fixed or fitted) on windows ``w`` (give them
+    ``fit``'s windows' |a_y|, so that the same windows are kept)."""
+    return regression(w, L, max_lateral=fit.max_lateral, fixed_gain=fit.fixed_gain)
 
 
 def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.ndarray:
@@ -132,8 +160,8 @@ def yaw_gain_ratio(fit: SteadyState, w: dict[str, np.ndarray], L: float) -> np.n
 
 
 def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, fixed_gain: float | None = None,
-                 per_bin: int = 8) -> tuple[float, str, bool]:
-    """(|a_y| limit [m/s2], how it was found, whether it was derived): the regression on the windows with |a_y| <= ``small``
+                 per_bin: int = 8) -> tuple[float, str, bool, bool]:
+    """(|a_y| limit [m/s2], how it was found, whether it was derived, whether a bin bent off): the regression on the windows with |a_y| <= ``small``
     is the reference; the windows above it, in bins of ``per_bin`` by |a_y|, stay linear while the
     median of yaw_gain_ratio lies within 3 standard errors of 1: the median's (1.25 sd / sqrt(n))
     and the reference's prediction's (delta method on its K and gain: v^2 sd_K / (L + K v^2),
@@ -142,7 +170,7 @@ def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, f
     ref = regression(w, L, max_lateral=small, fixed_gain=fixed_gain)
     if ref is None:
         return cap, (f"not derived (fewer than 7 steady windows with |a_y| <= {small:.3g} m/s2, or turns there at "
-                     f"one speed): the windows up to {cap:.3g} m/s2 are used"), False
+                     f"one speed): the windows up to {cap:.3g} m/s2 are used"), False, False
     a = np.abs(w["a_y"])
     ratio = yaw_gain_ratio(ref, w, L)
     v2 = w["v"] ** 2
@@ -157,21 +185,21 @@ def linear_limit(w: dict[str, np.ndarray], L: float, small: float, cap: float, f
             return limit, (f"where the steady yaw gain stays within 3 standard errors of the regression's on the "
                            f"{ref.used} windows with |a_y| <= {small:.3g} m/s2: the {len(chunk)} windows at "
                            f"{a[chunk[0]]:.3g}-{a[chunk[-1]]:.3g} m/s2 turn {100 * (med - 1):+.1f} % (3 standard errors: "
-                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)"), True
+                           f"{100 * allowed:.1f} %; tyres past their bend, or a steering map bending with the angle)"), True, True
         limit = float(a[chunk[-1]])
         if len(chunk) > per_bin:
             break
     limit = max(limit, min(small, cap))
     return limit, (f"every steady window up to {limit:.3g} m/s2 turns within 3 standard errors of the regression's on "
-                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2"), True
+                   f"the {ref.used} windows with |a_y| <= {small:.3g} m/s2"), True, False
 
 
 def in_linear_range(w: dict[str, np.ndarray], L: float, small: float, cap: float,
                     fixed_gain: float | None = None) -> SteadyState | None:
     """The regression on the windows inside linear_limit's range (None: regression's reasons)."""
-    limit, how, derived = linear_limit(w, L, small, cap, fixed_gain)
+    limit, how, derived, bent = linear_limit(w, L, small, cap, fixed_gain)
     fit = regression(w, L, max_lateral=limit, fixed_gain=fixed_gain)
     if fit is not None:
-        fit.limit_how, fit.limit_derived = how, derived
+        fit.limit_how, fit.limit_derived, fit.limit_bent = how, derived, bent
         fit.passed_over = int((np.abs(w["a_y"]) > limit).sum())
     return fit
