@@ -80,10 +80,16 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
     vehicle; the class's default outline where the study gives no dimensions). ``antenna``: the
     study's antenna from the rear axle [m] (a reference point's offset is from it)."""
     ctx = VehicleContext(vehicle, wheelbase, l_r, speed, antenna)
-    before = list(before) + [n for n in [ctx.defaults_note()] if n and vehicle.declared]
     verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue)
-    verdict["before"] = before
+    verdict["before"] = said_before(before, ctx)
     return verdict
+
+
+def said_before(before: Iterable[str], ctx: VehicleContext) -> list[str]:
+    """What is said before any verdict, also before a refusal: ``before`` (the study not being the
+    log's vehicle, a log in the kinematic regime), then, for a study whose [vehicle] table gives no
+    length and width, the class's default outline the values are judged against."""
+    return list(before) + [n for n in [ctx.defaults_note()] if n and ctx.vehicle.declared]
 
 
 def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
