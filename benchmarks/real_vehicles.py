@@ -154,7 +154,7 @@ def plausible(res: dict, wheelbase: float | None) -> str:
             if abs(math.log(other / wheelbase)) > math.log(SIZE):
                 said.append(f"suggests a study of wheelbase {other:.3g} m for a vehicle of {wheelbase:.3g} m")
     elif mine.get("wheelbase") and wheelbase and abs(math.log(mine["wheelbase"] / wheelbase)) > math.log(WHEELBASE) \
-            and res["verdict"] != "steering_gain":
+            and res["verdict"] != "steering_gain" and not any("more than 10 %" in n for n in res.get("before_verdict") or []):
         said.append(f"the log's turns give a wheelbase of {mine['wheelbase']:.3g} m against the declared "
                     f"{wheelbase:.3g} m, and the verdict does not say why")
     said += [f"{r['name']} on its {r['at_bound']} bound" for r in res.get("baseline_refit_summary") or [] if r["at_bound"]]
@@ -194,7 +194,9 @@ def steady_turn_gains(log, L: float) -> str:
 def identified(res: dict, piece, log, name: str, study) -> tuple[list, dict]:
     """(identify's comparisons, its cells): the model diagnose shares with identify on the stretch it
     judged, else identify on the whole log."""
+    from agrobot.identification import skid_steer
     from agrobot.identification.ordinary_driving import identify_driving
+    from agrobot.identification.vehicle import Vehicle
     from agrobot.orchestrator.errors import InputError
 
     rep = (res.get("identified_vehicle") or {}).get("identified")
@@ -209,6 +211,8 @@ def identified(res: dict, piece, log, name: str, study) -> tuple[list, dict]:
                 f"{math.degrees(held['rms']):.3g}; {math.degrees(held['diagnosis_rms']):.3g} ({held['seconds']:.0f} s)")
         return res["identified_vehicle"].get("comparisons", []), ident
     seconds = float(log["t"].iloc[-1] - log["t"].iloc[0])
+    if skid_steer.applies(log, Vehicle.of(study)):
+        return [], skid_steer_cells(log, name, study, seconds)
     try:
         full = identify_driving(log, name, study)
     except InputError as exc:
@@ -220,6 +224,19 @@ def identified(res: dict, piece, log, name: str, study) -> tuple[list, dict]:
         "held-out fit [%]": fmt(full["held_out_fit"], "{:.0f}") if "held_out_fit" in full else "-",
         "tyre saturation": (f"mu {saturation['parameters']['friction']['value']:.2f}" if saturation.get("found")
                             else "not found" if saturation else "-")}
+
+
+def skid_steer_cells(log, name: str, study, seconds: float) -> dict:
+    """identify's skid-steer model (the yaw rate against a turn-rate input): its yaw gain, delay,
+    held-out fit and its own plausibility findings."""
+    from agrobot.identification.skid_steer import identify_skid_steer
+
+    rep = identify_skid_steer(log, name, study)
+    found = rep["plausibility"]["findings"]
+    return {"identified on": f"all {seconds:.0f} s, skid-steer model against {rep['input']}",
+            "delay [s]": fmt(rep["delay"]), "held-out fit [%]": f"{rep['held_out_fit']['value']:.0f}",
+            "tyre saturation": "-", "skid-steer yaw gain (B / B_eff)": fmt(rep["parameters"]["yaw_gain"]),
+            "skid-steer plausibility": "yes" if not found else "no: " + "; ".join(map(str, found))}
 
 
 def judged(rec: dict, roots: dict, folder: Path, keep: bool) -> dict:

@@ -432,7 +432,7 @@ def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None
     p = baseline.tractor
     result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p))
     result["before_verdict"] = said_before([mismatch] if mismatch else [],
-                                           VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0))
+                                           VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0), result["log_vehicle"])
 
 
 def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_name: str, default_study: bool,
@@ -500,7 +500,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
-                       before=[x for x in (mismatch, kinematic(share)) if x])
+                       before=[x for x in (mismatch, kinematic(share)) if x], turns=mine or None)
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     if (gain := steering_gain_check(effects, mine)) is not None:
         verdict["bullets"].append(gain[0])
