@@ -57,11 +57,11 @@ def run(args: argparse.Namespace) -> int:
                       overwrite=args.overwrite, workers=args.workers, screen=not args.no_screen).result
     if result.get("recording"):
         print(describe(result["recording"]))
+    for note in result.get("before_verdict", []):
+        print(f"before the verdict: {note}")
     if result["verdict"] == CANNOT_DECIDE:
         print(f"error: {result['reason']}\nverdict: {CANNOT_DECIDE} (written to {args.out}/diagnosis.json)", file=sys.stderr)
         return 2
-    for note in result.get("before_verdict", []):
-        print(f"before the verdict: {note}")
     print(f"verdict: {result['verdict']} ({result['verdict_status']}): {result['verdict_statement']}")
     for bullet in result.get("verdict_bullets", []):
         print(f"  - {bullet}")

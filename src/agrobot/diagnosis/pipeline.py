@@ -35,9 +35,9 @@ from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .shared_quantities import diagnosis_side, identify_side, shared_quantities
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import kinematic, steering_gain_check, study_understeer, understeer
+from .plausibility import VehicleContext, kinematic, steering_gain_check, study_understeer, understeer
 from .study_fit import study_check
-from .verdict import audit_findings, conclude
+from .verdict import audit_findings, conclude, said_before
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
@@ -418,8 +418,21 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     frame, note = coarser_clock(frame)
     said = measured.text if measured is not None and measured.kind != "gyro" else None
     note = "; ".join(x for x in (stretch, note, said) if x) or None
-    replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+    try:
+        replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+    except CannotDecide:
+        _said_before_refusal(result, frame, baseline, study_path.name)
+        raise
     return study, baseline, frame, replay, note
+
+
+def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None:
+    """A log too short or too still to judge still says what comes before any verdict: the log's turns
+    not being the study's vehicle (study_check), the class's default outline (verdict.said_before)."""
+    p = baseline.tractor
+    result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p))
+    result["before_verdict"] = said_before([mismatch] if mismatch else [],
+                                           VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0), result["log_vehicle"])
 
 
 def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_name: str, default_study: bool,
@@ -487,7 +500,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
-                       before=[x for x in (mismatch, kinematic(share)) if x])
+                       before=[x for x in (mismatch, kinematic(share)) if x], turns=mine or None)
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     if (gain := steering_gain_check(effects, mine)) is not None:
         verdict["bullets"].append(gain[0])

@@ -184,3 +184,21 @@ def steering_gain_check(effects: list[dict], turns: dict | None) -> tuple[str, b
             f"{turns['study_wheelbase']:.3g} m): ")
     return text + ("they agree" if agree else "they disagree: the fitted gain also takes up what the model lacks in "
                    "harder turns (tyres, understeer); the steady linear turns' is the steering map's"), agree
+
+
+DECLARED = math.log(1.1)      # the log's turns and the study's wheelbase more than 10 % apart: said with the evidence
+
+
+def wheelbase_off(turns: dict | None, mismatch: float = math.log(1.3)) -> str | None:
+    """What the log's steady linear turns say of a study whose wheelbase they miss by more than 10 %
+    but not by the ``mismatch`` (log ratio) at which the study is named as another vehicle
+    (``turns``: study_fit.log_vehicle with the study's wheelbase; None: within 10 %, or no turns)."""
+    if not turns or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return None
+    ratio = turns["wheelbase"] / turns["study_wheelbase"]
+    if abs(math.log(ratio)) <= DECLARED or abs(math.log(ratio)) > mismatch:
+        return None
+    return (f"the log's steady turns under {turns.get('linear_lateral', 2.0):g} m/s2 ({turns.get('samples', 0)} samples) "
+            f"give a wheelbase of {turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m "
+            f"({100 * (ratio - 1):+.0f} %, more than 10 %): the study's wheelbase, or its steering map's gain (the "
+            f"wheels turning {1 / ratio:.2g} x the input), is off; the verdict's values are of the study's vehicle")

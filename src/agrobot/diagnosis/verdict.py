@@ -22,7 +22,7 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import VehicleContext
+from .plausibility import VehicleContext, wheelbase_off
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -72,18 +72,28 @@ def _judge(effect: dict, ctx: VehicleContext, rules: Mapping[str, Effect]) -> li
 def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
              audit: list[dict], vehicle, wheelbase: float, l_r: float, speed: float,
              catalogue: Iterable[Effect] = CATALOGUE, antenna: tuple[float, float] = (0.0, 0.0),
-             before: Iterable[str] = ()) -> dict:
+             before: Iterable[str] = (), turns: dict | None = None) -> dict:
     """The verdict object: ``id`` (an effect id, 'unexplained' or 'none'), ``status`` (conclusive,
     inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line),
     ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included,
     and ``before``: what is said before any verdict (``before`` given: the study not being the log's
-    vehicle; the class's default outline where the study gives no dimensions). ``antenna``: the
+    vehicle; the log's ``turns``, study_fit.log_vehicle, off the study's wheelbase; the class's default
+    outline where the study gives no dimensions). ``antenna``: the
     study's antenna from the rear axle [m] (a reference point's offset is from it)."""
     ctx = VehicleContext(vehicle, wheelbase, l_r, speed, antenna)
-    before = list(before) + [n for n in [ctx.defaults_note()] if n and vehicle.declared]
     verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue)
-    verdict["before"] = before
+    verdict["before"] = said_before(before, ctx, turns)
     return verdict
+
+
+def said_before(before: Iterable[str], ctx: VehicleContext, turns: dict | None = None) -> list[str]:
+    """What is said before any verdict, also before a refusal: ``before`` (the study not being the
+    log's vehicle, a log in the kinematic regime), the log's steady ``turns`` (study_fit.log_vehicle)
+    missing the study's wheelbase by more than 10 % (plausibility.wheelbase_off), then, for a study
+    whose [vehicle] table gives no length and width, the class's default outline the values are
+    judged against."""
+    notes = [wheelbase_off(turns), ctx.defaults_note() if ctx.vehicle.declared else None]
+    return list(before) + [n for n in notes if n]
 
 
 def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
