@@ -20,8 +20,9 @@
 """
 from __future__ import annotations
 
+
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -196,6 +197,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
     L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
+    p, L_from = plant_on_wheelbase(p, L, L_from)
     frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
@@ -327,6 +329,19 @@ def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, st
     if study is not None:
         return p.l_f + p.l_r, f"l_f + l_r of the yaw plant of {where} (--wheelbase gives the vehicle's)"
     return p.l_f + p.l_r, "the paper tractor's l_f + l_r: no study and no --wheelbase given (either gives the vehicle's)"
+
+
+def plant_on_wheelbase(p: TractorParameters, L: float, L_from: str) -> tuple[TractorParameters, str]:
+    """The yaw plant's axles on the wheelbase used: l_f + l_r scaled to L where they differ by more
+    than 1 % (the study's l_f / (l_f + l_r) kept), so that the dynamic fit's K = m (l_r/C_f - l_f/C_r) / L
+    and the steady turns' v tan(u) / L stand on one wheelbase; said in the wheelbase's source."""
+    plant = p.l_f + p.l_r
+    if abs(plant - L) <= 0.01 * L:
+        return p, L_from
+    k = L / plant
+    scaled = replace(p, l_f=p.l_f * k, l_r=p.l_r * k)
+    return scaled, (f"{L_from}; the yaw plant's l_f + l_r ({plant:.3g} m) scaled to it: l_f {scaled.l_f:.3g} m, "
+                    f"l_r {scaled.l_r:.3g} m")
 
 
 def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
