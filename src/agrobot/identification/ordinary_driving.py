@@ -39,8 +39,8 @@ from .comparisons import course_bias, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict
-from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
-                      fit, fit_percent, steady_state_gain, understeer_gradient)
+from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
+                      cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -48,6 +48,7 @@ from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
+LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
@@ -448,7 +449,7 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         say(bound)
     with Work(say, "fitting the vehicle models (linear, linear range, tyre saturation)", 3, "fits") as work:
         say("fitting the linear model")
-        linear = fit(model, free, start, fixed, fit_segs)
+        linear = _steering_geometry(model, fit(model, free, start, fixed, fit_segs), free, fixed, fit_segs, notes)
         work.step()
         a_fit = np.abs(log.a_y[fit_segs.idx])
         low = a_fit <= LINEAR_TYRE
@@ -471,6 +472,29 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
+
+
+def _steering_geometry(model: YawModel, small: FitResult, free: list[Parameter], fixed: dict, segs: Segments,
+                       notes: list[str]) -> FitResult:
+    """The linear fit under the geometry that fits the yaw better, said: where the wheel angle
+    reaches LARGE_ANGLE (tan w exceeds w by 1 %) the model is fitted again driven by tan w
+    (driving.ACKERMANN: an Ackermann machine turns on r = v tan w / L when its tyres do not slip);
+    the one with the smaller residual sum of squares (same parameters) is kept on ``model``."""
+    u = np.abs(model.log.u[segs.idx][segs.scored])
+    reach = float(np.percentile(u, 99)) if len(u) else 0.0
+    if reach < LARGE_ANGLE:
+        return small
+    model.geometry = ACKERMANN
+    ackermann = fit(model, free, small.values, fixed, segs)
+    keep = ackermann if ackermann.rss_total < small.rss_total else small
+    model.geometry = ACKERMANN if keep is ackermann else SMALL_ANGLE
+    rms = {k: math.sqrt(f.rss_total / max(f.n_total, 1)) for k, f in (("tan", ackermann), ("w", small))}
+    chosen, other = ("tan w", "w") if keep is ackermann else ("w", "tan w")
+    notes.append(f"steering geometry: the wheel angle reaches {reach:.2g} rad (99th percentile), where tan w exceeds w "
+                 f"by {100 * (math.tan(reach) / reach - 1):.0f} %: the yaw plant is driven by {chosen} (yaw RMS "
+                 f"{rms['tan' if keep is ackermann else 'w']:.3g} rad/s), passed over: {other} (RMS "
+                 f"{rms['w' if keep is ackermann else 'tan']:.3g} rad/s); the data choose, no option")
+    return keep
 
 
 @dataclass
