@@ -38,7 +38,7 @@ from agrobot.orchestrator.work_progress import Work
 from .comparisons import course_bias, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
-from .delay_bound import DELAY_LIMIT, delay_verdict
+from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
@@ -611,7 +611,11 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
                  for d in (first.values["delay"], -0.1)), key=lambda f: f.rss_total)          # from beyond it
     shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
     verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
-    if shaping:
+    tau, lag = final.values["delay"], final.values.get("lag", 0.0)
+    if not shaping and not on_zero and tau < 0 < lag:       # a lead traded against the lag: judged on tau + T
+        verdict = traded_verdict(_parameters(final, free, fits)[0]["delay"], before[0]["delay"], lag, tau + lag,
+                                 final.interval_of({"delay": 1.0, "lag": 1.0}))
+    if shaping or verdict["verdict"] == "below its upper limit" and "net_delay" in verdict:
         return first, {**before[0], "delay": verdict}, before[1]
     params_json, stiff = _parameters(final, free, fits)
     params_json["delay"] = verdict
