@@ -190,10 +190,12 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False, wheelbase: float | None = None) -> dict:
+                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto") -> dict:
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
     Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
-    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of."""
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of;
+    ``geometry``: how the wheel angle w enters the single-track model ("auto", "w", "tan":
+    _steering_geometry)."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
@@ -217,7 +219,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         say("kinematic regime: fitting the steering map")
         return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
                           measured, notes, p95)
-    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say)
+    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say, geometry)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
@@ -430,7 +432,8 @@ def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
 
 
 def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: str, p: TractorParameters, L: float,
-                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
+                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say,
+                geometry: str = "auto") -> _Fits:
     """The linear fit from the study's cornering coefficients per unit load (clipped to the
     vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
@@ -449,7 +452,8 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         say(bound)
     with Work(say, "fitting the vehicle models (linear, linear range, tyre saturation)", 3, "fits") as work:
         say("fitting the linear model")
-        linear = _steering_geometry(model, fit(model, free, start, fixed, fit_segs), free, fixed, fit_segs, notes)
+        linear = _steering_geometry(model, lambda x0: fit(model, free, x0, fixed, fit_segs), start, fit_segs, notes,
+                                    geometry)
         work.step()
         a_fit = np.abs(log.a_y[fit_segs.idx])
         low = a_fit <= LINEAR_TYRE
@@ -474,26 +478,32 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
 
 
-def _steering_geometry(model: YawModel, small: FitResult, free: list[Parameter], fixed: dict, segs: Segments,
-                       notes: list[str]) -> FitResult:
-    """The linear fit under the geometry that fits the yaw better, said: where the wheel angle
-    reaches LARGE_ANGLE (tan w exceeds w by 1 %) the model is fitted again driven by tan w
-    (driving.ACKERMANN: an Ackermann machine turns on r = v tan w / L when its tyres do not slip);
-    the one with the smaller residual sum of squares (same parameters) is kept on ``model``."""
+def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments, notes: list[str],
+                       choice: str = "auto") -> FitResult:
+    """The linear fit (``fit_linear(start)``) under the steering geometry ``choice``: "w" (small
+    angle), "tan" (driving.ACKERMANN: an Ackermann machine turns on r = v tan w / L when its tyres
+    do not slip) or "auto": where the wheel angle reaches LARGE_ANGLE (tan w exceeds w by 1 %)
+    both, the one with the smaller residual sum of squares (same parameters) kept on ``model`` and
+    said with what it passed over; below it w (the two are alike)."""
+    if choice != "auto":
+        model.geometry = ACKERMANN if choice == "tan" else SMALL_ANGLE
+        notes.append(f"steering geometry: the yaw plant is driven by {choice} (--steering-geometry {choice})")
+        return fit_linear(start)
+    small = fit_linear(start)
     u = np.abs(model.log.u[segs.idx][segs.scored])
     reach = float(np.percentile(u, 99)) if len(u) else 0.0
     if reach < LARGE_ANGLE:
         return small
     model.geometry = ACKERMANN
-    ackermann = fit(model, free, small.values, fixed, segs)
+    ackermann = fit_linear(small.values)
     keep = ackermann if ackermann.rss_total < small.rss_total else small
     model.geometry = ACKERMANN if keep is ackermann else SMALL_ANGLE
-    rms = {k: math.sqrt(f.rss_total / max(f.n_total, 1)) for k, f in (("tan", ackermann), ("w", small))}
+    rms = {k: math.sqrt(f.rss_total / max(f.n_total, 1)) for k, f in (("tan w", ackermann), ("w", small))}
     chosen, other = ("tan w", "w") if keep is ackermann else ("w", "tan w")
     notes.append(f"steering geometry: the wheel angle reaches {reach:.2g} rad (99th percentile), where tan w exceeds w "
                  f"by {100 * (math.tan(reach) / reach - 1):.0f} %: the yaw plant is driven by {chosen} (yaw RMS "
-                 f"{rms['tan' if keep is ackermann else 'w']:.3g} rad/s), passed over: {other} (RMS "
-                 f"{rms['w' if keep is ackermann else 'tan']:.3g} rad/s); the data choose, no option")
+                 f"{rms[chosen]:.3g} rad/s); passed over: {other} (RMS {rms[other]:.3g} rad/s); --steering-geometry "
+                 f"w|tan sets it")
     return keep
 
 
