@@ -193,9 +193,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                      dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto") -> dict:
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
     Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
-    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of;
-    ``geometry``: how the wheel angle w enters the single-track model ("auto", "w", "tan":
-    _steering_geometry)."""
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
