@@ -66,7 +66,7 @@ def traded_verdict(q: dict, on_bound: dict, lag: float, net: float, net_std: flo
     if hi < 0:
         out = delay_verdict({**q, "value": net, "std": net_std, "interval": [lo, hi]})
         return {**out, "net_delay": net, "note": f"{traded}; {out['note']}"}
-    return {**on_bound, "value": 0.0, "widened": WIDENED, "verdict": "below its upper limit", "identifiable": False,
+    return {**on_bound, "value": 0.0, "std": net_std, "interval": [0.0, max(hi, 0.0)], "widened": WIDENED, "verdict": "below its upper limit", "identifiable": False,
             "upper_limit": max(hi, 0.0), "net_delay": net, "searched_below_zero": q["value"],
             "note": f"{traded}, not below zero: no clock offset; the delay stays on its bound 0 s beside the lag and is "
                     f"at most {max(hi, 0.0):.3g} s"}
