@@ -32,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fit-seconds", type=float, default=None, help="log, driving: fit at most this many seconds "
                    "of the log's segments, evenly spread over it (default 300: a longer log's other segments are "
                    "passed over, and said; a larger value fits more at a cost growing with them)")
+    p.add_argument("--steering-geometry", choices=("auto", "w", "tan"), default="auto", help="log, driving: how the "
+                   "wheel angle w drives the single-track model: w (small angles), tan (an Ackermann machine's no-slip "
+                   "turn r = v tan w / L), auto (the better fit of the two where w reaches 0.17 rad, else w)")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     add_mode_options(p)
@@ -45,7 +48,8 @@ def run(args: argparse.Namespace) -> int:
                      period=args.period, speed=args.speed, band=args.band, models=args.models, delay=args.delay,
                      resample=args.resample, recording=None if is_study else recording_options(args),
                      out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite,
-                     course_speed=args.course_speed, fit_seconds=args.fit_seconds)
+                     course_speed=args.course_speed, fit_seconds=args.fit_seconds,
+                     steering_geometry=args.steering_geometry)
     if found.method == "driving":
         figures = found.report.get("figures", [])
         print(found.summary())

@@ -11,6 +11,12 @@ are not to be trusted), not a delay. So, after the widened fit, with the 95 % in
 * lo >= 0: a delay, as any other;
 * and whatever the interval, cannot decide when parameters that shape the response (a cornering
   stiffness, a steering gain) sit on their bounds: the delay then only makes up for them.
+
+A delay below zero beside a steering lag T > 0 trades against it (over the response's band a lead
+and a first-order lag of about the same size cancel: e^(-s tau) / (1 + s T) ~ 1 - s (tau + T)), so
+it is judged on the net delay tau + T (traded_verdict): below zero with its whole interval, a clock
+offset of tau + T; else no clock offset, the delay stays on its bound 0 s and is at most the net's
+upper limit.
 """
 from __future__ import annotations
 
@@ -48,3 +54,19 @@ def delay_verdict(q: dict, shaping_on_bound: list[str] = ()) -> dict:
                 "note": f"not told apart from no delay: its 95 % interval [{lo:.3g}, {hi:.3g}] s reaches below zero; "
                         f"the delay is at most {hi:.3g} s"}
     return {**out, "verdict": "delay", "identifiable": True}
+
+
+def traded_verdict(q: dict, on_bound: dict, lag: float, net: float, net_std: float) -> dict:
+    """The widened delay ``q`` (below zero beside the lag ``lag`` > 0) judged on the net delay
+    ``net`` = tau + T (std ``net_std``), as the module says; ``on_bound``: the delay's quantity on
+    its bound 0 s, what stands when no clock offset is found."""
+    lo, hi = net - 1.96 * net_std, net + 1.96 * net_std
+    traded = (f"searched below zero the delay goes to {q['value']:.3g} s beside a lag of {lag:.3g} s: they trade, "
+              f"the net delay tau + T is {net:.3g} [{lo:.3g}, {hi:.3g}] s")
+    if hi < 0:
+        out = delay_verdict({**q, "value": net, "std": net_std, "interval": [lo, hi]})
+        return {**out, "net_delay": net, "note": f"{traded}; {out['note']}"}
+    return {**on_bound, "value": 0.0, "std": net_std, "interval": [0.0, max(hi, 0.0)], "widened": WIDENED, "verdict": "below its upper limit", "identifiable": False,
+            "upper_limit": max(hi, 0.0), "net_delay": net, "searched_below_zero": q["value"],
+            "note": f"{traded}, not below zero: no clock offset; the delay stays on its bound 0 s beside the lag and is "
+                    f"at most {max(hi, 0.0):.3g} s"}

@@ -204,6 +204,9 @@ def _pieces(a: int, b: int, h: float, length: float, min_length: float) -> list[
     return list(zip(bounds[:-1], bounds[1:]))
 
 
+SMALL_ANGLE, ACKERMANN = "small angle", "Ackermann"     # how the wheel angle w enters the model: w or tan w
+
+
 class YawModel:
     """The single-track model of the study driven through delay, gain, offset and lag; simulates
     every segment side by side. ``values``: the free parameters by name (others at their defaults).
@@ -214,8 +217,10 @@ class YawModel:
                 "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
-                 max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str | None = None) -> None:
+                 max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str | None = None,
+                 geometry: str = SMALL_ANGLE) -> None:
         self.model, self.p, self.log, self.segs = model, params, log, segs
+        self.geometry = geometry               # how the wheel angle enters: SMALL_ANGLE (w) or ACKERMANN (tan w)
         self.kernel = kernel or single_track_kernel.DEFAULT     # "c", "python" (the reference) or "auto"
         self.loads = axle_loads(params.m, params.l_f, params.l_r)
         self.L = params.l_f + params.l_r
@@ -226,9 +231,12 @@ class YawModel:
         self.low_speed_scale = np.clip(log.v / min_sim_speed, 0.0, 1.0)
 
     def wheel_angle(self, values: dict) -> np.ndarray:
-        """w = g u(t - tau) + delta_0 on every sample (u before its run's start: its first value)."""
+        """w = g u(t - tau) + delta_0 on every sample (u before its run's start: its first value);
+        tan w under ACKERMANN geometry (the single-track model's steady turn r = v w / (L + K v^2)
+        becomes r = v tan w / (L + K v^2), the no-slip turn of an Ackermann machine)."""
         u = self.log.delayed_input(values.get("delay", 0.0))
-        return values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0)
+        w = values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0)
+        return np.tan(np.clip(w, -1.3, 1.3)) if self.geometry == ACKERMANN else w
 
     def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:
         """Gyro reading the model predicts, (S, L) on the segments' samples."""

@@ -20,8 +20,9 @@
 """
 from __future__ import annotations
 
+
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -37,9 +38,9 @@ from agrobot.orchestrator.work_progress import Work
 from .comparisons import course_bias, model_steady_state, pair, understeer_pair, withheld_understeer
 from agrobot.estimation import Z95, Parameter
 
-from .delay_bound import DELAY_LIMIT, delay_verdict
-from .driving import (DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel, cut_segments, even_grid,
-                      fit, fit_percent, steady_state_gain, understeer_gradient)
+from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
+from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
+                      cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
 from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -47,6 +48,7 @@ from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
+LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
@@ -188,14 +190,15 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False, wheelbase: float | None = None) -> dict:
+                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto") -> dict:
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
     Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
-    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of."""
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
     L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
+    p, L_from = plant_on_wheelbase(p, L, L_from)
     frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
@@ -214,7 +217,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         say("kinematic regime: fitting the steering map")
         return _kinematic(log, segs, (L, L_from), where, model_name, input_name, driven, min_speed, vehicle, p,
                           measured, notes, p95)
-    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say)
+    fits = _fit_models(log, segs, vehicle, model_name, p, L, command, min_speed, max_fit_seconds, notes, say, geometry)
     say("judging on the held-out segments")
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
@@ -328,6 +331,19 @@ def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, st
     return p.l_f + p.l_r, "the paper tractor's l_f + l_r: no study and no --wheelbase given (either gives the vehicle's)"
 
 
+def plant_on_wheelbase(p: TractorParameters, L: float, L_from: str) -> tuple[TractorParameters, str]:
+    """The yaw plant's axles on the wheelbase used: l_f + l_r scaled to L where they differ by more
+    than 1 % (the study's l_f / (l_f + l_r) kept), so that the dynamic fit's K = m (l_r/C_f - l_f/C_r) / L
+    and the steady turns' v tan(u) / L stand on one wheelbase; said in the wheelbase's source."""
+    plant = p.l_f + p.l_r
+    if abs(plant - L) <= 0.01 * L:
+        return p, L_from
+    k = L / plant
+    scaled = replace(p, l_f=p.l_f * k, l_r=p.l_r * k)
+    return scaled, (f"{L_from}; the yaw plant's l_f + l_r ({plant:.3g} m) scaled to it: l_f {scaled.l_f:.3g} m, "
+                    f"l_r {scaled.l_r:.3g} m")
+
+
 def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
     """The log's steering input: the measured wheel angle ``delta``, else the command ``delta_cmd``;
     raises when the vehicle has no yaw dynamics to identify or the log lacks a column it needs
@@ -413,7 +429,8 @@ def _standstill_bias(log: DrivingLog) -> tuple[dict[str, float], dict | None]:
 
 
 def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: str, p: TractorParameters, L: float,
-                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say) -> _Fits:
+                command: bool, min_speed: float, max_fit_seconds: float, notes: list[str], say,
+                geometry: str = "auto") -> _Fits:
     """The linear fit from the study's cornering coefficients per unit load (clipped to the
     vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
@@ -432,7 +449,8 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         say(bound)
     with Work(say, "fitting the vehicle models (linear, linear range, tyre saturation)", 3, "fits") as work:
         say("fitting the linear model")
-        linear = fit(model, free, start, fixed, fit_segs)
+        linear = _steering_geometry(model, lambda x0: fit(model, free, x0, fixed, fit_segs), start, fit_segs, notes,
+                                    geometry)
         work.step()
         a_fit = np.abs(log.a_y[fit_segs.idx])
         low = a_fit <= LINEAR_TYRE
@@ -455,6 +473,35 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
+
+
+def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments, notes: list[str],
+                       choice: str = "auto") -> FitResult:
+    """The linear fit (``fit_linear(start)``) under the steering geometry ``choice``: "w" (small
+    angle), "tan" (driving.ACKERMANN: an Ackermann machine turns on r = v tan w / L when its tyres
+    do not slip) or "auto": where the wheel angle reaches LARGE_ANGLE (tan w exceeds w by 1 %)
+    both, the one with the smaller residual sum of squares (same parameters) kept on ``model`` and
+    said with what it passed over; below it w (the two are alike)."""
+    if choice != "auto":
+        model.geometry = ACKERMANN if choice == "tan" else SMALL_ANGLE
+        notes.append(f"steering geometry: the yaw plant is driven by {choice} (--steering-geometry {choice})")
+        return fit_linear(start)
+    small = fit_linear(start)
+    u = np.abs(model.log.u[segs.idx][segs.scored])
+    reach = float(np.percentile(u, 99)) if len(u) else 0.0
+    if reach < LARGE_ANGLE:
+        return small
+    model.geometry = ACKERMANN
+    ackermann = fit_linear(small.values)
+    keep = ackermann if ackermann.rss_total < small.rss_total else small
+    model.geometry = ACKERMANN if keep is ackermann else SMALL_ANGLE
+    rms = {k: math.sqrt(f.rss_total / max(f.n_total, 1)) for k, f in (("tan w", ackermann), ("w", small))}
+    chosen, other = ("tan w", "w") if keep is ackermann else ("w", "tan w")
+    notes.append(f"steering geometry: the wheel angle reaches {reach:.2g} rad (99th percentile), where tan w exceeds w "
+                 f"by {100 * (math.tan(reach) / reach - 1):.0f} %: the yaw plant is driven by {chosen} (yaw RMS "
+                 f"{rms[chosen]:.3g} rad/s); passed over: {other} (RMS {rms[other]:.3g} rad/s); --steering-geometry "
+                 f"w|tan sets it")
+    return keep
 
 
 @dataclass
@@ -571,7 +618,11 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
                  for d in (first.values["delay"], -0.1)), key=lambda f: f.rss_total)          # from beyond it
     shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
     verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
-    if shaping:
+    tau, lag = final.values["delay"], final.values.get("lag", 0.0)
+    if not shaping and not on_zero and tau < 0 < lag:       # a lead traded against the lag: judged on tau + T
+        verdict = traded_verdict(_parameters(final, free, fits)[0]["delay"], before[0]["delay"], lag, tau + lag,
+                                 final.interval_of({"delay": 1.0, "lag": 1.0}))
+    if shaping or verdict["verdict"] == "below its upper limit" and "net_delay" in verdict:
         return first, {**before[0], "delay": verdict}, before[1]
     params_json, stiff = _parameters(final, free, fits)
     params_json["delay"] = verdict
