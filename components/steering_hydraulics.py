@@ -56,6 +56,64 @@ def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
 
+# The substep loop (module docstring) in the forms it takes: lines marked "dead" for an angle dead band
+# (or the quantisation guard), "res" / "raw" for a potentiometer with or without a resolution, "limit" /
+# "free" for an extra rate limit or none (a clamp at +-inf changes nothing, not even a NaN: both
+# comparisons are false). The statements are the general loop's, in its order: the same floats to the bit.
+_INTEGRATE = ("integral += ki_h * error", "if integral > i_lim:", "    integral = i_lim", "elif integral < no_i:",
+              "    integral = no_i")
+_LOOP = (
+    ("", "h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
+         "inv_res, _ = constants"),
+    ("", "rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim"),
+    ("", "v_rel = error = 0.0"),
+    ("", "for _ in range(n):"),
+    ("res", "    error = cmd - res * ((delta * inv_res + rounder) - rounder)"),
+    ("raw", "    error = cmd - delta"),
+    ("dead", "    if error > dead:"), ("dead", "        error = error - dead"),
+    ("dead", "    elif error < no_dead:"), ("dead", "        error = error + dead"),
+    ("dead", "    else:"), ("dead", "        error = 0.0"),
+    ("", "    raw = kp * error + integral"),
+    ("", "    if raw > v_hi:"), ("", "        v_rel = v_hi"),
+    ("", "        if not error > 0:"), *(("", "            " + line) for line in _INTEGRATE),
+    ("", "    elif raw < v_lo:"), ("", "        v_rel = v_lo"),
+    ("", "        if not error < 0:"), *(("", "            " + line) for line in _INTEGRATE),
+    ("", "    else:"), ("", "        v_rel = raw"), *(("", "        " + line) for line in _INTEGRATE),
+    ("", "    if v_rel > db:"), ("", "        target = (v_rel - db) * opening_scale"),
+    ("", "        if target > 1.0:"), ("", "            target = 1.0"),
+    ("", "    elif v_rel < no_db:"), ("", "        target = (v_rel + db) * opening_scale"),
+    ("", "        if target < -1.0:"), ("", "            target = -1.0"),
+    ("", "    else:"), ("", "        target = 0.0"),
+    ("", "    opening += alpha * (target - opening)"),
+    ("limit", "    move = rate_step * opening"),
+    ("limit", "    if move > max_move:"), ("limit", "        move = max_move"),
+    ("limit", "    elif move < no_move:"), ("limit", "        move = no_move"),
+    ("limit", "    delta += move"),
+    ("free", "    delta += rate_step * opening"),
+    ("", "    if delta > lim:"), ("", "        delta = lim"),
+    ("", "    elif delta < no_lim:"), ("", "        delta = no_lim"),
+    ("", "return delta, opening, integral, error, v_rel"),
+)
+_LOOPS: dict[tuple[bool, bool, bool], object] = {}
+
+
+def substep_loop(dead: bool, resolution: bool, limit: bool):
+    """``loop(n, cmd, delta, opening, integral, constants)`` -> (delta, opening, integral, error,
+    v_rel) after n substeps, made once per form (an angle dead band, a potentiometer resolution,
+    an extra rate limit: each present or not): the general loop without the tests that do not
+    change for the run (a third of its time)."""
+    key = (dead, resolution, limit)
+    loop = _LOOPS.get(key)
+    if loop is None:
+        kept = {"", "dead" if dead else "", "res" if resolution else "raw", "limit" if limit else "free"}
+        body = "\n".join("    " + line for mark, line in _LOOP if mark in kept)
+        space = {"ROUNDER": ROUNDER}
+        exec(compile(f"def loop(n, cmd, delta, opening, integral, constants):\n{body}\n",  # noqa: S102
+                     f"<steering substeps {key}>", "exec"), space)
+        loop = _LOOPS[key] = space["loop"]
+    return loop
+
+
 def _steering_compiled(comp, period: float) -> str:
     return substeps_define(comp, period) + f"#define DELAY_STEPS {delay_steps(comp.p['command_delay'], period)}\n"
 
@@ -137,71 +195,34 @@ class SteeringHydraulics(Component):
                 p["angle_limit"], res, 1.0 - math.exp(-h / p["valve_time_constant"]),
                 pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit,
                 p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0),
-                p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0)
+                p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0,
+                substep_loop(bool(p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0)),
+                             res > 0, p["rate_limit"] > 0))
 
     def step(self, t: float, dt: float) -> None:
-        """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
-        (a call costs as much as the arithmetic here; the rounding by ROUNDER); tests check it
-        against those functions."""
+        """The substep loop of the module docstring as one function made for this configuration
+        (``substep_loop``); DiscretePID.update (kd = 0), valve_opening and quantize inlined in it;
+        tests check it against those functions and against the general loop, to the bit."""
         constants = self._per_step.get(dt)
         if constants is None:
             constants = self._per_step[dt] = self._constants(dt)
-        h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, inv_res = \
-            constants
+        h, vn, res, max_move, loop = constants[0], constants[1], constants[6], constants[14], constants[-1]
         pi = self.pi
-        integral = pi.integral
         history = self.command_history
         history.append(float(self.u["steer_angle_cmd"]))
-        cmd = history[0]
-        delta, opening = self.delta, self.opening
-        v_rel = 0.0
-        rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim
-        for _ in range(self.substeps):
-            error = cmd - (res * ((delta * inv_res + rounder) - rounder) if inv_res else delta)
-            if dead:
-                error = error - dead if error > dead else (error + dead if error < no_dead else 0.0)
-            raw = kp * error + integral
-            if raw > v_hi:
-                v_rel = v_hi
-                windup = error > 0
-            elif raw < v_lo:
-                v_rel = v_lo
-                windup = error < 0
-            else:
-                v_rel, windup = raw, False
-            if not windup:
-                integral += ki_h * error
-                if integral > i_lim:
-                    integral = i_lim
-                elif integral < no_i:
-                    integral = no_i
-            if v_rel > db:
-                target = (v_rel - db) * opening_scale
-                target = 1.0 if target > 1.0 else target
-            elif v_rel < no_db:
-                target = (v_rel + db) * opening_scale
-                target = -1.0 if target < -1.0 else target
-            else:
-                target = 0.0
-            opening += alpha * (target - opening)
-            move = rate_step * opening
-            if move > max_move:
-                move = max_move
-            elif move < no_move:
-                move = no_move
-            delta += move
-            if delta > lim:
-                delta = lim
-            elif delta < no_lim:
-                delta = no_lim
-        pi.integral, pi.prev_error = integral, error
-        voltage = vn + v_rel
+        delta, opening, pi.integral, pi.prev_error, v_rel = \
+            loop(self.substeps, history[0], self.delta, self.opening, pi.integral, constants)
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
         y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
-        y["valve_voltage"] = voltage
-        y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
+        y["valve_voltage"] = vn + v_rel
+        if abs(delta) < constants[5]:     # max(-max_move, min(max_move, rate)) / h as min and max choose
+            rate = opening * constants[4]
+            rate = rate if rate < max_move else max_move
+            y["steer_rate"] = (rate if rate > -max_move else -max_move) / h
+        else:
+            y["steer_rate"] = 0.0
 
     def linear_model(self, step: float, speed: float) -> Block:
         """The hydraulics' substep (components.steering_hydraulics) beyond its dead bands, lifted over
