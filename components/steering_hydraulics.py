@@ -56,61 +56,79 @@ def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
 
-# The substep loop (module docstring) in the forms it takes: lines marked "dead" for an angle dead band
-# (or the quantisation guard), "res" / "raw" for a potentiometer with or without a resolution, "limit" /
-# "free" for an extra rate limit or none (a clamp at +-inf changes nothing, not even a NaN: both
-# comparisons are false). The statements are the general loop's, in its order: the same floats to the bit.
+# The substep loop (module docstring) as statements, in the general loop's order: the same floats to
+# the bit. A clamp at +-inf changes nothing, not even a NaN (both comparisons are false): without an
+# extra rate limit the move is not clamped.
+_DEAD = ("if error > dead:", "    error = error - dead", "elif error < no_dead:", "    error = error + dead", "else:",
+         "    error = 0.0")
 _INTEGRATE = ("integral += ki_h * error", "if integral > i_lim:", "    integral = i_lim", "elif integral < no_i:",
               "    integral = no_i")
-_LOOP = (
-    ("", "h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
-         "inv_res, _ = constants"),
-    ("", "rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim"),
-    ("", "v_rel = error = 0.0"),
-    ("", "for _ in range(n):"),
-    ("res", "    error = cmd - res * ((delta * inv_res + rounder) - rounder)"),
-    ("raw", "    error = cmd - delta"),
-    ("dead", "    if error > dead:"), ("dead", "        error = error - dead"),
-    ("dead", "    elif error < no_dead:"), ("dead", "        error = error + dead"),
-    ("dead", "    else:"), ("dead", "        error = 0.0"),
-    ("", "    raw = kp * error + integral"),
-    ("", "    if raw > v_hi:"), ("", "        v_rel = v_hi"),
-    ("", "        if not error > 0:"), *(("", "            " + line) for line in _INTEGRATE),
-    ("", "    elif raw < v_lo:"), ("", "        v_rel = v_lo"),
-    ("", "        if not error < 0:"), *(("", "            " + line) for line in _INTEGRATE),
-    ("", "    else:"), ("", "        v_rel = raw"), *(("", "        " + line) for line in _INTEGRATE),
-    ("", "    if v_rel > db:"), ("", "        target = (v_rel - db) * opening_scale"),
-    ("", "        if target > 1.0:"), ("", "            target = 1.0"),
-    ("", "    elif v_rel < no_db:"), ("", "        target = (v_rel + db) * opening_scale"),
-    ("", "        if target < -1.0:"), ("", "            target = -1.0"),
-    ("", "    else:"), ("", "        target = 0.0"),
-    ("", "    opening += alpha * (target - opening)"),
-    ("limit", "    move = rate_step * opening"),
-    ("limit", "    if move > max_move:"), ("limit", "        move = max_move"),
-    ("limit", "    elif move < no_move:"), ("limit", "        move = no_move"),
-    ("limit", "    delta += move"),
-    ("free", "    delta += rate_step * opening"),
-    ("", "    if delta > lim:"), ("", "        delta = lim"),
-    ("", "    elif delta < no_lim:"), ("", "        delta = no_lim"),
-    ("", "return delta, opening, integral, error, v_rel"),
-)
+_PI = ("raw = kp * error + integral", "if raw > v_hi:", "    v_rel = v_hi", "    if not error > 0:",
+       *("        " + line for line in _INTEGRATE), "elif raw < v_lo:", "    v_rel = v_lo", "    if not error < 0:",
+       *("        " + line for line in _INTEGRATE), "else:", "    v_rel = raw", *("    " + line for line in _INTEGRATE))
+_VALVE = ("if v_rel > db:", "    target = (v_rel - db) * opening_scale", "    if target > 1.0:", "        target = 1.0",
+          "elif v_rel < no_db:", "    target = (v_rel + db) * opening_scale", "    if target < -1.0:",
+          "        target = -1.0", "else:", "    target = 0.0")
+_LIMITED_MOVE = ("move = rate_step * opening", "if move > max_move:", "    move = max_move", "elif move < no_move:",
+                 "    move = no_move", "delta += move")
+_SPOOL_AND_WHEEL = ("opening += alpha * (target - opening)",)
+_STOP = ("if delta > lim:", "    delta = lim", "elif delta < no_lim:", "    delta = no_lim")
+# With a resolution the error holds while the potentiometer's level does; once a substep finds it 0
+# and leaves the integral as it was (nonzero: I + 0 = I), the PI and the valve are fixed until the
+# level changes: the next substeps only move the spool and the wheel, while delta stays in [lo, hi],
+# an interval whose ends read the same level (the rounding is monotonic: every delta between them does).
+_QUIET = ("if error == 0.0 and integral == before and integral != 0.0:",
+          "    lo, hi = (level - 0.4990234375) * res, (level + 0.4990234375) * res",
+          "    quiet = ((lo * inv_res + rounder) - rounder) == level == ((hi * inv_res + rounder) - rounder)")
+
+
+def _indent(lines, spaces: int) -> list[str]:
+    return [" " * spaces + line for line in lines]
+
+
+_BOUND = ("db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi", "i_lim", "dead",
+          "max_move", "inv_res", "rounder", "no_dead", "no_i", "no_db", "no_move", "no_lim")
+
+
+def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
+    """The source of ``make(constants)``, which returns the substep loop of one form with the
+    step's constants bound as its locals (defaults: made once per run and step)."""
+    wheel = list(_SPOOL_AND_WHEEL) + (list(_LIMITED_MOVE) if limit else ["delta += rate_step * opening"]) + list(_STOP)
+    lines = ["v_rel = error = 0.0", "quiet = False", "for _ in range(n):"]
+    if resolution:
+        lines += ["    if quiet:", "        if lo <= delta <= hi:", *_indent(wheel, 12), "            continue",
+                  "        quiet = False",
+                  "    level = (delta * inv_res + rounder) - rounder", "    error = cmd - res * level",
+                  "    before = integral"]
+    else:
+        lines += ["    error = cmd - delta"]
+    lines += _indent((_DEAD if dead else ()) + _PI + _VALVE, 4) + _indent(wheel, 4)
+    lines += _indent(_QUIET if resolution else (), 4) + ["return delta, opening, integral, error, v_rel"]
+    bound = ", ".join(f"{name}={name}" for name in _BOUND)
+    return "\n".join([
+        "def make(constants):",
+        "    h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
+        "inv_res = constants",
+        "    rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim",
+        f"    def loop(n, cmd, delta, opening, integral, {bound}):",
+        *_indent(lines, 8), "    return loop", ""])
+
+
 _LOOPS: dict[tuple[bool, bool, bool], object] = {}
 
 
 def substep_loop(dead: bool, resolution: bool, limit: bool):
-    """``loop(n, cmd, delta, opening, integral, constants)`` -> (delta, opening, integral, error,
-    v_rel) after n substeps, made once per form (an angle dead band, a potentiometer resolution,
-    an extra rate limit: each present or not): the general loop without the tests that do not
-    change for the run (a third of its time)."""
+    """``make(constants)`` -> ``loop(n, cmd, delta, opening, integral)`` -> (delta, opening,
+    integral, error, v_rel) after n substeps, compiled once per form (an angle dead band, a
+    potentiometer resolution, an extra rate limit: each present or not): the general loop without
+    the tests that do not change for the run, and with a resolution its quiet substeps (``_QUIET``)
+    reduced to the spool and the wheel."""
     key = (dead, resolution, limit)
     loop = _LOOPS.get(key)
     if loop is None:
-        kept = {"", "dead" if dead else "", "res" if resolution else "raw", "limit" if limit else "free"}
-        body = "\n".join("    " + line for mark, line in _LOOP if mark in kept)
         space = {"ROUNDER": ROUNDER}
-        exec(compile(f"def loop(n, cmd, delta, opening, integral, constants):\n{body}\n",  # noqa: S102
-                     f"<steering substeps {key}>", "exec"), space)
-        loop = _LOOPS[key] = space["loop"]
+        exec(compile(_loop_source(*key), f"<steering substeps {key}>", "exec"), space)  # noqa: S102
+        loop = _LOOPS[key] = space["make"]
     return loop
 
 
@@ -175,6 +193,7 @@ class SteeringHydraulics(Component):
                      f"parameter potentiometer_resolution must be 0 (none) or above angle_limit / 2^51, got {res}")
         steps = delay_steps(p["command_delay"], dt)
         self.command_history = deque([0.0] * steps, maxlen=steps + 1)
+        self._delayed = steps > 0
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
@@ -184,8 +203,9 @@ class SteeringHydraulics(Component):
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
 
     def _constants(self, dt: float) -> tuple:
-        """The substep's constants for step ``dt`` (made once per run and step: the parameters are
-        fixed from ``initialize`` on)."""
+        """The substep's constants for step ``dt`` (the parameters are fixed from ``initialize`` on):
+        (h, V_n, db, opening scale, rate step, angle limit, resolution, alpha, k_p, k_i h, PI bounds,
+        integral limit, angle dead band, rate limit per substep, 1 / resolution)."""
         p = self.p
         h = dt / self.substeps
         vn, db = p["neutral_voltage"], p["deadband"]
@@ -195,30 +215,38 @@ class SteeringHydraulics(Component):
                 p["angle_limit"], res, 1.0 - math.exp(-h / p["valve_time_constant"]),
                 pi.kp, pi.ki * h, pi.u_min, pi.u_max, pi.integral_limit,
                 p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0),
-                p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0,
-                substep_loop(bool(p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0)),
-                             res > 0, p["rate_limit"] > 0))
+                p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0)
+
+    def _step_of(self, dt: float) -> tuple:
+        """What ``step`` needs for step ``dt``, made once per run and step: (h, V_n, resolution, rate
+        limit per substep, angle limit, rate step, the substep loop with the constants bound)."""
+        c = self._constants(dt)
+        loop = substep_loop(bool(c[13]), c[6] > 0, self.p["rate_limit"] > 0)(c)
+        return c[0], c[1], c[6], c[14], c[5], c[4], loop
 
     def step(self, t: float, dt: float) -> None:
         """The substep loop of the module docstring as one function made for this configuration
         (``substep_loop``); DiscretePID.update (kd = 0), valve_opening and quantize inlined in it;
         tests check it against those functions and against the general loop, to the bit."""
-        constants = self._per_step.get(dt)
-        if constants is None:
-            constants = self._per_step[dt] = self._constants(dt)
-        h, vn, res, max_move, loop = constants[0], constants[1], constants[6], constants[14], constants[-1]
+        per_step = self._per_step.get(dt)
+        if per_step is None:
+            per_step = self._per_step[dt] = self._step_of(dt)
+        h, vn, res, max_move, lim, rate_step, loop = per_step
         pi = self.pi
-        history = self.command_history
-        history.append(float(self.u["steer_angle_cmd"]))
-        delta, opening, pi.integral, pi.prev_error, v_rel = \
-            loop(self.substeps, history[0], self.delta, self.opening, pi.integral, constants)
+        cmd = float(self.u["steer_angle_cmd"])
+        if self._delayed:
+            history = self.command_history
+            history.append(cmd)
+            cmd = history[0]
+        delta, opening, pi.integral, pi.prev_error, v_rel = loop(self.substeps, cmd, self.delta, self.opening,
+                                                                 pi.integral)
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
         y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
         y["valve_voltage"] = vn + v_rel
-        if abs(delta) < constants[5]:     # max(-max_move, min(max_move, rate)) / h as min and max choose
-            rate = opening * constants[4]
+        if abs(delta) < lim:     # max(-max_move, min(max_move, rate)) / h as min and max choose
+            rate = opening * rate_step
             rate = rate if rate < max_move else max_move
             y["steer_rate"] = (rate if rate > -max_move else -max_move) / h
         else:
