@@ -295,6 +295,8 @@ class TractorYawPlant(Component):
         self._affine = _AFFINE.get(n, _affine_held)
         self._held, self._product = np.zeros(n), np.zeros(n)    # the level step's state as an array, Ad z
         self._held_of = self.z                                  # the state ``_held`` holds
+        # written and read through memoryviews: a float in or out without numpy's item dispatch
+        self._held_view, self._product_view = memoryview(self._held), memoryview(self._product)
         self._set_outputs(0.0, 0.0, 0.0)
 
     def _update_ground(self) -> None:
@@ -375,20 +377,21 @@ class TractorYawPlant(Component):
         speed = abs(v)
         vmin = self._min_speed
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
+        # discretized's key, inline (round of a float is the int the key holds)
+        hit = self._cache.get((round(v_eff / self._cache_res), dt))
         Ad, _, _, bd = hit if hit is not None else self.discretized(v_eff, dt)
-        z0, held, product = self.z, self._held, self._product
+        z0, held = self.z, self._held
         if z0 is not self._held_of:            # a state set from outside: the array follows it
             held[:] = z0
             z0 = held.tolist()
         if self._tf is None:                    # (v_y, gamma, ...)
-            Ad.dot(held, product)
-            z = self.z = self._held_of = self._affine(product.tolist(), bd, delta, held)
+            Ad.dot(held, self._product)
+            z = self.z = self._held_of = self._affine(self._product_view.tolist(), bd, delta, self._held_view)
             vy0, gamma0, vy1, gamma1 = z0[0], z0[1], z[0], z[1]
         else:
             gamma0, vy0 = self._yaw_rate_and_lateral()
-            Ad.dot(held, product)
-            self.z = self._held_of = self._affine(product.tolist(), bd, delta, held)
+            Ad.dot(held, self._product)
+            self.z = self._held_of = self._affine(self._product_view.tolist(), bd, delta, self._held_view)
             gamma1, vy1 = self._yaw_rate_and_lateral()
         if scale != 1.0:
             gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
