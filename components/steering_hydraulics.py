@@ -61,9 +61,9 @@ def quantize(value: float, resolution: float) -> float:
 # extra rate limit the move is not clamped.
 _DEAD = ("if error > dead:", "    error = error - dead", "elif error < no_dead:", "    error = error + dead", "else:",
          "    error = 0.0")
-_INTEGRATE = ("integral += ki_h * error", "if integral > i_lim:", "    integral = i_lim", "elif integral < no_i:",
+_INTEGRATE = ("integral += {ki_e}", "if integral > i_lim:", "    integral = i_lim", "elif integral < no_i:",
               "    integral = no_i")
-_PI = ("raw = kp * error + integral", "if raw > v_hi:", "    v_rel = v_hi", "    if not error > 0:",
+_PI = ("raw = {kp_e} + integral", "if raw > v_hi:", "    v_rel = v_hi", "    if not error > 0:",
        *("        " + line for line in _INTEGRATE), "elif raw < v_lo:", "    v_rel = v_lo", "    if not error < 0:",
        *("        " + line for line in _INTEGRATE), "else:", "    v_rel = raw", *("    " + line for line in _INTEGRATE))
 _VALVE = ("if v_rel > db:", "    target = (v_rel - db) * opening_scale", "    if target > 1.0:", "        target = 1.0",
@@ -71,15 +71,20 @@ _VALVE = ("if v_rel > db:", "    target = (v_rel - db) * opening_scale", "    if
           "        target = -1.0", "else:", "    target = 0.0")
 _LIMITED_MOVE = ("move = rate_step * opening", "if move > max_move:", "    move = max_move", "elif move < no_move:",
                  "    move = no_move", "delta += move")
-_SPOOL_AND_WHEEL = ("opening += alpha * (target - opening)",)
 _STOP = ("if delta > lim:", "    delta = lim", "elif delta < no_lim:", "    delta = no_lim")
-# With a resolution the error holds while the potentiometer's level does; once a substep finds it 0
-# and leaves the integral as it was (nonzero: I + 0 = I), the PI and the valve are fixed until the
-# level changes: the next substeps only move the spool and the wheel, while delta stays in [lo, hi],
-# an interval whose ends read the same level (the rounding is monotonic: every delta between them does).
-_QUIET = ("if error == 0.0 and integral == before and integral != 0.0:",
-          "    lo, hi = (level - 0.4990234375) * res, (level + 0.4990234375) * res",
-          "    quiet = ((lo * inv_res + rounder) - rounder) == level == ((hi * inv_res + rounder) - rounder)")
+# With a resolution the error holds while the potentiometer's level does: ``reading`` (lo, hi, level)
+# is an interval of delta whose ends read that level (the rounding is monotonic: every delta between
+# them reads it too; NaN ends when its ends do not), kept from step to step; the error and its
+# products by k_p and k_i h are made when delta leaves it or the command changes. Once a substep finds
+# the error 0 and leaves the integral as it was (nonzero: I + 0 = I), the PI and the valve are fixed
+# until the level changes: the next substeps only move the spool and the wheel.
+_LEVEL = ("level = (delta * inv_res + rounder) - rounder",
+          "lo, hi = (level - 0.4990234375) * res, (level + 0.4990234375) * res",
+          "if not ((lo * inv_res + rounder) - rounder) == level == ((hi * inv_res + rounder) - rounder):",
+          "    lo = hi = NAN")
+_ERROR = ("error = cmd - res * level",)
+_PRODUCTS = ("kp_e, ki_e = kp * error, ki_h * error",)
+_QUIET = ("quiet = error == 0.0 and integral == before and integral != 0.0",)
 
 
 def _indent(lines, spaces: int) -> list[str]:
@@ -93,24 +98,28 @@ _BOUND = ("db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h
 def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
     """The source of ``make(constants)``, which returns the substep loop of one form with the
     step's constants bound as its locals (defaults: made once per run and step)."""
-    wheel = list(_SPOOL_AND_WHEEL) + (list(_LIMITED_MOVE) if limit else ["delta += rate_step * opening"]) + list(_STOP)
-    lines = ["v_rel = error = 0.0", "quiet = False", "for _ in range(n):"]
+    wheel = ["opening += alpha * (target - opening)"] + \
+        (list(_LIMITED_MOVE) if limit else ["delta += rate_step * opening"]) + list(_STOP)
+    dead_band = _DEAD if dead else ()
     if resolution:
-        lines += ["    if quiet:", "        if lo <= delta <= hi:", *_indent(wheel, 12), "            continue",
-                  "        quiet = False",
-                  "    level = (delta * inv_res + rounder) - rounder", "    error = cmd - res * level",
-                  "    before = integral"]
+        pi = [line.format(kp_e="kp_e", ki_e="ki_e") for line in _PI]
+        lines = ["lo, hi, level = reading", *_ERROR, *dead_band, *_PRODUCTS, "v_rel = 0.0", "quiet = False",
+                 "for _ in range(n):", "    if lo <= delta <= hi:", "        if quiet:", *_indent(wheel, 12),
+                 "            continue", "    else:", *_indent(_LEVEL + _ERROR + dead_band + _PRODUCTS, 8),
+                 "        quiet = False", "    before = integral", *_indent(pi + list(_VALVE) + wheel + list(_QUIET), 4)]
     else:
-        lines += ["    error = cmd - delta"]
-    lines += _indent((_DEAD if dead else ()) + _PI + _VALVE, 4) + _indent(wheel, 4)
-    lines += _indent(_QUIET if resolution else (), 4) + ["return delta, opening, integral, error, v_rel"]
+        pi = [line.format(kp_e="kp * error", ki_e="ki_h * error") for line in _PI]
+        lines = ["v_rel = error = 0.0", "for _ in range(n):", "    error = cmd - delta",
+                 *_indent(tuple(dead_band) + tuple(pi) + _VALVE, 4), *_indent(wheel, 4)]
+    lines += ["return delta, opening, integral, error, v_rel, reading" if not resolution else
+              "return delta, opening, integral, error, v_rel, (lo, hi, level)"]
     bound = ", ".join(f"{name}={name}" for name in _BOUND)
     return "\n".join([
         "def make(constants):",
         "    h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
         "inv_res = constants",
         "    rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim",
-        f"    def loop(n, cmd, delta, opening, integral, {bound}):",
+        f"    def loop(n, cmd, delta, opening, integral, reading, {bound}):",
         *_indent(lines, 8), "    return loop", ""])
 
 
@@ -126,7 +135,7 @@ def substep_loop(dead: bool, resolution: bool, limit: bool):
     key = (dead, resolution, limit)
     loop = _LOOPS.get(key)
     if loop is None:
-        space = {"ROUNDER": ROUNDER}
+        space = {"ROUNDER": ROUNDER, "NAN": math.nan}
         exec(compile(_loop_source(*key), f"<steering substeps {key}>", "exec"), space)  # noqa: S102
         loop = _LOOPS[key] = space["make"]
     return loop
@@ -199,6 +208,7 @@ class SteeringHydraulics(Component):
         self.delta = float(p["delta0"])
         self.opening = 0.0
         self._per_step: dict[float, tuple] = {}
+        self._reading = (math.nan, math.nan, math.nan)        # the potentiometer level's interval (substep_loop)
         self.y["steer_angle"] = self.delta
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
 
@@ -238,8 +248,8 @@ class SteeringHydraulics(Component):
             history = self.command_history
             history.append(cmd)
             cmd = history[0]
-        delta, opening, pi.integral, pi.prev_error, v_rel = loop(self.substeps, cmd, self.delta, self.opening,
-                                                                 pi.integral)
+        delta, opening, pi.integral, pi.prev_error, v_rel, self._reading = \
+            loop(self.substeps, cmd, self.delta, self.opening, pi.integral, self._reading)
         self.delta, self.opening = delta, opening
         y = self.y
         y["steer_angle"] = delta
