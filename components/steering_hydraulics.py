@@ -212,6 +212,11 @@ class SteeringHydraulics(Component):
         self.y["steer_angle"] = self.delta
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
 
+    def __getstate__(self) -> dict:
+        """Pickled without the substep loops made for each step (a generated function is not
+        picklable); ``step`` makes them again."""
+        return {**self.__dict__, "_per_step": {}}
+
     def _constants(self, dt: float) -> tuple:
         """The substep's constants for step ``dt`` (the parameters are fixed from ``initialize`` on):
         (h, V_n, db, opening scale, rate step, angle limit, resolution, alpha, k_p, k_i h, PI bounds,

@@ -295,9 +295,25 @@ class TractorYawPlant(Component):
         self._affine = _AFFINE.get(n, _affine_held)
         self._held, self._product = np.zeros(n), np.zeros(n)    # the level step's state as an array, Ad z
         self._held_of = self.z                                  # the state ``_held`` holds
-        # written and read through memoryviews: a float in or out without numpy's item dispatch
-        self._held_view, self._product_view = memoryview(self._held), memoryview(self._product)
+        self._views()
         self._set_outputs(0.0, 0.0, 0.0)
+
+    def _views(self) -> None:
+        """``_held`` and ``_product`` written and read through memoryviews: a float in or out without
+        numpy's item dispatch."""
+        self._held_view, self._product_view = memoryview(self._held), memoryview(self._product)
+
+    def __getstate__(self) -> dict:
+        """Pickled (and copied) without the memoryviews, which are not picklable."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_held_view", "_product_view")}
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickled or copied: arrays of its own (a copy stepping must not write the original's
+        state) and their memoryviews."""
+        self.__dict__.update(state)
+        if "_held" in state:
+            self._held, self._product = np.array(self._held), np.array(self._product)
+            self._views()
 
     def _update_ground(self) -> None:
         """Gradient, pull and attitude of the ground at the CG."""
