@@ -64,8 +64,12 @@ class _Buffer:
         except (TypeError, ValueError) as exc:
             raise ComputationError(f"component {self.name!r}: an output it declares numeric held a value that is "
                                    f"not a number ({exc})") from None
-        rows = block.shape[0]
-        block[:] = kept[:rows] if self.ratio == 1 else np.repeat(kept, self.ratio, axis=0)[:rows]
+        if self.ratio == 1:
+            block[:] = kept[:block.shape[0]]
+            return
+        for j in range(self.ratio):            # every ratio-th row from j: each sample held (no repeated copy)
+            rows = block[j::self.ratio]
+            rows[:] = kept[:rows.shape[0]]
 
 
 class SignalRecorder(Observer):
