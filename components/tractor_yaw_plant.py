@@ -289,6 +289,7 @@ class TractorYawPlant(Component):
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray, list]] = {}
         self._update_ground()
         self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+        self._arms = (self.params.l_r, self._lever[0], self._lever[1])     # the level step's lever arms
         self._offset = float(p["steer_angle_offset"])
         # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
         self._level = not (self._slope or self._saturation)
@@ -418,7 +419,7 @@ class TractorYawPlant(Component):
         self.x = x = self.x + dt * (v * c - vy_mid * s)
         self.y_pos = y_pos = self.y_pos + dt * (v * s + vy_mid * c)
         self.psi = psi = psi + 0.5 * dt * (gamma0 + gamma1)
-        lr = self.params.l_r                                        # _set_outputs(v, gamma1, vy1)
+        lr, forward, left = self._arms                              # _set_outputs(v, gamma1, vy1)
         c, s = math.cos(psi), math.sin(psi)
         y = self.y
         y["yaw_rate"], y["lateral_velocity"], y["heading"] = gamma1, vy1, psi
@@ -427,7 +428,6 @@ class TractorYawPlant(Component):
         v_lat_rear = vy1 - lr * gamma1
         y["vel_east_rear"] = ve = v * c - v_lat_rear * s
         y["vel_north_rear"] = vn = v * s + v_lat_rear * c
-        forward, left = self._lever[0], self._lever[1]
         dx, dy = c * forward - s * left, s * forward + c * left
         y["x_antenna"], y["y_antenna"] = x_rear + dx, y_rear + dy
         y["vel_east_antenna"] = ve - gamma1 * dy
