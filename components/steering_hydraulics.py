@@ -87,11 +87,18 @@ _PRODUCTS = ("kp_e, ki_e = kp * error, ki_h * error",)
 _QUIET = ("quiet = error == 0.0 and integral == before and integral != 0.0",)
 
 
+# the outputs after the last substep (the potentiometer's reading is quantize's, inline); the wheel
+# rate is max(-max_move, min(max_move, rate)) / h as min and max choose
+_OUTPUTS = ("y['steer_angle'] = delta", "y['valve_voltage'] = vn + v_rel", "if abs(delta) < lim:",
+            "    rate = opening * rate_step", "    rate = rate if rate < max_move else max_move",
+            "    y['steer_rate'] = (rate if rate > -max_move else -max_move) / h", "else:", "    y['steer_rate'] = 0.0")
+
+
 def _indent(lines, spaces: int) -> list[str]:
     return [" " * spaces + line for line in lines]
 
 
-_BOUND = ("db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi", "i_lim", "dead",
+_BOUND = ("h", "vn", "db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi", "i_lim", "dead",
           "max_move", "inv_res", "rounder", "no_dead", "no_i", "no_db", "no_move", "no_lim")
 
 
@@ -111,15 +118,17 @@ def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
         pi = [line.format(kp_e="kp * error", ki_e="ki_h * error") for line in _PI]
         lines = ["v_rel = error = 0.0", "for _ in range(n):", "    error = cmd - delta",
                  *_indent(tuple(dead_band) + tuple(pi) + _VALVE, 4), *_indent(wheel, 4)]
-    lines += ["return delta, opening, integral, error, v_rel, reading" if not resolution else
-              "return delta, opening, integral, error, v_rel, (lo, hi, level)"]
+    lines += list(_OUTPUTS) + ["y['steer_angle_measured'] = res * round(delta / res)" if resolution else
+                               "y['steer_angle_measured'] = delta"]
+    lines += ["return delta, opening, integral, error, reading" if not resolution else
+              "return delta, opening, integral, error, (lo, hi, level)"]
     bound = ", ".join(f"{name}={name}" for name in _BOUND)
     return "\n".join([
         "def make(constants):",
         "    h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
         "inv_res = constants",
         "    rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim",
-        f"    def loop(n, cmd, delta, opening, integral, reading, {bound}):",
+        f"    def loop(n, cmd, delta, opening, integral, reading, y, {bound}):",
         *_indent(lines, 8), "    return loop", ""])
 
 
@@ -127,11 +136,11 @@ _LOOPS: dict[tuple[bool, bool, bool], object] = {}
 
 
 def substep_loop(dead: bool, resolution: bool, limit: bool):
-    """``make(constants)`` -> ``loop(n, cmd, delta, opening, integral)`` -> (delta, opening,
-    integral, error, v_rel) after n substeps, compiled once per form (an angle dead band, a
-    potentiometer resolution, an extra rate limit: each present or not): the general loop without
-    the tests that do not change for the run, and with a resolution its quiet substeps (``_QUIET``)
-    reduced to the spool and the wheel."""
+    """``make(constants)`` -> ``loop(n, cmd, delta, opening, integral, reading, y)`` -> (delta,
+    opening, integral, error, reading) after n substeps, the outputs set in ``y``; compiled once per
+    form (an angle dead band, a potentiometer resolution, an extra rate limit: each present or not):
+    the general loop without the tests that do not change for the run, and with a resolution its
+    quiet substeps (``_QUIET``) reduced to the spool and the wheel."""
     key = (dead, resolution, limit)
     loop = _LOOPS.get(key)
     if loop is None:
@@ -232,40 +241,27 @@ class SteeringHydraulics(Component):
                 p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0),
                 p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0)
 
-    def _step_of(self, dt: float) -> tuple:
-        """What ``step`` needs for step ``dt``, made once per run and step: (h, V_n, resolution, rate
-        limit per substep, angle limit, rate step, the substep loop with the constants bound)."""
+    def _step_of(self, dt: float):
+        """The substep loop for step ``dt`` with the constants bound, made once per run and step."""
         c = self._constants(dt)
-        loop = substep_loop(bool(c[13]), c[6] > 0, self.p["rate_limit"] > 0)(c)
-        return c[0], c[1], c[6], c[14], c[5], c[4], loop
+        return substep_loop(bool(c[13]), c[6] > 0, self.p["rate_limit"] > 0)(c)
 
     def step(self, t: float, dt: float) -> None:
         """The substep loop of the module docstring as one function made for this configuration
-        (``substep_loop``); DiscretePID.update (kd = 0), valve_opening and quantize inlined in it;
-        tests check it against those functions and against the general loop, to the bit."""
-        per_step = self._per_step.get(dt)
-        if per_step is None:
-            per_step = self._per_step[dt] = self._step_of(dt)
-        h, vn, res, max_move, lim, rate_step, loop = per_step
+        (``substep_loop``), which also sets the outputs; DiscretePID.update (kd = 0), valve_opening
+        and quantize inlined in it; tests check it against those functions and against the general
+        loop, to the bit."""
+        loop = self._per_step.get(dt)
+        if loop is None:
+            loop = self._per_step[dt] = self._step_of(dt)
         pi = self.pi
         cmd = float(self.u["steer_angle_cmd"])
         if self._delayed:
             history = self.command_history
             history.append(cmd)
             cmd = history[0]
-        delta, opening, pi.integral, pi.prev_error, v_rel, self._reading = \
-            loop(self.substeps, cmd, self.delta, self.opening, pi.integral, self._reading)
-        self.delta, self.opening = delta, opening
-        y = self.y
-        y["steer_angle"] = delta
-        y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
-        y["valve_voltage"] = vn + v_rel
-        if abs(delta) < lim:     # max(-max_move, min(max_move, rate)) / h as min and max choose
-            rate = opening * rate_step
-            rate = rate if rate < max_move else max_move
-            y["steer_rate"] = (rate if rate > -max_move else -max_move) / h
-        else:
-            y["steer_rate"] = 0.0
+        self.delta, self.opening, pi.integral, pi.prev_error, self._reading = \
+            loop(self.substeps, cmd, self.delta, self.opening, pi.integral, self._reading, self.y)
 
     def linear_model(self, step: float, speed: float) -> Block:
         """The hydraulics' substep (components.steering_hydraulics) beyond its dead bands, lifted over
