@@ -98,8 +98,8 @@ def _indent(lines, spaces: int) -> list[str]:
     return [" " * spaces + line for line in lines]
 
 
-_BOUND = ("h", "vn", "db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi", "i_lim", "dead",
-          "max_move", "inv_res", "rounder", "no_dead", "no_i", "no_db", "no_move", "no_lim")
+_BOUND = ("h", "vn", "db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi",
+          "i_lim", "dead", "max_move", "inv_res", "rounder", "no_dead", "no_i", "no_db", "no_move", "no_lim")
 
 
 def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
@@ -113,7 +113,8 @@ def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
         lines = ["lo, hi, level = reading", *_ERROR, *dead_band, *_PRODUCTS, "v_rel = 0.0", "quiet = False",
                  "for _ in range(n):", "    if lo <= delta <= hi:", "        if quiet:", *_indent(wheel, 12),
                  "            continue", "    else:", *_indent(_LEVEL + _ERROR + dead_band + _PRODUCTS, 8),
-                 "        quiet = False", "    before = integral", *_indent(pi + list(_VALVE) + wheel + list(_QUIET), 4)]
+                 "        quiet = False", "    before = integral",
+                 *_indent(pi + list(_VALVE) + wheel + list(_QUIET), 4)]
     else:
         pi = [line.format(kp_e="kp * error", ki_e="ki_h * error") for line in _PI]
         lines = ["v_rel = error = 0.0", "for _ in range(n):", "    error = cmd - delta",
@@ -216,7 +217,7 @@ class SteeringHydraulics(Component):
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
         self.opening = 0.0
-        self._per_step: dict[float, tuple] = {}
+        self._per_step: dict = {}                             # step -> its substep loop (_step_of)
         self._reading = (math.nan, math.nan, math.nan)        # the potentiometer level's interval (substep_loop)
         self.y["steer_angle"] = self.delta
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])

@@ -67,7 +67,8 @@ class GeneralLoop:
 
 def _random_case(rng: np.random.Generator) -> tuple[dict, float, np.ndarray]:
     params = {"quantization_guard": int(rng.integers(0, 2)),
-              "potentiometer_resolution": float(rng.choice([0.0, math.radians(1.0), math.radians(rng.uniform(0.1, 2))])),
+              "potentiometer_resolution": float(rng.choice([0.0, math.radians(1.0),
+                                                             math.radians(rng.uniform(0.1, 2))])),
               "angle_deadband": float(rng.choice([0.0, math.radians(rng.uniform(0.0, 1.0))])),
               "rate_limit": float(rng.choice([0.0, rng.uniform(0.2, 1.5)])),
               "command_delay": float(rng.choice([0.0, 0.03])), "kp": float(rng.uniform(20.0, 400.0)),
