@@ -20,7 +20,8 @@ Two measures of the Python engine, each in a fresh process with PYTHONPATH the t
 Every figure is the median of ``--repeat`` rounds (the best beside it); the real-time factor is
 160 s over the run's time. Start-up is the wall time of ``python -m agrobot --version``. The other
 commit is unpacked by ``git archive`` into a temporary folder. Target: the Python engine at >= 500x
-real time in CPU time (the median), on this tree.
+real time in CPU time (the median), on this tree. The output also says whether every Python run of
+both trees recorded the same signal table, to the bit (a digest of its names and values).
 """
 from __future__ import annotations
 
@@ -42,7 +43,7 @@ RUNS_IN_PROCESS = 3         # the first run is the figure; the others (restarted
 
 # the engine's span, timed inside a fresh process (the Simulation API of every tree since 24154ae)
 IN_PROCESS = f"""
-import json, time
+import hashlib, json, time
 from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve
@@ -56,7 +57,8 @@ for _ in range({RUNS_IN_PROCESS}):
     rec = sim.finish()
     runs.append((time.process_time() - cpu, time.perf_counter() - wall))
     sim.terminate()
-print(json.dumps({{"cpu": runs[0][0], "wall": runs[0][1], "again": min(c for c, _ in runs[1:])}}))
+digest = hashlib.sha256(repr(rec.columns).encode() + rec.data.tobytes()).hexdigest()
+print(json.dumps({{"cpu": runs[0][0], "wall": runs[0][1], "again": min(c for c, _ in runs[1:]), "digest": digest}}))
 """
 
 
@@ -87,14 +89,15 @@ def run_command(tree: Path, engine: str, out: Path) -> tuple[float, float]:
     return float(metrics["wall_time_s"]), wall
 
 
-def run_in_process(tree: Path) -> tuple[float, float, float]:
-    """(CPU time, wall time) of the Python engine's first run, timed inside its process, and the
-    least CPU time of the runs after it in that process."""
+def run_in_process(tree: Path) -> tuple[float, float, float, str]:
+    """(CPU time, wall time) of the Python engine's first run, timed inside its process, the least
+    CPU time of the runs after it in that process, and a digest of its signal table (names and
+    every bit of every value)."""
     done, _ = _python(tree, ["-c", IN_PROCESS])
     if done.returncode != 0:
         raise SystemExit(f"{tree}: the in-process run exited {done.returncode}:\n{done.stderr[-2000:]}")
     facts = json.loads(done.stdout.strip().splitlines()[-1])
-    return float(facts["cpu"]), float(facts["wall"]), float(facts["again"])
+    return float(facts["cpu"]), float(facts["wall"]), float(facts["again"]), facts["digest"]
 
 
 def start_up(tree: Path) -> float:
@@ -111,12 +114,13 @@ def measure(trees: dict[str, Path], repeat: int, folder: Path) -> list[dict]:
     cases = [(name, tree, "python") for name, tree in trees.items()] + [("now", trees["now"], "compiled")]
     run_command(trees["now"], "compiled", folder / "warm")        # the loop compiled (or found in the cache)
     rows = {(name, engine): {"code": name, "engine": engine, "cpu": [], "wall": [], "again": [], "run": [],
-                             "command": [], "start": []} for name, _, engine in cases}
+                             "command": [], "start": [], "digests": set()} for name, _, engine in cases}
     for _ in range(repeat):
         for name, tree, engine in cases:
             row = rows[(name, engine)]
             if engine == "python":
-                cpu, wall, again = run_in_process(tree)
+                cpu, wall, again, digest = run_in_process(tree)
+                row["digests"].add(digest)
                 row["cpu"].append(cpu)
                 row["wall"].append(wall)
                 row["again"].append(again)
@@ -155,6 +159,17 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def same_signals(rows: list[dict]) -> str:
+    """Whether every Python run of every tree recorded the same signal table, to the bit."""
+    digests = {name: r["digests"] for r in rows if r["engine"] == "python" for name in [r["code"]]}
+    every = set().union(*digests.values())
+    if len(every) == 1:
+        return (f"signals: the same to the bit in every Python run of {' and '.join(digests)} "
+                f"(sha256 {next(iter(every))[:16]})")
+    return "signals: NOT the same: " + "; ".join(f"{name}: {', '.join(d[:16] for d in sorted(ds))}"
+                                                  for name, ds in digests.items())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tree", default="295871d", help="the commit to compare with (default 295871d)")
@@ -166,10 +181,12 @@ def main() -> None:
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        trees = {"now": ROOT, **({f"before ({args.tree})": unpack(args.tree, tmp / "before")} if not args.no_tree else {})}
+        before = {} if args.no_tree else {f"before ({args.tree})": unpack(args.tree, tmp / "before")}
+        trees = {"now": ROOT, **before}
         rows = measure(trees, args.repeat, tmp)
     print(f"figure-8, {SIM_TIME:g} s simulated; the median of {args.repeat} rounds each, the best in brackets")
     print(table(rows))
+    print(same_signals(rows))
     print("target: the Python engine on this tree at >= 500x real time in CPU time (the median; the engine from "
           "start to its table built, timed in its process); wall-clock figures move with the machine's load")
     print(f"(load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} cores)")
