@@ -2,7 +2,7 @@
 and on the code of another commit, and the compiled engine, in one run (the machine is shared:
 every side sees the same load, the rounds interleave them).
 
-    python benchmarks/engine_speed.py [--tree 295871d] [--repeat 5] [--no-tree]
+    python benchmarks/engine_speed.py [--tree 295871d] [--repeat 5] [--no-tree] [--profile 12]
 
 Two measures of the Python engine, each in a fresh process with PYTHONPATH the tree's ``src``:
 
@@ -60,6 +60,35 @@ for _ in range({RUNS_IN_PROCESS}):
 digest = hashlib.sha256(repr(rec.columns).encode() + rec.data.tobytes()).hexdigest()
 print(json.dumps({{"cpu": runs[0][0], "wall": runs[0][1], "again": min(c for c, _ in runs[1:]), "digest": digest}}))
 """
+
+
+# the same span under cProfile: the functions that take the most time of their own
+PROFILED = f"""
+import cProfile, io, pstats, sys
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.engine import Simulation
+from agrobot.orchestrator.resolver import resolve
+from agrobot.orchestrator.study import load_study
+sim = Simulation(build_system(resolve(load_study({STUDY!r}))))
+profile = cProfile.Profile()
+profile.enable()
+sim.start()
+sim.advance(sim.n_steps)
+sim.finish()
+profile.disable()
+sim.terminate()
+text = io.StringIO()
+pstats.Stats(profile, stream=text).sort_stats("tottime").print_stats(int(sys.argv[1]))
+print(text.getvalue()[text.getvalue().index("   ncalls"):].replace(sys.path[0] if sys.path[0] else "", ""))
+"""
+
+
+def profile(tree: Path, lines: int) -> str:
+    """The top ``lines`` of the Python engine's run under cProfile (own time), paths from the package."""
+    done, _ = _python(tree, ["-c", PROFILED, str(lines)])
+    if done.returncode != 0:
+        raise SystemExit(f"{tree}: the profiled run exited {done.returncode}:\n{done.stderr[-2000:]}")
+    return done.stdout.replace(str(tree / "src") + "/", "").rstrip()
 
 
 def unpack(commit: str, folder: Path) -> Path:
@@ -175,6 +204,8 @@ def main() -> None:
     parser.add_argument("--tree", default="295871d", help="the commit to compare with (default 295871d)")
     parser.add_argument("--no-tree", action="store_true", help="only the code of this tree")
     parser.add_argument("--repeat", type=int, default=5, help="rounds; each figure is their median (default 5)")
+    parser.add_argument("--profile", type=int, default=0, metavar="LINES",
+                        help="also print each tree's top LINES functions by own time under cProfile (default 0: none)")
     args = parser.parse_args()
     if args.repeat < 1:
         parser.error(f"--repeat {args.repeat}: expected at least 1")
@@ -184,12 +215,16 @@ def main() -> None:
         before = {} if args.no_tree else {f"before ({args.tree})": unpack(args.tree, tmp / "before")}
         trees = {"now": ROOT, **before}
         rows = measure(trees, args.repeat, tmp)
+        profiles = {name: profile(tree, args.profile) for name, tree in trees.items()} if args.profile > 0 else {}
     print(f"figure-8, {SIM_TIME:g} s simulated; the median of {args.repeat} rounds each, the best in brackets")
     print(table(rows))
     print(same_signals(rows))
     print("target: the Python engine on this tree at >= 500x real time in CPU time (the median; the engine from "
           "start to its table built, timed in its process); wall-clock figures move with the machine's load")
     print(f"(load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} cores)")
+    for name, text in profiles.items():
+        print(f"\nPython engine, {name}: the top {args.profile} functions by own time under cProfile "
+              f"(the profiler slows each call: compare the lines, not with the table)\n{text}")
 
 
 if __name__ == "__main__":
