@@ -106,11 +106,12 @@ class PoseEKF(Component):
         u = self.u
         if self.prev_input is not None:
             self.predict(*self.prev_input, dt)
-        fix = (float(u["gps_x"]), float(u["gps_y"]))
-        if u["fix_valid"] > 0.5 and all(map(math.isfinite, fix)):
-            self.update(*fix)
-        inputs = (float(u["speed"]), float(u["steer_angle"]))
-        self.prev_input = inputs if all(map(math.isfinite, inputs)) else None
+        isfinite = math.isfinite
+        zx, zy = float(u["gps_x"]), float(u["gps_y"])
+        if u["fix_valid"] > 0.5 and isfinite(zx) and isfinite(zy):
+            self.update(zx, zy)
+        v, delta = float(u["speed"]), float(u["steer_angle"])
+        self.prev_input = (v, delta) if isfinite(v) and isfinite(delta) else None
         if not all(map(math.isfinite, self.s + self.P)):
             self.event(t, f"pose estimate went non-finite: reset to the last finite pose ({self.good[0]:.3f} m, "
                           f"{self.good[1]:.3f} m, {self.good[2]:.4f} rad) with the initial uncertainty")

@@ -56,6 +56,7 @@ class SpeedDrivetrain(Component):
         self.substeps = substeps(dt, p["internal_step"])
         self.pedal, self.v = float(p["pedal0"]), float(p["speed0"])
         self._per_step: dict[float, tuple] = {}
+        self._still: tuple = (None, 0.0)          # (pedal, v_ss) of the last step the pedal stood still
         self.y["pedal_position"], self.y["speed"] = self.pedal, self.v
 
     def _constants(self, dt: float) -> tuple:
@@ -80,14 +81,26 @@ class SpeedDrivetrain(Component):
         opening = 0.0 if excess <= 0.0 else math.copysign(min(excess / span, 1.0), e)
         pedal, v = self.pedal, self.v
         rate = h * opening * rate_max
+        # min(max(a, 0.0), 1.0) as the builtins choose (max keeps its first argument unless the second
+        # is greater, min unless the second is smaller; a NaN too), without their calls
         if rate == 0.0 or (pedal == 0.0 and rate < 0.0) or (pedal == 1.0 and rate > 0.0):
-            # the pedal does not move over this step: v_ss is constant, the lag is exact in one go
-            v_ss = v_max * min(max((pedal - p0) / travel, 0.0), 1.0) ** expo
+            # the pedal does not move over this step: v_ss is constant, the lag is exact in one go;
+            # v_ss kept with the pedal value it was made of (the same object: the same number)
+            held, v_ss = self._still
+            if pedal is not held:
+                a = (pedal - p0) / travel
+                a = 0.0 if 0.0 > a else a
+                v_ss = v_max * (1.0 if 1.0 < a else a) ** expo
+                self._still = (pedal, v_ss)
             v = v_ss + (v - v_ss) * decay_step
         else:
             for _ in range(self.substeps):
-                pedal = min(max(pedal + rate, 0.0), 1.0)
-                v_ss = v_max * min(max((pedal - p0) / travel, 0.0), 1.0) ** expo
+                pedal = pedal + rate
+                pedal = 0.0 if 0.0 > pedal else pedal
+                pedal = 1.0 if 1.0 < pedal else pedal
+                a = (pedal - p0) / travel
+                a = 0.0 if 0.0 > a else a
+                v_ss = v_max * (1.0 if 1.0 < a else a) ** expo
                 v = v_ss + (v - v_ss) * decay
         self.pedal, self.v = pedal, v
         y = self.y

@@ -56,6 +56,101 @@ def quantize(value: float, resolution: float) -> float:
     return resolution * round(value / resolution) if resolution > 0 else value
 
 
+# The substep loop (module docstring) as statements, in the general loop's order: the same floats to
+# the bit. A clamp at +-inf changes nothing, not even a NaN (both comparisons are false): without an
+# extra rate limit the move is not clamped.
+_DEAD = ("if error > dead:", "    error = error - dead", "elif error < no_dead:", "    error = error + dead", "else:",
+         "    error = 0.0")
+_INTEGRATE = ("integral += {ki_e}", "if integral > i_lim:", "    integral = i_lim", "elif integral < no_i:",
+              "    integral = no_i")
+_PI = ("raw = {kp_e} + integral", "if raw > v_hi:", "    v_rel = v_hi", "    if not error > 0:",
+       *("        " + line for line in _INTEGRATE), "elif raw < v_lo:", "    v_rel = v_lo", "    if not error < 0:",
+       *("        " + line for line in _INTEGRATE), "else:", "    v_rel = raw", *("    " + line for line in _INTEGRATE))
+_VALVE = ("if v_rel > db:", "    target = (v_rel - db) * opening_scale", "    if target > 1.0:", "        target = 1.0",
+          "elif v_rel < no_db:", "    target = (v_rel + db) * opening_scale", "    if target < -1.0:",
+          "        target = -1.0", "else:", "    target = 0.0")
+_LIMITED_MOVE = ("move = rate_step * opening", "if move > max_move:", "    move = max_move", "elif move < no_move:",
+                 "    move = no_move", "delta += move")
+_STOP = ("if delta > lim:", "    delta = lim", "elif delta < no_lim:", "    delta = no_lim")
+# With a resolution the error holds while the potentiometer's level does: ``reading`` (lo, hi, level)
+# is an interval of delta whose ends read that level (the rounding is monotonic: every delta between
+# them reads it too; NaN ends when its ends do not), kept from step to step; the error and its
+# products by k_p and k_i h are made when delta leaves it or the command changes. Once a substep finds
+# the error 0 and leaves the integral as it was (nonzero: I + 0 = I), the PI and the valve are fixed
+# until the level changes: the next substeps only move the spool and the wheel.
+_LEVEL = ("level = (delta * inv_res + rounder) - rounder",
+          "lo, hi = (level - 0.4990234375) * res, (level + 0.4990234375) * res",
+          "if not ((lo * inv_res + rounder) - rounder) == level == ((hi * inv_res + rounder) - rounder):",
+          "    lo = hi = NAN")
+_ERROR = ("error = cmd - res * level",)
+_PRODUCTS = ("kp_e, ki_e = kp * error, ki_h * error",)
+_QUIET = ("quiet = error == 0.0 and integral == before and integral != 0.0",)
+
+
+# the outputs after the last substep (the potentiometer's reading is quantize's, inline); the wheel
+# rate is max(-max_move, min(max_move, rate)) / h as min and max choose
+_OUTPUTS = ("y['steer_angle'] = delta", "y['valve_voltage'] = vn + v_rel", "if abs(delta) < lim:",
+            "    rate = opening * rate_step", "    rate = rate if rate < max_move else max_move",
+            "    y['steer_rate'] = (rate if rate > -max_move else -max_move) / h", "else:", "    y['steer_rate'] = 0.0")
+
+
+def _indent(lines, spaces: int) -> list[str]:
+    return [" " * spaces + line for line in lines]
+
+
+_BOUND = ("h", "vn", "db", "opening_scale", "rate_step", "lim", "res", "alpha", "kp", "ki_h", "v_lo", "v_hi",
+          "i_lim", "dead", "max_move", "inv_res", "rounder", "no_dead", "no_i", "no_db", "no_move", "no_lim")
+
+
+def _loop_source(dead: bool, resolution: bool, limit: bool) -> str:
+    """The source of ``make(constants)``, which returns the substep loop of one form with the
+    step's constants bound as its locals (defaults: made once per run and step)."""
+    wheel = ["opening += alpha * (target - opening)"] + \
+        (list(_LIMITED_MOVE) if limit else ["delta += rate_step * opening"]) + list(_STOP)
+    dead_band = _DEAD if dead else ()
+    if resolution:
+        pi = [line.format(kp_e="kp_e", ki_e="ki_e") for line in _PI]
+        lines = ["lo, hi, level = reading", *_ERROR, *dead_band, *_PRODUCTS, "v_rel = 0.0", "quiet = False",
+                 "for _ in range(n):", "    if lo <= delta <= hi:", "        if quiet:", *_indent(wheel, 12),
+                 "            continue", "    else:", *_indent(_LEVEL + _ERROR + dead_band + _PRODUCTS, 8),
+                 "        quiet = False", "    before = integral",
+                 *_indent(pi + list(_VALVE) + wheel + list(_QUIET), 4)]
+    else:
+        pi = [line.format(kp_e="kp * error", ki_e="ki_h * error") for line in _PI]
+        lines = ["v_rel = error = 0.0", "for _ in range(n):", "    error = cmd - delta",
+                 *_indent(tuple(dead_band) + tuple(pi) + _VALVE, 4), *_indent(wheel, 4)]
+    lines += list(_OUTPUTS) + ["y['steer_angle_measured'] = res * round(delta / res)" if resolution else
+                               "y['steer_angle_measured'] = delta"]
+    lines += ["return delta, opening, integral, error, reading" if not resolution else
+              "return delta, opening, integral, error, (lo, hi, level)"]
+    bound = ", ".join(f"{name}={name}" for name in _BOUND)
+    return "\n".join([
+        "def make(constants):",
+        "    h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, "
+        "inv_res = constants",
+        "    rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim",
+        f"    def loop(n, cmd, delta, opening, integral, reading, y, {bound}):",
+        *_indent(lines, 8), "    return loop", ""])
+
+
+_LOOPS: dict[tuple[bool, bool, bool], object] = {}
+
+
+def substep_loop(dead: bool, resolution: bool, limit: bool):
+    """``make(constants)`` -> ``loop(n, cmd, delta, opening, integral, reading, y)`` -> (delta,
+    opening, integral, error, reading) after n substeps, the outputs set in ``y``; compiled once per
+    form (an angle dead band, a potentiometer resolution, an extra rate limit: each present or not):
+    the general loop without the tests that do not change for the run, and with a resolution its
+    quiet substeps (``_QUIET``) reduced to the spool and the wheel."""
+    key = (dead, resolution, limit)
+    loop = _LOOPS.get(key)
+    if loop is None:
+        space = {"ROUNDER": ROUNDER, "NAN": math.nan}
+        exec(compile(_loop_source(*key), f"<steering substeps {key}>", "exec"), space)  # noqa: S102
+        loop = _LOOPS[key] = space["make"]
+    return loop
+
+
 def _steering_compiled(comp, period: float) -> str:
     return substeps_define(comp, period) + f"#define DELAY_STEPS {delay_steps(comp.p['command_delay'], period)}\n"
 
@@ -117,17 +212,25 @@ class SteeringHydraulics(Component):
                      f"parameter potentiometer_resolution must be 0 (none) or above angle_limit / 2^51, got {res}")
         steps = delay_steps(p["command_delay"], dt)
         self.command_history = deque([0.0] * steps, maxlen=steps + 1)
+        self._delayed = steps > 0
         self.pi = DiscretePID(p["kp"], p["ki"], 0.0, p["voltage_min"] - p["neutral_voltage"],
                               p["voltage_max"] - p["neutral_voltage"], p["integral_limit"])
         self.delta = float(p["delta0"])
         self.opening = 0.0
-        self._per_step: dict[float, tuple] = {}
+        self._per_step: dict = {}                             # step -> its substep loop (_step_of)
+        self._reading = (math.nan, math.nan, math.nan)        # the potentiometer level's interval (substep_loop)
         self.y["steer_angle"] = self.delta
         self.y["steer_angle_measured"] = quantize(self.delta, p["potentiometer_resolution"])
 
+    def __getstate__(self) -> dict:
+        """Pickled without the substep loops made for each step (a generated function is not
+        picklable); ``step`` makes them again."""
+        return {**self.__dict__, "_per_step": {}}
+
     def _constants(self, dt: float) -> tuple:
-        """The substep's constants for step ``dt`` (made once per run and step: the parameters are
-        fixed from ``initialize`` on)."""
+        """The substep's constants for step ``dt`` (the parameters are fixed from ``initialize`` on):
+        (h, V_n, db, opening scale, rate step, angle limit, resolution, alpha, k_p, k_i h, PI bounds,
+        integral limit, angle dead band, rate limit per substep, 1 / resolution)."""
         p = self.p
         h = dt / self.substeps
         vn, db = p["neutral_voltage"], p["deadband"]
@@ -139,69 +242,27 @@ class SteeringHydraulics(Component):
                 p["angle_deadband"] + (0.5 * res if p["quantization_guard"] else 0.0),
                 p["rate_limit"] * h if p["rate_limit"] > 0 else math.inf, 1.0 / res if res > 0 else 0.0)
 
+    def _step_of(self, dt: float):
+        """The substep loop for step ``dt`` with the constants bound, made once per run and step."""
+        c = self._constants(dt)
+        return substep_loop(bool(c[13]), c[6] > 0, self.p["rate_limit"] > 0)(c)
+
     def step(self, t: float, dt: float) -> None:
-        """The substep loop inlines DiscretePID.update (kd = 0), valve_opening and quantize
-        (a call costs as much as the arithmetic here; the rounding by ROUNDER); tests check it
-        against those functions."""
-        constants = self._per_step.get(dt)
-        if constants is None:
-            constants = self._per_step[dt] = self._constants(dt)
-        h, vn, db, opening_scale, rate_step, lim, res, alpha, kp, ki_h, v_lo, v_hi, i_lim, dead, max_move, inv_res = \
-            constants
+        """The substep loop of the module docstring as one function made for this configuration
+        (``substep_loop``), which also sets the outputs; DiscretePID.update (kd = 0), valve_opening
+        and quantize inlined in it; tests check it against those functions and against the general
+        loop, to the bit."""
+        loop = self._per_step.get(dt)
+        if loop is None:
+            loop = self._per_step[dt] = self._step_of(dt)
         pi = self.pi
-        integral = pi.integral
-        history = self.command_history
-        history.append(float(self.u["steer_angle_cmd"]))
-        cmd = history[0]
-        delta, opening = self.delta, self.opening
-        v_rel = 0.0
-        rounder, no_dead, no_i, no_db, no_move, no_lim = ROUNDER, -dead, -i_lim, -db, -max_move, -lim
-        for _ in range(self.substeps):
-            error = cmd - (res * ((delta * inv_res + rounder) - rounder) if inv_res else delta)
-            if dead:
-                error = error - dead if error > dead else (error + dead if error < no_dead else 0.0)
-            raw = kp * error + integral
-            if raw > v_hi:
-                v_rel = v_hi
-                windup = error > 0
-            elif raw < v_lo:
-                v_rel = v_lo
-                windup = error < 0
-            else:
-                v_rel, windup = raw, False
-            if not windup:
-                integral += ki_h * error
-                if integral > i_lim:
-                    integral = i_lim
-                elif integral < no_i:
-                    integral = no_i
-            if v_rel > db:
-                target = (v_rel - db) * opening_scale
-                target = 1.0 if target > 1.0 else target
-            elif v_rel < no_db:
-                target = (v_rel + db) * opening_scale
-                target = -1.0 if target < -1.0 else target
-            else:
-                target = 0.0
-            opening += alpha * (target - opening)
-            move = rate_step * opening
-            if move > max_move:
-                move = max_move
-            elif move < no_move:
-                move = no_move
-            delta += move
-            if delta > lim:
-                delta = lim
-            elif delta < no_lim:
-                delta = no_lim
-        pi.integral, pi.prev_error = integral, error
-        voltage = vn + v_rel
-        self.delta, self.opening = delta, opening
-        y = self.y
-        y["steer_angle"] = delta
-        y["steer_angle_measured"] = res * round(delta / res) if res > 0 else delta      # quantize, inline
-        y["valve_voltage"] = voltage
-        y["steer_rate"] = max(-max_move, min(max_move, opening * rate_step)) / h if abs(delta) < lim else 0.0
+        cmd = float(self.u["steer_angle_cmd"])
+        if self._delayed:
+            history = self.command_history
+            history.append(cmd)
+            cmd = history[0]
+        self.delta, self.opening, pi.integral, pi.prev_error, self._reading = \
+            loop(self.substeps, cmd, self.delta, self.opening, pi.integral, self._reading, self.y)
 
     def linear_model(self, step: float, speed: float) -> Block:
         """The hydraulics' substep (components.steering_hydraulics) beyond its dead bands, lifted over

@@ -129,29 +129,48 @@ def _per_heading(p, eps: float = 1e-6) -> dict[str, float]:
 
 
 def _affine(w: list, b: list, d: float) -> list:
-    """w + b d element by element, on Python floats."""
+    """w + b d element by element, on Python floats (``_affineN``: also written into the array
+    ``held``, unrolled for N states)."""
     return [wi + bi * d for wi, bi in zip(w, b)]
 
 
-def _affine2(w: list, b: list, d: float) -> list:
+def _affine2(w: list, b: list, d: float, held) -> list:
     w0, w1 = w
     b0, b1 = b
-    return [w0 + b0 * d, w1 + b1 * d]
+    z0, z1 = w0 + b0 * d, w1 + b1 * d
+    held[0] = z0
+    held[1] = z1
+    return [z0, z1]
 
 
-def _affine3(w: list, b: list, d: float) -> list:
+def _affine3(w: list, b: list, d: float, held) -> list:
     w0, w1, w2 = w
     b0, b1, b2 = b
-    return [w0 + b0 * d, w1 + b1 * d, w2 + b2 * d]
+    z0, z1, z2 = w0 + b0 * d, w1 + b1 * d, w2 + b2 * d
+    held[0] = z0
+    held[1] = z1
+    held[2] = z2
+    return [z0, z1, z2]
 
 
-def _affine4(w: list, b: list, d: float) -> list:
+def _affine4(w: list, b: list, d: float, held) -> list:
     w0, w1, w2, w3 = w
     b0, b1, b2, b3 = b
-    return [w0 + b0 * d, w1 + b1 * d, w2 + b2 * d, w3 + b3 * d]
+    z0, z1, z2, z3 = w0 + b0 * d, w1 + b1 * d, w2 + b2 * d, w3 + b3 * d
+    held[0] = z0
+    held[1] = z1
+    held[2] = z2
+    held[3] = z3
+    return [z0, z1, z2, z3]
 
 
-_AFFINE = {2: _affine2, 3: _affine3, 4: _affine4}     # _affine unrolled for the physical models' states
+def _affine_held(w: list, b: list, d: float, held) -> list:
+    z = _affine(w, b, d)
+    held[:] = z
+    return z
+
+
+_AFFINE = {2: _affine2, 3: _affine3, 4: _affine4}     # unrolled for the physical models' states
 
 
 class TractorYawPlant(Component):
@@ -265,16 +284,37 @@ class TractorYawPlant(Component):
         else:
             n = state_space(p["model"], self.params, 1.0)[0].shape[0]
         self._min_speed, self._cache_res = float(p["min_speed"]), float(p["speed_cache_resolution"])
-        self.z = np.zeros(n)
+        self.z = [0.0] * n
         self.x, self.y_pos, self.psi = float(p["x0"]), float(p["y0"]), float(p["psi0"])
         self._cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray, list]] = {}
         self._update_ground()
         self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
+        self._arms = (self.params.l_r, self._lever[0], self._lever[1])     # the level step's lever arms
         self._offset = float(p["steer_angle_offset"])
         # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
         self._level = not (self._slope or self._saturation)
-        self._affine = _AFFINE.get(n, _affine)
+        self._affine = _AFFINE.get(n, _affine_held)
+        self._held, self._product = np.zeros(n), np.zeros(n)    # the level step's state as an array, Ad z
+        self._held_of = self.z                                  # the state ``_held`` holds
+        self._views()
         self._set_outputs(0.0, 0.0, 0.0)
+
+    def _views(self) -> None:
+        """``_held`` and ``_product`` written and read through memoryviews: a float in or out without
+        numpy's item dispatch."""
+        self._held_view, self._product_view = memoryview(self._held), memoryview(self._product)
+
+    def __getstate__(self) -> dict:
+        """Pickled (and copied) without the memoryviews, which are not picklable."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_held_view", "_product_view")}
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickled or copied: arrays of its own (a copy stepping must not write the original's
+        state) and their memoryviews."""
+        self.__dict__.update(state)
+        if "_held" in state:
+            self._held, self._product = np.array(self._held), np.array(self._product)
+            self._views()
 
     def _update_ground(self) -> None:
         """Gradient, pull and attitude of the ground at the CG."""
@@ -348,24 +388,50 @@ class TractorYawPlant(Component):
 
     def _level_step(self, v: float, delta: float, dt: float) -> None:
         """``step`` on level ground with linear tyres: z <- Ad(v) z + Bd(v) delta on a state of
-        Python floats (the product by Ad.dot, matmul's sums without its dispatch; the sum element
-        by element, as numpy's), the same to the bit; then ``_move``."""
+        Python floats (the product by Ad.dot into arrays held from initialize, matmul's sums without
+        its dispatch; the sum element by element, as numpy's), the same to the bit; then ``_move``
+        and ``_set_outputs`` written out with zero roll, pitch and pull (set at initialize)."""
         speed = abs(v)
         vmin = self._min_speed
         v_eff, scale = (speed, 1.0) if speed >= vmin else (vmin, speed / vmin)
-        hit = self._cache.get((int(round(v_eff / self._cache_res)), dt))       # discretized's, inline
+        # discretized's key, inline (round of a float is the int the key holds)
+        hit = self._cache.get((round(v_eff / self._cache_res), dt))
         Ad, _, _, bd = hit if hit is not None else self.discretized(v_eff, dt)
+        z0, held = self.z, self._held
+        if z0 is not self._held_of:            # a state set from outside: the array follows it
+            held[:] = z0
+            z0 = held.tolist()
         if self._tf is None:                    # (v_y, gamma, ...)
-            z0 = self.z
-            z = self.z = self._affine(Ad.dot(z0).tolist(), bd, delta)
-            vy0, gamma0, vy1, gamma1 = float(z0[0]), float(z0[1]), z[0], z[1]
+            Ad.dot(held, self._product)
+            z = self.z = self._held_of = self._affine(self._product_view.tolist(), bd, delta, self._held_view)
+            vy0, gamma0, vy1, gamma1 = z0[0], z0[1], z[0], z[1]
         else:
             gamma0, vy0 = self._yaw_rate_and_lateral()
-            self.z = self._affine(Ad.dot(self.z).tolist(), bd, delta)
+            Ad.dot(held, self._product)
+            self.z = self._held_of = self._affine(self._product_view.tolist(), bd, delta, self._held_view)
             gamma1, vy1 = self._yaw_rate_and_lateral()
         if scale != 1.0:
             gamma0, vy0, gamma1, vy1 = scale * gamma0, scale * vy0, scale * gamma1, scale * vy1
-        self._move(v, dt, gamma0, vy0, gamma1, vy1)
+        psi = self.psi                                              # _move
+        psi_mid = psi + 0.25 * dt * (gamma0 + gamma1)
+        vy_mid = 0.5 * (vy0 + vy1)
+        c, s = math.cos(psi_mid), math.sin(psi_mid)
+        self.x = x = self.x + dt * (v * c - vy_mid * s)
+        self.y_pos = y_pos = self.y_pos + dt * (v * s + vy_mid * c)
+        self.psi = psi = psi + 0.5 * dt * (gamma0 + gamma1)
+        lr, forward, left = self._arms                              # _set_outputs(v, gamma1, vy1)
+        c, s = math.cos(psi), math.sin(psi)
+        y = self.y
+        y["yaw_rate"], y["lateral_velocity"], y["heading"] = gamma1, vy1, psi
+        y["x_cg"], y["y_cg"] = x, y_pos
+        y["x_rear"], y["y_rear"] = x_rear, y_rear = x - lr * c, y_pos - lr * s
+        v_lat_rear = vy1 - lr * gamma1
+        y["vel_east_rear"] = ve = v * c - v_lat_rear * s
+        y["vel_north_rear"] = vn = v * s + v_lat_rear * c
+        dx, dy = c * forward - s * left, s * forward + c * left
+        y["x_antenna"], y["y_antenna"] = x_rear + dx, y_rear + dy
+        y["vel_east_antenna"] = ve - gamma1 * dy
+        y["vel_north_antenna"] = vn + gamma1 * dx
 
     def _move(self, v: float, dt: float, gamma0: float, vy0: float, gamma1: float, vy1: float) -> None:
         """The pose by the midpoint rule over the step (yaw rate and lateral velocity from gamma0,

@@ -15,7 +15,6 @@ import pandas as pd
 
 from .errors import ComputationError
 from .observers import Observer
-from .schedule import Schedule
 
 
 @dataclass
@@ -64,8 +63,12 @@ class _Buffer:
         except (TypeError, ValueError) as exc:
             raise ComputationError(f"component {self.name!r}: an output it declares numeric held a value that is "
                                    f"not a number ({exc})") from None
-        rows = block.shape[0]
-        block[:] = kept[:rows] if self.ratio == 1 else np.repeat(kept, self.ratio, axis=0)[:rows]
+        if self.ratio == 1:
+            block[:] = kept[:block.shape[0]]
+            return
+        for j in range(self.ratio):            # every ratio-th row from j: each sample held (no repeated copy)
+            rows = block[j::self.ratio]
+            rows[:] = kept[:rows.shape[0]]
 
 
 class SignalRecorder(Observer):
@@ -84,29 +87,32 @@ class SignalRecorder(Observer):
         self._layout = [(name, system.nodes[name].ratio, outs) for name, outs in outputs.items()]
         self._period = period
         self._buffers: list[_Buffer] = []
-        self._due: Schedule | list = []
         self._published: dict = {}
 
     def started(self, sim) -> None:
         self._buffers = [_Buffer(name, ratio, outs) for name, ratio, outs in self._layout]
         self._published = sim.published
-        self._due = Schedule(self._buffers, lambda b: b.ratio, self._keeper)
-        due = self._due.lookup
-        self.recorded = lambda phase: due(phase)()          # the hook, one call less at each base step
+        self.recorded = self._keeper(self._buffers)           # the hook: one call at each base step
 
     def _keeper(self, buffers: list[_Buffer]):
-        """One function for a due set: each buffer's outputs appended, as plain statements."""
+        """``keep(phase)``: each due buffer's outputs appended, as plain statements; a buffer of
+        ratio r is due when r divides ``phase`` (k modulo the engine's period, a multiple of r)."""
         space: dict = {"P": self._published}
         body = []
-        for i, b in enumerate(buffers):
-            space[f"e{i}"], space[f"g{i}"] = b.buf.extend, b.get
-            body.append(f"    e{i}(g{i}(P[{b.name!r}]))")
-        exec(compile("def keep():\n" + ("\n".join(body) or "    pass") + "\n", "<recorder>", "exec"), space)
+        for ratio in sorted({b.ratio for b in buffers}):
+            indent = "    " if ratio == 1 else "        "
+            if ratio != 1:
+                body.append(f"    if not phase % {ratio}:")
+            for i, b in enumerate(buffers):
+                if b.ratio == ratio:
+                    space[f"e{i}"], space[f"g{i}"] = b.buf.extend, b.get
+                    body.append(f"{indent}e{i}(g{i}(P[{b.name!r}]))")
+        exec(compile("def keep(phase):\n" + ("\n".join(body) or "    pass") + "\n", "<recorder>", "exec"), space)
         return space["keep"]
 
     def recorded(self, phase: int) -> None:
-        """Append the outputs due at ``phase`` (``started`` sets a quicker form of this hook)."""
-        self._due[phase]()
+        """Append the outputs due at ``phase`` (``started`` replaces this hook by its generated form)."""
+        self._keeper(self._buffers)(phase)
 
     def rows(self, t0: float, h: float, first: int, last: int) -> np.ndarray:
         """Time and signals of base steps ``first`` .. ``last - 1`` (``first``: where the buffers

@@ -658,9 +658,13 @@ def _drain(queue, pending: dict, job, submit, wait_first, workers: int):
             yield from zip(batch, results, folders)
 
 
-def _progress(total: int, initial: int, enabled: bool):
+def _progress(total: int, initial: int, enabled: bool, file=None):
+    """The sweep's bar. Its estimate of the time left is the rate so far (points done this time over
+    the time taken, ``smoothing=0``): the compiled engine's points arrive in batches, and tqdm's
+    moving average of the rate between two updates took a batch's wait for one point's (36 min left
+    after the first batch of a 93 s sweep)."""
     return tqdm(total=total, initial=initial, desc="sweep points", unit="pt", disable=not enabled,
-                dynamic_ncols=True)
+                dynamic_ncols=True, smoothing=0.0, file=file)
 
 
 _AT_T = re.compile(r"^at t = [^:]+ s: ")

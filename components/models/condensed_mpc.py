@@ -203,12 +203,13 @@ class CondensedTrackingMPC:
         actuator position): the internal model is advanced with it instead of the last command;
         the moves and their limits stay relative to the last command. Returns (u_k, status > 0)."""
         z, n = self._z, self._n
-        if u_applied is not None:
-            z[:n] = self._w[n:] + self.B * u_applied
+        if u_applied is not None:           # A x + B u_applied: W's lower half plus B u, element by element
+            w, b = self._w.tolist(), self.B.tolist()
+            z[:n] = [w[n + i] + b[i] * u_applied for i in range(n)]
         u_prev = float(z[n])                            # Python floats from here: no numpy scalar arithmetic
         z[n + 1] = y_meas - r
         if self.solver_name == "daqp":
-            np.dot(self.G, z, out=self._g)
+            self.G.dot(z, self._g)                      # np.dot without its dispatch
             self._bu[self.Nc:] = self.u_max - u_prev
             self._bl[self.Nc:] = -self.u_max - u_prev
             du, status = self._daqp(self._g, self._bu, self._bl)
@@ -220,7 +221,7 @@ class CondensedTrackingMPC:
         u = min(max(u_prev + du0, -self.u_max), self.u_max)
         z[n] = u
         w = self._w
-        np.dot(self._advance, z, out=w)
+        self._advance.dot(z, w)
         z[:n] = w[:n]
         self.last_du = du
         return float(u), status
