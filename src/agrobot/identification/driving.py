@@ -300,13 +300,15 @@ class YawModel:
 
     def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray):
         """The reference path: every row stepped together, (yaw rate, v_y) each (rows, L), from the
-        kinematic state; ``n_sub`` ROS2 substeps per sample (components.models.tyre.rates)."""
+        kinematic state; rows with linear tyres by the exact first-order-hold step at the sample's
+        mean speed (``exact_steps``), the others by ``n_sub`` ROS2 substeps per sample
+        (components.models.tyre.rates)."""
         Fzf, Fzr = self.loads
         Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
         mu = rows["friction"]
+        linear = ~np.isfinite(mu)
         tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
         slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
-        speed_scaled = bool(np.any(slope != 0.0))
         n = N_STATES[self.model]
         n_rows, L = w.shape
         z = np.zeros((n_rows, n))
@@ -315,29 +317,96 @@ class YawModel:
         z[:, 0], z[:, 1] = self.p.l_r * r0, r0
         out = np.empty((n_rows, L))
         out_vy = np.empty((n_rows, L))
-        hs = self.log.h / self.n_sub
-        eye = np.eye(n)
         for j in range(L):
             out[:, j] = z[:, 1]
             out_vy[:, j] = z[:, 0]
             if j == L - 1:
                 break
             d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
-            for k in range(self.n_sub):
-                s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
-                v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])
-                v1 = vv[:, j] + s1 * (vv[:, j + 1] - vv[:, j])
-                if speed_scaled:        # C x max(0.2, 1 + k (v - v_ref)), the speed-dependent cornering
-                    scale = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
-                    tyre["C_f"], tyre["C_r"] = Cf * scale, Cr * scale
-                f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
-                M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
-                k1 = np.einsum("sij,sj->si", M, f0)
-                f1, _ = rates(self.model, self.p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
-                k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
-                z = z + hs * (1.5 * k1 + 0.5 * k2)
+            z_next = z.copy()
+            if np.any(~linear):
+                z_next = self._ros2_sample(z, vv[:, j], vv[:, j + 1], d, d_next, tyre, Cf, Cr, slope, v_ref)
+            if np.any(linear):
+                vm = 0.5 * (vv[:, j] + vv[:, j + 1])
+                scale = cornering_scale(slope, v_ref, vm)
+                P, g1, g2 = exact_steps(self.model, self.p, vm, self.log.h, {**tyre, "C_f": Cf * scale, "C_r": Cr * scale})
+                exact = np.einsum("sij,sj->si", P, z) + g1 * d[:, None] + g2 * (d_next - d)[:, None]
+                z_next = np.where(linear[:, None], exact, z_next)
+            z = z_next
             d = d_next
         return out, out_vy
+
+    def _ros2_sample(self, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
+        """The state after one sample step by ``n_sub`` ROS2 substeps (speed and wheel angle linear
+        across the step; the cornering scaled at each substep's mean speed)."""
+        hs = self.log.h / self.n_sub
+        eye = np.eye(z.shape[1])
+        for k in range(self.n_sub):
+            s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
+            v0 = v_start + s0 * (v_end - v_start)
+            v1 = v_start + s1 * (v_end - v_start)
+            scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
+            tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
+            f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
+            M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
+            k1 = np.einsum("sij,sj->si", M, f0)
+            f1, _ = rates(self.model, self.p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
+            k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
+            z = z + hs * (1.5 * k1 + 0.5 * k2)
+        return z
+
+
+def cornering_scale(slope: np.ndarray, v_ref: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """max(0.2, 1 + k (v - v_ref)) where k != 0, else 1: the speed-dependent cornering's factor."""
+    return np.where(slope != 0.0, np.maximum(0.2, 1.0 + slope * (v - v_ref)), 1.0)
+
+
+def exact_steps(model: str, p, v: np.ndarray, h: float, tyre: dict, degree: int = 12):
+    """(P, g1, g2), (rows, n, n), (rows, n), (rows, n): the exact step of the linear single-track
+    model dz/dt = J z + b d at speed v over h for a wheel angle linear across it (d0 -> d1),
+
+        z+ = P z + g1 d0 + g2 (d1 - d0),  P = expm(h J),  g1 = h phi1(h J) b,  g2 = h phi2(h J) b,
+
+    phi1(X) = sum X^k / (k + 1)!, phi2(X) = sum X^k / (k + 2)! (linear tyres: b = f(0, 1)); by
+    scaling and squaring as single_track_kernel.c: X = h J / 2^s, ||X||_1 <= 1/2, expm(X) by the
+    [6/6] Pade approximant, phi2(X) b by Horner to ``degree``, phi1(X) b = b + X phi2(X) b, then s squarings of the block matrix
+    [[P, g1, g2], [0, 1, c], [0, 0, 1]] (c = 2^-s at the start)."""
+    n = N_STATES[model]
+    b, J = rates(model, p, v, np.ones_like(v), np.zeros((len(v), n)), **{**tyre, "mu": np.inf})
+    norm = np.abs(h * J).sum(axis=1).max(axis=1)
+    s = np.where(norm > 0.5, np.ceil(np.log2(np.maximum(norm, 0.5) / 0.5)), 0.0).astype(int)
+    scale = np.ldexp(h, -s)
+    X = J * scale[:, None, None]
+    beta = b * scale[:, None]
+    y = beta / math.factorial(degree + 2)
+    for k in range(degree - 1, -1, -1):              # phi2(X) beta
+        y = np.einsum("sij,sj->si", X, y) + beta / math.factorial(k + 2)
+    P = pade_expm(X)
+    c = np.ldexp(1.0, -s)
+    g1, g2 = beta + np.einsum("sij,sj->si", X, y), c[:, None] * y         # phi1(X) beta = beta + X phi2(X) beta
+    for k in range(int(s.max(initial=0))):
+        more = (k < s)[:, None]
+        g1, g2 = (np.where(more, np.einsum("sij,sj->si", P, g1) + g1, g1),
+                  np.where(more, np.einsum("sij,sj->si", P, g2) + c[:, None] * g1 + g2, g2))
+        c = np.where(k < s, 2.0 * c, c)
+        P = np.where(more[:, :, None], P @ P, P)
+    return P, g1, g2
+
+
+PADE_6 = (1.0, 1.0 / 2, 5.0 / 44, 1.0 / 66, 1.0 / 792, 1.0 / 15840, 1.0 / 665280)
+
+
+def pade_expm(X: np.ndarray) -> np.ndarray:
+    """expm of each matrix of X (rows, n, n), ||X||_1 <= 1/2: the [6/6] Pade approximant
+    (coefficients PADE_6; relative error below 1e-16)."""
+    c = PADE_6
+    eye = np.eye(X.shape[1])
+    X2 = X @ X
+    X4 = X2 @ X2
+    X6 = X4 @ X2
+    U = X @ (c[1] * eye + c[3] * X2 + c[5] * X4)
+    V = c[0] * eye + c[2] * X2 + c[4] * X4 + c[6] * X6
+    return np.linalg.solve(V - U, V + U)
 
 
 def understeer_gradient(c_f: float, c_r: float) -> float:
