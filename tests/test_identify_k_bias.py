@@ -88,3 +88,24 @@ def test_the_simulation_is_the_continuous_model_at_tight_tolerance(model, kernel
         ref = solve_ivp(lambda s, z: A @ z + b * np.interp(s, t, u), (0.0, t[-1]), z0, t_eval=t, method="DOP853",
                         rtol=1e-11, atol=1e-13, max_step=h / 4)
         assert np.max(np.abs(yaw - ref.y[1])) < 1e-8 * np.ptp(ref.y[1])
+
+
+def test_rows_that_share_their_steps_are_simulated_as_alone():
+    """A Jacobian's columns for the delay, lag and offset reuse the first row's linear steps (the
+    C kernel): the same numbers as each set alone, and as the Python path's."""
+    p = random_tractor(8)
+    h = 0.05
+    t = np.arange(0.0, 20.0, h)
+    log = DrivingLog(t, 0.1 * np.sin(0.7 * t), 2.0 + np.sin(0.3 * t), np.zeros_like(t), np.zeros(len(t), int), h,
+                     "delta")
+    segs = Segments(np.arange(len(t)).reshape(4, -1), np.ones((4, len(t) // 4), bool), np.zeros(4, bool))
+    base = {"c_f": 9.0, "c_r": 14.0, "lag": 0.1, "delay": 0.1}
+    sets = [base, {**base, "delay": 0.12}, {**base, "c_f": 9.5}, {**base, "lag": 0.13},
+            {**base, "steer_offset": 0.01}, {**base, "steer_gain": 1.1}]
+    model = YawModel("rlf", p, log, segs, kernel="c")
+    together = model.simulate_many(sets)
+    for got, values in zip(together, sets):
+        np.testing.assert_array_equal(got, model.simulate(values))
+    model.kernel = "python"
+    ref = model.simulate_many(sets)
+    assert np.max(np.abs(together - ref)) < 1e-9 * np.max(np.abs(ref))

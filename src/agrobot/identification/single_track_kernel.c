@@ -25,11 +25,15 @@
  *
  *     (P, g1, g2, c) -> (P P, P g1 + g1, P g2 + c g1 + g2, 2 c),  c = 2^-s at the start;
  *
- * a speed the previous sample had reuses the step.
+ * a speed the previous sample had reuses the step, and a row whose speeds and step parameters (all
+ * but the lag's) an earlier row of the call had reuses that row's steps (a Jacobian's columns for
+ * the delay, lag, offset or gain).
  *
  * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
 
 enum { P_A, P_C, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
        P_FZF, P_FZR, N_PAR };
@@ -288,9 +292,16 @@ static inline void cornering(Row *q, double v) {
 }
 
 
-/* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs */
+/* a stored step: P (4 x 4), g1, g2; rows remembered per speed row; the most doubles stored (128 MB): the
+ * store only when a call has more rows than speed rows (several parameter sets) */
+enum { STEP = 24, N_SLOT = 4, MAX_STORE = 1 << 24 };
+
+
+/* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs; steps
+ * (NULL: none): the linear steps of an earlier row with these speeds and step parameters (filled)
+ * or the place to store this row's */
 static inline int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
-                        double *vy) {
+                               double *vy, double *steps, int filled) {
     const double *p = q->p;
     double a = p[P_A], c = p[P_C], hs = h / sub;
     double z[4] = {0.0, 0.0, 0.0, 0.0}, d = w[0], P[4][4], g1[4], g2[4], v_cached = NAN;
@@ -305,12 +316,23 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
             break;
         double d_next = a * d + (1.0 - a) * w[j] + c * (w[j + 1] - w[j]);
         if (linear) {
-            double vm = 0.5 * (v[j] + v[j + 1]), zn[4];
-            if (vm != v_cached) {
-                cornering(q, vm);
-                if (!exact_step(q, vm, h, P, g1, g2))
-                    return 0;
-                v_cached = vm;
+            double vm = 0.5 * (v[j] + v[j + 1]), zn[4], *st = steps ? steps + j * STEP : NULL;
+            if (st && filled) {
+                memcpy(P, st, sizeof P);
+                memcpy(g1, st + 16, sizeof g1);
+                memcpy(g2, st + 20, sizeof g2);
+            } else {
+                if (vm != v_cached) {
+                    cornering(q, vm);
+                    if (!exact_step(q, vm, h, P, g1, g2))
+                        return 0;
+                    v_cached = vm;
+                }
+                if (st) {
+                    memcpy(st, P, sizeof P);
+                    memcpy(st + 16, g1, sizeof g1);
+                    memcpy(st + 20, g2, sizeof g2);
+                }
             }
             for (int i = 0; i < n; i++) {
                 zn[i] = g1[i] * d + g2[i] * (d_next - d);
@@ -335,29 +357,64 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
 }
 
 
+/* Where row i's linear steps are (or go) among the N_SLOT remembered for its speed row: *filled
+ * when an earlier row had its step parameters (all but P_A, P_C); NULL without a store */
+static double *slot_of(double *store, const double **keys, int *next, long S, long L, long i, const double *pi,
+                       int *filled) {
+    long s = i % S;
+    *filled = 0;
+    if (!store || !isinf(pi[P_MU]))
+        return NULL;
+    for (int k = 0; k < N_SLOT; k++) {
+        const double *key = keys[s * N_SLOT + k];
+        if (key && memcmp(key + P_CF, pi + P_CF, (N_PAR - P_CF) * sizeof(double)) == 0) {
+            *filled = 1;
+            return store + (s * N_SLOT + k) * (L - 1) * STEP;
+        }
+    }
+    int k = next[s];
+    next[s] = (k + 1) % N_SLOT;
+    keys[s * N_SLOT + k] = pi;
+    return store + (s * N_SLOT + k) * (L - 1) * STEP;
+}
+
+
 /* rows rows of L samples: row i driven by w[i L ..] at speed v[(i mod S) L ..], parameters
  * par[i N_PAR ..]; writes the yaw rate and the lateral velocity at the centre of gravity.
  * Returns -1 on success, else the first row whose Rosenbrock matrix (or Pade denominator) was
  * singular. */
 long single_track_simulate(int model, long rows, long S, long L, int sub, double h, const double *w,
                            const double *v, const double *par, double *yaw, double *vy) {
-    for (long i = 0; i < rows; i++) {
+    long failed = -1;
+    size_t size = (size_t)S * N_SLOT * (L > 1 ? L - 1 : 0) * STEP;          /* doubles */
+    double *store = rows > S && size > 0 && size <= MAX_STORE ? malloc(size * sizeof(double)) : NULL;
+    const double **keys = calloc((size_t)S * N_SLOT, sizeof(double *));
+    int *next = calloc((size_t)S, sizeof(int));
+    if (!keys || !next) {
+        free(store);
+        store = NULL;
+    }
+    for (long i = 0; i < rows && failed < 0; i++) {
         const double *pi = par + i * N_PAR;
-        int ok;
-        if (model == BICYCLE) {
+        int ok, filled;
+        double *steps = slot_of(store, keys, next, S, L, i, pi, &filled);
+        if (model == BICYCLE) {           /* one branch per model: its state count known to the compiler */
             Row q = {BICYCLE, 2, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         } else if (model == RLF) {
             Row q = {RLF, 3, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         } else {
             Row q = {RLFR, 4, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         }
         if (!ok)
-            return i;
+            failed = i;
     }
-    return -1;
+    free(store);
+    free((void *)keys);
+    free(next);
+    return failed;
 }
 
 
