@@ -27,7 +27,7 @@ Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -280,14 +280,23 @@ class YawModel:
         # d+ = a d + (1 - a) w_j + c (w_j+1 - w_j), c = 1 - (T/h)(1 - a): c -> 1 as T -> 0 (no lag,
         # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
         c = 1.0 - lag / h * (1.0 - a)
+        p = self.row_parameters(sets, S)
         if single_track_kernel.choose(self.kernel) == "c":
-            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c))
-        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c)
+            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c, p))
+        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c, p)
 
-    def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray) -> np.ndarray:
+    def row_parameters(self, sets: list[dict], S: int) -> TractorParameters:
+        """The vehicle's parameters, the front relaxation length per row (R S,) when a set gives
+        one (``sigma_f``, m)."""
+        if not any("sigma_f" in v for v in sets):
+            return self.p
+        if np.ndim(self.p.sigma_f):
+            raise ValueError("a relaxation length per set and per row at once")
+        return replace(self.p, sigma_f=np.repeat([float(v.get("sigma_f", self.p.sigma_f)) for v in sets], S))
+
+    def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray, p: TractorParameters) -> np.ndarray:
         """The C kernel's per-row parameters (single_track_kernel.PARAMETERS), (R S, P)."""
         Fzf, Fzr = self.loads
-        p = self.p
         columns = {"lag_decay": a, "hold_gain": c, "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
                    "mu": rows["friction"], "shape": rows["shape"],
                    "cornering_speed_slope": rows["cornering_speed_slope"],
@@ -298,7 +307,8 @@ class YawModel:
         return np.stack([np.broadcast_to(np.asarray(columns[k], float), (n,)) for k in single_track_kernel.PARAMETERS],
                         axis=1)
 
-    def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray):
+    def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray,
+                         p: TractorParameters):
         """The reference path: every row stepped together, (yaw rate, v_y) each (rows, L), from the
         kinematic state; rows with linear tyres by the exact first-order-hold step at the sample's
         mean speed (``exact_steps``), the others by ``n_sub`` ROS2 substeps per sample
@@ -314,7 +324,7 @@ class YawModel:
         z = np.zeros((n_rows, n))
         d = w[:, 0].copy()
         r0 = vv[:, 0] * d / self.L                       # kinematic start
-        z[:, 0], z[:, 1] = self.p.l_r * r0, r0
+        z[:, 0], z[:, 1] = p.l_r * r0, r0
         out = np.empty((n_rows, L))
         out_vy = np.empty((n_rows, L))
         for j in range(L):
@@ -325,18 +335,18 @@ class YawModel:
             d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
             z_next = z.copy()
             if np.any(~linear):
-                z_next = self._ros2_sample(z, vv[:, j], vv[:, j + 1], d, d_next, tyre, Cf, Cr, slope, v_ref)
+                z_next = self._ros2_sample(p, z, vv[:, j], vv[:, j + 1], d, d_next, tyre, Cf, Cr, slope, v_ref)
             if np.any(linear):
                 vm = 0.5 * (vv[:, j] + vv[:, j + 1])
                 scale = cornering_scale(slope, v_ref, vm)
-                P, g1, g2 = exact_steps(self.model, self.p, vm, self.log.h, {**tyre, "C_f": Cf * scale, "C_r": Cr * scale})
+                P, g1, g2 = exact_steps(self.model, p, vm, self.log.h, {**tyre, "C_f": Cf * scale, "C_r": Cr * scale})
                 exact = np.einsum("sij,sj->si", P, z) + g1 * d[:, None] + g2 * (d_next - d)[:, None]
                 z_next = np.where(linear[:, None], exact, z_next)
             z = z_next
             d = d_next
         return out, out_vy
 
-    def _ros2_sample(self, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
+    def _ros2_sample(self, p, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
         """The state after one sample step by ``n_sub`` ROS2 substeps (speed and wheel angle linear
         across the step; the cornering scaled at each substep's mean speed)."""
         hs = self.log.h / self.n_sub
@@ -347,10 +357,10 @@ class YawModel:
             v1 = v_start + s1 * (v_end - v_start)
             scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
             tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
-            f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
+            f0, J = rates(self.model, p, v0, d + s0 * (d_next - d), z, **tyre)
             M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
             k1 = np.einsum("sij,sj->si", M, f0)
-            f1, _ = rates(self.model, self.p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
+            f1, _ = rates(self.model, p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
             k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
             z = z + hs * (1.5 * k1 + 0.5 * k2)
         return z
