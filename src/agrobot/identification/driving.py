@@ -11,15 +11,18 @@ Model (the study's single-track model, LPV in the measured speed v)::
     r_gyro    = gamma + b                         gyro bias b
 
 Free: the cornering coefficients c_f = C_f / F_zf and c_r = C_r / F_zr (cornering stiffness per
-unit axle load, 1/rad), tau, T, b, delta_0, g (command input only), and mu, C for the saturation
-effect; m, I, l_f, l_r and the relaxation lengths are the study's. In these terms the understeer
+unit axle load, 1/rad), tau, T, b, delta_0, g (command input only), the front relaxation length
+sigma_f (a set may give it; identify fits it: held, a value 10 % off pulls K by about 1 %), and
+mu, C for the saturation effect; m, I, l_f, l_r and the rear relaxation length are the study's. In these terms the understeer
 gradient (delta = L / R + K a_y in steady cornering) is K = (1 / c_f - 1 / c_r) / g_0, whatever
 the mass and CG position (g_0 = 9.81 m/s2).
 
 The log is cut into segments of driving (v above ``min_speed``, no clock gap), each simulated from
 a kinematic state with a burn-in before the samples it is scored on; every third segment is held
 out. The segments are simulated by a compiled kernel (single_track_kernel: C, one row after
-another; the reference is the Python path, every row stepped together), and the fit uses at most
+another; the reference is the Python path, every row stepped together): with linear tyres each
+sample by the model's exact discretisation at the sample's mean speed (no step-size bias), with
+the Magic Formula by ROS2 substeps of at most ``max_substep``; and the fit uses at most
 ``max_fit_seconds`` of segments spread over the log: the cost grows linearly with the log's length
 at most. Least squares (scipy, bounded); intervals from the
 Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
