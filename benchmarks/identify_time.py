@@ -10,6 +10,11 @@
 
     python benchmarks/identify_time.py [--study studies/identification.toml] [--repeat 3]
     python benchmarks/identify_time.py --hour [--minutes 15 30 60]
+    python benchmarks/identify_time.py --truth 5 [--trees /work/a /work/b] [--repeat 3]
+
+3. ``--truth SEED``: a healthy generated tractor (harness.truth_tractor.make_log(SEED, duration=200 s),
+   20 Hz) identified (`identify --method driving`) by each source tree of ``--trees`` in turn
+   (PYTHONPATH=TREE/src; default this one), ``--repeat`` times, the same log for all: wall and CPU.
 """
 from __future__ import annotations
 
@@ -92,13 +97,36 @@ def hour(minutes: list[float]) -> None:
     print("target: under 120 s each for the one-hour log")
 
 
+def truth(seed: int, trees: list[Path], repeat: int) -> None:
+    from harness.truth_tractor import make_log
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"tractor_{seed}.csv"
+        make_log(seed, duration=200.0)[0].to_csv(path, index=False)
+        times: dict[Path, list[tuple[float, float]]] = {tree: [] for tree in trees}
+        for i in range(repeat):                 # trees alternate: the machine's load falls on each alike
+            for k, tree in enumerate(trees):
+                os.environ["PYTHONPATH"] = str(tree / "src")
+                times[tree].append(timed([sys.executable, "-m", "agrobot", "identify", str(path), "--method", "driving",
+                                          "--out", f"{folder}/ident_{i}_{k}", "--no-plots"]))
+    print(f"\n(load average while measuring: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores)")
+    print(f"| tree | identify wall [s], median of {repeat} | identify CPU [s], median |\n|---|---:|---:|")
+    for tree, rows in times.items():
+        print(f"| {tree} | {statistics.median(w for w, _ in rows):.2f} | {statistics.median(c for _, c in rows):.2f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--study", type=Path, default=ROOT / "studies/identification.toml")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--hour", action="store_true", help="time a one-hour 100 Hz driving log instead")
     parser.add_argument("--minutes", type=float, nargs="+", default=[60.0])
+    parser.add_argument("--truth", type=int, help="time a generated tractor's log of this seed instead")
+    parser.add_argument("--trees", type=Path, nargs="+", default=[ROOT], help="source trees to time (--truth)")
     args = parser.parse_args()
+    if args.truth is not None:
+        truth(args.truth, args.trees, args.repeat)
+        return
     if args.hour:
         hour(args.minutes)
         return

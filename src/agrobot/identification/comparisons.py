@@ -142,8 +142,8 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
         why = (f"a different model structure over the same linear |a_y| ({span}; neither finds a bend): the dynamic "
                f"model's steady turns miss the "
                f"measured ones by {miss:+.1f} % in K: its K comes from two stiffnesses fitted to transients through "
-               f"held relaxation lengths, inertia, a delay and a lag (a relaxation length off, a coarse step, a "
-               f"stiffness varying with speed or a steering ratio varying with the angle pull it)")
+               f"a fitted front relaxation length, held inertia and rear relaxation, a delay and a lag (a held "
+               f"value off, a stiffness varying with speed or a steering ratio varying with the angle pull it)")
     out = compare("understeer gradient K", "rad/(m/s2)", ("dynamic fit", understeer["value"], understeer["std"]),
                   ("steady-state regression", k_ss, sd), f"{why}; steady turns: {measured}")
     gap_sd = math.hypot(sd, understeer["std"])        # of K_ss - K_sim: the regression's and the fit's, carried 1:1

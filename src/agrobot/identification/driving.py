@@ -11,15 +11,18 @@ Model (the study's single-track model, LPV in the measured speed v)::
     r_gyro    = gamma + b                         gyro bias b
 
 Free: the cornering coefficients c_f = C_f / F_zf and c_r = C_r / F_zr (cornering stiffness per
-unit axle load, 1/rad), tau, T, b, delta_0, g (command input only), and mu, C for the saturation
-effect; m, I, l_f, l_r and the relaxation lengths are the study's. In these terms the understeer
+unit axle load, 1/rad), tau, T, b, delta_0, g (command input only), the front relaxation length
+sigma_f (a set may give it; identify fits it: held, a value 10 % off pulls K by about 1 %), and
+mu, C for the saturation effect; m, I, l_f, l_r and the rear relaxation length are the study's. In these terms the understeer
 gradient (delta = L / R + K a_y in steady cornering) is K = (1 / c_f - 1 / c_r) / g_0, whatever
 the mass and CG position (g_0 = 9.81 m/s2).
 
 The log is cut into segments of driving (v above ``min_speed``, no clock gap), each simulated from
 a kinematic state with a burn-in before the samples it is scored on; every third segment is held
 out. The segments are simulated by a compiled kernel (single_track_kernel: C, one row after
-another; the reference is the Python path, every row stepped together), and the fit uses at most
+another; the reference is the Python path, every row stepped together): with linear tyres each
+sample by the model's exact discretisation at the sample's mean speed (no step-size bias), with
+the Magic Formula by ROS2 substeps of at most ``max_substep``; and the fit uses at most
 ``max_fit_seconds`` of segments spread over the log: the cost grows linearly with the log's length
 at most. Least squares (scipy, bounded); intervals from the
 Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
@@ -27,7 +30,7 @@ Jacobian, inflated by n / n_eff for the residuals' autocorrelation.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -288,14 +291,23 @@ class YawModel:
         # d+ = a d + (1 - a) w_j + c (w_j+1 - w_j), c = 1 - (T/h)(1 - a): c -> 1 as T -> 0 (no lag,
         # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
         c = 1.0 - lag / h * (1.0 - a)
+        p = self.row_parameters(sets, S)
         if single_track_kernel.choose(self.kernel) == "c":
-            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c))
-        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c)
+            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c, p))
+        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c, p)
 
-    def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray) -> np.ndarray:
+    def row_parameters(self, sets: list[dict], S: int) -> TractorParameters:
+        """The vehicle's parameters, the front relaxation length per row (R S,) when a set gives
+        one (``sigma_f``, m)."""
+        if not any("sigma_f" in v for v in sets):
+            return self.p
+        if np.ndim(self.p.sigma_f):
+            raise ValueError("a relaxation length per set and per row at once")
+        return replace(self.p, sigma_f=np.repeat([float(v.get("sigma_f", self.p.sigma_f)) for v in sets], S))
+
+    def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray, p: TractorParameters) -> np.ndarray:
         """The C kernel's per-row parameters (single_track_kernel.PARAMETERS), (R S, P)."""
         Fzf, Fzr = self.loads
-        p = self.p
         columns = {"lag_decay": a, "hold_gain": c, "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
                    "mu": rows["friction"], "shape": rows["shape"],
                    "cornering_speed_slope": rows["cornering_speed_slope"],
@@ -306,46 +318,116 @@ class YawModel:
         return np.stack([np.broadcast_to(np.asarray(columns[k], float), (n,)) for k in single_track_kernel.PARAMETERS],
                         axis=1)
 
-    def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray):
+    def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray,
+                         p: TractorParameters):
         """The reference path: every row stepped together, (yaw rate, v_y) each (rows, L), from the
-        kinematic state; ``n_sub`` ROS2 substeps per sample (components.models.tyre.rates)."""
+        kinematic state; rows with linear tyres by the exact first-order-hold step at the sample's
+        mean speed (``exact_steps``), the others by ``n_sub`` ROS2 substeps per sample
+        (components.models.tyre.rates)."""
         Fzf, Fzr = self.loads
         Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
         mu = rows["friction"]
+        linear = ~np.isfinite(mu)
         tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
         slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
-        speed_scaled = bool(np.any(slope != 0.0))
         n = N_STATES[self.model]
         n_rows, L = w.shape
         z = np.zeros((n_rows, n))
         d = w[:, 0].copy()
         r0 = vv[:, 0] * d / self.L                       # kinematic start
-        z[:, 0], z[:, 1] = self.p.l_r * r0, r0
+        z[:, 0], z[:, 1] = p.l_r * r0, r0
         out = np.empty((n_rows, L))
         out_vy = np.empty((n_rows, L))
-        hs = self.log.h / self.n_sub
-        eye = np.eye(n)
         for j in range(L):
             out[:, j] = z[:, 1]
             out_vy[:, j] = z[:, 0]
             if j == L - 1:
                 break
             d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
-            for k in range(self.n_sub):
-                s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
-                v0 = vv[:, j] + s0 * (vv[:, j + 1] - vv[:, j])
-                v1 = vv[:, j] + s1 * (vv[:, j + 1] - vv[:, j])
-                if speed_scaled:        # C x max(0.2, 1 + k (v - v_ref)), the speed-dependent cornering
-                    scale = np.maximum(0.2, 1.0 + slope * (0.5 * (v0 + v1) - v_ref))
-                    tyre["C_f"], tyre["C_r"] = Cf * scale, Cr * scale
-                f0, J = rates(self.model, self.p, v0, d + s0 * (d_next - d), z, **tyre)
-                M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
-                k1 = np.einsum("sij,sj->si", M, f0)
-                f1, _ = rates(self.model, self.p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
-                k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
-                z = z + hs * (1.5 * k1 + 0.5 * k2)
+            z_next = z.copy()
+            if np.any(~linear):
+                z_next = self._ros2_sample(p, z, vv[:, j], vv[:, j + 1], d, d_next, tyre, Cf, Cr, slope, v_ref)
+            if np.any(linear):
+                vm = 0.5 * (vv[:, j] + vv[:, j + 1])
+                scale = cornering_scale(slope, v_ref, vm)
+                P, g1, g2 = exact_steps(self.model, p, vm, self.log.h, {**tyre, "C_f": Cf * scale, "C_r": Cr * scale})
+                exact = np.einsum("sij,sj->si", P, z) + g1 * d[:, None] + g2 * (d_next - d)[:, None]
+                z_next = np.where(linear[:, None], exact, z_next)
+            z = z_next
             d = d_next
         return out, out_vy
+
+    def _ros2_sample(self, p, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
+        """The state after one sample step by ``n_sub`` ROS2 substeps (speed and wheel angle linear
+        across the step; the cornering scaled at each substep's mean speed)."""
+        hs = self.log.h / self.n_sub
+        eye = np.eye(z.shape[1])
+        for k in range(self.n_sub):
+            s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
+            v0 = v_start + s0 * (v_end - v_start)
+            v1 = v_start + s1 * (v_end - v_start)
+            scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
+            tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
+            f0, J = rates(self.model, p, v0, d + s0 * (d_next - d), z, **tyre)
+            M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
+            k1 = np.einsum("sij,sj->si", M, f0)
+            f1, _ = rates(self.model, p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
+            k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
+            z = z + hs * (1.5 * k1 + 0.5 * k2)
+        return z
+
+
+def cornering_scale(slope: np.ndarray, v_ref: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """max(0.2, 1 + k (v - v_ref)) where k != 0, else 1: the speed-dependent cornering's factor."""
+    return np.where(slope != 0.0, np.maximum(0.2, 1.0 + slope * (v - v_ref)), 1.0)
+
+
+def exact_steps(model: str, p, v: np.ndarray, h: float, tyre: dict, degree: int = 12):
+    """(P, g1, g2), (rows, n, n), (rows, n), (rows, n): the exact step of the linear single-track
+    model dz/dt = J z + b d at speed v over h for a wheel angle linear across it (d0 -> d1),
+
+        z+ = P z + g1 d0 + g2 (d1 - d0),  P = expm(h J),  g1 = h phi1(h J) b,  g2 = h phi2(h J) b,
+
+    phi1(X) = sum X^k / (k + 1)!, phi2(X) = sum X^k / (k + 2)! (linear tyres: b = f(0, 1)); by
+    scaling and squaring as single_track_kernel.c: X = h J / 2^s, ||X||_1 <= 1/2, expm(X) by the
+    [6/6] Pade approximant, phi2(X) b by Horner to ``degree``, phi1(X) b = b + X phi2(X) b, then s squarings of the block matrix
+    [[P, g1, g2], [0, 1, c], [0, 0, 1]] (c = 2^-s at the start)."""
+    n = N_STATES[model]
+    b, J = rates(model, p, v, np.ones_like(v), np.zeros((len(v), n)), **{**tyre, "mu": np.inf})
+    norm = np.abs(h * J).sum(axis=1).max(axis=1)
+    s = np.where(norm > 0.5, np.ceil(np.log2(np.maximum(norm, 0.5) / 0.5)), 0.0).astype(int)
+    scale = np.ldexp(h, -s)
+    X = J * scale[:, None, None]
+    beta = b * scale[:, None]
+    y = beta / math.factorial(degree + 2)
+    for k in range(degree - 1, -1, -1):              # phi2(X) beta
+        y = np.einsum("sij,sj->si", X, y) + beta / math.factorial(k + 2)
+    P = pade_expm(X)
+    c = np.ldexp(1.0, -s)
+    g1, g2 = beta + np.einsum("sij,sj->si", X, y), c[:, None] * y         # phi1(X) beta = beta + X phi2(X) beta
+    for k in range(int(s.max(initial=0))):
+        more = (k < s)[:, None]
+        g1, g2 = (np.where(more, np.einsum("sij,sj->si", P, g1) + g1, g1),
+                  np.where(more, np.einsum("sij,sj->si", P, g2) + c[:, None] * g1 + g2, g2))
+        c = np.where(k < s, 2.0 * c, c)
+        P = np.where(more[:, :, None], P @ P, P)
+    return P, g1, g2
+
+
+PADE_6 = (1.0, 1.0 / 2, 5.0 / 44, 1.0 / 66, 1.0 / 792, 1.0 / 15840, 1.0 / 665280)
+
+
+def pade_expm(X: np.ndarray) -> np.ndarray:
+    """expm of each matrix of X (rows, n, n), ||X||_1 <= 1/2: the [6/6] Pade approximant
+    (coefficients PADE_6; relative error below 1e-16)."""
+    c = PADE_6
+    eye = np.eye(X.shape[1])
+    X2 = X @ X
+    X4 = X2 @ X2
+    X6 = X4 @ X2
+    U = X @ (c[1] * eye + c[3] * X2 + c[5] * X4)
+    V = c[0] * eye + c[2] * X2 + c[4] * X4 + c[6] * X6
+    return np.linalg.solve(V - U, V + U)
 
 
 def understeer_gradient(c_f: float, c_r: float) -> float:

@@ -65,7 +65,9 @@ def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
     return 1.0, 30.0
 
 
-def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool) -> list[Parameter]:
+def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool,
+                    relaxation: float | None = None) -> list[Parameter]:
+    """``relaxation``: the study's front relaxation length, fitted within x 1/4 .. 4 of it (None: held)."""
     lo, hi = cornering_bounds(vehicle)
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
     out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
@@ -77,6 +79,9 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
         out.append(Parameter("steer_gain", "1", 0.2, 0.5, 1.5, meaning="wheel angle per commanded angle"))
     if fit_bias:
         out.append(Parameter("gyro_bias", "rad/s", 0.01, -bias, bias, meaning="gyro bias"))
+    if relaxation:
+        out.append(Parameter("sigma_f", "m", 0.25 * relaxation, 0.25 * relaxation, 4.0 * relaxation,
+                             meaning="front tyre relaxation length"))
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
         out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, meaning="tyre friction coefficient mu (peak force / load)"),
@@ -436,11 +441,13 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
     the linear one, the friction started near the data's top |a_y| / g, else near its upper bound."""
     fixed, bias_info = _standstill_bias(log)
-    free = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=False)
+    relaxation = float(p.sigma_f) if model_name != "bicycle" else None      # fitted: held, it pulls K
+    free = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=False, relaxation=relaxation)
     Fz = YawModel(model_name, p, log, segs).loads
     lo, hi = cornering_bounds(vehicle)
     start = {"c_f": float(np.clip(p.C_f / Fz[0], lo, hi)), "c_r": float(np.clip(p.C_r / Fz[1], lo, hi)),
-             "delay": _delay_start(log, L), "lag": 0.05, "steer_offset": 0.0, "steer_gain": 1.0, "gyro_bias": 0.0}
+             "delay": _delay_start(log, L), "lag": 0.05, "steer_offset": 0.0, "steer_gain": 1.0, "gyro_bias": 0.0,
+             "sigma_f": float(p.sigma_f)}
     model = YawModel(model_name, p, log, segs, min_sim_speed=max(min_speed, 0.3))
     fit_segs, bound = _fitted_part(segs, max_fit_seconds, log.h)
     test_segs = segs.take(segs.held_out)
@@ -461,7 +468,7 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         else:
             linear_low = linear
         say("fitting the tyre-saturation model")
-        free_nl = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=True)
+        free_nl = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=True, relaxation=relaxation)
         ay_fit = np.abs(log.a_y[fit_segs.idx][fit_segs.scored])
         mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
         nl = None

@@ -12,9 +12,28 @@
  *     (I - gamma h J) k1 = f(z, u0),  (I - gamma h J) k2 = f(z + h k1, u1) - 2 k1,
  *     z+ = z + h (3 k1 + k2) / 2.
  *
+ * With linear tyres (mu infinite) the model is linear, dz/dt = J(v) z + b(v) d, and each sample's
+ * step is instead its exact discretisation at the sample's mean speed for the wheel angle linear
+ * across the step (first-order hold, d0 -> d1):
+ *
+ *     z+ = expm(h J) z + h phi1(h J) b d0 + h phi2(h J) b (d1 - d0),
+ *     phi1(X) = sum X^k / (k + 1)!,  phi2(X) = sum X^k / (k + 2)!
+ *
+ * (the top rows of expm([[h J, h b, 0], [0, 0, 1], [0, 0, 0]])), by scaling and squaring: X = h J / 2^s
+ * with ||X||_1 <= 1/2, expm(X) by its [6/6] Pade approximant, phi2(X) b by Horner to degree 12 and
+ * phi1(X) b = b + X phi2(X) b (relative errors below 1e-16), then s squarings of the block matrix,
+ *
+ *     (P, g1, g2, c) -> (P P, P g1 + g1, P g2 + c g1 + g2, 2 c),  c = 2^-s at the start;
+ *
+ * a speed the previous sample had reuses the step, and a row whose speeds and step parameters (all
+ * but the lag's) an earlier row of the call had reuses that row's steps (a Jacobian's columns for
+ * the delay, lag, offset or gain).
+ *
  * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
 
 enum { P_A, P_C, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
        P_FZF, P_FZR, N_PAR };
@@ -156,12 +175,137 @@ static inline int ros2_step(const Row *q, double hs, double v0, double v1, doubl
 }
 
 
-/* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs */
-static inline int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
-                        double *vy) {
+/* C = A B for n x n matrices, n <= 4 (C distinct from A and B) */
+static inline void matmul(int n, double A[4][4], double B[4][4], double C[4][4]) {
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double s = 0.0;
+            for (int k = 0; k < n; k++)
+                s += A[i][k] * B[k][j];
+            C[i][j] = s;
+        }
+}
+
+
+/* y = A x, n <= 4 (y distinct from x) */
+static inline void matvec(int n, double A[4][4], const double *x, double *y) {
+    for (int i = 0; i < n; i++) {
+        y[i] = 0.0;
+        for (int k = 0; k < n; k++)
+            y[i] += A[i][k] * x[k];
+    }
+}
+
+
+/* E = expm(X) by the [6/6] Pade approximant (||X||_1 <= 1/2), n <= 4; 0 when its denominator is
+ * singular */
+static inline int pade(int n, double X[4][4], double E[4][4]) {
+    static const double c[7] = {1.0, 0.5, 5.0 / 44.0, 1.0 / 66.0, 1.0 / 792.0, 1.0 / 15840.0, 1.0 / 665280.0};
+    double X2[4][4], X4[4][4], X6[4][4], U[4][4], V[4][4], T[4][4], M[4][4];
+    matmul(n, X, X, X2);
+    matmul(n, X2, X2, X4);
+    matmul(n, X4, X2, X6);
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            double id = i == j ? 1.0 : 0.0;
+            T[i][j] = c[1] * id + c[3] * X2[i][j] + c[5] * X4[i][j];
+            V[i][j] = c[0] * id + c[2] * X2[i][j] + c[4] * X4[i][j] + c[6] * X6[i][j];
+        }
+    matmul(n, X, T, U);
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++) {
+            T[i][j] = V[i][j] - U[i][j];
+            V[i][j] += U[i][j];
+        }
+    if (!invert(n, T, M))
+        return 0;
+    matmul(n, M, V, E);
+    return 1;
+}
+
+
+/* The exact first-order-hold step of the linear model at speed v over h (see the top): P, g1, g2
+ * with z+ = P z + g1 d0 + g2 (d1 - d0); 0 when the Pade denominator is singular */
+static inline int exact_step(const Row *q, double v, double h, double P[4][4], double *g1, double *g2) {
+    static const int DEGREE = 12;
+    int n = q->n;
+    double zero[4] = {0.0, 0.0, 0.0, 0.0}, b[4], J[4][4], X[4][4], T[4][4], y[4], t[4], norm = 0.0;
+    rates(q, v, 1.0, zero, b, J);            /* linear tyres: f(0, 1) = b */
+    for (int j = 0; j < n; j++) {
+        double col = 0.0;
+        for (int i = 0; i < n; i++)
+            col += fabs(h * J[i][j]);
+        norm = col > norm ? col : norm;
+    }
+    int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
+    double scale = ldexp(h, -s), c = ldexp(1.0, -s), f = 1.0;       /* f = 1 / (k + 2)! */
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            X[i][j] = scale * J[i][j];
+    for (int k = 1; k <= DEGREE + 2; k++)
+        f /= k;
+    for (int i = 0; i < n; i++)
+        y[i] = scale * b[i] * f;
+    for (int k = DEGREE - 1; k >= 0; k--) {        /* y <- X y + beta / (k + 2)!: phi2(X) beta */
+        f *= k + 3;
+        matvec(n, X, y, t);
+        for (int i = 0; i < n; i++)
+            y[i] = t[i] + scale * b[i] * f;
+    }
+    matvec(n, X, y, t);                           /* phi1(X) beta = beta + X phi2(X) beta */
+    for (int i = 0; i < n; i++) {
+        g1[i] = scale * b[i] + t[i];
+        g2[i] = c * y[i];
+    }
+    if (!pade(n, X, P))
+        return 0;
+    for (int k = 0; k < s; k++) {
+        double u1[4], u2[4];
+        matvec(n, P, g1, u1);
+        matvec(n, P, g2, u2);
+        for (int i = 0; i < n; i++) {
+            g2[i] = u2[i] + c * g1[i] + g2[i];
+            g1[i] = u1[i] + g1[i];
+        }
+        c *= 2.0;
+        matmul(n, P, P, T);
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++)
+                P[i][j] = T[i][j];
+    }
+    return 1;
+}
+
+
+/* The cornering stiffnesses at speed v: C x max(0.2, 1 + k (v - v_ref)) when k != 0 */
+static inline void cornering(Row *q, double v) {
     const double *p = q->p;
-    double a = p[P_A], c = p[P_C], slope = p[P_SLOPE], hs = h / sub;
-    double z[4] = {0.0, 0.0, 0.0, 0.0}, d = w[0];
+    q->Cf = p[P_CF];
+    q->Cr = p[P_CR];
+    if (p[P_SLOPE] != 0.0) {
+        double scale = 1.0 + p[P_SLOPE] * (v - p[P_VREF]);
+        if (scale < 0.2)
+            scale = 0.2;
+        q->Cf *= scale;
+        q->Cr *= scale;
+    }
+}
+
+
+/* a stored step: P (4 x 4), g1, g2; rows remembered per speed row; the most doubles stored (128 MB): the
+ * store only when a call has more rows than speed rows (several parameter sets) */
+enum { STEP = 24, N_SLOT = 4, MAX_STORE = 1 << 24 };
+
+
+/* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs; steps
+ * (NULL: none): the linear steps of an earlier row with these speeds and step parameters (filled)
+ * or the place to store this row's */
+static inline int simulate_row(Row *q, long L, int sub, double h, const double *w, const double *v, double *yaw,
+                               double *vy, double *steps, int filled) {
+    const double *p = q->p;
+    double a = p[P_A], c = p[P_C], hs = h / sub;
+    double z[4] = {0.0, 0.0, 0.0, 0.0}, d = w[0], P[4][4], g1[4], g2[4], v_cached = NAN;
+    int n = q->n, linear = !isfinite(p[P_MU]);
     double r0 = v[0] * d / (p[P_LF] + p[P_LR]);
     z[0] = p[P_LR] * r0;
     z[1] = r0;
@@ -171,18 +315,39 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
         if (j == L - 1)
             break;
         double d_next = a * d + (1.0 - a) * w[j] + c * (w[j + 1] - w[j]);
+        if (linear) {
+            double vm = 0.5 * (v[j] + v[j + 1]), zn[4], *st = steps ? steps + j * STEP : NULL;
+            if (st && filled) {
+                memcpy(P, st, sizeof P);
+                memcpy(g1, st + 16, sizeof g1);
+                memcpy(g2, st + 20, sizeof g2);
+            } else {
+                if (vm != v_cached) {
+                    cornering(q, vm);
+                    if (!exact_step(q, vm, h, P, g1, g2))
+                        return 0;
+                    v_cached = vm;
+                }
+                if (st) {
+                    memcpy(st, P, sizeof P);
+                    memcpy(st + 16, g1, sizeof g1);
+                    memcpy(st + 20, g2, sizeof g2);
+                }
+            }
+            for (int i = 0; i < n; i++) {
+                zn[i] = g1[i] * d + g2[i] * (d_next - d);
+                for (int k = 0; k < n; k++)
+                    zn[i] += P[i][k] * z[k];
+            }
+            for (int i = 0; i < n; i++)
+                z[i] = zn[i];
+            d = d_next;
+            continue;
+        }
         for (int k = 0; k < sub; k++) {
             double s0 = (double)k / sub, s1 = (double)(k + 1) / sub;
             double v0 = v[j] + s0 * (v[j + 1] - v[j]), v1 = v[j] + s1 * (v[j + 1] - v[j]);
-            q->Cf = p[P_CF];
-            q->Cr = p[P_CR];
-            if (slope != 0.0) {
-                double scale = 1.0 + slope * (0.5 * (v0 + v1) - p[P_VREF]);
-                if (scale < 0.2)
-                    scale = 0.2;
-                q->Cf *= scale;
-                q->Cr *= scale;
-            }
+            cornering(q, 0.5 * (v0 + v1));
             if (!ros2_step(q, hs, v0, v1, d + s0 * (d_next - d), d + s1 * (d_next - d), z))
                 return 0;
         }
@@ -192,28 +357,64 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
 }
 
 
+/* Where row i's linear steps are (or go) among the N_SLOT remembered for its speed row: *filled
+ * when an earlier row had its step parameters (all but P_A, P_C); NULL without a store */
+static double *slot_of(double *store, const double **keys, int *next, long S, long L, long i, const double *pi,
+                       int *filled) {
+    long s = i % S;
+    *filled = 0;
+    if (!store || !isinf(pi[P_MU]))
+        return NULL;
+    for (int k = 0; k < N_SLOT; k++) {
+        const double *key = keys[s * N_SLOT + k];
+        if (key && memcmp(key + P_CF, pi + P_CF, (N_PAR - P_CF) * sizeof(double)) == 0) {
+            *filled = 1;
+            return store + (s * N_SLOT + k) * (L - 1) * STEP;
+        }
+    }
+    int k = next[s];
+    next[s] = (k + 1) % N_SLOT;
+    keys[s * N_SLOT + k] = pi;
+    return store + (s * N_SLOT + k) * (L - 1) * STEP;
+}
+
+
 /* rows rows of L samples: row i driven by w[i L ..] at speed v[(i mod S) L ..], parameters
  * par[i N_PAR ..]; writes the yaw rate and the lateral velocity at the centre of gravity.
- * Returns -1 on success, else the first row whose Rosenbrock matrix was singular. */
+ * Returns -1 on success, else the first row whose Rosenbrock matrix (or Pade denominator) was
+ * singular. */
 long single_track_simulate(int model, long rows, long S, long L, int sub, double h, const double *w,
                            const double *v, const double *par, double *yaw, double *vy) {
-    for (long i = 0; i < rows; i++) {
+    long failed = -1;
+    size_t size = (size_t)S * N_SLOT * (L > 1 ? L - 1 : 0) * STEP;          /* doubles */
+    double *store = rows > S && size > 0 && size <= MAX_STORE ? malloc(size * sizeof(double)) : NULL;
+    const double **keys = calloc((size_t)S * N_SLOT, sizeof(double *));
+    int *next = calloc((size_t)S, sizeof(int));
+    if (!keys || !next) {
+        free(store);
+        store = NULL;
+    }
+    for (long i = 0; i < rows && failed < 0; i++) {
         const double *pi = par + i * N_PAR;
-        int ok;
-        if (model == BICYCLE) {
+        int ok, filled;
+        double *steps = slot_of(store, keys, next, S, L, i, pi, &filled);
+        if (model == BICYCLE) {           /* one branch per model: its state count known to the compiler */
             Row q = {BICYCLE, 2, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         } else if (model == RLF) {
             Row q = {RLF, 3, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         } else {
             Row q = {RLFR, 4, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L);
+            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
         }
         if (!ok)
-            return i;
+            failed = i;
     }
-    return -1;
+    free(store);
+    free((void *)keys);
+    free(next);
+    return failed;
 }
 
 

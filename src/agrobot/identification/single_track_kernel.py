@@ -1,6 +1,7 @@
 """The yaw model's segment simulation at compiled speed: single_track_kernel.c (the single-track
-model of components.models.tyre through the steering lag with a first-order hold, integrated by
-ROS2 substeps, one row at a time) compiled once per content by the compiled engine's toolchain
+model of components.models.tyre through the steering lag with a first-order hold, one row at a
+time: linear tyres by the exact discretisation at each sample's mean speed, as
+identification.driving.exact_steps; the Magic Formula by ROS2 substeps) compiled once per content by the compiled engine's toolchain
 (orchestrator.compiled.toolchain: $CC, cc or gcc; cached by hash under $AGROBOT_CACHE) and called
 through ctypes. identification.driving.YawModel keeps the Python path as the reference; ``choose``
 picks between them (``auto``: C where a compiler is found, else Python, said once).
@@ -44,7 +45,7 @@ choose = LIBRARY.choose
 def simulate(model: str, sub: int, h: float, w: np.ndarray, v: np.ndarray, par: np.ndarray):
     """(yaw rate, lateral velocity), each (rows, L): row i driven by the wheel angle asked w[i] at
     the speed v[i mod S] (v: (S, L)) with the parameters par[i] (PARAMETERS' order), from the
-    kinematic state; ``sub`` ROS2 substeps per sample step h."""
+    kinematic state; ``sub`` ROS2 substeps per sample step h (Magic Formula rows)."""
     lib = LIBRARY.lib()
     w = np.ascontiguousarray(w, float)
     v = np.ascontiguousarray(v, float)
