@@ -55,6 +55,7 @@ from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
+from .reading_noise import INPUT_NOISE_SHARE, corrected_fit, reading_level
 from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -68,6 +69,7 @@ from .verdict import audit_findings
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
 STRONG = -10.0         # dBIC below which the evidence is strong
+ATTENUATED = ("steering_gain",)    # read through the wheel angle's noise, refitted by corrected least squares
 
 
 @dataclass
@@ -175,13 +177,19 @@ def group(stages: set[str], members: list[Effect], available=STAGES,
     return tuple(s for s in STAGES if s in stages and s in available), related
 
 
+def fitted_stages(effects: list[Effect], stages) -> tuple[str, ...]:
+    """``stages`` but those the effects are only tested on (Effect.tested_on; none of them acting
+    there directly), where they are scored, not fitted."""
+    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
+    return tuple(s for s in stages if s not in tested) or tuple(stages)
+
+
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> FitResult:
     """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
     effects are only tested on (Effect.tested_on; none of them acting there directly): those are
     scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
     also explains)."""
-    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
-    fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
+    fit_on = fitted_stages(effects, stages)
     fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
         return fit
@@ -346,9 +354,35 @@ class Selector:
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
+        effects = [self.read_through_noise(f, members, floors, trace) for f in effects]
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def read_through_noise(self, finding: Finding, members: list[Effect], floors: dict, trace: list[str]) -> Finding:
+        """``finding`` with a gain read through the wheel-angle reading (ATTENUATED) refitted by
+        corrected least squares where the reading's noise passes material power into the yaw stage
+        (diagnosis.reading_noise: errors in variables attenuate it); said in ``trace``."""
+        effect = finding.effect
+        if effect.id not in ATTENUATED:
+            return finding
+        others = [f for f in members if f is not effect]
+        stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
+        fit_on = fitted_stages(related + [effect], stages)
+        free = refit_free(self.replay, fit_on, related + [effect])
+        sigma_n = reading_level(self.replay, floors.get("_sensors"))
+        out = corrected_fit(self.replay, finding.fit.values, free, fit_on, self.sigma, sigma_n)
+        if out is None:
+            return finding
+        part, share = out
+        fit = finding.fit.merged(part)
+        names = [p.name for p in effect.parameters]
+        trace.append(f"{effect.id}: the wheel-angle reading's noise ({math.degrees(sigma_n):.2g} deg) is "
+                     f"{100 * share:.0f} % of the yaw stage's residual power (>= {100 * INPUT_NOISE_SHARE:.0f} %), "
+                     f"which attenuates a gain read through it (errors in variables): "
+                     + ", ".join(f"{n} {finding.fit.values[n]:.4g} +- {finding.fit.std(n):.2g} by least squares, "
+                                 f"{fit.values[n]:.4g} +- {fit.std(n):.2g} by corrected least squares" for n in names))
+        return replace(finding, fit=fit)
 
     def simplest(self, model: FitResult, members: list[Effect], best: Finding, rivals: list[Finding]) -> Finding:
         """Of two tied explanations (dBIC within TIE), the one with fewer parameters, when the other is not
