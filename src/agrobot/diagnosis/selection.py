@@ -364,7 +364,7 @@ class Selector:
         corrected least squares where the reading's noise passes material power into the yaw stage
         (diagnosis.reading_noise: errors in variables attenuate it); said in ``trace``."""
         effect = finding.effect
-        if effect.id not in ATTENUATED:
+        if effect.id not in ATTENUATED or getattr(self.replay, "command_only", False):   # no reading: no noise in it
             return finding
         others = [f for f in members if f is not effect]
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
@@ -377,9 +377,9 @@ class Selector:
         part, share = out
         fit = finding.fit.merged(part)
         names = [p.name for p in effect.parameters]
-        trace.append(f"{effect.id}: the wheel-angle reading's noise ({math.degrees(sigma_n):.2g} deg) is "
-                     f"{100 * share:.0f} % of the yaw stage's residual power (>= {100 * INPUT_NOISE_SHARE:.0f} %), "
-                     f"which attenuates a gain read through it (errors in variables): "
+        trace.append(f"{effect.id}: the wheel-angle reading's noise ({math.degrees(sigma_n):.2g} deg) passed through "
+                     f"the yaw model is {100 * share:.0f} % of the yaw stage's residual power (>= "
+                     f"{100 * INPUT_NOISE_SHARE:.0f} %): it attenuates a gain read through it (errors in variables): "
                      + ", ".join(f"{n} {finding.fit.values[n]:.4g} +- {finding.fit.std(n):.2g} by least squares, "
                                  f"{fit.values[n]:.4g} +- {fit.std(n):.2g} by corrected least squares" for n in names))
         return replace(finding, fit=fit)
