@@ -69,14 +69,26 @@ def noise_draws(replay, sigma_n: float, seed: int = 0) -> list[np.ndarray]:
     return [np.repeat(sigma_n * rng.standard_normal(-(-n // step)), step)[:n] for _ in range(REALISATIONS)]
 
 
-def passage(replay, v: dict[str, float], noise: np.ndarray) -> np.ndarray:
+def passage(replay, v: dict[str, float], noise: np.ndarray, part: str = "fit") -> np.ndarray:
     """G_theta(n): the yaw stage's prediction on the reading plus ``noise`` less that on the
-    reading, under ``v`` (through the steering map; the linear yaw model, as the gyro sees it)."""
+    reading, under ``v`` (through the steering map; the linear yaw model, as the gyro sees it), on
+    the yaw stage's ``part``."""
     def yaw(d):
         inp = wheel_angle_input(d, None, replay.t, v)
         rate = replay.yaw.yaw_rate(v, d if inp is None else inp)
         return replay.seen("yaw", measured_yaw_rate(rate, v))
-    return (yaw(replay.delta + noise) - yaw(replay.delta))[replay.masks["yaw"]["fit"]]
+    return (yaw(replay.delta + noise) - yaw(replay.delta))[replay.masks["yaw"][part]]
+
+
+def passage_power(replay, v: dict[str, float], sigma_n: float, part: str = "test") -> float:
+    """E mean(G_theta(n)^2) on the yaw stage's ``part`` [(rad/s)^2]: what of its mean-square residual
+    no model can explain (held out: what a held-out RMS is judged net of, net_rms)."""
+    return float(np.mean([np.mean(u * u) for u in (passage(replay, v, n, part) for n in noise_draws(replay, sigma_n))]))
+
+
+def net_rms(rms: float, power: float) -> float:
+    """sqrt(rms^2 - power): an RMS net of the passage's mean square (at least a tenth of it)."""
+    return math.sqrt(max(rms * rms - power, 0.01 * rms * rms))
 
 
 def corrected_fit(replay, values: dict[str, float], free: list, stages: tuple[str, ...], sigma: dict[str, float],
