@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from agrobot.diagnosis.candidates import Replay, fit_baseline, fitted, refit_free
@@ -84,3 +85,18 @@ def test_no_gain_on_a_clean_car_log():
     fit, out, _, _, _ = gain_fits(frame)
     k = (out[0] if out else fit).values["steering_gain"]
     assert abs(k - 1.0) < 0.05, k
+
+
+@pytest.mark.slow
+def test_the_held_out_passage_is_what_the_noise_adds_to_the_yaw_residual():
+    """The held-out yaw residual's mean square on the noisy reading less that on the same log with a
+    noise-free reading, under the same values (the planted gain), is the passage's power the held-out
+    gain is judged net of (reading_noise.passage_power), within 25 %."""
+    noisy, quiet = (Replay(planted(1003, 1.2, noise), baseline_from_study(load_study(BASELINES["car"])))
+                    for noise in (None, 0.0))
+    base, _ = fit_baseline(quiet)
+    v = {**base.values, "steering_gain": 1.2}
+    added = float(np.mean(noisy.residuals("yaw", v, "test") ** 2) - np.mean(quiet.residuals("yaw", v, "test") ** 2))
+    sigma_n = reading_level(noisy, stage_floors(noisy, v)["_sensors"])
+    power = reading_noise.passage_power(noisy, v, sigma_n)
+    assert added > 0 and abs(power / added - 1.0) < 0.25, (power, added)

@@ -38,6 +38,11 @@ misfit and the effect's held-out RMS falls there (evidence_stages): on a steerin
 baseline explains to its noise, a map bending the rate limit is no evidence, and an asymmetry must
 not outweigh an offset the straight driving shows.
 
+A steering gain read through a wheel-angle reading whose noise passes material power into the yaw
+stage (a car's 0.05 deg on a quarter of a degree) is judged as on a noise-free reading
+(Selector.through_noise, diagnosis.reading_noise): fitted by corrected least squares, its held-out
+gain of the yaw rate's RMS net of the noise's passage, and reported so.
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
