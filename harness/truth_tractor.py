@@ -238,7 +238,8 @@ def make_log(seed: int, effect: str | tuple | list | None = None, duration: floa
     several of HEALTHY ('a+b'), ways the truth differs from the baseline without a fault
     (draw_healthy; drawn from a stream of their own, so the rest of the log's draws stay);
     ``vehicle``: a key of VEHICLES (steering effects' angles scale with its steering);
-    ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...);
+    ``values``: magnitudes that replace the drawn ones (``forward``, ``latency``, ``k``, ...; and
+    ``reading_noise``, the wheel-angle sensor's white noise [rad], 0.05 deg);
     ``lateral``: add the measured lateral velocity at the centre of gravity ``vy`` [m/s] and the
     side-slip ``beta`` = atan(vy / v) [rad] (an optical or GNSS/INS sensor; noise 0.005 m/s);
     ``rate``: the command's and the sensors' rate [Hz], a divisor of the 200 Hz integration."""
@@ -378,7 +379,7 @@ def _measured(rng, e, hv, p, veh, rec, times, sub, t_log, cmd, speed_of, lateral
         "t": t_log,
         "delta_cmd": cmd,
         "delta": q * np.round((sensor_gain * steering_maps.reading(delta[idx], curvature=curve)
-                               + 0.05 * DEG * noise[0]) / q),
+                               + e.get("reading_noise", 0.05 * DEG) * noise[0]) / q),
         "v": (1.0 + e.get("slip", 0.0)) * np.array([speed_of(tt) for tt in t_log]) + 0.02 * noise[1],
         "yaw_rate": e.get("gyro_scale", 1.0) * r[idx] + e.get("bias", 0.0) + veh["gyro_noise"] * noise[2],
         "x": gx + 0.02 * noise[3],

@@ -38,6 +38,11 @@ misfit and the effect's held-out RMS falls there (evidence_stages): on a steerin
 baseline explains to its noise, a map bending the rate limit is no evidence, and an asymmetry must
 not outweigh an offset the straight driving shows.
 
+A steering gain read through a wheel-angle reading whose noise passes material power into the yaw
+stage (a car's 0.05 deg on a quarter of a degree) is judged as on a noise-free reading
+(Selector.through_noise, diagnosis.reading_noise): fitted by corrected least squares, its held-out
+gain of the yaw rate's RMS net of the noise's passage, and reported so.
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
@@ -55,6 +60,7 @@ from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
+from .reading_noise import INPUT_NOISE_SHARE, corrected_fit, net_rms, passage_power, reading_level
 from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -68,6 +74,7 @@ from .verdict import audit_findings
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
 STRONG = -10.0         # dBIC below which the evidence is strong
+ATTENUATED = ("steering_gain",)    # read through the wheel angle's noise, refitted by corrected least squares
 
 
 @dataclass
@@ -124,15 +131,18 @@ def evidence_stages(effect: Effect, stages, gains: dict[str, float], without: Fi
 
 
 def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baseline_values, min_gain,
-           floors: dict | None = None) -> Finding:
+           floors: dict | None = None, unexplainable: dict[str, float] | None = None) -> Finding:
     """dBIC = sum_s n_eff,s ln(RSS_with / RSS_without) + k ln(sum n_eff); support as in candidates.py.
     ``floors``: the stages' noise floors (noise_floor.py); given, a signal whose held-out RMS rises
     counts against the effect only where it is then misfit (unexplained.is_misfit): a track left
-    within its noise is no evidence against a gain that fixes the turns."""
+    within its noise is no evidence against a gain that fixes the turns. ``unexplainable``: a mean
+    square per stage that no model explains (the wheel-angle reading's noise passed through the yaw
+    model, reading_noise.passage_power); the held-out gains are of the RMS net of it."""
     names = {s: SIGNALS[s][0] for s in stages}
     before = {names[s]: without.rmse_test[s] for s in stages}
     after = {names[s]: with_.rmse_test[s] for s in stages}
-    gains = {k: 1.0 - after[k] / before[k] if before[k] > 0 else 0.0 for k in before}
+    net = {names[s]: (unexplainable or {}).get(s, 0.0) for s in stages}
+    gains = {k: 1.0 - net_rms(after[k], net[k]) / net_rms(before[k], net[k]) if before[k] > 0 else 0.0 for k in before}
     counted = evidence_stages(effect, stages, gains, without, floors)
     n_total = sum(with_.n_eff[s] for s in counted)
     dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in counted)
@@ -175,13 +185,19 @@ def group(stages: set[str], members: list[Effect], available=STAGES,
     return tuple(s for s in STAGES if s in stages and s in available), related
 
 
+def fitted_stages(effects: list[Effect], stages) -> tuple[str, ...]:
+    """``stages`` but those the effects are only tested on (Effect.tested_on; none of them acting
+    there directly), where they are scored, not fitted."""
+    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
+    return tuple(s for s in stages if s not in tested) or tuple(stages)
+
+
 def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, starts) -> FitResult:
     """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
     effects are only tested on (Effect.tested_on; none of them acting there directly): those are
     scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
     also explains)."""
-    tested = {s for e in effects for s in e.tested_on} - {s for e in effects for s in e.stages if s not in e.tested_on}
-    fit_on = tuple(s for s in stages if s not in tested) or tuple(stages)
+    fit_on = fitted_stages(effects, stages)
     fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
         return fit
@@ -232,6 +248,9 @@ class Selector:
         self._evaluated: tuple | None = None
         self.widened: list[str] = []
         self.floors: dict | None = None
+        self._reading_noise: float | None = None     # the wheel-angle reading's noise level (reading_noise)
+        self.noisy_reading = False                   # a gain read through it was corrected (through_noise)
+        self.least_squares: dict[str, list] = {}     # its least-squares values and deviations, by effect
         self.work = Work(None, "", 0)
 
     def add(self, model: FitResult, members: list[Effect], effect: Effect) -> Finding:
@@ -258,7 +277,8 @@ class Selector:
             effect = wider
             fit = _refit(self.replay, model.values, related + [effect], stages, self.sigma,
                          [{p.name: fit.values[p.name] for p in effect.parameters}])
-        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain, self.floors)
+        fit, unexplainable = self.through_noise(effect, fit, related, stages)
+        finding = _judge(effect, fit, model, stages, self.base_values, self.min_gain, self.floors, unexplainable)
         self._cache[key] = finding
         if effect.id not in self._first:
             self._first[effect.id] = {p.name: fit.values[p.name] for p in effect.parameters}
@@ -270,7 +290,9 @@ class Selector:
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
-        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain, self.floors)
+        unexplainable = {"yaw": passage_power(self.replay, model.values, self.reading_noise)} \
+            if effect.id in ATTENUATED and self.noisy_reading else None
+        finding = _judge(effect, model, without, stages, self.base_values, self.min_gain, self.floors, unexplainable)
         finding.without = merged(model, without, reset)      # the model to fall back to
         return finding
 
@@ -346,9 +368,55 @@ class Selector:
         effects = [self.drop(model, members, f) for f in members]
         effects.sort(key=lambda f: f.delta_bic)
         final, floors = self.evaluate(model)
+        effects = [self.read_through_noise(f, members, trace) for f in effects]
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def through_noise(self, effect: Effect, fit: FitResult, related: list[Effect], stages,
+                      trace: list[str] | None = None) -> tuple[FitResult, dict[str, float] | None]:
+        """(``fit``, None), or for a gain read through the wheel-angle reading (ATTENUATED) whose noise
+        passes material power into the yaw stage (diagnosis.reading_noise: errors in variables
+        attenuate it) the fit refitted by corrected least squares and scored on ``stages``, with the
+        held-out mean square of the noise's passage (what no model explains); said in ``trace``."""
+        replay = self.replay
+        if effect.id not in ATTENUATED or getattr(replay, "command_only", False) \
+                or replay.__dict__.get("collecting") is not None:      # no reading; a fit only noted
+            return fit, None
+        fit_on = fitted_stages(related + [effect], stages)
+        out = corrected_fit(replay, fit.values, refit_free(replay, fit_on, related + [effect]), fit_on, self.sigma,
+                            self.reading_noise)
+        if out is None:
+            return fit, None
+        part, share = out
+        self.noisy_reading = True
+        scored = _fit(replay, part.values, [], tuple(stages), [{}], self.sigma)
+        corrected = fit.merged(replace(scored, free=part.free, cov=part.cov))
+        if trace is None:       # a candidate's fit: its least-squares values kept for the final model's line
+            self.least_squares[effect.id] = [(p.name, fit.values[p.name], fit.std(p.name)) for p in effect.parameters]
+        else:
+            trace.append(f"{effect.id}: the wheel-angle reading's noise ({math.degrees(self.reading_noise):.2g} deg) "
+                         f"passed through the yaw model is {100 * share:.0f} % of the yaw stage's residual power "
+                         f"(>= {100 * INPUT_NOISE_SHARE:.0f} %): it attenuates a gain read through it (errors in "
+                         f"variables), judged and reported by corrected least squares: " + ", ".join(
+                             f"{name} {corrected.values[name]:.4g} +- {corrected.std(name):.2g} (least squares "
+                             f"{value:.4g} +- {sd:.2g})" for name, value, sd in self.least_squares.get(effect.id, [])))
+        return corrected, {"yaw": passage_power(replay, corrected.values, self.reading_noise)}
+
+    def read_through_noise(self, finding: Finding, members: list[Effect], trace: list[str]) -> Finding:
+        """The final model's ``finding`` with its gain corrected as ``through_noise`` (a later refit of
+        its group with another effect reads it by least squares again)."""
+        others = [f for f in members if f is not finding.effect]
+        stages, related = group(set(finding.effect.stages), others, self.replay.stages, self.replay.side_slip_block)
+        fit, _ = self.through_noise(finding.effect, finding.fit, related, stages, trace)
+        return finding if fit is finding.fit else replace(finding, fit=fit)
+
+    @property
+    def reading_noise(self) -> float:
+        """sigma_n of the wheel-angle reading (reading_noise.reading_level, under the baseline's floors)."""
+        if self._reading_noise is None:
+            self._reading_noise = reading_level(self.replay, (self.floors or {}).get("_sensors"))
+        return self._reading_noise
 
     def simplest(self, model: FitResult, members: list[Effect], best: Finding, rivals: list[Finding]) -> Finding:
         """Of two tied explanations (dBIC within TIE), the one with fewer parameters, when the other is not
