@@ -4,7 +4,9 @@ clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
 A table is read as it comes, recognised by its content as well as its suffix (a ``.txt`` of
 numbers in columns is a table): lines starting with ``#`` or ``//`` are comments; rows wrapped
 whole in quotes (``"1.0,2.5,3"``) are unwrapped; the delimiter (``,`` ``;`` tab ``|`` or white
-space) is the one that splits the rows below the header alike into the most numbers. The header
+space) is the one that splits the rows below the header alike into the most numbers. A comment
+line right above header-less rows that splits like them into names is their header (numpy.savetxt
+writes ``# time(s),x(m),...``). The header
 is the rows before the first that holds a number: none means a file without a header, its
 columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units under it
 (``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows of
@@ -272,6 +274,10 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
         raise LogError(f"{path}: an empty table (no row of text in it: blank, zero bytes or comments only); expected a "
                        f"header and rows of numbers")
     sep = "\t" if suffix == ".tsv" else _delimiter(rows)
+    head = _commented_header(lines, rows, sep)
+    if head is not None:
+        rows = [head] + rows
+        notes.append(f"the header is a comment line ('{head[:40]}...', as numpy.savetxt writes one): its names used")
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
                         engine="python" if sep == " " else "c", skipinitialspace=True)
@@ -280,6 +286,26 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
     if sep not in (",", "\t"):
         notes.append(f"fields separated by {'white space' if sep == ' ' else repr(sep)} (read from the content)")
     return frame, units, first == 0
+
+
+def _commented_header(lines: list[str], rows: list[str], sep: str) -> str | None:
+    """The comment line right above a header-less table's first row when, its marker taken off, it
+    splits like the rows into as many names (no number among them): a header written as a comment
+    (numpy.savetxt's ``# a,b,c``, Octave's); None otherwise."""
+    above = None
+    for line in lines:
+        if not line:
+            continue
+        if not line.startswith(COMMENTS):
+            break
+        above = line
+    if above is None or not rows or not any(_is_number(v) for v in _split(rows[0], sep)):
+        return None
+    text = above.lstrip("#/").strip()
+    cells = _split(text, sep)
+    if len(cells) < 2 or len(cells) != len(_split(rows[0], sep)) or any(not c or _is_number(c) for c in cells):
+        return None
+    return text
 
 
 def _text_columns(frame: pd.DataFrame) -> list[str]:
