@@ -45,6 +45,7 @@ from .headings import as_yaw
 from .log import CANONICAL, LogError
 from .modes import is_mode_name, mode_codes
 from .mdf4 import mdf_tables
+from .numpy_channels import channel_folders, read_channel
 from .quirks import fixes_from_columns
 from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
@@ -539,13 +540,26 @@ def mdf_groups(path: Path) -> list[Table]:
             for g in mdf_tables(path)]
 
 
+def numpy_groups(root: Path) -> list[Table]:
+    """The numpy channel folders at or below ``root`` as tables, each on its own times
+    (measurements.numpy_channels)."""
+    return [Table(folder, c.name, c.frame, t=c.t, time_how=c.time_how)
+            for folder in channel_folders(root) for c in [read_channel(folder, root)]]
+
+
+def _tables_of(path: Path) -> list[Table]:
+    if path.is_dir():
+        return numpy_groups(path)
+    return mdf_groups(path) if path.suffix.lower() in MDF_SUFFIXES else [read_table(path)]
+
+
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
                 mapped: tuple = ()) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
     table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
     ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
     spec = parse_time(time)
-    tables = [t for p in paths for t in (mdf_groups(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
+    tables = [t for p in paths for t in _tables_of(p)]
     for t in tables:
         t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
@@ -900,4 +914,16 @@ class TableReader(Reader):
         return list_tables(paths, options)
 
 
+class NumpyChannelReader(TableReader):
+    """Folders of numpy channels (``t`` and ``value`` arrays per signal), read as tables."""
+
+    kind, name, listed = "numpy", "numpy channel folders", "numpy channels with ranges"
+    files = "a folder per signal holding its t and value arrays (numpy.save, .npy optional)"
+    suffixes = ()
+
+    def claims(self, path: Path) -> bool:
+        return path.is_dir() and bool(channel_folders(path))
+
+
 READER = TableReader()
+NUMPY_READER = NumpyChannelReader()
