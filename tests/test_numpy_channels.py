@@ -51,7 +51,7 @@ SIGNALS = ["delta=processed_log_CAN_steering_angle.value[deg]", "v=processed_log
 def test_numpy_channel_folders_convert_with_every_value_the_sources(tmp_path):
     truth = write_drive(tmp_path / "route")
     frame, report = import_recording(tmp_path / "route", ImportOptions(signals=[parse_signal(s) for s in SIGNALS]))
-    read = sorted(str(p).split("processed_log/")[-1] for p in report["files"]["table"])
+    read = sorted(str(p).split("processed_log/")[-1] for p in report["files"]["numpy"])
     assert read == ["CAN/speed", "CAN/steering_angle", "IMU/gyro"], report["files"]
     t = frame["t"].to_numpy()
     t0 = report["used"]["utc_start_s"]          # the log's t counts from its start on the boot clock

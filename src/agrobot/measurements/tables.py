@@ -924,6 +924,11 @@ class NumpyChannelReader(TableReader):
     def claims(self, path: Path) -> bool:
         return path.is_dir() and bool(channel_folders(path))
 
+    def streams(self, files: dict[str, list[Path]], options, source: Path):
+        streams = table_streams(files[self.kind], options, source)
+        streams.report["files"] = {self.kind: streams.report["files"].pop("table")}
+        return streams
+
 
 READER = TableReader()
 NUMPY_READER = NumpyChannelReader()
