@@ -278,6 +278,7 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
     head = _commented_header(lines, rows, sep)
     if head is not None:
         rows = [head] + rows
+        notes[:] = [_one_comment_fewer(n) for n in notes if not n.startswith("1 comment line(s)")]
         notes.append(f"the header is a comment line ('{head[:40]}...', as numpy.savetxt writes one): its names used")
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
@@ -287,6 +288,12 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
     if sep not in (",", "\t"):
         notes.append(f"fields separated by {'white space' if sep == ' ' else repr(sep)} (read from the content)")
     return frame, units, first == 0
+
+
+def _one_comment_fewer(note: str) -> str:
+    """A note counting the comment lines left out, less the one that is the header."""
+    count, _, rest = note.partition(" comment line(s)")
+    return f"{int(count) - 1} comment line(s){rest}" if rest and count.isdigit() else note
 
 
 def _commented_header(lines: list[str], rows: list[str], sep: str) -> str | None:
