@@ -842,5 +842,109 @@ def main(argv=None) -> int:
     return 0
 
 
+# --- numpy channel folders, the understeer gradient and the lateral acceleration -----------------
+# Added after the functions above and bound over three of their names (read_reference,
+# reference_numbers, project_identify, recording_rows), each calling the one it replaces.
+UNDERSTEER_MIN_SPEED = 5.0      # m/s: the steady-state regression's speeds (delta - L r / v is noise below)
+UNDERSTEER_LATERAL = 4.0        # m/s2: the regression's |a_y| (the linear range of a road tyre)
+
+
+def read_npchannels(folder: Path, ref: dict) -> dict:
+    """channel -> (t, x) in SI from [channel folder, column, scale(, offset)]: the ``t`` and
+    ``value`` arrays numpy.save wrote in that folder (np.load; a value of one column or several)."""
+    out = {}
+    for name, spec in ref.items():
+        if not isinstance(spec, list) or name in NOT_CHANNELS:
+            continue
+        sub, column, scale, *offset = spec
+        t, v = np.load(folder / sub / "t"), np.load(folder / sub / "value")
+        x = v.reshape(len(v), -1)[:, column].astype(float)
+        out[name] = (t.astype(float), (x + (offset[0] if offset else 0.0)) * scale)
+    return out
+
+
+_read_reference_of_kinds = read_reference
+
+
+def read_reference(rec: dict, roots: dict) -> dict:          # noqa: F811 - the kinds above and npchannels
+    if rec["reference"]["kind"] == "npchannels":
+        return read_npchannels(roots[rec["root"]] / rec["path"], rec["reference"])
+    return _read_reference_of_kinds(rec, roots)
+
+
+def understeer_reference(ch: dict, vehicle: dict, lag: float) -> dict | None:
+    """The steady-state regression delta/N - L r / v = K a_y + c (a_y = v r) by least squares on a
+    50 Hz grid, the yaw rate taken ``lag`` s after the steering (the kinematic lag of best
+    correlation), |v| above UNDERSTEER_MIN_SPEED and |a_y| below UNDERSTEER_LATERAL: K, its 95 %
+    interval, c; and the 99.9th percentile of |a_y| over the moving samples."""
+    if not all(k in ch for k in ("delta", "yaw_rate", "v")) or "wheelbase" not in vehicle:
+        return None
+    lo = max(ch[k][0][0] for k in ("delta", "yaw_rate", "v"))
+    hi = min(ch[k][0][-1] for k in ("delta", "yaw_rate", "v")) - max(lag, 0.0)
+    t = np.arange(lo, hi, GRID)
+    v, r = np.interp(t, *ch["v"]), np.interp(t + lag, *ch["yaw_rate"])
+    delta = np.interp(t, *ch["delta"]) / vehicle.get("steering_ratio", 1.0)
+    moving = np.abs(v) > UNDERSTEER_MIN_SPEED
+    if moving.sum() < 100:
+        return None
+    ay = v * r
+    m = moving & (np.abs(ay) < UNDERSTEER_LATERAL)
+    y = delta[m] - vehicle["wheelbase"] * r[m] / v[m]
+    a = np.column_stack([ay[m], np.ones(m.sum())])
+    coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+    resid = y - a @ coef
+    cov = np.linalg.inv(a.T @ a) * float(resid @ resid) / max(len(y) - 2, 1)
+    # samples 0.02 s apart are not independent: the interval is widened by sqrt(samples per second)
+    k_sd = math.sqrt(cov[0, 0]) * math.sqrt(1.0 / GRID)
+    return {"K": float(coef[0]), "K_sd": k_sd, "offset": float(coef[1]), "seconds": float(m.sum() * GRID),
+            "ay_peak": float(np.percentile(np.abs(ay[moving]), 99.9))}
+
+
+_reference_numbers_of_kinds = reference_numbers
+
+
+def reference_numbers(rec: dict, roots: dict) -> dict:      # noqa: F811 - with the understeer regression
+    out = _reference_numbers_of_kinds(rec, roots)
+    kin = out.get("kinematic") or {}
+    lag = kin.get("delay", 0.0)
+    if rec["reference"].get("understeer"):
+        out["understeer"] = understeer_reference(out["channels"], rec.get("vehicle", {}),
+                                                 0.0 if lag is None or math.isnan(lag) else lag)
+    return out
+
+
+IDENTIFIED: dict = {}           # recording name -> project_identify's numbers, for the rows below
+_project_identify_of_kinds = project_identify
+
+
+def project_identify(rec: dict, roots: dict) -> dict:       # noqa: F811 - kept for understeer_rows
+    IDENTIFIED[rec["name"]] = got = _project_identify_of_kinds(rec, roots)
+    return got
+
+
+def understeer_rows(rec: dict, roots: dict) -> list[tuple]:
+    """The reference's K and peak lateral acceleration beside identify's K (agree within 30 % or
+    within the reference's 95 % interval)."""
+    if not rec["reference"].get("understeer"):
+        return []
+    ref = guarded("reference", 120.0, reference_numbers, rec, roots)
+    u = None if isinstance(ref, str) else ref.get("understeer")
+    if u is None:
+        return [("understeer gradient K [rad/(m/s2)]", "-" if not isinstance(ref, str) else ref, "-", "-")]
+    got = IDENTIFIED.get(rec["name"], {}).get("K")
+    ok = None if got is None else (abs(got - u["K"]) <= max(0.3 * abs(u["K"]), 1.96 * u["K_sd"]))
+    return [("lateral acceleration [m/s2] (99.9 %, |v| > 5 m/s)", _f(u["ay_peak"]), "-", "-"),
+            ("understeer gradient K [rad/(m/s2)] (steady-state regression)",
+             f"{u['K']:.3g} +- {1.96 * u['K_sd']:.2g} (offset {u['offset']:.2g} rad, |a_y| < {UNDERSTEER_LATERAL:g}, "
+             f"{u['seconds']:.0f} s)", _f(got), _agree(ok))]
+
+
+_recording_rows_of_kinds = recording_rows
+
+
+def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> list[tuple]:  # noqa: F811
+    return _recording_rows_of_kinds(rec, roots, timeout, identify) + understeer_rows(rec, roots)
+
+
 if __name__ == "__main__":
     sys.exit(main())

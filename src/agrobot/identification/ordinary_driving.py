@@ -52,6 +52,8 @@ LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driv
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
+STEERING_SCALE_SUSPECT = 5.0     # yaw rate over v u / L (std) beyond which the angle's scale is doubted
+STEERING_SCALE_LARGEST = 100.0   # ... up to which a steering ratio or a unit (57.3 deg/rad) explains it
 INPUT_NOTE = {True: "input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the "
                     "whole steering chain", False: "input: the measured wheel angle delta"}
 STANDSTILL = 0.02             # m/s
@@ -392,11 +394,29 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
     if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
+        _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
                                f"of steering at {max(np.median(log.v), 0.5):.2g} m/s)")
     return min_speed, segs, driven
+
+
+def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitation: float, moving) -> None:
+    """Raises NotEnoughDriving naming the steering's scale when the measured yaw rate moves
+    (std >= MIN_EXCITATION) STEERING_SCALE_SUSPECT to STEERING_SCALE_LARGEST times what v u / L asks
+    for: the angle is not the road wheel's (a steering ratio divided into a road-wheel angle, degrees
+    for radians), not a steering that hardly moves; beyond that scale the input does not move."""
+    seen = moving if log.measured is None else moving & log.measured
+    answer = float(np.std(log.r[seen])) if seen.any() else 0.0
+    if answer < MIN_EXCITATION or not STEERING_SCALE_SUSPECT * excitation <= answer <= STEERING_SCALE_LARGEST * excitation:
+        return
+    raise NotEnoughDriving(f"{where}: the yaw rate moves {answer:.3g} rad/s (std while driving), "
+                           f"{answer / max(excitation, 1e-12):.3g} times what v {input_name} / L asks for "
+                           f"({excitation:.3g} rad/s): {input_name} is not the road-wheel angle it should be: a "
+                           f"steering ratio divided into an angle that is the road wheel's already (the study's "
+                           f"[vehicle] steering_ratio applies to a recording unless --steering-ratio is given; "
+                           f"--steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
 
 
 @dataclass

@@ -4,7 +4,9 @@ clocks (one CSV per ROS topic, a logger's files per sensor), joined on time.
 A table is read as it comes, recognised by its content as well as its suffix (a ``.txt`` of
 numbers in columns is a table): lines starting with ``#`` or ``//`` are comments; rows wrapped
 whole in quotes (``"1.0,2.5,3"``) are unwrapped; the delimiter (``,`` ``;`` tab ``|`` or white
-space) is the one that splits the rows below the header alike into the most numbers. The header
+space) is the one that splits the rows below the header alike into the most numbers. A comment
+line right above header-less rows that splits like them into names is their header (numpy.savetxt
+writes ``# time(s),x(m),...``). The header
 is the rows before the first that holds a number: none means a file without a header, its
 columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units under it
 (``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows of
@@ -43,6 +45,7 @@ from .headings import as_yaw
 from .log import CANONICAL, LogError
 from .modes import is_mode_name, mode_codes
 from .mdf4 import mdf_tables
+from .numpy_channels import channel_folders, read_channel
 from .quirks import fixes_from_columns
 from .runs import held
 from .signal_expressions import SignalSpec, check_unit, evaluate, target_unit, unknown_name
@@ -272,6 +275,11 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
         raise LogError(f"{path}: an empty table (no row of text in it: blank, zero bytes or comments only); expected a "
                        f"header and rows of numbers")
     sep = "\t" if suffix == ".tsv" else _delimiter(rows)
+    head = _commented_header(lines, rows, sep)
+    if head is not None:
+        rows = [head] + rows
+        notes[:] = [_one_comment_fewer(n) for n in notes if not n.startswith("1 comment line(s)")]
+        notes.append(f"the header is a comment line ('{head[:40]}...', as numpy.savetxt writes one): its names used")
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
                         engine="python" if sep == " " else "c", skipinitialspace=True)
@@ -280,6 +288,32 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
     if sep not in (",", "\t"):
         notes.append(f"fields separated by {'white space' if sep == ' ' else repr(sep)} (read from the content)")
     return frame, units, first == 0
+
+
+def _one_comment_fewer(note: str) -> str:
+    """A note counting the comment lines left out, less the one that is the header."""
+    count, _, rest = note.partition(" comment line(s)")
+    return f"{int(count) - 1} comment line(s){rest}" if rest and count.isdigit() else note
+
+
+def _commented_header(lines: list[str], rows: list[str], sep: str) -> str | None:
+    """The comment line right above a header-less table's first row when, its marker taken off, it
+    splits like the rows into as many names (no number among them): a header written as a comment
+    (numpy.savetxt's ``# a,b,c``, Octave's); None otherwise."""
+    above = None
+    for line in lines:
+        if not line:
+            continue
+        if not line.startswith(COMMENTS):
+            break
+        above = line
+    if above is None or not rows or not any(_is_number(v) for v in _split(rows[0], sep)):
+        return None
+    text = above.lstrip("#/").strip()
+    cells = _split(text, sep)
+    if len(cells) < 2 or len(cells) != len(_split(rows[0], sep)) or any(not c or _is_number(c) for c in cells):
+        return None
+    return text
 
 
 def _text_columns(frame: pd.DataFrame) -> list[str]:
@@ -513,13 +547,26 @@ def mdf_groups(path: Path) -> list[Table]:
             for g in mdf_tables(path)]
 
 
+def numpy_groups(root: Path) -> list[Table]:
+    """The numpy channel folders at or below ``root`` as tables, each on its own times
+    (measurements.numpy_channels)."""
+    return [Table(folder, c.name, c.frame, t=c.t, time_how=c.time_how)
+            for folder in channel_folders(root) for c in [read_channel(folder, root)]]
+
+
+def _tables_of(path: Path) -> list[Table]:
+    if path.is_dir():
+        return numpy_groups(path)
+    return mdf_groups(path) if path.suffix.lower() in MDF_SUFFIXES else [read_table(path)]
+
+
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
                 mapped: tuple = ()) -> list[Table]:
     """The tables with their times; a table without a time of its own takes the ``--time``
     table's row by row (same rows, or one fewer: a value per interval), else ``--rate``.
     ``mapped``: the names the --signal expressions take as data (never guessed as a clock)."""
     spec = parse_time(time)
-    tables = [t for p in paths for t in (mdf_groups(p) if p.suffix.lower() in MDF_SUFFIXES else [read_table(p)])]
+    tables = [t for p in paths for t in _tables_of(p)]
     for t in tables:
         t.mapped = {c for c in t.frame.columns if f"{t.name}.{c}" in mapped or str(c) in mapped}
     if spec is not None and not any(_column(t, c) for t in tables for c in spec.columns):
@@ -874,4 +921,21 @@ class TableReader(Reader):
         return list_tables(paths, options)
 
 
+class NumpyChannelReader(TableReader):
+    """Folders of numpy channels (``t`` and ``value`` arrays per signal), read as tables."""
+
+    kind, name, listed = "numpy", "numpy channel folders", "numpy channels with ranges"
+    files = "a folder per signal holding its t and value arrays (numpy.save, .npy optional)"
+    suffixes = ()
+
+    def claims(self, path: Path) -> bool:
+        return path.is_dir() and bool(channel_folders(path))
+
+    def streams(self, files: dict[str, list[Path]], options, source: Path):
+        streams = table_streams(files[self.kind], options, source)
+        streams.report["files"] = {self.kind: streams.report["files"].pop("table")}
+        return streams
+
+
 READER = TableReader()
+NUMPY_READER = NumpyChannelReader()
