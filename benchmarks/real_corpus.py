@@ -259,6 +259,8 @@ def read_reference(rec: dict, roots: dict) -> dict:
         return read_rosbag(path, ref)
     if kind == "mf4can":
         return read_mf4can(path, ref)
+    if kind == "npchannels":
+        return read_npchannels(path, ref)
     raise ValueError(f"reference kind {kind!r}")
 
 
@@ -535,6 +537,10 @@ def reference_numbers(rec: dict, roots: dict) -> dict:
            "second_yaw": second_yaw_source(ch), "speed_lag": speed_against_positions(ch)}
     if "quality" in ch:
         out["quality"] = sorted({int(q) for q in ch["quality"][1]})
+    if rec["reference"].get("understeer"):
+        lag = (out["kinematic"] or {}).get("delay", 0.0)
+        out["understeer"] = understeer_reference(ch, rec.get("vehicle", {}),
+                                                 0.0 if lag is None or math.isnan(lag) else lag)
     return out
 
 
@@ -703,7 +709,7 @@ def delay_rows(k: dict, got: dict, imp) -> list[tuple]:
     inertia: a car's single-track model lags 0.04-0.07 s at 20 km/h), or a clock offset where it is
     negative. identify's delay + lag is the part in front of its model, so it lies between
     min(0, that lag) and that lag (0.08 s allowed either side); a value on its zero bound does not
-    agree, and identify's "cannot decide" gives no number to compare. The audit's response lag
+    agree unless identify states it as an upper limit only ("at most"), and identify's "cannot decide" gives no number to compare. The audit's response lag
     (the same cross-correlation as the reference's) is printed beside."""
     found = [_found(imp, ("response_lag",), {"yaw_rate", "v", u}) for u in ("delta", "delta_cmd")]
     lag = next((x for x in found if x is not None), None)
@@ -711,8 +717,9 @@ def delay_rows(k: dict, got: dict, imp) -> list[tuple]:
     total = None if delay is None or not math.isfinite(delay) else delay + (got.get("lag") or 0.0)
     verdict = _agree(None if total is None or math.isnan(k["delay"]) else
                      min(0.0, k["delay"]) - 0.08 <= total <= k["delay"] + 0.08)
-    if delay is not None and 0 <= delay < 1e-6:
-        verdict = "NO (on its zero bound)"        # a verdict never sits on a bound
+    bounded = any(w in (got.get("delay_verdict") or "") for w in ("below its upper limit", "at most"))
+    if delay is not None and 0 <= delay < 1e-6 and not bounded:
+        verdict = "NO (on its zero bound)"        # a verdict never sits on a bound; "at most" is not a value
     said = f" ({got['delay_verdict']})" if got.get("delay_verdict") else ""
     return [("command-to-yaw lag [s]; identify's delay + lag within it",
              f"{_f(k['delay'])} (r at 0 s {_f(k['corr0'], '{:.2f}')})",
@@ -798,7 +805,7 @@ def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> li
     rows.append(("top speed [m/s] (99 %, positions)", _f(ref["top_speed"]), "-", "-"))
     rows += sensor_rows(ref, imp, rec["reference"].get("shift"))
     ident = guarded("identify", timeout, project_identify, rec, roots) if identify else "not run (--no-identify)"
-    rows += kinematic_rows(ref, ident, imp)
+    rows += kinematic_rows(ref, ident, imp) + understeer_rows(ref, ident)
     if isinstance(ident, dict):
         rows.append(("identify: K [rad/(m/s2)]; fit [%]; L [m]", "-",
                      f"{_f(ident['K'])}; {_f(ident['fit'], '{:.0f}')}; {_f(ident['wheelbase'])} ({ident['method']}, "
@@ -843,8 +850,6 @@ def main(argv=None) -> int:
 
 
 # --- numpy channel folders, the understeer gradient and the lateral acceleration -----------------
-# Added after the functions above and bound over three of their names (read_reference,
-# reference_numbers, project_identify, recording_rows), each calling the one it replaces.
 UNDERSTEER_MIN_SPEED = 5.0      # m/s: the steady-state regression's speeds (delta - L r / v is noise below)
 UNDERSTEER_LATERAL = 4.0        # m/s2: the regression's |a_y| (the linear range of a road tyre)
 
@@ -861,15 +866,6 @@ def read_npchannels(folder: Path, ref: dict) -> dict:
         x = v.reshape(len(v), -1)[:, column].astype(float)
         out[name] = (t.astype(float), (x + (offset[0] if offset else 0.0)) * scale)
     return out
-
-
-_read_reference_of_kinds = read_reference
-
-
-def read_reference(rec: dict, roots: dict) -> dict:          # noqa: F811 - the kinds above and npchannels
-    if rec["reference"]["kind"] == "npchannels":
-        return read_npchannels(roots[rec["root"]] / rec["path"], rec["reference"])
-    return _read_reference_of_kinds(rec, roots)
 
 
 def understeer_reference(ch: dict, vehicle: dict, lag: float) -> dict | None:
@@ -900,50 +896,20 @@ def understeer_reference(ch: dict, vehicle: dict, lag: float) -> dict | None:
             "ay_peak": float(np.percentile(np.abs(ay[moving]), 99.9))}
 
 
-_reference_numbers_of_kinds = reference_numbers
-
-
-def reference_numbers(rec: dict, roots: dict) -> dict:      # noqa: F811 - with the understeer regression
-    out = _reference_numbers_of_kinds(rec, roots)
-    kin = out.get("kinematic") or {}
-    lag = kin.get("delay", 0.0)
-    if rec["reference"].get("understeer"):
-        out["understeer"] = understeer_reference(out["channels"], rec.get("vehicle", {}),
-                                                 0.0 if lag is None or math.isnan(lag) else lag)
-    return out
-
-
-IDENTIFIED: dict = {}           # recording name -> project_identify's numbers, for the rows below
-_project_identify_of_kinds = project_identify
-
-
-def project_identify(rec: dict, roots: dict) -> dict:       # noqa: F811 - kept for understeer_rows
-    IDENTIFIED[rec["name"]] = got = _project_identify_of_kinds(rec, roots)
-    return got
-
-
-def understeer_rows(rec: dict, roots: dict) -> list[tuple]:
+def understeer_rows(ref: dict, ident) -> list[tuple]:
     """The reference's K and peak lateral acceleration beside identify's K (agree within 30 % or
     within the reference's 95 % interval)."""
-    if not rec["reference"].get("understeer"):
+    if "understeer" not in ref:
         return []
-    ref = guarded("reference", 120.0, reference_numbers, rec, roots)
-    u = None if isinstance(ref, str) else ref.get("understeer")
+    u = ref["understeer"]
     if u is None:
-        return [("understeer gradient K [rad/(m/s2)]", "-" if not isinstance(ref, str) else ref, "-", "-")]
-    got = IDENTIFIED.get(rec["name"], {}).get("K")
+        return [("understeer gradient K [rad/(m/s2)]", "-", "-", "-")]
+    got = ident.get("K") if isinstance(ident, dict) else None
     ok = None if got is None else (abs(got - u["K"]) <= max(0.3 * abs(u["K"]), 1.96 * u["K_sd"]))
     return [("lateral acceleration [m/s2] (99.9 %, |v| > 5 m/s)", _f(u["ay_peak"]), "-", "-"),
             ("understeer gradient K [rad/(m/s2)] (steady-state regression)",
              f"{u['K']:.3g} +- {1.96 * u['K_sd']:.2g} (offset {u['offset']:.2g} rad, |a_y| < {UNDERSTEER_LATERAL:g}, "
              f"{u['seconds']:.0f} s)", _f(got), _agree(ok))]
-
-
-_recording_rows_of_kinds = recording_rows
-
-
-def recording_rows(rec: dict, roots: dict, timeout: float, identify: bool) -> list[tuple]:  # noqa: F811
-    return _recording_rows_of_kinds(rec, roots, timeout, identify) + understeer_rows(rec, roots)
 
 
 if __name__ == "__main__":
