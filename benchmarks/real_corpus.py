@@ -709,8 +709,9 @@ def delay_rows(k: dict, got: dict, imp) -> list[tuple]:
     inertia: a car's single-track model lags 0.04-0.07 s at 20 km/h), or a clock offset where it is
     negative. identify's delay + lag is the part in front of its model, so it lies between
     min(0, that lag) and that lag (0.08 s allowed either side); a value on its zero bound does not
-    agree unless identify states it as an upper limit only ("at most"), and identify's "cannot decide" gives no number to compare. The audit's response lag
-    (the same cross-correlation as the reference's) is printed beside."""
+    agree unless identify states it as an upper limit only ("at most"), and identify's "cannot
+    decide" gives no number to compare. The audit's response lag (the same cross-correlation as
+    the reference's) is printed beside."""
     found = [_found(imp, ("response_lag",), {"yaw_rate", "v", u}) for u in ("delta", "delta_cmd")]
     lag = next((x for x in found if x is not None), None)
     delay = got.get("delay")
