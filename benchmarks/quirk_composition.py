@@ -1,5 +1,5 @@
 """Does the import audit name what it has not seen?
-``python3 benchmarks/quirk_composition.py [--n 300] [--seed 5400] [--classes a b ...] [--clean N]``.
+``python3 benchmarks/quirk_composition.py [--n 300] [--seed 5400] [--classes a b ...] [--clean N] [--misses]``.
 
 Random compositions of quirk classes (harness.quirk_recordings: each a seeded, compatible subset
 of 1-4 classes planted on a 90 s recording of a mower, a utility vehicle or a tractor, as one CSV,
@@ -360,6 +360,15 @@ def why_missed(res: dict) -> str:
     return "findings: " + (", ".join(kinds) or "none")
 
 
+def miss_lines(rows: list[dict], clean: list[dict]) -> list[str]:
+    """One line per missed planted quirk and per class claimed on a clean recording, with its seed."""
+    out = [f"missed: seed {r['truth']['seed']} {c} ({r['truth']['layout']}, {'+'.join(r['truth']['classes'])}): "
+           f"{why_missed(r)[:140]}" for r in rows for c in r["truth"]["planted"]
+           if not JUDGES[c][0](r, r["truth"]["planted"][c])]
+    return out + [f"invented: seed {r['truth']['seed']} {c} ({r['truth']['layout']})"
+                  for r in clean for c, j in JUDGES.items() if j[1](r)]
+
+
 def table(rows: list[dict], clean: list[dict], classes) -> list[str]:
     """The per-class table: planted, named, missed, invented on the clean recordings."""
     out = [f"| class | planted | named | missed | named % | invented (of {len(clean)} clean) | invented % | a miss |",
@@ -382,6 +391,8 @@ def main(argv=None) -> int:
     p.add_argument("--clean", type=int, default=None, help="clean recordings (default n / 5, at least 20)")
     p.add_argument("--classes", nargs="+", default=None, choices=ORDER, metavar="CLASS",
                    help=f"draw compositions among these classes only ({', '.join(ORDER)})")
+    p.add_argument("--misses", action="store_true",
+                   help="print every miss and every claim on a clean recording with its seed")
     args = p.parse_args(argv)
     clean_n = args.clean if args.clean is not None else max(20, args.n // 5)
     started = time.perf_counter()
@@ -399,6 +410,8 @@ def main(argv=None) -> int:
     named = sum(JUDGES[c][0](r, r["truth"]["planted"][c]) for c, r in planted)
     print(f"all planted quirks: {named}/{len(planted)} named ({100 * named / max(len(planted), 1):.1f} %); "
           f"clean recordings with any claim: {sum(any(j[1](r) for j in JUDGES.values()) for r in clean)}/{len(clean)}")
+    if args.misses:
+        print("\n".join(miss_lines(rows, clean)))
     return 0
 
 

@@ -12,7 +12,9 @@ names are joined with ``_`` (a group's name over its columns). A header's unit i
 ``speed [km/h]`` or ``speed (km/h)``, is the column's unit (the name is what precedes it). A
 column that holds no number is named with why (empty, text); a table of text only is refused.
 With lat/lon columns, a ``fix_quality`` column (or ``quality``, ``gps_quality`` ...) is the
-receiver's fix quality, held at its own times; without one the log has none (never assumed). A column is named by
+receiver's fix quality, held at its own times; without one the log has none (never assumed). A
+yaw rate taken from one axis of a table's gyro (``gyro_z``) beside its accelerometer (``acc_x/y/z``)
+is checked against the axis that carries gravity (measurements.imu_axes). A column is named by
 ``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
 table has it.
 
@@ -40,6 +42,7 @@ import pandas as pd
 from agrobot.orchestrator.units import base_unit
 
 from .headings import as_yaw
+from .imu_axes import GRAVITY, axis_check, axis_siblings
 from .log import CANONICAL, LogError
 from .modes import is_mode_name, mode_codes
 from .mdf4 import mdf_tables
@@ -756,6 +759,28 @@ def _receiver_specs(tables: list[Table], specs: list, given: set, auto: set) -> 
         auto.add("heading")
 
 
+def yaw_axis(tables: list[Table], specs: list, report: dict) -> None:
+    """A yaw rate read from one axis of a table's gyro whose table holds an accelerometer per
+    axis: the vertical axis by gravity checked against it (measurements.imu_axes; an
+    accelerometer declared in g scaled by g); a mismatch goes to report["imu_axes"] for the audit."""
+    spec = next((s for s in specs if s.column == "yaw_rate" and len(s.names) == 1), None)
+    found = catalog(tables).get(spec.names[0]) if spec is not None else None
+    if found is None:
+        return
+    t, column = found
+    siblings = axis_siblings(str(column), [str(c) for c in t.frame.columns if c not in t.time_columns])
+    if siblings is None:
+        return
+    axis, accel = siblings
+    readings = {a: pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
+                * (GRAVITY if (t.units.get(c) or "").strip().lower() in ("g", "gn") else 1.0) for a, c in accel.items()}
+    if any(np.isfinite(r).sum() < 20 for r in readings.values()):
+        return
+    check = axis_check("yaw_rate", f"{t.name}.{column}", axis, {a: f"{t.name}.{c}" for a, c in accel.items()}, readings)
+    if check is not None:
+        report.setdefault("imu_axes", []).append(check)
+
+
 def table_streams(paths: list[Path], options, source: Path):
     """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
     table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
@@ -829,6 +854,7 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
+    yaw_axis(tables, specs, report)
     streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
                                      | set(modes), {}, groups=groups, labels=labels), source)
     if "heading" in streams.signals:
