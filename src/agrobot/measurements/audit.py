@@ -75,7 +75,7 @@ import math
 import numpy as np
 
 from .clocks import parabolic_peak
-from .direction import check_direction
+from .direction import check_direction, position_noise
 from .findings import finding
 from .imu_axes import axis_findings
 from .log import CANONICAL, LogError
@@ -95,7 +95,8 @@ STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (a
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
-MOVING = 1.0            # m/s: the GNSS course is read above this speed
+MOVING = 0.3            # m/s: the GNSS course is read above this speed ...
+COURSE_SIGMAS = 40.0    # ... where its chord is this many position sigmas long (the course within ~2 deg)
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 G = 9.80665
@@ -302,7 +303,8 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
             r = np.gradient(course, tc)
-            slow = np.interp(tc, t, speed) < MOVING
+            sigma = position_noise(east, north)         # the chord long against the fixes' own noise
+            slow = np.interp(tc, t, speed) < np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
             r[slow] = np.nan
             rate[k:-k] = r
     return t, speed, rate
@@ -319,6 +321,13 @@ def smoothed(t: np.ndarray, x: np.ndarray, span: float) -> np.ndarray:
 
 def _moving(t_v, v, threshold=MOVING):
     return lambda grid: np.abs(np.interp(grid, t_v, v)) > threshold
+
+
+def _good(t_v, v, threshold, best):
+    """mask(grid): moving above ``threshold`` where the receiver's fix is at its usual quality
+    (a speed or course from degraded fixes is noise, not a signal to correlate)."""
+    moving, usual = _moving(t_v, v, threshold), _usual(best)
+    return moving if usual is None else (lambda grid: moving(grid) & usual(grid))
 
 
 def _usual(best):
@@ -421,7 +430,7 @@ class Auditor:
             best = usual_fix(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
                 out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
-                                                               through_origin=True, mask=_moving(tg, speed, 0.3),
+                                                               through_origin=True, mask=_good(tg, speed, 0.3, best),
                                                                scale_mask=_usual(best)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
@@ -430,7 +439,7 @@ class Auditor:
                 t, r = sig[gyro]
                 r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
-                            lag(tg[ok], course_rate[ok], t, r, search, mask=_moving(tg, speed)), "rad/s"))
+                            lag(tg[ok], course_rate[ok], t, r, search, mask=_good(tg, speed, MOVING, best)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
         if lateral and "v" in sig and "yaw_rate" in sig:
             t, r = sig["yaw_rate"]
@@ -531,7 +540,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if leap is not None:            # a known count of seconds inside the interval: that count, exactly
             late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
-        small = iv is not None and abs(late) < ALIGN_MIN
+        small = judged and abs(late) < ALIGN_MIN         # "the clocks agree" needs the evidence a realignment needs
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
                    f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
                    + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))

@@ -36,6 +36,7 @@ from .log import LogError
 
 CHORD = 0.25            # s: the course from the fixes this far either side (at least)
 CHORD_NOISE = 8.0       # a chord at least this many position sigmas long: the course within ~10 deg
+DIRECTION_NOISE = 4.0   # ... and for the direction alone (two values pi apart, told within AGREE): within ~20 deg
 NOISE_WINDOW = 41       # fixes: the position noise is read over this many
 MOVING = 0.2            # m/s: the course is read above this track speed
 AGREE = math.radians(45.0)
@@ -52,11 +53,12 @@ RUN_MIN, RUN_VOTES = 2.0, 5     # s, votes: a run of reversing evidence alone in
                                 # duration decides above 2.5 Hz fixes; 5 votes, as a stretch needs, below)
 
 
-def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def course(gnss, sigmas: float = CHORD_NOISE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t, course [rad, ENU], track speed [m/s]) on the fixes' own updates (a held fix is not a new
     one); course NaN where the track moves slower than MOVING. The chord is CHORD s either side,
     lengthened (x2, x4, x8) where the positions' local noise sigma would turn it by more than
-    about 10 deg: a chord shorter than CHORD_NOISE sigma is not read (a DGPS fix at mower speed)."""
+    about 10 deg: a chord shorter than ``sigmas`` sigma is not read (CHORD_NOISE: a DGPS fix at
+    mower speed; DIRECTION_NOISE where only forward or backward is asked)."""
     t = gnss["utc"].to_numpy(float)
     lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
     new = np.r_[True, (np.diff(lat) != 0) | (np.diff(lon) != 0)]
@@ -68,7 +70,7 @@ def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c, speed = np.full(len(t), np.nan), np.zeros(len(t))
     if len(t) <= 2 * k0 + 2:
         return t, c, speed
-    need = CHORD_NOISE * position_noise(east, north)
+    need = sigmas * position_noise(east, north)
     todo = np.ones(len(t), bool)
     for k in (k0, 2 * k0, 4 * k0, 8 * k0):
         if len(t) <= 2 * k + 2:
@@ -193,14 +195,16 @@ def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
     return e * majority, f"the course rate against the steering {name}"
 
 
-def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
-    """The first evidence available (module docstring): (per fix +1/-1/0, how it was read)."""
+def evidence(streams, t, c, wide=None) -> tuple[np.ndarray, str] | None:
+    """The first evidence available (module docstring): (per fix +1/-1/0, how it was read); the
+    rates from the course ``c`` (CHORD_NOISE), the votes on ``wide`` (DIRECTION_NOISE; default c)."""
     sig = streams.signals
+    rate = angle_rate(t, c)
+    c = c if wide is None else wide
     declared = next((n for n in ("direction", "gear") if n in sig), None)
     if declared:
         x = np.interp(t, *sig[declared])
         return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
-    rate = angle_rate(t, c)
     heading = sig.get("heading")
     g = streams.gnss
     if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:
@@ -286,11 +290,12 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     if streams.gnss is None or len(streams.gnss) < 20:
         return []
     t, c, _ = course(streams.gnss)
-    found = evidence(streams, t, c)
+    wide = course(streams.gnss, DIRECTION_NOISE)[1]       # same fixes, same t: the direction told on shorter chords
+    found = evidence(streams, t, c, wide)
     if found is None:
         return []
     e, how = found
-    stretches = reversing(t, c, e)
+    stretches = reversing(t, wide, e)
     if not stretches:
         return []
     speed = judged_speed(streams)

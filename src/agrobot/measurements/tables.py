@@ -82,6 +82,8 @@ class Table:
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
 DELIMITERS = (",", ";", "\t", "|")
+DECIMAL_COMMA = re.compile(r"^[-+]?\d*,\d+(?:[eE][-+]?\d+)?$")     # 1,5: a decimal comma (a European locale)
+DECIMAL_POINT = re.compile(r"^[-+]?\d*\.\d+(?:[eE][-+]?\d+)?$")
 _EPOCH = re.compile(r"^(?:(?:unix|posix|epoch|utc|gps)\s+)*(?:epoch\s+|time\s+)?(s|sec|secs|seconds|ms|milliseconds|us|"
                     r"microseconds|ns|nanoseconds)(?:\s+since\s+(?:the\s+)?(?:unix\s+)?epoch|\s+\(?(?:unix|posix|"
                     r"epoch|utc)\)?)?$")
@@ -136,10 +138,26 @@ def _delimiter(rows: list[str]) -> str:
         if width < 2 or widths.count(width) < 0.9 * len(widths):
             continue
         fields = [v for r in sample for v in _split(r, sep)]
-        numeric = round(sum(_is_number(v) for v in fields) / max(len(fields), 1), 2)
+        numeric = round(sum(_is_number(v) or (sep != "," and bool(DECIMAL_COMMA.match(v))) for v in fields)
+                        / max(len(fields), 1), 2)
         if (numeric, width) > score:
             best, score = sep, (numeric, width)
     return best or ","
+
+
+def _decimal_points(rows: list[str], sep: str, notes: list) -> list[str]:
+    """Rows whose numbers are written with a decimal comma (``1,5``; fields separated by another
+    character, no number with a decimal point among them) with points instead, named with the
+    count of columns that hold one; else the rows as they are."""
+    if sep == ",":
+        return rows
+    sample = [_split(r, sep) for r in rows[len(rows) // 3:][:60] or rows]
+    fields = [v for r in sample for v in r]
+    if not any(DECIMAL_COMMA.match(v) for v in fields) or any(DECIMAL_POINT.match(v) for v in fields):
+        return rows
+    columns = {k for r in sample for k, v in enumerate(r) if DECIMAL_COMMA.match(v)}
+    notes.append(f"numbers written with a decimal comma (1,5 for 1.5) in {len(columns)} columns: read as decimal points")
+    return [re.sub(r"(?<=\d),(?=\d)", ".", r) for r in rows]
 
 
 def declared_unit(text: str) -> str | None:
@@ -275,6 +293,7 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
         raise LogError(f"{path}: an empty table (no row of text in it: blank, zero bytes or comments only); expected a "
                        f"header and rows of numbers")
     sep = "\t" if suffix == ".tsv" else _delimiter(rows)
+    rows = _decimal_points(rows, sep, notes)
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
                         engine="python" if sep == " " else "c", skipinitialspace=True)
