@@ -10,7 +10,7 @@ from agrobot.api import convert
 from harness.quirk_recordings import compose
 
 
-@pytest.mark.parametrize("seed", [3, 5])          # GN first, GP first
+@pytest.mark.parametrize("seed", [3, 4])          # GP first, GN first
 def test_the_combined_solution_is_kept_and_the_talkers_named(tmp_path, seed):
     truth = compose(seed, tmp_path, classes=["two_talkers"], layout="nmea", machine="utility")
     planted = truth["planted"]["two_talkers"]
