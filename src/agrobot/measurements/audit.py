@@ -289,7 +289,9 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
 # --- the signals that must agree ---------------------------------------------------------------
 def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(utc, speed over ground [m/s], course rate [rad/s]) of the receiver's fixes: the course
-    of 1 s chords of the track (a sphere is enough for a rate), NaN below MOVING m/s."""
+    of 1 s chords of the track (a sphere is enough for a rate), NaN where the track is slower
+    than MOVING m/s, or than a chord of COURSE_SIGMAS position sigmas, within 1 s of the chord's
+    centre (a chord across a stop, where a machine may turn back, has no course)."""
     t = gnss["utc"].to_numpy(float)
     lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
     north = np.radians(lat - lat[0]) * 6.371e6
@@ -303,8 +305,12 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
             r = np.gradient(course, tc)
-            sigma = position_noise(east, north)         # the chord long against the fixes' own noise
-            slow = np.interp(tc, t, speed) < np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
+            sigma = position_noise(east, north)         # the chord long against the fixes' own noise ...
+            need = np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
+            from scipy.ndimage import minimum_filter1d
+
+            least = minimum_filter1d(speed, 4 * k + 1, mode="nearest")[k:-k]    # ... and moving all along it
+            slow = least < need
             r[slow] = np.nan
             rate[k:-k] = r
     return t, speed, rate
