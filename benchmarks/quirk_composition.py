@@ -86,7 +86,7 @@ NUMBER = re.compile(r"(?<![\d.])[-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")     # "17.
 def run(seed: int, folder: Path, classes, among=None) -> dict:
     """Compose (``classes``, or drawn ``among`` some), convert; {truth, ok, error, findings,
     channels, alignment, notes, log, report}."""
-    truth = compose(seed, folder, classes=classes, among=among)
+    truth = compose(seed, folder, classes=classes, among=among, added=True)
     out = {"truth": truth, "ok": False, "error": "", "findings": [], "channels": [], "alignment": {}, "notes": [],
            "log": None, "report": {}}
     signals = [parse_signal(s) for s in truth["signals"] or []]

@@ -43,7 +43,12 @@ checks the audit named):
   https://github.com/carla-simulator/ros-bridge/issues/51), ``out_of_order`` (rows written later
   than their stamps' place: https://github.com/ros/ros_comm/issues/952), ``clock_jump`` (the
   logger's clock stepped by 1-3 s either way mid-recording, as NTP does:
-  https://github.com/microsoft/gctoolkit/issues/127, https://github.com/juju/juju/pull/3941).
+  https://github.com/microsoft/gctoolkit/issues/127, https://github.com/juju/juju/pull/3941),
+  ``decimal_commas`` (fields by ';', numbers as 1,5, a spreadsheet's European-locale CSV:
+  https://github.com/nyetwurk/ecuxplot/issues/14: truth the columns per file holding one),
+  ``two_talkers`` (each NMEA epoch's GGA from GN, the combined solution, and GP, a GPS-only one
+  0.3-0.8 m off, in one order: https://github.com/projecthorus/chasemapper/pull/37: truth the
+  epochs both give and that GN holds the recording's positions).
 
 A composition is a seeded random subset of compatible classes (each class names the layouts it
 fits and the classes it excludes) planted on one drive; ``compose`` writes it to a folder and
@@ -542,29 +547,41 @@ def compatible(classes, layout: str) -> bool:
         b in CLASSES[a].excludes for a in classes for b in classes if a != b)
 
 
-def draw_classes(rng, layout: str, most: int = 4, among=None) -> list:
-    """A random subset of 1..``most`` compatible classes (of ``among``, default all) for ``layout``."""
-    pool = [c for c in (among or ORDER) if layout in CLASSES[c].layouts]
+ADDED = ("decimal_commas", "two_talkers")     # drawn apart (ADDED_SHARE each): a seed's draw of the others kept
+ADDED_SHARE = 0.2
+
+
+def draw_classes(rng, layout: str, most: int = 4, among=None, seed: int | None = None) -> list:
+    """A random subset of 1..``most`` compatible classes (of ``among``, default all but ADDED) for
+    ``layout``. With a ``seed`` and no ``among``, the classes added later (ADDED) are each drawn
+    apart with their own generator and added where they fit: every earlier composition of a seed
+    stays as it was, one of them added to some."""
+    pool = [c for c in (among or [c for c in ORDER if c not in ADDED]) if layout in CLASSES[c].layouts]
     want = int(rng.integers(1, most + 1))
     chosen: list = []
     for c in rng.permutation(pool):
         if len(chosen) < want and compatible(chosen + [str(c)], layout):
             chosen.append(str(c))
+    extra = np.random.default_rng([seed, 1]) if among is None and seed is not None else None
+    for c in ADDED if extra is not None else ():
+        if extra.random() < ADDED_SHARE and compatible(chosen + [c], layout):
+            chosen.append(c)
     return [c for c in ORDER if c in chosen]
 
 
 def compose(seed: int, folder: Path, classes=None, layout: str | None = None, machine: str | None = None,
-            duration: float = 90.0, most: int = 4, among=None) -> dict:
+            duration: float = 90.0, most: int = 4, among=None, added: bool = False) -> dict:
     """Write one composition to ``folder`` and return its truth (Recording.truth; "drive" the
     quirk_drive.Drive under it, on the recording's clock from its start). ``classes``:
     the classes to plant (None: a random compatible subset; [] a clean recording); ``layout``,
-    ``machine``: None draws them; ``among``: the classes a random subset is drawn from."""
+    ``machine``: None draws them; ``among``: the classes a random subset is drawn from; ``added``:
+    the classes added later (ADDED) drawn too, apart (draw_classes)."""
     rng = np.random.default_rng(seed)
     fitting = [x for x in LAYOUTS if any(x in CLASSES[c].layouts for c in among or ORDER)]
     layout = layout or str(rng.choice(fitting))
     machine = machine or str(rng.choice(sorted(MACHINES)))
     if classes is None:
-        classes = draw_classes(rng, layout, most, among)
+        classes = draw_classes(rng, layout, most, among, seed if added else None)
     classes = [c for c in ORDER if c in classes]
     if not compatible(classes, layout):
         raise ValueError(f"classes {classes} do not fit the layout {layout!r} together")

@@ -574,9 +574,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                     and reference not in offsets:    # GPS time against UTC: the receiver's stamps are the ones off
                 own = -late if ga == reference else late
                 offsets[reference] = (own, [own - half, own + half], name)
-            elif ga in base and gb not in base:
+            elif ga in base and gb not in base and abs(base[ga] + late) >= ALIGN_MIN:   # on the reference's clock: none
                 offsets[gb] = (base[ga] + late, [base[ga] + iv[0], base[ga] + iv[1]], name)
-            elif gb in base and ga not in base:
+            elif gb in base and ga not in base and abs(base[gb] - late) >= ALIGN_MIN:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
             meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "

@@ -778,26 +778,26 @@ def _receiver_specs(tables: list[Table], specs: list, given: set, auto: set) -> 
         auto.add("heading")
 
 
-def yaw_axis(tables: list[Table], specs: list, report: dict) -> None:
+def yaw_axis(tables: list[Table], specs: list) -> list[dict]:
     """A yaw rate read from one axis of a table's gyro whose table holds an accelerometer per
     axis: the vertical axis by gravity checked against it (measurements.imu_axes; an
-    accelerometer declared in g scaled by g); a mismatch goes to report["imu_axes"] for the audit."""
+    accelerometer declared in g scaled by g); a mismatch's entry for report["imu_axes"] (the
+    audit names it), else none."""
     spec = next((s for s in specs if s.column == "yaw_rate" and len(s.names) == 1), None)
     found = catalog(tables).get(spec.names[0]) if spec is not None else None
     if found is None:
-        return
+        return []
     t, column = found
     siblings = axis_siblings(str(column), [str(c) for c in t.frame.columns if c not in t.time_columns])
     if siblings is None:
-        return
+        return []
     axis, accel = siblings
     readings = {a: pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
                 * (GRAVITY if (t.units.get(c) or "").strip().lower() in ("g", "gn") else 1.0) for a, c in accel.items()}
     if any(np.isfinite(r).sum() < 20 for r in readings.values()):
-        return
+        return []
     check = axis_check("yaw_rate", f"{t.name}.{column}", axis, {a: f"{t.name}.{c}" for a, c in accel.items()}, readings)
-    if check is not None:
-        report.setdefault("imu_axes", []).append(check)
+    return [check] if check is not None else []
 
 
 def table_streams(paths: list[Path], options, source: Path):
@@ -835,8 +835,7 @@ def table_streams(paths: list[Path], options, source: Path):
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
                        + " (convert SOURCE --list shows their ranges)")
-    names = catalog(tables)
-    signals, columns, used, groups = {}, {}, set(), {}
+    names, signals, columns, used, groups = catalog(tables), {}, {}, set(), {}
     for spec in specs:
         found = {}
         for name in spec.names:
@@ -864,6 +863,7 @@ def table_streams(paths: list[Path], options, source: Path):
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
+              "imu_axes": yaw_axis(tables, specs),
               "time_base": [x for t in tables if t.name in used for x in t.time_base],
               "mode_columns": {f"{t.path.name} {c}": runs for t in tables if t.name in used for c, runs in mode_runs(t).items()},
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
@@ -873,7 +873,6 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": "the tables' own time columns"
                                       + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
-    yaw_axis(tables, specs, report)
     streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
                                      | set(modes), {}, groups=groups, labels=labels), source)
     if "heading" in streams.signals:
