@@ -8,7 +8,9 @@ with a known truth (harness.quirk_recordings, harness.quirk_drive):
   one speed for every machine: a slow machine's gyro clock offset is found on its RTK course;
 - a row written late is not a clock step (the return to the sequence after it is no leap);
 - the direction is told on chords of DIRECTION_NOISE position sigmas: a reversal inside a DGPS
-  stretch is named.
+  stretch is named;
+- a machine that steers its wheels cannot turn on the spot: a straight reversal between two short
+  stops, which its steering cannot vote on, is named by its course turned by pi.
 """
 from __future__ import annotations
 
@@ -88,3 +90,29 @@ def test_a_reversal_inside_a_dgps_stretch_is_named():
     said = [float(x) for x in re.findall(r"(\d+\.\d)-(\d+\.\d) s", str(refused.value))[0]]
     back = drive.t[drive.v < 0]
     assert said == pytest.approx([back[0], back[-1]], abs=1.0)
+
+
+def test_a_straight_reversal_told_by_steering_alone_is_named():
+    """No gyro, no heading: a machine that steers its wheels drives a winding path, stops, backs up
+    8 s straight (the wheels at zero: the steering votes on nothing), stops and drives on. Its
+    course turned by pi across both short stops names the stretch: it cannot turn on the spot."""
+    h, L = 0.05, 1.2
+    t = np.arange(0.0, 60.0, h)
+    a, b = 20.0, 29.0                                                  # the reversal, stop to stop
+    ramp = np.clip(np.minimum(np.abs(t - a), np.abs(t - b)) / 0.5, 0.0, 1.0)     # 0.5 s to and from rest
+    back = (t > a) & (t < b)
+    v = np.where(back, -0.6, 1.2) * ramp
+    delta = np.where(back, 0.0, 0.25 * np.sin(0.4 * t))
+    psi = np.cumsum(v * np.tan(delta) / L) * h
+    east, north = np.cumsum(v * np.cos(psi)) * h, np.cumsum(v * np.sin(psi)) * h
+    rng = np.random.default_rng(4)
+    east, north = east + 0.01 * rng.standard_normal(len(t)), north + 0.01 * rng.standard_normal(len(t))
+    gnss = pd.DataFrame({"utc": 1.7e9 + t, "lat": LAT0 + np.degrees(north / EARTH),
+                         "lon": 5.0 + np.degrees(east / (EARTH * math.cos(math.radians(LAT0)))),
+                         "quality": 4.0, "speed": np.nan})
+    streams = types.SimpleNamespace(gnss=gnss, signals={"delta": (1.7e9 + t, delta), "v": (1.7e9 + t, np.abs(v))},
+                                    report={})
+    with pytest.raises(LogError) as refused:
+        check_direction(streams, types.SimpleNamespace(sign_speed=False), "straight.csv", 1.7e9)
+    said = [tuple(map(float, x)) for x in re.findall(r"(\d+\.\d)-(\d+\.\d) s", str(refused.value))]
+    assert len(said) == 1 and said[0] == pytest.approx((a, b), abs=1.0)

@@ -49,6 +49,7 @@ SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the
 SCALE = 2.0             # a heading's rate within this factor of the course's (a gyro in deg/s is not one)
 AXIS_WINDOW = 30        # s: the course-heading axis is read over this window (a drifting heading)
 STILL, STILL_SAMPLES = 0.05, 20    # m/s, samples: a gyro's bias read at standstill
+FLIP_STOP, FLIP_SPAN = 3.0, 0.5     # s: a stop at most this long; the course this long either side of it
 RUN_MIN, RUN_VOTES = 2.0, 5     # s, votes: a run of reversing evidence alone inside a forward stretch (the
                                 # duration decides above 2.5 Hz fixes; 5 votes, as a stretch needs, below)
 
@@ -223,23 +224,49 @@ def evidence(streams, t, c, wide=None) -> tuple[np.ndarray, str] | None:
     return by_steering(t, c, rate, sig[steer], steer) if steer else None
 
 
-def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, float]]:
+def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray, steered: bool = False) -> list[tuple[float, float]]:
     """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
     each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
     when the net share of its evidence is below -REVERSE_SHARE, and named when at least
     REVERSE_MIN long with at least 5 votes; inside a stretch judged forward, a run of consecutive
-    reversing votes (_reversing_runs) is one too."""
+    reversing votes (_reversing_runs) is one too. A machine that steers its wheels (``steered``:
+    the evidence is its steering) cannot turn on the spot: a stretch whose course is turned by pi
+    against both neighbours' across stops of at most FLIP_STOP s, its own evidence no forward
+    majority (a straight reversal gives the steering little to say) and theirs forward, reverses
+    too (_flipped)."""
     out = []
     moving = np.isfinite(c)
     edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        votes = e[a:b]
+    runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+    shares = [e[a:b].sum() / max(float(np.sum(np.abs(e[a:b]))), 1e-12) for a, b in runs]
+    for j, (a, b) in enumerate(runs):
+        votes, share = e[a:b], shares[j]
         seen = int(np.sum(votes != 0))
-        if seen >= 5 and votes.sum() / np.sum(np.abs(votes)) < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+        if seen >= 5 and share < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+            out.append((float(t[a]), float(t[b - 1])))
+        elif steered and share <= 0 < min(shares[max(j - 1, 0)], shares[min(j + 1, len(runs) - 1)]) \
+                and t[b - 1] - t[a] >= REVERSE_MIN and _flipped(t, c, runs, j):
             out.append((float(t[a]), float(t[b - 1])))
         else:           # a stop too brief for the fixes to show it: a run of reversing evidence alone
             out += _reversing_runs(t[a:b], votes)
     return out
+
+
+def _flipped(t: np.ndarray, c: np.ndarray, runs: list, j: int) -> bool:
+    """Run j's course turned by pi (within AGREE) against the runs either side across stops of at
+    most FLIP_STOP s: its first and last FLIP_SPAN s against theirs next to it."""
+    if j == 0 or j == len(runs) - 1:
+        return False
+    (pa, pb), (a, b), (na, nb) = runs[j - 1], runs[j], runs[j + 1]
+    if t[a] - t[pb - 1] > FLIP_STOP or t[na] - t[b - 1] > FLIP_STOP:
+        return False
+
+    def mean(lo: int, hi: int) -> float:
+        return float(np.angle(np.mean(np.exp(1j * c[lo:hi]))))
+    span = max(1, int(round(FLIP_SPAN / float(np.median(np.diff(t))))))
+    turned = (_wrap(mean(a, min(b, a + span)) - mean(max(pa, pb - span), pb) - math.pi),
+              _wrap(mean(na, min(nb, na + span)) - mean(max(a, b - span), b) - math.pi))
+    return all(abs(x) < AGREE for x in turned)
 
 
 def _reversing_runs(t: np.ndarray, votes: np.ndarray) -> list[tuple[float, float]]:
@@ -295,7 +322,7 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     if found is None:
         return []
     e, how = found
-    stretches = reversing(t, wide, e)
+    stretches = reversing(t, wide, e, steered=how.startswith("the course rate against the steering"))
     if not stretches:
         return []
     speed = judged_speed(streams)
