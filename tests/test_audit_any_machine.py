@@ -10,7 +10,8 @@ with a known truth (harness.quirk_recordings, harness.quirk_drive):
 - the direction is told on chords of DIRECTION_NOISE position sigmas: a reversal inside a DGPS
   stretch is named;
 - a machine that steers its wheels cannot turn on the spot: a straight reversal between two short
-  stops, which its steering cannot vote on, is named by its course turned by pi.
+  stops, which its steering cannot vote on, is named by its course turned by pi;
+- an angle that is a rate is judged on the speed signed where the machine reverses.
 """
 from __future__ import annotations
 
@@ -116,3 +117,19 @@ def test_a_straight_reversal_told_by_steering_alone_is_named():
         check_direction(streams, types.SimpleNamespace(sign_speed=False), "straight.csv", 1.7e9)
     said = [tuple(map(float, x)) for x in re.findall(r"(\d+\.\d)-(\d+\.\d) s", str(refused.value))]
     assert len(said) == 1 and said[0] == pytest.approx((a, b), abs=1.0)
+
+
+def test_an_angle_that_is_a_rate_is_named_in_a_recording_that_reverses(tmp_path):
+    """The wheel angle's column holds its rate, in recordings that back up with an unsigned speed:
+    judged on the speed signed where the machine reverses (--sign-speed), it is named."""
+    checked = 0
+    for seed in range(12):
+        folder = tmp_path / f"s{seed}"
+        truth = compose(seed, folder, classes=["reversing_unsigned", "mislabelled_channel"], layout="table")
+        if truth["planted"]["mislabelled_channel"]["channel"] != "delta":
+            continue
+        found = [f for f in convert(folder, sign_speed=True).report["audit"]["findings"]
+                 if f["kind"] == "mislabelled_channel"]
+        assert [f["channels"] for f in found] == [["delta"]], seed
+        checked += 1
+    assert checked >= 3

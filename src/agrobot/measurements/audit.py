@@ -663,6 +663,14 @@ def mislabelled(aud: Auditor) -> list[dict]:
                                    f"yaw_rate and {lateral} look swapped: v x {lateral} matches yaw_rate (relative "
                                    f"misfit {swapped:.2f}) while v x yaw_rate misses {lateral} by {normal:.2f}; a gyro "
                                    f"and an accelerometer's channels exchanged: map each to the other"))
+    return out
+
+
+def angle_as_rate(aud: Auditor) -> list[dict]:
+    """A steering angle that is a rate: integrated, it follows yaw rate / speed better than as an
+    angle. Judged once the speed is signed where the machine reverses (check_direction): with an
+    unsigned speed, r = v tan(delta) / L turns its sign in every reversing stretch."""
+    sig, out = aud.streams.signals, []
     for steer in ("delta", "delta_cmd"):
         if steer in sig and "v" in sig and "yaw_rate" in sig:
             t, d = sig[steer]
@@ -941,6 +949,7 @@ def audit_streams(streams, options, source) -> dict:
         refusal = None
     except LogError as exc:           # every other channel judged before it refuses
         refusal = exc
+    findings += angle_as_rate(aud)
     findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
     findings += position_estimate(aud, streams.report)
     if refusal is not None:
