@@ -949,9 +949,7 @@ def audit_streams(streams, options, source) -> dict:
         refusal = None
     except LogError as exc:           # every other channel judged before it refuses
         refusal = exc
-    findings += angle_as_rate(aud)
-    findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
-    findings += position_estimate(aud, streams.report)
+    findings += angle_as_rate(aud) + gaps_findings(aud, getattr(options, "max_gap", 0.5)) + position_estimate(aud, streams.report)
     if refusal is not None:
         raise with_findings(refusal, findings)
     return {"channels": channels, "findings": findings,
