@@ -504,6 +504,11 @@ def _judged(est: dict) -> bool:
             and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"])
 
 
+def _agreeing(est: dict) -> bool:
+    """Evidence enough to say two clocks agree: a realignment's correlation over its time."""
+    return est["rho"] >= STRONG_RHO and est["seconds"] >= EVIDENCE_S
+
+
 def widened(aud: Auditor, pairs: list) -> list:
     """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
     +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
@@ -546,7 +551,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if leap is not None:            # a known count of seconds inside the interval: that count, exactly
             late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
-        small = judged and abs(late) < ALIGN_MIN         # "the clocks agree" needs the evidence a realignment needs
+        small = iv is not None and abs(late) < ALIGN_MIN and _agreeing(est)
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
                    f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
                    + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
