@@ -318,6 +318,9 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
         return []
     t, c, _ = course(streams.gnss)
     wide = course(streams.gnss, DIRECTION_NOISE)[1]       # same fixes, same t: the direction told on shorter chords
+    own = judged_speed(streams)
+    if own is not None and len(own[1]) > 1:     # the stops by the machine's own speed: a noisy chord bridges none
+        wide[np.abs(np.interp(t, own[1], np.nan_to_num(own[2]))) < MOVING] = np.nan
     found = evidence(streams, t, c, wide)
     if found is None:
         return []
