@@ -43,7 +43,12 @@ checks the audit named):
   https://github.com/carla-simulator/ros-bridge/issues/51), ``out_of_order`` (rows written later
   than their stamps' place: https://github.com/ros/ros_comm/issues/952), ``clock_jump`` (the
   logger's clock stepped by 1-3 s either way mid-recording, as NTP does:
-  https://github.com/microsoft/gctoolkit/issues/127, https://github.com/juju/juju/pull/3941).
+  https://github.com/microsoft/gctoolkit/issues/127, https://github.com/juju/juju/pull/3941),
+  ``decimal_commas`` (fields by ';', numbers as 1,5, a spreadsheet's European-locale CSV:
+  https://github.com/nyetwurk/ecuxplot/issues/14: truth the columns per file holding one),
+  ``two_talkers`` (each NMEA epoch's GGA from GN, the combined solution, and GP, a GPS-only one
+  0.3-0.8 m off, in one order: https://github.com/projecthorus/chasemapper/pull/37: truth the
+  epochs both give and that GN holds the recording's positions).
 
 A composition is a seeded random subset of compatible classes (each class names the layouts it
 fits and the classes it excludes) planted on one drive; ``compose`` writes it to a folder and
@@ -103,6 +108,8 @@ class Recording:
     signals: list | None = None                        # the --signal mapping a user gives, where one is needed
     quoted: bool = False
     units_row: bool = False
+    decimal_comma: bool = False                        # fields by ';', numbers as 1,5 (a European locale)
+    talkers: tuple = ()                                # NMEA: a second talker's GGA each epoch (GP beside GN)
     noise: dict = field(default_factory=lambda: dict(NOISE))
     files: list = field(default_factory=list)
     written: dict = field(default_factory=dict)       # per file: rows, stamps stepping back, repeated stamps
@@ -299,6 +306,32 @@ def plant_units_row(rec: Recording, rng) -> dict:
 def plant_quoted_rows(rec: Recording, rng) -> dict:
     rec.quoted = True
     return {"files": sorted(rec.sheets)}
+
+
+@quirk("text")
+def plant_decimal_commas(rec: Recording, rng) -> dict:
+    """Numbers written with a decimal comma and fields separated by ';', as a spreadsheet in a
+    European locale writes a CSV (https://github.com/nyetwurk/ecuxplot/issues/14,
+    https://github.com/JuliaData/CSV.jl/issues/83): truth the columns per file that hold one."""
+    rec.decimal_comma = True
+    return {"files": sorted(rec.sheets), "separator": ";"}
+
+
+@quirk("text", layouts=("nmea",))
+def plant_two_talkers(rec: Recording, rng) -> dict:
+    """Each epoch's GGA from two talkers: the combined solution (GN, the recording's positions)
+    and a GPS-only one (GP, 0.3-0.8 m off, DGPS), in one order throughout, as receivers configured
+    for both write them (https://github.com/projecthorus/chasemapper/pull/37,
+    https://github.com/LORD-MicroStrain/microstrain_inertial/issues/408): truth the count of
+    epochs with both and the talker that holds the recording's positions."""
+    s = rec.sheets["gnss"]
+    first = str(rng.choice(["GN", "GP"]))
+    sigma = float(rng.uniform(0.3, 0.8))
+    e, n = sigma * rng.standard_normal((2, len(s.t)))
+    s.columns["gp_lat"] = s.columns["lat"] + np.degrees(n / EARTH)
+    s.columns["gp_lon"] = s.columns["lon"] + np.degrees(e / (EARTH * math.cos(math.radians(LAT0))))
+    rec.talkers = ("GN", "GP") if first == "GN" else ("GP", "GN")
+    return {"talkers": list(rec.talkers), "kept": "GN", "count": int(len(s.t)), "gp_noise_m": sigma}
 
 
 @quirk("channel", layouts=LAYOUTS)
@@ -504,8 +537,8 @@ def plant_nmea_checksum(rec: Recording, rng) -> dict:
 # --- composition and writing ----------------------------------------------------------------------------
 ORDER = ("reversing_unsigned", "mode_stretches", "heading_no_gyro", "mislabelled_channel", "two_yaw_sources",
          "raw_units", "held_channel", "channel_dropouts", "fix_quality_drop", "one_clock_weak", "units_row",
-         "quoted_rows", "clock_offset", "leap_seconds", "gps_week_rollover", "clock_jump", "duplicate_stamps",
-         "out_of_order", "nmea_checksum")
+         "quoted_rows", "decimal_commas", "clock_offset", "leap_seconds", "gps_week_rollover", "clock_jump",
+         "duplicate_stamps", "out_of_order", "nmea_checksum", "two_talkers")
 
 
 def compatible(classes, layout: str) -> bool:
@@ -514,29 +547,41 @@ def compatible(classes, layout: str) -> bool:
         b in CLASSES[a].excludes for a in classes for b in classes if a != b)
 
 
-def draw_classes(rng, layout: str, most: int = 4, among=None) -> list:
-    """A random subset of 1..``most`` compatible classes (of ``among``, default all) for ``layout``."""
-    pool = [c for c in (among or ORDER) if layout in CLASSES[c].layouts]
+ADDED = ("decimal_commas", "two_talkers")     # drawn apart (ADDED_SHARE each): a seed's draw of the others kept
+ADDED_SHARE = 0.2
+
+
+def draw_classes(rng, layout: str, most: int = 4, among=None, seed: int | None = None) -> list:
+    """A random subset of 1..``most`` compatible classes (of ``among``, default all but ADDED) for
+    ``layout``. With a ``seed`` and no ``among``, the classes added later (ADDED) are each drawn
+    apart with their own generator and added where they fit: every earlier composition of a seed
+    stays as it was, one of them added to some."""
+    pool = [c for c in (among or [c for c in ORDER if c not in ADDED]) if layout in CLASSES[c].layouts]
     want = int(rng.integers(1, most + 1))
     chosen: list = []
     for c in rng.permutation(pool):
         if len(chosen) < want and compatible(chosen + [str(c)], layout):
             chosen.append(str(c))
+    extra = np.random.default_rng([seed, 1]) if among is None and seed is not None else None
+    for c in ADDED if extra is not None else ():
+        if extra.random() < ADDED_SHARE and compatible(chosen + [c], layout):
+            chosen.append(c)
     return [c for c in ORDER if c in chosen]
 
 
 def compose(seed: int, folder: Path, classes=None, layout: str | None = None, machine: str | None = None,
-            duration: float = 90.0, most: int = 4, among=None) -> dict:
+            duration: float = 90.0, most: int = 4, among=None, added: bool = False) -> dict:
     """Write one composition to ``folder`` and return its truth (Recording.truth; "drive" the
     quirk_drive.Drive under it, on the recording's clock from its start). ``classes``:
     the classes to plant (None: a random compatible subset; [] a clean recording); ``layout``,
-    ``machine``: None draws them; ``among``: the classes a random subset is drawn from."""
+    ``machine``: None draws them; ``among``: the classes a random subset is drawn from; ``added``:
+    the classes added later (ADDED) drawn too, apart (draw_classes)."""
     rng = np.random.default_rng(seed)
     fitting = [x for x in LAYOUTS if any(x in CLASSES[c].layouts for c in among or ORDER)]
     layout = layout or str(rng.choice(fitting))
     machine = machine or str(rng.choice(sorted(MACHINES)))
     if classes is None:
-        classes = draw_classes(rng, layout, most, among)
+        classes = draw_classes(rng, layout, most, among, seed if added else None)
     classes = [c for c in ORDER if c in classes]
     if not compatible(classes, layout):
         raise ValueError(f"classes {classes} do not fit the layout {layout!r} together")
@@ -567,10 +612,11 @@ def _stamp(t: float, how: str) -> str:
     return f"{START + t:.3f}"
 
 
-def _cell(x) -> str:
+def _cell(x, comma: bool = False) -> str:
     if isinstance(x, str):
         return x
-    return "" if not np.isfinite(x) else f"{x:.12g}"
+    text = "" if not np.isfinite(x) else f"{x:.12g}"
+    return text.replace(".", ",") if comma else text
 
 
 def write(rec: Recording, folder: Path) -> None:
@@ -586,14 +632,21 @@ def write(rec: Recording, folder: Path) -> None:
         if rec.units_row:
             rows.append([s.units.get(c, "-") for c in ["t", *names]])
         columns = [s.columns[c] for c in names]
+        comma = rec.decimal_comma
         for i, t in enumerate(s.t):
-            rows.append([_stamp(float(t), s.time_format), *(_cell(x[i]) for x in columns)])
+            stamp = _stamp(float(t), s.time_format)
+            rows.append([stamp.replace(".", ",") if comma and s.time_format == "posix" else stamp,
+                         *(_cell(x[i], comma) for x in columns)])
         path = folder / f"{s.name}.csv"
+        sep = ";" if comma else ","
         with path.open("w", newline="") as f:
             if rec.quoted:
-                f.write("".join('"' + ",".join(r) + '"\n' for r in rows))
+                f.write("".join('"' + sep.join(r) + '"\n' for r in rows))
             else:
-                csv.writer(f, lineterminator="\n").writerows(rows)
+                csv.writer(f, delimiter=sep, lineterminator="\n").writerows(rows)
+        if comma:
+            rec.planted["decimal_commas"].setdefault("columns", {})[s.name] = sum(
+                any("," in r[k] for r in rows[1 + rec.units_row:]) for k in range(len(rows[0])))
         rec.files.append(path)
         steps = np.diff(s.t)
         rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)),
@@ -614,12 +667,17 @@ def write_nmea(rec: Recording, s: Sheet, path: Path) -> None:
         hms = when.strftime("%H%M%S.") + f"{when.microsecond // 10000:02d}"
         lat, lon = float(s.columns["lat"][i]), float(s.columns["lon"][i])
         pos = f"{_dm(lat, 2)},{'N' if lat >= 0 else 'S'},{_dm(lon, 3)},{'E' if lon >= 0 else 'W'}"
-        gga = f"GPGGA,{hms},{pos},{int(s.columns['fix_quality'][i])},14,0.7,12.0,M,47.0,M,,"
-        line = sentence(gga)
-        if i in rec.corrupt:                      # one digit changed after the checksum was computed
-            k = line.index(".", 20) + 3
-            line = line[:k] + str((int(line[k]) + 3) % 10) + line[k + 1:]
-        lines.append(line)
+        for talker in rec.talkers or ("GP",):
+            if talker == "GP" and rec.talkers:     # the GPS-only solution beside the combined one
+                glat, glon = float(s.columns["gp_lat"][i]), float(s.columns["gp_lon"][i])
+                where, quality = f"{_dm(glat, 2)},N,{_dm(glon, 3)},E", 1
+            else:
+                where, quality = pos, int(s.columns["fix_quality"][i])
+            line = sentence(f"{talker}GGA,{hms},{where},{quality},14,0.7,12.0,M,47.0,M,,")
+            if i in rec.corrupt and (talker == "GN" or not rec.talkers):   # a digit changed after the checksum
+                k = line.index(".", 20) + 3
+                line = line[:k] + str((int(line[k]) + 3) % 10) + line[k + 1:]
+            lines.append(line)
         rmc = (f"GPRMC,{hms},A,{pos},{s.columns['speed'][i] / (1852 / 3600):.3f},{s.columns['course'][i]:.2f},"
                f"{when.strftime('%d%m%y')},,,A")
         lines.append(sentence(rmc))
@@ -629,6 +687,9 @@ def write_nmea(rec: Recording, s: Sheet, path: Path) -> None:
     rec.files.append(path)
     steps = np.diff(s.t)
     rec.written[s.name] = {"rows": int(len(s.t)), "step_backs": int(np.sum(steps < 0)), "repeated": int(np.sum(steps == 0))}
+    if rec.talkers:             # the epochs both talkers give readable (a corrupt GN leaves GP alone)
+        both = {float(t) for i, t in enumerate(s.t) if i not in rec.corrupt}
+        rec.planted["two_talkers"]["readable"] = len(both)
     if "duplicate_stamps" in rec.planted:       # a copy whose GGA or original's is corrupt repeats no readable epoch
         intact = np.array([i not in rec.corrupt for i in range(len(s.t))])
         rec.planted["duplicate_stamps"]["readable"] = int(np.sum(np.diff(s.t[intact]) == 0))

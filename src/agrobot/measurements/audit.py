@@ -75,7 +75,7 @@ import math
 import numpy as np
 
 from .clocks import parabolic_peak
-from .direction import check_direction
+from .direction import check_direction, position_noise
 from .findings import finding
 from .imu_axes import axis_findings
 from .log import CANONICAL, LogError
@@ -95,7 +95,8 @@ STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (a
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
 SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
-MOVING = 1.0            # m/s: the GNSS course is read above this speed
+MOVING = 0.3            # m/s: the GNSS course is read above this speed ...
+COURSE_SIGMAS = 40.0    # ... where its chord is this many position sigmas long (the course within ~2 deg)
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 G = 9.80665
@@ -292,7 +293,9 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
 # --- the signals that must agree ---------------------------------------------------------------
 def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(utc, speed over ground [m/s], course rate [rad/s]) of the receiver's fixes: the course
-    of 1 s chords of the track (a sphere is enough for a rate), NaN below MOVING m/s."""
+    of 1 s chords of the track (a sphere is enough for a rate), NaN where the track is slower
+    than MOVING m/s, or than a chord of COURSE_SIGMAS position sigmas, within 1 s of the chord's
+    centre (a chord across a stop, where a machine may turn back, has no course)."""
     t = gnss["utc"].to_numpy(float)
     lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
     north = np.radians(lat - lat[0]) * 6.371e6
@@ -306,7 +309,12 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
             r = np.gradient(course, tc)
-            slow = np.interp(tc, t, speed) < MOVING
+            sigma = position_noise(east, north)         # the chord long against the fixes' own noise ...
+            need = np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
+            from scipy.ndimage import minimum_filter1d
+
+            least = minimum_filter1d(speed, 4 * k + 1, mode="nearest")[k:-k]    # ... and moving all along it
+            slow = least < need
             r[slow] = np.nan
             rate[k:-k] = r
     return t, speed, rate
@@ -323,6 +331,13 @@ def smoothed(t: np.ndarray, x: np.ndarray, span: float) -> np.ndarray:
 
 def _moving(t_v, v, threshold=MOVING):
     return lambda grid: np.abs(np.interp(grid, t_v, v)) > threshold
+
+
+def _good(t_v, v, threshold, best):
+    """mask(grid): moving above ``threshold`` where the receiver's fix is at its usual quality
+    (a speed or course from degraded fixes is noise, not a signal to correlate)."""
+    moving, usual = _moving(t_v, v, threshold), _usual(best)
+    return moving if usual is None else (lambda grid: moving(grid) & usual(grid))
 
 
 def _usual(best):
@@ -425,7 +440,7 @@ class Auditor:
             best = usual_fix(gnss)
             if "v" in sig:          # the speed over ground is a magnitude: |v| against it
                 out.append(("two speeds", "gnss_speed", "v", lag(tg, speed, sig["v"][0], np.abs(sig["v"][1]), search,
-                                                               through_origin=True, mask=_moving(tg, speed, 0.3),
+                                                               through_origin=True, mask=_good(tg, speed, 0.3, best),
                                                                scale_mask=_usual(best)), "m/s"))
             gyros = [c for c in sig if c == "yaw_rate" or c.startswith("yaw_rate_")]
             for gyro in sorted(gyros) if np.isfinite(course_rate).sum() > 20 else ():
@@ -434,7 +449,7 @@ class Auditor:
                 t, r = sig[gyro]
                 r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
-                            lag(tg[ok], course_rate[ok], t, r, search, mask=_moving(tg, speed)), "rad/s"))
+                            lag(tg[ok], course_rate[ok], t, r, search, mask=_good(tg, speed, MOVING, best)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
         if lateral and "v" in sig and "yaw_rate" in sig:
             t, r = sig["yaw_rate"]
@@ -493,6 +508,11 @@ def _judged(est: dict) -> bool:
             and (iv[1] - iv[0]) / 2 <= HALF_WIDTH and not est["edge"])
 
 
+def _agreeing(est: dict) -> bool:
+    """Evidence enough to say two clocks agree: a realignment's correlation over its time."""
+    return est["rho"] >= STRONG_RHO and est["seconds"] >= EVIDENCE_S
+
+
 def widened(aud: Auditor, pairs: list) -> list:
     """The pairs of two clocks that no lag within +-SEARCH s explains, searched again over
     +-WIDE_SEARCH s (at most a third of the time they share: leap seconds, a clock set by hand);
@@ -535,7 +555,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if leap is not None:            # a known count of seconds inside the interval: that count, exactly
             late, judged = leap, True
         strong = judged and abs(late) >= ALIGN_MIN and (iv[0] > 0 or iv[1] < 0) and iv[1] - iv[0] < abs(late)
-        small = iv is not None and abs(late) < ALIGN_MIN
+        small = iv is not None and abs(late) < ALIGN_MIN and _agreeing(est)
         meaning = (f"{name}: {b} ({gb}) follows {'-' if est['inverted'] else ''}{a} ({ga}) {late:+.3f} s late "
                    f"(correlation {est['rho']:.2f} over {est['seconds']:.0f} s)"
                    + (f"; the peak sits on the search's bound (+-{SEARCH:g} s): no lag found" if est["edge"] else ""))
@@ -563,9 +583,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
                     and reference not in offsets:    # GPS time against UTC: the receiver's stamps are the ones off
                 own = -late if ga == reference else late
                 offsets[reference] = (own, [own - half, own + half], name)
-            elif ga in base and gb not in base:
+            elif ga in base and gb not in base and abs(base[ga] + late) >= ALIGN_MIN:   # on the reference's clock: none
                 offsets[gb] = (base[ga] + late, [base[ga] + iv[0], base[ga] + iv[1]], name)
-            elif gb in base and ga not in base:
+            elif gb in base and ga not in base and abs(base[gb] - late) >= ALIGN_MIN:
                 offsets[ga] = (base[gb] - late, [base[gb] - iv[1], base[gb] - iv[0]], name)
         else:
             meaning += (f"; too weak to judge (a realignment needs correlation at least {STRONG_RHO} over at least "
@@ -652,6 +672,14 @@ def mislabelled(aud: Auditor) -> list[dict]:
                                    f"yaw_rate and {lateral} look swapped: v x {lateral} matches yaw_rate (relative "
                                    f"misfit {swapped:.2f}) while v x yaw_rate misses {lateral} by {normal:.2f}; a gyro "
                                    f"and an accelerometer's channels exchanged: map each to the other"))
+    return out
+
+
+def angle_as_rate(aud: Auditor) -> list[dict]:
+    """A steering angle that is a rate: integrated, it follows yaw rate / speed better than as an
+    angle. Judged once the speed is signed where the machine reverses (check_direction): with an
+    unsigned speed, r = v tan(delta) / L turns its sign in every reversing stretch."""
+    sig, out = aud.streams.signals, []
     for steer in ("delta", "delta_cmd"):
         if steer in sig and "v" in sig and "yaw_rate" in sig:
             t, d = sig[steer]
@@ -930,8 +958,7 @@ def audit_streams(streams, options, source) -> dict:
         refusal = None
     except LogError as exc:           # every other channel judged before it refuses
         refusal = exc
-    findings += gaps_findings(aud, getattr(options, "max_gap", 0.5))
-    findings += position_estimate(aud, streams.report)
+    findings += angle_as_rate(aud) + gaps_findings(aud, getattr(options, "max_gap", 0.5)) + position_estimate(aud, streams.report)
     if refusal is not None:
         raise with_findings(refusal, findings)
     return {"channels": channels, "findings": findings,

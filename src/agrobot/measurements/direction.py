@@ -36,6 +36,7 @@ from .log import LogError
 
 CHORD = 0.25            # s: the course from the fixes this far either side (at least)
 CHORD_NOISE = 8.0       # a chord at least this many position sigmas long: the course within ~10 deg
+DIRECTION_NOISE = 4.0   # ... and for the direction alone (two values pi apart, told within AGREE): within ~20 deg
 NOISE_WINDOW = 41       # fixes: the position noise is read over this many
 MOVING = 0.2            # m/s: the course is read above this track speed
 AGREE = math.radians(45.0)
@@ -48,15 +49,17 @@ SIGNED_SHARE = 0.8      # the speed is signed when negative on this share of the
 SCALE = 2.0             # a heading's rate within this factor of the course's (a gyro in deg/s is not one)
 AXIS_WINDOW = 30        # s: the course-heading axis is read over this window (a drifting heading)
 STILL, STILL_SAMPLES = 0.05, 20    # m/s, samples: a gyro's bias read at standstill
+FLIP_STOP, FLIP_SPAN = 3.0, 0.5     # s: a stop at most this long; the course this long either side of it
 RUN_MIN, RUN_VOTES = 2.0, 5     # s, votes: a run of reversing evidence alone inside a forward stretch (the
                                 # duration decides above 2.5 Hz fixes; 5 votes, as a stretch needs, below)
 
 
-def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def course(gnss, sigmas: float = CHORD_NOISE) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t, course [rad, ENU], track speed [m/s]) on the fixes' own updates (a held fix is not a new
     one); course NaN where the track moves slower than MOVING. The chord is CHORD s either side,
     lengthened (x2, x4, x8) where the positions' local noise sigma would turn it by more than
-    about 10 deg: a chord shorter than CHORD_NOISE sigma is not read (a DGPS fix at mower speed)."""
+    about 10 deg: a chord shorter than ``sigmas`` sigma is not read (CHORD_NOISE: a DGPS fix at
+    mower speed; DIRECTION_NOISE where only forward or backward is asked)."""
     t = gnss["utc"].to_numpy(float)
     lat, lon = gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float)
     new = np.r_[True, (np.diff(lat) != 0) | (np.diff(lon) != 0)]
@@ -68,7 +71,7 @@ def course(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     c, speed = np.full(len(t), np.nan), np.zeros(len(t))
     if len(t) <= 2 * k0 + 2:
         return t, c, speed
-    need = CHORD_NOISE * position_noise(east, north)
+    need = sigmas * position_noise(east, north)
     todo = np.ones(len(t), bool)
     for k in (k0, 2 * k0, 4 * k0, 8 * k0):
         if len(t) <= 2 * k + 2:
@@ -193,14 +196,16 @@ def by_steering(t, c, rate, steer, name) -> tuple[np.ndarray, str] | None:
     return e * majority, f"the course rate against the steering {name}"
 
 
-def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
-    """The first evidence available (module docstring): (per fix +1/-1/0, how it was read)."""
+def evidence(streams, t, c, wide=None) -> tuple[np.ndarray, str] | None:
+    """The first evidence available (module docstring): (per fix +1/-1/0, how it was read); the
+    rates from the course ``c`` (CHORD_NOISE), the votes on ``wide`` (DIRECTION_NOISE; default c)."""
     sig = streams.signals
+    rate = angle_rate(t, c)
+    c = c if wide is None else wide
     declared = next((n for n in ("direction", "gear") if n in sig), None)
     if declared:
         x = np.interp(t, *sig[declared])
         return np.where(np.isfinite(c), np.sign(x), 0).astype(int), f"the declared direction channel {declared}"
-    rate = angle_rate(t, c)
     heading = sig.get("heading")
     g = streams.gnss
     if heading is None and "heading" in g and np.isfinite(g["heading"].to_numpy(float)).sum() > 20:
@@ -219,23 +224,49 @@ def evidence(streams, t, c) -> tuple[np.ndarray, str] | None:
     return by_steering(t, c, rate, sig[steer], steer) if steer else None
 
 
-def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray) -> list[tuple[float, float]]:
+def reversing(t: np.ndarray, c: np.ndarray, e: np.ndarray, steered: bool = False) -> list[tuple[float, float]]:
     """(start, end) of the reversing stretches: a machine changes direction only through a stop, so
     each moving stretch between stops (the course read, above MOVING) is judged whole, reversing
     when the net share of its evidence is below -REVERSE_SHARE, and named when at least
     REVERSE_MIN long with at least 5 votes; inside a stretch judged forward, a run of consecutive
-    reversing votes (_reversing_runs) is one too."""
+    reversing votes (_reversing_runs) is one too. A machine that steers its wheels (``steered``:
+    the evidence is its steering) cannot turn on the spot: a stretch whose course is turned by pi
+    against both neighbours' across stops of at most FLIP_STOP s, its own evidence no forward
+    majority (a straight reversal gives the steering little to say) and theirs forward, reverses
+    too (_flipped)."""
     out = []
     moving = np.isfinite(c)
     edges = np.diff(np.concatenate([[0], moving.astype(int), [0]]))
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        votes = e[a:b]
+    runs = list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
+    shares = [e[a:b].sum() / max(float(np.sum(np.abs(e[a:b]))), 1e-12) for a, b in runs]
+    for j, (a, b) in enumerate(runs):
+        votes, share = e[a:b], shares[j]
         seen = int(np.sum(votes != 0))
-        if seen >= 5 and votes.sum() / np.sum(np.abs(votes)) < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+        if seen >= 5 and share < -REVERSE_SHARE and t[b - 1] - t[a] >= REVERSE_MIN:
+            out.append((float(t[a]), float(t[b - 1])))
+        elif steered and share <= 0 < min(shares[max(j - 1, 0)], shares[min(j + 1, len(runs) - 1)]) \
+                and t[b - 1] - t[a] >= REVERSE_MIN and _flipped(t, c, runs, j):
             out.append((float(t[a]), float(t[b - 1])))
         else:           # a stop too brief for the fixes to show it: a run of reversing evidence alone
             out += _reversing_runs(t[a:b], votes)
     return out
+
+
+def _flipped(t: np.ndarray, c: np.ndarray, runs: list, j: int) -> bool:
+    """Run j's course turned by pi (within AGREE) against the runs either side across stops of at
+    most FLIP_STOP s: its first and last FLIP_SPAN s against theirs next to it."""
+    if j == 0 or j == len(runs) - 1:
+        return False
+    (pa, pb), (a, b), (na, nb) = runs[j - 1], runs[j], runs[j + 1]
+    if t[a] - t[pb - 1] > FLIP_STOP or t[na] - t[b - 1] > FLIP_STOP:
+        return False
+
+    def mean(lo: int, hi: int) -> float:
+        return float(np.angle(np.mean(np.exp(1j * c[lo:hi]))))
+    span = max(1, int(round(FLIP_SPAN / float(np.median(np.diff(t))))))
+    turned = (_wrap(mean(a, min(b, a + span)) - mean(max(pa, pb - span), pb) - math.pi),
+              _wrap(mean(na, min(nb, na + span)) - mean(max(a, b - span), b) - math.pi))
+    return all(abs(x) < AGREE for x in turned)
 
 
 def _reversing_runs(t: np.ndarray, votes: np.ndarray) -> list[tuple[float, float]]:
@@ -286,11 +317,15 @@ def check_direction(streams, options, source, t0: float) -> list[dict]:
     if streams.gnss is None or len(streams.gnss) < 20:
         return []
     t, c, _ = course(streams.gnss)
-    found = evidence(streams, t, c)
+    wide = course(streams.gnss, DIRECTION_NOISE)[1]       # same fixes, same t: the direction told on shorter chords
+    own = judged_speed(streams)
+    if own is not None and len(own[1]) > 1:     # the stops by the machine's own speed: a noisy chord bridges none
+        wide[np.abs(np.interp(t, own[1], np.nan_to_num(own[2]))) < MOVING] = np.nan
+    found = evidence(streams, t, c, wide)
     if found is None:
         return []
     e, how = found
-    stretches = reversing(t, c, e)
+    stretches = reversing(t, wide, e, steered=how.startswith("the course rate against the steering"))
     if not stretches:
         return []
     speed = judged_speed(streams)

@@ -145,6 +145,7 @@ class _Epochs:
         self.columns = {c: array("d") for c in self.COLUMNS}
         self.lines = array("q")
         self.recent: dict[tuple, int] = {}
+        self.talkers: dict[int, list] = {}       # epoch -> the talkers whose GGA gave it, the first opened it
 
     def add(self, key: tuple, line: int, tod: float, day: float, host: float, lat: float = math.nan,
             lon: float = math.nan, height: float = math.nan, quality: float = 0.0) -> int:
@@ -157,7 +158,7 @@ class _Epochs:
         self.lines.append(line)
         self.recent[key] = i
         if len(self.recent) > 32:
-            del self.recent[next(iter(self.recent))]
+            self.talkers.pop(self.recent.pop(next(iter(self.recent))), None)
         return i
 
     def set(self, i: int, column: str, value: float) -> None:
@@ -224,7 +225,9 @@ def _batches(path: Path, first_line: dict, size: int = 20000):
             if ident not in USED:
                 counts[f"unused {ident}"] += 1
                 continue
-            batch.append((number, line[:start], ident, body.split(b",")))
+            fields = body.split(b",")
+            fields[0] = fields[0][:2]             # the talker (GP, GN ...): GGA from two of them share an epoch
+            batch.append((number, line[:start], ident, fields))
             bodies.append(body)
             given.append(checksum)
         if len(batch) >= size:
@@ -272,6 +275,7 @@ def read_nmea_file(path: str | Path) -> NMEARecording:  # noqa: C901 - one pass 
         notes.append(f"{path.name}: {counts[kind]} line(s) with {kind} removed, the sentence after it read (the first "
                      f"at line {n})" if kind.startswith("binary data before") else
                      f"{path.name}: {counts[kind]} line(s) skipped: {kind} (the first at line {n})")
+    notes += _talker_notes(counts, path.name)
     if counts["repeated epoch"]:
         notes.append(f"{path.name}: {counts['repeated epoch']} GGA sentence(s) repeat the time of an epoch already "
                      f"read (an epoch written twice): the first kept")
@@ -313,9 +317,8 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                 day_index += 1                       # past midnight
             last_tod = tod
             key = (day_index, round(tod, 3))
-            if key in epochs.recent:          # the epoch written again: its sentences leave the first as read
-                counts["repeated epoch"] += 1
-                return day_index, last_tod, None
+            if key in epochs.recent:          # the epoch written again, or by a second talker
+                return _again(epochs, epochs.recent[key], f, counts, (day_index, last_tod))
             quality = int(f[6]) if f[6] else 0
             fix = quality != 0 and bool(f[2])
             if fix:
@@ -324,6 +327,7 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
                                   alt, float(quality))
             else:
                 last = epochs.add(key, number, tod, day_index, host)
+            epochs.talkers[last] = [f[0]]
             counts["GGA"] += 1
         elif ident == "RMC":
             if not dates and len(f) > 9 and len(f[9]) == 6 and f[9].isdigit():      # the first date is the one used
@@ -356,6 +360,40 @@ def _sentence(ident, f, prefix, good, number, epochs, dates, counts, first_line,
         counts["malformed"] += 1
         first_line.setdefault("malformed", number)
     return day_index, last_tod, last
+
+
+COMBINED = b"GN"         # the talker of a solution from every constellation the receiver tracks
+
+
+def _again(epochs: _Epochs, i: int, f: list, counts: Counter, state: tuple):
+    """A GGA whose time is that of epoch ``i``: from the talker that opened it, the epoch written
+    again (counted, the first kept); from another talker (GP beside GN), a second solution of the
+    same epoch (counted per pair; the combined one, GN, kept where the other opened the epoch)."""
+    seen = epochs.talkers.setdefault(i, [f[0]])
+    if f[0] == seen[0]:
+        counts["repeated epoch"] += 1
+    elif f[0] not in seen:
+        seen.append(f[0])
+        counts["second talker " + "+".join(t.decode("ascii", "replace") for t in seen[:2])] += 1
+        if f[0] == COMBINED and f[6] and int(f[6]) != 0 and f[2]:
+            alt = (float(f[9]) if f[9] else 0.0) + (float(f[11]) if len(f) > 11 and f[11] else 0.0)
+            for column, value in (("lat", _degrees(f[2], f[3], 2)), ("lon", _degrees(f[4], f[5], 3)), ("height", alt),
+                                  ("quality", float(int(f[6])))):
+                epochs.set(i, column, value)
+    return state[0], state[1], i
+
+
+def _talker_notes(counts: Counter, name: str) -> list[str]:
+    """A note per pair of talkers that both gave GGA for the same epochs."""
+    out = []
+    for key, n in counts.items():
+        if key.startswith("second talker "):
+            first, second = key.removeprefix("second talker ").split("+")
+            kept = "GN" if "GN" in (first, second) else first
+            out.append(f"{name}: two talkers give GGA for the same epochs ({first} first, {second} second) on {n} "
+                       f"epochs: one solution per epoch kept, {kept}'s"
+                       + (" (the combined solution of every constellation)" if kept == "GN" else " (the first)"))
+    return out
 
 
 def _utc(frame: pd.DataFrame, dates: list, notes: list[str], path: Path) -> np.ndarray:

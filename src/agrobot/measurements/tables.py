@@ -14,7 +14,9 @@ names are joined with ``_`` (a group's name over its columns). A header's unit i
 ``speed [km/h]`` or ``speed (km/h)``, is the column's unit (the name is what precedes it). A
 column that holds no number is named with why (empty, text); a table of text only is refused.
 With lat/lon columns, a ``fix_quality`` column (or ``quality``, ``gps_quality`` ...) is the
-receiver's fix quality, held at its own times; without one the log has none (never assumed). A column is named by
+receiver's fix quality, held at its own times; without one the log has none (never assumed). A
+yaw rate taken from one axis of a table's gyro (``gyro_z``) beside its accelerometer (``acc_x/y/z``)
+is checked against the axis that carries gravity (measurements.imu_axes). A column is named by
 ``TABLE.COLUMN`` (TABLE: the file name without its suffix) or by the column alone where only one
 table has it.
 
@@ -42,6 +44,7 @@ import pandas as pd
 from agrobot.orchestrator.units import base_unit
 
 from .headings import as_yaw
+from .imu_axes import GRAVITY, axis_check, axis_siblings
 from .log import CANONICAL, LogError
 from .modes import is_mode_name, mode_codes
 from .mdf4 import mdf_tables
@@ -82,6 +85,8 @@ class Table:
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
 DELIMITERS = (",", ";", "\t", "|")
+DECIMAL_COMMA = re.compile(r"^[-+]?\d*,\d+(?:[eE][-+]?\d+)?$")     # 1,5: a decimal comma (a European locale)
+DECIMAL_POINT = re.compile(r"^[-+]?\d*\.\d+(?:[eE][-+]?\d+)?$")
 _EPOCH = re.compile(r"^(?:(?:unix|posix|epoch|utc|gps)\s+)*(?:epoch\s+|time\s+)?(s|sec|secs|seconds|ms|milliseconds|us|"
                     r"microseconds|ns|nanoseconds)(?:\s+since\s+(?:the\s+)?(?:unix\s+)?epoch|\s+\(?(?:unix|posix|"
                     r"epoch|utc)\)?)?$")
@@ -136,10 +141,26 @@ def _delimiter(rows: list[str]) -> str:
         if width < 2 or widths.count(width) < 0.9 * len(widths):
             continue
         fields = [v for r in sample for v in _split(r, sep)]
-        numeric = round(sum(_is_number(v) for v in fields) / max(len(fields), 1), 2)
+        numeric = round(sum(_is_number(v) or (sep != "," and bool(DECIMAL_COMMA.match(v))) for v in fields)
+                        / max(len(fields), 1), 2)
         if (numeric, width) > score:
             best, score = sep, (numeric, width)
     return best or ","
+
+
+def _decimal_points(rows: list[str], sep: str, notes: list) -> list[str]:
+    """Rows whose numbers are written with a decimal comma (``1,5``; fields separated by another
+    character, no number with a decimal point among them) with points instead, named with the
+    count of columns that hold one; else the rows as they are."""
+    if sep == ",":
+        return rows
+    sample = [_split(r, sep) for r in rows[len(rows) // 3:][:60] or rows]
+    fields = [v for r in sample for v in r]
+    if not any(DECIMAL_COMMA.match(v) for v in fields) or any(DECIMAL_POINT.match(v) for v in fields):
+        return rows
+    columns = {k for r in sample for k, v in enumerate(r) if DECIMAL_COMMA.match(v)}
+    notes.append(f"numbers written with a decimal comma (1,5 for 1.5) in {len(columns)} columns: read as decimal points")
+    return [re.sub(r"(?<=\d),(?=\d)", ".", r) for r in rows]
 
 
 def declared_unit(text: str) -> str | None:
@@ -280,6 +301,7 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
         rows = [head] + rows
         notes[:] = [_one_comment_fewer(n) for n in notes if not n.startswith("1 comment line(s)")]
         notes.append(f"the header is a comment line ('{head[:40]}...', as numpy.savetxt writes one): its names used")
+    rows = _decimal_points(rows, sep, notes)
     names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
                         engine="python" if sep == " " else "c", skipinitialspace=True)
@@ -803,6 +825,28 @@ def _receiver_specs(tables: list[Table], specs: list, given: set, auto: set) -> 
         auto.add("heading")
 
 
+def yaw_axis(tables: list[Table], specs: list) -> list[dict]:
+    """A yaw rate read from one axis of a table's gyro whose table holds an accelerometer per
+    axis: the vertical axis by gravity checked against it (measurements.imu_axes; an
+    accelerometer declared in g scaled by g); a mismatch's entry for report["imu_axes"] (the
+    audit names it), else none."""
+    spec = next((s for s in specs if s.column == "yaw_rate" and len(s.names) == 1), None)
+    found = catalog(tables).get(spec.names[0]) if spec is not None else None
+    if found is None:
+        return []
+    t, column = found
+    siblings = axis_siblings(str(column), [str(c) for c in t.frame.columns if c not in t.time_columns])
+    if siblings is None:
+        return []
+    axis, accel = siblings
+    readings = {a: pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
+                * (GRAVITY if (t.units.get(c) or "").strip().lower() in ("g", "gn") else 1.0) for a, c in accel.items()}
+    if any(np.isfinite(r).sum() < 20 for r in readings.values()):
+        return []
+    check = axis_check("yaw_rate", f"{t.name}.{column}", axis, {a: f"{t.name}.{c}" for a, c in accel.items()}, readings)
+    return [check] if check is not None else []
+
+
 def table_streams(paths: list[Path], options, source: Path):
     """Streams of the tables: the ``--signal`` expressions; without any, lat/lon columns, and in a
     table laid out as the log (a ``t`` column) the columns named as the log's (delta_cmd, delta,
@@ -838,8 +882,7 @@ def table_streams(paths: list[Path], options, source: Path):
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
                        + " (convert SOURCE --list shows their ranges)")
-    names = catalog(tables)
-    signals, columns, used, groups = {}, {}, set(), {}
+    names, signals, columns, used, groups = catalog(tables), {}, {}, set(), {}
     for spec in specs:
         found = {}
         for name in spec.names:
@@ -867,6 +910,7 @@ def table_streams(paths: list[Path], options, source: Path):
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
+              "imu_axes": yaw_axis(tables, specs),
               "time_base": [x for t in tables if t.name in used for x in t.time_base],
               "mode_columns": {f"{t.path.name} {c}": runs for t in tables if t.name in used for c, runs in mode_runs(t).items()},
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,

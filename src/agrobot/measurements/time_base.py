@@ -5,7 +5,8 @@ file, a receiver's GPS week-number rollover, and the receiver's GPS time against
   A stamp that steps back by more than 2 h while the rows after it go on at the cadence (the first
   and 80 % of the next 20: rows written late return to the old sequence at once, out of order, not
   a clock; one among them does not hide a step) is a step of the
-  logger's clock; so is a stamp that leaps forward by more than max(5 h, 0.5 s) while the values
+  logger's clock; so is a stamp that leaps forward by more than max(5 h, 0.5 s) (from the latest
+  stamp before it: the return to the sequence after a row written late is no leap) while the values
   change across it as they change over one row, not as over the time the stamps skip (a silence
   moves every signal on: the positions as far as the machine drives). Per numeric column, with
   d the change across the step, D1 and Dn its changes over one row and over the n rows the
@@ -113,7 +114,8 @@ def clock_steps(t: np.ndarray, columns: list[np.ndarray], label: str) -> tuple[n
     for _ in range(5):
         dt = np.diff(t)
         back = np.flatnonzero(dt < -BACK_STEPS * h)
-        ahead = np.flatnonzero(dt > max(AHEAD_STEPS * h, AHEAD_MIN))
+        latest = t[1:] - np.maximum.accumulate(t)[:-1]       # a row written late opens no leap: from the latest stamp
+        ahead = np.flatnonzero((dt > max(AHEAD_STEPS * h, AHEAD_MIN)) & (latest > max(AHEAD_STEPS * h, AHEAD_MIN)))
         step = next((int(k) for k in back if _regular_after(t, int(k), h)), None)
         if step is None:
             for k in ahead:
