@@ -381,7 +381,7 @@ class TractorYawPlant(Component):
         tyre = {"mu": float(self.p["tyre_friction"]), "shape": float(self.p["tyre_shape"]),
                 "C_f": self.params.C_f * scale, "C_r": self.params.C_r * scale}
         n = max(1, int(math.ceil(dt / 0.002)))
-        z = self.z
+        z = np.asarray(self.z, dtype=float)          # initialize leaves a list of floats for the level step
         for _ in range(n):
             z = ros2_step(self.p["model"], self.params, z, dt / n, v, v, delta, delta, **tyre)
         return z

@@ -62,6 +62,8 @@ CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this 
 CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
 MIN_SAMPLES = 20
 RETURN_SHARE = 0.5      # a polled channel's value returns after a change less than this share of its repeats
+NOISY = 0.01            # ... and at least this often: a value that never returns (a noise-free ramp or step on a
+                        # grid) shows no noise, so its repeats cannot be told from a value that did not move
 POLLED = 4.0            # rows: a channel read at irregular times updates at least this often on average
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
 MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
@@ -137,15 +139,16 @@ def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float)
     turn with others, an OBD request answered when the bus allows), or None when its repeats are
     not copies. Its repeats are copies when, after a change, the value comes back to the one before
     it (x[i+2] = x[i] where x[i+1] differs) less than RETURN_SHARE as often as a row repeats (a signal
-    that meets a value again by chance, noise on a grid, returns about as often as it repeats), and
+    that meets a value again by chance, noise on a grid, returns about as often as it repeats) but
+    at least NOISY of the time (a noise-free signal's repeat may be a value that did not move), and
     it updates every REGULAR to POLLED rows on average (a state or an event holds for many rows)."""
     same = np.all(x[2:] == x[:-2], axis=1)
     after = change[1:-1]
     if after.sum() < MIN_SAMPLES:
         return None
-    repeats = 1.0 - change[1:].mean()
-    if np.mean(same[after]) > RETURN_SHARE * repeats:
-        return None
+    repeats, returns = 1.0 - change[1:].mean(), float(np.mean(same[after]))
+    if returns < NOISY or returns > RETURN_SHARE * repeats:
+        return None                     # no noise to tell a copy from a value that did not move, or not copies
     at = np.flatnonzero(change)
     period = float(t[at[-1]] - t[at[0]]) / (len(at) - 1)
     return period if REGULAR * row <= period <= POLLED * row else None
