@@ -10,6 +10,10 @@ dead-reckoned track's heading, the noise drifts the track at 30 m/s; the block f
 stiffnesses on the yaw rate and the track (candidates.fit_baseline) takes the drift as a 16 %
 stiffer rear axle (C_r x 1.15 against the truth's 0.99), and a lever arm fitted with the
 stiffnesses freed undoes that error on the held-out part, so it passes the held-out check.
+The same noise explains seed 1005's misses (asymmetry 0.203 for 0.235, ratio curvature 1445 for
+836): without it both come out within tolerance. On 240 s logs (144 s to fit) the clean log is
+healthy and the curvature within tolerance: the 120 s logs of ``--quick``, which the diagnosis
+warns are too short to confirm small effects, are where the noise decides.
 """
 from __future__ import annotations
 
@@ -48,4 +52,12 @@ def test_car_seed_1006_is_healthy_without_its_gyro_noise(tmp_path):
 def test_car_seed_1006_clean_log_names_nothing(tmp_path):
     """The log as the benchmark generates it: a healthy car, so no effect may be named."""
     frame, _ = make_log(SEED, None, duration=120.0, vehicle="car")
+    assert _diagnosed(frame, tmp_path) == []
+
+
+@pytest.mark.slow
+def test_car_seed_1006_clean_log_of_240_s_names_nothing(tmp_path):
+    """The same draw driven for 240 s (the benchmark's default length): 144 s to fit pin the rear
+    stiffness against the gyro's drift, and nothing is named."""
+    frame, _ = make_log(SEED, None, duration=240.0, vehicle="car")
     assert _diagnosed(frame, tmp_path) == []
