@@ -325,12 +325,8 @@ class Replay:
             self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
             return [measured_yaw_rate(rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i]), v)
                     for i, v in enumerate(sets)]
-        inputs = [self.yaw_input(v) for v in sets] if "yaw" in self.stages else [None] * len(sets)
-        if "yaw" in self.stages and any(d is not None for d in inputs):
-            self.yaw.prepare(sets, inputs)         # the side-slips of the sets' wheel angles in one recursion
         out = []
-        for v, delta in zip(sets, inputs):
-            track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v, delta))
+        for track in self.tracks(sets):
             if stage == "speed":
                 k = self.chord_k
                 speed = np.full(len(self.t), np.nan)
@@ -339,6 +335,20 @@ class Replay:
                 track = speed
             out.append(track)
         return out
+
+    def tracks(self, sets: list[dict[str, float]]) -> list[np.ndarray]:
+        """The dead-reckoned antenna track under each set; the last batch's are kept (exact keys), so
+        the speed stage reads the tracks the position stage of the same sets replayed."""
+        last = self.__dict__.get("_last_tracks", {})
+        keys = [tuple(sorted(v.items())) for v in sets]
+        todo = [(v, key) for v, key in zip(sets, keys) if key not in last]
+        inputs = [self.yaw_input(v) for v, _ in todo] if "yaw" in self.stages else [None] * len(todo)
+        if "yaw" in self.stages and any(d is not None for d in inputs):
+            self.yaw.prepare([v for v, _ in todo], inputs)    # the side-slips of the sets' wheel angles at once
+        fresh = {key: antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v, delta))
+                 for (v, key), delta in zip(todo, inputs)}
+        self._last_tracks = {key: fresh[key] if key in fresh else last[key] for key in keys}
+        return [self._last_tracks[key] for key in keys]
 
     def yaw_input(self, v: dict[str, float]) -> np.ndarray | None:
         """The wheel angle driving the yaw stage under ``v``: None for the measured one as it is,

@@ -171,12 +171,13 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
-def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
+def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbase: float | None = None) -> dict:
     """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
     study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
     held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
-    samples the diagnosis holds out, where both models are scored (held_out_misfit)."""
+    samples the diagnosis holds out, where both models are scored (held_out_misfit); ``wheelbase``:
+    the one given with the recording (--wheelbase), as ``identify`` takes it (wheelbase_of)."""
     p = baseline.tractor
     L = p.l_f + p.l_r
     ours = {"understeer_gradient": study_understeer(p),
@@ -184,7 +185,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None) -> dict:
             "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
     try:
         require_causal(frame, where)              # identify refuses a response leading its input
-        rep = identify_driving(frame, where, study)
+        rep = identify_driving(frame, where, study, wheelbase=wheelbase)
     except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
         return {"study": ours, "identified": None, "why_not": str(exc)}
     tyre = rep["tyre_saturation"]
@@ -363,7 +364,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         return result, partial(_write, result=result, plots=[])
     say = progress or (lambda text: None)
     mismatch = _vehicle_of_log(result, replay, frame, study, baseline, study_path.name, default_study,
-                               identify, log_path, say)
+                               identify, log_path, say, getattr(recording, "wheelbase", None))
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}; "
         f"held out: {held_part(replay)}")
@@ -436,10 +437,10 @@ def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None
 
 
 def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_name: str, default_study: bool,
-                    identify: bool, log_path, say) -> str | None:
+                    identify: bool, log_path, say, wheelbase: float | None = None) -> str | None:
     """The log's own vehicle against the study's (``log_vehicle``; the mismatch warning returned, or
     None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
-    (``identified_vehicle``)."""
+    (``identified_vehicle``; on the ``wheelbase`` given with the recording, else the study's)."""
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
                                                   study_name, study_understeer(baseline.tractor))
     if mismatch:
@@ -447,7 +448,8 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
         say(f"warning: {mismatch}")
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
-        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen)
+        result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen,
+                                                            wheelbase)
     return mismatch
 
 
