@@ -118,7 +118,7 @@ def test_every_study_parses_with_no_plugin_installed_and_keeps_its_tool_tables()
     out = json.loads(proc.stdout)
     assert len(out["parsed"]) == len(list((ROOT / "studies").glob("*.toml")))
     assert out["parsed"]["passenger_car.toml"] == ["vehicle"]            # kept as written, its tool absent
-    assert out["parsed"]["identification.toml"] == ["identification"]
+    assert out["parsed"]["identification.toml"] == ["identification", "vehicle"]
     # parsing loaded the description and nothing above it
     assert set(out["loaded"]) <= {"agrobot", "agrobot.orchestrator", *(f"agrobot.orchestrator.{m}" for m in (
                                   "component", "errors", "registry", "study", "study_files", "study_schema"))}
