@@ -58,10 +58,13 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
         stored = read_units(path)
     except Exception as exc:
         raise LogError(f"{path}: cannot read as {kind}: {exc}") from None
+    report = persisted_report(path)          # the import's report, when convert wrote the log
+    if isinstance(report.get("declared"), dict):
+        frame.attrs["declared"] = dict(report["declared"])      # the units the user declared to convert
     frame = check_log(frame, str(path), required, resample_jitter)
-    audit = persisted_audit(path)            # the import's audit, when convert wrote the log
-    if audit is not None:
-        frame.attrs["audit"] = audit
+    audit = report.get("audit", {}).get("findings")
+    if isinstance(audit, list):
+        frame.attrs["audit"] = list(audit)
     frame.attrs["units"] = log_units(frame, stored)
     return frame
 
@@ -74,17 +77,22 @@ def log_units(frame: pd.DataFrame, stored: dict[str, str] | None = None) -> dict
     return units
 
 
-def persisted_audit(path) -> list | None:
-    """The findings written beside a log (its ``<name>.import.json``, as ``convert`` writes it),
-    or None: reading a log back restores frame.attrs["audit"]."""
+def persisted_report(path) -> dict:
+    """The import report written beside a log (its ``<name>.import.json``, as ``convert`` writes
+    it), or {}: reading a log back restores its audit and the units the user declared."""
     side = Path(path).with_name(Path(path).stem + ".import.json")
     if not side.is_file():
-        return None
+        return {}
     try:
         report = json.loads(side.read_text())
     except (OSError, ValueError):
-        return None
-    found = report.get("audit", {}).get("findings") if isinstance(report, dict) else None
+        return {}
+    return report if isinstance(report, dict) else {}
+
+
+def persisted_audit(path) -> list | None:
+    """The findings written beside a log (persisted_report), or None."""
+    found = persisted_report(path).get("audit", {}).get("findings")
     return list(found) if isinstance(found, list) else None
 
 
@@ -142,13 +150,17 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
             if peak > bound and c == "yaw_rate" and (why := yaw_rate_in_radians(frame)):
                 frame.attrs.setdefault("notes", []).append(
                     f"column 'yaw_rate' reaches {peak:.3g} rad/s, more than {bound} rad/s, and is read as rad/s: {why}")
+            elif peak > bound and c in ("delta", "delta_cmd") and (why := wheel_angle_in_radians(frame, c)):
+                frame.attrs.setdefault("notes", []).append(
+                    f"column {c!r} reaches {peak:.4g} rad ({math.degrees(peak):.0f} deg), more than {bound} rad, "
+                    f"and is read as rad: {why}")
             elif peak > bound and c in frame.attrs.get("declared", {}):
                 frame.attrs.setdefault("notes", []).append(
-                    f"warning: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than {bound} {unit}, "
+                    f"warning: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than {bound} {unit}, "
                     f"which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
                     f"[{frame.attrs['declared'][c]}] (the user's word stands)")
             elif peak > bound:
-                raise LogError(f"{path}: column {c!r} reaches {peak:.3g} (99.5 % of its values within), more than "
+                raise LogError(f"{path}: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than "
                                f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
                                f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}: degrees are {180 / math.pi:.1f} times radians; a raw recording: declare the "
                                f"unit, --signal '{c}=...[deg{'/s' if unit == 'rad/s' else ''}]')")
@@ -284,6 +296,29 @@ def yaw_rate_in_radians(frame: pd.DataFrame) -> str | None:
         return (f"while moving (|v| > {MOVING} m/s) it turns no tighter than {1 / curvature:.2g} m radius and "
                 f"|v yaw_rate| reaches {lateral:.3g} m/s2 (in deg/s it would be 57 times that)")
     return None
+
+
+def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
+    """The evidence that a wide wheel-angle column (a tricycle's or a forklift's steered wheel turns
+    to 90 deg) is in rad, or None: with the speed v and the yaw rate r, the turns follow the no-slip
+    r = v tan(delta) / L of a vehicle's wheelbase L (0.1-10 m) better than the r = v delta / L that
+    a column in degrees, whose true angles then stay below 1.6 deg, would follow."""
+    if not {"t", "v", "yaw_rate", column} <= set(frame.columns):
+        return None
+    v, r, w = (frame[c].to_numpy(float) for c in ("v", "yaw_rate", column))
+    turning = (np.abs(v) > 0.1) & (np.abs(w) > 0.05) & (np.abs(w) < 1.5) & (np.abs(r) > 0.02)
+    if turning.sum() < 100 or np.abs(w[turning]).max() < 0.8:
+        return None
+    fits = {}
+    for name, x in (("tan", v * np.tan(w)), ("linear", v * w)):
+        x, y = x[turning], r[turning]
+        slope = float(x @ y / (x @ x))
+        fits[name] = (slope, 1 - float(np.sum((y - slope * x) ** 2) / np.sum(y ** 2)))
+    (slope, r2), (_, r2_linear) = fits["tan"], fits["linear"]
+    if slope <= 0 or not 0.1 <= 1 / slope <= 10 or r2 < 0.8 or r2 <= r2_linear:
+        return None
+    return (f"its turns follow yaw_rate = v tan({column}) / L with L = {1 / slope:.3g} m (R2 {r2:.3f}, "
+            f"against {r2_linear:.3f} for an angle in degrees)")
 
 
 def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:

@@ -121,6 +121,8 @@ def _with_audit(frame: pd.DataFrame, report: dict, options: ImportOptions) -> pd
     the user declared (frame.attrs["declared"]: a unit heuristic warns on them, never refuses)."""
     frame.attrs["audit"] = list(report.get("audit", {}).get("findings", []))
     frame.attrs["declared"] = {s.column: s.unit for s in options.signals if s.unit}
+    if frame.attrs["declared"]:              # written beside the log: read back, the word still stands
+        report["declared"] = dict(frame.attrs["declared"])
     return frame
 
 

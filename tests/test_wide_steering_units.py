@@ -1,0 +1,65 @@
+"""A wheel angle past 70 deg (a tricycle's or a forklift's steered wheel turns to 90 deg) is read
+as radians when the turns say so, and a unit the user declared to convert still stands when the
+written log is read back. Generated recordings: a tricycle of known wheelbase driven through wide
+turns, r = v tan(delta) / L exactly, with gyro noise."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.api import convert
+from agrobot.measurements import LogError, read_log
+from agrobot.measurements.signal_expressions import parse_signal
+
+WHEELBASE = 0.964
+
+
+def tricycle_log(seed: int = 0, n: int = 3000, h: float = 1 / 30) -> pd.DataFrame:
+    """Wide turns up to 1.4 rad both ways, up to 1.8 m/s and slower in tight turns; the truth is
+    r = v tan(delta) / L."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) * h
+    delta = 1.4 * np.sin(2 * np.pi * t / 37.0) * np.abs(np.sin(2 * np.pi * t / 11.0))
+    v = (1.05 + 0.75 * np.sin(2 * np.pi * t / 23.0)) / (1 + np.abs(np.tan(delta)))    # slow in tight turns
+    yaw_rate = v * np.tan(delta) / WHEELBASE + rng.normal(0, 0.005, n)
+    return pd.DataFrame({"t": t, "delta": delta, "v": v, "yaw_rate": yaw_rate})
+
+
+def test_wide_steering_is_read_as_radians_on_the_turns_evidence(tmp_path):
+    path = tmp_path / "tricycle.csv"
+    tricycle_log().to_csv(path, index=False)
+    frame = read_log(path, ("t",))
+    note = next(n for n in frame.attrs["notes"] if "'delta'" in n)
+    assert "read as rad" in note
+    found = float(note.split("L = ")[1].split(" m")[0])
+    assert found == pytest.approx(WHEELBASE, rel=0.02)
+
+
+def test_a_small_angle_in_degrees_is_still_refused(tmp_path):
+    """The same turns with a steering in degrees whose true angle never passes 1.4 deg: r follows
+    v times the column linearly, not its tangent."""
+    truth = tricycle_log()
+    small = np.radians(truth["delta"])           # true angles up to 1.4 deg ...
+    truth["yaw_rate"] = truth["v"] * np.tan(small) / WHEELBASE
+    path = tmp_path / "degrees.csv"
+    truth.to_csv(path, index=False)              # ... written in degrees (the column reaches 1.4)
+    with pytest.raises(LogError, match="'delta' reaches .* looks like degrees"):
+        read_log(path, ("t",))
+
+
+def test_a_declared_unit_stands_when_the_converted_log_is_read_back(tmp_path):
+    """No turns to judge by (the yaw rate does not follow the steering): the declared [rad] is kept
+    with a warning by convert, and again by every reader of the log it wrote."""
+    raw = tricycle_log()
+    raw["yaw_rate"] = np.random.default_rng(1).permutation(raw["yaw_rate"].to_numpy())
+    src = tmp_path / "raw.csv"
+    raw.to_csv(src, index=False)
+    out = tmp_path / "log.csv"
+    convert(src, out, signals=[parse_signal(s) for s in ("delta=delta[rad]", "v=v[m/s]", "yaw_rate=yaw_rate[rad/s]")])
+    frame = read_log(out, ("t",))
+    assert any("'delta'" in n and "kept as declared [rad]" in n for n in frame.attrs["notes"])
+    undeclared = tmp_path / "plain.csv"
+    pd.read_csv(out).to_csv(undeclared, index=False)         # the same table without its import report
+    with pytest.raises(LogError, match="'delta' reaches .* looks like degrees"):
+        read_log(undeclared, ("t",))
