@@ -10,7 +10,6 @@ import pytest
 
 from agrobot.api import convert
 from agrobot.measurements import LogError, read_log
-from agrobot.measurements.signal_expressions import parse_signal
 
 WHEELBASE = 0.964
 
@@ -56,10 +55,17 @@ def test_a_declared_unit_stands_when_the_converted_log_is_read_back(tmp_path):
     src = tmp_path / "raw.csv"
     raw.to_csv(src, index=False)
     out = tmp_path / "log.csv"
-    convert(src, out, signals=[parse_signal(s) for s in ("delta=delta[rad]", "v=v[m/s]", "yaw_rate=yaw_rate[rad/s]")])
+    convert(src, out, signals=["delta=delta[rad]", "v=v[m/s]", "yaw_rate=yaw_rate[rad/s]"])   # as the API takes them
     frame = read_log(out, ("t",))
     assert any("'delta'" in n and "kept as declared [rad]" in n for n in frame.attrs["notes"])
     undeclared = tmp_path / "plain.csv"
     pd.read_csv(out).to_csv(undeclared, index=False)         # the same table without its import report
     with pytest.raises(LogError, match="'delta' reaches .* looks like degrees"):
         read_log(undeclared, ("t",))
+
+
+def test_the_python_api_refuses_a_malformed_signal_text_by_name(tmp_path):
+    src = tmp_path / "raw.csv"
+    tricycle_log().to_csv(src, index=False)
+    with pytest.raises(LogError, match=r"--signal 'delta\[rad\]': expected COLUMN=EXPR\[unit\]"):
+        convert(src, signals=["delta[rad]"])

@@ -6,6 +6,8 @@ from pathlib import Path
 
 from agrobot.orchestrator.resolver import resolve
 
+from .signal_expressions import parse_signal
+
 
 @dataclass
 class ImportOptions:
@@ -31,6 +33,11 @@ class ImportOptions:
     keep_unexplained: bool = False              # keep the stretches the command does not explain (measurements.modes)
     min_stretch: float = 15.0                   # s: a selected stretch shorter than this is left out (measurements.modes)
     said: set = field(default_factory=set, repr=False, compare=False)   # selection lines printed already
+
+    def __post_init__(self):
+        """A signal given as its ``--signal`` text (``"yaw_rate=imuData.wz[deg/s]"``, as the Python API
+        takes it) is parsed, a malformed one refused with what was expected (a LogError)."""
+        self.signals = [parse_signal(s) if isinstance(s, str) else s for s in self.signals]
 
     def for_vehicle(self, study=None) -> "ImportOptions":
         """These options with what they leave open taken from the study's [vehicle] table
