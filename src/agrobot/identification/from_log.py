@@ -1,10 +1,7 @@
 """``identify LOG``: which method a measured log gets, and the driving method's outputs
 (identification.json, the figures, the summary on the terminal, progress on stderr).
 
-Imported where used: identification.driving_plots (matplotlib: only a run that draws figures loads it),
-diagnosis.study_fit and diagnosis.plausibility (the log's turns against the study's wheelbase, the rule
-the diagnosis says before its verdict; a module import would make diagnosis.pipeline's import of this
-module a circle through them).
+Imported where used: identification.driving_plots (matplotlib: only a run that draws figures loads it).
 """
 from __future__ import annotations
 
@@ -15,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.diagnosis.plausibility import study_understeer
+from agrobot.diagnosis.study_fit import study_check
 from agrobot.measurements import LogError, load_log
 from agrobot.measurements.audit import require_causal
 from agrobot.measurements.log import DEGREE_SUSPECT, check_log, persisted_audit, yaw_rate_in_radians
@@ -204,9 +203,6 @@ def study_mismatch(report: dict, frame, study, say) -> None:
     """The log's steady turns against the wheelbase identify stood on, by the diagnosis's rule
     (diagnosis.study_fit.study_check: more than 30 % apart, the study's understeer allowed for): when
     they disagree, named first among the report's notes (``study_mismatch``) and on stderr."""
-    from agrobot.diagnosis.plausibility import study_understeer
-    from agrobot.diagnosis.study_fit import study_check
-
     L = (report.get("vehicle") or {}).get("wheelbase")
     if not L:
         return
