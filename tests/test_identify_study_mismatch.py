@@ -48,3 +48,13 @@ def test_the_command_line_says_it_before_the_steering_map(small, cli, tmp_path):
     said = run.stdout.find("not the study's vehicle")
     assert 0 <= said < run.stdout.find("steering map:"), run.stdout
     assert "warning: the log's turns are not the study's vehicle" in run.stderr
+
+
+def test_the_help_names_the_wheelbase_identify_stands_on_without_one_given(small, cli):
+    """--help said 'default 1.4, the paper tractor'; without --wheelbase identify stands on the study's
+    [vehicle] wheelbase (2 m here), as the help now says."""
+    log, _, long_study = small
+    shown = " ".join(cli("identify", "--help").stdout.split())
+    assert "default: the study's [vehicle] wheelbase, else its yaw plant's l_f + l_r, else 1.4" in shown, shown
+    rep = api.identify(str(log), study=str(long_study), plots=False).report
+    assert rep["vehicle"]["wheelbase"] == pytest.approx(2.0) and "[vehicle] table" in rep["vehicle"]["wheelbase_from"]
