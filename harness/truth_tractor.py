@@ -25,6 +25,14 @@ STEERING_TIME_CONSTANT = 0.0667     # the paper tractor's closed-loop steering (
 STEERING_RATE = 60 * DEG
 STEERING_DEADBAND = 0.5 / 150       # valve dead-band / kp of the paper tractor
 
+# the magnitude of a gyro bias the truth draws [rad/s]: a tractor's guidance gyro (industrial MEMS, no
+# offset learnt at standstill) 0.6-1.7 deg/s, the order of a consumer or industrial MEMS part's
+# zero-rate offset (BMI055: 1 deg/s typical, 3 maximal; BMI160: 3 and 10); a car's CAN yaw rate comes
+# from its stability control's automotive sensor, temperature-compensated and its offset learnt at
+# each standstill: 0.3-0.9 deg/s, inside the car class's 1 deg/s (identification.vehicle.CLASSES)
+TRACTOR_GYRO_BIAS = (0.01, 0.03)
+CAR_GYRO_BIAS = (0.3 * DEG, 0.9 * DEG)
+
 # other vehicles the truth can be (``vehicle``): their own parameters, steering, sensors and driving;
 # "car" is a mid-size passenger car (studies/passenger_car.toml is its baseline) driven at 10, 20
 # and 30 m/s with road-wheel angles a twentieth of the tractor's (the same lateral accelerations,
@@ -34,7 +42,7 @@ VEHICLES = {
                     speeds=(1.0, 2.0, 3.0), steer_scale=1.0, resolution=0.1 * DEG, gyro_noise=0.005, v_ref=2.0),
     "car": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
                 tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(10.0, 20.0, 30.0), steer_scale=0.05,
-                resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0),
+                resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0, gyro_bias=CAR_GYRO_BIAS),
     # a small Ackermann field robot (a converted mower: 120 kg, wheelbase l_f + l_r = 1.27 m, outline
     # 1.9 m x 1.1 m) with a fast servo steering, driven at 0.5-0.85 m/s by default: lateral
     # accelerations below 1 m/s2, the kinematic regime r = v tan(delta) / L (make_log's ``speeds``
@@ -144,7 +152,7 @@ def draw_effect(effect: str | None, rng: np.random.Generator) -> dict[str, float
         "steering_deadband": {"deadband": u(1.0, 3.0) * DEG},
         "steering_rate_limit": {"rate": u(10.0, 25.0) * DEG},
         "steering_offset": {"offset": sign * u(1.0, 3.0) * DEG},
-        "yaw_rate_bias": {"bias": sign * u(0.01, 0.03)},
+        "yaw_rate_bias": {"bias": sign * u(*TRACTOR_GYRO_BIAS)},
         "gps_latency": {"latency": u(0.10, 0.30)},
         "speed_dependent_cornering": {"k": sign * u(0.15, 0.30)},
         "side_slope": {"slope": u(3.0, 6.0) * DEG, "downhill": u(-math.pi, math.pi)},
@@ -281,6 +289,9 @@ def _drawn_truth(seed, rng, ids, veh, scale, healthy, values) -> tuple[dict, dic
     for key in ("offset", "deadband"):
         if key in e:
             e[key] *= veh["steer_scale"]
+    if "bias" in e and "gyro_bias" in veh:      # the tractor's draw mapped onto the vehicle's gyro's range
+        (lo, hi), (t_lo, t_hi) = veh["gyro_bias"], TRACTOR_GYRO_BIAS
+        e["bias"] = math.copysign(lo + (abs(e["bias"]) - t_lo) / (t_hi - t_lo) * (hi - lo), e["bias"])
     hv = draw_healthy(healthy, np.random.default_rng([seed, 2])) if healthy else {}
     p = dict(veh["table"])
     later = np.random.default_rng([seed, 3])

@@ -2,7 +2,8 @@
 comma2k19's processed_log holds a car's CAN speed, steering-wheel angle and phone IMU) convert
 as a recording: every value written is the generated source's after unit conversion, at the
 source's own times; a gyro of three axes gives value0..value2, its down axis the yaw rate with
-its sign turned. Arrays that are not a channel's are refused naming the file, nothing written."""
+its sign turned. Arrays that are not a channel's, and a channel's file that is not a numpy array
+(a text export, an empty copy), are refused naming the file, nothing written."""
 from __future__ import annotations
 
 import math
@@ -66,6 +67,9 @@ def test_numpy_channel_folders_convert_with_every_value_the_sources(tmp_path):
     ("length", "values of shape (5,) (float64) beside 6000 times"),
     ("text", "values of shape"),
     ("times", "times of shape (6000, 2)"),
+    ("csv_value", "speed/value: not a numpy array (it begins b'15.0\\n15.1\\n'); expected a numpy.save array of "
+                  "the samples"),
+    ("empty_times", "speed/t: not a numpy array (it is empty or unreadable); expected a numpy.save array of the times"),
 ])
 def test_arrays_that_are_not_a_channels_are_refused_by_name(tmp_path, cli, bad, expect):
     write_drive(tmp_path / "route")
@@ -74,6 +78,10 @@ def test_arrays_that_are_not_a_channels_are_refused_by_name(tmp_path, cli, bad, 
         save(folder / "value", np.ones(5))
     elif bad == "text":
         save(folder / "value", np.array(["a"] * 6000))
+    elif bad == "csv_value":                  # a text export where the array was: named, not skipped
+        (folder / "value").write_text("15.0\n15.1\n")
+    elif bad == "empty_times":
+        (folder / "t").write_bytes(b"")
     else:
         save(folder / "t", np.ones((6000, 2)))
     with pytest.raises(LogError, match="speed"):

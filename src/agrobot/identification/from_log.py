@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from agrobot.diagnosis.plausibility import study_understeer
+from agrobot.diagnosis.study_fit import study_check
 from agrobot.measurements import LogError, load_log
 from agrobot.measurements.audit import require_causal
 from agrobot.measurements.log import DEGREE_SUSPECT, check_log, persisted_audit, yaw_rate_in_radians
@@ -22,7 +24,7 @@ from agrobot.orchestrator.resolver import resolve
 from .blas_threads import one_blas_thread
 from .experiment import detect_period
 from . import skid_steer
-from .ordinary_driving import identify_driving
+from .ordinary_driving import identify_driving, study_plant
 from .pipeline import _json_default
 from .vehicle import Vehicle
 
@@ -190,10 +192,26 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
     else:
         report = identify_driving(frame, str(source), study, progress=say,
                                   wheelbase=getattr(recording, "wheelbase", None), geometry=geometry, **more)
+        study_mismatch(report, frame, study, say)
     hidden = report.pop("_plot")
     if imported is not None:
         report["recording"] = imported
     return report, hidden
+
+
+def study_mismatch(report: dict, frame, study, say) -> None:
+    """The log's steady turns against the wheelbase identify stood on, by the diagnosis's rule
+    (diagnosis.study_fit.study_check: more than 30 % apart, the study's understeer allowed for): when
+    they disagree, named first among the report's notes (``study_mismatch``) and on stderr."""
+    L = (report.get("vehicle") or {}).get("wheelbase")
+    if not L:
+        return
+    name = Path(study.path).name if getattr(study, "path", None) else "paper tractor (no --study)"
+    _, text = study_check(frame, float(L), name, study_understeer(study_plant(study)[1]))
+    if text:
+        report["study_mismatch"] = text
+        report["notes"].insert(0, f"before the results: {text}")
+        say(f"warning: {text}")
 
 
 def write_driving(report: dict, hidden, out_dir: Path, study=None, source=None, plots: bool = True,

@@ -46,7 +46,9 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--steering-ratio", type=float, default=None, metavar="R",
                    help="the recording's steering angles are handwheel angles: divide delta and delta_cmd by R "
                         "(default: the study's steering_ratio for identify/diagnose, else 1)")
-    g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle (default 1.4, the paper tractor)")
+    g.add_argument("--wheelbase", type=float, default=None, help="m: curvature <-> wheel angle, and the wheelbase identify (and "
+                   "diagnose's identify step) fits on (default: the study's [vehicle] wheelbase, else its yaw "
+                   "plant's l_f + l_r, else 1.4, the paper tractor)")
     g.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; "
                    "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
     g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")

@@ -5,8 +5,10 @@ the ``.npy`` suffix, at any depth of the recording's folder (comma2k19's ``proce
 folders below the recording joined with ``_`` (``CAN_speed``); a one-column value is the column
 ``value``, a value of several columns ``value0``, ``value1`` ... (the publisher's order). The
 times are taken as written, in seconds; a clock whose origin is not POSIX (a device's boot time)
-is shared by every channel of the recording. An array that is not numeric, a ``t`` that is not
-one-dimensional or whose length is not the value's, is refused naming the file."""
+is shared by every channel of the recording. A folder holding a ``t`` and a ``value`` is a channel by
+their names: a file of them that is not a numpy array (a text export, a pickle, a truncated copy) is
+refused naming the file and its first bytes, as is an array that is not numeric, a ``t`` that is not
+one-dimensional or whose length is not the value's."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -33,12 +35,30 @@ class Channel:
     time_how: str
 
 
-def _is_npy(path: Path) -> bool:
+ROLES = {"t": "the times in seconds, one per sample", "value": "the samples, one row per time"}
+
+
+def _head(path: Path) -> bytes:
+    """The file's first bytes (empty when it cannot be read)."""
     try:
         with open(path, "rb") as f:
-            return f.read(6) == NPY_MAGIC
+            return f.read(16)
     except OSError:
-        return False
+        return b""
+
+
+def _is_npy(path: Path) -> bool:
+    return _head(path).startswith(NPY_MAGIC)
+
+
+def _checked_npy(path: Path) -> None:
+    """A LogError naming ``path`` when it is not a numpy array file, with what it begins with."""
+    head = _head(path)
+    if not head.startswith(NPY_MAGIC):
+        role = ROLES[path.name.removesuffix(".npy")]
+        begins = f"begins {head!r}" if head else "is empty or unreadable"
+        raise LogError(f"{path}: not a numpy array (it {begins}); expected a numpy.save array of {role} "
+                       f"(a file starting {NPY_MAGIC!r})")
 
 
 def _times_beside(value: Path) -> Path | None:
@@ -46,10 +66,11 @@ def _times_beside(value: Path) -> Path | None:
 
 
 def is_channel_folder(folder: Path) -> bool:
-    """A folder holding a numpy ``value`` and a numpy ``t`` beside it."""
+    """A folder holding a ``value`` and a ``t`` beside it, either of them a numpy array (read_channel
+    refuses the other by name when it is not one)."""
     value = next((folder / n for n in VALUE_NAMES if (folder / n).is_file()), None)
     times = None if value is None else _times_beside(value)
-    return times is not None and _is_npy(value) and _is_npy(times)
+    return times is not None and (_is_npy(value) or _is_npy(times))
 
 
 def channel_folders(root: Path) -> list[Path]:
@@ -67,6 +88,8 @@ def read_channel(folder: Path, root: Path) -> Channel:
     """The channel of ``folder``; a LogError names the file that is not a channel's array."""
     value = next(folder / n for n in VALUE_NAMES if (folder / n).is_file())
     times = _times_beside(value)
+    _checked_npy(times)
+    _checked_npy(value)
     try:
         t, v = np.load(times, allow_pickle=False), np.load(value, allow_pickle=False)
     except (ValueError, OSError) as exc:
