@@ -56,6 +56,7 @@ import numpy as np
 
 from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
+from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
@@ -226,6 +227,7 @@ class Selector:
         self.screen: Screen | None = None
         self.progress = progress                # the tool's progress lines (orchestrator.work_progress)
         self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
+        self.gate_note = ""                     # why identify's kept saturation was left to the gate
         moving = replay.speed > replay.min_speed
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
@@ -465,16 +467,14 @@ class Selector:
         top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
         vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
         the predicted yaw rate there (with the split "blocks", below the middle band's level).
-        Otherwise it is left out (and the trace says why)."""
+        Otherwise it is left out (and the trace says why). Tyre saturation identify keeps on the
+        evidence of all its held-out segments is tried whatever this says (identify_keeps)."""
         effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
         if effect is None:
             return None
-        if self.saturation:                     # one vehicle model: what identify keeps is a candidate here
-            self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
-                                              "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
-                                                                 SHAPE_BOUNDS[1])}
-            return (f"tyre_saturation tried: identify keeps it on this log (friction {friction_text(self.saturation)}, "
-                    f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
+        kept = self.identify_keeps()
+        if kept is not None:
+            return kept
         replay = self.replay
         keep = replay.scored("yaw")
         predicted = replay.predicted("yaw", base.values)[keep]
@@ -498,10 +498,30 @@ class Selector:
         text = (f"where |a_y| > {np.percentile(a_y, 90):.3g} m/s2 the baseline's yaw residual signed by the turn "
                 f"is {mean:+.3g} rad/s{than} (t = {mean / se if se > 0 else 0.0:.1f}, {100 * shortfall:.0f} % of the "
                 f"predicted yaw rate)")
+        if self.gate_note:
+            text += f" ({self.gate_note})"
         if se > 0 and mean / se < -3.0 and shortfall > 0.05:
             return f"tyre_saturation tried: {text}"
         self.catalogue = [e for e in self.catalogue if e is not effect]
         return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
+
+    def identify_keeps(self) -> str | None:
+        """One vehicle model: tyre saturation that identify keeps on this log is a candidate here,
+        started from identify's tyre (an "at least" friction from its bound), when it wins there on
+        the evidence of all identify's held-out segments (held-out gain >= ``min_gain``); kept on its
+        hardest third alone (the rest no better or worse), it is left to the gate (None)."""
+        if not self.saturation:
+            return None
+        gain = self.saturation.get("held_out_gain", 0.0)
+        said = f"friction {friction_text(self.saturation)}, held-out gain {100 * gain:.1f} %"
+        if gain < self.min_gain:
+            self.gate_note = (f"identify keeps tyre_saturation ({said} < {100 * self.min_gain:.0f} % over all its "
+                              f"held-out segments: it wins only in the hardest turns), so this log's own gate decides")
+            return None
+        self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
+                                          "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
+                                                             SHAPE_BOUNDS[1])}
+        return f"tyre_saturation tried: identify keeps it on this log ({said})"
 
     def evaluate(self, model: FitResult) -> tuple[FitResult, dict]:
         """``model`` scored on every stage, and the stages' noise floors under it (memoised on the
@@ -613,10 +633,13 @@ def _bounded(p: Parameter, prior: tuple[float, float], limit: tuple[float, float
 
 def widened(effect: Effect, values: dict[str, float]) -> Effect | None:
     """The effect with the range of each parameter that ended on a prior bound widened to its
-    physical limit (Parameter.widened), or None when none can widen."""
+    physical limit (Parameter.widened), or None when none can widen. A parameter the effect reads
+    as a lower limit on its upper bound (``at_least``: a friction on the class's top, the turns
+    bending the tyre curve short of its peak) stays there: the verdict says "at least" it."""
     params, moved = [], False
     for p in effect.parameters:
-        w = p.widened(values[p.name])
+        top = p.name in getattr(effect, "at_least", ()) and p.at_bound(values[p.name], REPORTED_AT_BOUND) == "upper"
+        w = None if top else p.widened(values[p.name])
         moved |= w is not None
         params.append(w or p)
     if not moved:

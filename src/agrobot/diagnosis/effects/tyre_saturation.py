@@ -27,6 +27,12 @@ class TyreSaturation(Effect):
     starts = ((1.0, 1.3), (0.3, 1.3))
     enters = {"yaw.friction": "tyre_friction", "yaw.shape": "tyre_shape"}
     secondary = ("tyre_shape",)
+    at_least = ("tyre_friction",)       # on its upper bound: the turns bend the tyre curve but reach no peak
+    undecided = {"tyre_shape": "the log does not show where the tyres' force ends (on the lower bound a curve "
+                               "without a peak bending from the smallest slip, on the upper one a sharp peak); the "
+                               "friction fitted with it is then not the tyres' (for C < 1 the force reaches only mu "
+                               "sin(C pi / 2)), and a yaw gain that falls with |a_y| (a steering map, understeer) bends "
+                               "the same way"}
     threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
                  "99th percentile of |a_y|: the log drives into the saturation")
     hypothesis = ("the tyres saturate: in hard turns the lateral force falls behind C alpha, and the yaw rate "
