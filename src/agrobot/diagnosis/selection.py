@@ -56,7 +56,6 @@ import numpy as np
 
 from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
-from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
@@ -633,13 +632,10 @@ def _bounded(p: Parameter, prior: tuple[float, float], limit: tuple[float, float
 
 def widened(effect: Effect, values: dict[str, float]) -> Effect | None:
     """The effect with the range of each parameter that ended on a prior bound widened to its
-    physical limit (Parameter.widened), or None when none can widen. A parameter the effect reads
-    as a lower limit on its upper bound (``at_least``: a friction on the class's top, the turns
-    bending the tyre curve short of its peak) stays there: the verdict says "at least" it."""
+    physical limit (Parameter.widened), or None when none can widen."""
     params, moved = [], False
     for p in effect.parameters:
-        top = p.name in getattr(effect, "at_least", ()) and p.at_bound(values[p.name], REPORTED_AT_BOUND) == "upper"
-        w = None if top else p.widened(values[p.name])
+        w = p.widened(values[p.name])
         moved |= w is not None
         params.append(w or p)
     if not moved:
