@@ -1,7 +1,7 @@
 """A tyre fit on its bounds in the verdict: a friction on its upper limit is said as "at least" that
 limit and judged as such, not "not identifiable"; a shape on its bound leaves the saturation
-undecided; tyre saturation identify keeps only in the hardest turns is left to the diagnosis's own
-gate; a generated car whose friction is beyond its class's top is kept by diagnose because identify
+standing but none of its values concluded; tyre saturation identify keeps only in the hardest turns is left to the diagnosis's own
+gate; tyres whose force limit is below the log's turns are not its tyres; a generated car whose friction is beyond its class's top is kept by diagnose because identify
 keeps it "at least" that top, and is not kept without it.
 
 Independent truth: the effect dicts are built as the pipeline builds them (pipeline.finding_json),
@@ -54,13 +54,31 @@ def test_without_the_at_least_rule_a_friction_on_its_limit_is_not_identifiable()
     assert verdict(low, [low])["status"] == "not identifiable"
 
 
-def test_a_shape_on_its_bound_leaves_the_saturation_undecided_and_says_why():
+def test_a_shape_on_its_bound_leaves_the_saturation_standing_but_no_value_concluded():
     e = tyre(0.83, 0.5, shape_edge="lower")
     v = verdict(e, [])
-    assert v["id"] == "tyre_saturation" and v["status"] == "cannot decide", v
-    assert "tyre_shape ended on its lower bound 0.5" in v["statement"]
+    assert v["id"] == "tyre_saturation" and v["status"] == "conclusive", v
+    assert "its values are not concluded: tyre_shape ended on its lower bound 0.5" in v["statement"]
     assert "tyre_shape [-] not identifiable" in v["statement"] and "peak" in v["statement"]
-    assert verdict(tyre(0.83, 1.3), [])["status"] == "conclusive"
+    assert "tyre_friction [-] 0.83 (fitted with tyre_shape on its bound)" in v["statement"]
+    free = verdict(tyre(0.83, 1.3), [])
+    assert free["status"] == "conclusive" and "not concluded" not in free["statement"]
+    assert "tyre_friction [-] 0.83, tyre_shape [-] 1.3" in free["statement"]
+
+
+def test_tyres_that_cannot_carry_the_logs_turns_are_not_its_tyres():
+    """A curve without a peak (shape 0.5) reaches mu sin(pi / 4) of the load: with mu 0.83, 5.76 m/s2,
+    below a log turning at 7.4 m/s2 (99th percentile of |v r|) by more than the 10 % allowed; mu 1.0
+    at shape 1.3 (a peak: the whole mu) carries 9.81 m/s2."""
+    import math
+
+    from agrobot.diagnosis.effects.tyre_saturation import LATERAL_KEY, TyreSaturation
+
+    log = {LATERAL_KEY: 7.4}
+    (why,) = TyreSaturation().contradicts({"tyre_friction": 0.83, "tyre_shape": 0.5}, log)
+    assert f"at most {0.83 * 9.81 * math.sin(math.pi / 4):.3g} m/s2" in why and "7.4 m/s2" in why
+    assert TyreSaturation().contradicts({"tyre_friction": 1.0, "tyre_shape": 1.3}, log) == []
+    assert TyreSaturation().contradicts({"tyre_friction": 0.83, "tyre_shape": 0.5}, {LATERAL_KEY: 6.2}) == []
 
 
 def selector(gain, min_gain=0.05):

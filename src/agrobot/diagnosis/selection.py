@@ -11,7 +11,7 @@ parameters, scored on the group's stages.
 
 - forward: every effect not in S is refitted jointly with its group; the supported one with the
   lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
-  material) joins S;
+  material, nothing the log shows against it: Effect.contradicts) joins S;
 - backward: every other member f of S is tested by refitting its group without it; f stays only
   if the model with f is still supported against the model without it (same rules);
 - a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
@@ -160,6 +160,7 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
         reasons.append(f"held-out RMS rises for {worse}")
     if not material:
         reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
+    reasons += effect.contradicts(with_.values, baseline_values)
     return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages),
                    evidence=counted)
 

@@ -16,8 +16,8 @@ It is built from the judged effects and three checks an engineer makes before si
   was widened to it first, diagnosis.selection) is *not identifiable*, and the verdict says so
   rather than "none"; but a parameter the effect reads as a lower limit there (``at_least``: a
   friction whose peak the log's turns do not reach) is said as "at least" its bound, and the effect
-  stands; an effect whose secondary parameter (a tyre's shape) ends on its bound is found but *cannot
-  be decided*: its other values were fitted with that one held there, and the verdict says why.
+  stands; an effect whose secondary parameter (a tyre's shape) ends on its bound stands, but none of
+  its values is concluded (the others were fitted with that one held there), and the verdict says why.
 """
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
              catalogue: Iterable[Effect] = CATALOGUE, antenna: tuple[float, float] = (0.0, 0.0),
              before: Iterable[str] = (), turns: dict | None = None) -> dict:
     """The verdict object: ``id`` (an effect id, 'unexplained' or 'none'), ``status`` (conclusive,
-    inconclusive, implausible, not concluded, not identifiable, cannot decide), ``statement`` (one line),
+    inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line),
     ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included,
     and ``before``: what is said before any verdict (``before`` given: the study not being the log's
     vehicle; the log's ``turns``, study_fit.log_vehicle, off the study's wheelbase; the class's default
@@ -123,15 +123,25 @@ def on_secondary_bound(e: dict) -> dict[str, dict]:
     return {n: p for n, p in (e.get("fitted") or {}).items() if p.get("at_bound") and p.get("secondary")}
 
 
+def undecided_text(held: dict[str, dict], rule: Effect | None) -> str:
+    """Why the values of an effect with secondary parameters on their bounds are not concluded
+    (the effect's ``undecided`` reason per parameter, else HELD)."""
+    why = getattr(rule, "undecided", {})
+    return "its values are not concluded: " + "; ".join(
+        f"{n} ended on its {p['at_bound']} bound {_bound(p):g} (its physical limit): {why.get(n, HELD)}"
+        for n, p in held.items())
+
+
 def values_text(e: dict, rule: Effect | None) -> str:
     """The effect's values as the verdict says them: an "at least" parameter as "at least" its
-    bound, a secondary one on its bound as not identifiable."""
+    bound, a secondary one on its bound as not identifiable and the others as fitted beside it."""
     names = {k: next((n for n in (e.get("fitted") or {}) if k.startswith(n + " [")), None)
              for k in e["parameters_display"]}
     low, held = _at_least(e, rule), on_secondary_bound(e)
+    beside = f" (fitted with {', '.join(held)} on its bound)" if held else ""
     return ", ".join(f"{k} at least {v:.4g}" if names[k] in low else
                      f"{k} not identifiable (on its {held[names[k]]['at_bound']} bound {v:.4g})" if names[k] in held
-                     else f"{k} {v:.4g}" for k, v in e["parameters_display"].items())
+                     else f"{k} {v:.4g}{beside}" for k, v in e["parameters_display"].items())
 
 
 def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
@@ -162,12 +172,6 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         elif top["judgement"]:
             status = "implausible"
             statement = f"{top['id']} fits ({value}), but not as a property of this vehicle: {top['judgement'][0]}"
-        elif held:
-            status = "cannot decide"
-            why = getattr(rules.get(top["id"]), "undecided", {})
-            statement = (f"{top['id']} fits ({value}) but cannot be decided: " + "; ".join(
-                f"{n} ended on its {p['at_bound']} bound {_bound(p):g} (its physical limit): "
-                f"{why.get(n, HELD)}" for n, p in held.items()))
         elif any(t["effects"][0] == top["id"] for t in inconclusive):
             status = "inconclusive"
             rivals = ", ".join(t["effects"][1] for t in inconclusive if t["effects"][0] == top["id"])
@@ -175,6 +179,8 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         else:
             status = "conclusive"
             statement = f"{top['id']}: {top['hypothesis']} ({value})"
+        if held:
+            statement += "; " + undecided_text(held, rules.get(top["id"]))
         verdict = top["id"]
     elif unidentifiable:
         top = unidentifiable[0]

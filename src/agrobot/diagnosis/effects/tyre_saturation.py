@@ -12,6 +12,7 @@ from agrobot.components.models.yaw_dynamics import GRAVITY
 from ..effect import Effect, Parameter
 
 LATERAL_KEY = "log_lateral_acceleration_p99"     # the log's 99th percentile of |v r| [m/s2], set by the selection
+CARRIED = 1.1        # the tyres' force limit may fall this far short of the log's |v r| (transients, gyro noise)
 
 
 def friction_text(saturation: dict) -> str:
@@ -51,6 +52,20 @@ class TyreSaturation(Effect):
             return False
         limit = fitted["tyre_friction"] * GRAVITY * linear_share_limit(fitted["tyre_shape"])
         return limit < base.get(LATERAL_KEY, 0.0)
+
+    def contradicts(self, fitted, base):
+        """Tyres that cannot carry the log's turns are not its tyres: their force limit mu g x the
+        shape's share of it (force_limit_share) below the log's 99th percentile of |v r| / CARRIED
+        is a yaw gain that falls with |a_y| (a steering map, understeer) read as a tyre curve."""
+        mu = fitted["tyre_friction"]
+        if not math.isfinite(mu):
+            return []
+        limit, turns = mu * GRAVITY * force_limit_share(fitted["tyre_shape"]), base.get(LATERAL_KEY, 0.0)
+        if limit >= turns / CARRIED:
+            return []
+        return [f"the fitted tyres carry at most {limit:.3g} m/s2 (mu {mu:.3g} x {force_limit_share(fitted['tyre_shape']):.2f} "
+                f"of it at shape {fitted['tyre_shape']:.2f}), less than the {turns:.3g} m/s2 the log turns at (99th "
+                f"percentile of |v r|): not the tyres' limit but a yaw gain falling with |a_y| (a steering map, understeer)"]
 
     def options(self, fitted, base, study):
         return [("yaw_plant", "tyre_friction", fitted["tyre_friction"]),
