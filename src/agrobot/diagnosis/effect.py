@@ -116,6 +116,12 @@ class Effect:
     def material(self, fitted: Mapping[str, float], base: Mapping[str, float]) -> bool:
         raise NotImplementedError
 
+    def contradicts(self, fitted: Mapping[str, float], base: Mapping[str, float]) -> list[str]:
+        """What the log itself shows against the fitted values (``base``: the baseline's values and
+        what the selection reads of the log), one reason each; such a fit is not supported (the
+        default: nothing)."""
+        return []
+
     def options(self, fitted: Mapping[str, float], base: Mapping[str, float],
                 study: BaselineStudy) -> list[tuple[str, str, float]]:
         """[(role, parameter, SI value)]: the component options that carry the fitted effect."""

@@ -11,7 +11,7 @@ parameters, scored on the group's stages.
 
 - forward: every effect not in S is refitted jointly with its group; the supported one with the
   lowest dBIC (candidates.py: dBIC < -10, held-out gain >= min_gain, no signal worse by 5%,
-  material) joins S;
+  material, nothing the log shows against it: Effect.contradicts) joins S;
 - backward: every other member f of S is tested by refitting its group without it; f stays only
   if the model with f is still supported against the model without it (same rules);
 - a tie: when another supported candidate of the same stage came within ``TIE`` of the best's dBIC
@@ -160,6 +160,7 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
         reasons.append(f"held-out RMS rises for {worse}")
     if not material:
         reasons.append(f"fitted value below the materiality threshold ({effect.threshold})")
+    reasons += effect.contradicts(with_.values, baseline_values)
     return Finding(effect, with_, dbic, gains, before, after, material, not reasons, reasons, tuple(stages),
                    evidence=counted)
 
@@ -226,6 +227,7 @@ class Selector:
         self.screen: Screen | None = None
         self.progress = progress                # the tool's progress lines (orchestrator.work_progress)
         self.saturation = saturation            # identify's tyre saturation on this log (friction, shape), if kept
+        self.gate_note = ""                     # why identify's kept saturation was left to the gate
         moving = replay.speed > replay.min_speed
         a_y = np.abs(np.nan_to_num(replay.speed * replay.gyro))[moving] if "yaw" in replay.stages else np.zeros(0)
         # the baseline's values, and what a materiality rule reads of the log itself
@@ -465,16 +467,14 @@ class Selector:
         top tenth of |a_y| the baseline's yaw residual, signed by the turn, falls below zero (the
         vehicle turns less than the linear tyre lets it) by more than 3 standard errors and 5 % of
         the predicted yaw rate there (with the split "blocks", below the middle band's level).
-        Otherwise it is left out (and the trace says why)."""
+        Otherwise it is left out (and the trace says why). Tyre saturation identify keeps on the
+        evidence of all its held-out segments is tried whatever this says (identify_keeps)."""
         effect = next((e for e in self.catalogue if e.id == "tyre_saturation"), None)
         if effect is None:
             return None
-        if self.saturation:                     # one vehicle model: what identify keeps is a candidate here
-            self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
-                                              "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
-                                                                 SHAPE_BOUNDS[1])}
-            return (f"tyre_saturation tried: identify keeps it on this log (friction {friction_text(self.saturation)}, "
-                    f"held-out gain {100 * self.saturation['held_out_gain']:.0f} %)")
+        kept = self.identify_keeps()
+        if kept is not None:
+            return kept
         replay = self.replay
         keep = replay.scored("yaw")
         predicted = replay.predicted("yaw", base.values)[keep]
@@ -498,10 +498,30 @@ class Selector:
         text = (f"where |a_y| > {np.percentile(a_y, 90):.3g} m/s2 the baseline's yaw residual signed by the turn "
                 f"is {mean:+.3g} rad/s{than} (t = {mean / se if se > 0 else 0.0:.1f}, {100 * shortfall:.0f} % of the "
                 f"predicted yaw rate)")
+        if self.gate_note:
+            text += f" ({self.gate_note})"
         if se > 0 and mean / se < -3.0 and shortfall > 0.05:
             return f"tyre_saturation tried: {text}"
         self.catalogue = [e for e in self.catalogue if e is not effect]
         return f"tyre_saturation not tried: {text}; saturation needs the vehicle to turn less than the linear model there"
+
+    def identify_keeps(self) -> str | None:
+        """One vehicle model: tyre saturation that identify keeps on this log is a candidate here,
+        started from identify's tyre (an "at least" friction from its bound), when it wins there on
+        the evidence of all identify's held-out segments (held-out gain >= ``min_gain``); kept on its
+        hardest third alone (the rest no better or worse), it is left to the gate (None)."""
+        if not self.saturation:
+            return None
+        gain = self.saturation.get("held_out_gain", 0.0)
+        said = f"friction {friction_text(self.saturation)}, held-out gain {100 * gain:.1f} %"
+        if gain < self.min_gain:
+            self.gate_note = (f"identify keeps tyre_saturation ({said} < {100 * self.min_gain:.0f} % over all its "
+                              f"held-out segments: it wins only in the hardest turns), so this log's own gate decides")
+            return None
+        self._first["tyre_saturation"] = {"tyre_friction": self.saturation["friction"],
+                                          "tyre_shape": min(max(self.saturation["shape"], SHAPE_BOUNDS[0]),
+                                                             SHAPE_BOUNDS[1])}
+        return f"tyre_saturation tried: identify keeps it on this log ({said})"
 
     def evaluate(self, model: FitResult) -> tuple[FitResult, dict]:
         """``model`` scored on every stage, and the stages' noise floors under it (memoised on the

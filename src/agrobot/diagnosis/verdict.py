@@ -14,7 +14,10 @@ It is built from the judged effects and three checks an engineer makes before si
   the verdict says what, with the number;
 - **no verdict on a range edge**: an effect whose parameter ends on its physical limit (the range
   was widened to it first, diagnosis.selection) is *not identifiable*, and the verdict says so
-  rather than "none".
+  rather than "none"; but a parameter the effect reads as a lower limit there (``at_least``: a
+  friction whose peak the log's turns do not reach) is said as "at least" its bound, and the effect
+  stands; an effect whose secondary parameter (a tyre's shape) ends on its bound stands, but none of
+  its values is concluded (the others were fitted with that one held there), and the verdict says why.
 """
 from __future__ import annotations
 
@@ -26,6 +29,7 @@ from .plausibility import VehicleContext, wheelbase_off
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
+HELD = "the values fitted with it held there are not the effect's own"   # a secondary parameter on its bound
 
 
 def imitated(kind: str, catalogue: Iterable[Effect] = CATALOGUE) -> list[str]:
@@ -96,6 +100,50 @@ def said_before(before: Iterable[str], ctx: VehicleContext, turns: dict | None =
     return list(before) + [n for n in notes if n]
 
 
+def _bound(p: dict) -> float:
+    return p["bounds"][0 if p["at_bound"] == "lower" else 1]
+
+
+def _at_least(e: dict, rule: Effect | None) -> dict[str, dict]:
+    """The parameters of ``e`` that ended on their upper bound and that the effect reads as a lower
+    limit there (Effect ``at_least``: a friction the log's turns do not reach the peak of)."""
+    names = getattr(rule, "at_least", ())
+    return {n: p for n, p in (e.get("fitted") or {}).items() if n in names and p.get("at_bound") == "upper"}
+
+
+def _only_at_least(e: dict, rule: Effect | None) -> bool:
+    """Every primary parameter of ``e`` on a bound is an "at least" (then ``e`` is an answer)."""
+    edge = {n for n, p in (e.get("fitted") or {}).items() if p.get("at_bound") and not p.get("secondary")}
+    return bool(edge) and edge <= set(_at_least(e, rule))
+
+
+def on_secondary_bound(e: dict) -> dict[str, dict]:
+    """The secondary parameters of ``e`` (Effect.secondary) that ended on a bound: the effect stands,
+    but no value read with them held there is concluded."""
+    return {n: p for n, p in (e.get("fitted") or {}).items() if p.get("at_bound") and p.get("secondary")}
+
+
+def undecided_text(held: dict[str, dict], rule: Effect | None) -> str:
+    """Why the values of an effect with secondary parameters on their bounds are not concluded
+    (the effect's ``undecided`` reason per parameter, else HELD)."""
+    why = getattr(rule, "undecided", {})
+    return "its values are not concluded: " + "; ".join(
+        f"{n} ended on its {p['at_bound']} bound {_bound(p):g} (its physical limit): {why.get(n, HELD)}"
+        for n, p in held.items())
+
+
+def values_text(e: dict, rule: Effect | None) -> str:
+    """The effect's values as the verdict says them: an "at least" parameter as "at least" its
+    bound, a secondary one on its bound as not identifiable and the others as fitted beside it."""
+    names = {k: next((n for n in (e.get("fitted") or {}) if k.startswith(n + " [")), None)
+             for k in e["parameters_display"]}
+    low, held = _at_least(e, rule), on_secondary_bound(e)
+    beside = f" (fitted with {', '.join(held)} on its bound)" if held else ""
+    return ", ".join(f"{k} at least {v:.4g}" if names[k] in low else
+                     f"{k} not identifiable (on its {held[names[k]]['at_bound']} bound {v:.4g})" if names[k] in held
+                     else f"{k} {v:.4g}{beside}" for k, v in e["parameters_display"].items())
+
+
 def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
              audit: list[dict], ctx: VehicleContext, catalogue: Iterable[Effect]) -> dict:
     blockers = [f for f in audit if not f["resolved"]]
@@ -111,10 +159,12 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
     for e in effects:
         e["judgement"] = _judge(e, ctx, rules)
         e["blocked_by"] = [f["kind"] for f in blockers if "*" in f["imitates"] or e["id"] in f["imitates"]]
+    unidentifiable = [e for e in unidentifiable if not _only_at_least(e, rules.get(e["id"]))]
     answers = [e for e in effects if e not in unidentifiable]
     if answers:
         top = answers[0]
-        value = ", ".join(f"{k} {v:.4g}" for k, v in top["parameters_display"].items())
+        value = values_text(top, rules.get(top["id"]))
+        held = on_secondary_bound(top)
         if top["blocked_by"]:
             status = "not concluded"
             statement = (f"{top['id']} fits ({value}) but is not concluded: the unresolved recording finding "
@@ -129,6 +179,8 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         else:
             status = "conclusive"
             statement = f"{top['id']}: {top['hypothesis']} ({value})"
+        if held:
+            statement += "; " + undecided_text(held, rules.get(top["id"]))
         verdict = top["id"]
     elif unidentifiable:
         top = unidentifiable[0]
@@ -145,7 +197,7 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         if e is not (answers[0] if answers else None):
             tag = ("not concluded (" + ", ".join(e["blocked_by"]) + ")" if e["blocked_by"] else
                    "not identifiable" if e in unidentifiable else "also")
-            bullets.append(f"{tag}: {e['id']} " + ", ".join(f"{k} {v:.4g}" for k, v in e["parameters_display"].items())
+            bullets.append(f"{tag}: {e['id']} " + values_text(e, rules.get(e["id"]))
                            + (f"; {e['judgement'][0]}" if e["judgement"] else ""))
     if unexplained and verdict != "unexplained":
         bullets.append("also unexplained: " + unexplained["summary"])

@@ -12,6 +12,7 @@ from agrobot.components.models.yaw_dynamics import GRAVITY
 from ..effect import Effect, Parameter
 
 LATERAL_KEY = "log_lateral_acceleration_p99"     # the log's 99th percentile of |v r| [m/s2], set by the selection
+CARRIED = 1.1        # the tyres' force limit may fall this far short of the log's |v r| (transients, gyro noise)
 
 
 def friction_text(saturation: dict) -> str:
@@ -27,6 +28,12 @@ class TyreSaturation(Effect):
     starts = ((1.0, 1.3), (0.3, 1.3))
     enters = {"yaw.friction": "tyre_friction", "yaw.shape": "tyre_shape"}
     secondary = ("tyre_shape",)
+    at_least = ("tyre_friction",)       # on its upper bound: the turns bend the tyre curve but reach no peak
+    undecided = {"tyre_shape": "the log does not show where the tyres' force ends (on the lower bound a curve "
+                               "without a peak bending from the smallest slip, on the upper one a sharp peak); the "
+                               "friction fitted with it is then not the tyres' (for C < 1 the force reaches only mu "
+                               "sin(C pi / 2)), and a yaw gain that falls with |a_y| (a steering map, understeer) bends "
+                               "the same way"}
     threshold = ("the linear range it leaves, |a_y| < mu g F/D at 95 % of the linear force, ends below the log's "
                  "99th percentile of |a_y|: the log drives into the saturation")
     hypothesis = ("the tyres saturate: in hard turns the lateral force falls behind C alpha, and the yaw rate "
@@ -45,6 +52,20 @@ class TyreSaturation(Effect):
             return False
         limit = fitted["tyre_friction"] * GRAVITY * linear_share_limit(fitted["tyre_shape"])
         return limit < base.get(LATERAL_KEY, 0.0)
+
+    def contradicts(self, fitted, base):
+        """Tyres that cannot carry the log's turns are not its tyres: their force limit mu g x the
+        shape's share of it (force_limit_share) below the log's 99th percentile of |v r| / CARRIED
+        is a yaw gain that falls with |a_y| (a steering map, understeer) read as a tyre curve."""
+        mu = fitted["tyre_friction"]
+        if not math.isfinite(mu):
+            return []
+        limit, turns = mu * GRAVITY * force_limit_share(fitted["tyre_shape"]), base.get(LATERAL_KEY, 0.0)
+        if limit >= turns / CARRIED:
+            return []
+        return [f"the fitted tyres carry at most {limit:.3g} m/s2 (mu {mu:.3g} x {force_limit_share(fitted['tyre_shape']):.2f} "
+                f"of it at shape {fitted['tyre_shape']:.2f}), less than the {turns:.3g} m/s2 the log turns at (99th "
+                f"percentile of |v r|): not the tyres' limit but a yaw gain falling with |a_y| (a steering map, understeer)"]
 
     def options(self, fitted, base, study):
         return [("yaw_plant", "tyre_friction", fitted["tyre_friction"]),
