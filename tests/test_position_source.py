@@ -12,6 +12,7 @@ import pandas as pd
 import pytest
 
 from agrobot.measurements.audit import audit_frame
+from agrobot.measurements.position_source import named_estimate
 from harness.truth_tractor import make_log
 
 
@@ -63,3 +64,11 @@ def test_a_localisation_on_a_jittering_clock_is_an_estimate(small):
     frame["x"], frame["y"] = np.interp(late, t, x), np.interp(late, t, y)
     found = estimate_kinds(frame)
     assert len(found) == 1 and "to the course" in found[0]["meaning"]
+
+
+@pytest.mark.parametrize("source, estimate", [("x=pfOdomData.x[m]", True), ("/odometry/filtered pose.pose.position.x", True),
+                                              ("/odometry/gps pose.pose.position.x", False), ("x=x[m]", False),
+                                              ("east of the run's first fix", False)])
+def test_a_source_named_for_an_estimator_is_one_unless_it_names_a_receiver(source, estimate):
+    """A particle filter's poses scatter like fixes (isotropic); its topic's name tells."""
+    assert (named_estimate(source) is not None) == estimate

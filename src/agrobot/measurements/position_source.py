@@ -14,11 +14,14 @@ both directions). Whiteness is read as MAD(third difference) / MAD(second differ
                    white noise under FLOOR, below any receiver's)
 
 Anything else (noise the same both ways; a low-rate fix whose turns outweigh its noise across the
-track) is not called an estimate: a receiver's fixes of any rate and noise level are not.
+track) is not called an estimate: a receiver's fixes of any rate and noise level are not. A
+scan-matching filter's poses can scatter like fixes; their source's name then tells (named_estimate:
+a topic or file of odometry, a pose, a filter, unless it names a receiver too).
 """
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -29,6 +32,8 @@ ALONG = 2.0          # along-track noise this many times the across-track: held 
 CHORD = 1.0          # s either side: the course the frame is turned to
 MOVING = 20.0        # a fix counts where the chord is this many noise sigmas long (the course is known)
 MIN_FIXES = 30       # moving fixes needed to tell
+ESTIMATOR = re.compile(r"odom|pose|locali[sz]|ekf|ukf|filter|fused|fusion|slam|amcl|estimat", re.IGNORECASE)
+RECEIVER = re.compile(r"gps|gnss|navsat|nmea|rtk|gga|fix|receiver", re.IGNORECASE)
 
 
 def _mad(a: np.ndarray) -> float:
@@ -86,3 +91,13 @@ def estimate_evidence(noise: dict | None) -> str | None:
         return (f"{said}: smooth both ways, no fix's own noise (a receiver's fixes carry white noise of "
                 f"{1000 * FLOOR:g} mm or more)")
     return None
+
+
+def named_estimate(source: str) -> str | None:
+    """Why a position column whose source is ``source`` (its file, topic, field) is an estimate by
+    its name (odometry, a pose, a filter; none that names a receiver too: a navsat transform's
+    odometry is a receiver's fixes), or None."""
+    word = ESTIMATOR.search(source or "")
+    if word is None or RECEIVER.search(source):
+        return None
+    return f"its source {source.split(' ')[0]!r} names an estimator ({word.group(0)!r})"
