@@ -118,12 +118,15 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
         c = fits[0][2]
         basis = (f"a {c.kind} like the declared one" if kind else
                  "no vehicle class declared: matched on the log's wheelbase alone")
-        return (f"studies/{c.name} (a {c.kind}, wheelbase {c.wheelbase:.3g} m, {c.length:g} x {c.width:g} m, "
-                f"{c.mass:.3g} kg; {basis}) is of the log's size: try --study studies/{c.name}")
+        return (f"studies/{c.name} (wheelbase {c.wheelbase:.3g} m), a {c.kind} of {c.length:g} x {c.width:g} m and "
+                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}")
+    near = min(shipped_vehicles(), key=lambda c: abs(math.log(log_wheelbase / c.wheelbase)))
+    passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
+              f"{unlike(near, log_wheelbase, declared, mass) or 'the study given'})")
     outline = (declared.length, declared.width) if declared is not None else (None, None)
     table = (f'class = "{kind or "..."}", wheelbase = {log_wheelbase:.3g}'
              + (", length = {:g}, width = {:g}".format(*outline) if all(outline) else ", length, width"))
-    return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size: if the study's "
+    return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: if the study's "
             f"wheelbase is the vehicle's, the steering map is the cause, else write a study with the log's "
             f"wheelbase {log_wheelbase:.3g} m (its plant's l_f + l_r) and its [vehicle] table ({table})")
 
@@ -146,12 +149,13 @@ def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, ma
     off in log ratio, or a mass more than MASS off (the outline and mass only where declared)."""
     if declared is not None and declared.kind and c.kind != declared.kind:
         return f"a {c.kind}, not a {declared.kind}"
-    pairs = [("wheelbase", log_wheelbase, c.wheelbase, SIZE)]
+    pairs = [("wheelbase", log_wheelbase, c.wheelbase, SIZE, "m", "the log's")]
     if declared is not None:
-        pairs += [("length", declared.length, c.length, SIZE), ("width", declared.width, c.width, SIZE)]
-    pairs.append(("mass", mass if declared is not None else None, c.mass, MASS))
-    return "; ".join(f"{what} {theirs:.3g} against {mine:.3g}" for what, mine, theirs, tol in pairs
-                     if mine and abs(math.log(mine / theirs)) > tol)
+        pairs += [("length", declared.length, c.length, SIZE, "m", "the declared"),
+                  ("width", declared.width, c.width, SIZE, "m", "the declared"),
+                  ("mass", mass, c.mass, MASS, "kg", "the study's")]
+    return "; ".join(f"of {what} {theirs:.3g} {unit} against {whose} {mine:.3g} {unit}"
+                     for what, mine, theirs, tol, unit, whose in pairs if mine and abs(math.log(mine / theirs)) > tol)
 
 
 @lru_cache(maxsize=1)
