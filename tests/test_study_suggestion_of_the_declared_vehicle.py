@@ -43,7 +43,7 @@ def test_a_small_robot_is_not_pointed_to_a_tractor_of_its_wheelbase(small_log):
     2.6 m long) is not a 120 kg robot: no study is suggested; the one to write is named."""
     mine, text = study_check(small_log, 0.9, "small.toml", 0.0, SMALL, SMALL_ACKERMANN["table"]["m"])
     assert mine["wheelbase"] == pytest.approx(1.27, rel=0.05)
-    assert "try --study" not in text and "figure8" not in text
+    assert "try --study" not in text and "studies/figure8.toml at 1.4 m, is a tractor, not a robot" in text
     assert "no shipped study is of a robot" in text and 'class = "robot"' in text
     assert "length = 1.9, width = 1.1" in text
 
