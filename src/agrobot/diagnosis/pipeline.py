@@ -431,7 +431,8 @@ def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None
     """A log too short or too still to judge still says what comes before any verdict: the log's turns
     not being the study's vehicle (study_check), the class's default outline (verdict.said_before)."""
     p = baseline.tractor
-    result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p))
+    result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p),
+                                                  baseline.vehicle, p.m)
     result["before_verdict"] = said_before([mismatch] if mismatch else [],
                                            VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0), result["log_vehicle"])
 
@@ -442,7 +443,8 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
     (``identified_vehicle``; on the ``wheelbase`` given with the recording, else the study's)."""
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
-                                                  study_name, study_understeer(baseline.tractor))
+                                                  study_name, study_understeer(baseline.tractor),
+                                                  None if default_study else baseline.vehicle, baseline.tractor.m)
     if mismatch:
         mismatch += " (no --study given: the default study was used)" if default_study else ""
         say(f"warning: {mismatch}")

@@ -1,25 +1,31 @@
 """Is the study this log's vehicle? The log's own kinematics give its wheelbase, L = v tan(delta) / r
 - K v^2 in steady turning inside the tyres' linear range (selected on the steering input as well as
-the yaw rate: a saturating tyre's turns would lengthen it), and its speed and steering ranges; they are compared with the study's wheelbase, and with the shipped studies, so that a log
-diagnosed against the default study (a tractor) says when it comes from another vehicle.
+the yaw rate: a saturating tyre's turns would lengthen it), and its speed and steering ranges; they are
+compared with the study's wheelbase, so that a log diagnosed against another vehicle's study says so,
+and with the shipped studies: one is suggested only when it is of the declared vehicle's class and
+size (wheelbase, outline, mass), else the study to write is named.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from agrobot.identification.ordinary_driving import study_plant
 from agrobot.identification.steady_state import held_input
-from agrobot.orchestrator.study import load_study
+from agrobot.identification.vehicle import Vehicle
+from agrobot.orchestrator.study import StudyError, load_study
 from agrobot.studies import shipped
 
-CANDIDATES = ("figure8.toml", "passenger_car.toml", "f1tenth.toml")
 STEADY = 0.5                 # s the steering input is held before a turn's sample counts as steady
 LINEAR_LATERAL = 2.0         # m/s2 (0.2 g): a steady turn below it is in any tyre's linear range
 MIN_TURNS = 15               # samples of steady linear turning needed to read a wheelbase
 MISMATCH = math.log(1.3)     # the log's turns and the study's wheelbase more than 30 % apart: named before any verdict
 SIZE = math.log(1.3)         # a shipped study is suggested only for a vehicle of its size: within 30 % of the log's
+                             # wheelbase and of the declared length and width
+MASS = math.log(2.0)         # and within a factor 2 of the declared mass (a class's masses spread wider than its lengths)
 
 
 def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
@@ -73,10 +79,13 @@ def log_vehicle(frame, wheelbase: float | None = None, understeer: float = 0.0) 
                                                              float(np.percentile(turns["v"], 90))]}
 
 
-def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.0) -> tuple[dict | None, str | None]:
-    """(the log's vehicle, a warning naming the shipped study that fits better) when its
-    wheelbase is off the study's by more than MISMATCH in log ratio; (vehicle, None) otherwise.
-    ``understeer``: the study's K [rad/(m/s2)], allowed for in each turn."""
+def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.0,
+                declared: Vehicle | None = None, mass: float | None = None) -> tuple[dict | None, str | None]:
+    """(the log's vehicle, a warning) when its wheelbase is off the study's by more than MISMATCH in
+    log ratio, naming a shipped study of the declared vehicle's class and size (suggestion) or,
+    when none is, what study to write; (vehicle, None) otherwise. ``understeer``: the study's K
+    [rad/(m/s2)], allowed for in each turn; ``declared``: the study's [vehicle] table, ``mass``
+    [kg] its plant's (None: no vehicle declared, a study matched on the log's wheelbase alone)."""
     mine = log_vehicle(frame, wheelbase, understeer)
     if mine is not None:
         mine |= {"study_wheelbase": float(wheelbase), "linear_lateral": LINEAR_LATERAL}
@@ -85,11 +94,6 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
     off = abs(math.log(mine["wheelbase"] / wheelbase))
     if off <= MISMATCH:
         return mine, None
-    fits = []
-    for name in CANDIDATES:
-        _, p = study_plant(load_study(shipped(name)))
-        fits.append((abs(math.log(mine["wheelbase"] / (p.l_f + p.l_r))), name, p.l_f + p.l_r))
-    best = min(fits)
     ratio = wheelbase / mine["wheelbase"]
     text = (f"the log's turns are not the study's vehicle: wheelbase {mine['wheelbase']:.3g} m from "
             f"v tan({mine['from']}) / yaw_rate in {mine['samples']} samples of steady turns under "
@@ -99,11 +103,75 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
             f"{wheelbase:.3g} m ({100 * (ratio - 1):+.0f} %): either the study is another vehicle, or its steering "
             f"map is off (the wheels turn {ratio:.2g} x the angle the log says; the steering_gain the verdict "
             f"judges tells)")
-    if best[0] <= SIZE and best[1] != study_name:
-        text += f"; studies/{best[1]} (wheelbase {best[2]:.3g} m) is of the log's size: try --study studies/{best[1]}"
-    else:
-        text += (f"; no shipped study is of the log's size (nearest studies/{best[1]}, {best[2]:.3g} m): if the "
-                 f"study's wheelbase is the vehicle's, the steering map is the cause, else write a study with its "
-                 f"[vehicle] table")
+    text += "; " + suggestion(mine["wheelbase"], study_name, declared, mass)
     mine["mismatch"] = text
     return mine, text
+
+
+def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, mass: float | None) -> str:
+    """The shipped study to try for a log of wheelbase ``log_wheelbase`` whose study declares
+    ``declared`` and ``mass``: the nearest in wheelbase of those not unlike it, else what to write."""
+    kind = declared.kind if declared is not None else None
+    fits = sorted((abs(math.log(log_wheelbase / c.wheelbase)), c.name, c) for c in shipped_vehicles()
+                  if c.name != study_name and not unlike(c, log_wheelbase, declared, mass))
+    if fits:
+        c = fits[0][2]
+        basis = (f"a {c.kind} like the declared one" if kind else
+                 "no vehicle class declared: matched on the log's wheelbase alone")
+        return (f"studies/{c.name} (wheelbase {c.wheelbase:.3g} m), a {c.kind} of {c.length:g} x {c.width:g} m and "
+                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}")
+    near = min(shipped_vehicles(), key=lambda c: abs(math.log(log_wheelbase / c.wheelbase)))
+    passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
+              f"{unlike(near, log_wheelbase, declared, mass) or 'the study given'})")
+    outline = (declared.length, declared.width) if declared is not None else (None, None)
+    table = (f'class = "{kind or "..."}", wheelbase = {log_wheelbase:.3g}'
+             + (", length = {:g}, width = {:g}".format(*outline) if all(outline) else ", length, width"))
+    return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: if the study's "
+            f"wheelbase is the vehicle's, the steering map is the cause, else write a study with the log's "
+            f"wheelbase {log_wheelbase:.3g} m (its plant's l_f + l_r) and its [vehicle] table ({table})")
+
+
+@dataclass(frozen=True)
+class ShippedVehicle:
+    """A shipped study's vehicle: its [vehicle] table's class and outline, its plant's wheelbase and mass."""
+
+    name: str
+    kind: str
+    wheelbase: float
+    length: float
+    width: float
+    mass: float
+
+
+def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, mass: float | None) -> str:
+    """Why shipped vehicle ``c`` is not the declared vehicle of wheelbase ``log_wheelbase`` ('' when
+    it is): another class than the declared one, or a wheelbase, length or width more than SIZE
+    off in log ratio, or a mass more than MASS off (the outline and mass only where declared)."""
+    if declared is not None and declared.kind and c.kind != declared.kind:
+        return f"a {c.kind}, not a {declared.kind}"
+    pairs = [("wheelbase", log_wheelbase, c.wheelbase, SIZE, "m", "the log's")]
+    if declared is not None:
+        pairs += [("length", declared.length, c.length, SIZE, "m", "the declared"),
+                  ("width", declared.width, c.width, SIZE, "m", "the declared"),
+                  ("mass", mass, c.mass, MASS, "kg", "the study's")]
+    return "; ".join(f"of {what} {theirs:.3g} {unit} against {whose} {mine:.3g} {unit}"
+                     for what, mine, theirs, tol, unit, whose in pairs if mine and abs(math.log(mine / theirs)) > tol)
+
+
+@lru_cache(maxsize=1)
+def shipped_vehicles() -> tuple[ShippedVehicle, ...]:
+    """One study per distinct vehicle among the shipped studies with a [vehicle] table and a yaw
+    plant (of those of one vehicle, the shortest name: figure8.toml for the paper's tractor)."""
+    out: dict[tuple, ShippedVehicle] = {}
+    for path in sorted(shipped().glob("*.toml"), key=lambda p: (len(p.name), p.name)):
+        study = load_study(path)
+        vehicle = Vehicle.of(study)
+        if not vehicle.kind or not study.section("vehicle") or not vehicle.length or not vehicle.width:
+            continue
+        try:
+            _, p = study_plant(study)
+        except StudyError:                        # no yaw plant (a hardware layout, an emulator): no vehicle to fit
+            continue
+        c = ShippedVehicle(path.name, vehicle.kind, p.l_f + p.l_r, vehicle.length, vehicle.width, p.m)
+        out.setdefault((c.kind, round(c.wheelbase, 3), c.length, c.width, round(c.mass, 1)), c)
+    return tuple(out.values())

@@ -52,7 +52,8 @@ Kinds:
 - ``mislabelled_channel``: a "gyro" whose mean is g, a gyro/accelerometer pair swapped, an
   "angle" that is a rate;
 - ``ambiguous_channel``: two plausible sources of one quantity that disagree;
-- ``position_is_estimate``: x, y from a localisation or odometry, not a receiver's fixes;
+- ``position_is_estimate``: x, y from a localisation or odometry, not a receiver's fixes: their
+  noise held to the course or absent (measurements.position_source);
 - ``gap_bridged``: a channel's gaps up to ``--max-gap`` bridged (linear; held for a command);
 - ``gap_split``: a channel's gaps longer than ``--max-gap`` (they split the log);
 - ``clock_jump``: a file's clock stepped (measurements.time_base; an offset of the date's leap
@@ -80,6 +81,7 @@ from .findings import finding
 from .imu_axes import axis_findings
 from .log import CANONICAL, LogError
 from .options import ImportOptions
+from .position_source import estimate_evidence, named_estimate, track_noise
 from .streams import Streams, gnss_speed
 from .time_base import LEAP_TOLERANCE, gps_minus_utc, leap_meaning
 
@@ -836,17 +838,24 @@ def held_findings(report: dict) -> list[dict]:
 
 
 def position_estimate(aud: Auditor, report: dict) -> list[dict]:
-    """x, y given as columns (a localisation, odometry), not the receiver's fixes."""
+    """x, y given as columns whose noise says they are an estimate (a localisation, odometry), not
+    a receiver's fixes (measurements.position_source: a receiver's noise is the same across the
+    track as along it; an estimate's is held to the course, or absent), or whose source's name
+    says so (an odometry, a pose, a filter)."""
     sig = aud.streams.signals
     if aud.streams.gnss is not None or not {"x", "y"} <= set(sig):
         return []
     t, x = sig["x"]
     y = np.interp(t, *sig["y"])
-    jump = float(np.max(np.hypot(np.diff(x), np.diff(y)))) if len(t) > 1 else 0.0
     how = report.get("columns", {}).get("x", "x")
+    why = (estimate_evidence(track_noise(np.asarray(t, float), np.asarray(x, float), np.asarray(y, float)))
+           or named_estimate(how))
+    if why is None:
+        return []
+    jump = float(np.max(np.hypot(np.diff(x), np.diff(y)))) if len(t) > 1 else 0.0
     return [finding("position_is_estimate", ["x", "y"], jump, None, "m",
-                    f"x, y come from {how}: an estimate (localisation, odometry), not a receiver's fixes; its "
-                    f"largest step is {jump:.3g} m; a lever arm or a GNSS latency cannot be judged on it",
+                    f"x, y come from {how}: an estimate (localisation, odometry), not a receiver's fixes ({why}); "
+                    f"its largest step is {jump:.3g} m; a lever arm or a GNSS latency cannot be judged on it",
                     resolved=False)]
 
 
