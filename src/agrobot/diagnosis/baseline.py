@@ -2,7 +2,8 @@
 
 The steering enters the replay as its closed-loop first-order equivalent
 (components.models.steering_equivalent), the yaw dynamics as the study's plant model at the
-measured speed; every effect of the catalogue reads its own parameters' baseline values
+measured speed, driven by the wheel angle or its tangent (the plant's ``steering_geometry``,
+components.tractor_yaw_plant.steer_input); every effect of the catalogue reads its own parameters' baseline values
 (diagnosis.effect). Components are found by their declared roles.
 """
 from __future__ import annotations
@@ -39,6 +40,8 @@ class Baseline:
     values: dict[str, float] = field(default_factory=dict)
     study: BaselineStudy | None = None
     vehicle: Vehicle = field(default_factory=Vehicle)
+    steering_geometry: str = "w"                # the plant's: "w" (delta drives the yaw model) or "tan"
+    geometry_declared: bool = False             # the study sets steering_geometry itself
 
 
 def baseline_from_study(study: Study) -> Baseline:
@@ -61,7 +64,10 @@ def baseline_from_study(study: Study) -> Baseline:
               "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
-    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))
+    spec = study.components.get(found["yaw_plant"])
+    declared = spec is not None and "steering_geometry" in spec.parameters
+    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study),
+                    str(tp.get("steering_geometry", "w")), declared)
 
 
 def widened_ranges(params, values) -> dict[str, Parameter]:
