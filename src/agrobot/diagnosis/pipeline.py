@@ -205,7 +205,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbas
                            for k, q in rep["parameters"].items()},
             "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None,
             "shared": identify_side(rep), "steering_geometry": rep.get("steering_geometry"),
-            "steering_geometry_note": identify_note(rep.get("notes"))}
+            "steering_geometry_note": identify_note(rep)}
     return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
             "physical_checks": rep.get("physical_checks", {})}
 

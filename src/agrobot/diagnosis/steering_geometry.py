@@ -28,12 +28,13 @@ def fixed_geometry(option: str, baseline) -> tuple[str | None, str]:
     return None, ""
 
 
-def identify_note(notes) -> str:
-    """identify's own line on the geometry (its yaw RMS under both), without its prefix; '' if none."""
-    for note in notes or ():
+def identify_note(report: dict) -> str:
+    """Why identify's report chose its geometry: its own line on it (its yaw RMS under both, without
+    the prefix), the kinematic regime's model, or ''."""
+    for note in report.get("notes") or ():
         if note.startswith("steering geometry:"):
             return note.removeprefix("steering geometry:").strip()
-    return ""
+    return "the kinematic regime, whose model is r = v tan(delta) / L" if report.get("final_model") == "kinematic" else ""
 
 
 def geometry_choice(baseline, fixed: str | None, source: str, identified: str | None, why: str = "") -> dict:
@@ -43,12 +44,15 @@ def geometry_choice(baseline, fixed: str | None, source: str, identified: str | 
     if fixed is not None:
         value, origin = fixed, source
     elif identified in ("w", "tan"):
-        value, origin = identified, "identify on this log" + (f" ({why})" if why else "")
+        value, origin = identified, "as identify chose on this log" + (f": {why}" if why else "")
     else:
         value, origin = default, "the study's default (identify did not choose one)"
     other = "w" if value == "tan" else "tan"
-    says = (f"steering geometry: the yaw model is driven by {SHOWN[value]} ({origin}); passed over: {SHOWN[other]}"
-            f"{' (the study default)' if other == default and fixed is None else ''}; {SETS}")
+    if fixed is None and identified in ("w", "tan") and "passed over" in why:     # identify's line says both
+        says = f"steering geometry: the diagnosis's yaw model {origin} (or the study's yaw plant steering_geometry)"
+    else:
+        says = (f"steering geometry: the yaw model is driven by {SHOWN[value]} ({origin}); passed over: "
+                f"{SHOWN[other]}{' (the study default)' if other == default and fixed is None else ''}; {SETS}")
     return {"value": value, "from": origin, "passed_over": other, "says": says}
 
 
