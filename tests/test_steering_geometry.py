@@ -17,7 +17,7 @@ import pytest
 
 from agrobot.components.tractor_yaw_plant import MAX_TAN_ANGLE, TractorYawPlant, steer_input
 from agrobot.diagnosis.pipeline import diagnose
-from agrobot.diagnosis.steering_geometry import fixed_geometry
+from agrobot.diagnosis.baseline import fixed_geometry
 from agrobot.orchestrator.build import build_system
 from agrobot.orchestrator.engine import Simulation
 from agrobot.orchestrator.resolver import resolve

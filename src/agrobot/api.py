@@ -231,7 +231,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     candidate fits (default: every core; the result is the same whatever their number). ``screen``: False
     fits every pair of effects, also those the linearised screen rules out (diagnosis.screen).
     ``steering_geometry``: the yaw model driven by the wheel angle ("w") or its tangent ("tan"); "auto":
-    the study's, else the one identify chooses (diagnosis.steering_geometry)."""
+    the study's, else the one identify chooses (diagnosis.baseline.geometry_choice)."""
     from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnosis
 

@@ -24,7 +24,8 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
-from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
+from .baseline import (baseline_from_study, fixed_geometry, geometry_choice, identify_note, refit_statement,
+                       refit_summary, replay_slip_share, with_geometry)
 from .candidates import CannotDecide, FitResult, Replay, uncertain
 from .effects.tyre_saturation import friction_text
 from .catalogue import DISPLAY, SIGNALS, shown
@@ -36,7 +37,6 @@ from .selection import Finding
 from .shared_quantities import diagnosis_side, identify_side, shared_quantities
 from .unexplained import RATIO, signature, stage_check
 from .plausibility import VehicleContext, kinematic, steering_gain_check, study_understeer, understeer
-from .steering_geometry import fixed_geometry, geometry_choice, identify_note, with_geometry
 from .study_fit import study_check
 from .verdict import audit_findings, conclude, said_before
 
@@ -352,7 +352,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     part, every third window, or chosen by the log's conditions); ``workers``: processes for the candidate
     fits (diagnosis.parallel_fits; None: every core), the result the same whatever their number; ``screen``:
     pairs of effects whose linearised gain cannot be supported are not fitted (diagnosis.screen);
-    ``steering_geometry``: auto, w or tan (diagnosis.steering_geometry)."""
+    ``steering_geometry``: auto, w or tan (diagnosis.baseline.fixed_geometry)."""
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
