@@ -233,10 +233,11 @@ class YawReplay:
             return replay_kernels.zoh_stack(A, B, self.h)
         return zoh_discretize(A, B, self.h)
 
-    def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
+    def response_to(self, u: np.ndarray, v: Mapping[str, float], through_geometry: bool = True) -> np.ndarray:
+        """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m);
+        ``through_geometry`` False: u is the dynamics' input itself (a static map's basis)."""
         system = self._discrete(*nonlinear(yaw_plant(v)))
-        u = np.column_stack([self.steer(col) for col in np.asarray(u, float).T])
+        u = np.column_stack([self.steer(col) if through_geometry else midpoints(col) for col in np.asarray(u, float).T])
         return self._recursion([system], [0] * u.shape[1], [u], (1,))[0, :, 0, :]
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
