@@ -7,7 +7,9 @@
  * and the pose at the CG by the midpoint rule; below min_speed the slip equations use min_speed
  * and the yaw rate is scaled by v / min_speed. Extensions: steer_angle_offset, cornering speed
  * slope, side slope (a lateral acceleration into dv_y/dt; the roll and pitch it gives, models/terrain.py),
- * antenna lever arm with its height turned by the roll and pitch. */
+ * antenna lever arm with its height turned by the roll and pitch. Steering geometry: with STEER_TAN
+ * the dynamics are driven by tan(delta), delta clipped to +-MAX_TAN_ANGLE (the turn without slip
+ * v tan(delta) / L; tractor_yaw_plant.steer_input). */
 #if YAW_MODEL == 3
 #define NS TF_ORDER
 #else
@@ -143,6 +145,9 @@ static void model_sample(ModelState *st, const double *p, const double *in, doub
     model_outputs(st, p, out);
     /* step over [t_k, t_k+1) with the inputs of t_k */
     double h = MODEL_PERIOD, speed_in = in[IN_speed], delta = in[IN_steer_angle] + p[P_steer_angle_offset];
+#if STEER_TAN
+    delta = tan(delta > MAX_TAN_ANGLE ? MAX_TAN_ANGLE : (delta < -MAX_TAN_ANGLE ? -MAX_TAN_ANGLE : delta));
+#endif
     double vmin = p[P_min_speed], speed = fabs(speed_in), v_eff = speed >= vmin ? speed : vmin;
     double low = speed >= vmin ? 1.0 : speed / vmin, res = p[P_speed_cache_resolution];
     double vq = nearbyint(v_eff / res) * res;

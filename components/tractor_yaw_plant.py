@@ -30,6 +30,18 @@ and ``tyre_friction`` with ``tyre_shape`` (tyre saturation: each axle's force fo
 Magic Formula of models.tyre instead of C alpha; physical models only; integrated by Rosenbrock
 sub-steps of at most 2 ms instead of the matrix exponential).
 
+Steering geometry (``steering_geometry``): ``w`` (default) drives the dynamics by the wheel angle
+delta, the linear single-track model whose front slip is alpha_f = delta - (v_y + l_f gamma) / v_x;
+``tan`` by the equivalent angle tan(delta), alpha_f = tan(delta) - (v_y + l_f gamma) / v_x: the
+wheel's heading and its velocity's both taken as tangents, so a turn without slip (alpha_f = alpha_r
+= 0, v_y = l_r gamma) is the Ackermann one at any lock,
+
+    gamma = v_x tan(delta) / L,        and in a steady turn  gamma = v_x tan(delta) / (L + K v_x^2),
+
+while for small angles (tan delta = delta + delta^3 / 3) the model, and its linearisation about the
+straight line (d tan / d delta = 1 at 0), are the linear one. delta is clipped to +-MAX_TAN_ANGLE (as
+identification.driving.YawModel's wheel angle); the offset is added before the tangent.
+
 Terrain (models.terrain): the ground is the plane of ``slope_angle`` and ``slope_downhill_heading``,
 or the height grid of ``terrain_file``; at the CG it gives the tractor's roll and pitch (outputs)
 and the lateral pull a_lat = P . (-sin psi, cos psi) of the in-plane gravity P. The GPS antenna
@@ -59,7 +71,24 @@ from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllab
 
 MODELS = PHYSICAL_MODELS + ("transfer_function",)
 CHECKED_SPEEDS = (0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+STEERING_GEOMETRIES = ("w", "tan")     # the dynamics driven by delta, or by tan(delta) (the Ackermann turn)
+MAX_TAN_ANGLE = 1.3                    # rad: |delta| clipped there under "tan" (tan 1.3 = 3.6)
 
+
+def steer_input(delta, geometry: str = "w"):
+    """The angle driving the yaw dynamics: delta under "w", tan(delta) (delta clipped to
+    +-MAX_TAN_ANGLE) under "tan"; a float or an array as given."""
+    if geometry != "tan":
+        return delta
+    if isinstance(delta, float):
+        return math.tan(min(max(delta, -MAX_TAN_ANGLE), MAX_TAN_ANGLE))
+    return np.tan(np.clip(delta, -MAX_TAN_ANGLE, MAX_TAN_ANGLE))
+
+
+
+def _tan_defines(comp) -> str:
+    """STEER_TAN (1: the dynamics driven by tan(delta)) and MAX_TAN_ANGLE for the C core."""
+    return f"#define STEER_TAN {int(comp.p['steering_geometry'] == 'tan')}\n#define MAX_TAN_ANGLE {MAX_TAN_ANGLE!r}\n"
 
 
 def _plant_compiled(comp, period: float) -> str:
@@ -69,11 +98,12 @@ def _plant_compiled(comp, period: float) -> str:
         A, B, C = controllable_canonical(comp.p["tf_num"], comp.p["tf_den"])
         n = A.shape[0]
         return (f"#define YAW_MODEL 3\n#define TF_ORDER {n}\nstatic const double TF_A[{n * n}] = {{{c_array(A)}}};\n"
-                f"static const double TF_B[{n}] = {{{c_array(B)}}};\nstatic const double TF_C[{n}] = {{{c_array(C)}}};\n")
+                f"static const double TF_B[{n}] = {{{c_array(B)}}};\nstatic const double TF_C[{n}] = {{{c_array(C)}}};\n"
+                + _tan_defines(comp))
     if model not in PHYSICAL_MODELS:
         raise NoCCore(f"model = {model!r} has no C form (its core covers {', '.join(PHYSICAL_MODELS)} and "
                       f"transfer_function)")
-    return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n"
+    return f"#define YAW_MODEL {PHYSICAL_MODELS.index(model)}\n" + _tan_defines(comp)
 
 
 def _plant_values(comp) -> dict[str, float]:
@@ -178,7 +208,7 @@ class TractorYawPlant(Component):
     roles = ("yaw_plant",)
     c_core = CoreDescription(Path(__file__).with_suffix(".c"), _plant_compiled,     # its C model core, beside this file
                              ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
-                              "cornering_scale_rear"), ("terrain_file", "tyre_friction", "tyre_shape"), _plant_values)
+                              "cornering_scale_rear", "steering_geometry"), ("terrain_file", "tyre_friction", "tyre_shape"), _plant_values)
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),
@@ -203,6 +233,8 @@ class TractorYawPlant(Component):
         par("psi0", "rad", 0.0, "initial heading (from east, counter-clockwise)"),
         par("speed_cache_resolution", "m/s", 1e-3, "speeds closer than this share one discretisation"),
         par("steer_angle_offset", "rad", 0.0, "extension: tyres see steer_angle + offset"),
+        par("steering_geometry", "", "w", "the dynamics driven by the wheel angle delta ('w') or by tan(delta) "
+            "('tan': the turn without slip is v tan(delta) / L at any lock)"),
         par("cornering_speed_slope", "s/m", 0.0, "extension: C_f, C_r x (1 + k (v_x - v_ref))"),
         par("cornering_reference_speed", "m/s", 2.0, "extension: v_ref of the cornering scaling"),
         par("slope_angle", "rad", 0.0, "extension: side slope of the field plane"),
@@ -291,6 +323,9 @@ class TractorYawPlant(Component):
         self._lever = (p["antenna_forward"], p["antenna_left"], p["antenna_height"])
         self._arms = (self.params.l_r, self._lever[0], self._lever[1])     # the level step's lever arms
         self._offset = float(p["steer_angle_offset"])
+        self.require(p["steering_geometry"] in STEERING_GEOMETRIES,
+                     f"parameter steering_geometry={p['steering_geometry']!r}; expected one of {STEERING_GEOMETRIES}")
+        self._geometry = p["steering_geometry"]
         # level ground with linear tyres: the step of ``_level_step`` (pull, roll and pitch stay as set here)
         self._level = not (self._slope or self._saturation)
         self._affine = _AFFINE.get(n, _affine_held)
@@ -449,7 +484,7 @@ class TractorYawPlant(Component):
 
     def step(self, t: float, dt: float) -> None:
         v = float(self.u["speed"])
-        delta = float(self.u["steer_angle"]) + self._offset
+        delta = steer_input(float(self.u["steer_angle"]) + self._offset, self._geometry)
         if self._level:
             self._level_step(v, delta, dt)
             return

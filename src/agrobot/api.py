@@ -218,7 +218,7 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
              resample: bool = False, recording=None, plots: bool = True, progress=None,
              identify: bool = True, split: str = "auto", overwrite: bool = False, mcap: bool = False,
              where: str | None = None, keep_unexplained: bool = False, workers: int | None = None,
-             screen: bool = True) -> Diagnosis:
+             screen: bool = True, steering_geometry: str = "auto") -> Diagnosis:
     """Name what the simulation of ``study`` (a study file or a shipped study's name; default
     figure8) gets wrong about a measured log. Without ``out`` nothing is written; with it (checked
     before anything is computed), diagnosis.json, report.md, the figures and extended_study.toml go
@@ -229,7 +229,9 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
     driven beyond the first's conditions). ``mcap``: diagnosis.mcap too. ``where``/``keep_unexplained``:
     the stretches judged (measurements.modes, the ``--where`` option). ``workers``: processes for the
     candidate fits (default: every core; the result is the same whatever their number). ``screen``: False
-    fits every pair of effects, also those the linearised screen rules out (diagnosis.screen)."""
+    fits every pair of effects, also those the linearised screen rules out (diagnosis.screen).
+    ``steering_geometry``: the yaw model driven by the wheel angle ("w") or its tangent ("tan"); "auto":
+    the study's, else the one identify chooses (diagnosis.baseline.geometry_choice)."""
     from agrobot.diagnosis.candidates import SPLITS
     from agrobot.diagnosis.pipeline import diagnosis
 
@@ -239,6 +241,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         raise StudyError(f"split {split!r}: expected one of {', '.join(SPLITS)}")
     if workers is not None and (not isinstance(workers, int) or workers < 1):
         raise StudyError(f"--workers {workers!r}: expected a whole number of processes, at least 1")
+    if steering_geometry not in ("auto", "w", "tan"):
+        raise StudyError(f"--steering-geometry {steering_geometry}: expected auto, w or tan")
     baseline = None if study is None else load(study)
     recording = _stretches(recording, where, keep_unexplained)
     inputs = [log, getattr(recording, "dbc", None), *study_inputs(baseline)]
@@ -246,7 +250,8 @@ def diagnose(log, study=None, out: str | Path | None = None, *, fit_fraction: fl
         Diagnosis.check(out, overwrite, inputs)
     found, write = diagnosis(log, None if baseline is None else baseline.path, fit_fraction, min_gain, plots=plots,
                              resample=resample, recording=recording, progress=progress, identify=identify,
-                             mcap=mcap, split=split, workers=workers, screen=screen)
+                             mcap=mcap, split=split, workers=workers, screen=screen,
+                             steering_geometry=steering_geometry)
     result = Diagnosis(found, None, write, inputs)
     if out is not None:
         result.save(out, overwrite)

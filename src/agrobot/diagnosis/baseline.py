@@ -2,13 +2,16 @@
 
 The steering enters the replay as its closed-loop first-order equivalent
 (components.models.steering_equivalent), the yaw dynamics as the study's plant model at the
-measured speed; every effect of the catalogue reads its own parameters' baseline values
-(diagnosis.effect). Components are found by their declared roles.
+measured speed, driven by the wheel angle or its tangent (the plant's ``steering_geometry``,
+components.tractor_yaw_plant.steer_input: the ``--steering-geometry`` option, else the study's
+own, else the one ``identify`` chose on the same log, tan in the kinematic regime, else w; said
+with what it passed over); every effect of the catalogue reads its own parameters' baseline
+values (diagnosis.effect). Components are found by their declared roles.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +42,8 @@ class Baseline:
     values: dict[str, float] = field(default_factory=dict)
     study: BaselineStudy | None = None
     vehicle: Vehicle = field(default_factory=Vehicle)
+    steering_geometry: str = "w"                # the plant's: "w" (delta drives the yaw model) or "tan"
+    geometry_declared: bool = False             # the study sets steering_geometry itself
 
 
 def baseline_from_study(study: Study) -> Baseline:
@@ -61,7 +66,10 @@ def baseline_from_study(study: Study) -> Baseline:
               "cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
     for effect in CATALOGUE:
         values.update(effect.baseline(view))
-    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study))
+    spec = study.components.get(found["yaw_plant"])
+    declared = spec is not None and "steering_geometry" in spec.parameters
+    return Baseline(study.path, found, tp["model"], TractorParameters.of(tp), values, view, Vehicle.of(study),
+                    str(tp.get("steering_geometry", "w")), declared)
 
 
 def widened_ranges(params, values) -> dict[str, Parameter]:
@@ -173,3 +181,53 @@ def refit_statement(summary: list[dict]) -> str:
                  + ", ".join(f"{r['name']} on its {r['at_bound']} bound {r['bounds'][r['at_bound'] == 'upper']:.3g}"
                              for r in edge))
     return text
+
+
+GEOMETRIES = ("auto", "w", "tan")
+SHOWN = {"w": "delta", "tan": "tan(delta)"}
+SETS = "--steering-geometry w|tan or the study's yaw plant steering_geometry sets it"
+
+
+def fixed_geometry(option: str, baseline) -> tuple[str | None, str]:
+    """(geometry or None, where from): the option's when not auto, else the study's when it declares
+    one; None leaves it to identify (or the plant's default)."""
+    if option not in GEOMETRIES:
+        raise ValueError(f"--steering-geometry {option!r}: expected one of {', '.join(GEOMETRIES)}")
+    if option != "auto":
+        return option, f"--steering-geometry {option}"
+    if baseline.geometry_declared:
+        return baseline.steering_geometry, f"the study's yaw plant steering_geometry = {baseline.steering_geometry!r}"
+    return None, ""
+
+
+def identify_note(report: dict) -> str:
+    """Why identify's report chose its geometry: its own line on it (its yaw RMS under both, without
+    the prefix), the kinematic regime's model, or ''."""
+    for note in report.get("notes") or ():
+        if note.startswith("steering geometry:"):
+            return note.removeprefix("steering geometry:").strip()
+    return "the kinematic regime, whose model is r = v tan(delta) / L" if report.get("final_model") == "kinematic" else ""
+
+
+def geometry_choice(baseline, fixed: str | None, source: str, identified: str | None, why: str = "") -> dict:
+    """{value, from, passed_over, says}: ``fixed`` (from ``source``) if given, else ``identified``
+    (identify's, ``why`` its reason), else the baseline's."""
+    default = baseline.steering_geometry
+    if fixed is not None:
+        value, origin = fixed, source
+    elif identified in ("w", "tan"):
+        value, origin = identified, "as identify chose on this log" + (f": {why}" if why else "")
+    else:
+        value, origin = default, "the study's default (identify did not choose one)"
+    other = "w" if value == "tan" else "tan"
+    if fixed is None and identified in ("w", "tan") and "passed over" in why:     # identify's line says both
+        says = f"steering geometry: the diagnosis's yaw model {origin} (or the study's yaw plant steering_geometry)"
+    else:
+        says = (f"steering geometry: the yaw model is driven by {SHOWN[value]} ({origin}); passed over: "
+                f"{SHOWN[other]}{' (the study default)' if other == default and fixed is None else ''}; {SETS}")
+    return {"value": value, "from": origin, "passed_over": other, "says": says}
+
+
+def with_geometry(baseline, geometry: str):
+    """The baseline with its yaw model driven under ``geometry``."""
+    return baseline if geometry == baseline.steering_geometry else replace(baseline, steering_geometry=geometry)

@@ -192,7 +192,8 @@ class Replay:
         self.heading = heading_estimate(self.t, self.gps, self.gyro, self.speed) if has_track else np.zeros(n)
         if "yaw" in self.stages:
             self.yaw = YawReplay(self.baseline.yaw_model, self.baseline.tractor, self.h, self.delta, self.speed,
-                                 self.heading, min_speed=self.min_speed, kernel=self.kernel)
+                                 self.heading, min_speed=self.min_speed, kernel=self.kernel,
+                                 geometry=self.baseline.steering_geometry)
         L = int(round(self.window / self.h))
         starts = np.arange(0, len(self.t) - L + 1, L)
         rows = starts[:, None] + np.arange(L)[None, :]
@@ -376,7 +377,8 @@ class Replay:
         inputs = [self.delta if d is None else d for d in inputs]
         if getattr(self, "_saturated", None) is None:
             self._saturated = SaturatedYawReplay(self.baseline.yaw_model, self.baseline.tractor, self.t, self.h,
-                                                 inputs[0], self.speed, self.min_speed)
+                                                 inputs[0], self.speed, self.min_speed,
+                                                 geometry=self.baseline.steering_geometry)
         out = self._saturated.yaw_rates(sets, inputs)
         return [self.yaw.with_slope(rate, v) for rate, v in zip(out, sets)]
 

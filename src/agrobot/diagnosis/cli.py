@@ -35,6 +35,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="what is held out: the log's last part (tail, the --fit-fraction rest), every third 10 s "
                         "(blocks), or auto (default): blocks when the last part is driven beyond the first's conditions "
                         "(lateral acceleration or speed 1.5 x higher), said in the warnings")
+    p.add_argument("--steering-geometry", choices=("auto", "w", "tan"), default="auto",
+                   help="the yaw model driven by the wheel angle (w) or its tangent (tan: the turn without slip "
+                        "v tan(delta) / L); auto (default): the study's yaw plant steering_geometry if it sets one, "
+                        "else the one identify chooses on the log (w without --no-identify's identification)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="processes for the candidate fits (default: every core); the result is the same whatever N")
     p.add_argument("--no-screen", action="store_true",
@@ -54,7 +58,8 @@ def run(args: argparse.Namespace) -> int:
     result = diagnose(args.log, args.study, args.out, fit_fraction=args.fit_fraction, min_gain=args.min_gain,
                       plots=not args.no_plots, resample=args.resample, recording=recording_options(args),
                       progress=timed_progress(), mcap=args.mcap, identify=not args.no_identify, split=args.split,
-                      overwrite=args.overwrite, workers=args.workers, screen=not args.no_screen).result
+                      overwrite=args.overwrite, workers=args.workers, screen=not args.no_screen,
+                      steering_geometry=args.steering_geometry).result
     if result.get("recording"):
         print(describe(result["recording"]))
     for note in result.get("before_verdict", []):

@@ -24,7 +24,8 @@ from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
-from .baseline import baseline_from_study, refit_statement, refit_summary, replay_slip_share
+from .baseline import (baseline_from_study, fixed_geometry, geometry_choice, identify_note, refit_statement,
+                       refit_summary, replay_slip_share, with_geometry)
 from .candidates import CannotDecide, FitResult, Replay, uncertain
 from .effects.tyre_saturation import friction_text
 from .catalogue import DISPLAY, SIGNALS, shown
@@ -171,13 +172,15 @@ def _unexplained(checks: dict) -> dict | None:
             "held_out_gain": ext["held_out_gain"], "by_stage": {c["stage"]: c for c in misfit}, "summary": summary}
 
 
-def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbase: float | None = None) -> dict:
+def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbase: float | None = None,
+                       geometry: str = "auto") -> dict:
     """The vehicle ``identify`` fits on this log (identification.ordinary_driving) beside the
     study's: understeer gradient K = (C_r l_r - C_f l_f) m / (C_f C_r L) (the same as (1/c_f -
     1/c_r)/g per unit load), cornering stiffnesses, delay; the identification's final model, its
     held-out fit and its independent estimates (identification.comparisons); ``unseen(t)``: the
     samples the diagnosis holds out, where both models are scored (held_out_misfit); ``wheelbase``:
-    the one given with the recording (--wheelbase), as ``identify`` takes it (wheelbase_of)."""
+    the one given with the recording (--wheelbase), as ``identify`` takes it (wheelbase_of); ``geometry``:
+    the steering geometry identify fits under (auto: its choice, in ``steering_geometry``)."""
     p = baseline.tractor
     L = p.l_f + p.l_r
     ours = {"understeer_gradient": study_understeer(p),
@@ -185,7 +188,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbas
             "delay": baseline.values.get("command_delay", 0.0), "wheelbase": L}
     try:
         require_causal(frame, where)              # identify refuses a response leading its input
-        rep = identify_driving(frame, where, study, wheelbase=wheelbase)
+        rep = identify_driving(frame, where, study, wheelbase=wheelbase, geometry=geometry)
     except (InputError, LogError) as exc:          # NotEnoughDriving is an InputError
         return {"study": ours, "identified": None, "why_not": str(exc)}
     tyre = rep["tyre_saturation"]
@@ -201,7 +204,8 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbas
             "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}
                            for k, q in rep["parameters"].items()},
             "held_out_yaw": held_out_misfit(rep, unseen) if unseen is not None else None,
-            "shared": identify_side(rep)}
+            "shared": identify_side(rep), "steering_geometry": rep.get("steering_geometry"),
+            "steering_geometry_note": identify_note(rep)}
     return {"study": ours, "identified": mine, "comparisons": rep.get("comparisons", []),
             "physical_checks": rep.get("physical_checks", {})}
 
@@ -324,11 +328,11 @@ def coarser_clock(frame):
 def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str | Path | None = None,
              fit_fraction: float = 0.6, min_gain: float = 0.05, plots: bool = True, resample: bool = False,
              recording=None, progress=None, identify: bool = True, mcap: bool = False, split: str = "auto",
-             workers: int | None = None, screen: bool = True) -> dict:
+             workers: int | None = None, screen: bool = True, steering_geometry: str = "auto") -> dict:
     """``diagnosis`` written into the existing folder ``out_dir`` when given (a caller that has
     already placed its output: the commands go through agrobot.api, which stages it)."""
     result, write = diagnosis(log_path, study_path, fit_fraction, min_gain, plots, resample, recording, progress,
-                              identify, mcap, split, workers, screen)
+                              identify, mcap, split, workers, screen, steering_geometry)
     if out_dir is not None:
         write(Path(out_dir))
     return result
@@ -338,7 +342,7 @@ def diagnose(log_path: str | Path, out_dir: str | Path | None, study_path: str |
 def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fraction: float = 0.6,
               min_gain: float = 0.05, plots: bool = True, resample: bool = False, recording=None, progress=None,
               identify: bool = True, mcap: bool = False, split: str = "auto", workers: int | None = None,
-              screen: bool = True):
+              screen: bool = True, steering_geometry: str = "auto"):
     """Run the diagnosis; returns (result, write), nothing written: ``write(folder)`` writes
     diagnosis.json and report.md (verdict ``cannot decide`` with the reason when the log cannot be
     used), and the figures and extended_study.toml. Raises nothing for a bad log; a ``--where``
@@ -347,7 +351,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     ``write`` adds diagnosis.mcap; ``split``: what is held out (diagnosis.candidates.SPLITS: the last
     part, every third window, or chosen by the log's conditions); ``workers``: processes for the candidate
     fits (diagnosis.parallel_fits; None: every core), the result the same whatever their number; ``screen``:
-    pairs of effects whose linearised gain cannot be supported are not fitted (diagnosis.screen)."""
+    pairs of effects whose linearised gain cannot be supported are not fitted (diagnosis.screen);
+    ``steering_geometry``: auto, w or tan (diagnosis.baseline.fixed_geometry)."""
     default_study = not study_path
     study_path = Path(study_path) if study_path else DEFAULT_STUDY
     result: dict = {"log": str(log_path), "study": str(study_path), "verdict": CANNOT_DECIDE, "effects": [],
@@ -363,9 +368,15 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         result["split_time"] = float("nan")
         return result, partial(_write, result=result, plots=[])
     say = progress or (lambda text: None)
+    fixed = fixed_geometry(steering_geometry, baseline)
+    baseline, replay = _under_geometry(baseline, replay, frame, fixed[0], fit_fraction, split)
     mismatch = _vehicle_of_log(result, replay, frame, study, baseline, study_path.name, default_study,
-                               identify, log_path, say, getattr(recording, "wheelbase", None))
+                               identify, log_path, say, getattr(recording, "wheelbase", None), fixed[0] or "auto")
     identified = result.get("identified_vehicle", {}).get("identified") or {}
+    choice = result["steering_geometry"] = geometry_choice(baseline, *fixed, identified.get("steering_geometry"),
+                                                           identified.get("steering_geometry_note", ""))
+    say(choice["says"])
+    baseline, replay = _under_geometry(baseline, replay, frame, choice["value"], fit_fraction, split)
     say(f"replaying {len(replay.t)} samples ({replay.t[-1] - replay.t[0]:.0f} s); stages {', '.join(replay.stages)}; "
         f"held out: {held_part(replay)}")
     if replay.split_note:
@@ -427,6 +438,15 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     return study, baseline, frame, replay, note
 
 
+def _under_geometry(baseline, replay, frame, geometry: str | None, fit_fraction: float, split: str):
+    """(baseline, replay) with the yaw model driven under ``geometry`` (None: as they are); replayed
+    again only when it changes."""
+    if geometry is None or geometry == baseline.steering_geometry:
+        return baseline, replay
+    baseline = with_geometry(baseline, geometry)
+    return baseline, Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
+
+
 def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None:
     """A log too short or too still to judge still says what comes before any verdict: the log's turns
     not being the study's vehicle (study_check), the class's default outline (verdict.said_before)."""
@@ -438,7 +458,7 @@ def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None
 
 
 def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_name: str, default_study: bool,
-                    identify: bool, log_path, say, wheelbase: float | None = None) -> str | None:
+                    identify: bool, log_path, say, wheelbase: float | None = None, geometry: str = "auto") -> str | None:
     """The log's own vehicle against the study's (``log_vehicle``; the mismatch warning returned, or
     None) and, with ``identify`` and a yaw stage, the vehicle identify fits on the log
     (``identified_vehicle``; on the ``wheelbase`` given with the recording, else the study's)."""
@@ -451,7 +471,7 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
         result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen,
-                                                            wheelbase)
+                                                            wheelbase, geometry)
     return mismatch
 
 

@@ -27,7 +27,8 @@ from scipy.integrate import cumulative_trapezoid
 from agrobot.components.models import steering_equivalent
 from agrobot.diagnosis import replay_kernels
 from agrobot.diagnosis.catalogue import CATALOGUE
-from agrobot.identification.driving import DrivingLog, Segments, YawModel
+from agrobot.components.tractor_yaw_plant import steer_input
+from agrobot.identification.driving import ACKERMANN, SMALL_ANGLE, DrivingLog, Segments, YawModel
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
                                             state_space, zoh_discretize)
@@ -107,14 +108,18 @@ class YawReplay:
     (a side slope with fall line psi_d and angle phi: s_east, s_north = g sin(phi) (cos, sin)(psi_d)).
     Simulations are cached on the parameters that enter nonlinearly (exact). ``kernel``
     (replay_kernels.KERNELS): the recursion and the hold's exponentials in C, or the Python reference
-    (blocked_recursion, zoh_discretize)."""
+    (blocked_recursion, zoh_discretize). ``geometry``: the plant's steering_geometry; under "tan" a wheel
+    angle drives the model as tan(delta) (tractor_yaw_plant.steer_input) and the offset's input is
+    its first-order share, d tan(delta) / d delta = 1 + tan(delta)^2."""
 
     def __init__(self, model: str, params: TractorParameters, h: float, delta: np.ndarray, v: np.ndarray,
-                 heading: np.ndarray, speed_grid: float = 0.02, min_speed: float = 0.3, kernel: str = "auto"):
-        self.model, self.params, self.h = model, params, h
+                 heading: np.ndarray, speed_grid: float = 0.02, min_speed: float = 0.3, kernel: str = "auto",
+                 geometry: str = "w"):
+        self.model, self.params, self.h, self.geometry = model, params, h, geometry
         self.kernel = replay_kernels.choose(kernel)
         psi = midpoints(heading)
-        self.inputs = np.column_stack([midpoints(delta), np.ones(len(delta)), np.cos(psi), -np.sin(psi)])
+        offset = np.ones(len(delta)) if geometry == "w" else midpoints(1.0 + steer_input(delta, geometry) ** 2)
+        self.inputs = np.column_stack([self.steer(delta), offset, np.cos(psi), -np.sin(psi)])
         self.bins = np.round(np.maximum(midpoints(v), min_speed) / speed_grid).astype(int)
         self.grid = speed_grid
         self.speeds = np.unique(self.bins) * speed_grid
@@ -122,6 +127,10 @@ class YawReplay:
         self._parts: list[np.ndarray] | None = None
         self._cache: dict[tuple, np.ndarray] = {}
         self._scales: dict[tuple[float, float], np.ndarray] = {}
+
+    def steer(self, delta: np.ndarray) -> np.ndarray:
+        """The input a wheel angle gives the recursion: midpoints of steer_input(delta)."""
+        return midpoints(steer_input(np.asarray(delta, float), self.geometry))
 
     def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0, steering: np.ndarray | None = None) -> np.ndarray:
@@ -144,7 +153,7 @@ class YawReplay:
             systems.append(self._discrete(*yaw))
             u = self.inputs
             if wide:
-                extra = np.zeros(len(u)) if steering is None else midpoints(np.asarray(steering, float))
+                extra = np.zeros(len(u)) if steering is None else self.steer(steering)
                 u = np.column_stack([u, extra])
             inputs.append(u)
         both = self._recursion(systems, columns, inputs, (1, 0))
@@ -224,10 +233,11 @@ class YawReplay:
             return replay_kernels.zoh_stack(A, B, self.h)
         return zoh_discretize(A, B, self.h)
 
-    def response_to(self, u: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m)."""
+    def response_to(self, u: np.ndarray, v: Mapping[str, float], through_geometry: bool = True) -> np.ndarray:
+        """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m);
+        ``through_geometry`` False: u is the dynamics' input itself (a static map's basis)."""
         system = self._discrete(*nonlinear(yaw_plant(v)))
-        u = np.column_stack([midpoints(col) for col in np.asarray(u, float).T])
+        u = np.column_stack([self.steer(col) if through_geometry else midpoints(col) for col in np.asarray(u, float).T])
         return self._recursion([system], [0] * u.shape[1], [u], (1,))[0, :, 0, :]
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:
@@ -247,7 +257,7 @@ class YawReplay:
         hit = self._cache.get(("input", id(delta)) + key)
         if hit is None or hit[0] is not delta:
             if key in self._cache:              # the four responses known: the input's alone
-                u = midpoints(np.asarray(delta, float))[:, None]
+                u = self.steer(delta)[:, None]
                 z = self._recursion([self._discrete(*yaw)], [0], [u], (1, 0))[0]
                 hit = (delta, z[:, 0, 0], z[:, 1, 0])
                 if len(self._cache) > 64:
@@ -401,7 +411,8 @@ class SaturatedYawReplay:
     model's response to it (its share of the lateral force is small beside the turn's)."""
 
     def __init__(self, model: str, params: TractorParameters, t: np.ndarray, h: float, delta: np.ndarray,
-                 v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0) -> None:
+                 v: np.ndarray, min_speed: float, piece: float = 2.0, burn_in: float = 1.0,
+                 geometry: str = "w") -> None:
         n = len(t)
         P, B = max(2, int(round(piece / h))), int(round(burn_in / h))
         rows = [(max(0, a - B), a, min(n, a + P)) for a in range(0, n, P)]
@@ -414,7 +425,8 @@ class SaturatedYawReplay:
         self.log = DrivingLog(np.asarray(t, float), np.asarray(delta, float), np.asarray(v, float), np.zeros(n),
                               np.zeros(n, int), h, "delta")
         segs = Segments(idx, np.ones_like(idx, bool), np.zeros(len(rows), bool))
-        self.model = YawModel(model, params, self.log, segs, max_substep=0.04, min_sim_speed=min_speed)
+        self.model = YawModel(model, params, self.log, segs, max_substep=0.04, min_sim_speed=min_speed,
+                              geometry=ACKERMANN if geometry == "tan" else SMALL_ANGLE)
         self.loads = self.model.loads
         self.params = params
 

@@ -146,7 +146,7 @@ def _yaw_input_map(replay, values: dict) -> tuple[float, np.ndarray, np.ndarray]
 
     def design(x):
         v = {**values, **dict(zip(names, x))}
-        return np.column_stack([np.ones(len(d)), replay.yaw.response_to(hats, v)])
+        return np.column_stack([np.ones(len(d)), replay.yaw.response_to(hats, v, through_geometry=False)])
 
     def fun(x):
         X = design(x)

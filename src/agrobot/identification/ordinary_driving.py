@@ -245,6 +245,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
         "final_model": "tyre_saturation" if saturation else "linear",
+        "steering_geometry": "tan" if fits.model.geometry == ACKERMANN else "w",
         "samples_per_second": 1 / log.h, "seconds_driven": driven,
         "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
                      "burn_in_s": BURN_IN, "min_speed": min_speed},
@@ -289,7 +290,7 @@ def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_
     if bias_info:
         params["gyro_bias"] = {**bias_info, "identifiable": True}
     return {"method": "kinematic model r = v tan(delta) / L, segments held out", "source": where, "model": "kinematic",
-            "input": input_name, "final_model": "kinematic", "samples_per_second": 1 / log.h, "seconds_driven": driven,
+            "input": input_name, "final_model": "kinematic", "steering_geometry": "tan", "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
                          "burn_in_s": BURN_IN, "min_speed": min_speed},
             "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},

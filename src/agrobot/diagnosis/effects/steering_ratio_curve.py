@@ -1,6 +1,11 @@
 """The steering ratio varies with the angle (a variable-ratio rack, Ackermann geometry read at
 one wheel, a nonlinear linkage): the wheels turn delta (1 + c delta^2) for a reading of delta,
-right in small turns and off in tight ones."""
+right in small turns and off in tight ones.
+
+The curvature c is relative to the baseline's steering geometry: the turned angle then drives the
+yaw model as the baseline's does (delta, or tan(delta) under steering_geometry "tan",
+components.tractor_yaw_plant.steer_input), so an Ackermann machine replayed under "tan" has c = 0
+and the cubic term of tan itself (c = 1/3 against "w") is not read as a ratio curve."""
 import copy
 from dataclasses import replace
 
@@ -21,7 +26,8 @@ class SteeringRatioCurve(Effect):
     threshold = "the ratio changes by >= 4 % at the log's 99th percentile of |delta|"
     hypothesis = "the steering ratio varies with the angle: the wheels turn more (or less) than the reading in tight turns"
     experiment = ("steady circles at walking speed at several wheel angles up to full lock: the kinematic "
-                  "yaw rate v tan(delta) / L against the gyro gives the ratio at each angle")
+                  "yaw rate v tan(delta) / L against the gyro gives the ratio at each angle (against the "
+                  "baseline's steering geometry)")
     imitated_by = ("scale_disagreement", "opposite_sign")
 
     def baseline(self, study):
