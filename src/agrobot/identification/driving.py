@@ -53,6 +53,10 @@ class NotEnoughDriving(InputError, ValueError):
     """The log holds too little driving to identify the yaw dynamics (the reason says how much more)."""
 
 
+class BadInputHold(InputError, ValueError):
+    """An input hold not among auto, zoh and linear."""
+
+
 AUTO, ZOH, LINEAR = "auto", "zoh", "linear"      # how the input is read between its samples (--input-hold)
 
 
@@ -209,7 +213,7 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     rows quantize a set-point's updates (each somewhere since the row before), and the linear ramp
     between rows is the expectation of a switch spread evenly over that interval."""
     if hold not in (AUTO, ZOH, LINEAR):
-        raise ValueError(f"input hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
+        raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
     if hold == ZOH:
         return True, (f"input {input_name} taken as held between its rows (--input-hold zoh: zero-order hold, the "
                       f"value at t - delay the row in force); --input-hold auto reads it linearly between rows")

@@ -169,12 +169,13 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
 
 @one_blas_thread
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
-                   course_speed: float | None = None, fit_seconds: float | None = None, geometry: str = "auto"):
+                   course_speed: float | None = None, fit_seconds: float | None = None, geometry: str = "auto",
+                   input_hold: str = "auto"):
     """(report, the figures' data): the ordinary-driving identification of a log
     (identification.ordinary_driving; a skid-steered vehicle's, identification.skid_steer), nothing written; the wheelbase given with ``recording``
     (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor, ``fit_seconds``:
-    the most of the segments fitted (None: their defaults); ``geometry``: the steering geometry
-    (ordinary_driving.identify_driving)."""
+    the most of the segments fitted (None: their defaults); ``geometry``: the steering geometry,
+    ``input_hold``: how the input is read between its rows (ordinary_driving.identify_driving)."""
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
@@ -189,7 +190,8 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
                                    f"every segment and needs a gyro, not a GNSS course)")
     else:
         report = identify_driving(frame, str(source), study, progress=say,
-                                  wheelbase=getattr(recording, "wheelbase", None), geometry=geometry, **more)
+                                  wheelbase=getattr(recording, "wheelbase", None), geometry=geometry,
+                                  input_hold=input_hold, **more)
     hidden = report.pop("_plot")
     if imported is not None:
         report["recording"] = imported
