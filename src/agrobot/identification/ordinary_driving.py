@@ -197,12 +197,11 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto",
-                     input_hold: str = "auto") -> dict:
+                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto", input_hold="auto"):
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
     Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
     steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry;
-    ``input_hold``: how the input is read between its samples (identification.driving.input_hold)."""
+    ``input_hold``: driving.input_hold."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)

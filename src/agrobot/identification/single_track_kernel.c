@@ -29,6 +29,10 @@
  * but the lag's) an earlier row of the call had reuses that row's steps (a Jacobian's columns for
  * the delay, lag, offset or gain).
  *
+ * A held input (phase given: zero-order hold) is stepped by simulate_row_held instead: each sample
+ * step in two pieces, w_j for phase_j h then w_j+1, through the lag exactly, the linear model with
+ * the lag's d as a state (held_step).
+ *
  * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
 #include <math.h>
 #include <stddef.h>
