@@ -97,12 +97,18 @@ class DrivingLog:
     update_times: np.ndarray | None = None     # the yaw measurement's own update times (None: every sample)
     kernel: np.ndarray | None = None           # the averaging a derived yaw rate applies (None: a gyro's)
     held: HeldInput | None = None              # a set-point input's updates (None: linear between samples)
+    sampled: np.ndarray | None = None          # (N, 2B + 1): the yaw measurement on samples i-B..i+B (yaw_sampling)
 
-    def as_measured(self, r: np.ndarray) -> np.ndarray:
-        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``)."""
-        if self.kernel is None:
+    def as_measured(self, r: np.ndarray, idx: np.ndarray | None = None) -> np.ndarray:
+        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``; ``sampled``:
+        on the samples ``idx`` (.., L), None: the whole log)."""
+        if self.kernel is not None:
+            r = convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
+        if self.sampled is None:
             return r
-        return convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
+        L, B = r.shape[-1], (self.sampled.shape[1] - 1) // 2
+        rows = self.sampled[np.arange(L) if idx is None else idx]          # (.., L, 2B + 1)
+        return sum(rows[..., o + B] * np.take(r, np.clip(np.arange(L) + o, 0, L - 1), axis=-1) for o in range(-B, B + 1))
 
     def updates_in(self, segs: "Segments", mask: np.ndarray | None = None) -> int | None:
         """How many of the yaw measurement's own updates fall on the scored samples (None: one
@@ -165,11 +171,9 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     dt = np.diff(t)
     step = float(np.median(dt))
     h = max(step, 1.0 / max_rate)
-    held, said = input_hold(frame, input_name, hold)
-    if held:          # a step holds one switch of a held input (hold_phases): no coarser than its updates
-        x = frame[input_name].to_numpy(float)
-        changes = np.diff(t[np.r_[True, x[1:] != x[:-1]]])
-        h = max(step, min(h, float(np.median(changes)) if len(changes) else h))
+    updates, said = input_hold(frame, input_name, hold)
+    if updates is not None and len(updates.times) > 1 and float(np.median(np.diff(updates.times))) < h * 0.99:
+        h = step         # a step holds one switch of a held input (hold_phases): its updates faster than h, the rows
     gap = gap or max(0.5, 5 * step)
     cuts = np.flatnonzero(dt > gap) + 1
     notes = []
@@ -189,37 +193,84 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
         k_avg = int(round(h / step))
         for key, col in (("u", input_name), ("v", "v"), ("r", "yaw_rate")):
             x = frame[col].to_numpy(float)[a:b]
-            if key == "u" and held:
+            if key == "u" and updates is not None:
                 continue
             if k_avg > 1 and b - a > k_avg:         # a coarser clock: average over its step first (no aliasing)
                 x = np.convolve(np.pad(x, (k_avg // 2, k_avg - 1 - k_avg // 2), mode="edge"), np.ones(k_avg) / k_avg,
                                 mode="valid")
             parts[key].append(np.interp(grid, t[a:b], x))
         parts["run"].append(np.full(len(grid), k))
-    updates = None
-    if held:          # an average over k steps reads the time its window centres on: the held input alike
+    if updates is not None:          # an average over k steps reads the time its window centres on: alike
         k_avg = int(round(h / step))
-        updates = held_updates(t, frame[input_name].to_numpy(float), step * (k_avg // 2 - (k_avg - 1) / 2))
+        updates = HeldInput(updates.times + step * (k_avg // 2 - (k_avg - 1) / 2), updates.values)
         parts["u"] = [updates.at(g) for g in parts["t"]]
     arrays = {k: np.concatenate(v) for k, v in parts.items()}
     measured = np.isfinite(arrays["r"])
-    return DrivingLog(arrays["t"], arrays["u"], arrays["v"], np.where(measured, arrays["r"], 0.0), arrays["run"], h,
-                      input_name, notes, measured, update_times, held=updates)
+    log = DrivingLog(arrays["t"], arrays["u"], arrays["v"], np.where(measured, arrays["r"], 0.0), arrays["run"], h,
+                     input_name, notes, measured, update_times, held=updates)
+    own = (frame.attrs.get("own_samples") or {}).get("yaw_rate")
+    if own is not None and update_times is None:
+        log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), t)
+        notes.append(said)
+    return log
 
 
-def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[bool, str]:
-    """(whether the input is held between its rows, the note that says so): ``zoh`` holds it (rows
-    that are its own update stamps); ``linear`` and ``auto`` read it linearly between rows: a log's
-    rows quantize a set-point's updates (each somewhere since the row before), and the linear ramp
-    between rows is the expectation of a switch spread evenly over that interval."""
+def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[HeldInput | None, str]:
+    """(the input's updates when it is held between them, else None; the note that says so).
+    ``zoh``: held, on its own update stamps where the log carries them (frame.attrs["own_samples"],
+    a recording's import), else from its rows (held_updates: rows that are its stamps); ``linear``:
+    linear between rows; ``auto``: a set-point (measurements.streams.HELD) with its own stamps held,
+    else linear: a log's rows quantize a set-point's updates (each somewhere since the row before),
+    and the linear ramp between rows is the expectation of a switch spread evenly over that step."""
     if hold not in (AUTO, ZOH, LINEAR):
         raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
-    if hold == ZOH:
-        return True, (f"input {input_name} taken as held between its rows (--input-hold zoh: zero-order hold, the "
-                      f"value at t - delay the row in force); --input-hold auto reads it linearly between rows")
-    what = "a set-point" if input_name in HELD else "a sampled signal"
-    return False, (f"input {input_name} read linearly between its rows ({what}; --input-hold {hold}); --input-hold "
-                   f"zoh takes it as held between them (for rows that are its own update stamps)")
+    own = (frame.attrs.get("own_samples") or {}).get(input_name)
+    if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD):
+        if own is not None:
+            updates = HeldInput(np.asarray(own[0], float), np.asarray(own[1], float))
+            where = f"its own {len(updates.times)} updates in the recording"
+        else:
+            updates = held_updates(frame["t"].to_numpy(float), frame[input_name].to_numpy(float))
+            where = "its rows taken as its update stamps"
+        why = "--input-hold zoh" if hold == ZOH else "auto: a set-point"
+        return updates, (f"input {input_name} taken as held between its updates ({why}; {where}: zero-order hold, the "
+                         f"value at t - delay the last update at or before it); --input-hold linear reads it linearly "
+                         f"between rows")
+    what = ("a set-point whose own updates the log does not carry: its rows quantize them"
+            if input_name in HELD else "a sampled signal") if hold == AUTO else "--input-hold linear"
+    return None, (f"input {input_name} read linearly between its rows ({what}); --input-hold zoh takes it as held "
+                  f"between them (for rows that are its own update stamps)")
+
+
+def yaw_sampling(log: DrivingLog, stamps: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray | None, str]:
+    """(DrivingLog.sampled, the note): a gyro whose rows interpolate its own samples at ``stamps``
+    (frame.attrs["own_samples"], a recording's import) is predicted alike, the model's yaw rate read
+    at the stamps (linear between samples) and interpolated back: the weights of each sample on its
+    neighbours; None where the grid is not the log's rows (an averaged or resampled clock)."""
+    t, h = log.t, log.h
+    if len(rows) != len(t) or np.max(np.abs(rows - t)) > 1e-6 * h or len(stamps) < 2:
+        return None, "yaw rate: its own sampling not modelled (the grid is not the log's rows)"
+    n = len(t)
+    new_run = np.r_[True, log.run[1:] != log.run[:-1]]
+    first = np.flatnonzero(new_run)[np.cumsum(new_run) - 1]                  # each sample's run: first, last index
+    run_end = np.r_[np.flatnonzero(new_run)[1:] - 1, n - 1][np.cumsum(new_run) - 1]
+    k = np.clip(np.searchsorted(stamps, t, side="right") - 1, 0, len(stamps) - 2)
+    a = np.clip((t - stamps[k]) / (stamps[k + 1] - stamps[k]), 0.0, 1.0)
+    entries = []          # (grid index, weight): the sample's two stamps, each linear between grid samples
+    for side, weight in ((k, 1.0 - a), (k + 1, a)):
+        x = np.clip((stamps[side] - t[first]) / h, 0.0, None)
+        j = first + np.floor(x).astype(int)
+        f = x - np.floor(x)
+        entries += [(j, weight * (1.0 - f)), (j + 1, weight * f)]
+    offsets = [np.clip(j, first, run_end) - np.arange(n) for j, _ in entries]
+    B = int(max(np.max(np.abs(o)) for o in offsets))
+    if B > 8:
+        return None, "yaw rate: its own sampling not modelled (its samples more than 8 rows apart)"
+    W = np.zeros((n, 2 * B + 1))
+    for o, (_, w) in zip(offsets, entries):
+        np.add.at(W, (np.arange(n), o + B), w)
+    return W, (f"yaw rate: its rows interpolate its own {len(stamps)} samples ({1 / float(np.median(np.diff(stamps))):.3g} "
+               f"Hz): the model's yaw rate is read alike (at the samples, interpolated back)")
 
 
 def held_updates(t: np.ndarray, x: np.ndarray, shift: float = 0.0) -> HeldInput:
@@ -347,7 +398,7 @@ class YawModel:
         pick = (which[:, None] * S + np.arange(S)).ravel()          # (R S,): each set's rows
         low_speed = np.tile(self.low_speed_scale[idx], (R, 1))
         out = yaw[pick] * low_speed
-        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
+        out = self.log.as_measured(out, np.tile(idx, (R, 1)))     # a yaw rate derived from a heading: averaged alike
         out += np.repeat([float(v["gyro_bias"]) for v in sets], S)[:, None]
         if lateral:
             return out.reshape(R, S, L), (vy[pick] * low_speed).reshape(R, S, L)

@@ -147,7 +147,10 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     why = report.get("can", {}).get("columns_without_a_signal", {})
     report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
     order = present + [c for c in columns if c not in CANONICAL]
-    return pd.DataFrame(columns)[order], report
+    frame = pd.DataFrame(columns)[order]
+    # each canonical signal's own samples on the log's clock: its rows hold (a set-point) or interpolate them
+    frame.attrs["own_samples"] = {c: (sig[c][0] - t[0], sig[c][1]) for c in CANONICAL[1:] if c in sig}
+    return frame, report
 
 
 def _timed(source: Path, streams: Streams) -> list[tuple[str, np.ndarray]]:
