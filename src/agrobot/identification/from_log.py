@@ -80,7 +80,22 @@ def longest_stretch(frame, gap: float | None = None):
     even = on_even_clock(frame, slice(a, b), t[a], t[b - 1], step)
     even["t"] -= t[a]
     even.attrs = dict(frame.attrs)          # the audit's findings, the selection: the stretch's too
+    moved(even, frame, t[a], t[b - 1])
     return even, (float(t[a]), float(t[b - 1]))
+
+
+def moved(even: pd.DataFrame, frame: pd.DataFrame, a: float, b: float) -> None:
+    """even.attrs["own_samples"] (measurements.runs.OwnSamples: the signals' own samples) on the
+    clock of ``even``, the stretch a..b of ``frame`` starting at 0: those within it and the one
+    either side (a held value in force at a, an interpolation's ends)."""
+    own = frame.attrs.get("own_samples")
+    if not own:
+        return
+    out = {}
+    for c, (tc, vc) in own.items():
+        lo, hi = max(int(np.searchsorted(tc, a, side="right")) - 1, 0), int(np.searchsorted(tc, b, side="left")) + 1
+        out[c] = (np.asarray(tc[lo:hi], float) - a, np.asarray(vc[lo:hi], float))
+    even.attrs["own_samples"] = type(own)(out)
 
 
 def on_even_clock(frame, rows, a: float, b: float, step: float) -> pd.DataFrame:
@@ -111,7 +126,7 @@ def joined_stretches(frame):
         pieces.append(piece)
         start += step * len(piece)
     even = pd.concat(pieces, ignore_index=True)
-    even.attrs = {**frame.attrs, "joins": joins}
+    even.attrs = {k: v for k, v in {**frame.attrs, "joins": joins}.items() if k != "own_samples"}   # re-clocked
     first, last = frame.attrs.get("log_span", (t[0], t[-1]))
     passed = max(last - first - sum(b - a for a, b in spans), 0.0)
     return even, (f"the {len(spans)} stretches judged are joined on one even {1 / step:.3g} Hz clock, each with its own "

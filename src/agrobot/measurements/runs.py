@@ -105,6 +105,19 @@ def _faster_than_rows(streams: Streams, options: ImportOptions, step: float) -> 
             + f" sampled at it, their updates between epochs left out; --rate {keep:g} keeps them")
 
 
+class OwnSamples(dict):
+    """column -> (its own sample times on the log's clock, values): read-only, shared as it is by
+    the frames derived from the log (pandas copies and compares attrs: not the arrays)."""
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def __eq__(self, other):
+        return self is other
+
+    __hash__ = object.__hash__
+
+
 def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
     """The log on its grid for the run or range ``options`` choose, and the report of it: every
     canonical column the recording holds, then the extras (the receiver's speed, fix quality,
@@ -149,7 +162,7 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     order = present + [c for c in columns if c not in CANONICAL]
     frame = pd.DataFrame(columns)[order]
     # each canonical signal's own samples on the log's clock: its rows hold (a set-point) or interpolate them
-    frame.attrs["own_samples"] = {c: (sig[c][0] - t[0], sig[c][1]) for c in CANONICAL[1:] if c in sig}
+    frame.attrs["own_samples"] = OwnSamples({c: (sig[c][0] - t[0], sig[c][1]) for c in CANONICAL[1:] if c in sig})
     return frame, report
 
 
