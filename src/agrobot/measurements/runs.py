@@ -106,8 +106,9 @@ def _faster_than_rows(streams: Streams, options: ImportOptions, step: float) -> 
 
 
 class OwnSamples(dict):
-    """column -> (its own sample times on the log's clock, values): read-only, shared as it is by
-    the frames derived from the log (pandas copies and compares attrs: not the arrays)."""
+    """column -> (its own sample times on the log's clock, values), lists (JSON, as pandas writes
+    attrs to parquet): read-only, shared as it is by the frames derived from the log (pandas copies
+    and compares attrs: not the lists)."""
 
     def __deepcopy__(self, memo):
         return self
@@ -161,8 +162,9 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
     order = present + [c for c in columns if c not in CANONICAL]
     frame = pd.DataFrame(columns)[order]
-    # each canonical signal's own samples on the log's clock: its rows hold (a set-point) or interpolate them
-    frame.attrs["own_samples"] = OwnSamples({c: (sig[c][0] - t[0], sig[c][1]) for c in CANONICAL[1:] if c in sig})
+    # the set-points' and the gyro's own samples on the log's clock: their rows hold or interpolate them
+    frame.attrs["own_samples"] = OwnSamples({c: ((sig[c][0] - t[0]).tolist(), np.asarray(sig[c][1], float).tolist())
+                                             for c in (*streams.held, "yaw_rate") if c in sig})
     return frame, report
 
 
