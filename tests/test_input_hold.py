@@ -105,3 +105,26 @@ def test_the_kernel_equals_the_python_path_on_a_held_input(model):
     for a, b in zip(ref, got):
         assert np.max(np.abs(a)) > 0.05
         assert np.max(np.abs(a - b)) / np.max(np.abs(a)) < 1e-9
+
+
+def test_a_recordings_own_samples_set_the_hold_and_the_gyros_reading():
+    """A set-point with its own stamps (frame.attrs["own_samples"], as the importer gives them) is held
+    on them; a gyro whose rows interpolate its own samples: the model's yaw rate read alike, here
+    against np.interp twice (the importer's reading of the truth)."""
+    from agrobot.measurements.runs import OwnSamples
+
+    rows = np.arange(0.0, 6.0, 0.025)
+    cmd_t, gyro_t = np.arange(0.013, 6.0, 1 / 30), np.arange(0.004, 6.0, 1 / 27)     # updates faster than 25 Hz
+    cmd = np.round(np.sin(cmd_t), 3)
+    frame = pd.DataFrame({"t": rows, "delta_cmd": HeldInput(cmd_t, cmd).at(rows), "v": 1.0,
+                          "yaw_rate": np.interp(rows, gyro_t, np.cos(gyro_t))})
+    frame.attrs["own_samples"] = OwnSamples({"delta_cmd": (cmd_t.tolist(), cmd.tolist()),
+                                             "yaw_rate": (gyro_t.tolist(), np.cos(gyro_t).tolist())})
+    log = even_grid(frame, "delta_cmd", max_rate=25.0, hold="auto")
+    assert log.h == pytest.approx(0.025) and np.array_equal(log.held.times, cmd_t)      # the rows: one switch a step
+    assert np.allclose(log.delayed_input(0.08), np.sin(cmd_t)[np.clip(np.searchsorted(cmd_t, rows - 0.08, "right") - 1,
+                                                                     0, None)], atol=1e-3)
+    assert any(f"own {len(cmd_t)} updates" in n for n in log.notes), log.notes
+    y = np.sin(3.0 * rows) + rows ** 2                                   # any model output on the rows
+    assert np.allclose(log.as_measured(y), np.interp(rows, gyro_t, np.interp(gyro_t, rows, y)), atol=1e-12)
+    assert pd.concat([frame, frame]).attrs["own_samples"] is frame.attrs["own_samples"]
