@@ -173,7 +173,8 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     h = max(step, 1.0 / max_rate)
     updates, said = input_hold(frame, input_name, hold)
     if updates is not None and len(updates.times) > 1 and float(np.median(np.diff(updates.times))) < h * 0.99:
-        h = step         # a step holds one switch of a held input (hold_phases): its updates faster than h, the rows
+        # a step holds one switch of a held input (hold_phases): the most rows within its update interval
+        h = step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
     gap = gap or max(0.5, 5 * step)
     cuts = np.flatnonzero(dt > gap) + 1
     notes = []
@@ -210,7 +211,7 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
                      input_name, notes, measured, update_times, held=updates)
     own = (frame.attrs.get("own_samples") or {}).get("yaw_rate")
     if own is not None and update_times is None:
-        log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), t)
+        log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), np.asarray(own[1], float), t)
         notes.append(said)
     return log
 
@@ -225,6 +226,9 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     if hold not in (AUTO, ZOH, LINEAR):
         raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
     own = (frame.attrs.get("own_samples") or {}).get(input_name)
+    if own is not None and not holds(HeldInput(*(np.asarray(a, float) for a in own)), frame["t"].to_numpy(float),
+                                     frame[input_name].to_numpy(float)):
+        own = None          # the column no longer what its own samples hold (changed since the import)
     if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD):
         if own is not None:
             updates = HeldInput(np.asarray(own[0], float), np.asarray(own[1], float))
@@ -242,7 +246,14 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
                   f"between them (for rows that are its own update stamps)")
 
 
-def yaw_sampling(log: DrivingLog, stamps: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray | None, str]:
+def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = 1.1e-3) -> bool:
+    """Whether every row x(t) is the update in force at t, within ``slack`` s (the importer takes a
+    value sent up to 1 ms after a row as the row's: measurements.runs.held)."""
+    return bool(np.all((held.at(t) == x) | (held.at(t - slack) == x) | (held.at(t + slack) == x)))
+
+
+def yaw_sampling(log: DrivingLog, stamps: np.ndarray, values: np.ndarray, rows: np.ndarray
+                 ) -> tuple[np.ndarray | None, str]:
     """(DrivingLog.sampled, the note): a gyro whose rows interpolate its own samples at ``stamps``
     (frame.attrs["own_samples"], a recording's import) is predicted alike, the model's yaw rate read
     at the stamps (linear between samples) and interpolated back: the weights of each sample on its
@@ -250,6 +261,9 @@ def yaw_sampling(log: DrivingLog, stamps: np.ndarray, rows: np.ndarray) -> tuple
     t, h = log.t, log.h
     if len(rows) != len(t) or np.max(np.abs(rows - t)) > 1e-6 * h or len(stamps) < 2:
         return None, "yaw rate: its own sampling not modelled (the grid is not the log's rows)"
+    if (not np.allclose(np.interp(t, stamps, values), log.r, rtol=0.0, atol=1e-4 * np.max(np.abs(log.r), initial=0.0))
+            or not np.all(log.measured)):         # 1e-4: the stamps' rounding (POSIX seconds) times the yaw's rate
+        return None, "yaw rate: its own sampling not modelled (the rows are not its samples interpolated)"
     n = len(t)
     new_run = np.r_[True, log.run[1:] != log.run[:-1]]
     first = np.flatnonzero(new_run)[np.cumsum(new_run) - 1]                  # each sample's run: first, last index
