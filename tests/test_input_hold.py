@@ -128,3 +128,19 @@ def test_a_recordings_own_samples_set_the_hold_and_the_gyros_reading():
     y = np.sin(3.0 * rows) + rows ** 2                                   # any model output on the rows
     assert np.allclose(log.as_measured(y), np.interp(rows, gyro_t, np.interp(gyro_t, rows, y)), atol=1e-12)
     assert pd.concat([frame, frame]).attrs["own_samples"] is frame.attrs["own_samples"]
+
+
+def test_a_set_point_stamped_in_bursts_is_read_linearly_and_said():
+    """Stamps of receipt (bursts: 10-90 % of the intervals far from the median) do not say when the
+    command took effect: auto reads it between rows; zoh still holds it on them."""
+    from agrobot.measurements.runs import OwnSamples
+
+    rng = np.random.default_rng(2)
+    stamps = np.cumsum(rng.choice([0.003, 0.01, 0.04, 0.1, 0.2], 200))
+    rows = np.arange(0.0, stamps[-1], 0.044)
+    cmd = np.round(np.sin(stamps), 4)
+    frame = pd.DataFrame({"t": rows, "delta_cmd": HeldInput(stamps, cmd).at(rows), "v": 1.0, "yaw_rate": 0.0})
+    frame.attrs["own_samples"] = OwnSamples({"delta_cmd": (stamps.tolist(), cmd.tolist())})
+    log = even_grid(frame, "delta_cmd", max_rate=25.0, hold="auto")
+    assert log.held is None and any("come in bursts" in n for n in log.notes), log.notes
+    assert np.array_equal(even_grid(frame, "delta_cmd", max_rate=25.0, hold="zoh").held.times, stamps)

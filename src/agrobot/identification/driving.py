@@ -220,8 +220,8 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     """(the input's updates when it is held between them, else None; the note that says so).
     ``zoh``: held, on its own update stamps where the log carries them (frame.attrs["own_samples"],
     a recording's import), else from its rows (held_updates: rows that are its stamps); ``linear``:
-    linear between rows; ``auto``: a set-point (measurements.streams.HELD) with its own stamps held,
-    else linear: a log's rows quantize a set-point's updates (each somewhere since the row before),
+    linear between rows; ``auto``: a set-point (measurements.streams.HELD) held on its own stamps
+    when they keep a steady rate (steady_stamps), else linear: a log's rows quantize a set-point's updates (each somewhere since the row before),
     and the linear ramp between rows is the expectation of a switch spread evenly over that step."""
     if hold not in (AUTO, ZOH, LINEAR):
         raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
@@ -229,7 +229,8 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     if own is not None and not holds(HeldInput(*(np.asarray(a, float) for a in own)), frame["t"].to_numpy(float),
                                      frame[input_name].to_numpy(float)):
         own = None          # the column no longer what its own samples hold (changed since the import)
-    if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD):
+    steady, spread = steady_stamps(own)
+    if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD and steady):
         if own is not None:
             updates = HeldInput(np.asarray(own[0], float), np.asarray(own[1], float))
             where = f"its own {len(updates.times)} updates in the recording"
@@ -240,10 +241,22 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
         return updates, (f"input {input_name} taken as held between its updates ({why}; {where}: zero-order hold, the "
                          f"value at t - delay the last update at or before it); --input-hold linear reads it linearly "
                          f"between rows")
-    what = ("a set-point whose own updates the log does not carry: its rows quantize them"
-            if input_name in HELD else "a sampled signal") if hold == AUTO else "--input-hold linear"
+    what = ("a sampled signal" if input_name not in HELD else
+            "a set-point whose own updates the log does not carry: its rows quantize them" if own is None else
+            f"a set-point whose own stamps come in bursts, 10-90 % of their intervals {spread} of their median: "
+            f"stamped on receipt, not when it took effect") if hold == AUTO else "--input-hold linear"
     return None, (f"input {input_name} read linearly between its rows ({what}); --input-hold zoh takes it as held "
                   f"between them (for rows that are its own update stamps)")
+
+
+def steady_stamps(own, band: float = 0.5) -> tuple[bool, str]:
+    """(whether a set-point's own stamps keep a sender's steady rate: 10-90 % of their intervals
+    within ``band`` of the median, the range they span as text); bursts are stamps of receipt."""
+    if own is None or len(own[0]) < 3:
+        return False, "-"
+    d = np.diff(np.asarray(own[0], float))
+    lo, hi = np.percentile(d, [10, 90]) / max(float(np.median(d)), 1e-12)
+    return bool(lo >= 1 - band and hi <= 1 + band), f"{lo:.2g}-{hi:.2g}"
 
 
 def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = 1.1e-3) -> bool:
