@@ -134,7 +134,7 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
              out: str | Path | None = None, plots: bool = True, progress=None,
              overwrite: bool = False, where: str | None = None, keep_unexplained: bool = False,
              course_speed: float | None = None, fit_seconds: float | None = None,
-             steering_geometry: str = "auto") -> Identification:
+             steering_geometry: str = "auto", input_hold: str = "auto") -> Identification:
     """Identify the yaw dynamics. ``source`` a study (its multisine experiment, simulated: ``set``
     applies to it) or a measured log or raw recording; for a log the method is chosen as the
     command chooses it (identification.from_log.choose_method: ``"auto"`` is multisine when
@@ -146,13 +146,17 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     GNSS course measures the yaw (driving method; None: 1 m/s). ``fit_seconds``: at most this much of
     the log's segments fitted (driving method; None: 300 s; identification.ordinary_driving).
     ``steering_geometry``: how the wheel angle w drives the single-track model, "w", "tan" or
-    "auto" (the better of the two where w reaches 0.17 rad; driving method)."""
+    "auto" (the better of the two where w reaches 0.17 rad; driving method). ``input_hold``: how the
+    steering input is read between its rows, "zoh" (held), "linear" or "auto" (linear; driving
+    method; identification.driving.input_hold)."""
     from agrobot.identification.from_log import choose_method, driving_report, write_driving
     from agrobot.identification.pipeline import log_identification, study_identification
 
     check_identify(band, speed, period, course_speed, fit_seconds)
     if steering_geometry not in ("auto", "w", "tan"):
         raise StudyError(f"--steering-geometry {steering_geometry}: expected auto, w or tan")
+    if input_hold not in ("auto", "zoh", "linear"):
+        raise StudyError(f"--input-hold {input_hold}: expected auto, zoh or linear")
     recording = _stretches(recording, where, keep_unexplained)
     is_study = not isinstance(source, (str, Path)) or Path(source).suffix in STUDY_SUFFIXES or shipped_name(source)
     vehicle = load(source, set) if is_study else load(study) if study is not None else None
@@ -167,7 +171,7 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
         chosen = _named(source, choose_method, Path(source), method, resample, recording, vehicle)
         if chosen == "driving":
             report, figures = driving_report(Path(source), vehicle, resample, recording, progress, course_speed,
-                                             fit_seconds, steering_geometry)
+                                             fit_seconds, steering_geometry, input_hold)
 
             def write(tmp: Path, plots: bool) -> None:
                 write_driving(report, figures, tmp, vehicle, source, plots, progress)

@@ -35,6 +35,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--steering-geometry", choices=("auto", "w", "tan"), default="auto", help="log, driving: how the "
                    "wheel angle w drives the single-track model: w (small angles), tan (an Ackermann machine's no-slip "
                    "turn r = v tan w / L), auto (the better fit of the two where w reaches 0.17 rad, else w)")
+    p.add_argument("--input-hold", choices=("auto", "zoh", "linear"), default="auto", help="log, driving: how the "
+                   "steering input is read between its rows: zoh (held: a set-point whose rows are its own update "
+                   "stamps), linear, auto (linear: rows that resample a set-point quantize its updates)")
     p.add_argument("--resample", action="store_true",
                    help="log: interpolate a log whose clock jitters onto an even grid (its median step)")
     add_mode_options(p)
@@ -49,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
                      resample=args.resample, recording=None if is_study else recording_options(args),
                      out=args.out, plots=not args.no_plots, progress=timed_progress(), overwrite=args.overwrite,
                      course_speed=args.course_speed, fit_seconds=args.fit_seconds,
-                     steering_geometry=args.steering_geometry)
+                     steering_geometry=args.steering_geometry, input_hold=args.input_hold)
     if found.method == "driving":
         figures = found.report.get("figures", [])
         print(found.summary())

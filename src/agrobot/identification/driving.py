@@ -39,6 +39,7 @@ from scipy.optimize import least_squares
 
 from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
                                 updates_on)
+from agrobot.measurements.streams import HELD
 from agrobot.orchestrator.errors import InputError
 
 from agrobot.components.models.tyre import GAMMA_ROS2, N_STATES, axle_loads, rates
@@ -52,10 +53,37 @@ class NotEnoughDriving(InputError, ValueError):
     """The log holds too little driving to identify the yaw dynamics (the reason says how much more)."""
 
 
+class BadInputHold(InputError, ValueError):
+    """An input hold not among auto, zoh and linear."""
+
+
+AUTO, ZOH, LINEAR = "auto", "zoh", "linear"      # how the input is read between its samples (--input-hold)
+
+
+@dataclass
+class HeldInput:
+    """A set-point held between its updates: from ``times[k]`` (increasing, s) the value
+    ``values[k]`` is in force (before the first: the first)."""
+
+    times: np.ndarray
+    values: np.ndarray
+
+    def at(self, t: np.ndarray) -> np.ndarray:
+        """The value in force at t: the last update at or before it."""
+        return self.values[np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)]
+
+    def integral(self, t: np.ndarray) -> np.ndarray:
+        """int_{times[0]}^t of the held value (before the first update: the first value)."""
+        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)
+        start = np.r_[0.0, np.cumsum(self.values[:-1] * np.diff(self.times))]
+        return start[k] + self.values[k] * (t - self.times[k])
+
+
 @dataclass
 class DrivingLog:
     """The log on an even grid: steering input u, speed v, gyro r; ``run`` numbers the
-    stretches without a clock gap."""
+    stretches without a clock gap; ``held``: the input's own updates when it is a set-point held
+    between them (zero-order hold), None when it is a sampled signal (linear between samples)."""
 
     t: np.ndarray
     u: np.ndarray
@@ -68,12 +96,19 @@ class DrivingLog:
     measured: np.ndarray | None = None         # where r is measured (a course: not on slow stretches)
     update_times: np.ndarray | None = None     # the yaw measurement's own update times (None: every sample)
     kernel: np.ndarray | None = None           # the averaging a derived yaw rate applies (None: a gyro's)
+    held: HeldInput | None = None              # a set-point input's updates (None: linear between samples)
+    sampled: np.ndarray | None = None          # (N, 2B + 1): the yaw measurement on samples i-B..i+B (yaw_sampling)
 
-    def as_measured(self, r: np.ndarray) -> np.ndarray:
-        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``)."""
-        if self.kernel is None:
+    def as_measured(self, r: np.ndarray, idx: np.ndarray | None = None) -> np.ndarray:
+        """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``; ``sampled``:
+        on the samples ``idx`` (.., L), None: the whole log)."""
+        if self.kernel is not None:
+            r = convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
+        if self.sampled is None:
             return r
-        return convolve1d(r, self.kernel[::-1], axis=-1, mode="nearest")
+        L, B = r.shape[-1], (self.sampled.shape[1] - 1) // 2
+        rows = self.sampled[np.arange(L) if idx is None else idx]          # (.., L, 2B + 1)
+        return sum(rows[..., o + B] * np.take(r, np.clip(np.arange(L) + o, 0, L - 1), axis=-1) for o in range(-B, B + 1))
 
     def updates_in(self, segs: "Segments", mask: np.ndarray | None = None) -> int | None:
         """How many of the yaw measurement's own updates fall on the scored samples (None: one
@@ -96,23 +131,50 @@ class DrivingLog:
 
     def delayed_input(self, tau: float) -> np.ndarray:
         """u(t - tau) on every sample, per run, clipped to the run's first and last samples; a
-        negative tau (a clock offset: the response stamped before its input) reads ahead."""
+        negative tau (a clock offset: the response stamped before its input) reads ahead. A held
+        input: the update in force at t - tau (the last at or before it), else linear between samples."""
         if tau == 0:
             return self.u
         tq = np.clip(self.t - tau, self.run_start(), self.run_end())
+        if self.held is not None:
+            return self.held.at(tq)
         return np.interp(tq + self.run * 1e6, self.t + self.run * 1e6, self.u)
+
+    def hold_phases(self, tau: float) -> np.ndarray:
+        """A held input's step from sample j to j + 1 as one switch: w_j for the first phi_j h, then
+        w_j+1 (phi_j in [0, 1], 1: no switch), phi_j the one that keeps the step's mean of the held
+        u(t - tau) (exact for one update in the step). The last sample of a run: 1."""
+        start, end = self.run_start(), self.run_end()
+        a = np.clip(self.t - tau, start, end)
+        b = np.clip(self.t + self.h - tau, start, end)
+        below = np.clip(start - (self.t - tau), 0.0, self.h)          # the step's time read at the run's ends
+        above = np.clip(self.t + self.h - tau - end, 0.0, self.h)
+        held = self.held
+        mean = (held.integral(b) - held.integral(a) + held.at(start) * below + held.at(end) * above) / self.h
+        w0, w1 = held.at(a), held.at(b)
+        jump = w1 - w0
+        safe = np.abs(jump) > 1e-12 * np.maximum(np.abs(w0) + np.abs(w1), 1e-300)
+        phi = np.where(safe, (w1 - mean) / np.where(safe, jump, 1.0), 1.0)
+        phi = np.clip(phi, 0.0, 1.0)
+        phi[np.r_[self.run[1:] != self.run[:-1], True]] = 1.0
+        return phi
 
 
 def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap: float | None = None,
-              update_times: np.ndarray | None = None) -> DrivingLog:
+              update_times: np.ndarray | None = None, hold: str = LINEAR) -> DrivingLog:
     """Interpolate each gap-free stretch of the log onto an even clock (its median step, no finer
     than ``max_rate``: a faster log is averaged over the coarser step first); a step longer than
     ``gap`` (default max(0.5 s, 5 median steps)) splits; a yaw rate not measured (nan) is 0 and
-    marked in ``measured``."""
+    marked in ``measured``. ``hold`` (input_hold): a held input, a set-point held between its
+    updates, is read at the grid as the update in force (held_updates), never averaged into a ramp."""
     t = frame["t"].to_numpy(float)
     dt = np.diff(t)
     step = float(np.median(dt))
     h = max(step, 1.0 / max_rate)
+    updates, said = input_hold(frame, input_name, hold)
+    if updates is not None and len(updates.times) > 1 and float(np.median(np.diff(updates.times))) < h * 0.99:
+        # a step holds one switch of a held input (hold_phases): the most rows within its update interval
+        h = step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
     gap = gap or max(0.5, 5 * step)
     cuts = np.flatnonzero(dt > gap) + 1
     notes = []
@@ -122,6 +184,7 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     if jitter > 0.05 or h > step * 1.01:
         notes.append(f"samples interpolated onto an even {1 / h:.3g} Hz clock (median step {step * 1e3:.3g} ms, "
                      f"jitter {100 * jitter:.0f} %)")
+    notes.append(said)
     parts = {"t": [], "u": [], "v": [], "r": [], "run": []}
     for k, (a, b) in enumerate(zip(np.r_[0, cuts], np.r_[cuts, len(t)])):
         if b - a < 2:
@@ -131,15 +194,117 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
         k_avg = int(round(h / step))
         for key, col in (("u", input_name), ("v", "v"), ("r", "yaw_rate")):
             x = frame[col].to_numpy(float)[a:b]
+            if key == "u" and updates is not None:
+                continue
             if k_avg > 1 and b - a > k_avg:         # a coarser clock: average over its step first (no aliasing)
                 x = np.convolve(np.pad(x, (k_avg // 2, k_avg - 1 - k_avg // 2), mode="edge"), np.ones(k_avg) / k_avg,
                                 mode="valid")
             parts[key].append(np.interp(grid, t[a:b], x))
         parts["run"].append(np.full(len(grid), k))
+    if updates is not None:          # an average over k steps reads the time its window centres on: alike
+        k_avg = int(round(h / step))
+        updates = HeldInput(updates.times + step * (k_avg // 2 - (k_avg - 1) / 2), updates.values)
+        parts["u"] = [updates.at(g) for g in parts["t"]]
     arrays = {k: np.concatenate(v) for k, v in parts.items()}
     measured = np.isfinite(arrays["r"])
-    return DrivingLog(arrays["t"], arrays["u"], arrays["v"], np.where(measured, arrays["r"], 0.0), arrays["run"], h,
-                      input_name, notes, measured, update_times)
+    log = DrivingLog(arrays["t"], arrays["u"], arrays["v"], np.where(measured, arrays["r"], 0.0), arrays["run"], h,
+                     input_name, notes, measured, update_times, held=updates)
+    own = (frame.attrs.get("own_samples") or {}).get("yaw_rate")
+    if own is not None and update_times is None:
+        log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), np.asarray(own[1], float), t)
+        notes.append(said)
+    return log
+
+
+def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[HeldInput | None, str]:
+    """(the input's updates when it is held between them, else None; the note that says so).
+    ``zoh``: held, on its own update stamps where the log carries them (frame.attrs["own_samples"],
+    a recording's import), else from its rows (held_updates: rows that are its stamps); ``linear``:
+    linear between rows; ``auto``: a set-point (measurements.streams.HELD) held on its own stamps
+    when they keep a steady rate (steady_stamps), else linear: a log's rows quantize a set-point's updates (each somewhere since the row before),
+    and the linear ramp between rows is the expectation of a switch spread evenly over that step."""
+    if hold not in (AUTO, ZOH, LINEAR):
+        raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
+    own = (frame.attrs.get("own_samples") or {}).get(input_name)
+    if own is not None and not holds(HeldInput(*(np.asarray(a, float) for a in own)), frame["t"].to_numpy(float),
+                                     frame[input_name].to_numpy(float)):
+        own = None          # the column no longer what its own samples hold (changed since the import)
+    steady, spread = steady_stamps(own)
+    if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD and steady):
+        if own is not None:
+            updates = HeldInput(np.asarray(own[0], float), np.asarray(own[1], float))
+            where = f"its own {len(updates.times)} updates in the recording"
+        else:
+            updates = held_updates(frame["t"].to_numpy(float), frame[input_name].to_numpy(float))
+            where = "its rows taken as its update stamps"
+        why = "--input-hold zoh" if hold == ZOH else "auto: a set-point"
+        return updates, (f"input {input_name} taken as held between its updates ({why}; {where}: zero-order hold, the "
+                         f"value at t - delay the last update at or before it); --input-hold linear reads it linearly "
+                         f"between rows")
+    what = ("a sampled signal" if input_name not in HELD else
+            "a set-point whose own updates the log does not carry: its rows quantize them" if own is None else
+            f"a set-point whose own stamps come in bursts, 10-90 % of their intervals {spread} of their median: "
+            f"stamped on receipt, not when it took effect") if hold == AUTO else "--input-hold linear"
+    return None, (f"input {input_name} read linearly between its rows ({what}); --input-hold zoh takes it as held "
+                  f"between them (for rows that are its own update stamps)")
+
+
+def steady_stamps(own, band: float = 0.5) -> tuple[bool, str]:
+    """(whether a set-point's own stamps keep a sender's steady rate: 10-90 % of their intervals
+    within ``band`` of the median, the range they span as text); bursts are stamps of receipt."""
+    if own is None or len(own[0]) < 3:
+        return False, "-"
+    d = np.diff(np.asarray(own[0], float))
+    lo, hi = np.percentile(d, [10, 90]) / max(float(np.median(d)), 1e-12)
+    return bool(lo >= 1 - band and hi <= 1 + band), f"{lo:.2g}-{hi:.2g}"
+
+
+def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = 1.1e-3) -> bool:
+    """Whether every row x(t) is the update in force at t, within ``slack`` s (the importer takes a
+    value sent up to 1 ms after a row as the row's: measurements.runs.held)."""
+    return bool(np.all((held.at(t) == x) | (held.at(t - slack) == x) | (held.at(t + slack) == x)))
+
+
+def yaw_sampling(log: DrivingLog, stamps: np.ndarray, values: np.ndarray, rows: np.ndarray
+                 ) -> tuple[np.ndarray | None, str]:
+    """(DrivingLog.sampled, the note): a gyro whose rows interpolate its own samples at ``stamps``
+    (frame.attrs["own_samples"], a recording's import) is predicted alike, the model's yaw rate read
+    at the stamps (linear between samples) and interpolated back: the weights of each sample on its
+    neighbours; None where the grid is not the log's rows (an averaged or resampled clock)."""
+    t, h = log.t, log.h
+    if len(rows) != len(t) or np.max(np.abs(rows - t)) > 1e-6 * h or len(stamps) < 2:
+        return None, "yaw rate: its own sampling not modelled (the grid is not the log's rows)"
+    if (not np.allclose(np.interp(t, stamps, values), log.r, rtol=0.0, atol=1e-4 * np.max(np.abs(log.r), initial=0.0))
+            or not np.all(log.measured)):         # 1e-4: the stamps' rounding (POSIX seconds) times the yaw's rate
+        return None, "yaw rate: its own sampling not modelled (the rows are not its samples interpolated)"
+    n = len(t)
+    new_run = np.r_[True, log.run[1:] != log.run[:-1]]
+    first = np.flatnonzero(new_run)[np.cumsum(new_run) - 1]                  # each sample's run: first, last index
+    run_end = np.r_[np.flatnonzero(new_run)[1:] - 1, n - 1][np.cumsum(new_run) - 1]
+    k = np.clip(np.searchsorted(stamps, t, side="right") - 1, 0, len(stamps) - 2)
+    a = np.clip((t - stamps[k]) / (stamps[k + 1] - stamps[k]), 0.0, 1.0)
+    entries = []          # (grid index, weight): the sample's two stamps, each linear between grid samples
+    for side, weight in ((k, 1.0 - a), (k + 1, a)):
+        x = np.clip((stamps[side] - t[first]) / h, 0.0, None)
+        j = first + np.floor(x).astype(int)
+        f = x - np.floor(x)
+        entries += [(j, weight * (1.0 - f)), (j + 1, weight * f)]
+    offsets = [np.clip(j, first, run_end) - np.arange(n) for j, _ in entries]
+    B = int(max(np.max(np.abs(o)) for o in offsets))
+    if B > 8:
+        return None, "yaw rate: its own sampling not modelled (its samples more than 8 rows apart)"
+    W = np.zeros((n, 2 * B + 1))
+    for o, (_, w) in zip(offsets, entries):
+        np.add.at(W, (np.arange(n), o + B), w)
+    return W, (f"yaw rate: its rows interpolate its own {len(stamps)} samples ({1 / float(np.median(np.diff(stamps))):.3g} "
+               f"Hz): the model's yaw rate is read alike (at the samples, interpolated back)")
+
+
+def held_updates(t: np.ndarray, x: np.ndarray, shift: float = 0.0) -> HeldInput:
+    """A set-point's updates from its rows: the first row and every row whose value differs from
+    the row before, each at its row (+ ``shift``)."""
+    new = np.r_[True, x[1:] != x[:-1]]
+    return HeldInput(t[new].astype(float) + shift, x[new].astype(float))
 
 
 @dataclass
@@ -260,7 +425,7 @@ class YawModel:
         pick = (which[:, None] * S + np.arange(S)).ravel()          # (R S,): each set's rows
         low_speed = np.tile(self.low_speed_scale[idx], (R, 1))
         out = yaw[pick] * low_speed
-        out = self.log.as_measured(out)                 # a yaw rate derived from a heading: averaged alike
+        out = self.log.as_measured(out, np.tile(idx, (R, 1)))     # a yaw rate derived from a heading: averaged alike
         out += np.repeat([float(v["gyro_bias"]) for v in sets], S)[:, None]
         if lateral:
             return out.reshape(R, S, L), (vy[pick] * low_speed).reshape(R, S, L)
@@ -292,9 +457,16 @@ class YawModel:
         # d = w), c -> (1 - a)/2 for T >> h; its delay at low frequency is T, whatever h
         c = 1.0 - lag / h * (1.0 - a)
         p = self.row_parameters(sets, S)
+        # a held input: each sample step's switch from w_j to w_j+1 (DrivingLog.hold_phases)
+        phase = (None if self.log.held is None else
+                 np.concatenate([self.log.hold_phases(float(v["delay"]))[idx] for v in sets]))
         if single_track_kernel.choose(self.kernel) == "c":
-            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c, p))
-        return self._simulate_python(w, np.tile(self.v_sim[idx], (len(sets), 1)), rows, a, c, p)
+            return single_track_kernel.simulate(self.model, self.n_sub, h, w, self.v_sim[idx], self._packed(rows, a, c, p),
+                                                phase)
+        vv = np.tile(self.v_sim[idx], (len(sets), 1))
+        if phase is not None:
+            return self._simulate_python_held(w, vv, phase, rows, p)
+        return self._simulate_python(w, vv, rows, a, c, p)
 
     def row_parameters(self, sets: list[dict], S: int) -> TractorParameters:
         """The vehicle's parameters, the front relaxation length per row (R S,) when a set gives
@@ -308,7 +480,7 @@ class YawModel:
     def _packed(self, rows: dict, a: np.ndarray, c: np.ndarray, p: TractorParameters) -> np.ndarray:
         """The C kernel's per-row parameters (single_track_kernel.PARAMETERS), (R S, P)."""
         Fzf, Fzr = self.loads
-        columns = {"lag_decay": a, "hold_gain": c, "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
+        columns = {"lag_decay": a, "hold_gain": c, "lag": rows["lag"], "delay": rows["delay"], "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
                    "mu": rows["friction"], "shape": rows["shape"],
                    "cornering_speed_slope": rows["cornering_speed_slope"],
                    "cornering_reference_speed": rows["cornering_reference_speed"],
@@ -357,6 +529,78 @@ class YawModel:
             d = d_next
         return out, out_vy
 
+    def _simulate_python_held(self, w: np.ndarray, vv: np.ndarray, phase: np.ndarray, rows: dict,
+                              p: TractorParameters):
+        """The reference path for a held input (zero-order hold): each sample step in two pieces,
+        w_j for phi_j h then w_j+1 (``phase``), through the lag d' = (w - d) / T exactly (T = 0:
+        d = w); linear tyres by the exact step of the model with d as a state, x = [z, d],
+
+            x+ = expm(t A) x + t phi1(t A) B w,  A = [[J, b], [0, -1/T]],  B = [0, 1/T]
+
+        at the sample's mean speed (T = 0: A's corner and B 0, d set to w first), the Magic Formula
+        by ``n_sub`` ROS2 substeps per piece on d exact at their ends."""
+        Fzf, Fzr = self.loads
+        Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
+        mu = rows["friction"]
+        linear = ~np.isfinite(mu)
+        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
+        slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
+        n, h = N_STATES[self.model], self.log.h
+        inv_T = np.where(rows["lag"] > 1e-6, 1.0 / np.maximum(rows["lag"], 1e-6), 0.0)
+        n_rows, L = w.shape
+        z = np.zeros((n_rows, n))
+        d = w[:, 0].copy()
+        r0 = vv[:, 0] * d / self.L                       # kinematic start
+        z[:, 0], z[:, 1] = p.l_r * r0, r0
+        out, out_vy = np.empty((n_rows, L)), np.empty((n_rows, L))
+        for j in range(L):
+            out[:, j], out_vy[:, j] = z[:, 1], z[:, 0]
+            if j == L - 1:
+                break
+            vm = 0.5 * (vv[:, j] + vv[:, j + 1])
+            scale = cornering_scale(slope, v_ref, vm)
+            lin_tyre = {**tyre, "mu": np.inf, "C_f": Cf * scale, "C_r": Cr * scale}
+            for start, length, omega in ((0.0, phase[:, j] * h, w[:, j]), (phase[:, j] * h, (1.0 - phase[:, j]) * h,
+                                                                              w[:, j + 1])):
+                d = np.where(inv_T > 0, d, omega)
+                z_next, d_next = z, omega + (d - omega) * np.exp(-length * inv_T)
+                if np.any(~linear):
+                    z_next = self._ros2_piece(p, z, (vv[:, j], vv[:, j + 1]), (start, length), (d, omega, inv_T),
+                                              tyre, (Cf, Cr, slope, v_ref))
+                if np.any(linear):
+                    b, J = rates(self.model, p, vm, np.ones_like(vm), np.zeros((n_rows, n)), **lin_tyre)
+                    A = np.zeros((n_rows, n + 1, n + 1))
+                    A[:, :n, :n], A[:, :n, n], A[:, n, n] = J, b, -inv_T
+                    B = np.zeros((n_rows, n + 1))
+                    B[:, n] = inv_T
+                    P, g1, _ = phi_steps(A, B, length)
+                    x = np.einsum("sij,sj->si", P, np.c_[z, d]) + g1 * omega[:, None]
+                    z_next = np.where(linear[:, None], x[:, :n], z_next)
+                    d_next = np.where(linear, x[:, n], d_next)
+                z, d = z_next, d_next
+        return out, out_vy
+
+    def _ros2_piece(self, p, z, speeds, piece, lagged, tyre, cornering):
+        """The state after ``n_sub`` ROS2 substeps over a piece (start, length) (rows,) of a sample
+        step: the speed linear across the sample step, the wheel angle d = w + (d0 - w) exp(-s / T)
+        at each substep's ends (T = 0: w), the cornering scaled at each substep's mean speed."""
+        (v_start, v_end), (start, length), (d0, omega, inv_T), (Cf, Cr, slope, v_ref) = speeds, piece, lagged, cornering
+        h, hs = self.log.h, length / self.n_sub
+        eye = np.eye(z.shape[1])
+        for k in range(self.n_sub):
+            s0, s1 = k * hs, (k + 1) * hs
+            v0 = v_start + (start + s0) / h * (v_end - v_start)
+            v1 = v_start + (start + s1) / h * (v_end - v_start)
+            scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
+            tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
+            f0, J = rates(self.model, p, v0, omega + (d0 - omega) * np.exp(-s0 * inv_T), z, **tyre)
+            M = np.linalg.inv(eye - GAMMA_ROS2 * hs[:, None, None] * J)
+            k1 = np.einsum("sij,sj->si", M, f0)
+            f1, _ = rates(self.model, p, v1, omega + (d0 - omega) * np.exp(-s1 * inv_T), z + hs[:, None] * k1, **tyre)
+            k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
+            z = z + hs[:, None] * (1.5 * k1 + 0.5 * k2)
+        return z
+
     def _ros2_sample(self, p, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
         """The state after one sample step by ``n_sub`` ROS2 substeps (speed and wheel angle linear
         across the step; the cornering scaled at each substep's mean speed)."""
@@ -394,7 +638,13 @@ def exact_steps(model: str, p, v: np.ndarray, h: float, tyre: dict, degree: int 
     [[P, g1, g2], [0, 1, c], [0, 0, 1]] (c = 2^-s at the start)."""
     n = N_STATES[model]
     b, J = rates(model, p, v, np.ones_like(v), np.zeros((len(v), n)), **{**tyre, "mu": np.inf})
-    norm = np.abs(h * J).sum(axis=1).max(axis=1)
+    return phi_steps(J, b, np.full(len(v), float(h)), degree)
+
+
+def phi_steps(J: np.ndarray, b: np.ndarray, h: np.ndarray, degree: int = 12):
+    """(P, g1, g2) of dz/dt = J z + b d over h (rows,) as exact_steps: P = expm(h J), g1 = h phi1(h J) b,
+    g2 = h phi2(h J) b."""
+    norm = np.abs(h[:, None, None] * J).sum(axis=1).max(axis=1)
     s = np.where(norm > 0.5, np.ceil(np.log2(np.maximum(norm, 0.5) / 0.5)), 0.0).astype(int)
     scale = np.ldexp(h, -s)
     X = J * scale[:, None, None]

@@ -82,7 +82,22 @@ def longest_stretch(frame, gap: float | None = None):
     even = on_even_clock(frame, slice(a, b), t[a], t[b - 1], step)
     even["t"] -= t[a]
     even.attrs = dict(frame.attrs)          # the audit's findings, the selection: the stretch's too
+    moved(even, frame, t[a], t[b - 1])
     return even, (float(t[a]), float(t[b - 1]))
+
+
+def moved(even: pd.DataFrame, frame: pd.DataFrame, a: float, b: float) -> None:
+    """even.attrs["own_samples"] (measurements.runs.OwnSamples: the signals' own samples) on the
+    clock of ``even``, the stretch a..b of ``frame`` starting at 0: those within it and the one
+    either side (a held value in force at a, an interpolation's ends)."""
+    own = frame.attrs.get("own_samples")
+    if not own:
+        return
+    out = {}
+    for c, (tc, vc) in own.items():
+        lo, hi = max(int(np.searchsorted(tc, a, side="right")) - 1, 0), int(np.searchsorted(tc, b, side="left")) + 1
+        out[c] = (np.asarray(tc[lo:hi], float) - a, np.asarray(vc[lo:hi], float))
+    even.attrs["own_samples"] = type(own)(out)
 
 
 def on_even_clock(frame, rows, a: float, b: float, step: float) -> pd.DataFrame:
@@ -113,7 +128,7 @@ def joined_stretches(frame):
         pieces.append(piece)
         start += step * len(piece)
     even = pd.concat(pieces, ignore_index=True)
-    even.attrs = {**frame.attrs, "joins": joins}
+    even.attrs = {k: v for k, v in {**frame.attrs, "joins": joins}.items() if k != "own_samples"}   # re-clocked
     first, last = frame.attrs.get("log_span", (t[0], t[-1]))
     passed = max(last - first - sum(b - a for a, b in spans), 0.0)
     return even, (f"the {len(spans)} stretches judged are joined on one even {1 / step:.3g} Hz clock, each with its own "
@@ -171,12 +186,13 @@ def choose_method(source: Path, method: str = "auto", resample: bool = False, re
 
 @one_blas_thread
 def driving_report(source: Path, study=None, resample: bool = False, recording=None, progress=None,
-                   course_speed: float | None = None, fit_seconds: float | None = None, geometry: str = "auto"):
+                   course_speed: float | None = None, fit_seconds: float | None = None, geometry: str = "auto",
+                   input_hold: str = "auto"):
     """(report, the figures' data): the ordinary-driving identification of a log
     (identification.ordinary_driving; a skid-steered vehicle's, identification.skid_steer), nothing written; the wheelbase given with ``recording``
     (--wheelbase) is the vehicle's; ``course_speed``: the GNSS course's speed floor, ``fit_seconds``:
-    the most of the segments fitted (None: their defaults); ``geometry``: the steering geometry
-    (ordinary_driving.identify_driving)."""
+    the most of the segments fitted (None: their defaults); ``geometry``: the steering geometry,
+    ``input_hold``: how the input is read between its rows (ordinary_driving.identify_driving)."""
     say = progress or (lambda text: None)
     frame, imported = _read(source, resample, recording, study)
     say(f"read {source}: {len(frame)} rows, {frame['t'].iloc[-1] - frame['t'].iloc[0]:.0f} s")
@@ -191,7 +207,8 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
                                    f"every segment and needs a gyro, not a GNSS course)")
     else:
         report = identify_driving(frame, str(source), study, progress=say,
-                                  wheelbase=getattr(recording, "wheelbase", None), geometry=geometry, **more)
+                                  wheelbase=getattr(recording, "wheelbase", None), geometry=geometry,
+                                  input_hold=input_hold, **more)
         study_mismatch(report, frame, study, say)
     hidden = report.pop("_plot")
     if imported is not None:

@@ -197,10 +197,11 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
                      progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
-                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto") -> dict:
+                     dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto", input_hold="auto"):
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
     Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
-    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry."""
+    steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry;
+    ``input_hold``: driving.input_hold."""
     say = progress or (lambda text: None)
     vehicle = Vehicle.of(study)
     model_name, p = study_plant(study)
@@ -209,7 +210,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     frame, measured = with_yaw_rate(frame, where, course_speed)
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
-    log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times)
+    log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times, hold=input_hold)
     log.kernel = measured.kernel(log.h)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
     notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]

@@ -29,15 +29,20 @@
  * but the lag's) an earlier row of the call had reuses that row's steps (a Jacobian's columns for
  * the delay, lag, offset or gain).
  *
+ * A held input (phase given: zero-order hold) is stepped by simulate_row_held instead: each sample
+ * step in two pieces, w_j for phase_j h then w_j+1, through the lag exactly, the linear model with
+ * the lag's d as a state (held_step).
+ *
  * Each row starts from the kinematic state gamma = v d / L, v_y = l_r gamma (slip angles 0). */
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum { P_A, P_C, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
+enum { P_A, P_C, P_LAG, P_DELAY, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
        P_FZF, P_FZR, N_PAR };
 enum { BICYCLE = 0, RLF = 1, RLFR = 2 };
+enum { NX = 5 };        /* the most states: rlfr's four and a held input's lag state */
 
 typedef struct { int model, n; const double *p; double Cf, Cr; } Row;
 
@@ -60,13 +65,13 @@ static inline void magic_formula(double alpha, double C, double D, double shape,
 
 /* dz/dt and its Jacobian J (NULL: not needed) of the single-track model, z = [v_y, gamma (, alpha_f)
  * (, alpha_r)] */
-static inline void rates(const Row *q, double v, double delta, const double *z, double *f, double J[4][4]) {
+static inline void rates(const Row *q, double v, double delta, const double *z, double *f, double J[NX][NX]) {
     const double *p = q->p;
     double m = p[P_M], I = p[P_I], lf = p[P_LF], lr = p[P_LR], mu = p[P_MU], shape = p[P_SHAPE];
     double vy = z[0], g = z[1];
     double a_f = q->model == BICYCLE ? (vy + lf * g) / v - delta : z[2];
     double a_r = q->model == RLFR ? z[3] : (vy - lr * g) / v;
-    double Ff, kf = 0.0, Fr, kr = 0.0, dFf[4] = {0.0, 0.0, 0.0, 0.0}, dFr[4] = {0.0, 0.0, 0.0, 0.0};
+    double Ff, kf = 0.0, Fr, kr = 0.0, dFf[NX] = {0.0}, dFr[NX] = {0.0};
     magic_formula(a_f, q->Cf, mu * p[P_FZF], shape, &Ff, J ? &kf : NULL);
     magic_formula(a_r, q->Cr, mu * p[P_FZR], shape, &Fr, J ? &kr : NULL);
     f[0] = -v * g - (Ff + Fr) / m;
@@ -110,9 +115,9 @@ static inline void rates(const Row *q, double v, double delta, const double *z, 
 }
 
 
-/* The inverse of the n x n matrix A (n <= 4) by Gauss-Jordan elimination with partial pivoting;
+/* The inverse of the n x n matrix A (n <= NX) by Gauss-Jordan elimination with partial pivoting;
  * 0 when A is singular */
-static inline int invert(int n, double A[4][4], double M[4][4]) {
+static inline int invert(int n, double A[NX][NX], double M[NX][NX]) {
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
             M[i][j] = i == j ? 1.0 : 0.0;
@@ -150,7 +155,7 @@ static inline int invert(int n, double A[4][4], double M[4][4]) {
 static inline int ros2_step(const Row *q, double hs, double v0, double v1, double d0, double d1, double *z) {
     const double gamma = 1.0 + 1.0 / sqrt(2.0);
     int n = q->n;
-    double f0[4], f1[4], J[4][4], A[4][4], M[4][4], k1[4], k2[4], z1[4] = {0.0, 0.0, 0.0, 0.0};
+    double f0[NX], f1[NX], J[NX][NX], A[NX][NX], M[NX][NX], k1[NX], k2[NX], z1[NX] = {0.0};
     rates(q, v0, d0, z, f0, J);
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++)
@@ -175,8 +180,8 @@ static inline int ros2_step(const Row *q, double hs, double v0, double v1, doubl
 }
 
 
-/* C = A B for n x n matrices, n <= 4 (C distinct from A and B) */
-static inline void matmul(int n, double A[4][4], double B[4][4], double C[4][4]) {
+/* C = A B for n x n matrices, n <= NX (C distinct from A and B) */
+static inline void matmul(int n, double A[NX][NX], double B[NX][NX], double C[NX][NX]) {
     for (int i = 0; i < n; i++)
         for (int j = 0; j < n; j++) {
             double s = 0.0;
@@ -187,8 +192,8 @@ static inline void matmul(int n, double A[4][4], double B[4][4], double C[4][4])
 }
 
 
-/* y = A x, n <= 4 (y distinct from x) */
-static inline void matvec(int n, double A[4][4], const double *x, double *y) {
+/* y = A x, n <= NX (y distinct from x) */
+static inline void matvec(int n, double A[NX][NX], const double *x, double *y) {
     for (int i = 0; i < n; i++) {
         y[i] = 0.0;
         for (int k = 0; k < n; k++)
@@ -197,11 +202,11 @@ static inline void matvec(int n, double A[4][4], const double *x, double *y) {
 }
 
 
-/* E = expm(X) by the [6/6] Pade approximant (||X||_1 <= 1/2), n <= 4; 0 when its denominator is
+/* E = expm(X) by the [6/6] Pade approximant (||X||_1 <= 1/2), n <= NX; 0 when its denominator is
  * singular */
-static inline int pade(int n, double X[4][4], double E[4][4]) {
+static inline int pade(int n, double X[NX][NX], double E[NX][NX]) {
     static const double c[7] = {1.0, 0.5, 5.0 / 44.0, 1.0 / 66.0, 1.0 / 792.0, 1.0 / 15840.0, 1.0 / 665280.0};
-    double X2[4][4], X4[4][4], X6[4][4], U[4][4], V[4][4], T[4][4], M[4][4];
+    double X2[NX][NX], X4[NX][NX], X6[NX][NX], U[NX][NX], V[NX][NX], T[NX][NX], M[NX][NX];
     matmul(n, X, X, X2);
     matmul(n, X2, X2, X4);
     matmul(n, X4, X2, X6);
@@ -224,56 +229,82 @@ static inline int pade(int n, double X[4][4], double E[4][4]) {
 }
 
 
-/* The exact first-order-hold step of the linear model at speed v over h (see the top): P, g1, g2
- * with z+ = P z + g1 d0 + g2 (d1 - d0); 0 when the Pade denominator is singular */
-static inline int exact_step(const Row *q, double v, double h, double P[4][4], double *g1, double *g2) {
+/* (P, g1, g2) of dx/dt = A x + B u over t (m states, m <= NX): P = expm(t A), g1 = t phi1(t A) B,
+ * g2 = t phi2(t A) B (see the top); 0 when the Pade denominator is singular */
+static inline int phi_step(int m, double A[NX][NX], const double *B, double t, double P[NX][NX], double *g1,
+                           double *g2) {
     static const int DEGREE = 12;
-    int n = q->n;
-    double zero[4] = {0.0, 0.0, 0.0, 0.0}, b[4], J[4][4], X[4][4], T[4][4], y[4], t[4], norm = 0.0;
-    rates(q, v, 1.0, zero, b, J);            /* linear tyres: f(0, 1) = b */
-    for (int j = 0; j < n; j++) {
+    double X[NX][NX], T[NX][NX], y[NX], u[NX], norm = 0.0;
+    for (int j = 0; j < m; j++) {
         double col = 0.0;
-        for (int i = 0; i < n; i++)
-            col += fabs(h * J[i][j]);
+        for (int i = 0; i < m; i++)
+            col += fabs(t * A[i][j]);
         norm = col > norm ? col : norm;
     }
     int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
-    double scale = ldexp(h, -s), c = ldexp(1.0, -s), f = 1.0;       /* f = 1 / (k + 2)! */
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++)
-            X[i][j] = scale * J[i][j];
+    double scale = ldexp(t, -s), c = ldexp(1.0, -s), f = 1.0;       /* f = 1 / (k + 2)! */
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++)
+            X[i][j] = scale * A[i][j];
     for (int k = 1; k <= DEGREE + 2; k++)
         f /= k;
-    for (int i = 0; i < n; i++)
-        y[i] = scale * b[i] * f;
+    for (int i = 0; i < m; i++)
+        y[i] = scale * B[i] * f;
     for (int k = DEGREE - 1; k >= 0; k--) {        /* y <- X y + beta / (k + 2)!: phi2(X) beta */
         f *= k + 3;
-        matvec(n, X, y, t);
-        for (int i = 0; i < n; i++)
-            y[i] = t[i] + scale * b[i] * f;
+        matvec(m, X, y, u);
+        for (int i = 0; i < m; i++)
+            y[i] = u[i] + scale * B[i] * f;
     }
-    matvec(n, X, y, t);                           /* phi1(X) beta = beta + X phi2(X) beta */
-    for (int i = 0; i < n; i++) {
-        g1[i] = scale * b[i] + t[i];
+    matvec(m, X, y, u);                           /* phi1(X) beta = beta + X phi2(X) beta */
+    for (int i = 0; i < m; i++) {
+        g1[i] = scale * B[i] + u[i];
         g2[i] = c * y[i];
     }
-    if (!pade(n, X, P))
+    if (!pade(m, X, P))
         return 0;
     for (int k = 0; k < s; k++) {
-        double u1[4], u2[4];
-        matvec(n, P, g1, u1);
-        matvec(n, P, g2, u2);
-        for (int i = 0; i < n; i++) {
+        double u1[NX], u2[NX];
+        matvec(m, P, g1, u1);
+        matvec(m, P, g2, u2);
+        for (int i = 0; i < m; i++) {
             g2[i] = u2[i] + c * g1[i] + g2[i];
             g1[i] = u1[i] + g1[i];
         }
         c *= 2.0;
-        matmul(n, P, P, T);
-        for (int i = 0; i < n; i++)
-            for (int j = 0; j < n; j++)
+        matmul(m, P, P, T);
+        for (int i = 0; i < m; i++)
+            for (int j = 0; j < m; j++)
                 P[i][j] = T[i][j];
     }
     return 1;
+}
+
+
+/* The exact first-order-hold step of the linear model at speed v over h (see the top): P, g1, g2
+ * with z+ = P z + g1 d0 + g2 (d1 - d0); 0 when the Pade denominator is singular */
+static inline int exact_step(const Row *q, double v, double h, double P[NX][NX], double *g1, double *g2) {
+    double zero[NX] = {0.0}, b[NX], J[NX][NX];
+    rates(q, v, 1.0, zero, b, J);            /* linear tyres: f(0, 1) = b */
+    return phi_step(q->n, J, b, h, P, g1, g2);
+}
+
+
+/* The exact step over t of the linear model at speed v with the lag's wheel angle d as a state,
+ * x = [z, d], for a held input w: x+ = P x + g w, P = expm(t A), g = t phi1(t A) B,
+ * A = [[J, b], [0, -1/T]], B = [0, 1/T] (T = 0: A's corner and B 0; the caller sets d = w) */
+static inline int held_step(const Row *q, double v, double t, double inv_T, double P[NX][NX], double *g) {
+    double zero[NX] = {0.0}, b[NX], J[NX][NX], A[NX][NX] = {{0.0}}, B[NX] = {0.0}, g2[NX];
+    int n = q->n;
+    rates(q, v, 1.0, zero, b, J);
+    for (int i = 0; i < n; i++) {
+        for (int j = 0; j < n; j++)
+            A[i][j] = J[i][j];
+        A[i][n] = b[i];
+    }
+    A[n][n] = -inv_T;
+    B[n] = inv_T;
+    return phi_step(n + 1, A, B, t, P, g, g2);
 }
 
 
@@ -292,9 +323,9 @@ static inline void cornering(Row *q, double v) {
 }
 
 
-/* a stored step: P (4 x 4), g1, g2; rows remembered per speed row; the most doubles stored (128 MB): the
+/* a stored step: P (NX x NX), g1, g2 (a held input's: its two pieces' P and g); rows remembered per speed row; the most doubles stored (128 MB): the
  * store only when a call has more rows than speed rows (several parameter sets) */
-enum { STEP = 24, N_SLOT = 4, MAX_STORE = 1 << 24 };
+enum { STEP = NX * NX + 2 * NX, STEP_HELD = 2 * (NX * NX + NX), N_SLOT = 4, MAX_STORE = 1 << 24 };
 
 
 /* One row over its L samples: w, v its wheel angle asked and speed, yaw and vy its outputs; steps
@@ -304,7 +335,7 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
                                double *vy, double *steps, int filled) {
     const double *p = q->p;
     double a = p[P_A], c = p[P_C], hs = h / sub;
-    double z[4] = {0.0, 0.0, 0.0, 0.0}, d = w[0], P[4][4], g1[4], g2[4], v_cached = NAN;
+    double z[NX] = {0.0}, d = w[0], P[NX][NX], g1[NX], g2[NX], v_cached = NAN;
     int n = q->n, linear = !isfinite(p[P_MU]);
     double r0 = v[0] * d / (p[P_LF] + p[P_LR]);
     z[0] = p[P_LR] * r0;
@@ -316,11 +347,11 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
             break;
         double d_next = a * d + (1.0 - a) * w[j] + c * (w[j + 1] - w[j]);
         if (linear) {
-            double vm = 0.5 * (v[j] + v[j + 1]), zn[4], *st = steps ? steps + j * STEP : NULL;
+            double vm = 0.5 * (v[j] + v[j + 1]), zn[NX], *st = steps ? steps + j * STEP : NULL;
             if (st && filled) {
                 memcpy(P, st, sizeof P);
-                memcpy(g1, st + 16, sizeof g1);
-                memcpy(g2, st + 20, sizeof g2);
+                memcpy(g1, st + NX * NX, sizeof g1);
+                memcpy(g2, st + NX * NX + NX, sizeof g2);
             } else {
                 if (vm != v_cached) {
                     cornering(q, vm);
@@ -330,8 +361,8 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
                 }
                 if (st) {
                     memcpy(st, P, sizeof P);
-                    memcpy(st + 16, g1, sizeof g1);
-                    memcpy(st + 20, g2, sizeof g2);
+                    memcpy(st + NX * NX, g1, sizeof g1);
+                    memcpy(st + NX * NX + NX, g2, sizeof g2);
                 }
             }
             for (int i = 0; i < n; i++) {
@@ -357,36 +388,117 @@ static inline int simulate_row(Row *q, long L, int sub, double h, const double *
 }
 
 
+/* The held input's row (zero-order hold): each sample step in two pieces, w_j for phase[j] h then
+ * w_j+1, through the lag exactly; linear tyres by held_step at the sample's mean speed (a speed and
+ * phase the previous sample had reuse its steps), the Magic Formula by SUB ROS2 substeps per piece
+ * on d = w + (d0 - w) exp(-s / T) at their ends (T = 0: d = w); steps as simulate_row's */
+static inline int simulate_row_held(Row *q, long L, int sub, double h, const double *w, const double *v,
+                                    const double *phase, double *yaw, double *vy, double *steps, int filled) {
+    const double *p = q->p;
+    double inv_T = p[P_LAG] > 1e-6 ? 1.0 / p[P_LAG] : 0.0, x[NX] = {0.0}, P[2][NX][NX], g[2][NX];
+    double v_cached = NAN, phi_cached = NAN;
+    int n = q->n, linear = !isfinite(p[P_MU]);
+    double r0 = v[0] * w[0] / (p[P_LF] + p[P_LR]);
+    x[0] = p[P_LR] * r0;
+    x[1] = r0;
+    x[n] = w[0];
+    for (long j = 0; j < L; j++) {
+        yaw[j] = x[1];
+        vy[j] = x[0];
+        if (j == L - 1)
+            break;
+        double phi = phase[j], vm = 0.5 * (v[j] + v[j + 1]), *st = steps ? steps + j * STEP_HELD : NULL;
+        double start[2] = {0.0, phi * h}, length[2] = {phi * h, (1.0 - phi) * h}, omega[2] = {w[j], w[j + 1]};
+        if (linear && st && filled) {
+            memcpy(P, st, sizeof P);
+            memcpy(g, st + 2 * NX * NX, sizeof g);
+        } else if (linear) {
+            if (vm != v_cached || phi != phi_cached) {
+                cornering(q, vm);
+                for (int k = 0; k < 2; k++)
+                    if (length[k] > 0.0 && !held_step(q, vm, length[k], inv_T, P[k], g[k]))
+                        return 0;
+                v_cached = vm;
+                phi_cached = phi;
+            }
+            if (st) {
+                memcpy(st, P, sizeof P);
+                memcpy(st + 2 * NX * NX, g, sizeof g);
+            }
+        }
+        for (int k = 0; k < 2; k++) {
+            double d0 = inv_T > 0.0 ? x[n] : omega[k], xn[NX];
+            if (linear) {
+                x[n] = d0;
+                if (length[k] <= 0.0)
+                    continue;
+                for (int i = 0; i <= n; i++) {
+                    xn[i] = g[k][i] * omega[k];
+                    for (int l = 0; l <= n; l++)
+                        xn[i] += P[k][i][l] * x[l];
+                }
+                memcpy(x, xn, sizeof xn);
+                continue;
+            }
+            double hs = length[k] / sub;
+            for (int i = 0; i < sub && length[k] > 0.0; i++) {
+                double s0 = i * hs, s1 = (i + 1) * hs;
+                double v0 = v[j] + (start[k] + s0) / h * (v[j + 1] - v[j]);
+                double v1 = v[j] + (start[k] + s1) / h * (v[j + 1] - v[j]);
+                cornering(q, 0.5 * (v0 + v1));
+                if (!ros2_step(q, hs, v0, v1, omega[k] + (d0 - omega[k]) * exp(-s0 * inv_T),
+                               omega[k] + (d0 - omega[k]) * exp(-s1 * inv_T), x))
+                    return 0;
+            }
+            x[n] = omega[k] + (d0 - omega[k]) * exp(-length[k] * inv_T);
+        }
+    }
+    return 1;
+}
+
+
 /* Where row i's linear steps are (or go) among the N_SLOT remembered for its speed row: *filled
- * when an earlier row had its step parameters (all but P_A, P_C); NULL without a store */
+ * when an earlier row had its step parameters (those from ``key``: P_CF, or P_LAG for a held input,
+ * whose steps depend on its lag and delay); NULL without a store */
 static double *slot_of(double *store, const double **keys, int *next, long S, long L, long i, const double *pi,
-                       int *filled) {
+                       int key, long step, int *filled) {
     long s = i % S;
     *filled = 0;
     if (!store || !isinf(pi[P_MU]))
         return NULL;
     for (int k = 0; k < N_SLOT; k++) {
-        const double *key = keys[s * N_SLOT + k];
-        if (key && memcmp(key + P_CF, pi + P_CF, (N_PAR - P_CF) * sizeof(double)) == 0) {
+        const double *prev = keys[s * N_SLOT + k];
+        if (prev && memcmp(prev + key, pi + key, (N_PAR - key) * sizeof(double)) == 0) {
             *filled = 1;
-            return store + (s * N_SLOT + k) * (L - 1) * STEP;
+            return store + (s * N_SLOT + k) * (L - 1) * step;
         }
     }
     int k = next[s];
     next[s] = (k + 1) % N_SLOT;
     keys[s * N_SLOT + k] = pi;
-    return store + (s * N_SLOT + k) * (L - 1) * STEP;
+    return store + (s * N_SLOT + k) * (L - 1) * step;
+}
+
+
+/* One row: simulate_row, or simulate_row_held when ``phase`` is given */
+static inline int run_row(Row *q, long L, int sub, double h, const double *w, const double *v, const double *phase,
+                          double *yaw, double *vy, double *steps, int filled) {
+    if (phase)
+        return simulate_row_held(q, L, sub, h, w, v, phase, yaw, vy, steps, filled);
+    return simulate_row(q, L, sub, h, w, v, yaw, vy, steps, filled);
 }
 
 
 /* rows rows of L samples: row i driven by w[i L ..] at speed v[(i mod S) L ..], parameters
- * par[i N_PAR ..]; writes the yaw rate and the lateral velocity at the centre of gravity.
- * Returns -1 on success, else the first row whose Rosenbrock matrix (or Pade denominator) was
- * singular. */
+ * par[i N_PAR ..]; ``phase`` (NULL: the input linear between samples): a held input's switch in
+ * each sample step, phase[i L + j] (simulate_row_held); writes the yaw rate and the lateral
+ * velocity at the centre of gravity. Returns -1 on success, else the first row whose Rosenbrock
+ * matrix (or Pade denominator) was singular. */
 long single_track_simulate(int model, long rows, long S, long L, int sub, double h, const double *w,
-                           const double *v, const double *par, double *yaw, double *vy) {
-    long failed = -1;
-    size_t size = (size_t)S * N_SLOT * (L > 1 ? L - 1 : 0) * STEP;          /* doubles */
+                           const double *v, const double *par, const double *phase, double *yaw, double *vy) {
+    long failed = -1, step = phase ? STEP_HELD : STEP;
+    int key = phase ? P_LAG : P_CF;
+    size_t size = (size_t)S * N_SLOT * (L > 1 ? L - 1 : 0) * step;          /* doubles */
     double *store = rows > S && size > 0 && size <= MAX_STORE ? malloc(size * sizeof(double)) : NULL;
     const double **keys = calloc((size_t)S * N_SLOT, sizeof(double *));
     int *next = calloc((size_t)S, sizeof(int));
@@ -395,18 +507,18 @@ long single_track_simulate(int model, long rows, long S, long L, int sub, double
         store = NULL;
     }
     for (long i = 0; i < rows && failed < 0; i++) {
-        const double *pi = par + i * N_PAR;
+        const double *pi = par + i * N_PAR, *ph = phase ? phase + i * L : NULL;
         int ok, filled;
-        double *steps = slot_of(store, keys, next, S, L, i, pi, &filled);
+        double *steps = slot_of(store, keys, next, S, L, i, pi, key, step, &filled);
         if (model == BICYCLE) {           /* one branch per model: its state count known to the compiler */
             Row q = {BICYCLE, 2, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
+            ok = run_row(&q, L, sub, h, w + i * L, v + (i % S) * L, ph, yaw + i * L, vy + i * L, steps, filled);
         } else if (model == RLF) {
             Row q = {RLF, 3, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
+            ok = run_row(&q, L, sub, h, w + i * L, v + (i % S) * L, ph, yaw + i * L, vy + i * L, steps, filled);
         } else {
             Row q = {RLFR, 4, pi, 0.0, 0.0};
-            ok = simulate_row(&q, L, sub, h, w + i * L, v + (i % S) * L, yaw + i * L, vy + i * L, steps, filled);
+            ok = run_row(&q, L, sub, h, w + i * L, v + (i % S) * L, ph, yaw + i * L, vy + i * L, steps, filled);
         }
         if (!ok)
             failed = i;

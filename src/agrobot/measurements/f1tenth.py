@@ -31,8 +31,10 @@ def _import(folder: Path, signals, **options) -> pd.DataFrame:
     opts = ImportOptions(signals=[parse_signal(s) for s in signals], **options)
     runs = import_runs(folder, opts) or [import_recording(folder, opts)]
     starts = [rep["used"].get("start", 0.0) for _, rep in runs]
-    return pd.concat([log.assign(t=log["t"] + s - min(starts)) for (log, _), s in zip(runs, starts)],
-                     ignore_index=True)
+    logs = [log.assign(t=log["t"] + s - min(starts)) for (log, _), s in zip(runs, starts)]
+    for log in (logs if len(logs) > 1 else []):         # several runs: their own samples (measurements.runs) each on its clock
+        log.attrs.pop("own_samples", None)
+    return pd.concat(logs, ignore_index=True)
 
 
 def frictionmaps_log(folder: str | Path, rate: float | None = None) -> pd.DataFrame:

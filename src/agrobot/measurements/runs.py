@@ -105,6 +105,20 @@ def _faster_than_rows(streams: Streams, options: ImportOptions, step: float) -> 
             + f" sampled at it, their updates between epochs left out; --rate {keep:g} keeps them")
 
 
+class OwnSamples(dict):
+    """column -> (its own sample times on the log's clock, values), lists (JSON, as pandas writes
+    attrs to parquet): read-only, shared as it is by the frames derived from the log (pandas copies
+    and compares attrs: not the lists)."""
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def __eq__(self, other):
+        return self is other
+
+    __hash__ = object.__hash__
+
+
 def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd.DataFrame, dict]:
     """The log on its grid for the run or range ``options`` choose, and the report of it: every
     canonical column the recording holds, then the extras (the receiver's speed, fix quality,
@@ -147,7 +161,11 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     why = report.get("can", {}).get("columns_without_a_signal", {})
     report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
     order = present + [c for c in columns if c not in CANONICAL]
-    return pd.DataFrame(columns)[order], report
+    frame = pd.DataFrame(columns)[order]
+    # the set-points' and the gyro's own samples on the log's clock: their rows hold or interpolate them
+    frame.attrs["own_samples"] = OwnSamples({c: ((sig[c][0] - t[0]).tolist(), np.asarray(sig[c][1], float).tolist())
+                                             for c in (*streams.held, "yaw_rate") if c in sig})
+    return frame, report
 
 
 def _timed(source: Path, streams: Streams) -> list[tuple[str, np.ndarray]]:
