@@ -87,14 +87,15 @@ def model_yaw(model, values: dict, log, min_speed: float, burn_in: float = 2.0) 
     return out
 
 
-def model_steady_state(model, values: dict, log, min_speed: float, delay: float, windows: dict, ss):
+def model_steady_state(model, values: dict, log, min_speed: float, delay: float, windows: dict, ss, u=None):
     """The steady-state regression ``ss`` (on ``windows``, steady_state.steady_windows with
-    ``delay``) run again on the dynamic model's own yaw rate (model_yaw) over the same windows:
-    (K_sim, std), or None (no regression there). The windows are chosen on the input and the speed
-    alone and kept by the measured |a_y|, so they are the same ones."""
+    ``delay`` and the input ``u``, log.u unless given) run again on the dynamic model's own yaw rate
+    (model_yaw) over the same windows: (K_sim, std), or None (no regression there). The windows are
+    chosen on the input and the speed alone and kept by the measured |a_y|, so they are the same ones."""
     if ss is None:
         return None
-    w = steady_windows(log.t, log.u, log.v, model_yaw(model, values, log, min_speed), log.run, min_speed, delay=delay)
+    u = log.u if u is None else u
+    w = steady_windows(log.t, u, log.v, model_yaw(model, values, log, min_speed), log.run, min_speed, delay=delay)
     if len(w["u"]) != len(windows["u"]):
         return None
     fit = same_regression(ss, {**w, "a_y": windows["a_y"]}, model.L)

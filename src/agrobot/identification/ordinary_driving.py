@@ -41,7 +41,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
-from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
+from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .steady_state import in_linear_range, steady_windows
@@ -230,16 +230,21 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
     final, params_json, stiff = _final_parameters(log, fits, held, saturation)
+    top = float(np.percentile(log.v[log.v >= min_speed], 99))
+    gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, final, params_json, stiff,
+                                                              command, min_speed)
     pred = held.sims[1] if saturation else held.sims[0]
-    K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
-    g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
+    K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top)
+    g_of = next((k for k in ("steer_gain", "yaw_gain") if k in final.names), None)     # a command's or the turns' scale
+    g, g_sd = (final.values[g_of], final.std(g_of)) if g_of else (1.0, 0.0)
     linear_range = _linear_range(saturation, nl, log, min_speed)
     windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
                                         params_json.get("gyro_bias"), linear_range, L, min_speed,
                                         _low_range_understeer(fits, saturation), twin)
-    understeer, char = withheld_understeer(understeer, char, comparisons, lambda k, sd: characteristic_speed(k, sd, L))
+    understeer, char = withheld_understeer(understeer, char, comparisons,
+                                           lambda k, sd: characteristic_speed(k, sd, L, top_speed=top))
     K, K_sd = understeer["value"], understeer["std"]
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
@@ -252,6 +257,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                     "axle_loads": list(fits.loads)},
         "understeer_gradient": understeer,
         "characteristic_speed": char,
+        **({"steering_gain_check": gain_check} if gain_check else {}),
         "delay": params_json["delay"],
         "held_out_fit": _held_out_fit(log, test_segs, held, pred, study),
         "cornering_stiffness": stiff,
@@ -693,10 +699,12 @@ def one_speed(log: DrivingLog, min_speed: float) -> str | None:
             f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
-def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None):
+def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
+                top_speed: float = math.inf):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
-    log cannot tell K from a fitted steering gain (one_speed), then K is not identifiable."""
+    log cannot tell K from a steering gain (one_speed, gain_apart), then K is not identifiable;
+    ``top_speed``: the log's (characteristic_speed)."""
     K, K_sd = _k_of(final)
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
@@ -704,13 +712,97 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
     understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd) and not alike),
                            deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
                                                                     if alike else {}))
-    char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike)
+    char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike, top_speed)
     return K, K_sd, understeer, char
 
 
-def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None) -> dict:
+SENSED_GAIN = (0.8, 1.25)      # yaw per kinematic v tan(w) / L: a wheelbase, speed, gyro or angle scale 10-20 % off
+APART = 2.0                    # K's std with the gain free over its std at g = 1 beyond which the two are not told apart
+BEYOND_TOP = 2.0               # a characteristic or critical speed is read no further than this x the log's top speed
+
+
+class YawScaled:
+    """The yaw model with a turn gain k on its yaw rate, its gyro bias b not scaled: r = k (r_model -
+    b) + b (``yaw_gain`` among the values). From turns, a wheelbase L / k, a speed or gyro scale k,
+    or a wheel-angle sensor's gain (at small angles) are one quantity."""
+
+    def __init__(self, model: YawModel):
+        self.model = model
+
+    def __getattr__(self, name):
+        return getattr(self.model, name)
+
+    def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:
+        return self.simulate_many([values], segs)[0]
+
+    def simulate_many(self, sets: list[dict], segs: Segments | None = None, lateral: bool = False):
+        out = self.model.simulate_many(sets, segs, lateral=lateral)
+        yaw = out[0] if lateral else out
+        scaled = [v.get("yaw_gain", 1.0) * (y - v.get("gyro_bias", 0.0)) + v.get("gyro_bias", 0.0)
+                  for v, y in zip(sets, yaw)]
+        return (scaled, out[1]) if lateral else scaled
+
+
+def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResult | None]:
+    """A measured wheel angle is fitted at g = 1; a scale error of the turns (the angle sensor's, the
+    declared wheelbase's, the speed's) then reads as understeer, since the steady yaw rate
+    k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
+    YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
+    fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
+    interval: k = 1 kept. Outside it: a scale error, the free fit kept, unless k ended on its bound,
+    or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
+    |corr(k, K)| > 0.87) and its interval holds 0: then K is not told from k."""
+    gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
+                     "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
+    fixed = {k: v for k, v in final.values.items() if k not in final.names}
+    free_fit = fit(YawScaled(fits.model), [*final.free, gain], {**final.values, "yaw_gain": 1.0}, fixed,
+                   fits.fit_segs, max_nfev=30)
+    (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
+    g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
+    lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
+    inside = lo <= k1 <= hi
+    wide = not math.isfinite(sd2) or (sd2 > APART * sd1 and lo <= 0.0 <= hi) or free_fit.at_bound(gain) is not None
+    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+               "K not told apart from k" if wide else f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with "
+               "k free kept")
+    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
+           "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
+           "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict, "kept": not inside and not wide,
+           "how": f"the final fit again with a turn gain k free in [{gain.lower:g}, {gain.upper:g}]"}
+    if inside:
+        return out, None, None
+    if not wide:
+        return out, None, free_fit
+    return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
+                 f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
+                 f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale: a "
+                 f"{100 * (g - 1):+.1f} % scale (the wheelbase's, the speed's, the angle sensor's) reads as understeer"), None
+
+
+def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, final: FitResult, params: dict,
+               stiff: dict, command: bool, min_speed: float):
+    """(the gain check or None, why K is not identifiable or None, final fit, parameters, stiffnesses):
+    a command input has its gain fitted (one_speed says when it and K are not told apart); a
+    measured angle goes through gain_apart, and a scale it finds replaces the final fit (``fits.model``
+    becomes YawScaled; its held-out prediction in ``held.sims``; the delay's verdict kept)."""
+    if command:
+        return None, one_speed(log, min_speed), final, params, stiff
+    check, alike, free_fit = gain_apart(fits, final)
+    if free_fit is None:
+        return check, alike, final, params, stiff
+    fits.model = YawScaled(fits.model)
+    new_params, new_stiff = _parameters(free_fit, list(free_fit.free), fits)
+    if "verdict" in params["delay"]:                # decided below zero: that verdict stands
+        new_params["delay"] = params["delay"]
+    held.sims[1 if saturation else 0] = fits.model.simulate(free_fit.values, fits.test_segs)
+    return check, None, free_fit, new_params, new_stiff
+
+
+def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None,
+                         top_speed: float = math.inf) -> dict:
     """The characteristic (K > 0) or critical (K < 0) speed sqrt(L / |K|) with its std (delta
-    method), identifiable where K is (``alike``: why K is not)."""
+    method), identifiable where K is (``alike``: why K is not) and no further than BEYOND_TOP x the
+    log's ``top_speed`` (beyond: not identifiable at these speeds)."""
     if K > 0:
         vch = math.sqrt(L / K)
         char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
@@ -725,6 +817,11 @@ def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = T
     char["identifiable"] = identifiable          # v_ch is K's: identifiable where K is
     if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
+    elif char["value"] > BEYOND_TOP * top_speed:     # an extrapolation of the gain curve far past the log
+        char["identifiable"] = False
+        char["note"] = (f"{NOT_AT_THESE_SPEEDS}: sqrt(L / |K|) = {char['value']:.3g} m/s lies beyond {BEYOND_TOP:g} x the "
+                        f"log's top speed {top_speed:.3g} m/s (99th percentile), where K v^2 / L is "
+                        f"{100 * abs(K) * top_speed ** 2 / L:.1f} % of the yaw gain")
     return char
 
 
@@ -732,11 +829,17 @@ def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_
                   command: bool):
     """(the steady windows, their regression in the linear range up to ``cap``, the same regression
     on the model's own yaw rate: comparisons.model_steady_state): the independent check on K (a
-    negative delay is left to the fit)."""
+    negative delay is left to the fit); the input enters as the model's does, tan u under its
+    Ackermann geometry (L r = v tan u - K v^2 r is the no-slip turn at any angle). The gain is
+    fitted beside K for a measured angle too (its sensor's, the wheelbase's or the speed's scale
+    would read as K), held at 1 only where the turns are at one speed and cannot tell them apart."""
     delay = max(values["delay"], 0.0)
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=delay)
-    ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=None if command else 1.0)
-    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss)
+    u = np.tan(np.clip(log.u, -1.3, 1.3)) if model.geometry == ACKERMANN else log.u       # as the model turns
+    windows = steady_windows(log.t, u, log.v, log.r, log.run, min_speed, delay=delay)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, cap)       # the gain free: a scale of the turns is not K
+    if ss is None and not command:                           # turns at one speed: a measured angle taken as is
+        ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=1.0)
+    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss, u)
 
 
 def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
@@ -934,7 +1037,8 @@ def summary(report: dict) -> str:
     if K["identifiable"]:
         ch = report["characteristic_speed"]
         lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)" + (f", {K['from']}" if "from" in K else ""),
-                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s"]
+                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s" if ch["identifiable"] else
+                  f"characteristic or critical speed: {ch['note']}"]
     else:       # neither K nor the speed it sets is printed as a result
         lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "
                      f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
