@@ -234,6 +234,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, final, params_json, stiff,
                                                               command, min_speed)
     pred = held.sims[1] if saturation else held.sims[0]
+    _without_standstill(params_json, final, log, L, min_speed)
     K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top)
     g_of = next((k for k in ("steer_gain", "yaw_gain") if k in final.names), None)     # a command's or the turns' scale
     g, g_sd = (final.values[g_of], final.std(g_of)) if g_of else (1.0, 0.0)
@@ -266,7 +267,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "linear_range": linear_range,
         "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
         "residual_by_lateral_acceleration": _residual_bins(held),
-        "steady_state_regression": ss.as_dict() if ss else
+        "steady_state_regression": _steady_json(ss, vehicle) if ss else
         {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
          "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
@@ -842,6 +843,45 @@ def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_
     return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss, u)
 
 
+def _without_standstill(params: dict, final: FitResult, log: DrivingLog, L: float, min_speed: float) -> None:
+    """A gyro bias fitted (no standstill to measure it) beside a steering offset: both notes say so
+    and that neither is concluded. Both shift the yaw rate, an offset delta_0 by v delta_0 / L, a
+    bias by b at every speed: only the speed's spread tells them apart, their fitted correlation says
+    how little, and their intervals hold only for an exact model (a gain, a lag or an asymmetry it
+    misses moves both beyond them)."""
+    if "gyro_bias" not in final.names or "steer_offset" not in final.names:
+        return
+    i, j = final.names.index("gyro_bias"), final.names.index("steer_offset")
+    c = final.cov
+    rho = float(c[i, j] / math.sqrt(c[i, i] * c[j, j])) if c[i, i] > 0 and c[j, j] > 0 else math.nan
+    v = float(np.median(log.v[log.v >= min_speed]))
+    why = (f"fitted without a standstill (no 2 s with |v| < {STANDSTILL:g} m/s in the log: the recording's standing "
+           f"still trimmed, or never recorded): the gyro bias and the steering offset both shift the yaw rate (an offset "
+           f"of 1 deg reads as {math.radians(1) * v / L:.3g} rad/s of bias at the median speed {v:.2g} m/s), told apart "
+           f"only by the speed's spread (correlation {rho:+.2f}); their intervals hold only for an exact model, any "
+           f"misfit moves both beyond them: not concluded; keep a standstill of 2 s or more in the log (--time-range "
+           f"around it) to measure the bias")
+    for name, text in (("gyro_bias", why), ("steer_offset", "fitted without a standstill, traded against the gyro "
+                                                          "bias: not concluded (see gyro_bias)")):
+        q = params[name]
+        params[name] = {**q, "concluded": False, "no_standstill": True,
+                        "note": f"{q['note']}; {text}" if q.get("note") else text}
+
+
+def _steady_json(ss, vehicle: Vehicle) -> dict:
+    """The steady-state regression's JSON, with why its gain is held (a measured angle at one speed)
+    and its offset flagged ``implausible`` beyond the class's steering offset (vehicle.STEER_OFFSET)."""
+    d = ss.as_dict()
+    if ss.fixed_gain is not None:
+        d["gain_held"] = "the measured angle at one speed, where a gain and K are not told apart"
+    bound, off = vehicle.steer_offset_bound, d["steer_offset"]["value"]
+    if abs(off) > bound:
+        d["steer_offset"]["implausible"] = (f"|{math.degrees(off):.3g}| deg beyond the {math.degrees(bound):.3g} deg "
+                                            f"a {vehicle.kind or 'vehicle'}'s angle sensor can be off: the regression's "
+                                            f"offset takes up what its straight-line model misses, not concluded")
+    return d
+
+
 def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
     """(K, std) of the linear model fitted where |a_y| <= LINEAR_TYRE (None: no such separate fit,
     or the tyre-saturation model is the final one, already linear there)."""
@@ -898,9 +938,9 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
                 "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
                        f"x {share:.3f} (shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
-    return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
-            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)",
-            "saturation": False}
+    return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2", "at_least": True,
+            "how": "no saturation found: the linear model holds over the whole log, whose largest |a_y| (99th "
+                   "percentile) this is: the tyres' bend is not reached", "saturation": False}
 
 
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
@@ -1017,6 +1057,21 @@ def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, d
     return out
 
 
+def _steady_lines(ss: dict, q) -> list[str]:
+    """The steady-state regression on the measured turns, as fitted (its K before the structural
+    correction the comparison line carries), its gain fitted or held, its offset flagged when
+    outside the class's range."""
+    if "understeer_gradient" not in ss:
+        return []
+    g, off = ss["steer_gain"], ss["steer_offset"]
+    gain = f"gain {g['value']:.3g} (held at 1: {ss['gain_held']})" if ss.get("gain_held") else f"gain {g['value']:.3g}"
+    flag = f" OUTSIDE the class's range: {off['implausible']}" if off.get("implausible") else ""
+    return [f"steady-state regression on the measured turns, before its structural correction ({ss['windows']} "
+            f"windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): K {q(ss['understeer_gradient'])}, {gain}, offset "
+            f"{off['value']:.3g} rad ({math.degrees(off['value']):.2g} deg){flag}; linear range {ss['linear_limit']}"
+            + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else "")]
+
+
 def summary(report: dict) -> str:
     """What an engineer reads first."""
     def q(d, f="{:.4g}"):
@@ -1057,13 +1112,9 @@ def summary(report: dict) -> str:
     else:
         lines.append("tyre saturation not found: " + "; ".join(t["why_not"]))
     lr = report["linear_range"]
-    lines.append(f"linear model holds for |a_y| up to {q(lr, '{:.3g}')}")
-    ss = report["steady_state_regression"]
-    if "understeer_gradient" in ss:
-        lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
-                     f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
-                     f"{ss['steer_offset']['value']:.3g} rad; linear range {ss['linear_limit']}"
-                     + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else ""))
+    lines.append(f"linear model holds for |a_y| at least up to {lr['value']:.3g} m/s2 ({lr['how']})" if lr.get("at_least")
+                 else f"linear model holds for |a_y| up to {q(lr, '{:.3g}')}")
+    lines += _steady_lines(report["steady_state_regression"], q)
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
