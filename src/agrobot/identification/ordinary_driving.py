@@ -229,15 +229,11 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
-    final, params_json, stiff = _final_parameters(log, fits, held, saturation)
+    gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, command, min_speed, L)
     top = float(np.percentile(log.v[log.v >= min_speed], 99))
-    gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, final, params_json, stiff,
-                                                              command, min_speed)
     pred = held.sims[1] if saturation else held.sims[0]
-    _without_standstill(params_json, final, log, L, min_speed)
     K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top)
-    g_of = next((k for k in ("steer_gain", "yaw_gain") if k in final.names), None)     # a command's or the turns' scale
-    g, g_sd = (final.values[g_of], final.std(g_of)) if g_of else (1.0, 0.0)
+    g, g_sd = _turn_gain(final)
     linear_range = _linear_range(saturation, nl, log, min_speed)
     windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
@@ -267,9 +263,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "linear_range": linear_range,
         "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
         "residual_by_lateral_acceleration": _residual_bins(held),
-        "steady_state_regression": _steady_json(ss, vehicle) if ss else
-        {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
-         "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
+        "steady_state_regression": _steady_json(ss, vehicle, windows),
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
         "comparisons": comparisons,
         "physical_checks": checks,
@@ -719,6 +713,7 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
 
 SENSED_GAIN = (0.8, 1.25)      # yaw per kinematic v tan(w) / L: a wheelbase, speed, gyro or angle scale 10-20 % off
 APART = 2.0                    # K's std with the gain free over its std at g = 1 beyond which the two are not told apart
+SCALE_TOLERANCE = 0.02        # a scale of the turns within this is the declared wheelbase's and speed's own uncertainty
 BEYOND_TOP = 2.0               # a characteristic or critical speed is read no further than this x the log's top speed
 
 
@@ -750,7 +745,8 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
     YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
     fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
-    interval: k = 1 kept. Outside it: a scale error, the free fit kept, unless k ended on its bound,
+    interval, or k within SCALE_TOLERANCE of 1: k = 1 kept. Else a scale error, the free fit kept,
+    unless k ended on its bound,
     or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
     |corr(k, K)| > 0.87) and its interval holds 0: then K is not told from k."""
     gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
@@ -761,9 +757,12 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
     g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
-    inside = lo <= k1 <= hi
     wide = not math.isfinite(sd2) or (sd2 > APART * sd1 and lo <= 0.0 <= hi) or free_fit.at_bound(gain) is not None
-    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+    small = abs(g - 1) - Z95 * g_sd <= SCALE_TOLERANCE         # within what a declared wheelbase or speed is sure of
+    inside = lo <= k1 <= hi or (small and not wide)
+    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if lo <= k1 <= hi else
+               f"k = 1 kept: a scale of {100 * (g - 1):+.1f} % is within the {100 * SCALE_TOLERANCE:g} % a declared "
+               f"wheelbase and speed are sure of (K with it {k2:.3g} [{lo:.3g}, {hi:.3g}])" if inside else
                "K not told apart from k" if wide else f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with "
                "k free kept")
     out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
@@ -780,23 +779,30 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
                  f"{100 * (g - 1):+.1f} % scale (the wheelbase's, the speed's, the angle sensor's) reads as understeer"), None
 
 
-def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, final: FitResult, params: dict,
-               stiff: dict, command: bool, min_speed: float):
-    """(the gain check or None, why K is not identifiable or None, final fit, parameters, stiffnesses):
-    a command input has its gain fitted (one_speed says when it and K are not told apart); a
-    measured angle goes through gain_apart, and a scale it finds replaces the final fit (``fits.model``
-    becomes YawScaled; its held-out prediction in ``held.sims``; the delay's verdict kept)."""
-    if command:
-        return None, one_speed(log, min_speed), final, params, stiff
-    check, alike, free_fit = gain_apart(fits, final)
-    if free_fit is None:
-        return check, alike, final, params, stiff
-    fits.model = YawScaled(fits.model)
-    new_params, new_stiff = _parameters(free_fit, list(free_fit.free), fits)
-    if "verdict" in params["delay"]:                # decided below zero: that verdict stands
-        new_params["delay"] = params["delay"]
-    held.sims[1 if saturation else 0] = fits.model.simulate(free_fit.values, fits.test_segs)
-    return check, None, free_fit, new_params, new_stiff
+def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, command: bool, min_speed: float,
+               L: float):
+    """(the gain check or None, why K is not identifiable or None, final fit, parameters, stiffnesses)
+    from _final_parameters: a command input has its gain fitted (one_speed says when it and K are
+    not told apart); a measured angle goes through gain_apart, and a scale it finds replaces the
+    final fit (``fits.model`` becomes YawScaled; its held-out prediction in ``held.sims``; the
+    delay's verdict kept). A bias fitted beside an offset: _without_standstill."""
+    final, params, stiff = _final_parameters(log, fits, held, saturation)
+    check, alike, free_fit = (None, one_speed(log, min_speed), None) if command else gain_apart(fits, final)
+    if free_fit is not None:
+        fits.model = YawScaled(fits.model)
+        new_params, stiff = _parameters(free_fit, list(free_fit.free), fits)
+        if "verdict" in params["delay"]:                # decided below zero: that verdict stands
+            new_params["delay"] = params["delay"]
+        held.sims[1 if saturation else 0] = fits.model.simulate(free_fit.values, fits.test_segs)
+        final, params = free_fit, new_params
+    _without_standstill(params, final, log, L, min_speed)
+    return check, alike, final, params, stiff
+
+
+def _turn_gain(final: FitResult) -> tuple[float, float]:
+    """(g, std) of the final fit's steering gain (a command) or turn scale (a measured angle), else (1, 0)."""
+    name = next((k for k in ("steer_gain", "yaw_gain") if k in final.names), None)
+    return (final.values[name], final.std(name)) if name else (1.0, 0.0)
 
 
 def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None,
@@ -868,9 +874,14 @@ def _without_standstill(params: dict, final: FitResult, log: DrivingLog, L: floa
                         "note": f"{q['note']}; {text}" if q.get("note") else text}
 
 
-def _steady_json(ss, vehicle: Vehicle) -> dict:
+def _steady_json(ss, vehicle: Vehicle, windows: dict) -> dict:
     """The steady-state regression's JSON, with why its gain is held (a measured angle at one speed)
-    and its offset flagged ``implausible`` beyond the class's steering offset (vehicle.STEER_OFFSET)."""
+    and its offset flagged ``implausible`` beyond the class's steering offset (vehicle.STEER_OFFSET);
+    ``ss`` None: why there is none."""
+    if ss is None:
+        return {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the "
+                "linear range, no steady turning, or (a command input) one speed, where the steering gain and K "
+                "are not told apart"}
     d = ss.as_dict()
     if ss.fixed_gain is not None:
         d["gain_held"] = "the measured angle at one speed, where a gain and K are not told apart"
@@ -1097,6 +1108,10 @@ def summary(report: dict) -> str:
     else:       # neither K nor the speed it sets is printed as a result
         lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "
                      f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
+    if "steering_gain_check" in report:
+        gc = report["steering_gain_check"]
+        lines.append(f"turn scale k (yaw rate per v tan(w) / L, fitted beside K): {q(gc['yaw_gain'], '{:.3g}')}: "
+                     f"{gc['verdict']}")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
