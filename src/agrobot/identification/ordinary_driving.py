@@ -745,10 +745,9 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
     YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
     fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
-    interval, or k within SCALE_TOLERANCE of 1: k = 1 kept. Else a scale error, the free fit kept,
-    unless k ended on its bound,
-    or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
-    |corr(k, K)| > 0.87) and its interval holds 0: then K is not told from k."""
+    interval: k = 1 kept. Else, where k ended on its bound or K's std with k free exceeds APART x its
+    std at k = 1 (k takes most of what the log says of K; |corr(k, K)| > 0.87), K is not told from
+    k; else k within SCALE_TOLERANCE of 1 keeps k = 1, and a larger scale keeps the free fit."""
     gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
                      "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
     fixed = {k: v for k, v in final.values.items() if k not in final.names}
@@ -757,14 +756,14 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
     g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
-    wide = not math.isfinite(sd2) or (sd2 > APART * sd1 and lo <= 0.0 <= hi) or free_fit.at_bound(gain) is not None
+    wide = not math.isfinite(sd2) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
     small = abs(g - 1) - Z95 * g_sd <= SCALE_TOLERANCE         # within what a declared wheelbase or speed is sure of
     inside = lo <= k1 <= hi or (small and not wide)
     verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if lo <= k1 <= hi else
                f"k = 1 kept: a scale of {100 * (g - 1):+.1f} % is within the {100 * SCALE_TOLERANCE:g} % a declared "
                f"wheelbase and speed are sure of (K with it {k2:.3g} [{lo:.3g}, {hi:.3g}])" if inside else
-               "K not told apart from k" if wide else f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with "
-               "k free kept")
+               f"K not told apart from k (K's std x {sd2 / sd1:.2g} with k free)" if wide else
+               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept")
     out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
            "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
            "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict, "kept": not inside and not wide,
@@ -775,8 +774,9 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
         return out, None, free_fit
     return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
                  f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
-                 f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale: a "
-                 f"{100 * (g - 1):+.1f} % scale (the wheelbase's, the speed's, the angle sensor's) reads as understeer"), None
+                 f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
+                 f"log's turns fix the two together (K's std x {sd2 / sd1:.2g} with k free), so a scale of the wheelbase, "
+                 f"the speed or the angle sensor reads as understeer"), None
 
 
 def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, command: bool, min_speed: float,
