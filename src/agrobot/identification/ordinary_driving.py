@@ -752,7 +752,7 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
                      "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
     fixed = {k: v for k, v in final.values.items() if k not in final.names}
     free_fit = fit(YawScaled(fits.model), [*final.free, gain], {**final.values, "yaw_gain": 1.0}, fixed,
-                   fits.fit_segs, max_nfev=30)
+                   fits.fit_segs, max_nfev=15)
     (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
     g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
