@@ -16,7 +16,10 @@
    direction (a saturating tyre turns less than it predicts: negative).
 5. Verdicts: a parameter on its bound is "not identifiable from this log" (value and bound given);
    every quantity is given with its 95 % interval; the steady-state regression
-   (identification.steady_state) is reported beside the dynamic fit.
+   (identification.steady_state) is reported beside the dynamic fit. A measured angle's fit is
+   tried again with a scale of the turns free (gain_apart: K is not concluded where the log cannot
+   tell the two apart); no characteristic or critical speed past BEYOND_TOP x the log's top speed;
+   a gyro bias fitted without a standstill is not concluded (_without_standstill).
 """
 from __future__ import annotations
 
