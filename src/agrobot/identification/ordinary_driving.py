@@ -235,7 +235,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, command, min_speed, L)
     top = float(np.percentile(log.v[log.v >= min_speed], 99))
     pred = held.sims[1] if saturation else held.sims[0]
-    K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top)
+    K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top, (gain_check or {}).get("span"))
     g, g_sd = _turn_gain(final)
     linear_range = _linear_range(saturation, nl, log, min_speed)
     windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
@@ -698,12 +698,15 @@ def one_speed(log: DrivingLog, min_speed: float) -> str | None:
 
 
 def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
-                top_speed: float = math.inf):
+                top_speed: float = math.inf, span: list[float] | None = None):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
     log cannot tell K from a steering gain (one_speed, gain_apart), then K is not identifiable;
-    ``top_speed``: the log's (characteristic_speed)."""
+    ``top_speed``: the log's (characteristic_speed); ``span``: K's 95 % interval widened to it
+    (gain_apart: the fits with the turns' scale at 1 and free)."""
     K, K_sd = _k_of(final)
+    if span:
+        K_sd = max(K - span[0], span[1] - K) / Z95
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
@@ -748,9 +751,10 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
     YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
     fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
-    interval: k = 1 kept. Else, where k ended on its bound or K's std with k free exceeds APART x its
-    std at k = 1 (k takes most of what the log says of K; |corr(k, K)| > 0.87), K is not told from
-    k; else k within SCALE_TOLERANCE of 1 keeps k = 1, and a larger scale keeps the free fit."""
+    interval: k = 1 kept. Else, where k ended on its bound, the free fit's stiffnesses both on theirs,
+    or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
+    |corr(k, K)| > 0.87), K is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps
+    the free fit, and a smaller one k = 1 with K's interval spanning both fits' (``span``)."""
     gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
                      "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
     fixed = {k: v for k, v in final.values.items() if k not in final.names}
@@ -759,26 +763,31 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
     (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
     g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
-    wide = not math.isfinite(sd2) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
-    small = abs(g - 1) - Z95 * g_sd <= SCALE_TOLERANCE         # within what a declared wheelbase or speed is sure of
-    inside = lo <= k1 <= hi or (small and not wide)
-    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if lo <= k1 <= hi else
-               f"k = 1 kept: a scale of {100 * (g - 1):+.1f} % is within the {100 * SCALE_TOLERANCE:g} % a declared "
-               f"wheelbase and speed are sure of (K with it {k2:.3g} [{lo:.3g}, {hi:.3g}])" if inside else
-               f"K not told apart from k (K's std x {sd2 / sd1:.2g} with k free)" if wide else
-               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept")
+    k2_seen = any(free_fit.at_bound(q) is None for q in free_fit.free if q.name in ("c_f", "c_r"))
+    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
+    scaled = abs(g - 1) - Z95 * g_sd > SCALE_TOLERANCE       # beyond what a declared wheelbase or speed is sure of
+    inside = lo <= k1 <= hi
+    how_wide = (f"K's std x {sd2 / sd1:.2g} with k free" if k2_seen and math.isfinite(sd2) else
+                "with k free both stiffnesses end on their bounds")
+    span = [min(lo, k1 - Z95 * sd1), max(hi, k1 + Z95 * sd1)]
+    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+               f"K not told apart from k ({how_wide})" if wide else
+               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept" if scaled else
+               f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
+               f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
     out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
            "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
-           "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict, "kept": not inside and not wide,
+           "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict,
+           "kept": bool(not inside and not wide and scaled),
            "how": f"the final fit again with a turn gain k free in [{gain.lower:g}, {gain.upper:g}]"}
-    if inside:
-        return out, None, None
+    if inside or (not wide and not scaled):
+        return out | ({} if inside else {"span": span}), None, None
     if not wide:
         return out, None, free_fit
     return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
                  f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
                  f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
-                 f"log's turns fix the two together (K's std x {sd2 / sd1:.2g} with k free), so a scale of the wheelbase, "
+                 f"log's turns fix the two together ({how_wide}), so a scale of the wheelbase, "
                  f"the speed or the angle sensor reads as understeer"), None
 
 
