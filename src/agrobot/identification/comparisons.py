@@ -42,6 +42,7 @@ from .driving import cut_segments
 from .steady_state import same_regression, steady_windows
 
 pair = compare           # the shared rule (agrobot.estimation.compare): intervals that overlap agree
+CORRECTED = "steady-state regression less its structural bias"     # K_ss - b, beside the dynamic fit's
 
 
 def course_bias(t: np.ndarray, x: np.ndarray, y: np.ndarray, r: np.ndarray, v: np.ndarray,
@@ -87,14 +88,15 @@ def model_yaw(model, values: dict, log, min_speed: float, burn_in: float = 2.0) 
     return out
 
 
-def model_steady_state(model, values: dict, log, min_speed: float, delay: float, windows: dict, ss):
+def model_steady_state(model, values: dict, log, min_speed: float, delay: float, windows: dict, ss, u=None):
     """The steady-state regression ``ss`` (on ``windows``, steady_state.steady_windows with
-    ``delay``) run again on the dynamic model's own yaw rate (model_yaw) over the same windows:
-    (K_sim, std), or None (no regression there). The windows are chosen on the input and the speed
-    alone and kept by the measured |a_y|, so they are the same ones."""
+    ``delay`` and the input ``u``, log.u unless given) run again on the dynamic model's own yaw rate
+    (model_yaw) over the same windows: (K_sim, std), or None (no regression there). The windows are
+    chosen on the input and the speed alone and kept by the measured |a_y|, so they are the same ones."""
     if ss is None:
         return None
-    w = steady_windows(log.t, log.u, log.v, model_yaw(model, values, log, min_speed), log.run, min_speed, delay=delay)
+    u = log.u if u is None else u
+    w = steady_windows(log.t, u, log.v, model_yaw(model, values, log, min_speed), log.run, min_speed, delay=delay)
     if len(w["u"]) != len(windows["u"]):
         return None
     fit = same_regression(ss, {**w, "a_y": windows["a_y"]}, model.L)
@@ -145,7 +147,7 @@ def understeer_pair(understeer: dict, ss, linear_range: dict, lateral_p99: float
                f"a fitted front relaxation length, held inertia and rear relaxation, a delay and a lag (a held "
                f"value off, a stiffness varying with speed or a steering ratio varying with the angle pull it)")
     out = compare("understeer gradient K", "rad/(m/s2)", ("dynamic fit", understeer["value"], understeer["std"]),
-                  ("steady-state regression", k_ss, sd), f"{why}; steady turns: {measured}")
+                  (CORRECTED, k_ss, sd), f"{why}; steady turns: {measured}")
     gap_sd = math.hypot(sd, understeer["std"])        # of K_ss - K_sim: the regression's and the fit's, carried 1:1
     if math.isfinite(gap_sd) and math.isfinite(k_ss - understeer["value"]):
         out["agree"] = bool(abs(k_ss - understeer["value"]) <= Z95 * gap_sd)
@@ -169,7 +171,7 @@ def withheld_understeer(understeer: dict, char: dict, comparisons: list[dict], c
         return understeer, char
     both = " and ".join(f"{m} {_text(e['value'], e['std'])}" for m, e in c["estimates"].items())
     if c.get("steady_concluded") and char_of is not None:
-        e = c["estimates"]["steady-state regression"]
+        e = c["estimates"][CORRECTED]
         note = (f"from the steady turns, where K is defined: {both} rad/(m/s2) disagree over the same linear |a_y|: "
                 f"{c['suggests']}")
         return ({**understeer, "value": e["value"], "std": e["std"], "interval": e["interval"],

@@ -16,7 +16,10 @@
    direction (a saturating tyre turns less than it predicts: negative).
 5. Verdicts: a parameter on its bound is "not identifiable from this log" (value and bound given);
    every quantity is given with its 95 % interval; the steady-state regression
-   (identification.steady_state) is reported beside the dynamic fit.
+   (identification.steady_state) is reported beside the dynamic fit. A measured angle's fit is
+   tried again with a scale of the turns free (gain_apart: K is not concluded where the log cannot
+   tell the two apart); no characteristic or critical speed past BEYOND_TOP x the log's top speed;
+   a gyro bias fitted without a standstill is not concluded (_without_standstill).
 """
 from __future__ import annotations
 
@@ -41,7 +44,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
-from .kinematic import KINEMATIC_LATERAL, kinematic_report, kinematic_summary, lateral_p95
+from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .steady_state import in_linear_range, steady_windows
@@ -230,17 +233,19 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     held = _judge_saturation(log, fits, min_gain)
     saturation = not held.reasons
     linear, nl, test_segs = fits.linear, fits.nl, fits.test_segs
-    final, params_json, stiff = _final_parameters(log, fits, held, saturation)
+    gain_check, alike, final, params_json, stiff = _with_gain(log, fits, held, saturation, command, min_speed, L)
+    top = float(np.percentile(log.v[log.v >= min_speed], 99))
     pred = held.sims[1] if saturation else held.sims[0]
-    K, K_sd, understeer, char = _understeer(final, fits.free, L, one_speed(log, min_speed) if command else None)
-    g, g_sd = final.values.get("steer_gain", 1.0), (final.std("steer_gain") if command else 0.0)
+    K, K_sd, understeer, char = _understeer(final, fits.free, L, alike, top, (gain_check or {}).get("span"))
+    g, g_sd = _turn_gain(final)
     linear_range = _linear_range(saturation, nl, log, min_speed)
     windows, ss, twin = _steady_check(log, fits.model, final.values, L, min_speed, linear_range["value"], command)
     checks = physical_checks(frame, log, fits.model, final.values, test_segs)
     comparisons = independent_estimates(frame, log, test_segs, held.r_test, pred, understeer, ss, params_json["delay"],
                                         params_json.get("gyro_bias"), linear_range, L, min_speed,
                                         _low_range_understeer(fits, saturation), twin)
-    understeer, char = withheld_understeer(understeer, char, comparisons, lambda k, sd: characteristic_speed(k, sd, L))
+    understeer, char = withheld_understeer(understeer, char, comparisons,
+                                           lambda k, sd: characteristic_speed(k, sd, L, top_speed=top))
     K, K_sd = understeer["value"], understeer["std"]
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
@@ -254,6 +259,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
                     "axle_loads": list(fits.loads)},
         "understeer_gradient": understeer,
         "characteristic_speed": char,
+        **({"steering_gain_check": gain_check} if gain_check else {}),
         "delay": params_json["delay"],
         "held_out_fit": _held_out_fit(log, test_segs, held, pred, study),
         "cornering_stiffness": stiff,
@@ -262,9 +268,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "linear_range": linear_range,
         "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
         "residual_by_lateral_acceleration": _residual_bins(held),
-        "steady_state_regression": ss.as_dict() if ss else
-        {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the linear range, "
-         "no steady turning, or (a command input) one speed, where the steering gain and K are not told apart"},
+        "steady_state_regression": _steady_json(ss, vehicle, windows),
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
         "comparisons": comparisons,
         "physical_checks": checks,
@@ -695,24 +699,131 @@ def one_speed(log: DrivingLog, min_speed: float) -> str | None:
             f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
-def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None):
+def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
+                top_speed: float = math.inf, span: list[float] | None = None):
     """(K, its std, K's quantity, the characteristic or critical speed): K = (1/c_f - 1/c_r) / g,
     its std by the delta method on the fit's covariance; v_ch = sqrt(L / |K|). ``alike``: why the
-    log cannot tell K from a fitted steering gain (one_speed), then K is not identifiable."""
+    log cannot tell K from a steering gain (one_speed, gain_apart), then K is not identifiable;
+    ``top_speed``: the log's (characteristic_speed); ``span``: K's 95 % interval widened to it
+    (gain_apart: the fits with the turns' scale at 1 and free)."""
     K, K_sd = _k_of(final)
+    if span:
+        K_sd = max(K - span[0], span[1] - K) / Z95
     # K needs one axle's stiffness off its bound (K = 1/(g c_f) as c_r grows without bound); its
     # interval then says how well the log pins it
     k_ident = any(final.at_bound(q) is None for q in free if q.name in ("c_f", "c_r"))
     understeer = _quantity(K, K_sd, "rad/(m/s2)", identifiable=bool(k_ident and math.isfinite(K_sd) and not alike),
                            deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
                                                                     if alike else {}))
-    char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike)
+    char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike, top_speed)
     return K, K_sd, understeer, char
 
 
-def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None) -> dict:
+SENSED_GAIN = (0.8, 1.25)      # yaw per kinematic v tan(w) / L: a wheelbase, speed, gyro or angle scale 10-20 % off
+APART = 2.0                    # K's std with the gain free over its std at g = 1 beyond which the two are not told apart
+SCALE_TOLERANCE = 0.02        # a scale of the turns within this is the declared wheelbase's and speed's own uncertainty
+BEYOND_TOP = 2.0               # a characteristic or critical speed is read no further than this x the log's top speed
+
+
+class YawScaled:
+    """The yaw model with a turn gain k on its yaw rate, its gyro bias b not scaled: r = k (r_model -
+    b) + b (``yaw_gain`` among the values). From turns, a wheelbase L / k, a speed or gyro scale k,
+    or a wheel-angle sensor's gain (at small angles) are one quantity."""
+
+    def __init__(self, model: YawModel):
+        self.model = model
+
+    def __getattr__(self, name):
+        return getattr(self.model, name)
+
+    def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:
+        return self.simulate_many([values], segs)[0]
+
+    def simulate_many(self, sets: list[dict], segs: Segments | None = None, lateral: bool = False):
+        out = self.model.simulate_many(sets, segs, lateral=lateral)
+        yaw = out[0] if lateral else out
+        scaled = [v.get("yaw_gain", 1.0) * (y - v.get("gyro_bias", 0.0)) + v.get("gyro_bias", 0.0)
+                  for v, y in zip(sets, yaw)]
+        return (scaled, out[1]) if lateral else scaled
+
+
+def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResult | None]:
+    """A measured wheel angle is fitted at g = 1; a scale error of the turns (the angle sensor's, the
+    declared wheelbase's, the speed's) then reads as understeer, since the steady yaw rate
+    k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
+    YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
+    fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
+    interval: k = 1 kept. Else, where k ended on its bound, the free fit's stiffnesses both on theirs,
+    or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
+    |corr(k, K)| > 0.87), K is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps
+    the free fit, and a smaller one k = 1 with K's interval spanning both fits' (``span``)."""
+    gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
+                     "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
+    fixed = {k: v for k, v in final.values.items() if k not in final.names}
+    free_fit = fit(YawScaled(fits.model), [*final.free, gain], {**final.values, "yaw_gain": 1.0}, fixed,
+                   fits.fit_segs, max_nfev=15)
+    (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
+    g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
+    lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
+    k2_seen = any(free_fit.at_bound(q) is None for q in free_fit.free if q.name in ("c_f", "c_r"))
+    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
+    scaled = abs(g - 1) - Z95 * g_sd > SCALE_TOLERANCE       # beyond what a declared wheelbase or speed is sure of
+    inside = lo <= k1 <= hi
+    how_wide = (f"K's std x {sd2 / sd1:.2g} with k free" if k2_seen and math.isfinite(sd2) else
+                "with k free both stiffnesses end on their bounds")
+    span = [min(lo, k1 - Z95 * sd1), max(hi, k1 + Z95 * sd1)]
+    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+               f"K not told apart from k ({how_wide})" if wide else
+               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept" if scaled else
+               f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
+               f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
+    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
+           "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
+           "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict,
+           "kept": bool(not inside and not wide and scaled),
+           "how": f"the final fit again with a turn gain k free in [{gain.lower:g}, {gain.upper:g}]"}
+    if inside or (not wide and not scaled):
+        return out | ({} if inside else {"span": span}), None, None
+    if not wide:
+        return out, None, free_fit
+    return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
+                 f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
+                 f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
+                 f"log's turns fix the two together ({how_wide}), so a scale of the wheelbase, "
+                 f"the speed or the angle sensor reads as understeer"), None
+
+
+def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, command: bool, min_speed: float,
+               L: float):
+    """(the gain check or None, why K is not identifiable or None, final fit, parameters, stiffnesses)
+    from _final_parameters: a command input has its gain fitted (one_speed says when it and K are
+    not told apart); a measured angle goes through gain_apart, and a scale it finds replaces the
+    final fit (``fits.model`` becomes YawScaled; its held-out prediction in ``held.sims``; the
+    delay's verdict kept). A bias fitted beside an offset: _without_standstill."""
+    final, params, stiff = _final_parameters(log, fits, held, saturation)
+    check, alike, free_fit = (None, one_speed(log, min_speed), None) if command else gain_apart(fits, final)
+    if free_fit is not None:
+        fits.model = YawScaled(fits.model)
+        new_params, stiff = _parameters(free_fit, list(free_fit.free), fits)
+        if "verdict" in params["delay"]:                # decided below zero: that verdict stands
+            new_params["delay"] = params["delay"]
+        held.sims[1 if saturation else 0] = fits.model.simulate(free_fit.values, fits.test_segs)
+        final, params = free_fit, new_params
+    _without_standstill(params, final, log, L, min_speed)
+    return check, alike, final, params, stiff
+
+
+def _turn_gain(final: FitResult) -> tuple[float, float]:
+    """(g, std) of the final fit's steering gain (a command) or turn scale (a measured angle), else (1, 0)."""
+    name = next((k for k in ("steer_gain", "yaw_gain") if k in final.names), None)
+    return (final.values[name], final.std(name)) if name else (1.0, 0.0)
+
+
+def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = True, alike: str | None = None,
+                         top_speed: float = math.inf) -> dict:
     """The characteristic (K > 0) or critical (K < 0) speed sqrt(L / |K|) with its std (delta
-    method), identifiable where K is (``alike``: why K is not)."""
+    method), identifiable where K is (``alike``: why K is not) and no further than BEYOND_TOP x the
+    log's ``top_speed`` (beyond: not identifiable at these speeds)."""
     if K > 0:
         vch = math.sqrt(L / K)
         char = {"kind": "characteristic speed (understeer): the yaw-rate gain peaks there", "value": vch,
@@ -727,6 +838,11 @@ def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = T
     char["identifiable"] = identifiable          # v_ch is K's: identifiable where K is
     if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
+    elif char["value"] > BEYOND_TOP * top_speed:     # an extrapolation of the gain curve far past the log
+        char["identifiable"] = False
+        char["note"] = (f"{NOT_AT_THESE_SPEEDS}: sqrt(L / |K|) = {char['value']:.3g} m/s lies beyond {BEYOND_TOP:g} x the "
+                        f"log's top speed {top_speed:.3g} m/s (99th percentile), where K v^2 / L is "
+                        f"{100 * abs(K) * top_speed ** 2 / L:.1f} % of the yaw gain")
     return char
 
 
@@ -734,11 +850,61 @@ def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_
                   command: bool):
     """(the steady windows, their regression in the linear range up to ``cap``, the same regression
     on the model's own yaw rate: comparisons.model_steady_state): the independent check on K (a
-    negative delay is left to the fit)."""
+    negative delay is left to the fit); the input enters as the model's does, tan u under its
+    Ackermann geometry (L r = v tan u - K v^2 r is the no-slip turn at any angle). The gain is
+    fitted beside K for a measured angle too (its sensor's, the wheelbase's or the speed's scale
+    would read as K), held at 1 only where the turns are at one speed and cannot tell them apart."""
     delay = max(values["delay"], 0.0)
-    windows = steady_windows(log.t, log.u, log.v, log.r, log.run, min_speed, delay=delay)
-    ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=None if command else 1.0)
-    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss)
+    u = np.tan(np.clip(log.u, -1.3, 1.3)) if model.geometry == ACKERMANN else log.u       # as the model turns
+    windows = steady_windows(log.t, u, log.v, log.r, log.run, min_speed, delay=delay)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, cap)       # the gain free: a scale of the turns is not K
+    if ss is None and not command:                           # turns at one speed: a measured angle taken as is
+        ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=1.0)
+    return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss, u)
+
+
+def _without_standstill(params: dict, final: FitResult, log: DrivingLog, L: float, min_speed: float) -> None:
+    """A gyro bias fitted (no standstill to measure it) beside a steering offset: both notes say so
+    and that neither is concluded. Both shift the yaw rate, an offset delta_0 by v delta_0 / L, a
+    bias by b at every speed: only the speed's spread tells them apart, their fitted correlation says
+    how little, and their intervals hold only for an exact model (a gain, a lag or an asymmetry it
+    misses moves both beyond them)."""
+    if "gyro_bias" not in final.names or "steer_offset" not in final.names:
+        return
+    i, j = final.names.index("gyro_bias"), final.names.index("steer_offset")
+    c = final.cov
+    rho = float(c[i, j] / math.sqrt(c[i, i] * c[j, j])) if c[i, i] > 0 and c[j, j] > 0 else math.nan
+    v = float(np.median(log.v[log.v >= min_speed]))
+    why = (f"fitted without a standstill (no 2 s with |v| < {STANDSTILL:g} m/s in the log: the recording's standing "
+           f"still trimmed, or never recorded): the gyro bias and the steering offset both shift the yaw rate (an offset "
+           f"of 1 deg reads as {math.radians(1) * v / L:.3g} rad/s of bias at the median speed {v:.2g} m/s), told apart "
+           f"only by the speed's spread (correlation {rho:+.2f}); their intervals hold only for an exact model, any "
+           f"misfit moves both beyond them: not concluded; keep a standstill of 2 s or more in the log (--time-range "
+           f"around it) to measure the bias")
+    for name, text in (("gyro_bias", why), ("steer_offset", "fitted without a standstill, traded against the gyro "
+                                                          "bias: not concluded (see gyro_bias)")):
+        q = params[name]
+        params[name] = {**q, "concluded": False, "no_standstill": True,
+                        "note": f"{q['note']}; {text}" if q.get("note") else text}
+
+
+def _steady_json(ss, vehicle: Vehicle, windows: dict) -> dict:
+    """The steady-state regression's JSON, with why its gain is held (a measured angle at one speed)
+    and its offset flagged ``implausible`` beyond the class's steering offset (vehicle.STEER_OFFSET);
+    ``ss`` None: why there is none."""
+    if ss is None:
+        return {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the "
+                "linear range, no steady turning, or (a command input) one speed, where the steering gain and K "
+                "are not told apart"}
+    d = ss.as_dict()
+    if ss.fixed_gain is not None:
+        d["gain_held"] = "the measured angle at one speed, where a gain and K are not told apart"
+    bound, off = vehicle.steer_offset_bound, d["steer_offset"]["value"]
+    if abs(off) > bound:
+        d["steer_offset"]["implausible"] = (f"|{math.degrees(off):.3g}| deg beyond the {math.degrees(bound):.3g} deg "
+                                            f"a {vehicle.kind or 'vehicle'}'s angle sensor can be off: the regression's "
+                                            f"offset takes up what its straight-line model misses, not concluded")
+    return d
 
 
 def _low_range_understeer(fits: _Fits, saturation: bool) -> tuple[float, float] | None:
@@ -797,9 +963,9 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
                 "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
                        f"x {share:.3f} (shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
-    return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2",
-            "how": "no saturation found: the linear model holds over the whole log (99th percentile of |a_y|)",
-            "saturation": False}
+    return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2", "at_least": True,
+            "how": "no saturation found: the linear model holds over the whole log, whose largest |a_y| (99th "
+                   "percentile) this is: the tyres' bend is not reached", "saturation": False}
 
 
 def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturation: bool) -> dict:
@@ -916,6 +1082,21 @@ def independent_estimates(frame, log, test_segs, r_test, pred, understeer, ss, d
     return out
 
 
+def _steady_lines(ss: dict, q) -> list[str]:
+    """The steady-state regression on the measured turns, as fitted (its K before the structural
+    correction the comparison line carries), its gain fitted or held, its offset flagged when
+    outside the class's range."""
+    if "understeer_gradient" not in ss:
+        return []
+    g, off = ss["steer_gain"], ss["steer_offset"]
+    gain = f"gain {g['value']:.3g} (held at 1: {ss['gain_held']})" if ss.get("gain_held") else f"gain {g['value']:.3g}"
+    flag = f" OUTSIDE the class's range: {off['implausible']}" if off.get("implausible") else ""
+    return [f"steady-state regression on the measured turns, before its structural correction ({ss['windows']} "
+            f"windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): K {q(ss['understeer_gradient'])}, {gain}, offset "
+            f"{off['value']:.3g} rad ({math.degrees(off['value']):.2g} deg){flag}; linear range {ss['linear_limit']}"
+            + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else "")]
+
+
 def summary(report: dict) -> str:
     """What an engineer reads first."""
     def q(d, f="{:.4g}"):
@@ -936,10 +1117,15 @@ def summary(report: dict) -> str:
     if K["identifiable"]:
         ch = report["characteristic_speed"]
         lines += [f"understeer gradient K: {q(K)} ({K['deg_per_g']:.3g} deg/g)" + (f", {K['from']}" if "from" in K else ""),
-                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s"]
+                  f"{ch['kind'].split(' (')[0]}: {ch['value']:.3g} m/s" if ch["identifiable"] else
+                  f"characteristic or critical speed: {ch['note']}"]
     else:       # neither K nor the speed it sets is printed as a result
         lines.append(f"understeer gradient K: {K.get('note', 'not identifiable from this log')} (fitted "
                      f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
+    if "steering_gain_check" in report:
+        gc = report["steering_gain_check"]
+        lines.append(f"turn scale k (yaw rate per v tan(w) / L, fitted beside K): {q(gc['yaw_gain'], '{:.3g}')}: "
+                     f"{gc['verdict']}")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
@@ -955,13 +1141,9 @@ def summary(report: dict) -> str:
     else:
         lines.append("tyre saturation not found: " + "; ".join(t["why_not"]))
     lr = report["linear_range"]
-    lines.append(f"linear model holds for |a_y| up to {q(lr, '{:.3g}')}")
-    ss = report["steady_state_regression"]
-    if "understeer_gradient" in ss:
-        lines.append(f"steady-state regression ({ss['windows']} windows, |a_y| <= {ss['max_lateral_acceleration']:.3g}): "
-                     f"K {q(ss['understeer_gradient'])}, gain {ss['steer_gain']['value']:.3g}, offset "
-                     f"{ss['steer_offset']['value']:.3g} rad; linear range {ss['linear_limit']}"
-                     + (f"; {ss['windows_passed_over']} windows beyond it passed over" if ss["windows_passed_over"] else ""))
+    lines.append(f"linear model holds for |a_y| at least up to {lr['value']:.3g} m/s2 ({lr['how']})" if lr.get("at_least")
+                 else f"linear model holds for |a_y| up to {q(lr, '{:.3g}')}")
+    lines += _steady_lines(report["steady_state_regression"], q)
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")

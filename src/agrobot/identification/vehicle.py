@@ -12,7 +12,7 @@ parameter may take on it.
     steering_ratio = 1.0       # handwheel / road-wheel angle (a recording's CAN handwheel angle)
 
 Ranges a class gives (a fitted value outside them is not a property of such a vehicle): the gyro
-bias a gyro of that class can have, the slope a road or a field can have, the friction its tyres
+bias a gyro of that class can have, the steering offset its angle sensor can have, the slope a road or a field can have, the friction its tyres
 can have on their ground; an antenna lever arm must lie inside the vehicle's outline.
 """
 from __future__ import annotations
@@ -32,6 +32,9 @@ CLASSES = {
     "scale_car": (3.0 * DEG, 5 * DEG, (0.2, 1.8), "a 1:10 to 1:5 model car (hobby MEMS gyro, indoor floors)"),
     "robot": (3.0 * DEG, 10 * DEG, (0.2, 1.5), "a small mobile robot (hobby MEMS gyro)"),
 }
+# class -> the steering offset [rad] its wheel-angle sensor or linkage can have: a potentiometer's or
+# encoder's zero off by a few degrees after a repair or a knock (a small machine's cheap linkage more)
+STEER_OFFSET = {"tractor": 3 * DEG, "car": 2 * DEG, "truck": 2 * DEG, "scale_car": 5 * DEG, "robot": 5 * DEG}
 STEERING = ("angle", "torque", "none")
 DRIVES = ("ackermann", "skid", "differential", "articulated")
 
@@ -86,6 +89,11 @@ class Vehicle:
     @property
     def gyro_bias_bound(self) -> float | None:
         return CLASSES[self.kind][0] if self.kind else None
+
+    @property
+    def steer_offset_bound(self) -> float:
+        """The largest steering offset [rad] of the class (5 deg without a class)."""
+        return STEER_OFFSET[self.kind] if self.kind else 5 * DEG
 
     @property
     def slope_bound(self) -> float | None:

@@ -1,0 +1,98 @@
+"""A scale of the turns is not understeer, and no value is concluded past what the log supports.
+Truths from harness.truth_tractor's small Ackermann machine (wheelbase 1.27 m, linear tyres of
+known stiffness) driven at 0.6-1.9 m/s: its wheel-angle sensor reading 4 % more than the wheels
+turn (the tyres see 1/1.04 of the logged angle); and a steering offset of 0.15 rad (8.6 deg, more
+than a robot's angle sensor can be off) on a log that begins with 5 s standing still."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.identification.ordinary_driving import characteristic_speed, identify_driving, summary
+from agrobot.orchestrator.study import Study
+from harness.truth_tractor import SMALL_ACKERMANN, make_log
+from harness.vehicle_classes import study
+
+SPEEDS = (0.6, 1.2, 1.9)
+SENSOR_GAIN = 1.04
+
+
+def true_k(truth: dict) -> float:
+    """K = m / L (l_r / C_f - l_f / C_r) of the truth's stiffnesses [rad/(m/s2)]."""
+    t = SMALL_ACKERMANN["table"]
+    L = t["l_f"] + t["l_r"]
+    return t["m"] / L * (t["l_r"] / truth["C_f"] - t["l_f"] / truth["C_r"])
+
+
+@pytest.fixture(scope="module")
+def scaled(tmp_path_factory):
+    s = Study.load(study(tmp_path_factory.mktemp("small"), speeds=SPEEDS))
+    frame, truth = make_log(1, "steering_sensor_gain", vehicle="small_ackermann", speeds=SPEEDS, duration=180.0,
+                            values={"sensor_gain": SENSOR_GAIN})
+    return identify_driving(frame.drop(columns=["x", "y"]), "scaled.csv", s), truth
+
+
+def test_a_turn_scale_is_not_read_as_understeer(scaled):
+    rep, truth = scaled
+    K = rep["understeer_gradient"]
+    assert not K["identifiable"] or K["interval"][0] <= true_k(truth) <= K["interval"][1], (K, true_k(truth))
+    check = rep["steering_gain_check"]
+    assert check["yaw_gain"]["value"] == pytest.approx(1 / SENSOR_GAIN, abs=0.015), check
+
+
+def test_no_characteristic_speed_far_past_the_log(scaled):
+    rep, _ = scaled
+    text = summary(rep)
+    assert not any(line.startswith(("characteristic speed:", "critical speed:")) for line in text.splitlines()), text
+    assert not rep["characteristic_speed"]["identifiable"]
+
+
+def test_characteristic_speed_only_within_twice_the_top_speed():
+    """sqrt(L / K): 1.27 m at K 0.005 gives 15.9 m/s, past 2 x 1.9 m/s; at K 0.1, 3.56 m/s, within."""
+    far = characteristic_speed(0.005, 0.001, 1.27, top_speed=1.9)
+    near = characteristic_speed(0.1, 0.01, 1.27, top_speed=1.9)
+    assert not far["identifiable"] and "not identifiable at these speeds" in far["note"]
+    assert near["identifiable"] and near["value"] == pytest.approx(math.sqrt(1.27 / 0.1))
+
+
+def test_linear_range_is_at_least_the_largest_lateral_acceleration(scaled):
+    """The truth's tyres are linear: the bend is not reached, the range is "at least" the log's top."""
+    rep, _ = scaled
+    lr = rep["linear_range"]
+    assert lr["at_least"] and not rep["tyre_saturation"]["found"]
+    assert f"at least up to {lr['value']:.3g} m/s2" in summary(rep)
+    assert "[" not in summary(rep).split("linear model holds")[1].splitlines()[0].split("(")[0]
+
+
+def test_bias_and_offset_without_a_standstill_are_not_concluded(scaled):
+    rep, _ = scaled
+    for name in ("gyro_bias", "steer_offset"):
+        assert rep["parameters"][name]["concluded"] is False, rep["parameters"][name]
+    assert "--time-range" in rep["parameters"]["gyro_bias"]["note"]
+
+
+def with_standstill(frame: pd.DataFrame, seconds: float = 5.0, rate: float = 20.0, noise: float = 0.005) -> pd.DataFrame:
+    """``frame`` after ``seconds`` standing still (v = 0, the gyro reading its noise around no bias)."""
+    n = int(seconds * rate)
+    head = pd.DataFrame({c: np.repeat(frame[c].iloc[0], n) for c in frame.columns})
+    head["t"] = frame["t"].iloc[0] - seconds + np.arange(n) / rate
+    head["v"] = 0.0
+    head["yaw_rate"] = np.random.default_rng(5).normal(0.0, noise, n)
+    return pd.concat([head, frame], ignore_index=True)
+
+
+@pytest.mark.slow
+def test_offset_outside_the_class_flagged_and_standstill_bias_measured(tmp_path):
+    s = Study.load(study(tmp_path, speeds=SPEEDS))
+    frame, truth = make_log(2, "steering_offset", vehicle="small_ackermann", speeds=SPEEDS, duration=150.0,
+                            values={"offset": 0.15})
+    rep = identify_driving(with_standstill(frame.drop(columns=["x", "y"])), "offset.csv", s)
+    ss = rep["steady_state_regression"]
+    assert abs(ss["steer_offset"]["value"]) > math.radians(5) and "implausible" in ss["steer_offset"], ss
+    assert "OUTSIDE the class's range" in summary(rep)
+    bias = rep["parameters"]["gyro_bias"]
+    assert "standing still" in bias["how"] and bias["interval"][0] <= 0.0 <= bias["interval"][1], bias
+    assert "concluded" not in rep["parameters"]["steer_offset"]
