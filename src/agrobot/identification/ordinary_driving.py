@@ -255,8 +255,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "samples_per_second": 1 / log.h, "seconds_driven": driven,
         "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
                      "burn_in_s": BURN_IN, "min_speed": min_speed},
-        "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
-                    "axle_loads": list(fits.loads)},
+        "vehicle": {**_vehicle_json(vehicle, (L, L_from), p), "axle_loads": list(fits.loads)},
         "understeer_gradient": understeer,
         "characteristic_speed": char,
         **({"steering_gain_check": gain_check} if gain_check else {}),
@@ -282,6 +281,13 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     return report
 
 
+def _vehicle_json(vehicle, wheelbase: tuple, p) -> dict:
+    """The report's vehicle: its class, the wheelbase identify stood on and where it came from, the plant's
+    mass, yaw inertia and axle distances."""
+    L, L_from = wheelbase
+    return {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r}
+
+
 def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_speed, vehicle, p, measured, notes,
                p95) -> dict:
     """The report in the kinematic regime (identification.kinematic): the steering map in place of
@@ -298,7 +304,7 @@ def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_
             "input": input_name, "final_model": "kinematic", "steering_geometry": "tan", "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
                          "burn_in_s": BURN_IN, "min_speed": min_speed},
-            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r},
+            "vehicle": _vehicle_json(vehicle, (L, L_from), p),
             **{k: v for k, v in part.items() if k != "_plot"}, "delay": smap["delay"], "parameters": params,
             "not_identifiable": [f"{k}: {v['note']}" for k, v in params.items() if v.get("note")],
             "linear_range": {"value": float("nan"), "note": part["regime"]["says"]},
@@ -317,8 +323,7 @@ def _steady_turn(log, segs, wheelbase, where, input_name, driven, min_speed, veh
             "input": input_name, "final_model": "steady_turn", "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int(len(segs.idx)), "held_out": 0, "length_s": SEGMENT, "burn_in_s": BURN_IN,
                          "min_speed": min_speed},
-            "vehicle": {"class": vehicle.kind, "wheelbase": L, "wheelbase_from": L_from, "m": p.m, "I": p.I,
-                        "l_f": p.l_f, "l_r": p.l_r},
+            "vehicle": _vehicle_json(vehicle, (L, L_from), p),
             **{k: v for k, v in part.items() if k != "says"}, "delay": part["parameters"]["delay"],
             "regime": {"kinematic": False, "steady_turn": True, "says": part["says"]},
             "held_out_fit": {"value": nan, "std": nan, "interval": [nan, nan], "unit": "%", "per_segment": [],
