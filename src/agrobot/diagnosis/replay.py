@@ -23,6 +23,7 @@ from typing import Mapping
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
+from scipy.linalg import solve_triangular
 
 from agrobot.components.models import steering_equivalent
 from agrobot.diagnosis import replay_kernels
@@ -369,6 +370,51 @@ def aligned_residuals(predicted: np.ndarray, measured: np.ndarray, windows: np.n
     th = np.arctan2(cross, dot)[:, None]
     c, s = np.cos(th), np.sin(th)
     return np.stack([M[..., 0] - (c * P[..., 0] - s * P[..., 1]), M[..., 1] - (s * P[..., 0] + c * P[..., 1])], axis=-1)
+
+
+def track_residual_vector(res: np.ndarray) -> np.ndarray:
+    """Aligned track residuals (W, L, 2) as one vector ordered by time within each window's east,
+    then north, series ((W, 2, L) raveled): the order a lag-1 autocorrelation reads
+    (estimation.effective_size), which on east, north interleaved would pair the two axes."""
+    return np.asarray(res, float).transpose(0, 2, 1).ravel()
+
+
+def track_whitening(points: np.ndarray, h: float, sigma_gps: float, sigma_gyro: float,
+                    sigma_speed: float) -> np.ndarray:
+    """The generalised-least-squares transform T (2L, 2L) of one window's aligned track residual,
+    laid out (east over time, north over time), given the window's track ``points`` (L, 2).
+
+    The dead-reckoned track integrates the gyro's and the wheel speed's white noise (per row
+    sigma_gyro, sigma_speed): a heading error h n_i at row i turns the rest of the track about p_i,
+    a speed error h nu_i moves it along the heading psi_i, so at row k > i
+
+        dp_k = sum_{i<k} h n_i J (p_k - p_i) + h nu_i (cos psi_i, sin psi_i),   J a quarter turn,
+
+    and the residual's covariance is C = sigma_gps^2 I + G_g G_g' sigma_gyro^2 h^2 + G_v G_v'
+    sigma_speed^2 h^2: a random walk of the heading, integrated (its share grows as v^2 T^3; at a
+    car's 30 m/s, a 0.002 rad/s gyro at 20 Hz drifts the track by a GPS noise's worth within a
+    10 s window). Least squares on the raw residual takes that drift for a rear-axle side-slip or
+    an antenna lever arm; on T r = sigma_gps Pi_W C^(-1/2) r, Pi_W the projection off the whitened
+    rigid motion of the window's alignment (W = C^(-1/2) A, A: two translations and the rotation
+    about the centroid) it weighs each frequency by its noise. T is I - Pi_A-like where the sensors'
+    noise is the GPS's alone: the residual in metres, at the GPS's level where the model is right."""
+    P = np.asarray(points, float)
+    L = len(P)
+    d = P[:, None, :] - P[None, :, :]                          # p_k - p_i
+    later = np.tril(np.ones((L, L)), -1)                       # i < k
+    step = np.diff(P, axis=0, append=P[-1:] + (P[-1:] - P[-2:-1]))
+    heading = np.arctan2(step[:, 1], step[:, 0])
+    G_g = np.vstack([-d[..., 1] * later, d[..., 0] * later])    # (2L, L)
+    G_v = np.vstack([np.cos(heading)[None, :] * later, np.sin(heading)[None, :] * later])
+    C = (sigma_gps ** 2) * np.eye(2 * L) + (sigma_gyro * h) ** 2 * (G_g @ G_g.T) + (sigma_speed * h) ** 2 * (G_v @ G_v.T)
+    chol = np.linalg.cholesky(C)
+    c = P - P.mean(axis=0)
+    A = np.zeros((2 * L, 3))
+    A[:L, 0], A[L:, 1], A[:L, 2], A[L:, 2] = 1.0, 1.0, -c[:, 1], c[:, 0]
+    inv = solve_triangular(chol, np.eye(2 * L), lower=True)     # C^(-1/2) (lower-triangular factor)
+    W = inv @ A
+    Q, _ = np.linalg.qr(W)
+    return sigma_gps * (inv - Q @ (Q.T @ inv))
 
 
 def heading_estimate(t: np.ndarray, gps: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray,
