@@ -208,6 +208,8 @@ class Replay:
                 if stage in self.stages:
                     self.not_judged[stage] = f"not judged: {why}"
             self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+        if "position" in self.stages:
+            self.__dict__["track_noise"] = self.track_noise     # read once, before any fit's tracks
 
     def _read_yaw(self, f: pd.DataFrame) -> None:
         """What measures the yaw (identification.yaw_measurement): a yaw rate from the GNSS course
@@ -494,7 +496,8 @@ class Replay:
             return level_on_updates(x, fs, step) * math.sqrt(step)
 
         rows = np.concatenate([self.windows["fit"], self.windows["test"]])
-        res = aligned_residuals(self.predicted("position", v), self.gps, rows)
+        track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))     # the fits' tracks kept (tracks)
+        res = aligned_residuals(track, self.gps, rows)
         sigma_gps = per_row(np.concatenate([res[..., 0], res[..., 1]]), "gnss")
         derived = self.frame.attrs.get("yaw_measurement")
         sigma_gyro = 0.0
