@@ -6,7 +6,9 @@ held-out part drives beyond the conditions of the fit part (``split_conditions``
 acceleration or speed well above what the fit saw), it would test extrapolation rather than the
 model, and every third ``window`` of the log is held out instead (``split="blocks"``). Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages
-(the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly.
+(the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly. The position stage's residual is each window's aligned track residual whitened
+by the dead reckoning's own noise, the gyro's drift and the speed's (replay.track_whitening), ordered
+by time along each axis.
 
 Score (Gaussian likelihood, per-stage unknown variance, autocorrelation-corrected sample size)::
 
@@ -484,21 +486,21 @@ class Replay:
     @cached_property
     def track_noise(self) -> tuple[float, float, float]:
         """(sigma_gps, sigma_gyro, sigma_speed) per row, the white levels the dead-reckoned track's
-        residual carries (noise_floor.level_on_updates, on each sensor's own updates; a channel
-        held m rows has m x the variance per row's share of its random walk): the GPS's from the
+        residual carries (noise_floor.level_on_updates, on each sensor's own updates; an integrated
+        channel held m rows adds m x the variance per row to its random walk): the GPS's from the
         aligned residual of the study's track, the gyro's from the yaw stage's residual under the
         study's values (or the gyro itself without a yaw stage; none for a yaw rate derived from a
         heading, whose integral is that heading), the speed's from the speed itself."""
         fs, v = 1.0 / self.h, self.baseline.values
 
-        def per_row(x, sensor):
+        def per_row(x, sensor, integrated=True):
             step = update_step(self.frame, sensor, self.h)
-            return level_on_updates(x, fs, step) * math.sqrt(step)
+            return level_on_updates(x, fs, step) * (math.sqrt(step) if integrated else 1.0)
 
         rows = np.concatenate([self.windows["fit"], self.windows["test"]])
         track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))     # the fits' tracks kept (tracks)
         res = aligned_residuals(track, self.gps, rows)
-        sigma_gps = per_row(np.concatenate([res[..., 0], res[..., 1]]), "gnss")
+        sigma_gps = per_row(np.concatenate([res[..., 0], res[..., 1]]), "gnss", integrated=False)
         derived = self.frame.attrs.get("yaw_measurement")
         sigma_gyro = 0.0
         if derived is None or derived.kind == "gyro":

@@ -3,7 +3,8 @@
 - steering: delta_cmd -> delta (the closed-loop first-order equivalent, components.models.steering_equivalent);
 - yaw: measured delta and speed -> yaw rate (the study's LPV yaw model);
 - position: measured yaw rate and speed -> antenna track, dead-reckoned and aligned to the GPS
-  track window by window (a rigid 2-D fit per window removes the unknown start pose).
+  track window by window (a rigid 2-D fit per window removes the unknown start pose); its residual
+  is weighed by the noise the dead reckoning integrates (track_whitening).
 
 Every function takes the parameter values (SI units) as a mapping and returns arrays on the log's
 sample times. Inputs are taken as the mean of the two samples around each step (first-order hold
@@ -396,8 +397,14 @@ def track_whitening(points: np.ndarray, h: float, sigma_gps: float, sigma_gyro: 
     10 s window). Least squares on the raw residual takes that drift for a rear-axle side-slip or
     an antenna lever arm; on T r = sigma_gps Pi_W C^(-1/2) r, Pi_W the projection off the whitened
     rigid motion of the window's alignment (W = C^(-1/2) A, A: two translations and the rotation
-    about the centroid) it weighs each frequency by its noise. T is I - Pi_A-like where the sensors'
-    noise is the GPS's alone: the residual in metres, at the GPS's level where the model is right."""
+    about the centroid) it weighs each frequency by its noise. Where the GPS's is the only noise,
+    T = I - Pi_A leaves an aligned residual as it is: in metres, at the GPS's level where the model
+    is right.
+
+    Why the gyro and not the model's own yaw rate: the track's heading is the integral of a yaw
+    rate; the gyro's errors are white and of a level read from the log, the yaw model's are its
+    misfit (slow, unknown, the yaw stage's to judge), and a track from the model would no longer
+    see the gyro's own scale and bias."""
     P = np.asarray(points, float)
     L = len(P)
     d = P[:, None, :] - P[None, :, :]                          # p_k - p_i
