@@ -8,7 +8,7 @@ within a 10 s window; read with equal weight at every frequency, the block fit o
 stiffnesses on the yaw rate and the track (candidates.fit_baseline) took that drift as a 16 %
 stiffer rear axle (C_r x 1.15 against the truth's 0.99), and a lever arm fitted with the stiffnesses
 freed undid that error on the held-out part (0.79 m named on a clean log). With the position
-stage's residual whitened by the dead reckoning's own noise (replay.track_whitening: the drift's
+stage's residual whitened by the dead reckoning's own noise (replay.TrackWhitening: the drift's
 covariance from the log's gyro and speed white levels) the fit finds C_r x 0.97: nothing named.
 The first test keeps the measured cause: with the gyro's noise alone taken out the log is healthy.
 """

@@ -2,7 +2,7 @@
 known noise, never the code's output, as the truth.
 
 - A gyro's white noise, integrated into the track's heading, is a low-frequency drift of the
-  track; whitened by its covariance (replay.track_whitening) the residual of a right model is the
+  track; whitened by its covariance (replay.TrackWhitening) the residual of a right model is the
   GPS's white noise again: level sigma_gps, no lag-1 correlation.
 - A residual correlated in time (AR(1), coefficient rho, in east and north alike) has the
   effective size n (1 - rho) / (1 + rho) (estimation.effective_size), read on the stage's residual
@@ -14,7 +14,7 @@ import numpy as np
 
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
-from agrobot.diagnosis.replay import aligned_residuals, antenna_track, track_whitening
+from agrobot.diagnosis.replay import TrackWhitening, aligned_residuals, antenna_track
 from agrobot.estimation import effective_size
 from agrobot.orchestrator.study import load_study
 from harness.hidden_effects import BASELINES
@@ -38,7 +38,7 @@ def test_whitened_track_residual_is_the_gps_noise():
     rate, speed = 0.1 * np.sin(0.8 * t), np.full(L, 30.0)
     truth = antenna_track(t, rate, speed, values)
     s_gps, s_gyro, s_speed = 0.02, 0.002, 0.02
-    T = track_whitening(truth, H, s_gps, s_gyro, s_speed)
+    T = TrackWhitening(truth, H, s_gps, s_gyro, s_speed)
     rng = np.random.default_rng(7)
     raw, white = [], []
     rows = np.arange(L)[None, :]
@@ -46,7 +46,7 @@ def test_whitened_track_residual_is_the_gps_noise():
         track = antenna_track(t, rate + s_gyro * rng.standard_normal(L), speed + s_speed * rng.standard_normal(L), values)
         r = aligned_residuals(track, truth + s_gps * rng.standard_normal((L, 2)), rows)[0].T       # (2, L)
         raw.append(r)
-        white.append((T @ r.ravel()).reshape(2, L))
+        white.append(T(r.ravel()).reshape(2, L))
     raw, white = np.array(raw), np.array(white)
     assert _lag1(raw) > 0.3 and np.sqrt(np.mean(raw ** 2)) > 1.2 * s_gps
     assert abs(_lag1(white)) < 0.05

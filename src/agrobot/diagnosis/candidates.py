@@ -7,7 +7,7 @@ acceleration or speed well above what the fit saw), it would test extrapolation 
 model, and every third ``window`` of the log is held out instead (``split="blocks"``). Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages
 (the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly. The position stage's residual is each window's aligned track residual whitened
-by the dead reckoning's own noise, the gyro's drift and the speed's (replay.track_whitening), ordered
+by the dead reckoning's own noise, the gyro's drift and the speed's (replay.TrackWhitening), ordered
 by time along each axis.
 
 Score (Gaussian likelihood, per-stage unknown variance, autocorrelation-corrected sample size)::
@@ -38,7 +38,7 @@ from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import level_on_updates, update_step
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
-                     measured_yaw_rate, saturates, steering_plant, steering_replay, track_whitening, wheel_angle_input)
+                     measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, wheel_angle_input)
 from .steering_map import mapped_steering
 
 STAGES = ("steering", "yaw", "position", "speed")
@@ -471,7 +471,7 @@ class Replay:
     def track_residuals(self, predicted: np.ndarray, rows: np.ndarray, measured: np.ndarray | None = None) -> np.ndarray:
         """The position stage's residual on the windows ``rows`` (W, L): each window's aligned
         residual (measured: the GPS track) through its generalised-least-squares transform
-        (replay.track_whitening, at the log's sensor levels ``track_noise``), ordered by time within
+        (replay.TrackWhitening, at the log's sensor levels ``track_noise``), ordered by time within
         each window's east, then north, series (replay.track_residual_vector)."""
         res = aligned_residuals(predicted, self.gps if measured is None else measured, rows).transpose(0, 2, 1)
         if not len(rows):
@@ -479,9 +479,8 @@ class Replay:
         cache = self.__dict__.setdefault("_whitenings", {})
         for row in rows:
             if int(row[0]) not in cache:
-                cache[int(row[0])] = track_whitening(self.gps[row], self.h, *self.track_noise)
-        T = np.stack([cache[int(row[0])] for row in rows])
-        return np.matmul(T, res.reshape(len(rows), -1, 1)).ravel()
+                cache[int(row[0])] = TrackWhitening(self.gps[row], self.h, *self.track_noise)
+        return np.concatenate([cache[int(row[0])](r.ravel()) for row, r in zip(rows, res)])
 
     @cached_property
     def track_noise(self) -> tuple[float, float, float]:
