@@ -42,7 +42,7 @@ def test_position_then_speed_replay_each_track_once(replay, monkeypatch):
     assert len(calls) == len(sets)                     # not one per stage and set
     for v, r_pos, r_speed in zip(sets, position, speed):
         track = antenna_track(replay.t, replay.gyro, replay.speed, v, replay.lateral(v))
-        fresh = candidates.aligned_residuals(track, replay.gps, replay.windows["fit"]).ravel()
+        fresh = replay.track_residuals(track, replay.windows["fit"])       # aligned, whitened
         assert np.array_equal(r_pos, fresh)
         k = replay.chord_k
         d = track[2 * k:] - track[:-2 * k]

@@ -6,7 +6,9 @@ held-out part drives beyond the conditions of the fit part (``split_conditions``
 acceleration or speed well above what the fit saw), it would test extrapolation rather than the
 model, and every third ``window`` of the log is held out instead (``split="blocks"``). Each
 stage's residual is normalised by the baseline's noise level, so a fit that touches two stages
-(the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly.
+(the gyro bias changes the yaw stage and the dead-reckoned track) weighs them fairly. The position stage's residual is each window's aligned track residual whitened
+by the dead reckoning's own noise, the gyro's drift and the speed's (replay.TrackWhitening), ordered
+by time along each axis.
 
 Score (Gaussian likelihood, per-stage unknown variance, autocorrelation-corrected sample size)::
 
@@ -34,8 +36,9 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
+from .noise_floor import level_on_updates, update_step
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
-                     measured_yaw_rate, saturates, steering_plant, steering_replay, wheel_angle_input)
+                     measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, wheel_angle_input)
 from .steering_map import mapped_steering
 
 STAGES = ("steering", "yaw", "position", "speed")
@@ -208,6 +211,8 @@ class Replay:
                 if stage in self.stages:
                     self.not_judged[stage] = f"not judged: {why}"
             self.stages = tuple(s for s in self.stages if s not in ("position", "speed"))
+        if "position" in self.stages:
+            self.__dict__["track_noise"] = self.track_noise     # read once, before any fit's tracks
 
     def _read_yaw(self, f: pd.DataFrame) -> None:
         """What measures the yaw (identification.yaw_measurement): a yaw rate from the GNSS course
@@ -458,12 +463,50 @@ class Replay:
         for pred in self.predicted_many(stage, sets):
             pred = self.seen(stage, pred)
             if stage == "position":
-                res = tuple(aligned_residuals(pred, self.gps, self.windows[p]).ravel() for p in parts)
+                res = tuple(self.track_residuals(pred, self.windows[p]) for p in parts)
             else:
                 r = self.measured(stage) - pred
                 res = tuple(r[self.masks[stage][p]] for p in parts)
             out.append(res[0] if len(parts) == 1 else res)
         return out
+
+    def track_residuals(self, predicted: np.ndarray, rows: np.ndarray, measured: np.ndarray | None = None) -> np.ndarray:
+        """The position stage's residual on the windows ``rows`` (W, L): each window's aligned
+        residual (measured: the GPS track) through its generalised-least-squares transform
+        (replay.TrackWhitening, at the log's sensor levels ``track_noise``), ordered by time within
+        each window's east, then north, series (replay.track_residual_vector)."""
+        res = aligned_residuals(predicted, self.gps if measured is None else measured, rows).transpose(0, 2, 1)
+        if not len(rows):
+            return res.ravel()
+        cache = self.__dict__.setdefault("_whitenings", {})
+        for row in rows:
+            if int(row[0]) not in cache:
+                cache[int(row[0])] = TrackWhitening(self.gps[row], self.h, *self.track_noise)
+        return np.concatenate([cache[int(row[0])](r.ravel()) for row, r in zip(rows, res)])
+
+    @cached_property
+    def track_noise(self) -> tuple[float, float, float]:
+        """(sigma_gps, sigma_gyro, sigma_speed) per row, the white levels the dead-reckoned track's
+        residual carries (noise_floor.level_on_updates, on each sensor's own updates; an integrated
+        channel held m rows adds m x the variance per row to its random walk): the GPS's from the
+        aligned residual of the study's track, the gyro's from the yaw stage's residual under the
+        study's values (or the gyro itself without a yaw stage; none for a yaw rate derived from a
+        heading, whose integral is that heading), the speed's from the speed itself."""
+        fs, v = 1.0 / self.h, self.baseline.values
+
+        def per_row(x, sensor, integrated=True):
+            step = update_step(self.frame, sensor, self.h)
+            return level_on_updates(x, fs, step) * (math.sqrt(step) if integrated else 1.0)
+
+        rows = np.concatenate([self.windows["fit"], self.windows["test"]])
+        track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))     # the fits' tracks kept (tracks)
+        res = aligned_residuals(track, self.gps, rows)
+        sigma_gps = per_row(np.concatenate([res[..., 0], res[..., 1]]), "gnss", integrated=False)
+        derived = self.frame.attrs.get("yaw_measurement")
+        sigma_gyro = 0.0
+        if derived is None or derived.kind == "gyro":
+            sigma_gyro = per_row(self.gyro - self.predicted("yaw", v) if "yaw" in self.stages else self.gyro, "yaw_rate")
+        return sigma_gps, sigma_gyro, per_row(self.speed, "v")
 
     def scored(self, stage: str) -> np.ndarray:
         """Samples of a time-series stage scored in either part (for plots and evidence)."""

@@ -17,8 +17,9 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   white levels read on their own updates, as above); both are 1 s means, so the floor
   is propagated: var = 2 sigma_gps^2 / T^2 + sigma_v^2 / (T / h)   (T the chord span);
 - position: the dead-reckoned track integrates the gyro's and the speed's noise, so the floor is the
-  aligned residual of the same windows when only noise of the estimated levels is present
-  (Monte Carlo through the same replay, seeded), with the GPS white level added.
+  stage's residual (aligned, and whitened by that noise: candidates.Replay.track_residuals) of the
+  same windows when only noise of the estimated levels is present (Monte Carlo through the same
+  replay, seeded), with the GPS white level added.
 """
 from __future__ import annotations
 
@@ -101,7 +102,7 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
         noisy = antenna_track(replay.t, replay.gyro + sigma_gyro * rng.standard_normal(len(replay.t)),
                               replay.speed + sigma_v * rng.standard_normal(len(replay.t)), values, replay.lateral(values))
         gps = nominal + sigma_gps * rng.standard_normal(nominal.shape)
-        sq.append(np.mean(aligned_residuals(noisy, gps, rows) ** 2))
+        sq.append(np.mean(replay.track_residuals(noisy, rows, gps) ** 2))    # as the stage reads it (whitened)
     floors["position"] = math.sqrt(float(np.mean(sq)))
     floors["_sensors"] = {**sensors, "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
     return floors

@@ -3,7 +3,8 @@
 - steering: delta_cmd -> delta (the closed-loop first-order equivalent, components.models.steering_equivalent);
 - yaw: measured delta and speed -> yaw rate (the study's LPV yaw model);
 - position: measured yaw rate and speed -> antenna track, dead-reckoned and aligned to the GPS
-  track window by window (a rigid 2-D fit per window removes the unknown start pose).
+  track window by window (a rigid 2-D fit per window removes the unknown start pose); its residual
+  is weighed by the noise the dead reckoning integrates (TrackWhitening).
 
 Every function takes the parameter values (SI units) as a mapping and returns arrays on the log's
 sample times. Inputs are taken as the mean of the two samples around each step (first-order hold
@@ -379,6 +380,80 @@ def aligned_residuals(predicted: np.ndarray, measured: np.ndarray, windows: np.n
     th = np.arctan2(cross, dot)[:, None]
     c, s = np.cos(th), np.sin(th)
     return np.stack([M[..., 0] - (c * P[..., 0] - s * P[..., 1]), M[..., 1] - (s * P[..., 0] + c * P[..., 1])], axis=-1)
+
+
+def track_residual_vector(res: np.ndarray) -> np.ndarray:
+    """Aligned track residuals (W, L, 2) as one vector ordered by time within each window's east,
+    then north, series ((W, 2, L) raveled): the order a lag-1 autocorrelation reads
+    (estimation.effective_size), which on east, north interleaved would pair the two axes."""
+    return np.asarray(res, float).transpose(0, 2, 1).ravel()
+
+
+class TrackWhitening:
+    """The generalised-least-squares transform T of one window's aligned track residual r (2L,),
+    laid out (east over time, north over time), given the window's track ``points`` (L, 2).
+
+    The dead-reckoned track integrates the gyro's and the wheel speed's white noise (per row
+    sigma_gyro, sigma_speed): a heading error h n_i at row i turns the rest of the track about p_i,
+    a speed error h nu_i moves it along the heading psi_i, so at row k > i
+
+        dp_k = sum_{i<k} h n_i J (p_k - p_i) + h nu_i (cos psi_i, sin psi_i),   J a quarter turn,
+
+    and the residual's covariance is C = sigma_gps^2 I + U U', U = h [sigma_gyro G_g, sigma_speed
+    G_v]: a random walk of the heading, integrated (its share grows as v^2 T^3; at a car's 30 m/s, a
+    0.002 rad/s gyro at 20 Hz drifts the track by a GPS noise's worth within a 10 s window). Least
+    squares on the raw residual takes that drift for a rear-axle side-slip or an antenna lever arm;
+    on T r = sigma_gps Pi_W C^(-1/2) r, Pi_W the projection off the whitened rigid motion of the
+    window's alignment (W = C^(-1/2) A, A: two translations and the rotation about the centroid), it
+    weighs each frequency by its noise. With U = Y S Z' (thin SVD),
+
+        sigma_gps C^(-1/2) = I + Y (sigma_gps / sqrt(sigma_gps^2 + S^2) - 1) Y',
+
+    so T costs O(L r); the noise is taken in ``blocks`` sums per window (the drift lives at low
+    frequencies: within a block the columns of G hardly differ), r <= 2 blocks. Where the GPS's is
+    the only noise T = I - Pi_A leaves an aligned residual as it is: in metres, at the GPS's level
+    where the model is right.
+
+    Why the gyro and not the model's own yaw rate: the track's heading is the integral of a yaw
+    rate; the gyro's errors are white and of a level read from the log, the yaw model's are its
+    misfit (slow, unknown, the yaw stage's to judge), and a track from the model would no longer
+    see the gyro's own scale and bias."""
+
+    def __init__(self, points: np.ndarray, h: float, sigma_gps: float, sigma_gyro: float, sigma_speed: float,
+                 blocks: int = 64) -> None:
+        P = np.asarray(points, float)
+        L = len(P)
+        step = np.diff(P, axis=0, append=P[-1:] + (P[-1:] - P[-2:-1]))
+        along = step / np.maximum(np.hypot(step[:, :1], step[:, 1:]), 1e-12)       # (cos psi_i, sin psi_i)
+        a = np.arange(0, L, -(-L // blocks))
+        b = np.append(a[1:], L)
+        m = np.clip(np.arange(L)[:, None], a, b)                # row k: block j's rows i < k are a_j .. m_kj - 1
+
+        def summed(x):                                          # sum_{i in block j, i < k} x_i: (L, blocks, 2)
+            c = np.vstack([np.zeros((1, 2)), np.cumsum(x, axis=0)])
+            return c[m] - c[a][None]
+
+        # a block's noises as one noise of their summed level (its columns hardly differ): / sqrt(size)
+        turn = ((m - a)[..., None] * P[:, None, :] - summed(P)) / np.sqrt(b - a)[None, :, None]     # sum p_k - p_i
+        slide = summed(along) / np.sqrt(b - a)[None, :, None]
+        U = h * np.hstack([sigma_gyro * np.vstack([-turn[..., 1], turn[..., 0]]),
+                           sigma_speed * np.vstack([slide[..., 0], slide[..., 1]])])
+        self.Y, S, _ = np.linalg.svd(U, full_matrices=False)
+        s = max(float(sigma_gps), 1e-9)
+        self.gain = s / np.sqrt(s * s + S * S) - 1.0
+        c = P - P.mean(axis=0)
+        A = np.zeros((2 * L, 3))
+        A[:L, 0], A[L:, 1], A[:L, 2], A[L:, 2] = 1.0, 1.0, -c[:, 1], c[:, 0]
+        self.Q = np.linalg.qr(self._whiten(A.T).T)[0]
+
+    def _whiten(self, r: np.ndarray) -> np.ndarray:
+        """sigma_gps C^(-1/2) r along the last axis."""
+        return r + ((r @ self.Y) * self.gain) @ self.Y.T
+
+    def __call__(self, r: np.ndarray) -> np.ndarray:
+        """T r along the last axis (2L)."""
+        z = self._whiten(np.asarray(r, float))
+        return z - (z @ self.Q) @ self.Q.T
 
 
 def heading_estimate(t: np.ndarray, gps: np.ndarray, yaw_rate: np.ndarray, speed: np.ndarray,
