@@ -273,12 +273,17 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "physical_checks": checks,
         "notes": notes,
         "yaw_measurement": measured.as_dict(),
-        "regime": {"kinematic": False, "lateral_acceleration_p95": p95, "threshold": KINEMATIC_LATERAL,
-                   "says": f"dynamic regime: 95 % of |v r| up to {p95:.2g} m/s2 (kinematic below {KINEMATIC_LATERAL:g})"},
+        "regime": _dynamic_regime(p95),
     }
     report["_plot"] = {"log": log, "model": fits.model, "test": test_segs, "test_pred": pred, "linear": linear.values,
                        "nl": nl.values, "final": final.values, "windows": windows, "K": K, "K_sd": K_sd, "L": L, "g": g}
     return report
+
+
+def _dynamic_regime(p95: float) -> dict:
+    """The report's regime of a log past the kinematic one: 95 % of its lateral accelerations |v r|."""
+    return {"kinematic": False, "lateral_acceleration_p95": p95, "threshold": KINEMATIC_LATERAL,
+            "says": f"dynamic regime: 95 % of |v r| up to {p95:.2g} m/s2 (kinematic below {KINEMATIC_LATERAL:g})"}
 
 
 def _vehicle_json(vehicle, wheelbase: tuple, p) -> dict:
