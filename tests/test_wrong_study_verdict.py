@@ -12,8 +12,6 @@ from __future__ import annotations
 import math
 import re
 
-import numpy as np
-import pandas as pd
 import pytest
 
 from agrobot.diagnosis.pipeline import diagnose, off_class
@@ -23,17 +21,9 @@ from agrobot.diagnosis.study_fit import study_check
 from agrobot.diagnosis.verdict import WRONG_STUDY, conclude
 from agrobot.identification.vehicle import Vehicle
 from harness.truth_tractor import TABLE, make_log
+from tests.test_plausible_for_vehicle import kinematic_log
 
 ROBOT = Vehicle.from_table({"class": "robot", "wheelbase": 1.4, "length": 1.9, "width": 1.1})
-
-
-def kinematic_log(wheelbase: float, seconds: float = 60.0) -> pd.DataFrame:
-    rng = np.random.default_rng(4)
-    t = np.arange(0, seconds, 0.05)
-    v = 0.8 + 0.1 * np.sin(0.1 * t)
-    delta = 0.3 * np.sin(0.4 * t)
-    return pd.DataFrame({"t": t, "v": v, "delta": delta,
-                         "yaw_rate": v * np.tan(delta) / wheelbase + 0.002 * rng.standard_normal(len(t))})
 
 
 def fitted(eid: str, **params) -> dict:

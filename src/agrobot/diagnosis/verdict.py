@@ -17,7 +17,11 @@ It is built from the judged effects and three checks an engineer makes before si
   rather than "none"; but a parameter the effect reads as a lower limit there (``at_least``: a
   friction whose peak the log's turns do not reach) is said as "at least" its bound, and the effect
   stands; an effect whose secondary parameter (a tyre's shape) ends on its bound stands, but none of
-  its values is concluded (the others were fitted with that one held there), and the verdict says why.
+  its values is concluded (the others were fitted with that one held there), and the verdict says why;
+- **the study before the effects**: a study whose wheelbase the log's steady turns miss by more
+  than 30 % is the verdict (``wrong_study``, plausibility.wrong_study, with the evidence and what to
+  run instead); effects that rescale the yaw rate as a wheelbase does (plausibility.RESCALE_YAW)
+  would only absorb it and are not concluded; what else was judged against the study follows.
 """
 from __future__ import annotations
 
@@ -77,7 +81,7 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
              audit: list[dict], vehicle, wheelbase: float, l_r: float, speed: float,
              catalogue: Iterable[Effect] = CATALOGUE, antenna: tuple[float, float] = (0.0, 0.0),
              before: Iterable[str] = (), turns: dict | None = None) -> dict:
-    """The verdict object: ``id`` (an effect id, 'unexplained' or 'none'), ``status`` (conclusive,
+    """The verdict object: ``id`` (an effect id, 'unexplained', 'none' or WRONG_STUDY), ``status`` (conclusive,
     inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line),
     ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included,
     and ``before``: what is said before any verdict (``before`` given: the study not being the log's
