@@ -81,8 +81,8 @@ def test_an_understeer_gradient_off_its_class_is_flagged_wherever_it_is_printed(
                   "dynamic fit": {"value": 9.4 * k}, "steady-state regression": {"value": 12.6 * k}}}]}}
     off_class(result, ROBOT, None)
     q, c = result["shared_quantities"][0], result["identified_vehicle"]["comparisons"][0]
-    assert "diagnose's an understeer gradient of 13.1 deg/g is not of a robot" in q["line"] and "identify's" not in q["line"]
-    assert "steady-state regression's" in c["implausible"] and "dynamic fit's" not in c["implausible"]
+    assert "diagnose: an understeer gradient of 13.1 deg/g is not of a robot" in q["line"] and "identify:" not in q["line"]
+    assert "steady-state regression: an understeer gradient of 12.6" in c["implausible"] and "dynamic fit" not in c["implausible"]
 
 
 def test_the_report_names_the_steering_geometry():

@@ -230,7 +230,7 @@ def understeer_estimates(estimates: Mapping[str, Mapping], vehicle: Vehicle, tur
     """Each estimate of an understeer gradient (``estimates``: {who: {value [rad/(m/s2)], ...}}, as
     estimation.compare gives them) that is not of the vehicle's class (understeer), with why; None:
     every one is of the class. Printed beside the value wherever it is printed."""
-    said = [f"{who}'s {why}" for who, e in estimates.items()
+    said = [f"{who}: {why}" for who, e in estimates.items()
             if isinstance(e.get("value"), (int, float)) and math.isfinite(e["value"])
             and (why := understeer(e["value"], vehicle, None, turns))]
     return "; ".join(said) or None
