@@ -14,8 +14,8 @@ turn-rate input (delta, delta_cmd, odom_yaw_rate, turn_rate_cmd) gets one line s
 not judged.
 
 Prints one table: vehicle, its class, the dimensions its publisher declares, the study judged
-against, seconds, the identified vehicle diagnose shares with identify (delay, held-out fit, tyre
-saturation), the independent estimates side by side (K from the dynamic fit and from steady
+against, seconds, the identified vehicle diagnose shares with identify (delay, held-out fit; the tyre
+saturation's friction as each tool concluded it, labelled), the independent estimates side by side (K from the dynamic fit and from steady
 states, the delay from the fit and from a cross-correlation, the gyro bias from the fit and from
 the GNSS course), the independent reference (benchmarks/real_corpus.py's second method on the raw
 files: the slope of the yaw rate on v tan(delta / N) / L with the declared N and L at its best lag,
