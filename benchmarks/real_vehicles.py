@@ -14,8 +14,8 @@ turn-rate input (delta, delta_cmd, odom_yaw_rate, turn_rate_cmd) gets one line s
 not judged.
 
 Prints one table: vehicle, its class, the dimensions its publisher declares, the study judged
-against, seconds, the identified vehicle diagnose shares with identify (delay, held-out fit, tyre
-saturation), the independent estimates side by side (K from the dynamic fit and from steady
+against, seconds, the identified vehicle diagnose shares with identify (delay, held-out fit; the tyre
+saturation's friction as each tool concluded it, labelled), the independent estimates side by side (K from the dynamic fit and from steady
 states, the delay from the fit and from a cross-correlation, the gyro bias from the fit and from
 the GNSS course), the independent reference (benchmarks/real_corpus.py's second method on the raw
 files: the slope of the yaw rate on v tan(delta / N) / L with the declared N and L at its best lag,
@@ -128,7 +128,7 @@ def both(comparisons: list[dict], quantity: str, f: str = "{:.3g}") -> str:
         return "-"
     text = "; ".join(f"{m.split(' ')[0]} " + f.format(e["value"]) + " [" + ", ".join(f.format(x) for x in e["interval"]) + "]"
                      for m, e in c["estimates"].items())
-    return text + ("" if c["agree"] else " DISAGREE")
+    return text + ("" if c["agree"] else " DISAGREE") + (" NOT OF THE CLASS" if c.get("implausible") else "")
 
 
 SIZE = 1.3          # a suggested study is of the vehicle's size when its wheelbase is within 30 %
@@ -158,6 +158,8 @@ def plausible(res: dict, wheelbase: float | None) -> str:
         said.append(f"the log's turns give a wheelbase of {mine['wheelbase']:.3g} m against the declared "
                     f"{wheelbase:.3g} m, and the verdict does not say why")
     said += [f"{r['name']} on its {r['at_bound']} bound" for r in res.get("baseline_refit_summary") or [] if r["at_bound"]]
+    said += [f"{q['quantity']} (flagged): {q['implausible']}" for q in res.get("shared_quantities") or []
+             + ((res.get("identified_vehicle") or {}).get("comparisons") or []) if q.get("implausible")]
     withheld = f"; withheld: understeer gradient, {res['understeer_note']}" if res.get("understeer_note") else ""
     return ("yes" + withheld) if not said else "no: " + "; ".join(said) + withheld
 
@@ -197,14 +199,14 @@ def identified(res: dict, piece, log, name: str, study) -> tuple[list, dict]:
     from agrobot.identification import skid_steer
     from agrobot.identification.ordinary_driving import identify_driving
     from agrobot.identification.vehicle import Vehicle
+    from agrobot.diagnosis.effects.tyre_saturation import friction_text
     from agrobot.orchestrator.errors import InputError
 
     rep = (res.get("identified_vehicle") or {}).get("identified")
     if rep is not None:
         ident = {"identified on": f"the diagnosed {piece['t'].iloc[-1] - piece['t'].iloc[0]:.0f} s",
                  "delay [s]": fmt(rep["delay"]), "held-out fit [%]": f"{rep['held_out_fit']:.0f}",
-                 "tyre saturation": (f"mu {rep['tyre_saturation']['friction']:.2f}" if rep["tyre_saturation"]
-                                     else "not found")}
+                 "tyre saturation: identify; diagnose": tyre_cells(rep["tyre_saturation"], res)}
         held = rep.get("held_out_yaw") or {}
         if "diagnosis_rms" in held:    # both models on identify's held-out segments inside the diagnosis's
             ident["yaw RMS, same unseen stretches: identify; diagnose [deg/s]"] = (
@@ -222,8 +224,33 @@ def identified(res: dict, piece, log, name: str, study) -> tuple[list, dict]:
         "identified on": f"all {seconds:.0f} s (diagnose: cannot decide)",
         "delay [s]": fmt(full["delay"]) if "delay" in full else "-",
         "held-out fit [%]": fmt(full["held_out_fit"], "{:.0f}") if "held_out_fit" in full else "-",
-        "tyre saturation": (f"mu {saturation['parameters']['friction']['value']:.2f}" if saturation.get("found")
-                            else "not found" if saturation else "-")}
+        "tyre saturation: identify; diagnose": "identify: " + (
+            f"mu {friction_text(identify_friction(saturation))}" if saturation.get("found")
+            else "not found" if saturation else "-") + "; diagnose: cannot decide"}
+
+
+def identify_friction(saturation: dict) -> dict:
+    """Identify's report's tyre saturation as diagnose's identified vehicle carries it (friction, at least)."""
+    mu = saturation["parameters"]["friction"]
+    return {"friction": mu["value"], "friction_at_least": bool(mu.get("at_least"))}
+
+
+def tyre_cells(identified_saturation: dict | None, res: dict) -> str:
+    """The friction each tool concluded, labelled: identify's (its "at least" where it ended on the
+    class's top), diagnose's effect as its verdict says it ("at least" its bound, not identifiable
+    on another bound, or not kept)."""
+    from agrobot.diagnosis.effects.tyre_saturation import friction_text
+
+    mine = f"mu {friction_text(identified_saturation)}" if identified_saturation else "not found"
+    e = next((e for e in res.get("effects", []) if e["id"] == "tyre_saturation"), None)
+    if e is None:
+        theirs = "not kept"
+    else:
+        mu = e["fitted"]["tyre_friction"]
+        theirs = ("mu at least {:.3g}" if mu.get("at_bound") == "upper" else
+                  "mu not identifiable (on its lower bound {:.3g})" if mu.get("at_bound") else "mu {:.3g}").format(
+            mu["value"])
+    return f"identify: {mine}; diagnose: {theirs}"
 
 
 def skid_steer_cells(log, name: str, study, seconds: float) -> dict:
@@ -235,7 +262,7 @@ def skid_steer_cells(log, name: str, study, seconds: float) -> dict:
     found = rep["plausibility"]["findings"]
     return {"identified on": f"all {seconds:.0f} s, skid-steer model against {rep['input']}",
             "delay [s]": fmt(rep["delay"]), "held-out fit [%]": f"{rep['held_out_fit']['value']:.0f}",
-            "tyre saturation": "-", "skid-steer yaw gain (B / B_eff)": fmt(rep["parameters"]["yaw_gain"]),
+            "tyre saturation: identify; diagnose": "-", "skid-steer yaw gain (B / B_eff)": fmt(rep["parameters"]["yaw_gain"]),
             "skid-steer plausibility": "yes" if not found else "no: " + "; ".join(map(str, found))}
 
 

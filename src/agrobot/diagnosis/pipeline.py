@@ -36,7 +36,8 @@ from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .shared_quantities import diagnosis_side, identify_side, shared_quantities
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import VehicleContext, kinematic, steering_gain_check, study_understeer, understeer
+from .plausibility import (VehicleContext, kinematic, steering_gain_check, study_understeer, understeer,
+                           understeer_estimates)
 from .study_fit import study_check
 from .verdict import audit_findings, conclude, said_before
 
@@ -534,8 +535,11 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     verdict["bullets"] += agreement(identified, effects, sel, min_gain, sel.floors.get("yaw", 0.0), held_part(replay))
     result["shared_quantities"] = shared_quantities((identified or {}).get("shared"),
                                                     diagnosis_side(effects, sel, replay, p))
+    off_class(result, baseline.vehicle, mine or None)
     verdict["bullets"] += [q["line"] for q in result["shared_quantities"]]
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
+        if c.get("implausible") and not kinematic(share):
+            verdict["bullets"].append(f"{c['quantity']}: implausible for the vehicle: {c['implausible']}")
         if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
                 f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
@@ -545,6 +549,19 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     result["verdict_statement"] = verdict["statement"]
     result["verdict_bullets"] = verdict["bullets"]
     result["before_verdict"] = verdict["before"]
+
+
+def off_class(result: dict, vehicle, turns: dict | None) -> None:
+    """Every understeer gradient the result prints beside another (the shared quantities, identify's
+    comparisons) flagged where it is not of the vehicle's class (plausibility.understeer_estimates):
+    ``implausible`` with why, and the shared quantity's line says so."""
+    for q in result.get("shared_quantities") or []:
+        if "understeer" in q["quantity"] and (why := understeer_estimates(q["estimates"], vehicle, turns)):
+            q["implausible"] = why
+            q["line"] += "; implausible for the vehicle, not concluded: " + why
+    for c in (result.get("identified_vehicle") or {}).get("comparisons") or []:
+        if "understeer" in c["quantity"] and (why := understeer_estimates(c["estimates"], vehicle, turns)):
+            c["implausible"] = why
 
 
 def _stage_results(result: dict, replay: Replay, sel, checks: dict, effects: list[dict], baseline) -> None:

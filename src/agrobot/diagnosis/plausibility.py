@@ -202,3 +202,35 @@ def wheelbase_off(turns: dict | None, mismatch: float = math.log(1.3)) -> str | 
             f"give a wheelbase of {turns['wheelbase']:.3g} m against the study's {turns['study_wheelbase']:.3g} m "
             f"({100 * (ratio - 1):+.0f} %, more than 10 %): the study's wheelbase, or its steering map's gain (the "
             f"wheels turning {1 / ratio:.2g} x the input), is off; the verdict's values are of the study's vehicle")
+
+
+RESCALE_YAW = ("gyro_scale", "steering_gain", "speed_scale")     # effects that rescale the yaw rate as a
+                                                                  # wheelbase does: r = v tan(delta) / L
+
+
+def wrong_study(turns: dict | None) -> str | None:
+    """The verdict on a study whose wheelbase the log's steady linear turns miss by more than 30 %
+    (``turns``: study_fit.log_vehicle with its ``mismatch`` and ``suggestion``; None: within 30 %):
+    the study is wrong, with the evidence (the log's wheelbase, its 95 % interval, the study's) and
+    what to run instead; an effect that rescales the yaw rate (RESCALE_YAW) would only absorb it."""
+    if not turns or not turns.get("mismatch") or not turns.get("wheelbase") or not turns.get("study_wheelbase"):
+        return None
+    L, Ls = turns["wheelbase"], turns["study_wheelbase"]
+    lo, hi = turns.get("wheelbase_interval") or (math.nan, math.nan)
+    return (f"the study is wrong for this log: its steady turns under {turns.get('linear_lateral', 2.0):g} m/s2 "
+            f"({turns.get('samples', 0)} samples) give a wheelbase of {L:.3g} m (95 % interval [{lo:.3g}, {hi:.3g}] m) "
+            f"against the study's {Ls:.3g} m ({100 * (Ls / L - 1):+.0f} %, more than the 30 % a study of this vehicle "
+            f"can be off): the study is another vehicle, or its steering map turns the wheels {Ls / L:.2g} x the angle "
+            f"the log says; {', '.join(RESCALE_YAW)}, which rescale the yaw rate as a wheelbase does, are not "
+            f"concluded on it; instead: {turns.get('suggestion') or 'write a study with the log wheelbase'}, "
+            f"and diagnose again")
+
+
+def understeer_estimates(estimates: Mapping[str, Mapping], vehicle: Vehicle, turns: dict | None = None) -> str | None:
+    """Each estimate of an understeer gradient (``estimates``: {who: {value [rad/(m/s2)], ...}}, as
+    estimation.compare gives them) that is not of the vehicle's class (understeer), with why; None:
+    every one is of the class. Printed beside the value wherever it is printed."""
+    said = [f"{who}: {why}" for who, e in estimates.items()
+            if isinstance(e.get("value"), (int, float)) and math.isfinite(e["value"])
+            and (why := understeer(e["value"], vehicle, None, turns))]
+    return "; ".join(said) or None

@@ -145,7 +145,8 @@ def vehicle_lines(iv: dict | None, understeer_note: str | None = None) -> list[s
         out.append(f"- {c['quantity']} [{unit}]: " + "; ".join(
             f"{m} {k * e['value']:.4g} [{k * e['interval'][0]:.4g}, {k * e['interval'][1]:.4g}]"
             for m, e in c["estimates"].items())
-            + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}"))
+            + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}")
+            + (f"; **implausible for the vehicle**: {c['implausible']}" if c.get("implausible") else ""))
     held = me.get("held_out_yaw") or {}
     if math.isfinite(held.get("diagnosis_rms", math.nan)):
         k = DEGREES["rad/s"][0]
@@ -180,6 +181,7 @@ def markdown(result: dict, plots: list[str]) -> str:
     each catalogue effect alone against the baseline, the baseline's residuals, the figures."""
     lines = [f"# Diagnosis of `{result['log']}`", "",
              f"Baseline model: `{result['study']}`. {split_sentence(result)} {UNITS_NOTE}", "",
+             *geometry_lines(result),
              *before_verdict(result), f"## Verdict: **{result['verdict']}**", ""]
     if result["verdict"] == "cannot decide":
         lines += [result.get("reason", ""), ""]
@@ -190,6 +192,13 @@ def markdown(result: dict, plots: list[str]) -> str:
     lines += _residual_lines(result)
     lines += [""] + [f"![{p}]({p})" for p in plots] + [""]
     return "\n".join(lines)
+
+
+def geometry_lines(result: dict) -> list[str]:
+    """The steering geometry the baseline's yaw model is driven under, where from and what it passed
+    over (pipeline: Baseline.steering_geometry, geometry_choice's line)."""
+    choice = result.get("steering_geometry")
+    return [f"Steering geometry: {choice['says'].removeprefix('steering geometry: ')}.", ""] if choice else []
 
 
 def before_verdict(result: dict) -> list[str]:
@@ -372,6 +381,8 @@ def verdict_title(result: dict) -> str:
         return (f"Diagnosis: unexplained misfit, the {u['stage']} stage at {u['ratio_to_floor']:.1f} x its noise floor "
                 + (f"(a data-driven extension takes {100 * gain:.0f} % off held out)" if gain >= 0.05 else
                    "(no data-driven extension carries over to the held-out part)"))
+    if verdict not in effects:           # the study wrong for the log (verdict.on_wrong_study)
+        return f"Diagnosis: {verdict.replace('_', ' ')}: {result.get('verdict_statement', '').split(':', 1)[0]}"
     e = effects[verdict]
     values = []
     for name, value in e["parameters_display"].items():

@@ -13,6 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from agrobot.estimation import effective_size, interval
 from agrobot.identification.ordinary_driving import study_plant
 from agrobot.identification.steady_state import held_input
 from agrobot.identification.vehicle import Vehicle
@@ -74,9 +75,18 @@ def log_vehicle(frame, wheelbase: float | None = None, understeer: float = 0.0) 
                 "why": (f"{len(turns['L_i'])} samples of steady turning under {LINEAR_LATERAL:g} m/s2 (need "
                         f"{MIN_TURNS}): the log's turns are too brief or too hard (tyres past their linear range) "
                         f"to tell its wheelbase")}
-    wheel = np.median(turns["L_i"] - understeer * turns["v"] ** 2)
-    return {**out, "wheelbase": float(wheel), "turn_speeds": [float(np.percentile(turns["v"], 10)),
-                                                             float(np.percentile(turns["v"], 90))]}
+    each = turns["L_i"] - understeer * turns["v"] ** 2
+    wheel = float(np.median(each))
+    return {**out, "wheelbase": wheel, "wheelbase_interval": list(median_interval(each)),
+            "turn_speeds": [float(np.percentile(turns["v"], 10)), float(np.percentile(turns["v"], 90))]}
+
+
+def median_interval(x: np.ndarray) -> tuple[float, float]:
+    """The 95 % interval of the median of ``x``: its standard error sqrt(pi / 2) std / sqrt(n_eff),
+    n_eff the samples' effective size (estimation.effective_size: consecutive samples of one turn
+    are not independent)."""
+    sd = math.sqrt(math.pi / 2) * float(np.std(x)) / math.sqrt(max(effective_size(x), 1.0))
+    return interval(float(np.median(x)), sd)
 
 
 def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.0,
@@ -103,7 +113,8 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
             f"{wheelbase:.3g} m ({100 * (ratio - 1):+.0f} %): either the study is another vehicle, or its steering "
             f"map is off (the wheels turn {ratio:.2g} x the angle the log says; the steering_gain the verdict "
             f"judges tells)")
-    text += "; " + suggestion(mine["wheelbase"], study_name, declared, mass)
+    mine["suggestion"] = suggestion(mine["wheelbase"], study_name, declared, mass)
+    text += "; " + mine["suggestion"]
     mine["mismatch"] = text
     return mine, text
 

@@ -17,7 +17,11 @@ It is built from the judged effects and three checks an engineer makes before si
   rather than "none"; but a parameter the effect reads as a lower limit there (``at_least``: a
   friction whose peak the log's turns do not reach) is said as "at least" its bound, and the effect
   stands; an effect whose secondary parameter (a tyre's shape) ends on its bound stands, but none of
-  its values is concluded (the others were fitted with that one held there), and the verdict says why.
+  its values is concluded (the others were fitted with that one held there), and the verdict says why;
+- **the study before the effects**: a study whose wheelbase the log's steady turns miss by more
+  than 30 % is the verdict (``wrong_study``, plausibility.wrong_study, with the evidence and what to
+  run instead); effects that rescale the yaw rate as a wheelbase does (plausibility.RESCALE_YAW)
+  would only absorb it and are not concluded; what else was judged against the study follows.
 """
 from __future__ import annotations
 
@@ -25,7 +29,7 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import VehicleContext, wheelbase_off
+from .plausibility import RESCALE_YAW, VehicleContext, wheelbase_off, wrong_study
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -77,7 +81,7 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
              audit: list[dict], vehicle, wheelbase: float, l_r: float, speed: float,
              catalogue: Iterable[Effect] = CATALOGUE, antenna: tuple[float, float] = (0.0, 0.0),
              before: Iterable[str] = (), turns: dict | None = None) -> dict:
-    """The verdict object: ``id`` (an effect id, 'unexplained' or 'none'), ``status`` (conclusive,
+    """The verdict object: ``id`` (an effect id, 'unexplained', 'none' or WRONG_STUDY), ``status`` (conclusive,
     inconclusive, implausible, not concluded, not identifiable), ``statement`` (one line),
     ``bullets``, each judged effect's ``judgement`` (its own rule's reasons, filled in here) included,
     and ``before``: what is said before any verdict (``before`` given: the study not being the log's
@@ -85,9 +89,26 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
     outline where the study gives no dimensions). ``antenna``: the
     study's antenna from the rear axle [m] (a reference point's offset is from it)."""
     ctx = VehicleContext(vehicle, wheelbase, l_r, speed, antenna)
-    verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue)
+    wrong = wrong_study(turns)
+    verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue,
+                       RESCALE_YAW if wrong else ())
+    if wrong:
+        verdict = on_wrong_study(verdict, wrong)
     verdict["before"] = said_before(before, ctx, turns)
     return verdict
+
+
+WRONG_STUDY = "wrong_study"
+
+
+def on_wrong_study(verdict: dict, statement: str) -> dict:
+    """The verdict on a study the log's turns are not (plausibility.wrong_study's ``statement``):
+    what was judged against it, with the effects that rescale the yaw rate withheld, follows as a
+    bullet (relative to the wrong study: to be judged again on the log's vehicle)."""
+    judged = [] if verdict["id"] == "none" else [
+        f"judged against this study (to be judged again on the log's vehicle): {verdict['id']} "
+        f"({verdict['status']}): {verdict['statement']}"]
+    return {"id": WRONG_STUDY, "status": "conclusive", "statement": statement, "bullets": judged + verdict["bullets"]}
 
 
 def said_before(before: Iterable[str], ctx: VehicleContext, turns: dict | None = None) -> list[str]:
@@ -145,7 +166,8 @@ def values_text(e: dict, rule: Effect | None) -> str:
 
 
 def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
-             audit: list[dict], ctx: VehicleContext, catalogue: Iterable[Effect]) -> dict:
+             audit: list[dict], ctx: VehicleContext, catalogue: Iterable[Effect], withheld: Iterable[str] = ()) -> dict:
+    """The verdict of the judged effects (``withheld``: effect ids listed but never concluded)."""
     blockers = [f for f in audit if not f["resolved"]]
     bullets = []
     for f in blockers:
@@ -160,7 +182,8 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         e["judgement"] = _judge(e, ctx, rules)
         e["blocked_by"] = [f["kind"] for f in blockers if "*" in f["imitates"] or e["id"] in f["imitates"]]
     unidentifiable = [e for e in unidentifiable if not _only_at_least(e, rules.get(e["id"]))]
-    answers = [e for e in effects if e not in unidentifiable]
+    answers = [e for e in effects if e not in unidentifiable and e["id"] not in withheld]
+    undecided = [e for e in unidentifiable if e["id"] not in withheld]
     if answers:
         top = answers[0]
         value = values_text(top, rules.get(top["id"]))
@@ -182,8 +205,8 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         if held:
             statement += "; " + undecided_text(held, rules.get(top["id"]))
         verdict = top["id"]
-    elif unidentifiable:
-        top = unidentifiable[0]
+    elif undecided:
+        top = undecided[0]
         verdict, status = top["id"], "not identifiable"
         statement = (f"{top['id']} explains part of the misfit but is not identifiable from this log: "
                      f"{top['not_identifiable']} (its physical limit)")
@@ -196,6 +219,7 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
     for e in effects:
         if e is not (answers[0] if answers else None):
             tag = ("not concluded (" + ", ".join(e["blocked_by"]) + ")" if e["blocked_by"] else
+                   "not concluded (it rescales the yaw rate as the study's wheelbase does)" if e["id"] in withheld else
                    "not identifiable" if e in unidentifiable else "also")
             bullets.append(f"{tag}: {e['id']} " + values_text(e, rules.get(e["id"]))
                            + (f"; {e['judgement'][0]}" if e["judgement"] else ""))
