@@ -89,6 +89,7 @@ def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monke
     """The same fits with scipy's internal finite differences (jac dropped, diff_step=1e-3): the
     yaw stage's stiffnesses, and the steering's dead-band with its time constant."""
     import agrobot.diagnosis.weighted_search as search
+    from agrobot.diagnosis.fit_memo import forget
     from agrobot.diagnosis.catalogue import CATALOGUE
 
     deadband = next(e for e in CATALOGUE if e.id == "steering_deadband").parameters
@@ -102,6 +103,7 @@ def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monke
         return real(fun, x0, diff_step=1e-3, **kw)
 
     monkeypatch.setattr(search, "least_squares", scipy_own)
+    forget(replay)                                    # searched again, not recalled
     for fit, (free, stages, sigma) in zip(ours, problems):
         theirs = _fit(replay, start, free, stages, [{}], sigma)
         for p in free:

@@ -2,7 +2,8 @@
 antenna lever arm, fitted on the side-slip block (yaw, position, speed) as the selection fits it: a
 search again at new stage levels started from the kept residuals and Jacobian lands where a fresh
 search does with fewer replays, and the search's stopping tolerance leaves the lever arm where
-scipy's default tolerances put it, a small fraction of its interval away, near the planted truth."""
+scipy's default tolerances put it, a small fraction of its interval away, near the planted truth; a
+fit asked for again is recalled (diagnosis.fit_memo), not searched, as a copy of its own."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -14,6 +15,7 @@ import agrobot.diagnosis.weighted_search as weighted_search
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay, _fit, fit_baseline, refit_free
 from agrobot.diagnosis.catalogue import CATALOGUE
+from agrobot.diagnosis.fit_memo import forget
 from agrobot.diagnosis.weighted_search import WeightedSearch
 from agrobot.orchestrator.study import load_study
 from harness.truth_tractor import make_log
@@ -70,8 +72,24 @@ def test_stopping_tolerance_leaves_the_lever_arm_where_the_default_puts_it(case,
     ours = _fit(replay, dict(base.values), free, replay.side_slip_block, [{}], sigma)
     monkeypatch.setattr(weighted_search, "FTOL", 1e-8)            # scipy's defaults
     monkeypatch.setattr(weighted_search, "XTOL", 1e-8)
+    forget(replay)                                    # searched again, not recalled
     tight = _fit(replay, dict(base.values), free, replay.side_slip_block, [{}], sigma)
     for name, planted in (("antenna_forward", truth["forward"]), ("antenna_left", truth["left"])):
         sd = ours.std(name)
         assert abs(ours.values[name] - tight.values[name]) < 0.05 * sd
         assert abs(ours.values[name] - planted) < 3.0 * sd
+
+
+def test_a_fit_asked_for_again_is_recalled_not_searched(case, monkeypatch):
+    replay, base, sigma, _ = case
+    free = refit_free(replay, ("yaw",), [])
+    first = _fit(replay, dict(base.values), free, ("yaw",), [{}], {"yaw": 2 * sigma["yaw"]})
+
+    def searched(*args, **kwargs):
+        raise AssertionError("searched again")
+    monkeypatch.setattr(weighted_search, "least_squares", searched)
+    first.values[free[0].name] = -1.0                  # what a caller changes in its copy
+    again = _fit(replay, dict(base.values), free, ("yaw",), [{}], {"yaw": 2 * sigma["yaw"]})
+    assert again.values[free[0].name] > 0 and again.rss == first.rss
+    with pytest.raises(AssertionError, match="searched again"):     # another fit is searched
+        _fit(replay, dict(base.values), free, ("yaw",), [{}], {"yaw": 3 * sigma["yaw"]})

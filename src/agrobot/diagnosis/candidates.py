@@ -35,6 +35,7 @@ from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened
 from .catalogue import UNCERTAIN, Parameter
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, wheel_angle_input)
+from .fit_memo import recalled, remembered
 from .steering_map import mapped_steering
 from .weighted_search import WeightedSearch
 
@@ -545,7 +546,12 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
 def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
            starts: list[dict[str, float]], sigma: dict[str, float]) -> FitResult:
     """Least squares over ``free`` (scaled by each parameter's typical size) from each start
-    (diagnosis.weighted_search: a search again at new levels starts from the last one's residuals)."""
+    (diagnosis.weighted_search: a search again at new levels starts from the last one's residuals); a
+    fit computed before on the replay is recalled (diagnosis.fit_memo)."""
+    key = fit_key(base_values, free, stages, starts, sigma)
+    known = recalled(replay, key)
+    if known is not None:
+        return known
     def values_of(x: np.ndarray) -> dict[str, float]:
         v = dict(base_values)
         for p, xi in zip(free, x):
@@ -587,7 +593,7 @@ def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter],
     cov = np.zeros((0, 0))
     if best is not None:          # one on its bound held there
         cov = solution_covariance(best.jac, best.cost, best.x, free, sum(n.values()), sum(n_eff.values()))
-    return FitResult(values, tuple(free), cov, rss, n, n_eff, rmse)
+    return remembered(replay, key, FitResult(values, tuple(free), cov, rss, n, n_eff, rmse))
 
 
 def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
