@@ -20,7 +20,9 @@ resident memory of its largest process, and the peak of the sum over the process
 runs past ``--cap`` seconds is stopped and shown as ``> cap``. The code before is the commit
 ``--before`` unpacked by ``git archive`` into a temporary folder; the logs are generated into a
 temporary folder and removed with it. For a log with a hidden effect the row says whether the
-verdict names it (harness.hidden_effects.expected_ids). Targets (on two idle cores): the tractor log
+verdict names it (harness.hidden_effects.expected_ids); a second table gives each diagnosis's verdict
+and fitted values with their 95 % intervals on each code, and whether the code before concluded the
+same (the same effects, each value inside the other's interval). Targets (on two idle cores): the tractor log
 diagnosed in 10 s, the excerpt in 15 s, the hour identified and diagnosed in 120 s together, peak
 memory under 2 GB.
 """
