@@ -20,7 +20,9 @@ resident memory of its largest process, and the peak of the sum over the process
 runs past ``--cap`` seconds is stopped and shown as ``> cap``. The code before is the commit
 ``--before`` unpacked by ``git archive`` into a temporary folder; the logs are generated into a
 temporary folder and removed with it. For a log with a hidden effect the row says whether the
-verdict names it (harness.hidden_effects.expected_ids). Targets (on two idle cores): the tractor log
+verdict names it (harness.hidden_effects.expected_ids); a second table gives each diagnosis's verdict
+and fitted values with their 95 % intervals on each code, and whether the code before concluded the
+same (the same effects, each value inside the other's interval). Targets (on two idle cores): the tractor log
 diagnosed in 10 s, the excerpt in 15 s, the hour identified and diagnosed in 120 s together, peak
 memory under 2 GB.
 """
@@ -29,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -154,6 +157,35 @@ def named(out: Path, expected: set | None) -> str:
         f"no ({result.get('verdict')}; {'+'.join(sorted(found)) or 'none'})"
 
 
+def concluded(out: Path) -> str:
+    """What the diagnosis at ``out`` concluded: its verdict, and each effect's fitted values with their
+    95 % intervals ('id: name value [lo, hi]'), for comparing two codes' results."""
+    try:
+        result = json.loads((out / "diagnosis.json").read_text())
+    except (OSError, ValueError):
+        return "no result"
+    effects = [f"{e['id']}: " + ", ".join(f"{k} {q['value']:.4g} [{q['interval'][0]:.4g}, {q['interval'][1]:.4g}]"
+                                          for k, q in (e.get("fitted") or {}).items())
+               for e in result.get("effects", [])]
+    return "; ".join([str(result.get("verdict"))] + effects)
+
+
+def same_within_intervals(now: str, before: str) -> str:
+    """'yes' when the two codes name the same verdict and effects, each value of one inside the
+    other's 95 % interval; else 'no'."""
+    def parsed(text: str):
+        head, *effects = text.split("; ")
+        values = {}
+        for e in effects:
+            eid, _, rest = e.partition(": ")
+            for name, value, lo, hi in re.findall(r"(\S+) (\S+) \[(\S+), (\S+)\]", rest):
+                values[(eid, name)] = (float(value), float(lo), float(hi))
+        return head, values
+    (v1, a), (v2, b) = parsed(now), parsed(before)
+    inside = all(b[k][1] <= a[k][0] <= b[k][2] and a[k][1] <= b[k][0] <= a[k][2] for k in a if k in b)
+    return "yes" if v1 == v2 and set(a) == set(b) and inside else "no"
+
+
 def unpack(commit: str, folder: Path) -> Path:
     """The tree at ``commit`` (git archive), with its package's links to the top-level folders."""
     folder.mkdir(parents=True)
@@ -179,6 +211,7 @@ def measure(cases: list[str], before: str | None, cap: float) -> list[tuple]:
                     r = timed(tree, [command, str(log), "--study", str(ROOT / study), *extra, "--out", str(out),
                                      "--no-plots", "--no-progress"], cap)
                     r["named"] = named(out, expected) if command == "diagnose" else ""
+                    r["concluded"] = concluded(out) if command == "diagnose" else ""
                     rows.append((case, seconds, command, name, r))
                     both.append(r)
                     print(f"{case} {command} {name}: {r['wall']:.1f} s wall{' (> cap)' if r['capped'] else ''}, "
@@ -211,6 +244,18 @@ def table(rows: list[tuple], cap: float) -> str:
     return "\n".join(lines)
 
 
+def conclusions(rows: list[tuple]) -> str:
+    """Each diagnosis's verdict and values with their intervals, on each code, and whether the other
+    codes' agree with this tree's (the same effects, each value inside the other's interval)."""
+    lines = ["| log | code | verdict; effect: value [95 % interval] | same as now |", "|---|---|---|---|"]
+    now = {case: r["concluded"] for case, _, command, name, r in rows if command == "diagnose" and name == "now"}
+    for case, _, command, name, r in rows:
+        if command == "diagnose":
+            same = "-" if name == "now" else same_within_intervals(now.get(case, ""), r["concluded"])
+            lines.append(f"| {case} | {name} | {r['concluded'].replace('|', '/')} | {same} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", nargs="+", choices=tuple(LOGS), default=list(LOGS))
@@ -222,6 +267,7 @@ def main() -> None:
     load = os.getloadavg()[0]
     rows = measure(args.cases, None if args.no_before else args.before, args.cap)
     print(table(rows, args.cap))
+    print(conclusions(rows))
     print(f"(load average {load:.1f} at the start, {os.getloadavg()[0]:.1f} at the end, on {os.cpu_count()} cores)")
 
 

@@ -88,7 +88,8 @@ def test_one_batched_replay_equals_one_replay_per_set(replay):
 def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monkeypatch):
     """The same fits with scipy's internal finite differences (jac dropped, diff_step=1e-3): the
     yaw stage's stiffnesses, and the steering's dead-band with its time constant."""
-    import agrobot.diagnosis.candidates as candidates
+    import agrobot.diagnosis.weighted_search as search
+    from agrobot.diagnosis.fit_memo import forget
     from agrobot.diagnosis.catalogue import CATALOGUE
 
     deadband = next(e for e in CATALOGUE if e.id == "steering_deadband").parameters
@@ -96,12 +97,13 @@ def test_fit_with_the_batched_jacobian_lands_where_scipys_own_does(replay, monke
                 (list(deadband) + list(UNCERTAIN["steering"]), ("steering",), {"steering": 0.002})]
     start = {**replay.baseline.values}
     ours = [_fit(replay, start, free, stages, [{}], sigma) for free, stages, sigma in problems]
-    real = candidates.least_squares
+    real = search.least_squares
 
     def scipy_own(fun, x0, jac=None, **kw):
         return real(fun, x0, diff_step=1e-3, **kw)
 
-    monkeypatch.setattr(candidates, "least_squares", scipy_own)
+    monkeypatch.setattr(search, "least_squares", scipy_own)
+    forget(replay)                                    # searched again, not recalled
     for fit, (free, stages, sigma) in zip(ours, problems):
         theirs = _fit(replay, start, free, stages, [{}], sigma)
         for p in free:

@@ -27,9 +27,8 @@ from functools import cached_property
 import numpy as np
 import pandas as pd
 from scipy.ndimage import convolve1d
-from scipy.optimize import least_squares
 
-from agrobot.estimation import FitResult, effective_size, forward_jacobian, solution_covariance, updates_on
+from agrobot.estimation import FitResult, effective_size, solution_covariance, updates_on
 from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
@@ -39,7 +38,9 @@ from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import level_on_updates, update_step
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, wheel_angle_input)
+from .fit_memo import recalled, remembered
 from .steering_map import mapped_steering
+from .weighted_search import WeightedSearch
 
 STAGES = ("steering", "yaw", "position", "speed")
 
@@ -589,36 +590,27 @@ def _fit(replay: Replay, base_values: dict[str, float], free: list[Parameter], s
 
 def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter], stages: tuple[str, ...],
            starts: list[dict[str, float]], sigma: dict[str, float]) -> FitResult:
-    """Least squares over ``free`` (scaled by each parameter's typical size) from each start."""
+    """Least squares over ``free`` (scaled by each parameter's typical size) from each start
+    (diagnosis.weighted_search: a search again at new levels starts from the last one's residuals); a
+    fit computed before on the replay is recalled (diagnosis.fit_memo)."""
+    key = fit_key(base_values, free, stages, starts, sigma)
+    known = recalled(replay, key)
+    if known is not None:
+        return known
     def values_of(x: np.ndarray) -> dict[str, float]:
         v = dict(base_values)
         for p, xi in zip(free, x):
             v[p.name] = float(xi) * p.scale
         return v
 
-    def residuals_many(xs: list[np.ndarray]) -> list[np.ndarray]:
-        sets = [values_of(x) for x in xs]
-        per_stage = [replay.residuals_many(s, sets, "fit") for s in stages]
-        return [np.concatenate([r[i] / sigma[s] for s, r in zip(stages, per_stage)]) for i in range(len(xs))]
-
-    last: dict[str, np.ndarray] = {}
-
-    def fun(x: np.ndarray) -> np.ndarray:
-        last["x"], last["f"] = np.array(x, float), residuals_many([x])[0]
-        return last["f"]
-
-    def jac(x: np.ndarray) -> np.ndarray:
-        """scipy's forward differences (diff_step=1e-3), the n stepped sets in one batched replay."""
-        f0 = last["f"] if "x" in last and np.array_equal(last["x"], x) else fun(x)
-        return forward_jacobian(residuals_many, x, lo, hi, rel_step=1e-3, f0=f0)
-
     best = None
     if free:
         lo = np.array([p.lower / p.scale for p in free])
         hi = np.array([p.upper / p.scale for p in free])
+        search = WeightedSearch(replay, stages, values_of, lo, hi)
         for start in starts:
             x0 = np.clip([start.get(p.name, base_values[p.name]) / p.scale for p in free], lo + 1e-9, hi - 1e-9)
-            sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=150, x_scale=1.0)
+            sol = search.search(x0, sigma)
             if best is None or sol.cost < best.cost:
                 best = sol
         block = getattr(replay, "side_slip_block", ())
@@ -629,15 +621,12 @@ def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter],
             # yaw rate, leaving the side-slip where the yaw rate alone puts it
             sigma = dict(sigma)
             for _ in range(REWEIGHTS):
-                v = values_of(best.x)
-                level = {}
-                for s in stages:
-                    r = replay.residuals(s, v, "fit")
-                    level[s] = math.sqrt(float(r @ r) / max(effective_size(r, updates=replay.updates(s)), 1.0)) or sigma[s]
+                level = {s: math.sqrt(float(r @ r) / max(effective_size(r, updates=replay.updates(s)), 1.0)) or sigma[s]
+                         for s, r in search.by_stage(best).items()}
                 if all(abs(level[s] / sigma[s] - 1.0) < 0.02 for s in stages):
                     break
                 sigma.update(level)
-                best = least_squares(fun, best.x, jac=jac, bounds=(lo, hi), max_nfev=150, x_scale=1.0)
+                best = search.search(best.x, sigma, after=best)
         values = values_of(best.x)
     else:
         values = dict(base_values)
@@ -649,7 +638,7 @@ def fitted(replay: Replay, base_values: dict[str, float], free: list[Parameter],
     cov = np.zeros((0, 0))
     if best is not None:          # one on its bound held there
         cov = solution_covariance(best.jac, best.cost, best.x, free, sum(n.values()), sum(n_eff.values()))
-    return FitResult(values, tuple(free), cov, rss, n, n_eff, rmse)
+    return remembered(replay, key, FitResult(values, tuple(free), cov, rss, n, n_eff, rmse))
 
 
 def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
