@@ -36,7 +36,8 @@ class GyroFilter(Effect):
         return fitted["gyro_time_constant"] >= 0.04
 
     def options(self, fitted, base, study):
-        raise KeyError("gyro filter's time constant (the study's gyro reads the yaw rate unfiltered)")
+        raise KeyError("gyro filter's time constant (the study's gyro is unfiltered: log the gyro's raw channel, or "
+                       "shift the log's yaw_rate earlier by tau_g before simulating)")
 
     def plausibility(self, values, ctx):
         """A filter slower than a sensor's is a heading estimate or a clock, no gyro's."""
