@@ -10,6 +10,9 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import numpy as np
+from scipy.signal import lfilter
+
 from agrobot.components.models.tyre import force_limit_share
 from agrobot.diagnosis import pipeline
 from agrobot.diagnosis.parallel_fits import default_workers
@@ -17,7 +20,7 @@ from agrobot.diagnosis.pipeline import diagnose
 from agrobot.studies import shipped
 from harness.truth_tractor import DEG, EFFECTS, TABLE, UNLISTED, make_log
 
-__all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "recovered"]
+__all__ = ["EFFECTS", "diagnose_hidden", "diagnose_many", "expected_ids", "filtered_gyro", "recovered"]
 
 
 # truth faults the catalogue has since named: truth id -> the effect a right diagnosis names
@@ -75,9 +78,23 @@ def recovered(effect: str, truth: dict, params: dict) -> tuple[float, float, flo
         return params["steering_gain"], 1.0 / truth["sensor_gain"], 0.03     # closed on it: wheels turn cmd / g
     if effect == "steering_clock":
         return params["steering_clock"], truth["steering_clock"], 0.04
+    if effect == "gyro_filter":                  # the vehicle's own lag the baseline misses biases it (~0.02 s)
+        return params["gyro_time_constant"], truth["gyro_time_constant"], 0.03              # s
     if effect == "steering_ratio_curve":
         return params["steering_ratio_curvature"], truth["ratio_curvature"], 0.25 * truth["ratio_curvature"]
     raise KeyError(effect)
+
+
+def filtered_gyro(frame, tau: float, fine: float = 0.001):
+    """The log with its yaw_rate read through a first-order low-pass of time constant ``tau`` [s]:
+    tau y' = r - y integrated exactly on a ``fine`` grid, r linear between the rows, from rest at r[0]."""
+    t, r = frame["t"].to_numpy(float), frame["yaw_rate"].to_numpy(float)
+    tf = np.arange(t[0], t[-1] + fine / 2, fine)
+    y = lfilter([1.0 - math.exp(-fine / tau)], [1.0, -math.exp(-fine / tau)], np.interp(tf, t, r),
+                zi=[math.exp(-fine / tau) * r[0]])[0]
+    out = frame.copy()
+    out["yaw_rate"] = np.interp(t, tf, y)
+    return out
 
 
 TRUTH_ANTENNA = 0.0       # m: the baseline studies' antenna_forward (figure8, passenger_car: at the rear axle)

@@ -83,9 +83,9 @@ def test_the_verdict_names_no_effect_id_each_effect_judges_itself():
 # what each unresolved audit finding kind keeps from being concluded, as the verdict's table held it
 # when it lived in verdict.py (a recording's clock imitates delays and latencies, a scale a bias or a tyre)
 IMITATED_BEFORE = {
-    "clock_offset": {"actuator_delay", "gps_latency", "position_reference", "antenna_lever_arm", "steering_rate_limit"},
-    "response_leads_input": {"actuator_delay", "gps_latency", "position_reference", "steering_rate_limit"},
-    "stamp_vs_receive": {"actuator_delay", "gps_latency", "position_reference"},
+    "clock_offset": {"gyro_filter", "actuator_delay", "gps_latency", "position_reference", "antenna_lever_arm", "steering_rate_limit"},
+    "response_leads_input": {"gyro_filter", "actuator_delay", "gps_latency", "position_reference", "steering_rate_limit"},
+    "stamp_vs_receive": {"gyro_filter", "actuator_delay", "gps_latency", "position_reference"},
     "gap_bridged": {"actuator_delay", "gps_latency", "steering_rate_limit"},
     "scale_disagreement": {"gyro_scale", "speed_scale", "yaw_rate_bias", "tyre_saturation",
                            "speed_dependent_cornering", "steering_ratio_curve"},

@@ -330,7 +330,7 @@ class Replay:
                                                                  [inputs[i] for i in saturated])))
             linear = [i for i in range(len(sets)) if i not in rates]
             self.yaw.prepare([sets[i] for i in linear], [inputs[i] for i in linear])
-            return [measured_yaw_rate(rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i]), v)
+            return [measured_yaw_rate(rates[i] if i in rates else self.yaw.yaw_rate(v, inputs[i]), v, self.h)
                     for i, v in enumerate(sets)]
         out = []
         for track in self.tracks(sets):

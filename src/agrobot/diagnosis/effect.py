@@ -50,6 +50,7 @@ QUANTITIES: dict[str, tuple[float | None, str, str]] = {
     "yaw.slope_north": (0.0, "sum", "a lateral acceleration g sin(phi) sin(psi_d) from a side slope [m/s2]"),
     "gyro.bias": (0.0, "sum", "the gyro reads gain x the yaw rate + bias [rad/s]"),
     "gyro.gain": (1.0, "product", "the gyro reads gain x the yaw rate + bias"),
+    "gyro.time_constant": (0.0, "one", "the gyro reads through a first-order low-pass of this time constant [s]"),
     "speed.gain": (1.0, "product", "the wheel speed reads gain x the ground speed"),
     "position.forward": (0.0, "sum", "the position's point ahead of the rear axle [m]"),
     "position.left": (0.0, "sum", "the position's point left of the vehicle's centre line [m]"),

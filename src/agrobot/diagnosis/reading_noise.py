@@ -81,7 +81,7 @@ def passage(replay, v: dict[str, float], noise: np.ndarray, part: str = "fit") -
     def yaw(d):
         inp = wheel_angle_input(d, None, replay.t, v)
         rate = replay.yaw.yaw_rate(v, d if inp is None else inp)
-        return replay.seen("yaw", measured_yaw_rate(rate, v))
+        return replay.seen("yaw", measured_yaw_rate(rate, v, replay.h))
     return (yaw(replay.delta + noise) - yaw(replay.delta))[replay.masks["yaw"][part]]
 
 

@@ -24,6 +24,7 @@ from typing import Mapping
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
+from scipy.signal import lfilter
 
 from agrobot.components.models import steering_equivalent
 from agrobot.diagnosis import replay_kernels
@@ -80,13 +81,23 @@ def wheel_angle_input(measured: np.ndarray, replayed: np.ndarray | None, t: np.n
     return delta
 
 
-def measured_yaw_rate(rate: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+def measured_yaw_rate(rate: np.ndarray, v: Mapping[str, float], h: float = 0.0) -> np.ndarray:
     """The yaw stage's reading of a replayed yaw rate (the gyro's bias in it): the gyro reads
     s r + b; a wheel speed k x the ground speed drives the LPV model k times too fast, which near
-    the kinematic yaw rate v delta / L is a yaw rate k times too high: (s / k) (rate - b) + b."""
+    the kinematic yaw rate v delta / L is a yaw rate k times too high: (s / k) (rate - b) + b;
+    read through the gyro's first-order filter of time constant tau on samples ``h`` apart."""
     gyro = CATALOGUE.quantities(v, "gyro")
     scale = gyro["gain"] / CATALOGUE.quantities(v, "speed")["gain"]
-    return rate if scale == 1.0 else scale * (rate - gyro["bias"]) + gyro["bias"]
+    out = rate if scale == 1.0 else scale * (rate - gyro["bias"]) + gyro["bias"]
+    return low_pass(out, h, gyro["time_constant"]) if gyro["time_constant"] > 0 and h > 0 else out
+
+
+def low_pass(x: np.ndarray, h: float, tau: float) -> np.ndarray:
+    """tau y' = x - y on samples h apart, x held linear between them (the mean of the two samples
+    around a step drives it), from rest at x[0]: y[k] = a y[k-1] + (1 - a) (x[k-1] + x[k]) / 2."""
+    a = math.exp(-h / tau)
+    u = np.concatenate([x[:1], 0.5 * (x[1:] + x[:-1])])
+    return lfilter([1.0 - a], [1.0, -a], u, zi=[a * u[0]])[0]
 
 
 def exact(values) -> tuple[float, ...]:
