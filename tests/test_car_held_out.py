@@ -4,13 +4,13 @@ study (studies/passenger_car.toml) as benchmarks/diagnosis_rate.py --classes car
 The truth plants nothing at that seed: no lever arm (its antenna sits at the rear axle, as the
 study's), stiffnesses within the others' spread. The gyro's white noise (0.002 rad/s at 20 Hz),
 integrated into the dead-reckoned track's heading, drifts the track at 30 m/s by a GPS noise's worth
-within a 10 s window; read with equal weight at every frequency, the block fit of the cornering
-stiffnesses on the yaw rate and the track (candidates.fit_baseline) took that drift as a 16 %
-stiffer rear axle (C_r x 1.15 against the truth's 0.99), and a lever arm fitted with the stiffnesses
-freed undid that error on the held-out part (0.79 m named on a clean log). With the position
-stage's residual whitened by the dead reckoning's own noise (replay.TrackWhitening: the drift's
-covariance from the log's gyro and speed white levels) the fit finds C_r x 0.97: nothing named.
-The first test keeps the measured cause: with the gyro's noise alone taken out the log is healthy.
+within a 10 s window. Read with equal weight at every frequency, that drift biases the block fit of
+the cornering stiffnesses on the yaw rate and the track (candidates.fit_baseline) towards a stiffer
+rear axle, and a lever arm fitted with the stiffnesses freed can undo that error on the held-out
+part. The position stage's residual is whitened by the dead reckoning's own noise
+(replay.TrackWhitening: the drift's covariance from the log's gyro and speed white levels), so the
+fit stays at the truth's C_r and nothing is named. The first test checks the cause itself: with the
+gyro's noise alone taken out the log is healthy.
 """
 from __future__ import annotations
 

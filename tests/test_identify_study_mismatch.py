@@ -51,8 +51,8 @@ def test_the_command_line_says_it_before_the_steering_map(small, cli, tmp_path):
 
 
 def test_the_help_names_the_wheelbase_identify_stands_on_without_one_given(small, cli):
-    """--help said 'default 1.4, the paper tractor'; without --wheelbase identify stands on the study's
-    [vehicle] wheelbase (2 m here), as the help now says."""
+    """Without --wheelbase identify stands on the study's [vehicle] wheelbase (2 m here), and --help
+    says so."""
     log, _, long_study = small
     shown = " ".join(cli("identify", "--help").stdout.split())
     assert "default: the study's [vehicle] wheelbase, else its yaw plant's l_f + l_r, else 1.4" in shown, shown

@@ -4,8 +4,7 @@ automotive sensor, its offset learnt at standstill) is drawn inside the car clas
 one the diagnosis may conclude by its own bound.
 
 Truth: harness.truth_tractor's drawn biases on 40 seeds of each vehicle; and the car's largest
-draw of the quick benchmark's seeds (1005: 0.89 deg/s; it was 1.69 deg/s, beyond the bound, and
-judged implausible) named with its value."""
+draw of the quick benchmark's seeds (1005: 0.89 deg/s) named with its value."""
 from __future__ import annotations
 
 import math
