@@ -39,6 +39,7 @@ from scipy.optimize import least_squares
 
 from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
                                 updates_on)
+from agrobot.measurements.runs import SENT_WITH_ROW, last_update
 from agrobot.measurements.streams import HELD
 from agrobot.orchestrator.errors import InputError
 
@@ -71,11 +72,15 @@ class HeldInput:
 
     def at(self, t: np.ndarray) -> np.ndarray:
         """The value in force at t: the last update at or before it."""
-        return self.values[np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)]
+        return self.values[self._in_force(t)]
+
+    def _in_force(self, t: np.ndarray) -> np.ndarray:
+        """The index of the update in force at t (before the first: the first)."""
+        return np.clip(last_update(self.times, t), 0, len(self.values) - 1)
 
     def integral(self, t: np.ndarray) -> np.ndarray:
         """int_{times[0]}^t of the held value (before the first update: the first value)."""
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)
+        k = self._in_force(t)
         start = np.r_[0.0, np.cumsum(self.values[:-1] * np.diff(self.times))]
         return start[k] + self.values[k] * (t - self.times[k])
 
@@ -260,9 +265,10 @@ def steady_stamps(own, band: float = 0.5) -> tuple[bool, str]:
     return bool(lo >= 1 - band and hi <= 1 + band), f"{lo:.2g}-{hi:.2g}"
 
 
-def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = 1.1e-3) -> bool:
+def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = SENT_WITH_ROW + 1e-4) -> bool:
     """Whether every row x(t) is the update in force at t, within ``slack`` s (the importer takes a
-    value sent up to 1 ms after a row as the row's: measurements.runs.held)."""
+    value sent up to SENT_WITH_ROW after a row as the row's: measurements.runs.held; 0.1 ms more for
+    the stamps' rounding)."""
     return bool(np.all((held.at(t) == x) | (held.at(t - slack) == x) | (held.at(t + slack) == x)))
 
 
