@@ -81,7 +81,7 @@ from .clocks import parabolic_peak
 from .direction import check_direction, position_noise
 from .findings import finding
 from .imu_axes import axis_findings
-from .log import CANONICAL, LogError
+from .log import CANONICAL, LogError, slope_through_origin
 from .options import ImportOptions
 from .position_source import estimate_evidence, named_estimate, track_noise
 from .streams import Streams, gnss_speed
@@ -288,10 +288,7 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
     x, y = a[lo:hi][sel], b[lo + k:hi + k][sel]
     if len(x) < 10:
         return math.nan
-    if through_origin:
-        return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
-    x, y = x - x.mean(), y - y.mean()
-    return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
+    return slope_through_origin(x, y) if through_origin else slope_through_origin(x - x.mean(), y - y.mean())
 
 
 # --- the signals that must agree ---------------------------------------------------------------
