@@ -180,7 +180,11 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     updates, said = input_hold(frame, input_name, hold)
     if updates is not None and len(updates.times) > 1 and float(np.median(np.diff(updates.times))) < h * 0.99:
         # a step holds one switch of a held input (hold_phases): the most rows within its update interval
-        h = step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
+        coarsest, h = h, step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
+        if h < coarsest * (1 - 1e-9):
+            said += (f"; the clock set to {1 / h:.3g} Hz, its update rate, finer than the {max_rate:g} Hz the fit keeps to "
+                     f"otherwise (max_rate, passed over: a step holds at most one switch of the held input); "
+                     f"--input-hold linear keeps {max_rate:g} Hz")
     gap = gap or max(0.5, 5 * step)
     cuts = np.flatnonzero(dt > gap) + 1
     notes = []
@@ -219,6 +223,8 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     if own is not None and update_times is None:
         log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), np.asarray(own[1], float), t)
         notes.append(said)
+    elif frame.attrs.get("own_samples_dropped") and update_times is None:
+        notes.append(f"yaw rate: its own sampling not modelled ({frame.attrs['own_samples_dropped']})")
     return log
 
 
@@ -232,9 +238,10 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     if hold not in (AUTO, ZOH, LINEAR):
         raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
     own = (frame.attrs.get("own_samples") or {}).get(input_name)
+    lacking = frame.attrs.get("own_samples_dropped") or "the log does not carry them"
     if own is not None and not holds(HeldInput(*(np.asarray(a, float) for a in own)), frame["t"].to_numpy(float),
                                      frame[input_name].to_numpy(float)):
-        own = None          # the column no longer what its own samples hold (changed since the import)
+        own, lacking = None, "the column changed since the import: its rows no longer what they hold"
     steady, spread = steady_stamps(own)
     if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD and steady):
         if own is not None:
@@ -242,13 +249,13 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
             where = f"its own {len(updates.times)} updates in the recording"
         else:
             updates = held_updates(frame["t"].to_numpy(float), frame[input_name].to_numpy(float))
-            where = "its rows taken as its update stamps"
+            where = f"its rows taken as its update stamps (its own updates not used: {lacking})"
         why = "--input-hold zoh" if hold == ZOH else "auto: a set-point"
         return updates, (f"input {input_name} taken as held between its updates ({why}; {where}: zero-order hold, the "
                          f"value at t - delay the last update at or before it); --input-hold linear reads it linearly "
                          f"between rows")
     what = ("a sampled signal" if input_name not in HELD else
-            "a set-point whose own updates the log does not carry: its rows quantize them" if own is None else
+            f"a set-point whose own updates are not used ({lacking}): its rows quantize them" if own is None else
             f"a set-point whose own stamps come in bursts, 10-90 % of their intervals {spread} of their median: "
             f"stamped on receipt, not when it took effect") if hold == AUTO else "--input-hold linear"
     return None, (f"input {input_name} read linearly between its rows ({what}); --input-hold zoh takes it as held "
