@@ -61,6 +61,8 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     report = persisted_report(path)          # the import's report, when convert wrote the log
     if isinstance(report.get("declared"), dict):
         frame.attrs["declared"] = dict(report["declared"])      # the units the user declared to convert
+    if isinstance(report.get("resolution"), dict):
+        frame.attrs["resolution"] = dict(report["resolution"])  # the recording's own quantisation steps
     frame = check_log(frame, str(path), required, resample_jitter)
     audit = report.get("audit", {}).get("findings")
     if isinstance(audit, list):
@@ -79,7 +81,8 @@ def log_units(frame: pd.DataFrame, stored: dict[str, str] | None = None) -> dict
 
 def persisted_report(path) -> dict:
     """The import report written beside a log (its ``<name>.import.json``, as ``convert`` writes
-    it), or {}: reading a log back restores its audit and the units the user declared."""
+    it), or {}: reading a log back restores its audit, the units the user declared and the
+    signals' resolution (a written log holds no attrs: orchestrator.atomic_files.write_frame)."""
     side = Path(path).with_name(Path(path).stem + ".import.json")
     if not side.is_file():
         return {}
