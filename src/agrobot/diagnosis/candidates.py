@@ -177,10 +177,9 @@ class Replay:
             check_units(f, "log")
         except LogError as exc:
             raise CannotDecide(str(exc).removeprefix("log: ")) from None
-        t_split = self.t[0] + self.fit_fraction * duration
+        self.t_split = t_split = self.t[0] + self.fit_fraction * duration
         settled = ~near_joins(self.t, f.attrs.get("joins", ()), 0.0, self.burn_in)    # each joined stretch burns in
         after_burn, moving = (self.t >= self.t[0] + self.burn_in) & settled, moving & settled
-        self.t_split = t_split
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held & settled}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
