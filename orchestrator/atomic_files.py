@@ -55,6 +55,18 @@ def units_metadata(units: dict[str, str]) -> dict[bytes, bytes]:
     return {UNITS_KEY: json.dumps(dict(units)).encode()}
 
 
+def frame_metadata(schema: pa.Schema) -> dict[bytes, bytes]:
+    """An Arrow schema's metadata without the frame's attrs that pyarrow keeps in its pandas
+    metadata ("attributes"): a written table holds what it declares (an import's own samples
+    would grow a log several times over, and every read-back frame would copy them)."""
+    meta = dict(schema.metadata or {})
+    if b"pandas" in meta:
+        pandas_meta = json.loads(meta[b"pandas"])
+        pandas_meta.pop("attributes", None)
+        meta[b"pandas"] = json.dumps(pandas_meta).encode()
+    return meta
+
+
 def units_file(path: Path) -> Path:
     """Where a CSV table's units are kept: ``NAME.units.json`` beside ``NAME.csv``."""
     return Path(path).with_name(Path(path).stem + ".units.json")
@@ -80,7 +92,8 @@ def read_units(path: Path, schema=None) -> dict[str, str]:
 
 
 def write_frame(path: Path, frame: pd.DataFrame, **csv_options) -> Path:
-    """``frame`` to ``path`` (.parquet, else CSV), with its ``attrs["units"]``."""
+    """``frame`` to ``path`` (.parquet, else CSV), with its ``attrs["units"]`` and none of its
+    other attrs (a CSV holds none; a parquet's pandas metadata would: frame_metadata)."""
     path = Path(path)
     units = dict(frame.attrs.get("units", {}))
     if path.suffix == ".parquet":
@@ -88,7 +101,7 @@ def write_frame(path: Path, frame: pd.DataFrame, **csv_options) -> Path:
 
         def write(p: Path) -> None:
             table = pa.Table.from_pandas(frame, preserve_index=False)
-            pq.write_table(table.replace_schema_metadata({**(table.schema.metadata or {}), **units_metadata(units)}), p)
+            pq.write_table(table.replace_schema_metadata({**frame_metadata(table.schema), **units_metadata(units)}), p)
 
         return atomic_write(path, write)
     if units:

@@ -37,7 +37,8 @@ from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import level_on_updates, update_step
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
-                     measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, wheel_angle_input)
+                     measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, track_residual_vector,
+                     wheel_angle_input)
 from .fit_memo import recalled, remembered
 from .steering_map import mapped_steering
 from .weighted_search import WeightedSearch
@@ -176,10 +177,9 @@ class Replay:
             check_units(f, "log")
         except LogError as exc:
             raise CannotDecide(str(exc).removeprefix("log: ")) from None
-        t_split = self.t[0] + self.fit_fraction * duration
+        self.t_split = t_split = self.t[0] + self.fit_fraction * duration
         settled = ~near_joins(self.t, f.attrs.get("joins", ()), 0.0, self.burn_in)    # each joined stretch burns in
         after_burn, moving = (self.t >= self.t[0] + self.burn_in) & settled, moving & settled
-        self.t_split = t_split
         held = self._held_out(t_split, moving)
         steering = {"fit": after_burn & ~held, "test": held & settled}
         # samples scored per stage and part (the yaw replay only where the tractor moves)
@@ -476,14 +476,14 @@ class Replay:
         residual (measured: the GPS track) through its generalised-least-squares transform
         (replay.TrackWhitening, at the log's sensor levels ``track_noise``), ordered by time within
         each window's east, then north, series (replay.track_residual_vector)."""
-        res = aligned_residuals(predicted, self.gps if measured is None else measured, rows).transpose(0, 2, 1)
+        res = aligned_residuals(predicted, self.gps if measured is None else measured, rows)
         if not len(rows):
-            return res.ravel()
+            return track_residual_vector(res)
         cache = self.__dict__.setdefault("_whitenings", {})
         for row in rows:
             if int(row[0]) not in cache:
                 cache[int(row[0])] = TrackWhitening(self.gps[row], self.h, *self.track_noise)
-        return np.concatenate([cache[int(row[0])](r.ravel()) for row, r in zip(rows, res)])
+        return np.concatenate([cache[int(row[0])](track_residual_vector(r[None])) for row, r in zip(rows, res)])
 
     @cached_property
     def track_noise(self) -> tuple[float, float, float]:

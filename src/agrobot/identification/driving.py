@@ -39,11 +39,13 @@ from scipy.optimize import least_squares
 
 from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
                                 updates_on)
+from agrobot.measurements.runs import SENT_WITH_ROW, last_update
 from agrobot.measurements.streams import HELD
 from agrobot.orchestrator.errors import InputError
 
 from agrobot.components.models.tyre import GAMMA_ROS2, N_STATES, axle_loads, rates
 from agrobot.components.models.yaw_dynamics import GRAVITY, TractorParameters
+from agrobot.components.tractor_yaw_plant import steer_input
 
 from . import single_track_kernel
 
@@ -70,11 +72,15 @@ class HeldInput:
 
     def at(self, t: np.ndarray) -> np.ndarray:
         """The value in force at t: the last update at or before it."""
-        return self.values[np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)]
+        return self.values[self._in_force(t)]
+
+    def _in_force(self, t: np.ndarray) -> np.ndarray:
+        """The index of the update in force at t (before the first: the first)."""
+        return np.clip(last_update(self.times, t), 0, len(self.values) - 1)
 
     def integral(self, t: np.ndarray) -> np.ndarray:
         """int_{times[0]}^t of the held value (before the first update: the first value)."""
-        k = np.clip(np.searchsorted(self.times, t, side="right") - 1, 0, len(self.values) - 1)
+        k = self._in_force(t)
         start = np.r_[0.0, np.cumsum(self.values[:-1] * np.diff(self.times))]
         return start[k] + self.values[k] * (t - self.times[k])
 
@@ -174,7 +180,11 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     updates, said = input_hold(frame, input_name, hold)
     if updates is not None and len(updates.times) > 1 and float(np.median(np.diff(updates.times))) < h * 0.99:
         # a step holds one switch of a held input (hold_phases): the most rows within its update interval
-        h = step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
+        coarsest, h = h, step * max(1, math.floor(float(np.median(np.diff(updates.times))) / step + 1e-9))
+        if h < coarsest * (1 - 1e-9):
+            said += (f"; the clock set to {1 / h:.3g} Hz, its update rate, finer than the {max_rate:g} Hz the fit keeps to "
+                     f"otherwise (max_rate, passed over: a step holds at most one switch of the held input); "
+                     f"--input-hold linear keeps {max_rate:g} Hz")
     gap = gap or max(0.5, 5 * step)
     cuts = np.flatnonzero(dt > gap) + 1
     notes = []
@@ -213,6 +223,8 @@ def even_grid(frame: pd.DataFrame, input_name: str, max_rate: float = 50.0, gap:
     if own is not None and update_times is None:
         log.sampled, said = yaw_sampling(log, np.asarray(own[0], float), np.asarray(own[1], float), t)
         notes.append(said)
+    elif frame.attrs.get("own_samples_dropped") and update_times is None:
+        notes.append(f"yaw rate: its own sampling not modelled ({frame.attrs['own_samples_dropped']})")
     return log
 
 
@@ -226,9 +238,10 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
     if hold not in (AUTO, ZOH, LINEAR):
         raise BadInputHold(f"--input-hold {hold!r}: expected {AUTO}, {ZOH} or {LINEAR}")
     own = (frame.attrs.get("own_samples") or {}).get(input_name)
+    lacking = frame.attrs.get("own_samples_dropped") or "the log does not carry them"
     if own is not None and not holds(HeldInput(*(np.asarray(a, float) for a in own)), frame["t"].to_numpy(float),
                                      frame[input_name].to_numpy(float)):
-        own = None          # the column no longer what its own samples hold (changed since the import)
+        own, lacking = None, "the column changed since the import: its rows no longer what they hold"
     steady, spread = steady_stamps(own)
     if hold == ZOH or (hold == AUTO and own is not None and input_name in HELD and steady):
         if own is not None:
@@ -236,13 +249,13 @@ def input_hold(frame: pd.DataFrame, input_name: str, hold: str = AUTO) -> tuple[
             where = f"its own {len(updates.times)} updates in the recording"
         else:
             updates = held_updates(frame["t"].to_numpy(float), frame[input_name].to_numpy(float))
-            where = "its rows taken as its update stamps"
+            where = f"its rows taken as its update stamps (its own updates not used: {lacking})"
         why = "--input-hold zoh" if hold == ZOH else "auto: a set-point"
         return updates, (f"input {input_name} taken as held between its updates ({why}; {where}: zero-order hold, the "
                          f"value at t - delay the last update at or before it); --input-hold linear reads it linearly "
                          f"between rows")
     what = ("a sampled signal" if input_name not in HELD else
-            "a set-point whose own updates the log does not carry: its rows quantize them" if own is None else
+            f"a set-point whose own updates are not used ({lacking}): its rows quantize them" if own is None else
             f"a set-point whose own stamps come in bursts, 10-90 % of their intervals {spread} of their median: "
             f"stamped on receipt, not when it took effect") if hold == AUTO else "--input-hold linear"
     return None, (f"input {input_name} read linearly between its rows ({what}); --input-hold zoh takes it as held "
@@ -259,9 +272,10 @@ def steady_stamps(own, band: float = 0.5) -> tuple[bool, str]:
     return bool(lo >= 1 - band and hi <= 1 + band), f"{lo:.2g}-{hi:.2g}"
 
 
-def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = 1.1e-3) -> bool:
+def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = SENT_WITH_ROW + 1e-4) -> bool:
     """Whether every row x(t) is the update in force at t, within ``slack`` s (the importer takes a
-    value sent up to 1 ms after a row as the row's: measurements.runs.held)."""
+    value sent up to SENT_WITH_ROW after a row as the row's: measurements.runs.held; 0.1 ms more for
+    the stamps' rounding)."""
     return bool(np.all((held.at(t) == x) | (held.at(t - slack) == x) | (held.at(t + slack) == x)))
 
 
@@ -403,8 +417,12 @@ class YawModel:
         tan w under ACKERMANN geometry (the single-track model's steady turn r = v w / (L + K v^2)
         becomes r = v tan w / (L + K v^2), the no-slip turn of an Ackermann machine)."""
         u = self.log.delayed_input(values.get("delay", 0.0))
-        w = values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0)
-        return np.tan(np.clip(w, -1.3, 1.3)) if self.geometry == ACKERMANN else w
+        return self.turning(values.get("steer_gain", 1.0) * u + values.get("steer_offset", 0.0))
+
+    def turning(self, w: np.ndarray) -> np.ndarray:
+        """The wheel angle as it turns the model: w, tan w under ACKERMANN geometry (clipped as the
+        plant's: components.tractor_yaw_plant.steer_input)."""
+        return steer_input(w, "tan") if self.geometry == ACKERMANN else w
 
     def simulate(self, values: dict, segs: Segments | None = None) -> np.ndarray:
         """Gyro reading the model predicts, (S, L) on the segments' samples."""
@@ -490,44 +508,50 @@ class YawModel:
         return np.stack([np.broadcast_to(np.asarray(columns[k], float), (n,)) for k in single_track_kernel.PARAMETERS],
                         axis=1)
 
+    def _stepped(self, w: np.ndarray, vv: np.ndarray, rows: dict, p: TractorParameters, step):
+        """The reference paths' loop: (yaw rate, v_y) each (rows, L) from the kinematic state at the
+        first sample, carried from sample j to j + 1 by ``step(j, z, d, linear, tyre, cornering)``
+        -> (z, d) (d the wheel angle; linear: the rows with linear tyres; cornering: C_f, C_r,
+        slope, v_ref)."""
+        Fzf, Fzr = self.loads
+        Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
+        mu = rows["friction"]
+        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
+        cornering = (Cf, Cr, rows["cornering_speed_slope"], rows["cornering_reference_speed"])
+        n_rows, L = w.shape
+        z = np.zeros((n_rows, N_STATES[self.model]))
+        d = w[:, 0].copy()
+        r0 = vv[:, 0] * d / self.L                       # kinematic start
+        z[:, 0], z[:, 1] = p.l_r * r0, r0
+        out, out_vy = np.empty((n_rows, L)), np.empty((n_rows, L))
+        for j in range(L):
+            out[:, j], out_vy[:, j] = z[:, 1], z[:, 0]
+            if j < L - 1:
+                z, d = step(j, z, d, ~np.isfinite(mu), tyre, cornering)
+        return out, out_vy
+
     def _simulate_python(self, w: np.ndarray, vv: np.ndarray, rows: dict, a: np.ndarray, c: np.ndarray,
                          p: TractorParameters):
         """The reference path: every row stepped together, (yaw rate, v_y) each (rows, L), from the
         kinematic state; rows with linear tyres by the exact first-order-hold step at the sample's
         mean speed (``exact_steps``), the others by ``n_sub`` ROS2 substeps per sample
         (components.models.tyre.rates)."""
-        Fzf, Fzr = self.loads
-        Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
-        mu = rows["friction"]
-        linear = ~np.isfinite(mu)
-        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
-        slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
-        n = N_STATES[self.model]
-        n_rows, L = w.shape
-        z = np.zeros((n_rows, n))
-        d = w[:, 0].copy()
-        r0 = vv[:, 0] * d / self.L                       # kinematic start
-        z[:, 0], z[:, 1] = p.l_r * r0, r0
-        out = np.empty((n_rows, L))
-        out_vy = np.empty((n_rows, L))
-        for j in range(L):
-            out[:, j] = z[:, 1]
-            out_vy[:, j] = z[:, 0]
-            if j == L - 1:
-                break
+        def step(j, z, d, linear, tyre, cornering):
+            Cf, Cr, slope, v_ref = cornering
             d_next = a * d + (1.0 - a) * w[:, j] + c * (w[:, j + 1] - w[:, j])
             z_next = z.copy()
-            if np.any(~linear):
-                z_next = self._ros2_sample(p, z, vv[:, j], vv[:, j + 1], d, d_next, tyre, Cf, Cr, slope, v_ref)
+            if np.any(~linear):          # speed and wheel angle linear across the step
+                v0, v1, n_sub = vv[:, j], vv[:, j + 1], self.n_sub
+                z_next = self._ros2_substeps(p, z, self.log.h / n_sub, lambda k: (
+                    v0 + k / n_sub * (v1 - v0), d + k / n_sub * (d_next - d)), tyre, cornering)
             if np.any(linear):
                 vm = 0.5 * (vv[:, j] + vv[:, j + 1])
                 scale = cornering_scale(slope, v_ref, vm)
                 P, g1, g2 = exact_steps(self.model, p, vm, self.log.h, {**tyre, "C_f": Cf * scale, "C_r": Cr * scale})
                 exact = np.einsum("sij,sj->si", P, z) + g1 * d[:, None] + g2 * (d_next - d)[:, None]
                 z_next = np.where(linear[:, None], exact, z_next)
-            z = z_next
-            d = d_next
-        return out, out_vy
+            return z_next, d_next
+        return self._stepped(w, vv, rows, p, step)
 
     def _simulate_python_held(self, w: np.ndarray, vv: np.ndarray, phase: np.ndarray, rows: dict,
                               p: TractorParameters):
@@ -539,24 +563,11 @@ class YawModel:
 
         at the sample's mean speed (T = 0: A's corner and B 0, d set to w first), the Magic Formula
         by ``n_sub`` ROS2 substeps per piece on d exact at their ends."""
-        Fzf, Fzr = self.loads
-        Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
-        mu = rows["friction"]
-        linear = ~np.isfinite(mu)
-        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
-        slope, v_ref = rows["cornering_speed_slope"], rows["cornering_reference_speed"]
         n, h = N_STATES[self.model], self.log.h
         inv_T = np.where(rows["lag"] > 1e-6, 1.0 / np.maximum(rows["lag"], 1e-6), 0.0)
-        n_rows, L = w.shape
-        z = np.zeros((n_rows, n))
-        d = w[:, 0].copy()
-        r0 = vv[:, 0] * d / self.L                       # kinematic start
-        z[:, 0], z[:, 1] = p.l_r * r0, r0
-        out, out_vy = np.empty((n_rows, L)), np.empty((n_rows, L))
-        for j in range(L):
-            out[:, j], out_vy[:, j] = z[:, 1], z[:, 0]
-            if j == L - 1:
-                break
+
+        def step(j, z, d, linear, tyre, cornering):
+            Cf, Cr, slope, v_ref = cornering
             vm = 0.5 * (vv[:, j] + vv[:, j + 1])
             scale = cornering_scale(slope, v_ref, vm)
             lin_tyre = {**tyre, "mu": np.inf, "C_f": Cf * scale, "C_r": Cr * scale}
@@ -564,60 +575,47 @@ class YawModel:
                                                                               w[:, j + 1])):
                 d = np.where(inv_T > 0, d, omega)
                 z_next, d_next = z, omega + (d - omega) * np.exp(-length * inv_T)
-                if np.any(~linear):
-                    z_next = self._ros2_piece(p, z, (vv[:, j], vv[:, j + 1]), (start, length), (d, omega, inv_T),
-                                              tyre, (Cf, Cr, slope, v_ref))
+                if np.any(~linear):          # speed linear across the sample step, d exact through the lag
+                    z_next = self._ros2_substeps(p, z, length / self.n_sub, self._lagged_law(
+                        vv[:, j], vv[:, j + 1], start, length / self.n_sub, d, omega, inv_T), tyre, cornering)
                 if np.any(linear):
-                    b, J = rates(self.model, p, vm, np.ones_like(vm), np.zeros((n_rows, n)), **lin_tyre)
-                    A = np.zeros((n_rows, n + 1, n + 1))
+                    b, J = rates(self.model, p, vm, np.ones_like(vm), np.zeros((len(vm), n)), **lin_tyre)
+                    A = np.zeros((len(vm), n + 1, n + 1))
                     A[:, :n, :n], A[:, :n, n], A[:, n, n] = J, b, -inv_T
-                    B = np.zeros((n_rows, n + 1))
+                    B = np.zeros((len(vm), n + 1))
                     B[:, n] = inv_T
                     P, g1, _ = phi_steps(A, B, length)
                     x = np.einsum("sij,sj->si", P, np.c_[z, d]) + g1 * omega[:, None]
                     z_next = np.where(linear[:, None], x[:, :n], z_next)
                     d_next = np.where(linear, x[:, n], d_next)
                 z, d = z_next, d_next
-        return out, out_vy
+            return z, d
+        return self._stepped(w, vv, rows, p, step)
 
-    def _ros2_piece(self, p, z, speeds, piece, lagged, tyre, cornering):
-        """The state after ``n_sub`` ROS2 substeps over a piece (start, length) (rows,) of a sample
-        step: the speed linear across the sample step, the wheel angle d = w + (d0 - w) exp(-s / T)
-        at each substep's ends (T = 0: w), the cornering scaled at each substep's mean speed."""
-        (v_start, v_end), (start, length), (d0, omega, inv_T), (Cf, Cr, slope, v_ref) = speeds, piece, lagged, cornering
-        h, hs = self.log.h, length / self.n_sub
+    def _lagged_law(self, v_start, v_end, start, hs, d0, omega, inv_T):
+        """The input law of a piece from ``start`` s into a sample step, substeps ``hs`` (rows,):
+        k -> (speed linear across the sample step, d = w + (d0 - w) exp(-s / T) (T = 0: w)) at s = k hs."""
+        h = self.log.h
+        return lambda k: (v_start + (start + k * hs) / h * (v_end - v_start),
+                          omega + (d0 - omega) * np.exp(-(k * hs) * inv_T))
+
+    def _ros2_substeps(self, p, z, hs, law, tyre, cornering):
+        """The state after ``n_sub`` ROS2 substeps of ``hs`` s (a number or one per row), ``law(k)``
+        the (speed, wheel angle) at the k-th substep's start; the cornering scaled at each substep's
+        mean speed (components.models.tyre.rates)."""
+        Cf, Cr, slope, v_ref = cornering
+        hz, hm = (np.reshape(hs, (-1, 1)), np.reshape(hs, (-1, 1, 1))) if np.ndim(hs) else (hs, hs)
         eye = np.eye(z.shape[1])
         for k in range(self.n_sub):
-            s0, s1 = k * hs, (k + 1) * hs
-            v0 = v_start + (start + s0) / h * (v_end - v_start)
-            v1 = v_start + (start + s1) / h * (v_end - v_start)
+            (v0, d0), (v1, d1) = law(k), law(k + 1)
             scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
             tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
-            f0, J = rates(self.model, p, v0, omega + (d0 - omega) * np.exp(-s0 * inv_T), z, **tyre)
-            M = np.linalg.inv(eye - GAMMA_ROS2 * hs[:, None, None] * J)
+            f0, J = rates(self.model, p, v0, d0, z, **tyre)
+            M = np.linalg.inv(eye - GAMMA_ROS2 * hm * J)
             k1 = np.einsum("sij,sj->si", M, f0)
-            f1, _ = rates(self.model, p, v1, omega + (d0 - omega) * np.exp(-s1 * inv_T), z + hs[:, None] * k1, **tyre)
+            f1, _ = rates(self.model, p, v1, d1, z + hz * k1, **tyre)
             k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
-            z = z + hs[:, None] * (1.5 * k1 + 0.5 * k2)
-        return z
-
-    def _ros2_sample(self, p, z, v_start, v_end, d, d_next, tyre, Cf, Cr, slope, v_ref):
-        """The state after one sample step by ``n_sub`` ROS2 substeps (speed and wheel angle linear
-        across the step; the cornering scaled at each substep's mean speed)."""
-        hs = self.log.h / self.n_sub
-        eye = np.eye(z.shape[1])
-        for k in range(self.n_sub):
-            s0, s1 = k / self.n_sub, (k + 1) / self.n_sub
-            v0 = v_start + s0 * (v_end - v_start)
-            v1 = v_start + s1 * (v_end - v_start)
-            scale = cornering_scale(slope, v_ref, 0.5 * (v0 + v1))
-            tyre = {**tyre, "C_f": Cf * scale, "C_r": Cr * scale}
-            f0, J = rates(self.model, p, v0, d + s0 * (d_next - d), z, **tyre)
-            M = np.linalg.inv(eye - GAMMA_ROS2 * hs * J)
-            k1 = np.einsum("sij,sj->si", M, f0)
-            f1, _ = rates(self.model, p, v1, d + s1 * (d_next - d), z + hs * k1, **tyre)
-            k2 = np.einsum("sij,sj->si", M, f1 - 2.0 * k1)
-            z = z + hs * (1.5 * k1 + 0.5 * k2)
+            z = z + hz * (1.5 * k1 + 0.5 * k2)
         return z
 
 

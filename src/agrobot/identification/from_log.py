@@ -129,6 +129,9 @@ def joined_stretches(frame):
         start += step * len(piece)
     even = pd.concat(pieces, ignore_index=True)
     even.attrs = {k: v for k, v in {**frame.attrs, "joins": joins}.items() if k != "own_samples"}   # re-clocked
+    if frame.attrs.get("own_samples"):
+        even.attrs["own_samples_dropped"] = ("the stretches judged are joined on one new clock, and the signals' own "
+                                             "stamps are on the recording's")
     first, last = frame.attrs.get("log_span", (t[0], t[-1]))
     passed = max(last - first - sum(b - a for a, b in spans), 0.0)
     return even, (f"the {len(spans)} stretches judged are joined on one even {1 / step:.3g} Hz clock, each with its own "

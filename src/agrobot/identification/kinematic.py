@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from agrobot.estimation import Parameter, covariance, effective_size, forward_jacobian, interval
+from agrobot.components.tractor_yaw_plant import steer_input
 
 from .delay_bound import DELAY_LIMIT, delay_verdict
 from .driving import DrivingLog, Segments
@@ -53,7 +54,7 @@ def predicted(log: DrivingLog, values: dict, L: float) -> np.ndarray:
     the yaw measurement sees it (DrivingLog.as_measured)."""
     u = log.delayed_input(values["delay"])
     w = np.where(u > 0, values["gain_left"], values["gain_right"]) * u + values["steer_offset"]
-    return log.as_measured(log.v * np.tan(np.clip(w, -1.3, 1.3)) / L) + values.get("gyro_bias", 0.0)
+    return log.as_measured(log.v * steer_input(w, "tan") / L) + values.get("gyro_bias", 0.0)
 
 
 def fit_map(log: DrivingLog, fit_segs: Segments, L: float, fixed: dict, free: list[Parameter] | None = None) -> dict:

@@ -865,7 +865,7 @@ def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_
     fitted beside K for a measured angle too (its sensor's, the wheelbase's or the speed's scale
     would read as K), held at 1 only where the turns are at one speed and cannot tell them apart."""
     delay = max(values["delay"], 0.0)
-    u = np.tan(np.clip(log.u, -1.3, 1.3)) if model.geometry == ACKERMANN else log.u       # as the model turns
+    u = model.turning(log.u)       # as the model turns
     windows = steady_windows(log.t, u, log.v, log.r, log.run, min_speed, delay=delay)
     ss = in_linear_range(windows, L, LINEAR_TYRE, cap)       # the gain free: a scale of the turns is not K
     if ss is None and not command:                           # turns at one speed: a measured angle taken as is

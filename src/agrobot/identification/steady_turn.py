@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from agrobot.estimation import effective_size, interval
+from agrobot.components.tractor_yaw_plant import steer_input
 
 DYNAMICS = ("not identifiable from a steady turn: the input does not move, so a delay, a lag, the tyres' "
             "stiffness and the understeer gradient leave no trace; drive steps or a slalom for them")
@@ -29,7 +30,7 @@ DYNAMICS = ("not identifiable from a steady turn: the input does not move, so a 
 def asked_yaw(log, L: float, segs) -> tuple[np.ndarray, np.ndarray]:
     """(v tan(u) / L [rad/s], the measured r) on the segments' scored samples (the driving)."""
     idx = segs.idx[segs.scored]
-    return (log.v * np.tan(np.clip(log.u, -1.3, 1.3)) / L)[idx], log.r[idx]
+    return (log.v * steer_input(log.u, "tan") / L)[idx], log.r[idx]
 
 
 def is_steady_turn(log, L: float, segs, min_excitation: float) -> bool:

@@ -75,11 +75,13 @@ import math
 
 import numpy as np
 
+from agrobot.components.tractor_yaw_plant import steer_input
+
 from .clocks import parabolic_peak
 from .direction import check_direction, position_noise
 from .findings import finding
 from .imu_axes import axis_findings
-from .log import CANONICAL, LogError
+from .log import CANONICAL, LogError, slope_through_origin
 from .options import ImportOptions
 from .position_source import estimate_evidence, named_estimate, track_noise
 from .streams import Streams, gnss_speed
@@ -286,10 +288,7 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
     x, y = a[lo:hi][sel], b[lo + k:hi + k][sel]
     if len(x) < 10:
         return math.nan
-    if through_origin:
-        return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
-    x, y = x - x.mean(), y - y.mean()
-    return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
+    return slope_through_origin(x, y) if through_origin else slope_through_origin(x - x.mean(), y - y.mean())
 
 
 # --- the signals that must agree ---------------------------------------------------------------
@@ -470,7 +469,7 @@ class Auditor:
         if steer is None or "v" not in sig or "yaw_rate" not in sig:
             return None
         t, d = sig[steer]
-        u = np.interp(t, *sig["v"]) * np.tan(np.clip(d, -1.4, 1.4)) / self.L
+        u = np.interp(t, *sig["v"]) * steer_input(d, "tan") / self.L
         found = lag(t, u, *sig["yaw_rate"], mask=_moving(*sig["v"], 0.3))
         changes = int(np.count_nonzero(np.diff(d))) + int(np.count_nonzero(np.diff(sig["v"][1])))
         return None if found is None else {**found, "input": steer, "input_changes": changes}
@@ -485,7 +484,7 @@ class Auditor:
             return None
         t, r = sig["yaw_rate"]
         v = np.interp(t, *sig["v"])
-        u = v * np.tan(np.clip(np.interp(t, *sig[steer]), -1.4, 1.4)) / self.L
+        u = v * steer_input(np.interp(t, *sig[steer]), "tan") / self.L
         moving = np.abs(v) > 0.3
         if moving.sum() < 100:
             return None

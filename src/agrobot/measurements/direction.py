@@ -33,6 +33,7 @@ import pandas as pd
 
 from .findings import finding
 from .log import LogError
+from .position_source import MAD_NORMAL, white_noise_sigma
 
 CHORD = 0.25            # s: the course from the fixes this far either side (at least)
 CHORD_NOISE = 8.0       # a chord at least this many position sigmas long: the course within ~10 deg
@@ -89,12 +90,12 @@ def course(gnss, sigmas: float = CHORD_NOISE) -> tuple[np.ndarray, np.ndarray, n
 
 def position_noise(east: np.ndarray, north: np.ndarray) -> np.ndarray:
     """Each fix's local position noise sigma [m]: the running median (NOISE_WINDOW fixes) of the
-    second differences' size, / 0.6745 / sqrt(6) (a second difference of white noise has variance 6 sigma^2; a
+    second differences' size, / MAD_NORMAL / sqrt(6) (a second difference of white noise has variance 6 sigma^2; a
     smooth drive adds a h^2, which the median of a few fixes ignores only in part: an upper bound)."""
     d2 = np.hypot(np.diff(east, 2), np.diff(north, 2)) / math.sqrt(2.0)
     d2 = np.r_[d2[:1], d2, d2[-1:]] if len(d2) else np.zeros(len(east))
     local = pd.Series(d2).rolling(NOISE_WINDOW, center=True, min_periods=1).median().to_numpy()
-    return local / 0.6745 / math.sqrt(6.0)
+    return white_noise_sigma(local / MAD_NORMAL)
 
 
 def _wrap(x):

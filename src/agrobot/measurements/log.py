@@ -61,6 +61,8 @@ def read_log(path: str | Path, required: tuple[str, ...] = CANONICAL, resample_j
     report = persisted_report(path)          # the import's report, when convert wrote the log
     if isinstance(report.get("declared"), dict):
         frame.attrs["declared"] = dict(report["declared"])      # the units the user declared to convert
+    if isinstance(report.get("resolution"), dict):
+        frame.attrs["resolution"] = dict(report["resolution"])  # the recording's own quantisation steps
     frame = check_log(frame, str(path), required, resample_jitter)
     audit = report.get("audit", {}).get("findings")
     if isinstance(audit, list):
@@ -79,7 +81,8 @@ def log_units(frame: pd.DataFrame, stored: dict[str, str] | None = None) -> dict
 
 def persisted_report(path) -> dict:
     """The import report written beside a log (its ``<name>.import.json``, as ``convert`` writes
-    it), or {}: reading a log back restores its audit and the units the user declared."""
+    it), or {}: reading a log back restores its audit, the units the user declared and the
+    signals' resolution (a written log holds no attrs: orchestrator.atomic_files.write_frame)."""
     side = Path(path).with_name(Path(path).stem + ".import.json")
     if not side.is_file():
         return {}
@@ -298,6 +301,11 @@ def yaw_rate_in_radians(frame: pd.DataFrame) -> str | None:
     return None
 
 
+def slope_through_origin(x: np.ndarray, y: np.ndarray) -> float:
+    """The least-squares slope of y = s x (x.y / x.x); NaN where x is all zero."""
+    return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
+
+
 def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
     """The evidence that a wide wheel-angle column (a tricycle's or a forklift's steered wheel turns
     to 90 deg) is in rad, or None: with the speed v and the yaw rate r, the turns follow the no-slip
@@ -312,7 +320,7 @@ def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
     fits = {}
     for name, x in (("tan", v * np.tan(w)), ("linear", v * w)):
         x, y = x[turning], r[turning]
-        slope = float(x @ y / (x @ x))
+        slope = slope_through_origin(x, y)
         fits[name] = (slope, 1 - float(np.sum((y - slope * x) ** 2) / np.sum(y ** 2)))
     (slope, r2), (_, r2_linear) = fits["tan"], fits["linear"]
     if slope <= 0 or not 0.1 <= 1 / slope <= 10 or r2 < 0.8 or r2 <= r2_linear:

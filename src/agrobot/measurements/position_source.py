@@ -36,8 +36,17 @@ ESTIMATOR = re.compile(r"odom|pose|locali[sz]|ekf|ukf|filter|fused|fusion|slam|a
 RECEIVER = re.compile(r"gps|gnss|navsat|nmea|rtk|gga|fix|receiver", re.IGNORECASE)
 
 
+MAD_NORMAL = 0.6745  # the median |x| of zero-mean normal noise, in its sigmas
+
+
 def _mad(a: np.ndarray) -> float:
-    return float(np.median(np.abs(a))) / 0.6745 if len(a) else math.nan
+    return float(np.median(np.abs(a))) / MAD_NORMAL if len(a) else math.nan
+
+
+def white_noise_sigma(second_difference_sigma):
+    """The sigma of white position noise from its second differences' (MAD / MAD_NORMAL): / sqrt 6,
+    var(x[i+1] - 2 x[i] + x[i-1]) = 6 sigma^2."""
+    return second_difference_sigma / math.sqrt(6.0)
 
 
 def track_noise(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict | None:
@@ -63,7 +72,7 @@ def track_noise(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict | None:
     ux, uy = (np.divide(c, chord, out=np.zeros(n), where=chord > 0)[1:-2] for c in (cx, cy))
     d2x, d2y = np.diff(x, 2)[:-1], np.diff(y, 2)[:-1]
     d3x, d3y = np.diff(x, 3), np.diff(y, 3)
-    sigma = _mad(np.r_[d2x, d2y]) / math.sqrt(6.0)
+    sigma = white_noise_sigma(_mad(np.r_[d2x, d2y]))
     moving = chord[1:-2] > MOVING * max(sigma, 1e-6)
     if moving.sum() < MIN_FIXES:
         return None
@@ -71,7 +80,7 @@ def track_noise(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict | None:
     for name, (ax, ay) in (("along", (ux, uy)), ("across", (-uy, ux))):
         d2, d3 = (dx * ax + dy * ay for dx, dy in ((d2x, d2y), (d3x, d3y)))
         spread = _mad(d2[moving])
-        out[name] = spread / math.sqrt(6.0)
+        out[name] = white_noise_sigma(spread)
         out[f"white_{name}"] = _mad(d3[moving]) / spread if spread > 0 else 0.0
     return out
 

@@ -28,6 +28,7 @@ from .streams import Streams, gnss_speed, iso
 
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 MAX_SAMPLES = 5e7      # rows of one log grid (a day at 500 Hz): more is a damaged clock, not a recording
+SENT_WITH_ROW = 1e-3   # s: a set-point sent up to this after a grid time is in force at it (held)
 HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
 DISCRETE = ("fix_quality", "mode", "engaged", "gear", "direction")   # codes: held at their own times, never interpolated
 
@@ -57,10 +58,15 @@ def _stretches(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
+def last_update(times: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The index of the last of the increasing ``times`` at or before each t (-1 before the first)."""
+    return np.searchsorted(times, t, side="right") - 1
+
+
 def held(grid: np.ndarray, t: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """The value in force at each grid time: the last one sent at or before it (1 ms tolerance);
-    NaN before the first (the source has said nothing yet)."""
-    i = np.searchsorted(t, grid + 1e-3, side="right") - 1
+    """The value in force at each grid time: the last one sent at or before it (SENT_WITH_ROW
+    tolerance); NaN before the first (the source has said nothing yet)."""
+    i = last_update(t, grid + SENT_WITH_ROW)
     out = np.asarray(values, float)[np.clip(i, 0, max(len(t) - 1, 0))]
     return np.where(i >= 0, out, np.nan)
 
