@@ -825,13 +825,12 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
                 "with k free both stiffnesses end on their bounds")
     span = [min(lo, k1 - Z95 * sd1), max(hi, k1 + Z95 * sd1)]
     where = "" if mask is None else f" where |a_y| <= {cap:.3g} m/s2 (the linear range)"
-    free_says = f"k free{where} goes to {g:.3g} [{g - Z95 * g_sd:.3g}, {g + Z95 * g_sd:.3g}], K to {k2:.3g}"
-    verdict = (f"k = 1 kept: the refit with k free did not converge ({free_says}): no evidence of a scale"
+    verdict = ("k = 1 kept: the refit with k free did not converge: no evidence of a scale"
                if not free_fit.converged else
-               f"k = 1 kept: with {free_says}, but the held-out segments are predicted no better (mean square "
-               f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 over {n_held} segments): no evidence of a scale, a "
-               f"misfit of the model taken up on the fit segments alone" if alone else
                "k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+               f"k = 1 kept: the fit with k free predicts the held-out segments no better (mean square "
+               f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 less over {n_held} segments): no evidence of a "
+               f"scale, what k takes up on the fit segments does not carry over" if alone else
                f"K not told apart from k ({how_wide})" if wide else
                f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept" if scaled else
                f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
@@ -1226,9 +1225,10 @@ def summary(report: dict) -> str:
     if "steering_gain_check" in report:
         gc = report["steering_gain_check"]
         k = gc.get("turn_scale")
-        fitted = f"; fitted free {q(gc['yaw_gain'], '{:.3g}')}" if "yaw_gain" in gc else ""
-        lines.append(f"turn scale k (yaw rate per v tan(w) / L): {'not concluded' if k is None else f'{k:.3g}'}"
-                     f"{fitted}: {gc['verdict']}")
+        fitted = (f" ({gc['how']}: k {q(gc['yaw_gain'], '{:.3g}')}, K {q(gc['understeer_gradient_gain_free'])})"
+                  if "yaw_gain" in gc else "")
+        lines.append(f"turn scale k (yaw rate per v tan(w) / L): {'not concluded' if k is None else f'{k:.3g}'}: "
+                     f"{gc['verdict']}{fitted}")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
