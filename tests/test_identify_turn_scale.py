@@ -4,7 +4,9 @@ known stiffness) driven at 0.6-1.9 m/s: its wheel-angle sensor reading 4 % more 
 turn (the tyres see 1/1.04 of the logged angle); and a steering offset of 0.15 rad (8.6 deg, more
 than a robot's angle sensor can be off) on a log that begins with 5 s standing still; the passenger
 car with its tyres saturating F = C alpha / (1 + |alpha| / alpha_s) (a bend the Magic Formula does not
-take exactly) and no scale of the turns."""
+take exactly) and no scale of the turns, and healthy; the F1TENTH study driven at one speed, its
+angle taken as measured.
+"""
 from __future__ import annotations
 
 import math
@@ -17,6 +19,7 @@ from agrobot.identification.ordinary_driving import characteristic_speed, identi
 from agrobot.orchestrator.study import Study
 from harness.truth_tractor import SMALL_ACKERMANN, make_log
 from harness.vehicle_classes import study
+from tests.test_understeer_at_one_speed import STUDY as F1TENTH, one_speed_log
 from tests.vehicle_logs import ROOT_STUDIES as STUDIES
 
 SPEEDS = (0.6, 1.2, 1.9)
@@ -114,9 +117,38 @@ def test_a_saturation_misfit_is_not_a_turn_scale():
     """The car's tyres bend from the first degree (harness.truth_tractor's tyre_saturation), its
     turns at their true scale: a turn scale fitted on that misfit does not predict the held-out
     segments better, so k = 1 is kept and K is not withheld for a scale."""
-    frame, _ = make_log(1006, "tyre_saturation", vehicle="car")
-    rep = identify_driving(frame.drop(columns=["x", "y", "delta_cmd"]), "car.csv", Study.load(STUDIES / "passenger_car.toml"))
+    rep = identify_car("tyre_saturation")[0]
     check = rep["steering_gain_check"]
     assert check["turn_scale"] == 1.0 and not check["kept"], check
     K = rep["understeer_gradient"]
     assert K["identifiable"] or "scale of the turns" not in K.get("note", ""), K
+
+
+def identify_car(effect: str | None) -> tuple[dict, dict]:
+    """identify on the passenger car's log of seed 1006 with ``effect``, its measured angle the input."""
+    frame, truth = make_log(1006, effect, vehicle="car")
+    car = Study.load(STUDIES / "passenger_car.toml")
+    return identify_driving(frame.drop(columns=["x", "y", "delta_cmd"]), "car.csv", car), truth
+
+
+def test_the_steady_regression_takes_a_measured_angle_at_its_declared_scale():
+    """The healthy car's turns are at their declared scale: the regression holds its gain at 1, as the
+    dynamic fit does, and its K (less its structural bias) holds the truth's m / L (l_r / C_f - l_f / C_r)."""
+    rep, truth = identify_car(None)
+    ss = rep["steady_state_regression"]
+    assert ss["steer_gain"]["value"] == 1.0 and "gain_held" in ss, ss
+    t = {"m": 1500.0, "l_f": 1.2, "l_r": 1.5}          # harness.truth_tractor's car
+    K_true = t["m"] / 2.7 * (t["l_r"] / truth["C_f"] - t["l_f"] / truth["C_r"])
+    steady = next(c for c in rep["comparisons"] if c["quantity"] == "understeer gradient K")["estimates"]
+    lo, hi = steady["steady-state regression less its structural bias"]["interval"]
+    assert lo <= K_true <= hi, (lo, K_true, hi)
+    assert rep["steering_gain_check"]["turn_scale"] == 1.0
+
+
+def test_at_one_speed_the_turn_scale_is_not_refitted():
+    """At one speed a scale of the turns and K give the same yaw rate: K is not identifiable (one
+    speed) and no refit with k free is spent on it."""
+    rep = identify_driving(one_speed_log().rename(columns={"delta_cmd": "delta"}), "one speed", Study.load(F1TENTH))
+    check, K = rep["steering_gain_check"], rep["understeer_gradient"]
+    assert check["verdict"].startswith("not fitted") and "yaw_gain" not in check, check
+    assert not K["identifiable"] and "one speed" in K["note"], K

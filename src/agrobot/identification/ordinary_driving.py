@@ -17,8 +17,10 @@
 5. Verdicts: a parameter on its bound is "not identifiable from this log" (value and bound given);
    every quantity is given with its 95 % interval; the steady-state regression
    (identification.steady_state) is reported beside the dynamic fit. A measured angle's fit is
-   tried again with a scale of the turns free (gain_apart: K is not concluded where the log cannot
-   tell the two apart); no characteristic or critical speed past BEYOND_TOP x the log's top speed;
+   tried again with a scale of the turns free in the linear range (gain_apart: a scale read only
+   where the refit converges and predicts the held-out segments better; K is not concluded where
+   the log cannot tell the two apart); no characteristic or critical speed past BEYOND_TOP x the
+   log's top speed;
    a gyro bias fitted without a standstill is not concluded (_without_standstill).
 """
 from __future__ import annotations
@@ -868,10 +870,9 @@ def _stiffnesses_on_bounds(final: FitResult) -> str | None:
 
 
 def _misfit_on_bound(final: FitResult) -> str | None:
-    """Why the final model misses the log (a parameter it needs beyond its range: any on its bound
-    but the stiffnesses, K's own, the delay and lag, at their physical zero, and the tyres' bend,
-    judged apart) or None: a turn scale would take that misfit up, not measure a scale."""
-    on = [q.name for q in final.free if q.name not in ("c_f", "c_r", "delay", "lag", *TYRE_SHAPE) and final.at_bound(q)]
+    """Why the final model misses the turns' zero (a steering offset or a gyro bias beyond its range,
+    on its bound) or None: a turn scale would take that misfit up, not measure a scale."""
+    on = [q.name for q in final.free if q.name in ("steer_offset", "gyro_bias") and final.at_bound(q)]
     return f"{', '.join(on)} on its bound: the model misses the log by more than a scale" if on else None
 
 
