@@ -70,7 +70,8 @@ class FitResult:
     """One least-squares fit: ``values`` (every value the model reads), the ``free`` parameters and
     their covariance ``cov`` (SI units; a parameter held on its bound: nan), and per signal scored
     the fit part's residual sum of squares ``rss``, samples ``n`` and effective samples ``n_eff``,
-    and the held-out RMS ``rmse_test`` (where a part is held out)."""
+    and the held-out RMS ``rmse_test`` (where a part is held out); ``converged``: the solver met its
+    tolerance (False: stopped by its evaluation budget)."""
 
     values: dict[str, float]
     free: tuple[Parameter, ...]
@@ -79,6 +80,7 @@ class FitResult:
     n: dict[str, int]
     n_eff: dict[str, float]
     rmse_test: dict[str, float] = field(default_factory=dict)
+    converged: bool = True
 
     @property
     def names(self) -> tuple[str, ...]:

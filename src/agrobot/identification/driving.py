@@ -723,7 +723,8 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
     rows = [residual[i][mask[i]] for i in range(len(segs.idx))]
     n, n_eff = len(res), effective_size(rows, updates=model.log.updates_in(segs, mask))
     cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)    # one on its bound held there
-    return FitResult(values, tuple(free), cov, {"yaw": float(res @ res)}, {"yaw": n}, {"yaw": n_eff})
+    return FitResult(values, tuple(free), cov, {"yaw": float(res @ res)}, {"yaw": n}, {"yaw": n_eff},
+                     converged=bool(sol.status > 0))
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:

@@ -17,8 +17,10 @@
 5. Verdicts: a parameter on its bound is "not identifiable from this log" (value and bound given);
    every quantity is given with its 95 % interval; the steady-state regression
    (identification.steady_state) is reported beside the dynamic fit. A measured angle's fit is
-   tried again with a scale of the turns free (gain_apart: K is not concluded where the log cannot
-   tell the two apart); no characteristic or critical speed past BEYOND_TOP x the log's top speed;
+   tried again with a scale of the turns free in the linear range (gain_apart: a scale read only
+   where the refit converges and predicts the held-out segments better; K is not concluded where
+   the log cannot tell the two apart); no characteristic or critical speed past BEYOND_TOP x the
+   log's top speed;
    a gyro bias fitted without a standstill is not concluded (_without_standstill).
 """
 from __future__ import annotations
@@ -267,7 +269,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "linear_range": linear_range,
         "tyre_saturation": _tyre_json(held, nl, fits.free_nl, saturation),
         "residual_by_lateral_acceleration": _residual_bins(held),
-        "steady_state_regression": _steady_json(ss, vehicle, windows),
+        "steady_state_regression": _steady_json(ss, vehicle, windows, params_json["steer_offset"]),
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
         "comparisons": comparisons,
         "physical_checks": checks,
@@ -705,8 +707,8 @@ def one_speed(log: DrivingLog, min_speed: float) -> str | None:
     lo, hi = np.percentile(log.v[turning], [10, 90])
     if hi >= 1.5 * lo:
         return None
-    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain and an "
-            f"understeer gradient give the same yaw rate g v / (L + K v^2) there")
+    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain (or a scale of "
+            f"the turns) and an understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
 def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
@@ -730,9 +732,15 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
 
 
 SENSED_GAIN = (0.8, 1.25)      # yaw per kinematic v tan(w) / L: a wheelbase, speed, gyro or angle scale 10-20 % off
-APART = 2.0                    # K's std with the gain free over its std at g = 1 beyond which the two are not told apart
-SCALE_TOLERANCE = 0.02        # a scale of the turns within this is the declared wheelbase's and speed's own uncertainty
-BEYOND_TOP = 2.0               # a characteristic or critical speed is read no further than this x the log's top speed
+# K's std with the turn scale k free over its std at k = 1 is 1 / sqrt(1 - rho^2), rho = corr(k, K):
+# at 2, k carries three quarters of what the log says of K and K is not told from it
+APART = 2.0
+# a tyre's rolling radius moves 1-2 % with its pressure, load and wear (the speed's scale) and a
+# declared wheelbase is measured to a centimetre or two on 1-3 m: a turn scale within 2 % is theirs
+SCALE_TOLERANCE = 0.02
+# at v_ch = 2 v_top the log's top speed sees K v^2 / L = 1/4, a yaw gain 20 % below the neutral
+# steer's; beyond, the log sees less than a fifth of the effect whose midpoint v_ch would name
+BEYOND_TOP = 2.0
 
 
 class YawScaled:
@@ -757,45 +765,90 @@ class YawScaled:
         return (scaled, out[1]) if lateral else scaled
 
 
-def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResult | None]:
-    """A measured wheel angle is fitted at g = 1; a scale error of the turns (the angle sensor's, the
+TURN_GAIN = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
+                      "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
+TYRE_SHAPE = ("friction", "shape")
+
+
+def _turn_scale_fits(fits: _Fits, final: FitResult, cap: float | None) -> tuple[FitResult, FitResult, np.ndarray | None]:
+    """(the final model at k = 1, the same with k free (YawScaled), the |a_y| mask): both on the fit
+    segments where |a_y| <= ``cap`` (the linear range, where a misfit of the tyres' bend cannot pass
+    for a scale; None: everywhere, and the k = 1 fit is ``final``), the saturation's friction and
+    shape held as the final fit has them."""
+    a_y = np.abs(fits.model.log.a_y[fits.fit_segs.idx])
+    mask = None if cap is None or a_y[fits.fit_segs.scored].max() <= cap else a_y <= cap
+    free = [q for q in final.free if q.name not in TYRE_SHAPE]
+    fixed = {k: v for k, v in final.values.items() if k not in [q.name for q in free]}
+    base = final if mask is None else fit(fits.model, free, final.values, fixed, fits.fit_segs, mask=mask)
+    scaled = fit(YawScaled(fits.model), [*free, TURN_GAIN], {**base.values, "yaw_gain": 1.0}, fixed, fits.fit_segs,
+                 mask=mask)
+    return base, scaled, mask
+
+
+def held_out_gain(fits: _Fits, base: FitResult, scaled: FitResult, cap: float | None) -> tuple[float, float, int]:
+    """(mean, standard error, segments) of the held-out segments' mean square yaw misfit at k = 1
+    less that with k free, each segment (|a_y| <= ``cap``, at least 10 samples) one independent
+    draw: a scale of the turns the log supports predicts them better by more than Z95 standard errors."""
+    segs, log = fits.test_segs, fits.model.log
+    y = log.r[segs.idx]
+    at_one, free = fits.model.simulate(base.values, segs), YawScaled(fits.model).simulate(scaled.values, segs)
+    m = segs.scored & (np.abs(log.a_y[segs.idx]) <= (math.inf if cap is None else cap))
+    d = np.array([np.mean((y[i] - at_one[i])[m[i]] ** 2) - np.mean((y[i] - free[i])[m[i]] ** 2)
+                  for i in range(len(segs.idx)) if m[i].sum() >= 10])
+    if len(d) < 3:
+        return math.nan, math.nan, len(d)
+    return float(d.mean()), float(d.std(ddof=1) / math.sqrt(len(d))), len(d)
+
+
+def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple[dict, str | None, FitResult | None]:
+    """A measured wheel angle is fitted at k = 1; a scale error of the turns (the angle sensor's, the
     declared wheelbase's, the speed's) then reads as understeer, since the steady yaw rate
-    k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final fit again on
-    YawScaled with k free in SENSED_GAIN: (the check's JSON, why K is not told from k or None, the
-    fit with k free when it is the one to keep or None). K at k = 1 inside the free fit's 95 %
-    interval: k = 1 kept. Else, where k ended on its bound, the free fit's stiffnesses both on theirs,
-    or K's std with k free exceeds APART x its std at k = 1 (k takes most of what the log says of K;
-    |corr(k, K)| > 0.87), K is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps
-    the free fit, and a smaller one k = 1 with K's interval spanning both fits' (``span``)."""
-    gain = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
-                     "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
-    fixed = {k: v for k, v in final.values.items() if k not in final.names}
-    free_fit = fit(YawScaled(fits.model), [*final.free, gain], {**final.values, "yaw_gain": 1.0}, fixed,
-                   fits.fit_segs, max_nfev=15)
-    (k1, sd1), (k2, sd2) = _k_of(final), _k_of(free_fit)
+    k v / (L + K v^2) differs from a neutral vehicle's as much at low speeds. The final model fitted
+    again with k free in SENSED_GAIN where |a_y| <= ``cap`` (_turn_scale_fits): (the check's JSON,
+    why K is not told from k or None, the fit with k free when it is the one to keep or None).
+    k = 1 is kept when the refit does not converge, when k does not predict the held-out segments
+    better (held_out_gain: no evidence of a scale; a misfit of the model fits the fit segments
+    alone), or when K at k = 1 lies inside K's 95 % interval with k free. Else, where k ended on
+    its bound, both stiffnesses on theirs or K's std with k free exceeds APART x its std at k = 1, K
+    is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps the free fit, a smaller one
+    k = 1 with K's interval spanning both fits' (``span``)."""
+    base, free_fit, mask = _turn_scale_fits(fits, final, cap)
+    gain = TURN_GAIN
+    (k1, sd1), (k2, sd2) = _k_of(base), _k_of(free_fit)
     g, g_sd = free_fit.values["yaw_gain"], free_fit.std("yaw_gain")
+    gained, gained_se, n_held = held_out_gain(fits, base, free_fit, cap)
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
     k2_seen = any(free_fit.at_bound(q) is None for q in free_fit.free if q.name in ("c_f", "c_r"))
     wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
     scaled = abs(g - 1) - Z95 * g_sd > SCALE_TOLERANCE       # beyond what a declared wheelbase or speed is sure of
     inside = lo <= k1 <= hi
+    alone = not gained > Z95 * gained_se                     # nan (too few held-out segments): no evidence either
     how_wide = (f"K's std x {sd2 / sd1:.2g} with k free" if k2_seen and math.isfinite(sd2) else
                 "with k free both stiffnesses end on their bounds")
     span = [min(lo, k1 - Z95 * sd1), max(hi, k1 + Z95 * sd1)]
-    verdict = ("k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+    where = "" if mask is None else f" where |a_y| <= {cap:.3g} m/s2 (the linear range)"
+    verdict = ("k = 1 kept: the refit with k free did not converge: no evidence of a scale"
+               if not free_fit.converged else
+               "k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
+               f"k = 1 kept: the fit with k free predicts the held-out segments no better (mean square "
+               f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 less over {n_held} segments): no evidence of a "
+               f"scale, what k takes up on the fit segments does not carry over" if alone else
                f"K not told apart from k ({how_wide})" if wide else
                f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept" if scaled else
                f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
                f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
+    no_scale = not free_fit.converged or alone or inside
     out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
            "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
            "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict,
-           "kept": bool(not inside and not wide and scaled),
-           "how": f"the final fit again with a turn gain k free in [{gain.lower:g}, {gain.upper:g}]"}
-    if inside or (not wide and not scaled):
-        return out | ({} if inside else {"span": span}), None, None
+           "held_out_gain": {"mean": gained, "std_error": gained_se, "segments": n_held, "unit": "(rad/s)^2"},
+           "kept": bool(not no_scale and not wide and scaled), "converged": free_fit.converged,
+           "turn_scale": 1.0 if no_scale or not (wide or scaled) else None if wide else g,
+           "how": f"the final model again with a turn gain k free in [{gain.lower:g}, {gain.upper:g}]{where}"}
+    if no_scale or (not wide and not scaled):
+        return out | ({} if no_scale else {"span": span}), None, None
     if not wide:
-        return out, None, free_fit
+        return out, None, free_fit if mask is None else _scaled_everywhere(fits, final, free_fit)
     return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
                  f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
                  f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
@@ -803,15 +856,45 @@ def gain_apart(fits: _Fits, final: FitResult) -> tuple[dict, str | None, FitResu
                  f"the speed or the angle sensor reads as understeer"), None
 
 
+def _scaled_everywhere(fits: _Fits, final: FitResult, scaled: FitResult) -> FitResult:
+    """The final model with the turn scale found in the linear range, fitted on every fit segment
+    from there (its saturation free again)."""
+    fixed = {k: v for k, v in final.values.items() if k not in final.names}
+    return fit(YawScaled(fits.model), [*final.free, TURN_GAIN], {**final.values, **scaled.values}, fixed, fits.fit_segs)
+
+
+def _stiffnesses_on_bounds(final: FitResult) -> str | None:
+    """Why K is not identifiable from the final fit alone (both stiffnesses on their bounds) or None."""
+    on = [q for q in final.free if q.name in ("c_f", "c_r") and final.at_bound(q)]
+    return "both cornering stiffnesses end on their bounds" if len(on) == 2 else None
+
+
+def _misfit_on_bound(final: FitResult) -> str | None:
+    """Why the final model misses the turns' zero (a steering offset or a gyro bias beyond its range,
+    on its bound) or None: a turn scale would take that misfit up, not measure a scale."""
+    on = [q.name for q in final.free if q.name in ("steer_offset", "gyro_bias") and final.at_bound(q)]
+    return f"{', '.join(on)} on its bound: the model misses the log by more than a scale" if on else None
+
+
 def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, command: bool, min_speed: float,
                L: float):
     """(the gain check or None, why K is not identifiable or None, final fit, parameters, stiffnesses)
-    from _final_parameters: a command input has its gain fitted (one_speed says when it and K are
-    not told apart); a measured angle goes through gain_apart, and a scale it finds replaces the
-    final fit (``fits.model`` becomes YawScaled; its held-out prediction in ``held.sims``; the
-    delay's verdict kept). A bias fitted beside an offset: _without_standstill."""
+    from _final_parameters: at one speed (one_speed) a gain or a scale of the turns and K are not
+    told apart and nothing is refitted; a measured angle goes through gain_apart otherwise (unless
+    both stiffnesses are on their bounds, K already not identifiable), in the linear range where
+    saturation is found, and a scale it finds replaces the final fit (``fits.model`` becomes
+    YawScaled; its held-out prediction in ``held.sims``; the delay's verdict kept). A bias fitted
+    beside an offset: _without_standstill."""
     final, params, stiff = _final_parameters(log, fits, held, saturation)
-    check, alike, free_fit = (None, one_speed(log, min_speed), None) if command else gain_apart(fits, final)
+    check, alike, free_fit = None, one_speed(log, min_speed), None
+    skip = alike or _stiffnesses_on_bounds(final) or _misfit_on_bound(final)
+    if not command and skip:
+        check = {"verdict": f"not fitted: K is not identifiable from this log already, or not through a scale ({skip})",
+                 "kept": False,
+                 "turn_scale": None}
+    elif not command:
+        cap = _linear_range(True, fits.nl, log, min_speed)["value"] if saturation else None
+        check, alike, free_fit = gain_apart(fits, final, cap)
     if free_fit is not None:
         fits.model = YawScaled(fits.model)
         new_params, stiff = _parameters(free_fit, list(free_fit.free), fits)
@@ -861,15 +944,13 @@ def _steady_check(log: DrivingLog, model: YawModel, values: dict, L: float, min_
     """(the steady windows, their regression in the linear range up to ``cap``, the same regression
     on the model's own yaw rate: comparisons.model_steady_state): the independent check on K (a
     negative delay is left to the fit); the input enters as the model's does, tan u under its
-    Ackermann geometry (L r = v tan u - K v^2 r is the no-slip turn at any angle). The gain is
-    fitted beside K for a measured angle too (its sensor's, the wheelbase's or the speed's scale
-    would read as K), held at 1 only where the turns are at one speed and cannot tell them apart."""
+    Ackermann geometry (L r = v tan u - K v^2 r is the no-slip turn at any angle). A command's gain
+    is fitted beside K; a measured angle's held at 1, as the dynamic fit takes it (a scale of the
+    turns is the turn-scale check's, gain_apart, and the model's own regression carries it)."""
     delay = max(values["delay"], 0.0)
     u = model.turning(log.u)       # as the model turns
     windows = steady_windows(log.t, u, log.v, log.r, log.run, min_speed, delay=delay)
-    ss = in_linear_range(windows, L, LINEAR_TYRE, cap)       # the gain free: a scale of the turns is not K
-    if ss is None and not command:                           # turns at one speed: a measured angle taken as is
-        ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=1.0)
+    ss = in_linear_range(windows, L, LINEAR_TYRE, cap, fixed_gain=None if command else 1.0)
     return windows, ss, model_steady_state(model, values, log, min_speed, delay, windows, ss, u)
 
 
@@ -898,22 +979,32 @@ def _without_standstill(params: dict, final: FitResult, log: DrivingLog, L: floa
                         "note": f"{q['note']}; {text}" if q.get("note") else text}
 
 
-def _steady_json(ss, vehicle: Vehicle, windows: dict) -> dict:
-    """The steady-state regression's JSON, with why its gain is held (a measured angle at one speed)
-    and its offset flagged ``implausible`` beyond the class's steering offset (vehicle.STEER_OFFSET);
-    ``ss`` None: why there is none."""
+def _steady_json(ss, vehicle: Vehicle, windows: dict, dynamic_offset: dict | None = None) -> dict:
+    """The steady-state regression's JSON, with why its gain is held (a measured angle) and its
+    offset flagged ``implausible`` beyond the class's steering offset (vehicle.CLASSES), its cause
+    from the dynamic fit's offset (``dynamic_offset``): on the same side beyond the class's range too
+    (or on its bound there), an offset of the steering itself, a fault to check; else the regression's
+    straight-line model missing the turns. ``ss`` None: why there is none."""
     if ss is None:
         return {"windows": int(len(windows["u"])), "note": "not possible: fewer than 7 steady windows inside the "
                 "linear range, no steady turning, or (a command input) one speed, where the steering gain and K "
                 "are not told apart"}
     d = ss.as_dict()
     if ss.fixed_gain is not None:
-        d["gain_held"] = "the measured angle at one speed, where a gain and K are not told apart"
+        d["gain_held"] = "a measured angle taken at its declared scale, as the dynamic fit takes it (steering_gain_check)"
     bound, off = vehicle.steer_offset_bound, d["steer_offset"]["value"]
-    if abs(off) > bound:
-        d["steer_offset"]["implausible"] = (f"|{math.degrees(off):.3g}| deg beyond the {math.degrees(bound):.3g} deg "
-                                            f"a {vehicle.kind or 'vehicle'}'s angle sensor can be off: the regression's "
-                                            f"offset takes up what its straight-line model misses, not concluded")
+    if abs(off) <= bound:
+        return d
+    dyn = (dynamic_offset or {}).get("value", 0.0)
+    both = dyn * off > 0 and abs(dyn) > bound
+    cause = (f"the dynamic fit's offset {dyn:.3g} rad is beyond it on the same side"
+             f"{' (on its bound)' if 'bound' in (dynamic_offset or {}).get('note', '') else ''}: the steering is off "
+             f"by more than a healthy {vehicle.kind or 'vehicle'}'s, a fault to check (the angle sensor's zero, the "
+             f"steering linkage)" if both else
+             f"the dynamic fit's offset {dyn:.3g} rad is not: the regression's offset takes up what its straight-line "
+             f"model misses")
+    d["steer_offset"]["implausible"] = (f"|{math.degrees(off):.3g}| deg beyond the {math.degrees(bound):.3g} deg a "
+                                        f"{vehicle.kind or 'vehicle'}'s angle sensor can be off; {cause}; not concluded")
     return d
 
 
@@ -1134,8 +1225,11 @@ def summary(report: dict) -> str:
                      f"{K['deg_per_g']:.3g} deg/g; no characteristic or critical speed)")
     if "steering_gain_check" in report:
         gc = report["steering_gain_check"]
-        lines.append(f"turn scale k (yaw rate per v tan(w) / L, fitted beside K): {q(gc['yaw_gain'], '{:.3g}')}: "
-                     f"{gc['verdict']}")
+        k = gc.get("turn_scale")
+        fitted = (f" ({gc['how']}: k {q(gc['yaw_gain'], '{:.3g}')}, K {q(gc['understeer_gradient_gain_free'])})"
+                  if "yaw_gain" in gc else "")
+        lines.append(f"turn scale k (yaw rate per v tan(w) / L): {'not concluded' if k is None else f'{k:.3g}'}: "
+                     f"{gc['verdict']}{fitted}")
     lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))

@@ -19,22 +19,35 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 DEG = math.pi / 180.0
 
-# class -> (gyro bias bound [rad/s], slope bound [rad], friction range, what it is)
+
+class VehicleClass(NamedTuple):
+    """The ranges a class of vehicle gives a fitted parameter."""
+
+    gyro_bias: float                # rad/s: the largest zero-rate offset of its gyro
+    slope: float                    # rad: the steepest ground it drives on
+    friction: tuple[float, float]   # its tyres' friction on their ground
+    steer_offset: float             # rad: the largest zero offset of its wheel-angle sensor or linkage
+    what: str
+
+
+# a tractor's guidance gyro is an industrial MEMS part with no ESC learning its offset at standstill
+# (a car's CAN yaw rate has that): zero-rate offsets up to about 2 deg/s over temperature; a
+# steering angle sensor's zero (a potentiometer's or encoder's) is off a few degrees after a repair
+# or a knock, a small machine's cheap linkage more
 CLASSES = {
-    # a tractor's guidance gyro is an industrial MEMS part with no ESC learning its offset at standstill
-    # (a car's CAN yaw rate has that): zero-rate offsets up to about 2 deg/s over temperature
-    "tractor": (2.0 * DEG, 15 * DEG, (0.2, 1.2), "an agricultural tractor (industrial MEMS gyro, field slopes)"),
-    "car": (1.0 * DEG, 7 * DEG, (0.1, 1.3), "a road car (automotive-grade gyro, road gradients up to about 12 %)"),
-    "truck": (1.0 * DEG, 7 * DEG, (0.1, 1.1), "a road truck"),
-    "scale_car": (3.0 * DEG, 5 * DEG, (0.2, 1.8), "a 1:10 to 1:5 model car (hobby MEMS gyro, indoor floors)"),
-    "robot": (3.0 * DEG, 10 * DEG, (0.2, 1.5), "a small mobile robot (hobby MEMS gyro)"),
+    "tractor": VehicleClass(2.0 * DEG, 15 * DEG, (0.2, 1.2), 3 * DEG,
+                            "an agricultural tractor (industrial MEMS gyro, field slopes)"),
+    "car": VehicleClass(1.0 * DEG, 7 * DEG, (0.1, 1.3), 2 * DEG,
+                        "a road car (automotive-grade gyro, road gradients up to about 12 %)"),
+    "truck": VehicleClass(1.0 * DEG, 7 * DEG, (0.1, 1.1), 2 * DEG, "a road truck"),
+    "scale_car": VehicleClass(3.0 * DEG, 5 * DEG, (0.2, 1.8), 5 * DEG,
+                              "a 1:10 to 1:5 model car (hobby MEMS gyro, indoor floors)"),
+    "robot": VehicleClass(3.0 * DEG, 10 * DEG, (0.2, 1.5), 5 * DEG, "a small mobile robot (hobby MEMS gyro)"),
 }
-# class -> the steering offset [rad] its wheel-angle sensor or linkage can have: a potentiometer's or
-# encoder's zero off by a few degrees after a repair or a knock (a small machine's cheap linkage more)
-STEER_OFFSET = {"tractor": 3 * DEG, "car": 2 * DEG, "truck": 2 * DEG, "scale_car": 5 * DEG, "robot": 5 * DEG}
 STEERING = ("angle", "torque", "none")
 DRIVES = ("ackermann", "skid", "differential", "articulated")
 
@@ -88,20 +101,20 @@ class Vehicle:
 
     @property
     def gyro_bias_bound(self) -> float | None:
-        return CLASSES[self.kind][0] if self.kind else None
+        return CLASSES[self.kind].gyro_bias if self.kind else None
 
     @property
     def steer_offset_bound(self) -> float:
         """The largest steering offset [rad] of the class (5 deg without a class)."""
-        return STEER_OFFSET[self.kind] if self.kind else 5 * DEG
+        return CLASSES[self.kind].steer_offset if self.kind else 5 * DEG
 
     @property
     def slope_bound(self) -> float | None:
-        return CLASSES[self.kind][1] if self.kind else None
+        return CLASSES[self.kind].slope if self.kind else None
 
     @property
     def friction_range(self) -> tuple[float, float]:
-        return CLASSES[self.kind][2] if self.kind else (0.1, 2.0)
+        return CLASSES[self.kind].friction if self.kind else (0.1, 2.0)
 
     def lever_arm_bounds(self) -> tuple[tuple[float, float], tuple[float, float]] | None:
         """((forward lo, hi), (left lo, hi)) of a point on the vehicle measured from the rear axle:
