@@ -1,0 +1,59 @@
+"""No effect is concluded on top of a baseline refit that ended on its bounds, and no lever arm is
+concluded outside the declared car's outline.
+
+Independent truths placed by hand: the refit's values put on the catalogue's own bounds (or inside
+them), and a reference point 1.2 m ahead of a 2.7 m car's front axle whose body ends 0.92 m ahead
+of it (4.7 m long: the 2 m beyond the wheelbase split as a car's overhangs, 0.35 : 0.30)."""
+from __future__ import annotations
+
+import pytest
+
+from agrobot.diagnosis.baseline import refit_summary
+from agrobot.diagnosis.catalogue import UNCERTAIN
+from agrobot.diagnosis.verdict import conclude, judge_values, on_bounded_baseline
+from agrobot.identification.vehicle import Vehicle
+
+CAR = Vehicle.from_table({"class": "car", "wheelbase": 2.7, "length": 4.7, "width": 1.8})
+STUDY = {"cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
+
+
+def effect(eid, **params):
+    return {"id": eid, "parameters": params, "parameters_display": {f"{k} [SI]": v for k, v in params.items()},
+            "hypothesis": "h", "not_identifiable": None}
+
+
+def verdict_on(refit: dict[str, float]) -> dict:
+    arm = effect("yaw_rate_bias", yaw_rate_bias=0.01)
+    v = conclude([arm], None, [], [], [], CAR, 2.7, 1.5, 20.0)
+    assert v["status"] == "conclusive"
+    return on_bounded_baseline(v, refit_summary(STUDY, refit, UNCERTAIN["yaw"]))
+
+
+def test_an_effect_on_a_baseline_refit_on_its_bounds_cannot_be_decided():
+    """The racecar's refit: the front scale on its lower bound 0.4, the rear on its upper 2.5."""
+    v = verdict_on({"cornering_front_scale": 0.4, "cornering_rear_scale": 2.5, "relaxation_scale": 1.7})
+    assert v["status"] == "cannot decide" and v["statement"].startswith("cannot decide")
+    assert "cornering_front_scale, cornering_rear_scale end on their bounds" in v["statement"]
+    assert "0.4 on its lower bound" in v["statement"] and "2.5 on its upper bound" in v["statement"]
+    assert "relaxation_scale" not in v["statement"]
+    assert "yaw_rate_bias may be absorbing the misfit" in v["statement"] and "study of this vehicle" in v["statement"]
+    assert v["bullets"][0].startswith("on that baseline (conclusive): yaw_rate_bias")
+
+
+@pytest.mark.parametrize("refit", [STUDY, {"cornering_front_scale": 0.42, "cornering_rear_scale": 2.4,
+                                           "relaxation_scale": 2.9}])
+def test_a_refit_inside_its_bounds_leaves_the_verdict(refit):
+    v = verdict_on(refit)
+    assert v["status"] == "conclusive" and v["statement"].startswith("yaw_rate_bias")
+
+
+def test_a_reference_point_ahead_of_the_cars_nose_is_no_mounting():
+    """4.18 m ahead of the rear axle of the 2.7 m car: 1.48 m ahead of its front axle, beyond the 0.92 m
+    front overhang (the whole length, 4.7 m, ahead of the rear axle only without a rear overhang)."""
+    outside = effect("antenna_lever_arm", antenna_forward=4.18, antenna_left=-0.15)
+    notes = judge_values(outside, CAR, 2.7, 1.5, 20.0)
+    assert len(notes) == 1 and "outside its outline" in notes[0] and "0.92 m ahead of the front one" in notes[0]
+    assert judge_values(effect("antenna_lever_arm", antenna_forward=3.55, antenna_left=0.0), CAR, 2.7, 1.5, 20.0) == []
+    assert judge_values(effect("antenna_lever_arm", antenna_forward=-1.0, antenna_left=0.0), CAR, 2.7, 1.5, 20.0) == []
+    v = conclude([outside], None, [], [], [], CAR, 2.7, 1.5, 20.0)
+    assert v["status"] == "implausible"
