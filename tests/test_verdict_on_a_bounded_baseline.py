@@ -57,3 +57,15 @@ def test_a_reference_point_ahead_of_the_cars_nose_is_no_mounting():
     assert judge_values(effect("antenna_lever_arm", antenna_forward=-1.0, antenna_left=0.0), CAR, 2.7, 1.5, 20.0) == []
     v = conclude([outside], None, [], [], [], CAR, 2.7, 1.5, 20.0)
     assert v["status"] == "implausible"
+
+
+def test_a_lever_arm_outside_the_outline_on_a_bounded_refit_names_the_refit_first():
+    """The full racecar log: the reference point outside the car and the three tyre scales on their bounds
+    (0.4 lower, 2.5 and 10 upper): the refit that cannot represent the car is said first."""
+    outside = effect("antenna_lever_arm", antenna_forward=4.18, antenna_left=-0.15)
+    v = conclude([outside], None, [], [], [], CAR, 2.7, 1.5, 20.0)
+    refit = {"cornering_front_scale": 0.4, "cornering_rear_scale": 2.5, "relaxation_scale": 3.0}
+    v = on_bounded_baseline(v, refit_summary(STUDY, refit, UNCERTAIN["yaw"]))
+    assert v["status"] == "cannot decide" and "relaxation_scale" in v["statement"]
+    assert "antenna_lever_arm may be absorbing" in v["statement"]
+    assert v["bullets"][0].startswith("on that baseline (implausible)") and "outside its outline" in v["bullets"][0]

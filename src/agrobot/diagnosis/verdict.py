@@ -111,15 +111,15 @@ def on_wrong_study(verdict: dict, statement: str) -> dict:
     return {"id": WRONG_STUDY, "status": "conclusive", "statement": statement, "bullets": judged + verdict["bullets"]}
 
 
-BASELINE_BOUND = ("conclusive", "inconclusive")     # the statuses a baseline refit on its bounds withdraws
-FIT_THE_VEHICLE = ("diagnose against a study of this vehicle (its own tyres: put identify's cornering stiffnesses "
-                   "and relaxation lengths into the study's yaw plant) and again")
+BASELINE_BOUND = ("conclusive", "inconclusive", "implausible")    # statuses a refit on its bounds withdraws
+FIT_THE_VEHICLE = ("diagnose again against a study of this vehicle (its own tyres: identify's cornering "
+                   "stiffnesses and relaxation lengths in the study's yaw plant)")
 
 
 def on_bounded_baseline(verdict: dict, summary: list[dict]) -> dict:
     """The verdict when the baseline refit left parameters on their bounds (baseline.refit_summary's
     ``at_bound``): the study cannot represent this vehicle there, so an effect fitted on top of it may
-    absorb the misfit; a conclusive or inconclusive effect is then "cannot decide", with the
+    absorb the misfit (or make it implausible); such an effect is then "cannot decide", with the
     parameters, their values and what to do; the effect's own statement follows as a bullet."""
     edge = [r for r in summary or () if r.get("at_bound")]
     if not edge or verdict["status"] not in BASELINE_BOUND or verdict["id"] in ("none", "unexplained", WRONG_STUDY):
