@@ -9,9 +9,12 @@ from __future__ import annotations
 import pytest
 
 from agrobot.diagnosis.baseline import refit_summary
+from agrobot.diagnosis.pipeline import diagnose
 from agrobot.diagnosis.catalogue import UNCERTAIN
 from agrobot.diagnosis.verdict import conclude, judge_values, on_bounded_baseline
 from agrobot.identification.vehicle import Vehicle
+from harness.hidden_effects import BASELINES
+from harness.truth_tractor import make_log
 
 CAR = Vehicle.from_table({"class": "car", "wheelbase": 2.7, "length": 4.7, "width": 1.8})
 STUDY = {"cornering_front_scale": 1.0, "cornering_rear_scale": 1.0, "relaxation_scale": 1.0}
@@ -69,3 +72,30 @@ def test_a_lever_arm_outside_the_outline_on_a_bounded_refit_names_the_refit_firs
     assert v["status"] == "cannot decide" and "relaxation_scale" in v["statement"]
     assert "antenna_lever_arm may be absorbing" in v["statement"]
     assert v["bullets"][0].startswith("on that baseline (implausible)") and "outside its outline" in v["bullets"][0]
+
+
+def _diagnosed(tmp_path, effect_id: str, scale: dict | None) -> tuple[dict, dict]:
+    frame, truth = make_log(3, effect_id, duration=120.0, vehicle="car", scale=scale)
+    frame.to_parquet(tmp_path / "car.parquet")
+    result = diagnose(tmp_path / "car.parquet", tmp_path / "out", plots=False, study_path=BASELINES["car"],
+                      identify=False, workers=1)
+    return result, truth
+
+
+@pytest.mark.slow                       # about 7 s of CPU, near 20 s on a loaded machine
+def test_a_racing_tyre_the_study_cannot_hold_is_searched_out_to_its_limit(tmp_path):
+    """A car on tyres three times as stiff as the study's (C_f x 3, C_r x 3, drawn around that): the rear
+    scale the yaw rate and the track ask for together lies beyond the prior range [0.4, 2.5]; searched
+    again out to its limit it ends near the truth's C_r / 100000 N/rad, on no bound."""
+    result, truth = _diagnosed(tmp_path, "antenna_lever_arm", {"C_f": 3.0, "C_r": 3.0})
+    rows = {r["name"]: r for r in result["baseline_refit_summary"]}
+    rear = rows["cornering_rear_scale"]
+    assert rear["at_bound"] is None and rear["bounds"][1] > 2.5
+    assert rear["value"] == pytest.approx(truth["C_r"] / 100000.0, rel=0.15)
+
+
+def test_an_ordinary_car_log_keeps_its_verdict(tmp_path):
+    """The study's own car with a gyro bias: the refit ends on no bound and the bias is concluded."""
+    result, truth = _diagnosed(tmp_path, "yaw_rate_bias", None)
+    assert not any(r["at_bound"] for r in result["baseline_refit_summary"])
+    assert result["verdict"] == "yaw_rate_bias" and result["verdict_status"] == "conclusive"

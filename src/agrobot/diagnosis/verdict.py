@@ -126,7 +126,8 @@ def on_bounded_baseline(verdict: dict, summary: list[dict]) -> dict:
         return verdict
     names = ", ".join(r["name"] for r in edge)
     values = ", ".join(f"{r['value']:.3g} on its {r['at_bound']} bound" for r in edge)
-    statement = (f"cannot decide: the study's {names} end on their bounds ({values}), so {verdict['id']} may be "
+    ends = "end on their bounds" if len(edge) > 1 else "ends on its bound"
+    statement = (f"cannot decide: the study's {names} {ends} ({values}), so {verdict['id']} may be "
                  f"absorbing the misfit; {FIT_THE_VEHICLE}")
     return {**verdict, "status": "cannot decide", "statement": statement,
             "bullets": [f"on that baseline ({verdict['status']}): {verdict['statement']}"] + verdict["bullets"]}
