@@ -669,9 +669,12 @@ def fit_baseline(replay: Replay) -> tuple[FitResult, dict[str, float]]:
         values = _held_where_loose(replay, fit, start, s, sigma).values
     block = replay.side_slip_block
     for joint in ((False, True) if block else (False,)):
-        if joint:
+        if joint:                   # on a prior edge here too: searched again out to the limit
             free = list(dict.fromkeys(p for s in block for p in uncertain(replay, s)))
             values = _fit(replay, values, free, block, [{}], sigma).values
+            if wider := widened_ranges(free, values):
+                replay.widened_uncertain.update(wider)
+                values = _fit(replay, values, [wider.get(p.name, p) for p in free], block, [{}], sigma).values
         fit = _fit(replay, values, [], replay.stages, [{}], sigma)
         for s in replay.stages:
             sigma[s] = math.sqrt(fit.rss[s] / fit.n[s]) or 1.0

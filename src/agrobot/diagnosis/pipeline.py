@@ -39,7 +39,7 @@ from .unexplained import RATIO, signature, stage_check
 from .plausibility import (VehicleContext, kinematic, steering_gain_check, study_understeer, understeer,
                            understeer_estimates)
 from .study_fit import study_check
-from .verdict import audit_findings, conclude, said_before
+from .verdict import audit_findings, conclude, on_bounded_baseline, said_before
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
@@ -526,6 +526,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
                        before=[x for x in (mismatch, kinematic(share)) if x], turns=mine or None)
+    verdict = on_bounded_baseline(verdict, result["baseline_refit_summary"])
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     if (gain := steering_gain_check(effects, mine)) is not None:
         verdict["bullets"].append(gain[0])

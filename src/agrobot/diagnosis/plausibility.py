@@ -44,11 +44,20 @@ class VehicleContext:
 
     def outline(self) -> tuple[tuple[float, float], tuple[float, float], str]:
         """((forward lo, hi), (left lo, hi)) of the vehicle from its rear axle, and how it is known:
-        the [vehicle] table's length and width, else its class's default outline (CLASS_OUTLINE)."""
+        the [vehicle] table's length and width, the length beyond the wheelbase split between the
+        overhangs as its class's (CLASS_OUTLINE: behind = (length - L) rear / (rear + front), the body
+        then ends length - behind ahead of the rear axle), else its class's default outline."""
         arm, wb = self.vehicle.lever_arm_bounds(), self.wheelbase
+        rear, front, width = CLASS_OUTLINE.get(self.vehicle.kind, CLASS_OUTLINE[None])
+        if arm and 0.0 < wb < self.vehicle.length:
+            behind = (self.vehicle.length - wb) * rear / (rear + front)
+            return ((-behind, self.vehicle.length - behind), arm[1],
+                    f"its outline ({self.vehicle.length:g} m long, {self.vehicle.width:g} m wide; the "
+                    f"{self.vehicle.length - wb:.2g} m beyond its wheelbase split as a {self.vehicle.kind or 'vehicle'}'s "
+                    f"overhangs: {behind:.2g} m behind the rear axle, {self.vehicle.length - wb - behind:.2g} m ahead "
+                    f"of the front one)")
         if arm:
             return arm[0], arm[1], f"its outline ({self.vehicle.length:g} m long, {self.vehicle.width:g} m wide)"
-        rear, front, width = CLASS_OUTLINE.get(self.vehicle.kind, CLASS_OUTLINE[None])
         return ((-rear * wb, (1 + front) * wb), (-0.5 * width * wb, 0.5 * width * wb),
                 f"the default outline of {self.defaults_named()}")
 

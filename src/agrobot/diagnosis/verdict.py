@@ -111,6 +111,28 @@ def on_wrong_study(verdict: dict, statement: str) -> dict:
     return {"id": WRONG_STUDY, "status": "conclusive", "statement": statement, "bullets": judged + verdict["bullets"]}
 
 
+BASELINE_BOUND = ("conclusive", "inconclusive", "implausible")    # statuses a refit on its bounds withdraws
+FIT_THE_VEHICLE = ("diagnose again against a study of this vehicle (its own tyres: identify's cornering "
+                   "stiffnesses and relaxation lengths in the study's yaw plant)")
+
+
+def on_bounded_baseline(verdict: dict, summary: list[dict]) -> dict:
+    """The verdict when the baseline refit left parameters on their bounds (baseline.refit_summary's
+    ``at_bound``): the study cannot represent this vehicle there, so an effect fitted on top of it may
+    absorb the misfit (or make it implausible); such an effect is then "cannot decide", with the
+    parameters, their values and what to do; the effect's own statement follows as a bullet."""
+    edge = [r for r in summary or () if r.get("at_bound")]
+    if not edge or verdict["status"] not in BASELINE_BOUND or verdict["id"] in ("none", "unexplained", WRONG_STUDY):
+        return verdict
+    names = ", ".join(r["name"] for r in edge)
+    values = ", ".join(f"{r['value']:.3g} on its {r['at_bound']} bound" for r in edge)
+    ends = "end on their bounds" if len(edge) > 1 else "ends on its bound"
+    statement = (f"cannot decide: the study's {names} {ends} ({values}), so {verdict['id']} may be "
+                 f"absorbing the misfit; {FIT_THE_VEHICLE}")
+    return {**verdict, "status": "cannot decide", "statement": statement,
+            "bullets": [f"on that baseline ({verdict['status']}): {verdict['statement']}"] + verdict["bullets"]}
+
+
 def said_before(before: Iterable[str], ctx: VehicleContext, turns: dict | None = None) -> list[str]:
     """What is said before any verdict, also before a refusal: ``before`` (the study not being the
     log's vehicle, a log in the kinematic regime), the log's steady ``turns`` (study_fit.log_vehicle)
