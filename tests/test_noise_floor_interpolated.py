@@ -77,3 +77,25 @@ def test_a_noise_growing_with_speed_is_judged_on_the_held_out_rows():
     floors = stage_floors(replay, {})
     rms_test = float(np.sqrt(np.mean(on_rows[replay.masks["yaw"]["test"]] ** 2)))
     assert abs(floors["yaw"] - rms_test) < 0.1 * rms_test, (floors, rms_test)
+
+
+def test_a_clean_log_with_jittered_stamps_is_not_unexplained(tmp_path):
+    """A clean generated log (harness.truth_tractor) re-stamped with a 3 % jitter, imported onto rows
+    at 20.2 Hz (the import's grid at another rate than the 20 Hz samples): the gyro's white level
+    is the truth's, and the yaw stage is not above its floor."""
+    from agrobot.diagnosis.pipeline import diagnose
+    from agrobot.measurements.options import ImportOptions
+    from agrobot.measurements.signal_expressions import parse_signal
+    from harness.truth_tractor import VEHICLES, make_log
+
+    frame, _ = make_log(5, None, duration=120.0)
+    h = float(np.median(np.diff(frame["t"])))
+    frame["t"] = frame["t"] + 0.03 * h * np.random.default_rng(7).standard_normal(len(frame))
+    frame.to_csv(tmp_path / "log.csv", index=False)
+    columns = ("delta_cmd=delta_cmd[rad]", "delta=delta[rad]", "v=v[m/s]", "yaw_rate=yaw_rate[rad/s]", "x=x[m]", "y=y[m]")
+    res = diagnose(tmp_path / "log.csv", None, identify=False, plots=False,
+                   recording=ImportOptions(signals=[parse_signal(s) for s in columns], rate=1.01 / h))
+    sigma = VEHICLES["tractor"]["gyro_noise"]
+    assert abs(res["noise_floor"]["sensors"]["yaw_rate"] - sigma) < 0.1 * sigma, res["noise_floor"]
+    assert not res["stages"]["yaw"]["misfit"] and res["stages"]["yaw"]["ratio"] < 1.25, res["stages"]["yaw"]
+    assert res["verdict"] != "unexplained", res["selection_trace"]
