@@ -1,6 +1,6 @@
 """A noise floor read on a channel the import interpolated onto its even grid (diagnosis.noise_floor):
 a gyro of known white noise sigma on its own jittered stamps (1-5 % of a step), linearly
-interpolated onto rows offset from them or at another rate, on a slow yaw motion the model predicts
+interpolated onto rows offset from them, at another rate or four times faster, on a slow yaw motion the model predicts
 exactly. Linear interpolation damps the top band the white level is read from more than the rest,
 so read on the rows the level comes out at 0.5-0.8 sigma; corrected by the interpolation's own
 effect it is sigma, and the floor is the RMS the interpolated noise has on the held-out rows. A
@@ -50,12 +50,14 @@ def slow(t):
 
 
 def gyro_on_grid(jitter: float, grid: str, seed: int = 4, sigma_of=lambda t: SIGMA + 0 * t):
-    """(the replay, the noise the rows carry): white noise of sigma_of(t) on stamps k H + jitter H N(0, 1),
-    interpolated onto rows 0.3 H after them ('offset') or at 1.01 x their rate ('rate')."""
+    """(the replay, the noise the rows carry): white noise of sigma_of(t) on stamps k P + jitter P N(0, 1),
+    interpolated onto rows of step H 0.3 H after them: P = H ('offset'), P = 4 H ('slower'), or rows
+    at 1.01 x their rate ('rate')."""
     rng = np.random.default_rng(seed)
-    own_t = H * np.arange(int(SECONDS / H)) + jitter * H * rng.standard_normal(int(SECONDS / H))
+    own = 4 * H if grid == "slower" else H
+    own_t = own * np.arange(int(SECONDS / own)) + jitter * own * rng.standard_normal(int(SECONDS / own))
     noise = sigma_of(own_t) * rng.standard_normal(len(own_t))
-    step = H if grid == "offset" else H / 1.01
+    step = H / 1.01 if grid == "rate" else H
     t = own_t[0] + H + 0.3 * H + step * np.arange(int((own_t[-1] - own_t[0] - 3 * H) / step))
     test = t >= 0.6 * t[-1]
     replay = InterpolatedGyro(t, own_t, slow(own_t) + noise, slow(t), test)
@@ -63,7 +65,7 @@ def gyro_on_grid(jitter: float, grid: str, seed: int = 4, sigma_of=lambda t: SIG
 
 
 @pytest.mark.parametrize("jitter", [0.01, 0.05])
-@pytest.mark.parametrize("grid", ["offset", "rate"])
+@pytest.mark.parametrize("grid", ["offset", "rate", "slower"])
 def test_the_floor_of_an_interpolated_gyro_is_its_sigma(jitter, grid):
     replay, on_rows = gyro_on_grid(jitter, grid)
     floors = stage_floors(replay, {})

@@ -123,17 +123,22 @@ def interpolated_stamps(replay, stage: str, sensor: str) -> np.ndarray | None:
 def stage_level(replay, stage: str, sensor: str, values: dict, fs: float) -> tuple[float, float]:
     """(the sensor's sigma, the floor of the stage's held-out residual): the residual's white level
     on the sensor's updates, on the held-out rows (both parts when they are too few), corrected for
-    a linear interpolation from the sensor's own stamps (module docstring)."""
+    a linear interpolation from the sensor's own stamps (module docstring), whose median interval in
+    rows is the m of a slower channel (read on every m-th row, G on those rows)."""
     res = replay.measured(stage) - replay.seen(stage, replay.predicted(stage, values))
     step = update_step(replay.frame, sensor, replay.h)
+    stamps = interpolated_stamps(replay, stage, sensor) if step == 1 else None
+    if stamps is not None:                       # a slower channel interpolated: read on its updates too
+        step = max(1, int(round(float(np.median(np.diff(stamps))) / replay.h)))
     test = replay.masks[stage]["test"]
     rows = test if test.sum() >= HELD_OUT_ROWS * step else replay.scored(stage)
     level = level_on_updates(res[rows], fs, step)
-    stamps = interpolated_stamps(replay, stage, sensor) if step == 1 else None
     if stamps is None:
         return level, level
-    band, rms = interpolated_white(replay.t[rows], stamps)
-    return level / band, level / band * rms
+    t = replay.t[rows]
+    band = interpolated_white(t[::step] if step > 1 and len(t) >= 16 * step else t, stamps)[0]
+    sigma = level / band
+    return sigma, sigma * interpolated_white(t, stamps)[1]
 
 
 def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: int = 4) -> dict[str, float]:
