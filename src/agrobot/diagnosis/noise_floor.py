@@ -25,7 +25,8 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   derived from a heading or course (identification.yaw_measurement): at least its noise read on
   the heading's own updates (the rows' top band holds only the interpolation);
 - speed: the GPS chord speed against the dead-reckoned chord speed (the speed's and the positions'
-  white levels read on their own updates, as above); both are 1 s means, so the floor
+  white levels read on their own updates, as above, but not corrected for an interpolation: the
+  import keeps own stamps of the held channels and the gyro only); both are 1 s means, so the floor
   is propagated: var = 2 sigma_gps^2 / T^2 + sigma_v^2 / (T / h)   (T the chord span);
 - position: the dead-reckoned track integrates the gyro's and the speed's noise, so the floor is the
   stage's residual (aligned, and whitened by that noise: candidates.Replay.track_residuals) of the
