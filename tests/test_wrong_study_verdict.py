@@ -90,3 +90,16 @@ def test_the_report_names_the_steering_geometry():
               "steering_geometry": {"says": "steering geometry: the yaw model is driven by tan(delta) (--steering-geometry "
                                             "tan); passed over: delta; SETS"}}
     assert "Steering geometry: the yaw model is driven by tan(delta) (--steering-geometry tan)" in markdown(result, [])
+
+
+def test_a_steering_gain_on_a_declared_vehicle_is_the_other_reading_of_a_30_percent_mismatch():
+    """A declared 1.4 m robot whose turns give 1.9 m: the wheels turning 0.74 x the input (a steering
+    map's gain error, inside a calibration's range) reads the same turns; a fitted steering gain of 0.74
+    is the verdict, the wrong study named beside it. The same turns against an undeclared study: the study."""
+    turns, _ = study_check(kinematic_log(1.9), 1.4, "declared.toml")
+    assert turns and turns.get("mismatch")
+    v = conclude([fitted("steering_gain", steering_gain=0.74)], None, [], [], [], ROBOT, 1.4, 0.7, 0.8, turns=turns)
+    assert ROBOT.declared and v["id"] == "steering_gain", v
+    assert any(b.startswith("the other reading of the same turns: the study is wrong") for b in v["bullets"]), v["bullets"]
+    w = conclude([fitted("steering_gain", steering_gain=0.74)], None, [], [], [], Vehicle(), 1.4, 0.7, 0.8, turns=turns)
+    assert not Vehicle().declared and w["id"] == WRONG_STUDY, w

@@ -21,7 +21,9 @@ It is built from the judged effects and three checks an engineer makes before si
 - **the study before the effects**: a study whose wheelbase the log's steady turns miss by more
   than 30 % is the verdict (``wrong_study``, plausibility.wrong_study, with the evidence and what to
   run instead); effects that rescale the yaw rate as a wheelbase does (plausibility.RESCALE_YAW)
-  would only absorb it and are not concluded; what else was judged against the study follows.
+  would only absorb it and are not concluded; what else was judged against the study follows. On a
+  study that declares its vehicle, a steering gain inside a calibration error's range is the other
+  reading of the same turns (steering_map_reading): it may be the verdict, the wrong study said beside it.
 """
 from __future__ import annotations
 
@@ -29,7 +31,7 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import RESCALE_YAW, VehicleContext, wheelbase_off, wrong_study
+from .plausibility import CALIBRATION, RESCALE_YAW, VehicleContext, wheelbase_off, wrong_study
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -90,15 +92,29 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
     study's antenna from the rear axle [m] (a reference point's offset is from it)."""
     ctx = VehicleContext(vehicle, wheelbase, l_r, speed, antenna)
     wrong = wrong_study(turns)
+    map_reading = wrong is not None and steering_map_reading(vehicle, turns)
     verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue,
-                       RESCALE_YAW if wrong else ())
-    if wrong:
+                       tuple(e for e in RESCALE_YAW if not (map_reading and e == "steering_gain")) if wrong else ())
+    if wrong and map_reading and verdict["id"] == "steering_gain":
+        verdict["bullets"] = [f"the other reading of the same turns: {wrong}"] + verdict["bullets"]
+    elif wrong:
         verdict = on_wrong_study(verdict, wrong)
     verdict["before"] = said_before(before, ctx, turns)
     return verdict
 
 
 WRONG_STUDY = "wrong_study"
+
+
+def steering_map_reading(vehicle, turns: dict) -> bool:
+    """Whether a study the log's turns miss by more than 30 % may still be the vehicle with its
+    steering map's gain off: the study declares the vehicle (its [vehicle] table: the user's word on
+    the wheelbase) and the gain that would turn the study's wheelbase into the log's, k = L_study /
+    L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
+    (plausibility.CALIBRATION). Then a fitted steering gain may be the verdict, the wrong study its
+    other reading; a gyro or speed scale that large is no sensor error."""
+    k = turns["study_wheelbase"] / turns["wheelbase"]
+    return bool(getattr(vehicle, "declared", False)) and CALIBRATION[0] < k < CALIBRATION[1]
 
 
 def on_wrong_study(verdict: dict, statement: str) -> dict:
