@@ -215,6 +215,18 @@ def wheelbase_off(turns: dict | None, mismatch: float = math.log(1.3)) -> str | 
 
 RESCALE_YAW = ("gyro_scale", "steering_gain", "speed_scale")     # effects that rescale the yaw rate as a
                                                                   # wheelbase does: r = v tan(delta) / L
+MAP_GAIN = RESCALE_YAW[1]          # the one of them a steering map's gain error is
+
+
+def steering_map_reading(vehicle, turns: dict) -> bool:
+    """Whether a study the log's turns miss by more than 30 % may still be the vehicle with its
+    steering map's gain off: the study declares the vehicle (its [vehicle] table: the user's word on
+    the wheelbase) and the gain that would turn the study's wheelbase into the log's, k = L_study /
+    L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
+    (CALIBRATION). Then a fitted steering gain (MAP_GAIN) may be the verdict, the wrong study its
+    other reading; a gyro or speed scale that large is no sensor error."""
+    k = turns["study_wheelbase"] / turns["wheelbase"]
+    return bool(getattr(vehicle, "declared", False)) and CALIBRATION[0] < k < CALIBRATION[1]
 
 
 def wrong_study(turns: dict | None) -> str | None:

@@ -31,7 +31,7 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import CALIBRATION, RESCALE_YAW, VehicleContext, wheelbase_off, wrong_study
+from .plausibility import MAP_GAIN, RESCALE_YAW, VehicleContext, steering_map_reading, wheelbase_off, wrong_study
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -94,8 +94,8 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
     wrong = wrong_study(turns)
     map_reading = wrong is not None and steering_map_reading(vehicle, turns)
     verdict = _verdict(effects, unexplained, unidentifiable, inconclusive, audit, ctx, catalogue,
-                       tuple(e for e in RESCALE_YAW if not (map_reading and e == "steering_gain")) if wrong else ())
-    if wrong and map_reading and verdict["id"] == "steering_gain":
+                       tuple(e for e in RESCALE_YAW if not (map_reading and e == MAP_GAIN)) if wrong else ())
+    if wrong and map_reading and verdict["id"] == MAP_GAIN:
         verdict["bullets"] = [f"the other reading of the same turns: {wrong}"] + verdict["bullets"]
     elif wrong:
         verdict = on_wrong_study(verdict, wrong)
@@ -105,16 +105,6 @@ def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list
 
 WRONG_STUDY = "wrong_study"
 
-
-def steering_map_reading(vehicle, turns: dict) -> bool:
-    """Whether a study the log's turns miss by more than 30 % may still be the vehicle with its
-    steering map's gain off: the study declares the vehicle (its [vehicle] table: the user's word on
-    the wheelbase) and the gain that would turn the study's wheelbase into the log's, k = L_study /
-    L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
-    (plausibility.CALIBRATION). Then a fitted steering gain may be the verdict, the wrong study its
-    other reading; a gyro or speed scale that large is no sensor error."""
-    k = turns["study_wheelbase"] / turns["wheelbase"]
-    return bool(getattr(vehicle, "declared", False)) and CALIBRATION[0] < k < CALIBRATION[1]
 
 
 def on_wrong_study(verdict: dict, statement: str) -> dict:
