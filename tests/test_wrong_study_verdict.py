@@ -95,7 +95,8 @@ def test_the_report_names_the_steering_geometry():
 def test_a_steering_gain_on_a_declared_vehicle_is_the_other_reading_of_a_30_percent_mismatch():
     """A declared 1.4 m robot whose turns give 1.9 m: the wheels turning 0.74 x the input (a steering
     map's gain error, inside a calibration's range) reads the same turns; a fitted steering gain of 0.74
-    is the verdict, the wrong study named beside it. The same turns against an undeclared study: the study."""
+    is the verdict, the wrong study named beside it. The same turns against an undeclared study, or the
+    default study diagnose takes when no --study is given: the study."""
     turns, _ = study_check(kinematic_log(1.9), 1.4, "declared.toml")
     assert turns and turns.get("mismatch")
     v = conclude([fitted("steering_gain", steering_gain=0.74)], None, [], [], [], ROBOT, 1.4, 0.7, 0.8, turns=turns)
@@ -103,3 +104,6 @@ def test_a_steering_gain_on_a_declared_vehicle_is_the_other_reading_of_a_30_perc
     assert any(b.startswith("the other reading of the same turns: the study is wrong") for b in v["bullets"]), v["bullets"]
     w = conclude([fitted("steering_gain", steering_gain=0.74)], None, [], [], [], Vehicle(), 1.4, 0.7, 0.8, turns=turns)
     assert not Vehicle().declared and w["id"] == WRONG_STUDY, w
+    default = conclude([fitted("steering_gain", steering_gain=0.74)], None, [], [], [], ROBOT, 1.4, 0.7, 0.8,
+                       turns={**turns, "declared": False})       # the same study as the default, no --study given
+    assert default["id"] == WRONG_STUDY, default

@@ -466,6 +466,8 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     result["log_vehicle"], mismatch = study_check(replay.frame, baseline.tractor.l_f + baseline.tractor.l_r,
                                                   study_name, study_understeer(baseline.tractor),
                                                   None if default_study else baseline.vehicle, baseline.tractor.m)
+    if result["log_vehicle"] is not None:         # the user's word on the wheelbase: a study given, with a [vehicle]
+        result["log_vehicle"]["declared"] = not default_study and baseline.vehicle.declared
     if mismatch:
         mismatch += " (no --study given: the default study was used)" if default_study else ""
         say(f"warning: {mismatch}")

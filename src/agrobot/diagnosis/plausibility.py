@@ -220,13 +220,14 @@ MAP_GAIN = RESCALE_YAW[1]          # the one of them a steering map's gain error
 
 def steering_map_reading(vehicle, turns: dict) -> bool:
     """Whether a study the log's turns miss by more than 30 % may still be the vehicle with its
-    steering map's gain off: the study declares the vehicle (its [vehicle] table: the user's word on
-    the wheelbase) and the gain that would turn the study's wheelbase into the log's, k = L_study /
+    steering map's gain off: the study, given by the user, declares the vehicle (its [vehicle] table:
+    the user's word on the wheelbase; ``turns["declared"]``, else the vehicle's own flag) and the gain that would turn the study's wheelbase into the log's, k = L_study /
     L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
     (CALIBRATION). Then a fitted steering gain (MAP_GAIN) may be the verdict, the wrong study its
     other reading; a gyro or speed scale that large is no sensor error."""
     k = turns["study_wheelbase"] / turns["wheelbase"]
-    return bool(getattr(vehicle, "declared", False)) and CALIBRATION[0] < k < CALIBRATION[1]
+    declared = turns.get("declared", getattr(vehicle, "declared", False))      # no --study: the default's is not
+    return bool(declared) and CALIBRATION[0] < k < CALIBRATION[1]
 
 
 def wrong_study(turns: dict | None) -> str | None:
