@@ -69,6 +69,10 @@ class HeldInput:
 
     times: np.ndarray
     values: np.ndarray
+    _start: np.ndarray = field(init=False, repr=False, compare=False)     # the integral at each update, summed once
+
+    def __post_init__(self):
+        self._start = np.r_[0.0, np.cumsum(self.values[:-1] * np.diff(self.times))]
 
     def at(self, t: np.ndarray) -> np.ndarray:
         """The value in force at t: the last update at or before it."""
@@ -81,8 +85,7 @@ class HeldInput:
     def integral(self, t: np.ndarray) -> np.ndarray:
         """int_{times[0]}^t of the held value (before the first update: the first value)."""
         k = self._in_force(t)
-        start = np.r_[0.0, np.cumsum(self.values[:-1] * np.diff(self.times))]
-        return start[k] + self.values[k] * (t - self.times[k])
+        return self._start[k] + self.values[k] * (t - self.times[k])
 
 
 @dataclass
