@@ -419,7 +419,7 @@ def floors_figure(result: dict, path: Path) -> Path:
     judged = [result["stages"][s] for s in stages]        # each stage's own judgement: healthy and misfit levels
     xs = np.arange(len(stages))
     ax.hlines([st.get("healthy_level", st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45, color="k",
-              lw=2.5, label="healthy level (what a fault-free tractor leaves)")
+              lw=2.5, label="healthy level (what the study's fault-free vehicle leaves)")
     ax.hlines([st.get("misfit_level", RATIO * st["floor"]) / st["floor"] for st in judged], xs - 0.45, xs + 0.45,
               color="#d6604d", ls="--", lw=1.5, label=f"misfit above: {RATIO:g} x floor and a material excess over healthy")
     ax.set_yscale("log")
