@@ -94,6 +94,7 @@ def test_a_racing_tyre_the_study_cannot_hold_is_searched_out_to_its_limit(tmp_pa
     assert rear["value"] == pytest.approx(truth["C_r"] / 100000.0, rel=0.15)
 
 
+@pytest.mark.slow                       # a whole diagnosis of a 60 s car log: 7 s
 def test_an_ordinary_car_log_keeps_its_verdict(tmp_path):
     """The study's own car with a gyro bias: the refit ends on no bound and the bias is concluded."""
     result, truth = _diagnosed(tmp_path, "yaw_rate_bias", None)
