@@ -107,6 +107,7 @@ class DrivingLog:
     kernel: np.ndarray | None = None           # the averaging a derived yaw rate applies (None: a gyro's)
     held: HeldInput | None = None              # a set-point input's updates (None: linear between samples)
     sampled: np.ndarray | None = None          # (N, 2B + 1): the yaw measurement on samples i-B..i+B (yaw_sampling)
+    lean: np.ndarray | None = None             # gravity's lateral share g sin(bank) [m/s2] (ground_lean; None: untold)
 
     def as_measured(self, r: np.ndarray, idx: np.ndarray | None = None) -> np.ndarray:
         """A yaw rate (.., L) along its last axis as the measurement sees it (``kernel``; ``sampled``:

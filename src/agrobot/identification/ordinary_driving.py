@@ -46,6 +46,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
+from .ground_lean import ground_lean, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -217,8 +218,10 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times, hold=input_hold)
     log.kernel = measured.kernel(log.h)
+    log.lean, lean_from = ground_lean(frame, log.t, log.v, log.r)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
     notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]
+    notes += [lean_from] if lean_from else []
     floor = course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
@@ -886,7 +889,8 @@ def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, c
     YawScaled; its held-out prediction in ``held.sims``; the delay's verdict kept). A bias fitted
     beside an offset: _without_standstill."""
     final, params, stiff = _final_parameters(log, fits, held, saturation)
-    check, alike, free_fit = None, one_speed(log, min_speed), None
+    leaning = turns_lean(log.lean, log.v, log.r, log.h, (log.v >= min_speed) & log.measured)
+    check, alike, free_fit = None, one_speed(log, min_speed) or leaning, None
     skip = alike or _stiffnesses_on_bounds(final) or _misfit_on_bound(final)
     if not command and skip:
         check = {"verdict": f"not fitted: K is not identifiable from this log already, or not through a scale ({skip})",
