@@ -56,6 +56,13 @@ def ground_lean(frame, t: np.ndarray, v: np.ndarray, r: np.ndarray) -> tuple[np.
     return None, None
 
 
+def lean_of_log(frame, log) -> np.ndarray | None:
+    """ground_lean on a DrivingLog's samples, where it comes from (or why not) added to its notes."""
+    lean, said = ground_lean(frame, log.t, log.v, log.r)
+    log.notes.extend([said] if said else [])
+    return lean
+
+
 def turns_lean(lean: np.ndarray | None, v: np.ndarray, r: np.ndarray, h: float, moving: np.ndarray) -> str | None:
     """Why K (and a scale of the turns or a steering gain) is not concluded, or None: the lean's
     least-squares slope on v r over the ``moving`` samples (into the turns: positive) exceeds

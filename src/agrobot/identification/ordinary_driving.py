@@ -19,7 +19,9 @@
    (identification.steady_state) is reported beside the dynamic fit. A measured angle's fit is
    tried again with a scale of the turns free in the linear range (gain_apart: a scale read only
    where the refit converges and predicts the held-out segments better; K is not concluded where
-   the log cannot tell the two apart); no characteristic or critical speed past BEYOND_TOP x the
+   the log cannot tell the two apart, nor where its roll, bank or a_y column tells the turns lean
+   on a bank, whose share of them a scale or K would take up: identification.ground_lean); no
+   characteristic or critical speed past BEYOND_TOP x the
    log's top speed;
    a gyro bias fitted without a standstill is not concluded (_without_standstill).
 """
@@ -46,7 +48,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
-from .ground_lean import ground_lean, turns_lean
+from .ground_lean import lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -217,11 +219,9 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     input_name = _steering_input(frame, where, vehicle)
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times, hold=input_hold)
-    log.kernel = measured.kernel(log.h)
-    log.lean, lean_from = ground_lean(frame, log.t, log.v, log.r)
+    log.kernel, log.lean = measured.kernel(log.h), lean_of_log(frame, log)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
     notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]
-    notes += [lean_from] if lean_from else []
     floor = course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
