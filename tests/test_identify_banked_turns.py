@@ -117,5 +117,7 @@ def test_the_lean_from_an_imu_is_gravity_s_share():
     assert np.allclose(imu, g_lat) and np.allclose(roll, g_lat)
     assert turns_lean(g_lat, v, r, 0.05, np.ones(200, bool)) is not None           # 1 m/s2 per m/s2 into the turns
     assert turns_lean(-0.07 * v * r, v, r, 0.05, np.ones(200, bool)) is None     # a body's roll, out of them
+    flipped, why = ground_lean(pd.DataFrame({"t": t, "ay": g_lat - v * r}), t, v, r)
+    assert flipped is None and "runs against v r" in why                   # an a_y read right side positive
     wild, why = ground_lean(pd.DataFrame({"t": t, "roll": np.full(200, 1.9)}), t, v, r)
     assert wild is None and "not taken for the ground's lean" in why       # 109 deg: no ground's lean

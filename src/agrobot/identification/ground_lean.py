@@ -9,10 +9,11 @@ take it up alike, so none of them is told from it by a fit that leaves the lean 
 The log tells the lean by a ``bank`` column (the road's cross slope, rad) or a ``roll`` column (the
 body's roll, rad: the road's plus the body's own lean on its springs), both right side down
 positive (the aerospace and ROS convention alike), so gravity's share towards the left (the side
-v r > 0 turns to) is -g sin(roll); or by a measured lateral specific force ``a_y`` (an IMU's, m/s2,
-left positive): v r - a_y. On level ground the body rolls out of the turn and its lean's share is
-against v r; only a lean into the turns (a positive slope of the share on v r) is a bank that
-carries part of them. turns_lean says why K is not concluded when that slope exceeds LEAN_SHARE
+v r > 0 turns to) is -g sin(roll); or by a measured lateral specific force ``a_y`` or ``ay`` (an
+IMU's, m/s2, left positive): v r - a_y (one that falls as v r rises is not taken: read the other
+way round, or a bank carrying more than the whole turn, the log cannot say which). On level
+ground the body rolls out of the turn and its lean's share is against v r; only a lean into the
+turns (a positive slope of the share on v r) is a bank that carries part of them. turns_lean says why K is not concluded when that slope exceeds LEAN_SHARE
 beyond its 95 % interval.
 """
 from __future__ import annotations
@@ -25,7 +26,7 @@ from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.estimation import Z95
 
 LEAN_COLUMNS = ("bank", "roll")      # rad: the road's cross slope, the body's roll
-LATERAL_COLUMN = "a_y"               # m/s2: a measured lateral specific force
+LATERAL_COLUMNS = ("a_y", "ay")      # m/s2: a measured lateral specific force
 # a tenth of the turns' v r from gravity moves K's steady steer by a tenth of K a_y: as much as a
 # declared wheelbase 1-2 % off moves L r / v on the turns of a racecar (K a_y ~ 10 % of L / R)
 LEAN_SHARE = 0.1
@@ -49,10 +50,17 @@ def ground_lean(frame, t: np.ndarray, v: np.ndarray, r: np.ndarray) -> tuple[np.
                               f"taken for the ground's lean (a column in degrees: --signal {name}={name}[deg])")
             return -GRAVITY * np.sin(np.interp(t, tf[ok], x[ok])), (f"the ground's lean from the log's {name} column [rad, "
                                                                     f"right side down positive]")
-    if LATERAL_COLUMN in frame.columns and np.isfinite(frame[LATERAL_COLUMN].to_numpy(float)).sum() > 1:
-        x = frame[LATERAL_COLUMN].to_numpy(float)
-        ok = np.isfinite(x)
-        return v * r - np.interp(t, tf[ok], x[ok]), f"the ground's lean from v r less the log's {LATERAL_COLUMN} [m/s2]"
+    for name in LATERAL_COLUMNS:
+        if name in frame.columns and np.isfinite(frame[name].to_numpy(float)).sum() > 1:
+            x = frame[name].to_numpy(float)
+            ok = np.isfinite(x)
+            a_y, turn = np.interp(t, tf[ok], x[ok]), v * r
+            slope = float(np.polyfit(turn, a_y, 1)[0]) if np.ptp(turn) > 0 else 0.0
+            if slope <= 0:
+                return None, (f"the log's {name} runs against v r ({slope:+.2g} m/s2 per m/s2): read right side "
+                              f"positive (--signal {name}=-COLUMN turns it round), or a bank carrying more than the "
+                              f"whole turn; not taken for the ground's lean")
+            return turn - a_y, f"the ground's lean from v r less the log's {name} [m/s2, left positive]"
     return None, None
 
 
