@@ -615,6 +615,7 @@ def project_identify(rec: dict, roots: dict) -> dict:
             "steer_gain": _value(rep, "parameters", "steer_gain"),
             "steer_offset": _value(rep, "parameters", "steer_offset"),
             "K": _value(rep, "understeer_gradient"), "fit": _value(rep, "held_out_fit"),
+            "K_concluded": (rep.get("understeer_gradient") or {}).get("identifiable", True),
             "wheelbase": _value(rep, "vehicle", "wheelbase"), "input": rep.get("input")}
 
 
@@ -899,18 +900,19 @@ def understeer_reference(ch: dict, vehicle: dict, lag: float) -> dict | None:
 
 def understeer_rows(ref: dict, ident) -> list[tuple]:
     """The reference's K and peak lateral acceleration beside identify's K (agree within 30 % or
-    within the reference's 95 % interval)."""
+    within the reference's 95 % interval; a K identify does not conclude is not compared)."""
     if "understeer" not in ref:
         return []
     u = ref["understeer"]
     if u is None:
         return [("understeer gradient K [rad/(m/s2)]", "-", "-", "-")]
     got = ident.get("K") if isinstance(ident, dict) else None
-    ok = None if got is None else (abs(got - u["K"]) <= max(0.3 * abs(u["K"]), 1.96 * u["K_sd"]))
+    concluded = got is None or ident.get("K_concluded", True)
+    ok = None if got is None or not concluded else (abs(got - u["K"]) <= max(0.3 * abs(u["K"]), 1.96 * u["K_sd"]))
     return [("lateral acceleration [m/s2] (99.9 %, |v| > 5 m/s)", _f(u["ay_peak"]), "-", "-"),
             ("understeer gradient K [rad/(m/s2)] (steady-state regression)",
              f"{u['K']:.3g} +- {1.96 * u['K_sd']:.2g} (offset {u['offset']:.2g} rad, |a_y| < {UNDERSTEER_LATERAL:g}, "
-             f"{u['seconds']:.0f} s)", _f(got), _agree(ok))]
+             f"{u['seconds']:.0f} s)", _f(got) if concluded else f"not concluded (fitted {_f(got)})", _agree(ok))]
 
 
 if __name__ == "__main__":
