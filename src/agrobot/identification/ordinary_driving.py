@@ -746,6 +746,11 @@ SCALE_TOLERANCE = 0.02
 BEYOND_TOP = 2.0
 
 
+# said beside a scale kept from a log that does not tell the ground's lean (ground_lean)
+UNSEEN_LEAN = ("; a bank under the turns would read alike and this log does not tell the ground's lean (a roll, bank "
+               "or a_y column lets identify check it)")
+
+
 class YawScaled:
     """The yaw model with a turn gain k on its yaw rate, its gyro bias b not scaled: r = k (r_model -
     b) + b (``yaw_gain`` among the values). From turns, a wheelbase L / k, a speed or gyro scale k,
@@ -830,6 +835,7 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
                 "with k free both stiffnesses end on their bounds")
     span = [min(lo, k1 - Z95 * sd1), max(hi, k1 + Z95 * sd1)]
     where = "" if mask is None else f" where |a_y| <= {cap:.3g} m/s2 (the linear range)"
+    unseen = UNSEEN_LEAN if fits.model.log.lean is None else ""
     verdict = ("k = 1 kept: the refit with k free did not converge: no evidence of a scale"
                if not free_fit.converged else
                "k = 1 kept: K at k = 1 lies inside the interval of K with k free" if inside else
@@ -837,7 +843,7 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
                f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 less over {n_held} segments): no evidence of a "
                f"scale, what k takes up on the fit segments does not carry over" if alone else
                f"K not told apart from k ({how_wide})" if wide else
-               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept" if scaled else
+               f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept{unseen}" if scaled else
                f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
                f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
     no_scale = not free_fit.converged or alone or inside
