@@ -918,8 +918,7 @@ def table_streams(paths: list[Path], options, source: Path):
                                   "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
                          for t in tables},
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
-              "clocks": {"reference": "the tables' own time columns"
-                                      + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
+              "clocks": {"reference": _clock_reference([t for t in tables if t.name in used], boot)}}
     streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
                                      | set(modes), {}, groups=groups, labels=labels), source)
     if "heading" in streams.signals:
@@ -927,6 +926,15 @@ def table_streams(paths: list[Path], options, source: Path):
         as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
                "no unit in the header" not in columns.get("heading", ""))
     return streams
+
+
+def _clock_reference(used: list[Table], boot: list[str]) -> str:
+    """What the used tables' times are: their own time columns, or another table's taken row by row
+    (--time TABLE.COLUMN), as each table's time_how says."""
+    lent = {t.name: t.time_how.split(" (")[0] for t in used if t.time_how.startswith("row by row from ")}
+    parts = ["the tables' own time columns"] if len(lent) < len(used) or not used else []
+    parts += [f"{how} (--time) for {', '.join(n for n, h in lent.items() if h == how)}" for how in sorted(set(lent.values()))]
+    return "; ".join(parts) + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")
 
 
 def list_tables(paths: list[Path], options) -> list[str]:

@@ -1,0 +1,46 @@
+"""A folder of one-column text files at 100 Hz, one of them the time of all (an INS export saved
+channel by channel, as the Revs vehicle-dynamics excerpts are): the default 50 Hz grid says what it
+thins and the --rate that keeps it, and the clock is named as the time file's, taken row by row,
+not as the tables' own time columns (they have none)."""
+from __future__ import annotations
+
+import numpy as np
+
+from agrobot.measurements.recording import ImportOptions, import_recording
+
+RATE = 100.0
+
+
+def _folder(root, seconds: float = 30.0):
+    t = 150.0 + np.arange(0.0, seconds, 1.0 / RATE)
+    delta = 0.05 * np.sin(2 * np.pi * 0.3 * (t - t[0]))
+    v = np.full_like(t, 25.0)
+    columns = {"t": t, "delta": delta, "vx": v, "yawRate": v * np.tan(delta) / 2.4}
+    root.mkdir()
+    for name, x in columns.items():
+        np.savetxt(root / f"{name}.txt", x, fmt="%15.7e")
+    return root
+
+
+def _options(**kw) -> ImportOptions:
+    return ImportOptions(signals=["delta=delta.col1[rad]", "yaw_rate=yawRate.col1[rad/s]", "v=vx.col1[m/s]"],
+                         time="t.col1[s]", wheelbase=2.4, **kw)
+
+
+def test_the_default_grid_below_the_channels_rate_is_said(tmp_path):
+    folder = _folder(tmp_path / "run")
+    frame, report = import_recording(folder, _options())
+    assert abs(report["rate_hz"] - 50.0) < 0.01
+    notes = [n for n in report["notes"] if n.startswith("rows at 50 Hz")]
+    assert notes and "yaw_rate (100 Hz)" in notes[0] and "--rate 100 " in notes[0] + " "
+    frame, report = import_recording(folder, _options(rate=RATE))
+    assert abs(report["rate_hz"] - RATE) < 0.01
+    assert not [n for n in report["notes"] if n.startswith("rows at ")]
+
+
+def test_the_clock_is_named_as_the_time_files(tmp_path):
+    frame, report = import_recording(_folder(tmp_path / "run"), _options(rate=RATE))
+    reference = report["clocks"]["reference"]
+    assert "own time columns" not in reference
+    assert reference.startswith("row by row from t (--time) for ")
+    assert all(name in reference for name in ("delta", "vx", "yawRate"))
