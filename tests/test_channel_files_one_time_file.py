@@ -1,11 +1,14 @@
 """A folder of one-column text files at 100 Hz, one of them the time of all (an INS export saved
 channel by channel, as the Revs vehicle-dynamics excerpts are): the default 50 Hz grid says what it
 thins and the --rate that keeps it, and the clock is named as the time file's, taken row by row,
-not as the tables' own time columns (they have none)."""
+not as the tables' own time columns (they have none); without --time, the error names the time
+file beside and the --time that takes it."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+from agrobot.measurements.log import LogError
 from agrobot.measurements.recording import ImportOptions, import_recording
 
 RATE = 100.0
@@ -44,3 +47,12 @@ def test_the_clock_is_named_as_the_time_files(tmp_path):
     assert "own time columns" not in reference
     assert reference.startswith("row by row from t (--time) for ")
     assert all(name in reference for name in ("delta", "vx", "yawRate"))
+
+
+def test_without_time_the_time_file_beside_is_named(tmp_path):
+    folder = _folder(tmp_path / "run")
+    options = ImportOptions(signals=["delta=delta.col1[rad]", "yaw_rate=yawRate.col1[rad/s]", "v=vx.col1[m/s]"],
+                            wheelbase=2.4)
+    with pytest.raises(LogError, match=r"no time column.*t\.txt holds one rising column over the same 3000 rows: "
+                                       r"--time 't\.col1\[s\]'"):
+        import_recording(folder, options)

@@ -649,11 +649,24 @@ def _rollover(tables: list[Table]) -> None:
             t.time_base.append({"at": None, "finding": said})
 
 
-def untimed(t: Table) -> LogError:
+def untimed(t: Table, tables: tuple = ()) -> LogError:
+    """The error of a column asked of a table without a time: where a time could come from, and
+    another table that is a clock of the same rows (named as a time, one increasing column)."""
     return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
                     f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
                     f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
-                    f"of another table), or give --rate HZ")
+                    f"of another table), or give --rate HZ" + _clock_beside(t, tables))
+
+
+def _clock_beside(t: Table, tables) -> str:
+    """'; F holds ...' for a table named as a time whose one column rises over as many rows as t's
+    (or one more), the --time that takes it row by row; '' without one."""
+    for c in tables:
+        rising = time_like(c) if c is not t and str(c.name).lower() in TIME_NAMES else []
+        if c.frame.shape[1] == 1 and rising and len(c.frame) in (len(t.frame), len(t.frame) + 1):
+            return (f"; {c.path.name} holds one rising column over the same {len(t.frame)} rows: "
+                    f"--time '{c.name}.{rising[0]}[s]' (its unit) takes it row by row for every table")
+    return ""
 
 
 # --- names ----------------------------------------------------------------------------------------
@@ -683,7 +696,7 @@ def table_series(tables: list[Table], name: str) -> Series | None:
         return None
     t, c = found
     if t.t is None:
-        raise untimed(t)
+        raise untimed(t, tuple(tables))
     x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
     ok = np.isfinite(x)
     return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
