@@ -56,3 +56,19 @@ def test_without_time_the_time_file_beside_is_named(tmp_path):
     with pytest.raises(LogError, match=r"no time column.*t\.txt holds one rising column over the same 3000 rows: "
                                        r"--time 't\.col1\[s\]'"):
         import_recording(folder, options)
+
+
+def test_channels_of_one_time_file_share_its_clock(tmp_path):
+    """A second gyro 0.3 s behind the first (a filtered copy), both clocked by t.txt: a sensor's own
+    latency on one clock, never a clock offset for --align auto to move."""
+    folder = _folder(tmp_path / "run", seconds=120.0)
+    t = np.loadtxt(folder / "t.txt")
+    rate = 0.2 * np.sin(0.7 * (t - t[0])) + 0.1 * np.sin(2.3 * (t - t[0]) + 1.0)
+    np.savetxt(folder / "yawRate.txt", rate, fmt="%15.7e")
+    np.savetxt(folder / "yawRateFilt.txt", np.interp(t - 0.3, t, rate), fmt="%15.7e")
+    options = ImportOptions(signals=["yaw_rate=yawRate.col1[rad/s]", "yaw_rate_2=yawRateFilt.col1[rad/s]",
+                                     "v=vx.col1[m/s]"], time="t.col1[s]", wheelbase=2.4, rate=RATE)
+    frame, report = import_recording(folder, options)
+    gyros = [f for f in report["audit"]["findings"] if f["channels"] == ["yaw_rate", "yaw_rate_2"]]
+    assert gyros and gyros[0]["kind"] == "sensor_latency" and abs(gyros[0]["value"] - 0.3) < 0.03
+    assert report["audit"]["alignment"]["channels_moved"] == []

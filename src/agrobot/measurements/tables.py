@@ -23,7 +23,8 @@ table has it.
 Time, per table: ``--time`` names it (``COLUMN[unit]`` with any pint time unit, ``COLUMN[datetime]``
 for date strings, ``SECONDS+NANOSECONDS`` for a pair of integer columns, ``A+B[datetime]`` for a
 date and a time in two columns; ``TABLE.COLUMN`` takes it from one table for the tables without
-their own, row by row: the same number of rows, or one fewer, a value per interval), else it is
+their own, row by row: the same number of rows, or one fewer, a value per interval; they share its clock,
+Streams.clocks: a lag between them is a sensor's own latency, never aligned), else it is
 found by name (a seconds + nanoseconds pair such as ``s, ns`` or ``sec, nsec``; ``t``, ``time``,
 ``timestamp``, ``stamp``, ``%time`` ...; its unit from its header, else from its size: POSIX
 nanoseconds, microseconds, milliseconds or seconds), else ``--rate``. Date strings without a zone
@@ -81,6 +82,7 @@ class Table:
     notes: list = field(default_factory=list)
     mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
     time_base: list = field(default_factory=list)  # {finding, at}: its clock's steps and rollover (measurements.time_base)
+    clock: str = ""                                # the table whose times it takes row by row (--time TABLE.COLUMN)
 
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
@@ -601,7 +603,7 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
             continue
         n = len(t.frame)
         if clock is not None and len(clock.frame) in (n, n + 1) and clock.frame.shape[1] == len(clock.time_columns):
-            t.t = clock.t[:n].copy()
+            t.t, t.clock = clock.t[:n].copy(), clock.name
             t.time_how = (f"row by row from {clock.name} ({clock.time_how})"
                           + ("; one row fewer: a value per interval, at its start" if n + 1 == len(clock.frame) else ""))
         elif rate is not None:
@@ -933,7 +935,8 @@ def table_streams(paths: list[Path], options, source: Path):
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
               "clocks": {"reference": _clock_reference([t for t in tables if t.name in used], boot)}}
     streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-                                     | set(modes), {}, groups=groups, labels=labels), source)
+                                     | set(modes), {}, groups=groups, labels=labels,
+                                     clocks={t.name: t.clock for t in tables if t.clock}), source)
     if "heading" in streams.signals:
         spec = next(s for s in specs if s.column == "heading")
         as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
@@ -943,10 +946,11 @@ def table_streams(paths: list[Path], options, source: Path):
 
 def _clock_reference(used: list[Table], boot: list[str]) -> str:
     """What the used tables' times are: their own time columns, or another table's taken row by row
-    (--time TABLE.COLUMN), as each table's time_how says."""
-    lent = {t.name: t.time_how.split(" (")[0] for t in used if t.time_how.startswith("row by row from ")}
+    (--time TABLE.COLUMN)."""
+    lent = {t.name: t.clock for t in used if t.clock}
     parts = ["the tables' own time columns"] if len(lent) < len(used) or not used else []
-    parts += [f"{how} (--time) for {', '.join(n for n, h in lent.items() if h == how)}" for how in sorted(set(lent.values()))]
+    parts += [f"row by row from {c} (--time) for {', '.join(n for n, k in lent.items() if k == c)}"
+              for c in sorted(set(lent.values()))]
     return "; ".join(parts) + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")
 
 
