@@ -2,7 +2,8 @@
 channel by channel, as the Revs vehicle-dynamics excerpts are): the default 50 Hz grid says what it
 thins and the --rate that keeps it, and the clock is named as the time file's, taken row by row,
 not as the tables' own time columns (they have none); without --time, the error names the time
-file beside and the --time that takes it."""
+file beside and the --time that takes it; channels of one time file share its clock; a gyro in
+deg/s declared in rad/s is named with the unit that fits it."""
 from __future__ import annotations
 
 import numpy as np
@@ -72,3 +73,16 @@ def test_channels_of_one_time_file_share_its_clock(tmp_path):
     gyros = [f for f in report["audit"]["findings"] if f["channels"] == ["yaw_rate", "yaw_rate_2"]]
     assert gyros and gyros[0]["kind"] == "sensor_latency" and abs(gyros[0]["value"] - 0.3) < 0.03
     assert report["audit"]["alignment"]["channels_moved"] == []
+
+
+def test_a_gyro_in_degrees_declared_in_radians_is_named(tmp_path):
+    """The filtered gyro of such an export is in deg/s beside a raw one in rad/s: declared [rad/s],
+    half its samples pass 10 rad/s, and the finding names deg/s as the unit that fits them all."""
+    folder = _folder(tmp_path / "run")
+    rate = np.loadtxt(folder / "yawRate.txt")
+    np.savetxt(folder / "yawRateFilt.txt", np.degrees(rate), fmt="%15.7e")     # up to 0.52 rad/s, in deg/s
+    options = ImportOptions(signals=["delta=delta.col1[rad]", "yaw_rate=yawRateFilt.col1[rad/s]", "v=vx.col1[m/s]"],
+                            time="t.col1[s]", wheelbase=2.4, rate=RATE)
+    frame, report = import_recording(folder, options)
+    found = [f for f in report["audit"]["findings"] if f["kind"] == "out_of_range" and f["channels"] == ["yaw_rate"]]
+    assert found and "--signal yaw_rate=COLUMN[deg/s]" in found[0]["meaning"]
