@@ -3,7 +3,7 @@ channel by channel, as the Revs vehicle-dynamics excerpts are): the default 50 H
 thins and the --rate that keeps it, and the clock is named as the time file's, taken row by row,
 not as the tables' own time columns (they have none); without --time, the error names the time
 file beside and the --time that takes it; channels of one time file share its clock; a gyro in
-deg/s declared in rad/s is named with the unit that fits it."""
+deg/s declared in rad/s is named with the unit that fits it; each spike named has its value."""
 from __future__ import annotations
 
 import numpy as np
@@ -86,3 +86,17 @@ def test_a_gyro_in_degrees_declared_in_radians_is_named(tmp_path):
     frame, report = import_recording(folder, options)
     found = [f for f in report["audit"]["findings"] if f["kind"] == "out_of_range" and f["channels"] == ["yaw_rate"]]
     assert found and "--signal yaw_rate=COLUMN[deg/s]" in found[0]["meaning"]
+
+
+def test_every_spike_named_has_its_value(tmp_path):
+    """Four single-sample glitches of a road-wheel angle (the largest last): the quirk line gives the
+    value of each time it names."""
+    folder = _folder(tmp_path / "run")
+    delta = np.loadtxt(folder / "delta.txt")
+    glitches = {500: 0.1356, 1200: 0.1496, 1900: 0.2366, 2600: 0.4783}
+    for i, value in glitches.items():
+        delta[i] = value
+    np.savetxt(folder / "delta.txt", delta, fmt="%15.7e")
+    frame, report = import_recording(folder, _options(rate=RATE))
+    line = next(q for q in report["quirks"] if "spike(s) in delta" in q)
+    assert all(f"{value:.4g}" in line for value in glitches.values()), line
