@@ -1067,7 +1067,7 @@ def out_of_range(aud: Auditor) -> list[dict]:
                                f"{c}: {len(i)} of {len(x)} samples beyond {bound:g} {unit}, which no ground vehicle "
                                f"reaches (the largest {np.max(np.abs(x[bad])):.4g} {unit}, the first at "
                                f"{t[i[0]] - aud.t0:.2f} s): a sentinel, an overflow, a wrong field or unit; mask them "
-                               f"(--time-range around them) or map the right field"))
+                               f"(--time-range around them) or map the right field" + _in_degrees(c, x, bad, bound)))
     for s in aud.streams.report.get("spikes") or []:       # masked already as spikes: named for what they are
         bound, unit = PHYSICAL.get(s["column"], (math.inf, ""))
         beyond = [v for v in s["values"] if abs(v) > bound]
@@ -1079,6 +1079,17 @@ def out_of_range(aud: Auditor) -> list[dict]:
                                + ("kept (--keep-spikes)" if s.get("kept") else "masked as spikes"),
                                resolved=not s.get("kept")))
     return out
+
+
+def _in_degrees(c: str, x: np.ndarray, bad: np.ndarray, bound: float) -> str:
+    """'; ...' when the channel, an angle or a yaw rate, is out of range in a tenth of its samples or
+    more and every sample would be within it read as degrees (x / 57.3): the unit to declare."""
+    k = 180 / math.pi
+    if c not in ("yaw_rate", "delta", "delta_cmd") or bad.mean() < 0.1 or np.max(np.abs(x)) / k > bound:
+        return ""
+    unit = "deg/s" if c == "yaw_rate" else "deg"
+    return (f"; read as {unit} every sample is within it (the largest {np.max(np.abs(x)) / k:.3g}): a channel in "
+            f"{unit} declared in radians? --signal {c}=COLUMN[{unit}]")
 
 
 def _causality(now: dict, before: dict | None, applied: dict) -> dict:

@@ -51,7 +51,8 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    "plant's l_f + l_r, else 1.4, the paper tractor)")
     g.add_argument("--max-file-size", default=None, metavar="SIZE", help="the largest file read (500M, 4G ...; "
                    "default 1G for a file read whole into memory, 16G for one read as a stream: NMEA, CAN, bags)")
-    g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate)")
+    g.add_argument("--rate", type=float, default=None, help="Hz of the log (default: the GNSS epoch rate, else the fastest "
+                   "channel's, at most 50 Hz; a channel thinned by it is said)")
     g.add_argument("--run", type=int, default=None, help="use the K-th run found (default: the longest)")
     g.add_argument("--max-gap", type=float, default=0.5, metavar="SECONDS",
                    help="a channel's gap up to this is bridged (linear; a command held) and named; a longer one, or "

@@ -16,7 +16,7 @@ class ImportOptions:
     dbc: Path | None = None                     # None: the project's agrobot_tractor.dbc
     signals: list = field(default_factory=list)  # SignalSpec per column (measurements.signal_expressions)
     wheelbase: float | None = None              # m: curvature <-> wheel angle (None: the study's, else 1.4)
-    rate: float | None = None                   # Hz of the log (default: the GNSS epoch rate)
+    rate: float | None = None                   # Hz of the log (default: the GNSS epoch rate, else <= 50 Hz)
     run: int | None = None                      # 1-based index of the run to use
     time_range: tuple[float, float] | None = None   # s from the first sample
     min_speed: float = 0.2                      # m/s: driving

@@ -164,7 +164,8 @@ def find_quirks(streams: Streams, options: ImportOptions) -> Streams:
         report["spikes"] = found
         report.setdefault("quirks", []).extend(
             f"{s['count']} spike(s) in {s['column']} at {', '.join(f'{v:.2f}' for v in s['times_s'][:5])} s"
-            + (" ..." if s["count"] > 5 else "") + f" (values {', '.join(f'{v:.4g}' for v in s['values'][:3])}; "
+            + (" ..." if s["count"] > 5 else "") + f" (values {', '.join(f'{v:.4g}' for v in s['values'][:5])}"
+            + (" ..." if len(s["values"]) > 5 else "") + "; "
             f"typical {s['typical_range'][0]:.4g} to {s['typical_range'][1]:.4g}): "
             + ("kept (--keep-spikes)" if s["kept"] else "masked (--keep-spikes keeps them)") for s in found)
     if streams.gnss is not None:

@@ -96,19 +96,22 @@ def _grid_step(streams: Streams, options: ImportOptions) -> float:
 
 
 def _faster_than_rows(streams: Streams, options: ImportOptions, step: float) -> str | None:
-    """The note of a grid at the GNSS epoch rate (no --rate) below the canonical signals' own
-    update rates (at least twice the rows'): what the rows leave out and the --rate that keeps it."""
-    if options.rate or streams.gnss is None:
+    """The note of a default grid (no --rate: the GNSS epoch rate, else at most 50 Hz) below the
+    canonical signals' own update rates (at least twice the rows' with a GNSS, above them without):
+    what the rows leave out and the --rate that keeps it."""
+    if options.rate:
         return None
     fast = {c: 1.0 / float(np.median(np.diff(t))) for c, (t, _) in streams.signals.items()
             if c in CANONICAL and len(t) > 2 and np.median(np.diff(t)) > 0}
-    fast = {c: hz for c, hz in fast.items() if hz >= 2.0 / step}
+    least = 2.0 / step if streams.gnss is not None else 1.05 / step
+    fast = {c: hz for c, hz in fast.items() if hz >= least}
     if not fast:
         return None
     keep = min(200.0, max(round(hz) for hz in fast.values()))
-    return (f"rows at the GNSS epoch rate {1.0 / step:.3g} Hz (the default): "
-            + ", ".join(f"{c} ({hz:.3g} Hz)" for c, hz in sorted(fast.items(), key=lambda kv: -kv[1]))
-            + f" sampled at it, their updates between epochs left out; --rate {keep:g} keeps them")
+    head = (f"rows at the GNSS epoch rate {1.0 / step:.3g} Hz (the default)" if streams.gnss is not None else
+            f"rows at {1.0 / step:.3g} Hz (the default without a GNSS: the fastest channel's rate, at most 50 Hz)")
+    return (head + ": " + ", ".join(f"{c} ({hz:.3g} Hz)" for c, hz in sorted(fast.items(), key=lambda kv: -kv[1]))
+            + f" sampled at it, their updates between rows left out; --rate {keep:g} keeps them")
 
 
 class OwnSamples(dict):

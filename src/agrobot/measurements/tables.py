@@ -23,7 +23,8 @@ table has it.
 Time, per table: ``--time`` names it (``COLUMN[unit]`` with any pint time unit, ``COLUMN[datetime]``
 for date strings, ``SECONDS+NANOSECONDS`` for a pair of integer columns, ``A+B[datetime]`` for a
 date and a time in two columns; ``TABLE.COLUMN`` takes it from one table for the tables without
-their own, row by row: the same number of rows, or one fewer, a value per interval), else it is
+their own, row by row: the same number of rows, or one fewer, a value per interval; they share its clock,
+Streams.clocks: a lag between them is a sensor's own latency, never aligned), else it is
 found by name (a seconds + nanoseconds pair such as ``s, ns`` or ``sec, nsec``; ``t``, ``time``,
 ``timestamp``, ``stamp``, ``%time`` ...; its unit from its header, else from its size: POSIX
 nanoseconds, microseconds, milliseconds or seconds), else ``--rate``. Date strings without a zone
@@ -81,6 +82,7 @@ class Table:
     notes: list = field(default_factory=list)
     mapped: set = field(default_factory=set)      # columns a --signal takes as data: never guessed as the clock
     time_base: list = field(default_factory=list)  # {finding, at}: its clock's steps and rollover (measurements.time_base)
+    clock: str = ""                                # the table whose times it takes row by row (--time TABLE.COLUMN)
 
 
 COMMENTS = ("#", "//")       # a line starting so is a comment (a ROS dump's '%time' is a header)
@@ -601,7 +603,7 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
             continue
         n = len(t.frame)
         if clock is not None and len(clock.frame) in (n, n + 1) and clock.frame.shape[1] == len(clock.time_columns):
-            t.t = clock.t[:n].copy()
+            t.t, t.clock = clock.t[:n].copy(), clock.name
             t.time_how = (f"row by row from {clock.name} ({clock.time_how})"
                           + ("; one row fewer: a value per interval, at its start" if n + 1 == len(clock.frame) else ""))
         elif rate is not None:
@@ -649,11 +651,24 @@ def _rollover(tables: list[Table]) -> None:
             t.time_base.append({"at": None, "finding": said})
 
 
-def untimed(t: Table) -> LogError:
+def untimed(t: Table, tables: tuple = ()) -> LogError:
+    """The error of a column asked of a table without a time: where a time could come from, and
+    another table that is a clock of the same rows (named as a time, one increasing column)."""
     return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
                     f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
                     f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
-                    f"of another table), or give --rate HZ")
+                    f"of another table), or give --rate HZ" + _clock_beside(t, tables))
+
+
+def _clock_beside(t: Table, tables) -> str:
+    """'; F holds ...' for a table named as a time whose one column rises over as many rows as t's
+    (or one more), the --time that takes it row by row; '' without one."""
+    for c in tables:
+        rising = time_like(c) if c is not t and str(c.name).lower() in TIME_NAMES else []
+        if c.frame.shape[1] == 1 and rising and len(c.frame) in (len(t.frame), len(t.frame) + 1):
+            return (f"; {c.path.name} holds one rising column over the same {len(t.frame)} rows: "
+                    f"--time '{c.name}.{rising[0]}[s]' (its unit) takes it row by row for every table")
+    return ""
 
 
 # --- names ----------------------------------------------------------------------------------------
@@ -683,7 +698,7 @@ def table_series(tables: list[Table], name: str) -> Series | None:
         return None
     t, c = found
     if t.t is None:
-        raise untimed(t)
+        raise untimed(t, tuple(tables))
     x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
     ok = np.isfinite(x)
     return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
@@ -918,15 +933,25 @@ def table_streams(paths: list[Path], options, source: Path):
                                   "duration_s": float(t.t[-1] - t.t[0]) if t.t is not None and len(t.t) > 1 else 0.0}
                          for t in tables},
               "columns": {**columns, "t": "the tables' clock, s from the run's start"},
-              "clocks": {"reference": "the tables' own time columns"
-                                      + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")}}
+              "clocks": {"reference": _clock_reference([t for t in tables if t.name in used], boot)}}
     streams = fixes_as_given(Streams(None, signals, report, {c for c in ("delta_cmd", "speed_cmd") if c in signals}
-                                     | set(modes), {}, groups=groups, labels=labels), source)
+                                     | set(modes), {}, groups=groups, labels=labels,
+                                     clocks={t.name: t.clock for t in tables if t.clock}), source)
     if "heading" in streams.signals:
         spec = next(s for s in specs if s.column == "heading")
         as_yaw(streams, declared=spec.unit is not None or "heading" not in auto or
                "no unit in the header" not in columns.get("heading", ""))
     return streams
+
+
+def _clock_reference(used: list[Table], boot: list[str]) -> str:
+    """What the used tables' times are: their own time columns, or another table's taken row by row
+    (--time TABLE.COLUMN)."""
+    lent = {t.name: t.clock for t in used if t.clock}
+    parts = ["the tables' own time columns"] if len(lent) < len(used) or not used else []
+    parts += [f"row by row from {c} (--time) for {', '.join(n for n, k in lent.items() if k == c)}"
+              for c in sorted(set(lent.values()))]
+    return "; ".join(parts) + (f" ({', '.join(boot)}: seconds from the logger's start, not dates)" if boot else "")
 
 
 def list_tables(paths: list[Path], options) -> list[str]:
