@@ -491,21 +491,26 @@ def _study_limits(result: dict, frame, baseline, study_name: str, default_study:
     extremes = log_extremes(frame)
     if extremes is None:
         return None
-    limits = StudyLimits.of(baseline)
-    beyond, compared = beyond_limits(extremes, limits)
-    result["study_limits"] = {"log": extremes, "study": {**vars(limits), "min_radius": limits.min_radius},
-                              "beyond": beyond, "compared": compared}
-    say(compared + ("" if beyond else f": within them (against {study_name}; --study gives another vehicle's)"))
-    if not beyond:
+    limits, mine = StudyLimits.of(baseline), result.get("log_vehicle") or {}
+    checked = beyond_limits(extremes, limits, mine["wheelbase"] / limits.wheelbase if mine.get("wheelbase") else None)
+    result["study_limits"] = {"log": extremes, "study": {**vars(limits), "min_radius": limits.min_radius}, **checked}
+    say(checked["compared"] + ("" if checked["beyond"] else
+                               f": within them (against {study_name}; --study gives another vehicle's)"))
+    if not checked["beyond"]:
         return None
-    mine = result.get("log_vehicle") or {}
     hint = suggestion(mine.get("wheelbase") or limits.wheelbase, study_name, None if default_study else baseline.vehicle,
-                      baseline.tractor.m, lambda c: "; ".join(beyond_limits(extremes, shipped_limits(c.name))[0]))
-    text = cannot_do(beyond, hint, not default_study and baseline.vehicle.declared) + (
+                      baseline.tractor.m, partial(_unable, extremes))
+    text = cannot_do(checked["beyond"], hint, not default_study and baseline.vehicle.declared, checked["undecided"]) + (
         " (no --study given: the default study was used)" if default_study else "")
     result["study_limits"]["statement"] = text
     say(f"warning: {text}")
     return text
+
+
+def _unable(extremes: dict, c) -> str:
+    """Why shipped study ``c``'s vehicle cannot do what the log shows ('' when it can)."""
+    beyond = beyond_limits(extremes, shipped_limits(c.name))["beyond"]
+    return "unable to do what the log shows: " + "; ".join(beyond) if beyond else ""
 
 
 def _describe_selection(result: dict, replay: Replay, sel) -> None:

@@ -224,9 +224,15 @@ def steering_map_reading(vehicle, turns: dict) -> bool:
     the user's word on the wheelbase; ``turns["declared"]``, else the vehicle's own flag) and the gain that would turn the study's wheelbase into the log's, k = L_study /
     L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
     (CALIBRATION). Then a fitted steering gain (MAP_GAIN) may be the verdict, the wrong study its
-    other reading; a gyro or speed scale that large is no sensor error. Never when the log does what
-    the study's vehicle cannot (``turns["beyond_limits"]``): no map gain turns past a lock or a rate."""
-    if turns.get("beyond_limits") or not turns.get("wheelbase"):     # the log does what the study's vehicle cannot
+    other reading; a gyro or speed scale that large is no sensor error. A log beyond the study's
+    limits (``turns["beyond_limits"]``, cannot_do) is read so only where a reading high is not ruled
+    out (UNDECIDED): no map gain turns the wheels past a lock or a rate."""
+    beyond = turns.get("beyond_limits")
+    if beyond and not beyond.startswith(UNDECIDED):     # the log does what no map gain gives the study's vehicle
+        return False
+    if beyond and not turns.get("mismatch"):            # a reading k x high not ruled out by the log's turns
+        return True
+    if not turns.get("wheelbase"):
         return False
     k = turns["study_wheelbase"] / turns["wheelbase"]
     declared = turns.get("declared", getattr(vehicle, "declared", False))      # no --study: the default's is not
@@ -236,10 +242,10 @@ def steering_map_reading(vehicle, turns: dict) -> bool:
 def wrong_study(turns: dict | None) -> str | None:
     """The verdict on a study that is not the log's vehicle (``turns``: study_fit.log_vehicle; None:
     it may be): its ``beyond_limits`` statement (cannot_do: the log does what the study's vehicle
-    cannot), after the wheelbase's when both hold (wrong_wheelbase)."""
+    cannot), after the wheelbase's when both hold (wrong_wheelbase: then the verdict)."""
     wheel = wrong_wheelbase(turns)
     beyond = (turns or {}).get("beyond_limits")
-    return f"{wheel}; also {beyond}" if wheel and beyond else wheel or beyond
+    return f"{wheel}; also {beyond.removeprefix(UNDECIDED)}" if wheel and beyond else wheel or beyond
 
 
 def wrong_wheelbase(turns: dict | None) -> str | None:
@@ -270,8 +276,10 @@ def understeer_estimates(estimates: Mapping[str, Mapping], vehicle: Vehicle, tur
     return "; ".join(said) or None
 
 
-LIMIT_MARGIN = 1.2     # a log's figure is beyond a study's limit only past 1.2 x it (a radius below 1 / 1.2 x):
-                       # a study's lock, actuator or drivetrain is its design, a real one a little off it
+LIMIT_MARGIN = 1.25    # a log's figure is beyond a study's limit only past 1.25 x it (a radius below 1 / 1.25 x):
+                       # a study's lock, actuator or drivetrain is its design, a real one a little off it; a
+                       # wheel-angle sensor reading up to 20 % high stays inside it
+UNDECIDED = "cannot decide: "      # cannot_do's opening when a sensor reading high is not ruled out
 NOISE_SIGMAS = 4       # and past 4 sigmas of the wheel angle's reading noise (a rate: over its window)
 
 
@@ -306,11 +314,17 @@ def _limit_rows(log: Mapping, study) -> list[tuple[str, float, float, bool, str]
     return rows
 
 
-def beyond_limits(log: Mapping, study) -> tuple[list[str], str]:
-    """(what the log does beyond the study's vehicle's limits, past LIMIT_MARGIN and its reading
-    noise; what was compared): the tightest steady turn against L / tan(delta_max), the wheels'
-    rate against the actuator's full rate, the wheel angle against the lock, the speed against
-    the top speed, the lateral acceleration against the tyres' friction times g."""
+ON_DELTA = ("steering rate", "wheel angle")     # the limits the log reads on its wheel-angle channel
+
+
+def beyond_limits(log: Mapping, study, turns_ratio: float | None = None) -> dict:
+    """{beyond, compared, undecided}: what the log does beyond the study's vehicle's limits, past
+    LIMIT_MARGIN and its reading noise (the tightest steady turn against L / tan(delta_max), the
+    wheels' rate against the actuator's full rate, the wheel angle against the lock, the speed
+    against the top speed, the lateral acceleration against the tyres' friction times g); what was
+    compared; and, when only the wheel-angle channel's figures are beyond, why a wheel-angle sensor
+    reading high is not ruled out (sensor_reading; ``turns_ratio``: the log's turns' wheelbase
+    over the study's)."""
     rows = _limit_rows(log, study)
     unit = {"turn radius": ("m", 1.0), "steering rate": ("deg/s", 180 / math.pi), "wheel angle": ("deg", 180 / math.pi),
             "speed": ("m/s", 1.0), "lateral acceleration": ("m/s2", 1.0)}
@@ -318,14 +332,31 @@ def beyond_limits(log: Mapping, study) -> tuple[list[str], str]:
                      for what, a, b, _, _ in rows)
     compared = (f"the log against the study's vehicle's limits (beyond only past {LIMIT_MARGIN:g} x them and "
                 f"the log's reading noise): {said or 'none the study declares and the log reads'}")
-    return [text for *_, beyond, text in rows if beyond], compared
+    over = [(what, a / b) for what, a, b, beyond, _ in rows if beyond]
+    undecided = sensor_reading(max(k for _, k in over), turns_ratio) if over and all(
+        what in ON_DELTA for what, _ in over) else None
+    return {"beyond": [text for *_, beyond, text in rows if beyond], "compared": compared, "undecided": undecided}
 
 
-def cannot_do(beyond: list[str], suggestion: str, declared: bool) -> str:
-    """The statement on a study whose vehicle cannot do what the log shows (``beyond``: beyond_limits;
-    ``suggestion``: study_fit.suggestion's; ``declared``: the user gave the study)."""
+def sensor_reading(k: float, turns_ratio: float | None) -> str | None:
+    """Why a wheel-angle sensor (or a steering map) reading ``k`` x high (the log's rate or angle over
+    the study's limit) may be what the log shows instead (None: ruled out): the log's turns, which
+    such a reading lengthens as much (L_turns = g L, g >= k), not shorter than k / 1.1 x the study's
+    wheelbase; without turns, a gain inside a calibration error's range (CALIBRATION)."""
+    if turns_ratio is None and k >= CALIBRATION[1] or turns_ratio is not None and turns_ratio * math.exp(DECLARED) < k:
+        return None
+    turns = ("the log has no steady turns to tell" if turns_ratio is None else
+             f"the log's turns give {turns_ratio:.2g} x the study's wheelbase, as such a reading would")
+    return f"a wheel-angle sensor or steering map reading {k:.2g} x high shows the same: {turns}"
+
+
+def cannot_do(beyond: list[str], suggestion: str, declared: bool, undecided: str | None = None) -> str:
+    """The statement on a study whose vehicle cannot do what the log shows (``beyond``, ``undecided``:
+    beyond_limits'; ``suggestion``: study_fit.suggestion's; ``declared``: the user gave the study);
+    "cannot decide" first when a sensor's reading is not ruled out."""
     whose = ("the study is another vehicle, or the limits it declares are not this vehicle's" if declared
              else "the study is not this vehicle's")
-    return (f"the study's vehicle cannot do what the log shows: {'; '.join(beyond)} (more than {LIMIT_MARGIN:g} x): "
+    text = (f"the study's vehicle cannot do what the log shows: {'; '.join(beyond)} (more than {LIMIT_MARGIN:g} x): "
             f"{whose}; its effects are judged against a vehicle the log is not; instead: {suggestion}, and "
             f"diagnose again (--study)")
+    return f"{UNDECIDED}{text}; or {undecided}" if undecided else text

@@ -31,7 +31,8 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import MAP_GAIN, RESCALE_YAW, VehicleContext, steering_map_reading, wheelbase_off, wrong_study
+from .plausibility import (MAP_GAIN, RESCALE_YAW, UNDECIDED, VehicleContext, steering_map_reading, wheelbase_off,
+                           wrong_study)
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -114,7 +115,8 @@ def on_wrong_study(verdict: dict, statement: str) -> dict:
     judged = [] if verdict["id"] == "none" else [
         f"judged against this study (to be judged again on the log's vehicle): {verdict['id']} "
         f"({verdict['status']}): {verdict['statement']}"]
-    return {"id": WRONG_STUDY, "status": "conclusive", "statement": statement, "bullets": judged + verdict["bullets"]}
+    status = "cannot decide" if statement.startswith(UNDECIDED) else "conclusive"     # plausibility.cannot_do
+    return {"id": WRONG_STUDY, "status": status, "statement": statement, "bullets": judged + verdict["bullets"]}
 
 
 BASELINE_BOUND = ("conclusive", "inconclusive", "implausible")    # statuses a refit on its bounds withdraws
