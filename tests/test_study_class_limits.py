@@ -106,7 +106,7 @@ def test_a_wheel_angle_sensor_reading_high_is_said_beside_the_limit(tmp_path):
     1.35 x the hydraulics' full rate, but a sensor's calibration error shows the same, and the log's
     turns, as much longer than the study's wheelbase, agree with it: named as the other reading
     ("cannot decide")."""
-    frame, _ = make_log(3, "steering_sensor_gain", duration=120.0, vehicle="tractor", values={"sensor_gain": 1.35})
+    frame, _ = make_log(3, "steering_sensor_gain", duration=90.0, vehicle="tractor", values={"sensor_gain": 1.35})
     frame.to_parquet(tmp_path / "sensor.parquet")
     result = diagnose(tmp_path / "sensor.parquet", None, None, plots=False, identify=False, workers=1)
     limits = result["study_limits"]

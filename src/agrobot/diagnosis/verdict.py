@@ -21,7 +21,10 @@ It is built from the judged effects and three checks an engineer makes before si
 - **the study before the effects**: a study whose wheelbase the log's steady turns miss by more
   than 30 % is the verdict (``wrong_study``, plausibility.wrong_study, with the evidence and what to
   run instead); effects that rescale the yaw rate as a wheelbase does (plausibility.RESCALE_YAW)
-  would only absorb it and are not concluded; what else was judged against the study follows. On a
+  would only absorb it and are not concluded; what else was judged against the study follows. So is
+  a study whose vehicle cannot do what the log shows (a turn, a wheel rate or angle, a speed or a
+  lateral acceleration beyond its limits: plausibility.cannot_do), "cannot decide" where a wheel-angle
+  reading that many times high is not ruled out. On a
   study that declares its vehicle, a steering gain inside a calibration error's range is the other
   reading of the same turns (steering_map_reading): it may be the verdict, the wrong study said beside it.
 """
