@@ -36,9 +36,10 @@ from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
 from .shared_quantities import diagnosis_side, identify_side, shared_quantities
 from .unexplained import RATIO, signature, stage_check
-from .plausibility import (VehicleContext, kinematic, steering_gain_check, study_understeer, understeer,
-                           understeer_estimates)
-from .study_fit import study_check
+from .plausibility import (VehicleContext, beyond_limits, cannot_do, kinematic, steering_gain_check,
+                           study_understeer, understeer, understeer_estimates)
+from .study_fit import study_check, suggestion
+from .vehicle_limits import StudyLimits, log_extremes, shipped_limits
 from .verdict import audit_findings, conclude, on_bounded_baseline, said_before
 
 REFIT = ("steering_time_constant", "cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
@@ -406,6 +407,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         [replay.split_note] if replay.split_note else [])
     if mismatch:
         result["warnings"].insert(0, mismatch)
+    if result.get("study_limits", {}).get("statement"):
+        result["warnings"].insert(0, result["study_limits"]["statement"])
     _stage_results(result, replay, sel, checks, effects, baseline)
     return result, partial(_write_all, result=result, replay=replay, sel=sel, study=study, options=options,
                            log_path=log_path, plots=plots, say=say, mcap=mcap)
@@ -454,7 +457,8 @@ def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None
     p = baseline.tractor
     result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p),
                                                   baseline.vehicle, p.m)
-    result["before_verdict"] = said_before([mismatch] if mismatch else [],
+    beyond = _study_limits(result, frame, baseline, study_name, False, lambda text: None)
+    result["before_verdict"] = said_before([x for x in (beyond, mismatch) if x],
                                            VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0), result["log_vehicle"])
 
 
@@ -471,11 +475,42 @@ def _vehicle_of_log(result: dict, replay: Replay, frame, study, baseline, study_
     if mismatch:
         mismatch += " (no --study given: the default study was used)" if default_study else ""
         say(f"warning: {mismatch}")
+    _study_limits(result, replay.frame, baseline, study_name, default_study, say)
     if identify and "yaw" in replay.stages:
         say("identifying the vehicle on the same log (the model identify fits)")
         result["identified_vehicle"] = identified_vehicle(frame, str(log_path), study, baseline, replay.unseen,
                                                             wheelbase, geometry)
     return mismatch
+
+
+def _study_limits(result: dict, frame, baseline, study_name: str, default_study: bool, say) -> str | None:
+    """The log's figures against the study's vehicle's limits (``study_limits``: vehicle_limits,
+    plausibility.beyond_limits), what was compared said; returned: the statement that the study's
+    vehicle cannot do what the log shows (plausibility.cannot_do, with a shipped study whose limits
+    the log keeps within, study_fit.suggestion), None when the log stays within them."""
+    extremes = log_extremes(frame)
+    if extremes is None:
+        return None
+    limits, mine = StudyLimits.of(baseline), result.get("log_vehicle") or {}
+    checked = beyond_limits(extremes, limits, mine["wheelbase"] / limits.wheelbase if mine.get("wheelbase") else None)
+    result["study_limits"] = {"log": extremes, "study": {**vars(limits), "min_radius": limits.min_radius}, **checked}
+    say(checked["compared"] + ("" if checked["beyond"] else
+                               f": within them (against {study_name}; --study gives another vehicle's)"))
+    if not checked["beyond"]:
+        return None
+    hint = suggestion(mine.get("wheelbase") or limits.wheelbase, study_name, None if default_study else baseline.vehicle,
+                      baseline.tractor.m, partial(_unable, extremes))
+    text = cannot_do(checked["beyond"], hint, not default_study and baseline.vehicle.declared, checked["undecided"]) + (
+        " (no --study given: the default study was used)" if default_study else "")
+    result["study_limits"]["statement"] = text
+    say(f"warning: {text}")
+    return text
+
+
+def _unable(extremes: dict, c) -> str:
+    """Why shipped study ``c``'s vehicle cannot do what the log shows ('' when it can)."""
+    beyond = beyond_limits(extremes, shipped_limits(c.name))["beyond"]
+    return "unable to do what the log shows: " + "; ".join(beyond) if beyond else ""
 
 
 def _describe_selection(result: dict, replay: Replay, sel) -> None:
@@ -522,12 +557,14 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     moving = replay.speed[replay.speed > replay.min_speed]
     mine = result.get("log_vehicle") or {}
     mismatch, share = mine.get("mismatch"), replay_slip_share(replay)
+    beyond = result.get("study_limits", {}).get("statement")
+    mine = {**mine, "beyond_limits": beyond} if beyond else mine
     K = identified.get("understeer_gradient") if identified else None
     result["understeer_note"] = understeer(K, baseline.vehicle, share, mine or None) if K else kinematic(share)
     verdict = conclude(effects, unexplained, unidentifiable, sel.inconclusive, result["audit"], baseline.vehicle,
                        p.l_f + p.l_r, p.l_r, float(np.median(moving)) if len(moving) else 0.0,
                        antenna=(baseline.values["antenna_forward"], baseline.values["antenna_left"]),
-                       before=[x for x in (mismatch, kinematic(share)) if x], turns=mine or None)
+                       before=[x for x in (beyond, mismatch, kinematic(share)) if x], turns=mine or None)
     verdict = on_bounded_baseline(verdict, result["baseline_refit_summary"])
     verdict["bullets"].append(refit_statement(result["baseline_refit_summary"]))
     if (gain := steering_gain_check(effects, mine)) is not None:

@@ -224,13 +224,31 @@ def steering_map_reading(vehicle, turns: dict) -> bool:
     the user's word on the wheelbase; ``turns["declared"]``, else the vehicle's own flag) and the gain that would turn the study's wheelbase into the log's, k = L_study /
     L_log (r = v k delta / L_study = v delta / L_log), lies inside a calibration error's range
     (CALIBRATION). Then a fitted steering gain (MAP_GAIN) may be the verdict, the wrong study its
-    other reading; a gyro or speed scale that large is no sensor error."""
+    other reading; a gyro or speed scale that large is no sensor error. A log beyond the study's
+    limits (``turns["beyond_limits"]``, cannot_do) is read so only where a reading high is not ruled
+    out (UNDECIDED): no map gain turns the wheels past a lock or a rate."""
+    beyond = turns.get("beyond_limits")
+    if beyond and not beyond.startswith(UNDECIDED):     # the log does what no map gain gives the study's vehicle
+        return False
+    if beyond and not turns.get("mismatch"):            # a reading k x high not ruled out by the log's turns
+        return True
+    if not turns.get("wheelbase"):
+        return False
     k = turns["study_wheelbase"] / turns["wheelbase"]
     declared = turns.get("declared", getattr(vehicle, "declared", False))      # no --study: the default's is not
     return bool(declared) and CALIBRATION[0] < k < CALIBRATION[1]
 
 
 def wrong_study(turns: dict | None) -> str | None:
+    """The verdict on a study that is not the log's vehicle (``turns``: study_fit.log_vehicle; None:
+    it may be): its ``beyond_limits`` statement (cannot_do: the log does what the study's vehicle
+    cannot), after the wheelbase's when both hold (wrong_wheelbase: then the verdict)."""
+    wheel = wrong_wheelbase(turns)
+    beyond = (turns or {}).get("beyond_limits")
+    return f"{wheel}; also {beyond.removeprefix(UNDECIDED)}" if wheel and beyond else wheel or beyond
+
+
+def wrong_wheelbase(turns: dict | None) -> str | None:
     """The verdict on a study whose wheelbase the log's steady linear turns miss by more than 30 %
     (``turns``: study_fit.log_vehicle with its ``mismatch`` and ``suggestion``; None: within 30 %):
     the study is wrong, with the evidence (the log's wheelbase, its 95 % interval, the study's) and
@@ -256,3 +274,89 @@ def understeer_estimates(estimates: Mapping[str, Mapping], vehicle: Vehicle, tur
             if isinstance(e.get("value"), (int, float)) and math.isfinite(e["value"])
             and (why := understeer(e["value"], vehicle, None, turns))]
     return "; ".join(said) or None
+
+
+LIMIT_MARGIN = 1.25    # a log's figure is beyond a study's limit only past 1.25 x it (a radius below 1 / 1.25 x):
+                       # a study's lock, actuator or drivetrain is its design, a real one a little off it; a
+                       # wheel-angle sensor reading up to 20 % high stays inside it
+UNDECIDED = "cannot decide: "      # cannot_do's opening when a sensor reading high is not ruled out
+NOISE_SIGMAS = 4       # and past 4 sigmas of the wheel angle's reading noise (a rate: over its window)
+
+
+def _limit_rows(log: Mapping, study) -> list[tuple[str, float, float, bool, str]]:
+    """(what, log figure, study limit, beyond, said) for each limit the study declares and the log
+    reads (``log``: vehicle_limits.log_extremes; ``study``: vehicle_limits.StudyLimits)."""
+    deg, noise, rows = math.degrees, NOISE_SIGMAS * (log.get("angle_noise") or 0.0), []
+    if log.get("min_radius") and study.min_radius:
+        rows.append(("turn radius", log["min_radius"], study.min_radius, log["min_radius"] * LIMIT_MARGIN < study.min_radius,
+                     f"a steady turn of {log['min_radius']:.2g} m radius (v / |yaw_rate| at t {log['radius_at']:.0f} s, "
+                     f"its noise allowed for) against the tightest the study's vehicle makes, L / tan(delta_max) = "
+                     f"{study.wheelbase:.3g} m / tan({deg(study.lock):.0f} deg) = {study.min_radius:.2g} m"))
+    if log.get("steering_rate") and study.rate:
+        rows.append(("steering rate", log["steering_rate"], study.rate,
+                     log["steering_rate"] > LIMIT_MARGIN * study.rate + math.sqrt(2) * noise / log["rate_window"],
+                     f"the wheels turning at {deg(log['steering_rate']):.0f} deg/s (delta over {log['rate_window']:.2g} s) "
+                     f"against the study's steering actuator at full rate, {deg(study.rate):.0f} deg/s"))
+    if log.get("wheel_angle") and study.lock:
+        rows.append(("wheel angle", log["wheel_angle"], study.lock, log["wheel_angle"] > LIMIT_MARGIN * study.lock + noise,
+                     f"a wheel angle of {deg(log['wheel_angle']):.0f} deg against the study's lock, "
+                     f"{deg(study.lock):.0f} deg"))
+    if log.get("speed") and study.top_speed:
+        rows.append(("speed", log["speed"], study.top_speed, log["speed"] > LIMIT_MARGIN * study.top_speed,
+                     f"a speed of {log['speed']:.3g} m/s (99.5th percentile) against the study's top speed, "
+                     f"{study.top_speed:.3g} m/s"))
+    if log.get("lateral_acceleration") and study.friction:
+        grip = study.friction * 9.81
+        rows.append(("lateral acceleration", log["lateral_acceleration"], grip,
+                     log["lateral_acceleration"] > LIMIT_MARGIN * grip,
+                     f"a lateral acceleration of {log['lateral_acceleration']:.3g} m/s2 (99.5th percentile) against "
+                     f"the {grip:.3g} m/s2 its tyres hold (friction {study.friction:.2g})"))
+    return rows
+
+
+ON_DELTA = ("steering rate", "wheel angle")     # the limits the log reads on its wheel-angle channel
+
+
+def beyond_limits(log: Mapping, study, turns_ratio: float | None = None) -> dict:
+    """{beyond, compared, undecided}: what the log does beyond the study's vehicle's limits, past
+    LIMIT_MARGIN and its reading noise (the tightest steady turn against L / tan(delta_max), the
+    wheels' rate against the actuator's full rate, the wheel angle against the lock, the speed
+    against the top speed, the lateral acceleration against the tyres' friction times g); what was
+    compared; and, when only the wheel-angle channel's figures are beyond, why a wheel-angle sensor
+    reading high is not ruled out (sensor_reading; ``turns_ratio``: the log's turns' wheelbase
+    over the study's)."""
+    rows = _limit_rows(log, study)
+    unit = {"turn radius": ("m", 1.0), "steering rate": ("deg/s", 180 / math.pi), "wheel angle": ("deg", 180 / math.pi),
+            "speed": ("m/s", 1.0), "lateral acceleration": ("m/s2", 1.0)}
+    said = ", ".join(f"{what} {a * unit[what][1]:.3g} {unit[what][0]} (study's limit {b * unit[what][1]:.3g})"
+                     for what, a, b, _, _ in rows)
+    compared = (f"the log against the study's vehicle's limits (beyond only past {LIMIT_MARGIN:g} x them and "
+                f"the log's reading noise): {said or 'none the study declares and the log reads'}")
+    over = [(what, a / b) for what, a, b, beyond, _ in rows if beyond]
+    undecided = sensor_reading(max(k for _, k in over), turns_ratio) if over and all(
+        what in ON_DELTA for what, _ in over) else None
+    return {"beyond": [text for *_, beyond, text in rows if beyond], "compared": compared, "undecided": undecided}
+
+
+def sensor_reading(k: float, turns_ratio: float | None) -> str | None:
+    """Why a wheel-angle sensor (or a steering map) reading ``k`` x high (the log's rate or angle over
+    the study's limit) may be what the log shows instead (None: ruled out): the log's turns, which
+    such a reading lengthens as much (L_turns = g L, g >= k), not shorter than k / 1.1 x the study's
+    wheelbase; without turns, a gain inside a calibration error's range (CALIBRATION)."""
+    if turns_ratio is None and k >= CALIBRATION[1] or turns_ratio is not None and turns_ratio * math.exp(DECLARED) < k:
+        return None
+    turns = ("the log has no steady turns to tell" if turns_ratio is None else
+             f"the log's turns give {turns_ratio:.2g} x the study's wheelbase, as such a reading would")
+    return f"a wheel-angle sensor or steering map reading {k:.2g} x high shows the same: {turns}"
+
+
+def cannot_do(beyond: list[str], suggestion: str, declared: bool, undecided: str | None = None) -> str:
+    """The statement on a study whose vehicle cannot do what the log shows (``beyond``, ``undecided``:
+    beyond_limits'; ``suggestion``: study_fit.suggestion's; ``declared``: the user gave the study);
+    "cannot decide" first when a sensor's reading is not ruled out."""
+    whose = ("the study is another vehicle, or the limits it declares are not this vehicle's" if declared
+             else "the study is not this vehicle's")
+    text = (f"the study's vehicle cannot do what the log shows: {'; '.join(beyond)} (more than {LIMIT_MARGIN:g} x): "
+            f"{whose}; its effects are judged against a vehicle the log is not; instead: {suggestion}, and "
+            f"diagnose again (--study)")
+    return f"{UNDECIDED}{text}; or {undecided}" if undecided else text

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Callable
 
 import numpy as np
 
@@ -119,12 +120,14 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
     return mine, text
 
 
-def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, mass: float | None) -> str:
+def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, mass: float | None,
+               unfit: Callable[[ShippedVehicle], str] | None = None) -> str:
     """The shipped study to try for a log of wheelbase ``log_wheelbase`` whose study declares
-    ``declared`` and ``mass``: the nearest in wheelbase of those not unlike it, else what to write."""
+    ``declared`` and ``mass``: the nearest in wheelbase of those not unlike it, else what to write.
+    ``unfit``: why a shipped vehicle cannot do what the log shows ('' when it can): such is not suggested."""
     kind = declared.kind if declared is not None else None
     fits = sorted((abs(math.log(log_wheelbase / c.wheelbase)), c.name, c) for c in shipped_vehicles()
-                  if c.name != study_name and not unlike(c, log_wheelbase, declared, mass))
+                  if c.name != study_name and not unlike(c, log_wheelbase, declared, mass) and not (unfit and unfit(c)))
     if fits:
         c = fits[0][2]
         basis = (f"a {c.kind} like the declared one" if kind else
@@ -133,7 +136,7 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
                 f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}")
     near = min(shipped_vehicles(), key=lambda c: abs(math.log(log_wheelbase / c.wheelbase)))
     passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
-              f"{unlike(near, log_wheelbase, declared, mass) or 'the study given'})")
+              f"{unlike(near, log_wheelbase, declared, mass) or (unfit and unfit(near)) or 'the study given'})")
     outline = (declared.length, declared.width) if declared is not None else (None, None)
     table = (f'class = "{kind or "..."}", wheelbase = {log_wheelbase:.3g}'
              + (", length = {:g}, width = {:g}".format(*outline) if all(outline) else ", length, width"))

@@ -21,7 +21,10 @@ It is built from the judged effects and three checks an engineer makes before si
 - **the study before the effects**: a study whose wheelbase the log's steady turns miss by more
   than 30 % is the verdict (``wrong_study``, plausibility.wrong_study, with the evidence and what to
   run instead); effects that rescale the yaw rate as a wheelbase does (plausibility.RESCALE_YAW)
-  would only absorb it and are not concluded; what else was judged against the study follows. On a
+  would only absorb it and are not concluded; what else was judged against the study follows. So is
+  a study whose vehicle cannot do what the log shows (a turn, a wheel rate or angle, a speed or a
+  lateral acceleration beyond its limits: plausibility.cannot_do), "cannot decide" where a wheel-angle
+  reading that many times high is not ruled out. On a
   study that declares its vehicle, a steering gain inside a calibration error's range is the other
   reading of the same turns (steering_map_reading): it may be the verdict, the wrong study said beside it.
 """
@@ -31,7 +34,8 @@ from typing import Iterable, Mapping
 
 from .catalogue import CATALOGUE
 from .effect import Effect
-from .plausibility import MAP_GAIN, RESCALE_YAW, VehicleContext, steering_map_reading, wheelbase_off, wrong_study
+from .plausibility import (MAP_GAIN, RESCALE_YAW, UNDECIDED, VehicleContext, steering_map_reading, wheelbase_off,
+                           wrong_study)
 
 # the audit's finding kinds that can imitate any effect (the others: each effect's ``imitated_by``)
 IMITATES_ANY = ("mislabelled_channel",)
@@ -114,7 +118,8 @@ def on_wrong_study(verdict: dict, statement: str) -> dict:
     judged = [] if verdict["id"] == "none" else [
         f"judged against this study (to be judged again on the log's vehicle): {verdict['id']} "
         f"({verdict['status']}): {verdict['statement']}"]
-    return {"id": WRONG_STUDY, "status": "conclusive", "statement": statement, "bullets": judged + verdict["bullets"]}
+    status = "cannot decide" if statement.startswith(UNDECIDED) else "conclusive"     # plausibility.cannot_do
+    return {"id": WRONG_STUDY, "status": status, "statement": statement, "bullets": judged + verdict["bullets"]}
 
 
 BASELINE_BOUND = ("conclusive", "inconclusive", "implausible")    # statuses a refit on its bounds withdraws
