@@ -121,17 +121,20 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
 
 def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, mass: float | None) -> str:
     """The shipped study to try for a log of wheelbase ``log_wheelbase`` whose study declares
-    ``declared`` and ``mass``: the nearest in wheelbase of those not unlike it, else what to write."""
+    ``declared`` and ``mass``: of those not unlike it, the nearest in size (nearness: wheelbase,
+    outline and mass in log ratio; an exact tie goes to the first name, said), the others it passed
+    over named; else what to write."""
     kind = declared.kind if declared is not None else None
-    fits = sorted((abs(math.log(log_wheelbase / c.wheelbase)), c.name, c) for c in shipped_vehicles()
+    fits = sorted((round(nearness(c, log_wheelbase, declared, mass), 9), c.name, c) for c in shipped_vehicles()
                   if c.name != study_name and not unlike(c, log_wheelbase, declared, mass))
     if fits:
         c = fits[0][2]
         basis = (f"a {c.kind} like the declared one" if kind else
                  "no vehicle class declared: matched on the log's wheelbase alone")
         return (f"studies/{c.name} (wheelbase {c.wheelbase:.3g} m), a {c.kind} of {c.length:g} x {c.width:g} m and "
-                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}")
-    near = min(shipped_vehicles(), key=lambda c: abs(math.log(log_wheelbase / c.wheelbase)))
+                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}"
+                + passed_over(fits, "the declared vehicle's" if declared is not None else "the log's wheelbase"))
+    near = min(shipped_vehicles(), key=lambda c: (abs(math.log(log_wheelbase / c.wheelbase)), c.name))
     passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
               f"{unlike(near, log_wheelbase, declared, mass) or 'the study given'})")
     outline = (declared.length, declared.width) if declared is not None else (None, None)
@@ -140,6 +143,28 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
     return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: if the study's "
             f"wheelbase is the vehicle's, the steering map is the cause, else write a study with the log's "
             f"wheelbase {log_wheelbase:.3g} m (its plant's l_f + l_r) and its [vehicle] table ({table})")
+
+
+def nearness(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, mass: float | None) -> float:
+    """How far shipped vehicle ``c`` is from the log's: sqrt(sum ((ln(mine / theirs)) / tol)^2) over
+    the wheelbase (the log's), the declared length and width (tol SIZE) and mass (tol MASS; a
+    class's masses spread wider than its lengths), each only where known: 1 is one tolerance off."""
+    pairs = [(log_wheelbase, c.wheelbase, SIZE)]
+    if declared is not None:
+        pairs += [(declared.length, c.length, SIZE), (declared.width, c.width, SIZE), (mass, c.mass, MASS)]
+    return math.sqrt(sum((math.log(mine / theirs) / tol) ** 2 for mine, theirs, tol in pairs if mine and theirs))
+
+
+def passed_over(fits: list, against: str) -> str:
+    """The studies of the vehicle's class and size not suggested, each with its nearness (the
+    suggested one's first), and the tie-break when two are as near."""
+    if len(fits) < 2:
+        return ""
+    tie = fits[1][0] == fits[0][0]
+    return ("; passed over: " + ", ".join(f"studies/{n} ({d:.2f})" for d, n, _ in fits[1:])
+            + f" (their distance from {against} size, wheelbase, outline and mass in log ratio over 30 % and x2: "
+              f"studies/{fits[0][1]} {fits[0][0]:.2f}"
+            + ("; as near: the first by name taken, --study names another" if tie else "") + ")")
 
 
 @dataclass(frozen=True)
