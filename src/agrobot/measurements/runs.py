@@ -6,6 +6,8 @@ shorter gap of one stream is bridged (linear; a set-point held) and named by the
 (measurements.audit). Runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
 shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
 ``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
+A run keeps the standstill either side of it (a gyro's bias is read there) unless
+``trim_standstill`` (``--trim-standstill``).
 Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
 signals are interpolated linearly onto the log's grid; the set-points are held (the last frame).
 
@@ -141,8 +143,10 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
     grid = _grid(source, times, u0, step)
     covered = _covered_grid(grid, times, least, u0, streams, report)
-    long_runs = _runs(grid, u0, step, covered, _speed(grid, streams, report), options, report)
+    speed = _speed(grid, streams, report)
+    long_runs = _runs(grid, u0, step, covered, speed, options, report)
     pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
+    pick, used = with_standstill(pick, used, grid - u0, covered, speed, options)
     report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
                       "utc_start_s": float(grid[pick][0])}
     t = grid[pick]
@@ -268,6 +272,37 @@ def _runs(grid: np.ndarray, u0: float, step: float, covered: np.ndarray, v: np.n
     report["runs"] = long_runs
     report["short_runs_ignored"] = len(runs) - len(long_runs)
     return long_runs
+
+
+def with_standstill(pick: np.ndarray, used: dict, t: np.ndarray, covered: np.ndarray, v: np.ndarray | None,
+                    options: ImportOptions) -> tuple[np.ndarray, dict]:
+    """A run's samples with the standstill either side of it (|v| <= min_speed, every stream present,
+    up to the next driving or gap): a gyro's bias and a steering offset are measured standing still
+    (identification.ordinary_driving._standstill_bias); ``--trim-standstill`` leaves it out. Said in
+    ``used["how"]`` either way; a time range or a stretch chosen without a run is kept as it is."""
+    if not used["how"].startswith("run") or v is None:
+        return pick, used
+    idx = np.flatnonzero(pick)
+    a, b = int(idx[0]), int(idx[-1]) + 1
+    still = covered & (np.abs(v) <= options.min_speed)
+    lo, hi = a, b
+    while lo > 0 and still[lo - 1]:
+        lo -= 1
+    while hi < len(t) and still[hi]:
+        hi += 1
+    step = float(t[1] - t[0]) if len(t) > 1 else 0.0
+    before, after = (a - lo) * step, (hi - b) * step
+    if not before and not after:
+        return pick, used
+    if options.trim_standstill:
+        return pick, {**used, "how": f"{used['how']}, the standstill either side ({before:.1f} s before, "
+                                     f"{after:.1f} s after) left out (--trim-standstill)"}
+    out = np.zeros(len(pick), bool)
+    out[lo:hi] = True
+    return out, {**used, "start": float(t[lo]), "end": float(t[hi - 1]), "standstill_kept": [before, after],
+                 "how": f"{used['how']} with the standstill either side ({before:.1f} s before, {after:.1f} s after: "
+                        f"a gyro bias and a steering offset are measured standing still; --trim-standstill leaves "
+                        f"it out)"}
 
 
 def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str, np.ndarray]:
