@@ -37,3 +37,13 @@ def test_an_exact_tie_is_broken_the_same_way_in_any_order_and_said(monkeypatch):
         picks.add(text.split("try --study ")[1].split()[0].rstrip(";"))
         assert "as near" in text and "--study names another" in text
     assert picks == {"studies/robot_of_the_log.toml"}
+
+
+def test_studies_of_the_very_same_vehicle_are_one_candidate_and_the_others_named():
+    """The shipped car studies passenger_car.toml and passenger_car_identification.toml are one car
+    (2.7 m, 4.7 x 1.8 m, 1500 kg): nothing physical tells them apart, so one is suggested and the
+    other named beside it."""
+    car = Vehicle.from_table({"class": "car", "length": 4.7, "width": 1.8})
+    text = suggestion(2.7, "mine.toml", car, 1500.0)
+    assert "try --study studies/passenger_car.toml" in text
+    assert "studies/passenger_car_identification.toml: they differ in what they simulate" in text

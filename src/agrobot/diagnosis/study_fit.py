@@ -8,7 +8,7 @@ size (wheelbase, outline, mass), else the study to write is named.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -133,6 +133,8 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
                  "no vehicle class declared: matched on the log's wheelbase alone")
         return (f"studies/{c.name} (wheelbase {c.wheelbase:.3g} m), a {c.kind} of {c.length:g} x {c.width:g} m and "
                 f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}"
+                + (f" (or any of the {len(c.same)} other shipped studies of this vehicle, e.g. studies/{c.same[0]}: "
+                   f"they differ in what they simulate, not in the vehicle)" if c.same else "")
                 + passed_over(fits, "the declared vehicle's" if declared is not None else "the log's wheelbase"))
     near = min(shipped_vehicles(), key=lambda c: (abs(math.log(log_wheelbase / c.wheelbase)), c.name))
     passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
@@ -177,6 +179,7 @@ class ShippedVehicle:
     length: float
     width: float
     mass: float
+    same: tuple[str, ...] = ()          # the other shipped studies of this very vehicle (they simulate other runs)
 
 
 def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, mass: float | None) -> str:
@@ -197,7 +200,9 @@ def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, ma
 @lru_cache(maxsize=1)
 def shipped_vehicles() -> tuple[ShippedVehicle, ...]:
     """One study per distinct vehicle among the shipped studies with a [vehicle] table and a yaw
-    plant (of those of one vehicle, the shortest name: figure8.toml for the paper's tractor)."""
+    plant; studies of one vehicle (class, wheelbase, outline and mass all equal: nothing physical tells
+    them apart) are one, named by the shortest name (figure8.toml for the paper's tractor), the others
+    in its ``same``."""
     out: dict[tuple, ShippedVehicle] = {}
     for path in sorted(shipped().glob("*.toml"), key=lambda p: (len(p.name), p.name)):
         study = load_study(path)
@@ -209,5 +214,6 @@ def shipped_vehicles() -> tuple[ShippedVehicle, ...]:
         except StudyError:                        # no yaw plant (a hardware layout, an emulator): no vehicle to fit
             continue
         c = ShippedVehicle(path.name, vehicle.kind, p.l_f + p.l_r, vehicle.length, vehicle.width, p.m)
-        out.setdefault((c.kind, round(c.wheelbase, 3), c.length, c.width, round(c.mass, 1)), c)
+        key = (c.kind, round(c.wheelbase, 3), c.length, c.width, round(c.mass, 1))
+        out[key] = replace(out[key], same=out[key].same + (c.name,)) if key in out else c
     return tuple(out.values())
