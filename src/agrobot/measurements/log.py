@@ -330,13 +330,20 @@ MIN_R2 = 0.8                    # the no-slip turn explains a steered vehicle's 
 
 def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
     """The evidence that a wide wheel-angle column (past DEGREE_SUSPECT's 70 deg: a pivot-steer
-    tricycle's or forklift's steered wheel turns to 80-90 deg) is in rad, or None: never past
-    WIDEST_LOCK (pi/2; a column past it, robust_peak, is degrees); else, with the speed v and the
-    yaw rate r, on the samples turning (|v| > MOVING_SPEED, TURNING_ANGLE < |delta| < TAN_WIDEST,
-    |r| > TURNING_RATE, at least 100) whose widest reaches EVIDENT_ANGLE, the turns follow the
-    no-slip r = v tan(delta) / L of a wheelbase L in WHEELBASES (R2 >= MIN_R2) better than the
-    r = v delta / L that a column in degrees, whose true angles are then 57 times smaller, would
-    follow. The bounds' derivations: their comments."""
+    tricycle's or forklift's steered wheel turns to 80-90 deg) is in rad, or None: the turns follow
+    the no-slip r = v tan(delta) / L of a wheelbase L better than the r = v delta / L that a column in
+    degrees (its true angles 57 times smaller) would follow. Each bound from the physics:
+
+    - never past WIDEST_LOCK = pi/2 (robust_peak): at 90 deg a wheel points across the vehicle;
+      past it, it points backwards (delta - pi driven with v < 0), so no wheel angle in rad does;
+    - samples below TAN_WIDEST (85 deg): d tan / tan = d delta / (sin delta cos delta), so a
+      READING_ERROR of 0.5 deg moves tan by TAN_ERROR (10 %) there, and more beyond;
+    - above TURNING_ANGLE (1.5 deg, 3 reading errors), |r| above TURNING_RATE (a MEMS gyro's
+      uncorrected 1 deg/s), |v| above MOVING_SPEED (standing: channel_updates.STANDING), 100 at least;
+    - the widest turn reaches EVIDENT_ANGLE (46 deg), where tan exceeds the angle by 29 %, three
+      times what a reading error makes of it: below, the two readings are not told apart;
+    - L within WHEELBASES (a 1:10 model car's 0.1 m to a truck's 10 m: --wheelbase's range), and
+      R2 >= MIN_R2 (0.8: the no-slip turn less understeer, K v^2 / L of 10-20 %, slip and noise)."""
     if not {"t", "v", "yaw_rate", column} <= set(frame.columns):
         return None
     v, r, w = (frame[c].to_numpy(float) for c in ("v", "yaw_rate", column))
