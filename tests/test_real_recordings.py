@@ -256,7 +256,8 @@ def test_a_tractor_loggers_csv_with_dates_kmh_and_float32_positions(tmp_path):
                           "Tempo": e["speed"] * 3.6})
     table.to_csv(tmp_path / "logger.csv", sep=";", index=False)
     proc = cli("convert", tmp_path / "logger.csv", "--time", "Zeit[datetime]", "--signal", "lat=Breite",
-               "--signal", "lon=Laenge", "--signal", "v=Tempo[km/h]", "--out", tmp_path / "log.csv", "--rate", 1)
+               "--signal", "lon=Laenge", "--signal", "v=Tempo[km/h]", "--out", tmp_path / "log.csv", "--rate", 1,
+               "--trim-standstill")      # compared from the run's start, where the fixes follow the speed
     assert proc.returncode == 0, proc.stderr
     report = json.loads((tmp_path / "log.import.json").read_text())
     q = report["position_quantisation"]
@@ -266,7 +267,7 @@ def test_a_tractor_loggers_csv_with_dates_kmh_and_float32_positions(tmp_path):
     assert report["resolution"]["y"] == pytest.approx(expect_n, rel=1e-6) and abs(lat) < 90
     assert "positions are quantised" in proc.stdout
     log = pd.read_csv(tmp_path / "log.csv")
-    base = cli("convert", NMEA / "haicom-305N.log", "--out", tmp_path / "nmea.csv")
+    base = cli("convert", NMEA / "haicom-305N.log", "--out", tmp_path / "nmea.csv", "--trim-standstill")
     nmea = pd.read_csv(tmp_path / "nmea.csv")
     n = min(len(log), len(nmea))
     assert np.abs(log[["x", "y"]].to_numpy()[:n] - nmea[["x", "y"]].to_numpy()[:n]).max() < 2.0 and base.returncode == 0

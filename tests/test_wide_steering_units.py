@@ -1,8 +1,12 @@
 """A wheel angle past 70 deg (a tricycle's or a forklift's steered wheel turns to 90 deg) is read
-as radians when the turns say so, and a unit the user declared to convert still stands when the
-written log is read back. Generated recordings: a tricycle of known wheelbase driven through wide
-turns, r = v tan(delta) / L exactly, with gyro noise."""
+as radians when the turns say so, a column past pi/2 never (no wheel angle in rad passes 90 deg),
+and a unit the user declared to convert still stands when the written log is read back. Generated
+recordings: a tricycle of known wheelbase driven through wide turns, r = v tan(delta) / L exactly,
+with gyro noise; at the edges, a tractor steered to 60 deg and the tricycle to 85 deg written in
+degrees, and the tricycle to 85 deg in rad with its sensor's zero 1 deg off."""
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import pandas as pd
@@ -10,29 +14,55 @@ import pytest
 
 from agrobot.api import convert
 from agrobot.measurements import LogError, read_log
+from agrobot.measurements.log import EVIDENT_ANGLE, READING_ERROR, TAN_ERROR, TAN_WIDEST, WIDEST_LOCK
 
 WHEELBASE = 0.964
 
 
-def tricycle_log(seed: int = 0, n: int = 3000, h: float = 1 / 30) -> pd.DataFrame:
-    """Wide turns up to 1.4 rad both ways, up to 1.8 m/s and slower in tight turns; the truth is
+def tricycle_log(seed: int = 0, n: int = 3000, h: float = 1 / 30, lock: float = 1.4,
+                 wheelbase: float = WHEELBASE) -> pd.DataFrame:
+    """Wide turns up to ``lock`` rad both ways, up to 1.8 m/s and slower in tight turns; the truth is
     r = v tan(delta) / L."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * h
-    delta = 1.4 * np.sin(2 * np.pi * t / 37.0) * np.abs(np.sin(2 * np.pi * t / 11.0))
+    delta = lock * np.sin(2 * np.pi * t / 37.0) * np.abs(np.sin(2 * np.pi * t / 11.0))
     v = (1.05 + 0.75 * np.sin(2 * np.pi * t / 23.0)) / (1 + np.abs(np.tan(delta)))    # slow in tight turns
-    yaw_rate = v * np.tan(delta) / WHEELBASE + rng.normal(0, 0.005, n)
+    yaw_rate = v * np.tan(delta) / wheelbase + rng.normal(0, 0.005, n)
     return pd.DataFrame({"t": t, "delta": delta, "v": v, "yaw_rate": yaw_rate})
 
 
-def test_wide_steering_is_read_as_radians_on_the_turns_evidence(tmp_path):
+@pytest.mark.parametrize("lock, zero, rel", [(1.4, 0.0, 0.02), (math.radians(85), math.radians(1), 0.05)])
+def test_wide_steering_is_read_as_radians_on_the_turns_evidence(tmp_path, lock, zero, rel):
+    """To 1.4 rad (80 deg), and to a pivot-steer tricycle's 85 deg with its sensor's zero 1 deg off."""
     path = tmp_path / "tricycle.csv"
-    tricycle_log().to_csv(path, index=False)
+    log = tricycle_log(lock=lock)
+    log["delta"] += zero
+    log.to_csv(path, index=False)
     frame = read_log(path, ("t",))
     note = next(n for n in frame.attrs["notes"] if "'delta'" in n)
     assert "read as rad" in note
     found = float(note.split("L = ")[1].split(" m")[0])
-    assert found == pytest.approx(WHEELBASE, rel=0.02)
+    assert found == pytest.approx(WHEELBASE, rel=rel)
+
+
+@pytest.mark.parametrize("lock, wheelbase", [(60.0, 2.5), (85.0, WHEELBASE)])
+def test_a_wide_lock_written_in_degrees_is_refused_as_past_pi_over_2(tmp_path, lock, wheelbase):
+    """A tractor steered to 60 deg and the tricycle to 85 deg, their columns in degrees: past pi/2,
+    which no wheel angle in rad reaches, whatever the turns."""
+    log = tricycle_log(lock=math.radians(lock), wheelbase=wheelbase)
+    log["delta"] = np.degrees(log["delta"])
+    path = tmp_path / "degrees.csv"
+    log.to_csv(path, index=False)
+    with pytest.raises(LogError, match=r"'delta' reaches .*past pi/2 = 1.571 rad .* looks like degrees"):
+        read_log(path, ("t",))
+
+
+def test_the_bounds_are_what_their_derivations_say():
+    """The widest angle used: a reading error of 0.5 deg moves tan there by TAN_ERROR (10 %, to first order); the
+    evident angle: tan exceeds the angle by about three times that; both short of pi/2."""
+    assert math.tan(TAN_WIDEST + READING_ERROR) / math.tan(TAN_WIDEST) - 1 == pytest.approx(TAN_ERROR, rel=0.15)   # first order
+    assert math.tan(EVIDENT_ANGLE) / EVIDENT_ANGLE - 1 == pytest.approx(3 * TAN_ERROR, rel=0.05)
+    assert EVIDENT_ANGLE < TAN_WIDEST < WIDEST_LOCK == math.pi / 2
 
 
 def test_a_small_angle_in_degrees_is_still_refused(tmp_path):

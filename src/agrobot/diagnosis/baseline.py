@@ -201,12 +201,25 @@ def fixed_geometry(option: str, baseline) -> tuple[str | None, str]:
 
 
 def identify_note(report: dict) -> str:
-    """Why identify's report chose its geometry: its own line on it (its yaw RMS under both, without
-    the prefix), the kinematic regime's model, or ''."""
-    for note in report.get("notes") or ():
-        if note.startswith("steering geometry:"):
-            return note.removeprefix("steering geometry:").strip()
-    return "the kinematic regime, whose model is r = v tan(delta) / L" if report.get("final_model") == "kinematic" else ""
+    """Why identify's report chose its geometry, from its ``steering_geometry_choice`` (not its notes'
+    wording): the option, the wheel angle's reach below where tan w exceeds w by 1 %, both geometries'
+    yaw RMS (the one passed over named), the kinematic regime's model; '' when it says none."""
+    c = report.get("steering_geometry_choice") or {}
+    how, shown = c.get("how"), {"w": "w", "tan": "tan w"}
+    if how == "option":
+        return f"the yaw plant is driven by {c['value']} (--steering-geometry {c['value']})"
+    if how == "small_angles":
+        return (f"the wheel angle reaches {c['reach']:.2g} rad (99th percentile), under {c['threshold']:.2g} rad "
+                f"where tan w exceeds w by 1 %: the two alike, w kept")
+    if how == "compared":
+        value, other = c["value"], c["passed_over"]
+        return (f"the wheel angle reaches {c['reach']:.2g} rad (99th percentile), where tan w exceeds w by "
+                f"{100 * (math.tan(c['reach']) / c['reach'] - 1):.0f} %: the yaw plant is driven by {shown[value]} "
+                f"(yaw RMS {c['rms'][value]:.3g} rad/s); passed over: {shown[other]} (RMS {c['rms'][other]:.3g} rad/s); "
+                f"--steering-geometry w|tan sets it")
+    if how == "kinematic" or report.get("final_model") == "kinematic":
+        return "the kinematic regime, whose model is r = v tan(delta) / L"
+    return ""
 
 
 def geometry_choice(baseline, fixed: str | None, source: str, identified: str | None, why: str = "") -> dict:

@@ -8,7 +8,7 @@ size (wheelbase, outline, mass), else the study to write is named.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Callable
 
@@ -123,18 +123,24 @@ def study_check(frame, wheelbase: float, study_name: str, understeer: float = 0.
 def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, mass: float | None,
                unfit: Callable[[ShippedVehicle], str] | None = None) -> str:
     """The shipped study to try for a log of wheelbase ``log_wheelbase`` whose study declares
-    ``declared`` and ``mass``: the nearest in wheelbase of those not unlike it, else what to write.
-    ``unfit``: why a shipped vehicle cannot do what the log shows ('' when it can): such is not suggested."""
+    ``declared`` and ``mass``: of those not unlike it and able to do what the log shows (``unfit``:
+    why a shipped vehicle cannot, '' when it can), the nearest in size (nearness: wheelbase, outline
+    and mass in log ratio; an exact tie goes to the first name, said), the others it passed over
+    named; else what to write."""
     kind = declared.kind if declared is not None else None
-    fits = sorted((abs(math.log(log_wheelbase / c.wheelbase)), c.name, c) for c in shipped_vehicles()
-                  if c.name != study_name and not unlike(c, log_wheelbase, declared, mass) and not (unfit and unfit(c)))
+    fits = sorted((round(nearness(c, log_wheelbase, declared, mass), 9), c.name, c) for c in shipped_vehicles()
+                  if c.name != study_name and not unlike(c, log_wheelbase, declared, mass)
+                  and not (unfit and unfit(c)))
     if fits:
         c = fits[0][2]
         basis = (f"a {c.kind} like the declared one" if kind else
                  "no vehicle class declared: matched on the log's wheelbase alone")
         return (f"studies/{c.name} (wheelbase {c.wheelbase:.3g} m), a {c.kind} of {c.length:g} x {c.width:g} m and "
-                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}")
-    near = min(shipped_vehicles(), key=lambda c: abs(math.log(log_wheelbase / c.wheelbase)))
+                f"{c.mass:.3g} kg ({basis}), is of the log's size: try --study studies/{c.name}"
+                + (f" (or any of the {len(c.same)} other shipped studies of this vehicle, e.g. studies/{c.same[0]}: "
+                   f"they differ in what they simulate, not in the vehicle)" if c.same else "")
+                + passed_over(fits, "the declared vehicle's" if declared is not None else "the log's wheelbase"))
+    near = min(shipped_vehicles(), key=lambda c: (abs(math.log(log_wheelbase / c.wheelbase)), c.name))
     passed = (f" (the nearest in wheelbase, studies/{near.name} at {near.wheelbase:.3g} m, is "
               f"{unlike(near, log_wheelbase, declared, mass) or (unfit and unfit(near)) or 'the study given'})")
     outline = (declared.length, declared.width) if declared is not None else (None, None)
@@ -143,6 +149,28 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
     return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: if the study's "
             f"wheelbase is the vehicle's, the steering map is the cause, else write a study with the log's "
             f"wheelbase {log_wheelbase:.3g} m (its plant's l_f + l_r) and its [vehicle] table ({table})")
+
+
+def nearness(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, mass: float | None) -> float:
+    """How far shipped vehicle ``c`` is from the log's: sqrt(sum ((ln(mine / theirs)) / tol)^2) over
+    the wheelbase (the log's), the declared length and width (tol SIZE) and mass (tol MASS; a
+    class's masses spread wider than its lengths), each only where known: 1 is one tolerance off."""
+    pairs = [(log_wheelbase, c.wheelbase, SIZE)]
+    if declared is not None:
+        pairs += [(declared.length, c.length, SIZE), (declared.width, c.width, SIZE), (mass, c.mass, MASS)]
+    return math.sqrt(sum((math.log(mine / theirs) / tol) ** 2 for mine, theirs, tol in pairs if mine and theirs))
+
+
+def passed_over(fits: list, against: str) -> str:
+    """The studies of the vehicle's class and size not suggested, each with its nearness (the
+    suggested one's first), and the tie-break when two are as near."""
+    if len(fits) < 2:
+        return ""
+    tie = fits[1][0] == fits[0][0]
+    return ("; passed over: " + ", ".join(f"studies/{n} ({d:.2f})" for d, n, _ in fits[1:])
+            + f" (their distance from {against} size, wheelbase, outline and mass in log ratio over 30 % and x2: "
+              f"studies/{fits[0][1]} {fits[0][0]:.2f}"
+            + ("; as near: the first by name taken, --study names another" if tie else "") + ")")
 
 
 @dataclass(frozen=True)
@@ -155,6 +183,7 @@ class ShippedVehicle:
     length: float
     width: float
     mass: float
+    same: tuple[str, ...] = ()          # the other shipped studies of this very vehicle (they simulate other runs)
 
 
 def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, mass: float | None) -> str:
@@ -175,7 +204,9 @@ def unlike(c: ShippedVehicle, log_wheelbase: float, declared: Vehicle | None, ma
 @lru_cache(maxsize=1)
 def shipped_vehicles() -> tuple[ShippedVehicle, ...]:
     """One study per distinct vehicle among the shipped studies with a [vehicle] table and a yaw
-    plant (of those of one vehicle, the shortest name: figure8.toml for the paper's tractor)."""
+    plant; studies of one vehicle (class, wheelbase, outline and mass all equal: nothing physical tells
+    them apart) are one, named by the shortest name (figure8.toml for the paper's tractor), the others
+    in its ``same``."""
     out: dict[tuple, ShippedVehicle] = {}
     for path in sorted(shipped().glob("*.toml"), key=lambda p: (len(p.name), p.name)):
         study = load_study(path)
@@ -187,5 +218,6 @@ def shipped_vehicles() -> tuple[ShippedVehicle, ...]:
         except StudyError:                        # no yaw plant (a hardware layout, an emulator): no vehicle to fit
             continue
         c = ShippedVehicle(path.name, vehicle.kind, p.l_f + p.l_r, vehicle.length, vehicle.width, p.m)
-        out.setdefault((c.kind, round(c.wheelbase, 3), c.length, c.width, round(c.mass, 1)), c)
+        key = (c.kind, round(c.wheelbase, 3), c.length, c.width, round(c.mass, 1))
+        out[key] = replace(out[key], same=out[key].same + (c.name,)) if key in out else c
     return tuple(out.values())

@@ -257,7 +257,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "source": where, "model": model_name, "input": input_name,
         "final_model": "tyre_saturation" if saturation else "linear",
         "steering_geometry": "tan" if fits.model.geometry == ACKERMANN else "w",
-        "samples_per_second": 1 / log.h, "seconds_driven": driven,
+        "steering_geometry_choice": fits.model.geometry_choice, "samples_per_second": 1 / log.h, "seconds_driven": driven,
         "segments": {"fit": int(len(fits.fit_segs.idx)), "held_out": int(len(test_segs.idx)), "length_s": SEGMENT,
                      "burn_in_s": BURN_IN, "min_speed": min_speed},
         "vehicle": {**_vehicle_json(vehicle, (L, L_from), p), "axle_loads": list(fits.loads)},
@@ -311,7 +311,8 @@ def _kinematic(log, segs, wheelbase, where, model_name, input_name, driven, min_
     if bias_info:
         params["gyro_bias"] = {**bias_info, "identifiable": True}
     return {"method": "kinematic model r = v tan(delta) / L, segments held out", "source": where, "model": "kinematic",
-            "input": input_name, "final_model": "kinematic", "steering_geometry": "tan", "samples_per_second": 1 / log.h, "seconds_driven": driven,
+            "input": input_name, "final_model": "kinematic", "steering_geometry": "tan",
+            "steering_geometry_choice": {"value": "tan", "how": "kinematic", "passed_over": "w"}, "samples_per_second": 1 / log.h, "seconds_driven": driven,
             "segments": {"fit": int((~segs.held_out).sum()), "held_out": int(segs.held_out.sum()), "length_s": SEGMENT,
                          "burn_in_s": BURN_IN, "min_speed": min_speed},
             "vehicle": _vehicle_json(vehicle, (L, L_from), p),
@@ -529,14 +530,19 @@ def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments,
     angle), "tan" (driving.ACKERMANN: an Ackermann machine turns on r = v tan w / L when its tyres
     do not slip) or "auto": where the wheel angle reaches LARGE_ANGLE (tan w exceeds w by 1 %)
     both, the one with the smaller residual sum of squares (same parameters) kept on ``model`` and
-    said with what it passed over; below it w (the two are alike)."""
+    said with what it passed over; below it w (the two are alike). The choice also goes on
+    ``model.geometry_choice``, {value, how (option|small_angles|compared), reach [rad], threshold,
+    rms [rad/s] by geometry, passed_over}: the report's steering_geometry_choice."""
     if choice != "auto":
         model.geometry = ACKERMANN if choice == "tan" else SMALL_ANGLE
+        model.geometry_choice = {"value": choice, "how": "option", "passed_over": "w" if choice == "tan" else "tan"}
         notes.append(f"steering geometry: the yaw plant is driven by {choice} (--steering-geometry {choice})")
         return fit_linear(start)
     small = fit_linear(start)
     u = np.abs(model.log.u[segs.idx][segs.scored])
     reach = float(np.percentile(u, 99)) if len(u) else 0.0
+    model.geometry_choice = {"value": "w", "how": "small_angles", "reach": reach, "threshold": LARGE_ANGLE,
+                             "passed_over": "tan"}
     if reach < LARGE_ANGLE:
         return small
     model.geometry = ACKERMANN
@@ -545,6 +551,8 @@ def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments,
     model.geometry = ACKERMANN if keep is ackermann else SMALL_ANGLE
     rms = {k: math.sqrt(f.rss_total / max(f.n_total, 1)) for k, f in (("tan w", ackermann), ("w", small))}
     chosen, other = ("tan w", "w") if keep is ackermann else ("w", "tan w")
+    model.geometry_choice |= {"value": chosen.removesuffix(" w"), "how": "compared", "passed_over": other.removesuffix(" w"),
+                              "rms": {"tan": rms["tan w"], "w": rms["w"]}}
     notes.append(f"steering geometry: the wheel angle reaches {reach:.2g} rad (99th percentile), where tan w exceeds w "
                  f"by {100 * (math.tan(reach) / reach - 1):.0f} %: the yaw plant is driven by {chosen} (yaw RMS "
                  f"{rms[chosen]:.3g} rad/s); passed over: {other} (RMS {rms[other]:.3g} rad/s); --steering-geometry "

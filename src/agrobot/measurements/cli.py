@@ -65,6 +65,9 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    help="the speed is unsigned (a receiver's speed over ground, an encoder without direction): make "
                         "it negative where the audit finds the machine reversing (the course against a direction "
                         "channel, the heading or the steering); without it such a recording is refused")
+    g.add_argument("--trim-standstill", action="store_true",
+                   help="leave out the standstill before and after the run used (kept by default: a gyro's bias "
+                        "and a steering offset are measured standing still)")
     g.add_argument("--time-range", type=float, nargs=2, default=None, metavar=("START", "END"),
                    help="use this span, s after the recording's first fix, instead of a run")
 
@@ -111,6 +114,7 @@ def recording_options(args: argparse.Namespace):
                             run=args.run, time_range=tuple(args.time_range) if args.time_range else None,
                             bus=getattr(args, "bus", None), time=getattr(args, "time", None),
                             keep_spikes=getattr(args, "keep_spikes", False),
+                            trim_standstill=getattr(args, "trim_standstill", False),
                             max_gap=getattr(args, "max_gap", 0.5), align=getattr(args, "align", "auto"),
                             sign_speed=getattr(args, "sign_speed", False),
                             where=getattr(args, "where", None),

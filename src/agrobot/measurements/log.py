@@ -35,8 +35,10 @@ COLUMNS: dict[str, tuple[str, str]] = {
 }
 CANONICAL = tuple(COLUMNS)
 
-# A column whose largest magnitude passes this bound is almost surely in degrees: no tractor
-# steers beyond 70 deg (1.22 rad) or yaws faster than 3 rad/s (172 deg/s).
+# A column whose largest magnitude passes this bound is almost surely in degrees: no Ackermann
+# vehicle steers beyond 70 deg (1.22 rad; a car's inner wheel 35-45 deg, a tractor's 50-60 deg;
+# only a pivot-steer tricycle's or forklift's wheel goes further, to 80-90 deg: wheel_angle_in_radians)
+# or yaws faster than 3 rad/s (172 deg/s).
 DEGREE_SUSPECT = {"delta_cmd": (1.22, "rad"), "delta": (1.22, "rad"), "yaw_rate": (3.0, "rad/s"),
                   "odom_yaw_rate": (3.0, "rad/s"), "turn_rate_cmd": (3.0, "rad/s")}
 
@@ -159,12 +161,12 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
                     f"and is read as rad: {why}")
             elif peak > bound and c in frame.attrs.get("declared", {}):
                 frame.attrs.setdefault("notes", []).append(
-                    f"warning: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than {bound} {unit}, "
-                    f"which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
+                    f"warning: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than {bound} {unit}"
+                    f"{past_widest_lock(c, peak)}, which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
                     f"[{frame.attrs['declared'][c]}] (the user's word stands)")
             elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than "
-                               f"{bound} {unit}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
+                               f"{bound} {unit}{past_widest_lock(c, peak)}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
                                f"hold {unit} (multiply by pi/180 = {math.pi / 180:.6f}: degrees are {180 / math.pi:.1f} times radians; a raw recording: declare the "
                                f"unit, --signal '{c}=...[deg{'/s' if unit == 'rad/s' else ''}]')")
     check_units(frame, path)
@@ -306,16 +308,50 @@ def slope_through_origin(x: np.ndarray, y: np.ndarray) -> float:
     return float(x @ y / (x @ x)) if x @ x > 0 else math.nan
 
 
+# The evidence for a wheel angle past DEGREE_SUSPECT's 70 deg in rad (wheel_angle_in_radians), each bound from the
+# physics of a steered wheel and of its sensors:
+WIDEST_LOCK = math.pi / 2       # rad: a wheel at 90 deg points across the vehicle, a pivot-steer tricycle's full lock;
+                                # past it, it points backwards (delta - pi driven the other way, v < 0): no wheel
+                                # angle in rad passes it, and a column that does is in degrees
+READING_ERROR = math.radians(0.5)   # rad: a steering angle sensor's zero and linearity error (a potentiometer's)
+TAN_ERROR = 0.1                 # the error of tan(delta) a sample used may carry from READING_ERROR
+# d tan / tan = d delta / (sin delta cos delta): READING_ERROR makes at most TAN_ERROR of tan below this (85 deg)
+TAN_WIDEST = (math.pi - math.asin(2 * READING_ERROR / TAN_ERROR)) / 2
+TURNING_ANGLE = 3 * READING_ERROR   # rad: a turn, not the sensor's zero error (1.5 deg)
+TURNING_RATE = 0.02             # rad/s: a turn, not a MEMS gyro's uncorrected bias (about 1 deg/s)
+MOVING_SPEED = 0.1              # m/s: driving, not standing (measurements.channel_updates.STANDING)
+# the widest turn driven must reach where tan delta exceeds delta by about 3 TAN_ERROR (29 % at 0.8 rad = 46 deg):
+# there the two readings of the column differ by three times what a reading error makes of tan
+EVIDENT_ANGLE = 0.8
+WHEELBASES = (0.1, 10.0)        # m: a 1:10 model car's to a long truck's (the --wheelbase range)
+MIN_R2 = 0.8                    # the no-slip turn explains a steered vehicle's yaw but for understeer (K v^2 / L of
+                                # 10-20 % at the speeds of wide turns), slip and gyro noise: 80 % of its variance
+
+
 def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
-    """The evidence that a wide wheel-angle column (a tricycle's or a forklift's steered wheel turns
-    to 90 deg) is in rad, or None: with the speed v and the yaw rate r, the turns follow the no-slip
-    r = v tan(delta) / L of a vehicle's wheelbase L (0.1-10 m) better than the r = v delta / L that
-    a column in degrees, whose true angles then stay below 1.6 deg, would follow."""
+    """The evidence that a wide wheel-angle column (past DEGREE_SUSPECT's 70 deg: a pivot-steer
+    tricycle's or forklift's steered wheel turns to 80-90 deg) is in rad, or None: the turns follow
+    the no-slip r = v tan(delta) / L of a wheelbase L better than the r = v delta / L that a column in
+    degrees (its true angles 57 times smaller) would follow. Each bound from the physics:
+
+    - never past WIDEST_LOCK = pi/2 (robust_peak): at 90 deg a wheel points across the vehicle;
+      past it, it points backwards (delta - pi driven with v < 0), so no wheel angle in rad does;
+    - samples below TAN_WIDEST (85 deg): d tan / tan = d delta / (sin delta cos delta), so a
+      READING_ERROR of 0.5 deg moves tan by TAN_ERROR (10 %) there, and more beyond;
+    - above TURNING_ANGLE (1.5 deg, 3 reading errors), |r| above TURNING_RATE (a MEMS gyro's
+      uncorrected 1 deg/s), |v| above MOVING_SPEED (standing: channel_updates.STANDING), 100 at least;
+    - the widest turn reaches EVIDENT_ANGLE (46 deg), where tan exceeds the angle by 29 %, three
+      times what a reading error makes of it: below, the two readings are not told apart;
+    - L within WHEELBASES (a 1:10 model car's 0.1 m to a truck's 10 m: --wheelbase's range), and
+      R2 >= MIN_R2 (0.8: the no-slip turn less understeer, K v^2 / L of 10-20 %, slip and noise)."""
     if not {"t", "v", "yaw_rate", column} <= set(frame.columns):
         return None
     v, r, w = (frame[c].to_numpy(float) for c in ("v", "yaw_rate", column))
-    turning = (np.abs(v) > 0.1) & (np.abs(w) > 0.05) & (np.abs(w) < 1.5) & (np.abs(r) > 0.02)
-    if turning.sum() < 100 or np.abs(w[turning]).max() < 0.8:
+    if robust_peak(w) > WIDEST_LOCK:
+        return None
+    turning = ((np.abs(v) > MOVING_SPEED) & (np.abs(w) > TURNING_ANGLE) & (np.abs(w) < TAN_WIDEST)
+               & (np.abs(r) > TURNING_RATE))
+    if turning.sum() < 100 or np.abs(w[turning]).max() < EVIDENT_ANGLE:
         return None
     fits = {}
     for name, x in (("tan", v * np.tan(w)), ("linear", v * w)):
@@ -323,10 +359,18 @@ def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
         slope = slope_through_origin(x, y)
         fits[name] = (slope, 1 - float(np.sum((y - slope * x) ** 2) / np.sum(y ** 2)))
     (slope, r2), (_, r2_linear) = fits["tan"], fits["linear"]
-    if slope <= 0 or not 0.1 <= 1 / slope <= 10 or r2 < 0.8 or r2 <= r2_linear:
+    if slope <= 0 or not WHEELBASES[0] <= 1 / slope <= WHEELBASES[1] or r2 < MIN_R2 or r2 <= r2_linear:
         return None
     return (f"its turns follow yaw_rate = v tan({column}) / L with L = {1 / slope:.3g} m (R2 {r2:.3f}, "
             f"against {r2_linear:.3f} for an angle in degrees)")
+
+
+def past_widest_lock(column: str, peak: float) -> str:
+    """Why a wheel-angle column reaching ``peak`` cannot be in rad ('' when it may be): past pi/2."""
+    if column not in ("delta", "delta_cmd") or peak <= WIDEST_LOCK:
+        return ""
+    return (f", and past pi/2 = {WIDEST_LOCK:.4g} rad (90 deg), where a steered wheel points across the vehicle: "
+            f"no wheel angle in rad passes it (a pivot-steer tricycle's lock is 80-90 deg)")
 
 
 def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: np.ndarray) -> None:

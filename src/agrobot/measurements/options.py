@@ -22,6 +22,7 @@ class ImportOptions:
     min_speed: float = 0.2                      # m/s: driving
     min_stop: float = 3.0                       # s: a shorter stop does not end a run
     min_run: float = 10.0                       # s: shorter runs are listed, not used
+    trim_standstill: bool = False               # leave out the standstill either side of the run used
     steering_ratio: float | None = None         # recorded steering angles / road-wheel angles (None: the study's, else 1)
     bus: str | None = None                      # the CAN bus to read (candump's can0, a Vector channel)
     time: str | None = None                     # a table's time column(s) (measurements.tables.parse_time)

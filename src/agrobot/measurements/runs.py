@@ -6,6 +6,8 @@ shorter gap of one stream is bridged (linear; a set-point held) and named by the
 (measurements.audit). Runs are the stretches where the vehicle drives (|speed| above ``min_speed``, stops
 shorter than ``min_stop`` bridged) with every stream present. One run is used: the longest, the
 ``run``-th, or a ``time_range`` (seconds from the recording's first sample); the report says which.
+A run keeps the standstill either side of it (a gyro's bias is read there) unless
+``trim_standstill`` (``--trim-standstill``).
 Positions go to a local east/north plane about the run's first fix (pymap3d, WGS-84). Measured
 signals are interpolated linearly onto the log's grid; the set-points are held (the last frame).
 
@@ -29,6 +31,8 @@ from .streams import Streams, gnss_speed, iso
 GAP_PERIODS, GAP_MIN = 3.0, 0.2
 MAX_SAMPLES = 5e7      # rows of one log grid (a day at 500 Hz): more is a damaged clock, not a recording
 SENT_WITH_ROW = 1e-3   # s: a set-point sent up to this after a grid time is in force at it (held)
+STANDSTILL_KEPT = 60.0  # s of standstill kept at most either side of a run: a gyro's bias is read in 2 s, and the
+                        # nearest minute holds the bias of the run's temperature, not a long idle's
 HELD_GAP = 1.0        # s: a set-point is sent when it changes, or now and then; in force until the next
 DISCRETE = ("fix_quality", "mode", "engaged", "gear", "direction")   # codes: held at their own times, never interpolated
 
@@ -144,8 +148,10 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     report["gaps"] = sum((gaps(t, name, u0, least[name]) for name, t in times), [])
     grid = _grid(source, times, u0, step)
     covered = _covered_grid(grid, times, least, u0, streams, report)
-    long_runs = _runs(grid, u0, step, covered, _speed(grid, streams, report), options, report)
+    speed = _speed(grid, streams, report)
+    long_runs = _runs(grid, u0, step, covered, speed, options, report)
     pick, used = _choose(source, grid, u0, covered, long_runs, report, options)
+    pick, used = with_standstill(pick, used, grid - u0, covered, speed, options)
     report["used"] = {**used, "duration": float(pick.sum() * step), "utc_start": iso(grid[pick][0]),
                       "utc_start_s": float(grid[pick][0])}
     t = grid[pick]
@@ -271,6 +277,40 @@ def _runs(grid: np.ndarray, u0: float, step: float, covered: np.ndarray, v: np.n
     report["runs"] = long_runs
     report["short_runs_ignored"] = len(runs) - len(long_runs)
     return long_runs
+
+
+def with_standstill(pick: np.ndarray, used: dict, t: np.ndarray, covered: np.ndarray, v: np.ndarray | None,
+                    options: ImportOptions) -> tuple[np.ndarray, dict]:
+    """A run's samples with the standstill either side of it (|v| <= min_speed, every stream present,
+    up to the next driving or gap, STANDSTILL_KEPT at most): a gyro's bias and a steering offset are
+    measured standing still (identification.ordinary_driving._standstill_bias); ``--trim-standstill``
+    leaves it out. Said in ``used["how"]`` either way; a time range or a stretch chosen without a run
+    is kept as it is."""
+    if not used["how"].startswith("run") or v is None or len(t) < 2:
+        return pick, used
+    idx = np.flatnonzero(pick)
+    a, b = int(idx[0]), int(idx[-1]) + 1
+    step = float(t[1] - t[0])
+    most = int(STANDSTILL_KEPT / step)
+    still = covered & (np.abs(v) <= options.min_speed)
+    lo, hi = a, b
+    while lo > max(0, a - most) and still[lo - 1]:
+        lo -= 1
+    while hi < min(len(t), b + most) and still[hi]:
+        hi += 1
+    before, after = (a - lo) * step, (hi - b) * step
+    if not before and not after:
+        return pick, used
+    if options.trim_standstill:
+        return pick, {**used, "how": f"{used['how']}, the standstill either side ({before:.1f} s before, "
+                                     f"{after:.1f} s after) left out (--trim-standstill)"}
+    out = np.zeros(len(pick), bool)
+    out[lo:hi] = True
+    return out, {**used, "start": float(t[lo]), "end": float(t[hi - 1]), "standstill_kept": [before, after],
+                 "how": f"{used['how']} with the standstill either side ({before:.1f} s before, {after:.1f} s after, "
+                        f"{STANDSTILL_KEPT:g} s at most: "
+                        f"a gyro bias and a steering offset are measured standing still; --trim-standstill leaves "
+                        f"it out)"}
 
 
 def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str, np.ndarray]:
