@@ -124,7 +124,8 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
                unfit: Callable[[ShippedVehicle], str] | None = None) -> str:
     """The shipped study to try for a log of wheelbase ``log_wheelbase`` whose study declares
     ``declared`` and ``mass``: of those not unlike it and able to do what the log shows (``unfit``:
-    why a shipped vehicle cannot, '' when it can), the nearest in size (nearness: wheelbase, outline
+    why a shipped vehicle cannot, '' when it can; given, the study's limits are what the log exceeds,
+    so a steering map is not offered as the other reading), the nearest in size (nearness: wheelbase, outline
     and mass in log ratio; an exact tie goes to the first name, said), the others it passed over
     named; else what to write."""
     kind = declared.kind if declared is not None else None
@@ -146,8 +147,9 @@ def suggestion(log_wheelbase: float, study_name: str, declared: Vehicle | None, 
     outline = (declared.length, declared.width) if declared is not None else (None, None)
     table = (f'class = "{kind or "..."}", wheelbase = {log_wheelbase:.3g}'
              + (", length = {:g}, width = {:g}".format(*outline) if all(outline) else ", length, width"))
-    return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: if the study's "
-            f"wheelbase is the vehicle's, the steering map is the cause, else write a study with the log's "
+    either = "" if unfit else "if the study's wheelbase is the vehicle's, the steering map is the cause, else "
+    return (f"no shipped study is of {'a ' + kind if kind else 'a vehicle'} of the log's size{passed}: {either}"
+            f"write a study with the log's "
             f"wheelbase {log_wheelbase:.3g} m (its plant's l_f + l_r) and its [vehicle] table ({table})")
 
 
