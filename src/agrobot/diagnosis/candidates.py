@@ -36,6 +36,7 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import level_on_updates, update_step
+from .own_samples import reading
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, track_residual_vector,
                      wheel_angle_input)
@@ -222,6 +223,7 @@ class Replay:
         self.yaw_measured = np.isfinite(self.gyro) if "yaw_rate" in f else np.ones(len(self.t), bool)
         derived = f.attrs.get("yaw_measurement")
         self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
+        self.yaw_sampling = reading(f, "yaw_rate", self.gyro) if derived is None and "yaw_rate" in f else None
         self.yaw_update_times = getattr(derived, "update_times", None)
         if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
             self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
@@ -524,7 +526,10 @@ class Replay:
 
     def seen(self, stage: str, pred: np.ndarray) -> np.ndarray:
         """A stage's prediction as its measurement sees it: a yaw rate derived from a heading or a
-        course averages the true one (identification.yaw_measurement's kernel), the model's alike."""
+        course averages the true one (identification.yaw_measurement's kernel), a gyro interpolated
+        from its own samples reads the yaw rate at them (own_samples.reading): the model's alike."""
+        if stage == "yaw" and self.yaw_sampling is not None:
+            return self.yaw_sampling @ pred
         if stage != "yaw" or self.yaw_kernel is None:
             return pred
         return convolve1d(pred, self.yaw_kernel[::-1], mode="nearest")
