@@ -53,6 +53,7 @@ from .replay import aligned_residuals, antenna_track
 
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
 BAND_POINTS = 33                 # frequencies G(w) is averaged over in the high band
+BAND_DRAWS = 8                   # unit noises through the interpolation whose read level is its white power
 HELD_OUT_ROWS = 512              # rows (per update): fewer held out, the floor is read on both parts
 
 
@@ -144,8 +145,9 @@ def sensor_level(x: np.ndarray, t: np.ndarray, fs: float, how: Sampling) -> tupl
     level = level_on_updates(x, fs, how.step)
     if how.stamps is None:
         return level, level
-    read = how.step if how.step > 1 and x.shape[-1] >= 16 * how.step else 1      # as level_on_updates reads it
-    band = np.mean([interpolated_white(row[::read], how.stamps)[0] for row in t])
+    rows, rng = interpolation(how.stamps, t.ravel()), np.random.default_rng(0)   # unit noise on the samples, read alike
+    band = np.mean([level_on_updates((rows @ rng.standard_normal(len(how.stamps))).reshape(x.shape), fs, how.step) ** 2
+                    for _ in range(BAND_DRAWS)])
     per_row = np.mean([interpolated_white(row, how.stamps)[1] for row in t])
     sigma = level / math.sqrt(band)
     return sigma, sigma * math.sqrt(per_row)
