@@ -111,6 +111,14 @@ def sampling(replay, sensor: str, column: str | None = None, x: np.ndarray | Non
     return Sampling(max(1, int(round(float(np.median(np.diff(stamps))) / replay.h))), stamps)
 
 
+def track_samplings(replay) -> dict[str, Sampling]:
+    """The Sampling of each channel a dead-reckoned track reads: the GPS (its fixes' x), the speed
+    (its source column) and the gyro."""
+    column = replay.speed_source if replay.speed_source in replay.frame else "v"
+    return {"gps": sampling(replay, "gnss", "x", replay.gps[:, 0]), "v": sampling(replay, "v", column, replay.speed),
+            "yaw_rate": sampling(replay, "yaw_rate", x=replay.gyro)}
+
+
 def interpolation_weights(t: np.ndarray, own_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(i_j, f_j): the row at t_j lies at the fraction f_j of the way from own sample i_j to i_j + 1."""
     own_t = np.asarray(own_t, float)
@@ -164,6 +172,15 @@ def mean_interval(how: Sampling, t: np.ndarray, h: float) -> float:
     return h * float(np.sum(w * w) / np.sum(w))
 
 
+def track_level(replay, x: np.ndarray, t: np.ndarray, how: Sampling, integrated: bool) -> float:
+    """The white level per row that stands for a channel's noise in a dead-reckoned track
+    (replay.TrackWhitening), from ``x`` on the rows ``t`` (sensor_level): an integrated channel's
+    random walk grows by sigma^2 P per second (mean_interval), a row's white level sigma sqrt(P / h);
+    a position's noise is its RMS on the rows."""
+    sigma, rms = sensor_level(x, t, 1.0 / replay.h, how)
+    return sigma * math.sqrt(mean_interval(how, replay.t, replay.h) / replay.h) if integrated else rms
+
+
 def sampled_noise(how: Sampling, t: np.ndarray, sigma: float, rng: np.random.Generator, shape: tuple = ()) -> np.ndarray:
     """White noise of ``sigma`` on the channel's own samples as its rows ``t`` carry it (len(t), *shape):
     interpolated from its stamps (own_samples.interpolation), else held over ``step`` rows."""
@@ -203,13 +220,11 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     t, rows = replay.t, np.concatenate([replay.windows["fit"], replay.windows["test"]])
     nominal = replay.predicted("position", values)
     res = aligned_residuals(nominal, replay.gps, rows)          # the GPS's: window by window, each axis
-    on_gps = sampling(replay, "gnss", "x", replay.gps[:, 0])
+    on = track_samplings(replay)
+    on_gps, on_v, on_gyro = on["gps"], on["v"], on["yaw_rate"]
     sigma_gps, gps_row = sensor_level(np.concatenate([res[..., 0], res[..., 1]]), np.concatenate([t[rows]] * 2), fs,
                                       on_gps)
-    column = replay.speed_source if replay.speed_source in replay.frame else "v"
-    on_v = sampling(replay, "v", column, replay.speed)
     sigma_v = sensor_level(replay.speed, t, fs, on_v)[0]
-    on_gyro = sampling(replay, "yaw_rate", x=replay.gyro)
     sigma_gyro = sensors.get("yaw_rate") or sensor_level(replay.gyro, t, fs, on_gyro)[0]   # no yaw stage: its top band
     span = replay.chord_span
     floors["speed"] = math.sqrt(2 * gps_row ** 2 / span ** 2 + sigma_v ** 2 * mean_interval(on_v, t, replay.h) / span)
