@@ -14,11 +14,10 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   onto the rows from its own stamps (jittered, or at another rate: the import's
   frame.attrs["own_samples"]), row j at the fraction f_j between its samples i_j and i_j + 1,
   carries n_j = (1 - f_j) e_{i_j} + f_j e_{i_j+1}: of variance ((1 - f_j)^2 + f_j^2) sigma^2, its
-  neighbours correlated, and its top band damped more than the rest:
-
-      E |sum_j n_j exp(-i w j)|^2 / N = sigma^2 G(w),   G(w) = (1/N) sum_i |sum_j W_ji exp(-i w j)|^2
-
-  (W_ji the weight of sample i in row j), so sigma = white_level / sqrt(mean_band G), and the floor
+  neighbours correlated, and its top band damped more than the rest: the level read is sigma sqrt(G),
+  G the power the same reading (the same rows, the same Welch segments) finds in unit white noise
+  drawn on the stamps and interpolated alike (seeded draws: what the estimator makes of the
+  interpolation, leakage included), so sigma = white_level / sqrt(G), and the floor
   the stage's residual is judged against is sigma sqrt(mean_j ((1 - f_j)^2 + f_j^2)); both read on
   the held-out rows (a noise that grows with speed is judged on the speeds it is compared at), on
   both parts when the held-out rows are too few for the spectrum; a yaw rate
@@ -52,7 +51,6 @@ from .own_samples import interpolation, own_stamps
 from .replay import aligned_residuals, antenna_track
 
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
-BAND_POINTS = 33                 # frequencies G(w) is averaged over in the high band
 BAND_DRAWS = 8                   # unit noises through the interpolation whose read level is its white power
 HELD_OUT_ROWS = 512              # rows (per update): fewer held out, the floor is read on both parts
 
@@ -127,28 +125,20 @@ def interpolation_weights(t: np.ndarray, own_t: np.ndarray) -> tuple[np.ndarray,
     return i, f
 
 
-def interpolated_white(t: np.ndarray, own_t: np.ndarray) -> tuple[float, float]:
-    """(mean_band G, mean_j ((1 - f_j)^2 + f_j^2)): what linear interpolation from the stamps
-    ``own_t`` onto the rows ``t`` (in the order given) makes of unit white noise: its white power (as
-    white_level reads it) and its mean square per row (module docstring)."""
-    i, f = interpolation_weights(np.asarray(t, float), own_t)
-    j, n = np.arange(len(i)), int(i.max()) + 2
-    gains = []
-    for w in 2 * np.pi * np.linspace(*HIGH_BAND, BAND_POINTS):
-        phase = np.exp(-1j * w * j)
-        a, b = (1 - f) * phase, f * phase
-        re = np.bincount(i, a.real, n) + np.bincount(i + 1, b.real, n)
-        im = np.bincount(i, a.imag, n) + np.bincount(i + 1, b.imag, n)
-        gains.append(float(np.sum(re ** 2 + im ** 2)) / len(i))
-    return float(np.mean(gains)), float(np.mean((1 - f) ** 2 + f ** 2))
+def interpolated_power(t: np.ndarray, own_t: np.ndarray) -> float:
+    """mean_j ((1 - f_j)^2 + f_j^2): the mean square linear interpolation from the stamps ``own_t``
+    onto the rows ``t`` makes of unit white noise (module docstring)."""
+    f = interpolation_weights(np.asarray(t, float), own_t)[1]
+    return float(np.mean((1 - f) ** 2 + f ** 2))
 
 
 def sensor_level(x: np.ndarray, t: np.ndarray, fs: float, how: Sampling) -> tuple[float, float]:
     """(sigma on the channel's own samples, the RMS its noise has on the rows ``t``) from ``x`` on
     those rows (a residual, or the signal; along its last axis, each leading row a stretch): the
     white level on the channel's updates (level_on_updates), corrected for an interpolation from its
-    own stamps (module docstring: sigma = level / sqrt(mean_band G), RMS sigma sqrt(mean_j ((1 - f_j)^2
-    + f_j^2)), both averaged over the stretches)."""
+    own stamps (module docstring: sigma = level / sqrt(G), G the power the same reading finds in
+    unit noise drawn on the stamps and interpolated onto ``t``, BAND_DRAWS seeded draws; RMS
+    sigma sqrt(mean_j ((1 - f_j)^2 + f_j^2)), averaged over the stretches)."""
     x, t = np.asarray(x, float), np.atleast_2d(np.asarray(t, float))
     level = level_on_updates(x, fs, how.step)
     if how.stamps is None:
@@ -156,7 +146,7 @@ def sensor_level(x: np.ndarray, t: np.ndarray, fs: float, how: Sampling) -> tupl
     rows, rng = interpolation(how.stamps, t.ravel()), np.random.default_rng(0)   # unit noise on the samples, read alike
     band = np.mean([level_on_updates((rows @ rng.standard_normal(len(how.stamps))).reshape(x.shape), fs, how.step) ** 2
                     for _ in range(BAND_DRAWS)])
-    per_row = np.mean([interpolated_white(row, how.stamps)[1] for row in t])
+    per_row = np.mean([interpolated_power(row, how.stamps) for row in t])
     sigma = level / math.sqrt(band)
     return sigma, sigma * math.sqrt(per_row)
 
