@@ -35,7 +35,8 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 
 from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
-from .noise_floor import level_on_updates, update_step
+from .noise_floor import track_level, track_samplings
+from .own_samples import reading
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, track_residual_vector,
                      wheel_angle_input)
@@ -222,6 +223,7 @@ class Replay:
         self.yaw_measured = np.isfinite(self.gyro) if "yaw_rate" in f else np.ones(len(self.t), bool)
         derived = f.attrs.get("yaw_measurement")
         self.yaw_kernel = derived.kernel(self.h) if derived is not None else None
+        self.yaw_sampling = reading(f, "yaw_rate", self.gyro) if derived is None and "yaw_rate" in f else None
         self.yaw_update_times = getattr(derived, "update_times", None)
         if "yaw_rate" in f and not self.yaw_measured.all() and self.yaw_measured.sum() >= 2:
             self.gyro = np.interp(self.t, self.t[self.yaw_measured], self.gyro[self.yaw_measured])
@@ -488,26 +490,23 @@ class Replay:
     @cached_property
     def track_noise(self) -> tuple[float, float, float]:
         """(sigma_gps, sigma_gyro, sigma_speed) per row, the white levels the dead-reckoned track's
-        residual carries (noise_floor.level_on_updates, on each sensor's own updates; an integrated
+        residual carries (noise_floor.track_level, on each sensor's own samples; an integrated
         channel held m rows adds m x the variance per row to its random walk): the GPS's from the
         aligned residual of the study's track, the gyro's from the yaw stage's residual under the
         study's values (or the gyro itself without a yaw stage; none for a yaw rate derived from a
         heading, whose integral is that heading), the speed's from the speed itself."""
-        fs, v = 1.0 / self.h, self.baseline.values
-
-        def per_row(x, sensor, integrated=True):
-            step = update_step(self.frame, sensor, self.h)
-            return level_on_updates(x, fs, step) * (math.sqrt(step) if integrated else 1.0)
-
+        v = self.baseline.values
         rows = np.concatenate([self.windows["fit"], self.windows["test"]])
         track = antenna_track(self.t, self.gyro, self.speed, v, self.lateral(v))     # the fits' tracks kept (tracks)
-        res = aligned_residuals(track, self.gps, rows)
-        sigma_gps = per_row(np.concatenate([res[..., 0], res[..., 1]]), "gnss", integrated=False)
+        res, on = aligned_residuals(track, self.gps, rows), track_samplings(self)
+        sigma_gps = track_level(self, np.concatenate([res[..., 0], res[..., 1]]), np.concatenate([self.t[rows]] * 2),
+                                on["gps"], integrated=False)
         derived = self.frame.attrs.get("yaw_measurement")
         sigma_gyro = 0.0
         if derived is None or derived.kind == "gyro":
-            sigma_gyro = per_row(self.gyro - self.predicted("yaw", v) if "yaw" in self.stages else self.gyro, "yaw_rate")
-        return sigma_gps, sigma_gyro, per_row(self.speed, "v")
+            sigma_gyro = track_level(self, self.gyro - self.predicted("yaw", v) if "yaw" in self.stages else self.gyro,
+                                     self.t, on["yaw_rate"], integrated=True)
+        return sigma_gps, sigma_gyro, track_level(self, self.speed, self.t, on["v"], integrated=True)
 
     def scored(self, stage: str) -> np.ndarray:
         """Samples of a time-series stage scored in either part (for plots and evidence)."""
@@ -524,7 +523,10 @@ class Replay:
 
     def seen(self, stage: str, pred: np.ndarray) -> np.ndarray:
         """A stage's prediction as its measurement sees it: a yaw rate derived from a heading or a
-        course averages the true one (identification.yaw_measurement's kernel), the model's alike."""
+        course averages the true one (identification.yaw_measurement's kernel), a gyro interpolated
+        from its own samples reads the yaw rate at them (own_samples.reading): the model's alike."""
+        if stage == "yaw" and self.yaw_sampling is not None:
+            return self.yaw_sampling @ pred
         if stage != "yaw" or self.yaw_kernel is None:
             return pred
         return convolve1d(pred, self.yaw_kernel[::-1], mode="nearest")

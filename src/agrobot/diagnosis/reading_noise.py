@@ -12,7 +12,8 @@ a gain alone, G_theta = K G, it is the reliability ratio K_hat = K <Gd,Gd> / (<G
 The corrected least squares minimises S - P instead, whose expectation is the fit on a noise-free
 reading; for the gain alone K = K_hat <Gd_r,Gd_r> / (<Gd_r,Gd_r> - <Gn,Gn>) (d_r the reading).
 P is taken by Monte Carlo: REALISATIONS of white noise at sigma_n (held over the reading's updates,
-seeded: the same noise at every theta) through the stage's own dynamics under theta, through the
+seeded: the same noise at every theta; interpolated from the reading's own samples where the import
+did) through the stage's own dynamics under theta, through the
 steering map (``passage``). Gauss-Newton on S - P, u_m = G_theta(n_m):
 
     step = -(J_r'J_r - mean_m J_u'J_u)^-1 (J_r'r - mean_m J_u'u_m),
@@ -50,7 +51,7 @@ import numpy as np
 
 from agrobot.estimation import FitResult, effective_size, forward_jacobian
 
-from .noise_floor import level_on_updates, update_step
+from .noise_floor import sampled_noise, sampling, sensor_level
 from .replay import measured_yaw_rate, wheel_angle_input
 
 INPUT_NOISE_SHARE = 0.05       # the passage's share of the yaw stage's RSS from which it is corrected
@@ -59,19 +60,18 @@ ITERATIONS = (3, 3)            # reweightings x Gauss-Newton steps each
 
 
 def reading_level(replay, sensors: dict | None) -> float:
-    """sigma_n [rad]: the white level of the reading's noise on its updates (module docstring)."""
+    """sigma_n [rad]: the white level of the reading's noise on its own samples (module docstring)."""
     level = (sensors or {}).get("delta")
     if level is not None and "steering" in replay.stages and math.isfinite(level):
         return float(level)
-    return level_on_updates(replay.delta, 1.0 / replay.h, update_step(replay.frame, "delta", replay.h))
+    return sensor_level(replay.delta, replay.t, 1.0 / replay.h, sampling(replay, "delta", x=replay.delta))[0]
 
 
 def noise_draws(replay, sigma_n: float, seed: int = 0) -> list[np.ndarray]:
-    """REALISATIONS of white noise at ``sigma_n``, held over the reading's updates."""
-    step = update_step(replay.frame, "delta", replay.h)
-    rng = np.random.default_rng(seed)
-    n = len(replay.t)
-    return [np.repeat(sigma_n * rng.standard_normal(-(-n // step)), step)[:n] for _ in range(REALISATIONS)]
+    """REALISATIONS of white noise at ``sigma_n`` as the reading's rows carry it (noise_floor.sampled_noise:
+    held over its updates, or interpolated from its own samples)."""
+    how, rng = sampling(replay, "delta", x=replay.delta), np.random.default_rng(seed)
+    return [sampled_noise(how, replay.t, sigma_n, rng) for _ in range(REALISATIONS)]
 
 
 def passage(replay, v: dict[str, float], noise: np.ndarray, part: str = "fit") -> np.ndarray:

@@ -177,9 +177,11 @@ def assemble(source: Path, streams: Streams, options: ImportOptions) -> tuple[pd
     report["missing"] = {c: why.get(c, _missing_reason(c, report)) for c in CANONICAL if c not in columns}
     order = present + [c for c in columns if c not in CANONICAL]
     frame = pd.DataFrame(columns)[order]
-    # the set-points' and the gyro's own samples on the log's clock: their rows hold or interpolate them
-    frame.attrs["own_samples"] = OwnSamples({c: ((sig[c][0] - t[0]).tolist(), np.asarray(sig[c][1], float).tolist())
-                                             for c in (*streams.held, "yaw_rate") if c in sig})
+    # the canonical channels' own samples on the log's clock (their rows hold or interpolate them), the
+    # fixes' positions among them
+    own = {c: ((sig[c][0] - t[0]).tolist(), np.asarray(sig[c][1], float).tolist())
+           for c in dict.fromkeys((*streams.held, *CANONICAL[1:])) if c in sig}
+    frame.attrs["own_samples"] = OwnSamples({**own, **(_fix_positions(t[0], streams) if gnss is not None else {})})
     return frame, report
 
 
@@ -346,6 +348,20 @@ def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str
             if extra == "heading":
                 columns[extra] = np.angle(np.exp(1j * columns[extra]))
     return columns
+
+
+def _fix_positions(t0: float, streams: Streams) -> dict:
+    """x, y at the fixes' own stamps (on the log's clock, from ``t0``): as _receiver_columns reads
+    them, east and north of the first row's position, of which the rows are the interpolation."""
+    import pymap3d
+
+    gnss = streams.gnss
+    utc = gnss["utc"].to_numpy(float)
+    datum = tuple(float(np.interp(t0, utc, gnss[k])) for k in ("lat", "lon", "height"))
+    x, y, _ = pymap3d.geodetic2enu(gnss["lat"].to_numpy(float), gnss["lon"].to_numpy(float),
+                                   gnss["height"].to_numpy(float), *datum, deg=True)
+    stamps = (utc - t0).tolist()
+    return {"x": (stamps, np.asarray(x, float).tolist()), "y": (stamps, np.asarray(y, float).tolist())}
 
 
 def _standstill_or_silence(report: dict) -> str:
