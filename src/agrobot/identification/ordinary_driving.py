@@ -808,6 +808,25 @@ def held_out_gain(fits: _Fits, base: FitResult, scaled: FitResult, cap: float | 
     return float(d.mean()), float(d.std(ddof=1) / math.sqrt(len(d))), len(d)
 
 
+def scale_on_bound(fit: FitResult) -> str | None:
+    """Why the turn scale k of a fit with k free (``yaw_gain``) is not concluded, or None: it ends on
+    a bound of SENSED_GAIN or its 95 % interval reaches or crosses one. Those bounds are its limit as
+    a scale (a sensor's gain, the declared wheelbase or speed off by up to 20 %; past them the
+    declaration itself is wrong), so there is no wider physical bound to search: the log cannot
+    decide whether k lies inside them, nor what K is, which moves with it."""
+    g, sd, q = fit.values["yaw_gain"], fit.std("yaw_gain"), TURN_GAIN
+    lo, hi = g - Z95 * sd, g + Z95 * sd
+    side = fit.at_bound(q) or ("lower" if not lo > q.lower else "upper" if not hi < q.upper else None)
+    if side is None and math.isfinite(sd):
+        return None
+    side = side or ("lower" if g - q.lower < q.upper - g else "upper")
+    bound = q.lower if side == "lower" else q.upper
+    interval = f" [{lo:.3g}, {hi:.3g}]" if math.isfinite(sd) else ""
+    return (f"k {g:.3g}{interval} at its bound {bound:g}; cannot decide: a scale of the turns is searched in "
+            f"[{q.lower:g}, {q.upper:g}] (a sensor's gain, the declared wheelbase or speed off by up to 20 %), its limit "
+            f"as a scale; past it the declared wheelbase, speed or wheel angle is wrong, not off by a scale: check them")
+
+
 def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple[dict, str | None, FitResult | None]:
     """A measured wheel angle is fitted at k = 1; a scale error of the turns (the angle sensor's, the
     declared wheelbase's, the speed's) then reads as understeer, since the steady yaw rate
@@ -816,9 +835,9 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
     why K is not told from k or None, the fit with k free when it is the one to keep or None).
     k = 1 is kept when the refit does not converge, when k does not predict the held-out segments
     better (held_out_gain: no evidence of a scale; a misfit of the model fits the fit segments
-    alone), or when K at k = 1 lies inside K's 95 % interval with k free. Else, where k ended on
-    its bound, both stiffnesses on theirs or K's std with k free exceeds APART x its std at k = 1, K
-    is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps the free fit, a smaller one
+    alone), or when K at k = 1 lies inside K's 95 % interval with k free. Else, where k or its 95 %
+    interval reaches a bound (scale_on_bound: neither k nor K concluded), both stiffnesses end on
+    theirs or K's std with k free exceeds APART x its std at k = 1, K is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps the free fit, a smaller one
     k = 1 with K's interval spanning both fits' (``span``)."""
     base, free_fit, mask = _turn_scale_fits(fits, final, cap)
     gain = TURN_GAIN
@@ -827,7 +846,8 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
     gained, gained_se, n_held = held_out_gain(fits, base, free_fit, cap)
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
     k2_seen = any(free_fit.at_bound(q) is None for q in free_fit.free if q.name in ("c_f", "c_r"))
-    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
+    bound = scale_on_bound(free_fit)
+    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or bound is not None
     scaled = abs(g - 1) - Z95 * g_sd > SCALE_TOLERANCE       # beyond what a declared wheelbase or speed is sure of
     inside = lo <= k1 <= hi
     alone = not gained > Z95 * gained_se                     # nan (too few held-out segments): no evidence either
@@ -842,12 +862,14 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
                f"k = 1 kept: the fit with k free predicts the held-out segments no better (mean square "
                f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 less over {n_held} segments): no evidence of a "
                f"scale, what k takes up on the fit segments does not carry over" if alone else
+               f"k not concluded: {bound}" if bound else
                f"K not told apart from k ({how_wide})" if wide else
                f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept{unseen}" if scaled else
                f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
                f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
     no_scale = not free_fit.converged or alone or inside
-    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
+    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning,
+                                 **({"identifiable": False, "note": f"not concluded: {bound}"} if bound else {})),
            "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
            "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict,
            "held_out_gain": {"mean": gained, "std_error": gained_se, "segments": n_held, "unit": "(rad/s)^2"},
@@ -858,6 +880,10 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
         return out | ({} if no_scale else {"span": span}), None, None
     if not wide:
         return out, None, free_fit if mask is None else _scaled_everywhere(fits, final, free_fit)
+    if bound:
+        return out, (f"the turn scale is not concluded ({bound}), nor K, which moves with it: K {k2:.3g} [{lo:.3g}, "
+                     f"{hi:.3g}] rad/(m/s2) with k free, {k1:.3g} [{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] at "
+                     f"k = 1"), None
     return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
                  f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
                  f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
