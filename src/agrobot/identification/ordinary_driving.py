@@ -42,7 +42,8 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
 
-from .comparisons import course_bias, model_steady_state, pair, understeer_pair, withheld_understeer
+from .comparisons import (course_bias, mark_not_concluded, model_steady_state, pair, pair_line, understeer_pair,
+                          withheld_understeer)
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
@@ -252,6 +253,8 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     understeer, char = withheld_understeer(understeer, char, comparisons,
                                            lambda k, sd: characteristic_speed(k, sd, L, top_speed=top))
     K, K_sd = understeer["value"], understeer["std"]
+    mark_not_concluded(comparisons, {"understeer gradient K": understeer, "command-to-yaw delay": params_json["delay"],
+                                     "gyro bias": params_json.get("gyro_bias")})
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
@@ -1062,11 +1065,12 @@ def _k_of(fit: FitResult) -> tuple[float, float]:
 
 def _steady_gain(log: DrivingLog, min_speed: float, k: tuple, L: float, gain: tuple, notes: list[str]) -> dict:
     """The steady-state yaw-rate gain's JSON: _gain_rows at K = k[0] (std k[1]), none (said in
-    ``notes``) when no single K is concluded (k[2], the understeer quantity, ``withheld``)."""
+    ``notes``) when no single K is concluded (k[2], the understeer quantity, ``withheld`` or not
+    ``identifiable``)."""
     d = {"unit": "(rad/s) per rad of input", "formula": "g v / (L + K v^2)"}
-    if k[2].get("withheld"):
-        why = ("left out: no single K is concluded (the dynamic fit's and the steady turns' disagree), so no gain "
-               "curve is drawn from one")
+    if k[2].get("withheld") or not k[2].get("identifiable", True):
+        why = ("left out: no single K is concluded (" + ("the dynamic fit's and the steady turns' disagree" if
+               k[2].get("withheld") else "see the understeer gradient") + "), so no gain curve is drawn from one")
         notes.append(f"steady-state yaw-rate gain rows and figure {why}")
         return d | {"rows": [], "note": why}
     return d | {"rows": _gain_rows(log, min_speed, k[0], k[1], L, *gain)}
@@ -1241,6 +1245,9 @@ def summary(report: dict) -> str:
             return f.format(d["value"]) + " " + d.get("unit", "") + " (on its bound)"
         return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "] " + d.get("unit", "")
 
+    def told(d, f="{:.4g}"):          # a value not concluded is given as fitted, as the comparisons give it
+        return q(d, f) if d.get("identifiable", True) and d.get("concluded", True) else f"not concluded (fitted {q(d, f)})"
+
     lines = [f"identification from driving ({report['source']}): {report['model']} model, input {report['input']}, "
              f"{report['seconds_driven']:.0f} s of driving, {report['segments']['held_out']} segment(s) held out"]
     lines += [f"  {n}" for n in report["notes"]]
@@ -1266,7 +1273,7 @@ def summary(report: dict) -> str:
                   if "yaw_gain" in gc else "")
         lines.append(f"turn scale k (yaw rate per v tan(w) / L): {'not concluded' if k is None else f'{k:.3g}'}: "
                      f"{gc['verdict']}{fitted}")
-    lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
+    lines.append(f"delay: {told(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
     hf = report["held_out_fit"]
@@ -1287,11 +1294,8 @@ def summary(report: dict) -> str:
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
-    for c in (c for c in report.get("comparisons", []) if not (c["quantity"] == "understeer gradient K" and K.get("withheld"))):
-        lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
-                                                      for m, e in c["estimates"].items()) + " " + c["unit"]
-                     + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))
+    lines += [pair_line(c) for c in report.get("comparisons", [])]
     for p_name, pj in report["parameters"].items():
-        lines.append(f"  {p_name}: {q(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
+        lines.append(f"  {p_name}: {told(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
     lines += [f"extended_study.toml leaves out {x}" for x in report.get("extended_study_left_out", [])]
     return "\n".join(lines)
