@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agrobot.identification.ordinary_driving import TURN_GAIN, identify_driving, summary
+from agrobot.identification.driving import DrivingLog
+from agrobot.identification.ordinary_driving import TURN_GAIN, identify_driving, one_speed, summary
 from agrobot.orchestrator.study import Study
 from harness.truth_tractor import make_log
 from harness.vehicle_classes import study
@@ -75,3 +76,35 @@ def test_a_bias_fitted_without_a_standstill_is_not_compared_as_if_concluded(near
     line = _pair_lines(near_bound)["gyro bias"]
     assert "dynamic fit not concluded (fitted" in line and "DISAGREE" not in line, line
     assert any(x.strip().startswith("gyro_bias: not concluded (fitted") for x in summary(near_bound).splitlines())
+
+
+def lap_log(turn_speeds: tuple[float, ...], straight_speed: float, radius: float, wheelbase: float,
+            weave: float = 0.0, gyro_noise: float = 0.002, seed: int = 4) -> DrivingLog:
+    """20 Hz laps of a 20 s straight (its speed ``straight_speed``, the steering weaving ``weave``
+    rad at 0.3 Hz) and a 15 s turn of ``radius`` m, each lap's turn at the next of ``turn_speeds``:
+    the wheel angle L / R (+ the weave), the gyro v kappa with its white noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 420.0, 0.05)
+    lap, phase = (t // 35.0).astype(int), t % 35.0
+    in_turn = phase >= 20.0
+    v = np.where(in_turn, np.array(turn_speeds)[lap % len(turn_speeds)], straight_speed)
+    weaving = weave * np.sin(2 * np.pi * 0.3 * t) * ~in_turn
+    kappa = np.where(in_turn, 1.0 / radius, weaving / wheelbase)
+    u = wheelbase * kappa
+    r = v * kappa + rng.normal(0.0, gyro_noise, len(t))
+    return DrivingLog(t, u, v, r, np.zeros(len(t), int), 0.05, "delta", measured=np.ones(len(t), bool))
+
+
+@pytest.mark.parametrize("turns,straights,radius,L,weave,alike", [
+    ((20.0,), 20.0, 330.0, 2.97, 0.0, True),          # a racecar's oval at one speed: 0.009 rad of road wheel
+    ((15.0, 25.0), 20.0, 330.0, 2.97, 0.0, False),   # ... its turns at 15 and 25 m/s
+    ((1.0,), 2.5, 5.0, 2.5, 0.035, True),            # a tractor turning at the headlands at 1 m/s, its rows weaving
+])
+def test_one_speed_is_read_from_the_log_s_own_turns(turns, straights, radius, L, weave, alike):
+    """Turns at one speed fix only the ratio of a steering gain to L + K v^2, whatever the machine's
+    scale: a racecar's gentle oval turns count as turns, a tractor's weave along its rows does not."""
+    why = one_speed(lap_log(turns, straights, radius, L, weave), 0.5)
+    assert (why is not None) is alike, why
+    if alike:
+        lo, hi = (float(x) for x in why.split("(")[1].split(" m/s")[0].split("-"))
+        assert lo <= turns[0] <= hi, why

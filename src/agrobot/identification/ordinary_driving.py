@@ -53,6 +53,7 @@ from .ground_lean import lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
+from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
@@ -703,18 +704,22 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
     return params_json, stiff
 
 
-def one_speed(log: DrivingLog, min_speed: float) -> str | None:
+def one_speed(log: DrivingLog, min_speed: float, bias: float = 0.0) -> str | None:
     """Why a fitted steering gain g and an understeer gradient K are not told apart (None: they
     are): the steady yaw rate g v / (L + K v^2) of turns at one speed (the 90th percentile of the
-    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio."""
-    turning = (log.v >= min_speed) & (np.abs(log.u) > 0.03)
-    if turning.sum() < 10:
+    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio.
+    Turning: where the path curvature clears the log's own turns' share and noise (turning; ``bias``:
+    the gyro's)."""
+    moving = (log.v >= min_speed) & (np.ones(len(log.v), bool) if log.measured is None else log.measured)
+    turns, limit = turning(log.h, log.v, log.r, moving, bias)
+    if turns.sum() < 10:
         return None
-    lo, hi = np.percentile(log.v[turning], [10, 90])
+    lo, hi = np.percentile(log.v[turns], [10, 90])
     if hi >= 1.5 * lo:
         return None
-    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain (or a scale of "
-            f"the turns) and an understeer gradient give the same yaw rate g v / (L + K v^2) there")
+    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns, where the path curvature |r / v| "
+            f"exceeds a quarter of the log's tight turns', {limit:.2g} 1/m, and its noise): a steering gain (or a scale of the turns) "
+            f"and an understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
 def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
@@ -925,7 +930,7 @@ def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, c
     beside an offset: _without_standstill."""
     final, params, stiff = _final_parameters(log, fits, held, saturation)
     leaning = turns_lean(log.lean, log.v, log.r, log.h, (log.v >= min_speed) & log.measured)
-    check, alike, free_fit = None, one_speed(log, min_speed) or leaning, None
+    check, alike, free_fit = None, one_speed(log, min_speed, final.values.get("gyro_bias", 0.0)) or leaning, None
     skip = alike or _stiffnesses_on_bounds(final) or _misfit_on_bound(final)
     if not command and skip:
         check = {"verdict": f"not fitted: K is not identifiable from this log already, or not through a scale ({skip})",
