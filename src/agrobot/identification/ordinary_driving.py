@@ -930,7 +930,8 @@ def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, c
     beside an offset: _without_standstill."""
     final, params, stiff = _final_parameters(log, fits, held, saturation)
     leaning = turns_lean(log.lean, log.v, log.r, log.h, (log.v >= min_speed) & log.measured)
-    check, alike, free_fit = None, one_speed(log, min_speed, final.values.get("gyro_bias", 0.0)) or leaning, None
+    alike = "; and ".join(x for x in (one_speed(log, min_speed, final.values.get("gyro_bias", 0.0)), leaning) if x)
+    check, alike, free_fit = None, alike or None, None
     skip = alike or _stiffnesses_on_bounds(final) or _misfit_on_bound(final)
     if not command and skip:
         check = {"verdict": f"not fitted: K is not identifiable from this log already, or not through a scale ({skip})",
