@@ -183,14 +183,17 @@ def withheld_understeer(understeer: dict, char: dict, comparisons: list[dict], c
     return {**understeer, "identifiable": False, "withheld": True, "note": note}, {**char, "withheld": True}
 
 
-def mark_not_concluded(comparisons: list[dict], quantities: dict[str, dict | None]) -> None:
-    """Each pair whose dynamic fit's value identify does not conclude (``quantities``: a pair's
-    quantity -> identify's own quantity, not concluded where not ``identifiable`` or ``concluded``
+def mark_not_concluded(comparisons: list[dict], understeer: dict, params: dict) -> list[dict]:
+    """``comparisons``, each pair whose dynamic fit's value identify does not conclude (its K
+    ``understeer``, its delay or gyro bias among ``params``: not ``identifiable``, or ``concluded``
     False) marked ``concluded`` False, with that quantity's note as ``why_not``."""
+    own = {"understeer gradient K": understeer, "command-to-yaw delay": params.get("delay"),
+           "gyro bias": params.get("gyro_bias")}
     for c in comparisons:
-        q = quantities.get(c["quantity"])
+        q = own.get(c["quantity"])
         if q and (not q.get("identifiable", True) or q.get("concluded") is False):
             c["concluded"], c["why_not"] = False, q.get("note", "")
+    return comparisons
 
 
 def pair_line(c: dict) -> str:

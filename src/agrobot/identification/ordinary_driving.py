@@ -254,8 +254,6 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     understeer, char = withheld_understeer(understeer, char, comparisons,
                                            lambda k, sd: characteristic_speed(k, sd, L, top_speed=top))
     K, K_sd = understeer["value"], understeer["std"]
-    mark_not_concluded(comparisons, {"understeer gradient K": understeer, "command-to-yaw delay": params_json["delay"],
-                                     "gyro bias": params_json.get("gyro_bias")})
     report = {
         "method": "output error, single-track model LPV in speed, segments held out",
         "source": where, "model": model_name, "input": input_name,
@@ -278,7 +276,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "residual_by_lateral_acceleration": _residual_bins(held),
         "steady_state_regression": _steady_json(ss, vehicle, windows, params_json["steer_offset"]),
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
-        "comparisons": comparisons,
+        "comparisons": mark_not_concluded(comparisons, understeer, params_json),
         "physical_checks": checks,
         "notes": notes,
         "yaw_measurement": measured.as_dict(),
