@@ -128,7 +128,8 @@ def both(comparisons: list[dict], quantity: str, f: str = "{:.3g}") -> str:
         return "-"
     text = "; ".join(f"{m.split(' ')[0]} " + f.format(e["value"]) + " [" + ", ".join(f.format(x) for x in e["interval"]) + "]"
                      for m, e in c["estimates"].items())
-    return text + ("" if c["agree"] else " DISAGREE") + (" NOT OF THE CLASS" if c.get("implausible") else "")
+    verdict = " NOT CONCLUDED" if c.get("concluded") is False else "" if c["agree"] else " DISAGREE"
+    return text + verdict + (" NOT OF THE CLASS" if c.get("implausible") else "")
 
 
 SIZE = 1.3          # a suggested study is of the vehicle's size when its wheelbase is within 30 %

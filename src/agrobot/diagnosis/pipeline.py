@@ -580,7 +580,7 @@ def _conclude(result: dict, replay: Replay, baseline, sel, effects: list[dict], 
     for c in result.get("identified_vehicle", {}).get("comparisons", []):
         if c.get("implausible") and not kinematic(share):
             verdict["bullets"].append(f"{c['quantity']}: implausible for the vehicle: {c['implausible']}")
-        if not c["agree"] and not (kinematic(share) and "understeer" in c["quantity"]):
+        if not c["agree"] and c.get("concluded", True) and not (kinematic(share) and "understeer" in c["quantity"]):
             verdict["bullets"].append(f"{c['quantity']}: " + " against ".join(
                 f"{m} {e['value']:.3g} [{e['interval'][0]:.3g}, {e['interval'][1]:.3g}]" for m, e in c["estimates"].items())
                 + f" {c['unit']}: they disagree; {c['suggests']}")

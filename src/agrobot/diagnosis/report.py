@@ -145,7 +145,8 @@ def vehicle_lines(iv: dict | None, understeer_note: str | None = None) -> list[s
         out.append(f"- {c['quantity']} [{unit}]: " + "; ".join(
             f"{m} {k * e['value']:.4g} [{k * e['interval'][0]:.4g}, {k * e['interval'][1]:.4g}]"
             for m, e in c["estimates"].items())
-            + (" (agree)" if c["agree"] else f" **disagree**: {c['suggests']}")
+            + (" (not compared: identify does not conclude its value)" if c.get("concluded") is False else
+               " (agree)" if c["agree"] else f" **disagree**: {c['suggests']}")
             + (f"; **implausible for the vehicle**: {c['implausible']}" if c.get("implausible") else ""))
     held = me.get("held_out_yaw") or {}
     if math.isfinite(held.get("diagnosis_rms", math.nan)):

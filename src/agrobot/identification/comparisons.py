@@ -2,7 +2,9 @@
 dynamic fit and from steady states in their linear range (understeer_pair, withheld_understeer),
 the command-to-yaw delay from the fit and from a cross-correlation, the gyro bias from the fit and
 from the GNSS course. Each pair is reported with its intervals; intervals that do not overlap are
-flagged with what the disagreement suggests.
+flagged with what the disagreement suggests. A pair whose dynamic fit's value identify does not
+conclude (mark_not_concluded) says so and is not judged: its value is printed as fitted, not
+concluded, and its agreement or disagreement concludes nothing (pair_line).
 
 The understeer gradient, like with like. The two K come from models of different structure: the
 steady-state regression reads K from windows that are only nearly steady (the yaw settling, the
@@ -179,3 +181,31 @@ def withheld_understeer(understeer: dict, char: dict, comparisons: list[dict], c
                  "structural bias (the dynamic fit's disagrees)", "note": note}, char_of(e["value"], e["std"]))
     note = f"no single value: {both} rad/(m/s2) disagree: {c['suggests']}"
     return {**understeer, "identifiable": False, "withheld": True, "note": note}, {**char, "withheld": True}
+
+
+def mark_not_concluded(comparisons: list[dict], understeer: dict, params: dict) -> list[dict]:
+    """``comparisons``, each pair whose dynamic fit's value identify does not conclude (its K
+    ``understeer``, its delay or gyro bias among ``params``: not ``identifiable``, or ``concluded``
+    False) marked ``concluded`` False, with that quantity's note as ``why_not``."""
+    own = {"understeer gradient K": understeer, "command-to-yaw delay": params.get("delay"),
+           "gyro bias": params.get("gyro_bias")}
+    for c in comparisons:
+        q = own.get(c["quantity"])
+        if q and (not q.get("identifiable", True) or q.get("concluded") is False):
+            c["concluded"], c["why_not"] = False, q.get("note", "")
+    return comparisons
+
+
+def pair_line(c: dict) -> str:
+    """One pair as a person reads it: both estimates with their 95 % intervals and DISAGREE with what
+    it suggests; a pair not concluded (mark_not_concluded) gives the dynamic fit's value as fitted
+    and is not judged."""
+    out = c.get("concluded", True) is not False
+
+    def one(m, e):
+        text = f"{e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
+        return f"{m} {text}" if out or m != "dynamic fit" else f"{m} not concluded (fitted {text})"
+    line = f"{c['quantity']}: " + "; ".join(one(m, e) for m, e in c["estimates"].items()) + " " + c["unit"]
+    if not out:
+        return line + ": not compared, the dynamic fit's value is not concluded (its own line says why)"
+    return line + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}")

@@ -275,9 +275,10 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if not plant:
         return None
     values, left_out = {}, []
-    if report["understeer_gradient"].get("withheld"):
-        left_out.append("C_f, C_r (they fix one understeer gradient K, and no single K is concluded: the dynamic "
-                        "fit's and the steady turns' disagree)")
+    K = report["understeer_gradient"]
+    if K.get("withheld") or not K.get("identifiable", True):
+        left_out.append("C_f, C_r (they fix one understeer gradient K, and no single K is concluded: " + (
+            "the dynamic fit's and the steady turns' disagree)" if K.get("withheld") else f"{K.get('note', '')})"))
     for key, name in (("front", "C_f"), ("rear", "C_r")):
         s = report["cornering_stiffness"][key]
         if s["identifiable"] and not left_out:
@@ -288,7 +289,7 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
         values[f"{steering[0]}.command_delay"] = params["delay"]["value"]
     gyro = model.find(role="gyro")
     bias = params.get("gyro_bias", {})
-    if gyro and bias.get("identifiable") and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
+    if gyro and bias.get("identifiable") and bias.get("concluded", True) and (bias["interval"][0] > 0 or bias["interval"][1] < 0):
         values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
     tyre = report["tyre_saturation"]
     if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):

@@ -42,7 +42,8 @@ from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
 
-from .comparisons import course_bias, model_steady_state, pair, understeer_pair, withheld_understeer
+from .comparisons import (course_bias, mark_not_concluded, model_steady_state, pair, pair_line, understeer_pair,
+                          withheld_understeer)
 from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
@@ -52,6 +53,7 @@ from .ground_lean import lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
+from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
@@ -274,7 +276,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
         "residual_by_lateral_acceleration": _residual_bins(held),
         "steady_state_regression": _steady_json(ss, vehicle, windows, params_json["steer_offset"]),
         "not_identifiable": [f"{k}: {v['note']}" for k, v in params_json.items() if v.get("note")],
-        "comparisons": comparisons,
+        "comparisons": mark_not_concluded(comparisons, understeer, params_json),
         "physical_checks": checks,
         "notes": notes,
         "yaw_measurement": measured.as_dict(),
@@ -708,18 +710,22 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
     return params_json, stiff
 
 
-def one_speed(log: DrivingLog, min_speed: float) -> str | None:
+def one_speed(log: DrivingLog, min_speed: float, bias: float = 0.0) -> str | None:
     """Why a fitted steering gain g and an understeer gradient K are not told apart (None: they
     are): the steady yaw rate g v / (L + K v^2) of turns at one speed (the 90th percentile of the
-    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio."""
-    turning = (log.v >= min_speed) & (np.abs(log.u) > 0.03)
-    if turning.sum() < 10:
+    turning speeds under 1.5 x the 10th, steady_state.regression's rule) fixes only their ratio.
+    Turning: where the path curvature clears the log's own turns' share and noise (turning; ``bias``:
+    the gyro's)."""
+    moving = (log.v >= min_speed) & (np.ones(len(log.v), bool) if log.measured is None else log.measured)
+    turns, limit = turning(log.h, log.v, log.r, moving, bias)
+    if turns.sum() < 10:
         return None
-    lo, hi = np.percentile(log.v[turning], [10, 90])
+    lo, hi = np.percentile(log.v[turns], [10, 90])
     if hi >= 1.5 * lo:
         return None
-    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns): a steering gain (or a scale of "
-            f"the turns) and an understeer gradient give the same yaw rate g v / (L + K v^2) there")
+    return (f"one speed ({lo:.2g}-{hi:.2g} m/s, 10th to 90th percentile of the turns, where the path curvature |r / v| "
+            f"exceeds a quarter of the log's tight turns', {limit:.2g} 1/m, and its noise): a steering gain (or a scale of the turns) "
+            f"and an understeer gradient give the same yaw rate g v / (L + K v^2) there")
 
 
 def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | None = None,
@@ -816,6 +822,25 @@ def held_out_gain(fits: _Fits, base: FitResult, scaled: FitResult, cap: float | 
     return float(d.mean()), float(d.std(ddof=1) / math.sqrt(len(d))), len(d)
 
 
+def scale_on_bound(fit: FitResult) -> str | None:
+    """Why the turn scale k of a fit with k free (``yaw_gain``) is not concluded, or None: it ends on
+    a bound of SENSED_GAIN or its 95 % interval reaches or crosses one. Those bounds are its limit as
+    a scale (a sensor's gain, the declared wheelbase or speed off by up to 20 %; past them the
+    declaration itself is wrong), so there is no wider physical bound to search: the log cannot
+    decide whether k lies inside them, nor what K is, which moves with it."""
+    g, sd, q = fit.values["yaw_gain"], fit.std("yaw_gain"), TURN_GAIN
+    lo, hi = g - Z95 * sd, g + Z95 * sd
+    side = fit.at_bound(q) or ("lower" if not lo > q.lower else "upper" if not hi < q.upper else None)
+    if side is None and math.isfinite(sd):
+        return None
+    side = side or ("lower" if g - q.lower < q.upper - g else "upper")
+    bound = q.lower if side == "lower" else q.upper
+    interval = f" [{lo:.3g}, {hi:.3g}]" if math.isfinite(sd) else ""
+    return (f"k {g:.3g}{interval} at its bound {bound:g}; cannot decide: a scale of the turns is searched in "
+            f"[{q.lower:g}, {q.upper:g}] (a sensor's gain, the declared wheelbase or speed off by up to 20 %), its limit "
+            f"as a scale; past it the declared wheelbase, speed or wheel angle is wrong, not off by a scale: check them")
+
+
 def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple[dict, str | None, FitResult | None]:
     """A measured wheel angle is fitted at k = 1; a scale error of the turns (the angle sensor's, the
     declared wheelbase's, the speed's) then reads as understeer, since the steady yaw rate
@@ -824,9 +849,9 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
     why K is not told from k or None, the fit with k free when it is the one to keep or None).
     k = 1 is kept when the refit does not converge, when k does not predict the held-out segments
     better (held_out_gain: no evidence of a scale; a misfit of the model fits the fit segments
-    alone), or when K at k = 1 lies inside K's 95 % interval with k free. Else, where k ended on
-    its bound, both stiffnesses on theirs or K's std with k free exceeds APART x its std at k = 1, K
-    is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps the free fit, a smaller one
+    alone), or when K at k = 1 lies inside K's 95 % interval with k free. Else, where k or its 95 %
+    interval reaches a bound (scale_on_bound: neither k nor K concluded), both stiffnesses end on
+    theirs or K's std with k free exceeds APART x its std at k = 1, K is not told from k; else a scale clearly beyond SCALE_TOLERANCE keeps the free fit, a smaller one
     k = 1 with K's interval spanning both fits' (``span``)."""
     base, free_fit, mask = _turn_scale_fits(fits, final, cap)
     gain = TURN_GAIN
@@ -835,7 +860,8 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
     gained, gained_se, n_held = held_out_gain(fits, base, free_fit, cap)
     lo, hi = k2 - Z95 * sd2, k2 + Z95 * sd2
     k2_seen = any(free_fit.at_bound(q) is None for q in free_fit.free if q.name in ("c_f", "c_r"))
-    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or free_fit.at_bound(gain) is not None
+    bound = scale_on_bound(free_fit)
+    wide = not (k2_seen and math.isfinite(sd2)) or sd2 > APART * sd1 or bound is not None
     scaled = abs(g - 1) - Z95 * g_sd > SCALE_TOLERANCE       # beyond what a declared wheelbase or speed is sure of
     inside = lo <= k1 <= hi
     alone = not gained > Z95 * gained_se                     # nan (too few held-out segments): no evidence either
@@ -850,12 +876,14 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
                f"k = 1 kept: the fit with k free predicts the held-out segments no better (mean square "
                f"misfit {gained:+.2g} +- {gained_se:.2g} (rad/s)^2 less over {n_held} segments): no evidence of a "
                f"scale, what k takes up on the fit segments does not carry over" if alone else
+               f"k not concluded: {bound}" if bound else
                f"K not told apart from k ({how_wide})" if wide else
                f"a scale of the turns of {100 * (g - 1):+.1f} %: the fit with k free kept{unseen}" if scaled else
                f"k = 1 kept, a scale of {100 * (g - 1):+.1f} % not clearly beyond the {100 * SCALE_TOLERANCE:g} % a "
                f"declared wheelbase and speed are sure of: K's interval spans both fits, [{span[0]:.3g}, {span[1]:.3g}]")
     no_scale = not free_fit.converged or alone or inside
-    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning),
+    out = {"yaw_gain": _quantity(g, g_sd, "1", (gain.lower, gain.upper), free_fit.at_bound(gain), meaning=gain.meaning,
+                                 **({"identifiable": False, "note": f"not concluded: {bound}"} if bound else {})),
            "understeer_gradient_gain_free": _quantity(k2, sd2, "rad/(m/s2)"),
            "understeer_gradient_gain_one": _quantity(k1, sd1, "rad/(m/s2)"), "verdict": verdict,
            "held_out_gain": {"mean": gained, "std_error": gained_se, "segments": n_held, "unit": "(rad/s)^2"},
@@ -866,6 +894,10 @@ def gain_apart(fits: _Fits, final: FitResult, cap: float | None = None) -> tuple
         return out | ({} if no_scale else {"span": span}), None, None
     if not wide:
         return out, None, free_fit if mask is None else _scaled_everywhere(fits, final, free_fit)
+    if bound:
+        return out, (f"the turn scale is not concluded ({bound}), nor K, which moves with it: K {k2:.3g} [{lo:.3g}, "
+                     f"{hi:.3g}] rad/(m/s2) with k free, {k1:.3g} [{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] at "
+                     f"k = 1"), None
     return out, (f"a scale of the turns and the understeer gradient are not told apart at these speeds: with a turn "
                  f"gain free it goes to {g:.3g} and K to {k2:.3g} [{lo:.3g}, {hi:.3g}] rad/(m/s2), against K {k1:.3g} "
                  f"[{k1 - Z95 * sd1:.3g}, {k1 + Z95 * sd1:.3g}] with the turns taken at their declared scale; the "
@@ -904,7 +936,8 @@ def _with_gain(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: bool, c
     beside an offset: _without_standstill."""
     final, params, stiff = _final_parameters(log, fits, held, saturation)
     leaning = turns_lean(log.lean, log.v, log.r, log.h, (log.v >= min_speed) & log.measured)
-    check, alike, free_fit = None, one_speed(log, min_speed) or leaning, None
+    alike = "; and ".join(x for x in (one_speed(log, min_speed, final.values.get("gyro_bias", 0.0)), leaning) if x)
+    check, alike, free_fit = None, alike or None, None
     skip = alike or _stiffnesses_on_bounds(final) or _misfit_on_bound(final)
     if not command and skip:
         check = {"verdict": f"not fitted: K is not identifiable from this log already, or not through a scale ({skip})",
@@ -1044,11 +1077,12 @@ def _k_of(fit: FitResult) -> tuple[float, float]:
 
 def _steady_gain(log: DrivingLog, min_speed: float, k: tuple, L: float, gain: tuple, notes: list[str]) -> dict:
     """The steady-state yaw-rate gain's JSON: _gain_rows at K = k[0] (std k[1]), none (said in
-    ``notes``) when no single K is concluded (k[2], the understeer quantity, ``withheld``)."""
+    ``notes``) when no single K is concluded (k[2], the understeer quantity, ``withheld`` or not
+    ``identifiable``)."""
     d = {"unit": "(rad/s) per rad of input", "formula": "g v / (L + K v^2)"}
-    if k[2].get("withheld"):
-        why = ("left out: no single K is concluded (the dynamic fit's and the steady turns' disagree), so no gain "
-               "curve is drawn from one")
+    if k[2].get("withheld") or not k[2].get("identifiable", True):
+        why = ("left out: no single K is concluded (" + ("the dynamic fit's and the steady turns' disagree" if
+               k[2].get("withheld") else "see the understeer gradient") + "), so no gain curve is drawn from one")
         notes.append(f"steady-state yaw-rate gain rows and figure {why}")
         return d | {"rows": [], "note": why}
     return d | {"rows": _gain_rows(log, min_speed, k[0], k[1], L, *gain)}
@@ -1223,6 +1257,9 @@ def summary(report: dict) -> str:
             return f.format(d["value"]) + " " + d.get("unit", "") + " (on its bound)"
         return f.format(d["value"]) + " [" + ", ".join(f.format(x) for x in d["interval"]) + "] " + d.get("unit", "")
 
+    def told(d, f="{:.4g}"):          # a value not concluded is given as fitted, as the comparisons give it
+        return q(d, f) if d.get("identifiable", True) and d.get("concluded", True) else f"not concluded (fitted {q(d, f)})"
+
     lines = [f"identification from driving ({report['source']}): {report['model']} model, input {report['input']}, "
              f"{report['seconds_driven']:.0f} s of driving, {report['segments']['held_out']} segment(s) held out"]
     lines += [f"  {n}" for n in report["notes"]]
@@ -1248,7 +1285,7 @@ def summary(report: dict) -> str:
                   if "yaw_gain" in gc else "")
         lines.append(f"turn scale k (yaw rate per v tan(w) / L): {'not concluded' if k is None else f'{k:.3g}'}: "
                      f"{gc['verdict']}{fitted}")
-    lines.append(f"delay: {q(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
+    lines.append(f"delay: {told(report['delay'])}" + (f"; {report['delay']['note']}" if "note" in report["delay"] else ""))
     for side, s in report["cornering_stiffness"].items():
         lines.append(f"cornering stiffness {side}: {q(s, '{:.4g}')}" + (f"; {s['note']}" if "note" in s else ""))
     hf = report["held_out_fit"]
@@ -1269,11 +1306,8 @@ def summary(report: dict) -> str:
     for c, chk in report.get("physical_checks", {}).items():
         lines.append(f"physical check {c} ({chk['what']}): held-out fit {chk['fit_percent']:.1f} %, RMS {chk['rms']:.3g} "
                      f"{chk['unit']} (measured std {chk['measured_std']:.3g})")
-    for c in (c for c in report.get("comparisons", []) if not (c["quantity"] == "understeer gradient K" and K.get("withheld"))):
-        lines.append(f"{c['quantity']}: " + "; ".join(f"{m} {e['value']:.4g} [{e['interval'][0]:.4g}, {e['interval'][1]:.4g}]"
-                                                      for m, e in c["estimates"].items()) + " " + c["unit"]
-                     + ("" if c["agree"] else f"  DISAGREE: {c['suggests']}"))
+    lines += [pair_line(c) for c in report.get("comparisons", [])]
     for p_name, pj in report["parameters"].items():
-        lines.append(f"  {p_name}: {q(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
+        lines.append(f"  {p_name}: {told(pj)}" + (f"  ({pj['note']})" if pj.get("note") else ""))
     lines += [f"extended_study.toml leaves out {x}" for x in report.get("extended_study_left_out", [])]
     return "\n".join(lines)
