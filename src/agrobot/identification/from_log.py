@@ -212,6 +212,8 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
         report = identify_driving(frame, str(source), study, progress=say,
                                   wheelbase=getattr(recording, "wheelbase", None), geometry=geometry,
                                   input_hold=input_hold, **more)
+        if imported is not None and imported.get("steering_ratio"):      # never applied silently
+            report["notes"].insert(0, imported["steering_ratio"]["text"])
         study_mismatch(report, frame, study, say)
     hidden = report.pop("_plot")
     if imported is not None:

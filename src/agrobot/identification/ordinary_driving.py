@@ -411,8 +411,8 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
+    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)   # at any excitation
     if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
-        _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
@@ -728,6 +728,8 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
                            deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
                                                                     if alike else {}))
     char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike, top_speed)
+    if understeer["identifiable"] and not char["identifiable"] and K < 0 and char["value"] < top_speed:
+        understeer.update(identifiable=False, note=f"not concluded: its critical speed is {char['note']}")
     return K, K_sd, understeer, char
 
 
@@ -931,6 +933,11 @@ def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = T
     char["identifiable"] = identifiable          # v_ch is K's: identifiable where K is
     if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
+    elif K < 0 and char["value"] < top_speed:       # driven stably above it: the sign is a misfit's, not the car's
+        char["identifiable"] = False
+        char["note"] = (f"impossible, not a verdict: sqrt(L / |K|) = {char['value']:.3g} m/s lies below the speeds the "
+                        f"vehicle was driven at (top {top_speed:.3g} m/s, 99th percentile) without losing it: the "
+                        f"model misses the log (a steering angle's scale, a clock, a bias), the car is not oversteering")
     elif char["value"] > BEYOND_TOP * top_speed:     # an extrapolation of the gain curve far past the log
         char["identifiable"] = False
         char["note"] = (f"{NOT_AT_THESE_SPEEDS}: sqrt(L / |K|) = {char['value']:.3g} m/s lies beyond {BEYOND_TOP:g} x the "
