@@ -432,9 +432,9 @@ def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitati
     raise NotEnoughDriving(f"{where}: the yaw rate moves {answer:.3g} rad/s (std while driving), "
                            f"{answer / max(excitation, 1e-12):.3g} times what v {input_name} / L asks for "
                            f"({excitation:.3g} rad/s): {input_name} is not the road-wheel angle it should be: a "
-                           f"steering ratio divided into an angle that is the road wheel's already (the study's "
-                           f"[vehicle] steering_ratio applies to a recording unless --steering-ratio is given; "
-                           f"--steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
+                           f"steering ratio divided into an angle that is the road wheel's already (a --steering-ratio "
+                           f"given is taken as given, the study's only where the turns say the angle is the "
+                           f"handwheel's; --steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
 
 
 @dataclass
