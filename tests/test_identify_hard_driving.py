@@ -1,6 +1,6 @@
 """A sports car driven hard on a road circuit, recorded as one-column text files (a road-wheel angle,
 a gyro, the speed, one time file; as the Revs vehicle-dynamics excerpts are): a linear single-track
-model of a 2.4 m, 982 kg mid-engined car (l_f 1.33 m, l_r 1.07 m) at 18-40 m/s with up to 0.05 rad
+model of a 2.4 m, 982 kg mid-engined car (l_f 1.33 m, l_r 1.07 m) at 18-40 m/s with up to 0.03 rad
 of road-wheel angle, its understeer gradient known from its cornering stiffnesses
 (K = m / L (l_r / C_f - l_f / C_r), Rajamani 3.3). The passenger-car study's steering ratio 15.8 is
 not divided into a road-wheel angle (the turns' yaw rate is about v delta / L, not 1/15.8 of it), and
@@ -25,18 +25,18 @@ RATE = 100.0
 M, LF, LR = 982.0, 1.33, 1.07
 L = LF + LR
 IZ = M * LF * LR
-CF, CR = 9.0e4, 1.1e5                   # N/rad, the axle's
+CF, CR = 7.0e4, 1.2e5                   # N/rad, the axle's
 K_TRUE = M / L * (LR / CF - LF / CR)    # rad/(m/s2): understeer
 
 
 def drive(seconds: float = 120.0, seed: int = 7) -> dict[str, np.ndarray]:
     """t, delta (road wheel), vx, yawRate of the car: speed 18-40 m/s swept slowly, steering a
-    smoothed random walk of held angles up to 0.05 rad; Euler at 1 kHz, rows at RATE."""
+    smoothed random walk of held angles up to 0.03 rad; Euler at 1 kHz, rows at RATE."""
     rng = np.random.default_rng(seed)
     n = int(seconds * 1000)
     t = np.arange(n) / 1000.0
     v = 29.0 + 11.0 * np.sin(2 * np.pi * t / 70.0)
-    held = np.repeat(rng.uniform(-0.05, 0.05, n // 1500 + 1), 1500)[:n]
+    held = np.repeat(rng.uniform(-0.03, 0.03, n // 1500 + 1), 1500)[:n]
     delta = np.convolve(held, np.ones(300) / 300, mode="same")
     vy = r = 0.0
     yaw = np.empty(n)

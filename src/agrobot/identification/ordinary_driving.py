@@ -342,13 +342,15 @@ def _steady_turn(log, segs, wheelbase, where, input_name, driven, min_speed, veh
 
 
 def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, study) -> tuple[float, str]:
-    """(L [m], where it comes from): the one given with the recording (--wheelbase), else the study's
+    """(L [m], where it comes from): the one given with the recording (--wheelbase; or ``given`` a
+    (value, where from) pair: from_log.recorded_wheelbase), else the study's
     [vehicle] wheelbase, else its yaw plant's l_f + l_r (the paper tractor's without a study)."""
     where = getattr(study, "path", None)
+    given, told = given if isinstance(given, tuple) else (given, "given with the recording (--wheelbase)")
     if given:
         passed = (f"; the study's {vehicle.wheelbase:.3g} m passed over" if vehicle.wheelbase and
                   abs(vehicle.wheelbase - given) > 1e-9 else "")
-        return float(given), f"given with the recording (--wheelbase){passed}"
+        return float(given), f"{told}{passed}"
     if vehicle.wheelbase:
         return float(vehicle.wheelbase), f"the [vehicle] table of {where}"
     if study is not None:
