@@ -72,13 +72,19 @@ def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
     return 1.0, 30.0
 
 
+# a tyre's cornering stiffness per unit load is B C mu of its Magic Formula: a racing slick's mu 2 at a
+# peak slip of 0.05 rad (C about 1.5) gives about 60; a fit beyond means something else (a scale)
+CORNERING_LIMIT = (0.5, 60.0)
+WIDENED_ON_BOUND = ("c_f", "c_r", "friction")
+
+
 def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool,
                     relaxation: float | None = None) -> list[Parameter]:
     """``relaxation``: the study's front relaxation length, fitted within x 1/4 .. 4 of it (None: held)."""
     lo, hi = cornering_bounds(vehicle)
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
-    out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
-           Parameter("c_r", "1/rad", 5.0, lo, hi, meaning="rear cornering stiffness / rear axle load"),
+    out = [Parameter("c_f", "1/rad", 5.0, lo, hi, limit=CORNERING_LIMIT, meaning="front cornering stiffness / front axle load"),
+           Parameter("c_r", "1/rad", 5.0, lo, hi, limit=CORNERING_LIMIT, meaning="rear cornering stiffness / rear axle load"),
            Parameter("delay", "s", 0.1, 0.0, 0.5, limit=DELAY_LIMIT, meaning="steering delay (input to the wheels)"),
            Parameter("lag", "s", 0.1, 0.0, 0.5, meaning="steering first-order lag"),
            Parameter("steer_offset", "rad", 0.02, -0.1, 0.1, meaning="wheel angle the tyres see at zero input")]
@@ -91,7 +97,8 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
                              meaning="front tyre relaxation length"))
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
-        out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, meaning="tyre friction coefficient mu (peak force / load)"),
+        out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, limit=vehicle.physical_limits()["tyre_friction"],
+                          meaning="tyre friction coefficient mu (peak force / load)"),
                 Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C")]
     return out
 
@@ -519,7 +526,30 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
                 nl = trial
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
+    linear, free = widened_refit(model, linear, free, fixed, fit_segs, notes, say)
+    nl, free_nl = widened_refit(model, nl, free_nl, fixed, fit_segs, notes, say)
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
+
+
+def widened_refit(model, result: FitResult, free: list[Parameter], fixed: dict, segs: Segments, notes: list[str],
+                  say) -> tuple[FitResult, list[Parameter]]:
+    """A fit whose WIDENED_ON_BOUND parameters ended on a bound of the class that is not their
+    physical limit (Parameter.limit), fitted again with that bound moved to the limit: a value on a
+    bound is never concluded; one between the class's range and the limit is fitted and said.
+    The wider fit stands when it fits the segments as well or better."""
+    wide = {p.name: p.widened(result.values[p.name]) for p in free if p.name in WIDENED_ON_BOUND and result.at_bound(p)}
+    wide = {k: w for k, w in wide.items() if w is not None}
+    if not wide:
+        return result, free
+    moved = ", ".join(f"{k} {result.values[k]:.3g} to [{w.lower:.3g}, {w.upper:.3g}]" for k, w in wide.items())
+    say(f"fitted again with bounds widened to their physical limits: {moved}")
+    free_wide = [wide.get(p.name, p) for p in free]
+    again = fit(model, free_wide, result.values, fixed, segs)
+    if again.rss_total > result.rss_total:
+        return result, free
+    notes.append(f"ended on the class's bounds, fitted again within their physical limits: {moved} (now "
+                 + ", ".join(f"{k} {again.values[k]:.3g}" for k in wide) + ")")
+    return again, free_wide
 
 
 def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments, notes: list[str],
