@@ -693,7 +693,8 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
     free = [wide if p is delay else p for p in first_free if p not in on_zero]
     final = min((fit(fits.model, free, {**first.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
                  for d in (first.values["delay"], -0.1)), key=lambda f: f.rss_total)          # from beyond it
-    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
+    # a relaxation length held on its bound lags (sigma_f / v) or leads the model as much as a delay does
+    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain", "sigma_f") and final.at_bound(p)]
     verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
     tau, lag = final.values["delay"], final.values.get("lag", 0.0)
     if not shaping and not on_zero and tau < 0 < lag:       # a lead traded against the lag: judged on tau + T
