@@ -68,16 +68,18 @@ def drive(seconds: float = 120.0, seed: int = 7, steer: float = 0.03, friction: 
             "yawRate": yaw[rows] + noise.normal(0, 2e-3, n)[rows]}
 
 
+SIGNALS = ["delta=delta.col1[rad]", "yaw_rate=yawRate.col1[rad/s]", "v=vx.col1[m/s]"]
+
+
 def write(folder: Path, channels: dict[str, np.ndarray]) -> Path:
+    """One headerless one-column text file per channel (t.txt the time of all)."""
     folder.mkdir()
-    for name, x in channels.items():
-        np.savetxt(folder / f"{name}.txt", x, fmt="%15.8e")
+    [np.savetxt(folder / f"{name}.txt", x, fmt="%15.8e") for name, x in channels.items()]
     return folder
 
 
 def options(**kw) -> ImportOptions:
-    return ImportOptions(signals=["delta=delta.col1[rad]", "yaw_rate=yawRate.col1[rad/s]", "v=vx.col1[m/s]"],
-                         time="t.col1[s]", wheelbase=L, rate=50.0, **kw)
+    return ImportOptions(signals=SIGNALS, time="t.col1[s]", wheelbase=L, rate=50.0, **kw)
 
 
 @pytest.fixture(scope="module")

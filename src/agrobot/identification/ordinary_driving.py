@@ -721,6 +721,11 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
                                         final.at_bound(q), meaning=q.meaning)
     if fits.bias_info:
         params_json["gyro_bias"] = {**fits.bias_info, "bounds": None, "identifiable": True}
+    lag = params_json.get("lag", {})
+    if "steer_gain" not in final.names and "lower bound" in lag.get("note", ""):
+        lag["note"] += (": the input is a measured wheel angle, with no steering actuator after it to lag (the "
+                        "tyres' own lag is sigma_f): 0 s is its physical limit, not told from any lag the fit "
+                        "has no use for")
     stiff = {}
     for key, q, load in (("front", "c_f", fits.loads[0]), ("rear", "c_r", fits.loads[1])):
         entry = params_json[q]
