@@ -313,7 +313,7 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):
         left_out.append(f"tyre_friction (identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
                         f"value: the study keeps its own)")
-    elif tyre["found"]:
+    elif tyre["found"] and tyre["parameters"]["friction"].get("identifiable", True):
         values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
         if tyre["parameters"]["shape"]["identifiable"]:
             values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]

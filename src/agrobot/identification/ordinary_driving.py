@@ -535,21 +535,32 @@ def widened_refit(model, result: FitResult, free: list[Parameter], fixed: dict, 
                   say) -> tuple[FitResult, list[Parameter]]:
     """A fit whose WIDENED_ON_BOUND parameters ended on a bound of the class that is not their
     physical limit (Parameter.limit), fitted again with that bound moved to the limit: a value on a
-    bound is never concluded; one between the class's range and the limit is fitted and said.
-    The wider fit stands when it fits the segments as well or better."""
+    bound is never concluded. One that runs to the limit too is put back on the class's bound (not
+    identifiable, said why) and the others fitted again without it; the wider fit stands when it
+    fits the segments as well or better."""
     wide = {p.name: p.widened(result.values[p.name]) for p in free if p.name in WIDENED_ON_BOUND and result.at_bound(p)}
     wide = {k: w for k, w in wide.items() if w is not None}
-    if not wide:
-        return result, free
-    moved = ", ".join(f"{k} {result.values[k]:.3g} to [{w.lower:.3g}, {w.upper:.3g}]" for k, w in wide.items())
-    say(f"fitted again with bounds widened to their physical limits: {moved}")
-    free_wide = [wide.get(p.name, p) for p in free]
-    again = fit(model, free_wide, result.values, fixed, segs)
-    if again.rss_total > result.rss_total:
-        return result, free
-    notes.append(f"ended on the class's bounds, fitted again within their physical limits: {moved} (now "
-                 + ", ".join(f"{k} {again.values[k]:.3g}" for k in wide) + ")")
-    return again, free_wide
+    runaway = []
+    while wide:
+        moved = ", ".join(f"{k} {result.values[k]:.3g} to [{w.lower:.3g}, {w.upper:.3g}]" for k, w in wide.items())
+        say(f"fitted again with bounds widened to their physical limits: {moved}")
+        free_wide = [wide.get(p.name, p) for p in free]
+        again = fit(model, free_wide, result.values, fixed, segs)
+        ran = [k for k, w in wide.items() if again.at_bound(w)]
+        if not ran and again.rss_total <= result.rss_total:
+            notes.append(f"ended on the class's bounds, fitted again within their physical limits: {moved} (now "
+                         + ", ".join(f"{k} {again.values[k]:.3g}" for k in wide) + ")" + _ran_to(runaway))
+            return again, free_wide
+        runaway += ran
+        wide = {k: w for k, w in wide.items() if k not in ran} if ran else {}
+    if runaway and f"ended on the class's bounds{_ran_to(runaway)}" not in notes:
+        notes.append(f"ended on the class's bounds{_ran_to(runaway)}")
+    return result, free
+
+
+def _ran_to(names: list[str]) -> str:
+    return (f"; {', '.join(names)} ran to {'its' if len(names) == 1 else 'their'} physical limit too when widened: "
+            f"kept on the class's bound, not identifiable from this log" if names else "")
 
 
 def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments, notes: list[str],
@@ -1123,6 +1134,9 @@ def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturati
     if saturation and nl.at_bound(friction) == "upper":
         mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "
                f"turns reach the tyres' bend but not their peak force"}
+    elif saturation and nl.at_bound(next(q for q in free_nl if q.name == "shape")):
+        mu |= {"identifiable": False, "note": f"{mu['value']:.3g} not concluded: the shape C (how sharply the tyres "
+               f"bend) sits on its bound, and the peak force trades against it"}
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
             "found": saturation, "why_not": held.reasons, "delta_bic": held.dbic,
             "held_out_gain": held.gain_all, "held_out_gain_high_lateral": held.gain_top,
@@ -1284,7 +1298,8 @@ def summary(report: dict) -> str:
     t = report["tyre_saturation"]
     if t["found"]:
         mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
-        lines.append(f"tyre saturation found: friction {mu['note'] if mu.get('at_least') else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+        told = mu.get("at_least") or not mu.get("identifiable", True)
+        lines.append(f"tyre saturation found: friction {mu['note'] if told else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
                      f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
                      f"{t['high_lateral_from']:.2g} m/s2")
     else:
