@@ -37,7 +37,8 @@ def delay_verdict(q: dict, shaping_on_bound: list[str] = ()) -> dict:
         return {**out, "verdict": "cannot decide: on its bound", "identifiable": False, "value": float("nan"),
                 "on_bound": 0.0, "searched_below_zero": q["value"],
                 "note": f"cannot decide: on its bound 0 s; searched below zero it goes to {q['value']:.3g} s "
-                        f"[{lo:.3g}, {hi:.3g}], but {', '.join(shaping_on_bound)} sit on their bounds: the delay "
+                        f"[{lo:.3g}, {hi:.3g}], but {', '.join(shaping_on_bound)} {'sits' if len(shaping_on_bound) == 1 else 'sit'} on "
+                        f"{'its bound' if len(shaping_on_bound) == 1 else 'their bounds'}: the delay "
                         f"only makes up for a response the model does not pin down (drive more, or in a wider "
                         f"range of speeds and turns)"}
     if not math.isfinite(q["std"]) or abs(q["value"] - DELAY_LIMIT[0]) < 5e-3:

@@ -16,7 +16,7 @@ from agrobot.diagnosis.plausibility import study_understeer
 from agrobot.diagnosis.study_fit import study_check
 from agrobot.measurements import LogError, load_log
 from agrobot.measurements.audit import require_causal
-from agrobot.measurements.log import DEGREE_SUSPECT, check_log, persisted_audit, yaw_rate_in_radians
+from agrobot.measurements.log import DEGREE_SUSPECT, check_log, persisted_audit, persisted_report, yaw_rate_in_radians
 from agrobot.measurements.recording import ImportOptions, is_recording
 from agrobot.orchestrator.atomic_files import atomic_write, write_json
 from agrobot.orchestrator.resolver import resolve
@@ -210,13 +210,32 @@ def driving_report(source: Path, study=None, resample: bool = False, recording=N
                                    f"every segment and needs a gyro, not a GNSS course)")
     else:
         report = identify_driving(frame, str(source), study, progress=say,
-                                  wheelbase=getattr(recording, "wheelbase", None), geometry=geometry,
+                                  wheelbase=recorded_wheelbase(source, getattr(recording, "wheelbase", None)),
+                                  geometry=geometry,
                                   input_hold=input_hold, **more)
+        if imported is not None and imported.get("steering_ratio"):      # never applied silently
+            report["notes"].insert(0, imported["steering_ratio"]["text"])
         study_mismatch(report, frame, study, say)
     hidden = report.pop("_plot")
     if imported is not None:
         report["recording"] = imported
     return report, hidden
+
+
+def recorded_wheelbase(source: Path, given: float | None):
+    """The wheelbase identify stands on before the study's: the one given (--wheelbase), else the one
+    ``convert --wheelbase`` recorded beside a converted log (its <name>.import.json), as (L, where
+    from); the recorded one passed over for one given is said; None: neither."""
+    saved = None if is_recording(Path(source)) else persisted_report(source).get("wheelbase")
+    saved = saved.get("value") if isinstance(saved, dict) else None
+    side = f"{Path(source).stem}.import.json"
+    if given:
+        passed = (f"; the {saved:.3g} m that convert --wheelbase recorded in {side} passed over"
+                  if saved and abs(saved - given) > 1e-9 else "")
+        return float(given), f"given with the recording (--wheelbase){passed}"
+    if saved:
+        return float(saved), f"recorded by convert --wheelbase in {side} (--wheelbase gives another)"
+    return None
 
 
 def study_mismatch(report: dict, frame, study, say) -> None:
@@ -295,7 +314,7 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):
         left_out.append(f"tyre_friction (identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
                         f"value: the study keeps its own)")
-    elif tyre["found"]:
+    elif tyre["found"] and tyre["parameters"]["friction"].get("identifiable", True):
         values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
         if tyre["parameters"]["shape"]["identifiable"]:
             values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]

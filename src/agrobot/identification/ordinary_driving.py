@@ -77,13 +77,19 @@ def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
     return 1.0, 30.0
 
 
+# a tyre's cornering stiffness per unit load is B C mu of its Magic Formula: a racing slick's mu 2 at a
+# peak slip of 0.05 rad (C about 1.5) gives about 60; a fit beyond means something else (a scale)
+CORNERING_LIMIT = (0.5, 60.0)
+WIDENED_ON_BOUND = ("c_f", "c_r", "friction")
+
+
 def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool,
                     relaxation: float | None = None) -> list[Parameter]:
     """``relaxation``: the study's front relaxation length, fitted within x 1/4 .. 4 of it (None: held)."""
     lo, hi = cornering_bounds(vehicle)
     bias = vehicle.gyro_bias_bound or 3.0 * math.pi / 180
-    out = [Parameter("c_f", "1/rad", 5.0, lo, hi, meaning="front cornering stiffness / front axle load"),
-           Parameter("c_r", "1/rad", 5.0, lo, hi, meaning="rear cornering stiffness / rear axle load"),
+    out = [Parameter("c_f", "1/rad", 5.0, lo, hi, limit=CORNERING_LIMIT, meaning="front cornering stiffness / front axle load"),
+           Parameter("c_r", "1/rad", 5.0, lo, hi, limit=CORNERING_LIMIT, meaning="rear cornering stiffness / rear axle load"),
            Parameter("delay", "s", 0.1, 0.0, 0.5, limit=DELAY_LIMIT, meaning="steering delay (input to the wheels)"),
            Parameter("lag", "s", 0.1, 0.0, 0.5, meaning="steering first-order lag"),
            Parameter("steer_offset", "rad", 0.02, -0.1, 0.1, meaning="wheel angle the tyres see at zero input")]
@@ -96,7 +102,8 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
                              meaning="front tyre relaxation length"))
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
-        out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, meaning="tyre friction coefficient mu (peak force / load)"),
+        out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, limit=vehicle.physical_limits()["tyre_friction"],
+                          meaning="tyre friction coefficient mu (peak force / load)"),
                 Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C")]
     return out
 
@@ -348,13 +355,15 @@ def _steady_turn(log, segs, wheelbase, where, input_name, driven, min_speed, veh
 
 
 def wheelbase_of(vehicle: Vehicle, p: TractorParameters, given: float | None, study) -> tuple[float, str]:
-    """(L [m], where it comes from): the one given with the recording (--wheelbase), else the study's
+    """(L [m], where it comes from): the one given with the recording (--wheelbase; or ``given`` a
+    (value, where from) pair: from_log.recorded_wheelbase), else the study's
     [vehicle] wheelbase, else its yaw plant's l_f + l_r (the paper tractor's without a study)."""
     where = getattr(study, "path", None)
+    given, told = given if isinstance(given, tuple) else (given, "given with the recording (--wheelbase)")
     if given:
         passed = (f"; the study's {vehicle.wheelbase:.3g} m passed over" if vehicle.wheelbase and
                   abs(vehicle.wheelbase - given) > 1e-9 else "")
-        return float(given), f"given with the recording (--wheelbase){passed}"
+        return float(given), f"{told}{passed}"
     if vehicle.wheelbase:
         return float(vehicle.wheelbase), f"the [vehicle] table of {where}"
     if study is not None:
@@ -417,8 +426,8 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
+    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)   # at any excitation
     if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
-        _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
                                f"drive turns and slaloms (for example +-{math.degrees(2 * MIN_EXCITATION * L / max(np.median(log.v), 0.5)):.1f} deg "
@@ -438,9 +447,9 @@ def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitati
     raise NotEnoughDriving(f"{where}: the yaw rate moves {answer:.3g} rad/s (std while driving), "
                            f"{answer / max(excitation, 1e-12):.3g} times what v {input_name} / L asks for "
                            f"({excitation:.3g} rad/s): {input_name} is not the road-wheel angle it should be: a "
-                           f"steering ratio divided into an angle that is the road wheel's already (the study's "
-                           f"[vehicle] steering_ratio applies to a recording unless --steering-ratio is given; "
-                           f"--steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
+                           f"steering ratio divided into an angle that is the road wheel's already (a --steering-ratio "
+                           f"given is taken as given, the study's only where the turns say the angle is the "
+                           f"handwheel's; --steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
 
 
 @dataclass
@@ -523,7 +532,41 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
                 nl = trial
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
+    linear, free = widened_refit(model, linear, free, fixed, fit_segs, notes, say)
+    nl, free_nl = widened_refit(model, nl, free_nl, fixed, fit_segs, notes, say)
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
+
+
+def widened_refit(model, result: FitResult, free: list[Parameter], fixed: dict, segs: Segments, notes: list[str],
+                  say) -> tuple[FitResult, list[Parameter]]:
+    """A fit whose WIDENED_ON_BOUND parameters ended on a bound of the class that is not their
+    physical limit (Parameter.limit), fitted again with that bound moved to the limit: a value on a
+    bound is never concluded. One that runs to the limit too is put back on the class's bound (not
+    identifiable, said why) and the others fitted again without it; the wider fit stands when it
+    fits the segments as well or better."""
+    wide = {p.name: p.widened(result.values[p.name]) for p in free if p.name in WIDENED_ON_BOUND and result.at_bound(p)}
+    wide = {k: w for k, w in wide.items() if w is not None}
+    runaway = []
+    while wide:
+        moved = ", ".join(f"{k} {result.values[k]:.3g} to [{w.lower:.3g}, {w.upper:.3g}]" for k, w in wide.items())
+        say(f"fitted again with bounds widened to their physical limits: {moved}")
+        free_wide = [wide.get(p.name, p) for p in free]
+        again = fit(model, free_wide, result.values, fixed, segs)
+        ran = [k for k, w in wide.items() if again.at_bound(w)]
+        if not ran and again.rss_total <= result.rss_total:
+            notes.append(f"ended on the class's bounds, fitted again within their physical limits: {moved} (now "
+                         + ", ".join(f"{k} {again.values[k]:.3g}" for k in wide) + ")" + _ran_to(runaway))
+            return again, free_wide
+        runaway += ran
+        wide = {k: w for k, w in wide.items() if k not in ran} if ran else {}
+    if runaway and f"ended on the class's bounds{_ran_to(runaway)}" not in notes:
+        notes.append(f"ended on the class's bounds{_ran_to(runaway)}")
+    return result, free
+
+
+def _ran_to(names: list[str]) -> str:
+    return (f"; {', '.join(names)} ran to {'its' if len(names) == 1 else 'their'} physical limit too when widened: "
+            f"kept on the class's bound, not identifiable from this log" if names else "")
 
 
 def _steering_geometry(model: YawModel, fit_linear, start: dict, segs: Segments, notes: list[str],
@@ -674,7 +717,8 @@ def _final_parameters(log: DrivingLog, fits: _Fits, held: _HeldOut, saturation: 
     free = [wide if p is delay else p for p in first_free if p not in on_zero]
     final = min((fit(fits.model, free, {**first.values, "delay": d}, fixed, fits.fit_segs)     # from the bound and
                  for d in (first.values["delay"], -0.1)), key=lambda f: f.rss_total)          # from beyond it
-    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain") and final.at_bound(p)]
+    # a relaxation length held on its bound lags (sigma_f / v) or leads the model as much as a delay does
+    shaping = [p.name for p in free if p.name in ("c_f", "c_r", "steer_gain", "sigma_f") and final.at_bound(p)]
     verdict = delay_verdict(_parameters(final, free, fits)[0]["delay"], shaping)
     tau, lag = final.values["delay"], final.values.get("lag", 0.0)
     if not shaping and not on_zero and tau < 0 < lag:       # a lead traded against the lag: judged on tau + T
@@ -701,6 +745,11 @@ def _parameters(final: FitResult, free: list[Parameter], fits: _Fits) -> tuple[d
                                         final.at_bound(q), meaning=q.meaning)
     if fits.bias_info:
         params_json["gyro_bias"] = {**fits.bias_info, "bounds": None, "identifiable": True}
+    lag = params_json.get("lag", {})
+    if "steer_gain" not in final.names and "lower bound" in lag.get("note", ""):
+        lag["note"] += (": the input is a measured wheel angle, with no steering actuator after it to lag (the "
+                        "tyres' own lag is sigma_f): 0 s is its physical limit, not told from any lag the fit "
+                        "has no use for")
     stiff = {}
     for key, q, load in (("front", "c_f", fits.loads[0]), ("rear", "c_r", fits.loads[1])):
         entry = params_json[q]
@@ -745,6 +794,8 @@ def _understeer(final: FitResult, free: list[Parameter], L: float, alike: str | 
                            deg_per_g=math.degrees(K) * GRAVITY, **({"note": f"not identifiable from this log: {alike}"}
                                                                     if alike else {}))
     char = characteristic_speed(K, K_sd, L, understeer["identifiable"], alike, top_speed)
+    if understeer["identifiable"] and not char["identifiable"] and K < 0 and char["value"] < top_speed:
+        understeer.update(identifiable=False, note=f"not concluded: its critical speed is {char['note']}")
     return K, K_sd, understeer, char
 
 
@@ -982,6 +1033,11 @@ def characteristic_speed(K: float, K_sd: float, L: float, identifiable: bool = T
     char["identifiable"] = identifiable          # v_ch is K's: identifiable where K is
     if not identifiable:
         char["note"] = "not identifiable from this log: it is set by K, which is not" + (f" ({alike})" if alike else "")
+    elif K < 0 and char["value"] < top_speed:       # driven stably above it: the sign is a misfit's, not the car's
+        char["identifiable"] = False
+        char["note"] = (f"impossible, not a verdict: sqrt(L / |K|) = {char['value']:.3g} m/s lies below the speeds the "
+                        f"vehicle was driven at (top {top_speed:.3g} m/s, 99th percentile) without losing it: the "
+                        f"model misses the log (a steering angle's scale, a clock, a bias), the car is not oversteering")
     elif char["value"] > BEYOND_TOP * top_speed:     # an extrapolation of the gain curve far past the log
         char["identifiable"] = False
         char["note"] = (f"{NOT_AT_THESE_SPEEDS}: sqrt(L / |K|) = {char['value']:.3g} m/s lies beyond {BEYOND_TOP:g} x the "
@@ -1130,6 +1186,9 @@ def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturati
     if saturation and nl.at_bound(friction) == "upper":
         mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "
                f"turns reach the tyres' bend but not their peak force"}
+    elif saturation and nl.at_bound(next(q for q in free_nl if q.name == "shape")):
+        mu |= {"identifiable": False, "note": f"{mu['value']:.3g} not concluded: the shape C (how sharply the tyres "
+               f"bend) sits on its bound, and the peak force trades against it"}
     return {"model": "simplified Magic Formula F = mu F_z sin(C atan(B alpha)), B = C_alpha / (C mu F_z)",
             "found": saturation, "why_not": held.reasons, "delta_bic": held.dbic,
             "held_out_gain": held.gain_all, "held_out_gain_high_lateral": held.gain_top,
@@ -1294,7 +1353,8 @@ def summary(report: dict) -> str:
     t = report["tyre_saturation"]
     if t["found"]:
         mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
-        lines.append(f"tyre saturation found: friction {mu['note'] if mu.get('at_least') else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+        told = mu.get("at_least") or not mu.get("identifiable", True)
+        lines.append(f"tyre saturation found: friction {mu['note'] if told else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
                      f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
                      f"{t['high_lateral_from']:.2g} m/s2")
     else:

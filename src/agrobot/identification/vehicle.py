@@ -2,7 +2,7 @@
 parameter may take on it.
 
     [vehicle]
-    class = "scale_car"        # tractor | car | truck | scale_car | robot
+    class = "scale_car"        # tractor | car | sports_car | truck | scale_car | robot
     wheelbase = 0.32           # m
     length = 0.55              # m, overall
     width = 0.30               # m, overall
@@ -43,6 +43,8 @@ CLASSES = {
                             "an agricultural tractor (industrial MEMS gyro, field slopes)"),
     "car": VehicleClass(1.0 * DEG, 7 * DEG, (0.1, 1.3), 2 * DEG,
                         "a road car (automotive-grade gyro, road gradients up to about 12 %)"),
+    "sports_car": VehicleClass(1.0 * DEG, 7 * DEG, (0.3, 2.0), 2 * DEG,
+                               "a sports or GT car on road-legal or racing tyres (friction up to about 1.6-2 dry)"),
     "truck": VehicleClass(1.0 * DEG, 7 * DEG, (0.1, 1.1), 2 * DEG, "a road truck"),
     "scale_car": VehicleClass(3.0 * DEG, 5 * DEG, (0.2, 1.8), 5 * DEG,
                               "a 1:10 to 1:5 model car (hobby MEMS gyro, indoor floors)"),

@@ -162,6 +162,9 @@ def run(args: argparse.Namespace) -> int:
                 for f, rep in import_runs(args.source, options)]
     else:
         jobs = [(args.out, *import_recording(args.source, options))]
+    if args.wheelbase is not None:          # read back by identify on the converted log
+        for _, _, rep in jobs:
+            rep["wheelbase"] = {"value": float(args.wheelbase), "unit": "m", "from": "convert --wheelbase"}
     for path, f, rep in jobs:             # every log checked before the first is written
         checked_log(args.source, f, rep)
         for written in (path, path.with_name(path.stem + ".import.json")) + ((path.with_suffix(".mcap"),) if args.mcap else ()):

@@ -12,6 +12,11 @@ def describe(report: dict) -> str:
     parts = [f"{len(v)} {k} file(s)" for k, v in files.items() if v]
     lines = [f"recording {report['source']}: {', '.join(parts) or 'no files'}"
              + (f", DBC {report['dbc']}" if report.get("dbc") else "")]
+    if report.get("wheelbase"):
+        lines.append(f"  wheelbase {report['wheelbase']['value']:.3g} m ({report['wheelbase']['from']}): recorded for "
+                     f"identify and diagnose on the converted log")
+    if report.get("steering_ratio"):
+        lines.append(f"  {report['steering_ratio']['text']}")
     c = report.get("clocks", {})
     if "nmea_host_clock" in c:
         h = c["nmea_host_clock"]

@@ -24,6 +24,7 @@ class ImportOptions:
     min_run: float = 10.0                       # s: shorter runs are listed, not used
     trim_standstill: bool = False               # leave out the standstill either side of the run used
     steering_ratio: float | None = None         # recorded steering angles / road-wheel angles (None: the study's, else 1)
+    steering_ratio_from: str = ""               # given | study | default: who chose it (for_vehicle fills it)
     bus: str | None = None                      # the CAN bus to read (candump's can0, a Vector channel)
     time: str | None = None                     # a table's time column(s) (measurements.tables.parse_time)
     keep_spikes: bool = False                   # keep the samples found to be spikes (they are named either way)
@@ -49,7 +50,9 @@ class ImportOptions:
         if model is not None and model.find(role="yaw_plant"):
             p = model.parameters(model.find(role="yaw_plant")[0])
             wheelbase = float(p.get("l_f", 1.0)) + float(p.get("l_r", 0.4))
-        return replace(self, wheelbase=float(wheelbase or 1.4),
+        origin = self.steering_ratio_from or ("given" if self.steering_ratio else
+                                              "study" if vehicle.get("steering_ratio") else "default")
+        return replace(self, wheelbase=float(wheelbase or 1.4), steering_ratio_from=origin,
                        steering_ratio=float(self.steering_ratio or vehicle.get("steering_ratio", 1.0)))
 
     @property

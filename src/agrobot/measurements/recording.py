@@ -29,6 +29,7 @@ from .modes import judged
 from .options import ImportOptions
 from .quirks import find_quirks, fixes_from_columns
 from .runs import assemble
+from .steering_scale import road_wheel_or_handwheel, turn_slope
 from .streams import Streams
 
 __all__ = ["ImportOptions", "describe", "import_recording", "import_runs", "is_recording", "load_log", "positions",
@@ -85,16 +86,33 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
 
 
 def _steered(streams: Streams, options: ImportOptions) -> Streams:
-    """Handwheel angles to road-wheel angles: delta and delta_cmd divided by the steering ratio."""
-    if not options.steering_ratio or options.steering_ratio == 1.0:
+    """Handwheel angles to road-wheel angles: delta and delta_cmd divided by the steering ratio,
+    the study's only where the log's turns say delta is the handwheel's (measurements.steering_scale);
+    the choice is in the report's ``steering_ratio``."""
+    ratio = options.steering_ratio or 1.0
+    if options.steering_ratio_from == "study" and ratio != 1.0:
+        handwheel, why = road_wheel_or_handwheel(turn_slope(streams.signals, streams.gnss, options.wheelbase), ratio)
+        if handwheel is False:
+            ratio = 1.0
+        streams.report["steering_ratio"] = {
+            "applied": ratio, "study": options.steering_ratio, "decided_from_turns": handwheel is not None,
+            "text": (f"steering ratio {ratio:g}: " + ("delta taken as recorded; " if ratio == 1.0 else "delta divided by "
+                     "it (handwheel -> road wheel); ") + f"the study's {options.steering_ratio:g} "
+                     + ("passed over" if ratio == 1.0 else "applied" if handwheel else "applied (the turns cannot tell)")
+                     + f": {why}; --steering-ratio R sets it (1: the angle as recorded)")}
+    elif ratio != 1.0:
+        streams.report["steering_ratio"] = {"applied": ratio, "decided_from_turns": False,
+                                            "text": f"steering ratio {ratio:g} (given): delta divided by it "
+                                                    f"(handwheel -> road wheel)"}
+    if ratio == 1.0:
         return streams
     for column in ("delta_cmd", "delta"):
         if column in streams.signals:
             t, v = streams.signals[column]
-            streams.signals[column] = (t, v / options.steering_ratio)
-            streams.resolution[column] = streams.resolution.get(column, 0.0) / options.steering_ratio
+            streams.signals[column] = (t, v / ratio)
+            streams.resolution[column] = streams.resolution.get(column, 0.0) / ratio
             streams.report.setdefault("columns", {})[column] = (streams.report.get("columns", {}).get(column, column)
-                                                                 + f"; / steering ratio {options.steering_ratio:g} "
+                                                                 + f"; / steering ratio {ratio:g} "
                                                                    f"(handwheel -> road wheel)")
     return streams
 
