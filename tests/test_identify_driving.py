@@ -43,7 +43,11 @@ def test_f1tenth_ds5_delay_understeer_saturation_and_held_out_fit(ds5):
     tyre = ds5["tyre_saturation"]
     assert tyre["found"], tyre["why_not"]
     mu = tyre["parameters"]["friction"]
-    assert mu["identifiable"] and 0.3 < mu["value"] < 1.2          # a plastic-tyred car on a floor
+    assert 0.3 < mu["value"] < 1.2                                 # a plastic-tyred car on a floor
+    # with the shape C on its bound (C < 1 never reaches the peak: sin(C atan) < sin(C pi/2)) the
+    # friction is an extrapolation, never a concluded value; with C free it is concluded
+    shape_on_bound = tyre["parameters"]["shape"].get("note", "").startswith("not identifiable")
+    assert mu["identifiable"] != shape_on_bound, mu.get("note")
     # the linear range ends where the Magic Formula leaves the linear tyre, below the log's top
     assert ds5["linear_range"]["value"] < 9.81 * mu["value"]
     for name, p in ds5["parameters"].items():                     # every parameter with bounds and interval
