@@ -60,20 +60,24 @@ a quarter of a degree (40 %), not a tractor's on 7 degrees.
 """
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 
 from agrobot.estimation import FitResult, effective_size, forward_jacobian
 
-from .candidates import Replay, _fit
+from .candidates import _fit
+from .fit_memo import MEMO
 from .noise_floor import level_on_updates, update_step
-from .replay import measured_yaw_rate, wheel_angle_input
+from .replay import YawReplay, measured_yaw_rate, wheel_angle_input
 
 INPUT_NOISE_SHARE = 0.05       # the passage's share of the yaw stage's RSS from which it is corrected
 REALISATIONS = 6
 ITERATIONS = (3, 3)            # reweightings x Gauss-Newton steps each
 SLOW_CONTENT = 5.0             # s: the moving mean that keeps the reading's own slow content (denoised_reading)
+# a replay's caches that read the wheel angle (candidates.Replay: tracks, saturated replay, fits, fits ahead)
+DELTA_CACHES = ("_last_tracks", "_saturated", MEMO, "collecting", "collect_first", "fits_ahead")
 EXPLAINED = 1.25               # the steering stage's RMS within this x sigma_n: its replay carries the wheels
 
 
@@ -200,6 +204,20 @@ def denoised_reading(replay, v: dict[str, float]) -> np.ndarray:
     return s + np.convolve(miss, np.ones(n) / n, mode="valid")
 
 
+def with_reading(replay, delta: np.ndarray):
+    """``replay`` with its yaw stage driven by ``delta`` for the reading: the log's arrays and what does
+    not read the wheel angle (the track's whitening, the steering replays) shared, the yaw replay
+    built on it, the caches that read it (tracks, the saturated replay, remembered fits) left behind."""
+    quiet = copy.copy(replay)
+    for key in DELTA_CACHES:
+        quiet.__dict__.pop(key, None)
+    quiet.delta = delta
+    b = replay.baseline
+    quiet.yaw = YawReplay(b.yaw_model, b.tractor, replay.h, delta, replay.speed, replay.heading,
+                          min_speed=replay.min_speed, kernel=replay.kernel, geometry=b.steering_geometry)
+    return quiet
+
+
 def denoised_fit(replay, values: dict[str, float], free: list, stages: tuple[str, ...], sigma_n: float,
                  share: float) -> tuple[FitResult, float] | None:
     """(``free`` refitted on ``stages`` from ``values`` by least squares with the yaw stage driven by
@@ -212,11 +230,7 @@ def denoised_fit(replay, values: dict[str, float], free: list, stages: tuple[str
     miss = replay.residuals("steering", values, "fit")
     if not float(np.sqrt(np.mean(miss ** 2))) <= EXPLAINED * sigma_n:
         return None
-    frame = replay.frame.copy()
-    frame.attrs = dict(replay.frame.attrs)
-    frame["delta"] = denoised_reading(replay, values)
-    quiet = Replay(frame, replay.baseline, fit_fraction=replay.fit_fraction, split=replay.split,
-                   burn_in=replay.burn_in, window=replay.window, min_speed=replay.min_speed, kernel=replay.kernel)
+    quiet = with_reading(replay, denoised_reading(replay, values))
     levels = {s: float(np.sqrt(np.mean(quiet.residuals(s, values, "fit") ** 2))) or 1.0 for s in stages}
     return _fit(quiet, values, free, stages, [{}], levels), share
 
