@@ -23,7 +23,7 @@ of harness.hidden_effects.recovered. Prints one table, then the time per diagnos
 hiding tyre saturation, the default; all; none).
 
 Vehicle classes (``--classes tractor car small_ackermann``, or ``--quick``: one seed of 120 s logs, a
-few minutes on two free cores): the paper tractor, a passenger car and a small Ackermann machine
+few minutes on two free cores; ``--quick --classes car --seeds 8``: one class over eight seeds): the paper tractor, a passenger car and a small Ackermann machine
 (wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna heading and no gyro; harness.diagnosis_classes), each
 judged against its own baseline study (the small machine's: harness.vehicle_classes.study),
 clean and with each steering-map effect hidden (gain error, left/right asymmetry, offset, nonlinear

@@ -223,9 +223,9 @@ def denoised_fit(replay, values: dict[str, float], free: list, stages: tuple[str
     """(``free`` refitted on ``stages`` from ``values`` by least squares with the yaw stage driven by
     the denoised reading (denoised_reading: the command as an instrument, the reading's slow content
     kept), each stage weighed by its level there; ``share``), or None where the steering stage is not
-    replayed or its replay does not carry the wheels (its fit part's RMS above EXPLAINED x sigma_n: a
-    steering effect the model does not hold yet)."""
-    if "steering" not in replay.stages or not np.all(np.isfinite(replay.cmd)):
+    replayed, is fitted too (it is judged on the reading itself) or its replay does not carry the
+    wheels (its fit part's RMS above EXPLAINED x sigma_n: a steering effect the model does not hold yet)."""
+    if "steering" not in replay.stages or "steering" in stages or not np.all(np.isfinite(replay.cmd)):
         return None
     miss = replay.residuals("steering", values, "fit")
     if not float(np.sqrt(np.mean(miss ** 2))) <= EXPLAINED * sigma_n:
