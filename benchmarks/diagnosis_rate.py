@@ -23,7 +23,7 @@ of harness.hidden_effects.recovered. Prints one table, then the time per diagnos
 hiding tyre saturation, the default; all; none).
 
 Vehicle classes (``--classes tractor car small_ackermann``, or ``--quick``: one seed of 120 s logs, a
-few minutes on two free cores): the paper tractor, a passenger car and a small Ackermann machine
+few minutes on two free cores; ``--quick --classes car --seeds 8``: one class over eight seeds): the paper tractor, a passenger car and a small Ackermann machine
 (wheelbase 1.27 m, 0.3-1.5 m/s, a dual-antenna heading and no gyro; harness.diagnosis_classes), each
 judged against its own baseline study (the small machine's: harness.vehicle_classes.study),
 clean and with each steering-map effect hidden (gain error, left/right asymmetry, offset, nonlinear
@@ -162,7 +162,7 @@ def _skipped(rows: list[dict]) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=None, help="seeds per case (3; --quick: 1)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--duration", type=float, default=240.0, help="log length [s] of the rate table")
     ap.add_argument("--scale-truth", action="append", default=[], metavar="PARAM=FACTOR",
@@ -182,13 +182,14 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=1000,
                     help="the vehicle-class table's first seed (another than 1000 checks a change on unseen logs)")
     ap.add_argument("--quick", action="store_true",
-                    help="the vehicle-class table of the three classes, one seed, 120 s logs (a few minutes)")
+                    help="the vehicle-class table (of the three classes unless --classes), one seed unless "
+                         "--seeds, 120 s logs (a few minutes)")
     ap.add_argument("--compare-screen", action="store_true",
                     help="the vehicle-class table twice in one run, the diagnosis's pair screen off and on "
                          "(diagnosis.screen), and the logs it changes")
     args = ap.parse_args()
     if args.quick or args.classes:
-        class_table(args.classes or ["tractor", "car", "small_ackermann"], 1 if args.quick else args.seeds,
+        class_table(args.classes or ["tractor", "car", "small_ackermann"], args.seeds or (1 if args.quick else 3),
                     120.0 if args.quick else args.duration, args.workers,
                     () if args.quick else ("actuator_delay", "gps_latency", "steering_offset", "steering_offset+yaw_rate_bias"),
                     args.first_seed, (False, True) if args.compare_screen else (True,))
@@ -219,7 +220,7 @@ def main() -> None:
 
     print(f"identify first (as diagnose does by default): {args.identify} (--identify tyre|all|none)")
     with tempfile.TemporaryDirectory() as folder:
-        cases = [case(c, s, folder) for cases in groups.values() for c in cases for s in range(args.seeds)]
+        cases = [case(c, s, folder) for cases in groups.values() for c in cases for s in range(args.seeds or 3)]
         rows = [score(run) for run in diagnose_many(cases, args.workers)]
     print(f"{'hidden':48s} {'exact set':>10s} {'+params ok':>11s}  found instead")
     for group, cases in groups.items():

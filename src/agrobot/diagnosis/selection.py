@@ -38,8 +38,8 @@ misfit and the effect's held-out RMS falls there (evidence_stages): on a steerin
 baseline explains to its noise, a map bending the rate limit is no evidence, and an asymmetry must
 not outweigh an offset the straight driving shows.
 
-A steering gain read through a wheel-angle reading whose noise passes material power into the yaw
-stage (a car's 0.05 deg on a quarter of a degree) is judged as on a noise-free reading
+A steering gain or ratio curve read through a wheel-angle reading whose noise passes material power
+into the yaw stage (a car's 0.05 deg on a quarter of a degree) is judged as on a noise-free reading
 (Selector.through_noise, diagnosis.reading_noise): fitted by corrected least squares, its held-out
 gain of the yaw rate's RMS net of the noise's passage, and reported so.
 
@@ -60,7 +60,7 @@ from agrobot.orchestrator.work_progress import Work
 
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
-from .reading_noise import INPUT_NOISE_SHARE, corrected_fit, net_rms, passage_power, reading_level
+from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
 from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -74,7 +74,7 @@ from .verdict import audit_findings
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
 TIE = 10.0             # dBIC difference below which two rival explanations are not told apart
 STRONG = -10.0         # dBIC below which the evidence is strong
-ATTENUATED = ("steering_gain",)    # read through the wheel angle's noise, refitted by corrected least squares
+ATTENUATED = ("steering_gain", "steering_ratio_curve")    # read through the wheel angle's noise: corrected least squares
 
 
 @dataclass
@@ -377,7 +377,7 @@ class Selector:
 
     def through_noise(self, effect: Effect, fit: FitResult, related: list[Effect], stages,
                       trace: list[str] | None = None) -> tuple[FitResult, dict[str, float] | None]:
-        """(``fit``, None), or for a gain read through the wheel-angle reading (ATTENUATED) whose noise
+        """(``fit``, None), or for a gain or a ratio curve read through the wheel-angle reading (ATTENUATED) whose noise
         passes material power into the yaw stage (diagnosis.reading_noise: errors in variables
         attenuate it) the fit refitted by corrected least squares and scored on ``stages``, with the
         held-out mean square of the noise's passage (what no model explains); said in ``trace``."""
@@ -386,11 +386,11 @@ class Selector:
                 or replay.__dict__.get("collecting") is not None:      # no reading; a fit only noted
             return fit, None
         fit_on = fitted_stages(related + [effect], stages)
-        out = corrected_fit(replay, fit.values, refit_free(replay, fit_on, related + [effect]), fit_on, self.sigma,
-                            self.reading_noise)
+        out = noise_free_fit(replay, fit.values, refit_free(replay, fit_on, related + [effect]), fit_on, self.sigma,
+                             self.reading_noise)
         if out is None:
             return fit, None
-        part, share = out
+        part, share, how = out
         self.noisy_reading = True
         scored = _fit(replay, part.values, [], tuple(stages), [{}], self.sigma)
         corrected = fit.merged(replace(scored, free=part.free, cov=part.cov))
@@ -399,8 +399,8 @@ class Selector:
         else:
             trace.append(f"{effect.id}: the wheel-angle reading's noise ({math.degrees(self.reading_noise):.2g} deg) "
                          f"passed through the yaw model is {100 * share:.0f} % of the yaw stage's residual power "
-                         f"(>= {100 * INPUT_NOISE_SHARE:.0f} %): it attenuates a gain read through it (errors in "
-                         f"variables), judged and reported by corrected least squares: " + ", ".join(
+                         f"(>= {100 * INPUT_NOISE_SHARE:.0f} %): it attenuates a map read through it (errors in "
+                         f"variables), judged and reported by {how}: " + ", ".join(
                              f"{name} {corrected.values[name]:.4g} +- {corrected.std(name):.2g} (least squares "
                              f"{value:.4g} +- {sd:.2g})" for name, value, sd in self.least_squares.get(effect.id, [])))
         return corrected, {"yaw": passage_power(replay, corrected.values, self.reading_noise)}
