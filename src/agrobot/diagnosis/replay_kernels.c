@@ -8,10 +8,9 @@
  *   Z_{-1} = 0, u_N = u_{N-1} (the yaw replay's time-varying recursion under a first-order hold, the
  *   system matrices of the step's speed bin i_k; B1 NULL: a zero-order hold), giving the chosen rows
  *   of Z_{k-1} (the state before each sample's update), for R sets side by side;
- * - zoh_stack: the zero-order hold of a stack of systems (components.models.yaw_dynamics.zoh_discretize
- *   with expm_batched: scaling and squaring with a degree-12 Taylor polynomial, the squarings given);
- * - expm_stack: exp of each full matrix of a stack by the same series (the first-order hold's
- *   augmented generators, diagnosis.replay.first_order_hold). */
+ * - expm_stack: exp of each matrix of a stack (components.models.yaw_dynamics.expm_batched: scaling
+ *   and squaring with a degree-12 Taylor polynomial, the squarings given), the first-order hold's
+ *   augmented generators (diagnosis.replay.first_order_hold). */
 #include <string.h>
 
 long replay_kernels_version(void) { return 2; }
@@ -57,50 +56,6 @@ void indexed_recursion(long R, long S, long N, long n, long p, long m, const dou
                 }
             memcpy(z, next, sizeof(double) * n * m);
         }
-    }
-}
-
-/* The zero-order hold of each system of a stack: [Ad Bd; 0 I] = exp([A B; 0 0] dt) by expm_batched's
- * series, its products restricted to the top block row (the bottom rows of every term are zero, of
- * every power of the exponential [0 I]: the terms left out add exact zeros). A: (count, n, n) and B:
- * (count, n, p), both already times dt; Ad, Bd alike; n + p <= 16. */
-void zoh_stack(long count, long n, long p, long squarings, const double *A, const double *B, double *Ad, double *Bd) {
-    long q = n + p;
-    double X[256], T[256], tmp[256], E[256];
-    double scale = 1.0;
-    for (long s = 0; s < squarings; s++) scale *= 2.0;
-    for (long c = 0; c < count; c++) {
-        for (long i = 0; i < n; i++)           /* X, T, E: the top n rows of q columns */
-            for (long j = 0; j < q; j++) {
-                X[i * q + j] = (j < n ? A[(c * n + i) * n + j] : B[(c * n + i) * p + j - n]) / scale;
-                T[i * q + j] = E[i * q + j] = (i == j) ? 1.0 : 0.0;
-            }
-        for (int k = 1; k < 13; k++) {
-            for (long i = 0; i < n; i++)
-                for (long j = 0; j < q; j++) {
-                    double s = 0.0;
-                    for (long l = 0; l < n; l++) s += T[i * q + l] * X[l * q + j];
-                    tmp[i * q + j] = s;
-                }
-            for (long i = 0; i < n * q; i++) {
-                T[i] = tmp[i] / k;
-                E[i] += T[i];
-            }
-        }
-        for (long s = 0; s < squarings; s++) {
-            for (long i = 0; i < n; i++)
-                for (long j = 0; j < q; j++) {
-                    double acc = 0.0;
-                    for (long l = 0; l < n; l++) acc += E[i * q + l] * E[l * q + j];
-                    tmp[i * q + j] = j < n ? acc : acc + E[i * q + j];
-                }
-            memcpy(E, tmp, sizeof(double) * n * q);
-        }
-        for (long i = 0; i < n; i++)
-            for (long j = 0; j < q; j++) {
-                if (j < n) Ad[(c * n + i) * n + j] = E[i * q + j];
-                else Bd[(c * n + i) * p + j - n] = E[i * q + j];
-            }
     }
 }
 
