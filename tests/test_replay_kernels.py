@@ -1,6 +1,6 @@
 """The diagnosis's stage replays in C (diagnosis.replay_kernels) against their Python references on
 the same candidates, to 1e-9: the steering's first-order equivalent, the yaw replay's indexed
-recursion and its zero-order hold, and whole replays of a generated tractor log
+recursion and its exponentials (the first-order hold), and whole replays of a generated tractor log
 (every stage, the command-only yaw stage too). The kernels are also held to truths of their own:
 a step through the first-order lag, exp of a rotation generator."""
 from __future__ import annotations
@@ -13,11 +13,11 @@ import pytest
 from scipy.linalg import expm
 
 from agrobot.components.models import steering_equivalent
-from agrobot.components.models.yaw_dynamics import TractorParameters, zoh_discretize
+from agrobot.components.models.yaw_dynamics import TractorParameters, expm_batched
 from agrobot.diagnosis import replay_kernels
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
-from agrobot.diagnosis.replay import YawReplay, blocked_recursion, steering_replay
+from agrobot.diagnosis.replay import YawReplay, blocked_recursion, hold_generator, steering_replay
 from agrobot.orchestrator.study import load_study
 from harness.truth_tractor import make_log
 
@@ -72,20 +72,18 @@ def test_recursion_kernel_equals_the_blocked_recursion():
         z = A[0, index[k]] @ z + b[0, k]
 
 
-def test_hold_kernel_equals_the_batched_taylor_series():
+def test_exponential_kernel_equals_the_batched_taylor_series():
     rng = np.random.default_rng(7)
     size = np.linspace(0.01, 60.0, 40)[:, None, None]
     for n, p in ((2, 2), (4, 2), (3, 1)):
         A, B = rng.standard_normal((40, n, n)) * size, rng.standard_normal((40, n, p)) * size
         for dt in (0.01, 0.05):
-            for got, ref in zip(replay_kernels.zoh_stack(A, B, dt), zoh_discretize(A, B, dt)):
-                close(got, ref, 1e-12)
-    close(replay_kernels.zoh_stack(A[:3], B[:3], 0.05)[0][2], expm(A[2] * 0.05), 1e-11)
-    w, dt = 2.5, 0.4                 # a rotation's generator: Ad = Rot(w dt), Bd = int_0^dt Rot(w s) ds b
-    Ad, Bd = replay_kernels.zoh_stack(np.array([[[0.0, -w], [w, 0.0]]]), np.array([[[1.0], [0.0]]]), dt)
+            M = hold_generator(A, B, dt)
+            close(replay_kernels.expm_stack(M), expm_batched(M), 1e-12)
+    close(replay_kernels.expm_stack(A[:3] * 0.05)[2], expm(A[2] * 0.05), 1e-11)
+    w, dt = 2.5, 0.4                 # a rotation's generator: exp = Rot(w dt)
     c, s = math.cos(w * dt), math.sin(w * dt)
-    close(Ad[0], [[c, -s], [s, c]], 1e-13)
-    close(Bd[0, :, 0], [s / w, (1.0 - c) / w], 1e-13)
+    close(replay_kernels.expm_stack(np.array([[[0.0, -w * dt], [w * dt, 0.0]]]))[0], [[c, -s], [s, c]], 1e-13)
 
 
 @pytest.mark.parametrize("model", ["bicycle", "rlfr"])

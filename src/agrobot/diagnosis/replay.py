@@ -7,8 +7,10 @@
   is weighed by the noise the dead reckoning integrates (TrackWhitening).
 
 Every function takes the parameter values (SI units) as a mapping and returns arrays on the log's
-sample times. Inputs are taken as the mean of the two samples around each step (first-order hold
-in the integral sense), so a 20 Hz log replays without half-a-sample lag.
+sample times. The linear systems (the yaw model, the gyro's filter) hold their inputs linear
+between the samples (an exact first-order hold: ``first_order_hold``), so a vehicle whose yaw follows
+the wheels within a row's step replays without the half-row lag a held mean of the two samples
+would give; the speed that schedules a step's system is that mean (the step's system held).
 
 No effect is named here: the values reach the model as the quantities the catalogue's effects carry
 (diagnosis.effect.QUANTITIES, catalogue.CATALOGUE.quantities: the steering's and the yaw model's
@@ -33,7 +35,7 @@ from agrobot.components.tractor_yaw_plant import steer_input
 from agrobot.identification.driving import ACKERMANN, SMALL_ANGLE, DrivingLog, Segments, YawModel
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
-                                            state_space, zoh_discretize)
+                                            expm_batched, state_space)
 
 
 def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float,
@@ -93,11 +95,34 @@ def measured_yaw_rate(rate: np.ndarray, v: Mapping[str, float], h: float = 0.0) 
 
 
 def low_pass(x: np.ndarray, h: float, tau: float) -> np.ndarray:
-    """tau y' = x - y on samples h apart, x held linear between them (the mean of the two samples
-    around a step drives it), from rest at x[0]: y[k] = a y[k-1] + (1 - a) (x[k-1] + x[k]) / 2."""
+    """tau y' = x - y on samples h apart, x linear between them (first_order_hold, exact), from rest
+    at x[0]: y[k] = a y[k-1] + g0 x[k-1] + g1 x[k], a = exp(-h / tau), g1 = 1 - (tau / h)(1 - a),
+    g0 = (tau / h)(1 - a) - a."""
     a = math.exp(-h / tau)
-    u = np.concatenate([x[:1], 0.5 * (x[1:] + x[:-1])])
-    return lfilter([1.0 - a], [1.0, -a], u, zi=[a * u[0]])[0]
+    g1 = 1.0 - tau / h * -math.expm1(-h / tau)
+    g0 = 1.0 - a - g1
+    return lfilter([g1, g0], [1.0, -a], x, zi=[(1.0 - g1) * x[0]])[0]
+
+
+def first_order_hold(A: np.ndarray, B: np.ndarray, h: float, exponential=expm_batched
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Phi, G0, G1) of x' = A x + B u, u linear over each step h: x_{k+1} = Phi x_k + G0 u_k + G1 u_{k+1},
+    Phi = e^{Ah}, G1 = (1/h) int_0^h e^{A(h-s)} s ds B, G0 = int_0^h e^{A(h-s)} ds B - G1, the top block
+    row of exp([[A, B, 0], [0, 0, I/h], [0, 0, 0]] h) = [Phi, G0 + G1, G1] (u = w + z s / h, w' = z / h).
+    A stack (k, n, n), B (k, n, p), in one batched ``exponential`` (expm_batched, or the C kernel's
+    replay_kernels.expm_stack)."""
+    n, p = A.shape[-1], B.shape[-1]
+    E = exponential(hold_generator(A, B, h))
+    return E[..., :n, :n], E[..., :n, n:n + p] - E[..., :n, n + p:], E[..., :n, n + p:]
+
+
+def hold_generator(A: np.ndarray, B: np.ndarray, h: float) -> np.ndarray:
+    """[[A, B, 0], [0, 0, I/h], [0, 0, 0]] h of each system of a stack: (k, n + 2p, n + 2p)."""
+    k, n, p = B.shape
+    M = np.zeros((k, n + 2 * p, n + 2 * p))
+    M[:, :n, :n], M[:, :n, n:n + p] = A * h, B * h
+    M[:, n:n + p, n + p:] = np.eye(p)
+    return M
 
 
 def exact(values) -> tuple[float, ...]:
@@ -129,8 +154,8 @@ class YawReplay:
                  geometry: str = "w"):
         self.model, self.params, self.h, self.geometry = model, params, h, geometry
         self.kernel = replay_kernels.choose(kernel)
-        psi = midpoints(heading)
-        offset = np.ones(len(delta)) if geometry == "w" else midpoints(1.0 + steer_input(delta, geometry) ** 2)
+        psi = np.asarray(heading, float)
+        offset = np.ones(len(delta)) if geometry == "w" else 1.0 + steer_input(delta, geometry) ** 2
         self.inputs = np.column_stack([self.steer(delta), offset, np.cos(psi), -np.sin(psi)])
         self.bins = np.round(np.maximum(midpoints(v), min_speed) / speed_grid).astype(int)
         self.grid = speed_grid
@@ -141,8 +166,8 @@ class YawReplay:
         self._scales: dict[tuple[float, float], np.ndarray] = {}
 
     def steer(self, delta: np.ndarray) -> np.ndarray:
-        """The input a wheel angle gives the recursion: midpoints of steer_input(delta)."""
-        return midpoints(steer_input(np.asarray(delta, float), self.geometry))
+        """The input a wheel angle gives the recursion, on the samples: steer_input(delta)."""
+        return steer_input(np.asarray(delta, float), self.geometry)
 
     def responses(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0, steering: np.ndarray | None = None) -> np.ndarray:
@@ -197,22 +222,24 @@ class YawReplay:
         jobs = list(todo.values())
         self._recurse([y for y, _, _ in jobs], [d for _, d, _ in jobs])
 
-    def _recursion(self, systems: list[tuple[np.ndarray, np.ndarray]], columns: list[int], inputs: list[np.ndarray],
-                   rows) -> np.ndarray:
-        """Rows ``rows`` of Z_{k-1}, Z_k = Ad(v_k) Z_{k-1} + Bd(v_k)[:, columns] * u_k, for each system
-        (Ad, Bd at the log's speeds) and its inputs u (N, m): (R, N, len(rows), m)."""
+    def _recursion(self, systems: list[tuple[np.ndarray, np.ndarray, np.ndarray]], columns: list[int],
+                   inputs: list[np.ndarray], rows) -> np.ndarray:
+        """Rows ``rows`` of Z_{k-1}, Z_k = Phi(v_k) Z_{k-1} + G0(v_k)[:, columns] * u_k + G1(v_k)[:, columns] * u_{k+1}
+        (u_N = u_{N-1}), for each system (Phi, G0, G1 at the log's speeds) and its inputs u (N, m):
+        (R, N, len(rows), m)."""
         if self.kernel == "c":
-            return replay_kernels.indexed_recursion(np.stack([A for A, _ in systems]), np.stack([B for _, B in systems]),
-                                                    self.index, columns, np.stack(inputs), rows)
-        A = [Ad[self.index] for Ad, _ in systems]
-        b = [Bd[self.index][:, :, columns] * u[:, None, :] for (_, Bd), u in zip(systems, inputs)]
+            A, G0, G1 = (np.stack(x) for x in zip(*systems))
+            return replay_kernels.indexed_recursion(A, G0, self.index, columns, np.stack(inputs), rows, G1)
+        A = [Ad[self.index] for Ad, _, _ in systems]
+        b = [G0[self.index][:, :, columns] * u[:, None, :] + G1[self.index][:, :, columns] * np.vstack([u[1:], u[-1:]])[:, None, :]
+             for (_, G0, G1), u in zip(systems, inputs)]
         if len(systems) == 1:
             return blocked_recursion(A[0], b[0], row=tuple(rows))[None]
         return blocked_recursion(np.stack(A), np.stack(b), row=tuple(rows))
 
     def _discrete(self, front_scale: float, rear_scale: float, speed_slope: float, v_ref: float,
                   relaxation_scale: float = 1.0):
-        """ZOH (Ad, [Bd_delta, Bd_lateral]) at each speed of the log, batched. A and B are affine in
+        """First-order hold (Phi, G0, G1; each G [delta, lateral]) at each speed of the log, batched. A and B are affine in
         the cornering stiffnesses and in 1/sigma (the relaxation lengths) at a given speed (every
         physical model), so they are assembled from parts computed once:
         A = A_0(v) + (1/s - 1) A_sigma(v) + c(v) (s_f C_f A_f(v) + s_r C_r A_r(v)), s the scale
@@ -241,15 +268,13 @@ class YawReplay:
                 self._scales = {(speed_slope, v_ref): c}
         k = 1.0 / relaxation_scale - 1.0
         A, B = A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs + c * front_scale * Bf
-        if self.kernel == "c":
-            return replay_kernels.zoh_stack(A, B, self.h)
-        return zoh_discretize(A, B, self.h)
+        return first_order_hold(A, B, self.h, replay_kernels.expm_stack if self.kernel == "c" else expm_batched)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float], through_geometry: bool = True) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m);
         ``through_geometry`` False: u is the dynamics' input itself (a static map's basis)."""
         system = self._discrete(*nonlinear(yaw_plant(v)))
-        u = np.column_stack([self.steer(col) if through_geometry else midpoints(col) for col in np.asarray(u, float).T])
+        u = np.column_stack([self.steer(col) if through_geometry else col for col in np.asarray(u, float).T])
         return self._recursion([system], [0] * u.shape[1], [u], (1,))[0, :, 0, :]
 
     def yaw_rate(self, v: Mapping[str, float], delta: np.ndarray | None = None) -> np.ndarray:

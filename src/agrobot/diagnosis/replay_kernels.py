@@ -1,6 +1,6 @@
 """The diagnosis's stage replays at compiled speed: replay_kernels.c (the steering's first-order
-equivalent, the yaw replay's indexed time-varying recursion, the zero-order hold of its systems at
-the log's speeds) compiled once per content by the compiled engine's toolchain
+equivalent, the yaw replay's indexed time-varying recursion, the exponentials of the first-order hold
+of its systems at the log's speeds) compiled once per content by the compiled engine's toolchain
 (orchestrator.compiled.toolchain: $CC, cc or gcc; cached by hash under $AGROBOT_CACHE) and called
 through ctypes, which lets go of the interpreter lock while C runs. diagnosis.replay keeps the Python
 path as the reference; ``choose`` picks between them (``auto``: C where a compiler is found, else
@@ -19,16 +19,16 @@ from agrobot.orchestrator.compiled.optional_library import OptionalLibrary
 from agrobot.orchestrator.compiled.toolchain import library
 
 SOURCE = Path(__file__).with_suffix(".c")
-MAX_ORDER = 16                 # the C file's largest state (recursion) and n + p (hold)
+MAX_ORDER = 16                 # the C file's largest state (recursion) and exponential
 
 
 def _load() -> ctypes.CDLL:
     lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [], [])
     L, D, I, P = ctypes.c_long, ctypes.c_double, ctypes.c_int, ctypes.c_void_p
     lib.steering_first_order.argtypes = [L, I, P, P, D, D, D, D, D, D, P]
-    lib.indexed_recursion.argtypes = [L, L, L, L, L, L, P, P, P, P, P, L, P, P]
-    lib.zoh_stack.argtypes = [L, L, L, L, P, P, P, P]
-    for f in (lib.steering_first_order, lib.indexed_recursion, lib.zoh_stack):
+    lib.indexed_recursion.argtypes = [L, L, L, L, L, L, P, P, P, P, P, P, L, P, P]
+    lib.expm_stack.argtypes = [L, L, L, P, P]
+    for f in (lib.steering_first_order, lib.indexed_recursion, lib.expm_stack):
         f.restype = None
     return lib
 
@@ -54,36 +54,40 @@ def steering_first_order(pieces: list[tuple[np.ndarray, float, float]], deadband
     return out
 
 
-def indexed_recursion(A: np.ndarray, B: np.ndarray, index: np.ndarray, columns, u: np.ndarray, rows) -> np.ndarray:
-    """Rows ``rows`` of Z_{k-1} for Z_k = A[index_k] Z_{k-1} + B[index_k][:, columns] * u_k, Z_{-1} = 0,
-    R sets side by side: A (R, S, n, n), B (R, S, n, p), u (R, N, m); returns (R, N, len(rows), m)."""
+def indexed_recursion(A: np.ndarray, B: np.ndarray, index: np.ndarray, columns, u: np.ndarray, rows,
+                      B1: np.ndarray | None = None) -> np.ndarray:
+    """Rows ``rows`` of Z_{k-1} for Z_k = A[index_k] Z_{k-1} + B[index_k][:, columns] * u_k
+    (+ B1[index_k][:, columns] * u_{k+1}, u_N = u_{N-1}: a first-order hold), Z_{-1} = 0, R sets side
+    by side: A (R, S, n, n), B and B1 (R, S, n, p), u (R, N, m); returns (R, N, len(rows), m)."""
     A, B, u = _as(A, float), _as(B, float), _as(u, float)
+    B1 = None if B1 is None else _as(B1, float)
     index, columns, rows = _as(index, np.int_), _as(columns, np.int_), _as(rows, np.int_)
     R, S, n, _ = A.shape
     p, (N, m) = B.shape[-1], u.shape[1:]
     if n > MAX_ORDER or m > MAX_ORDER or B.shape[:3] != (R, S, n) or u.shape[0] != R or len(index) != N \
-            or len(columns) != m or (N and (index.min() < 0 or index.max() >= S)) or (m and columns.max() >= p):
+            or len(columns) != m or (N and (index.min() < 0 or index.max() >= S)) or (m and columns.max() >= p) \
+            or (B1 is not None and B1.shape != B.shape):
         raise ValueError(f"shapes: A {A.shape}, B {B.shape}, index {index.shape}, columns {columns.shape}, u {u.shape}")
     out = np.empty((R, N, len(rows), m))
-    _lib().indexed_recursion(R, S, N, n, p, m, A.ctypes.data, B.ctypes.data, index.ctypes.data, columns.ctypes.data,
-                             u.ctypes.data, len(rows), rows.ctypes.data, out.ctypes.data)
+    _lib().indexed_recursion(R, S, N, n, p, m, A.ctypes.data, B.ctypes.data, None if B1 is None else B1.ctypes.data,
+                             index.ctypes.data, columns.ctypes.data, u.ctypes.data, len(rows), rows.ctypes.data,
+                             out.ctypes.data)
     return out
 
 
-def _squarings(*parts: np.ndarray) -> int:
-    """expm_batched's squarings: the largest 1-norm in the stack, of the columns of ``parts`` side by
-    side, scaled to at most 1/4."""
-    norm = max(float(np.max(np.sum(np.abs(x), axis=-2), initial=0.0)) for x in parts)
+def _squarings(M: np.ndarray) -> int:
+    """expm_batched's squarings: the largest 1-norm in the stack, scaled to at most 1/4."""
+    norm = float(np.max(np.sum(np.abs(M), axis=-2), initial=0.0))
     return max(0, int(math.ceil(math.log2(norm / 0.25)))) if norm > 0.25 else 0
 
 
-def zoh_stack(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """(Ad, Bd) of each system of a stack (A: (k, n, n), B: (k, n, p)), [Ad Bd; 0 I] = exp([A B; 0 0] dt),
-    as yaw_dynamics.zoh_discretize with expm_batched (the series' products on the top block row only)."""
-    A, B = _as(A * dt, float), _as(B * dt, float)
-    (k, n, _), p = A.shape, B.shape[-1]
-    if n + p > MAX_ORDER or B.shape[:2] != (k, n):
-        raise ValueError(f"shapes: A {A.shape}, B {B.shape} (n + p at most {MAX_ORDER})")
-    Ad, Bd = np.empty_like(A), np.empty_like(B)
-    _lib().zoh_stack(k, n, p, _squarings(A, B), A.ctypes.data, B.ctypes.data, Ad.ctypes.data, Bd.ctypes.data)
-    return Ad, Bd
+def expm_stack(M: np.ndarray) -> np.ndarray:
+    """exp of each matrix of a stack (k, q, q), q at most MAX_ORDER: yaw_dynamics.expm_batched's series."""
+    M = _as(M, float)
+    k, q, _ = M.shape
+    if q > MAX_ORDER or M.shape[2] != q:
+        raise ValueError(f"shape: M {M.shape} (square, at most {MAX_ORDER})")
+    E = np.empty_like(M)
+    _lib().expm_stack(k, q, _squarings(M), M.ctypes.data, E.ctypes.data)
+    return E
+
