@@ -10,7 +10,7 @@ import numpy as np
 
 from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.identification.blas_threads import one_blas_thread
-from agrobot.identification.from_log import finite_for_json, read_uneven
+from agrobot.identification.from_log import finite_for_json, read_uneven, recorded_wheelbase
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
 from agrobot.identification.skid_steer import why_not_diagnosed
 from agrobot.identification.vehicle import Vehicle
@@ -372,8 +372,11 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     say = progress or (lambda text: None)
     fixed = fixed_geometry(steering_geometry, baseline)
     baseline, replay = _under_geometry(baseline, replay, frame, fixed[0], fit_fraction, split)
+    wheelbase = recorded_wheelbase(Path(log_path), getattr(recording, "wheelbase", None))
+    if wheelbase is not None:
+        say(f"wheelbase {wheelbase[0]:.4g} m for the identification on the same log: {wheelbase[1]}")
     mismatch = _vehicle_of_log(result, replay, frame, study, baseline, study_path.name, default_study,
-                               identify, log_path, say, getattr(recording, "wheelbase", None), fixed[0] or "auto")
+                               identify, log_path, say, wheelbase and wheelbase[0], fixed[0] or "auto")
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     choice = result["steering_geometry"] = geometry_choice(baseline, *fixed, identified.get("steering_geometry"),
                                                            identified.get("steering_geometry_note", ""))
