@@ -72,3 +72,11 @@ def test_a_long_idle_is_kept_for_a_minute_next_to_the_run(tmp_path):
     used = convert(path).report["used"]
     assert used["standstill_kept"][0] == pytest.approx(STANDSTILL_KEPT, abs=0.1)
     assert used["standstill_kept"][1] == pytest.approx(5.0, abs=0.2)
+
+
+def test_trimming_a_log_with_no_standstill_says_nothing_was_left_out(tmp_path):
+    frame, _ = make_log(3, None, duration=30.0, vehicle="tractor")
+    path = tmp_path / "moving.csv"
+    frame.assign(v=np.maximum(frame["v"], 1.0)).to_csv(path, index=False)     # never standing still
+    how = convert(path, trim_standstill=True).report["used"]["how"]
+    assert "--trim-standstill: nothing left out: no standstill beside the run" in how

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from agrobot.identification.driving import NotEnoughDriving, understeer_gradient
-from agrobot.identification.ordinary_driving import identify_driving
+from agrobot.identification.ordinary_driving import identify_driving, summary
 from agrobot.measurements import LogError
 from agrobot.orchestrator.study import Study
 from tests.vehicle_logs import ROOT_STUDIES, autokoopman_log, frictionmaps_log
@@ -52,6 +52,8 @@ def test_f1tenth_ds5_delay_understeer_saturation_and_held_out_fit(ds5):
     assert ds5["linear_range"]["value"] < 9.81 * mu["value"]
     for name, p in ds5["parameters"].items():                     # every parameter with bounds and interval
         assert len(p["interval"]) == 2 and (p["bounds"] is None or len(p["bounds"]) == 2), name
+    text = summary(ds5)                                            # what the engineer reads, saturation found
+    assert "tyre saturation found: friction" in text and f"{mu['value']:.3g}" in text
 
 
 @pytest.mark.slow

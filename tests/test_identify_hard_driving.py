@@ -161,3 +161,17 @@ def test_a_rear_axle_stiffer_than_the_class_range_is_fitted_not_left_on_its_boun
     # planted without a delay: a model that lags more than the car (its relaxation length held on its
     # bound) makes the delay go below zero, which is then not a clock offset
     assert report["delay"]["verdict"] != "clock offset", report["delay"]["note"]
+
+
+@pytest.mark.slow
+def test_diagnose_stands_on_the_wheelbase_convert_recorded(car, tmp_path):
+    """diagnose's identification on the same log takes the recorded wheelbase as identify does, and says so."""
+    folder = write(tmp_path / "rec", car)
+    out = tmp_path / "car.csv"
+    proc = cli("convert", folder, "--signal", "delta=delta.col1[rad]", "--signal", "yaw_rate=yawRate.col1[rad/s]",
+               "--signal", "v=vx.col1[m/s]", "--time", "t.col1[s]", "--wheelbase", L, "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    proc = cli("diagnose", out, "--study", CAR, "--out", tmp_path / "diag", "--no-plots", "--time-range", 0, 60)
+    said = proc.stdout + proc.stderr
+    assert proc.returncode == 0, said
+    assert f"wheelbase {L:.4g} m for the identification on the same log: recorded by convert --wheelbase" in said

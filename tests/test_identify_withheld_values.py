@@ -108,3 +108,16 @@ def test_one_speed_is_read_from_the_log_s_own_turns(turns, straights, radius, L,
     if alike:
         lo, hi = (float(x) for x in why.split("(")[1].split(" m/s")[0].split("-"))
         assert lo <= turns[0] <= hi, why
+
+
+def test_a_k_withheld_for_disagreeing_keeps_its_disagreement_said():
+    """A K identify withholds because its two estimates disagree is judged in its pair (DISAGREE and
+    what it suggests); a K withheld for another reason (one speed) is not compared."""
+    from agrobot.identification.comparisons import mark_not_concluded, pair_line
+    pair = {"quantity": "understeer gradient K", "unit": "rad/(m/s2)", "agree": False, "suggests": "a bank",
+            "estimates": {"dynamic fit": {"value": 0.004, "interval": [0.0035, 0.0045]},
+                          "steady-state regression": {"value": 0.001, "interval": [0.0008, 0.0012]}}}
+    disagreeing = mark_not_concluded([dict(pair)], {"identifiable": False, "withheld": True, "note": "x"}, {})
+    assert "DISAGREE: a bank" in pair_line(disagreeing[0])
+    one_speed = mark_not_concluded([dict(pair)], {"identifiable": False, "note": "one speed"}, {})
+    assert "not compared" in pair_line(one_speed[0]) and "DISAGREE" not in pair_line(one_speed[0])

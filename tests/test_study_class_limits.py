@@ -114,3 +114,16 @@ def test_a_wheel_angle_sensor_reading_high_is_said_beside_the_limit(tmp_path):
     assert limits["undecided"].startswith("a wheel-angle sensor or steering map reading 1.3")
     said = next(line for line in result["before_verdict"] if CANNOT in line)
     assert said.startswith("cannot decide: " + CANNOT)
+
+
+def test_an_unmeasured_reading_noise_adds_no_margin_and_hides_no_limit():
+    """A wheel-angle reading noise that could not be measured (NaN) is no margin: a 3x steering rate
+    and a lock half again the study's are still named (a NaN margin made every comparison false)."""
+    from agrobot.diagnosis.plausibility import beyond_limits
+    from agrobot.diagnosis.vehicle_limits import StudyLimits
+    study = StudyLimits(wheelbase=1.4, lock=0.6, rate=1.0, top_speed=4.0, friction=0.8)
+    log = {"speed": 2.0, "lateral_acceleration": 1.0, "steering_rate": 3.0, "rate_window": 0.25, "wheel_angle": 0.9,
+           "angle_noise": float("nan")}
+    said = " ".join(b if isinstance(b, str) else str(b) for b in beyond_limits(log, study)["beyond"])
+    assert "steering rate" in said or "turning at" in said, said
+    assert "wheel angle" in said or "lock" in said, said

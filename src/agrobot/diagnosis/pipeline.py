@@ -10,7 +10,7 @@ import numpy as np
 
 from agrobot.estimation import REPORTED_AT_BOUND
 from agrobot.identification.blas_threads import one_blas_thread
-from agrobot.identification.from_log import finite_for_json, read_uneven
+from agrobot.identification.from_log import finite_for_json, read_uneven, recorded_wheelbase
 from agrobot.identification.ordinary_driving import held_out_misfit, identify_driving
 from agrobot.identification.skid_steer import why_not_diagnosed
 from agrobot.identification.vehicle import Vehicle
@@ -361,7 +361,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
                     "findings": []}
     try:
         study, baseline, frame, replay, note = _replay_of(log_path, study_path, result, fit_fraction, resample,
-                                                          recording, split)
+                                                          recording, split, default_study)
     except WhereError:                            # a --where that does not fit the log: usage, nothing written
         raise
     except (LogError, CannotDecide) as exc:
@@ -372,8 +372,11 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     say = progress or (lambda text: None)
     fixed = fixed_geometry(steering_geometry, baseline)
     baseline, replay = _under_geometry(baseline, replay, frame, fixed[0], fit_fraction, split)
+    wheelbase = recorded_wheelbase(Path(log_path), getattr(recording, "wheelbase", None))
+    if wheelbase is not None:
+        say(f"wheelbase {wheelbase[0]:.4g} m for the identification on the same log: {wheelbase[1]}")
     mismatch = _vehicle_of_log(result, replay, frame, study, baseline, study_path.name, default_study,
-                               identify, log_path, say, getattr(recording, "wheelbase", None), fixed[0] or "auto")
+                               identify, log_path, say, wheelbase and wheelbase[0], fixed[0] or "auto")
     identified = result.get("identified_vehicle", {}).get("identified") or {}
     choice = result["steering_geometry"] = geometry_choice(baseline, *fixed, identified.get("steering_geometry"),
                                                            identified.get("steering_geometry_note", ""))
@@ -414,7 +417,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
                            log_path=log_path, plots=plots, say=say, mcap=mcap)
 
 
-def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, resample: bool, recording, split: str):
+def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, resample: bool, recording, split: str,
+               default_study: bool = False):
     """(study, baseline, frame, replay, note): the study's baseline and the log read for its vehicle
     (a recording with the study's steering ratio and wheelbase; a clock with gaps cut to its longest
     stretch; a long fast log averaged down, coarser_clock), replayed; ``note`` says what was changed.
@@ -437,7 +441,7 @@ def _replay_of(log_path, study_path: Path, result: dict, fit_fraction: float, re
     try:
         replay = Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
     except CannotDecide:
-        _said_before_refusal(result, frame, baseline, study_path.name)
+        _said_before_refusal(result, frame, baseline, study_path.name, default_study)
         raise
     return study, baseline, frame, replay, note
 
@@ -451,13 +455,16 @@ def _under_geometry(baseline, replay, frame, geometry: str | None, fit_fraction:
     return baseline, Replay(frame, baseline, fit_fraction=fit_fraction, split=split)
 
 
-def _said_before_refusal(result: dict, frame, baseline, study_name: str) -> None:
+def _said_before_refusal(result: dict, frame, baseline, study_name: str, default_study: bool) -> None:
     """A log too short or too still to judge still says what comes before any verdict: the log's turns
-    not being the study's vehicle (study_check), the class's default outline (verdict.said_before)."""
+    not being the study's vehicle (study_check), the study's limits it exceeds (the default study
+    matched on the log alone, as _vehicle_of_log does), the class's default outline (verdict.said_before)."""
     p = baseline.tractor
     result["log_vehicle"], mismatch = study_check(frame, p.l_f + p.l_r, study_name, study_understeer(p),
-                                                  baseline.vehicle, p.m)
-    beyond = _study_limits(result, frame, baseline, study_name, False, lambda text: None)
+                                                  None if default_study else baseline.vehicle, p.m)
+    if mismatch and default_study:
+        mismatch += " (no --study given: the default study was used)"
+    beyond = _study_limits(result, frame, baseline, study_name, default_study, lambda text: None)
     result["before_verdict"] = said_before([x for x in (beyond, mismatch) if x],
                                            VehicleContext(baseline.vehicle, p.l_f + p.l_r, p.l_r, 0.0), result["log_vehicle"])
 

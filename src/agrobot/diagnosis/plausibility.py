@@ -283,10 +283,15 @@ UNDECIDED = "cannot decide: "      # cannot_do's opening when a sensor reading h
 NOISE_SIGMAS = 4       # and past 4 sigmas of the wheel angle's reading noise (a rate: over its window)
 
 
+def _finite_or_zero(x: float | None) -> float:
+    """x when it is a finite number, else 0 (a reading noise not measured adds no margin)."""
+    return float(x) if x is not None and math.isfinite(x) else 0.0
+
+
 def _limit_rows(log: Mapping, study) -> list[tuple[str, float, float, bool, str]]:
     """(what, log figure, study limit, beyond, said) for each limit the study declares and the log
     reads (``log``: vehicle_limits.log_extremes; ``study``: vehicle_limits.StudyLimits)."""
-    deg, noise, rows = math.degrees, NOISE_SIGMAS * (log.get("angle_noise") or 0.0), []
+    deg, noise, rows = math.degrees, NOISE_SIGMAS * _finite_or_zero(log.get("angle_noise")), []
     if log.get("min_radius") and study.min_radius:
         rows.append(("turn radius", log["min_radius"], study.min_radius, log["min_radius"] * LIMIT_MARGIN < study.min_radius,
                      f"a steady turn of {log['min_radius']:.2g} m radius (v / |yaw_rate| at t {log['radius_at']:.0f} s, "

@@ -186,8 +186,10 @@ def withheld_understeer(understeer: dict, char: dict, comparisons: list[dict], c
 def mark_not_concluded(comparisons: list[dict], understeer: dict, params: dict) -> list[dict]:
     """``comparisons``, each pair whose dynamic fit's value identify does not conclude (its K
     ``understeer``, its delay or gyro bias among ``params``: not ``identifiable``, or ``concluded``
-    False) marked ``concluded`` False, with that quantity's note as ``why_not``."""
-    own = {"understeer gradient K": understeer, "command-to-yaw delay": params.get("delay"),
+    False) marked ``concluded`` False, with that quantity's note as ``why_not``. A K withheld because
+    the pair disagrees (withheld_understeer) keeps its pair judged: the disagreement is why."""
+    own = {"understeer gradient K": None if understeer.get("withheld") else understeer,
+           "command-to-yaw delay": params.get("delay"),
            "gyro bias": params.get("gyro_bias")}
     for c in comparisons:
         q = own.get(c["quantity"])

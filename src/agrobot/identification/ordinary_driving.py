@@ -1353,8 +1353,8 @@ def summary(report: dict) -> str:
     t = report["tyre_saturation"]
     if t["found"]:
         mu, c = t["parameters"]["friction"], t["parameters"]["shape"]
-        told = mu.get("at_least") or not mu.get("identifiable", True)
-        lines.append(f"tyre saturation found: friction {mu['note'] if told else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
+        mu_withheld = mu.get("at_least") or not mu.get("identifiable", True)
+        lines.append(f"tyre saturation found: friction {mu['note'] if mu_withheld else q(mu, '{:.3g}')}, shape {q(c, '{:.3g}')}; dBIC {t['delta_bic']:.0f}, "
                      f"held-out RMS -{100 * t['held_out_gain_high_lateral']:.0f} % where |a_y| > "
                      f"{t['high_lateral_from']:.2g} m/s2")
     else:

@@ -289,7 +289,8 @@ def with_standstill(pick: np.ndarray, used: dict, t: np.ndarray, covered: np.nda
     leaves it out. Said in ``used["how"]`` either way; a time range or a stretch chosen without a run
     is kept as it is."""
     if not used["how"].startswith("run") or v is None or len(t) < 2:
-        return pick, used
+        why = "no speed to find it by" if used["how"].startswith("run") else "the stretch was chosen as it is"
+        return pick, _nothing_trimmed(used, options, why)
     idx = np.flatnonzero(pick)
     a, b = int(idx[0]), int(idx[-1]) + 1
     step = float(t[1] - t[0])
@@ -302,7 +303,7 @@ def with_standstill(pick: np.ndarray, used: dict, t: np.ndarray, covered: np.nda
         hi += 1
     before, after = (a - lo) * step, (hi - b) * step
     if not before and not after:
-        return pick, used
+        return pick, _nothing_trimmed(used, options, "no standstill beside the run")
     if options.trim_standstill:
         return pick, {**used, "how": f"{used['how']}, the standstill either side ({before:.1f} s before, "
                                      f"{after:.1f} s after) left out (--trim-standstill)"}
@@ -313,6 +314,11 @@ def with_standstill(pick: np.ndarray, used: dict, t: np.ndarray, covered: np.nda
                         f"{STANDSTILL_KEPT:g} s at most: "
                         f"a gyro bias and a steering offset are measured standing still; --trim-standstill leaves "
                         f"it out)"}
+
+
+def _nothing_trimmed(used: dict, options: ImportOptions, why: str) -> dict:
+    """``used`` with, when --trim-standstill was asked and nothing was left out, why (never silent)."""
+    return {**used, "how": f"{used['how']} (--trim-standstill: nothing left out: {why})"} if options.trim_standstill else used
 
 
 def _receiver_columns(t: np.ndarray, streams: Streams, report: dict) -> dict[str, np.ndarray]:
