@@ -49,8 +49,8 @@ def lever_recording(tmp_path_factory) -> Path:
     args = [a for k, v in LEVER.items() for a in ("--set", f"{k}={v}")]
     folder = tmp_path_factory.mktemp("field") / "recording"
     out = folder.parent / "run"
-    subprocess.run([sys.executable, "-m", "agrobot", "run", str(ROOT / "studies" / "field_test.toml"), "--out", str(out),
-                    "--record", str(folder), "--no-plots", *args], check=True, capture_output=True, text=True, cwd=ROOT)
+    proc = cli("run", ROOT / "studies" / "field_test.toml", "--out", out, "--record", folder, "--no-plots", *args)
+    assert proc.returncode == 0, proc.stderr
     return folder
 
 
