@@ -128,7 +128,7 @@ FILE_CPU_S = {
     "test_hardware_io.py": (1, 75),
     "test_reader_abuse.py": (5, 62),
     "test_whole_field.py": (10, 50),
-    "test_field_recordings.py": (24, 28),
+    "test_field_recordings.py": (16, 35),
     "test_diagnosis.py": (1, 35),
     "test_tree.py": (1, 36),
     "test_reliability.py": (4, 17),
