@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import ctypes
 import subprocess
-import sys
 import zipfile
 from pathlib import Path
 
@@ -17,6 +16,7 @@ from agrobot.orchestrator.engine import RunError, Simulation
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import Study, StudyError, parse_study
+from tests.commands import cli
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRST_ORDER_SOURCES = ROOT / "tests/fmu_sources/first_order"
@@ -40,8 +40,7 @@ def first_order_fmi3_fmu(tmp_path_factory) -> Path:
 
 
 def _export(out: Path, *extra: str) -> Path:
-    res = subprocess.run([sys.executable, "-m", "agrobot", "export-controller", "studies/figure8.toml",
-                          "--out", str(out), *extra], cwd=ROOT, capture_output=True, text=True)
+    res = cli("export-controller", "studies/figure8.toml", "--out", out, *extra)
     assert res.returncode == 0, res.stderr
     return out
 

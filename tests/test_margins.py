@@ -18,8 +18,6 @@ from __future__ import annotations
 
 import functools
 import math
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -188,8 +186,7 @@ def test_studies_without_a_loop_get_a_reason(name):
 
 def test_margins_command_prints_margins_and_writes_the_plots(tmp_path):
     out = tmp_path / "m"
-    proc = subprocess.run([sys.executable, "-m", "agrobot", "margins", "studies/figure8_pure_pursuit.toml",
-                           "--out", str(out)], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    proc = cli("margins", "studies/figure8_pure_pursuit.toml", "--out", out, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "reading the speed loop's steady excess" in proc.stdout          # progress before the numbers
     assert "pure_pursuit" in proc.stdout and "whole loop" in proc.stdout

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.commands import cli
 from tests.markdown_code import run_page
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -95,8 +96,7 @@ def test_components_path_and_an_entry_point_provide_types(tmp_path, monkeypatch)
 def test_a_components_path_that_is_no_folder_is_refused_by_name(tmp_path):
     study = tmp_path / "own.toml"
     study.write_text(STUDY.format(extra='components_path = "nowhere"', source="gyro_sensor", twice="gyro_sensor"))
-    done = subprocess.run([sys.executable, "-m", "agrobot", "run", str(study), "--out", str(tmp_path / "o")],
-                          capture_output=True, text=True, timeout=300)
+    done = cli("run", study, "--out", tmp_path / "o")
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert f"{study}: study.components_path: 'nowhere': no such folder" in done.stderr
 

@@ -3,23 +3,17 @@ NMEA with the host's UNIX time before each sentence (gps.nmea) and every CAN fra
 received as a candump log (can.log), which python-can reads back and the project's DBC decodes."""
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 from tests.commands import cli
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory) -> Path:
     where = tmp_path_factory.mktemp("rec") / "field"
-    res = subprocess.run([sys.executable, "-m", "agrobot", "emulate", "studies/tractor_emulator.toml",
-                          "--nmea-port", "0", "--duration", "6", "--record", str(where),
-                          "--set", "can.interface=virtual", "--set", "can.channel=recording-test"],
-                         cwd=ROOT, capture_output=True, text=True, timeout=120)
+    res = cli("emulate", "studies/tractor_emulator.toml", "--nmea-port", "0", "--duration", "6", "--record", where,
+              "--set", "can.interface=virtual", "--set", "can.channel=recording-test", timeout=120)
     assert res.returncode == 0, res.stdout + res.stderr
     return where
 

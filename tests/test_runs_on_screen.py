@@ -15,6 +15,7 @@ import pytest
 from agrobot.orchestrator.key_figures import parse_bound, run_table
 from agrobot.orchestrator.runner import run_study
 from agrobot.orchestrator.study import load_study
+from tests import commands
 
 ROOT = Path(__file__).resolve().parent.parent
 CMD = [sys.executable, "-m", "agrobot"]
@@ -195,10 +196,9 @@ def test_a_real_time_run_that_misses_deadlines_warns_on_screen(tmp_path):
     """The command's own words: pacing statistics and a warning, both from metrics.json's counts."""
     import json
 
-    proc = subprocess.run(CMD + ["run", "studies/figure8_hardware_layout.toml", "--out", str(tmp_path / "rt"),
-                                 "--no-plots", "--set", "study.realtime=true", "--set", "study.stop_time=2",
-                                 "--set", "study.realtime_tolerance=-0.0", "--set", 'study.analysis=""'],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = commands.cli("run", "studies/figure8_hardware_layout.toml", "--out", tmp_path / "rt", "--no-plots",
+                        "--set", "study.realtime=true", "--set", "study.stop_time=2",
+                        "--set", "study.realtime_tolerance=-0.0", "--set", 'study.analysis=""', timeout=120)
     assert proc.returncode == 0, proc.stderr
     rt = json.loads((tmp_path / "rt" / "metrics.json").read_text())["realtime"]
     assert rt["steps"] == 41
