@@ -121,3 +121,17 @@ def test_the_lean_from_an_imu_is_gravity_s_share():
     assert flipped is None and "runs against v r" in why                   # an a_y read right side positive
     wild, why = ground_lean(pd.DataFrame({"t": t, "roll": np.full(200, 1.9)}), t, v, r)
     assert wild is None and "not taken for the ground's lean" in why       # 109 deg: no ground's lean
+
+
+def test_an_imu_on_a_log_without_turns_has_no_sign_to_read():
+    """Driven straight (v r = 0 throughout) a lateral force column has nothing to be read against: said so,
+    not called turned round; a lateral column of another name (lat_acc) is read as well."""
+    from agrobot.identification.ground_lean import ground_lean
+
+    t = np.arange(200) / 20.0
+    v, r = np.full(200, 10.0), np.zeros(200)
+    lean, why = ground_lean(pd.DataFrame({"t": t, "a_y": 0.2 * np.sin(t)}), t, v, r)
+    assert lean is None and "no turns to read its sign against" in why and "-COLUMN" not in why
+    r = 0.1 * np.sin(t)
+    lean, why = ground_lean(pd.DataFrame({"t": t, "lat_acc": v * r - 0.5}), t, v, r)
+    assert np.allclose(lean, 0.5) and "lat_acc" in why

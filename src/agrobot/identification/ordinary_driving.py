@@ -49,7 +49,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
-from .ground_lean import lean_of_log, turns_lean
+from .ground_lean import lean_column, lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -1232,15 +1232,18 @@ PHYSICAL_COLUMNS = {"beta": ("side-slip angle at the centre of gravity", "rad"),
 def physical_checks(frame, log, model, values: dict, segs) -> dict:
     """The final model's side-slip beta = atan(v_y / v), lateral velocity v_y and lateral
     acceleration a_y = dv_y/dt + v r (its states, never fitted to them) against the log's ``beta``
-    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS."""
+    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS. The log's a_y
+    is a specific force (identification.ground_lean): the ground's lean read from a bank or roll
+    column is subtracted from the model's (one read from a_y itself would compare a_y with itself)."""
     have = [c for c in PHYSICAL_COLUMNS if c in frame and np.isfinite(frame[c].to_numpy(float)).sum() > 10]
     if not have or not len(segs.idx):
         return {}
     yaw, vy = model.simulate_many([values], segs, lateral=True)
     yaw, vy = yaw[0] - values.get("gyro_bias", 0.0), vy[0]
     v = log.v[segs.idx]
+    lean = log.lean[segs.idx] if log.lean is not None and lean_column(frame) else 0.0
     pred = {"beta": np.arctan2(vy, np.maximum(v, 1e-3)), "vy": vy,
-            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw}
+            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw - lean}
     t = frame["t"].to_numpy(float)
     out = {}
     for c in have:
