@@ -38,6 +38,7 @@ from agrobot.components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, Tra
 from agrobot.measurements import LogError
 from agrobot.measurements.audit import minimum
 from agrobot.measurements.clocks import content_lag
+from agrobot.measurements.steering_scale import MIN_CORRELATION, slope_on_turns
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
@@ -62,7 +63,7 @@ LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driv
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
-STEERING_SCALE_SUSPECT = 5.0     # yaw rate over v u / L (std) beyond which the angle's scale is doubted
+STEERING_SCALE_SUSPECT = 5.0     # the yaw rate's slope on v u / L beyond which the angle's scale is doubted
 STEERING_SCALE_LARGEST = 100.0   # ... up to which a steering ratio or a unit (57.3 deg/rad) explains it
 INPUT_NOTE = {True: "input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the "
                     "whole steering chain", False: "input: the measured wheel angle delta"}
@@ -426,7 +427,7 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
-    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)   # at any excitation
+    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed, L)   # at any excitation
     if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
@@ -435,18 +436,22 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
     return min_speed, segs, driven
 
 
-def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitation: float, moving) -> None:
+def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitation: float, moving, L: float) -> None:
     """Raises NotEnoughDriving naming the steering's scale when the measured yaw rate moves
-    (std >= MIN_EXCITATION) STEERING_SCALE_SUSPECT to STEERING_SCALE_LARGEST times what v u / L asks
-    for: the angle is not the road wheel's (a steering ratio divided into a road-wheel angle, degrees
-    for radians), not a steering that hardly moves; beyond that scale the input does not move."""
+    (std >= MIN_EXCITATION) and its slope on v u / L over the turns (measurements.steering_scale.
+    slope_on_turns, the import's rule, over the ``moving`` samples measured; correlation at least
+    MIN_CORRELATION) is STEERING_SCALE_SUSPECT to STEERING_SCALE_LARGEST: the angle is not the road
+    wheel's (a steering ratio divided into a road-wheel angle, degrees for radians), not a steering
+    that hardly moves; beyond that scale the input does not move."""
     seen = moving if log.measured is None else moving & log.measured
     answer = float(np.std(log.r[seen])) if seen.any() else 0.0
-    if answer < MIN_EXCITATION or not STEERING_SCALE_SUSPECT * excitation <= answer <= STEERING_SCALE_LARGEST * excitation:
+    slope = slope_on_turns(log.v, log.u, log.r, seen, L) if answer >= MIN_EXCITATION else None
+    if slope is None or slope[1] < MIN_CORRELATION or not STEERING_SCALE_SUSPECT <= slope[0] <= STEERING_SCALE_LARGEST:
         return
     raise NotEnoughDriving(f"{where}: the yaw rate moves {answer:.3g} rad/s (std while driving), "
-                           f"{answer / max(excitation, 1e-12):.3g} times what v {input_name} / L asks for "
-                           f"({excitation:.3g} rad/s): {input_name} is not the road-wheel angle it should be: a "
+                           f"{slope[0]:.3g} times what v {input_name} / L asks for "
+                           f"({excitation:.3g} rad/s std; the turns' slope, correlation {slope[1]:.2f}): {input_name} is "
+                           f"not the road-wheel angle it should be: a "
                            f"steering ratio divided into an angle that is the road wheel's already (a --steering-ratio "
                            f"given is taken as given, the study's only where the turns say the angle is the "
                            f"handwheel's; --steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")

@@ -45,7 +45,15 @@ def turn_slope(signals: dict, gnss, wheelbase: float) -> tuple[float, float, int
     r, v = _on_clock(t, signals["yaw_rate"]), _on_clock(t, speed)
     if r is None or v is None:
         return None
-    use = np.isfinite(delta) & (v > MOVING) & (np.abs(v * r) < LINEAR_AY)
+    return slope_on_turns(v, delta, r, v > MOVING, wheelbase)
+
+
+def slope_on_turns(v: np.ndarray, delta: np.ndarray, r: np.ndarray, use: np.ndarray, wheelbase: float
+                   ) -> tuple[float, float, int] | None:
+    """(s, correlation, samples): the least-squares slope s of the yaw rate ``r`` on v delta / L (with
+    an offset) over the samples ``use`` with a finite delta and |v r| < LINEAR_AY; None under 20 of
+    them or with the yaw rate moving less than MIN_TURNING (std) over them."""
+    use = use & np.isfinite(delta) & np.isfinite(r) & (np.abs(v * r) < LINEAR_AY)
     if use.sum() < 20 or np.std(r[use]) < MIN_TURNING:
         return None
     x = v[use] * delta[use] / wheelbase
