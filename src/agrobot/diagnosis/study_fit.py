@@ -64,7 +64,8 @@ def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
 
 
 def log_vehicle(frame, wheelbase: float | None = None, understeer: float = 0.0) -> dict | None:
-    """{wheelbase, speed_range, steering_range, ...} of the log's vehicle from its steady turns
+    """{wheelbase, speed_range (10-90th percentiles), steering_range (99th percentile of |input|),
+    lateral_acceleration_p99, ...} of the log's vehicle while moving, its wheelbase from its steady turns
     (steady_turns; ``wheelbase``, ``understeer``: the study's L and K): the wheelbase that with
     the study's K gives each turn's L_i = L + K v^2, the median over the turns; ``wheelbase`` None
     with ``why`` when fewer than MIN_TURNS samples are steady linear turns. None: no turning
