@@ -160,7 +160,35 @@ def _skipped(rows: list[dict]) -> str:
     return f"({'; '.join(first)}) " if first else ""
 
 
-def main() -> None:
+def _rate_table(groups: dict[str, list[str]], rows: list[tuple], duration: float, t0: float) -> None:
+    """Each group's cases found exactly and with their parameters, then the false alarms and the detection."""
+    print(f"{'hidden':48s} {'exact set':>10s} {'+params ok':>11s}  found instead")
+    for group, cases in groups.items():
+        print(f"-- {group}")
+        g_ok = g_n = 0
+        for case in cases:
+            r = [x for x in rows if x[0] == case]
+            exact, ok = sum(x[1] for x in r), sum(x[2] for x in r)
+            g_ok, g_n = g_ok + ok, g_n + len(r)
+            wrong = ", ".join(x[3] for x in r if not x[1])
+            print(f"{case:48s} {exact:>4d}/{len(r):<5d} {ok:>5d}/{len(r):<5d}  {wrong}")
+        print(f"{group + ' total':48s} {'':10s} {g_ok:>5d}/{g_n:<5d}  {100 * g_ok / max(g_n, 1):.0f}%")
+    n_ok = sum(x[2] for x in rows)
+    print(f"{'all':48s} {'':10s} {n_ok:>5d}/{len(rows):<5d}  {100 * n_ok / len(rows):.1f}% "
+          f"({time.perf_counter() - t0:.0f} s, {duration:.0f} s logs)")
+    clean = [x for x in rows if x[0] == "none" or x[0].startswith("healthy:")]
+    faulty = [x for x in rows if x not in clean]
+    if clean:
+        alarms = sum(not x[1] for x in clean)
+        print(f"{'false alarms (no fault hidden, verdict not none)':48s} {'':10s} {alarms:>5d}/{len(clean):<5d}  "
+              f"{100 * alarms / len(clean):.1f}%")
+    if faulty:
+        found = sum(x[2] for x in faulty)
+        print(f"{'detection (a fault hidden, found exactly)':48s} {'':10s} {found:>5d}/{len(faulty):<5d}  "
+              f"{100 * found / len(faulty):.1f}%")
+
+
+def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, default=None, help="seeds per case (3; --quick: 1)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
@@ -187,7 +215,11 @@ def main() -> None:
     ap.add_argument("--compare-screen", action="store_true",
                     help="the vehicle-class table twice in one run, the diagnosis's pair screen off and on "
                          "(diagnosis.screen), and the logs it changes")
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> None:
+    args = _parser().parse_args()
     if args.quick or args.classes:
         class_table(args.classes or ["tractor", "car", "small_ackermann"], args.seeds or (1 if args.quick else 3),
                     120.0 if args.quick else args.duration, args.workers,
@@ -222,30 +254,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         cases = [case(c, s, folder) for cases in groups.values() for c in cases for s in range(args.seeds or 3)]
         rows = [score(run) for run in diagnose_many(cases, args.workers)]
-    print(f"{'hidden':48s} {'exact set':>10s} {'+params ok':>11s}  found instead")
-    for group, cases in groups.items():
-        print(f"-- {group}")
-        g_ok = g_n = 0
-        for case in cases:
-            r = [x for x in rows if x[0] == case]
-            exact, ok = sum(x[1] for x in r), sum(x[2] for x in r)
-            g_ok, g_n = g_ok + ok, g_n + len(r)
-            wrong = ", ".join(x[3] for x in r if not x[1])
-            print(f"{case:48s} {exact:>4d}/{len(r):<5d} {ok:>5d}/{len(r):<5d}  {wrong}")
-        print(f"{group + ' total':48s} {'':10s} {g_ok:>5d}/{g_n:<5d}  {100 * g_ok / max(g_n, 1):.0f}%")
-    n_ok = sum(x[2] for x in rows)
-    print(f"{'all':48s} {'':10s} {n_ok:>5d}/{len(rows):<5d}  {100 * n_ok / len(rows):.1f}% "
-          f"({time.perf_counter() - t0:.0f} s, {args.duration:.0f} s logs)")
-    clean = [x for x in rows if x[0] == "none" or x[0].startswith("healthy:")]
-    faulty = [x for x in rows if x not in clean]
-    if clean:
-        alarms = sum(not x[1] for x in clean)
-        print(f"{'false alarms (no fault hidden, verdict not none)':48s} {'':10s} {alarms:>5d}/{len(clean):<5d}  "
-              f"{100 * alarms / len(clean):.1f}%")
-    if faulty:
-        found = sum(x[2] for x in faulty)
-        print(f"{'detection (a fault hidden, found exactly)':48s} {'':10s} {found:>5d}/{len(faulty):<5d}  "
-              f"{100 * found / len(faulty):.1f}%")
+    _rate_table(groups, rows, args.duration, t0)
     if not args.no_timing:
         print("\nseconds per diagnosis of a 420 s log (plots included, one process; budget 15 s)")
         for case, seconds in timing(420.0, ["none", "steering_offset+yaw_rate_bias",

@@ -46,10 +46,11 @@ def oval_plan(duration: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return t, v, kappa
 
 
-def banked_oval_log(banked: bool, duration: float = 156.0, seed: int = 3) -> pd.DataFrame:
+def banked_oval_log(banked: bool, duration: float = 156.0, seed: int = 3, imu: bool = False) -> pd.DataFrame:
     """The log (t, delta, v, yaw_rate, roll) of the truth car lapping the oval: banked (the turns
     BANK_TURNS, the straights BANK_STRAIGHTS into the turns) or level, its body rolling out of the
-    turns by 4 deg per g either way."""
+    turns by 4 deg per g either way; ``imu``: with a_y, the tyres' lateral specific force
+    (F_f + F_r) / m = dv_y/dt + v r - g sin(bank)."""
     rng = np.random.default_rng(seed)
     t, v, kappa = oval_plan(duration)
     m, I, lf, lr, cf, cr, sf = (CAR[k] for k in ("m", "I", "l_f", "l_r", "C_f", "C_r", "sigma_f"))
@@ -67,17 +68,19 @@ def banked_oval_log(banked: bool, duration: float = 156.0, seed: int = 3) -> pd.
                          (vy + lf * r - v[i] * (delta[i] + af)) / sf])
 
     h, s = 1 / 200.0, np.zeros(3)
-    r_true = np.empty(len(t))
+    r_true, force = np.empty(len(t)), np.empty(len(t))
     for i in range(len(t)):
         r_true[i] = s[1]
         k1 = deriv(i, s)
+        force[i] = k1[0] + v[i] * s[1] - g_lat[i]
         k2 = deriv(min(i + 1, len(t) - 1), s + h * k1)
         s = s + 0.5 * h * (k1 + k2)
     keep = slice(0, None, int(200 / RATE))
     n = len(t[keep])
     body_roll = math.radians(4.0) / G * (v * r_true)[keep]     # out of the turn: right side down in a left turn
-    return pd.DataFrame({"t": t[keep], "delta": delta[keep] + rng.normal(0, 2e-4, n), "v": v[keep],
-                         "yaw_rate": r_true[keep] + rng.normal(0, 0.002, n), "roll": body_roll - bank[keep]})
+    frame = pd.DataFrame({"t": t[keep], "delta": delta[keep] + rng.normal(0, 2e-4, n), "v": v[keep],
+                          "yaw_rate": r_true[keep] + rng.normal(0, 0.002, n), "roll": body_roll - bank[keep]})
+    return frame.assign(a_y=force[keep] + rng.normal(0, 0.05, n)) if imu else frame
 
 
 @pytest.fixture(scope="module")
@@ -121,3 +124,25 @@ def test_the_lean_from_an_imu_is_gravity_s_share():
     assert flipped is None and "runs against v r" in why                   # an a_y read right side positive
     wild, why = ground_lean(pd.DataFrame({"t": t, "roll": np.full(200, 1.9)}), t, v, r)
     assert wild is None and "not taken for the ground's lean" in why       # 109 deg: no ground's lean
+
+
+def test_an_imu_on_a_log_without_turns_has_no_sign_to_read():
+    """Driven straight (v r = 0 throughout) a lateral force column has nothing to be read against: said so,
+    not called turned round; a lateral column of another name (lat_acc) is read as well."""
+    from agrobot.identification.ground_lean import ground_lean
+
+    t = np.arange(200) / 20.0
+    v, r = np.full(200, 10.0), np.zeros(200)
+    lean, why = ground_lean(pd.DataFrame({"t": t, "a_y": 0.2 * np.sin(t)}), t, v, r)
+    assert lean is None and "no turns to read its sign against" in why and "-COLUMN" not in why
+    r = 0.1 * np.sin(t)
+    lean, why = ground_lean(pd.DataFrame({"t": t, "lat_acc": v * r - 0.5}), t, v, r)
+    assert np.allclose(lean, 0.5) and "lat_acc" in why
+
+
+def test_an_imus_lateral_force_on_the_bank_is_checked_as_a_specific_force(car):
+    """The model's lateral acceleration less the lean the roll column tells is what an IMU on the
+    banked oval reads (dv_y/dt + v r - g sin(bank)): it fits the a_y column on the held-out segments."""
+    rep = identify_driving(banked_oval_log(True, imu=True), "banked.csv", car)
+    check = rep["physical_checks"]["a_y"]
+    assert check["fit_percent"] > 80.0, check

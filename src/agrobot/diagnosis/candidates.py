@@ -36,7 +36,7 @@ from agrobot.measurements.log import check_units, resolution, speed_estimate
 from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import track_level, track_samplings
-from .own_samples import reading
+from agrobot.measurements.own_samples import reading
 from .replay import (SaturatedYawReplay, YawReplay, aligned_residuals, antenna_track, chords, exact, heading_estimate,
                      measured_yaw_rate, saturates, steering_plant, steering_replay, TrackWhitening, track_residual_vector,
                      wheel_angle_input)

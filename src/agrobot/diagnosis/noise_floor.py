@@ -47,7 +47,7 @@ from scipy.signal import welch
 
 from agrobot.measurements.channel_updates import holding
 
-from .own_samples import interpolation, own_stamps
+from agrobot.measurements.own_samples import interpolation, interpolation_weights, own_stamps
 from .replay import aligned_residuals, antenna_track
 
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
@@ -115,14 +115,6 @@ def track_samplings(replay) -> dict[str, Sampling]:
     column = replay.speed_source if replay.speed_source in replay.frame else "v"
     return {"gps": sampling(replay, "gnss", "x", replay.gps[:, 0]), "v": sampling(replay, "v", column, replay.speed),
             "yaw_rate": sampling(replay, "yaw_rate", x=replay.gyro)}
-
-
-def interpolation_weights(t: np.ndarray, own_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(i_j, f_j): the row at t_j lies at the fraction f_j of the way from own sample i_j to i_j + 1."""
-    own_t = np.asarray(own_t, float)
-    i = np.clip(np.searchsorted(own_t, t, side="right") - 1, 0, len(own_t) - 2)
-    f = np.clip((t - own_t[i]) / np.maximum(own_t[i + 1] - own_t[i], 1e-12), 0.0, 1.0)
-    return i, f
 
 
 def interpolated_power(t: np.ndarray, own_t: np.ndarray) -> float:

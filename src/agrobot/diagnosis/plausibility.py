@@ -11,6 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Mapping
 
+from agrobot.components.models.yaw_dynamics import GRAVITY
+
 if TYPE_CHECKING:
     from agrobot.identification.vehicle import Vehicle
 
@@ -150,7 +152,7 @@ def understeer(K, vehicle: Vehicle, share: float | None, turns: dict | None = No
     if kinematic(share):
         return "not identifiable at these speeds: " + kinematic(share)
     lo, hi = UNDERSTEER.get(vehicle.kind, UNDERSTEER[None])
-    kind, deg = vehicle.kind or "vehicle", lambda k: math.degrees(k) * 9.81      # noqa: E731
+    kind, deg = vehicle.kind or "vehicle", lambda k: math.degrees(k) * GRAVITY      # noqa: E731
     if isinstance(K, Mapping):
         if K.get("withheld"):       # identify's dynamic and steady-state K disagree: its note has both and why
             return K["note"]
@@ -302,19 +304,20 @@ def _limit_rows(log: Mapping, study) -> list[tuple[str, float, float, bool, str]
                      log["steering_rate"] > LIMIT_MARGIN * study.rate + math.sqrt(2) * noise / log["rate_window"],
                      f"the wheels turning at {deg(log['steering_rate']):.0f} deg/s (delta over {log['rate_window']:.2g} s) "
                      f"against the study's steering actuator at full rate, {deg(study.rate):.0f} deg/s"))
-    if log.get("wheel_angle") and study.lock:
-        rows.append(("wheel angle", log["wheel_angle"], study.lock, log["wheel_angle"] > LIMIT_MARGIN * study.lock + noise,
-                     f"a wheel angle of {deg(log['wheel_angle']):.0f} deg against the study's lock, "
+    if log.get("wheel_angle_third_largest") and study.lock:
+        angle = log["wheel_angle_third_largest"]
+        rows.append(("wheel angle", angle, study.lock, angle > LIMIT_MARGIN * study.lock + noise,
+                     f"a wheel angle of {deg(angle):.0f} deg (the 3rd largest) against the study's lock, "
                      f"{deg(study.lock):.0f} deg"))
     if log.get("speed") and study.top_speed:
         rows.append(("speed", log["speed"], study.top_speed, log["speed"] > LIMIT_MARGIN * study.top_speed,
                      f"a speed of {log['speed']:.3g} m/s (99.5th percentile) against the study's top speed, "
                      f"{study.top_speed:.3g} m/s"))
-    if log.get("lateral_acceleration") and study.friction:
-        grip = study.friction * 9.81
-        rows.append(("lateral acceleration", log["lateral_acceleration"], grip,
-                     log["lateral_acceleration"] > LIMIT_MARGIN * grip,
-                     f"a lateral acceleration of {log['lateral_acceleration']:.3g} m/s2 (99.5th percentile) against "
+    if log.get("lateral_acceleration_p995") and study.friction:
+        grip = study.friction * GRAVITY
+        rows.append(("lateral acceleration", log["lateral_acceleration_p995"], grip,
+                     log["lateral_acceleration_p995"] > LIMIT_MARGIN * grip,
+                     f"a lateral acceleration of {log['lateral_acceleration_p995']:.3g} m/s2 (99.5th percentile) against "
                      f"the {grip:.3g} m/s2 its tyres hold (friction {study.friction:.2g})"))
     return rows
 

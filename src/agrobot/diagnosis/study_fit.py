@@ -30,6 +30,11 @@ SIZE = math.log(1.3)         # a shipped study is suggested only for a vehicle o
 MASS = math.log(2.0)         # and within a factor 2 of the declared mass (a class's masses spread wider than its lengths)
 
 
+def driving(v: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """The samples ``ok`` moving forward above max(0.2 m/s, a tenth of their speed's 90th percentile)."""
+    return ok & (v > max(0.2, 0.1 * float(np.percentile(v[ok], 90)))) if ok.any() else ok
+
+
 def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
     """The log's steady turns in the tyres' linear range (None: no v, yaw_rate and delta or
     delta_cmd, or under 50 moving samples): samples whose steering input has been held for STEADY s
@@ -39,13 +44,14 @@ def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
     study's ``wheelbase`` when given) under LINEAR_LATERAL. Selected on the input as well as the
     yaw rate: a tyre that saturates turns less, and turns selected on the yaw rate alone lengthen
     the wheelbase read from them. Each gives L_i = v tan|delta| / |r| (= L + K v^2 in steady
-    cornering). Returns {from, v, L_i, moving speeds, steering}."""
+    cornering). Returns {from, v, L_i, moving speeds, steering}. It reads the wheelbase the turns
+    give, which measurements.steering_scale.turn_slope (the angle's scale, the yaw rate's slope on
+    v delta / L over all the turns) does not: a steering angle's scale is judged there."""
     steer = "delta" if "delta" in frame else "delta_cmd" if "delta_cmd" in frame else None
     if steer is None or "v" not in frame or "yaw_rate" not in frame or "t" not in frame:
         return None
     t, v, d, r = (frame[c].to_numpy(float) for c in ("t", "v", steer, "yaw_rate"))
-    ok = np.isfinite(v) & np.isfinite(d) & np.isfinite(r)
-    moving = ok & (v > max(0.2, 0.1 * float(np.percentile(v[ok], 90)))) if ok.any() else ok
+    moving = driving(v, np.isfinite(v) & np.isfinite(d) & np.isfinite(r))
     if moving.sum() < 50:
         return None
     held = held_input(d, np.zeros(len(d), int), max(2, int(round(STEADY / float(np.median(np.diff(t)))))))
@@ -58,7 +64,8 @@ def steady_turns(frame, wheelbase: float | None = None) -> dict | None:
 
 
 def log_vehicle(frame, wheelbase: float | None = None, understeer: float = 0.0) -> dict | None:
-    """{wheelbase, speed_range, steering_range, ...} of the log's vehicle from its steady turns
+    """{wheelbase, speed_range (10-90th percentiles), steering_range (99th percentile of |input|),
+    lateral_acceleration_p99, ...} of the log's vehicle while moving, its wheelbase from its steady turns
     (steady_turns; ``wheelbase``, ``understeer``: the study's L and K): the wheelbase that with
     the study's K gives each turn's L_i = L + K v^2, the median over the turns; ``wheelbase`` None
     with ``why`` when fewer than MIN_TURNS samples are steady linear turns. None: no turning

@@ -23,11 +23,10 @@ from agrobot.orchestrator.study import load_study
 from agrobot.studies import shipped
 
 from .baseline import baseline_from_study
+from .study_fit import STEADY, driving
 
-G = 9.81
 WINDOW = 0.25        # s over which the wheels' rate is read (several samples: one sample's noise is spread)
-RANK = 3             # the 3rd largest window's rate or angle: a rate held over three windows, not one glitch
-STEADY = 0.5         # s the steering input is held before a turn's sample counts as steady (study_fit's)
+RANK = 3             # (wheel_angle_third_largest) the 3rd largest window's rate or angle: a rate held over three windows, not one glitch
 MIN_STRETCH = 1.0    # s of steady turning that give one radius
 
 
@@ -84,12 +83,12 @@ def _ranked(x: np.ndarray) -> float | None:
 
 
 def wheel_motion(t: np.ndarray, delta: np.ndarray) -> dict:
-    """{steering_rate, wheel_angle, angle_noise}: the RANKth largest |delta(t + WINDOW) - delta(t)|
+    """{steering_rate, wheel_angle_third_largest, angle_noise}: the RANKth largest |delta(t + WINDOW) - delta(t)|
     / WINDOW [rad/s] and |delta| [rad] of the measured wheel angle, and its reading noise [rad]."""
     h = float(np.median(np.diff(t)))
     k = max(1, int(round(WINDOW / h)))
     rate = np.abs(delta[k:] - delta[:-k]) / (t[k:] - t[:-k]) if len(t) > k else np.zeros(0)
-    return {"steering_rate": _ranked(rate), "rate_window": k * h, "wheel_angle": _ranked(np.abs(delta)),
+    return {"steering_rate": _ranked(rate), "rate_window": k * h, "wheel_angle_third_largest": _ranked(np.abs(delta)),
             "angle_noise": reading_noise(delta)}
 
 
@@ -115,12 +114,13 @@ def tightest_turn(t, v, r, steer, moving) -> dict:
 def log_extremes(frame) -> dict | None:
     """What the log's vehicle does (None: no t and v, or under 50 moving samples): the tightest
     steady turn (with yaw_rate and delta or delta_cmd), the wheels' rate and angle (with a measured
-    delta), the top speed and the lateral acceleration |v r| (99.5th percentiles while moving)."""
+    delta), the top speed and the lateral acceleration |v r| (99.5th percentiles while moving:
+    lateral_acceleration_p995, the limits' figure, beside study_fit.log_vehicle's 99th percentile, the
+    tyres' range a fit reads; a limit is passed only past the rarer one)."""
     if "t" not in frame or "v" not in frame:
         return None
     t, v = frame["t"].to_numpy(float), frame["v"].to_numpy(float)
-    ok = np.isfinite(v)
-    moving = ok & (v > max(0.2, 0.1 * float(np.percentile(v[ok], 90)))) if ok.any() else ok
+    moving = driving(v, np.isfinite(v))
     if moving.sum() < 50:
         return None
     out: dict = {"speed": float(np.percentile(v[moving], 99.5))}
@@ -128,7 +128,7 @@ def log_extremes(frame) -> dict | None:
     if "yaw_rate" in frame:
         r = frame["yaw_rate"].to_numpy(float)
         lateral = np.abs(v * r)[moving & np.isfinite(r)]
-        out["lateral_acceleration"] = float(np.percentile(lateral, 99.5)) if len(lateral) else None
+        out["lateral_acceleration_p995"] = float(np.percentile(lateral, 99.5)) if len(lateral) else None
         if steer:
             out |= tightest_turn(t, v, r, frame[steer].to_numpy(float), moving)
     if "delta" in frame:

@@ -39,6 +39,7 @@ from scipy.optimize import least_squares
 
 from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
                                 updates_on)
+from agrobot.measurements.own_samples import interpolates, interpolation_weights
 from agrobot.measurements.runs import SENT_WITH_ROW, last_update
 from agrobot.measurements.streams import HELD
 from agrobot.orchestrator.errors import InputError
@@ -286,21 +287,20 @@ def holds(held: HeldInput, t: np.ndarray, x: np.ndarray, slack: float = SENT_WIT
 def yaw_sampling(log: DrivingLog, stamps: np.ndarray, values: np.ndarray, rows: np.ndarray
                  ) -> tuple[np.ndarray | None, str]:
     """(DrivingLog.sampled, the note): a gyro whose rows interpolate its own samples at ``stamps``
-    (frame.attrs["own_samples"], a recording's import) is predicted alike, the model's yaw rate read
-    at the stamps (linear between samples) and interpolated back: the weights of each sample on its
-    neighbours; None where the grid is not the log's rows (an averaged or resampled clock)."""
+    (frame.attrs["own_samples"], a recording's import; judged by measurements.own_samples.interpolates,
+    the diagnosis's rule) is predicted alike, the model's yaw rate read at the stamps (linear between
+    samples) and interpolated back: the weights of each sample on its neighbours; None where the
+    grid is not the log's rows (an averaged or resampled clock)."""
     t, h = log.t, log.h
     if len(rows) != len(t) or np.max(np.abs(rows - t)) > 1e-6 * h or len(stamps) < 2:
         return None, "yaw rate: its own sampling not modelled (the grid is not the log's rows)"
-    if (not np.allclose(np.interp(t, stamps, values), log.r, rtol=0.0, atol=1e-4 * np.max(np.abs(log.r), initial=0.0))
-            or not np.all(log.measured)):         # 1e-4: the stamps' rounding (POSIX seconds) times the yaw's rate
+    if not interpolates(t, log.r, stamps, values) or not np.all(log.measured):
         return None, "yaw rate: its own sampling not modelled (the rows are not its samples interpolated)"
     n = len(t)
     new_run = np.r_[True, log.run[1:] != log.run[:-1]]
     first = np.flatnonzero(new_run)[np.cumsum(new_run) - 1]                  # each sample's run: first, last index
     run_end = np.r_[np.flatnonzero(new_run)[1:] - 1, n - 1][np.cumsum(new_run) - 1]
-    k = np.clip(np.searchsorted(stamps, t, side="right") - 1, 0, len(stamps) - 2)
-    a = np.clip((t - stamps[k]) / (stamps[k + 1] - stamps[k]), 0.0, 1.0)
+    k, a = interpolation_weights(t, stamps)
     entries = []          # (grid index, weight): the sample's two stamps, each linear between grid samples
     for side, weight in ((k, 1.0 - a), (k + 1, a)):
         x = np.clip((stamps[side] - t[first]) / h, 0.0, None)

@@ -9,8 +9,8 @@ take it up alike, so none of them is told from it by a fit that leaves the lean 
 The log tells the lean by a ``bank`` column (the road's cross slope, rad) or a ``roll`` column (the
 body's roll, rad: the road's plus the body's own lean on its springs), both right side down
 positive (the aerospace and ROS convention alike), so gravity's share towards the left (the side
-v r > 0 turns to) is -g sin(roll); or by a measured lateral specific force ``a_y`` or ``ay`` (an
-IMU's, m/s2, left positive): v r - a_y (one that falls as v r rises is not taken: read the other
+v r > 0 turns to) is -g sin(roll); or by a measured lateral specific force ``a_y`` (an IMU's, m/s2,
+left positive; a column of measurements.audit.LATERAL): v r - a_y (one that falls as v r rises is not taken: read the other
 way round, or a bank carrying more than the whole turn, the log cannot say which). On level
 ground the body rolls out of the turn and its lean's share is against v r; only a lean into the
 turns (a positive slope of the share on v r) is a bank that carries part of them. turns_lean says why K is not concluded when that slope exceeds LEAN_SHARE
@@ -24,9 +24,9 @@ import numpy as np
 
 from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.estimation import Z95
+from agrobot.measurements.audit import LATERAL     # m/s2: the columns of a measured lateral specific force
 
 LEAN_COLUMNS = ("bank", "roll")      # rad: the road's cross slope, the body's roll
-LATERAL_COLUMNS = ("a_y", "ay")      # m/s2: a measured lateral specific force
 # a tenth of the turns' v r from gravity moves K's steady steer by a tenth of K a_y: as much as a
 # declared wheelbase 1-2 % off moves L r / v on the turns of a racecar (K a_y ~ 10 % of L / R)
 LEAN_SHARE = 0.1
@@ -34,28 +34,36 @@ DECORRELATION = 1.0                  # s: the lean and the turns counted as one 
 STEEPEST = math.radians(45.0)        # rad: no ground a wheeled machine drives across leans further
 
 
+def lean_column(frame) -> str | None:
+    """The first of LEAN_COLUMNS the log carries with two finite samples or more (None: neither)."""
+    return next((c for c in LEAN_COLUMNS if c in frame.columns and np.isfinite(frame[c].to_numpy(float)).sum() > 1),
+                None)
+
+
 def ground_lean(frame, t: np.ndarray, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray | None, str | None]:
     """(gravity's lateral share towards the left on the samples ``t`` [m/s2], where it comes from):
     -g sin(bank) from the log's bank or roll column, else v r - a_y from its measured lateral
     specific force; (None, None) without either, (None, why) for a column no ground's lean fits."""
     tf = frame["t"].to_numpy(float)
-    for name in LEAN_COLUMNS:
-        if name in frame.columns and np.isfinite(frame[name].to_numpy(float)).sum() > 1:
-            x = frame[name].to_numpy(float)
-            ok = np.isfinite(x)
-            top = float(np.percentile(np.abs(x[ok]), 99))
-            if top > STEEPEST:
-                return None, (f"the log's {name} column reaches {math.degrees(top):.0f} deg (99th percentile of its size), "
-                              f"beyond any ground a wheeled machine drives across ({math.degrees(STEEPEST):.0f} deg): not "
-                              f"taken for the ground's lean (a column in degrees: --signal {name}={name}[deg])")
-            return -GRAVITY * np.sin(np.interp(t, tf[ok], x[ok])), (f"the ground's lean from the log's {name} column [rad, "
-                                                                    f"right side down positive]")
-    for name in LATERAL_COLUMNS:
+    name = lean_column(frame)
+    if name is not None:
+        x = frame[name].to_numpy(float)
+        ok = np.isfinite(x)
+        top = float(np.percentile(np.abs(x[ok]), 99))
+        if top > STEEPEST:
+            return None, (f"the log's {name} column reaches {math.degrees(top):.0f} deg (99th percentile of its size), "
+                          f"beyond any ground a wheeled machine drives across ({math.degrees(STEEPEST):.0f} deg): not "
+                          f"taken for the ground's lean (a column in degrees: --signal {name}={name}[deg])")
+        return -GRAVITY * np.sin(np.interp(t, tf[ok], x[ok])), (f"the ground's lean from the log's {name} column [rad, "
+                                                                f"right side down positive]")
+    for name in LATERAL:
         if name in frame.columns and np.isfinite(frame[name].to_numpy(float)).sum() > 1:
             x = frame[name].to_numpy(float)
             ok = np.isfinite(x)
             a_y, turn = np.interp(t, tf[ok], x[ok]), v * r
-            slope = float(np.polyfit(turn, a_y, 1)[0]) if np.ptp(turn) > 0 else 0.0
+            if not np.ptp(turn) > 0:
+                return None, f"the log's {name}: no turns to read its sign against (v r constant); not taken for the ground's lean"
+            slope = float(np.polyfit(turn, a_y, 1)[0])
             if slope <= 0:
                 return None, (f"the log's {name} runs against v r ({slope:+.2g} m/s2 per m/s2): read right side "
                               f"positive (--signal {name}=-COLUMN turns it round), or a bank carrying more than the "

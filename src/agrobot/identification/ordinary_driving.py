@@ -38,6 +38,7 @@ from agrobot.components.models.yaw_dynamics import GRAVITY, PHYSICAL_MODELS, Tra
 from agrobot.measurements import LogError
 from agrobot.measurements.audit import minimum
 from agrobot.measurements.clocks import content_lag
+from agrobot.measurements.steering_scale import MIN_CORRELATION, slope_on_turns
 from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import StudyError
 from agrobot.orchestrator.work_progress import Work
@@ -49,7 +50,7 @@ from agrobot.estimation import Z95, Parameter
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
                       cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
-from .ground_lean import lean_of_log, turns_lean
+from .ground_lean import lean_column, lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
 from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
@@ -62,7 +63,7 @@ LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driv
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
 LINEAR_TYRE = 0.15 * 9.81    # m/s2: tyres on any ground (mu >= 0.5) are linear up to here
 MIN_EXCITATION = 0.02         # rad/s: std of the yaw rate the steering asks for (v u / L)
-STEERING_SCALE_SUSPECT = 5.0     # yaw rate over v u / L (std) beyond which the angle's scale is doubted
+STEERING_SCALE_SUSPECT = 5.0     # the yaw rate's slope on v u / L beyond which the angle's scale is doubted
 STEERING_SCALE_LARGEST = 100.0   # ... up to which a steering ratio or a unit (57.3 deg/rad) explains it
 INPUT_NOTE = {True: "input: the steering command delta_cmd (no measured wheel angle): gain, delay and lag are the "
                     "whole steering chain", False: "input: the measured wheel angle delta"}
@@ -426,7 +427,7 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
                                f"1 s or more) in {len(segs.idx)} segment(s); identification needs at least "
                                f"{MIN_DRIVING:g} s in 3 segments (two to fit, one held out): record "
                                f"{max(MIN_DRIVING - driven, 3 * SEGMENT - driven, 0):.0f} s more of driving with turns")
-    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed)   # at any excitation
+    _steering_scale_check(log, where, input_name, excitation, log.v >= min_speed, L)   # at any excitation
     if excitation < MIN_EXCITATION and not is_steady_turn(log, L, segs, MIN_EXCITATION):
         raise NotEnoughDriving(f"{where}: the steering hardly moves: it asks for {excitation:.3g} rad/s of yaw rate "
                                f"(std of v {input_name} / L); identification needs {MIN_EXCITATION} rad/s or more: "
@@ -435,18 +436,22 @@ def _enough_driving(log: DrivingLog, where: str, L: float, input_name: str, note
     return min_speed, segs, driven
 
 
-def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitation: float, moving) -> None:
+def _steering_scale_check(log: DrivingLog, where: str, input_name: str, excitation: float, moving, L: float) -> None:
     """Raises NotEnoughDriving naming the steering's scale when the measured yaw rate moves
-    (std >= MIN_EXCITATION) STEERING_SCALE_SUSPECT to STEERING_SCALE_LARGEST times what v u / L asks
-    for: the angle is not the road wheel's (a steering ratio divided into a road-wheel angle, degrees
-    for radians), not a steering that hardly moves; beyond that scale the input does not move."""
+    (std >= MIN_EXCITATION) and its slope on v u / L over the turns (measurements.steering_scale.
+    slope_on_turns, the import's rule, over the ``moving`` samples measured; correlation at least
+    MIN_CORRELATION) is STEERING_SCALE_SUSPECT to STEERING_SCALE_LARGEST: the angle is not the road
+    wheel's (a steering ratio divided into a road-wheel angle, degrees for radians), not a steering
+    that hardly moves; beyond that scale the input does not move."""
     seen = moving if log.measured is None else moving & log.measured
     answer = float(np.std(log.r[seen])) if seen.any() else 0.0
-    if answer < MIN_EXCITATION or not STEERING_SCALE_SUSPECT * excitation <= answer <= STEERING_SCALE_LARGEST * excitation:
+    slope = slope_on_turns(log.v, log.u, log.r, seen, L) if answer >= MIN_EXCITATION else None
+    if slope is None or slope[1] < MIN_CORRELATION or not STEERING_SCALE_SUSPECT <= slope[0] <= STEERING_SCALE_LARGEST:
         return
     raise NotEnoughDriving(f"{where}: the yaw rate moves {answer:.3g} rad/s (std while driving), "
-                           f"{answer / max(excitation, 1e-12):.3g} times what v {input_name} / L asks for "
-                           f"({excitation:.3g} rad/s): {input_name} is not the road-wheel angle it should be: a "
+                           f"{slope[0]:.3g} times what v {input_name} / L asks for "
+                           f"({excitation:.3g} rad/s std; the turns' slope, correlation {slope[1]:.2f}): {input_name} is "
+                           f"not the road-wheel angle it should be: a "
                            f"steering ratio divided into an angle that is the road wheel's already (a --steering-ratio "
                            f"given is taken as given, the study's only where the turns say the angle is the "
                            f"handwheel's; --steering-ratio 1 keeps the angle as recorded), an angle in other units, or not the steering")
@@ -1232,15 +1237,18 @@ PHYSICAL_COLUMNS = {"beta": ("side-slip angle at the centre of gravity", "rad"),
 def physical_checks(frame, log, model, values: dict, segs) -> dict:
     """The final model's side-slip beta = atan(v_y / v), lateral velocity v_y and lateral
     acceleration a_y = dv_y/dt + v r (its states, never fitted to them) against the log's ``beta``
-    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS."""
+    [rad], ``vy`` [m/s] and ``a_y`` [m/s2] on the held-out segments: fit [%] and RMS. The log's a_y
+    is a specific force (identification.ground_lean): the ground's lean read from a bank or roll
+    column is subtracted from the model's (one read from a_y itself would compare a_y with itself)."""
     have = [c for c in PHYSICAL_COLUMNS if c in frame and np.isfinite(frame[c].to_numpy(float)).sum() > 10]
     if not have or not len(segs.idx):
         return {}
     yaw, vy = model.simulate_many([values], segs, lateral=True)
     yaw, vy = yaw[0] - values.get("gyro_bias", 0.0), vy[0]
     v = log.v[segs.idx]
+    lean = log.lean[segs.idx] if log.lean is not None and lean_column(frame) else 0.0
     pred = {"beta": np.arctan2(vy, np.maximum(v, 1e-3)), "vy": vy,
-            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw}
+            "a_y": np.gradient(vy, log.h, axis=1) + v * yaw - lean}
     t = frame["t"].to_numpy(float)
     out = {}
     for c in have:

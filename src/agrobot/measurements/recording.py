@@ -80,18 +80,21 @@ def _streams(source: Path, options: ImportOptions) -> Streams:
     ignored = [p.name for k in ("table",) for p in kinds[k] if streams.report.get("files", {}).get(k) is None]
     if ignored and kinds["table"] and streams.report.get("files", {}).get("table") is None:
         streams.report.setdefault("notes", []).append(f"tables beside the recording not read: {', '.join(ignored[:6])}")
-    streams = _steered(find_quirks(fixes_from_columns(streams, source), options), options)
+    streams = _steered(find_quirks(fixes_from_columns(streams, source), options), options, source)
     streams.report["audit"] = audit_streams(streams, options, source)     # spikes already masked
     return streams
 
 
-def _steered(streams: Streams, options: ImportOptions) -> Streams:
+def _steered(streams: Streams, options: ImportOptions, source: Path) -> Streams:
     """Handwheel angles to road-wheel angles: delta and delta_cmd divided by the steering ratio,
     the study's only where the log's turns say delta is the handwheel's (measurements.steering_scale);
-    the choice is in the report's ``steering_ratio``."""
+    the choice is in the report's ``steering_ratio``; an angle the turns read in degrees is refused
+    (LogError naming ``source`` and the column)."""
     ratio = options.steering_ratio or 1.0
     if options.steering_ratio_from == "study" and ratio != 1.0:
-        handwheel, why = road_wheel_or_handwheel(turn_slope(streams.signals, streams.gnss, options.wheelbase), ratio)
+        column = streams.report.get("columns", {}).get("delta", "delta")
+        handwheel, why = road_wheel_or_handwheel(turn_slope(streams.signals, streams.gnss, options.wheelbase), ratio,
+                                                 f"{source}: delta ({column})")
         if handwheel is False:
             ratio = 1.0
         streams.report["steering_ratio"] = {
