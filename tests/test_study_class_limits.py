@@ -122,7 +122,7 @@ def test_an_unmeasured_reading_noise_adds_no_margin_and_hides_no_limit():
     from agrobot.diagnosis.plausibility import beyond_limits
     from agrobot.diagnosis.vehicle_limits import StudyLimits
     study = StudyLimits(wheelbase=1.4, lock=0.6, rate=1.0, top_speed=4.0, friction=0.8)
-    log = {"speed": 2.0, "lateral_acceleration": 1.0, "steering_rate": 3.0, "rate_window": 0.25, "wheel_angle": 0.9,
+    log = {"speed": 2.0, "lateral_acceleration": 1.0, "steering_rate": 3.0, "rate_window": 0.25, "wheel_angle_third_largest": 0.9,
            "angle_noise": float("nan")}
     said = " ".join(b if isinstance(b, str) else str(b) for b in beyond_limits(log, study)["beyond"])
     assert "steering rate" in said or "turning at" in said, said
