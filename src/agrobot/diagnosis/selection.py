@@ -353,6 +353,8 @@ class Selector:
             members = members + [best.effect]
             model = merged(model, best.fit)
             trace.append(f"+ {best.effect.id} (dBIC {best.delta_bic:.1f})")
+            tie = self.map_or_saturation(model, members[:-1], best, trials)
+            inconclusive += [tie] if tie else []
             for rival in rivals:
                 again = self.add(model, members, rival.effect)
                 if not again.supported:
@@ -374,6 +376,22 @@ class Selector:
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def map_or_saturation(self, model: FitResult, members: list[Effect], best: Finding,
+                          trials: list[Finding]) -> dict | None:
+        """A steering map (gain, ratio curve) read on a log that drives beyond the tyres' linear range
+        against tyre saturation: both bend the yaw gain in hard turns, the map's with delta whatever
+        a_y, the saturation's with a_y whatever delta (speed variation tells them apart). The map is
+        fitted on top of the saturation; where it adds nothing there, the log cannot tell the two
+        apart (a tie, both named), however far apart their dBIC alone."""
+        sat = next((f for f in trials if f.effect.id == "tyre_saturation"), None)
+        if best.effect.id not in ATTENUATED or sat is None or sat.delta_bic >= 0 or sat.effect in members:
+            return None
+        on_top = self.add(merged(model, sat.fit), members + [sat.effect], best.effect)
+        if on_top.supported:
+            return None
+        return _tie(best, sat, "the tyres' saturation bends the yaw gain in the hard turns as the map does, and "
+                               "with it in the model the map adds nothing (" + "; ".join(on_top.reasons) + ")")
 
     def through_noise(self, effect: Effect, fit: FitResult, related: list[Effect], stages,
                       trace: list[str] | None = None) -> tuple[FitResult, dict[str, float] | None]:

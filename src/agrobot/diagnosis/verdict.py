@@ -79,8 +79,11 @@ def judge_values(effect: dict, vehicle, wheelbase: float, l_r: float, speed: flo
 
 
 def _judge(effect: dict, ctx: VehicleContext, rules: Mapping[str, Effect]) -> list[str]:
+    """The effect's plausibility rule on its values; none where a secondary parameter ended on its
+    bound (on_secondary_bound): the values read beside it are not concluded, so nothing is claimed
+    of them (a friction beside a shape on its bound is not the tyres')."""
     rule = rules.get(effect["id"])
-    return rule.plausibility(effect.get("parameters", {}), ctx) if rule else []
+    return rule.plausibility(effect.get("parameters", {}), ctx) if rule and not on_secondary_bound(effect) else []
 
 
 def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
