@@ -39,7 +39,8 @@ def test_a_car_driven_into_its_tyres_saturation_gets_no_steering_map_verdict():
     """The passenger car driven hard (harness.truth_tractor "car_hard": 15-35 m/s, |a_y| to 10 m/s2)
     with tyres that saturate (F = C alpha / (1 + |alpha| / alpha_s), alpha_s 6 deg) and its road-wheel
     angle measured (no command): no steering map is planted, so none the selection keeps may stand
-    alone: each is tied with tyre_saturation as "cannot decide"."""
+    alone: each is tied with tyre_saturation as "cannot decide". Identify's keeping the saturation
+    (the pipeline runs it first) is given as a tyre of friction 1, shape 1.3 to start from."""
     frame, _ = make_log(1101, "tyre_saturation", duration=120.0, vehicle="car_hard", values={"alpha_s": 0.105})
     frame = frame.drop(columns=["x", "y", "delta_cmd"])
     selector = Selector(Replay(frame, baseline_from_study(Study.load(BASELINES["car"]))), 0.05, screen=False,
