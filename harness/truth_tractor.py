@@ -43,6 +43,11 @@ VEHICLES = {
     "car": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
                 tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(10.0, 20.0, 30.0), steer_scale=0.05,
                 resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0, gyro_bias=CAR_GYRO_BIAS),
+    # the same car driven hard: road-wheel angles four times the car's at 15-35 m/s (|a_y| to 8-10 m/s2,
+    # beyond the tyres' linear range), as a track day or a vehicle-dynamics test records it
+    "car_hard": dict(table=dict(m=1500.0, I=2500.0, l_f=1.2, l_r=1.5, C_f=80000.0, C_r=100000.0, sigma_f=0.5),
+                     tau=0.05, rate=40 * DEG, deadband=0.02 * DEG, speeds=(15.0, 25.0, 35.0), steer_scale=0.3,
+                     resolution=0.01 * DEG, gyro_noise=0.002, v_ref=20.0, gyro_bias=CAR_GYRO_BIAS),
     # a small Ackermann field robot (a converted mower: 120 kg, wheelbase l_f + l_r = 1.27 m, outline
     # 1.9 m x 1.1 m) with a fast servo steering, driven at 0.5-0.85 m/s by default: lateral
     # accelerations below 1 m/s2, the kinematic regime r = v tan(delta) / L (make_log's ``speeds``

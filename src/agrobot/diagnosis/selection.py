@@ -58,6 +58,8 @@ from agrobot.components.models.tyre import SHAPE_BOUNDS
 from agrobot.components.models.yaw_dynamics import GRAVITY
 from agrobot.orchestrator.work_progress import Work
 
+from agrobot.estimation import REPORTED_AT_BOUND
+
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
@@ -360,6 +362,7 @@ class Selector:
                                                           "model the other adds nothing"))
             model, members = self.still_supported(model, members, members[:-1], removed, trace)
         model, members = self.absorbed(model, members, trace)
+        inconclusive += self.map_or_saturation(model, members, first)
         seen, ties = set(), []
         for t in inconclusive:                       # one entry per pair, the chosen effect still in the model
             key = tuple(t["effects"])
@@ -374,6 +377,47 @@ class Selector:
         trace += [f"widened {w}" for w in self.widened]
         trace += self.screen.lines() if self.screen else ["screen: off (--no-screen): every pair of a misfit stage fitted"]
         return Selection(base, self.sigma, model, effects, first, final, floors, inconclusive, trace)
+
+    def map_or_saturation(self, model: FitResult, members: list[Effect], first: list[Finding]) -> list[dict]:
+        """The steering maps of the model, where one lowers the yaw gain in the log's tight turns (a
+        ratio curve c < 0, a gain k < 1), against tyre saturation, where the log drives into it (tried, with
+        evidence of its own: dBIC < 0): both bend the yaw gain down in hard turns, the map's with
+        delta, the saturation's with a_y. The map is told apart only where it stays supported with the
+        saturation fitted beside it and the tyre's shape off its bound (on it the tyre curve cannot
+        follow the bend, and the map may hold the rest of it); otherwise a tie, "cannot decide", both
+        named, however far apart their dBIC. Saturation never raises the gain: a map that does is kept."""
+        by_id = {f.effect.id: f for f in first}
+        sat = by_id.get("tyre_saturation")
+        if sat is None or sat.delta_bic >= 0:
+            return []
+        maps = [m for m in members if m.id in ATTENUATED and m.id in by_id]
+        if not any(self.lowers(m.id, model.values) for m in maps):
+            return []
+        tyre = next((m for m in members if m.id == "tyre_saturation"), None)
+        if tyre is None:             # the saturation fitted beside the maps
+            tyre, joint = sat.effect, merged(model, self.add(model, members, sat.effect).fit)
+            members = members + [tyre]
+        else:
+            joint = model
+        shape = next(p for p in tyre.parameters if p.name == "tyre_shape")
+        edge = shape.at_bound(joint.values["tyre_shape"], REPORTED_AT_BOUND)
+        ties = []
+        for effect in maps:          # a gain above 1 beside a falling curve: the small turns' part of the same bend
+            kept = self.drop(joint, members, effect)
+            if kept.supported and not edge:
+                continue
+            why = (f"with the saturation fitted beside it its shape ends on its {edge} bound (the tyre curve cannot "
+                   f"follow the bend; the map may hold the rest of it)" if edge else
+                   "with the saturation fitted beside it the map is not supported (" + "; ".join(kept.reasons) + ")")
+            ties.append({**_tie(by_id[effect.id], sat, ""), "undecided": True,
+                         "why": f"both lower the yaw gain in the hard turns (the map with delta, the saturation with "
+                                f"a_y) and this log does not tell them apart: {why}"})
+        return ties
+
+    @staticmethod
+    def lowers(effect_id: str, v: dict[str, float]) -> bool:
+        """The map turns the wheels less than the reading in tight turns (c < 0), or everywhere (k < 1)."""
+        return v["steering_ratio_curvature"] < 0 if effect_id == "steering_ratio_curve" else v["steering_gain"] < 1.0
 
     def through_noise(self, effect: Effect, fit: FitResult, related: list[Effect], stages,
                       trace: list[str] | None = None) -> tuple[FitResult, dict[str, float] | None]:

@@ -79,8 +79,11 @@ def judge_values(effect: dict, vehicle, wheelbase: float, l_r: float, speed: flo
 
 
 def _judge(effect: dict, ctx: VehicleContext, rules: Mapping[str, Effect]) -> list[str]:
+    """The effect's plausibility rule on its values; none where a secondary parameter ended on its
+    bound (on_secondary_bound): the values read beside it are not concluded, so nothing is claimed
+    of them (a friction beside a shape on its bound is not the tyres')."""
     rule = rules.get(effect["id"])
-    return rule.plausibility(effect.get("parameters", {}), ctx) if rule else []
+    return rule.plausibility(effect.get("parameters", {}), ctx) if rule and not on_secondary_bound(effect) else []
 
 
 def conclude(effects: list[dict], unexplained: dict | None, unidentifiable: list[dict], inconclusive: list[dict],
@@ -229,9 +232,12 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
             status = "implausible"
             statement = f"{top['id']} fits ({value}), but not as a property of this vehicle: {top['judgement'][0]}"
         elif any(t["effects"][0] == top["id"] for t in inconclusive):
-            status = "inconclusive"
-            rivals = ", ".join(t["effects"][1] for t in inconclusive if t["effects"][0] == top["id"])
-            statement = f"{top['id']} ({value}), or equally well {rivals}"
+            ties = [t for t in inconclusive if t["effects"][0] == top["id"]]
+            rivals = ", ".join(t["effects"][1] for t in ties)
+            status = "cannot decide" if any(t.get("undecided") for t in ties) else "inconclusive"
+            statement = (f"{UNDECIDED}{top['id']} ({value}) or {rivals}: "
+                         + "; ".join(t["why"] for t in ties if t.get("undecided"))
+                         if status == "cannot decide" else f"{top['id']} ({value}), or equally well {rivals}")
         else:
             status = "conclusive"
             statement = f"{top['id']}: {top['hypothesis']} ({value})"
@@ -251,7 +257,9 @@ def _verdict(effects: list[dict], unexplained: dict | None, unidentifiable: list
         statement = "the study explains the log to its noise floor"
     for e in effects:
         if e is not (answers[0] if answers else None):
+            rival = next((t["effects"][1] for t in inconclusive if t.get("undecided") and t["effects"][0] == e["id"]), None)
             tag = ("not concluded (" + ", ".join(e["blocked_by"]) + ")" if e["blocked_by"] else
+                   f"cannot decide (it or {rival})" if rival else
                    "not concluded (it rescales the yaw rate as the study's wheelbase does)" if e["id"] in withheld else
                    "not identifiable" if e in unidentifiable else "also")
             bullets.append(f"{tag}: {e['id']} " + values_text(e, rules.get(e["id"]))
