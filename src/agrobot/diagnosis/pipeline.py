@@ -412,6 +412,8 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
         result["warnings"].insert(0, mismatch)
     if result.get("study_limits", {}).get("statement"):
         result["warnings"].insert(0, result["study_limits"]["statement"])
+    elif result.get("study_limits", {}).get("noted"):
+        result["warnings"].insert(0, result["study_limits"]["noted"])
     _stage_results(result, replay, sel, checks, effects, baseline)
     return result, partial(_write_all, result=result, replay=replay, sel=sel, study=study, options=options,
                            log_path=log_path, plots=plots, say=say, mcap=mcap)
@@ -503,6 +505,8 @@ def _study_limits(result: dict, frame, baseline, study_name: str, default_study:
     result["study_limits"] = {"log": extremes, "study": {**vars(limits), "min_radius": limits.min_radius}, **checked}
     say(checked["compared"] + ("" if checked["beyond"] else
                                f": within them (against {study_name}; --study gives another vehicle's)"))
+    if checked["noted"] and not checked["beyond"]:
+        say(f"note: {checked['noted']}")
     if not checked["beyond"]:
         return None
     hint = suggestion(mine.get("wheelbase") or limits.wheelbase, study_name, None if default_study else baseline.vehicle,

@@ -71,6 +71,7 @@ from .effect import Effect, Parameter
 from .effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from .effects.steering_ratio_curve import DELTA_KEY
 from .effects.tyre_saturation import LATERAL_KEY, friction_text
+from .vehicle_limits import StudyLimits
 from .verdict import audit_findings
 
 SCALES = ("gyro_scale", "speed_scale")   # a yaw gain alone: on a command-only log, the command's gain
@@ -219,6 +220,20 @@ class Selection:
     floors: dict                                 # each stage's noise floor under it (noise_floor.py)
     inconclusive: list[dict] = field(default_factory=list)
     trace: list[str] = field(default_factory=list)
+
+
+BEND_SHARE = 0.5       # a tyre's force leaves its linear one (by a few %) past about half its peak
+
+
+def drives_into_tyres(replay: Replay) -> bool:
+    """The log's lateral acceleration |v r| (99th percentile while moving) reaches BEND_SHARE of the
+    grip the study's tyres hold (friction x g, vehicle_limits.StudyLimits): only there can tyre
+    saturation bend the yaw gain as a steering map does."""
+    moving = np.isfinite(replay.speed) & (replay.speed > replay.min_speed) & np.isfinite(replay.gyro)
+    friction = StudyLimits.of(replay.baseline).friction
+    if moving.sum() < 50 or not friction:
+        return True
+    return float(np.percentile(np.abs(replay.speed * replay.gyro)[moving], 99)) >= BEND_SHARE * friction * GRAVITY
 
 
 class Selector:
@@ -388,7 +403,7 @@ class Selector:
         named, however far apart their dBIC. Saturation never raises the gain: a map that does is kept."""
         by_id = {f.effect.id: f for f in first}
         sat = by_id.get("tyre_saturation")
-        if sat is None or sat.delta_bic >= 0:
+        if sat is None or sat.delta_bic >= 0 or not drives_into_tyres(self.replay):
             return []
         maps = [m for m in members if m.id in ATTENUATED and m.id in by_id]
         if not any(self.lowers(m.id, model.values) for m in maps):
