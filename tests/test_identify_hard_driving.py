@@ -171,7 +171,7 @@ def test_diagnose_stands_on_the_wheelbase_convert_recorded(car, tmp_path):
     proc = cli("convert", folder, "--signal", "delta=delta.col1[rad]", "--signal", "yaw_rate=yawRate.col1[rad/s]",
                "--signal", "v=vx.col1[m/s]", "--time", "t.col1[s]", "--wheelbase", L, "--out", out)
     assert proc.returncode == 0, proc.stderr
-    proc = cli("diagnose", out, "--study", CAR, "--out", tmp_path / "diag", "--no-plots", "--time-range", 0, 60)
+    proc = cli("diagnose", out, "--study", CAR, "--out", tmp_path / "diag", "--no-plots", "--time-range", 0, 40)
     said = proc.stdout + proc.stderr
     assert proc.returncode == 0, said
     assert f"wheelbase {L:.4g} m for the identification on the same log: recorded by convert --wheelbase" in said
