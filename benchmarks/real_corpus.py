@@ -13,8 +13,9 @@ reference number, the project's, and whether they agree:
   its rows; a fix's fields count together and only while the machine moves (fix_rates); the
   project's is the audit's rate for that column; they agree when it lies in that range, 25 %
   allowed beyond either end.
-* reversing: the share of moving time (|v| > 0.2 m/s) driven backwards, from a signed speed or from
-  the course against the heading, on the stretch the converted log keeps (reversing_like_log); the
+* reversing: the share of moving time (|v| > 0.2 m/s, by the speed channel where there is one and
+  by the fixes' own displacement: a standing receiver's jitter makes a course) driven backwards,
+  from a signed speed or from the course against the heading, on the stretch the converted log keeps (reversing_like_log); the
   project's is the share of v < 0 in the converted log.
 * yaw/kinematic slope: the regression of the yaw rate on v tan(delta/N)/L (N the steering ratio, L
   the wheelbase as published), |v| > 0.2 m/s, at the lag of the best correlation, on the samples
@@ -385,6 +386,8 @@ def reversing(ch: dict, within: tuple | None = None) -> tuple[float, str]:
         tm, course, speed = cs
         heading = np.interp(tm, ch["heading"][0], np.unwrap(ch["heading"][1]))
         moving = speed > MOVING
+        if "v" in ch:            # standing still, a fix's jitter makes a course: moving only where the speed says so too
+            moving &= np.abs(np.interp(tm, ch["v"][0], ch["v"][1])) > MOVING
         if not moving.any():
             return math.nan, "never moving"
         turn = np.exp(1j * (course - heading))[moving]
