@@ -127,12 +127,18 @@ def test_a_critical_speed_below_the_speeds_driven_is_not_a_verdict():
     assert beyond["identifiable"] and math.isclose(beyond["value"], math.sqrt(L / 0.005))
 
 
-def test_convert_records_the_wheelbase_and_identify_reads_it_back(car, tmp_path):
+def converted_with_wheelbase(car, tmp_path: Path) -> Path:
+    """The car's recording converted with ``--wheelbase L`` (recorded in car.import.json)."""
     folder = write(tmp_path / "rec", car)
     out = tmp_path / "car.csv"
     proc = cli("convert", folder, "--signal", "delta=delta.col1[rad]", "--signal", "yaw_rate=yawRate.col1[rad/s]",
                "--signal", "v=vx.col1[m/s]", "--time", "t.col1[s]", "--wheelbase", L, "--out", out)
     assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def test_convert_records_the_wheelbase_and_identify_reads_it_back(car, tmp_path):
+    out = converted_with_wheelbase(car, tmp_path)
     assert json.loads((tmp_path / "car.import.json").read_text())["wheelbase"]["value"] == L
     value, said = recorded_wheelbase(out, None)
     assert value == L and "car.import.json" in said
@@ -166,11 +172,7 @@ def test_a_rear_axle_stiffer_than_the_class_range_is_fitted_not_left_on_its_boun
 @pytest.mark.slow
 def test_diagnose_stands_on_the_wheelbase_convert_recorded(car, tmp_path):
     """diagnose's identification on the same log takes the recorded wheelbase as identify does, and says so."""
-    folder = write(tmp_path / "rec", car)
-    out = tmp_path / "car.csv"
-    proc = cli("convert", folder, "--signal", "delta=delta.col1[rad]", "--signal", "yaw_rate=yawRate.col1[rad/s]",
-               "--signal", "v=vx.col1[m/s]", "--time", "t.col1[s]", "--wheelbase", L, "--out", out)
-    assert proc.returncode == 0, proc.stderr
+    out = converted_with_wheelbase(car, tmp_path)
     proc = cli("diagnose", out, "--study", CAR, "--out", tmp_path / "diag", "--no-plots", "--time-range", 0, 40)
     said = proc.stdout + proc.stderr
     assert proc.returncode == 0, said
