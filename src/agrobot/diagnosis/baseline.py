@@ -81,12 +81,21 @@ def widened_ranges(params, values) -> dict[str, Parameter]:
 TYRE_SCALES = ("cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
 
 
+def replay_lateral(replay) -> tuple[np.ndarray, float] | None:
+    """(the moving samples, the lateral acceleration |v r| at their 99th percentile [m/s2]) of the
+    replayed log; None under 50 moving samples with a gyro."""
+    moving = np.isfinite(replay.speed) & (replay.speed > replay.min_speed) & np.isfinite(replay.gyro)
+    if moving.sum() < 50:
+        return None
+    return moving, float(np.percentile(np.abs(replay.speed * replay.gyro)[moving], 99))
+
+
 def replay_slip_share(replay) -> float | None:
     """plausibility.slip_share of the replayed log (None without a moving yaw stage)."""
-    moving = np.isfinite(replay.speed) & (replay.speed > replay.min_speed) & np.isfinite(replay.gyro)
-    if "yaw" not in replay.stages or moving.sum() < 50:
+    seen = replay_lateral(replay) if "yaw" in replay.stages else None
+    if seen is None:
         return None
-    lateral = float(np.percentile(np.abs(replay.speed * replay.gyro)[moving], 99))
+    moving, lateral = seen
     steering = float(np.nanpercentile(np.abs(replay.delta[moving]), 99))
     return slip_share(replay.baseline.tractor, lateral, steering)
 

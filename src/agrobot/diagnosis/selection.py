@@ -60,6 +60,7 @@ from agrobot.orchestrator.work_progress import Work
 
 from agrobot.estimation import REPORTED_AT_BOUND
 
+from .baseline import replay_lateral
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
@@ -229,11 +230,10 @@ def drives_into_tyres(replay: Replay) -> bool:
     """The log's lateral acceleration |v r| (99th percentile while moving) reaches BEND_SHARE of the
     grip the study's tyres hold (friction x g, vehicle_limits.StudyLimits): only there can tyre
     saturation bend the yaw gain as a steering map does."""
-    moving = np.isfinite(replay.speed) & (replay.speed > replay.min_speed) & np.isfinite(replay.gyro)
-    friction = StudyLimits.of(replay.baseline).friction
-    if moving.sum() < 50 or not friction:
+    seen, friction = replay_lateral(replay), StudyLimits.of(replay.baseline).friction
+    if seen is None or not friction:
         return True
-    return float(np.percentile(np.abs(replay.speed * replay.gyro)[moving], 99)) >= BEND_SHARE * friction * GRAVITY
+    return seen[1] >= BEND_SHARE * friction * GRAVITY
 
 
 class Selector:
