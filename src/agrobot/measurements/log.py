@@ -199,6 +199,18 @@ def chords(gps: np.ndarray, h: float, span: float = 1.0) -> tuple[int, np.ndarra
     return k, gps[2 * k:] - gps[:-2 * k]
 
 
+def track_span(t: np.ndarray, gps: np.ndarray) -> float:
+    """Seconds a chord of the track must span to hold position updates: 1 s, or twice the median
+    interval between the positions' changes where they change less often (a receiver at 0.2-1 Hz
+    held on a faster grid, a clock that runs slower than the data's). A shorter chord between two
+    updates measures a track that stands still."""
+    moved = np.any(np.diff(gps, axis=0) != 0, axis=1)
+    changes = np.asarray(t, float)[1:][moved]
+    if len(changes) < 3:
+        return 1.0
+    return max(1.0, 2.0 * float(np.median(np.diff(changes))))
+
+
 def speed_estimate(frame: pd.DataFrame) -> tuple[np.ndarray | None, str]:
     """(speed [m/s], where from): the wheel speed v, else the receiver's speed over ground
     (gnss_speed), else the speed of the GPS track over 1 s chords ("track"); (None, "none")."""
@@ -226,7 +238,8 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
         return
     t = frame["t"].to_numpy(float)
     h = float(np.median(np.diff(t)))
-    k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+    gps = frame[["x", "y"]].to_numpy(float)
+    k, d = chords(gps, h, track_span(t, gps))
     track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
     v = frame["v"].to_numpy(float)[k:-k]
     fast = v > 0.5
@@ -236,7 +249,9 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
     if "v" in frame.attrs.get("declared", {}) and not 0.67 < ratio < 1.5:
         frame.attrs.setdefault("notes", []).append(
             f"warning: column 'v' is {ratio:.2f} times the speed of the GPS track; kept as declared "
-            f"[{frame.attrs['declared']['v']}] (the user's word stands)")
+            f"[{frame.attrs['declared']['v']}] (the user's word stands): a unit of v, or a time base that runs "
+            f"{ratio:.2f} times {'slower' if ratio > 1 else 'faster'} than the data's own clock (a bag recorded while a "
+            f"log was replayed: every rate, the yaw rate's included, is then off by that factor)")
         return
     if abs(ratio - 3.6) < 0.4:
         raise LogError(f"{where}: column 'v' is 3.6 times the speed of the GPS track: it looks like km/h; "
@@ -247,7 +262,8 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
                        f"fixed point); the log must hold the GPS position in metres east/north of a datum")
     if not 0.67 < ratio < 1.5:
         raise LogError(f"{where}: column 'v' is {ratio:.2f} times the speed of the GPS track (x, y): "
-                       f"check the units of v, x and y (m/s and m)")
+                       f"check the units of v, x and y (m/s and m), and the time base (a clock that runs at another rate "
+                       f"than the data's scales every rate alike)")
     if "yaw_rate" in frame.columns:
         _check_yaw_rate_unit(frame, where, h, k, d)
 
