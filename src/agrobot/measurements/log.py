@@ -203,9 +203,11 @@ def track_span(t: np.ndarray, gps: np.ndarray) -> float:
     """Seconds a chord of the track must span to hold position updates: 1 s, or twice the median
     interval between the positions' changes where they change less often (a receiver at 0.2-1 Hz
     held on a faster grid, a clock that runs slower than the data's). A shorter chord between two
-    updates measures a track that stands still."""
+    updates measures a track that stands still. An update is a run of changing rows (a resampled
+    track ramps from one fix to the next over the rows between their samples)."""
     moved = np.any(np.diff(gps, axis=0) != 0, axis=1)
-    changes = np.asarray(t, float)[1:][moved]
+    starts = moved & ~np.concatenate(([False], moved[:-1]))
+    changes = np.asarray(t, float)[1:][starts]
     if len(changes) < 3:
         return 1.0
     return max(1.0, 2.0 * float(np.median(np.diff(changes))))
