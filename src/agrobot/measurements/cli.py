@@ -40,7 +40,9 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
                    "Vector channel number)")
     g.add_argument("--time", default=None, metavar="COLUMN[unit|datetime]",
                    help="a table's time: COLUMN[s|ms|us|ns], COLUMN[datetime], SECONDS+NANOSECONDS, DATE+TIME[datetime], "
-                        "or TABLE.COLUMN for tables without their own (default: found by name, e.g. t, time, s+ns)")
+                        "or TABLE.COLUMN for tables without their own (default: found by name, e.g. t, time, s+ns); "
+                        "a ROS bag's: /topic.field[s|ms|us|ns], a topic holding the data's own clock (a bag recorded "
+                        "while a log was replayed; default: the bag's clock)")
     g.add_argument("--keep-spikes", action="store_true", help="keep the samples found to be spikes (they are "
                    "named in the report either way)")
     g.add_argument("--steering-ratio", type=float, default=None, metavar="R",

@@ -21,7 +21,10 @@ Any numeric field of any topic, custom messages included: ``--signal COLUMN=/top
 declared for an angle, a rate or a speed); ``lat``/``lon`` columns in degrees become x/y.
 Topics of other types (/rosout, /tf, ...) are listed in the report, not read. Times are
 the messages' header stamps where they have a header with a stamp, else the bag's receive times;
-every topic is on that one clock, and the report says which each topic used. Topics read on the
+every topic is on that one clock, and the report says which each topic used. ``--time
+/topic.field[unit]`` names a topic whose values are the data's own clock (a logger's counter written
+beside its samples, a bag recorded while a log was replayed at another speed): every message's time on
+the bag's clock is then carried onto it, linearly between that topic's messages (on_data_clock). Topics read on the
 bag's receive times, or whose header stamps sit within STAMP_ON_RECEIVE s of them, share the bag's
 clock (Streams.clocks): a lag between them is a sensor's own latency, never a clock to align.
 
@@ -40,7 +43,7 @@ from .imu_axes import AXES, describe, vertical_axis
 from .log import LogError
 from .modes import MODE_VALUES, is_mode_name
 from .runs import held as in_force
-from .signal_expressions import SignalSpec, evaluate, unknown_name
+from .signal_expressions import SignalSpec, evaluate, parse_signal, unknown_name
 from .streams import Reader, Series, Streams, gnss_table, iso
 
 BAG_SUFFIXES = (".bag", ".db3", ".mcap")
@@ -460,13 +463,64 @@ def _numeric_paths(msg, prefix: str = "") -> list[tuple[str, float]]:
     return out
 
 
+CLOCK_COLUMN = "data_clock"      # the --time topic's values, read as a column and taken out
+
+
+def clock_spec(text: str | None, source: Path) -> SignalSpec | None:
+    """``--time`` for a bag: ``/topic[.field][unit]`` with a unit of time, read as a signal; None
+    without --time. Any other form is refused, naming what a bag's --time takes."""
+    if text is None:
+        return None
+    from .tables import parse_time
+
+    spec = parse_time(text)
+    if len(spec.columns) != 1 or not spec.columns[0].startswith("/") or spec.unit in (None, "datetime"):
+        raise LogError(f"{source}: --time {text!r}: a ROS bag takes --time /topic.field[unit] (s, ms, us, ns): the "
+                       f"topic whose values are the data's own clock; without --time the bag's clock is used (header "
+                       f"stamps, else receive times)")
+    return parse_signal(f"{CLOCK_COLUMN}={spec.columns[0]}[{spec.unit}]")
+
+
+def on_data_clock(signals: dict, clock: tuple[np.ndarray, np.ndarray], text: str, source: Path) -> tuple[dict, float]:
+    """(signals on the data's clock, seconds of data per second of the bag): each time t on the bag's
+    clock becomes c(t), c linear between the clock topic's messages (its bag times -> its values [s])
+    and extended beyond them at its mean rate. The clock's values must increase."""
+    tb, tv = (np.asarray(a, float) for a in clock)
+    steps = np.diff(tv)
+    if len(tv) < 2 or np.any(steps <= 0):
+        i = int(np.argmax(steps <= 0)) + 1 if len(tv) >= 2 else 0
+        raise LogError(f"{source}: --time {text!r}: the clock's values must increase from one message to the next; "
+                       + (f"message {i + 1} holds {tv[i]:.9g} s after {tv[i - 1]:.9g} s (a counter that wraps or "
+                          f"restarts: convert the stretch before it with --time-range)" if len(tv) >= 2 else
+                          f"it holds {len(tv)} message(s)"))
+    rate = float((tv[-1] - tv[0]) / (tb[-1] - tb[0]))
+
+    def move(t: np.ndarray) -> np.ndarray:
+        t = np.asarray(t, float)
+        out = np.interp(t, tb, tv)
+        out = np.where(t < tb[0], tv[0] + (t - tb[0]) * rate, out)
+        return np.where(t > tb[-1], tv[-1] + (t - tb[-1]) * rate, out)
+
+    return {c: (move(t), v) for c, (t, v) in signals.items()}, rate
+
+
 def bag_streams(paths: list[Path], options, source: Path):
     """The recording's streams from ROS bags."""
-    signals, topics = read_bags(paths, list(options.signals), source)
+    clock = clock_spec(options.time, source)
+    signals, topics = read_bags(paths, list(options.signals) + ([clock] if clock else []), source)
+    reference = "the bag's clock: header stamps (receive times where a message has no header)"
+    notes = list(topics.pop("choices", []))
+    if clock is not None:
+        signals, rate = on_data_clock(signals, signals.pop(CLOCK_COLUMN), options.time, source)
+        reference = (f"{clock.names[0]} [{clock.unit}] (--time): the data's own clock, each message's time on the "
+                     f"bag's clock carried onto it between that topic's messages")
+        notes.append(f"time: {clock.names[0]} [{clock.unit}] runs {rate:.4g} s per second of the bag's clock"
+                     + (f" (the bag took {1 / rate:.3g} s per second of data: recorded while a log was replayed "
+                        f"slower?)" if rate < 0.95 else f" (the bag took {1 / rate:.3g} s per second of data: "
+                        f"recorded while a log was replayed faster?)" if rate > 1.05 else ""))
     report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None,
-                    "notes": list(topics.pop("choices", [])), "stamp_vs_receive": topics.pop("stamp_vs_receive", {}),
-                    "bag": topics, "clocks": {"reference": "the bag's clock: header stamps (receive times where a "
-                                                           "message has no header)"}}
+                    "notes": notes, "stamp_vs_receive": topics.pop("stamp_vs_receive", {}),
+                    "bag": topics, "clocks": {"reference": reference}}
     gnss = None
     if "lat" in signals and "lon" in signals:
         t, lat = signals.pop("lat")
@@ -491,13 +545,16 @@ def bag_streams(paths: list[Path], options, source: Path):
     if gnss is not None:
         columns.update({"x": "NavSatFix latitude/longitude -> east of the run's first fix (pymap3d)",
                         "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
-    report["columns"] = {**columns, "t": "the bag's clock, s from the run's start"}
+    report["columns"] = {**columns, "t": ("the data's clock (--time), " if clock else "the bag's clock, ")
+                         + "s from the run's start"}
     held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
     groups = {c: topic for topic, v in topics["topics"].items() for c in v["columns"] if c in signals}
     fixes = next((topic for topic, v in topics["topics"].items() if "lat" in v["columns"]), None)
     if gnss is not None and fixes is not None:
         groups["gnss"] = fixes          # the receiver's fixes keep their topic's clock
     clocks = bag_clocks(topics["topics"], report["stamp_vs_receive"], paths)
+    if clock is not None:
+        clocks = {topic: f"the data's clock ({clock.names[0]}, --time)" for topic in clocks}
     return Streams(gnss, signals, report, held, {}, groups=groups, labels=topics.pop("mode_labels", {}), clocks=clocks)
 
 
