@@ -45,6 +45,7 @@ from scipy.signal import lfilter
 
 from agrobot.estimation import (AT_BOUND, FitResult, Parameter, interval)
 from agrobot.measurements import LogError
+from agrobot.measurements.direction import rank_correlation
 from agrobot.measurements.log import DEGREE_SUSPECT, robust_peak
 
 from .driving import DrivingLog, NotEnoughDriving, Segments, cut_segments, even_grid, fit_percent
@@ -247,9 +248,10 @@ def _log_of(frame, where: str, name: str, notes: list[str]) -> tuple[DrivingLog,
     against the input, or the log holds too little turning."""
     log = even_grid(_input_on_its_updates(frame, where, name, notes).assign(v=1.0), name, max_rate=25.0)
     notes += log.notes
-    rho = float(np.corrcoef(log.r, log.u)[0, 1]) if np.std(log.r) > 0 and np.std(log.u) > 0 else 0.0
+    # of the ranks: a few bursts of a glitching gyro (runs of rows at its range's end) do not outweigh the rest
+    rho = rank_correlation(log.r, log.u) if np.std(log.r) > 0 and np.std(log.u) > 0 else 0.0
     if rho < -0.3:
-        raise LogError(f"{where}: the gyro yaw_rate turns against {name} (correlation {rho:.2f}): one of them is counted "
+        raise LogError(f"{where}: the gyro yaw_rate turns against {name} (rank correlation {rho:.2f}): one of them is counted "
                        f"clockwise; both must be counter-clockwise positive (REP 103): negate one in its --signal "
                        f"(-1*/imu/data.angular_velocity.z)")
     turning = float(np.std(log.u))
