@@ -48,7 +48,7 @@ ROOT = Path(__file__).resolve().parent.parent
 ROOTS = {"realdata": Path("/work/shared/realdata"), "corpus": Path("/work/corpus_data")}
 MOVING = 0.2            # m/s: moving, for the reversing share
 KINEMATIC_MIN_SPEED = 0.2   # m/s: the slope and the delay are computed above it
-NOT_CHANNELS = ("commands", "samples")   # [recording.reference] lists that are not channels
+NOT_CHANNELS = ("commands", "samples", "clock")   # [recording.reference] lists that are not channels
 GRID = 0.02             # s: the common grid of the slope and the cross-correlation
 G_ACC = 9.81            # m/s2
 
@@ -182,10 +182,13 @@ def read_optitrack(path: Path) -> dict:
 
 def read_rosbag(path: Path, ref: dict) -> dict:
     """channel -> (receive time, field) from [topic, field.path, scale(, offset)], read with the
-    rosbags library."""
+    rosbags library; with clock = [topic, field, scale to s], each receive time is carried onto that
+    topic's values (linear between its messages): the data's own clock in a replayed bag."""
     from rosbags.highlevel import AnyReader
 
     wanted = {name: spec for name, spec in ref.items() if isinstance(spec, list) and name not in NOT_CHANNELS}
+    if "clock" in ref:
+        wanted["clock"] = ref["clock"]
     rows: dict[str, list] = {name: [] for name in wanted}
     with AnyReader([path]) as reader:
         topics = {spec[0] for spec in wanted.values()}
@@ -197,7 +200,11 @@ def read_rosbag(path: Path, ref: dict) -> dict:
                     for part in field.split("."):
                         value = getattr(value, part)
                     rows[name].append((stamp * 1e-9, (float(value) + (offset[0] if offset else 0.0)) * scale))
-    return {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+    out = {k: (np.array([a for a, _ in v]), np.array([b for _, b in v])) for k, v in rows.items() if v}
+    if "clock" in out:
+        tb, tv = out.pop("clock")
+        out = {k: (np.interp(t, tb, tv), x) for k, (t, x) in out.items()}
+    return out
 
 
 def _group(frame_id: int, extended: bool):
