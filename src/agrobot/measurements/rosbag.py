@@ -45,6 +45,7 @@ from .modes import MODE_VALUES, is_mode_name
 from .runs import held as in_force
 from .signal_expressions import SignalSpec, evaluate, parse_signal, unknown_name
 from .streams import Reader, Series, Streams, gnss_table, iso
+from .tables import parse_time
 
 BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 
@@ -471,8 +472,6 @@ def clock_spec(text: str | None, source: Path) -> SignalSpec | None:
     without --time. Any other form is refused, naming what a bag's --time takes."""
     if text is None:
         return None
-    from .tables import parse_time
-
     spec = parse_time(text)
     if len(spec.columns) != 1 or not spec.columns[0].startswith("/") or spec.unit in (None, "datetime"):
         raise LogError(f"{source}: --time {text!r}: a ROS bag takes --time /topic.field[unit] (s, ms, us, ns): the "
