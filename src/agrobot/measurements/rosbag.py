@@ -32,6 +32,7 @@ Imported where used: rosbags (the bags extra).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from pathlib import Path
@@ -447,10 +448,13 @@ def list_bag(paths: list[Path]) -> list[str]:
 
 
 def _numeric_paths(msg, prefix: str = "") -> list[tuple[str, float]]:
+    """(field path, value) of a message's numeric fields, nested ones with dotted paths; its
+    constants (a type's ClassVars, rosgraph_msgs/Log's DEBUG = 1 ...) are not fields."""
     out = []
-    for k in getattr(msg, "__dataclass_fields__", {}):
-        if k.startswith("__"):
-            continue
+    declared = getattr(type(msg), "__annotations__", {})
+    for k in (f.name for f in dataclasses.fields(msg)) if dataclasses.is_dataclass(msg) else ():
+        if k.startswith("__") or str(declared.get(k, "")).startswith(("ClassVar", "typing.ClassVar")):
+            continue                    # a constant (rosbags declares them ClassVar, as text dataclasses keep)
         v = getattr(msg, k)
         path = f"{prefix}{k}"
         if isinstance(v, bool):
