@@ -546,8 +546,11 @@ def bag_streams(paths: list[Path], options, source: Path):
                        + "; map a field with --signal COLUMN=/topic.field[unit] (convert SOURCE --list shows the fields)")
     columns = {c: how for v in topics["topics"].values() for c, how in v["columns"].items() if c in signals}
     if gnss is not None:
-        columns.update({"x": "NavSatFix latitude/longitude -> east of the run's first fix (pymap3d)",
-                        "y": "NavSatFix latitude/longitude -> north of the run's first fix (pymap3d)"})
+        named = {c: next((f"{t} ({v['type']})" for t, v in topics["topics"].items() if c in v["columns"]), c)
+                 for c in ("lat", "lon")}
+        source_of = named["lat"] if named["lat"] == named["lon"] else f"{named['lat']} and {named['lon']}"
+        columns.update({"x": f"latitude/longitude of {source_of} -> east of the run's first fix (pymap3d)",
+                        "y": f"latitude/longitude of {source_of} -> north of the run's first fix (pymap3d)"})
     report["columns"] = {**columns, "t": ("the data's clock (--time), " if clock else "the bag's clock, ")
                          + "s from the run's start"}
     held = {c for c in signals if c in ("delta_cmd", "speed_cmd") or is_mode_name(c)}   # a mode: held at its own times
