@@ -1,7 +1,10 @@
 """Quirks of real recordings, found with robust statistics and named rather than misread.
 
-- Spikes: a sample (or a run of up to ``SPIKE_WIDTH``) far from the running median of its
-  neighbours, |x - median_7| > d = max(10 x 1.4826 MAD, half the signal's 1-99 % range),
+- Spikes: a sample (or a run of up to ``SPIKE_WIDTH`` samples, or of up to ``BURST_SECONDS`` where the
+  signal is sampled faster: no measured wheel angle, speed or yaw rate rises by half its range, holds
+  and falls back within 0.15 s, each edge in one sample) far from the running median of its
+  neighbours (a window of twice the run plus one: 7 samples, more at high rates),
+  |x - median| > d = max(10 x 1.4826 MAD, half the signal's 1-99 % range),
   more than d from the samples just before and after it, which agree with each other within d:
   the signal leaves and comes back in one sample, a glitch, not a fast manoeuvre (a real peak
   rises through its neighbours; a step is followed by the median and does not come back). They are counted,
@@ -29,6 +32,7 @@ from .options import ImportOptions
 from .streams import Streams, gnss_table, iso
 
 SPIKE_WIDTH = 3
+BURST_SECONDS = 0.15               # s: the longest glitch run at high sample rates (module docstring)
 SPIKE_SIGMAS = 10.0
 SPIKE_RANGE_FRACTION = 0.5
 EARTH_RADIUS = 6_371_000.0
@@ -45,7 +49,10 @@ def spikes(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     n = len(x)
     if n < 4 * SPIKE_WIDTH + 3:
         return np.array([], int)
-    window = 2 * SPIKE_WIDTH + 1
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    width = max(SPIKE_WIDTH, int(BURST_SECONDS / step + 1e-9)) if step > 0 else SPIKE_WIDTH
+    width = min(width, (n - 3) // 4)
+    window = 2 * width + 1
     med = median_filter(x, size=window, mode="nearest")
     r = x - med
     mad = 1.4826 * float(np.median(np.abs(r - np.median(r))))
@@ -63,7 +70,7 @@ def spikes(t: np.ndarray, x: np.ndarray) -> np.ndarray:
         j = i
         while j < n and candidates[j]:
             j += 1
-        if j - i <= SPIKE_WIDTH and 0 < i and j < n:
+        if j - i <= width and 0 < i and j < n:
             before, after, run = x[i - 1], x[j], x[i:j]
             near = min(np.abs(run - before).min(), np.abs(run - after).min())
             if abs(before - after) < threshold and near > threshold:
