@@ -633,14 +633,20 @@ def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
                    f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
 
+SPEED_CHANNELS = ("v", "gnss_speed", "track_speed", "speed_cmd")    # a km/h vs m/s mix-up needs two speeds
+
+
 def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
     text = f"{name}: {b} is {s:.3g} times {a}"
     if abs(abs(s) - 180 / math.pi) < 3 or abs(abs(s) - math.pi / 180) < 0.002:
         return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
-    if abs(s - 3.6) < 0.2 or abs(s - 1 / 3.6) < 0.02:
+    if (abs(s - 3.6) < 0.2 or abs(s - 1 / 3.6) < 0.02) and a in SPEED_CHANNELS and b in SPEED_CHANNELS:
         return text + ": a km/h vs m/s mix-up"
     if s < 0:
         return text + ": the sign is opposite (a mounting or axis convention); diagnosis would take it for a fault"
+    if b == "odom_yaw_rate" and s > 1:
+        return (text + ": a skid-steered vehicle's wheels slip sideways in a turn, so it turns 1/K times less than "
+                "its wheel speeds say (identify's skid-steer model fits K), or the track or a wheel radius is off")
     return (text + ": a wheel radius, a calibration or slip; identification takes the first as the truth, "
             "diagnosis may name it a gain fault")
 
