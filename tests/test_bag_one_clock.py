@@ -39,9 +39,10 @@ def _odom(store, utc: float, v: float, r: float):
     return T["nav_msgs/msg/Odometry"](header=_stamp(store, utc), child_frame_id="base_link", pose=pose, twist=twist)
 
 
-def _bag(folder, odom_clock: float) -> None:
-    """120 s: a 50 Hz gyro and a 10 Hz wheel odometry whose yaw rate is the gyro's delayed by LAG
-    (its filter); both received at their stamps, the odometry's stamps ``odom_clock`` s off."""
+def _bag(folder, odom_clock: float, lag: float = LAG, scale: float = 1.0) -> None:
+    """120 s: a 50 Hz gyro and a 10 Hz wheel odometry whose yaw rate is ``scale`` times the gyro's
+    delayed by ``lag`` (its filter); both received at their stamps, the odometry's stamps
+    ``odom_clock`` s off."""
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     from agrobot.measurements.rosbag import typestore
@@ -59,9 +60,9 @@ def _bag(folder, odom_clock: float) -> None:
             utc = 1.7e9 + tk
             w.write(imu, int((utc + 0.005) * 1e9), store.serialize_cdr(
                 _imu(store, utc, r[k] + 0.01 * rng.standard_normal()), "sensor_msgs/msg/Imu"))
-            if k % 5 == 0 and tk >= LAG:
-                w.write(odom, int((utc + 0.005) * 1e9), store.serialize_cdr(
-                    _odom(store, utc + odom_clock, 1.0, float(np.interp(tk - LAG, t, r))), "nav_msgs/msg/Odometry"))
+            if k % 5 == 0 and tk >= lag:
+                w.write(odom, int((utc + 0.005) * 1e9), store.serialize_cdr(_odom(
+                    store, utc + odom_clock, 1.0, scale * float(np.interp(tk - lag, t, r))), "nav_msgs/msg/Odometry"))
 
 
 def _pair(frame):
