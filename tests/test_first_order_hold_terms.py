@@ -11,7 +11,7 @@ the replay's x+ = Phi x + G0 u_k + G1 u_k+1 has G1 = Gamma1 / h, G0 = Gamma0 - G
 stable ones, near-singular and singular ones (an integrator), complex eigenvalues (lightly damped
 and undamped), repeated eigenvalues (Jordan blocks and a scalar matrix), stiff ones (many
 squarings), steps from 1e-9 s to 2 s, several steps in one stack (uneven intervals). Each block is
-held to 1e-13 of its own size times max(1, ||hA||_1). Then the yaw replay (bicycle, rlf, rlfr) with the hold replaced by the
+held to 1e-14 of its own size times max(1, ||hA||_1). Then the yaw replay (bicycle, rlf, rlfr) with the hold replaced by the
 augmented exponential gives the same yaw rates to 1e-10."""
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from agrobot.components.models.yaw_dynamics import TractorParameters
 from agrobot.diagnosis import replay, replay_kernels
 from agrobot.identification.driving import phi_steps
 
-TOL = 1e-13
+TOL = 1e-14
 STEPS = (1e-9, 1e-6, 1e-3, 0.05, 2.0)
 
 
