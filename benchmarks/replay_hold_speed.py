@@ -130,6 +130,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.child:
         return child(args.child)
+    sys.path[:0] = [str(ROOT / "src"), str(ROOT)]     # this tree's code and harness/ for the logs
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         spec = {"logs": logs(tmp), "sets": draws(args.calls)}
