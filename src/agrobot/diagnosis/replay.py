@@ -227,8 +227,8 @@ class YawReplay:
             A, G0, G1 = (np.stack(x) for x in zip(*systems))
             return replay_kernels.indexed_recursion(A, G0, self.index, columns, np.stack(inputs), rows, G1)
         A = [Ad[self.index] for Ad, _, _ in systems]
-        b = [G0[self.index][:, :, columns] * u[:, None, :] + G1[self.index][:, :, columns] * np.vstack([u[1:], u[-1:]])[:, None, :]
-             for (_, G0, G1), u in zip(systems, inputs)]
+        b = [G0[:, :, columns][self.index] * u[:, None, :] + G1[:, :, columns][self.index] * np.vstack([u[1:], u[-1:]])[:, None, :]
+             for (_, G0, G1), u in zip(systems, inputs)]       # the columns taken at each speed, then the samples
         if len(systems) == 1:
             return blocked_recursion(A[0], b[0], row=tuple(rows))[None]
         return blocked_recursion(np.stack(A), np.stack(b), row=tuple(rows))
