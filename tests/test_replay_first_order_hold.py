@@ -18,7 +18,6 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from agrobot.components.models.yaw_dynamics import expm_batched
 from agrobot.diagnosis import replay_kernels
 from agrobot.diagnosis.candidates import Replay, fit_baseline, fitted, refit_free
 from agrobot.diagnosis.catalogue import CATALOGUE
@@ -32,14 +31,14 @@ TAU, SEEDS = 0.05, range(6)
 FILTER = next(e for e in CATALOGUE if e.id == "gyro_filter")
 
 
-def exponentials():
-    yield expm_batched
+def kernels():
+    yield "python"
     if replay_kernels.choose("auto") == "c":
-        yield replay_kernels.expm_stack
+        yield "c"
 
 
-@pytest.mark.parametrize("exponential", list(exponentials()))
-def test_the_hold_is_the_integral_of_a_linear_input(exponential):
+@pytest.mark.parametrize("kernel", list(kernels()))
+def test_the_hold_is_the_integral_of_a_linear_input(kernel):
     rng = np.random.default_rng(4)
     n, p, h = 3, 2, 0.05
     A = np.array([[-40.0, 5.0, 0.0], [-3.0, -2.0, 1.0], [0.0, -8.0, -0.5]]) + rng.normal(0, 0.3, (n, n))
@@ -47,7 +46,7 @@ def test_the_hold_is_the_integral_of_a_linear_input(exponential):
     x0, u0, u1 = rng.standard_normal(n), rng.standard_normal(p), rng.standard_normal(p)
     ode = solve_ivp(lambda s, x: A @ x + B @ (u0 + (u1 - u0) * s / h), (0.0, h), x0, method="Radau",
                     rtol=1e-12, atol=1e-14)
-    Phi, G0, G1 = (x[0] for x in first_order_hold(A[None], B[None], h, exponential))
+    Phi, G0, G1 = (x[0] for x in first_order_hold(A[None], B[None], h, kernel))
     assert np.allclose(Phi @ x0 + G0 @ u0 + G1 @ u1, ode.y[:, -1], rtol=0, atol=1e-9)
     assert np.abs(G1 @ (u1 - u0)).max() > 1e-3          # the slope within the step matters
 

@@ -1,8 +1,8 @@
 """The diagnosis's stage replays in C (diagnosis.replay_kernels) against their Python references on
 the same candidates, to 1e-9: the steering's first-order equivalent, the yaw replay's indexed
-recursion and its exponentials (the first-order hold), and whole replays of a generated tractor log
+recursion and its first-order hold, and whole replays of a generated tractor log
 (every stage, the command-only yaw stage too). The kernels are also held to truths of their own:
-a step through the first-order lag, exp of a rotation generator."""
+a step through the first-order lag, the hold of a rotation generator."""
 from __future__ import annotations
 
 import math
@@ -13,11 +13,11 @@ import pytest
 from scipy.linalg import expm
 
 from agrobot.components.models import steering_equivalent
-from agrobot.components.models.yaw_dynamics import TractorParameters, expm_batched
+from agrobot.components.models.yaw_dynamics import TractorParameters
 from agrobot.diagnosis import replay_kernels
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
-from agrobot.diagnosis.replay import YawReplay, blocked_recursion, hold_generator, steering_replay
+from agrobot.diagnosis.replay import YawReplay, blocked_recursion, first_order_hold, steering_replay
 from agrobot.orchestrator.study import load_study
 from harness.truth_tractor import make_log
 
@@ -72,18 +72,23 @@ def test_recursion_kernel_equals_the_blocked_recursion():
         z = A[0, index[k]] @ z + b[0, k]
 
 
-def test_exponential_kernel_equals_the_batched_taylor_series():
+def test_hold_kernel_equals_the_python_hold():
+    """The C first-order hold (phi_step.h) against its Python twin (identification.driving.phi_steps),
+    over norms that take from no squaring to many; and Phi of a rotation's generator: Rot(w dt)."""
     rng = np.random.default_rng(7)
     size = np.linspace(0.01, 60.0, 40)[:, None, None]
-    for n, p in ((2, 2), (4, 2), (3, 1)):
+    for n, p in ((2, 2), (4, 2), (3, 1), (5, 4)):
         A, B = rng.standard_normal((40, n, n)) * size, rng.standard_normal((40, n, p)) * size
         for dt in (0.01, 0.05):
-            M = hold_generator(A, B, dt)
-            close(replay_kernels.expm_stack(M), expm_batched(M), 1e-12)
-    close(replay_kernels.expm_stack(A[:3] * 0.05)[2], expm(A[2] * 0.05), 1e-11)
+            for got, want in zip(replay_kernels.first_order_hold(A, B, dt), first_order_hold(A, B, dt, "python")):
+                close(got, want, 1e-12)
+    close(replay_kernels.first_order_hold(A[:3], B[:3], 0.05)[0][2], expm(A[2] * 0.05), 1e-11)
     w, dt = 2.5, 0.4                 # a rotation's generator: exp = Rot(w dt)
     c, s = math.cos(w * dt), math.sin(w * dt)
-    close(replay_kernels.expm_stack(np.array([[[0.0, -w * dt], [w * dt, 0.0]]]))[0], [[c, -s], [s, c]], 1e-13)
+    rotation = replay_kernels.first_order_hold(np.array([[[0.0, -w], [w, 0.0]]]), np.zeros((1, 2, 1)), dt)[0]
+    close(rotation[0], [[c, -s], [s, c]], 1e-13)
+    with pytest.raises(ValueError, match="at most 5 states"):
+        replay_kernels.first_order_hold(np.zeros((1, 6, 6)), np.zeros((1, 6, 1)), dt)
 
 
 @pytest.mark.parametrize("model", ["bicycle", "rlfr"])

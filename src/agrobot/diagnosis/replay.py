@@ -32,10 +32,10 @@ from agrobot.components.models import steering_equivalent
 from agrobot.diagnosis import replay_kernels
 from agrobot.diagnosis.catalogue import CATALOGUE
 from agrobot.components.tractor_yaw_plant import steer_input
-from agrobot.identification.driving import ACKERMANN, SMALL_ANGLE, DrivingLog, Segments, YawModel
+from agrobot.identification.driving import ACKERMANN, SMALL_ANGLE, DrivingLog, Segments, YawModel, phi_steps
 from agrobot.measurements.log import chords
 from agrobot.components.models.yaw_dynamics import (TractorParameters, body_to_world, cornering_scale, lateral_disturbance_column,
-                                            expm_batched, state_space)
+                                            state_space)
 
 
 def steering_replay(cmd: np.ndarray, h: float, v: Mapping[str, float], delta0: float,
@@ -104,25 +104,21 @@ def low_pass(x: np.ndarray, h: float, tau: float) -> np.ndarray:
     return lfilter([g1, g0], [1.0, -a], x, zi=[(1.0 - g1) * x[0]])[0]
 
 
-def first_order_hold(A: np.ndarray, B: np.ndarray, h: float, exponential=expm_batched
+def first_order_hold(A: np.ndarray, B: np.ndarray, h: float, kernel: str = "python"
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(Phi, G0, G1) of x' = A x + B u, u linear over each step h: x_{k+1} = Phi x_k + G0 u_k + G1 u_{k+1},
-    Phi = e^{Ah}, G1 = (1/h) int_0^h e^{A(h-s)} s ds B, G0 = int_0^h e^{A(h-s)} ds B - G1, the top block
-    row of exp([[A, B, 0], [0, 0, I/h], [0, 0, 0]] h) = [Phi, G0 + G1, G1] (u = w + z s / h, w' = z / h).
-    A stack (k, n, n), B (k, n, p), in one batched ``exponential`` (expm_batched, or the C kernel's
-    replay_kernels.expm_stack)."""
-    n, p = A.shape[-1], B.shape[-1]
-    E = exponential(hold_generator(A, B, h))
-    return E[..., :n, :n], E[..., :n, n:n + p] - E[..., :n, n + p:], E[..., :n, n + p:]
 
+        Phi = e^{Ah},  Gamma0 = int_0^h e^{As} ds B,  Gamma1 = int_0^h e^{As} (h - s) ds B,
+        x(h) = Phi x0 + Gamma0 u0 + Gamma1 (u1 - u0) / h:  G1 = Gamma1 / h,  G0 = Gamma0 - G1
 
-def hold_generator(A: np.ndarray, B: np.ndarray, h: float) -> np.ndarray:
-    """[[A, B, 0], [0, 0, I/h], [0, 0, 0]] h of each system of a stack: (k, n + 2p, n + 2p)."""
-    k, n, p = B.shape
-    M = np.zeros((k, n + 2 * p, n + 2 * p))
-    M[:, :n, :n], M[:, :n, n:n + p] = A * h, B * h
-    M[:, n:n + p, n + p:] = np.eye(p)
-    return M
+    (the top block row of exp([[A, B, 0], [0, 0, I/h], [0, 0, 0]] h) is [Phi, Gamma0, Gamma1 / h]).
+    A stack (k, n, n), B (k, n, p), by identification.driving.phi_steps (Gamma0 = h phi1(hA) B,
+    Gamma1 / h = h phi2(hA) B: scaling and squaring of the n x n block, Pade and Horner; ``kernel``
+    "c": its C twin identification/phi_step.h through replay_kernels.first_order_hold)."""
+    if kernel == "c":
+        return replay_kernels.first_order_hold(A, B, h)
+    P, g1, g2 = phi_steps(A, B, np.full(len(A), float(h)))
+    return P, g1 - g2, g2
 
 
 def exact(values) -> tuple[float, ...]:
@@ -145,7 +141,7 @@ class YawReplay:
     (a side slope with fall line psi_d and angle phi: s_east, s_north = g sin(phi) (cos, sin)(psi_d)).
     Simulations are cached on the parameters that enter nonlinearly (exact). ``kernel``
     (replay_kernels.KERNELS): the recursion and the hold's exponentials in C, or the Python reference
-    (blocked_recursion, zoh_discretize). ``geometry``: the plant's steering_geometry; under "tan" a wheel
+    (blocked_recursion, first_order_hold). ``geometry``: the plant's steering_geometry; under "tan" a wheel
     angle drives the model as tan(delta) (tractor_yaw_plant.steer_input) and the offset's input is
     its first-order share, d tan(delta) / d delta = 1 + tan(delta)^2."""
 
@@ -231,8 +227,8 @@ class YawReplay:
             A, G0, G1 = (np.stack(x) for x in zip(*systems))
             return replay_kernels.indexed_recursion(A, G0, self.index, columns, np.stack(inputs), rows, G1)
         A = [Ad[self.index] for Ad, _, _ in systems]
-        b = [G0[self.index][:, :, columns] * u[:, None, :] + G1[self.index][:, :, columns] * np.vstack([u[1:], u[-1:]])[:, None, :]
-             for (_, G0, G1), u in zip(systems, inputs)]
+        b = [G0[:, :, columns][self.index] * u[:, None, :] + G1[:, :, columns][self.index] * np.vstack([u[1:], u[-1:]])[:, None, :]
+             for (_, G0, G1), u in zip(systems, inputs)]       # the columns taken at each speed, then the samples
         if len(systems) == 1:
             return blocked_recursion(A[0], b[0], row=tuple(rows))[None]
         return blocked_recursion(np.stack(A), np.stack(b), row=tuple(rows))
@@ -268,7 +264,7 @@ class YawReplay:
                 self._scales = {(speed_slope, v_ref): c}
         k = 1.0 / relaxation_scale - 1.0
         A, B = A0 + k * As + c * (front_scale * Af + rear_scale * Ar), B + k * Bs + c * front_scale * Bf
-        return first_order_hold(A, B, self.h, replay_kernels.expm_stack if self.kernel == "c" else expm_batched)
+        return first_order_hold(A, B, self.h, self.kernel)
 
     def response_to(self, u: np.ndarray, v: Mapping[str, float], through_geometry: bool = True) -> np.ndarray:
         """Yaw-rate responses (N, m) of the model under ``v`` to the steering-angle inputs u (N, m);

@@ -8,12 +8,16 @@
  *   Z_{-1} = 0, u_N = u_{N-1} (the yaw replay's time-varying recursion under a first-order hold, the
  *   system matrices of the step's speed bin i_k; B1 NULL: a zero-order hold), giving the chosen rows
  *   of Z_{k-1} (the state before each sample's update), for R sets side by side;
- * - expm_stack: exp of each matrix of a stack (components.models.yaw_dynamics.expm_batched: scaling
- *   and squaring with a degree-12 Taylor polynomial, the squarings given), the first-order hold's
- *   augmented generators (diagnosis.replay.first_order_hold). */
+ * - first_order_hold: the exact first-order hold (Phi, G0, G1) of a stack of systems, the yaw replay's
+ *   at the log's speeds (diagnosis.replay.first_order_hold; phi_step.h gives the equations). */
 #include <string.h>
 
-long replay_kernels_version(void) { return 2; }
+#include "phi_step.h"        /* identification/: NX, NU, phi_step */
+
+long replay_kernels_version(void) { return 3; }
+
+/* phi_step.h's largest system and number of input columns, as 100 NX + NU (checked on load) */
+long hold_limits(void) { return 100 * NX + NU; }
 
 void steering_first_order(long n, int pieces, const double *c1, const double *c2, double alpha1, double move1,
                           double alpha2, double move2, double deadband, double delta0, double *out) {
@@ -59,38 +63,26 @@ void indexed_recursion(long R, long S, long N, long n, long p, long m, const dou
     }
 }
 
-/* exp of each matrix of a stack, M: (count, q, q), q <= 16, into E alike: expm_batched's degree-12
- * Taylor series of M / 2^squarings, squared back. */
-void expm_stack(long count, long q, long squarings, const double *M, double *E) {
-    double X[256], T[256], tmp[256];
-    double scale = 1.0;
-    for (long s = 0; s < squarings; s++) scale *= 2.0;
+/* The first-order hold of each system of a stack (phi_step.h, identification.driving.phi_steps' twin):
+ * A: (count, n, n), B: (count, n, p), n <= NX, p <= NU; Phi alike A, G0 and G1 alike B, so that
+ * x+ = Phi x + G0 u_k + G1 u_k+1 (G1 = g2, G0 = g1 - g2); the first system whose Pade denominator is
+ * singular, or -1. */
+long first_order_hold(long count, long n, long p, double h, const double *A, const double *B, double *Phi,
+                      double *G0, double *G1) {
+    double Ac[NX][NX], P[NX][NX], g1[NX * NU], g2[NX * NU];
     for (long c = 0; c < count; c++) {
-        double *e = E + c * q * q;
-        for (long i = 0; i < q * q; i++) {
-            X[i] = M[c * q * q + i] / scale;
-            T[i] = e[i] = (i / q == i % q) ? 1.0 : 0.0;
-        }
-        for (int k = 1; k < 13; k++) {
-            for (long i = 0; i < q; i++)
-                for (long j = 0; j < q; j++) {
-                    double s = 0.0;
-                    for (long l = 0; l < q; l++) s += T[i * q + l] * X[l * q + j];
-                    tmp[i * q + j] = s;
-                }
-            for (long i = 0; i < q * q; i++) {
-                T[i] = tmp[i] / k;
-                e[i] += T[i];
-            }
-        }
-        for (long s = 0; s < squarings; s++) {
-            for (long i = 0; i < q; i++)
-                for (long j = 0; j < q; j++) {
-                    double acc = 0.0;
-                    for (long l = 0; l < q; l++) acc += e[i * q + l] * e[l * q + j];
-                    tmp[i * q + j] = acc;
-                }
-            memcpy(e, tmp, sizeof(double) * q * q);
+        for (long i = 0; i < n; i++)
+            for (long j = 0; j < n; j++)
+                Ac[i][j] = A[(c * n + i) * n + j];
+        if (!phi_step((int)n, (int)p, Ac, B + c * n * p, h, P, g1, g2))
+            return c;
+        for (long i = 0; i < n; i++)
+            for (long j = 0; j < n; j++)
+                Phi[(c * n + i) * n + j] = P[i][j];
+        for (long i = 0; i < n * p; i++) {
+            G0[c * n * p + i] = g1[i] - g2[i];
+            G1[c * n * p + i] = g2[i];
         }
     }
+    return -1;
 }

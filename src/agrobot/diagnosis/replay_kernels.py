@@ -1,6 +1,6 @@
 """The diagnosis's stage replays at compiled speed: replay_kernels.c (the steering's first-order
-equivalent, the yaw replay's indexed time-varying recursion, the exponentials of the first-order hold
-of its systems at the log's speeds) compiled once per content by the compiled engine's toolchain
+equivalent, the yaw replay's indexed time-varying recursion, the exact first-order hold of its systems
+at the log's speeds by identification/phi_step.h) compiled once per content by the compiled engine's toolchain
 (orchestrator.compiled.toolchain: $CC, cc or gcc; cached by hash under $AGROBOT_CACHE) and called
 through ctypes, which lets go of the interpreter lock while C runs. diagnosis.replay keeps the Python
 path as the reference; ``choose`` picks between them (``auto``: C where a compiler is found, else
@@ -9,7 +9,6 @@ Python, said once per process).
 from __future__ import annotations
 
 import ctypes
-import math
 from pathlib import Path
 
 import numpy as np
@@ -19,17 +18,24 @@ from agrobot.orchestrator.compiled.optional_library import OptionalLibrary
 from agrobot.orchestrator.compiled.toolchain import library
 
 SOURCE = Path(__file__).with_suffix(".c")
-MAX_ORDER = 16                 # the C file's largest state (recursion) and exponential
+HEADER = Path(__file__).parents[1] / "identification" / "phi_step.h"     # the exact first-order-hold step
+MAX_ORDER = 16                 # the C file's largest state (recursion)
+HOLD_ORDER, HOLD_INPUTS = 5, 4  # phi_step.h's NX and NU: the largest system and input columns of a hold
 
 
 def _load() -> ctypes.CDLL:
-    lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [], [])
+    lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [HEADER.parent], [HEADER])
     L, D, I, P = ctypes.c_long, ctypes.c_double, ctypes.c_int, ctypes.c_void_p
     lib.steering_first_order.argtypes = [L, I, P, P, D, D, D, D, D, D, P]
     lib.indexed_recursion.argtypes = [L, L, L, L, L, L, P, P, P, P, P, P, L, P, P]
-    lib.expm_stack.argtypes = [L, L, L, P, P]
-    for f in (lib.steering_first_order, lib.indexed_recursion, lib.expm_stack):
+    lib.first_order_hold.argtypes = [L, L, L, D, P, P, P, P, P]
+    lib.first_order_hold.restype = L
+    for f in (lib.steering_first_order, lib.indexed_recursion):
         f.restype = None
+    lib.hold_limits.restype = L
+    if lib.hold_limits() != 100 * HOLD_ORDER + HOLD_INPUTS:
+        raise RuntimeError(f"{HEADER.name}: NX, NU {divmod(lib.hold_limits(), 100)}, the module expects "
+                           f"{HOLD_ORDER}, {HOLD_INPUTS}")
     return lib
 
 
@@ -75,19 +81,17 @@ def indexed_recursion(A: np.ndarray, B: np.ndarray, index: np.ndarray, columns, 
     return out
 
 
-def _squarings(M: np.ndarray) -> int:
-    """expm_batched's squarings: the largest 1-norm in the stack, scaled to at most 1/4."""
-    norm = float(np.max(np.sum(np.abs(M), axis=-2), initial=0.0))
-    return max(0, int(math.ceil(math.log2(norm / 0.25)))) if norm > 0.25 else 0
-
-
-def expm_stack(M: np.ndarray) -> np.ndarray:
-    """exp of each matrix of a stack (k, q, q), q at most MAX_ORDER: yaw_dynamics.expm_batched's series."""
-    M = _as(M, float)
-    k, q, _ = M.shape
-    if q > MAX_ORDER or M.shape[2] != q:
-        raise ValueError(f"shape: M {M.shape} (square, at most {MAX_ORDER})")
-    E = np.empty_like(M)
-    _lib().expm_stack(k, q, _squarings(M), M.ctypes.data, E.ctypes.data)
-    return E
-
+def first_order_hold(A: np.ndarray, B: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Phi, G0, G1) of each system of a stack, A (k, n, n) and B (k, n, p), n at most HOLD_ORDER, p
+    at most HOLD_INPUTS: x_{k+1} = Phi x_k + G0 u_k + G1 u_{k+1} for u linear over the step h
+    (diagnosis.replay.first_order_hold, identification/phi_step.h)."""
+    A, B = _as(A, float), _as(B, float)
+    k, n, p = B.shape
+    if n > HOLD_ORDER or p > HOLD_INPUTS or A.shape != (k, n, n):
+        raise ValueError(f"shapes: A {A.shape}, B {B.shape} (at most {HOLD_ORDER} states, {HOLD_INPUTS} inputs)")
+    Phi, G0, G1 = np.empty_like(A), np.empty_like(B), np.empty_like(B)
+    failed = _lib().first_order_hold(k, n, p, float(h), A.ctypes.data, B.ctypes.data, Phi.ctypes.data,
+                                     G0.ctypes.data, G1.ctypes.data)
+    if failed >= 0:
+        raise np.linalg.LinAlgError(f"Singular matrix (the Pade denominator of system {failed})")
+    return Phi, G0, G1

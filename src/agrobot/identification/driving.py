@@ -644,26 +644,39 @@ def exact_steps(model: str, p, v: np.ndarray, h: float, tyre: dict, degree: int 
 
 
 def phi_steps(J: np.ndarray, b: np.ndarray, h: np.ndarray, degree: int = 12):
-    """(P, g1, g2) of dz/dt = J z + b d over h (rows,) as exact_steps: P = expm(h J), g1 = h phi1(h J) b,
-    g2 = h phi2(h J) b."""
+    """(P, g1, g2) of dz/dt = J z + b d over h (rows,) for d linear across the step (d0 -> d1):
+
+        z+ = P z + g1 d0 + g2 (d1 - d0),  P = e^{hJ},  g1 = int_0^h e^{Js} ds b = h phi1(hJ) b,
+        g2 = (1/h) int_0^h e^{Js} (h - s) ds b = h phi2(hJ) b
+
+    (the top block row of expm([[hJ, hb, 0], [0, 0, I], [0, 0, 0]])), as exact_steps and the C twin
+    identification/phi_step.h. b: (rows, n), or (rows, n, p) for p inputs, each column with its own
+    arithmetic; g1 and g2 alike."""
+    cols = b if b.ndim == 3 else b[:, :, None]
     norm = np.abs(h[:, None, None] * J).sum(axis=1).max(axis=1)
     s = np.where(norm > 0.5, np.ceil(np.log2(np.maximum(norm, 0.5) / 0.5)), 0.0).astype(int)
     scale = np.ldexp(h, -s)
     X = J * scale[:, None, None]
-    beta = b * scale[:, None]
-    y = beta / math.factorial(degree + 2)
-    for k in range(degree - 1, -1, -1):              # phi2(X) beta
-        y = np.einsum("sij,sj->si", X, y) + beta / math.factorial(k + 2)
-    P = pade_expm(X)
-    c = np.ldexp(1.0, -s)
-    g1, g2 = beta + np.einsum("sij,sj->si", X, y), c[:, None] * y         # phi1(X) beta = beta + X phi2(X) beta
+    beta = cols * scale[:, None, None]
+    terms = beta / np.array([float(math.factorial(k + 2)) for k in range(degree + 1)])[:, None, None, None]
+    y = terms[degree]
+    for k in range(degree - 1, -1, -1):              # phi2(X) beta = sum_k X^k beta / (k + 2)!, by Horner
+        y = X @ y
+        y += terms[k]
+    c = np.ldexp(1.0, -s)[:, None, None]
+    order = np.argsort(-s, kind="stable")            # the rows still squaring at step k: a prefix
+    P, c, s = pade_expm(X)[order], c[order], s[order]
+    g1, g2 = (beta + X @ y)[order], (c * y[order])   # phi1(X) beta = beta + X phi2(X) beta
     for k in range(int(s.max(initial=0))):
-        more = (k < s)[:, None]
-        g1, g2 = (np.where(more, np.einsum("sij,sj->si", P, g1) + g1, g1),
-                  np.where(more, np.einsum("sij,sj->si", P, g2) + c[:, None] * g1 + g2, g2))
-        c = np.where(k < s, 2.0 * c, c)
-        P = np.where(more[:, :, None], P @ P, P)
-    return P, g1, g2
+        m = int(np.count_nonzero(s > k))
+        Pm, g1m = P[:m], g1[:m]
+        g2[:m] = Pm @ g2[:m] + c[:m] * g1m + g2[:m]
+        g1[:m] = Pm @ g1m + g1m
+        c[:m] *= 2.0
+        P[:m] = Pm @ Pm
+    back = np.argsort(order)
+    P, g1, g2 = P[back], g1[back], g2[back]
+    return (P, g1, g2) if b.ndim == 3 else (P, g1[:, :, 0], g2[:, :, 0])
 
 
 PADE_6 = (1.0, 1.0 / 2, 5.0 / 44, 1.0 / 66, 1.0 / 792, 1.0 / 15840, 1.0 / 665280)

@@ -19,12 +19,8 @@
  *     z+ = expm(h J) z + h phi1(h J) b d0 + h phi2(h J) b (d1 - d0),
  *     phi1(X) = sum X^k / (k + 1)!,  phi2(X) = sum X^k / (k + 2)!
  *
- * (the top rows of expm([[h J, h b, 0], [0, 0, 1], [0, 0, 0]])), by scaling and squaring: X = h J / 2^s
- * with ||X||_1 <= 1/2, expm(X) by its [6/6] Pade approximant, phi2(X) b by Horner to degree 12 and
- * phi1(X) b = b + X phi2(X) b (relative errors below 1e-16), then s squarings of the block matrix,
- *
- *     (P, g1, g2, c) -> (P P, P g1 + g1, P g2 + c g1 + g2, 2 c),  c = 2^-s at the start;
- *
+ * (the top rows of expm([[h J, h b, 0], [0, 0, 1], [0, 0, 0]]); phi_step.h, by scaling and squaring
+ * with a [6/6] Pade approximant and Horner's phi2, relative errors below 1e-16);
  * a speed the previous sample had reuses the step, and a row whose speeds and step parameters (all
  * but the lag's) an earlier row of the call had reuses that row's steps (a Jacobian's columns for
  * the delay, lag, offset or gain).
@@ -39,10 +35,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "phi_step.h"        /* NX, invert, matmul, phi_step: the exact first-order-hold step */
+
 enum { P_A, P_C, P_LAG, P_DELAY, P_CF, P_CR, P_MU, P_SHAPE, P_SLOPE, P_VREF, P_SIGMA_F, P_SIGMA_R, P_M, P_I, P_LF, P_LR,
        P_FZF, P_FZR, N_PAR };
 enum { BICYCLE = 0, RLF = 1, RLFR = 2 };
-enum { NX = 5 };        /* the most states: rlfr's four and a held input's lag state */
 
 typedef struct { int model, n; const double *p; double Cf, Cr; } Row;
 
@@ -115,42 +112,6 @@ static inline void rates(const Row *q, double v, double delta, const double *z, 
 }
 
 
-/* The inverse of the n x n matrix A (n <= NX) by Gauss-Jordan elimination with partial pivoting;
- * 0 when A is singular */
-static inline int invert(int n, double A[NX][NX], double M[NX][NX]) {
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++)
-            M[i][j] = i == j ? 1.0 : 0.0;
-    for (int col = 0; col < n; col++) {
-        int piv = col;
-        for (int i = col + 1; i < n; i++)
-            if (fabs(A[i][col]) > fabs(A[piv][col]))
-                piv = i;
-        if (A[piv][col] == 0.0)
-            return 0;
-        for (int j = 0; j < n; j++) {
-            double t = A[col][j]; A[col][j] = A[piv][j]; A[piv][j] = t;
-            t = M[col][j]; M[col][j] = M[piv][j]; M[piv][j] = t;
-        }
-        double inv = 1.0 / A[col][col];
-        for (int j = 0; j < n; j++) {
-            A[col][j] *= inv;
-            M[col][j] *= inv;
-        }
-        for (int i = 0; i < n; i++) {
-            double e = A[i][col];
-            if (i == col || e == 0.0)
-                continue;
-            for (int j = 0; j < n; j++) {
-                A[i][j] -= e * A[col][j];
-                M[i][j] -= e * M[col][j];
-            }
-        }
-    }
-    return 1;
-}
-
-
 /* One ROS2 step of length hs from inputs (v0, d0) to (v1, d1); 0 when I - gamma hs J is singular */
 static inline int ros2_step(const Row *q, double hs, double v0, double v1, double d0, double d1, double *z) {
     const double gamma = 1.0 + 1.0 / sqrt(2.0);
@@ -180,113 +141,12 @@ static inline int ros2_step(const Row *q, double hs, double v0, double v1, doubl
 }
 
 
-/* C = A B for n x n matrices, n <= NX (C distinct from A and B) */
-static inline void matmul(int n, double A[NX][NX], double B[NX][NX], double C[NX][NX]) {
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double s = 0.0;
-            for (int k = 0; k < n; k++)
-                s += A[i][k] * B[k][j];
-            C[i][j] = s;
-        }
-}
-
-
-/* y = A x, n <= NX (y distinct from x) */
-static inline void matvec(int n, double A[NX][NX], const double *x, double *y) {
-    for (int i = 0; i < n; i++) {
-        y[i] = 0.0;
-        for (int k = 0; k < n; k++)
-            y[i] += A[i][k] * x[k];
-    }
-}
-
-
-/* E = expm(X) by the [6/6] Pade approximant (||X||_1 <= 1/2), n <= NX; 0 when its denominator is
- * singular */
-static inline int pade(int n, double X[NX][NX], double E[NX][NX]) {
-    static const double c[7] = {1.0, 0.5, 5.0 / 44.0, 1.0 / 66.0, 1.0 / 792.0, 1.0 / 15840.0, 1.0 / 665280.0};
-    double X2[NX][NX], X4[NX][NX], X6[NX][NX], U[NX][NX], V[NX][NX], T[NX][NX], M[NX][NX];
-    matmul(n, X, X, X2);
-    matmul(n, X2, X2, X4);
-    matmul(n, X4, X2, X6);
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            double id = i == j ? 1.0 : 0.0;
-            T[i][j] = c[1] * id + c[3] * X2[i][j] + c[5] * X4[i][j];
-            V[i][j] = c[0] * id + c[2] * X2[i][j] + c[4] * X4[i][j] + c[6] * X6[i][j];
-        }
-    matmul(n, X, T, U);
-    for (int i = 0; i < n; i++)
-        for (int j = 0; j < n; j++) {
-            T[i][j] = V[i][j] - U[i][j];
-            V[i][j] += U[i][j];
-        }
-    if (!invert(n, T, M))
-        return 0;
-    matmul(n, M, V, E);
-    return 1;
-}
-
-
-/* (P, g1, g2) of dx/dt = A x + B u over t (m states, m <= NX): P = expm(t A), g1 = t phi1(t A) B,
- * g2 = t phi2(t A) B (see the top); 0 when the Pade denominator is singular */
-static inline int phi_step(int m, double A[NX][NX], const double *B, double t, double P[NX][NX], double *g1,
-                           double *g2) {
-    static const int DEGREE = 12;
-    double X[NX][NX], T[NX][NX], y[NX], u[NX], norm = 0.0;
-    for (int j = 0; j < m; j++) {
-        double col = 0.0;
-        for (int i = 0; i < m; i++)
-            col += fabs(t * A[i][j]);
-        norm = col > norm ? col : norm;
-    }
-    int s = norm > 0.5 ? (int)ceil(log2(norm / 0.5)) : 0;
-    double scale = ldexp(t, -s), c = ldexp(1.0, -s), f = 1.0;       /* f = 1 / (k + 2)! */
-    for (int i = 0; i < m; i++)
-        for (int j = 0; j < m; j++)
-            X[i][j] = scale * A[i][j];
-    for (int k = 1; k <= DEGREE + 2; k++)
-        f /= k;
-    for (int i = 0; i < m; i++)
-        y[i] = scale * B[i] * f;
-    for (int k = DEGREE - 1; k >= 0; k--) {        /* y <- X y + beta / (k + 2)!: phi2(X) beta */
-        f *= k + 3;
-        matvec(m, X, y, u);
-        for (int i = 0; i < m; i++)
-            y[i] = u[i] + scale * B[i] * f;
-    }
-    matvec(m, X, y, u);                           /* phi1(X) beta = beta + X phi2(X) beta */
-    for (int i = 0; i < m; i++) {
-        g1[i] = scale * B[i] + u[i];
-        g2[i] = c * y[i];
-    }
-    if (!pade(m, X, P))
-        return 0;
-    for (int k = 0; k < s; k++) {
-        double u1[NX], u2[NX];
-        matvec(m, P, g1, u1);
-        matvec(m, P, g2, u2);
-        for (int i = 0; i < m; i++) {
-            g2[i] = u2[i] + c * g1[i] + g2[i];
-            g1[i] = u1[i] + g1[i];
-        }
-        c *= 2.0;
-        matmul(m, P, P, T);
-        for (int i = 0; i < m; i++)
-            for (int j = 0; j < m; j++)
-                P[i][j] = T[i][j];
-    }
-    return 1;
-}
-
-
 /* The exact first-order-hold step of the linear model at speed v over h (see the top): P, g1, g2
  * with z+ = P z + g1 d0 + g2 (d1 - d0); 0 when the Pade denominator is singular */
 static inline int exact_step(const Row *q, double v, double h, double P[NX][NX], double *g1, double *g2) {
     double zero[NX] = {0.0}, b[NX], J[NX][NX];
     rates(q, v, 1.0, zero, b, J);            /* linear tyres: f(0, 1) = b */
-    return phi_step(q->n, J, b, h, P, g1, g2);
+    return phi_step(q->n, 1, J, b, h, P, g1, g2);
 }
 
 
@@ -304,7 +164,7 @@ static inline int held_step(const Row *q, double v, double t, double inv_T, doub
     }
     A[n][n] = -inv_T;
     B[n] = inv_T;
-    return phi_step(n + 1, A, B, t, P, g, g2);
+    return phi_step(n + 1, 1, A, B, t, P, g, g2);
 }
 
 

@@ -18,6 +18,7 @@ from agrobot.orchestrator.compiled.optional_library import OptionalLibrary
 from agrobot.orchestrator.compiled.toolchain import library
 
 SOURCE = Path(__file__).with_suffix(".c")
+HEADER = SOURCE.with_name("phi_step.h")     # the exact first-order-hold step (driving.phi_steps' C twin)
 DEFAULT = "auto"             # what a YawModel runs unless told (``python``: the reference everywhere)
 MODELS = {"bicycle": 0, "rlf": 1, "rlfr": 2}
 # per-row parameters in the C file's P_ order
@@ -26,7 +27,7 @@ PARAMETERS = ("lag_decay", "hold_gain", "lag", "delay", "C_f", "C_r", "mu", "sha
 
 
 def _load() -> ctypes.CDLL:
-    lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [], [])
+    lib, _, _ = library({SOURCE.name: SOURCE.read_text()}, [HEADER.parent], [HEADER])
     dbl = ctypes.POINTER(ctypes.c_double)
     lib.single_track_simulate.argtypes = [ctypes.c_int, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int,
                                           ctypes.c_double, dbl, dbl, dbl, dbl, dbl, dbl]
