@@ -1,0 +1,74 @@
+"""Direction evidence from a heading or an integrated gyro (measurements.direction.by_heading), on
+generated 20 Hz drives with a known truth:
+
+* a gyro written 57.3 times too small (converted from degrees twice, declared rad/s): its integral
+  never turns while the course turns by pi in a U-turn; it tells no U-turn from a reversal, so it
+  is no evidence, and a forward drive is never named reversing;
+* a course-over-ground heading with 0.02 rad of noise at each 20 Hz sample (a truck's receiver):
+  its rate read on the course rate's chords follows the course, so a real reversal is named."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.api import convert
+from agrobot.measurements import LogError
+
+HZ = 20.0
+LAT0, LON0 = 57.71, 11.94
+SPEED = 5.0
+
+
+def drive(legs: list[tuple[float, float, float]], seed: int = 3) -> pd.DataFrame:
+    """A 20 Hz drive from legs (seconds, signed speed [m/s], yaw rate [rad/s] as a function of
+    nothing: constant on the leg; a weave is added on the legs with speed): t, lat, lon, v (signed),
+    r (true, ENU), psi (true body heading, ENU)."""
+    rng = np.random.default_rng(seed)
+    rows, psi, x, y, t = [], 0.0, 0.0, 0.0, 0.0
+    for seconds, v, r in legs:
+        for _ in range(int(round(seconds * HZ))):
+            weave = 0.12 * math.sin(2 * math.pi * t / 8.0) if v != 0 else 0.0
+            rate = r + weave
+            rows.append((t, x, y, v, rate, psi))
+            psi += rate / HZ
+            x += v * math.cos(psi) / HZ
+            y += v * math.sin(psi) / HZ
+            t += 1 / HZ
+    d = pd.DataFrame(rows, columns=["t", "x", "y", "v", "r", "psi"])
+    d["x"] += rng.normal(0, 0.02, len(d))
+    d["y"] += rng.normal(0, 0.02, len(d))
+    d["lat"] = LAT0 + np.degrees(d["y"] / 6.371e6)
+    d["lon"] = LON0 + np.degrees(d["x"] / (6.371e6 * math.cos(math.radians(LAT0))))
+    return d
+
+
+def test_a_gyro_57_times_too_small_is_no_evidence_of_reversing(tmp_path):
+    d = drive([(5, 0.0, 0.0), (50, SPEED, 0.0), (math.pi / 0.2, SPEED, 0.2), (40, SPEED, 0.0), (5, 0.0, 0.0)])
+    out = pd.DataFrame({"t": d["t"], "lat": d["lat"], "lon": d["lon"], "v": d["v"],
+                        "yaw_rate": d["r"] * math.pi / 180})          # rad/s converted once more
+    out.to_csv(tmp_path / "truck.csv", index=False, float_format="%.10f")
+    rec = convert(tmp_path / "truck.csv", signals=["v=v[m/s]", "yaw_rate=yaw_rate[rad/s]", "lat=lat[deg]",
+                                                   "lon=lon[deg]"], time="t[s]", wheelbase=4.0)
+    assert not [f for f in rec.report["audit"]["findings"] if f["kind"] == "reversing"]
+
+
+def test_a_noisy_20_hz_heading_names_the_reversal(tmp_path):
+    legs = [(5, 0.0, 0.0), (40, SPEED, 0.0), (3, 0.0, 0.0), (20, -2.0, 0.0), (3, 0.0, 0.0), (40, SPEED, 0.0),
+            (5, 0.0, 0.0)]
+    d = drive(legs)
+    noise = np.random.default_rng(7).normal(0, 0.02, len(d))
+    compass = np.mod(math.pi / 2 - d["psi"] + noise, 2 * math.pi)      # clockwise from north, as receivers write it
+    out = pd.DataFrame({"t": d["t"], "lat": d["lat"], "lon": d["lon"], "v": d["v"].abs(), "heading": compass})
+    out.to_csv(tmp_path / "truck.csv", index=False, float_format="%.10f")
+    with pytest.raises(LogError, match="reverses at") as err:
+        convert(tmp_path / "truck.csv", signals=["v=v[m/s]", "heading=heading[rad]", "lat=lat[deg]", "lon=lon[deg]"],
+                time="t[s]", wheelbase=4.0)
+    said = str(err.value).split("reverses at ")[1].split(" s")[0]
+    start, end = (float(x) for x in said.split("-"))
+    back = d["t"][d["v"] < 0]          # named from standstill to standstill: within the 3 s stops around it
+    assert back.min() - 3.5 < start <= back.min() + 0.5 and back.max() - 0.5 <= end < back.max() + 3.5, \
+        (said, back.min(), back.max())
+    assert "the course against the heading" in str(err.value)
