@@ -72,3 +72,26 @@ def test_a_noisy_20_hz_heading_names_the_reversal(tmp_path):
     assert back.min() - 3.5 < start <= back.min() + 0.5 and back.max() - 0.5 <= end < back.max() + 3.5, \
         (said, back.min(), back.max())
     assert "the course against the heading" in str(err.value)
+
+
+@pytest.mark.parametrize("factor", [1.0, math.pi / 180])
+def test_a_20_hz_course_rate_is_read_over_chords_not_per_fix(tmp_path, factor):
+    """Fixes at 20 Hz with 5 cm of noise each: the course rate differenced per fix is mostly noise
+    (the gyro pair 'too weak to judge'); over 0.25 s either side it follows the gyro, which then
+    agrees in scale, or is named 57.3 times too small (a yaw rate converted from degrees twice)."""
+    d = drive([(5, 0.0, 0.0), (120, 6.0, 0.0), (5, 0.0, 0.0)])
+    rng = np.random.default_rng(1)
+    lat = d["lat"] + np.degrees(rng.normal(0, 0.05, len(d)) / 6.371e6)
+    lon = d["lon"] + np.degrees(rng.normal(0, 0.05, len(d)) / (6.371e6 * math.cos(math.radians(LAT0))))
+    pd.DataFrame({"t": d["t"], "lat": lat, "lon": lon, "v": d["v"], "yaw_rate": d["r"] * factor}).to_csv(
+        tmp_path / "truck.csv", index=False, float_format="%.10f")
+    rec = convert(tmp_path / "truck.csv", signals=["v=v[m/s]", "yaw_rate=yaw_rate[rad/s]", "lat=lat[deg]",
+                                                   "lon=lon[deg]"], time="t[s]", wheelbase=4.0)
+    pair = [f for f in rec.report["audit"]["findings"] if "course_rate" in f["channels"]]
+    latency = [f for f in pair if f["kind"] == "sensor_latency"]
+    assert latency and "too weak" not in latency[0]["meaning"], latency
+    scale = [f for f in pair if f["kind"] == "scale_disagreement"]
+    if factor == 1.0:
+        assert not scale, scale
+    else:
+        assert len(scale) == 1 and abs(scale[0]["value"] / factor - 1) < 0.1 and "degrees/radians" in scale[0]["meaning"]

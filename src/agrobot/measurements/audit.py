@@ -292,9 +292,20 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
 
 
 # --- the signals that must agree ---------------------------------------------------------------
+RATE_SPAN = 0.25        # s: the course rate is the chords' course differenced this far either side (at least a fix)
+
+
+def rate_step(h: float) -> int:
+    """Fixes either side over which gnss_rates differences the chords' course (RATE_SPAN at a fix
+    interval h): a 20 Hz course differenced per fix is its noise over 0.1 s, larger than a
+    machine's turning (the gyro compared with it is smoothed by the same 2 m h box)."""
+    return max(1, int(round(RATE_SPAN / h))) if h > 0 else 1
+
+
 def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(utc, speed over ground [m/s], course rate [rad/s]) of the receiver's fixes: the course
-    of 1 s chords of the track (a sphere is enough for a rate), NaN where the track is slower
+    of 1 s chords of the track (a sphere is enough for a rate), differenced over rate_step fixes
+    either side (a 2 m h box), NaN where the track is slower
     than MOVING m/s, or than a chord of COURSE_SIGMAS position sigmas, within 1 s of the chord's
     centre (a chord across a stop, where a machine may turn back, has no course)."""
     t = gnss["utc"].to_numpy(float)
@@ -309,7 +320,10 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if len(t) > 2 * k + 2:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
-            r = np.gradient(course, tc)
+            m = rate_step(h)
+            i = np.arange(len(tc))
+            lo, hi = np.clip(i - m, 0, len(tc) - 1), np.clip(i + m, 0, len(tc) - 1)
+            r = (course[hi] - course[lo]) / np.maximum(tc[hi] - tc[lo], 1e-9)
             sigma = position_noise(east, north)         # the chord long against the fixes' own noise ...
             need = np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
             from scipy.ndimage import minimum_filter1d
@@ -448,7 +462,7 @@ class Auditor:
                 ok = np.isfinite(course_rate)
                 h = float(np.median(np.diff(tg)))
                 t, r = sig[gyro]
-                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
+                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * rate_step(h) * h)  # as the chords
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
                             lag(tg[ok], course_rate[ok], t, r, search, mask=_good(tg, speed, MOVING, best)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
