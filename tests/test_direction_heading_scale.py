@@ -95,3 +95,23 @@ def test_a_20_hz_course_rate_is_read_over_chords_not_per_fix(tmp_path, factor):
         assert not scale, scale
     else:
         assert len(scale) == 1 and abs(scale[0]["value"] / factor - 1) < 0.1 and "degrees/radians" in scale[0]["meaning"]
+
+
+def test_a_noisy_20_hz_compass_heading_is_turned_to_enu(tmp_path):
+    """A compass heading (clockwise from north) with 0.02 rad of noise a sample at 20 Hz: its sense
+    is read against the course on the same chords, so the log's heading is pi/2 - heading, the
+    truth's ENU yaw angle, and the report says it was judged by the track."""
+    d = drive([(5, 0.0, 0.0), (120, SPEED, 0.0), (5, 0.0, 0.0)])
+    noise = np.random.default_rng(11).normal(0, 0.02, len(d))
+    compass = np.mod(math.pi / 2 - d["psi"] + noise, 2 * math.pi)
+    pd.DataFrame({"t": d["t"], "lat": d["lat"], "lon": d["lon"], "v": d["v"], "heading": compass}).to_csv(
+        tmp_path / "truck.csv", index=False, float_format="%.10f")
+    rec = convert(tmp_path / "truck.csv", signals=["v=v[m/s]", "heading=heading[rad]", "lat=lat[deg]", "lon=lon[deg]"],
+                  time="t[s]", wheelbase=4.0)
+    said = rec.report["columns"]["heading"]
+    assert "clockwise from north" in said and "by its turns against the course" in said, said
+    log = rec.log
+    t0 = rec.report["used"]["start"]
+    psi = np.interp(log["t"].to_numpy() + t0, d["t"], d["psi"])
+    err = np.angle(np.exp(1j * (log["heading"].to_numpy() - psi)))
+    assert np.median(np.abs(err)) < 0.05, np.median(np.abs(err))
