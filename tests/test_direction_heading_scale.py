@@ -115,3 +115,36 @@ def test_a_noisy_20_hz_compass_heading_is_turned_to_enu(tmp_path):
     psi = np.interp(log["t"].to_numpy() + t0, d["t"], d["psi"])
     err = np.angle(np.exp(1j * (log["heading"].to_numpy() - psi)))
     assert np.median(np.abs(err)) < 0.05, np.median(np.abs(err))
+
+
+def wandering(n: int, sigma: float, tau: float, rng) -> np.ndarray:
+    """A receiver's position wander: first-order autoregressive noise of std ``sigma`` [m] and
+    correlation time ``tau`` [s] at 20 Hz (slower than the scale's 2 s averaging removes)."""
+    a = math.exp(-1 / (HZ * tau))
+    e = rng.normal(0, sigma * math.sqrt(1 - a * a), n)
+    x = np.zeros(n)
+    for i in range(1, n):
+        x[i] = a * x[i - 1] + e[i]
+    return x
+
+
+@pytest.mark.parametrize("factor", [1.0, math.pi / 180])
+def test_a_course_rate_noisier_than_the_gyro_shrinks_no_scale_into_a_disagreement(tmp_path, factor):
+    """Fixes wandering 0.2 m over 1 s: the gyro regressed on the course rate reads about 0.87 of its
+    true scale (the course's noise shrinks the slope), the course rate on the gyro about 1.01. A gyro
+    true to its unit is no scale disagreement; one 57.3 times too small is named a degrees/radians
+    mix-up (the factor lies between the two regressions)."""
+    d = drive([(5, 0.0, 0.0), (200, SPEED, 0.0), (5, 0.0, 0.0)])
+    rng = np.random.default_rng(1)
+    lat = d["lat"] + np.degrees(wandering(len(d), 0.2, 1.0, rng) / 6.371e6)
+    lon = d["lon"] + np.degrees(wandering(len(d), 0.2, 1.0, rng) / (6.371e6 * math.cos(math.radians(LAT0))))
+    pd.DataFrame({"t": d["t"], "lat": lat, "lon": lon, "v": d["v"], "yaw_rate": d["r"] * factor}).to_csv(
+        tmp_path / "truck.csv", index=False, float_format="%.10f")
+    rec = convert(tmp_path / "truck.csv", signals=["v=v[m/s]", "yaw_rate=yaw_rate[rad/s]", "lat=lat[deg]",
+                                                   "lon=lon[deg]"], time="t[s]", wheelbase=4.0)
+    scale = [f for f in rec.report["audit"]["findings"]
+             if f["kind"] == "scale_disagreement" and "course_rate" in f["channels"]]
+    if factor == 1.0:
+        assert not scale, scale
+    else:
+        assert len(scale) == 1 and "degrees/radians" in scale[0]["meaning"], scale

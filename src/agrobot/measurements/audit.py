@@ -227,6 +227,8 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     width = int(round(SCALE_SPAN / step))
     oks = oka & scale_mask(grid) if scale_mask is not None else oka
     scale = _slope(a, b, oks, okb, k, through_origin, width)
+    back = _slope(b, a, okb, oks, -k, through_origin, width)     # a on b: the noise in a no longer shrinks it
+    reverse = 1.0 / back if math.isfinite(back) and back != 0 else math.nan
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -250,9 +252,10 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         interval = [whole - half, whole + half] if half is not None else None
         scale_interval = None
     if inverted:
-        scale = -scale
+        scale, reverse = -scale, -reverse
         scale_interval = None if scale_interval is None else [-scale_interval[1], -scale_interval[0]]
     return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
+            "scale_reverse": reverse,
             "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags), "inverted": inverted,
             "edge": abs(whole) >= search - 2 * step,
             "scale_share": float(np.sum(oks & okb) / max(1, np.sum(oka & okb)))}
@@ -613,9 +616,11 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
                                                           f"{est['rho']:.2f} with the sign turned)"))
         elif math.isfinite(s) and est["rho"] >= 0.5:
-            off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
+            rev = est.get("scale_reverse", math.nan)
+            off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1]) and \
+                _beyond_noise(s, rev)
             if off:
-                what = _scale_meaning(name, a, b, s) + _scale_stretch(est)
+                what = _scale_meaning(name, a, b, s, rev) + _scale_stretch(est)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
         if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
             course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
@@ -647,8 +652,23 @@ def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
                    f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
 
-def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
+def _beyond_noise(s: float, rev: float) -> bool:
+    """A scale off 1 on both regressions: b on a (shrunk by the noise in a) and the inverse of a on b
+    (grown by the noise in b) bracket the true ratio; one that holds 1 (within SCALE_TOLERANCE) is
+    no disagreement, only noise (a course rate from noisy fixes against a clean gyro)."""
+    if not math.isfinite(rev):
+        return True
+    lo, hi = min(s, rev), max(s, rev)
+    return not lo - SCALE_TOLERANCE <= 1 <= hi + SCALE_TOLERANCE
+
+
+def _scale_meaning(name: str, a: str, b: str, s: float, rev: float = math.nan) -> str:
     text = f"{name}: {b} is {s:.3g} times {a}"
+    if math.isfinite(rev) and abs(rev - s) > 0.02 * abs(s):
+        text += f" ({rev:.3g} by {a} on {b}: the true ratio lies between, the noise shrinking each)"
+    k = 180 / math.pi
+    if any(min(abs(s), abs(rev)) <= f <= max(abs(s), abs(rev)) for f in (k, 1 / k)) if math.isfinite(rev) else False:
+        return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
     if abs(abs(s) - 180 / math.pi) < 3 or abs(abs(s) - math.pi / 180) < 0.002:
         return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
     if abs(s - 3.6) < 0.2 or abs(s - 1 / 3.6) < 0.02:
