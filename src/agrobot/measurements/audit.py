@@ -616,11 +616,8 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
             findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
                                                           f"{est['rho']:.2f} with the sign turned)"))
         elif math.isfinite(s) and est["rho"] >= 0.5:
-            rev = est.get("scale_reverse", math.nan)
-            off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1]) and \
-                _beyond_noise(s, rev)
-            if off:
-                what = _scale_meaning(name, a, b, s, rev) + _scale_stretch(est)
+            if _scale_off(s, siv, est.get("scale_reverse", math.nan)):
+                what = _scale_meaning(name, a, b, s, est.get("scale_reverse", math.nan)) + _scale_stretch(est)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
         if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
             course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
@@ -652,10 +649,13 @@ def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
                    f"{channels[-1]}=-COLUMN, or diagnosis takes it for a fault")
 
 
-def _beyond_noise(s: float, rev: float) -> bool:
-    """A scale off 1 on both regressions: b on a (shrunk by the noise in a) and the inverse of a on b
-    (grown by the noise in b) bracket the true ratio; one that holds 1 (within SCALE_TOLERANCE) is
-    no disagreement, only noise (a course rate from noisy fixes against a clean gyro)."""
+def _scale_off(s: float, siv, rev: float) -> bool:
+    """A scale off 1 by more than SCALE_TOLERANCE, its interval too, and on both regressions: b on a
+    (shrunk by the noise in a) and the inverse of a on b (grown by the noise in b) bracket the true
+    ratio; a bracket that holds 1 is no disagreement, only noise (a course rate from wandering fixes
+    against a clean gyro)."""
+    if not abs(s - 1) > SCALE_TOLERANCE or (siv is not None and siv[0] <= 1 <= siv[1]):
+        return False
     if not math.isfinite(rev):
         return True
     lo, hi = min(s, rev), max(s, rev)
