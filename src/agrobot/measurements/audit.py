@@ -98,7 +98,8 @@ EVIDENCE_S = 30.0       # s: ... on at least this much of the two signals compar
 STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
-SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
+SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named ...
+SCALE_EVIDENCE_S = 10.0     # s: ... read on at least this much of the two signals compared (5 of the 2 s averages)
 MOVING = 0.3            # m/s: the GNSS course is read above this speed ...
 COURSE_SIGMAS = 40.0    # ... where its chord is this many position sigmas long (the course within ~2 deg)
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -615,7 +616,7 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
             findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
                                                           f"{est['rho']:.2f} with the sign turned)"))
-        elif math.isfinite(s) and est["rho"] >= 0.5:
+        elif math.isfinite(s) and est["rho"] >= 0.5 and est["seconds"] >= SCALE_EVIDENCE_S:
             if _scale_off(s, siv, est.get("scale_reverse", math.nan)):
                 what = _scale_meaning(name, a, b, s, est.get("scale_reverse", math.nan)) + _scale_stretch(est)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
