@@ -74,11 +74,12 @@ def _times(folder: Path, spec: str, frame: pd.DataFrame, read) -> np.ndarray:
 def read_tables(folder: Path, ref: dict) -> dict:
     """channel -> (t, x) in SI from [file, time, column, scale(, offset)] per channel."""
     header = None if ref.get("header") == "none" else "infer"
+    sep = r"\s+" if ref.get("sep") == "whitespace" else ","
     cache: dict = {}
 
     def read(path: Path) -> pd.DataFrame:
         if path not in cache:
-            cache[path] = pd.read_csv(path, header=header if header is None else 0)
+            cache[path] = pd.read_csv(path, header=header if header is None else 0, sep=sep)
         return cache[path]
 
     out = {}

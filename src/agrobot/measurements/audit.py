@@ -98,7 +98,8 @@ EVIDENCE_S = 30.0       # s: ... on at least this much of the two signals compar
 STEADY = 0.02          # rad/s: a kinematic yaw rate whose mean is above this (and twice its spread) is a steady turn
 MIN_INPUT_CHANGES = 10  # an input (steering and speed) that changes fewer times gives no lag to judge
 SCALE_SPAN = 2.0        # s: a scale is the slope of both channels averaged over this span
-SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named
+SCALE_TOLERANCE = 0.05  # a scale off 1 by more than this (and its interval) is named ...
+SCALE_EVIDENCE_S = 10.0     # s: ... read on at least this much of the two signals compared (5 of the 2 s averages)
 MOVING = 0.3            # m/s: the GNSS course is read above this speed ...
 COURSE_SIGMAS = 40.0    # ... where its chord is this many position sigmas long (the course within ~2 deg)
 LATERAL = ("ay", "a_y", "lat_acc", "acc_y", "lateral_acceleration")
@@ -227,6 +228,8 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
     width = int(round(SCALE_SPAN / step))
     oks = oka & scale_mask(grid) if scale_mask is not None else oka
     scale = _slope(a, b, oks, okb, k, through_origin, width)
+    back = _slope(b, a, okb, oks, -k, through_origin, width)     # a on b: the noise in a no longer shrinks it
+    reverse = 1.0 / back if math.isfinite(back) and back != 0 else math.nan
     # stretches: up to 8 separate ones of at least 15 s of valid samples
     parts = min(8, int(np.sum(oka & okb) * step // 15.0))
     lags, scales = [], []
@@ -250,9 +253,10 @@ def lag(ta, xa, tb, xb, search: float = SEARCH, mask=None, through_origin: bool 
         interval = [whole - half, whole + half] if half is not None else None
         scale_interval = None
     if inverted:
-        scale = -scale
+        scale, reverse = -scale, -reverse
         scale_interval = None if scale_interval is None else [-scale_interval[1], -scale_interval[0]]
     return {"lag": whole, "interval": interval, "rho": r, "scale": scale, "scale_interval": scale_interval,
+            "scale_reverse": reverse,
             "seconds": float(np.sum(oka & okb) * step), "stretches": len(lags), "inverted": inverted,
             "edge": abs(whole) >= search - 2 * step,
             "scale_share": float(np.sum(oks & okb) / max(1, np.sum(oka & okb)))}
@@ -292,9 +296,20 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
 
 
 # --- the signals that must agree ---------------------------------------------------------------
+RATE_SPAN = 0.25        # s: the course rate is the chords' course differenced this far either side (at least a fix)
+
+
+def rate_step(h: float) -> int:
+    """Fixes either side over which gnss_rates differences the chords' course (RATE_SPAN at a fix
+    interval h): a 20 Hz course differenced per fix is its noise over 0.1 s, larger than a
+    machine's turning (the gyro compared with it is smoothed by the same 2 m h box)."""
+    return max(1, int(round(RATE_SPAN / h))) if h > 0 else 1
+
+
 def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(utc, speed over ground [m/s], course rate [rad/s]) of the receiver's fixes: the course
-    of 1 s chords of the track (a sphere is enough for a rate), NaN where the track is slower
+    of 1 s chords of the track (a sphere is enough for a rate), differenced over rate_step fixes
+    either side (a 2 m h box), NaN where the track is slower
     than MOVING m/s, or than a chord of COURSE_SIGMAS position sigmas, within 1 s of the chord's
     centre (a chord across a stop, where a machine may turn back, has no course)."""
     t = gnss["utc"].to_numpy(float)
@@ -309,7 +324,10 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         if len(t) > 2 * k + 2:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
-            r = np.gradient(course, tc)
+            m = rate_step(h)
+            i = np.arange(len(tc))
+            lo, hi = np.clip(i - m, 0, len(tc) - 1), np.clip(i + m, 0, len(tc) - 1)
+            r = (course[hi] - course[lo]) / np.maximum(tc[hi] - tc[lo], 1e-9)
             sigma = position_noise(east, north)         # the chord long against the fixes' own noise ...
             need = np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
             from scipy.ndimage import minimum_filter1d
@@ -448,7 +466,7 @@ class Auditor:
                 ok = np.isfinite(course_rate)
                 h = float(np.median(np.diff(tg)))
                 t, r = sig[gyro]
-                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * h)    # as the chords smooth it
+                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * rate_step(h) * h)  # as the chords
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
                             lag(tg[ok], course_rate[ok], t, r, search, mask=_good(tg, speed, MOVING, best)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)
@@ -598,10 +616,9 @@ def estimate_offsets(aud: Auditor) -> tuple[dict[str, tuple[float, list, str]], 
         if math.isfinite(s) and s < 0 and est["rho"] >= 0.5 and not est["edge"]:
             findings.append(opposite_sign([a, b], s, siv, f"{name}: {b} is {s:.3g} times {a} (correlation "
                                                           f"{est['rho']:.2f} with the sign turned)"))
-        elif math.isfinite(s) and est["rho"] >= 0.5:
-            off = abs(s - 1) > SCALE_TOLERANCE and (siv is None or not siv[0] <= 1 <= siv[1])
-            if off:
-                what = _scale_meaning(name, a, b, s) + _scale_stretch(est)
+        elif math.isfinite(s) and est["rho"] >= 0.5 and est["seconds"] >= SCALE_EVIDENCE_S:
+            if _scale_off(s, siv, est.get("scale_reverse", math.nan)):
+                what = _scale_meaning(name, a, b, s, est.get("scale_reverse", math.nan)) + _scale_stretch(est)
                 findings.append(finding("scale_disagreement", [a, b], s, siv, "ratio", what))
         if name == "two gyros" and (strong or (math.isfinite(s) and abs(s - 1) > SCALE_TOLERANCE)):
             course = {p[2]: p[3]["scale"] for p in pairs if p[0] == "gyro vs GNSS course" and p[2] in (a, b)}
@@ -636,8 +653,26 @@ def opposite_sign(channels: list[str], s: float, interval, what: str) -> dict:
 SPEED_CHANNELS = ("v", "gnss_speed", "track_speed", "speed_cmd")    # a km/h vs m/s mix-up needs two speeds
 
 
-def _scale_meaning(name: str, a: str, b: str, s: float) -> str:
+def _scale_off(s: float, siv, rev: float) -> bool:
+    """A scale off 1 by more than SCALE_TOLERANCE, its interval too, and on both regressions: b on a
+    (shrunk by the noise in a) and the inverse of a on b (grown by the noise in b) bracket the true
+    ratio; a bracket that holds 1 is no disagreement, only noise (a course rate from wandering fixes
+    against a clean gyro)."""
+    if not abs(s - 1) > SCALE_TOLERANCE or (siv is not None and siv[0] <= 1 <= siv[1]):
+        return False
+    if not math.isfinite(rev):
+        return True
+    lo, hi = min(s, rev), max(s, rev)
+    return not lo - SCALE_TOLERANCE <= 1 <= hi + SCALE_TOLERANCE
+
+
+def _scale_meaning(name: str, a: str, b: str, s: float, rev: float = math.nan) -> str:
     text = f"{name}: {b} is {s:.3g} times {a}"
+    if math.isfinite(rev) and abs(rev - s) > 0.02 * abs(s):
+        text += f" ({rev:.3g} by {a} on {b}: the true ratio lies between, the noise shrinking each)"
+    k = 180 / math.pi
+    if any(min(abs(s), abs(rev)) <= f <= max(abs(s), abs(rev)) for f in (k, 1 / k)) if math.isfinite(rev) else False:
+        return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
     if abs(abs(s) - 180 / math.pi) < 3 or abs(abs(s) - math.pi / 180) < 0.002:
         return text + ": a degrees/radians mix-up (declare the unit with --signal COLUMN=EXPR[unit])"
     if (abs(s - 3.6) < 0.2 or abs(s - 1 / 3.6) < 0.02) and a in SPEED_CHANNELS and b in SPEED_CHANNELS:

@@ -128,19 +128,23 @@ def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
 
 def by_heading(t, c, rate, heading, what: str = "the heading") -> tuple[np.ndarray, str] | None:
     """Evidence (+1 forward, -1 reversing, 0 none) from a heading (module docstring), or None when
-    its rate does not follow the course's (in rank, and in size within SCALE where both turn)."""
+    its rate does not follow the course's: in rank, and in size within SCALE where both turn (a
+    heading that never turns while the course does, a gyro written 57.3 times too small, fails: it
+    tells no U-turn from a reversal). Both rates are read on the same chords (angle_rate)."""
     th, h = heading
     inside = (t >= th[0]) & (t <= th[-1]) & np.isfinite(c)
     if inside.sum() < 20:
         return None
     hu = np.interp(t, th, np.unwrap(h))
-    hr = np.gradient(hu, t)
-    ok = inside & np.isfinite(rate)
+    hr = angle_rate(t, hu)          # on the course rate's chords: a 20 Hz heading's noise not differentiated per step
+    ok = inside & np.isfinite(rate) & np.isfinite(hr)
     if ok.sum() < 20 or np.std(rate[ok]) == 0 or np.std(hr[ok]) == 0:
         return None
     sense = rank_correlation(rate[ok], hr[ok])
     turning = ok & (np.abs(rate) > TURNING) & (np.abs(hr) > TURNING)
-    size = float(np.median(np.abs(rate[turning] / hr[turning]))) if turning.sum() >= 20 else 1.0
+    course_turns = int(np.sum(ok & (np.abs(rate) > TURNING))) >= 20
+    size = float(np.median(np.abs(rate[turning] / hr[turning]))) if turning.sum() >= 20 else \
+        (math.inf if course_turns else 1.0)     # the course turns, the heading never does
     if not abs(sense) > 0.3 or not 1 / SCALE <= size <= SCALE:
         return None
     diff = _wrap(c - math.copysign(1.0, sense) * hu)

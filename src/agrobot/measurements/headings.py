@@ -20,20 +20,20 @@ from .direction import angle_rate, course, rank_correlation
 SENSE = 0.3             # the least |correlation| of the heading's rate with the course's that decides its sense
 
 
-def sense(gnss, t: np.ndarray, psi: np.ndarray) -> int:
-    """+1 when the heading turns with the course (anticlockwise), -1 against it, 0 undecided."""
+def sense(gnss, t: np.ndarray, psi: np.ndarray) -> tuple[int, float | None]:
+    """(+1 when the heading turns with the course (anticlockwise), -1 against it, 0 undecided; the
+    rank correlation of the two rates, None without a track to judge by). Both rates are read on the
+    same chords (direction.angle_rate): a 20 Hz heading differenced per sample is its noise."""
     if gnss is None or len(gnss) < 20 or len(t) < 20:
-        return 0
+        return 0, None
     tc, c, _ = course(gnss)
     rate = angle_rate(tc, c)
-    inside = (tc >= t[0]) & (tc <= t[-1]) & np.isfinite(rate)
-    if inside.sum() < 20:
-        return 0
-    hr = np.gradient(np.interp(tc, t, np.unwrap(psi)), tc)
-    if np.std(rate[inside]) == 0 or np.std(hr[inside]) == 0:
-        return 0
+    hr = angle_rate(tc, np.interp(tc, t, np.unwrap(psi)))
+    inside = (tc >= t[0]) & (tc <= t[-1]) & np.isfinite(rate) & np.isfinite(hr)
+    if inside.sum() < 20 or np.std(rate[inside]) == 0 or np.std(hr[inside]) == 0:
+        return 0, None
     rho = rank_correlation(rate[inside], hr[inside])
-    return 0 if not abs(rho) >= SENSE else (1 if rho > 0 else -1)
+    return (0 if not abs(rho) >= SENSE else (1 if rho > 0 else -1)), rho
 
 
 def as_yaw(streams, declared: bool) -> None:
@@ -46,14 +46,16 @@ def as_yaw(streams, declared: bool) -> None:
         x = np.radians(x)
         said.append("no unit declared: its values reach beyond 2 pi, so degrees (declare one with --signal "
                     "heading=COLUMN[unit])")
-    turns = sense(streams.gnss, t, x)
+    turns, rho = sense(streams.gnss, t, x)
     compass = turns < 0 or (turns == 0 and degrees)
     if compass:
         x = math.pi / 2 - x
+    why = "no track to judge by" if rho is None else \
+        f"the track does not decide: its rate correlates {rho:+.2f} with the course's, |rho| below {SENSE}"
     said.append(("clockwise from north (a compass heading): psi = pi/2 - heading" if compass else
                  "anticlockwise from east (ENU)") + (" by its turns against the course of the fixes" if turns else
-                                                    " as receivers write it (no track to judge by)" if compass
-                                                    else " (no track to judge by)"))
+                                                    f" as receivers write it ({why})" if compass
+                                                    else f" ({why})"))
     streams.signals["heading"] = (t, np.unwrap(x))
     columns = streams.report.setdefault("columns", {})
     columns["heading"] = columns.get("heading", "heading") + "; " + "; ".join(said) + "; the yaw angle a gyro-less " \
