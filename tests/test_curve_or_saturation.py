@@ -51,3 +51,19 @@ def test_a_curve_on_a_car_saturating_at_one_speed_cannot_be_told_from_the_satura
     assert "steering_ratio_curve" in ties, (sel.inconclusive, sel.trace)
     why = ties["steering_ratio_curve"]["why"]
     assert "collinear in delta and a_y" in why and "correlate at 1.000" in why, why
+
+
+def test_a_curve_on_a_car_saturating_at_three_speeds_is_tied_by_the_fit_not_the_driving():
+    """The same car driven at 15, 25 and 35 m/s: its turns are not collinear, so a tie is not the driving's
+    to blame. The catalogue's Magic Formula tyre fitted beside the curve does not follow this truth's tyre
+    (F = C alpha / (1 + |alpha| / alpha_s) bends from the smallest slip): no curve is concluded alone, and
+    the tie says that the turns would separate the two and that the joint fit does not."""
+    selector = Selector(replay(), 0.05, screen=False,
+                        saturation={"friction": 1.0, "shape": 1.3, "held_out_gain": 0.2})
+    selector.catalogue = [e for e in selector.catalogue if e.id in MAPS + ("tyre_saturation",)]
+    sel = selector.run()
+    maps = {f.effect.id for f in sel.effects} & set(MAPS)
+    ties = {t["effects"][0]: t for t in sel.inconclusive if t.get("undecided") and t["effects"][1] == "tyre_saturation"}
+    assert maps <= set(ties), (maps, sel.inconclusive, sel.trace)
+    why = ties["steering_ratio_curve"]["why"]
+    assert "its turns are not collinear" in why and "the tie is the joint fit's" in why, why

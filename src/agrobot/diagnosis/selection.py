@@ -43,6 +43,11 @@ into the yaw stage (a car's 0.05 deg on a quarter of a degree) is judged as on a
 (Selector.through_noise, diagnosis.reading_noise): fitted by corrected least squares, its held-out
 gain of the yaw rate's RMS net of the noise's passage, and reported so.
 
+A steering map that lowers the yaw gain in hard turns, on a log driven into the tyres, is told from tyre
+saturation only with the saturation fitted beside it (Selector.map_or_saturation); a ratio curve on a log
+whose hard turns are collinear in delta and a_y (one speed, diagnosis.curve_or_saturation) is tied with it
+whatever the fits say, the turns' correlation given.
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
