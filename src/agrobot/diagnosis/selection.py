@@ -43,6 +43,11 @@ into the yaw stage (a car's 0.05 deg on a quarter of a degree) is judged as on a
 (Selector.through_noise, diagnosis.reading_noise): fitted by corrected least squares, its held-out
 gain of the yaw rate's RMS net of the noise's passage, and reported so.
 
+A steering map that lowers the yaw gain in hard turns, on a log driven into the tyres, is told from tyre
+saturation only with the saturation fitted beside it (Selector.map_or_saturation); a ratio curve on a log
+whose hard turns are collinear in delta and a_y (one speed, diagnosis.curve_or_saturation) is tied with it
+whatever the fits say, the turns' correlation given.
+
 Each effect of the final model is reported by its drop-one comparison: the final model against
 the final model refitted without it (held-out RMS per stage with and without it).
 """
@@ -68,6 +73,7 @@ from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
 from .catalogue import CATALOGUE, SIGNALS
+from .curve_or_saturation import COLLINEAR, Collinearity, turn_collinearity
 from .effect import Effect, Parameter
 from .effects.steering_offset import SPEED_KEY, WHEELBASE_KEY
 from .effects.steering_ratio_curve import DELTA_KEY
@@ -400,14 +406,24 @@ class Selector:
         delta, the saturation's with a_y. The map is told apart only where it stays supported with the
         saturation fitted beside it and the tyre's shape off its bound (on it the tyre curve cannot
         follow the bend, and the map may hold the rest of it); otherwise a tie, "cannot decide", both
-        named, however far apart their dBIC. Saturation never raises the gain: a map that does is kept."""
+        named, however far apart their dBIC. Saturation never raises the gain: a map that does is kept.
+        A ratio curve on a log whose hard turns are collinear in delta and a_y (one speed:
+        curve_or_saturation.turn_collinearity) is tied whatever the fits say, saturation tried with
+        evidence or not: there a bend with delta is a bend with a_y."""
         by_id = {f.effect.id: f for f in first}
         sat = by_id.get("tyre_saturation")
-        if sat is None or sat.delta_bic >= 0 or not drives_into_tyres(self.replay):
+        if sat is None or not drives_into_tyres(self.replay):
             return []
         maps = [m for m in members if m.id in ATTENUATED and m.id in by_id]
         if not any(self.lowers(m.id, model.values) for m in maps):
             return []
+        turns = turn_collinearity(self.replay)
+        collinear = turns is not None and turns.collinear and self.lowers("steering_ratio_curve", model.values) \
+            and any(m.id == "steering_ratio_curve" for m in maps)
+        if sat.delta_bic >= 0:       # no evidence of its own: only the collinear curve is tied with it
+            if not collinear:
+                return []
+            maps = [m for m in maps if m.id == "steering_ratio_curve"]
         tyre = next((m for m in members if m.id == "tyre_saturation"), None)
         if tyre is None:             # the saturation fitted beside the maps
             tyre, joint = sat.effect, merged(model, self.add(model, members, sat.effect).fit)
@@ -419,14 +435,13 @@ class Selector:
         ties = []
         for effect in maps:          # a gain above 1 beside a falling curve: the small turns' part of the same bend
             kept = self.drop(joint, members, effect)
-            if kept.supported and not edge:
+            one_curve = collinear and effect.id == "steering_ratio_curve"
+            if kept.supported and not edge and not one_curve:
                 continue
-            why = (f"with the saturation fitted beside it its shape ends on its {edge} bound (the tyre curve cannot "
-                   f"follow the bend; the map may hold the rest of it)" if edge else
-                   "with the saturation fitted beside it the map is not supported (" + "; ".join(kept.reasons) + ")")
             ties.append({**_tie(by_id[effect.id], sat, ""), "undecided": True,
-                         "why": f"both lower the yaw gain in the hard turns (the map with delta, the saturation with "
-                                f"a_y) and this log does not tell them apart: {why}"})
+                         "why": "both lower the yaw gain in the hard turns (the map with delta, the saturation with "
+                                "a_y) and this log does not tell them apart: "
+                                + bend_reason(kept, edge, turns if effect.id == "steering_ratio_curve" else None)})
         return ties
 
     @staticmethod
@@ -665,6 +680,23 @@ class Selector:
             else:
                 trace.append(f"= {f.id} stays: {text}")
         return model, members
+
+
+def bend_reason(kept: Finding, edge: str | None, turns: Collinearity | None) -> str:
+    """Why a map lowering the yaw gain is not told from tyre saturation: the turns collinear in delta and
+    a_y (``turns``, curve_or_saturation), the tyre's shape on its ``edge``, or the map not supported beside
+    the saturation (``kept``: its drop-one test); a curve's reason states the turns' correlation."""
+    if turns is not None and turns.collinear:
+        return (f"its hard turns are collinear in delta and a_y ({turns.text()}; >= {COLLINEAR:g}): a bend with "
+                f"delta is then a bend with a_y, and no fit tells a ratio curve from a tyre curve; turns at one "
+                f"angle driven at two or more speeds would")
+    why = (f"with the saturation fitted beside it its shape ends on its {edge} bound (the tyre curve cannot "
+           f"follow the bend; the map may hold the rest of it)" if edge else
+           "with the saturation fitted beside it the map is not supported (" + "; ".join(kept.reasons) + ")")
+    if turns is not None:
+        why += (f"; its turns are not collinear ({turns.text()} < {COLLINEAR:g}): the tie is the joint fit's (the "
+                f"tyre curve's form fitted against the map's), not the driving's")
+    return why
 
 
 def restaged(effect: Effect, replay: Replay) -> Effect:
