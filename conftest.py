@@ -129,15 +129,15 @@ FILE_CPU_S = {
     "test_hardware_io.py": (3, 75),   # slow: earlier
     "test_verdicts_truths.py": (1, 75),   # slow: earlier
     "test_steering_map_causes.py": (0, 63),   # slow: earlier
-    "test_whole_field.py": (9, 50),   # slow: earlier
-    "test_field_recordings.py": (17, 35),   # slow: earlier
+    "test_whole_field.py": (9, 54),
+    "test_field_recordings.py": (17, 45),
     "test_tree.py": (2, 36),   # slow: earlier
     "test_diagnosis.py": (0, 35),   # slow: earlier
     "test_live_viewers.py": (5, 30),   # slow: earlier
     "test_margins.py": (13, 21),   # slow: earlier
     "test_real_recordings.py": (6, 20),   # slow: earlier
     "test_install.py": (0, 20),   # slow: earlier
-    "test_diagnosis_split.py": (3, 17),   # slow: earlier
+    "test_diagnosis_split.py": (2, 17),   # slow: earlier
     "test_reliability.py": (2, 17),   # slow: earlier
     "test_other_data.py": (7, 12),   # slow: earlier
     "test_sweep_judged.py": (18, 0),
