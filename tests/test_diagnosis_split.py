@@ -20,16 +20,29 @@ def baseline():
     return baseline_from_study(Study.load(BASELINES["tractor"]))
 
 
-def test_a_log_driven_alike_throughout_holds_out_its_last_part(baseline):
-    frame, _ = make_log(1000, None, duration=240.0)
+@pytest.fixture(scope="module")
+def alike_log():
+    """The clean 240 s log driven alike throughout, made once (each test replays a copy)."""
+    return make_log(1000, None, duration=240.0)[0]
+
+
+@pytest.fixture(scope="module")
+def hard_log():
+    """The 240 s log of the same seed at 1-1.5 m/s, then 3-3.5 m/s for its last 100 s (GENTLE_THEN_HARD),
+    made once."""
+    return make_log(1000, None, duration=240.0, speeds=GENTLE_THEN_HARD)[0]
+
+
+def test_a_log_driven_alike_throughout_holds_out_its_last_part(baseline, alike_log):
+    frame = alike_log.copy()
     replay = Replay(frame, baseline)
     assert replay.split == "tail" and replay.split_note is None
     t = replay.t
     assert np.array_equal(replay.masks["steering"]["test"], t >= t[0] + 0.6 * (t[-1] - t[0]))
 
 
-def test_a_log_driven_harder_at_its_end_holds_out_every_third_window(baseline):
-    frame, _ = make_log(1000, None, duration=240.0, speeds=GENTLE_THEN_HARD)
+def test_a_log_driven_harder_at_its_end_holds_out_every_third_window(baseline, hard_log):
+    frame = hard_log.copy()
     replay = Replay(frame, baseline)
     assert replay.split == "blocks"
     assert "driven beyond its first" in replay.split_note and "--split tail" in replay.split_note
@@ -49,10 +62,9 @@ def test_a_log_driven_harder_at_its_end_holds_out_every_third_window(baseline):
     assert np.array_equal(replay.unseen(t), held)
 
 
-def test_the_split_can_be_forced_either_way(baseline):
-    hard, _ = make_log(1000, None, duration=240.0, speeds=GENTLE_THEN_HARD)
+def test_the_split_can_be_forced_either_way(baseline, alike_log, hard_log):
+    hard, alike = hard_log.copy(), alike_log.copy()
     assert Replay(hard, baseline, split="tail").split == "tail"
-    alike, _ = make_log(1000, None, duration=240.0)
     assert Replay(alike, baseline, split="blocks").split == "blocks"
     with pytest.raises(ValueError, match="split 'last'"):
         Replay(alike, baseline, split="last")
