@@ -1,0 +1,43 @@
+"""Each axle's own peak friction in the tyre-saturation fit: why the understeer gradient needs it.
+
+With the simplified Magic Formula per axle, F / F_z = mu sin(C atan(B alpha)), B = c / (C mu)
+(c = C_alpha / F_z, components.models.tyre), each axle in a steady turn carries F / F_z = a_y / g,
+so its slip angle is alpha = (C mu / c) tan(asin(a_y / (g mu)) / C), and the steady turn reads
+
+    delta - L / R = alpha_f - alpha_r.
+
+One mu and one C on both axles make this K h(a_y) with h(a) = g C mu tan(asin(a / (g mu)) / C),
+h'(0) = 1, K = (1/c_f - 1/c_r) / g (Rajamani 3.3 per unit load): the whole understeer curve past
+the linear range is K times a shape the friction alone sets. A vehicle whose front axle lets go
+before its rear (a front-heavy roll-stiffness split, smaller front tyres, the lateral load transfer
+that every car has: every production car is tuned to understeer at the limit) has limit understeer
+that grows faster than its K predicts; with one mu the fit can only raise K to reach it, and its
+shape C runs to the bound where h bends earliest. With mu_f and mu_r = rho mu_f the bend of each
+axle is its own and K is again the slope at a_y = 0, the quantity the steady turns measure
+(delta = L / R + K a_y in the linear range). rho = 1 is the single-friction model, so nothing is lost
+where the axles let go together.
+
+The fit's parameter is rho (``FRICTION_RATIO``); the Magic Formula's ``mu`` stays the front's
+(``friction``). The linear range ends where the first axle bends (first_to_bend).
+"""
+from __future__ import annotations
+
+import math
+
+from agrobot.estimation import Parameter
+
+RATIO_BOUNDS = (0.5, 2.0)       # rear / front peak friction: load transfer and tyre sizing stay well inside
+
+
+def friction_ratio() -> Parameter:
+    """The free parameter rho = mu_r / mu_f of the tyre-saturation fit (1: one friction on both axles)."""
+    return Parameter("friction_ratio", "1", 0.1, *RATIO_BOUNDS,
+                     meaning="rear tyre friction over the front's, mu_r / mu_f (below 1 the rear lets go first)")
+
+
+def first_to_bend(mu: float, mu_sd: float, ratio: float, ratio_sd: float) -> tuple[float, float, str]:
+    """(the friction of the axle that bends first, min(mu_f, rho mu_f), its std by the delta method
+    on independent mu_f and rho, which axle): the linear range of a steady turn ends at its bend."""
+    if ratio >= 1.0:
+        return mu, mu_sd, "front"
+    return mu * ratio, math.hypot(ratio * mu_sd, mu * ratio_sd), "rear"

@@ -1,0 +1,52 @@
+"""The understeer gradient of a car whose front tyres let go before its rear ones (the generated sports
+car of test_identify_hard_driving: K = m / L (l_r / C_f - l_f / C_r), Rajamani 3.3, Magic Formula
+tyres with front mu 1.1 and rear mu 1.6), driven hard: half of the time above |a_y| = 4 m/s2. With one
+friction on both axles the steady turn past the linear range is K h(a_y), h set by the friction and
+the shape alone (identification.axle_friction), so the fit raised K to reach the limit understeer
+and ran its shape to the bound where the tyres bend earliest; each axle's own friction gives K back
+as the slope at a_y = 0, concluded, and says which axle lets go first. The fitted ratio enters the
+C kernel and the Python path alike, and moves the yaw rate only where the tyres bend."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from agrobot.identification.ordinary_driving import identify_driving
+from agrobot.orchestrator.study import load_study
+from tests.test_identify_hard_driving import CAR, K_TRUE, drive
+from tests.test_single_track_kernel import SETS, assert_close, both, driving_log
+
+FRONT_MU, REAR_MU = 1.1, 1.6
+
+
+@pytest.fixture(scope="module")
+def report():
+    c = drive(seconds=200.0, steer=0.045, friction=FRONT_MU, rear_friction=REAR_MU)
+    frame = pd.DataFrame({"t": c["t"], "delta": c["delta"], "v": c["vx"], "yaw_rate": c["yawRate"]})
+    assert np.mean(np.abs(frame.v * frame.yaw_rate) > 4.0) > 0.4         # driven hard: the bend weighs
+    return identify_driving(frame, "generated", load_study(CAR), wheelbase=2.4)
+
+
+def test_the_limit_understeer_of_a_front_letting_go_first_is_not_read_as_K(report):
+    K = report["understeer_gradient"]
+    assert report["final_model"] == "tyre_saturation"
+    assert K["identifiable"], K.get("note")
+    assert abs(K["value"] - K_TRUE) <= 0.05 * K_TRUE, (K["value"], K_TRUE)
+    assert K["interval"][0] <= K_TRUE * 1.02 and K["interval"][1] >= K_TRUE * 0.98
+
+
+def test_the_front_is_said_to_let_go_first(report):
+    ratio = report["tyre_saturation"]["parameters"]["friction_ratio"]
+    assert ratio["value"] > 1.1 and ratio["interval"][0] > 1.0
+    assert "front axle (the first to bend)" in report["linear_range"]["how"]
+
+
+@pytest.mark.parametrize("model", ["bicycle", "rlf"])
+def test_the_rear_friction_moves_the_yaw_in_the_kernel_and_the_python_path_alike(model):
+    log = driving_log()
+    sets = [{**v, "friction": 0.25, "shape": 1.3, "friction_ratio": ratio} for v in SETS[:2] for ratio in (1.0, 0.5)]
+    ref, got = both(model, sets, log)
+    assert_close(ref, got)
+    for i in (0, 2):                  # the rear letting go first turns the car more (oversteer)
+        assert np.max(np.abs(ref[0][i + 1] - ref[0][i])) > 0.05 * np.max(np.abs(ref[0][i]))
