@@ -26,6 +26,8 @@ import math
 
 from agrobot.estimation import Parameter
 
+from .driving import understeer_gradient
+
 RATIO_BOUNDS = (0.5, 2.0)       # rear / front peak friction: load transfer and tyre sizing stay well inside
 
 
@@ -41,3 +43,28 @@ def first_to_bend(mu: float, mu_sd: float, ratio: float, ratio_sd: float) -> tup
     if ratio >= 1.0:
         return mu, mu_sd, "front"
     return mu * ratio, math.hypot(ratio * mu_sd, mu * ratio_sd), "rear"
+
+
+# the per-axle fit's evaluations: its ten parameters and the tyres' bend leave the 40 of the other
+# fits short of converging on a log driven hard (it stops on its budget, not its tolerance)
+SATURATION_EVALUATIONS = 80
+BIC_MARGIN = 10.0           # as the saturation's own verdict: dBIC below -10 keeps the extra parameter
+
+
+def axle_friction_fit(fit, single, free: list, start: dict, notes: list[str]):
+    """(the tyre-saturation fit, its free parameters): ``single`` (one friction on both axles)
+    unless the same model with rho free (``fit(free, start, evaluations)``, from ``start`` at rho = 1) lowers the
+    BIC by more than BIC_MARGIN; the choice is said in ``notes`` with what it passed over."""
+    free_both = [*free, friction_ratio()]
+    both = fit(free_both, {**start, "friction_ratio": 1.0}, SATURATION_EVALUATIONS)
+    dbic = both.bic - single.bic
+    rho = both.values["friction_ratio"]
+    if dbic < -BIC_MARGIN:
+        notes.append(f"tyre friction per axle: rear / front {rho:.3g} kept (dBIC {dbic:.0f} against one friction on "
+                     f"both axles, whose K {understeer_gradient(single.values['c_f'], single.values['c_r']):.3g} rad/(m/s2) is passed over: it takes up the limit "
+                     f"understeer of the axle that lets go first)")
+        return both, free_both
+    notes.append(f"tyre friction: one on both axles (a rear / front ratio {rho:.3g} fitted lowers the BIC by "
+                 f"{-dbic:.1f}, not more than {BIC_MARGIN:g}: passed over)")
+    return single, free
+

@@ -57,7 +57,7 @@ from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
-from .axle_friction import first_to_bend, friction_ratio
+from .axle_friction import axle_friction_fit, first_to_bend
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
 LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
@@ -83,9 +83,6 @@ def cornering_bounds(vehicle: Vehicle) -> tuple[float, float]:
 # peak slip of 0.05 rad (C about 1.5) gives about 60; a fit beyond means something else (a scale)
 CORNERING_LIMIT = (0.5, 60.0)
 WIDENED_ON_BOUND = ("c_f", "c_r", "friction")
-# the tyre-saturation fit's evaluations: its ten parameters and the tyres' bend leave the linear fit's
-# 40 short of converging on a log driven hard (it stops on its budget, not its tolerance)
-SATURATION_EVALUATIONS = 80
 
 
 def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, saturation: bool,
@@ -109,8 +106,7 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
         mu_lo, mu_hi = vehicle.friction_range
         out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, limit=vehicle.physical_limits()["tyre_friction"],
                           meaning="front tyre friction coefficient mu (peak force / load)"),
-                Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C"),
-                friction_ratio()]          # each axle its own bend, or K takes up the limit understeer
+                Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C")]
     return out
 
 
@@ -536,13 +532,14 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
         mu0 = float(np.clip(1.25 * np.percentile(ay_fit, 99) / GRAVITY, *vehicle.friction_range))
         nl = None
         for mu_start in (mu0, 0.9 * vehicle.friction_range[1]):      # near the data's top; else nearly linear
-            trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3, "friction_ratio": 1.0},
-                        fixed, fit_segs, max_nfev=SATURATION_EVALUATIONS)
+            trial = fit(model, free_nl, {**linear.values, "friction": mu_start, "shape": 1.3}, fixed, fit_segs)
             work.step()
             if nl is None or trial.rss_total < nl.rss_total:
                 nl = trial
-            if trial.rss_total <= linear.rss_total and not trial.at_bound(next(q for q in free_nl if q.name == "friction")):
+            if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
+        nl, free_nl = axle_friction_fit(lambda free_a, start_a, n: fit(model, free_a, start_a, fixed, fit_segs, max_nfev=n),
+                                        nl, free_nl, {**linear.values, "friction": mu0, "shape": 1.3}, notes)
     linear, free = widened_refit(model, linear, free, fixed, fit_segs, notes, say)
     nl, free_nl = widened_refit(model, nl, free_nl, fixed, fit_segs, notes, say)
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
