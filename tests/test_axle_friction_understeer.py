@@ -50,3 +50,30 @@ def test_the_rear_friction_moves_the_yaw_in_the_kernel_and_the_python_path_alike
     assert_close(ref, got)
     for i in (0, 2):                  # the rear letting go first turns the car more (oversteer)
         assert np.max(np.abs(ref[0][i + 1] - ref[0][i])) > 0.05 * np.max(np.abs(ref[0][i]))
+
+
+def test_the_ratio_is_kept_on_its_residuals_not_on_its_autocorrelation():
+    """Two nested fits of one log (the f1tenth car of test_steady_state_linear_range, one friction on
+    both axles): the ratio moves the RSS by 0.05 % but its residuals' n_eff by 6.5 of 685, which at
+    ln(RSS / n) = -8.7 is a BIC 56 lower by itself. Compared at the one-friction fit's n_eff the ratio
+    gains 0.3 against a penalty of 6.5: passed over, the one-friction fit returned; a ratio that halves
+    the RSS (the Ferrari 250 LM's) is kept."""
+    from agrobot.estimation import FitResult
+    from agrobot.identification.axle_friction import BIC_MARGIN, axle_friction_fit, friction_ratio
+    from agrobot.identification.ordinary_driving import free_parameters
+    from agrobot.identification.vehicle import Vehicle
+
+    free = free_parameters(Vehicle(kind="scale_car"), False, False, saturation=True)
+
+    def result(params, rss, n_eff, ratio=1.0):
+        return FitResult({"c_f": 8.0, "c_r": 30.0, "friction_ratio": ratio}, tuple(params),
+                         np.zeros((len(params), len(params))), {"yaw": rss}, {"yaw": 1982}, {"yaw": n_eff})
+
+    single = result(free, 0.343087, 684.5)
+    for rss_both, kept in ((0.342931, False), (0.5 * 0.343087, True)):
+        notes: list[str] = []
+        both_fit = result([*free, friction_ratio()], rss_both, 691.0, ratio=0.94)
+        assert both_fit.bic < single.bic - BIC_MARGIN          # on each fit's own n_eff: "kept"
+        chosen, free_chosen = axle_friction_fit(lambda *_: both_fit, single, free, {}, notes)
+        assert (chosen is both_fit) == kept and (len(free_chosen) == len(free) + 1) == kept, notes
+        assert ("kept" in notes[0]) == kept and ("one on both axles" in notes[0]) != kept

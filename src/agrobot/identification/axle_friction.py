@@ -23,6 +23,7 @@ The fit's parameter is rho (``FRICTION_RATIO``); the Magic Formula's ``mu`` stay
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from agrobot.estimation import Parameter
 
@@ -54,17 +55,20 @@ BIC_MARGIN = 10.0           # as the saturation's own verdict: dBIC below -10 ke
 def axle_friction_fit(fit, single, free: list, start: dict, notes: list[str]):
     """(the tyre-saturation fit, its free parameters): ``single`` (one friction on both axles)
     unless the same model with rho free (``fit(free, start, evaluations)``, from ``start`` at rho = 1) lowers the
-    BIC by more than BIC_MARGIN; the choice is said in ``notes`` with what it passed over."""
-    free_both = [*free, friction_ratio()]
+    BIC by more than BIC_MARGIN, both at the n_eff of ``single`` (FitResult.bic_at: each fit's own n_eff
+    moves the BIC by more than the margin where rho changes nothing); the choice is said in ``notes``
+    with what it passed over."""
+    free_both = [replace(q, meaning=f"front {q.meaning}") if q.name == "friction" else q for q in free]
+    free_both.append(friction_ratio())
     both = fit(free_both, {**start, "friction_ratio": 1.0}, SATURATION_EVALUATIONS)
-    dbic = both.bic - single.bic
+    dbic = both.bic_at(single.n_eff_total) - single.bic
     rho = both.values["friction_ratio"]
     if dbic < -BIC_MARGIN:
         notes.append(f"tyre friction per axle: rear / front {rho:.3g} kept (dBIC {dbic:.0f} against one friction on "
                      f"both axles, whose K {understeer_gradient(single.values['c_f'], single.values['c_r']):.3g} rad/(m/s2) is passed over: it takes up the limit "
                      f"understeer of the axle that lets go first)")
         return both, free_both
-    notes.append(f"tyre friction: one on both axles (a rear / front ratio {rho:.3g} fitted lowers the BIC by "
-                 f"{-dbic:.1f}, not more than {BIC_MARGIN:g}: passed over)")
+    notes.append(f"tyre friction: one on both axles (a rear / front ratio {rho:.3g} fitted changes the BIC by "
+                 f"{dbic:+.1f}, not below -{BIC_MARGIN:g}: passed over)")
     return single, free
 

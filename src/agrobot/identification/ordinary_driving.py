@@ -105,7 +105,7 @@ def free_parameters(vehicle: Vehicle, command_input: bool, fit_bias: bool, satur
     if saturation:
         mu_lo, mu_hi = vehicle.friction_range
         out += [Parameter("friction", "1", 0.3, mu_lo, mu_hi, limit=vehicle.physical_limits()["tyre_friction"],
-                          meaning="front tyre friction coefficient mu (peak force / load)"),
+                          meaning="tyre friction coefficient mu (peak force / load)"),
                 Parameter("shape", "1", 0.3, *SHAPE_BOUNDS, meaning="Magic Formula shape factor C")]
     return out
 
@@ -1178,9 +1178,11 @@ def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: f
         eps = 1e-4
         d_share = (linear_share_limit(min(shape + eps, SHAPE_BOUNDS[1])) - linear_share_limit(shape - eps)) / (2 * eps)
         lr_sd = GRAVITY * math.hypot(share * mu_sd, mu * d_share * np.nan_to_num(nl.std("shape")))
+        per_axle = "friction_ratio" in nl.names          # one friction on both axles: no axle to name
+        whose, mu_said = (f"of the {axle} axle (the first to bend) ", f"mu {mu:.3g}, ") if per_axle else ("", "")
         return {**_quantity(lin_range, lr_sd, "m/s2"),
-                "how": f"where the Magic Formula's force of the {axle} axle (the first to bend) falls 5 % below the "
-                       f"linear tyre's: |a_y| = mu g x {share:.3f} (mu {mu:.3g}, shape {shape:.2f})", "saturation": True}
+                "how": f"where the Magic Formula's force {whose}falls 5 % below the linear tyre's: |a_y| = mu g "
+                       f"x {share:.3f} ({mu_said}shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
     return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2", "at_least": True,
             "how": "no saturation found: the linear model holds over the whole log, whose largest |a_y| (99th "
