@@ -77,3 +77,18 @@ def test_the_ratio_is_kept_on_its_residuals_not_on_its_autocorrelation():
         chosen, free_chosen = axle_friction_fit(lambda *_: both_fit, single, free, {}, notes)
         assert (chosen is both_fit) == kept and (len(free_chosen) == len(free) + 1) == kept, notes
         assert ("kept" in notes[0]) == kept and ("one on both axles" in notes[0]) != kept
+
+
+def test_the_diagnosis_repeats_a_friction_per_axle_as_the_fronts_with_the_ratio():
+    """identify's friction with a rear / front ratio kept is the front axle's: diagnose tells it with
+    the ratio, and one friction on both axles as before."""
+    import types
+
+    from agrobot.diagnosis.pipeline import agreement
+
+    identified = {"tyre_saturation": {"friction": 1.08, "friction_at_least": False, "shape": 1.1,
+                                      "friction_ratio": 1.4, "held_out_gain": 0.3}}
+    lines = agreement(identified, [], types.SimpleNamespace(first_step=[]))
+    assert any("friction 1.08 front, rear / front 1.4," in line for line in lines), lines
+    identified["tyre_saturation"]["friction_ratio"] = 1.0
+    assert any("friction 1.08," in line for line in agreement(identified, [], types.SimpleNamespace(first_step=[])))
