@@ -35,11 +35,11 @@ SHAPE = 1.3                             # Magic Formula C of the saturating tyre
 
 
 def drive(seconds: float = 120.0, seed: int = 7, steer: float = 0.03, friction: float | None = None,
-          rear: float = CR) -> dict:
+          rear: float = CR, rear_friction: float | None = None) -> dict:
     """t, delta (road wheel), vx, yawRate of the car: speed 18-40 m/s swept slowly, steering a
     smoothed random walk of held angles up to ``steer`` rad; linear tyres, or with ``friction`` a
     Magic Formula tyre mu F_z sin(SHAPE atan(B alpha)) of the same cornering stiffness (``rear``:
-    the rear axle's [N/rad]); Euler at
+    the rear axle's [N/rad]; ``rear_friction``: the rear tyres' mu where it is not ``friction``); Euler at
     1 kHz, rows at RATE."""
     rng = np.random.default_rng(seed)
     n = int(seconds * 1000)
@@ -49,16 +49,16 @@ def drive(seconds: float = 120.0, seed: int = 7, steer: float = 0.03, friction: 
     delta = np.convolve(held, np.ones(300) / 300, mode="same")
     loads = (M * 9.81 * LR / L, M * 9.81 * LF / L)
 
-    def force(c, alpha, fz):
-        if friction is None:
+    def force(c, alpha, fz, mu=friction):
+        if mu is None:
             return c * alpha
-        return friction * fz * math.sin(SHAPE * math.atan(c / (SHAPE * friction * fz) * alpha))
+        return mu * fz * math.sin(SHAPE * math.atan(c / (SHAPE * mu * fz) * alpha))
 
     vy = r = 0.0
     yaw = np.empty(n)
     for i in range(n):
         fy_f = force(CF, delta[i] - (vy + LF * r) / v[i], loads[0])
-        fy_r = force(rear, -(vy - LR * r) / v[i], loads[1])
+        fy_r = force(rear, -(vy - LR * r) / v[i], loads[1], friction if rear_friction is None else rear_friction)
         vy += 1e-3 * ((fy_f + fy_r) / M - v[i] * r)
         r += 1e-3 * (LF * fy_f - LR * fy_r) / IZ
         yaw[i] = r

@@ -44,6 +44,20 @@ def test_extended_study_leaves_out_what_was_not_concluded(tmp_path, withheld, at
     assert ("tyre_friction (identified at least 1.8" in left) is at_least
 
 
+def test_a_friction_per_axle_is_not_written_into_a_plant_of_one_friction(tmp_path):
+    """identify kept a rear / front friction ratio of 1.4 (identification.axle_friction): the study's
+    plant has one friction on both axles, so the front's 1.8 there would let the rear go at the
+    front's limit and take away the limit understeer; the frictions are left out and said, the
+    stiffnesses written."""
+    rep = report(False, False)
+    rep["tyre_saturation"]["parameters"]["friction_ratio"] = _q(1.4)
+    assert write_extended_study(rep, Study.load(ROOT_STUDIES / "f1tenth.toml"), tmp_path, "gen.csv")
+    text = (tmp_path / "extended_study.toml").read_text()
+    assert "C_f" in text and "tyre_friction" not in text and "tyre_shape" not in text
+    left = " ".join(rep.get("extended_study_left_out", []))
+    assert "identified per axle, rear / front 1.4" in left and "one friction on both axles" in left
+
+
 def test_no_gain_curve_from_a_withheld_k():
     t = np.arange(0, 10, 0.1)
     log = DrivingLog(t, np.zeros_like(t), np.full_like(t, 2.0), np.zeros_like(t), np.zeros(len(t), int), 0.1, "delta")

@@ -71,10 +71,11 @@ def linear_share_limit(shape: float, share: float = 0.95) -> float:
 N_STATES = {"bicycle": 2, "rlf": 3, "rlfr": 4}
 
 
-def rates(model: str, p, v, delta, z, mu=np.inf, shape=1.3, C_f=None, C_r=None):
+def rates(model: str, p, v, delta, z, mu=np.inf, shape=1.3, C_f=None, C_r=None, mu_r=None):
     """(dz/dt, d(dz/dt)/dz) of the single-track model ``model`` with state z (..., n) =
     [v_y, gamma (, alpha_f) (, alpha_r)], speed v and wheel angle delta (...,); ``p`` has m, I,
-    l_f, l_r, sigma_f, sigma_r, and C_f, C_r unless given (arrays broadcast with v)."""
+    l_f, l_r, sigma_f, sigma_r, and C_f, C_r unless given (arrays broadcast with v); ``mu_r``: the
+    rear axle's friction where it differs from the front's ``mu`` (None: ``mu`` on both)."""
     m, I, lf, lr = p.m, p.I, p.l_f, p.l_r
     Cf = p.C_f if C_f is None else C_f
     Cr = p.C_r if C_r is None else C_r
@@ -87,7 +88,7 @@ def rates(model: str, p, v, delta, z, mu=np.inf, shape=1.3, C_f=None, C_r=None):
         a_f = z[..., 2]
     a_r = z[..., 3] if model == "rlfr" else (vy - lr * g) / v
     Ff, kf = magic_formula(a_f, Cf, mu * Fzf, shape)
-    Fr, kr = magic_formula(a_r, Cr, mu * Fzr, shape)
+    Fr, kr = magic_formula(a_r, Cr, (mu if mu_r is None else mu_r) * Fzr, shape)
     f = np.empty(z.shape)
     J = np.zeros(z.shape + (n,))
     f[..., 0] = -v * g - (Ff + Fr) / m

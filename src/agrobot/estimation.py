@@ -120,7 +120,13 @@ class FitResult:
     @property
     def bic(self) -> float:
         """n_eff ln(RSS / n) + k ln(n_eff), over every signal scored."""
-        return self.n_eff_total * math.log(self.rss_total / self.n_total) + len(self.free) * math.log(self.n_eff_total)
+        return self.bic_at(self.n_eff_total)
+
+    def bic_at(self, n_eff: float) -> float:
+        """The BIC at a given effective size: two nested fits of one log compared at one n_eff (the
+        simpler one's). Each fit's own n_eff, from its residuals' autocorrelation, moves by a few
+        samples between fits, and n_eff ln(RSS / n) with it by several times ln(n_eff)."""
+        return n_eff * math.log(self.rss_total / self.n_total) + len(self.free) * math.log(n_eff)
 
     def merged(self, part: "FitResult", reset: dict[str, float] | None = None) -> "FitResult":
         """This fit with the signals ``part`` scored, and the parameters it moved, taken from ``part``

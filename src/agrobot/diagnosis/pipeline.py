@@ -201,6 +201,7 @@ def identified_vehicle(frame, where: str, study, baseline, unseen=None, wheelbas
             "tyre_saturation": ({"friction": tyre["parameters"]["friction"]["value"],
                                  "friction_at_least": bool(tyre["parameters"]["friction"].get("at_least")),
                                  "shape": tyre["parameters"]["shape"]["value"],
+                                 "friction_ratio": tyre["parameters"].get("friction_ratio", {"value": 1.0})["value"],
                                  "held_out_gain": tyre["held_out_gain"]} if tyre["found"] else None),
             "tyre_saturation_why_not": tyre["why_not"], "input": rep["input"],
             "parameters": {k: {"value": q["value"], "interval": q.get("interval"), "unit": q["unit"]}

@@ -400,7 +400,12 @@ class YawModel:
     compiler is found; default single_track_kernel.DEFAULT)."""
 
     DEFAULTS = {"delay": 0.0, "lag": 0.0, "gyro_bias": 0.0, "steer_offset": 0.0, "steer_gain": 1.0,
-                "friction": math.inf, "shape": 1.3, "cornering_speed_slope": 0.0, "cornering_reference_speed": 2.0}
+                "friction": math.inf, "friction_ratio": 1.0, "shape": 1.3, "cornering_speed_slope": 0.0,
+                "cornering_reference_speed": 2.0}
+    # ``friction`` is the front axle's mu, ``friction_ratio`` the rear's over it (mu_r = ratio mu):
+    # with one mu on both axles the steady turn delta - L / R = alpha_f - alpha_r is K h(a_y) with h
+    # fixed by mu and the shape alone, so the understeer past the linear range scales with K; a
+    # vehicle whose front lets go first (or its rear) has limit understeer its K does not set
 
     def __init__(self, model: str, params: TractorParameters, log: DrivingLog, segs: Segments,
                  max_substep: float = 0.02, min_sim_speed: float = 0.05, kernel: str | None = None,
@@ -504,10 +509,11 @@ class YawModel:
         Fzf, Fzr = self.loads
         columns = {"lag_decay": a, "hold_gain": c, "lag": rows["lag"], "delay": rows["delay"], "C_f": rows["c_f"] * Fzf, "C_r": rows["c_r"] * Fzr,
                    "mu": rows["friction"], "shape": rows["shape"],
+                   "F_zr": Fzr * rows["friction_ratio"],           # the kernel's rear peak is mu F_zr: mu_r F_zr
                    "cornering_speed_slope": rows["cornering_speed_slope"],
                    "cornering_reference_speed": rows["cornering_reference_speed"],
                    "sigma_f": p.sigma_f, "sigma_r": p.sigma_r, "m": p.m, "I": p.I, "l_f": p.l_f, "l_r": p.l_r,
-                   "F_zf": Fzf, "F_zr": Fzr}
+                   "F_zf": Fzf}
         n = len(a)
         return np.stack([np.broadcast_to(np.asarray(columns[k], float), (n,)) for k in single_track_kernel.PARAMETERS],
                         axis=1)
@@ -520,7 +526,9 @@ class YawModel:
         Fzf, Fzr = self.loads
         Cf, Cr = rows["c_f"] * Fzf, rows["c_r"] * Fzr
         mu = rows["friction"]
-        tyre = {"mu": mu if np.any(np.isfinite(mu)) else np.inf, "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
+        saturating = np.any(np.isfinite(mu))
+        tyre = {"mu": mu if saturating else np.inf, "mu_r": mu * rows["friction_ratio"] if saturating else np.inf,
+                "shape": rows["shape"], "C_f": Cf, "C_r": Cr}
         cornering = (Cf, Cr, rows["cornering_speed_slope"], rows["cornering_reference_speed"])
         n_rows, L = w.shape
         z = np.zeros((n_rows, N_STATES[self.model]))
@@ -574,7 +582,7 @@ class YawModel:
             Cf, Cr, slope, v_ref = cornering
             vm = 0.5 * (vv[:, j] + vv[:, j + 1])
             scale = cornering_scale(slope, v_ref, vm)
-            lin_tyre = {**tyre, "mu": np.inf, "C_f": Cf * scale, "C_r": Cr * scale}
+            lin_tyre = {**tyre, "mu": np.inf, "mu_r": np.inf, "C_f": Cf * scale, "C_r": Cr * scale}
             for start, length, omega in ((0.0, phase[:, j] * h, w[:, j]), (phase[:, j] * h, (1.0 - phase[:, j]) * h,
                                                                               w[:, j + 1])):
                 d = np.where(inv_T > 0, d, omega)
@@ -639,7 +647,7 @@ def exact_steps(model: str, p, v: np.ndarray, h: float, tyre: dict, degree: int 
     [6/6] Pade approximant, phi2(X) b by Horner to ``degree``, phi1(X) b = b + X phi2(X) b, then s squarings of the block matrix
     [[P, g1, g2], [0, 1, c], [0, 0, 1]] (c = 2^-s at the start)."""
     n = N_STATES[model]
-    b, J = rates(model, p, v, np.ones_like(v), np.zeros((len(v), n)), **{**tyre, "mu": np.inf})
+    b, J = rates(model, p, v, np.ones_like(v), np.zeros((len(v), n)), **{**tyre, "mu": np.inf, "mu_r": np.inf})
     return phi_steps(J, b, np.full(len(v), float(h)), degree)
 
 

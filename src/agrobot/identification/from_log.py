@@ -287,8 +287,9 @@ def finite_for_json(v):
 
 def write_extended_study(report: dict, study, out_dir: Path, source) -> str | None:
     """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
-    steering's delay, the gyro's bias, and tyre saturation when found) -- the study then simulates
-    the vehicle of the log. Parameters not identifiable from the log keep the study's values."""
+    steering's delay, the gyro's bias, and tyre saturation when found with one friction on both
+    axles) -- the study then simulates the vehicle of the log. Parameters not identifiable from the
+    log, and a friction per axle (the plant has one), keep the study's values."""
     model = resolve(study)
     plant = model.find(role="yaw_plant")
     if not plant:
@@ -314,6 +315,10 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
     if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):
         left_out.append(f"tyre_friction (identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
                         f"value: the study keeps its own)")
+    elif tyre["found"] and "friction_ratio" in tyre["parameters"]:     # identification.axle_friction
+        left_out.append(f"tyre_friction, tyre_shape (identified per axle, rear / front "
+                        f"{tyre['parameters']['friction_ratio']['value']:.3g}: the plant's Magic Formula has one "
+                        f"friction on both axles, which moves the limit understeer; the study keeps its own)")
     elif tyre["found"] and tyre["parameters"]["friction"].get("identifiable", True):
         values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
         if tyre["parameters"]["shape"]["identifiable"]:

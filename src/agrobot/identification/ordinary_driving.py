@@ -57,6 +57,7 @@ from .steady_turn import is_steady_turn, steady_turn_parts, steady_turn_summary
 from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
+from .axle_friction import axle_friction_fit, first_to_bend
 from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
 
 LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
@@ -537,6 +538,8 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
                 nl = trial
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
+        nl, free_nl = axle_friction_fit(lambda free_a, start_a, n: fit(model, free_a, start_a, fixed, fit_segs, max_nfev=n),
+                                        nl, free_nl, {**linear.values, "friction": mu0, "shape": 1.3}, notes)
     linear, free = widened_refit(model, linear, free, fixed, fit_segs, notes, say)
     nl, free_nl = widened_refit(model, nl, free_nl, fixed, fit_segs, notes, say)
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
@@ -845,7 +848,7 @@ class YawScaled:
 
 TURN_GAIN = Parameter("yaw_gain", "1", 0.05, *SENSED_GAIN, meaning="yaw rate per kinematic v tan(w) / L: a scale of "
                       "the turns (the declared wheelbase's, the speed's, the gyro's, or the wheel angle sensor's)")
-TYRE_SHAPE = ("friction", "shape")
+TYRE_SHAPE = ("friction", "shape", "friction_ratio")
 
 
 def _turn_scale_fits(fits: _Fits, final: FitResult, cap: float | None) -> tuple[FitResult, FitResult, np.ndarray | None]:
@@ -1163,19 +1166,23 @@ def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: floa
 
 
 def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: float) -> dict:
-    """How far in |a_y| the linear model holds: with saturation, where the Magic Formula's force
-    falls 5 % below the linear tyre's, mu g x share(C) (std by the delta method on mu and C);
-    without, the 99th percentile of the driving's |a_y|."""
+    """How far in |a_y| the linear model holds: with saturation, where the Magic Formula's force of
+    the axle that bends first (axle_friction.first_to_bend) falls 5 % below the linear tyre's, mu g x
+    share(C) (std by the delta method on mu and C); without, the 99th percentile of the driving's |a_y|."""
     if saturation:
-        mu, shape = nl.values["friction"], nl.values["shape"]
+        shape = nl.values["shape"]
+        mu, mu_sd, axle = first_to_bend(nl.values["friction"], float(np.nan_to_num(nl.std("friction"))),
+                                        nl.values.get("friction_ratio", 1.0), float(np.nan_to_num(nl.std("friction_ratio"))))
         share = linear_share_limit(shape)
         lin_range = mu * GRAVITY * share
         eps = 1e-4
         d_share = (linear_share_limit(min(shape + eps, SHAPE_BOUNDS[1])) - linear_share_limit(shape - eps)) / (2 * eps)
-        lr_sd = GRAVITY * math.hypot(share * np.nan_to_num(nl.std("friction")), mu * d_share * np.nan_to_num(nl.std("shape")))
+        lr_sd = GRAVITY * math.hypot(share * mu_sd, mu * d_share * np.nan_to_num(nl.std("shape")))
+        per_axle = "friction_ratio" in nl.names          # one friction on both axles: no axle to name
+        whose, mu_said = (f"of the {axle} axle (the first to bend) ", f"mu {mu:.3g}, ") if per_axle else ("", "")
         return {**_quantity(lin_range, lr_sd, "m/s2"),
-                "how": f"where the Magic Formula's force falls 5 % below the linear tyre's: |a_y| = mu g "
-                       f"x {share:.3f} (shape {shape:.2f})", "saturation": True}
+                "how": f"where the Magic Formula's force {whose}falls 5 % below the linear tyre's: |a_y| = mu g "
+                       f"x {share:.3f} ({mu_said}shape {shape:.2f})", "saturation": True}
     top_a = float(np.percentile(np.abs(log.a_y[log.v >= min_speed]), 99))
     return {"value": top_a, "std": 0.0, "interval": [top_a, top_a], "unit": "m/s2", "at_least": True,
             "how": "no saturation found: the linear model holds over the whole log, whose largest |a_y| (99th "
@@ -1186,7 +1193,7 @@ def _tyre_json(held: _HeldOut, nl: FitResult, free_nl: list[Parameter], saturati
     """The tyre-saturation verdict: found or why not, dBIC, held-out gains, the misfit's growth at
     high |a_y|, the fitted friction and shape with their intervals."""
     params = {q.name: _quantity(nl.values[q.name], nl.std(q.name), q.unit, (q.lower, q.upper), nl.at_bound(q),
-                                meaning=q.meaning) for q in free_nl if q.name in ("friction", "shape")}
+                                meaning=q.meaning) for q in free_nl if q.name in TYRE_SHAPE}
     mu, friction = params["friction"], next(q for q in free_nl if q.name == "friction")
     if saturation and nl.at_bound(friction) == "upper":
         mu |= {"at_least": True, "note": f"at least {mu['bounds'][1]:g}: on the class's upper bound, the log's "

@@ -16,8 +16,11 @@ CARRIED = 1.1        # the tyres' force limit may fall this far short of the log
 
 
 def friction_text(saturation: dict) -> str:
-    """Identify's friction as a reader should take it: "at least" where it ended on the class's top."""
-    return ("at least " if saturation.get("friction_at_least") else "") + f"{saturation['friction']:.3g}"
+    """Identify's friction as a reader should take it: "at least" where it ended on the class's top;
+    the front's, with the rear's ratio to it, where identify fitted one per axle (axle_friction)."""
+    ratio = saturation.get("friction_ratio", 1.0)
+    axle = f" front, rear / front {ratio:.3g}" if ratio != 1.0 else ""
+    return ("at least " if saturation.get("friction_at_least") else "") + f"{saturation['friction']:.3g}{axle}"
 
 
 class TyreSaturation(Effect):
