@@ -121,9 +121,12 @@ def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
 
 def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
     """Spearman's correlation (of the ranks): a course rate's spikes where the course flips at a
-    turnaround or a stop do not outweigh the rest."""
-    ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
-    return float(np.corrcoef(ra, rb)[0, 1])
+    turnaround or a stop do not outweigh the rest. Tied values take the mean of the ranks they span
+    (a command or a deadbanded gyro exactly 0 through a stop: ranks handed out in sample order would
+    correlate the ties' order in time, not their values)."""
+    from scipy.stats import rankdata
+
+    return float(np.corrcoef(rankdata(a), rankdata(b))[0, 1])
 
 
 def by_heading(t, c, rate, heading, what: str = "the heading") -> tuple[np.ndarray, str] | None:
