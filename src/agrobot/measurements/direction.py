@@ -102,14 +102,19 @@ def _wrap(x):
     return np.angle(np.exp(1j * np.asarray(x, float)))
 
 
-def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """d(angle)/dt of a possibly interrupted angle by chords of RATE_CHORD s either side (NaN where
+def chord_steps(h: float, span: float) -> int:
+    """Samples either side of a chord ``span`` s long at a sample interval h (at least one)."""
+    return max(1, int(round(span / h))) if h > 0 else 1
+
+
+def angle_rate(t: np.ndarray, angle: np.ndarray, span: float = RATE_CHORD) -> np.ndarray:
+    """d(angle)/dt of a possibly interrupted angle by chords of ``span`` s either side (NaN where
     the angle is, and across its interruptions: the course is not read at a stop)."""
     out = np.full(len(t), np.nan)
     ok = np.isfinite(angle)
     if ok.sum() > 3:
         idx = np.flatnonzero(ok)
-        k = max(1, int(round(RATE_CHORD / float(np.median(np.diff(t))))))
+        k = chord_steps(float(np.median(np.diff(t))), span)
         u = np.unwrap(angle[idx])
         i = np.arange(len(idx))
         lo, hi = np.clip(i - k, 0, len(idx) - 1), np.clip(i + k, 0, len(idx) - 1)
