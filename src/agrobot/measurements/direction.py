@@ -129,9 +129,13 @@ def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
     turnaround or a stop do not outweigh the rest. Tied values take the mean of the ranks they span
     (a command or a deadbanded gyro exactly 0 through a stop: ranks handed out in sample order would
     correlate the ties' order in time, not their values)."""
-    from scipy.stats import rankdata
+    return float(np.corrcoef(mean_ranks(a), mean_ranks(b))[0, 1])
 
-    return float(np.corrcoef(rankdata(a), rankdata(b))[0, 1])
+
+def mean_ranks(x: np.ndarray) -> np.ndarray:
+    """The ranks of x (1 to n), each run of equal values given the mean of the ranks it spans."""
+    _, where, count = np.unique(np.asarray(x), return_inverse=True, return_counts=True)
+    return (np.cumsum(count) - (count - 1) / 2.0)[where.ravel()]
 
 
 def by_heading(t, c, rate, heading, what: str = "the heading") -> tuple[np.ndarray, str] | None:
