@@ -66,3 +66,14 @@ def test_a_clock_that_restarts_is_refused_with_the_message_it_restarts_at(tmp_pa
     _bag(tmp_path / "restart.bag", ms)
     with pytest.raises(LogError, match=r"message 801 holds 0 s after 19.975 s.*--time-range"):
         import_recording(tmp_path / "restart.bag", _options("/stamp.data[ms]"))
+
+
+def test_a_clock_with_a_value_that_is_not_a_number_is_refused_naming_the_message(tmp_path):
+    """A NaN in the clock's field neither increases nor decreases: every message near it would take a
+    NaN time (np.interp), so it is refused like a restart, naming the message."""
+    pytest.importorskip("rosbags")
+    ms = 795065.0 + 1000.0 * np.arange(0.0, DURATION, 0.025)
+    ms[500] = np.nan
+    _bag(tmp_path / "nan.bag", ms)
+    with pytest.raises(LogError, match=r"message 501 holds nan s after"):
+        import_recording(tmp_path / "nan.bag", _options("/stamp.data[ms]"))

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .plausibility import study_understeer
+
 COLLINEAR = 0.99     # |delta| and a_ss correlated at least this much in the hard turns: one function of each other
 HARD_TURN = 0.5      # the hard turns: |v r| at least this share of the log's 99th percentile (where the bends act)
 MIN_TURNS = 20       # fewer hard-turn samples: no measure
@@ -61,7 +63,7 @@ def turn_collinearity(replay) -> Collinearity | None:
     turns = moving & (a_y >= HARD_TURN * np.percentile(a_y[moving], 99))
     p = replay.baseline.tractor
     wheelbase = p.l_f + p.l_r
-    understeer = p.m * (p.l_r / p.C_f - p.l_f / p.C_r) / wheelbase
+    understeer = study_understeer(p)
     steady = v[turns] ** 2 * np.abs(delta[turns]) / (wheelbase + understeer * v[turns] ** 2)
     if turns.sum() < MIN_TURNS or np.std(delta[turns]) == 0 or np.std(steady) == 0:
         return None

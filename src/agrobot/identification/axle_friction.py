@@ -22,7 +22,6 @@ The fit's parameter is rho (``FRICTION_RATIO``); the Magic Formula's ``mu`` stay
 """
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 from agrobot.estimation import Parameter
@@ -38,12 +37,14 @@ def friction_ratio() -> Parameter:
                      meaning="rear tyre friction over the front's, mu_r / mu_f (below 1 the rear lets go first)")
 
 
-def first_to_bend(mu: float, mu_sd: float, ratio: float, ratio_sd: float) -> tuple[float, float, str]:
-    """(the friction of the axle that bends first, min(mu_f, rho mu_f), its std by the delta method
-    on independent mu_f and rho, which axle): the linear range of a steady turn ends at its bend."""
+def first_to_bend(mu: float, ratio: float) -> tuple[float, dict[str, float], str]:
+    """(the friction of the axle that bends first, min(mu_f, rho mu_f), its gradient in the fit's
+    parameters ``friction`` (mu_f) and ``friction_ratio`` (rho) for the delta method on their
+    covariance (FitResult.interval_of: a log that bends one axle sees its mu well and mu_f and rho
+    each poorly, strongly correlated), which axle): the linear range of a steady turn ends at its bend."""
     if ratio >= 1.0:
-        return mu, mu_sd, "front"
-    return mu * ratio, math.hypot(ratio * mu_sd, mu * ratio_sd), "rear"
+        return mu, {"friction": 1.0}, "front"
+    return mu * ratio, {"friction": ratio, "friction_ratio": mu}, "rear"
 
 
 # the per-axle fit's evaluations: its ten parameters and the tyres' bend leave the 40 of the other

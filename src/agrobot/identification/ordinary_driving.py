@@ -1168,16 +1168,16 @@ def _gain_rows(log: DrivingLog, min_speed: float, K: float, K_sd: float, L: floa
 def _linear_range(saturation: bool, nl: FitResult, log: DrivingLog, min_speed: float) -> dict:
     """How far in |a_y| the linear model holds: with saturation, where the Magic Formula's force of
     the axle that bends first (axle_friction.first_to_bend) falls 5 % below the linear tyre's, mu g x
-    share(C) (std by the delta method on mu and C); without, the 99th percentile of the driving's |a_y|."""
+    share(C) (std by the delta method on the fit's covariance of mu_f, rho and C); without, the 99th
+    percentile of the driving's |a_y|."""
     if saturation:
         shape = nl.values["shape"]
-        mu, mu_sd, axle = first_to_bend(nl.values["friction"], float(np.nan_to_num(nl.std("friction"))),
-                                        nl.values.get("friction_ratio", 1.0), float(np.nan_to_num(nl.std("friction_ratio"))))
+        mu, d_mu, axle = first_to_bend(nl.values["friction"], nl.values.get("friction_ratio", 1.0))
         share = linear_share_limit(shape)
         lin_range = mu * GRAVITY * share
         eps = 1e-4
         d_share = (linear_share_limit(min(shape + eps, SHAPE_BOUNDS[1])) - linear_share_limit(shape - eps)) / (2 * eps)
-        lr_sd = GRAVITY * math.hypot(share * mu_sd, mu * d_share * np.nan_to_num(nl.std("shape")))
+        lr_sd = GRAVITY * nl.interval_of({**{k: share * g for k, g in d_mu.items()}, "shape": mu * d_share})
         per_axle = "friction_ratio" in nl.names          # one friction on both axles: no axle to name
         whose, mu_said = (f"of the {axle} axle (the first to bend) ", f"mu {mu:.3g}, ") if per_axle else ("", "")
         return {**_quantity(lin_range, lr_sd, "m/s2"),

@@ -78,7 +78,7 @@ import numpy as np
 from agrobot.components.tractor_yaw_plant import steer_input
 
 from .clocks import parabolic_peak
-from .direction import check_direction, position_noise
+from .direction import angle_rate, check_direction, chord_steps, position_noise
 from .findings import finding
 from .imu_axes import axis_findings
 from .log import CANONICAL, LogError, slope_through_origin
@@ -296,6 +296,7 @@ def _slope(a, b, oka, okb, k, through_origin, width: int = 1):
 
 
 # --- the signals that must agree ---------------------------------------------------------------
+COURSE_HALF_CHORD = 0.5  # s: gnss_rates reads the course on chords this far either side (1 s chords)
 RATE_SPAN = 0.25        # s: the course rate is the chords' course differenced this far either side (at least a fix)
 
 
@@ -303,7 +304,7 @@ def rate_step(h: float) -> int:
     """Fixes either side over which gnss_rates differences the chords' course (RATE_SPAN at a fix
     interval h): a 20 Hz course differenced per fix is its noise over 0.1 s, larger than a
     machine's turning (the gyro compared with it is smoothed by the same 2 m h box)."""
-    return max(1, int(round(RATE_SPAN / h))) if h > 0 else 1
+    return chord_steps(h, RATE_SPAN)
 
 
 def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -320,14 +321,11 @@ def gnss_rates(gnss) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     rate = np.full(len(t), np.nan)
     if len(t) > 5:
         h = float(np.median(np.diff(t)))
-        k = max(1, int(round(0.5 / h)))
+        k = chord_steps(h, COURSE_HALF_CHORD)
         if len(t) > 2 * k + 2:
             course = np.unwrap(np.arctan2(north[2 * k:] - north[:-2 * k], east[2 * k:] - east[:-2 * k]))
             tc = t[k:-k]
-            m = rate_step(h)
-            i = np.arange(len(tc))
-            lo, hi = np.clip(i - m, 0, len(tc) - 1), np.clip(i + m, 0, len(tc) - 1)
-            r = (course[hi] - course[lo]) / np.maximum(tc[hi] - tc[lo], 1e-9)
+            r = angle_rate(tc, course, RATE_SPAN)
             sigma = position_noise(east, north)         # the chord long against the fixes' own noise ...
             need = np.maximum(MOVING, COURSE_SIGMAS * sigma[k:-k] / (2 * k * h))
             from scipy.ndimage import minimum_filter1d
@@ -466,7 +464,7 @@ class Auditor:
                 ok = np.isfinite(course_rate)
                 h = float(np.median(np.diff(tg)))
                 t, r = sig[gyro]
-                r = smoothed(t, smoothed(t, r, 2 * max(1, int(round(0.5 / h))) * h), 2 * rate_step(h) * h)  # as the chords
+                r = smoothed(t, smoothed(t, r, 2 * chord_steps(h, COURSE_HALF_CHORD) * h), 2 * rate_step(h) * h)  # as the chords
                 out.append(("gyro vs GNSS course", "course_rate", gyro,
                             lag(tg[ok], course_rate[ok], t, r, search, mask=_good(tg, speed, MOVING, best)), "rad/s"))
         lateral = next((c for c in LATERAL if c in sig), None)

@@ -102,14 +102,19 @@ def _wrap(x):
     return np.angle(np.exp(1j * np.asarray(x, float)))
 
 
-def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """d(angle)/dt of a possibly interrupted angle by chords of RATE_CHORD s either side (NaN where
+def chord_steps(h: float, span: float) -> int:
+    """Samples either side of a chord ``span`` s long at a sample interval h (at least one)."""
+    return max(1, int(round(span / h))) if h > 0 else 1
+
+
+def angle_rate(t: np.ndarray, angle: np.ndarray, span: float = RATE_CHORD) -> np.ndarray:
+    """d(angle)/dt of a possibly interrupted angle by chords of ``span`` s either side (NaN where
     the angle is, and across its interruptions: the course is not read at a stop)."""
     out = np.full(len(t), np.nan)
     ok = np.isfinite(angle)
     if ok.sum() > 3:
         idx = np.flatnonzero(ok)
-        k = max(1, int(round(RATE_CHORD / float(np.median(np.diff(t))))))
+        k = chord_steps(float(np.median(np.diff(t))), span)
         u = np.unwrap(angle[idx])
         i = np.arange(len(idx))
         lo, hi = np.clip(i - k, 0, len(idx) - 1), np.clip(i + k, 0, len(idx) - 1)
@@ -121,9 +126,16 @@ def angle_rate(t: np.ndarray, angle: np.ndarray) -> np.ndarray:
 
 def rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
     """Spearman's correlation (of the ranks): a course rate's spikes where the course flips at a
-    turnaround or a stop do not outweigh the rest."""
-    ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
-    return float(np.corrcoef(ra, rb)[0, 1])
+    turnaround or a stop do not outweigh the rest. Tied values take the mean of the ranks they span
+    (a command or a deadbanded gyro exactly 0 through a stop: ranks handed out in sample order would
+    correlate the ties' order in time, not their values)."""
+    return float(np.corrcoef(mean_ranks(a), mean_ranks(b))[0, 1])
+
+
+def mean_ranks(x: np.ndarray) -> np.ndarray:
+    """The ranks of x (1 to n), each run of equal values given the mean of the ranks it spans."""
+    _, where, count = np.unique(np.asarray(x), return_inverse=True, return_counts=True)
+    return (np.cumsum(count) - (count - 1) / 2.0)[where.ravel()]
 
 
 def by_heading(t, c, rate, heading, what: str = "the heading") -> tuple[np.ndarray, str] | None:

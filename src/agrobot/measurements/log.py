@@ -213,18 +213,25 @@ def track_span(t: np.ndarray, gps: np.ndarray) -> float:
     return max(1.0, 2.0 * float(np.median(np.diff(changes))))
 
 
+def track_chords(frame: pd.DataFrame) -> tuple[float, int, np.ndarray]:
+    """(h, k, d): the median row interval and the chords of the track (x, y) that span its
+    positions' updates (chords(..., track_span)), the one reading of the track's speed and course."""
+    t = frame["t"].to_numpy(float)
+    gps = frame[["x", "y"]].to_numpy(float)
+    h = float(np.median(np.diff(t)))
+    return (h, *chords(gps, h, track_span(t, gps)))
+
+
 def speed_estimate(frame: pd.DataFrame) -> tuple[np.ndarray | None, str]:
     """(speed [m/s], where from): the wheel speed v, else the receiver's speed over ground
-    (gnss_speed), else the speed of the GPS track over 1 s chords ("track"); (None, "none")."""
+    (gnss_speed), else the speed of the GPS track over its chords (track_chords: "track"); (None, "none")."""
     if "v" in frame:
         return frame["v"].to_numpy(float), "v"
     if "gnss_speed" in frame:
         return frame["gnss_speed"].to_numpy(float), "gnss_speed"
     if {"x", "y"} <= set(frame.columns):
         t = frame["t"].to_numpy(float)
-        gps = frame[["x", "y"]].to_numpy(float)
-        h = float(np.median(np.diff(t)))
-        k, d = chords(gps, h)
+        h, k, d = track_chords(frame)
         speed = np.full(len(t), np.nan)
         speed[k:-k] = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
         ok = np.isfinite(speed)
@@ -234,14 +241,11 @@ def speed_estimate(frame: pd.DataFrame) -> tuple[np.ndarray | None, str]:
 
 
 def check_units(frame: pd.DataFrame, where: str) -> None:
-    """Speed against the speed of the GPS track over 1 s chords (when v, x, y are logged): 3.6
-    means km/h; a track that hardly moves while v says it does means x, y are not metres."""
+    """Speed against the speed of the GPS track over its chords (track_chords; when v, x, y are
+    logged): 3.6 means km/h; a track that hardly moves while v says it does means x, y are not metres."""
     if not {"t", "v", "x", "y"} <= set(frame.columns) or len(frame) < 10:
         return
-    t = frame["t"].to_numpy(float)
-    h = float(np.median(np.diff(t)))
-    gps = frame[["x", "y"]].to_numpy(float)
-    k, d = chords(gps, h, track_span(t, gps))
+    h, k, d = track_chords(frame)
     track = np.hypot(d[:, 0], d[:, 1]) / (2 * k * h)
     v = frame["v"].to_numpy(float)[k:-k]
     fast = v > 0.5
@@ -271,7 +275,7 @@ def check_units(frame: pd.DataFrame, where: str) -> None:
 
 
 def _track_turn_ratio(frame: pd.DataFrame, h: float, k: int, d: np.ndarray) -> float | None:
-    """Heading change over 2 s, integrated yaw rate against the GPS course (1 s chords) while
+    """Heading change over 2 s, integrated yaw rate against the GPS course (track_chords) while
     moving: the regression slope, 1 in rad/s and 57 in deg/s (None: too little moving)."""
     from scipy.integrate import cumulative_trapezoid
 
@@ -304,7 +308,7 @@ def yaw_rate_in_radians(frame: pd.DataFrame) -> str | None:
     t = frame["t"].to_numpy(float)
     h = float(np.median(np.diff(t)))
     if {"x", "y"} <= set(frame.columns):
-        k, d = chords(frame[["x", "y"]].to_numpy(float), h)
+        _, k, d = track_chords(frame)
         slope = _track_turn_ratio(frame, h, k, d) if len(d) else None
         if slope is not None and 0.5 < slope < 2.0:
             return f"integrated, it turns {slope:.2f} times as fast as the track (x, y)"

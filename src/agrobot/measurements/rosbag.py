@@ -489,9 +489,9 @@ def on_data_clock(signals: dict, clock: tuple[np.ndarray, np.ndarray], text: str
     clock becomes c(t), c linear between the clock topic's messages (its bag times -> its values [s])
     and extended beyond them at its mean rate. The clock's values must increase."""
     tb, tv = (np.asarray(a, float) for a in clock)
-    steps = np.diff(tv)
-    if len(tv) < 2 or np.any(steps <= 0):
-        i = int(np.argmax(steps <= 0)) + 1 if len(tv) >= 2 else 0
+    rising = np.diff(tv) > 0                # a NaN neither rises nor falls: refused as a restart is
+    if len(tv) < 2 or not rising.all():
+        i = int(np.argmax(~rising)) + 1 if len(tv) >= 2 else 0
         raise LogError(f"{source}: --time {text!r}: the clock's values must increase from one message to the next; "
                        + (f"message {i + 1} holds {tv[i]:.9g} s after {tv[i - 1]:.9g} s (a counter that wraps or "
                           f"restarts: convert the stretch before it with --time-range)" if len(tv) >= 2 else
