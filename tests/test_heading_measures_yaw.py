@@ -6,6 +6,7 @@ update rate; harness.truth_tractor: the tractor's stiffnesses, so its understeer
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -93,7 +94,7 @@ def test_a_slow_robot_reads_its_course_at_its_own_speeds(small_study):
 def test_a_receivers_course_at_walking_pace_is_refused_with_its_noise(small_study):
     """Fixes at 10 Hz with 2 cm noise: the course needs about 1.1 m/s on 0.5 s chords for 0.05 rad,
     held at the 1 m/s (and 5-update chords) of before; at 0.5 m/s it is refused, the noise, the bound
-    and the option said."""
+    and the option said, with the longer chord a --course-speed at its own speed would read it on."""
     frame, _ = make_small_log(4, duration=60.0, speeds=(1.1, 1.5))
     _, m = with_yaw_rate(frame.drop(columns="heading"), "tractor.csv")
     assert (m.course_speed, m.chord_updates) == (1.0, 5) and "held at the 1 m/s default" in m.course_choice
@@ -103,7 +104,8 @@ def test_a_receivers_course_at_walking_pace_is_refused_with_its_noise(small_stud
     text = str(err.value)
     assert "walk.csv" in text and "too few to read the GNSS course" in text
     assert all(s in text for s in ("mm across the track at 10 Hz", "within 0.05 rad", "held at the 1 m/s default",
-                                   "--course-speed")), text
+                                   "--course-speed changes it")), text
+    assert re.search(r"--course-speed 0\.[45]\d?, its median speed, reads it on chords of 0\.5 m, 1\.\d+ s", text), text
 
 
 @pytest.mark.parametrize("case, expect", [("frozen", "never updates"), ("degrees", "expected radians"),

@@ -193,9 +193,12 @@ def from_course(frame: pd.DataFrame, where: str, course_speed: float | None = No
         speed = np.minimum(speed, np.interp(tk, t, frame["v"].to_numpy(float)))
     fwd = speed >= course_speed
     if fwd.sum() < 10 + m:
+        own = float(np.median(speed)) if len(speed) else 0.0
+        longer = (f"--course-speed {own:.2g}, its median speed, reads it on chords of {COURSE_CHORD:g} m, "
+                  f"{COURSE_CHORD / own:.2g} s; " if choice and 0 < own < course_speed else "lower course_speed, ")
         raise LogError(f"{where}: the positions x, y move forward at {course_speed:.3g} m/s or more on {int(fwd.sum())} "
                        f"updates: too few to read the GNSS course (" + (f"{choice}; " if choice else "")
-                       + "lower course_speed, or log a gyro or a heading)")
+                       + f"{longer}or log a gyro or a heading)")
     course = np.unwrap(np.arctan2(dy, dx))
     ok = fwd[m:] & fwd[:-m]
     tr, r = (0.5 * (tk[m:] + tk[:-m]))[ok], ((course[m:] - course[:-m]) / (tk[m:] - tk[:-m]))[ok]
