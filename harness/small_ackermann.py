@@ -31,8 +31,8 @@ from harness.truth_tractor import DEG, SMALL_WHEELBASE as WHEELBASE
 TRUTH = dict(gain=0.85, asymmetry=0.15, offset=0.035, understeer=0.01, servo=0.15)
 
 
-def _plan(rng: np.random.Generator, duration: float, rate: float):
-    """(t, command, speed) at ``rate``: speed held 8-20 s at 0.3-1.5 m/s; steering changed every
+def _plan(rng: np.random.Generator, duration: float, rate: float, speeds: tuple[float, float] = (0.3, 1.5)):
+    """(t, command, speed) at ``rate``: speed held 8-20 s within ``speeds`` [m/s]; steering changed every
     1.5-4 s to a value whose steady lateral acceleration stays below about 0.4 m/s2."""
     n = int(round(duration * rate))
     t = np.arange(n) / rate
@@ -40,7 +40,7 @@ def _plan(rng: np.random.Generator, duration: float, rate: float):
     k, v = 0, 0.8
     while k < n:
         m = min(n, k + int(rng.uniform(8.0, 20.0) * rate))
-        v_new = rng.uniform(0.3, 1.5)
+        v_new = rng.uniform(*speeds)
         speed[k:m] = v + (v_new - v) * np.clip(np.arange(m - k) / (1.5 * rate), 0, 1)
         v = v_new
         k = m
@@ -55,13 +55,16 @@ def _plan(rng: np.random.Generator, duration: float, rate: float):
     return t, cmd, speed
 
 
-def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None,
-                   heading_rate: float = 5.0) -> tuple[pd.DataFrame, dict]:
-    """The log and its truth (``truth`` replaces entries of TRUTH)."""
+def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None, heading_rate: float = 5.0,
+                   speeds: tuple[float, float] = (0.3, 1.5), rate: float = 20.0,
+                   positions: tuple[float, float] = (10.0, 0.02)) -> tuple[pd.DataFrame, dict]:
+    """The log and its truth (``truth`` replaces entries of TRUTH); ``speeds``: the range the speed
+    is held in [m/s]; ``rate``: the rows' [Hz] (integrated at ``rate`` x the divisor nearest 200 Hz);
+    ``positions``: the positions' update rate [Hz] (a divisor of ``rate``) and white noise [m]."""
     tr = {**TRUTH, **(truth or {})}
     rng = np.random.default_rng(seed)
-    rate, sub = 20.0, 10
-    t, cmd, speed = _plan(rng, duration, rate)
+    sub = max(1, int(round(200.0 / rate)))
+    t, cmd, speed = _plan(rng, duration, rate, speeds)
     h = 1.0 / (rate * sub)
     n = len(t)
     u, psi, x, y = 0.0, rng.uniform(-math.pi, math.pi), 0.0, 0.0
@@ -84,10 +87,11 @@ def make_small_log(seed: int, duration: float = 240.0, truth: dict | None = None
     hold_h = np.floor(t * heading_rate + 1e-9) / heading_rate          # the last 5 Hz update at or before t
     k_h = np.round(hold_h * rate).astype(int)
     heading = np.angle(np.exp(1j * (rec[k_h, 1] + 0.3 * DEG * noise[2][k_h])))
-    k_p = np.round(np.floor(t * 10.0 + 1e-9) / 10.0 * rate).astype(int)
+    position_hz, sigma_p = positions
+    k_p = np.round(np.floor(t * position_hz + 1e-9) / position_hz * rate).astype(int)
     frame = pd.DataFrame({"t": t, "delta_cmd": cmd, "delta": rec[:, 0] + 0.1 * DEG * noise[0],
                           "v": rec[:, 4] + 0.02 * noise[1], "heading": heading,
-                          "x": rec[k_p, 2] + 0.02 * noise[3][k_p], "y": rec[k_p, 3] + 0.02 * noise[4][k_p]})
+                          "x": rec[k_p, 2] + sigma_p * noise[3][k_p], "y": rec[k_p, 3] + sigma_p * noise[4][k_p]})
     return frame, {**tr, "wheelbase": WHEELBASE, "gain_left": tr["gain"] * (1 + tr["asymmetry"]),
                    "gain_right": tr["gain"] * (1 - tr["asymmetry"]), "heading_rate": heading_rate}
 

@@ -6,6 +6,7 @@ update rate; harness.truth_tractor: the tractor's stiffnesses, so its understeer
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -68,6 +69,43 @@ def test_identify_fits_the_tractor_on_the_gnss_course():
     K = rep["understeer_gradient"]
     assert covers(K, k_true), (K, k_true)
     assert understeer_gradient(1.0, 2.0) > 0          # the formula's sign: understeer positive
+
+
+def test_a_slow_robot_reads_its_course_at_its_own_speeds(small_study):
+    """A robot at 0.5-0.9 m/s tracked at 120 Hz to 1 mm, positions only: the course is read where
+    0.5 s chords keep its noise sqrt(2) sigma / chord within 0.05 rad (a few cm/s here), the 1 m/s
+    passed over and said; the steering map's intervals hold the truth's (a machine without understeer:
+    the kinematic map's gain is g L / (L + K v^2), which millimetre positions tell from g). An explicit
+    course_speed wins."""
+    frame, truth = make_small_log(4, duration=150.0, truth={"understeer": 0.0}, speeds=(0.5, 0.9), rate=120.0,
+                                  positions=(120.0, 0.001))
+    frame = frame.drop(columns="heading")
+    rep = identify_driving(frame, "robot.csv", Study.load(small_study))
+    measured = rep["yaw_measurement"]
+    assert measured["kind"] == "GNSS course" and measured["course_speed"] < 0.2
+    assert "passed over the 1 m/s default" in measured["course_choice"] and "--course-speed" in measured["course_choice"]
+    assert "mm across the track" in summary(rep)
+    smap = rep["steering_map"]
+    assert covers(smap["gain"], truth["gain"]) and covers(smap["steer_offset"], truth["offset"]), smap
+    with pytest.raises(LogError, match="move forward at 1 m/s or more"):
+        identify_driving(frame, "robot.csv", Study.load(small_study), course_speed=1.0)
+
+
+def test_a_receivers_course_at_walking_pace_is_refused_with_its_noise(small_study):
+    """Fixes at 10 Hz with 2 cm noise: the course needs about 1.1 m/s on 0.5 s chords for 0.05 rad,
+    held at the 1 m/s (and 5-update chords) of before; at 0.5 m/s it is refused, the noise, the bound
+    and the option said, with the longer chord a --course-speed at its own speed would read it on."""
+    frame, _ = make_small_log(4, duration=60.0, speeds=(1.1, 1.5))
+    _, m = with_yaw_rate(frame.drop(columns="heading"), "tractor.csv")
+    assert (m.course_speed, m.chord_updates) == (1.0, 5) and "held at the 1 m/s default" in m.course_choice
+    slow, _ = make_small_log(4, duration=90.0, speeds=(0.45, 0.55))
+    with pytest.raises(LogError) as err:
+        identify_driving(slow.drop(columns="heading"), "walk.csv", Study.load(small_study))
+    text = str(err.value)
+    assert "walk.csv" in text and "too few to read the GNSS course" in text
+    assert all(s in text for s in ("mm across the track at 10 Hz", "within 0.05 rad", "held at the 1 m/s default",
+                                   "--course-speed changes it")), text
+    assert re.search(r"--course-speed 0\.[45]\d?, its median speed, reads it on chords of 0\.5 m, 1\.\d+ s", text), text
 
 
 @pytest.mark.parametrize("case, expect", [("frozen", "never updates"), ("degrees", "expected radians"),

@@ -143,8 +143,8 @@ def identify(source, *, study=None, method: str = "auto", set: Mapping[str, Any]
     measurements.ImportOptions for a raw recording. ``where``/``keep_unexplained``: the stretches
     judged (measurements.modes, the ``--where`` option). ``out``: checked before anything is computed,
     written as ``Identification.save`` writes. ``course_speed``: the speed [m/s] above which the
-    GNSS course measures the yaw (driving method; None: 1 m/s). ``fit_seconds``: at most this much of
-    the log's segments fitted (driving method; None: 300 s; identification.ordinary_driving).
+    GNSS course measures the yaw (driving method; None: the log's own, yaw_measurement.course_floor).
+    ``fit_seconds``: at most this much of the log's segments fitted (driving method; None: 300 s; identification.ordinary_driving).
     ``steering_geometry``: how the wheel angle w drives the single-track model, "w", "tan" or
     "auto" (the better of the two where w reaches 0.17 rad; driving method). ``input_hold``: how the
     steering input is read between its rows, "zoh" (held), "linear" or "auto" (linear; driving

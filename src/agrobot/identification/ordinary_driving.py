@@ -58,7 +58,7 @@ from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .axle_friction import axle_friction_fit, first_to_bend
-from .yaw_measurement import COURSE_SPEED, check_sign, with_yaw_rate
+from .yaw_measurement import check_sign, with_yaw_rate
 
 LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
@@ -215,10 +215,10 @@ def _quantity(value, std, unit, bounds=None, at_bound=None, **more) -> dict:
 
 
 def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_fit_seconds: float = 300.0,
-                     progress=None, max_rate: float = 25.0, course_speed: float = COURSE_SPEED,
+                     progress=None, max_rate: float = 25.0, course_speed: float | None = None,
                      dynamic: bool = False, wheelbase: float | None = None, geometry: str = "auto", input_hold="auto"):
     """The report (a JSON-able dict); raises NotEnoughDriving or a LogError naming what the log lacks.
-    Yaw without a gyro: identification.yaw_measurement (``course_speed``); the kinematic regime, the
+    Yaw without a gyro: identification.yaw_measurement (``course_speed``, None: the log's own); the kinematic regime, the
     steering map unless ``dynamic``: identification.kinematic; ``wheelbase``: wheelbase_of; ``geometry``: _steering_geometry;
     ``input_hold``: driving.input_hold."""
     say = progress or (lambda text: None)
@@ -233,7 +233,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     log.kernel, log.lean = measured.kernel(log.h), lean_of_log(frame, log)
     check_sign(np.where(log.measured, log.r, np.nan), log.v * log.u, where, measured)
     notes = list(log.notes) + [measured.text, f"wheelbase {L:.3g} m: {L_from}", INPUT_NOTE[command]]
-    floor = course_speed if measured.kind == "GNSS course" else 0.0
+    floor = measured.course_speed if measured.kind == "GNSS course" else 0.0
     min_speed, segs, driven = _enough_driving(log, where, L, input_name, notes, floor)
     say(f"{len(segs.idx)} segments, {driven:.0f} s of driving ({segs.held_out.sum()} held out)")
     if is_steady_turn(log, L, segs, MIN_EXCITATION):

@@ -6,8 +6,16 @@ Without a gyro the yaw rate is derived, in this order of preference, from
   yaw rate's sign);
 - the GNSS course atan2(dy, dx) of the positions ``x``, ``y`` [m] on chords of 0.5 m at
   ``course_speed`` (m position updates), where the vehicle moves forward above ``course_speed``
-  (1 m/s unless told; ``v`` must be positive there: a reversing vehicle's course is its heading +
-  180 deg), differenced over m updates.
+  (``v`` must be positive there: a reversing vehicle's course is its heading + 180 deg),
+  differenced over m updates. Unless told, ``course_speed`` is the log's own (course_floor): a
+  course over a chord of length D from positions of white noise sigma across the track has the
+  noise sqrt(2) sigma / D [rad], so chords of COURSE_TIME s keep it within COURSE_NOISE above
+
+      v_min = sqrt(2) sigma / (COURSE_NOISE COURSE_TIME),   course_speed = min(COURSE_SPEED, v_min)
+
+  (sigma: measurements.position_source.track_noise, at least the positions' resolution / sqrt 12);
+  a tractor-class receiver (sigma of 2 cm) keeps the 1 m/s of before, a motion-capture track
+  (millimetres) reads its course at a few cm/s.
 
 Each is read on its own updates (the rows where its value changes; a 5 Hz heading held in 20 Hz
 rows has a quarter of the rows' information), never on the rows::
@@ -31,9 +39,12 @@ import numpy as np
 import pandas as pd
 
 from agrobot.measurements import LogError
+from agrobot.measurements.position_source import track_noise
 
-COURSE_SPEED = 1.0          # m/s: the GNSS course is read above this speed (course_speed changes it)
+COURSE_SPEED = 1.0          # m/s: the GNSS course is read above this speed at most (course_speed changes it)
 COURSE_CHORD = 0.5          # m: the course is read on chords at least this long at course_speed
+COURSE_TIME = COURSE_CHORD / COURSE_SPEED      # s: a chord's duration at course_speed
+COURSE_NOISE = 0.05         # rad: the course noise sqrt(2) sigma / chord the default course_speed keeps within
 
 
 @dataclass(frozen=True)
@@ -47,15 +58,17 @@ class YawMeasurement:
     update_times: np.ndarray | None = None    # its yaw-rate samples' times (None: every row)
     course_speed: float | None = None
     chord_updates: int = 1                    # a course: the updates a chord spans
+    course_choice: str = ""                   # a course: how course_speed was chosen (course_floor)
 
     @property
     def text(self) -> str:
         if self.kind == "gyro":
             return "yaw measured by: gyro yaw_rate"
-        speed = f" above {self.course_speed:g} m/s moving forward (course_speed changes it)" if self.course_speed else ""
+        speed = f" above {self.course_speed:.3g} m/s moving forward (course_speed changes it)" if self.course_speed else ""
         return (f"yaw measured by: {self.kind}{speed}, {self.update_hz:.3g} Hz updates, differenced on its own updates "
                 f"(yaw-rate noise {self.noise:.2g} rad/s on the rows; stamped up to {1e3 * self.latency:.0f} ms late, "
-                f"a receiver latency is in the fitted delay); no gyro yaw_rate in the log")
+                f"a receiver latency is in the fitted delay); no gyro yaw_rate in the log"
+                + (f"; {self.course_choice}" if self.course_choice else ""))
 
     def kernel(self, h: float) -> np.ndarray | None:
         """The weights (odd length, sum 1) on a grid of step ``h`` with which the derived yaw rate
@@ -81,7 +94,7 @@ class YawMeasurement:
 
     def as_dict(self) -> dict:
         return {"kind": self.kind, "update_hz": self.update_hz, "noise": self.noise, "latency": self.latency,
-                "course_speed": self.course_speed, "text": self.text}
+                "course_speed": self.course_speed, "course_choice": self.course_choice, "text": self.text}
 
 
 def own_updates(x: np.ndarray) -> np.ndarray:
@@ -132,26 +145,60 @@ def from_heading(frame: pd.DataFrame, where: str) -> tuple[np.ndarray, YawMeasur
     return rows, YawMeasurement("dual-antenna heading", 1.0 / dt_u, sigma / dt_u, h if dt_u > 1.5 * h else 0.0, tr)
 
 
-def from_course(frame: pd.DataFrame, where: str, course_speed: float) -> tuple[np.ndarray, YawMeasurement]:
-    """The course of chords of at least COURSE_CHORD at ``course_speed`` (m updates apart), its rate
-    over m updates: a yaw rate averaged over 2 m updates (positions' noise sigma_p gives a course
-    noise sqrt(2) sigma_p / chord)."""
+def course_floor(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[float, str]:
+    """(course_speed [m/s], how it was chosen): min(COURSE_SPEED, sqrt(2) sigma / (COURSE_NOISE
+    COURSE_TIME)), sigma the positions' white noise across the track (module docstring); COURSE_SPEED
+    when too few moving fixes tell their noise."""
+    noise = track_noise(t, x, y)
+    if noise is None:
+        return COURSE_SPEED, (f"course_speed {COURSE_SPEED:g} m/s: too few moving fixes to read the positions' "
+                              f"own noise (--course-speed changes it)")
+    steps = np.abs(np.r_[np.diff(x), np.diff(y)])
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    resolution = float(steps.min()) / math.sqrt(12.0) if len(steps) else 0.0
+    sigma = max(float(noise["across"]), resolution)
+    need = math.sqrt(2.0) * sigma / (COURSE_NOISE * COURSE_TIME)
+    speed = min(COURSE_SPEED, need)
+    said = (f"course_speed {speed:.3g} m/s from the positions' own noise ({1e3 * sigma:.3g} mm across the track "
+            f"at {noise['hz']:.3g} Hz): chords of {COURSE_TIME:g} s at {need:.3g} m/s keep the course noise "
+            f"sqrt(2) sigma / chord within {COURSE_NOISE:g} rad")
+    if need > COURSE_SPEED:
+        said += (f", held at the {COURSE_SPEED:g} m/s default (its course noise "
+                 f"{math.sqrt(2.0) * sigma / (COURSE_SPEED * COURSE_TIME):.2g} rad)")
+    else:
+        said += f"; passed over the {COURSE_SPEED:g} m/s default"
+    return speed, said + " (--course-speed changes it)"
+
+
+def from_course(frame: pd.DataFrame, where: str, course_speed: float | None = None
+                ) -> tuple[np.ndarray, YawMeasurement]:
+    """The course of chords of at least course_speed COURSE_TIME at ``course_speed`` (m updates
+    apart; None: course_floor), its rate over m updates: a yaw rate averaged over 2 m updates
+    (positions' noise sigma_p gives a course noise sqrt(2) sigma_p / chord)."""
     t = frame["t"].to_numpy(float)
     x, y = frame["x"].to_numpy(float), frame["y"].to_numpy(float)
     k = np.union1d(own_updates(x), own_updates(y))
     if len(k) < 10:
         raise LogError(f"{where}: columns 'x', 'y' take {len(k)} distinct positions: they never update; expected "
                        f"positions that follow the drive (or a gyro yaw_rate, or a heading)")
+    choice = ""
+    if course_speed is None:
+        course_speed, choice = course_floor(t[k], x[k], y[k])
     dt_u = float(np.median(np.diff(t[k])))
-    m = max(1, int(math.ceil(COURSE_CHORD / (course_speed * dt_u))))
+    m = max(1, int(math.ceil(COURSE_TIME / dt_u - 1e-9))) if choice else \
+        max(1, int(math.ceil(COURSE_CHORD / (course_speed * dt_u))))
     tk, dx, dy = 0.5 * (t[k][m:] + t[k][:-m]), x[k][m:] - x[k][:-m], y[k][m:] - y[k][:-m]
     speed = np.hypot(dx, dy) / (t[k][m:] - t[k][:-m])
     if "v" in frame:             # a signed speed says forward; an unsigned one is taken as forward (said)
         speed = np.minimum(speed, np.interp(tk, t, frame["v"].to_numpy(float)))
     fwd = speed >= course_speed
     if fwd.sum() < 10 + m:
-        raise LogError(f"{where}: the positions x, y move forward at {course_speed:g} m/s or more on {int(fwd.sum())} "
-                       f"updates: too few to read the GNSS course (lower course_speed, or log a gyro or a heading)")
+        own = float(np.median(speed)) if len(speed) else 0.0
+        longer = (f"--course-speed {own:.2g}, its median speed, reads it on chords of {COURSE_CHORD:g} m, "
+                  f"{COURSE_CHORD / own:.2g} s; " if choice and 0 < own < course_speed else "lower course_speed, ")
+        raise LogError(f"{where}: the positions x, y move forward at {course_speed:.3g} m/s or more on {int(fwd.sum())} "
+                       f"updates: too few to read the GNSS course (" + (f"{choice}; " if choice else "")
+                       + f"{longer}or log a gyro or a heading)")
     course = np.unwrap(np.arctan2(dy, dx))
     ok = fwd[m:] & fwd[:-m]
     tr, r = (0.5 * (tk[m:] + tk[:-m]))[ok], ((course[m:] - course[:-m]) / (tk[m:] - tk[:-m]))[ok]
@@ -159,14 +206,15 @@ def from_course(frame: pd.DataFrame, where: str, course_speed: float) -> tuple[n
     sigma = _noise(course[fwd][::m])
     h = float(np.median(np.diff(t)))
     return rows, YawMeasurement("GNSS course", 1.0 / dt_u, sigma / (m * dt_u), h if dt_u > 1.5 * h else 0.0, tr,
-                                course_speed, m)
+                                course_speed, m, choice)
 
 
-def with_yaw_rate(frame: pd.DataFrame, where: str, course_speed: float = COURSE_SPEED
+def with_yaw_rate(frame: pd.DataFrame, where: str, course_speed: float | None = None
                   ) -> tuple[pd.DataFrame, YawMeasurement | None]:
     """(the log with a ``yaw_rate``, what measured it): the gyro's when the log has one (or a yaw
     rate derived before, frame.attrs["yaw_measurement"]), else derived from ``heading``, else from
-    the course of ``x``, ``y``; (the log, None) when it has none of them or a gyro under another name. A derived yaw rate is nan
+    the course of ``x``, ``y`` above ``course_speed`` (None: the log's own, course_floor); (the log,
+    None) when it has none of them or a gyro under another name. A derived yaw rate is nan
     where its measurement says nothing (a slow stretch for the course)."""
     known = frame.attrs.get("yaw_measurement")
     if "yaw_rate" in frame:

@@ -6,11 +6,15 @@ numbers in columns is a table): lines starting with ``#`` or ``//`` are comments
 whole in quotes (``"1.0,2.5,3"``) are unwrapped; the delimiter (``,`` ``;`` tab ``|`` or white
 space) is the one that splits the rows below the header alike into the most numbers. A comment
 line right above header-less rows that splits like them into names is their header (numpy.savetxt
-writes ``# time(s),x(m),...``). The header
-is the rows before the first that holds a number: none means a file without a header, its
-columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units under it
-(``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows of
-names are joined with ``_`` (a group's name over its columns). A header's unit in brackets,
+writes ``# time(s),x(m),...``). The data
+is the longest run of rows with one field count that hold numbers (from its first run of that
+count); the header is the rows right above it that hold no number (or have its field count: a
+row of IDs); lines above the header (a metadata line of keys and values, as OptiTrack Motive
+writes one) are a preamble, named in the notes and left out. No header means a file without
+one, its columns named ``col1``, ``col2`` ...; the first row names the columns, a row of units
+under it (``deg``, ``km/h``, ``Unix epoch seconds`` ...) gives their declared units, further rows
+of names are joined with ``_`` (a group's name over its columns: ``Position_X``), less the rows
+with one name over every column (a body's name over all of them). A header's unit in brackets,
 ``speed [km/h]`` or ``speed (km/h)``, is the column's unit (the name is what precedes it). A
 column that holds no number is named with why (empty, text); a table of text only is refused.
 With lat/lon columns, a ``fix_quality`` column (or ``quality``, ``gps_quality`` ...) is the
@@ -167,7 +171,7 @@ def _decimal_points(rows: list[str], sep: str, notes: list) -> list[str]:
 
 def declared_unit(text: str) -> str | None:
     """A units row's cell as a unit: pint's units, 'Unix epoch seconds' (and the like) -> s, ms ...,
-    a date's 'datetime', '' for none; None where it is not a unit."""
+    a date's 'datetime', '' for none (and 1); None where it is not a unit (a number other than 1)."""
     text = text.strip().strip("[]()").strip()
     low = text.lower()
     if low in NO_UNIT:
@@ -177,6 +181,8 @@ def declared_unit(text: str) -> str | None:
     m = _EPOCH.match(low)
     if m:
         return _SHORT.get(m.group(1), m.group(1))
+    if _is_number(text):                # a number other than 1 is a value (an ID), never a unit
+        return None
     try:
         check_unit(text, "")
     except LogError:
@@ -184,30 +190,79 @@ def declared_unit(text: str) -> str | None:
     return text
 
 
-def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], dict, int]:
-    """(names, units, first data row) of the rows' header: the rows before the first that holds a
-    number; the first is the names, a row of units (most of its cells units) gives the units,
-    other rows are more of the names (a group's name over its columns, joined with '_')."""
-    first = next((i for i, r in enumerate(rows) if any(_is_number(v) for v in r)), None)
-    if first is None:
+def _holds_number(row: list[str]) -> bool:
+    return any(_is_number(v) for v in row)
+
+
+def _data_start(rows: list[list[str]]) -> tuple[int, int] | None:
+    """(first row, field count) of the data: the rows holding a number come in runs of one field
+    count; the data starts at the first run of the longest run's count at least min(3, the longest)
+    rows long, and takes in the rows right above it that are mostly numbers and not wider (a row
+    short of its last fields). A metadata line (key, value pairs holding numbers, another count) or
+    a numeric row inside a header makes no such run. The field count is the widest of the data's
+    first 50 rows. None when no row holds a number."""
+    runs: list[list[int]] = []                        # [start, length, field count]
+    for i, r in enumerate(rows):
+        if not _holds_number(r):
+            continue
+        if runs and sum(runs[-1][:2]) == i and runs[-1][2] == len(r):
+            runs[-1][1] += 1
+        else:
+            runs.append([i, 1, len(r)])
+    if not runs:
+        return None
+    longest = max(runs, key=lambda run: run[1])
+    start = next(s for s, n, w in runs if w == longest[2] and n >= min(3, longest[1]))
+    while start > 0 and len(rows[start - 1]) <= longest[2] and _mostly_numbers(rows[start - 1]):
+        start -= 1
+    return start, max(len(r) for r in rows[start:start + 50] if _holds_number(r))
+
+
+def _mostly_numbers(row: list[str]) -> bool:
+    cells = [v for v in row if v]
+    return bool(cells) and sum(map(_is_number, cells)) >= 0.5 * len(cells)
+
+
+def _header_start(rows: list[list[str]], first: int, width: int) -> int:
+    """The header's first row: the rows right above the data that hold no number or have its field
+    count (an ID row of numbers between rows of names), less those on top that hold a number (a
+    header starts with names); the rows above it are a preamble (a metadata line such as
+    'Format Version,1.21,...,Capture Frame Rate,120')."""
+    top = first
+    while top > 0 and (not _holds_number(rows[top - 1]) or len(rows[top - 1]) == width):
+        top -= 1
+    while top < first and _holds_number(rows[top]):
+        top += 1
+    return top
+
+
+def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], dict, int, bool]:
+    """(names, units, first data row, header-less) of the rows: the data is the rows from
+    _data_start, the header the rows right above it (_header_start), a preamble above that is
+    named in the notes and left out. The header's first row is the names, a row of units (most of
+    its cells units) gives the units, other rows are more of the names (_names)."""
+    found = _data_start(rows)
+    if found is None:
         raise LogError(f"{path}: a table of text only, no column to take: no row holds a number (first rows: "
                        + "; ".join(",".join(r[:6]) for r in rows[:3]) + "); expected a header and rows of numbers")
-    width = max((len(r) for r in rows[first:first + 50]), default=0)
-    if first == 0:
-        return [f"col{i + 1}" for i in range(width)], {}, 0
-    head = [(list(r) + [""] * width)[:width] for r in rows[:first]]
+    first, width = found
+    top = _header_start(rows, first, width)
+    if top:
+        notes.append(f"{top} line(s) above the header taken as a preamble, not the table (their fields are not the "
+                     f"data's {width}): " + "; ".join(repr(",".join(r)[:80]) for r in rows[:min(top, 3)])
+                     + f"; header: {first - top} row(s) above the data" + (", none: columns named col1 ..."
+                                                                          if top == first else ""))
+    if top == first:
+        return [f"col{i + 1}" for i in range(width)], {}, first, True
+    head = [(list(r) + [""] * width)[:width] for r in rows[top:first]]
     units_row, name_rows = None, [head[0]]
     for r in head[1:]:
-        cells = [declared_unit(v) for v in r if v]
+        cells = [None if _is_number(v) else declared_unit(v) for v in r if v]      # a row of IDs is names
         if units_row is None and cells and sum(c is not None for c in cells) >= 0.5 * len(cells):
             units_row = r
         else:
             name_rows.append(r)
-    for r in name_rows[:-1]:                      # a group's name spans the cells after it (merged cells)
-        for k in range(1, width):
-            r[k] = r[k] or r[k - 1]
-    names = ["_".join(dict.fromkeys(r[k] for r in name_rows if r[k])) for k in range(width)]
-    names = _unique([n or f"Unnamed: {k}" for k, n in enumerate(names)])      # named col<k+1> by read_table
+    names = _names(name_rows, width, notes)
     units, unknown = {}, []
     for name, cell in zip(names, units_row or []):
         unit = declared_unit(cell) if cell else ""
@@ -219,9 +274,27 @@ def _header(rows: list[list[str]], path: Path, notes: list) -> tuple[list[str], 
         notes.append("a units row under the header, its units used: " + ", ".join(f"{n} [{u}]" for n, u in units.items())
                      + (f"; not units, ignored: {', '.join(unknown)} (declare one with --signal COLUMN=NAME[unit])"
                         if unknown else ""))
+    return names, units, first, False
+
+
+def _names(name_rows: list[list[str]], width: int, notes: list) -> list[str]:
+    """The columns' names from a header's rows of names: a group's name spans the cells after it
+    (merged cells); a row above the last that holds one name over all its cells tells no column
+    from another and is left out (said); the rest are joined with '_' from the top, repeated names
+    made unique with _2, _3 ... (_unique)."""
+    for r in name_rows[:-1]:
+        for k in range(1, width):
+            r[k] = r[k] or r[k - 1]
+    same = [r for r in name_rows[:-1] if len({v for v in r if v}) == 1]
+    if same:
+        notes.append(f"{len(same)} header row(s) with one name over every column left out of the names: "
+                     + ", ".join(repr(next(v for v in r if v)) for r in same))
+    name_rows = [r for r in name_rows if not any(r is x for x in same)]
+    names = ["_".join(dict.fromkeys(r[k] for r in name_rows if r[k])) for k in range(width)]
+    names = _unique([n or f"Unnamed: {k}" for k, n in enumerate(names)])      # named col<k+1> by read_table
     if len(name_rows) > 1:
-        notes.append(f"a header of {len(name_rows)} rows of names, joined with '_': {', '.join(names[:6])}")
-    return names, units, first
+        notes.append(f"a header of {len(name_rows)} rows of names, joined with '_': {', '.join(names[:10])}")
+    return names
 
 
 def _unique(names: list[str]) -> list[str]:
@@ -304,14 +377,14 @@ def _text_table(path: Path, suffix: str, notes: list) -> tuple[pd.DataFrame, dic
         notes[:] = [_one_comment_fewer(n) for n in notes if not n.startswith("1 comment line(s)")]
         notes.append(f"the header is a comment line ('{head[:40]}...', as numpy.savetxt writes one): its names used")
     rows = _decimal_points(rows, sep, notes)
-    names, units, first = _header([_split(r, sep) for r in rows[:200]], path, notes)
+    names, units, first, headerless = _header([_split(r, sep) for r in rows[:200]], path, notes)
     frame = pd.read_csv(io.StringIO("\n".join(rows[first:])), sep=r"\s+" if sep == " " else sep, header=None,
                         engine="python" if sep == " " else "c", skipinitialspace=True)
     names = (names + [f"col{i + 1}" for i in range(len(names), frame.shape[1])])[:frame.shape[1]]
     frame.columns = names
     if sep not in (",", "\t"):
         notes.append(f"fields separated by {'white space' if sep == ' ' else repr(sep)} (read from the content)")
-    return frame, units, first == 0
+    return frame, units, headerless
 
 
 def _one_comment_fewer(note: str) -> str:
