@@ -58,6 +58,7 @@ def test_a_lever_arm_outside_the_outline_is_not_a_mounting_and_the_verdict_says_
     ("steering_gain", {"steering_gain": 1 / 16.0}, "a steering ratio (1:16)"),
     ("steering_gain", {"steering_gain": math.pi / 180}, "in degrees where radians"),
     ("steering_gain", {"steering_gain": 2.5}, "another quantity"),
+    ("steering_gain", {"steering_gain": 0.664}, "the log's steering (command or reading)"),
 ])
 def test_values_no_vehicle_of_the_class_has_are_named(eid, params, words):
     notes = judge_values(effect(eid, **params), CAR, 2.97, 1.5, 20.0)

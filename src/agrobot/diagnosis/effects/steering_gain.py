@@ -39,15 +39,16 @@ class SteeringGain(Effect):
         raise KeyError("steering map gain (multiply the log's delta_cmd and delta by it)")
 
     def plausibility(self, values, ctx):
-        """A gain outside ``CALIBRATION`` is a unit (180/pi), a steering ratio (1:8 to 1:30) or another quantity."""
+        """A gain outside ``CALIBRATION`` is a unit (180/pi), a steering ratio (1:8 to 1:30) or another quantity,
+        whether the log's steering is the command or a measured angle."""
         k = values.get("steering_gain")
         if k is None or CALIBRATION[0] <= k <= CALIBRATION[1]:
             return []
         if abs(k * 180 / math.pi - 1.0) < 0.1 or abs(k * math.pi / 180 - 1.0) < 0.1:
-            return [f"a steering command gain of {k:.3g} is a unit: the command is in degrees where radians "
-                    f"are expected, or the other way round"]
+            return [f"a steering gain of {k:.3g} (wheel angle per logged steering) is a unit: the log's steering "
+                    f"(command or reading) is in degrees where radians are expected, or the other way round"]
         if 1 / 30 <= k <= 1 / 8:
-            return [f"a steering command gain of {k:.3g} is a steering ratio (1:{1 / k:.0f}): the command is the "
-                    f"handwheel's angle, not the road wheels'"]
-        return [f"a steering command gain of {k:.3g} is no calibration error: the command is another quantity "
-                f"or in another unit"]
+            return [f"a steering gain of {k:.3g} (wheel angle per logged steering) is a steering ratio "
+                    f"(1:{1 / k:.0f}): the log's steering is the handwheel's angle, not the road wheels'"]
+        return [f"a steering gain of {k:.3g} (wheel angle per logged steering) is no calibration error: the "
+                f"log's steering (command or reading) is another quantity or in another unit"]
