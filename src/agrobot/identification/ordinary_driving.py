@@ -58,7 +58,7 @@ from .turning import turning
 from .steady_state import in_linear_range, steady_windows
 from .vehicle import Vehicle
 from .axle_friction import axle_friction_fit, first_to_bend
-from .yaw_measurement import check_sign, with_yaw_rate
+from .yaw_measurement import YawMeasurement, check_sign, with_yaw_rate
 
 LARGE_ANGLE = 0.172           # rad: tan w exceeds w by 1 % (identification.driving.ACKERMANN tried)
 MIN_DRIVING = 20.0            # s of scored driving, fit and held-out together
@@ -116,8 +116,9 @@ def similar_columns(columns, wanted: str) -> list[str]:
     return [c for c in map(str, columns) if c != wanted and c.replace("_", "").replace("-", "").replace(" ", "").lower() == key]
 
 
-def missing_text(frame, needs: dict[str, str]) -> str | None:
-    """None when every need is met; else what is missing, why, and the columns the log has."""
+def missing_text(frame, needs: dict[str, str], derived: dict[str, str] | None = None) -> str | None:
+    """None when every need is met; else what is missing, why, and the columns the log has (``derived``:
+    a column made from others, named with its source)."""
     gaps = []
     for col, why in needs.items():
         options = col.split("|")
@@ -127,7 +128,9 @@ def missing_text(frame, needs: dict[str, str]) -> str | None:
             gaps.append(f"no {' or '.join(options)} ({why}){hint}")
     if not gaps:
         return None
-    return "; ".join(gaps) + f"; the log has {', '.join(map(str, frame.columns))}"
+    derived = derived or {}
+    names = [f"{c} ({derived[c]})" if c in derived else str(c) for c in frame.columns]
+    return "; ".join(gaps) + f"; the log has {', '.join(names)}"
 
 
 def study_plant(study) -> tuple[str, TractorParameters]:
@@ -227,7 +230,7 @@ def identify_driving(frame, where: str, study=None, min_gain: float = 0.05, max_
     L, L_from = wheelbase_of(vehicle, p, wheelbase, study)
     p, L_from = plant_on_wheelbase(p, L, L_from)
     frame, measured = with_yaw_rate(frame, where, course_speed)
-    input_name = _steering_input(frame, where, vehicle)
+    input_name = _steering_input(frame, where, vehicle, measured)
     command = input_name == "delta_cmd"
     log = even_grid(frame, input_name, max_rate=max_rate, update_times=measured.update_times, hold=input_hold)
     log.kernel, log.lean = measured.kernel(log.h), lean_of_log(frame, log)
@@ -386,7 +389,7 @@ def plant_on_wheelbase(p: TractorParameters, L: float, L_from: str) -> tuple[Tra
                     f"l_r {scaled.l_r:.3g} m")
 
 
-def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
+def _steering_input(frame, where: str, vehicle: Vehicle, measured: YawMeasurement | None = None) -> str:
     """The log's steering input: the measured wheel angle ``delta``, else the command ``delta_cmd``;
     raises when the vehicle has no yaw dynamics to identify or the log lacks a column it needs
     (a torque-commanded steering needs the measured angle)."""
@@ -398,7 +401,9 @@ def _steering_input(frame, where: str, vehicle: Vehicle) -> str:
                                "delta|delta_cmd": "a steering angle, measured or commanded, is the input; a skid-"
                                                   "steered vehicle's is a turn rate, odom_yaw_rate or turn_rate_cmd "
                                                   "[rad/s]: --signal 'odom_yaw_rate=/odom.twist.twist.angular.z'",
-                               "v": "the speed schedules the model"})
+                               "v": "the speed schedules the model"},
+                       None if measured is None or measured.kind == "gyro" else
+                       {"yaw_rate": f"derived from the {measured.kind}, not logged"})
     if gap:
         raise LogError(f"{where}: identification from driving not possible: {gap}")
     if vehicle.steering == "torque" and "delta" not in frame:
