@@ -28,6 +28,7 @@ def report():
     return identify_driving(frame, "generated", load_study(CAR), wheelbase=2.4)
 
 
+@pytest.mark.slow
 def test_the_limit_understeer_of_a_front_letting_go_first_is_not_read_as_K(report):
     K = report["understeer_gradient"]
     assert report["final_model"] == "tyre_saturation"
@@ -36,6 +37,7 @@ def test_the_limit_understeer_of_a_front_letting_go_first_is_not_read_as_K(repor
     assert K["interval"][0] <= K_TRUE * 1.02 and K["interval"][1] >= K_TRUE * 0.98
 
 
+@pytest.mark.slow
 def test_the_front_is_said_to_let_go_first(report):
     ratio = report["tyre_saturation"]["parameters"]["friction_ratio"]
     assert ratio["value"] > 1.1 and ratio["interval"][0] > 1.0

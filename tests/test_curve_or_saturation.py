@@ -8,6 +8,8 @@ wheel-angle sensor reading a ratio curve c = -8 1/rad2 (the wheels turn delta (1
 8 % less at 0.1 rad); one speed is the driving plan's segments all at 25 m/s."""
 from __future__ import annotations
 
+import pytest
+
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
 from agrobot.diagnosis.curve_or_saturation import COLLINEAR, turn_collinearity
@@ -53,6 +55,7 @@ def test_a_curve_on_a_car_saturating_at_one_speed_cannot_be_told_from_the_satura
     assert "collinear in delta and a_y" in why and "correlate at 1.000" in why, why
 
 
+@pytest.mark.slow
 def test_a_curve_on_a_car_saturating_at_three_speeds_is_tied_by_the_fit_not_the_driving():
     """The same car driven at 15, 25 and 35 m/s: its turns are not collinear, so a tie is not the driving's
     to blame. The catalogue's Magic Formula tyre fitted beside the curve does not follow this truth's tyre

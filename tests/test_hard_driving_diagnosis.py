@@ -8,6 +8,8 @@ whose force (mu x the shape's share) is above a car's class top 1.3; the same fr
 shape is judged, as before."""
 from __future__ import annotations
 
+import pytest
+
 from agrobot.diagnosis.baseline import baseline_from_study
 from agrobot.diagnosis.candidates import Replay
 from agrobot.diagnosis.selection import Selector
@@ -35,6 +37,7 @@ def test_a_friction_beside_a_shape_on_its_bound_is_not_judged_implausible():
     assert v["status"] == "implausible" and "overstated" in v["statement"], v
 
 
+@pytest.mark.slow
 def test_a_car_driven_into_its_tyres_saturation_gets_no_steering_map_verdict():
     """The passenger car driven hard (harness.truth_tractor "car_hard": 15-35 m/s, |a_y| to 10 m/s2)
     with tyres that saturate (F = C alpha / (1 + |alpha| / alpha_s), alpha_s 6 deg) and its road-wheel

@@ -155,6 +155,7 @@ def sports_car_study(folder: Path) -> Path:
     return folder / "sports_car.toml"
 
 
+@pytest.mark.slow
 def test_a_rear_axle_stiffer_than_the_class_range_is_fitted_not_left_on_its_bound(tmp_path):
     rear = 2.2e5                                    # N/rad: 41 per unit rear-axle load, beyond the class's 30
     frame, _ = import_recording(write(tmp_path / "stiff", drive(90.0, rear=rear)), options())

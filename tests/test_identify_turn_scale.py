@@ -113,6 +113,7 @@ def test_offset_outside_the_class_flagged_and_standstill_bias_measured(tmp_path)
     assert "concluded" not in rep["parameters"]["steer_offset"]
 
 
+@pytest.mark.slow
 def test_a_saturation_misfit_is_not_a_turn_scale():
     """The car's tyres bend from the first degree (harness.truth_tractor's tyre_saturation), its
     turns at their true scale: a turn scale fitted on that misfit does not predict the held-out
