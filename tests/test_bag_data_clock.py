@@ -77,3 +77,10 @@ def test_a_clock_with_a_value_that_is_not_a_number_is_refused_naming_the_message
     _bag(tmp_path / "nan.bag", ms)
     with pytest.raises(LogError, match=r"message 501 holds nan s after"):
         import_recording(tmp_path / "nan.bag", _options("/stamp.data[ms]"))
+
+
+def test_a_clock_topic_the_bag_lacks_is_named_as_the_time_given(tmp_path):
+    _bag(tmp_path / "replayed.bag")
+    with pytest.raises(LogError) as err:
+        import_recording(tmp_path / "replayed.bag", _options("/nope.data[ms]"))
+    assert "--time /nope.data[ms]: no topic '/nope'" in str(err.value) and "data_clock" not in str(err.value)

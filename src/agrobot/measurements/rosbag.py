@@ -510,7 +510,10 @@ def on_data_clock(signals: dict, clock: tuple[np.ndarray, np.ndarray], text: str
 def bag_streams(paths: list[Path], options, source: Path):
     """The recording's streams from ROS bags."""
     clock = clock_spec(options.time, source)
-    signals, topics = read_bags(paths, list(options.signals) + ([clock] if clock else []), source)
+    try:
+        signals, topics = read_bags(paths, list(options.signals) + ([clock] if clock else []), source)
+    except LogError as err:            # the clock is read as a signal: its errors are said as the --time given
+        raise LogError(str(err).replace(f"--signal {CLOCK_COLUMN}=", "--time ")) from None
     reference = "the bag's clock: header stamps (receive times where a message has no header)"
     notes = list(topics.pop("choices", []))
     if clock is not None:
