@@ -72,3 +72,24 @@ def test_a_localisation_on_a_jittering_clock_is_an_estimate(small):
 def test_a_source_named_for_an_estimator_is_one_unless_it_names_a_receiver(source, estimate):
     """A particle filter's poses scatter like fixes (isotropic); its topic's name tells."""
     assert (named_estimate(source) is not None) == estimate
+
+
+def test_a_motion_captures_positions_are_not_an_estimate():
+    """Optical motion capture: the path itself with 0.2 mm of white noise the same both ways, at 100 Hz.
+    A measurement (white, isotropic), though finer than any receiver's."""
+    frame, _ = make_log(5, None, duration=120.0, vehicle="small_ackermann", rate=100.0)
+    x, y = odometry(frame)
+    noise = 0.2e-3 * np.random.default_rng(11).standard_normal((2, len(x)))
+    frame["x"], frame["y"] = np.round(x + noise[0], 6), np.round(y + noise[1], 6)      # Motive writes micrometres
+    assert estimate_kinds(frame) == []
+
+
+def test_a_smooth_path_stored_in_float32_far_from_its_origin_is_still_an_estimate(small):
+    """Its rounding (0.06 mm steps 800 m out) is white and the same both ways, but no finer than the
+    values' resolution: rounding, not a measurement."""
+    frame = small.copy()
+    frame["v"] = np.convolve(frame["v"], np.ones(20) / 20, mode="same")
+    x, y = odometry(frame)
+    frame["x"], frame["y"] = (np.float32(800.0 + x)).astype(float), (np.float32(-600.0 + y)).astype(float)
+    found = estimate_kinds(frame)
+    assert len(found) == 1 and "smooth both ways" in found[0]["meaning"]

@@ -153,10 +153,7 @@ def course_floor(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[float, st
     if noise is None:
         return COURSE_SPEED, (f"course_speed {COURSE_SPEED:g} m/s: too few moving fixes to read the positions' "
                               f"own noise (--course-speed changes it)")
-    steps = np.abs(np.r_[np.diff(x), np.diff(y)])
-    steps = steps[np.isfinite(steps) & (steps > 0)]
-    resolution = float(steps.min()) / math.sqrt(12.0) if len(steps) else 0.0
-    sigma = max(float(noise["across"]), resolution)
+    sigma = max(float(noise["across"]), noise["resolution"])
     need = math.sqrt(2.0) * sigma / (COURSE_NOISE * COURSE_TIME)
     speed = min(COURSE_SPEED, need)
     said = (f"course_speed {speed:.3g} m/s from the positions' own noise ({1e3 * sigma:.3g} mm across the track "
