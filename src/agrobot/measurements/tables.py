@@ -562,10 +562,30 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                     table.t, table.time_how = x * factor, f"{cols[0]} [{how}]"
             return True
         if len(spec.columns) == 1 and "." in spec.columns[0]:
-            return False                          # another table's clock, row by row (join_rows)
+            return _named_time(table)             # its own clock, else another table's row by row (read_tables)
         missing = [c for c, k in zip(spec.columns, cols) if not k]
         raise LogError(f"{where}: --time {spec.text}: no column {missing[0]!r}; columns: "
                        f"{', '.join(map(str, f.columns[:20]))}")
+    if _named_time(table):
+        return True
+    first = f.columns[0] if len(f.columns) > 1 else None
+    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
+            and _even(f[first].to_numpy(float)):
+        c = first
+        x = _numbers(f[c], where, c)
+        factor, how = _magnitude_unit(x)
+        table.t, table.time_columns = x * factor, (c,)
+        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
+                          f"--time COLUMN[unit] picks another)")
+        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
+        return True
+    return False
+
+
+def _named_time(table: Table) -> bool:
+    """Set ``table.t`` from a column named as a clock (a seconds + nanoseconds pair, then
+    TIME_NAMES; its unit from the header, else from its size); False when none is."""
+    f, where = table.frame, str(table.path)
     lower = {str(c).lower(): c for c in f.columns}
     for s, ns in PAIRS:
         if s in lower and ns in lower and pd.api.types.is_numeric_dtype(f[lower[s]]):
@@ -590,17 +610,6 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                     factor, how = 1e-9, "ns (rostopic's %time)"
                 table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
             return True
-    first = f.columns[0] if len(f.columns) > 1 else None
-    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
-            and _even(f[first].to_numpy(float)):
-        c = first
-        x = _numbers(f[c], where, c)
-        factor, how = _magnitude_unit(x)
-        table.t, table.time_columns = x * factor, (c,)
-        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
-                          f"--time COLUMN[unit] picks another)")
-        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
-        return True
     return False
 
 
@@ -670,7 +679,7 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
         raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
     timed = [t for t in tables if t.t is not None or time_of(t, spec)]      # an MDF group has its own clock
-    clock = next((t for t in timed if spec is not None and t.time_columns), None)
+    clock = next((t for t in timed if spec is not None and all(_column(t, c) for c in spec.columns)), None)
     for t in tables:
         if t.t is not None:
             continue

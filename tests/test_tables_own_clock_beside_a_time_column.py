@@ -1,0 +1,44 @@
+"""A folder of two loggers' tables, each on its own clock: an IMU logger whose clock column is not
+named as one (declared with --time TABLE.COLUMN[ms]) and a phone's GNSS export with a column named
+``time`` in seconds. The --time names the IMU table's clock; the GNSS table keeps its own (the
+TABLE.COLUMN form is for tables without their own): it is neither refused for want of a time nor
+handed the IMU's stamps row by row when both hold as many rows."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from agrobot.measurements.tables import read_tables
+
+
+def _folder(root, imu_rows: int, gnss_rows: int):
+    root.mkdir()
+    imu_ms = 6004.0 + 534.0 * np.arange(imu_rows)               # a boot clock in ms, about 1.9 Hz
+    pd.DataFrame({"Stamp": imu_ms, "Gz": np.sin(np.arange(imu_rows))}).to_csv(root / "imu.csv", index=False)
+    gnss_s = 0.042 + 1.0 * np.arange(gnss_rows)                  # its own clock in s, 1 Hz
+    pd.DataFrame({"time": gnss_s, "lat": 53.1 + 1e-5 * np.arange(gnss_rows),
+                  "lon": np.full(gnss_rows, 8.85)}).to_csv(root / "gnss.csv", index=False)
+    return sorted(root.iterdir()), imu_ms / 1e3, gnss_s
+
+
+def test_a_table_with_its_own_clock_keeps_it_beside_another_tables_time(tmp_path):
+    paths, imu_t, gnss_t = _folder(tmp_path / "ride", 120, 80)
+    tables = {t.name: t for t in read_tables(paths, "imu.Stamp[ms]", None, tmp_path / "ride")}
+    np.testing.assert_allclose(tables["imu"].t, imu_t)
+    assert tables["gnss"].t is not None, "the GNSS table's own 'time' column was not taken"
+    np.testing.assert_allclose(tables["gnss"].t, gnss_t)
+    assert "found by name" in tables["gnss"].time_how
+
+
+def test_as_many_rows_do_not_hand_it_the_time_files_clock(tmp_path):
+    """The time in a file of its own (one column, as many rows): the table without a clock takes it
+    row by row, the GNSS table with its own keeps its own."""
+    paths, imu_t, gnss_t = _folder(tmp_path / "ride", 100, 100)
+    pd.DataFrame({"Stamp": imu_t * 1e3}).to_csv(tmp_path / "ride" / "clock.csv", index=False)
+    pd.read_csv(tmp_path / "ride" / "imu.csv")[["Gz"]].to_csv(tmp_path / "ride" / "imu.csv", index=False)
+    paths = sorted((tmp_path / "ride").iterdir())
+    tables = {t.name: t for t in read_tables(paths, "clock.Stamp[ms]", None, tmp_path / "ride")}
+    np.testing.assert_allclose(tables["imu"].t, imu_t)
+    assert tables["imu"].time_how.startswith("row by row from clock")
+    assert not tables["gnss"].time_how.startswith("row by row"), tables["gnss"].time_how
+    np.testing.assert_allclose(tables["gnss"].t, gnss_t)
