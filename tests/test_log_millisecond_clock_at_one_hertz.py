@@ -29,3 +29,20 @@ def test_a_clock_is_named_by_the_rate_it_gives(step, unit, divide, hz):
     text = str(err.value)
     assert "ride.csv" in text and "'t'" in text
     assert f"looks like {unit} {hz}" in text and divide in text, text
+
+
+def test_convert_names_the_table_clock_taken_as_seconds(tmp_path):
+    """A logger's table whose clock column counts milliseconds without saying so (a 2 Hz IMU row with
+    a 1 Hz fix): taken as seconds, the log steps by 1000; the refusal names the table's column and
+    the --time that declares it."""
+    from agrobot.api import convert
+
+    n = 600
+    ms = 6004.0 + 500.0 * np.arange(n)
+    fix = np.arange(n) // 2
+    pd.DataFrame({"Time": ms, "Gz": np.zeros(n), "LAT": 53.1 + 3e-5 * fix, "LNG": np.full(n, 8.85)}).to_csv(
+        tmp_path / "ride.csv", index=False)
+    with pytest.raises(LogError) as err:
+        convert(tmp_path / "ride.csv", signals=["yaw_rate=Gz[deg/s]", "lat=LAT[deg]", "lon=LNG[deg]"])
+    text = str(err.value)
+    assert "looks like milliseconds" in text and "--time 'ride.Time[ms]'" in text, text

@@ -101,6 +101,7 @@ def persisted_audit(path) -> list | None:
     return list(found) if isinstance(found, list) else None
 
 
+SECONDS_STEP_MAX = 9.5  # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
 MS_STEP_MAX = 2000.0    # a millisecond clock at 0.5-100 Hz steps by 10-2000 (a 1 Hz receiver's, 1000 and a jitter);
                         # a microsecond one at up to 500 Hz by more
 
@@ -135,7 +136,7 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
         i = int(np.argmax(dt <= 0))
         raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
     step = float(np.median(dt))
-    if step >= 9.5:           # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
+    if step >= SECONDS_STEP_MAX:
         unit, factor = ("microseconds", 1e6) if step > MS_STEP_MAX else ("milliseconds", 1e3)
         raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a vehicle log samples at 0.1-100 Hz, "
                        f"so it looks like {unit} ({factor / step:.3g} Hz): the log must hold seconds (divide t by "
