@@ -32,8 +32,8 @@ def _folder(root, start: float, gyro_in_wheel_file: bool = False, seed: int = 1)
     return root
 
 
-def _clock_findings(folder, *extra):
-    options = ImportOptions(signals=["yaw_rate=imu.gz[rad/s]", "v=wheel.speed[m/s]", *extra], align="none")
+def _clock_findings(folder, *extra, align: str = "none"):
+    options = ImportOptions(signals=["yaw_rate=imu.gz[rad/s]", "v=wheel.speed[m/s]", *extra], align=align)
     _, report = import_recording(folder, options)
     return [f for f in report["audit"]["findings"] if f["kind"] == "clock_offset"]
 
@@ -55,3 +55,7 @@ def test_a_pair_across_them_measures_the_offset_instead(tmp_path):
 
 def test_dated_tables_are_one_time_scale(tmp_path):
     assert _clock_findings(_folder(tmp_path / "ride", start=1.7e9)) == []
+
+
+def test_an_offset_the_user_gives_is_not_said_unknown(tmp_path):
+    assert _clock_findings(_folder(tmp_path / "ride", start=6.0), align="wheel=-7") == []

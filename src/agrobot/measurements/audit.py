@@ -935,9 +935,10 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
     return moved
 
 
-def unchecked_clocks(aud: Auditor, pair_findings: list[dict]) -> list[dict]:
+def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | None = None) -> list[dict]:
     """A ``clock_offset`` finding (value NaN, no interval; said, not acted on) for each clock that
-    no pair of channels compared with the reference's (the receiver's, else the first), where
+    no pair of channels compared with the reference's (the receiver's, else the first) nor
+    ``applied`` moved (--align GROUP=SECONDS: the user's word), where
     either counts from its logger's start rather than being a date: their stamps are joined as if
     the loggers started together, which nothing in the recording confirms (dates are taken as one
     time scale, UTC)."""
@@ -951,8 +952,8 @@ def unchecked_clocks(aud: Auditor, pair_findings: list[dict]) -> list[dict]:
     reference = next(iter(channels), None)
     for clock in list(channels)[1:]:
         boot = [c for c in (clock, reference) if is_boot_clock(stamps[c])]
-        if boot and clock not in compared:
-            group = aud.group(channels[clock][0])
+        group = aud.group(channels[clock][0])
+        if boot and clock not in compared and not {group, aud.group(channels[reference][0])} & set(applied or {}):
             out.append(finding("clock_offset", [channels[reference][0], channels[clock][0]], math.nan, None, "s",
                                f"{', '.join(channels[clock])} ({clock}) joined with {', '.join(channels[reference])} "
                                f"({reference}) as if their clocks started together ({' and '.join(boot)} "
@@ -1002,7 +1003,7 @@ def audit_streams(streams, options, source) -> dict:
             if ga in applied or gb in applied:
                 f["resolved"] = True
                 f["meaning"] += f"; aligned: {', '.join(f'{g} moved {-s:+.3f} s' for g, s in applied.items())}"
-    findings += pair_findings + unchecked_clocks(aud, pair_findings)
+    findings += pair_findings + unchecked_clocks(aud, pair_findings, applied)
     for f in pair_findings:
         g = next((aud.group(c) for c in f["channels"] if aud.group(c) in offsets and aud.group(c) not in applied), None)
         if f["kind"] == "clock_offset" and not f["resolved"] and g is not None:
