@@ -42,3 +42,22 @@ def test_as_many_rows_do_not_hand_it_the_time_files_clock(tmp_path):
     assert tables["imu"].time_how.startswith("row by row from clock")
     assert not tables["gnss"].time_how.startswith("row by row"), tables["gnss"].time_how
     np.testing.assert_allclose(tables["gnss"].t, gnss_t)
+
+
+def test_a_clock_without_unit_is_told_the_time_for_its_table_alone(tmp_path):
+    """Both tables have a column 'Time' (the GNSS one says (s) in its header, the IMU's says nothing):
+    the IMU's is taken as seconds, and the --time offered names its table, so that following it
+    leaves the GNSS table's seconds alone (a bare 'Time[ms]' would make them milliseconds)."""
+    root = tmp_path / "ride"
+    root.mkdir()
+    imu_ms = 6004.0 + 534.0 * np.arange(120)
+    pd.DataFrame({"Time": imu_ms, "Gz": np.zeros(120)}).to_csv(root / "ArduinoLog.csv", index=False)
+    gnss_s = 0.042 + np.arange(80.0)
+    pd.DataFrame({"Time (s)": gnss_s, "Latitude (deg)": np.full(80, 53.1)}).to_csv(root / "Location.csv", index=False)
+    paths = sorted(root.iterdir())
+    tables = {t.name: t for t in read_tables(paths, None, None, root)}
+    said = tables["ArduinoLog"].time_how
+    assert "no unit stated" in said and "--time 'ArduinoLog.Time[ms]'" in said, said
+    tables = {t.name: t for t in read_tables(paths, "ArduinoLog.Time[ms]", None, root)}
+    np.testing.assert_allclose(tables["ArduinoLog"].t, imu_ms / 1e3)
+    np.testing.assert_allclose(tables["Location"].t, gnss_s)

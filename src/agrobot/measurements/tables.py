@@ -502,14 +502,16 @@ def _datetime(values: pd.Series, where: str) -> tuple[np.ndarray, str]:
     return np.where(np.isnat(stamps), np.nan, secs).astype(float), note
 
 
-def _magnitude_unit(x: np.ndarray) -> tuple[float, str]:
-    """A time column's unit from its size: POSIX ns, us, ms or s; else seconds (a relative clock)."""
+def _magnitude_unit(x: np.ndarray, name: str) -> tuple[float, str]:
+    """A time column's unit from its size: POSIX ns, us, ms or s; else seconds (a relative clock),
+    said with the --time that declares another for this column alone (``name``: TABLE.COLUMN; a
+    bare COLUMN would declare it for every table that has one)."""
     big = float(np.nanmedian(np.abs(x))) if np.isfinite(x).any() else 0.0
     for limit, factor, unit in ((1e17, 1e-9, "ns"), (1e14, 1e-6, "us"), (1e11, 1e-3, "ms")):
         if big > limit:
             return factor, f"POSIX {unit} (from its size)"
     return 1.0, "s" + (" (POSIX, from its size)" if big > 1e8 else " (no unit stated: taken as seconds; "
-                                                                       "declare another with --time 'COLUMN[ms]')")
+                                                                       f"declare another with --time '{name}[ms]')")
 
 
 def time_like(table: Table) -> list[str]:
@@ -558,7 +560,7 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                 if spec.unit:
                     table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
                 else:
-                    factor, how = _magnitude_unit(x)
+                    factor, how = _magnitude_unit(x, f"{table.name}.{cols[0]}")
                     table.t, table.time_how = x * factor, f"{cols[0]} [{how}]"
             return True
         if len(spec.columns) == 1 and "." in spec.columns[0]:
@@ -573,7 +575,7 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
             and _even(f[first].to_numpy(float)):
         c = first
         x = _numbers(f[c], where, c)
-        factor, how = _magnitude_unit(x)
+        factor, how = _magnitude_unit(x, f"{table.name}.{c}")
         table.t, table.time_columns = x * factor, (c,)
         table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
                           f"--time COLUMN[unit] picks another)")
@@ -605,7 +607,7 @@ def _named_time(table: Table) -> bool:
                 table.time_how = f"{c} [{table.units[c]}] (found by name)"
             else:
                 x = _numbers(f[c], where, c)
-                factor, how = _magnitude_unit(x)
+                factor, how = _magnitude_unit(x, f"{table.name}.{c}")
                 if c == "%time":                     # rostopic echo -p: receive time in ns
                     factor, how = 1e-9, "ns (rostopic's %time)"
                 table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
