@@ -15,7 +15,7 @@ from agrobot.measurements.recording import ImportOptions, import_recording
 SECONDS = 120.0
 
 
-def _folder(root, start: float, gyro_in_wheel_file: bool = False, seed: int = 1):
+def _folder(root, start: float, gyro_in_wheel_file: bool = False, steering: bool = False, seed: int = 1):
     """imu.csv at 50 Hz (its clock in ms from ``start``), wheel.csv at 20 Hz on its own clock in s;
     the machine turns at random (a smooth yaw rate) at 2 m/s; the wheel logger started 7 s after the IMU's."""
     rng = np.random.default_rng(seed)
@@ -28,6 +28,8 @@ def _folder(root, start: float, gyro_in_wheel_file: bool = False, seed: int = 1)
     wheel = {"time (s)": start + tw - 7.0, "speed": 2.0 + 0.2 * np.sin(2 * np.pi * tw / 30.0)}
     if gyro_in_wheel_file:
         wheel["gz2"] = np.interp(tw, ti, r) + rng.normal(0, 0.01, len(tw))
+    if steering:        # the wheel angle that turns the machine so on a 2.5 m wheelbase, logged beside the speed
+        wheel["steer"] = np.arctan(np.interp(tw, ti, r) * 2.5 / wheel["speed"])
     pd.DataFrame(wheel).to_csv(root / "wheel.csv", index=False)
     return root
 
@@ -59,3 +61,10 @@ def test_dated_tables_are_one_time_scale(tmp_path):
 
 def test_an_offset_the_user_gives_is_not_said_unknown(tmp_path):
     assert _clock_findings(_folder(tmp_path / "ride", start=6.0), align="wheel=-7") == []
+
+
+def test_the_steering_against_the_gyro_is_a_comparison(tmp_path):
+    """The causality check (steering x speed -> yaw rate, a response never leads its input) compares
+    the steering's clock with the gyro's: not said unknown."""
+    found = _clock_findings(_folder(tmp_path / "ride", start=6.0, steering=True), "delta=wheel.steer[rad]")
+    assert not [f for f in found if math.isnan(f["value"])], found

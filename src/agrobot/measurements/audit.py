@@ -935,10 +935,12 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
     return moved
 
 
-def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | None = None) -> list[dict]:
+def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | None = None,
+                     causal: dict | None = None) -> list[dict]:
     """A ``clock_offset`` finding (value NaN, no interval; said, not acted on) for each clock that
-    no pair of channels compared with the reference's (the receiver's, else the first) nor
-    ``applied`` moved (--align GROUP=SECONDS: the user's word), where
+    no pair of channels compared with the reference's (the receiver's, else the first), nor the
+    ``causal`` check (Auditor.causal: the steering's clock against the gyro's, a response never
+    leading its input), nor ``applied`` moved (--align GROUP=SECONDS: the user's word), where
     either counts from its logger's start rather than being a date: their stamps are joined as if
     the loggers started together, which nothing in the recording confirms (dates are taken as one
     time scale, UTC)."""
@@ -948,6 +950,7 @@ def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | No
         channels.setdefault(aud.clock(names[0]), []).extend(names)
         stamps.setdefault(aud.clock(names[0]), t)
     compared = {c for f in pair_findings if f["kind"] == "clock_offset" for c in map(aud.clock, f["channels"])}
+    compared |= {aud.clock(c) for c in ((causal["input"], "yaw_rate") if causal else ())}
     out = []
     reference = next(iter(channels), None)
     for clock in list(channels)[1:]:
@@ -1003,7 +1006,7 @@ def audit_streams(streams, options, source) -> dict:
             if ga in applied or gb in applied:
                 f["resolved"] = True
                 f["meaning"] += f"; aligned: {', '.join(f'{g} moved {-s:+.3f} s' for g, s in applied.items())}"
-    findings += pair_findings + unchecked_clocks(aud, pair_findings, applied)
+    findings += pair_findings + unchecked_clocks(aud, pair_findings, applied, causal_before)
     for f in pair_findings:
         g = next((aud.group(c) for c in f["channels"] if aud.group(c) in offsets and aud.group(c) not in applied), None)
         if f["kind"] == "clock_offset" and not f["resolved"] and g is not None:
