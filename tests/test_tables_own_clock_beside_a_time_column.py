@@ -61,3 +61,18 @@ def test_a_clock_without_unit_is_told_the_time_for_its_table_alone(tmp_path):
     tables = {t.name: t for t in read_tables(paths, "ArduinoLog.Time[ms]", None, root)}
     np.testing.assert_allclose(tables["ArduinoLog"].t, imu_ms / 1e3)
     np.testing.assert_allclose(tables["Location"].t, gnss_s)
+
+
+def test_a_time_unit_against_the_header_is_said(tmp_path):
+    """A bare --time 'Time[ms]' declares ms in every table with a column Time, also in one whose
+    header states (s): taken (the user's word), and said with the TABLE.COLUMN that names one."""
+    root = tmp_path / "ride"
+    root.mkdir()
+    pd.DataFrame({"Time": 6004.0 + 534.0 * np.arange(50), "Gz": np.zeros(50)}).to_csv(root / "ArduinoLog.csv", index=False)
+    pd.DataFrame({"Time (s)": 0.042 + np.arange(40.0), "Latitude (deg)": np.full(40, 53.1)}).to_csv(
+        root / "Location.csv", index=False)
+    tables = {t.name: t for t in read_tables(sorted(root.iterdir()), "Time[ms]", None, root)}
+    assert not [n for n in tables["ArduinoLog"].notes if "header states" in n]
+    said = [n for n in tables["Location"].notes if "header states Time in s" in n]
+    assert said and "--time 'TABLE.Time[ms]'" in said[0], tables["Location"].notes
+    np.testing.assert_allclose(tables["Location"].t, 1e-3 * (0.042 + np.arange(40.0)))

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -559,6 +560,7 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                                    f"({f[cols[0]].iloc[0]!r}); for date strings write --time '{cols[0]}[datetime]'")
                 if spec.unit:
                     table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
+                    _header_overruled(table, cols[0], spec)
                 else:
                     factor, how = _magnitude_unit(x, f"{table.name}.{cols[0]}")
                     table.t, table.time_how = x * factor, f"{cols[0]} [{how}]"
@@ -582,6 +584,19 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
         table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
         return True
     return False
+
+
+def _header_overruled(table: Table, column: str, spec: TimeSpec) -> None:
+    """A note where --time gives ``column`` a unit other than the one its header states: the
+    --time's is taken (the user's word stands), and a bare COLUMN names the TABLE.COLUMN that
+    would declare it for one table alone."""
+    stated = table.units.get(column)
+    said = base_unit(stated) if stated else None        # a header's unit pint does not know: nothing to compare
+    if said is None or spec.unit is None or math.isclose(said.factor, base_unit(spec.unit).factor):
+        return
+    alone = "" if "." in spec.text.split("[")[0] else \
+        f" (a bare column name declares it in every table that has one: --time 'TABLE.{column}[{spec.unit}]' names one)"
+    table.notes.append(f"time: the header states {column} in {stated}; --time {spec.text} takes it in {spec.unit}{alone}")
 
 
 def _named_time(table: Table) -> bool:
