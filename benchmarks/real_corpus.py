@@ -61,10 +61,17 @@ def _column(frame: pd.DataFrame, name: str) -> np.ndarray:
     return pd.to_numeric(frame[name], errors="coerce").to_numpy(float)
 
 
+TIME_UNITS = {"[ms]": 1e-3, "[us]": 1e-6, "[ns]": 1e-9}
+
+
 def _times(folder: Path, spec: str, frame: pd.DataFrame, read) -> np.ndarray:
-    """A table's times: 's+ns' (seconds plus nanoseconds), 'FILE:COLUMN' (another file's), a column."""
+    """A table's times: 's+ns' (seconds plus nanoseconds), 'FILE:COLUMN' (another file's), a column
+    (in seconds, or 'COLUMN[ms]', '[us]', '[ns]')."""
     if spec == "s+ns":
         return _column(frame, "s") + 1e-9 * _column(frame, "ns")
+    unit = next((u for u in TIME_UNITS if spec.endswith(u)), None)
+    if unit is not None:
+        return _times(folder, spec[: -len(unit)], frame, read) * TIME_UNITS[unit]
     if ":" in spec:
         other, col = spec.split(":")
         return _column(read(folder / other), col)

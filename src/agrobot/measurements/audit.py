@@ -33,7 +33,9 @@ Kinds:
   least STRONG_RHO over at least EVIDENCE_S s of samples compared, an interval of half-width at
   most HALF_WIDTH s that excludes zero and is narrower than the offset, the offset at least
   ALIGN_MIN; below that it is "too weak to judge",
-  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
+  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned; its value
+  NaN (not known, resolved: said, not moved) for a clock that no pair compared, where it or the
+  reference counts from a logger's start (unchecked_clocks: joined as if started together);
 - ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
   clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
 - ``held_samples``: a channel updated slower than its rows (``value`` rows per update), judged on
@@ -84,7 +86,7 @@ from .imu_axes import axis_findings
 from .log import CANONICAL, LogError, slope_through_origin
 from .options import ImportOptions
 from .position_source import estimate_evidence, named_estimate, track_noise
-from .streams import Streams, gnss_speed
+from .streams import Streams, gnss_speed, is_boot_clock
 from .time_base import LEAP_TOLERANCE, gps_minus_utc, leap_meaning
 
 SEARCH = 3.0            # s: lags searched either way
@@ -933,6 +935,38 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
     return moved
 
 
+def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | None = None,
+                     causal: dict | None = None) -> list[dict]:
+    """A ``clock_offset`` finding (value NaN, no interval; said, not acted on) for each clock that
+    no pair of channels compared with the reference's (the receiver's, else the first), nor the
+    ``causal`` check (Auditor.causal: the steering's clock against the gyro's, a response never
+    leading its input), nor ``applied`` moved (--align GROUP=SECONDS: the user's word), where
+    either counts from its logger's start rather than being a date: their stamps are joined as if
+    the loggers started together, which nothing in the recording confirms (dates are taken as one
+    time scale, UTC)."""
+    channels: dict[str, list[str]] = {}
+    stamps: dict[str, np.ndarray] = {}
+    for names, t in aud.stamped():
+        channels.setdefault(aud.clock(names[0]), []).extend(names)
+        stamps.setdefault(aud.clock(names[0]), t)
+    compared = {c for f in pair_findings if f["kind"] == "clock_offset" for c in map(aud.clock, f["channels"])}
+    compared |= {aud.clock(c) for c in ((causal["input"], "yaw_rate") if causal else ())}
+    out = []
+    reference = next(iter(channels), None)
+    for clock in list(channels)[1:]:
+        boot = [c for c in (clock, reference) if is_boot_clock(stamps[c])]
+        group = aud.group(channels[clock][0])
+        if boot and clock not in compared and not {group, aud.group(channels[reference][0])} & set(applied or {}):
+            out.append(finding("clock_offset", [channels[reference][0], channels[clock][0]], math.nan, None, "s",
+                               f"{', '.join(channels[clock])} ({clock}) joined with {', '.join(channels[reference])} "
+                               f"({reference}) as if their clocks started together ({' and '.join(boot)} "
+                               f"{'counts' if len(boot) == 1 else 'count'} from a logger's start, not a date); no "
+                               f"pair of channels compared them (two speeds, gyro vs GNSS course, v r vs lateral "
+                               f"acceleration, two gyros): an offset between them is not known, not moved; --align "
+                               f"{group}=SECONDS moves {group}'s stamps earlier", resolved=True))
+    return out
+
+
 def audit_streams(streams, options, source) -> dict:
     """The audit of a recording's streams, and the alignment ``options.align`` asks for, applied
     to the streams in place: {channels, findings, alignment}."""
@@ -972,7 +1006,7 @@ def audit_streams(streams, options, source) -> dict:
             if ga in applied or gb in applied:
                 f["resolved"] = True
                 f["meaning"] += f"; aligned: {', '.join(f'{g} moved {-s:+.3f} s' for g, s in applied.items())}"
-    findings += pair_findings
+    findings += pair_findings + unchecked_clocks(aud, pair_findings, applied, causal_before)
     for f in pair_findings:
         g = next((aud.group(c) for c in f["channels"] if aud.group(c) in offsets and aud.group(c) not in applied), None)
         if f["kind"] == "clock_offset" and not f["resolved"] and g is not None:
@@ -1202,8 +1236,8 @@ def describe_audit(audit: dict) -> list[str]:
                      + f"  group {r['group']}")
     for f in audit.get("findings", []):
         iv = f" {_interval_text(f['interval'], f['unit'])}" if f["interval"] else ""
-        lines.append(f"  audit {f['kind']}{' (resolved)' if f['resolved'] else ''}: {f['value']:.4g} {f['unit']}"
-                     f"{iv}: {f['meaning']}")
+        value = f"{f['value']:.4g} {f['unit']}" if math.isfinite(f["value"]) else "not known"
+        lines.append(f"  audit {f['kind']}{' (resolved)' if f['resolved'] else ''}: {value}{iv}: {f['meaning']}")
     a = audit.get("alignment", {})
     if a.get("offsets_s"):
         lines.append(f"  aligned ({a['mode']}): " + ", ".join(f"{g} moved {-s:+.3f} s" for g, s in a["offsets_s"].items())

@@ -9,6 +9,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from agrobot.orchestrator.atomic_files import atomic_write, write_frame
 from agrobot.orchestrator.cli import add_output_options
 from agrobot.orchestrator.output import ResultFile, check_output_file
@@ -17,7 +19,7 @@ from agrobot.orchestrator.source_files import set_limit
 from . import recording_readers as readers
 from .audit import parse_align, with_findings
 from .listing import list_source
-from .log import LogError, check_log, log_units
+from .log import SECONDS_STEP_MAX, LogError, check_log, log_units
 from .log_mcap import write_log_mcap
 from .modes import parse_where
 from .recording import ImportOptions, describe, import_recording, import_runs
@@ -184,9 +186,22 @@ def checked_log(source, f, rep: dict):
     try:
         checked = check_log(f, f"{source} ({rep['used']['how']})", ("t",))
     except LogError as exc:              # the refusal lists what the audit found besides
-        raise with_findings(exc, rep.get("audit", {}).get("findings", [])) from None
+        raise with_findings(LogError(f"{exc}{_undeclared_clocks(f, rep)}"),
+                            rep.get("audit", {}).get("findings", [])) from None
     rep.setdefault("notes", []).extend(n for n in checked.attrs.get("notes", []) if n.startswith("warning:"))
     return checked
+
+
+def _undeclared_clocks(f, rep: dict) -> str:
+    """'; ...' naming the tables whose time column had no unit and was taken as seconds, with the
+    --time that declares it, when the log steps too slowly for seconds (check_log); '' else."""
+    t = f["t"].to_numpy(float) if "t" in f and len(f) > 1 else None
+    if t is None or not float(np.median(np.diff(t))) >= SECONDS_STEP_MAX:
+        return ""
+    said = [(name, str(table.get("time", "")).split(" [")[0]) for name, table in rep.get("tables", {}).items()
+            if "no unit stated" in str(table.get("time", ""))]
+    return "".join(f"; {name}'s time column {column!r} states no unit and was taken as seconds: "
+                   f"--time '{name}.{column}[ms]' declares milliseconds" for name, column in said)
 
 
 def write_converted(path: Path, f, rep: dict) -> None:

@@ -22,6 +22,7 @@ import pandas as pd
 from agrobot.orchestrator.errors import InputError
 from agrobot.orchestrator.atomic_files import read_units
 from agrobot.orchestrator.source_files import checked_path, regular_file
+from agrobot.orchestrator.units import base_unit
 
 # the canonical columns: name -> (SI unit, meaning)
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -101,6 +102,11 @@ def persisted_audit(path) -> list | None:
     return list(found) if isinstance(found, list) else None
 
 
+SECONDS_STEP_MAX = 9.5  # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
+MS_STEP_MAX = 2000.0    # a millisecond clock at 0.5-100 Hz steps by 10-2000 (a 1 Hz receiver's, 1000 and a jitter);
+                        # a microsecond one at up to 500 Hz by more
+
+
 def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONICAL,
               resample_jitter: bool = False) -> pd.DataFrame:
     """The checks of read_log on a table already in memory (an imported recording); ``path``
@@ -131,10 +137,11 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
         i = int(np.argmax(dt <= 0))
         raise LogError(f"{path}: column 't' is not increasing at row {i + 1} (t = {t[i]} then {t[i + 1]})")
     step = float(np.median(dt))
-    if step >= 9.5:           # slow receivers log every 1-5 s; a millisecond clock steps by 10 and more
-        unit, factor = ("microseconds", 1e6) if step > 1000 else ("milliseconds", 1e3)
+    if step >= SECONDS_STEP_MAX:
+        unit, factor = ("microseconds", 1e6) if step > MS_STEP_MAX else ("milliseconds", 1e3)
         raise LogError(f"{path}: column 't' steps by {step:.4g} between samples; a vehicle log samples at 0.1-100 Hz, "
-                       f"so it looks like {unit}: the log must hold seconds (divide t by {factor:g})")
+                       f"so it looks like {unit} ({factor / step:.3g} Hz): the log must hold seconds (divide t by "
+                       f"{factor:g})")
     if dt.max() > 1.5 * step:
         i = int(np.argmax(dt))
         raise LogError(f"{path}: column 't' has a gap of {dt[i]:.4g} s at t = {t[i]:.4g} s (row {i + 1}); "
@@ -160,10 +167,9 @@ def check_log(frame: pd.DataFrame, path: str, required: tuple[str, ...] = CANONI
                     f"column {c!r} reaches {peak:.4g} rad ({math.degrees(peak):.0f} deg), more than {bound} rad, "
                     f"and is read as rad: {why}")
             elif peak > bound and c in frame.attrs.get("declared", {}):
-                frame.attrs.setdefault("notes", []).append(
-                    f"warning: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than {bound} {unit}"
-                    f"{past_widest_lock(c, peak)}, which looks like degrees{'/s' if unit == 'rad/s' else ''}; kept as declared "
-                    f"[{frame.attrs['declared'][c]}] (the user's word stands)")
+                frame.attrs.setdefault("notes", []).append(declared_warning(
+                    c, f"reaches {peak:.4g} (99.5 % of its values within), more than {bound} {unit}{past_widest_lock(c, peak)}",
+                    frame.attrs["declared"][c], unit))
             elif peak > bound:
                 raise LogError(f"{path}: column {c!r} reaches {peak:.4g} (99.5 % of its values within), more than "
                                f"{bound} {unit}{past_widest_lock(c, peak)}: it looks like degrees{'/s' if unit == 'rad/s' else ''}; the log must "
@@ -387,6 +393,24 @@ def wheel_angle_in_radians(frame: pd.DataFrame, column: str) -> str | None:
             f"against {r2_linear:.3f} for an angle in degrees)")
 
 
+OTHER_CAUSES = {"yaw_rate": "a gyro shaken by its mount, or another axis",
+                "delta": "a handwheel angle (--steering-ratio divides it)", "delta_cmd": "a handwheel angle (--steering-ratio divides it)"}
+
+
+def declared_warning(column: str, evidence: str, declared: str, si: str) -> str:
+    """The warning for a column the user declared in ``declared`` that ``evidence`` finds too large
+    for ``si``: the look of degrees where it was declared in another unit; where it was declared in
+    degrees (already converted: a factor pi/180), not a slip of degrees but a value beyond a ground
+    vehicle's (OTHER_CAUSES). Kept either way: the user's word stands."""
+    b = base_unit(declared)
+    if b is not None and math.isclose(b.factor, math.pi / 180, rel_tol=1e-9):
+        return (f"warning: column {column!r} {evidence}, although declared in degrees [{declared}] and converted: not "
+                f"a slip of degrees; {OTHER_CAUSES.get(column, 'another quantity')}, or another unit? kept as declared "
+                f"(the user's word stands)")
+    return (f"warning: column {column!r} {evidence}, which looks like degrees{'/s' if si == 'rad/s' else ''}; kept as "
+            f"declared [{declared}] (the user's word stands)")
+
+
 def past_widest_lock(column: str, peak: float) -> str:
     """Why a wheel-angle column reaching ``peak`` cannot be in rad ('' when it may be): past pi/2."""
     if column not in ("delta", "delta_cmd") or peak <= WIDEST_LOCK:
@@ -400,9 +424,8 @@ def _check_yaw_rate_unit(frame: pd.DataFrame, where: str, h: float, k: int, d: n
     slope = _track_turn_ratio(frame, h, k, d)
     if slope is not None and slope > 20:
         if "yaw_rate" in frame.attrs.get("declared", {}):
-            frame.attrs.setdefault("notes", []).append(
-                f"warning: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track, which looks like "
-                f"deg/s; kept as declared [{frame.attrs['declared']['yaw_rate']}] (the user's word stands)")
+            frame.attrs.setdefault("notes", []).append(declared_warning(
+                "yaw_rate", f"turns {slope:.0f} times as fast as the GPS track", frame.attrs["declared"]["yaw_rate"], "rad/s"))
             return
         raise LogError(f"{where}: column 'yaw_rate' turns {slope:.0f} times as fast as the GPS track: "
                        f"it looks like deg/s; the log must hold rad/s (multiply by pi/180)")

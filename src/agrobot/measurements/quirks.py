@@ -123,6 +123,18 @@ def position_quantisation(lat: np.ndarray, lon: np.ndarray) -> dict | None:
                     f"the raw fixes, a resampled or interpolated log does not remove it"}
 
 
+def _own_speed(sig: dict, t: np.ndarray) -> np.ndarray | None:
+    """The receiver's own speed over ground (a ``gnss_speed`` column) at the fixes' times ``t``,
+    taken out of the signals: the fixes carry it, as a receiver's sentences carry theirs, so that
+    the runs, the stops and the course are judged by it (never by the chords of a track that
+    wanders at a standstill); None without one."""
+    if "gnss_speed" not in sig:
+        return None
+    ts, v = (np.asarray(x, float) for x in sig.pop("gnss_speed"))
+    ok = np.isfinite(v)
+    return np.interp(t, ts[ok], v[ok]) if ok.sum() >= 2 else None
+
+
 def fixes_from_columns(streams: Streams, source: Path) -> Streams:
     """lat/lon columns (a table's, a custom topic's, a CAN GNSS message's) as the receiver's fixes."""
     sig = streams.signals
@@ -131,6 +143,7 @@ def fixes_from_columns(streams: Streams, source: Path) -> Streams:
         t, lat = sig.pop("lat")
         lon = np.interp(t, *sig.pop("lon"))
         height = np.interp(t, *sig.pop("height")) if "height" in sig else None
+        speed = _own_speed(sig, t)
         ok = np.isfinite(lat) & np.isfinite(lon) & ((np.abs(lat) > 0) | (np.abs(lon) > 0))
         if ok.sum() < 2:
             raise LogError(f"{source}: the lat/lon columns ({streams.report.get('columns', {}).get('lat', 'lat')}, "
@@ -140,7 +153,8 @@ def fixes_from_columns(streams: Streams, source: Path) -> Streams:
         if bad.any():
             raise LogError(f"{source}: lat/lon {lat[bad][0]:g}, {lon[bad][0]:g} are not degrees of latitude/longitude "
                            f"(expected |lat| <= 90, |lon| <= 180; a projected CRS in metres maps to x/y)")
-        streams.gnss = gnss_table(t[ok], lat[ok], lon[ok], None if height is None else height[ok])
+        streams.gnss = gnss_table(t[ok], lat[ok], lon[ok], None if height is None else height[ok],
+                                  speed=None if speed is None else speed[ok])
         streams.report.setdefault("columns", {}).update({
             "x": "lat/lon -> east of the run's first fix (pymap3d)", "y": "lat/lon -> north of the run's first fix"})
     elif "lat" in sig or "lon" in sig:

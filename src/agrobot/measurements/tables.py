@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -502,14 +503,16 @@ def _datetime(values: pd.Series, where: str) -> tuple[np.ndarray, str]:
     return np.where(np.isnat(stamps), np.nan, secs).astype(float), note
 
 
-def _magnitude_unit(x: np.ndarray) -> tuple[float, str]:
-    """A time column's unit from its size: POSIX ns, us, ms or s; else seconds (a relative clock)."""
+def _magnitude_unit(x: np.ndarray, name: str) -> tuple[float, str]:
+    """A time column's unit from its size: POSIX ns, us, ms or s; else seconds (a relative clock),
+    said with the --time that declares another for this column alone (``name``: TABLE.COLUMN; a
+    bare COLUMN would declare it for every table that has one)."""
     big = float(np.nanmedian(np.abs(x))) if np.isfinite(x).any() else 0.0
     for limit, factor, unit in ((1e17, 1e-9, "ns"), (1e14, 1e-6, "us"), (1e11, 1e-3, "ms")):
         if big > limit:
             return factor, f"POSIX {unit} (from its size)"
     return 1.0, "s" + (" (POSIX, from its size)" if big > 1e8 else " (no unit stated: taken as seconds; "
-                                                                       "declare another with --time 'COLUMN[ms]')")
+                                                                       f"declare another with --time '{name}[ms]')")
 
 
 def time_like(table: Table) -> list[str]:
@@ -557,15 +560,49 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                                    f"({f[cols[0]].iloc[0]!r}); for date strings write --time '{cols[0]}[datetime]'")
                 if spec.unit:
                     table.t, table.time_how = x * base_unit(spec.unit).factor, f"{cols[0]} [{spec.unit}]"
+                    _header_overruled(table, cols[0], spec)
                 else:
-                    factor, how = _magnitude_unit(x)
+                    factor, how = _magnitude_unit(x, f"{table.name}.{cols[0]}")
                     table.t, table.time_how = x * factor, f"{cols[0]} [{how}]"
             return True
         if len(spec.columns) == 1 and "." in spec.columns[0]:
-            return False                          # another table's clock, row by row (join_rows)
+            return _named_time(table)             # its own clock, else another table's row by row (read_tables)
         missing = [c for c, k in zip(spec.columns, cols) if not k]
         raise LogError(f"{where}: --time {spec.text}: no column {missing[0]!r}; columns: "
                        f"{', '.join(map(str, f.columns[:20]))}")
+    if _named_time(table):
+        return True
+    first = f.columns[0] if len(f.columns) > 1 else None
+    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
+            and _even(f[first].to_numpy(float)):
+        c = first
+        x = _numbers(f[c], where, c)
+        factor, how = _magnitude_unit(x, f"{table.name}.{c}")
+        table.t, table.time_columns = x * factor, (c,)
+        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
+                          f"--time COLUMN[unit] picks another)")
+        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
+        return True
+    return False
+
+
+def _header_overruled(table: Table, column: str, spec: TimeSpec) -> None:
+    """A note where --time gives ``column`` a unit other than the one its header states: the
+    --time's is taken (the user's word stands), and a bare COLUMN names the TABLE.COLUMN that
+    would declare it for one table alone."""
+    stated = table.units.get(column)
+    said = base_unit(stated) if stated else None        # a header's unit pint does not know: nothing to compare
+    if said is None or spec.unit is None or math.isclose(said.factor, base_unit(spec.unit).factor):
+        return
+    alone = "" if "." in spec.text.split("[")[0] else \
+        f" (a bare column name declares it in every table that has one: --time 'TABLE.{column}[{spec.unit}]' names one)"
+    table.notes.append(f"time: the header states {column} in {stated}; --time {spec.text} takes it in {spec.unit}{alone}")
+
+
+def _named_time(table: Table) -> bool:
+    """Set ``table.t`` from a column named as a clock (a seconds + nanoseconds pair, then
+    TIME_NAMES; its unit from the header, else from its size); False when none is."""
+    f, where = table.frame, str(table.path)
     lower = {str(c).lower(): c for c in f.columns}
     for s, ns in PAIRS:
         if s in lower and ns in lower and pd.api.types.is_numeric_dtype(f[lower[s]]):
@@ -585,22 +622,11 @@ def _time_of(table: Table, spec: TimeSpec | None) -> bool:
                 table.time_how = f"{c} [{table.units[c]}] (found by name)"
             else:
                 x = _numbers(f[c], where, c)
-                factor, how = _magnitude_unit(x)
+                factor, how = _magnitude_unit(x, f"{table.name}.{c}")
                 if c == "%time":                     # rostopic echo -p: receive time in ns
                     factor, how = 1e-9, "ns (rostopic's %time)"
                 table.t, table.time_how = x * factor, f"{c} [{how}] (found by name)"
             return True
-    first = f.columns[0] if len(f.columns) > 1 else None
-    if table.headerless and first is not None and first in time_like(table) and first not in table.mapped \
-            and _even(f[first].to_numpy(float)):
-        c = first
-        x = _numbers(f[c], where, c)
-        factor, how = _magnitude_unit(x)
-        table.t, table.time_columns = x * factor, (c,)
-        table.time_how = (f"{c} [{how}] (guessed: no header, its first column increases throughout by even steps; "
-                          f"--time COLUMN[unit] picks another)")
-        table.notes.append(f"no header: columns named col1 ... col{f.shape[1]}; time guessed: {table.time_how}")
-        return True
     return False
 
 
@@ -670,7 +696,7 @@ def read_tables(paths: list[Path], time: str | None, rate: float | None, source:
         raise LogError(f"{source}: --time {spec.text}: no table has column {spec.columns[0]!r}; tables: "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:10]))}" for t in tables))
     timed = [t for t in tables if t.t is not None or time_of(t, spec)]      # an MDF group has its own clock
-    clock = next((t for t in timed if spec is not None and t.time_columns), None)
+    clock = next((t for t in timed if spec is not None and all(_column(t, c) for c in spec.columns)), None)
     for t in tables:
         if t.t is not None:
             continue
