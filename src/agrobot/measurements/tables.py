@@ -654,6 +654,9 @@ def numpy_groups(root: Path) -> list[Table]:
 def _tables_of(path: Path) -> list[Table]:
     if path.is_dir():
         return numpy_groups(path)
+    if path.suffix.lower() == ".mat":
+        from .matlab import mat_tables        # MATLAB structs as tables: that module builds on this one
+        return mat_tables(path)
     return mdf_groups(path) if path.suffix.lower() in MDF_SUFFIXES else [read_table(path)]
 
 
