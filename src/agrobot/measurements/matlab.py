@@ -29,6 +29,8 @@ matching from the last instead (each value at the next time) is the choice passe
 Clocks: each group is a clock of its own (Streams.groups); a group whose times count from its own
 start is named so beside the groups on POSIX dates (streams.is_boot_clock), in ``--list`` and in
 the report, and the audit checks the lags between the groups' clocks as it does for any tables.
+
+Imported where used: h5py (the matlab extra, for v7.3 files only).
 """
 from __future__ import annotations
 
@@ -38,10 +40,12 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.io import loadmat
+from scipy.io.matlab import mat_struct, matfile_version
 
 from .log import LogError
 from .streams import is_boot_clock
-from .tables import TIME_NAMES, Table, TableReader, list_tables, table_streams
+from .tables import GROUPED_FILES, TIME_NAMES, Table, TableReader, list_tables, table_streams
 
 SUFFIX = ".mat"
 HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
@@ -75,8 +79,6 @@ def mat_version(path: Path) -> str:
         head = f.read(HDF5_AT + len(HDF5_MAGIC))
     if head[HDF5_AT:].startswith(HDF5_MAGIC) or head.startswith(HDF5_MAGIC):
         return "7.3"
-    from scipy.io.matlab import matfile_version
-
     try:
         major, _ = matfile_version(str(path))
     except Exception as exc:        # noqa: BLE001 - scipy raises several kinds on a file that is none
@@ -91,8 +93,6 @@ def mat_variables(path: Path) -> tuple[str, dict]:
     version = mat_version(path)
     if version == "7.3":
         return version, _hdf5_variables(path)
-    from scipy.io import loadmat
-
     try:
         raw = loadmat(str(path), squeeze_me=True, struct_as_record=False, chars_as_strings=True)
     except Exception as exc:        # noqa: BLE001 - a damaged file raises several kinds
@@ -103,8 +103,6 @@ def mat_variables(path: Path) -> tuple[str, dict]:
 
 def _plain(value):
     """A loadmat value as an array, a dict of fields, a str, a list of str, or Skipped."""
-    from scipy.io.matlab import mat_struct
-
     if isinstance(value, mat_struct):
         return {f: _plain(getattr(value, f)) for f in value._fieldnames}
     if isinstance(value, str):
@@ -353,3 +351,4 @@ class MatlabReader(TableReader):
 
 
 READER = MatlabReader()
+GROUPED_FILES[SUFFIX] = mat_tables

@@ -40,6 +40,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -651,13 +652,16 @@ def numpy_groups(root: Path) -> list[Table]:
             for folder in channel_folders(root) for c in [read_channel(folder, root)]]
 
 
+# suffix -> the tables of a file of several groups: MDF4 here, MATLAB's by measurements.matlab (which
+# builds on this module, its reader adding its own)
+GROUPED_FILES: dict[str, Callable[[Path], list[Table]]] = dict.fromkeys(MDF_SUFFIXES, mdf_groups)
+
+
 def _tables_of(path: Path) -> list[Table]:
     if path.is_dir():
         return numpy_groups(path)
-    if path.suffix.lower() == ".mat":
-        from .matlab import mat_tables        # MATLAB structs as tables: that module builds on this one
-        return mat_tables(path)
-    return mdf_groups(path) if path.suffix.lower() in MDF_SUFFIXES else [read_table(path)]
+    grouped = GROUPED_FILES.get(path.suffix.lower())
+    return grouped(path) if grouped is not None else [read_table(path)]
 
 
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
