@@ -160,3 +160,27 @@ def test_a_version_7_3_file_without_h5py_is_refused_saying_what_it_needs(tmp_pat
         import_recording(path, ImportOptions(signals=SIGNALS))
     assert str(caught.value).startswith(f"{path}: a MATLAB v7.3 MAT-file (HDF5): reading it needs h5py")
     assert "pip install 'agrobot-guidance[matlab]'" in str(caught.value)
+
+
+def test_a_wheel_tick_counter_that_wraps_becomes_a_speed_with_rate(tmp_path):
+    """Known truth: a wheel turning forward and back, its hall counter a uint16 that wraps every
+    65536 ticks (several times in the minute); v = rate(ticks) x metres per tick, unwrapped at
+    the counter's width read from its type."""
+    per_metre = 703 / (np.pi * 0.213)                  # ticks per metre of a 0.213 m wheel, 703 ticks a turn
+    t = EPOCH + np.arange(0.0, SECONDS, 0.02)
+    distance = (t - EPOCH) + 2.5 / 0.3 * (1 - np.cos(0.3 * (t - EPOCH)))     # v = 1 + 2.5 sin(0.3 t): reverses
+    ticks = np.floor(per_metre * distance).astype(np.int64) + 65000
+    mat = write_mat(tmp_path / "wheel.mat", {"odometry": {"Time": t, "Ticks": (ticks % 65536).astype(np.uint16)}})
+    frame, report = import_recording(mat, ImportOptions(signals=[f"v=rate(odometry.Ticks)*{1 / per_metre!r}[m/s]"]))
+    tt = frame["t"].to_numpy() + report["used"]["utc_start_s"]
+    mid, rate = 0.5 * (t[1:] + t[:-1]), np.diff(ticks) / np.diff(t)
+    assert np.allclose(frame["v"], np.interp(tt, mid, rate / per_metre), atol=1e-6)
+    assert frame["v"].min() < -1.0 and frame["v"].max() > 3.0
+    assert "unwrapped modulo 65536" in report["columns"]["v"]
+
+
+def test_rate_takes_one_signal_name():
+    from agrobot.measurements.signal_expressions import parse_signal
+
+    with pytest.raises(LogError, match=r"rate\(\.\.\.\) takes one signal name"):
+        parse_signal("v=rate(a.b + c.d)[m/s]")

@@ -781,7 +781,9 @@ def table_series(tables: list[Table], name: str) -> Series | None:
         raise untimed(t, tuple(tables))
     x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
     ok = np.isfinite(x)
-    return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
+    dtype = t.frame[c].dtype
+    wrap = 2.0 ** (8 * dtype.itemsize) if dtype.kind in "iu" and dtype.itemsize <= 4 else None   # a binary file's width
+    return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}", wrap)
 
 
 def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
