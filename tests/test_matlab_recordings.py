@@ -109,6 +109,17 @@ def test_a_mat_file_without_a_time_field_is_refused_naming_the_file_and_struct(t
     assert f"{mat}: no time field in it: struct odometry (fields Ticks); expected in each struct a field named " \
            "t, time, timestamp, time_s (any letter case" in run.stderr, run.stderr
     assert not (tmp_path / "out.csv").exists()
+    listed = list_source(mat, ImportOptions())
+    assert all("no time field in it: struct odometry" in line for line in listed[1:]), listed
+
+
+def test_a_struct_without_a_time_beside_a_timed_one_is_named_when_asked_for(tmp_path):
+    mat = write_mat(tmp_path / "two.mat", {"odometry": {"Ticks": np.arange(200).reshape(100, 2)},
+                                           "gps": {"t": np.arange(100.0), "v": np.ones(100)}})
+    with pytest.raises(LogError) as caught:
+        import_recording(mat, ImportOptions(signals=["v=odometry.Ticks[0][m/s]"]))
+    assert str(caught.value).startswith(f"{mat} (odometry): no time column"), caught.value
+    assert "odometry: no time field (expected one named t, time, timestamp" in "\n".join(list_source(mat, ImportOptions()))
 
 
 def _write_v73(path, groups: dict) -> None:

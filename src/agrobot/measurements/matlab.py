@@ -347,7 +347,15 @@ class MatlabReader(TableReader):
         return streams
 
     def listing(self, paths: list[Path], options, source: Path) -> list[str]:
-        return [f"MATLAB file {p.name}: MAT-file version {mat_version(p)}" for p in paths] + list_tables(paths, options)
+        return [f"MATLAB file {p.name}: MAT-file version {mat_version(p)}{_header(p)}" for p in paths] + \
+            list_tables(paths, options)
+
+
+def _header(path: Path) -> str:
+    """' (the header text MATLAB writes: platform, date)' of a v5 to v7.3 file, '' of a v4 one."""
+    with open(path, "rb") as f:
+        text = f.read(116).decode("ascii", "replace").strip(" \x00")
+    return f" ({text})" if text.startswith("MATLAB") and text.isprintable() else ""
 
 
 READER = MatlabReader()

@@ -734,7 +734,7 @@ def _rollover(tables: list[Table]) -> None:
 def untimed(t: Table, tables: tuple = ()) -> LogError:
     """The error of a column asked of a table without a time: where a time could come from, and
     another table that is a clock of the same rows (named as a time, one increasing column)."""
-    return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
+    return LogError(f"{t.path}{'' if t.name == t.path.stem else f' ({t.name})'}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
                     f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
                     f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
                     f"of another table), or give --rate HZ" + _clock_beside(t, tables))
@@ -1046,7 +1046,7 @@ def list_tables(paths: list[Path], options) -> list[str]:
         out = [f"tables: {exc}"]
         for p in paths:
             try:
-                out += describe_table(read_table(p))
+                out += [line for t in _tables_of(p) for line in describe_table(t)]
             except LogError as why:
                 out.append(f"table {p.name}: not read: {why}")
         return out
