@@ -734,10 +734,15 @@ def _rollover(tables: list[Table]) -> None:
 def untimed(t: Table, tables: tuple = ()) -> LogError:
     """The error of a column asked of a table without a time: where a time could come from, and
     another table that is a clock of the same rows (named as a time, one increasing column)."""
-    return LogError(f"{t.path}{'' if t.name == t.path.stem else f' ({t.name})'}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
+    return LogError(f"{t.path}{_group_of(t)}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
                     f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
                     f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
                     f"of another table), or give --rate HZ" + _clock_beside(t, tables))
+
+
+def _group_of(t: Table) -> str:
+    """' (GROUP)' of a table that is one group of a file (an MDF4 channel group, a MATLAB struct), else ''."""
+    return "" if t.name == t.path.stem else f" ({t.name})"
 
 
 def _clock_beside(t: Table, tables) -> str:
@@ -795,7 +800,8 @@ def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
     if hi <= lo:
         boot = any(is_boot_clock(t.t) for t in chosen) and not all(is_boot_clock(t.t) for t in chosen)
         raise LogError(f"{source}: the tables' clocks do not overlap: "
-                       + "; ".join(f"{t.path.name} {iso(float(t.t[0]))} to {iso(float(t.t[-1]))} ({t.time_how})"
+                       + "; ".join(f"{t.path.name}{_group_of(t)} {iso(float(t.t[0]))} to {iso(float(t.t[-1]))} "
+                                   f"({t.time_how})"
                                    for t in chosen)
                        + ("; one counts from its start, another from 1970: give them one clock" if boot else
                           "; expected tables of one recording, on one clock"))
