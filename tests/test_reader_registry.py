@@ -78,7 +78,7 @@ def _named(text: str, reader: Reader) -> None:
 
 def test_every_registered_reader_is_named_by_the_help_and_the_listing(tmp_path):
     help_text, refusal = _convert_help(), _refusal(tmp_path)
-    assert [r.kind for r in readers.READERS] == ["bag", "isoxml", "nmea", "can", "numpy", "table"]
+    assert [r.kind for r in readers.READERS] == ["bag", "isoxml", "nmea", "can", "numpy", "matlab", "table"]
     for reader in readers.READERS:
         _named(help_text, reader)
         _named(refusal, reader)

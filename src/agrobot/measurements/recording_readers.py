@@ -9,7 +9,7 @@ of READERS decides twice:
   candump, an MDF4 file of bus logging is CAN before it is a table);
 - of the kinds a recording holds, the first reader's makes the recording: a ROS bag, else an
   ISO 11783-10 TaskData, else NMEA and CAN logs (read together), else folders of numpy channels, else
-  tables.
+  MATLAB .mat files, else tables.
 
 A new format is one module with its reader, listed here once (or added with ``register``).
 """
@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from . import isoxml_log, nmea_can, rosbag, tables
+from . import isoxml_log, matlab, nmea_can, rosbag, tables
 from .streams import Reader
 
 READERS: list[Reader] = [rosbag.READER, isoxml_log.READER, nmea_can.NMEA, nmea_can.CAN, tables.NUMPY_READER,
-                         tables.READER]
+                         matlab.READER, tables.READER]
 
 
 def register(reader: Reader, before: str | None = None) -> Reader:

@@ -17,6 +17,15 @@ declare it. A curvature [1/m] feeds a wheel angle through the wheelbase, delta =
 
 The expression is linear (a sum of constant multiples of signals, plus a constant): the terms are
 put on the first term's time stamps by linear interpolation, within the span they share.
+
+A term may be ``rate(NAME)``: a counter (wheel ticks, an encoder) as its rate per second. Between
+samples k and k+1 the counter steps d_k = c_{k+1} - c_k; a counter stored as an integer of a fixed
+width wraps at M = 2^bits (2^16 for int16 and uint16: Series.wrap, from the source's type), and the
+step is taken as the smallest one modulo M, d_k - M round(d_k / M) (a counter that moves less than
+M/2 between samples); the rate r_k = d_k / (t_{k+1} - t_k), placed mid-interval at
+(t_k + t_{k+1}) / 2, in the counter's unit per second (``v=rate(odometry.Ticks[0])*0.000952[m/s]``:
+ticks times metres per tick). A counter without a width (a float, a text table's integers) is
+differenced as it is.
 """
 from __future__ import annotations
 
@@ -54,7 +63,8 @@ class SignalSpec:
 
     @property
     def names(self) -> list[str]:
-        return [n for n, _ in self.terms]
+        """The signals the expression reads (a rate(NAME) term's NAME), once each."""
+        return list(dict.fromkeys(operand(n) for n, _ in self.terms))
 
     def __str__(self) -> str:
         return self.text or f"{self.column}=" + "+".join(f"{c:g}*{n}" for n, c in self.terms)
@@ -181,6 +191,12 @@ class _Parser:
             return self.factor()
         if kind == "number":
             return {None: float(text)}
+        if kind == "name" and text in FUNCTIONS and self.peek() == ("op", "("):
+            inner, close = self.tokens[self.i + 1:self.i + 3] if self.i + 3 <= len(self.tokens) else (("end", ""),) * 2
+            if inner[0] != "name" or close != ("op", ")"):
+                raise LogError(f"--signal {self.text!r}: {text}(...) takes one signal name, e.g. {text}(wheel.ticks)")
+            self.i += 3
+            return {f"{text}({inner[1]})": 1.0}
         if kind == "name":
             return {text: 1.0}
         if (kind, text) == ("op", "("):
@@ -191,6 +207,34 @@ class _Parser:
             return value
         raise LogError(f"--signal {self.text!r}: expected a signal name or a number, found "
                        f"{text or 'the end of the expression'!r}")
+
+
+FUNCTIONS = ("rate",)
+_CALL = re.compile(r"^(rate)\((.+)\)$")
+
+
+def operand(name: str) -> str:
+    """The signal a term reads: NAME of ``rate(NAME)``, else the term's name."""
+    m = _CALL.match(name)
+    return m.group(2) if m else name
+
+
+def counter_rate(s: Series) -> Series:
+    """A counter's rate per second (the module docstring gives the equation): the steps between
+    samples, unwrapped modulo ``s.wrap`` where the counter has a width, over their intervals,
+    mid-interval."""
+    d = np.diff(np.asarray(s.values, float))
+    if s.wrap:
+        d = d - s.wrap * np.round(d / s.wrap)
+    t = np.asarray(s.t, float)
+    unit = f"({s.unit})/s" if s.unit else None
+    how = f"unwrapped modulo {s.wrap:.0f}" if s.wrap else "no width: not unwrapped"
+    return Series(0.5 * (t[1:] + t[:-1]), d / np.diff(t), unit, f"{s.label} as a rate per second ({how})")
+
+
+def _applied(name: str, series: dict[str, Series]) -> Series:
+    """The series of a term: the signal, or the rate of it for ``rate(NAME)``."""
+    return counter_rate(series[operand(name)]) if _CALL.match(name) else series[name]
 
 
 def unknown_name(where: str, spec: SignalSpec, name: str, known: list[str], what: str = "signal") -> LogError:
@@ -214,7 +258,9 @@ def target_unit(column: str) -> str | None:
 
 def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4
              ) -> tuple[np.ndarray, np.ndarray, str]:
-    """(times, values in the column's unit, how) of ``spec`` from the named series."""
+    """(times, values in the column's unit, how) of ``spec`` from the named series (by
+    SignalSpec.names; a rate(NAME) term's rate taken here)."""
+    series = {n: _applied(n, series) for n, _ in spec.terms}
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
     lo = max(float(series[n].t[0]) for n, _ in spec.terms)
@@ -231,7 +277,7 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
         if s is first and len(spec.terms) > 1:
             values = values[(first.t >= lo) & (first.t <= hi)]
         parts.append((name, coef, values, s.unit))
-    notes = []
+    notes = [s.label for n, s in series.items() if _CALL.match(n)]
     if spec.unit is not None:
         value = sum(c * v for _, c, v, _ in parts) + spec.constant
         have = check_unit(spec.unit, f"{where}: --signal {spec}")
@@ -256,7 +302,7 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
                                f"column {spec.column!r} is {kind}; declare it, e.g. --signal "
                                f"'{spec.column}={_bare(spec)}[{want}]' or [{example}]")
             value = sum(c * v for _, c, v, _ in parts) + spec.constant
-            return t, value, f"{spec}: no unit in the source, taken as {want or 'logged'}"
+            return t, value, f"{spec}: no unit in the source, taken as {want or 'logged'}" + "".join(f"; {n}" for n in notes)
         si = []
         dims = set()
         for name, coef, v, u in parts:

@@ -28,12 +28,14 @@ SPEED_CHORD = 0.2     # s: a track's speed from fixes at least this far either s
 @dataclass
 class Series:
     """One signal as the source holds it: increasing times [s], values in ``unit`` (None: the
-    source states none), and where it came from."""
+    source states none), and where it came from; ``wrap`` the modulus of an integer counter
+    stored in a fixed width (2^16 for int16 and uint16), None where the source gives no width."""
 
     t: np.ndarray
     values: np.ndarray
     unit: str | None
     label: str
+    wrap: float | None = None
 
 
 @dataclass

@@ -41,6 +41,7 @@ import csv
 import io
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -677,10 +678,16 @@ def numpy_groups(root: Path) -> list[Table]:
             for folder in channel_folders(root) for c in [read_channel(folder, root)]]
 
 
+# suffix -> the tables of a file of several groups: MDF4 here, MATLAB's by measurements.matlab (which
+# builds on this module, its reader adding its own)
+GROUPED_FILES: dict[str, Callable[[Path], list[Table]]] = dict.fromkeys(MDF_SUFFIXES, mdf_groups)
+
+
 def _tables_of(path: Path) -> list[Table]:
     if path.is_dir():
         return numpy_groups(path)
-    return mdf_groups(path) if path.suffix.lower() in MDF_SUFFIXES else [read_table(path)]
+    grouped = GROUPED_FILES.get(path.suffix.lower())
+    return grouped(path) if grouped is not None else [read_table(path)]
 
 
 def read_tables(paths: list[Path], time: str | None, rate: float | None, source: Path,
@@ -753,10 +760,15 @@ def _rollover(tables: list[Table]) -> None:
 def untimed(t: Table, tables: tuple = ()) -> LogError:
     """The error of a column asked of a table without a time: where a time could come from, and
     another table that is a clock of the same rows (named as a time, one increasing column)."""
-    return LogError(f"{t.path}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
+    return LogError(f"{t.path}{_group_of(t)}: no time column (looked for a seconds + nanoseconds pair such as s, ns, and for "
                     f"{', '.join(TIME_NAMES[:8])} ...); columns: {', '.join(map(str, t.frame.columns[:12]))}; "
                     f"declare it with --time 'COLUMN[s]' (or [ms], [datetime], SECONDS+NANOSECONDS, TABLE.COLUMN "
                     f"of another table), or give --rate HZ" + _clock_beside(t, tables))
+
+
+def _group_of(t: Table) -> str:
+    """' (GROUP)' of a table that is one group of a file (an MDF4 channel group, a MATLAB struct), else ''."""
+    return "" if t.name == t.path.stem else f" ({t.name})"
 
 
 def _clock_beside(t: Table, tables) -> str:
@@ -800,7 +812,9 @@ def table_series(tables: list[Table], name: str) -> Series | None:
         raise untimed(t, tuple(tables))
     x = pd.to_numeric(t.frame[c], errors="coerce").to_numpy(float)
     ok = np.isfinite(x)
-    return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}")
+    dtype = t.frame[c].dtype
+    wrap = 2.0 ** (8 * dtype.itemsize) if dtype.kind in "iu" and dtype.itemsize <= 4 else None   # a binary file's width
+    return Series(t.t[ok], x[ok], t.units.get(c), f"{t.name}.{c}", wrap)
 
 
 def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
@@ -812,7 +826,8 @@ def spans_overlap(tables: list[Table], used: set[str], source: Path) -> None:
     if hi <= lo:
         boot = any(is_boot_clock(t.t) for t in chosen) and not all(is_boot_clock(t.t) for t in chosen)
         raise LogError(f"{source}: the tables' clocks do not overlap: "
-                       + "; ".join(f"{t.path.name} {iso(float(t.t[0]))} to {iso(float(t.t[-1]))} ({t.time_how})"
+                       + "; ".join(f"{t.path.name}{_group_of(t)} {iso(float(t.t[0]))} to {iso(float(t.t[-1]))} "
+                                   f"({t.time_how})"
                                    for t in chosen)
                        + ("; one counts from its start, another from 1970: give them one clock" if boot else
                           "; expected tables of one recording, on one clock"))
@@ -1063,7 +1078,7 @@ def list_tables(paths: list[Path], options) -> list[str]:
         out = [f"tables: {exc}"]
         for p in paths:
             try:
-                out += describe_table(read_table(p))
+                out += [line for t in _tables_of(p) for line in describe_table(t)]
             except LogError as why:
                 out.append(f"table {p.name}: not read: {why}")
         return out
