@@ -46,3 +46,18 @@ def test_a_wandering_fix_at_a_standstill_is_not_reversing(tmp_path):
     assert not [f for f in report["audit"]["findings"] if f["kind"] == "reversing"]
     standing = (log["t"] - log["t"].iloc[0] >= 150) & (log["t"] - log["t"].iloc[0] < 200)
     assert float(log.loc[standing, "gnss_speed"].abs().max()) < 0.05
+
+
+def test_a_receivers_no_value_speed_is_left_out(tmp_path):
+    """A phone writes -1 where it has no speed: a speed over ground is never negative, so the log's
+    gnss_speed there is interpolated from its neighbours (4 m/s), not -1."""
+    path = _ride(tmp_path / "ride")
+    table = pd.read_csv(path)
+    table.loc[60:62, "speed"] = -1.0
+    table.to_csv(path, index=False)
+    options = ImportOptions(signals=["lat=lat[deg]", "lon=lon[deg]", "gnss_speed=speed[m/s]", "heading=course[deg]"],
+                            time="t[s]", time_range=(0.0, 399.0))
+    log, _ = import_recording(path, options)
+    assert float(log["gnss_speed"].min()) >= 0.0
+    near = (log["t"] - log["t"].iloc[0] - 61.0).abs() < 2.0
+    assert np.allclose(log.loc[near, "gnss_speed"], 4.0, atol=0.2)

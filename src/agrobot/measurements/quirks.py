@@ -127,11 +127,12 @@ def _own_speed(sig: dict, t: np.ndarray) -> np.ndarray | None:
     """The receiver's own speed over ground (a ``gnss_speed`` column) at the fixes' times ``t``,
     taken out of the signals: the fixes carry it, as a receiver's sentences carry theirs, so that
     the runs, the stops and the course are judged by it (never by the chords of a track that
-    wanders at a standstill); None without one."""
+    wanders at a standstill); None without one. A speed over ground is never negative: a negative
+    value is a receiver's "no value" (a phone's -1), left out with the NaNs."""
     if "gnss_speed" not in sig:
         return None
     ts, v = (np.asarray(x, float) for x in sig.pop("gnss_speed"))
-    ok = np.isfinite(v)
+    ok = np.isfinite(v) & (v >= 0)
     return np.interp(t, ts[ok], v[ok]) if ok.sum() >= 2 else None
 
 
