@@ -29,6 +29,7 @@ import numpy as np
 
 from agrobot.orchestrator.units import base_unit
 
+from .channel_updates import term_share
 from .log import COLUMNS, LogError
 from .streams import Series
 
@@ -212,9 +213,11 @@ def target_unit(column: str) -> str | None:
     return EXTRA_TARGETS.get(column)
 
 
-def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4
-             ) -> tuple[np.ndarray, np.ndarray, str]:
-    """(times, values in the column's unit, how) of ``spec`` from the named series."""
+def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4,
+             sums: dict | None = None) -> tuple[np.ndarray, np.ndarray, str]:
+    """(times, values in the column's unit, how) of ``spec`` from the named series; ``sums``: where
+    the expression has several terms, sums[column] = its fastest term's changes per sample
+    (measurements.channel_updates.term_share: a sum's rate is its fastest term's)."""
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
     lo = max(float(series[n].t[0]) for n, _ in spec.terms)
@@ -231,6 +234,9 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
         if s is first and len(spec.terms) > 1:
             values = values[(first.t >= lo) & (first.t <= hi)]
         parts.append((name, coef, values, s.unit))
+    if sums is not None and len(spec.terms) > 1:
+        own = [np.asarray(series[n].values, float)[(series[n].t >= lo) & (series[n].t <= hi)] for n, _ in spec.terms]
+        sums[spec.column] = term_share(own, len(t))
     notes = []
     if spec.unit is not None:
         value = sum(c * v for _, c, v, _ in parts) + spec.constant
