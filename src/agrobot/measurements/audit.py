@@ -77,7 +77,7 @@ import numpy as np
 
 from agrobot.components.tractor_yaw_plant import steer_input
 
-from .channel_updates import SUM_SAID
+from .channel_updates import ROWS_KEPT, SUM_SAID
 from .clocks import parabolic_peak
 from .direction import angle_rate, check_direction, chord_steps, position_noise
 from .findings import finding
@@ -877,9 +877,10 @@ def held_findings(report: dict) -> list[dict]:
         out.append(finding("held_samples", [name], u["held"], None, "rows per update",
                            f"{what}: {u['updates_hz']:.3g} Hz updates in {u['rows_hz']:.3g} Hz rows (held x"
                            f"{u['held']:.2g}): " + ("a set-point, held as it is sent" if u.get("set_point") else
-                                                    SUM_SAID if u.get("sum") else
-                                                    "its rate, noise, derived speed, course and lags are judged on "
-                                                    "its updates at their own times"), resolved=True))
+                                                    (SUM_SAID if u.get("sum") else "") + (
+                                                        ROWS_KEPT if u.get("rows_kept") else
+                                                        "its rate, noise, derived speed, course and lags are judged "
+                                                        "on its updates at their own times")), resolved=True))
         out[-1]["updates_hz"] = float(u["updates_hz"])      # a noise floor is read on them (diagnosis.noise_floor)
     return out
 

@@ -49,9 +49,10 @@ in 10 Hz messages make a mean that changes at 7 Hz. Combining sensors samples no
 fastest of them, so a sum's rate is its fastest term's: that term's changes over the span they
 share, per sample of the sum (``term_share``; read where the expression is evaluated, where the
 terms' own samples are known, and kept in report["sums"]), times the sum's sample rate, where its
-fastest term repeats at least HELD_SHARE of the sum's samples; the sum's own samples are kept as
-they are (each change a partial update, not a copy). A mean computed before the recording (one
-column) is judged on its own changes.
+fastest term repeats at least HELD_SHARE of the sum's samples and that is slower than the sum's own
+changes. The sum's samples are judged as any channel's: replaced by its changes where its own
+repeats are copies (terms held in the same rows), else kept (each change a part of an update). A
+mean computed before the recording (one column) is judged on its own changes only.
 
 A heading (``MUST_CHANGE``) that never changes while the course of the fixes turns by more than
 TURNED rad is refused, and so is a recording in which
@@ -82,7 +83,8 @@ RETURN_SHARE = 0.5      # an irregular hold's value returns after a change less 
 POLLED = 4.0            # rows: a channel held at irregular intervals updates at least this often on average
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
 SUM_SAID = ("a sum of signals: its rate is its fastest term's changes (combining sensors samples no faster than "
-            "the fastest of them); its samples are kept, each change a part of an update")
+            "the fastest of them); ")
+ROWS_KEPT = "its samples are kept, each change a part of an update"
 MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
                           "noise alone changes it)"}
 
@@ -296,11 +298,12 @@ def keep_updates(streams: Streams, source) -> list[dict]:
             notes.append({"channel": "gnss", **_said(found)})
         notes += _receiver_heading(streams)
     sums = _sums(streams)
-    notes += list(sums.values())
     for c, (t, x) in list(streams.signals.items()):
         # a speed, a rate or an angle may stay put while the machine moves (a cruise, a straight):
         # only positions must change then, so only theirs are judged stale
-        found = holding(t, x, None) if c not in sums else None
+        found = holding(t, x, None)
+        if found is None and c in sums:
+            notes.append(sums[c])
         if found is None:
             genuine = None if c in sums or c in streams.held else genuine_repeats(c, t, x)
             if genuine:
@@ -308,11 +311,19 @@ def keep_updates(streams: Streams, source) -> list[dict]:
             continue
         if c not in streams.held:
             streams.signals[c] = (found["times"], x[found["keep"]])
-        notes.append({"channel": c, **_said(found), "set_point": c in streams.held})
+        notes.append(_as_sum({"channel": c, **_said(found), "set_point": c in streams.held}, sums.get(c)))
     if notes:
         streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
         streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
     return notes
+
+
+def _as_sum(note: dict, term: dict | None) -> dict:
+    """A held channel's note, at its fastest term's rate where it is a sum of signals that samples
+    slower than its own changes (module docstring)."""
+    if term is None or term["updates_hz"] >= note["updates_hz"]:
+        return note
+    return {**note, "updates_hz": term["updates_hz"], "held": note["rows_hz"] / term["updates_hz"], "sum": True}
 
 
 def _sums(streams: Streams) -> dict[str, dict]:
@@ -327,7 +338,7 @@ def _sums(streams: Streams) -> dict[str, dict]:
             continue
         rows = (len(t) - 1) / float(t[-1] - t[0])
         notes[c] = {"channel": c, "rows_hz": rows, "updates_hz": rows * share, "held": 1.0 / share, "stale": 0,
-                    "set_point": False, "sum": True}
+                    "set_point": False, "sum": True, "rows_kept": True}
     return notes
 
 
@@ -373,8 +384,8 @@ def note_text(n: dict) -> str:
     """One held channel as the report says it."""
     what = "the positions" if n["channel"] == "gnss" else n["channel"]
     text = (f"{what}: {n['updates_hz']:.3g} Hz updates in {n['rows_hz']:.3g} Hz rows (held x{n['held']:.2g}): "
-            + ("a set-point, kept as held" if n.get("set_point") else SUM_SAID if n.get("sum")
-               else "judged and logged on its updates"))
+            + ("a set-point, kept as held" if n.get("set_point") else
+               (SUM_SAID if n.get("sum") else "") + (ROWS_KEPT if n.get("rows_kept") else "judged and logged on its updates")))
     if n.get("stale"):
         text += f"; {n['stale']} value(s) held longer than {STILL:g} updates while moving dropped (a gap)"
     return text
