@@ -20,11 +20,15 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   at least HELD_SHARE of its row steps repeat and its repeats are copies, i.e. neither its grid nor
   chance explains them: its changes are not single steps of its grid (above), and after a change
   its value comes back to the one before less than RETURN_SHARE as often as a row repeats (noise on
-  a grid meets a value again by chance about as often as it repeats); and it updates at least every
-  POLLED rows on average (a state holds for many); its P is then the mean interval between updates
-  (its rate the number of its changes over their span: what its values carry). A noise-free
-  signal whose grid resolution() does not see (values between its levels) is judged by its changes:
-  its stands count as copies;
+  a grid meets a value again by chance about as often as it repeats) but at least NOISY as often,
+  or, for a value that never returns, fewer than REVISITED of its changes land on a value it held
+  before (off any grid a continuous value repeats exactly only as a copy; a noise-free signal on a
+  grid, a quantised steering on a straight, comes back to its levels and may genuinely stand: not
+  held, also where resolution() does not see the grid because some values lie between its levels);
+  and it
+  updates at least every POLLED rows on average (a state holds for many); its P is then the mean
+  interval between updates (its rate the number of its changes over their span: what its values
+  carry);
 - a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
   else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
   constant, not a gap); for the positions, while the machine moves, it is a stale value (a dropped
@@ -80,6 +84,10 @@ CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this 
 CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
 MIN_SAMPLES = 20
 RETURN_SHARE = 0.5      # an irregular hold's value returns after a change less than this share of its repeats
+NOISY = 0.01            # ... and at least this often: noise on a grid tells its copies; a value that never returns
+REVISITED = 0.1         # ... is held only when fewer than this share of its changes land on a value it had before:
+                        # off any grid (a continuous value stands exactly only as a copy); a noise-free signal
+                        # on a grid (a quantised steering) comes back to its levels, and its stands are genuine
 POLLED = 4.0            # rows: a channel held at irregular intervals updates at least this often on average
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
 SUM_SAID = ("a sum of signals: its rate is its fastest term's changes (combining sensors samples no faster than "
@@ -185,9 +193,11 @@ def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float)
     when, after a change, the value comes back to the one before it (x[i+2] = x[i] where x[i+1]
     differs) less than RETURN_SHARE as often as a row repeats (a signal that meets a value again by
     chance, noise on a grid, returns about as often as it repeats; single steps of a grid are
-    refused before), and it updates at least every POLLED rows on average (a state or an event
-    holds for many rows), and the rows between its first and last change repeat HELD_SHARE of the
-    time too. The mean interval is the span of the changes over their number: a channel's rate is
+    refused before) but at least NOISY of the time, or, where it never returns (no noise on a grid
+    to tell a copy by), when fewer than REVISITED of its changes land on a value it held before
+    (_revisited: off any grid a continuous value repeats exactly only as a copy; a noise-free
+    signal on a grid, a quantised steering, comes back to its levels and may stand); and it updates at least every POLLED rows on average (a state or an event holds for
+    many rows), and the rows between its first and last change repeat HELD_SHARE of the time too. The mean interval is the span of the changes over their number: a channel's rate is
     that of the values it carries."""
     same = np.all(x[2:] == x[:-2], axis=1)
     after = change[1:-1]
@@ -196,9 +206,18 @@ def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float)
     repeats, returns = 1.0 - change[1:].mean(), float(np.mean(same[after]))
     if returns > RETURN_SHARE * repeats:
         return None                     # a value met again by chance: its repeats are not copies
+    if returns < NOISY and _revisited(x, change) >= REVISITED:
+        return None                     # a noise-free signal on a grid: its repeats may be stands
     at = np.flatnonzero(change)
     period = float(t[at[-1]] - t[at[0]]) / (len(at) - 1)
     return period if row / (1.0 - HELD_SHARE) <= period <= POLLED * row else None
+
+
+def _revisited(x: np.ndarray, change: np.ndarray) -> float:
+    """The share of a channel's changes that land on a value (row) it held before: about 0 off any
+    grid, a large share for a signal on a grid, seen or not by resolution() (levels met again)."""
+    values = x[change]
+    return 1.0 - len(np.unique(values, axis=0)) / len(values)
 
 
 def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
