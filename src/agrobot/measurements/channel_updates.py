@@ -25,10 +25,11 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   before (off any grid a continuous value repeats exactly only as a copy; a noise-free signal on a
   grid, a quantised steering on a straight, comes back to its levels and may genuinely stand: not
   held, also where resolution() does not see the grid because some values lie between its levels);
-  and it
-  updates at least every POLLED rows on average (a state holds for many); its P is then the mean
-  interval between updates (its rate the number of its changes over their span: what its values
-  carry);
+  and it updates at least every POLLED rows on average (a state holds for many); its P is then the
+  mean interval between updates (its rate the number of its changes over their span: what its
+  values carry);
+- a channel that repeats at least HELD_SHARE of its rows in single steps of its grid (a speed at a
+  cruise) is not held, and the report says so with its grid (genuine_repeats);
 - a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
   else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
   constant, not a gap); for the positions, while the machine moves, it is a stale value (a dropped
@@ -51,8 +52,9 @@ A sum of signals (``--signal v=0.25*(FL + FR + RL + RR)``, measurements.signal_e
 whenever any of its terms does, each change a part of an update: four wheel speeds held at 3 Hz
 in 10 Hz messages make a mean that changes at 7 Hz. Combining sensors samples no faster than the
 fastest of them, so a sum's rate is its fastest term's: that term's changes over the span they
-share, per sample of the sum (``term_share``; read where the expression is evaluated, where the
-terms' own samples are known, and kept in report["sums"]), times the sum's sample rate, where its
+share (standing time included, as a reference that reads one wheel counts it), per sample of the
+sum (``term_share``; read where the expression is evaluated, where the terms' own samples are
+known, and kept in report["sums"]), times the sum's sample rate, where its
 fastest term repeats at least HELD_SHARE of the sum's samples and that is slower than the sum's own
 changes. The sum's samples are judged as any channel's: replaced by its changes where its own
 repeats are copies (terms held in the same rows), else kept (each change a part of an update). A
