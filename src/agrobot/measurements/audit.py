@@ -79,6 +79,7 @@ import numpy as np
 
 from agrobot.components.tractor_yaw_plant import steer_input
 
+from .channel_updates import ROWS_KEPT, SUM_SAID
 from .clocks import parabolic_peak
 from .direction import angle_rate, check_direction, chord_steps, position_noise
 from .findings import finding
@@ -445,10 +446,17 @@ class Auditor:
         return out
 
     def channels(self) -> list[dict]:
+        """A row per set of channels on the same stamps whose updates were found alike (a sum of
+        signals kept on its rows has its own rate: measurements.channel_updates)."""
         updates = self.streams.report.get("updates", {})
-        return [channel_row(", ".join(names), self.group(names[0]), t, self.t0,
-                            updates[names[0]] if all(n in updates for n in names) else None)
-                for names, t in self.stamped()]
+        rows = []
+        for names, t in self.stamped():
+            alike: dict[tuple, list[str]] = {}
+            for n in names:
+                alike.setdefault(tuple(sorted((updates.get(n) or {}).items())), []).append(n)
+            rows += [channel_row(", ".join(same), self.group(same[0]), t, self.t0, updates.get(same[0]))
+                     for same in alike.values()]
+        return rows
 
     def zero_lag_pairs(self, search: float = SEARCH) -> list[dict]:
         """Every pair with no physical lag: (name, a, b, lag dict), lags searched +-``search`` s."""
@@ -871,8 +879,10 @@ def held_findings(report: dict) -> list[dict]:
         out.append(finding("held_samples", [name], u["held"], None, "rows per update",
                            f"{what}: {u['updates_hz']:.3g} Hz updates in {u['rows_hz']:.3g} Hz rows (held x"
                            f"{u['held']:.2g}): " + ("a set-point, held as it is sent" if u.get("set_point") else
-                                                    "its rate, noise, derived speed, course and lags are judged on "
-                                                    "its updates at their own times"), resolved=True))
+                                                    (SUM_SAID if u.get("sum") else "") + (
+                                                        ROWS_KEPT if u.get("rows_kept") else
+                                                        "its rate, noise, derived speed, course and lags are judged "
+                                                        "on its updates at their own times")), resolved=True))
         out[-1]["updates_hz"] = float(u["updates_hz"])      # a noise floor is read on them (diagnosis.noise_floor)
     return out
 

@@ -13,13 +13,23 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   lie within half that period and a row of it (a sensor's rate, not a state that switches now and
   then), and its changes are not single steps of
   a grid (a quantised signal that moves slowly also repeats, but changes by one quantum at a time:
-  the median change is then within 1.5 quanta; measurements.log.resolution finds the quantum);
+  the median change is then within SINGLE_STEP quanta; measurements.log.resolution finds the quantum);
   its update period P is the median interval between updates, ``held`` = P / the row period;
-- a channel read at irregular times (polled in turn with others: most updates one row apart, some
-  several) is held too when its repeats are copies: after a change its value comes back to the one
-  before less than RETURN_SHARE as often as a row repeats (noise on a grid meets a value again by
-  chance about as often as it repeats), and it updates every REGULAR to POLLED rows on average (a
-  state holds for many); its P is then the mean interval between updates;
+- a channel whose updates are not a whole number of rows apart (18.5 Hz in 25 Hz rows: one, then
+  two rows, with jitter) or read at irregular times (polled in turn with others) is held too when
+  at least HELD_SHARE of its row steps repeat and its repeats are copies, i.e. neither its grid nor
+  chance explains them: its changes are not single steps of its grid (above), and after a change
+  its value comes back to the one before less than RETURN_SHARE as often as a row repeats (noise on
+  a grid meets a value again by chance about as often as it repeats) but at least NOISY as often,
+  or, for a value that never returns, fewer than REVISITED of its changes land on a value it held
+  before (off any grid a continuous value repeats exactly only as a copy; a noise-free signal on a
+  grid, a quantised steering on a straight, comes back to its levels and may genuinely stand: not
+  held, also where resolution() does not see the grid because some values lie between its levels);
+  and it updates at least every POLLED rows on average (a state holds for many); its P is then the
+  mean interval between updates (its rate the number of its changes over their span: what its
+  values carry);
+- a channel that repeats at least HELD_SHARE of its rows in single steps of its grid (a speed at a
+  cruise) is not held, and the report says so with its grid (genuine_repeats);
 - a run of repeats longer than STILL x P is no hold: while the machine stands (the speed ``v``,
   else the track, under STANDING m/s) it is a value that stays put and is kept every P (a measured
   constant, not a gap); for the positions, while the machine moves, it is a stale value (a dropped
@@ -38,6 +48,18 @@ fixes as one channel: a fix updates when its latitude or longitude changes):
   heading, a noise level, a cross-correlation) is computed on them. Set-points (a command, held by
   nature) keep their rows; their update rate is still reported.
 
+A sum of signals (``--signal v=0.25*(FL + FR + RL + RR)``, measurements.signal_expressions) changes
+whenever any of its terms does, each change a part of an update: four wheel speeds held at 3 Hz
+in 10 Hz messages make a mean that changes at 7 Hz. Combining sensors samples no faster than the
+fastest of them, so a sum's rate is its fastest term's: that term's changes over the span they
+share (standing time included, as a reference that reads one wheel counts it), per sample of the
+sum (``term_share``; read where the expression is evaluated, where the terms' own samples are
+known, and kept in report["sums"]), times the sum's sample rate, where its
+fastest term repeats at least HELD_SHARE of the sum's samples and that is slower than the sum's own
+changes. The sum's samples are judged as any channel's: replaced by its changes where its own
+repeats are copies (terms held in the same rows), else kept (each change a part of an update). A
+mean computed before the recording (one column) is judged on its own changes only.
+
 A heading (``MUST_CHANGE``) that never changes while the course of the fixes turns by more than
 TURNED rad is refused, and so is a recording in which
 no channel changes at all: the error names the file, each channel with the value it holds, and
@@ -53,19 +75,26 @@ from .direction import course
 from .log import COLUMNS, LogError, resolution
 from .streams import Streams
 
-HELD_SHARE = 0.4        # at least this share of row steps repeat exactly: the channel may be held
+HELD_SHARE = 0.2        # at least this share of row steps repeat exactly: the channel may be held (a hold of
+                        # 1.25 rows on average repeats one row in five)
 REGULAR = 1.5           # the median update interval at least this many row periods
 REGULAR_SHARE = 0.6     # ... and this share of the intervals within half a period and a row of it
+SINGLE_STEP = 1.5       # quanta: a median change up to this is a grid's single step (a slow signal on a grid)
 STILL = 2.0             # a run of repeats longer than this many update periods is no hold
 STANDING = 0.1          # m/s: below this the machine stands
 CLOCK_WINDOW = 51       # updates: a sensor clock's drift is followed over this many
 CLOCK_FIT = 0.6         # rows: the residual std of update times that fit a regular clock
 MIN_SAMPLES = 20
-RETURN_SHARE = 0.5      # a polled channel's value returns after a change less than this share of its repeats
-NOISY = 0.01            # ... and at least this often: a value that never returns (a noise-free ramp or step on a
-                        # grid) shows no noise, so its repeats cannot be told from a value that did not move
-POLLED = 4.0            # rows: a channel read at irregular times updates at least this often on average
+RETURN_SHARE = 0.5      # an irregular hold's value returns after a change less than this share of its repeats
+NOISY = 0.01            # ... and at least this often: noise on a grid tells its copies; a value that never returns
+REVISITED = 0.1         # ... is held only when fewer than this share of its changes land on a value it had before:
+                        # off any grid (a continuous value stands exactly only as a copy); a noise-free signal
+                        # on a grid (a quantised steering) comes back to its levels, and its stands are genuine
+POLLED = 4.0            # rows: a channel held at irregular intervals updates at least this often on average
 TURNED = math.radians(30.0)   # rad: a course that turns this much turns any heading
+SUM_SAID = ("a sum of signals: its rate is its fastest term's changes (combining sensors samples no faster than "
+            "the fastest of them); ")
+ROWS_KEPT = "its samples are kept, each change a part of an update"
 MUST_CHANGE = {"heading": "a heading that changes as the machine turns (a dual-antenna or an INS heading: its "
                           "noise alone changes it)"}
 
@@ -79,13 +108,38 @@ def changed(values: np.ndarray) -> np.ndarray:
     return out
 
 
+def term_share(terms: list[np.ndarray], samples: int) -> float:
+    """The changes of the fastest of a sum's ``terms`` (each its own samples within the span the
+    sum covers) per sample of the sum (``samples`` of them): its rate over the sum's rows (module
+    docstring)."""
+    if samples < 2:
+        return 1.0
+    return max(float(changed(x)[1:].sum()) for x in terms) / (samples - 1)
+
+
+def genuine_repeats(name: str, t: np.ndarray, values: np.ndarray) -> str | None:
+    """What is said of a channel that repeats at least HELD_SHARE of its rows but moves in single
+    steps of its grid (a slow or constant value on a grid: a speed at a cruise, a steering on a
+    straight): its repeats are genuine, it is not held and its rate is its rows'; None otherwise."""
+    x = np.asarray(values, float)
+    if len(x) < MIN_SAMPLES or x.ndim != 1:
+        return None
+    change = changed(x)
+    share = 1.0 - float(change[1:].mean())
+    if share < HELD_SHARE or change.sum() < 5 or not _single_steps(x, change):
+        return None
+    return (f"{name}: {share:.0%} of its rows repeat its value, but it moves in single steps of its "
+            f"{resolution(x):.3g} grid: a slow or constant value on a grid, its repeats genuine, not held (its rate is "
+            f"its rows'; a median change above {SINGLE_STEP:g} steps would make them copies)")
+
+
 def _single_steps(x: np.ndarray, change: np.ndarray) -> bool:
     """Whether a column moves one quantum at a time (a slow signal on a grid, not a held one)."""
     x = np.asarray(x, float)
     q = resolution(x)
     steps = np.abs(np.diff(x[change]))
     steps = steps[np.isfinite(steps) & (steps > 0)]
-    return q > 0 and len(steps) > 0 and float(np.median(steps)) <= 1.5 * q
+    return q > 0 and len(steps) > 0 and float(np.median(steps)) <= SINGLE_STEP * q
 
 
 def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
@@ -135,23 +189,37 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
 
 
 def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float) -> float | None:
-    """The mean interval between the updates of a channel read at irregular times (a value polled in
-    turn with others, an OBD request answered when the bus allows), or None when its repeats are
-    not copies. Its repeats are copies when, after a change, the value comes back to the one before
-    it (x[i+2] = x[i] where x[i+1] differs) less than RETURN_SHARE as often as a row repeats (a signal
-    that meets a value again by chance, noise on a grid, returns about as often as it repeats) but
-    at least NOISY of the time (a noise-free signal's repeat may be a value that did not move), and
-    it updates every REGULAR to POLLED rows on average (a state or an event holds for many rows)."""
+    """The mean interval between the updates of a channel held at irregular intervals (a hold that
+    is not a whole number of rows, with jitter; a value polled in turn with others, an OBD request
+    answered when the bus allows), or None when its repeats are not copies. Its repeats are copies
+    when, after a change, the value comes back to the one before it (x[i+2] = x[i] where x[i+1]
+    differs) less than RETURN_SHARE as often as a row repeats (a signal that meets a value again by
+    chance, noise on a grid, returns about as often as it repeats; single steps of a grid are
+    refused before) but at least NOISY of the time, or, where it never returns (no noise on a grid
+    to tell a copy by), when fewer than REVISITED of its changes land on a value it held before
+    (_revisited: off any grid a continuous value repeats exactly only as a copy; a noise-free
+    signal on a grid, a quantised steering, comes back to its levels and may stand); and it updates at least every POLLED rows on average (a state or an event holds for
+    many rows), and the rows between its first and last change repeat HELD_SHARE of the time too. The mean interval is the span of the changes over their number: a channel's rate is
+    that of the values it carries."""
     same = np.all(x[2:] == x[:-2], axis=1)
     after = change[1:-1]
     if after.sum() < MIN_SAMPLES:
         return None
     repeats, returns = 1.0 - change[1:].mean(), float(np.mean(same[after]))
-    if returns < NOISY or returns > RETURN_SHARE * repeats:
-        return None                     # no noise to tell a copy from a value that did not move, or not copies
+    if returns > RETURN_SHARE * repeats:
+        return None                     # a value met again by chance: its repeats are not copies
+    if returns < NOISY and _revisited(x, change) >= REVISITED:
+        return None                     # a noise-free signal on a grid: its repeats may be stands
     at = np.flatnonzero(change)
     period = float(t[at[-1]] - t[at[0]]) / (len(at) - 1)
-    return period if REGULAR * row <= period <= POLLED * row else None
+    return period if row / (1.0 - HELD_SHARE) <= period <= POLLED * row else None
+
+
+def _revisited(x: np.ndarray, change: np.ndarray) -> float:
+    """The share of a channel's changes that land on a value (row) it held before: about 0 off any
+    grid, a large share for a signal on a grid, seen or not by resolution() (levels met again)."""
+    values = x[change]
+    return 1.0 - len(np.unique(values, axis=0)) / len(values)
 
 
 def regular_times(tm: np.ndarray, period: float, row: float) -> np.ndarray:
@@ -250,18 +318,48 @@ def keep_updates(streams: Streams, source) -> list[dict]:
             streams.gnss = g.iloc[found["keep"]].reset_index(drop=True).assign(utc=found["times"])
             notes.append({"channel": "gnss", **_said(found)})
         notes += _receiver_heading(streams)
+    sums = _sums(streams)
     for c, (t, x) in list(streams.signals.items()):
         # a speed, a rate or an angle may stay put while the machine moves (a cruise, a straight):
         # only positions must change then, so only theirs are judged stale
         found = holding(t, x, None)
+        if found is None and c in sums:
+            notes.append(sums[c])
         if found is None:
+            genuine = None if c in sums or c in streams.held else genuine_repeats(c, t, x)
+            if genuine:
+                streams.report.setdefault("quirks", []).append(genuine)
             continue
         if c not in streams.held:
             streams.signals[c] = (found["times"], x[found["keep"]])
-        notes.append({"channel": c, **_said(found), "set_point": c in streams.held})
+        notes.append(_as_sum({"channel": c, **_said(found), "set_point": c in streams.held}, sums.get(c)))
     if notes:
         streams.report["updates"] = {n["channel"]: {k: v for k, v in n.items() if k != "channel"} for n in notes}
         streams.report.setdefault("quirks", []).extend(note_text(n) for n in notes)
+    return notes
+
+
+def _as_sum(note: dict, term: dict | None) -> dict:
+    """A held channel's note, at its fastest term's rate where it is a sum of signals that samples
+    slower than its own changes (module docstring)."""
+    if term is None or term["updates_hz"] >= note["updates_hz"]:
+        return note
+    return {**note, "updates_hz": term["updates_hz"], "held": note["rows_hz"] / term["updates_hz"], "sum": True}
+
+
+def _sums(streams: Streams) -> dict[str, dict]:
+    """Column -> the note of each sum of signals whose fastest term repeats at least HELD_SHARE of
+    the sum's samples (report["sums"]: term_share): its rate is that term's (module docstring)."""
+    notes = {}
+    for c, share in (streams.report.get("sums") or {}).items():
+        if c not in streams.signals or c in streams.held or share > 1.0 - HELD_SHARE or share <= 0:
+            continue
+        t = np.asarray(streams.signals[c][0], float)
+        if len(t) < MIN_SAMPLES or not t[-1] > t[0]:
+            continue
+        rows = (len(t) - 1) / float(t[-1] - t[0])
+        notes[c] = {"channel": c, "rows_hz": rows, "updates_hz": rows * share, "held": 1.0 / share, "stale": 0,
+                    "set_point": False, "sum": True, "rows_kept": True}
     return notes
 
 
@@ -307,7 +405,8 @@ def note_text(n: dict) -> str:
     """One held channel as the report says it."""
     what = "the positions" if n["channel"] == "gnss" else n["channel"]
     text = (f"{what}: {n['updates_hz']:.3g} Hz updates in {n['rows_hz']:.3g} Hz rows (held x{n['held']:.2g}): "
-            + ("a set-point, kept as held" if n.get("set_point") else "judged and logged on its updates"))
+            + ("a set-point, kept as held" if n.get("set_point") else
+               (SUM_SAID if n.get("sum") else "") + (ROWS_KEPT if n.get("rows_kept") else "judged and logged on its updates")))
     if n.get("stale"):
         text += f"; {n['stale']} value(s) held longer than {STILL:g} updates while moving dropped (a gap)"
     return text

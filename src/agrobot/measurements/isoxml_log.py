@@ -253,7 +253,8 @@ def _mapped(signals: dict, info: dict, options, source: Path, report: dict) -> d
         for name in spec.names:
             if name not in series:
                 raise unknown_name(str(source), spec, name, sorted(series), "column")
-        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4,
+                                  report.setdefault("sums", {}))
         ok = np.isfinite(values)
         out[spec.column] = (t[ok], values[ok], how + ("; the machine's measured speed (DDI 397)"
                                                       if spec.text == f"v={speed}" else ""))

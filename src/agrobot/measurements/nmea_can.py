@@ -148,7 +148,8 @@ def _can_signals(source: Path, cans: list[CANRecording], db, dbc_name: str, opti
                 raise LogError(f"{source}: {what}")
             report["can"]["columns_without_a_signal"][column] = what
             continue
-        t, values, text = evaluate(spec, found, f"{source} (DBC {dbc_name})", options.wheelbase or 1.4)
+        t, values, text = evaluate(spec, found, f"{source} (DBC {dbc_name})", options.wheelbase or 1.4,
+                                   report.setdefault("sums", {}))
         raw[column] = (t, values)
         _yaw_axis(db, frames, spec, report)
         units[column] = text + ("; matched by name and unit (--signal to choose another)" if column in guessed else "")
@@ -208,7 +209,8 @@ def _receiver_signals(streams: Streams, options: ImportOptions, source: Path) ->
         for name in spec.names:
             if name not in series:
                 raise unknown_name(str(source), spec, name, sorted(series), "receiver field")
-        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4)
+        t, values, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), options.wheelbase or 1.4,
+                                  streams.report.setdefault("sums", {}))
         streams.signals[spec.column] = (t, values)
         streams.groups[spec.column] = "gnss"
         streams.report.setdefault("columns", {})[spec.column] = how

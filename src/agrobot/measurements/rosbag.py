@@ -229,8 +229,9 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
     rows, header_used = _messages(reader, wanted, auto, source, labels)
     series, report_topics, stamps = _topic_series(rows, header_used, wanted, topics, given, source)
     turned = _vertical_yaw_rates(auto, series, topics)
-    signals = _evaluated(given, auto, series, topics, report_topics, source)
-    report = {"topics": report_topics, "stamp_vs_receive": stamps,
+    sums: dict = {}
+    signals = _evaluated(given, auto, series, topics, report_topics, source, sums)
+    report = {"topics": report_topics, "stamp_vs_receive": stamps, "sums": sums,
               "mode_labels": {spec.column: list(labels[spec.names[0]]) for spec in given
                               if spec.names[0] in labels and labels[spec.names[0]] and spec.column in signals},
               "topics_not_used": {t: m for t, m in sorted(topics.items()) if t not in wanted}}
@@ -392,10 +393,11 @@ def _topic_series(rows: dict, header_used: dict, wanted: dict, topics: dict, giv
 
 
 def _evaluated(given: list, auto: dict, series: dict, topics: dict, report_topics: dict,
-               source: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+               source: Path, sums: dict) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """column -> (times, values) of every expression whose names the bag holds (``given`` first,
     then the standard fields); a fix's quality and error, and the standard positions, are taken
-    as they are (no unit conversion). Each topic's report names the columns it gave."""
+    as they are (no unit conversion). Each topic's report names the columns it gave; ``sums``
+    gets each sum's fastest term's share (signal_expressions.evaluate)."""
     signals: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for spec in list(given) + list(auto.values()):
         if not all(n in series for n in spec.names):
@@ -409,7 +411,7 @@ def _evaluated(given: list, auto: dict, series: dict, topics: dict, report_topic
             signals[spec.column] = (s.t, s.values)
             how = spec.names[0]
         else:
-            t, v, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source))
+            t, v, how = evaluate(spec, {n: series[n] for n in spec.names}, str(source), sums=sums)
             signals[spec.column] = (t, v)
         for n in spec.names:
             topic = split_name(n, list(topics))[0]
@@ -525,7 +527,7 @@ def bag_streams(paths: list[Path], options, source: Path):
                         f"slower?)" if rate < 0.95 else f" (the bag took {1 / rate:.3g} s per second of data: "
                         f"recorded while a log was replayed faster?)" if rate > 1.05 else ""))
     report: dict = {"source": str(source), "files": {"bag": [str(p) for p in paths]}, "dbc": None,
-                    "notes": notes, "stamp_vs_receive": topics.pop("stamp_vs_receive", {}),
+                    "notes": notes, "stamp_vs_receive": topics.pop("stamp_vs_receive", {}), "sums": topics.pop("sums"),
                     "bag": topics, "clocks": {"reference": reference}}
     gnss = None
     if "lat" in signals and "lon" in signals:

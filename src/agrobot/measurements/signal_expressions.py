@@ -38,6 +38,7 @@ import numpy as np
 
 from agrobot.orchestrator.units import base_unit
 
+from .channel_updates import term_share
 from .log import COLUMNS, LogError
 from .streams import Series
 
@@ -256,10 +257,12 @@ def target_unit(column: str) -> str | None:
     return EXTRA_TARGETS.get(column)
 
 
-def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4
-             ) -> tuple[np.ndarray, np.ndarray, str]:
+def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase: float = 1.4,
+             sums: dict | None = None) -> tuple[np.ndarray, np.ndarray, str]:
     """(times, values in the column's unit, how) of ``spec`` from the named series (by
-    SignalSpec.names; a rate(NAME) term's rate taken here)."""
+    SignalSpec.names; a rate(NAME) term's rate taken here); ``sums``: where the expression has
+    several terms, sums[column] = its fastest term's changes per sample
+    (measurements.channel_updates.term_share: a sum's rate is its fastest term's)."""
     series = {n: _applied(n, series) for n, _ in spec.terms}
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
@@ -277,6 +280,9 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
         if s is first and len(spec.terms) > 1:
             values = values[(first.t >= lo) & (first.t <= hi)]
         parts.append((name, coef, values, s.unit))
+    if sums is not None and len(spec.terms) > 1:
+        own = [np.asarray(series[n].values, float)[(series[n].t >= lo) & (series[n].t <= hi)] for n, _ in spec.terms]
+        sums[spec.column] = term_share(own, len(t))
     notes = [s.label for n, s in series.items() if _CALL.match(n)]
     if spec.unit is not None:
         value = sum(c * v for _, c, v, _ in parts) + spec.constant

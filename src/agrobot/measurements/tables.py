@@ -1011,7 +1011,7 @@ def table_streams(paths: list[Path], options, source: Path):
                        f"columns: delta_cmd, delta, v, yaw_rate, x, y, or lat, lon); "
                        + "; ".join(f"{t.name}: {', '.join(map(str, t.frame.columns[:12]))}" for t in tables)
                        + " (convert SOURCE --list shows their ranges)")
-    names, signals, columns, used, groups = catalog(tables), {}, {}, set(), {}
+    names, signals, columns, used, groups, sums = catalog(tables), {}, {}, set(), {}, {}
     for spec in specs:
         found = {}
         for name in spec.names:
@@ -1029,7 +1029,7 @@ def table_streams(paths: list[Path], options, source: Path):
                 s.label += " (no unit in the header: the log's convention)"
             found[name] = s
             used.add(s.label.split(".")[0])
-        t, values, how = evaluate(spec, found, str(source), options.wheelbase or 1.4)
+        t, values, how = evaluate(spec, found, str(source), options.wheelbase or 1.4, sums)
         ok = np.isfinite(values)
         signals[spec.column] = (t[ok], values[ok])
         groups[spec.column] = names[spec.names[0]][0].name if spec.names[0] in names else spec.column
@@ -1039,7 +1039,7 @@ def table_streams(paths: list[Path], options, source: Path):
     spans_overlap(tables, used, source)
     boot = [t.name for t in tables if t.name in used and t.t is not None and is_boot_clock(t.t)]
     report = {"source": str(source), "files": {"table": [str(t.path) for t in tables]}, "dbc": None, "notes": notes,
-              "imu_axes": yaw_axis(tables, specs),
+              "imu_axes": yaw_axis(tables, specs), "sums": sums,
               "time_base": [x for t in tables if t.name in used for x in t.time_base],
               "mode_columns": {f"{t.path.name} {c}": runs for t in tables if t.name in used for c, runs in mode_runs(t).items()},
               "tables": {t.name: {"rows": int(len(t.frame)), "time": t.time_how or "none", "used": t.name in used,
