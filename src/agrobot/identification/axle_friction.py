@@ -24,11 +24,12 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from agrobot.components.models.tyre import FRICTION_RATIO_BOUNDS
 from agrobot.estimation import Parameter
 
 from .driving import understeer_gradient
 
-RATIO_BOUNDS = (0.5, 2.0)       # rear / front peak friction: load transfer and tyre sizing stay well inside
+RATIO_BOUNDS = FRICTION_RATIO_BOUNDS       # the yaw plant's tyre_friction_ratio takes the same range
 
 
 def friction_ratio() -> Parameter:
