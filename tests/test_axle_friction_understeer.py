@@ -118,7 +118,8 @@ def test_the_ratio_is_kept_on_its_residuals_not_on_its_autocorrelation():
         notes: list[str] = []
         both_fit = result([*free, friction_ratio()], rss_both, 691.0, ratio=0.94)
         assert both_fit.bic < single.bic - BIC_MARGIN          # on each fit's own n_eff: "kept"
-        chosen, free_chosen = axle_friction_fit(lambda *_: both_fit, single, free, {}, notes)
+        chosen, free_chosen = axle_friction_fit(lambda *_: both_fit, lambda *_: (single.rss_total, single.rss_total),
+                                                single, free, notes)
         assert (chosen is both_fit) == kept and (len(free_chosen) == len(free) + 1) == kept, notes
         assert ("kept" in notes[0]) == kept and ("one on both axles" in notes[0]) != kept
 
@@ -136,3 +137,36 @@ def test_the_diagnosis_repeats_a_friction_per_axle_as_the_fronts_with_the_ratio(
     assert any("friction 1.08 front, rear / front 1.4," in line for line in lines), lines
     identified["tyre_saturation"]["friction_ratio"] = 1.0
     assert any("friction 1.08," in line for line in agreement(identified, [], types.SimpleNamespace(first_step=[])))
+
+
+def test_the_per_axle_fit_starts_from_the_one_friction_optimum_and_runs_only_where_it_can_win():
+    """The per-axle fit is nested in the one-friction fit: it starts from that fit's values at rho = 1.
+    It runs only where the fall of the RSS rho brings to first order, times GAIN_ALLOWANCE, reaches
+    the fall a dBIC below -BIC_MARGIN needs at the one-friction fit's n_eff (needed_fall:
+    RSS (1 - exp(-(10 + ln n_eff) / n_eff))); short of it, it is not fitted and the notes say so with
+    the numbers."""
+    from agrobot.estimation import FitResult
+    from agrobot.identification.axle_friction import GAIN_ALLOWANCE, axle_friction_fit, friction_ratio, needed_fall
+    from agrobot.identification.ordinary_driving import free_parameters
+    from agrobot.identification.vehicle import Vehicle
+
+    free = free_parameters(Vehicle(kind="scale_car"), False, False, saturation=True)
+    values = {"c_f": 8.0, "c_r": 30.0, "friction": 0.7, "shape": 1.4}
+    single = FitResult(values, tuple(free), np.zeros((len(free), len(free))), {"yaw": 0.3}, {"yaw": 2000},
+                       {"yaw": 400.0})
+    needed = needed_fall(single)
+    assert needed == pytest.approx(0.3 * (1 - np.exp(-(10 + np.log(400.0)) / 400.0)))
+    both = FitResult({**values, "friction_ratio": 1.3}, (*free, friction_ratio()), np.zeros((len(free) + 1,) * 2),
+                     {"yaw": 0.2}, {"yaw": 2000}, {"yaw": 400.0})
+    starts: list[dict] = []
+
+    def fit(free_a, start, evaluations):
+        starts.append(start)
+        return both
+
+    for fall, tried in ((0.99 * needed / GAIN_ALLOWANCE, False), (1.01 * needed / GAIN_ALLOWANCE, True)):
+        notes: list[str] = []
+        chosen, _ = axle_friction_fit(fit, lambda free_a, start, added: (0.3, fall), single, free, notes)
+        assert (chosen is both) == tried and len(starts) == int(tried), notes
+        assert ("was not fitted" in notes[0] and f"{100 * needed / 0.3:.2g} %" in notes[0]) != tried, notes
+    assert starts == [{**values, "friction_ratio": 1.0}]
