@@ -28,7 +28,10 @@ Extensions (off by default; each is an entry of the diagnosis catalogue, see src
 models only), ``antenna_forward``/``antenna_left`` (GPS antenna = R + lever arm in the body frame)
 and ``tyre_friction`` with ``tyre_shape`` (tyre saturation: each axle's force follows the simplified
 Magic Formula of models.tyre instead of C alpha; physical models only; integrated by Rosenbrock
-sub-steps of at most 2 ms instead of the matrix exponential).
+sub-steps of at most 2 ms instead of the matrix exponential) and ``tyre_friction_ratio`` rho (the
+front axle's peak is mu F_zf, the rear's rho mu F_zr: the axle that lets go first sets the limit
+understeer, identification.axle_friction; within FRICTION_RATIO_BOUNDS). The C core models none of
+the tyre saturation: the compiled engine refuses a study that sets it and ``auto`` runs it in Python.
 
 Steering geometry (``steering_geometry``): ``w`` (default) drives the dynamics by the wheel angle
 delta, the linear single-track model whose front slip is alpha_f = delta - (v_y + l_f gamma) / v_x;
@@ -65,7 +68,7 @@ from agrobot.orchestrator.units import FILE_UNIT
 from .models.loop_blocks import Block, Ground
 from .models.paper_models import G_2ND
 from .models.terrain import GRAVITY, attitude, ground_of, lever_offset, slope_pull
-from .models.tyre import ros2_step
+from .models.tyre import FRICTION_RATIO_BOUNDS, ros2_step
 from .models.yaw_dynamics import (PHYSICAL_MODELS, TractorParameters, controllable_canonical, cornering_scale,
                                   lateral_disturbance_column, state_space, with_cornering_scale, zoh_discretize)
 
@@ -208,7 +211,8 @@ class TractorYawPlant(Component):
     roles = ("yaw_plant",)
     c_core = CoreDescription(Path(__file__).with_suffix(".c"), _plant_compiled,     # its C model core, beside this file
                              ("model", "parameter_set", "tf_num", "tf_den", "cornering_scale_front",
-                              "cornering_scale_rear", "steering_geometry"), ("terrain_file", "tyre_friction", "tyre_shape"), _plant_values)
+                              "cornering_scale_rear", "steering_geometry"), ("terrain_file", "tyre_friction", "tyre_shape",
+                                                                         "tyre_friction_ratio"), _plant_values)
     variables = (
         inp("steer_angle", "rad", 0.0, "front wheel steering angle delta"),
         inp("speed", "m/s", 0.0, "longitudinal speed v_x of the CG"),
@@ -246,6 +250,8 @@ class TractorYawPlant(Component):
             "(empty: the plane of slope_angle)"),
         par("tyre_friction", "1", 0.0, "extension: tyre friction mu of the Magic Formula (0 = linear tyres)"),
         par("tyre_shape", "1", 1.3, "extension: Magic Formula shape factor C (1 < C < 2: a peak; 0 < C < 1: none)"),
+        par("tyre_friction_ratio", "1", 1.0, "extension: the rear tyres' peak friction over the front's, mu_r / mu_f "
+            "(tyre_friction is the front's; 1: one friction on both axles)"),
         out("yaw_rate", "rad/s", 0.0, "yaw rate gamma"),
         out("lateral_velocity", "m/s", 0.0, "lateral velocity v_y of the CG"),
         out("heading", "rad", 0.0, "yaw angle psi"),
@@ -269,6 +275,7 @@ class TractorYawPlant(Component):
 
     def __init__(self, name, parameters=None, rng=None) -> None:
         super().__init__(name, parameters, rng)
+        self._check_friction_ratio()
         if self.p["model"] in PHYSICAL_MODELS:
             try:
                 unstable = unstable_modes(self.p["model"], self._parameters())
@@ -282,6 +289,16 @@ class TractorYawPlant(Component):
                     f"{pole.imag:+.2f}j 1/s at {v:g} m/s (unstable at {', '.join(f'{s:g}' for s, _ in unstable)} m/s); "
                     f"the paper's identified G_RLFR has none (parameter_set = 'rlfr_identified' is stable)"),
                     stacklevel=2)
+
+    def _check_friction_ratio(self) -> None:
+        """ComponentError (the study's file and field named by build_system) for a tyre_friction_ratio
+        that is not a number within FRICTION_RATIO_BOUNDS (on linear tyres, tyre_friction 0, it
+        changes nothing, as tyre_shape)."""
+        ratio, (low, high) = self.p["tyre_friction_ratio"], FRICTION_RATIO_BOUNDS
+        number = isinstance(ratio, (int, float)) and not isinstance(ratio, bool)
+        self.require(number and low <= ratio <= high,
+                     f"parameter tyre_friction_ratio={ratio!r}: expected a number in [{low:g}, {high:g}] (the rear "
+                     f"tyres' peak friction over the front's, mu_r / mu_f; 1: one friction on both axles)")
 
     def _parameters(self) -> TractorParameters:
         try:
@@ -413,7 +430,8 @@ class TractorYawPlant(Component):
         """The state after dt with Magic Formula tyres (models.tyre.ros2_step, sub-steps <= 2 ms)."""
         scale = cornering_scale(v, self.p["cornering_speed_slope"], self.p["cornering_reference_speed"]) \
             if self._cornering else 1.0
-        tyre = {"mu": float(self.p["tyre_friction"]), "shape": float(self.p["tyre_shape"]),
+        mu = float(self.p["tyre_friction"])
+        tyre = {"mu": mu, "mu_r": mu * float(self.p["tyre_friction_ratio"]), "shape": float(self.p["tyre_shape"]),
                 "C_f": self.params.C_f * scale, "C_r": self.params.C_r * scale}
         n = max(1, int(math.ceil(dt / 0.002)))
         z = np.asarray(self.z, dtype=float)          # initialize leaves a list of floats for the level step

@@ -15,6 +15,8 @@ import pytest
 from agrobot.identification.driving import DrivingLog
 from agrobot.identification.from_log import write_extended_study
 from agrobot.identification.ordinary_driving import _steady_gain, _understeer
+from agrobot.orchestrator.build import build_system
+from agrobot.orchestrator.resolver import resolve
 from agrobot.orchestrator.study import Study
 from tests.vehicle_logs import ROOT_STUDIES
 
@@ -44,18 +46,17 @@ def test_extended_study_leaves_out_what_was_not_concluded(tmp_path, withheld, at
     assert ("tyre_friction (identified at least 1.8" in left) is at_least
 
 
-def test_a_friction_per_axle_is_not_written_into_a_plant_of_one_friction(tmp_path):
-    """identify kept a rear / front friction ratio of 1.4 (identification.axle_friction): the study's
-    plant has one friction on both axles, so the front's 1.8 there would let the rear go at the
-    front's limit and take away the limit understeer; the frictions are left out and said, the
-    stiffnesses written."""
+def test_a_friction_per_axle_is_written_as_the_fronts_with_the_ratio(tmp_path):
+    """identify kept a rear / front friction ratio of 1.4 (identification.axle_friction): its friction
+    1.8 is the front axle's, so the study's plant gets it with the shape and the ratio
+    (tyre_friction_ratio: the rear's peak 1.4 x 1.8 F_zr) beside the stiffnesses, and nothing is left out."""
     rep = report(False, False)
     rep["tyre_saturation"]["parameters"]["friction_ratio"] = _q(1.4)
     assert write_extended_study(rep, Study.load(ROOT_STUDIES / "f1tenth.toml"), tmp_path, "gen.csv")
-    text = (tmp_path / "extended_study.toml").read_text()
-    assert "C_f" in text and "tyre_friction" not in text and "tyre_shape" not in text
-    left = " ".join(rep.get("extended_study_left_out", []))
-    assert "identified per axle, rear / front 1.4" in left and "one friction on both axles" in left
+    extended = Study.load(tmp_path / "extended_study.toml")
+    plant = build_system(resolve(extended)).nodes["car"].component
+    assert (plant.p["tyre_friction"], plant.p["tyre_shape"], plant.p["tyre_friction_ratio"]) == (1.8, 1.5, 1.4)
+    assert plant.p["C_f"] == 40.0 and not rep.get("extended_study_left_out")
 
 
 def test_no_gain_curve_from_a_withheld_k():

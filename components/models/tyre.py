@@ -45,6 +45,8 @@ def magic_formula(alpha, stiffness, peak, shape):
 
 
 SHAPE_BOUNDS = (0.5, 1.95)      # the shape factors a fit may take (C < 1: a tyre without a peak)
+# rear / front peak friction mu_r / mu_f: load transfer and tyre sizing keep a vehicle well inside
+FRICTION_RATIO_BOUNDS = (0.5, 2.0)
 
 
 def force_limit_share(shape: float) -> float:

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 from scipy.ndimage import convolve1d
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, lsq_linear
 
 from agrobot.estimation import (FitResult, Parameter, effective_size, forward_jacobian, solution_covariance,
                                 updates_on)
@@ -714,12 +714,10 @@ def steady_state_gain(speed, K: float, L: float, gain: float = 1.0):
     return gain * speed / (L + K * speed ** 2)
 
 
-def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: Segments,
-        max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
-    """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
-    ``mask``, (S, L), when given)."""
+def _problem(model: YawModel, free: list[Parameter], fixed: dict, segs: Segments, mask: np.ndarray):
+    """(values_of, fun, jac, lower, upper) of the least squares of the gyro against the model on the
+    ``mask`` samples of ``segs``, in scaled parameters x = value / scale (fit's and gauss_newton_gain's)."""
     r_meas = model.log.r[segs.idx]
-    mask = segs.scored if mask is None else segs.scored & mask
     lo = np.array([p.lower / p.scale for p in free])
     hi = np.array([p.upper / p.scale for p in free])
 
@@ -740,7 +738,21 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
         return forward_jacobian(lambda xs: [(r_meas - s)[mask] for s in model.simulate_many(
             [values_of(xi) for xi in xs], segs)], x, lo, hi, f0=f0, floor=1.0, signed=False)
 
-    x0 = np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
+    return values_of, fun, jac, lo, hi
+
+
+def _start_point(free: list[Parameter], start: dict, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.clip([start[p.name] / p.scale for p in free], lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo))
+
+
+def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: Segments,
+        max_nfev: int = 40, mask: np.ndarray | None = None) -> FitResult:
+    """Bounded least squares of the gyro against the model on ``segs``' scored samples (and
+    ``mask``, (S, L), when given)."""
+    r_meas = model.log.r[segs.idx]
+    mask = segs.scored if mask is None else segs.scored & mask
+    values_of, fun, jac, lo, hi = _problem(model, free, fixed, segs, mask)
+    x0 = _start_point(free, start, lo, hi)
     sol = least_squares(fun, x0, jac=jac, bounds=(lo, hi), max_nfev=max_nfev, x_scale=1.0, ftol=1e-6, xtol=1e-6)
     values = values_of(sol.x)
     res = sol.fun
@@ -750,6 +762,28 @@ def fit(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: 
     cov = solution_covariance(sol.jac, sol.cost, sol.x, free, n, n_eff)    # one on its bound held there
     return FitResult(values, tuple(free), cov, {"yaw": float(res @ res)}, {"yaw": n}, {"yaw": n_eff},
                      converged=bool(sol.status > 0))
+
+
+def gauss_newton_gain(model: YawModel, free: list[Parameter], start: dict, fixed: dict, segs: Segments,
+                      added: tuple[str, ...]) -> tuple[float, float]:
+    """(RSS at ``start``, the fall of the RSS the ``added`` parameters bring to first order): with
+    the residuals f and fit's Jacobian J at start, the Gauss-Newton step within the bounds,
+    min over lower <= x0 + dx <= upper of |f + J dx|^2 (scipy lsq_linear), taken with every parameter
+    of ``free`` less that taken with ``added`` held. At the optimum of the fit without them it is the
+    score test's (Rao) gain of the parameters added, and what is left of that fit's own descent
+    (stopped on its budget) is not theirs. One batched Jacobian: the cost of one step of ``fit``."""
+    values_of, fun, jac, lo, hi = _problem(model, free, fixed, segs, segs.scored)
+    x0 = _start_point(free, start, lo, hi)
+    f = fun(x0)
+    J = jac(x0)
+    rss = float(f @ f)
+
+    def fall(columns: np.ndarray) -> float:
+        step = lsq_linear(J[:, columns], -f, bounds=(lo[columns] - x0[columns], hi[columns] - x0[columns]))
+        return rss - 2.0 * float(step.cost)
+
+    kept = np.array([p.name not in added for p in free])
+    return rss, fall(np.ones(len(free), bool)) - fall(kept)
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> float:

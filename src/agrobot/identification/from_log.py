@@ -287,9 +287,10 @@ def finite_for_json(v):
 
 def write_extended_study(report: dict, study, out_dir: Path, source) -> str | None:
     """extended_study.toml: the study with what the log identified (cornering stiffnesses, the
-    steering's delay, the gyro's bias, and tyre saturation when found with one friction on both
-    axles) -- the study then simulates the vehicle of the log. Parameters not identifiable from the
-    log, and a friction per axle (the plant has one), keep the study's values."""
+    steering's delay, the gyro's bias, and tyre saturation when found: the friction, the shape and,
+    where identify fitted one friction per axle, the rear / front ratio, tyre_friction_ratio, with the
+    front's friction) -- the study then simulates the vehicle of the log. Parameters not identifiable
+    from the log keep the study's values."""
     model = resolve(study)
     plant = model.find(role="yaw_plant")
     if not plant:
@@ -313,16 +314,15 @@ def write_extended_study(report: dict, study, out_dir: Path, source) -> str | No
         values[f"{gyro[0]}.bias"] = params["gyro_bias"]["value"]
     tyre = report["tyre_saturation"]
     if tyre["found"] and tyre["parameters"]["friction"].get("at_least"):
-        left_out.append(f"tyre_friction (identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
+        left_out.append(f"tyre_friction{', tyre_friction_ratio' if 'friction_ratio' in tyre['parameters'] else ''} "
+                        f"(identified at least {tyre['parameters']['friction']['bounds'][1]:g}, not a "
                         f"value: the study keeps its own)")
-    elif tyre["found"] and "friction_ratio" in tyre["parameters"]:     # identification.axle_friction
-        left_out.append(f"tyre_friction, tyre_shape (identified per axle, rear / front "
-                        f"{tyre['parameters']['friction_ratio']['value']:.3g}: the plant's Magic Formula has one "
-                        f"friction on both axles, which moves the limit understeer; the study keeps its own)")
     elif tyre["found"] and tyre["parameters"]["friction"].get("identifiable", True):
         values[f"{plant[0]}.tyre_friction"] = tyre["parameters"]["friction"]["value"]
         if tyre["parameters"]["shape"]["identifiable"]:
             values[f"{plant[0]}.tyre_shape"] = tyre["parameters"]["shape"]["value"]
+        if "friction_ratio" in tyre["parameters"]:      # identification.axle_friction: the friction is the front's
+            values[f"{plant[0]}.tyre_friction_ratio"] = tyre["parameters"]["friction_ratio"]["value"]
     if left_out:
         report["extended_study_left_out"] = left_out
     if not values:

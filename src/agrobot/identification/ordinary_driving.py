@@ -49,7 +49,8 @@ from agrobot.estimation import Z95, Parameter
 
 from .delay_bound import DELAY_LIMIT, delay_verdict, traded_verdict
 from .driving import (ACKERMANN, SMALL_ANGLE, DrivingLog, FitResult, NotEnoughDriving, Segments, YawModel,
-                      cut_segments, even_grid, fit, fit_percent, steady_state_gain, understeer_gradient)
+                      cut_segments, even_grid, fit, fit_percent, gauss_newton_gain, steady_state_gain,
+                      understeer_gradient)
 from .ground_lean import lean_column, lean_of_log, turns_lean
 from .kinematic import KINEMATIC_LATERAL, NOT_AT_THESE_SPEEDS, kinematic_report, kinematic_summary, lateral_p95
 from . import skid_steer
@@ -503,7 +504,8 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
     """The linear fit from the study's cornering coefficients per unit load (clipped to the
     vehicle's bounds) and the delay of the peak cross-correlation (_delay_start); the linear fit
     again where |a_y| <= LINEAR_TYRE when both parts are long enough; the tyre-saturation fit from
-    the linear one, the friction started near the data's top |a_y| / g, else near its upper bound."""
+    the linear one, the friction started near the data's top |a_y| / g, else near its upper bound;
+    a friction per axle from that fit where it can win (axle_friction.axle_friction_fit)."""
     fixed, bias_info = _standstill_bias(log)
     relaxation = float(p.sigma_f) if model_name != "bicycle" else None      # fitted: held, it pulls K
     free = free_parameters(vehicle, command, "gyro_bias" not in fixed, saturation=False, relaxation=relaxation)
@@ -544,7 +546,8 @@ def _fit_models(log: DrivingLog, segs: Segments, vehicle: Vehicle, model_name: s
             if trial.rss_total <= linear.rss_total and not trial.at_bound(free_nl[-2]):
                 break
         nl, free_nl = axle_friction_fit(lambda free_a, start_a, n: fit(model, free_a, start_a, fixed, fit_segs, max_nfev=n),
-                                        nl, free_nl, {**linear.values, "friction": mu0, "shape": 1.3}, notes)
+                                        lambda free_a, start_a, added: gauss_newton_gain(model, free_a, start_a, fixed, fit_segs, added),
+                                        nl, free_nl, notes)
     linear, free = widened_refit(model, linear, free, fixed, fit_segs, notes, say)
     nl, free_nl = widened_refit(model, nl, free_nl, fixed, fit_segs, notes, say)
     return _Fits(model, Fz, free, free_nl, fit_segs, test_segs, linear, linear_low, nl, bias_info)
