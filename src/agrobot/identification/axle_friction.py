@@ -75,7 +75,8 @@ def axle_friction_fit(fit, gain, single, free: list, notes: list[str]):
     unless the same model with rho free (``fit(free, start, evaluations)``, started from the values
     of ``single`` at rho = 1: the two fits nested, the per-axle one from the other's optimum) lowers
     the BIC by more than BIC_MARGIN, both at the n_eff of ``single`` (FitResult.bic_at: each fit's own
-    n_eff moves the BIC by more than the margin where rho changes nothing).
+    n_eff moves the BIC by more than the margin where rho changes nothing), with rho inside its
+    bounds (RATIO_BOUNDS are the plant's and the physical range: a rho on one is not concluded).
 
     The per-axle fit (SATURATION_EVALUATIONS) is run only where it can win: ``gain(free, start,
     added)`` -> (RSS, fall), the fall of the RSS rho brings at the start to first order (the
@@ -98,6 +99,12 @@ def axle_friction_fit(fit, gain, single, free: list, notes: list[str]):
     both = fit(free_both, start, SATURATION_EVALUATIONS)
     dbic = both.bic_at(single.n_eff_total) - single.bic
     rho = both.values["friction_ratio"]
+    if dbic < -BIC_MARGIN and both.at_bound(free_both[-1]):
+        notes.append(f"tyre friction: one on both axles; a rear / front ratio fitted ran to its bound {rho:.3g} "
+                     f"(dBIC {dbic:.0f}): a value on a bound is not concluded, so the per-axle friction is not "
+                     f"identifiable from this log (the axle's range [{RATIO_BOUNDS[0]:g}, {RATIO_BOUNDS[1]:g}] is the "
+                     f"yaw plant's tyre_friction_ratio's; a misfit elsewhere, e.g. a load or a trailer, may be what it took up)")
+        return single, free
     if dbic < -BIC_MARGIN:
         notes.append(f"tyre friction per axle: rear / front {rho:.3g} kept (dBIC {dbic:.0f} against one friction on "
                      f"both axles, whose K {understeer_gradient(single.values['c_f'], single.values['c_r']):.3g} rad/(m/s2) is passed over: it takes up the limit "
