@@ -1,8 +1,16 @@
 """Puts the repository root on sys.path so tests can name their own toy components, and gives the
 tests the command line as one fixture (``cli``: tests/commands.py)."""
 import os
+import sys
 
 import pytest
+
+# Bytecode is kept beside the sources (Python's default; __pycache__ is in .gitignore) even where the
+# environment sets PYTHONDONTWRITEBYTECODE: without it each test process rewrites every test module's
+# asserts again (7 CPU s of an xdist worker's collection) and every interpreter a test starts (a
+# command, a sweep's workers, a forkserver) compiles agrobot again (0.7 CPU s each). Those interpreters
+# keep the variable and read what the test processes wrote; no result depends on it.
+sys.dont_write_bytecode = False
 
 
 @pytest.fixture
