@@ -34,6 +34,20 @@ def environment_as_before():
         os.environ.update(before)
 
 
+@pytest.fixture(autouse=True)
+def progress_shown_as_before():
+    """Progress lines as they were before the test: a command called in the test process
+    (tests/commands.py's ``in_process``) with --no-progress or --quiet turns them off for the whole
+    process (orchestrator.observers.PROGRESS), and a later test on the same worker that reads them
+    (tests/test_runs_on_screen.py) would see none, depending on which files xdist gave that worker."""
+    from agrobot.orchestrator.observers import PROGRESS
+
+    before = dict(PROGRESS)
+    yield
+    PROGRESS.clear()
+    PROGRESS.update(before)
+
+
 @pytest.fixture(scope="session", autouse=True)
 def diagnoses_fit_on_their_share_of_the_cores():
     """Under xdist, a diagnosis run in a test process fits its candidates on that process's share of
