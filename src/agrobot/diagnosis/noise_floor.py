@@ -36,6 +36,37 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   same windows when only noise of the estimated levels is present (Monte Carlo through the same
   replay, seeded; each noise on its sensor's own samples, as the rows carry it: ``sampled_noise``),
   with the GPS white level added.
+
+The held-out gain of a stage whose measurement noise is most of its residual (a yaw rate derived
+from a heading: the differencing makes its noise 0.05 rad/s where a steering map's signal is a few
+thousandths) is judged on the part of the error a model can explain (``HeldOutNoise``). The
+held-out residual is e = s + w (s the model's error, w the measurement's noise, independent of the
+model); its mean square B = |s|^2 + |w|^2 + 2 <s, w>, and an effect changes only s: B - A = |s_b|^2
+- |s_a|^2 + 2 <s_b - s_a, w>. A gain judged on the RMS is 1 - sqrt(A / B): of a few thousandths
+when |w|^2 is 99 % of B, however much of |s_b|^2 the effect removes. Net of the noise's realised
+power n^2 = |w|^2 (the same in both: one measurement), the gain on the RMS the models can explain is
+
+    gain = 1 - sqrt((A - n^2) / (B - n^2))                (reading_noise.held_out_gain)
+
+n^2 must be the realisation's, not its expectation: |w|^2 spreads by sqrt(2 / n_eff) of itself
+(5 % on 48 s at 20 Hz, ten times a map's |s|^2), so it is read on the residual itself where the
+model has nothing: above f_c, where the baseline's yaw rate (as the measurement sees it) has
+1 - MODEL_BAND of its power (mean removed; on the held-out rows), the residual is taken as noise
+(``held_out_noise``: B_H, its periodogram's power above f_c); below f_c the noise's expected power
+N_L is added, from the derivation's own noise model (identification.yaw_measurement: an angle of
+white noise sigma on updates dt_u apart, differenced over m of them, nu = sigma / (m dt_u) its
+rate noise, of one-sided density
+
+    S(f) = 8 nu^2 dt_u sin^2(pi f m dt_u)       (2 nu^2 in all; ~ f^2: blue, little of it below f_c)
+
+summed over the periodogram's bins k / T up to f_c as S(f_k) / T; the linear interpolation onto the
+rows damps it by less than 1 - sinc^4(f_c dt_u), not counted). So n^2 = B_H + N_L and B - n^2 =
+B_L - N_L, the baseline's error below f_c; A - n^2 = A_L - N_L + (A_H - B_H): whatever the effect
+changes above f_c counts for or against it. The estimate's error is the low band's realisation:
+each bin's power spreads by its mean, so N_L's standard error is sqrt(sum_k (S(f_k) / T)^2)
+(``spread``); an explainable part within LEAST_SPREADS of it is not told from the noise: B - n^2
+and A - n^2 are taken at least LEAST_SPREADS x spread, and a log whose baseline leaves no more gives
+no effect a gain. A gyro's white noise is not netted (its floor is not most of its residual).
 """
 from __future__ import annotations
 
@@ -53,6 +84,9 @@ from .replay import aligned_residuals, antenna_track
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
 BAND_DRAWS = 8                   # unit noises through the interpolation whose read level is its white power
 HELD_OUT_ROWS = 512              # rows (per update): fewer held out, the floor is read on both parts
+MODEL_BAND = 0.99                # share of the model's yaw-rate power below f_c (HeldOutNoise)
+LEAST_SPREADS = 2.0              # an explainable part within this x the netted noise's standard error is none
+BAND_BINS = 8                    # fewer periodogram bins below f_c: the held-out noise is not netted
 
 
 def white_level(x: np.ndarray, fs: float) -> float:
@@ -195,6 +229,7 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     if "yaw" in replay.stages and derived is not None and math.isfinite(derived.noise):
         # a yaw rate from a heading held between its updates: its noise from its own updates, not the rows'
         floors["yaw"] = sensors["yaw_rate"] = max(floors["yaw"], derived.noise)
+    floors["_held_out"] = held_out_noise(replay, values)
     if not {"position", "speed"} & set(replay.stages):
         floors["_sensors"] = sensors
         return floors
@@ -220,3 +255,65 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     floors["position"] = math.sqrt(float(np.mean(sq)))
     floors["_sensors"] = {**sensors, "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
     return floors
+
+
+@dataclass(frozen=True)
+class HeldOutNoise:
+    """The measurement noise's realised mean square in a stage's held-out residual (module
+    docstring): ``power`` n^2 = B_H + N_L, ``spread`` the standard error of N_L, ``band`` f_c [Hz],
+    ``low`` N_L, ``gross`` the residual's own mean square B (the baseline's)."""
+
+    power: float
+    spread: float
+    band: float
+    low: float
+    gross: float
+
+    @property
+    def least(self) -> float:
+        """The least explainable mean square told from the noise: LEAST_SPREADS x spread."""
+        return LEAST_SPREADS * self.spread
+
+    def text(self, unit: str = "rad/s") -> str:
+        return (f"held-out yaw-rate gains are net of the derived yaw rate's noise, {math.sqrt(self.power):.3g} {unit} "
+                f"of its {math.sqrt(self.gross):.3g} {unit} RMS (above {self.band:.3g} Hz, where the baseline's yaw "
+                f"rate has {100 * (1 - MODEL_BAND):.0f} % of its power, read on the baseline's residual; below it the "
+                f"differencing's expected {math.sqrt(self.low):.2g} {unit}): the models can explain "
+                f"{math.sqrt(max(self.gross - self.power, 0.0)):.2g} {unit} (at least {math.sqrt(self.least):.2g}); "
+                f"passed over: the gross RMS, whose noise no model removes (a gyro's gains are gross)")
+
+
+def differenced_noise(noise: float, update_hz: float, chord: int, f: np.ndarray) -> np.ndarray:
+    """S(f) [(rad/s)^2/Hz]: the one-sided density of a rate differenced over ``chord`` updates of an
+    angle of white noise, ``noise`` = nu its rate's level (module docstring)."""
+    dt = 1.0 / update_hz
+    return 8.0 * noise ** 2 * dt * np.sin(math.pi * f * chord * dt) ** 2
+
+
+def held_out_noise(replay, values: dict[str, float]) -> dict[str, HeldOutNoise]:
+    """{"yaw": HeldOutNoise} for a yaw rate derived from a heading or a course (its noise known,
+    identification.yaw_measurement), read on the held-out residual under ``values`` (the baseline);
+    {} for a gyro, an unknown noise, or a band of fewer than BAND_BINS bins."""
+    derived = replay.frame.attrs.get("yaw_measurement")
+    if "yaw" not in replay.stages or derived is None or derived.kind == "gyro" \
+            or not (math.isfinite(derived.noise) and math.isfinite(derived.update_hz)):
+        return {}
+    seen = replay.seen("yaw", replay.predicted("yaw", values))
+    keep = replay.masks["yaw"]["test"] & np.isfinite(seen) & np.isfinite(replay.gyro)
+    r, y = replay.gyro[keep] - seen[keep], seen[keep]
+    n = len(r)
+    if n < 2 * BAND_BINS:
+        return {}
+    f = np.fft.rfftfreq(n, replay.h)
+    model = np.abs(np.fft.rfft(y - y.mean())) ** 2
+    f_c = float(f[min(int(np.searchsorted(np.cumsum(model) / max(model.sum(), 1e-300), MODEL_BAND)), len(f) - 1)])
+    low = (f <= f_c) & (f > 0)
+    if low.sum() < BAND_BINS:
+        return {}
+    power = np.abs(np.fft.rfft(r)) ** 2 / n ** 2
+    power[1:(n + 1) // 2] *= 2                     # one-sided: each bin's power, summing to mean(r^2)
+    bins = differenced_noise(derived.noise, derived.update_hz, derived.chord_updates, f[low]) / (n * replay.h)
+    gross = float(np.mean(r * r))
+    high = gross - float(power[f <= f_c].sum())
+    return {"yaw": HeldOutNoise(high + float(bins.sum()), float(np.sqrt(np.sum(bins ** 2))), f_c, float(bins.sum()),
+                                gross)}

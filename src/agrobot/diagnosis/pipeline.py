@@ -31,6 +31,7 @@ from .effects.tyre_saturation import friction_text
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
+from .noise_floor import held_out_noise
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
@@ -408,7 +409,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     result["inconclusive"] = sel.inconclusive
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, sel.base, floors) + ([note] if note else []) + (
-        [replay.split_note] if replay.split_note else [])
+        [replay.split_note] if replay.split_note else []) + [n["text"] for n in result["held_out_noise"].values()]
     if mismatch:
         result["warnings"].insert(0, mismatch)
     if result.get("study_limits", {}).get("statement"):
@@ -538,6 +539,11 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
                                                      getattr(replay, "held_uncertain", ()))
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
+    # what the held-out gains were judged net of: the measurement noise under the baseline (noise_floor.stage_floors)
+    result["held_out_noise"] = {s: {"rms": math.sqrt(n.power), "band_hz": n.band, "gross_rms": math.sqrt(n.gross),
+                                    "low_band_rms": math.sqrt(n.low), "least_explained_rms": math.sqrt(n.least),
+                                    "text": n.text()}
+                                for s, n in held_out_noise(replay, sel.base.values).items()}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
 
