@@ -104,3 +104,22 @@ def test_a_steering_map_under_the_heading_noise_is_named(effect, seed, expected,
         assert within(f.effect.id, f.fit.values, truth), (f.fit.values, truth)
         gross = 1.0 - f.rmse_after["yaw_rate"] / f.rmse_before["yaw_rate"]
         assert f.gain >= max(0.05, 3 * gross), (f.gain_by_signal, gross)
+
+
+@pytest.mark.slow
+def test_diagnose_says_what_the_yaw_gains_are_net_of(tmp_path):
+    """diagnose on the ratio-curve log: the curve named, and the report says that its yaw-rate gains are
+    net of the derived yaw rate's noise, with that noise, the band it was read above and what was
+    passed over (the gross RMS)."""
+    from agrobot.diagnosis.pipeline import diagnosis
+
+    frame, truth = class_log("steering_map_curve", 2000, "small_ackermann", 120.0)
+    log = tmp_path / "small.parquet"
+    frame.to_parquet(log)
+    result, _ = diagnosis(log, baseline_study("small_ackermann", tmp_path), plots=False, identify=False, workers=1)
+    assert [e["id"] for e in result["effects"]] == ["steering_ratio_curve"], result["effects"]
+    assert within("steering_ratio_curve", result["effects"][0]["parameters"], truth)
+    held = result["held_out_noise"]["yaw"]
+    assert 0.9 * held["gross_rms"] < held["rms"] < held["gross_rms"] and 0.0 < held["band_hz"] < 2.0, held
+    said = [w for w in result["warnings"] if "net of the derived yaw rate's noise" in w]
+    assert said and "passed over: the gross RMS" in said[0] and f"above {held['band_hz']:.3g} Hz" in said[0], said

@@ -398,7 +398,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
               for s in replay.stages}
-    _describe_selection(result, replay, sel)
+    _describe_selection(result, replay, sel, study.study.seed)
     effects, options, unidentifiable = _judged_effects(sel, baseline)
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
@@ -526,9 +526,10 @@ def _unable(extremes: dict, c) -> str:
     return "unable to do what the log shows: " + "; ".join(beyond) if beyond else ""
 
 
-def _describe_selection(result: dict, replay: Replay, sel) -> None:
+def _describe_selection(result: dict, replay: Replay, sel, seed: int = 0) -> None:
     """What the selection stood on: the split, the baseline's refitted values, each judged stage's
-    noise level and floor, the stages judged and those not."""
+    noise level and floor, what its held-out gains are net of (the selection's ``seed``), the stages
+    judged and those not."""
     judged = replay.stages
     result["split_time"] = replay.t_split if replay.split == "tail" else float("nan")
     result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
@@ -543,7 +544,7 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
     result["held_out_noise"] = {s: {"rms": math.sqrt(n.power), "band_hz": n.band, "gross_rms": math.sqrt(n.gross),
                                     "low_band_rms": math.sqrt(n.low), "least_explained_rms": math.sqrt(n.least),
                                     "text": n.text()}
-                                for s, n in held_out_noise(replay, sel.base.values).items()}
+                                for s, n in held_out_noise(replay, sel.base.values, seed).items()}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
 
