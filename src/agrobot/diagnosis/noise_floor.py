@@ -36,6 +36,47 @@ Nyquist frequency. So the white level of a signal is read from the top of its sp
   same windows when only noise of the estimated levels is present (Monte Carlo through the same
   replay, seeded; each noise on its sensor's own samples, as the rows carry it: ``sampled_noise``),
   with the GPS white level added.
+
+The held-out gain of a stage whose measurement noise is most of its residual (a yaw rate derived
+from a heading: the differencing makes its noise 0.05 rad/s where a steering map's signal is a few
+thousandths) is judged on the part of the error a model can explain (``HeldOutNoise``). The
+held-out residual is e = s + w (s the model's error, w the measurement's noise, independent of the
+model); its mean square B = |s|^2 + |w|^2 + 2 <s, w>, and an effect changes only s: B - A = |s_b|^2
+- |s_a|^2 + 2 <s_b - s_a, w>. A gain judged on the RMS is 1 - sqrt(A / B): of a few thousandths
+when |w|^2 is 99 % of B, however much of |s_b|^2 the effect removes. Net of the noise's realised
+power n^2 = |w|^2 (the same in both: one measurement), the gain on the RMS the models can explain is
+
+    gain = 1 - sqrt((A - n^2) / (B - n^2))                (reading_noise.held_out_gain)
+
+n^2 must be the realisation's, not its expectation: |w|^2 spreads by sqrt(2 / n_eff) of itself
+(5 % on 48 s at 20 Hz, ten times a map's |s|^2), so it is read on the residual itself where the
+model has nothing: above f_c, where the baseline's yaw rate (as the measurement sees it) has
+1 - MODEL_BAND of its power (mean removed; on the held-out rows), the residual is taken as noise
+(``held_out_noise``: B_H, its power above f_c); below f_c the noise's expected power N_L is added,
+from the derivation's own noise model (identification.yaw_measurement: an angle of white noise
+sigma on updates dt_u apart, differenced over m of them, nu = sigma / (m dt_u) its rate noise), of
+one-sided density
+
+    S(f) = 8 nu^2 dt_u sin^2(pi f m dt_u)       (2 nu^2 in all; ~ f^2: blue, little of it at low f)
+
+Each band is read on the sine transform (DST-I, orthonormal: the bins' powers sum to the mean
+square) of each stretch of consecutive held-out rows (``sine_bins``; a stretch of m rows has bins
+k / (2 (m + 1) h)): a differenced noise's record keeps its end samples' noise (its sum telescopes),
+which a Fourier transform spreads flat over every low bin, ~2 K nu^2 / n^2 on K bins, moving them
+together (at 0.3 Hz on 48 s of a 20 Hz heading it doubles N_L, and every gap in the held-out rows,
+a slow stretch left out, is two more ends); the sine basis vanishes at a stretch's ends. N_L is
+read as the residual is: NOISE_DRAWS seeded draws of the noise as the rows carry it
+(``differenced_noise``: white noise of sigma on the updates, differenced over m at the rate
+samples' own times, a gap starting a new chain, interpolated linearly onto the rows; a course's
+chords taken as independent), their power below f_c on the same bins: N_L their mean. MODEL_BAND
+is 90 %, not all of it: the noise below f_c grows as f_c^3, and the last tenth of the model's
+power (its steps' edges, the reading's noise passed through it) lies where the noise is most of
+the residual. So n^2 = B_H + N_L and B - n^2 = B_L - N_L, the baseline's error below f_c;
+A - n^2 = A_L - N_L + (A_H - B_H): whatever the effect changes above f_c counts for or against it.
+The low band's realisation is the estimate's error: an explainable part below what the draws
+exceed N_L by in 1 - LEAST_QUANTILE of them is not told from the noise: B - n^2 and A - n^2 are
+taken at least that (``least``), and a log whose baseline leaves no more gives no effect a gain. A
+gyro's white noise is not netted (its floor is not most of its residual).
 """
 from __future__ import annotations
 
@@ -43,6 +84,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.fft import dst
 from scipy.signal import welch
 
 from agrobot.measurements.channel_updates import holding
@@ -53,6 +95,10 @@ from .replay import aligned_residuals, antenna_track
 HIGH_BAND = (0.35, 0.5)          # share of the sampling frequency read as "noise only"
 BAND_DRAWS = 8                   # unit noises through the interpolation whose read level is its white power
 HELD_OUT_ROWS = 512              # rows (per update): fewer held out, the floor is read on both parts
+MODEL_BAND = 0.90                # share of the model's yaw-rate power below f_c (HeldOutNoise)
+LEAST_QUANTILE = 0.975           # an explainable part the noise's low band exceeds its mean by this often is none
+BAND_BINS = 8                    # fewer sine bins below f_c: the held-out noise is not netted
+NOISE_DRAWS = 256                # seeded draws of a derived rate's noise: its low band N_L and least
 
 
 def white_level(x: np.ndarray, fs: float) -> float:
@@ -195,6 +241,7 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     if "yaw" in replay.stages and derived is not None and math.isfinite(derived.noise):
         # a yaw rate from a heading held between its updates: its noise from its own updates, not the rows'
         floors["yaw"] = sensors["yaw_rate"] = max(floors["yaw"], derived.noise)
+    floors["_held_out"] = held_out_noise(replay, values, seed)
     if not {"position", "speed"} & set(replay.stages):
         floors["_sensors"] = sensors
         return floors
@@ -220,3 +267,90 @@ def stage_floors(replay, values: dict[str, float], seed: int = 0, realisations: 
     floors["position"] = math.sqrt(float(np.mean(sq)))
     floors["_sensors"] = {**sensors, "yaw_rate": sigma_gyro, "v": sigma_v, "gps": sigma_gps}
     return floors
+
+
+@dataclass(frozen=True)
+class HeldOutNoise:
+    """The measurement noise's realised mean square in a stage's held-out residual (module
+    docstring): ``power`` n^2 = B_H + N_L, ``least`` the least explainable mean square told from the
+    noise (N_L's LEAST_QUANTILE less its mean), ``band`` f_c [Hz], ``low`` N_L, ``gross`` the
+    residual's own mean square B (the baseline's)."""
+
+    power: float
+    least: float
+    band: float
+    low: float
+    gross: float
+
+    def text(self, unit: str = "rad/s") -> str:
+        return (f"held-out yaw-rate gains are net of the derived yaw rate's noise, {math.sqrt(self.power):.3g} {unit} "
+                f"of its {math.sqrt(self.gross):.3g} {unit} RMS (above {self.band:.3g} Hz, where the baseline's yaw "
+                f"rate has {100 * (1 - MODEL_BAND):.0f} % of its power, read on the baseline's residual; below it the "
+                f"differencing's expected {math.sqrt(self.low):.2g} {unit}): the models can explain "
+                f"{math.sqrt(max(self.gross - self.power, 0.0)):.2g} {unit} (at least {math.sqrt(self.least):.2g}); "
+                f"passed over: the gross RMS, whose noise no model removes (a gyro's gains are gross)")
+
+
+def differenced_noise(derived, t: np.ndarray, rng: np.random.Generator, draws: int) -> np.ndarray:
+    """(draws, len(t)): the noise of a rate derived as ``derived`` (yaw_measurement.YawMeasurement) as
+    its rows ``t`` carry it: white noise of sigma = nu m dt_u on the angle's updates, differenced over
+    m of them at the rate samples' own times (a gap longer than 1.5 dt_u starts a new chain),
+    interpolated linearly onto the rows (module docstring)."""
+    tr, m = np.asarray(derived.update_times, float), max(1, int(derived.chord_updates))
+    dt = 1.0 / derived.update_hz
+    starts = np.flatnonzero(np.r_[True, np.diff(tr) > 1.5 * dt, True])
+    rates = np.empty((draws, len(tr)))
+    for a, b in zip(starts[:-1], starts[1:]):
+        angle = derived.noise * m * dt * rng.standard_normal((draws, b - a + m))
+        rates[:, a:b] = (angle[:, m:] - angle[:, :-m]) / (m * dt)
+    return np.stack([np.interp(t, tr, x) for x in rates])
+
+
+def sine_bins(x: np.ndarray, t: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """(f [Hz], p): the power of ``x`` (along its last axis, on the rows ``t``, ``h`` s apart) in each
+    bin of the sine transform (DST-I, orthonormal) of each stretch of consecutive rows, bin k of a
+    stretch of m rows at k / (2 (m + 1) h); p sums to mean(x^2) along its last axis."""
+    x = np.asarray(x, float)
+    cuts = np.flatnonzero(np.diff(t) > 1.5 * h) + 1
+    f, p = [], []
+    for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(t)]):
+        f.append(np.arange(1, b - a + 1) / (2.0 * (b - a + 1) * h))
+        p.append(dst(x[..., a:b], type=1, norm="ortho", axis=-1) ** 2)
+    return np.concatenate(f), np.concatenate(p, axis=-1) / x.shape[-1]
+
+
+def held_out_noise(replay, values: dict[str, float], seed: int = 0) -> dict[str, HeldOutNoise]:
+    """{"yaw": residual_noise} of the held-out yaw residual under ``values`` (the baseline) for a yaw
+    rate derived from a heading or a course (its noise known, identification.yaw_measurement); {}
+    for a gyro, an unknown noise, or a band of fewer than BAND_BINS bins."""
+    derived = replay.frame.attrs.get("yaw_measurement")
+    if "yaw" not in replay.stages or derived is None or derived.kind == "gyro":
+        return {}
+    seen = replay.seen("yaw", replay.predicted("yaw", values))
+    keep = replay.masks["yaw"]["test"] & np.isfinite(seen) & np.isfinite(replay.gyro)
+    found = residual_noise(replay.gyro[keep] - seen[keep], seen[keep], replay.t[keep], replay.h, derived, seed)
+    return {} if found is None else {"yaw": found}
+
+
+def residual_noise(r: np.ndarray, y: np.ndarray, t: np.ndarray, h: float, derived, seed: int = 0
+                   ) -> HeldOutNoise | None:
+    """HeldOutNoise of the residual ``r`` on the rows ``t`` (``h`` s apart) of a model whose output
+    (as the measurement sees it) is ``y``, the measurement a derived yaw rate (``derived``:
+    yaw_measurement.YawMeasurement): n^2 = B_H + N_L, each read on the sine bins of the rows'
+    stretches (sine_bins), f_c the bin below which ``y`` has MODEL_BAND of its power, N_L and the
+    least explainable part from NOISE_DRAWS seeded draws of its noise (differenced_noise) read alike
+    (module docstring); None when its noise is unknown or fewer than BAND_BINS bins lie below f_c."""
+    if not (math.isfinite(derived.noise) and math.isfinite(derived.update_hz)) or derived.update_times is None \
+            or len(derived.update_times) < 2 or len(r) < 2 * BAND_BINS:
+        return None
+    f, model = sine_bins(y - y.mean(), t, h)
+    order = np.argsort(f, kind="stable")
+    share = np.cumsum(model[order]) / max(float(model.sum()), 1e-300)
+    f_c = float(f[order][min(int(np.searchsorted(share, MODEL_BAND)), len(f) - 1)])
+    low = f <= f_c
+    if low.sum() < BAND_BINS:
+        return None
+    noise = sine_bins(differenced_noise(derived, t, np.random.default_rng(seed), NOISE_DRAWS), t, h)[1][:, low].sum(-1)
+    gross = float(np.mean(r * r))
+    n2 = gross - float(sine_bins(r, t, h)[1][low].sum()) + float(noise.mean())
+    return HeldOutNoise(n2, float(np.quantile(noise, LEAST_QUANTILE) - noise.mean()), f_c, float(noise.mean()), gross)

@@ -31,6 +31,7 @@ from .effects.tyre_saturation import friction_text
 from .catalogue import DISPLAY, SIGNALS, shown
 from .evidence import stage_evidence
 from .mcap import write_diagnosis_mcap
+from .noise_floor import held_out_noise
 from .report import binned_figure, floors_figure, markdown, stage_figure
 from .parallel_fits import ParallelSelector, default_workers
 from .selection import Finding
@@ -397,7 +398,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     final, floors = sel.final, sel.floors
     checks = {s: stage_check(replay, s, final.values, floors, math.sqrt(final.rss[s] / final.n[s]), final.rmse_test[s])
               for s in replay.stages}
-    _describe_selection(result, replay, sel)
+    _describe_selection(result, replay, sel, study.study.seed)
     effects, options, unidentifiable = _judged_effects(sel, baseline)
     unexplained = _unexplained(checks)
     result["effects"] = effects + ([unexplained] if unexplained else [])
@@ -408,7 +409,7 @@ def diagnosis(log_path: str | Path, study_path: str | Path | None = None, fit_fr
     result["inconclusive"] = sel.inconclusive
     result["selection_trace"] = sel.trace
     result["warnings"] = _warnings(replay, sel.base, floors) + ([note] if note else []) + (
-        [replay.split_note] if replay.split_note else [])
+        [replay.split_note] if replay.split_note else []) + [n["text"] for n in result["held_out_noise"].values()]
     if mismatch:
         result["warnings"].insert(0, mismatch)
     if result.get("study_limits", {}).get("statement"):
@@ -525,9 +526,10 @@ def _unable(extremes: dict, c) -> str:
     return "unable to do what the log shows: " + "; ".join(beyond) if beyond else ""
 
 
-def _describe_selection(result: dict, replay: Replay, sel) -> None:
+def _describe_selection(result: dict, replay: Replay, sel, seed: int = 0) -> None:
     """What the selection stood on: the split, the baseline's refitted values, each judged stage's
-    noise level and floor, the stages judged and those not."""
+    noise level and floor, what its held-out gains are net of (the selection's ``seed``), the stages
+    judged and those not."""
     judged = replay.stages
     result["split_time"] = replay.t_split if replay.split == "tail" else float("nan")
     result["split"] = {"kind": replay.split, "held_out": held_part(replay), "spans": replay.held_out_spans(),
@@ -538,6 +540,11 @@ def _describe_selection(result: dict, replay: Replay, sel) -> None:
                                                      getattr(replay, "held_uncertain", ()))
     result["noise_level"] = {SIGNALS[s][0]: sel.sigma[s] for s in judged}
     result["noise_floor"] = {s: sel.floors[s] for s in judged} | {"sensors": sel.floors["_sensors"]}
+    # what the held-out gains were judged net of: the measurement noise under the baseline (noise_floor.stage_floors)
+    result["held_out_noise"] = {s: {"rms": math.sqrt(n.power), "band_hz": n.band, "gross_rms": math.sqrt(n.gross),
+                                    "low_band_rms": math.sqrt(n.low), "least_explained_rms": math.sqrt(n.least),
+                                    "text": n.text()}
+                                for s, n in held_out_noise(replay, sel.base.values, seed).items()}
     result["stages_judged"] = list(judged)
     result["not_judged"] = dict(replay.not_judged)
 

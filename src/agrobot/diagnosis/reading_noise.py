@@ -70,7 +70,7 @@ from agrobot.estimation import FitResult, effective_size, forward_jacobian
 
 from .candidates import _fit
 from .fit_memo import MEMO
-from .noise_floor import sampled_noise, sampling, sensor_level
+from .noise_floor import HeldOutNoise, sampled_noise, sampling, sensor_level
 from .replay import YawReplay, measured_yaw_rate, wheel_angle_input
 
 INPUT_NOISE_SHARE = 0.05       # the passage's share of the yaw stage's RSS from which it is corrected
@@ -114,9 +114,20 @@ def passage_power(replay, v: dict[str, float], sigma_n: float, part: str = "test
     return float(np.mean([np.mean(u * u) for u in (passage(replay, v, n, part) for n in noise_draws(replay, sigma_n))]))
 
 
-def net_rms(rms: float, power: float) -> float:
-    """sqrt(rms^2 - power): an RMS net of the passage's mean square (at least a tenth of it)."""
-    return math.sqrt(max(rms * rms - power, 0.01 * rms * rms))
+def net_rms(rms: float, power: float, noise: HeldOutNoise | None = None) -> float:
+    """sqrt(rms^2 - power): an RMS net of the passage's mean square (at least a tenth of it); and of
+    the measurement's realised ``noise`` (noise_floor.HeldOutNoise: sqrt(rms^2 - power - n^2), the
+    tenth taken of rms^2 - n^2, at least sqrt(noise.least))."""
+    if noise is None:
+        return math.sqrt(max(rms * rms - power, 0.01 * rms * rms))
+    return math.sqrt(max(rms * rms - power - noise.power, 0.01 * (rms * rms - noise.power), noise.least))
+
+
+def held_out_gain(before: float, after: float, power: float = 0.0, noise: HeldOutNoise | None = None) -> float:
+    """1 - net_rms(after) / net_rms(before): the share of the held-out RMS an effect removes of what
+    no model's error leaves unexplained (the passage's ``power``, the measurement's ``noise``:
+    noise_floor's module docstring, gain = 1 - sqrt((A - n^2) / (B - n^2))); 0 for a stage with no RMS."""
+    return 1.0 - net_rms(after, power, noise) / net_rms(before, power, noise) if before > 0 else 0.0
 
 
 def corrected_fit(replay, values: dict[str, float], free: list, stages: tuple[str, ...], sigma: dict[str, float],

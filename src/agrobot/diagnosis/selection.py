@@ -68,7 +68,7 @@ from agrobot.estimation import REPORTED_AT_BOUND
 from .baseline import replay_lateral
 from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
-from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
+from .reading_noise import INPUT_NOISE_SHARE, held_out_gain, noise_free_fit, passage_power, reading_level
 from .screen import Screen
 from .simplification import healthy_levels
 from .unexplained import extension, is_misfit
@@ -147,12 +147,14 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
     counts against the effect only where it is then misfit (unexplained.is_misfit): a track left
     within its noise is no evidence against a gain that fixes the turns. ``unexplainable``: a mean
     square per stage that no model explains (the wheel-angle reading's noise passed through the yaw
-    model, reading_noise.passage_power); the held-out gains are of the RMS net of it."""
+    model, reading_noise.passage_power); the held-out gains are of the RMS net of it, and of the
+    measurement's own noise where ``floors`` carry it (noise_floor.HeldOutNoise: a derived yaw rate's)."""
     names = {s: SIGNALS[s][0] for s in stages}
     before = {names[s]: without.rmse_test[s] for s in stages}
     after = {names[s]: with_.rmse_test[s] for s in stages}
-    net = {names[s]: (unexplainable or {}).get(s, 0.0) for s in stages}
-    gains = {k: 1.0 - net_rms(after[k], net[k]) / net_rms(before[k], net[k]) if before[k] > 0 else 0.0 for k in before}
+    noise = (floors or {}).get("_held_out", {})        # the measurement's own noise (noise_floor.HeldOutNoise)
+    gains = {names[s]: held_out_gain(before[names[s]], after[names[s]], (unexplainable or {}).get(s, 0.0), noise.get(s))
+             for s in stages}
     counted = evidence_stages(effect, stages, gains, without, floors)
     n_total = sum(with_.n_eff[s] for s in counted)
     dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in counted)
