@@ -33,7 +33,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
+from .baseline import CORNERING_SCALES, IMPLAUSIBLE, Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import track_level, track_samplings
 from agrobot.measurements.own_samples import reading
@@ -539,11 +539,31 @@ def _named(need: str, columns) -> str:
     return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")
 
 
-def refit_free(replay: "Replay", stages, effects) -> list[Parameter]:
-    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones, then the
-    effects', each once (selection._refit fits them, screen.Screen linearises the same set)."""
-    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] +
+def refit_free(replay: "Replay", stages, effects, joining=()) -> list[Parameter]:
+    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones but the
+    cornering scales such a fit holds (class_held: ``joining``, effects whose own parameters are
+    freed beside these, count for that), then the effects', each once (selection._refit fits them,
+    screen.Screen linearises the same set)."""
+    held = class_held(replay, list(effects) + list(joining))
+    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s) if p.name not in held] +
                               [p for e in effects for p in e.parameters]))
+
+
+def class_held(replay: "Replay", effects) -> dict[str, float]:
+    """{name: the study's value} of the cornering scales a refit of ``effects`` holds: when the
+    baseline refit held one because freed it gave the vehicle an understeer gradient
+    K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have (baseline.implausible_tyres),
+    every cornering scale it held (the other, left unpinned, reaches the same K from its axle),
+    unless one of ``effects`` acts on the tyres (Effect.on_tyres: saturation, a stiffness changing
+    with speed), whose fit needs the stiffness. Freed beside any other effect, such scales take up
+    a steering map's gain as a yaw gain v / (L + K v^2), and every candidate (a clock shift, a gyro
+    bias) scores the tyres' dBIC, not its own."""
+    selection = replay.__dict__.get("held_in_selection", {})
+    held = {k: why for k, why in getattr(replay, "held_uncertain", {}).items()
+            if k in CORNERING_SCALES and k not in selection}
+    if not any(why.kind == IMPLAUSIBLE for why in held.values()) or any(e.on_tyres() for e in effects):
+        return {}
+    return {k: replay.baseline.values[k] for k in held}
 
 
 def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:

@@ -66,7 +66,7 @@ from agrobot.orchestrator.work_progress import Work
 from agrobot.estimation import REPORTED_AT_BOUND
 
 from .baseline import replay_lateral
-from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
+from .candidates import STAGES, FitResult, Replay, _fit, class_held, fit_baseline, merged, refit_free
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
 from .screen import Screen
@@ -207,7 +207,8 @@ def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, s
     """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
     effects are only tested on (Effect.tested_on; none of them acting there directly): those are
     scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
-    also explains)."""
+    also explains); cornering scales the class does not have held unless an effect acts on the
+    tyres (candidates.class_held)."""
     fit_on = fitted_stages(effects, stages)
     fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
@@ -314,6 +315,8 @@ class Selector:
         others = [f for f in members if f is not effect]
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
+        if effect.on_tyres():           # the cornering scales it freed, held again without it (class_held)
+            reset.update(class_held(self.replay, related))
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         unexplainable = {"yaw": passage_power(self.replay, model.values, self.reading_noise)} \
             if effect.id in ATTENUATED and self.noisy_reading else None
