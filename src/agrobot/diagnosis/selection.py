@@ -175,6 +175,28 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
                    evidence=counted)
 
 
+def turns_bic(model: FitResult, finding: Finding) -> float:
+    """A finding's dBIC (as _judge's) on the stages its effect acts on, those it is only tested on left
+    out (Effect.tested_on: a steering map on the actuator's stage)."""
+    acts = [s for s in finding.evidence if s not in finding.effect.tested_on]
+    n = sum(finding.fit.n_eff[s] for s in acts)
+    return sum(finding.fit.n_eff[s] * math.log(max(finding.fit.rss[s], 1e-300) / max(model.rss[s], 1e-300))
+               for s in acts) + len(finding.effect.parameters) * math.log(max(n, 2.0))
+
+
+def by_turns(model: FitResult, best: Finding, supported: list[Finding]) -> Finding:
+    """Of supported steering-map effects (tested on the actuator's stage), the one the turns favour by
+    more than TIE over ``best`` (the lowest dBIC), else ``best``. The actuator's stage sees a map only
+    through its rate read through it, r / M'(reading): a gain k there is the rate limit scaled by
+    1 / k, a soft design figure (plausibility.RATE_MARGIN), whatever the map's shape; the yaw rate
+    v tan(M(reading)) / L shows the shape itself (k reading, or reading (1 + c reading^2))."""
+    if not best.effect.tested_on:
+        return best
+    rivals = [f for f in supported if f is not best and set(f.effect.tested_on) & set(best.effect.tested_on)
+              and turns_bic(model, f) < turns_bic(model, best) - TIE]
+    return min(rivals, key=lambda f: turns_bic(model, f)) if rivals else best
+
+
 def group(stages: set[str], members: list[Effect], available=STAGES,
           block: tuple[str, ...] = ()) -> tuple[tuple[str, ...], list[Effect]]:
     """The stages and the members coupled to ``stages`` through shared stages (transitively),
@@ -358,7 +380,13 @@ class Selector:
                 model, members = self.still_supported(model, members, members[:-2], removed, trace)
                 continue
             best = supported[0]
-            rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
+            turns = by_turns(model, best, supported)
+            if turns is not best:
+                trace.append(f"= {turns.effect.id} before {best.effect.id}: the turns tell them apart (dBIC there "
+                             f"{turns_bic(model, turns):.1f} against {turns_bic(model, best):.1f}); "
+                             f"{best.effect.id} leads only on the stages it is tested on")
+                best = turns
+            rivals = [f for f in supported if f is not best and f.delta_bic - best.delta_bic < TIE
                       and set(f.effect.stages) & set(best.effect.stages)]
             simpler = self.simplest(model, members, best, rivals)
             if simpler is not best:
