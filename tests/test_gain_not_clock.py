@@ -1,0 +1,86 @@
+"""A steering map's gain error on the small Ackermann machine (a dual-antenna heading, no gyro,
+0.3-1.5 m/s: harness.diagnosis_classes) against a clock shift of its steering channels: a gain scales
+the yaw response at every frequency, a clock shift tau only turns its phase by omega tau (at the
+log's 0.1-0.5 Hz steering, 0.05-0.25 rad for tau = 0.08 s), so a clock cannot take up a gain unless
+the cornering scales fitted beside it do, as an understeer gradient K giving the yaw gain
+v / (L + K v^2). Where the baseline refit held such scales (a gradient the class does not have),
+the refits of candidates that do not act on the tyres hold them too (candidates.class_held), so each
+candidate scores its own evidence; tyre saturation and a speed-dependent stiffness still free them.
+With them held, a gain and a ratio curve are told apart by the turns (selection.by_turns), not by the
+actuator's rate."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from agrobot.diagnosis.baseline import IMPLAUSIBLE, Hold, baseline_from_study
+from agrobot.diagnosis.candidates import refit_free
+from agrobot.diagnosis.catalogue import CATALOGUE
+from agrobot.diagnosis.pipeline import diagnose
+from agrobot.diagnosis.plausibility import study_understeer, understeer
+from agrobot.orchestrator.study import Study
+from harness.diagnosis_classes import baseline_study, class_log
+
+EFFECTS = {e.id: e for e in CATALOGUE}
+SCALES = ("cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
+
+
+def robot_replay(held: dict) -> SimpleNamespace:
+    """What refit_free reads of a replay after fit_baseline: the holds, none freed for the selection."""
+    return SimpleNamespace(held_uncertain=held, held_in_selection={}, baseline=SimpleNamespace(
+        values=dict.fromkeys(SCALES, 1.0)))
+
+
+def test_refits_hold_the_cornering_scales_the_class_does_not_have_unless_the_effect_acts_on_the_tyres():
+    """The front scale held as implausible (70 deg/g of understeer on a robot), the rear as not pinned:
+    a clock's or a gain's refit frees neither (the rear alone reaches the same gradient from its axle),
+    tyre saturation's and a speed-dependent stiffness' free both; with no implausible hold, all free."""
+    held = {"cornering_front_scale": Hold(IMPLAUSIBLE, "at 0.147 and 1, 70 deg/g"),
+            "cornering_rear_scale": Hold("not pinned by the log", "it ended on its bound")}
+    for effect_id in ("steering_clock", "steering_gain", "yaw_rate_bias"):
+        free = {p.name for p in refit_free(robot_replay(held), ("yaw",), [EFFECTS[effect_id]])}
+        assert free == {"relaxation_scale"} | {p.name for p in EFFECTS[effect_id].parameters}, (effect_id, free)
+    for effect_id in ("tyre_saturation", "speed_dependent_cornering"):
+        free = {p.name for p in refit_free(robot_replay(held), ("yaw",), [EFFECTS[effect_id]])}
+        assert set(SCALES) <= free, (effect_id, free)
+    loose = {"cornering_rear_scale": held["cornering_rear_scale"]}
+    assert set(SCALES) <= {p.name for p in refit_free(robot_replay(loose), ("yaw",), [EFFECTS["steering_clock"]])}
+
+
+@pytest.mark.slow
+def test_a_gain_error_read_through_a_heading_is_a_gain_not_a_clock(tmp_path):
+    """The wheels turn 0.81 x the reading (planted): the gain is named within 0.03 of it, no clock, no
+    tie; the clock's first-step refit keeps tyres of a robot (on the base it moved the front and rear
+    cornering scales to 0.14 and 20, 70 deg/g of understeer, and the clock was named)."""
+    frame, truth = class_log("steering_map_gain", 2000, "small_ackermann", 120.0)
+    log = tmp_path / "log.parquet"
+    frame.to_parquet(log)
+    study = baseline_study("small_ackermann", tmp_path)
+    result = diagnose(log, tmp_path / "out", plots=False, study_path=study, identify=False)
+    assert [e["id"] for e in result["effects"]] == ["steering_gain"], result["selection_trace"]
+    gain = result["effects"][0]["parameters"]["steering_gain"]
+    assert abs(gain - truth["map_gain"]) <= 0.03, (gain, truth["map_gain"])
+    assert not result["inconclusive"], result["inconclusive"]
+    clock = next(f for f in result["findings"] if f["id"] == "steering_clock")["refit_baseline"]
+    base = baseline_from_study(Study.load(study))
+    K = study_understeer(base.tractor, clock["cornering_front_scale"], clock["cornering_rear_scale"])
+    assert understeer(K, base.vehicle, None) is None, (K, clock)
+
+
+@pytest.mark.slow
+def test_a_ratio_curve_is_told_from_a_gain_by_the_turns(tmp_path):
+    """The wheels turn reading (1 + 2.37 reading^2) (planted): the ratio curve is named within 25 % of
+    it, not a gain. With the tyres held as above, a gain leads the curve's dBIC by more than TIE (-734
+    against -716), on the actuator's stage only (the rate limit scaled 1 / k); the turns favour the
+    curve (-311 against -260)."""
+    frame, truth = class_log("steering_map_curve", 2005, "small_ackermann", 120.0)
+    log = tmp_path / "log.parquet"
+    frame.to_parquet(log)
+    result = diagnose(log, tmp_path / "out", plots=False, study_path=baseline_study("small_ackermann", tmp_path),
+                      identify=False)
+    assert [e["id"] for e in result["effects"]] == ["steering_ratio_curve"], result["selection_trace"]
+    c = result["effects"][0]["parameters"]["steering_ratio_curvature"]
+    assert abs(c - truth["map_curvature"]) <= 0.25 * truth["map_curvature"], (c, truth["map_curvature"])
+    assert any(line.startswith("= steering_ratio_curve before steering_gain: the turns")
+               for line in result["selection_trace"]), result["selection_trace"]
