@@ -575,6 +575,17 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
+def class_held_note(replay: "Replay") -> str | None:
+    """The trace's line for class_held: the scales held in the candidates' refits, what is passed
+    over (their stiffness freed) and the effects that still free them; None when none is held."""
+    held = class_held(replay, [])
+    if not held:
+        return None
+    return (f"cornering scales held at the study's in the refits of effects that do not act on the tyres: "
+            f"{', '.join(held)} (the baseline refit held them, freed they give a gradient the class does not "
+            f"have); tyre saturation and a speed-dependent stiffness free them")
+
+
 class Speculated(Exception):
     """A fit asked for while its arguments are being collected (diagnosis.parallel_fits), to stop
     the caller at its first fit."""

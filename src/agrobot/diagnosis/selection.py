@@ -66,7 +66,8 @@ from agrobot.orchestrator.work_progress import Work
 from agrobot.estimation import REPORTED_AT_BOUND
 
 from .baseline import replay_lateral
-from .candidates import STAGES, FitResult, Replay, _fit, class_held, fit_baseline, merged, refit_free
+from .candidates import (STAGES, FitResult, Replay, _fit, class_held, class_held_note, fit_baseline, merged,
+                         refit_free)
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
 from .screen import Screen
@@ -356,7 +357,7 @@ class Selector:
         self.screen = Screen(self.replay, self.sigma, STRONG) if self.screening else None
         self.floors = self.evaluate(base)[1]         # the noise floors a rising signal is judged against
         trace_gate = self.saturation_gate(base)
-        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start(), class_held_note(self.replay)) if x]
         model, members, trace, inconclusive = base, [], notes, []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
