@@ -185,16 +185,28 @@ def turns_bic(model: FitResult, finding: Finding) -> float:
                for s in acts) + len(finding.effect.parameters) * math.log(max(n, 2.0))
 
 
+def held_out_text(finding: Finding) -> str:
+    """A finding's held-out gains, one per signal, in %."""
+    return ", ".join(f"{k} {100 * g:.1f}%" for k, g in finding.gain_by_signal.items())
+
+
 def by_turns(model: FitResult, best: Finding, supported: list[Finding]) -> Finding:
     """Of supported steering-map effects (tested on the actuator's stage), the one the turns favour by
-    more than TIE over ``best`` (the lowest dBIC), else ``best``. The actuator's stage sees a map only
+    more than TIE over ``best`` (the lowest dBIC), or by less with a larger held-out gain on every
+    signal (the held-out part agreeing), else ``best``. The actuator's stage sees a map only
     through its rate read through it, r / M'(reading): a gain k there is the rate limit scaled by
     1 / k, a soft design figure (plausibility.RATE_MARGIN), whatever the map's shape; the yaw rate
     v tan(M(reading)) / L shows the shape itself (k reading, or reading (1 + c reading^2))."""
     if not best.effect.tested_on:
         return best
+
+    def favoured(f: Finding) -> bool:
+        lead = turns_bic(model, best) - turns_bic(model, f)
+        shared = set(f.gain_by_signal) & set(best.gain_by_signal)
+        return lead > TIE or (lead > 0 and bool(shared) and all(f.gain_by_signal[k] > best.gain_by_signal[k]
+                                                                for k in shared))
     rivals = [f for f in supported if f is not best and set(f.effect.tested_on) & set(best.effect.tested_on)
-              and turns_bic(model, f) < turns_bic(model, best) - TIE]
+              and favoured(f)]
     return min(rivals, key=lambda f: turns_bic(model, f)) if rivals else best
 
 
@@ -384,7 +396,8 @@ class Selector:
             turns = by_turns(model, best, supported)
             if turns is not best:
                 trace.append(f"= {turns.effect.id} before {best.effect.id}: the turns tell them apart (dBIC there "
-                             f"{turns_bic(model, turns):.1f} against {turns_bic(model, best):.1f}); "
+                             f"{turns_bic(model, turns):.1f} against {turns_bic(model, best):.1f}, held-out gains "
+                             f"{held_out_text(turns)} against {held_out_text(best)}); "
                              f"{best.effect.id} leads only on the stages it is tested on")
                 best = turns
             rivals = [f for f in supported if f is not best and f.delta_bic - best.delta_bic < TIE
