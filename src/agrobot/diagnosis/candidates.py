@@ -554,14 +554,14 @@ def class_held(replay: "Replay", effects) -> dict[str, float]:
     baseline refit held one because freed it gave the vehicle an understeer gradient
     K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have (baseline.implausible_tyres),
     every cornering scale it held (the other, left unpinned, reaches the same K from its axle),
-    unless one of ``effects`` acts on the tyres (Effect.on_tyres: saturation, a stiffness changing
-    with speed), whose fit needs the stiffness. Freed beside any other effect, such scales take up
-    a steering map's gain as a yaw gain v / (L + K v^2), and every candidate (a clock shift, a gyro
-    bias) scores the tyres' dBIC, not its own."""
+    unless one of ``effects`` is what such a gradient reads (frees_scales): with it in the model the
+    scales are the vehicle's again. Freed beside any other effect, they take up a steering map's
+    gain as a yaw gain v / (L + K v^2), and every candidate (a clock shift, a gyro bias) scores the
+    tyres' dBIC, not its own."""
     selection = replay.__dict__.get("held_in_selection", {})
     held = {k: why for k, why in getattr(replay, "held_uncertain", {}).items()
             if k in CORNERING_SCALES and k not in selection}
-    if not any(why.kind == IMPLAUSIBLE for why in held.values()) or any(e.on_tyres() for e in effects):
+    if not any(why.kind == IMPLAUSIBLE for why in held.values()) or any(frees_scales(e) for e in effects):
         return {}
     return {k: replay.baseline.values[k] for k in held}
 
@@ -575,6 +575,14 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
 
 
+def frees_scales(effect) -> bool:
+    """Whether ``effect`` is what an implausible understeer gradient reads (plausibility.understeer):
+    tyres past their linear range (Effect.on_tyres: saturation, a stiffness changing with speed) or a
+    steering map off in gain, shape or symmetry (tested on the actuator's stage, Effect.tested_on),
+    so that its refit frees the cornering scales class_held holds for the others."""
+    return effect.on_tyres() or "steering" in effect.tested_on
+
+
 def class_held_note(replay: "Replay") -> str | None:
     """The trace's line for class_held: the scales held in the candidates' refits, what is passed
     over (their stiffness freed) and the effects that still free them; None when none is held."""
@@ -583,7 +591,7 @@ def class_held_note(replay: "Replay") -> str | None:
         return None
     return (f"cornering scales held at the study's in the refits of effects that do not act on the tyres: "
             f"{', '.join(held)} (the baseline refit held them, freed they give a gradient the class does not "
-            f"have); tyre saturation and a speed-dependent stiffness free them")
+            f"have); tyre effects and steering maps (gain, ratio curve, asymmetry) free them")
 
 
 class Speculated(Exception):

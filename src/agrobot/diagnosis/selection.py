@@ -66,8 +66,8 @@ from agrobot.orchestrator.work_progress import Work
 from agrobot.estimation import REPORTED_AT_BOUND
 
 from .baseline import replay_lateral
-from .candidates import (STAGES, FitResult, Replay, _fit, class_held, class_held_note, fit_baseline, merged,
-                         refit_free)
+from .candidates import (STAGES, FitResult, Replay, _fit, class_held, class_held_note, fit_baseline, frees_scales,
+                         merged, refit_free)
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, net_rms, noise_free_fit, passage_power, reading_level
 from .screen import Screen
@@ -350,7 +350,7 @@ class Selector:
         others = [f for f in members if f is not effect]
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
-        if effect.on_tyres():           # the cornering scales it freed, held again without it (class_held)
+        if frees_scales(effect):        # the cornering scales it freed, held again without it (class_held)
             reset.update(class_held(self.replay, related))
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         unexplainable = {"yaw": passage_power(self.replay, model.values, self.reading_noise)} \
