@@ -79,6 +79,7 @@ def widened_ranges(params, values) -> dict[str, Parameter]:
 
 
 TYRE_SCALES = ("cornering_front_scale", "cornering_rear_scale", "relaxation_scale")
+CORNERING_SCALES = TYRE_SCALES[:2]
 
 
 def replay_lateral(replay) -> tuple[np.ndarray, float] | None:
@@ -113,6 +114,7 @@ class Hold:
 
 
 KINEMATIC_HELD = Hold("the kinematic regime", "not identifiable at these speeds")
+IMPLAUSIBLE = "implausible for the vehicle"     # Hold.kind of cornering scales the class does not have
 PINNED = 0.5        # a refitted value the log pins: its 95 % interval within +-50 % of it
 
 
@@ -145,13 +147,13 @@ def implausible_tyres(replay, values: dict[str, float], free) -> dict[str, Hold]
     (plausibility.understeer): a steering map's gain or a wrong wheelbase taken up as tyres; else
     empty."""
     p = replay.baseline.tractor
-    names = [n for n in TYRE_SCALES[:2] if n in free]
+    names = [n for n in CORNERING_SCALES if n in free]
     if not names:
         return {}
     sf, sr = values["cornering_front_scale"], values["cornering_rear_scale"]
     K = study_understeer(p, sf, sr)
     why = understeer(K, replay.baseline.vehicle, None)
-    return dict.fromkeys(names, Hold("implausible for the vehicle", f"at {sf:.3g} and {sr:.3g}, {why}")) if why else {}
+    return dict.fromkeys(names, Hold(IMPLAUSIBLE, f"at {sf:.3g} and {sr:.3g}, {why}")) if why else {}
 
 
 def refit_summary(start: dict[str, float], fitted: dict[str, float], params, held=()) -> list[dict]:

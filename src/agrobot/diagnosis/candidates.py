@@ -33,7 +33,7 @@ from agrobot.identification.ordinary_driving import similar_columns
 from agrobot.measurements import LogError
 from agrobot.measurements.log import check_units, resolution, speed_estimate
 
-from .baseline import Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
+from .baseline import CORNERING_SCALES, IMPLAUSIBLE, Baseline, held_tyres, implausible_tyres, unpinned, widened_ranges
 from .catalogue import UNCERTAIN, Parameter
 from .noise_floor import track_level, track_samplings
 from agrobot.measurements.own_samples import reading
@@ -539,11 +539,31 @@ def _named(need: str, columns) -> str:
     return text + (f" (the log has {', '.join(near)}: rename it to {need} if it is that, in SI units)" if near else "")
 
 
-def refit_free(replay: "Replay", stages, effects) -> list[Parameter]:
-    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones, then the
-    effects', each once (selection._refit fits them, screen.Screen linearises the same set)."""
-    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s)] +
+def refit_free(replay: "Replay", stages, effects, joining=()) -> list[Parameter]:
+    """The parameters a fit of ``effects`` on ``stages`` frees: the stages' uncertain ones but the
+    cornering scales such a fit holds (class_held: ``joining``, effects whose own parameters are
+    freed beside these, count for that), then the effects', each once (selection._refit fits them,
+    screen.Screen linearises the same set)."""
+    held = class_held(replay, list(effects) + list(joining))
+    return list(dict.fromkeys([p for s in stages for p in uncertain(replay, s) if p.name not in held] +
                               [p for e in effects for p in e.parameters]))
+
+
+def class_held(replay: "Replay", effects) -> dict[str, float]:
+    """{name: the study's value} of the cornering scales a refit of ``effects`` holds: when the
+    baseline refit held one because freed it gave the vehicle an understeer gradient
+    K = m/L (l_r / (s_f C_f) - l_f / (s_r C_r)) its class does not have (baseline.implausible_tyres),
+    every cornering scale it held (the other, left unpinned, reaches the same K from its axle),
+    unless one of ``effects`` is what such a gradient reads (frees_scales): with it in the model the
+    scales are the vehicle's again. Freed beside any other effect, they take up a steering map's
+    gain as a yaw gain v / (L + K v^2), and every candidate (a clock shift, a gyro bias) scores the
+    tyres' dBIC, not its own."""
+    selection = replay.__dict__.get("held_in_selection", {})
+    held = {k: why for k, why in getattr(replay, "held_uncertain", {}).items()
+            if k in CORNERING_SCALES and k not in selection}
+    if not any(why.kind == IMPLAUSIBLE for why in held.values()) or any(frees_scales(e) for e in effects):
+        return {}
+    return {k: replay.baseline.values[k] for k in held}
 
 
 def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
@@ -553,6 +573,25 @@ def uncertain(replay: "Replay", stage: str) -> tuple[Parameter, ...]:
     wider = getattr(replay, "widened_uncertain", {})       # ranges fit_baseline widened to their limits
     held = replay.__dict__.get("held_in_selection", getattr(replay, "held_uncertain", ()))    # and those it holds
     return tuple(wider.get(p.name, p) for p in tuple(UNCERTAIN[stage]) + tuple(extra) if p.name not in held)
+
+
+def frees_scales(effect) -> bool:
+    """Whether ``effect`` is what an implausible understeer gradient reads (plausibility.understeer):
+    tyres past their linear range (Effect.on_tyres: saturation, a stiffness changing with speed) or a
+    steering map off in gain, shape or symmetry (tested on the actuator's stage, Effect.tested_on),
+    so that its refit frees the cornering scales class_held holds for the others."""
+    return effect.on_tyres() or "steering" in effect.tested_on
+
+
+def class_held_note(replay: "Replay") -> str | None:
+    """The trace's line for class_held: the scales held in the candidates' refits, what is passed
+    over (their stiffness freed) and the effects that still free them; None when none is held."""
+    held = class_held(replay, [])
+    if not held:
+        return None
+    return (f"cornering scales held at the study's in the refits of effects that do not act on the tyres: "
+            f"{', '.join(held)} (the baseline refit held them, freed they give a gradient the class does not "
+            f"have); tyre effects and steering maps (gain, ratio curve, asymmetry) free them")
 
 
 class Speculated(Exception):

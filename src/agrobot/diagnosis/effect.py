@@ -28,7 +28,7 @@ from agrobot.estimation import Parameter
 
 from .plausibility import VehicleContext
 
-__all__ = ["Parameter", "BaselineStudy", "Effect", "QUANTITIES"]     # Parameter: the shared estimation type
+__all__ = ["Parameter", "BaselineStudy", "Effect", "QUANTITIES", "TYRES"]     # Parameter: the shared estimation type
 
 # The replay's model quantities an effect may carry (``Effect.enters``): name -> (the value without
 # any effect, how several effects' values combine: "sum", "product", or "one": a single effect carries
@@ -56,6 +56,11 @@ QUANTITIES: dict[str, tuple[float | None, str, str]] = {
     "position.left": (0.0, "sum", "the position's point left of the vehicle's centre line [m]"),
     "position.lag": (0.0, "sum", "the position reads the point this late [s] (negative: early)"),
 }
+
+# the quantities of the tyres' lateral force F = C alpha (its stiffnesses, their change with speed, its
+# saturation): an effect carrying one acts on the tyres (Effect.on_tyres)
+TYRES = ("yaw.front_scale", "yaw.rear_scale", "yaw.relaxation_scale", "yaw.speed_slope", "yaw.reference_speed",
+         "yaw.friction", "yaw.shape")
 
 
 class BaselineStudy:
@@ -109,6 +114,10 @@ class Effect:
     pointwise: ClassVar[bool] = True                     # ``wheel_angle`` maps each sample alone (the steering
                                                          # stage then runs through it and back); False: it
                                                          # shifts the signal (a clock), the yaw stage's input only
+
+    def on_tyres(self) -> bool:
+        """Whether it carries a quantity of the tyres' lateral force (TYRES)."""
+        return bool(set(self.enters) & set(TYRES))
 
     def baseline(self, study: BaselineStudy) -> dict[str, float]:
         """The replay values of this effect's parameters in the baseline study."""

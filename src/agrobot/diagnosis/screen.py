@@ -143,7 +143,7 @@ class Screen:
         members = related + [a, b]
         if any(set(e.tested_on) & set(stages) for e in members):
             return True
-        refitted = refit_free(self.replay, stages, related)
+        refitted = refit_free(self.replay, stages, related, joining=[a, b])
         screened = self.judge(values, refitted, [a, b], stages)
         key = (tuple(sorted(values.items())), tuple(e.id for e in pool))
         entry = self.rounds.setdefault(key, {"members": tuple(e.id for e in related), "pairs": {}})

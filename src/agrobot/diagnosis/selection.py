@@ -66,7 +66,8 @@ from agrobot.orchestrator.work_progress import Work
 from agrobot.estimation import REPORTED_AT_BOUND
 
 from .baseline import replay_lateral
-from .candidates import STAGES, FitResult, Replay, _fit, fit_baseline, merged, refit_free
+from .candidates import (STAGES, FitResult, Replay, _fit, class_held, class_held_note, fit_baseline, frees_scales,
+                         merged, refit_free)
 from .noise_floor import stage_floors
 from .reading_noise import INPUT_NOISE_SHARE, held_out_gain, noise_free_fit, passage_power, reading_level
 from .screen import Screen
@@ -177,6 +178,40 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
                    evidence=counted)
 
 
+def turns_bic(model: FitResult, finding: Finding) -> float:
+    """A finding's dBIC (as _judge's) on the stages its effect acts on, those it is only tested on left
+    out (Effect.tested_on: a steering map on the actuator's stage)."""
+    acts = [s for s in finding.evidence if s not in finding.effect.tested_on]
+    n = sum(finding.fit.n_eff[s] for s in acts)
+    return sum(finding.fit.n_eff[s] * math.log(max(finding.fit.rss[s], 1e-300) / max(model.rss[s], 1e-300))
+               for s in acts) + len(finding.effect.parameters) * math.log(max(n, 2.0))
+
+
+def held_out_text(finding: Finding) -> str:
+    """A finding's held-out gains, one per signal, in %."""
+    return ", ".join(f"{k} {100 * g:.1f}%" for k, g in finding.gain_by_signal.items())
+
+
+def by_turns(model: FitResult, best: Finding, supported: list[Finding]) -> Finding:
+    """Of supported steering-map effects (tested on the actuator's stage), the one the turns favour by
+    more than TIE over ``best`` (the lowest dBIC), or by less with a larger held-out gain on every
+    signal (the held-out part agreeing), else ``best``. The actuator's stage sees a map only
+    through its rate read through it, r / M'(reading): a gain k there is the rate limit scaled by
+    1 / k, a soft design figure (plausibility.RATE_MARGIN), whatever the map's shape; the yaw rate
+    v tan(M(reading)) / L shows the shape itself (k reading, or reading (1 + c reading^2))."""
+    if not best.effect.tested_on:
+        return best
+
+    def favoured(f: Finding) -> bool:
+        lead = turns_bic(model, best) - turns_bic(model, f)
+        shared = set(f.gain_by_signal) & set(best.gain_by_signal)
+        return lead > TIE or (lead > 0 and bool(shared) and all(f.gain_by_signal[k] > best.gain_by_signal[k]
+                                                                for k in shared))
+    rivals = [f for f in supported if f is not best and set(f.effect.tested_on) & set(best.effect.tested_on)
+              and favoured(f)]
+    return min(rivals, key=lambda f: turns_bic(model, f)) if rivals else best
+
+
 def group(stages: set[str], members: list[Effect], available=STAGES,
           block: tuple[str, ...] = ()) -> tuple[tuple[str, ...], list[Effect]]:
     """The stages and the members coupled to ``stages`` through shared stages (transitively),
@@ -209,7 +244,8 @@ def _refit(replay: Replay, values: dict, effects: list[Effect], stages, sigma, s
     """The effects' and the stages' uncertain parameters fitted on ``stages``, but for the stages the
     effects are only tested on (Effect.tested_on; none of them acting there directly): those are
     scored, not fitted (a steering map's gain fixed by the turns, not by the actuator's rate it
-    also explains)."""
+    also explains); cornering scales the class does not have held unless an effect acts on the
+    tyres (candidates.class_held)."""
     fit_on = fitted_stages(effects, stages)
     fit = _fit(replay, values, refit_free(replay, fit_on, effects), fit_on, starts, sigma)
     if fit_on == tuple(stages):
@@ -316,6 +352,8 @@ class Selector:
         others = [f for f in members if f is not effect]
         stages, related = group(set(effect.stages), others, self.replay.stages, self.replay.side_slip_block)
         reset = {p.name: self.base_values[p.name] for p in effect.parameters}
+        if frees_scales(effect):        # the cornering scales it freed, held again without it (class_held)
+            reset.update(class_held(self.replay, related))
         without = _refit(self.replay, {**model.values, **reset}, related, stages, self.sigma, [{}])
         unexplainable = {"yaw": passage_power(self.replay, model.values, self.reading_noise)} \
             if effect.id in ATTENUATED and self.noisy_reading else None
@@ -333,7 +371,7 @@ class Selector:
         self.screen = Screen(self.replay, self.sigma, STRONG) if self.screening else None
         self.floors = self.evaluate(base)[1]         # the noise floors a rising signal is judged against
         trace_gate = self.saturation_gate(base)
-        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start()) if x]
+        notes = [x for x in (self.replay.side_slip_note(), trace_gate, self.audit_start(), class_held_note(self.replay)) if x]
         model, members, trace, inconclusive = base, [], notes, []
         first = [self.add(base, [], e) for e in self.catalogue]
         first.sort(key=lambda f: (not f.supported, f.delta_bic))
@@ -357,7 +395,14 @@ class Selector:
                 model, members = self.still_supported(model, members, members[:-2], removed, trace)
                 continue
             best = supported[0]
-            rivals = [f for f in supported[1:] if f.delta_bic - best.delta_bic < TIE
+            turns = by_turns(model, best, supported)
+            if turns is not best:
+                trace.append(f"= {turns.effect.id} before {best.effect.id}: the turns tell them apart (dBIC there "
+                             f"{turns_bic(model, turns):.1f} against {turns_bic(model, best):.1f}, held-out gains "
+                             f"{held_out_text(turns)} against {held_out_text(best)}); "
+                             f"{best.effect.id} leads only on the stages it is tested on")
+                best = turns
+            rivals = [f for f in supported if f is not best and f.delta_bic - best.delta_bic < TIE
                       and set(f.effect.stages) & set(best.effect.stages)]
             simpler = self.simplest(model, members, best, rivals)
             if simpler is not best:
