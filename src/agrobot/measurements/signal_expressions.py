@@ -20,8 +20,8 @@ put on the first term's time stamps by linear interpolation, within the span the
 
 A term may be ``rate(NAME)``: a counter (wheel ticks, an encoder) as its rate per second. Between
 samples k and k+1 the counter steps d_k = c_{k+1} - c_k; a counter stored as an integer of a fixed
-width wraps at M = 2^bits (2^16 for int16 and uint16; a DBC signal's 2^length x scale: Series.wrap,
-from the source's type), and the
+width wraps at M = 2^bits (2^16 for int16 and uint16, a file's column or a ROS message's field; a DBC
+signal's 2^length x scale: Series.wrap, from the source's type), and the
 step is taken as the smallest one modulo M, d_k - M round(d_k / M) (a counter that moves less than
 M/2 between samples); the rate r_k = d_k / (t_{k+1} - t_k), placed mid-interval at
 (t_k + t_{k+1}) / 2, in the counter's unit per second (``v=rate(odometry.Ticks[0])*0.000952[m/s]``:
