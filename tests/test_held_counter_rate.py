@@ -50,3 +50,17 @@ def test_the_imported_speed_of_a_held_counter(tmp_path):
         signals=[f"v=rate(ticks)*{1 / PER_METRE!r}[m/s]", "yaw_rate=gyro[rad/s]"], time="t[s]"))
     moving = np.abs(log["t"] - log["t"].iloc[0] - 40.0) > 11.0
     assert abs(float(log.loc[moving, "v"].mean()) - 4.0) < 0.1 and float(log.loc[moving, "v"].std()) < 0.3
+
+
+def test_a_counter_of_one_sample_is_refused_naming_it():
+    """rate() of a counter with one sample (a topic with one message) has no step: a LogError names
+    the source, the expression and the signal, not an IndexError."""
+    import pytest
+
+    from agrobot.measurements.log import LogError
+    from agrobot.measurements.signal_expressions import evaluate, parse_signal
+
+    spec = parse_signal("v=rate(/wheel/ticks.data)*0.001[m/s]")
+    one = Series(np.array([3.0]), np.array([120.0]), None, "/wheel/ticks.data")
+    with pytest.raises(LogError, match=r"drive\.bag.*rate\(/wheel/ticks\.data\).*1 sample.*two or more"):
+        evaluate(spec, {"/wheel/ticks.data": one}, "drive.bag")

@@ -268,6 +268,10 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
     SignalSpec.names; a rate(NAME) term's rate taken here); ``sums``: where the expression has
     several terms, sums[column] = its fastest term's changes per sample
     (measurements.channel_updates.term_share: a sum's rate is its fastest term's)."""
+    for n, _ in spec.terms:
+        if _CALL.match(n) and len(series[operand(n)].t) < 2:
+            raise LogError(f"{where}: --signal {spec}: {n}: {series[operand(n)].label} holds "
+                           f"{len(series[operand(n)].t)} sample(s); a rate needs two or more")
     series = {n: _applied(n, series) for n, _ in spec.terms}
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)
