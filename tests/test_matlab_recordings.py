@@ -196,3 +196,13 @@ def test_rate_takes_one_signal_name():
 
     with pytest.raises(LogError, match=r"rate\(\.\.\.\) takes one signal name"):
         parse_signal("v=rate(a.b + c.d)[m/s]")
+
+
+def test_a_seconds_clock_eight_days_from_its_start_is_not_a_datenum(tmp_path):
+    """A logger up 8.1 days counts its seconds into the datenums of 1900-2100 (693962 to 767011);
+    stepping 0.05 s it is no datenum (a datenum steps by 0.05 / 86400 days): read as seconds."""
+    t = 700000.0 + np.arange(0.0, 30.0, 0.05)
+    mat = write_mat(tmp_path / "up.mat", {"gps": {"Timestamp": t, "Speed": 3.0 + np.sin(t - t[0])}})
+    frame, report = import_recording(mat, ImportOptions(signals=["v=gps.Speed[m/s]"]))
+    assert not any("MATLAB datenum days" in n for n in report["notes"]), report["notes"]
+    assert np.allclose(np.diff(frame["t"].to_numpy()), 0.05, atol=1e-6)

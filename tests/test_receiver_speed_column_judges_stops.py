@@ -61,3 +61,19 @@ def test_a_receivers_no_value_speed_is_left_out(tmp_path):
     assert float(log["gnss_speed"].min()) >= 0.0
     near = (log["t"] - log["t"].iloc[0] - 61.0).abs() < 2.0
     assert np.allclose(log.loc[near, "gnss_speed"], 4.0, atol=0.2)
+
+
+def test_the_no_value_speeds_left_out_are_said(tmp_path):
+    """The -1 values left out of the receiver's speed are counted in the report's notes (a choice
+    that changes the log's gnss_speed there is said), and none is said where there are none."""
+    path = _ride(tmp_path / "ride")
+    options = ImportOptions(signals=["lat=lat[deg]", "lon=lon[deg]", "gnss_speed=speed[m/s]", "heading=course[deg]"],
+                            time="t[s]", time_range=(0.0, 399.0))
+    _, clean = import_recording(path, options)
+    table = pd.read_csv(path)
+    table.loc[60:62, "speed"] = -1.0
+    table.to_csv(path, index=False)
+    _, report = import_recording(path, options)
+    said = [n for n in report["notes"] if "gnss_speed" in n and "negative" in n]
+    assert len(said) == 1 and "3 negative" in said[0]
+    assert not [n for n in clean["notes"] if "gnss_speed" in n and "negative" in n]

@@ -33,9 +33,10 @@ Kinds:
   least STRONG_RHO over at least EVIDENCE_S s of samples compared, an interval of half-width at
   most HALF_WIDTH s that excludes zero and is narrower than the offset, the offset at least
   ALIGN_MIN; below that it is "too weak to judge",
-  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned; its value
-  NaN (not known, resolved: said, not moved) for a clock that no pair compared, where it or the
-  reference counts from a logger's start (unchecked_clocks: joined as if started together);
+  resolved (not acted on, no blocker); unresolved while a strong offset stays unaligned;
+- ``clock_unchecked``: a clock that no pair compared, where it or the reference counts from a
+  logger's start (unchecked_clocks): joined as if started together, value 0 s (the offset assumed;
+  not known; resolved: said, not moved);
 - ``sensor_latency``: a lag between two channels of one group (one file's rows, one topic: one
   clock): a sensor's own latency (a filter, a fix's age), never a realignment (resolved);
 - ``held_samples``: a channel updated slower than its rows (``value`` rows per update), judged on
@@ -947,7 +948,8 @@ def shift(streams, group_of, offsets: dict[str, float]) -> list[str]:
 
 def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | None = None,
                      causal: dict | None = None) -> list[dict]:
-    """A ``clock_offset`` finding (value NaN, no interval; said, not acted on) for each clock that
+    """A ``clock_unchecked`` finding (value 0: the offset the join assumes, no interval; said, not
+    acted on) for each clock that
     no pair of channels compared with the reference's (the receiver's, else the first), nor the
     ``causal`` check (Auditor.causal: the steering's clock against the gyro's, a response never
     leading its input), nor ``applied`` moved (--align GROUP=SECONDS: the user's word), where
@@ -967,12 +969,12 @@ def unchecked_clocks(aud: Auditor, pair_findings: list[dict], applied: dict | No
         boot = [c for c in (clock, reference) if is_boot_clock(stamps[c])]
         group = aud.group(channels[clock][0])
         if boot and clock not in compared and not {group, aud.group(channels[reference][0])} & set(applied or {}):
-            out.append(finding("clock_offset", [channels[reference][0], channels[clock][0]], math.nan, None, "s",
+            out.append(finding("clock_unchecked", [channels[reference][0], channels[clock][0]], 0.0, None, "s",
                                f"{', '.join(channels[clock])} ({clock}) joined with {', '.join(channels[reference])} "
                                f"({reference}) as if their clocks started together ({' and '.join(boot)} "
                                f"{'counts' if len(boot) == 1 else 'count'} from a logger's start, not a date); no "
                                f"pair of channels compared them (two speeds, gyro vs GNSS course, v r vs lateral "
-                               f"acceleration, two gyros): an offset between them is not known, not moved; --align "
+                               f"acceleration, two gyros): joined at 0 s, an offset between them is not known, not moved; --align "
                                f"{group}=SECONDS moves {group}'s stamps earlier", resolved=True))
     return out
 

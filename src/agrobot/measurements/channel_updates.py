@@ -165,6 +165,20 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
         period = _polled_period(t, x, change, row)
         if period is None:
             return None                 # changes at irregular times: a state or an event, not a sampled hold
+    keep, stale = _kept(t, at, period, row, moving)
+    times = t[keep].copy()
+    first = np.isin(keep, at) & (keep > 0)
+    times[first] = regular_times(0.5 * (t[keep[first] - 1] + t[keep[first]]), period, row)
+    ahead = times > np.maximum.accumulate(np.concatenate([[-np.inf], times[:-1]]))   # increasing, always
+    keep, times = keep[ahead], times[ahead]
+    return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
+            "stale": stale}
+
+
+def _kept(t: np.ndarray, at: np.ndarray, period: float, row: float, moving=None) -> tuple[np.ndarray, int]:
+    """(the rows kept of a channel held every ``period`` whose values change at rows ``at``: each
+    change's row, and in a run of repeats longer than STILL x period one row every period where the
+    machine stands (``moving`` None: taken as standing), the runs dropped as stale while it moves)."""
     keep, stale = [], 0
     ends = np.append(at[1:], len(t))
     every = max(1, int(round(period / row)))
@@ -178,14 +192,28 @@ def holding(t: np.ndarray, values: np.ndarray, moving=None) -> dict | None:
             stale += 1
             continue
         keep.extend(range(a + every, b, every))
-    keep = np.array(keep, int)
-    times = t[keep].copy()
-    first = np.isin(keep, at) & (keep > 0)
-    times[first] = regular_times(0.5 * (t[keep[first] - 1] + t[keep[first]]), period, row)
-    ahead = times > np.maximum.accumulate(np.concatenate([[-np.inf], times[:-1]]))   # increasing, always
-    keep, times = keep[ahead], times[ahead]
-    return {"rows_hz": 1.0 / row, "updates_hz": 1.0 / period, "held": period / row, "keep": keep, "times": times,
-            "stale": stale}
+    return np.array(keep, int), stale
+
+
+def counter_updates(t: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, str]:
+    """(the rows a counter is differenced over, what was done): a counter read in rows faster than
+    it updates (at least HELD_SHARE of its row steps repeat) is differenced over its updates, the
+    rows where its count changes, P apart (the median interval between them), with one row every P
+    in a run of repeats longer than STILL x P (the machine stands: a rate of 0 there); its rows
+    otherwise. Differenced row by row, a count held for k rows gives k - 1 rates of 0 and one k times
+    the true rate."""
+    t = np.asarray(t, float)
+    x = np.asarray(values, float).reshape(len(t), -1)
+    change = changed(x)
+    at = np.flatnonzero(change[1:]) + 1
+    if len(t) < MIN_SAMPLES or 1.0 - change[1:].mean() < HELD_SHARE or len(at) < 5:
+        return np.arange(len(t)), "differenced row by row"
+    dt = np.diff(t)
+    row = float(np.median(dt[dt > 0]))
+    period = float(np.median(np.diff(t[at])))
+    keep, _ = _kept(t, np.r_[0, at], period, row)
+    return keep, (f"held in its rows ({1.0 - change[1:].mean():.0%} repeat): differenced over its updates, "
+                  f"{period:.3g} s apart, not its rows (row by row would give rates of 0 between bursts)")
 
 
 def _polled_period(t: np.ndarray, x: np.ndarray, change: np.ndarray, row: float) -> float | None:

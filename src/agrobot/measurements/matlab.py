@@ -11,7 +11,8 @@ Of a group's fields:
   TIME_NAMES: ``t``, ``time``, ``timestamp`` ...) and which holds one number per row; it is the
   group's clock, read as a table's time column is (POSIX ns, us, ms or s from its size, else
   seconds from its own start; ``--time`` declares its unit). A time in MATLAB datenum days
-  (between the years 1900 and 2100, days since year 0) is turned into POSIX seconds,
+  (between the years 1900 and 2100, days since year 0, stepping by less than DATENUM_STEP days) is
+  turned into POSIX seconds,
   ``t = (datenum - 719529) x 86400``, and said so;
 - a field of one column is a channel named as the field; one of K columns K channels
   ``field[0]`` .. ``field[K-1]``, or named by the group's column-name field (``names``, ``labels``,
@@ -52,6 +53,8 @@ HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
 HDF5_AT = 512                      # a v7.3 file: the 128-byte MATLAB text header in a 512-byte user block
 DATENUM_1970 = 719529.0            # MATLAB datenum of 1970-01-01 (days since year 0)
 DATENUM_SPAN = (693962.0, 767011.0)  # datenums of 1900-01-01 and 2100-01-01: a time there is in days
+DATENUM_STEP = 1e-3                # days (86 s): a datenum's steps are below; a seconds clock 8 days from its
+                                   # start (in DATENUM_SPAN too) steps by less only above 1 kHz
 _LABELS = re.compile(r"^(?:col(?:umn)?_?names?|names|labels|headers?|columns|variable_?names|channel_?names)$", re.I)
 _NAME = re.compile(r"[^A-Za-z0-9_]+")
 
@@ -267,7 +270,7 @@ def _passed_over(time: np.ndarray, n: int) -> str:
 def _datenum(group: str, name: str, time: np.ndarray, units: dict, notes: list) -> np.ndarray:
     """A time in MATLAB datenum days as POSIX seconds, said so; other times as written."""
     mid = float(np.nanmedian(time))
-    if not (DATENUM_SPAN[0] <= mid <= DATENUM_SPAN[1] and float(np.nanmax(np.diff(time))) < 1.0):
+    if not (DATENUM_SPAN[0] <= mid <= DATENUM_SPAN[1] and float(np.nanmax(np.diff(time))) < DATENUM_STEP):
         return time.astype(float)
     units[name] = "s"
     notes.append(f"{name}: MATLAB datenum days (years 1900 to 2100), taken as POSIX seconds (datenum - "

@@ -123,15 +123,20 @@ def position_quantisation(lat: np.ndarray, lon: np.ndarray) -> dict | None:
                     f"the raw fixes, a resampled or interpolated log does not remove it"}
 
 
-def _own_speed(sig: dict, t: np.ndarray) -> np.ndarray | None:
+def _own_speed(sig: dict, t: np.ndarray, notes: list) -> np.ndarray | None:
     """The receiver's own speed over ground (a ``gnss_speed`` column) at the fixes' times ``t``,
     taken out of the signals: the fixes carry it, as a receiver's sentences carry theirs, so that
     the runs, the stops and the course are judged by it (never by the chords of a track that
     wanders at a standstill); None without one. A speed over ground is never negative: a negative
-    value is a receiver's "no value" (a phone's -1), left out with the NaNs."""
+    value is a receiver's "no value" (a phone's -1), left out with the NaNs, counted in ``notes``."""
     if "gnss_speed" not in sig:
         return None
     ts, v = (np.asarray(x, float) for x in sig.pop("gnss_speed"))
+    negative = int(np.sum(v < 0))
+    if negative:
+        notes.append(f"gnss_speed: {negative} negative value(s) (min {float(np.nanmin(v)):.3g}), a receiver's 'no "
+                     f"value' (a speed over ground is never negative), left out: the speed there is interpolated "
+                     f"from its neighbours")
     ok = np.isfinite(v) & (v >= 0)
     return np.interp(t, ts[ok], v[ok]) if ok.sum() >= 2 else None
 
@@ -144,7 +149,7 @@ def fixes_from_columns(streams: Streams, source: Path) -> Streams:
         t, lat = sig.pop("lat")
         lon = np.interp(t, *sig.pop("lon"))
         height = np.interp(t, *sig.pop("height")) if "height" in sig else None
-        speed = _own_speed(sig, t)
+        speed = _own_speed(sig, t, streams.report.setdefault("notes", []))
         ok = np.isfinite(lat) & np.isfinite(lon) & ((np.abs(lat) > 0) | (np.abs(lon) > 0))
         if ok.sum() < 2:
             raise LogError(f"{source}: the lat/lon columns ({streams.report.get('columns', {}).get('lat', 'lat')}, "

@@ -380,8 +380,15 @@ def series(db, frames: dict[str, pd.DataFrame], name: str) -> Series | None:
                 return Series(np.array([]), np.array([]), (sig.unit or "").strip() or None, name)
             ok = table[signal].notna().to_numpy()
             return Series(table["t"].to_numpy(float)[ok], table[signal].to_numpy(float)[ok],
-                          (sig.unit or "").strip() or None, f"{name} (CAN {messages[message].frame_id:#x})")
+                          (sig.unit or "").strip() or None, f"{name} (CAN {messages[message].frame_id:#x})",
+                          _width(sig))
     return None
+
+
+def _width(sig) -> float | None:
+    """The modulus a DBC integer signal rolls over at, in its physical unit: 2^length x scale (a
+    counter's rate() is unwrapped by it: signal_expressions.counter_rate); None for a float signal."""
+    return None if sig.is_float else float(2 ** sig.length) * abs(float(sig.scale))
 
 
 # a maker's DBC names its signals its own way: by name and unit (pint), the first match in

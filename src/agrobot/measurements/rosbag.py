@@ -99,6 +99,34 @@ def field_unit(msgtype: str, path: str) -> str | None:
     return None
 
 
+BITS = {"int8": 8, "uint8": 8, "byte": 8, "char": 8, "int16": 16, "uint16": 16, "int32": 32, "uint32": 32}
+BASE, NAME, ARRAY, SEQUENCE = 1, 2, 3, 4      # rosbags' Nodetype of a field definition
+
+
+def field_width(fielddefs: dict, msgtype: str, path: str) -> float | None:
+    """The modulus 2^bits of the integer field of fixed width (uint16 ... uint32) at ``path``
+    (``a.b[2].c``; empty: the message's one numeric field) of ``msgtype``, by the bag's message
+    definitions (a counter's rate() unwraps at it: signal_expressions.counter_rate); None for a
+    float, a 64-bit integer or a path they do not resolve."""
+    kind, what = NAME, msgtype
+    if not path:
+        fields = fielddefs.get(msgtype, ((), ()))[1]
+        numeric = [d for _, d in fields if int(d[0]) == BASE and d[1][0] not in ("string", "bool")]
+        kind, what = numeric[0] if len(numeric) == 1 else (NAME, None)
+    for part in path.split(".") if path else ():
+        name, _, index = part.partition("[")
+        fields = dict(fielddefs[what][1]) if kind == NAME and what in fielddefs else {}
+        if name not in fields:
+            return None
+        kind, what = fields[name]
+        if index:
+            if int(kind) not in (ARRAY, SEQUENCE):
+                return None
+            kind, what = what[0]
+    bits = BITS.get(what[0]) if int(kind) == BASE else None
+    return float(2 ** bits) if bits else None
+
+
 def split_name(name: str, topics: list[str]) -> tuple[str, str]:
     """(topic, field path) of ``/topic.field.path``: the longest topic of the bag that prefixes it
     (a topic name may hold dots only where the bag says so), else up to the first dot."""
@@ -228,6 +256,9 @@ def _read(reader, given: list, source: Path) -> tuple[dict, dict]:
     labels = {n: {} for spec in given if is_mode_name(spec.column) for n in spec.names[:1]}    # a mode's text values
     rows, header_used = _messages(reader, wanted, auto, source, labels)
     series, report_topics, stamps = _topic_series(rows, header_used, wanted, topics, given, source)
+    for name, s in series.items():                 # an integer field's width: a counter's rate() unwraps at it
+        topic = next(t for t, names in wanted.items() if name in names)
+        s.wrap = field_width(reader.typestore.fielddefs, topics[topic], wanted[topic][name])
     turned = _vertical_yaw_rates(auto, series, topics)
     sums: dict = {}
     signals = _evaluated(given, auto, series, topics, report_topics, source, sums)

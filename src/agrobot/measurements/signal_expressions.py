@@ -20,12 +20,16 @@ put on the first term's time stamps by linear interpolation, within the span the
 
 A term may be ``rate(NAME)``: a counter (wheel ticks, an encoder) as its rate per second. Between
 samples k and k+1 the counter steps d_k = c_{k+1} - c_k; a counter stored as an integer of a fixed
-width wraps at M = 2^bits (2^16 for int16 and uint16: Series.wrap, from the source's type), and the
+width wraps at M = 2^bits (2^16 for int16 and uint16, a file's column or a ROS message's field; a DBC
+signal's 2^length x scale: Series.wrap, from the source's type), and the
 step is taken as the smallest one modulo M, d_k - M round(d_k / M) (a counter that moves less than
 M/2 between samples); the rate r_k = d_k / (t_{k+1} - t_k), placed mid-interval at
 (t_k + t_{k+1}) / 2, in the counter's unit per second (``v=rate(odometry.Ticks[0])*0.000952[m/s]``:
 ticks times metres per tick). A counter without a width (a float, a text table's integers) is
-differenced as it is.
+differenced as it is. A counter read in rows faster than it updates (a count held for k rows would
+give k - 1 rates of 0 and one of k times the true rate) is differenced over its updates, the rows
+where its count changes, with one row every update period in a stand
+(measurements.channel_updates.counter_updates); the rate's label says which.
 """
 from __future__ import annotations
 
@@ -38,7 +42,7 @@ import numpy as np
 
 from agrobot.orchestrator.units import base_unit
 
-from .channel_updates import term_share
+from .channel_updates import counter_updates, term_share
 from .log import COLUMNS, LogError
 from .streams import Series
 
@@ -224,13 +228,14 @@ def counter_rate(s: Series) -> Series:
     """A counter's rate per second (the module docstring gives the equation): the steps between
     samples, unwrapped modulo ``s.wrap`` where the counter has a width, over their intervals,
     mid-interval."""
-    d = np.diff(np.asarray(s.values, float))
+    keep, held = counter_updates(s.t, s.values)
+    d = np.diff(np.asarray(s.values, float)[keep])
     if s.wrap:
         d = d - s.wrap * np.round(d / s.wrap)
-    t = np.asarray(s.t, float)
+    t = np.asarray(s.t, float)[keep]
     unit = f"({s.unit})/s" if s.unit else None
-    how = f"unwrapped modulo {s.wrap:.0f}" if s.wrap else "no width: not unwrapped"
-    return Series(0.5 * (t[1:] + t[:-1]), d / np.diff(t), unit, f"{s.label} as a rate per second ({how})")
+    how = f"unwrapped modulo {s.wrap:.6g}" if s.wrap else "no width: not unwrapped"
+    return Series(0.5 * (t[1:] + t[:-1]), d / np.diff(t), unit, f"{s.label} as a rate per second ({how}; {held})")
 
 
 def _applied(name: str, series: dict[str, Series]) -> Series:
@@ -263,6 +268,10 @@ def evaluate(spec: SignalSpec, series: dict[str, Series], where: str, wheelbase:
     SignalSpec.names; a rate(NAME) term's rate taken here); ``sums``: where the expression has
     several terms, sums[column] = its fastest term's changes per sample
     (measurements.channel_updates.term_share: a sum's rate is its fastest term's)."""
+    for n, _ in spec.terms:
+        if _CALL.match(n) and len(series[operand(n)].t) < 2:
+            raise LogError(f"{where}: --signal {spec}: {n}: {series[operand(n)].label} holds "
+                           f"{len(series[operand(n)].t)} sample(s); a rate needs two or more")
     series = {n: _applied(n, series) for n, _ in spec.terms}
     first = series[spec.terms[0][0]]
     t = np.asarray(first.t, float)

@@ -17,7 +17,7 @@ class ActuatorDelay(Effect):
     hypothesis = "the wheels follow the command late: a transport delay in the valve drive or the bus"
     experiment = ("small fast steering steps (+/-2 deg) at any speed: a delay shifts "
                   "even the smallest moves, a rate limit does not")
-    imitated_by = ("clock_offset", "response_leads_input", "stamp_vs_receive", "gap_bridged")
+    imitated_by = ("clock_offset", "clock_unchecked", "response_leads_input", "stamp_vs_receive", "gap_bridged")
 
     def baseline(self, study):
         return {"command_delay": FirstOrderSteering.of(study.parameters("steering")).delay}

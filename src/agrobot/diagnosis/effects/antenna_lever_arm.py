@@ -19,7 +19,7 @@ class AntennaLeverArm(Effect):
                   "not where the model puts it: in turns it swings on a different radius")
     experiment = ("tight turns both ways at low speed: a lever arm swings the antenna "
                   "on a different radius, independent of speed")
-    imitated_by = ("clock_offset",)
+    imitated_by = ("clock_offset", "clock_unchecked",)
 
     def baseline(self, study):
         p = study.parameters("yaw_plant")

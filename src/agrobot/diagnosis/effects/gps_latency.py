@@ -14,7 +14,7 @@ class GPSLatency(Effect):
     threshold = "latency >= 0.05 s"
     hypothesis = "the GPS reports where the antenna was a moment ago"
     experiment = "straight runs at 1 and 3 m/s: a latency puts the fix behind by speed x latency, along the track"
-    imitated_by = ("clock_offset", "response_leads_input", "stamp_vs_receive", "gap_bridged")
+    imitated_by = ("clock_offset", "clock_unchecked", "response_leads_input", "stamp_vs_receive", "gap_bridged")
 
     def baseline(self, study):
         return {"gps_latency": study.parameters("gps", {"latency": 0.0})["latency"]}

@@ -27,7 +27,7 @@ class GyroFilter(Effect):
     experiment = ("steering steps standing on the brake (the wheels turn, the yaw rate stays zero), then the same "
                   "steps driving: the wheel angle reading shows no lag, the yaw rate's rise is an exponential of "
                   "tau_g on top of the vehicle's own; or log the gyro's raw channel beside the filtered one")
-    imitated_by = ("clock_offset", "response_leads_input", "stamp_vs_receive")
+    imitated_by = ("clock_offset", "clock_unchecked", "response_leads_input", "stamp_vs_receive")
 
     def baseline(self, study):
         return {"gyro_time_constant": 0.0}

@@ -32,7 +32,7 @@ class PositionReference(Effect):
                   "speed x lag along the track, a reference point swings on its own radius in turns at any speed")
     recording = True
     imitates = ("antenna_lever_arm", "gps_latency")
-    imitated_by = ("clock_offset", "response_leads_input", "stamp_vs_receive")
+    imitated_by = ("clock_offset", "clock_unchecked", "response_leads_input", "stamp_vs_receive")
 
     def baseline(self, study):
         return {"position_forward": 0.0, "position_left": 0.0, "position_clock": 0.0}

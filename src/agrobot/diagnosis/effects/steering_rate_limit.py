@@ -18,7 +18,7 @@ class SteeringRateLimit(Effect):
     threshold = "rate limit <= 0.8 x the baseline's"
     hypothesis = "large steering moves are slower than the model: less pump flow than assumed"
     experiment = "large fast steering steps (+/-20 deg): a rate limit slows only the large moves"
-    imitated_by = ("clock_offset", "response_leads_input", "gap_bridged")
+    imitated_by = ("clock_offset", "clock_unchecked", "response_leads_input", "gap_bridged")
 
     def baseline(self, study):
         return {"steering_rate_limit": FirstOrderSteering.of(study.parameters("steering")).rate_limit}
