@@ -138,6 +138,7 @@ def _peak_at_start():
     START_MB.append(_peak_mb())
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(kind=st.sampled_from(["nmea", "nmea_generated"]), edits=_mutations())
 def test_a_mutated_nmea_capture_is_read_or_refused_by_name(kind, edits):

@@ -392,6 +392,7 @@ def test_route_cross_track_interpolates_between_route_points():
     assert d_line == pytest.approx([0.4, -0.25]) and arc == pytest.approx([3.3, 7.7])
 
 
+@pytest.mark.slow
 def test_pass_to_pass_at_an_interval_by_interpolation_against_shapely():
     """The ISO-style line test on a real parcel, its pause cut to 60 s: the second pass starts the
     pass, the turn and the pause after the first; pass-to-pass (the spacing of the implement's two

@@ -87,6 +87,7 @@ def _mcap_channels(path: Path) -> dict:
     return {c.topic: (c.message_encoding, summary.schemas[c.schema_id].name) for c in summary.channels.values()}
 
 
+@pytest.mark.slow
 def test_both_subprotocols_are_served_every_mcap_topic_and_one_viewer_too_many_is_refused(tmp_path):
     out, port = tmp_path / "run", _free_port()
     run = _start_run(STUDIES / "figure8.toml", out, port, "--set", "study.stop_time=160", "--live-wait", "60",

@@ -184,6 +184,7 @@ def test_studies_without_a_loop_get_a_reason(name):
         assert word in str(err.value), str(err.value)
 
 
+@pytest.mark.slow
 def test_margins_command_prints_margins_and_writes_the_plots(tmp_path):
     out = tmp_path / "m"
     proc = cli("margins", "studies/figure8_pure_pursuit.toml", "--out", out, timeout=300)

@@ -68,6 +68,7 @@ def test_a_long_run_stopped_by_a_signal_keeps_every_row_and_says_interrupted(tmp
     assert not list(tmp_path.glob(".long.*"))            # no staging folder left, no lock file
 
 
+@pytest.mark.slow
 def test_a_real_time_composite_run_interrupted_keeps_its_signals(tmp_path):
     out = tmp_path / "rt"
     proc = _start(["run", "studies/figure8_hardware_layout.toml", "--set", "study.realtime=true", "--out", str(out),

@@ -91,7 +91,8 @@ def test_identified_model_becomes_plant_and_controller_model(tmp_path):
     (["--out", "{tmp}/t.toml", "--delay-margin", "-1"], ["--delay-margin", ">= 0"]),
     (["--out", "{tmp}/t.toml", "--identified", "{tmp}/none.json"], ["--identified", "not found"]),
     (["--out", "{tmp}/t.toml", "--identified", "{tmp}/ident.json", "--model", "bicycle"], ["no model 'bicycle'", "second_order"]),
-    (["--out", "{tmp}/t.toml", "--delay-margin", "3", "--grid", "0.25"], ["no gains", "lower"]),
+    pytest.param(["--out", "{tmp}/t.toml", "--delay-margin", "3", "--grid", "0.25"], ["no gains", "lower"],
+                 marks=pytest.mark.slow),
     (["--out", "{tmp}/t.toml", "--grid", "0"], ["--grid"]),
 ])
 def test_tune_bad_options_exit_2_with_a_message(tmp_path, args, words):
