@@ -157,9 +157,7 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
     gains = {names[s]: held_out_gain(before[names[s]], after[names[s]], (unexplainable or {}).get(s, 0.0), noise.get(s))
              for s in stages}
     counted = evidence_stages(effect, stages, gains, without, floors)
-    n_total = sum(with_.n_eff[s] for s in counted)
-    dbic = sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300)) for s in counted)
-    dbic += len(effect.parameters) * math.log(max(n_total, 2.0))
+    dbic = stages_bic(with_, without, counted, len(effect.parameters))
     material = bool(effect.material(with_.values, baseline_values))
     reasons = []
     if dbic >= STRONG:
@@ -178,13 +176,19 @@ def _judge(effect: Effect, with_: FitResult, without: FitResult, stages, baselin
                    evidence=counted)
 
 
+def stages_bic(with_: FitResult, without: FitResult, stages, k: int) -> float:
+    """dBIC of ``with_`` (k parameters more) against ``without`` on ``stages``:
+    sum_s n_eff,s ln(RSS_s,with / RSS_s,without) + k ln(sum_s n_eff,s)."""
+    n = sum(with_.n_eff[s] for s in stages)
+    return sum(with_.n_eff[s] * math.log(max(with_.rss[s], 1e-300) / max(without.rss[s], 1e-300))
+               for s in stages) + k * math.log(max(n, 2.0))
+
+
 def turns_bic(model: FitResult, finding: Finding) -> float:
-    """A finding's dBIC (as _judge's) on the stages its effect acts on, those it is only tested on left
-    out (Effect.tested_on: a steering map on the actuator's stage)."""
+    """A finding's dBIC (stages_bic, as _judge's) on the stages its effect acts on, those it is only
+    tested on left out (Effect.tested_on: a steering map on the actuator's stage)."""
     acts = [s for s in finding.evidence if s not in finding.effect.tested_on]
-    n = sum(finding.fit.n_eff[s] for s in acts)
-    return sum(finding.fit.n_eff[s] * math.log(max(finding.fit.rss[s], 1e-300) / max(model.rss[s], 1e-300))
-               for s in acts) + len(finding.effect.parameters) * math.log(max(n, 2.0))
+    return stages_bic(finding.fit, model, acts, len(finding.effect.parameters))
 
 
 def held_out_text(finding: Finding) -> str:

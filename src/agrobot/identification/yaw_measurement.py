@@ -13,7 +13,7 @@ Without a gyro the yaw rate is derived, in this order of preference, from
 
       v_min = sqrt(2) sigma / (COURSE_NOISE COURSE_TIME),   course_speed = min(COURSE_SPEED, v_min)
 
-  (sigma: measurements.position_source.track_noise, at least the positions' resolution / sqrt 12);
+  (sigma: measurements.position_source.track_noise, at least the positions' rounding, their smallest step / sqrt 12);
   a tractor-class receiver (sigma of 2 cm) keeps the 1 m/s of before, a motion-capture track
   (millimetres) reads its course at a few cm/s.
 
@@ -153,7 +153,7 @@ def course_floor(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[float, st
     if noise is None:
         return COURSE_SPEED, (f"course_speed {COURSE_SPEED:g} m/s: too few moving fixes to read the positions' "
                               f"own noise (--course-speed changes it)")
-    sigma = max(float(noise["across"]), noise["resolution"])
+    sigma = max(float(noise["across"]), noise["rounding"])
     need = math.sqrt(2.0) * sigma / (COURSE_NOISE * COURSE_TIME)
     speed = min(COURSE_SPEED, need)
     said = (f"course_speed {speed:.3g} m/s from the positions' own noise ({1e3 * sigma:.3g} mm across the track "

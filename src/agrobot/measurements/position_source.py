@@ -10,15 +10,15 @@ both directions). Whiteness is read as MAD(third difference) / MAD(second differ
 = 1.83 for white noise, far below 1 for a smooth path.
 
     measured  <=>  white both ways (whiteness >= WHITE), less than ALONG x as much along as across,
-                   and above ROUNDING x the values' resolution (not their rounding)
+                   and above ROUNDING x the values' own rounding (rounding_sigma)
     estimate  <=>  not measured, and: white along the track and at least ALONG x the across-track
                    noise, or smooth both ways (each direction's whiteness under SMOOTH or its
                    white noise under FLOOR, below any receiver's)
 
 Anything else (noise the same both ways; a low-rate fix whose turns outweigh its noise across the
 track) is not called an estimate: a receiver's fixes of any rate and noise level are not, nor a
-motion capture's (finer than FLOOR, but white and the same both ways). The resolution is the
-smallest step between stored values / sqrt 12 (the rounding's sigma): a smooth path stored in
+motion capture's (finer than FLOOR, but white and the same both ways). The rounding's sigma is the
+smallest step between stored values / sqrt 12 (not measurements.log.resolution, a grid's step): a smooth path stored in
 float32 a kilometre from its origin carries 0.02 mm of white rounding noise, no measurement's. A
 scan-matching filter's poses can scatter like fixes; their source's name then tells (named_estimate:
 a topic or file of odometry, a pose, a filter, unless it names a receiver too).
@@ -33,7 +33,7 @@ import numpy as np
 WHITE = 1.4          # whiteness at or above it: white noise dominates (white noise 1.83)
 SMOOTH = 0.5         # whiteness below it: no white noise at all (a dead-reckoned or filtered path)
 FLOOR = 0.5e-3       # m: white noise below it is no receiver's (an RTK fix's carrier-phase noise is millimetres)
-ROUNDING = 3.0       # white noise within this many resolutions is the stored values' rounding
+ROUNDING = 3.0       # white noise within this many rounding sigmas is the stored values' rounding
 ALONG = 2.0          # along-track noise this many times the across-track: held to the course by a model
 CHORD = 1.0          # s either side: the course the frame is turned to
 MOVING = 20.0        # a fix counts where the chord is this many noise sigmas long (the course is known)
@@ -55,7 +55,7 @@ def white_noise_sigma(second_difference_sigma):
     return second_difference_sigma / math.sqrt(6.0)
 
 
-def resolution(x: np.ndarray, y: np.ndarray) -> float:
+def rounding_sigma(x: np.ndarray, y: np.ndarray) -> float:
     """The positions' rounding sigma [m]: their smallest nonzero step / sqrt 12 (0 with none)."""
     steps = np.abs(np.r_[np.diff(x), np.diff(y)])
     steps = steps[np.isfinite(steps) & (steps > 0)]
@@ -63,7 +63,7 @@ def resolution(x: np.ndarray, y: np.ndarray) -> float:
 
 
 def track_noise(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict | None:
-    """{along, across [m], white_along, white_across, fixes, hz, resolution}: the white-noise sigma of the
+    """{along, across [m], white_along, white_across, fixes, hz, rounding}: the white-noise sigma of the
     positions' updates (a held row is not one) along and across the course, from their second
     differences (MAD / 0.6745 / sqrt 6), and each direction's whiteness (module docstring). None
     under MIN_FIXES moving fixes."""
@@ -89,7 +89,7 @@ def track_noise(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> dict | None:
     moving = chord[1:-2] > MOVING * max(sigma, 1e-6)
     if moving.sum() < MIN_FIXES:
         return None
-    out = {"fixes": int(moving.sum()), "hz": 1.0 / h, "resolution": resolution(x, y)}
+    out = {"fixes": int(moving.sum()), "hz": 1.0 / h, "rounding": rounding_sigma(x, y)}
     for name, (ax, ay) in (("along", (ux, uy)), ("across", (-uy, ux))):
         d2, d3 = (dx * ax + dy * ay for dx, dy in ((d2x, d2y), (d3x, d3y)))
         spread = _mad(d2[moving])
@@ -106,7 +106,7 @@ def estimate_evidence(noise: dict | None) -> str | None:
     said = (f"fix-to-fix noise {1000 * noise['along']:.3g} mm along the track, {1000 * noise['across']:.3g} mm "
             f"across (whiteness {noise['white_along']:.2f}, {noise['white_across']:.2f}; white noise 1.83) in "
             f"{noise['fixes']} moving fixes at {noise['hz']:.3g} Hz")
-    if all(noise[f"white_{d}"] >= WHITE and noise[d] > ROUNDING * noise["resolution"] for d in ("along", "across")) \
+    if all(noise[f"white_{d}"] >= WHITE and noise[d] > ROUNDING * noise["rounding"] for d in ("along", "across")) \
             and noise["along"] < ALONG * noise["across"]:
         return None                 # a measurement's white noise, the same both ways
     if noise["white_along"] >= WHITE and noise["along"] >= ALONG * noise["across"]:

@@ -215,7 +215,7 @@ class _Parser:
 
 
 FUNCTIONS = ("rate",)
-_CALL = re.compile(r"^(rate)\((.+)\)$")
+_CALL = re.compile(rf"^({'|'.join(FUNCTIONS)})\((.+)\)$")
 
 
 def operand(name: str) -> str:
