@@ -4,7 +4,7 @@
   signal is sampled faster: no measured wheel angle, speed or yaw rate rises by half its range, holds
   and falls back within 0.15 s, each edge in one sample) far from the running median of its
   neighbours (a window of twice the run plus one: 7 samples, more at high rates),
-  |x - median| > d = max(10 x 1.4826 MAD, half the signal's 1-99 % range),
+  |x - median| > d = max(10 x 1.4826 MAD, half the signal's 1-99 % range, 1e-6 max |x|: its rounding),
   more than d from the samples just before and after it, which agree with each other within d:
   the signal leaves and comes back in one sample, a glitch, not a fast manoeuvre (a real peak
   rises through its neighbours; a step is followed by the median and does not come back). They are counted,
@@ -35,6 +35,7 @@ SPIKE_WIDTH = 3
 BURST_SECONDS = 0.15               # s: the longest glitch run at high sample rates (module docstring)
 SPIKE_SIGMAS = 10.0
 SPIKE_RANGE_FRACTION = 0.5
+SPIKE_ROUNDING = 1e-6              # of the signal's magnitude: a deviation below it is rounding (float32's is 6e-8)
 EARTH_RADIUS = 6_371_000.0
 POSITION_SPEED = 100.0             # m/s between two fixes: faster than any ground vehicle, a fix out of place
 POSITION_NOISE = 10.0              # m: a step within this is the receiver's noise at any rate
@@ -57,7 +58,8 @@ def spikes(t: np.ndarray, x: np.ndarray) -> np.ndarray:
     r = x - med
     mad = 1.4826 * float(np.median(np.abs(r - np.median(r))))
     lo, hi = np.percentile(x, [1, 99])
-    threshold = max(SPIKE_SIGMAS * mad, SPIKE_RANGE_FRACTION * float(hi - lo))
+    scale = float(np.nanmax(np.abs(x))) if np.isfinite(x).any() else 0.0
+    threshold = max(SPIKE_SIGMAS * mad, SPIKE_RANGE_FRACTION * float(hi - lo), SPIKE_ROUNDING * scale)
     if threshold <= 0:
         return np.array([], int)
     candidates = np.abs(r) > threshold
